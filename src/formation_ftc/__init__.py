@@ -1,0 +1,32 @@
+"""formation-ftc: fault-tolerant control of spacecraft formations in JAX (float64).
+
+Public entry points::
+
+    import formation_ftc as ftc
+    scenario = ftc.load_scenario("li2020-thm1", overrides={"simulation.horizon": 100.0})
+    result = ftc.simulate(scenario)        # xarray.Dataset with provenance attributes
+    table = ftc.check(scenario)            # theorem / design conditions
+
+The package enables ``jax_enable_x64`` on import (see :mod:`formation_ftc._jax`).
+"""
+
+from __future__ import annotations
+
+from formation_ftc import _jax  # noqa: F401  (x64 before anything else)
+
+__version__ = "0.1.0"
+
+from formation_ftc.api import (  # noqa: E402
+    check,
+    list_scenarios,
+    load_scenario,
+    save_result,
+    simulate,
+    simulate_with_metrics,
+)
+from formation_ftc.sim.engine import SimulationDiverged  # noqa: E402
+
+__all__ = [
+    "__version__", "check", "list_scenarios", "load_scenario", "save_result", "simulate",
+    "simulate_with_metrics", "SimulationDiverged",
+]

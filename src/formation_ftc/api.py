@@ -1,0 +1,137 @@
+"""Python API: load a scenario, simulate it, check its conditions.
+
+>>> import formation_ftc as ftc
+>>> scn = ftc.load_scenario("cw-free-drift", overrides={"simulation.horizon": 600.0})
+>>> ds = ftc.simulate(scn)                     # xarray.Dataset
+>>> ds.attrs["seed"], ds.attrs["git_commit"]   # provenance travels with the data
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import jax
+import numpy as np
+
+from formation_ftc.config import loader
+from formation_ftc.config.base import ScenarioBase
+from formation_ftc.provenance import provenance
+from formation_ftc.registry import Compiled, Condition, get_method
+from formation_ftc.sim.engine import SimulationDiverged, diagnose_divergence, trim_records
+
+__all__ = [
+    "load_scenario",
+    "list_scenarios",
+    "simulate",
+    "simulate_with_metrics",
+    "check",
+    "compile_scenario",
+    "finish_run",
+    "result_metrics",
+    "save_result",
+]
+
+
+def load_scenario(name_or_path: str | Path | Mapping[str, Any],
+                  overrides: Mapping[str, Any] | Iterable[str] | None = None) -> ScenarioBase:
+    """Built-in name, TOML path or raw dict -> validated scenario (overrides applied first)."""
+    if isinstance(name_or_path, ScenarioBase):
+        raw, source = name_or_path.model_dump(mode="json", exclude_none=True), "<scenario object>"
+    elif isinstance(name_or_path, Mapping):
+        raw, source = dict(name_or_path), "<dict>"
+    else:
+        raw, source = loader.read_raw(name_or_path)
+    raw = loader.apply_overrides(raw, overrides)
+    return loader.validate(raw, source)
+
+
+def list_scenarios() -> dict[str, str]:
+    """Built-in scenario name -> one-line description."""
+    import tomllib
+
+    out = {}
+    for name, text in loader.builtin_scenarios().items():
+        meta = tomllib.loads(text).get("scenario", {})
+        out[name] = str(meta.get("description", ""))
+    return out
+
+
+def compile_scenario(scenario: ScenarioBase) -> Compiled:
+    """The method's compiled form of a scenario (no JAX compilation happens yet)."""
+    return get_method(scenario.scenario.method).build(scenario)
+
+
+def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True):
+    """numpy RunOutput -> (Dataset with provenance, metrics); raises SimulationDiverged with .partial."""
+    out = jax.tree_util.tree_map(np.asarray, dict(out))
+    div = int(out["diverged_step"])
+    records, n_kept = trim_records(out["records"], div, compiled.record_every)
+    out["records"] = records
+    ds = compiled.to_dataset(out, n_kept)
+    metrics = {k: float(v) for k, v in compiled.metrics(out).items()}
+    ds.attrs.update(provenance())
+    ds.attrs.update(
+        scenario_name=scenario.scenario.name,
+        method=scenario.scenario.method,
+        scenario_toml=loader.dump_toml(scenario),
+        seed=int(scenario.simulation.seed),
+        metrics_json=json.dumps(metrics),
+        diverged="",
+    )
+    if div >= 0:
+        t = compiled.t0 + div * compiled.dt
+        info = diagnose_divergence(compiled.make_step(compiled.params), out["last_finite"], div, t,
+                                   compiled.spacecraft_axis) if compiled.make_step else None
+        if info is None:
+            from formation_ftc.sim.engine import DivergenceInfo
+
+            info = DivergenceInfo(div, t, "<state>", None, ())
+        ds.attrs["diverged"] = str(info)
+        if raise_on_divergence:
+            raise SimulationDiverged(info, partial=ds)
+    return ds, metrics
+
+
+def simulate_with_metrics(scenario: ScenarioBase | str | Path):
+    """Run one scenario: ``(xarray.Dataset, {metric: float})``."""
+    if not isinstance(scenario, ScenarioBase):
+        scenario = load_scenario(scenario)
+    compiled = compile_scenario(scenario)
+    out = jax.jit(compiled.run)(compiled.params)
+    return finish_run(scenario, compiled, out)
+
+
+def simulate(scenario: ScenarioBase | str | Path):
+    """Run one scenario and return its ``xarray.Dataset`` (metrics in ``attrs['metrics_json']``)."""
+    return simulate_with_metrics(scenario)[0]
+
+
+def result_metrics(ds) -> dict[str, float]:
+    """Scalar metrics stored in a result dataset."""
+    return json.loads(ds.attrs.get("metrics_json", "{}"))
+
+
+def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
+    """Evaluate the stability / design conditions the scenario's method declares."""
+    if not isinstance(scenario, ScenarioBase):
+        scenario = load_scenario(scenario)
+    method = get_method(scenario.scenario.method)
+    return list(method.check(scenario)) if method.check else []
+
+
+def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = None) -> dict[str, Path]:
+    """Write ``result.nc`` (NetCDF via h5netcdf) and ``metrics.json`` into ``out_dir``."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    nc = out_dir / "result.nc"
+    tmp = out_dir / ".result.nc.tmp"
+    ds.to_netcdf(tmp, engine="h5netcdf")
+    tmp.replace(nc)
+    m = dict(metrics if metrics is not None else result_metrics(ds))
+    m["scenario"] = ds.attrs.get("scenario_name", "")
+    mj = out_dir / "metrics.json"
+    mj.write_text(json.dumps(m, indent=2, sort_keys=True))
+    return {"result": nc, "metrics": mj}

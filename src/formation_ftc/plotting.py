@@ -1,0 +1,49 @@
+"""Consistent matplotlib style for every figure the toolkit writes (edge layer: import only from
+``papers/``, ``report/`` and the CLI). Uses the non-interactive Agg backend."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+__all__ = ["plt", "new_figure", "save_figure", "SPACECRAFT_COLORS"]
+
+SPACECRAFT_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"]
+
+_STYLE = {
+    "figure.dpi": 110,
+    "savefig.dpi": 130,
+    "font.size": 9,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "axes.titlesize": 10,
+    "legend.fontsize": 8,
+    "lines.linewidth": 1.2,
+    "axes.prop_cycle": matplotlib.cycler(color=SPACECRAFT_COLORS),
+}
+
+
+def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 6.4, height: float | None = None,
+               sharex: bool = True, title: str | None = None):
+    """Figure and axes with the package style; height defaults to 2.2 in per row."""
+    with plt.rc_context(_STYLE):
+        fig, axes = plt.subplots(nrows, ncols, figsize=(width, height or 1.0 + 2.2 * nrows),
+                                 sharex=sharex, squeeze=False)
+    if title:
+        fig.suptitle(title)
+    return fig, axes
+
+
+def save_figure(fig, path: str | Path) -> Path:
+    """Save as PNG (tight layout) and close the figure."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with plt.rc_context(_STYLE):
+        fig.tight_layout()
+        fig.savefig(path)
+    plt.close(fig)
+    return path

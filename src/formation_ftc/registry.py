@@ -1,0 +1,209 @@
+"""The method / reproduction registry and the contracts that plug a paper into the toolkit.
+
+A **method** turns a validated scenario into a compiled, pure JAX run (:class:`Compiled`); the generic
+:func:`formation_ftc.simulate`, the ``run``/``check`` commands and Monte Carlo campaigns all go through
+it. A **reproduction** runs a paper's study and returns a :class:`PaperReport` (figures, published vs
+reproduced rows, condition checks) that ``formation-ftc reproduce`` and the HTML report consume.
+
+Plug-ins register themselves when their module is imported; :func:`load_plugins` imports the built-in
+ones (``formation_ftc.methods`` and every ``formation_ftc.papers.<name>``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "Compiled",
+    "Method",
+    "Condition",
+    "ComparisonRow",
+    "Figure",
+    "PaperReport",
+    "Reproduction",
+    "register_method",
+    "get_method",
+    "methods",
+    "register_reproduction",
+    "get_reproduction",
+    "reproductions",
+    "load_plugins",
+    "PAPER_MODULES",
+]
+
+PyTree = Any
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A scenario compiled for the engine.
+
+    Attributes
+    ----------
+    run : pure function ``params -> RunOutput`` (see :mod:`formation_ftc.sim.engine`); jittable and
+        vmappable over a leading batch axis of ``params``.
+    params : pytree of float64/int arrays -- everything numeric a campaign may vary.
+    static_key : hashable; two scenarios with equal keys can share one compiled ``run`` (and be batched).
+    dt, record_every : step [s] and decimation used to map records to time.
+    to_dataset : ``(out, n_records) -> xarray.Dataset`` from one run's numpy output (records trimmed
+        to ``n_records``); the generic layer adds provenance attributes.
+    metrics : ``out -> {name: float}`` scalar metrics of one run (numpy side).
+    make_step : ``params -> step(k, state)``; used to diagnose a divergence (replays one step).
+    spacecraft_axis : ``variable name -> axis index of the spacecraft dimension or None``.
+    """
+
+    run: Callable[[PyTree], Any]
+    params: PyTree
+    static_key: Hashable
+    dt: float
+    record_every: int
+    to_dataset: Callable[[dict, int], Any]
+    metrics: Callable[[dict], dict[str, float]]
+    make_step: Callable[[PyTree], Callable] | None = None
+    spacecraft_axis: Callable[[str], int | None] | None = None
+    t0: float = 0.0
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One theorem / design condition evaluated before (or after) a run.
+
+    ``holds`` is None when the condition cannot be evaluated for this scenario. ``required`` marks
+    conditions the method's guarantee needs: ``formation-ftc check`` exits with 1 when one fails.
+    """
+
+    name: str
+    reference: str
+    value: str
+    requirement: str
+    holds: bool | None
+    required: bool = True
+    detail: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(name=self.name, reference=self.reference, value=self.value,
+                    requirement=self.requirement, holds=self.holds, required=self.required,
+                    detail=self.detail)
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    schema: type
+    build: Callable[[Any], Compiled]
+    description: str = ""
+    check: Callable[[Any], list[Condition]] | None = None
+    plot: Callable[[Any, Any, Path], list[Path]] | None = None  # (dataset, scenario, out_dir) -> PNGs
+
+
+@dataclass(frozen=True)
+class ComparisonRow:
+    """Published vs reproduced. verdict in {"match", "differs", "not stated"}."""
+
+    quantity: str
+    published: str
+    ours: str
+    criterion: str
+    verdict: str
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        if self.verdict not in {"match", "differs", "not stated"}:
+            raise ValueError(f"verdict must be match/differs/not stated, got {self.verdict!r}")
+
+    def as_dict(self) -> dict[str, str]:
+        return dict(quantity=self.quantity, published=self.published, ours=self.ours,
+                    criterion=self.criterion, verdict=self.verdict, note=self.note)
+
+
+@dataclass(frozen=True)
+class Figure:
+    path: str  # relative to the reproduction's output directory
+    number: str  # the paper's figure number, e.g. "4" or "12"
+    caption: str
+
+
+@dataclass
+class PaperReport:
+    paper: str
+    summary: dict[str, Any]
+    rows: list[ComparisonRow] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+    checks: list[Condition] = field(default_factory=list)
+    scenarios: list[str] = field(default_factory=list)
+    seeds: list[int] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    wall_time_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """A paper's reproducible study. ``run(out_dir, progress)`` writes figures into ``out_dir`` and
+    returns the report; ``progress(done_fraction, message)`` may be called to update a progress bar."""
+
+    paper: str
+    title: str
+    citation: str
+    description: str
+    errata: list[tuple[str, str]]
+    run: Callable[[Path, Callable[[float, str], None]], PaperReport]
+
+
+_METHODS: dict[str, Method] = {}
+_REPRODUCTIONS: dict[str, Reproduction] = {}
+
+#: Built-in paper sub-packages, in the order the report shows them.
+PAPER_MODULES = ["li2020", "yang2013", "gui2022", "mehrabian", "azizi2009"]
+
+
+def register_method(method: Method) -> Method:
+    _METHODS[method.name] = method
+    return method
+
+
+def get_method(name: str) -> Method:
+    load_plugins()
+    if name not in _METHODS:
+        raise KeyError(f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}")
+    return _METHODS[name]
+
+
+def methods() -> dict[str, Method]:
+    load_plugins()
+    return dict(_METHODS)
+
+
+def register_reproduction(rep: Reproduction) -> Reproduction:
+    _REPRODUCTIONS[rep.paper] = rep
+    return rep
+
+
+def get_reproduction(paper: str) -> Reproduction:
+    load_plugins()
+    if paper not in _REPRODUCTIONS:
+        raise KeyError(f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all")
+    return _REPRODUCTIONS[paper]
+
+
+def reproductions() -> dict[str, Reproduction]:
+    load_plugins()
+    order = {p: k for k, p in enumerate(PAPER_MODULES)}
+    return dict(sorted(_REPRODUCTIONS.items(), key=lambda kv: order.get(kv[0], 99)))
+
+
+_LOADED = False
+
+
+def load_plugins() -> None:
+    """Import the built-in methods and paper packages (idempotent)."""
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    importlib.import_module("formation_ftc.methods")
+    for name in PAPER_MODULES:
+        importlib.import_module(f"formation_ftc.papers.{name}")

@@ -1,0 +1,169 @@
+"""The fixed-step ``lax.scan`` driver shared by every method.
+
+One control step (the order every method follows; ARCHITECTURE.md "One control step")::
+
+    k -> (1) measure -> (2) network: push/read delayed messages -> (3) FDI, observers
+      -> (4) supervisor -> (5) controller -> (6) actuator chain (faults act here)
+      -> (7) integrate the plant over [t_k, t_k + dt] (RK4; continuous-time laws evaluated per stage)
+      -> (8) push histories, accumulate metrics
+
+A method supplies ``step(k, state) -> state`` (everything above; ``t_k = t0 + k*dt`` is computed from
+the integer step index, so event times are exact step boundaries) and ``observe(k, state) -> dict``
+(what to record). :func:`run_fixed_step` runs ``n_steps`` steps as a scan over records of
+``record_every`` inner steps each (output decimation: a 3-million-step run keeps only
+``n_steps/record_every + 1`` samples; metrics that need every step live in the state and are
+accumulated by ``step``).
+
+Divergence: after every step the state is checked for non-finite values. The first non-finite step
+freezes the carry at the last finite state and records the step index; later records repeat that last
+finite state's observation and are masked out by :func:`trim_records`. :func:`diagnose_divergence`
+then replays one step eagerly to name the variable and spacecraft.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+__all__ = [
+    "RunOutput",
+    "run_fixed_step",
+    "trim_records",
+    "SimulationDiverged",
+    "DivergenceInfo",
+    "diagnose_divergence",
+    "steps_from_horizon",
+]
+
+PyTree = Any
+
+
+#: A run's output: a plain dict (a JAX pytree) with keys ``records`` (pytree, leading axis = record
+#: index), ``final`` (final state), ``diverged_step`` (int, -1 when the run stayed finite) and
+#: ``last_finite`` (the last finite state; the state at divergence).
+RunOutput = dict
+
+
+def steps_from_horizon(horizon: float, dt: float, record_every: int = 1, field: str = "simulation") -> int:
+    """Number of steps for ``horizon``; the step must divide the horizon (to 1e-9 relative)."""
+    if dt <= 0:
+        raise ValueError(f"{field}.dt must be > 0 s, got {dt}")
+    if horizon <= 0:
+        raise ValueError(f"{field}.horizon must be > 0 s, got {horizon}")
+    n = round(horizon / dt)
+    if abs(n * dt - horizon) > 1e-9 * max(horizon, 1.0):
+        raise ValueError(f"{field}.dt = {dt} s does not divide {field}.horizon = {horizon} s")
+    if n % record_every:
+        raise ValueError(
+            f"{field}.record_every = {record_every} must divide the number of steps {n} (horizon/dt)"
+        )
+    return n
+
+
+def _all_finite(tree) -> jax.Array:
+    leaves = [jnp.all(jnp.isfinite(x)) for x in jax.tree_util.tree_leaves(tree)
+              if jnp.issubdtype(jnp.asarray(x).dtype, jnp.inexact)]
+    return jnp.all(jnp.stack(leaves)) if leaves else jnp.asarray(True)
+
+
+def run_fixed_step(
+    step: Callable[[jax.Array, PyTree], PyTree],
+    observe: Callable[[jax.Array, PyTree], PyTree],
+    state0: PyTree,
+    n_steps: int,
+    record_every: int = 1,
+    unroll: int = 1,
+    check_finite: bool = True,
+) -> RunOutput:
+    """Run ``n_steps`` steps; record ``observe`` at k = 0, record_every, 2*record_every, ..., n_steps.
+
+    Pure and jittable (``n_steps`` and ``record_every`` are static). Returns a :class:`RunOutput`.
+    """
+    if n_steps % record_every:
+        raise ValueError(f"record_every={record_every} must divide n_steps={n_steps}")
+    n_records = n_steps // record_every
+
+    def inner(carry, _):
+        k, state, last_good, div = carry
+        new = step(k, state)
+        if check_finite:
+            ok = _all_finite(new)
+            newly = jnp.logical_and(div < 0, jnp.logical_not(ok))
+            div = jnp.where(newly, k, div)
+            frozen = div >= 0
+            new = jax.tree_util.tree_map(lambda a, b: jnp.where(frozen, a, b), state, new)
+            last_good = new
+        return (k + 1, new, last_good, div), None
+
+    def outer(carry, _):
+        carry, _ = jax.lax.scan(inner, carry, None, length=record_every, unroll=unroll)
+        k, state, _, _ = carry
+        return carry, observe(k, state)
+
+    k0 = jnp.asarray(0, dtype=jnp.int64)
+    rec0 = observe(k0, state0)
+    carry0 = (k0, state0, state0, jnp.asarray(-1, dtype=jnp.int64))
+    (_, final, last_good, div), recs = jax.lax.scan(outer, carry0, None, length=n_records)
+    records = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b], axis=0), rec0, recs)
+    return dict(records=records, final=final, diverged_step=div, last_finite=last_good)
+
+
+def trim_records(records: PyTree, diverged_step: int, record_every: int) -> tuple[PyTree, int]:
+    """Keep the records computed before divergence (all of them when ``diverged_step < 0``)."""
+    n = jax.tree_util.tree_leaves(records)[0].shape[0]
+    if diverged_step < 0:
+        return records, n
+    keep = int(diverged_step) // record_every + 1
+    return jax.tree_util.tree_map(lambda a: np.asarray(a)[:keep], records), keep
+
+
+@dataclass(frozen=True)
+class DivergenceInfo:
+    step: int
+    time: float
+    variable: str
+    spacecraft: int | None  # 0-based index, None when the variable has no spacecraft axis
+    index: tuple[int, ...]
+
+    def __str__(self) -> str:
+        who = f"spacecraft {self.spacecraft + 1}" if self.spacecraft is not None else "formation"
+        return (f"simulation diverged at t = {self.time:.6g} s (step {self.step}): {who}, "
+                f"variable '{self.variable}' index {list(self.index)} became non-finite")
+
+
+class SimulationDiverged(RuntimeError):
+    """A run produced a non-finite state. ``partial`` holds what was computed up to then."""
+
+    def __init__(self, info: DivergenceInfo, partial: Any = None):
+        super().__init__(str(info) + "; results up to that time were kept")
+        self.info = info
+        self.partial = partial
+
+
+def diagnose_divergence(
+    step: Callable[[jax.Array, PyTree], PyTree],
+    last_finite: PyTree,
+    k: int,
+    t: float,
+    spacecraft_axis: Callable[[str], int | None] | None = None,
+) -> DivergenceInfo:
+    """Replay step ``k`` from the last finite state and name the first non-finite leaf."""
+    new = jax.jit(step)(jnp.asarray(k, dtype=jnp.int64), last_finite)
+    flat, _ = jax.tree_util.tree_flatten_with_path(new)
+    for path, leaf in flat:
+        arr = np.asarray(leaf)
+        if not np.issubdtype(arr.dtype, np.inexact):
+            continue
+        bad = np.argwhere(~np.isfinite(arr))
+        if bad.size:
+            name = jax.tree_util.keystr(path).strip("[]'\"").replace("']['", ".")
+            idx = tuple(int(v) for v in bad[0])
+            ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
+            sc = idx[ax] if ax is not None and len(idx) > ax else None
+            return DivergenceInfo(int(k), float(t), name, sc, idx)
+    return DivergenceInfo(int(k), float(t), "<unknown>", None, ())
