@@ -73,14 +73,16 @@ class KeplerOrbit:
 
 def solve_kepler(mean_anomaly: np.ndarray | float, e: float, tol: float = 1e-15) -> np.ndarray:
     """Eccentric anomaly E from Kepler's equation M = E - e sin E (Newton iteration, numpy)."""
-    M = np.asarray(mean_anomaly, dtype=float)
-    E = M + e * np.sin(M) if e < 0.8 else np.full_like(M, np.pi)
-    for _ in range(50):
+    M_all = np.asarray(mean_anomaly, dtype=float)
+    # reduce to (-pi, pi] so that Newton starts near the root; add the revolutions back at the end
+    M = np.remainder(M_all + np.pi, 2 * np.pi) - np.pi
+    E = M + e * np.sin(M) if e < 0.8 else np.pi * np.sign(M) + (M == 0) * 0.0
+    for _ in range(60):
         dE = (E - e * np.sin(E) - M) / (1.0 - e * np.cos(E))
         E = E - dE
         if np.all(np.abs(dE) < tol):
             break
-    return E
+    return E + (M_all - M)
 
 
 def true_anomaly_at(orbit: KeplerOrbit, t: np.ndarray | float) -> np.ndarray:
