@@ -1,0 +1,65 @@
+"""Layering (ARCHITECTURE.md): imports point downward only; matplotlib only at the edges.
+
+Checked by walking every module's AST (function-level imports included), so a violation fails here
+rather than in review.
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "src" / "formation_ftc"
+
+# layer -> packages it must not import
+FORBIDDEN = {
+    "core": ["blocks", "design", "sim", "config", "papers", "report", "campaign", "cli", "api",
+             "plotting", "methods", "registry"],
+    "blocks": ["sim", "config", "papers", "report", "campaign", "cli", "api", "plotting", "methods"],
+    "design": ["sim", "papers", "report", "campaign", "cli", "api", "plotting", "methods"],
+    "sim": ["papers", "report", "campaign", "cli", "plotting", "methods"],
+    "config": ["papers", "report", "campaign", "cli", "plotting", "methods"],
+}
+MATPLOTLIB_ALLOWED = ("plotting.py", "papers", "report", "campaign", "methods")
+
+
+def _imports(path: Path):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                yield a.name
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            yield node.module
+
+
+@pytest.mark.parametrize("layer", sorted(FORBIDDEN))
+def test_layers_import_downward_only(layer):
+    bad = []
+    for path in (PKG / layer).rglob("*.py"):
+        for mod in _imports(path):
+            for target in FORBIDDEN[layer]:
+                if mod == f"formation_ftc.{target}" or mod.startswith(f"formation_ftc.{target}."):
+                    bad.append(f"{path.relative_to(PKG)} imports {mod}")
+    assert not bad, "\n".join(bad)
+
+
+def test_matplotlib_only_at_the_edges():
+    bad = []
+    for path in PKG.rglob("*.py"):
+        rel = path.relative_to(PKG)
+        if str(rel).startswith(MATPLOTLIB_ALLOWED):
+            continue
+        if any(m.split(".")[0] == "matplotlib" for m in _imports(path)):
+            bad.append(str(rel))
+    assert not bad, bad
+
+
+def test_no_eval_or_exec():
+    bad = []
+    for path in PKG.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in {"eval", "exec"}:
+                bad.append(f"{path.relative_to(PKG)}:{node.lineno}")
+    assert not bad, bad
