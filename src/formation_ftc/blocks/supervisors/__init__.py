@@ -1,0 +1,1 @@
+"""Supervisors (L1 blocks): discrete-event mode machines (mode, guards, dwell timers, logged decisions)."""

@@ -1,0 +1,79 @@
+"""Rigid-body attitude with quaternions, gravity-gradient and disturbance torque (Yang2013 eq. (4)).
+
+State ``s = [omega, q]`` (shape ``(..., 7)``): body angular velocity omega [rad/s] in the body frame
+F_i and the attitude quaternion ``q = [q1, q2, q3, q4]`` (vector first, scalar last; see
+:mod:`formation_ftc.core.quaternion`). Dynamics::
+
+    J omega_dot = -omega x J omega + tau_g + tau + iota       # Yang2013 eq. (4)
+    q_v_dot = 1/2 (q4 omega - omega x q_v),  q4_dot = -1/2 omega^T q_v
+    tau_g = 3 mu / |R|^5  R x J R                             # gravity gradient, R in body axes
+
+with the inertia matrix J [kg m^2] (symmetric positive definite), control torque tau [N m],
+disturbance torque iota [N m] (|iota| <= iota_bar) and the position R [m] of the spacecraft from the
+Earth's centre expressed in body axes.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.core.quaternion import quat_kinematics, rotation_matrix
+
+__all__ = [
+    "gravity_gradient_torque",
+    "attitude_rhs",
+    "angular_momentum_reference",
+    "rotational_kinetic_energy",
+]
+
+
+def gravity_gradient_torque(R_body, J, mu: float = MU_EARTH):
+    """``tau_g = 3 mu / |R|^5 R x (J R)`` [N m]; R_body (..., 3) [m], J (3, 3) [kg m^2]."""
+    R_body = jnp.asarray(R_body)
+    J = jnp.asarray(J)
+    r = jnp.linalg.norm(R_body, axis=-1, keepdims=True)
+    JR = jnp.einsum("ij,...j->...i", J, R_body)
+    return 3.0 * mu / r**5 * jnp.cross(R_body, JR)
+
+
+def attitude_rhs(t, state, J, torque=None, disturbance=None, R_body=None, mu: float = MU_EARTH):
+    """Time derivative of ``[omega, q]`` under eq. (4).
+
+    Parameters
+    ----------
+    t : time [s] (unused)
+    state : (..., 7) ``[omega, q]`` [rad/s, -]
+    J : (3, 3) inertia matrix [kg m^2]
+    torque, disturbance : (..., 3) control torque tau and disturbance torque iota [N m]; None = zero
+    R_body : (..., 3) position from the Earth's centre in body axes [m]; None = no gravity gradient
+    mu : gravitational parameter [m^3/s^2]
+    """
+    state = jnp.asarray(state)
+    J = jnp.asarray(J)
+    omega, q = state[..., :3], state[..., 3:]
+    Jw = jnp.einsum("ij,...j->...i", J, omega)
+    total = -jnp.cross(omega, Jw)
+    if R_body is not None:
+        total = total + gravity_gradient_torque(R_body, J, mu)
+    if torque is not None:
+        total = total + jnp.asarray(torque)
+    if disturbance is not None:
+        total = total + jnp.asarray(disturbance)
+    omega_dot = jnp.einsum("ij,...j->...i", jnp.linalg.inv(J), total)
+    return jnp.concatenate([omega_dot, quat_kinematics(q, omega)], axis=-1)
+
+
+def angular_momentum_reference(state, J):
+    """Angular momentum in the reference frame, ``C(q) J omega`` [kg m^2/s] (torque-free invariant)."""
+    state = jnp.asarray(state)
+    omega, q = state[..., :3], state[..., 3:]
+    Jw = jnp.einsum("ij,...j->...i", jnp.asarray(J), omega)
+    return jnp.einsum("...ij,...j->...i", rotation_matrix(q), Jw)
+
+
+def rotational_kinetic_energy(state, J):
+    """``1/2 omega^T J omega`` [J] (torque-free invariant)."""
+    state = jnp.asarray(state)
+    omega = state[..., :3]
+    return 0.5 * jnp.einsum("...i,ij,...j->...", omega, jnp.asarray(J), omega)

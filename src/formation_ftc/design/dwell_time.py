@@ -1,0 +1,218 @@
+"""Condition calculators of the state-varying switched-system theorems (Yang2013 Sec. 3).
+
+Pure numpy, evaluated offline (never inside the time loop). Symbols of the paper:
+
+* ``D = |[d_bar, iota_bar]|`` -- disturbance bound (Definition 1)
+* ``S = max |S_ij|`` -- largest variation-matrix norm. The paper's value sqrt(5) is the *Frobenius*
+  norm; the proof step |S X| <= S |X| needs the *induced 2-norm*; both are provided (E001-04)
+* ``eta`` -- Lyapunov decay rate (18), ``zeta = max_j sqrt(n_j eps)`` (20)
+* dwell-time bound (21), new-state bound (22), initial-state bound (24), guaranteed envelope
+  ``eps + (S+2) zeta D`` and pre-switch bound ``eps1 + zeta D`` (proof of Theorem 1), and the
+  fault-tolerance condition (29) of Theorem 2.
+
+Each checker returns an :class:`Inequality` naming the equation, its two sides and whether it holds,
+so that callers can report *which* inequality a scenario violates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Inequality",
+    "variation_norm",
+    "max_variation_norm",
+    "disturbance_bound",
+    "zeta_from_epsilon",
+    "lyapunov_epsilon",
+    "eta_from_gains",
+    "translational_decay_rate",
+    "gains_for_decay_rate",
+    "dwell_time_bound",
+    "new_state_bound",
+    "initial_state_bound",
+    "state_envelope",
+    "pre_switch_bound",
+    "condition_29_margin",
+    "check_epsilons",
+    "check_dwell_time",
+    "check_new_state",
+    "check_initial_state",
+    "check_condition_29",
+]
+
+
+@dataclass(frozen=True)
+class Inequality:
+    """``lhs relation rhs`` with the paper's equation number; ``holds`` is its truth value."""
+
+    name: str
+    reference: str
+    lhs: float
+    relation: str  # one of "<=", ">=", "<", ">"
+    rhs: float
+    holds: bool
+    detail: str = ""
+
+    def __str__(self) -> str:
+        state = "holds" if self.holds else "VIOLATED"
+        return f"{self.reference} {self.name}: {self.lhs:.6g} {self.relation} {self.rhs:.6g} ({state})"
+
+
+def _compare(lhs: float, relation: str, rhs: float, tol: float = 1e-12) -> bool:
+    if relation == "<=":
+        return lhs <= rhs + tol
+    if relation == ">=":
+        return lhs >= rhs - tol
+    if relation == "<":
+        return lhs < rhs
+    if relation == ">":
+        return lhs > rhs
+    raise ValueError(f"unknown relation {relation!r}")
+
+
+def variation_norm(S: np.ndarray, kind: str = "frobenius") -> float:
+    """Norm of one variation matrix S_ij (n_j x n_i): ``"frobenius"`` (paper) or ``"induced2"`` (E001-04)."""
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    if kind == "frobenius":
+        return float(np.linalg.norm(S, "fro"))
+    if kind == "induced2":
+        return float(np.linalg.norm(S, 2))
+    raise ValueError(f"variation norm kind must be 'frobenius' or 'induced2', got {kind!r}")
+
+
+def max_variation_norm(matrices: Sequence[np.ndarray], kind: str = "frobenius") -> float:
+    """``S = max_ij |S_ij|`` over the given variation matrices (Yang2013, after (20))."""
+    if not matrices:
+        raise ValueError("at least one variation matrix is needed to compute S")
+    return max(variation_norm(S, kind) for S in matrices)
+
+
+def disturbance_bound(d_bar: float, iota_bar: float) -> float:
+    """``D = |[d_bar, iota_bar]|`` (Definition 1); d_bar [N], iota_bar [N m] (mixed units as in the paper)."""
+    return float(np.hypot(d_bar, iota_bar))
+
+
+def lyapunov_epsilon(nu1: float, nu2: float, masses: Sequence[float]) -> float:
+    """``eps = max_i [1/(nu1 M_i^2), 1/nu2]`` of (18)."""
+    return float(max(max(1.0 / (nu1 * m**2) for m in masses), 1.0 / nu2))
+
+
+def zeta_from_epsilon(mode_sizes: Sequence[int], eps_lyap: float) -> float:
+    """``zeta = max_j sqrt(n_j eps)`` (after (20))."""
+    return float(np.sqrt(max(mode_sizes) * eps_lyap))
+
+
+def eta_from_gains(K1: float, K2: float, K3: float, K4: float, K5: float,
+                   nu1: float, nu2: float, nu3: float) -> float:
+    """Printed decay rate of (18): ``eta = 2 min[K1, K2 - nu1, K3 - nu2 - nu3, K4 - 1/nu3, K5]``.
+
+    E001-03: (14) cannot be derived from (12)-(13), so this number is the paper's claim, not a proven
+    rate. :func:`translational_decay_rate` gives the exact rate of the closed loop.
+    """
+    return 2.0 * min(K1, K2 - nu1, K3 - nu2 - nu3, K4 - 1.0 / nu3, K5)
+
+
+def translational_decay_rate(K1: float, K2: float) -> float:
+    """Exact decay rate of ``e_ddot + K2 e_dot + (K1 + 1) e = 0`` (closed loop of (12)): ``-max Re(lambda)``.
+
+    Amplitudes decay as ``exp(-rate t)``; for the SPEC gains rate = K2/2 = eta/2 (underdamped). A
+    negative value is a growth rate (faulty gain K2f < 0: rate = K2f/2 = -eta1/2).
+    """
+    lam = np.roots([1.0, K2, K1 + 1.0])
+    return float(-np.max(lam.real))
+
+
+def gains_for_decay_rate(eta: float, K1: float | None = None) -> tuple[float, float]:
+    """(K1, K2) realising amplitude decay ``exp(-eta t / 2)`` of the translational loop.
+
+    The closed loop of (12) is ``e_ddot + K2 e_dot + (K1+1) e = 0``; when underdamped
+    (K2^2 < 4 (K1+1)) its eigenvalues have real part -K2/2, so ``K2 = eta`` gives |x| ~ exp(-eta t/2),
+    matching W ~ exp(-eta t) of (20). K1 > 0 (E001-01) is free; the SPEC choice is ``K1 = eta/2``.
+    """
+    if eta <= 0:
+        raise ValueError(f"eta must be > 0, got {eta}")
+    K1 = eta / 2.0 if K1 is None else K1
+    K2 = eta
+    if K2**2 >= 4.0 * (K1 + 1.0):
+        raise ValueError("K2 = eta is not underdamped for this K1; the decay rate would differ from eta/2")
+    return K1, K2
+
+
+def dwell_time_bound(eta: float, S: float, zeta: float, D: float, eps: float, eps1: float,
+                     tau: float = 0.0, s_offset: float = 2.0) -> float:
+    """Right side of (21): ``max[(2/eta) ln((eps + (S + 2) zeta D)/eps1), tau]`` [s].
+
+    ``s_offset = 1`` gives the proof-consistent variant with (S + 1) (E001-07).
+    """
+    if eta <= 0 or eps1 <= 0:
+        raise ValueError(f"(21) needs eta > 0 and eps1 > 0, got eta={eta}, eps1={eps1}")
+    return float(max(2.0 / eta * np.log((eps + (S + s_offset) * zeta * D) / eps1), tau))
+
+
+def new_state_bound(eps2: float, zeta: float, D: float) -> float:
+    """Right side of (22): ``eps2 + zeta D``."""
+    return float(eps2 + zeta * D)
+
+
+def initial_state_bound(eps: float, S: float, zeta: float, D: float) -> float:
+    """Right side of (24): ``eps + (S + 1) zeta D``."""
+    return float(eps + (S + 1.0) * zeta * D)
+
+
+def state_envelope(eps: float, S: float, zeta: float, D: float) -> float:
+    """Guaranteed bound of Theorem 1: ``|X(t)| <= eps + (S + 2) zeta D`` for all t."""
+    return float(eps + (S + 2.0) * zeta * D)
+
+
+def pre_switch_bound(eps1: float, zeta: float, D: float) -> float:
+    """Bound at every switching instant, ``|X(t_k^-)| <= eps1 + zeta D`` (proof of Theorem 1)."""
+    return float(eps1 + zeta * D)
+
+
+def condition_29_margin(eta: float, eta1: float, dt1: float, dt2: float) -> float:
+    """Left side of (29): ``(eta/2) dt1 - (eta1/2) dt2`` (>= 0 means tolerable by switching)."""
+    return float(0.5 * eta * dt1 - 0.5 * eta1 * dt2)
+
+
+def check_epsilons(eps: float, eps1: float, eps2: float, S: float) -> list[Inequality]:
+    """Side conditions of Theorem 1: ``0 <= eps2 < eps``, ``eps1 > 0``, ``S eps1 + eps2 <= eps``."""
+    return [
+        Inequality("eps2 >= 0", "Thm 1", eps2, ">=", 0.0, _compare(eps2, ">=", 0.0)),
+        Inequality("eps2 < eps", "Thm 1", eps2, "<", eps, _compare(eps2, "<", eps)),
+        Inequality("eps1 > 0", "Thm 1", eps1, ">", 0.0, _compare(eps1, ">", 0.0)),
+        Inequality("S eps1 + eps2 <= eps", "Thm 1", S * eps1 + eps2, "<=", eps,
+                   _compare(S * eps1 + eps2, "<=", eps)),
+    ]
+
+
+def check_dwell_time(min_activation: float, eta: float, S: float, zeta: float, D: float, eps: float,
+                     eps1: float, tau: float) -> Inequality:
+    """(21): the shortest activation time of the switching modes must reach the bound."""
+    bound = dwell_time_bound(eta, S, zeta, D, eps, eps1, tau)
+    return Inequality("min Delta t >= dwell-time bound", "(21)",
+                      float(min_activation), ">=", bound, _compare(float(min_activation), ">=", bound))
+
+
+def check_new_state(norm: float, eps2: float, zeta: float, D: float, who: str = "") -> Inequality:
+    """(22): ``|X*(t_k)| <= eps2 + zeta D`` for a joining spacecraft state."""
+    bound = new_state_bound(eps2, zeta, D)
+    return Inequality(f"|X*| <= eps2 + zeta D{(' (' + who + ')') if who else ''}", "(22)", float(norm),
+                      "<=", bound, _compare(float(norm), "<=", bound))
+
+
+def check_initial_state(norm: float, eps: float, S: float, zeta: float, D: float) -> Inequality:
+    """(24): ``|X(0)| <= eps + (S + 1) zeta D``."""
+    bound = initial_state_bound(eps, S, zeta, D)
+    return Inequality("|X(0)| <= eps + (S+1) zeta D", "(24)", float(norm), "<=", bound,
+                      _compare(float(norm), "<=", bound))
+
+
+def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequality:
+    """(29): ``(eta/2) dt1 - (eta1/2) dt2 >= 0``."""
+    m = condition_29_margin(eta, eta1, dt1, dt2)
+    return Inequality("(eta/2) dt1 - (eta1/2) dt2 >= 0", "(29)", m, ">=", 0.0, _compare(m, ">=", 0.0),
+                      detail=f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}")

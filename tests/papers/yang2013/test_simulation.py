@@ -1,0 +1,126 @@
+"""Switched-system simulation of Yang2013 Sec. 4 (SPEC P1.4, acceptance checks P1.6-4/5).
+
+Full 5000-s runs (RK4, dt = 0.05 s, 100,000 steps, one lax.scan each; the two scenarios share one
+compiled program). Truths: the theorem's envelope and pre-switch bound, the variation model (10)
+(exact copies / zero blocks), decoupling of the spacecraft (the fault of spacecraft 2 cannot change any
+other spacecraft's error, and after its departure the formation is identical to the healthy one),
+the reviewer's reference run of SPEC P1.4 (|X(t_k^-)| = 0.053, 0.066, 0.071, 0.144; |X(4000)| = 0.204;
+max|u_2| = 4.7 N on [2000, 3800) s) within 0.005 / 0.005 / 0.3 N, and the supervisor's (29) decision.
+"""
+
+import jax
+import numpy as np
+import pytest
+
+import formation_ftc as ftc
+from formation_ftc.papers.yang2013.model import build
+from formation_ftc.papers.yang2013.reproduction import run_scenario, scenario_numbers
+
+
+@pytest.fixture(scope="module")
+def runs():
+    out = {}
+    for name in ("yang2013-healthy", "yang2013-controller-fault"):
+        sc, ds, metrics = run_scenario(name)
+        out[name] = (sc, ds, metrics, scenario_numbers(sc, ds))
+    return out
+
+
+def test_envelope_and_switch_bounds(runs):
+    for _name, (_sc, ds, metrics, n) in runs.items():
+        assert n["state_norm_bound"] == pytest.approx(3.018, abs=1e-3)
+        assert metrics["max_state_norm"] <= n["state_norm_bound"]
+        assert metrics["max_state_norm"] == pytest.approx(1.5, abs=0.01)  # sup|X| = |X(0)| = 1.5
+        assert float(ds["state_norm"][0]) == pytest.approx(1.5, abs=1e-12)
+        assert max(n["pre_switch_norms"].values()) <= 0.7  # eps1 + zeta D
+        assert n["state_norm_after_4000"] == pytest.approx(0.20, abs=0.05)
+
+
+def test_reference_run_numbers(runs):
+    n = runs["yang2013-controller-fault"][3]
+    ref = {1000.0: 0.053, 2000.0: 0.066, 3000.0: 0.071, 4000.0: 0.144}
+    for tk, value in ref.items():
+        assert n["pre_switch_norms"][tk] == pytest.approx(value, abs=0.005), tk
+    assert n["state_norm_after_4000"] == pytest.approx(0.204, abs=0.005)
+    assert n["max_input_norm_sc2_2000_3800"] == pytest.approx(4.7, abs=0.3)
+    h = runs["yang2013-healthy"][3]
+    assert h["pre_switch_norms"][3000.0] == pytest.approx(0.071, abs=0.005)
+
+
+def test_fault_growth_and_input_growth(runs):
+    n = runs["yang2013-controller-fault"][3]
+    h = runs["yang2013-healthy"][3]
+    assert n["x2_growth_ratio"] >= 2.0  # SPEC reference x 4.4; exp(0.005 * 200) * resonance phase
+    assert h["x2_growth_ratio"] < 1.5
+    assert n["max_input_norm_sc2_3800_4000"] > 2.0 * n["max_input_norm_sc2_2000_3800"]
+    assert h["max_input_norm_sc2_3800_4000"] < 1.5 * h["max_input_norm_sc2_2000_3800"]
+    assert n["condition_29_holds"] is True and n["condition_29_margin"] == pytest.approx(3.0)
+    assert h["condition_29_holds"] is None
+    ev = n["supervisor_events"]
+    assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == 3800.0
+    assert ev[0]["decision"] == "tolerate by switching" and ev[0]["condition_29_margin"] == pytest.approx(3.0)
+
+
+def test_variation_model_bookkeeping(runs):
+    _, ds, _, _ = runs["yang2013-healthy"]
+    x = ds["error_state"]
+    at = lambda t, s: x.sel(time=t, spacecraft=s).values  # noqa: E731
+    # undocking at 1000 s: S_12 copies x1 into 4 and 5 exactly (records are right-continuous)
+    np.testing.assert_array_equal(at(1000.0, 4), at(1000.0, 1))
+    np.testing.assert_array_equal(at(1000.0, 5), at(1000.0, 1))
+    assert np.all(at(999.0, 4) == 0.0)
+    # docking + departure + participation at 4000 s: x2 = x4 = x5 = 0, x6 = X*
+    for s in (2, 4, 5):
+        assert np.all(at(4000.0, s) == 0.0)
+    expected6 = np.zeros(13)
+    expected6[0] = 0.2
+    np.testing.assert_array_equal(at(4000.0, 6), expected6)
+    active = ds["active"].values
+    assert active.sum(axis=1)[[0, 1000, 2000, 3000, 4000]].tolist() == [3, 5, 5, 5, 3]
+    assert ds["mode"].values[[0, 999, 1000, 3999, 4000]].tolist() == [1, 1, 2, 4, 5]
+    # desired relative positions of the transition modes (E001-05): R4 reaches -400 m at 2000 s
+    R4 = ds["desired_position"].sel(spacecraft=4, axis="x")
+    assert float(R4.sel(time=1500.0)) == pytest.approx(-200.0)
+    assert float(R4.sel(time=2500.0)) == pytest.approx(-400.0)
+    assert float(R4.sel(time=3500.0)) == pytest.approx(-200.0)
+
+
+def test_fault_only_affects_spacecraft_2(runs):
+    xh = runs["yang2013-healthy"][1]["error_state"].values
+    xf = runs["yang2013-controller-fault"][1]["error_state"].values
+    others = [0, 2, 3, 4, 5]
+    np.testing.assert_array_equal(xh[:, others], xf[:, others])
+    t = runs["yang2013-healthy"][1]["time"].values
+    np.testing.assert_array_equal(xh[t >= 4000.0], xf[t >= 4000.0])  # formation unaffected after departure
+    assert not np.array_equal(xh[(t > 3800) & (t < 4000), 1], xf[(t > 3800) & (t < 4000), 1])
+
+
+def test_early_fault_is_reconfigured_by_the_supervisor(runs):
+    # fault at 3300 s: (29) fails (dt1 = 300 < dt2 = 700) -> reconfiguration (nominal K2 restored)
+    sc, ds, metrics = run_scenario("yang2013-controller-fault", {"faults.0.onset": 3300.0})
+    n = scenario_numbers(sc, ds)
+    ev = n["supervisor_events"]
+    assert ev[0]["decision"] == "request controller reconfiguration"
+    assert ev[0]["condition_29_margin"] == pytest.approx(-2.0)
+    # reconfigured at once: spacecraft 2 behaves like the healthy one
+    xh = runs["yang2013-healthy"][1]["error_state"].values
+    np.testing.assert_array_equal(ds["error_state"].values, xh)
+
+
+def test_batched_params_equal_single_runs():
+    sc = ftc.load_scenario("yang2013-controller-fault",
+                           {"simulation.horizon": 100.0, "modes.1.start": 20.0, "modes.2.start": 40.0,
+                            "modes.3.start": 60.0, "modes.4.start": 80.0, "faults.0.onset": 70.0,
+                            "simulation.record_every": 100})
+    c = build(sc)
+    p2 = dict(c.params)
+    p2["K2_faulty"] = p2["K2_faulty"].at[1].set(-0.05)
+    batch = jax.tree_util.tree_map(lambda a, b: np.stack([a, b]), c.params, p2)
+    run = jax.jit(c.run)
+    outb = jax.jit(jax.vmap(c.run))(batch)
+    for i, p in enumerate((c.params, p2)):
+        single = run(p)
+        np.testing.assert_allclose(outb["records"]["x"][i], single["records"]["x"], rtol=1e-12, atol=1e-15)
+    assert int(single["diverged_step"]) == -1
+    assert outb["records"]["x"].dtype == np.float64
+    assert not np.allclose(outb["records"]["x"][0], outb["records"]["x"][1])
