@@ -1,0 +1,265 @@
+"""Formation-level fault recovery (FLFR): analytic choice of the allocation weight alpha_k of a
+partially recovered satellite (Azizi & Khorasani 2009, eqs. (7)-(11), Theorems 1-2; SPEC.md P4.3).
+
+Reduced error model (7) with X = [e_{k-1,k}, e'_{k-1,k}, e_{k,k+1}, e'_{k,k+1}] (E004-01)::
+
+    X' = (I + Delta) A X + [0, 1, 0, -1]^T (d . xdd_des)                         # eq. (7)
+    A = blkdiag([[0, 1], [-lambda0, -lambda1]] x 2),  Delta rows 2 / 4 = +/-[0, d1, 0, d2]
+
+with d_m = eps f_m / DET (see :mod:`formation_ftc.design.allocation`). Theorem 2 bound::
+
+    |X_i(t)| <= |eps| H_i / (q2 alpha_k + q1),
+    H_i = sup_t |(G_i4 - G_i2) * (f . xdd_des)|,  G(s) = (sI - A_clp)^-1           # eq. (8)
+
+H_i is computed, as SPEC.md prescribes, by *simulating* ``X' = A_clp X + [0, 1, 0, -1]^T w(t)``,
+``w = f . xdd_des``, from zero initial conditions (RK4, lax.scan) and taking sup_t |X_i|, with A_clp at
+a reference alpha_k (default 1) and eps = +/- B_eps (the larger H is kept, so (9)/(11) stay
+conservative for alpha_k above the reference). The nominal-A variant (Delta = 0) is reported too.
+
+Design equations::
+
+    alpha_k = B_eps H / (q2 e_s) - q1 / q2                                          # eq. (9)
+    alpha_k = B_eps (1 - pi) H / (q2 e_s) - q1 / q2   (eps uniform on [-B_eps, B_eps]) # eq. (11)
+
+pi is the allowed violation probability; pi = 0 is the deterministic case (9), so 0 <= pi < 1 is
+accepted. External disturbance floor: ``T_i = sup_omega |G_i4(j omega) - G_i2(j omega)| B_ext``
+(E004-07: over all omega); no alpha can bring the error below T_i, so an ``e_s <= T_i`` is reported as
+infeasible. Units: e_s, H_i/|DET| and T_i in m; B_eps dimensionless; w in m/s^2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.core.integrators import rk4_step
+from formation_ftc.design.allocation import PerturbationCoefficients, perturbation_coefficients
+from formation_ftc.design.small_gain import SmallGainResult, hinf_norm_grid, small_gain_margin
+
+__all__ = [
+    "InfeasibleSpecification",
+    "INPUT_DIRECTION",
+    "error_dynamics_matrix",
+    "reduced_model",
+    "simulate_reduced_model",
+    "convolution_supremum",
+    "disturbance_floor",
+    "validate_violation_probability",
+    "alpha_deterministic",
+    "alpha_probabilistic",
+    "FlfrDesign",
+    "design_flfr",
+]
+
+#: Input direction of the perturbation w in X' = A_clp X + b w (eq. (7), D-bar)
+INPUT_DIRECTION = np.array([0.0, 1.0, 0.0, -1.0])
+
+
+class InfeasibleSpecification(ValueError):
+    """The mission bound e_s is at or below the disturbance floor T_i: no alpha_k can meet it."""
+
+
+def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
+    """A of eq. (7): blkdiag([[0, 1], [-lambda0, -lambda1]] x 2) [1/s, 1/s^2]."""
+    if lam0 <= 0 or lam1 <= 0:
+        raise ValueError(f"lambda0 and lambda1 must be > 0 (Hurwitz s^2 + l1 s + l0), got {lam0}, {lam1}")
+    blk = np.array([[0.0, 1.0], [-lam0, -lam1]])
+    A = np.zeros((4, 4))
+    A[:2, :2] = blk
+    A[2:, 2:] = blk
+    return A
+
+
+def reduced_model(lam0: float, lam1: float, d12: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, Delta, A_clp = (I + Delta) A) of eq. (7) for the first two D entries (d1, d2)."""
+    A = error_dynamics_matrix(lam0, lam1)
+    d1, d2 = (float(x) for x in d12)
+    Delta = np.zeros((4, 4))
+    Delta[1, 1], Delta[1, 3] = d1, d2
+    Delta[3, 1], Delta[3, 3] = -d1, -d2
+    return A, Delta, (np.eye(4) + Delta) @ A
+
+
+@partial(jax.jit, static_argnames=("w_fn", "n_steps", "record_every"))
+def _simulate(A_clp, b_vec, weights, w_fn, dt, n_steps: int, record_every: int):
+    def rhs(t, x):
+        return A_clp @ x + b_vec * jnp.dot(weights, jnp.atleast_1d(w_fn(t)))
+
+    def inner(carry, _):
+        k, x, peak = carry
+        x = rk4_step(rhs, k * dt, x, dt)
+        return (k + 1, x, jnp.maximum(peak, jnp.abs(x))), None
+
+    def outer(carry, _):
+        carry, _ = jax.lax.scan(inner, carry, None, length=record_every)
+        return carry, carry[1]
+
+    x0 = jnp.zeros(A_clp.shape[0])
+    carry0 = (jnp.asarray(0, jnp.int64), x0, jnp.abs(x0))
+    (_, _, peak), xs = jax.lax.scan(outer, carry0, None, length=n_steps // record_every)
+    return jnp.concatenate([x0[None], xs], axis=0), peak
+
+
+def simulate_reduced_model(A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,),
+                           record_every: int = 1, b_vec=INPUT_DIRECTION) -> tuple[np.ndarray, np.ndarray]:
+    """Integrate ``X' = A_clp X + b_vec (weights . w(t))`` from X(0) = 0 with RK4 (w at the stages).
+
+    ``w_fn(t)`` is a JAX-traceable function returning a scalar or a vector matching ``weights``; it is a
+    static jit argument, so pass the same function object to reuse the compilation.
+    Returns (records of shape (n_steps/record_every + 1, 4), per-state sup_t |X_i| over every step).
+    """
+    n_steps = round(horizon / dt)
+    if n_steps < 1 or abs(n_steps * dt - horizon) > 1e-9 * max(horizon, 1.0):
+        raise ValueError(f"dt = {dt} s must divide horizon = {horizon} s")
+    if n_steps % record_every:
+        raise ValueError(f"record_every = {record_every} must divide horizon/dt = {n_steps}")
+    xs, peak = _simulate(jnp.asarray(A_clp, dtype=jnp.float64), jnp.asarray(b_vec, dtype=jnp.float64),
+                         jnp.asarray(weights, dtype=jnp.float64), w_fn, jnp.asarray(dt, jnp.float64),
+                         n_steps, record_every)
+    return np.asarray(xs), np.asarray(peak)
+
+
+def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,)) -> np.ndarray:
+    """H_i = sup_{0<=t<=horizon} |(G_i4 - G_i2) * (weights . w)| for i = 1..4 (eq. (8)), by simulation.
+
+    The sign convention of the input direction does not matter (absolute value).
+    """
+    _, peak = simulate_reduced_model(A_clp, w_fn, horizon, dt, weights)
+    return peak
+
+
+def disturbance_floor(A_clp, b_ext: float, w_min: float = 1e-4, w_max: float = 1e3) -> np.ndarray:
+    """T_i = sup_omega |G_i4(j omega) - G_i2(j omega)| B_ext [m] for i = 1..4 (E004-07: all omega)."""
+    if b_ext < 0:
+        raise ValueError(f"b_ext (disturbance bound) must be >= 0 m/s^2, got {b_ext}")
+    A_clp = np.asarray(A_clp, dtype=float)
+    B = INPUT_DIRECTION[:, None]
+    out = np.empty(4)
+    for i in range(4):
+        C = np.zeros((1, 4))
+        C[0, i] = 1.0
+        out[i] = hinf_norm_grid(A_clp, B, C, None, w_min, w_max, 4000)[0] * b_ext
+    return out
+
+
+def validate_violation_probability(pi: float) -> float:
+    """Accept 0 <= pi < 1 (pi = 0 is the deterministic design (9)); raise ValueError otherwise."""
+    p = float(pi)
+    if not np.isfinite(p) or p < 0.0 or p >= 1.0:
+        raise ValueError(
+            f"violation probability pi must satisfy 0 <= pi < 1 (pi = 0 is the deterministic design "
+            f"of eq. (9)), got {pi}")
+    return p
+
+
+def alpha_probabilistic(b_eps: float, H: float, q1: float, q2: float, e_s: float, pi: float = 0.0,
+                        floor: float = 0.0) -> float:
+    """alpha_k of eq. (11) (eq. (9) for pi = 0) with the mission bound reduced by ``floor`` [m].
+
+    Raises :class:`InfeasibleSpecification` if ``e_s <= floor`` and ValueError on bad input.
+    """
+    pi = validate_violation_probability(pi)
+    if not b_eps > 0:
+        raise ValueError(f"B_eps (bound on the estimation error) must be > 0, got {b_eps}")
+    if not e_s > 0:
+        raise ValueError(f"e_s (mission error bound) must be > 0 m, got {e_s}")
+    if q2 <= 0:
+        raise ValueError(f"q2 must be > 0, got {q2}")
+    if e_s <= floor:
+        raise InfeasibleSpecification(
+            f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m; "
+            f"no alpha can meet it (Azizi2009 Sec. IV)")
+    return b_eps * (1.0 - pi) * H / (q2 * (e_s - floor)) - q1 / q2  # Azizi2009 eq. (11)
+
+
+def alpha_deterministic(b_eps: float, H: float, q1: float, q2: float, e_s: float, floor: float = 0.0) -> float:
+    """alpha_k of eq. (9) (conservative, worst-case eps)."""
+    return alpha_probabilistic(b_eps, H, q1, q2, e_s, 0.0, floor)  # Azizi2009 eq. (9)
+
+
+@dataclass(frozen=True)
+class FlfrDesign:
+    """Result of :func:`design_flfr`.
+
+    verdict: "feasible" (alpha from (11) above the current weight), "llfr-sufficient" (the bound already
+    holds at the current weight) or "infeasible" (e_s <= floor). ``alpha`` maps pi -> alpha_k
+    (None when infeasible); ``alpha_nominal_H`` the same with H from the nominal A.
+    """
+
+    verdict: str
+    message: str
+    coefficients: PerturbationCoefficients
+    H: float
+    H_nominal: float
+    H_eps_sign: float
+    floor: float
+    alpha: dict[float, float | None]
+    alpha_nominal_H: dict[float, float | None]
+    bound_at_reference: float
+    delta_norm_reference: float
+    small_gain: SmallGainResult
+    eig_clp: np.ndarray = field(repr=False)
+
+
+def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_s: float,
+                pis, w_fn: Callable, horizon: float, dt: float, b_ext: float = 0.0,
+                alpha_ref: float = 1.0, subtract_floor: bool = False) -> FlfrDesign:
+    """FLFR design for faulty satellite ``k`` (0-based, interior) with current weights ``alpha``.
+
+    ``w_fn(t)`` [m/s^2] must be the *unscaled* desired relative acceleration row ``xdd_des`` (shape
+    (N-1,)) as a JAX function; it is combined with the cofactors f inside. H uses A_clp at
+    ``alpha_k = alpha_ref`` and eps = +/- b_eps (larger kept). ``subtract_floor`` uses e_s - T in (11).
+    """
+    alpha = np.asarray(alpha, dtype=float)
+    coeff = perturbation_coefficients(alpha, b_hat, k)
+    f = coeff.f[: len(coeff.f) - 1]  # f_N multiplies the 0 entry of [p; 0]
+    n = alpha.size
+    if n != 4 or k != 1:
+        raise ValueError("the reduced model (7) is implemented for N = 4 and faulty satellite 2 (k = 1)")
+
+    A = error_dynamics_matrix(lam0, lam1)
+    H_nom = float(np.max(convolution_supremum(A, w_fn, horizon, dt, f)[[0, 2]]))
+    best, best_sign, best_clp = -1.0, 1.0, A
+    for sgn in (+1.0, -1.0):
+        d = coeff.d(sgn * b_eps, alpha_ref)
+        _, _, A_clp = reduced_model(lam0, lam1, (d[0], d[1]))
+        h = float(np.max(convolution_supremum(A_clp, w_fn, horizon, dt, f)[[0, 2]]))
+        if h > best:
+            best, best_sign, best_clp = h, sgn, A_clp
+    d_ref = coeff.d(b_eps, alpha_ref)
+    _, Delta_ref, _ = reduced_model(lam0, lam1, (d_ref[0], d_ref[1]))
+    floor = float(np.max(disturbance_floor(best_clp, b_ext)[[0, 2]])) if b_ext > 0 else 0.0
+    bound_ref = b_eps * best / coeff.det(alpha_ref)
+    alpha_k = float(alpha[k])
+    out: dict[float, float | None] = {}
+    out_nom: dict[float, float | None] = {}
+    if e_s <= floor:
+        verdict = "infeasible"
+        msg = (f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m "
+               f"(sup_omega |G_14 - G_12| B_ext with B_ext = {b_ext:.3g} m/s^2); no alpha_{k + 1} can meet it")
+        for p in pis:
+            validate_violation_probability(p)
+            out[float(p)] = None
+            out_nom[float(p)] = None
+    else:
+        fl = floor if subtract_floor else 0.0
+        for p in pis:
+            out[float(p)] = alpha_probabilistic(b_eps, best, coeff.q1, coeff.q2, e_s, p, fl)
+            out_nom[float(p)] = alpha_probabilistic(b_eps, H_nom, coeff.q1, coeff.q2, e_s, p, fl)
+        if bound_ref <= e_s:
+            verdict = "llfr-sufficient"
+            msg = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m <= e_s = {e_s} m: FLFR not needed"
+        else:
+            verdict = "feasible"
+            msg = (f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
+                   f"FLFR raises alpha_{k + 1} from {alpha_k:g}")
+    return FlfrDesign(
+        verdict=verdict, message=msg, coefficients=coeff, H=best, H_nominal=H_nom, H_eps_sign=best_sign,
+        floor=floor, alpha=out, alpha_nominal_H=out_nom, bound_at_reference=bound_ref,
+        delta_norm_reference=float(np.linalg.norm(Delta_ref, 2)), small_gain=small_gain_margin(A),
+        eig_clp=np.linalg.eigvals(best_clp))

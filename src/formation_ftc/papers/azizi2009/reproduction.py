@@ -1,0 +1,296 @@
+"""Reproduction ``azizi2009``: scenarios (a)-(c), the alpha_2 sweep, the analytic FLFR design, the
+seed spread, figures 2-4 and the published-vs-ours table (SPEC.md P4.4-P4.6, ERRATA E004-*).
+
+Steps (all runs fixed-seed; noise off except in the seed spread, E004-09):
+
+1. offline design (:func:`formation_ftc.design.flfr.design_flfr`): q1, q2, cofactors, H_i from A_clp
+   at alpha_2 = 1 (and from the nominal A), alpha_2(pi) of eq. (11) on pi = 0, 0.05, ..., 0.40,
+   small-gain margin gamma_1, disturbance floor T_i;
+2. single runs: (a) fault-free, (b) LLFR alpha_2 = 1, (c) FLFR alpha_2 = 6 and 10 (Fig. 2), the HL
+   supervisor run (LLFR -> FLFR with the analytic alpha_2) and a run with the analytic alpha_2 from t = 0;
+3. alpha_2 sweep 1.0 ... 10.0 on a 0.1 grid (x axis only; y and z are unaffected by the x fault) as one
+   ``jax.vmap`` batch; smallest grid alpha_2 with max |e_ij| <= e_s;
+4. seed spread: 20 seeds with noise sigma = 1e-5 m on e_ij and 1e-5 m/s on de_ij/dt (SPEC P4.2), alpha_2 = 1
+   plus a +/- 0.5 window of the 0.1 grid around the noise-free minimum, one vmapped batch; a seed whose
+   minimum falls on the window edge is flagged in the notes.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fig4
+from formation_ftc.papers.azizi2009.model import flfr_design
+from formation_ftc.papers.azizi2009.runner import load, run_batch, simulate
+from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction, register_reproduction
+
+__all__ = ["run_reproduction", "REPRODUCTION", "PUBLISHED", "alpha_min_on_grid"]
+
+#: Values printed in the paper (Sec. V, Figs. 3-4)
+PUBLISHED = {
+    "max_err_fault_free": 1e-4,
+    "max_err_llfr": 0.072,
+    "alpha2_min_simulated": 5.6,
+    "alpha2_analytic": {0.0: 7.6, 0.15: 6.0, 0.2: 5.4, 0.4: 3.4},
+}
+PI_GRID = tuple(round(0.05 * j, 2) for j in range(9))
+SEEDS = 20
+NOISE_SIGMA = 1e-5
+
+
+def alpha_min_on_grid(alpha: np.ndarray, max_err: np.ndarray, e_s: float) -> float | None:
+    """Smallest grid alpha whose max error is <= e_s (None if none); ``alpha`` ascending."""
+    ok = np.nonzero(np.asarray(max_err) <= e_s)[0]
+    return float(alpha[ok[0]]) if ok.size else None
+
+
+def _interp_alpha(alpha: np.ndarray, max_err: np.ndarray, e_s: float) -> float:
+    """alpha at which the (decreasing) simulated max error crosses e_s (linear interpolation)."""
+    me = np.asarray(max_err)
+    return float(np.interp(e_s, me[::-1], np.asarray(alpha)[::-1]))
+
+
+def _rel(ours: float, pub: float) -> float:
+    return abs(ours - pub) / abs(pub)
+
+
+def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: None,
+                     horizon: float = 300.0, sweep_step: float = 0.1, seeds: int = SEEDS,
+                     seed_window: float = 0.5) -> PaperReport:
+    """Run the study (see module docstring); ``horizon``/``sweep_step``/``seeds`` reduce it for tests."""
+    t_start = time.time()
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    hz = {"simulation.horizon": horizon}
+    e_s = 0.03
+
+    progress(0.02, "FLFR design (H_i, eq. (11))")
+    sc_llfr = load("azizi2009-llfr", hz)
+    design = flfr_design(sc_llfr, pis=PI_GRID, e_s=e_s)
+    a_an = design.alpha
+    a_an0 = float(a_an[0.0])
+
+    progress(0.08, "scenarios (a), (b), supervisor")
+    ds_ff, m_ff = simulate(load("azizi2009-fault-free", hz))
+    ds_ll, m_ll = simulate(sc_llfr)
+    ds_sv, m_sv = simulate(load("azizi2009-flfr", hz))
+    x_only = {**hz, "formation.n_axes": 1}
+    ds_6, m_6 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 6.0, 1.0, 1.0]}))
+    ds_10, m_10 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 10.0, 1.0, 1.0]}))
+    _, m_an = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, a_an0, 1.0, 1.0]}))
+
+    progress(0.25, "alpha_2 sweep (one vmapped batch)")
+    n_grid = round(9.0 / sweep_step) + 1
+    alpha_grid = np.round(1.0 + sweep_step * np.arange(n_grid), 10)
+    sc_sweep = load("azizi2009-llfr", {**x_only, "simulation.record_every": 1000})
+    A = np.ones((n_grid, 4))
+    A[:, 1] = alpha_grid
+    res = run_batch(sc_sweep, {"alpha": A})
+    max_err = np.array([r["max_err"] for r in res])
+    d_norm = np.array([r["D_norm_llfr"] for r in res])
+    a_min = alpha_min_on_grid(alpha_grid, max_err, e_s)
+    a_interp = _interp_alpha(alpha_grid, max_err, e_s)
+
+    progress(0.6, f"seed spread ({seeds} seeds, noise on)")
+    center = a_min if a_min is not None else 10.0
+    half = round(seed_window / sweep_step)
+    win = np.round(center + sweep_step * np.arange(-half, half + 1), 10)
+    win = win[(win >= 1.0 - 1e-9) & (win <= 10.0 + 1e-9)]
+    per_seed = np.concatenate([[1.0], win])
+    sc_noise = load("azizi2009-llfr", {**x_only, "simulation.record_every": 1000,
+                                       "noise.sigma_position": NOISE_SIGMA, "noise.sigma_velocity": NOISE_SIGMA})
+    seed_ids = np.arange(seeds)
+    SA = np.ones((seeds * per_seed.size, 4))
+    SA[:, 1] = np.tile(per_seed, seeds)
+    SS = np.repeat(seed_ids, per_seed.size)
+    res_s = run_batch(sc_noise, {"alpha": SA, "seed": SS})
+    me_s = np.array([r["max_err"] for r in res_s]).reshape(seeds, per_seed.size)
+    llfr_seed = me_s[:, 0]
+    amin_seed = []
+    edge = []
+    for j in range(seeds):
+        a = alpha_min_on_grid(win, me_s[j, 1:], e_s)
+        if a is None or a <= win[0] + 1e-9:
+            edge.append(j)
+        amin_seed.append(np.nan if a is None else a)
+    amin_seed = np.asarray(amin_seed)
+
+    progress(0.85, "figures")
+    figs = []
+    eff = []
+    for title, ds in (("(a) fault-free", ds_ff), ("(b) LLFR, alpha_2 = 1", ds_ll),
+                      ("(c) FLFR, alpha_2 = 6", ds_6), ("(d) FLFR, alpha_2 = 10", ds_10)):
+        eff.append((title, ds["time"].values, ds["effort"].sel(axis="x").values))
+    plot_fig2(eff, out_dir / "fig2_effort.png")
+    figs.append(Figure("fig2_effort.png", "2", "x-axis cumulative input effort: (a) fault-free, (b) LLFR "
+                       "alpha_2 = 1, (c) FLFR alpha_2 = 6, (d) FLFR alpha_2 = 10 (E004-06: caption HLFR -> FLFR)"))
+    plot_fig3(alpha_grid, d_norm, max_err, e_s, a_min, out_dir / "fig3_alpha2.png")
+    figs.append(Figure("fig3_alpha2.png", "3", "alpha_2 versus (a) ||D||_2 and (b) simulated max tracking error"))
+    es_grid = np.linspace(0.012, 0.07, 200)
+    coeff = design.coefficients
+    analytic_curves = {p: np.array([sc_llfr.fault.b_eps * (1 - p) * design.H / (coeff.q2 * e) - coeff.q1 / coeff.q2
+                                    for e in es_grid]) for p in PI_GRID}
+    plot_fig4(es_grid, analytic_curves, max_err, alpha_grid, out_dir / "fig4_analytic_vs_sim.png", e_s)
+    figs.append(Figure("fig4_analytic_vs_sim.png", "4", "analytic alpha_2 (eq. (11), pi = 0..0.4, H from A_clp "
+                       "at alpha_2 = 1) and simulated alpha_2 versus e_s"))
+
+    # ---------------------------------------------------------------- summary
+    t_cmp = min(100.0, horizon)
+
+    def e_at(ds) -> list[float]:
+        return [float(v) for v in ds["effort"].sel(axis="x").sel(time=t_cmp, method="nearest").values]
+
+    E = {"fault_free": e_at(ds_ff), "alpha2_1": e_at(ds_ll), "alpha2_6": e_at(ds_6), "alpha2_10": e_at(ds_10)}
+    summary = {
+        "max_err_fault_free": m_ff["max_err"],
+        "max_err_llfr": m_ll["max_err"],
+        "alpha2_min_simulated": a_min,
+        "alpha2_min_simulated_interpolated": a_interp,
+        "alpha2_analytic_pi_0": a_an0,
+        "alpha2_analytic_pi_0.15": float(a_an[0.15]),
+        "alpha2_analytic_pi_0.2": float(a_an[0.2]),
+        "alpha2_analytic_pi_0.4": float(a_an[0.4]),
+        "alpha2_analytic_nominal_A": {f"pi_{p:g}": float(v) for p, v in design.alpha_nominal_H.items()},
+        "alpha2_analytic_all_pi": {f"pi_{p:g}": float(v) for p, v in a_an.items()},
+        "H1_clp_alpha2_1": design.H, "H1_nominal_A": design.H_nominal,
+        "q1": coeff.q1, "q2": coeff.q2, "DET_alpha2_1": coeff.det(1.0), "cofactors_C_k2": coeff.f.tolist(),
+        "gamma1": design.small_gain.gamma1, "B_Delta": design.small_gain.b_delta,
+        "Delta_norm_alpha2_1": design.delta_norm_reference,
+        "bound8_alpha2_1": design.bound_at_reference,
+        "disturbance_floor_T": design.floor,
+        "max_err_analytic_alpha2_pi_0": m_an["max_err"],
+        "supervisor_t_flfr": m_sv["t_flfr"], "supervisor_alpha2": float(ds_sv.attrs["alpha_flfr"]),
+        "supervisor_max_err_after_settle": m_sv["max_err_after_flfr"], "supervisor_max_err": m_sv["max_err"],
+        f"effort_x_at_{t_cmp:g}s": E,
+        "seed_spread": {
+            "seeds": int(seeds), "noise_sigma_position_m": NOISE_SIGMA, "noise_sigma_velocity_m_s": NOISE_SIGMA,
+            "alpha2_min_simulated_min": float(np.nanmin(amin_seed)) if np.any(np.isfinite(amin_seed)) else None,
+            "alpha2_min_simulated_max": float(np.nanmax(amin_seed)) if np.any(np.isfinite(amin_seed)) else None,
+            "alpha2_min_simulated_mean": float(np.nanmean(amin_seed)) if np.any(np.isfinite(amin_seed)) else None,
+            "max_err_llfr_min": float(llfr_seed.min()), "max_err_llfr_max": float(llfr_seed.max()),
+            "max_err_llfr_std": float(llfr_seed.std()),
+            "seeds_at_window_edge": edge,
+        },
+    }
+
+    # ---------------------------------------------------------------- comparison rows
+    rows: list[ComparisonRow] = []
+    why = ("E004-08: nominal b_i, sign of eps, fault onset, labelling and H_i computation are unstated; "
+           "SPEC baseline b = 1, b_hat_2 = 0.88")
+    rows.append(ComparisonRow("(a) fault-free max |e_ij| [m]", "about 1e-4", f"{m_ff['max_err']:.2g}",
+                              "same order, <= 2e-4 m (SPEC P4.6-3)",
+                              "match" if m_ff["max_err"] <= 2e-4 else "differs",
+                              "dt = 1e-3 ZOH discretisation error, noise off (E004-09)"))
+    rows.append(ComparisonRow("(b) LLFR-only max |e_ij| [m], alpha_2 = 1", "0.072", f"{m_ll['max_err']:.4f}",
+                              "within 10 %", "match" if _rel(m_ll["max_err"], 0.072) <= 0.10 else "differs",
+                              why + f" ({100 * _rel(m_ll['max_err'], 0.072):.0f} % off; b_hat_2 = 0.90, "
+                              "B_eps = 0.1 gives 0.080 per SPEC)"))
+    rows.append(ComparisonRow("simulated min alpha_2 for e_s = 0.03 m (0.1 grid)", "5.6",
+                              f"{a_min} (interpolated {a_interp:.2f})", "within 0.3",
+                              "match" if a_min is not None and abs(a_min - 5.6) <= 0.3 else "differs", why))
+    for p in (0.0, 0.15, 0.2, 0.4):
+        pub = PUBLISHED["alpha2_analytic"][p]
+        ours = float(a_an[p])
+        rows.append(ComparisonRow(f"analytic alpha_2, eq. (11), pi = {p:g}", f"{pub}",
+                                  f"{ours:.2f} (nominal-A H: {design.alpha_nominal_H[p]:.2f})", "within 10 %",
+                                  "match" if _rel(ours, pub) <= 0.10 else "differs",
+                                  why + "; the paper's four values are only approximately linear in 1 - pi "
+                                  "(their line predicts 5.5 at pi = 0.2) and imply q1/q2 ~ 2.9, b_hat_2 ~ 0.98"))
+    # theory relations
+    vals = np.array([a_an[p] for p in PI_GRID])
+    dec = bool(np.all(np.diff(vals) < 0))
+    lin = np.polyfit(1 - np.array(PI_GRID), vals, 1)
+    lin_res = float(np.max(np.abs(np.polyval(lin, 1 - np.array(PI_GRID)) - vals)))
+    rows.append(ComparisonRow("relation: analytic alpha_2 decreases as pi grows", "yes (7.6 > 6.0 > 5.4 > 3.4)",
+                              " > ".join(f"{v:.2f}" for v in vals[[0, 3, 4, 8]]), "strictly decreasing",
+                              "match" if dec else "differs", f"linear in 1 - pi: max residual {lin_res:.1e}"))
+    cons = a_min is not None and a_an0 >= a_min
+    rows.append(ComparisonRow("relation: deterministic alpha_2 (pi = 0) >= simulated minimum (conservative)",
+                              "7.6 >= 5.6", f"{a_an0:.2f} >= {a_min} (interpolated {a_interp:.2f})",
+                              "alpha_2(pi=0) >= simulated grid minimum",
+                              "match" if cons else "differs",
+                              f"H from A_clp at alpha_2 = 1; with the nominal A it is {design.alpha_nominal_H[0.0]:.2f} "
+                              "(not conservative, SPEC P4.6-5)"))
+    rows.append(ComparisonRow("relation: LLFR alone violates e_s", "0.072 > 0.03", f"{m_ll['max_err']:.4f} > {e_s}",
+                              "max error > e_s", "match" if m_ll["max_err"] > e_s else "differs"))
+    meets = m_an["max_err"] <= e_s
+    rows.append(ComparisonRow("relation: FLFR with the analytic alpha_2 meets e_s", "yes",
+                              f"{m_an['max_err']:.4f} at alpha_2 = {a_an0:.2f}; supervised run after settling "
+                              f"{m_sv['max_err_after_flfr']:.4f} (switch at t = {m_sv['t_flfr']:.3f} s)",
+                              "max error <= e_s", "match" if meets and m_sv["max_err_after_flfr"] <= e_s else "differs",
+                              "the supervised run exceeds e_s briefly before the switch (it is the trigger)"))
+    cases = ("alpha2_1", "alpha2_6", "alpha2_10")
+    e2 = [E[c][1] for c in cases]
+    others = [[E[c][j] for c in cases] for j in (0, 2, 3)]
+    redistrib = e2[0] > e2[1] > e2[2] and all(o[0] < o[1] < o[2] for o in others)
+    rows.append(ComparisonRow("relation: satellite 2 effort falls, others rise as alpha_2 = 1 -> 6 -> 10 (Fig. 2)",
+                              "yes (Fig. 2)", f"E_x2({t_cmp:g} s) = " + " > ".join(f"{v:.1f}" for v in e2)
+                              + "; E_x1 = " + " < ".join(f"{v:.1f}" for v in others[0]),
+                              "monotone", "match" if redistrib else "differs"))
+    mono = bool(np.all(np.diff(max_err) < 0))
+    rows.append(ComparisonRow("relation: max error decreases with alpha_2 (Theorem 2, Fig. 3b)", "yes",
+                              f"{max_err[0]:.4f} -> {max_err[-1]:.4f}", "strictly decreasing on the grid",
+                              "match" if mono else "differs"))
+    rows.append(ComparisonRow("relation: ||D|| decreases with alpha_2 (Lemma 1, Fig. 3a)", "yes",
+                              f"{d_norm[0]:.4f} -> {d_norm[-1]:.4f}", "strictly decreasing",
+                              "match" if np.all(np.diff(d_norm) < 0) else "differs"))
+    sg = design.small_gain
+    rows.append(ComparisonRow("Theorem 1 small gain: ||Delta|| < B_Delta at alpha_2 = 1", "not stated (numbers)",
+                              f"||Delta|| = {design.delta_norm_reference:.3f} < B_Delta = {sg.b_delta:.4f} "
+                              f"(gamma_1 = {sg.gamma1:.4f})", "holds",
+                              "match" if sg.holds(design.delta_norm_reference) else "differs",
+                              "E004-05: gamma_1 = sqrt(2); nominal system stable even without FLFR"))
+    rows.append(ComparisonRow("bound (8) at alpha_2 = 1 vs simulated max error", "not stated",
+                              f"{design.bound_at_reference:.4f} vs {m_ll['max_err']:.4f}",
+                              "bound >= simulation (within 1 %)",
+                              "match" if design.bound_at_reference >= m_ll["max_err"] * 0.99 else "differs",
+                              "exact there because (7) is exact (SPEC P4.6-5)"))
+
+    notes = [
+        "H_i by simulating X' = A_clp X + [0,1,0,-1]^T (f . xdd^d) from zero ICs over 300 s, A_clp at alpha_2 = 1 "
+        "and eps = +/- B_eps (larger kept); eq. (11) used literally (disturbance floor not subtracted; "
+        f"T = {design.floor:.2e} m).",
+        "Sweep and seed spread simulate the x axis only (y, z are decoupled and fault-free).",
+        f"Seed spread: {seeds} seeds, noise sigma = {NOISE_SIGMA} on e_ij and de_ij/dt (SPEC P4.2; the paper's "
+        "variance 1e-4 would give ~4e-3 m fault-free error, E004-09).",
+    ]
+    if edge:
+        notes.append(f"seeds {edge}: minimum alpha_2 at/below the window edge {win[0]} (window too narrow)")
+    progress(1.0, "done")
+    return PaperReport(
+        paper="azizi2009", summary=summary, rows=rows, figures=figs, checks=[],
+        scenarios=["azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"],
+        seeds=sorted({0, *(int(s) for s in seed_ids)}), notes=notes, wall_time_s=time.time() - t_start)
+
+
+def _run(out_dir: Path, progress: Callable[[float, str], None]) -> PaperReport:
+    rep = run_reproduction(out_dir, progress)
+    from formation_ftc.papers.azizi2009.method import check
+
+    rep.checks = check(load("azizi2009-flfr"))
+    return rep
+
+
+REPRODUCTION = register_reproduction(Reproduction(
+    paper="azizi2009",
+    title="A hierarchical architecture for cooperative fault accommodation of formation flying satellites in deep space",
+    citation="S.M. Azizi, K. Khorasani, American Control Conference 2009",
+    description="LLFR allocation + HL supervisor + FLFR weight design (eqs. (9), (11)); alpha_2 sweep 1..10, "
+                "analytic alpha_2(pi), 20-seed spread",
+    errata=[
+        ("E004-01", "X = [e12, e12', e23, e23']"),
+        ("E004-02", "J_aug last row uses b_hat_2 (implementable Lagrange condition)"),
+        ("E004-03", "DET = -det(J_aug) = q2 alpha_2 + q1; cofactors C_k2 free of alpha_2, b_hat_2"),
+        ("E004-05", "gamma_1 = sqrt(2), B_Delta = 0.7071"),
+        ("E004-06", "'decrease alpha_2' -> increase; Fig. 2 'HLFR' -> FLFR"),
+        ("E004-07", "T_i over all omega"),
+        ("E004-08", "published numbers not reproducible from the printed data; relations checked"),
+        ("E004-09", "noise off by default, dt = 1e-3"),
+        ("E004-10", "satellite-dependent disturbance 1e-5 cos(0.01 t + i)"),
+    ],
+    run=_run,
+))
