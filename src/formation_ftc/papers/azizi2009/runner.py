@@ -16,7 +16,6 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
-from pydantic import ValidationError
 
 from formation_ftc.config import loader
 from formation_ftc.papers.azizi2009.model import build
@@ -27,21 +26,19 @@ __all__ = ["load", "simulate", "run_batch"]
 
 def load(name_or_path: str | Path, overrides: Mapping[str, Any] | Iterable[str] | None = None) -> Azizi2009Scenario:
     """Built-in scenario name or TOML path (+ overrides) -> validated :class:`Azizi2009Scenario`."""
-    raw, source = loader.read_raw(name_or_path)
-    raw = loader.apply_overrides(raw, overrides)
-    try:
-        return Azizi2009Scenario.model_validate(raw)
-    except ValidationError as exc:
-        raise loader.ScenarioError(loader._format_validation_error(exc, source)) from None
+    from formation_ftc.api import load_scenario
+
+    sc = load_scenario(name_or_path, overrides)
+    if not isinstance(sc, Azizi2009Scenario):
+        raise loader.ScenarioError(f"{name_or_path}: scenario.method must be 'azizi2009', got {sc.scenario.method!r}")
+    return sc
 
 
 def simulate(sc: Azizi2009Scenario):
     """One run -> (xarray.Dataset with provenance, metrics dict); raises SimulationDiverged."""
-    from formation_ftc.api import finish_run
+    from formation_ftc.api import simulate_with_metrics
 
-    compiled = build(sc)
-    out = jax.jit(compiled.run)(compiled.params)
-    return finish_run(sc, compiled, out)
+    return simulate_with_metrics(sc)
 
 
 def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> list[dict[str, float]]:
