@@ -33,6 +33,7 @@ __all__ = [
     "reproductions",
     "load_plugins",
     "PAPER_MODULES",
+    "PLUGIN_ERRORS",
 ]
 
 PyTree = Any
@@ -168,7 +169,8 @@ def register_method(method: Method) -> Method:
 def get_method(name: str) -> Method:
     load_plugins()
     if name not in _METHODS:
-        raise KeyError(f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}")
+        raise KeyError(f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}"
+                       + _plugin_error_hint())
     return _METHODS[name]
 
 
@@ -185,7 +187,8 @@ def register_reproduction(rep: Reproduction) -> Reproduction:
 def get_reproduction(paper: str) -> Reproduction:
     load_plugins()
     if paper not in _REPRODUCTIONS:
-        raise KeyError(f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all")
+        raise KeyError(f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all"
+                       + _plugin_error_hint())
     return _REPRODUCTIONS[paper]
 
 
@@ -196,14 +199,31 @@ def reproductions() -> dict[str, Reproduction]:
 
 
 _LOADED = False
+#: plug-in module -> traceback text of an import that failed (the others still load)
+PLUGIN_ERRORS: dict[str, str] = {}
 
 
 def load_plugins() -> None:
-    """Import the built-in methods and paper packages (idempotent)."""
+    """Import the built-in methods and paper packages (idempotent).
+
+    A package that fails to import is recorded in :data:`PLUGIN_ERRORS` and skipped, so one broken
+    paper does not take the others (or the CLI) down; lookups of its names then report the error.
+    """
     global _LOADED
     if _LOADED:
         return
     _LOADED = True
-    importlib.import_module("formation_ftc.methods")
-    for name in PAPER_MODULES:
-        importlib.import_module(f"formation_ftc.papers.{name}")
+    import traceback
+
+    for module in ["formation_ftc.methods"] + [f"formation_ftc.papers.{n}" for n in PAPER_MODULES]:
+        try:
+            importlib.import_module(module)
+        except Exception:  # noqa: BLE001 - recorded and reported on lookup
+            PLUGIN_ERRORS[module] = traceback.format_exc()
+
+
+def _plugin_error_hint() -> str:
+    if not PLUGIN_ERRORS:
+        return ""
+    return " (plug-ins that failed to import: " + ", ".join(
+        f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items()) + ")"

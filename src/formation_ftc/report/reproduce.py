@@ -1,0 +1,437 @@
+"""``formation-ftc reproduce PAPER|all --out DIR``: run the registered paper reproductions, write the report.
+
+For every selected paper (see :data:`formation_ftc.registry.PAPER_MODULES` for the order) the
+registered :class:`~formation_ftc.registry.Reproduction` runs into ``DIR/<paper>/`` under one rich
+progress bar; its wall time is measured here (compilation included). A paper that raises is recorded
+as a failed section (with its traceback) and the others still run; the exit status is then 1.
+
+Files written::
+
+    DIR/.formation-ftc-report     marker: DIR is a report (a later run may overwrite it)
+    DIR/summary.json              one paper: its summary + "paper" + "metadata";
+                                  several (or "all"): {paper: summary, ..., "metadata": {...}}
+    DIR/index.html                self-contained page (see formation_ftc.report.html)
+    DIR/<paper>/summary.json      the paper's summary + "paper"
+    DIR/<paper>/report.json       rows, checks, figures, notes, seeds, errata, status, wall time
+    DIR/<paper>/*.png             the paper's figures (written by the reproduction)
+    DIR/<paper>/trajectory3d.json optional 3-D trajectory data for the interactive view
+
+An existing, non-empty ``DIR`` without the marker is refused unless ``force``; an unknown paper name
+raises :class:`ReproduceError` listing the valid ones. JSON files are strict JSON: non-finite floats
+are written as the strings ``"nan"``, ``"inf"``, ``"-inf"``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import shutil
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from formation_ftc import registry
+from formation_ftc.registry import PaperReport, Reproduction
+from formation_ftc.report.metadata import provenance, utc_now
+
+__all__ = [
+    "MARKER_NAME",
+    "REPORT_SCHEMA",
+    "ReproduceError",
+    "available_reproductions",
+    "select_papers",
+    "prepare_output",
+    "reproduce",
+    "paper_entry",
+    "to_jsonable",
+    "add_cli",
+    "run_cli",
+]
+
+#: Marker file that identifies a directory written by ``formation-ftc reproduce``.
+MARKER_NAME = ".formation-ftc-report"
+#: Schema tag stored in every ``report.json``.
+REPORT_SCHEMA = "formation-ftc-paper-report/1"
+
+VERDICTS = ("match", "differs", "not stated")
+
+
+class ReproduceError(Exception):
+    """Bad input to ``reproduce`` (unknown paper, refused output directory); CLI exit status 2."""
+
+
+# ----------------------------------------------------------------------------------------------- JSON
+def to_jsonable(obj: Any) -> Any:
+    """Convert ``obj`` to plain JSON types (numpy/JAX arrays and scalars, paths, dataclasses, sets).
+
+    Non-finite floats become the strings ``"nan"``, ``"inf"``, ``"-inf"`` so the output is strict
+    JSON (readable by browsers' ``JSON.parse``).
+    """
+    if obj is None or isinstance(obj, bool | str):
+        return obj
+    if isinstance(obj, int):
+        return obj
+    if isinstance(obj, float):
+        if math.isfinite(obj):
+            return obj
+        return "nan" if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, Path):
+        return str(obj)
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        as_dict = getattr(obj, "as_dict", None)
+        return to_jsonable(as_dict() if callable(as_dict) else dataclasses.asdict(obj))
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, set | frozenset):
+        return [to_jsonable(v) for v in sorted(obj, key=str)]
+    if hasattr(obj, "__array__") or type(obj).__module__.startswith("numpy"):
+        import numpy as np
+
+        arr = np.asarray(obj)
+        if arr.dtype.kind in "biuf":
+            return to_jsonable(arr.tolist())
+        if arr.dtype.kind == "c":
+            return to_jsonable({"real": arr.real.tolist(), "imag": arr.imag.tolist()})
+        return to_jsonable(arr.astype(str).tolist())
+    if hasattr(obj, "item"):  # other scalar types exposing .item()
+        try:
+            return to_jsonable(obj.item())
+        except Exception:
+            pass
+    return str(obj)
+
+
+def _write_json(path: Path, data: Any) -> None:
+    """Write strict JSON atomically (temporary file then rename)."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    tmp.replace(path)
+
+
+# ------------------------------------------------------------------------------------- registry side
+def available_reproductions() -> tuple[dict[str, Reproduction], dict[str, str]]:
+    """Registered reproductions (report order) and the paper packages that failed to import.
+
+    Returns ``(reproductions, import_failures)`` with ``import_failures = {paper: traceback}``. A
+    paper package that raises on import does not hide the others: each built-in package is imported
+    on its own first, so the report can show the broken one as a failed section.
+    """
+    found = registry.reproductions()  # load_plugins records failing imports instead of raising
+    failures = {m.rsplit(".", 1)[-1]: tb for m, tb in registry.PLUGIN_ERRORS.items()}
+    if "methods" in failures:
+        print("warning: formation_ftc.methods failed to import:\n" + failures.pop("methods"), file=sys.stderr)
+    return found, {p: tb for p, tb in failures.items() if p not in found}
+
+
+def select_papers(requested: Iterable[str], valid: Iterable[str]) -> list[str]:
+    """Resolve the requested names (``"all"`` or paper names) against ``valid``, keeping its order.
+
+    Raises :class:`ReproduceError` naming the valid choices for an unknown name or an empty request.
+    """
+    requested = [str(r).strip() for r in requested]
+    valid = list(valid)
+    choices = ", ".join(valid + ["all"]) if valid else "none registered"
+    if not requested:
+        raise ReproduceError(f"no paper given; valid: {choices}")
+    unknown = [r for r in requested if r != "all" and r not in valid]
+    if unknown:
+        raise ReproduceError(f"unknown paper {unknown[0]!r}; valid: {choices}")
+    if "all" in requested:
+        if not valid:
+            raise ReproduceError("no paper reproduction is registered")
+        return valid
+    return [p for p in valid if p in requested]
+
+
+def prepare_output(out: Path, force: bool = False) -> bool:
+    """Create (or accept) the report directory and write the marker.
+
+    Returns True when ``out`` held a previous report (then stale per-paper directories may be
+    cleared). Raises :class:`ReproduceError` when ``out`` is a file, or an existing non-empty
+    directory without the marker and ``force`` is False.
+    """
+    out = Path(out)
+    previous = False
+    if out.exists():
+        if not out.is_dir():
+            raise ReproduceError(f"--out {out} exists and is not a directory")
+        previous = (out / MARKER_NAME).is_file()
+        if not previous and any(out.iterdir()) and not force:
+            raise ReproduceError(
+                f"--out {out} exists, is not empty and is not a previous formation-ftc report "
+                f"(no {MARKER_NAME} file); choose a new directory or pass --force to write into it")
+    out.mkdir(parents=True, exist_ok=True)
+    from formation_ftc import __version__
+
+    _write_json(out / MARKER_NAME, {"tool": "formation-ftc reproduce", "version": __version__,
+                                    "written_utc": utc_now()})
+    return previous
+
+
+# ----------------------------------------------------------------------------------------- progress
+class _Bar:
+    """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``."""
+
+    def __init__(self, enabled: bool, n_papers: int, console=None) -> None:
+        self.enabled = enabled and n_papers > 0
+        self.n = n_papers
+        self._progress = None
+        self._task = None
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+
+            self._progress = Progress(TextColumn("[bold]reproduce[/]"), BarColumn(), TaskProgressColumn(),
+                                      TimeElapsedColumn(), TextColumn("{task.description}"),
+                                      console=console or Console(stderr=True))
+
+    def __enter__(self) -> _Bar:
+        if self._progress is not None:
+            self._progress.start()
+            self._task = self._progress.add_task("", total=float(self.n))
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._progress is not None:
+            self._progress.stop()
+
+    def update(self, completed: float, description: str) -> None:
+        if self._progress is not None:
+            self._progress.update(self._task, completed=completed, description=description)
+
+    def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
+        def progress(fraction: float = 0.0, message: str = "") -> None:
+            try:
+                f = float(fraction)
+            except (TypeError, ValueError):
+                f = 0.0
+            f = min(max(f, 0.0), 1.0) if math.isfinite(f) else 0.0
+            self.update(index + f, f"{paper} ({index + 1}/{self.n}) {message}".rstrip())
+
+        return progress
+
+
+# ------------------------------------------------------------------------------------------ entries
+def _counts(rows: list[dict], checks: list[dict]) -> tuple[dict[str, int], dict[str, int]]:
+    verdicts = {v: sum(1 for r in rows if r.get("verdict") == v) for v in VERDICTS}
+    checks_summary = {
+        "hold": sum(1 for c in checks if c.get("holds") is True),
+        "fail": sum(1 for c in checks if c.get("holds") is False),
+        "not evaluated": sum(1 for c in checks if c.get("holds") is None),
+        "required_failed": sum(1 for c in checks if c.get("holds") is False and c.get("required", True)),
+    }
+    return verdicts, checks_summary
+
+
+def paper_entry(reproduction: Reproduction | None, paper: str, paper_dir: Path,
+                report: PaperReport | None, wall_time_s: float, error: str | None = None) -> dict[str, Any]:
+    """The ``report.json`` content of one paper (also what :mod:`formation_ftc.report.html` renders)."""
+    rows = [r.as_dict() for r in report.rows] if report else []
+    checks = [c.as_dict() for c in report.checks] if report else []
+    warnings: list[str] = []
+    figures = []
+    for fig in (report.figures if report else []):
+        exists = (paper_dir / fig.path).is_file()
+        if not exists:
+            warnings.append(f"figure {fig.number}: file {fig.path} was not written")
+        figures.append(dict(path=str(fig.path), number=str(fig.number), caption=fig.caption, exists=exists))
+    if report is not None and report.paper != paper:
+        warnings.append(f"the reproduction returned a report for {report.paper!r}, expected {paper!r}")
+    verdicts, checks_summary = _counts(rows, checks)
+    traj = paper_dir / "trajectory3d.json"
+    return {
+        "schema": REPORT_SCHEMA,
+        "paper": paper,
+        "title": reproduction.title if reproduction else paper,
+        "citation": reproduction.citation if reproduction else "",
+        "description": reproduction.description if reproduction else "",
+        "errata": [{"id": str(e[0]), "text": str(e[1])} for e in (reproduction.errata if reproduction else [])],
+        "status": "ok" if error is None else "failed",
+        "error": error,
+        "wall_time_s": round(float(wall_time_s), 3),
+        "rows": rows,
+        "verdicts": verdicts,
+        "checks": checks,
+        "checks_summary": checks_summary,
+        "figures": figures,
+        "scenarios": list(report.scenarios) if report else [],
+        "seeds": list(report.seeds) if report else [],
+        "notes": list(report.notes) if report else [],
+        "warnings": warnings,
+        "trajectory3d": traj.name if traj.is_file() else None,
+        "finished_utc": utc_now(),
+    }
+
+
+def _paper_summary(entry: dict, report: PaperReport | None) -> dict[str, Any]:
+    if entry["status"] == "ok" and report is not None:
+        return dict(report.summary)
+    last = (entry["error"] or "").strip().splitlines()
+    return {"status": "failed", "error": last[-1] if last else "failed"}
+
+
+def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Callable[[float, str], None],
+             import_error: str | None) -> tuple[dict[str, Any], PaperReport | None]:
+    t0 = time.perf_counter()
+    report: PaperReport | None = None
+    error = import_error
+    if rep is not None:
+        try:
+            result = rep.run(paper_dir, progress)
+            if not isinstance(result, PaperReport):
+                raise TypeError(f"Reproduction {paper!r}.run returned {type(result).__name__}, "
+                                "expected registry.PaperReport")
+            report = result
+        except Exception:
+            error = traceback.format_exc()
+    wall = time.perf_counter() - t0
+    if report is not None:
+        report.wall_time_s = wall
+    return paper_entry(rep, paper, paper_dir, report, wall, error), report
+
+
+# ------------------------------------------------------------------------------------------- driver
+def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, progress: bool = True, *,
+              include_3d: bool = True, available: Mapping[str, Reproduction] | None = None,
+              console=None) -> dict[str, Any]:
+    """Run the selected paper reproductions into ``out`` and write the report.
+
+    Parameters
+    ----------
+    papers : paper names, or ``["all"]`` (a single string is accepted too).
+    out : report directory (created; see :func:`prepare_output` for the refusal rule).
+    force : write into an existing non-empty directory that is not a previous report.
+    progress : show one rich progress bar (on stderr).
+    include_3d : embed the interactive 3-D trajectory views (needs plotly).
+    available : reproductions to choose from (default: the registry); tests inject fakes here.
+    console : rich console for the final wall-time table (default: stdout).
+
+    Returns
+    -------
+    dict with ``exit_code`` (0 all papers ran, 1 one failed), ``papers`` (``{paper: {status,
+    wall_time_s, error}}``), ``summary`` (what ``summary.json`` holds), ``index`` (path of
+    ``index.html``) and ``out``.
+    """
+    from formation_ftc.report import html as html_report
+
+    if isinstance(papers, str):
+        papers = [papers]
+    if available is None:
+        found, import_failures = available_reproductions()
+    else:
+        found, import_failures = dict(available), {}
+    valid = list(found) + [p for p in registry.PAPER_MODULES if p in import_failures]
+    selected = select_papers(papers, valid)
+    single = len(selected) == 1 and "all" not in papers
+    out = Path(out)
+    previous = prepare_output(out, force)
+
+    t_start = time.perf_counter()
+    entries: list[dict[str, Any]] = []
+    summaries: dict[str, dict[str, Any]] = {}
+    with _Bar(progress, len(selected)) as bar:
+        for i, paper in enumerate(selected):
+            paper_dir = out / paper
+            if previous and paper_dir.is_dir():
+                shutil.rmtree(paper_dir)  # stale figures of an earlier report
+            paper_dir.mkdir(parents=True, exist_ok=True)
+            bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
+            entry, report = _run_one(found.get(paper), paper, paper_dir, bar.callback(i, paper),
+                                     import_failures.get(paper))
+            summary = _paper_summary(entry, report)
+            summaries[paper] = summary
+            entries.append(entry)
+            _write_json(paper_dir / "report.json", entry)
+            _write_json(paper_dir / "summary.json", {**summary, "paper": paper})
+            bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
+    total = time.perf_counter() - t_start
+
+    metadata: dict[str, Any] = dict(provenance())
+    metadata.update(
+        command="formation-ftc reproduce " + " ".join(papers),
+        papers=selected,
+        status={e["paper"]: e["status"] for e in entries},
+        wall_time_s={e["paper"]: e["wall_time_s"] for e in entries},
+        seeds={e["paper"]: e["seeds"] for e in entries},
+        total_wall_time_s=round(total, 3),
+    )
+    if single:
+        paper = selected[0]
+        summary_doc = {**summaries[paper], "paper": paper, "metadata": metadata}
+    else:
+        summary_doc = {**summaries, "metadata": metadata}
+    _write_json(out / "summary.json", summary_doc)
+    index = html_report.write_index(out, entries, metadata, include_3d=include_3d)
+
+    failed = [e["paper"] for e in entries if e["status"] != "ok"]
+    _print_table(entries, total, index, console)
+    return {
+        "exit_code": 1 if failed else 0,
+        "papers": {e["paper"]: {"status": e["status"], "wall_time_s": e["wall_time_s"], "error": e["error"]}
+                   for e in entries},
+        "summary": to_jsonable(summary_doc),
+        "index": str(index),
+        "out": str(out),
+    }
+
+
+def _print_table(entries: list[dict], total: float, index: Path, console=None) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = console or Console()
+    table = Table(title="formation-ftc reproduce: wall time per paper")
+    for col, kw in [("paper", {}), ("status", {}), (escape("wall time [s]"), {"justify": "right"}),
+                    ("match", {"justify": "right"}), ("differs", {"justify": "right"}),
+                    ("not stated", {"justify": "right"}), ("conditions hold/fail", {"justify": "right"})]:
+        table.add_column(col, **kw)
+    for e in entries:
+        status = "[green]ok[/]" if e["status"] == "ok" else "[red]FAILED[/]"
+        v, c = e["verdicts"], e["checks_summary"]
+        table.add_row(e["paper"], status, f"{e['wall_time_s']:.1f}", str(v["match"]), str(v["differs"]),
+                      str(v["not stated"]), f"{c['hold']}/{c['fail']}")
+    table.add_row("total", "", f"{total:.1f}", "", "", "", "", end_section=True)
+    console.print(table)
+    for e in entries:
+        if e["status"] != "ok":
+            last = (e["error"] or "").strip().splitlines()
+            console.print(f"[red]{e['paper']} failed:[/] {last[-1] if last else ''} "
+                          f"(traceback in {e['paper']}/report.json)", highlight=False)
+    console.print(f"report: {index}", highlight=False)
+
+
+# ----------------------------------------------------------------------------------------------- CLI
+def add_cli(subparsers) -> argparse.ArgumentParser:
+    """Add the ``reproduce`` subcommand to an ``argparse`` subparsers object (handler in ``func``)."""
+    valid = ", ".join(registry.PAPER_MODULES)
+    p = subparsers.add_parser(
+        "reproduce", help="reproduce the papers' studies and write an HTML report",
+        description="Run the paper reproductions and write DIR/index.html, DIR/summary.json and one "
+                    "folder per paper. Exit status: 0 all ran, 1 a paper failed, 2 bad input.")
+    p.add_argument("paper", nargs="+", metavar="PAPER", help=f"paper name ({valid}) or 'all'")
+    p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
+    p.add_argument("--force", action="store_true",
+                   help="write into an existing non-empty directory that is not a previous report")
+    p.add_argument("--no-3d", dest="include_3d", action="store_false",
+                   help="leave out the interactive 3-D trajectory views (smaller page)")
+    p.set_defaults(func=run_cli)
+    return p
+
+
+def run_cli(args: argparse.Namespace) -> int:
+    """Handler of ``formation-ftc reproduce``; returns the exit status (0, 1 a paper failed, 2 bad input)."""
+    try:
+        result = reproduce(args.paper, args.out, force=args.force, progress=True,
+                           include_3d=getattr(args, "include_3d", True))
+    except ReproduceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return int(result["exit_code"])
