@@ -14,9 +14,9 @@ the integer step index, so event times are exact step boundaries) and ``observe(
 ``n_steps/record_every + 1`` samples; metrics that need every step live in the state and are
 accumulated by ``step``).
 
-Divergence: after every step the state is checked for non-finite values. The first non-finite step
-freezes the carry at the last finite state and records the step index; later records repeat that last
-finite state's observation and are masked out by :func:`trim_records`. :func:`diagnose_divergence`
+Divergence: after every step the state (or the part ``check_of`` selects) is checked for non-finite
+values. The first non-finite step freezes the carry at the last finite state and records the step index;
+later records repeat that last finite state's observation and are masked out by :func:`trim_records`. :func:`diagnose_divergence`
 then replays one step eagerly to name the variable and spacecraft.
 """
 
@@ -45,7 +45,7 @@ PyTree = Any
 
 #: A run's output: a plain dict (a JAX pytree) with keys ``records`` (pytree, leading axis = record
 #: index), ``final`` (final state), ``diverged_step`` (int, -1 when the run stayed finite) and
-#: ``last_finite`` (the last finite state; the state at divergence).
+#: ``last_finite`` (the last finite state, equal to ``final``; kept as a separate name for clarity).
 RunOutput = dict
 
 
@@ -79,38 +79,41 @@ def run_fixed_step(
     record_every: int = 1,
     unroll: int = 1,
     check_finite: bool = True,
+    check_of: Callable[[PyTree], PyTree] | None = None,
 ) -> RunOutput:
     """Run ``n_steps`` steps; record ``observe`` at k = 0, record_every, 2*record_every, ..., n_steps.
 
-    Pure and jittable (``n_steps`` and ``record_every`` are static). Returns a :class:`RunOutput`.
+    Pure and jittable (``n_steps`` and ``record_every`` are static). ``check_of(state)`` selects the
+    part of the state tested for finiteness (default: all of it; pass e.g. the plant and controller
+    states to skip large history buffers, which only ever hold copies of checked values). After the
+    first non-finite step the carry stays frozen (``lax.cond``), so ``final`` is the last finite state.
+    Returns a :data:`RunOutput`.
     """
     if n_steps % record_every:
         raise ValueError(f"record_every={record_every} must divide n_steps={n_steps}")
     n_records = n_steps // record_every
+    select = check_of if check_of is not None else (lambda s: s)
 
     def inner(carry, _):
-        k, state, last_good, div = carry
+        k, state, div = carry
         new = step(k, state)
         if check_finite:
-            ok = _all_finite(new)
-            newly = jnp.logical_and(div < 0, jnp.logical_not(ok))
-            div = jnp.where(newly, k, div)
-            frozen = div >= 0
-            new = jax.tree_util.tree_map(lambda a, b: jnp.where(frozen, a, b), state, new)
-            last_good = new
-        return (k + 1, new, last_good, div), None
+            ok = _all_finite(select(new))
+            div = jnp.where(jnp.logical_and(div < 0, jnp.logical_not(ok)), k, div)
+            new = jax.lax.cond(div >= 0, lambda: state, lambda: new)
+        return (k + 1, new, div), None
 
     def outer(carry, _):
         carry, _ = jax.lax.scan(inner, carry, None, length=record_every, unroll=unroll)
-        k, state, _, _ = carry
+        k, state, _ = carry
         return carry, observe(k, state)
 
     k0 = jnp.asarray(0, dtype=jnp.int64)
     rec0 = observe(k0, state0)
-    carry0 = (k0, state0, state0, jnp.asarray(-1, dtype=jnp.int64))
-    (_, final, last_good, div), recs = jax.lax.scan(outer, carry0, None, length=n_records)
+    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64))
+    (_, final, div), recs = jax.lax.scan(outer, carry0, None, length=n_records)
     records = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b], axis=0), rec0, recs)
-    return dict(records=records, final=final, diverged_step=div, last_finite=last_good)
+    return dict(records=records, final=final, diverged_step=div, last_finite=final)
 
 
 def trim_records(records: PyTree, diverged_step: int, record_every: int) -> tuple[PyTree, int]:

@@ -1,0 +1,1 @@
+"""Controllers (flight side): pure functions of measured/received signals and controller states."""

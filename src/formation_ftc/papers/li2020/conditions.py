@@ -1,0 +1,225 @@
+"""Condition checks of Li et al. 2020 (SPEC.md P0.3 "Checkable conditions") and delay validation.
+
+* graph balance (Thms 1-2 assume it; the printed C is NOT balanced, E000-07) with row/column sums;
+* strong connectivity (informative);
+* delay validity: T_ij(t) >= 0 for every printed pair, dT_ij/dt < 1 (eq. (46)), and T_ij >= dt on used
+  edges (the delayed sample must lie in the stored history); the rate is d/dt of the expression
+  (``jax.jacfwd``) on the simulation step grid over the whole horizon;
+* gain/delay coupling (47): rho = 1/(1 - max h_ij), lambda_i > (rho - 1)/2 sum_j c_ij;
+* k_i > 0 (Lemma 2), d_hat_i(0) > 0, sigma integrable (eq. (11));
+* sign of the d_hat tanh term consistent with the proof (E000-04);
+* Lemma 3 constant r* = x*(1 - tanh x*), e^{-2x*} + 1 - 2x* = 0.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import scipy.optimize
+
+from formation_ftc.core.expressions import compile_expression
+from formation_ftc.core.graph import balance_report, is_strongly_connected
+from formation_ftc.registry import Condition
+
+__all__ = [
+    "DelayError",
+    "DelayStats",
+    "delay_vector_function",
+    "delay_statistics",
+    "validate_delays",
+    "lemma3_constant",
+    "check",
+]
+
+
+class DelayError(ValueError):
+    """A delay expression that is negative, too short, or whose rate reaches 1."""
+
+
+def delay_vector_function(texts, pairs):
+    """``T(t) -> (E,)`` [s]: the delays of the listed ``pairs`` ((i, j) 0-based), in that order."""
+    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
+           for i, j in pairs]
+
+    def T(t):
+        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), jnp.shape(t))
+                          for f, (i, j) in zip(fns, pairs, strict=True)])
+
+    return T
+
+
+@dataclass(frozen=True)
+class DelayStats:
+    """Per pair (i, j) (0-based receiver, sender): extreme values over the horizon grid."""
+
+    pair: tuple[int, int]
+    t_min: float  # time of min T [s]
+    value_min: float  # [s]
+    value_max: float  # [s]
+    rate_max: float  # max dT/dt [-]
+    t_rate_max: float  # [s]
+    t_first_negative: float = float("nan")  # first grid time with T < 0 [s]
+    t_first_rate_violation: float = float("nan")  # first grid time with dT/dt >= 1 [s]
+
+    @property
+    def name(self) -> str:
+        i, j = self.pair
+        return f"T{i + 1}{j + 1}"
+
+
+@lru_cache(maxsize=64)
+def _delay_statistics(texts: tuple[tuple[str, ...], ...], horizon: float, dt: float) -> tuple[DelayStats, ...]:
+    n = len(texts)
+    pairs = [(i, j) for i in range(n) for j in range(n) if i != j]
+    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
+           for i, j in pairs]
+
+    def vec(t):
+        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), ())
+                          for f, (i, j) in zip(fns, pairs, strict=True)])
+
+    n_steps = int(round(horizon / dt))
+    grid = jnp.arange(n_steps + 1, dtype=jnp.float64) * dt
+
+    @jax.jit
+    def evaluate(tt):
+        return jax.vmap(vec)(tt), jax.vmap(jax.jacfwd(vec))(tt)
+
+    vals, rates = (np.asarray(a) for a in evaluate(grid))
+    tg = np.asarray(grid)
+    out = []
+    for k, pair in enumerate(pairs):
+        v, r = vals[:, k], rates[:, k]
+        kmin, kr = int(np.argmin(v)), int(np.argmax(r))
+        neg, fast = np.flatnonzero(v < 0), np.flatnonzero(r >= 1)
+        out.append(DelayStats(pair, float(tg[kmin]), float(v[kmin]), float(np.max(v)), float(r[kr]),
+                              float(tg[kr]), float(tg[neg[0]]) if neg.size else float("nan"),
+                              float(tg[fast[0]]) if fast.size else float("nan")))
+    return tuple(out)
+
+
+def delay_statistics(scenario) -> list[DelayStats]:
+    """Delay extremes and rates for every off-diagonal entry of ``network.delays`` (empty if none)."""
+    d = scenario.network.delays
+    if d is None:
+        return []
+    texts = tuple(tuple(str(x) for x in row) for row in d)
+    return list(_delay_statistics(texts, float(scenario.simulation.horizon), float(scenario.simulation.dt)))
+
+
+def _used(scenario) -> np.ndarray:
+    return np.asarray(scenario.network.adjacency, dtype=float) > 0
+
+
+def validate_delays(scenario) -> list[DelayStats]:
+    """Raise :class:`DelayError` naming the pair and the time if a delay is invalid (see module doc)."""
+    stats = delay_statistics(scenario)
+    used = _used(scenario)
+    dt = scenario.simulation.dt
+    for st in stats:
+        i, j = st.pair
+        where = f"network.delays[{i}][{j}] ({st.name}, link {j + 1} -> {i + 1})"
+        if st.value_min < 0:
+            raise DelayError(f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
+                             f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)")
+        if st.rate_max >= 1:
+            raise DelayError(f"{where}: delay rate reaches dT/dt >= 1 at t = {st.t_first_rate_violation:.6g} s "
+                             f"(max {st.rate_max:.6g} at t = {st.t_rate_max:.6g} s; eq. (46) needs "
+                             "dT/dt <= h < 1)")
+        if used[i, j] and st.value_min < dt:
+            raise DelayError(f"{where}: T = {st.value_min:.6g} s at t = {st.t_min:.6g} s is shorter than "
+                             f"the step simulation.dt = {dt} s (a used link needs T >= dt)")
+    return stats
+
+
+def lemma3_constant() -> tuple[float, float]:
+    """(x*, r*) of Lemma 3: e^{-2x} + 1 - 2x = 0, r* = x*(1 - tanh x*)."""
+    x = scipy.optimize.brentq(lambda x: math.exp(-2 * x) + 1 - 2 * x, 0.1, 2.0, xtol=1e-15)
+    return x, x * (1 - math.tanh(x))
+
+
+def _fmt(v) -> str:
+    return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+
+
+def check(scenario) -> list[Condition]:
+    """Theorem conditions for a ``li2020`` scenario (see module docstring)."""
+    law = scenario.controller.law
+    C = np.asarray(scenario.network.adjacency, dtype=float)
+    n = C.shape[0]
+    out: list[Condition] = []
+    proposed = law in ("thm1", "thm2")
+    thm = "Theorem 1" if law == "thm1" else "Theorem 2"
+    br = balance_report(C, tol=1e-12)
+    out.append(Condition(
+        name="communication graph balanced", reference=f"Li2020 {thm}, Sec. II-C; E000-07",
+        value=str(br), requirement="row sums = column sums", holds=br.balanced, required=proposed,
+        detail="" if br.balanced else "the theorems assume a balanced graph; the printed C is not "
+        "balanced (the closed loop still converges in simulation)"))
+    sc = is_strongly_connected(C)
+    out.append(Condition(name="communication graph strongly connected", reference="Li2020 Sec. IV-A, Fig. 3",
+                         value=str(sc), requirement="True", holds=sc, required=False))
+    k = scenario.per_spacecraft("k")
+    out.append(Condition(name="k_i > 0", reference="Li2020 Lemma 2", value=_fmt(k), requirement="> 0",
+                         holds=bool(np.all(k > 0))))
+    if proposed:
+        d0 = scenario.per_spacecraft("d_hat0")
+        out.append(Condition(name="d_hat_i(0) > 0", reference="Li2020 eq. (27)", value=_fmt(d0),
+                             requirement="> 0", holds=bool(np.all(d0 > 0))))
+        form = scenario.controller.sigma_form
+        out.append(Condition(name="sigma_i integrable", reference="Li2020 eq. (11), (13)-(16)",
+                             value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
+                             requirement="int_0^inf sigma < inf", holds=True,
+                             detail="exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
+        literal = scenario.controller.dhat_sign_literal
+        sign = -1 if (literal and law == "thm2") else 1
+        out.append(Condition(name="sign of d_hat tanh term", reference="Li2020 eq. (24)/(42); E000-04",
+                             value=f"{sign:+d}", requirement="+1 (proof steps (34)-(36))", holds=sign > 0))
+        lam = scenario.per_spacecraft("lam")
+        if law == "thm2":
+            stats = delay_statistics(scenario)
+            used = C > 0
+            used_stats = [st for st in stats if used[st.pair]]
+            neg = [st for st in stats if st.value_min < 0]
+            out.append(Condition(
+                name="delays non-negative", reference="Li2020 Sec. III-B",
+                value=", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats),
+                requirement=">= 0 on every pair", holds=not neg,
+                detail="; ".join(f"{st.name} < 0 at t = {st.t_min:.6g} s" for st in neg)))
+            worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
+            h = worst.rate_max if worst else 0.0
+            out.append(Condition(
+                name="delay rate bound (used edges)", reference="Li2020 eq. (46); E000-15",
+                value=(f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
+                       + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats)) if worst else "no edges",
+                requirement="h_ij < 1", holds=h < 1))
+            if stats:
+                wa = max(stats, key=lambda st: st.rate_max)
+                out.append(Condition(
+                    name="delay rate bound (all printed delays)", reference="Li2020 Sec. IV-A; E000-15",
+                    value=f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)",
+                    requirement="< 1", holds=wa.rate_max < 1, required=False,
+                    detail="informative: unused delays do not enter the closed loop"))
+            if h < 1:
+                rho = 1.0 / (1.0 - h)
+                rhs = (rho - 1.0) / 2.0 * C.sum(axis=1)
+                margin = lam - rhs
+                out.append(Condition(
+                    name="lambda_i > (rho - 1)/2 sum_j c_ij", reference="Li2020 eq. (47)",
+                    value=f"rho = {rho:.4f}; rhs = {_fmt(rhs)}; lambda = {_fmt(lam)}; margin = {_fmt(margin)}",
+                    requirement="margin > 0 with rho (1 - h) >= 1", holds=bool(np.all(margin > 0))))
+        x_star, r_star = lemma3_constant()
+        out.append(Condition(name="Lemma 3 constant r*", reference="Li2020 eq. (22)",
+                             value=f"x* = {x_star:.6f}, r* = {r_star:.6f}", requirement="informative",
+                             holds=True, required=False))
+    else:
+        out.append(Condition(name="SIR-FTC gains positive", reference="Li2020 Sec. IV-D",
+                             value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
+                             requirement="> 0", holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0))
+    del n
+    return out

@@ -1,0 +1,112 @@
+"""Figures of Li et al. 2020 (Figs. 4-12) drawn from result datasets of method ``li2020``.
+
+Each time history is drawn twice: a 0-100 s zoom (faults at 10/15/20 s, initial convergence) and the
+whole horizon. Matplotlib is used only through :mod:`formation_ftc.plotting`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from formation_ftc.plotting import new_figure, save_figure
+
+__all__ = ["plot_errors", "plot_mu", "plot_adaptive", "plot_comparison", "plot_scenario"]
+
+ZOOM = 100.0  # s
+
+
+def _label(sc) -> str:
+    return f"spacecraft {int(sc)}"
+
+
+def plot_errors(ds, path: Path, variable: str, title: str, unit: str) -> Path:
+    """Components of e_i1 or e_i2 (rows x, y, z; columns zoom / full horizon)."""
+    fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
+    t = ds.time.values
+    zoom = t <= ZOOM
+    sym = "e_{i1}" if variable == "position_error" else "e_{i2}"
+    for r, ax_name in enumerate(["x", "y", "z"]):
+        for c, mask in enumerate([zoom, slice(None)]):
+            ax = axes[r, c]
+            for sc in ds.spacecraft.values:
+                ax.plot(t[mask], ds[variable].sel(spacecraft=sc, axis=ax_name).values[mask], label=_label(sc))
+            ax.set_ylabel(f"${sym},{ax_name}$ [{unit}]")
+            if c == 1:
+                ax.set_yscale("symlog", linthresh=1e-2 if unit == "m" else 1e-3)
+    for c in range(2):
+        axes[-1, c].set_xlabel("time [s]")
+    axes[0, 0].legend(loc="best", ncol=2)
+    return save_figure(fig, path)
+
+
+def plot_mu(ds, path: Path, title: str) -> Path:
+    """mu1, mu2 (literal, E000-08) and mu2_vc (virtual centre)."""
+    fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
+    t = ds.time.values
+    zoom = t <= ZOOM
+    names = [("mu1", r"$\mu_1$ [m]"), ("mu2", r"$\mu_2$ literal [m]"), ("mu2_vc", r"$\mu_{2,vc}$ [m]")]
+    for r, (name, lab) in enumerate(names):
+        y = ds[name].values
+        axes[r, 0].plot(t[zoom], y[zoom], color="k", label=name)
+        axes[r, 1].semilogy(t, np.maximum(y, 1e-12), color="k", label=name)
+        for c in range(2):
+            axes[r, c].set_ylabel(lab)
+    for c in range(2):
+        axes[-1, c].set_xlabel("time [s]")
+    return save_figure(fig, path)
+
+
+def plot_adaptive(ds, path: Path, title: str) -> Path:
+    """m_hat, beta_hat, d_hat (Thm 1/2) or b_hat (SIR-FTC) per spacecraft."""
+    names = [(n, u) for n, u in (("m_hat", r"$\hat m_i$ [kg]"), ("beta_hat", r"$\hat\beta_i$ [-]"),
+                                 ("d_hat", r"$\hat d_i$ [N]"), ("b_hat", r"$\hat b_i$ [N]")) if n in ds]
+    fig, axes = new_figure(len(names), 2, width=10.0, sharex=False, title=title)
+    t = ds.time.values
+    zoom = t <= ZOOM
+    for r, (name, lab) in enumerate(names):
+        for c, mask in enumerate([zoom, slice(None)]):
+            for sc in ds.spacecraft.values:
+                axes[r, c].plot(t[mask], ds[name].sel(spacecraft=sc).values[mask], label=_label(sc))
+            axes[r, c].set_ylabel(lab)
+    for c in range(2):
+        axes[-1, c].set_xlabel("time [s]")
+    axes[0, 0].legend(loc="best", ncol=2)
+    return save_figure(fig, path)
+
+
+def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path:
+    """Fig. 12: mu1 and mu2 of several runs on a log scale (full horizon and zoom)."""
+    fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
+    styles = ["-", "--", ":", "-."]
+    for k, (label, ds) in enumerate(datasets.items()):
+        t = ds.time.values
+        zoom = t <= ZOOM
+        for r, name in enumerate(["mu1", "mu2", "mu2_vc"]):
+            y = ds[name].values
+            axes[r, 0].plot(t[zoom], y[zoom], styles[k % 4], label=label)
+            axes[r, 1].semilogy(t, np.maximum(y, 1e-12), styles[k % 4], label=label)
+    for r, lab in enumerate([r"$\mu_1$ [m]", r"$\mu_2$ literal [m]", r"$\mu_{2,vc}$ [m]"]):
+        for c in range(2):
+            axes[r, c].set_ylabel(lab)
+    for c in range(2):
+        axes[-1, c].set_xlabel("time [s]")
+    axes[0, 0].legend(loc="best")
+    return save_figure(fig, path)
+
+
+def plot_scenario(ds, scenario, out_dir) -> list[Path]:
+    """Figures of one ``li2020`` run (position/velocity errors, mu1/mu2, adaptive parameters)."""
+    out_dir = Path(out_dir)
+    name = scenario.scenario.name
+    law = scenario.controller.law
+    ctrl = {"thm1": "Thm 1, eqs. (23)-(27)", "thm2": "Thm 2, eqs. (41)-(45)", "sir-ftc": "SIR-FTC"}[law]
+    return [
+        plot_errors(ds, out_dir / f"{name}_position_error.png", "position_error",
+                    f"{name}: position tracking errors ({ctrl})", "m"),
+        plot_errors(ds, out_dir / f"{name}_velocity_error.png", "velocity_error",
+                    f"{name}: velocity tracking errors ({ctrl})", "m/s"),
+        plot_mu(ds, out_dir / f"{name}_mu.png", f"{name}: formation tracking / keeping errors ({ctrl})"),
+        plot_adaptive(ds, out_dir / f"{name}_adaptive.png", f"{name}: adaptive parameters ({ctrl})"),
+    ]

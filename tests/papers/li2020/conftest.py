@@ -1,0 +1,25 @@
+"""Fixtures for the Li2020 tests: scenarios are validated with the li2020 schema directly (independent of
+the plugin registry, so a sibling paper package in progress cannot break these tests)."""
+
+from __future__ import annotations
+
+import pytest
+
+import formation_ftc  # noqa: F401  (x64)
+from formation_ftc.papers.li2020.reproduction import load_li2020, simulate_li2020
+
+
+@pytest.fixture(scope="session")
+def load():
+    return load_li2020
+
+
+@pytest.fixture(scope="session")
+def simulate():
+    return simulate_li2020
+
+
+@pytest.fixture(scope="module")
+def thm1_full():
+    """Full 3000 s Thm 1 run (a few seconds), shared by the tests of a module."""
+    return simulate_li2020(load_li2020("li2020-thm1"))
