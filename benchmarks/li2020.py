@@ -262,7 +262,7 @@ def main() -> None:
           f"(compile + first run {first:.1f} s)")
     print(f"speed-up JAX / numpy           : {np_step / jax_step:8.1f}x")
     _, run_nc, _ = jax_full_run_time("li2020-thm2-delays", args.horizon, check_finite=False)
-    print(f"  same without the engine's per-step finite check: {run_nc / n * 1e6:8.2f} us/step -> "
+    print(f"  same without the engine's finite check: {run_nc / n * 1e6:8.2f} us/step -> "
           f"{run_nc:8.3f} s")
     for name in ("li2020-thm1", "li2020-sirftc"):
         f1, r1, n1 = jax_full_run_time(name, args.horizon)

@@ -84,7 +84,8 @@ def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_d
     if div >= 0:
         t = compiled.t0 + div * compiled.dt
         info = diagnose_divergence(compiled.make_step(compiled.params), out["last_finite"], div, t,
-                                   compiled.spacecraft_axis) if compiled.make_step else None
+                                   compiled.spacecraft_axis, max_steps=compiled.record_every,
+                                   dt=compiled.dt) if compiled.make_step else None
         if info is None:
             from formation_ftc.sim.engine import DivergenceInfo
 

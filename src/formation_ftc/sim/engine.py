@@ -14,9 +14,10 @@ the integer step index, so event times are exact step boundaries) and ``observe(
 ``n_steps/record_every + 1`` samples; metrics that need every step live in the state and are
 accumulated by ``step``).
 
-Divergence: after every step the state (or the part ``check_of`` selects) is checked for non-finite
-values. The first non-finite step freezes the carry at the last finite state and records the step index;
-later records repeat that last finite state's observation and are masked out by :func:`trim_records`. :func:`diagnose_divergence`
+Divergence: at the end of every record block the state (or the part ``check_of`` selects) is checked
+for non-finite values. A non-finite block freezes the carry at the block's start (the last finite
+state) and records that step index; later records repeat that state's observation and are masked out by
+:func:`trim_records`. :func:`diagnose_divergence`
 then replays one step eagerly to name the variable and spacecraft.
 """
 
@@ -83,11 +84,12 @@ def run_fixed_step(
 ) -> RunOutput:
     """Run ``n_steps`` steps; record ``observe`` at k = 0, record_every, 2*record_every, ..., n_steps.
 
-    Pure and jittable (``n_steps`` and ``record_every`` are static). ``check_of(state)`` selects the
-    part of the state tested for finiteness (default: all of it; pass e.g. the plant and controller
-    states to skip large history buffers, which only ever hold copies of checked values). After the
-    first non-finite step the carry stays frozen (``lax.cond``), so ``final`` is the last finite state.
-    Returns a :data:`RunOutput`.
+    Pure and jittable (``n_steps`` and ``record_every`` are static). Finiteness is tested once per
+    record block (every ``record_every`` steps, so the check costs nothing per step); ``check_of(state)``
+    selects the part of the state tested (default: all of it). When a block ends non-finite, the carry
+    stays at that block's start -- the last finite state, returned as ``final``/``last_finite`` -- and
+    ``diverged_step`` is the block's first step; :func:`diagnose_divergence` replays the block to find
+    the exact step and variable. Returns a :data:`RunOutput`.
     """
     if n_steps % record_every:
         raise ValueError(f"record_every={record_every} must divide n_steps={n_steps}")
@@ -95,18 +97,25 @@ def run_fixed_step(
     select = check_of if check_of is not None else (lambda s: s)
 
     def inner(carry, _):
+        k, state = carry
+        return (k + 1, step(k, state)), None
+
+    def block(k, state):
+        (k, state), _ = jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)
+        return state
+
+    def outer(carry, _):
         k, state, div = carry
-        new = step(k, state)
         if check_finite:
+            # once diverged, stop computing: the carry stays at the last finite block boundary
+            new = jax.lax.cond(div >= 0, lambda: state, lambda: block(k, state))
             ok = _all_finite(select(new))
             div = jnp.where(jnp.logical_and(div < 0, jnp.logical_not(ok)), k, div)
             new = jax.lax.cond(div >= 0, lambda: state, lambda: new)
-        return (k + 1, new, div), None
-
-    def outer(carry, _):
-        carry, _ = jax.lax.scan(inner, carry, None, length=record_every, unroll=unroll)
-        k, state, _ = carry
-        return carry, observe(k, state)
+        else:
+            new = block(k, state)
+        k = k + record_every
+        return (k, new, div), observe(k, new)
 
     k0 = jnp.asarray(0, dtype=jnp.int64)
     rec0 = observe(k0, state0)
@@ -154,19 +163,27 @@ def diagnose_divergence(
     k: int,
     t: float,
     spacecraft_axis: Callable[[str], int | None] | None = None,
+    *,
+    max_steps: int = 1,
+    dt: float = 0.0,
 ) -> DivergenceInfo:
-    """Replay step ``k`` from the last finite state and name the first non-finite leaf."""
-    new = jax.jit(step)(jnp.asarray(k, dtype=jnp.int64), last_finite)
-    flat, _ = jax.tree_util.tree_flatten_with_path(new)
-    for path, leaf in flat:
-        arr = np.asarray(leaf)
-        if not np.issubdtype(arr.dtype, np.inexact):
-            continue
-        bad = np.argwhere(~np.isfinite(arr))
-        if bad.size:
-            name = jax.tree_util.keystr(path).strip("[]'\"").replace("']['", ".")
-            idx = tuple(int(v) for v in bad[0])
-            ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
-            sc = idx[ax] if ax is not None and len(idx) > ax else None
-            return DivergenceInfo(int(k), float(t), name, sc, idx)
+    """Replay up to ``max_steps`` steps from the last finite state (at step ``k``, time ``t``) and
+    name the first non-finite leaf of the first non-finite step (time ``t + j*dt``)."""
+    jstep = jax.jit(step)
+    state = last_finite
+    for j in range(max(1, max_steps)):
+        new = jstep(jnp.asarray(k + j, dtype=jnp.int64), state)
+        flat, _ = jax.tree_util.tree_flatten_with_path(new)
+        for path, leaf in flat:
+            arr = np.asarray(leaf)
+            if not np.issubdtype(arr.dtype, np.inexact):
+                continue
+            bad = np.argwhere(~np.isfinite(arr))
+            if bad.size:
+                name = jax.tree_util.keystr(path).strip("[]'\"").replace("']['", ".")
+                idx = tuple(int(v) for v in bad[0])
+                ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
+                sc = idx[ax] if ax is not None and len(idx) > ax else None
+                return DivergenceInfo(int(k + j), float(t + j * dt), name, sc, idx)
+        state = new
     return DivergenceInfo(int(k), float(t), "<unknown>", None, ())
