@@ -9,14 +9,21 @@ from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 
-__all__ = ["package_versions", "git_commit", "provenance"]
+__all__ = ["package_versions", "git_commit", "provenance", "utc_now"]
+
+
+def utc_now() -> str:
+    """Current UTC time, ISO 8601 to the second (e.g. ``2026-11-23T09:40:00+00:00``)."""
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 _PACKAGES = ["formation-ftc", "jax", "jaxlib", "numpy", "scipy", "xarray", "pydantic", "cvxpy",
-             "networkx", "matplotlib", "dask", "h5netcdf", "pyarrow"]
+             "networkx", "matplotlib", "dask", "h5netcdf", "h5py", "pyarrow", "pandas", "clarabel",
+             "control", "rich", "plotly"]
 
 
 @lru_cache(maxsize=1)
 def package_versions() -> dict[str, str]:
+    """Installed version of each package the toolkit uses ("not installed" for optional ones)."""
     out = {}
     for name in _PACKAGES:
         try:
@@ -47,6 +54,6 @@ def provenance() -> dict[str, str]:
         git_commit=git_commit(),
         python=platform.python_version(),
         platform=platform.platform(),
-        created_utc=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        created_utc=utc_now(),
     )
     return out

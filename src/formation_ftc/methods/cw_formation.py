@@ -26,6 +26,7 @@ import xarray as xr
 from pydantic import Field, model_validator
 
 from formation_ftc.config.base import ExprText, ScenarioBase, StrictModel
+from formation_ftc.config.sections import SpacecraftSection
 from formation_ftc.core.disturbances import gaussian_noise, run_key, step_key
 from formation_ftc.core.dynamics.cw import cw_rhs
 from formation_ftc.core.expressions import compile_expression
@@ -54,30 +55,6 @@ class OrbitSection(StrictModel):
     @property
     def n(self) -> float:
         return self.mean_motion if self.mean_motion is not None else float(np.sqrt(self.mu / self.semi_major_axis**3))
-
-
-class SpacecraftSection(StrictModel):
-    mass: list[float] = Field(description="Mass of each deputy [kg], > 0.")
-    initial_position: list[tuple[float, float, float]] = Field(description="Initial LVLH position per deputy [m].")
-    initial_velocity: list[tuple[float, float, float]] | None = Field(None, description="Initial LVLH velocity [m/s] (default 0).")
-
-    @model_validator(mode="after")
-    def _sizes(self):
-        n = len(self.mass)
-        if n < 1:
-            raise ValueError("spacecraft.mass: at least one spacecraft is required")
-        for k, m in enumerate(self.mass):
-            if not m > 0:
-                raise ValueError(f"spacecraft.mass[{k}] = {m}: masses must be > 0 kg")
-        if len(self.initial_position) != n:
-            raise ValueError(f"spacecraft.initial_position: {len(self.initial_position)} rows for {n} spacecraft (need {n})")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(f"spacecraft.initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft (need {n})")
-        return self
-
-    @property
-    def count(self) -> int:
-        return len(self.mass)
 
 
 class ControllerSection(StrictModel):

@@ -1,49 +1,21 @@
 """Run provenance for the reproduction report: package versions, git commit, Python, platform, time.
 
 Builds on :func:`formation_ftc.provenance.provenance` (the attributes every result file carries) and
-adds what a report reader also wants to know: the versions of the report-side packages (rich,
-plotly, pandas, ...), the JAX backend and the host's CPU count. Every value is a string, so the dict
+adds what a report reader also wants to know: the Python executable, the JAX backend and the host's
+CPU count. Every value is a string, so the dict
 goes unchanged into JSON, NetCDF attributes or an HTML table.
 """
 
 from __future__ import annotations
 
-import datetime as _dt
 import os
 import platform
 import sys
-from importlib import metadata
 
 from formation_ftc import provenance as _base
+from formation_ftc.provenance import git_commit, package_versions, utc_now
 
 __all__ = ["provenance", "package_versions", "git_commit", "utc_now"]
-
-#: Packages whose versions the report lists, beyond those of :mod:`formation_ftc.provenance`.
-EXTRA_PACKAGES = ["h5py", "pandas", "clarabel", "control", "rich", "plotly"]
-
-
-def utc_now() -> str:
-    """Current UTC time, ISO 8601 to the second (e.g. ``2026-11-23T09:40:00+00:00``)."""
-    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-
-
-def package_versions() -> dict[str, str]:
-    """Installed version of every package the toolkit and its report depend on.
-
-    A package that is not installed maps to ``"not installed"`` (plotly is optional).
-    """
-    out = dict(_base.package_versions())
-    for name in EXTRA_PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "not installed"
-    return out
-
-
-def git_commit() -> str:
-    """HEAD commit of the checkout the package runs from (``+dirty`` when modified), else ``"unknown"``."""
-    return _base.git_commit()
 
 
 def _jax_backend() -> str:
@@ -63,15 +35,11 @@ def provenance() -> dict[str, str]:
     ``python``, ``python_executable``, ``platform``, ``machine``, ``cpu_count``, ``jax_backend``,
     ``created_utc``.
     """
-    out = {f"version_{k}": v for k, v in package_versions().items()}
+    out = _base.provenance()
     out.update(
-        git_commit=git_commit(),
-        python=platform.python_version(),
         python_executable=sys.executable,
-        platform=platform.platform(),
         machine=platform.machine(),
         cpu_count=str(os.cpu_count() or "unknown"),
         jax_backend=_jax_backend(),
-        created_utc=utc_now(),
     )
     return out

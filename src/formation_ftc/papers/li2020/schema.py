@@ -15,6 +15,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from formation_ftc.config.base import ExprText, ScenarioBase, StrictModel, expression_validator
+from formation_ftc.config.sections import SpacecraftSection
 from formation_ftc.core.graph import GraphError, validate_adjacency
 from formation_ftc.core.orbit import MU_EARTH
 
@@ -77,31 +78,6 @@ class OrbitSection(StrictModel):
     def period(self) -> float:
         """T_c = 2 pi / n_c [s]."""
         return 2 * math.pi / self.mean_motion
-
-
-class SpacecraftSection(StrictModel):
-    mass: list[float] = Field(description="True mass m_i of each follower [kg] (unknown to the controller).")
-    initial_position: list[tuple[float, float, float]] = Field(description="rho_i(0) in LVLH [m].")
-    initial_velocity: list[tuple[float, float, float]] | None = Field(
-        None, description="v_i(0) in LVLH [m/s] (default 0).")
-
-    @model_validator(mode="after")
-    def _sizes(self):
-        n = len(self.mass)
-        if n < 1:
-            raise ValueError("spacecraft.mass: at least one spacecraft is required")
-        for k, m in enumerate(self.mass):
-            if not m > 0:
-                raise ValueError(f"spacecraft.mass[{k}] = {m}: masses must be > 0 kg")
-        if len(self.initial_position) != n:
-            raise ValueError(f"spacecraft.initial_position: {len(self.initial_position)} rows for {n} spacecraft")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(f"spacecraft.initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft")
-        return self
-
-    @property
-    def count(self) -> int:
-        return len(self.mass)
 
 
 class FormationSection(StrictModel):
