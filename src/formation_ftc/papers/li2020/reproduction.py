@@ -96,6 +96,12 @@ def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict 
         figs.append(Figure(str(path.relative_to(out_dir)), number, caption))
 
     d1, d2, ds_sir = results["li2020-thm1"], results["li2020-thm2-delays"], results["li2020-sirftc"]
+    from formation_ftc.report.html import write_trajectory3d
+
+    write_trajectory3d(out_dir, {f"spacecraft {int(sc)}": d2.position.sel(spacecraft=sc).values
+                                 for sc in d2.spacecraft.values},
+                       title="Li2020 Thm 2: LVLH trajectories (x radial, y along-track, z normal)",
+                       append=False)
     add(plot_errors(d1, out_dir / "fig04_position_errors_thm1.png", "position_error",
                     "Fig. 4: position tracking errors, Thm 1 (eqs. (23)-(27))", "m"), "4",
         "Position tracking errors e_i1, controller of Thm 1")
