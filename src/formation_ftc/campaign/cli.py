@@ -1,0 +1,98 @@
+"""``formation-ftc campaign {list, run, report}``.
+
+The main command line calls :func:`add_cli` with its sub-parsers; this module also runs alone:
+``python -m formation_ftc.campaign.cli run NAME_OR_FILE --out DIR``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["add_cli", "main"]
+
+
+def _cmd_list(args) -> int:
+    import tomllib
+
+    from formation_ftc.campaign.spec import builtin_campaigns
+
+    for name, text in builtin_campaigns().items():
+        meta = tomllib.loads(text).get("campaign", {})
+        print(f"{name}  {meta.get('description', '')}")
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from rich.console import Console
+
+    from formation_ftc.campaign.executors import make_executor
+    from formation_ftc.campaign.runner import run_campaign
+
+    console = Console(stderr=True)
+    executor = make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
+    outcome = run_campaign(args.campaign, args.out, runs=args.runs, chunk_size=args.chunk_size,
+                           executor=executor, progress=not args.no_progress)
+    console.print(f"campaign done ({executor.describe()}): {outcome}", soft_wrap=True, markup=False)
+    return 0
+
+
+def _cmd_report(args) -> int:
+    from rich.console import Console
+
+    from formation_ftc.campaign.report import write_report
+
+    console = Console(width=None if sys.stdout.isatty() else 160)
+    _, figures = write_report(args.dir, console=console, plots=not args.no_plots)
+    print(f"wrote {args.dir}/report/summary.json, summary.csv and {len(figures)} figure(s)")
+    return 0
+
+
+def add_cli(subparsers) -> argparse.ArgumentParser:
+    """Add the ``campaign`` command (with ``list``, ``run``, ``report``) to ``subparsers``."""
+    p = subparsers.add_parser("campaign", help="Monte Carlo campaigns: list, run (resumable), report")
+    sub = p.add_subparsers(dest="campaign_command", required=True)
+
+    q = sub.add_parser("list", help="list the built-in campaigns (name first)")
+    q.set_defaults(func=_cmd_list)
+
+    q = sub.add_parser("run", help="run or resume a campaign into a results directory")
+    q.add_argument("campaign", metavar="NAME_OR_FILE", help="built-in campaign name or campaign TOML file")
+    q.add_argument("--out", required=True, help="results directory (resumed when it holds this campaign)")
+    q.add_argument("--runs", type=int, default=None, help="runs per grid point (overrides the file)")
+    q.add_argument("--chunk-size", type=int, default=None, help="runs per vmap batch (overrides the file)")
+    q.add_argument("--workers", type=int, default=1, help="local worker processes (spawn), default 1 = in-process")
+    g = q.add_mutually_exclusive_group()
+    g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
+    g.add_argument("--dask-local", metavar="N", type=int, default=None,
+                   help="start a Dask LocalCluster with N worker processes")
+    q.add_argument("--no-progress", action="store_true", help="no progress bar")
+    q.set_defaults(func=_cmd_run)
+
+    q = sub.add_parser("report", help="summary statistics and sensitivity plots of a campaign directory")
+    q.add_argument("dir", metavar="DIR", help="campaign results directory")
+    q.add_argument("--no-plots", action="store_true", help="tables only")
+    q.set_defaults(func=_cmd_report)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Stand-alone entry point: ``main(["run", ...])`` or ``main(["campaign", "run", ...])``."""
+    from formation_ftc.config.loader import ScenarioError
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] != "campaign":
+        argv = ["campaign", *argv]
+    parser = argparse.ArgumentParser(prog="formation-ftc")
+    add_cli(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ScenarioError, ValueError, KeyError) as exc:
+        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+        print(f"error: {msg}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,289 @@
+"""Execute a campaign: chunks of runs as ``jax.vmap`` batches, results stored chunk by chunk.
+
+A chunk (see :mod:`formation_ftc.campaign.sampling`) is computed by :func:`run_chunk`, a pure
+function of ``(plan, chunk)`` that any executor may call in any process:
+
+1. build each run's scenario (base + overrides + grid/sampled values + run seed), compile it with the
+   method (:func:`formation_ftc.api.compile_scenario`);
+2. group the runs by ``Compiled.static_key`` (one group per chunk unless a random ``choice`` changes
+   the structure), stack the ``params`` pytrees leaf by leaf and call
+   ``jax.jit(jax.vmap(compiled.run))`` -- one jitted function per static key, reused by every chunk,
+   the batch padded to ``chunk_size`` so the last chunk does not recompile;
+3. per run, ``Compiled.metrics`` on its slice; a run whose state became non-finite
+   (``diverged_step >= 0``) is recorded ``status = "failed"`` with the engine's diagnostic
+   (variable, spacecraft, time), its metrics NaN, and the campaign goes on.
+
+:func:`run_campaign` validates everything first (campaign file, dotted paths, sampler bounds, every
+run's scenario, the metric names, the results directory, the executor's scheduler), then submits the
+unfinished chunks and writes each result atomically as it arrives, with a progress bar (runs done,
+runs/s, ETA).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import jax
+import numpy as np
+import pandas as pd
+
+from formation_ftc.campaign.sampling import CampaignPlan, Chunk
+from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
+from formation_ftc.campaign.storage import CampaignStore
+
+__all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "run_campaign", "metric_names", "make_plan"]
+
+_JIT_CACHE: dict[Any, Callable] = {}
+
+
+@dataclass
+class ChunkResult:
+    chunk_id: int
+    table: pd.DataFrame
+    traces: dict[int, Any] = field(default_factory=dict)
+    wall_s: float = 0.0
+
+    @property
+    def n_runs(self) -> int:
+        return len(self.table)
+
+    @property
+    def n_failed(self) -> int:
+        return int((self.table["status"] != "ok").sum())
+
+
+@dataclass
+class CampaignOutcome:
+    out_dir: Path
+    n_runs: int
+    n_failed: int
+    chunks_total: int
+    chunks_computed: int
+    chunks_resumed: int
+    wall_s: float
+    results: pd.DataFrame
+
+    def __str__(self) -> str:
+        return (f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
+                f"{self.out_dir}; {self.chunks_computed} chunk(s) computed, {self.chunks_resumed} kept from "
+                f"an earlier run, {self.wall_s:.1f} s")
+
+
+def _batched(compiled) -> Callable:
+    fn = _JIT_CACHE.get(compiled.static_key)
+    if fn is None:
+        run = compiled.run
+        fn = jax.jit(jax.vmap(lambda p: dict(run(p))))
+        _JIT_CACHE[compiled.static_key] = fn
+    return fn
+
+
+def _stack(params: list[Any]) -> Any:
+    return jax.tree_util.tree_map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *params)
+
+
+def _value_cell(v: Any, numeric: bool) -> Any:
+    if numeric:
+        return float(v)
+    return v if isinstance(v, str) else json.dumps(v)
+
+
+def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
+    from formation_ftc.sim.engine import DivergenceInfo, diagnose_divergence
+
+    t = compiled.t0 + div * compiled.dt
+    try:
+        if compiled.make_step is None:
+            raise RuntimeError("no make_step")
+        info = diagnose_divergence(compiled.make_step(compiled.params), out["last_finite"], div, t,
+                                   compiled.spacecraft_axis, max_steps=compiled.record_every,
+                                   dt=compiled.dt)
+    except Exception:  # noqa: BLE001 - a diagnostic must never stop the campaign
+        info = DivergenceInfo(div, t, "<state>", None, ())
+    return str(info)
+
+
+def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any], status: str):
+    from formation_ftc.sim.engine import trim_records
+
+    tr = plan.spec.traces
+    records, n_kept = trim_records(out["records"], int(out["diverged_step"]), compiled.record_every)
+    ds = compiled.to_dataset(dict(out, records=records), n_kept)
+    if tr.variables:
+        missing = [v for v in tr.variables if v not in ds.data_vars]
+        if missing:
+            raise CampaignError(f"traces.variables: {missing} not in the dataset (has {list(ds.data_vars)})")
+        ds = ds[tr.variables]
+    ds = ds.isel(time=slice(None, None, tr.every))
+    ds.attrs.update(campaign=plan.name, run_id=inputs.run_id, seed=inputs.seed, status=status,
+                    scenario_name=scenario.scenario.name, inputs_json=json.dumps(inputs.values, default=str))
+    return ds
+
+
+def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
+    """Compute one chunk (pure function of its arguments; safe in worker processes and on Dask)."""
+    from formation_ftc import api
+
+    t_start = time.perf_counter()
+    inputs = [plan.run_inputs(r) for r in chunk.run_ids]
+    scenarios = [plan.scenario(i) for i in inputs]
+    compiled = [api.compile_scenario(s) for s in scenarios]
+    groups: dict[Any, list[int]] = {}
+    for k, c in enumerate(compiled):
+        groups.setdefault(c.static_key, []).append(k)
+    outs: list[Any] = [None] * len(compiled)
+    for idxs in groups.values():
+        params = [compiled[k].params for k in idxs]
+        params += [params[-1]] * (plan.chunk_size - len(params))  # pad: one program per chunk size
+        batch = jax.device_get(_batched(compiled[idxs[0]])(_stack(params)))
+        for pos, k in enumerate(idxs):
+            outs[k] = jax.tree_util.tree_map(lambda a, pos=pos: np.asarray(a[pos]), batch)
+    keep = plan.spec.campaign.metrics
+    numeric = plan.input_columns()
+    rows, traces = [], {}
+    for inp, scn, comp, out in zip(inputs, scenarios, compiled, outs, strict=True):
+        div = int(out["diverged_step"])
+        row: dict[str, Any] = dict(run_id=inp.run_id, chunk_id=chunk.chunk_id, grid_index=inp.grid_index,
+                                   replicate=inp.replicate, seed=inp.seed, scenario=inp.base)
+        if div < 0:
+            with np.errstate(all="ignore"):
+                metrics = {k: float(v) for k, v in comp.metrics(out).items()}
+            missing = [m for m in keep if m not in metrics]
+            if missing:
+                raise CampaignError(f"campaign.metrics: {missing} not returned by method "
+                                    f"{scn.scenario.method!r} (it returns {sorted(metrics)})")
+            row.update(status="ok", diagnostic="")
+        else:
+            metrics = {m: float("nan") for m in keep}
+            row.update(status="failed", diagnostic=_diagnostic(comp, out, div))
+        for path, v in inp.values.items():
+            row[f"input:{path}"] = _value_cell(v, numeric[f"input:{path}"])
+        for name in (keep or metrics):
+            row[f"metric:{name}"] = metrics.get(name, float("nan"))
+        rows.append(row)
+        if inp.run_id in plan.spec.traces.runs:
+            traces[inp.run_id] = _trace(plan, comp, scn, inp, out, row["status"])
+    table = pd.DataFrame(rows)
+    for col in table.columns:
+        if col.startswith("metric:"):
+            table[col] = table[col].astype("float64")
+    return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
+
+
+def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
+    """Metric names each base scenario's method returns, found without running anything
+    (``jax.eval_shape`` of the run, then ``metrics`` on zeros). Empty list when it cannot tell."""
+    from formation_ftc import api
+
+    out: dict[str, list[str]] = {}
+    for b, name in enumerate(plan.base_names):
+        g = 0
+        if len(plan.base_names) > 1:
+            g = int(np.ravel_multi_index([b] + [0] * len(plan.grid_samplers), plan.grid_shape))
+        compiled = api.compile_scenario(plan.scenario(plan.run_inputs(g * plan.runs)))
+        try:
+            shapes = jax.eval_shape(lambda p, c=compiled: dict(c.run(p)), compiled.params)
+            zeros = jax.tree_util.tree_map(lambda s: np.zeros(s.shape, s.dtype), shapes)
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                out[name] = list(compiled.metrics(zeros))
+        except Exception:  # noqa: BLE001 - metrics that cannot take zeros: checked on the first chunk
+            out[name] = []
+    return out
+
+
+def make_plan(campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan, *,
+              runs: int | None = None, chunk_size: int | None = None) -> CampaignPlan:
+    """Campaign name/path/dict/spec -> validated :class:`CampaignPlan` (nothing runs)."""
+    if isinstance(campaign, CampaignPlan):
+        if runs is not None or chunk_size is not None:
+            raise CampaignError("runs/chunk_size overrides need a campaign file or spec, not a plan")
+        return campaign
+    if isinstance(campaign, CampaignSpec):
+        raw = campaign.model_dump(mode="json")
+        spec, base_dir = load_campaign(raw, runs=runs, chunk_size=chunk_size)
+    else:
+        spec, base_dir = load_campaign(campaign, runs=runs, chunk_size=chunk_size)
+    return CampaignPlan(spec, base_dir, drop_missing_traces=runs is not None)
+
+
+class _Progress:
+    def __init__(self, enabled: bool, total: int, done: int, name: str):
+        self.p = None
+        if not enabled:
+            return
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            ProgressColumn,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+        from rich.text import Text
+
+        class RunsPerSecond(ProgressColumn):
+            def render(self, task):
+                speed = task.finished_speed or task.speed
+                return Text("-- runs/s" if speed is None else f"{speed:.2f} runs/s")
+
+        self.p = Progress(TextColumn(f"[bold]{name}"), BarColumn(), MofNCompleteColumn(),
+                          TextColumn("runs"), RunsPerSecond(), TimeElapsedColumn(), TextColumn("ETA"),
+                          TimeRemainingColumn(), console=Console(stderr=True))
+        self.p.start()
+        self.task = self.p.add_task(name, total=total, completed=done)
+
+    def advance(self, n: int) -> None:
+        if self.p is not None:
+            self.p.update(self.task, advance=n)
+
+    def close(self) -> None:
+        if self.p is not None:
+            self.p.stop()
+
+
+def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan,
+                 out_dir: str | Path, *, runs: int | None = None, chunk_size: int | None = None,
+                 executor=None, progress: bool = False) -> CampaignOutcome:
+    """Run (or resume) a campaign into ``out_dir``; returns counts and the results table.
+
+    Everything that can be checked is checked before the first run: campaign file, dotted paths,
+    sampler bounds, every run's scenario, metric names, the results directory (foreign or corrupt:
+    refused) and the executor (an unreachable scheduler is an error).
+    """
+    from formation_ftc.campaign.executors import LocalExecutor
+
+    t0 = time.perf_counter()
+    plan = make_plan(campaign, runs=runs, chunk_size=chunk_size)
+    plan.validate_all()
+    if plan.spec.campaign.metrics:
+        for base, names in metric_names(plan).items():
+            missing = [m for m in plan.spec.campaign.metrics if names and m not in names]
+            if missing:
+                raise CampaignError(f"campaign.metrics: {missing} not returned for base scenario {base!r} "
+                                    f"(available: {', '.join(names)})")
+    store = CampaignStore.prepare(out_dir, plan)
+    executor = executor if executor is not None else LocalExecutor()
+    done_before = store.finished()
+    todo = [c for c in plan.chunks() if c.chunk_id not in done_before]
+    with executor:
+        store.initialize()
+        bar = _Progress(progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name)
+        try:
+            for res in executor.map(run_chunk, plan, todo):
+                store.write_chunk(res.chunk_id, res.table, res.traces)
+                bar.advance(res.n_runs)
+        finally:
+            bar.close()
+    results = store.load_results()
+    n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
+    return CampaignOutcome(Path(out_dir), len(results), n_failed, plan.n_chunks, len(todo),
+                           len(done_before), time.perf_counter() - t0, results)

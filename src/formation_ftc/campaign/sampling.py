@@ -1,0 +1,299 @@
+"""From a campaign spec to the exact inputs of every run (deterministic, order-free).
+
+Run ids, grid points and replicates
+-----------------------------------
+With G grid points (the Cartesian product of the base-scenario list and every ``{grid = [...]}``
+field, in file order, the last axis varying fastest) and ``runs`` replicates per point, run id
+``r = g * runs + j`` (``g`` the grid index, ``j`` the replicate). Chunks never straddle grid points,
+so a chunk is homogeneous in every swept value.
+
+Seeds and samples
+-----------------
+Every random number of run ``r`` comes from :class:`numpy.random.SeedSequence` keyed by the campaign
+seed and ``key = j`` (``paired = true``: common random numbers, the same fault profile at every grid
+point, which is what a paired comparison of two controllers needs) or ``key = r`` (``paired = false``):
+
+* scenario seed (``simulation.seed``) = 31 bits of ``SeedSequence(seed, spawn_key=(key, 0))``;
+* sampled field ``path`` = one draw from ``default_rng(SeedSequence(seed, spawn_key=(key, 1, crc32(path))))``.
+
+Nothing depends on which other runs exist, the order they are computed in, or the chunking; adding
+a sampled field does not change the values drawn for the others.
+"""
+
+from __future__ import annotations
+
+import copy
+import zlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from formation_ftc.campaign.spec import CampaignError, CampaignSpec, Sampler, spec_hash
+from formation_ftc.config import loader
+
+__all__ = ["RunInputs", "Chunk", "CampaignPlan", "run_seed", "draw_value", "path_exists"]
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """What defines run ``run_id``: its grid point, replicate, seed and the values set by the campaign."""
+
+    run_id: int
+    grid_index: int
+    replicate: int
+    seed: int
+    base: str
+    values: dict[str, Any] = field(default_factory=dict)  # dotted path -> value (grid and sampled)
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Runs ``start .. stop-1`` of one grid point: one vmap batch and one Parquet file."""
+
+    chunk_id: int
+    grid_index: int
+    start: int
+    stop: int
+
+    @property
+    def run_ids(self) -> list[int]:
+        return list(range(self.start, self.stop))
+
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+
+def run_seed(campaign_seed: int, key: int) -> int:
+    """31-bit scenario seed of the run with sampling key ``key`` (replicate or run id)."""
+    ss = np.random.SeedSequence(campaign_seed, spawn_key=(int(key), 0))
+    return int(ss.generate_state(1, dtype=np.uint32)[0] >> 1)
+
+
+def draw_value(sampler: Sampler, campaign_seed: int, key: int) -> Any:
+    """The value of a random field for sampling key ``key`` (independent stream per field path)."""
+    ss = np.random.SeedSequence(campaign_seed, spawn_key=(int(key), 1, zlib.crc32(sampler.path.encode())))
+    return sampler.draw(np.random.default_rng(ss))
+
+
+def _walk(tree: Any, path: str) -> tuple[bool, Any, str]:
+    """(exists, node, where it stopped) for a dotted path through dicts and lists."""
+    node = tree
+    done: list[str] = []
+    for part in path.split("."):
+        if isinstance(node, Mapping):
+            if part not in node:
+                return False, node, ".".join(done)
+            node = node[part]
+        elif isinstance(node, list | tuple):
+            try:
+                k = int(part)
+            except ValueError:
+                return False, node, ".".join(done)
+            if not -len(node) <= k < len(node):
+                return False, node, ".".join(done)
+            node = node[k]
+        else:
+            return False, node, ".".join(done)
+        done.append(part)
+    return True, node, path
+
+
+def path_exists(dump: Mapping[str, Any], path: str) -> bool:
+    return _walk(dump, path)[0]
+
+
+def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> None:
+    """Copy from the validated ``dump`` the part of ``path`` missing in ``raw`` (defaults, list rows),
+    so that :func:`loader.set_dotted` can set it in place."""
+    node: Any = raw
+    ref: Any = dump
+    for part in path.split(".")[:-1]:
+        if isinstance(node, list):
+            k = int(part)
+            node, ref = node[k], ref[k]
+            continue
+        if part not in node:
+            node[part] = copy.deepcopy(ref[part])
+            return
+        node, ref = node[part], ref[part]
+
+
+def _describe_dump(node: Any) -> str:
+    if isinstance(node, Mapping):
+        return "fields: " + ", ".join(map(str, node)) if node else "no fields"
+    if isinstance(node, list | tuple):
+        return f"a list of {len(node)} item(s) (index 0..{len(node) - 1})"
+    return f"a value ({node!r})"
+
+
+class CampaignPlan:
+    """A validated campaign: base scenarios, grid, samplers, run ids and chunks. Picklable (sent to
+    worker processes and Dask workers with every chunk)."""
+
+    def __init__(self, spec: CampaignSpec, base_dir: Path | None = None, drop_missing_traces: bool = False):
+        self.spec = spec
+        meta = spec.campaign
+        self.name = meta.name
+        self.seed = meta.seed
+        self.runs = meta.runs
+        self.chunk_size = meta.chunk_size
+        self.paired = meta.paired
+        self.base_names = spec.bases
+        self.base_raws: list[dict[str, Any]] = []
+        self.methods: list[str] = []
+        dumps: list[dict[str, Any]] = []
+        for name in self.base_names:
+            raw, dump, method = self._load_base(name, base_dir)
+            self.base_raws.append(raw)
+            dumps.append(dump)
+            self.methods.append(method)
+        self.samplers = spec.samplers()
+        self.grid_samplers = [s for s in self.samplers if s.kind == "grid"]
+        self.random_samplers = [s for s in self.samplers if s.kind != "grid"]
+        for s in self.samplers:
+            for name, raw, dump in zip(self.base_names, self.base_raws, dumps, strict=True):
+                ok, node, where = _walk(dump, s.path)
+                if not ok:
+                    raise CampaignError(
+                        f"sample.{s.path}: dotted path does not exist in base scenario {name!r} "
+                        f"(method {raw['scenario']['method']}); at {where or '<top level>'} it has "
+                        f"{_describe_dump(node)}")
+                if isinstance(node, Mapping):
+                    raise CampaignError(f"sample.{s.path}: names a whole table of {name!r}; sample one "
+                                        f"field ({_describe_dump(node)})")
+                _materialize(raw, dump, s.path)
+        self.grid_shape = ([len(self.base_names)] if len(self.base_names) > 1 else []) + \
+            [len(s.values) for s in self.grid_samplers]
+        self.n_grid = int(np.prod(self.grid_shape)) if self.grid_shape else 1
+        self.n_runs = self.n_grid * self.runs
+        self.chunks_per_point = -(-self.runs // self.chunk_size)
+        self.n_chunks = self.n_grid * self.chunks_per_point
+        bad = [r for r in spec.traces.runs if r >= self.n_runs]
+        if bad and drop_missing_traces:  # --runs made the campaign smaller: keep the traces that exist
+            kept = [r for r in spec.traces.runs if r < self.n_runs]
+            spec = spec.model_copy(update={"traces": spec.traces.model_copy(update={"runs": kept})})
+            self.spec = spec
+        elif bad:
+            raise CampaignError(f"traces.runs: run id(s) {bad} do not exist (run ids are 0..{self.n_runs - 1})")
+        self.hash = spec_hash(spec, self.base_raws)
+        self._check_extremes()
+
+    # ------------------------------------------------------------------------------ base scenarios
+    def _load_base(self, name: str, base_dir: Path | None):
+        candidate = Path(name)
+        if base_dir is not None and not candidate.is_absolute() and (base_dir / candidate).is_file():
+            candidate = base_dir / candidate
+            raw, source = loader.read_raw(candidate)
+        else:
+            try:
+                raw, source = loader.read_raw(name)
+            except loader.ScenarioError as exc:
+                raise CampaignError(f"campaign.base: {exc}") from None
+        try:
+            raw = loader.apply_overrides(raw, self.spec.overrides)
+            scenario = loader.validate(raw, f"{source} with the campaign's [overrides]")
+        except loader.ScenarioError as exc:
+            raise CampaignError(f"campaign.base {name!r}: {exc}") from None
+        dump = scenario.model_dump(mode="json")
+        return raw, dump, scenario.scenario.method
+
+    def _check_extremes(self) -> None:
+        """Every bound of every sampler must validate on every base, before any run."""
+        for s in self.samplers:
+            for v in s.extremes():
+                for name, raw in zip(self.base_names, self.base_raws, strict=True):
+                    r = copy.deepcopy(raw)
+                    loader.set_dotted(r, s.path, v)
+                    try:
+                        loader.validate(r, f"base scenario {name!r}")
+                    except loader.ScenarioError as exc:
+                        raise CampaignError(
+                            f"sample.{s.path}: value {v!r} ({s.describe()}) is outside what the scenario "
+                            f"allows:\n{exc}") from None
+
+    # --------------------------------------------------------------------------------- run inputs
+    def grid_point(self, g: int) -> tuple[int, dict[str, Any]]:
+        """(base index, {path: value} of the grid fields) of grid index ``g``."""
+        if not self.grid_shape:
+            return 0, {}
+        idx = list(np.unravel_index(g, self.grid_shape))
+        b = int(idx.pop(0)) if len(self.base_names) > 1 else 0
+        return b, {s.path: copy.deepcopy(s.values[int(k)]) for s, k in zip(self.grid_samplers, idx, strict=True)}
+
+    def run_inputs(self, run_id: int) -> RunInputs:
+        if not 0 <= run_id < self.n_runs:
+            raise CampaignError(f"run id {run_id} does not exist (0..{self.n_runs - 1})")
+        g, j = divmod(int(run_id), self.runs)
+        key = j if self.paired else int(run_id)
+        b, values = self.grid_point(g)
+        for s in self.random_samplers:
+            values[s.path] = draw_value(s, self.seed, key)
+        ordered = {s.path: values[s.path] for s in self.samplers}
+        return RunInputs(int(run_id), g, j, run_seed(self.seed, key), self.base_names[b], ordered)
+
+    def scenario_raw(self, inputs: RunInputs) -> dict[str, Any]:
+        raw = copy.deepcopy(self.base_raws[self.base_names.index(inputs.base)])
+        for path, v in inputs.values.items():
+            loader.set_dotted(raw, path, v)
+        loader.set_dotted(raw, "simulation.seed", inputs.seed)
+        return raw
+
+    def scenario(self, inputs: RunInputs):
+        """The validated scenario of one run (ScenarioError names the run and field)."""
+        try:
+            return loader.validate(self.scenario_raw(inputs), f"run {inputs.run_id}")
+        except loader.ScenarioError as exc:
+            shown = ", ".join(f"{p} = {v!r}" for p, v in inputs.values.items())
+            raise CampaignError(f"run {inputs.run_id} ({shown}): sampled scenario is invalid:\n{exc}") from None
+
+    def validate_all(self, run_ids: list[int] | None = None) -> None:
+        """Validate the scenario of every run (default: all) before anything runs."""
+        errors = []
+        for r in (range(self.n_runs) if run_ids is None else run_ids):
+            try:
+                self.scenario(self.run_inputs(r))
+            except CampaignError as exc:
+                errors.append(str(exc))
+                if len(errors) >= 3:
+                    break
+        if errors:
+            raise CampaignError("samples outside what the scenario allows (nothing was run):\n"
+                                + "\n".join(errors))
+
+    # ------------------------------------------------------------------------------------ chunks
+    def chunks(self) -> list[Chunk]:
+        out = []
+        for g in range(self.n_grid):
+            for c in range(self.chunks_per_point):
+                start = g * self.runs + c * self.chunk_size
+                stop = min(start + self.chunk_size, (g + 1) * self.runs)
+                out.append(Chunk(g * self.chunks_per_point + c, g, start, stop))
+        return out
+
+    def chunk(self, chunk_id: int) -> Chunk:
+        g, c = divmod(int(chunk_id), self.chunks_per_point)
+        start = g * self.runs + c * self.chunk_size
+        return Chunk(int(chunk_id), g, start, min(start + self.chunk_size, (g + 1) * self.runs))
+
+    # ------------------------------------------------------------------------------- description
+    def input_columns(self) -> dict[str, bool]:
+        """``input:<path>`` column -> numeric? (non-numeric values are stored as JSON text)."""
+        return {f"input:{s.path}": s.numeric for s in self.samplers}
+
+    def swept(self) -> list[str]:
+        """Columns that identify a grid point (scenario first when several bases)."""
+        cols = ["scenario"] if len(self.base_names) > 1 else []
+        return cols + [f"input:{s.path}" for s in self.grid_samplers]
+
+    def sampled(self) -> list[str]:
+        return [f"input:{s.path}" for s in self.random_samplers]
+
+    def summary(self) -> dict[str, Any]:
+        return dict(name=self.name, bases=self.base_names, methods=self.methods, runs_per_point=self.runs,
+                    grid_points=self.n_grid, total_runs=self.n_runs, chunk_size=self.chunk_size,
+                    chunks=self.n_chunks, seed=self.seed, paired=self.paired,
+                    samplers={s.path: s.describe() for s in self.samplers})
+
