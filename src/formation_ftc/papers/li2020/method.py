@@ -88,6 +88,11 @@ def make_params(s: Li2020Scenario) -> dict:
         k0=sir.k0, phi=sir.phi, sigma1=sir.sigma1, sigma2=sir.sigma2, mu_s=sir.mu_s,
         b_hat0=np.full(N, sir.b_hat0),
     )
+    if s.faults.profile == "step":
+        dt = float(s.simulation.dt)
+        p["fault_alpha"] = np.asarray(s.faults.step_effectiveness, float)
+        # onsets snapped to the step grid so that no RK step straddles a fault onset
+        p["fault_onset"] = np.round(np.asarray(s.faults.step_onset, float) / dt) * dt
     return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.float64), p)
 
 
@@ -102,7 +107,14 @@ def make_model(s: Li2020Scenario):
     delayed = law == "thm2"
     adaptive = law in ("thm1", "thm2")
     idx = jnp.arange(1, N + 1, dtype=jnp.float64)
-    gamma_fn = _vec_expr(s.faults.effectiveness_texts(), "faults.effectiveness")
+    if s.faults.profile == "step":
+        def gamma_fn(t, _idx, p):  # Li2020 eq. (5) with a step loss of effectiveness per channel
+            return jnp.where(t >= p["fault_onset"], p["fault_alpha"], 1.0)
+    else:
+        _gamma_expr = _vec_expr(s.faults.effectiveness_texts(), "faults.effectiveness")
+
+        def gamma_fn(t, i, _p):
+            return _gamma_expr(t, i)
     delta_fn = _vec_expr(s.faults.additive, "faults.additive")
     h_fn = _vec_expr(s.disturbance.force, "disturbance.force")
     exp_sigma = s.controller.sigma_form == "exponential"
@@ -128,7 +140,7 @@ def make_model(s: Li2020Scenario):
         rho_d, v_d, a_d, rho_f = desired_trajectory(t, p["rho_bar"], p["chi"], p["rotation"], p["growth"],
                                                     p["centre"])
         tv = dict(rho_d=rho_d, v_d=v_d, a_d=a_d, rho_f=rho_f, sigma=sigma_of(t, p),
-                  Gam=gamma_fn(t_fault, idx), delta=delta_fn(t_fault, idx), h=h_fn(t_fault, idx))
+                  Gam=gamma_fn(t_fault, idx, p), delta=delta_fn(t_fault, idx), h=h_fn(t_fault, idx))
         if delayed:
             tv["T"] = T_fn(t)
         return tv
@@ -303,7 +315,8 @@ def build(s: Li2020Scenario) -> Compiled:
                     res[f"{name}_final_sc{i + 1}"] = float(fin[name][i])
         return res
 
-    key = ("li2020", N, s.controller.law, s.controller.sigma_form, s.faults.effectiveness_texts(),
+    key = ("li2020", N, s.controller.law, s.controller.sigma_form, s.faults.profile,
+           s.faults.effectiveness_texts() if s.faults.profile == "expressions" else None,
            tuple(s.faults.additive), tuple(s.disturbance.force),
            None if s.network.delays is None or not static["delayed"] else tuple(map(tuple, s.network.delays)),
            tuple(map(tuple, (np.asarray(s.network.adjacency) > 0).tolist())) if static["delayed"] else None,

@@ -163,6 +163,14 @@ class FaultSection(StrictModel):
         description="alpha_i1..alpha_i3(t) in (0, 1] [-]; onsets use the t >= t0 branch (E000-06).")
     alpha3_literal: bool = Field(
         False, description="Replace alpha_i3 by the printed form with exp(-0.2 (t - 10)) (E000-06).")
+    profile: Literal["expressions", "step"] = Field(
+        "expressions", description="'expressions': Gamma_i(t) from faults.effectiveness; 'step': "
+        "alpha_ij = faults.step_effectiveness[i][j] from faults.step_onset[i][j] on (numeric, so Monte "
+        "Carlo campaigns vary them without recompiling).")
+    step_effectiveness: list[tuple[float, float, float]] | None = Field(
+        None, description="Step profile: effectiveness after onset per spacecraft and axis, in (0, 1] [-].")
+    step_onset: list[tuple[float, float, float]] | None = Field(
+        None, description="Step profile: onset time per spacecraft and axis, >= 0 [s] (snapped to the step grid).")
     additive: Vec3Expr = Field(
         ("0.1*((i+1)*cos(0.1*t) + 2*exp(-0.2*t))",
          "0.1*(i*sin(0.2*t) + exp(-0.3*t))",
@@ -208,6 +216,19 @@ class Li2020Scenario(ScenarioBase):
             raise ValueError(str(exc)) from None
         if len(self.formation.phase) != n:
             raise ValueError(f"formation.phase: {len(self.formation.phase)} values for {n} spacecraft")
+        f = self.faults
+        if f.profile == "step":
+            for name, lo, hi, unit in (("step_effectiveness", 0.0, 1.0, "-"), ("step_onset", 0.0, None, "s")):
+                rows = getattr(f, name)
+                if rows is None or len(rows) != n:
+                    got = "missing" if rows is None else f"{len(rows)} rows"
+                    raise ValueError(f"faults.{name}: {got}; faults.profile = 'step' needs {n} rows of 3 values")
+                for i, row in enumerate(rows):
+                    for j, v in enumerate(row):
+                        ok = (v > lo and v <= hi) if name == "step_effectiveness" else v >= lo
+                        if not ok:
+                            rng = "(0, 1]" if name == "step_effectiveness" else ">= 0"
+                            raise ValueError(f"faults.{name}[{i}][{j}] = {v}: must be {rng} [{unit}]")
         c = self.controller
         for name in ("k", "lam", "gamma", "eta", "mu", "upsilon", "m_hat0", "beta_hat0", "d_hat0", "sigma_a"):
             _per_spacecraft(getattr(c, name), n, f"controller.{name}")
