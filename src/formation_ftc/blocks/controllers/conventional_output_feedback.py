@@ -1,0 +1,41 @@
+"""Conventional output-feedback FTC (COF2TC): the comparison baseline of Gui et al. 2022 (Figs. 7-9).
+
+The paper compares with "the conventional output-feedback FTC approach proposed in [30]" but gives
+neither the law nor its gains (E002-10). Following SPEC.md P2.4 [CHOICE] this module implements the
+passive, fixed-gain ("reliable") output feedback
+
+    u = K e_y                        (pi == 1, no learning term v, no fault compensation)
+
+with the same gain K as LOF2TC (K C = B^T P1, eq. (35)), and the optional variant
+``fault_compensation=True``: ``u = K e_y - B^+ H F_hat`` (uses the ILO fault estimate).
+
+Assumptions (stated because ref. [30] is not reproduced): same K, same measurement e_y = y0 - y, same
+sampling (u held over the step), no adaptation and no disturbance compensation; the expected outcome is
+a steady x offset of about F_x / K_11 = 0.5 / 0.0063 = 79 m after the 1500 s bias fault and a z
+oscillation of about 37 m after 2000 s (SPEC.md P2.4). Units as in
+:mod:`formation_ftc.blocks.controllers.learning_output_feedback`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+
+from formation_ftc.blocks.observers.iterative_learning_observer import matvec
+
+__all__ = ["ConventionalOutputFeedback"]
+
+
+@dataclass(frozen=True)
+class ConventionalOutputFeedback:
+    """Fixed-gain output feedback; ``fault_compensation`` subtracts ``B^+ H F_hat`` (static flag)."""
+
+    fault_compensation: bool = False
+
+    def control(self, params: dict, e_y, F_hat) -> jnp.ndarray:
+        """``u = K e_y`` [m/s^2] (optionally ``- B^+ H F_hat``)."""
+        u = matvec(params["K"], e_y)
+        if self.fault_compensation:
+            u = u - matvec(params["BpH"], F_hat)
+        return u

@@ -1,0 +1,242 @@
+"""LMI synthesis of the iterative-learning-observer gains (Gui et al. 2022, Theorem 1 and Remark 1).
+
+Finds ``P = P^T > 0``, ``Y`` and ``L2`` such that
+
+* (8)   ``P A + A^T P - Y C - C^T Y^T < 0``                       (observer Lyapunov inequality)
+* (27)  ``[[-lam I, H^T P - L2 C], [*, -I]] < 0``                 (Schur relaxation of (9) ``H^T P = L2 C``)
+* disk  ``[[-r P, P A - Y C - c P], [*, -r P]] < 0``             (all eig(A - L1 C) in the disk S(c, r))
+
+and returns ``L1 = P^-1 Y`` (Theorem 1), with cvxpy and the CLARABEL interior-point solver (SCS as a
+fallback). Strict inequalities are imposed as ``<= -eps I`` (SPEC.md 0.5, eps = 1e-6); (27) uses the
+margin ``min(eps, lam / 10)`` because its own diagonal is only ``-lam = -1e-8``.
+
+Homogeneity (SPEC.md P2.3, E002-06): (8), (27) and the disk LMI are homogeneous in (P, Y, L2) -- if
+(P, Y, L2) is a solution, so is (s P, s Y, s L2) for any s >= 1 (margins aside), and L1 = P^-1 Y does not
+change. The solver's scaling of P is therefore arbitrary, and it fixes the *magnitude* of L2 that the
+learning law uses. To make the result reproducible we add the normalisation ``P >= I`` and minimise
+``trace(P)``; :func:`rescale_design` applies the free scale factor (e.g. to match the printed L2 ~ 456).
+
+An infeasible problem raises :class:`DesignInfeasible` naming the conflicting constraint(s) (found by
+re-solving with each constraint group dropped) and the solver status. Offline code; never called in the
+time loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+__all__ = [
+    "DesignInfeasible",
+    "IloLmiDesign",
+    "design_ilo_gains",
+    "ilo_lmi_residuals",
+    "rescale_design",
+    "CONSTRAINT_NAMES",
+]
+
+#: Human-readable names of the constraint groups (used in error messages and residual reports).
+CONSTRAINT_NAMES = {
+    "lyapunov_8": "(8) P A + A^T P - Y C - C^T Y^T < 0",
+    "schur_27": "(27) [[-lam I, H^T P - L2 C], [*, -I]] < 0 (relaxed (9))",
+    "disk": "disk pole region S(c, r): [[-r P, P A - Y C - c P], [*, -r P]] < 0",
+    "normalisation": "normalisation P >= I (fixes the free scale of the homogeneous LMIs)",
+}
+
+
+class DesignInfeasible(ValueError):
+    """The LMI problem has no solution. ``constraints`` names the conflicting groups, ``status`` is the
+    solver status (e.g. ``'infeasible'``)."""
+
+    def __init__(self, message: str, constraints: tuple[str, ...] = (), status: str = "", solver: str = ""):
+        super().__init__(message)
+        self.constraints = constraints
+        self.status = status
+        self.solver = solver
+
+
+@dataclass(frozen=True)
+class IloLmiDesign:
+    """Result of :func:`design_ilo_gains`.
+
+    Attributes
+    ----------
+    P : (n, n) Lyapunov matrix; Y : (n, p); L2 : (m, p) learning gain; L1 : (n, p) = P^-1 Y [1/s].
+    lam : the small scalar of (27); disk_center, disk_radius : pole region S(c, r) [1/s].
+    residuals : see :func:`ilo_lmi_residuals`.
+    poles : eig(A - L1 C) [1/s].
+    solver, status : solver used and its final status.
+    """
+
+    P: np.ndarray
+    Y: np.ndarray
+    L1: np.ndarray
+    L2: np.ndarray
+    lam: float
+    disk_center: float
+    disk_radius: float
+    residuals: dict[str, float] = field(default_factory=dict)
+    poles: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    solver: str = ""
+    status: str = ""
+
+
+def _sym(M):
+    return (M + M.T) / 2
+
+
+def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float = -5.0,
+                      disk_radius: float = 2.0) -> dict[str, float]:
+    """Numerical certificate of a candidate (P, Y, L2).
+
+    Returns
+    -------
+    dict with ``max_eig_8`` (< 0 required), ``max_eig_27`` (< 0), ``max_abs_9`` = max|H^T P - L2 C|
+    (0 for (9) exactly), ``max_eig_disk`` (< 0), ``min_eig_P`` (> 0), ``max_pole_distance`` =
+    max |eig(A - L1 C) - c| (< r), ``max_pole_real`` [1/s].
+    """
+    A, C, H, P, Y, L2 = (np.asarray(x, dtype=float) for x in (A, C, H, P, Y, L2))
+    n, m = A.shape[0], H.shape[1]
+    M8 = _sym(P @ A + A.T @ P - Y @ C - C.T @ Y.T)
+    X = H.T @ P - L2 @ C
+    M27 = np.block([[-lam * np.eye(m), X], [X.T, -np.eye(n)]])
+    D = P @ A - Y @ C - disk_center * P
+    MD = np.block([[-disk_radius * P, D], [D.T, -disk_radius * P]])
+    L1 = np.linalg.solve(P, Y)
+    poles = np.linalg.eigvals(A - L1 @ C)
+    return {
+        "max_eig_8": float(np.max(np.linalg.eigvalsh(M8))),
+        "max_eig_27": float(np.max(np.linalg.eigvalsh(_sym(M27)))),
+        "max_abs_9": float(np.max(np.abs(X))),
+        "max_eig_disk": float(np.max(np.linalg.eigvalsh(_sym(MD)))),
+        "min_eig_P": float(np.min(np.linalg.eigvalsh(_sym(P)))),
+        "max_pole_distance": float(np.max(np.abs(poles - disk_center))),
+        "max_pole_real": float(np.max(poles.real)),
+    }
+
+
+def _build_problem(A, C, H, lam, c, r, eps, groups):
+    import cvxpy as cp
+
+    n, p, m = A.shape[0], C.shape[0], H.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    Y = cp.Variable((n, p))
+    L2 = cp.Variable((m, p))
+    cons = []
+    if "lyapunov_8" in groups:
+        M8 = P @ A + A.T @ P - Y @ C - C.T @ Y.T
+        cons.append(_sym(M8) << -eps * np.eye(n))  # Gui2022 eq. (8)
+    if "schur_27" in groups:
+        X = H.T @ P - L2 @ C
+        M27 = cp.bmat([[-lam * np.eye(m), X], [X.T, -np.eye(n)]])
+        cons.append(_sym(M27) << -min(eps, lam / 10) * np.eye(n + m))  # eq. (27)
+    if "disk" in groups:
+        D = P @ A - Y @ C - c * P
+        MD = cp.bmat([[-r * P, D], [D.T, -r * P]])
+        cons.append(_sym(MD) << -eps * np.eye(2 * n))  # D-stability, disk S(c, r)
+    if "normalisation" in groups:
+        cons.append(P >> np.eye(n))
+    else:
+        cons.append(P >> eps * np.eye(n))
+    prob = cp.Problem(cp.Minimize(cp.trace(P)), cons)
+    return prob, P, Y, L2
+
+
+def _solve(prob, solver):
+    """Solve with ``solver`` (or CLARABEL, then SCS); return (status, solver_name)."""
+    import cvxpy as cp
+
+    order = [solver] if solver else ["CLARABEL", "SCS"]
+    installed = set(cp.installed_solvers())
+    last = ("solver_error", order[-1])
+    for name in order:
+        if name not in installed:
+            last = (f"solver {name} not installed", name)
+            continue
+        try:
+            kwargs = {"eps": 1e-9, "max_iters": 200000} if name == "SCS" else {}
+            prob.solve(solver=name, **kwargs)
+        except (KeyboardInterrupt, SystemExit):  # pragma: no cover
+            raise
+        except BaseException as exc:  # noqa: BLE001 - SolverError, or a Rust panic of CLARABEL
+            # (pyo3 PanicException derives from BaseException; seen on near-infeasible disk LMIs)
+            last = (f"solver_error: {type(exc).__name__}: {str(exc)[:120]}", name)
+            continue
+        status = str(prob.status)
+        if status in ("optimal", "infeasible", "unbounded") or name == order[-1]:
+            return status, name
+        last = (status, name)
+    return last
+
+
+def design_ilo_gains(A, C, H, *, lam: float = 1e-8, disk_center: float = -5.0, disk_radius: float = 2.0,
+                     eps: float = 1e-6, solver: str | None = None) -> IloLmiDesign:
+    """Solve (8), (27) and the disk LMI (Gui2022 Remark 1, design steps (3)-(4)); ``L1 = P^-1 Y``.
+
+    Parameters
+    ----------
+    A : (n, n) [1/s]; C : (p, n) output matrix; H : (n, m) fault distribution matrix.
+    lam : the small positive scalar of (27) (paper: 1e-8).
+    disk_center, disk_radius : the pole region S(c, r): centre c (< 0) and radius r (> 0) [1/s].
+    eps : margin of the strict inequalities.
+    solver : cvxpy solver name; default CLARABEL with SCS as fallback.
+
+    Raises
+    ------
+    DesignInfeasible : no solution; the message names the constraint(s) whose removal makes the
+        problem feasible and the solver status.
+    ValueError : bad arguments (radius <= 0, lam <= 0, shapes).
+    """
+    A, C, H = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, C, H))
+    if not (disk_radius > 0):
+        raise ValueError(f"disk_radius must be > 0 1/s, got {disk_radius}")
+    if not (lam > 0):
+        raise ValueError(f"lam must be > 0, got {lam}")
+    n = A.shape[0]
+    if A.shape != (n, n) or C.shape[1] != n or H.shape[0] != n:
+        raise ValueError(f"inconsistent shapes A{A.shape}, C{C.shape}, H{H.shape}")
+    all_groups = ("lyapunov_8", "schur_27", "disk", "normalisation")
+    prob, P, Y, L2 = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, all_groups)
+    status, used = _solve(prob, solver)
+    region = f"S({disk_center:g}, {disk_radius:g})"
+    if status not in ("optimal", "optimal_inaccurate"):
+        culprits = []
+        for g in all_groups:
+            sub = tuple(x for x in all_groups if x != g)
+            prob_g = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, sub)[0]
+            st, _ = _solve(prob_g, solver)
+            if st in ("optimal", "optimal_inaccurate"):
+                culprits.append(g)
+        names = "; ".join(CONSTRAINT_NAMES[g].replace("S(c, r)", region) for g in culprits) or \
+            "no single constraint (the combination of (8), (27) and the disk region is infeasible)"
+        raise DesignInfeasible(
+            f"ILO gain LMI is infeasible (solver {used}, status '{status}'); conflicting constraint(s), "
+            f"each of which alone makes the problem feasible when removed: {names}. Pole region {region}: centre {disk_center:g} 1/s, radius {disk_radius:g} 1/s.",
+            constraints=tuple(culprits), status=status, solver=used)
+    Pv, Yv, L2v = np.asarray(P.value), np.asarray(Y.value), np.asarray(L2.value)
+    Pv = _sym(Pv)
+    res = ilo_lmi_residuals(A, C, H, Pv, Yv, L2v, lam, disk_center, disk_radius)
+    bad = [k for k in ("max_eig_8", "max_eig_27", "max_eig_disk") if not res[k] < 0]
+    if res["min_eig_P"] <= 0:
+        bad.append("min_eig_P")
+    if bad:
+        raise DesignInfeasible(
+            f"ILO gain LMI: solver {used} returned status '{status}' but the solution fails the numerical "
+            f"check of {', '.join(bad)} ({', '.join(f'{k} = {res[k]:.3g}' for k in bad)})",
+            constraints=tuple(bad), status=status, solver=used)
+    L1 = np.linalg.solve(Pv, Yv)
+    return IloLmiDesign(P=Pv, Y=Yv, L1=L1, L2=L2v, lam=lam, disk_center=disk_center, disk_radius=disk_radius,
+                        residuals=res, poles=np.linalg.eigvals(A - L1 @ C), solver=used, status=status)
+
+
+def rescale_design(design: IloLmiDesign, factor: float, A, C, H) -> IloLmiDesign:
+    """Apply the free scale of the homogeneous LMIs: (P, Y, L2) -> factor * (P, Y, L2); L1 unchanged.
+
+    ``factor >= 1`` keeps every ``-eps I`` margin; residuals are recomputed.
+    """
+    if not factor > 0:
+        raise ValueError(f"factor must be > 0, got {factor}")
+    P, Y, L2 = factor * design.P, factor * design.Y, factor * design.L2
+    res = ilo_lmi_residuals(A, C, H, P, Y, L2, design.lam, design.disk_center, design.disk_radius)
+    return replace(design, P=P, Y=Y, L2=L2, L1=np.linalg.solve(P, Y), residuals=res)
