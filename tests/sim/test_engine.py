@@ -102,3 +102,16 @@ def test_steps_from_horizon_errors():
         steps_from_horizon(10.0, 0.3)
     with pytest.raises(ValueError, match="record_every"):
         steps_from_horizon(10.0, 0.01, 7)
+
+
+def test_divergence_names_nested_variables():
+    from formation_ftc.core.history import History, history_init
+
+    def step(k, st):
+        v = jnp.where(k == 3, jnp.nan, st["ctl"]["hist"].values + 1.0)
+        return {"ctl": {"hist": History(v, st["ctl"]["hist"].head, st["ctl"]["hist"].count)}}
+
+    st0 = {"ctl": {"hist": history_init(jnp.zeros(2), 4)}}
+    out = jax.jit(lambda: run_fixed_step(step, lambda k, x: {}, st0, 10, 5))()
+    info = diagnose_divergence(step, out["last_finite"], int(out["diverged_step"]), 0.0, max_steps=5, dt=1.0)
+    assert info.variable == "ctl.hist.values" and info.step == 3

@@ -157,6 +157,19 @@ class SimulationDiverged(RuntimeError):
         self.partial = partial
 
 
+def _path_name(path) -> str:
+    """'x.rho' for a pytree path of dict keys, attribute names (named tuples) and list indices."""
+    parts = []
+    for entry in path:
+        for attr in ("key", "name", "idx"):
+            if hasattr(entry, attr):
+                parts.append(str(getattr(entry, attr)))
+                break
+        else:  # pragma: no cover - unknown key type
+            parts.append(str(entry))
+    return ".".join(parts)
+
+
 def diagnose_divergence(
     step: Callable[[jax.Array, PyTree], PyTree],
     last_finite: PyTree,
@@ -180,7 +193,7 @@ def diagnose_divergence(
                 continue
             bad = np.argwhere(~np.isfinite(arr))
             if bad.size:
-                name = jax.tree_util.keystr(path).strip("[]'\"").replace("']['", ".")
+                name = _path_name(path)
                 idx = tuple(int(v) for v in bad[0])
                 ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
                 sc = idx[ax] if ax is not None and len(idx) > ax else None
