@@ -47,3 +47,22 @@ def test_zoh_matches_integration_with_held_input():
     np.testing.assert_allclose(Ad, scipy.linalg.expm(A * dt), rtol=1e-13)
     sol = solve_ivp(lambda t, x: A @ x + B @ u, (0, dt), x0, rtol=1e-13, atol=1e-13, method="DOP853")
     np.testing.assert_allclose(Ad @ x0 + Bd @ u, sol.y[:, -1], rtol=1e-10, atol=1e-12)
+
+
+def test_staged_rk4_equals_rk4_with_inputs_inside_rhs():
+    from formation_ftc.core.integrators import rk4_step_staged
+
+    def u(t):
+        return jnp.array([jnp.cos(0.7 * t), jnp.exp(-t)])
+
+    def rhs_inside(t, x):
+        return -x + u(t)
+
+    def rhs_staged(t, x, ut):
+        return -x + ut
+
+    x = jnp.array([1.0, -2.0])
+    t, dt = 0.3, 0.1
+    a = rk4_step(rhs_inside, t, x, dt)
+    b = rk4_step_staged(rhs_staged, t, x, dt, (u(t), u(t + dt / 2), u(t + dt)))
+    np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15)

@@ -18,7 +18,7 @@ import jax
 import numpy as np
 import scipy.linalg
 
-__all__ = ["rk4_step", "euler_step", "zoh_discretize"]
+__all__ = ["rk4_step", "rk4_step_staged", "euler_step", "zoh_discretize"]
 
 PyTree = Any
 
@@ -34,6 +34,23 @@ def rk4_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:
     k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), *args)
     k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), *args)
     k4 = rhs(t + dt, _axpy(dt, k3, x), *args)
+    return jax.tree_util.tree_map(
+        lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
+    )
+
+
+def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, *args) -> PyTree:
+    """RK4 step of ``dx/dt = rhs(t, x, u(t), *args)`` with time-only inputs precomputed at the three
+    distinct stage times: ``stage_inputs = (u(t), u(t + dt/2), u(t + dt))``.
+
+    Same result as :func:`rk4_step` with ``u`` evaluated inside ``rhs``, but the stage inputs are
+    selected statically (no run-time selection) and ``u(t + dt/2)`` is evaluated once for stages 2-3.
+    """
+    u0, u_half, u1 = stage_inputs
+    k1 = rhs(t, x, u0, *args)
+    k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), u_half, *args)
+    k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), u_half, *args)
+    k4 = rhs(t + dt, _axpy(dt, k3, x), u1, *args)
     return jax.tree_util.tree_map(
         lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
     )

@@ -40,7 +40,7 @@ from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_contro
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration, reference_rates
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.history import history_init, history_push, history_read, required_capacity
-from formation_ftc.core.integrators import rk4_step
+from formation_ftc.core.integrators import rk4_step_staged
 from formation_ftc.papers.li2020.conditions import delay_statistics, delay_vector_function
 from formation_ftc.papers.li2020.desired import chi_from_period, desired_trajectory, formation_offsets
 from formation_ftc.papers.li2020.metrics import (
@@ -152,10 +152,6 @@ def make_model(s: Li2020Scenario):
         tf = t_k + dt * jnp.array([0.0, 0.5, 1.0 - LEFT_LIMIT])
         return jax.vmap(lambda a, b: time_values(a, b, p))(ts, tf)
 
-    def select_stage(table, t, t_k):
-        c = (t - t_k) / dt
-        return jax.tree_util.tree_map(lambda a: jnp.where(c < 0.25, a[0], jnp.where(c < 0.75, a[1], a[2])), table)
-
     def sliding(x, tv, p):
         e1 = x["rho"] - tv["rho_d"]  # eq. (6)
         e2 = x["v"] - tv["v_d"]
@@ -211,14 +207,15 @@ def make_model(s: Li2020Scenario):
         return state
 
     def make_step(p):
-        def rhs(t, x, t_k, table, hist):
-            return evaluate(t, x, select_stage(table, t, t_k), t_k, hist, p)[0]
+        def rhs(t, x, tv, t_k, hist):
+            return evaluate(t, x, tv, t_k, hist, p)[0]
 
         def step(k, state):
             t_k = k * dt
             hist = state.get("hist")
             table = stage_table(t_k, p)
-            x = rk4_step(rhs, t_k, state["x"], dt, t_k, table, hist)
+            stages = tuple(jax.tree_util.tree_map(lambda a, j=j: a[j], table) for j in range(3))
+            x = rk4_step_staged(rhs, t_k, state["x"], dt, stages, t_k, hist)
             new = {"x": x}
             if delayed:
                 tv_next = jax.tree_util.tree_map(lambda a: a[2], table)  # t_{k+1} (desired part is exact)
