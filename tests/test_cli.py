@@ -35,3 +35,15 @@ def test_run_divergence_exit_code_keeps_partial(tmp_path, capsys):
 def test_check_fails_for_unstable_design(capsys):
     # free drift needs no condition; a pd loop with zero damping and gains -> marginal: max Re = 0
     assert main(["check", "cw-pd-fault", "--set", "controller.kd=0", "--set", "controller.kp=0"]) == 1
+
+
+def test_check_json_for_every_builtin_scenario(capsys):
+    """`check --json` is valid JSON for every built-in scenario (numpy values included)."""
+    from formation_ftc.api import list_scenarios
+
+    for name in list_scenarios():
+        code = main(["check", name, "--json"])
+        data = json.loads(capsys.readouterr().out)
+        assert code == (0 if data["all_required_hold"] else 1), name
+        for c in data["conditions"]:
+            assert c["holds"] in (True, False, None)

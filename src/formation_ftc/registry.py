@@ -86,9 +86,10 @@ class Condition:
     detail: str = ""
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(name=self.name, reference=self.reference, value=self.value,
-                    requirement=self.requirement, holds=self.holds, required=self.required,
-                    detail=self.detail)
+        return dict(name=str(self.name), reference=str(self.reference), value=str(self.value),
+                    requirement=str(self.requirement),
+                    holds=None if self.holds is None else bool(self.holds),  # numpy bools too
+                    required=bool(self.required), detail=str(self.detail))
 
 
 @dataclass(frozen=True)
