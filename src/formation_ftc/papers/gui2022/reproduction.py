@@ -91,6 +91,12 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
                              timings, "gui2022-ilo-lmi-scaled")
     progress(7 / steps, "figures")
 
+    from formation_ftc.report.html import write_trajectory3d
+
+    write_trajectory3d(out_dir, {"nominal configuration q0": ds_lof.desired_state.values[:, :3],
+                                 "deputy, LOF2TC": ds_lof.state.values[:, :3],
+                                 "deputy, COF2TC": ds_cof.state.values[:, :3]},
+                       title="Gui2022 Fig. 9: relative trajectory in LVLH (interactive)", append=False)
     figs = [
         Figure(F.fig3_fault_reconstruction(ds_ilo, out_dir / "fig03_fault_reconstruction.png").name, "3",
                "F_hat vs F per axis (new ILO, printed gains)"),
