@@ -76,3 +76,17 @@ def test_error_has_caret_column():
     with pytest.raises(ExpressionError) as info:
         compile_expression("1 + foo*t", field="f")
     assert info.value.col == 4
+
+
+def test_vector_expression_per_spacecraft():
+    from formation_ftc.core.expressions import compile_vector_expression
+
+    f = compile_vector_expression(["0.1*i*t", "1", "where(t >= 10, 1 - 0.05*(i+2), 1)"], field="faults.x")
+    idx = np.arange(1, 5, dtype=float)
+    out = np.asarray(f(12.0, idx))
+    assert out.shape == (4, 3)
+    np.testing.assert_allclose(out[:, 0], 1.2 * idx)
+    np.testing.assert_allclose(out[:, 1], 1.0)
+    np.testing.assert_allclose(out[:, 2], 1 - 0.05 * (idx + 2))
+    with pytest.raises(ExpressionError, match=r"faults.x\[1\]"):
+        compile_vector_expression(["t", "bad_name"], field="faults.x")

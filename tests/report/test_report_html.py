@@ -100,7 +100,6 @@ def test_page_is_self_contained(tmp_path):
     assert not re.search(r"url\(\s*['\"]?https?:", page.split("</style>")[0])
 
 
-@pytest.mark.skipif(not rh.plotly_available(), reason="plotly not installed: optional 3-D view")
 def test_trajectory_view_with_plotly(tmp_path):
     from plotly.offline import get_plotlyjs
 

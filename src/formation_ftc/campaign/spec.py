@@ -85,8 +85,9 @@ class Sampler:
 
     kind = "random"  # "random" (drawn per run) or "grid" (swept)
 
-    def draw(self, rng: np.random.Generator) -> Any:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def draw(self, rng: np.random.Generator) -> Any:  # pragma: no cover - every sampler overrides it
+        """One value drawn with ``rng`` (subclasses define the distribution)."""
+        return NotImplemented
 
     def extremes(self) -> list[Any]:
         return []

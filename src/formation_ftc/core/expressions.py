@@ -28,7 +28,8 @@ from functools import lru_cache
 
 import jax.numpy as jnp
 
-__all__ = ["ExpressionError", "Expression", "compile_expression", "FUNCTIONS", "CONSTANTS"]
+__all__ = ["ExpressionError", "Expression", "compile_expression", "compile_vector_expression", "FUNCTIONS",
+           "CONSTANTS"]
 
 
 class ExpressionError(ValueError):
@@ -122,6 +123,16 @@ def compile_expression(text: str | float | int, variables: Sequence[str] = ("t",
     if not isinstance(text, str):
         raise ExpressionError(f"expected a string or number, got {type(text).__name__}", str(text), field)
     return _compile_cached(text, tuple(variables), field)
+
+
+def compile_vector_expression(texts: Sequence[str | float], field: str = "") -> Callable:
+    """Per-axis expressions in ``t`` and ``i`` -> ``f(t, i)`` returning shape ``i.shape + (len(texts),)``.
+
+    ``i`` is typically the array of 1-based spacecraft numbers, so ``f(t, idx)`` gives an (N, 3) array.
+    Errors name ``field[k]`` of the offending component.
+    """
+    fns = [compile_expression(s, ("t", "i"), field=f"{field}[{k}]") for k, s in enumerate(texts)]
+    return lambda t, i: jnp.stack([jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1)
 
 
 @lru_cache(maxsize=4096)

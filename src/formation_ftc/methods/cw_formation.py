@@ -29,7 +29,7 @@ from formation_ftc.config.base import ExprText, ScenarioBase, StrictModel
 from formation_ftc.config.sections import SpacecraftSection
 from formation_ftc.core.disturbances import gaussian_noise, run_key, step_key
 from formation_ftc.core.dynamics.cw import cw_rhs
-from formation_ftc.core.expressions import compile_expression
+from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.core.faults import actuator_fault
 from formation_ftc.core.integrators import rk4_step
 from formation_ftc.core.orbit import MU_EARTH
@@ -90,20 +90,16 @@ class CwFormationScenario(ScenarioBase):
     sensors: SensorSection = SensorSection()
 
 
-def _vec_expr(texts, field):
-    fns = [compile_expression(s, ("t", "i"), field=f"{field}[{k}]") for k, s in enumerate(texts)]
-    return lambda t, i: jnp.stack([jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1)
-
 
 def build(s: CwFormationScenario) -> Compiled:
     """Compile a CW formation scenario (see module docstring)."""
     N = s.spacecraft.count
     dt = s.simulation.dt
     idx = jnp.arange(1, N + 1, dtype=jnp.float64)  # 1-based spacecraft number for expressions
-    desired = _vec_expr(s.controller.desired_position, "controller.desired_position")
-    gamma = _vec_expr(s.faults.effectiveness, "faults.effectiveness")
-    bias = _vec_expr(s.faults.bias, "faults.bias")
-    dist = _vec_expr(s.disturbance.force, "disturbance.force")
+    desired = compile_vector_expression(s.controller.desired_position, "controller.desired_position")
+    gamma = compile_vector_expression(s.faults.effectiveness, "faults.effectiveness")
+    bias = compile_vector_expression(s.faults.bias, "faults.bias")
+    dist = compile_vector_expression(s.disturbance.force, "disturbance.force")
     d_vel = jax.jacfwd(desired, argnums=0)
     d_acc = jax.jacfwd(d_vel, argnums=0)
     pd = s.controller.type == "pd"

@@ -38,7 +38,7 @@ from formation_ftc.blocks.controllers.li2020_adaptive import (
 )
 from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_control, sir_ftc_rate
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration, reference_rates
-from formation_ftc.core.expressions import compile_expression
+from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.core.history import history_init, history_push, history_read, required_capacity
 from formation_ftc.core.integrators import rk4_step_staged
 from formation_ftc.papers.li2020.conditions import delay_statistics, delay_vector_function
@@ -59,10 +59,6 @@ __all__ = ["build", "make_params", "make_model", "LEFT_LIMIT"]
 #: fraction of dt subtracted from the last RK stage time for fault/disturbance expressions
 LEFT_LIMIT = 1e-9
 
-
-def _vec_expr(texts, field):
-    fns = [compile_expression(s, ("t", "i"), field=f"{field}[{k}]") for k, s in enumerate(texts)]
-    return lambda t, i: jnp.stack([jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1)
 
 
 def make_params(s: Li2020Scenario) -> dict:
@@ -111,12 +107,12 @@ def make_model(s: Li2020Scenario):
         def gamma_fn(t, _idx, p):  # Li2020 eq. (5) with a step loss of effectiveness per channel
             return jnp.where(t >= p["fault_onset"], p["fault_alpha"], 1.0)
     else:
-        _gamma_expr = _vec_expr(s.faults.effectiveness_texts(), "faults.effectiveness")
+        _gamma_expr = compile_vector_expression(s.faults.effectiveness_texts(), "faults.effectiveness")
 
         def gamma_fn(t, i, _p):
             return _gamma_expr(t, i)
-    delta_fn = _vec_expr(s.faults.additive, "faults.additive")
-    h_fn = _vec_expr(s.disturbance.force, "disturbance.force")
+    delta_fn = compile_vector_expression(s.faults.additive, "faults.additive")
+    h_fn = compile_vector_expression(s.disturbance.force, "disturbance.force")
     exp_sigma = s.controller.sigma_form == "exponential"
     C_np = np.asarray(s.network.adjacency, float)
     if delayed:

@@ -36,7 +36,7 @@ from formation_ftc.core.dynamics.euler_lagrange import (
     euler_rates_from_body_rates,
     rigid_body_rhs,
 )
-from formation_ftc.core.expressions import compile_expression
+from formation_ftc.core.expressions import compile_expression, compile_vector_expression
 from formation_ftc.core.integrators import rk4_step
 from formation_ftc.papers.mehrabian.schema import MehrabianScenario
 from formation_ftc.registry import Compiled
@@ -57,10 +57,6 @@ def neighbour_pairs(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return j, n
 
 
-def _vec_expr(texts, field):
-    fns = [compile_expression(s, ("t", "i"), field=f"{field}[{k}]") for k, s in enumerate(texts)]
-    return lambda t, i: jnp.stack([jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1)
-
 
 def build(s: MehrabianScenario) -> Compiled:
     """Compile a scenario (see the module docstring)."""
@@ -70,7 +66,7 @@ def build(s: MehrabianScenario) -> Compiled:
     A = s.formation.adjacency()
     pj, pn = neighbour_pairs(A)
     idx = jnp.arange(1, m + 1, dtype=jnp.float64)
-    desired = _vec_expr(s.desired.attitude, "desired.attitude")
+    desired = compile_vector_expression(s.desired.attitude, "desired.attitude")
     desired_d = jax.jacfwd(desired, argnums=0)
     desired_dd = jax.jacfwd(desired_d, argnums=0)
     cfg = ELHinfConfig(law=s.controller.law, compensation=s.controller.compensation)
