@@ -66,3 +66,32 @@ def test_staged_rk4_equals_rk4_with_inputs_inside_rhs():
     a = rk4_step(rhs_inside, t, x, dt)
     b = rk4_step_staged(rhs_staged, t, x, dt, (u(t), u(t + dt / 2), u(t + dt)))
     np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15)
+
+
+def test_autonomous_stages_plus_staged_rk4_equal_joint_rk4():
+    """An autonomous sub-state integrated ahead (its four stage values feeding the coupled state's
+    stages) gives the same step as RK4 on the joint system: a pendulum angle driving a forced
+    oscillator. Same floating-point operations, so equal to round-off (1e-14)."""
+    from formation_ftc.core.integrators import rk4_autonomous_stages, rk4_step_staged
+
+    def f_theta(th):
+        return 1.3 + 0.4 * jnp.cos(th)
+
+    def rhs_joint(t, s):
+        th, x = s
+        return (f_theta(th), jnp.array([x[1], -4.0 * x[0] - 0.1 * x[1] + jnp.sin(th) * (1 + t)]))
+
+    def rhs_coupled(t, x, sin_th):
+        return jnp.array([x[1], -4.0 * x[0] - 0.1 * x[1] + sin_th * (1 + t)])
+
+    th0, x0 = jnp.asarray(0.2), jnp.array([1.0, -0.5])
+    t, dt = 0.3, 0.05
+    th_ref, x_ref = rk4_step(rhs_joint, t, (th0, x0), dt)
+    th1, stages = rk4_autonomous_stages(f_theta, th0, dt)
+    x1 = rk4_step_staged(rhs_coupled, t, x0, dt, tuple(jnp.sin(s) for s in stages))
+    np.testing.assert_allclose(th1, th_ref, rtol=1e-14)
+    np.testing.assert_allclose(x1, x_ref, rtol=1e-14, atol=1e-15)
+    # and the stage values are those RK4 visits: y1 = y, y4 = y + dt k3 (4th-order accurate step)
+    assert float(stages[0]) == float(th0)
+    with pytest.raises(ValueError):
+        rk4_step_staged(rhs_coupled, t, x0, dt, (1.0, 2.0))

@@ -6,9 +6,10 @@ function of ``(plan, chunk)`` that any executor may call in any process:
 1. build each run's scenario (base + overrides + grid/sampled values + run seed), compile it with the
    method (:func:`formation_ftc.api.compile_scenario`);
 2. group the runs by ``Compiled.static_key`` (one group per chunk unless a random ``choice`` changes
-   the structure), stack the ``params`` pytrees leaf by leaf and call
-   ``jax.jit(jax.vmap(compiled.run))`` -- one jitted function per static key, reused by every chunk,
-   the batch padded to ``chunk_size`` so the last chunk does not recompile;
+   the structure), stack the ``params`` leaves that differ between the runs (the others are shared,
+   ``in_axes=None``, see :func:`formation_ftc.sim.batch.stack_params`) and call ``jax.jit(jax.vmap(compiled.run))`` -- one jitted
+   function per static key and set of batched leaves, reused by every chunk, the batch padded to
+   ``chunk_size`` so the last chunk does not recompile;
 3. per run, ``Compiled.metrics`` on its slice; a run whose state became non-finite
    (``diverged_step >= 0``) is recorded ``status = "failed"`` with the engine's diagnostic
    (variable, spacecraft, time), its metrics NaN, and the campaign goes on.
@@ -24,7 +25,7 @@ from __future__ import annotations
 import json
 import time
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,11 +37,9 @@ import pandas as pd
 from formation_ftc.campaign.sampling import CampaignPlan, Chunk
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
+from formation_ftc.sim.batch import batched_run, stack_params
 
 __all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "run_campaign", "metric_names", "make_plan"]
-
-_JIT_CACHE: dict[Any, Callable] = {}
-
 
 @dataclass
 class ChunkResult:
@@ -73,19 +72,6 @@ class CampaignOutcome:
         return (f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
                 f"{self.out_dir}; {self.chunks_computed} chunk(s) computed, {self.chunks_resumed} kept from "
                 f"an earlier run, {self.wall_s:.1f} s")
-
-
-def _batched(compiled) -> Callable:
-    fn = _JIT_CACHE.get(compiled.static_key)
-    if fn is None:
-        run = compiled.run
-        fn = jax.jit(jax.vmap(lambda p: dict(run(p))))
-        _JIT_CACHE[compiled.static_key] = fn
-    return fn
-
-
-def _stack(params: list[Any]) -> Any:
-    return jax.tree_util.tree_map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *params)
 
 
 def _value_cell(v: Any, numeric: bool) -> Any:
@@ -139,9 +125,8 @@ def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
         groups.setdefault(c.static_key, []).append(k)
     outs: list[Any] = [None] * len(compiled)
     for idxs in groups.values():
-        params = [compiled[k].params for k in idxs]
-        params += [params[-1]] * (plan.chunk_size - len(params))  # pad: one program per chunk size
-        batch = jax.device_get(_batched(compiled[idxs[0]])(_stack(params)))
+        stacked, axes = stack_params([compiled[k].params for k in idxs], plan.chunk_size)
+        batch = jax.device_get(batched_run(compiled[idxs[0]], axes, plan.chunk_size)(stacked))
         for pos, k in enumerate(idxs):
             outs[k] = jax.tree_util.tree_map(lambda a, pos=pos: np.asarray(a[pos]), batch)
     keep = plan.spec.campaign.metrics

@@ -18,7 +18,7 @@ import jax
 import numpy as np
 import scipy.linalg
 
-__all__ = ["rk4_step", "rk4_step_staged", "euler_step", "zoh_discretize"]
+__all__ = ["rk4_step", "rk4_step_staged", "rk4_autonomous_stages", "euler_step", "zoh_discretize"]
 
 PyTree = Any
 
@@ -40,20 +40,50 @@ def rk4_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:
 
 
 def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, *args) -> PyTree:
-    """RK4 step of ``dx/dt = rhs(t, x, u(t), *args)`` with time-only inputs precomputed at the three
-    distinct stage times: ``stage_inputs = (u(t), u(t + dt/2), u(t + dt))``.
+    """RK4 step of ``dx/dt = rhs(t, x, u(t), *args)`` with inputs precomputed per stage.
 
-    Same result as :func:`rk4_step` with ``u`` evaluated inside ``rhs``, but the stage inputs are
-    selected statically (no run-time selection) and ``u(t + dt/2)`` is evaluated once for stages 2-3.
+    ``stage_inputs`` is ``(u(t), u(t + dt/2), u(t + dt))`` for time-only inputs (the middle value is
+    used by stages 2 and 3) or one input per stage ``(u1, u2, u3, u4)`` (e.g. with the stage values of
+    a decoupled sub-state from :func:`rk4_autonomous_stages`). Same result as :func:`rk4_step` with
+    ``u`` evaluated inside ``rhs``, but the inputs are selected statically (no run-time selection)
+    and each is evaluated once.
     """
-    u0, u_half, u1 = stage_inputs
-    k1 = rhs(t, x, u0, *args)
-    k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), u_half, *args)
-    k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), u_half, *args)
-    k4 = rhs(t + dt, _axpy(dt, k3, x), u1, *args)
+    if len(stage_inputs) == 3:
+        u0, u_half, u1 = stage_inputs
+        stage_inputs = (u0, u_half, u_half, u1)
+    if len(stage_inputs) != 4:
+        raise ValueError(f"rk4_step_staged: stage_inputs must hold 3 or 4 values, got {len(stage_inputs)}")
+    ua, ub, uc, ud = stage_inputs
+    k1 = rhs(t, x, ua, *args)
+    k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), ub, *args)
+    k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), uc, *args)
+    k4 = rhs(t + dt, _axpy(dt, k3, x), ud, *args)
     return jax.tree_util.tree_map(
         lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
     )
+
+
+def rk4_autonomous_stages(f: Callable[[PyTree], PyTree], y: PyTree, dt) -> tuple[PyTree, tuple]:
+    """RK4 step of an autonomous sub-system ``dy/dt = f(y)`` that nothing else feeds back into
+    (e.g. the reference orbit's true anomaly), run ahead of the main step.
+
+    Returns ``(y(t + dt), (y1, y2, y3, y4))`` where ``y1..y4`` are the states at which RK4 evaluates
+    ``f``; the same floating-point operations as integrating ``y`` together with the coupled state, so
+    the coupled system can be stepped with :func:`rk4_step_staged` using values computed from
+    ``y1..y4`` as its stage inputs (computed once per step, shared by every run of a batch).
+    """
+    y1 = y
+    k1 = f(y1)
+    y2 = _axpy(0.5 * dt, k1, y)
+    k2 = f(y2)
+    y3 = _axpy(0.5 * dt, k2, y)
+    k3 = f(y3)
+    y4 = _axpy(dt, k3, y)
+    k4 = f(y4)
+    y_next = jax.tree_util.tree_map(
+        lambda yi, a, b, c, d: yi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), y, k1, k2, k3, k4
+    )
+    return y_next, (y1, y2, y3, y4)
 
 
 def euler_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:

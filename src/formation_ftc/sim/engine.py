@@ -15,10 +15,13 @@ the integer step index, so event times are exact step boundaries) and ``observe(
 accumulated by ``step``).
 
 Divergence: at the end of every record block the state (or the part ``check_of`` selects) is checked
-for non-finite values. A non-finite block freezes the carry at the block's start (the last finite
-state) and records that step index; later records repeat that state's observation and are masked out by
-:func:`trim_records`. :func:`diagnose_divergence`
-then replays one step eagerly to name the variable and spacecraft.
+for non-finite values. The first non-finite block records its first step index; a snapshot of the
+state at that block's start (the last finite state) is kept and returned, and the records after it
+(non-finite) are masked out by :func:`trim_records`. :func:`diagnose_divergence` then replays the block
+eagerly to name the time, variable and spacecraft. The snapshot is a separate carry (one select per
+block), never a select on the running state: under ``jax.vmap`` a per-run select would make every
+state leaf batched, even those that depend only on parameters shared by all runs (the reference orbit
+of Li2020), and multiply their cost by the batch size.
 """
 
 from __future__ import annotations
@@ -86,9 +89,10 @@ def run_fixed_step(
 
     Pure and jittable (``n_steps`` and ``record_every`` are static). Finiteness is tested once per
     record block (every ``record_every`` steps, so the check costs nothing per step); ``check_of(state)``
-    selects the part of the state tested (default: all of it). When a block ends non-finite, the carry
-    stays at that block's start -- the last finite state, returned as ``final``/``last_finite`` -- and
-    ``diverged_step`` is the block's first step; :func:`diagnose_divergence` replays the block to find
+    selects the part of the state tested (default: all of it). When a block ends non-finite, the state
+    at that block's start -- the last finite state -- is returned as ``final``/``last_finite`` and
+    ``diverged_step`` is the block's first step (the run itself goes on to the horizon; its later
+    records are not finite and :func:`trim_records` drops them); :func:`diagnose_divergence` replays the block to find
     the exact step and variable. Returns a :data:`RunOutput`.
     """
     if n_steps % record_every:
@@ -105,23 +109,25 @@ def run_fixed_step(
         return state
 
     def outer(carry, _):
-        k, state, div = carry
+        k, state, div, frozen = carry
+        new = block(k, state)
         if check_finite:
-            # once diverged, stop computing: the carry stays at the last finite block boundary
-            new = jax.lax.cond(div >= 0, lambda: state, lambda: block(k, state))
             ok = _all_finite(select(new))
             div = jnp.where(jnp.logical_and(div < 0, jnp.logical_not(ok)), k, div)
-            new = jax.lax.cond(div >= 0, lambda: state, lambda: new)
-        else:
-            new = block(k, state)
+            # the last finite state is kept in a separate snapshot, updated once per block; the
+            # running state itself is never selected, so under ``vmap`` leaves that do not depend on
+            # the batched parameters (reference orbit, desired trajectory, ...) stay unbatched
+            frozen = jax.tree_util.tree_map(lambda f, n: jnp.where(div >= 0, f, n), frozen, new)
         k = k + record_every
-        return (k, new, div), observe(k, new)
+        return (k, new, div, frozen), observe(k, new)
 
     k0 = jnp.asarray(0, dtype=jnp.int64)
     rec0 = observe(k0, state0)
-    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64))
-    (_, final, div), recs = jax.lax.scan(outer, carry0, None, length=n_records)
+    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64), state0)
+    (_, final, div, frozen), recs = jax.lax.scan(outer, carry0, None, length=n_records)
     records = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b], axis=0), rec0, recs)
+    if check_finite:
+        final = frozen
     return dict(records=records, final=final, diverged_step=div, last_finite=final)
 
 

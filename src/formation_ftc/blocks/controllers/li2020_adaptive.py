@@ -48,7 +48,10 @@ def consensus_term(C, s, s_received=None):
     C = jnp.asarray(C)
     in_weight = jnp.sum(C, axis=1)
     if s_received is None:
-        return in_weight[:, None] * s - C @ s
+        # sum_j c_ij s_j as N broadcast multiply-adds (elementwise, fuses with its consumers; a
+        # dot_general is a separate XLA kernel with a transpose around it under vmap)
+        received = sum(C[:, j, None] * s[..., j, None, :] for j in range(C.shape[1]))
+        return in_weight[:, None] * s - received
     return in_weight[:, None] * s - jnp.einsum("ij,ijk->ik", C, s_received)
 
 

@@ -32,6 +32,7 @@ import jax.numpy as jnp
 __all__ = [
     "reference_rates",
     "natural_acceleration",
+    "natural_acceleration_from_rates",
     "relative_lvlh_rhs",
     "lvlh_from_inertial",
 ]
@@ -64,7 +65,17 @@ def natural_acceleration(rho, v, theta, p, e, mu):
 
     Li2020 eqs. (1)-(4) divided by m_i (E000-01, E000-03).
     """
-    r_c, thd, thdd = reference_rates(theta, p, e, mu)
+    return natural_acceleration_from_rates(rho, v, *reference_rates(theta, p, e, mu), mu)
+
+
+def natural_acceleration_from_rates(rho, v, r_c, theta_dot, theta_ddot, mu):
+    """:func:`natural_acceleration` from the reference-orbit values ``reference_rates`` returns.
+
+    Lets a caller evaluate the (run-independent) orbit terms once and share them: XLA fuses a scalar
+    producer into its single elementwise consumer and then recomputes it, cos and sin included, for
+    every element of the (runs, N, 3) arrays.
+    """
+    thd, thdd = theta_dot, theta_ddot
     x, y, z = rho[..., 0], rho[..., 1], rho[..., 2]
     vx, vy = v[..., 0], v[..., 1]
     r_i = jnp.sqrt((r_c + x) ** 2 + y**2 + z**2)  # E000-03

@@ -37,10 +37,11 @@ from formation_ftc.blocks.controllers.li2020_adaptive import (
     sigma_inverse_square,
 )
 from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_control, sir_ftc_rate
-from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration, reference_rates
+from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates, reference_rates
 from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.core.history import history_init, history_push, history_read, required_capacity
-from formation_ftc.core.integrators import rk4_step_staged
+from formation_ftc.core.integrators import rk4_autonomous_stages, rk4_step_staged
+from formation_ftc.core.vector3 import norm3, sq_norm3
 from formation_ftc.papers.li2020.conditions import delay_statistics, delay_vector_function
 from formation_ftc.papers.li2020.desired import chi_from_period, desired_trajectory, formation_offsets
 from formation_ftc.papers.li2020.metrics import (
@@ -164,9 +165,10 @@ def make_model(s: Li2020Scenario):
         recv = receiver_onehot @ (c_e[:, None] * s_j)  # (N, 3)
         return in_weight[:, None] * s_ - recv
 
-    def evaluate(t, x, tv, t_k, hist, p):
+    def evaluate(t, x, tv, orb, t_k, hist, p):
+        """Derivatives of x (theta excepted) and outputs; ``orb = (r_c, theta_dot, theta_ddot)``."""
         s_, e1, e2 = sliding(x, tv, p)
-        acc_nat = natural_acceleration(x["rho"], x["v"], x["theta"], p["p"], p["e"], p["mu"])
+        acc_nat = natural_acceleration_from_rates(x["rho"], x["v"], *orb, p["mu"])
         Y = acc_nat + p["k"][:, None] * (x["v"] - tv["v_d"]) - tv["a_d"]  # eq. (8)
         sig = tv["sigma"]
         deriv = {}
@@ -184,9 +186,8 @@ def make_model(s: Li2020Scenario):
             f = sir_ftc_control(s_, x["b_hat"], p["k0"], p["phi"], eps)
             deriv["b_hat"] = sir_ftc_rate(s_, x["b_hat"], p["phi"], eps, p["sigma1"], p["sigma2"])
         F = tv["Gam"] * f + tv["delta"]  # eq. (5)
-        _, thd, _ = reference_rates(x["theta"], p["p"], p["e"], p["mu"])
-        deriv.update(theta=thd, rho=x["v"], v=acc_nat + (tv["h"] + F) / p["mass"][:, None],  # eq. (1)
-                     dv=jnp.linalg.norm(f, axis=-1) / p["mass"], effort=jnp.sum(f**2, axis=-1))
+        deriv.update(rho=x["v"], v=acc_nat + (tv["h"] + F) / p["mass"][:, None],  # eq. (1)
+                     dv=norm3(f) / p["mass"], effort=sq_norm3(f))
         extra = dict(e1=e1, e2=e2, s=s_, f=f, F=F)
         return deriv, extra
 
@@ -203,15 +204,25 @@ def make_model(s: Li2020Scenario):
         return state
 
     def make_step(p):
-        def rhs(t, x, tv, t_k, hist):
-            return evaluate(t, x, tv, t_k, hist, p)[0]
+        def rhs(t, x, stage, t_k, hist):
+            tv, orb = stage
+            return evaluate(t, x, tv, orb, t_k, hist, p)[0]
+
+        def theta_dot(theta):
+            return reference_rates(theta, p["p"], p["e"], p["mu"])[1]
 
         def step(k, state):
             t_k = k * dt
             hist = state.get("hist")
             table = stage_table(t_k, p)
-            stages = tuple(jax.tree_util.tree_map(lambda a, j=j: a[j], table) for j in range(3))
-            x = rk4_step_staged(rhs, t_k, state["x"], dt, stages, t_k, hist)
+            tvs = [jax.tree_util.tree_map(lambda a, j=j: a[j], table) for j in (0, 1, 1, 2)]
+            # the reference orbit (Li2020 eq. (1)'s theta) is autonomous and independent of the spacecraft:
+            # its RK4 stage values are computed first, once per step (not per run of a batch)
+            theta, theta_stages = rk4_autonomous_stages(theta_dot, state["x"]["theta"], dt)
+            orbit = reference_rates(jnp.stack(theta_stages), p["p"], p["e"], p["mu"])  # each (4,)
+            stages = tuple((tvs[j], tuple(o[j] for o in orbit)) for j in range(4))
+            xs = {name: v for name, v in state["x"].items() if name != "theta"}
+            x = dict(rk4_step_staged(rhs, t_k, xs, dt, stages, t_k, hist), theta=theta)
             new = {"x": x}
             if delayed:
                 tv_next = jax.tree_util.tree_map(lambda a: a[2], table)  # t_{k+1} (desired part is exact)
@@ -224,7 +235,8 @@ def make_model(s: Li2020Scenario):
         t = k * dt
         x = state["x"]
         tv = time_values(t, t, p)
-        _, extra = evaluate(t, x, tv, t, state.get("hist"), p)
+        orb = reference_rates(x["theta"], p["p"], p["e"], p["mu"])
+        _, extra = evaluate(t, x, tv, orb, t, state.get("hist"), p)
         rec = dict(rho=x["rho"], v=x["v"], e1=extra["e1"], e2=extra["e2"], f=extra["f"], F=extra["F"],
                    effectiveness=tv["Gam"], dv=x["dv"], effort=x["effort"], theta=x["theta"],
                    mu1=mu1(extra["e1"]), mu2=mu2_literal(x["rho"]),
