@@ -110,7 +110,10 @@ def run_fixed_step(
 
     def outer(carry, _):
         k, state, div, frozen = carry
-        new = block(k, state)
+        # always taken (k < n_steps inside the scan; k is never batched, so this stays a conditional
+        # under vmap): XLA:CPU compiles the block's inner loop faster inside a conditional than
+        # inline -- measured 2.8 s vs 3.9-4.4 s for the 300,000-step li2020-thm2-delays run
+        new = jax.lax.cond(k < n_steps, lambda: block(k, state), lambda: state)
         if check_finite:
             ok = _all_finite(select(new))
             div = jnp.where(jnp.logical_and(div < 0, jnp.logical_not(ok)), k, div)
