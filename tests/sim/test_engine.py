@@ -115,3 +115,46 @@ def test_divergence_names_nested_variables():
     out = jax.jit(lambda: run_fixed_step(step, lambda k, x: {}, st0, 10, 5))()
     info = diagnose_divergence(step, out["last_finite"], int(out["diverged_step"]), 0.0, max_steps=5, dt=1.0)
     assert info.variable == "ctl.hist.values" and info.step == 3
+
+
+def test_divergence_under_vmap_keeps_each_runs_last_finite_state():
+    """Batched runs: one run blows up at step 37, the other never. The diverged run returns its state at
+    the start of the failing block (step 35) and its divergence step; the healthy run is untouched; a
+    run-independent state leaf (a clock driven only by a shared parameter) stays unbatched inside the
+    program (the snapshot never selects on the running state)."""
+    def step_of(p):
+        def step(k, x):
+            v = x["v"].at[1, 0].set(jnp.where((k == p["bad_step"]), jnp.inf, x["v"][1, 0] + 1.0))
+            return {"v": v, "clock": x["clock"] + p["dt"]}
+        return step
+
+    def run(p):
+        return run_fixed_step(step_of(p), lambda k, x: x, {"v": jnp.zeros((3, 2)), "clock": jnp.asarray(0.0)},
+                              100, 5)
+
+    params = {"bad_step": jnp.array([37, 1000]), "dt": jnp.asarray(0.1)}
+    in_axes = ({"bad_step": 0, "dt": None},)
+    out = jax.jit(jax.vmap(run, in_axes=in_axes))(params)
+    np.testing.assert_array_equal(out["diverged_step"], [35, -1])
+    np.testing.assert_array_equal(out["final"]["v"][:, 1, 0], [35.0, 100.0])
+    np.testing.assert_allclose(out["final"]["clock"], [3.5, 10.0], rtol=1e-12)
+    recs, n = trim_records(jax.tree_util.tree_map(lambda a: np.asarray(a)[0], out["records"]), 35, 5)
+    assert n == 8 and np.all(np.isfinite(recs["v"]))
+    # inside the program the clock's additions are scalar (unbatched) operations
+    jaxpr = jax.make_jaxpr(jax.vmap(run, in_axes=in_axes))(params).jaxpr
+
+    def add_shapes(jx, acc):
+        for eqn in jx.eqns:
+            if eqn.primitive.name == "add" and eqn.outvars[0].aval.dtype == jnp.float64:
+                acc.append(tuple(eqn.outvars[0].aval.shape))
+            for val in eqn.params.values():
+                for sub in (val if isinstance(val, (tuple, list)) else (val,)):
+                    inner = getattr(sub, "jaxpr", sub)
+                    if hasattr(inner, "eqns"):
+                        add_shapes(inner, acc)
+        return acc
+
+    assert () in add_shapes(jaxpr, [])  # the clock update stays a scalar float64 add
+    # (control: with dt batched the clock is batched and no scalar float add remains)
+    batched_dt = jax.make_jaxpr(jax.vmap(run))({"bad_step": jnp.array([37, 1000]), "dt": jnp.array([0.1, 0.1])})
+    assert () not in add_shapes(batched_dt.jaxpr, [])
