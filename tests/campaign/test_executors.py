@@ -71,3 +71,25 @@ def test_executor_options():
         make_executor(workers=2, dask_local=2)
     with pytest.raises(CampaignError, match="--workers must be >= 1"):
         LocalExecutor(0)
+
+
+def test_automatic_local_pool_size():
+    """workers=None (the default of `campaign run`): in-process for small work, else one worker per core
+    and never more workers than chunks."""
+    from formation_ftc.campaign.executors import AUTO_POOL_MIN_RUN_STEPS, auto_workers
+
+    assert auto_workers(AUTO_POOL_MIN_RUN_STEPS - 1, 40, cores=8) == 1
+    assert auto_workers(3 * 10**8, 40, cores=2) == 2
+    assert auto_workers(3 * 10**8, 3, cores=16) == 3
+    ex = LocalExecutor()
+    assert ex.describe() == "local (in-process)"
+    ex.prepare(3 * 10**8, 40)
+    assert ex.workers == auto_workers(3 * 10**8, 40)
+    fixed = LocalExecutor(1)
+    fixed.prepare(3 * 10**8, 40)
+    assert fixed.workers == 1  # an explicit choice is kept
+
+
+def test_campaign_outcome_names_the_executor(tmp_path):
+    outcome = run_campaign(_raw(), tmp_path / "auto")  # tiny: the automatic choice stays in-process
+    assert outcome.executor == "local (in-process)"

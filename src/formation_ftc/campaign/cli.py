@@ -33,7 +33,7 @@ def _cmd_run(args) -> int:
     executor = make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
     outcome = run_campaign(args.campaign, args.out, runs=args.runs, chunk_size=args.chunk_size,
                            executor=executor, progress=not args.no_progress)
-    console.print(f"campaign done ({executor.describe()}): {outcome}", soft_wrap=True, markup=False)
+    console.print(f"campaign done ({outcome.executor}): {outcome}", soft_wrap=True, markup=False)
     return 0
 
 
@@ -61,7 +61,9 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--out", required=True, help="results directory (resumed when it holds this campaign)")
     q.add_argument("--runs", type=int, default=None, help="runs per grid point (overrides the file)")
     q.add_argument("--chunk-size", type=int, default=None, help="runs per vmap batch (overrides the file)")
-    q.add_argument("--workers", type=int, default=1, help="local worker processes (spawn), default 1 = in-process")
+    q.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
+                        "one per chunk), in-process for campaigns under 10 million run-steps")
     g = q.add_mutually_exclusive_group()
     g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
     g.add_argument("--dask-local", metavar="N", type=int, default=None,

@@ -1,12 +1,17 @@
 """Where chunks run: in this process, in a local process pool, or on a Dask cluster.
 
 An executor is a context manager with ``map(fn, plan, chunks)`` yielding ``fn(plan, chunk)`` results
-as they finish (any order; the store writes each one atomically). Every executor calls the same pure
+as they finish (any order; the store writes each one atomically), ``describe()`` (one line for the
+user) and, optionally, ``prepare(run_steps, n_chunks)``, called with the size of the work before the
+context is entered. Every executor calls the same pure
 :func:`formation_ftc.campaign.runner.run_chunk`, so the numbers do not depend on the executor.
 
-* :class:`LocalExecutor` -- ``workers=1``: chunks one after the other in this process (the default);
+* :class:`LocalExecutor` -- ``workers=1``: chunks one after the other in this process;
   ``workers=W > 1``: a :class:`concurrent.futures.ProcessPoolExecutor` with the *spawn* start method
-  (JAX/XLA is not fork-safe), each worker keeping its compiled programs between chunks.
+  (JAX/XLA is not fork-safe), each worker keeping its compiled programs between chunks;
+  ``workers=None`` (the default): one worker per CPU core, at most one per chunk to compute, and
+  in-process when the work is small (under :data:`AUTO_POOL_MIN_RUN_STEPS` run-steps, where starting
+  worker processes and compiling in each costs more than it saves).
 * :class:`DaskExecutor` -- ``scheduler="tcp://HOST:PORT"``: an existing ``dask.distributed`` cluster
   (its workers need formation-ftc installed); the address is checked with a short TCP connect before
   anything runs. ``n_local=N``: starts a ``LocalCluster`` of N single-threaded worker processes.
@@ -25,17 +30,44 @@ from urllib.parse import urlsplit
 
 from formation_ftc.campaign.spec import CampaignError
 
-__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable"]
+__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable",
+           "auto_workers", "AUTO_POOL_MIN_RUN_STEPS"]
+
+#: below this many run-steps (about 10 s of one core for the Li2020 loop) ``workers=None`` stays in-process
+AUTO_POOL_MIN_RUN_STEPS = 10_000_000
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def auto_workers(run_steps: int, n_chunks: int, cores: int | None = None) -> int:
+    """Local workers for ``run_steps`` run-steps in ``n_chunks`` chunks: 1 (in-process) for small work,
+    else one per core, at most one per chunk."""
+    cores = _cores() if cores is None else cores
+    if run_steps < AUTO_POOL_MIN_RUN_STEPS:
+        return 1
+    return max(1, min(cores, n_chunks))
 
 
 class LocalExecutor:
-    """In-process batches (``workers=1``) or a spawn-context process pool of ``workers`` processes."""
+    """In-process batches (``workers=1``), a spawn-context process pool of ``workers`` processes, or
+    ``workers=None``: chosen by :meth:`prepare` from the size of the work (:func:`auto_workers`)."""
 
-    def __init__(self, workers: int = 1):
-        if workers < 1:
+    def __init__(self, workers: int | None = None):
+        if workers is not None and workers < 1:
             raise CampaignError(f"--workers must be >= 1, got {workers}")
-        self.workers = workers
+        self.requested = workers
+        self.workers = 1 if workers is None else workers
         self._pool: ProcessPoolExecutor | None = None
+
+    def prepare(self, run_steps: int, n_chunks: int) -> None:
+        """Size the pool for the work about to be mapped (only when ``workers`` was left to None)."""
+        if self.requested is None:
+            self.workers = auto_workers(run_steps, n_chunks)
 
     def __enter__(self) -> LocalExecutor:
         if self.workers > 1:
@@ -148,10 +180,10 @@ class DaskExecutor:
         return f"dask ({self.scheduler})" if self.scheduler else f"dask LocalCluster ({self.n_local} workers)"
 
 
-def make_executor(workers: int = 1, scheduler: str | None = None, dask_local: int | None = None):
-    """The executor the command-line options ask for."""
+def make_executor(workers: int | None = None, scheduler: str | None = None, dask_local: int | None = None):
+    """The executor the command-line options ask for (``workers=None``: automatic local pool)."""
     if scheduler is not None or dask_local is not None:
-        if workers != 1:
+        if workers is not None:
             raise CampaignError("--workers is for the local executor; with Dask the cluster sets the workers")
         return DaskExecutor(scheduler=scheduler, n_local=dask_local)
     return LocalExecutor(workers)

@@ -2,7 +2,8 @@
 
 ``formation-ftc campaign report DIR`` prints, per metric, the number of successful runs, mean, std
 (ddof = 1), min, 5/25/50/75/95th percentiles, max and the failure rate (failed runs plus runs whose
-metric is not finite), overall and per swept value (grid point). It writes ``DIR/report/summary.json``,
+metric is not finite), overall and per swept value (grid point); a metric that one of several base
+scenarios does not return is summarised over the other bases' runs only. It writes ``DIR/report/summary.json``,
 ``DIR/report/summary.csv``, one sensitivity figure per sampled numeric input (metric vs input, failed
 runs marked on the axis) and one figure per swept field (median and 5-95 % band vs the swept value).
 """
@@ -46,15 +47,42 @@ def _metric_columns(df: pd.DataFrame) -> list[str]:
     return [c for c in df.columns if c.startswith("metric:")]
 
 
+def _bases_returning(df: pd.DataFrame) -> dict[str, set] | None:
+    """Per metric column, the base scenarios that return it (some successful run has a finite value);
+    None for a single-base campaign (every run counts for every metric)."""
+    if "scenario" not in df.columns or df["scenario"].nunique() < 2:
+        return None
+    ok = (df["status"] == "ok").to_numpy()
+    out = {}
+    for c in _metric_columns(df):
+        finite = np.isfinite(pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)) & ok
+        out[c] = set(df.loc[finite, "scenario"])
+    return out
+
+
+def _metric_stats(df: pd.DataFrame, bases: dict[str, set] | None) -> dict[str, dict[str, Any]]:
+    """:func:`_stats` of every metric over the runs it applies to: in a campaign over several base
+    scenarios, a base none of whose successful runs has a finite value of a metric does not return it
+    (e.g. ``b_hat`` is SIR-FTC's, not Theorem 1's), and its runs are left out of that metric instead
+    of counting as failures (``bases`` from :func:`_bases_returning` of the whole table)."""
+    out = {}
+    for c in _metric_columns(df):
+        sub = df if bases is None else df[df["scenario"].isin(bases[c])]
+        if len(sub):
+            out[c[len("metric:"):]] = _stats(sub[c], len(sub))
+    return out
+
+
 def summarize(df: pd.DataFrame, manifest: dict[str, Any]) -> dict[str, Any]:
     """Statistics per metric, overall and per swept value (see module docstring)."""
     n = len(df)
     failed = int((df["status"] != "ok").sum()) if n else 0
+    bases = _bases_returning(df) if n else None
     out: dict[str, Any] = {
         "campaign": manifest.get("campaign"), "spec_hash": manifest.get("spec_hash"),
         "runs_total": int(manifest.get("n_runs", n)), "runs_done": n, "runs_failed": failed,
         "failure_rate": failed / n if n else float("nan"),
-        "metrics": {c[len("metric:"):]: _stats(df[c], n) for c in _metric_columns(df)},
+        "metrics": _metric_stats(df, bases),
         "by_swept_value": {},
         "failures": df.loc[df["status"] != "ok", ["run_id", "diagnostic"]].head(20).to_dict("records") if n else [],
     }
@@ -65,7 +93,7 @@ def summarize(df: pd.DataFrame, manifest: dict[str, Any]) -> dict[str, Any]:
         for value, sub in df.groupby(col, sort=True):
             groups[str(value)] = {
                 "runs": int(len(sub)), "failed": int((sub["status"] != "ok").sum()),
-                "metrics": {c[len("metric:"):]: _stats(sub[c], len(sub)) for c in _metric_columns(df)},
+                "metrics": _metric_stats(sub, bases),
             }
         out["by_swept_value"][col.removeprefix("input:")] = groups
     return out

@@ -67,6 +67,7 @@ class CampaignOutcome:
     chunks_resumed: int
     wall_s: float
     results: pd.DataFrame
+    executor: str = ""
 
     def __str__(self) -> str:
         return (f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
@@ -259,6 +260,8 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
     executor = executor if executor is not None else LocalExecutor()
     done_before = store.finished()
     todo = [c for c in plan.chunks() if c.chunk_id not in done_before]
+    if hasattr(executor, "prepare"):  # the automatic local pool sizes itself to the work left
+        executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
         store.initialize()
         bar = _Progress(progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name)
@@ -271,4 +274,13 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
     results = store.load_results()
     n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
     return CampaignOutcome(Path(out_dir), len(results), n_failed, plan.n_chunks, len(todo),
-                           len(done_before), time.perf_counter() - t0, results)
+                           len(done_before), time.perf_counter() - t0, results, executor.describe())
+
+
+def _run_steps(plan: CampaignPlan, chunks: list[Chunk]) -> int:
+    """Integration steps over all runs of ``chunks`` (each chunk's first run gives its step count)."""
+    total = 0
+    for c in chunks:
+        scenario = plan.scenario(plan.run_inputs(c.start))
+        total += len(c) * int(getattr(scenario.simulation, "n_steps", 0) or 0)
+    return total

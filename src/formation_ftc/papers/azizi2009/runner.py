@@ -45,7 +45,7 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> li
     """Metrics of len(batch) runs that differ only in the given ``params`` entries.
 
     ``variations`` maps a params key to an array with a leading batch axis (e.g. ``alpha`` of shape
-    (B, N), ``seed`` of shape (B,)); all other params are broadcast. One ``jax.jit(jax.vmap(run))``.
+    (B, N), ``seed`` of shape (B,)); all other params are shared (unbatched). One ``jax.jit(jax.vmap(run))``.
     """
     compiled = build(sc)
     sizes = {np.asarray(v).shape[0] for v in variations.values()}
@@ -55,12 +55,11 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> li
     unknown = set(variations) - set(compiled.params)
     if unknown:
         raise KeyError(f"unknown params {sorted(unknown)}; valid: {sorted(compiled.params)}")
-    batched = {}
-    for key, val in compiled.params.items():
-        if key in variations:
-            batched[key] = jnp.asarray(variations[key], dtype=val.dtype)
-        else:
-            batched[key] = jnp.broadcast_to(val, (bsz,) + val.shape)
+    # only the varied entries are batched; the others are passed once (in_axes None), so work that
+    # depends only on them is done once per step for the whole batch (see formation_ftc.sim.batch)
+    batched = {key: jnp.asarray(variations[key], dtype=val.dtype) if key in variations else val
+               for key, val in compiled.params.items()}
+    in_axes = {key: 0 if key in variations else None for key in compiled.params}
 
     def run_final(p):
         out = compiled.run(p)
@@ -68,7 +67,7 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> li
         return {"final": out["final"], "records": {"effort": out["records"]["effort"]},
                 "diverged_step": out["diverged_step"]}
 
-    outs = jax.jit(jax.vmap(run_final))(batched)
+    outs = jax.jit(jax.vmap(run_final, in_axes=(in_axes,)))(batched)
     outs = jax.tree_util.tree_map(np.asarray, outs)
     res = []
     for b in range(bsz):

@@ -8,7 +8,10 @@ Plant: :mod:`formation_ftc.core.dynamics.relative_lvlh` (eqs. (1)-(4)); faults e
 One step k -> k+1 (t_k = k dt):
 
 1. RK4 over [t_k, t_k + dt]; at every stage the controller is evaluated (continuous-time law) and the
-   adaptive states are integrated with the plant. Everything that depends on time only (desired
+   adaptive states are integrated with the plant. The reference true anomaly theta (autonomous, the
+   same for every spacecraft and every run of a batch) is stepped first and its four stage values
+   (r_c, theta_dot, theta_ddot) are handed to the spacecraft stages
+   (:func:`formation_ftc.core.integrators.rk4_autonomous_stages`; same numbers as joint RK4). Everything that depends on time only (desired
    trajectory, sigma, faults, disturbances, delays) is evaluated once per step, batched over the three
    distinct stage times t_k, t_k + dt/2, t_k + dt (fewer XLA kernels per step). Fault/disturbance
    expressions use the left limit t_{k+1}^- at the last stage so that a fault onset on the step grid
@@ -219,6 +222,10 @@ def make_model(s: Li2020Scenario):
             # the reference orbit (Li2020 eq. (1)'s theta) is autonomous and independent of the spacecraft:
             # its RK4 stage values are computed first, once per step (not per run of a batch)
             theta, theta_stages = rk4_autonomous_stages(theta_dot, state["x"]["theta"], dt)
+            # the rates are evaluated again, as one (4,) vector: a vector with four consumers is
+            # materialised once by XLA, whereas the scalar rates of each stage would be fused into that
+            # stage's (runs, N, 3) kernel and their cos/sin evaluated per element (4 scalar cos/sin per
+            # step spent to save 4 x runs x N x 3)
             orbit = reference_rates(jnp.stack(theta_stages), p["p"], p["e"], p["mu"])  # each (4,)
             stages = tuple((tvs[j], tuple(o[j] for o in orbit)) for j in range(4))
             xs = {name: v for name, v in state["x"].items() if name != "theta"}

@@ -21,6 +21,7 @@ from formation_ftc.papers.mehrabian import conditions
 from formation_ftc.papers.mehrabian.figures import plot_attitudes, plot_fault_estimate, plot_seed_spread
 from formation_ftc.papers.mehrabian.method import metrics_from_final
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.sim.batch import batched_run, stack_params
 
 __all__ = ["CASES", "SEEDS", "run_batch", "run", "REPRODUCTION"]
 
@@ -34,15 +35,14 @@ SEEDS = list(range(1, 21))
 FIGURE_SEED = 1
 
 
-def _stack_params(compiled, seeds):
-    """One params pytree with leading axis len(compiled) * len(seeds) (case-major)."""
+def _batch(compiled, seeds):
+    """The case x seed runs (case-major) as one batch: ``(params, in_axes, size)`` for
+    :func:`formation_ftc.sim.batch.batched_run` (leaves shared by every run stay unbatched)."""
     keys = {c.static_key for c in compiled}
     if len(keys) != 1:
         raise RuntimeError("the Mehrabian cases must share one compiled program (static keys differ)")
-    n = len(seeds)
-    P = jax.tree_util.tree_map(lambda *a: jnp.stack([x for x in a for _ in range(n)]), *[c.params for c in compiled])
-    P["seed"] = jnp.asarray(np.tile(np.asarray(seeds), len(compiled)), dtype=jnp.uint32)
-    return P
+    runs = [dict(c.params, seed=jnp.asarray(s, dtype=jnp.uint32)) for c in compiled for s in seeds]
+    return (*stack_params(runs), len(runs))
 
 
 def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | None = None):
@@ -53,11 +53,11 @@ def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | Non
     n_steps = scns[0].simulation.n_steps
     scns = [load_scenario(n, {**ov, "simulation.record_every": n_steps}) for n in scenario_names]
     compiled = [compile_scenario(s) for s in scns]
-    P = _stack_params(compiled, seeds)
-    out = jax.jit(jax.vmap(compiled[0].run))(P)
+    P, axes, size = _batch(compiled, seeds)
+    out = batched_run(compiled[0], axes, size)(P)
     final = jax.tree_util.tree_map(np.asarray, out["final"])
     m = scns[0].formation.n_spacecraft
-    mets = metrics_from_final(final, np.asarray(P["windows"][0]), m)
+    mets = metrics_from_final(final, np.asarray(compiled[0].params["windows"]), m)
     shape = (len(scenario_names), len(seeds))
     return {k: np.asarray(v).reshape(shape) for k, v in mets.items()}, np.asarray(out["diverged_step"]).reshape(shape)
 
@@ -66,8 +66,8 @@ def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = 
     ov = {**(overrides or {}), "simulation.seed": seed}
     scns = [load_scenario(n, ov) for n in scenario_names]
     compiled = [compile_scenario(s) for s in scns]
-    P = _stack_params(compiled, [seed])
-    out = jax.tree_util.tree_map(np.asarray, dict(jax.jit(jax.vmap(compiled[0].run))(P)))
+    P, axes, size = _batch(compiled, [seed])
+    out = jax.tree_util.tree_map(np.asarray, batched_run(compiled[0], axes, size)(P))
     datasets = []
     for i, (s, c) in enumerate(zip(scns, compiled, strict=True)):
         one = jax.tree_util.tree_map(lambda a, i=i: a[i], out)
