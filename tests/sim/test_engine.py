@@ -33,7 +33,7 @@ def test_divergence_is_caught_and_diagnosed():
         return {"v": v}
 
     out = jax.jit(lambda: run_fixed_step(step, lambda k, x: x, {"v": jnp.zeros((3, 2))}, 100, 5))()
-    # checked once per record block: the block [35, 40) diverges, the carry stays at step 35
+    # checked once per record block: the block [35, 40) diverges, the returned state is the one at step 35
     assert int(out["diverged_step"]) == 35
     assert np.all(np.isfinite(out["final"]["v"]))  # frozen at the last finite state
     np.testing.assert_array_equal(out["final"]["v"][1, 0], 35.0)
