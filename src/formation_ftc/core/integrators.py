@@ -28,15 +28,20 @@ def _axpy(a, x, y):
     return jax.tree_util.tree_map(lambda xi, yi: yi + a * xi, x, y)
 
 
+def _rk4_combine(x, dt, k1, k2, k3, k4):
+    """x + dt/6 (k1 + 2 k2 + 2 k3 + k4) on pytrees."""
+    return jax.tree_util.tree_map(
+        lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
+    )
+
+
 def rk4_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:
     """One RK4 step of ``dx/dt = rhs(t, x, *args)`` from ``t`` to ``t + dt``."""
     k1 = rhs(t, x, *args)
     k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), *args)
     k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), *args)
     k4 = rhs(t + dt, _axpy(dt, k3, x), *args)
-    return jax.tree_util.tree_map(
-        lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
-    )
+    return _rk4_combine(x, dt, k1, k2, k3, k4)
 
 
 def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, *args) -> PyTree:
@@ -58,9 +63,7 @@ def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, 
     k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), ub, *args)
     k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), uc, *args)
     k4 = rhs(t + dt, _axpy(dt, k3, x), ud, *args)
-    return jax.tree_util.tree_map(
-        lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), x, k1, k2, k3, k4
-    )
+    return _rk4_combine(x, dt, k1, k2, k3, k4)
 
 
 def rk4_autonomous_stages(f: Callable[[PyTree], PyTree], y: PyTree, dt) -> tuple[PyTree, tuple]:
@@ -80,10 +83,7 @@ def rk4_autonomous_stages(f: Callable[[PyTree], PyTree], y: PyTree, dt) -> tuple
     k3 = f(y3)
     y4 = _axpy(dt, k3, y)
     k4 = f(y4)
-    y_next = jax.tree_util.tree_map(
-        lambda yi, a, b, c, d: yi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), y, k1, k2, k3, k4
-    )
-    return y_next, (y1, y2, y3, y4)
+    return _rk4_combine(y, dt, k1, k2, k3, k4), (y1, y2, y3, y4)
 
 
 def euler_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:

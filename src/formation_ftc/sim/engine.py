@@ -126,7 +126,7 @@ def run_fixed_step(
 
     k0 = jnp.asarray(0, dtype=jnp.int64)
     rec0 = observe(k0, state0)
-    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64), state0)
+    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64), state0 if check_finite else None)
     (_, final, div, frozen), recs = jax.lax.scan(outer, carry0, None, length=n_records)
     records = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b], axis=0), rec0, recs)
     if check_finite:

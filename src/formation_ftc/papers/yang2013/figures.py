@@ -11,6 +11,16 @@ from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
 __all__ = ["plot_scenario", "figure_4", "figure_5"]
 
 
+def _semilogy_active(ax, t, ds, variable: str, act) -> None:
+    """One semilogy line per spacecraft of ``ds[variable]`` (time, spacecraft), drawn only while the
+    spacecraft is in the formation (``act``); spacecraft never active are left out of the legend."""
+    for s, sc_id in enumerate(ds["spacecraft"].values):
+        if not act[:, s].any():
+            continue
+        y = np.where(act[:, s], ds[variable].values[:, s], np.nan)
+        ax.semilogy(t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}")
+
+
 def _switch_lines(ax, ds) -> None:
     for ts in np.asarray(ds["switch"].values):
         ax.axvline(float(ts), color="0.6", lw=0.7, ls=":")
@@ -33,20 +43,12 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     ax.legend(loc="upper right")
     ax = axes[1, 0]
     act = ds["active"].values.astype(bool)
-    for s, sc_id in enumerate(ds["spacecraft"].values):
-        if not act[:, s].any():
-            continue
-        y = np.where(act[:, s], ds["spacecraft_norm"].values[:, s], np.nan)
-        ax.semilogy(t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}")
+    _semilogy_active(ax, t, ds, "spacecraft_norm", act)
     _switch_lines(ax, ds)
     ax.set_ylabel("|x_i| [-]")
     ax.legend(loc="upper right", ncol=3)
     ax = axes[2, 0]
-    for s, sc_id in enumerate(ds["spacecraft"].values):
-        if not act[:, s].any():
-            continue
-        y = np.where(act[:, s], ds["input_norm"].values[:, s], np.nan)
-        ax.semilogy(t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}")
+    _semilogy_active(ax, t, ds, "input_norm", act)
     _switch_lines(ax, ds)
     ax.set_ylabel("|u_i| [N, N m]")
     ax.set_xlabel("time t [s]")
@@ -70,11 +72,7 @@ def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path
     ax = axes[1, 0]
     t = ds_fault["time"].values
     act = ds_fault["active"].values.astype(bool)
-    for s, sc_id in enumerate(ds_fault["spacecraft"].values):
-        if not act[:, s].any():
-            continue
-        y = np.where(act[:, s], ds_fault["spacecraft_norm"].values[:, s], np.nan)
-        ax.semilogy(t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}")
+    _semilogy_active(ax, t, ds_fault, "spacecraft_norm", act)
     _switch_lines(ax, ds_fault)
     ax.set_ylabel("|x_i| (fault scenario) [-]")
     ax.set_xlabel("time t [s]")
