@@ -14,7 +14,13 @@ from __future__ import annotations
 
 from formation_ftc import _jax  # noqa: F401  (x64 before anything else)
 
-__version__ = "0.1.0"
+try:  # single source: the version in pyproject.toml, read from the installed package's metadata
+    from importlib.metadata import PackageNotFoundError as _NotFound
+    from importlib.metadata import version as _version
+
+    __version__ = _version("formation-ftc")
+except _NotFound:  # pragma: no cover - running from a source tree that was never installed
+    __version__ = "0+unknown"
 
 from formation_ftc.api import (  # noqa: E402
     check,

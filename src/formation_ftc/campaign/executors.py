@@ -138,7 +138,11 @@ class DaskExecutor:
         self._cluster = None
 
     def __enter__(self) -> DaskExecutor:
-        from dask.distributed import Client, LocalCluster
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise CampaignError("Dask executors need the optional dask extra: "
+                                "pip install 'formation-ftc[dask]'") from None
 
         if self.scheduler is not None:
             check_reachable(self.scheduler, self.connect_timeout)
