@@ -5,13 +5,28 @@ A scenario file is TOML. Its ``[scenario]`` table names the ``method`` (a regist
 validates the whole file. Unknown fields are rejected (``extra="forbid"``), every numeric field
 carries its unit in its description, and cross-field rules (the step divides the horizon, matrix sizes
 match the number of spacecraft) are model validators whose messages name the field.
+
+Values are strict: a boolean is never accepted as a number (``horizon = true`` is an error, not 1.0),
+floats must be finite (``inf``/``nan`` are refused for every physical quantity) and the run seed is
+bounded to the 32-bit seeds the random generators take.
 """
 
 from __future__ import annotations
 
+import math
+import types
+import typing
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from formation_ftc.core.expressions import ExpressionError, compile_expression
 
@@ -22,13 +37,59 @@ __all__ = [
     "ScenarioBase",
     "ExprText",
     "expression_validator",
+    "MAX_SEED",
 ]
+
+#: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
+MAX_SEED = 2**32 - 1
+
+
+def _allows_bool(annotation: Any) -> bool:
+    """Whether a field annotation admits a boolean anywhere (bool, Any, unions and containers of them)."""
+    if annotation is bool or annotation is Any or annotation is object:
+        return True
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return True  # a nested model checks its own fields
+    origin = typing.get_origin(annotation)
+    if origin is Annotated:
+        return _allows_bool(typing.get_args(annotation)[0])
+    args = typing.get_args(annotation)
+    if origin in (typing.Union, types.UnionType) or origin is not None:
+        return any(_allows_bool(a) for a in args if a is not Ellipsis)
+    return False
+
+
+def _find_bool(value: Any, path: str = "") -> str | None:
+    """Dotted/indexed location of the first boolean inside ``value`` (lists/tuples), else None."""
+    stack = [(value, path)]
+    while stack:
+        v, p = stack.pop()
+        if isinstance(v, bool):
+            return p
+        if isinstance(v, list | tuple):
+            stack.extend((x, f"{p}[{k}]") for k, x in reversed(list(enumerate(v))))
+    return None
 
 
 class StrictModel(BaseModel):
     """Base for every configuration model: unknown fields are errors, assignments are validated."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_as_number(cls, v: Any, info: ValidationInfo) -> Any:
+        """Booleans are not numbers: refuse ``true``/``false`` where the field takes no boolean."""
+        if not isinstance(v, bool | list | tuple) or info.field_name is None:
+            return v
+        field = cls.model_fields.get(info.field_name)
+        if field is None or _allows_bool(field.annotation):
+            return v
+        where = _find_bool(v)
+        if where is not None:
+            raise ValueError(f"expected a number{' at ' + where if where else ''}, got a boolean "
+                             f"(booleans are not numbers)")
+        return v
 
 
 def expression_validator(variables: tuple[str, ...] = ("t", "i")):
@@ -38,7 +99,13 @@ def expression_validator(variables: tuple[str, ...] = ("t", "i")):
         if isinstance(v, bool):
             raise ValueError("expected an expression string or a number, got a boolean")
         if isinstance(v, int | float):
-            return repr(float(v))
+            try:
+                x = float(v)
+            except OverflowError:
+                x = math.inf
+            if not math.isfinite(x):
+                raise ValueError(f"expected a finite number, got {v!r}")
+            return repr(x)
         if not isinstance(v, str):
             raise ValueError(f"expected an expression string or a number, got {type(v).__name__}")
         try:
@@ -65,7 +132,7 @@ class SimulationSection(StrictModel):
     horizon: float = Field(gt=0, description="Simulated time span [s].")
     dt: float = Field(gt=0, description="Fixed integration step [s]; must divide the horizon.")
     record_every: int = Field(1, ge=1, description="Record every k-th step (output decimation) [-].")
-    seed: int = Field(0, ge=0, description="Root random seed of the run [-].")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="Root random seed of the run, 0 <= seed < 2**32 [-].")
     unroll: int = Field(1, ge=1, le=64, description="lax.scan unroll factor (performance only) [-].")
 
     @model_validator(mode="after")

@@ -5,6 +5,10 @@
 * :func:`parse_override` -- ``"a.b=value"`` -> ``("a.b", value)`` (value parsed as a TOML value)
 * :func:`validate` -- raw dict -> the method's pydantic schema instance, errors as :class:`ScenarioError`
 * :func:`dump_toml` -- validated scenario -> TOML text
+
+Every failure (unreadable or non-UTF-8 file, invalid or too deeply nested TOML, a bad override, a
+schema error, an exception raised by a validator) is a :class:`ScenarioError` naming the file, the
+field and the reason.
 """
 
 from __future__ import annotations
@@ -19,6 +23,8 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
+from formation_ftc.errors import InputError
+
 __all__ = [
     "ScenarioError",
     "builtin_scenarios",
@@ -29,10 +35,15 @@ __all__ = [
     "apply_overrides",
     "validate",
     "dump_toml",
+    "parse_toml",
+    "MAX_NESTING",
 ]
 
+#: deepest nesting of tables/arrays accepted in a scenario or campaign file [-]
+MAX_NESTING = 32
 
-class ScenarioError(ValueError):
+
+class ScenarioError(InputError):
     """A scenario that cannot be read or does not validate. The message names file and field."""
 
 
@@ -49,13 +60,69 @@ def builtin_scenarios() -> dict[str, str]:
     return out
 
 
+def _nesting_depth(obj: Any) -> int:
+    """Deepest nesting of dicts/lists in ``obj`` (iterative, so it cannot overflow the stack)."""
+    deepest, stack = 0, [(obj, 0)]
+    while stack:
+        node, d = stack.pop()
+        if isinstance(node, dict | list):
+            d += 1
+            deepest = max(deepest, d)
+            if d <= MAX_NESTING + 1:
+                stack.extend((v, d) for v in (node.values() if isinstance(node, dict) else node))
+    return deepest
+
+
+def parse_toml(text: str, source: str, error: type[InputError] = ScenarioError) -> dict[str, Any]:
+    """TOML text -> dict; invalid or too deeply nested TOML raises ``error`` naming ``source``."""
+    if text.count("[") + text.count("{") > MAX_NESTING and _bracket_depth(text) > MAX_NESTING:
+        raise error(f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it")
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{source}: invalid TOML: {exc}") from None
+    except RecursionError:
+        raise error(f"{source}: TOML nested too deeply (at most {MAX_NESTING} levels)") from None
+    if _nesting_depth(raw) > MAX_NESTING:
+        raise error(f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it")
+    return raw
+
+
+def _bracket_depth(text: str) -> int:
+    """Upper bound of the bracket nesting of TOML text (brackets inside strings counted too)."""
+    depth = deepest = 0
+    for ch in text:
+        if ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+    return deepest
+
+
+def read_text_file(path: Path, kind: str = "scenario", error: type[InputError] = ScenarioError) -> str:
+    """UTF-8 text of a user file; unreadable, not a file or not UTF-8 raises ``error`` naming it."""
+    if not path.exists():
+        raise error(f"{kind} file {str(path)!r} does not exist")
+    if not path.is_file():
+        raise error(f"{kind} file {str(path)!r} is not a regular file")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise error(f"{kind} file {str(path)!r} cannot be read ({exc.strerror or exc})") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{kind} file {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+
+
 def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
     """Parse a built-in scenario (by name) or a TOML file (by path)."""
+    if isinstance(name_or_path, str) and (not name_or_path or "\x00" in name_or_path):
+        raise ScenarioError(f"invalid scenario name or path {name_or_path!r}")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
-            raise ScenarioError(f"scenario file {str(p)!r} does not exist")
-        text, source = p.read_text(encoding="utf-8"), str(p)
+        text, source = read_text_file(p), str(p)
     else:
         builtin = builtin_scenarios()
         if str(name_or_path) not in builtin:
@@ -64,10 +131,7 @@ def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
                 f"(built-in: {', '.join(builtin) or 'none'}; see `formation-ftc list`)"
             )
         text, source = builtin[str(name_or_path)], f"<built-in {name_or_path}>"
-    try:
-        return tomllib.loads(text), source
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
+    return parse_toml(text, source), source
 
 
 def get_dotted(raw: Mapping[str, Any], path: str) -> Any:
@@ -80,47 +144,84 @@ def get_dotted(raw: Mapping[str, Any], path: str) -> Any:
 
 
 def set_dotted(raw: dict[str, Any], path: str, value: Any) -> None:
-    """Set ``raw[a][b]... = value`` creating intermediate tables; list items via integer parts."""
+    """Set ``raw[a][b]... = value`` creating missing intermediate tables; list items via integer parts.
+
+    A list index must be a non-negative integer naming an existing item; a path cannot go through a
+    number or a string (``spacecraft.mass.0.x`` when ``mass[0]`` is a number is an error).
+    """
     parts = path.split(".")
-    if not all(parts):
-        raise ScenarioError(f"invalid dotted path {path!r}")
+    if not all(p.strip() for p in parts):
+        raise ScenarioError(f"invalid dotted path {path!r} (empty part)")
     node: Any = raw
-    for part in parts[:-1]:
+    for depth, part in enumerate(parts[:-1]):
         if isinstance(node, list):
-            node = node[_index(part, path)]
-            continue
-        if part not in node or not isinstance(node[part], dict | list):
-            node[part] = {}
-        node = node[part]
+            node = node[_index(part, path, len(node))]
+        else:
+            if part not in node:
+                node[part] = {}
+            node = node[part]
+        if not isinstance(node, dict | list):
+            where = ".".join(parts[:depth + 1])
+            raise ScenarioError(f"override {path}: {where} is a {_kind(node)}, not a table or a list; "
+                                f"it has no field {parts[depth + 1]!r}")
     last = parts[-1]
     if isinstance(node, list):
-        node[_index(last, path)] = value
+        node[_index(last, path, len(node))] = value
     else:
         node[last] = value
 
 
-def _index(part: str, path: str) -> int:
-    try:
-        return int(part)
-    except ValueError:
-        raise ScenarioError(f"{path}: {part!r} indexes a list and must be an integer") from None
+def _kind(v: Any) -> str:
+    return "boolean" if isinstance(v, bool) else "number" if isinstance(v, int | float) else type(v).__name__
+
+
+def _index(part: str, path: str, length: int) -> int:
+    if not part.isdigit():
+        raise ScenarioError(f"override {path}: {part!r} indexes a list and must be a non-negative integer "
+                            f"(0 ... {length - 1})")
+    k = int(part)
+    if k >= length:
+        raise ScenarioError(f"override {path}: index {k} is out of range; the list has {length} item(s) "
+                            f"(indices 0 ... {length - 1})")
+    return k
 
 
 def parse_override(text: str) -> tuple[str, Any]:
-    """``"a.b=1.5"`` -> ``("a.b", 1.5)``; the value is a TOML value, else a plain string."""
+    """``"a.b=1.5"`` -> ``("a.b", 1.5)``; the value is exactly one TOML value, else a plain string.
+
+    A value that is not valid TOML is taken as a string (so ``--set f=1 - 0.1*t`` works) unless it
+    looks like TOML (starts with a quote, bracket or brace) or holds a line break; a value followed by
+    more TOML (``1\nother = 2``) is refused.
+    """
     if "=" not in text:
         raise ScenarioError(f"override {text!r} must look like dotted.path=value")
     path, value = text.split("=", 1)
-    path = path.strip()
+    path, value = path.strip(), value.strip()
+    if not path:
+        raise ScenarioError(f"override {text!r}: empty dotted path")
+    if not value:
+        raise ScenarioError(f"--set {path}: empty value (give a number, a quoted string, a list or a table)")
+    if any(c in value for c in "\n\r\x00"):
+        raise ScenarioError(f"--set {path}: the value must be a single TOML value on one line, got {value!r}")
     try:
-        parsed = tomllib.loads(f"v = {value.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        parsed = value.strip()
-    return path, parsed
+        doc = tomllib.loads(f"v = {value}")
+    except tomllib.TOMLDecodeError as exc:
+        if value[0] in "[{\"'":
+            raise ScenarioError(f"--set {path}: invalid TOML value {value!r} ({exc})") from None
+        return path, value
+    except RecursionError:
+        raise ScenarioError(f"--set {path}: value nested too deeply") from None
+    if set(doc) != {"v"}:  # pragma: no cover - newlines are refused above
+        raise ScenarioError(f"--set {path}: the value must be exactly one TOML value, got {value!r}")
+    if _nesting_depth(doc["v"]) > MAX_NESTING:
+        raise ScenarioError(f"--set {path}: value nested more than {MAX_NESTING} levels deep")
+    return path, doc["v"]
 
 
 def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any] | Iterable[str] | None) -> dict[str, Any]:
     """Copy of ``raw`` with overrides applied (mapping of dotted path -> value, or "path=value" strings)."""
+    if _nesting_depth(raw) > MAX_NESTING:
+        raise ScenarioError(f"scenario nested more than {MAX_NESTING} levels deep (tables/arrays)")
     out = copy.deepcopy(raw)
     if not overrides:
         return out
@@ -135,6 +236,8 @@ def _format_validation_error(exc: ValidationError, source: str) -> str:
     for err in exc.errors():
         loc = ".".join(str(p) for p in err["loc"]) or "<root>"
         msg = err["msg"]
+        if msg.startswith("Value error, "):
+            msg = msg[len("Value error, "):]
         if err["type"] == "extra_forbidden":
             msg = "unknown field (not part of this method's scenario schema)"
         lines.append(f"  field {loc}: {msg}")
@@ -152,12 +255,14 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>"):
         method = get_method(str(meta["method"]))
     except KeyError as exc:
         raise ScenarioError(f"{source}: field scenario.method: {exc.args[0]}") from None
+    if _nesting_depth(raw) > MAX_NESTING:
+        raise ScenarioError(f"{source}: nested more than {MAX_NESTING} levels deep (tables/arrays)")
     try:
         return method.schema.model_validate(dict(raw))
     except ValidationError as exc:
         raise ScenarioError(_format_validation_error(exc, source)) from None
-    except ValueError as exc:  # validators raising outside pydantic's wrapping
-        raise ScenarioError(f"{source}: {exc}") from None
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:  # raised outside pydantic's wrapping
+        raise ScenarioError(f"{source}: invalid scenario ({type(exc).__name__}: {exc})") from None
 
 
 def dump_toml(scenario) -> str:

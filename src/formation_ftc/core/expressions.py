@@ -16,7 +16,13 @@ Grammar (Python syntax subset)
   [lo, hi]), ``piecewise(c1, v1, c2, v2, ..., default)`` (first true condition wins).
 
 Errors raise :class:`ExpressionError` naming the field, the expression, the offending token and its
-column.
+column. Validation is total: an expression longer than :data:`MAX_LENGTH` characters, nested deeper
+than :data:`MAX_DEPTH` levels or with more than :data:`MAX_NODES` syntax nodes is refused before it is
+compiled (the compiler never recurses deeper than that), a number literal must be a finite float64,
+and every constant sub-expression (one without variables, e.g. ``1/0``, ``10**400``, ``log(0)``) is
+evaluated at validation in numpy float64 with floating-point errors raised, so a division by zero, an
+overflow or an invalid operation in a constant is a validation error, not a non-finite value at run
+time.
 """
 
 from __future__ import annotations
@@ -27,20 +33,35 @@ from collections.abc import Callable, Sequence
 from functools import lru_cache
 
 import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.errors import InputError
 
 __all__ = ["ExpressionError", "Expression", "compile_expression", "compile_vector_expression", "FUNCTIONS",
-           "CONSTANTS"]
+           "CONSTANTS", "MAX_LENGTH", "MAX_DEPTH", "MAX_NODES"]
+
+#: longest accepted expression text [characters]
+MAX_LENGTH = 2000
+#: deepest accepted nesting of the syntax tree (operator chains such as ``1+1+...+1`` count one level
+#: per operator) [-]
+MAX_DEPTH = 200
+#: most syntax-tree nodes in one expression [-]
+MAX_NODES = 5000
 
 
-class ExpressionError(ValueError):
+class ExpressionError(InputError):
     """An expression that cannot be parsed or uses something outside the whitelist."""
 
     def __init__(self, message: str, expression: str = "", field: str = "", col: int | None = None):
         where = f"{field}: " if field else ""
         caret = ""
-        if expression and col is not None:
-            caret = f"\n    {expression}\n    {' ' * col}^"
-        super().__init__(f"{where}{message} in expression {expression!r}{caret}")
+        shown = expression
+        if len(expression) > 120:  # keep the message readable; the caret only within what is shown
+            shown = expression[:100] + "..."
+            col = col if col is not None and col < 100 else None
+        if shown and col is not None:
+            caret = f"\n    {shown}\n    {' ' * col}^"
+        super().__init__(f"{where}{message} in expression {shown!r}{caret}")
         self.field = field
         self.expression = expression
         self.col = col
@@ -118,7 +139,12 @@ def compile_expression(text: str | float | int, variables: Sequence[str] = ("t",
     if isinstance(text, bool):
         raise ExpressionError("booleans are not expressions", str(text), field)
     if isinstance(text, int | float):
-        value = float(text)
+        try:
+            value = float(text)
+        except OverflowError:
+            value = math.inf
+        if not math.isfinite(value):
+            raise ExpressionError("a number used as an expression must be finite", str(text)[:40], field)
         return Expression(repr(value), lambda env: value, tuple(variables))
     if not isinstance(text, str):
         raise ExpressionError(f"expected a string or number, got {type(text).__name__}", str(text), field)
@@ -137,15 +163,144 @@ def compile_vector_expression(texts: Sequence[str | float], field: str = "") -> 
 
 @lru_cache(maxsize=4096)
 def _compile_cached(text: str, variables: tuple[str, ...], field: str) -> Expression:
-    if len(text) > 2000:
-        raise ExpressionError("expression longer than 2000 characters", text[:40] + "...", field)
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(f"expression longer than {MAX_LENGTH} characters ({len(text)})",
+                              text[:40] + "...", field)
+    if "\x00" in text:
+        raise ExpressionError("NUL character in expression", text.replace("\x00", "\\x00"), field)
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
         col = (exc.offset or 1) - 1
         raise ExpressionError(f"syntax error ({exc.msg})", text, field, col) from None
-    fn = _Compiler(text, set(variables), field).visit(tree.body)
+    except (RecursionError, MemoryError, ValueError) as exc:
+        raise ExpressionError(f"expression too deeply nested to parse ({type(exc).__name__}); at most "
+                              f"{MAX_DEPTH} levels", text, field) from None
+    _check_size(tree.body, text, field)
+    compiler = _Compiler(text, set(variables), field)
+    fn = compiler.visit(tree.body)
+    _Folder(compiler).fold(tree.body)
     return Expression(text, fn, variables)
+
+
+def _check_size(root: ast.AST, text: str, field: str) -> None:
+    """Iterative walk: refuse trees deeper than MAX_DEPTH or larger than MAX_NODES (before compiling)."""
+    stack = [(root, 1)]
+    n = 0
+    while stack:
+        node, depth = stack.pop()
+        n += 1
+        if n > MAX_NODES:
+            raise ExpressionError(f"expression too large (more than {MAX_NODES} syntax nodes); split it or "
+                                  f"simplify it", text, field)
+        if depth > MAX_DEPTH:
+            raise ExpressionError(f"expression nested too deeply (more than {MAX_DEPTH} levels, e.g. a chain "
+                                  f"of more than {MAX_DEPTH} operators); simplify it", text, field,
+                                  getattr(node, "col_offset", None))
+        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+
+
+def _np_piecewise(*args):
+    out = args[-1]
+    for k in range(len(args) - 3, -1, -2):
+        out = np.where(args[k], args[k + 1], out)
+    return out
+
+
+#: numpy float64 twins of FUNCTIONS, used to fold constant sub-expressions at validation
+_NP_FUNCTIONS: dict[str, Callable] = {
+    "sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan,
+    "atan2": np.arctan2, "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "exp": np.exp, "log": np.log,
+    "log10": np.log10, "sqrt": np.sqrt, "abs": np.abs, "sign": np.sign, "floor": np.floor, "ceil": np.ceil,
+    "min": lambda *a: _reduce(np.minimum, a), "max": lambda *a: _reduce(np.maximum, a), "clip": np.clip,
+    "where": np.where, "step": lambda x: np.where(x >= 0, 1.0, 0.0),
+    "window": lambda x, lo, hi: np.where((x >= lo) & (x <= hi), 1.0, 0.0), "piecewise": _np_piecewise,
+}
+_NP_BINOPS = {
+    ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.true_divide,
+    ast.Pow: np.power, ast.Mod: np.remainder,
+}
+_NP_CMPOPS = {
+    ast.Lt: np.less, ast.LtE: np.less_equal, ast.Gt: np.greater, ast.GtE: np.greater_equal,
+    ast.Eq: np.equal, ast.NotEq: np.not_equal,
+}
+
+
+class _Folder:
+    """Evaluate every constant sub-expression in numpy float64 with floating-point errors raised.
+
+    ``fold(node)`` returns the value of a constant node or None when it depends on a variable; a
+    division by zero, overflow or invalid operation raises :class:`ExpressionError` at that node.
+    The tree was already checked by :class:`_Compiler` (whitelist) and :func:`_check_size` (depth).
+    """
+
+    def __init__(self, compiler: _Compiler):
+        self.c = compiler
+
+    def fold(self, node: ast.AST):
+        with np.errstate(all="raise"):
+            return self._fold(node)
+
+    def _apply(self, node: ast.AST, fn: Callable, *args):
+        try:
+            out = fn(*args)
+        except FloatingPointError as exc:
+            token = ast.get_source_segment(self.c.text, node) or type(node).__name__
+            reason = str(exc).replace("encountered in ", "in ")
+            self.c.fail(node, f"constant {token!r} is not a finite float64 ({reason})")
+        except (OverflowError, ZeroDivisionError, ValueError) as exc:  # pragma: no cover - numpy raises FPE
+            self.c.fail(node, f"constant cannot be evaluated ({exc})")
+        if np.ndim(out) == 0 and np.issubdtype(np.asarray(out).dtype, np.floating) and not np.isfinite(out):
+            token = ast.get_source_segment(self.c.text, node) or type(node).__name__
+            self.c.fail(node, f"constant {token!r} is not finite ({out})")
+        return out
+
+    def _fold(self, node: ast.AST):
+        if isinstance(node, ast.Constant):
+            return np.float64(node.value)
+        if isinstance(node, ast.Name):
+            return np.float64(CONSTANTS[node.id]) if node.id not in self.c.variables else None
+        if isinstance(node, ast.BinOp):
+            a, b = self._fold(node.left), self._fold(node.right)
+            if b is not None and isinstance(node.op, ast.Div | ast.Mod) and b == 0:
+                op = "division" if isinstance(node.op, ast.Div) else "modulo"
+                self.c.fail(node.right, f"{op} by a constant zero")
+            if a is None or b is None:
+                return None
+            return self._apply(node, _NP_BINOPS[type(node.op)], np.float64(a), np.float64(b))
+        if isinstance(node, ast.UnaryOp):
+            x = self._fold(node.operand)
+            if x is None:
+                return None
+            if isinstance(node.op, ast.USub):
+                return self._apply(node, np.negative, x)
+            if isinstance(node.op, ast.Not):
+                return np.logical_not(x)
+            return x
+        if isinstance(node, ast.BoolOp):
+            vals = [self._fold(v) for v in node.values]
+            if any(v is None for v in vals):
+                return None
+            return _reduce(np.logical_and if isinstance(node.op, ast.And) else np.logical_or, vals)
+        if isinstance(node, ast.Compare):
+            vals = [self._fold(node.left)] + [self._fold(c) for c in node.comparators]
+            if any(v is None for v in vals):
+                return None
+            out = np.bool_(True)
+            for op, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True):
+                out = np.logical_and(out, _NP_CMPOPS[type(op)](a, b))
+            return out
+        if isinstance(node, ast.IfExp):
+            c, a, b = self._fold(node.test), self._fold(node.body), self._fold(node.orelse)
+            if c is None or a is None or b is None:
+                return None
+            return np.where(c, a, b)
+        if isinstance(node, ast.Call):
+            args = [self._fold(a) for a in node.args]
+            if any(a is None for a in args):
+                return None
+            return self._apply(node, _NP_FUNCTIONS[node.func.id], *args)
+        return None  # pragma: no cover - the compiler rejected every other node
 
 
 class _Compiler:
@@ -165,7 +320,15 @@ class _Compiler:
     def visit_Constant(self, node: ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, int | float):
             self.fail(node, f"constant {node.value!r} is not a number")
-        v = float(node.value)
+        try:
+            v = float(node.value)
+        except OverflowError:
+            v = math.inf
+        if not math.isfinite(v):
+            token = ast.get_source_segment(self.text, node) or repr(node.value)
+            if len(token) > 24:
+                token = token[:20] + "..."
+            self.fail(node, f"number {token} is outside the float64 range (|x| < 1.8e308)")
         return lambda env: v
 
     def visit_Name(self, node: ast.Name):
