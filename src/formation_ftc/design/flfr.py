@@ -24,7 +24,9 @@ Design equations::
 pi is the allowed violation probability; pi = 0 is the deterministic case (9), so 0 <= pi < 1 is
 accepted. External disturbance floor: ``T_i = sup_omega |G_i4(j omega) - G_i2(j omega)| B_ext``
 (E004-07: over all omega); no alpha can bring the error below T_i, so an ``e_s <= T_i`` is reported as
-infeasible. Units: e_s, H_i/|DET| and T_i in m; B_eps dimensionless; w in m/s^2.
+infeasible. T_i uses the certified H-infinity norm of :func:`formation_ftc.design.small_gain.hinf_norm` (an
+upper bound, so the floor is never underestimated). Units: e_s, H_i/|DET| and T_i in m; B_eps
+dimensionless; w in m/s^2.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ import numpy as np
 
 from formation_ftc.core.integrators import rk4_step
 from formation_ftc.design.allocation import PerturbationCoefficients, perturbation_coefficients
-from formation_ftc.design.small_gain import SmallGainResult, hinf_norm_grid, small_gain_margin
+from formation_ftc.design.small_gain import SmallGainResult, hinf_norm, small_gain_margin
 
 __all__ = [
     "InfeasibleSpecification",
@@ -133,8 +135,12 @@ def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weigh
     return peak
 
 
-def disturbance_floor(A_clp, b_ext: float, w_min: float = 1e-4, w_max: float = 1e3) -> np.ndarray:
-    """T_i = sup_omega |G_i4(j omega) - G_i2(j omega)| B_ext [m] for i = 1..4 (E004-07: all omega)."""
+def disturbance_floor(A_clp, b_ext: float) -> np.ndarray:
+    """T_i = sup_omega |G_i4(j omega) - G_i2(j omega)| B_ext [m] for i = 1..4 (E004-07: all omega).
+
+    The supremum is the certified H-infinity norm (upper bound, see :func:`hinf_norm`); an A_clp that is
+    not Hurwitz gives T_i = inf (no finite floor, so every e_s is infeasible).
+    """
     if b_ext < 0:
         raise ValueError(f"b_ext (disturbance bound) must be >= 0 m/s^2, got {b_ext}")
     A_clp = np.asarray(A_clp, dtype=float)
@@ -143,7 +149,7 @@ def disturbance_floor(A_clp, b_ext: float, w_min: float = 1e-4, w_max: float = 1
     for i in range(4):
         C = np.zeros((1, 4))
         C[0, i] = 1.0
-        out[i] = hinf_norm_grid(A_clp, B, C, None, w_min, w_max, 4000)[0] * b_ext
+        out[i] = hinf_norm(A_clp, B, C).value * b_ext if b_ext > 0 else 0.0
     return out
 
 
