@@ -7,12 +7,18 @@ Public entry points::
     result = ftc.simulate(scenario)        # xarray.Dataset with provenance attributes
     table = ftc.check(scenario)            # theorem / design conditions
 
-The package enables ``jax_enable_x64`` on import (see :mod:`formation_ftc._jax`).
+float64 is mandatory. Importing :mod:`formation_ftc` does not import JAX (so that the command line
+answers ``--help`` at once); it sets ``JAX_ENABLE_X64`` and the persistent compilation cache for the
+JAX that any later import loads, and when JAX is already imported it switches ``jax_enable_x64`` on
+directly (see :mod:`formation_ftc._jax`). The names below are loaded on first use.
 """
 
 from __future__ import annotations
 
-from formation_ftc import _jax  # noqa: F401  (x64 before anything else)
+import os as _os
+import sys as _sys
+from pathlib import Path as _Path
+from typing import TYPE_CHECKING
 
 try:  # single source: the version in pyproject.toml, read from the installed package's metadata
     from importlib.metadata import PackageNotFoundError as _NotFound
@@ -22,17 +28,63 @@ try:  # single source: the version in pyproject.toml, read from the installed pa
 except _NotFound:  # pragma: no cover - running from a source tree that was never installed
     __version__ = "0+unknown"
 
-from formation_ftc.api import (  # noqa: E402
-    check,
-    list_scenarios,
-    load_scenario,
-    save_result,
-    simulate,
-    simulate_with_metrics,
-)
-from formation_ftc.sim.engine import SimulationDiverged  # noqa: E402
+
+def _configure_jax_environment() -> None:
+    """x64 and the compilation cache for the JAX this process imports (now or later)."""
+    _os.environ["JAX_ENABLE_X64"] = "1"
+    cache = _os.environ.get("FORMATION_FTC_JAX_CACHE",
+                            str(_Path.home() / ".cache" / "formation_ftc" / "jax"))
+    if cache and cache.lower() != "off":
+        try:
+            _Path(cache).mkdir(parents=True, exist_ok=True)
+            _os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", cache)
+            _os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "1.0")
+        except OSError:  # pragma: no cover - the cache is an optimisation only
+            pass
+    if "jax" in _sys.modules:  # JAX came first: its configuration is already read, set it directly
+        from formation_ftc import _jax  # noqa: F401
+
+
+_configure_jax_environment()
+
+_LAZY = {
+    "check": "formation_ftc.api",
+    "list_scenarios": "formation_ftc.api",
+    "load_scenario": "formation_ftc.api",
+    "save_result": "formation_ftc.api",
+    "simulate": "formation_ftc.api",
+    "simulate_with_metrics": "formation_ftc.api",
+    "SimulationDiverged": "formation_ftc.sim.engine",
+}
 
 __all__ = [
     "__version__", "check", "list_scenarios", "load_scenario", "save_result", "simulate",
     "simulate_with_metrics", "SimulationDiverged",
 ]
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    from formation_ftc.api import (
+        check,
+        list_scenarios,
+        load_scenario,
+        save_result,
+        simulate,
+        simulate_with_metrics,
+    )
+    from formation_ftc.sim.engine import SimulationDiverged
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'formation_ftc' has no attribute {name!r}")
+    import importlib
+
+    importlib.import_module("formation_ftc._jax")  # x64 and cache, also if JAX was imported meanwhile
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
