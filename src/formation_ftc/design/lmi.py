@@ -33,6 +33,7 @@ __all__ = [
     "design_ilo_gains",
     "ilo_lmi_residuals",
     "rescale_design",
+    "rounding_margin",
     "CONSTRAINT_NAMES",
 ]
 
@@ -86,15 +87,28 @@ def _sym(M):
     return (M + M.T) / 2
 
 
+def rounding_margin(M) -> float:
+    """Bound on the floating-point error of the extreme eigenvalues of a symmetric matrix M.
+
+    ``10 n eps ||M||_2`` covers the backward error of the symmetric eigenvalue solver and the rounding
+    of forming M from products of the design matrices; a definiteness claim ``lambda_max(M) < 0`` is
+    only *verified* when ``lambda_max(M) < -rounding_margin(M)``.
+    """
+    M = np.atleast_2d(np.asarray(M, dtype=float))
+    return float(10 * M.shape[0] * np.finfo(float).eps * np.linalg.norm(M, 2))
+
+
 def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float = -5.0,
                       disk_radius: float = 2.0) -> dict[str, float]:
-    """Numerical certificate of a candidate (P, Y, L2).
+    """Numerical certificate of a candidate (P, Y, L2), recomputed in numpy from the matrices themselves.
 
     Returns
     -------
     dict with ``max_eig_8`` (< 0 required), ``max_eig_27`` (< 0), ``max_abs_9`` = max|H^T P - L2 C|
     (0 for (9) exactly), ``max_eig_disk`` (< 0), ``min_eig_P`` (> 0), ``max_pole_distance`` =
-    max |eig(A - L1 C) - c| (< r), ``max_pole_real`` [1/s].
+    max |eig(A - L1 C) - c| (< r), ``max_pole_real`` [1/s], and ``tol_8``, ``tol_27``, ``tol_disk``,
+    ``tol_P``: the rounding margins (:func:`rounding_margin`) each eigenvalue must clear for the
+    inequality to count as verified.
     """
     A, C, H, P, Y, L2 = (np.asarray(x, dtype=float) for x in (A, C, H, P, Y, L2))
     n, m = A.shape[0], H.shape[1]
@@ -106,6 +120,8 @@ def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float =
     L1 = np.linalg.solve(P, Y)
     poles = np.linalg.eigvals(A - L1 @ C)
     return {
+        "tol_8": rounding_margin(M8), "tol_27": rounding_margin(M27), "tol_disk": rounding_margin(MD),
+        "tol_P": rounding_margin(P),
         "max_eig_8": float(np.max(np.linalg.eigvalsh(M8))),
         "max_eig_27": float(np.max(np.linalg.eigvalsh(_sym(M27)))),
         "max_abs_9": float(np.max(np.abs(X))),
@@ -217,8 +233,9 @@ def design_ilo_gains(A, C, H, *, lam: float = 1e-8, disk_center: float = -5.0, d
     Pv, Yv, L2v = np.asarray(P.value), np.asarray(Y.value), np.asarray(L2.value)
     Pv = _sym(Pv)
     res = ilo_lmi_residuals(A, C, H, Pv, Yv, L2v, lam, disk_center, disk_radius)
-    bad = [k for k in ("max_eig_8", "max_eig_27", "max_eig_disk") if not res[k] < 0]
-    if res["min_eig_P"] <= 0:
+    bad = [k for k, t in (("max_eig_8", "tol_8"), ("max_eig_27", "tol_27"), ("max_eig_disk", "tol_disk"))
+           if not res[k] < -res[t]]
+    if not res["min_eig_P"] > res["tol_P"]:
         bad.append("min_eig_P")
     if bad:
         raise DesignInfeasible(

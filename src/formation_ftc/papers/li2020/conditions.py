@@ -143,6 +143,11 @@ def lemma3_constant() -> tuple[float, float]:
     return x, x * (1 - math.tanh(x))
 
 
+#: How the delay conditions are evaluated (the simulation reads the delays only at these times).
+GRID = ("sampled at every simulation step over the horizon (values and d/dt by automatic differentiation): "
+        "a violation found is exact, a pass holds on the step grid the simulation uses")
+
+
 def _fmt(v) -> str:
     return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
 
@@ -159,27 +164,29 @@ def check(scenario) -> list[Condition]:
     out.append(Condition(
         name="communication graph balanced", reference=f"Li2020 {thm}, Sec. II-C; E000-07",
         value=str(br), requirement="row sums = column sums", holds=br.balanced, required=proposed,
-        detail="" if br.balanced else "the theorems assume a balanced graph; the printed C is not "
-        "balanced (the closed loop still converges in simulation)"))
+        detail="exact row/column sums (tolerance 1e-12)" + ("" if br.balanced else "; the theorems assume a "
+        "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)")))
     sc = is_strongly_connected(C)
     out.append(Condition(name="communication graph strongly connected", reference="Li2020 Sec. IV-A, Fig. 3",
-                         value=str(sc), requirement="True", holds=sc, required=False))
+                         value=str(sc), requirement="True", holds=sc, required=False,
+                         detail="exact: reachability on the adjacency pattern"))
     k = scenario.per_spacecraft("k")
     out.append(Condition(name="k_i > 0", reference="Li2020 Lemma 2", value=_fmt(k), requirement="> 0",
-                         holds=bool(np.all(k > 0))))
+                         holds=bool(np.all(k > 0)), detail="exact: comparison of the scenario values"))
     if proposed:
         d0 = scenario.per_spacecraft("d_hat0")
         out.append(Condition(name="d_hat_i(0) > 0", reference="Li2020 eq. (27)", value=_fmt(d0),
-                             requirement="> 0", holds=bool(np.all(d0 > 0))))
+                             requirement="> 0", holds=bool(np.all(d0 > 0)), detail="exact: comparison of the scenario values"))
         form = scenario.controller.sigma_form
         out.append(Condition(name="sigma_i integrable", reference="Li2020 eq. (11), (13)-(16)",
                              value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
                              requirement="int_0^inf sigma < inf", holds=True,
-                             detail="exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
+                             detail="exact (closed-form integrals): exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
         literal = scenario.controller.dhat_sign_literal
         sign = -1 if (literal and law == "thm2") else 1
         out.append(Condition(name="sign of d_hat tanh term", reference="Li2020 eq. (24)/(42); E000-04",
-                             value=f"{sign:+d}", requirement="+1 (proof steps (34)-(36))", holds=sign > 0))
+                             value=f"{sign:+d}", requirement="+1 (proof steps (34)-(36))", holds=sign > 0,
+                             detail="exact: sign chosen by the scenario"))
         lam = scenario.per_spacecraft("lam")
         if law == "thm2":
             stats = delay_statistics(scenario)
@@ -190,21 +197,21 @@ def check(scenario) -> list[Condition]:
                 name="delays non-negative", reference="Li2020 Sec. III-B",
                 value=", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats),
                 requirement=">= 0 on every pair", holds=not neg,
-                detail="; ".join(f"{st.name} < 0 at t = {st.t_min:.6g} s" for st in neg)))
+                detail="; ".join([f"{st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID])))
             worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
             h = worst.rate_max if worst else 0.0
             out.append(Condition(
                 name="delay rate bound (used edges)", reference="Li2020 eq. (46); E000-15",
                 value=(f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
                        + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats)) if worst else "no edges",
-                requirement="h_ij < 1", holds=h < 1))
+                requirement="h_ij < 1", holds=h < 1, detail=GRID))
             if stats:
                 wa = max(stats, key=lambda st: st.rate_max)
                 out.append(Condition(
                     name="delay rate bound (all printed delays)", reference="Li2020 Sec. IV-A; E000-15",
                     value=f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)",
                     requirement="< 1", holds=wa.rate_max < 1, required=False,
-                    detail="informative: unused delays do not enter the closed loop"))
+                    detail="informative: unused delays do not enter the closed loop; " + GRID))
             if h < 1:
                 rho = 1.0 / (1.0 - h)
                 rhs = (rho - 1.0) / 2.0 * C.sum(axis=1)
@@ -212,14 +219,16 @@ def check(scenario) -> list[Condition]:
                 out.append(Condition(
                     name="lambda_i > (rho - 1)/2 sum_j c_ij", reference="Li2020 eq. (47)",
                     value=f"rho = {rho:.4f}; rhs = {_fmt(rhs)}; lambda = {_fmt(lam)}; margin = {_fmt(margin)}",
-                    requirement="margin > 0 with rho (1 - h) >= 1", holds=bool(np.all(margin > 0))))
+                    requirement="margin > 0 with rho (1 - h) >= 1", holds=bool(np.all(margin > 0)),
+                    detail="exact arithmetic given h; h itself is " + GRID))
         x_star, r_star = lemma3_constant()
         out.append(Condition(name="Lemma 3 constant r*", reference="Li2020 eq. (22)",
                              value=f"x* = {x_star:.6f}, r* = {r_star:.6f}", requirement="informative",
-                             holds=True, required=False))
+                             holds=True, required=False, detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)"))
     else:
         out.append(Condition(name="SIR-FTC gains positive", reference="Li2020 Sec. IV-D",
                              value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
-                             requirement="> 0", holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0))
+                             requirement="> 0", holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0,
+                             detail="exact: comparison of the scenario values"))
     del n
     return out
