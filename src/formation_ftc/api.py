@@ -124,15 +124,27 @@ def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
 
 
 def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = None) -> dict[str, Path]:
-    """Write ``result.nc`` (NetCDF via h5netcdf) and ``metrics.json`` into ``out_dir``."""
+    """Write ``result.nc`` (NetCDF via h5netcdf) and ``metrics.json`` into ``out_dir``.
+
+    Both files are first written under temporary names and only then renamed into place, so a failure
+    while writing either leaves the previous pair untouched (never a new result with old metrics).
+    ``formation-ftc run`` additionally writes into a temporary sibling directory that replaces
+    ``out_dir`` as a whole.
+    """
+    import os
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    nc = out_dir / "result.nc"
-    tmp = out_dir / ".result.nc.tmp"
-    ds.to_netcdf(tmp, engine="h5netcdf")
-    tmp.replace(nc)
+    nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
+    tmp_nc, tmp_mj = out_dir / f".result.nc.tmp-{os.getpid()}", out_dir / f".metrics.json.tmp-{os.getpid()}"
     m = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
-    mj = out_dir / "metrics.json"
-    mj.write_text(json.dumps(m, indent=2, sort_keys=True))
+    try:
+        ds.to_netcdf(tmp_nc, engine="h5netcdf")
+        tmp_mj.write_text(json.dumps(m, indent=2, sort_keys=True))
+        tmp_mj.replace(mj)
+        tmp_nc.replace(nc)
+    finally:
+        for t in (tmp_nc, tmp_mj):
+            t.unlink(missing_ok=True)
     return {"result": nc, "metrics": mj}

@@ -1,0 +1,183 @@
+"""Resource budgets checked before anything is compiled or run.
+
+A scenario (or a campaign) whose estimated size exceeds a budget is refused with
+:class:`formation_ftc.errors.ResourceLimitError` (exit status 2) naming the fields to change, instead
+of asking XLA for terabytes or running for days. Budgets and their defaults:
+
+==========================  =====================  =====================================================
+budget                      default                override (flag / environment variable)
+==========================  =====================  =====================================================
+memory of one run/batch     8 GiB, at most half    ``--max-memory 32GB`` / ``FORMATION_FTC_MAX_MEMORY``
+                            the machine's memory
+integration steps per run   1e9                    ``--max-run-steps`` / ``FORMATION_FTC_MAX_RUN_STEPS``
+run-steps per campaign      1e11                   ``--max-campaign-steps`` /
+                                                   ``FORMATION_FTC_MAX_CAMPAIGN_STEPS``
+==========================  =====================  =====================================================
+
+The memory of a run is estimated from the shapes of its outputs, found with :func:`jax.eval_shape`
+(nothing is computed): twice the records (the scan's stacked records and the concatenated copy) plus
+four copies of the state (running state, last finite snapshot, final state, integrator stages) plus
+the parameters. A campaign batch of ``chunk_size`` runs needs ``chunk_size`` times that. ``0`` or
+``none`` disables a budget.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from formation_ftc.errors import ResourceLimitError
+
+__all__ = ["Budgets", "parse_bytes", "parse_count", "format_bytes", "run_memory_bytes", "check_run_steps",
+           "check_memory", "DEFAULT_MAX_RUN_STEPS", "DEFAULT_MAX_CAMPAIGN_STEPS", "default_max_memory"]
+
+DEFAULT_MAX_RUN_STEPS = 1_000_000_000
+DEFAULT_MAX_CAMPAIGN_STEPS = 100_000_000_000
+_DEFAULT_MAX_MEMORY = 8 * 2**30
+_UNITS = {"": 1, "b": 1, "k": 10**3, "kb": 10**3, "m": 10**6, "mb": 10**6, "g": 10**9, "gb": 10**9,
+          "t": 10**12, "tb": 10**12, "kib": 2**10, "mib": 2**20, "gib": 2**30, "tib": 2**40}
+
+
+def _physical_memory() -> int | None:
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return None
+
+
+def default_max_memory() -> int:
+    """8 GiB, or half the physical memory when that is smaller [bytes]."""
+    phys = _physical_memory()
+    return min(_DEFAULT_MAX_MEMORY, phys // 2) if phys else _DEFAULT_MAX_MEMORY
+
+
+def parse_bytes(text: str | int | float | None, what: str = "--max-memory") -> int | None:
+    """``"8GB"``, ``"512MiB"``, ``"1e9"`` -> bytes; ``0``/``"none"`` -> None (no budget)."""
+    if text is None:
+        return None
+    if isinstance(text, int | float) and not isinstance(text, bool):
+        value, unit = float(text), ""
+    else:
+        m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([a-zA-Z]*)\s*", str(text))
+        if str(text).strip().lower() in ("none", "off", "unlimited"):
+            return None
+        if not m or m.group(2).lower() not in _UNITS:
+            raise ResourceLimitError(f"{what}: expected a size such as 8GB, 512MiB or 2e9 (bytes), got {text!r}")
+        value, unit = float(m.group(1)), m.group(2).lower()
+    if not math.isfinite(value) or value < 0:
+        raise ResourceLimitError(f"{what}: expected a finite size >= 0, got {text!r}")
+    n = int(value * _UNITS[unit])
+    return n or None
+
+
+def parse_count(text: str | int | float | None, what: str) -> int | None:
+    """``"1e9"``/``"1000000"`` -> int; ``0``/``"none"`` -> None (no budget)."""
+    if text is None:
+        return None
+    if str(text).strip().lower() in ("none", "off", "unlimited"):
+        return None
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise ResourceLimitError(f"{what}: expected a number such as 1e9, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise ResourceLimitError(f"{what}: expected a finite number >= 0, got {text!r}")
+    return int(value) or None
+
+
+def format_bytes(n: float) -> str:
+    for unit, size in (("TiB", 2**40), ("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{int(n)} B"
+
+
+@dataclass(frozen=True)
+class Budgets:
+    """Resource budgets; None = unlimited. :meth:`resolve` applies flags, then environment, then defaults."""
+
+    max_memory: int | None = _DEFAULT_MAX_MEMORY
+    max_run_steps: int | None = DEFAULT_MAX_RUN_STEPS
+    max_campaign_steps: int | None = DEFAULT_MAX_CAMPAIGN_STEPS
+
+    @classmethod
+    def resolve(cls, max_memory: Any = None, max_run_steps: Any = None,
+                max_campaign_steps: Any = None) -> Budgets:
+        env = os.environ
+
+        def pick(flag, var, parse, default, what):
+            if flag is not None:
+                return parse(flag, what)
+            if env.get(var, "").strip():
+                return parse(env[var], var)
+            return default
+
+        return cls(
+            max_memory=pick(max_memory, "FORMATION_FTC_MAX_MEMORY", parse_bytes, default_max_memory(),
+                            "--max-memory"),
+            max_run_steps=pick(max_run_steps, "FORMATION_FTC_MAX_RUN_STEPS", parse_count, DEFAULT_MAX_RUN_STEPS,
+                               "--max-run-steps"),
+            max_campaign_steps=pick(max_campaign_steps, "FORMATION_FTC_MAX_CAMPAIGN_STEPS", parse_count,
+                                    DEFAULT_MAX_CAMPAIGN_STEPS, "--max-campaign-steps"),
+        )
+
+
+def check_run_steps(n_steps: int, budgets: Budgets, where: str = "scenario") -> None:
+    """Refuse a run of more than ``budgets.max_run_steps`` integration steps (before compiling)."""
+    if budgets.max_run_steps is not None and n_steps > budgets.max_run_steps:
+        raise ResourceLimitError(
+            f"{where}: {n_steps:.3g} integration steps per run (simulation.horizon / simulation.dt) exceed the "
+            f"budget of {budgets.max_run_steps:.3g}; shorten simulation.horizon or enlarge simulation.dt, or "
+            f"raise the budget with --max-run-steps / FORMATION_FTC_MAX_RUN_STEPS")
+
+
+def check_campaign_steps(run_steps: int, n_runs: int, budgets: Budgets, where: str = "campaign") -> None:
+    """Refuse a campaign of more than ``budgets.max_campaign_steps`` run-steps in total."""
+    if budgets.max_campaign_steps is not None and run_steps > budgets.max_campaign_steps:
+        raise ResourceLimitError(
+            f"{where}: {n_runs:,} runs, {run_steps:.3g} run-steps in total exceed the budget of "
+            f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
+            f"simulation.horizon, or raise the budget with --max-campaign-steps / "
+            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS")
+
+
+def _tree_bytes(tree: Any) -> int:
+    import jax
+    import numpy as np
+
+    total = 0
+    for x in jax.tree_util.tree_leaves(tree):
+        shape = getattr(x, "shape", None)
+        if shape is None:
+            shape = np.shape(x)
+        dtype = getattr(x, "dtype", None) or np.asarray(x).dtype
+        total += int(np.prod(shape, dtype=np.float64)) * np.dtype(dtype).itemsize
+    return total
+
+
+def run_memory_bytes(compiled: Any) -> int:
+    """Estimated peak memory of one run of ``compiled`` [bytes] (shapes only, nothing computed)."""
+    import jax
+
+    shapes = jax.eval_shape(compiled.run, compiled.params)
+    out = dict(shapes)
+    records = _tree_bytes(out.get("records"))
+    state = _tree_bytes(out.get("final"))
+    return 2 * records + 4 * state + _tree_bytes(compiled.params)
+
+
+def check_memory(compiled: Any, budgets: Budgets, where: str = "scenario", batch: int = 1) -> int:
+    """Refuse when ``batch`` runs of ``compiled`` need more than ``budgets.max_memory``; the estimate."""
+    need = run_memory_bytes(compiled) * batch
+    if budgets.max_memory is not None and need > budgets.max_memory:
+        what = f"a batch of {batch} runs" if batch > 1 else "one run"
+        fix = "lower campaign.chunk_size (--chunk-size), " if batch > 1 else ""
+        raise ResourceLimitError(
+            f"{where}: {what} needs about {format_bytes(need)} of memory for its records and state, over the "
+            f"budget of {format_bytes(budgets.max_memory)}; {fix}raise simulation.record_every (fewer "
+            f"records), shorten simulation.horizon or use fewer spacecraft, or raise the budget with "
+            f"--max-memory / FORMATION_FTC_MAX_MEMORY")
+    return need

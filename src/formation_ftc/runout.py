@@ -1,0 +1,143 @@
+"""Output directory of ``formation-ftc run``: checked before the run, written atomically after it.
+
+* :func:`check_out_dir` -- refuse, before anything is computed, an empty path, a path that is a file or
+  a device (``/dev/null``), a directory that cannot be written, and an existing non-empty directory
+  that is not a previous ``run`` result (unless ``force``);
+* :func:`staged_output` -- the result, metrics and figures are written into a temporary sibling
+  directory ``.NAME.tmp-PID`` which then replaces ``DIR`` by renames, so ``DIR`` always holds one whole
+  run (the new one, or the previous one when anything failed); a marker file lists what a run wrote;
+* :func:`plot_view` -- above :data:`MAX_PLOT_SPACECRAFT` spacecraft the figures show an evenly spaced
+  subset (``result.nc`` keeps every spacecraft).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from formation_ftc.errors import InputError
+
+__all__ = ["OutputError", "MARKER", "MAX_PLOT_SPACECRAFT", "check_out_dir", "staged_output", "plot_view",
+           "is_run_result"]
+
+#: file in a run directory listing what the run wrote (so a rerun may replace exactly that)
+MARKER = ".formation-ftc-run.json"
+#: most spacecraft drawn one line each in the figures of ``run`` [-]
+MAX_PLOT_SPACECRAFT = int(os.environ.get("FORMATION_FTC_MAX_PLOT_SPACECRAFT", "50") or 50)
+_RESULT_SUFFIXES = {".nc", ".json", ".png", ".svg", ".pdf", ".html"}
+
+
+class OutputError(InputError):
+    """An output path that cannot or must not be written."""
+
+
+def is_run_result(d: Path) -> bool:
+    """Whether directory ``d`` holds only what a previous ``formation-ftc run`` wrote."""
+    entries = {e.name for e in d.iterdir()}
+    marker = d / MARKER
+    if marker.is_file():
+        try:
+            written = set(json.loads(marker.read_text(encoding="utf-8")).get("files", []))
+        except (OSError, ValueError, AttributeError):
+            return False
+        return entries <= written | {MARKER}
+    # a result written before the marker existed: result.nc + metrics.json and figures only
+    return ({"result.nc", "metrics.json"} <= entries
+            and all((d / e).is_file() and Path(e).suffix in _RESULT_SUFFIXES for e in entries))
+
+
+def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
+    """Validate ``--out`` before any computation; returns the path. Raises :class:`OutputError`."""
+    text = os.fspath(out)
+    if not text.strip():
+        raise OutputError("--out: empty path; give the output directory, e.g. --out out/run1")
+    if "\x00" in text:
+        raise OutputError(f"--out {text!r}: NUL character in the path")
+    d = Path(text)
+    if d.exists() or d.is_symlink():
+        if not d.is_dir():
+            kind = "a file" if d.is_file() else "not a directory (a device, socket or broken link)"
+            raise OutputError(f"--out {text}: exists and is {kind}; give a directory")
+        try:
+            entries = list(d.iterdir())
+        except OSError as exc:
+            raise OutputError(f"--out {text}: cannot be read ({exc.strerror or exc})") from None
+        if entries and not force and not is_run_result(d):
+            raise OutputError(f"--out {text}: is not empty and is not the result of an earlier `formation-ftc "
+                              f"run` (it holds e.g. {sorted(e.name for e in entries)[:3]}); use another "
+                              f"directory, or --force to replace its content")
+    # the nearest existing ancestor must be a writable directory (the staging sibling is created there)
+    anc = d.absolute().parent
+    while not anc.exists():
+        anc = anc.parent
+    if not anc.is_dir():
+        raise OutputError(f"--out {text}: {anc} is not a directory")
+    probe = anc / f".formation-ftc-probe-{os.getpid()}"
+    try:
+        probe.mkdir()
+        probe.rmdir()
+    except OSError as exc:
+        raise OutputError(f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
+                          f"directory") from None
+    return d
+
+
+@contextlib.contextmanager
+def staged_output(out_dir: Path) -> Iterator[Path]:
+    """Yield a fresh temporary sibling of ``out_dir``; on success it replaces ``out_dir`` (renames),
+    on any exception it is removed and ``out_dir`` is left untouched."""
+    out_dir = Path(out_dir)
+    parent = out_dir.absolute().parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        stage = parent / f".{out_dir.name}.tmp-{os.getpid()}"
+        if stage.exists():
+            shutil.rmtree(stage)
+        stage.mkdir()
+    except OSError as exc:
+        raise OutputError(f"--out {out_dir}: cannot create a directory in {parent} "
+                          f"({exc.strerror or exc})") from None
+    try:
+        yield stage
+        files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
+        (stage / MARKER).write_text(json.dumps({"files": files}, indent=1), encoding="utf-8")
+        _swap_into_place(stage, out_dir)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
+def _swap_into_place(stage: Path, out_dir: Path) -> None:
+    old = None
+    if out_dir.exists():
+        old = out_dir.with_name(f".{out_dir.name}.old-{os.getpid()}")
+        if old.exists():
+            shutil.rmtree(old)
+        os.replace(out_dir, old)
+    try:
+        os.replace(stage, out_dir)
+    except BaseException:
+        if old is not None:
+            os.replace(old, out_dir)  # put the previous result back
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def plot_view(ds: Any, max_spacecraft: int | None = None) -> tuple[Any, str]:
+    """``ds`` reduced to at most ``max_spacecraft`` evenly spaced spacecraft for plotting, and a note
+    ("" when nothing was dropped)."""
+    import numpy as np
+
+    limit = MAX_PLOT_SPACECRAFT if max_spacecraft is None else max_spacecraft
+    n = int(ds.sizes.get("spacecraft", 0)) if hasattr(ds, "sizes") else 0
+    if limit <= 0 or n <= limit:
+        return ds, ""
+    keep = np.unique(np.linspace(0, n - 1, limit).round().astype(int))
+    return ds.isel(spacecraft=keep), (f"figures show {len(keep)} of {n} spacecraft (evenly spaced); "
+                                      f"result.nc holds all of them")
