@@ -18,11 +18,33 @@ point, which is what a paired comparison of two controllers needs) or ``key = r`
 
 Nothing depends on which other runs exist, the order they are computed in, or the chunking; adding
 a sampled field does not change the values drawn for the others.
+
+Quasi-Monte Carlo (``[campaign] sampling = "sobol"`` or ``"lhs"``)
+------------------------------------------------------------------
+The random fields (every sampler except ``grid``, in file order) share one point ``u`` of a
+``d``-dimensional unit cube design, ``d`` = number of random fields; field ``m`` takes the value of
+its distribution's inverse CDF at ``u[m]`` (uniform: ``low + (high - low) u``; loguniform: the same in
+``log``; normal: the (truncated) normal quantile; integer: ``low + floor((high - low + 1) u)``;
+choice: the item whose cumulative-weight interval holds ``u``). The design is drawn once from
+``SeedSequence(seed, spawn_key=(2**32 - 1, 2 or 3))`` and row ``key`` (the replicate, or the run id
+when ``paired = false``) belongs to the run:
+
+* ``"sobol"``: scrambled Sobol' sequence (:class:`scipy.stats.qmc.Sobol`, Owen scrambling). Row ``key``
+  is the ``key``-th point of the sequence, so a run's values depend only on (seed, key, the list of
+  random fields), never on how many runs there are; the first ``2**m`` replicates form a
+  ``(t, m, d)``-net (use a power of two for ``runs`` to get its balance).
+* ``"lhs"``: Latin hypercube (:class:`scipy.stats.qmc.LatinHypercube`, one point per stratum
+  ``[k/n, (k+1)/n)`` of every dimension) over ``n = runs`` rows (``n_runs`` when unpaired). A run's
+  values depend on (seed, key, fields, ``n``): changing ``--runs`` draws a new hypercube.
+
+Scenario seeds stay pseudo-random (``run_seed``). Unlike ``"random"``, adding or removing a random
+field changes the design, so the values of the others change too.
 """
 
 from __future__ import annotations
 
 import copy
+import math
 import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -30,11 +52,27 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
-from formation_ftc.campaign.spec import CampaignError, CampaignSpec, Sampler, spec_hash
+from formation_ftc.campaign.spec import (
+    CampaignError,
+    CampaignSpec,
+    Choice,
+    Grid,
+    Integer,
+    LogUniform,
+    Normal,
+    Sampler,
+    Uniform,
+    spec_hash,
+)
 from formation_ftc.config import loader
 
-__all__ = ["RunInputs", "Chunk", "CampaignPlan", "run_seed", "draw_value", "path_exists"]
+__all__ = ["RunInputs", "Chunk", "CampaignPlan", "run_seed", "draw_value", "value_from_unit", "qmc_design",
+           "path_exists"]
+
+_QMC_SPAWN = 2**32 - 1  # spawn-key entry no run key reaches (run ids are below 2**32 - 1)
+_QMC_KINDS = {"sobol": 2, "lhs": 3}
 
 
 @dataclass(frozen=True)
@@ -76,6 +114,53 @@ def draw_value(sampler: Sampler, campaign_seed: int, key: int) -> Any:
     """The value of a random field for sampling key ``key`` (independent stream per field path)."""
     ss = np.random.SeedSequence(campaign_seed, spawn_key=(int(key), 1, zlib.crc32(sampler.path.encode())))
     return sampler.draw(np.random.default_rng(ss))
+
+
+def value_from_unit(sampler: Sampler, u: float) -> Any:
+    """The value of ``sampler``'s distribution at quantile ``u`` in [0, 1) (its inverse CDF)."""
+    u = min(max(float(u), 0.0), np.nextafter(1.0, 0.0))
+    if isinstance(sampler, Uniform):
+        return float(sampler.low + (sampler.high - sampler.low) * u)
+    if isinstance(sampler, LogUniform):
+        lo, hi = math.log(sampler.low), math.log(sampler.high)
+        return float(math.exp(lo + (hi - lo) * u))
+    if isinstance(sampler, Normal):
+        if sampler.low is None and sampler.high is None:
+            return float(sampler.mean + sampler.std * stats.norm.ppf(u))
+        a = -np.inf if sampler.low is None else (sampler.low - sampler.mean) / sampler.std
+        b = np.inf if sampler.high is None else (sampler.high - sampler.mean) / sampler.std
+        return float(stats.truncnorm.ppf(u, a, b, loc=sampler.mean, scale=sampler.std))
+    if isinstance(sampler, Integer):
+        return int(min(sampler.low + math.floor((sampler.high - sampler.low + 1) * u), sampler.high))
+    if isinstance(sampler, Choice):
+        w = np.ones(len(sampler.values)) if sampler.weights is None else np.asarray(sampler.weights, float)
+        edges = np.cumsum(w) / np.sum(w)
+        k = min(int(np.searchsorted(edges, u, side="right")), len(sampler.values) - 1)
+        return copy.deepcopy(sampler.values[k])
+    if isinstance(sampler, Grid):
+        raise TypeError("grid values are assigned by grid index, not drawn")
+    raise TypeError(f"no quasi-Monte Carlo mapping for {type(sampler).__name__}")  # pragma: no cover
+
+
+def qmc_design(kind: str, d: int, n: int, campaign_seed: int) -> np.ndarray:
+    """Rows ``0 .. n-1`` (at least) of the ``d``-dimensional ``kind`` design ("sobol" or "lhs") in [0, 1)^d.
+
+    Sobol': the first ``2**ceil(log2 n)`` points of the scrambled sequence (a prefix of one infinite
+    sequence: row ``k`` does not depend on ``n``). LHS: exactly ``n`` rows, one per stratum.
+    """
+    from scipy.stats import qmc
+
+    if kind not in _QMC_KINDS:
+        raise CampaignError(f"campaign.sampling: unknown quasi-Monte Carlo design {kind!r} (sobol, lhs)")
+    rng = np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(_QMC_SPAWN, _QMC_KINDS[kind])))
+    cls = qmc.Sobol if kind == "sobol" else qmc.LatinHypercube
+    try:
+        engine = cls(d, scramble=True, rng=rng)
+    except TypeError:  # pragma: no cover - SciPy < 1.15 names the generator ``seed``
+        engine = cls(d, scramble=True, seed=rng)
+    if kind == "sobol":
+        return engine.random_base2(max(0, math.ceil(math.log2(max(n, 1)))))
+    return engine.random(n)
 
 
 def _walk(tree: Any, path: str) -> tuple[bool, Any, str]:
@@ -141,6 +226,8 @@ class CampaignPlan:
         self.runs = meta.runs
         self.chunk_size = meta.chunk_size
         self.paired = meta.paired
+        self.sampling = meta.sampling
+        self._design: np.ndarray | None = None  # quasi-Monte Carlo rows, built on first use
         self.base_names = spec.bases
         self.base_raws: list[dict[str, Any]] = []
         self.methods: list[str] = []
@@ -229,10 +316,22 @@ class CampaignPlan:
         g, j = divmod(int(run_id), self.runs)
         key = j if self.paired else int(run_id)
         b, values = self.grid_point(g)
-        for s in self.random_samplers:
-            values[s.path] = draw_value(s, self.seed, key)
+        if self.sampling == "random":
+            for s in self.random_samplers:
+                values[s.path] = draw_value(s, self.seed, key)
+        elif self.random_samplers:
+            u = self.design()[key]
+            for m, s in enumerate(self.random_samplers):
+                values[s.path] = value_from_unit(s, u[m])
         ordered = {s.path: values[s.path] for s in self.samplers}
         return RunInputs(int(run_id), g, j, run_seed(self.seed, key), self.base_names[b], ordered)
+
+    def design(self) -> np.ndarray:
+        """The quasi-Monte Carlo unit-cube design of this campaign (rows indexed by sampling key)."""
+        if self._design is None:
+            n = self.runs if self.paired else self.n_runs
+            self._design = qmc_design(self.sampling, len(self.random_samplers), n, self.seed)
+        return self._design
 
     def scenario_raw(self, inputs: RunInputs) -> dict[str, Any]:
         raw = copy.deepcopy(self.base_raws[self.base_names.index(inputs.base)])
@@ -294,6 +393,6 @@ class CampaignPlan:
     def summary(self) -> dict[str, Any]:
         return dict(name=self.name, bases=self.base_names, methods=self.methods, runs_per_point=self.runs,
                     grid_points=self.n_grid, total_runs=self.n_runs, chunk_size=self.chunk_size,
-                    chunks=self.n_chunks, seed=self.seed, paired=self.paired,
+                    chunks=self.n_chunks, seed=self.seed, paired=self.paired, sampling=self.sampling,
                     samplers={s.path: s.describe() for s in self.samplers})
 

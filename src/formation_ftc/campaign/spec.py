@@ -11,6 +11,7 @@ A campaign file looks like::
     chunk_size = 25                   # runs per vmap batch
     metrics = ["max_position_error"]  # metrics to keep (empty: all the method returns)
     paired = true                     # same samples/seed for the same replicate at every grid point
+    sampling = "random"               # or "sobol" / "lhs" (quasi-Monte Carlo, see campaign.sampling)
 
     [overrides]                       # fixed changes to the base scenario (dotted path = value)
     "simulation.horizon" = 100.0
@@ -42,7 +43,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
@@ -332,6 +333,10 @@ class CampaignMeta(StrictModel):
     metrics: list[str] = Field(default_factory=list, description="Metrics to keep (empty: all).")
     paired: bool = Field(True, description="Same samples and seed for replicate j at every grid point "
                          "(common random numbers) [-].")
+    sampling: Literal["random", "sobol", "lhs"] = Field(
+        "random", description="How the random fields are drawn: 'random' (independent pseudo-random "
+        "draws), 'sobol' (scrambled Sobol' quasi-Monte Carlo points) or 'lhs' (Latin hypercube); see "
+        "formation_ftc.campaign.sampling.")
 
     @field_validator("base")
     @classmethod
@@ -474,7 +479,10 @@ def _canonical(obj: Any) -> str:
 def spec_hash(spec: CampaignSpec, base_raws: list[dict[str, Any]]) -> str:
     """SHA-256 of the campaign spec and the *content* of its base scenarios (not their names only)."""
     h = hashlib.sha256()
-    h.update(_canonical(spec.model_dump(mode="json")).encode())
+    dump = spec.model_dump(mode="json")
+    if dump["campaign"].get("sampling") == "random":  # the default: same hash as before the option existed
+        del dump["campaign"]["sampling"]
+    h.update(_canonical(dump).encode())
     for raw in base_raws:
         h.update(_canonical(raw).encode())
     return h.hexdigest()
