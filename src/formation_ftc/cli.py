@@ -1,7 +1,9 @@
-"""``formation-ftc`` command line: run / list / show / check / reproduce / campaign.
+"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign.
 
-Thin edge layer over :mod:`formation_ftc.api`; every command works for every registered method.
-Exit codes: 0 success, 1 a required condition failed or a run diverged, 2 bad input.
+Thin edge layer over formation_ftc.api; every command works for every registered method. Heavy
+modules (JAX, SciPy, pandas) are imported by the commands that need them, so --help, --version and
+list answer at once. Exit codes: 0 success, 1 a required condition failed or a run diverged,
+2 bad input.
 """
 
 from __future__ import annotations
@@ -14,17 +16,127 @@ from pathlib import Path
 
 __all__ = ["main", "build_parser"]
 
+EXIT_CODES = ("exit status:\n"
+              "  0  success\n"
+              "  1  a required condition failed or a run diverged (partial results are still written)\n"
+              "  2  bad input (the message names the file, the field and the allowed range)\n"
+              "  3  unexpected error (one line, and the path of a file holding the traceback)")
+
+#: command path -> (description, examples); shown by ``formation-ftc COMMAND --help`` as plain text
+HELP: dict[str, tuple[str, list[str]]] = {
+    "": ("Simulate, design and verify fault-tolerant control of spacecraft formations (JAX, float64).",
+         ["formation-ftc list", "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300",
+          "formation-ftc reproduce all --out out/reproduction", "formation-ftc COMMAND --help"]),
+    "list": ("List the built-in scenarios, one line each (name, then description).",
+             ["formation-ftc list", "formation-ftc list | grep li2020"]),
+    "show": ("Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied).",
+             ["formation-ftc show li2020-thm1", "formation-ftc show my-scenario.toml --set controller.kp=3"]),
+    "check": ("Evaluate the theorem and design conditions of a scenario's method before any run.",
+              ["formation-ftc check li2020-thm2-delays", "formation-ftc check gui2022-lof2tc --json"]),
+    "schema": ("Print the JSON Schema of a method's scenario file (for editor completion and validation). "
+               "Without METHOD, list the registered methods.",
+               ["formation-ftc schema", "formation-ftc schema cw-formation > cw-formation.schema.json"]),
+    "run": ("Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
+            ["formation-ftc run cw-pd-fault --out out/run1",
+             "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3"]),
+    "reproduce": ("Run the papers' simulation studies and write DIR/index.html, DIR/summary.json and one "
+                  "folder per paper.",
+                  ["formation-ftc reproduce li2020 --out out/li2020",
+                   "formation-ftc reproduce all --out out/reproduction"]),
+    "campaign": ("Monte Carlo campaigns: list the built-in ones, run (resumable) and report.",
+                 ["formation-ftc campaign list", "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
+                  "formation-ftc campaign report out/c"]),
+    "campaign list": ("List the built-in campaigns (name, then description).", ["formation-ftc campaign list"]),
+    "campaign run": ("Run a campaign into a results directory; run the same command again to resume a "
+                     "killed one.",
+                     ["formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
+                      "formation-ftc campaign run my-campaign.toml --out out/c --dask-local 4"]),
+    "campaign report": ("Summary statistics (summary.json, summary.csv) and sensitivity plots of a "
+                        "campaign directory.", ["formation-ftc campaign report out/c"]),
+}
+
+_VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
+
+
+def _info(msg: str) -> None:
+    """Progress/informational line on stderr (suppressed by --quiet)."""
+    if _VERBOSITY >= 0:
+        print(msg, file=sys.stderr)
+
+
+def _debug(msg: str) -> None:
+    """Detail shown with --verbose only (stderr)."""
+    if _VERBOSITY > 0:
+        print(msg, file=sys.stderr)
+
+
+def _builtin_scenario_names() -> list[str]:
+    from importlib import resources
+
+    d = resources.files("formation_ftc") / "scenarios"
+    return [n[:-5] for n in sorted(e.name for e in d.iterdir()) if n.endswith(".toml")]  # loader's order
+
+
+def _check_scenario_name(name: str) -> None:
+    """Bad input with a "did you mean" when ``name`` is neither a file nor a built-in scenario."""
+    from formation_ftc.config.loader import ScenarioError
+    from formation_ftc.suggest import did_you_mean
+
+    if name.endswith(".toml") or Path(name).exists():
+        return
+    names = _builtin_scenario_names()
+    if name not in names:
+        raise ScenarioError(f"unknown scenario {name!r}: not a file and not a built-in scenario"
+                            f"{did_you_mean(name, names)}; see `formation-ftc list`")
+
+
+def _field_hints(scenario: str, overrides: list[str]) -> str:
+    """"did you mean" lines for unknown fields of a scenario (file or --set paths); "" if none."""
+    from formation_ftc.config import loader
+    from formation_ftc.registry import get_method
+    from formation_ftc.suggest import unknown_fields
+
+    try:
+        raw, _ = loader.read_raw(scenario)
+        raw = loader.apply_overrides(raw, overrides)
+        schema = get_method(str(raw["scenario"]["method"])).schema.model_json_schema()
+    except Exception:  # noqa: BLE001 - hints are best effort; the original error is reported anyway
+        return ""
+    return "".join(f"\n  {u.message()}" for u in unknown_fields(raw, schema) if u.suggestions)
+
+
+def _load(args):
+    """The validated scenario of ``args.scenario`` with ``--set`` overrides; errors get "did you mean"."""
+    from formation_ftc.api import load_scenario
+    from formation_ftc.config.loader import ScenarioError
+
+    _check_scenario_name(args.scenario)
+    try:
+        return load_scenario(args.scenario, args.overrides)
+    except ScenarioError as exc:
+        hints = _field_hints(args.scenario, args.overrides)
+        if not hints:
+            raise
+        raise ScenarioError(f"{exc}{hints}") from None
+
+
 
 def _scenario_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="built-in scenario name or path to a TOML file")
+    p.add_argument("scenario", metavar="SCENARIO",
+                   help="built-in scenario name (see `formation-ftc list`) or path to a TOML file")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="override a field, e.g. --set simulation.horizon=100 (repeatable)")
 
 
 def _cmd_list(args) -> int:
-    from formation_ftc.api import list_scenarios
+    import tomllib
+    from importlib import resources
 
-    items = list_scenarios()
+    d = resources.files("formation_ftc") / "scenarios"
+    items = {}
+    for name in _builtin_scenario_names():
+        meta = tomllib.loads((d / f"{name}.toml").read_text(encoding="utf-8")).get("scenario", {})
+        items[name] = str(meta.get("description", ""))
     width = max((len(n) for n in items), default=10)
     for name, desc in items.items():
         print(f"{name:<{width}}  {desc}")
@@ -32,10 +144,9 @@ def _cmd_list(args) -> int:
 
 
 def _cmd_show(args) -> int:
-    from formation_ftc.api import load_scenario
     from formation_ftc.config.loader import dump_toml
 
-    print(dump_toml(load_scenario(args.scenario, args.overrides)), end="")
+    print(dump_toml(_load(args)), end="")
     return 0
 
 
@@ -44,6 +155,19 @@ def _print_conditions(conds, as_json: bool) -> int:
     if as_json:
         print(json.dumps({"conditions": [c.as_dict() for c in conds],
                           "all_required_hold": not failed_required}, indent=2))
+    elif not sys.stdout.isatty():
+        rows = [("condition", "reference", "value", "requirement", "holds", "required")]
+        rows += [(str(c.name), str(c.reference), str(c.value), str(c.requirement),
+                  {True: "yes", False: "NO", None: "n/a"}[c.holds], "yes" if c.required else "info")
+                 for c in conds]
+        widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
+        for r in rows if conds else []:
+            print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
+        for c in conds:
+            if c.detail and c.holds is False:
+                print(f"- {c.name}: {c.detail}")
+        if not conds:
+            print("this scenario's method declares no conditions")
     else:
         from rich.console import Console
         from rich.table import Table
@@ -64,26 +188,60 @@ def _print_conditions(conds, as_json: bool) -> int:
 
 
 def _cmd_check(args) -> int:
-    from formation_ftc.api import check, load_scenario
+    from formation_ftc.api import check
 
-    return _print_conditions(check(load_scenario(args.scenario, args.overrides)), args.json)
+    return _print_conditions(check(_load(args)), args.json)
+
+
+def _cmd_schema(args) -> int:
+    from formation_ftc.registry import methods
+    from formation_ftc.suggest import did_you_mean
+
+    registered = methods()
+    if args.method is None:
+        width = max((len(n) for n in registered), default=10)
+        for name, m in sorted(registered.items()):
+            print(f"{name:<{width}}  {m.description}")
+        return 0
+    if args.method not in registered:
+        from formation_ftc.errors import InputError
+
+        raise InputError(f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
+                         f"registered: {', '.join(sorted(registered))}")
+    schema = registered[args.method].schema.model_json_schema()
+    schema = {"$schema": "https://json-schema.org/draft/2020-12/schema",
+              "title": f"formation-ftc scenario ({args.method})", **{k: v for k, v in schema.items()
+                                                                      if k != "title"}}
+    print(json.dumps(schema, indent=2))
+    return 0
 
 
 def _cmd_run(args) -> int:
     import jax
     from rich.console import Console
 
-    from formation_ftc.api import compile_scenario, finish_run, load_scenario, save_result
+    from formation_ftc.api import compile_scenario, finish_run, save_result
+    from formation_ftc.config.loader import ScenarioError
+    from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.registry import get_method
+    from formation_ftc.runout import check_out_dir, plot_view, staged_output
     from formation_ftc.sim.engine import SimulationDiverged
 
-    console = Console(stderr=True)
-    scenario = load_scenario(args.scenario, args.overrides)
-    out_dir = Path(args.out)
+    console = Console(stderr=True, quiet=_VERBOSITY < 0)
+    out_dir = check_out_dir(args.out, force=args.force)  # before any computation
+    scenario = _load(args)
+    budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
+    check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
+    try:
+        compiled = compile_scenario(scenario)
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+        if isinstance(exc, ScenarioError):
+            raise
+        raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
+    check_memory(compiled, budgets, args.scenario)
     t0 = time.perf_counter()
     with console.status(f"compiling and running {scenario.scenario.name} "
                         f"({scenario.simulation.n_steps:,} steps)..."):
-        compiled = compile_scenario(scenario)
         out = jax.jit(compiled.run)(compiled.params)
         jax.block_until_ready(out)
     wall = time.perf_counter() - t0
@@ -98,19 +256,72 @@ def _cmd_run(args) -> int:
         metrics = result_metrics(ds)
         code = 1
     ds.attrs["wall_time_s"] = wall
-    paths = save_result(ds, out_dir, metrics)
     method = get_method(scenario.scenario.method)
-    figs = method.plot(ds, scenario, out_dir) if method.plot else []
-    console.print(f"wrote {paths['result']}, {paths['metrics']} and {len(figs)} figure(s) in {wall:.2f} s")
+    with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written
+        save_result(ds, stage, metrics)
+        view, note = plot_view(ds)
+        if note:
+            console.print(note)
+        figs = method.plot(view, scenario, stage) if method.plot else []
+    console.print(f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'} and {len(figs)} figure(s) "
+                  f"in {wall:.2f} s")
     return code
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _add_verbosity(p: argparse.ArgumentParser, top: bool = False) -> None:
+    g = p.add_mutually_exclusive_group()
+    default = 0 if top else argparse.SUPPRESS  # a sub-command's flag must not reset the top-level one
+    g.add_argument("-q", "--quiet", dest="verbosity", action="store_const", const=-1, default=default,
+                   help="print only results and errors (no progress or informational lines)")
+    g.add_argument("-v", "--verbose", dest="verbosity", action="store_const", const=1, default=default,
+                   help="more detail (timings, full tracebacks on errors)")
+
+
+def _epilog(key: str) -> str:
+    examples = HELP.get(key, ("", []))[1]
+    lines = ["examples:", *(f"  {e}" for e in examples)] if examples else []
+    return "\n".join(lines + ([""] if lines else []) + [EXIT_CODES])
+
+
+def _decorate(parser: argparse.ArgumentParser, key: str) -> None:
+    """Plain-text help with examples and exit codes, and -q/-v, on ``parser`` and every sub-command."""
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    if key in HELP:
+        parser.description = HELP[key][0]
+    parser.epilog = _epilog(key)
+    for action in parser._actions:  # noqa: SLF001 - argparse keeps sub-parsers here
+        if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+            for name, sub in action.choices.items():
+                sub_key = f"{key} {name}".strip()
+                _add_verbosity(sub)
+                _decorate(sub, sub_key)
+
+
+#: commands whose parsers live in other modules: name -> (module with add_cli, one-line help)
+_PLUGGED = {
+    "reproduce": ("formation_ftc.report.reproduce", "reproduce the papers' studies and write an HTML report"),
+    "campaign": ("formation_ftc.campaign.cli", "Monte Carlo campaigns: list, run (resumable), report"),
+}
+
+
+def _command_of(argv: list[str]) -> str | None:
+    """The sub-command named in ``argv`` (top-level options are all flags), or None."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
+def build_parser(command: str | None = "") -> argparse.ArgumentParser:
+    """The ``formation-ftc`` parser.
+
+    ``command`` = "" (default) builds every sub-command; a command name (or None: no command) builds
+    the modules of that command only (the others get a placeholder with their one-line help), so
+    that ``--help``, ``--version`` and ``list`` import no JAX, SciPy or pandas.
+    """
     from formation_ftc import __version__
 
-    parser = argparse.ArgumentParser(prog="formation-ftc", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="formation-ftc")
     parser.add_argument("--version", action="version", version=f"formation-ftc {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+    _add_verbosity(parser, top=True)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("list", help="list the built-in scenarios")
     p.set_defaults(func=_cmd_list)
@@ -124,33 +335,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_check)
 
+    p = sub.add_parser("schema", help="print the JSON Schema of a method's scenario file")
+    p.add_argument("method", metavar="METHOD", nargs="?", default=None,
+                   help="method name (the [scenario].method of a scenario file); omit to list them")
+    p.set_defaults(func=_cmd_schema)
+
     p = sub.add_parser("run", help="simulate a scenario and write result.nc, metrics.json, figures")
     _scenario_args(p)
-    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--force", action="store_true",
+                   help="replace DIR even when it is not empty and not an earlier run's result")
+    p.add_argument("--max-memory", metavar="SIZE", default=None,
+                   help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)")
+    p.add_argument("--max-run-steps", metavar="N", default=None,
+                   help="integration steps allowed per run (default 1e9; 0 = none)")
     p.set_defaults(func=_cmd_run)
 
-    for module in ("formation_ftc.report.reproduce", "formation_ftc.campaign.cli"):
+    for name, (module, short) in _PLUGGED.items():
+        if command not in ("", name):
+            sub.add_parser(name, help=short, add_help=False).add_argument("rest", nargs=argparse.REMAINDER)
+            continue
         try:
             mod = __import__(module, fromlist=["add_cli"])
         except ImportError as exc:  # pragma: no cover - only while a part is missing
             print(f"warning: {module} unavailable: {exc}", file=sys.stderr)
             continue
         mod.add_cli(sub)
+    _decorate(parser, "")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    from formation_ftc.config.loader import ScenarioError
-    from formation_ftc.core.expressions import ExpressionError
-
-    parser = build_parser()
+    global _VERBOSITY
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(_command_of(argv))
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except (ScenarioError, ExpressionError, ValueError, KeyError) as exc:
-        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-        print(f"error: {msg}", file=sys.stderr)
-        return 2
+    _VERBOSITY = int(getattr(args, "verbosity", 0))
+    from formation_ftc.exitcodes import run_guarded
+
+    return run_guarded(args.func, args, verbose=_VERBOSITY > 0)
 
 
 if __name__ == "__main__":  # pragma: no cover
