@@ -1,0 +1,80 @@
+"""Direct tests of the model matrices and vector fields that paper packages keep beside ``core/``.
+
+Truths are derived by hand in the comments (not computed with the package):
+
+* yang2013: the slot variation maps P[j] of the built-in mode sequence (S_ij of the scenario placed on
+  the spacecraft slots), the leave flags and the error dynamics (2), (5) at a hand-picked state;
+* azizi2009: the rotating-square desired state (positions on the circumscribed circle, v = omega x r,
+  a = -omega^2 r) and the desired relative accelerations of the chain pairs;
+* li2020: the formation offsets rho_bar_iF = R [cos(phi)/2, -sin(phi), sqrt(3)/2 cos(phi)].
+"""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from formation_ftc import api
+from formation_ftc.papers.azizi2009.model import desired_state, relative_acceleration_fn
+from formation_ftc.papers.li2020.desired import formation_offsets
+from formation_ftc.papers.yang2013.model import error_dynamics_rhs, switched_structure
+
+
+def test_yang2013_slot_variation_maps_of_the_builtin_sequence():
+    st = switched_structure(api.load_scenario("yang2013-healthy"))
+    # modes: {1,2,3} -> {1..5} (S_12: rows 4 and 5 copy spacecraft 1) -> {1..5} (I) -> {1..5} (I)
+    #        -> {1, -, 3, 6} (S_45 keeps 1 and 3; 6 enters with X*)
+    P1 = np.zeros((6, 6))
+    P1[0, 0] = P1[1, 1] = P1[2, 2] = 1.0
+    P1[3, 0] = P1[4, 0] = 1.0
+    P_id5 = np.diag([1.0, 1, 1, 1, 1, 0])
+    P4 = np.diag([1.0, 0, 1, 0, 0, 0])
+    np.testing.assert_array_equal(st.P[0], np.eye(6))
+    np.testing.assert_array_equal(st.P[1], P1)
+    np.testing.assert_array_equal(st.P[2], P_id5)
+    np.testing.assert_array_equal(st.P[3], P_id5)
+    np.testing.assert_array_equal(st.P[4], P4)
+    np.testing.assert_array_equal(st.active.astype(int), [[1, 1, 1, 0, 0, 0]] + [[1, 1, 1, 1, 1, 0]] * 3
+                                  + [[1, 0, 1, 0, 0, 1]])
+    leaves = np.zeros((5, 6), dtype=bool)
+    leaves[3, [1, 3, 4]] = True  # spacecraft 2, 4 and 5 have zero columns in S_45
+    np.testing.assert_array_equal(st.leaves, leaves)
+    np.testing.assert_array_equal(st.switch_steps * 0.05, [0.0, 1000.0, 2000.0, 3000.0, 4000.0])
+    assert st.xstar[4, 5, 0] == 0.2 and not np.any(st.xstar[4, 5, 1:3])
+
+
+def test_yang2013_error_dynamics_by_hand():
+    # e_R = (1, 2, 3), e_V = (0.1, -0.2, 0.3), e_w = (0.01, 0, 0), q = identity (scalar last)
+    x = jnp.array([1.0, 2, 3, 0.1, -0.2, 0.3, 0.01, 0, 0, 0, 0, 0, 1])
+    Phi, f, d = jnp.array([0.5, 0, -1.0]), jnp.array([10.0, 20.0, 0.0]), jnp.array([0.0, 0.0, 4.0])
+    Ups, tau, iota = jnp.array([0.0, 1.0, 0.0]), jnp.array([2.0, 0.0, 0.0]), jnp.array([0.0, 0.0, -3.0])
+    J = np.diag([2.0, 4.0, 5.0])
+    dx = np.asarray(error_dynamics_rhs(x, Phi, Ups, f, tau, d, iota, 10.0, jnp.asarray(np.linalg.inv(J))))
+    np.testing.assert_allclose(dx[0:3], [0.1, -0.2, 0.3], rtol=0, atol=1e-15)  # e_R' = e_V
+    np.testing.assert_allclose(dx[3:6], [0.5 - 1.0, -2.0, -1.0 - 0.4], rtol=0, atol=1e-15)  # Phi - (f+d)/M
+    np.testing.assert_allclose(dx[6:9], [2.0 / 2, 1.0 / 4, -3.0 / 5], rtol=0, atol=1e-15)  # J^-1 (Ups+tau+iota)
+    np.testing.assert_allclose(dx[9:13], [0.005, 0, 0, 0], rtol=0, atol=1e-15)  # q' = q (x) (w/2, 0) at q = 1
+
+
+def test_azizi_rotating_square_by_hand():
+    side, omega = 200.0, 0.1
+    r = 100.0 * np.sqrt(2.0)  # circumradius of a 200 m square
+    pos, vel, acc = (np.asarray(a) for a in desired_state(0.0, 4, 3, side, omega))
+    np.testing.assert_allclose(pos, [[100, 100, 0], [-100, 100, 0], [-100, -100, 0], [100, -100, 0]],
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(vel, 0.1 * np.array([[-100, 100, 0], [-100, -100, 0], [100, -100, 0],
+                                                    [100, 100, 0]]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(acc, -0.01 * pos, rtol=0, atol=1e-12)
+    t = 7.0  # rotated by 0.7 rad: satellite 1 at angle pi/4 + 0.7 on the circle
+    pos, _, acc = (np.asarray(a) for a in desired_state(t, 4, 2, side, omega))
+    np.testing.assert_allclose(pos[0], r * np.array([np.cos(np.pi / 4 + 0.7), np.sin(np.pi / 4 + 0.7)]), rtol=1e-14)
+    np.testing.assert_allclose(np.linalg.norm(pos, axis=1), r, rtol=1e-14)
+    rel = np.asarray(relative_acceleration_fn(4, side, omega, 0)(t))
+    np.testing.assert_allclose(rel, [acc[1, 0] - acc[0, 0], acc[2, 0] - acc[1, 0], acc[3, 0] - acc[2, 0]],
+                               rtol=1e-14)
+
+
+@pytest.mark.parametrize("phi", [0.0, np.pi / 3, 2.0])
+def test_li2020_formation_offsets_by_hand(phi):
+    out = formation_offsets(10.0, [phi])[0]
+    np.testing.assert_allclose(out, [5 * np.cos(phi), -10 * np.sin(phi), 5 * np.sqrt(3) * np.cos(phi)], rtol=1e-15)
+    assert np.linalg.norm(out) == pytest.approx(10.0, rel=1e-14)  # |rho_bar| = R for every phase
