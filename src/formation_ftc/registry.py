@@ -12,10 +12,12 @@ ones (``formation_ftc.methods`` and every ``formation_ftc.papers.<name>``).
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from formation_ftc.sim.compiled import Compiled
 
 __all__ = [
     "Compiled",
@@ -37,36 +39,6 @@ __all__ = [
 ]
 
 PyTree = Any
-
-
-@dataclass(frozen=True)
-class Compiled:
-    """A scenario compiled for the engine.
-
-    Attributes
-    ----------
-    run : pure function ``params -> RunOutput`` (see :mod:`formation_ftc.sim.engine`); jittable and
-        vmappable over a leading batch axis of ``params``.
-    params : pytree of float64/int arrays -- everything numeric a campaign may vary.
-    static_key : hashable; two scenarios with equal keys can share one compiled ``run`` (and be batched).
-    dt, record_every : step [s] and decimation used to map records to time.
-    to_dataset : ``(out, n_records) -> xarray.Dataset`` from one run's numpy output (records trimmed
-        to ``n_records``); the generic layer adds provenance attributes.
-    metrics : ``out -> {name: float}`` scalar metrics of one run (numpy side).
-    make_step : ``params -> step(k, state)``; used to diagnose a divergence (replays one step).
-    spacecraft_axis : ``variable name -> axis index of the spacecraft dimension or None``.
-    """
-
-    run: Callable[[PyTree], Any]
-    params: PyTree
-    static_key: Hashable
-    dt: float
-    record_every: int
-    to_dataset: Callable[[dict, int], Any]
-    metrics: Callable[[dict], dict[str, float]]
-    make_step: Callable[[PyTree], Callable] | None = None
-    spacecraft_axis: Callable[[str], int | None] | None = None
-    t0: float = 0.0
 
 
 @dataclass(frozen=True)

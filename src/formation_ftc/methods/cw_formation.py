@@ -19,24 +19,24 @@ from __future__ import annotations
 
 from typing import Literal
 
-import jax
 import jax.numpy as jnp
 import numpy as np
-import xarray as xr
 from pydantic import Field, model_validator
 
+from formation_ftc.components.actuators.expression_faults import ExpressionFaultActuator
+from formation_ftc.components.controllers.pd_formation import PdFormationController, ZeroController
+from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
+from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.config.base import ExprText, ScenarioBase, StrictModel
 from formation_ftc.config.sections import SpacecraftSection
-from formation_ftc.core.disturbances import gaussian_noise, run_key, step_key
-from formation_ftc.core.dynamics.cw import cw_rhs
-from formation_ftc.core.expressions import compile_vector_expression
-from formation_ftc.core.faults import actuator_fault
-from formation_ftc.core.integrators import rk4_step
 from formation_ftc.core.orbit import MU_EARTH
-from formation_ftc.registry import Compiled, Condition, Method, register_method
-from formation_ftc.sim.engine import run_fixed_step
+from formation_ftc.registry import Condition, Method, register_method
+from formation_ftc.sim.compiled import Compiled, compile_loop
+from formation_ftc.sim.components import as_float
+from formation_ftc.sim.loop import ClosedLoop
+from formation_ftc.sim.metrics import Metric
 
-__all__ = ["CwFormationScenario", "build"]
+__all__ = ["CwFormationScenario", "build", "make_loop"]
 
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
@@ -91,102 +91,46 @@ class CwFormationScenario(ScenarioBase):
 
 
 
+def make_loop(s: CwFormationScenario) -> ClosedLoop:
+    """The scenario as a composition of components (every number a leaf, every choice static)."""
+    N = s.spacecraft.count
+    v0 = np.zeros((N, 3)) if s.spacecraft.initial_velocity is None else np.asarray(s.spacecraft.initial_velocity)
+    mass = as_float(s.spacecraft.mass)
+    plant = ClohessyWiltshirePlant(
+        mean_motion=as_float(s.orbit.n), mass=mass,
+        initial_state_lvlh=as_float(np.hstack([np.asarray(s.spacecraft.initial_position), v0])),
+        process_noise_std=as_float(s.disturbance.process_noise_std),
+        disturbance_force=tuple(s.disturbance.force))
+    if s.controller.type == "pd":
+        sat = s.controller.max_force
+        controller = PdFormationController(
+            count=N, kp=as_float(s.controller.kp), kd=as_float(s.controller.kd), mass=mass,
+            max_force=as_float(np.inf if sat is None else sat),
+            desired_position=tuple(s.controller.desired_position),
+            is_sampled=s.controller.mode == "sampled")
+    else:
+        controller = ZeroController(count=N)
+    sensors = RelativeStateSensors(count=N, position_noise_std=as_float(s.sensors.position_noise_std),
+                                   velocity_noise_std=as_float(s.sensors.velocity_noise_std))
+    actuator = ExpressionFaultActuator(count=N, effectiveness=tuple(s.faults.effectiveness),
+                                       bias=tuple(s.faults.bias))
+    metrics = [Metric("delta_v", "delta_v", reduce="final", spacecraft="each", units="m s-1"),
+               Metric("control_effort", "control_effort", reduce="final", spacecraft="each", units="N2 s"),
+               Metric("delta_v_total", "delta_v", reduce="final", spacecraft="sum", units="m s-1")]
+    if s.controller.type == "pd":
+        metrics += [Metric("max_position_error", "position_error", reduce="max", norm=True, spacecraft="max",
+                           units="m"),
+                    Metric("final_position_error_mean", "position_error", reduce="final", norm=True,
+                           spacecraft="mean", units="m")]
+    sim = s.simulation
+    return ClosedLoop(plant=plant, controller=controller, sensors=sensors, actuator=actuator,
+                      metrics=tuple(metrics), seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(sim.dt),
+                      n_steps=sim.n_steps, record_every=sim.record_every, unroll=sim.unroll)
+
+
 def build(s: CwFormationScenario) -> Compiled:
     """Compile a CW formation scenario (see module docstring)."""
-    N = s.spacecraft.count
-    dt = s.simulation.dt
-    idx = jnp.arange(1, N + 1, dtype=jnp.float64)  # 1-based spacecraft number for expressions
-    desired = compile_vector_expression(s.controller.desired_position, "controller.desired_position")
-    gamma = compile_vector_expression(s.faults.effectiveness, "faults.effectiveness")
-    bias = compile_vector_expression(s.faults.bias, "faults.bias")
-    dist = compile_vector_expression(s.disturbance.force, "disturbance.force")
-    d_vel = jax.jacfwd(desired, argnums=0)
-    d_acc = jax.jacfwd(d_vel, argnums=0)
-    pd = s.controller.type == "pd"
-    continuous = s.controller.mode == "continuous"
-    sat = s.controller.max_force
-
-    v0 = np.zeros((N, 3)) if s.spacecraft.initial_velocity is None else np.asarray(s.spacecraft.initial_velocity)
-    params = dict(
-        n=jnp.asarray(s.orbit.n), mass=jnp.asarray(s.spacecraft.mass), kp=jnp.asarray(s.controller.kp),
-        kd=jnp.asarray(s.controller.kd), q0=jnp.asarray(np.hstack([np.asarray(s.spacecraft.initial_position), v0])),
-        process_std=jnp.asarray(s.disturbance.process_noise_std),
-        pos_std=jnp.asarray(s.sensors.position_noise_std), vel_std=jnp.asarray(s.sensors.velocity_noise_std),
-        seed=jnp.asarray(s.simulation.seed, dtype=jnp.uint32),
-    )
-
-    def control(t, q_meas, p):
-        if not pd:
-            return jnp.zeros((N, 3))
-        pdes, vdes, ades = desired(t, idx), d_vel(t, idx), d_acc(t, idx)
-        u = -p["kp"] * (q_meas[:, :3] - pdes) - p["kd"] * (q_meas[:, 3:] - vdes) + p["mass"][:, None] * ades
-        return jnp.clip(u, -sat, sat) if sat is not None else u
-
-    def make_step(p):
-        key = run_key(p["seed"])
-
-        def rhs(t, x, u_held, w, noise):
-            q = x["q"]
-            u = control(t, q + noise, p) if continuous else u_held
-            f = actuator_fault(u, gamma(t, idx), bias(t, idx)) + dist(t, idx) + w
-            return {"q": cw_rhs(t, q, f / p["mass"][:, None], p["n"]),
-                    "dv": jnp.linalg.norm(u, axis=-1) / p["mass"], "effort": jnp.sum(u**2, axis=-1)}
-
-        def step(k, x):
-            t = k * dt
-            kk = step_key(key, k)
-            k1, k2, k3 = jax.random.split(kk, 3)
-            w = gaussian_noise(k1, (N, 3), p["process_std"])
-            noise = jnp.concatenate([gaussian_noise(k2, (N, 3), p["pos_std"]),
-                                     gaussian_noise(k3, (N, 3), p["vel_std"])], axis=-1)
-            u_held = control(t, x["q"] + noise, p)  # used only in sampled-data mode
-            return rk4_step(rhs, t, x, dt, u_held, w, noise)
-
-        return step
-
-    def observe(k, x, p):
-        t = k * dt
-        u = control(t, x["q"], p)
-        err = x["q"][:, :3] - desired(t, idx) if pd else jnp.zeros((N, 3))
-        return {"q": x["q"], "u": u, "pos_err": err}
-
-    def run(p):
-        x0 = {"q": p["q0"], "dv": jnp.zeros(N), "effort": jnp.zeros(N)}
-        return run_fixed_step(make_step(p), lambda k, x: observe(k, x, p), x0,
-                              s.simulation.n_steps, s.simulation.record_every, s.simulation.unroll)
-
-    def to_dataset(out, n_rec):
-        r = out["records"]
-        time = np.arange(n_rec) * dt * s.simulation.record_every
-        sc = np.arange(1, N + 1)
-        ax = ["x", "y", "z"]
-        q = r["q"]
-        return xr.Dataset(
-            {
-                "position": (("time", "spacecraft", "axis"), q[..., :3], {"units": "m", "frame": "LVLH"}),
-                "velocity": (("time", "spacecraft", "axis"), q[..., 3:], {"units": "m/s", "frame": "LVLH"}),
-                "control": (("time", "spacecraft", "axis"), r["u"], {"units": "N"}),
-                "position_error": (("time", "spacecraft", "axis"), r["pos_err"], {"units": "m"}),
-            },
-            coords={"time": ("time", time, {"units": "s"}), "spacecraft": sc, "axis": ax},
-        )
-
-    def metrics(out):
-        r, fin = out["records"], out["final"]
-        e = np.linalg.norm(r["pos_err"], axis=-1)
-        m = {"max_position_error": float(e.max()), "final_position_error_mean": float(e[-1].mean())}
-        for i in range(N):
-            m[f"delta_v_sc{i + 1}"] = float(fin["dv"][i])
-            m[f"control_effort_sc{i + 1}"] = float(fin["effort"][i])
-        m["delta_v_total"] = float(np.sum(fin["dv"]))
-        return m
-
-    key = ("cw-formation", N, tuple(s.controller.desired_position), tuple(s.faults.effectiveness),
-           tuple(s.faults.bias), tuple(s.disturbance.force), pd, continuous, sat,
-           s.simulation.n_steps, s.simulation.record_every, dt, s.simulation.unroll)
-    return Compiled(run=run, params=params, static_key=key, dt=dt, record_every=s.simulation.record_every,
-                    to_dataset=to_dataset, metrics=metrics, make_step=make_step,
-                    spacecraft_axis=lambda name: 0)
+    return compile_loop(make_loop(s))
 
 
 def check(s: CwFormationScenario) -> list[Condition]:

@@ -1,0 +1,1 @@
+"""Actuators components (one module per concept)."""

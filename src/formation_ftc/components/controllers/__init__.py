@@ -1,0 +1,1 @@
+"""Controllers components (one module per concept)."""

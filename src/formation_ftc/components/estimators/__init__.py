@@ -1,0 +1,1 @@
+"""Estimators components (one module per concept)."""

@@ -1,0 +1,1 @@
+"""Plants components (one module per concept)."""

@@ -1,0 +1,1 @@
+"""References components (one module per concept)."""

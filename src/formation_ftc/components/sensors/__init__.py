@@ -1,0 +1,1 @@
+"""Sensors components (one module per concept)."""

@@ -1,0 +1,1 @@
+"""Supervisors components (one module per concept)."""

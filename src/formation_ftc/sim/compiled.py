@@ -1,0 +1,134 @@
+"""A scenario compiled for the engine, and the generic path from a :class:`~.loop.ClosedLoop` to it.
+
+:func:`compile_loop` derives everything a method used to write by hand -- the compile key (the loop's
+tree definition), the dataset (from the declared :class:`~.components.Signal` s), the metrics (computed
+inside the run), the divergence replay and the spacecraft axis of every state variable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import numpy as np
+
+from formation_ftc.sim.components import structure_key
+from formation_ftc.sim.metrics import metrics_dict
+
+__all__ = ["Compiled", "compile_loop", "records_to_dataset"]
+
+PyTree = Any
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A scenario compiled for the engine.
+
+    Attributes
+    ----------
+    run : pure function ``params -> RunOutput`` (see :mod:`formation_ftc.sim.engine`); jittable and
+        vmappable over a leading batch axis of ``params``.
+    params : pytree of float64/int arrays -- everything numeric a campaign may vary (for a
+        :class:`~.loop.ClosedLoop`, the loop itself).
+    static_key : hashable; two scenarios with equal keys share one compiled ``run`` (and can be batched).
+    dt, record_every : step [s] and decimation used to map records to time.
+    to_dataset : ``(out, n_records) -> xarray.Dataset`` from one run's numpy output (records trimmed
+        to ``n_records``); the generic layer adds provenance attributes.
+    metrics : ``out -> {name: float}`` scalar metrics of one run (numpy side).
+    make_step : ``params -> step(k, state)``; used to diagnose a divergence (replays one step).
+    spacecraft_axis : ``variable name -> axis index of the spacecraft dimension or None``.
+    """
+
+    run: Callable[[PyTree], Any]
+    params: PyTree
+    static_key: Hashable
+    dt: float
+    record_every: int
+    to_dataset: Callable[[dict, int], Any]
+    metrics: Callable[[dict], dict[str, float]]
+    make_step: Callable[[PyTree], Callable] | None = None
+    spacecraft_axis: Callable[[str], int | None] | None = None
+    t0: float = 0.0
+
+
+def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None = None):
+    """Records of a run of ``loop`` -> ``xarray.Dataset`` with every declared signal, its dims, units,
+    long_name and frame; time [s] from ``t0 + j * dt * record_every``."""
+    import xarray as xr
+
+    time = loop.t0 + np.arange(n_records) * loop.dt * loop.record_every
+    coords: dict[str, Any] = {"time": ("time", time, {"units": "s", "long_name": "time", "standard_name": "time"}),
+                              "spacecraft": ("spacecraft", np.arange(1, loop.count + 1),
+                                             {"long_name": "spacecraft number (1-based)", "units": "1"})}
+    data = {}
+    for sig in loop.signals():
+        if sig.name not in records:
+            continue
+        arr = np.asarray(records[sig.name])[:n_records]
+        dims = ("time",) + tuple(sig.dims)
+        if arr.ndim != len(dims):
+            raise ValueError(f"signal {sig.name!r}: declared dims {dims} but recorded shape {arr.shape}")
+        meta = {"units": sig.units, "long_name": sig.long_name}
+        if sig.frame:
+            meta["frame"] = sig.frame
+        data[sig.name] = (dims, arr, meta)
+        for d, n in zip(dims, arr.shape, strict=True):
+            if d == "axis" and "axis" not in coords:
+                coords["axis"] = ("axis", ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
+                                  {"long_name": "vector component"})
+    for comp in _components(loop):
+        for name, values in comp.coords().items():
+            coords.setdefault(name, (name, list(values)))
+    used = {d for v in data.values() for d in v[0]}
+    coords = {k: v for k, v in coords.items() if k in used}
+    return xr.Dataset(data, coords=coords, attrs=attrs or {})
+
+
+def _components(loop):
+    return [loop.plant, loop.reference, loop.sensors, loop.network, loop.estimator, loop.supervisor,
+            loop.controller, loop.actuator]
+
+
+def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:
+    """The engine's view of a closed loop: everything derived from the component declarations."""
+    from formation_ftc.sim.loop import ClosedLoop
+
+    loop.validate()
+
+    def run(p: ClosedLoop):
+        return p.run()
+
+    def to_dataset(out, n_rec):
+        return records_to_dataset(loop, out["records"], n_rec, dataset_attrs)
+
+    def metrics(out):
+        return metrics_dict(loop.metrics, out["metrics"])
+
+    n = loop.count
+
+    def spacecraft_axis(name: str) -> int | None:
+        leaf = _leaf_by_name(loop, name)
+        if leaf is None:
+            return None
+        shape = np.shape(leaf)
+        if "values" in name.split(".") and len(shape) >= 2 and shape[1] == n:  # history ring buffers
+            return 1
+        return 0 if len(shape) >= 1 and shape[0] == n else None
+
+    return Compiled(run=run, params=loop, static_key=("closed-loop", structure_key(loop)), dt=loop.dt,
+                    record_every=loop.record_every, to_dataset=to_dataset, metrics=metrics,
+                    make_step=lambda p: p.replay_step(), spacecraft_axis=spacecraft_axis, t0=loop.t0)
+
+
+def _leaf_by_name(loop, name: str):
+    """Leaf of the run's carry named ``name`` (as the divergence diagnostic prints it), or None."""
+    from formation_ftc.sim.engine import _path_name
+
+    state = jax.eval_shape(lambda p: (p.initial_state(), None), loop)
+    flat, _ = jax.tree_util.tree_flatten_with_path(state)
+    for path, leaf in flat:
+        if _path_name(path) == name:
+            return leaf
+    return None

@@ -1,0 +1,428 @@
+"""The component contract: plant, sensors, network, estimator, supervisor, controller, actuator.
+
+Every closed loop in formation-ftc is a :class:`ClosedLoop` that fills seven slots with components.
+A component is an immutable pytree (a frozen dataclass registered with
+``jax.tree_util.register_dataclass``): its **structure** -- sizes, which law, which fault model,
+expression texts, static flags -- is declared with :func:`static` fields, and its **numbers** are
+array leaves. The component *is* its parameters: a Monte Carlo campaign varies the leaves and
+``jax.vmap`` batches them, while the tree definition (which includes every static field) is the
+compile key (:func:`structure_key`). Nobody writes a compile key by hand.
+
+Why frozen dataclasses and not Equinox: the split we need (``static`` metadata vs array leaves,
+hashable treedef) is exactly what ``jax.tree_util.register_dataclass`` provides; it adds no dependency
+and no metaclass, and a component is an ordinary dataclass that ``dataclasses.replace`` updates.
+
+Truth side and flight side are separate types. The plant and the actuator receive
+:class:`TruthInputs` / :class:`ActuatorInputs` (true state, true faults, true disturbance); the
+estimator, supervisor and controller receive :class:`FlightInputs`, which has no field for the true
+state, the true fault or the true disturbance -- only measurements, received messages, estimates, the
+supervisor's decision and the flight side's own time-only signals.
+
+One control step (k -> k+1, ``t_k = t0 + k dt``; the order every method follows)::
+
+    (0) time-only signals of every component at t_k, t_k + dt/2, t_k + dt (one batched evaluation;
+        truth-side signals at the left limit t_{k+1}^- so a fault onset on the grid never falls inside
+        a step); the reference orbit's RK4 stage values (autonomous, computed once per step)
+    (1) sensors: noise drawn for the step (held), y_k = measure(x_k)
+    (2) network: messages of every spacecraft, read with their delays from the history
+    (3) estimator / FDI update (discrete, once per step)
+    (4) supervisor update (discrete decisions: modes, flags, reconfiguration)
+    (5) controller: sampled -> u_k once and held; continuous -> evaluated at every RK stage with its
+        adaptive states integrated together with the plant
+    (6) actuator: faults, saturation (truth side)
+    (7) plant: RK4 over [t_k, t_k + dt] (or the plant's exact discrete step)
+    (8) network history push, every-step metric accumulators, records every ``record_every`` steps
+
+Every kind has one signature shape: ``method(self, t, state, inputs) -> ...`` with ``self`` the
+numeric parameters. Every component declares the signals it records (:class:`Signal`: name, dims, SI
+units, long_name, frame); :func:`formation_ftc.sim.results.to_dataset` turns records into an
+``xarray.Dataset`` generically and :class:`formation_ftc.sim.metrics.Metric` accumulates metrics at
+every step inside the compiled run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar, NamedTuple, TypeVar
+
+import jax
+import jax.numpy as jnp
+
+__all__ = [
+    "component",
+    "static",
+    "structure_key",
+    "Signal",
+    "TruthInputs",
+    "ActuatorInputs",
+    "SensorInputs",
+    "FlightInputs",
+    "NetworkInputs",
+    "Plant",
+    "Reference",
+    "Sensors",
+    "Network",
+    "Estimator",
+    "Supervisor",
+    "Controller",
+    "Actuator",
+    "NoReference",
+    "PerfectSensors",
+    "NoNetwork",
+    "NoEstimator",
+    "NoSupervisor",
+    "IdealActuator",
+    "CompositionError",
+    "KIND_SLOTS",
+]
+
+PyTree = Any
+T = TypeVar("T")
+
+
+# --------------------------------------------------------------------------------------------------
+# Declaring components
+# --------------------------------------------------------------------------------------------------
+def static(default: Any = dataclasses.MISSING, **kwargs: Any) -> Any:
+    """A structural (static) field: part of the compile key, never batched; must be hashable."""
+    metadata = dict(kwargs.pop("metadata", {}) or {}, static=True)
+    return dataclasses.field(default=default, metadata=metadata, **kwargs)
+
+
+def component(cls: type[T]) -> type[T]:
+    """Make ``cls`` a frozen dataclass registered as a JAX pytree.
+
+    Fields declared with :func:`static` are metadata of the tree definition (compile key); every other
+    field is a child (an array leaf or a nested component). Subclasses must be decorated again.
+    """
+    cls = dataclasses.dataclass(frozen=True, eq=False)(cls)
+    fields = dataclasses.fields(cls)
+    meta = [f.name for f in fields if f.metadata.get("static", False)]
+    data = [f.name for f in fields if not f.metadata.get("static", False)]
+    for name in meta:
+        default = next(f.default for f in fields if f.name == name)
+        if default is not dataclasses.MISSING:
+            try:
+                hash(default)
+            except TypeError as exc:  # pragma: no cover - a declaration error caught at import
+                raise TypeError(f"{cls.__name__}.{name}: static fields must be hashable") from exc
+    jax.tree_util.register_dataclass(cls, data_fields=data, meta_fields=meta)
+    return cls
+
+
+def structure_key(tree: PyTree) -> Any:
+    """Compile key of a component tree: its tree definition (static fields included) and the shapes
+    and dtypes of its leaves. Two trees with equal keys run with one compiled program."""
+    leaves, treedef = jax.tree_util.tree_flatten(tree)
+    return treedef, tuple((jnp.shape(x), jnp.result_type(x).name) for x in leaves)
+
+
+class CompositionError(ValueError):
+    """Two components that cannot work together (raised before any computation)."""
+
+
+class Signal(NamedTuple):
+    """One recorded signal: ``dims`` exclude the time dimension; units are UDUNITS strings."""
+
+    name: str
+    dims: tuple[str, ...]
+    units: str
+    long_name: str
+    frame: str | None = None
+
+
+# --------------------------------------------------------------------------------------------------
+# Inputs of each kind: the truth / flight boundary is a type boundary
+# --------------------------------------------------------------------------------------------------
+class TruthInputs(NamedTuple):
+    """What the truth plant's dynamics may use at one RK stage."""
+
+    force: jax.Array  # applied actuator output (after faults and saturation), SI
+    exogenous: PyTree  # the plant's own time-only signals (true disturbance, ...)
+    reference: PyTree  # reference-orbit values at this stage (None without a reference)
+    process_noise: PyTree  # per-step process noise (held over the step)
+
+
+class ActuatorInputs(NamedTuple):
+    """What the actuator chain may use: its own time-only signals (true faults) and its state."""
+
+    exogenous: PyTree
+    state: PyTree
+
+
+class SensorInputs(NamedTuple):
+    """Measurement noise drawn for the step and the reference-orbit values."""
+
+    noise: PyTree
+    reference: PyTree
+
+
+class NetworkInputs(NamedTuple):
+    """Messages sent now, the current step's start time and the network's time-only signals."""
+
+    messages: PyTree
+    t_k: jax.Array
+    exogenous: PyTree
+
+
+class FlightInputs(NamedTuple):
+    """Everything the flight side (estimator, supervisor, controller) may see. There is deliberately
+    no field for the true state, the true fault or the true disturbance."""
+
+    measurement: PyTree  # sensors' output (noisy, possibly relative)
+    received: PyTree  # what the network delivered (None without a network)
+    estimate: PyTree  # the estimator's output (None without an estimator)
+    decision: PyTree  # the supervisor's output (None without a supervisor)
+    exogenous: PyTree  # the receiving component's own time-only signals (desired trajectory, ...)
+    reference: PyTree  # reference-orbit values known on board (None without a reference)
+
+
+# --------------------------------------------------------------------------------------------------
+# The seven kinds (plus the reference orbit). Default methods are the "nothing there" behaviour.
+# --------------------------------------------------------------------------------------------------
+class _Kind:
+    kind: ClassVar[str] = ""
+    #: physical quantity of the component's input/output where it matters ("force", "torque", ...)
+
+    def signals(self) -> tuple[Signal, ...]:
+        """Signals this component records (declared once)."""
+        return ()
+
+    def exogenous(self, t: jax.Array) -> PyTree:
+        """Time-only signals [SI] at time ``t``; evaluated once per step for the three RK stage times."""
+        return None
+
+    def coords(self) -> dict[str, Any]:
+        """Coordinate values of the dimensions this component's signals introduce (e.g. channel names)."""
+        return {}
+
+
+class Plant(_Kind):
+    """Truth dynamics of every spacecraft. Owns the true disturbances (:meth:`exogenous`) and the
+    process noise. ``quantity`` names what the actuator must deliver (``"force"`` [N] or
+    ``"torque"`` [N m]); ``count`` is the number of spacecraft."""
+
+    kind: ClassVar[str] = "plant"
+    quantity: ClassVar[str] = "force"
+    #: "rk4": continuous dynamics; "exact": the plant provides an exact discrete step (LTI, ZOH)
+    integration: ClassVar[str] = "rk4"
+
+    @property
+    def count(self) -> int:  # pragma: no cover - every plant overrides
+        raise NotImplementedError
+
+    def initial_state(self) -> PyTree:  # pragma: no cover
+        raise NotImplementedError
+
+    def derivative(self, t: jax.Array, x: PyTree, inputs: TruthInputs) -> PyTree:  # pragma: no cover
+        raise NotImplementedError
+
+    def exact_step(self, t: jax.Array, x: PyTree, inputs: TruthInputs, dt: float) -> PyTree:
+        raise CompositionError(f"plant {type(self).__name__} has no exact discrete step")
+
+    def process_noise(self, key: jax.Array) -> PyTree:
+        return None
+
+    def usage_names(self) -> tuple[str, ...]:
+        """Names of the per-spacecraft actuator-usage integrals (e.g. delta-v), recorded as signals."""
+        return ()
+
+    def usage_rates(self, t: jax.Array, x: PyTree, command: jax.Array) -> dict[str, jax.Array]:
+        """Rates of the usage integrals (integrated with the plant), each of shape (count,)."""
+        return {}
+
+    def outputs(self, t: jax.Array, x: PyTree, inputs: TruthInputs) -> dict[str, jax.Array]:
+        """Recorded true-state signals (declared by :meth:`signals`)."""
+        return {}
+
+    def position(self, x: PyTree) -> jax.Array | None:
+        """True (N, 3) position in the formation frame [m] (None for rotational plants); used only
+        for evaluation (the ``position_error`` record), never by the flight side."""
+        return None
+
+
+class Reference(_Kind):
+    """An autonomous reference (virtual chief orbit): integrated ahead of the spacecraft at every step
+    (its stage values are shared by the whole formation and by every run of a batch)."""
+
+    kind: ClassVar[str] = "reference"
+
+    def initial_state(self) -> PyTree:
+        return None
+
+    def rate(self, r: PyTree) -> PyTree:
+        return None
+
+    def values(self, r: PyTree) -> PyTree:
+        """Quantities the plant (and the flight side) need from the reference state ``r``."""
+        return None
+
+
+class Sensors(_Kind):
+    kind: ClassVar[str] = "sensors"
+
+    def noise(self, key: jax.Array) -> PyTree:
+        """Measurement noise for one step (held over the step)."""
+        return None
+
+    def measure(self, t: jax.Array, x: PyTree, inputs: SensorInputs) -> PyTree:  # pragma: no cover
+        raise NotImplementedError
+
+
+class Network(_Kind):
+    """Communication between spacecraft: graph, delays, histories of transmitted messages."""
+
+    kind: ClassVar[str] = "network"
+    delayed: ClassVar[bool] = False
+
+    def initial_state(self, messages0: PyTree) -> PyTree:
+        return None
+
+    def receive(self, t: jax.Array, state: PyTree, inputs: NetworkInputs) -> PyTree:
+        return None
+
+    def push(self, state: PyTree, messages: PyTree) -> PyTree:
+        return state
+
+
+class Estimator(_Kind):
+    """Observer / FDI: discrete update once per step from flight inputs."""
+
+    kind: ClassVar[str] = "estimator"
+
+    def initial_state(self, measurement0: PyTree) -> PyTree:
+        return None
+
+    def update(self, t: jax.Array, state: PyTree, inputs: FlightInputs) -> tuple[PyTree, PyTree]:
+        return state, None
+
+    def current(self, state: PyTree) -> PyTree:
+        """The estimate held in ``state`` (what :meth:`update` last returned)."""
+        return None
+
+    def outputs(self, t: jax.Array, state: PyTree, estimate: PyTree) -> dict[str, jax.Array]:
+        return {}
+
+
+class Supervisor(_Kind):
+    """Discrete decisions (mode switches, reconfiguration, membership)."""
+
+    kind: ClassVar[str] = "supervisor"
+
+    def initial_state(self) -> PyTree:
+        return None
+
+    def update(self, t: jax.Array, state: PyTree, inputs: FlightInputs) -> tuple[PyTree, PyTree]:
+        return state, None
+
+    def current(self, state: PyTree) -> PyTree:
+        """The decision held in ``state`` (what :meth:`update` last returned)."""
+        return None
+
+    def outputs(self, t: jax.Array, state: PyTree, decision: PyTree) -> dict[str, jax.Array]:
+        return {}
+
+
+class Controller(_Kind):
+    """Formation / attitude law. ``sampled = True``: evaluated once per step and held (zero-order
+    hold); otherwise evaluated at every RK stage with its states integrated with the plant.
+
+    :meth:`output` returns ``(command, state_derivative, outputs)``; for a sampled controller
+    ``state_derivative`` is the *next* controller state instead of a derivative."""
+
+    kind: ClassVar[str] = "controller"
+    quantity: ClassVar[str] = "force"
+
+    @property
+    def sampled(self) -> bool:
+        return False
+
+    def initial_state(self) -> PyTree:
+        return None
+
+    def desired_position_at(self, exogenous: PyTree) -> jax.Array | None:
+        """The (N, 3) desired position [m] contained in this controller's time signals (None if it has
+        no position objective); the loop records ``position_error = true position - desired``."""
+        return None
+
+    def message(self, t: jax.Array, inputs: FlightInputs) -> PyTree:
+        """What each spacecraft transmits (e.g. its sliding variable); None: nothing."""
+        return None
+
+    def output(self, t: jax.Array, state: PyTree, inputs: FlightInputs
+               ) -> tuple[jax.Array, PyTree, dict[str, jax.Array]]:  # pragma: no cover
+        raise NotImplementedError
+
+
+class Actuator(_Kind):
+    """Allocation, faults and saturation on the truth side: command -> applied output."""
+
+    kind: ClassVar[str] = "actuator"
+
+    def initial_state(self) -> PyTree:
+        return None
+
+    def apply(self, t: jax.Array, command: jax.Array, inputs: ActuatorInputs) -> jax.Array:
+        return command
+
+    def update(self, t: jax.Array, state: PyTree, command: jax.Array, inputs: ActuatorInputs) -> PyTree:
+        """Discrete actuator state after the step (e.g. a stuck thruster's frozen value)."""
+        return state
+
+    def outputs(self, t: jax.Array, command: jax.Array, inputs: ActuatorInputs) -> dict[str, jax.Array]:
+        """Recorded truth-side actuator signals (e.g. the true effectiveness)."""
+        return {}
+
+
+#: slot name -> required base class
+KIND_SLOTS: dict[str, type] = {
+    "plant": Plant, "reference": Reference, "sensors": Sensors, "network": Network,
+    "estimator": Estimator, "supervisor": Supervisor, "controller": Controller, "actuator": Actuator,
+}
+
+
+# --------------------------------------------------------------------------------------------------
+# "Nothing there" components
+# --------------------------------------------------------------------------------------------------
+@component
+class NoReference(Reference):
+    """No reference orbit (the plant is autonomous in its own frame)."""
+
+
+@component
+class PerfectSensors(Sensors):
+    """The measurement is the true state (no noise)."""
+
+    def measure(self, t, x, inputs):
+        return x
+
+
+@component
+class NoNetwork(Network):
+    """No communication."""
+
+
+@component
+class NoEstimator(Estimator):
+    """No observer / FDI."""
+
+
+@component
+class NoSupervisor(Supervisor):
+    """No discrete decisions."""
+
+
+@component
+class IdealActuator(Actuator):
+    """Applied output = command."""
+
+
+def tree_take(tree: PyTree, j: int) -> PyTree:
+    """Entry ``j`` of every leaf's leading axis."""
+    return jax.tree_util.tree_map(lambda a: a[j], tree)
+
+
+def as_float(x: Any) -> jax.Array:
+    """float64 array leaf."""
+    return jnp.asarray(x, dtype=jnp.float64)
+

@@ -1,0 +1,365 @@
+"""The closed loop: seven component slots, one step, one compiled run (see :mod:`.components`).
+
+:class:`ClosedLoop` is itself a component: its array leaves are every number of the scenario (gains,
+masses, fault data, initial states, metric windows, the seed), its static fields the structure (which
+components, sizes, step, horizon). :meth:`ClosedLoop.run` is a pure function of the loop, so
+``jax.jit(ClosedLoop.run)`` compiles once per :func:`~.components.structure_key` and
+``jax.vmap`` batches runs that differ in leaves (:mod:`formation_ftc.sim.batch`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from formation_ftc.core.disturbances import run_key, step_key
+from formation_ftc.core.integrators import rk4_autonomous_stages
+from formation_ftc.sim import metrics as metric_ops
+from formation_ftc.sim.components import (
+    KIND_SLOTS,
+    Actuator,
+    ActuatorInputs,
+    CompositionError,
+    Controller,
+    Estimator,
+    FlightInputs,
+    IdealActuator,
+    Network,
+    NetworkInputs,
+    NoEstimator,
+    NoNetwork,
+    NoReference,
+    NoSupervisor,
+    PerfectSensors,
+    Plant,
+    Reference,
+    SensorInputs,
+    Sensors,
+    Signal,
+    Supervisor,
+    TruthInputs,
+    component,
+    static,
+    tree_take,
+)
+from formation_ftc.sim.engine import run_fixed_step
+
+__all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL"]
+
+#: fraction of dt subtracted from the last RK stage time for truth-side time signals (faults,
+#: disturbances): a fault onset on the step grid acts from the next step on, never inside an RK step
+LEFT_LIMIT = 1e-9
+COMMAND_SIGNAL = "command"
+POSITION_ERROR_SIGNAL = "position_error"
+APPLIED_SIGNAL = "applied"
+
+PyTree = Any
+
+
+def _axpy(a, x, y):
+    return jax.tree_util.tree_map(lambda xi, yi: yi + a * xi, x, y)
+
+
+@component
+class ClosedLoop:
+    """A scenario compiled into components (every number a leaf, every structural choice static).
+
+    Slots: ``plant`` (truth dynamics), ``reference`` (autonomous reference orbit), ``sensors``,
+    ``network``, ``estimator``, ``supervisor``, ``controller``, ``actuator``; ``metrics`` (tuple of
+    :class:`~formation_ftc.sim.metrics.Metric`) and ``seed`` (noise seed, uint32 leaf).
+    """
+
+    plant: Plant
+    controller: Controller
+    reference: Reference = dataclasses.field(default_factory=NoReference)
+    sensors: Sensors = dataclasses.field(default_factory=PerfectSensors)
+    network: Network = dataclasses.field(default_factory=NoNetwork)
+    estimator: Estimator = dataclasses.field(default_factory=NoEstimator)
+    supervisor: Supervisor = dataclasses.field(default_factory=NoSupervisor)
+    actuator: Actuator = dataclasses.field(default_factory=IdealActuator)
+    metrics: tuple = ()
+    seed: Any = 0
+    dt: float = static(0.1)
+    n_steps: int = static(1)
+    record_every: int = static(1)
+    unroll: int = static(1)
+    t0: float = static(0.0)
+
+    # ------------------------------------------------------------------ validation
+    def validate(self) -> ClosedLoop:
+        """Check that the components fit together (raises :class:`CompositionError` naming both parts);
+        returns the loop. Called by :func:`formation_ftc.sim.compiled.compile_loop` before any
+        computation (not on pytree reconstruction, where leaves may be placeholders)."""
+        for slot, base in KIND_SLOTS.items():
+            comp = getattr(self, slot)
+            if not isinstance(comp, base):
+                raise CompositionError(f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}")
+        p, c = self.plant, self.controller
+        if getattr(c, "quantity", "force") != getattr(p, "quantity", "force"):
+            raise CompositionError(
+                f"controller {type(c).__name__} commands a {c.quantity}, but plant {type(p).__name__} "
+                f"is driven by a {p.quantity}: a {c.quantity} law cannot drive this plant")
+        for slot in ("controller", "network", "estimator", "supervisor", "sensors", "actuator"):
+            n = getattr(getattr(self, slot), "count", None)
+            if n is not None and n != p.count:
+                raise CompositionError(f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
+                                       f"spacecraft, plant {type(p).__name__} has {p.count}")
+        if self.network.delayed and not getattr(c, "uses_messages", False):
+            raise CompositionError(
+                f"network {type(self.network).__name__} delays messages, but controller "
+                f"{type(c).__name__} exchanges none (it has no history to read delayed values from)")
+        if self.n_steps % self.record_every:
+            raise CompositionError(f"record_every = {self.record_every} must divide the number of steps "
+                                   f"{self.n_steps}")
+        names = [s.name for s in self.signals()]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise CompositionError(f"two components record a signal with the same name: {', '.join(dup)}")
+        return self
+
+    # ------------------------------------------------------------------ declarations
+    def signals(self) -> tuple[Signal, ...]:
+        """Every recorded signal of the loop, in slot order."""
+        own = (Signal(COMMAND_SIGNAL, ("spacecraft", "axis"), _unit(self.controller.quantity),
+                      f"commanded {self.controller.quantity}"),
+               Signal(APPLIED_SIGNAL, ("spacecraft", "axis"), _unit(self.plant.quantity),
+                      f"applied {self.plant.quantity} (after actuator faults)"))
+        if self._tracks_position():
+            own += (Signal(POSITION_ERROR_SIGNAL, ("spacecraft", "axis"), "m",
+                           "true position minus desired position", "LVLH"),)
+        return (tuple(self.plant.signals()) + tuple(self.reference.signals()) + tuple(self.sensors.signals())
+                + tuple(self.network.signals()) + tuple(self.estimator.signals())
+                + tuple(self.supervisor.signals()) + tuple(self.controller.signals()) + own
+                + tuple(self.actuator.signals()))
+
+    @property
+    def count(self) -> int:
+        return self.plant.count
+
+    def _tracks_position(self) -> bool:
+        """True when the plant reports positions and the controller a desired position (evaluation
+        only: the flight side never sees the true position)."""
+        return (type(self.plant).position is not Plant.position
+                and type(self.controller).desired_position_at is not Controller.desired_position_at)
+
+    # ------------------------------------------------------------------ pieces of one step
+    def _time_table(self, t_k):
+        """Time-only signals at t_k, t_k + dt/2, t_k + dt (truth side at the left limit of t_{k+1})."""
+        dt = self.dt
+        ts = t_k + dt * jnp.array([0.0, 0.5, 1.0])
+        tf = t_k + dt * jnp.array([0.0, 0.5, 1.0 - LEFT_LIMIT])
+
+        def at(t_flight, t_truth):
+            return dict(plant=self.plant.exogenous(t_truth), actuator=self.actuator.exogenous(t_truth),
+                        controller=self.controller.exogenous(t_flight),
+                        network=self.network.exogenous(t_flight),
+                        estimator=self.estimator.exogenous(t_flight),
+                        supervisor=self.supervisor.exogenous(t_flight))
+
+        return jax.vmap(at)(ts, tf)
+
+    def _reference_stages(self, r):
+        """Reference state after the step and its values at the four RK stages (or None)."""
+        if isinstance(self.reference, NoReference):
+            return r, (None, None, None, None)
+        r_next, stages = rk4_autonomous_stages(self.reference.rate, r, self.dt)
+        # evaluated as one stacked vector: XLA materialises it once instead of fusing scalar cos/sin
+        # into every (runs, N, 3) consumer
+        vals = self.reference.values(jax.tree_util.tree_map(lambda *a: jnp.stack(a), *stages))
+        return r_next, tuple(tree_take(vals, j) for j in range(4))
+
+    def _noise(self, k):
+        key = step_key(run_key(self.seed), k)
+        k_sensor, k_plant = jax.random.split(key, 2)
+        return self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)
+
+    def _flight(self, y, received, est, decision, exo, ref):
+        return FlightInputs(measurement=y, received=received, estimate=est, decision=decision,
+                            exogenous=exo, reference=ref)
+
+    def _evaluate(self, t, z, ctx):
+        """Derivatives of the integrated state ``z = {plant, controller, usage}`` and the outputs at
+        one RK stage; ``ctx`` holds the step's held values and this stage's time signals."""
+        exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held = ctx
+        x = z["plant"]
+        y = self.sensors.measure(t, x, SensorInputs(s_noise, ref))
+        flight = self._flight(y, None, est, dec, exo["controller"], ref)
+        received = None
+        if not isinstance(self.network, NoNetwork):
+            msg = self.controller.message(t, flight)
+            received = self.network.receive(t, net_state, NetworkInputs(msg, t_k, exo["network"]))
+            flight = flight._replace(received=received)
+        if self.controller.sampled:
+            u, ctl_out = held
+            dc = None
+        else:
+            u, dc, ctl_out = self.controller.output(t, z["controller"], flight)
+        act_in = ActuatorInputs(exo["actuator"], z.get("actuator_state"))
+        applied = self.actuator.apply(t, u, act_in)
+        truth = TruthInputs(applied, exo["plant"], ref, p_noise)
+        dx = self.plant.derivative(t, x, truth)
+        deriv = {"plant": dx, "controller": dc, "usage": self.plant.usage_rates(t, x, u)}
+        outputs = dict(self.plant.outputs(t, x, truth))
+        outputs.update(self.actuator.outputs(t, u, act_in))
+        if self._tracks_position():
+            outputs[POSITION_ERROR_SIGNAL] = self.plant.position(x) - self.controller.desired_position_at(
+                exo["controller"])
+        outputs.update(ctl_out)
+        outputs[COMMAND_SIGNAL] = u
+        outputs[APPLIED_SIGNAL] = applied
+        return deriv, outputs
+
+    def _discrete(self, k, t_k, state, y, exo0, ref0):
+        """Steps (3)-(5) at t_k: estimator, supervisor, sampled controller."""
+        est_state, est = self.estimator.update(t_k, state["estimator"],
+                                               self._flight(y, None, None, None, exo0["estimator"], ref0))
+        sup_state, dec = self.supervisor.update(t_k, state["supervisor"],
+                                                self._flight(y, None, est, None, exo0["supervisor"], ref0))
+        return est_state, est, sup_state, dec
+
+    def initial_state(self) -> dict:
+        """State at t0 (the loop's every-step metric accumulators start from the t0 signals)."""
+        x0 = self.plant.initial_state()
+        r0 = self.reference.initial_state()
+        ref0 = None if isinstance(self.reference, NoReference) else self.reference.values(r0)
+        t0 = jnp.asarray(self.t0, dtype=jnp.float64)
+        s_noise, _ = self._noise(jnp.asarray(0, dtype=jnp.int64))
+        y0 = self.sensors.measure(t0, x0, SensorInputs(s_noise, ref0))
+        state = dict(plant=x0, reference=r0, controller=self.controller.initial_state(),
+                     estimator=self.estimator.initial_state(y0), supervisor=self.supervisor.initial_state(),
+                     actuator=self.actuator.initial_state(),
+                     usage={name: jnp.zeros(self.count) for name in self.plant.usage_names()})
+        if not isinstance(self.network, NoNetwork):
+            exo0 = tree_take(self._time_table(t0), 0)
+            msg0 = self.controller.message(t0, self._flight(y0, None, None, None, exo0["controller"], ref0))
+            state["network"] = self.network.initial_state(msg0)
+        else:
+            state["network"] = None
+        return state
+
+    def step(self, k, state: dict) -> tuple[dict, dict]:
+        """One control step k -> k + 1; returns the new state and the signals at t_k."""
+        dt = self.dt
+        t_k = self.t0 + k * dt
+        table = self._time_table(t_k)
+        exos = [tree_take(table, j) for j in (0, 1, 1, 2)]
+        r_next, refs = self._reference_stages(state["reference"])
+        s_noise, p_noise = self._noise(k)
+        x = state["plant"]
+        y = self.sensors.measure(t_k, x, SensorInputs(s_noise, refs[0]))
+        est_state, est, sup_state, dec = self._discrete(k, t_k, state, y, exos[0], refs[0])
+        net_state = state["network"]
+        if not isinstance(self.network, NoNetwork):
+            # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
+            msg_k = self.controller.message(t_k, self._flight(y, None, est, dec, exos[0]["controller"], refs[0]))
+            net_state = self.network.push(net_state, msg_k)
+        held = None
+        ctl_next = state["controller"]
+        if self.controller.sampled:
+            flight = self._flight(y, None, est, dec, exos[0]["controller"], refs[0])
+            if not isinstance(self.network, NoNetwork):
+                msg = self.controller.message(t_k, flight)
+                flight = flight._replace(received=self.network.receive(
+                    t_k, net_state, NetworkInputs(msg, t_k, exos[0]["network"])))
+            u, ctl_next, ctl_out = self.controller.output(t_k, state["controller"], flight)
+            held = (u, ctl_out)
+
+        def ctx(j):
+            return (exos[j], refs[j], s_noise, p_noise, est, dec, net_state, t_k, held)
+
+        z = {"plant": x, "controller": None if self.controller.sampled else state["controller"],
+             "usage": state["usage"]}
+        if self.plant.integration == "exact":
+            deriv, outputs = self._evaluate(t_k, z, ctx(0))
+            applied = outputs[APPLIED_SIGNAL]
+            x_next = self.plant.exact_step(t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise), dt)
+            z_next = {"plant": x_next, "controller": None,
+                      "usage": _axpy(dt, deriv["usage"], z["usage"])}
+        else:
+            k1, outputs = self._evaluate(t_k, z, ctx(0))
+            k2, _ = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k1, z), ctx(1))
+            k3, _ = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
+            k4, _ = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
+            z_next = jax.tree_util.tree_map(
+                lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), z, k1, k2, k3, k4)
+        act_state = self.actuator.update(t_k, state["actuator"], outputs[COMMAND_SIGNAL],
+                                         ActuatorInputs(exos[0]["actuator"], state["actuator"]))
+        outputs.update(self.estimator.outputs(t_k, est_state, est))
+        outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
+        new = dict(plant=z_next["plant"], reference=r_next,
+                   controller=ctl_next if self.controller.sampled else z_next["controller"],
+                   estimator=est_state, supervisor=sup_state, actuator=act_state,
+                   usage=z_next["usage"], network=net_state)
+        return new, outputs
+
+    def observe(self, k, state: dict) -> dict:
+        """Signals at t_k from the state at t_k (what the step would compute at its first stage)."""
+        dt = self.dt
+        t_k = self.t0 + k * dt
+        exo = tree_take(self._time_table(t_k), 0)
+        r = state["reference"]
+        ref = None if isinstance(self.reference, NoReference) else self.reference.values(r)
+        s_noise, p_noise = self._noise(k)
+        x = state["plant"]
+        y = self.sensors.measure(t_k, x, SensorInputs(s_noise, ref))
+        # the estimator / supervisor outputs recorded are those of their current state
+        est = self.estimator.current(state["estimator"])
+        dec = self.supervisor.current(state["supervisor"])
+        net_state = state["network"]
+        if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
+            msg_k = self.controller.message(t_k, self._flight(y, None, est, dec, exo["controller"], ref))
+            net_state = self.network.push(net_state, msg_k)
+        held = None
+        if self.controller.sampled:
+            flight = self._flight(y, None, est, dec, exo["controller"], ref)
+            u, _, ctl_out = self.controller.output(t_k, state["controller"], flight)
+            held = (u, ctl_out)
+        z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}
+        _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held))
+        outputs.update(self.estimator.outputs(t_k, state["estimator"], est))
+        outputs.update(self.supervisor.outputs(t_k, state["supervisor"], dec))
+        for name, v in state["usage"].items():
+            outputs[name] = v
+        return outputs
+
+    # ------------------------------------------------------------------ the run
+    def run(self) -> dict:
+        """Pure, jittable, vmappable: records, final state, divergence step and metric values."""
+        state0 = self.initial_state()
+        sig0 = self.observe(jnp.asarray(0, dtype=jnp.int64), state0)
+        acc0 = metric_ops.init_accumulators(self.metrics, sig0)
+
+        def step(k, carry):
+            state, acc = carry
+            new, outputs = self.step(k, state)
+            for name, v in state["usage"].items():
+                outputs[name] = v
+            acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs)
+            return new, acc
+
+        def observe(k, carry):
+            return self.observe(k, carry[0])
+
+        out = run_fixed_step(step, observe, (state0, acc0), self.n_steps, self.record_every, self.unroll,
+                             check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]))
+        state_n, acc = out["final"]
+        sig_n = self.observe(jnp.asarray(self.n_steps, dtype=jnp.int64), state_n)
+        acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt,
+                                             sig_n, is_final=True)
+        return dict(records=out["records"], final=state_n, diverged_step=out["diverged_step"],
+                    last_finite=out["last_finite"], metrics=metric_ops.finalize(self.metrics, acc))
+
+    def replay_step(self):
+        """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""
+        def step(k, carry):
+            state, acc = carry
+            new, _ = self.step(k, state)
+            return new, acc
+        return step
+
+
+def _unit(quantity: str) -> str:
+    return {"force": "N", "torque": "N m", "acceleration": "m s-2"}.get(quantity, "1")

@@ -1,0 +1,194 @@
+"""Metrics accumulated at every step inside the compiled run (never from decimated records).
+
+A :class:`Metric` names a recorded signal, how to reduce it over its non-time axes (Euclidean norm
+over the vector axis, then over spacecraft) and over time (max, min, final, mean, integral, value at a
+time, settle time), and a time window. :func:`init_accumulators` / :func:`update_accumulators` /
+:func:`finalize` are pure JAX functions the closed loop calls at every step (k = 0 .. n-1, with the
+signals at t_k) and once more with the final sample (k = n), so a peak between two records is never
+missed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.sim.components import component, static
+
+__all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
+           "REDUCTIONS", "SPACECRAFT_REDUCTIONS"]
+
+#: time reductions: name -> meaning
+REDUCTIONS = {
+    "max": "maximum over the window",
+    "min": "minimum over the window",
+    "final": "last value in the window",
+    "mean": "mean over the samples in the window",
+    "integral": "rectangle-rule integral over the window (value at t_k times dt) [signal unit x s]",
+    "at": "value at the first sample with t >= start",
+    "settle": "first time after which the value stays below `threshold` (NaN if it ends above) [s]",
+}
+#: how spacecraft are combined before the time reduction
+SPACECRAFT_REDUCTIONS = ("each", "max", "mean", "sum", "none")
+
+_TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt in float64)
+
+
+@component
+class Metric:
+    """One scalar metric (or one per spacecraft with ``spacecraft = "each"``).
+
+    Parameters
+    ----------
+    name : metric name (``"each"`` appends ``_sc1``, ``_sc2``, ...).
+    signal : name of a recorded signal of the closed loop.
+    reduce : time reduction, one of :data:`REDUCTIONS`.
+    norm : take the Euclidean norm over the signal's last axis first.
+    spacecraft : combine the spacecraft axis (axis 0 after the norm) with one of
+        :data:`SPACECRAFT_REDUCTIONS`; ``"none"`` for signals without a spacecraft axis.
+    units : units of the metric (UDUNITS).
+    start, end : window [s] (inclusive); ``end = inf`` for "until the end".
+    threshold : threshold of ``"settle"`` [signal units].
+    """
+
+    name: str = static()
+    signal: str = static()
+    reduce: str = static("max")
+    norm: bool = static(False)
+    spacecraft: str = static("none")
+    units: str = static("1")
+    start: Any = 0.0
+    end: Any = float("inf")
+    threshold: Any = 0.0
+
+    def __post_init__(self) -> None:
+        if self.reduce not in REDUCTIONS:
+            raise ValueError(f"metric {self.name!r}: reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}")
+        if self.spacecraft not in SPACECRAFT_REDUCTIONS:
+            raise ValueError(f"metric {self.name!r}: spacecraft must be one of {SPACECRAFT_REDUCTIONS}, "
+                             f"got {self.spacecraft!r}")
+
+    def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
+        """The instantaneous value (scalar, or (N,) for ``"each"``)."""
+        v = jnp.asarray(signals[self.signal])
+        if self.norm:
+            v = jnp.sqrt(jnp.sum(v * v, axis=-1))
+        if self.spacecraft == "max":
+            v = jnp.max(v, axis=0)
+        elif self.spacecraft == "mean":
+            v = jnp.mean(v, axis=0)
+        elif self.spacecraft == "sum":
+            v = jnp.sum(v, axis=0)
+        if self.spacecraft == "each":
+            if v.ndim != 1:
+                raise ValueError(f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
+                                 "expected (spacecraft,)")
+        elif v.ndim != 0:
+            raise ValueError(f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
+                             "expected a scalar (set norm / spacecraft)")
+        return v
+
+
+def metric_names(metrics: Sequence[Metric], count: int) -> list[str]:
+    """Flat metric names (per-spacecraft metrics expanded)."""
+    out = []
+    for m in metrics:
+        if m.spacecraft == "each":
+            out += [f"{m.name}_sc{i + 1}" for i in range(count)]
+        else:
+            out.append(m.name)
+    return out
+
+
+def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
+    """Initial accumulator of each metric (shapes taken from the signals at t0)."""
+    accs = []
+    for m in metrics:
+        shape = jnp.shape(m.value(signals))
+        nan = jnp.full(shape, jnp.nan)
+        if m.reduce == "max":
+            accs.append((jnp.full(shape, -jnp.inf), jnp.zeros(shape, bool)))
+        elif m.reduce == "min":
+            accs.append((jnp.full(shape, jnp.inf), jnp.zeros(shape, bool)))
+        elif m.reduce in ("final", "at"):
+            accs.append((nan, jnp.zeros(shape, bool)))
+        elif m.reduce in ("mean", "integral"):
+            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
+        elif m.reduce == "settle":
+            # (time of the first sample after the last one at or above the threshold, seen, last above)
+            accs.append((nan, jnp.zeros(shape, bool), jnp.zeros(shape, bool)))
+    return tuple(accs)
+
+
+def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt: float,
+                        signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
+    """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
+    which the rectangle-rule integral does not count)."""
+    out = []
+    for m, acc in zip(metrics, accs, strict=True):
+        v = m.value(signals)
+        inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+        if m.reduce == "max":
+            a, seen = acc
+            out.append((jnp.where(inw, jnp.maximum(a, v), a), seen | inw))
+        elif m.reduce == "min":
+            a, seen = acc
+            out.append((jnp.where(inw, jnp.minimum(a, v), a), seen | inw))
+        elif m.reduce == "final":
+            a, seen = acc
+            out.append((jnp.where(inw, v, a), seen | inw))
+        elif m.reduce == "at":
+            a, seen = acc
+            take = jnp.logical_and(inw, jnp.logical_not(seen))
+            out.append((jnp.where(take, v, a), seen | inw))
+        elif m.reduce == "mean":
+            s, n = acc
+            out.append((s + jnp.where(inw, v, 0.0), n + jnp.where(inw, 1.0, 0.0)))
+        elif m.reduce == "integral":
+            s, n = acc
+            w = 0.0 if is_final else dt
+            out.append((s + jnp.where(inw, v * w, 0.0), n + jnp.where(inw, 1.0, 0.0)))
+        elif m.reduce == "settle":
+            ts, seen, last_above = acc
+            above = jnp.logical_not(v < m.threshold)
+            first = jnp.logical_and(inw, jnp.logical_not(seen))
+            # settle time = time of the first in-window sample below the threshold following a sample
+            # at or above it (the window start when it never was above); NaN while it is above
+            ts_new = jnp.where(above, jnp.nan, jnp.where(first | last_above, t, ts))
+            out.append((jnp.where(inw, ts_new, ts), seen | inw, jnp.where(inw, above, last_above)))
+    return tuple(out)
+
+
+def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
+    """Accumulators -> metric values (NaN where the window held no sample)."""
+    out = []
+    for m, acc in zip(metrics, accs, strict=True):
+        if m.reduce in ("max", "min", "final", "at"):
+            a, seen = acc
+            out.append(jnp.where(seen, a, jnp.nan))
+        elif m.reduce == "mean":
+            s, n = acc
+            out.append(jnp.where(n > 0, s / jnp.maximum(n, 1.0), jnp.nan))
+        elif m.reduce == "integral":
+            s, n = acc
+            out.append(jnp.where(n > 0, s, jnp.nan))
+        elif m.reduce == "settle":
+            out.append(acc[0])
+    return tuple(out)
+
+
+def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, float]:
+    """Numpy metric values -> flat ``{name: float}``."""
+    res: dict[str, float] = {}
+    for m, v in zip(metrics, values, strict=True):
+        arr = np.asarray(v, dtype=float)
+        if m.spacecraft == "each":
+            for i, x in enumerate(arr.reshape(-1)):
+                res[f"{m.name}_sc{i + 1}"] = float(x)
+        else:
+            res[m.name] = float(arr)
+    return res
