@@ -5,8 +5,7 @@ Truths are derived by hand in the comments (not computed with the package):
 * yang2013: the slot variation maps P[j] of the built-in mode sequence (S_ij of the scenario placed on
   the spacecraft slots), the leave flags and the error dynamics (2), (5) at a hand-picked state;
 * azizi2009: the rotating-square desired state (positions on the circumscribed circle, v = omega x r,
-  a = -omega^2 r) and the desired relative accelerations of the chain pairs;
-* li2020: the formation offsets rho_bar_iF = R [cos(phi)/2, -sin(phi), sqrt(3)/2 cos(phi)].
+  a = -omega^2 r) and the desired relative accelerations of the chain pairs.
 """
 
 import jax.numpy as jnp
@@ -15,7 +14,6 @@ import pytest
 
 from formation_ftc import api
 from formation_ftc.papers.azizi2009.model import desired_state, relative_acceleration_fn
-from formation_ftc.papers.li2020.desired import formation_offsets
 from formation_ftc.papers.yang2013.model import error_dynamics_rhs, switched_structure
 
 
@@ -71,10 +69,3 @@ def test_azizi_rotating_square_by_hand():
     rel = np.asarray(relative_acceleration_fn(4, side, omega, 0)(t))
     np.testing.assert_allclose(rel, [acc[1, 0] - acc[0, 0], acc[2, 0] - acc[1, 0], acc[3, 0] - acc[2, 0]],
                                rtol=1e-14)
-
-
-@pytest.mark.parametrize("phi", [0.0, np.pi / 3, 2.0])
-def test_li2020_formation_offsets_by_hand(phi):
-    out = formation_offsets(10.0, [phi])[0]
-    np.testing.assert_allclose(out, [5 * np.cos(phi), -10 * np.sin(phi), 5 * np.sqrt(3) * np.cos(phi)], rtol=1e-15)
-    assert np.linalg.norm(out) == pytest.approx(10.0, rel=1e-14)  # |rho_bar| = R for every phase
