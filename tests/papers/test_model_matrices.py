@@ -10,7 +10,6 @@ Truths are derived by hand in the comments (not computed with the package):
 
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
 from formation_ftc import api
 from formation_ftc.papers.azizi2009.model import desired_state, relative_acceleration_fn
