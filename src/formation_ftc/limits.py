@@ -181,3 +181,33 @@ def check_memory(compiled: Any, budgets: Budgets, where: str = "scenario", batch
             f"records), shorten simulation.horizon or use fewer spacecraft, or raise the budget with "
             f"--max-memory / FORMATION_FTC_MAX_MEMORY")
     return need
+
+
+def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None) -> dict[str, int]:
+    """Refuse a campaign over budget before anything runs: run-steps per run and in total, and the
+    memory of one vmapped batch of ``chunk_size`` runs (first run of each base scenario, compiled but
+    not run). Returns the estimates (``run_steps``, ``campaign_steps``, ``batch_memory`` [bytes])."""
+    from formation_ftc import api
+
+    where = where or f"campaign {plan.name!r}"
+    runs_per_point = int(plan.runs)
+    n_points = max(1, plan.n_runs // max(1, runs_per_point))
+    probe = [g * runs_per_point for g in range(min(n_points, 256))]
+    if any(str(s.path).startswith("simulation.") for s in getattr(plan, "samplers", []) or []):
+        probe += list(range(min(plan.n_runs, 16)))  # sampled horizon/step: look at a few runs too
+    steps = 0
+    first_of_base: dict[str, int] = {}
+    for r in sorted(set(probe)):
+        inputs = plan.run_inputs(r)
+        scenario = plan.scenario(inputs)
+        n = int(scenario.simulation.n_steps)
+        check_run_steps(n, budgets, f"{where}, run {r}")
+        steps = max(steps, n)
+        first_of_base.setdefault(inputs.base, r)
+    total = steps * int(plan.n_runs)
+    check_campaign_steps(total, int(plan.n_runs), budgets, where)
+    batch = 0
+    for r in first_of_base.values():
+        compiled = api.compile_scenario(plan.scenario(plan.run_inputs(r)))
+        batch = max(batch, check_memory(compiled, budgets, where, batch=int(plan.chunk_size)))
+    return {"run_steps": steps, "campaign_steps": total, "batch_memory": batch}

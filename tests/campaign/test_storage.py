@@ -44,10 +44,14 @@ def test_stale_temporary_file_of_a_killed_write_is_discarded(tmp_path, plan):
     root = tmp_path / "c"
     store = CampaignStore.prepare(root, plan)
     store.initialize()
+    store.close()
     stale = root / "chunks" / ".chunk-000001.parquet.tmp-12345"
     stale.write_bytes(b"half a parquet file")
     again = CampaignStore.prepare(root, plan)
-    assert again.finished() == set() and not stale.exists()
+    assert again.finished() == set() and stale.exists()  # never counted; a scan deletes nothing
+    again.initialize()  # only the lock holder removes interrupted writes
+    assert not stale.exists()
+    again.close()
 
 
 def test_foreign_directory_is_refused(tmp_path, plan):
@@ -76,8 +80,10 @@ def test_corrupt_manifest_chunk_and_unknown_files_are_refused(tmp_path, plan):
     s.initialize()
     s.write_chunk(1, _table(plan, 1))
     (root / "chunks" / "chunk-000001.parquet").write_bytes(b"not parquet")
-    with pytest.raises(CampaignError, match=r"chunk-000001.parquet: corrupt chunk file"):
-        CampaignStore.prepare(root, plan)
+    # a chunk that does not match its checksum is reported and recomputed, never used
+    assert CampaignStore.prepare(root, plan).finished() == set()
+    with pytest.raises(CampaignError, match=r"corrupt chunk file.*chunk-000001.parquet: content does not match"):
+        CampaignStore.read(root)
     (root / "chunks" / "chunk-000001.parquet").unlink()
     (root / "chunks" / "notes.txt").write_text("x")
     with pytest.raises(CampaignError, match=r"notes.txt: unknown file"):
@@ -87,10 +93,15 @@ def test_corrupt_manifest_chunk_and_unknown_files_are_refused(tmp_path, plan):
     with pytest.raises(CampaignError, match=r"chunk 9 does not exist"):
         CampaignStore.prepare(root, plan)
     (root / "chunks" / "chunk-000009.parquet").unlink()
-    # a chunk file holding the wrong runs (copied from another chunk) is refused
+    # a chunk file holding the wrong runs (copied from another chunk): its checksum does not match
     s2 = CampaignStore.prepare(root, plan)
     s2.write_chunk(0, _table(plan, 0))
     (root / "chunks" / "chunk-000001.parquet").write_bytes((root / "chunks" / "chunk-000000.parquet").read_bytes())
+    assert CampaignStore.prepare(root, plan).finished() == {0}
+    # ... and with a forged checksum, the run ids still give it away
+    m = json.loads((root / "manifest.json").read_text())
+    m["chunk_sha256"]["1"] = m["chunk_sha256"]["0"]
+    (root / "manifest.json").write_text(json.dumps(m))
     with pytest.raises(CampaignError, match=r"holds runs \[0, 1\].* but chunk 1 is runs 2..2"):
         CampaignStore.prepare(root, plan)
     (root / "chunks" / "chunk-000001.parquet").unlink()

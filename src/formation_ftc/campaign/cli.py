@@ -27,12 +27,19 @@ def _cmd_run(args) -> int:
     from rich.console import Console
 
     from formation_ftc.campaign.executors import make_executor
-    from formation_ftc.campaign.runner import run_campaign
+    from formation_ftc.campaign.runner import make_plan, run_campaign
+    from formation_ftc.campaign.spec import CampaignError
+    from formation_ftc.limits import Budgets, check_campaign_budgets
 
     console = Console(stderr=True)
-    executor = make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
-    outcome = run_campaign(args.campaign, args.out, runs=args.runs, chunk_size=args.chunk_size,
-                           executor=executor, progress=not args.no_progress)
+    if not str(args.out).strip():
+        raise CampaignError("--out: empty path; give the results directory, e.g. --out out/campaign1")
+    executor = make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
+                             connect_timeout=args.connect_timeout)
+    plan = make_plan(args.campaign, runs=args.runs, chunk_size=args.chunk_size)
+    budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
+    check_campaign_budgets(plan, budgets)  # before anything is compiled for the run or written
+    outcome = run_campaign(plan, args.out, executor=executor, progress=not args.no_progress)
     console.print(f"campaign done ({outcome.executor}): {outcome}", soft_wrap=True, markup=False)
     return 0
 
@@ -68,6 +75,15 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
     g.add_argument("--dask-local", metavar="N", type=int, default=None,
                    help="start a Dask LocalCluster with N worker processes")
+    q.add_argument("--connect-timeout", metavar="S", type=float, default=None,
+                   help="seconds allowed for the Dask scheduler handshake (default 30)")
+    q.add_argument("--max-memory", metavar="SIZE", default=None,
+                   help="memory budget of one batch of chunk-size runs, e.g. 32GB (default 8 GiB or half the "
+                        "RAM; 0 = none)")
+    q.add_argument("--max-run-steps", metavar="N", default=None,
+                   help="integration steps allowed per run (default 1e9; 0 = none)")
+    q.add_argument("--max-campaign-steps", metavar="N", default=None,
+                   help="run-steps allowed in the whole campaign (default 1e11; 0 = none)")
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_run)
 
@@ -80,7 +96,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry point: ``main(["run", ...])`` or ``main(["campaign", "run", ...])``."""
-    from formation_ftc.config.loader import ScenarioError
+    from formation_ftc.exitcodes import run_guarded
 
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] != "campaign":
@@ -88,13 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="formation-ftc")
     add_cli(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except (ScenarioError, ValueError, KeyError) as exc:
-        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-        print(f"error: {msg}", file=sys.stderr)
-        return 2
-
+    return run_guarded(args.func, args)
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

@@ -13,16 +13,30 @@ context is entered. Every executor calls the same pure
   in-process when the work is small (under :data:`AUTO_POOL_MIN_RUN_STEPS` run-steps, where starting
   worker processes and compiling in each costs more than it saves).
 * :class:`DaskExecutor` -- ``scheduler="tcp://HOST:PORT"``: an existing ``dask.distributed`` cluster
-  (its workers need formation-ftc installed); the address is checked with a short TCP connect before
-  anything runs. ``n_local=N``: starts a ``LocalCluster`` of N single-threaded worker processes.
+  (its workers need formation-ftc installed). Before anything runs, the address gets a bounded
+  handshake (TCP connect, then the scheduler's ``identity`` reply, all within ``connect_timeout``,
+  default :data:`DEFAULT_CONNECT_TIMEOUT` s, ``--connect-timeout`` or
+  ``FORMATION_FTC_DASK_CONNECT_TIMEOUT``), so an address that is not a Dask scheduler (a web server,
+  a silent port) is an error naming the address, never a hang. ``n_local=N``: starts a
+  ``LocalCluster`` of N single-threaded worker processes.
+
+Workers die with their parent: local pool workers set ``PR_SET_PDEATHSIG`` (Linux) and watch their
+parent's PID, so a campaign process killed with SIGKILL leaves no worker computing on; the worker
+processes of a Dask ``LocalCluster`` exit when their nanny's process (the campaign) goes away.
 """
 
 from __future__ import annotations
 
+import asyncio
+import ctypes
 import logging
 import multiprocessing
 import os
+import signal
 import socket
+import sys
+import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
@@ -31,7 +45,10 @@ from urllib.parse import urlsplit
 from formation_ftc.campaign.spec import CampaignError
 
 __all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable",
-           "auto_workers", "AUTO_POOL_MIN_RUN_STEPS"]
+           "check_scheduler", "auto_workers", "AUTO_POOL_MIN_RUN_STEPS", "DEFAULT_CONNECT_TIMEOUT"]
+
+#: seconds allowed to reach a Dask scheduler and get its handshake reply
+DEFAULT_CONNECT_TIMEOUT = 30.0
 
 #: below this many run-steps (about 10 s of one core for the Li2020 loop) ``workers=None`` stays in-process
 AUTO_POOL_MIN_RUN_STEPS = 10_000_000
@@ -53,6 +70,30 @@ def auto_workers(run_steps: int, n_chunks: int, cores: int | None = None) -> int
     return max(1, min(cores, n_chunks))
 
 
+def _die_with_parent(parent_pid: int, poll_s: float = 1.0) -> None:
+    """Worker initializer: exit when the campaign process (``parent_pid``) dies, even by SIGKILL.
+
+    Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; everywhere: a daemon thread polling ``os.getppid()``
+    (a reparented worker has lost its parent) every ``poll_s`` seconds.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent_pid:  # the parent died before this line: do not start at all
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(poll_s)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="formation-ftc-parent-watch", daemon=True).start()
+
+
 class LocalExecutor:
     """In-process batches (``workers=1``), a spawn-context process pool of ``workers`` processes, or
     ``workers=None``: chosen by :meth:`prepare` from the size of the work (:func:`auto_workers`)."""
@@ -72,7 +113,8 @@ class LocalExecutor:
     def __enter__(self) -> LocalExecutor:
         if self.workers > 1:
             self._pool = ProcessPoolExecutor(max_workers=self.workers,
-                                             mp_context=multiprocessing.get_context("spawn"))
+                                             mp_context=multiprocessing.get_context("spawn"),
+                                             initializer=_die_with_parent, initargs=(os.getpid(),))
         return self
 
     def __exit__(self, *exc) -> None:
@@ -110,6 +152,46 @@ def parse_scheduler_address(address: str) -> tuple[str, int]:
     return parts.hostname, port
 
 
+async def _identity(address: str, timeout: float) -> dict:
+    from distributed.comm import connect
+
+    comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
+    try:
+        await asyncio.wait_for(comm.write({"op": "identity"}), timeout)
+        return await asyncio.wait_for(comm.read(), timeout)
+    finally:
+        comm.abort()
+
+
+def check_scheduler(address: str, timeout: float = DEFAULT_CONNECT_TIMEOUT) -> dict:
+    """Bounded Dask handshake: the scheduler's ``identity`` reply within ``timeout`` seconds, else
+    :class:`CampaignError` naming the address (also when something else answers on that port)."""
+    check_reachable(address, min(timeout, 10.0))
+    result: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            result["reply"] = asyncio.run(_identity(address, timeout))
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            result["error"] = exc
+
+    t = threading.Thread(target=target, name="formation-ftc-dask-probe", daemon=True)
+    t.start()
+    t.join(timeout + 5.0)  # the probe bounds itself; this join bounds even a stuck event loop
+    reply, exc = result.get("reply"), result.get("error")
+    if t.is_alive() or isinstance(exc, asyncio.TimeoutError | TimeoutError):
+        raise CampaignError(f"--scheduler {address}: no Dask scheduler handshake within {timeout:g} s (something "
+                            f"accepts connections there but does not answer like a Dask scheduler; check the "
+                            f"address and port, or raise --connect-timeout)")
+    if exc is not None:
+        raise CampaignError(f"--scheduler {address}: not a Dask scheduler, or it refused the handshake "
+                            f"({type(exc).__name__}: {exc})")
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise CampaignError(f"--scheduler {address}: answered as {kind!r}, not as a Dask scheduler")
+    return reply
+
+
 def check_reachable(address: str, timeout: float = 3.0) -> None:
     """Open (and close) a TCP connection to the scheduler; CampaignError if it cannot be reached."""
     host, port = parse_scheduler_address(address)
@@ -124,7 +206,8 @@ def check_reachable(address: str, timeout: float = 3.0) -> None:
 class DaskExecutor:
     """Chunks as tasks on a Dask cluster (existing scheduler, or a LocalCluster of ``n_local`` workers)."""
 
-    def __init__(self, scheduler: str | None = None, n_local: int | None = None, connect_timeout: float = 3.0):
+    def __init__(self, scheduler: str | None = None, n_local: int | None = None,
+                 connect_timeout: float | None = None):
         if (scheduler is None) == (n_local is None):
             raise CampaignError("give exactly one of --scheduler ADDR and --dask-local N")
         if n_local is not None and n_local < 1:
@@ -133,7 +216,15 @@ class DaskExecutor:
             parse_scheduler_address(scheduler)
         self.scheduler = scheduler
         self.n_local = n_local
-        self.connect_timeout = connect_timeout
+        if connect_timeout is None:
+            env = os.environ.get("FORMATION_FTC_DASK_CONNECT_TIMEOUT", "").strip()
+            try:
+                connect_timeout = float(env) if env else DEFAULT_CONNECT_TIMEOUT
+            except ValueError:
+                raise CampaignError(f"FORMATION_FTC_DASK_CONNECT_TIMEOUT={env!r}: expected seconds") from None
+        if not (connect_timeout > 0 and connect_timeout < 1e6):
+            raise CampaignError(f"--connect-timeout must be > 0 s, got {connect_timeout}")
+        self.connect_timeout = float(connect_timeout)
         self.client = None
         self._cluster = None
 
@@ -145,9 +236,9 @@ class DaskExecutor:
                                 "pip install 'formation-ftc[dask]'") from None
 
         if self.scheduler is not None:
-            check_reachable(self.scheduler, self.connect_timeout)
+            check_scheduler(self.scheduler, self.connect_timeout)
             try:
-                self.client = Client(self.scheduler, timeout=f"{max(self.connect_timeout, 5.0)}s")
+                self.client = Client(self.scheduler, timeout=f"{self.connect_timeout}s")
             except Exception as exc:  # noqa: BLE001
                 raise CampaignError(f"cannot connect to the Dask scheduler at {self.scheduler}: {exc}") from None
         else:
@@ -184,10 +275,11 @@ class DaskExecutor:
         return f"dask ({self.scheduler})" if self.scheduler else f"dask LocalCluster ({self.n_local} workers)"
 
 
-def make_executor(workers: int | None = None, scheduler: str | None = None, dask_local: int | None = None):
+def make_executor(workers: int | None = None, scheduler: str | None = None, dask_local: int | None = None,
+                  connect_timeout: float | None = None):
     """The executor the command-line options ask for (``workers=None``: automatic local pool)."""
     if scheduler is not None or dask_local is not None:
         if workers is not None:
             raise CampaignError("--workers is for the local executor; with Dask the cluster sets the workers")
-        return DaskExecutor(scheduler=scheduler, n_local=dask_local)
+        return DaskExecutor(scheduler=scheduler, n_local=dask_local, connect_timeout=connect_timeout)
     return LocalExecutor(workers)

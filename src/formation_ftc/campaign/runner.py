@@ -263,7 +263,7 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
     if hasattr(executor, "prepare"):  # the automatic local pool sizes itself to the work left
         executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
-        store.initialize()
+        store.initialize()  # takes the directory's lock (refused while another run writes there)
         bar = _Progress(progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name)
         try:
             for res in executor.map(run_chunk, plan, todo):
@@ -271,6 +271,7 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
                 bar.advance(res.n_runs)
         finally:
             bar.close()
+            store.close()
     results = store.load_results()
     n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
     return CampaignOutcome(Path(out_dir), len(results), n_failed, plan.n_chunks, len(todo),

@@ -38,7 +38,6 @@ import copy
 import hashlib
 import json
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
@@ -50,6 +49,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from scipy import stats
 
 from formation_ftc.config.base import StrictModel
+from formation_ftc.errors import InputError
 
 __all__ = [
     "CampaignError",
@@ -72,7 +72,11 @@ __all__ = [
 _SAMPLER_KEYS = {"dist", "grid", "choice"}
 
 
-class CampaignError(ValueError):
+#: most runs per grid point [-]
+MAX_RUNS = 10_000_000
+
+
+class CampaignError(InputError):
     """A campaign that cannot be read, validated, stored or executed; the message names the field."""
 
 
@@ -327,7 +331,8 @@ class CampaignMeta(StrictModel):
     description: str = Field("", description="One line shown by `formation-ftc campaign list`.")
     base: str | list[str] = Field(description="Base scenario (built-in name or TOML path); a list adds a "
                                   "grid axis over scenarios.")
-    runs: int = Field(ge=1, description="Runs per grid point (total runs when nothing is swept) [-].")
+    runs: int = Field(ge=1, le=MAX_RUNS, description="Runs per grid point (total runs when nothing is swept), "
+                      "at most 10 million [-].")
     seed: int = Field(0, ge=0, description="Campaign seed; run seeds and samples derive from it [-].")
     chunk_size: int = Field(32, ge=1, le=100_000, description="Runs per vmap batch [-].")
     metrics: list[str] = Field(default_factory=list, description="Metrics to keep (empty: all).")
@@ -442,21 +447,21 @@ def load_campaign(name_or_path: str | Path | Mapping[str, Any], *, runs: int | N
     if isinstance(name_or_path, Mapping):
         raw, source = copy.deepcopy(dict(name_or_path)), "<dict>"
     else:
+        from formation_ftc.config.loader import parse_toml, read_text_file
+
+        if isinstance(name_or_path, str) and (not name_or_path.strip() or "\x00" in name_or_path):
+            raise CampaignError(f"invalid campaign name or path {name_or_path!r}")
         p = Path(name_or_path)
         if p.suffix == ".toml" or p.exists():
-            if not p.is_file():
-                raise CampaignError(f"campaign file {str(p)!r} does not exist")
-            text, source, base_dir = p.read_text(encoding="utf-8"), str(p), p.resolve().parent
+            text = read_text_file(p, "campaign", CampaignError)
+            source, base_dir = str(p), p.resolve().parent
         else:
             builtin = builtin_campaigns()
             if str(name_or_path) not in builtin:
                 raise CampaignError(f"unknown campaign {str(name_or_path)!r}: not a file and not a built-in "
                                     f"campaign (built-in: {', '.join(builtin) or 'none'})")
             text, source = builtin[str(name_or_path)], f"<built-in campaign {name_or_path}>"
-        try:
-            raw = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise CampaignError(f"{source}: invalid TOML: {exc}") from None
+        raw = parse_toml(text, source, CampaignError)
     meta = raw.get("campaign")
     if isinstance(meta, dict):
         if runs is not None:
@@ -467,7 +472,7 @@ def load_campaign(name_or_path: str | Path | Mapping[str, Any], *, runs: int | N
         spec = CampaignSpec.model_validate(raw)
     except ValidationError as exc:
         raise CampaignError(_format_error(exc, source)) from None
-    except ValueError as exc:
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         raise CampaignError(f"{source}: {exc}") from None
     return spec, base_dir
 

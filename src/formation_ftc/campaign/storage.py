@@ -2,7 +2,9 @@
 
 Layout::
 
-    DIR/manifest.json                 campaign spec, its hash, package version, run/chunk counts
+    DIR/manifest.json                 campaign spec, its hash, package version, run/chunk counts and
+                                      the SHA-256 of every chunk file (``chunk_sha256``)
+    DIR/.lock                         advisory lock of the process writing the campaign (host, PID)
     DIR/chunks/chunk-000012.parquet   one row per run of chunk 12 (inputs, seed, status, metrics)
     DIR/traces/run-000005.nc          optional decimated time history of run 5 (NetCDF, h5netcdf)
     DIR/report/                       written by ``formation-ftc campaign report``
@@ -12,14 +14,30 @@ Every file is written under a temporary name in the same directory and renamed w
 file exists only once the chunk is finished (its traces are written before it). Resuming keeps every
 finished chunk and computes the others. A directory that is not this campaign's -- another campaign's
 manifest, an unreadable manifest or chunk, files we do not write -- is refused, never overwritten.
+
+Safety against concurrent writers and silent corruption:
+
+* one writer per directory: :meth:`CampaignStore.initialize` takes an exclusive advisory lock
+  (``fcntl.flock``) on ``DIR/.lock`` and writes the holder's host and PID into it; a second
+  ``campaign run`` on the same directory is refused with that host and PID. The operating system
+  releases the lock when its process dies, so the lock of a killed run is taken over by the next one
+  (its stale host/PID text is simply overwritten);
+* temporary files (``.NAME.tmp-PID``) are never touched by a scan; only the lock holder removes them;
+* the SHA-256 of each chunk file is recorded in the manifest before the chunk file is renamed into
+  place (and Parquet page checksums are written). Resuming recomputes a chunk whose content does not
+  match (reported on stderr, never used); ``campaign report`` refuses a directory with such a chunk.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
+import io
 import json
 import os
 import re
+import socket
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -29,15 +47,22 @@ import pyarrow.parquet as pq
 from formation_ftc.campaign.sampling import CampaignPlan
 from formation_ftc.campaign.spec import CampaignError
 
-__all__ = ["CampaignStore", "MANIFEST", "FORMAT", "atomic_write_bytes", "chunk_filename"]
+try:  # POSIX advisory locks; other platforms run without a lock
+    import fcntl
+except ImportError:  # pragma: no cover
+    fcntl = None
+
+__all__ = ["CampaignStore", "MANIFEST", "LOCK", "FORMAT", "atomic_write_bytes", "chunk_filename", "sha256_file"]
 
 MANIFEST = "manifest.json"
 FORMAT = "formation-ftc-campaign"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+LOCK = ".lock"
 _CHUNK_RE = re.compile(r"^chunk-(\d{6,})\.parquet$")
 _TRACE_RE = re.compile(r"^run-(\d{6,})\.nc$")
 _TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
-_TOP_LEVEL = {MANIFEST, "chunks", "traces", "report"}
+_TOP_LEVEL = {MANIFEST, LOCK, "chunks", "traces", "report"}
+_ROOT_TMP_RE = re.compile(r"^\.manifest\.json\.tmp-\d+$")
 
 
 def chunk_filename(chunk_id: int) -> str:
@@ -74,6 +99,19 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         os.fsync(f.fileno())
     os.replace(tmp, path)
     _fsync_dir(path.parent)
+
+
+def sha256_file(path: Path) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _warn(msg: str) -> None:
+    print(f"warning: {msg}", file=sys.stderr)
 
 
 def _package_version() -> str:
@@ -118,6 +156,7 @@ class CampaignStore:
             sampled=plan.sampled(),
             n_runs=plan.n_runs,
             n_chunks=plan.n_chunks,
+            chunk_sha256={},
         )
 
     @staticmethod
@@ -134,7 +173,9 @@ class CampaignStore:
         if manifest.get("format_version") != FORMAT_VERSION:
             raise CampaignError(f"{path}: campaign format version {manifest.get('format_version')} is not "
                                 f"{FORMAT_VERSION}; refusing to use it")
-        for key in ("spec_hash", "n_chunks", "n_runs", "spec"):
+        if not isinstance(manifest.get("chunk_sha256", {}), dict):
+            raise CampaignError(f"{path}: corrupt campaign manifest (chunk_sha256 is not a table)")
+        for key in ("spec_hash", "n_chunks", "n_runs", "spec", "chunk_sha256"):
             if key not in manifest:
                 raise CampaignError(f"{path}: corrupt campaign manifest (no {key!r}); refusing to use it")
         return manifest
@@ -144,7 +185,7 @@ class CampaignStore:
         """Check the directory holds only our files; return the chunk ids present (stale temporary
         files of a killed run are removed)."""
         for entry in root.iterdir():
-            if entry.name not in _TOP_LEVEL:
+            if entry.name not in _TOP_LEVEL and not _ROOT_TMP_RE.match(entry.name):
                 raise CampaignError(f"{root}: unknown entry {entry.name!r} in a campaign directory; refusing "
                                     f"to write here (move it away or use another --out)")
         chunk_ids: set[int] = set()
@@ -156,8 +197,7 @@ class CampaignStore:
                 raise CampaignError(f"{d}: expected a directory; refusing to use {root}")
             for f in d.iterdir():
                 if _TMP_RE.match(f.name) and f.is_file():
-                    f.unlink()  # an interrupted atomic write: never renamed, never counted
-                    continue
+                    continue  # a write in progress or interrupted: never counted; only the lock holder removes it
                 m = pattern.match(f.name)
                 if not m or not f.is_file():
                     raise CampaignError(f"{f}: unknown file in a campaign directory; refusing to use {root}")
@@ -175,7 +215,7 @@ class CampaignStore:
         root = Path(root)
         if root.exists() and not root.is_dir():
             raise CampaignError(f"{root}: exists and is not a directory")
-        if not root.exists() or not any(root.iterdir()):
+        if not root.exists() or not any(e.name != LOCK for e in root.iterdir()):
             return cls(root, cls.manifest_for(plan), set(), True)
         if not (root / MANIFEST).exists():
             raise CampaignError(f"{root}: not empty and has no {MANIFEST}: not a campaign directory; "
@@ -187,9 +227,15 @@ class CampaignStore:
             raise CampaignError(f"{root}: written by formation-ftc {manifest.get('package_version')}, this is "
                                 f"{_package_version()}; resume with the same version or use a new directory")
         finished = cls._scan(root, int(manifest["n_chunks"]))
+        store = cls(root, manifest, set(), False)
         for cid in sorted(finished):
+            problem = store.verify_chunk(cid)
+            if problem:  # reported and recomputed, never used
+                _warn(f"{problem}; chunk {cid} will be recomputed")
+                continue
             cls._check_chunk(root, cid, plan.chunk(cid).run_ids)
-        return cls(root, manifest, finished, False)
+            store._finished.add(cid)
+        return store
 
     @staticmethod
     def _difference(root: Path, manifest: dict[str, Any], plan: CampaignPlan) -> str:
@@ -214,12 +260,92 @@ class CampaignStore:
                                 f"{expected_runs[0]}..{expected_runs[-1]}; refusing to use this directory")
 
     def initialize(self) -> None:
-        """Create the directory and manifest of a new campaign (no-op when resuming)."""
+        """Take the directory's lock, then create the directory and manifest of a new campaign (when
+        resuming: re-read the manifest under the lock). Call :meth:`close` to release the lock."""
+        self.acquire_lock()
         if not self.is_new:
+            if (self.root / MANIFEST).is_file():
+                self.manifest = self._read_manifest(self.root)
+            self._remove_temporaries()
             return
+        if (self.root / MANIFEST).exists():
+            self.close()
+            raise CampaignError(f"{self.root}: another process created a campaign here meanwhile; run again")
         (self.root / "chunks").mkdir(parents=True, exist_ok=True)
-        atomic_write_bytes(self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True).encode())
+        self._write_manifest()
         self.is_new = False
+
+    def _write_manifest(self) -> None:
+        atomic_write_bytes(self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True).encode())
+
+    # ------------------------------------------------------------------------------------ locking
+    _lock_fd: int | None = None
+
+    def acquire_lock(self) -> None:
+        """Exclusive advisory lock on ``DIR/.lock`` (non-blocking); CampaignError naming the holder."""
+        if self._lock_fd is not None or fcntl is None:
+            return
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.root / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise CampaignError(f"{self.root}: cannot create the lock file {LOCK} ({exc.strerror or exc}); "
+                                f"is the directory writable?") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = ""
+            try:
+                holder = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+            except OSError:  # pragma: no cover
+                pass
+            os.close(fd)
+            info = _lock_holder_text(holder)
+            raise CampaignError(f"{self.root}: in use by another campaign run ({info}); wait for it to finish "
+                                f"or stop it, or use another --out") from None
+        # any text left in the file is a dead holder's (the kernel released its lock): taken over
+        text = json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
+                           "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")})
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, text.encode(), 0)
+        self._lock_fd = fd
+
+    def close(self) -> None:
+        """Release the directory lock (idempotent)."""
+        fd, self._lock_fd = self._lock_fd, None
+        if fd is not None:
+            try:
+                os.ftruncate(fd, 0)
+            except OSError:  # pragma: no cover
+                pass
+            os.close(fd)  # closing the descriptor releases the flock
+
+    def _remove_temporaries(self) -> None:
+        """Remove interrupted atomic writes (only called while holding the lock: no other writer)."""
+        for sub in ("chunks", "traces"):
+            d = self.root / sub
+            if d.is_dir():
+                for f in d.iterdir():
+                    if _TMP_RE.match(f.name) and f.is_file():
+                        f.unlink(missing_ok=True)
+        for f in self.root.iterdir():
+            if _ROOT_TMP_RE.match(f.name):
+                f.unlink(missing_ok=True)
+
+    # --------------------------------------------------------------------------------- checksums
+    def verify_chunk(self, chunk_id: int) -> str:
+        """"" when chunk ``chunk_id``'s file matches its recorded SHA-256, else what is wrong."""
+        path = self.chunk_path(chunk_id)
+        want = self.manifest.get("chunk_sha256", {}).get(str(chunk_id))
+        if want is None:
+            return f"{path}: no checksum recorded in {MANIFEST}"
+        try:
+            got = sha256_file(path)
+        except OSError as exc:
+            return f"{path}: cannot be read ({exc.strerror or exc})"
+        if got != want:
+            return f"{path}: content does not match its checksum (SHA-256 {got[:12]}..., recorded {want[:12]}...)"
+        return ""
 
     @classmethod
     def read(cls, root: str | Path) -> CampaignStore:
@@ -229,7 +355,21 @@ class CampaignStore:
             raise CampaignError(f"{root}: no {MANIFEST}; not a campaign directory")
         manifest = cls._read_manifest(root)
         finished = cls._scan(root, int(manifest["n_chunks"]))
-        return cls(root, manifest, finished, False)
+        store = cls(root, manifest, set(), False)
+        bad = []
+        for cid in sorted(finished):
+            if str(cid) not in manifest["chunk_sha256"]:
+                continue  # being written right now (its checksum comes first): not finished yet
+            problem = store.verify_chunk(cid)
+            if problem:
+                bad.append(problem)
+            else:
+                store._finished.add(cid)
+        if bad:
+            raise CampaignError(f"{root}: {len(bad)} corrupt chunk file(s), refusing to report them: {bad[0]}"
+                                f"{' (and more)' if len(bad) > 1 else ''}. Run `formation-ftc campaign run` on "
+                                f"this directory again to recompute them")
+        return store
 
     # ------------------------------------------------------------------------------------- access
     def finished(self) -> set[int]:
@@ -250,13 +390,13 @@ class CampaignStore:
             ds.to_netcdf(tmp, engine="h5netcdf")
             os.replace(tmp, path)
         path = self.chunk_path(chunk_id)
-        tmp = _tmp_path(path)
-        with open(tmp, "wb") as f:
-            table.to_parquet(f, index=False, engine="pyarrow")
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-        _fsync_dir(path.parent)
+        buf = io.BytesIO()
+        table.to_parquet(buf, index=False, engine="pyarrow", write_page_checksum=True)
+        data = buf.getvalue()
+        # the checksum is recorded first: a chunk file never exists without one
+        self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(data).hexdigest()
+        self._write_manifest()
+        atomic_write_bytes(path, data)
         self._finished.add(chunk_id)
         return path
 
@@ -266,7 +406,7 @@ class CampaignStore:
         for cid in sorted(self._finished):
             path = self.chunk_path(cid)
             try:
-                frames.append(pd.read_parquet(path, engine="pyarrow"))
+                frames.append(pq.read_table(path, page_checksum_verification=True).to_pandas())
             except Exception as exc:  # noqa: BLE001
                 raise CampaignError(f"{path}: corrupt chunk file ({exc})") from None
         if not frames:
@@ -276,3 +416,12 @@ class CampaignStore:
 
     def trace_path(self, run_id: int) -> Path:
         return self.root / "traces" / trace_filename(run_id)
+
+
+def _lock_holder_text(holder: str) -> str:
+    try:
+        info = json.loads(holder)
+        return f"host {info.get('host')}, PID {info.get('pid')}, since {info.get('since_utc')}"
+    except (ValueError, AttributeError):
+        return "holder unknown"
+

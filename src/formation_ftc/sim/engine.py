@@ -179,6 +179,77 @@ def _path_name(path) -> str:
     return ".".join(parts)
 
 
+def _nonfinite_leaves(tree) -> list[tuple[Any, np.ndarray, tuple[int, ...]]]:
+    """(path, array, index of the first non-finite entry) of every inexact leaf that is not finite."""
+    out = []
+    for path, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]:
+        arr = np.asarray(leaf)
+        if not np.issubdtype(arr.dtype, np.inexact):
+            continue
+        bad = np.argwhere(~np.isfinite(arr))
+        if bad.size:
+            out.append((path, arr, tuple(int(v) for v in bad[0])))
+    return out
+
+
+_CALL_JAXPR_PARAMS = ("jaxpr", "call_jaxpr", "fun_jaxpr")
+
+
+def _var_deps(env: dict, v) -> frozenset:
+    return frozenset() if type(v).__name__ == "Literal" else env.get(v, frozenset())
+
+
+def _propagate(jaxpr, in_deps: list[frozenset]) -> list[frozenset]:
+    """Which inputs each output of ``jaxpr`` depends on (structural; loops are treated as mixing all
+    their inputs, which can only over-state a dependency)."""
+    env: dict = dict(zip(jaxpr.invars, in_deps, strict=True))
+    for eqn in jaxpr.eqns:
+        ins = [_var_deps(env, v) for v in eqn.invars]
+        outs = None
+        sub = next((eqn.params[n] for n in _CALL_JAXPR_PARAMS if n in eqn.params), None)
+        if eqn.primitive.name == "cond" and "branches" in eqn.params:
+            pred, ops = ins[0], ins[1:]
+            per = [_propagate(b.jaxpr, ops) for b in eqn.params["branches"]]
+            outs = [pred.union(*cols) for cols in zip(*per, strict=True)]
+        elif sub is not None and eqn.primitive.name not in ("scan", "while"):
+            inner = getattr(sub, "jaxpr", sub)
+            if len(inner.invars) == len(ins) and len(inner.outvars) == len(eqn.outvars):
+                outs = _propagate(inner, ins)
+        if outs is None:
+            everything = frozenset().union(*ins) if ins else frozenset()
+            outs = [everything] * len(eqn.outvars)
+        for v, d in zip(eqn.outvars, outs, strict=True):
+            env[v] = d
+    return [_var_deps(env, v) for v in jaxpr.outvars]
+
+
+#: steps replayed past a step where only accumulators became non-finite, looking for their cause
+_FOLLOW_STEPS = 20
+
+
+def _info(bad: tuple, k: int, t: float, spacecraft_axis) -> DivergenceInfo:
+    path, arr, idx = bad
+    name = _path_name(path)
+    ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
+    sc = idx[ax] if ax is not None and len(idx) > ax else None
+    return DivergenceInfo(int(k), float(t), name, sc, idx)
+
+
+def _accumulators(step, k, state) -> set[int]:
+    """Indices of the state leaves that no other leaf of ``step(k, state)`` depends on."""
+    closed = jax.make_jaxpr(step)(k, state)
+    n_in = len(jax.tree_util.tree_leaves((k, state)))
+    deps = _propagate(closed.jaxpr, [frozenset({i}) for i in range(n_in)])
+    n_state = n_in - 1  # input 0 is k
+    if len(deps) != n_state:
+        return set()
+    acc = set()
+    for i in range(n_state):
+        if not any(i + 1 in deps[o] for o in range(n_state) if o != i):
+            acc.add(i)
+    return acc
+
+
 def diagnose_divergence(
     step: Callable[[jax.Array, PyTree], PyTree],
     last_finite: PyTree,
@@ -190,22 +261,38 @@ def diagnose_divergence(
     dt: float = 0.0,
 ) -> DivergenceInfo:
     """Replay up to ``max_steps`` steps from the last finite state (at step ``k``, time ``t``) and
-    name the first non-finite leaf of the first non-finite step (time ``t + j*dt``)."""
+    name the first non-finite state variable of the first non-finite step (time ``t + j*dt``).
+
+    Accumulators -- leaves that no other leaf depends on, such as an integrated delta-v or control
+    effort -- are named only when nothing else became non-finite: they merely follow the variable
+    that left its admissible set. Dependencies are read from the step's jaxpr (structurally, without
+    computing anything).
+    """
     jstep = jax.jit(step)
     state = last_finite
-    for j in range(max(1, max_steps)):
-        new = jstep(jnp.asarray(k + j, dtype=jnp.int64), state)
-        flat, _ = jax.tree_util.tree_flatten_with_path(new)
-        for path, leaf in flat:
-            arr = np.asarray(leaf)
-            if not np.issubdtype(arr.dtype, np.inexact):
-                continue
-            bad = np.argwhere(~np.isfinite(arr))
-            if bad.size:
-                name = _path_name(path)
-                idx = tuple(int(v) for v in bad[0])
-                ax = spacecraft_axis(name) if spacecraft_axis else (0 if arr.ndim >= 2 else None)
-                sc = idx[ax] if ax is not None and len(idx) > ax else None
-                return DivergenceInfo(int(k + j), float(t + j * dt), name, sc, idx)
+    acc: set[int] | None = None
+    first: DivergenceInfo | None = None
+    n = max(1, max_steps)
+    j = 0
+    while j < n:
+        kj = jnp.asarray(k + j, dtype=jnp.int64)
+        new = jstep(kj, state)
+        bad = _nonfinite_leaves(new)
+        if bad:
+            if acc is None:
+                try:
+                    acc = _accumulators(step, kj, state)
+                except Exception:  # noqa: BLE001 - a diagnostic must never fail; keep the first leaf
+                    acc = set()
+            order = [p for p, _ in jax.tree_util.tree_flatten_with_path(new)[0]]
+            causes = [b for b in bad if order.index(b[0]) not in acc]
+            info = _info(causes[0] if causes else bad[0], k + j, t + j * dt, spacecraft_axis)
+            if causes:
+                return info
+            if first is None:  # only accumulators so far: follow the run a few steps to find the cause
+                first, n = info, j + 1 + _FOLLOW_STEPS
         state = new
+        j += 1
+    if first is not None:
+        return first
     return DivergenceInfo(int(k), float(t), "<unknown>", None, ())
