@@ -114,14 +114,15 @@ def make_loop(s: CwFormationScenario) -> ClosedLoop:
                                    velocity_noise_std=as_float(s.sensors.velocity_noise_std))
     actuator = ExpressionFaultActuator(count=N, effectiveness=tuple(s.faults.effectiveness),
                                        bias=tuple(s.faults.bias))
-    metrics = [Metric("delta_v", "delta_v", reduce="final", spacecraft="each", units="m s-1"),
-               Metric("control_effort", "control_effort", reduce="final", spacecraft="each", units="N2 s"),
-               Metric("delta_v_total", "delta_v", reduce="final", spacecraft="sum", units="m s-1")]
+    metrics = []
     if s.controller.type == "pd":
         metrics += [Metric("max_position_error", "position_error", reduce="max", norm=True, spacecraft="max",
                            units="m"),
                     Metric("final_position_error_mean", "position_error", reduce="final", norm=True,
                            spacecraft="mean", units="m")]
+    metrics += [Metric("delta_v", "delta_v", reduce="final", spacecraft="each", units="m s-1"),
+                Metric("control_effort", "control_effort", reduce="final", spacecraft="each", units="N2 s"),
+                Metric("delta_v_total", "delta_v", reduce="final", spacecraft="sum", units="m s-1")]
     sim = s.simulation
     return ClosedLoop(plant=plant, controller=controller, sensors=sensors, actuator=actuator,
                       metrics=tuple(metrics), seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(sim.dt),

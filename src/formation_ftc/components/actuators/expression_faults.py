@@ -27,3 +27,6 @@ class ExpressionFaultActuator(Actuator):
 
     def signals(self):
         return (Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),)
+
+    def outputs(self, t, command, inputs: ActuatorInputs):
+        return {"effectiveness": inputs.exogenous["gamma"]}
