@@ -72,6 +72,7 @@ __all__ = [
     "NoEstimator",
     "NoSupervisor",
     "IdealActuator",
+    "Evaluation",
     "CompositionError",
     "KIND_SLOTS",
 ]
@@ -141,13 +142,20 @@ class TruthInputs(NamedTuple):
     exogenous: PyTree  # the plant's own time-only signals (true disturbance, ...)
     reference: PyTree  # reference-orbit values at this stage (None without a reference)
     process_noise: PyTree  # per-step process noise (held over the step)
+    #: the supervisor's decision in force over the step, as the truth side executes it (membership of a
+    #: switched formation, ...); None without a supervisor
+    decision: PyTree = None
 
 
 class ActuatorInputs(NamedTuple):
-    """What the actuator chain may use: its own time-only signals (true faults) and its state."""
+    """What the actuator chain may use: its own time-only signals (true faults) and its state; the
+    supervisor's decision in force (e.g. a switch to a redundant unit) and the true plant state (for a
+    fault whose effect depends on the state); both None where the loop has none."""
 
     exogenous: PyTree
     state: PyTree
+    decision: PyTree = None
+    plant_state: PyTree = None
 
 
 class SensorInputs(NamedTuple):
@@ -196,6 +204,11 @@ class _Kind:
         """Coordinate values of the dimensions this component's signals introduce (e.g. channel names)."""
         return {}
 
+    #: True: the time signals are sampled at the step start t_k and held over the step (zero-order
+    #: hold, e.g. a fault profile or a disturbance sequence applied through a sample-and-hold); the loop
+    #: evaluates :meth:`exogenous` once per step at t_k
+    holds_exogenous: ClassVar[bool] = False
+
 
 class Plant(_Kind):
     """Truth dynamics of every spacecraft. Owns the true disturbances (:meth:`exogenous`) and the
@@ -220,15 +233,31 @@ class Plant(_Kind):
     def exact_step(self, t: jax.Array, x: PyTree, inputs: TruthInputs, dt: float) -> PyTree:
         raise CompositionError(f"plant {type(self).__name__} has no exact discrete step")
 
+    def prepare(self, dt: float) -> Plant:
+        """The plant with its per-run precomputation done from its leaves (e.g. the exact
+        discretisation over the step ``dt`` [s] of an LTI plant); the loop calls it once per run,
+        outside the time loop. Default: nothing to precompute."""
+        return self
+
     def process_noise(self, key: jax.Array) -> PyTree:
         return None
+
+    def jump(self, t: jax.Array, x: PyTree, decision: PyTree) -> PyTree:
+        """The state after a discrete change at the end of a step (``t = t_{k+1}``), given the
+        supervisor's decision in force over the step (e.g. the state variation of a switched formation
+        when spacecraft dock, undock, depart or join). Default: no jump."""
+        return x
 
     def usage_names(self) -> tuple[str, ...]:
         """Names of the per-spacecraft actuator-usage integrals (e.g. delta-v), recorded as signals."""
         return ()
 
+    def usage_shape(self) -> tuple[int, ...]:
+        """Shape of every usage integral (default ``(count,)``; e.g. ``(count, axes)`` per axis)."""
+        return (self.count,)
+
     def usage_rates(self, t: jax.Array, x: PyTree, command: jax.Array) -> dict[str, jax.Array]:
-        """Rates of the usage integrals (integrated with the plant), each of shape (count,)."""
+        """Rates of the usage integrals (integrated with the plant), each of shape :meth:`usage_shape`."""
         return {}
 
     def outputs(self, t: jax.Array, x: PyTree, inputs: TruthInputs) -> dict[str, jax.Array]:
@@ -260,6 +289,9 @@ class Reference(_Kind):
 
 class Sensors(_Kind):
     kind: ClassVar[str] = "sensors"
+    #: True: :meth:`noise` receives the step's key itself and splits it into its own streams (the
+    #: plant's process noise then uses a key folded from it); False: one half of the step key's split
+    splits_step_key: ClassVar[bool] = False
 
     def noise(self, key: jax.Array) -> PyTree:
         """Measurement noise for one step (held over the step)."""
@@ -289,9 +321,17 @@ class Estimator(_Kind):
     """Observer / FDI: discrete update once per step from flight inputs."""
 
     kind: ClassVar[str] = "estimator"
+    #: True: the signals recorded at t_k are those of :meth:`update` at t_k (evaluated on the recorded
+    #: state and discarded, as the step computes them); False: those of :meth:`current`
+    refresh_on_observe: ClassVar[bool] = False
 
     def initial_state(self, measurement0: PyTree) -> PyTree:
         return None
+
+    def predict(self, t: jax.Array, state: PyTree, command: jax.Array, dt: float) -> PyTree:
+        """Time update over [t, t + dt] with the controller's command held over the step (called after
+        the control step; flight side: the command, not the applied output). Default: none."""
+        return state
 
     def update(self, t: jax.Array, state: PyTree, inputs: FlightInputs) -> tuple[PyTree, PyTree]:
         return state, None
@@ -417,6 +457,18 @@ class IdealActuator(Actuator):
     """Applied output = command."""
 
 
+class Evaluation(_Kind):
+    """Evaluation signals: functions of one sample's recorded signals (truth and flight side), e.g.
+    formation-error measures. They are recorded and feed metrics like any signal; the flight side never
+    sees them. Listed in :attr:`ClosedLoop.evaluations <formation_ftc.sim.loop.ClosedLoop>`, evaluated
+    in order (a later one may read an earlier one's signals)."""
+
+    kind: ClassVar[str] = "evaluation"
+
+    def outputs(self, signals: dict[str, jax.Array]) -> dict[str, jax.Array]:
+        return {}
+
+
 def tree_take(tree: PyTree, j: int) -> PyTree:
     """Entry ``j`` of every leaf's leading axis."""
     return jax.tree_util.tree_map(lambda a: a[j], tree)
@@ -425,4 +477,3 @@ def tree_take(tree: PyTree, j: int) -> PyTree:
 def as_float(x: Any) -> jax.Array:
     """float64 array leaf."""
     return jnp.asarray(x, dtype=jnp.float64)
-

@@ -55,6 +55,10 @@ LEFT_LIMIT = 1e-9
 COMMAND_SIGNAL = "command"
 POSITION_ERROR_SIGNAL = "position_error"
 APPLIED_SIGNAL = "applied"
+#: key under which :meth:`ClosedLoop.step` hands the stage-integrated metric increments to the run
+STAGE_INCREMENTS = "__stage_increments__"
+#: data folded into the step key for the plant's process noise when the sensors split the key themselves
+_PLANT_STREAM = 0x706C616E
 
 PyTree = Any
 
@@ -69,7 +73,9 @@ class ClosedLoop:
 
     Slots: ``plant`` (truth dynamics), ``reference`` (autonomous reference orbit), ``sensors``,
     ``network``, ``estimator``, ``supervisor``, ``controller``, ``actuator``; ``metrics`` (tuple of
-    :class:`~formation_ftc.sim.metrics.Metric`) and ``seed`` (noise seed, uint32 leaf).
+    :class:`~formation_ftc.sim.metrics.Metric`), ``evaluations`` (tuple of
+    :class:`~.components.Evaluation`: signals derived from each sample's signals, for records and
+    metrics only) and ``seed`` (noise seed, uint32 leaf).
     """
 
     plant: Plant
@@ -82,6 +88,7 @@ class ClosedLoop:
     actuator: Actuator = dataclasses.field(default_factory=IdealActuator)
     metrics: tuple = ()
     seed: Any = 0
+    evaluations: tuple = ()
     dt: float = static(0.1)
     n_steps: int = static(1)
     record_every: int = static(1)
@@ -133,7 +140,8 @@ class ClosedLoop:
         return (tuple(self.plant.signals()) + tuple(self.reference.signals()) + tuple(self.sensors.signals())
                 + tuple(self.network.signals()) + tuple(self.estimator.signals())
                 + tuple(self.supervisor.signals()) + tuple(self.controller.signals()) + own
-                + tuple(self.actuator.signals()))
+                + tuple(self.actuator.signals())
+                + tuple(sig for ev in self.evaluations for sig in ev.signals()))
 
     @property
     def count(self) -> int:
@@ -146,20 +154,27 @@ class ClosedLoop:
                 and type(self.controller).desired_position_at is not Controller.desired_position_at)
 
     # ------------------------------------------------------------------ pieces of one step
-    def _time_table(self, t_k):
-        """Time-only signals at t_k, t_k + dt/2, t_k + dt (truth side at the left limit of t_{k+1})."""
+    def _time_table(self, t_k, first_only: bool = False):
+        """Time-only signals at t_k, t_k + dt/2, t_k + dt (truth side at the left limit of t_{k+1});
+        ``first_only``: at t_k alone (an exact discrete plant, or a caller that reads only t_k)."""
         dt = self.dt
-        ts = t_k + dt * jnp.array([0.0, 0.5, 1.0])
-        tf = t_k + dt * jnp.array([0.0, 0.5, 1.0 - LEFT_LIMIT])
+        ts = t_k + dt * jnp.array([0.0] if first_only else [0.0, 0.5, 1.0])
+        tf = t_k + dt * jnp.array([0.0] if first_only else [0.0, 0.5, 1.0 - LEFT_LIMIT])
+
+        slots = ("plant", "actuator", "controller", "network", "estimator", "supervisor")
+        truth = ("plant", "actuator")
+        held = [s for s in slots if getattr(self, s).holds_exogenous]
 
         def at(t_flight, t_truth):
-            return dict(plant=self.plant.exogenous(t_truth), actuator=self.actuator.exogenous(t_truth),
-                        controller=self.controller.exogenous(t_flight),
-                        network=self.network.exogenous(t_flight),
-                        estimator=self.estimator.exogenous(t_flight),
-                        supervisor=self.supervisor.exogenous(t_flight))
+            return {s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
+                    for s in slots if s not in held}
 
-        return jax.vmap(at)(ts, tf)
+        table = jax.vmap(at)(ts, tf)
+        n = ts.shape[0]
+        for s in held:  # sampled at t_k, held over the step (zero-order hold)
+            table[s] = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
+                                              getattr(self, s).exogenous(t_k))
+        return table
 
     def _reference_stages(self, r):
         """Reference state after the step and its values at the four RK stages (or None)."""
@@ -173,6 +188,8 @@ class ClosedLoop:
 
     def _noise(self, k):
         key = step_key(run_key(self.seed), k)
+        if self.sensors.splits_step_key:  # the sensors split the step key into their own streams
+            return self.sensors.noise(key), self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM))
         k_sensor, k_plant = jax.random.split(key, 2)
         return self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)
 
@@ -197,9 +214,9 @@ class ClosedLoop:
             dc = None
         else:
             u, dc, ctl_out = self.controller.output(t, z["controller"], flight)
-        act_in = ActuatorInputs(exo["actuator"], z.get("actuator_state"))
+        act_in = ActuatorInputs(exo["actuator"], z.get("actuator_state"), dec, x)
         applied = self.actuator.apply(t, u, act_in)
-        truth = TruthInputs(applied, exo["plant"], ref, p_noise)
+        truth = TruthInputs(applied, exo["plant"], ref, p_noise, dec)
         dx = self.plant.derivative(t, x, truth)
         deriv = {"plant": dx, "controller": dc, "usage": self.plant.usage_rates(t, x, u)}
         outputs = dict(self.plant.outputs(t, x, truth))
@@ -231,9 +248,9 @@ class ClosedLoop:
         state = dict(plant=x0, reference=r0, controller=self.controller.initial_state(),
                      estimator=self.estimator.initial_state(y0), supervisor=self.supervisor.initial_state(),
                      actuator=self.actuator.initial_state(),
-                     usage={name: jnp.zeros(self.count) for name in self.plant.usage_names()})
+                     usage={name: jnp.zeros(self.plant.usage_shape()) for name in self.plant.usage_names()})
         if not isinstance(self.network, NoNetwork):
-            exo0 = tree_take(self._time_table(t0), 0)
+            exo0 = tree_take(self._time_table(t0, first_only=True), 0)
             msg0 = self.controller.message(t0, self._flight(y0, None, None, None, exo0["controller"], ref0))
             state["network"] = self.network.initial_state(msg0)
         else:
@@ -244,8 +261,9 @@ class ClosedLoop:
         """One control step k -> k + 1; returns the new state and the signals at t_k."""
         dt = self.dt
         t_k = self.t0 + k * dt
-        table = self._time_table(t_k)
-        exos = [tree_take(table, j) for j in (0, 1, 1, 2)]
+        exact = self.plant.integration == "exact"  # one stage: time signals at t_k only
+        table = self._time_table(t_k, first_only=exact)
+        exos = [tree_take(table, j) for j in ((0, 0, 0, 0) if exact else (0, 1, 1, 2))]
         r_next, refs = self._reference_stages(state["reference"])
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
@@ -275,38 +293,61 @@ class ClosedLoop:
         if self.plant.integration == "exact":
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
             applied = outputs[APPLIED_SIGNAL]
-            x_next = self.plant.exact_step(t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise), dt)
+            x_next = self.plant.exact_step(t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt)
             z_next = {"plant": x_next, "controller": None,
                       "usage": _axpy(dt, deriv["usage"], z["usage"])}
+            if self._stage_metrics():  # rectangle rule over the step
+                stage_inc = tuple(None if v is None else dt * v
+                                  for v in metric_ops.stage_values(self.metrics, outputs))
         else:
             k1, outputs = self._evaluate(t_k, z, ctx(0))
-            k2, _ = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k1, z), ctx(1))
-            k3, _ = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
-            k4, _ = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
+            k2, o2 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k1, z), ctx(1))
+            k3, o3 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
+            k4, o4 = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
             z_next = jax.tree_util.tree_map(
                 lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), z, k1, k2, k3, k4)
+            if self._stage_metrics():  # integrals of stage-integrated metrics over the step (RK4 weights)
+                v1, v2, v3, v4 = (metric_ops.stage_values(self.metrics, o) for o in (outputs, o2, o3, o4))
+                stage_inc = tuple(None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
+                                  for a, b, c, d in zip(v1, v2, v3, v4, strict=True))
         act_state = self.actuator.update(t_k, state["actuator"], outputs[COMMAND_SIGNAL],
-                                         ActuatorInputs(exos[0]["actuator"], state["actuator"]))
+                                         ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x))
+        # discrete change of the truth state at t_{k+1} commanded by the decision in force (default none)
+        z_next = dict(z_next, plant=self.plant.jump(t_k + dt, z_next["plant"], dec))
         outputs.update(self.estimator.outputs(t_k, est_state, est))
         outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
+        # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
+        est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
         new = dict(plant=z_next["plant"], reference=r_next,
                    controller=ctl_next if self.controller.sampled else z_next["controller"],
                    estimator=est_state, supervisor=sup_state, actuator=act_state,
                    usage=z_next["usage"], network=net_state)
+        if self._stage_metrics():
+            outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
+
+    def _stage_metrics(self) -> bool:
+        """True when a metric is integrated at the integrator's stages (:data:`~.metrics.STAGE_REDUCTIONS`)."""
+        return any(m.reduce in metric_ops.STAGE_REDUCTIONS for m in self.metrics)
 
     def observe(self, k, state: dict) -> dict:
         """Signals at t_k from the state at t_k (what the step would compute at its first stage)."""
         dt = self.dt
         t_k = self.t0 + k * dt
-        exo = tree_take(self._time_table(t_k), 0)
+        exo = tree_take(self._time_table(t_k, first_only=True), 0)
         r = state["reference"]
         ref = None if isinstance(self.reference, NoReference) else self.reference.values(r)
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
         y = self.sensors.measure(t_k, x, SensorInputs(s_noise, ref))
-        # the estimator / supervisor outputs recorded are those of their current state
-        est = self.estimator.current(state["estimator"])
+        # the estimator / supervisor outputs recorded are those of their current state (an estimator
+        # with ``refresh_on_observe`` records its update at t_k, as the step computes it)
+        est_state = state["estimator"]
+        if self.estimator.refresh_on_observe:
+            est_state, est = self.estimator.update(t_k, est_state, self._flight(y, None, None, None,
+                                                                                exo["estimator"], ref))
+        else:
+            est = self.estimator.current(est_state)
         dec = self.supervisor.current(state["supervisor"])
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
@@ -319,15 +360,31 @@ class ClosedLoop:
             held = (u, ctl_out)
         z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}
         _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held))
-        outputs.update(self.estimator.outputs(t_k, state["estimator"], est))
+        outputs.update(self.estimator.outputs(t_k, est_state, est))
         outputs.update(self.supervisor.outputs(t_k, state["supervisor"], dec))
         for name, v in state["usage"].items():
             outputs[name] = v
+        return self._evaluated(outputs)
+
+    def _evaluated(self, outputs: dict) -> dict:
+        """``outputs`` with every evaluation's signals added."""
+        for ev in self.evaluations:
+            outputs.update(ev.outputs(outputs))
         return outputs
 
     # ------------------------------------------------------------------ the run
+    def prepared(self) -> ClosedLoop:
+        """The loop with the plant's per-run precomputation done (:meth:`~.components.Plant.prepare`,
+        e.g. an exact discretisation from the parameter leaves); called once per run, outside the
+        time loop."""
+        plant = self.plant.prepare(self.dt)
+        return self if plant is self.plant else dataclasses.replace(self, plant=plant)
+
     def run(self) -> dict:
         """Pure, jittable, vmappable: records, final state, divergence step and metric values."""
+        return self.prepared()._run()
+
+    def _run(self) -> dict:
         state0 = self.initial_state()
         sig0 = self.observe(jnp.asarray(0, dtype=jnp.int64), state0)
         acc0 = metric_ops.init_accumulators(self.metrics, sig0)
@@ -335,9 +392,14 @@ class ClosedLoop:
         def step(k, carry):
             state, acc = carry
             new, outputs = self.step(k, state)
+            stage_inc = outputs.pop(STAGE_INCREMENTS, None)
             for name, v in state["usage"].items():
                 outputs[name] = v
+            outputs = self._evaluated(outputs)
             acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs)
+            if stage_inc is not None:
+                acc = metric_ops.update_stage_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt,
+                                                           stage_inc)
             return new, acc
 
         def observe(k, carry):
@@ -354,9 +416,11 @@ class ClosedLoop:
 
     def replay_step(self):
         """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""
+        loop = self.prepared()
+
         def step(k, carry):
             state, acc = carry
-            new, _ = self.step(k, state)
+            new, _ = loop.step(k, state)
             return new, acc
         return step
 

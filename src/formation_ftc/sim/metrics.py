@@ -20,7 +20,8 @@ import numpy as np
 from formation_ftc.sim.components import component, static
 
 __all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
-           "REDUCTIONS", "SPACECRAFT_REDUCTIONS"]
+           "REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
+           "update_stage_accumulators"]
 
 #: time reductions: name -> meaning
 REDUCTIONS = {
@@ -31,9 +32,18 @@ REDUCTIONS = {
     "integral": "rectangle-rule integral over the window (value at t_k times dt) [signal unit x s]",
     "at": "value at the first sample with t >= start",
     "settle": "first time after which the value stays below `threshold` (NaN if it ends above) [s]",
+    "settle_delay": "`settle` measured from the window start [s] (0 when it never was at or above)",
+    "rms": "root mean square over the samples in the window, the horizon sample excluded (as `integral`)",
+    "stage_integral": "integral over the steps [t_k, t_k + dt] inside the window, integrated with the plant "
+                      "(the RK4 stage values; rectangle rule for an exact-step plant) [signal unit x s]",
+    "stage_root_mean": "sqrt(stage_integral / (end - start)): with square = True, the RMS over the window",
+    "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
 }
+#: time reductions integrated at the integrator's stages (need a signal evaluated at every RK stage:
+#: plant, controller and actuator outputs, ``command``, ``applied``)
+STAGE_REDUCTIONS = ("stage_integral", "stage_root_mean")
 #: how spacecraft are combined before the time reduction
-SPACECRAFT_REDUCTIONS = ("each", "max", "mean", "sum", "none")
+SPACECRAFT_REDUCTIONS = ("each", "max", "mean", "sum", "none", "range")
 
 _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt in float64)
 
@@ -47,12 +57,15 @@ class Metric:
     name : metric name (``"each"`` appends ``_sc1``, ``_sc2``, ...).
     signal : name of a recorded signal of the closed loop.
     reduce : time reduction, one of :data:`REDUCTIONS`.
-    norm : take the Euclidean norm over the signal's last axis first.
+    norm : take a norm over the signal's last axis first (``norm_ord``).
+    norm_ord : ``"2"`` Euclidean norm (default) or ``"inf"`` largest absolute component.
     spacecraft : combine the spacecraft axis (axis 0 after the norm) with one of
         :data:`SPACECRAFT_REDUCTIONS`; ``"none"`` for signals without a spacecraft axis.
     units : units of the metric (UDUNITS).
     start, end : window [s] (inclusive); ``end = inf`` for "until the end".
-    threshold : threshold of ``"settle"`` [signal units].
+    threshold : threshold of ``"settle"`` and ``"first"`` [signal units].
+    gate : name of a signal; when given, only the samples at which it is > 0 (true) count, so the
+        window may open on an event (e.g. a mode switch). Not for the stage-integrated reductions.
     """
 
     name: str = static()
@@ -64,25 +77,50 @@ class Metric:
     start: Any = 0.0
     end: Any = float("inf")
     threshold: Any = 0.0
+    norm_ord: str = static("2")
+    square: bool = static(False)
+    component: int | None = static(None)
+    gate: str | None = static(None)
 
     def __post_init__(self) -> None:
+        if self.norm_ord not in ("2", "inf"):
+            raise ValueError(f"metric {self.name!r}: norm_ord must be '2' or 'inf', got {self.norm_ord!r}")
         if self.reduce not in REDUCTIONS:
             raise ValueError(f"metric {self.name!r}: reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}")
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
             raise ValueError(f"metric {self.name!r}: spacecraft must be one of {SPACECRAFT_REDUCTIONS}, "
                              f"got {self.spacecraft!r}")
+        if self.gate is not None and self.reduce in STAGE_REDUCTIONS:
+            raise ValueError(f"metric {self.name!r}: a gate is not supported by the stage-integrated "
+                             f"reduction {self.reduce!r}")
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         """The instantaneous value (scalar, or (N,) for ``"each"``)."""
         v = jnp.asarray(signals[self.signal])
-        if self.norm:
+        if self.component is not None:  # one component of the last axis; its norm is |v|
+            v = v[..., self.component]
+            if self.norm:
+                v = jnp.abs(v)
+            if self.square:
+                v = v * v
+        elif self.norm and self.square and self.norm_ord == "2":
+            v = jnp.sum(v * v, axis=-1)
+        elif self.square and not self.norm:
+            v = v * v
+        elif self.norm and self.norm_ord == "inf":
+            v = jnp.max(jnp.abs(v), axis=-1)
+        elif self.norm:
             v = jnp.sqrt(jnp.sum(v * v, axis=-1))
+            if self.square:
+                v = v * v
         if self.spacecraft == "max":
             v = jnp.max(v, axis=0)
         elif self.spacecraft == "mean":
             v = jnp.mean(v, axis=0)
         elif self.spacecraft == "sum":
             v = jnp.sum(v, axis=0)
+        elif self.spacecraft == "range":
+            v = jnp.max(v, axis=0) - jnp.min(v, axis=0)
         if self.spacecraft == "each":
             if v.ndim != 1:
                 raise ValueError(f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
@@ -118,9 +156,15 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
             accs.append((nan, jnp.zeros(shape, bool)))
         elif m.reduce in ("mean", "integral"):
             accs.append((jnp.zeros(shape), jnp.zeros(shape)))
-        elif m.reduce == "settle":
+        elif m.reduce in STAGE_REDUCTIONS:  # (integral, number of steps counted)
+            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
+        elif m.reduce == "rms":  # (sum of squares, number of samples)
+            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
+        elif m.reduce in ("settle", "settle_delay"):
             # (time of the first sample after the last one at or above the threshold, seen, last above)
             accs.append((nan, jnp.zeros(shape, bool), jnp.zeros(shape, bool)))
+        elif m.reduce == "first":  # (time of the first sample at or above the threshold, found)
+            accs.append((nan, jnp.zeros(shape, bool)))
     return tuple(accs)
 
 
@@ -130,8 +174,13 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
     which the rectangle-rule integral does not count)."""
     out = []
     for m, acc in zip(metrics, accs, strict=True):
+        if m.reduce in STAGE_REDUCTIONS:  # folded in by update_stage_accumulators
+            out.append(acc)
+            continue
         v = m.value(signals)
         inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+        if m.gate is not None:
+            inw = jnp.logical_and(inw, jnp.asarray(signals[m.gate]) > 0)
         if m.reduce == "max":
             a, seen = acc
             out.append((jnp.where(inw, jnp.maximum(a, v), a), seen | inw))
@@ -152,7 +201,11 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
             s, n = acc
             w = 0.0 if is_final else dt
             out.append((s + jnp.where(inw, v * w, 0.0), n + jnp.where(inw, 1.0, 0.0)))
-        elif m.reduce == "settle":
+        elif m.reduce == "rms":
+            s, n = acc
+            take = jnp.logical_and(inw, not is_final)
+            out.append((s + jnp.where(take, v * v, 0.0), n + jnp.where(take, 1.0, 0.0)))
+        elif m.reduce in ("settle", "settle_delay"):
             ts, seen, last_above = acc
             above = jnp.logical_not(v < m.threshold)
             first = jnp.logical_and(inw, jnp.logical_not(seen))
@@ -160,6 +213,10 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
             # at or above it (the window start when it never was above); NaN while it is above
             ts_new = jnp.where(above, jnp.nan, jnp.where(first | last_above, t, ts))
             out.append((jnp.where(inw, ts_new, ts), seen | inw, jnp.where(inw, above, last_above)))
+        elif m.reduce == "first":
+            ts, found = acc
+            hit = inw & jnp.logical_not(v < m.threshold) & jnp.logical_not(found)
+            out.append((jnp.where(hit, t, ts), found | hit))
     return tuple(out)
 
 
@@ -178,6 +235,39 @@ def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
             out.append(jnp.where(n > 0, s, jnp.nan))
         elif m.reduce == "settle":
             out.append(acc[0])
+        elif m.reduce == "settle_delay":
+            out.append(acc[0] - m.start)
+        elif m.reduce == "first":
+            out.append(acc[0])
+        elif m.reduce == "rms":
+            s, n = acc
+            out.append(jnp.where(n > 0, jnp.sqrt(s / jnp.maximum(n, 1.0)), jnp.nan))
+        elif m.reduce == "stage_integral":
+            s, n = acc
+            out.append(jnp.where(n > 0, s, jnp.nan))
+        elif m.reduce == "stage_root_mean":
+            s, n = acc
+            out.append(jnp.where(n > 0, jnp.sqrt(s / (m.end - m.start)), jnp.nan))
+    return tuple(out)
+
+
+def stage_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
+    """Values of the stage-integrated metrics at one integrator stage (None for the others)."""
+    return tuple(m.value(signals) if m.reduce in STAGE_REDUCTIONS else None for m in metrics)
+
+
+def update_stage_accumulators(metrics: Sequence[Metric], accs: tuple, t_k: jax.Array, dt: float,
+                              increments: Sequence[Any]) -> tuple:
+    """Add the integral over the step [t_k, t_k + dt] (``increments``, from the integrator's stages) to
+    every stage-integrated metric whose window contains the whole step."""
+    out = []
+    for m, acc, inc in zip(metrics, accs, increments, strict=True):
+        if m.reduce not in STAGE_REDUCTIONS:
+            out.append(acc)
+            continue
+        s, n = acc
+        inw = jnp.logical_and(t_k >= m.start - _TOL, t_k + dt <= m.end + _TOL)
+        out.append((jnp.where(inw, s + inc, s), n + jnp.where(inw, 1.0, 0.0)))
     return tuple(out)
 
 

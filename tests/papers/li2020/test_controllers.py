@@ -9,13 +9,16 @@ from hypothesis import strategies as st
 
 import formation_ftc  # noqa: F401
 from formation_ftc.blocks.controllers.li2020_adaptive import (
-    consensus_term,
     li2020_adaptation_rates,
     li2020_control,
     sigma_exponential,
     sigma_inverse_square,
 )
 from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_control, sir_ftc_rate
+from formation_ftc.components.controllers.li2020_adaptive import consensus
+from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork, graph_edges
+from formation_ftc.core.history import history_init, history_push
+from formation_ftc.sim.components import NetworkInputs
 
 rng = np.random.default_rng(3)
 
@@ -27,7 +30,7 @@ def test_control_law_matches_per_agent_formula():
     C = np.array([[0, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]])
     m_hat, beta, d_hat = rng.uniform(90, 110, N), rng.uniform(1, 10, N), rng.uniform(0.1, 5, N)
     sig, lam = 0.7, 20.0
-    cons = consensus_term(C, s)
+    cons = consensus(GraphNetwork(weights=jnp.asarray(C)).receive(0.0, None, NetworkInputs(s, 0.0, None)), s)
     f, xi = li2020_control(s, Y, cons, m_hat, beta, d_hat, sig, lam)
     bd, md, dd = li2020_adaptation_rates(s, Y, xi, d_hat, sig, 0.1, 1.0, 1.0, 0.01)
     for i in range(N):
@@ -41,10 +44,46 @@ def test_control_law_matches_per_agent_formula():
 
 
 def test_delayed_consensus_reduces_to_undelayed():
+    """A delayed network whose history holds the same message at every sample delivers what the
+    instantaneous network delivers (interpolating between equal samples)."""
     s = rng.normal(size=(4, 3))
     C = rng.uniform(0, 1, (4, 4)) * (1 - np.eye(4))
-    received = np.broadcast_to(s[None], (4, 4, 3))
-    assert np.allclose(consensus_term(C, s, received), consensus_term(C, s), atol=1e-14)
+    delays = tuple(tuple("0.5 + 0.1*i + 0.01*j" for _ in range(4)) for _ in range(4))
+    net = DelayedGraphNetwork(weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=80, dt=0.01)
+    hist = history_init(jnp.asarray(s), 80)
+    for _ in range(5):
+        hist = history_push(hist, jnp.asarray(s))
+    t = 0.043
+    exo = net.exogenous(t)
+    got = consensus(net.receive(t, hist, NetworkInputs(s, 0.04, exo)), s)
+    want = consensus(GraphNetwork(weights=jnp.asarray(C)).receive(t, None, NetworkInputs(s, 0.04, None)), s)
+    assert np.allclose(got, want, atol=1e-14)
+
+
+def test_delayed_network_reads_interpolated_past():
+    """m_j(t - T_ij(t)) with linear interpolation between stored samples, against a per-link formula."""
+    N, dt = 3, 0.1
+    C = np.array([[0, 0.5, 0.2], [0.3, 0, 0], [0, 0.7, 0]])
+    delays = (("0", "0.25", "0.3 + 0.1*sin(t)"), ("0.15", "0", "0"), ("0", "0.2 + 0.01*t", "0"))
+    net = DelayedGraphNetwork(weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=8, dt=dt)
+    samples = [rng.normal(size=(N, 2)) for _ in range(6)]  # m(t_0) .. m(t_5), t_k = k dt
+    hist = history_init(jnp.asarray(samples[0]), 8)
+    for m in samples[1:]:
+        hist = history_push(hist, jnp.asarray(m))
+    t_k, t = 0.5, 0.53
+
+    def past(j, tau):  # linear interpolation of sender j at time tau
+        x = tau / dt
+        k0 = int(np.floor(x))
+        w = x - k0
+        return (1 - w) * samples[k0][j] + w * samples[k0 + 1][j]
+
+    T = {(0, 1): 0.25, (0, 2): 0.3 + 0.1 * np.sin(t), (1, 0): 0.15, (2, 1): 0.2 + 0.01 * t}
+    got = net.receive(t, hist, NetworkInputs(None, t_k, net.exogenous(t)))
+    for i in range(N):
+        want = sum(C[i, j] * past(j, t - T[(i, j)]) for j in range(N) if C[i, j] > 0)
+        np.testing.assert_allclose(np.asarray(got["weighted_sum"][i]), want, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(np.asarray(got["in_weight"]), C.sum(axis=1))
 
 
 @settings(max_examples=50, deadline=None)

@@ -4,7 +4,9 @@ Pure ``jax.numpy`` kernels; spacecraft are axis 0 (shapes (N, 3) for vectors, (N
 
 Composite error (eq. (6)): ``s_i = e_i2 + k_i e_i1``. With the regressor Y_i (eq. (8)) and the
 consensus term ``sum_j c_ij (s_i - s_j)`` (Thm 1, eq. (24)) or ``sum_j c_ij (s_i - s_j(t - T_ij(t)))``
-(Thm 2, eq. (42)), the control and the adaptive laws are (vector form of E000-05)::
+(Thm 2, eq. (42)) -- formed from what a graph network delivers
+(:mod:`formation_ftc.components.networks.weighted_graph`) -- the control and the adaptive laws are
+(vector form of E000-05)::
 
     xi_i  = m_hat_i Y_i + lambda_i s_i + consensus_i + sgn * d_hat_i tanh(s_i / sigma_i)   # (24)/(42)
     w_i   = xi_i^T s_i
@@ -26,33 +28,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 __all__ = [
-    "sliding_variable",
-    "consensus_term",
     "sigma_exponential",
     "sigma_inverse_square",
     "li2020_control",
     "li2020_adaptation_rates",
 ]
-
-
-def sliding_variable(e1, e2, k):
-    """s_i = e_i2 + k_i e_i1 (eq. (6)); e1 [m], e2 [m/s], k (N,) or scalar [1/s] -> [m/s]."""
-    return e2 + jnp.asarray(k)[..., None] * e1
-
-
-def consensus_term(C, s, s_received=None):
-    """sum_j c_ij (s_i - s_j) (eq. (24)) or, with ``s_received[i, j] = s_j(t - T_ij(t))``, eq. (42).
-
-    C (N, N) row i = receiver; s (N, 3); s_received (N, N, 3) or None (no delay).
-    """
-    C = jnp.asarray(C)
-    in_weight = jnp.sum(C, axis=1)
-    if s_received is None:
-        # sum_j c_ij s_j as N broadcast multiply-adds (elementwise, fuses with its consumers; a
-        # dot_general is a separate XLA kernel with a transpose around it under vmap)
-        received = sum(C[:, j, None] * s[..., j, None, :] for j in range(C.shape[1]))
-        return in_weight[:, None] * s - received
-    return in_weight[:, None] * s - jnp.einsum("ij,ijk->ik", C, s_received)
 
 
 def sigma_exponential(t, a):

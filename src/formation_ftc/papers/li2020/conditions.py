@@ -1,4 +1,4 @@
-"""Condition checks of Li et al. 2020 (SPEC.md P0.3 "Checkable conditions") and delay validation.
+"""Condition checks of Li et al. 2020 (the checkable conditions of its theorems) and delay validation.
 
 * graph balance (Thms 1-2 assume it; the printed C is NOT balanced, E000-07) with row/column sums;
 * strong connectivity (informative);
@@ -29,7 +29,6 @@ from formation_ftc.registry import Condition
 __all__ = [
     "DelayError",
     "DelayStats",
-    "delay_vector_function",
     "delay_statistics",
     "validate_delays",
     "lemma3_constant",
@@ -39,18 +38,6 @@ __all__ = [
 
 class DelayError(ValueError):
     """A delay expression that is negative, too short, or whose rate reaches 1."""
-
-
-def delay_vector_function(texts, pairs):
-    """``T(t) -> (E,)`` [s]: the delays of the listed ``pairs`` ((i, j) 0-based), in that order."""
-    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
-           for i, j in pairs]
-
-    def T(t):
-        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), jnp.shape(t))
-                          for f, (i, j) in zip(fns, pairs, strict=True)])
-
-    return T
 
 
 @dataclass(frozen=True)

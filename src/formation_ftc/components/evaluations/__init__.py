@@ -1,0 +1,1 @@
+"""Evaluation components: signals derived from each sample for records and metrics (one module per concept)."""

@@ -1,0 +1,109 @@
+"""Weighted directed communication graphs, instantaneous or with time-varying delays.
+
+Both networks deliver to spacecraft i the in-weight and the weighted sum of the messages it receives::
+
+    received_i = {"in_weight": sum_j c_ij,  "weighted_sum": sum_j c_ij m_j(t - T_ij(t))}
+
+(``T_ij = 0`` for :class:`GraphNetwork`), so that a controller forms the Laplacian consensus term
+``sum_j c_ij (s_i - s_j(t - T_ij)) = in_weight_i s_i - weighted_sum_i`` (Li2020 eqs. (24) / (42)).
+``c_ij > 0``: i receives from j (row i = receiver). Messages have shape (N, d).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any, ClassVar
+
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.core.expressions import compile_expression
+from formation_ftc.core.history import history_init, history_push, history_read
+from formation_ftc.sim.components import Network, NetworkInputs, component, static
+
+__all__ = ["GraphNetwork", "DelayedGraphNetwork", "delay_vector_function", "graph_edges"]
+
+
+def graph_edges(weights) -> tuple[tuple[int, int], ...]:
+    """Used links (i, j) (0-based receiver, sender) of a weight matrix, row-major order."""
+    w = np.asarray(weights, dtype=float)
+    return tuple((int(i), int(j)) for i, j in zip(*np.nonzero(w > 0), strict=True))
+
+
+@lru_cache(maxsize=256)
+def delay_vector_function(texts: tuple[tuple[str, ...], ...], pairs: tuple[tuple[int, int], ...]):
+    """``T(t) -> (E,)`` [s]: the delay expressions (in t [s], i receiver, j sender, 1-based) of the listed
+    ``pairs`` ((i, j) 0-based), in that order (compiled once per texts and pairs)."""
+    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
+           for i, j in pairs]
+
+    def T(t):
+        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), jnp.shape(t))
+                          for f, (i, j) in zip(fns, pairs, strict=True)])
+
+    return T
+
+
+@component
+class GraphNetwork(Network):
+    """Instantaneous exchange over a weighted directed graph ``weights`` (N, N) [-]."""
+
+    weights: Any  # (N, N) c_ij, row i = receiver
+
+    @property
+    def count(self) -> int:
+        return int(jnp.shape(self.weights)[0])
+
+    def receive(self, t, state, inputs: NetworkInputs):
+        C, m = self.weights, inputs.messages
+        # sum_j c_ij m_j as N broadcast multiply-adds (elementwise, fuses with its consumers; a
+        # dot_general is a separate XLA kernel with a transpose around it under vmap)
+        weighted = sum(C[:, j, None] * m[..., j, None, :] for j in range(self.count))
+        return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}
+
+
+@component
+class DelayedGraphNetwork(Network):
+    """Exchange over a weighted directed graph with time-varying delays T_ij(t) [s] (Li2020 Thm 2).
+
+    Every step the message of t_k is pushed into a ring buffer of ``capacity`` samples
+    (:mod:`formation_ftc.core.history`); at a stage time t in [t_k, t_k + dt] receiver i reads
+    m_j(t - T_ij(t)) with linear interpolation between the stored samples (constant prehistory m_j(t0)).
+    Requires T_ij(t) >= dt on every used link (the newest stored sample is m(t_k)) and
+    ``capacity >= ceil(max T / dt) + 2``. The per-link reads are dense one-hot selections (faster
+    than gathers and scatters on XLA:CPU)."""
+
+    weights: Any  # (N, N) c_ij, row i = receiver
+    delays: tuple[tuple[str, ...], ...] = static()  # T_ij(t) expressions in t, i, j [s] (N x N)
+    edges: tuple[tuple[int, int], ...] = static()  # used links (i, j), see graph_edges
+    capacity: int = static()  # ring-buffer length [samples]
+    dt: float = static()  # sample spacing of the history = the loop's step [s]
+    delayed: ClassVar[bool] = True
+
+    @property
+    def count(self) -> int:
+        return int(jnp.shape(self.weights)[0])
+
+    def exogenous(self, t):
+        return {"T": delay_vector_function(self.delays, self.edges)(t)}
+
+    def initial_state(self, messages0):
+        return history_init(messages0, self.capacity)
+
+    def push(self, state, messages):
+        return history_push(state, messages)
+
+    def receive(self, t, state, inputs: NetworkInputs):
+        n = self.count
+        rows = np.array([i for i, _ in self.edges], dtype=int)
+        cols = np.array([j for _, j in self.edges], dtype=int)
+        sender_onehot = np.eye(n)[cols]  # (E, N)
+        receiver_onehot = np.eye(n)[rows].T  # (N, E)
+        C = self.weights
+        # steps before the newest sample m(t_k) (>= 0 since T >= dt)
+        lag = (inputs.exogenous["T"] - (t - inputs.t_k)) / self.dt
+        rows_all = history_read(state, lag)  # (E, N, d): every sender's message at each link's delayed time
+        m_j = jnp.einsum("en,enk->ek", sender_onehot, rows_all)  # (E, d): m_{j_e}(t - T_e)
+        c_e = jnp.sum(C[rows] * sender_onehot, axis=1)  # (E,) link weights c_{i_e j_e}
+        weighted = receiver_onehot @ (c_e[:, None] * m_j)  # (N, d), eq. (42)
+        return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}

@@ -1,0 +1,80 @@
+"""Nonlinear relative translational motion about an elliptic Keplerian reference, in its LVLH frame."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+
+from formation_ftc.components.expressions import vector_expression
+from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
+from formation_ftc.core.vector3 import norm3, sq_norm3
+from formation_ftc.sim.components import CompositionError, Plant, Signal, TruthInputs, component, static
+
+__all__ = ["RelativeLvlhPlant"]
+
+VEC = ("spacecraft", "axis")
+
+
+@component
+class RelativeLvlhPlant(Plant):
+    """N point-mass spacecraft on the nonlinear relative dynamics of Li2020 eqs. (1)-(4).
+
+    State ``{"q": (N, 6)}``, q = [x, y, z, vx, vy, vz] in LVLH (x radial, y along-track, z orbit normal)
+    [m, m/s]. Per spacecraft i (mass m_i [kg])::
+
+        rho_dot_i = v_i                                                        (E000-02)
+        v_dot_i   = (C_i v_i + D_i rho_i + n_i) / m_i + (h_i(t) + F_i) / m_i    (eq. (1))
+
+    with the applied force F_i [N] (after the actuator's faults), the disturbance expressions h_i(t)
+    [N] and the reference-orbit values r_c, theta_dot, theta_ddot of a
+    :class:`~formation_ftc.components.references.keplerian.KeplerianReference` (required).
+    Usage integrals: the commanded delta-v int ||u_i|| / m_i dt [m/s] and effort int ||u_i||^2 dt [N^2 s].
+    """
+
+    mass: Any  # (N,) [kg]
+    initial_state_lvlh: Any  # (N, 6) [m, m/s]
+    mu: Any  # gravitational parameter [m^3/s^2]
+    disturbance_force: tuple[str, str, str] = static(("0", "0", "0"))  # h_i(t), expressions in t, i [N]
+
+    @property
+    def count(self) -> int:
+        return int(jnp.shape(self.mass)[0])
+
+    def initial_state(self):
+        return {"q": self.initial_state_lvlh}
+
+    def exogenous(self, t):
+        return {"h": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
+
+    def derivative(self, t, x, inputs: TruthInputs):
+        ref = inputs.reference
+        if ref is None:
+            raise CompositionError("plant RelativeLvlhPlant needs a reference orbit (reference slot "
+                                   "KeplerianReference), got none")
+        q = x["q"]
+        rho, v = q[:, :3], q[:, 3:]
+        acc_nat = natural_acceleration_from_rates(rho, v, ref["r_c"], ref["theta_dot"], ref["theta_ddot"],
+                                                  self.mu)  # eqs. (2)-(4) / m_i
+        acc = acc_nat + (inputs.exogenous["h"] + inputs.force) / self.mass[:, None]  # eq. (1)
+        return {"q": jnp.concatenate([v, acc], axis=-1)}
+
+    def position(self, x):
+        return x["q"][:, :3]
+
+    def usage_names(self):
+        return ("delta_v", "control_effort")
+
+    def usage_rates(self, t, x, command):
+        return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
+
+    def signals(self):
+        return (Signal("position", VEC, "m", "position rho_i relative to the reference", "LVLH"),
+                Signal("velocity", VEC, "m s-1", "velocity v_i relative to the reference", "LVLH"),
+                Signal("true_anomaly", (), "rad", "true anomaly of the reference orbit"),
+                Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |f_i|/m_i"),
+                Signal("control_effort", ("spacecraft",), "N2 s", "integral of |f_i|^2"))
+
+    def outputs(self, t, x, inputs):
+        return {"position": x["q"][:, :3], "velocity": x["q"][:, 3:],
+                "true_anomaly": inputs.reference["theta"]}
