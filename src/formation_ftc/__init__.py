@@ -20,13 +20,15 @@ import sys as _sys
 from pathlib import Path as _Path
 from typing import TYPE_CHECKING
 
-try:  # single source: the version in pyproject.toml, read from the installed package's metadata
-    from importlib.metadata import PackageNotFoundError as _NotFound
-    from importlib.metadata import version as _version
 
-    __version__ = _version("formation-ftc")
-except _NotFound:  # pragma: no cover - running from a source tree that was never installed
-    __version__ = "0+unknown"
+def _package_version() -> str:
+    """The version in pyproject.toml (the single source), read from the installed package's metadata."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("formation-ftc")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
+        return "0+unknown"
 
 
 def _configure_jax_environment() -> None:
@@ -63,6 +65,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    __version__: str
     from formation_ftc.api import (
         check,
         list_scenarios,
@@ -75,6 +78,9 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
 
 
 def __getattr__(name: str):
+    if name == "__version__":  # importlib.metadata costs ~30 ms: only when asked
+        globals()["__version__"] = value = _package_version()
+        return value
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'formation_ftc' has no attribute {name!r}")
@@ -87,4 +93,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | {"__version__"})

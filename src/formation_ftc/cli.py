@@ -268,6 +268,20 @@ def _cmd_run(args) -> int:
     return code
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: reads the package metadata only when asked (not for every command)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0,
+                         help=help or "show the version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        import formation_ftc
+
+        print(f"formation-ftc {formation_ftc.__version__}")
+        parser.exit()
+
+
 def _add_verbosity(p: argparse.ArgumentParser, top: bool = False) -> None:
     g = p.add_mutually_exclusive_group()
     default = 0 if top else argparse.SUPPRESS  # a sub-command's flag must not reset the top-level one
@@ -316,10 +330,8 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
     the modules of that command only (the others get a placeholder with their one-line help), so
     that ``--help``, ``--version`` and ``list`` import no JAX, SciPy or pandas.
     """
-    from formation_ftc import __version__
-
     parser = argparse.ArgumentParser(prog="formation-ftc")
-    parser.add_argument("--version", action="version", version=f"formation-ftc {__version__}")
+    parser.add_argument("--version", action=_VersionAction)
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
