@@ -4,7 +4,9 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test test-fast lint bench clean
+DOCS_STAMP := $(VENV)/.installed-docs
+
+.PHONY: install demo test test-fast lint bench bench-cli docs examples wheel-smoke clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -13,6 +15,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 install: $(STAMP)
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install -q -e ".[test,docs]"
+	touch $(DOCS_STAMP)
 
 ## main job: reproduce all five papers into out/reproduction (index.html + summary.json)
 demo: $(STAMP)
@@ -28,11 +34,28 @@ test-fast: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 
+## documentation site into site/ (strict: any warning fails; runs every example at reduced size)
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+## every example at reduced size (as the docs build runs them)
+examples: $(STAMP)
+	set -e; for f in examples/[0-9][0-9]_*.py; do echo "== $$f"; MPLBACKEND=Agg $(BIN)/python $$f --quick; done
+
+## wheel + sdist, installed into a fresh venv, list / run / campaign run from there
+wheel-smoke: $(STAMP)
+	.ci/wheel-smoke $(BIN)/python
+
+## command-line start-up times (--help, --version, list) against 0.5 s
+bench-cli: $(STAMP)
+	$(BIN)/python benchmarks/cli.py
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/engine.py
 	$(BIN)/python benchmarks/li2020.py
 	$(BIN)/python benchmarks/gui2022.py
 	$(BIN)/python benchmarks/campaign.py
+	$(BIN)/python benchmarks/cli.py
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out .pytest_cache site .cache/docs-examples
