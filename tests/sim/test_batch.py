@@ -3,6 +3,8 @@ and the property that makes it fast -- work that depends only on shared paramete
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import numpy as np
 import pytest
@@ -45,7 +47,8 @@ def li2020_runs():
     scn = api.load_scenario("li2020-thm1", {"simulation.horizon": 2.0, "simulation.record_every": 50})
     c = api.compile_scenario(scn)
     masses = (1.0, 1.07, 0.93)
-    params = [dict(c.params, mass=c.params["mass"] * m) for m in masses]
+    params = [dataclasses.replace(c.params, plant=dataclasses.replace(c.params.plant, mass=c.params.plant.mass * m))
+              for m in masses]
     return c, params
 
 
@@ -54,17 +57,18 @@ def test_shared_batch_equals_single_and_fully_stacked_runs(li2020_runs):
     Separate XLA programs round differently only in the last bits (1e-12 relative on positions)."""
     c, params = li2020_runs
     batch, axes = stack_params(params)
-    assert axes["mass"] == 0 and axes["p"] is None and axes["rho_bar"] is None
+    assert axes.plant.mass == 0 and axes.reference.semi_latus_rectum is None
+    assert axes.controller.formation.offsets is None
     shared = batched_run(c, axes, len(params))(batch)
     full = jax.jit(jax.vmap(c.run))(jax.tree_util.tree_map(lambda *x: np.stack(x), *params))
     single = jax.jit(c.run)
     for k, p in enumerate(params):
-        ref = np.asarray(single(p)["final"]["x"]["rho"])
-        np.testing.assert_allclose(shared["final"]["x"]["rho"][k], ref, rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(full["final"]["x"]["rho"][k], ref, rtol=1e-12, atol=1e-12)
+        ref = np.asarray(single(p)["final"]["plant"]["q"])
+        np.testing.assert_allclose(shared["final"]["plant"]["q"][k], ref, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(full["final"]["plant"]["q"][k], ref, rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(shared["records"]["mu1"][k], np.asarray(single(p)["records"]["mu1"]),
                                    rtol=1e-12, atol=1e-12)
-    assert shared["final"]["x"]["theta"].shape == (3,)  # outputs are broadcast to the run axis
+    assert shared["final"]["reference"].shape == (3,)  # outputs are broadcast to the run axis
 
 
 def test_run_independent_work_is_not_batched(li2020_runs):

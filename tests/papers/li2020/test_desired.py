@@ -8,9 +8,21 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.papers.li2020.desired import chi_from_period, desired_trajectory, formation_offsets
-from formation_ftc.papers.li2020.method import make_params
-from formation_ftc.papers.li2020.metrics import mu1, mu2_literal, mu2_virtual_centre, settle_time
+from formation_ftc.components.evaluations.formation_errors import (
+    mu1,
+    mu2_literal,
+    mu2_virtual_centre,
+    settle_time,
+)
+from formation_ftc.core.rotating_formation import chi_from_period, desired_trajectory, formation_offsets
+from formation_ftc.papers.li2020.method import make_loop
+
+
+def _formation(scn):
+    """(rho0 (N, 3), desired-trajectory arguments) of the scenario's closed loop."""
+    loop = make_loop(scn)
+    f = loop.controller.formation
+    return np.asarray(loop.plant.initial_state_lvlh)[:, :3], (f.offsets, f.chi, f.rotation, f.growth, f.centre)
 
 
 def test_constants(load):
@@ -20,7 +32,7 @@ def test_constants(load):
     assert abs(n / 1.078008e-3 - 1) < 1e-5 and abs(T / 5828.52 - 1) < 1e-5
     chi = chi_from_period(T)
     assert abs(chi / 3.07368e5 - 1) < 1e-5
-    assert abs(float(make_params(scn)["chi"]) - chi) < 1e-9
+    assert abs(float(make_loop(scn).controller.formation.chi) - chi) < 1e-9
     g = 1 - math.exp(-((T / 2) ** 2) / (2 * chi))
     assert abs((1 - g) - 1e-6) < 1e-12
 
@@ -29,10 +41,9 @@ def test_initial_geometry(load):
     """e_i1(0), mu1(0) = 18.127 m, edges 707.11 m, diagonals 1000 m (x1.6 after the maneuver),
     literal mu2 at the desired shape = 0, mu2_vc(0) = 171.38 m."""
     scn = load("li2020-thm1")
-    p = make_params(scn)
-    args = (p["rho_bar"], p["chi"], p["rotation"], p["growth"], p["centre"])
+    rho0, args = _formation(scn)
     rd0, vd0, _, rf0 = desired_trajectory(0.0, *args)
-    e1 = np.asarray(p["rho0"]) - np.asarray(rd0)
+    e1 = rho0 - np.asarray(rd0)
     want = np.array([[0, 20, -10.013], [-15, -5, 10], [12, -10, 0], [5, 0, 15]])
     assert np.allclose(e1, want, atol=1e-3)
     assert abs(float(mu1(e1)) - 18.127) < 1e-3
@@ -45,13 +56,12 @@ def test_initial_geometry(load):
     assert np.allclose([dT[0, 2], dT[1, 3]], 1600.0, atol=1e-6)
     for t in (0.0, 500.0, 3000.0):
         assert float(mu2_literal(desired_trajectory(t, *args)[0])) < 1e-9
-    assert abs(float(mu2_virtual_centre(p["rho0"], rf0)) - 171.38) < 5e-3
+    assert abs(float(mu2_virtual_centre(rho0, rf0)) - 171.38) < 5e-3
 
 
 def test_velocity_and_acceleration_are_exact_derivatives(load):
     """v^d = d rho^d/dt and a^d = d v^d/dt (forward-mode autodiff of the position as the truth)."""
-    p = make_params(load("li2020-thm1"))
-    args = (p["rho_bar"], p["chi"], p["rotation"], p["growth"], p["centre"])
+    _, args = _formation(load("li2020-thm1"))
     pos = lambda t: desired_trajectory(t, *args)[0]  # noqa: E731
     vel = lambda t: desired_trajectory(t, *args)[1]  # noqa: E731
     for t in (0.0, 137.0, 900.0, 2914.0):

@@ -46,7 +46,7 @@ def test_step_profile_shares_one_program_across_values():
                                                            "faults.step_effectiveness": [[0.9] * 3] * 4,
                                                            "faults.step_onset": [[1.0] * 3] * 4}))
     assert a.static_key == b.static_key
-    assert not np.array_equal(a.params["fault_alpha"], b.params["fault_alpha"])
+    assert not np.array_equal(a.params.actuator.alpha, b.params.actuator.alpha)
 
 
 @pytest.mark.parametrize("field,value,msg", [
