@@ -133,3 +133,15 @@ def test_check_output_not_truncated_when_piped(capsys):
     assert max(len(ln) for ln in lines) > 80 or all(len(ln) <= 80 for ln in lines)
     for c in conds:  # every value printed whole on its condition's line
         assert any(ln.startswith(c.name) and str(c.value) in ln for ln in lines), c.name
+
+
+def test_show_annotates_units_without_changing_values(capsys):
+    import tomllib
+
+    assert cli.main(["show", "cw-pd-fault", "--set", "controller.kp=3"]) == 0
+    annotated = capsys.readouterr().out
+    assert cli.main(["show", "cw-pd-fault", "--set", "controller.kp=3", "--no-comments"]) == 0
+    bare = capsys.readouterr().out
+    assert "#" not in bare and tomllib.loads(annotated) == tomllib.loads(bare)
+    kp_line = next(ln for ln in annotated.splitlines() if ln.startswith("kp ="))
+    assert kp_line.startswith("kp = 3.0") and "[N/m]" in kp_line

@@ -29,7 +29,8 @@ HELP: dict[str, tuple[str, list[str]]] = {
           "formation-ftc reproduce all --out out/reproduction", "formation-ftc COMMAND --help"]),
     "list": ("List the built-in scenarios, one line each (name, then description).",
              ["formation-ftc list", "formation-ftc list | grep li2020"]),
-    "show": ("Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied).",
+    "show": ("Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied), "
+             "each field followed by its unit and meaning as a comment.",
              ["formation-ftc show li2020-thm1", "formation-ftc show my-scenario.toml --set controller.kp=3"]),
     "check": ("Evaluate the theorem and design conditions of a scenario's method before any run.",
               ["formation-ftc check li2020-thm2-delays", "formation-ftc check gui2022-lof2tc --json"]),
@@ -143,10 +144,44 @@ def _cmd_list(args) -> int:
     return 0
 
 
+def _annotate_toml(text: str, schema: dict) -> str:
+    """``text`` (TOML of a scenario) with each field's unit and meaning from ``schema`` as a trailing
+    comment (``kp = 2.0  # [N/m] Position gain.``); the values are unchanged."""
+    import tomlkit
+
+    from formation_ftc.suggest import _resolve
+
+    doc = tomlkit.parse(text)
+
+    def walk(container, node: dict) -> None:
+        props: dict = {}
+        for option in _resolve(node, schema):
+            props.update(option.get("properties", {}))
+        for key, item in container.items():
+            sub = props.get(key)
+            if sub is None:
+                continue
+            if isinstance(item, tomlkit.items.Table):
+                walk(item, sub)
+                continue
+            desc = " ".join(str(next((o.get("description") for o in [sub, *_resolve(sub, schema)]
+                                      if o.get("description")), "")).split())
+            if desc and hasattr(item, "comment"):
+                item.comment(desc if len(desc) <= 100 else desc[:97] + "...")
+
+    walk(doc, schema)
+    return tomlkit.dumps(doc)
+
+
 def _cmd_show(args) -> int:
     from formation_ftc.config.loader import dump_toml
+    from formation_ftc.registry import get_method
 
-    print(dump_toml(_load(args)), end="")
+    scenario = _load(args)
+    text = dump_toml(scenario)
+    if not args.no_comments:
+        text = _annotate_toml(text, get_method(scenario.scenario.method).schema.model_json_schema())
+    print(text, end="")
     return 0
 
 
@@ -340,6 +375,8 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
 
     p = sub.add_parser("show", help="print the resolved TOML of a scenario")
     _scenario_args(p)
+    p.add_argument("--no-comments", action="store_true",
+                   help="bare TOML (default: each field's unit and meaning as a comment)")
     p.set_defaults(func=_cmd_show)
 
     p = sub.add_parser("check", help="evaluate the scenario's stability/design conditions")
