@@ -12,8 +12,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc import api
+from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
+from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.papers.azizi2009.model import desired_state, relative_acceleration_fn
-from formation_ftc.papers.yang2013.model import error_dynamics_rhs, switched_structure
+from formation_ftc.papers.yang2013.method import switched_structure
 
 
 def test_yang2013_slot_variation_maps_of_the_builtin_sequence():
@@ -45,7 +47,9 @@ def test_yang2013_error_dynamics_by_hand():
     Phi, f, d = jnp.array([0.5, 0, -1.0]), jnp.array([10.0, 20.0, 0.0]), jnp.array([0.0, 0.0, 4.0])
     Ups, tau, iota = jnp.array([0.0, 1.0, 0.0]), jnp.array([2.0, 0.0, 0.0]), jnp.array([0.0, 0.0, -3.0])
     J = np.diag([2.0, 4.0, 5.0])
-    dx = np.asarray(error_dynamics_rhs(x, Phi, Ups, f, tau, d, iota, 10.0, jnp.asarray(np.linalg.inv(J))))
+    de_R, de_V = translational_error_rates(x[0:3], x[3:6], Phi, f, d, 10.0)  # (2) without omega x terms
+    de_w, dq = rigid_body_quaternion_rates(x[6:9], x[9:13], Ups + tau + iota, J, gyroscopic=False)  # (5)
+    dx = np.concatenate([de_R, de_V, de_w, dq])
     np.testing.assert_allclose(dx[0:3], [0.1, -0.2, 0.3], rtol=0, atol=1e-15)  # e_R' = e_V
     np.testing.assert_allclose(dx[3:6], [0.5 - 1.0, -2.0, -1.0 - 0.4], rtol=0, atol=1e-15)  # Phi - (f+d)/M
     np.testing.assert_allclose(dx[6:9], [2.0 / 2, 1.0 / 4, -3.0 / 5], rtol=0, atol=1e-15)  # J^-1 (Ups+tau+iota)

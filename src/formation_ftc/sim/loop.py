@@ -130,9 +130,9 @@ class ClosedLoop:
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:
         """Every recorded signal of the loop, in slot order."""
-        own = (Signal(COMMAND_SIGNAL, ("spacecraft", "axis"), _unit(self.controller.quantity),
-                      f"commanded {self.controller.quantity}"),
-               Signal(APPLIED_SIGNAL, ("spacecraft", "axis"), _unit(self.plant.quantity),
+        own = (Signal(COMMAND_SIGNAL, ("spacecraft", _vector_dim(self.controller.quantity)),
+                      _unit(self.controller.quantity), f"commanded {self.controller.quantity}"),
+               Signal(APPLIED_SIGNAL, ("spacecraft", _vector_dim(self.plant.quantity)), _unit(self.plant.quantity),
                       f"applied {self.plant.quantity} (after actuator faults)"))
         if self._tracks_position():
             own += (Signal(POSITION_ERROR_SIGNAL, ("spacecraft", "axis"), "m",
@@ -423,6 +423,12 @@ class ClosedLoop:
             new, _ = loop.step(k, state)
             return new, acc
         return step
+
+
+def _vector_dim(quantity: str) -> str:
+    """Dimension of a command vector: ``axis`` (x, y, z), or ``wrench_component`` for a force-torque
+    wrench [f; tau] (6 components)."""
+    return "wrench_component" if quantity == "wrench" else "axis"
 
 
 def _unit(quantity: str) -> str:

@@ -2,7 +2,8 @@
 
 Truths: closed-form solution of the translational closed loop e'' + K2 e' + (K1+1) e = 0 (decay rate
 eta/2 = K2/2, and growth eta1/2 for the faulty gain), exact cancellation of the drift (the closed loop
-does not depend on Phi, Upsilon), and the (29) decision table of Theorem 2.
+does not depend on Phi, Upsilon), the formulas (12)-(13) written out by hand, and the (29) decision
+table of Theorem 2 (margins computed by hand).
 """
 
 import jax
@@ -12,20 +13,16 @@ import pytest
 
 import formation_ftc  # noqa: F401  (x64)
 from formation_ftc.blocks.controllers.yang2013_individual import (
-    Yang2013Gains,
     attitude_control,
-    feedback_input,
     input_norm,
     translational_control,
 )
-from formation_ftc.blocks.supervisors.switching_supervisor import (
-    RECONFIGURE,
-    TOLERATE_BY_SWITCHING,
-    SwitchingSupervisor,
-    decision_events,
-)
+from formation_ftc.blocks.supervisors.switching_supervisor import RECONFIGURE, TOLERATE_BY_SWITCHING
+from formation_ftc.components.supervisors.switching_supervisor import SwitchingSupervisor, decision_events
+from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
+from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.core.integrators import rk4_step
-from formation_ftc.papers.yang2013.model import error_dynamics_rhs
+from formation_ftc.sim.components import FlightInputs
 
 M = 150.0
 J = jnp.diag(jnp.array([25.0, 25.0, 25.0]))
@@ -36,7 +33,9 @@ def closed_loop(t, x, K2, Phi, Ups):
     f = translational_control(e_R, e_V, Phi, M, 0.005, K2)
     tau = attitude_control(e_w, e_q, e_q4, Ups, J, 0.2, 1.0, 1.0, 1e-3)
     z = jnp.zeros(3)
-    return error_dynamics_rhs(x, Phi, Ups, f, tau, z, z, M, jnp.linalg.inv(J), omega_body=-e_w)
+    de_R, de_V = translational_error_rates(e_R, e_V, Phi, f, z, M, omega_body=-e_w)
+    de_w, dq = rigid_body_quaternion_rates(e_w, x[9:13], Ups + tau, J, gyroscopic=False)
+    return jnp.concatenate([de_R, de_V, de_w, dq])
 
 
 def simulate(x0, K2, Phi, Ups, dt=0.05, n=20000):
@@ -79,35 +78,37 @@ def test_translational_closed_loop_matches_closed_form_rate_eta_over_2(K2):
     assert np.max(np.abs(traj[:, 6:])) == 0.0
 
 
-def test_drift_cancellation_and_feedback_input():
+def test_drift_cancellation_and_laws_by_hand():
     x = jnp.arange(1.0, 14.0) / 10.0
     a = closed_loop(0.0, x, 0.01, jnp.zeros(3), jnp.zeros(3))
     b = closed_loop(0.0, x, 0.01, jnp.array([1.0, 2.0, 3.0]), jnp.array([-4.0, 5.0, 0.5]))
     np.testing.assert_allclose(a, b, atol=1e-14)
-    f, tau = feedback_input(x, M, J, Yang2013Gains())
+    z = jnp.zeros(3)
+    f = translational_control(x[0:3], x[3:6], z, M, 0.005, 0.01)
     np.testing.assert_allclose(f, M * (1.005 * x[0:3] + 0.01 * x[3:6]), rtol=1e-14)
     e_w, e_q, e_q4 = x[6:9], x[9:12], x[12]
+    tau = attitude_control(e_w, e_q, e_q4, z, J, 0.2, 1.0, 1.0, 1e-3)
     shaping = (jnp.sum(e_q**2) + e_q4**2) / (2 * (jnp.sum(e_w**2) + 1e-3))
     np.testing.assert_allclose(tau, -J @ (0.2 * e_w + e_q + e_w * shaping), rtol=1e-14)
     np.testing.assert_allclose(input_norm(f, tau), np.sqrt(np.sum(f**2) + np.sum(tau**2)), rtol=1e-14)
-
-
-def test_gains_must_be_positive_e001_01():
-    with pytest.raises(ValueError, match="K2 must be > 0"):
-        Yang2013Gains(K2=-0.01)
-    with pytest.raises(ValueError, match="kappa"):
-        Yang2013Gains(kappa=0.0)
 
 
 def make_supervisor(leaves_slot1=True, delay=0):
     # modes start at 0, 1000, 2000 s (dt = 1 s); slot 1 leaves at the switch out of mode 2 (index 1)
     leaves = np.zeros((3, 3), bool)
     leaves[1, 1] = leaves_slot1
-    return SwitchingSupervisor(np.array([0, 1000, 2000]), leaves, 0.01, np.full(3, 0.01), np.full(3, delay), 1.0)
+    return SwitchingSupervisor(count=3, dt=1.0, switch_steps=jnp.array([0, 1000, 2000]),
+                               active=jnp.ones((3, 3)), leaves_at_next_switch=jnp.asarray(leaves),
+                               eta=0.01, eta1=jnp.full(3, 0.01), delay_bound_steps=jnp.full(3, delay),
+                               desired_position=((("0", "0", "0"),) * 3,) * 3)
+
+
+def flight(diagnosed):
+    return FlightInputs(None, None, {"diagnosed": jnp.asarray(diagnosed)}, None, None, None)
 
 
 @pytest.mark.parametrize("k_diag, leaves, delay, expected, margin", [
-    (1800, True, 0, TOLERATE_BY_SWITCHING, 3.0),  # dt1 = 800, dt2 = 200
+    (1800, True, 0, TOLERATE_BY_SWITCHING, 3.0),  # dt1 = 800, dt2 = 200: 0.005*800 - 0.005*200
     (1500, True, 0, TOLERATE_BY_SWITCHING, 0.0),  # dt1 = dt2: boundary of (29)
     (1300, True, 0, RECONFIGURE, -2.0),  # fault too early: (29) fails
     (1800, False, 0, RECONFIGURE, 3.0),  # (29) holds, but the spacecraft stays: reconfigure
@@ -116,25 +117,32 @@ def make_supervisor(leaves_slot1=True, delay=0):
 ])
 def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
     sup = make_supervisor(leaves, delay)
-    state = sup.init()
-    step = jax.jit(sup.step)
-    diagnosed = np.array([False, True, False])
-    state, out = step(state, diagnosed, k_diag)
+    update = jax.jit(sup.update)
+    diagnosed = [False, True, False]
+    state, dec = update(float(k_diag), sup.initial_state(), flight(diagnosed))
     assert int(state["decision"][1]) == expected
     assert float(state["margin_29"][1]) == pytest.approx(margin)
-    assert bool(out["reconfigure"][1]) == (expected == RECONFIGURE)
+    assert bool(dec.reconfigure[1]) == (expected == RECONFIGURE)
     assert int(state["decision"][0]) == 0 and int(state["decision"][2]) == 0
-    # decided once: later steps keep the decision
-    state2, _ = step(state, diagnosed, k_diag + 10)
+    # decided once: later steps keep the decision; the held decision is the one of the next step
+    state2, _ = update(float(k_diag + 10), state, flight(diagnosed))
     assert int(state2["decision_step"][1]) == k_diag
-    ev = decision_events(jax.tree_util.tree_map(np.asarray, state2), 1.0, [1, 2, 3])
-    assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == k_diag
+    held = sup.current(state2)
+    assert int(held.mode) == int(np.searchsorted([0, 1000, 2000], k_diag + 11, side="right") - 1)
+    out = sup.outputs(0.0, state2, held)
+    metrics = {f"{name}_sc{i + 1}": float(out[name][i]) for name in
+               ("supervisor_decision", "supervisor_decision_time", "supervisor_decision_mode",
+                "condition_29_margin") for i in range(3)}
+    ev = decision_events(metrics, 3, 1.0)
+    assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == k_diag and ev[0]["step"] == k_diag
 
 
-def test_supervisor_vmaps_over_batch():
+def test_supervisor_ignores_a_diagnosis_outside_the_formation_and_vmaps():
     sup = make_supervisor()
-    states = jax.vmap(lambda _: sup.init())(jnp.arange(2))
-    diag = jnp.array([[False, True, False], [False, True, False]])
-    ks = jnp.array([1800, 1300])
-    new, _ = jax.vmap(sup.step)(states, diag, ks)
+    sup = type(sup)(**{**sup.__dict__, "active": jnp.asarray([[1.0, 0.0, 1.0]] * 3)})
+    state, _ = sup.update(1800.0, sup.initial_state(), flight([False, True, False]))
+    assert int(state["decision"][1]) == 0
+    sup = make_supervisor()
+    new, _ = jax.vmap(lambda t: sup.update(t, sup.initial_state(), flight([False, True, False])))(
+        jnp.array([1800.0, 1300.0]))
     assert new["decision"][:, 1].tolist() == [TOLERATE_BY_SWITCHING, RECONFIGURE]

@@ -1,6 +1,6 @@
 """Switched-system simulation of Yang2013 Sec. 4 (SPEC P1.4, acceptance checks P1.6-4/5).
 
-Full 5000-s runs (RK4, dt = 0.05 s, 100,000 steps, one lax.scan each; the two scenarios share one
+Full 5000-s runs (RK4, dt = 0.05 s, 100,000 steps; the two scenarios run as one batch of one
 compiled program). Truths: the theorem's envelope and pre-switch bound, the variation model (10)
 (exact copies / zero blocks), decoupling of the spacecraft (the fault of spacecraft 2 cannot change any
 other spacecraft's error, and after its departure the formation is identical to the healthy one),
@@ -8,21 +8,26 @@ the reviewer's reference run of SPEC P1.4 (|X(t_k^-)| = 0.053, 0.066, 0.071, 0.1
 max|u_2| = 4.7 N on [2000, 3800) s) within 0.005 / 0.005 / 0.3 N, and the supervisor's (29) decision.
 """
 
+import dataclasses
+
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.papers.yang2013.model import build
-from formation_ftc.papers.yang2013.reproduction import run_scenario, scenario_numbers
+from formation_ftc.papers.yang2013.method import input_norm_window, make_loop
+from formation_ftc.papers.yang2013.reproduction import run_scenario, run_scenarios, scenario_numbers
+from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.compiled import compile_loop
+from formation_ftc.sim.metrics import metrics_dict
 
 
 @pytest.fixture(scope="module")
 def runs():
     out = {}
-    for name in ("yang2013-healthy", "yang2013-controller-fault"):
-        sc, ds, metrics = run_scenario(name)
-        out[name] = (sc, ds, metrics, scenario_numbers(sc, ds))
+    for sc, ds, metrics in run_scenarios(["yang2013-healthy", "yang2013-controller-fault"]):
+        out[sc.scenario.name] = (sc, ds, metrics, scenario_numbers(sc, ds, metrics))
     return out
 
 
@@ -98,7 +103,7 @@ def test_fault_only_affects_spacecraft_2(runs):
 def test_early_fault_is_reconfigured_by_the_supervisor(runs):
     # fault at 3300 s: (29) fails (dt1 = 300 < dt2 = 700) -> reconfiguration (nominal K2 restored)
     sc, ds, metrics = run_scenario("yang2013-controller-fault", {"faults.0.onset": 3300.0})
-    n = scenario_numbers(sc, ds)
+    n = scenario_numbers(sc, ds, metrics)
     ev = n["supervisor_events"]
     assert ev[0]["decision"] == "request controller reconfiguration"
     assert ev[0]["condition_29_margin"] == pytest.approx(-2.0)
@@ -107,20 +112,64 @@ def test_early_fault_is_reconfigured_by_the_supervisor(runs):
     np.testing.assert_array_equal(ds["error_state"].values, xh)
 
 
+SHORT = {"simulation.horizon": 100.0, "modes.1.start": 20.0, "modes.2.start": 40.0, "modes.3.start": 60.0,
+         "modes.4.start": 80.0, "faults.0.onset": 70.0, "simulation.record_every": 100}
+
+
 def test_batched_params_equal_single_runs():
-    sc = ftc.load_scenario("yang2013-controller-fault",
-                           {"simulation.horizon": 100.0, "modes.1.start": 20.0, "modes.2.start": 40.0,
-                            "modes.3.start": 60.0, "modes.4.start": 80.0, "faults.0.onset": 70.0,
-                            "simulation.record_every": 100})
-    c = build(sc)
-    p2 = dict(c.params)
-    p2["K2_faulty"] = p2["K2_faulty"].at[1].set(-0.05)
-    batch = jax.tree_util.tree_map(lambda a, b: np.stack([a, b]), c.params, p2)
-    run = jax.jit(c.run)
-    outb = jax.jit(jax.vmap(c.run))(batch)
-    for i, p in enumerate((c.params, p2)):
+    sc = ftc.load_scenario("yang2013-controller-fault", SHORT)
+    loop = make_loop(sc)
+    act = loop.actuator
+    loop2 = dataclasses.replace(loop, actuator=dataclasses.replace(act, K2_faulty=act.K2_faulty.at[1].set(-0.05)))
+    c = compile_loop(loop)
+    batch, in_axes = stack_params([loop, loop2])
+    outb = batched_run(c, in_axes, 2)(batch)
+    run = jax.jit(lambda p: p.run())
+    for i, p in enumerate((loop, loop2)):
         single = run(p)
-        np.testing.assert_allclose(outb["records"]["x"][i], single["records"]["x"], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(outb["records"]["error_state"][i], single["records"]["error_state"],
+                                   rtol=1e-12, atol=1e-15)
     assert int(single["diverged_step"]) == -1
-    assert outb["records"]["x"].dtype == np.float64
-    assert not np.allclose(outb["records"]["x"][0], outb["records"]["x"][1])
+    assert outb["records"]["error_state"].dtype == np.float64
+    assert not np.allclose(outb["records"]["error_state"][0], outb["records"]["error_state"][1])
+
+
+def test_windowed_input_maxima_are_taken_at_every_step():
+    # the same run recorded every step and every 20 steps: the in-run window maxima agree exactly and
+    # equal the maxima of the every-step records (an independent reduction of the records in numpy);
+    # the maxima of the decimated records miss the peaks of the 1 rad/s oscillation
+    over = dict(SHORT, **{"faults.0.onset": 75.0})
+    windows = (input_norm_window("w_60_75", 60.0, 75.0, 0.05), input_norm_window("w_75_80", 75.0, 80.0, 0.05))
+    out = {}
+    for every in (1, 20):
+        loop = make_loop(ftc.load_scenario("yang2013-controller-fault",
+                                           dict(over, **{"simulation.record_every": every})), windows)
+        res = jax.jit(lambda p: p.run())(loop)
+        out[every] = (metrics_dict(loop.metrics, res["metrics"]), np.asarray(res["records"]["input_norm"]))
+    m1, u1 = out[1]
+    m20, u20 = out[20]
+    assert m1 == pytest.approx(m20, rel=1e-13, abs=0, nan_ok=True)
+    t1 = 0.05 * np.arange(u1.shape[0])
+    t20 = 1.0 * np.arange(u20.shape[0])
+    for name, lo, hi in (("w_60_75", 60.0, 75.0), ("w_75_80", 75.0, 80.0), ("max_input_norm_mode4", 60.0, 80.0)):
+        sel = (t1 >= lo - 1e-9) & (t1 < hi - 1e-9)
+        for s in range(6):
+            assert m1[f"{name}_sc{s + 1}"] == pytest.approx(float(np.max(u1[sel, s])), rel=1e-13), (name, s)
+    dec = (t20 >= 75.0 - 1e-9) & (t20 < 80.0 - 1e-9)
+    assert np.max(u20[dec, 1]) < m1["w_75_80_sc2"]  # the decimated records miss the growing peak
+    assert m1["max_input_norm_sc2"] == pytest.approx(float(np.max(u1[:, 1])), rel=1e-13)
+    # |X| at the left limit of every switch, and sup |X| over both limits, against the every-step records
+    x1 = np.asarray(jax.jit(lambda p: p.run())(make_loop(ftc.load_scenario(
+        "yang2013-controller-fault", dict(over, **{"simulation.record_every": 1}))))["records"]["state_norm"])
+    assert m1["post_switch_norm_5"] == pytest.approx(float(x1[1600]), rel=1e-13)
+    assert m1["max_state_norm"] >= float(np.max(x1))
+
+
+def test_diagnosis_delay_is_counted_by_the_supervisor():
+    sc = ftc.load_scenario("yang2013-controller-fault", dict(SHORT, **{"faults.0.diagnosis_delay": 2.0}))
+    _, _, metrics = run_scenario(sc)
+    # diagnosed at 72 s; the estimated fault time 72 - 2 = 70 s: margin 0.005 (10) - 0.005 (10) = 0
+    assert metrics["supervisor_decision_time_sc2"] == pytest.approx(72.0)
+    assert metrics["condition_29_margin_sc2"] == pytest.approx(0.0, abs=1e-12)
+    assert metrics["supervisor_decision_sc2"] == 1.0
+    assert jnp.isnan(metrics["supervisor_decision_time_sc1"])

@@ -10,16 +10,16 @@ import jax.numpy as jnp
 import numpy as np
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.controllers.yang2013_individual import translational_control
+from formation_ftc.blocks.controllers.yang2013_individual import translational_control, translational_drift
 from formation_ftc.core.dynamics.attitude_quaternion import (
     angular_momentum_reference,
     gravity_gradient_torque,
 )
+from formation_ftc.core.dynamics.rigid_body_6dof import spacecraft_6dof_rhs
 from formation_ftc.core.dynamics.two_body import gravity_acceleration, specific_energy, two_body_rhs
 from formation_ftc.core.integrators import rk4_step
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.core.quaternion import rotation_matrix
-from formation_ftc.papers.yang2013.model import spacecraft_6dof_rhs, translational_drift
 
 M, K1, K2 = 150.0, 0.005, 0.01
 

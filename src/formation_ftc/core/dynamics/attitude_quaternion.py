@@ -23,6 +23,7 @@ from formation_ftc.core.quaternion import quat_kinematics, rotation_matrix
 __all__ = [
     "gravity_gradient_torque",
     "attitude_rhs",
+    "rigid_body_quaternion_rates",
     "angular_momentum_reference",
     "rotational_kinetic_energy",
 ]
@@ -62,6 +63,22 @@ def attitude_rhs(t, state, J, torque=None, disturbance=None, R_body=None, mu: fl
         total = total + jnp.asarray(disturbance)
     omega_dot = jnp.einsum("ij,...j->...i", jnp.linalg.inv(J), total)
     return jnp.concatenate([omega_dot, quat_kinematics(q, omega)], axis=-1)
+
+
+def rigid_body_quaternion_rates(omega, q, torque, J, gyroscopic: bool = True):
+    """``(omega', q')`` of a rigid body with quaternion attitude, eq. (4) [rad/s^2, 1/s].
+
+    ``J omega' = -omega x J omega + torque`` (the gyroscopic term only with ``gyroscopic``; at the
+    error level of Yang2013 (5) it belongs to the drift Upsilon that the attitude law cancels);
+    ``q' = 1/2 Omega(omega) q``. ``omega`` (..., 3) [rad/s], ``q`` (..., 4) vector first, ``torque``
+    (..., 3) total torque [N m], ``J`` (3, 3) inertia [kg m^2].
+    """
+    J = jnp.asarray(J)
+    total = torque
+    if gyroscopic:
+        total = -jnp.cross(omega, jnp.einsum("ij,...j->...i", J, omega)) + total
+    omega_dot = jnp.einsum("ij,...j->...i", jnp.linalg.inv(J), total)  # Yang2013 eq. (4) / (5)
+    return omega_dot, quat_kinematics(q, omega)
 
 
 def angular_momentum_reference(state, J):

@@ -22,13 +22,16 @@ def _semilogy_active(ax, t, ds, variable: str, act) -> None:
 
 
 def _switch_lines(ax, ds) -> None:
-    for ts in np.asarray(ds["switch"].values):
+    """Dotted lines at the recorded mode changes."""
+    mode = np.asarray(ds["mode"].values)
+    t = np.asarray(ds["time"].values)
+    for ts in t[1:][mode[1:] != mode[:-1]]:
         ax.axvline(float(ts), color="0.6", lw=0.7, ls=":")
 
 
 def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     """Per-scenario figures: |X| with envelope, |x_i| per spacecraft, |u_i| per spacecraft."""
-    from formation_ftc.papers.yang2013.checks import design_quantities
+    from formation_ftc.papers.yang2013.conditions import design_quantities
 
     out_dir = Path(out_dir)
     q = design_quantities(scenario)

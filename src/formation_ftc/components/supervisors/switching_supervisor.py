@@ -1,0 +1,145 @@
+"""Switching supervisor of a state-varying switched formation (Yang2013 Sec. 3.3, Fig. 2, Theorem 2)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from formation_ftc.blocks.supervisors import switching_supervisor as block
+from formation_ftc.core.expressions import compile_vector_expression
+from formation_ftc.sim.components import FlightInputs, Signal, Supervisor, component, static
+
+__all__ = ["SwitchDecision", "SwitchingSupervisor", "decision_events"]
+
+
+class SwitchDecision(NamedTuple):
+    """The supervisor's decision in force over one step."""
+
+    mode: jax.Array  # index of the mode in force (0-based)
+    next_mode: jax.Array  # index of the mode in force from the end of the step (a switch if != mode)
+    active: jax.Array  # (N,) 1 for the spacecraft of the mode, 0 for the others
+    reconfigure: jax.Array  # (N,) bool: controller reconfiguration requested (decision 2)
+    desired_position: jax.Array  # (N, 3) desired relative positions R~^d(t) of the mode [m]
+
+
+@lru_cache(maxsize=256)
+def _desired_fns(table: tuple) -> tuple:
+    return tuple(tuple(compile_vector_expression(texts, f"modes[{j}].desired") for texts in row)
+                 for j, row in enumerate(table))
+
+
+@component
+class SwitchingSupervisor(Supervisor):
+    """Per-spacecraft supervisors holding the prescribed mode sequence a priori (N_max slots).
+
+    At every step k (t_k = t0 + k dt) it states the mode in force, its members (``active``) and whether
+    a switch follows the step; the truth plant executes membership and state variation. When the FDI
+    unit's estimate ``{"diagnosed": (N,) bool}`` reports a fault of a spacecraft in the formation, the
+    supervisor decides once (:mod:`formation_ftc.blocks.supervisors.switching_supervisor`): tolerate by
+    switching iff the spacecraft leaves at the next switch and (29) holds, else request reconfiguration.
+    Decisions, their times, modes and (29) margins are recorded signals.
+
+    ``switch_steps`` (n_modes,) first step of every mode; ``active`` (n_modes, N) membership;
+    ``leaves_at_next_switch`` (n_modes, N) bool; ``eta`` [1/s]; ``eta1`` (N,) [1/s];
+    ``delay_bound_steps`` (N,) a-priori bound of the diagnosis delay [steps]; ``desired_position``
+    per mode and slot three expressions of t [s] and i (the desired relative positions R~^d [m], which
+    only enter the drift that the laws cancel: recorded, not used by the laws).
+    """
+
+    count: int = static()
+    dt: float = static()
+    switch_steps: Any = None
+    active: Any = None
+    leaves_at_next_switch: Any = None
+    eta: Any = 0.01
+    eta1: Any = 0.01
+    delay_bound_steps: Any = 0
+    desired_position: tuple = static(())
+    t0: float = static(0.0)
+
+    def initial_state(self):
+        n = self.count
+        return {"k": jnp.asarray(0, dtype=jnp.int64),
+                "decision": jnp.zeros(n, dtype=jnp.int64),
+                "decision_step": jnp.full(n, -1, dtype=jnp.int64),
+                "margin_29": jnp.full(n, jnp.nan),
+                "decision_mode": jnp.full(n, -1, dtype=jnp.int64)}
+
+    def _desired(self, k, mode):
+        t = self.t0 + k * self.dt
+        i = jnp.arange(1, self.count + 1, dtype=jnp.float64)
+        table = jnp.stack([jnp.stack([fn(t, i[s]) for s, fn in enumerate(row)])
+                           for row in _desired_fns(self.desired_position)])  # (n_modes, N, 3)
+        return table[mode]
+
+    def _decision(self, k, state) -> SwitchDecision:
+        mode = block.mode_index(self.switch_steps, k)
+        active = self.active[mode]
+        return SwitchDecision(mode=mode, next_mode=block.mode_index(self.switch_steps, k + 1), active=active,
+                              reconfigure=state["decision"] == block.RECONFIGURE,
+                              desired_position=self._desired(k, mode) * active[:, None])
+
+    def update(self, t, state, inputs: FlightInputs):
+        k = jnp.round((t - self.t0) / self.dt).astype(jnp.int64)
+        mode = block.mode_index(self.switch_steps, k)
+        est = inputs.estimate
+        diagnosed = jnp.zeros(self.count, dtype=bool) if est is None else est["diagnosed"]
+        diagnosed = diagnosed & (self.active[mode] > 0)  # only spacecraft in the formation
+        margin, has_next, gain, loss = block.condition_29(self.switch_steps, k, self.delay_bound_steps,
+                                                          self.eta, self.eta1, self.dt)  # (29)
+        decision, new = block.decide(state["decision"], diagnosed, self.leaves_at_next_switch[mode] > 0,
+                                     has_next, gain, loss)
+        state = {"k": k + 1, "decision": decision,
+                 "decision_step": jnp.where(new, k, state["decision_step"]),
+                 "margin_29": jnp.where(new, margin, state["margin_29"]),
+                 "decision_mode": jnp.where(new, mode, state["decision_mode"])}
+        return state, self._decision(k, state)
+
+    def current(self, state):
+        return self._decision(state["k"], state)
+
+    def signals(self):
+        sc = ("spacecraft",)
+        return (
+            Signal("mode", (), "1", "active mode sigma(t) (1-based)"),
+            Signal("active", sc, "1", "spacecraft in the formation (1) or not (0)"),
+            Signal("desired_position", ("spacecraft", "axis"), "m", "desired relative position R~^d", "F_i"),
+            Signal("supervisor_decision", sc, "1",
+                   "supervisor decision: 0 none, 1 tolerate by switching, 2 request controller reconfiguration"),
+            Signal("supervisor_decision_time", sc, "s", "time of the supervisor decision (NaN: none)"),
+            Signal("supervisor_decision_mode", sc, "1", "mode (1-based) in which the decision was taken (0: none)"),
+            Signal("condition_29_margin", sc, "1", "(eta/2) dt1 - (eta1/2) dt2 of (29) at the decision (NaN: none)"),
+        )
+
+    def outputs(self, t, state, decision: SwitchDecision):
+        step = state["decision_step"]
+        return {
+            "mode": decision.mode + 1,
+            "active": decision.active,
+            "desired_position": decision.desired_position,
+            "supervisor_decision": state["decision"],
+            "supervisor_decision_time": jnp.where(step >= 0, self.t0 + step * self.dt, jnp.nan),
+            "supervisor_decision_mode": state["decision_mode"] + 1,
+            "condition_29_margin": state["margin_29"],
+        }
+
+
+def decision_events(metrics: dict, count: int, dt: float, mode_names=None) -> list[dict]:
+    """Event log of the supervisor decisions from a run's final-value metrics
+    (``supervisor_decision_sc{i}``, ``supervisor_decision_time_sc{i}``, ``supervisor_decision_mode_sc{i}``,
+    ``condition_29_margin_sc{i}``)."""
+    events = []
+    for i in range(1, count + 1):
+        code = int(metrics.get(f"supervisor_decision_sc{i}", 0) or 0)
+        if code == block.NO_DECISION:
+            continue
+        t = float(metrics[f"supervisor_decision_time_sc{i}"])
+        mode = int(metrics[f"supervisor_decision_mode_sc{i}"])
+        events.append({"time": t, "step": int(round(t / dt)), "spacecraft": i, "event": "supervisor decision",
+                       "decision": block.DECISION_NAMES[code],
+                       "mode": mode_names[mode - 1] if mode_names else mode,
+                       "condition_29_margin": float(metrics[f"condition_29_margin_sc{i}"])})
+    return sorted(events, key=lambda e: e["time"])
