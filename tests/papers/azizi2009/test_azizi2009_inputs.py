@@ -4,9 +4,8 @@ and the "infeasible" verdict with the disturbance floor (issue 5, "Bad input")."
 import pytest
 
 from formation_ftc.config.loader import ScenarioError
-from formation_ftc.papers.azizi2009.method import check
-from formation_ftc.papers.azizi2009.model import build
-from formation_ftc.papers.azizi2009.runner import load
+from formation_ftc.papers.azizi2009.conditions import check
+from formation_ftc.papers.azizi2009.method import build, load
 
 
 @pytest.mark.parametrize("override,match", [

@@ -11,7 +11,8 @@ disturbance acceleration ``d`` [m/s^2].
 * :func:`rhs` -- continuous right-hand side (for :func:`formation_ftc.core.integrators.rk4_step`);
 * :func:`zoh_step` -- the exact update over one step when the acceleration ``b u + d`` is held
   constant over ``[t_k, t_k + dt]`` (zero-order hold); RK4 with a held input gives the same numbers
-  up to round-off, because the solution is a quadratic polynomial in time.
+  up to round-off, because the solution is a quadratic polynomial in time;
+* :func:`held_acceleration_step` -- the same update for a given held acceleration ``a`` [m/s^2].
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-__all__ = ["DoubleIntegratorState", "acceleration", "rhs", "zoh_step"]
+__all__ = ["DoubleIntegratorState", "acceleration", "rhs", "zoh_step", "held_acceleration_step"]
 
 
 class DoubleIntegratorState(NamedTuple):
@@ -46,5 +47,10 @@ def zoh_step(state: DoubleIntegratorState, u, b, d, dt) -> DoubleIntegratorState
 
     ``r+ = r + v dt + a dt^2 / 2``, ``v+ = v + a dt`` with ``a = b u + d``.
     """
-    a = acceleration(u, b, d)
+    return held_acceleration_step(state, acceleration(u, b, d), dt)
+
+
+def held_acceleration_step(state: DoubleIntegratorState, a, dt) -> DoubleIntegratorState:
+    """Exact update over ``dt`` [s] with the acceleration ``a`` [m/s^2] held constant:
+    ``r+ = r + v dt + a dt^2 / 2``, ``v+ = v + a dt``."""
     return DoubleIntegratorState(state.r + state.v * dt + 0.5 * a * dt * dt, state.v + a * dt)

@@ -1,95 +1,210 @@
-"""Registration of the ``azizi2009`` method: schema, build, condition checks and scenario figures.
+"""Method ``azizi2009``: the deep-space formation of Azizi & Khorasani 2009 (N double integrators,
+relative-output formation control on a chain, LLFR allocation, HL supervisor and FLFR) as a
+composition of components.
 
-Conditions (``formation-ftc check``), all from Azizi & Khorasani 2009 / SPEC.md P4:
+* plant :class:`~formation_ftc.components.plants.double_integrator.DoubleIntegratorPlant`
+  (``x_i'' = b_i u_i + d_i``; exact zero-order-hold step for ``controller.sampling = 'zoh'``, RK4 with
+  the control re-evaluated at the stages for ``'continuous'``) with the disturbance d_i(t) (E004-10);
+* sensors :class:`~formation_ftc.components.sensors.chain_relative.ChainRelativeSensors`: relative
+  positions and velocities on the chain pairs with seeded Gaussian noise (E004-09, default off);
+* supervisor :class:`~formation_ftc.components.supervisors.hierarchical.HierarchicalSupervisor`:
+  Nominal -> LLFR when the fault estimate arrives, LLFR -> FLFR when the measured max |e_ij| exceeds
+  e_s;
+* controller :class:`~formation_ftc.components.controllers.azizi2009_llfr.ChainLlfrController`:
+  p_ij = xdd_ij^d - lambda1 e'_ij - lambda0 e_ij (Sec. II) and u = J_aug^-1 [p; 0] (eq. (3)) with the
+  mode's (alpha, b_hat) -- one allocation matrix per mode and axis, computed once per run;
+* actuator :class:`~formation_ftc.components.actuators.actuator_gains.StepGainActuator`: the true
+  (faulty) gains b_i(t) on the truth side;
+* evaluations: the true chain errors ``tracking_error`` and the flag ``flfr_settled`` (FLFR active for
+  longer than ``supervisor.settle_time``) that opens the window of ``max_err_after_flfr``.
 
-* allocation inputs valid (alpha_i > 0, b_hat_i > 0; eq. (3));
-* Lemma 1 / E004-03: DET = q2 alpha_2 + q1 > 0 and equal to -det(J_aug);
-* Theorem 1 (small gain): ||Delta||_2 < B_Delta = 1 / gamma_1 for the LLFR and the FLFR weights;
-* B_eps covers the actual estimation error |b_hat - b| (informational: it uses the true b);
-* Theorem 2 / eq. (11): the FLFR design is feasible (e_s above the disturbance floor T_i) and the
-  bound (8) at the FLFR weight is <= e_s.
+Desired formation: regular N-gon (a square of side 200 m for N = 4) rotating counter-clockwise at
+omega in the xy plane, satellite i at angle omega t + pi/4 + (i-1) 2 pi / N
+(:func:`formation_ftc.core.polygon_formation.rotating_polygon`). Metrics are accumulated at every step
+inside the run; ``effort`` integrates u_i^2 of the command per spacecraft and axis.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.design.allocation import augmented_matrix, perturbation_coefficients
-from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
-from formation_ftc.design.small_gain import small_gain_margin
-from formation_ftc.papers.azizi2009.model import _alpha_flfr, _b_hat_estimated, _b_true, build, flfr_design
+from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
+from formation_ftc.components.actuators.actuator_gains import StepGainActuator
+from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
+from formation_ftc.components.evaluations.chain_errors import ChainTrackingError, ThresholdFlag
+from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
+from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
+from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
+from formation_ftc.config import loader
+from formation_ftc.core.polygon_formation import rotating_polygon
+from formation_ftc.design.allocation import validate_allocation_inputs
+from formation_ftc.papers.azizi2009.conditions import (
+    alpha_flfr,
+    b_hat_estimated,
+    b_nominal,
+    b_true,
+    check,
+    d_norms,
+)
 from formation_ftc.papers.azizi2009.schema import Azizi2009Scenario
-from formation_ftc.registry import Condition, Method, register_method
+from formation_ftc.registry import Method, register_method
+from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.compiled import Compiled, compile_loop
+from formation_ftc.sim.components import as_float
+from formation_ftc.sim.loop import ClosedLoop
+from formation_ftc.sim.metrics import Metric, metrics_dict
 
-__all__ = ["check", "plot", "METHOD"]
+__all__ = ["make_loop", "build", "load", "simulate", "run_batch", "plot", "METHOD", "EFFORT_TIME", "VARIABLE"]
+
+#: time of the ``effort_x_100s_sc*`` metrics (Fig. 2 compares the efforts there) [s]
+EFFORT_TIME = 100.0
 
 
-def check(sc: Azizi2009Scenario) -> list[Condition]:
-    """Evaluate the paper's design conditions for a scenario (see module docstring)."""
-    out: list[Condition] = []
-    n = sc.formation.n_satellites
-    alpha = np.asarray(sc.allocation.alpha, float)
-    out.append(Condition("allocation weights", "Azizi2009 eq. (3)", f"alpha = {alpha.tolist()}",
-                         "alpha_i > 0", bool(np.all(alpha > 0))))
-    if not sc.fault.enabled:
-        out.append(Condition("fault-free allocation", "Azizi2009 eq. (4)", "b_hat = b",
-                             "exact cancellation: e'' = -l1 e' - l0 e", True, required=False))
-        return out
-    k = sc.fault.satellite - 1
-    ax = "xyz".index(sc.fault.axis)
-    b_hat = _b_hat_estimated(sc)[:, ax]
-    b_true = _b_true(sc)[:, ax]
-    eps = float(b_hat[k] - b_true[k])
-    out.append(Condition("estimation error within B_eps", "Azizi2009 Sec. IV, |eps| < B_eps",
-                         f"|eps| = {abs(eps):.4g}, B_eps = {sc.fault.b_eps:.4g}", "|b_hat - b| <= B_eps",
-                         abs(eps) <= sc.fault.b_eps + 1e-12, required=False,
-                         detail="uses the true gain (truth side); the design only knows B_eps"))
-    if not 0 < k < n - 1:
-        out.append(Condition("interior faulty satellite", "Azizi2009 eq. (6)-(7)", f"satellite {k + 1}",
-                             f"2..{n - 1} for the reduced model (7)", None, required=False))
-        return out
-    coeff = perturbation_coefficients(alpha, b_hat, k)
-    det_num = float(np.linalg.det(np.asarray(augmented_matrix(alpha, b_hat))))
-    DET = coeff.det(alpha[k])
-    out.append(Condition("DET = q2 alpha_k + q1", "Lemma 1, E004-03",
-                         f"DET = {DET:.6g}, sign*det(J_aug) = {coeff.sign * det_num:.6g}, q1 = {coeff.q1:.5g}, "
-                         f"q2 = {coeff.q2:.5g}", "DET > 0 and equal", DET > 0 and abs(DET - coeff.sign * det_num) < 1e-9 * max(1, abs(DET))))
-    lam0, lam1 = sc.controller.lambda0, sc.controller.lambda1
-    sg = small_gain_margin(error_dynamics_matrix(lam0, lam1))
-    try:
-        a_f: float | None = _alpha_flfr(sc) if sc.supervisor.flfr else float(alpha[k])
-    except ValueError:  # infeasible design: reported by the floor condition below
-        a_f = None
-    if n == 4 and k == 1:
-        weights = [("LLFR", float(alpha[k]))] + ([("FLFR", a_f)] if a_f is not None else [])
-        for label, a_k in weights:
-            d = coeff.d(sc.fault.b_eps, a_k)
-            _, Delta, A_clp = reduced_model(lam0, lam1, (d[0], d[1]))
-            dn = float(np.linalg.norm(Delta, 2))
-            eig = np.linalg.eigvals(A_clp)
-            out.append(Condition(
-                f"small gain ({label}, alpha_{k + 1} = {a_k:.4g})", "Theorem 1, E004-05",
-                f"||Delta||_2 = {dn:.4g} (worst eps = B_eps), gamma_1 = {sg.gamma1:.5g}",
-                f"||Delta|| < B_Delta = {sg.b_delta:.5g}", sg.holds(dn),
-                detail=f"eig((I + Delta) A) = {np.round(eig, 4).tolist()}"))
-        if sc.supervisor.flfr or sc.supervisor.alpha_flfr is not None:
-            des = flfr_design(sc)
-            feasible = des.verdict != "infeasible"
-            out.append(Condition("e_s above the disturbance floor", "Azizi2009 Sec. IV, T_i (E004-07)",
-                                 f"e_s = {sc.supervisor.e_s:.4g} m, T = {des.floor:.3g} m",
-                                 "e_s > T_i", feasible, detail=des.message))
-            if feasible and a_f is not None:
-                bound = sc.fault.b_eps * des.H / coeff.det(a_f)
-                out.append(Condition(
-                    "error bound (8) at the FLFR weight", "Theorem 2, eq. (8), (11)",
-                    f"B_eps H / DET = {bound:.4g} m (H = {des.H:.4g}, alpha_{k + 1} = {a_f:.4g}, "
-                    f"pi = {sc.supervisor.violation_probability})", f"<= e_s = {sc.supervisor.e_s} m (pi = 0)",
-                    bound <= sc.supervisor.e_s * (1 + 1e-9) / max(1e-12, 1 - sc.supervisor.violation_probability)
-                    if sc.supervisor.violation_probability > 0 else bound <= sc.supervisor.e_s * (1 + 1e-9),
-                    detail="for pi > 0 the bound is met with probability >= 1 - pi (uniform eps)"))
-    return out
+# --------------------------------------------------------------------------------------------------
+# the composition
+# --------------------------------------------------------------------------------------------------
+def make_loop(sc: Azizi2009Scenario) -> ClosedLoop:
+    """The scenario as a composition of components (see module docstring).
+
+    The FLFR weight ``controller.alpha_flfr`` is designed offline (eq. (11)) from the scenario's own
+    weights; a batch that varies ``controller.alpha`` in a supervised scenario should vary it with it.
+    """
+    fm, sim = sc.formation, sc.simulation
+    n, na, dt = fm.n_satellites, fm.n_axes, sim.dt
+    b_nom = b_nominal(sc)
+    b_hat = b_hat_estimated(sc)
+    for a in range(na):
+        validate_allocation_inputs(sc.allocation.alpha, b_hat[:, a])
+    never = sim.n_steps + 1
+    k_onset = round(sc.fault.onset / dt) if sc.fault.enabled else never
+    k_est = round(sc.fault.estimated_at / dt) if sc.fault.enabled else never
+    continuous = sc.controller.sampling == "continuous"
+    offset = np.zeros(n) if fm.initial_offset_x is None else np.asarray(fm.initial_offset_x, float)
+    side, omega = as_float(fm.side), as_float(fm.omega)
+    rd0, vd0, _ = jax.jit(rotating_polygon, static_argnums=(1, 2))(0.0, n, na, side, omega)
+    plant = DoubleIntegratorPlant(initial_position=rd0.at[:, 0].add(as_float(offset)), initial_velocity=vd0,
+                                  disturbance=str(sc.disturbance.acceleration), zoh=not continuous)
+    noisy = sc.noise.sigma_position > 0 or sc.noise.sigma_velocity > 0
+    sensors = ChainRelativeSensors(count=n, n_axes=na, position_noise_std=as_float(sc.noise.sigma_position),
+                                   velocity_noise_std=as_float(sc.noise.sigma_velocity), noisy=noisy)
+    supervisor = HierarchicalSupervisor(
+        count=n, n_axes=na, dt=float(dt), side=side, omega=omega, e_s=as_float(sc.supervisor.e_s),
+        k_estimated=jnp.asarray(k_est, jnp.int64),
+        confirm_steps=jnp.asarray(round(sc.supervisor.confirm_time / dt), jnp.int64),
+        monitor_start=jnp.asarray(round(sc.supervisor.monitor_start / dt), jnp.int64),
+        flfr_enabled=jnp.asarray(bool(sc.supervisor.flfr and sc.fault.enabled)))
+    controller = ChainLlfrController(
+        lambda0=as_float(sc.controller.lambda0), lambda1=as_float(sc.controller.lambda1),
+        alpha=as_float(sc.allocation.alpha), alpha_flfr=as_float(alpha_flfr(sc)), b_nominal=as_float(b_nom),
+        b_hat=as_float(b_hat), side=side, omega=omega, fault_index=sc.fault.satellite - 1,
+        is_sampled=not continuous)
+    actuator = StepGainActuator(gain=as_float(b_nom), faulty_gain=as_float(b_true(sc)), onset=as_float(k_onset * dt))
+    settle_steps = round(sc.supervisor.settle_time / dt)
+    evaluations = (ChainTrackingError(),
+                   ThresholdFlag(name="flfr_settled", source="time_in_flfr", threshold=as_float((settle_steps + 0.5) * dt),
+                                 long_name="FLFR active for longer than supervisor.settle_time"))
+    metrics = [
+        Metric("max_err", "tracking_error", reduce="max", norm=True, norm_ord="inf", spacecraft="max", units="m"),
+        Metric("max_err_x", "tracking_error", reduce="max", norm=True, component=0, spacecraft="max", units="m"),
+        Metric("max_err_after_flfr", "tracking_error", reduce="max", norm=True, norm_ord="inf", spacecraft="max",
+               units="m", gate="flfr_settled"),
+        Metric("t_flfr", "mode", reduce="first", threshold=as_float(FLFR), units="s"),
+        Metric("n_events", "mode_changes", reduce="final"),
+        Metric("effort_x", "effort", reduce="final", component=0, spacecraft="each", units="m2 s-3"),
+    ]
+    if sim.horizon >= EFFORT_TIME - 1e-9:
+        metrics.append(Metric("effort_x_100s", "effort", reduce="at", start=as_float(EFFORT_TIME), component=0,
+                              spacecraft="each", units="m2 s-3"))
+    return ClosedLoop(plant=plant, controller=controller, sensors=sensors, supervisor=supervisor,
+                      actuator=actuator, evaluations=evaluations, metrics=tuple(metrics),
+                      seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(dt), n_steps=sim.n_steps,
+                      record_every=sim.record_every, unroll=sim.unroll)
+
+
+def _dataset_attrs(sc: Azizi2009Scenario, loop: ClosedLoop) -> dict[str, float]:
+    a_f = float(np.asarray(loop.controller.alpha_flfr))
+    d_llfr, d_flfr = d_norms(sc, sc.allocation.alpha, a_f)
+    return {"alpha_flfr": a_f, "D_norm_llfr": d_llfr, "D_norm_flfr": d_flfr}
+
+
+def build(sc: Azizi2009Scenario) -> Compiled:
+    """Compile a scenario: the composition of :func:`make_loop`; the dataset carries the FLFR weight and
+    ||D||_2 of eq. (6) at the LLFR and FLFR weights (true eps) as attributes."""
+    loop = make_loop(sc)
+    return compile_loop(loop, dataset_attrs=_dataset_attrs(sc, loop))
+
+
+# --------------------------------------------------------------------------------------------------
+# running: one scenario, or a batch of variations of one scenario (one compiled program)
+# --------------------------------------------------------------------------------------------------
+def load(name_or_path: str | Path, overrides: Mapping[str, Any] | Iterable[str] | None = None) -> Azizi2009Scenario:
+    """Built-in scenario name or TOML path (+ overrides) -> validated :class:`Azizi2009Scenario`."""
+    from formation_ftc.api import load_scenario
+
+    sc = load_scenario(name_or_path, overrides)
+    if not isinstance(sc, Azizi2009Scenario):
+        raise loader.ScenarioError(f"{name_or_path}: scenario.method must be 'azizi2009', got {sc.scenario.method!r}")
+    return sc
+
+
+#: what :func:`run_batch` may vary: name -> (component, field) of the closed loop (None: the loop)
+VARIABLE = {"alpha": ("controller", "alpha"), "alpha_flfr": ("controller", "alpha_flfr"), "seed": (None, "seed")}
+
+
+def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
+    for name, value in values.items():
+        slot, field = VARIABLE[name]
+        old = getattr(loop, field) if slot is None else getattr(getattr(loop, slot), field)
+        new = jnp.asarray(value, dtype=jnp.result_type(old))
+        if slot is None:
+            loop = dataclasses.replace(loop, **{field: new})
+        else:
+            loop = dataclasses.replace(loop, **{slot: dataclasses.replace(getattr(loop, slot), **{field: new})})
+    return loop
+
+
+def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> list[dict[str, float]]:
+    """Metrics of len(batch) runs of ``sc`` that differ only in the given leaves (see :data:`VARIABLE`:
+    ``alpha`` (B, N), ``alpha_flfr`` (B,), ``seed`` (B,)), run as one compiled, vmapped program through
+    :mod:`formation_ftc.sim.batch` (leaves shared by every run stay unbatched). Each run's metrics also
+    carry ``D_norm_llfr`` / ``D_norm_flfr``: ||D||_2 of eq. (6) from its weights (true eps).
+    Raises ``RuntimeError`` naming a run that diverged."""
+    unknown = set(variations) - set(VARIABLE)
+    if unknown:
+        raise KeyError(f"unknown variations {sorted(unknown)}; valid: {sorted(VARIABLE)}")
+    sizes = {np.asarray(v).shape[0] for v in variations.values()}
+    if len(sizes) != 1:
+        raise ValueError(f"all variations need the same batch size, got {sizes}")
+    (size,) = sizes
+    loop = make_loop(sc)
+    compiled = compile_loop(loop)
+    loops = [_variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)]
+    batch, axes = stack_params(loops)
+    out = jax.device_get(batched_run(compiled, axes, size)(batch))
+    res = []
+    for b, lp in enumerate(loops):
+        div = int(out["diverged_step"][b])
+        if div >= 0:
+            raise RuntimeError(f"batch member {b} diverged at step {div}")
+        m = metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]])
+        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(sc, np.asarray(lp.controller.alpha),
+                                                      float(np.asarray(lp.controller.alpha_flfr)))
+        res.append(m)
+    return res
+
+
+def simulate(sc: Azizi2009Scenario):
+    """One run -> (xarray.Dataset with provenance, metrics dict); raises SimulationDiverged."""
+    from formation_ftc.api import simulate_with_metrics
+
+    return simulate_with_metrics(sc)
 
 
 def plot(ds, sc: Azizi2009Scenario, out_dir: Path) -> list[Path]:
