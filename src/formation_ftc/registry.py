@@ -24,6 +24,7 @@ __all__ = [
     "Method",
     "Condition",
     "ComparisonRow",
+    "basis_holds",
     "Figure",
     "PaperReport",
     "Reproduction",
@@ -74,9 +75,66 @@ class Method:
     plot: Callable[[Any, Any, Path], list[Path]] | None = None  # (dataset, scenario, out_dir) -> PNGs
 
 
+#: Relations a verdict basis may use: name -> (arity, predicate on (lhs, rhs, tol)).
+BASIS_RELATIONS: dict[str, Callable[..., bool]] = {
+    "<": lambda a, b, tol=0.0: a < b,
+    "<=": lambda a, b, tol=0.0: a <= b,
+    ">": lambda a, b, tol=0.0: a > b,
+    ">=": lambda a, b, tol=0.0: a >= b,
+    "abs<=": lambda a, b, tol: abs(a - b) <= tol,  # |a - b| <= tol
+    "rel<=": lambda a, b, tol: abs(a - b) <= tol * abs(b),  # |a - b| <= tol |b|
+    "true": lambda a, b=None, tol=None: bool(a),
+    "decreasing": lambda a, b=None, tol=None: all(y < x for x, y in zip(a, a[1:], strict=False)),
+}
+
+
+def basis_holds(basis: tuple) -> bool:
+    """True when every clause ``(relation, lhs[, rhs[, tol]])`` of a verdict basis holds.
+
+    Relations: ``<``, ``<=``, ``>``, ``>=`` (lhs against rhs), ``abs<=`` (|lhs - rhs| <= tol), ``rel<=``
+    (|lhs - rhs| <= tol |rhs|), ``true`` (lhs is true) and ``decreasing`` (lhs is a strictly decreasing
+    sequence). A NaN makes every numeric relation false.
+    """
+    if not basis:
+        raise ValueError("empty verdict basis")
+    for clause in basis:
+        rel, *args = clause
+        if rel not in BASIS_RELATIONS:
+            raise ValueError(f"unknown relation {rel!r} in verdict basis {clause!r}")
+        if not BASIS_RELATIONS[rel](*args):
+            return False
+    return True
+
+
+def _plain(x: Any) -> Any:
+    """numpy scalars / arrays -> Python floats / lists (the basis goes into report.json)."""
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if hasattr(x, "tolist"):
+        return x.tolist()
+    return x
+
+
 @dataclass(frozen=True)
 class ComparisonRow:
-    """Published vs reproduced. verdict in {"match", "differs", "not stated"}."""
+    """One row of a reproduction report: the paper's value, a reference value, ours, and the verdict.
+
+    Columns
+    -------
+    quantity : what is compared.
+    published : the paper's value *and where it is printed* (equation, figure, table or text), or "" when
+        the paper prints no number for it. Never a number the paper did not print.
+    ours : our value.
+    criterion : the rule that decides the verdict, in words.
+    verdict : "match", "differs" or "not stated" (no number to compare with).
+    note : free text.
+    reference : a value the paper does not print, with how it was obtained (documented in
+        docs/references.md and recomputed there by an independent implementation).
+    basis : the verdict's machine-checkable form, a tuple of clauses ``(relation, lhs[, rhs[, tol]])``
+        (see :func:`basis_holds`). A row with verdict "match"/"differs" must carry one, and the verdict
+        must equal what the basis gives: a verdict is computed, never written by hand. Build rows with
+        :meth:`judged` to get the verdict from the basis.
+    """
 
     quantity: str
     published: str
@@ -84,14 +142,36 @@ class ComparisonRow:
     criterion: str
     verdict: str
     note: str = ""
+    reference: str = ""
+    basis: tuple = ()
 
     def __post_init__(self) -> None:
         if self.verdict not in {"match", "differs", "not stated"}:
             raise ValueError(f"verdict must be match/differs/not stated, got {self.verdict!r}")
+        if self.verdict != "not stated":
+            if not self.basis:
+                raise ValueError(f"row {self.quantity!r}: a {self.verdict!r} verdict needs a basis")
+            want = "match" if basis_holds(self.basis) else "differs"
+            if want != self.verdict:
+                raise ValueError(f"row {self.quantity!r}: verdict {self.verdict!r} but its basis gives {want!r}")
 
-    def as_dict(self) -> dict[str, str]:
+    @classmethod
+    def judged(cls, quantity: str, published: str, ours: str, criterion: str, basis: tuple, note: str = "",
+               reference: str = "") -> ComparisonRow:
+        """Row whose verdict is computed from ``basis`` ("match" when every clause holds)."""
+        basis = tuple(tuple(_plain(x) for x in c) for c in basis)
+        return cls(quantity, published, ours, criterion, "match" if basis_holds(basis) else "differs", note,
+                   reference, basis)
+
+    @property
+    def paper(self) -> str:
+        """Alias of ``published``: the paper's printed value and where it is printed."""
+        return self.published
+
+    def as_dict(self) -> dict[str, Any]:
         return dict(quantity=self.quantity, published=self.published, ours=self.ours,
-                    criterion=self.criterion, verdict=self.verdict, note=self.note)
+                    criterion=self.criterion, verdict=self.verdict, note=self.note, reference=self.reference,
+                    basis=[list(c) for c in self.basis])
 
 
 @dataclass(frozen=True)

@@ -52,8 +52,11 @@ def ok_reproduction(paper: str = "alpha", *, figure_sizes=((40, 30), (24, 18)), 
         summary.update(summary_extra or {})
         return PaperReport(
             paper=paper, summary=summary,
-            rows=[ComparisonRow("settling time", "10 s", "9.8 s", "within 5 %", "match"),
-                  ComparisonRow("peak thrust", "0.5 N", "0.9 N", "within 5 %", "differs", "saturation"),
+            rows=[ComparisonRow.judged("settling time", "10 s (Fig. 3)", "9.8 s", "within 5 %",
+                                       (("rel<=", 9.8, 10.0, 0.05),)),
+                  ComparisonRow.judged("peak thrust", "", "0.9 N", "within 5 % of the reference",
+                                       (("rel<=", 0.9, 0.5, 0.05),), "saturation",
+                                       reference="0.5 N (reference run, docs/references.md)"),
                   ComparisonRow("chattering", "-", "small", "-", "not stated")],
             figures=figures,
             checks=[Condition("Laplacian connected", "Assumption 1", "lambda2 = 0.38", "> 0", True),

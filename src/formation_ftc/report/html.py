@@ -5,7 +5,7 @@ The page is rendered from the per-paper ``report.json`` entries (see
 is needed to view it -- figures are embedded as base64 data URIs, the style sheet is inline and,
 when the optional interactive 3-D view is on, plotly's own JavaScript bundle is inlined once.
 
-Per paper: title, citation, short method description, the published-vs-reproduced comparison table
+Per paper: title, citation, short method description, the paper-vs-reproduced comparison table
 (verdicts coloured), the figures with the paper's numbers and captions, the condition-check table,
 the errata applied, notes, warnings, the traceback of a failed run, and the run metadata (scenarios,
 seeds, wall time). At the end: provenance (package versions, git commit, Python, platform).
@@ -211,12 +211,17 @@ def _plotly_view(view: dict, div_id: str) -> str:
 # ------------------------------------------------------------------------------------------ sections
 def _comparison_table(rows: list[dict]) -> str:
     if not rows:
-        return '<p class="missing">No published-vs-reproduced rows.</p>'
-    out = ['<table class="comparison"><thead><tr><th>quantity</th><th>published</th><th>ours</th>'
-           "<th>criterion</th><th>verdict</th><th>note</th></tr></thead><tbody>"]
+        return '<p class="missing">No paper-vs-reproduced rows.</p>'
+    # "paper" holds only what the paper prints (with where); values the paper does not print are in
+    # "reference", with how they were obtained (docs/references.md of the repository)
+    out = ['<table class="comparison"><thead><tr><th>quantity</th><th>paper (where printed)</th>'
+           "<th>reference (how obtained)</th><th>ours</th><th>criterion</th><th>verdict</th><th>note</th>"
+           "</tr></thead><tbody>"]
     for r in rows:
         cls = _VERDICT_CLASS.get(r.get("verdict"), "verdict-not-stated")
-        out.append(f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(r.get("published"))}</td>'
+        paper = r.get("published") or "not printed"
+        out.append(f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(paper)}</td>'
+                   f'<td>{_e(r.get("reference") or "")}</td>'
                    f'<td>{_e(r.get("ours"))}</td><td>{_e(r.get("criterion"))}</td>'
                    f'<td class="verdict">{_e(r.get("verdict"))}</td><td>{_e(r.get("note"))}</td></tr>')
     out.append("</tbody></table>")

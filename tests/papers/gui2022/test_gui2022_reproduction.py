@@ -9,8 +9,9 @@ from formation_ftc.papers.gui2022.reproduction import run_reproduction
 
 
 @pytest.mark.slow
-def test_full_reproduction(tmp_path):
+def test_full_reproduction(tmp_path, recheck_verdicts):
     rep = run_reproduction(tmp_path)
+    recheck_verdicts(rep.rows)  # every verdict follows from its stated criterion
     s = rep.summary
     for key in ("ilo_rms_err_x", "ilo_rms_err_y", "ilo_rms_err_z", "ilo_baseline_rms_err_x",
                 "ilo_baseline_rms_err_y", "ilo_baseline_rms_err_z", "lof2tc_pos_rms", "cof2tc_pos_rms",

@@ -13,10 +13,11 @@ from formation_ftc.registry import get_reproduction
 from formation_ftc.report.reproduce import to_jsonable
 
 
-def test_reproduction_structure_on_short_run(tmp_path):
+def test_reproduction_structure_on_short_run(tmp_path, recheck_verdicts):
     rep = get_reproduction("mehrabian")
     assert rep.run is run
     report = run(tmp_path, seeds=[1, 2], overrides={"simulation.horizon": 60.0})
+    recheck_verdicts(report.rows)  # every verdict follows from its stated criterion
     for fig in report.figures:
         assert (tmp_path / fig.path).stat().st_size > 10_000
     assert {f.number for f in report.figures} >= {"2", "3", "4", "5"}

@@ -8,9 +8,10 @@ from formation_ftc.registry import get_reproduction
 
 
 @pytest.mark.slow
-def test_reproduction_writes_figures_summary_and_matches(tmp_path):
+def test_reproduction_writes_figures_summary_and_matches(tmp_path, recheck_verdicts):
     rep = get_reproduction("yang2013")
     report = rep.run(tmp_path, lambda f, m: None)
+    recheck_verdicts(report.rows)  # every verdict follows from its stated criterion
     for fig in report.figures:
         assert (tmp_path / fig.path).stat().st_size > 10_000
     assert [f.number for f in report.figures] == ["4", "5"]
