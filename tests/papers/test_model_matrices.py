@@ -3,9 +3,10 @@
 Truths are derived by hand in the comments (not computed with the package):
 
 * yang2013: the slot variation maps P[j] of the built-in mode sequence (S_ij of the scenario placed on
-  the spacecraft slots), the leave flags and the error dynamics (2), (5) at a hand-picked state;
-* azizi2009: the rotating-square desired state (positions on the circumscribed circle, v = omega x r,
-  a = -omega^2 r) and the desired relative accelerations of the chain pairs.
+  the spacecraft slots, kept in papers/yang2013/method.py), the leave flags, and the translational error
+  dynamics (2) at a hand-picked state (now in core);
+* azizi2009: the rotating-square desired state, now in core (positions on the circumscribed circle,
+  v = omega x r, a = -omega^2 r) and the desired relative accelerations of the chain pairs.
 """
 
 import jax.numpy as jnp
@@ -14,7 +15,8 @@ import numpy as np
 from formation_ftc import api
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
-from formation_ftc.papers.azizi2009.model import desired_state, relative_acceleration_fn
+from formation_ftc.core.polygon_formation import relative_acceleration_fn
+from formation_ftc.core.polygon_formation import rotating_polygon as desired_state
 from formation_ftc.papers.yang2013.method import switched_structure
 
 
@@ -41,19 +43,30 @@ def test_yang2013_slot_variation_maps_of_the_builtin_sequence():
     assert st.xstar[4, 5, 0] == 0.2 and not np.any(st.xstar[4, 5, 1:3])
 
 
-def test_yang2013_error_dynamics_by_hand():
-    # e_R = (1, 2, 3), e_V = (0.1, -0.2, 0.3), e_w = (0.01, 0, 0), q = identity (scalar last)
-    x = jnp.array([1.0, 2, 3, 0.1, -0.2, 0.3, 0.01, 0, 0, 0, 0, 0, 1])
+def test_yang2013_translational_error_dynamics_by_hand():
+    # e_R = (1, 2, 3), e_V = (0.1, -0.2, 0.3); eq. (2): e_R' = e_V - w x e_R, e_V' = Phi - (f + d)/M - w x e_V
+    e_R, e_V = jnp.array([1.0, 2, 3]), jnp.array([0.1, -0.2, 0.3])
     Phi, f, d = jnp.array([0.5, 0, -1.0]), jnp.array([10.0, 20.0, 0.0]), jnp.array([0.0, 0.0, 4.0])
-    Ups, tau, iota = jnp.array([0.0, 1.0, 0.0]), jnp.array([2.0, 0.0, 0.0]), jnp.array([0.0, 0.0, -3.0])
+    dR, dV = (np.asarray(a) for a in translational_error_rates(e_R, e_V, Phi, f, d, 10.0))
+    np.testing.assert_allclose(dR, [0.1, -0.2, 0.3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dV, [0.5 - 1.0, -2.0, -1.0 - 0.4], rtol=0, atol=1e-15)
+    w = jnp.array([0.0, 0.0, 0.5])  # w x e_R = (-1, 0.5, 0), w x e_V = (0.1, 0.05, 0)
+    dR, dV = (np.asarray(a) for a in translational_error_rates(e_R, e_V, Phi, f, d, 10.0, w))
+    np.testing.assert_allclose(dR, [0.1 + 1.0, -0.2 - 0.5, 0.3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dV, [-0.5 - 0.1, -2.0 - 0.05, -1.4], rtol=0, atol=1e-15)
+
+
+def test_yang2013_attitude_error_dynamics_by_hand():
+    # eq. (5) at the error level: J e_w' = Upsilon + tau + iota (no gyroscopic term), q' = 1/2 (q4 w - w x q, -w.q)
     J = np.diag([2.0, 4.0, 5.0])
-    de_R, de_V = translational_error_rates(x[0:3], x[3:6], Phi, f, d, 10.0)  # (2) without omega x terms
-    de_w, dq = rigid_body_quaternion_rates(x[6:9], x[9:13], Ups + tau + iota, J, gyroscopic=False)  # (5)
-    dx = np.concatenate([de_R, de_V, de_w, dq])
-    np.testing.assert_allclose(dx[0:3], [0.1, -0.2, 0.3], rtol=0, atol=1e-15)  # e_R' = e_V
-    np.testing.assert_allclose(dx[3:6], [0.5 - 1.0, -2.0, -1.0 - 0.4], rtol=0, atol=1e-15)  # Phi - (f+d)/M
-    np.testing.assert_allclose(dx[6:9], [2.0 / 2, 1.0 / 4, -3.0 / 5], rtol=0, atol=1e-15)  # J^-1 (Ups+tau+iota)
-    np.testing.assert_allclose(dx[9:13], [0.005, 0, 0, 0], rtol=0, atol=1e-15)  # q' = q (x) (w/2, 0) at q = 1
+    torque = jnp.array([2.0, 1.0, -3.0])  # Upsilon + tau + iota
+    w = jnp.array([0.01, 0.0, 0.0])
+    dw, dq = (np.asarray(a) for a in rigid_body_quaternion_rates(w, jnp.array([0.0, 0, 0, 1]), torque, J, False))
+    np.testing.assert_allclose(dw, [2.0 / 2, 1.0 / 4, -3.0 / 5], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dq, [0.005, 0, 0, 0], rtol=0, atol=1e-15)
+    q = jnp.array([0.0, 0.6, 0.0, 0.8])  # w x q_v = (0, 0, 0.006), w . q_v = 0
+    _, dq = (np.asarray(a) for a in rigid_body_quaternion_rates(w, q, torque, J, False))
+    np.testing.assert_allclose(dq, [0.5 * 0.8 * 0.01, 0, -0.5 * 0.006, 0], rtol=0, atol=1e-15)
 
 
 def test_azizi_rotating_square_by_hand():

@@ -18,13 +18,13 @@ Model (per step k, t = k dt; all numbers in ``params`` so campaigns can vary the
     flag     = active * (routing . fault_mask > 0)            channel (n, q) to the reported (j, p)
 
 ``routing`` is the identity for correct isolation; :func:`isolation_routing` builds wrong-channel /
-wrong-spacecraft maps. With the SPEC P3.4 choice (delay 5 s, scale 1, bias -0.1 N m) the estimate is
+wrong-spacecraft maps. With the Our choice (E003-10) (delay 5 s, scale 1, bias -0.1 N m) the estimate is
 ``u*_{1,3}(t) = u_bar_{1,3}(t - 5) - 0.1`` on [45, 245] s and 0 elsewhere (E003-10).
 
 The noise sample is held over the step; the caller passes a per-step key that is distinct from the
 keys of other random signals (e.g. ``fold_in(fold_in(run_key, k), tag)``).
 
-Flight-side boundary (ARCHITECTURE.md principle 3): a controller receives only the :class:`FDIOutput`;
+Flight-side boundary (architecture principle: flight side sees no truth): a controller receives only the :class:`FDIOutput`;
 the true fault is read here, on the truth side of the synthetic FDI.
 """
 

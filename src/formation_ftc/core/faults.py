@@ -1,4 +1,4 @@
-"""Actuator fault vocabulary (pure functions, SPEC.md 0.1).
+"""Actuator fault vocabulary (pure functions).
 
 A fault maps the commanded input ``u`` to the applied input. All maps act element-wise on arrays of
 shape (..., m) and are differentiable where the physics is.

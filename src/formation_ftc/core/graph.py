@@ -1,6 +1,6 @@
 """Communication-graph utilities (networkx underneath).
 
-Convention (SPEC.md 0.2): **row i = receiver**, ``C[i, j] > 0`` means agent i receives from agent j.
+Convention: **row i = receiver**, ``C[i, j] > 0`` means agent i receives from agent j.
 In-weight = row sums, out-weight = column sums, Laplacian ``L = diag(rowsum) - C``.
 """
 

@@ -5,7 +5,7 @@ Thm 2) and learning laws at t - tau (Gui2022). The buffer lives in the ``lax.sca
 
 Layout: ``values`` has shape (capacity, *signal_shape); ``head`` is the index of the newest sample,
 which corresponds to step ``k_newest``; samples are equally spaced by ``dt``. Times earlier than the
-first pushed sample return the prehistory value (the initial sample, SPEC.md 0.2 [CHOICE]).
+first pushed sample return the prehistory value (the initial sample, our choice).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Keplerian reference orbit: true anomaly, its rates, radius, mean motion and period.
 
-Used as the virtual reference of the relative-motion models (Li2020 Sec. II, SPEC.md P0.2).
+Used as the virtual reference of the relative-motion models (Li2020 Sec. II).
 All quantities SI: metres, seconds, radians; gravitational parameter in m^3/s^2.
 """
 
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-MU_EARTH = 3.986004418e14  # m^3/s^2, standard value (SPEC.md P0.2 [CHOICE])
+MU_EARTH = 3.986004418e14  # m^3/s^2, standard value (our choice)
 
 __all__ = ["MU_EARTH", "KeplerOrbit", "solve_kepler", "true_anomaly_at"]
 

@@ -1,4 +1,4 @@
-"""Scalar time functions shared by the papers (SPEC.md 0.1). Pure jax.numpy, time t in seconds."""
+"""Scalar time functions shared by the papers. Pure jax.numpy, time t in seconds."""
 
 from __future__ import annotations
 

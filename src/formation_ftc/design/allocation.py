@@ -21,7 +21,7 @@ Both forms are implemented and tested to agree. For the faulty satellite k (0-ba
 ``E[k, k] = +eps``, so ``d_m = eps f_m / DET`` with the cofactors ``f_m`` of column k of J_aug
 (free of alpha_k and b_hat_k, Lemma 1) and ``DET = q2 alpha_k + q1`` (E004-03: DET = -det J_aug for
 N = 4). :func:`perturbation_coefficients` computes q1, q2, f numerically for any N and interior k;
-:func:`closed_form_n4` gives the SPEC P4.3 formulas for N = 4, k = 2 (1-based).
+:func:`closed_form_n4` gives the closed forms for N = 4, k = 2 (1-based; E004-03).
 
 Units: ``b``, ``b_hat``, ``alpha`` dimensionless; ``p`` [m/s^2]; ``u`` [N per unit gain].
 """
@@ -163,7 +163,7 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
 
 
 def closed_form_n4(alpha, b, b_hat2: float) -> dict[str, object]:
-    """SPEC P4.3 / E004-03 closed forms for N = 4, faulty satellite 2 (1-based).
+    """E004-03 closed forms for N = 4, faulty satellite 2 (1-based).
 
     Returns q1, q2, DET (= q2 alpha_2 + q1 = -det J_aug) and the cofactors
     C_{k2} = [-a1 b3 b4/b1, b1(a3 b4^2 + a4 b3^2)/(b3 b4), a4 b1 b3/b4, -b1 b3 b4].

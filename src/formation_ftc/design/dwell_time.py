@@ -119,7 +119,7 @@ def eta_from_gains(K1: float, K2: float, K3: float, K4: float, K5: float,
 def translational_decay_rate(K1: float, K2: float) -> float:
     """Exact decay rate of ``e_ddot + K2 e_dot + (K1 + 1) e = 0`` (closed loop of (12)): ``-max Re(lambda)``.
 
-    Amplitudes decay as ``exp(-rate t)``; for the SPEC gains rate = K2/2 = eta/2 (underdamped). A
+    Amplitudes decay as ``exp(-rate t)``; for the scenario gains (E001-10) rate = K2/2 = eta/2 (underdamped). A
     negative value is a growth rate (faulty gain K2f < 0: rate = K2f/2 = -eta1/2).
     """
     lam = np.roots([1.0, K2, K1 + 1.0])
@@ -131,7 +131,7 @@ def gains_for_decay_rate(eta: float, K1: float | None = None) -> tuple[float, fl
 
     The closed loop of (12) is ``e_ddot + K2 e_dot + (K1+1) e = 0``; when underdamped
     (K2^2 < 4 (K1+1)) its eigenvalues have real part -K2/2, so ``K2 = eta`` gives |x| ~ exp(-eta t/2),
-    matching W ~ exp(-eta t) of (20). K1 > 0 (E001-01) is free; the SPEC choice is ``K1 = eta/2``.
+    matching W ~ exp(-eta t) of (20). K1 > 0 (E001-01) is free; the scenarios choose ``K1 = eta/2`` (E001-10).
     """
     if eta <= 0:
         raise ValueError(f"eta must be > 0, got {eta}")

@@ -1,5 +1,5 @@
 """Formation-level fault recovery (FLFR): analytic choice of the allocation weight alpha_k of a
-partially recovered satellite (Azizi & Khorasani 2009, eqs. (7)-(11), Theorems 1-2; SPEC.md P4.3).
+partially recovered satellite (Azizi & Khorasani 2009, eqs. (7)-(11), Theorems 1-2).
 
 Reduced error model (7) with X = [e_{k-1,k}, e'_{k-1,k}, e_{k,k+1}, e'_{k,k+1}] (E004-01)::
 
@@ -11,7 +11,7 @@ with d_m = eps f_m / DET (see :mod:`formation_ftc.design.allocation`). Theorem 2
     |X_i(t)| <= |eps| H_i / (q2 alpha_k + q1),
     H_i = sup_t |(G_i4 - G_i2) * (f . xdd_des)|,  G(s) = (sI - A_clp)^-1           # eq. (8)
 
-H_i is computed, as SPEC.md prescribes, by *simulating* ``X' = A_clp X + [0, 1, 0, -1]^T w(t)``,
+H_i is computed by *simulating* ``X' = A_clp X + [0, 1, 0, -1]^T w(t)``,
 ``w = f . xdd_des``, from zero initial conditions (RK4, lax.scan) and taking sup_t |X_i|, with A_clp at
 a reference alpha_k (default 1) and eps = +/- B_eps (the larger H is kept, so (9)/(11) stay
 conservative for alpha_k above the reference). The nominal-A variant (Delta = 0) is reported too.

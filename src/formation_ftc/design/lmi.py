@@ -7,10 +7,10 @@ Finds ``P = P^T > 0``, ``Y`` and ``L2`` such that
 * disk  ``[[-r P, P A - Y C - c P], [*, -r P]] < 0``             (all eig(A - L1 C) in the disk S(c, r))
 
 and returns ``L1 = P^-1 Y`` (Theorem 1), with cvxpy and the CLARABEL interior-point solver (SCS as a
-fallback). Strict inequalities are imposed as ``<= -eps I`` (SPEC.md 0.5, eps = 1e-6); (27) uses the
+fallback). Strict inequalities are imposed as ``<= -eps I`` (eps = 1e-6); (27) uses the
 margin ``min(eps, lam / 10)`` because its own diagonal is only ``-lam = -1e-8``.
 
-Homogeneity (SPEC.md P2.3, E002-06): (8), (27) and the disk LMI are homogeneous in (P, Y, L2) -- if
+Homogeneity (E002-06): (8), (27) and the disk LMI are homogeneous in (P, Y, L2) -- if
 (P, Y, L2) is a solution, so is (s P, s Y, s L2) for any s >= 1 (margins aside), and L1 = P^-1 Y does not
 change. The solver's scaling of P is therefore arbitrary, and it fixes the *magnitude* of L2 that the
 learning law uses. To make the result reproducible we add the normalisation ``P >= I`` and minimise

@@ -1,4 +1,4 @@
-"""Continuous algebraic Riccati equation (CARE) with a residual certificate (SPEC.md 0.5).
+"""Continuous algebraic Riccati equation (CARE) with a residual certificate.
 
 Solves ``P A + A^T P - P B R^-1 B^T P + Q = 0`` with :func:`scipy.linalg.solve_continuous_are` and
 reports ``max |P A + A^T P - P B R^-1 B^T P + Q|`` so a caller can certify the solution. Used by the

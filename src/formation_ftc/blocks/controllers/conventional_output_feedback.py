@@ -1,7 +1,7 @@
 """Conventional output-feedback FTC (COF2TC): the comparison baseline of Gui et al. 2022 (Figs. 7-9).
 
 The paper compares with "the conventional output-feedback FTC approach proposed in [30]" but gives
-neither the law nor its gains (E002-10). Following SPEC.md P2.4 [CHOICE] this module implements the
+neither the law nor its gains (E002-10). Following our choice this module implements the
 passive, fixed-gain ("reliable") output feedback
 
     u = K e_y                        (pi == 1, no learning term v, no fault compensation)
@@ -12,7 +12,7 @@ with the same gain K as LOF2TC (K C = B^T P1, eq. (35)), and the optional varian
 Assumptions (stated because ref. [30] is not reproduced): same K, same measurement e_y = y0 - y, same
 sampling (u held over the step), no adaptation and no disturbance compensation; the expected outcome is
 a steady x offset of about F_x / K_11 = 0.5 / 0.0063 = 79 m after the 1500 s bias fault and a z
-oscillation of about 37 m after 2000 s (SPEC.md P2.4). Units as in
+oscillation of about 37 m after 2000 s. Units as in
 :mod:`formation_ftc.blocks.controllers.learning_output_feedback`.
 """
 

@@ -6,7 +6,7 @@ With the tracking error ``e_q = q0 - q`` and ``e_y = C e_q`` (29)::
     v(t)  = G3 v(t - tau) + G4 K e_q(t)                                 # (32), K e_q := K e_y (C = I)
     u     = pi(t) K e_y - B^+ E v(t) - B^+ H F_hat(t)                   # (30)
 
-``F_hat`` comes from the iterative learning observer (5). Discrete implementation (SPEC.md P2.4): the
+``F_hat`` comes from the iterative learning observer (5). Discrete implementation: the
 learning laws are recursions evaluated once per sample with ``tau = m dt`` (m integer >= 1); past
 values are read from fixed-size histories (prehistory ``pi(-tau) = pi_init`` [CHOICE, E002-08: so that
 pi >= 1/2 initially], ``v(-tau) = v_init``).

@@ -1,5 +1,5 @@
 """Distributed H-infinity synchronisation / tracking control of networked EL systems with adaptive
-fault recovery (Mehrabian, Tafazoli, Khorasani, eqs. (6), (8), (18)-(19), (25)-(26); SPEC P3.3).
+fault recovery (Mehrabian, Tafazoli, Khorasani, eqs. (6), (8), (18)-(19), (25)-(26)).
 
 Per agent j (k generalised coordinates; gains are per-channel diagonals, arrays (m, k))::
 

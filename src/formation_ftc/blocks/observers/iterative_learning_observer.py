@@ -5,12 +5,12 @@ Continuous-time law (5), with e_y = y - C q_hat::
     q_hat_dot = A q_hat + B u + H F_hat + L1 e_y + gamma sgn(e_y)       (sign term: E002-02)
     F_hat(t)  = Q1 F_hat(t - tau) + Q2 L2 e_y(t)                         (learning update)
 
-Discrete implementation (SPEC.md P2.4): at sample k (t_k = k dt) the learning update is evaluated
+Discrete implementation: at sample k (t_k = k dt) the learning update is evaluated
 first, ``F_hat_k = Q1 F_hat_{k-m} + Q2 L2 e_y,k`` with ``m = tau/dt`` an integer number of steps, the
 past estimates read from a fixed-size history (ring buffer, :mod:`formation_ftc.core.history`,
 prehistory ``F_hat(t) = F_hat(-tau)`` for t < 0); then ``q_hat`` is propagated by forward Euler with
 ``e_y``, ``u`` and ``F_hat_k`` held over the step. ``sign_term=False`` gives the earlier ILO of the
-paper's ref. [25] (same structure without the robustifying ``gamma sgn`` term; SPEC.md P2.4).
+paper's ref. [25] (same structure without the robustifying ``gamma sgn`` term).
 
 Units: q in [m, m/s], u, F in m/s^2 (per unit mass, E002-03), L1 [1/s], L2 [1/s] (velocity rows),
 gamma [m/s^2], dt and tau [s].

@@ -1,4 +1,4 @@
-"""Linear Clohessy-Wiltshire (Hill) relative dynamics about a circular orbit (SPEC.md 0.3, Gui2022 (1)-(3)).
+"""Linear Clohessy-Wiltshire (Hill) relative dynamics about a circular orbit (Gui2022 (1)-(3)).
 
 State q = [x, y, z, xdot, ydot, zdot] in the LVLH/Hill frame: x radial (outward), y along-track,
 z orbit normal; positions in m, velocities in m/s, inputs as accelerations in m/s^2 (force per unit
@@ -35,7 +35,7 @@ def cw_rhs(t, q, u, n):
 
 
 def cw_state_transition(n: float, t: float) -> np.ndarray:
-    """Closed-form 6x6 state-transition matrix Phi(t) (SPEC.md 0.3)."""
+    """Closed-form 6x6 state-transition matrix Phi(t)."""
     c, s = np.cos(n * t), np.sin(n * t)
     return np.array([
         [4 - 3 * c, 0, 0, s / n, 2 * (1 - c) / n, 0],

@@ -6,7 +6,7 @@ sequence: the body-to-inertial rotation is ``R = Rz(psi) Ry(theta) Rx(phi)``. Bo
 ``u`` [N m] conjugate to ``q`` (power ``u^T q_dot = tau_b^T omega``, so the body torque is
 ``tau_b = R_bar^T u``).
 
-Kinematics (SPEC P3.2, E003-08: the printed R_bar is the standard Z-Y-X matrix for the ordering
+Kinematics (E003-08: the printed R_bar is the standard Z-Y-X matrix for the ordering
 [phi, theta, psi]; with q = [theta, phi, psi] its first two rows are swapped)::
 
     theta_dot = c_phi w_y - s_phi w_z
@@ -25,7 +25,7 @@ such attitudes.
 
 Two propagations are provided: :func:`el_rhs` integrates (q, q_dot) with the EL matrices (what a
 model-based controller believes), :func:`rigid_body_rhs` integrates (q, omega) with Euler's equation
-``J omega_dot = -omega x J omega + tau_b`` (the plant used in simulations, SPEC P3.2).
+``J omega_dot = -omega x J omega + tau_b`` (the plant used in simulations).
 All functions are pure jax.numpy and broadcast over leading axes ``(..., 3)``.
 """
 

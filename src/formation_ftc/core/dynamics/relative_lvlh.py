@@ -1,6 +1,6 @@
 """Nonlinear relative motion about an elliptic Keplerian reference orbit in the LVLH frame.
 
-Li et al. 2020, eqs. (1)-(4) (SPEC.md P0.2), with the errata applied:
+Li et al. 2020, eqs. (1)-(4), with the errata applied:
 
 * E000-01: x radial (outward), y along-track (in-plane), z orbit normal -- the equations fix the axes;
 * E000-02: rho_dot_i = v_i;

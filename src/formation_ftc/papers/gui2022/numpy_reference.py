@@ -1,6 +1,6 @@
 """Plain-numpy, per-step Python loop of the gui2022 closed loop (independent reference).
 
-Written directly from the paper's equations and SPEC.md P2.4 without the JAX blocks, the history ring
+Written directly from the paper's equations (with the choices of E002-10) without the JAX blocks, the history ring
 buffer or the engine: used by the tests (agreement with the JAX scan) and by ``benchmarks/gui2022.py``
 (speed ratio). Slow by design (~10-20 us/step); use short horizons.
 """

@@ -1,5 +1,5 @@
-"""Values printed in Gui et al. 2022 (Appl. Sci. 12, 2022), section 5, and the reviewer's reference
-numbers of SPEC.md P2.4/P2.6. Kept in one place so that scenarios, checks and the report agree."""
+"""Values printed in Gui et al. 2022 (Appl. Sci. 12, 2022), section 5, and our documented choices for the
+data the paper does not give (E002-10). Kept in one place so that scenarios, checks and the report agree."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Mehrabian, Tafazoli, Khorasani: reconfigurable control of networked nonlinear Euler-Lagrange systems
 subject to FDI imperfections. Registers method ``mehrabian`` and reproduction ``mehrabian``
-(SPEC.md P3, ERRATA E003-*).
+(errata E003-* in docs/errata.md).
 """
 
 from formation_ftc.papers.mehrabian import registration  # noqa: F401

@@ -120,7 +120,7 @@ def check(s) -> list[Condition]:
     eigs = [np.linalg.eigvalsh(P).min() for P in Ps]
     tol = max(rounding_margin(P) for P in Ps)
     out.append(Condition(
-        "P_j positive definite", "Mehrabian (21) (reconstructed, SPEC P3.3)",
+        "P_j positive definite", "Mehrabian (21) (reconstructed)",
         f"min eig = {eigs[0]:.4g} (D = J^), {eigs[1]:.4g} (D = 10 I), {eigs[2]:.4g} (D = 20 I)",
         "> 0 (iff K_P > K_I for scalar gains)", bool(min(eigs) > tol), required=False,
         detail=f"verified: numpy eigenvalues beyond the rounding margin {tol:.2g}"))
