@@ -13,13 +13,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
 from formation_ftc.papers.mehrabian import conditions
 from formation_ftc.papers.mehrabian.figures import plot_attitudes, plot_fault_estimate, plot_seed_spread
-from formation_ftc.papers.mehrabian.method import metrics_from_final
+from formation_ftc.papers.mehrabian.method import with_seed
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.sim.batch import batched_run, stack_params
 
@@ -41,7 +40,7 @@ def _batch(compiled, seeds):
     keys = {c.static_key for c in compiled}
     if len(keys) != 1:
         raise RuntimeError("the Mehrabian cases must share one compiled program (static keys differ)")
-    runs = [dict(c.params, seed=jnp.asarray(s, dtype=jnp.uint32)) for c in compiled for s in seeds]
+    runs = [with_seed(c.params, s) for c in compiled for s in seeds]
     return (*stack_params(runs), len(runs))
 
 
@@ -55,11 +54,10 @@ def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | Non
     compiled = [compile_scenario(s) for s in scns]
     P, axes, size = _batch(compiled, seeds)
     out = batched_run(compiled[0], axes, size)(P)
-    final = jax.tree_util.tree_map(np.asarray, out["final"])
-    m = scns[0].formation.n_spacecraft
-    mets = metrics_from_final(final, np.asarray(compiled[0].params["windows"]), m)
     shape = (len(scenario_names), len(seeds))
-    return {k: np.asarray(v).reshape(shape) for k, v in mets.items()}, np.asarray(out["diverged_step"]).reshape(shape)
+    mets = {m.name: np.asarray(v).reshape(shape)
+            for m, v in zip(compiled[0].params.metrics, out["metrics"], strict=True)}
+    return mets, np.asarray(out["diverged_step"]).reshape(shape)
 
 
 def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = None):

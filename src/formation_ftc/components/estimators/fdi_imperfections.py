@@ -1,0 +1,73 @@
+"""Synthetic FDI with configurable imperfections as an estimator (Mehrabian Sec. IV, Assumption 4).
+
+The FDI unit runs beside the controller and reports, per spacecraft and channel, a fault flag and an
+estimate ``u*`` of the additive actuator fault (:mod:`formation_ftc.blocks.fdi`: detection latency,
+missed detection, isolation routing, identification scale / bias / noise). It is a *scripted* report:
+the scenario compiles the same fault description into the truth-side actuator
+(:class:`~formation_ftc.components.actuators.additive_faults.HeldAdditiveFaultActuator`) and into this
+component's own time profile, so the estimator reads no truth at run time -- only its own profile and
+its own noise stream (the fourth stream of the run seed, ``fold_in(key, k)`` per step).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from formation_ftc.blocks.fdi import FDIModel, fdi_output
+from formation_ftc.core.disturbances import run_key, step_key
+from formation_ftc.core.fault_profiles import windowed_additive_faults
+from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+
+__all__ = ["ScriptedFdi", "fdi_noise_key"]
+
+VEC = ("spacecraft", "axis")
+
+
+def fdi_noise_key(seed):
+    """Root key of the FDI noise: the fourth of the run's four streams (see
+    :func:`formation_ftc.components.plants.euler_angle_attitude.seed_streams`)."""
+    return jax.random.split(run_key(seed), 4)[3]
+
+
+@component
+class ScriptedFdi(Estimator):
+    """FDI report (flag, u*) at every step from the scripted fault profile.
+
+    Leaves: ``seed`` (uint32), ``windows`` (n_faults, 2) fault windows [s], ``params`` (the
+    :func:`formation_ftc.blocks.fdi.fdi_params` pytree: onset, delay, detected, scale, bias, noise_std,
+    routing, fault mask). Static: the fault expressions, 0-based spacecraft / channels, ``step`` (the
+    step grid [s]) and ``t0`` [s]. The estimate is an :class:`~formation_ftc.blocks.fdi.FDIOutput`.
+    """
+
+    refresh_on_observe = True  # the report recorded at t_k is the one the step at t_k uses
+
+    count: int = static()
+    seed: Any = 0
+    windows: Any = None
+    params: Any = None
+    torques: tuple[str, ...] = static(())
+    spacecraft: tuple[int, ...] = static(())
+    channels: tuple[int, ...] = static(())
+    step: float = static(1.0)
+    t0: float = static(0.0)
+    n_channels: int = static(3)
+
+    def _model(self) -> FDIModel:
+        def fault_fn(k):
+            return windowed_additive_faults(k, self.step, self.windows, self.torques, self.spacecraft,
+                                            self.channels, self.count, self.n_channels)
+        return FDIModel(self.count, self.n_channels, fault_fn, self.step)
+
+    def update(self, t, state, inputs: FlightInputs):
+        k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
+        return state, fdi_output(self._model(), self.params, k, step_key(fdi_noise_key(self.seed), k))
+
+    def signals(self):
+        return (Signal("fdi_flag", VEC, "1", "channel reported faulty by the FDI (reconfigure)"),
+                Signal("fdi_estimate", VEC, "N m", "fault estimate u* reported by the FDI"))
+
+    def outputs(self, t, state, estimate):
+        return {"fdi_flag": estimate.flag, "fdi_estimate": estimate.estimate}
