@@ -5,8 +5,11 @@ A **method** turns a validated scenario into a compiled, pure JAX run (:class:`C
 it. A **reproduction** runs a paper's study and returns a :class:`PaperReport` (figures, published vs
 reproduced rows, condition checks) that ``formation-ftc reproduce`` and the HTML report consume.
 
-Plug-ins register themselves when their module is imported; :func:`load_plugins` imports the built-in
-ones (``formation_ftc.methods`` and every ``formation_ftc.papers.<name>``).
+Plug-ins register themselves when their module is imported. :func:`load_plugins` imports every module
+named by an entry point of the group ``formation_ftc.plugins`` in the installed package metadata --
+the built-in methods and papers declare theirs in ``pyproject.toml``, and a third-party package adds
+its own the same way (see ``docs/extending.md``). A plug-in that fails to import is reported
+(:data:`PLUGIN_ERRORS`), never fatal.
 """
 
 from __future__ import annotations
@@ -37,6 +40,8 @@ __all__ = [
     "load_plugins",
     "PAPER_MODULES",
     "PLUGIN_ERRORS",
+    "PLUGIN_GROUP",
+    "plugin_modules",
 ]
 
 PyTree = Any
@@ -210,8 +215,10 @@ class Reproduction:
 _METHODS: dict[str, Method] = {}
 _REPRODUCTIONS: dict[str, Reproduction] = {}
 
-#: Built-in paper sub-packages, in the order the report shows them.
+#: Display order of the built-in papers in the report (loading is by entry point, not by this list).
 PAPER_MODULES = ["li2020", "yang2013", "gui2022", "mehrabian", "azizi2009"]
+#: entry-point group that plug-ins (built-in and third-party) register under
+PLUGIN_GROUP = "formation_ftc.plugins"
 
 
 def register_method(method: Method) -> Method:
@@ -256,11 +263,29 @@ _LOADED = False
 PLUGIN_ERRORS: dict[str, str] = {}
 
 
-def load_plugins() -> None:
-    """Import the built-in methods and paper packages (idempotent).
+def plugin_modules() -> list[str]:
+    """Modules to import: every ``formation_ftc.plugins`` entry point's value (a module name), built-in
+    ones first. When the installed metadata predates the entry points (an old editable install), the
+    built-in modules are found by walking ``formation_ftc.papers`` instead."""
+    from importlib.metadata import entry_points
 
-    A package that fails to import is recorded in :data:`PLUGIN_ERRORS` and skipped, so one broken
-    paper does not take the others (or the CLI) down; lookups of its names then report the error.
+    names = [ep.value.split(":")[0] for ep in entry_points(group=PLUGIN_GROUP)]
+    if "formation_ftc.methods" not in names:
+        import pkgutil
+
+        import formation_ftc.papers as papers
+
+        names = ["formation_ftc.methods"] + [f"formation_ftc.papers.{m.name}"
+                                             for m in pkgutil.iter_modules(papers.__path__)] + names
+    own = [n for n in names if n.startswith("formation_ftc.")]
+    return list(dict.fromkeys(own + [n for n in names if not n.startswith("formation_ftc.")]))
+
+
+def load_plugins() -> None:
+    """Import every plug-in module (idempotent).
+
+    A module that fails to import is recorded in :data:`PLUGIN_ERRORS` and skipped, so one broken
+    plug-in does not take the others (or the CLI) down; lookups of its names then report the error.
     """
     global _LOADED
     if _LOADED:
@@ -268,7 +293,7 @@ def load_plugins() -> None:
     _LOADED = True
     import traceback
 
-    for module in ["formation_ftc.methods"] + [f"formation_ftc.papers.{n}" for n in PAPER_MODULES]:
+    for module in plugin_modules():
         try:
             importlib.import_module(module)
         except Exception:  # noqa: BLE001 - recorded and reported on lookup

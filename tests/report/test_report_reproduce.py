@@ -253,7 +253,8 @@ def test_broken_paper_package_becomes_a_failed_section(tmp_path, monkeypatch):
         "register_reproduction(ok_reproduction('zzfake_good'))\n")
     (pkg_dir / "zzfake_bad.py").write_text("raise ImportError('missing dependency xyz')\n")
     monkeypatch.setattr(papers_pkg, "__path__", list(papers_pkg.__path__) + [str(pkg_dir)])
-    monkeypatch.setattr(registry, "PAPER_MODULES", ["zzfake_bad", "zzfake_good"])
+    monkeypatch.setattr(registry, "plugin_modules",
+                        lambda: ["formation_ftc.papers.zzfake_bad", "formation_ftc.papers.zzfake_good"])
     monkeypatch.setattr(registry, "_REPRODUCTIONS", {})
     monkeypatch.setattr(registry, "_LOADED", False)
     try:

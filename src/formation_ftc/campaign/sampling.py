@@ -44,6 +44,7 @@ field changes the design, so the values of the others change too.
 from __future__ import annotations
 
 import copy
+import json
 import math
 import zlib
 from collections.abc import Mapping
@@ -206,6 +207,42 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
         node, ref = node[part], ref[part]
 
 
+def _schema_bounds(method: str, path: str) -> list[tuple[float, str, Any]]:
+    """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
+    elements inherit the bounds of their list's field items when declared there)."""
+    import annotated_types as at
+
+    from formation_ftc.registry import get_method
+
+    try:
+        model: Any = get_method(method).schema
+    except KeyError:
+        return []
+    info = None
+    for part in path.split("."):
+        if part.isdigit():
+            continue
+        fields = getattr(model, "model_fields", None)
+        if not fields or part not in fields:
+            return []
+        info = fields[part]
+        ann = info.annotation
+        model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
+    if info is None:
+        return []
+    out: list[tuple[float, str, Any]] = []
+    for m in info.metadata:
+        if isinstance(m, at.Gt):
+            out.append((m.gt, ">", lambda v, b=m.gt: v > b))
+        elif isinstance(m, at.Ge):
+            out.append((m.ge, ">=", lambda v, b=m.ge: v >= b))
+        elif isinstance(m, at.Lt):
+            out.append((m.lt, "<", lambda v, b=m.lt: v < b))
+        elif isinstance(m, at.Le):
+            out.append((m.le, "<=", lambda v, b=m.le: v <= b))
+    return out
+
+
 def _describe_dump(node: Any) -> str:
     if isinstance(node, Mapping):
         return "fields: " + ", ".join(map(str, node)) if node else "no fields"
@@ -349,18 +386,57 @@ class CampaignPlan:
             raise CampaignError(f"run {inputs.run_id} ({shown}): sampled scenario is invalid:\n{exc}") from None
 
     def validate_all(self, run_ids: list[int] | None = None) -> None:
-        """Validate the scenario of every run (default: all) before anything runs."""
-        errors = []
-        for r in (range(self.n_runs) if run_ids is None else run_ids):
+        """Validate every run (default: all) before anything runs, without building each scenario.
+
+        Numeric fields are checked as arrays against the bounds the scenario schema declares for them
+        (the message names the field, the run id and the value); then the scenario is validated in
+        full for one run per structure (base and non-numeric values) and for the runs holding the
+        smallest and the largest value of every numeric field (cross-field rules see the extremes).
+        """
+        ids = list(range(self.n_runs) if run_ids is None else run_ids)
+        inputs = [self.run_inputs(r) for r in ids]
+        errors: list[str] = []
+        numeric_paths = [s.path for s in self.samplers
+                         if all(isinstance(i.values[s.path], int | float) and not isinstance(i.values[s.path], bool)
+                                for i in inputs)]
+        chosen: dict[int, RunInputs] = {}
+        for path in numeric_paths:
+            vals = np.array([i.values[path] for i in inputs], dtype=np.float64)
+            for base_k, base in enumerate(self.base_names):
+                sel = [k for k, i in enumerate(inputs) if i.base == base]
+                if not sel:
+                    continue
+                for bound, op, ok in _schema_bounds(self.methods[base_k], path):
+                    good = np.asarray(ok(vals[sel]), dtype=bool)
+                    bad = [sel[j] for j in np.flatnonzero(~good)]
+                    if bad:
+                        k = bad[0]
+                        errors.append(f"run {inputs[k].run_id}: {path} = {vals[k]!r} violates {path} {op} "
+                                      f"{bound} ({len(bad)} run(s) in all)")
+                v_sel = vals[sel]
+                if np.any(~np.isfinite(v_sel)):
+                    k = sel[int(np.flatnonzero(~np.isfinite(v_sel))[0])]
+                    errors.append(f"run {inputs[k].run_id}: {path} = {vals[k]!r} is not finite")
+                    continue
+                for k in (sel[int(np.argmin(v_sel))], sel[int(np.argmax(v_sel))]):
+                    chosen[inputs[k].run_id] = inputs[k]
+        structures: dict[str, RunInputs] = {}
+        for i in inputs:
+            key = i.base + json.dumps({p: v for p, v in i.values.items() if p not in numeric_paths},
+                                      sort_keys=True, default=str)
+            structures.setdefault(key, i)
+        for i in structures.values():
+            chosen.setdefault(i.run_id, i)
+        for i in sorted(chosen.values(), key=lambda x: x.run_id):
+            if len(errors) >= 3:
+                break
             try:
-                self.scenario(self.run_inputs(r))
+                self.scenario(i)
             except CampaignError as exc:
                 errors.append(str(exc))
-                if len(errors) >= 3:
-                    break
         if errors:
             raise CampaignError("samples outside what the scenario allows (nothing was run):\n"
-                                + "\n".join(errors))
+                                + "\n".join(errors[:3]))
 
     # ------------------------------------------------------------------------------------ chunks
     def chunks(self) -> list[Chunk]:
