@@ -39,7 +39,6 @@ PENDING = {
     "src/formation_ftc/sim/engine.py",
     "src/formation_ftc/methods/cw_formation.py", "src/formation_ftc/_jax.py",
     "src/formation_ftc/core/rotating_formation.py",
-    "src/formation_ftc/components/plants/clohessy_wiltshire_zoh.py",
 }
 
 
