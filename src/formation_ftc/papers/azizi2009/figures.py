@@ -29,7 +29,7 @@ def plot_fig2(efforts: Sequence[tuple[str, np.ndarray, np.ndarray]], path: Path,
                     label=f"satellite {j + 1}")
         ax.set_title(title)
         ax.set_xlabel("time t [s]")
-        ax.set_ylabel("E_xi [N^2 s]")
+        ax.set_ylabel("E_xi [m^2 s^-3]")
         ax.legend(loc="upper left")
     return save_figure(fig, path)
 
@@ -97,7 +97,7 @@ def plot_run(ds, sc, out_dir: Path) -> list[Path]:
     for j, scn in enumerate(ds["spacecraft"].values):
         ax.plot(t, ds["effort"].sel(axis="x", spacecraft=scn).values, label=f"satellite {scn}",
                 color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)])
-    ax.set_ylabel("E_xi [N^2 s]")
+    ax.set_ylabel("E_xi [m^2 s^-3]")
     ax.set_xlabel("time t [s]")
     ax.legend(ncol=4)
     return [save_figure(fig, Path(out_dir) / f"{sc.scenario.name}.png")]
