@@ -186,9 +186,10 @@ def _nonfinite_leaves(tree) -> list[tuple[Any, np.ndarray, tuple[int, ...]]]:
         arr = np.asarray(leaf)
         if not np.issubdtype(arr.dtype, np.inexact):
             continue
-        bad = np.argwhere(~np.isfinite(arr))
-        if bad.size:
-            out.append((path, arr, tuple(int(v) for v in bad[0])))
+        finite = np.isfinite(arr)
+        if not finite.all():  # (a 0-d leaf has no argwhere rows: its index is ())
+            idx = tuple(int(v) for v in np.argwhere(~finite)[0]) if arr.ndim else ()
+            out.append((path, arr, idx))
     return out
 
 
