@@ -29,7 +29,7 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from formation_ftc.errors import ResourceLimitError
+from formation_ftc.errors import InputError, ResourceLimitError
 
 __all__ = ["Budgets", "parse_bytes", "parse_count", "format_bytes", "run_memory_bytes", "check_run_steps",
            "check_memory", "DEFAULT_MAX_RUN_STEPS", "DEFAULT_MAX_CAMPAIGN_STEPS", "default_max_memory"]
@@ -207,7 +207,12 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
     total = steps * int(plan.n_runs)
     check_campaign_steps(total, int(plan.n_runs), budgets, where)
     batch = 0
-    for r in first_of_base.values():
-        compiled = api.compile_scenario(plan.scenario(plan.run_inputs(r)))
+    for base, r in first_of_base.items():
+        try:
+            compiled = api.compile_scenario(plan.scenario(plan.run_inputs(r)))
+        except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+            if isinstance(exc, InputError):
+                raise
+            raise InputError(f"{where}: base scenario {base!r} (run {r}) cannot be compiled: {exc}") from None
         batch = max(batch, check_memory(compiled, budgets, where, batch=int(plan.chunk_size)))
     return {"run_steps": steps, "campaign_steps": total, "batch_memory": batch}
