@@ -16,6 +16,7 @@ Run: ``python benchmarks/engine.py [--batch 1000] [--batch-horizon 10]``
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import re
 import statistics
@@ -103,8 +104,10 @@ def main() -> None:
     bcomp = compile_scenario(bscn)
     bn = bscn.simulation.n_steps
     rng = np.random.default_rng(0)
-    masses = bcomp.params["mass"] * rng.uniform(0.9, 1.1, size=(args.batch,) + np.shape(bcomp.params["mass"]))
-    runs = [dict(bcomp.params, mass=m) for m in masses]  # the runs differ by their true masses
+    loop = bcomp.params  # the ClosedLoop pytree
+    masses = loop.plant.mass * rng.uniform(0.9, 1.1, size=(args.batch,) + np.shape(loop.plant.mass))
+    # the runs differ by their true masses
+    runs = [dataclasses.replace(loop, plant=dataclasses.replace(loop.plant, mass=m)) for m in masses]
 
     def time_batch(batch, axes):
         vrun = jax.jit(jax.vmap(bcomp.run, in_axes=(axes,)))

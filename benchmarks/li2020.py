@@ -197,28 +197,33 @@ def jax_closed_loop(scenario: str = "li2020-thm2-delays", horizon: float | None 
     """(jitted run, params, n_steps) of the JAX closed loop of a built-in li2020 scenario.
 
     ``jax.block_until_ready(run(params))`` runs it; the first call compiles. ``check_finite=False``
-    runs the same step without the engine's per-step divergence check (to measure its cost only;
-    the method itself always checks).
+    runs the same step without the engine's divergence check (to measure its cost only; the method
+    itself always checks).
     """
+    import functools
+
     import jax
 
-    from formation_ftc.papers.li2020.method import build, make_model
+    from formation_ftc.papers.li2020.method import build
     from formation_ftc.papers.li2020.reproduction import load_li2020
-    from formation_ftc.sim.engine import run_fixed_step
+    from formation_ftc.sim import loop as loop_module
 
     ov = dict(overrides or {})
     if horizon is not None:
         ov["simulation.horizon"] = horizon
     scn = load_li2020(scenario, ov)
     compiled = build(scn)
-    n, rec = scn.simulation.n_steps, scn.simulation.record_every
+    n = scn.simulation.n_steps
     if check_finite:
         return jax.jit(compiled.run), compiled.params, n
-    init_state, make_step, observe, _ = make_model(scn)
+    engine_run = loop_module.run_fixed_step
 
-    def run(p):
-        return run_fixed_step(make_step(p), lambda k, st: observe(p, k, st), init_state(p), n, rec,
-                              scn.simulation.unroll, check_finite=False)
+    def run(p):  # traced once, at the first call: the loop's run with the check switched off
+        loop_module.run_fixed_step = functools.partial(engine_run, check_finite=False)
+        try:
+            return p.run()
+        finally:
+            loop_module.run_fixed_step = engine_run
 
     return jax.jit(run), compiled.params, n
 
