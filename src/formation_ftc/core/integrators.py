@@ -6,7 +6,8 @@
   (sampled-data, zero-order hold).
 * :func:`euler_step` -- forward Euler (used by discrete-time observers, Gui2022).
 * :func:`zoh_discretize` -- exact zero-order-hold discretisation of an LTI plant with the matrix
-  exponential of the augmented matrix [[A, B], [0, 0]] (Van Loan).
+  exponential of the augmented matrix [[A, B], [0, 0]] (Van Loan); :func:`zoh_discretize_jax` is the
+  same in JAX (traceable in A and B, e.g. inside a compiled run whose mean motion is a parameter).
 """
 
 from __future__ import annotations
@@ -15,10 +16,12 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
 
-__all__ = ["rk4_step", "rk4_step_staged", "rk4_autonomous_stages", "euler_step", "zoh_discretize"]
+__all__ = ["rk4_step", "rk4_step_staged", "rk4_autonomous_stages", "euler_step", "zoh_discretize",
+           "zoh_discretize_jax"]
 
 PyTree = Any
 
@@ -100,4 +103,12 @@ def zoh_discretize(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
     M[:n, :n] = A
     M[:n, n:] = B
     E = scipy.linalg.expm(M * dt)
+    return E[:n, :n], E[:n, n:]
+
+
+def zoh_discretize_jax(A, B, dt: float) -> tuple[jax.Array, jax.Array]:
+    """:func:`zoh_discretize` in JAX: (Ad, Bd) from expm of [[A, B], [0, 0]] dt (Van Loan)."""
+    n, m = A.shape[0], B.shape[1]
+    M = jnp.zeros((n + m, n + m)).at[:n, :n].set(A).at[:n, n:].set(B)
+    E = jax.scipy.linalg.expm(M * dt)
     return E[:n, :n], E[:n, n:]

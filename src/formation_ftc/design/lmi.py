@@ -27,6 +27,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from formation_ftc.errors import InputError
+
 __all__ = [
     "DesignInfeasible",
     "IloLmiDesign",
@@ -46,7 +48,7 @@ CONSTRAINT_NAMES = {
 }
 
 
-class DesignInfeasible(ValueError):
+class DesignInfeasible(InputError):
     """The LMI problem has no solution. ``constraints`` names the conflicting groups, ``status`` is the
     solver status (e.g. ``'infeasible'``)."""
 

@@ -5,17 +5,28 @@ fixed point of the linear ILO recursion, the exact scalar recursion of the posit
 CW closed form, the steady state of the COF2TC closed loop, and batched == single runs.
 """
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.api import compile_scenario, finish_run, simulate_with_metrics
-from formation_ftc.core.dynamics.cw import cw_closed_form, cw_matrices
+from formation_ftc import api
+from formation_ftc.api import compile_scenario, finish_run
+from formation_ftc.core.dynamics.cw import cw_closed_form, cw_free_motion, cw_matrices
 from formation_ftc.papers.gui2022 import published as pub
-from formation_ftc.papers.gui2022.method import _closed_form
+from formation_ftc.papers.gui2022.figures import deputy
 from formation_ftc.papers.gui2022.numpy_reference import simulate_numpy
+from formation_ftc.sim.batch import batched_run, stack_params
+
+
+def simulate_with_metrics(scn):
+    """One run: (dataset of the single deputy, metrics)."""
+    ds, m = api.simulate_with_metrics(scn)
+    return deputy(ds), m
+
 
 GAMMA = pub.GAMMA_PRINTED
 LAM = pub.L1_PRINTED[0, 0]
@@ -44,7 +55,7 @@ def test_jax_scan_matches_numpy_reference(over):
     np.testing.assert_allclose(ds.fault.values[:N], ref["F"], rtol=0, atol=1e-15)
     np.testing.assert_allclose(ds.state.values, ref["q"], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(ds.estimate.values, ref["q_hat"], rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(ds.control.values[:N], ref["u"], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(ds.command.values[:N], ref["u"], rtol=1e-9, atol=1e-9)
     if over["controller.law"] == "lof2tc":
         assert not np.allclose(ref["pi"], ref["pi"][0])  # the learning laws were exercised
         np.testing.assert_allclose(ds.learning_gain.values[:N], ref["pi"], rtol=1e-9)
@@ -145,17 +156,19 @@ def test_lof2tc_and_cof2tc_short_campaign():
 def test_batched_equals_single_runs():
     scn = ftc.load_scenario("gui2022-lof2tc", {"simulation.horizon": 0.5, "simulation.record_every": 50})
     c = compile_scenario(scn)
-    amps = jnp.array([1.2e-3, 5e-3])
-    batch = jax.tree_util.tree_map(lambda x: jnp.stack([x, x]), c.params)
-    batch["A0"] = amps
-    outb = jax.jit(jax.vmap(c.run))(batch)
-    for i in range(2):
-        single = jax.jit(c.run)({**c.params, "A0": amps[i]})
-        np.testing.assert_allclose(np.asarray(outb["records"]["F_hat"][i]), np.asarray(single["records"]["F_hat"]),
+    loops = [dataclasses.replace(c.params, plant=dataclasses.replace(
+        c.params.plant, disturbance_amplitude=jnp.asarray(a))) for a in (1.2e-3, 5e-3)]
+    batch, axes = stack_params(loops)
+    outb = batched_run(c, axes, 2)(batch)
+    for i, loop in enumerate(loops):
+        single = jax.jit(c.run)(loop)
+        np.testing.assert_allclose(np.asarray(outb["records"]["fault_estimate"][i]),
+                                   np.asarray(single["records"]["fault_estimate"]),
                                    rtol=0, atol=1e-9)  # vmapped XLA fuses differently: rounding x 456
-    assert outb["records"]["q"].dtype == jnp.float64
+    assert not np.allclose(outb["records"]["fault_estimate"][0], outb["records"]["fault_estimate"][1])
+    assert outb["records"]["state"].dtype == jnp.float64
     ds, m = finish_run(scn, c, jax.jit(c.run)(c.params))
-    assert set(ds.fault_estimate.dims) == {"time", "axis"}
+    assert set(ds.fault_estimate.dims) == {"time", "spacecraft", "axis"}
 
 
 def test_nominal_orbit_closed_form_and_zoh_propagation():
@@ -164,7 +177,7 @@ def test_nominal_orbit_closed_form_and_zoh_propagation():
     T = 2 * np.pi / n
     ts = np.array([0.0, 100.0, 1234.5, 3000.0, T])
     ref = cw_closed_form(n, q0, ts)
-    got = np.stack([np.asarray(_closed_form(n, jnp.asarray(q0), np.cos(n * t), np.sin(n * t), t)) for t in ts])
+    got = np.stack([np.asarray(cw_free_motion(n, jnp.asarray(q0), t)) for t in ts])
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
     np.testing.assert_allclose(got[-1], q0, rtol=0, atol=1e-9)  # returns after 4188.79 s (SPEC P2.6 #4)
     # ZOH propagation q_{k+1} = Ad q_k (the plant's discretisation) stays on the closed form
@@ -184,8 +197,8 @@ def test_nominal_orbit_closed_form_and_zoh_propagation():
 def test_fz_shifted_flag_e002_09():
     over = {"simulation.horizon": 1.2, "simulation.record_every": 100, "faults.z_onset": 1.0,
             "controller.law": "none"}
-    lit = ftc.simulate(ftc.load_scenario("gui2022-ilo", over)).fault.sel(axis="z", time=1.0).item()
-    sh = ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "faults.z_decay_shifted": True})).fault.sel(
+    lit = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over))).fault.sel(axis="z", time=1.0).item()
+    sh = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "faults.z_decay_shifted": True}))).fault.sel(
         axis="z", time=1.0).item()
     base = 0.25 * np.sin(0.05 + np.pi / 4)
     assert lit == pytest.approx(base - 0.2 * np.exp(-0.1), abs=1e-14)
@@ -206,9 +219,9 @@ def test_sign_term_period_two_chatter_and_record_mean():
     # With the sign term and a small F_hat, sgn(e_v) flips every step: F_hat alternates with period 2 steps
     # (~+-4.2e-4 m/s^2); the ILO of [25] does not. The record-interval mean removes it (mean over 2 steps).
     over = {"simulation.horizon": 4.0, "simulation.record_every": 1}
-    ds1 = ftc.simulate(ftc.load_scenario("gui2022-ilo", over))
-    ds2 = ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "simulation.record_every": 2}))
-    dsb = ftc.simulate(ftc.load_scenario("gui2022-ilo-baseline", over))
+    ds1 = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over)))
+    ds2 = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "simulation.record_every": 2})))
+    dsb = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo-baseline", over)))
     w = ds1.time.values >= 3.0
     h = ds1.synthesized_disturbance.values[w]
     assert np.all(np.sign(h[1:, 1]) == -np.sign(h[:-1, 1]))  # alternates every step (y axis)

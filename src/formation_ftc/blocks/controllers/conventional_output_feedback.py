@@ -18,24 +18,16 @@ oscillation of about 37 m after 2000 s. Units as in
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import jax
 
-import jax.numpy as jnp
+from formation_ftc.core.linear import matvec
 
-from formation_ftc.blocks.observers.iterative_learning_observer import matvec
-
-__all__ = ["ConventionalOutputFeedback"]
+__all__ = ["cof2tc_law"]
 
 
-@dataclass(frozen=True)
-class ConventionalOutputFeedback:
-    """Fixed-gain output feedback; ``fault_compensation`` subtracts ``B^+ H F_hat`` (static flag)."""
-
-    fault_compensation: bool = False
-
-    def control(self, params: dict, e_y, F_hat) -> jnp.ndarray:
-        """``u = K e_y`` [m/s^2] (optionally ``- B^+ H F_hat``)."""
-        u = matvec(params["K"], e_y)
-        if self.fault_compensation:
-            u = u - matvec(params["BpH"], F_hat)
-        return u
+def cof2tc_law(e_y: jax.Array, F_hat: jax.Array, K, BpH, fault_compensation: bool) -> jax.Array:
+    """``u = K e_y`` [m/s^2] (optionally ``- B^+ H F_hat``); broadcasts over leading axes."""
+    u = matvec(K, e_y)
+    if fault_compensation:
+        u = u - matvec(BpH, F_hat)
+    return u

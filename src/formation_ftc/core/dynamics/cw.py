@@ -10,7 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["cw_matrices", "cw_rhs", "cw_state_transition", "cw_closed_form"]
+__all__ = ["cw_matrices", "cw_rhs", "cw_state_transition", "cw_closed_form", "cw_matrices_jax", "cw_free_motion"]
 
 
 def cw_matrices(n: float) -> tuple[np.ndarray, np.ndarray]:
@@ -52,3 +52,44 @@ def cw_closed_form(n: float, q0, t) -> np.ndarray:
     t = np.atleast_1d(np.asarray(t, dtype=float))
     q0 = np.asarray(q0, dtype=float)
     return np.stack([cw_state_transition(n, tk) @ q0 for tk in t])
+
+
+# ------------------------------------------------------------------------------------------------
+# JAX versions (traceable, vmappable and differentiable in n)
+# ------------------------------------------------------------------------------------------------
+def cw_matrices_jax(n) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(A, B) of :func:`cw_matrices` as JAX arrays built from the (possibly traced) mean motion n [rad/s]."""
+    z = jnp.zeros((), dtype=jnp.float64)
+    one = 1.0 + z
+    n = n + z
+    n2 = n * n
+    rows = [
+        [z, z, z, one, z, z],
+        [z, z, z, z, one, z],
+        [z, z, z, z, z, one],
+        [3 * n2, z, z, z, 2 * n, z],
+        [z, z, z, -2 * n, z, z],
+        [z, z, -n2, z, z, z],
+    ]
+    A = jnp.stack([jnp.stack(r) for r in rows])
+    B = jnp.concatenate([jnp.zeros((3, 3)), jnp.eye(3)])
+    return A, B
+
+
+def cw_free_motion(n, q0, t):
+    """Free-drift CW state Phi(t) q0 at one time t [s] (closed form) in JAX.
+
+    ``q0`` has shape (..., 6) [m, m/s]; returns the same shape. Same formula as
+    :func:`cw_state_transition` written element by element (no 6x6 matrix per call).
+    """
+    nt = n * t
+    c, s = jnp.cos(nt), jnp.sin(nt)
+    x0, y0, z0, xd, yd, zd = (q0[..., i] for i in range(6))
+    return jnp.stack([
+        (4 - 3 * c) * x0 + (s / n) * xd + (2 / n) * (1 - c) * yd,
+        6 * (s - nt) * x0 + y0 - (2 / n) * (1 - c) * xd + ((4 * s - 3 * nt) / n) * yd,
+        c * z0 + (s / n) * zd,
+        3 * n * s * x0 + c * xd + 2 * s * yd,
+        -6 * n * (1 - c) * x0 - 2 * s * xd + (4 * c - 3) * yd,
+        -n * s * z0 + c * zd,
+    ], axis=-1)

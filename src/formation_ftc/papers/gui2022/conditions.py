@@ -8,19 +8,50 @@ and ``Y = P L1``. For LMI gains the solver's P and Y are used.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from formation_ftc.blocks.observers.iterative_learning_observer import learning_steps
 from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.design.lmi import ilo_lmi_residuals
-from formation_ftc.design.riccati import care_residual
+from formation_ftc.design.lmi import design_ilo_gains, ilo_lmi_residuals, rescale_design
+from formation_ftc.design.riccati import care_residual, solve_care
 from formation_ftc.papers.gui2022 import published as pub
-from formation_ftc.papers.gui2022.method import care_cached, gains_of, lmi_design_cached
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.registry import Condition
 
 __all__ = ["check", "implied_lyapunov", "learning_loop_radius", "learning_loop_eigenvalues", "d_max", "observer_conditions",
-           "controller_conditions"]
+           "controller_conditions", "gains_of", "lmi_design_cached", "care_cached"]
+
+
+@functools.lru_cache(maxsize=16)
+def lmi_design_cached(n: float, lam: float, center: float, radius: float):
+    """ILO gains from the LMIs (8), (27), disk S(c, r); cached by input (design/ is offline code)."""
+    A, B = cw_matrices(n)
+    return design_ilo_gains(A, np.eye(6), B, lam=lam, disk_center=center, disk_radius=radius)
+
+
+@functools.lru_cache(maxsize=16)
+def care_cached(n: float, q_scale: float):
+    """CARE (34) with Q = q_scale I6, R = I3; cached."""
+    A, B = cw_matrices(n)
+    return solve_care(A, B, q_scale * np.eye(6), np.eye(3))
+
+
+def gains_of(s: Gui2022Scenario) -> dict[str, np.ndarray]:
+    """Numeric gains a run uses: L1, L2 (printed or LMI) and K (printed or CARE)."""
+    n = s.orbit.mean_motion
+    A, B = cw_matrices(n)
+    o, c = s.observer, s.controller
+    if o.gains == "lmi":
+        des = lmi_design_cached(n, o.lmi_lambda, o.disk_center, o.disk_radius)
+        if o.lmi_scale != 1.0:
+            des = rescale_design(des, o.lmi_scale, A, np.eye(6), B)
+        L1, L2 = des.L1, des.L2
+    else:
+        L1, L2 = np.asarray(o.L1), np.asarray(o.L2)
+    K = care_cached(n, c.care_q_scale).K if c.gains == "care" else np.asarray(c.K)
+    return {"L1": L1, "L2": L2, "K": K}
 
 
 def d_max(A0: float, n: float, samples: int = 200_001) -> float:

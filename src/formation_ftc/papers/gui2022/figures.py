@@ -1,6 +1,7 @@
 """Figures 3-10 of Gui et al. 2022 from result datasets (matplotlib via formation_ftc.plotting).
 
-Every function takes xarray Datasets produced by method ``gui2022`` and returns the written PNG path.
+Every figure function takes xarray Datasets of the deputy (:func:`deputy` of a ``gui2022`` result) and
+returns the written PNG path.
 The single deputy is called "deputy" in legends; times in s, positions in m, accelerations in m/s^2.
 """
 
@@ -12,10 +13,15 @@ import numpy as np
 
 from formation_ftc.plotting import new_figure, save_figure
 
-__all__ = ["fig3_fault_reconstruction", "fig45_estimation_errors", "fig6_ilo_comparison",
+__all__ = ["deputy", "fig3_fault_reconstruction", "fig45_estimation_errors", "fig6_ilo_comparison",
            "fig78_tracking_errors", "fig9_trajectory", "fig10_synthesized_disturbance", "plot"]
 
 AX = ["x", "y", "z"]
+
+
+def deputy(ds):
+    """The single deputy's variables (the ``spacecraft`` dimension of a result dataset removed)."""
+    return ds.isel(spacecraft=0) if "spacecraft" in ds.dims else ds
 
 
 def fig3_fault_reconstruction(ds, path: Path) -> Path:
@@ -131,6 +137,7 @@ def fig10_synthesized_disturbance(ds_lof, path: Path) -> Path:
 def plot(ds, scenario, out_dir) -> list[Path]:
     """Method plot hook: fault reconstruction, and tracking errors when a controller runs."""
     out_dir = Path(out_dir)
+    ds = deputy(ds)
     paths = [fig3_fault_reconstruction(ds, out_dir / "fault_reconstruction.png")]
     if "tracking_error" in ds:
         fig, axes = new_figure(3, 1, title=f"{scenario.scenario.name}: position tracking error (deputy)")

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg
 
 from formation_ftc.core.dynamics.cw import cw_matrices, cw_state_transition
-from formation_ftc.papers.gui2022.method import gains_of
+from formation_ftc.papers.gui2022.conditions import gains_of
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 
 __all__ = ["simulate_numpy"]

@@ -1,18 +1,11 @@
-"""Registration of the ``gui2022`` method and reproduction."""
+"""Registration of method ``gui2022`` (in :mod:`.method`) and reproduction ``gui2022``."""
 
 from __future__ import annotations
 
-from formation_ftc.papers.gui2022 import reproduction  # noqa: F401  (registers the reproduction)
-from formation_ftc.papers.gui2022.conditions import check
-from formation_ftc.papers.gui2022.figures import plot
-from formation_ftc.papers.gui2022.method import build
-from formation_ftc.papers.gui2022.schema import Gui2022Scenario
-from formation_ftc.registry import Method, register_method
+from formation_ftc.papers.gui2022.method import METHOD
+from formation_ftc.papers.gui2022.reproduction import REPRODUCTION
+from formation_ftc.registry import register_reproduction
 
 __all__ = ["METHOD"]
 
-METHOD = register_method(Method(
-    name="gui2022", schema=Gui2022Scenario, build=build,
-    description="Gui2022: CW deputy, iterative learning observer (5), LOF2TC (30)-(32) / COF2TC baseline",
-    check=check, plot=plot,
-))
+register_reproduction(REPRODUCTION)
