@@ -5,7 +5,7 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.config.loader import ScenarioError
-from formation_ftc.papers.yang2013.checks import design_quantities
+from formation_ftc.papers.yang2013.conditions import design_quantities
 
 
 def conditions(overrides=None):

@@ -20,7 +20,7 @@ for any orbit; the loop simulates them at the error level. Components (:func:`ma
   prescribed mode sequence, membership, (29) decisions.
 
 Metrics (every step, inside the run): sup |X| over both limits of every switch, |X| at both limits of
-every switch, max |u_i| over the run and per mode, the supervisor's decisions.
+every switch (per spacecraft before it), max |u_i| over the run, the supervisor's decisions.
 """
 
 from __future__ import annotations
@@ -143,11 +143,6 @@ def _metrics(sc: Yang2013Scenario, st: SwitchedStructure) -> list[Metric]:
                 Metric(f"post_switch_norm_{j + 1}", "state_norm", reduce="at", units="1", start=t),
                 Metric(f"pre_switch_sc_norm_{j + 1}", "spacecraft_norm_left", reduce="at", spacecraft="each",
                        units="1", start=t)]
-    for j, t in enumerate(starts):
-        if st.switch_steps[j] >= n_steps:
-            continue
-        end = starts[j + 1] if j + 1 < len(starts) and st.switch_steps[j + 1] <= n_steps else horizon
-        out.append(input_norm_window(f"max_input_norm_mode{j + 1}", t, end, dt))
     out += [Metric("supervisor_decision", "supervisor_decision", reduce="final", spacecraft="each"),
             Metric("supervisor_decision_time", "supervisor_decision_time", reduce="final", spacecraft="each",
                    units="s"),

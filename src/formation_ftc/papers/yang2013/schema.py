@@ -78,7 +78,7 @@ class ControllerSection(StrictModel):
     kappa: float = Field(1e-3, gt=0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
     rotation_coupling: bool = Field(
         True, description="Keep the norm-preserving omega_i x e terms of (2) with omega_i = -e_omega "
-        "(reference at rest); false drops them (SPEC P1.3 allows both).")
+        "(reference at rest); false drops them (the terms preserve the error norm).")
 
 
 class DisturbanceSection(StrictModel):
