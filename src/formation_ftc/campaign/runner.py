@@ -125,6 +125,7 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
 
     from formation_ftc import api
     from formation_ftc.campaign.binding import apply_bindings, bind_fields, params_close, take_run
+    from formation_ftc.sim.compiled import compile_loop
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
@@ -158,7 +159,10 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
             values0 = {**{p: first.values[p] for p in bindable}, seed_path: first.seed}
             bindings = bind_fields(lambda v: build(v).params, values0,
                                    {**cands, seed_path: []}, {**integer, seed_path: True})
-            _BINDINGS[cache_key] = None if bindings is None else (template, bindings)
+            # the batch needs no time histories (metrics are computed inside the run): one record at
+            # the start and one at the end; trace runs and failed runs are re-run alone with records
+            lean = compile_loop(dataclasses.replace(template.params, record_every=template.params.n_steps))
+            _BINDINGS[cache_key] = None if bindings is None else (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:
         return None
@@ -169,7 +173,8 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
     batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
     last = inputs[-1]
     check = build({**{p: last.values[p] for p in bindable}, seed_path: last.seed})
-    if not params_close(check.params, take_run(batch, axes, n - 1)):
+    check_params = dataclasses.replace(check.params, record_every=template.params.record_every)
+    if not params_close(check_params, take_run(batch, axes, n - 1)):
         _BINDINGS[cache_key] = None  # not affine after all (or interacting fields): build per run
         return None
     out = jax.device_get(batched_run(template, axes, plan.chunk_size)(batch))
@@ -206,16 +211,18 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
     for name in (keep or names):
         table[f"metric:{name}"] = np.where(failed, np.nan, cols[name]).astype("float64")
     traces = {}
-    for j in np.flatnonzero(failed).tolist() + [j for j, i in enumerate(inputs) if i.run_id in plan.spec.traces.runs]:
-        run_out = jax.tree_util.tree_map(lambda a, j=j: np.asarray(a[j]), out)
-        params_j = take_run(batch, axes, j)
-        comp_j = dataclasses.replace(template, params=params_j, make_step=lambda p: p.replay_step())
-        if failed[j] and not table.at[j, "diagnostic"]:
-            table.at[j, "diagnostic"] = _diagnostic(comp_j, run_out, int(div[j]))
+    for j in sorted(set(np.flatnonzero(failed).tolist())
+                    | {j for j, i in enumerate(inputs) if i.run_id in plan.spec.traces.runs}):
+        # re-run alone with the scenario's records (and the replay that names a divergence)
+        scn = plan.scenario(inputs[j])
+        comp_j = api.compile_scenario(scn)
+        params_j = dataclasses.replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
+        run_out = jax.device_get(jax.jit(comp_j.run)(params_j))
+        if failed[j]:
+            table.at[j, "diagnostic"] = _diagnostic(dataclasses.replace(comp_j, params=params_j), run_out,
+                                                    int(run_out["diverged_step"]))
         if inputs[j].run_id in plan.spec.traces.runs:
-            scn = plan.scenario(inputs[j])
-            traces[inputs[j].run_id] = _trace(plan, api.compile_scenario(scn), scn, inputs[j], run_out,
-                                              str(table.at[j, "status"]))
+            traces[inputs[j].run_id] = _trace(plan, comp_j, scn, inputs[j], run_out, str(table.at[j, "status"]))
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
 
@@ -224,7 +231,7 @@ def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     from formation_ftc import api
 
     t_start = time.perf_counter()
-    inputs = [plan.run_inputs(r) for r in chunk.run_ids]
+    inputs = plan.run_inputs_many(chunk.run_ids)
     fast = _bound_chunk(plan, chunk, inputs, t_start)
     if fast is not None:
         return fast

@@ -117,6 +117,14 @@ def draw_value(sampler: Sampler, campaign_seed: int, key: int) -> Any:
     return sampler.draw(np.random.default_rng(ss))
 
 
+def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int]) -> list[Any]:
+    """:func:`draw_value` for many sampling keys at once (same numbers, vectorised inverse CDFs)."""
+    crc = zlib.crc32(sampler.path.encode())
+    rngs = [np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(int(k), 1, crc)))
+            for k in keys]
+    return sampler.draw_many(rngs)
+
+
 def value_from_unit(sampler: Sampler, u: float) -> Any:
     """The value of ``sampler``'s distribution at quantile ``u`` in [0, 1) (its inverse CDF)."""
     u = min(max(float(u), 0.0), np.nextafter(1.0, 0.0))
@@ -363,6 +371,25 @@ class CampaignPlan:
         ordered = {s.path: values[s.path] for s in self.samplers}
         return RunInputs(int(run_id), g, j, run_seed(self.seed, key), self.base_names[b], ordered)
 
+    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
+        """:meth:`run_inputs` of many runs (same values; random draws vectorised per field)."""
+        if self.sampling != "random" or not self.random_samplers:
+            return [self.run_inputs(r) for r in run_ids]
+        for r in run_ids:
+            if not 0 <= r < self.n_runs:
+                raise CampaignError(f"run id {r} does not exist (0..{self.n_runs - 1})")
+        keys = [(r % self.runs) if self.paired else int(r) for r in run_ids]
+        drawn = {s.path: draw_values(s, self.seed, keys) for s in self.random_samplers}
+        out = []
+        for n, r in enumerate(run_ids):
+            g, j = divmod(int(r), self.runs)
+            b, values = self.grid_point(g)
+            for s in self.random_samplers:
+                values[s.path] = drawn[s.path][n]
+            ordered = {s.path: values[s.path] for s in self.samplers}
+            out.append(RunInputs(int(r), g, j, run_seed(self.seed, keys[n]), self.base_names[b], ordered))
+        return out
+
     def design(self) -> np.ndarray:
         """The quasi-Monte Carlo unit-cube design of this campaign (rows indexed by sampling key)."""
         if self._design is None:
@@ -394,7 +421,7 @@ class CampaignPlan:
         smallest and the largest value of every numeric field (cross-field rules see the extremes).
         """
         ids = list(range(self.n_runs) if run_ids is None else run_ids)
-        inputs = [self.run_inputs(r) for r in ids]
+        inputs = self.run_inputs_many(ids)
         errors: list[str] = []
         numeric_paths = [s.path for s in self.samplers
                          if all(isinstance(i.values[s.path], int | float) and not isinstance(i.values[s.path], bool)

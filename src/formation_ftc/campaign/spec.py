@@ -94,6 +94,11 @@ class Sampler:
         """One value drawn with ``rng`` (subclasses define the distribution)."""
         return NotImplemented
 
+    def draw_many(self, rngs: list[np.random.Generator]) -> list[Any]:
+        """One value per generator: the same numbers as ``[draw(r) for r in rngs]`` (subclasses
+        vectorise the expensive part)."""
+        return [self.draw(r) for r in rngs]
+
     def extremes(self) -> list[Any]:
         return []
 
@@ -170,12 +175,18 @@ class Normal(Sampler):
                                 f"high = {self.high}")
 
     def draw(self, rng):
-        u = rng.uniform()
+        return self._from_uniform(np.asarray([rng.uniform()]))[0]
+
+    def draw_many(self, rngs):
+        # one uniform per run from its own stream, the inverse CDF evaluated once for all of them
+        return self._from_uniform(np.asarray([r.uniform() for r in rngs]))
+
+    def _from_uniform(self, u: np.ndarray) -> list[float]:
         if self.low is None and self.high is None:
-            return float(self.mean + self.std * stats.norm.ppf(u))
+            return [float(v) for v in self.mean + self.std * stats.norm.ppf(u)]
         a = -np.inf if self.low is None else (self.low - self.mean) / self.std
         b = np.inf if self.high is None else (self.high - self.mean) / self.std
-        return float(stats.truncnorm.ppf(u, a, b, loc=self.mean, scale=self.std))
+        return [float(v) for v in stats.truncnorm.ppf(u, a, b, loc=self.mean, scale=self.std)]
 
     def extremes(self):
         return [v for v in (self.low, self.high) if v is not None]

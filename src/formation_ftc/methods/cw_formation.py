@@ -19,7 +19,6 @@ from __future__ import annotations
 
 from typing import Literal
 
-import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, model_validator
 
@@ -125,7 +124,7 @@ def make_loop(s: CwFormationScenario) -> ClosedLoop:
                 Metric("delta_v_total", "delta_v", reduce="final", spacecraft="sum", units="m s-1")]
     sim = s.simulation
     return ClosedLoop(plant=plant, controller=controller, sensors=sensors, actuator=actuator,
-                      metrics=tuple(metrics), seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(sim.dt),
+                      metrics=tuple(metrics), seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt),
                       n_steps=sim.n_steps, record_every=sim.record_every, unroll=sim.unroll)
 
 

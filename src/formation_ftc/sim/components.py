@@ -47,6 +47,7 @@ from typing import Any, ClassVar, NamedTuple, TypeVar
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 __all__ = [
     "component",
@@ -474,6 +475,6 @@ def tree_take(tree: PyTree, j: int) -> PyTree:
     return jax.tree_util.tree_map(lambda a: a[j], tree)
 
 
-def as_float(x: Any) -> jax.Array:
-    """float64 array leaf."""
-    return jnp.asarray(x, dtype=jnp.float64)
+def as_float(x: Any) -> np.ndarray:
+    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called)."""
+    return np.asarray(x, dtype=np.float64)
