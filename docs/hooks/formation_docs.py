@@ -368,6 +368,30 @@ def examples_pages(files: Files, config) -> None:
 
 
 # --------------------------------------------------------------------------------------------- hook
+def _method_names() -> list[str]:
+    sys.path.insert(0, str(ROOT / "src"))
+    from formation_ftc.registry import methods
+
+    return sorted(methods())
+
+
+def on_config(config):
+    """Fill the "Scenario files" section of the nav with one page per registered method (plug-ins
+    included), after the section's own first entry (the index page)."""
+
+    def fill(items):
+        for item in items or []:
+            if isinstance(item, dict):
+                for title, value in item.items():
+                    if title == "Scenario files" and isinstance(value, list) and value:
+                        item[title] = [value[0]] + [{n: f"reference/scenarios/{n}.md"} for n in _method_names()]
+                    elif isinstance(value, list):
+                        fill(value)
+
+    fill(config["nav"])
+    return config
+
+
 def on_files(files: Files, config) -> Files:
     sys.path.insert(0, str(ROOT / "src"))
     _gen(files, config, "reference/cli.md", cli_reference())
