@@ -218,6 +218,8 @@ class Plant(_Kind):
 
     kind: ClassVar[str] = "plant"
     quantity: ClassVar[str] = "force"
+    #: True when the dynamics need the reference slot's values (e.g. relative motion about an orbit)
+    needs_reference: ClassVar[bool] = False
     #: "rk4": continuous dynamics; "exact": the plant provides an exact discrete step (LTI, ZOH)
     integration: ClassVar[str] = "rk4"
 

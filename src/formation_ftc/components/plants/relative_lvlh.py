@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import jax.numpy as jnp
 
@@ -36,6 +36,7 @@ class RelativeLvlhPlant(Plant):
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     mu: Any  # gravitational parameter [m^3/s^2]
     disturbance_force: tuple[str, str, str] = static(("0", "0", "0"))  # h_i(t), expressions in t, i [N]
+    needs_reference: ClassVar[bool] = True
 
     @property
     def count(self) -> int:
