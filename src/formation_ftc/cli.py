@@ -134,13 +134,17 @@ def _cmd_list(args) -> int:
     from importlib import resources
 
     d = resources.files("formation_ftc") / "scenarios"
-    items = {}
+    items, composed = {}, {}
     for name in _builtin_scenario_names():
         meta = tomllib.loads((d / f"{name}.toml").read_text(encoding="utf-8")).get("scenario", {})
-        items[name] = str(meta.get("description", ""))
-    width = max((len(n) for n in items), default=10)
+        (composed if meta.get("method") == "composed" else items)[name] = str(meta.get("description", ""))
+    width = max((len(n) for n in [*items, *composed]), default=10)
     for name, desc in items.items():
         print(f"{name:<{width}}  {desc}")
+    if composed:
+        print("\nCross-paper compositions (method \"composed\": one paper's law on another's plant):")
+        for name, desc in composed.items():
+            print(f"{name:<{width}}  {desc}")
     return 0
 
 
