@@ -40,7 +40,8 @@ from formation_ftc.components.references.keplerian import KeplerianReference
 from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
 from formation_ftc.core.history import required_capacity
 from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
-from formation_ftc.papers.li2020.conditions import delay_statistics
+from formation_ftc.papers.li2020.conditions import check, delay_statistics
+from formation_ftc.papers.li2020.figures import plot_scenario
 from formation_ftc.papers.li2020.schema import Li2020Scenario
 from formation_ftc.registry import Method, register_method
 from formation_ftc.sim.compiled import Compiled, compile_loop
@@ -155,19 +156,7 @@ def build(s: Li2020Scenario) -> Compiled:
     return compile_loop(make_loop(s))
 
 
-def _check(s: Li2020Scenario):
-    from formation_ftc.papers.li2020.conditions import check
-
-    return check(s)
-
-
-def _plot(ds, scenario, out_dir):
-    from formation_ftc.papers.li2020.figures import plot_scenario
-
-    return plot_scenario(ds, scenario, out_dir)
-
-
 METHOD = register_method(Method(
     name="li2020", schema=Li2020Scenario, build=build,
     description="Li2020 nonlinear elliptic relative motion, adaptive FTC (Thm 1 / Thm 2 with delays) or SIR-FTC",
-    check=_check, plot=_plot))
+    check=check, plot=plot_scenario))

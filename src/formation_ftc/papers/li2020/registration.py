@@ -1,11 +1,11 @@
-"""Registration of method ``li2020`` (in :mod:`.method`) and reproduction ``li2020``."""
+"""Registers reproduction ``li2020`` (method ``li2020`` is registered by :mod:`.method`)."""
 
 from __future__ import annotations
 
-from formation_ftc.papers.li2020.method import METHOD
+from formation_ftc.papers.li2020 import method  # noqa: F401  (registers the method)
 from formation_ftc.papers.li2020.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-__all__ = ["METHOD"]
+__all__ = ["REPRODUCTION"]
 
 register_reproduction(REPRODUCTION)
