@@ -52,7 +52,7 @@ def test_controller_cannot_see_the_truth(cls):
         loop.plant, mass=loop.plant.mass * 1.7, disturbance_force=("5", "5*t", "-5"),
         attitude=dataclasses.replace(loop.plant.attitude, disturbance_torque=("1", "2", "t")))
     actuator = dataclasses.replace(loop.actuator, K2_faulty=loop.actuator.K2_faulty * 0 - 0.3,
-                                   onset=loop.actuator.onset * 0.0)
+                                   onset=np.zeros_like(loop.actuator.onset))
     other = dataclasses.replace(loop, plant=plant, actuator=actuator)
     k = jnp.asarray(1500, dtype=jnp.int64)  # t = 75 s: fault (onset 70 s) tolerated, not reconfigured
     state = loop.initial_state()

@@ -120,7 +120,9 @@ def test_batched_params_equal_single_runs():
     sc = ftc.load_scenario("yang2013-controller-fault", SHORT)
     loop = make_loop(sc)
     act = loop.actuator
-    loop2 = dataclasses.replace(loop, actuator=dataclasses.replace(act, K2_faulty=act.K2_faulty.at[1].set(-0.05)))
+    K2f = np.array(act.K2_faulty)
+    K2f[1] = -0.05
+    loop2 = dataclasses.replace(loop, actuator=dataclasses.replace(act, K2_faulty=K2f))
     c = compile_loop(loop)
     batch, in_axes = stack_params([loop, loop2])
     outb = batched_run(c, in_axes, 2)(batch)
