@@ -273,8 +273,7 @@ def plugin_modules() -> list[str]:
     if "formation_ftc.methods" not in names:
         import pkgutil
 
-        import formation_ftc.papers as papers
-
+        papers = importlib.import_module("formation_ftc.papers")  # the built-in paper packages
         names = ["formation_ftc.methods"] + [f"formation_ftc.papers.{m.name}"
                                              for m in pkgutil.iter_modules(papers.__path__)] + names
     own = [n for n in names if n.startswith("formation_ftc.")]
