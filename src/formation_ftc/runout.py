@@ -59,6 +59,8 @@ def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     if "\x00" in text:
         raise OutputError(f"--out {text!r}: NUL character in the path")
     d = Path(text)
+    if d.is_symlink() and d.is_dir():
+        d = d.resolve()  # write where the link points; the link itself stays
     if d.exists() or d.is_symlink():
         if not d.is_dir():
             kind = "a file" if d.is_file() else "not a directory (a device, socket or broken link)"
