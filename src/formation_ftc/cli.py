@@ -129,6 +129,18 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
                    help="override a field, e.g. --set simulation.horizon=100 (repeatable)")
 
 
+def _scenario_table(text: str) -> str:
+    """Only the ``[scenario]`` table of a scenario file (``list`` needs its description; parsing the
+    whole files of every scenario would cost most of the command's time)."""
+    lines = text.splitlines()
+    try:
+        start = next(k for k, ln in enumerate(lines) if ln.strip() == "[scenario]")
+    except StopIteration:
+        return text  # unusual layout: parse everything
+    end = next((k for k in range(start + 1, len(lines)) if lines[k].lstrip().startswith("[")), len(lines))
+    return "\n".join(lines[start:end])
+
+
 def _cmd_list(args) -> int:
     import tomllib
     from importlib import resources
@@ -136,7 +148,7 @@ def _cmd_list(args) -> int:
     d = resources.files("formation_ftc") / "scenarios"
     items, composed = {}, {}
     for name in _builtin_scenario_names():
-        meta = tomllib.loads((d / f"{name}.toml").read_text(encoding="utf-8")).get("scenario", {})
+        meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get("scenario", {})
         (composed if meta.get("method") == "composed" else items)[name] = str(meta.get("description", ""))
     width = max((len(n) for n in [*items, *composed]), default=10)
     for name, desc in items.items():
