@@ -10,9 +10,9 @@ convergence of the ZOH discretisation error in dt; relations of Theorem 2 (monot
 import numpy as np
 import pytest
 
+from formation_ftc.core.polygon_formation import relative_acceleration_fn
 from formation_ftc.design.allocation import perturbation_coefficients
 from formation_ftc.design.flfr import reduced_model, simulate_reduced_model
-from formation_ftc.core.polygon_formation import relative_acceleration_fn
 from formation_ftc.papers.azizi2009.method import METHOD, load, run_batch, simulate
 
 ALPHAS = [1.0, 3.0, 4.0, 5.0, 6.0, 10.0]

@@ -7,7 +7,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR, LLFR, NOMINAL, initial_state, transition
+from formation_ftc.blocks.supervisors.hierarchical_supervisor import (
+    FLFR,
+    LLFR,
+    NOMINAL,
+    initial_state,
+    transition,
+)
 from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.sim.components import FlightInputs

@@ -98,14 +98,19 @@ def alpha_flfr(sc: Azizi2009Scenario) -> float:
 def perturbation_norm(alpha, b_hat, k: int, eps: float) -> float:
     """||D||_2 with D = E J_aug(alpha, b_hat)^-1 of eq. (6) for an estimation error eps on satellite k
     (0-based; E[k-1, k] = -eps, E[k, k] = +eps, the rows that exist) [-]."""
-    alpha = np.asarray(alpha, float)
+    alpha, b_hat = np.asarray(alpha, float), np.asarray(b_hat, float)
     n = alpha.size
     E = np.zeros((n - 1, n))
     if k > 0:
         E[k - 1, k] = -eps
     if k < n - 1:
         E[k, k] = eps
-    return float(np.linalg.norm(E @ np.linalg.inv(np.asarray(augmented_matrix(alpha, b_hat))), 2))
+    rows = np.arange(n - 1)
+    J_aug = np.zeros((n, n))  # eq. (3): chain rows of eq. (2), then alpha_i / b_hat_i (E004-02)
+    J_aug[rows, rows] = -b_hat[:-1]
+    J_aug[rows, rows + 1] = b_hat[1:]
+    J_aug[n - 1] = alpha / b_hat
+    return float(np.linalg.norm(E @ np.linalg.inv(J_aug), 2))
 
 
 def d_norms(sc: Azizi2009Scenario, alpha, a_flfr: float) -> tuple[float, float]:

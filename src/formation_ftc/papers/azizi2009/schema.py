@@ -1,7 +1,8 @@
-"""Scenario schema of the ``azizi2009`` method (Azizi & Khorasani 2009; SPEC.md P4.2-P4.4).
+"""Scenario schema of the ``azizi2009`` method (Azizi & Khorasani 2009).
 
 Sections beyond ``[scenario]``/``[simulation]``: ``[formation]``, ``[controller]``, ``[allocation]``,
-``[fault]``, ``[disturbance]``, ``[noise]``, ``[supervisor]``. Defaults are the SPEC P4.4 baseline.
+``[fault]``, ``[disturbance]``, ``[noise]``, ``[supervisor]``. Defaults are the
+baseline of the reproduction (four satellites, 80 % gain on satellite 2, x; b_hat = 0.88).
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ class ControllerSection(StrictModel):
     lambda1: float = Field(3.0, gt=0, description="Velocity gain lambda_1 of p_ij [1/s].")
     sampling: Literal["zoh", "continuous"] = Field(
         "zoh", description="'zoh': control computed at t_k and held over the step (exact double-integrator "
-                           "update, SPEC P4.4); 'continuous': control re-evaluated at the RK4 stages "
+                           "update); 'continuous': control re-evaluated at the RK4 stages "
                            "(continuous-time loop, used to check the reduced model (7)).")
 
 
