@@ -194,6 +194,26 @@ def test_plots_subsample_thousands_of_spacecraft():
     assert int(view["spacecraft"].size) == 50 and plot_view(ds.isel(spacecraft=slice(0, 7)), 50)[1] == ""
 
 
+def test_run_with_hundreds_of_spacecraft_plots_a_subset(tmp_path, capsys):
+    import tomllib
+
+    import tomli_w
+
+    from formation_ftc.config.loader import builtin_scenarios
+
+    raw = tomllib.loads(builtin_scenarios()[SCN])
+    n = 300
+    raw["spacecraft"]["mass"] = [100.0] * n
+    raw["spacecraft"]["initial_position"] = [[float(k % 20), float(k // 20), 0.0] for k in range(n)]
+    raw["simulation"]["horizon"] = 2.0
+    path = tmp_path / "many.toml"
+    path.write_text(tomli_w.dumps(raw))
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    assert "figures show 16 of 300 spacecraft" in capsys.readouterr().err
+    with xr.open_dataset(tmp_path / "o" / "result.nc", engine="h5netcdf") as ds:
+        assert ds.sizes["spacecraft"] == n  # the data keeps every spacecraft
+
+
 def test_unexpected_error_exits_3_with_a_saved_traceback(tmp_path, capsys, monkeypatch):
     import formation_ftc.cli as cli
 
@@ -241,6 +261,17 @@ def test_campaign_hostile_input_exits_2(tmp_path, capsys):
     assert "nested more than 32 levels" in capsys.readouterr().err
     assert not Path(out).exists()
     assert campaign_main(["report", str(tmp_path / "nothing-here")]) == 2
+    # a constant error in an override fails validation, not the first chunk
+    import tomli_w
+
+    bad = tmp_path / "div0.toml"
+    bad.write_text(tomli_w.dumps({
+        "campaign": {"name": "div0", "base": "cw-pd-fault", "runs": 2, "chunk_size": 2},
+        "overrides": {"simulation.horizon": 2.0, "faults.bias": ["1/0", "0", "0"]}}))
+    assert campaign_main(["run", str(bad), "--out", out, "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "faults.bias" in err and "division by a constant zero" in err and "Traceback" not in err
+    assert not Path(out).exists()
 
 
 class _nullcontext:

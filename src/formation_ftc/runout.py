@@ -28,7 +28,17 @@ __all__ = ["OutputError", "MARKER", "MAX_PLOT_SPACECRAFT", "check_out_dir", "sta
 #: file in a run directory listing what the run wrote (so a rerun may replace exactly that)
 MARKER = ".formation-ftc-run.json"
 #: most spacecraft drawn one line each in the figures of ``run`` [-]
-MAX_PLOT_SPACECRAFT = int(os.environ.get("FORMATION_FTC_MAX_PLOT_SPACECRAFT", "50") or 50)
+MAX_PLOT_SPACECRAFT = 16
+
+
+def _plot_limit() -> int:
+    """MAX_PLOT_SPACECRAFT, or ``$FORMATION_FTC_MAX_PLOT_SPACECRAFT`` when it is a positive integer."""
+    text = os.environ.get("FORMATION_FTC_MAX_PLOT_SPACECRAFT", "").strip()
+    if not text:
+        return MAX_PLOT_SPACECRAFT
+    if not text.isdigit() or int(text) < 1:
+        raise OutputError(f"FORMATION_FTC_MAX_PLOT_SPACECRAFT={text!r}: expected a positive integer")
+    return int(text)
 _RESULT_SUFFIXES = {".nc", ".json", ".png", ".svg", ".pdf", ".html"}
 
 
@@ -53,6 +63,7 @@ def is_run_result(d: Path) -> bool:
 
 def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     """Validate ``--out`` before any computation; returns the path. Raises :class:`OutputError`."""
+    _plot_limit()  # a bad FORMATION_FTC_MAX_PLOT_SPACECRAFT is reported before the run, not after
     text = os.fspath(out)
     if not text.strip():
         raise OutputError("--out: empty path; give the output directory, e.g. --out out/run1")
@@ -136,7 +147,7 @@ def plot_view(ds: Any, max_spacecraft: int | None = None) -> tuple[Any, str]:
     ("" when nothing was dropped)."""
     import numpy as np
 
-    limit = MAX_PLOT_SPACECRAFT if max_spacecraft is None else max_spacecraft
+    limit = _plot_limit() if max_spacecraft is None else max_spacecraft
     n = int(ds.sizes.get("spacecraft", 0)) if hasattr(ds, "sizes") else 0
     if limit <= 0 or n <= limit:
         return ds, ""
