@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install demo test test-fast lint bench bench-cli docs examples wheel-smoke clean
+.PHONY: install demo test test-fast lint typecheck bench bench-cli docs examples wheel-smoke clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,11 @@ test-fast: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples docs/hooks
+	$(BIN)/lint-imports
+
+## static type check of src/ (configuration and its rationale: [tool.mypy] in pyproject.toml)
+typecheck: $(STAMP)
+	$(BIN)/mypy
 
 ## documentation site into site/ (strict: any warning fails; runs every example at reduced size)
 docs: $(DOCS_STAMP)
