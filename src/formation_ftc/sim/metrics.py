@@ -142,8 +142,55 @@ def metric_names(metrics: Sequence[Metric], count: int) -> list[str]:
     return out
 
 
+class _Stack:
+    """Metrics of one time reduction, spacecraft mode and gate evaluated together: their values,
+    windows and thresholds stacked along a leading axis, so that one step's accumulator update is one
+    vector operation per group instead of one small kernel per metric (XLA runs every fused kernel of
+    a scan body as a separate call; with tens of metrics these calls dominated a 6-state step).
+    The arithmetic per metric is unchanged (elementwise), so results are identical."""
+
+    def __init__(self, metrics: Sequence[Metric]):
+        m0 = metrics[0]
+        self.metrics = tuple(metrics)
+        self.reduce, self.spacecraft, self.gate = m0.reduce, m0.spacecraft, m0.gate
+        trail = (1,) if m0.spacecraft == "each" else ()
+
+        def stacked(name):
+            return jnp.reshape(jnp.stack([jnp.asarray(getattr(m, name), dtype=jnp.float64) for m in metrics]),
+                               (len(metrics),) + trail)
+
+        self.start, self.end, self.threshold = stacked("start"), stacked("end"), stacked("threshold")
+
+    def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
+        return jnp.stack([m.value(signals) for m in self.metrics])
+
+
+def _groups(metrics: Sequence[Metric]) -> list[list[int]]:
+    """Indices of the metrics accumulated together (stage-integrated metrics stay alone), in order of
+    their first member."""
+    groups: dict[Any, list[int]] = {}
+    for i, m in enumerate(metrics):
+        key = ("alone", i) if m.reduce in STAGE_REDUCTIONS else (m.reduce, m.spacecraft == "each", m.gate)
+        groups.setdefault(key, []).append(i)
+    return list(groups.values())
+
+
+def _grouped(metrics: Sequence[Metric]) -> list[tuple[list[int], Any]]:
+    """(member indices, the metric or :class:`_Stack` that accumulates them)."""
+    return [(idx, metrics[idx[0]] if metrics[idx[0]].reduce in STAGE_REDUCTIONS else _Stack([metrics[i] for i in idx]))
+            for idx in _groups(metrics)]
+
+
 def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
-    """Initial accumulator of each metric (shapes taken from the signals at t0)."""
+    """Initial accumulator of each metric (shapes taken from the signals at t0). Metrics accumulated
+    together keep their common accumulator in the first member's entry (the others hold ``()``)."""
+    accs: list[Any] = [()] * len(metrics)
+    for idx, g in _grouped(metrics):
+        accs[idx[0]] = _init_accumulators([g], signals)[0]
+    return tuple(accs)
+
+
+def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array]) -> tuple:
     accs = []
     for m in metrics:
         shape = jnp.shape(m.value(signals))
@@ -172,6 +219,14 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
     which the rectangle-rule integral does not count)."""
+    out = list(accs)
+    for idx, g in _grouped(metrics):
+        out[idx[0]] = _update_accumulators([g], (accs[idx[0]],), t, dt, signals, is_final)[0]
+    return tuple(out)
+
+
+def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array, dt: float,
+                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     out = []
     for m, acc in zip(metrics, accs, strict=True):
         if m.reduce in STAGE_REDUCTIONS:  # folded in by update_stage_accumulators
@@ -222,6 +277,15 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
     """Accumulators -> metric values (NaN where the window held no sample)."""
+    out: list[Any] = [None] * len(metrics)
+    for idx, g in _grouped(metrics):
+        values = _finalize([g], (accs[idx[0]],))[0]
+        for j, i in enumerate(idx):
+            out[i] = values if isinstance(g, Metric) else values[j]
+    return tuple(out)
+
+
+def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
     out = []
     for m, acc in zip(metrics, accs, strict=True):
         if m.reduce in ("max", "min", "final", "at"):
