@@ -23,20 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_ftc.papers.azizi2009.conditions import check, flfr_design
 from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fig4
-from formation_ftc.papers.azizi2009.model import flfr_design
-from formation_ftc.papers.azizi2009.runner import load, run_batch, simulate
-from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction, register_reproduction
+from formation_ftc.papers.azizi2009.method import load, run_batch, simulate
+from formation_ftc.papers.azizi2009.published import CITATION, PUBLISHED, TITLE
+from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 
 __all__ = ["run_reproduction", "REPRODUCTION", "PUBLISHED", "alpha_min_on_grid"]
 
-#: Values printed in the paper (Sec. V, Figs. 3-4)
-PUBLISHED = {
-    "max_err_fault_free": 1e-4,
-    "max_err_llfr": 0.072,
-    "alpha2_min_simulated": 5.6,
-    "alpha2_analytic": {0.0: 7.6, 0.15: 6.0, 0.2: 5.4, 0.4: 3.4},
-}
 PI_GRID = tuple(round(0.05 * j, 2) for j in range(9))
 SEEDS = 20
 NOISE_SIGMA = 1e-5
@@ -274,16 +268,14 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
 
 def _run(out_dir: Path, progress: Callable[[float, str], None]) -> PaperReport:
     rep = run_reproduction(out_dir, progress)
-    from formation_ftc.papers.azizi2009.method import check
-
     rep.checks = check(load("azizi2009-flfr"))
     return rep
 
 
-REPRODUCTION = register_reproduction(Reproduction(
+REPRODUCTION = Reproduction(
     paper="azizi2009",
-    title="A hierarchical architecture for cooperative fault accommodation of formation flying satellites in deep space",
-    citation="S.M. Azizi, K. Khorasani, American Control Conference 2009",
+    title=TITLE,
+    citation=CITATION,
     description="LLFR allocation + HL supervisor + FLFR weight design (eqs. (9), (11)); alpha_2 sweep 1..10, "
                 "analytic alpha_2(pi), 20-seed spread",
     errata=[
@@ -298,4 +290,4 @@ REPRODUCTION = register_reproduction(Reproduction(
         ("E004-10", "satellite-dependent disturbance 1e-5 cos(0.01 t + i)"),
     ],
     run=_run,
-))
+)
