@@ -1,4 +1,5 @@
-"""Desired formation of Li et al. 2020, Sec. IV-A (SPEC.md P0.2), with exact derivatives.
+"""Rotating, expanding desired formation with a moving centre (Li et al. 2020, Sec. IV-A), with exact
+analytic first and second time derivatives.
 
 ::
 

@@ -1,7 +1,7 @@
-"""Scenario schema of method ``li2020`` (Li et al. 2020, SPEC.md P0.4).
+"""Scenario schema of method ``li2020`` (Li et al. 2020).
 
 Every parameter of the paper's Sec. IV is a field; where the paper is silent (adaptation gains,
-horizon, step) the defaults are SPEC.md P0.4's [CHOICE] values. Time functions (faults,
+horizon, step) the defaults are our choices (errata E000-12, E000-16). Time functions (faults,
 disturbances, delays) are expression strings (:mod:`formation_ftc.core.expressions`) in ``t`` [s] and
 ``i`` (1-based spacecraft number); delays also see ``j`` (the sender).
 """
@@ -81,7 +81,7 @@ class OrbitSection(StrictModel):
 
 
 class FormationSection(StrictModel):
-    """Desired rotating, expanding formation and moving centre (Sec. IV-A, SPEC.md P0.2)."""
+    """Desired rotating, expanding formation and moving centre (Sec. IV-A)."""
 
     radius: float = Field(500.0, gt=0, description="R of rho_bar_iF = R[cos(phi_i)/2, -sin(phi_i), sqrt(3)/2 cos(phi_i)] [m].")
     phase: list[float] = Field([0.0, math.pi / 2, math.pi, 3 * math.pi / 2],
@@ -117,10 +117,10 @@ class ControllerSection(StrictModel):
     law: Literal["thm1", "thm2", "sir-ftc"] = Field(description="Control law.")
     k: FloatOrList = Field(0.2, description="k_i of s_i = e_i2 + k_i e_i1 (eq. (6)) [1/s], > 0 (Lemma 2).")
     lam: FloatOrList = Field(20.0, description="lambda_i [kg/s] (Thm 1: 20, Thm 2: 15).")
-    gamma: FloatOrList = Field(0.1, description="gamma_i, beta_hat adaptation gain [s/(kg m^2)] (SPEC [CHOICE]).")
-    eta: FloatOrList = Field(1.0, description="eta_i, m_hat adaptation gain [kg s/m^2] (SPEC [CHOICE]).")
-    mu: FloatOrList = Field(1.0, description="mu_i, d_hat adaptation gain [N s/m] (SPEC [CHOICE]).")
-    upsilon: FloatOrList = Field(0.01, description="upsilon_i, d_hat leakage gain [1/(N s)] per unit sigma (SPEC [CHOICE]).")
+    gamma: FloatOrList = Field(0.1, description="gamma_i, beta_hat adaptation gain [s/(kg m^2)] (not in the paper: our choice, E000-12).")
+    eta: FloatOrList = Field(1.0, description="eta_i, m_hat adaptation gain [kg s/m^2] (not in the paper: our choice, E000-12).")
+    mu: FloatOrList = Field(1.0, description="mu_i, d_hat adaptation gain [N s/m] (not in the paper: our choice, E000-12).")
+    upsilon: FloatOrList = Field(0.01, description="upsilon_i, d_hat leakage gain [1/(N s)] per unit sigma (not in the paper: our choice, E000-12).")
     m_hat0: FloatOrList = Field(100.0, description="m_hat_i(0) [kg].")
     beta_hat0: FloatOrList = Field(1.0, description="beta_hat_i(0) [-].")
     d_hat0: FloatOrList = Field(0.001, description="d_hat_i(0) [N], > 0.")
