@@ -13,9 +13,9 @@ import jax
 import numpy as np
 import pytest
 
+from formation_ftc.components.evaluations.formation_errors import max_over_window
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.papers.li2020.method import build
-from formation_ftc.components.evaluations.formation_errors import max_over_window
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
 from li2020 import NumpyLi2020  # noqa: E402
