@@ -289,3 +289,16 @@ def test_metrics_json_of_a_diverged_run_names_a_state_not_an_accumulator(tmp_pat
     assert "simulation diverged" in err
     assert "delta_v" not in err and "effort" not in err and "'dv'" not in err
     assert json.loads((tmp_path / "o" / "metrics.json").read_text())["scenario"] == SCN
+
+
+def test_path_texts_the_system_refuses_exit_2(tmp_path, capsys):
+    from formation_ftc.campaign.cli import main as campaign_main
+
+    long = "a" * 5000
+    for call in (lambda: main(["show", long]), lambda: main(["check", long + ".toml"]),
+                 lambda: main(["run", SCN, *SHORT, "--out", long]),
+                 lambda: campaign_main(["run", long, "--out", str(tmp_path / "c")]),
+                 lambda: campaign_main(["report", long])):
+        assert call() == 2
+        err = capsys.readouterr().err
+        assert "File name too long" in err and "Traceback" not in err and len(err) < 400

@@ -83,7 +83,10 @@ def _check_scenario_name(name: str) -> None:
     from formation_ftc.config.loader import ScenarioError
     from formation_ftc.suggest import did_you_mean
 
-    if name.endswith(".toml") or Path(name).exists():
+    try:
+        if name.endswith(".toml") or Path(name).exists():
+            return
+    except (OSError, ValueError):  # a path text the system refuses: the loader reports it
         return
     names = _builtin_scenario_names()
     if name not in names:

@@ -63,6 +63,18 @@ def is_run_result(d: Path) -> bool:
 
 def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     """Validate ``--out`` before any computation; returns the path. Raises :class:`OutputError`."""
+    try:
+        return _check_out_dir(out, force)
+    except (OSError, ValueError) as exc:
+        if isinstance(exc, OutputError):
+            raise
+        from formation_ftc.config.loader import short_text
+
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise OutputError(f"--out {short_text(os.fspath(out))}: unusable path ({reason})") from None
+
+
+def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     _plot_limit()  # a bad FORMATION_FTC_MAX_PLOT_SPACECRAFT is reported before the run, not after
     text = os.fspath(out)
     if not text.strip():

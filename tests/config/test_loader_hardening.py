@@ -104,3 +104,19 @@ def test_errors_are_input_errors_naming_the_file(tmp_path):
         node = node["x"]
     with pytest.raises(ScenarioError, match="nested more than 32 levels"):
         load_scenario(nested)
+
+
+def test_unusable_paths_and_huge_files(tmp_path):
+    with pytest.raises(ScenarioError, match="invalid scenario path 'aaaa.*File name too long"):
+        load_scenario("a" * 5000)
+    big = tmp_path / "big.toml"
+    with open(big, "wb") as f:
+        f.truncate(17 * 2**20)  # sparse: costs no disk
+    with pytest.raises(ScenarioError, match="is 17 MiB; at most 16 MiB"):
+        load_scenario(big)
+    import os
+
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)  # reading it would block: refused as not a regular file
+    with pytest.raises(ScenarioError, match="is not a regular file"):
+        load_scenario(fifo)

@@ -212,7 +212,16 @@ class CampaignStore:
     @classmethod
     def prepare(cls, root: str | Path, plan: CampaignPlan) -> CampaignStore:
         """Check ``root`` for ``plan`` (a new, empty or same-campaign directory); writes nothing."""
-        root = Path(root)
+        try:
+            return cls._prepare(Path(root), plan)
+        except (OSError, ValueError) as exc:
+            if isinstance(exc, CampaignError):
+                raise
+            raise CampaignError(f"{_short(root)}: unusable results directory "
+                                f"({getattr(exc, 'strerror', None) or exc})") from None
+
+    @classmethod
+    def _prepare(cls, root: Path, plan: CampaignPlan) -> CampaignStore:
         if root.exists() and not root.is_dir():
             raise CampaignError(f"{root}: exists and is not a directory")
         if not root.exists() or not any(e.name != LOCK for e in root.iterdir()):
@@ -350,7 +359,16 @@ class CampaignStore:
     @classmethod
     def read(cls, root: str | Path) -> CampaignStore:
         """Open an existing campaign directory for reading (report)."""
-        root = Path(root)
+        try:
+            return cls._read(Path(root))
+        except (OSError, ValueError) as exc:
+            if isinstance(exc, CampaignError):
+                raise
+            raise CampaignError(f"{_short(root)}: unusable campaign directory "
+                                f"({getattr(exc, 'strerror', None) or exc})") from None
+
+    @classmethod
+    def _read(cls, root: Path) -> CampaignStore:
         if not (root / MANIFEST).is_file():
             raise CampaignError(f"{root}: no {MANIFEST}; not a campaign directory")
         manifest = cls._read_manifest(root)
@@ -416,6 +434,11 @@ class CampaignStore:
 
     def trace_path(self, run_id: int) -> Path:
         return self.root / "traces" / trace_filename(run_id)
+
+
+def _short(path: str | Path) -> str:
+    text = str(path)
+    return text if len(text) <= 120 else text[:100] + "..."
 
 
 def _lock_holder_text(holder: str) -> str:

@@ -36,11 +36,17 @@ __all__ = [
     "validate",
     "dump_toml",
     "parse_toml",
+    "read_text_file",
+    "path_exists",
+    "short_text",
     "MAX_NESTING",
+    "MAX_FILE_BYTES",
 ]
 
 #: deepest nesting of tables/arrays accepted in a scenario or campaign file [-]
 MAX_NESTING = 32
+#: largest scenario or campaign file read [bytes]
+MAX_FILE_BYTES = 16 * 2**20
 
 
 class ScenarioError(InputError):
@@ -100,12 +106,34 @@ def _bracket_depth(text: str) -> int:
     return deepest
 
 
+def short_text(text: object, limit: int = 80) -> str:
+    """``repr`` of ``text`` cut to about ``limit`` characters (for messages about user input)."""
+    r = repr(str(text))
+    return r if len(r) <= limit else r[:limit - 5] + "...'"
+
+
+def path_exists(path: str | Path, kind: str = "scenario", error: type[InputError] = ScenarioError) -> bool:
+    """Whether ``path`` exists; a path text the system refuses (too long, NUL) raises ``error``."""
+    try:
+        return Path(path).exists()
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise error(f"invalid {kind} path {short_text(path)}: {reason}") from None
+
+
 def read_text_file(path: Path, kind: str = "scenario", error: type[InputError] = ScenarioError) -> str:
     """UTF-8 text of a user file; unreadable, not a file or not UTF-8 raises ``error`` naming it."""
-    if not path.exists():
-        raise error(f"{kind} file {str(path)!r} does not exist")
+    if not path_exists(path, kind, error):
+        raise error(f"{kind} file {short_text(path)} does not exist")
     if not path.is_file():
-        raise error(f"{kind} file {str(path)!r} is not a regular file")
+        raise error(f"{kind} file {short_text(path)} is not a regular file")
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise error(f"{kind} file {short_text(path)} cannot be read ({exc.strerror or exc})") from None
+    if size > MAX_FILE_BYTES:
+        raise error(f"{kind} file {short_text(path)} is {size / 2**20:.0f} MiB; at most "
+                    f"{MAX_FILE_BYTES // 2**20} MiB of TOML is accepted (put large data in arrays elsewhere)")
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -121,13 +149,13 @@ def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
     if isinstance(name_or_path, str) and (not name_or_path or "\x00" in name_or_path):
         raise ScenarioError(f"invalid scenario name or path {name_or_path!r}")
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
+    if p.suffix == ".toml" or path_exists(p):
         text, source = read_text_file(p), str(p)
     else:
         builtin = builtin_scenarios()
         if str(name_or_path) not in builtin:
             raise ScenarioError(
-                f"unknown scenario {str(name_or_path)!r}: not a file and not a built-in scenario "
+                f"unknown scenario {short_text(name_or_path)}: not a file and not a built-in scenario "
                 f"(built-in: {', '.join(builtin) or 'none'}; see `formation-ftc list`)"
             )
         text, source = builtin[str(name_or_path)], f"<built-in {name_or_path}>"
