@@ -63,6 +63,18 @@ def test_hostile_scenario_input_exits_2(command, args, fragment, tmp_path, capsy
     assert not (tmp_path / "o").exists()  # nothing written
 
 
+@pytest.mark.parametrize("args,fragment", [
+    (["--set", "simulation.horizon=1e308", "--set", "simulation.dt=1e-308"], "not a countable number of steps"),
+    (["--set", "orbit.semi_major_axis=1e300"], "the conditions cannot be evaluated for these values"),
+    (["--set", "spacecraft.mass.0=1e-320"], "the conditions cannot be evaluated for these values"),
+    (["--set", "spacecraft.mass.\u0663=1"], "must be a non-negative integer"),
+], ids=["steps-overflow", "sma-1e300", "subnormal-mass", "non-ascii-index"])
+def test_extreme_values_in_check_exit_2(args, fragment, capsys):
+    assert main(["check", SCN, *args]) == 2
+    err = capsys.readouterr().err
+    assert fragment in err and "Traceback" not in err
+
+
 def test_deeply_nested_and_non_utf8_and_unreadable_files(tmp_path, capsys, monkeypatch):
     deep = tmp_path / "deep.toml"
     deep.write_text(DEEP_TOML)

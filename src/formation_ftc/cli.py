@@ -243,8 +243,17 @@ def _print_conditions(conds, as_json: bool) -> int:
 
 def _cmd_check(args) -> int:
     from formation_ftc.api import check
+    from formation_ftc.config.loader import ScenarioError
 
-    return _print_conditions(check(_load(args)), args.json)
+    scenario = _load(args)
+    try:
+        conds = check(scenario)
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+        if isinstance(exc, ScenarioError):
+            raise
+        raise ScenarioError(f"{args.scenario}: the conditions cannot be evaluated for these values "
+                            f"({type(exc).__name__}: {exc})") from None
+    return _print_conditions(conds, args.json)
 
 
 def _cmd_schema(args) -> int:

@@ -39,15 +39,20 @@ def _crash_dirs() -> list[Path]:
 def save_traceback(exc: BaseException) -> Path | None:
     """Write the traceback of ``exc`` to ``crash-<UTC time>-<pid>.txt``; its path, or None if no
     directory was writable."""
-    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%S")
+    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%S.%f")
     text = "".join(traceback.format_exception(exc))
     header = f"formation-ftc crash report\nargv: {sys.argv!r}\npython: {sys.version.split()[0]}\n\n"
     for d in _crash_dirs():
         try:
             d.mkdir(parents=True, exist_ok=True)
-            path = d / f"crash-{stamp}-{os.getpid()}.txt"
-            path.write_text(header + text, encoding="utf-8")
-            return path
+            for n in range(100):  # never overwrite an earlier report
+                path = d / f"crash-{stamp}-{os.getpid()}{f'-{n}' if n else ''}.txt"
+                try:
+                    with open(path, "x", encoding="utf-8") as f:
+                        f.write(header + text)
+                    return path
+                except FileExistsError:
+                    continue
         except OSError:
             continue
     return None

@@ -137,7 +137,11 @@ class SimulationSection(StrictModel):
 
     @model_validator(mode="after")
     def _step_divides_horizon(self) -> SimulationSection:
-        n = round(self.horizon / self.dt)
+        ratio = self.horizon / self.dt
+        if not math.isfinite(ratio) or ratio > 2**53:
+            raise ValueError(f"simulation.horizon / simulation.dt = {self.horizon:g} / {self.dt:g} s is not a "
+                             f"countable number of steps (at most 2**53); shorten the horizon or enlarge the step")
+        n = round(ratio)
         if n < 1 or abs(n * self.dt - self.horizon) > 1e-9 * max(self.horizon, 1.0):
             raise ValueError(
                 f"simulation.dt = {self.dt} s must divide simulation.horizon = {self.horizon} s "

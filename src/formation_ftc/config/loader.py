@@ -204,7 +204,7 @@ def _kind(v: Any) -> str:
 
 
 def _index(part: str, path: str, length: int) -> int:
-    if not part.isdigit():
+    if not (part.isascii() and part.isdigit()):
         raise ScenarioError(f"override {path}: {part!r} indexes a list and must be a non-negative integer "
                             f"(0 ... {length - 1})")
     k = int(part)
