@@ -1,0 +1,315 @@
+"""Catalog: quaternion rigid-body attitudes, Euler-angle attitude sensors, the networked Euler-Lagrange
+H-infinity / adaptive attitude law, its generalised-torque allocation with additive faults and the
+scripted FDI, for composed scenarios.
+
+The attitude law (``controller.type = "networked-el-hinf"``) is written in 3-2-1 Euler angles and
+commands a generalised torque; the quaternion plant (``plant.type = "quaternion-rigid-body"``) has a
+quaternion state and is driven by a body torque. The two fit through
+
+* ``sensors.type = "quaternion-euler"`` -- quaternion -> ``[theta, phi, psi]`` (Z-Y-X), body rates
+  passed through (the law forms ``q_dot = R_bar(q) omega``);
+* ``actuator.type = "euler-torque-allocation"`` -- ``tau_body = R_bar(q)^T (tau_gen + u_bar)`` with the
+  additive faults ``u_bar`` in the law's channels (equal power ``tau_body . omega = tau_gen . q_dot``).
+
+A composition of the law on the quaternion plant without either is rejected at validation, naming
+both parts (see :mod:`formation_ftc.core.euler_quaternion` for the conversions).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from formation_ftc.blocks.fdi import fdi_params, isolation_routing
+from formation_ftc.components.actuators.additive_faults import HeldAdditiveFaultActuator
+from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
+from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
+from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
+from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
+from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
+from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.core import graph as graphs
+from formation_ftc.core.dynamics.euler_lagrange import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
+from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
+from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.sim.components import CompositionError, IdealActuator, as_float
+
+Vec3 = tuple[float, float, float]
+Vec3Expr = tuple[ExprText, ExprText, ExprText]
+
+QUATERNION_PLANT = "quaternion-rigid-body"
+EULER_SENSORS = "quaternion-euler"
+EULER_LAW = "networked-el-hinf"
+EULER_ALLOCATION = "euler-torque-allocation"
+SCRIPTED_FDI = "scripted-fdi"
+
+
+# ----------------------------------------------------------------------------------------- plants
+class QuaternionPlantSection(StrictModel):
+    """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
+
+    inertia: Vec3 = Field(description="Principal inertia diag(J) of every spacecraft [kg m^2], each > 0.")
+    initial_attitude_deg: list[Vec3] | None = Field(
+        None, description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
+                          "[deg] (converted to quaternions; give this or initial_quaternion).")
+    initial_quaternion: list[tuple[float, float, float, float]] | None = Field(
+        None, description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].")
+    initial_body_rate: list[Vec3] | None = Field(
+        None, description="Initial body angular velocity per spacecraft [rad/s] (default 0).")
+    disturbance_torque: Vec3Expr = Field(
+        ("0", "0", "0"), description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].")
+    gyroscopic: bool = Field(True, description="Include -omega x J omega (false: the error-level form).")
+
+    @model_validator(mode="after")
+    def _sizes(self):
+        for k, x in enumerate(self.inertia):
+            if not (x > 0 and math.isfinite(x)):
+                raise ValueError(f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2")
+        if (self.initial_attitude_deg is None) == (self.initial_quaternion is None):
+            raise ValueError("give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]")
+        if self.initial_quaternion is not None:
+            for k, p in enumerate(self.initial_quaternion):
+                norm = float(np.linalg.norm(p))
+                if not abs(norm - 1.0) <= 1e-6:
+                    raise ValueError(f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed")
+        n = self.count
+        if n < 1:
+            raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")
+        if self.initial_body_rate is not None and len(self.initial_body_rate) != n:
+            raise ValueError(f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft")
+        return self
+
+    @property
+    def count(self) -> int:
+        rows = self.initial_attitude_deg if self.initial_attitude_deg is not None else self.initial_quaternion
+        return len(rows or [])
+
+    def quaternions(self) -> np.ndarray:
+        """(N, 4) initial unit quaternions."""
+        if self.initial_quaternion is not None:
+            p = np.asarray(self.initial_quaternion, dtype=float)
+            return p / np.linalg.norm(p, axis=-1, keepdims=True)
+        return np.asarray(quaternion_from_euler_zyx(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
+
+    def euler_angles(self) -> np.ndarray:
+        """(N, 3) initial 3-2-1 Euler angles [rad]."""
+        return np.asarray(euler_zyx_from_quaternion(self.quaternions()))
+
+
+def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):
+    n = sec.count
+    w0 = np.zeros((n, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
+    return QuaternionRigidBodyPlant(inertia=as_float(np.diag(sec.inertia)), initial_omega=as_float(w0),
+                                    initial_quaternion=as_float(sec.quaternions()),
+                                    disturbance_torque=tuple(sec.disturbance_torque), gyroscopic=sec.gyroscopic)
+
+
+register_component_type("plant", QUATERNION_PLANT, QuaternionPlantSection, _quaternion_plant,
+                        "rigid-body attitudes with quaternion kinematics, driven by body torques (Yang2013 (4))")
+
+
+def _needs_quaternion_plant(slot: str, name: str, ctx: BuildContext) -> None:
+    plant = ctx.scenario.type_of("plant")
+    if plant != QUATERNION_PLANT:
+        raise CompositionError(f"{slot} {name} converts a quaternion attitude, but plant {plant} has none "
+                               f"(use it with plant {QUATERNION_PLANT})")
+
+
+# ----------------------------------------------------------------------------------------- sensors
+class QuaternionEulerSection(StrictModel):
+    """Exact measurement; no fields."""
+
+
+def _quaternion_euler(sec: QuaternionEulerSection, ctx: BuildContext):
+    _needs_quaternion_plant("sensors", EULER_SENSORS, ctx)
+    return QuaternionToEulerSensors(count=ctx.count)
+
+
+register_component_type("sensors", EULER_SENSORS, QuaternionEulerSection, _quaternion_euler,
+                        "attitude as 3-2-1 Euler angles [theta, phi, psi] and body rates, from a quaternion plant")
+
+
+# -------------------------------------------------------------------------------------- actuators
+class FaultEntry(StrictModel):
+    spacecraft: int = Field(ge=1, description="Faulty spacecraft (1-based) [-].")
+    channel: int = Field(ge=1, le=3, description="Faulty generalised channel 1 = pitch, 2 = roll, 3 = yaw [-].")
+    torque: ExprText = Field(description="Additive fault u_bar(t) while active, expression in t [s] [N m].")
+    start: float = Field(ge=0.0, description="Fault start (inclusive, snapped to the step grid) [s].")
+    end: float = Field(description="Fault end (inclusive, snapped to the step grid) [s].")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if not self.end >= self.start:
+            raise ValueError(f"end = {self.end} s must be >= start = {self.start} s")
+        return self
+
+
+class EulerAllocationSection(StrictModel):
+    """tau_body = R_bar(q)^T (tau_gen + u_bar), u_bar the additive faults held over each step."""
+
+    faults: list[FaultEntry] = Field(default_factory=list,
+                                     description="Additive faults in the law's generalised channels [N m].")
+
+
+def _fault_data(sec: EulerAllocationSection, ctx: BuildContext):
+    for k, f in enumerate(sec.faults):
+        if f.spacecraft > ctx.count:
+            raise CompositionError(f"actuator.faults[{k}].spacecraft = {f.spacecraft}: plant {ctx.scenario.type_of('plant')} "
+                                   f"has {ctx.count} spacecraft")
+    statics = dict(torques=tuple(str(f.torque) for f in sec.faults), spacecraft=tuple(f.spacecraft - 1 for f in sec.faults),
+                   channels=tuple(f.channel - 1 for f in sec.faults), step=ctx.dt)
+    windows = as_float(np.array([(f.start, f.end) for f in sec.faults], dtype=float).reshape(-1, 2))
+    return statics, windows
+
+
+def _euler_allocation(sec: EulerAllocationSection, ctx: BuildContext):
+    _needs_quaternion_plant("actuator", EULER_ALLOCATION, ctx)
+    if not sec.faults:
+        return EulerTorqueAllocation(inner=IdealActuator())
+    statics, windows = _fault_data(sec, ctx)
+    return EulerTorqueAllocation(inner=HeldAdditiveFaultActuator(count=ctx.count, windows=windows, **statics))
+
+
+register_component_type("actuator", EULER_ALLOCATION, EulerAllocationSection, _euler_allocation,
+                        "generalised (Euler-angle) torque + additive faults -> body torque R_bar(q)^T (...)")
+
+
+# -------------------------------------------------------------------------------------- estimators
+class IsolationEntry(StrictModel):
+    spacecraft: int = Field(ge=1, description="True faulty spacecraft (1-based) [-].")
+    channel: int = Field(ge=1, le=3, description="True faulty channel [-].")
+    reported_spacecraft: int = Field(ge=1, description="Spacecraft the FDI blames (1-based) [-].")
+    reported_channel: int = Field(ge=1, le=3, description="Channel the FDI blames [-].")
+
+
+class ScriptedFdiSection(StrictModel):
+    """FDI report (flag, u*) of the actuator's faults with imperfections."""
+
+    detected: bool = Field(True, description="False models a missed detection.")
+    delay: float = Field(5.0, ge=0.0, description="Detection latency; the estimate also lags by it [s].")
+    scale: float = Field(1.0, description="Identification scale error: u* = scale u_bar(t - delay) + bias [-].")
+    bias: float = Field(0.0, description="Identification bias while the fault is seen [N m].")
+    noise_std: float = Field(0.0, ge=0.0, description="Std of a per-step Gaussian identification noise [N m].")
+    isolation: list[IsolationEntry] = Field(default_factory=list,
+                                            description="Isolation errors: report a true fault elsewhere.")
+
+
+def _scripted_fdi(sec: ScriptedFdiSection, ctx: BuildContext):
+    act = ctx.section("actuator")
+    if ctx.scenario.type_of("actuator") != EULER_ALLOCATION or not act.faults:
+        raise CompositionError(f"estimator {SCRIPTED_FDI} reports the faults of the actuator, but actuator "
+                               f"{ctx.scenario.type_of('actuator')} has no faults (give actuator {EULER_ALLOCATION} "
+                               "with faults)")
+    statics, windows = _fault_data(act, ctx)
+    m, nch = ctx.count, 3
+    mask = np.zeros((m, nch))
+    for f in act.faults:
+        mask[f.spacecraft - 1, f.channel - 1] = 1.0
+    faulty = {(f.spacecraft, f.channel) for f in act.faults}
+    moves = {}
+    for k, e in enumerate(sec.isolation):
+        if (e.spacecraft, e.channel) not in faulty:
+            raise ValueError(f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault")
+        if max(e.spacecraft, e.reported_spacecraft) > m:
+            raise ValueError(f"estimator.isolation[{k}]: spacecraft numbers must be in 1..{m}")
+        moves[(e.spacecraft - 1, e.channel - 1)] = (e.reported_spacecraft - 1, e.reported_channel - 1)
+    params = fdi_params(m, nch, fault_mask=mask, onset=min(f.start for f in act.faults), delay=sec.delay,
+                        detected=sec.detected, scale=sec.scale, bias=sec.bias, noise_std=sec.noise_std,
+                        routing=isolation_routing(m, nch, moves))
+    seed = np.asarray(ctx.scenario.simulation.seed, dtype=np.uint32)
+    return ScriptedFdi(count=m, seed=seed, windows=windows, params=params, **statics)
+
+
+register_component_type("estimator", SCRIPTED_FDI, ScriptedFdiSection, _scripted_fdi,
+                        "scripted FDI report (flag, u*) of the actuator's faults: latency, missed detection, "
+                        "isolation and identification errors")
+
+
+# ------------------------------------------------------------------------------------- controllers
+class NetworkedElHinfSection(StrictModel):
+    """Distributed H-infinity synchronisation / tracking law with adaptive fault recovery (Euler angles)."""
+
+    edges: list[tuple[int, int]] = Field(description="Undirected links as 1-based spacecraft pairs, unit weights [-]; "
+                                                     "the graph must be connected.")
+    law: Literal["literal", "diffusive"] = Field("literal", description="Reading of the synchronisation law.")
+    compensation: Literal["sat", "sign", "certainty_equivalence"] = Field(
+        "sat", description="Fault compensation Gamma: sat(s/phi_b) u^, sgn(s) u^ or -u^.")
+    gamma: float = Field(0.6, gt=0.0, description="H-infinity level gamma_j [-].")
+    alpha: float = Field(0.86, description="Synchronisation weight alpha_j [-].")
+    K: float = Field(20.0, description="K_j = K I_3 [N m s].")
+    K_P: float = Field(0.16, description="Proportional gain K_P I_3 [1/s].")
+    K_I: float = Field(0.001, description="Integral gain K_I I_3 [1/s^2].")
+    sigma: float = Field(0.5, gt=0.0, description="Adaptation gain sigma I_3 [N m / rad].")
+    e_gain: float = Field(1.0, gt=0.0, description="Estimate pull towards the FDI estimate [1/s].")
+    boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s].")
+    nominal_inertia: Vec3 | None = Field(None, description="Principal inertia of the law's model [kg m^2] "
+                                                           "(default: the plant's inertia).")
+    desired_attitude: Vec3Expr = Field(("0", "0", "0"), description="Desired [theta, phi, psi] per spacecraft, "
+                                                                    "expressions in t [s], i [rad].")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if not self.edges:
+            raise ValueError("edges: at least one link is needed")
+        for k, (a, b) in enumerate(self.edges):
+            if a < 1 or b < 1 or a == b:
+                raise ValueError(f"edges[{k}] = [{a}, {b}]: 1-based spacecraft numbers, no self-loops")
+        if self.nominal_inertia is not None and any(not x > 0 for x in self.nominal_inertia):
+            raise ValueError(f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2")
+        return self
+
+
+def _attitude_chain_fits(ctx: BuildContext) -> None:
+    """The Euler-angle law on a quaternion plant needs the Euler sensors and the torque allocation."""
+    s = ctx.scenario
+    if s.type_of("plant") != QUATERNION_PLANT:
+        return  # other plants: the loop's own checks (quantities, counts) apply
+    if s.type_of("sensors") != EULER_SENSORS:
+        raise CompositionError(
+            f"controller {EULER_LAW} reads 3-2-1 Euler angles, but plant {QUATERNION_PLANT} has a quaternion "
+            f"attitude and sensors {s.type_of('sensors') or '(none: the raw plant state)'} do not convert it "
+            f"(use sensors type = \"{EULER_SENSORS}\")")
+    if s.type_of("actuator") != EULER_ALLOCATION:
+        raise CompositionError(
+            f"controller {EULER_LAW} commands a generalised torque conjugate to the Euler angles, but plant "
+            f"{QUATERNION_PLANT} is driven by a body torque and actuator {s.type_of('actuator') or '(ideal)'} "
+            f"does not map one to the other (use actuator type = \"{EULER_ALLOCATION}\")")
+    q0 = ctx.section("plant").euler_angles()
+    if np.any(np.abs(q0[:, 0]) >= SINGULAR_PITCH_LIMIT_RAD):
+        check_away_from_singularity(q0, field="plant initial attitude (3-2-1 Euler angles)")
+
+
+def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
+    _attitude_chain_fits(ctx)
+    m = ctx.count
+    for k, (a, b) in enumerate(sec.edges):
+        if a > m or b > m:
+            raise CompositionError(f"controller.edges[{k}] = [{a}, {b}]: plant {ctx.scenario.type_of('plant')} "
+                                   f"has {m} spacecraft")
+    A = graphs.adjacency(m, [(a - 1, b - 1) for a, b in sec.edges], directed=False)
+    if not graphs.is_connected_undirected(A):
+        raise ValueError("controller.edges: the communication graph is not connected; the synchronisation law "
+                         "needs a connected undirected graph")
+    J = sec.nominal_inertia
+    if J is None:
+        J = getattr(ctx.section("plant"), "inertia", None)
+        if J is None:
+            raise CompositionError(f"controller {EULER_LAW}: give controller.nominal_inertia [kg m^2] "
+                                   f"(plant {ctx.scenario.type_of('plant')} has no inertia)")
+    ones = np.ones((m, 3))
+    pj, pn = np.nonzero(np.triu(A > 0, 1))
+    return NetworkedElHinfController(
+        count=m, K=as_float(sec.K * ones), K_P=as_float(sec.K_P * ones), K_I=as_float(sec.K_I * ones),
+        sigma=as_float(sec.sigma * ones), e_gain=as_float(sec.e_gain * ones), alpha=as_float(sec.alpha * np.ones(m)),
+        gamma=as_float(sec.gamma * np.ones(m)), phi_b=as_float(sec.boundary_layer),
+        avg=as_float(graphs.row_normalized(A)), J_hat=as_float(np.stack([np.diag(J)] * m)),
+        law=sec.law, compensation=sec.compensation, desired_attitude=tuple(str(x) for x in sec.desired_attitude),
+        links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
+
+
+register_component_type("controller", EULER_LAW, NetworkedElHinfSection, _networked_el_hinf,
+                        "Mehrabian distributed H-infinity attitude synchronisation with adaptive fault recovery "
+                        "(3-2-1 Euler angles, generalised torque)")
