@@ -31,6 +31,7 @@ Safety against concurrent writers and silent corruption:
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import hashlib
 import io
 import json
@@ -302,7 +303,12 @@ class CampaignStore:
                                 f"is the directory writable?") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        except OSError as exc:
+            if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                os.close(fd)
+                raise CampaignError(f"{self.root}: the file system refuses advisory locks on {LOCK} "
+                                    f"({exc.strerror or exc}); use a results directory on a local disk or on "
+                                    f"a file system with locking") from None
             holder = ""
             try:
                 holder = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
