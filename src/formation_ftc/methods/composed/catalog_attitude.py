@@ -47,6 +47,11 @@ EULER_ALLOCATION = "euler-torque-allocation"
 SCRIPTED_FDI = "scripted-fdi"
 
 
+def _vec3_text(v: Vec3Expr) -> tuple[str, str, str]:
+    a, b, c = v
+    return str(a), str(b), str(c)
+
+
 # ----------------------------------------------------------------------------------------- plants
 class QuaternionPlantSection(StrictModel):
     """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
@@ -104,7 +109,7 @@ def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):
     w0 = np.zeros((n, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
     return QuaternionRigidBodyPlant(inertia=as_float(np.diag(sec.inertia)), initial_omega=as_float(w0),
                                     initial_quaternion=as_float(sec.quaternions()),
-                                    disturbance_torque=tuple(sec.disturbance_torque), gyroscopic=sec.gyroscopic)
+                                    disturbance_torque=_vec3_text(sec.disturbance_torque), gyroscopic=sec.gyroscopic)
 
 
 register_component_type("plant", QUATERNION_PLANT, QuaternionPlantSection, _quaternion_plant,
@@ -297,8 +302,9 @@ def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
     if J is None:
         J = getattr(ctx.section("plant"), "inertia", None)
         if J is None:
-            raise CompositionError(f"controller {EULER_LAW}: give controller.nominal_inertia [kg m^2] "
-                                   f"(plant {ctx.scenario.type_of('plant')} has no inertia)")
+            raise CompositionError(f"controller {EULER_LAW} is an attitude law (torque on Euler angles), but plant "
+                                   f"{ctx.scenario.type_of('plant')} has no inertia to build its model from (use an "
+                                   "attitude plant, or give controller.nominal_inertia [kg m^2])")
     ones = np.ones((m, 3))
     pj, pn = np.nonzero(np.triu(A > 0, 1))
     return NetworkedElHinfController(
@@ -306,7 +312,7 @@ def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
         sigma=as_float(sec.sigma * ones), e_gain=as_float(sec.e_gain * ones), alpha=as_float(sec.alpha * np.ones(m)),
         gamma=as_float(sec.gamma * np.ones(m)), phi_b=as_float(sec.boundary_layer),
         avg=as_float(graphs.row_normalized(A)), J_hat=as_float(np.stack([np.diag(J)] * m)),
-        law=sec.law, compensation=sec.compensation, desired_attitude=tuple(str(x) for x in sec.desired_attitude),
+        law=sec.law, compensation=sec.compensation, desired_attitude=_vec3_text(sec.desired_attitude),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
 
 
