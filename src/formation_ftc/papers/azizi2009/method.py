@@ -66,6 +66,9 @@ __all__ = ["make_loop", "build", "load", "simulate", "run_batch", "plot", "METHO
 #: time of the ``effort_x_100s_sc*`` metrics (Fig. 2 compares the efforts there) [s]
 EFFORT_TIME = 100.0
 
+#: the desired formation evaluated by XLA (the same numbers the run computes in its loop)
+_desired_state = jax.jit(rotating_polygon, static_argnums=(1, 2))
+
 
 # --------------------------------------------------------------------------------------------------
 # the composition
@@ -88,7 +91,7 @@ def make_loop(sc: Azizi2009Scenario) -> ClosedLoop:
     continuous = sc.controller.sampling == "continuous"
     offset = np.zeros(n) if fm.initial_offset_x is None else np.asarray(fm.initial_offset_x, float)
     side, omega = as_float(fm.side), as_float(fm.omega)
-    rd0, vd0, _ = jax.jit(rotating_polygon, static_argnums=(1, 2))(0.0, n, na, side, omega)
+    rd0, vd0, _ = _desired_state(0.0, n, na, side, omega)  # start on the desired formation (+ x offsets)
     plant = DoubleIntegratorPlant(initial_position=rd0.at[:, 0].add(as_float(offset)), initial_velocity=vd0,
                                   disturbance=str(sc.disturbance.acceleration), zoh=not continuous)
     noisy = sc.noise.sigma_position > 0 or sc.noise.sigma_velocity > 0
