@@ -20,6 +20,8 @@ pitch theta = +-90 deg (R_bar has 1/cos(theta)).
 
 from __future__ import annotations
 
+import dataclasses
+
 from formation_ftc.core.euler_quaternion import body_torque_from_generalised, euler_zyx_from_quaternion
 from formation_ftc.sim.components import Actuator, ActuatorInputs, IdealActuator, Signal, component
 
@@ -37,7 +39,7 @@ class EulerTorqueAllocation(Actuator):
 
     quantity = "torque"
 
-    inner: Actuator = IdealActuator()
+    inner: Actuator = dataclasses.field(default_factory=IdealActuator)
 
     @property
     def holds_exogenous(self) -> bool:  # type: ignore[override]

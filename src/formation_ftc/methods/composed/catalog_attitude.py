@@ -32,7 +32,7 @@ from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigi
 from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core import graph as graphs
-from formation_ftc.core.dynamics.euler_lagrange import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
+from formation_ftc.core.dynamics.euler_lagrange import check_away_from_singularity
 from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
 from formation_ftc.methods.composed import BuildContext, register_component_type
 from formation_ftc.sim.components import CompositionError, IdealActuator, as_float
@@ -282,9 +282,8 @@ def _attitude_chain_fits(ctx: BuildContext) -> None:
             f"controller {EULER_LAW} commands a generalised torque conjugate to the Euler angles, but plant "
             f"{QUATERNION_PLANT} is driven by a body torque and actuator {s.type_of('actuator') or '(ideal)'} "
             f"does not map one to the other (use actuator type = \"{EULER_ALLOCATION}\")")
-    q0 = ctx.section("plant").euler_angles()
-    if np.any(np.abs(q0[:, 0]) >= SINGULAR_PITCH_LIMIT_RAD):
-        check_away_from_singularity(q0, field="plant initial attitude (3-2-1 Euler angles)")
+    # the law's model is singular at pitch +-90 deg: start well away from it
+    check_away_from_singularity(ctx.section("plant").euler_angles(), field="plant initial attitude (3-2-1 Euler angles)")
 
 
 def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
