@@ -46,3 +46,33 @@ def test_settle_delay_is_settle_time_from_window_start():
     assert settle == delay + 1.0
     assert never == 0.0
     assert np.isnan(above)
+
+
+def test_metrics_accumulated_together_equal_metrics_alone():
+    # metrics of one reduction share one accumulator array; the values must equal those of each metric
+    # accumulated on its own (scalar and per-spacecraft metrics, a gate, several reductions mixed)
+    rng = np.random.default_rng(5)
+    n, dt = 40, 0.25
+    series = [{"v": jnp.asarray(rng.normal(size=(3, 2))), "g": jnp.asarray(float(k % 3 == 0))} for k in range(n + 1)]
+    ms = [Metric("a", "v", reduce="max", norm=True, spacecraft="max", start=1.0),
+          Metric("b", "v", reduce="max", norm=True, spacecraft="each", end=6.0),
+          Metric("c", "v", reduce="rms", component=1, norm=True, spacecraft="mean"),
+          Metric("d", "v", reduce="max", component=0, spacecraft="sum", start=2.0, end=5.0),
+          Metric("e", "v", reduce="settle_delay", norm=True, spacecraft="max", threshold=1.5, start=3.0),
+          Metric("f", "v", reduce="mean", component=0, spacecraft="each", gate="g"),
+          Metric("g", "v", reduce="final", component=1, spacecraft="max", end=7.0),
+          Metric("h", "v", reduce="mean", norm=True, spacecraft="mean", gate="g")]
+
+    def run(metrics):
+        acc = init_accumulators(metrics, series[0])
+        for k in range(n):
+            acc = update_accumulators(metrics, acc, k * dt, dt, series[k])
+        acc = update_accumulators(metrics, acc, n * dt, dt, series[n], is_final=True)
+        return finalize(metrics, acc)
+
+    together = run(ms)
+    for m, got in zip(ms, together, strict=True):
+        np.testing.assert_array_equal(np.asarray(got), np.asarray(run([m])[0]))
+    # and one of them against numpy directly
+    norms = np.array([np.max(np.linalg.norm(np.asarray(s["v"]), axis=1)) for s in series])
+    assert float(together[0]) == np.max(norms[4:])

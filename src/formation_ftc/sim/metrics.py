@@ -10,6 +10,7 @@ missed.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -181,12 +182,75 @@ def _grouped(metrics: Sequence[Metric]) -> list[tuple[list[int], Any]]:
             for idx in _groups(metrics)]
 
 
+class _Probe:
+    """A scalar stand-in metric of one reduction (to read the layout of its accumulator)."""
+
+    def __init__(self, reduce: str):
+        self.reduce = reduce
+
+    def value(self, signals):
+        return jnp.zeros(())
+
+
+@functools.cache
+def _boolean_parts(reduce: str) -> tuple[bool, ...]:
+    """Which parts of a reduction's accumulator tuple are booleans."""
+    return tuple(bool(jnp.asarray(a).dtype == jnp.bool_) for a in _init_accumulators([_Probe(reduce)], {})[0])
+
+
+def _pack(parts: tuple, rows: int) -> jax.Array:
+    """A group's accumulator tuple as one float64 array of ``rows`` rows (booleans as 0/1, zero padding)."""
+    parts = [jnp.asarray(x).astype(jnp.float64) for x in parts]
+    parts += [jnp.zeros_like(parts[0])] * (rows - len(parts))
+    return jnp.stack(parts)
+
+
+def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int], Any]]]]:
+    """(carry slot, its groups): the groups of one value shape (scalar, or one value per spacecraft) share
+    one float64 array in the scan carry -- the accumulator blocks of the groups side by side along axis
+    1 -- written by one fused kernel per step; a stage-integrated metric keeps its own entry."""
+    out: list[tuple[int, list[tuple[list[int], Any]]]] = []
+    shared: dict[bool, int] = {}
+    for idx, g in _grouped(metrics):
+        if not isinstance(g, _Stack):
+            out.append((idx[0], [(idx, g)]))
+            continue
+        key = g.spacecraft == "each"
+        if key not in shared:
+            shared[key] = len(out)
+            out.append((idx[0], []))
+        out[shared[key]][1].append((idx, g))
+    return out
+
+
+def _rows(groups) -> int:
+    return max(len(_boolean_parts(g.reduce)) for _, g in groups)
+
+
+def _blocks(groups, packed: jax.Array) -> list[tuple]:
+    """The accumulator tuple of each group from the shared array."""
+    out, col = [], 0
+    for idx, g in groups:
+        out.append(_unpack(g.reduce, packed[:len(_boolean_parts(g.reduce)), col:col + len(idx)]))
+        col += len(idx)
+    return out
+
+
+def _unpack(reduce: str, packed: jax.Array) -> tuple:
+    return tuple(packed[j] != 0 if b else packed[j] for j, b in enumerate(_boolean_parts(reduce)))
+
+
 def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
     """Initial accumulator of each metric (shapes taken from the signals at t0). Metrics accumulated
-    together keep their common accumulator in the first member's entry (the others hold ``()``)."""
+    together keep their common accumulator (one array, see :func:`_classes`) in the first member's
+    entry (the others hold ``()``)."""
     accs: list[Any] = [()] * len(metrics)
-    for idx, g in _grouped(metrics):
-        accs[idx[0]] = _init_accumulators([g], signals)[0]
+    for slot, groups in _classes(metrics):
+        if not isinstance(groups[0][1], _Stack):
+            accs[slot] = _init_accumulators([groups[0][1]], signals)[0]
+            continue
+        rows = _rows(groups)
+        accs[slot] = jnp.concatenate([_pack(_init_accumulators([g], signals)[0], rows) for _, g in groups], axis=1)
     return tuple(accs)
 
 
@@ -220,8 +284,14 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
     which the rectangle-rule integral does not count)."""
     out = list(accs)
-    for idx, g in _grouped(metrics):
-        out[idx[0]] = _update_accumulators([g], (accs[idx[0]],), t, dt, signals, is_final)[0]
+    for slot, groups in _classes(metrics):
+        if not isinstance(groups[0][1], _Stack):
+            out[slot] = _update_accumulators([groups[0][1]], (accs[slot],), t, dt, signals, is_final)[0]
+            continue
+        rows = _rows(groups)
+        new = [_pack(_update_accumulators([g], (acc,), t, dt, signals, is_final)[0], rows)
+               for (_, g), acc in zip(groups, _blocks(groups, accs[slot]), strict=True)]
+        out[slot] = jnp.concatenate(new, axis=1)
     return tuple(out)
 
 
@@ -278,10 +348,14 @@ def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array, dt: 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
     """Accumulators -> metric values (NaN where the window held no sample)."""
     out: list[Any] = [None] * len(metrics)
-    for idx, g in _grouped(metrics):
-        values = _finalize([g], (accs[idx[0]],))[0]
-        for j, i in enumerate(idx):
-            out[i] = values if isinstance(g, Metric) else values[j]
+    for slot, groups in _classes(metrics):
+        if not isinstance(groups[0][1], _Stack):
+            out[slot] = _finalize([groups[0][1]], (accs[slot],))[0]
+            continue
+        for (idx, g), acc in zip(groups, _blocks(groups, accs[slot]), strict=True):
+            values = _finalize([g], (acc,))[0]
+            for j, i in enumerate(idx):
+                out[i] = values[j]
     return tuple(out)
 
 
