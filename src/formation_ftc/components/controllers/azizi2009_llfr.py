@@ -50,6 +50,7 @@ class ChainLlfrController(Controller):
     omega: Any  # [rad/s]
     fault_index: int = static(0)  # 0-based satellite whose weight FLFR raises
     is_sampled: bool = static(True)
+    frame: str = static("inertial")  # frame of the desired formation's axes (records only)
 
     @property
     def sampled(self) -> bool:
@@ -88,7 +89,7 @@ class ChainLlfrController(Controller):
         return u, nxt, {"desired_position": rd}
 
     def signals(self):
-        return (Signal("desired_position", VEC, "m", "desired position of the rotating formation", "inertial"),)
+        return (Signal("desired_position", VEC, "m", "desired position of the rotating formation", self.frame),)
 
     def coords(self):
         return {"pair": [f"{j + 1}-{j + 2}" for j in range(self.count - 1)]}

@@ -28,8 +28,8 @@ Catalog modules (``catalog_*.py``) register the built-in types; a plug-in may re
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationError, model_validator
@@ -51,11 +51,16 @@ SLOTS = ("plant", "reference", "sensors", "network", "estimator", "supervisor", 
 
 @dataclass(frozen=True)
 class BuildContext:
-    """What a component builder may use besides its own section."""
+    """What a component builder may use besides its own section: the scenario, the spacecraft count,
+    the step, the built plant (None while the plant itself is built) and ``evaluations``, a list a
+    builder may append :class:`~formation_ftc.sim.components.Evaluation` components to (truth-side
+    signals derived from the records, e.g. a law's own error measure, for records and metrics only)."""
 
     scenario: ComposedScenario
     count: int  # number of spacecraft (from the plant section)
     dt: float  # step [s]
+    plant: Any = None
+    evaluations: list = field(default_factory=list)
 
     def section(self, slot: str) -> Any:
         """The validated section of another slot (None when the slot is empty)."""
@@ -119,6 +124,8 @@ class MetricSection(StrictModel):
     start: float = Field(0.0, description="Window start [s].")
     end: float = Field(float("inf"), description="Window end [s] (inf: until the horizon).")
     threshold: float = Field(0.0, description="Threshold of the 'settle' reduction [signal units].")
+    norm_ord: Literal["2", "inf"] = Field("2", description="Norm of `norm`: '2' Euclidean, 'inf' largest |component|.")
+    gate: str | None = Field(None, description="Name of a recorded signal: only samples where it is true count.")
 
     @model_validator(mode="after")
     def _known(self):
@@ -189,7 +196,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     count = int(getattr(plant_section, "count", len(getattr(plant_section, "mass", []) or [])))
     ctx = BuildContext(scenario=s, count=count, dt=float(s.simulation.dt))
     parts: dict[str, Any] = {"plant": plant_entry.build(plant_section, ctx)}
-    ctx = BuildContext(scenario=s, count=parts["plant"].count, dt=float(s.simulation.dt))
+    ctx = BuildContext(scenario=s, count=parts["plant"].count, dt=float(s.simulation.dt), plant=parts["plant"])
     for slot in SLOTS[1:]:
         name = s.type_of(slot)
         if name is None:
@@ -199,10 +206,12 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
     metrics = tuple(Metric(m.name, m.signal, m.reduce, norm=m.norm, spacecraft=m.spacecraft, units=m.units,
-                           start=as_float(m.start), end=as_float(m.end), threshold=as_float(m.threshold))
+                           start=as_float(m.start), end=as_float(m.end), threshold=as_float(m.threshold),
+                           norm_ord=m.norm_ord, gate=m.gate)
                     for m in s.metrics)
     sim = s.simulation
-    return ClosedLoop(**parts, metrics=metrics, seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt),
+    return ClosedLoop(**parts, metrics=metrics, evaluations=tuple(ctx.evaluations),
+                      seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt),
                       n_steps=sim.n_steps, record_every=sim.record_every, unroll=sim.unroll)
 
 

@@ -1,0 +1,108 @@
+"""An acceleration law flying a force-driven plant: the command scaled by each spacecraft's nominal mass."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from formation_ftc.sim.components import CompositionError, Controller, FlightInputs, Signal, component
+
+__all__ = ["AccelerationToForce", "TrackingAccelerationToForce", "force_from_acceleration",
+           "ACCELERATION_COMMAND_SIGNAL"]
+
+#: the wrapped law's own command, recorded next to the loop's ``command`` (the force)
+ACCELERATION_COMMAND_SIGNAL = "acceleration_command"
+
+
+@component
+class AccelerationToForce(Controller):
+    """A law that commands accelerations u_i [m/s^2] (``quantity = "acceleration"``, e.g. a
+    deep-space double-integrator law) turned into the force command a force-driven plant needs::
+
+        f_i = m_i^nom u_i                                                              [N]
+
+    ``nominal_mass`` (N,) [kg] is what the flight side knows about the spacecraft masses (a design
+    number on board, not the plant's true mass): with a true mass m_i the plant receives the
+    acceleration (m_i^nom / m_i) u_i, i.e. a mass error acts like an actuator-gain error the law does
+    not know. Everything else (sampling, states, messages, time signals, recorded signals, conditions)
+    is the wrapped law's; the law's own command is recorded as ``acceleration_command``.
+    Use :func:`force_from_acceleration` to build one (it keeps the law's position objective, if any).
+    """
+
+    law: Controller
+    nominal_mass: Any  # (N,) [kg]
+
+    quantity = "force"
+
+    def __post_init__(self) -> None:
+        law = self.law
+        if not isinstance(law, Controller):
+            return  # pytree reconstruction with placeholders
+        if law.quantity != "acceleration":
+            raise CompositionError(f"AccelerationToForce scales an acceleration command by the nominal mass, but "
+                                   f"controller {type(law).__name__} commands a {law.quantity}")
+        m = self.nominal_mass
+        if isinstance(m, np.ndarray) and (m.shape != (law.count,) or not np.all(m > 0)):
+            raise CompositionError(f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
+                                   f"{type(law).__name__} of {law.count} spacecraft (need {law.count}, each > 0)")
+
+    # the wrapped law's structure
+    @property
+    def sampled(self) -> bool:
+        return self.law.sampled
+
+    @property
+    def count(self) -> int:
+        return self.law.count
+
+    @property
+    def uses_messages(self) -> bool:
+        return bool(getattr(self.law, "uses_messages", False))
+
+    @property
+    def holds_exogenous(self) -> bool:  # type: ignore[override]
+        return bool(self.law.holds_exogenous)
+
+    def exogenous(self, t):
+        return self.law.exogenous(t)
+
+    def initial_state(self):
+        return self.law.initial_state()
+
+    def message(self, t, inputs: FlightInputs):
+        return self.law.message(t, inputs)
+
+    def output(self, t, state, inputs: FlightInputs):
+        u, nxt, out = self.law.output(t, state, inputs)
+        force = self.nominal_mass[:, None] * u  # f_i = m_i^nom u_i
+        return force, nxt, {**out, ACCELERATION_COMMAND_SIGNAL: u}
+
+    def signals(self):
+        return tuple(self.law.signals()) + (
+            Signal(ACCELERATION_COMMAND_SIGNAL, ("spacecraft", "axis"), "m s-2",
+                   "acceleration commanded by the law (before the nominal-mass scaling)"),)
+
+    def coords(self):
+        return self.law.coords()
+
+    def conditions(self, loop) -> list:
+        conds = getattr(self.law, "conditions", None)
+        return list(conds(loop)) if callable(conds) else []
+
+
+@component
+class TrackingAccelerationToForce(AccelerationToForce):
+    """:class:`AccelerationToForce` for a law with a position objective: the loop records
+    ``position_error`` against the law's desired position."""
+
+    def desired_position_at(self, exogenous):
+        return self.law.desired_position_at(exogenous)
+
+
+def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationToForce:
+    """``law`` (acceleration command) driving a force plant with the flight side's ``nominal_mass``
+    (N,) [kg]; the law's position objective, if it declares one, is kept."""
+    tracks = type(law).desired_position_at is not Controller.desired_position_at
+    cls = TrackingAccelerationToForce if tracks else AccelerationToForce
+    return cls(law=law, nominal_mass=nominal_mass)
