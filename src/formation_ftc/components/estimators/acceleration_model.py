@@ -1,0 +1,79 @@
+"""An estimator whose internal model is driven by accelerations, in a loop whose command is a force."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from formation_ftc.sim.components import CompositionError, Estimator, FlightInputs, component
+
+__all__ = ["AccelerationModelEstimator"]
+
+
+@component
+class AccelerationModelEstimator(Estimator):
+    """Runs ``inner`` (an estimator whose model takes the command as an acceleration [m/s^2], e.g. the
+    iterative learning observer's CW model ``q_hat' = A q_hat + B u + ...``) in a loop whose controller
+    commands forces [N] (a force-driven plant). The time update receives the command per unit of the
+    flight side's nominal mass::
+
+        u_i = f_i / m_i^nom                                                         [m/s^2]
+
+    ``nominal_mass`` (N,) [kg] is the on-board value (the same one that turned the law's acceleration
+    into the force, so u_i is exactly the law's acceleration command). With a true mass m_i != m_i^nom
+    the plant receives (m_i^nom / m_i) u_i: the difference is part of what the estimator sees as an
+    unknown input. Everything else (update, state, estimate, recorded signals) is ``inner``'s.
+    """
+
+    inner: Estimator
+    nominal_mass: Any  # (N,) [kg]
+
+    def __post_init__(self) -> None:
+        m = self.nominal_mass
+        if not isinstance(self.inner, Estimator) or not isinstance(m, np.ndarray):
+            return  # pytree reconstruction with placeholders
+        n = getattr(self.inner, "count", None)
+        if m.ndim != 1 or (n is not None and m.shape != (n,)) or not np.all(np.isfinite(m) & (m > 0)):
+            raise CompositionError(f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
+                                   f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)")
+
+    @property
+    def count(self) -> int | None:
+        return getattr(self.inner, "count", None)
+
+    @property
+    def refresh_on_observe(self) -> bool:  # type: ignore[override]
+        return bool(self.inner.refresh_on_observe)
+
+    @property
+    def holds_exogenous(self) -> bool:  # type: ignore[override]
+        return bool(self.inner.holds_exogenous)
+
+    def exogenous(self, t):
+        return self.inner.exogenous(t)
+
+    def initial_state(self, measurement0):
+        return self.inner.initial_state(measurement0)
+
+    def update(self, t, state, inputs: FlightInputs):
+        return self.inner.update(t, state, inputs)
+
+    def predict(self, t, state, command, dt):
+        return self.inner.predict(t, state, command / self.nominal_mass[:, None], dt)  # u_i = f_i / m_i^nom
+
+    def current(self, state):
+        return self.inner.current(state)
+
+    def signals(self):
+        return self.inner.signals()
+
+    def outputs(self, t, state, estimate):
+        return self.inner.outputs(t, state, estimate)
+
+    def coords(self):
+        return self.inner.coords()
+
+    def conditions(self, loop) -> list:
+        conds = getattr(self.inner, "conditions", None)
+        return list(conds(loop)) if callable(conds) else []

@@ -1,0 +1,355 @@
+"""Catalog: the iterative learning observer (ILO) and the learning / conventional output-feedback
+formation-keeping laws (LOF2TC, COF2TC) of Gui et al. 2022, for composed scenarios on any
+translational plant with an (N, 6) relative state.
+
+How the flight side's CW design meets a plant it was not designed for:
+
+* **On-board model.** The ILO's internal model and the laws' nominal orbit q0(t) are the linear
+  Clohessy-Wiltshire equations with a mean motion ``mean_motion`` [rad/s] (default: the mean motion
+  sqrt(mu / a^3) of the ``[reference]`` orbit, or the CW plant's own). On a nonlinear plant about an
+  elliptic reference (``plant.type = "relative-lvlh"``) the difference between the true relative
+  acceleration and the CW model -- eccentricity, nonlinearity, and the plant's disturbance -- enters
+  the ILO as an unknown input in the velocity channel, exactly where the thruster faults enter (H = B):
+  the fault estimate F_hat reconstructs the fault *plus* that model mismatch.
+* **Acceleration -> force.** The laws and the ILO work in accelerations [m/s^2]. On a force-driven
+  plant the law's command is scaled by the nominal masses known on board,
+  ``f_i = m_i^nom u_i`` [N] (:mod:`~formation_ftc.components.controllers.acceleration_to_force`), and the
+  ILO's time update divides the loop's force command by the same masses, ``u_i = f_i / m_i^nom``
+  (:mod:`~formation_ftc.components.estimators.acceleration_model`). ``nominal_mass`` defaults to the
+  plant's masses (masses known exactly on board); a different value acts like an actuator-gain error.
+* **Gains.** ``gains = "printed"`` uses the L1, L2 / K given in the section (the paper's printed gains,
+  designed at its own mean motion); ``gains = "lmi"`` (observer) re-solves the LMIs (8), (27) and the
+  pole-region LMI at the on-board mean motion, ``gains = "care"`` (law) the CARE (34) with
+  Q = care_q_scale I6, R = I3.
+* **Fault in acceleration units.** With a ``thruster-bias`` actuator the loop records
+  ``fault_acceleration`` = F_i / m_i (the true fault per unit true mass) and ``fault_error`` =
+  fault_acceleration - F_hat [m/s^2]; the laws add ``position_tracking_error`` and
+  ``velocity_tracking_error`` (norms of the measured tracking error e_y).
+
+The ILO on a plant without an (N, 6) relative state (an attitude plant) or behind sensors that do not
+measure it is rejected at validation, naming both parts; so is a law on a torque-driven plant.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from formation_ftc.blocks.observers.iterative_learning_observer import LearningIntervalError, learning_steps
+from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+from formation_ftc.components.controllers.output_feedback import (
+    ConventionalOutputFeedbackController,
+    LearningOutputFeedbackController,
+)
+from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
+from formation_ftc.components.estimators.iterative_learning_observer import IterativeLearningObserver
+from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
+from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.dynamics.cw import cw_matrices
+from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.sim.components import CompositionError, as_float
+
+__all__ = ["ILO", "LOF2TC", "COF2TC", "IloSection", "Lof2tcSection", "Cof2tcSection", "onboard_mean_motion",
+           "nominal_mass_of", "ilo_lmi_gains", "care_gain"]
+
+ILO = "iterative-learning-observer"
+LOF2TC = "gui2022-lof2tc"
+COF2TC = "gui2022-cof2tc"
+#: sensors that deliver the (N, 6) relative state y = q the ILO and the laws need (C = I6)
+STATE_SENSORS = (None, "relative-state")
+
+Vec3 = tuple[float, float, float]
+Vec6 = tuple[float, float, float, float, float, float]
+
+
+def _matrix(value, shape, field: str):
+    if value is None:
+        return None
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != shape:
+        raise ValueError(f"{field}: expected a {shape[0]}x{shape[1]} matrix (list of rows), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{field}: entries must be finite")
+    return arr.tolist()
+
+
+def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(f"{field}: every mass must be finite and > 0 kg")
+    return arr
+
+
+def _on_grid(tau: float, dt: float, field: str) -> int:
+    try:
+        return learning_steps(tau, dt, field)
+    except LearningIntervalError as exc:
+        raise ValueError(str(exc)) from None
+
+
+# ------------------------------------------------------------------------------- shared decisions
+def onboard_mean_motion(given: float | None, ctx: BuildContext, slot: str) -> float:
+    """The mean motion of the on-board CW model [rad/s]: ``given``, else sqrt(mu / a^3) of the
+    ``[reference]`` orbit, else the plant's own (a CW plant)."""
+    if given is not None:
+        return float(given)
+    ref = ctx.section("reference")
+    if ref is not None and hasattr(ref, "semi_major_axis"):
+        return math.sqrt(ref.mu / ref.semi_major_axis**3)
+    n = getattr(ctx.section("plant"), "mean_motion", None)
+    if n is None:
+        raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but plant "
+                               f"{ctx.scenario.type_of('plant')} has no reference orbit to take it from "
+                               f"(give {slot}.mean_motion [rad/s])")
+    return float(n)
+
+
+def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
+    """The plant's initial (N, 6) relative state; a CompositionError naming both parts without one."""
+    plant, name = ctx.plant, ctx.scenario.type_of(slot)
+    plant_name = ctx.scenario.type_of("plant")
+    state = plant.initial_state() if plant is not None else None
+    q = state.get("q") if isinstance(state, dict) else None
+    if q is None or np.shape(q) != (ctx.count, 6) or getattr(plant, "quantity", "force") not in ("force",
+                                                                                               "acceleration"):
+        keys = ", ".join(sorted(state)) if isinstance(state, dict) else type(state).__name__
+        raise CompositionError(
+            f"{slot} {name} works on the (N, 6) relative position/velocity state of a CW model, but plant "
+            f"{plant_name} ({type(plant).__name__}, driven by a {getattr(plant, 'quantity', '?')}) has no such state "
+            f"(state: {keys}); use a translational plant (clohessy-wiltshire, relative-lvlh)")
+    sensors = ctx.scenario.type_of("sensors")
+    if sensors not in STATE_SENSORS:
+        raise CompositionError(f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state), "
+                               f"but sensors {sensors} deliver something else")
+    return np.asarray(q, dtype=float)
+
+
+def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:
+    """The flight side's nominal masses [kg]: ``given``, else the plant's true masses."""
+    if given is None:
+        given = getattr(ctx.section("plant"), "mass", None)
+        if given is None:
+            raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: plant {ctx.scenario.type_of('plant')} "
+                                   f"has no masses to take the nominal masses from (give {slot}.nominal_mass [kg])")
+    return _per_spacecraft(given, ctx.count, f"{slot}.nominal_mass")
+
+
+@functools.lru_cache(maxsize=16)
+def ilo_lmi_gains(n: float, lam: float, center: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(L1, L2) from the LMIs (8), (27) and the pole region S(c, r) on the CW model of mean motion n
+    [rad/s] (C = I6, H = B), normalised P >= I; cached by input (an offline design)."""
+    from formation_ftc.design.lmi import design_ilo_gains
+
+    A, B = cw_matrices(n)
+    des = design_ilo_gains(A, np.eye(6), B, lam=lam, disk_center=center, disk_radius=radius)
+    return des.L1, des.L2
+
+
+@functools.lru_cache(maxsize=16)
+def care_gain(n: float, q_scale: float) -> np.ndarray:
+    """K = B^T P1 from the CARE (34) with Q = q_scale I6, R = I3 on the CW model of mean motion n."""
+    from formation_ftc.design.riccati import solve_care
+
+    A, B = cw_matrices(n)
+    return solve_care(A, B, q_scale * np.eye(6), np.eye(3)).K
+
+
+# ------------------------------------------------------------------------------------- estimator
+class IloSection(StrictModel):
+    """Iterative learning observer (5) on an on-board CW model, one per spacecraft."""
+
+    gains: Literal["printed", "lmi"] = Field("printed", description=(
+        "'printed': L1, L2 as given; 'lmi': solve (8), (27) and the pole-region LMI at the on-board mean motion."))
+    L1: list[list[float]] | None = Field(None, description="Observer gain L1 (6x6) [1/s] (gains = 'printed').")
+    L2: list[list[float]] | None = Field(None, description="Learning gain L2 (3x6) [1/s] (gains = 'printed').")
+    lmi_lambda: float = Field(1e-8, gt=0, description="lambda of (27) [-] (gains = 'lmi').")
+    disk_center: float = Field(-5.0, lt=0, description="Centre c of the pole region S(c, r) [1/s] (gains = 'lmi').")
+    disk_radius: float = Field(2.0, gt=0, description="Radius r of the pole region S(c, r) [1/s] (gains = 'lmi').")
+    lmi_l2_scale: float | None = Field(None, gt=0, description=(
+        "Magnitude of L2's diagonal after the LMI solve (the free scale of the homogeneous LMIs) [1/s]; "
+        "default: as solved with P >= I."))
+    Q1: Vec3 = Field(description="Diagonal of Q1, each in (0, 1] [-].")
+    Q2: float = Field(gt=0, description="Learning gain Q2 [-].")
+    gamma: float = Field(ge=0, description="Sign-term gain gamma [m/s^2].")
+    sign_term: bool = Field(True, description="Include gamma sgn(e_y) (false: the ILO without the sign term).")
+    learning_interval: float = Field(gt=0, description="tau: a positive integer multiple of simulation.dt [s].")
+    mean_motion: float | None = Field(None, gt=0, description=(
+        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit)."))
+    nominal_mass: float | list[float] | None = Field(None, description=(
+        "On-board masses m_nom [kg] dividing a force command into the model's acceleration (default: the "
+        "controller's nominal_mass, else the plant's masses)."))
+    estimate_offset: Vec6 = Field((0.0,) * 6, description="q_hat(0) - y(0), same for every spacecraft [m, m/s].")
+
+    @field_validator("L1")
+    @classmethod
+    def _l1(cls, v):
+        return _matrix(v, (6, 6), "L1")
+
+    @field_validator("L2")
+    @classmethod
+    def _l2(cls, v):
+        return _matrix(v, (3, 6), "L2")
+
+    @field_validator("Q1")
+    @classmethod
+    def _q1(cls, v):
+        for k, s in enumerate(v):
+            if not 0 < s <= 1:
+                raise ValueError(f"Q1[{k}] = {s}: each entry must be in (0, 1]")
+        return v
+
+    @model_validator(mode="after")
+    def _printed_given(self):
+        if self.gains == "printed" and (self.L1 is None or self.L2 is None):
+            missing = " and ".join(f for f in ("L1", "L2") if getattr(self, f) is None)
+            raise ValueError(f"{missing}: required with gains = 'printed' (or set gains = 'lmi')")
+        return self
+
+    def gains_at(self, n: float) -> tuple[np.ndarray, np.ndarray]:
+        """(L1, L2) used on the CW model of mean motion n [rad/s]."""
+        if self.gains == "printed":
+            return np.asarray(self.L1, float), np.asarray(self.L2, float)
+        L1, L2 = ilo_lmi_gains(n, self.lmi_lambda, self.disk_center, self.disk_radius)
+        if self.lmi_l2_scale is not None:  # (P, Y, L2) -> s (P, Y, L2): L1 unchanged
+            L2 = L2 * (self.lmi_l2_scale / float(np.mean(np.diag(L2[:, 3:]))))
+        return L1, L2
+
+
+def _nominal_mass_for_estimator(sec: IloSection, ctx: BuildContext) -> np.ndarray:
+    if sec.nominal_mass is not None:
+        return nominal_mass_of(sec.nominal_mass, ctx, "estimator")
+    ctl = ctx.section("controller")
+    return nominal_mass_of(getattr(ctl, "nominal_mass", None) if ctx.scenario.type_of("controller") in
+                           (LOF2TC, COF2TC) else None, ctx, "estimator")
+
+
+def _ilo(sec: IloSection, ctx: BuildContext):
+    q_init = _relative_state(ctx, "estimator")
+    m = _on_grid(sec.learning_interval, ctx.dt, "estimator.learning_interval")
+    n = onboard_mean_motion(sec.mean_motion, ctx, "estimator")
+    L1, L2 = sec.gains_at(n)
+    N = ctx.count
+    ilo = IterativeLearningObserver(
+        count=N, mean_motion=as_float(n), L1=as_float(L1), L2=as_float(L2), Q1=as_float(sec.Q1),
+        Q2=as_float(sec.Q2), gamma=as_float(sec.gamma),
+        initial_estimate=as_float(q_init + np.asarray(sec.estimate_offset)),  # y(0) = q(0): exact sensors
+        fault_prehistory=as_float(np.zeros((N, 3))),
+        learning_steps=m, sign_term=sec.sign_term, mean_steps=int(ctx.scenario.simulation.record_every))
+    force_loop = ctx.plant.quantity == "force"
+    est = AccelerationModelEstimator(inner=ilo, nominal_mass=as_float(_nominal_mass_for_estimator(sec, ctx))) \
+        if force_loop else ilo
+    if ctx.scenario.type_of("actuator") == "thruster-bias":
+        fault = "fault"
+        if force_loop:
+            mass = getattr(ctx.section("plant"), "mass", None)
+            if mass is not None:
+                ctx.evaluations.append(PerUnitMass("fault_acceleration", "fault", mass=as_float(mass),
+                                                   long_name="true thruster fault per unit true mass F_i / m_i",
+                                                   frame="LVLH"))
+                fault = "fault_acceleration"
+        ctx.evaluations.append(SignalSum("fault_error", (("+", fault), ("-", "fault_estimate")), units="m s-2",
+                                         long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
+                                         frame="LVLH"))
+    return est
+
+
+register_component_type("estimator", ILO, IloSection, _ilo,
+                        "Gui2022 iterative learning observer (5): thruster-fault reconstruction on a CW model")
+
+
+# ------------------------------------------------------------------------------------ controllers
+class _OutputFeedbackSection(StrictModel):
+    desired_state: list[Vec6] = Field(description=(
+        "q0(0) of each spacecraft's nominal orbit (28), CW free motion on board [m, m/s] (one row each)."))
+    gains: Literal["printed", "care"] = Field("printed", description=(
+        "K: 'printed' as given, or 'care' = B^T P1 from the CARE (34) at the on-board mean motion."))
+    K: list[list[float]] | None = Field(None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed').")
+    care_q_scale: float = Field(4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care').")
+    mean_motion: float | None = Field(None, gt=0, description=(
+        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit)."))
+    nominal_mass: float | list[float] | None = Field(None, description=(
+        "On-board masses m_nom [kg], f = m_nom u on a force-driven plant (default: the plant's masses)."))
+
+    @field_validator("K")
+    @classmethod
+    def _k(cls, v):
+        return _matrix(v, (3, 6), "K")
+
+    @model_validator(mode="after")
+    def _printed_given(self):
+        if self.gains == "printed" and self.K is None:
+            raise ValueError("K: required with gains = 'printed' (or set gains = 'care')")
+        return self
+
+    def common(self, ctx: BuildContext, slot: str = "controller") -> dict:
+        _relative_state(ctx, slot)
+        N = ctx.count
+        if len(self.desired_state) != N:
+            raise ValueError(f"{slot}.desired_state: {len(self.desired_state)} rows for {N} spacecraft")
+        n = onboard_mean_motion(self.mean_motion, ctx, slot)
+        K = np.asarray(self.K, float) if self.gains == "printed" else care_gain(n, self.care_q_scale)
+        _, B = cw_matrices(n)
+        BpB = np.linalg.pinv(B) @ B  # B^+ H with H = B (and B^+ E with E = B)
+        return dict(count=N, mean_motion=as_float(n), desired_initial=as_float(self.desired_state),
+                    K=as_float(K), BpH=as_float(BpB))
+
+
+def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
+    """The acceleration law as is on an acceleration-driven plant; f = m_nom u on a force-driven one;
+    any other plant keeps the law unwrapped so the loop rejects the pair naming both."""
+    ctx.evaluations.extend([PartNorm("position_tracking_error", "tracking_error", 0, 3, units="m",
+                                     long_name="||position part of e_y = q0 - y||"),
+                            PartNorm("velocity_tracking_error", "tracking_error", 3, 6, units="m s-1",
+                                     long_name="||velocity part of e_y = q0 - y||")])
+    if ctx.plant.quantity == "force":
+        return force_from_acceleration(law, as_float(nominal_mass_of(sec.nominal_mass, ctx, "controller")))
+    return law
+
+
+class Lof2tcSection(_OutputFeedbackSection):
+    """LOF2TC (30)-(32): u = pi K e_y - B^+E v - B^+H F_hat with the learning gain pi and compensation v."""
+
+    G1: float = Field(description="G1 of (31) [-].")
+    G2: float = Field(description="G2 of (31) [s^4/m^2].")
+    G3: Vec3 = Field(description="Diagonal of G3 in (32) [-].")
+    G4: float = Field(description="G4 of (32) [-].")
+    pi_initial: float = Field(1.0, description="pi(-tau) [-].")
+    v_initial: Vec3 = Field((0.0, 0.0, 0.0), description="v(-tau) [m/s^2].")
+    learning_interval: float = Field(gt=0, description="tau of (31)-(32): a positive integer multiple of simulation.dt [s].")
+
+
+def _lof2tc(sec: Lof2tcSection, ctx: BuildContext):
+    common = sec.common(ctx)
+    N = ctx.count
+    law = LearningOutputFeedbackController(
+        **common, G1=as_float(sec.G1), G2=as_float(sec.G2), G3=as_float(sec.G3), G4=as_float(sec.G4),
+        BpE=common["BpH"], pi_initial=as_float(np.full(N, sec.pi_initial)),
+        v_initial=as_float(np.broadcast_to(np.asarray(sec.v_initial, float), (N, 3)).copy()),
+        learning_steps=_on_grid(sec.learning_interval, ctx.dt, "controller.learning_interval"))
+    return _on_plant(law, sec, ctx)
+
+
+class Cof2tcSection(_OutputFeedbackSection):
+    """COF2TC: u = K e_y, or u = K e_y - B^+H F_hat with ``fault_compensation``."""
+
+    fault_compensation: bool = Field(False, description="Subtract the estimator's fault estimate F_hat.")
+
+
+def _cof2tc(sec: Cof2tcSection, ctx: BuildContext):
+    law = ConventionalOutputFeedbackController(**sec.common(ctx), fault_compensation=sec.fault_compensation)
+    return _on_plant(law, sec, ctx)
+
+
+register_component_type("controller", LOF2TC, Lof2tcSection, _lof2tc,
+                        "Gui2022 LOF2TC (30)-(32): learning output feedback on a CW nominal orbit (acceleration law)")
+register_component_type("controller", COF2TC, Cof2tcSection, _cof2tc,
+                        "Gui2022 COF2TC baseline u = K e_y (optionally - F_hat) on a CW nominal orbit")
