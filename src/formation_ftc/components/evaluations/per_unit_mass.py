@@ -18,10 +18,10 @@ class PerUnitMass(Evaluation):
     name: str = static()
     signal: str = static()
     mass: Any = 1.0  # (N,) [kg]
-    dims: tuple[str, ...] = static(("spacecraft", "axis"))
-    units: str = static("m s-2")
-    long_name: str = static("")
-    frame: str | None = static(None)
+    dims: tuple[str, ...] = static(default=("spacecraft", "axis"))
+    units: str = static(default="m s-2")
+    long_name: str = static(default="")
+    frame: str | None = static(default=None)
 
     def signals(self):
         return (Signal(self.name, self.dims, self.units, self.long_name, self.frame),)

@@ -63,6 +63,8 @@ COF2TC = "gui2022-cof2tc"
 #: sensors that deliver the (N, 6) relative state y = q the ILO and the laws need (C = I6)
 STATE_SENSORS = (None, "relative-state")
 
+VEC = ("spacecraft", "axis")
+SC = ("spacecraft",)
 Vec3 = tuple[float, float, float]
 Vec6 = tuple[float, float, float, float, float, float]
 
@@ -252,11 +254,11 @@ def _ilo(sec: IloSection, ctx: BuildContext):
         if force_loop:
             mass = getattr(ctx.section("plant"), "mass", None)
             if mass is not None:
-                ctx.evaluations.append(PerUnitMass("fault_acceleration", "fault", mass=as_float(mass),
+                ctx.evaluations.append(PerUnitMass("fault_acceleration", "fault", mass=as_float(mass), dims=VEC,
                                                    long_name="true thruster fault per unit true mass F_i / m_i",
                                                    frame="LVLH"))
                 fault = "fault_acceleration"
-        ctx.evaluations.append(SignalSum("fault_error", (("+", fault), ("-", "fault_estimate")), units="m s-2",
+        ctx.evaluations.append(SignalSum("fault_error", (("+", fault), ("-", "fault_estimate")), dims=VEC, units="m s-2",
                                          long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
                                          frame="LVLH"))
     return est
@@ -306,9 +308,9 @@ class _OutputFeedbackSection(StrictModel):
 def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
     """The acceleration law as is on an acceleration-driven plant; f = m_nom u on a force-driven one;
     any other plant keeps the law unwrapped so the loop rejects the pair naming both."""
-    ctx.evaluations.extend([PartNorm("position_tracking_error", "tracking_error", 0, 3, units="m",
+    ctx.evaluations.extend([PartNorm("position_tracking_error", "tracking_error", 0, 3, dims=SC, units="m",
                                      long_name="||position part of e_y = q0 - y||"),
-                            PartNorm("velocity_tracking_error", "tracking_error", 3, 6, units="m s-1",
+                            PartNorm("velocity_tracking_error", "tracking_error", 3, 6, dims=SC, units="m s-1",
                                      long_name="||velocity part of e_y = q0 - y||")])
     if ctx.plant.quantity == "force":
         return force_from_acceleration(law, as_float(nominal_mass_of(sec.nominal_mass, ctx, "controller")))
