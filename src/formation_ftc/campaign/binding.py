@@ -93,7 +93,8 @@ def bind_field(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str, 
     l0, t0 = _leaves(p0)
     l1, t1 = _leaves(p1)
     l2, t2 = _leaves(p2)
-    if t0 != t1 or t0 != t2 or any(a.shape != b.shape or a.shape != c.shape for a, b, c in zip(l0, l1, l2)):
+    if t0 != t1 or t0 != t2 or any(a.shape != b.shape or a.shape != c.shape
+                                   for a, b, c in zip(l0, l1, l2, strict=True)):
         return None  # structural field
     v1, v2 = probes
     targets = []
