@@ -6,7 +6,9 @@ acceleration-to-force adapter."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 
+import jax
 import numpy as np
 import pytest
 
@@ -15,6 +17,10 @@ from formation_ftc.cli import main
 from formation_ftc.config import loader
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.polygon_formation import rotating_polygon
+from formation_ftc.methods.composed import make_loop
+from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.compiled import compile_loop
+from formation_ftc.sim.metrics import metrics_dict
 
 NAME = "compose-azizi2009-on-li2020"
 MASS = np.array([100.0, 120.0, 115.0, 108.0])
@@ -96,6 +102,22 @@ def test_deep_space_limit_reproduces_the_azizi2009_method():
     np.testing.assert_allclose(ds_c.acceleration_command.values, ds_a.command.values, rtol=0, atol=1e-8)
     assert m_c["t_flfr"] == m_a["t_flfr"]
     assert m_c["max_err_after_flfr"] == pytest.approx(m_a["max_err_after_flfr"], rel=1e-6)
+
+
+def test_flfr_reduces_the_post_fault_error_against_llfr_alone_but_not_below_e_s_in_orbit():
+    """One vmapped program, two runs that differ only in the supervisor's FLFR flag (a leaf)."""
+    scn = ftc.load_scenario(NAME, {"simulation.horizon": 100.0, "simulation.record_every": 100})
+    loop = make_loop(scn)
+    llfr_only = dataclasses.replace(loop, supervisor=dataclasses.replace(loop.supervisor,
+                                                                         flfr_enabled=np.asarray(False)))
+    batch, axes = stack_params([loop, llfr_only])
+    out = jax.device_get(batched_run(compile_loop(loop), axes, 2)(batch))
+    assert np.all(np.asarray(out["diverged_step"]) < 0)
+    flfr, llfr = (metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]]) for b in range(2))
+    assert flfr["n_events"] == 2.0 and llfr["n_events"] == 1.0 and np.isnan(llfr["t_flfr"])
+    assert flfr["max_err_before_fault"] == llfr["max_err_before_fault"] < E_S  # identical until the switch
+    assert flfr["max_err_after_fault"] < 0.75 * llfr["max_err_after_fault"]  # FLFR helps ...
+    assert flfr["max_err_after_flfr"] > E_S  # ... but the orbit's unmodelled accelerations remain
 
 
 _ATTITUDE_PLANT = {"type": "quaternion-rigid-body", "inertia": [25.0, 25.0, 25.0],
