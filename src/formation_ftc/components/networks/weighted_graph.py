@@ -69,8 +69,10 @@ class DelayedGraphNetwork(Network):
     Every step the message of t_k is pushed into a ring buffer of ``capacity`` samples
     (:mod:`formation_ftc.core.history`); at a stage time t in [t_k, t_k + dt] receiver i reads
     m_j(t - T_ij(t)) with linear interpolation between the stored samples (constant prehistory m_j(t0)).
-    Requires T_ij(t) >= dt on every used link (the newest stored sample is m(t_k)) and
-    ``capacity >= ceil(max T / dt) + 2``. The per-link reads are dense one-hot selections (faster
+    The newest stored sample is m(t_k): a delay shorter than the elapsed part of the step
+    (0 <= T < t - t_k) interpolates linearly between m_j(t_k) and the message m_j(t) sent now, so
+    T = 0 delivers exactly the instantaneous message (as :class:`GraphNetwork`). Requires T_ij(t) >= 0
+    and ``capacity >= ceil(max T / dt) + 2``. The per-link reads are dense one-hot selections (faster
     than gathers and scatters on XLA:CPU)."""
 
     weights: Any  # (N, N) c_ij, row i = receiver
@@ -100,10 +102,18 @@ class DelayedGraphNetwork(Network):
         sender_onehot = np.eye(n)[cols]  # (E, N)
         receiver_onehot = np.eye(n)[rows].T  # (N, E)
         C = self.weights
-        # steps before the newest sample m(t_k) (>= 0 since T >= dt)
-        lag = (inputs.exogenous["T"] - (t - inputs.t_k)) / self.dt
+        T = inputs.exogenous["T"]
+        elapsed = t - inputs.t_k
+        # steps before the newest sample m(t_k) (read clamps at 0: the newest sample)
+        lag = (T - elapsed) / self.dt
         rows_all = history_read(state, lag)  # (E, N, d): every sender's message at each link's delayed time
         m_j = jnp.einsum("en,enk->ek", sender_onehot, rows_all)  # (E, d): m_{j_e}(t - T_e)
+        # T < t - t_k: between m(t_k) and the message sent now, weight w = (t - T - t_k) / (t - t_k)
+        # (w = 1 exactly for T = 0); links with T >= t - t_k keep the stored value unchanged
+        recent = T < elapsed
+        w = jnp.where(recent, (elapsed - T) / jnp.where(recent, elapsed, 1.0), 0.0)[:, None]
+        m_now = jnp.einsum("en,nk->ek", sender_onehot, inputs.messages)  # (E, d): m_{j_e}(t)
+        m_j = jnp.where(recent[:, None], (1.0 - w) * m_j + w * m_now, m_j)
         c_e = jnp.sum(C[rows] * sender_onehot, axis=1)  # (E,) link weights c_{i_e j_e}
         weighted = receiver_onehot @ (c_e[:, None] * m_j)  # (N, d), eq. (42)
         return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}

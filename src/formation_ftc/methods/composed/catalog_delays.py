@@ -1,0 +1,93 @@
+"""Catalog: Yang2013's translational formation law (12) for translational plants, alone or relative to
+the spacecraft each one references over a (delayed) network.
+
+* ``yang2013-translational``: eq. (12) on the measured (N, 6) relative state, tracking each spacecraft's
+  own desired position; exchanges no messages (a delayed network is rejected with it).
+* ``yang2013-relative``: the same law wrapped in
+  :class:`~formation_ftc.components.controllers.neighbour_relative.NeighbourRelativeController`: every
+  spacecraft sends its formation error and spacecraft i keeps its offset relative to the (delayed)
+  formation errors it receives, weighted by ``coupling`` beta_i. Needs a ``[network]``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from formation_ftc.components.controllers.neighbour_relative import NeighbourRelativeController
+from formation_ftc.components.controllers.yang2013_individual import Yang2013TranslationalController
+from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.sim.components import as_float
+
+Vec3Expr = tuple[ExprText, ExprText, ExprText]
+
+
+def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    return arr
+
+
+class Yang2013TranslationalSection(StrictModel):
+    """Yang2013 eq. (12): f_i = M_i (a^d_i + (K1 + 1) e_R + K2 e_V), e_R = p^d - p, e_V = v^d - v
+    (the plant's drift is not cancelled; on a Clohessy-Wiltshire plant it is of order n^2 |p|)."""
+
+    K1: float = Field(0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0.")
+    K2: float = Field(0.01, gt=0, description="Velocity gain K2 [1/s], > 0.")
+    nominal_mass: float | list[float] | None = Field(
+        None, description="Mass M_i used by the law [kg] (one or per spacecraft; default: the plant's).")
+    desired_position: Vec3Expr = Field(("0", "0", "0"),
+                                       description="Desired position p^d per axis, expressions in t [s], i [m].")
+
+    @model_validator(mode="after")
+    def _masses(self):
+        m = self.nominal_mass
+        values = [] if m is None else ([m] if isinstance(m, (int, float)) else list(m))
+        if any(not (v > 0 and math.isfinite(v)) for v in values):
+            raise ValueError("nominal_mass: every mass must be finite and > 0 kg")
+        return self
+
+
+class Yang2013RelativeSection(Yang2013TranslationalSection):
+    coupling: float | list[float] = Field(
+        1.0, description="beta_i [-] in [0, 1] (one or per spacecraft): weight of the referenced spacecraft's "
+                         "received formation error; 1 keeps the offset relative to them, 0 tracks the own slot.")
+
+    @model_validator(mode="after")
+    def _coupling(self):
+        values = [self.coupling] if isinstance(self.coupling, (int, float)) else list(self.coupling)
+        if any(not (0.0 <= v <= 1.0) for v in values):
+            raise ValueError(f"coupling: every beta_i must lie in [0, 1], got {values}")
+        return self
+
+
+def _yang2013_law(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2013TranslationalController:
+    n = ctx.count
+    mass = sec.nominal_mass if sec.nominal_mass is not None else getattr(ctx.section("plant"), "mass", None)
+    if mass is None:
+        raise ValueError("controller.nominal_mass: the plant has no masses, give the law's masses [kg]")
+    return Yang2013TranslationalController(count=n, mass=as_float(_per_spacecraft(mass, n, "controller.nominal_mass")),
+                                           K1=as_float(sec.K1), K2=as_float(sec.K2),
+                                           desired_position=tuple(str(x) for x in sec.desired_position))
+
+
+def _yang2013_relative(sec: Yang2013RelativeSection, ctx: BuildContext) -> NeighbourRelativeController:
+    if ctx.section("network") is None:
+        raise ValueError("controller.type = 'yang2013-relative' references other spacecraft through the "
+                         "network: add a [network] (e.g. type = 'graph' or 'delayed-graph')")
+    return NeighbourRelativeController(
+        law=_yang2013_law(sec, ctx),
+        coupling=as_float(_per_spacecraft(sec.coupling, ctx.count, "controller.coupling")))
+
+
+register_component_type("controller", "yang2013-translational", Yang2013TranslationalSection, _yang2013_law,
+                        "Yang2013 feedback-linearising translational law (12), own desired slot, no messages")
+register_component_type("controller", "yang2013-relative", Yang2013RelativeSection, _yang2013_relative,
+                        "Yang2013 law (12) keeping each spacecraft's offset relative to the (delayed) formation "
+                        "errors received from the spacecraft it references")
