@@ -62,6 +62,9 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
     coords: dict[str, Any] = {"time": ("time", time, {"units": "s", "long_name": "time", "standard_name": "time"}),
                               "spacecraft": ("spacecraft", np.arange(1, loop.count + 1),
                                              {"long_name": "spacecraft number (1-based)", "units": "1"})}
+    for comp in _components(loop):  # declared coordinates first (they win over the default axis labels)
+        for name, values in comp.coords().items():
+            coords.setdefault(name, (name, list(values)))
     data = {}
     for sig in loop.signals():
         if sig.name not in records:
@@ -78,9 +81,6 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
             if d == "axis" and "axis" not in coords:
                 coords["axis"] = ("axis", ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
                                   {"long_name": "vector component"})
-    for comp in _components(loop):
-        for name, values in comp.coords().items():
-            coords.setdefault(name, (name, list(values)))
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items() if k in used}
     return xr.Dataset(data, coords=coords, attrs=attrs or {})

@@ -57,6 +57,7 @@ def short_case_b():
 
 def test_fault_and_fdi_signals(short_case_b):
     s, ds, _ = short_case_b
+    assert list(ds.axis.values) == ["pitch", "roll", "yaw"] and ds.attitude.attrs["units"] == "rad"
     t = ds.time.values
     on = (t >= 10.0 - 1e-9) & (t <= 40.0 + 1e-9)
     np.testing.assert_allclose(ds.fault.values[:, 0, 2], np.where(on, 0.05 * np.sin(0.02 * t) + 0.6, 0.0), atol=1e-12)

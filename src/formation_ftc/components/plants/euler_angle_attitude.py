@@ -66,20 +66,24 @@ class EulerAngleAttitudePlant(Plant):
     disturbance_std: Any
     step: float = static()
     t0: float = static(0.0)
-    J: Any = None  # (m, 3, 3) true inertia [kg m^2] (prepare)
-    J_inv: Any = None
+    # set by prepare (empty until then: no leaves): (m, 3, 3) true inertia [kg m^2], its inverse and
+    # the root key of the disturbance stream
+    J: Any = ()
+    J_inv: Any = ()
+    noise_key: Any = ()
 
     @property
     def count(self) -> int:
         return int(jnp.shape(self.q0_fixed)[0])
 
     def prepare(self, dt):
-        """Draw the true inertia J = J^ diag(1 + delta), delta ~ U[-spread, spread]^3 (once per run)."""
-        _, k_J, _, _ = seed_streams(self.seed)
+        """Draw the true inertia J = J^ diag(1 + delta), delta ~ U[-spread, spread]^3, and derive the
+        disturbance key (once per run)."""
+        _, k_J, k_d, _ = seed_streams(self.seed)
         delta = self.inertia_spread * jax.random.uniform(k_J, (self.count, 3), dtype=jnp.float64,
                                                          minval=-1.0, maxval=1.0)
         J = jax.vmap(jnp.diag)(self.J_nominal * (1.0 + delta))
-        return dataclasses.replace(self, J=J, J_inv=jnp.linalg.inv(J))
+        return dataclasses.replace(self, J=J, J_inv=jnp.linalg.inv(J), noise_key=k_d)
 
     def initial_state(self):
         k_q0, _, _, _ = seed_streams(self.seed)
@@ -90,7 +94,8 @@ class EulerAngleAttitudePlant(Plant):
 
     def exogenous(self, t):
         """d_k ~ N(0, std^2 I) for the step starting at t = t_k, held over it [N m]."""
-        _, _, k_d, _ = seed_streams(self.seed)
+        # the disturbance stream's root key (prepare computes it once per run)
+        k_d = seed_streams(self.seed)[2] if isinstance(self.noise_key, tuple) else self.noise_key
         k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
         return {"d": self.disturbance_std * jax.random.normal(step_key(k_d, k), (self.count, 3),
                                                               dtype=jnp.float64)}

@@ -103,14 +103,17 @@ def _row(quantity, published, ours, criterion, basis, note="", reference="") -> 
 
 
 def _mx(v) -> float:
-    """max of an array (NaN when empty: no seed qualifies, so the clause fails)."""
+    """max of an array over the runs that have a value (a run that diverged has NaN in-run metrics);
+    NaN when none has: no seed qualifies, so the clause fails."""
     v = np.asarray(v, dtype=float)
+    v = v[~np.isnan(v)]
     return float(v.max()) if v.size else float("nan")
 
 
 def _mn(v) -> float:
-    """min of an array (NaN when empty)."""
+    """min of an array over the runs that have a value (NaN when none has)."""
     v = np.asarray(v, dtype=float)
+    v = v[~np.isnan(v)]
     return float(v.min()) if v.size else float("nan")
 
 
