@@ -130,10 +130,8 @@ def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
     held = sup.current(state2)
     assert int(held.mode) == int(np.searchsorted([0, 1000, 2000], k_diag + 11, side="right") - 1)
     out = sup.outputs(0.0, state2, held)
-    metrics = {f"{name}_sc{i + 1}": float(out[name][i]) for name in
-               ("supervisor_decision", "supervisor_decision_time", "supervisor_decision_mode",
-                "condition_29_margin") for i in range(3)}
-    ev = decision_events(metrics, 3, 1.0)
+    ev = decision_events(*(out[name] for name in ("supervisor_decision", "supervisor_decision_time",
+                                                  "supervisor_decision_mode", "condition_29_margin")), 1.0)
     assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == k_diag and ev[0]["step"] == k_diag
 
 

@@ -66,6 +66,6 @@ def test_general_mode_sequence_with_return(tmp_path):
 
 def test_inactive_fault_is_not_diagnosed_before_joining():
     raw = dict(RAW, faults=[{"spacecraft": 4, "onset": 5.0, "K2_faulty": -0.1}])
-    metrics = ftc.simulate_with_metrics(ftc.load_scenario(raw))[1]
+    ds, metrics = ftc.simulate_with_metrics(ftc.load_scenario(raw))
     assert metrics["supervisor_decision_sc4"] == 0  # spacecraft 4 never joins: no decision
-    assert np.isnan(metrics["supervisor_decision_time_sc4"])
+    assert np.isnan(ds["supervisor_decision_time"].values[-1, 3])

@@ -42,7 +42,8 @@ DECISION_NAMES = {NO_DECISION: "none", TOLERATE_BY_SWITCHING: "tolerate by switc
 def mode_index(switch_steps, k):
     """Index of the mode active at step k (mode j starts at step ``switch_steps[j]``, increasing,
     ``switch_steps[0] = 0``)."""
-    return jnp.searchsorted(jnp.asarray(switch_steps), k, side="right") - 1
+    # compare_all: a few modes, one vectorised comparison (no loop inside the time step)
+    return jnp.searchsorted(jnp.asarray(switch_steps), k, side="right", method="compare_all") - 1
 
 
 def condition_29(switch_steps, k, delay_bound_steps, eta, eta1, dt):

@@ -51,7 +51,8 @@ class VelocityGainFaultActuator(Actuator):
     def apply(self, t, command, inputs: ActuatorInputs):
         e_V = inputs.plant_state["x"][:, 3:6]
         gain = jnp.where(self._faulty(inputs), self.mass * (self.K2_faulty - self.K2), 0.0)
-        return command.at[:, 0:3].add(gain[:, None] * e_V)
+        delta = gain[:, None] * e_V
+        return command + jnp.concatenate([delta, jnp.zeros_like(command[:, 3:])], axis=-1)
 
     def signals(self):
         return (Signal("controller_faulty", ("spacecraft",), "1",

@@ -7,6 +7,7 @@ from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.blocks.supervisors import switching_supervisor as block
 from formation_ftc.core.expressions import compile_vector_expression
@@ -127,19 +128,18 @@ class SwitchingSupervisor(Supervisor):
         }
 
 
-def decision_events(metrics: dict, count: int, dt: float, mode_names=None) -> list[dict]:
-    """Event log of the supervisor decisions from a run's final-value metrics
-    (``supervisor_decision_sc{i}``, ``supervisor_decision_time_sc{i}``, ``supervisor_decision_mode_sc{i}``,
-    ``condition_29_margin_sc{i}``)."""
+def decision_events(decision, decision_time, decision_mode, margin, dt: float, mode_names=None) -> list[dict]:
+    """Event log of the supervisor decisions from the recorded signals of one sample (the last record
+    holds every decision taken up to the horizon): ``supervisor_decision``, ``supervisor_decision_time``
+    [s], ``supervisor_decision_mode`` (1-based) and ``condition_29_margin``, each (N,)."""
     events = []
-    for i in range(1, count + 1):
-        code = int(metrics.get(f"supervisor_decision_sc{i}", 0) or 0)
+    for s, code in enumerate(np.asarray(decision).astype(int)):
         if code == block.NO_DECISION:
             continue
-        t = float(metrics[f"supervisor_decision_time_sc{i}"])
-        mode = int(metrics[f"supervisor_decision_mode_sc{i}"])
-        events.append({"time": t, "step": int(round(t / dt)), "spacecraft": i, "event": "supervisor decision",
-                       "decision": block.DECISION_NAMES[code],
+        t = float(np.asarray(decision_time)[s])
+        mode = int(np.asarray(decision_mode)[s])
+        events.append({"time": t, "step": int(round(t / dt)), "spacecraft": s + 1, "event": "supervisor decision",
+                       "decision": block.DECISION_NAMES[int(code)],
                        "mode": mode_names[mode - 1] if mode_names else mode,
-                       "condition_29_margin": float(metrics[f"condition_29_margin_sc{i}"])})
+                       "condition_29_margin": float(np.asarray(margin)[s])})
     return sorted(events, key=lambda e: e["time"])

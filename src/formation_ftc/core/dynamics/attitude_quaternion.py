@@ -24,6 +24,7 @@ __all__ = [
     "gravity_gradient_torque",
     "attitude_rhs",
     "rigid_body_quaternion_rates",
+    "inverse_3x3",
     "angular_momentum_reference",
     "rotational_kinetic_energy",
 ]
@@ -65,6 +66,15 @@ def attitude_rhs(t, state, J, torque=None, disturbance=None, R_body=None, mu: fl
     return jnp.concatenate([omega_dot, quat_kinematics(q, omega)], axis=-1)
 
 
+def inverse_3x3(J):
+    """Inverse of a 3x3 matrix by its adjugate, ``adj(J) / det(J)`` (rows of the adjugate transpose are
+    the cross products of J's rows): plain arithmetic that XLA fuses, no LAPACK call inside a loop."""
+    J = jnp.asarray(J)
+    a, b, c = J[0], J[1], J[2]
+    cols = jnp.stack([jnp.cross(b, c), jnp.cross(c, a), jnp.cross(a, b)], axis=-1)
+    return cols / jnp.dot(a, jnp.cross(b, c))
+
+
 def rigid_body_quaternion_rates(omega, q, torque, J, gyroscopic: bool = True):
     """``(omega', q')`` of a rigid body with quaternion attitude, eq. (4) [rad/s^2, 1/s].
 
@@ -77,7 +87,7 @@ def rigid_body_quaternion_rates(omega, q, torque, J, gyroscopic: bool = True):
     total = torque
     if gyroscopic:
         total = -jnp.cross(omega, jnp.einsum("ij,...j->...i", J, omega)) + total
-    omega_dot = jnp.einsum("ij,...j->...i", jnp.linalg.inv(J), total)  # Yang2013 eq. (4) / (5)
+    omega_dot = jnp.einsum("ij,...j->...i", inverse_3x3(J), total)  # Yang2013 eq. (4) / (5)
     return omega_dot, quat_kinematics(q, omega)
 
 

@@ -143,11 +143,9 @@ def _metrics(sc: Yang2013Scenario, st: SwitchedStructure) -> list[Metric]:
                 Metric(f"post_switch_norm_{j + 1}", "state_norm", reduce="at", units="1", start=t),
                 Metric(f"pre_switch_sc_norm_{j + 1}", "spacecraft_norm_left", reduce="at", spacecraft="each",
                        units="1", start=t)]
-    out += [Metric("supervisor_decision", "supervisor_decision", reduce="final", spacecraft="each"),
-            Metric("supervisor_decision_time", "supervisor_decision_time", reduce="final", spacecraft="each",
-                   units="s"),
-            Metric("supervisor_decision_mode", "supervisor_decision_mode", reduce="final", spacecraft="each"),
-            Metric("condition_29_margin", "condition_29_margin", reduce="final", spacecraft="each")]
+    # decision codes (0 none, 1 tolerate by switching, 2 reconfigure); times, modes and (29) margins are
+    # recorded signals (the last record holds every decision)
+    out.append(Metric("supervisor_decision", "supervisor_decision", reduce="final", spacecraft="each"))
     return out
 
 
