@@ -162,7 +162,7 @@ class GraphSection(StrictModel):
 
 
 class DelayedGraphSection(GraphSection):
-    delays: list[list[ExprText]] = Field(description="T_ij(t) per link, expressions in t, i, j [s] (N x N); >= dt.")
+    delays: list[list[ExprText]] = Field(description="T_ij(t) per link, expressions in t, i, j [s] (N x N); >= 0.")
     max_delay: float = Field(gt=0, description="Largest delay on any used link [s] (sizes the history buffer).")
 
 
