@@ -61,7 +61,7 @@ class NeighbourRelativeController(Controller):
 
     @property
     def count(self) -> int:
-        return self.law.count
+        return int(self.law.count)  # type: ignore[attr-defined]  # every translational law has a count
 
     def initial_state(self):
         return self.law.initial_state()
@@ -76,7 +76,9 @@ class NeighbourRelativeController(Controller):
 
     def message(self, t, inputs: FlightInputs):
         exo = inputs.exogenous
-        desired = jnp.concatenate([self.law.desired_position_at(exo["law"]), exo["v"]], axis=-1)
+        p_d = self.law.desired_position_at(exo["law"])
+        assert p_d is not None  # checked in __post_init__
+        desired = jnp.concatenate([p_d, exo["v"]], axis=-1)
         return inputs.measurement - desired  # eps_j (N, 6) [m, m/s]
 
     def referenced_error(self, received) -> jax.Array:

@@ -72,9 +72,10 @@ def _yang2013_law(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2
     mass = sec.nominal_mass if sec.nominal_mass is not None else getattr(ctx.section("plant"), "mass", None)
     if mass is None:
         raise ValueError("controller.nominal_mass: the plant has no masses, give the law's masses [kg]")
+    px, py, pz = sec.desired_position
     return Yang2013TranslationalController(count=n, mass=as_float(_per_spacecraft(mass, n, "controller.nominal_mass")),
                                            K1=as_float(sec.K1), K2=as_float(sec.K2),
-                                           desired_position=tuple(str(x) for x in sec.desired_position))
+                                           desired_position=(str(px), str(py), str(pz)))
 
 
 def _yang2013_relative(sec: Yang2013RelativeSection, ctx: BuildContext) -> NeighbourRelativeController:
