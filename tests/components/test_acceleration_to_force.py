@@ -4,6 +4,7 @@ acceleration law."""
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import typing
 
@@ -21,6 +22,7 @@ from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrControl
 from formation_ftc.components.controllers.pd_formation import PdFormationController
 from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
 from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
+from formation_ftc.sim.batch import stack_params
 from formation_ftc.sim.components import CompositionError, FlightInputs, SensorInputs, as_float
 
 MASS = np.array([100.0, 120.0, 115.0, 108.0])
@@ -67,6 +69,10 @@ def test_adapter_output_takes_flight_inputs_only_and_is_a_pytree():
     assert any(np.array_equal(np.asarray(leaf), MASS) for leaf in leaves)  # the masses are a leaf (batchable)
     again = jax.tree_util.tree_unflatten(treedef, leaves)
     assert type(again) is AccelerationToForce and again.law.fault_index == 1
+    # a batch that varies the masses and a law leaf stacks without tripping any construction check
+    other = force_from_acceleration(dataclasses.replace(_law(), alpha_flfr=as_float(2.0)), as_float(MASS * 1.1))
+    batch, axes = stack_params([ctl, other])
+    assert np.shape(batch.nominal_mass) == (2, 4) and axes.nominal_mass == 0 and axes.law.lambda0 is None
 
 
 def test_adapter_keeps_a_position_objective_and_rejects_other_quantities():
@@ -76,6 +82,8 @@ def test_adapter_keeps_a_position_objective_and_rejects_other_quantities():
         force_from_acceleration(pd, as_float(MASS))
     with pytest.raises(CompositionError, match="ChainLlfrController of 4 spacecraft"):
         force_from_acceleration(_law(), as_float(MASS[:3]))
+    with pytest.raises(CompositionError, match="each > 0"):
+        force_from_acceleration(_law(), as_float([100.0, np.inf, 1.0, 1.0]))
 
     class _Tracking(ChainLlfrController):  # the chain law with a position objective (test double)
         def desired_position_at(self, exogenous):

@@ -42,10 +42,6 @@ class AccelerationToForce(Controller):
         if law.quantity != "acceleration":
             raise CompositionError(f"AccelerationToForce scales an acceleration command by the nominal mass, but "
                                    f"controller {type(law).__name__} commands a {law.quantity}")
-        m = self.nominal_mass
-        if isinstance(m, np.ndarray) and (m.shape != (law.count,) or not np.all(m > 0)):
-            raise CompositionError(f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
-                                   f"{type(law).__name__} of {law.count} spacecraft (need {law.count}, each > 0)")
 
     # the wrapped law's structure
     @property
@@ -54,7 +50,7 @@ class AccelerationToForce(Controller):
 
     @property
     def count(self) -> int:
-        return self.law.count
+        return int(self.law.count)  # type: ignore[attr-defined]  # every translational law has a count
 
     @property
     def uses_messages(self) -> bool:
@@ -102,7 +98,14 @@ class TrackingAccelerationToForce(AccelerationToForce):
 
 def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationToForce:
     """``law`` (acceleration command) driving a force plant with the flight side's ``nominal_mass``
-    (N,) [kg]; the law's position objective, if it declares one, is kept."""
+    (N,) [kg], checked here (one finite mass > 0 per spacecraft of the law; not on pytree
+    reconstruction, where a batch stacks the leaves); the law's position objective, if it declares
+    one, is kept."""
+    m = np.asarray(nominal_mass, dtype=float)
+    n = int(law.count)  # type: ignore[attr-defined]  # every translational law has a count
+    if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):
+        raise CompositionError(f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
+                               f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)")
     tracks = type(law).desired_position_at is not Controller.desired_position_at
     cls = TrackingAccelerationToForce if tracks else AccelerationToForce
     return cls(law=law, nominal_mass=nominal_mass)

@@ -10,7 +10,7 @@ __all__ = ["ChainRelativeStateSensors"]
 
 
 @component
-class ChainRelativeStateSensors(ChainRelativeSensors):
+class ChainRelativeStateSensors(ChainRelativeSensors):  # type: ignore[misc]  # fields inherited as declared
     """:class:`~formation_ftc.components.sensors.chain_relative.ChainRelativeSensors` for plants whose
     state is the (N, 6) relative state ``"q"`` = [x, y, z, vx, vy, vz] [m, m/s] (Clohessy-Wiltshire,
     nonlinear relative motion in LVLH, ...)::

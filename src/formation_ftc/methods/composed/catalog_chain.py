@@ -223,7 +223,7 @@ def _hierarchical(sec: HierarchicalSection, ctx: BuildContext):
         k_estimated=np.asarray(_steps(sec.estimate_time, dt) if known else never, np.int64),
         confirm_steps=np.asarray(_steps(sec.confirm_time, dt), np.int64),
         monitor_start=np.asarray(_steps(sec.monitor_start, dt), np.int64),
-        flfr_enabled=np.asarray(bool(sec.flfr and known)))
+        flfr_enabled=np.asarray(bool(sec.flfr and known)), t0=0.0)
 
 
 register_component_type("supervisor", HL_SUPERVISOR, HierarchicalSection, _hierarchical,
