@@ -37,8 +37,9 @@ class ZohClohessyWiltshirePlant(Plant):
     mean_motion: Any  # n [rad/s]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     disturbance_amplitude: Any = 0.0  # A0 [m/s^2]
-    Ad: Any = None  # (6, 6) filled by prepare()
-    Bd: Any = None  # (6, 3) [s]
+    # set by prepare() (empty until then: no leaves): Ad (6, 6) [-], Bd (6, 3) [s]
+    Ad: Any = ()
+    Bd: Any = ()
 
     @property
     def count(self) -> int:
@@ -62,12 +63,15 @@ class ZohClohessyWiltshirePlant(Plant):
         return {"q": cw_rhs(t, x["q"], inputs.force + inputs.exogenous["d"], self.mean_motion)}
 
     def exact_step(self, t, x, inputs: TruthInputs, dt: float):
-        plant = self if self.Ad is not None else self.prepare(dt)
+        plant = self.prepare(dt) if isinstance(self.Ad, tuple) else self
         w = inputs.force + inputs.exogenous["d"]  # held over the step (B = E = H)
         return {"q": matvec(plant.Ad, x["q"]) + matvec(plant.Bd, w)}
 
     def position(self, x):
         return x["q"][:, :3]
+
+    def velocity(self, x):
+        return x["q"][:, 3:]
 
     def signals(self):
         return (Signal("state", ("spacecraft", "component"), "m, m s-1",
