@@ -31,6 +31,7 @@ __all__ = [
     "compile_scenario",
     "finish_run",
     "result_metrics",
+    "metric_units",
     "save_result",
 ]
 
@@ -60,8 +61,19 @@ def list_scenarios() -> dict[str, str]:
 
 
 def compile_scenario(scenario: ScenarioBase) -> Compiled:
-    """The method's compiled form of a scenario (no JAX compilation happens yet)."""
-    return get_method(scenario.scenario.method).build(scenario)
+    """The method's compiled form of a scenario (no JAX compilation happens yet). A component loop
+    gets the scenario's admissible set (``simulation.max_position`` / ``max_velocity``)."""
+    import dataclasses
+
+    from formation_ftc.sim.loop import ClosedLoop
+
+    compiled = get_method(scenario.scenario.method).build(scenario)
+    sim = scenario.simulation
+    if isinstance(compiled.params, ClosedLoop) and hasattr(sim, "max_position"):
+        loop = dataclasses.replace(compiled.params, max_position=np.float64(sim.max_position),
+                                   max_velocity=np.float64(sim.max_velocity))
+        compiled = dataclasses.replace(compiled, params=loop)
+    return compiled
 
 
 def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True):
@@ -79,21 +91,50 @@ def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_d
         scenario_toml=loader.dump_toml(scenario),
         seed=int(scenario.simulation.seed),
         metrics_json=json.dumps(metrics),
+        metric_units_json=json.dumps(_metric_units(compiled, metrics)),
         diverged="",
     )
+    _apply_cf(ds, scenario)
     if div >= 0:
         t = compiled.t0 + div * compiled.dt
-        info = diagnose_divergence(compiled.make_step(compiled.params), out["last_finite"], div, t,
+        p = compiled.params
+        info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
                                    compiled.spacecraft_axis, max_steps=compiled.record_every,
-                                   dt=compiled.dt) if compiled.make_step else None
+                                   dt=compiled.dt, admissible=getattr(p, "admissible", None),
+                                   violations=getattr(p, "violations", None)) if compiled.make_step else None
         if info is None:
             from formation_ftc.sim.engine import DivergenceInfo
 
             info = DivergenceInfo(div, t, "<state>", None, ())
         ds.attrs["diverged"] = str(info)
+        ds.attrs["history"] += f"\n{ds.attrs['created_utc']} diverged: {info}"
         if raise_on_divergence:
             raise SimulationDiverged(info, partial=ds)
     return ds, metrics
+
+
+def _references(scenario: ScenarioBase) -> str:
+    """Citation of the paper the scenario reproduces (and its method's description), for ``references``."""
+    from formation_ftc.registry import reproductions
+
+    refs = []
+    paper = getattr(scenario.scenario, "paper", None)
+    reps = reproductions()
+    for key in filter(None, (paper, scenario.scenario.method)):
+        rep = reps.get(key)
+        if rep is not None and rep.citation and rep.citation not in refs:
+            refs.append(rep.citation)
+    return "\n".join(refs)
+
+
+def _apply_cf(ds, scenario: ScenarioBase) -> None:
+    """CF-1.10 global attributes and per-variable metadata on a result (see ``formation_ftc.cf``)."""
+    from formation_ftc.cf import apply_cf
+
+    apply_cf(ds, scenario_name=scenario.scenario.name, method=scenario.scenario.method,
+             description=scenario.scenario.description, references=_references(scenario),
+             created_utc=str(ds.attrs.get("created_utc", "")),
+             version=str(ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))))
 
 
 def simulate_with_metrics(scenario: ScenarioBase | str | Path):
@@ -123,6 +164,18 @@ def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
     return list(method.check(scenario)) if method.check else []
 
 
+def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str, str]:
+    """UDUNITS unit of each metric the loop declares (``"1"`` for dimensionless or undeclared)."""
+    declared = {m.name: str(getattr(m, "units", "") or "1")
+                for m in getattr(compiled.params, "metrics", ()) or () if hasattr(m, "name")}
+    return {k: declared.get(k, "1") for k in metrics}
+
+
+def metric_units(ds) -> dict[str, str]:
+    """Units of the scalar metrics stored in a result dataset (``{metric: UDUNITS string}``)."""
+    return json.loads(ds.attrs.get("metric_units_json", "{}"))
+
+
 def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = None) -> dict[str, Path]:
     """Write ``result.nc`` (NetCDF via h5netcdf) and ``metrics.json`` into ``out_dir``.
 
@@ -133,14 +186,19 @@ def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = N
     """
     import os
 
+    from formation_ftc.cf import write_netcdf
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
     tmp_nc, tmp_mj = out_dir / f".result.nc.tmp-{os.getpid()}", out_dir / f".metrics.json.tmp-{os.getpid()}"
     m = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
+    units = metric_units(ds)
+    if units:
+        m["units"] = {k: units.get(k, "") for k in m if k not in ("scenario", "units")}
     try:
-        ds.to_netcdf(tmp_nc, engine="h5netcdf")
+        write_netcdf(ds, tmp_nc)  # CF-1.10, netCDF4-classic compatible
         tmp_mj.write_text(json.dumps(m, indent=2, sort_keys=True))
         tmp_mj.replace(mj)
         tmp_nc.replace(nc)

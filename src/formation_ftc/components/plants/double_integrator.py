@@ -79,7 +79,7 @@ class DoubleIntegratorPlant(Plant):
     def signals(self):
         return (Signal("position", VEC, "m", "position", "inertial"),
                 Signal("velocity", VEC, "m s-1", "velocity", "inertial"),
-                Signal("effort", VEC, "m2 s-3", "cumulative effort E_i = int u_i^2 dt of the command u"))
+                Signal("effort", VEC, "m2 s-3", "cumulative effort E_i = int u_i^2 dt of the command u", "inertial"))
 
     def outputs(self, t, x, inputs):
         return {"position": x["r"], "velocity": x["v"]}

@@ -1,0 +1,195 @@
+"""CF-1.10 conventions for result datasets: global attributes, per-variable metadata, attribute hygiene.
+
+``formation_ftc.api.finish_run`` calls :func:`apply_cf` on every result, so a ``result.nc`` opens in
+any CF-aware tool (xarray, Panoply, ncview, ``nccopy -k classic``):
+
+* global attributes ``Conventions``, ``title``, ``institution``, ``source``, ``history``, ``references``;
+* every data variable and coordinate carries ``units`` (a UDUNITS string, ``"1"`` when dimensionless)
+  and ``long_name``; vectors keep the ``frame`` their component declared;
+* attribute names contain only letters, digits and underscores (``version_formation-ftc`` is written
+  ``version_formation_ftc``), and attribute values are strings or numbers (netCDF4-classic compatible:
+  booleans become 0/1, ``None`` becomes ``""``, anything nested becomes its JSON text).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+
+import numpy as np
+
+__all__ = ["CONVENTIONS", "apply_cf", "cf_problems", "clean_attrs", "MIXED_UNITS_NOTE"]
+
+CONVENTIONS = "CF-1.10"
+MIXED_UNITS_NOTE = ("components carry different units (see component_units); the variable as a whole is "
+                    "stored with units '1'")
+
+_COORD_DEFAULTS: dict[str, tuple[str, str]] = {
+    "time": ("s", "time"),
+    "spacecraft": ("1", "spacecraft number (1-based)"),
+    "axis": ("1", "vector component"),
+    "component": ("1", "state component"),
+    "quaternion_component": ("1", "quaternion component"),
+    "wrench_component": ("1", "force/torque component"),
+    "pair": ("1", "pair of consecutive spacecraft"),
+    "link": ("1", "communication link (sender-receiver)"),
+}
+
+_NAME_BAD = re.compile(r"[^A-Za-z0-9_]")
+
+
+def _attr_name(key: str) -> str:
+    name = _NAME_BAD.sub("_", str(key))
+    return name if re.match(r"[A-Za-z]", name) else "a_" + name
+
+
+def _attr_value(v: Any) -> str | int | float | np.ndarray:
+    if v is None:
+        return ""
+    if isinstance(v, bool | np.bool_):
+        return int(v)
+    if isinstance(v, str | int | float | np.integer | np.floating):
+        return v
+    if isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.ndim == 1:
+        return v
+    if isinstance(v, list | tuple) and v and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
+        return np.asarray(v)
+    try:
+        return json.dumps(v, default=str)
+    except TypeError:
+        return str(v)
+
+
+def clean_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
+    """Attributes with netCDF-safe names (``[A-Za-z][A-Za-z0-9_]*``) and netCDF4-classic values."""
+    return {_attr_name(k): _attr_value(v) for k, v in attrs.items()}
+
+
+def _title(scenario_name: str, method: str, description: str) -> str:
+    head = f"formation-ftc simulation of scenario '{scenario_name}' (method {method})"
+    return f"{head}: {description}" if description else head
+
+
+def apply_cf(ds, *, scenario_name: str = "", method: str = "", description: str = "",
+             references: str = "", created_utc: str = "", version: str = "") -> Any:
+    """Make ``ds`` a CF-1.10 result in place (and return it).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result as ``compiled.to_dataset`` builds it (declared signals with units, long_name, frame).
+    scenario_name, method, description : str
+        Used in the ``title`` global attribute.
+    references : str
+        Publications the method implements (``references`` global attribute).
+    created_utc : str
+        ISO 8601 creation time, first entry of ``history``.
+    version : str
+        formation-ftc version named in ``source``.
+    """
+    for name in list(ds.variables):
+        var = ds[name] if name in ds.data_vars else ds.coords[name]
+        attrs = dict(var.attrs)
+        default_units, default_long = _COORD_DEFAULTS.get(str(name), ("1", str(name).replace("_", " ")))
+        units = str(attrs.get("units", "") or "").strip()
+        if not units or units == "-":
+            units = default_units
+        if "," in units:  # a stacked vector whose components have different units ("m, m s-1")
+            attrs["component_units"] = units
+            attrs["comment"] = MIXED_UNITS_NOTE
+            units = "1"
+        attrs["units"] = units
+        if not str(attrs.get("long_name", "") or "").strip():
+            attrs["long_name"] = default_long
+        var.attrs.clear()
+        var.attrs.update(clean_attrs(attrs))
+    attrs = dict(ds.attrs)
+    history = f"{created_utc} formation-ftc {version} simulate {scenario_name}".strip()
+    attrs.update(
+        Conventions=CONVENTIONS,
+        title=_title(scenario_name, method, description),
+        institution=str(attrs.get("institution", "")) or "formation-ftc (open-source toolkit)",
+        source=f"formation-ftc {version}, method {method}, JAX float64 fixed-step simulation".strip(),
+        history=history if not attrs.get("history") else f"{attrs['history']}\n{history}",
+        references=references or str(attrs.get("references", "")) or "see the method's documentation",
+    )
+    ds.attrs.clear()
+    ds.attrs.update(clean_attrs(attrs))
+    return ds
+
+
+def cf_problems(ds) -> list[str]:
+    """What keeps ``ds`` from being a CF-1.10 / netCDF4-classic compatible result (empty when none)."""
+    out = []
+    for key in ("Conventions", "title", "institution", "source", "history", "references"):
+        if not isinstance(ds.attrs.get(key), str) or not ds.attrs[key]:
+            out.append(f"global attribute {key!r} missing")
+    items = [("<global>", ds.attrs)] + [(str(n), ds.variables[n].attrs) for n in ds.variables]
+    for where, attrs in items:
+        for k, v in attrs.items():
+            if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", str(k)):
+                out.append(f"{where}: attribute name {k!r} is not netCDF-safe")
+            ok = isinstance(v, str | int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
+            ok = ok or (isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.ndim == 1)
+            if not ok:
+                out.append(f"{where}: attribute {k!r} has type {type(v).__name__}")
+        if where != "<global>":
+            for k in ("units", "long_name"):
+                if not isinstance(attrs.get(k), str) or not attrs[k]:
+                    out.append(f"{where}: no {k}")
+    return out
+
+
+def _classic_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
+    out = {}
+    for k, v in clean_attrs(attrs).items():
+        if isinstance(v, str):  # NC_CHAR, not NC_STRING (h5py writes np.bytes_ as a fixed-length string)
+            out[k] = np.bytes_(v.encode("utf-8"))
+        elif isinstance(v, int | np.integer):
+            out[k] = np.int32(v) if -2**31 <= int(v) < 2**31 else float(v)
+        elif isinstance(v, np.ndarray) and v.dtype.kind in "iu":
+            out[k] = v.astype(np.int32) if v.size == 0 or np.abs(v).max() < 2**31 else v.astype(float)
+        else:
+            out[k] = v
+    return out
+
+
+def classic_compatible(ds):
+    """A copy of ``ds`` whose NetCDF file is netCDF4-classic compatible (``nccopy -k classic`` converts it).
+
+    Text attributes are written as character arrays (``NC_CHAR``) rather than variable-length strings,
+    integer attributes and 64-bit integer variables as 32-bit integers, and text coordinates as
+    character arrays. Values read back with xarray are unchanged (text stays text).
+    """
+    out = ds.copy(deep=False)
+    out.attrs = _classic_attrs(ds.attrs)
+    for name in list(out.variables):
+        var = out.variables[name]
+        var.attrs = _classic_attrs(ds.variables[name].attrs)
+        if var.dtype.kind in "UO":  # char array + _Encoding (fixed by ``fix_text_encoding_attrs``)
+            var.encoding["dtype"] = "S1"
+        elif var.dtype.kind in "iu" and var.dtype.itemsize > 4:
+            var.encoding["dtype"] = "i4"
+        elif var.dtype.kind == "b":
+            var.encoding["dtype"] = "i1"
+    return out
+
+
+def fix_text_encoding_attrs(path) -> None:
+    """Rewrite the ``_Encoding`` attributes xarray puts on text variables as ``NC_CHAR`` (h5py)."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        for obj in f.values():
+            if isinstance(obj, h5py.Dataset) and "_Encoding" in obj.attrs:
+                value = obj.attrs["_Encoding"]
+                value = value.decode() if isinstance(value, bytes) else str(value)
+                del obj.attrs["_Encoding"]
+                obj.attrs["_Encoding"] = np.bytes_(value.encode("ascii"))
+
+
+def write_netcdf(ds, path) -> None:
+    """Write ``ds`` as a NetCDF-4 file (h5netcdf) that is netCDF4-classic compatible and CF-readable."""
+    classic_compatible(ds).to_netcdf(path, engine="h5netcdf")
+    fix_text_encoding_attrs(path)
