@@ -93,7 +93,8 @@ def _network(s: Li2020Scenario):
     used = {st.pair: st for st in delay_statistics(s)}
     t_max = max((used[pr].value_max for pr in edges), default=0.0)
     return DelayedGraphNetwork(weights=C, delays=tuple(tuple(str(x) for x in r) for r in s.network.delays),
-                               edges=edges, capacity=required_capacity(t_max, dt) + 1, dt=dt)
+                               edges=edges, capacity=required_capacity(t_max, dt) + 1, dt=dt,
+                               short_delays=False)  # validate_delays: T >= dt on every used link
 
 
 def _actuator(s: Li2020Scenario):
