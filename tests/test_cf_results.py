@@ -109,3 +109,26 @@ def test_every_builtin_result_is_cf_and_classic_compatible(name, tmp_path):
     assert set(mj["units"]) == set(metrics)
     for k, v in metrics.items():
         assert mj[k] == pytest.approx(v, nan_ok=True) and udunits_ok(mj["units"][k]), k
+
+
+def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(tmp_path):
+    import pandas as pd
+    import pyarrow.dataset as pads
+
+    from formation_ftc.campaign.runner import run_campaign
+
+    raw = {"campaign": {"name": "cf", "base": "cw-pd-fault", "runs": 2, "seed": 3, "chunk_size": 2,
+                        "metrics": ["max_position_error", "delta_v_total"]},
+           "overrides": {"simulation.horizon": 2.0},
+           "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}}}
+    results = run_campaign(raw, tmp_path / "c").results
+    chunks = tmp_path / "c" / "chunks"
+    df = pd.read_parquet(chunks)
+    assert sorted(df["run_id"]) == sorted(results["run_id"]) and len(df) == 2
+    np.testing.assert_array_equal(df.sort_values("run_id")["metric:max_position_error"].to_numpy(),
+                                  results.sort_values("run_id")["metric:max_position_error"].to_numpy())
+    schema = pads.dataset(chunks, format="parquet").schema
+    # physical units of these metrics: a position error in metres, a velocity increment in m/s
+    assert schema.field("metric:max_position_error").metadata[b"units"] == b"m"
+    assert schema.field("metric:delta_v_total").metadata[b"units"] == b"m s-1"
+    assert not (schema.field("run_id").metadata or {}).get(b"units")

@@ -225,6 +225,7 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
             traces[inputs[j].run_id] = _trace(plan, comp_j, scn, inputs[j], run_out, str(table.at[j, "status"]))
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
+    table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
 
 def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     """Compute one chunk (pure function of its arguments; safe in worker processes and on Dask)."""
@@ -277,9 +278,21 @@ def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
             table[col] = table[col].astype("float64")
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
+    table.attrs["metric_units"] = _metric_units(getattr(compiled[0].params, "metrics", ()),
+                                                getattr(compiled[0].params, "count", 0))
 
 def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
     """Metric names each base scenario's method returns, found without running anything
+def _metric_units(metrics, count: int) -> dict[str, str]:
+    """``metric:<name>`` column -> UDUNITS unit of the declared metric (per-spacecraft names expanded)."""
+    out = {}
+    for m in metrics or ():
+        units = str(getattr(m, "units", "") or "1")
+        names = [f"{m.name}_sc{i + 1}" for i in range(count)] if m.spacecraft == "each" else [m.name]
+        out.update({f"metric:{n}": units for n in names})
+    return out
+
+
     (``jax.eval_shape`` of the run, then ``metrics`` on zeros). Empty list when it cannot tell."""
     from formation_ftc import api
 

@@ -415,7 +415,17 @@ class CampaignStore:
             os.replace(tmp, path)
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
-        table.to_parquet(buf, index=False, engine="pyarrow", write_page_checksum=True)
+        units = {c: u for c, u in dict(table.attrs.get("metric_units", {})).items() if c in table.columns}
+        if units:  # metric columns carry their UDUNITS unit as Parquet field metadata {"units": ...}
+            import pyarrow as pa
+
+            arrow = pa.Table.from_pandas(table, preserve_index=False)
+            fields = [f.with_metadata({**(f.metadata or {}), b"units": units[f.name].encode()})
+                      if f.name in units else f for f in arrow.schema]
+            arrow = arrow.cast(pa.schema(fields, metadata=arrow.schema.metadata))
+            pq.write_table(arrow, buf, write_page_checksum=True)
+        else:
+            table.to_parquet(buf, index=False, engine="pyarrow", write_page_checksum=True)
         data = buf.getvalue()
         # the checksum is recorded first: a chunk file never exists without one
         self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(data).hexdigest()
