@@ -223,9 +223,9 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
                                                     int(run_out["diverged_step"]))
         if inputs[j].run_id in plan.spec.traces.runs:
             traces[inputs[j].run_id] = _trace(plan, comp_j, scn, inputs[j], run_out, str(table.at[j, "status"]))
+    table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
-    table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
 
 def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     """Compute one chunk (pure function of its arguments; safe in worker processes and on Dask)."""
@@ -276,13 +276,11 @@ def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     for col in table.columns:
         if col.startswith("metric:"):
             table[col] = table[col].astype("float64")
-    return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
-
     table.attrs["metric_units"] = _metric_units(getattr(compiled[0].params, "metrics", ()),
                                                 getattr(compiled[0].params, "count", 0))
+    return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
-def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
-    """Metric names each base scenario's method returns, found without running anything
+
 def _metric_units(metrics, count: int) -> dict[str, str]:
     """``metric:<name>`` column -> UDUNITS unit of the declared metric (per-spacecraft names expanded)."""
     out = {}
@@ -293,6 +291,8 @@ def _metric_units(metrics, count: int) -> dict[str, str]:
     return out
 
 
+def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
+    """Metric names each base scenario's method returns, found without running anything
     (``jax.eval_shape`` of the run, then ``metrics`` on zeros). Empty list when it cannot tell."""
     from formation_ftc import api
 
