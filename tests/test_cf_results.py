@@ -109,6 +109,8 @@ def test_every_builtin_result_is_cf_and_classic_compatible(name, tmp_path):
     assert set(mj["units"]) == set(metrics)
     for k, v in metrics.items():
         assert mj[k] == pytest.approx(v, nan_ok=True) and udunits_ok(mj["units"][k]), k
+        if k.startswith("delta_v"):  # a velocity increment, per spacecraft or in total
+            assert mj["units"][k] == "m s-1", k
 
 
 def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(tmp_path):

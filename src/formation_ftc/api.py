@@ -166,8 +166,13 @@ def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
 
 def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str, str]:
     """UDUNITS unit of each metric the loop declares (``"1"`` for dimensionless or undeclared)."""
-    declared = {m.name: str(getattr(m, "units", "") or "1")
-                for m in getattr(compiled.params, "metrics", ()) or () if hasattr(m, "name")}
+    declared = {}
+    count = int(getattr(compiled.params, "count", 0) or 0)
+    for m in getattr(compiled.params, "metrics", ()) or ():
+        units = str(getattr(m, "units", "") or "1")
+        declared[m.name] = units
+        if getattr(m, "spacecraft", None) == "each":  # expanded per spacecraft: name_sc1, name_sc2, ...
+            declared.update({f"{m.name}_sc{i + 1}": units for i in range(count)})
     return {k: declared.get(k, "1") for k in metrics}
 
 

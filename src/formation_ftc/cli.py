@@ -325,9 +325,14 @@ def _cmd_run(args) -> int:
         view, note = plot_view(ds)
         if note:
             console.print(note)
-        figs = method.plot(view, scenario, stage) if method.plot else []
-    console.print(f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'} and {len(figs)} figure(s) "
-                  f"in {wall:.2f} s")
+        from formation_ftc.api import metric_units
+        from formation_ftc.report.run_page import standard_figures, write_run_page
+
+        figs = standard_figures(view, stage)
+        figs += method.plot(view, scenario, stage) if method.plot else []
+        write_run_page(stage, ds, metrics, figs, metric_units(ds))
+    console.print(f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'}, {len(figs)} figure(s) and "
+                  f"{out_dir / 'index.html'} in {wall:.2f} s")
     return code
 
 
