@@ -88,9 +88,11 @@ def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
     try:
         if compiled.make_step is None:
             raise RuntimeError("no make_step")
-        info = diagnose_divergence(compiled.make_step(compiled.params), out["last_finite"], div, t,
+        p = compiled.params
+        info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
                                    compiled.spacecraft_axis, max_steps=compiled.record_every,
-                                   dt=compiled.dt)
+                                   dt=compiled.dt, admissible=getattr(p, "admissible", None),
+                                   violations=getattr(p, "violations", None))
     except Exception:  # noqa: BLE001 - a diagnostic must never stop the campaign
         info = DivergenceInfo(div, t, "<state>", None, ())
     return str(info)

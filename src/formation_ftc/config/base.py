@@ -134,6 +134,11 @@ class SimulationSection(StrictModel):
     record_every: int = Field(1, ge=1, description="Record every k-th step (output decimation) [-].")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="Root random seed of the run, 0 <= seed < 2**32 [-].")
     unroll: int = Field(1, ge=1, le=64, description="lax.scan unroll factor (performance only) [-].")
+    max_position: float = Field(1.0e6, gt=0, description=(
+        "Admissible set: a run whose spacecraft position (relative to the formation frame's origin) exceeds "
+        "this magnitude has diverged and stops with a diagnostic [m]."))
+    max_velocity: float = Field(1.0e4, gt=0, description=(
+        "Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s]."))
 
     @model_validator(mode="after")
     def _step_divides_horizon(self) -> SimulationSection:

@@ -270,7 +270,12 @@ class Plant(_Kind):
 
     def position(self, x: PyTree) -> jax.Array | None:
         """True (N, 3) position in the formation frame [m] (None for rotational plants); used only
-        for evaluation (the ``position_error`` record), never by the flight side."""
+        for evaluation (the ``position_error`` record) and the admissible set, never by the flight side."""
+        return None
+
+    def velocity(self, x: PyTree) -> jax.Array | None:
+        """True (N, 3) velocity in the formation frame [m/s] (None when not applicable); used only for
+        the admissible set."""
         return None
 
 

@@ -84,12 +84,14 @@ def run_fixed_step(
     unroll: int = 1,
     check_finite: bool = True,
     check_of: Callable[[PyTree], PyTree] | None = None,
+    admissible: Callable[[PyTree], jax.Array] | None = None,
 ) -> RunOutput:
     """Run ``n_steps`` steps; record ``observe`` at k = 0, record_every, 2*record_every, ..., n_steps.
 
     Pure and jittable (``n_steps`` and ``record_every`` are static). Finiteness is tested once per
     record block (every ``record_every`` steps, so the check costs nothing per step); ``check_of(state)``
-    selects the part of the state tested (default: all of it). When a block ends non-finite, the state
+    selects the part of the state tested (default: all of it); ``admissible(state) -> bool`` narrows the
+    admissible set further (e.g. positions within a bound). When a block ends outside it, the state
     at that block's start -- the last finite state -- is returned as ``final``/``last_finite`` and
     ``diverged_step`` is the block's first step (the run itself goes on to the horizon; its later
     records are not finite and :func:`trim_records` drops them); :func:`diagnose_divergence` replays the block to find
@@ -116,6 +118,8 @@ def run_fixed_step(
         new = jax.lax.cond(k < n_steps, lambda: block(k, state), lambda: state)
         if check_finite:
             ok = _all_finite(select(new))
+            if admissible is not None:
+                ok = jnp.logical_and(ok, admissible(new))
             div = jnp.where(jnp.logical_and(div < 0, jnp.logical_not(ok)), k, div)
             # the last finite state is kept in a separate snapshot, updated once per block; the
             # running state itself is never selected, so under ``vmap`` leaves that do not depend on
@@ -150,11 +154,12 @@ class DivergenceInfo:
     variable: str
     spacecraft: int | None  # 0-based index, None when the variable has no spacecraft axis
     index: tuple[int, ...]
+    reason: str = "became non-finite"
 
     def __str__(self) -> str:
         who = f"spacecraft {self.spacecraft + 1}" if self.spacecraft is not None else "formation"
         return (f"simulation diverged at t = {self.time:.6g} s (step {self.step}): {who}, "
-                f"variable '{self.variable}' index {list(self.index)} became non-finite")
+                f"variable '{self.variable}' index {list(self.index)} {self.reason}")
 
 
 class SimulationDiverged(RuntimeError):
@@ -251,6 +256,28 @@ def _accumulators(step, k, state) -> set[int]:
     return acc
 
 
+def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTree, k: int, n: int,
+                       ok: Callable[[PyTree], jax.Array]) -> tuple[int, PyTree]:
+    """Replay up to ``n`` steps from ``state`` (at step ``k``) in one compiled loop and return ``(j,
+    state_j)``: the number of steps after which the state first fails ``ok``, and the last state that
+    passed (``j = n`` when none fails). Used to date a divergence exactly inside a long record block."""
+
+    def cond(c):
+        j, _, bad = c
+        return jnp.logical_and(j < n, jnp.logical_not(bad))
+
+    def body(c):
+        j, st, _ = c
+        new = step(jnp.asarray(k, dtype=jnp.int64) + j, st)
+        bad = jnp.logical_not(ok(new))
+        st = jax.tree_util.tree_map(lambda a, b: jnp.where(bad, a, b), st, new)
+        return j + jnp.where(bad, 0, 1), st, bad
+
+    j, st, _ = jax.jit(lambda s0: jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), s0,
+                                                                    jnp.asarray(False))))(state)
+    return int(j), st
+
+
 def diagnose_divergence(
     step: Callable[[jax.Array, PyTree], PyTree],
     last_finite: PyTree,
@@ -260,6 +287,8 @@ def diagnose_divergence(
     *,
     max_steps: int = 1,
     dt: float = 0.0,
+    admissible: Callable[[PyTree], jax.Array] | None = None,
+    violations: Callable[[PyTree], list[tuple[str, tuple[int, ...], int | None]]] | None = None,
 ) -> DivergenceInfo:
     """Replay up to ``max_steps`` steps from the last finite state (at step ``k``, time ``t``) and
     name the first non-finite state variable of the first non-finite step (time ``t + j*dt``).
@@ -269,6 +298,15 @@ def diagnose_divergence(
     that left its admissible set. Dependencies are read from the step's jaxpr (structurally, without
     computing anything).
     """
+    if max_steps > 1:  # date it exactly first: one compiled replay of the block
+        def ok(st):
+            # ``admissible`` (when given) is the whole test, finiteness of the checked state included
+            return _all_finite(st) if admissible is None else admissible(st)
+
+        j0, state0 = first_failing_step(step, last_finite, k, max_steps, ok)
+        if j0 >= max_steps:
+            j0, state0 = 0, last_finite
+        last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     jstep = jax.jit(step)
     state = last_finite
     acc: set[int] | None = None
@@ -279,6 +317,19 @@ def diagnose_divergence(
         kj = jnp.asarray(k + j, dtype=jnp.int64)
         new = jstep(kj, state)
         bad = _nonfinite_leaves(new)
+        if admissible is not None:
+            if bool(admissible(new)):  # inside the admissible set: leaves it does not check may be NaN
+                state = new
+                j += 1
+                continue
+            checked = getattr(admissible, "checked_prefixes", None)
+            if checked:
+                bad = [b for b in bad if _path_name(b[0]).startswith(tuple(checked))]
+        if not bad and admissible is not None:
+            found = violations(new) if violations is not None else []
+            name, index, sc = found[0] if found else ("<admissible set>", (), None)
+            return DivergenceInfo(int(k + j), float(t + j * dt), name, sc, index,
+                                  reason="left its admissible set")
         if bad:
             if acc is None:
                 try:

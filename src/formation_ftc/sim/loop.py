@@ -88,6 +88,10 @@ class ClosedLoop:
     actuator: Actuator = dataclasses.field(default_factory=IdealActuator)
     metrics: tuple = ()
     seed: Any = 0
+    #: admissible set of the truth state beyond "finite" (a run leaving it has diverged): largest
+    #: relative position [m] and speed [m/s] of any spacecraft (plants that report them)
+    max_position: Any = 1.0e6
+    max_velocity: Any = 1.0e4
     evaluations: tuple = ()
     dt: float = static(0.1)
     n_steps: int = static(1)
@@ -409,13 +413,51 @@ class ClosedLoop:
             return self.observe(k, carry[0])
 
         out = run_fixed_step(step, observe, (state0, acc0), self.n_steps, self.record_every, self.unroll,
-                             check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]))
+                             check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
+                             admissible=self.admissible)
         state_n, acc = out["final"]
         sig_n = self.observe(jnp.asarray(self.n_steps, dtype=jnp.int64), state_n)
         acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt,
                                              sig_n, is_final=True)
         return dict(records=out["records"], final=state_n, diverged_step=out["diverged_step"],
                     last_finite=out["last_finite"], metrics=metric_ops.finalize(self.metrics, acc))
+
+    def _bounded(self, x) -> list[tuple[str, Any, Any]]:
+        """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
+        out = []
+        pos = self.plant.position(x)
+        if pos is not None:
+            out.append(("plant.position", jnp.sqrt(jnp.sum(pos * pos, axis=-1)), self.max_position))
+        vel = self.plant.velocity(x) if hasattr(self.plant, "velocity") else None
+        if vel is not None:
+            out.append(("plant.velocity", jnp.sqrt(jnp.sum(vel * vel, axis=-1)), self.max_velocity))
+        return out
+
+    def admissible(self, carry) -> jax.Array:
+        """True while the checked state (plant, controller, estimator) is finite and every bounded
+        truth quantity is within its bound."""
+        from formation_ftc.sim.engine import _all_finite
+
+        c = carry[0]
+        ok = _all_finite((c["plant"], c["controller"], c["estimator"]))
+        for _, mag, bound in self._bounded(carry[0]["plant"]):
+            ok = jnp.logical_and(ok, jnp.all(jnp.logical_not(mag > bound)))
+        return ok
+
+    #: carry paths the admissible set checks (for naming the variable that left it)
+    admissible.checked_prefixes = ("0.plant", "0.controller", "0.estimator")  # type: ignore[attr-defined]
+
+    def violations(self, carry) -> list[tuple[str, tuple[int, ...], int | None]]:
+        """(variable, index, spacecraft) of every bounded quantity outside its bound (numpy side)."""
+        import numpy as np
+
+        out = []
+        for name, mag, bound in self._bounded(carry[0]["plant"]):
+            bad = np.argwhere(np.asarray(mag) > np.asarray(bound))
+            for idx in bad:
+                out.append((f"{name} (|.| > {float(np.asarray(bound)):g})", tuple(int(i) for i in idx),
+                            int(idx[0]) if len(idx) else None))
+        return out
 
     def replay_step(self):
         """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""

@@ -51,6 +51,9 @@ class ClohessyWiltshirePlant(Plant):
     def position(self, x):
         return x["q"][:, :3]
 
+    def velocity(self, x):
+        return x["q"][:, 3:]
+
     def usage_names(self):
         return ("delta_v", "control_effort")
 

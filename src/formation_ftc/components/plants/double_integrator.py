@@ -67,6 +67,9 @@ class DoubleIntegratorPlant(Plant):
     def position(self, x):
         return x["r"]
 
+    def velocity(self, x):
+        return x["v"]
+
     def usage_names(self):
         return ("effort",)
 

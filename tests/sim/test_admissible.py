@@ -1,0 +1,64 @@
+"""Divergence means leaving the admissible set, dated to the exact step, whatever the record block."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import formation_ftc as ftc
+from formation_ftc.cli import main
+from formation_ftc.methods.cw_formation import rk4_amplification
+
+STIFF = {"controller.kd": 3000.0, "simulation.horizon": 20.0, "sensors.position_noise_std": 0.0,
+         "sensors.velocity_noise_std": 0.0, "disturbance.process_noise_std": 0.0}
+
+
+def _diverge(record_every: int):
+    scn = ftc.load_scenario("cw-pd-fault", {**STIFF, "simulation.record_every": record_every})
+    with pytest.raises(ftc.SimulationDiverged) as err:
+        ftc.simulate(scn)
+    return err.value
+
+
+def test_stiff_gain_leaves_the_admissible_set_long_before_overflow():
+    err = _diverge(10)
+    info = err.info
+    assert info.variable.startswith("plant.velocity") and "admissible" in str(err)
+    # |R(lambda dt)| = 1.375 per step from ~80 m/s: 1e4 m/s is passed after a few dozen steps,
+    # far before the 3e80 m the unbounded run reached
+    assert 1.0 < info.time < 10.0
+    v = np.linalg.norm(err.partial.velocity.values, axis=-1)
+    assert np.all(np.isfinite(v)) and v.max() <= 1e4
+
+
+def test_divergence_time_does_not_depend_on_the_record_block():
+    fine = _diverge(1).info
+    coarse = _diverge(200).info  # one record block for the whole run
+    assert coarse.step == fine.step and coarse.time == pytest.approx(fine.time, abs=1e-12)
+    assert coarse.variable == fine.variable and coarse.spacecraft == fine.spacecraft
+
+
+def test_admissible_bound_is_a_scenario_field():
+    scn = ftc.load_scenario("cw-pd-fault", {**STIFF, "simulation.max_velocity": 1e30,
+                                            "simulation.max_position": 1e30, "simulation.horizon": 5.0})
+    ds = ftc.simulate(scn)  # the same run stays "admissible" up to 5 s with huge bounds
+    assert np.isfinite(ds.position.values).all()
+
+
+def test_rk4_amplification_against_the_stability_boundary():
+    # the real-axis RK4 stability limit is z = -2.785293563...; |R| = 1 there, < 1 inside, > 1 outside
+    z0 = -2.7852935634
+    assert rk4_amplification(z0) == pytest.approx(1.0, abs=1e-9)
+    assert rk4_amplification(z0 + 0.01) < 1.0 < rk4_amplification(z0 - 0.01)
+    # the imaginary-axis limit is 2 sqrt(2)
+    assert rk4_amplification(2j * np.sqrt(2)) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_check_uses_closed_loop_eigenvalues(capsys):
+    assert main(["check", "cw-pd-fault", "--set", "controller.kd=3000", "--json"]) == 1
+    import json
+
+    out = json.loads(capsys.readouterr().out)
+    row = next(c for c in out["conditions"] if c["name"] == "RK4 step vs closed-loop modes")
+    assert row["holds"] is False and "1.375" in row["value"]
+    assert main(["check", "cw-pd-fault", "--json"]) == 0
