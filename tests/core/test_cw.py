@@ -34,7 +34,7 @@ def test_free_drift_scenario_matches_closed_form_over_one_orbit():
 
 def test_result_is_float64():
     ds = ftc.simulate(ftc.load_scenario("cw-free-drift", {"simulation.horizon": 100.0}))
-    for name in ("position", "velocity", "control"):
+    for name in ("position", "velocity", "command", "applied"):
         assert ds[name].dtype == np.float64, name
 
 
