@@ -1,7 +1,7 @@
 """JAX configuration shared by the whole package.
 
 float64 is mandatory: at 7,000 km the float32 spacing is 0.5 m and the gravity terms of the relative
-dynamics cancel from about 8 m/s^2 to 1e-3 m/s^2 (see PERFORMANCE.md). Importing :mod:`formation_ftc`
+dynamics cancel from about 8 m/s^2 to 1e-3 m/s^2 (measured; see README "Engine"). Importing :mod:`formation_ftc`
 switches ``jax_enable_x64`` on before any array is created and enables the persistent compilation
 cache so that the command-line tool starts fast on the second call.
 """

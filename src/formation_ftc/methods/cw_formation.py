@@ -7,7 +7,7 @@ disturbance forces, process and sensor noise (seeded), RK4 integration with the 
 evaluated at every RK stage (``controller.mode = "continuous"``) or held over the step
 (``"sampled"``, zero-order hold).
 
-Model per deputy i (mass m_i [kg], x radial, y along-track, z orbit normal; SPEC.md 0.3)::
+Model per deputy i (mass m_i [kg], x radial, y along-track, z orbit normal)::
 
     q_dot = A q + B (Gamma_i(t) u_i + delta_i(t) + d_i(t) + w_i) / m_i
     u_i   = -kp (p_i - p_i^d(t)) - kd (v_i - v_i^d(t)) + m_i a_i^d(t)  (PD + feed-forward, measured state)

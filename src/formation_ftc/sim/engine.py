@@ -1,6 +1,6 @@
 """The fixed-step ``lax.scan`` driver shared by every method.
 
-One control step (the order every method follows; ARCHITECTURE.md "One control step")::
+One control step (the order every method follows; docs/architecture.md "One control step")::
 
     k -> (1) measure -> (2) network: push/read delayed messages -> (3) FDI, observers
       -> (4) supervisor -> (5) controller -> (6) actuator chain (faults act here)

@@ -1,9 +1,9 @@
-"""Scenario schema of method ``gui2022`` (Gui et al. 2022, SPEC.md P2.4).
+"""Scenario schema of method ``gui2022`` (Gui et al. 2022).
 
 One chief on a circular orbit and one deputy on linear CW dynamics with thruster bias faults F(t)
 (H = B), the space perturbation d(t) of ref. [12], the iterative learning observer (5) and one of the
-controllers ``none`` (u = 0, section 5.1), ``lof2tc`` (30)-(32) or ``cof2tc`` (SPEC.md P2.4 baseline).
-Defaults are the paper's printed values; where the paper is silent the SPEC.md [CHOICE] values.
+controllers ``none`` (u = 0, section 5.1), ``lof2tc`` (30)-(32) or ``cof2tc`` (the conventional baseline).
+Defaults are the paper's printed values; where the paper is silent this project's documented choices.
 Units: u, d, F in m/s^2 (per unit mass, E002-03); positions m, velocities m/s, times s.
 """
 
@@ -66,14 +66,14 @@ class FaultSection(StrictModel):
 class InitialSection(StrictModel):
     desired_state: Vec6 = Field(tuple(pub.Q0_INITIAL), description="q0(0) of the nominal orbit (28) [m, m/s].")
     state: Vec6 = Field((0.0,) * 6, description="q(0) of the deputy [m, m/s].")
-    estimate_offset: Vec6 = Field((0.0,) * 6, description="q_hat(0) - q(0) [m, m/s] (SPEC: 0; Figs. 4-5 run uses an offset).")
+    estimate_offset: Vec6 = Field((0.0,) * 6, description="q_hat(0) - q(0) [m, m/s] (default 0; the Figs. 4-5 run uses an offset).")
 
 
 class ObserverSection(StrictModel):
     """ILO (5) and the Theorem 1 design data (for `check`)."""
 
     gains: Literal["printed", "lmi"] = Field("printed", description=(
-        "'printed' = the paper's L1, L2 (SPEC: use them to reproduce); 'lmi' = solve (8), (27) and the disk LMI."))
+        "'printed' = the paper's L1, L2 (used to reproduce); 'lmi' = solve (8), (27) and the disk LMI."))
     L1: list[list[float]] = Field(pub.L1_PRINTED.tolist(), description="Observer gain L1 (6x6) [1/s] (used when gains = 'printed').")
     L2: list[list[float]] = Field(pub.L2_PRINTED.tolist(), description="Learning gain L2 (3x6) [1/s] (used when gains = 'printed').")
     lmi_scale: float = Field(1.0, gt=0, description=(
@@ -129,7 +129,7 @@ class ControllerSection(StrictModel):
     pi_initial: float = Field(1.0, description="pi(-tau) (E002-08 [CHOICE]: 1) [-].")
     v_initial: Vec3 = Field((0.0, 0.0, 0.0), description="v(-tau) [m/s^2].")
     learning_interval: float = Field(0.001, gt=0, description="tau of (31)-(32): integer multiple of simulation.dt [s].")
-    fault_compensation: bool = Field(False, description="COF2TC variant u = K e_y - F_hat (SPEC optional).")
+    fault_compensation: bool = Field(False, description="COF2TC variant u = K e_y - F_hat (optional variant).")
 
     @field_validator("K")
     @classmethod

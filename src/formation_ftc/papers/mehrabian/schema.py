@@ -1,6 +1,6 @@
 """Scenario schema of the ``mehrabian`` method (networked EL attitude control under FDI imperfections).
 
-Defaults are the paper's data (gains, fault, disturbance) and the SPEC P3.4 choices for what the paper
+Defaults are the paper's data (gains, fault, disturbance) and this project's documented choices (docs/errata.md) for what the paper
 does not give (graph, nominal inertia, FDI estimate, desired attitude, step). Angles in the file are
 in degrees (converted to rad at load), everything else SI.
 """
@@ -30,7 +30,7 @@ __all__ = [
     "MehrabianScenario",
 ]
 
-#: SPEC P3.4 [CHOICE]: ring 1-2-...-8-1 plus chords 1-5 and 3-7 (the paper's Fig. 1 is not in the text).
+#: Our choice (the paper is silent): ring 1-2-...-8-1 plus chords 1-5 and 3-7 (the paper's Fig. 1 is not in the text).
 DEFAULT_EDGES: list[tuple[int, int]] = [(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7), (7, 8), (8, 1), (1, 5), (3, 7)]
 
 _PITCH_LIMIT_DEG = float(np.rad2deg(SINGULAR_PITCH_LIMIT_RAD))
@@ -42,7 +42,7 @@ class FormationSection(StrictModel):
     edges: list[tuple[int, int]] = Field(
         default_factory=lambda: list(DEFAULT_EDGES),
         description="Undirected communication links as 1-based spacecraft pairs, unit weights [-]. "
-                    "Default: ring 1..8 plus chords 1-5, 3-7 (SPEC P3.4 choice; the paper's Fig. 1 is not given).")
+                    "Default: ring 1..8 plus chords 1-5, 3-7 (our choice; the paper's Fig. 1 is not given).")
     nominal_inertia: tuple[float, float, float] = Field(
         (20.0, 18.0, 15.0), description="Nominal principal inertia J^ = diag(...) of every spacecraft [kg m^2].")
     inertia_uncertainty: float = Field(
@@ -93,7 +93,7 @@ class InitialSection(StrictModel):
         None, description="Explicit initial [theta (pitch), phi (roll), psi (yaw)] per spacecraft [deg] "
                           "(used when random = false).")
     rate_deg_s: list[tuple[float, float, float]] | None = Field(
-        None, description="Initial Euler-angle rates per spacecraft [deg/s] (default 0, SPEC P3.4).")
+        None, description="Initial Euler-angle rates per spacecraft [deg/s] (default 0, our choice).")
 
     @model_validator(mode="after")
     def _check(self):
@@ -137,7 +137,7 @@ class ControllerSection(StrictModel):
     K_I: float = Field(0.001, description="Integral gain K-double-bar_j = K_I I_3 (E003-03) [1/s^2].")
     sigma: float = Field(0.5, gt=0.0, description="Adaptation gain Sigma-bar_j = sigma I_3 [N m / (rad)].")
     e_gain: float = Field(1.0, gt=0.0, description="Estimate pull E-bar_j = e I_3 towards the FDI estimate [1/s].")
-    boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s] (SPEC choice).")
+    boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s] (our choice).")
 
 
 class FaultEntry(StrictModel):
@@ -166,7 +166,7 @@ class FDISection(StrictModel):
     detected: bool = Field(True, description="False models a missed detection (Case 1).")
     delay: float = Field(5.0, ge=0.0, description="Detection latency; the estimate also lags by it [s].")
     scale: float = Field(1.0, description="Identification scale error: u* = scale u_bar(t - delay) + bias [-].")
-    bias: float = Field(-0.1, description="Identification bias while the fault is seen [N m] (SPEC: -0.1).")
+    bias: float = Field(-0.1, description="Identification bias while the fault is seen [N m] (our choice: -0.1).")
     noise_std: float = Field(0.0, ge=0.0, description="Std of a per-step Gaussian identification noise [N m].")
     isolation: list[IsolationEntry] = Field(
         default_factory=list, description="Isolation errors (Case 2): report a true fault elsewhere.")
@@ -177,7 +177,7 @@ class MetricsSection(StrictModel):
 
     fault_window: tuple[float, float] = Field((40.0, 240.0), description="Window of the fault-window metrics [s].")
     assessment_window: tuple[float, float] = Field(
-        (45.0, 240.0), description="Window of the SPEC P3.6 comparisons (from the reconfiguration) [s].")
+        (45.0, 240.0), description="Window of the reproduction's comparisons (from the reconfiguration) [s].")
 
     @model_validator(mode="after")
     def _order(self):
