@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax.numpy as jnp
 import numpy as np
 from hypothesis import given, settings
@@ -79,11 +81,13 @@ def test_delayed_network_reads_interpolated_past():
         return (1 - w) * samples[k0][j] + w * samples[k0 + 1][j]
 
     T = {(0, 1): 0.25, (0, 2): 0.3 + 0.1 * np.sin(t), (1, 0): 0.15, (2, 1): 0.2 + 0.01 * t}
-    got = net.receive(t, hist, NetworkInputs(None, t_k, net.exogenous(t)))
-    for i in range(N):
-        want = sum(C[i, j] * past(j, t - T[(i, j)]) for j in range(N) if C[i, j] > 0)
-        np.testing.assert_allclose(np.asarray(got["weighted_sum"][i]), want, rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(np.asarray(got["in_weight"]), C.sum(axis=1))
+    now = NetworkInputs(jnp.asarray(rng.normal(size=(N, 2))), t_k, net.exogenous(t))  # every T > t - t_k
+    for network in (net, dataclasses.replace(net, short_delays=False)):
+        got = network.receive(t, hist, now)
+        for i in range(N):
+            want = sum(C[i, j] * past(j, t - T[(i, j)]) for j in range(N) if C[i, j] > 0)
+            np.testing.assert_allclose(np.asarray(got["weighted_sum"][i]), want, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(np.asarray(got["in_weight"]), C.sum(axis=1))
 
 
 @settings(max_examples=50, deadline=None)
