@@ -197,7 +197,7 @@ def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = N
     out_dir.mkdir(parents=True, exist_ok=True)
     nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
     tmp_nc, tmp_mj = out_dir / f".result.nc.tmp-{os.getpid()}", out_dir / f".metrics.json.tmp-{os.getpid()}"
-    m = dict(metrics if metrics is not None else result_metrics(ds))
+    m: dict[str, Any] = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
     units = metric_units(ds)
     if units:

@@ -44,7 +44,7 @@ def _attr_name(key: str) -> str:
     return name if re.match(r"[A-Za-z]", name) else "a_" + name
 
 
-def _attr_value(v: Any) -> str | int | float | np.ndarray:
+def _attr_value(v: Any) -> str | int | float | np.integer | np.floating | np.ndarray:
     if v is None:
         return ""
     if isinstance(v, bool | np.bool_):
@@ -142,7 +142,7 @@ def cf_problems(ds) -> list[str]:
 
 
 def _classic_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
-    out = {}
+    out: dict[str, Any] = {}
     for k, v in clean_attrs(attrs).items():
         if isinstance(v, str):  # NC_CHAR, not NC_STRING (h5py writes np.bytes_ as a fixed-length string)
             out[k] = np.bytes_(v.encode("utf-8"))

@@ -149,7 +149,8 @@ def _cmd_list(args) -> int:
     from importlib import resources
 
     d = resources.files("formation_ftc") / "scenarios"
-    items, composed = {}, {}
+    items: dict[str, str] = {}
+    composed: dict[str, str] = {}
     for name in _builtin_scenario_names():
         meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get("scenario", {})
         (composed if meta.get("method") == "composed" else items)[name] = str(meta.get("description", ""))

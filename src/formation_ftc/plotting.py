@@ -4,17 +4,21 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+if TYPE_CHECKING:
+    from matplotlib.typing import RcKeyType
+
 __all__ = ["plt", "new_figure", "save_figure", "SPACECRAFT_COLORS"]
 
 SPACECRAFT_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"]
 
-_STYLE = {
+_STYLE: dict[RcKeyType, Any] = {
     "figure.dpi": 110,
     "savefig.dpi": 130,
     "font.size": 9,
@@ -23,7 +27,7 @@ _STYLE = {
     "axes.titlesize": 10,
     "legend.fontsize": 8,
     "lines.linewidth": 1.2,
-    "axes.prop_cycle": matplotlib.cycler(color=SPACECRAFT_COLORS),
+    "axes.prop_cycle": matplotlib.cycler(color=SPACECRAFT_COLORS),  # type: ignore[attr-defined]  # not in the stubs
 }
 
 

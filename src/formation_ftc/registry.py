@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pydantic import BaseModel
+
 from formation_ftc.sim.compiled import Compiled
 
 __all__ = [
@@ -73,7 +75,7 @@ class Condition:
 @dataclass(frozen=True)
 class Method:
     name: str
-    schema: type
+    schema: type[BaseModel]
     build: Callable[[Any], Compiled]
     description: str = ""
     check: Callable[[Any], list[Condition]] | None = None

@@ -165,7 +165,7 @@ def apply_bindings(template, bindings: Mapping[str, FieldBinding], values: Mappi
 def take_run(batch, in_axes, j: int):
     """Parameters of run ``j`` of a batch from :func:`apply_bindings`."""
     leaves, treedef = jax.tree_util.tree_flatten(batch)
-    axes = treedef.flatten_up_to(in_axes)  # fields that are None are empty subtrees, not leaves
+    axes = treedef.flatten_up_to(in_axes)  # type: ignore[attr-defined]  # PyTreeDef unresolved in jax stubs  # fields that are None are empty subtrees, not leaves
     return jax.tree_util.tree_unflatten(
         treedef, [a if ax is None else np.asarray(a)[j] for a, ax in zip(leaves, axes, strict=True)])
 

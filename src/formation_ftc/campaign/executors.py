@@ -39,10 +39,13 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
 from formation_ftc.campaign.spec import CampaignError
+
+if TYPE_CHECKING:  # optional dependency (the dask extra)
+    from dask.distributed import Client, LocalCluster
 
 __all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable",
            "check_scheduler", "auto_workers", "AUTO_POOL_MIN_RUN_STEPS", "DEFAULT_CONNECT_TIMEOUT"]
@@ -225,8 +228,8 @@ class DaskExecutor:
         if not (connect_timeout > 0 and connect_timeout < 1e6):
             raise CampaignError(f"--connect-timeout must be > 0 s, got {connect_timeout}")
         self.connect_timeout = float(connect_timeout)
-        self.client = None
-        self._cluster = None
+        self.client: Client | None = None
+        self._cluster: LocalCluster | None = None
 
     def __enter__(self) -> DaskExecutor:
         try:
@@ -260,6 +263,7 @@ class DaskExecutor:
 
         if not chunks:
             return
+        assert self.client is not None, "DaskExecutor.map outside its with block"
         plan_future = self.client.scatter(plan, broadcast=True)
         futures = [self.client.submit(fn, plan_future, c, pure=False,
                                       key=f"campaign-{plan.hash[:10]}-chunk-{c.chunk_id}-{os.getpid()}")

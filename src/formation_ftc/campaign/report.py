@@ -149,7 +149,7 @@ def _json_safe(obj: Any) -> Any:
 def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) -> list[Path]:
     from formation_ftc.plotting import new_figure, save_figure
 
-    paths = []
+    paths: list[Path] = []
     metrics = _metric_columns(df)[:_MAX_METRICS_PER_FIGURE]
     numeric = manifest.get("input_columns", {})
     swept = [c for c in manifest.get("swept", []) if c in df.columns]

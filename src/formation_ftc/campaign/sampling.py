@@ -215,7 +215,7 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
         node, ref = node[part], ref[part]
 
 
-def _schema_bounds(method: str, path: str) -> list[tuple[float, str, Any]]:
+def _schema_bounds(method: str, path: str) -> list[tuple[Any, str, Any]]:
     """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
     elements inherit the bounds of their list's field items when declared there)."""
     import annotated_types as at
@@ -238,7 +238,7 @@ def _schema_bounds(method: str, path: str) -> list[tuple[float, str, Any]]:
         model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
     if info is None:
         return []
-    out: list[tuple[float, str, Any]] = []
+    out: list[tuple[Any, str, Any]] = []  # (bound, operator, test); bounds are comparable values
     for m in info.metadata:
         if isinstance(m, at.Gt):
             out.append((m.gt, ">", lambda v, b=m.gt: v > b))
@@ -283,7 +283,7 @@ class CampaignPlan:
             dumps.append(dump)
             self.methods.append(method)
         self.samplers = spec.samplers()
-        self.grid_samplers = [s for s in self.samplers if s.kind == "grid"]
+        self.grid_samplers = [s for s in self.samplers if isinstance(s, Grid)]  # kind "grid"
         self.random_samplers = [s for s in self.samplers if s.kind != "grid"]
         for s in self.samplers:
             for name, raw, dump in zip(self.base_names, self.base_raws, dumps, strict=True):

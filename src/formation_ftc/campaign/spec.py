@@ -438,7 +438,7 @@ def _builtin_dir():
 
 def builtin_campaigns() -> dict[str, str]:
     """Name -> TOML text of every built-in campaign."""
-    out = {}
+    out: dict[str, str] = {}
     d = _builtin_dir()
     if not d.is_dir():
         return out

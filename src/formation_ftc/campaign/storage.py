@@ -51,7 +51,7 @@ from formation_ftc.campaign.spec import CampaignError
 try:  # POSIX advisory locks; other platforms run without a lock
     import fcntl
 except ImportError:  # pragma: no cover
-    fcntl = None
+    fcntl = None  # type: ignore[assignment]  # the optional-module idiom
 
 __all__ = ["CampaignStore", "MANIFEST", "LOCK", "FORMAT", "atomic_write_bytes", "chunk_filename", "sha256_file"]
 

@@ -32,9 +32,16 @@ def delay_init(prehistory, m: int) -> DelayLine:
 
 def delay_read(line: DelayLine, m: int) -> jax.Array:
     """x_{k-m}: the sample m steps before the current one."""
-    return line.last if m == 1 else history_read(line.ring, m - 1, mode="zoh")
+    if m == 1:
+        assert line.last is not None, "delay_read: m = 1 but the line holds a ring"
+        return line.last
+    assert line.ring is not None, "delay_read: m > 1 but the line holds no ring"
+    return history_read(line.ring, m - 1, mode="zoh")
 
 
 def delay_push(line: DelayLine, value, m: int) -> DelayLine:
     """Append x_k (end of step k)."""
-    return DelayLine(value, None) if m == 1 else DelayLine(None, history_push(line.ring, value))
+    if m == 1:
+        return DelayLine(value, None)
+    assert line.ring is not None, "delay_push: m > 1 but the line holds no ring"
+    return DelayLine(None, history_push(line.ring, value))

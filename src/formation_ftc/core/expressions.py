@@ -31,6 +31,7 @@ import ast
 import math
 from collections.abc import Callable, Sequence
 from functools import lru_cache
+from typing import Any, NoReturn, cast
 
 import jax.numpy as jnp
 import numpy as np
@@ -257,7 +258,7 @@ class _Folder:
 
     def _fold(self, node: ast.AST):
         if isinstance(node, ast.Constant):
-            return np.float64(node.value)
+            return np.float64(cast(float, node.value))  # the compiler admitted only int | float
         if isinstance(node, ast.Name):
             return np.float64(CONSTANTS[node.id]) if node.id not in self.c.variables else None
         if isinstance(node, ast.BinOp):
@@ -287,8 +288,8 @@ class _Folder:
             if any(v is None for v in vals):
                 return None
             out = np.bool_(True)
-            for op, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True):
-                out = np.logical_and(out, _NP_CMPOPS[type(op)](a, b))
+            for cmp, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True):
+                out = np.logical_and(out, _NP_CMPOPS[type(cmp)](a, b))
             return out
         if isinstance(node, ast.IfExp):
             c, a, b = self._fold(node.test), self._fold(node.body), self._fold(node.orelse)
@@ -299,7 +300,7 @@ class _Folder:
             args = [self._fold(a) for a in node.args]
             if any(a is None for a in args):
                 return None
-            return self._apply(node, _NP_FUNCTIONS[node.func.id], *args)
+            return self._apply(node, _NP_FUNCTIONS[cast(ast.Name, node.func).id], *args)  # compiler: a Name
         return None  # pragma: no cover - the compiler rejected every other node
 
 
@@ -307,10 +308,10 @@ class _Compiler:
     def __init__(self, text: str, variables: set[str], field: str):
         self.text, self.variables, self.field = text, variables, field
 
-    def fail(self, node: ast.AST, message: str):
+    def fail(self, node: ast.AST, message: str) -> NoReturn:
         raise ExpressionError(message, self.text, self.field, getattr(node, "col_offset", None))
 
-    def visit(self, node: ast.AST) -> Callable[[Env], object]:
+    def visit(self, node: ast.AST) -> Callable[[Env], Any]:
         method = getattr(self, f"visit_{type(node).__name__}", None)
         if method is None:
             token = ast.get_source_segment(self.text, node) or type(node).__name__

@@ -20,7 +20,8 @@ __all__ = ["History", "history_init", "history_push", "history_read", "required_
 class History(NamedTuple):
     values: jnp.ndarray  # (capacity, *shape)
     head: jnp.ndarray  # int, index of newest sample
-    count: jnp.ndarray  # int, number of samples pushed (saturates at capacity)
+    # shadows tuple.count (a NamedTuple field by design; the method is never used on a History)
+    count: jnp.ndarray  # type: ignore[assignment]  # int, number of samples pushed (saturates at capacity)
 
 
 def required_capacity(max_delay: float, dt: float) -> int:

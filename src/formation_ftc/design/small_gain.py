@@ -143,7 +143,7 @@ def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
         return False, f"gamma = {gamma:.6g} <= sigma_max(D)"
     S = C.T @ D
     CC = C.T @ C
-    base = max(np.linalg.norm(CC, 2), np.linalg.norm(A, 2) * 1e-8, 1e-300)
+    base = max(float(np.linalg.norm(CC, 2)), float(np.linalg.norm(A, 2)) * 1e-8, 1e-300)
     last = "Riccati solve failed"
     for e_rel in (1e-6, 1e-8, 1e-10, 1e-12):
         Q = CC + e_rel * base * np.eye(n)

@@ -53,7 +53,10 @@ class OrbitSection(StrictModel):
 
     @property
     def n(self) -> float:
-        return self.mean_motion if self.mean_motion is not None else float(np.sqrt(self.mu / self.semi_major_axis**3))
+        if self.mean_motion is not None:
+            return self.mean_motion
+        assert self.semi_major_axis is not None  # the validator requires exactly one of the two
+        return float(np.sqrt(self.mu / self.semi_major_axis**3))
 
 
 class ControllerSection(StrictModel):
@@ -99,20 +102,20 @@ def make_loop(s: CwFormationScenario) -> ClosedLoop:
         mean_motion=as_float(s.orbit.n), mass=mass,
         initial_state_lvlh=as_float(np.hstack([np.asarray(s.spacecraft.initial_position), v0])),
         process_noise_std=as_float(s.disturbance.process_noise_std),
-        disturbance_force=tuple(s.disturbance.force))
+        disturbance_force=s.disturbance.force)
     if s.controller.type == "pd":
         sat = s.controller.max_force
-        controller = PdFormationController(
+        controller: PdFormationController | ZeroController = PdFormationController(
             count=N, kp=as_float(s.controller.kp), kd=as_float(s.controller.kd), mass=mass,
             max_force=as_float(np.inf if sat is None else sat),
-            desired_position=tuple(s.controller.desired_position),
+            desired_position=s.controller.desired_position,
             is_sampled=s.controller.mode == "sampled")
     else:
         controller = ZeroController(count=N)
     sensors = RelativeStateSensors(count=N, position_noise_std=as_float(s.sensors.position_noise_std),
                                    velocity_noise_std=as_float(s.sensors.velocity_noise_std))
-    actuator = ExpressionFaultActuator(count=N, effectiveness=tuple(s.faults.effectiveness),
-                                       bias=tuple(s.faults.bias))
+    actuator = ExpressionFaultActuator(count=N, effectiveness=s.faults.effectiveness,
+                                       bias=s.faults.bias)
     metrics = []
     if s.controller.type == "pd":
         metrics += [Metric("max_position_error", "position_error", reduce="max", norm=True, spacecraft="max",

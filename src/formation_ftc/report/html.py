@@ -218,7 +218,8 @@ def _comparison_table(rows: list[dict]) -> str:
            "<th>reference (how obtained)</th><th>ours</th><th>criterion</th><th>verdict</th><th>note</th>"
            "</tr></thead><tbody>"]
     for r in rows:
-        cls = _VERDICT_CLASS.get(r.get("verdict"), "verdict-not-stated")
+        verdict: Any = r.get("verdict")  # a JSON value
+        cls = _VERDICT_CLASS.get(verdict, "verdict-not-stated")
         paper = r.get("published") or "not printed"
         out.append(f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(paper)}</td>'
                    f'<td>{_e(r.get("reference") or "")}</td>'
@@ -234,7 +235,7 @@ def _checks_table(checks: list[dict]) -> str:
     out = ['<table class="checks"><thead><tr><th>condition</th><th>reference</th><th>value</th>'
            "<th>requirement</th><th>holds</th><th>required</th><th>detail</th></tr></thead><tbody>"]
     for c in checks:
-        holds = c.get("holds")
+        holds: Any = c.get("holds")  # a JSON value: true, false or null
         cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(holds, ("holds-na", "n/a"))
         required = "yes" if c.get("required", True) else "info"
         out.append(f'<tr class="{cls}"><td>{_e(c.get("name"))}</td><td>{_e(c.get("reference"))}</td>'

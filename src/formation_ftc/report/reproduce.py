@@ -33,11 +33,14 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from formation_ftc import registry
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
 
 __all__ = [
     "MARKER_NAME",
@@ -183,7 +186,7 @@ class _Bar:
         self.enabled = enabled and n_papers > 0
         self.n = n_papers
         self._progress = None
-        self._task = None
+        self._task: TaskID | None = None
         if self.enabled:
             from rich.console import Console
             from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
@@ -203,7 +206,7 @@ class _Bar:
             self._progress.stop()
 
     def update(self, completed: float, description: str) -> None:
-        if self._progress is not None:
+        if self._progress is not None and self._task is not None:
             self._progress.update(self._task, completed=completed, description=description)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
@@ -389,9 +392,10 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
 
     console = console or Console()
     table = Table(title="formation-ftc reproduce: wall time per paper")
-    for col, kw in [("paper", {}), ("status", {}), (escape("wall time [s]"), {"justify": "right"}),
+    columns: list[tuple[str, dict[str, Any]]] = [("paper", {}), ("status", {}), (escape("wall time [s]"), {"justify": "right"}),
                     ("match", {"justify": "right"}), ("differs", {"justify": "right"}),
-                    ("not stated", {"justify": "right"}), ("conditions hold/fail", {"justify": "right"})]:
+                    ("not stated", {"justify": "right"}), ("conditions hold/fail", {"justify": "right"})]
+    for col, kw in columns:
         table.add_column(col, **kw)
     for e in entries:
         status = "[green]ok[/]" if e["status"] == "ok" else "[red]FAILED[/]"

@@ -40,11 +40,12 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     if size < len(params):
         raise ValueError(f"stack_params: size = {size} < number of runs {len(params)}")
     flat = [jax.tree_util.tree_flatten(p) for p in params]
-    treedef = flat[0][1]
+    treedef: Any = flat[0][1]  # jax's PyTreeDef is not resolvable from its stubs
     for k, (_, td) in enumerate(flat[1:], start=1):
         if td != treedef:
             raise ValueError(f"stack_params: run {k} has a different parameter structure than run 0")
-    leaves, axes = [], []
+    leaves: list[np.ndarray] = []
+    axes: list[int | None] = []
     for vals in zip(*(f[0] for f in flat), strict=True):
         arrs = [np.asarray(v) for v in vals]
         first = arrs[0]

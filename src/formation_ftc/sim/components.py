@@ -86,7 +86,11 @@ T = TypeVar("T")
 # Declaring components
 # --------------------------------------------------------------------------------------------------
 def static(default: Any = dataclasses.MISSING, **kwargs: Any) -> Any:
-    """A structural (static) field: part of the compile key, never batched; must be hashable."""
+    """A structural (static) field: part of the compile key, never batched; must be hashable.
+
+    Pass the default by keyword (``static(default=1)``): type checkers read field specifiers per
+    PEP 681 and only recognise a keyword ``default`` (a positional one is accepted at run time).
+    """
     metadata = dict(kwargs.pop("metadata", {}) or {}, static=True)
     return dataclasses.field(default=default, metadata=metadata, **kwargs)
 
@@ -99,7 +103,7 @@ def component(cls: type[T]) -> type[T]:
     field is a child (an array leaf or a nested component). Subclasses must be decorated again.
     """
     cls = dataclasses.dataclass(frozen=True, eq=False)(cls)
-    fields = dataclasses.fields(cls)
+    fields = dataclasses.fields(cls)  # type: ignore[arg-type]  # cls is a dataclass from the line above
     meta = [f.name for f in fields if f.metadata.get("static", False)]
     data = [f.name for f in fields if not f.metadata.get("static", False)]
     for name in meta:

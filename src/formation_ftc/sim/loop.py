@@ -93,11 +93,11 @@ class ClosedLoop:
     max_position: Any = 1.0e6
     max_velocity: Any = 1.0e4
     evaluations: tuple = ()
-    dt: float = static(0.1)
-    n_steps: int = static(1)
-    record_every: int = static(1)
-    unroll: int = static(1)
-    t0: float = static(0.0)
+    dt: float = static(default=0.1)
+    n_steps: int = static(default=1)
+    record_every: int = static(default=1)
+    unroll: int = static(default=1)
+    t0: float = static(default=0.0)
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> ClosedLoop:
@@ -137,7 +137,7 @@ class ClosedLoop:
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:
         """Every recorded signal of the loop, in slot order."""
-        own = (Signal(COMMAND_SIGNAL, ("spacecraft", _vector_dim(self.controller.quantity)),
+        own: tuple[Signal, ...] = (Signal(COMMAND_SIGNAL, ("spacecraft", _vector_dim(self.controller.quantity)),
                       _unit(self.controller.quantity), f"commanded {self.controller.quantity}"),
                Signal(APPLIED_SIGNAL, ("spacecraft", _vector_dim(self.plant.quantity)), _unit(self.plant.quantity),
                       f"applied {self.plant.quantity} (after actuator faults)"))

@@ -71,17 +71,17 @@ class Metric:
 
     name: str = static()
     signal: str = static()
-    reduce: str = static("max")
-    norm: bool = static(False)
-    spacecraft: str = static("none")
-    units: str = static("1")
+    reduce: str = static(default="max")
+    norm: bool = static(default=False)
+    spacecraft: str = static(default="none")
+    units: str = static(default="1")
     start: Any = 0.0
     end: Any = float("inf")
     threshold: Any = 0.0
-    norm_ord: str = static("2")
-    square: bool = static(False)
-    component: int | None = static(None)
-    gate: str | None = static(None)
+    norm_ord: str = static(default="2")
+    square: bool = static(default=False)
+    component: int | None = static(default=None)
+    gate: str | None = static(default=None)
 
     def __post_init__(self) -> None:
         if self.norm_ord not in ("2", "inf"):
@@ -200,9 +200,9 @@ def _boolean_parts(reduce: str) -> tuple[bool, ...]:
 
 def _pack(parts: tuple, rows: int) -> jax.Array:
     """A group's accumulator tuple as one float64 array of ``rows`` rows (booleans as 0/1, zero padding)."""
-    parts = [jnp.asarray(x).astype(jnp.float64) for x in parts]
-    parts += [jnp.zeros_like(parts[0])] * (rows - len(parts))
-    return jnp.stack(parts)
+    arrs = [jnp.asarray(x).astype(jnp.float64) for x in parts]
+    arrs += [jnp.zeros_like(arrs[0])] * (rows - len(arrs))
+    return jnp.stack(arrs)
 
 
 def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int], Any]]]]:
@@ -255,7 +255,7 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
 
 
 def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array]) -> tuple:
-    accs = []
+    accs: list[tuple[jax.Array, ...]] = []
     for m in metrics:
         shape = jnp.shape(m.value(signals))
         nan = jnp.full(shape, jnp.nan)
@@ -279,7 +279,7 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
     return tuple(accs)
 
 
-def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt: float,
+def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float,
                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
     which the rectangle-rule integral does not count)."""
@@ -295,7 +295,7 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array, dt
     return tuple(out)
 
 
-def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array, dt: float,
+def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array | float, dt: float,
                          signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     out = []
     for m, acc in zip(metrics, accs, strict=True):

@@ -15,8 +15,8 @@ class ExpressionFaultActuator(Actuator):
     both written as expressions in t [s] and i (1-based spacecraft number)."""
 
     count: int = static()
-    effectiveness: tuple[str, str, str] = static(("1", "1", "1"))  # Gamma(t) [-]
-    bias: tuple[str, str, str] = static(("0", "0", "0"))  # delta(t) [command units]
+    effectiveness: tuple[str, str, str] = static(default=("1", "1", "1"))  # Gamma(t) [-]
+    bias: tuple[str, str, str] = static(default=("0", "0", "0"))  # delta(t) [command units]
 
     def exogenous(self, t):
         return {"gamma": vector_expression(self.effectiveness, "faults.effectiveness", t, self.count),

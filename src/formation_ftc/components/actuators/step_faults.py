@@ -24,7 +24,7 @@ class StepFaultActuator(Actuator):
 
     alpha: Any  # (N, 3) effectiveness after the onset, in (0, 1] [-]
     onset: Any  # (N, 3) onset times [s]
-    bias: tuple[str, str, str] = static(("0", "0", "0"))  # delta(t) [command units]
+    bias: tuple[str, str, str] = static(default=("0", "0", "0"))  # delta(t) [command units]
 
     @property
     def count(self) -> int:

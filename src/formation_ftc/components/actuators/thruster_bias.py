@@ -33,7 +33,7 @@ class ThrusterBiasFaultActuator(Actuator):
     decay_amplitude: Any = 0.0  # (N, 3) [command units]
     decay_rate: Any = 0.0  # (N, 3) [1/s]
     decay_origin: Any = 0.0  # (N, 3) [s]
-    units: str = static("m s-2")
+    units: str = static(default="m s-2")
 
     def exogenous(self, t):
         f = (self.magnitude + self.amplitude * jnp.sin(self.omega * t + self.phase)

@@ -33,7 +33,7 @@ class VelocityGainFaultActuator(Actuator):
     K2: Any = 0.01
     K2_faulty: Any = 0.0
     onset: Any = float("inf")
-    reconfigurable: bool = static(True)
+    reconfigurable: bool = static(default=True)
 
     def exogenous(self, t):
         return {"faulty": t >= self.onset}

@@ -48,9 +48,9 @@ class ChainLlfrController(Controller):
     b_hat: Any  # (N, axes) estimated actuator gains (LLFR) [-]
     side: Any  # [m]
     omega: Any  # [rad/s]
-    fault_index: int = static(0)  # 0-based satellite whose weight FLFR raises
-    is_sampled: bool = static(True)
-    frame: str = static("inertial")  # frame of the desired formation's axes (records only)
+    fault_index: int = static(default=0)  # 0-based satellite whose weight FLFR raises
+    is_sampled: bool = static(default=True)
+    frame: str = static(default="inertial")  # frame of the desired formation's axes (records only)
 
     @property
     def sampled(self) -> bool:

@@ -65,7 +65,7 @@ class Li2020AdaptiveController(Controller):
     sigma_t0: Any = 1.0  # t0 of the inverse-square sigma [s]
     d_sign: Any = 1.0  # +1 corrected (E000-04), -1 literal eq. (42)
     mu: Any = MU_EARTH  # gravitational parameter of the on-board model [m^3/s^2]
-    sigma_form: str = static("exponential")  # "exponential" (eq. (13)) or "inverse_square" (eq. (14))
+    sigma_form: str = static(default="exponential")  # "exponential" (eq. (13)) or "inverse_square" (eq. (14))
     uses_messages: ClassVar[bool] = True
 
     def initial_state(self):

@@ -21,7 +21,7 @@ Gamma (18) and the adaptive estimate u^ (19); without an estimator both are zero
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import jax
 import jax.numpy as jnp
@@ -62,10 +62,10 @@ class NetworkedElHinfController(Controller):
     phi_b: Any = None
     avg: Any = None
     J_hat: Any = None
-    law: str = static("literal")
-    compensation: str = static("sat")
-    desired_attitude: tuple[str, str, str] = static(("0", "0", "0"))
-    links: tuple[tuple[int, int], ...] = static(())
+    law: Literal["literal", "diffusive"] = static(default="literal")
+    compensation: Literal["sat", "sign", "certainty_equivalence"] = static(default="sat")
+    desired_attitude: tuple[str, str, str] = static(default=("0", "0", "0"))
+    links: tuple[tuple[int, int], ...] = static(default=())
 
     def __post_init__(self) -> None:
         ELHinfConfig(self.law, self.compensation)  # validates the static choices

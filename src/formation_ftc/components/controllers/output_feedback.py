@@ -91,7 +91,7 @@ class LearningOutputFeedbackController(NominalOrbitTracking):
     BpH: Any = 0.0
     pi_initial: Any = 1.0  # (N,)
     v_initial: Any = 0.0  # (N, 3)
-    learning_steps: int = static(1)
+    learning_steps: int = static(default=1)
 
     def initial_state(self):
         m = self.learning_steps
@@ -117,7 +117,7 @@ class ConventionalOutputFeedbackController(NominalOrbitTracking):
 
     K: Any = 0.0
     BpH: Any = 0.0
-    fault_compensation: bool = static(False)
+    fault_compensation: bool = static(default=False)
 
     def output(self, t, state, inputs: FlightInputs):
         q0, e_y, F_hat = self.tracking(inputs)

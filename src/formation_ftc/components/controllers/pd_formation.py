@@ -40,8 +40,8 @@ class PdFormationController(Controller):
     kd: Any = 0.0  # [N s/m]
     mass: Any = 1.0  # (N,) nominal masses [kg]
     max_force: Any = float("inf")  # [N]
-    desired_position: tuple[str, str, str] = static(("0", "0", "0"))
-    is_sampled: bool = static(False)
+    desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
+    is_sampled: bool = static(default=False)
 
     @property
     def sampled(self) -> bool:

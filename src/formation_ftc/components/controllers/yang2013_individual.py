@@ -35,7 +35,7 @@ class Yang2013TranslationalController(Controller):
     mass: Any = 1.0
     K1: Any = 0.005
     K2: Any = 0.01
-    desired_position: tuple[str, str, str] = static(("0", "0", "0"))
+    desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
         def p(tt):

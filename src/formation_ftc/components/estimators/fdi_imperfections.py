@@ -48,12 +48,12 @@ class ScriptedFdi(Estimator):
     seed: Any = 0
     windows: Any = None
     params: Any = None
-    torques: tuple[str, ...] = static(())
-    spacecraft: tuple[int, ...] = static(())
-    channels: tuple[int, ...] = static(())
-    step: float = static(1.0)
-    t0: float = static(0.0)
-    n_channels: int = static(3)
+    torques: tuple[str, ...] = static(default=())
+    spacecraft: tuple[int, ...] = static(default=())
+    channels: tuple[int, ...] = static(default=())
+    step: float = static(default=1.0)
+    t0: float = static(default=0.0)
+    n_channels: int = static(default=3)
 
     def _model(self) -> FDIModel:
         def fault_fn(k):

@@ -52,9 +52,9 @@ class IterativeLearningObserver(Estimator):
     gamma: Any = 0.0  # [m/s^2]
     initial_estimate: Any = 0.0  # q_hat(0), (N, 6) [m, m/s]
     fault_prehistory: Any = 0.0  # F_hat(t), t < 0, (N, 3) [m/s^2]
-    learning_steps: int = static(1)  # m = tau / dt
-    sign_term: bool = static(True)
-    mean_steps: int = static(1)  # steps averaged by fault_estimate_mean (the record interval)
+    learning_steps: int = static(default=1)  # m = tau / dt
+    sign_term: bool = static(default=True)
+    mean_steps: int = static(default=1)  # steps averaged by fault_estimate_mean (the record interval)
 
     def initial_state(self, measurement0):
         n = self.count

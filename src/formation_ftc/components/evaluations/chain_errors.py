@@ -34,7 +34,7 @@ class ThresholdFlag(Evaluation):
 
     name: str = static()
     source: str = static()
-    long_name: str = static("")
+    long_name: str = static(default="")
     threshold: Any = 0.0
 
     def signals(self):

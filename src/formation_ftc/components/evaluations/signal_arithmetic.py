@@ -20,10 +20,10 @@ class SignalSum(Evaluation):
 
     name: str = static()
     terms: tuple[tuple[str, str], ...] = static()
-    dims: tuple[str, ...] = static(("spacecraft", "axis"))
-    units: str = static("1")
-    long_name: str = static("")
-    frame: str | None = static(None)
+    dims: tuple[str, ...] = static(default=("spacecraft", "axis"))
+    units: str = static(default="1")
+    long_name: str = static(default="")
+    frame: str | None = static(default=None)
 
     def __post_init__(self) -> None:
         if not self.terms or any(sign not in ("+", "-") for sign, _ in self.terms):
@@ -46,11 +46,11 @@ class PartNorm(Evaluation):
 
     name: str = static()
     signal: str = static()
-    start: int = static(0)
-    stop: int = static(3)
-    dims: tuple[str, ...] = static(("spacecraft",))
-    units: str = static("1")
-    long_name: str = static("")
+    start: int = static(default=0)
+    stop: int = static(default=3)
+    dims: tuple[str, ...] = static(default=("spacecraft",))
+    units: str = static(default="1")
+    long_name: str = static(default="")
 
     def signals(self):
         return (Signal(self.name, self.dims, self.units, self.long_name),)

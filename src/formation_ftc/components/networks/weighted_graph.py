@@ -91,7 +91,7 @@ class DelayedGraphNetwork(Network):
     dt: float = static()  # sample spacing of the history = the loop's step [s]
     #: False when every used link's delay is known to stay >= dt (e.g. validated by the scenario): the
     #: reads then never need the message sent now, and that per-stage selection is left out
-    short_delays: bool = static(True)
+    short_delays: bool = static(default=True)
     delayed: ClassVar[bool] = True
 
     @property

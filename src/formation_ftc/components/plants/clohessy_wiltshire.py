@@ -29,7 +29,7 @@ class ClohessyWiltshirePlant(Plant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     process_noise_std: Any = 0.0  # [N]
-    disturbance_force: tuple[str, str, str] = static(("0", "0", "0"))  # expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))  # expressions in t, i [N]
 
     @property
     def count(self) -> int:

@@ -32,8 +32,8 @@ class DoubleIntegratorPlant(Plant):
 
     initial_position: Any  # (N, axes) [m]
     initial_velocity: Any  # (N, axes) [m/s]
-    disturbance: str = static("0")  # d_i(t) [m/s^2]
-    zoh: bool = static(True)
+    disturbance: str = static(default="0")  # d_i(t) [m/s^2]
+    zoh: bool = static(default=True)
 
     quantity = "acceleration"
 

@@ -65,7 +65,7 @@ class EulerAngleAttitudePlant(Plant):
     inertia_spread: Any
     disturbance_std: Any
     step: float = static()
-    t0: float = static(0.0)
+    t0: float = static(default=0.0)
     # set by prepare (empty until then: no leaves): (m, 3, 3) true inertia [kg m^2], its inverse and
     # the root key of the disturbance stream
     J: Any = ()

@@ -34,8 +34,8 @@ class QuaternionRigidBodyPlant(Plant):
     inertia: Any  # (3, 3) [kg m^2]
     initial_omega: Any  # (N, 3) [rad/s]
     initial_quaternion: Any  # (N, 4) [-], vector first
-    disturbance_torque: tuple[str, str, str] = static(("0", "0", "0"))  # iota(t) [N m]
-    gyroscopic: bool = static(True)
+    disturbance_torque: tuple[str, str, str] = static(default=("0", "0", "0"))  # iota(t) [N m]
+    gyroscopic: bool = static(default=True)
 
     @property
     def count(self) -> int:

@@ -35,7 +35,7 @@ class RelativeLvlhPlant(Plant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     mu: Any  # gravitational parameter [m^3/s^2]
-    disturbance_force: tuple[str, str, str] = static(("0", "0", "0"))  # h_i(t), expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))  # h_i(t), expressions in t, i [N]
     needs_reference: ClassVar[bool] = True
 
     @property

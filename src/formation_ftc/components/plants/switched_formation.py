@@ -60,8 +60,8 @@ class SwitchedFormationPlant(Plant):
     initial_translation: Any
     variation: Any
     new_states: Any
-    disturbance_force: tuple[str, str, str] = static(("0", "0", "0"))
-    rotation_coupling: bool = static(True)
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
+    rotation_coupling: bool = static(default=True)
 
     @property
     def count(self) -> int:

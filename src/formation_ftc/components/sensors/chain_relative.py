@@ -28,7 +28,7 @@ class ChainRelativeSensors(Sensors):
     n_axes: int = static()
     position_noise_std: Any = 0.0  # [m]
     velocity_noise_std: Any = 0.0  # [m/s]
-    noisy: bool = static(False)
+    noisy: bool = static(default=False)
 
     splits_step_key = True
 

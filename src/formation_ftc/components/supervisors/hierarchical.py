@@ -38,7 +38,7 @@ class HierarchicalSupervisor(Supervisor):
     confirm_steps: Any  # consecutive violations needed (int)
     monitor_start: Any  # first monitored step (int)
     flfr_enabled: Any  # bool
-    t0: float = static(0.0)
+    t0: float = static(default=0.0)
 
     def initial_state(self):
         return initial_state()

@@ -58,8 +58,8 @@ class SwitchingSupervisor(Supervisor):
     eta: Any = 0.01
     eta1: Any = 0.01
     delay_bound_steps: Any = 0
-    desired_position: tuple = static(())
-    t0: float = static(0.0)
+    desired_position: tuple = static(default=())
+    t0: float = static(default=0.0)
 
     def initial_state(self):
         n = self.count

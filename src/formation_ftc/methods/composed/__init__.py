@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationError, model_validator
@@ -191,7 +191,7 @@ class ComposedScenario(ScenarioBase):
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
     """The composed scenario's closed loop (components built from their sections)."""
-    plant_entry = _CATALOG[("plant", s.type_of("plant"))]
+    plant_entry = _CATALOG[("plant", cast(str, s.type_of("plant")))]  # the plant section is required
     plant_section = s.section("plant")
     count = int(getattr(plant_section, "count", len(getattr(plant_section, "mass", []) or [])))
     ctx = BuildContext(scenario=s, count=count, dt=float(s.simulation.dt))

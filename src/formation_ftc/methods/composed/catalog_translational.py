@@ -4,7 +4,7 @@ laws and thruster faults for composed scenarios."""
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -94,7 +94,7 @@ def _cw_plant(sec: CwPlantSection, ctx: BuildContext):
     return ClohessyWiltshirePlant(mean_motion=as_float(sec.mean_motion), mass=as_float(sec.mass),
                                   initial_state_lvlh=as_float(sec.q0()),
                                   process_noise_std=as_float(sec.process_noise_std),
-                                  disturbance_force=tuple(sec.disturbance_force))
+                                  disturbance_force=sec.disturbance_force)
 
 
 class RelativeLvlhSection(_PointMassSection):
@@ -103,7 +103,7 @@ class RelativeLvlhSection(_PointMassSection):
 
 def _relative_lvlh_plant(sec: RelativeLvlhSection, ctx: BuildContext):
     return RelativeLvlhPlant(mass=as_float(sec.mass), initial_state_lvlh=as_float(sec.q0()), mu=as_float(sec.mu),
-                             disturbance_force=tuple(sec.disturbance_force))
+                             disturbance_force=sec.disturbance_force)
 
 
 register_component_type("plant", "clohessy-wiltshire", CwPlantSection, _cw_plant,
@@ -200,7 +200,7 @@ class FormationSection(StrictModel):
             raise ValueError(f"controller.formation.phase: {len(self.phase)} values for {n} spacecraft")
         if self.chi is None and self.period is None:
             raise ValueError("controller.formation: give chi [s^2] or period [s]")
-        chi = self.chi if self.chi is not None else chi_from_period(self.period)
+        chi = self.chi if self.chi is not None else chi_from_period(cast(float, self.period))  # checked above
         return RotatingFormation(offsets=as_float(formation_offsets(self.radius, self.phase)), chi=as_float(chi),
                                  rotation=as_float(self.rotation), growth=as_float(self.growth),
                                  centre=as_float(self.centre_offset))
@@ -270,7 +270,7 @@ def _pd(sec: PdSection, ctx: BuildContext):
     return PdFormationController(count=n, kp=as_float(sec.kp), kd=as_float(sec.kd),
                                  mass=as_float(_per_spacecraft(mass, n, "controller.nominal_mass")),
                                  max_force=as_float(np.inf if sec.max_force is None else sec.max_force),
-                                 desired_position=tuple(sec.desired_position), is_sampled=sec.mode == "sampled")
+                                 desired_position=sec.desired_position, is_sampled=sec.mode == "sampled")
 
 
 register_component_type("controller", "li2020-adaptive", Li2020Section, _li2020,
@@ -287,7 +287,7 @@ class ExpressionFaultSection(StrictModel):
 
 
 def _expression_faults(sec: ExpressionFaultSection, ctx: BuildContext):
-    return ExpressionFaultActuator(count=ctx.count, effectiveness=tuple(sec.effectiveness), bias=tuple(sec.bias))
+    return ExpressionFaultActuator(count=ctx.count, effectiveness=sec.effectiveness, bias=sec.bias)
 
 
 class ThrusterBiasSection(StrictModel):
