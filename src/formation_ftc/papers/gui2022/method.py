@@ -18,6 +18,8 @@ k < n unless stated; final values at the horizon).
 
 from __future__ import annotations
 
+from typing import Any
+
 import jax.numpy as jnp
 import numpy as np
 
@@ -74,7 +76,7 @@ def _controller(s: Gui2022Scenario, K):
         return FreeDrift(count=N_DEPUTIES)
     _, B = cw_matrices(n)
     Bp = np.linalg.pinv(B)  # B^+ = (B^T B)^-1 B^T
-    common = dict(count=N_DEPUTIES, mean_motion=as_float(n),
+    common: dict[str, Any] = dict(count=N_DEPUTIES, mean_motion=as_float(n),
                   desired_initial=as_float(np.asarray(s.initial.desired_state, dtype=float)[None, :]),
                   K=as_float(K), BpH=as_float(Bp @ B))
     if c.law == "cof2tc":
@@ -103,7 +105,7 @@ def metrics_of(s: Gui2022Scenario) -> tuple[Metric, ...]:
     acc = "m s-2"
     out = []
     for i, ax in enumerate(AXES):
-        err = dict(signal="fault_error", component=i, norm=True, spacecraft="max", units=acc, end=last)
+        err: dict[str, Any] = dict(signal="fault_error", component=i, norm=True, spacecraft="max", units=acc, end=last)
         out += [Metric(f"fault_rms_err_{ax}", reduce="rms", start=at(k_rms[i]), **err),
                 Metric(f"fault_settle_time_{ax}", reduce="settle_delay", start=at(onset[i]),
                        threshold=mt.settle_threshold, **{**err, "units": "s"}),
@@ -117,7 +119,7 @@ def metrics_of(s: Gui2022Scenario) -> tuple[Metric, ...]:
                       spacecraft="max", units="1", start=at(ks(mt.estimate_start)),
                       end=(ks(mt.estimate_end) - 0.5) * dt))
     if s.controller.law != "none":
-        pos = dict(signal="position_tracking_error", spacecraft="max", units="m")
+        pos: dict[str, Any] = dict(signal="position_tracking_error", spacecraft="max", units="m")
         out += [Metric("pos_rms", reduce="rms", start=at(ks(mt.position_rms_start)), end=last, **pos),
                 Metric("pos_max_after_fault", reduce="max", start=at(onset[0]), end=last, **pos),
                 Metric("ex_max_fault_window", "tracking_error", reduce="max", component=0, norm=True,
@@ -135,7 +137,7 @@ def metrics_of(s: Gui2022Scenario) -> tuple[Metric, ...]:
 
 def _evaluations(s: Gui2022Scenario) -> tuple:
     acc = "m s-2"
-    out = [SignalSum("fault_error", (("+", "fault"), ("-", "fault_estimate")), units=acc,
+    out: list[SignalSum | PartNorm] = [SignalSum("fault_error", (("+", "fault"), ("-", "fault_estimate")), units=acc,
                      long_name="e_F = F - F_hat"),
            SignalSum("synthesized_disturbance", (("+", "disturbance"), ("+", "fault"), ("-", "fault_estimate")),
                      units=acc, long_name="h = d + e_F (33)"),

@@ -28,6 +28,7 @@ spread (max - min over spacecraft) and largest |angle| per Euler angle [rad].
 from __future__ import annotations
 
 import dataclasses
+from typing import Any, cast
 
 import jax.numpy as jnp
 import numpy as np
@@ -71,8 +72,8 @@ def _metrics(s: MehrabianScenario) -> tuple[Metric, ...]:
     for w, (a, b) in metric_windows(s).items():
         if b - a <= 0:  # window after the horizon (shortened run): no metrics
             continue
-        stage = dict(start=as_float(a), end=as_float(b))
-        sample = dict(start=as_float(a), end=as_float(b - 0.5 * dt))  # samples t_k with a <= t_k < b
+        stage: dict[str, Any] = dict(start=as_float(a), end=as_float(b))
+        sample: dict[str, Any] = dict(start=as_float(a), end=as_float(b - 0.5 * dt))  # samples t_k with a <= t_k < b
         out += [
             Metric(f"sync_err_rms_{w}", "synchronisation_error", "stage_root_mean", norm=True, square=True,
                    spacecraft="mean", units="rad", **stage),
@@ -110,7 +111,7 @@ def make_loop(s: MehrabianScenario) -> ClosedLoop:
         inertia_spread=as_float(s.formation.inertia_uncertainty),
         disturbance_std=as_float(np.sqrt(s.disturbance.variance)), step=dt)
 
-    faults = dict(torques=tuple(str(f.torque) for f in s.faults), spacecraft=tuple(f.spacecraft - 1 for f in s.faults),
+    faults: dict[str, Any] = dict(torques=tuple(str(f.torque) for f in s.faults), spacecraft=tuple(f.spacecraft - 1 for f in s.faults),
                   channels=tuple(f.channel - 1 for f in s.faults), step=dt)
     windows = as_float(np.array([(f.start, f.end) for f in s.faults]).reshape(-1, 2))
     actuator = HeldAdditiveFaultActuator(count=m, windows=windows, **faults)
@@ -124,7 +125,7 @@ def make_loop(s: MehrabianScenario) -> ClosedLoop:
         params = fdi_params(m, nch, fault_mask=mask, onset=min(f.start for f in s.faults), delay=s.fdi.delay,
                             detected=s.fdi.detected, scale=s.fdi.scale, bias=s.fdi.bias,
                             noise_std=s.fdi.noise_std, routing=routing)
-        estimator = ScriptedFdi(count=m, seed=seed, windows=windows, params=params, **faults)
+        estimator: ScriptedFdi | NoEstimator = ScriptedFdi(count=m, seed=seed, windows=windows, params=params, **faults)
     else:
         estimator = NoEstimator()
 
@@ -135,7 +136,7 @@ def make_loop(s: MehrabianScenario) -> ClosedLoop:
         gamma=as_float(c.gamma * np.ones(m)), phi_b=as_float(c.boundary_layer),
         avg=as_float(graphs.row_normalized(A)),
         J_hat=as_float(np.stack([np.diag(s.formation.nominal_inertia)] * m)),
-        law=c.law, compensation=c.compensation, desired_attitude=tuple(str(x) for x in s.desired.attitude),
+        law=c.law, compensation=c.compensation, desired_attitude=cast(tuple[str, str, str], tuple(str(x) for x in s.desired.attitude)),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
     sim = s.simulation
     return ClosedLoop(plant=plant, controller=controller, estimator=estimator, actuator=actuator,
@@ -149,7 +150,8 @@ def with_seed(loop: ClosedLoop, seed: int) -> ClosedLoop:
     est = loop.estimator
     if isinstance(est, ScriptedFdi):
         est = dataclasses.replace(est, seed=sd)
-    return dataclasses.replace(loop, plant=dataclasses.replace(loop.plant, seed=sd), estimator=est, seed=sd)
+    plant = dataclasses.replace(loop.plant, seed=sd)  # type: ignore[type-var]  # every plant is a @component
+    return dataclasses.replace(loop, plant=plant, estimator=est, seed=sd)
 
 
 def build(s: MehrabianScenario) -> Compiled:

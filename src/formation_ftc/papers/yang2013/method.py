@@ -104,8 +104,8 @@ def switched_structure(sc: Yang2013Scenario) -> SwitchedStructure:
             if pc > 0 and not np.any(S[:, c]):
                 leaves[j - 1, pc - 1] = True
     x0 = np.zeros((n, STATE_DIM))
-    for s in sc.initial_state:
-        x0[s.spacecraft - 1] = s.vector()
+    for init in sc.initial_state:
+        x0[init.spacecraft - 1] = init.vector()
     return SwitchedStructure(switch_steps, active, P, xstar, leaves, x0, [m.name for m in modes])
 
 
@@ -114,7 +114,7 @@ def _desired_table(sc: Yang2013Scenario) -> tuple:
     n = sc.spacecraft.count
     table = []
     for m in sc.modes:
-        row = [("0", "0", "0")] * n
+        row: list[tuple[str, ...]] = [("0", "0", "0")] * n
         for d in m.desired:
             row[d.spacecraft - 1] = tuple(str(x) for x in d.position)
         table.append(tuple(row))
@@ -160,10 +160,10 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
     J = as_float(np.diag(sc.spacecraft.inertia))
     attitude = QuaternionRigidBodyPlant(inertia=J, initial_omega=as_float(st.x0[:, 6:9]),
                                         initial_quaternion=as_float(st.x0[:, 9:13]),
-                                        disturbance_torque=tuple(sc.disturbance.torque), gyroscopic=False)
+                                        disturbance_torque=sc.disturbance.torque, gyroscopic=False)
     plant = SwitchedFormationPlant(mass=mass, attitude=attitude, initial_translation=as_float(st.x0[:, 0:6]),
                                    variation=as_float(st.P), new_states=as_float(st.xstar),
-                                   disturbance_force=tuple(sc.disturbance.force),
+                                   disturbance_force=sc.disturbance.force,
                                    rotation_coupling=c.rotation_coupling)
     controller = ForceTorqueController(
         force_law=Yang2013TranslationalController(count=n, mass=mass, K1=as_float(c.K1), K2=as_float(c.K2)),

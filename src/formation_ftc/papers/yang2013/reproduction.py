@@ -13,10 +13,14 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+
+if TYPE_CHECKING:
+    from formation_ftc.papers.yang2013.schema import Yang2013Scenario
 
 __all__ = ["SCENARIOS", "run_scenario", "run_scenarios", "scenario_numbers", "run", "REPRODUCTION"]
 
@@ -39,7 +43,8 @@ def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
     from formation_ftc.sim.batch import batched_run, stack_params
     from formation_ftc.sim.compiled import compile_loop
 
-    scs = [s if hasattr(s, "modes") else load_scenario(s, overrides) for s in names_or_scenarios]
+    scs: list[Yang2013Scenario] = [s if hasattr(s, "modes") else cast("Yang2013Scenario", load_scenario(s, overrides))
+                                   for s in names_or_scenarios]
     compiled = [compile_loop(make_loop(sc, _windows(sc.simulation.dt))) for sc in scs]
     results: list = [None] * len(scs)
     groups: dict = {}
@@ -108,7 +113,7 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
         "x2_norm_4000_minus": x2_pre4000,
         "x2_growth_ratio": x2_pre4000 / x2_3800 if x2_3800 > 0 else float("nan"),
         "state_norm_after_4000": post.get(4000.0, float("nan")),
-        "supervisor_events": decision_events(
+        "supervisor_events": decision_events(  # type: ignore[call-arg]  # a starred generator of 4 items
             *(ds[name].values[-1] for name in ("supervisor_decision", "supervisor_decision_time",
                                                "supervisor_decision_mode", "condition_29_margin")),
             sc.simulation.dt, [m.name for m in sc.modes]),
