@@ -39,6 +39,8 @@ REDUCTIONS = {
                       "(the RK4 stage values; rectangle rule for an exact-step plant) [signal unit x s]",
     "stage_root_mean": "sqrt(stage_integral / (end - start)): with square = True, the RMS over the window",
     "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
+    "last": "value at the horizon (the run's last sample; window ignored), read once after the loop: no "
+            "per-step cost, unlike `final`",
 }
 #: time reductions integrated at the integrator's stages (need a signal evaluated at every RK stage:
 #: plant, controller and actuator outputs, ``command``, ``applied``)
@@ -263,7 +265,7 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
             accs.append((jnp.full(shape, -jnp.inf), jnp.zeros(shape, bool)))
         elif m.reduce == "min":
             accs.append((jnp.full(shape, jnp.inf), jnp.zeros(shape, bool)))
-        elif m.reduce in ("final", "at"):
+        elif m.reduce in ("final", "at", "last"):
             accs.append((nan, jnp.zeros(shape, bool)))
         elif m.reduce in ("mean", "integral"):
             accs.append((jnp.zeros(shape), jnp.zeros(shape)))
@@ -301,6 +303,9 @@ def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array | flo
     for m, acc in zip(metrics, accs, strict=True):
         if m.reduce in STAGE_REDUCTIONS:  # folded in by update_stage_accumulators
             out.append(acc)
+            continue
+        if m.reduce == "last":  # only the horizon sample (a static branch: nothing at the steps)
+            out.append((m.value(signals), jnp.ones_like(acc[1])) if is_final else acc)
             continue
         v = m.value(signals)
         inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
@@ -362,7 +367,7 @@ def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
 def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
     out = []
     for m, acc in zip(metrics, accs, strict=True):
-        if m.reduce in ("max", "min", "final", "at"):
+        if m.reduce in ("max", "min", "final", "at", "last"):
             a, seen = acc
             out.append(jnp.where(seen, a, jnp.nan))
         elif m.reduce == "mean":
