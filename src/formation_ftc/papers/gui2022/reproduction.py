@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import cast
 
 import jax
 import numpy as np
@@ -26,6 +27,7 @@ from formation_ftc.papers.gui2022 import figures as F
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.papers.gui2022.conditions import check
 from formation_ftc.papers.gui2022.method import care_cached, lmi_design_cached
+from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 
 __all__ = ["run_reproduction", "run_scenario", "REPRODUCTION"]
@@ -281,7 +283,7 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
         "F_z literal form (E002-09): the exponential term is e^{-200} ~ 0; flag faults.z_decay_shifted for the "
         "shifted form.",
     ]
-    checks = check(load_scenario("gui2022-lof2tc", ov))
+    checks = check(cast(Gui2022Scenario, load_scenario("gui2022-lof2tc", ov)))
     progress(1.0, "done")
     return PaperReport(
         paper="gui2022", summary=summary, rows=rows, figures=figs, checks=checks,

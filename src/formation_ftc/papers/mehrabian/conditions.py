@@ -5,6 +5,7 @@ of Mehrabian et al., printed next to the paper's values (E003-02, E003-03, E003-
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -16,7 +17,7 @@ from formation_ftc.registry import Condition
 __all__ = ["PRINTED", "PRINTED_RESOLUTION", "matches_printed", "DesignQuantities", "design_quantities", "lyapunov_matrix", "check"]
 
 #: Values printed in Sec. V (per channel; the paper repeats each three times).
-PRINTED = {
+PRINTED: dict[str, Any] = {  # a number or a diagonal (3 numbers) per quantity
     "R": 17.22,
     "sum_Q_jn": (0.17e-4, 0.44, 17.22),
     "Q_j": (0.27e-5, 0.031e-3, 2.78),
@@ -46,8 +47,8 @@ def design_quantities(K: float, K_P: float, K_I: float, alpha: float, gamma: flo
     return DesignQuantities(
         K_minus=km,
         R=1.0 / km if km != 0 else float("inf"),
-        sum_Q_jn=tuple(float(x) for x in sum_q),
-        Q_j=tuple(float(x) for x in q_j),
+        sum_Q_jn=(float(sum_q[0]), float(sum_q[1]), float(sum_q[2])),
+        Q_j=(float(q_j[0]), float(q_j[1]), float(q_j[2])),
         cond11=(1.0 - alpha) * K_P**2 - 2.0 * K_I,
         cond11_swapped=(1.0 - alpha) * K_I**2 - 2.0 * K_P,
         consensus_damping_literal=float(modal_damping(K, alpha, gamma, 1.0, "literal")),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import jax
 import numpy as np
@@ -93,8 +94,8 @@ def _ms(v: np.ndarray, fmt: str = ".3g") -> str:
 
 #: Closed-form design quantities of eqs. (13)-(15), (11) and the literal law's consensus damping for the
 #: printed gains (not printed in this form; docs/references.md, recomputed in tests/papers/test_reference_values.py)
-DESIGN_REFERENCE = {"R": 0.058065, "sum_Q_jn": (1.72e-5, 0.4403, 17.20), "Q_j": (2.80e-6, 0.03168, 2.80),
-                    "cond11": 1.584e-3, "damping": 0.011111}
+DESIGN_REFERENCE: dict[str, Any] = {"R": 0.058065, "sum_Q_jn": (1.72e-5, 0.4403, 17.20), "Q_j": (2.80e-6, 0.03168, 2.80),
+                                     "cond11": 1.584e-3, "damping": 0.011111}
 
 
 def _row(quantity, published, ours, criterion, basis, note="", reference="") -> ComparisonRow:
