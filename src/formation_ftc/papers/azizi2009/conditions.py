@@ -92,6 +92,7 @@ def alpha_flfr(sc: Azizi2009Scenario) -> float:
     if des.verdict == "infeasible":
         raise ValueError(f"supervisor: {des.message}")
     a = des.alpha[float(sc.supervisor.violation_probability)]
+    assert a is not None  # None only when infeasible (raised above)
     return max(float(a), float(sc.allocation.alpha[k]))  # never lower the weight (LLFR already suffices)
 
 

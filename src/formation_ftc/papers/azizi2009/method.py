@@ -29,7 +29,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import jax
 import jax.numpy as jnp
@@ -132,7 +132,7 @@ def make_loop(sc: Azizi2009Scenario) -> ClosedLoop:
 
 
 def _dataset_attrs(sc: Azizi2009Scenario, loop: ClosedLoop) -> dict[str, float]:
-    a_f = float(np.asarray(loop.controller.alpha_flfr))
+    a_f = float(np.asarray(cast(ChainLlfrController, loop.controller).alpha_flfr))  # make_loop's controller
     d_llfr, d_flfr = d_norms(sc, sc.allocation.alpha, a_f)
     return {"alpha_flfr": a_f, "D_norm_llfr": d_llfr, "D_norm_flfr": d_flfr}
 
@@ -166,10 +166,11 @@ def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
         slot, field = VARIABLE[name]
         old = getattr(loop, field) if slot is None else getattr(getattr(loop, slot), field)
         new = jnp.asarray(value, dtype=jnp.result_type(old))
+        change: dict[str, Any] = {field: new}
         if slot is None:
-            loop = dataclasses.replace(loop, **{field: new})
+            loop = dataclasses.replace(loop, **change)
         else:
-            loop = dataclasses.replace(loop, **{slot: dataclasses.replace(getattr(loop, slot), **{field: new})})
+            loop = dataclasses.replace(loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)})
     return loop
 
 
@@ -197,8 +198,8 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> li
         if div >= 0:
             raise RuntimeError(f"batch member {b} diverged at step {div}")
         m = metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]])
-        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(sc, np.asarray(lp.controller.alpha),
-                                                      float(np.asarray(lp.controller.alpha_flfr)))
+        ctl = cast(ChainLlfrController, lp.controller)  # make_loop's controller
+        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(sc, np.asarray(ctl.alpha), float(np.asarray(ctl.alpha_flfr)))
         res.append(m)
     return res
 
