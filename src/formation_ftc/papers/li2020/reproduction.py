@@ -64,6 +64,7 @@ def simulate_li2020(scenario):
 
 def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None) -> PaperReport:
     """Run the study. ``overrides`` (dotted path -> value) apply to every scenario (tests shorten it)."""
+    from formation_ftc.components.evaluations.formation_errors import max_over_window
     from formation_ftc.papers.li2020.conditions import check
     from formation_ftc.papers.li2020.figures import (
         plot_adaptive,
@@ -71,7 +72,6 @@ def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict 
         plot_errors,
         plot_mu,
     )
-    from formation_ftc.papers.li2020.metrics import max_over_window
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
