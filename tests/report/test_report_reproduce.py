@@ -256,6 +256,7 @@ def test_broken_paper_package_becomes_a_failed_section(tmp_path, monkeypatch):
     monkeypatch.setattr(registry, "plugin_modules",
                         lambda: ["formation_ftc.papers.zzfake_bad", "formation_ftc.papers.zzfake_good"])
     monkeypatch.setattr(registry, "_REPRODUCTIONS", {})
+    monkeypatch.setattr(registry, "PLUGIN_ERRORS", {})
     monkeypatch.setattr(registry, "_LOADED", False)
     try:
         found, failures = rp.available_reproductions()

@@ -330,7 +330,8 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         found, import_failures = available_reproductions()
     else:
         found, import_failures = dict(available), {}
-    valid = list(found) + [p for p in registry.PAPER_MODULES if p in import_failures]
+    order = {p: k for k, p in enumerate(registry.PAPER_MODULES)}  # display order of the built-ins
+    valid = list(found) + sorted(import_failures, key=lambda p: (order.get(p, len(order)), p))
     selected = select_papers(papers, valid)
     single = len(selected) == 1 and "all" not in papers
     out = Path(out)
