@@ -43,7 +43,7 @@ from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
 
 __all__ = ["ComposedScenario", "ComponentType", "BuildContext", "register_component_type", "component_types",
-           "make_loop", "build", "SLOTS"]
+           "make_loop", "build", "SLOTS", "per_spacecraft"]
 
 #: slots a composed scenario may fill (plant and controller are required)
 SLOTS = ("plant", "reference", "sensors", "network", "estimator", "supervisor", "controller", "actuator")
@@ -77,6 +77,16 @@ class ComponentType:
 
 
 _CATALOG: dict[tuple[str, str], ComponentType] = {}
+
+
+def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
+    """One number or ``n`` numbers -> (n,) float64 (errors name ``field``)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    return arr
 
 
 def register_component_type(kind: str, name: str, section: type[StrictModel],

@@ -43,7 +43,7 @@ from formation_ftc.components.sensors.chain_relative_state import ChainRelativeS
 from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.config.base import StrictModel
 from formation_ftc.design.allocation import validate_allocation_inputs
-from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.sim.components import CompositionError, as_float
 
 CHAIN_SENSORS = "chain-relative"
@@ -52,13 +52,7 @@ HL_SUPERVISOR = "hierarchical"
 AXES = ("x", "y", "z")
 
 
-def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    return arr
+_per_spacecraft = per_spacecraft
 
 
 def _plant_layout(ctx: BuildContext, slot: str, name: str) -> tuple[str, int]:

@@ -13,25 +13,18 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components.controllers.neighbour_relative import NeighbourRelativeController
 from formation_ftc.components.controllers.yang2013_individual import Yang2013TranslationalController
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.sim.components import as_float
 
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
 
-def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    return arr
+_per_spacecraft = per_spacecraft
 
 
 class Yang2013TranslationalSection(StrictModel):

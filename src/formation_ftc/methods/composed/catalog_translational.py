@@ -25,20 +25,14 @@ from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.history import required_capacity
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
-from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.sim.components import as_float
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
 
-def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    return arr
+_per_spacecraft = per_spacecraft
 
 
 def _per_axis(value, n: int, field: str) -> np.ndarray:
