@@ -7,9 +7,10 @@ from typing import Any
 import jax.numpy as jnp
 
 from formation_ftc.components.expressions import vector_expression
+from formation_ftc.components.plants.relative_state import RelativeStatePlant
 from formation_ftc.core.disturbances import gaussian_noise
 from formation_ftc.core.dynamics.cw import cw_rhs
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import Signal, TruthInputs, component, static
 
 __all__ = ["ClohessyWiltshirePlant"]
 
@@ -17,7 +18,7 @@ VEC = ("spacecraft", "axis")
 
 
 @component
-class ClohessyWiltshirePlant(Plant):
+class ClohessyWiltshirePlant(RelativeStatePlant):
     """N point-mass deputies on linear Clohessy-Wiltshire dynamics about a circular reference orbit.
 
     State ``{"q": (N, 6)}``, q = [x, y, z, vx, vy, vz] in LVLH (x radial, y along-track, z orbit normal)
@@ -47,15 +48,6 @@ class ClohessyWiltshirePlant(Plant):
     def derivative(self, t, x, inputs: TruthInputs):
         f = inputs.force + inputs.exogenous["d"] + inputs.process_noise
         return {"q": cw_rhs(t, x["q"], f / self.mass[:, None], self.mean_motion)}
-
-    def position(self, x):
-        return x["q"][:, :3]
-
-    def velocity(self, x):
-        return x["q"][:, 3:]
-
-    def usage_names(self):
-        return ("delta_v", "control_effort")
 
     def usage_rates(self, t, x, command):
         return {"delta_v": jnp.linalg.norm(command, axis=-1) / self.mass,

@@ -7,9 +7,10 @@ from typing import Any, ClassVar
 import jax.numpy as jnp
 
 from formation_ftc.components.expressions import vector_expression
+from formation_ftc.components.plants.relative_state import RelativeStatePlant
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
 from formation_ftc.core.vector3 import norm3, sq_norm3
-from formation_ftc.sim.components import CompositionError, Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import CompositionError, Signal, TruthInputs, component, static
 
 __all__ = ["RelativeLvlhPlant"]
 
@@ -17,7 +18,7 @@ VEC = ("spacecraft", "axis")
 
 
 @component
-class RelativeLvlhPlant(Plant):
+class RelativeLvlhPlant(RelativeStatePlant):
     """N point-mass spacecraft on the nonlinear relative dynamics of Li2020 eqs. (1)-(4).
 
     State ``{"q": (N, 6)}``, q = [x, y, z, vx, vy, vz] in LVLH (x radial, y along-track, z orbit normal)
@@ -59,15 +60,6 @@ class RelativeLvlhPlant(Plant):
                                                   self.mu)  # eqs. (2)-(4) / m_i
         acc = acc_nat + (inputs.exogenous["h"] + inputs.force) / self.mass[:, None]  # eq. (1)
         return {"q": jnp.concatenate([v, acc], axis=-1)}
-
-    def position(self, x):
-        return x["q"][:, :3]
-
-    def velocity(self, x):
-        return x["q"][:, 3:]
-
-    def usage_names(self):
-        return ("delta_v", "control_effort")
 
     def usage_rates(self, t, x, command):
         return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}

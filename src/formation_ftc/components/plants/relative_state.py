@@ -1,0 +1,21 @@
+"""Shared part of the plants whose state is the (N, 6) relative state ``q = [position, velocity]``."""
+
+from __future__ import annotations
+
+from formation_ftc.sim.components import Plant
+
+__all__ = ["RelativeStatePlant"]
+
+
+class RelativeStatePlant(Plant):
+    """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views and the
+    commanded delta-v / control-effort usage integrals (subclasses give the rates)."""
+
+    def position(self, x):
+        return x["q"][:, :3]
+
+    def velocity(self, x):
+        return x["q"][:, 3:]
+
+    def usage_names(self):
+        return ("delta_v", "control_effort")
