@@ -43,7 +43,8 @@ HELP: dict[str, tuple[str, list[str]]] = {
     "reproduce": ("Run the papers' simulation studies and write DIR/index.html, DIR/summary.json and one "
                   "folder per paper.",
                   ["formation-ftc reproduce li2020 --out out/li2020",
-                   "formation-ftc reproduce all --out out/reproduction"]),
+                   "formation-ftc reproduce all --out out/reproduction",
+                   "formation-ftc reproduce li2020 --out out/li2020 --profile"]),
     "campaign": ("Monte Carlo campaigns: list the built-in ones, run (resumable) and report.",
                  ["formation-ftc campaign list", "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
                   "formation-ftc campaign report out/c"]),

@@ -24,6 +24,7 @@ are written as the strings ``"nan"``, ``"inf"``, ``"-inf"``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import math
@@ -38,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 from formation_ftc import registry
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
+from formation_ftc.report.profile import PHASES, Profiler, format_breakdown
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
@@ -281,13 +283,14 @@ def _paper_summary(entry: dict, report: PaperReport | None) -> dict[str, Any]:
 
 
 def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Callable[[float, str], None],
-             import_error: str | None) -> tuple[dict[str, Any], PaperReport | None]:
+             import_error: str | None, profiler: Profiler | None = None) -> tuple[dict[str, Any], PaperReport | None]:
     t0 = time.perf_counter()
     report: PaperReport | None = None
     error = import_error
     if rep is not None:
         try:
-            result = rep.run(paper_dir, progress)
+            with profiler if profiler is not None else contextlib.nullcontext():
+                result = rep.run(paper_dir, progress)
             if not isinstance(result, PaperReport):
                 raise TypeError(f"Reproduction {paper!r}.run returned {type(result).__name__}, "
                                 "expected registry.PaperReport")
@@ -303,7 +306,7 @@ def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Ca
 # ------------------------------------------------------------------------------------------- driver
 def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, progress: bool = True, *,
               include_3d: bool = True, available: Mapping[str, Reproduction] | None = None,
-              console=None) -> dict[str, Any]:
+              console=None, profile: bool = False) -> dict[str, Any]:
     """Run the selected paper reproductions into ``out`` and write the report.
 
     Parameters
@@ -315,12 +318,15 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     include_3d : embed the interactive 3-D trajectory views (needs plotly).
     available : reproductions to choose from (default: the registry); tests inject fakes here.
     console : rich console for the final wall-time table (default: stdout).
+    profile : time each paper's phases (see :mod:`formation_ftc.report.profile`: compile, run, post,
+        plot, report), print them as a second table and store them in the run metadata
+        (``metadata["profile"]``, and one ``profile_<paper>`` line each for the HTML page).
 
     Returns
     -------
     dict with ``exit_code`` (0 all papers ran, 1 one failed), ``papers`` (``{paper: {status,
     wall_time_s, error}}``), ``summary`` (what ``summary.json`` holds), ``index`` (path of
-    ``index.html``) and ``out``.
+    ``index.html``), ``out`` and, with ``profile``, ``profile`` (``{paper: {phase: seconds}}``).
     """
     from formation_ftc.report import html as html_report
 
@@ -340,6 +346,7 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     t_start = time.perf_counter()
     entries: list[dict[str, Any]] = []
     summaries: dict[str, dict[str, Any]] = {}
+    profiles: dict[str, Profiler] = {}
     with _Bar(progress, len(selected)) as bar:
         for i, paper in enumerate(selected):
             paper_dir = out / paper
@@ -347,13 +354,17 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
                 shutil.rmtree(paper_dir)  # stale figures of an earlier report
             paper_dir.mkdir(parents=True, exist_ok=True)
             bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
+            prof = profiles[paper] = Profiler() if profile else None
             entry, report = _run_one(found.get(paper), paper, paper_dir, bar.callback(i, paper),
-                                     import_failures.get(paper))
+                                     import_failures.get(paper), prof)
+            t_report = time.perf_counter()
             summary = _paper_summary(entry, report)
             summaries[paper] = summary
             entries.append(entry)
             _write_json(paper_dir / "report.json", entry)
             _write_json(paper_dir / "summary.json", {**summary, "paper": paper})
+            if prof is not None:
+                prof.add("report", time.perf_counter() - t_report)
             bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     total = time.perf_counter() - t_start
 
@@ -366,16 +377,29 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         seeds={e["paper"]: e["seeds"] for e in entries},
         total_wall_time_s=round(total, 3),
     )
+    breakdowns = {p: prof.breakdown() for p, prof in profiles.items() if prof is not None}
+    if profile:
+        metadata["profile_method"] = ("compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
+                                      "reads) from jax.monitoring time spans; run/plot: marked blocks without "
+                                      "compile; post: the rest of the paper's wall time; report: JSON files")
+        metadata["profile"] = breakdowns
+        for p, b in breakdowns.items():
+            metadata[f"profile_{p}"] = format_breakdown(b)
     if single:
         paper = selected[0]
         summary_doc = {**summaries[paper], "paper": paper, "metadata": metadata}
     else:
         summary_doc = {**summaries, "metadata": metadata}
+    t_index = time.perf_counter()
     _write_json(out / "summary.json", summary_doc)
     index = html_report.write_index(out, entries, metadata, include_3d=include_3d)
+    index_s = time.perf_counter() - t_index
 
     failed = [e["paper"] for e in entries if e["status"] != "ok"]
     _print_table(entries, total, index, console)
+    if profile:
+        _print_profile(breakdowns, index_s, console)
+    extra = {"profile": {**breakdowns, "index.html": {"report": round(index_s, 3)}}} if profile else {}
     return {
         "exit_code": 1 if failed else 0,
         "papers": {e["paper"]: {"status": e["status"], "wall_time_s": e["wall_time_s"], "error": e["error"]}
@@ -383,7 +407,34 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         "summary": to_jsonable(summary_doc),
         "index": str(index),
         "out": str(out),
+        **extra,
     }
+
+
+def _print_profile(breakdowns: Mapping[str, Mapping[str, float]], index_s: float, console=None) -> None:
+    """The ``--profile`` table: seconds per phase (rows: papers, then the index page and the total)."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = console or Console()
+    table = Table(title="formation-ftc reproduce --profile: wall time per phase [s]")
+    table.add_column("paper")
+    for ph in (*PHASES, "total"):
+        table.add_column(escape(ph), justify="right")
+    sums = dict.fromkeys((*PHASES, "total"), 0.0)
+    for paper, b in breakdowns.items():
+        table.add_row(paper, *(f"{b.get(ph, 0.0):.2f}" for ph in (*PHASES, "total")))
+        for ph in sums:
+            sums[ph] += b.get(ph, 0.0)
+    table.add_row("index.html", *("" for _ in PHASES[:-1]), f"{index_s:.2f}", f"{index_s:.2f}")
+    sums["report"] += index_s
+    sums["total"] += index_s
+    table.add_row("total", *(f"{sums[ph]:.2f}" for ph in (*PHASES, "total")), end_section=True)
+    console.print(table)
+    console.print("compile = JAX tracing + lowering + XLA compile (jax.monitoring time spans, persistent-cache "
+                  "reads included); run / plot = the reproduction's marked blocks without compile; post = the "
+                  "rest (Python post-processing); report = JSON and HTML writing", highlight=False)
 
 
 def _print_table(entries: list[dict], total: float, index: Path, console=None) -> None:
@@ -427,6 +478,9 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
                    help="write into an existing non-empty directory that is not a previous report")
     p.add_argument("--no-3d", dest="include_3d", action="store_false",
                    help="leave out the interactive 3-D trajectory views (smaller page)")
+    p.add_argument("--profile", action="store_true",
+                   help="time each paper's compile / run / post-processing / plotting / report phases, print "
+                        "them as a table and store them in the report's run metadata")
     p.set_defaults(func=run_cli)
     return p
 
@@ -435,7 +489,8 @@ def run_cli(args: argparse.Namespace) -> int:
     """Handler of ``formation-ftc reproduce``; returns the exit status (0, 1 a paper failed, 2 bad input)."""
     try:
         result = reproduce(args.paper, args.out, force=args.force, progress=True,
-                           include_3d=getattr(args, "include_3d", True))
+                           include_3d=getattr(args, "include_3d", True),
+                           profile=getattr(args, "profile", False))
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -28,6 +28,7 @@ from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fi
 from formation_ftc.papers.azizi2009.method import load, run_batch, simulate
 from formation_ftc.papers.azizi2009.published import CITATION, PUBLISHED, TITLE
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
 
 __all__ = ["run_reproduction", "REPRODUCTION", "PUBLISHED", "alpha_min_on_grid"]
 
@@ -69,13 +70,14 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     a_an0 = float(a_an[0.0])
 
     progress(0.08, "scenarios (a), (b), supervisor")
-    ds_ff, m_ff = simulate(load("azizi2009-fault-free", hz))
-    ds_ll, m_ll = simulate(sc_llfr)
-    ds_sv, m_sv = simulate(load("azizi2009-flfr", hz))
     x_only = {**hz, "formation.n_axes": 1}
-    ds_6, m_6 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 6.0, 1.0, 1.0]}))
-    ds_10, m_10 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 10.0, 1.0, 1.0]}))
-    _, m_an = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, a_an0, 1.0, 1.0]}))
+    with phase("run"):
+        ds_ff, m_ff = simulate(load("azizi2009-fault-free", hz))
+        ds_ll, m_ll = simulate(sc_llfr)
+        ds_sv, m_sv = simulate(load("azizi2009-flfr", hz))
+        ds_6, m_6 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 6.0, 1.0, 1.0]}))
+        ds_10, m_10 = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 10.0, 1.0, 1.0]}))
+        _, m_an = simulate(load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, a_an0, 1.0, 1.0]}))
 
     progress(0.25, "alpha_2 sweep (one vmapped batch)")
     n_grid = round(9.0 / sweep_step) + 1
@@ -83,7 +85,8 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     sc_sweep = load("azizi2009-llfr", {**x_only, "simulation.record_every": 1000})
     A = np.ones((n_grid, 4))
     A[:, 1] = alpha_grid
-    res = run_batch(sc_sweep, {"alpha": A})
+    with phase("run"):
+        res = run_batch(sc_sweep, {"alpha": A})
     max_err = np.array([r["max_err"] for r in res])
     d_norm = np.array([r["D_norm_llfr"] for r in res])
     a_min = alpha_min_on_grid(alpha_grid, max_err, e_s)
@@ -101,7 +104,8 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     SA = np.ones((seeds * per_seed.size, 4))
     SA[:, 1] = np.tile(per_seed, seeds)
     SS = np.repeat(seed_ids, per_seed.size)
-    res_s = run_batch(sc_noise, {"alpha": SA, "seed": SS})
+    with phase("run"):
+        res_s = run_batch(sc_noise, {"alpha": SA, "seed": SS})
     me_s = np.array([r["max_err"] for r in res_s]).reshape(seeds, per_seed.size)
     llfr_seed = me_s[:, 0]
     amin_seed = []
@@ -119,16 +123,19 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     for title, ds in (("(a) fault-free", ds_ff), ("(b) LLFR, alpha_2 = 1", ds_ll),
                       ("(c) FLFR, alpha_2 = 6", ds_6), ("(d) FLFR, alpha_2 = 10", ds_10)):
         eff.append((title, ds["time"].values, ds["effort"].sel(axis="x").values))
-    plot_fig2(eff, out_dir / "fig2_effort.png")
+    with phase("plot"):
+        plot_fig2(eff, out_dir / "fig2_effort.png")
     figs.append(Figure("fig2_effort.png", "2", "x-axis cumulative input effort: (a) fault-free, (b) LLFR "
                        "alpha_2 = 1, (c) FLFR alpha_2 = 6, (d) FLFR alpha_2 = 10 (E004-06: caption HLFR -> FLFR)"))
-    plot_fig3(alpha_grid, d_norm, max_err, e_s, a_min, out_dir / "fig3_alpha2.png")
+    with phase("plot"):
+        plot_fig3(alpha_grid, d_norm, max_err, e_s, a_min, out_dir / "fig3_alpha2.png")
     figs.append(Figure("fig3_alpha2.png", "3", "alpha_2 versus (a) ||D||_2 and (b) simulated max tracking error"))
     es_grid = np.linspace(0.012, 0.07, 200)
     coeff = design.coefficients
     analytic_curves = {p: np.array([sc_llfr.fault.b_eps * (1 - p) * design.H / (coeff.q2 * e) - coeff.q1 / coeff.q2
                                     for e in es_grid]) for p in PI_GRID}
-    plot_fig4(es_grid, analytic_curves, max_err, alpha_grid, out_dir / "fig4_analytic_vs_sim.png", e_s)
+    with phase("plot"):
+        plot_fig4(es_grid, analytic_curves, max_err, alpha_grid, out_dir / "fig4_analytic_vs_sim.png", e_s)
     figs.append(Figure("fig4_analytic_vs_sim.png", "4", "analytic alpha_2 (eq. (11), pi = 0..0.4, H from A_clp "
                        "at alpha_2 = 1) and simulated alpha_2 versus e_s"))
 

@@ -29,6 +29,7 @@ from formation_ftc.papers.gui2022.conditions import check
 from formation_ftc.papers.gui2022.method import care_cached, lmi_design_cached
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
 
 __all__ = ["run_reproduction", "run_scenario", "REPRODUCTION"]
 
@@ -38,16 +39,17 @@ def run_scenario(scn, timings: dict | None = None, label: str | None = None):
     ``timings[label] = (compile_s, run_s)`` -- the run time is measured after compilation (runs of one
     structure reuse JAX's persistent compilation cache).
     """
-    c = compile_scenario(scn)
-    t0 = time.perf_counter()
-    executable = jax.jit(c.run).lower(c.params).compile()
-    t1 = time.perf_counter()
-    out = jax.block_until_ready(executable(c.params))
-    t2 = time.perf_counter()
-    if timings is not None:
-        timings[label or scn.scenario.name] = (t1 - t0, t2 - t1)
-    ds, metrics = finish_run(scn, c, out)
-    return F.deputy(ds), metrics
+    with phase("run"):
+        c = compile_scenario(scn)
+        t0 = time.perf_counter()
+        executable = jax.jit(c.run).lower(c.params).compile()
+        t1 = time.perf_counter()
+        out = jax.block_until_ready(executable(c.params))
+        t2 = time.perf_counter()
+        if timings is not None:
+            timings[label or scn.scenario.name] = (t1 - t0, t2 - t1)
+        ds, metrics = finish_run(scn, c, out)
+        return F.deputy(ds), metrics
 
 
 def _fmt(x, p=4):
@@ -100,28 +102,29 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
 
     from formation_ftc.report.html import write_trajectory3d
 
-    write_trajectory3d(out_dir, {"nominal configuration q0": ds_lof.desired_state.values[:, :3],
-                                 "deputy, LOF2TC": ds_lof.state.values[:, :3],
-                                 "deputy, COF2TC": ds_cof.state.values[:, :3]},
-                       title="Gui2022 Fig. 9: relative trajectory in LVLH (interactive)", append=False)
-    figs = [
-        Figure(F.fig3_fault_reconstruction(ds_ilo, out_dir / "fig03_fault_reconstruction.png").name, "3",
-               "F_hat vs F per axis (new ILO, printed gains)"),
-        Figure(F.fig45_estimation_errors(ds_off, ds_ilo, out_dir / "fig04_position_estimation_error.png", False).name,
-               "4", "position estimation error"),
-        Figure(F.fig45_estimation_errors(ds_off, ds_ilo, out_dir / "fig05_velocity_estimation_error.png", True).name,
-               "5", "velocity estimation error"),
-        Figure(F.fig6_ilo_comparison(ds_ilo, ds_base, out_dir / "fig06_ilo_comparison.png").name, "6",
-               "new ILO vs ILO of [25] on the x axis"),
-        Figure(F.fig78_tracking_errors(ds_lof, ds_cof, out_dir / "fig07_position_tracking_error.png", False).name,
-               "7", "position tracking error, LOF2TC vs COF2TC"),
-        Figure(F.fig78_tracking_errors(ds_lof, ds_cof, out_dir / "fig08_velocity_tracking_error.png", True).name,
-               "8", "velocity tracking error, LOF2TC vs COF2TC"),
-        Figure(F.fig9_trajectory(ds_lof, ds_cof, out_dir / "fig09_trajectory_3d.png").name, "9",
-               "3-D trajectory vs the nominal ellipse"),
-        Figure(F.fig10_synthesized_disturbance(ds_lof, out_dir / "fig10_synthesized_disturbance.png").name, "10",
-               "v(t) vs h(t) = d + e_F"),
-    ]
+    with phase("plot"):
+        write_trajectory3d(out_dir, {"nominal configuration q0": ds_lof.desired_state.values[:, :3],
+                                     "deputy, LOF2TC": ds_lof.state.values[:, :3],
+                                     "deputy, COF2TC": ds_cof.state.values[:, :3]},
+                           title="Gui2022 Fig. 9: relative trajectory in LVLH (interactive)", append=False)
+        figs = [
+            Figure(F.fig3_fault_reconstruction(ds_ilo, out_dir / "fig03_fault_reconstruction.png").name, "3",
+                   "F_hat vs F per axis (new ILO, printed gains)"),
+            Figure(F.fig45_estimation_errors(ds_off, ds_ilo, out_dir / "fig04_position_estimation_error.png", False).name,
+                   "4", "position estimation error"),
+            Figure(F.fig45_estimation_errors(ds_off, ds_ilo, out_dir / "fig05_velocity_estimation_error.png", True).name,
+                   "5", "velocity estimation error"),
+            Figure(F.fig6_ilo_comparison(ds_ilo, ds_base, out_dir / "fig06_ilo_comparison.png").name, "6",
+                   "new ILO vs ILO of [25] on the x axis"),
+            Figure(F.fig78_tracking_errors(ds_lof, ds_cof, out_dir / "fig07_position_tracking_error.png", False).name,
+                   "7", "position tracking error, LOF2TC vs COF2TC"),
+            Figure(F.fig78_tracking_errors(ds_lof, ds_cof, out_dir / "fig08_velocity_tracking_error.png", True).name,
+                   "8", "velocity tracking error, LOF2TC vs COF2TC"),
+            Figure(F.fig9_trajectory(ds_lof, ds_cof, out_dir / "fig09_trajectory_3d.png").name, "9",
+                   "3-D trajectory vs the nominal ellipse"),
+            Figure(F.fig10_synthesized_disturbance(ds_lof, out_dir / "fig10_synthesized_disturbance.png").name, "10",
+                   "v(t) vs h(t) = d + e_F"),
+        ]
 
     # --- numbers -------------------------------------------------------------------------------
     t_off = ds_off.time.values

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
 
 __all__ = ["REPRODUCTION", "run_reproduction", "load_li2020", "simulate_li2020", "REFERENCE_RUN", "MU1_INITIAL", "SUMMARY_KEYS", "adaptive_drift"]
 
@@ -87,7 +88,8 @@ def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict 
         else:
             scn = load_li2020(name, overrides=ov)
         scns[name] = scn
-        results[name], mets[name] = simulate_li2020(scn)
+        with phase("run"):
+            results[name], mets[name] = simulate_li2020(scn)
 
     progress(len(runs) / (len(runs) + 1), "drawing figures")
     figs: list[Figure] = []
@@ -98,35 +100,36 @@ def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict 
     d1, d2, ds_sir = results["li2020-thm1"], results["li2020-thm2-delays"], results["li2020-sirftc"]
     from formation_ftc.report.html import write_trajectory3d
 
-    write_trajectory3d(out_dir, {f"spacecraft {int(sc)}": d2.position.sel(spacecraft=sc).values
-                                 for sc in d2.spacecraft.values},
-                       title="Li2020 Thm 2: LVLH trajectories (x radial, y along-track, z normal)",
-                       append=False)
-    add(plot_errors(d1, out_dir / "fig04_position_errors_thm1.png", "position_error",
-                    "Fig. 4: position tracking errors, Thm 1 (eqs. (23)-(27))", "m"), "4",
-        "Position tracking errors e_i1, controller of Thm 1")
-    add(plot_errors(d1, out_dir / "fig05_velocity_errors_thm1.png", "velocity_error",
-                    "Fig. 5: velocity tracking errors, Thm 1", "m/s"), "5", "Velocity tracking errors e_i2, Thm 1")
-    add(plot_mu(d1, out_dir / "fig06_mu_thm1.png", "Fig. 6: formation tracking/keeping errors, Thm 1"), "6",
-        "mu1, mu2 (literal, E000-08) and mu2_vc, Thm 1")
-    add(plot_adaptive(d1, out_dir / "fig07_adaptive_thm1.png", "Fig. 7: adaptive parameters, Thm 1"), "7",
-        "m_hat, beta_hat, d_hat, Thm 1")
-    add(plot_errors(d2, out_dir / "fig08_position_errors_thm2.png", "position_error",
-                    "Fig. 8: position tracking errors, Thm 2 with delays (eqs. (41)-(45))", "m"), "8",
-        "Position tracking errors, Thm 2 with time-varying delays")
-    add(plot_errors(d2, out_dir / "fig09_velocity_errors_thm2.png", "velocity_error",
-                    "Fig. 9: velocity tracking errors, Thm 2", "m/s"), "9", "Velocity tracking errors, Thm 2")
-    add(plot_mu(d2, out_dir / "fig10_mu_thm2.png", "Fig. 10: formation tracking/keeping errors, Thm 2"), "10",
-        "mu1, mu2, mu2_vc, Thm 2")
-    add(plot_adaptive(d2, out_dir / "fig11_adaptive_thm2.png", "Fig. 11: adaptive parameters, Thm 2"), "11",
-        "m_hat, beta_hat, d_hat, Thm 2")
-    add(plot_comparison({"Thm 1 (eqs. (23)-(27))": d1, "SIR-FTC [21]": ds_sir},
-                        out_dir / "fig12_thm1_vs_sirftc.png", "Fig. 12: Thm 1 vs SIR-FTC"), "12",
-        "mu1 and mu2 of the Thm 1 controller and SIR-FTC")
-    add(plot_comparison({"Thm 2, printed C": d2, "Thm 2, balanced C_bal": results["li2020-thm2-balanced"]},
-                        out_dir / "figS1_thm2_printed_vs_balanced.png",
-                        "Supplement: Thm 2 with the printed (unbalanced) and the balanced graph"), "S1",
-        "Thm 2 on the printed graph C and on the balanced variant C_bal (E000-07)")
+    with phase("plot"):
+        write_trajectory3d(out_dir, {f"spacecraft {int(sc)}": d2.position.sel(spacecraft=sc).values
+                                     for sc in d2.spacecraft.values},
+                           title="Li2020 Thm 2: LVLH trajectories (x radial, y along-track, z normal)",
+                           append=False)
+        add(plot_errors(d1, out_dir / "fig04_position_errors_thm1.png", "position_error",
+                        "Fig. 4: position tracking errors, Thm 1 (eqs. (23)-(27))", "m"), "4",
+            "Position tracking errors e_i1, controller of Thm 1")
+        add(plot_errors(d1, out_dir / "fig05_velocity_errors_thm1.png", "velocity_error",
+                        "Fig. 5: velocity tracking errors, Thm 1", "m/s"), "5", "Velocity tracking errors e_i2, Thm 1")
+        add(plot_mu(d1, out_dir / "fig06_mu_thm1.png", "Fig. 6: formation tracking/keeping errors, Thm 1"), "6",
+            "mu1, mu2 (literal, E000-08) and mu2_vc, Thm 1")
+        add(plot_adaptive(d1, out_dir / "fig07_adaptive_thm1.png", "Fig. 7: adaptive parameters, Thm 1"), "7",
+            "m_hat, beta_hat, d_hat, Thm 1")
+        add(plot_errors(d2, out_dir / "fig08_position_errors_thm2.png", "position_error",
+                        "Fig. 8: position tracking errors, Thm 2 with delays (eqs. (41)-(45))", "m"), "8",
+            "Position tracking errors, Thm 2 with time-varying delays")
+        add(plot_errors(d2, out_dir / "fig09_velocity_errors_thm2.png", "velocity_error",
+                        "Fig. 9: velocity tracking errors, Thm 2", "m/s"), "9", "Velocity tracking errors, Thm 2")
+        add(plot_mu(d2, out_dir / "fig10_mu_thm2.png", "Fig. 10: formation tracking/keeping errors, Thm 2"), "10",
+            "mu1, mu2, mu2_vc, Thm 2")
+        add(plot_adaptive(d2, out_dir / "fig11_adaptive_thm2.png", "Fig. 11: adaptive parameters, Thm 2"), "11",
+            "m_hat, beta_hat, d_hat, Thm 2")
+        add(plot_comparison({"Thm 1 (eqs. (23)-(27))": d1, "SIR-FTC [21]": ds_sir},
+                            out_dir / "fig12_thm1_vs_sirftc.png", "Fig. 12: Thm 1 vs SIR-FTC"), "12",
+            "mu1 and mu2 of the Thm 1 controller and SIR-FTC")
+        add(plot_comparison({"Thm 2, printed C": d2, "Thm 2, balanced C_bal": results["li2020-thm2-balanced"]},
+                            out_dir / "figS1_thm2_printed_vs_balanced.png",
+                            "Supplement: Thm 2 with the printed (unbalanced) and the balanced graph"), "S1",
+            "Thm 2 on the printed graph C and on the balanced variant C_bal (E000-07)")
 
     summary = {}
     for name in SCENARIOS:
@@ -187,7 +190,8 @@ def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict 
     t_hi = float(lit.time.values[-1])
     cor = d2
     if float(d2.time.values[-1]) < t_hi:  # shortened study: corrected-sign run over the same window
-        cor = simulate_li2020(load_li2020("li2020-thm2-delays", {"simulation.horizon": t_hi}))[0]
+        with phase("run"):
+            cor = simulate_li2020(load_li2020("li2020-thm2-delays", {"simulation.horizon": t_hi}))[0]
     lit_max = max_over_window(lit.time.values, lit.mu1.values, 50.0, t_hi)
     cor_max = max_over_window(cor.time.values, cor.mu1.values, 50.0, t_hi)
     rows.append(ComparisonRow.judged(

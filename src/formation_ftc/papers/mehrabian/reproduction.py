@@ -21,6 +21,7 @@ from formation_ftc.papers.mehrabian import conditions
 from formation_ftc.papers.mehrabian.figures import plot_attitudes, plot_fault_estimate, plot_seed_spread
 from formation_ftc.papers.mehrabian.method import with_seed
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
 from formation_ftc.sim.batch import batched_run, stack_params
 
 __all__ = ["CASES", "SEEDS", "run_batch", "run", "REPRODUCTION"]
@@ -128,29 +129,37 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     names = [CASES[c][0] for c in "ABC"]
 
     progress(0.02, f"3 cases x {len(seeds)} seeds (one vmapped program)")
-    M, div = run_batch(names, seeds, overrides)
+    with phase("run"):
+        M, div = run_batch(names, seeds, overrides)
+    progress(0.6, "diffusive-law variant (E003-01), seeds 1-3")
+    alt_seeds = seeds[:3]
+    with phase("run"):  # every simulation before the figures
+        Md, divd = run_batch([CASES["A"][0], CASES["C"][0]], alt_seeds,
+                             {**(overrides or {}), "controller.law": "diffusive"})
     A, B, C = 0, 1, 2
     deg = np.rad2deg
 
     progress(0.75, f"figures (seed {FIGURE_SEED})")
-    scns, datasets = _figure_runs(names, FIGURE_SEED, overrides)
+    with phase("run"):
+        scns, datasets = _figure_runs(names, FIGURE_SEED, overrides)
     figures = []
-    p = plot_fault_estimate(datasets[B], out_dir / "fig2_fault_estimate.png", 1, 3,
-                            "Fig. 2: fault in channel 3 of spacecraft 1 and its FDI estimate (Case 3)")
-    figures.append(Figure(p.name, "2", "Additive fault u_bar_{1,3}, FDI estimate u* (5 s latency, -0.1 N m) "
-                                       "and the adaptive estimate u^ of (19), Case 3, seed 1"))
-    win = tuple(scns[0].metrics.fault_window)
-    for i, letter in enumerate("ABC"):
-        name, fig_no, caption = CASES[letter]
-        p = plot_attitudes(datasets[i], out_dir / f"fig{fig_no}_attitudes_{letter}.png",
-                           f"Fig. {fig_no}: {caption} (seed {FIGURE_SEED})", win)
-        figures.append(Figure(p.name, fig_no, f"Attitudes of the 8 spacecraft, {caption}; spacecraft 1 "
-                                              f"dash-dotted; grey: fault window; seed {FIGURE_SEED}"))
-    p = plot_seed_spread({f"{k} ({CASES[k][0].split('-', 1)[1]})": M["sync_err_rms_fault_window"][i]
-                          for i, k in enumerate("ABC")}, out_dir / "fig_seeds_sync_error.png",
-                         "sync error RMS, 40-240 s [rad]", f"Synchronisation error over {len(seeds)} seeds")
-    figures.append(Figure(p.name, "extra", "RMS synchronisation error over neighbour pairs in the fault "
-                                           f"window, each case over {len(seeds)} seeds"))
+    with phase("plot"):
+        p = plot_fault_estimate(datasets[B], out_dir / "fig2_fault_estimate.png", 1, 3,
+                                "Fig. 2: fault in channel 3 of spacecraft 1 and its FDI estimate (Case 3)")
+        figures.append(Figure(p.name, "2", "Additive fault u_bar_{1,3}, FDI estimate u* (5 s latency, -0.1 N m) "
+                                           "and the adaptive estimate u^ of (19), Case 3, seed 1"))
+        win = tuple(scns[0].metrics.fault_window)
+        for i, letter in enumerate("ABC"):
+            name, fig_no, caption = CASES[letter]
+            p = plot_attitudes(datasets[i], out_dir / f"fig{fig_no}_attitudes_{letter}.png",
+                               f"Fig. {fig_no}: {caption} (seed {FIGURE_SEED})", win)
+            figures.append(Figure(p.name, fig_no, f"Attitudes of the 8 spacecraft, {caption}; spacecraft 1 "
+                                                  f"dash-dotted; grey: fault window; seed {FIGURE_SEED}"))
+        p = plot_seed_spread({f"{k} ({CASES[k][0].split('-', 1)[1]})": M["sync_err_rms_fault_window"][i]
+                              for i, k in enumerate("ABC")}, out_dir / "fig_seeds_sync_error.png",
+                             "sync error RMS, 40-240 s [rad]", f"Synchronisation error over {len(seeds)} seeds")
+        figures.append(Figure(p.name, "extra", "RMS synchronisation error over neighbour pairs in the fault "
+                                               f"window, each case over {len(seeds)} seeds"))
 
     progress(0.9, "comparison rows")
     s0 = scns[0]
@@ -258,9 +267,6 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     rows.append(_row("P_j (21) min eigenvalue", "positive definite (eq. (21))", f"{Pmin:.4g}", "> 0",
                      ((">", Pmin, 0.0),)))
 
-    progress(0.93, "diffusive-law variant (E003-01), seeds 1-3")
-    alt_seeds = seeds[:3]
-    Md, divd = run_batch([CASES["A"][0], CASES["C"][0]], alt_seeds, {**(overrides or {}), "controller.law": "diffusive"})
     roll_d = deg(Md["spread_max_roll_assessment_window"])
     summary["diffusive_law_roll_spread_max_45_240_deg"] = {
         CASES["A"][0]: _stats(roll_d[0], "deg", divd[0] < 0), CASES["C"][0]: _stats(roll_d[1], "deg", divd[1] < 0)}

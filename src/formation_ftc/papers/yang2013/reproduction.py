@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
 
 if TYPE_CHECKING:
     from formation_ftc.papers.yang2013.schema import Yang2013Scenario
@@ -136,14 +137,17 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     progress(0.0, "simulating " + ", ".join(SCENARIOS) + " (one batch)")
+    with phase("run"):
+        runs = run_scenarios(SCENARIOS)
     results = {name: (sc, ds, scenario_numbers(sc, ds, metrics))
-               for name, (sc, ds, metrics) in zip(SCENARIOS, run_scenarios(SCENARIOS), strict=True)}
+               for name, (sc, ds, metrics) in zip(SCENARIOS, runs, strict=True)}
     progress(len(SCENARIOS) / (len(SCENARIOS) + 1), "figures")
     sc_h, ds_h, n_h = results["yang2013-healthy"]
     sc_f, ds_f, n_f = results["yang2013-controller-fault"]
     q = n_h["design"]
-    figure_4(ds_h, ds_f, q["envelope"], q["pre_switch_bound"], out_dir / "fig4_state_norm.png")
-    figure_5(ds_h, ds_f, out_dir / "fig5_input_norm_sc2.png")
+    with phase("plot"):
+        figure_4(ds_h, ds_f, q["envelope"], q["pre_switch_bound"], out_dir / "fig4_state_norm.png")
+        figure_5(ds_h, ds_f, out_dir / "fig5_input_norm_sc2.png")
     figures = [
         Figure("fig4_state_norm.png", "4", "Trajectories of |X_sigma(t)(t)|, healthy and with the spacecraft-2 "
                "controller fault at 3800 s, inside the envelope eps + (S+2) zeta D; lower panel |x_i|."),
