@@ -10,7 +10,7 @@ import jax.numpy as jnp
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.sim.components import Controller, FlightInputs, component, static
 
-__all__ = ["PdFormationController", "ZeroController"]
+__all__ = ["DesiredPositionLaw", "PdFormationController", "ZeroController"]
 
 VEC = ("spacecraft", "axis")
 
@@ -26,20 +26,14 @@ class ZeroController(Controller):
 
 
 @component
-class PdFormationController(Controller):
-    """PD formation keeping with feed-forward on measured relative states [N]::
+class DesiredPositionLaw(Controller):
+    """Base of the formation laws that track a desired LVLH position given as expressions.
 
-        u_i = -kp (p_i - p_i^d(t)) - kd (v_i - v_i^d(t)) + m_i a_i^d(t)
-
-    ``p^d(t)`` is an expression per axis (in t [s] and the 1-based spacecraft number i); v^d and a^d are
-    its exact time derivatives (forward-mode autodiff). ``mass`` is the nominal mass the law uses [kg];
-    ``max_force`` saturates each axis [N] (inf: none). ``is_sampled``: held over the step (ZOH)."""
+    ``p^d(t)`` is an expression per axis (in t [s] and the 1-based spacecraft number i) [m]; v^d [m/s]
+    and a^d [m/s^2] are its exact time derivatives (forward-mode autodiff), delivered as the time-only
+    signals ``{"p", "v", "a"}`` (each (N, 3)). ``is_sampled``: the law is held over the step (ZOH)."""
 
     count: int = static()
-    kp: Any = 0.0  # [N/m]
-    kd: Any = 0.0  # [N s/m]
-    mass: Any = 1.0  # (N,) nominal masses [kg]
-    max_force: Any = float("inf")  # [N]
     desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
     is_sampled: bool = static(default=False)
 
@@ -60,6 +54,21 @@ class PdFormationController(Controller):
 
     def desired_position_at(self, exogenous):
         return exogenous["p"]
+
+
+@component
+class PdFormationController(DesiredPositionLaw):
+    """PD formation keeping with feed-forward on measured relative states [N]::
+
+        u_i = -kp (p_i - p_i^d(t)) - kd (v_i - v_i^d(t)) + m_i a_i^d(t)
+
+    ``p^d(t)``, v^d and a^d as in :class:`DesiredPositionLaw`. ``mass`` is the nominal mass the law uses
+    [kg]; ``max_force`` saturates each axis [N] (inf: none). ``is_sampled``: held over the step (ZOH)."""
+
+    kp: Any = 0.0  # [N/m]
+    kd: Any = 0.0  # [N s/m]
+    mass: Any = 1.0  # (N,) nominal masses [kg]
+    max_force: Any = float("inf")  # [N]
 
     def output(self, t, state, inputs: FlightInputs):
         y, d = inputs.measurement, inputs.exogenous

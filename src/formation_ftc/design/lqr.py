@@ -1,0 +1,116 @@
+"""Linear-quadratic regulator (LQR) designed on the Clohessy-Wiltshire model, weights by Bryson's rule.
+
+The gain minimises ``J = int (e^T Q e + a^T R a) dt`` for ``e_dot = A e + B a`` (a: commanded
+acceleration [m/s^2]) and is ``K = R^-1 B^T P`` with P the stabilising solution of the continuous
+algebraic Riccati equation (CARE) ``A^T P + P A - P B R^-1 B^T P + Q = 0``, solved by
+:func:`formation_ftc.design.riccati.solve_care` (scipy's ``solve_continuous_are``).
+
+Bryson's rule: each state and input is weighted by the inverse square of its largest acceptable value,
+``Q = diag(1 / e_max^2)``, ``R = diag(1 / a_max^2)``, so the designer states a maximum position error
+[m], velocity error [m/s] and acceleration [m/s^2] instead of abstract weights.
+
+Offline design code (numpy/scipy); never called inside the time loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from formation_ftc.core.dynamics.cw import cw_matrices
+from formation_ftc.design.riccati import solve_care
+
+__all__ = ["LqrDesign", "bryson_weights", "lqr", "cw_lqr", "care_relative_residual"]
+
+
+@dataclass(frozen=True)
+class LqrDesign:
+    """An LQR design.
+
+    Attributes
+    ----------
+    K : (m, n) gain ``R^-1 B^T P``; for the CW model (3, 6) [1/s^2 | 1/s] (acceleration per error).
+    P : (n, n) stabilising CARE solution (symmetric positive definite).
+    Q, R : the weights the gain was designed with.
+    A, B : the model the gain was designed on.
+    relative_residual : :func:`care_relative_residual` of P [-].
+    closed_loop_eigenvalues : eigenvalues of ``A - B K`` [1/s].
+    """
+
+    K: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    relative_residual: float
+    closed_loop_eigenvalues: np.ndarray
+
+
+def _positive(value, size: int, name: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(size, float(arr))
+    if arr.shape != (size,):
+        raise ValueError(f"{name}: {arr.size} values, expected one number or {size}")
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name}: every value must be finite and > 0")
+    return arr
+
+
+def bryson_weights(max_state, max_input) -> tuple[np.ndarray, np.ndarray]:
+    """Bryson's rule: ``Q = diag(1 / max_state^2)``, ``R = diag(1 / max_input^2)``.
+
+    Parameters
+    ----------
+    max_state : (n,) largest acceptable value of each state (same units as the state).
+    max_input : (m,) largest acceptable value of each input (same units as the input).
+    """
+    xs = _positive(max_state, np.size(max_state), "max_state")
+    us = _positive(max_input, np.size(max_input), "max_input")
+    return np.diag(1.0 / xs**2), np.diag(1.0 / us**2)
+
+
+def care_relative_residual(P, A, B, Q, R) -> float:
+    """``||A^T P + P A - P B R^-1 B^T P + Q||_F`` divided by the sum of the Frobenius norms of the four
+    terms [-]: 0 for an exact solution, about machine precision for a well-solved one."""
+    P, A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (P, A, B, Q, R))
+    terms = (A.T @ P, P @ A, -P @ B @ np.linalg.solve(R, B.T @ P), Q)
+    scale = sum(np.linalg.norm(t) for t in terms)
+    return float(np.linalg.norm(sum(terms)) / scale) if scale > 0 else 0.0
+
+
+def lqr(A, B, Q, R) -> LqrDesign:
+    """LQR gain of ``x_dot = A x + B u`` for the weights Q (n x n, >= 0) and R (m x m, > 0).
+
+    Raises ``ValueError`` (from the CARE solver) when no stabilising solution exists.
+    """
+    A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
+    sol = solve_care(A, B, Q, R)
+    return LqrDesign(K=sol.K, P=sol.P, Q=Q, R=R, A=A, B=B,
+                     relative_residual=care_relative_residual(sol.P, A, B, Q, R),
+                     closed_loop_eigenvalues=sol.closed_loop_eigenvalues)
+
+
+def cw_lqr(mean_motion: float, max_position_error, max_velocity_error, max_acceleration) -> LqrDesign:
+    """LQR gain for the Clohessy-Wiltshire model (acceleration input), weights by Bryson's rule.
+
+    Parameters
+    ----------
+    mean_motion : n of the circular reference orbit [rad/s] (>= 0; 0 gives three double integrators).
+    max_position_error : largest acceptable position error [m], one number or one per LVLH axis.
+    max_velocity_error : largest acceptable velocity error [m/s], one number or one per axis.
+    max_acceleration : largest acceptable commanded acceleration [m/s^2], one number or one per axis.
+
+    Returns
+    -------
+    LqrDesign with K (3, 6): the commanded acceleration is ``-K (q - q_d)`` [m/s^2].
+    """
+    if not (np.isfinite(mean_motion) and mean_motion >= 0):
+        raise ValueError(f"mean_motion = {mean_motion}: must be finite and >= 0 rad/s")
+    A, B = cw_matrices(float(mean_motion))
+    emax = np.concatenate([_positive(max_position_error, 3, "max_position_error"),
+                           _positive(max_velocity_error, 3, "max_velocity_error")])
+    Q, R = bryson_weights(emax, _positive(max_acceleration, 3, "max_acceleration"))
+    return lqr(A, B, Q, R)

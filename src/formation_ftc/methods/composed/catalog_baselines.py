@@ -1,0 +1,87 @@
+"""Catalog: baseline (non-fault-tolerant) formation laws for composed scenarios.
+
+* ``lqr``: LQR state feedback designed on the Clohessy-Wiltshire model of the section's circular orbit,
+  weights by Bryson's rule (:func:`formation_ftc.design.lqr.cw_lqr`), with the feed-forward that makes
+  the desired state an equilibrium of that model
+  (:class:`~formation_ftc.components.controllers.lqr_formation.LqrFormationController`). No
+  communication, no fault estimate: the reference point a fault-tolerant law should beat.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from formation_ftc.components.controllers.lqr_formation import LqrFormationController
+from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.design.lqr import cw_lqr
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
+from formation_ftc.sim.components import as_float
+
+Vec3 = tuple[float, float, float]
+Vec3Expr = tuple[ExprText, ExprText, ExprText]
+
+_BRYSON = ("max_position_error", "max_velocity_error", "max_acceleration")
+
+
+class LqrSection(StrictModel):
+    """LQR on the CW model: weights by Bryson's rule, Q = diag(1/e_max^2), R = diag(1/a_max^2)."""
+
+    max_position_error: float | Vec3 = Field(
+        description="Bryson's rule: largest acceptable position error [m], one number or one per LVLH axis; > 0.")
+    max_velocity_error: float | Vec3 = Field(
+        description="Bryson's rule: largest acceptable velocity error [m/s], one number or one per axis; > 0.")
+    max_acceleration: float | Vec3 = Field(
+        description="Bryson's rule: largest acceptable commanded acceleration [m/s^2], one number or one per axis; > 0.")
+    semi_major_axis: float | None = Field(
+        None, gt=0, description="Radius of the circular orbit the gain is designed on [m] (default: the plant's, "
+                                "else the reference's semi_major_axis).")
+    mu: float | None = Field(None, gt=0, description="Gravitational parameter of the on-board model [m^3/s^2] "
+                                                     "(default: the plant's, else the reference's, else Earth's).")
+    mass: float | list[float] | None = Field(
+        None, description="Nominal on-board mass per spacecraft [kg], one or per spacecraft, > 0 (default: the plant's).")
+    desired_position: Vec3Expr = Field(("0", "0", "0"), description="Desired LVLH position, expressions in t [s], i [m].")
+    mode: Literal["continuous", "sampled"] = Field("continuous", description="Every RK stage or held over the step.")
+
+    @model_validator(mode="after")
+    def _positive(self):
+        for name in _BRYSON:
+            values = getattr(self, name)
+            values = values if isinstance(values, tuple) else (values,)
+            if any(not (math.isfinite(v) and v > 0) for v in values):
+                raise ValueError(f"{name}: every value must be finite and > 0")
+        masses = self.mass if isinstance(self.mass, list) else [] if self.mass is None else [self.mass]
+        if any(not (math.isfinite(m) and m > 0) for m in masses):
+            raise ValueError("mass: every value must be finite and > 0 kg")
+        return self
+
+
+def _from_plant_or_reference(ctx: BuildContext, name: str):
+    for slot in ("plant", "reference"):
+        value = getattr(ctx.section(slot), name, None)
+        if value is not None:
+            return float(value)
+    return None
+
+
+def _lqr(sec: LqrSection, ctx: BuildContext):
+    n_sc = ctx.count
+    a = sec.semi_major_axis if sec.semi_major_axis is not None else _from_plant_or_reference(ctx, "semi_major_axis")
+    if a is None:
+        raise ValueError("controller.semi_major_axis: required (neither the plant nor the reference states one)")
+    mu = sec.mu if sec.mu is not None else _from_plant_or_reference(ctx, "mu") or MU_EARTH
+    n = math.sqrt(mu / a**3)  # mean motion of the circular design orbit [rad/s]
+    design = cw_lqr(n, sec.max_position_error, sec.max_velocity_error, sec.max_acceleration)
+    mass = sec.mass if sec.mass is not None else getattr(ctx.section("plant"), "mass", None)
+    if mass is None:
+        raise ValueError("controller.mass: required (the plant states no masses)")
+    return LqrFormationController(count=n_sc, gain=as_float(design.K), mean_motion=as_float(n),
+                                  mass=as_float(per_spacecraft(mass, n_sc, "controller.mass")),
+                                  desired_position=sec.desired_position, is_sampled=sec.mode == "sampled")
+
+
+register_component_type("controller", "lqr", LqrSection, _lqr,
+                        "LQR baseline designed on Clohessy-Wiltshire (Bryson weights), no fault tolerance")
