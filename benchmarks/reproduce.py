@@ -1,0 +1,130 @@
+"""Time to first result: ``formation-ftc reproduce all`` with a cold and a warm compilation cache, and
+the compile time of every built-in scenario as ``formation-ftc run`` compiles it.
+
+1. ``reproduce all --profile`` in a fresh process with a fresh, empty ``FORMATION_FTC_JAX_CACHE``
+   directory (cold), then again with the same directory (warm). Printed: the wall time of each
+   process (interpreter start and imports included), each paper's wall time and its phase breakdown
+   (compile / run / post / plot / report, see ``formation_ftc.report.profile``).
+2. For every built-in scenario at its default horizon: ``jax.jit(compiled.run).lower(params).compile()``
+   (tracing, lowering and XLA compile; the persistent cache off and JAX's in-memory caches cleared
+   before each scenario, so every number is a cold compile), in one fresh process. The slowest is
+   printed last.
+
+Targets (issue "time to first result", 2 CPU cores): reproduce all cold < 90 s, warm < 40 s; compile
+< 2 s per scenario. Exit status 0 always (a measurement, not a gate); ``--json FILE`` stores the numbers.
+
+Run: ``python benchmarks/reproduce.py [--skip-reproduce] [--skip-compile] [--papers all] [--json out.json]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TARGET_COLD_S, TARGET_WARM_S, TARGET_COMPILE_S = 90.0, 40.0, 2.0
+PHASES = ("compile", "run", "post", "plot", "report")
+
+_COMPILE_SCRIPT = r"""
+import json, sys, time
+import jax
+from formation_ftc.api import compile_scenario, list_scenarios, load_scenario
+names = sorted(list_scenarios())
+out = {}
+for name in names:
+    jax.clear_caches()
+    try:
+        c = compile_scenario(load_scenario(name))
+        t0 = time.perf_counter()
+        jax.jit(c.run).lower(c.params).compile()
+        out[name] = time.perf_counter() - t0
+    except Exception as exc:  # a scenario that cannot compile is reported, not fatal
+        out[name] = f"error: {type(exc).__name__}: {exc}"
+    print(json.dumps({name: out[name]}), flush=True)
+"""
+
+
+def _has_profile() -> bool:
+    """Whether this checkout's ``reproduce`` has ``--profile`` (older ones: wall times only)."""
+    proc = subprocess.run([sys.executable, "-m", "formation_ftc", "reproduce", "--help"], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True)
+    return "--profile" in proc.stdout
+
+
+def _reproduce(papers: list[str], out: Path, cache: Path) -> dict:
+    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache)}
+    cmd = [sys.executable, "-m", "formation_ftc", "reproduce", *papers, "--out", str(out), "--force", "--no-3d",
+           *(["--profile"] if _has_profile() else [])]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        print(proc.stdout[-4000:], file=sys.stderr)
+    meta = json.loads((out / "summary.json").read_text())["metadata"]
+    return {"wall_s": wall, "exit_code": proc.returncode, "papers": meta["wall_time_s"],
+            "profile": meta.get("profile", {}), "status": meta["status"]}
+
+
+def _print_reproduce(label: str, r: dict, target: float) -> None:
+    ok = "yes" if r["wall_s"] < target else "NO"
+    print(f"\nreproduce ({label}): {r['wall_s']:.1f} s wall, exit {r['exit_code']} (target < {target:g} s: {ok})")
+    print(f"  {'paper':12s} {'wall':>7s} " + " ".join(f"{p:>8s}" for p in PHASES))
+    for paper, wall in r["papers"].items():
+        b = r["profile"].get(paper, {})
+        print(f"  {paper:12s} {wall:7.1f} " + " ".join(f"{b.get(p, float('nan')):8.1f}" for p in PHASES)
+              + ("" if r["status"].get(paper) == "ok" else "  FAILED"))
+
+
+def _compile_times() -> dict:
+    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": "off"}
+    proc = subprocess.run([sys.executable, "-c", _COMPILE_SCRIPT], env=env, capture_output=True,
+                          text=True)
+    times: dict = {}
+    for line in proc.stdout.splitlines():
+        if line.startswith("{"):
+            times.update(json.loads(line))
+    if proc.returncode != 0:
+        print(proc.stderr[-4000:], file=sys.stderr)
+    return times
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--papers", nargs="+", default=["all"], help="papers to reproduce (default: all)")
+    ap.add_argument("--skip-reproduce", action="store_true", help="only the scenario compile times")
+    ap.add_argument("--skip-compile", action="store_true", help="only reproduce (cold and warm)")
+    ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
+    args = ap.parse_args(argv)
+    result: dict = {"cpu_count": os.cpu_count()}
+    with tempfile.TemporaryDirectory(prefix="ftc-bench-") as tmp:
+        tmp_path = Path(tmp)
+        if not args.skip_reproduce:
+            cache = tmp_path / "jax-cache"  # fresh: created by the package on import
+            result["cold"] = _reproduce(args.papers, tmp_path / "cold", cache)
+            _print_reproduce("cold compilation cache", result["cold"], TARGET_COLD_S)
+            result["warm"] = _reproduce(args.papers, tmp_path / "warm", cache)
+            _print_reproduce("warm compilation cache", result["warm"], TARGET_WARM_S)
+    if not args.skip_compile:
+        times = _compile_times()
+        result["compile_s"] = times
+        print(f"\nformation-ftc run: compile time per built-in scenario (cold; target < {TARGET_COMPILE_S:g} s)")
+        numeric = {k: v for k, v in times.items() if isinstance(v, float)}
+        for name, t in sorted(times.items(), key=lambda kv: (isinstance(kv[1], str), kv[1] if
+                                                             isinstance(kv[1], float) else 0.0)):
+            print(f"  {name:36s} " + (f"{t:6.2f} s" if isinstance(t, float) else t))
+        if numeric:
+            worst = max(numeric, key=numeric.__getitem__)
+            ok = "yes" if numeric[worst] < TARGET_COMPILE_S else "NO"
+            print(f"  slowest: {worst} {numeric[worst]:.2f} s (< {TARGET_COMPILE_S:g} s: {ok})")
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
