@@ -45,6 +45,9 @@ EULER_SENSORS = "quaternion-euler"
 EULER_LAW = "networked-el-hinf"
 EULER_ALLOCATION = "euler-torque-allocation"
 SCRIPTED_FDI = "scripted-fdi"
+#: plant types whose state is {"omega": (N, 3), "q": (N, 4)} (body rate, quaternion vector first): the Euler
+#: sensors, the torque allocation and the Euler-angle law accept them; other catalogs add theirs
+QUATERNION_PLANTS: set[str] = {QUATERNION_PLANT}
 
 
 def _vec3_text(v: Vec3Expr) -> tuple[str, str, str]:
@@ -118,9 +121,9 @@ register_component_type("plant", QUATERNION_PLANT, QuaternionPlantSection, _quat
 
 def _needs_quaternion_plant(slot: str, name: str, ctx: BuildContext) -> None:
     plant = ctx.scenario.type_of("plant")
-    if plant != QUATERNION_PLANT:
+    if plant not in QUATERNION_PLANTS:
         raise CompositionError(f"{slot} {name} converts a quaternion attitude, but plant {plant} has none "
-                               f"(use it with plant {QUATERNION_PLANT})")
+                               f"(use it with plant {' or '.join(sorted(QUATERNION_PLANTS))})")
 
 
 # ----------------------------------------------------------------------------------------- sensors
@@ -270,18 +273,20 @@ class NetworkedElHinfSection(StrictModel):
 def _attitude_chain_fits(ctx: BuildContext) -> None:
     """The Euler-angle law on a quaternion plant needs the Euler sensors and the torque allocation."""
     s = ctx.scenario
-    if s.type_of("plant") != QUATERNION_PLANT:
+    plant = s.type_of("plant")
+    if plant not in QUATERNION_PLANTS:
         return  # other plants: the loop's own checks (quantities, counts) apply
     if s.type_of("sensors") != EULER_SENSORS:
         raise CompositionError(
-            f"controller {EULER_LAW} reads 3-2-1 Euler angles, but plant {QUATERNION_PLANT} has a quaternion "
+            f"controller {EULER_LAW} reads 3-2-1 Euler angles, but plant {plant} has a quaternion "
             f"attitude and sensors {s.type_of('sensors') or '(none: the raw plant state)'} do not convert it "
             f"(use sensors type = \"{EULER_SENSORS}\")")
-    if s.type_of("actuator") != EULER_ALLOCATION:
+    if s.type_of("actuator") != EULER_ALLOCATION and not getattr(ctx.section("actuator"), "euler_allocation", False):
         raise CompositionError(
             f"controller {EULER_LAW} commands a generalised torque conjugate to the Euler angles, but plant "
-            f"{QUATERNION_PLANT} is driven by a body torque and actuator {s.type_of('actuator') or '(ideal)'} "
-            f"does not map one to the other (use actuator type = \"{EULER_ALLOCATION}\")")
+            f"{plant} is driven by a body torque and actuator {s.type_of('actuator') or '(ideal)'} "
+            f"does not map one to the other (use actuator type = \"{EULER_ALLOCATION}\", or one with "
+            "euler_allocation = true)")
     # the law's model is singular at pitch +-90 deg: start well away from it
     check_away_from_singularity(ctx.section("plant").euler_angles(), field="plant initial attitude (3-2-1 Euler angles)")
 

@@ -1,0 +1,180 @@
+"""Catalog: the attitude truth plant (``plant.type = "attitude-truth"``) for composed scenarios.
+
+Quaternion rigid bodies with inertial attitude on a circular orbit with the gravity-gradient torque
+(:class:`~formation_ftc.components.plants.attitude_truth.AttitudeTruthPlant`). It has the state layout
+of ``quaternion-rigid-body``, so the Euler sensors (``quaternion-euler``), the generalised-torque
+allocation (``euler-torque-allocation``), the scripted FDI and the Euler-angle attitude law
+(``networked-el-hinf``) compose with it exactly as with that plant.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
+from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
+from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS
+from formation_ftc.sim.components import as_float
+
+__all__ = ["ATTITUDE_TRUTH_PLANT", "AttitudeTruthSection", "initial_inertial_state"]
+
+ATTITUDE_TRUTH_PLANT = "attitude-truth"
+EARTH_RADIUS = 6_378_137.0  # equatorial radius [m] (WGS 84), lower bound of the orbit radius
+
+Vec3 = tuple[float, float, float]
+Mat3 = tuple[Vec3, Vec3, Vec3]
+
+
+class AttitudeTruthSection(StrictModel):
+    """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
+
+    inertia: Vec3 = Field(description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
+                                      "spacecraft unless inertia_matrices is given, and the model an attitude "
+                                      "law uses by default.")
+    inertia_matrices: list[Mat3] | None = Field(
+        None, description="Full inertia matrix per spacecraft (one 3x3 row list each, or a single one for all) "
+                          "[kg m^2]: symmetric, positive definite, satisfying the triangle inequalities; "
+                          "overrides `inertia` in the truth.")
+    semi_major_axis: float = Field(7.0e6, ge=EARTH_RADIUS, le=1.0e9,
+                                   description="Radius of the circular orbit [m] (>= the Earth's equatorial radius).")
+    mu: float = Field(MU_EARTH, gt=0.0, description="Gravitational parameter [m^3/s^2].")
+    initial_argument_of_latitude_deg: float = Field(
+        0.0, ge=-360.0, le=360.0, description="Argument of latitude u0 of the spacecraft at t = 0 [deg].")
+    gravity_gradient: bool = Field(True, description="Apply the gravity-gradient torque.")
+    initial_frame: Literal["inertial", "lvlh"] = Field(
+        "inertial", description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
+                                "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).")
+    initial_attitude_deg: list[Vec3] | None = Field(
+        None, description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
+                          "[deg] (give this or initial_quaternion).")
+    initial_quaternion: list[tuple[float, float, float, float]] | None = Field(
+        None, description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].")
+    initial_body_rate: list[Vec3] | None = Field(
+        None, description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0 in "
+                          "initial_frame).")
+    disturbance_torque: tuple[ExprText, ExprText, ExprText] = Field(
+        ("0", "0", "0"), description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].")
+
+    @model_validator(mode="after")
+    def _check(self):
+        for k, x in enumerate(self.inertia):
+            if not (x > 0 and math.isfinite(x)):
+                raise ValueError(f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2")
+        if (self.initial_attitude_deg is None) == (self.initial_quaternion is None):
+            raise ValueError("give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]")
+        if self.initial_quaternion is not None:
+            for k, p in enumerate(self.initial_quaternion):
+                norm = float(np.linalg.norm(p))
+                if not abs(norm - 1.0) <= 1e-6:
+                    raise ValueError(f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed")
+        n = self.count
+        if n < 1:
+            raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")
+        if self.initial_body_rate is not None and len(self.initial_body_rate) != n:
+            raise ValueError(f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft")
+        if self.inertia_matrices is not None:
+            if len(self.inertia_matrices) not in (1, n):
+                raise ValueError(f"inertia_matrices: {len(self.inertia_matrices)} matrices for {n} spacecraft "
+                                 f"(give one or {n})")
+            for k, m in enumerate(self.inertia_matrices):
+                _check_inertia(np.asarray(m, dtype=float), f"inertia_matrices[{k}]")
+        return self
+
+    @property
+    def count(self) -> int:
+        rows = self.initial_attitude_deg if self.initial_attitude_deg is not None else self.initial_quaternion
+        return len(rows or [])
+
+    def orbit_rate(self) -> float:
+        """n = sqrt(mu / a^3) [rad/s]."""
+        return math.sqrt(self.mu / self.semi_major_axis**3)
+
+    def given_quaternions(self) -> np.ndarray:
+        """(N, 4) initial unit quaternions in ``initial_frame``."""
+        if self.initial_quaternion is not None:
+            p = np.asarray(self.initial_quaternion, dtype=float)
+            return p / np.linalg.norm(p, axis=-1, keepdims=True)
+        return np.asarray(quaternion_from_euler_zyx(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
+
+    def quaternions(self) -> np.ndarray:
+        """(N, 4) initial body -> inertial quaternions."""
+        return initial_inertial_state(self)[1]
+
+    def euler_angles(self) -> np.ndarray:
+        """(N, 3) initial inertial 3-2-1 Euler angles [rad] (what the Euler sensors measure at t = 0)."""
+        return np.asarray(euler_zyx_from_quaternion(self.quaternions()))
+
+    def inertia_tensor(self) -> np.ndarray:
+        """(N, 3, 3) inertia of every spacecraft [kg m^2]."""
+        n = self.count
+        if self.inertia_matrices is None:
+            return np.broadcast_to(np.diag(np.asarray(self.inertia, float)), (n, 3, 3)).copy()
+        mats = np.asarray(self.inertia_matrices, dtype=float)
+        return np.broadcast_to(mats, (n, 3, 3)).copy()
+
+
+def _check_inertia(m: np.ndarray, field: str) -> None:
+    if m.shape != (3, 3) or not np.all(np.isfinite(m)):
+        raise ValueError(f"{field}: a finite 3x3 matrix is needed [kg m^2]")
+    if not np.allclose(m, m.T, rtol=1e-9, atol=1e-12 * float(np.abs(m).max())):
+        raise ValueError(f"{field}: not symmetric")
+    eig = np.linalg.eigvalsh(m)
+    if not eig[0] > 0:
+        raise ValueError(f"{field}: not positive definite (smallest principal inertia {eig[0]:.6g} kg m^2)")
+    if eig[0] + eig[1] < eig[2] * (1.0 - 1e-12):
+        raise ValueError(f"{field}: principal inertias {eig[0]:.6g}, {eig[1]:.6g}, {eig[2]:.6g} kg m^2 violate "
+                         "the triangle inequality J1 + J2 >= J3 of a rigid body")
+
+
+def _rz_quaternion(u: float) -> np.ndarray:
+    return np.array([0.0, 0.0, math.sin(0.5 * u), math.cos(0.5 * u)])
+
+
+def _quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    pv, p4 = p[..., :3], p[..., 3:]
+    qv, q4 = q[..., :3], q[..., 3:]
+    return np.concatenate([p4 * qv + q4 * pv + np.cross(pv, qv), p4 * q4 - np.sum(pv * qv, -1, keepdims=True)], -1)
+
+
+def initial_inertial_state(sec: AttitudeTruthSection) -> tuple[np.ndarray, np.ndarray]:
+    """(omega (N, 3) [rad/s], q (N, 4)) at t = 0 relative to the inertial frame.
+
+    With ``initial_frame = "lvlh"`` the given attitude q_L (body -> LVLH) and rate w_r (relative to LVLH)
+    become ``q = q_z(u0) (x) q_L`` and ``omega = w_r + n o_b`` with o_b the orbit normal in body axes.
+    """
+    n_sc = sec.count
+    q = sec.given_quaternions()
+    w = np.zeros((n_sc, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
+    if sec.initial_frame == "lvlh":
+        u0 = math.radians(sec.initial_argument_of_latitude_deg)
+        q_l = q
+        q = _quat_mul(np.broadcast_to(_rz_quaternion(u0), q_l.shape), q_l)
+        # orbit normal (LVLH z) in body axes: third row of C(q_L)
+        qv, q4 = q_l[:, :3], q_l[:, 3]
+        o_b = np.stack([2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]), 2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
+                        q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2], axis=-1)
+        w = w + sec.orbit_rate() * o_b
+    return w, q
+
+
+def _attitude_truth(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTruthPlant:
+    w0, q0 = initial_inertial_state(sec)
+    a, b, c = sec.disturbance_torque
+    return AttitudeTruthPlant(
+        inertia=as_float(sec.inertia_tensor()), initial_omega=as_float(w0), initial_quaternion=as_float(q0),
+        semi_major_axis=as_float(sec.semi_major_axis), mu=as_float(sec.mu),
+        initial_argument_of_latitude=as_float(math.radians(sec.initial_argument_of_latitude_deg)),
+        disturbance_torque=(str(a), str(b), str(c)), gravity_gradient=sec.gravity_gradient)
+
+
+QUATERNION_PLANTS.add(ATTITUDE_TRUTH_PLANT)
+register_component_type("plant", ATTITUDE_TRUTH_PLANT, AttitudeTruthSection, _attitude_truth,
+                        "rigid-body attitudes (inertial quaternion) on a circular orbit with the gravity-gradient "
+                        "torque, driven by body torques")
