@@ -272,6 +272,12 @@ class Plant(_Kind):
         """Recorded true-state signals (declared by :meth:`signals`)."""
         return {}
 
+    def sensed_state(self, x: PyTree) -> PyTree:
+        """The view of the truth state that sensors measure (default: the state itself). A plant whose
+        state is not in the formation frame (e.g. inertial orbits) returns here the layout relative-state
+        sensors read (``{"q": (N, 6)}`` in LVLH), so every sensor built for that layout works on it."""
+        return x
+
     def position(self, x: PyTree) -> jax.Array | None:
         """True (N, 3) position in the formation frame [m] (None for rotational plants); used only
         for evaluation (the ``position_error`` record) and the admissible set, never by the flight side."""

@@ -207,9 +207,9 @@ class ClosedLoop:
     def _evaluate(self, t, z, ctx):
         """Derivatives of the integrated state ``z = {plant, controller, usage}`` and the outputs at
         one RK stage; ``ctx`` holds the step's held values and this stage's time signals."""
-        exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held = ctx
+        exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held, act_state = ctx
         x = z["plant"]
-        y = self.sensors.measure(t, x, SensorInputs(s_noise, ref))
+        y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
         flight = self._flight(y, None, est, dec, exo["controller"], ref)
         received = None
         if not isinstance(self.network, NoNetwork):
@@ -221,7 +221,7 @@ class ClosedLoop:
             dc = None
         else:
             u, dc, ctl_out = self.controller.output(t, z["controller"], flight)
-        act_in = ActuatorInputs(exo["actuator"], z.get("actuator_state"), dec, x)
+        act_in = ActuatorInputs(exo["actuator"], act_state, dec, x)
         applied = self.actuator.apply(t, u, act_in)
         truth = TruthInputs(applied, exo["plant"], ref, p_noise, dec)
         dx = self.plant.derivative(t, x, truth)
@@ -251,7 +251,7 @@ class ClosedLoop:
         ref0 = None if isinstance(self.reference, NoReference) else self.reference.values(r0)
         t0 = jnp.asarray(self.t0, dtype=jnp.float64)
         s_noise, _ = self._noise(jnp.asarray(0, dtype=jnp.int64))
-        y0 = self.sensors.measure(t0, x0, SensorInputs(s_noise, ref0))
+        y0 = self.sensors.measure(t0, self.plant.sensed_state(x0), SensorInputs(s_noise, ref0))
         state = dict(plant=x0, reference=r0, controller=self.controller.initial_state(),
                      estimator=self.estimator.initial_state(y0), supervisor=self.supervisor.initial_state(),
                      actuator=self.actuator.initial_state(),
@@ -274,7 +274,7 @@ class ClosedLoop:
         r_next, refs = self._reference_stages(state["reference"])
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
-        y = self.sensors.measure(t_k, x, SensorInputs(s_noise, refs[0]))
+        y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, refs[0]))
         est_state, est, sup_state, dec = self._discrete(k, t_k, state, y, exos[0], refs[0])
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):
@@ -293,7 +293,7 @@ class ClosedLoop:
             held = (u, ctl_out)
 
         def ctx(j):
-            return (exos[j], refs[j], s_noise, p_noise, est, dec, net_state, t_k, held)
+            return (exos[j], refs[j], s_noise, p_noise, est, dec, net_state, t_k, held, state["actuator"])
 
         z = {"plant": x, "controller": None if self.controller.sampled else state["controller"],
              "usage": state["usage"]}
@@ -346,7 +346,7 @@ class ClosedLoop:
         ref = None if isinstance(self.reference, NoReference) else self.reference.values(r)
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
-        y = self.sensors.measure(t_k, x, SensorInputs(s_noise, ref))
+        y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
         # the estimator / supervisor outputs recorded are those of their current state (an estimator
         # with ``refresh_on_observe`` records its update at t_k, as the step computes it)
         est_state = state["estimator"]
@@ -366,7 +366,8 @@ class ClosedLoop:
             u, _, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
         z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}
-        _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held))
+        _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held,
+                                            state["actuator"]))
         outputs.update(self.estimator.outputs(t_k, est_state, est))
         outputs.update(self.supervisor.outputs(t_k, state["supervisor"], dec))
         for name, v in state["usage"].items():

@@ -12,6 +12,7 @@ A composed scenario names one component type per slot of the closed loop and giv
     [supervisor]       type = ...                    (optional)
     [controller]       type = "li2020-adaptive"      ...its fields
     [actuator]         type = "thruster-bias"        (optional, default: ideal)
+    [[evaluations]]    type = "formation-scores"     (optional: truth-side score signals)
     [[metrics]]        name, signal, reduce, ...     (optional, computed at every step)
 
 Every component type is registered in a catalog (:func:`register_component_type`) with a pydantic
@@ -43,10 +44,13 @@ from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
 
 __all__ = ["ComposedScenario", "ComponentType", "BuildContext", "register_component_type", "component_types",
-           "make_loop", "build", "SLOTS", "per_spacecraft"]
+           "make_loop", "build", "SLOTS", "KINDS", "per_spacecraft"]
 
 #: slots a composed scenario may fill (plant and controller are required)
 SLOTS = ("plant", "reference", "sensors", "network", "estimator", "supervisor", "controller", "actuator")
+#: kinds of the catalog: the slots plus ``evaluation`` (a list: ``[[evaluations]]``, truth-side signals
+#: for records and metrics only)
+KINDS = (*SLOTS, "evaluation")
 
 
 @dataclass(frozen=True)
@@ -93,8 +97,8 @@ def register_component_type(kind: str, name: str, section: type[StrictModel],
                             build: Callable[[Any, BuildContext], Any], description: str) -> ComponentType:
     """Make ``[kind] type = "name"`` available in composed scenarios. ``section`` validates the table
     (without its ``type`` key); ``build(section, context)`` returns the component."""
-    if kind not in SLOTS:
-        raise ValueError(f"unknown slot {kind!r} (slots: {', '.join(SLOTS)})")
+    if kind not in KINDS:
+        raise ValueError(f"unknown slot {kind!r} (kinds: {', '.join(KINDS)})")
     entry = ComponentType(kind, name, section, build, description)
     _CATALOG[(kind, name)] = entry
     return entry
@@ -157,8 +161,11 @@ class ComposedScenario(ScenarioBase):
     estimator: dict[str, Any] | None = Field(None, description="Observer / FDI (optional).")
     supervisor: dict[str, Any] | None = Field(None, description="Supervisor (optional).")
     actuator: dict[str, Any] | None = Field(None, description="Actuator chain with faults (optional).")
+    evaluations: list[dict[str, Any]] = Field(default_factory=list, description=(
+        "Truth-side evaluation signals (records and metrics only): `type` and that type's fields."))
     metrics: list[MetricSection] = Field(default_factory=list, description="Metrics computed at every step.")
     _sections: dict[str, Any] = PrivateAttr(default_factory=dict)
+    _evaluation_sections: list[tuple[str, Any]] = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
     def _compose(self):
@@ -185,6 +192,21 @@ class ComposedScenario(ScenarioBase):
                     lines.append(f"{slot}.{loc}: {err.get('msg')}" if loc else f"{slot}: {err.get('msg')}")
                 raise ValueError("; ".join(lines)) from None
         self._sections = sections
+        evaluations: list[tuple[str, Any]] = []
+        known = sorted(n for (k, n) in _CATALOG if k == "evaluation")
+        for j, raw in enumerate(self.evaluations):
+            name = raw.get("type")
+            entry = _CATALOG.get(("evaluation", str(name)))
+            if entry is None:
+                raise ValueError(f"evaluations[{j}].type = {name!r} is not an evaluation type "
+                                 f"(known: {', '.join(known) or 'none registered'})")
+            try:
+                evaluations.append((str(name), entry.section.model_validate(
+                    {k: v for k, v in raw.items() if k != "type"})))
+            except ValidationError as exc:
+                raise ValueError("; ".join(f"evaluations[{j}].{'.'.join(str(p) for p in e.get('loc', ()))}: "
+                                           f"{e.get('msg')}" for e in exc.errors())) from None
+        self._evaluation_sections = evaluations
         try:
             make_loop(self).validate()
         except CompositionError as exc:
@@ -212,6 +234,8 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         if name is None:
             continue
         parts[slot] = _CATALOG[(slot, name)].build(s.section(slot), ctx)
+    for name, section in s._evaluation_sections:  # after every slot: they may read any signal
+        ctx.evaluations.append(_CATALOG[("evaluation", name)].build(section, ctx))
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)

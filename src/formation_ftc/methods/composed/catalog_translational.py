@@ -181,21 +181,36 @@ register_component_type("network", "delayed-graph", DelayedGraphSection, _delaye
 
 # ------------------------------------------------------------------------------------- controllers
 class FormationSection(StrictModel):
-    radius: float = Field(gt=0, description="Formation radius [m].")
-    phase: list[float] = Field(description="Phase of each spacecraft on the formation circle [rad].")
+    radius: float | None = Field(None, gt=0, description="Formation radius [m] (with `phase`; or give `offsets`).")
+    phase: list[float] | None = Field(None, description="Phase of each spacecraft on the formation circle [rad].")
+    offsets: list[Vec3] | None = Field(None, description=(
+        "Explicit formation offsets rho_bar_iF per spacecraft [m], LVLH (instead of radius and phase)."))
     rotation: float = Field(0.0, description="Final rotation about the LVLH y axis [rad].")
     growth: float = Field(0.0, description="Final relative size change [-].")
     centre_offset: Vec3 = Field((0.0, 0.0, 0.0), description="Final centre offset [m].")
     chi: float | None = Field(None, gt=0, description="Time constant of the manoeuvre [s^2].")
     period: float | None = Field(None, gt=0, description="Reference period used to derive chi when chi is not given [s].")
 
+    @model_validator(mode="after")
+    def _geometry(self):
+        if (self.offsets is None) == (self.radius is None or self.phase is None):
+            raise ValueError("controller.formation: give either radius and phase, or offsets")
+        return self
+
     def component(self, n: int) -> RotatingFormation:
-        if len(self.phase) != n:
-            raise ValueError(f"controller.formation.phase: {len(self.phase)} values for {n} spacecraft")
+        if self.offsets is not None:
+            if len(self.offsets) != n:
+                raise ValueError(f"controller.formation.offsets: {len(self.offsets)} offsets for {n} spacecraft")
+            offsets = np.asarray(self.offsets, dtype=float)
+        else:
+            phase = cast(list, self.phase)
+            if len(phase) != n:
+                raise ValueError(f"controller.formation.phase: {len(phase)} values for {n} spacecraft")
+            offsets = formation_offsets(cast(float, self.radius), phase)
         if self.chi is None and self.period is None:
             raise ValueError("controller.formation: give chi [s^2] or period [s]")
         chi = self.chi if self.chi is not None else chi_from_period(cast(float, self.period))  # checked above
-        return RotatingFormation(offsets=as_float(formation_offsets(self.radius, self.phase)), chi=as_float(chi),
+        return RotatingFormation(offsets=as_float(offsets), chi=as_float(chi),
                                  rotation=as_float(self.rotation), growth=as_float(self.growth),
                                  centre=as_float(self.centre_offset))
 

@@ -1,0 +1,262 @@
+"""League definitions: which methods, on which truth, under which faults, scored how.
+
+A league is a TOML file (built-in ones in ``league/data/``)::
+
+    [league]        name, version, description, battery, seeds, quick_seeds, seed, horizon, chunk_size
+    [league.requirement]   metric, max, units       pass/fail of every run
+    [league.initial_error] field, std, units        desired slot + N(0, std^2) per axis and spacecraft
+    [league.onset]         low, high                fault onset, uniform [s]
+    [truth]         the plant table shared by every method (e.g. type = "orbital-truth")
+    [sensors]       the sensors shared by every method (a method may replace them)
+    [actuator]      the actuator table shared by every method (type = "fault-battery")
+    [[levels]]      name, saturation                actuator levels (per-axis limit [N or N m]; inf: none)
+    [[evaluations]] score signals (e.g. type = "formation-scores")
+    [[metrics]]     scores computed inside every run
+    [[methods]]     name, scenario, label, reference     one per method
+
+Each method's ``scenario`` is a partial composed scenario (``league/data/<league>/<method>.toml``) that
+gives what belongs to the law -- controller, network, reference (the on-board orbit model), estimator,
+supervisor, the sensors it needs and its own time step -- and nothing about the truth, the faults or
+the scoring, which the league fills in alike for every method.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from formation_ftc.config.base import StrictModel
+from formation_ftc.errors import InputError
+
+__all__ = ["LeagueError", "LeagueSpec", "MethodEntry", "Level", "builtin_leagues", "load_league",
+           "method_scenario", "league_hash"]
+
+#: the slots a method's own file may fill (the league owns plant, actuator, evaluations and metrics)
+METHOD_SLOTS = ("reference", "sensors", "network", "estimator", "supervisor", "controller")
+
+
+class LeagueError(InputError):
+    """A league definition that cannot run (exit code 2); the message names the entry."""
+
+
+class Requirement(StrictModel):
+    metric: str = Field(description="Metric the requirement is stated on (one of the league's metrics).")
+    max: float = Field(gt=0, description="Largest value that passes [metric units].")
+    units: str = Field("1", description="Units of `max` (UDUNITS).")
+
+
+class InitialError(StrictModel):
+    field: str = Field(description="Dotted path of the plant's (N, 3) initial position list, e.g. "
+                                   "'plant.initial_position'.")
+    std: float = Field(ge=0, description="Standard deviation of the initial position error per axis [m or rad].")
+    units: str = Field("m", description="Units of `std`.")
+
+
+class Onset(StrictModel):
+    field: str = Field("actuator.onset", description="Dotted path of the fault onset [s].")
+    low: float = Field(ge=0, description="Earliest onset [s].")
+    high: float = Field(ge=0, description="Latest onset [s].")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.high < self.low:
+            raise ValueError(f"league.onset: high = {self.high} < low = {self.low}")
+        return self
+
+
+class LeagueMeta(StrictModel):
+    name: str = Field(description="League name.")
+    version: str = Field(description="League definition version (bump on any change of its content).")
+    description: str = Field("", description="One line shown by `formation-ftc league list`.")
+    kind: str = Field("translational", description="'translational' or 'attitude' (what the scores mean).")
+    battery: str = Field(description="Name of the fault battery (league/data/battery-NAME.toml).")
+    seeds: int = Field(100, ge=1, le=100_000, description="Monte Carlo seeds per cell (full league) [-].")
+    quick_seeds: int = Field(10, ge=1, le=100_000, description="Seeds per cell with --quick [-].")
+    seed: int = Field(0, ge=0, description="League seed: every run's seed and draws derive from it [-].")
+    horizon: float = Field(gt=0, description="Simulated time of every run [s].")
+    chunk_size: int = Field(64, ge=1, le=100_000, description="Runs per vmap batch [-].")
+    settle_start: float = Field(ge=0, description="Start of the scoring window (after the acquisition) [s].")
+    requirement: Requirement
+    initial_error: InitialError
+    onset: Onset
+    trace_seed: int = Field(0, ge=0, description="Seed index whose time histories the report plots [-].")
+
+
+class Level(StrictModel):
+    name: str = Field(description="Actuator level name (e.g. 'unsaturated', 'limited').")
+    saturation: float = Field(gt=0, description="Per-axis limit of every actuator [N or N m]; inf: none.")
+    note: str = Field("", description="Why this limit (shown in the report).")
+
+
+class MethodEntry(StrictModel):
+    name: str = Field(description="Method name in the leaderboard.")
+    scenario: str = Field(description="The method's partial composed scenario, relative to the league file.")
+    label: str = Field("", description="Long name shown in the report.")
+    reference: str = Field("", description="Where the law and its gains come from (docs/references.md).")
+    gain_rule: str = Field("", description="How the paper's gains were carried to the league plant.")
+
+
+class LeagueSpec(StrictModel):
+    league: LeagueMeta
+    truth: dict[str, Any] = Field(description="The truth plant table shared by every method.")
+    sensors: dict[str, Any] | None = Field(None, description="Default sensors (a method may replace them).")
+    actuator: dict[str, Any] = Field(description="The actuator table shared by every method (fault battery).")
+    levels: list[Level] = Field(min_length=1, description="Actuator levels.")
+    evaluations: list[dict[str, Any]] = Field(default_factory=list, description="Score signals.")
+    metrics: list[dict[str, Any]] = Field(min_length=1, description="Scores computed inside every run.")
+    methods: list[MethodEntry] = Field(min_length=1, description="The methods ranked.")
+    _source: Path | None = None
+
+    @field_validator("levels")
+    @classmethod
+    def _unique_levels(cls, v):
+        names = [lv.name for lv in v]
+        if len(set(names)) != len(names):
+            raise ValueError(f"levels: duplicate names {names}")
+        return v
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        names = [m.name for m in self.methods]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"methods: duplicate method names {dup}")
+        metric_names = [str(m.get("name")) for m in self.metrics]
+        if self.league.requirement.metric not in metric_names:
+            raise ValueError(f"league.requirement.metric = {self.league.requirement.metric!r} is not one of the "
+                             f"league's metrics ({', '.join(metric_names)})")
+        return self
+
+    @property
+    def source(self) -> Path | None:
+        return self._source
+
+    def method(self, name: str) -> MethodEntry:
+        for m in self.methods:
+            if m.name == name:
+                return m
+        raise LeagueError(f"method {name!r} is not in league {self.league.name!r} "
+                          f"(methods: {', '.join(m.name for m in self.methods)})")
+
+
+def _data_dir() -> Path:
+    return Path(str(resources.files("formation_ftc.league") / "data"))
+
+
+def builtin_leagues() -> dict[str, Path]:
+    """Built-in league name -> definition file."""
+    out = {}
+    for p in sorted(_data_dir().glob("league-*.toml")):
+        out[p.stem.removeprefix("league-")] = p
+    return out
+
+
+def _format(exc: ValidationError, source: str) -> str:
+    lines = []
+    for err in exc.errors():
+        loc = ".".join(str(p) for p in err.get("loc", ()))
+        lines.append(f"{source}: {loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}")
+    return "\n".join(lines)
+
+
+def load_league(name_or_path: str | Path) -> LeagueSpec:
+    """A built-in league by name, or a league TOML file; every field validated (errors name it)."""
+    known = builtin_leagues()
+    path = known.get(str(name_or_path))
+    if path is None:
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise LeagueError(f"league {str(name_or_path)!r}: neither a built-in league "
+                              f"({', '.join(known) or 'none'}) nor a file")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise LeagueError(f"{path}: not valid TOML: {exc}") from None
+    try:
+        spec = LeagueSpec.model_validate(raw)
+    except ValidationError as exc:
+        raise LeagueError(_format(exc, str(path))) from None
+    spec._source = path.resolve()
+    for m in spec.methods:
+        if not (spec._source.parent / m.scenario).is_file():
+            raise LeagueError(f"{path}: methods[{m.name}].scenario = {m.scenario!r}: no such file next to the "
+                              "league definition")
+    return spec
+
+
+def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
+    assert spec.source is not None
+    path = spec.source.parent / method.scenario
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise LeagueError(f"method {method.name}: {path}: not valid TOML: {exc}") from None
+    allowed = {"scenario", "simulation", "actuator", *METHOD_SLOTS}
+    extra = sorted(set(raw) - allowed)
+    if extra:
+        raise LeagueError(f"method {method.name}: {path.name} sets {extra}; a method file gives only "
+                          f"{', '.join(sorted(allowed))} (the league owns the truth, faults and scores)")
+    return raw
+
+
+def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, case_fields: dict[str, Any],
+                    network_fields: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The full composed scenario of one cell: the league's truth, sensors, actuator level and fault case,
+    evaluations and metrics, with the method's own slots (and time step) on top."""
+    own = _method_raw(spec, method)
+    meta = own.get("scenario", {})
+    sim = dict(own.get("simulation", {}))
+    unknown_sim = sorted(set(sim) - {"dt", "record_every", "unroll"})
+    if unknown_sim:
+        raise LeagueError(f"method {method.name}: simulation.{unknown_sim[0]}: a method sets only its step "
+                          "(dt), record_every and unroll; the league sets the horizon and the seed")
+    raw: dict[str, Any] = {
+        "scenario": {"name": f"league-{spec.league.name}-{method.name}", "method": "composed",
+                     "description": meta.get("description", method.label or method.name)},
+        "simulation": {"horizon": spec.league.horizon, **sim},
+        "plant": copy.deepcopy(spec.truth),
+    }
+    if spec.sensors is not None:
+        raw["sensors"] = copy.deepcopy(spec.sensors)
+    for slot in METHOD_SLOTS:
+        if slot in own:
+            raw[slot] = copy.deepcopy(own[slot])
+    actuator = copy.deepcopy(spec.actuator)
+    actuator.update(copy.deepcopy(own.get("actuator", {})))  # structural options of the method (allocation)
+    actuator.update(case_fields)
+    actuator["saturation"] = level.saturation
+    raw["actuator"] = actuator
+    if network_fields:
+        if "network" not in raw:
+            raise LeagueError(f"method {method.name} has no network: a communication fault does not apply")
+        raw["network"].update(network_fields)
+    raw["evaluations"] = copy.deepcopy(spec.evaluations)
+    raw["metrics"] = copy.deepcopy(spec.metrics)
+    return raw
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return repr(obj)
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    return obj
+
+
+def league_hash(spec: LeagueSpec) -> str:
+    """sha256 of the definition and of every method file (what the results directory is bound to)."""
+    assert spec.source is not None
+    h = hashlib.sha256(json.dumps(_jsonable(spec.model_dump()), sort_keys=True).encode())
+    for m in spec.methods:
+        h.update((spec.source.parent / m.scenario).read_bytes())
+    return h.hexdigest()
