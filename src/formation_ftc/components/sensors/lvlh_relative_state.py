@@ -1,0 +1,43 @@
+"""Sensors of an inertial truth plant: the deputies' state relative to the chief, in the chief's LVLH frame."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from formation_ftc.core.disturbances import gaussian_noise
+from formation_ftc.core.dynamics.orbital_truth import eci_to_lvlh
+from formation_ftc.sim.components import SensorInputs, Sensors, component, static
+
+__all__ = ["LvlhRelativeStateSensors"]
+
+
+@component
+class LvlhRelativeStateSensors(Sensors):
+    """Relative position and velocity of every deputy in the truth chief's LVLH frame, with additive
+    Gaussian noise drawn once per step (held over the step) and a constant bias::
+
+        y_i = eci_to_lvlh(x_chief, x_i) + [n_p, n_v] + b_i        [m, m/s]
+
+    The plant state must hold the chief's and the deputies' ECI states under ``"chief"`` (6,) and
+    ``"deputies"`` (N, 6) (:class:`~formation_ftc.components.plants.orbital_truth.InertialFormationPlant`).
+    The output has the layout of
+    :class:`~formation_ftc.components.sensors.relative_state.RelativeStateSensors` ((N, 6), x radial,
+    y along-track, z orbit normal), and the noise is drawn the same way from the step's key, so laws
+    built for relative-state sensors run unchanged."""
+
+    count: int = static()  # number of spacecraft
+    position_noise_std: Any = 0.0  # [m]
+    velocity_noise_std: Any = 0.0  # [m/s]
+    bias: Any = 0.0  # (N, 6) or broadcastable: constant bias [m, m/s]
+
+    def noise(self, key):
+        n = self.count
+        k_p, k_v = jax.random.split(key, 2)
+        return jnp.concatenate([gaussian_noise(k_p, (n, 3), self.position_noise_std),
+                                gaussian_noise(k_v, (n, 3), self.velocity_noise_std)], axis=-1)
+
+    def measure(self, t, x, inputs: SensorInputs):
+        return eci_to_lvlh(x["chief"], x["deputies"]) + inputs.noise + self.bias

@@ -1,0 +1,312 @@
+"""High-fidelity orbital truth: Earth-centred inertial (ECI) translation with J2, drag and SRP.
+
+Every function is pure ``jax.numpy`` (float64, SI units: metres, seconds, kilograms, radians) and works
+on stacked inputs (``(..., 3)`` positions and velocities) and traced parameters (Monte Carlo).
+
+Model (per unit mass, ECI, z axis along Earth's rotation axis)::
+
+    r'' = -mu r / |r|^3                          two-body                          (1)
+        + a_J2(r)                                zonal J2 term                     (2)
+        - 1/2 rho(h) B |v_rel| v_rel             drag, v_rel = v - omega_E x r     (3)
+        - P_sun C_R A/m s_hat                    cannonball SRP, s_hat: to the Sun (4)
+        + f / m                                  applied force f [N]
+
+    a_J2 = -3/2 J2 mu R_E^2 / r^5 [x (1 - 5 z^2/r^2), y (1 - 5 z^2/r^2), z (3 - 5 z^2/r^2)]   (2)
+    U_J2 =  1/2 J2 mu R_E^2 / r^3 (3 z^2/r^2 - 1)   (a_J2 = -grad U_J2)                      (5)
+
+Earth constants (module constants; every function also takes them as arguments):
+
+* ``MU_EARTH`` = 3.986004418e14 m^3/s^2 -- WGS-84 gravitational parameter (the package-wide value of
+  :mod:`formation_ftc.core.orbit`);
+* ``R_EARTH`` = 6378137.0 m -- WGS-84 equatorial radius (used as the J2 reference radius and for the
+  altitude of the spherical-Earth atmosphere);
+* ``J2_EARTH`` = 1.0826266835531513e-3 -- EGM96: J2 = -sqrt(5) C20bar with the normalised
+  C20bar = -4.84165371736e-4;
+* ``OMEGA_EARTH`` = 7.292115e-5 rad/s -- WGS-84 Earth rotation rate (co-rotating atmosphere);
+* ``SOLAR_PRESSURE`` = 1361 / 299792458 = 4.5398e-6 N/m^2 -- total solar irradiance 1361 W/m^2 at
+  1 AU (Kopp & Lean 2011) over the speed of light.
+
+Atmosphere: the piecewise exponential model of Vallado (Fundamentals of Astrodynamics and Applications,
+4th ed. 2013, Table 8-4, from CIRA-72): rho(h) = rho_0 exp(-(h - h_0) / H) with (h_0, rho_0, H) of the
+band containing the altitude h = |r| - R_E (spherical Earth), see :data:`EXPONENTIAL_ATMOSPHERE`. A
+single exponential is the one-row table ``[[h_0, rho_0, H]]``. Below the first base altitude the first
+row is extrapolated. The atmosphere co-rotates with the Earth (omega_E about the ECI z axis).
+
+SRP: cannonball model with a fixed Sun direction in ECI and no eclipse (the spacecraft is always lit);
+the pressure is the 1 AU value (no Sun-distance variation).
+
+Frames: the chief's LVLH frame has x radial (outward), y along-track (in the orbit plane, completing the
+triad), z along the orbit normal h = r x v -- the convention of
+:mod:`formation_ftc.core.dynamics.relative_lvlh`. Relative velocities are taken in the rotating frame
+with the angular velocity omega = r x v / |r|^2 of the chief (exact for a Keplerian chief; under J2 or
+drag the frame's small rotation about the radial axis, of order |r| a_normal / |h|, is not included).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.core.orbit import MU_EARTH
+
+__all__ = [
+    "MU_EARTH",
+    "R_EARTH",
+    "J2_EARTH",
+    "OMEGA_EARTH",
+    "SOLAR_PRESSURE",
+    "EXPONENTIAL_ATMOSPHERE",
+    "two_body_acceleration",
+    "j2_acceleration",
+    "j2_potential",
+    "specific_energy_j2",
+    "atmospheric_density",
+    "drag_acceleration",
+    "srp_acceleration",
+    "perturbed_acceleration",
+    "elements_to_eci",
+    "eci_to_elements",
+    "lvlh_rotation",
+    "lvlh_angular_velocity",
+    "eci_to_lvlh",
+    "lvlh_to_eci",
+    "j2_secular_rates",
+    "drag_decay_rate_circular",
+]
+
+R_EARTH = 6378137.0  # m, WGS-84 equatorial radius
+J2_EARTH = 1.0826266835531513e-3  # -, EGM96 (-sqrt(5) * C20bar, C20bar = -4.84165371736e-4)
+OMEGA_EARTH = 7.292115e-5  # rad/s, WGS-84 rotation rate
+SOLAR_PRESSURE = 1361.0 / 299792458.0  # N/m^2, TSI 1361 W/m^2 (Kopp & Lean 2011) / c
+
+#: Vallado (2013) Table 8-4: rows [base altitude h_0 [m], nominal density rho_0 [kg/m^3], scale height H [m]]
+EXPONENTIAL_ATMOSPHERE = np.array([
+    [0.0, 1.225, 7.249], [25.0, 3.899e-2, 6.349], [30.0, 1.774e-2, 6.682], [40.0, 3.972e-3, 7.554],
+    [50.0, 1.057e-3, 8.382], [60.0, 3.206e-4, 7.714], [70.0, 8.770e-5, 6.549], [80.0, 1.905e-5, 5.799],
+    [90.0, 3.396e-6, 5.382], [100.0, 5.297e-7, 5.877], [110.0, 9.661e-8, 7.263], [120.0, 2.438e-8, 9.473],
+    [130.0, 8.484e-9, 12.636], [140.0, 3.845e-9, 16.149], [150.0, 2.070e-9, 22.523],
+    [180.0, 5.464e-10, 29.740], [200.0, 2.789e-10, 37.105], [250.0, 7.248e-11, 45.546],
+    [300.0, 2.418e-11, 53.628], [350.0, 9.518e-12, 53.298], [400.0, 3.725e-12, 58.515],
+    [450.0, 1.585e-12, 60.828], [500.0, 6.967e-13, 63.822], [600.0, 1.454e-13, 71.835],
+    [700.0, 3.614e-14, 88.667], [800.0, 1.170e-14, 124.64], [900.0, 5.245e-15, 181.05],
+    [1000.0, 3.019e-15, 268.00],
+]) * np.array([1e3, 1.0, 1e3])  # km -> m for the altitudes and scale heights
+
+
+def _norm(v):
+    return jnp.sqrt(jnp.sum(v * v, axis=-1, keepdims=True))
+
+
+# --------------------------------------------------------------------------------------- forces
+def two_body_acceleration(r, mu=MU_EARTH):
+    """Point-mass gravity -mu r / |r|^3 [m/s^2] (eq. (1)); ``r`` (..., 3) [m]."""
+    r = jnp.asarray(r)
+    return -mu * r / _norm(r) ** 3
+
+
+def j2_acceleration(r, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
+    """Acceleration of the J2 zonal harmonic [m/s^2] (eq. (2)); ``r`` (..., 3) ECI [m]."""
+    r = jnp.asarray(r)
+    rn = _norm(r)
+    z2 = (r[..., 2:3] / rn) ** 2
+    k = -1.5 * j2 * mu * r_earth**2 / rn**5
+    factors = jnp.concatenate([1.0 - 5.0 * z2, 1.0 - 5.0 * z2, 3.0 - 5.0 * z2], axis=-1)
+    return k * r * factors  # eq. (2)
+
+
+def j2_potential(r, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
+    """Potential energy per unit mass of the J2 term [J/kg] (eq. (5)); its negative gradient is
+    :func:`j2_acceleration`. ``r`` (..., 3) ECI [m]; returns shape (...)."""
+    r = jnp.asarray(r)
+    rn = jnp.linalg.norm(r, axis=-1)
+    return 0.5 * j2 * mu * r_earth**2 / rn**3 * (3.0 * (r[..., 2] / rn) ** 2 - 1.0)  # eq. (5)
+
+
+def specific_energy_j2(state, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
+    """Total specific energy |v|^2/2 - mu/|r| + U_J2 [J/kg] of ``state`` (..., 6) [m, m/s]; conserved by
+    two-body + J2 motion (the J2 field is axisymmetric about the ECI z axis, hence time-invariant)."""
+    state = jnp.asarray(state)
+    r, v = state[..., :3], state[..., 3:]
+    return 0.5 * jnp.sum(v * v, axis=-1) - mu / jnp.linalg.norm(r, axis=-1) + j2_potential(r, mu, j2, r_earth)
+
+
+def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
+    """Piecewise exponential density rho(h) = rho_0 exp(-(h - h_0)/H) [kg/m^3] at altitude ``altitude`` [m].
+
+    ``table`` (K, 3) rows [h_0 [m], rho_0 [kg/m^3], H [m]] sorted by h_0; the band is the last row with
+    h_0 <= h (the first row below its base altitude)."""
+    table = jnp.asarray(table)
+    h = jnp.asarray(altitude)
+    idx = jnp.clip(jnp.searchsorted(table[:, 0], h, side="right") - 1, 0, table.shape[0] - 1)
+    row = table[idx]
+    return row[..., 1] * jnp.exp(-(h - row[..., 0]) / row[..., 2])
+
+
+def drag_acceleration(r, v, ballistic, table=EXPONENTIAL_ATMOSPHERE, omega_earth=OMEGA_EARTH,
+                      r_earth=R_EARTH):
+    """Drag -1/2 rho B |v_rel| v_rel [m/s^2] with v_rel = v - omega_E x r (eq. (3)).
+
+    Parameters
+    ----------
+    r, v : (..., 3) ECI position [m] and velocity [m/s]
+    ballistic : B = C_D A / m [m^2/kg], shape (...) (broadcast against the leading axes)
+    table : density table of :func:`atmospheric_density`
+    omega_earth : Earth rotation rate about the ECI z axis [rad/s]
+    r_earth : radius of the spherical Earth for the altitude [m]
+    """
+    r, v = jnp.asarray(r), jnp.asarray(v)
+    rho = atmospheric_density(jnp.linalg.norm(r, axis=-1) - r_earth, table)
+    w = jnp.array([0.0, 0.0, 1.0]) * omega_earth
+    v_rel = v - jnp.cross(jnp.broadcast_to(w, r.shape), r)
+    return (-0.5 * rho * jnp.asarray(ballistic))[..., None] * _norm(v_rel) * v_rel  # eq. (3)
+
+
+def srp_acceleration(srp_coefficient, sun_direction, pressure=SOLAR_PRESSURE):
+    """Cannonball SRP -P C_R A/m s_hat [m/s^2] (eq. (4)), no eclipse, fixed Sun direction.
+
+    ``srp_coefficient`` C_R A / m [m^2/kg], shape (...); ``sun_direction`` (3,) ECI vector towards the Sun
+    (normalised here); ``pressure`` P [N/m^2]. Returns (..., 3)."""
+    s = jnp.asarray(sun_direction)
+    s = s / jnp.linalg.norm(s)
+    return (-pressure * jnp.asarray(srp_coefficient))[..., None] * s  # eq. (4)
+
+
+def perturbed_acceleration(r, v, *, mu=MU_EARTH, j2=None, r_earth=R_EARTH, ballistic=None,
+                           table=EXPONENTIAL_ATMOSPHERE, omega_earth=OMEGA_EARTH, srp_coefficient=None,
+                           sun_direction=(1.0, 0.0, 0.0), pressure=SOLAR_PRESSURE):
+    """Natural acceleration (1) + optional (2)-(4) [m/s^2]; a term is off when its parameter is None
+    (``j2``, ``ballistic``, ``srp_coefficient``). Shapes as in the individual terms."""
+    a = two_body_acceleration(r, mu)
+    if j2 is not None:
+        a = a + j2_acceleration(r, mu, j2, r_earth)
+    if ballistic is not None:
+        a = a + drag_acceleration(r, v, ballistic, table, omega_earth, r_earth)
+    if srp_coefficient is not None:
+        a = a + srp_acceleration(srp_coefficient, sun_direction, pressure)
+    return a
+
+
+# ----------------------------------------------------------------------------------- elements
+def _rot3(angle):
+    c, s = jnp.cos(angle), jnp.sin(angle)
+    z, o = jnp.zeros_like(c), jnp.ones_like(c)
+    return jnp.stack([jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2)
+
+
+def _rot1(angle):
+    c, s = jnp.cos(angle), jnp.sin(angle)
+    z, o = jnp.zeros_like(c), jnp.ones_like(c)
+    return jnp.stack([jnp.stack([o, z, z], -1), jnp.stack([z, c, -s], -1), jnp.stack([z, s, c], -1)], -2)
+
+
+def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
+    """ECI state [r, v] (..., 6) [m, m/s] from classical orbital elements.
+
+    Parameters
+    ----------
+    a : semi-major axis [m]; e : eccentricity [-] (0 <= e < 1); i : inclination [rad];
+    raan : right ascension of the ascending node [rad]; argp : argument of perigee [rad];
+    nu : true anomaly [rad]; mu : gravitational parameter [m^3/s^2]
+    """
+    a, e, nu = jnp.asarray(a), jnp.asarray(e), jnp.asarray(nu)
+    p = a * (1.0 - e**2)
+    r = p / (1.0 + e * jnp.cos(nu))
+    r_pf = jnp.stack([r * jnp.cos(nu), r * jnp.sin(nu), jnp.zeros_like(r)], -1)  # perifocal frame
+    k = jnp.sqrt(mu / p)
+    v_pf = jnp.stack([-k * jnp.sin(nu), k * (e + jnp.cos(nu)), jnp.zeros_like(r)], -1)
+    Q = _rot3(raan) @ _rot1(i) @ _rot3(argp)  # perifocal -> ECI
+    return jnp.concatenate([jnp.einsum("...ij,...j->...i", Q, r_pf),
+                            jnp.einsum("...ij,...j->...i", Q, v_pf)], -1)
+
+
+def eci_to_elements(state, mu=MU_EARTH):
+    """Osculating classical elements ``(a, e, i, raan, argp, nu)`` [m, -, rad, rad, rad, rad] of an ECI
+    state (..., 6). Angles in [0, 2 pi) (i in [0, pi]); undefined (nan-free but arbitrary) for e = 0
+    (argp) or i = 0 (raan)."""
+    state = jnp.asarray(state)
+    r, v = state[..., :3], state[..., 3:]
+    rn = jnp.linalg.norm(r, axis=-1)
+    h = jnp.cross(r, v)
+    hn = jnp.linalg.norm(h, axis=-1)
+    n_vec = jnp.stack([-h[..., 1], h[..., 0], jnp.zeros_like(hn)], -1)  # z x h: towards the ascending node
+    e_vec = jnp.cross(v, h) / mu - r / rn[..., None]
+    e = jnp.linalg.norm(e_vec, axis=-1)
+    energy = 0.5 * jnp.sum(v * v, axis=-1) - mu / rn
+    a = -mu / (2.0 * energy)
+    i = jnp.arccos(jnp.clip(h[..., 2] / hn, -1.0, 1.0))
+    raan = jnp.mod(jnp.arctan2(n_vec[..., 1], n_vec[..., 0]), 2 * jnp.pi)
+    # angles in the orbit plane, measured from the node line with the orbit normal as the axis
+    hz = h / hn[..., None]
+    n_hat = n_vec / jnp.linalg.norm(n_vec, axis=-1, keepdims=True)
+    m_hat = jnp.cross(hz, n_hat)
+
+    def angle(u):
+        return jnp.arctan2(jnp.sum(u * m_hat, -1), jnp.sum(u * n_hat, -1))
+
+    argp = jnp.mod(angle(e_vec), 2 * jnp.pi)
+    nu = jnp.mod(angle(r) - angle(e_vec), 2 * jnp.pi)
+    return a, e, i, raan, argp, nu
+
+
+# --------------------------------------------------------------------------------------- LVLH
+def lvlh_rotation(r_chief, v_chief):
+    """Rotation ECI -> chief LVLH (..., 3, 3): rows are the LVLH unit vectors (x radial, y along-track,
+    z orbit normal) in ECI coordinates, so ``rho = R @ dr`` and ``dr = R.T @ rho``."""
+    r_chief, v_chief = jnp.asarray(r_chief), jnp.asarray(v_chief)
+    h = jnp.cross(r_chief, v_chief)
+    ex = r_chief / _norm(r_chief)
+    ez = h / _norm(h)
+    ey = jnp.cross(ez, ex)
+    return jnp.stack([ex, ey, ez], axis=-2)
+
+
+def lvlh_angular_velocity(r_chief, v_chief):
+    """Angular velocity of the chief LVLH frame, omega = r x v / |r|^2 [rad/s], in ECI (..., 3)."""
+    r_chief, v_chief = jnp.asarray(r_chief), jnp.asarray(v_chief)
+    return jnp.cross(r_chief, v_chief) / jnp.sum(r_chief**2, axis=-1, keepdims=True)
+
+
+def eci_to_lvlh(chief, deputy):
+    """Relative state of ``deputy`` (..., 6) in the LVLH frame of ``chief`` (6,) or (..., 6) [m, m/s]::
+
+        rho = R (r_d - r_c),   rho_dot = R (v_d - v_c - omega x (r_d - r_c))     (rotating frame)
+
+    Returns (..., 6) ``[rho, rho_dot]``."""
+    chief, deputy = jnp.asarray(chief), jnp.asarray(deputy)
+    rc, vc = chief[..., :3], chief[..., 3:]
+    R = lvlh_rotation(rc, vc)
+    w = lvlh_angular_velocity(rc, vc)
+    dr = deputy[..., :3] - rc
+    dv = deputy[..., 3:] - vc - jnp.cross(jnp.broadcast_to(w, dr.shape), dr)
+    return jnp.concatenate([jnp.einsum("...ij,...j->...i", R, dr), jnp.einsum("...ij,...j->...i", R, dv)], -1)
+
+
+def lvlh_to_eci(chief, relative):
+    """Inverse of :func:`eci_to_lvlh`: deputy ECI state (..., 6) from the chief (6,) and LVLH offsets
+    ``relative`` (..., 6) [m, m/s]: r_d = r_c + R^T rho, v_d = v_c + R^T rho_dot + omega x (R^T rho)."""
+    chief, relative = jnp.asarray(chief), jnp.asarray(relative)
+    rc, vc = chief[..., :3], chief[..., 3:]
+    R = lvlh_rotation(rc, vc)
+    w = lvlh_angular_velocity(rc, vc)
+    dr = jnp.einsum("...ji,...j->...i", R, relative[..., :3])
+    dv = jnp.einsum("...ji,...j->...i", R, relative[..., 3:]) + jnp.cross(jnp.broadcast_to(w, dr.shape), dr)
+    return jnp.concatenate([rc + dr, vc + dv], -1)
+
+
+# ------------------------------------------------------------------------------ analytic rates
+def j2_secular_rates(a, e, i, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
+    """First-order mean secular rates (d RAAN/dt, d argp/dt) [rad/s] of the J2 term::
+
+        dRAAN/dt = -3/2 n J2 (R_E/p)^2 cos i                 (6)
+        dargp/dt =  3/4 n J2 (R_E/p)^2 (5 cos^2 i - 1)        (7)
+
+    with n = sqrt(mu/a^3) and p = a (1 - e^2) (mean elements: a [m], e [-], i [rad])."""
+    n = jnp.sqrt(mu / jnp.asarray(a) ** 3)
+    k = n * j2 * (r_earth / (a * (1.0 - e**2))) ** 2
+    return -1.5 * k * jnp.cos(i), 0.75 * k * (5.0 * jnp.cos(i) ** 2 - 1.0)  # eqs. (6), (7)
+
+
+def drag_decay_rate_circular(a, ballistic, density, mu=MU_EARTH):
+    """da/dt = -rho B sqrt(mu a) [m/s] of a circular orbit (non-rotating atmosphere; the co-rotation
+    changes |v_rel| by the factor ~ 1 - omega_E r cos i / v): a [m], B = C_D A/m [m^2/kg], rho [kg/m^3]."""
+    return -density * ballistic * jnp.sqrt(mu * a)

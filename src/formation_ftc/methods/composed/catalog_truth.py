@@ -1,0 +1,120 @@
+"""Catalog: the high-fidelity orbital truth plant (ECI, J2, drag, SRP) and its LVLH relative-state sensors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
+from formation_ftc.components.sensors.lvlh_relative_state import LvlhRelativeStateSensors
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.dynamics.orbital_truth import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
+from formation_ftc.methods.composed.catalog_translational import _per_axis, _PointMassSection
+from formation_ftc.sim.components import as_float
+
+__all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]
+
+#: sensors types that read an (N, 6) relative state "q" the inertial plant does not have
+_Q_SENSORS = ("relative-state",)
+
+
+class OrbitalTruthSection(_PointMassSection):
+    """Chief classical elements + per-deputy LVLH offsets (``initial_position``, ``initial_velocity``);
+    forces (applied and ``disturbance_force``) are in the chief's LVLH axes."""
+
+    semi_major_axis: float = Field(gt=R_EARTH, description=f"Chief semi-major axis [m], > R_E = {R_EARTH} m.")
+    eccentricity: float = Field(0.0, ge=0, lt=0.9, description="Chief eccentricity [-], in [0, 0.9).")
+    inclination: float = Field(0.0, ge=0, le=math.pi, description="Chief inclination [rad], in [0, pi].")
+    raan: float = Field(0.0, description="Chief right ascension of the ascending node [rad].")
+    arg_perigee: float = Field(0.0, description="Chief argument of perigee [rad].")
+    true_anomaly: float = Field(0.0, description="Chief true anomaly at t = 0 [rad].")
+    j2: bool = Field(True, description="Include the J2 zonal harmonic.")
+    drag: bool = Field(False, description="Include drag (exponential atmosphere co-rotating with the Earth).")
+    srp: bool = Field(False, description="Include cannonball solar radiation pressure (fixed Sun, no eclipse).")
+    ballistic_coefficient: float | list[float] = Field(
+        0.02, description="B = C_D A / m of each spacecraft [m^2/kg], > 0 (one number or one per spacecraft).")
+    chief_ballistic_coefficient: float | None = Field(
+        None, gt=0, description="B of the virtual chief [m^2/kg] (default: mean of the spacecraft's).")
+    srp_coefficient: float | list[float] = Field(
+        0.015, description="C_R A / m of each spacecraft [m^2/kg], >= 0 (one number or one per spacecraft).")
+    chief_srp_coefficient: float | None = Field(
+        None, ge=0, description="C_R A / m of the virtual chief [m^2/kg] (default: mean of the spacecraft's).")
+    sun_direction: tuple[float, float, float] = Field(
+        (1.0, 0.0, 0.0), description="Direction towards the Sun in ECI [-] (normalised; fixed).")
+    density_base: float | None = Field(
+        None, gt=0, description="Single-exponential atmosphere: density at density_base_altitude [kg/m^3] "
+                                "(default: Vallado's piecewise exponential table).")
+    density_base_altitude: float = Field(0.0, ge=0, description="Base altitude of the single exponential [m].")
+    density_scale_height: float = Field(60e3, gt=0, description="Scale height of the single exponential [m].")
+    mu: float = Field(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+
+    @model_validator(mode="after")
+    def _orbit(self):
+        rp = self.semi_major_axis * (1.0 - self.eccentricity)
+        if not rp > R_EARTH:
+            raise ValueError(f"eccentricity: perigee radius a (1 - e) = {rp:.1f} m is inside the Earth "
+                             f"(R_E = {R_EARTH} m); lower eccentricity or raise semi_major_axis")
+        if not np.linalg.norm(self.sun_direction) > 0:
+            raise ValueError("sun_direction: must be a non-zero vector")
+        for name, lower_ok in (("ballistic_coefficient", lambda b: b > 0), ("srp_coefficient", lambda b: b >= 0)):
+            vals = np.atleast_1d(np.asarray(getattr(self, name), float))
+            if not all(lower_ok(b) and math.isfinite(b) for b in vals):
+                raise ValueError(f"{name}: every value must be finite and {'> 0' if name[0] == 'b' else '>= 0'} m^2/kg")
+        return self
+
+    def density_table(self) -> np.ndarray:
+        if self.density_base is None:
+            return EXPONENTIAL_ATMOSPHERE.copy()
+        return np.array([[self.density_base_altitude, self.density_base, self.density_scale_height]])
+
+
+def _orbital_truth(sec: OrbitalTruthSection, ctx: BuildContext):
+    sensors = ctx.scenario.type_of("sensors")
+    if sensors is None or sensors in _Q_SENSORS:
+        raise ValueError(f"plant orbital-truth: sensors {sensors or '(default exact relative state)'} read a "
+                         "relative state the inertial plant does not hold; use [sensors] type = "
+                         "\"lvlh-relative-state\"")
+    n = sec.count
+    b = per_spacecraft(sec.ballistic_coefficient, n, "plant.ballistic_coefficient")
+    c = per_spacecraft(sec.srp_coefficient, n, "plant.srp_coefficient")
+    b_c = float(np.mean(b)) if sec.chief_ballistic_coefficient is None else sec.chief_ballistic_coefficient
+    c_c = float(np.mean(c)) if sec.chief_srp_coefficient is None else sec.chief_srp_coefficient
+    elements = [sec.semi_major_axis, sec.eccentricity, sec.inclination, sec.raan, sec.arg_perigee, sec.true_anomaly]
+    return InertialFormationPlant(
+        mass=as_float(sec.mass), chief_elements=as_float(elements), initial_state_lvlh=as_float(sec.q0()),
+        ballistic_coefficient=as_float(b), chief_ballistic_coefficient=as_float(b_c),
+        srp_coefficient=as_float(c), chief_srp_coefficient=as_float(c_c),
+        sun_direction=as_float(sec.sun_direction), density_table=as_float(sec.density_table()),
+        mu=as_float(sec.mu), j2=sec.j2, drag=sec.drag, srp=sec.srp, disturbance_force=sec.disturbance_force)
+
+
+class LvlhRelativeStateSection(StrictModel):
+    position_noise_std: float = Field(0.0, ge=0, description="Std of the position noise [m].")
+    velocity_noise_std: float = Field(0.0, ge=0, description="Std of the velocity noise [m/s].")
+    position_bias: float | list = Field(0.0, description="Constant position bias: a number, 3 values (per axis) "
+                                                         "or N x 3 [m].")
+    velocity_bias: float | list = Field(0.0, description="Constant velocity bias: a number, 3 values or N x 3 [m/s].")
+
+
+def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
+    if ctx.plant is not None and not isinstance(ctx.plant, InertialFormationPlant):
+        raise ValueError(f"sensors lvlh-relative-state read the chief and deputy ECI states of the orbital-truth "
+                         f"plant; plant {ctx.scenario.type_of('plant')} has none (use sensors relative-state)")
+    n = ctx.count
+    bias = np.hstack([_per_axis(sec.position_bias, n, "sensors.position_bias"),
+                      _per_axis(sec.velocity_bias, n, "sensors.velocity_bias")])
+    if not np.all(np.isfinite(bias)):
+        raise ValueError("sensors.position_bias / velocity_bias: values must be finite")
+    return LvlhRelativeStateSensors(count=n, position_noise_std=as_float(sec.position_noise_std),
+                                    velocity_noise_std=as_float(sec.velocity_noise_std), bias=as_float(bias))
+
+
+register_component_type("plant", "orbital-truth", OrbitalTruthSection, _orbital_truth,
+                        "every spacecraft and a virtual chief in ECI with J2, drag and SRP; forces in the "
+                        "chief's LVLH axes (use sensors lvlh-relative-state)")
+register_component_type("sensors", "lvlh-relative-state", LvlhRelativeStateSection, _lvlh_relative_state,
+                        "relative state in the truth chief's LVLH frame with held Gaussian noise and a "
+                        "constant bias (for the orbital-truth plant)")
