@@ -1,0 +1,159 @@
+"""The fault-battery actuator: per-axis saturation and one thruster-level fault of a chosen kind.
+
+Every quantity that distinguishes one fault case from another -- the kind, the faulty channel
+(spacecraft, axis), the onset, the magnitudes and the saturation limit -- is a numeric array leaf, so
+the cases of a battery differ only in their leaves and share one compiled program (a campaign or a
+league ``vmap``-s over them). Each kind's effect is computed with masks; no Python branch depends on a
+leaf. The only structural choices are the spacecraft count, whether a generalised Euler-angle torque is
+first mapped to a body torque (``euler_allocation``) and the units of the output.
+
+For a command ``u`` (N, 3) [N or N m], per spacecraft i and axis k::
+
+    u_sat = clip(u, -limit_i, limit_i)                                   (per-axis saturation)
+    applied = g(t) u_sat + b(t)   on the faulty channel (i*, k*) for t >= onset; u_sat elsewhere
+
+with, by kind (``FAULT_KINDS``; ``tau = t - onset``):
+
+==========================  ===============================================================
+none                        g = 1, b = 0
+loss_of_effectiveness       g = effectiveness, b = 0
+bias                        g = 1, b = bias
+stuck                       g = 0, b = u_sat of the channel at onset (held in the actuator state)
+outage ("float")            g = 0, b = 0
+intermittent                g = 1 during the first duty * period of each period, 0 after it
+degrading                   g = max(min_effectiveness, 1 - rate tau)
+==========================  ===============================================================
+
+Times are compared as the loop's truth-side time signals are (an onset on the step grid acts from that
+step on). *Stuck*: the frozen value is the saturated command of the faulty channel at the first step
+time ``t_k >= onset`` (stored by :meth:`FaultBatteryActuator.update` after that step); during that
+first step the channel passes its current saturated command (exactly the frozen value for a law sampled
+once per step).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+
+from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
+from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
+
+__all__ = ["FaultBatteryActuator", "FAULT_KINDS", "fault_kind_code"]
+
+#: fault kind names; a kind's code (the ``kind`` leaf) is its index in this tuple
+FAULT_KINDS: tuple[str, ...] = ("none", "loss_of_effectiveness", "bias", "stuck", "outage", "intermittent",
+                                "degrading")
+_CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
+
+
+def fault_kind_code(name: str) -> int:
+    """The numeric code of the fault kind ``name`` (raises ``ValueError`` naming the allowed names)."""
+    try:
+        return _CODE[name]
+    except KeyError:
+        raise ValueError(f"unknown fault kind {name!r} (allowed: {', '.join(FAULT_KINDS)})") from None
+
+
+@component
+class FaultBatteryActuator(Actuator):
+    """Per-axis saturation then one fault on channel (spacecraft, axis) of kind ``kind`` (module docstring).
+
+    Leaves: ``saturation`` scalar or (N,) per-axis limit [N or N m] (inf: unsaturated); ``kind`` code in
+    :data:`FAULT_KINDS` [-]; ``spacecraft`` 1-based [-]; ``axis`` 0, 1 or 2 [-]; ``onset`` [s];
+    ``effectiveness`` [-]; ``bias`` [N or N m]; ``period`` [s] and ``duty`` [-] (intermittent);
+    ``rate`` [1/s] and ``min_effectiveness`` [-] (degrading). Static: ``count`` N, ``euler_allocation``
+    (the command is a generalised 3-2-1 Euler-angle torque, mapped to the body torque as
+    :class:`~formation_ftc.components.actuators.euler_torque_allocation.EulerTorqueAllocation` does
+    before saturation and fault act in body axes), ``units`` of the command.
+
+    Records ``effectiveness`` (N, 3) the true gain g [-] (0 on a stuck or outage channel),
+    ``saturated`` (N,) 1 when any axis of the spacecraft's command is at or beyond its limit,
+    ``fault_active`` () 1 from the onset on (0 throughout for kind none).
+    """
+
+    count: int = static()
+    saturation: Any = float("inf")  # () or (N,) [N or N m]
+    kind: Any = 0.0  # code, index in FAULT_KINDS [-]
+    spacecraft: Any = 1.0  # faulty spacecraft, 1-based [-]
+    axis: Any = 0.0  # faulty axis 0..2 [-]
+    onset: Any = 0.0  # [s]
+    effectiveness: Any = 1.0  # loss_of_effectiveness gain [-]
+    bias: Any = 0.0  # [N or N m]
+    period: Any = 1.0  # intermittent period [s]
+    duty: Any = 1.0  # intermittent on-fraction [-]
+    rate: Any = 0.0  # degrading rate [1/s]
+    min_effectiveness: Any = 0.0  # degrading floor [-]
+    euler_allocation: bool = static(default=False)
+    units: str = static(default="N")
+
+    # ------------------------------------------------------------------ pieces
+    def _is(self, name: str) -> jnp.ndarray:
+        return jnp.asarray(self.kind) == _CODE[name]
+
+    def _channel(self) -> jnp.ndarray:
+        """(N, 3) boolean mask of the faulty channel."""
+        sc = jnp.arange(1, self.count + 1)[:, None] == jnp.asarray(self.spacecraft)
+        ax = jnp.arange(3)[None, :] == jnp.asarray(self.axis)
+        return sc & ax
+
+    def _limit(self) -> jnp.ndarray:
+        """(N, 1) per-axis limit [N or N m]."""
+        return jnp.broadcast_to(jnp.asarray(self.saturation, dtype=jnp.float64), (self.count,))[:, None]
+
+    def _body(self, t, command, inputs: ActuatorInputs):
+        """The command in the actuator's axes (after the Euler-angle allocation when static-enabled)."""
+        if self.euler_allocation:
+            return EulerTorqueAllocation().apply(t, command, inputs)  # tau_b = R_bar(q)^T tau_gen
+        return command
+
+    def exogenous(self, t):
+        tau = t - self.onset
+        active = (tau >= 0.0) & ~self._is("none")
+        phase = jnp.mod(jnp.maximum(tau, 0.0), self.period)
+        on = phase < self.duty * self.period
+        g = jnp.where(self._is("loss_of_effectiveness"), self.effectiveness, 1.0)
+        g = jnp.where(self._is("stuck") | self._is("outage"), 0.0, g)
+        g = jnp.where(self._is("intermittent"), jnp.where(on, 1.0, 0.0), g)
+        g = jnp.where(self._is("degrading"), jnp.maximum(self.min_effectiveness, 1.0 - self.rate * tau), g)
+        b = jnp.where(self._is("bias"), self.bias, 0.0)
+        on_channel = self._channel() & active
+        return {"gain": jnp.where(on_channel, g, 1.0),  # (N, 3)
+                "bias": jnp.where(on_channel, b, 0.0),  # (N, 3)
+                "stuck": on_channel & self._is("stuck"),  # (N, 3)
+                "active": active}
+
+    def initial_state(self):
+        return {"value": jnp.zeros((self.count, 3)), "frozen": jnp.asarray(False)}
+
+    def _saturated(self, u):
+        return jnp.clip(u, -self._limit(), self._limit())
+
+    # ------------------------------------------------------------------ the contract
+    def apply(self, t, command, inputs: ActuatorInputs):
+        u = self._saturated(self._body(t, command, inputs))
+        exo = inputs.exogenous
+        y = exo["gain"] * u + exo["bias"]
+        state = inputs.state
+        if state is None:  # a caller without the actuator state: the channel passes its saturated command
+            return jnp.where(exo["stuck"], u, y)
+        return jnp.where(exo["stuck"], jnp.where(state["frozen"], state["value"], u), y)
+
+    def update(self, t, state, command, inputs: ActuatorInputs):
+        freeze = (t >= self.onset) & ~state["frozen"]
+        u = self._saturated(self._body(t, command, inputs))
+        return {"value": jnp.where(freeze, u, state["value"]), "frozen": state["frozen"] | freeze}
+
+    def signals(self):
+        return (Signal("effectiveness", ("spacecraft", "axis"), "1",
+                       "true actuator effectiveness g (after saturation; 0 on a stuck or outage channel)"),
+                Signal("saturated", ("spacecraft",), "1", "1 when any axis command is at its saturation limit"),
+                Signal("fault_active", (), "1", "1 from the actuator fault onset on"))
+
+    def outputs(self, t, command, inputs: ActuatorInputs):
+        u = self._body(t, command, inputs)
+        at_limit = jnp.any(jnp.abs(u) >= self._limit(), axis=-1)
+        exo = inputs.exogenous
+        return {"effectiveness": exo["gain"], "saturated": jnp.where(at_limit, 1.0, 0.0),
+                "fault_active": jnp.where(exo["active"], 1.0, 0.0)}

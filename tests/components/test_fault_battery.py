@@ -1,0 +1,299 @@
+"""The fault-battery actuator, the link-loss networks and their catalog sections.
+
+Every kind is checked against the applied output computed by hand with numpy from the module's
+definition (saturation first, then the fault on the faulty channel)."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import tomli_w
+
+import formation_ftc as ftc
+from formation_ftc.components.actuators.fault_battery import (
+    FAULT_KINDS,
+    FaultBatteryActuator,
+    fault_kind_code,
+)
+from formation_ftc.components.networks.link_faults import DelayedGraphLinkLossNetwork, GraphLinkLossNetwork
+from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork, graph_edges
+from formation_ftc.config.loader import ScenarioError
+from formation_ftc.core.history import history_init, history_push, required_capacity
+from formation_ftc.sim.components import ActuatorInputs, NetworkInputs
+
+N = 3
+LIMIT = np.array([2.0, 1.5, np.inf])  # per spacecraft [N]
+CMD = np.array([[3.0, -0.4, 0.1], [1.0, -2.5, 0.7], [5.0, -6.0, 0.2]])
+SC, AX, ONSET = 2, 1, 10.0  # faulty channel (spacecraft 2, axis 1), onset [s]
+
+
+def _actuator(kind: str, **kw) -> FaultBatteryActuator:
+    leaves = dict(saturation=LIMIT, kind=float(fault_kind_code(kind)), spacecraft=float(SC), axis=float(AX),
+                  onset=ONSET, effectiveness=0.3, bias=0.25, period=6.0, duty=0.5, rate=0.01,
+                  min_effectiveness=0.4)
+    leaves.update(kw)
+    return FaultBatteryActuator(count=N, **{k: np.asarray(v, dtype=float) for k, v in leaves.items()})
+
+
+def _apply(act, t, cmd=CMD, state=None):
+    exo = act.exogenous(jnp.asarray(t, dtype=jnp.float64))
+    st = act.initial_state() if state is None else state
+    return np.asarray(act.apply(t, jnp.asarray(cmd), ActuatorInputs(exo, st))), act.outputs(
+        t, jnp.asarray(cmd), ActuatorInputs(exo, st))
+
+
+def _clipped(cmd=CMD):
+    return np.clip(cmd, -LIMIT[:, None], LIMIT[:, None])
+
+
+def _expected(gain, bias=0.0, cmd=CMD):
+    out = _clipped(cmd)
+    out[SC - 1, AX] = gain * out[SC - 1, AX] + bias
+    return out
+
+
+@pytest.mark.parametrize("kind, gain, bias", [
+    ("none", 1.0, 0.0), ("loss_of_effectiveness", 0.3, 0.0), ("bias", 1.0, 0.25), ("outage", 0.0, 0.0)])
+def test_constant_kinds_before_and_after_onset(kind, gain, bias):
+    act = _actuator(kind)
+    for t in (0.0, 9.99):
+        y, out = _apply(act, t)
+        np.testing.assert_array_equal(y, _clipped())  # saturation only before the onset
+        assert float(out["fault_active"]) == 0.0
+    for t in (10.0, 50.0):
+        y, out = _apply(act, t)
+        np.testing.assert_allclose(y, _expected(gain, bias), rtol=0, atol=1e-15)
+        assert float(out["fault_active"]) == (0.0 if kind == "none" else 1.0)
+        eff = np.ones((N, 3))
+        eff[SC - 1, AX] = gain
+        np.testing.assert_array_equal(np.asarray(out["effectiveness"]), eff)
+
+
+def test_saturation_clips_each_axis_and_flags_the_spacecraft():
+    y, out = _apply(_actuator("none"), 0.0)
+    np.testing.assert_array_equal(y, [[2.0, -0.4, 0.1], [1.0, -1.5, 0.7], [5.0, -6.0, 0.2]])
+    # spacecraft 1 (x beyond 2 N) and 2 (y beyond 1.5 N) at a limit; 3 is unsaturated (inf)
+    np.testing.assert_array_equal(np.asarray(out["saturated"]), [1.0, 1.0, 0.0])
+    y, out = _apply(_actuator("none"), 0.0, cmd=0.1 * CMD)
+    np.testing.assert_array_equal(y, 0.1 * CMD)
+    np.testing.assert_array_equal(np.asarray(out["saturated"]), [0.0, 0.0, 0.0])
+
+
+def test_bias_acts_after_saturation():
+    """The faulty channel's command (-2.5 N) is clipped to -1.5 N first, then the bias adds 0.25 N."""
+    y, _ = _apply(_actuator("bias"), 20.0)
+    assert y[SC - 1, AX] == pytest.approx(-1.25, abs=1e-15)
+
+
+def test_intermittent_on_off_pattern():
+    act = _actuator("intermittent")  # period 6 s, duty 0.5: on [10, 13), off [13, 16), on [16, 19) ...
+    c = _clipped()[SC - 1, AX]
+    for t, on in [(9.0, True), (10.0, True), (12.9, True), (13.0, False), (15.9, False), (16.0, True),
+                  (18.5, True), (19.5, False), (100.0, (100.0 - 10.0) % 6.0 < 3.0)]:
+        y, out = _apply(act, t)
+        assert y[SC - 1, AX] == (c if on else 0.0), t
+        assert float(np.asarray(out["effectiveness"])[SC - 1, AX]) == (1.0 if on else 0.0)
+        np.testing.assert_array_equal(np.delete(y.ravel(), (SC - 1) * 3 + AX),
+                                      np.delete(_clipped().ravel(), (SC - 1) * 3 + AX))
+
+
+def test_degrading_ramp_and_floor():
+    act = _actuator("degrading")  # g = max(0.4, 1 - 0.01 (t - 10)): floor reached at t = 70 s
+    c = _clipped()[SC - 1, AX]
+    for t in (0.0, 10.0, 30.0, 69.0, 70.0, 500.0):
+        g = 1.0 if t < ONSET else max(0.4, 1.0 - 0.01 * (t - ONSET))
+        y, out = _apply(act, t)
+        assert y[SC - 1, AX] == pytest.approx(g * c, rel=1e-14)
+        assert float(np.asarray(out["effectiveness"])[SC - 1, AX]) == pytest.approx(g, rel=1e-14)
+
+
+def test_stuck_holds_the_value_at_onset_while_the_command_changes():
+    act = _actuator("stuck")
+    state = act.initial_state()
+    inputs = lambda t, s: ActuatorInputs(act.exogenous(jnp.asarray(t)), s)  # noqa: E731
+    commands = [0.4 * CMD * (1.0 + 0.1 * k) * (-1) ** k for k in range(6)]  # channel within its limit
+    frozen = None
+    for k, t in enumerate([8.0, 9.0, 10.0, 11.0, 12.0, 13.0]):  # steps of 1 s; onset on the grid at 10 s
+        y = np.asarray(act.apply(t, jnp.asarray(commands[k]), inputs(t, state)))
+        if t < ONSET:
+            np.testing.assert_array_equal(y, _clipped(commands[k]))
+        elif t == ONSET:  # the onset step: the channel still passes its saturated command, which freezes
+            frozen = _clipped(commands[k])[SC - 1, AX]
+            np.testing.assert_array_equal(y, _clipped(commands[k]))
+        else:
+            assert y[SC - 1, AX] == frozen != _clipped(commands[k])[SC - 1, AX]
+            other = np.ones((N, 3), bool)
+            other[SC - 1, AX] = False
+            np.testing.assert_array_equal(y[other], _clipped(commands[k])[other])
+        state = act.update(t, state, jnp.asarray(commands[k]), inputs(t, state))
+    assert frozen == pytest.approx(0.4 * 1.2 * -2.5)
+
+
+def test_one_compilation_serves_every_kind():
+    traces = []
+
+    @jax.jit
+    def applied(act, t, cmd):
+        traces.append(1)
+        return act.apply(t, cmd, ActuatorInputs(act.exogenous(t), act.initial_state()))
+
+    outs = {kind: np.asarray(applied(_actuator(kind), jnp.asarray(20.0), jnp.asarray(CMD))) for kind in FAULT_KINDS}
+    assert len(traces) == 1
+    np.testing.assert_allclose(outs["loss_of_effectiveness"], _expected(0.3))
+    np.testing.assert_allclose(outs["bias"], _expected(1.0, 0.25))
+    np.testing.assert_allclose(outs["degrading"], _expected(0.9))
+    # the channel and the saturation are leaves too
+    other = applied(_actuator("outage", spacecraft=1.0, axis=0.0, saturation=np.full(N, 0.5)), jnp.asarray(20.0),
+                    jnp.asarray(CMD))
+    assert len(traces) == 1
+    want = np.clip(CMD, -0.5, 0.5)
+    want[0, 0] = 0.0
+    np.testing.assert_array_equal(np.asarray(other), want)
+
+
+def test_unknown_kind_name():
+    with pytest.raises(ValueError, match="allowed: none, loss_of_effectiveness"):
+        fault_kind_code("jammed")
+
+
+# ------------------------------------------------------------------------------------------ networks
+C = np.array([[0.0, 0.0, 0.5, 0.0], [0.6, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.4], [0.6, 0.0, 0.0, 0.0]])
+LOST = np.zeros((4, 4))
+LOST[2, 3] = 1.0  # 3 <- 4
+MSG = np.arange(12.0).reshape(4, 3) + 1.0
+
+
+def test_link_loss_delivers_zero_weight_after_onset_and_unchanged_before():
+    net = GraphLinkLossNetwork(weights=C, lost=LOST, onset=np.asarray(50.0))
+    healthy = GraphNetwork(weights=C)
+    for t_k in (0.0, 49.0):
+        got = net.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
+        want = healthy.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
+        for key in ("in_weight", "weighted_sum"):
+            np.testing.assert_array_equal(np.asarray(got[key]), np.asarray(want[key]))
+    got = net.receive(50.0, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(50.0), None))
+    c = C * (1.0 - LOST)  # numpy: receiver 3 now hears only spacecraft 2
+    np.testing.assert_allclose(np.asarray(got["in_weight"]), c.sum(axis=1))
+    np.testing.assert_allclose(np.asarray(got["weighted_sum"]), c @ MSG, rtol=1e-15)
+    assert float(got["in_weight"][2]) == 0.5
+
+
+def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
+    dt, T = 1.0, 2.0
+    delays = tuple(tuple("2" for _ in range(4)) for _ in range(4))
+    edges = graph_edges(C)
+    cap = required_capacity(3 * T, dt) + 1
+    base = dict(weights=C, delays=delays, edges=edges, capacity=cap, dt=dt)
+    net = DelayedGraphLinkLossNetwork(**base, lost=LOST, onset=np.asarray(20.0), delay_scale=np.asarray(3.0))
+    healthy = DelayedGraphNetwork(**base)
+    # messages m(t) = (t + 1) MSG pushed at t = 0 .. 30 s
+    state = history_init(jnp.asarray(MSG), cap)
+    for k in range(1, 31):
+        state = history_push(state, jnp.asarray((k + 1.0) * MSG))
+    t = 30.0
+    ins = NetworkInputs(jnp.asarray(31.0 * MSG), jnp.asarray(t), net.exogenous(jnp.asarray(t)))
+    got = net.receive(t, state, ins)
+    # after the onset: weights without 3 <- 4 and messages 3 T = 6 s old: m(24) = 25 MSG
+    c = C * (1.0 - LOST)
+    np.testing.assert_allclose(np.asarray(got["weighted_sum"]), c @ (25.0 * MSG), rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(got["in_weight"]), c.sum(axis=1))
+    # before the onset the reading is the healthy network's (delay T = 2 s)
+    t = 15.0
+    state15 = history_init(jnp.asarray(MSG), cap)
+    for k in range(1, 16):
+        state15 = history_push(state15, jnp.asarray((k + 1.0) * MSG))
+    ins = NetworkInputs(jnp.asarray(16.0 * MSG), jnp.asarray(t), net.exogenous(jnp.asarray(t)))
+    got, want = net.receive(t, state15, ins), healthy.receive(t, state15, ins)
+    np.testing.assert_array_equal(np.asarray(got["weighted_sum"]), np.asarray(want["weighted_sum"]))
+    np.testing.assert_allclose(np.asarray(want["weighted_sum"]), C @ (14.0 * MSG), rtol=1e-12)
+
+
+# ------------------------------------------------------------------------------------------- catalog
+def _raw(actuator=None, network=None, plant_count=2):
+    raw = {
+        "scenario": {"name": "battery", "method": "composed"},
+        "simulation": {"horizon": 10.0, "dt": 0.1},
+        "plant": {"type": "clohessy-wiltshire", "semi_major_axis": 7000e3, "mass": [10.0] * plant_count,
+                  "initial_position": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]][:plant_count]},
+        "controller": {"type": "pd", "kp": 1.0, "kd": 1.0},
+    }
+    if actuator is not None:
+        raw["actuator"] = {"type": "fault-battery", **actuator}
+    if network is not None:
+        raw["network"] = {"type": "graph-link-loss", **network}
+    return raw
+
+
+@pytest.mark.parametrize("actuator, needle", [
+    ({"kind": "jammed"}, "actuator.kind"),
+    ({"kind": "jammed"}, "allowed: none, loss_of_effectiveness, bias, stuck, outage, intermittent, degrading"),
+    ({"kind": "bias", "spacecraft": 3}, "actuator.spacecraft = 3: must be in 1..2"),
+    ({"kind": "bias", "spacecraft": 0}, "actuator.spacecraft"),
+    ({"kind": "bias", "axis": 3}, "actuator.axis"),
+    ({"kind": "bias", "saturation": [1.0, 2.0, 3.0]}, "actuator.saturation"),
+    ({"kind": "bias", "saturation": -1.0}, "actuator.saturation"),
+    ({"kind": "intermittent", "duty": 1.5}, "actuator.duty"),
+    ({"kind": "bias", "euler_allocation": True}, "quaternion"),
+])
+def test_catalog_rejects_bad_actuator_sections_naming_the_field(actuator, needle):
+    with pytest.raises(ScenarioError) as err:
+        ftc.load_scenario(_raw(actuator=actuator))
+    assert needle in str(err.value)
+
+
+@pytest.mark.parametrize("network, needle", [
+    ({"adjacency": [[0, 1], [1, 0]], "lost_links": [[1, 3]]}, "lost_links[0] = [1, 3]"),
+    ({"adjacency": [[0, 0], [1, 0]], "lost_links": [[1, 2]]}, "spacecraft 1 does not receive from 2"),
+    ({"adjacency": [[0, 1], [1, 0]], "delay_scale": 2.0}, "network.delay_scale"),
+    ({"adjacency": [[0, 1], [1, 0]], "delays": [["1", "1"], ["1", "1"]]}, "max_delay"),
+])
+def test_catalog_rejects_bad_network_sections_naming_the_field(network, needle):
+    with pytest.raises(ScenarioError) as err:
+        ftc.load_scenario(_raw(network=network))
+    assert needle in str(err.value)
+
+
+def test_catalog_builds_leaves_not_static_fields():
+    from formation_ftc.methods.composed import make_loop
+
+    a = make_loop(ftc.load_scenario(_raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 1, "onset": 3.0,
+                                                   "saturation": 4.0}))).actuator
+    b = make_loop(ftc.load_scenario(_raw(actuator={"kind": "degrading", "rate": 0.1, "saturation": [1.0, 2.0]}))).actuator
+    assert jax.tree_util.tree_structure(a) == jax.tree_util.tree_structure(b)
+    assert float(a.kind) == FAULT_KINDS.index("stuck") and float(a.spacecraft) == 2.0 and float(a.axis) == 1.0
+    np.testing.assert_array_equal(a.saturation, [4.0, 4.0])
+    np.testing.assert_array_equal(b.saturation, [1.0, 2.0])
+    c = make_loop(ftc.load_scenario(_raw(actuator={"kind": "none"}))).actuator
+    np.testing.assert_array_equal(c.saturation, [np.inf, np.inf])
+
+
+# -------------------------------------------------------------------------------------- end to end
+def test_li2020_on_cw_with_a_loss_of_effectiveness_runs_and_records_the_switch(tmp_path: Path):
+    src = Path(ftc.__file__).parent / "scenarios" / "compose-li2020-on-cw.toml"
+    raw = tomllib.loads(src.read_text())
+    raw["simulation"].update(horizon=20.0, record_every=100)  # dt 0.01 s: records every 1 s
+    raw["actuator"] = {"type": "fault-battery", "kind": "loss_of_effectiveness", "spacecraft": 2, "axis": 0,
+                       "onset": 10.0, "effectiveness": 0.5}
+    raw["metrics"] = [m for m in raw["metrics"] if m["name"] != "max_position_error_after_1000s"]
+    raw["metrics"].append({"name": "saturated_fraction", "signal": "saturated", "reduce": "mean",
+                           "spacecraft": "max"})
+    path = tmp_path / "li2020-loe.toml"
+    path.write_bytes(tomli_w.dumps(raw).encode())
+    ds, metrics = ftc.simulate_with_metrics(ftc.load_scenario(path))
+    t = ds.time.values
+    eff = ds.effectiveness.values  # (time, spacecraft, axis)
+    np.testing.assert_array_equal(eff[t < 10.0], 1.0)
+    np.testing.assert_array_equal(eff[t >= 10.0][:, 1, 0], 0.5)
+    np.testing.assert_array_equal(np.delete(eff[t >= 10.0].reshape(-1, 12), 3, axis=1), 1.0)
+    np.testing.assert_array_equal(ds.fault_active.values, (t >= 10.0).astype(float))
+    # the applied force on the faulty channel is half the command after the onset, equal before
+    cmd, app = ds.command.values, ds.applied.values
+    np.testing.assert_allclose(app[t >= 10.0][:, 1, 0], 0.5 * cmd[t >= 10.0][:, 1, 0], rtol=1e-14)
+    np.testing.assert_array_equal(app[t < 10.0], cmd[t < 10.0])
+    assert metrics["saturated_fraction"] == 0.0  # no limit given: never saturated
+    assert all(np.isfinite(v) for v in metrics.values())
