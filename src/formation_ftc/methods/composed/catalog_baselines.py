@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator
 
 from formation_ftc.components.controllers.lqr_formation import LqrFormationController
 from formation_ftc.config.base import ExprText, StrictModel
@@ -46,17 +46,21 @@ class LqrSection(StrictModel):
     desired_position: Vec3Expr = Field(("0", "0", "0"), description="Desired LVLH position, expressions in t [s], i [m].")
     mode: Literal["continuous", "sampled"] = Field("continuous", description="Every RK stage or held over the step.")
 
-    @model_validator(mode="after")
-    def _positive(self):
-        for name in _BRYSON:
-            values = getattr(self, name)
-            values = values if isinstance(values, tuple) else (values,)
-            if any(not (math.isfinite(v) and v > 0) for v in values):
-                raise ValueError(f"{name}: every value must be finite and > 0")
-        masses = self.mass if isinstance(self.mass, list) else [] if self.mass is None else [self.mass]
-        if any(not (math.isfinite(m) and m > 0) for m in masses):
-            raise ValueError("mass: every value must be finite and > 0 kg")
-        return self
+    @field_validator(*_BRYSON)
+    @classmethod
+    def _positive(cls, value):
+        values = value if isinstance(value, tuple) else (value,)
+        if any(not (math.isfinite(v) and v > 0) for v in values):
+            raise ValueError("every value must be finite and > 0")
+        return value
+
+    @field_validator("mass")
+    @classmethod
+    def _masses(cls, value):
+        values = value if isinstance(value, list) else [] if value is None else [value]
+        if any(not (math.isfinite(m) and m > 0) for m in values):
+            raise ValueError("every mass must be finite and > 0 kg")
+        return value
 
 
 def _from_plant_or_reference(ctx: BuildContext, name: str):
