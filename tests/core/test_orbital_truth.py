@@ -140,7 +140,7 @@ def test_j2_secular_drift_of_raan_and_argp_matches_the_analytic_rates():
     orbit (the short-period terms average out over a whole period) against eqs. (6)-(7) evaluated
     with the orbit-averaged elements of the first orbit. Tolerance 2 %: the first-order theory omits
     O(J2) corrections (~0.1 % here) and the averaging window is the Keplerian period, which differs
-    from the anomalistic one by O(J2); measured deviations are well below 1 %."""
+    from the anomalistic one by O(J2); measured deviations 0.24 % (RAAN) and 0.31 % (argp)."""
     a0, e0, i0 = 7000e3, 0.05, 0.5
     dt, T = 20.0, _period(a0)
     per = int(round(T / dt))
@@ -197,7 +197,7 @@ def _drag_decay(inclination, n_orbits=4, B=0.02, h=400e3, dt=20.0):
 
 def test_drag_decay_of_a_circular_orbit_matches_the_analytic_rate():
     """Polar orbit (the co-rotating atmosphere's velocity omega_E x r is normal to the orbit plane, so it
-    changes |v_rel| by < 0.2 %): da/dt within 5 % of -rho B sqrt(mu a); measured ~0.2 %."""
+    changes |v_rel| by < 0.2 %): da/dt within 5 % of -rho B sqrt(mu a); measured +0.28 %."""
     measured, analytic, _ = _drag_decay(np.pi / 2)
     assert analytic < 0
     assert abs(measured / analytic - 1) < 0.05, (measured, analytic)
@@ -206,7 +206,7 @@ def test_drag_decay_of_a_circular_orbit_matches_the_analytic_rate():
 def test_co_rotating_atmosphere_slows_the_decay_of_a_prograde_equatorial_orbit():
     """Equatorial prograde orbit: v_rel = v - omega_E r along track, so the decay rate is the analytic one
     times (1 - omega_E a / v)^2 (about 0.875 at 400 km); within 1 % (the density band and orbit-averaging
-    effects are well below that)."""
+    effects are well below that; measured +0.18 %)."""
     measured, analytic, a0 = _drag_decay(0.0)
     factor = (1.0 - OMEGA_EARTH * a0 / np.sqrt(MU_EARTH / a0)) ** 2
     assert abs(measured / (analytic * factor) - 1) < 0.01, (measured / analytic, factor)
@@ -228,7 +228,8 @@ def _relative_from_truth(chief0, rel0, dt, n_steps, every):
 def test_inertial_truth_equals_the_nonlinear_elliptic_relative_dynamics():
     """J2, drag and SRP off, 1 km formation, e = 0.05, one orbit, both integrated by RK4 at 1 s: the
     LVLH state from the inertial truth equals Li2020's eqs. (1)-(4) to < 1e-5 m (issue requirement;
-    measured ~2e-8 m, RK4 truncation of two different formulations) and < 1e-8 m/s."""
+    measured 4.3e-7 m: RK4 truncation of two formulations and float64 rounding of the 7e6 m ECI
+    positions) and < 1e-8 m/s (measured 1.4e-10 m/s)."""
     a0, e0, nu0 = 7000e3, 0.05, 0.3
     chief0 = elements_to_eci(a0, e0, 0.8, 0.2, 0.6, nu0)
     rel0 = np.array([[600.0, -700.0, 300.0, 0.2, -0.3, 0.1], [-400.0, 500.0, -800.0, -0.1, 0.5, -0.2],
@@ -255,8 +256,8 @@ def test_inertial_truth_equals_the_nonlinear_elliptic_relative_dynamics():
 def test_clohessy_wiltshire_limit_for_small_separation_and_eccentricity(size):
     """Circular chief (e = 0), two-body truth: the LVLH state follows the CW closed form up to the
     second-order terms, ~3 n^2 d^2 / r per unit acceleration; over one orbit the error is bounded by
-    1e-4 d (measured ~2e-5 d for d = 100 m) and it shrinks as d^2 (10x smaller formation: ~100x smaller
-    error, checked between 30x and 300x)."""
+    1e-4 d (measured 1.35e-3 m = 1.3e-5 d for d = 100 m) and it shrinks as d^2 (10x smaller formation:
+    measured 100x smaller error, checked between 30x and 300x)."""
     a0 = 7000e3
     n_mean = np.sqrt(MU_EARTH / a0**3)
     chief0 = elements_to_eci(a0, 0.0, 0.5, 0.1, 0.0, 0.0)
