@@ -297,3 +297,56 @@ def test_li2020_on_cw_with_a_loss_of_effectiveness_runs_and_records_the_switch(t
     np.testing.assert_array_equal(app[t < 10.0], cmd[t < 10.0])
     assert metrics["saturated_fraction"] == 0.0  # no limit given: never saturated
     assert all(np.isfinite(v) for v in metrics.values())
+
+
+def test_stuck_in_a_closed_loop_freezes_the_applied_output_at_onset():
+    """A sampled PD law on CW: after the onset the faulty channel applies the command of the onset step
+    (clipped at the limit) while the command keeps changing; other channels apply the clipped command."""
+    raw = _raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 0, "onset": 3.0, "saturation": 0.5})
+    raw["simulation"].update(horizon=8.0, dt=0.1, record_every=1)
+    raw["controller"].update(kp=0.3, kd=1.0, mode="sampled")
+    ds = ftc.simulate(ftc.load_scenario(raw))
+    t, cmd, app = ds.time.values, ds.command.values, ds.applied.values
+    clipped = np.clip(cmd, -0.5, 0.5)
+    k0 = int(np.argmin(np.abs(t - 3.0)))
+    after = t >= 3.0 - 1e-9
+    np.testing.assert_array_equal(app[:, 1, 0][after], clipped[k0, 1, 0])
+    assert np.ptp(cmd[after][:, 1, 0]) > 1e-3  # the command does change
+    np.testing.assert_array_equal(app[~after], clipped[~after])
+    other = np.ones(app.shape[1:], bool)
+    other[1, 0] = False
+    np.testing.assert_array_equal(app[:, other], clipped[:, other])
+    np.testing.assert_array_equal(ds.effectiveness.values[after][:, 1, 0], 0.0)
+
+
+def test_euler_allocation_is_the_torque_allocation_then_saturation_and_fault():
+    from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
+    from formation_ftc.core.euler_quaternion import quaternion_from_euler_zyx
+
+    q = jnp.asarray(quaternion_from_euler_zyx(jnp.asarray([[0.3, -0.2, 0.5], [0.1, 0.4, -0.7], [0.0, 0.0, 0.0]])))
+    plant_state = {"q": q, "omega": jnp.zeros((N, 3))}
+    tau_gen = jnp.asarray(0.1 * CMD)
+    body = np.asarray(EulerTorqueAllocation().apply(0.0, tau_gen, ActuatorInputs(None, None, None, plant_state)))
+    for kind in ("none", "loss_of_effectiveness"):
+        act = _actuator(kind, saturation=np.full(N, 0.3))
+        act = FaultBatteryActuator(**{**{f: getattr(act, f) for f in act.__dataclass_fields__}, "euler_allocation": True})
+        exo = act.exogenous(jnp.asarray(20.0))
+        y = np.asarray(act.apply(20.0, tau_gen, ActuatorInputs(exo, act.initial_state(), None, plant_state)))
+        want = np.clip(body, -0.3, 0.3)
+        if kind != "none":
+            want[SC - 1, AX] *= 0.3
+        np.testing.assert_allclose(y, want, rtol=0, atol=1e-15)
+
+
+def test_euler_law_on_the_quaternion_plant_accepts_the_battery_with_euler_allocation():
+    from formation_ftc.methods.composed import make_loop
+
+    raw = tomllib.loads((Path(ftc.__file__).parent / "scenarios" / "compose-mehrabian-on-yang2013.toml").read_text())
+    raw.pop("estimator", None)  # the scripted FDI reports the euler-torque-allocation's own faults
+    raw["actuator"] = {"type": "fault-battery", "kind": "bias", "bias": 0.1, "euler_allocation": True}
+    loop = make_loop(ftc.load_scenario(raw))
+    act = loop.actuator
+    assert isinstance(act, FaultBatteryActuator) and act.euler_allocation and act.units == "N m"
+    raw["actuator"]["euler_allocation"] = False
+    with pytest.raises(ScenarioError, match="euler_allocation = true"):
+        ftc.load_scenario(raw)
