@@ -25,8 +25,9 @@ import numpy as np
 
 from formation_ftc.papers.azizi2009.conditions import check, flfr_design
 from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fig4
-from formation_ftc.papers.azizi2009.method import load, run_batch, simulate
+from formation_ftc.papers.azizi2009.method import load, run_batch
 from formation_ftc.papers.azizi2009.published import CITATION, PUBLISHED, TITLE
+from formation_ftc.papers.programs import simulate
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 

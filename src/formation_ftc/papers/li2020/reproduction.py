@@ -57,10 +57,11 @@ def load_li2020(name: str, overrides: dict | None = None):
 
 
 def simulate_li2020(scenario):
-    """(dataset, metrics) of one ``li2020`` scenario via the generic API."""
-    from formation_ftc.api import simulate_with_metrics
+    """(dataset, metrics) of one ``li2020`` scenario, as the generic API computes them; scenarios of one
+    structure share one compiled program (:mod:`formation_ftc.papers.programs`)."""
+    from formation_ftc.papers.programs import simulate
 
-    return simulate_with_metrics(scenario)
+    return simulate(scenario)
 
 
 def run_reproduction(out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None) -> PaperReport:
