@@ -33,7 +33,7 @@ SC, AX, ONSET = 2, 1, 10.0  # faulty channel (spacecraft 2, axis 1), onset [s]
 
 
 def _actuator(kind: str, **kw) -> FaultBatteryActuator:
-    leaves = dict(saturation=LIMIT, kind=float(fault_kind_code(kind)), spacecraft=float(SC), axis=float(AX),
+    leaves = dict(saturation=LIMIT, fault_kind=float(fault_kind_code(kind)), spacecraft=float(SC), axis=float(AX),
                   onset=ONSET, effectiveness=0.3, bias=0.25, period=6.0, duty=0.5, rate=0.01,
                   min_effectiveness=0.4)
     leaves.update(kw)
@@ -265,7 +265,7 @@ def test_catalog_builds_leaves_not_static_fields():
                                                    "saturation": 4.0}))).actuator
     b = make_loop(ftc.load_scenario(_raw(actuator={"kind": "degrading", "rate": 0.1, "saturation": [1.0, 2.0]}))).actuator
     assert jax.tree_util.tree_structure(a) == jax.tree_util.tree_structure(b)
-    assert float(a.kind) == FAULT_KINDS.index("stuck") and float(a.spacecraft) == 2.0 and float(a.axis) == 1.0
+    assert float(a.fault_kind) == FAULT_KINDS.index("stuck") and float(a.spacecraft) == 2.0 and float(a.axis) == 1.0
     np.testing.assert_array_equal(a.saturation, [4.0, 4.0])
     np.testing.assert_array_equal(b.saturation, [1.0, 2.0])
     c = make_loop(ftc.load_scenario(_raw(actuator={"kind": "none"}))).actuator

@@ -12,7 +12,7 @@ For a command ``u`` (N, 3) [N or N m], per spacecraft i and axis k::
     u_sat = clip(u, -limit_i, limit_i)                                   (per-axis saturation)
     applied = g(t) u_sat + b(t)   on the faulty channel (i*, k*) for t >= onset; u_sat elsewhere
 
-with, by kind (``FAULT_KINDS``; ``tau = t - onset``):
+with, by kind (``FAULT_KINDS``, the ``fault_kind`` leaf is the index; ``tau = t - onset``):
 
 ==========================  ===============================================================
 none                        g = 1, b = 0
@@ -42,7 +42,7 @@ from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, compo
 
 __all__ = ["FaultBatteryActuator", "FAULT_KINDS", "fault_kind_code"]
 
-#: fault kind names; a kind's code (the ``kind`` leaf) is its index in this tuple
+#: fault kind names; a kind's code (the ``fault_kind`` leaf) is its index in this tuple
 FAULT_KINDS: tuple[str, ...] = ("none", "loss_of_effectiveness", "bias", "stuck", "outage", "intermittent",
                                 "degrading")
 _CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
@@ -58,9 +58,9 @@ def fault_kind_code(name: str) -> int:
 
 @component
 class FaultBatteryActuator(Actuator):
-    """Per-axis saturation then one fault on channel (spacecraft, axis) of kind ``kind`` (module docstring).
+    """Per-axis saturation then one fault on channel (spacecraft, axis) of kind ``fault_kind`` (module docstring).
 
-    Leaves: ``saturation`` scalar or (N,) per-axis limit [N or N m] (inf: unsaturated); ``kind`` code in
+    Leaves: ``saturation`` scalar or (N,) per-axis limit [N or N m] (inf: unsaturated); ``fault_kind`` code in
     :data:`FAULT_KINDS` [-]; ``spacecraft`` 1-based [-]; ``axis`` 0, 1 or 2 [-]; ``onset`` [s];
     ``effectiveness`` [-]; ``bias`` [N or N m]; ``period`` [s] and ``duty`` [-] (intermittent);
     ``rate`` [1/s] and ``min_effectiveness`` [-] (degrading). Static: ``count`` N, ``euler_allocation``
@@ -75,7 +75,7 @@ class FaultBatteryActuator(Actuator):
 
     count: int = static()
     saturation: Any = float("inf")  # () or (N,) [N or N m]
-    kind: Any = 0.0  # code, index in FAULT_KINDS [-]
+    fault_kind: Any = 0.0  # code, index in FAULT_KINDS [-]
     spacecraft: Any = 1.0  # faulty spacecraft, 1-based [-]
     axis: Any = 0.0  # faulty axis 0..2 [-]
     onset: Any = 0.0  # [s]
@@ -90,7 +90,7 @@ class FaultBatteryActuator(Actuator):
 
     # ------------------------------------------------------------------ pieces
     def _is(self, name: str) -> jnp.ndarray:
-        return jnp.asarray(self.kind) == _CODE[name]
+        return jnp.asarray(self.fault_kind) == _CODE[name]
 
     def _channel(self) -> jnp.ndarray:
         """(N, 3) boolean mask of the faulty channel."""

@@ -96,7 +96,7 @@ def _fault_battery(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryA
     sat = per_spacecraft(limit, n, "actuator.saturation")
     quantity = getattr(ctx.plant, "quantity", "force")
     return FaultBatteryActuator(
-        count=n, saturation=as_float(sat), kind=as_float(fault_kind_code(sec.kind)),
+        count=n, saturation=as_float(sat), fault_kind=as_float(fault_kind_code(sec.kind)),
         spacecraft=as_float(sec.spacecraft), axis=as_float(sec.axis), onset=as_float(sec.onset),
         effectiveness=as_float(sec.effectiveness), bias=as_float(sec.bias), period=as_float(sec.period),
         duty=as_float(sec.duty), rate=as_float(sec.rate), min_effectiveness=as_float(sec.min_effectiveness),
