@@ -302,12 +302,12 @@ def test_li2020_on_cw_with_a_loss_of_effectiveness_runs_and_records_the_switch(t
 def test_stuck_in_a_closed_loop_freezes_the_applied_output_at_onset():
     """A sampled PD law on CW: after the onset the faulty channel applies the command of the onset step
     (clipped at the limit) while the command keeps changing; other channels apply the clipped command."""
-    raw = _raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 0, "onset": 3.0, "saturation": 0.5})
+    raw = _raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 0, "onset": 3.0, "saturation": 0.2})
     raw["simulation"].update(horizon=8.0, dt=0.1, record_every=1)
     raw["controller"].update(kp=0.3, kd=1.0, mode="sampled")
     ds = ftc.simulate(ftc.load_scenario(raw))
     t, cmd, app = ds.time.values, ds.command.values, ds.applied.values
-    clipped = np.clip(cmd, -0.5, 0.5)
+    clipped = np.clip(cmd, -0.2, 0.2)
     k0 = int(np.argmin(np.abs(t - 3.0)))
     after = t >= 3.0 - 1e-9
     np.testing.assert_array_equal(app[:, 1, 0][after], clipped[k0, 1, 0])
@@ -317,6 +317,9 @@ def test_stuck_in_a_closed_loop_freezes_the_applied_output_at_onset():
     other[1, 0] = False
     np.testing.assert_array_equal(app[:, other], clipped[:, other])
     np.testing.assert_array_equal(ds.effectiveness.values[after][:, 1, 0], 0.0)
+    saturated = np.any(np.abs(cmd) >= 0.2, axis=-1)
+    assert saturated.any() and not saturated.all()
+    np.testing.assert_array_equal(ds.saturated.values, saturated.astype(float))
 
 
 def test_euler_allocation_is_the_torque_allocation_then_saturation_and_fault():
