@@ -20,13 +20,17 @@ from formation_ftc.core.dynamics.gravity_gradient import (
     attitude_relative_to_lvlh,
     gravity_gradient_torque_unit,
     orbit_normal_in_body,
+    quaternion_lvlh_to_inertial,
     radial_unit_in_body,
 )
-from formation_ftc.core.quaternion import quat_kinematics
+from formation_ftc.core.quaternion import quat_kinematics, quat_multiply, rotation_matrix
 from formation_ftc.core.vector3 import norm3
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import CompositionError, Plant, Signal, TruthInputs, component, static
 
-__all__ = ["AttitudeTruthPlant", "batched_inverse_3x3"]
+__all__ = ["AttitudeTruthPlant", "batched_inverse_3x3", "STATE_FRAMES"]
+
+#: frames the plant can integrate the attitude in
+STATE_FRAMES = ("inertial", "lvlh")
 
 VEC = ("spacecraft", "axis")
 
@@ -56,23 +60,39 @@ class AttitudeTruthPlant(Plant):
     of the outputs). Every spacecraft flies the same orbit (the formation's separations are negligible
     against a for the torque).
 
-    State ``{"omega": (N, 3), "q": (N, 4)}``. Records the inertial attitude and rate (the signals of the
-    quaternion rigid-body plant), the attitude relative to LVLH ``attitude_lvlh`` (body -> LVLH
-    quaternion), the body rate relative to LVLH ``angular_velocity_lvlh`` (omega - n o_b, body axes), the
-    gravity-gradient torque and the usage integral ``torque_impulse`` = int |tau_cmd| dt [N m s] of the
-    commanded torque.
+    State ``{"omega": (N, 3), "q": (N, 4)}`` in ``state_frame``:
+
+    * ``"inertial"``: omega_i and q_i above;
+    * ``"lvlh"``: the body rate relative to LVLH ``w_r = omega - n o_b`` (body axes, o_b the orbit
+      normal in body axes = third row of C(q_L)) and the body -> LVLH quaternion q_L, integrated as::
+
+          w_r' = omega' + n w_r x o_b,   q_L' = 1/2 q_L (x) [w_r, 0],   r_b = first row of C(q_L)
+
+      (o_b is fixed in LVLH, so its body-axes rate is o_b x w_r). Sensors, allocations and laws that
+      read the state then work relative to LVLH: an attitude law holds LVLH pointing.
+
+    Records in both cases the inertial attitude and rate (``quaternion``, ``angular_velocity``: the
+    signals of the quaternion rigid-body plant), the attitude relative to LVLH ``attitude_lvlh`` (body ->
+    LVLH quaternion, ``C(q_L) = Rz(u)^T C(q)``), the body rate relative to LVLH
+    ``angular_velocity_lvlh``, the gravity-gradient torque and the usage integral ``torque_impulse`` =
+    int |tau_cmd| dt [N m s] of the commanded torque.
     """
 
     quantity = "torque"
 
     inertia: Any  # (N, 3, 3) [kg m^2]
-    initial_omega: Any  # (N, 3) [rad/s]
-    initial_quaternion: Any  # (N, 4) [-], vector first, body -> inertial
+    initial_omega: Any  # (N, 3) [rad/s], relative to state_frame
+    initial_quaternion: Any  # (N, 4) [-], vector first, body -> state_frame
     semi_major_axis: Any  # () circular orbit radius [m]
     mu: Any  # () [m^3/s^2]
     initial_argument_of_latitude: Any  # () [rad]
     disturbance_torque: tuple[str, str, str] = static(default=("0", "0", "0"))  # iota(t) [N m]
     gravity_gradient: bool = static(default=True)
+    state_frame: str = static(default="inertial")  # "inertial" or "lvlh"
+
+    def __post_init__(self):
+        if self.state_frame not in STATE_FRAMES:
+            raise CompositionError(f"AttitudeTruthPlant.state_frame = {self.state_frame!r}: one of {STATE_FRAMES}")
 
     @property
     def count(self) -> int:
@@ -92,21 +112,44 @@ class AttitudeTruthPlant(Plant):
         """u(t) = u0 + n t [rad]."""
         return self.initial_argument_of_latitude + self.orbit_rate() * t
 
+    def _lvlh(self) -> bool:
+        return self.state_frame == "lvlh"
+
     def gravity_gradient_torque(self, t, q):
-        """tau_gg (N, 3) [N m, body axes] at time t [s] for the attitudes q (N, 4)."""
-        r_b = radial_unit_in_body(q, self.argument_of_latitude(t))
+        """tau_gg (N, 3) [N m, body axes] at time t [s] for the attitudes q (N, 4) of ``state_frame``."""
+        r_b = rotation_matrix(q)[..., 0, :] if self._lvlh() else radial_unit_in_body(q, self.argument_of_latitude(t))
         return gravity_gradient_torque_unit(r_b, self.inertia, self.mu / self.semi_major_axis**3)
 
     def rates(self, t, x, torque):
-        """``{"omega": omega', "q": q'}`` under the external torque ``torque`` (N, 3) [N m] plus gravity
-        gradient (when on)."""
-        omega, q = x["omega"], x["q"]
+        """``{"omega": ..., "q": ...}`` rates of the state (``state_frame``) under the external torque
+        ``torque`` (N, 3) [N m] plus gravity gradient (when on)."""
+        w, q = x["omega"], x["q"]
         J = self.inertia
+        if self._lvlh():
+            n = self.orbit_rate()
+            o_b = orbit_normal_in_body(q)
+            omega = w + n * o_b  # inertial body rate
+        else:
+            omega = w
         total = -jnp.cross(omega, jnp.einsum("nij,nj->ni", J, omega)) + torque
         if self.gravity_gradient:
             total = total + self.gravity_gradient_torque(t, q)
         omega_dot = jnp.einsum("nij,nj->ni", batched_inverse_3x3(J), total)  # J w' = -w x J w + tau_gg + tau + iota
+        if self._lvlh():
+            return {"omega": omega_dot + n * jnp.cross(w, o_b), "q": quat_kinematics(q, w)}  # w_r' = w' + n w_r x o_b
         return {"omega": omega_dot, "q": quat_kinematics(q, omega)}
+
+    def inertial_and_lvlh(self, t, x):
+        """``(omega, q, w_r, q_L)``: the inertial body rate [rad/s] and attitude, and the body rate
+        relative to LVLH [rad/s] and body -> LVLH attitude, from the state at time ``t`` [s]."""
+        w, q = x["omega"], x["q"]
+        u = self.argument_of_latitude(t)
+        n = self.orbit_rate()
+        o_b = orbit_normal_in_body(q)
+        if self._lvlh():
+            q_il = jnp.broadcast_to(quaternion_lvlh_to_inertial(u), q.shape)
+            return w + n * o_b, quat_multiply(q_il, q), w, q
+        return w, q, w - n * o_b, attitude_relative_to_lvlh(q, u)
 
     def derivative(self, t, x, inputs: TruthInputs):
         return self.rates(t, x, inputs.force + inputs.exogenous["iota"])
@@ -132,10 +175,7 @@ class AttitudeTruthPlant(Plant):
         return {"quaternion_component": QUATERNION_COMPONENTS}
 
     def outputs(self, t, x, inputs):
-        omega, q = x["omega"], x["q"]
-        u = self.argument_of_latitude(t)
-        gg = self.gravity_gradient_torque(t, q) if self.gravity_gradient else jnp.zeros_like(omega)
-        return {"angular_velocity": omega, "quaternion": q,
-                "attitude_lvlh": attitude_relative_to_lvlh(q, u),
-                "angular_velocity_lvlh": omega - self.orbit_rate() * orbit_normal_in_body(q),
+        omega, q, w_r, q_l = self.inertial_and_lvlh(t, x)
+        gg = self.gravity_gradient_torque(t, x["q"]) if self.gravity_gradient else jnp.zeros_like(omega)
+        return {"angular_velocity": omega, "quaternion": q, "attitude_lvlh": q_l, "angular_velocity_lvlh": w_r,
                 "gravity_gradient_torque": gg}

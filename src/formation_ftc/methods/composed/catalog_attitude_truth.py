@@ -23,7 +23,7 @@ from formation_ftc.methods.composed import BuildContext, register_component_type
 from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS
 from formation_ftc.sim.components import as_float
 
-__all__ = ["ATTITUDE_TRUTH_PLANT", "AttitudeTruthSection", "initial_inertial_state"]
+__all__ = ["ATTITUDE_TRUTH_PLANT", "AttitudeTruthSection", "initial_inertial_state", "initial_state_in"]
 
 ATTITUDE_TRUTH_PLANT = "attitude-truth"
 EARTH_RADIUS = 6_378_137.0  # equatorial radius [m] (WGS 84), lower bound of the orbit radius
@@ -48,6 +48,10 @@ class AttitudeTruthSection(StrictModel):
     initial_argument_of_latitude_deg: float = Field(
         0.0, ge=-360.0, le=360.0, description="Argument of latitude u0 of the spacecraft at t = 0 [deg].")
     gravity_gradient: bool = Field(True, description="Apply the gravity-gradient torque.")
+    state_frame: Literal["inertial", "lvlh"] = Field(
+        "inertial", description="Frame of the attitude the plant integrates and its sensors measure: 'inertial', or "
+                                "'lvlh' (attitude and body rate relative to LVLH: an attitude law then holds LVLH "
+                                "pointing, its desired attitude 0 being LVLH alignment).")
     initial_frame: Literal["inertial", "lvlh"] = Field(
         "inertial", description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
                                 "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).")
@@ -104,11 +108,12 @@ class AttitudeTruthSection(StrictModel):
         return np.asarray(quaternion_from_euler_zyx(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
 
     def quaternions(self) -> np.ndarray:
-        """(N, 4) initial body -> inertial quaternions."""
-        return initial_inertial_state(self)[1]
+        """(N, 4) initial body -> ``state_frame`` quaternions."""
+        return initial_state_in(self, self.state_frame)[1]
 
     def euler_angles(self) -> np.ndarray:
-        """(N, 3) initial inertial 3-2-1 Euler angles [rad] (what the Euler sensors measure at t = 0)."""
+        """(N, 3) initial 3-2-1 Euler angles [rad] relative to ``state_frame`` (what the Euler sensors
+        measure at t = 0)."""
         return np.asarray(euler_zyx_from_quaternion(self.quaternions()))
 
     def inertia_tensor(self) -> np.ndarray:
@@ -143,35 +148,47 @@ def _quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.concatenate([p4 * qv + q4 * pv + np.cross(pv, qv), p4 * q4 - np.sum(pv * qv, -1, keepdims=True)], -1)
 
 
-def initial_inertial_state(sec: AttitudeTruthSection) -> tuple[np.ndarray, np.ndarray]:
-    """(omega (N, 3) [rad/s], q (N, 4)) at t = 0 relative to the inertial frame.
+def _orbit_normal_in_body(q: np.ndarray) -> np.ndarray:
+    """Third row of C(q) (the reference frame's z axis in body axes), (N, 3)."""
+    qv, q4 = q[:, :3], q[:, 3]
+    return np.stack([2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]), 2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
+                     q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2], axis=-1)
 
-    With ``initial_frame = "lvlh"`` the given attitude q_L (body -> LVLH) and rate w_r (relative to LVLH)
-    become ``q = q_z(u0) (x) q_L`` and ``omega = w_r + n o_b`` with o_b the orbit normal in body axes.
+
+def initial_state_in(sec: AttitudeTruthSection, frame: str) -> tuple[np.ndarray, np.ndarray]:
+    """(omega (N, 3) [rad/s], q (N, 4)) at t = 0 relative to ``frame`` ("inertial" or "lvlh") from the
+    section's initial attitude and rate given in ``initial_frame``.
+
+    LVLH -> inertial: ``q = q_z(u0) (x) q_L``, ``omega = w_r + n o_b``; inertial -> LVLH:
+    ``q_L = q_z(u0)^* (x) q``, ``w_r = omega - n o_b``, with o_b the orbit normal in body axes (the
+    orbit normal is the z axis of both frames).
     """
     n_sc = sec.count
     q = sec.given_quaternions()
     w = np.zeros((n_sc, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
-    if sec.initial_frame == "lvlh":
-        u0 = math.radians(sec.initial_argument_of_latitude_deg)
-        q_l = q
-        q = _quat_mul(np.broadcast_to(_rz_quaternion(u0), q_l.shape), q_l)
-        # orbit normal (LVLH z) in body axes: third row of C(q_L)
-        qv, q4 = q_l[:, :3], q_l[:, 3]
-        o_b = np.stack([2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]), 2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
-                        q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2], axis=-1)
-        w = w + sec.orbit_rate() * o_b
-    return w, q
+    if sec.initial_frame == frame:
+        return w, q
+    u0 = math.radians(sec.initial_argument_of_latitude_deg)
+    sign = 1.0 if frame == "inertial" else -1.0  # lvlh -> inertial, or back
+    q_new = _quat_mul(np.broadcast_to(_rz_quaternion(sign * u0), q.shape), q)
+    w_new = w + sign * sec.orbit_rate() * _orbit_normal_in_body(q)
+    return w_new, q_new
+
+
+def initial_inertial_state(sec: AttitudeTruthSection) -> tuple[np.ndarray, np.ndarray]:
+    """(omega (N, 3) [rad/s], q (N, 4)) at t = 0 relative to the inertial frame (:func:`initial_state_in`)."""
+    return initial_state_in(sec, "inertial")
 
 
 def _attitude_truth(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTruthPlant:
-    w0, q0 = initial_inertial_state(sec)
+    w0, q0 = initial_state_in(sec, sec.state_frame)
     a, b, c = sec.disturbance_torque
     return AttitudeTruthPlant(
         inertia=as_float(sec.inertia_tensor()), initial_omega=as_float(w0), initial_quaternion=as_float(q0),
         semi_major_axis=as_float(sec.semi_major_axis), mu=as_float(sec.mu),
         initial_argument_of_latitude=as_float(math.radians(sec.initial_argument_of_latitude_deg)),
-        disturbance_torque=(str(a), str(b), str(c)), gravity_gradient=sec.gravity_gradient)
+        disturbance_torque=(str(a), str(b), str(c)), gravity_gradient=sec.gravity_gradient,
+        state_frame=sec.state_frame)
 
 
 QUATERNION_PLANTS.add(ATTITUDE_TRUTH_PLANT)
