@@ -4,7 +4,9 @@ Quaternion rigid bodies with inertial attitude on a circular orbit with the grav
 (:class:`~formation_ftc.components.plants.attitude_truth.AttitudeTruthPlant`). It has the state layout
 of ``quaternion-rigid-body``, so the Euler sensors (``quaternion-euler``), the generalised-torque
 allocation (``euler-torque-allocation``), the scripted FDI and the Euler-angle attitude law
-(``networked-el-hinf``) compose with it exactly as with that plant.
+(``networked-el-hinf``) compose with it exactly as with that plant. ``state_frame = "lvlh"`` puts the
+attitude and body rate relative to LVLH in the state, so those components -- and the law's desired
+attitude -- then work relative to LVLH (LVLH pointing).
 """
 
 from __future__ import annotations
