@@ -205,3 +205,28 @@ def test_builtin_scenario_validates_with_the_truth_plant_and_sensors():
     raw["plant"]["eccentricity"] = "high"
     with pytest.raises(ScenarioError, match="plant.eccentricity"):
         ftc.load_scenario(raw)
+
+
+def test_initial_condition_from_relative_orbital_elements():
+    """``initial_roe`` [m] (a_c times the dimensionless ROE) replaces the LVLH offsets: the deputies'
+    osculating elements give the same ROE back; giving both or neither is rejected naming the field."""
+    from formation_ftc.core.dynamics.orbital_truth import elements_to_roe
+    from formation_ftc.methods.composed import make_loop
+
+    roe_m = [[0.0, 200.0, 100.0, -50.0, 80.0, 60.0], [5.0, -300.0, 0.0, 0.0, -40.0, 0.0]]
+    plant = {k: v for k, v in TRUTH.items()}
+    raw = _loop({**plant, "initial_roe": roe_m}, {"type": "lvlh-relative-state"})
+    raw["plant"].pop("initial_position")
+    raw["plant"].pop("initial_velocity")
+    loop = make_loop(ftc.load_scenario(raw))
+    x0 = loop.plant.initial_state()
+    chief = [float(v) for v in eci_to_elements(x0["chief"])]
+    roe = np.asarray(elements_to_roe(chief, eci_to_elements(x0["deputies"])))
+    np.testing.assert_allclose(roe * A, roe_m, atol=1e-5)  # ~1e-12 relative rounding of the elements
+    # the LVLH offsets are ~ the ROE scale (hundreds of metres), not zero
+    assert 100.0 < np.max(np.abs(loop.plant.position(x0))) < 1000.0
+    with pytest.raises(ScenarioError, match="plant: .*initial_position: give either"):
+        ftc.load_scenario(_loop({**plant, "initial_roe": roe_m}, {"type": "lvlh-relative-state"}))
+    raw["plant"]["initial_roe"] = roe_m[:1]
+    with pytest.raises(ScenarioError, match="initial_roe: 1 rows for 2 spacecraft"):
+        ftc.load_scenario(raw)

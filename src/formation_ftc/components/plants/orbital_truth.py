@@ -21,6 +21,7 @@ from formation_ftc.core.dynamics.orbital_truth import (
     lvlh_rotation,
     lvlh_to_eci,
     perturbed_acceleration,
+    roe_to_elements,
 )
 from formation_ftc.core.vector3 import norm3, sq_norm3
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
@@ -53,8 +54,10 @@ class InertialFormationPlant(Plant):
     frame (:meth:`position`, :meth:`velocity`, (N, 3) each, as the relative-state plants), with the
     relative velocity taken in the frame rotating at omega = r_c x v_c / |r_c|^2.
 
-    Initial condition: the chief's classical elements and per-deputy LVLH offsets (mapped to ECI when
-    the run starts, so campaigns may vary them). Usage integrals: the commanded delta-v
+    Initial condition: the chief's classical elements and per-deputy LVLH offsets, or per-deputy
+    quasi-nonsingular relative orbital elements (``initial_roe``, see
+    :func:`~formation_ftc.core.dynamics.orbital_truth.roe_to_elements`); mapped to ECI when the run
+    starts, so campaigns may vary them. Usage integrals: the commanded delta-v
     int ||u_i|| / m_i dt [m/s] and effort int ||u_i||^2 dt [N^2 s].
     """
 
@@ -72,6 +75,9 @@ class InertialFormationPlant(Plant):
     earth_radius: Any = R_EARTH  # [m]
     earth_rotation_rate: Any = OMEGA_EARTH  # [rad/s]
     solar_pressure: Any = SOLAR_PRESSURE  # [N/m^2]
+    #: (N, 6) dimensionless relative orbital elements of the deputies (da, dl, dex, dey, dix, diy); when
+    #: given they replace initial_state_lvlh as the initial condition
+    initial_roe: Any = None
     j2: bool = static(default=True)
     drag: bool = static(default=False)
     srp: bool = static(default=False)
@@ -84,6 +90,9 @@ class InertialFormationPlant(Plant):
     def initial_state(self):
         el = jnp.asarray(self.chief_elements)
         chief = elements_to_eci(el[0], el[1], el[2], el[3], el[4], el[5], self.mu)
+        if self.initial_roe is not None:
+            deputies = elements_to_eci(*roe_to_elements(tuple(el), self.initial_roe), self.mu)
+            return {"chief": chief, "deputies": deputies}
         return {"chief": chief, "deputies": lvlh_to_eci(chief, self.initial_state_lvlh)}
 
     def exogenous(self, t):
@@ -111,6 +120,11 @@ class InertialFormationPlant(Plant):
     def relative_state(self, x):
         """(N, 6) LVLH relative state [m, m/s] of the deputies w.r.t. the chief."""
         return eci_to_lvlh(x["chief"], x["deputies"])
+
+    def sensed_state(self, x):
+        """What sensors measure: ``{"q": (N, 6)}``, the LVLH relative state (so every relative-state sensor
+        and every law built for the relative-state plants works on the inertial truth)."""
+        return {"q": self.relative_state(x)}
 
     def position(self, x):
         return self.relative_state(x)[:, :3]

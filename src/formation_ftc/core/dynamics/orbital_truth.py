@@ -66,6 +66,10 @@ __all__ = [
     "perturbed_acceleration",
     "elements_to_eci",
     "eci_to_elements",
+    "true_to_mean_anomaly",
+    "mean_to_true_anomaly",
+    "roe_to_elements",
+    "elements_to_roe",
     "lvlh_rotation",
     "lvlh_angular_velocity",
     "eci_to_lvlh",
@@ -246,6 +250,71 @@ def eci_to_elements(state, mu=MU_EARTH):
     argp = jnp.mod(angle(e_vec), 2 * jnp.pi)
     nu = jnp.mod(angle(r) - angle(e_vec), 2 * jnp.pi)
     return a, e, i, raan, argp, nu
+
+
+def true_to_mean_anomaly(nu, e):
+    """Mean anomaly M [rad] from the true anomaly ``nu`` [rad] (eccentric anomaly, Kepler's equation);
+    whole revolutions of ``nu`` are kept."""
+    nu = jnp.asarray(nu)
+    nu_w = jnp.remainder(nu + jnp.pi, 2 * jnp.pi) - jnp.pi
+    E = 2.0 * jnp.arctan2(jnp.sqrt(1.0 - e) * jnp.sin(nu_w / 2), jnp.sqrt(1.0 + e) * jnp.cos(nu_w / 2))
+    return E - e * jnp.sin(E) + (nu - nu_w)
+
+
+def mean_to_true_anomaly(M, e, iterations: int = 40):
+    """True anomaly [rad] from the mean anomaly ``M`` [rad]: Newton on Kepler's equation M = E - e sin E
+    (a fixed number of iterations, traceable; quadratic convergence for 0 <= e < 0.9 from the start
+    E = M + e sin M, or pi for e > 0.8)."""
+    M = jnp.asarray(M)
+    Mr = jnp.remainder(M + jnp.pi, 2 * jnp.pi) - jnp.pi
+    E = jnp.where(e < 0.8, Mr + e * jnp.sin(Mr), jnp.pi * jnp.sign(Mr))
+    for _ in range(iterations):
+        E = E - (E - e * jnp.sin(E) - Mr) / (1.0 - e * jnp.cos(E))
+    nu = 2.0 * jnp.arctan2(jnp.sqrt(1.0 + e) * jnp.sin(E / 2), jnp.sqrt(1.0 - e) * jnp.cos(E / 2))
+    return nu + (M - Mr)
+
+
+def roe_to_elements(chief, roe, mu=MU_EARTH):
+    """Deputy classical elements from the chief's and quasi-nonsingular relative orbital elements.
+
+    ``chief`` = (a, e, i, RAAN, argp, nu) [m, -, rad, rad, rad, rad]; ``roe`` (..., 6) dimensionless
+    (divide metres by a)::
+
+        da  = (a_d - a_c) / a_c
+        dl  = (u_d - u_c) + (RAAN_d - RAAN_c) cos i_c            (u = argp + M, mean argument of latitude)
+        dex = e_d cos argp_d - e_c cos argp_c,   dey = e_d sin argp_d - e_c sin argp_c
+        dix = i_d - i_c,                         diy = (RAAN_d - RAAN_c) sin i_c
+
+    (D'Amico's definition.) Singular for sin i_c = 0 with diy != 0. Returns a tuple of six (...) arrays.
+    """
+    del mu
+    a, e, i, raan, argp, nu = (jnp.asarray(c) for c in chief)
+    roe = jnp.asarray(roe)
+    da, dl, dex, dey, dix, diy = (roe[..., k] for k in range(6))
+    u_c = argp + true_to_mean_anomaly(nu, e)
+    ex, ey = e * jnp.cos(argp) + dex, e * jnp.sin(argp) + dey
+    e_d = jnp.sqrt(ex**2 + ey**2)
+    argp_d = jnp.arctan2(ey, ex)
+    d_raan = diy / jnp.sin(i)
+    u_d = u_c + dl - d_raan * jnp.cos(i)
+    nu_d = mean_to_true_anomaly(u_d - argp_d, e_d)
+    return a * (1.0 + da), e_d, i + dix, raan + d_raan, argp_d, nu_d
+
+
+def elements_to_roe(chief, deputy):
+    """Inverse of :func:`roe_to_elements`: (..., 6) dimensionless ROE of ``deputy`` elements w.r.t.
+    ``chief`` (both (a, e, i, RAAN, argp, nu)); angle differences wrapped to (-pi, pi]."""
+    a, e, i, raan, argp, nu = (jnp.asarray(c) for c in chief)
+    ad, ed, id_, raand, argpd, nud = (jnp.asarray(c) for c in deputy)
+
+    def wrap(x):
+        return jnp.remainder(x + jnp.pi, 2 * jnp.pi) - jnp.pi
+
+    d_raan = wrap(raand - raan)
+    du = wrap(argpd + true_to_mean_anomaly(nud, ed) - argp - true_to_mean_anomaly(nu, e))
+    return jnp.stack([ad / a - 1.0, du + d_raan * jnp.cos(i),
+                      ed * jnp.cos(argpd) - e * jnp.cos(argp), ed * jnp.sin(argpd) - e * jnp.sin(argp),
+                      id_ - i, d_raan * jnp.sin(i)], axis=-1)
 
 
 # --------------------------------------------------------------------------------------- LVLH

@@ -12,7 +12,7 @@ from formation_ftc.components.sensors.lvlh_relative_state import LvlhRelativeSta
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.methods.composed.catalog_translational import _per_axis, _PointMassSection
+from formation_ftc.methods.composed.catalog_translational import Vec3, Vec3Expr, _per_axis
 from formation_ftc.sim.components import as_float
 
 __all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]
@@ -21,9 +21,21 @@ __all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]
 _Q_SENSORS = ("relative-state",)
 
 
-class OrbitalTruthSection(_PointMassSection):
-    """Chief classical elements + per-deputy LVLH offsets (``initial_position``, ``initial_velocity``);
-    forces (applied and ``disturbance_force``) are in the chief's LVLH axes."""
+class OrbitalTruthSection(StrictModel):
+    """Chief classical elements + per-deputy LVLH offsets (``initial_position``, ``initial_velocity``) or
+    relative orbital elements (``initial_roe``); forces (applied and ``disturbance_force``) are in the
+    chief's LVLH axes."""
+
+    mass: list[float] = Field(description="True mass of each spacecraft [kg], > 0.")
+    initial_position: list[Vec3] | None = Field(
+        None, description="Initial LVLH offset of each spacecraft from the chief [m] (or give initial_roe).")
+    initial_velocity: list[Vec3] | None = Field(
+        None, description="Initial LVLH velocity (rotating frame) of each spacecraft [m/s] (default 0).")
+    initial_roe: list[tuple[float, float, float, float, float, float]] | None = Field(
+        None, description="Instead of initial_position/initial_velocity: quasi-nonsingular relative orbital "
+                          "elements a_c (da, dlambda, dex, dey, dix, diy) of each spacecraft [m].")
+    disturbance_force: Vec3Expr = Field(("0", "0", "0"), description="External force per axis in the chief's "
+                                                                     "LVLH axes, expressions in t [s], i [N].")
 
     semi_major_axis: float = Field(gt=R_EARTH, description=f"Chief semi-major axis [m], > R_E = {R_EARTH} m.")
     eccentricity: float = Field(0.0, ge=0, lt=0.9, description="Chief eccentricity [-], in [0, 0.9).")
@@ -53,6 +65,20 @@ class OrbitalTruthSection(_PointMassSection):
 
     @model_validator(mode="after")
     def _orbit(self):
+        n = len(self.mass)
+        if n < 1 or any(not (m > 0 and math.isfinite(m)) for m in self.mass):
+            raise ValueError("mass: at least one spacecraft, every mass finite and > 0 kg")
+        if (self.initial_position is None) == (self.initial_roe is None):
+            raise ValueError("initial_position: give either initial_position (LVLH offsets) or initial_roe")
+        if self.initial_roe is not None and self.initial_velocity is not None:
+            raise ValueError("initial_velocity: not used with initial_roe (the elements fix the velocity)")
+        for name in ("initial_position", "initial_velocity", "initial_roe"):
+            rows = getattr(self, name)
+            if rows is not None and len(rows) != n:
+                raise ValueError(f"{name}: {len(rows)} rows for {n} spacecraft")
+        if self.initial_roe is not None and any(r[5] != 0 for r in self.initial_roe) \
+                and abs(math.sin(self.inclination)) < 1e-6:
+            raise ValueError("initial_roe: diy != 0 needs an inclined chief (sin(inclination) = 0 here)")
         rp = self.semi_major_axis * (1.0 - self.eccentricity)
         if not rp > R_EARTH:
             raise ValueError(f"eccentricity: perigee radius a (1 - e) = {rp:.1f} m is inside the Earth "
@@ -64,6 +90,16 @@ class OrbitalTruthSection(_PointMassSection):
             if not all(lower_ok(b) and math.isfinite(b) for b in vals):
                 raise ValueError(f"{name}: every value must be finite and {'> 0' if name[0] == 'b' else '>= 0'} m^2/kg")
         return self
+
+    @property
+    def count(self) -> int:
+        return len(self.mass)
+
+    def q0(self) -> np.ndarray:
+        if self.initial_position is None:
+            return np.zeros((self.count, 6))
+        v0 = np.zeros((self.count, 3)) if self.initial_velocity is None else np.asarray(self.initial_velocity)
+        return np.hstack([np.asarray(self.initial_position, float), v0])
 
     def density_table(self) -> np.ndarray:
         if self.density_base is None:
@@ -88,7 +124,9 @@ def _orbital_truth(sec: OrbitalTruthSection, ctx: BuildContext):
         ballistic_coefficient=as_float(b), chief_ballistic_coefficient=as_float(b_c),
         srp_coefficient=as_float(c), chief_srp_coefficient=as_float(c_c),
         sun_direction=as_float(sec.sun_direction), density_table=as_float(sec.density_table()),
-        mu=as_float(sec.mu), j2=sec.j2, drag=sec.drag, srp=sec.srp, disturbance_force=sec.disturbance_force)
+        mu=as_float(sec.mu),
+        initial_roe=None if sec.initial_roe is None else as_float(np.asarray(sec.initial_roe) / sec.semi_major_axis),
+        j2=sec.j2, drag=sec.drag, srp=sec.srp, disturbance_force=sec.disturbance_force)
 
 
 class LvlhRelativeStateSection(StrictModel):
