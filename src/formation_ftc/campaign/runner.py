@@ -34,7 +34,7 @@ import jax
 import numpy as np
 import pandas as pd
 
-from formation_ftc.campaign.sampling import CampaignPlan, Chunk
+from formation_ftc.campaign.sampling import CampaignPlan, Chunk, RunColumns
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
 from formation_ftc.sim.batch import batched_run, stack_params
@@ -119,10 +119,11 @@ def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any
 _BINDINGS: dict[Any, Any] = {}
 
 
-def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float) -> ChunkResult | None:
+def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float) -> ChunkResult | None:
     """The fast path: one build per structural group, sampled values written into the parameter
-    arrays (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run.
-    None when the method's parameters are not a ClosedLoop or a field cannot be bound."""
+    arrays (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
+    the result table assembled from columns (no per-run Python objects except for failed and traced
+    runs). None when the method's parameters are not a ClosedLoop or a field cannot be bound."""
     import dataclasses
 
     from formation_ftc import api
@@ -131,21 +132,25 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
+    n = len(cols)
     bindable = [s.path for s in plan.random_samplers
-                if s.numeric and s.kind != "choice" and all(isinstance(inp.values[s.path], int | float)
-                                                            and not isinstance(inp.values[s.path], bool)
-                                                            for inp in inputs)]
+                if s.numeric and s.kind != "choice" and all(isinstance(v, int | float) and not isinstance(v, bool)
+                                                            for v in cols.values[s.path])]
     cands = {s.path: list(s.extremes()) for s in plan.random_samplers if s.path in bindable}
     integer = {s.path: s.kind == "integer" for s in plan.random_samplers if s.path in bindable}
     seed_path = "simulation.seed"
-    groups: dict[str, list[int]] = {}
-    for k, inp in enumerate(inputs):
-        key = json.dumps({p: v for p, v in inp.values.items() if p not in bindable}, sort_keys=True, default=str)
-        groups.setdefault(inp.base + "|" + key, []).append(k)
-    if len(groups) > 1:
+    base_names = [plan.base_names[b] for b in cols.base.tolist()]
+    structural = [p for p in cols.values if p not in bindable]  # grid values (constant) and choices
+
+    def group_key(k: int) -> str:
+        return base_names[k] + "|" + json.dumps({p: cols.values[p][k] for p in structural}, sort_keys=True,
+                                                default=str)
+
+    gkey = group_key(0)
+    varying = [p for p in structural if any(v != cols.values[p][0] for v in cols.values[p])]
+    if len(set(base_names)) > 1 or (varying and any(group_key(k) != gkey for k in range(1, n))):
         return None  # structure differs inside the chunk (a choice): the general path groups it
-    (gkey, idxs), = groups.items()
-    first = inputs[idxs[0]]
+    first = cols.row(0, plan.base_names)
 
     def build(values: Mapping[str, Any]):
         vals = {p: v for p, v in values.items() if p != seed_path}
@@ -169,11 +174,10 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
     if entry is None:
         return None
     template, bindings = entry
-    n = len(inputs)
-    values = {p: np.array([inp.values[p] for inp in inputs], dtype=np.float64) for p in bindable}
-    values[seed_path] = np.array([inp.seed for inp in inputs], dtype=np.float64)
+    values = {p: np.asarray(cols.values[p], dtype=np.float64) for p in bindable}
+    values[seed_path] = cols.seed.astype(np.float64)
     batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
-    last = inputs[-1]
+    last = cols.row(n - 1, plan.base_names)
     check = build({**{p: last.values[p] for p in bindable}, seed_path: last.seed})
     check_params = dataclasses.replace(check.params, record_every=template.params.record_every)
     if not params_close(check_params, take_run(batch, axes, n - 1)):
@@ -182,49 +186,57 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, inputs: list, t_start: float)
     out = jax.device_get(batched_run(template, axes, plan.chunk_size)(batch))
     loop = template.params
     names = loop_metric_names(loop.metrics, loop.count)
-    cols: dict[str, np.ndarray] = {}
+    metric_cols: dict[str, np.ndarray] = {}
     for m, arr in zip(loop.metrics, out["metrics"], strict=True):
         a = np.asarray(arr, dtype=np.float64)[:n]
         if m.spacecraft == "each":
             for i in range(a.shape[1]):
-                cols[f"{m.name}_sc{i + 1}"] = a[:, i]
+                metric_cols[f"{m.name}_sc{i + 1}"] = a[:, i]
         else:
-            cols[m.name] = a
+            metric_cols[m.name] = a
     keep = plan.spec.campaign.metrics
-    missing = [m for m in keep if m not in cols]
+    missing = [m for m in keep if m not in metric_cols]
     if missing:
         raise CampaignError(f"campaign.metrics: {missing} not returned by method "
                             f"{plan.scenario(first).scenario.method!r} (it returns {sorted(names)})")
     div = np.asarray(out["diverged_step"])[:n]
     failed = div >= 0
-    table = pd.DataFrame({
-        "run_id": np.array([i.run_id for i in inputs], dtype=np.int64),
+    data: dict[str, Any] = {
+        "run_id": cols.run_id.astype(np.int64),
         "chunk_id": np.full(n, chunk.chunk_id, dtype=np.int64),
-        "grid_index": np.array([i.grid_index for i in inputs], dtype=np.int64),
-        "replicate": np.array([i.replicate for i in inputs], dtype=np.int64),
-        "seed": np.array([i.seed for i in inputs], dtype=np.int64),
-        "scenario": [i.base for i in inputs],
+        "grid_index": cols.grid_index.astype(np.int64),
+        "replicate": cols.replicate.astype(np.int64),
+        "seed": cols.seed.astype(np.int64),
+        "scenario": base_names,
         "status": np.where(failed, "failed", "ok"),
         "diagnostic": [""] * n,
-    })
+    }
     numeric = plan.input_columns()
-    for path in inputs[0].values:
-        table[f"input:{path}"] = [_value_cell(i.values[path], numeric[f"input:{path}"]) for i in inputs]
+    for path, vals in cols.values.items():
+        if numeric[f"input:{path}"]:
+            data[f"input:{path}"] = np.asarray(vals, dtype=np.float64)
+        elif path not in varying:
+            data[f"input:{path}"] = [_value_cell(vals[0], False)] * n
+        else:
+            data[f"input:{path}"] = [_value_cell(v, False) for v in vals]
     for name in (keep or names):
-        table[f"metric:{name}"] = np.where(failed, np.nan, cols[name]).astype("float64")
+        data[f"metric:{name}"] = np.where(failed, np.nan, metric_cols[name]).astype("float64")
+    table = pd.DataFrame(data)
     traces = {}
-    for j in sorted(set(np.flatnonzero(failed).tolist())
-                    | {j for j, i in enumerate(inputs) if i.run_id in plan.spec.traces.runs}):
+    trace_runs = set(plan.spec.traces.runs)
+    rerun = np.flatnonzero(failed | np.isin(cols.run_id, np.fromiter(trace_runs, dtype=np.int64, count=len(trace_runs))))
+    for j in rerun.tolist():
         # re-run alone with the scenario's records (and the replay that names a divergence)
-        scn = plan.scenario(inputs[j])
+        inp = cols.row(j, plan.base_names)
+        scn = plan.scenario(inp)
         comp_j = api.compile_scenario(scn)
         params_j = dataclasses.replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
         run_out = jax.device_get(jax.jit(comp_j.run)(params_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(dataclasses.replace(comp_j, params=params_j), run_out,
                                                     int(run_out["diverged_step"]))
-        if inputs[j].run_id in plan.spec.traces.runs:
-            traces[inputs[j].run_id] = _trace(plan, comp_j, scn, inputs[j], run_out, str(table.at[j, "status"]))
+        if inp.run_id in trace_runs:
+            traces[inp.run_id] = _trace(plan, comp_j, scn, inp, run_out, str(table.at[j, "status"]))
     table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
@@ -234,10 +246,11 @@ def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     from formation_ftc import api
 
     t_start = time.perf_counter()
-    inputs = plan.run_inputs_many(chunk.run_ids)
-    fast = _bound_chunk(plan, chunk, inputs, t_start)
+    cols = plan.run_columns(chunk.run_ids)
+    fast = _bound_chunk(plan, chunk, cols, t_start)
     if fast is not None:
         return fast
+    inputs = cols.rows(plan.base_names)
     scenarios = [plan.scenario(i) for i in inputs]
     compiled = [api.compile_scenario(s) for s in scenarios]
     groups: dict[Any, list[int]] = {}
@@ -294,9 +307,12 @@ def _metric_units(metrics, count: int) -> dict[str, str]:
 
 
 def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
-    """Metric names each base scenario's method returns, found without running anything
-    (``jax.eval_shape`` of the run, then ``metrics`` on zeros). Empty list when it cannot tell."""
+    """Metric names each base scenario's method returns, found without running anything (a closed
+    loop declares them; other methods: ``jax.eval_shape`` of the run, then ``metrics`` on zeros).
+    Empty list when it cannot tell."""
     from formation_ftc import api
+    from formation_ftc.sim.loop import ClosedLoop
+    from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     out: dict[str, list[str]] = {}
     for b, name in enumerate(plan.base_names):
@@ -304,6 +320,9 @@ def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
         if len(plan.base_names) > 1:
             g = int(np.ravel_multi_index([b] + [0] * len(plan.grid_samplers), plan.grid_shape))
         compiled = api.compile_scenario(plan.scenario(plan.run_inputs(g * plan.runs)))
+        if isinstance(compiled.params, ClosedLoop):  # declared metrics: their names need no tracing
+            out[name] = loop_metric_names(compiled.params.metrics, compiled.params.count)
+            continue
         try:
             shapes = jax.eval_shape(lambda p, c=compiled: dict(c.run(p)), compiled.params)
             zeros = jax.tree_util.tree_map(lambda s: np.zeros(s.shape, s.dtype), shapes)

@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from formation_ftc.campaign import streams
 from formation_ftc.campaign.spec import (
     CampaignError,
     CampaignSpec,
@@ -69,7 +70,8 @@ from formation_ftc.campaign.spec import (
 )
 from formation_ftc.config import loader
 
-__all__ = ["RunInputs", "Chunk", "CampaignPlan", "run_seed", "draw_value", "value_from_unit", "qmc_design",
+__all__ = ["RunInputs", "RunColumns", "Chunk", "CampaignPlan", "run_seed", "run_seeds", "draw_value",
+           "draw_values", "value_from_unit", "qmc_design",
            "path_exists"]
 
 _QMC_SPAWN = 2**32 - 1  # spawn-key entry no run key reaches (run ids are below 2**32 - 1)
@@ -105,6 +107,40 @@ class Chunk:
         return self.stop - self.start
 
 
+@dataclass(frozen=True)
+class RunColumns:
+    """The :class:`RunInputs` of many runs as columns (``values``: dotted path -> one value per run)."""
+
+    run_id: np.ndarray  # int64
+    grid_index: np.ndarray  # int64
+    replicate: np.ndarray  # int64
+    seed: np.ndarray  # int64, the scenario seeds
+    base: np.ndarray  # int64 index into the plan's base names
+    values: dict[str, list[Any]]
+
+    def __len__(self) -> int:
+        return int(self.run_id.shape[0])
+
+    def row(self, k: int, base_names: list[str]) -> RunInputs:
+        """Run ``k`` (position in the columns) as :class:`RunInputs` (grid values copied per run)."""
+        vals = {p: v[k] if isinstance(v[k], int | float | str | bool) or v[k] is None else copy.deepcopy(v[k])
+                for p, v in self.values.items()}
+        return RunInputs(int(self.run_id[k]), int(self.grid_index[k]), int(self.replicate[k]), int(self.seed[k]),
+                         base_names[int(self.base[k])], vals)
+
+    def rows(self, base_names: list[str]) -> list[RunInputs]:
+        ids, gs, js, seeds, bases = (a.tolist() for a in (self.run_id, self.grid_index, self.replicate, self.seed,
+                                                           self.base))
+        paths = list(self.values)
+        cols = [self.values[p] for p in paths]
+        plain = [all(isinstance(v, int | float | str | bool) or v is None for v in col) for col in cols]
+        out = []
+        for k in range(len(ids)):
+            vals = {p: c[k] if pl else copy.deepcopy(c[k]) for p, c, pl in zip(paths, cols, plain, strict=True)}
+            out.append(RunInputs(ids[k], gs[k], js[k], seeds[k], base_names[bases[k]], vals))
+        return out
+
+
 def run_seed(campaign_seed: int, key: int) -> int:
     """31-bit scenario seed of the run with sampling key ``key`` (replicate or run id)."""
     ss = np.random.SeedSequence(campaign_seed, spawn_key=(int(key), 0))
@@ -117,12 +153,37 @@ def draw_value(sampler: Sampler, campaign_seed: int, key: int) -> Any:
     return sampler.draw(np.random.default_rng(ss))
 
 
-def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int]) -> list[Any]:
-    """:func:`draw_value` for many sampling keys at once (same numbers, vectorised inverse CDFs)."""
+def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int] | np.ndarray) -> list[Any]:
+    """:func:`draw_value` for many sampling keys at once (the same numbers).
+
+    The generator states of all keys are derived at once (:mod:`formation_ftc.campaign.streams`);
+    distributions that map the first double of the stream (uniform, loguniform, normal, weighted
+    choice) are evaluated as arrays, the others draw from each run's generator. The first keys are
+    also drawn the per-run way and compared: any difference falls back to per-run generators.
+    """
     crc = zlib.crc32(sampler.path.encode())
+    ks = np.asarray(keys, dtype=np.int64).reshape(-1)
+    if ks.size and streams.available() and ks.min() >= 0 and ks.max() <= 0xFFFFFFFF:
+        values = sampler.from_first_double(streams.first_doubles(campaign_seed, ks, (1, crc)))
+        if values is None:
+            values = [sampler.draw(g) for g in streams.generators(campaign_seed, ks, (1, crc))]
+        if all(_same(values[n], draw_value(sampler, campaign_seed, int(ks[n]))) for n in range(min(2, ks.size))):
+            return values
     rngs = [np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(int(k), 1, crc)))
-            for k in keys]
+            for k in ks.tolist()]
     return sampler.draw_many(rngs)
+
+
+def run_seeds(campaign_seed: int, keys: list[int] | np.ndarray) -> np.ndarray:
+    """:func:`run_seed` of many sampling keys (int64 array; the same numbers)."""
+    ks = np.asarray(keys, dtype=np.int64).reshape(-1)
+    if ks.size and streams.available() and ks.min() >= 0 and ks.max() <= 0xFFFFFFFF:
+        return streams.run_seeds(campaign_seed, ks)
+    return np.array([run_seed(campaign_seed, int(k)) for k in ks.tolist()], dtype=np.int64)
+
+
+def _same(a: Any, b: Any) -> bool:
+    return type(a) is type(b) and (a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)))
 
 
 def value_from_unit(sampler: Sampler, u: float) -> Any:
@@ -371,24 +432,41 @@ class CampaignPlan:
         ordered = {s.path: values[s.path] for s in self.samplers}
         return RunInputs(int(run_id), g, j, run_seed(self.seed, key), self.base_names[b], ordered)
 
-    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
-        """:meth:`run_inputs` of many runs (same values; random draws vectorised per field)."""
-        if self.sampling != "random" or not self.random_samplers:
-            return [self.run_inputs(r) for r in run_ids]
-        for r in run_ids:
-            if not 0 <= r < self.n_runs:
-                raise CampaignError(f"run id {r} does not exist (0..{self.n_runs - 1})")
-        keys = [(r % self.runs) if self.paired else int(r) for r in run_ids]
-        drawn = {s.path: draw_values(s, self.seed, keys) for s in self.random_samplers}
-        out = []
-        for n, r in enumerate(run_ids):
-            g, j = divmod(int(r), self.runs)
-            b, values = self.grid_point(g)
+    def run_columns(self, run_ids: list[int] | np.ndarray) -> RunColumns:
+        """The inputs of many runs as columns (the values of :meth:`run_inputs`, derived per field for
+        all runs at once: vectorised seeds and draws, grid values looked up per grid point)."""
+        ids = np.asarray(run_ids, dtype=np.int64).reshape(-1)
+        if ids.size and (ids.min() < 0 or ids.max() >= self.n_runs):
+            bad = int(ids[(ids < 0) | (ids >= self.n_runs)][0])
+            raise CampaignError(f"run id {bad} does not exist (0..{self.n_runs - 1})")
+        g, j = np.divmod(ids, self.runs)
+        keys = j if self.paired else ids
+        points = {int(x): self.grid_point(int(x)) for x in np.unique(g)}
+        values: dict[str, list[Any]] = {}
+        if len(points) == 1:  # one grid point (a chunk): constant columns
+            (b0, grid0), = points.values()
+            base = np.full(ids.size, b0, dtype=np.int64)
+            for s in self.grid_samplers:
+                values[s.path] = [grid0[s.path]] * ids.size
+        else:
+            g_list = g.tolist()
+            base = np.array([points[x][0] for x in g_list], dtype=np.int64)
+            for s in self.grid_samplers:
+                values[s.path] = [points[x][1][s.path] for x in g_list]
+        if self.sampling == "random":
             for s in self.random_samplers:
-                values[s.path] = drawn[s.path][n]
-            ordered = {s.path: values[s.path] for s in self.samplers}
-            out.append(RunInputs(int(r), g, j, run_seed(self.seed, keys[n]), self.base_names[b], ordered))
-        return out
+                values[s.path] = draw_values(s, self.seed, keys) if ids.size else []
+        elif self.random_samplers:
+            design = self.design()
+            for m, s in enumerate(self.random_samplers):
+                values[s.path] = [value_from_unit(s, u) for u in design[keys, m].tolist()]
+        ordered = {s.path: values[s.path] for s in self.samplers}
+        return RunColumns(ids, g, j, run_seeds(self.seed, keys) if ids.size else np.zeros(0, np.int64), base,
+                          ordered)
+
+    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
+        """:meth:`run_inputs` of many runs (same values; see :meth:`run_columns`)."""
+        return self.run_columns(run_ids).rows(self.base_names)
 
     def design(self) -> np.ndarray:
         """The quasi-Monte Carlo unit-cube design of this campaign (rows indexed by sampling key)."""
@@ -420,40 +498,52 @@ class CampaignPlan:
         full for one run per structure (base and non-numeric values) and for the runs holding the
         smallest and the largest value of every numeric field (cross-field rules see the extremes).
         """
-        ids = list(range(self.n_runs) if run_ids is None else run_ids)
-        inputs = self.run_inputs_many(ids)
+        ids = np.arange(self.n_runs) if run_ids is None else np.asarray(run_ids, dtype=np.int64)
+        cols = self.run_columns(ids)
+        run_id = cols.run_id
         errors: list[str] = []
         numeric_paths = [s.path for s in self.samplers
-                         if all(isinstance(i.values[s.path], int | float) and not isinstance(i.values[s.path], bool)
-                                for i in inputs)]
+                         if all(isinstance(v, int | float) and not isinstance(v, bool) for v in cols.values[s.path])]
         chosen: dict[int, RunInputs] = {}
+
+        def pick(k: int) -> None:
+            chosen.setdefault(int(run_id[k]), cols.row(k, self.base_names))
+
+        base_sel = {b: np.flatnonzero(cols.base == b) for b in range(len(self.base_names))}
         for path in numeric_paths:
-            vals = np.array([i.values[path] for i in inputs], dtype=np.float64)
-            for base_k, base in enumerate(self.base_names):
-                sel = [k for k, i in enumerate(inputs) if i.base == base]
-                if not sel:
+            vals = np.array(cols.values[path], dtype=np.float64)
+            for base_k in range(len(self.base_names)):
+                sel = base_sel[base_k]
+                if not sel.size:
                     continue
                 for bound, op, ok in _schema_bounds(self.methods[base_k], path):
                     good = np.asarray(ok(vals[sel]), dtype=bool)
-                    bad = [sel[j] for j in np.flatnonzero(~good)]
-                    if bad:
-                        k = bad[0]
-                        errors.append(f"run {inputs[k].run_id}: {path} = {vals[k]!r} violates {path} {op} "
-                                      f"{bound} ({len(bad)} run(s) in all)")
+                    bad = sel[np.flatnonzero(~good)]
+                    if bad.size:
+                        k = int(bad[0])
+                        errors.append(f"run {int(run_id[k])}: {path} = {vals[k]!r} violates {path} {op} "
+                                      f"{bound} ({bad.size} run(s) in all)")
                 v_sel = vals[sel]
                 if np.any(~np.isfinite(v_sel)):
-                    k = sel[int(np.flatnonzero(~np.isfinite(v_sel))[0])]
-                    errors.append(f"run {inputs[k].run_id}: {path} = {vals[k]!r} is not finite")
+                    k = int(sel[int(np.flatnonzero(~np.isfinite(v_sel))[0])])
+                    errors.append(f"run {int(run_id[k])}: {path} = {vals[k]!r} is not finite")
                     continue
-                for k in (sel[int(np.argmin(v_sel))], sel[int(np.argmax(v_sel))]):
-                    chosen[inputs[k].run_id] = inputs[k]
-        structures: dict[str, RunInputs] = {}
-        for i in inputs:
-            key = i.base + json.dumps({p: v for p, v in i.values.items() if p not in numeric_paths},
-                                      sort_keys=True, default=str)
-            structures.setdefault(key, i)
-        for i in structures.values():
-            chosen.setdefault(i.run_id, i)
+                for k in (int(sel[int(np.argmin(v_sel))]), int(sel[int(np.argmax(v_sel))])):
+                    pick(k)
+        # one run per structure (base and non-numeric values)
+        other = [p for p in cols.values if p not in numeric_paths]
+        if not other:
+            for sel in base_sel.values():
+                if sel.size:
+                    pick(int(sel[0]))
+        else:
+            structures: dict[str, int] = {}
+            for k in range(len(cols)):
+                key = self.base_names[int(cols.base[k])] + json.dumps(
+                    {p: cols.values[p][k] for p in other}, sort_keys=True, default=str)
+                structures.setdefault(key, k)
+            for k in structures.values():
+                pick(k)
         for i in sorted(chosen.values(), key=lambda x: x.run_id):
             if len(errors) >= 3:
                 break

@@ -99,6 +99,12 @@ class Sampler:
         vectorise the expensive part)."""
         return [self.draw(r) for r in rngs]
 
+    def from_first_double(self, d: np.ndarray) -> list[Any] | None:
+        """The values ``draw`` returns for fresh generators whose first ``random()`` is ``d`` (one per
+        run), or None when a draw is not a function of the first double alone (then each run's
+        generator draws; see :mod:`formation_ftc.campaign.streams`)."""
+        return None
+
     def extremes(self) -> list[Any]:
         return []
 
@@ -131,6 +137,10 @@ class Uniform(Sampler):
     def draw(self, rng):
         return float(rng.uniform(self.low, self.high))
 
+    def from_first_double(self, d):
+        # Generator.uniform(low, high) = low + (high - low) * random()
+        return (float(self.low) + (float(self.high) - float(self.low)) * d).tolist()
+
     def extremes(self):
         return [self.low, self.high]
 
@@ -150,6 +160,10 @@ class LogUniform(Sampler):
 
     def draw(self, rng):
         return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
+
+    def from_first_double(self, d):
+        lo, hi = math.log(self.low), math.log(self.high)
+        return [math.exp(x) for x in (lo + (hi - lo) * d).tolist()]  # math.exp: the same libm as draw
 
     def extremes(self):
         return [self.low, self.high]
@@ -180,6 +194,9 @@ class Normal(Sampler):
     def draw_many(self, rngs):
         # one uniform per run from its own stream, the inverse CDF evaluated once for all of them
         return self._from_uniform(np.asarray([r.uniform() for r in rngs]))
+
+    def from_first_double(self, d):
+        return self._from_uniform(np.asarray(d, dtype=np.float64))  # uniform() = 0 + 1 * random()
 
     def _from_uniform(self, u: np.ndarray) -> list[float]:
         if self.low is None and self.high is None:
@@ -231,6 +248,14 @@ class Choice(Sampler):
     def draw(self, rng):
         p = None if self.weights is None else np.asarray(self.weights) / np.sum(self.weights)
         return copy.deepcopy(self.values[int(rng.choice(len(self.values), p=p))])
+
+    def from_first_double(self, d):
+        if self.weights is None:
+            return None  # Generator.choice without p draws a bounded integer
+        # Generator.choice(n, p=p): the cumulative weights searched with one random() (side="right")
+        cdf = (np.asarray(self.weights) / np.sum(self.weights)).astype(np.float64).cumsum()
+        cdf /= cdf[-1]
+        return [copy.deepcopy(self.values[int(k)]) for k in cdf.searchsorted(d, side="right")]
 
     def extremes(self):
         return list(self.values)
