@@ -303,6 +303,7 @@ def test_builtin_scenario_validates():
     ("inertia_matrices", [[[10.0, 1.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 25.0]]], "symmetric"),
     ("inertia_matrices", [[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 5.0]]], "triangle"),
     ("initial_frame", "ecef", "plant.initial_frame"),
+    ("state_frame", "body", "plant.state_frame"),
     ("gravity_gradiant", True, "plant.gravity_gradiant"),
 ])
 def test_bad_section_is_rejected_naming_the_field(field, value, needle):
