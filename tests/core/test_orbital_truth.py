@@ -112,6 +112,9 @@ def test_elements_round_trip_and_orbit_geometry():
     assert np.isclose(0.5 * v @ v - MU_EARTH / np.linalg.norm(r), -MU_EARTH / (2 * el[0]), rtol=1e-13)
     assert np.isclose(h[2] / np.linalg.norm(h), np.cos(el[2]), rtol=1e-14)
     np.testing.assert_allclose([float(x) for x in eci_to_elements(s)], el, rtol=1e-11)
+    # equatorial orbit: no node line, raan = 0 and argp is the longitude of perigee (finite, not nan)
+    eq = [float(x) for x in eci_to_elements(elements_to_eci(7.2e6, 0.1, 0.0, 0.7, 0.5, 0.3))]
+    np.testing.assert_allclose(eq, [7.2e6, 0.1, 0.0, 0.0, 1.2, 0.3], rtol=1e-11, atol=1e-12)
 
 
 def test_eci_lvlh_round_trip_and_agreement_with_the_existing_mapping():

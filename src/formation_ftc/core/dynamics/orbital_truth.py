@@ -225,8 +225,9 @@ def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
 
 def eci_to_elements(state, mu=MU_EARTH):
     """Osculating classical elements ``(a, e, i, raan, argp, nu)`` [m, -, rad, rad, rad, rad] of an ECI
-    state (..., 6). Angles in [0, 2 pi) (i in [0, pi]); undefined (nan-free but arbitrary) for e = 0
-    (argp) or i = 0 (raan)."""
+    state (..., 6). Angles in [0, 2 pi) (i in [0, pi]). Singular cases stay finite: for e = 0 the
+    argument of perigee follows the rounding direction of the eccentricity vector (arbitrary); for
+    i = 0 the node line is taken along the ECI x axis (raan = 0)."""
     state = jnp.asarray(state)
     r, v = state[..., :3], state[..., 3:]
     rn = jnp.linalg.norm(r, axis=-1)
@@ -241,7 +242,9 @@ def eci_to_elements(state, mu=MU_EARTH):
     raan = jnp.mod(jnp.arctan2(n_vec[..., 1], n_vec[..., 0]), 2 * jnp.pi)
     # angles in the orbit plane, measured from the node line with the orbit normal as the axis
     hz = h / hn[..., None]
-    n_hat = n_vec / jnp.linalg.norm(n_vec, axis=-1, keepdims=True)
+    n_norm = jnp.linalg.norm(n_vec, axis=-1, keepdims=True)
+    # equatorial orbit: no node line; measure from the ECI x axis (raan = 0)
+    n_hat = jnp.where(n_norm > 0, n_vec / jnp.where(n_norm > 0, n_norm, 1.0), jnp.array([1.0, 0.0, 0.0]))
     m_hat = jnp.cross(hz, n_hat)
 
     def angle(u):
@@ -377,5 +380,6 @@ def j2_secular_rates(a, e, i, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
 
 def drag_decay_rate_circular(a, ballistic, density, mu=MU_EARTH):
     """da/dt = -rho B sqrt(mu a) [m/s] of a circular orbit (non-rotating atmosphere; the co-rotation
-    changes |v_rel| by the factor ~ 1 - omega_E r cos i / v): a [m], B = C_D A/m [m^2/kg], rho [kg/m^3]."""
+    changes |v_rel| by the factor ~ 1 - omega_E r cos i / v, hence the rate by about its square): a [m],
+    B = C_D A/m [m^2/kg], rho [kg/m^3]."""
     return -density * ballistic * jnp.sqrt(mu * a)
