@@ -180,17 +180,39 @@ def test_catalog_rejects_bad_plant_fields_naming_them(field, value, needle):
     assert needle in str(exc.value)
 
 
-def test_catalog_rejects_perigee_inside_the_earth_and_wrong_sensors():
+def test_catalog_rejects_perigee_inside_the_earth_and_sensors_without_a_relative_state():
+    from types import SimpleNamespace
+
+    from formation_ftc.methods.composed import BuildContext, component_types
+
     with pytest.raises(ScenarioError, match="eccentricity: perigee radius"):
         ftc.load_scenario(_loop({**TRUTH, "eccentricity": 0.1}, {"type": "lvlh-relative-state"}))
-    with pytest.raises(ScenarioError, match="lvlh-relative-state"):
-        ftc.load_scenario(_loop(TRUTH, None))
-    with pytest.raises(ScenarioError, match="lvlh-relative-state"):
-        ftc.load_scenario(_loop(TRUTH, {"type": "relative-state"}))
-    with pytest.raises(ScenarioError, match="sensors lvlh-relative-state"):
-        ftc.load_scenario(_loop({"type": "relative-lvlh"}, {"type": "lvlh-relative-state"}))
     with pytest.raises(ScenarioError, match="sensors.position_bias"):
         ftc.load_scenario(_loop(TRUTH, {"type": "lvlh-relative-state", "position_bias": [1.0, 2.0]}))
+    # on a plant whose sensed state has no (N, 6) relative state the sensors are refused, naming both
+    entry = component_types("sensors")[("sensors", "lvlh-relative-state")]
+    plant = SimpleNamespace(initial_state=lambda: {"r": np.zeros((2, 3)), "v": np.zeros((2, 3))},
+                            sensed_state=lambda x: x)
+    ctx = BuildContext(scenario=None, count=2, dt=1.0, plant=plant)
+    with pytest.raises(ValueError, match="sensors lvlh-relative-state .* SimpleNamespace has no"):
+        entry.build(entry.section.model_validate({}), ctx)
+    # a relative-state plant is fine (its sensed state is the (N, 6) relative state)
+    ftc.load_scenario(_loop({"type": "relative-lvlh"}, {"type": "lvlh-relative-state"}))
+
+
+def test_relative_state_sensors_and_the_default_run_unchanged_on_the_truth():
+    """The plant's sensed state is the LVLH relative state, so the relative-state sensors (same noise
+    draws) and the default exact sensors give the loop of the lvlh-relative-state sensors exactly."""
+    noise = {"position_noise_std": 0.5, "velocity_noise_std": 1e-3}
+    runs = []
+    for sensors in ({"type": "lvlh-relative-state", **noise}, {"type": "relative-state", **noise},
+                    {"type": "lvlh-relative-state"}, None):
+        raw = _loop(TRUTH, sensors)
+        raw["simulation"]["horizon"] = 60.0
+        runs.append(ftc.simulate(ftc.load_scenario(raw)))
+    np.testing.assert_array_equal(runs[0].command.values, runs[1].command.values)
+    np.testing.assert_array_equal(runs[2].command.values, runs[3].command.values)
+    assert np.max(np.abs(runs[0].command.values - runs[2].command.values)) > 1e-3  # the noise is there
 
 
 def test_builtin_scenario_validates_with_the_truth_plant_and_sensors():

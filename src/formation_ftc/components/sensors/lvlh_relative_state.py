@@ -21,8 +21,10 @@ class LvlhRelativeStateSensors(Sensors):
 
         y_i = eci_to_lvlh(x_chief, x_i) + [n_p, n_v] + b_i        [m, m/s]
 
-    The plant state must hold the chief's and the deputies' ECI states under ``"chief"`` (6,) and
-    ``"deputies"`` (N, 6) (:class:`~formation_ftc.components.plants.orbital_truth.InertialFormationPlant`).
+    The loop hands sensors the plant's sensed state: for
+    :class:`~formation_ftc.components.plants.orbital_truth.InertialFormationPlant` that is already the LVLH
+    relative state ``{"q": (N, 6)}``; given the inertial state itself (``"chief"`` (6,) and ``"deputies"``
+    (N, 6) in ECI) the sensor maps it.
     The output has the layout of
     :class:`~formation_ftc.components.sensors.relative_state.RelativeStateSensors` ((N, 6), x radial,
     y along-track, z orbit normal), and the noise is drawn the same way from the step's key, so laws
@@ -40,4 +42,5 @@ class LvlhRelativeStateSensors(Sensors):
                                 gaussian_noise(k_v, (n, 3), self.velocity_noise_std)], axis=-1)
 
     def measure(self, t, x, inputs: SensorInputs):
-        return eci_to_lvlh(x["chief"], x["deputies"]) + inputs.noise + self.bias
+        q = x["q"] if "q" in x else eci_to_lvlh(x["chief"], x["deputies"])
+        return q + inputs.noise + self.bias

@@ -17,10 +17,6 @@ from formation_ftc.sim.components import as_float
 
 __all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]
 
-#: sensors types that read an (N, 6) relative state "q" the inertial plant does not have
-_Q_SENSORS = ("relative-state",)
-
-
 class OrbitalTruthSection(StrictModel):
     """Chief classical elements + per-deputy LVLH offsets (``initial_position``, ``initial_velocity``) or
     relative orbital elements (``initial_roe``); forces (applied and ``disturbance_force``) are in the
@@ -108,11 +104,6 @@ class OrbitalTruthSection(StrictModel):
 
 
 def _orbital_truth(sec: OrbitalTruthSection, ctx: BuildContext):
-    sensors = ctx.scenario.type_of("sensors")
-    if sensors is None or sensors in _Q_SENSORS:
-        raise ValueError(f"plant orbital-truth: sensors {sensors or '(default exact relative state)'} read a "
-                         "relative state the inertial plant does not hold; use [sensors] type = "
-                         "\"lvlh-relative-state\"")
     n = sec.count
     b = per_spacecraft(sec.ballistic_coefficient, n, "plant.ballistic_coefficient")
     c = per_spacecraft(sec.srp_coefficient, n, "plant.srp_coefficient")
@@ -139,8 +130,10 @@ class LvlhRelativeStateSection(StrictModel):
 
 def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
     if ctx.plant is not None and not isinstance(ctx.plant, InertialFormationPlant):
-        raise ValueError(f"sensors lvlh-relative-state read the chief and deputy ECI states of the orbital-truth "
-                         f"plant; plant {ctx.scenario.type_of('plant')} has none (use sensors relative-state)")
+        sensed = ctx.plant.sensed_state(ctx.plant.initial_state())
+        if not (isinstance(sensed, dict) and np.shape(sensed.get("q"))[-1:] == (6,)):
+            raise ValueError(f"sensors lvlh-relative-state measure a relative position and velocity; plant "
+                             f"{type(ctx.plant).__name__} has no (N, 6) relative state")
     n = ctx.count
     bias = np.hstack([_per_axis(sec.position_bias, n, "sensors.position_bias"),
                       _per_axis(sec.velocity_bias, n, "sensors.velocity_bias")])
@@ -152,7 +145,7 @@ def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
 
 register_component_type("plant", "orbital-truth", OrbitalTruthSection, _orbital_truth,
                         "every spacecraft and a virtual chief in ECI with J2, drag and SRP; forces in the "
-                        "chief's LVLH axes (use sensors lvlh-relative-state)")
+                        "chief's LVLH axes; sensors see the LVLH relative state")
 register_component_type("sensors", "lvlh-relative-state", LvlhRelativeStateSection, _lvlh_relative_state,
                         "relative state in the truth chief's LVLH frame with held Gaussian noise and a "
-                        "constant bias (for the orbital-truth plant)")
+                        "constant per-axis bias")
