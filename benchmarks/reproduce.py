@@ -4,7 +4,8 @@ the compile time of every built-in scenario as ``formation-ftc run`` compiles it
 1. ``reproduce all --profile`` in a fresh process with a fresh, empty ``FORMATION_FTC_JAX_CACHE``
    directory (cold), then again with the same directory (warm). Printed: the wall time of each
    process (interpreter start and imports included), each paper's wall time and its phase breakdown
-   (compile / run / post / plot / report, see ``formation_ftc.report.profile``).
+   (compile / run / post / plot / report, see ``formation_ftc.report.profile``), and the process's CPU
+   time (user + sys; on a shared machine a steadier figure than the wall time) with the load average.
 2. For every built-in scenario at its default horizon: ``jax.jit(compiled.run).lower(params).compile()``
    (tracing, lowering and XLA compile; the persistent cache off and JAX's in-memory caches cleared
    before each scenario, so every number is a cold compile), in one fresh process. The slowest is
@@ -21,6 +22,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -60,19 +63,22 @@ def _reproduce(papers: list[str], out: Path, cache: Path) -> dict:
     env = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache)}
     cmd = [sys.executable, "-m", "formation_ftc", "reproduce", *papers, "--out", str(out), "--force", "--no-3d",
            *(["--profile"] if _has_profile() else [])]
-    t0 = time.perf_counter()
+    t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    wall = time.perf_counter() - t0
+    wall, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
     if proc.returncode != 0:
         print(proc.stdout[-4000:], file=sys.stderr)
     meta = json.loads((out / "summary.json").read_text())["metadata"]
-    return {"wall_s": wall, "exit_code": proc.returncode, "papers": meta["wall_time_s"],
+    return {"wall_s": wall, "cpu_s": cpu, "load_avg": os.getloadavg(), "exit_code": proc.returncode, "papers": meta["wall_time_s"],
             "profile": meta.get("profile", {}), "status": meta["status"]}
 
 
 def _print_reproduce(label: str, r: dict, target: float) -> None:
     ok = "yes" if r["wall_s"] < target else "NO"
-    print(f"\nreproduce ({label}): {r['wall_s']:.1f} s wall, exit {r['exit_code']} (target < {target:g} s: {ok})")
+    print(f"\nreproduce ({label}): {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU (user + sys), exit "
+          f"{r['exit_code']} (target < {target:g} s wall: {ok}; load average after: "
+          + ", ".join(f"{x:.1f}" for x in r["load_avg"]) + ")")
     print(f"  {'paper':12s} {'wall':>7s} " + " ".join(f"{p:>8s}" for p in PHASES))
     for paper, wall in r["papers"].items():
         b = r["profile"].get(paper, {})
@@ -99,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--skip-reproduce", action="store_true", help="only the scenario compile times")
     ap.add_argument("--skip-compile", action="store_true", help="only reproduce (cold and warm)")
     ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
+    ap.add_argument("--keep", type=Path, help="copy the two reports (cold/, warm/) into this directory")
     args = ap.parse_args(argv)
     result: dict = {"cpu_count": os.cpu_count()}
     with tempfile.TemporaryDirectory(prefix="ftc-bench-") as tmp:
@@ -109,6 +116,9 @@ def main(argv: list[str] | None = None) -> int:
             _print_reproduce("cold compilation cache", result["cold"], TARGET_COLD_S)
             result["warm"] = _reproduce(args.papers, tmp_path / "warm", cache)
             _print_reproduce("warm compilation cache", result["warm"], TARGET_WARM_S)
+            if args.keep:
+                for run in ("cold", "warm"):
+                    shutil.copytree(tmp_path / run, args.keep / run, dirs_exist_ok=True)
     if not args.skip_compile:
         times = _compile_times()
         result["compile_s"] = times

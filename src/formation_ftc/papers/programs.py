@@ -9,6 +9,7 @@ second scenario of a structure calls the program the first one compiled. The pro
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from typing import Any
 
@@ -16,16 +17,33 @@ import jax
 
 __all__ = ["simulate", "jitted_run", "executable", "clear"]
 
-_PROGRAMS: dict[Hashable, Callable[[Any], Any]] = {}
-_EXECUTABLES: dict[Hashable, Any] = {}
+#: at most this many programs (and executables) are kept, least recently used dropped first, so that a
+#: long session (a test run) does not hold every executable it ever compiled
+MAX_KEPT = 8
+_PROGRAMS: OrderedDict[Hashable, Callable[[Any], Any]] = OrderedDict()
+_EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
+
+
+def _get(cache: OrderedDict, key: Hashable) -> Any:
+    value = cache.get(key)
+    if value is not None:
+        cache.move_to_end(key)
+    return value
+
+
+def _put(cache: OrderedDict, key: Hashable, value: Any) -> Any:
+    cache[key] = value
+    while len(cache) > MAX_KEPT:
+        cache.popitem(last=False)
+    return value
 
 
 def jitted_run(compiled) -> Callable[[Any], Any]:
     """``jax.jit(compiled.run)``, shared by every compiled scenario with the same ``static_key``
     (JAX still retraces if the parameters' shapes or static fields differ)."""
-    fn = _PROGRAMS.get(compiled.static_key)
+    fn = _get(_PROGRAMS, compiled.static_key)
     if fn is None:
-        fn = _PROGRAMS[compiled.static_key] = jax.jit(compiled.run)
+        fn = _put(_PROGRAMS, compiled.static_key, jax.jit(compiled.run))
     return fn
 
 
@@ -40,11 +58,11 @@ def executable(compiled) -> tuple[Any, float]:
     leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
     key = (compiled.static_key, treedef,
            tuple((type(x).__name__, np.shape(x), np.result_type(x).str) for x in leaves))
-    exe = _EXECUTABLES.get(key)
+    exe = _get(_EXECUTABLES, key)
     if exe is not None:
         return exe, 0.0
     t0 = time.perf_counter()
-    exe = _EXECUTABLES[key] = jitted_run(compiled).lower(compiled.params).compile()
+    exe = _put(_EXECUTABLES, key, jitted_run(compiled).lower(compiled.params).compile())
     return exe, time.perf_counter() - t0
 
 

@@ -1,0 +1,71 @@
+"""One program per structure (formation_ftc.papers.programs): a second scenario of the same structure
+compiles nothing and gives bit-for-bit the results of the generic API, which compiles its own program.
+
+Truths: :func:`formation_ftc.api.simulate_with_metrics` (a fresh ``jax.jit`` per call) and JAX's own
+compile events (``jax.monitoring``), counted for the ``run`` program only.
+"""
+
+from __future__ import annotations
+
+import jax.monitoring
+import numpy as np
+import pytest
+
+from formation_ftc.api import compile_scenario, load_scenario, simulate_with_metrics
+from formation_ftc.papers import programs
+
+_COMPILES: list[str] = []
+
+
+def _listener(event: str, duration: float, **kw) -> None:
+    if event == "/jax/core/compile/backend_compile_duration" and kw.get("fun_name") == "jit(run)":
+        _COMPILES.append(event)
+
+
+jax.monitoring.register_event_duration_secs_listener(_listener)
+
+OV = {"simulation.horizon": 20.0}
+
+
+@pytest.fixture(scope="module")
+def scenarios():
+    return [load_scenario("cw-pd-fault", {**OV, "controller.kp": kp}) for kp in (2.0, 3.0)]
+
+
+def test_same_structure_compiles_once_and_matches_the_api(scenarios):
+    a, b = scenarios
+    assert compile_scenario(a).static_key == compile_scenario(b).static_key
+    programs.clear()
+    _COMPILES.clear()
+    ds_a, m_a = programs.simulate(a)
+    n_first = len(_COMPILES)
+    ds_b, m_b = programs.simulate(b)
+    assert n_first == 1 and len(_COMPILES) == 1  # the second scenario reused the program
+    assert m_a != m_b  # the gains differ, so do the results
+    for scn, ds, m in ((a, ds_a, m_a), (b, ds_b, m_b)):
+        ref_ds, ref_m = simulate_with_metrics(scn)
+        assert m == ref_m  # bit for bit
+        for name in ref_ds.data_vars:
+            np.testing.assert_array_equal(ds[name].values, ref_ds[name].values)
+    assert len(_COMPILES) == 3  # the generic API compiled its own program each time
+
+
+def test_executable_is_shared_and_lru_bounded(scenarios, monkeypatch):
+    programs.clear()
+    c_a, c_b = (compile_scenario(s) for s in scenarios)
+    exe_a, t_a = programs.executable(c_a)
+    exe_b, t_b = programs.executable(c_b)
+    assert exe_a is exe_b and t_a > 0.0 and t_b == 0.0
+    c_long = compile_scenario(load_scenario("cw-pd-fault", {"simulation.horizon": 30.0}))
+    exe_long, t_long = programs.executable(c_long)  # more steps: another program
+    assert exe_long is not exe_a and t_long > 0.0
+    out = exe_b(c_b.params)
+    ref = jax.jit(c_b.run)(c_b.params)
+    np.testing.assert_array_equal(np.asarray(out["metrics"][0]), np.asarray(ref["metrics"][0]))
+    monkeypatch.setattr(programs, "MAX_KEPT", 1)
+    programs.clear()
+    programs.executable(c_a)
+    programs.executable(c_long)  # the least recently used (c_a's) is dropped
+    assert len(programs._EXECUTABLES) == 1
+    assert programs.executable(c_long)[1] == 0.0
+    assert programs.executable(c_b)[1] > 0.0  # c_a's program was dropped: compiled again
