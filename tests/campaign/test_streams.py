@@ -7,7 +7,7 @@ import zlib
 import numpy as np
 import pytest
 
-from formation_ftc.campaign import make_plan, streams
+from formation_ftc.campaign import make_plan, sampling, streams
 from formation_ftc.campaign.sampling import draw_value, draw_values, run_seed, run_seeds
 from formation_ftc.campaign.spec import Choice, Integer, LogUniform, Normal, Uniform
 
@@ -63,6 +63,7 @@ def test_draw_values_equal_per_run_generators(sampler):
 def test_draw_values_fall_back_when_the_stream_module_disagrees(monkeypatch):
     # a (simulated) NumPy whose seeding differs: the check on the first keys sends every run to NumPy
     monkeypatch.setattr(streams, "first_doubles", lambda e, k, s: np.full(len(k), 0.5))
+    monkeypatch.setattr(sampling, "_CHECKED_SAMPLERS", set())
     s = Uniform("a.b", 1.0, 4.0)
     assert draw_values(s, 7, KEYS[:40]) == [draw_value(s, 7, int(k)) for k in KEYS[:40]]
 

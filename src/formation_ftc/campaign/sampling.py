@@ -159,7 +159,8 @@ def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int] | np.ndarr
     The generator states of all keys are derived at once (:mod:`formation_ftc.campaign.streams`);
     distributions that map the first double of the stream (uniform, loguniform, normal, weighted
     choice) are evaluated as arrays, the others draw from each run's generator. The first keys are
-    also drawn the per-run way and compared: any difference falls back to per-run generators.
+    also drawn the per-run way and compared (once per process and sampler): any difference falls back
+    to per-run generators.
     """
     crc = zlib.crc32(sampler.path.encode())
     ks = np.asarray(keys, dtype=np.int64).reshape(-1)
@@ -167,7 +168,10 @@ def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int] | np.ndarr
         values = sampler.from_first_double(streams.first_doubles(campaign_seed, ks, (1, crc)))
         if values is None:
             values = [sampler.draw(g) for g in streams.generators(campaign_seed, ks, (1, crc))]
-        if all(_same(values[n], draw_value(sampler, campaign_seed, int(ks[n]))) for n in range(min(2, ks.size))):
+        tag = repr(sampler)
+        if tag in _CHECKED_SAMPLERS or all(_same(values[n], draw_value(sampler, campaign_seed, int(ks[n])))
+                                           for n in range(min(4, ks.size))):
+            _CHECKED_SAMPLERS.add(tag)
             return values
     rngs = [np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(int(k), 1, crc)))
             for k in ks.tolist()]
@@ -180,6 +184,15 @@ def run_seeds(campaign_seed: int, keys: list[int] | np.ndarray) -> np.ndarray:
     if ks.size and streams.available() and ks.min() >= 0 and ks.max() <= 0xFFFFFFFF:
         return streams.run_seeds(campaign_seed, ks)
     return np.array([run_seed(campaign_seed, int(k)) for k in ks.tolist()], dtype=np.int64)
+
+
+def all_numbers(values: list[Any]) -> bool:
+    """Every value an int or float (not a bool): a check per distinct type, not per value."""
+    return all(issubclass(t, int | float) and not issubclass(t, bool) for t in set(map(type, values)))
+
+
+#: samplers (by repr) whose array evaluation matched the per-run draws in this process
+_CHECKED_SAMPLERS: set[str] = set()
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -502,8 +515,7 @@ class CampaignPlan:
         cols = self.run_columns(ids)
         run_id = cols.run_id
         errors: list[str] = []
-        numeric_paths = [s.path for s in self.samplers
-                         if all(isinstance(v, int | float) and not isinstance(v, bool) for v in cols.values[s.path])]
+        numeric_paths = [s.path for s in self.samplers if all_numbers(cols.values[s.path])]
         chosen: dict[int, RunInputs] = {}
 
         def pick(k: int) -> None:
