@@ -53,10 +53,10 @@ def overhead(name: str, campaign, runs_per_chunk: int) -> tuple[float, float]:
         return t_campaign, float("nan")
     batches = []
     for chunk in plan.chunks():
-        inputs = [plan.run_inputs(r) for r in chunk.run_ids]
+        cols = plan.run_columns(chunk.run_ids)
         template, bindings = entries[0]
-        values = {p: [i.values[p] for i in inputs] for p in bindings if p != "simulation.seed"}
-        values["simulation.seed"] = [i.seed for i in inputs]
+        values = {p: cols.values[p] for p in bindings if p != "simulation.seed"}
+        values["simulation.seed"] = cols.seed
         batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
         batches.append((template, axes, batch))
     for template, axes, batch in batches[:1]:
@@ -67,7 +67,8 @@ def overhead(name: str, campaign, runs_per_chunk: int) -> tuple[float, float]:
     t_engine = time.perf_counter() - t0
     n = outcome.n_runs
     print(f"{name}: {n} runs in {len(batches)} chunk(s) of {runs_per_chunk}: campaign {t_campaign:.3f} s, "
-          f"engine {t_engine:.3f} s")
+          f"engine {t_engine:.3f} s (both warm: compile excluded from both; load average "
+          f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} CPU(s))")
     print(f"campaign/engine time ratio: {t_campaign / t_engine:.3f}")
     print(f"campaign overhead per run: {(t_campaign - t_engine) / n * 1e6:.0f} us")
     return t_campaign, t_engine
