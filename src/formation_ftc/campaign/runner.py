@@ -1,7 +1,11 @@
 """Execute a campaign: chunks of runs as ``jax.vmap`` batches, results stored chunk by chunk.
 
 A chunk (see :mod:`formation_ftc.campaign.sampling`) is computed by :func:`run_chunk`, a pure
-function of ``(plan, chunk)`` that any executor may call in any process:
+function of ``(plan, chunk)`` that any executor may call in any process. Methods whose parameters are
+a closed loop take the fast path (``_bound_chunk``): the chunk's inputs are derived as columns, the
+sampled values written into the parameter arrays of one template build
+(:mod:`formation_ftc.campaign.binding`), the batch run without time histories and the result table
+assembled from the metric arrays; only failed and traced runs are handled one by one. Otherwise:
 
 1. build each run's scenario (base + overrides + grid/sampled values + run seed), compile it with the
    method (:func:`formation_ftc.api.compile_scenario`);
@@ -92,7 +96,7 @@ def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
         info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
                                    compiled.spacecraft_axis, max_steps=compiled.record_every,
                                    dt=compiled.dt, admissible=getattr(p, "admissible", None),
-                                   violations=getattr(p, "violations", None))
+                                   violations=getattr(p, "violations", None), params=p)
     except Exception:  # noqa: BLE001 - a diagnostic must never stop the campaign
         info = DivergenceInfo(div, t, "<state>", None, ())
     return str(info)

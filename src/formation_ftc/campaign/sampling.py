@@ -17,7 +17,9 @@ point, which is what a paired comparison of two controllers needs) or ``key = r`
 * sampled field ``path`` = one draw from ``default_rng(SeedSequence(seed, spawn_key=(key, 1, crc32(path))))``.
 
 Nothing depends on which other runs exist, the order they are computed in, or the chunking; adding
-a sampled field does not change the values drawn for the others.
+a sampled field does not change the values drawn for the others. :meth:`CampaignPlan.run_columns`
+derives these numbers for a whole chunk at once (:mod:`formation_ftc.campaign.streams`: the same
+``SeedSequence`` and ``PCG64`` integers as arrays), bit-identical to the per-run objects.
 
 Quasi-Monte Carlo (``[campaign] sampling = "sobol"`` or ``"lhs"``)
 ------------------------------------------------------------------
