@@ -101,7 +101,8 @@ def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_d
         info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
                                    compiled.spacecraft_axis, max_steps=compiled.record_every,
                                    dt=compiled.dt, admissible=getattr(p, "admissible", None),
-                                   violations=getattr(p, "violations", None)) if compiled.make_step else None
+                                   violations=getattr(p, "violations", None),
+                                   params=p) if compiled.make_step else None
         if info is None:
             from formation_ftc.sim.engine import DivergenceInfo
 

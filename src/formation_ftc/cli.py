@@ -1,4 +1,4 @@
-"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign.
+"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign, league.
 
 Thin edge layer over formation_ftc.api; every command works for every registered method. Heavy
 modules (JAX, SciPy, pandas) are imported by the commands that need them, so --help, --version and
@@ -48,6 +48,16 @@ HELP: dict[str, tuple[str, list[str]]] = {
     "campaign": ("Monte Carlo campaigns: list the built-in ones, run (resumable) and report.",
                  ["formation-ftc campaign list", "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
                   "formation-ftc campaign report out/c"]),
+    "league": ("FTC league: every method on one realistic truth (J2, drag) under the same fault battery, "
+               "ranked on the same scores.",
+               ["formation-ftc league list", "formation-ftc league run translational --quick --out out/league",
+                "formation-ftc league report out/league"]),
+    "league list": ("List the built-in leagues (name, description, methods).", ["formation-ftc league list"]),
+    "league run": ("Run (or resume) a league into a directory and write its leaderboard.",
+                   ["formation-ftc league run translational --quick --out out/league",
+                    "formation-ftc league run attitude --quick --out out/att --workers 2"]),
+    "league report": ("(Re)write the leaderboard (index.html, leaderboard.json, Parquet) of a league "
+                      "directory.", ["formation-ftc league report out/league"]),
     "campaign list": ("List the built-in campaigns (name, then description).", ["formation-ftc campaign list"]),
     "campaign run": ("Run a campaign into a results directory; run the same command again to resume a "
                      "killed one.",
@@ -385,6 +395,7 @@ def _decorate(parser: argparse.ArgumentParser, key: str) -> None:
 _PLUGGED = {
     "reproduce": ("formation_ftc.report.reproduce", "reproduce the papers' studies and write an HTML report"),
     "campaign": ("formation_ftc.campaign.cli", "Monte Carlo campaigns: list, run (resumable), report"),
+    "league": ("formation_ftc.league.cli", "FTC league: every method on one realistic formation, same faults"),
 }
 
 

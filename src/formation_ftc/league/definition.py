@@ -92,7 +92,8 @@ class LeagueMeta(StrictModel):
 
 class Level(StrictModel):
     name: str = Field(description="Actuator level name (e.g. 'unsaturated', 'limited').")
-    saturation: float = Field(gt=0, description="Per-axis limit of every actuator [N or N m]; inf: none.")
+    saturation: float | None = Field(None, gt=0, description="Per-axis limit of every actuator [N or N m]; "
+                                     "leave it out for no limit.")
     note: str = Field("", description="Why this limit (shown in the report).")
 
 
@@ -207,10 +208,11 @@ def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
     return raw
 
 
-def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, case_fields: dict[str, Any],
+def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, actuator_fields: dict[str, Any],
                     network_fields: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The full composed scenario of one cell: the league's truth, sensors, actuator level and fault case,
-    evaluations and metrics, with the method's own slots (and time step) on top."""
+    """The full composed scenario of one cell: the league's truth, sensors, actuator (with the level's
+    saturation and the fault case in ``actuator_fields``), evaluations and metrics, with the method's own
+    slots (and time step) on top; ``network_fields`` turn the method's network into a link-fault one."""
     own = _method_raw(spec, method)
     meta = own.get("scenario", {})
     sim = dict(own.get("simulation", {}))
@@ -231,13 +233,12 @@ def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, case_fi
             raw[slot] = copy.deepcopy(own[slot])
     actuator = copy.deepcopy(spec.actuator)
     actuator.update(copy.deepcopy(own.get("actuator", {})))  # structural options of the method (allocation)
-    actuator.update(case_fields)
-    actuator["saturation"] = level.saturation
+    actuator.update(copy.deepcopy(actuator_fields))
     raw["actuator"] = actuator
     if network_fields:
         if "network" not in raw:
             raise LeagueError(f"method {method.name} has no network: a communication fault does not apply")
-        raw["network"].update(network_fields)
+        raw["network"].update(copy.deepcopy(network_fields))
     raw["evaluations"] = copy.deepcopy(spec.evaluations)
     raw["metrics"] = copy.deepcopy(spec.metrics)
     return raw

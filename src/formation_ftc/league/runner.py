@@ -66,25 +66,32 @@ def _battery(spec: LeagueSpec):
 
     try:
         return load_battery(spec.league.battery)
-    except (KeyError, ValueError) as exc:
+    except ValueError as exc:
         raise LeagueError(f"league.battery = {spec.league.battery!r}: {exc}") from None
 
 
 def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, list[Cell]]:
-    """Every method's cells, each scenario validated (composition included) before anything runs."""
+    """Every method's cells, each scenario validated (composition included) before anything runs.
+
+    A case applies to a method when it means something for it (a communication fault needs a network,
+    larger delays a delayed one). Every cell of a networked method uses the link-fault network (with no
+    lost link outside the communication cases), so all its cells share one compiled program."""
     from formation_ftc.api import load_scenario
 
     battery = _battery(spec)
     chosen = [spec.method(m) for m in methods] if methods else spec.methods
+    quantity = "torque" if spec.league.kind == "attitude" else "force"
     out: dict[str, list[Cell]] = {}
     for m in chosen:
+        network, delayed = _network_kind(spec, m)
         cells = []
         for case in battery.cases:
-            network = case.network_fields()
+            if not case.applies_to(network=network, delayed=delayed):
+                continue
+            net_fields = case.network_fields(delayed=delayed) if network else None
             for level in spec.levels:
-                if network is not None and not _has_network(spec, m):
-                    continue  # a communication fault does not apply to a law without messages
-                raw = method_scenario(spec, m, level, case.actuator_fields(), network)
+                act = case.actuator_fields(saturation=level.saturation, quantity=quantity)
+                raw = method_scenario(spec, m, level, act, net_fields)
                 try:
                     load_scenario(raw)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
@@ -95,14 +102,19 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
     return out
 
 
-def _has_network(spec: LeagueSpec, m: MethodEntry) -> bool:
+def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
+    """(has a network, the network has delays) of a method's own file."""
     import tomllib
 
     assert spec.source is not None
-    return "network" in tomllib.loads((spec.source.parent / m.scenario).read_text())
+    net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
+    if net is None:
+        return False, False
+    return True, net.get("delays") is not None
 
 
-def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int, traced: list[int]) -> dict:
+def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int, traced: list[int],
+              networked: bool) -> dict:
     truth_field = spec.league.initial_error.field
     if not truth_field.startswith("plant."):
         raise LeagueError(f"league.initial_error.field = {truth_field!r}: must name a plant field (plant.*)")
@@ -118,10 +130,12 @@ def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int,
                 sample[f"{truth_field}.{i}.{k}"] = {"dist": "normal", "mean": float(v), "std": std}
     overrides: dict[str, Any] = {}
     on = spec.league.onset
-    if on.high > on.low:
-        sample[on.field] = {"dist": "uniform", "low": on.low, "high": on.high}
-    else:
-        overrides[on.field] = on.low
+    # the actuator fault's onset, and the communication fault's where the method has a network
+    for path in (on.field, "network.onset") if networked else (on.field,):
+        if on.high > on.low:
+            sample[path] = {"dist": "uniform", "low": on.low, "high": on.high}
+        else:
+            overrides[path] = on.low
     return {
         "campaign": {"name": f"league-{spec.league.name}-{method}", "base": [str(p) for p in cell_files],
                      "runs": seeds, "seed": spec.league.seed, "chunk_size": spec.league.chunk_size,
@@ -172,7 +186,7 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         "name": spec.league.name, "version": spec.league.version, "hash": digest, "seeds": n_seeds,
         "quick": quick, "definition_file": spec.source.name, "definition": spec.source.read_text(),
         "method_files": {m.name: (spec.source.parent / m.scenario).read_text() for m in spec.methods},
-        "battery": {"name": battery.name, "version": battery.version, "hash": battery.hash,
+        "battery": {"name": battery.name, "version": battery.version, "sha256": battery.sha256,
                     "cases": [{"name": c.name, "kind": c.kind} for c in battery.cases]},
         "methods": [m.model_dump() for m in spec.methods if m.name in cells],
         "levels": [lv.model_dump() for lv in spec.levels],
@@ -193,7 +207,7 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
                 p.write_text(text)
             files.append(p)
         traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed)
-        campaign = _campaign(spec, name, files, n_seeds, traced)
+        campaign = _campaign(spec, name, files, n_seeds, traced, _network_kind(spec, spec.method(name))[0])
         executor = executor_factory() if executor_factory is not None else None
         outcome = run_campaign(campaign, out / name / "campaign", executor=executor, progress=progress)
         per_method[name] = time.perf_counter() - t_m

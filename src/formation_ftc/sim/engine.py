@@ -256,12 +256,7 @@ def _accumulators(step, k, state) -> set[int]:
     return acc
 
 
-def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTree, k: int, n: int,
-                       ok: Callable[[PyTree], jax.Array]) -> tuple[int, PyTree]:
-    """Replay up to ``n`` steps from ``state`` (at step ``k``) in one compiled loop and return ``(j,
-    state_j)``: the number of steps after which the state first fails ``ok``, and the last state that
-    passed (``j = n`` when none fails). Used to date a divergence exactly inside a long record block."""
-
+def _replay_loop(step, ok, state, k, n):
     def cond(c):
         j, _, bad = c
         return jnp.logical_and(j < n, jnp.logical_not(bad))
@@ -273,8 +268,30 @@ def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTre
         st = jax.tree_util.tree_map(lambda a, b: jnp.where(bad, a, b), st, new)
         return j + jnp.where(bad, 0, 1), st, bad
 
-    j, st, _ = jax.jit(lambda s0: jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), s0,
-                                                                    jnp.asarray(False))))(state)
+    return jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), state, jnp.asarray(False)))
+
+
+@jax.jit
+def _params_replay(params, state, k, n):
+    """:func:`first_failing_step` of a closed loop given as a pytree argument: compiled once per loop
+    structure (the parameters are arguments, not constants of a closure), so the diagnostics of many
+    failed runs of one campaign share one program."""
+    j, st, _ = _replay_loop(params.replay_step(), params.admissible, state, k, n)
+    return j, st
+
+
+@jax.jit
+def _params_step(params, k, state):
+    return params.replay_step()(k, state)
+
+
+def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTree, k: int, n: int,
+                       ok: Callable[[PyTree], jax.Array]) -> tuple[int, PyTree]:
+    """Replay up to ``n`` steps from ``state`` (at step ``k``) in one compiled loop and return ``(j,
+    state_j)``: the number of steps after which the state first fails ``ok``, and the last state that
+    passed (``j = n`` when none fails). Used to date a divergence exactly inside a long record block."""
+
+    j, st, _ = jax.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
     return int(j), st
 
 
@@ -289,6 +306,7 @@ def diagnose_divergence(
     dt: float = 0.0,
     admissible: Callable[[PyTree], jax.Array] | None = None,
     violations: Callable[[PyTree], list[tuple[str, tuple[int, ...], int | None]]] | None = None,
+    params: Any = None,
 ) -> DivergenceInfo:
     """Replay up to ``max_steps`` steps from the last finite state (at step ``k``, time ``t``) and
     name the first non-finite state variable of the first non-finite step (time ``t + j*dt``).
@@ -297,17 +315,27 @@ def diagnose_divergence(
     effort -- are named only when nothing else became non-finite: they merely follow the variable
     that left its admissible set. Dependencies are read from the step's jaxpr (structurally, without
     computing anything).
-    """
-    if max_steps > 1:  # date it exactly first: one compiled replay of the block
-        def ok(st):
-            # ``admissible`` (when given) is the whole test, finiteness of the checked state included
-            return _all_finite(st) if admissible is None else admissible(st)
 
-        j0, state0 = first_failing_step(step, last_finite, k, max_steps, ok)
+    ``params``: the closed loop whose ``replay_step`` and ``admissible`` ``step`` and ``admissible`` are
+    (optional); given, the replays are compiled once per loop structure and reused for every
+    diagnosed run of that structure (a campaign with many failed runs compiles them once).
+    """
+    use_params = params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
+    if max_steps > 1:  # date it exactly first: one compiled replay of the block
+        if use_params:
+            j0a, state0 = _params_replay(params, last_finite, jnp.asarray(k, jnp.int64),
+                                         jnp.asarray(max_steps, jnp.int64))
+            j0 = int(j0a)
+        else:
+            def ok(st):
+                # ``admissible`` (when given) is the whole test, finiteness of the checked state included
+                return _all_finite(st) if admissible is None else admissible(st)
+
+            j0, state0 = first_failing_step(step, last_finite, k, max_steps, ok)
         if j0 >= max_steps:
             j0, state0 = 0, last_finite
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
-    jstep = jax.jit(step)
+    jstep = (lambda kk, st: _params_step(params, kk, st)) if use_params else jax.jit(step)
     state = last_finite
     acc: set[int] | None = None
     first: DivergenceInfo | None = None

@@ -58,7 +58,7 @@ _per_spacecraft = per_spacecraft
 def _plant_layout(ctx: BuildContext, slot: str, name: str) -> tuple[str, int]:
     """('q', 3) for an (N, 6) relative-state plant, ('rv', axes) for a double-integrator plant."""
     plant = ctx.plant
-    state = plant.initial_state() if plant is not None else None
+    state = plant.sensed_state(plant.initial_state()) if plant is not None else None  # what sensors see
     plant_name = ctx.scenario.type_of("plant")
     if isinstance(state, dict) and "q" in state and np.shape(state["q"])[-1] == 6:
         return "q", 3

@@ -61,7 +61,7 @@ ILO = "iterative-learning-observer"
 LOF2TC = "gui2022-lof2tc"
 COF2TC = "gui2022-cof2tc"
 #: sensors that deliver the (N, 6) relative state y = q the ILO and the laws need (C = I6)
-STATE_SENSORS = (None, "relative-state")
+STATE_SENSORS = (None, "relative-state", "lvlh-relative-state")
 
 VEC = ("spacecraft", "axis")
 SC = ("spacecraft",)
@@ -119,7 +119,7 @@ def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
     """The plant's initial (N, 6) relative state; a CompositionError naming both parts without one."""
     plant, name = ctx.plant, ctx.scenario.type_of(slot)
     plant_name = ctx.scenario.type_of("plant")
-    state = plant.initial_state() if plant is not None else None
+    state = plant.sensed_state(plant.initial_state()) if plant is not None else None  # what sensors see
     q = state.get("q") if isinstance(state, dict) else None
     if q is None or np.shape(q) != (ctx.count, 6) or getattr(plant, "quantity", "force") not in ("force",
                                                                                                "acceleration"):
@@ -130,7 +130,7 @@ def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
             f"(state: {keys}); use a translational plant (clohessy-wiltshire, relative-lvlh)")
     sensors = ctx.scenario.type_of("sensors")
     if sensors not in STATE_SENSORS:
-        raise CompositionError(f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state), "
+        raise CompositionError(f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state or lvlh-relative-state), "
                                f"but sensors {sensors} deliver something else")
     return np.asarray(q, dtype=float)
 

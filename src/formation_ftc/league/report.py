@@ -1,0 +1,320 @@
+"""League leaderboard: per-fault tables, ranking, Pareto plot, representative trajectories.
+
+``write_leaderboard(DIR)`` reads the finished runs of a league directory and writes
+
+* ``DIR/leaderboard/leaderboard.json`` -- definition, provenance, per-cell statistics, ranking, winners;
+* ``DIR/leaderboard/cells.parquet`` -- one row per (method, level, case) cell;
+* ``DIR/leaderboard/runs.parquet`` -- one row per run (every score, seed, status, diagnostic);
+* ``DIR/leaderboard/index.html`` -- the self-contained leaderboard page (figures embedded).
+
+Statistics: medians and 95th percentiles over the runs that finished (a diverged run has no score), the
+pass rate over every run (a diverged run fails). Ranking, per actuator level: pass rate over the
+actuator-fault cases that apply to every method, then the median of the requirement metric.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from formation_ftc.league.runner import load_league_results
+
+__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "SCORES"]
+
+#: scores shown in the tables (when the league computes them)
+SCORES = ("rms_shape_error", "max_shape_error", "rms_slot_error", "settle_time", "delta_v_total", "peak_thrust",
+          "saturated_fraction", "rms_attitude_error", "max_attitude_error", "control_impulse")
+
+
+def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
+    import tomllib
+
+    league = tomllib.loads(meta["definition"])["league"]
+    req = league["requirement"]
+    return str(req["metric"]), float(req["max"]), str(req.get("units", ""))
+
+
+def _passed(df: pd.DataFrame, metric: str, limit: float) -> pd.Series:
+    col = f"metric:{metric}"
+    vals = df[col] if col in df else pd.Series(np.nan, index=df.index)
+    return (df["status"] == "ok") & (vals <= limit)
+
+
+def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
+    """One row per (method, level, case): runs, failures, pass rate, median and p95 of every score."""
+    metric, limit, _ = _requirement(meta)
+    runs = runs.assign(passed=_passed(runs, metric, limit))
+    rows = []
+    for (method, level, case), g in runs.groupby(["method", "level", "case"], sort=False):
+        ok = g[g["status"] == "ok"]
+        row: dict[str, Any] = {"method": method, "level": level, "case": case,
+                               "fault_kind": g["fault_kind"].iloc[0], "runs": len(g),
+                               "failed": int((g["status"] != "ok").sum()), "pass_rate": float(g["passed"].mean())}
+        for s in SCORES:
+            col = f"metric:{s}"
+            if col in g:
+                v = ok[col].to_numpy(dtype=float)
+                v = v[np.isfinite(v)]
+                row[f"{s}_median"] = float(np.median(v)) if v.size else math.nan
+                row[f"{s}_p95"] = float(np.percentile(v, 95)) if v.size else math.nan
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _common_cases(cells: pd.DataFrame) -> list[str]:
+    """Cases every method was run on (the communication cases apply to networked methods only)."""
+    per_method = cells.groupby("method")["case"].apply(set)
+    common = set.intersection(*per_method.tolist()) if len(per_method) else set()
+    return [c for c in dict.fromkeys(cells["case"]) if c in common]
+
+
+def ranking(meta: dict[str, Any], cells: pd.DataFrame) -> dict[str, list[dict[str, Any]]]:
+    """Per level: methods by pass rate over the common cases, then by the median requirement metric."""
+    metric, _, _ = _requirement(meta)
+    common = _common_cases(cells)
+    out: dict[str, list[dict[str, Any]]] = {}
+    for level, g in cells.groupby("level", sort=False):
+        g = g[g["case"].isin(common)]
+        rows = []
+        for method, h in g.groupby("method", sort=False):
+            w = h["runs"].to_numpy(dtype=float)
+            rows.append({"method": method, "pass_rate": float(np.average(h["pass_rate"], weights=w)),
+                         f"{metric}_median": float(np.nanmedian(h[f"{metric}_median"])),
+                         "delta_v_total_median": float(np.nanmedian(h["delta_v_total_median"]))
+                         if "delta_v_total_median" in h else math.nan,
+                         "failed": int(h["failed"].sum()), "runs": int(h["runs"].sum())})
+        rows.sort(key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))
+        for k, r in enumerate(rows, start=1):
+            r["rank"] = k
+        out[str(level)] = rows
+    return out
+
+
+def _nan_last(v: float) -> float:
+    return math.inf if not math.isfinite(v) else v
+
+
+def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
+    """Per (level, case): the method with the highest pass rate, ties broken by the median metric."""
+    metric, _, _ = _requirement(meta)
+    out = []
+    for (level, case), g in cells.groupby(["level", "case"], sort=False):
+        best = sorted(g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))[0]
+        out.append({"level": level, "case": case, "method": best["method"], "pass_rate": best["pass_rate"],
+                    f"{metric}_median": best[f"{metric}_median"]})
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- figures
+def _png(fig, path: Path) -> Path:
+    from formation_ftc.plotting import save_figure
+
+    return save_figure(fig, path)
+
+
+def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
+    from formation_ftc.plotting import new_figure
+
+    metric, limit, units = _requirement(meta)
+    if "delta_v_total_median" not in cells:
+        return []
+    common = _common_cases(cells)
+    paths = []
+    for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
+        agg = g.groupby("method", sort=False)[[f"{metric}_median", "delta_v_total_median"]].median()
+        fig, axes = new_figure(1, 1, width=6.4, height=4.2,
+                               title=f"{meta['name']} league, {level}: delta-v vs accuracy (median over cases)")
+        ax = axes[0, 0]
+        pts = agg.to_numpy(dtype=float)
+        for (name, (acc, dv)) in zip(agg.index, pts, strict=True):
+            if math.isfinite(acc) and math.isfinite(dv):
+                ax.scatter(dv, acc, s=30)
+                ax.annotate(name, (dv, acc), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        front = _pareto_front(pts)
+        if front:
+            f = sorted((pts[i][1], pts[i][0]) for i in front)
+            ax.plot([p[0] for p in f], [p[1] for p in f], "k--", lw=0.8, label="Pareto front")
+        ax.axhline(limit, color="tab:red", lw=0.8, label=f"requirement {limit:g} {units}")
+        ax.set_xlabel("total delta-v, median [m/s]")
+        ax.set_ylabel(f"{metric}, median [{units}]")
+        if np.nanmin(pts[:, 0]) > 0 and np.nanmax(pts[:, 0]) / max(np.nanmin(pts[:, 0]), 1e-300) > 100:
+            ax.set_yscale("log")
+        ax.legend(loc="best", fontsize=7)
+        paths.append(_png(fig, out / f"pareto-{level}.png"))
+    return paths
+
+
+def _pareto_front(pts: np.ndarray) -> list[int]:
+    """Indices of the points no other point beats on both accuracy (col 0) and delta-v (col 1)."""
+    idx = []
+    for i, (a, d) in enumerate(pts):
+        if not (math.isfinite(a) and math.isfinite(d)):
+            continue
+        dominated = any(j != i and math.isfinite(pts[j][0]) and math.isfinite(pts[j][1]) and pts[j][0] <= a
+                        and pts[j][1] <= d and (pts[j][0] < a or pts[j][1] < d) for j in range(len(pts)))
+        if not dominated:
+            idx.append(i)
+    return idx
+
+
+def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
+    """Each method's score signal against time for the traced seed, one panel per fault case."""
+    import xarray as xr
+
+    from formation_ftc.plotting import new_figure
+
+    metric, limit, units = _requirement(meta)
+    signal = "shape_error" if meta.get("kind", "translational") != "attitude" else "attitude_error"
+    traces: dict[str, dict[str, Any]] = {}
+    for m in meta["methods"]:
+        tdir = league_dir / m["name"] / "campaign" / "traces"
+        cdir = league_dir / m["name"] / "cells"
+        if not tdir.is_dir():
+            continue
+        manifest = json.loads((league_dir / m["name"] / "campaign" / "manifest.json").read_text())
+        runs = int(manifest.get("runs_per_point", manifest.get("runs", 1)))
+        bases = [Path(b).stem for b in manifest.get("bases", sorted(p.name for p in cdir.glob("*.toml")))]
+        for p in sorted(tdir.glob("run-*.nc")):
+            rid = int(p.stem.split("-")[1])
+            g = rid // runs
+            if g >= len(bases):
+                continue
+            case = bases[g].split("--")[0]
+            with xr.open_dataset(p) as ds:
+                if signal in ds:
+                    v = ds[signal].values
+                    v = v if v.ndim == 1 else np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
+                    traces.setdefault(case, {})[m["name"]] = (ds["time"].values, v)
+    paths = []
+    cases = list(traces)
+    if not cases:
+        return paths
+    fig, axes = new_figure(len(cases), 1, width=7.0, height=1.0 + 2.0 * len(cases),
+                           title=f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level")
+    for ax, case in zip(axes[:, 0], cases, strict=True):
+        for name, (t, v) in traces[case].items():
+            ax.plot(t, np.maximum(v, 1e-6), lw=0.8, label=name)
+        ax.set_yscale("log")
+        ax.axhline(limit, color="tab:red", lw=0.6)
+        ax.set_ylabel(f"{case} [{units}]", fontsize=7)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[0, 0].legend(loc="upper right", fontsize=6, ncol=2)
+    paths.append(_png(fig, out / "trajectories.png"))
+    return paths
+
+
+# ---------------------------------------------------------------------------------------------- page
+def _e(v: Any) -> str:
+    return html.escape(str(v))
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "-"
+        return f"{v:.3g}"
+    return _e(v)
+
+
+def _table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
+    head = "".join(f"<th>{_e(label)}</th>" for _, label in cols)
+    body = "".join("<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k, _ in cols) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _img(path: Path) -> str:
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return f'<figure><img alt="{_e(path.stem)}" src="data:image/png;base64,{data}"></figure>'
+
+
+_STYLE = """body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;margin:0.5em 0 1.5em;font-size:0.85em}td,th{border:1px solid #ccc;padding:2px 6px;
+text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%}
+pre{background:#f7f7f7;padding:0.6em;overflow-x:auto;font-size:0.8em}"""
+
+
+def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]) -> str:
+    metric, limit, units = _requirement(meta)
+    prov = meta.get("provenance", {})
+    parts = [f"<h1>formation-ftc league: {_e(meta['name'])}</h1>",
+             f"<p>League definition version {_e(meta['version'])} (sha256 {_e(meta['hash'][:16])}), fault battery "
+             f"{_e(meta['battery']['name'])} v{_e(meta['battery']['version'])} "
+             f"(sha256 {_e(str(meta['battery'].get('sha256', ''))[:16])}), {meta['seeds']} seed(s) per cell"
+             f"{' (quick)' if meta.get('quick') else ''}. Requirement: <b>{_e(metric)} &le; {limit:g} {_e(units)}</b>; "
+             "a diverged run fails.</p>",
+             "<h2>Ranking</h2><p>Per actuator level: pass rate over the actuator-fault cases every method ran, "
+             f"then the median {_e(metric)}.</p>"]
+    for level, rows in rank.items():
+        parts.append(f"<h3>{_e(level)}</h3>")
+        parts.append(_table(rows, [("rank", "rank"), ("method", "method"), ("pass_rate", "pass rate"),
+                                   (f"{metric}_median", f"median {metric} [{units}]"),
+                                   ("delta_v_total_median", "median total delta-v [m/s]"),
+                                   ("failed", "diverged"), ("runs", "runs")]))
+    parts.append("<h2>Winner per fault</h2>")
+    parts.append(_table(wins, [("level", "level"), ("case", "fault case"), ("method", "best method"),
+                               ("pass_rate", "pass rate"), (f"{metric}_median", f"median {metric} [{units}]")]))
+    parts.append("<h2>Per-fault tables</h2>")
+    score_cols = [s for s in SCORES if f"{s}_median" in cells]
+    for (level, case), g in cells.groupby(["level", "case"], sort=False):
+        parts.append(f"<h3>{_e(case)} &mdash; {_e(level)}</h3>")
+        cols = [("method", "method"), ("runs", "runs"), ("failed", "diverged"), ("pass_rate", "pass rate")]
+        for s in score_cols:
+            cols += [(f"{s}_median", f"{s} median"), (f"{s}_p95", f"{s} p95")]
+        parts.append(_table(g.to_dict("records"), cols))
+    parts.append("<h2>Figures</h2>")
+    parts += [_img(p) for p in figures]
+    parts.append("<h2>Methods</h2>")
+    parts.append(_table(meta["methods"], [("name", "name"), ("label", "law"), ("reference", "source"),
+                                          ("gain_rule", "gains")]))
+    parts.append("<h2>League definition</h2>")
+    parts.append(f"<pre>{_e(meta['definition'])}</pre>")
+    for name, text in meta.get("method_files", {}).items():
+        parts.append(f"<details><summary>{_e(name)}</summary><pre>{_e(text)}</pre></details>")
+    parts.append("<h2>Provenance</h2>")
+    parts.append(_table([{"key": k, "value": v} for k, v in prov.items()], [("key", "key"), ("value", "value")]))
+    return (f"<!doctype html><html><head><meta charset='utf-8'><title>league {_e(meta['name'])}</title>"
+            f"<style>{_STYLE}</style></head><body>{''.join(parts)}</body></html>")
+
+
+def _json_safe(obj: Any) -> Any:
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return _json_safe(obj.item())
+    return obj
+
+
+def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, Any]:
+    """Write the leaderboard files of a league directory; returns the leaderboard dictionary."""
+    league_dir = Path(league_dir)
+    meta, runs = load_league_results(league_dir)
+    cells = cell_table(meta, runs)
+    rank = ranking(meta, cells)
+    wins = winners(meta, cells)
+    out = league_dir / "leaderboard"
+    out.mkdir(parents=True, exist_ok=True)
+    figures: list[Path] = []
+    if plots:
+        figures += _pareto(meta, cells, out)
+        figures += _trajectories(meta, league_dir, out)
+    metric, limit, units = _requirement(meta)
+    board = {"league": meta["name"], "version": meta["version"], "hash": meta["hash"], "seeds": meta["seeds"],
+             "quick": meta.get("quick", False), "battery": meta["battery"], "levels": meta["levels"],
+             "requirement": {"metric": metric, "max": limit, "units": units}, "provenance": meta.get("provenance"),
+             "ranking": rank, "winners": wins, "cells": cells.to_dict("records")}
+    (out / "leaderboard.json").write_text(json.dumps(_json_safe(board), indent=1))
+    cells.to_parquet(out / "cells.parquet")
+    runs.to_parquet(out / "runs.parquet")
+    (out / "index.html").write_text(_page(meta, cells, rank, wins, figures))
+    return board
