@@ -57,7 +57,7 @@ def executable(compiled) -> tuple[Any, float]:
 
     leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
     key = (compiled.static_key, treedef,
-           tuple((type(x).__name__, np.shape(x), np.result_type(x).str) for x in leaves))
+           tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves))
     exe = _get(_EXECUTABLES, key)
     if exe is not None:
         return exe, 0.0
