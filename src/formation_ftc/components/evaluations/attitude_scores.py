@@ -1,0 +1,68 @@
+"""Scores of an attitude formation that every attitude law is judged by alike (truth side).
+
+The desired attitude is the evaluator's own (N, 4) leaf, not the law's, so laws that state their
+objective differently (Euler angles, quaternions, a synchronisation target) are scored against the
+same attitude. Angles are rotation angles of relative quaternions, independent of any Euler sequence.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.core.quaternion import quat_conjugate, quat_multiply
+from formation_ftc.sim.components import Evaluation, Signal, component, static
+
+__all__ = ["AttitudeScores", "rotation_angle", "relative_angle"]
+
+
+def rotation_angle(q):
+    """Rotation angle of the unit quaternion(s) ``q`` (..., 4), vector first, in [0, pi] [rad]::
+
+        theta = 2 atan2(|q_v|, |q4|)                                     (1)
+
+    (the shorter rotation: q and -q give the same angle)."""
+    return 2.0 * jnp.arctan2(jnp.linalg.norm(q[..., 0:3], axis=-1), jnp.abs(q[..., 3]))  # (1)
+
+
+def relative_angle(p, q):
+    """Angle of the rotation from attitude ``p`` to attitude ``q`` (..., 4) [rad]: (1) of ``p^* (x) q``."""
+    return rotation_angle(quat_multiply(quat_conjugate(p), q))
+
+
+@component
+class AttitudeScores(Evaluation):
+    """Signals, at every sample:
+
+    * ``attitude_error`` (N,) [rad]: rotation angle between each body attitude and its desired attitude;
+    * ``attitude_synchronisation_error`` () [rad]: max over pairs i < j of the rotation angle between the
+      attitudes of i and j (0 when all point alike, whatever the common attitude);
+    * ``torque`` (N,) [N m]: ||tau_i||, the applied body torque (after saturation and faults).
+
+    ``desired_quaternion`` (N, 4) [-]: desired body -> frame quaternions, vector first, in the frame of
+    the recorded attitude signal ``attitude_signal`` (static: ``"quaternion"``, the body -> inertial
+    attitude, or ``"attitude_lvlh"``, body -> LVLH). Reads that signal and the loop's ``applied``.
+    """
+
+    desired_quaternion: Any  # (N, 4) [-]
+    attitude_signal: str = static(default="quaternion")
+
+    def signals(self):
+        return (Signal("attitude_error", ("spacecraft",), "rad", "rotation angle from the desired attitude"),
+                Signal("attitude_synchronisation_error", (), "rad",
+                       "max over pairs of the rotation angle between two spacecraft's attitudes"),
+                Signal("torque", ("spacecraft",), "N m", "norm of the applied body torque"))
+
+    def outputs(self, signals):
+        q = signals[self.attitude_signal]
+        n = q.shape[-2]
+        err = relative_angle(jnp.asarray(self.desired_quaternion), q)
+        if n > 1:
+            iu, ju = np.triu_indices(n, k=1)
+            sync = jnp.max(relative_angle(q[..., iu, :], q[..., ju, :]), axis=-1)
+        else:
+            sync = jnp.zeros(q.shape[:-2])
+        return {"attitude_error": err, "attitude_synchronisation_error": sync,
+                "torque": jnp.linalg.norm(signals["applied"], axis=-1)}
