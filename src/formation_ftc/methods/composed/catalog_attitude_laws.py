@@ -3,11 +3,11 @@
 * ``controller.type = "yang2013-attitude"`` -- Yang2013's attitude law (13)
   (:class:`~formation_ftc.components.controllers.yang2013_individual.Yang2013AttitudeController`) with
   the gains of the ``yang2013`` scenarios as defaults (K3 = 0.2, K4 = K5 = 1 [1/s], kappa = 1e-3
-  [rad^2/s^2]). The law reads the error state ``{"omega": e_w, "q": (e_q, e_q4)}``; on a quaternion
-  plant with no ``[sensors]`` section the measurement is the plant state (body rate and body -> frame
-  quaternion in the plant's ``state_frame``), which *is* that error state for the desired attitude
-  "aligned with the state frame" (inertial hold, or LVLH hold with ``state_frame = "lvlh"``). Sensors
-  that change the state (e.g. ``quaternion-euler``) are rejected.
+  [rad^2/s^2]), fed the error state (e_w, e_q, e_q4) of a fixed desired attitude in the plant's
+  ``state_frame`` (inertial hold, or LVLH hold with ``state_frame = "lvlh"``) by
+  :class:`~formation_ftc.components.controllers.yang2013_attitude_hold.Yang2013AttitudeHold`. It reads
+  the plant state (body rate and body -> frame quaternion): the scenario has no ``[sensors]`` section;
+  sensors that change the state (e.g. ``quaternion-euler``) are rejected.
 * ``controller.type = "attitude-pd"`` -- quaternion PD baseline
   (:class:`~formation_ftc.components.controllers.attitude_pd.AttitudePdController`) towards a fixed
   desired attitude in the plant's state frame; no fault tolerance. Also reads the plant state.
@@ -22,6 +22,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components.controllers.attitude_pd import AttitudePdController
+from formation_ftc.components.controllers.yang2013_attitude_hold import Yang2013AttitudeHold
 from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.components.evaluations.attitude_scores import AttitudeScores
 from formation_ftc.config.base import StrictModel
@@ -95,19 +96,25 @@ class Yang2013AttitudeSection(StrictModel):
     kappa: float = Field(1e-3, gt=0.0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
     inertia: Vec3 | None = Field(None, description="Principal inertia of the law's model [kg m^2] (default: the "
                                                    "plant's).")
+    desired_quaternion: Quat | list[Quat] | None = Field(
+        None, description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
+                          "first) or one per spacecraft [-] (default identity: aligned with the state frame).")
 
     @model_validator(mode="after")
     def _check(self):
         if self.inertia is not None and any(not x > 0 for x in self.inertia):
             raise ValueError(f"inertia = {self.inertia}: every entry must be > 0 kg m^2")
+        _unit_quaternions(self.desired_quaternion)
         return self
 
 
 def _yang2013_attitude(sec: Yang2013AttitudeSection, ctx: BuildContext):
     _reads_plant_state(YANG2013_ATTITUDE, ctx)
-    return Yang2013AttitudeController(count=ctx.count, inertia=as_float(_inertia(YANG2013_ATTITUDE, sec.inertia, ctx)),
-                                      K3=as_float(sec.K3), K4=as_float(sec.K4), K5=as_float(sec.K5),
-                                      kappa=as_float(sec.kappa))
+    law = Yang2013AttitudeController(count=ctx.count, inertia=as_float(_inertia(YANG2013_ATTITUDE, sec.inertia, ctx)),
+                                     K3=as_float(sec.K3), K4=as_float(sec.K4), K5=as_float(sec.K5),
+                                     kappa=as_float(sec.kappa))
+    q_d = _quaternions(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
+    return Yang2013AttitudeHold(law=law, desired_quaternion=as_float(q_d))
 
 
 register_component_type("controller", YANG2013_ATTITUDE, Yang2013AttitudeSection, _yang2013_attitude,
