@@ -461,13 +461,13 @@ class CampaignPlan:
         if len(points) == 1:  # one grid point (a chunk): constant columns
             (b0, grid0), = points.values()
             base = np.full(ids.size, b0, dtype=np.int64)
-            for s in self.grid_samplers:
-                values[s.path] = [grid0[s.path]] * ids.size
+            for gs in self.grid_samplers:
+                values[gs.path] = [grid0[gs.path]] * ids.size
         else:
             g_list = g.tolist()
             base = np.array([points[x][0] for x in g_list], dtype=np.int64)
-            for s in self.grid_samplers:
-                values[s.path] = [points[x][1][s.path] for x in g_list]
+            for gs in self.grid_samplers:
+                values[gs.path] = [points[x][1][gs.path] for x in g_list]
         if self.sampling == "random":
             for s in self.random_samplers:
                 values[s.path] = draw_values(s, self.seed, keys) if ids.size else []

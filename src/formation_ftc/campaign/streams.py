@@ -65,7 +65,7 @@ def _hashmix(value: np.ndarray, hc: list[int]) -> np.ndarray:
 
 
 def _mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    r = _U32(_MIX_MULT_L) * x - _U32(_MIX_MULT_R) * y
+    r: np.ndarray = _U32(_MIX_MULT_L) * x - _U32(_MIX_MULT_R) * y
     return r ^ (r >> _U32(16))
 
 
