@@ -10,7 +10,11 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.components.evaluations.attitude_scores import AttitudeScores, relative_angle, rotation_angle
+from formation_ftc.components.evaluations.attitude_scores import (
+    AttitudeScores,
+    relative_angle,
+    rotation_angle,
+)
 from formation_ftc.methods.composed import make_loop
 
 
