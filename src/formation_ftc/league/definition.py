@@ -88,6 +88,8 @@ class LeagueMeta(StrictModel):
     initial_error: InitialError
     onset: Onset
     trace_seed: int = Field(0, ge=0, description="Seed index whose time histories the report plots [-].")
+    trace_cases: list[str] = Field(["none", "loe-50"], description=(
+        "Fault cases whose time histories (trace seed, first level) are kept for the report's plot."))
 
 
 class Level(StrictModel):

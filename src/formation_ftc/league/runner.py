@@ -138,7 +138,8 @@ def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int,
             overrides[path] = on.low
     return {
         "campaign": {"name": f"league-{spec.league.name}-{method}", "base": [str(p) for p in cell_files],
-                     "runs": seeds, "seed": spec.league.seed, "chunk_size": spec.league.chunk_size,
+                     # a chunk never spans two cells: no larger than the seeds (no padded runs)
+                     "runs": seeds, "seed": spec.league.seed, "chunk_size": min(spec.league.chunk_size, seeds),
                      "paired": True, "description": f"league {spec.league.name}: {method}"},
         "overrides": overrides,
         "sample": sample,
@@ -206,7 +207,7 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
             if not p.exists() or p.read_text() != text:
                 p.write_text(text)
             files.append(p)
-        traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed)
+        traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed, spec.league.trace_cases)
         campaign = _campaign(spec, name, files, n_seeds, traced, _network_kind(spec, spec.method(name))[0])
         executor = executor_factory() if executor_factory is not None else None
         outcome = run_campaign(campaign, out / name / "campaign", executor=executor, progress=progress)
@@ -227,11 +228,12 @@ def _toml_safe(obj: Any) -> Any:
     return obj
 
 
-def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int) -> list[int]:
-    """Run ids whose time histories are kept: the trace seed of every cell of the first level."""
+def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int, cases: list[str]) -> list[int]:
+    """Run ids whose time histories are kept: the trace seed of the trace cases at the first level
+    (each kept history is one more run, re-run alone with its records)."""
     j = min(trace_seed, seeds - 1)
     first_level = cells[0].level if cells else ""
-    return [g * seeds + j for g, c in enumerate(cells) if c.level == first_level]
+    return [g * seeds + j for g, c in enumerate(cells) if c.level == first_level and c.case in cases]
 
 
 def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFrame]:

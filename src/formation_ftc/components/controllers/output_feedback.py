@@ -38,19 +38,25 @@ class FreeDrift(Controller):
 class NominalOrbitTracking(Controller):
     """Base of the sampled output-feedback laws: the nominal orbit q0(t) = Phi(t) q0(0) of the CW free
     motion (28) (mean motion ``mean_motion`` [rad/s], ``desired_initial`` (N, 6) [m, m/s]) as the
-    controller's own time signal, and the tracking error e_y = y0 - y = q0 - y (29) with C = I6."""
+    controller's own time signal, and the tracking error e_y = y0 - y = q0 - y (29) with C = I6.
+    ``hold_desired``: q0(t) = q0(0) held fixed instead (slots fixed in LVLH, which are not free CW motion
+    unless purely along-track: the force that holds them is then, for the law, an unmodelled
+    disturbance)."""
 
     quantity = "acceleration"
 
     count: int = static()
     mean_motion: Any = 0.0  # [rad/s]
     desired_initial: Any = 0.0  # q0(0), (N, 6) [m, m/s]
+    hold_desired: bool = static(default=False)
 
     @property
     def sampled(self) -> bool:
         return True  # u_k held over the step (zero-order hold)
 
     def exogenous(self, t):
+        if self.hold_desired:
+            return {"q0": self.desired_initial + 0.0 * t}  # fixed slots (same shape and dtype as (28))
         return {"q0": cw_free_motion(self.mean_motion, self.desired_initial, t)}  # (28)
 
     def desired_position_at(self, exogenous):

@@ -272,6 +272,9 @@ register_component_type("estimator", ILO, IloSection, _ilo,
 class _OutputFeedbackSection(StrictModel):
     desired_state: list[Vec6] = Field(description=(
         "q0(0) of each spacecraft's nominal orbit (28), CW free motion on board [m, m/s] (one row each)."))
+    desired_motion: Literal["natural", "hold"] = Field("natural", description=(
+        "'natural': q0(t) is the CW free motion (28) from desired_state; 'hold': desired_state held fixed "
+        "in LVLH (slots that are not free motion: the holding force is then an unmodelled disturbance)."))
     gains: Literal["printed", "care"] = Field("printed", description=(
         "K: 'printed' as given, or 'care' = B^T P1 from the CARE (34) at the on-board mean motion."))
     K: list[list[float]] | None = Field(None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed').")
@@ -302,7 +305,7 @@ class _OutputFeedbackSection(StrictModel):
         _, B = cw_matrices(n)
         BpB = np.linalg.pinv(B) @ B  # B^+ H with H = B (and B^+ E with E = B)
         return dict(count=N, mean_motion=as_float(n), desired_initial=as_float(self.desired_state),
-                    K=as_float(K), BpH=as_float(BpB))
+                    K=as_float(K), BpH=as_float(BpB), hold_desired=self.desired_motion == "hold")
 
 
 def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
