@@ -132,6 +132,12 @@ class ClosedLoop:
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise CompositionError(f"two components record a signal with the same name: {', '.join(dup)}")
+        recorded = {sig.name for sig in self.signals()}
+        for m in self.metrics:
+            for what, name in (("signal", m.signal), ("gate", m.gate)):
+                if name is not None and name not in recorded:
+                    raise CompositionError(f"metric {m.name!r}: {what} {name!r} is not a recorded signal of this "
+                                           f"loop (signals: {', '.join(sorted(recorded))})")
         return self
 
     # ------------------------------------------------------------------ declarations

@@ -1,0 +1,196 @@
+"""The translational league: definition, validation before any run, a tiny end-to-end run with its
+leaderboard, resume, and the rejections of bad league files (exit code 2 from the command line)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import tomli_w
+
+from formation_ftc.league.battery import load_battery
+from formation_ftc.league.definition import LeagueError, builtin_leagues, load_league, method_scenario
+from formation_ftc.league.report import cell_table, ranking, winners, write_leaderboard
+from formation_ftc.league.runner import plan_cells, run_league
+
+DATA = Path(builtin_leagues()["translational"]).parent
+
+
+def _tiny_league(tmp_path: Path, methods=("sir-ftc", "lqr"), **league) -> Path:
+    """The built-in translational league, shortened: 60 s, scores from 20 s, two methods, onset in
+    [30, 40] s, two battery cases would be too few to rank, so every case is kept."""
+    raw = tomllib.loads((DATA / "league-translational.toml").read_text())
+    raw["league"].update(horizon=60.0, settle_start=20.0, chunk_size=4, **league)
+    raw["league"]["onset"].update(low=30.0, high=40.0)
+    for m in raw["metrics"]:
+        if m.get("start") == 300.0:
+            m["start"] = 20.0
+    raw["methods"] = [m for m in raw["methods"] if m["name"] in methods]
+    (tmp_path / "translational").mkdir(exist_ok=True)
+    for m in raw["methods"]:
+        shutil.copy(DATA / m["scenario"], tmp_path / m["scenario"])
+    path = tmp_path / "tiny.toml"
+    path.write_text(tomli_w.dumps(raw))
+    return path
+
+
+def test_builtin_league_loads_and_every_cell_validates():
+    spec = load_league("translational")
+    assert {m.name for m in spec.methods} >= {"li2020-thm1", "li2020-thm2", "sir-ftc", "gui2022-lof2tc",
+                                               "gui2022-cof2tc", "azizi2009", "yang2013", "lqr"}
+    cells = plan_cells(spec)
+    battery = load_battery(spec.league.battery)
+    n_levels = len(spec.levels)
+    actuator_cases = [c for c in battery.cases if not c.communication]
+    for name, cs in cells.items():
+        # every actuator case at every level, for every method; communication cases only with a network
+        assert {(c.case, c.level) for c in cs} >= {(c.name, lv.name) for c in actuator_cases for lv in spec.levels}
+        assert len(cs) % n_levels == 0
+    assert any(c.case == "link-loss" for c in cells["li2020-thm1"])
+    assert not any(c.case == "link-loss" for c in cells["sir-ftc"])
+    assert any(c.case == "larger-delays" for c in cells["li2020-thm2"])
+    assert not any(c.case == "larger-delays" for c in cells["li2020-thm1"])
+
+
+def test_every_method_gets_the_same_truth_faults_and_scores():
+    spec = load_league("translational")
+    battery = load_battery(spec.league.battery)
+    case = battery["bias"]
+    level = spec.levels[1]
+    raws = [method_scenario(spec, m, level, case.actuator_fields(saturation=level.saturation)) for m in spec.methods]
+    for raw in raws:
+        assert raw["plant"] == raws[0]["plant"]
+        assert raw["actuator"]["kind"] == "bias" and raw["actuator"]["saturation"] == level.saturation
+        assert raw["actuator"]["bias"] == pytest.approx(0.5 * level.saturation)  # half the limit
+        assert raw["metrics"] == raws[0]["metrics"] and raw["evaluations"] == raws[0]["evaluations"]
+        assert raw["simulation"]["horizon"] == spec.league.horizon
+    assert len({r["controller"]["type"] for r in raws}) == len(raws) - 1  # li2020 Thm 1 and Thm 2 share a law
+
+
+def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path):
+    path = _tiny_league(tmp_path)
+    out = tmp_path / "out"
+    outcome = run_league(path, out, seeds=2)
+    spec = load_league(path)
+    n_cells = sum(len(c) for c in plan_cells(spec).values())
+    assert outcome.n_runs == 2 * n_cells
+    meta = json.loads((out / "league.json").read_text())
+    assert meta["battery"]["name"] == "v1" and meta["seeds"] == 2 and "git_commit" in json.dumps(meta["provenance"])
+    board = write_leaderboard(out)
+    lb = out / "leaderboard"
+    for f in ("index.html", "leaderboard.json", "cells.parquet", "runs.parquet", "pareto-limited.png",
+              "trajectories.png"):
+        assert (lb / f).is_file(), f
+    runs = pd.read_parquet(lb / "runs.parquet")
+    assert len(runs) == outcome.n_runs and set(runs["method"]) == {"sir-ftc", "lqr"}
+    # paired seeds: replicate j has the same drawn onset in every cell and for every method
+    onsets = runs.groupby("replicate")["input:actuator.onset"].nunique()
+    assert (onsets == 1).all()
+    # pass rate recomputed from the runs
+    cells = pd.read_parquet(lb / "cells.parquet")
+    req = board["requirement"]
+    for _, c in cells.iterrows():
+        sel = runs[(runs.method == c.method) & (runs.level == c.level) & (runs.case == c.case)]
+        passed = (sel.status == "ok") & (sel[f"metric:{req['metric']}"] <= req["max"])
+        assert c.pass_rate == pytest.approx(passed.mean())
+        ok = sel[sel.status == "ok"][f"metric:{req['metric']}"]
+        if len(ok):
+            assert c[f"{req['metric']}_median"] == pytest.approx(np.median(ok))
+    html = (lb / "index.html").read_text()
+    assert "data:image/png;base64," in html and "Ranking" in html and "sir-ftc" in html
+    assert "<script src=" not in html  # self-contained
+    # resume: a second run computes nothing and returns the same table
+    again = run_league(path, out, seeds=2)
+    assert again.n_runs == outcome.n_runs
+    runs2 = pd.read_parquet(lb / "runs.parquet")
+    assert runs2.equals(runs)
+    # a different seed count is another league directory
+    with pytest.raises(LeagueError, match="another --out"):
+        run_league(path, out, seeds=3)
+
+
+def test_ranking_and_winners_follow_pass_rate_then_median():
+    meta = {"definition": (DATA / "league-translational.toml").read_text()}
+    cells = pd.DataFrame([
+        dict(method="a", level="L", case="none", runs=10, failed=0, pass_rate=1.0, rms_shape_error_median=0.5,
+             delta_v_total_median=1.0),
+        dict(method="b", level="L", case="none", runs=10, failed=0, pass_rate=1.0, rms_shape_error_median=0.2,
+             delta_v_total_median=2.0),
+        dict(method="c", level="L", case="none", runs=10, failed=5, pass_rate=0.5, rms_shape_error_median=0.1,
+             delta_v_total_median=0.5),
+        dict(method="a", level="L", case="bias", runs=10, failed=0, pass_rate=0.9, rms_shape_error_median=0.6,
+             delta_v_total_median=1.0),
+        dict(method="b", level="L", case="bias", runs=10, failed=0, pass_rate=0.1, rms_shape_error_median=3.0,
+             delta_v_total_median=2.0),
+        dict(method="c", level="L", case="bias", runs=10, failed=0, pass_rate=0.0, rms_shape_error_median=9.0,
+             delta_v_total_median=0.5),
+    ])
+    rank = ranking(meta, cells)["L"]
+    assert [r["method"] for r in rank] == ["a", "b", "c"]  # 0.95, 0.55, 0.25
+    assert rank[0]["pass_rate"] == pytest.approx(0.95)
+    wins = {w["case"]: w["method"] for w in winners(meta, cells)}
+    assert wins == {"none": "b", "bias": "a"}  # tie on pass rate broken by the median
+
+
+def test_formation_scores_against_numpy(tmp_path):
+    from formation_ftc.components.evaluations.formation_scores import FormationScores, shape_error
+
+    rng = np.random.default_rng(3)
+    rho, d = rng.normal(size=(4, 3)) * 100, rng.normal(size=(4, 3)) * 100
+    ref = max(np.linalg.norm((rho[i] - rho[j]) - (d[i] - d[j])) for i in range(4) for j in range(i + 1, 4))
+    assert float(shape_error(rho, d)) == pytest.approx(ref, rel=1e-14)
+    assert float(shape_error(rho + 57.0, d)) == pytest.approx(ref, rel=1e-12)  # blind to a common translation
+    f = rng.normal(size=(4, 3))
+    m = np.array([100.0, 120.0, 115.0, 108.0])
+    out = FormationScores(desired=d, mass=m).outputs({"position": rho, "applied": f})
+    np.testing.assert_allclose(out["slot_error"], np.linalg.norm(rho - d, axis=1), rtol=1e-14)
+    np.testing.assert_allclose(out["applied_acceleration"], np.linalg.norm(f, axis=1) / m, rtol=1e-14)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda r: r["methods"].append({"name": "ghost", "scenario": "translational/ghost.toml"}), "ghost.toml"),
+    (lambda r: r["league"].update(battery="v99"), "v99"),
+    (lambda r: r["league"]["requirement"].update(metric="no_such_metric"), "no_such_metric"),
+    (lambda r: r["metrics"].append({"name": "bad", "signal": "no_such_signal"}), "no_such_signal"),
+    (lambda r: r["league"].update(seeds=0), "seeds"),
+    (lambda r: r["levels"].append({"name": "limited", "saturation": 1.0}), "duplicate"),
+])
+def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, edit, message):
+    path = _tiny_league(tmp_path)
+    raw = tomllib.loads(path.read_text())
+    edit(raw)
+    path.write_text(tomli_w.dumps(raw))
+    with pytest.raises(LeagueError, match=message):
+        run_league(path, tmp_path / "out", seeds=1)
+    assert not (tmp_path / "out").exists()  # rejected before anything is written
+
+
+def test_a_method_that_cannot_drive_the_league_plant_is_rejected(tmp_path):
+    path = _tiny_league(tmp_path)
+    bad = tmp_path / "translational" / "attitude-law.toml"
+    bad.write_text(tomli_w.dumps({"controller": {"type": "networked-el-hinf", "edges": [[1, 2], [2, 3], [3, 4]]}}))
+    raw = tomllib.loads(path.read_text())
+    raw["methods"].append({"name": "attitude-law", "scenario": "translational/attitude-law.toml"})
+    path.write_text(tomli_w.dumps(raw))
+    with pytest.raises(LeagueError, match="attitude-law cannot run"):
+        run_league(path, tmp_path / "out", seeds=1)
+    # a method file may not replace the truth or the faults
+    bad.write_text(tomli_w.dumps({"plant": {"type": "clohessy-wiltshire"}, "controller": {"type": "pd"}}))
+    with pytest.raises(LeagueError, match="the league owns the truth"):
+        plan_cells(load_league(path))
+
+
+def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "formation_ftc", "league", "run", "translational", "--out",
+                        str(tmp_path / "o"), "--methods", "nope", "--seeds", "1"], capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr
+    assert "nope" in r.stderr and "li2020-thm1" in r.stderr
+    r = subprocess.run([sys.executable, "-m", "formation_ftc", "league", "list"], capture_output=True, text=True)
+    assert r.returncode == 0 and "translational" in r.stdout
