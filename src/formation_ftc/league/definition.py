@@ -54,10 +54,24 @@ class Requirement(StrictModel):
 
 
 class InitialError(StrictModel):
-    field: str = Field(description="Dotted path of the plant's (N, 3) initial position list, e.g. "
-                                   "'plant.initial_position'.")
-    std: float = Field(ge=0, description="Standard deviation of the initial position error per axis [m or rad].")
+    """Either ``seed_field``: the plant draws its own initial dispersion (its deviations in [truth]) from
+    a seed the league samples per replicate -- one sampled number per run, however many spacecraft; or
+    ``field`` + ``std``: each component of a per-spacecraft list is sampled around its [truth] value."""
+
+    seed_field: str | None = Field(None, description="Dotted path of the plant's dispersion seed, e.g. "
+                                   "'plant.dispersion_seed'.")
+    field: str | None = Field(None, description="Dotted path of the plant's (N, 3) initial list, e.g. "
+                              "'plant.initial_position'.")
+    std: float | None = Field(None, ge=0, description="Standard deviation per component [m or deg] (with field).")
     units: str = Field("m", description="Units of `std`.")
+
+    @model_validator(mode="after")
+    def _one_mode(self):
+        if (self.seed_field is None) == (self.field is None):
+            raise ValueError("league.initial_error: give either seed_field, or field and std")
+        if self.field is not None and self.std is None:
+            raise ValueError("league.initial_error.std: required with field")
+        return self
 
 
 class Onset(StrictModel):

@@ -115,19 +115,24 @@ def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
 
 def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int, traced: list[int],
               networked: bool) -> dict:
-    truth_field = spec.league.initial_error.field
-    if not truth_field.startswith("plant."):
-        raise LeagueError(f"league.initial_error.field = {truth_field!r}: must name a plant field (plant.*)")
-    nominal = spec.truth.get(truth_field.removeprefix("plant."))
-    if not isinstance(nominal, list) or not all(isinstance(r, list) for r in nominal):
-        raise LeagueError(f"league.initial_error.field = {truth_field!r}: [truth] has no list of per-spacecraft "
-                          "vectors there")
+    ie = spec.league.initial_error
     sample: dict[str, Any] = {}
-    std = spec.league.initial_error.std
-    if std > 0:
-        for i, row in enumerate(nominal):
-            for k, v in enumerate(row):
-                sample[f"{truth_field}.{i}.{k}"] = {"dist": "normal", "mean": float(v), "std": std}
+    if ie.seed_field is not None:
+        if not ie.seed_field.startswith("plant."):
+            raise LeagueError(f"league.initial_error.seed_field = {ie.seed_field!r}: must name a plant field")
+        sample[ie.seed_field] = {"dist": "integer", "low": 0, "high": 2**31 - 1}
+    else:
+        truth_field = str(ie.field)
+        if not truth_field.startswith("plant."):
+            raise LeagueError(f"league.initial_error.field = {truth_field!r}: must name a plant field (plant.*)")
+        nominal = spec.truth.get(truth_field.removeprefix("plant."))
+        if not isinstance(nominal, list) or not all(isinstance(r, list) for r in nominal):
+            raise LeagueError(f"league.initial_error.field = {truth_field!r}: [truth] has no list of "
+                              "per-spacecraft vectors there")
+        if ie.std and ie.std > 0:
+            for i, row in enumerate(nominal):
+                for k, v in enumerate(row):
+                    sample[f"{truth_field}.{i}.{k}"] = {"dist": "normal", "mean": float(v), "std": ie.std}
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
@@ -184,7 +189,8 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
     out.mkdir(parents=True, exist_ok=True)
     assert spec.source is not None
     meta = {
-        "name": spec.league.name, "version": spec.league.version, "hash": digest, "seeds": n_seeds,
+        "name": spec.league.name, "version": spec.league.version, "kind": spec.league.kind, "hash": digest,
+        "seeds": n_seeds,
         "quick": quick, "definition_file": spec.source.name, "definition": spec.source.read_text(),
         "method_files": {m.name: (spec.source.parent / m.scenario).read_text() for m in spec.methods},
         "battery": {"name": battery.name, "version": battery.version, "sha256": battery.sha256,

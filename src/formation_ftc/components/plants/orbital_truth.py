@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -78,6 +79,11 @@ class InertialFormationPlant(Plant):
     #: (N, 6) dimensionless relative orbital elements of the deputies (da, dl, dex, dey, dix, diy); when
     #: given they replace initial_state_lvlh as the initial condition
     initial_roe: Any = None
+    #: (2,) standard deviations of a Gaussian dispersion added to initial_state_lvlh: position [m] and
+    #: velocity [m/s] per axis, drawn inside the run from ``dispersion_seed`` (so a campaign varies the
+    #: initial errors of every spacecraft through one number)
+    initial_dispersion: Any = dataclasses.field(default_factory=lambda: np.zeros(2))
+    dispersion_seed: Any = 0.0  # [-] integer-valued
     j2: bool = static(default=True)
     drag: bool = static(default=False)
     srp: bool = static(default=False)
@@ -93,7 +99,15 @@ class InertialFormationPlant(Plant):
         if self.initial_roe is not None:
             deputies = elements_to_eci(*roe_to_elements(tuple(el), self.initial_roe), self.mu)
             return {"chief": chief, "deputies": deputies}
-        return {"chief": chief, "deputies": lvlh_to_eci(chief, self.initial_state_lvlh)}
+        return {"chief": chief, "deputies": lvlh_to_eci(chief, self.initial_state_lvlh + self.dispersion())}
+
+    def dispersion(self):
+        """(N, 6) LVLH initial-state dispersion [m, m/s]: standard normal draws from ``dispersion_seed``
+        scaled by ``initial_dispersion`` (zero when both deviations are zero)."""
+        key = jax.random.PRNGKey(jnp.asarray(self.dispersion_seed).astype(jnp.uint32))
+        z = jax.random.normal(key, (self.count, 6), dtype=jnp.float64)
+        std = jnp.asarray(self.initial_dispersion)
+        return z * jnp.concatenate([jnp.full(3, std[0]), jnp.full(3, std[1])])
 
     def exogenous(self, t):
         return {"h": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}

@@ -58,6 +58,12 @@ class OrbitalTruthSection(StrictModel):
     density_base_altitude: float = Field(0.0, ge=0, description="Base altitude of the single exponential [m].")
     density_scale_height: float = Field(60e3, gt=0, description="Scale height of the single exponential [m].")
     mu: float = Field(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+    initial_position_std: float = Field(0.0, ge=0, description=(
+        "Std of a Gaussian dispersion of every deputy's initial LVLH position, per axis [m] (drawn in the run "
+        "from dispersion_seed; LVLH initial conditions only)."))
+    initial_velocity_std: float = Field(0.0, ge=0, description=(
+        "Std of the dispersion of every deputy's initial LVLH velocity, per axis [m/s]."))
+    dispersion_seed: int = Field(0, ge=0, le=2**31 - 1, description="Seed of the initial dispersion [-].")
 
     @model_validator(mode="after")
     def _orbit(self):
@@ -66,6 +72,9 @@ class OrbitalTruthSection(StrictModel):
             raise ValueError("mass: at least one spacecraft, every mass finite and > 0 kg")
         if (self.initial_position is None) == (self.initial_roe is None):
             raise ValueError("initial_position: give either initial_position (LVLH offsets) or initial_roe")
+        if self.initial_roe is not None and (self.initial_position_std > 0 or self.initial_velocity_std > 0):
+            raise ValueError("initial_position_std / initial_velocity_std: a dispersion applies to LVLH initial "
+                             "conditions (initial_position), not to initial_roe")
         if self.initial_roe is not None and self.initial_velocity is not None:
             raise ValueError("initial_velocity: not used with initial_roe (the elements fix the velocity)")
         for name in ("initial_position", "initial_velocity", "initial_roe"):
@@ -117,6 +126,8 @@ def _orbital_truth(sec: OrbitalTruthSection, ctx: BuildContext):
         sun_direction=as_float(sec.sun_direction), density_table=as_float(sec.density_table()),
         mu=as_float(sec.mu),
         initial_roe=None if sec.initial_roe is None else as_float(np.asarray(sec.initial_roe) / sec.semi_major_axis),
+        initial_dispersion=as_float([sec.initial_position_std, sec.initial_velocity_std]),
+        dispersion_seed=as_float(sec.dispersion_seed),
         j2=sec.j2, drag=sec.drag, srp=sec.srp, disturbance_force=sec.disturbance_force)
 
 
