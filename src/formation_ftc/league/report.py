@@ -179,8 +179,9 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         if not tdir.is_dir():
             continue
         manifest = json.loads((league_dir / m["name"] / "campaign" / "manifest.json").read_text())
-        runs = int(manifest.get("runs_per_point", manifest.get("runs", 1)))
-        bases = [Path(b).stem for b in manifest.get("bases", sorted(p.name for p in cdir.glob("*.toml")))]
+        runs = int(meta.get("seeds") or manifest.get("runs_per_point", manifest.get("runs", 1)))  # runs per cell
+        plan_bases = manifest.get("plan", {}).get("bases") or manifest.get("bases")  # the cells in run order
+        bases = [Path(b).stem for b in plan_bases or sorted(p.name for p in cdir.glob("*.toml"))]
         for p in sorted(tdir.glob("run-*.nc")):
             rid = int(p.stem.split("-")[1])
             g = rid // runs
