@@ -26,7 +26,17 @@ import pandas as pd
 
 from formation_ftc.league.runner import load_league_results
 
-__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "SCORES"]
+__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "SCORES", "COSTS"]
+
+#: the actuator-usage score a league is ranked and plotted against, with its label (first one present)
+COSTS = (("delta_v_total", "total delta-v [m/s]"), ("control_impulse", "control impulse [N m s]"))
+
+
+def _cost(cells: pd.DataFrame) -> tuple[str, str] | None:
+    for name, label in COSTS:
+        if f"{name}_median" in cells:
+            return name, label
+    return None
 
 #: scores shown in the tables (when the league computes them)
 SCORES = ("rms_shape_error", "max_shape_error", "rms_slot_error", "settle_time", "delta_v_total", "peak_thrust",
@@ -79,22 +89,30 @@ def ranking(meta: dict[str, Any], cells: pd.DataFrame) -> dict[str, list[dict[st
     """Per level: methods by pass rate over the common cases, then by the median requirement metric."""
     metric, _, _ = _requirement(meta)
     common = _common_cases(cells)
+    cost = _cost(cells)
     out: dict[str, list[dict[str, Any]]] = {}
     for level, g in cells.groupby("level", sort=False):
         g = g[g["case"].isin(common)]
         rows = []
         for method, h in g.groupby("method", sort=False):
             w = h["runs"].to_numpy(dtype=float)
-            rows.append({"method": method, "pass_rate": float(np.average(h["pass_rate"], weights=w)),
-                         f"{metric}_median": float(np.nanmedian(h[f"{metric}_median"])),
-                         "delta_v_total_median": float(np.nanmedian(h["delta_v_total_median"]))
-                         if "delta_v_total_median" in h else math.nan,
-                         "failed": int(h["failed"].sum()), "runs": int(h["runs"].sum())})
+            row = {"method": method, "pass_rate": float(np.average(h["pass_rate"], weights=w)),
+                   f"{metric}_median": _nanmedian(h[f"{metric}_median"]),
+                   "failed": int(h["failed"].sum()), "runs": int(h["runs"].sum())}
+            if cost is not None:
+                row[f"{cost[0]}_median"] = _nanmedian(h[f"{cost[0]}_median"])
+            rows.append(row)
         rows.sort(key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))
         for k, r in enumerate(rows, start=1):
             r["rank"] = k
         out[str(level)] = rows
     return out
+
+
+def _nanmedian(v) -> float:
+    a = np.asarray(v, dtype=float)
+    a = a[np.isfinite(a)]
+    return float(np.median(a)) if a.size else math.nan
 
 
 def _nan_last(v: float) -> float:
@@ -123,14 +141,15 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
     from formation_ftc.plotting import new_figure
 
     metric, limit, units = _requirement(meta)
-    if "delta_v_total_median" not in cells:
+    cost = _cost(cells)
+    if cost is None:
         return []
     common = _common_cases(cells)
     paths = []
     for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
-        agg = g.groupby("method", sort=False)[[f"{metric}_median", "delta_v_total_median"]].median()
+        agg = g.groupby("method", sort=False)[[f"{metric}_median", f"{cost[0]}_median"]].median()
         fig, axes = new_figure(1, 1, width=6.4, height=4.2,
-                               title=f"{meta['name']} league, {level}: delta-v vs accuracy (median over cases)")
+                               title=f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)")
         ax = axes[0, 0]
         pts = agg.to_numpy(dtype=float)
         for (name, (acc, dv)) in zip(agg.index, pts, strict=True):
@@ -142,10 +161,14 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
             f = sorted((pts[i][1], pts[i][0]) for i in front)
             ax.plot([p[0] for p in f], [p[1] for p in f], "k--", lw=0.8, label="Pareto front")
         ax.axhline(limit, color="tab:red", lw=0.8, label=f"requirement {limit:g} {units}")
-        ax.set_xlabel("total delta-v, median [m/s]")
+        ax.set_xlabel(f"{cost[1]}, median")
         ax.set_ylabel(f"{metric}, median [{units}]")
-        if np.nanmin(pts[:, 0]) > 0 and np.nanmax(pts[:, 0]) / max(np.nanmin(pts[:, 0]), 1e-300) > 100:
+        acc = pts[:, 0][np.isfinite(pts[:, 0])]
+        if acc.size and acc.min() > 0 and acc.max() / acc.min() > 100:
             ax.set_yscale("log")
+        dv = pts[:, 1][np.isfinite(pts[:, 1])]
+        if dv.size and dv.min() > 0 and dv.max() / dv.min() > 100:
+            ax.set_xscale("log")
         ax.legend(loc="best", fontsize=7)
         paths.append(_png(fig, out / f"pareto-{level}.png"))
     return paths
@@ -243,6 +266,7 @@ pre{background:#f7f7f7;padding:0.6em;overflow-x:auto;font-size:0.8em}"""
 
 def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]) -> str:
     metric, limit, units = _requirement(meta)
+    cost = _cost(cells)
     prov = meta.get("provenance", {})
     parts = [f"<h1>formation-ftc league: {_e(meta['name'])}</h1>",
              f"<p>League definition version {_e(meta['version'])} (sha256 {_e(meta['hash'][:16])}), fault battery "
@@ -256,7 +280,7 @@ def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]
         parts.append(f"<h3>{_e(level)}</h3>")
         parts.append(_table(rows, [("rank", "rank"), ("method", "method"), ("pass_rate", "pass rate"),
                                    (f"{metric}_median", f"median {metric} [{units}]"),
-                                   ("delta_v_total_median", "median total delta-v [m/s]"),
+                                   *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
                                    ("failed", "diverged"), ("runs", "runs")]))
     parts.append("<h2>Winner per fault</h2>")
     parts.append(_table(wins, [("level", "level"), ("case", "fault case"), ("method", "best method"),
