@@ -161,6 +161,8 @@ def test_formation_scores_against_numpy(tmp_path):
     (lambda r: r["metrics"].append({"name": "bad", "signal": "no_such_signal"}), "no_such_signal"),
     (lambda r: r["league"].update(seeds=0), "seeds"),
     (lambda r: r["levels"].append({"name": "limited", "saturation": 1.0}), "duplicate"),
+    (lambda r: r["league"]["initial_error"].update(seed_field="plant.no_such_seed"), "no_such_seed"),
+    (lambda r: r["league"]["initial_error"].update(field="plant.initial_position"), "either seed_field"),
 ])
 def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, edit, message):
     path = _tiny_league(tmp_path)

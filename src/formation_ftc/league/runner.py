@@ -176,6 +176,15 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
     if n_seeds < 1:
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
+    for name, mcells in cells.items():
+        networked = _network_kind(spec, spec.method(name))[0]
+        sampled = _campaign(spec, name, [], 1, [], networked)
+        for path in [*sampled["sample"], *sampled["overrides"]]:
+            for c in mcells:
+                if not _has_path(c.raw, path):
+                    raise LeagueError(f"league {spec.league.name}: the league samples {path!r}, but method {name}'s "
+                                      f"cell {c.key} has no such field (give it a value in [truth], [actuator] or "
+                                      "the method's network)")
     battery = _battery(spec)
     out = Path(out_dir)
     digest = league_hash(spec)
@@ -223,6 +232,18 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         if log is not None:
             log(f"{name}: {outcome.n_runs} runs, {outcome.n_failed} failed, {per_method[name]:.1f} s")
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
+
+
+def _has_path(raw: dict, path: str) -> bool:
+    node: Any = raw
+    for part in path.split("."):
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        else:
+            return False
+    return True
 
 
 def _toml_safe(obj: Any) -> Any:
