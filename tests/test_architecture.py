@@ -14,11 +14,13 @@ PKG = Path(__file__).resolve().parents[1] / "src" / "formation_ftc"
 # layer -> packages it must not import
 FORBIDDEN = {
     "core": ["blocks", "design", "sim", "config", "papers", "report", "campaign", "cli", "api",
-             "plotting", "methods", "registry"],
-    "blocks": ["sim", "config", "papers", "report", "campaign", "cli", "api", "plotting", "methods"],
-    "design": ["sim", "papers", "report", "campaign", "cli", "api", "plotting", "methods"],
-    "sim": ["papers", "report", "campaign", "cli", "plotting", "methods"],
-    "config": ["papers", "report", "campaign", "cli", "plotting", "methods"],
+             "plotting", "methods", "registry", "league"],
+    "blocks": ["sim", "config", "papers", "report", "campaign", "cli", "api", "plotting", "methods", "league"],
+    "design": ["sim", "papers", "report", "campaign", "cli", "api", "plotting", "methods", "league"],
+    "sim": ["papers", "report", "campaign", "cli", "plotting", "methods", "league"],
+    "config": ["papers", "report", "campaign", "cli", "plotting", "methods", "league"],
+    "campaign": ["papers", "report", "cli", "league"],
+    "components": ["papers", "report", "campaign", "cli", "api", "methods", "league"],
 }
 MATPLOTLIB_ALLOWED = ("plotting.py", "papers", "report", "campaign", "methods")
 
