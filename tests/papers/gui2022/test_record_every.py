@@ -1,0 +1,91 @@
+"""Gui2022 metrics do not depend on the record decimation (``simulation.record_every``).
+
+Every metric of a ``gui2022`` run is accumulated inside the run at every step; the records are only an
+output decimation. The three scenarios of the reproduction (new ILO alone, LOF2TC, COF2TC) run 4 s
+(4,000 steps of 1 ms) with the x fault at 1 s and the z fault at 2 s and every metric window moved inside
+(RMS from onset + 0.5 s, estimate window [0.1, 1) s, |e_z| from 2.1 s, position RMS from 1.5 s), at
+``record_every = 1`` and ``= 20``; every metric must agree. The comparison is to a relative 1e-12
+rather than bit for bit: the two programs scan blocks of 1 and 20 steps, which XLA may fuse
+differently (the values measured here agree exactly).
+
+To show that the comparison can fail, windowed maxima are also recomputed in numpy: from the
+every-step records they equal the in-run metrics; from the records kept every 20 steps they miss the
+peaks (the sign term makes F_hat chatter with a period of 2 steps, and the records every 20 steps see
+one phase of it only).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import formation_ftc as ftc
+from formation_ftc.papers.gui2022.reproduction import run_scenario
+
+DT = 1e-3  # [s]
+HORIZON = 4.0  # [s]
+X_ONSET, Z_ONSET = 1.0, 2.0  # [s]
+OVERRIDES = {"simulation.horizon": HORIZON, "faults.x_onset": X_ONSET, "faults.z_onset": Z_ONSET,
+             "metrics.fault_rms_delay": 0.5, "metrics.position_rms_start": 1.5, "metrics.estimate_start": 0.1,
+             "metrics.estimate_end": 1.0, "metrics.z_amplitude_start": 2.1}
+EXPECTED = ("fault_rms_err_x", "fault_settle_time_x", "fault_max_err_after_1s_x", "fault_max_err_after_1s_z",
+            "final_fault_err_z", "sign_mean_vz", "estimate_max_err_after_start")
+EXPECTED_CONTROL = ("pos_rms", "pos_max_after_fault", "ex_max_fault_window", "ez_max_after", "final_pos_err",
+                    "final_vel_err")
+
+
+def _same(m1: dict[str, float], m20: dict[str, float], rtol: float = 1e-12) -> float:
+    """Assert equal metric dicts (NaN where the other is NaN); return the largest relative difference."""
+    assert m1.keys() == m20.keys()
+    worst = 0.0
+    for k, a in m1.items():
+        b = m20[k]
+        if math.isnan(a):
+            assert math.isnan(b), k
+            continue
+        assert b == pytest.approx(a, rel=rtol, abs=0.0), k
+        worst = max(worst, abs(a - b) / abs(a) if a != 0 else abs(b))
+    return worst
+
+
+def _window_max(ds, values: np.ndarray, start: float, end: float) -> float:
+    """max over the records with start <= t <= end (edges to 1e-9 s, as the metric windows) of ``values``."""
+    t = ds.time.values
+    sel = (t >= start - 1e-9) & (t <= end + 1e-9)
+    return float(np.max(values[sel]))
+
+
+@pytest.mark.parametrize("name", ["gui2022-ilo", "gui2022-lof2tc", "gui2022-cof2tc"])
+def test_metrics_independent_of_record_every(name):
+    out = {every: run_scenario(ftc.load_scenario(name, {**OVERRIDES, "simulation.record_every": every}))
+           for every in (1, 20)}
+    (ds1, m1), (ds20, m20) = out[1], out[20]
+    expected = EXPECTED + (EXPECTED_CONTROL if name != "gui2022-ilo" else ())
+    assert set(expected) <= m1.keys()
+    assert all(math.isfinite(m1[k]) for k in expected)
+    _same(m1, m20)
+
+    last = HORIZON - 0.5 * DT  # the windows that end before the horizon sample
+    assert ds1.time.size == round(HORIZON / DT) + 1
+
+    def err_x(ds):  # |F_x - F_hat_x| of the deputy [m/s^2]
+        return np.abs(ds["fault_error"].values[:, 0])
+
+    # independent reductions of the every-step records equal the in-run metrics
+    assert _window_max(ds1, err_x(ds1), X_ONSET + 1.0, last) == pytest.approx(m1["fault_max_err_after_1s_x"],
+                                                                               rel=1e-12)
+    assert _window_max(ds1, np.abs(ds1["fault_error"].values[:, 2]), Z_ONSET + 1.0, last) == pytest.approx(
+        m1["fault_max_err_after_1s_z"], rel=1e-12)
+    missed = [_window_max(ds20, err_x(ds20), X_ONSET + 1.0, last) < m1["fault_max_err_after_1s_x"] * (1 - 1e-9)]
+    if name != "gui2022-ilo":
+        e_pos = ds1["position_tracking_error"].values
+        assert _window_max(ds1, e_pos, X_ONSET, last) == pytest.approx(m1["pos_max_after_fault"], rel=1e-12)
+        ex1 = np.abs(ds1["tracking_error"].values[:, 0])
+        assert _window_max(ds1, ex1, X_ONSET, Z_ONSET - 0.5 * DT) == pytest.approx(m1["ex_max_fault_window"],
+                                                                                   rel=1e-12)
+        ex20 = np.abs(ds20["tracking_error"].values[:, 0])
+        missed.append(_window_max(ds20, ex20, X_ONSET, Z_ONSET - 0.5 * DT) < m1["ex_max_fault_window"] * (1 - 1e-9))
+    # the records kept every 20 steps miss the peak of |F_x - F_hat_x| after the x fault (and of |e_x|)
+    assert all(missed), (missed, _window_max(ds20, err_x(ds20), X_ONSET + 1.0, last), m1["fault_max_err_after_1s_x"])
