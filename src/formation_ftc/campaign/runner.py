@@ -119,6 +119,14 @@ def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any
     return ds
 
 
+def _closed_loop_run(loop):
+    return loop.run()
+
+
+#: one closed-loop run with its records, jitted once: the loop is an argument (a pytree), so every failed
+#: or traced run of one structure reuses one compiled program instead of tracing a new closure per run
+_run_alone = jax.jit(_closed_loop_run)
+
 #: per-process cache: (plan hash, group key) -> (template Compiled, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
@@ -245,7 +253,7 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: fl
         scn = plan.scenario(inp)
         comp_j = api.compile_scenario(scn)
         params_j = dataclasses.replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
-        run_out = jax.device_get(jax.jit(comp_j.run)(params_j))
+        run_out = jax.device_get(_run_alone(params_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(dataclasses.replace(comp_j, params=params_j), run_out,
                                                     int(run_out["diverged_step"]))
