@@ -85,7 +85,7 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path):
     assert meta["battery"]["name"] == "v1" and meta["seeds"] == 2 and "git_commit" in json.dumps(meta["provenance"])
     board = write_leaderboard(out)
     lb = out / "leaderboard"
-    for f in ("index.html", "leaderboard.json", "cells.parquet", "runs.parquet", "pareto-limited.png",
+    for f in ("index.html", "leaderboard.json", "leaderboard.md", "cells.parquet", "runs.parquet", "pareto-limited.png",
               "trajectories.png"):
         assert (lb / f).is_file(), f
     runs = pd.read_parquet(lb / "runs.parquet")

@@ -26,7 +26,7 @@ import pandas as pd
 
 from formation_ftc.league.runner import load_league_results
 
-__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "SCORES", "COSTS"]
+__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "markdown_summary", "SCORES", "COSTS"]
 
 #: the actuator-usage score a league is ranked and plotted against, with its label (first one present)
 COSTS = (("delta_v_total", "total delta-v [m/s]"), ("control_impulse", "control impulse [N m s]"))
@@ -320,6 +320,54 @@ def _json_safe(obj: Any) -> Any:
     return obj
 
 
+def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
+    head = "| " + " | ".join(label for _, label in cols) + " |"
+    sep = "|" + "|".join("---" for _ in cols) + "|"
+    body = ["| " + " | ".join(_fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows]
+    return "\n".join([head, sep, *body])
+
+
+def markdown_summary(board: dict[str, Any]) -> str:
+    """The ranking per level and the best method per fault case as Markdown tables (for a README)."""
+    metric = board["requirement"]["metric"]
+    cells = pd.DataFrame(board["cells"])
+    cost = _cost(cells) if len(cells) else None
+    out = [f"League `{board['league']}` (definition version {board['version']}), fault battery "
+           f"{board['battery']['name']} (version {board['battery']['version']}), {board['seeds']} seeds per cell; "
+           f"requirement {metric} <= "
+           f"{board['requirement']['max']:g} {board['requirement']['units']}."]
+    for level, rows in board["ranking"].items():
+        cols = [("rank", "rank"), ("method", "method"), ("pass_rate", "pass rate"),
+                (f"{metric}_median", f"median {metric}")]
+        if cost:
+            cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
+        cols += [("failed", "diverged"), ("runs", "runs")]
+        out += ["", f"**{level}**", "", _md_table(rows, cols)]
+    best: dict[tuple[str, str], dict[str, Any]] = {}
+    for r in board["cells"]:
+        key = (r["case"], r["level"])
+        cur = best.get(key)
+        if cur is None or (r["pass_rate"], -_nan_last(r.get(f"{metric}_median", math.nan))) > \
+                (cur["pass_rate"], -_nan_last(cur.get(f"{metric}_median", math.nan))):
+            best[key] = r
+    levels = list(board["ranking"])
+    rows = []
+    for case in dict.fromkeys(r["case"] for r in board["cells"]):
+        row = {"case": case}
+        for lv in levels:
+            b = best.get((case, lv))
+            if b is None:
+                row[lv] = "-"
+            elif b["pass_rate"] > 0:
+                row[lv] = f"{b['method']} ({b['pass_rate']:.2f})"
+            else:
+                row[lv] = f"none passes (lowest median: {b['method']})"
+        rows.append(row)
+    out += ["", "Best method per fault case (pass rate):", "",
+            _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]])]
+    return "\n".join(out) + "\n"
+
+
 def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, Any]:
     """Write the leaderboard files of a league directory; returns the leaderboard dictionary."""
     league_dir = Path(league_dir)
@@ -342,4 +390,5 @@ def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, A
     cells.to_parquet(out / "cells.parquet")
     runs.to_parquet(out / "runs.parquet")
     (out / "index.html").write_text(_page(meta, cells, rank, wins, figures))
+    (out / "leaderboard.md").write_text(markdown_summary(_json_safe(board)))
     return board
