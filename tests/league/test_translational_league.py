@@ -17,7 +17,7 @@ import tomli_w
 
 from formation_ftc.league.battery import load_battery
 from formation_ftc.league.definition import LeagueError, builtin_leagues, load_league, method_scenario
-from formation_ftc.league.report import cell_table, ranking, winners, write_leaderboard
+from formation_ftc.league.report import ranking, winners, write_leaderboard
 from formation_ftc.league.runner import plan_cells, run_league
 
 DATA = Path(builtin_leagues()["translational"]).parent
@@ -49,7 +49,7 @@ def test_builtin_league_loads_and_every_cell_validates():
     battery = load_battery(spec.league.battery)
     n_levels = len(spec.levels)
     actuator_cases = [c for c in battery.cases if not c.communication]
-    for name, cs in cells.items():
+    for cs in cells.values():
         # every actuator case at every level, for every method; communication cases only with a network
         assert {(c.case, c.level) for c in cs} >= {(c.name, lv.name) for c in actuator_cases for lv in spec.levels}
         assert len(cs) % n_levels == 0
@@ -85,8 +85,8 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path):
     assert meta["battery"]["name"] == "v1" and meta["seeds"] == 2 and "git_commit" in json.dumps(meta["provenance"])
     board = write_leaderboard(out)
     lb = out / "leaderboard"
-    for f in ("index.html", "leaderboard.json", "leaderboard.md", "cells.parquet", "runs.parquet", "pareto-limited.png",
-              "trajectories.png"):
+    for f in ("index.html", "leaderboard.json", "leaderboard.md", "cells.parquet", "runs.parquet",
+              "pareto-limited.png", "trajectories.png"):
         assert (lb / f).is_file(), f
     runs = pd.read_parquet(lb / "runs.parquet")
     assert len(runs) == outcome.n_runs and set(runs["method"]) == {"sir-ftc", "lqr"}
