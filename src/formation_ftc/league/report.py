@@ -216,7 +216,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
                     v = ds[signal].values
                     v = v if v.ndim == 1 else np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
                     traces.setdefault(case, {})[m["name"]] = (ds["time"].values, v)
-    paths = []
+    paths: list[Path] = []
     cases = list(traces)
     if not cases:
         return paths

@@ -62,7 +62,8 @@ def executable(compiled) -> tuple[Any, float]:
     if exe is not None:
         return exe, 0.0
     t0 = time.perf_counter()
-    exe = _put(_EXECUTABLES, key, jitted_run(compiled).lower(compiled.params).compile())
+    jitted: Any = jitted_run(compiled)  # a jax.jit function (its stubs type it as a plain callable)
+    exe = _put(_EXECUTABLES, key, jitted.lower(compiled.params).compile())
     return exe, time.perf_counter() - t0
 
 

@@ -55,7 +55,7 @@ def _listen() -> None:
     if not _LISTENING:
         import jax.monitoring
 
-        jax.monitoring.register_event_time_span_listener(_on_span)
+        jax.monitoring.register_event_time_span_listener(_on_span)  # type: ignore[arg-type]  # **kwargs typed str|int
         _LISTENING = True
 
 

@@ -354,7 +354,9 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
                 shutil.rmtree(paper_dir)  # stale figures of an earlier report
             paper_dir.mkdir(parents=True, exist_ok=True)
             bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
-            prof = profiles[paper] = Profiler() if profile else None
+            prof = Profiler() if profile else None
+            if prof is not None:
+                profiles[paper] = prof
             entry, report = _run_one(found.get(paper), paper, paper_dir, bar.callback(i, paper),
                                      import_failures.get(paper), prof)
             t_report = time.perf_counter()

@@ -142,7 +142,7 @@ class LvlhRelativeStateSection(StrictModel):
 def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
     if ctx.plant is not None and not isinstance(ctx.plant, InertialFormationPlant):
         sensed = ctx.plant.sensed_state(ctx.plant.initial_state())
-        if not (isinstance(sensed, dict) and np.shape(sensed.get("q"))[-1:] == (6,)):
+        if not (isinstance(sensed, dict) and "q" in sensed and np.shape(sensed["q"])[-1:] == (6,)):
             raise ValueError(f"sensors lvlh-relative-state measure a relative position and velocity; plant "
                              f"{type(ctx.plant).__name__} has no (N, 6) relative state")
     n = ctx.count
