@@ -115,8 +115,9 @@ def _nanmedian(v) -> float:
     return float(np.median(a)) if a.size else math.nan
 
 
-def _nan_last(v: float) -> float:
-    return math.inf if not math.isfinite(v) else v
+def _nan_last(v: float | None) -> float:
+    """Sort key: a missing (None) or non-finite median after every finite one."""
+    return math.inf if v is None or not math.isfinite(v) else float(v)
 
 
 def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
