@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 __all__ = ["add_cli"]
@@ -29,16 +30,25 @@ def _cmd_run(args) -> int:
         from formation_ftc.league.definition import LeagueError
 
         raise LeagueError("--out: empty path; give the league directory, e.g. --out out/league")
-    if args.scheduler or args.dask_local:
+    distributed = bool(args.scheduler or args.dask_local)
+    if distributed:
         make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)  # checked now
+    if args.workers is not None and args.workers < 1:
+        from formation_ftc.league.definition import LeagueError
+
+        raise LeagueError(f"--workers must be >= 1, got {args.workers}")
+    # locally: one process per method, as many side by side as --workers (default: the CPU cores)
+    parallel = 1 if distributed else (args.workers or os.cpu_count() or 1)
 
     def factory():
-        return make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
+        if distributed:
+            return make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
+        return make_executor(workers=1)
 
     methods = [m.strip() for m in args.methods.split(",")] if args.methods else None
     outcome = run_league(args.league, args.out, seeds=args.seeds, quick=args.quick, methods=methods,
-                         executor_factory=factory, progress=not args.no_progress,
-                         log=lambda s: print(s, file=sys.stderr))
+                         executor_factory=factory, progress=not args.no_progress and parallel == 1,
+                         log=lambda s: print(s, file=sys.stderr), parallel_methods=parallel)
     print(f"league done: {outcome}")
     board = write_leaderboard(args.out, plots=not args.no_plots)
     _print_ranking(board)
@@ -77,7 +87,8 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--seeds", type=int, default=None, help="Monte Carlo seeds per cell (overrides the file)")
     q.add_argument("--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)")
     q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
-    q.add_argument("--workers", type=int, default=None, help="local worker processes (1: in-process)")
+    q.add_argument("--workers", type=int, default=None,
+                   help="methods run side by side, one process each (default: one per CPU core; 1: in-process)")
     g = q.add_mutually_exclusive_group()
     g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
     g.add_argument("--dask-local", metavar="N", type=int, default=None,

@@ -161,11 +161,26 @@ def _provenance() -> dict[str, Any]:
         return {}
 
 
+def _run_method_campaign(campaign: dict, out_dir: str) -> tuple[int, int, float]:
+    """One method's campaign in this process (a worker of :func:`run_league`): (runs, failed, seconds)."""
+    from formation_ftc.campaign.executors import LocalExecutor
+    from formation_ftc.campaign.runner import run_campaign
+
+    t0 = time.perf_counter()
+    outcome = run_campaign(campaign, out_dir, executor=LocalExecutor(workers=1))
+    return outcome.n_runs, outcome.n_failed, time.perf_counter() - t0
+
+
 def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: int | None = None,
                quick: bool = False, methods: list[str] | None = None, executor_factory: Callable | None = None,
-               progress: bool = False, log: Callable[[str], None] | None = None) -> LeagueOutcome:
+               progress: bool = False, log: Callable[[str], None] | None = None,
+               parallel_methods: int = 1) -> LeagueOutcome:
     """Run (or resume) ``league`` into ``out_dir``: ``DIR/league.json`` (definition, battery, seeds,
-    provenance) and one campaign directory per method (``DIR/<method>/campaign``)."""
+    provenance) and one campaign directory per method (``DIR/<method>/campaign``).
+
+    ``parallel_methods`` > 1: that many methods run side by side, one process each (each method's chunks
+    in that process); otherwise the methods run one after the other, each campaign with the executor from
+    ``executor_factory`` (local processes by default, or Dask)."""
     import tomli_w
 
     from formation_ftc.campaign.runner import run_campaign
@@ -211,8 +226,8 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
     meta_path.write_text(json.dumps(meta, indent=1, default=str))
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
+    jobs = []
     for name, mcells in cells.items():
-        t_m = time.perf_counter()
         cdir = out / name / "cells"
         cdir.mkdir(parents=True, exist_ok=True)
         files = []
@@ -223,14 +238,36 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
                 p.write_text(text)
             files.append(p)
         traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed, spec.league.trace_cases)
-        campaign = _campaign(spec, name, files, n_seeds, traced, _network_kind(spec, spec.method(name))[0])
-        executor = executor_factory() if executor_factory is not None else None
-        outcome = run_campaign(campaign, out / name / "campaign", executor=executor, progress=progress)
-        per_method[name] = time.perf_counter() - t_m
-        n_runs += outcome.n_runs
-        n_failed += outcome.n_failed
+        jobs.append((name, _campaign(spec, name, files, n_seeds, traced, _network_kind(spec, spec.method(name))[0])))
+
+    def done(name: str, runs: int, failed: int, seconds: float) -> None:
+        nonlocal n_runs, n_failed
+        per_method[name] = seconds
+        n_runs += runs
+        n_failed += failed
         if log is not None:
-            log(f"{name}: {outcome.n_runs} runs, {outcome.n_failed} failed, {per_method[name]:.1f} s")
+            log(f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
+
+    if parallel_methods > 1 and len(jobs) > 1:
+        # one process per method (each compiles its program once and runs its chunks in-process):
+        # the methods' campaigns are independent directories, so they run side by side
+        import concurrent.futures
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("spawn")
+        with concurrent.futures.ProcessPoolExecutor(max_workers=min(parallel_methods, len(jobs)),
+                                                    mp_context=ctx) as pool:
+            futures = {pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
+                       for name, campaign in jobs}
+            for fut in concurrent.futures.as_completed(futures):
+                runs, failed, seconds = fut.result()
+                done(futures[fut], runs, failed, seconds)
+    else:
+        for name, campaign in jobs:
+            t_m = time.perf_counter()
+            executor = executor_factory() if executor_factory is not None else None
+            outcome = run_campaign(campaign, out / name / "campaign", executor=executor, progress=progress)
+            done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
 
 
