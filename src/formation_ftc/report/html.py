@@ -359,8 +359,51 @@ def _metadata_block(metadata: Mapping[str, Any]) -> str:
 
 
 # ------------------------------------------------------------------------------------------- public
+def league_links(out_dir: Path | str, leagues: list[Path | str] | None = None) -> list[dict[str, Any]]:
+    """League leaderboards to link from the report: the given league directories and every
+    ``<out_dir>/*/leaderboard/index.html``; each ``{name, href (relative), ranking}``."""
+    import json
+    import os
+
+    out_dir = Path(out_dir)
+    dirs = [Path(d) for d in (leagues or [])]
+    if out_dir.is_dir():
+        dirs += sorted(p.parent.parent for p in out_dir.glob("*/leaderboard/index.html"))
+    found: dict[str, dict[str, Any]] = {}
+    for d in dirs:
+        page = d / "leaderboard" / "index.html"
+        board_path = d / "leaderboard" / "leaderboard.json"
+        if not page.is_file() or not board_path.is_file():
+            continue
+        key = str(page.resolve())
+        if key in found:
+            continue
+        try:
+            board = json.loads(board_path.read_text())
+        except (OSError, ValueError):
+            continue
+        found[key] = {"name": board.get("league", d.name), "seeds": board.get("seeds"),
+                      "href": os.path.relpath(page, out_dir), "ranking": board.get("ranking", {}),
+                      "metric": board.get("requirement", {}).get("metric", "")}
+    return list(found.values())
+
+
+def _league_block(links: list[dict[str, Any]]) -> str:
+    if not links:
+        return ""
+    items = []
+    for lk in links:
+        tops = "; ".join(f"{_e(level)}: " + ", ".join(_e(r.get("method")) for r in rows[:3])
+                         for level, rows in lk["ranking"].items())
+        items.append(f'<li><a href="{_e(lk["href"])}">league {_e(lk["name"])}</a> ({_e(lk["seeds"])} seeds per '
+                     f"cell; top three by pass rate on {_e(lk['metric'])}: {tops})</li>")
+    return ('<section id="leagues"><h2>FTC league leaderboards</h2><p>Every method on one realistic truth under '
+            "the same fault battery (<code>formation-ftc league</code>):</p><ul>" + "".join(items) + "</ul></section>")
+
+
 def render_index(entries: list[dict], out_dir: Path | str, metadata: Mapping[str, Any], *,
-                 include_3d: bool = True, title: str = "formation-ftc reproduction report") -> str:
+                 include_3d: bool = True, title: str = "formation-ftc reproduction report",
+                 leagues: list[Path | str] | None = None) -> str:
     """The complete HTML text of the report page.
 
     ``entries`` are the per-paper ``report.json`` dicts; figure and trajectory files are read from
@@ -388,6 +431,7 @@ def render_index(entries: list[dict], out_dir: Path | str, metadata: Mapping[str
         "<main>",
         f'<nav class="toc">{toc} <a href="#run-metadata">run metadata</a></nav>',
         '<section class="overview" id="overview"><h2>Overview</h2>' + _overview(entries) + "</section>",
+        _league_block(league_links(out_dir, leagues)),
         *sections,
         _metadata_block(metadata),
         "<footer><p>Written by <code>formation-ftc reproduce</code>. Per-paper data: "
@@ -398,11 +442,12 @@ def render_index(entries: list[dict], out_dir: Path | str, metadata: Mapping[str
 
 
 def write_index(out_dir: Path | str, entries: list[dict], metadata: Mapping[str, Any], *,
-                include_3d: bool = True) -> Path:
+                include_3d: bool = True, leagues: list[Path | str] | None = None) -> Path:
     """Render :func:`render_index` into ``out_dir/index.html`` and return its path."""
     out_dir = Path(out_dir)
     path = out_dir / "index.html"
     tmp = path.with_name("index.html.tmp")
-    tmp.write_text(render_index(entries, out_dir, metadata, include_3d=include_3d), encoding="utf-8")
+    tmp.write_text(render_index(entries, out_dir, metadata, include_3d=include_3d, leagues=leagues),
+                   encoding="utf-8")
     tmp.replace(path)
     return path

@@ -306,7 +306,7 @@ def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Ca
 # ------------------------------------------------------------------------------------------- driver
 def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, progress: bool = True, *,
               include_3d: bool = True, available: Mapping[str, Reproduction] | None = None,
-              console=None, profile: bool = False) -> dict[str, Any]:
+              console=None, profile: bool = False, leagues: list[Path | str] | None = None) -> dict[str, Any]:
     """Run the selected paper reproductions into ``out`` and write the report.
 
     Parameters
@@ -394,7 +394,7 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         summary_doc = {**summaries, "metadata": metadata}
     t_index = time.perf_counter()
     _write_json(out / "summary.json", summary_doc)
-    index = html_report.write_index(out, entries, metadata, include_3d=include_3d)
+    index = html_report.write_index(out, entries, metadata, include_3d=include_3d, leagues=leagues)
     index_s = time.perf_counter() - t_index
 
     failed = [e["paper"] for e in entries if e["status"] != "ok"]
@@ -483,6 +483,9 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--profile", action="store_true",
                    help="time each paper's compile / run / post-processing / plotting / report phases, print "
                         "them as a table and store them in the report's run metadata")
+    p.add_argument("--league", action="append", type=Path, default=None, metavar="DIR",
+                   help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
+                        "DIR/*/leaderboard/ of the report directory are linked anyway)")
     p.set_defaults(func=run_cli)
     return p
 
@@ -492,7 +495,7 @@ def run_cli(args: argparse.Namespace) -> int:
     try:
         result = reproduce(args.paper, args.out, force=args.force, progress=True,
                            include_3d=getattr(args, "include_3d", True),
-                           profile=getattr(args, "profile", False))
+                           profile=getattr(args, "profile", False), leagues=getattr(args, "league", None))
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
