@@ -62,7 +62,8 @@ def list_scenarios() -> dict[str, str]:
 
 def compile_scenario(scenario: ScenarioBase) -> Compiled:
     """The method's compiled form of a scenario (no JAX compilation happens yet). A component loop
-    gets the scenario's admissible set (``simulation.max_position`` / ``max_velocity``)."""
+    gets the scenario's admissible set (``simulation.max_position`` / ``max_velocity`` / ``max_rate`` /
+    ``max_pitch``)."""
     import dataclasses
 
     from formation_ftc.sim.loop import ClosedLoop
@@ -71,7 +72,9 @@ def compile_scenario(scenario: ScenarioBase) -> Compiled:
     sim = scenario.simulation
     if isinstance(compiled.params, ClosedLoop) and hasattr(sim, "max_position"):
         loop = dataclasses.replace(compiled.params, max_position=np.float64(sim.max_position),
-                                   max_velocity=np.float64(sim.max_velocity))
+                                   max_velocity=np.float64(sim.max_velocity),
+                                   max_rate=np.float64(getattr(sim, "max_rate", 100.0)),
+                                   max_pitch=np.float64(getattr(sim, "max_pitch", 1.5607963267948966)))
         compiled = dataclasses.replace(compiled, params=loop)
     return compiled
 

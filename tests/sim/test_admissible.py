@@ -62,3 +62,29 @@ def test_check_uses_closed_loop_eigenvalues(capsys):
     row = next(c for c in out["conditions"] if c["name"] == "RK4 step vs closed-loop modes")
     assert row["holds"] is False and "1.375" in row["value"]
     assert main(["check", "cw-pd-fault", "--json"]) == 0
+
+
+def test_body_rate_bound_is_part_of_the_admissible_set_and_overridable():
+    """A constant 5 N m torque on a 25 kg m^2 body spins it up at 0.2 rad/s^2: with max_rate = 0.5 rad/s
+    the run leaves its admissible set at about 2.5 s (the attitude plants report their body rates)."""
+    scn = ftc.load_scenario("compose-mehrabian-on-yang2013", {
+        "simulation.horizon": 10.0, "simulation.max_rate": 0.5,
+        "plant.disturbance_torque": ["5.0", "0", "0"]})
+    with pytest.raises(ftc.SimulationDiverged) as err:
+        ftc.simulate(scn)
+    assert err.value.info.variable.startswith("plant.angular_rate")
+    assert 1.0 < err.value.info.time < 4.0
+    # the default bound (100 rad/s) lets the same run finish
+    ftc.simulate(ftc.load_scenario("compose-mehrabian-on-yang2013", {
+        "simulation.horizon": 2.0, "plant.disturbance_torque": ["5.0", "0", "0"]}))
+
+
+def test_euler_pitch_bound_names_the_singular_angle():
+    """Mehrabian's plant holds 3-2-1 Euler angles (singular at pitch +-pi/2): its initial pitches lie in
+    [0, 60] deg, so a 0.3 rad bound is left at once and the diagnostic names the pitch."""
+    scn = ftc.load_scenario("mehrabian-identification", {"simulation.horizon": 1.0, "simulation.max_pitch": 0.3})
+    with pytest.raises(ftc.SimulationDiverged) as err:
+        ftc.simulate(scn)
+    assert err.value.info.variable.startswith("plant.pitch")
+    with pytest.raises(ValueError, match="max_pitch"):
+        ftc.load_scenario("mehrabian-identification", {"simulation.max_pitch": 1.6})

@@ -139,6 +139,11 @@ class SimulationSection(StrictModel):
         "this magnitude has diverged and stops with a diagnostic [m]."))
     max_velocity: float = Field(1.0e4, gt=0, description=(
         "Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s]."))
+    max_rate: float = Field(100.0, gt=0, description=(
+        "Admissible set: a run whose spacecraft body rate exceeds this magnitude has diverged [rad/s]."))
+    max_pitch: float = Field(1.5607963267948966, gt=0, lt=1.5707963267948966, description=(
+        "Admissible set: a run whose 3-2-1 Euler pitch exceeds this magnitude has diverged (the Euler-angle "
+        "kinematics are singular at pi/2; default pi/2 - 0.01) [rad]."))
 
     @model_validator(mode="after")
     def _step_divides_horizon(self) -> SimulationSection:

@@ -283,6 +283,17 @@ class Plant(_Kind):
         for evaluation (the ``position_error`` record) and the admissible set, never by the flight side."""
         return None
 
+    def angular_rate(self, x: PyTree) -> jax.Array | None:
+        """True (N, 3) body angular rate [rad/s] (None for translational plants); used only for the
+        admissible set (``simulation.max_rate``)."""
+        return None
+
+    def euler_pitch(self, x: PyTree) -> jax.Array | None:
+        """(N,) middle angle of a 3-2-1 Euler-angle attitude state [rad], whose kinematics are singular at
+        +-pi/2 (None when the attitude is not held as Euler angles); admissible set only
+        (``simulation.max_pitch``)."""
+        return None
+
     def velocity(self, x: PyTree) -> jax.Array | None:
         """True (N, 3) velocity in the formation frame [m/s] (None when not applicable); used only for
         the admissible set."""

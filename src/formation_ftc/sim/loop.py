@@ -92,6 +92,10 @@ class ClosedLoop:
     #: relative position [m] and speed [m/s] of any spacecraft (plants that report them)
     max_position: Any = 1.0e6
     max_velocity: Any = 1.0e4
+    #: largest body rate [rad/s] and largest |pitch| of an Euler-angle attitude state [rad] (its kinematics
+    #: are singular at pi/2): plants that report them
+    max_rate: Any = 100.0
+    max_pitch: Any = 1.5607963267948966  # pi/2 - 0.01
     evaluations: tuple = ()
     dt: float = static(default=0.1)
     n_steps: int = static(default=1)
@@ -438,6 +442,12 @@ class ClosedLoop:
         vel = self.plant.velocity(x) if hasattr(self.plant, "velocity") else None
         if vel is not None:
             out.append(("plant.velocity", jnp.sqrt(jnp.sum(vel * vel, axis=-1)), self.max_velocity))
+        rate = self.plant.angular_rate(x) if hasattr(self.plant, "angular_rate") else None
+        if rate is not None:
+            out.append(("plant.angular_rate", jnp.sqrt(jnp.sum(rate * rate, axis=-1)), self.max_rate))
+        pitch = self.plant.euler_pitch(x) if hasattr(self.plant, "euler_pitch") else None
+        if pitch is not None:
+            out.append(("plant.pitch", jnp.abs(pitch), self.max_pitch))
         return out
 
     def admissible(self, carry) -> jax.Array:

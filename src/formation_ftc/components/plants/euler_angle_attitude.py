@@ -92,6 +92,12 @@ class EulerAngleAttitudePlant(Plant):
         q0 = jnp.where(self.random_initial > 0.5, q_rand, self.q0_fixed)
         return {"q": q0, "w": body_rates_from_euler_rates(q0, self.qdot0)}
 
+    def angular_rate(self, x):
+        return x["w"]
+
+    def euler_pitch(self, x):
+        return x["q"][..., 0]  # theta, the middle angle of the 3-2-1 sequence (AXES[0])
+
     def exogenous(self, t):
         """d_k ~ N(0, std^2 I) for the step starting at t = t_k, held over it [N m]."""
         # the disturbance stream's root key (prepare computes it once per run)

@@ -44,6 +44,9 @@ class QuaternionRigidBodyPlant(Plant):
     def initial_state(self):
         return {"omega": self.initial_omega, "q": self.initial_quaternion}
 
+    def angular_rate(self, x):
+        return x["omega"]
+
     def exogenous(self, t):
         return {"iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)}
 
