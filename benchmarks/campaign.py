@@ -169,20 +169,24 @@ def main(argv: list[str] | None = None) -> int:
         import formation_ftc.campaign.runner as runner
 
         chunk_walls: list[float] = []
-        original = runner.run_chunk
+        original = runner.start_chunk
 
-        def timed_chunk(plan, chunk):
-            res = original(plan, chunk)
-            chunk_walls.append(res.wall_s)
-            return res
+        def timed_start(plan, chunk):
+            finish = original(plan, chunk)
+
+            def timed_finish():
+                res = finish()
+                chunk_walls.append(res.wall_s)
+                return res
+            return timed_finish
 
         t0 = time.perf_counter()
         if args.workers == 1:
-            runner.run_chunk = timed_chunk  # in-process: record each chunk's wall time
+            runner.start_chunk = timed_start  # in-process: record each chunk's wall time
         try:
             outcome = run_campaign(campaign, out, executor=LocalExecutor(args.workers), progress=sys.stderr.isatty())
         finally:
-            runner.run_chunk = original
+            runner.start_chunk = original
         wall = time.perf_counter() - t0
     total_steps = args.runs * n_steps
     batch_rate = total_steps / wall

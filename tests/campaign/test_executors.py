@@ -93,3 +93,43 @@ def test_automatic_local_pool_size():
 def test_campaign_outcome_names_the_executor(tmp_path):
     outcome = run_campaign(_raw(), tmp_path / "auto")  # tiny: the automatic choice stays in-process
     assert outcome.executor == "local (in-process)"
+
+
+def test_in_process_pipeline_starts_the_next_chunk_before_finishing_one():
+    """In-process with ``start``: chunk k+1 is started (dispatched) before chunk k is finished, and
+    the results come back in chunk order."""
+    events: list[tuple[str, int]] = []
+
+    def start(plan, c):
+        events.append(("start", c))
+        return lambda: (events.append(("finish", c)), c)[1]
+
+    got = list(LocalExecutor(1).map(None, None, [0, 1, 2], start=start))
+    assert got == [0, 1, 2]
+    assert events == [("start", 0), ("start", 1), ("finish", 0), ("start", 2), ("finish", 1), ("finish", 2)]
+
+
+def test_in_process_pipeline_delivers_a_finished_chunk_before_a_start_error():
+    def start(plan, c):
+        if c == 1:
+            raise RuntimeError("chunk 1 cannot start")
+        return lambda: c
+
+    it = LocalExecutor(1).map(None, None, [0, 1, 2], start=start)
+    assert next(it) == 0  # chunk 0 was computed: it is delivered (and stored) first
+    with pytest.raises(RuntimeError, match="chunk 1 cannot start"):
+        next(it)
+
+
+def test_pipelined_in_process_equals_chunk_by_chunk(local_result, tmp_path):
+    """The pipelined in-process campaign (and its background writer) stores exactly what run_chunk
+    computes chunk by chunk."""
+    from formation_ftc.campaign.runner import make_plan, run_chunk
+
+    raw, _ = local_result
+    outcome = run_campaign(raw, tmp_path / "inproc", executor=LocalExecutor(1))
+    plan = make_plan(raw)
+    tables = [run_chunk(plan, c).table for c in plan.chunks()]
+    expected = pd.concat(tables, ignore_index=True).sort_values("run_id", kind="stable").reset_index(drop=True)
+    pd.testing.assert_frame_equal(outcome.results, expected, check_dtype=False)
+    assert outcome.chunks_computed == plan.n_chunks

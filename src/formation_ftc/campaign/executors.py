@@ -125,10 +125,29 @@ class LocalExecutor:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
-    def map(self, fn: Callable, plan: Any, chunks: list) -> Iterator[Any]:
+    def map(self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None) -> Iterator[Any]:
+        """Results of ``fn(plan, chunk)`` for every chunk, as they finish.
+
+        In-process with ``start`` (``start(plan, chunk)`` returns the call that finishes the chunk, as
+        :func:`formation_ftc.campaign.runner.start_chunk` does): chunk k+1 is started before chunk k is
+        finished, so one chunk's Python work overlaps the other's computation; results are the same."""
         if self._pool is None:
-            for c in chunks:
-                yield fn(plan, c)
+            if start is None:
+                for c in chunks:
+                    yield fn(plan, c)
+                return
+            finish = start(plan, chunks[0]) if chunks else None
+            for nxt in chunks[1:]:
+                assert finish is not None
+                try:
+                    following = start(plan, nxt)
+                except BaseException:
+                    yield finish()  # the chunk already computed is stored before the error propagates
+                    raise
+                yield finish()
+                finish = following
+            if finish is not None:
+                yield finish()
             return
         futures = [self._pool.submit(fn, plan, c) for c in chunks]
         try:
@@ -258,7 +277,9 @@ class DaskExecutor:
             self._cluster.close()
             self._cluster = None
 
-    def map(self, fn: Callable, plan: Any, chunks: list) -> Iterator[Any]:
+    def map(self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None) -> Iterator[Any]:
+        """Results of ``fn(plan, chunk)`` as the cluster finishes them (``start`` is for in-process
+        executors and is not used here: each worker runs whole chunks)."""
         from dask.distributed import as_completed as dask_as_completed
 
         if not chunks:

@@ -21,7 +21,10 @@ assembled from the metric arrays; only failed and traced runs are handled one by
 :func:`run_campaign` validates everything first (campaign file, dotted paths, sampler bounds, every
 run's scenario, the metric names, the results directory, the executor's scheduler), then submits the
 unfinished chunks and writes each result atomically as it arrives, with a progress bar (runs done,
-runs/s, ETA).
+runs/s, ETA). In-process, the work of consecutive chunks overlaps: chunk k+1 is started
+(:func:`start_chunk`: parameter batch built, program dispatched) before chunk k is finished, and chunk
+k is written by a background writer thread while chunk k+1 computes; the stored numbers are those of
+:func:`run_chunk`.
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from __future__ import annotations
 import json
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -43,7 +47,7 @@ from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campai
 from formation_ftc.campaign.storage import CampaignStore
 from formation_ftc.sim.batch import batched_run, stack_params
 
-__all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "run_campaign", "metric_names", "make_plan"]
+__all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "start_chunk", "run_campaign", "metric_names", "make_plan"]
 
 @dataclass
 class ChunkResult:
@@ -133,18 +137,21 @@ _BINDINGS: dict[Any, Any] = {}
 _VERIFIED: set[Any] = set()
 
 
-def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float) -> ChunkResult | None:
+def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
+                 t_start: float) -> Callable[[], ChunkResult] | None:
     """The fast path: one build per structural group, sampled values written into the parameter
     arrays (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
     the result table assembled from columns (no per-run Python objects except for failed and traced
-    runs). None when the method's parameters are not a ClosedLoop or a field cannot be bound."""
+    runs). None when the method's parameters are not a ClosedLoop or a field cannot be bound.
+
+    Returns the chunk's *finisher*: the batch has been dispatched (JAX computes asynchronously) and
+    the finisher waits for it and assembles the table, so a caller may start the next chunk first."""
     import dataclasses
 
     from formation_ftc import api
     from formation_ftc.campaign.binding import apply_bindings, bind_fields, params_close, take_run
     from formation_ftc.sim.compiled import compile_loop
     from formation_ftc.sim.loop import ClosedLoop
-    from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     n = len(cols)
     bindable = [s.path for s in plan.random_samplers
@@ -221,6 +228,19 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: fl
             inputs[f"input:{path}"] = [_value_cell(vals[0], False)] * n
         else:
             inputs[f"input:{path}"] = [_value_cell(v, False) for v in vals]
+    return lambda: _finish_bound(plan, chunk, cols, t_start, template, batch, axes, pending, data, inputs, first)
+
+
+def _finish_bound(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float, template, batch, axes,
+                  pending, data: dict[str, Any], inputs: dict[str, Any], first) -> ChunkResult:
+    """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
+    import dataclasses
+
+    from formation_ftc import api
+    from formation_ftc.campaign.binding import take_run
+    from formation_ftc.sim.metrics import metric_names as loop_metric_names
+
+    n = len(cols)
     out = jax.device_get(pending)
     loop = template.params
     names = loop_metric_names(loop.metrics, loop.count)
@@ -265,13 +285,29 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: fl
 
 def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
     """Compute one chunk (pure function of its arguments; safe in worker processes and on Dask)."""
-    from formation_ftc import api
+    return start_chunk(plan, chunk)()
 
+
+def start_chunk(plan: CampaignPlan, chunk: Chunk) -> Callable[[], ChunkResult]:
+    """Start one chunk and return the call that finishes it (same result as :func:`run_chunk`).
+
+    On the bound-parameter path the batch is dispatched before this returns and JAX computes it
+    asynchronously, so an in-process executor starts chunk k+1 (building its parameter batch, queueing
+    its program) before it finishes chunk k (waiting, metrics table, re-runs of failed runs) and the
+    Python work of one chunk overlaps the computation of the other."""
     t_start = time.perf_counter()
     cols = plan.run_columns(chunk.run_ids)
     fast = _bound_chunk(plan, chunk, cols, t_start)
     if fast is not None:
         return fast
+    result = _general_chunk(plan, chunk, cols, t_start)
+    return lambda: result
+
+
+def _general_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float) -> ChunkResult:
+    """Per-run builds grouped by structure (the path of methods that are not component loops)."""
+    from formation_ftc import api
+
     inputs = cols.rows(plan.base_names)
     scenarios = [plan.scenario(i) for i in inputs]
     compiled = [api.compile_scenario(s) for s in scenarios]
@@ -437,17 +473,30 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
     with executor:
         store.initialize()  # takes the directory's lock (refused while another run writes there)
         bar = _Progress(progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name)
+        # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
+        # at most one write is in flight and a write error stops the campaign at the next chunk
+        writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer")
+        writing: Future | None = None
         try:
-            for res in executor.map(run_chunk, plan, todo):
-                store.write_chunk(res.chunk_id, res.table, res.traces)
-                bar.advance(res.n_runs)
+            for res in executor.map(run_chunk, plan, todo, start=start_chunk):
+                if writing is not None:
+                    bar.advance(writing.result())
+                writing = writer.submit(_store_chunk, store, res)
+            if writing is not None:
+                bar.advance(writing.result())
         finally:
+            writer.shutdown(wait=True)  # a write under way completes: a finished chunk is never lost
             bar.close()
             store.close()
     results = store.load_results()
     n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
     return CampaignOutcome(Path(out_dir), len(results), n_failed, plan.n_chunks, len(todo),
                            len(done_before), time.perf_counter() - t0, results, executor.describe())
+
+
+def _store_chunk(store: CampaignStore, res: ChunkResult) -> int:
+    store.write_chunk(res.chunk_id, res.table, res.traces)
+    return res.n_runs
 
 
 def _run_steps(plan: CampaignPlan, chunks: list[Chunk]) -> int:
