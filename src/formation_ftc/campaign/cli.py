@@ -55,6 +55,14 @@ def _cmd_report(args) -> int:
     return 0
 
 
+def add_dask_options(parser: argparse.ArgumentParser) -> None:
+    """The Dask executor options shared by ``campaign run`` and ``league run`` (mutually exclusive)."""
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
+    g.add_argument("--dask-local", metavar="N", type=int, default=None,
+                   help="start a Dask LocalCluster with N worker processes")
+
+
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``campaign`` command (with ``list``, ``run``, ``report``) to ``subparsers``."""
     p = subparsers.add_parser("campaign", help="Monte Carlo campaigns: list, run (resumable), report")
@@ -71,10 +79,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--workers", type=int, default=None,
                    help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
                         "one per chunk), in-process for campaigns under 10 million run-steps")
-    g = q.add_mutually_exclusive_group()
-    g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
-    g.add_argument("--dask-local", metavar="N", type=int, default=None,
-                   help="start a Dask LocalCluster with N worker processes")
+    add_dask_options(q)
     q.add_argument("--connect-timeout", metavar="S", type=float, default=None,
                    help="seconds allowed for the Dask scheduler handshake (default 30)")
     q.add_argument("--max-memory", metavar="SIZE", default=None,

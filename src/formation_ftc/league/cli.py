@@ -6,6 +6,8 @@ import argparse
 import os
 import sys
 
+from formation_ftc.campaign.cli import add_dask_options
+
 __all__ = ["add_cli"]
 
 
@@ -89,10 +91,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
     q.add_argument("--workers", type=int, default=None,
                    help="methods run side by side, one process each (default: one per CPU core; 1: in-process)")
-    g = q.add_mutually_exclusive_group()
-    g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
-    g.add_argument("--dask-local", metavar="N", type=int, default=None,
-                   help="start a Dask LocalCluster with N worker processes")
+    add_dask_options(q)
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
     q.set_defaults(func=_cmd_run)

@@ -233,7 +233,7 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         files = []
         for c in mcells:
             p = cdir / f"{c.key}.toml"
-            text = tomli_w.dumps(_toml_safe(c.raw))
+            text = tomli_w.dumps(c.raw)  # tomli_w writes tuples as arrays and inf as ``inf``
             if not p.exists() or p.read_text() != text:
                 p.write_text(text)
             files.append(p)
@@ -281,15 +281,6 @@ def _has_path(raw: dict, path: str) -> bool:
         else:
             return False
     return True
-
-
-def _toml_safe(obj: Any) -> Any:
-    """inf is valid TOML (``inf``); tomli_w writes it. Tuples -> lists."""
-    if isinstance(obj, dict):
-        return {k: _toml_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_toml_safe(v) for v in obj]
-    return obj
 
 
 def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int, cases: list[str]) -> list[int]:

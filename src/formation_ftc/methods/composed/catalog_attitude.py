@@ -56,8 +56,9 @@ def _vec3_text(v: Vec3Expr) -> tuple[str, str, str]:
 
 
 # ----------------------------------------------------------------------------------------- plants
-class QuaternionPlantSection(StrictModel):
-    """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
+class RigidBodyAttitudeSection(StrictModel):
+    """Fields shared by the rigid-body attitude plants: principal inertia, initial attitude (Euler
+    angles or quaternions), initial body rate and disturbance torque, with their checks."""
 
     inertia: Vec3 = Field(description="Principal inertia diag(J) of every spacecraft [kg m^2], each > 0.")
     initial_attitude_deg: list[Vec3] | None = Field(
@@ -66,13 +67,12 @@ class QuaternionPlantSection(StrictModel):
     initial_quaternion: list[tuple[float, float, float, float]] | None = Field(
         None, description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].")
     initial_body_rate: list[Vec3] | None = Field(
-        None, description="Initial body angular velocity per spacecraft [rad/s] (default 0).")
+        None, description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0).")
     disturbance_torque: Vec3Expr = Field(
         ("0", "0", "0"), description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].")
-    gyroscopic: bool = Field(True, description="Include -omega x J omega (false: the error-level form).")
 
     @model_validator(mode="after")
-    def _sizes(self):
+    def _initial_attitude(self):
         for k, x in enumerate(self.inertia):
             if not (x > 0 and math.isfinite(x)):
                 raise ValueError(f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2")
@@ -95,16 +95,26 @@ class QuaternionPlantSection(StrictModel):
         rows = self.initial_attitude_deg if self.initial_attitude_deg is not None else self.initial_quaternion
         return len(rows or [])
 
-    def quaternions(self) -> np.ndarray:
-        """(N, 4) initial unit quaternions."""
+    def given_quaternions(self) -> np.ndarray:
+        """(N, 4) initial unit quaternions as given (Euler angles converted, quaternions normalised)."""
         if self.initial_quaternion is not None:
             p = np.asarray(self.initial_quaternion, dtype=float)
             return p / np.linalg.norm(p, axis=-1, keepdims=True)
         return np.asarray(quaternion_from_euler_zyx(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
 
+    def quaternions(self) -> np.ndarray:
+        """(N, 4) initial unit quaternions of the plant's state."""
+        return self.given_quaternions()
+
     def euler_angles(self) -> np.ndarray:
-        """(N, 3) initial 3-2-1 Euler angles [rad]."""
+        """(N, 3) initial 3-2-1 Euler angles [rad] of the plant's state."""
         return np.asarray(euler_zyx_from_quaternion(self.quaternions()))
+
+
+class QuaternionPlantSection(RigidBodyAttitudeSection):
+    """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
+
+    gyroscopic: bool = Field(True, description="Include -omega x J omega (false: the error-level form).")
 
 
 def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):

@@ -18,11 +18,9 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
-from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.methods.composed import BuildContext, register_component_type
-from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS
+from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS, RigidBodyAttitudeSection
 from formation_ftc.sim.components import as_float
 
 __all__ = ["ATTITUDE_TRUTH_PLANT", "AttitudeTruthSection", "initial_inertial_state", "initial_state_in"]
@@ -34,7 +32,7 @@ Vec3 = tuple[float, float, float]
 Mat3 = tuple[Vec3, Vec3, Vec3]
 
 
-class AttitudeTruthSection(StrictModel):
+class AttitudeTruthSection(RigidBodyAttitudeSection):
     """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
 
     inertia: Vec3 = Field(description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
@@ -57,34 +55,13 @@ class AttitudeTruthSection(StrictModel):
     initial_frame: Literal["inertial", "lvlh"] = Field(
         "inertial", description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
                                 "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).")
-    initial_attitude_deg: list[Vec3] | None = Field(
-        None, description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
-                          "[deg] (give this or initial_quaternion).")
-    initial_quaternion: list[tuple[float, float, float, float]] | None = Field(
-        None, description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].")
     initial_body_rate: list[Vec3] | None = Field(
         None, description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0 in "
                           "initial_frame).")
-    disturbance_torque: tuple[ExprText, ExprText, ExprText] = Field(
-        ("0", "0", "0"), description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].")
 
     @model_validator(mode="after")
     def _check(self):
-        for k, x in enumerate(self.inertia):
-            if not (x > 0 and math.isfinite(x)):
-                raise ValueError(f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2")
-        if (self.initial_attitude_deg is None) == (self.initial_quaternion is None):
-            raise ValueError("give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]")
-        if self.initial_quaternion is not None:
-            for k, p in enumerate(self.initial_quaternion):
-                norm = float(np.linalg.norm(p))
-                if not abs(norm - 1.0) <= 1e-6:
-                    raise ValueError(f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed")
         n = self.count
-        if n < 1:
-            raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")
-        if self.initial_body_rate is not None and len(self.initial_body_rate) != n:
-            raise ValueError(f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft")
         if self.inertia_matrices is not None:
             if len(self.inertia_matrices) not in (1, n):
                 raise ValueError(f"inertia_matrices: {len(self.inertia_matrices)} matrices for {n} spacecraft "
@@ -93,30 +70,13 @@ class AttitudeTruthSection(StrictModel):
                 _check_inertia(np.asarray(m, dtype=float), f"inertia_matrices[{k}]")
         return self
 
-    @property
-    def count(self) -> int:
-        rows = self.initial_attitude_deg if self.initial_attitude_deg is not None else self.initial_quaternion
-        return len(rows or [])
-
     def orbit_rate(self) -> float:
         """n = sqrt(mu / a^3) [rad/s]."""
         return math.sqrt(self.mu / self.semi_major_axis**3)
 
-    def given_quaternions(self) -> np.ndarray:
-        """(N, 4) initial unit quaternions in ``initial_frame``."""
-        if self.initial_quaternion is not None:
-            p = np.asarray(self.initial_quaternion, dtype=float)
-            return p / np.linalg.norm(p, axis=-1, keepdims=True)
-        return np.asarray(quaternion_from_euler_zyx(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
-
     def quaternions(self) -> np.ndarray:
         """(N, 4) initial body -> ``state_frame`` quaternions."""
         return initial_state_in(self, self.state_frame)[1]
-
-    def euler_angles(self) -> np.ndarray:
-        """(N, 3) initial 3-2-1 Euler angles [rad] relative to ``state_frame`` (what the Euler sensors
-        measure at t = 0)."""
-        return np.asarray(euler_zyx_from_quaternion(self.quaternions()))
 
     def inertia_tensor(self) -> np.ndarray:
         """(N, 3, 3) inertia of every spacecraft [kg m^2]."""
