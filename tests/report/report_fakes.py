@@ -59,9 +59,10 @@ def ok_reproduction(paper: str = "alpha", *, figure_sizes=((40, 30), (24, 18)), 
                                        reference="0.5 N (reference run, docs/references.md)"),
                   ComparisonRow("chattering", "-", "small", "-", "not stated")],
             figures=figures,
-            checks=[Condition("Laplacian connected", "Assumption 1", "lambda2 = 0.38", "> 0", True),
-                    Condition("gain bound", "Thm 1 eq. (23)", "k = 0.2", "k > 0.5", False, detail="too small"),
-                    Condition("delay bound", "Thm 2", "n/a", "T < 1 s", None, required=False)],
+            checks=[Condition("Laplacian connected", "Assumption 1", "lambda2 = 0.38", "> 0", True, basis="exact"),
+                    Condition("gain bound", "Thm 1 eq. (23)", "k = 0.2", "k > 0.5", False, detail="too small",
+                              basis="exact"),
+                    Condition("delay bound", "Thm 2", "n/a", "T < 1 s", None, required=False, basis="informative")],
             scenarios=[f"{paper}-thm1"], seeds=[7, 8], notes=[f"{paper} note"])
 
     return Reproduction(paper=paper, title=f"Paper {paper.title()} (2020)", citation=f"{paper} et al., J. Test 1 (2020)",
@@ -81,3 +82,26 @@ def failing_reproduction(paper: str = "broken", message: str = "solver exploded"
 def wrong_type_reproduction(paper: str = "wrongtype") -> Reproduction:
     return Reproduction(paper=paper, title="Wrong type", citation="", description="", errata=[],
                         run=lambda out_dir, progress: {"not": "a PaperReport"})
+
+
+def _shipped_run(paper: str, out_dir: Path, progress) -> PaperReport:
+    """Module-level run (picklable through functools.partial): what a worker process receives."""
+    progress(0.5, "half")
+    (Path(out_dir) / "fig3.png").write_bytes(tiny_png(8, 6))
+    return PaperReport(paper=paper, summary={"value": len(paper), "undefined": float("nan")},
+                       rows=[ComparisonRow.judged("value", "", str(len(paper)), ">= 1", ((">=", len(paper), 1),))],
+                       figures=[Figure("fig3.png", "3", f"{paper} figure")],
+                       checks=[Condition("positive", "Thm 1", "1", "> 0", True, basis="exact")],
+                       scenarios=[f"{paper}-s"], seeds=[1], notes=[])
+
+
+def _shipped_failure(paper: str, out_dir: Path, progress) -> PaperReport:
+    raise RuntimeError(f"{paper} exploded in its worker")
+
+
+def shippable_reproduction(paper: str, fail: bool = False) -> Reproduction:
+    """A fake that can be pickled into a worker process (no closures)."""
+    import functools
+
+    run = functools.partial(_shipped_failure if fail else _shipped_run, paper)
+    return Reproduction(paper=paper, title=paper, citation=f"{paper} (2020)", description="", errata=[], run=run)

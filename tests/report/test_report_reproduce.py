@@ -262,7 +262,8 @@ def test_broken_paper_package_becomes_a_failed_section(tmp_path, monkeypatch):
         found, failures = rp.available_reproductions()
         assert list(found) == ["zzfake_good"]
         assert list(failures) == ["zzfake_bad"] and "missing dependency xyz" in failures["zzfake_bad"]
-        result = rp.reproduce(["all"], tmp_path / "out", progress=False, console=_console())
+        # in this process: the monkeypatched registry does not exist in a spawned worker
+        result = rp.reproduce(["all"], tmp_path / "out", progress=False, console=_console(), workers=1)
     finally:
         for name in ("zzfake_good", "zzfake_bad"):
             sys.modules.pop(f"formation_ftc.papers.{name}", None)
@@ -270,3 +271,33 @@ def test_broken_paper_package_becomes_a_failed_section(tmp_path, monkeypatch):
     assert result["papers"]["zzfake_bad"]["status"] == "failed"
     assert "missing dependency xyz" in result["papers"]["zzfake_bad"]["error"]
     assert result["papers"]["zzfake_good"]["status"] == "ok"
+
+
+def test_papers_in_worker_processes_equal_one_after_the_other(tmp_path):
+    """--workers 2: papers run in spawn worker processes (the longest first) and the report is the
+    one the sequential run writes; a paper that raises in its worker is a failed section."""
+    from report_fakes import shippable_reproduction
+
+    avail = {"alpha": shippable_reproduction("alpha"), "gamma": shippable_reproduction("gamma", fail=True),
+             "beta": shippable_reproduction("beta")}
+    seq, _ = _run(["all"], tmp_path / "seq", avail, workers=1)
+    par, text = _run(["all"], tmp_path / "par", avail, workers=2, profile=True)
+    assert seq["exit_code"] == par["exit_code"] == 1
+    assert par["papers"]["gamma"]["status"] == "failed"
+    assert "gamma exploded in its worker" in par["papers"]["gamma"]["error"]
+    for paper in ("alpha", "beta"):
+        a, b = _read(tmp_path / "seq" / paper / "report.json"), _read(tmp_path / "par" / paper / "report.json")
+        for key in ("rows", "checks", "figures", "verdicts", "summary" if "summary" in a else "seeds"):
+            assert a[key] == b[key], (paper, key)
+        assert _read(tmp_path / "seq" / paper / "summary.json") == _read(tmp_path / "par" / paper / "summary.json")
+        assert (tmp_path / "par" / paper / "fig3.png").is_file()
+    meta = _read(tmp_path / "par" / "summary.json")["metadata"]
+    assert meta["papers"] == ["alpha", "gamma", "beta"] and meta["paper_workers"] == 2
+    assert set(par["profile"]) >= {"alpha", "beta"} and "side by side" in meta["profile_method"]
+
+
+def test_paper_workers_count():
+    assert rp._paper_workers(None, 1) == 1
+    assert rp._paper_workers(3, 2) == 2
+    with pytest.raises(rp.ReproduceError, match="--workers must be >= 1"):
+        rp._paper_workers(0, 5)

@@ -28,6 +28,7 @@ import contextlib
 import dataclasses
 import json
 import math
+import os
 import shutil
 import sys
 import time
@@ -306,7 +307,8 @@ def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Ca
 # ------------------------------------------------------------------------------------------- driver
 def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, progress: bool = True, *,
               include_3d: bool = True, available: Mapping[str, Reproduction] | None = None,
-              console=None, profile: bool = False, leagues: list[Path | str] | None = None) -> dict[str, Any]:
+              console=None, profile: bool = False, leagues: list[Path | str] | None = None,
+              workers: int | None = None) -> dict[str, Any]:
     """Run the selected paper reproductions into ``out`` and write the report.
 
     Parameters
@@ -321,6 +323,10 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     profile : time each paper's phases (see :mod:`formation_ftc.report.profile`: compile, run, post,
         plot, report), print them as a second table and store them in the run metadata
         (``metadata["profile"]``, and one ``profile_<paper>`` line each for the HTML page).
+    workers : papers computed side by side, each in its own worker process (spawn), the longest
+        first. None: one per CPU core, at most one per paper; 1: one after the other in this process
+        (always so for injected ``available`` reproductions, which a worker process could not import).
+        The numbers do not depend on it: every paper is a deterministic function of its scenarios.
 
     Returns
     -------
@@ -344,30 +350,44 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     previous = prepare_output(out, force)
 
     t_start = time.perf_counter()
-    entries: list[dict[str, Any]] = []
     summaries: dict[str, dict[str, Any]] = {}
-    profiles: dict[str, Profiler] = {}
+    breakdowns: dict[str, dict[str, float]] = {}
+    # injected reproductions (tests) run in this process unless workers are asked for explicitly
+    n_workers = _paper_workers(workers, len(selected)) if (available is None or workers is not None) else 1
+    for paper in selected:
+        paper_dir = out / paper
+        if previous and paper_dir.is_dir():
+            shutil.rmtree(paper_dir)  # stale figures of an earlier report
+        paper_dir.mkdir(parents=True, exist_ok=True)
+    done: dict[str, dict[str, Any]] = {}
+
+    def finished(paper: str, entry: dict[str, Any], summary: dict[str, Any],
+                 breakdown: dict[str, float] | None, report_s: float) -> None:
+        t_report = time.perf_counter()
+        summaries[paper] = summary
+        done[paper] = entry
+        _write_json(out / paper / "report.json", entry)
+        _write_json(out / paper / "summary.json", {**summary, "paper": paper})
+        if breakdown is not None:
+            b = dict(breakdown)
+            b["report"] = round(b.get("report", 0.0) + report_s + time.perf_counter() - t_report, 3)
+            b["total"] = round(b.get("total", 0.0) + report_s + time.perf_counter() - t_report, 3)
+            breakdowns[paper] = b
+
     with _Bar(progress, len(selected)) as bar:
-        for i, paper in enumerate(selected):
-            paper_dir = out / paper
-            if previous and paper_dir.is_dir():
-                shutil.rmtree(paper_dir)  # stale figures of an earlier report
-            paper_dir.mkdir(parents=True, exist_ok=True)
-            bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
-            prof = Profiler() if profile else None
-            if prof is not None:
-                profiles[paper] = prof
-            entry, report = _run_one(found.get(paper), paper, paper_dir, bar.callback(i, paper),
-                                     import_failures.get(paper), prof)
-            t_report = time.perf_counter()
-            summary = _paper_summary(entry, report)
-            summaries[paper] = summary
-            entries.append(entry)
-            _write_json(paper_dir / "report.json", entry)
-            _write_json(paper_dir / "summary.json", {**summary, "paper": paper})
-            if prof is not None:
-                prof.add("report", time.perf_counter() - t_report)
-            bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
+        if n_workers > 1:
+            _reproduce_in_workers(selected, out, n_workers, profile, bar, finished, found, import_failures)
+        else:
+            for i, paper in enumerate(selected):
+                bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
+                prof = Profiler() if profile else None
+                entry, report = _run_one(found.get(paper), paper, out / paper, bar.callback(i, paper),
+                                         import_failures.get(paper), prof)
+                finished(paper, entry, _paper_summary(entry, report),
+                         prof.breakdown() if prof is not None else None, 0.0)
+                bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
+    entries = [done[p] for p in selected]
+    summaries = {p: summaries[p] for p in selected}
     total = time.perf_counter() - t_start
 
     metadata: dict[str, Any] = dict(provenance())
@@ -378,12 +398,16 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         wall_time_s={e["paper"]: e["wall_time_s"] for e in entries},
         seeds={e["paper"]: e["seeds"] for e in entries},
         total_wall_time_s=round(total, 3),
+        paper_workers=n_workers,
     )
-    breakdowns = {p: prof.breakdown() for p, prof in profiles.items() if prof is not None}
+    breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
     if profile:
         metadata["profile_method"] = ("compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
                                       "reads) from jax.monitoring time spans; run/plot: marked blocks without "
-                                      "compile; post: the rest of the paper's wall time; report: JSON files")
+                                      "compile; post: the rest of the paper's wall time; report: JSON files"
+                                      + (f"; papers ran side by side in {n_workers} worker processes, so the "
+                                         "papers' times add up to more than the total wall time"
+                                         if n_workers > 1 else ""))
         metadata["profile"] = breakdowns
         for p, b in breakdowns.items():
             metadata[f"profile_{p}"] = format_breakdown(b)
@@ -411,6 +435,125 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         "out": str(out),
         **extra,
     }
+
+
+#: Relative cost of each built-in reproduction (wall seconds measured on 2 cores): workers take the
+#: longest first, so the last paper to start is a short one. Unknown papers count as long.
+PAPER_COST = {"azizi2009": 53.0, "mehrabian": 43.0, "li2020": 23.0, "gui2022": 14.0, "yang2013": 3.0}
+
+
+def _paper_workers(workers: int | None, n_papers: int) -> int:
+    """Worker processes for ``n_papers`` papers (``workers`` None: one per CPU core, at most one per paper)."""
+    if workers is not None:
+        if workers < 1:
+            raise ReproduceError(f"--workers must be >= 1, got {workers}")
+        return min(workers, max(n_papers, 1))
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, n_papers))
+
+
+def _paper_in_worker(rep: Reproduction | None, paper: str, paper_dir: str, profile: bool,
+                     import_error: str | None,
+                     messages) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
+    """One paper in a worker process: (report.json entry, summary, phase breakdown or None).
+    ``rep`` None: looked up by name in the worker's registry."""
+    if rep is not None:
+        found, failures = {paper: rep}, {}
+    else:
+        found, failures = available_reproductions()
+
+    def progress(fraction: float = 0.0, message: str = "") -> None:
+        with contextlib.suppress(Exception):  # progress is cosmetic; never fail a paper on it
+            messages.put((paper, float(fraction), str(message)))
+
+    prof = Profiler() if profile else None
+    rep = found.get(paper)
+    error = import_error or failures.get(paper)
+    if rep is None and error is None:
+        error = f"no reproduction named {paper!r} in this worker process (available: {', '.join(found)})"
+    entry, report = _run_one(rep, paper, Path(paper_dir), progress, error, prof)
+    return entry, to_jsonable(_paper_summary(entry, report)), prof.breakdown() if prof is not None else None
+
+
+def _shippable(rep: Reproduction | None) -> Reproduction | None:
+    """``rep`` when it can be sent to a worker process (pickled), else None (the worker looks it up)."""
+    import pickle
+
+    try:
+        pickle.dumps(rep)
+    except Exception:  # noqa: BLE001 - closures, lambdas: the worker imports the registry instead
+        return None
+    return rep
+
+
+def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profile: bool, bar: _Bar,
+                          finished: Callable[..., None], found: Mapping[str, Reproduction],
+                          import_failures: Mapping[str, str]) -> None:
+    """Run the papers in a spawn process pool, the longest first; progress messages come back
+    through a queue; a worker that dies takes only its paper down (recorded as failed)."""
+    import multiprocessing
+    import queue as queue_module
+    import threading
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    ctx = multiprocessing.get_context("spawn")
+    manager = ctx.Manager()
+    messages = manager.Queue()
+    state: dict[str, tuple[float, str]] = {}
+    n_done = 0
+    lock = threading.Lock()
+    stop = threading.Event()
+
+    def show() -> None:
+        with lock:
+            running = {p: v for p, v in state.items() if v[0] < 1.0}
+            text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
+            bar.update(n_done + sum(f for f, _ in running.values()), f"{n_done}/{len(selected)} done  {text}")
+
+    def drain() -> None:
+        while not stop.is_set():
+            try:
+                paper, fraction, message = messages.get(timeout=0.2)
+            except (queue_module.Empty, EOFError, OSError):
+                continue
+            with lock:
+                if paper in state and state[paper][0] < 1.0:
+                    f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
+                    state[paper] = (f, message)
+            show()
+
+    reader = threading.Thread(target=drain, name="reproduce-progress", daemon=True)
+    reader.start()
+    order = sorted(selected, key=lambda p: -PAPER_COST.get(p, 100.0))
+    t0 = {p: time.perf_counter() for p in selected}
+    try:
+        with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
+            futures = {}
+            for paper in order:
+                futures[pool.submit(_paper_in_worker, _shippable(found.get(paper)), paper, str(out / paper),
+                                    profile, import_failures.get(paper), messages)] = paper
+                with lock:
+                    state[paper] = (0.0, "")
+            for fut in as_completed(futures):
+                paper = futures[fut]
+                try:
+                    entry, summary, breakdown = fut.result()
+                except Exception:  # the worker died (killed, out of memory): this paper failed
+                    entry = paper_entry(None, paper, out / paper, None, time.perf_counter() - t0[paper],
+                                        traceback.format_exc())
+                    summary, breakdown = _paper_summary(entry, None), None
+                finished(paper, entry, summary, breakdown, 0.0)
+                with lock:
+                    state[paper] = (1.0, "")
+                    n_done += 1
+                show()
+    finally:
+        stop.set()
+        reader.join(timeout=2.0)
+        manager.shutdown()
 
 
 def _print_profile(breakdowns: Mapping[str, Mapping[str, float]], index_s: float, console=None) -> None:
@@ -483,6 +626,9 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--profile", action="store_true",
                    help="time each paper's compile / run / post-processing / plotting / report phases, print "
                         "them as a table and store them in the report's run metadata")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="papers computed side by side in N worker processes (default: one per CPU core, at "
+                        "most one per paper; 1: one after the other in this process); same numbers either way")
     p.add_argument("--league", action="append", type=Path, default=None, metavar="DIR",
                    help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
                         "DIR/*/leaderboard/ of the report directory are linked anyway)")
@@ -495,7 +641,8 @@ def run_cli(args: argparse.Namespace) -> int:
     try:
         result = reproduce(args.paper, args.out, force=args.force, progress=True,
                            include_3d=getattr(args, "include_3d", True),
-                           profile=getattr(args, "profile", False), leagues=getattr(args, "league", None))
+                           profile=getattr(args, "profile", False), leagues=getattr(args, "league", None),
+                           workers=getattr(args, "workers", None))
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
