@@ -216,40 +216,51 @@ def _cmd_show(args) -> int:
     return 0
 
 
+def _holds_text(c) -> str:
+    """yes / NO / unproven (sampled or heuristic, no violation found) / n/a (not evaluated)."""
+    if c.holds is None:
+        return "unproven" if c.basis in ("sampled", "heuristic") else "n/a"
+    return "yes" if c.holds else "NO"
+
+
 def _print_conditions(conds, as_json: bool) -> int:
     failed_required = [c for c in conds if c.required and c.holds is False]
+    unproven_required = [c for c in conds if c.required and c.holds is None]
+    cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
     if as_json:
         print(json.dumps({"conditions": [c.as_dict() for c in conds],
-                          "all_required_hold": not failed_required}, indent=2))
-    elif not sys.stdout.isatty():
-        rows = [("condition", "reference", "value", "requirement", "holds", "required")]
-        rows += [(str(c.name), str(c.reference), str(c.value), str(c.requirement),
-                  {True: "yes", False: "NO", None: "n/a"}[c.holds], "yes" if c.required else "info")
+                          "all_required_hold": not failed_required,
+                          "required_unproven": len(unproven_required)}, indent=2))
+        return 1 if failed_required else 0
+    if not sys.stdout.isatty():
+        rows = [cols]
+        rows += [(str(c.name), str(c.reference), str(c.value), str(c.requirement), _holds_text(c), str(c.basis),
+                  "yes" if c.required else "info")
                  for c in conds]
         widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
         for r in rows if conds else []:
             print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
-        for c in conds:
-            if c.detail and c.holds is False:
-                print(f"- {c.name}: {c.detail}")
-        if not conds:
-            print("this scenario's method declares no conditions")
     else:
         from rich.console import Console
         from rich.table import Table
 
         table = Table(title="Conditions")
-        for col in ("condition", "reference", "value", "requirement", "holds", "required"):
+        for col in cols:
             table.add_column(col)
         for c in conds:
-            mark = {True: "[green]yes[/]", False: "[red]NO[/]", None: "n/a"}[c.holds]
-            table.add_row(c.name, c.reference, c.value, c.requirement, mark, "yes" if c.required else "info")
+            mark = {"yes": "[green]yes[/]", "NO": "[red]NO[/]", "unproven": "[yellow]unproven[/]"}.get(
+                _holds_text(c), "n/a")
+            table.add_row(c.name, c.reference, c.value, c.requirement, mark, c.basis,
+                          "yes" if c.required else "info")
         Console().print(table)
-        for c in conds:
-            if c.detail and c.holds is False:
-                print(f"- {c.name}: {c.detail}")
-        if not conds:
-            print("this scenario's method declares no conditions")
+    for c in conds:
+        if c.detail and (c.holds is False or (c.required and c.holds is None)):
+            print(f"- {c.name}: {c.detail}")
+    if not conds:
+        print("this scenario's method declares no conditions")
+    else:
+        print(f"{len(unproven_required)} required condition(s) unproven (not evaluated, or sampled / heuristic "
+              "with no violation found)")
     return 1 if failed_required else 0
 
 

@@ -67,7 +67,7 @@ th { background: #f3f5f7; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.verdict-match td.verdict, tr.holds-yes td.holds, .badge.ok { background: var(--okbg); color: var(--ok); }
 tr.verdict-differs td.verdict, tr.holds-no td.holds, .badge.failed { background: var(--badbg); color: var(--bad); }
-tr.verdict-not-stated td.verdict, tr.holds-na td.holds { background: var(--nabg); color: var(--na); }
+tr.verdict-not-stated td.verdict, tr.holds-na td.holds, tr.holds-unproven td.holds { background: var(--nabg); color: var(--na); }
 td.verdict, td.holds { font-weight: 600; white-space: nowrap; }
 .badge { display: inline-block; padding: 1px 8px; border-radius: 10px; font-weight: 600; font-size: .85em; }
 .figures { display: flex; flex-wrap: wrap; gap: 16px; }
@@ -233,14 +233,19 @@ def _checks_table(checks: list[dict]) -> str:
     if not checks:
         return '<p class="missing">No conditions declared.</p>'
     out = ['<table class="checks"><thead><tr><th>condition</th><th>reference</th><th>value</th>'
-           "<th>requirement</th><th>holds</th><th>required</th><th>detail</th></tr></thead><tbody>"]
+           "<th>requirement</th><th>holds</th><th>basis</th><th>required</th><th>detail</th></tr></thead><tbody>"]
     for c in checks:
         holds: Any = c.get("holds")  # a JSON value: true, false or null
-        cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(holds, ("holds-na", "n/a"))
+        basis = c.get("basis") or ""  # absent in a report.json written before the basis existed
+        if holds is None and basis in ("sampled", "heuristic"):
+            cls, text = "holds-unproven", "unproven"  # no violation found, nothing proved
+        else:
+            cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(holds, ("holds-na", "n/a"))
         required = "yes" if c.get("required", True) else "info"
         out.append(f'<tr class="{cls}"><td>{_e(c.get("name"))}</td><td>{_e(c.get("reference"))}</td>'
                    f'<td>{_e(c.get("value"))}</td><td>{_e(c.get("requirement"))}</td>'
-                   f'<td class="holds">{text}</td><td>{required}</td><td>{_e(c.get("detail"))}</td></tr>')
+                   f'<td class="holds">{text}</td><td class="basis">{_e(basis)}</td><td>{required}</td>'
+                   f'<td>{_e(c.get("detail"))}</td></tr>')
     out.append("</tbody></table>")
     return "\n".join(out)
 

@@ -38,6 +38,10 @@ def test_e_s_below_disturbance_floor_is_infeasible():
 
 def test_checks_hold_for_the_builtin_flfr_scenario():
     conds = check(load("azizi2009-flfr"))
-    assert all(c.holds for c in conds if c.required), [c.as_dict() for c in conds if not c.holds]
+    # every required condition holds, except the bound (8): H_i is a simulated supremum (basis "sampled"),
+    # so no violation found is reported unproven (None), never as proved
+    sampled = [c for c in conds if c.basis == "sampled"]
+    assert [c.name for c in sampled] == ["error bound (8) at the FLFR weight"] and sampled[0].holds is None
+    assert all(c.holds for c in conds if c.required and c.basis != "sampled"), [c.as_dict() for c in conds]
     names = " ".join(c.name for c in conds)
     assert "small gain" in names and "DET" in names

@@ -261,7 +261,8 @@ def check(s: ComposedScenario) -> list[Condition]:
     parts = ", ".join(f"{slot} {s.type_of(slot)}" for slot in SLOTS if s.type_of(slot))
     out = [Condition(name="components fit together", reference="component contract",
                      value=parts, requirement="compatible quantities, counts, messages, reference",
-                     holds=True, required=True, detail="checked exactly (structural)")]
+                     holds=True, required=True, basis="exact",
+                     detail="exact: structural check of the composition (done when the loop is built)")]
     for slot in SLOTS:
         comp = getattr(loop, slot)
         conds = getattr(comp, "conditions", None)

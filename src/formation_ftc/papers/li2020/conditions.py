@@ -3,8 +3,11 @@
 * graph balance (Thms 1-2 assume it; the printed C is NOT balanced, E000-07) with row/column sums;
 * strong connectivity (informative);
 * delay validity: T_ij(t) >= 0 for every printed pair, dT_ij/dt < 1 (eq. (46)), and T_ij >= dt on used
-  edges (the delayed sample must lie in the stored history); the rate is d/dt of the expression
-  (``jax.jacfwd``) on the simulation step grid over the whole horizon;
+  edges (the delayed sample must lie in the stored history). The conditions are *verified* over the
+  continuous horizon by interval arithmetic (:mod:`formation_ftc.core.interval`: enclosures of T and
+  dT/dt); the values shown are sampled at every simulation step (``jax.jacfwd`` for the rate), and
+  when the enclosure is inconclusive the condition falls back to that sample (basis "sampled": a
+  violation found is real, a pass is unproven). :func:`validate_delays` uses the samples;
 * gain/delay coupling (47): rho = 1/(1 - max h_ij), lambda_i > (rho - 1)/2 sum_j c_ij;
 * k_i > 0 (Lemma 2), d_hat_i(0) > 0, sigma integrable (eq. (11));
 * sign of the d_hat tanh term consistent with the proof (E000-04);
@@ -24,12 +27,15 @@ import scipy.optimize
 
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.graph import balance_report, is_strongly_connected
+from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
 from formation_ftc.registry import Condition
 
 __all__ = [
     "DelayError",
     "DelayStats",
+    "DelayBounds",
     "delay_statistics",
+    "delay_bounds",
     "validate_delays",
     "lemma3_constant",
     "check",
@@ -130,13 +136,168 @@ def lemma3_constant() -> tuple[float, float]:
     return x, x * (1 - math.tanh(x))
 
 
-#: How the delay conditions are evaluated (the simulation reads the delays only at these times).
+#: How the delay values shown are computed (the simulation reads the delays only at these times).
 GRID = ("sampled at every simulation step over the horizon (values and d/dt by automatic differentiation): "
-        "a violation found is exact, a pass holds on the step grid the simulation uses")
+        "a violation found is real, a pass is not a proof")
+#: How the delay conditions are verified.
+INTERVAL = ("verified by interval arithmetic over the continuous horizon (outward-rounded enclosures of T and "
+            "dT/dt on 4,096 sub-intervals, bisected where inconclusive); values shown are sampled at every step")
+
+
+@dataclass(frozen=True)
+class DelayBounds:
+    """Verified bounds of one delay over [0, horizon]: ``value_lo <= T_ij(t)`` and ``dT_ij/dt <= rate_hi``
+    (``None`` in a field when the interval evaluation could not enclose the expression)."""
+
+    pair: tuple[int, int]
+    value_lo: float | None
+    rate_hi: float | None
+
+
+@lru_cache(maxsize=256)
+def _delay_bound(text: str, i: int, j: int, horizon: float, rate_target: float) -> tuple[float | None, float | None]:
+    names = ("t", "i", "j")
+    lo: float | None
+    hi: float | None
+    try:
+        lo, _ = enclose(text, names, 0.0, horizon, lower=0.0, i=float(i + 1), j=float(j + 1))
+    except IntervalError:
+        lo = None
+    try:
+        _, hi = enclose_derivative(text, names, 0.0, horizon, upper=rate_target, i=float(i + 1), j=float(j + 1))
+    except IntervalError:
+        hi = None
+    return lo, hi
+
+
+def delay_bounds(scenario, rate_target: float = 1.0) -> dict[tuple[int, int], DelayBounds]:
+    """Verified lower bound of T_ij and upper bound of dT_ij/dt over [0, horizon] for every off-diagonal
+    pair (interval arithmetic; the rate enclosure is refined until it is below ``rate_target`` where a
+    few bisections suffice)."""
+    d = scenario.network.delays
+    if d is None:
+        return {}
+    n = len(d)
+    horizon = float(scenario.simulation.horizon)
+    out = {}
+    for i in range(n):
+        for j in range(n):
+            if i != j:
+                lo, hi = _delay_bound(str(d[i][j]), i, j, horizon, float(rate_target))
+                out[(i, j)] = DelayBounds((i, j), lo, hi)
+    return out
+
+
+def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
+    """Largest h with lambda_i > h/(1 - h)/2 sum_j c_ij for all i (eq. (47)), capped at 1."""
+    s = C.sum(axis=1)
+    with np.errstate(divide="ignore"):
+        q = np.where(s > 0, 2.0 * lam / np.where(s > 0, s, 1.0), np.inf)
+    qmin = float(np.min(q)) if q.size else math.inf
+    if not qmin > 0:
+        return 1.0
+    return 1.0 if math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
 
 
 def _fmt(v) -> str:
     return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+
+
+def _worst_bound(bounds: list[DelayBounds]) -> float | None:
+    """max rate_hi over the pairs, None if one is missing (no verified bound)."""
+    his = [b.rate_hi for b in bounds]
+    if any(h is None for h in his):
+        return None
+    return max((float(h) for h in his if h is not None), default=0.0)
+
+
+def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Condition]:
+    """Delay conditions of Theorem 2: verified by interval arithmetic, else sampled (see module doc)."""
+    out: list[Condition] = []
+    stats = delay_statistics(scenario)
+    used = C > 0
+    used_stats = [st for st in stats if used[st.pair]]
+    target = _rate_target(lam, C)
+    vb_used = delay_bounds(scenario, rate_target=target * (1 - 1e-9) if target < 1 else 1.0)
+    vb_all = delay_bounds(scenario)
+    # T >= 0 on every printed pair
+    neg = [st for st in stats if st.value_min < 0]
+    lows = [vb_all[st.pair].value_lo for st in stats]
+    proved = all(v is not None and v >= 0 for v in lows)
+    lo_all = min((v for v in lows if v is not None), default=math.inf)
+    value = ", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats)
+    if neg:
+        holds, basis = False, "sampled"
+        detail = "; ".join([f"sampled: {st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID])
+    elif proved:
+        holds, basis = True, "verified"
+        value += f"; verified T >= {lo_all:.4g} s on every pair"
+        detail = INTERVAL
+    else:
+        holds, basis = None, "sampled"
+        detail = "sampled (unproven; the interval enclosure reaches below 0): " + GRID
+    out.append(Condition(name="delays non-negative", reference="Li2020 Sec. III-B", value=value,
+                         requirement=">= 0 on every pair", holds=holds, basis=basis, detail=detail))
+    # dT/dt <= h < 1 on the used edges (eq. (46))
+    worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
+    h = worst.rate_max if worst else 0.0
+    h_up = _worst_bound([vb_used[st.pair] for st in used_stats])
+    if worst is None:
+        value = "no edges"
+    else:
+        value = (f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
+                 + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats))
+    if h >= 1:
+        holds, basis, detail = False, "sampled", "sampled: the rate reaches 1 at a step; " + GRID
+    elif h_up is not None and h_up < 1:
+        holds, basis, detail = True, "verified", INTERVAL
+        value += f"; verified h <= {h_up:.6g}"
+    else:
+        holds, basis = None, "sampled"
+        detail = f"sampled (unproven; the rate enclosure reaches {h_up}): " + GRID
+    out.append(Condition(name="delay rate bound (used edges)", reference="Li2020 eq. (46); E000-15", value=value,
+                         requirement="h_ij < 1", holds=holds, basis=basis, detail=detail))
+    if stats:
+        wa = max(stats, key=lambda st: st.rate_max)
+        ha_up = _worst_bound([vb_all[st.pair] for st in stats])
+        value = f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)"
+        if wa.rate_max >= 1:
+            holds, basis, detail = False, "sampled", "sampled: the rate reaches 1 at a step; " + GRID
+        elif ha_up is not None and ha_up < 1:
+            holds, basis, detail = True, "verified", INTERVAL
+            value += f"; verified <= {ha_up:.6g}"
+        else:
+            holds, basis, detail = None, "sampled", "sampled (unproven by the interval enclosure): " + GRID
+        out.append(Condition(
+            name="delay rate bound (all printed delays)", reference="Li2020 Sec. IV-A; E000-15", value=value,
+            requirement="< 1", holds=holds, required=False, basis=basis,
+            detail="not required (unused delays do not enter the closed loop); " + detail))
+    if h < 1:
+        rows = C.sum(axis=1)
+
+        def margin_at(hh: float) -> np.ndarray:
+            rho = 1.0 / (1.0 - hh)  # Li2020 eq. (47)
+            return lam - (rho - 1.0) / 2.0 * rows
+
+        margin = margin_at(h)
+        rho = 1.0 / (1.0 - h)
+        value = (f"rho = {rho:.4f}; rhs = {_fmt((rho - 1.0) / 2.0 * rows)}; lambda = {_fmt(lam)}; "
+                 f"margin = {_fmt(margin)}")
+        slack = 1e-12 * max(1.0, float(np.max(np.abs(lam))))  # rounding of rho and the products
+        if not bool(np.all(margin > 0)):
+            holds, basis = False, "sampled"
+            detail = "sampled: the margin fails already at the sampled h (the true h is at least as large); " + GRID
+        elif h_up is not None and h_up < 1 and bool(np.all(margin_at(h_up) > slack)):
+            holds, basis = True, "verified"
+            value += f"; with the verified h <= {h_up:.6g}: margin >= {_fmt(margin_at(h_up))}"
+            detail = f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is " + INTERVAL
+        else:
+            holds, basis = None, "sampled"
+            detail = "sampled (unproven): arithmetic with the sampled h; h is " + GRID
+        out.append(Condition(
+            name="lambda_i > (rho - 1)/2 sum_j c_ij", reference="Li2020 eq. (47)", value=value,
+            requirement="margin > 0 with rho (1 - h) >= 1", holds=holds, basis=basis, detail=detail))
+    return out
 
 
 def check(scenario) -> list[Condition]:
@@ -150,72 +311,43 @@ def check(scenario) -> list[Condition]:
     br = balance_report(C, tol=1e-12)
     out.append(Condition(
         name="communication graph balanced", reference=f"Li2020 {thm}, Sec. II-C; E000-07",
-        value=str(br), requirement="row sums = column sums", holds=br.balanced, required=proposed,
-        detail="exact row/column sums (tolerance 1e-12)" + ("" if br.balanced else "; the theorems assume a "
+        value=str(br), requirement="row sums = column sums", holds=br.balanced, required=proposed, basis="exact",
+        detail="exact: row/column sums (tolerance 1e-12)" + ("" if br.balanced else "; the theorems assume a "
         "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)")))
     sc = is_strongly_connected(C)
     out.append(Condition(name="communication graph strongly connected", reference="Li2020 Sec. IV-A, Fig. 3",
-                         value=str(sc), requirement="True", holds=sc, required=False,
+                         value=str(sc), requirement="True", holds=sc, required=False, basis="exact",
                          detail="exact: reachability on the adjacency pattern"))
     k = scenario.per_spacecraft("k")
     out.append(Condition(name="k_i > 0", reference="Li2020 Lemma 2", value=_fmt(k), requirement="> 0",
-                         holds=bool(np.all(k > 0)), detail="exact: comparison of the scenario values"))
+                         holds=bool(np.all(k > 0)), basis="exact", detail="exact: comparison of the scenario values"))
     if proposed:
         d0 = scenario.per_spacecraft("d_hat0")
         out.append(Condition(name="d_hat_i(0) > 0", reference="Li2020 eq. (27)", value=_fmt(d0),
-                             requirement="> 0", holds=bool(np.all(d0 > 0)), detail="exact: comparison of the scenario values"))
+                             requirement="> 0", holds=bool(np.all(d0 > 0)), basis="exact",
+                             detail="exact: comparison of the scenario values"))
         form = scenario.controller.sigma_form
         out.append(Condition(name="sigma_i integrable", reference="Li2020 eq. (11), (13)-(16)",
                              value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
-                             requirement="int_0^inf sigma < inf", holds=True,
-                             detail="exact (closed-form integrals): exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
+                             requirement="int_0^inf sigma < inf", holds=True, basis="exact",
+                             detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
         literal = scenario.controller.dhat_sign_literal
         sign = -1 if (literal and law == "thm2") else 1
         out.append(Condition(name="sign of d_hat tanh term", reference="Li2020 eq. (24)/(42); E000-04",
                              value=f"{sign:+d}", requirement="+1 (proof steps (34)-(36))", holds=sign > 0,
-                             detail="exact: sign chosen by the scenario"))
+                             basis="exact", detail="exact: sign chosen by the scenario"))
         lam = scenario.per_spacecraft("lam")
         if law == "thm2":
-            stats = delay_statistics(scenario)
-            used = C > 0
-            used_stats = [st for st in stats if used[st.pair]]
-            neg = [st for st in stats if st.value_min < 0]
-            out.append(Condition(
-                name="delays non-negative", reference="Li2020 Sec. III-B",
-                value=", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats),
-                requirement=">= 0 on every pair", holds=not neg,
-                detail="; ".join([f"{st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID])))
-            worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
-            h = worst.rate_max if worst else 0.0
-            out.append(Condition(
-                name="delay rate bound (used edges)", reference="Li2020 eq. (46); E000-15",
-                value=(f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
-                       + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats)) if worst else "no edges",
-                requirement="h_ij < 1", holds=h < 1, detail=GRID))
-            if stats:
-                wa = max(stats, key=lambda st: st.rate_max)
-                out.append(Condition(
-                    name="delay rate bound (all printed delays)", reference="Li2020 Sec. IV-A; E000-15",
-                    value=f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)",
-                    requirement="< 1", holds=wa.rate_max < 1, required=False,
-                    detail="informative: unused delays do not enter the closed loop; " + GRID))
-            if h < 1:
-                rho = 1.0 / (1.0 - h)
-                rhs = (rho - 1.0) / 2.0 * C.sum(axis=1)
-                margin = lam - rhs
-                out.append(Condition(
-                    name="lambda_i > (rho - 1)/2 sum_j c_ij", reference="Li2020 eq. (47)",
-                    value=f"rho = {rho:.4f}; rhs = {_fmt(rhs)}; lambda = {_fmt(lam)}; margin = {_fmt(margin)}",
-                    requirement="margin > 0 with rho (1 - h) >= 1", holds=bool(np.all(margin > 0)),
-                    detail="exact arithmetic given h; h itself is " + GRID))
+            out += _delay_conditions(scenario, C, lam)
         x_star, r_star = lemma3_constant()
         out.append(Condition(name="Lemma 3 constant r*", reference="Li2020 eq. (22)",
                              value=f"x* = {x_star:.6f}, r* = {r_star:.6f}", requirement="informative",
-                             holds=True, required=False, detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)"))
+                             holds=True, required=False, basis="informative",
+                             detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)"))
     else:
         out.append(Condition(name="SIR-FTC gains positive", reference="Li2020 Sec. IV-D",
                              value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
                              requirement="> 0", holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0,
-                             detail="exact: comparison of the scenario values"))
+                             basis="exact", detail="exact: comparison of the scenario values"))
     del n
     return out
