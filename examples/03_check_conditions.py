@@ -11,9 +11,9 @@ import formation_ftc as ftc
 
 def show(conditions):
     for c in conditions:
-        mark = {True: "holds", False: "FAILS", None: "n/a"}[c.holds]
+        mark = "unproven" if c.unproven else {True: "holds", False: "FAILS", None: "n/a"}[c.holds]
         kind = "required" if c.required else "info"
-        print(f"  [{mark:5s}] ({kind}) {c.name}: {c.value}  (needs {c.requirement})")
+        print(f"  [{mark:8s}] ({kind}, {c.basis}) {c.name}: {c.value}  (needs {c.requirement})")
 
 
 scenario = ftc.load_scenario("li2020-thm1")
@@ -21,6 +21,10 @@ print(scenario.scenario.description)
 show(ftc.check(scenario))
 
 # %% [markdown]
+# Each condition states its basis: `exact` (exact arithmetic, or floating point with a stated rounding
+# margin), `verified` (a rigorous bound, e.g. interval arithmetic over the whole horizon), `sampled` or
+# `heuristic` (a pass is only "unproven"; a violation found is real) and `informative`.
+#
 # The communication graph printed in the paper is not balanced, which the theorem assumes. The
 # scenario `li2020-thm2-balanced` uses a balanced graph; checking it shows which conditions now hold.
 

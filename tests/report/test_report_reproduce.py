@@ -67,7 +67,8 @@ def test_all_papers_files_and_summary_layout(tmp_path):
     report = _read(out / "alpha" / "report.json")
     assert report["schema"] == rp.REPORT_SCHEMA and report["status"] == "ok" and report["error"] is None
     assert report["verdicts"] == {"match": 1, "differs": 1, "not stated": 1}
-    assert report["checks_summary"] == {"hold": 1, "fail": 1, "not evaluated": 1, "required_failed": 1}
+    assert report["checks_summary"] == {"hold": 1, "fail": 1, "unproven": 0, "not evaluated": 1,
+                                       "required_failed": 1}
     assert [f["number"] for f in report["figures"]] == ["3", "4"] and all(f["exists"] for f in report["figures"])
     assert report["seeds"] == [7, 8] and report["notes"] == ["alpha note"]
     assert report["errata"] == [{"id": "E001-01", "text": "alpha: sign of eq. (7) corrected"}]

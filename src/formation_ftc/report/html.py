@@ -335,7 +335,7 @@ def _section(entry: dict, out_dir: Path, include_3d: bool, state: dict) -> str:
 
 def _overview(entries: list[dict]) -> str:
     out = ['<table class="overview"><thead><tr><th>paper</th><th>status</th><th>match</th><th>differs</th>'
-           "<th>not stated</th><th>conditions hold / fail / n.a.</th><th>figures</th><th>wall time</th>"
+           "<th>not stated</th><th>conditions hold / fail / unproven / n.a.</th><th>figures</th><th>wall time</th>"
            "</tr></thead><tbody>"]
     for e in entries:
         v, c = e.get("verdicts") or {}, e.get("checks_summary") or {}
@@ -344,7 +344,8 @@ def _overview(entries: list[dict]) -> str:
                    f'<td><span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span></td>'
                    f'<td class="num">{v.get("match", 0)}</td><td class="num">{v.get("differs", 0)}</td>'
                    f'<td class="num">{v.get("not stated", 0)}</td>'
-                   f'<td class="num">{c.get("hold", 0)} / {c.get("fail", 0)} / {c.get("not evaluated", 0)}</td>'
+                   f'<td class="num">{c.get("hold", 0)} / {c.get("fail", 0)} / {c.get("unproven", 0)} / '
+                   f'{c.get("not evaluated", 0)}</td>'
                    f'<td class="num">{len(e.get("figures") or [])}</td>'
                    f'<td class="num">{_fmt_seconds(e.get("wall_time_s"))}</td></tr>')
     out.append("</tbody></table>")

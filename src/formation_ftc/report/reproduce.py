@@ -230,7 +230,9 @@ def _counts(rows: list[dict], checks: list[dict]) -> tuple[dict[str, int], dict[
     checks_summary = {
         "hold": sum(1 for c in checks if c.get("holds") is True),
         "fail": sum(1 for c in checks if c.get("holds") is False),
-        "not evaluated": sum(1 for c in checks if c.get("holds") is None),
+        "unproven": sum(1 for c in checks if c.get("holds") is None and c.get("basis") in ("sampled", "heuristic")),
+        "not evaluated": sum(1 for c in checks if c.get("holds") is None
+                             and c.get("basis") not in ("sampled", "heuristic")),
         "required_failed": sum(1 for c in checks if c.get("holds") is False and c.get("required", True)),
     }
     return verdicts, checks_summary
@@ -460,6 +462,8 @@ def _paper_in_worker(rep: Reproduction | None, paper: str, paper_dir: str, profi
                      messages) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
     """One paper in a worker process: (report.json entry, summary, phase breakdown or None).
     ``rep`` None: looked up by name in the worker's registry."""
+    found: Mapping[str, Reproduction]
+    failures: Mapping[str, str]
     if rep is not None:
         found, failures = {paper: rep}, {}
     else:
