@@ -1,4 +1,5 @@
-"""Shared fixture for the paper reproductions: re-check every verdict from its stated criterion."""
+"""Shared fixtures for the paper reproductions: re-check every verdict from its stated criterion; compare
+two runs' metric dicts."""
 
 from __future__ import annotations
 
@@ -63,3 +64,25 @@ def recheck(rows) -> dict[str, int]:
 def recheck_verdicts():
     """``recheck_verdicts(rows) -> counts``: every verdict recomputed from its stated criterion."""
     return recheck
+
+
+def same_metrics(m1: dict[str, float], m20: dict[str, float], rtol: float = 1e-12) -> float:
+    """Assert equal metric dicts: the same names, NaN where the other is NaN, otherwise equal to a relative
+    ``rtol``; return the largest relative difference."""
+    assert m1.keys() == m20.keys(), sorted(set(m1) ^ set(m20))
+    worst = 0.0
+    for k, a in m1.items():
+        b = m20[k]
+        if math.isnan(a):
+            assert math.isnan(b), k
+            continue
+        assert b == pytest.approx(a, rel=rtol, abs=0.0), k
+        worst = max(worst, abs(a - b) / abs(a) if a != 0 else abs(b))
+    return worst
+
+
+@pytest.fixture(name="same_metrics")
+def same_metrics_fixture():
+    """``same_metrics(m1, m2, rtol=1e-12) -> largest relative difference``: two runs' metric dicts agree
+    (the record_every tests of every paper)."""
+    return same_metrics

@@ -357,15 +357,26 @@ class ClosedLoop:
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
         y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
-        # the estimator / supervisor outputs recorded are those of their current state (an estimator
-        # with ``refresh_on_observe`` records its update at t_k, as the step computes it)
+        # the estimator outputs recorded are those of its current state (an estimator with
+        # ``refresh_on_observe`` records its update at t_k, as the step computes it); the supervisor's
+        # are those of its decision taken at t_k -- the decision in force over [t_k, t_{k+1}), which the
+        # step's controller, actuator and plant use and the step's metric sample sees -- taken here on
+        # the estimate the step gives it (the estimator's update at t_k), and the controller's command
+        # recorded at t_k is computed with that decision
         est_state = state["estimator"]
         if self.estimator.refresh_on_observe:
             est_state, est = self.estimator.update(t_k, est_state, self._flight(y, None, None, None,
                                                                                 exo["estimator"], ref))
         else:
             est = self.estimator.current(est_state)
-        dec = self.supervisor.current(state["supervisor"])
+        sup_state = state["supervisor"]
+        if isinstance(self.supervisor, NoSupervisor):
+            dec = self.supervisor.current(sup_state)
+        else:
+            est_flight = est if self.estimator.refresh_on_observe else self.estimator.update(
+                t_k, state["estimator"], self._flight(y, None, None, None, exo["estimator"], ref))[1]
+            sup_state, dec = self.supervisor.update(t_k, sup_state, self._flight(y, None, est_flight, None,
+                                                                                exo["supervisor"], ref))
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
             msg_k = self.controller.message(t_k, self._flight(y, None, est, dec, exo["controller"], ref))
@@ -379,7 +390,7 @@ class ClosedLoop:
         _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held,
                                             state["actuator"]))
         outputs.update(self.estimator.outputs(t_k, est_state, est))
-        outputs.update(self.supervisor.outputs(t_k, state["supervisor"], dec))
+        outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
         for name, v in state["usage"].items():
             outputs[name] = v
         return self._evaluated(outputs)

@@ -21,7 +21,7 @@ import numpy as np
 from formation_ftc.sim.components import component, static
 
 __all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
-           "REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
+           "REDUCTIONS", "BLOCK_REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
            "update_stage_accumulators"]
 
 #: time reductions: name -> meaning
@@ -41,7 +41,14 @@ REDUCTIONS = {
     "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
     "last": "value at the horizon (the run's last sample; window ignored), read once after the loop: no "
             "per-step cost, unlike `final`",
+    "block_rms": "low-pass RMS: the samples in the window (the horizon sample excluded) cut into consecutive "
+                 "blocks of `block` steps from the first one; RMS over the complete blocks of each block's mean "
+                 "(a boxcar filter of `block` steps, decimated; an incomplete last block is dropped)",
+    "block_dev_rms": "RMS of the value minus the mean of its block (blocks as `block_rms`): the amplitude of "
+                     "what varies faster than `block` steps, e.g. a chatter",
 }
+#: time reductions over blocks of ``Metric.block`` steps
+BLOCK_REDUCTIONS = ("block_rms", "block_dev_rms")
 #: time reductions integrated at the integrator's stages (need a signal evaluated at every RK stage:
 #: plant, controller and actuator outputs, ``command``, ``applied``)
 STAGE_REDUCTIONS = ("stage_integral", "stage_root_mean")
@@ -69,6 +76,7 @@ class Metric:
     threshold : threshold of ``"settle"`` and ``"first"`` [signal units].
     gate : name of a signal; when given, only the samples at which it is > 0 (true) count, so the
         window may open on an event (e.g. a mode switch). Not for the stage-integrated reductions.
+    block : number of steps of a block of :data:`BLOCK_REDUCTIONS` (>= 1; a static structure choice).
     """
 
     name: str = static()
@@ -84,6 +92,7 @@ class Metric:
     square: bool = static(default=False)
     component: int | None = static(default=None)
     gate: str | None = static(default=None)
+    block: int = static(default=0)
 
     def __post_init__(self) -> None:
         if self.norm_ord not in ("2", "inf"):
@@ -96,6 +105,8 @@ class Metric:
         if self.gate is not None and self.reduce in STAGE_REDUCTIONS:
             raise ValueError(f"metric {self.name!r}: a gate is not supported by the stage-integrated "
                              f"reduction {self.reduce!r}")
+        if self.reduce in BLOCK_REDUCTIONS and not (isinstance(self.block, int) and self.block >= 1):
+            raise ValueError(f"metric {self.name!r}: reduce {self.reduce!r} needs block >= 1 steps, got {self.block!r}")
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         """The instantaneous value (scalar, or (N,) for ``"each"``)."""
@@ -155,7 +166,7 @@ class _Stack:
     def __init__(self, metrics: Sequence[Metric]):
         m0 = metrics[0]
         self.metrics = tuple(metrics)
-        self.reduce, self.spacecraft, self.gate = m0.reduce, m0.spacecraft, m0.gate
+        self.reduce, self.spacecraft, self.gate, self.block = m0.reduce, m0.spacecraft, m0.gate, m0.block
         trail = (1,) if m0.spacecraft == "each" else ()
 
         def stacked(name):
@@ -173,7 +184,7 @@ def _groups(metrics: Sequence[Metric]) -> list[list[int]]:
     their first member."""
     groups: dict[Any, list[int]] = {}
     for i, m in enumerate(metrics):
-        key = ("alone", i) if m.reduce in STAGE_REDUCTIONS else (m.reduce, m.spacecraft == "each", m.gate)
+        key = ("alone", i) if m.reduce in STAGE_REDUCTIONS else (m.reduce, m.spacecraft == "each", m.gate, m.block)
         groups.setdefault(key, []).append(i)
     return list(groups.values())
 
@@ -189,6 +200,7 @@ class _Probe:
 
     def __init__(self, reduce: str):
         self.reduce = reduce
+        self.block = 1
 
     def value(self, signals):
         return jnp.zeros(())
@@ -278,6 +290,15 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
             accs.append((nan, jnp.zeros(shape, bool), jnp.zeros(shape, bool)))
         elif m.reduce == "first":  # (time of the first sample at or above the threshold, found)
             accs.append((nan, jnp.zeros(shape, bool)))
+        elif m.reduce == "block_rms":
+            # (sum over the open block, its samples, sum of the squared means of the closed blocks, closed blocks)
+            z = jnp.zeros(shape)
+            accs.append((z, z, z, z))
+        elif m.reduce == "block_dev_rms":
+            # (shift = first value of the open block, sum and sum of squares of value - shift over the open
+            # block, its samples, sum of squared deviations from the mean over the closed blocks, their samples)
+            z = jnp.zeros(shape)
+            accs.append((z, z, z, z, z, z))
     return tuple(accs)
 
 
@@ -347,6 +368,25 @@ def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array | flo
             ts, found = acc
             hit = inw & jnp.logical_not(v < m.threshold) & jnp.logical_not(found)
             out.append((jnp.where(hit, t, ts), found | hit))
+        elif m.reduce == "block_rms":
+            s, n, q, nb = acc
+            take = jnp.logical_and(inw, not is_final)
+            s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
+            full = n >= m.block  # the block closes: fold its mean in, open the next one
+            mean = s / m.block
+            out.append((jnp.where(full, 0.0, s), jnp.where(full, 0.0, n), q + jnp.where(full, mean * mean, 0.0),
+                        nb + jnp.where(full, 1.0, 0.0)))
+        elif m.reduce == "block_dev_rms":
+            # shifted sums (shift = the block's first value): no cancellation when the mean is large
+            shift, s1, s2, n, q, nq = acc
+            take = jnp.logical_and(inw, not is_final)
+            shift = jnp.where(take & (n == 0), v, shift)
+            d = jnp.where(take, v - shift, 0.0)
+            s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
+            full = n >= m.block
+            dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
+            out.append((shift, jnp.where(full, 0.0, s1), jnp.where(full, 0.0, s2), jnp.where(full, 0.0, n),
+                        q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0)))
     return tuple(out)
 
 
@@ -391,6 +431,12 @@ def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
         elif m.reduce == "stage_root_mean":
             s, n = acc
             out.append(jnp.where(n > 0, jnp.sqrt(s / (m.end - m.start)), jnp.nan))
+        elif m.reduce == "block_rms":
+            _, _, q, nb = acc
+            out.append(jnp.where(nb > 0, jnp.sqrt(q / jnp.maximum(nb, 1.0)), jnp.nan))
+        elif m.reduce == "block_dev_rms":
+            *_, q, nq = acc
+            out.append(jnp.where(nq > 0, jnp.sqrt(jnp.maximum(q, 0.0) / jnp.maximum(nq, 1.0)), jnp.nan))
     return tuple(out)
 
 

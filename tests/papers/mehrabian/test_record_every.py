@@ -36,19 +36,6 @@ WINDOWS = {"fault_window": FAULT, "run": (0.0, HORIZON), "assessment_window": AS
 AXES = ("pitch", "roll", "yaw")  # the attitude record's axis labels
 
 
-def _same(m1: dict[str, float], m20: dict[str, float], rtol: float = 1e-12) -> float:
-    """Assert equal metric dicts (NaN where the other is NaN); return the largest relative difference."""
-    assert m1.keys() == m20.keys()
-    worst = 0.0
-    for k, a in m1.items():
-        b = m20[k]
-        if math.isnan(a):
-            assert math.isnan(b), k
-            continue
-        assert b == pytest.approx(a, rel=rtol, abs=0.0), k
-        worst = max(worst, abs(a - b) / abs(a) if a != 0 else abs(b))
-    return worst
-
 
 def _maxima(ds) -> dict[str, float]:
     """The sampled windowed maxima recomputed in numpy from the records: samples t_k with a <= t_k < b."""
@@ -68,15 +55,15 @@ def _maxima(ds) -> dict[str, float]:
     return out
 
 
-def test_metrics_independent_of_record_every():
+def test_metrics_independent_of_record_every(same_metrics):
     batched, diverged = run_batch(CASES, [1], OVERRIDES)  # the reproduction's path: one record per run
     assert np.all(diverged == -1)
     for i, name in enumerate(CASES):
         ds1, m1 = simulate(ftc.load_scenario(name, {**OVERRIDES, "simulation.record_every": 1}))
         ds20, m20 = simulate(ftc.load_scenario(name, {**OVERRIDES, "simulation.record_every": 20}))
         assert len(m1) == 36 and all(math.isfinite(v) for v in m1.values()), name  # 12 metrics x 3 windows
-        _same(m1, m20)
-        _same(m1, {k: float(v[i, 0]) for k, v in batched.items()})
+        same_metrics(m1, m20)
+        same_metrics(m1, {k: float(v[i, 0]) for k, v in batched.items()})
         assert ds1.time.size == round(HORIZON / DT) + 1
         from_records = _maxima(ds1)
         assert len(from_records) == 24

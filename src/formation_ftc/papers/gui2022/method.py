@@ -45,11 +45,23 @@ from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric
 
 __all__ = ["make_loop", "build", "metrics_of", "gains_of", "lmi_design_cached", "care_cached", "METHOD",
-           "COMPONENTS", "AXES"]
+           "COMPONENTS", "AXES", "LOWPASS_WINDOW", "ESTIMATE_ERROR_AT", "lowpass_steps"]
 
 COMPONENTS = list(STATE_COMPONENTS)
 AXES = ["x", "y", "z"]
 N_DEPUTIES = 1
+#: boxcar of the low-pass metrics [s]: F - F_hat (and v - h) averaged over consecutive blocks of this
+#: length before the RMS (``block_rms``); the deviation of F_hat from its block mean measures the chatter
+#: (``block_dev_rms``). Fixed, independent of ``simulation.record_every``.
+LOWPASS_WINDOW = 0.1
+#: times [s] of the exact samples ``estimate_pos_err_at_<t>s`` of ||q - q_hat|| (position part)
+ESTIMATE_ERROR_AT = (0.0, 1.0, 2.0)
+
+
+def lowpass_steps(dt: float) -> int:
+    """Steps of the boxcar: LOWPASS_WINDOW / dt rounded to an even number >= 2 (an even boxcar removes a
+    chatter of period 2 steps exactly)."""
+    return max(2, 2 * round(LOWPASS_WINDOW / dt / 2))
 
 
 def _per_axis(values, n: int = N_DEPUTIES):
@@ -118,6 +130,17 @@ def metrics_of(s: Gui2022Scenario) -> tuple[Metric, ...]:
     out.append(Metric("estimate_max_err_after_start", "estimation_error", reduce="max", norm=True,
                       spacecraft="max", units="1", start=at(ks(mt.estimate_start)),
                       end=(ks(mt.estimate_end) - 0.5) * dt))
+    # low-pass (boxcar of lowpass_steps) RMS of F - F_hat per axis over the fault_rms window, and the RMS
+    # of F_hat about its boxcar mean (the chatter) from fault_rms_delay to the x fault onset
+    box = lowpass_steps(dt)
+    for i, ax in enumerate(AXES):
+        out += [Metric(f"fault_lowpass_rms_err_{ax}", "fault_error", reduce="block_rms", component=i,
+                       spacecraft="max", units=acc, start=at(k_rms[i]), end=last, block=box),
+                Metric(f"fault_estimate_chatter_rms_{ax}", "fault_estimate", reduce="block_dev_rms", component=i,
+                       spacecraft="max", units=acc, start=at(ks(mt.fault_rms_delay)), end=(onset[0] - 0.5) * dt,
+                       block=box)]
+    out += [Metric(f"estimate_pos_err_at_{tq:g}s", "estimation_position_error", reduce="at", spacecraft="max",
+                   units="m", start=at(ks(tq))) for tq in ESTIMATE_ERROR_AT if ks(tq) <= n_steps]
     if s.controller.law != "none":
         pos: dict[str, Any] = dict(signal="position_tracking_error", spacecraft="max", units="m")
         out += [Metric("pos_rms", reduce="rms", start=at(ks(mt.position_rms_start)), end=last, **pos),
@@ -132,6 +155,11 @@ def metrics_of(s: Gui2022Scenario) -> tuple[Metric, ...]:
                        units="m s-1")]
         if s.controller.law == "lof2tc":
             out.append(Metric("pi_max", "learning_gain", reduce="max", spacecraft="max", end=last))
+            # Fig. 10: low-pass RMS per axis of v - h and of h = d + F - F_hat from position_rms_start
+            for i, ax in enumerate(AXES):
+                out += [Metric(f"{sig}_lowpass_rms_{ax}", sig, reduce="block_rms", component=i, spacecraft="max",
+                               units=acc, start=at(ks(mt.position_rms_start)), end=last, block=box)
+                        for sig in ("compensation_error", "synthesized_disturbance")]
     return tuple(out)
 
 
@@ -144,6 +172,11 @@ def _evaluations(s: Gui2022Scenario) -> tuple:
            SignalSum("synthesized_disturbance_mean",
                      (("+", "disturbance"), ("+", "fault"), ("-", "fault_estimate_mean")), units=acc,
                      long_name="h = d + F - mean(F_hat) over the record interval")]
+    out.append(PartNorm("estimation_position_error", "estimation_error", 0, 3, units="m",
+                        long_name="||q - q_hat position part|| of the ILO"))
+    if s.controller.law == "lof2tc":
+        out.append(SignalSum("compensation_error", (("+", "compensation"), ("-", "synthesized_disturbance")),
+                             units=acc, long_name="v - h, h = d + e_F (33)"))
     if s.controller.law != "none":
         out += [PartNorm("position_tracking_error", "tracking_error", 0, 3, units="m",
                          long_name="||e_y position part||"),

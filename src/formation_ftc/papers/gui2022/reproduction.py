@@ -26,7 +26,12 @@ from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.papers.gui2022 import figures as F
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.papers.gui2022.conditions import check
-from formation_ftc.papers.gui2022.method import care_cached, lmi_design_cached
+from formation_ftc.papers.gui2022.method import (
+    ESTIMATE_ERROR_AT,
+    LOWPASS_WINDOW,
+    care_cached,
+    lmi_design_cached,
+)
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.papers.programs import executable
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
@@ -84,7 +89,7 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     progress(2 / steps, "gui2022-ilo (q_hat offset)")
     ov_off = {"simulation.horizon": 20.0, "simulation.record_every": 10,
               "initial.estimate_offset": list(pub.ESTIMATE_OFFSET)}
-    ds_off, _ = run_scenario(load_scenario("gui2022-ilo", ov_off), timings, "gui2022-ilo-offset")
+    ds_off, m_off = run_scenario(load_scenario("gui2022-ilo", ov_off), timings, "gui2022-ilo-offset")
     progress(3 / steps, "gui2022-lof2tc")
     ds_lof, m_lof = run_scenario(load_scenario("gui2022-lof2tc", ov), timings)
     progress(4 / steps, "gui2022-cof2tc")
@@ -127,39 +132,26 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
                    "v(t) vs h(t) = d + e_F"),
         ]
 
-    # --- numbers -------------------------------------------------------------------------------
-    t_off = ds_off.time.values
-    epos_off = np.linalg.norm(ds_off.estimation_error.values[:, :3], axis=1)
-    e_at = {tt: float(epos_off[np.argmin(np.abs(t_off - tt))]) for tt in (0.0, 1.0, 2.0)}
-    tl = ds_lof.time.values
-    h = ds_lof.synthesized_disturbance_mean.values
-    v = ds_lof.compensation.values
-    w = tl >= 1600
-    v_h_rms = float(np.sqrt(np.mean(np.sum((v[w] - h[w]) ** 2, axis=1)))) if w.any() else float("nan")
-    h_rms = float(np.sqrt(np.mean(np.sum(h[w] ** 2, axis=1)))) if w.any() else float("nan")
+    # --- numbers (every one accumulated in-run at every step; none read from the decimated records) ---
+    e_at = {tt: m_off[f"estimate_pos_err_at_{tt:g}s"] for tt in ESTIMATE_ERROR_AT}
+    # Fig. 10, low-pass (boxcar of LOWPASS_WINDOW) RMS of |v - h| and |h| after position_rms_start: the
+    # block means of each axis combine exactly, rms|x| = sqrt(sum over axes of rms_axis^2)
+    v_h_rms = float(np.sqrt(sum(m_lof[f"compensation_error_lowpass_rms_{ax}"] ** 2 for ax in "xyz")))
+    h_rms = float(np.sqrt(sum(m_lof[f"synthesized_disturbance_lowpass_rms_{ax}"] ** 2 for ax in "xyz")))
     A, B = cw_matrices(n)
     care = care_cached(n, pub.CARE_Q_SCALE)
     dP = float(np.max(np.abs(care.P - pub.P1_PRINTED)))
     K_care_4dp = np.round(B.T @ care.P, 4)
 
-    def lowpass_rms(ds, i, start):
-        """rms of F - (record-interval mean of F_hat) for t >= start (chatter averaged out)."""
-        t = ds.time.values
-        e = (ds.fault - ds.fault_estimate_mean).values[t >= start, i]
-        return float(np.sqrt(np.mean(e**2))) if e.size else float("nan")
+    def chatter(m):
+        """largest over the axes of the RMS of F_hat about its boxcar mean over [fault_rms_delay, x onset)
+        (100 s to 1500 s): the amplitude of the period-2 chatter."""
+        return float(max(m[f"fault_estimate_chatter_rms_{ax}"] for ax in "xyz"))
 
-    def chatter(ds):
-        """median |F_hat - mean F_hat| over 100 s <= t < 1500 s (amplitude of the period-2 chatter)."""
-        t = ds.time.values
-        w = (t >= 100) & (t < 1500)
-        return float(np.max(np.median(np.abs((ds.fault_estimate - ds.fault_estimate_mean).values[w]), axis=0))) \
-            if w.any() else float("nan")
-
-    starts = {"x": 1600.0, "y": 100.0, "z": 2100.0}
     summary: dict = {}
-    for i, ax in enumerate("xyz"):
-        summary[f"ilo_lowpass_rms_err_{ax}"] = lowpass_rms(ds_ilo, i, starts[ax])
-        summary[f"ilo_baseline_lowpass_rms_err_{ax}"] = lowpass_rms(ds_base, i, starts[ax])
+    for ax in "xyz":
+        summary[f"ilo_lowpass_rms_err_{ax}"] = m_ilo[f"fault_lowpass_rms_err_{ax}"]
+        summary[f"ilo_baseline_lowpass_rms_err_{ax}"] = m_base[f"fault_lowpass_rms_err_{ax}"]
         summary[f"ilo_rms_err_{ax}"] = m_ilo[f"fault_rms_err_{ax}"]
         summary[f"ilo_baseline_rms_err_{ax}"] = m_base[f"fault_rms_err_{ax}"]
         summary[f"ilo_final_err_{ax}"] = m_ilo[f"final_fault_err_{ax}"]
@@ -169,8 +161,8 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
         summary[f"ilo_lmi_rms_err_{ax}"] = m_lmi[f"fault_rms_err_{ax}"]
         summary[f"ilo_lmi_scaled_rms_err_{ax}"] = m_lmis[f"fault_rms_err_{ax}"]
     summary.update(
-        ilo_chatter_amplitude_before_faults=chatter(ds_ilo),
-        ilo_baseline_chatter_amplitude_before_faults=chatter(ds_base),
+        ilo_chatter_amplitude_before_faults=chatter(m_ilo),
+        ilo_baseline_chatter_amplitude_before_faults=chatter(m_base),
         ilo_settle_time_x=m_ilo["fault_settle_time_x"], ilo_baseline_settle_time_x=m_base["fault_settle_time_x"],
         ilo_sign_mean_vx=m_ilo["sign_mean_vx"], ilo_sign_mean_vz=m_ilo["sign_mean_vz"],
         ilo_estimate_max_err_10_1500s=m_ilo["estimate_max_err_after_start"],
@@ -250,7 +242,8 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
              f"rms ||e_pos|| after 1600 s: {m_lof['pos_rms']:.3g} vs {m_cof['pos_rms']:.4g} m", "LOF2TC < COF2TC",
              (("<", m_lof["pos_rms"], m_cof["pos_rms"]),)),
         _row("Fig. 10: v estimates h = d + e_F", "accurate (Fig. 10 text)",
-             f"rms |v - h| after 1600 s = {v_h_rms:.3g} (rms |h| {h_rms:.3g})", "< 0.5 rms |h|",
+             f"rms |v - h| after 1600 s = {v_h_rms:.3g} (rms |h| {h_rms:.3g}), both low-pass "
+             f"(boxcar means over {LOWPASS_WINDOW:g} s)", "< 0.5 rms |h|",
              (("<", v_h_rms, 0.5 * h_rms),)),
         _row("pi(t) peak", "", f"{m_lof['pi_max']:.4g}", "-", None),
     ]
@@ -267,10 +260,13 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
         "Q2 L2/tau ~ 4.6e5 s^-2) absorbs everything else, so both ILOs reconstruct F + d; the new one is shifted by "
         "-gamma: F_hat_x ~ F_x + d_x - gamma. Where F_hat is small (before the faults, y axis, z near its zero "
         "crossings) sgn(e_v) switches every step and F_hat chatters with period 2 steps (500 Hz) with amplitude "
-        f"{summary['ilo_chatter_amplitude_before_faults']:.3g} m/s^2 (baseline {summary['ilo_baseline_chatter_amplitude_before_faults']:.2g}); "
+        f"{summary['ilo_chatter_amplitude_before_faults']:.3g} m/s^2 (baseline {summary['ilo_baseline_chatter_amplitude_before_faults']:.2g}; "
+        f"RMS of F_hat about its boxcar mean over {LOWPASS_WINDOW:g} s blocks, 100-1500 s, largest axis); "
         "its mean is F + d to ~1e-7. Decimated samples (every 100th step) see one phase of this chatter, which "
         "looks like a constant 4.2e-4 offset (probably the '4.2e-4 offset' of E002-11); the figures therefore show "
-        "record-interval means, and the per-step rms metrics include the chatter. Low-pass rms errors: x new "
+        "record-interval means, and the per-step rms metrics include the chatter. Low-pass rms errors (F - F_hat "
+        f"averaged over consecutive {LOWPASS_WINDOW:g} s blocks, every step counted, then the RMS of the block "
+        "means over the rms window): x new "
         f"{summary['ilo_lowpass_rms_err_x']:.3g} vs [25] {summary['ilo_baseline_lowpass_rms_err_x']:.3g}, z "
         f"{summary['ilo_lowpass_rms_err_z']:.3g} vs {summary['ilo_baseline_lowpass_rms_err_z']:.3g}. Neither ILO "
         "separates d from F (Remark 3's claim); even in continuous time a sliding mode e_v = 0 is incompatible "

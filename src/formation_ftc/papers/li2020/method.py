@@ -49,10 +49,13 @@ from formation_ftc.sim.components import NoNetwork, as_float
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric
 
-__all__ = ["build", "make_loop", "metrics_of", "MU1_AT", "METHOD"]
+__all__ = ["build", "make_loop", "metrics_of", "MU1_AT", "E000_04_WINDOW", "METHOD"]
 
 #: times [s] of the mu1_at_<t>s metrics (those within the horizon)
 MU1_AT = (10.0, 20.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)
+#: window [s] of ``mu1_max_50_300s`` (the E000-04 comparison of the literal and corrected d_hat sign;
+#: declared when the horizon reaches its end)
+E000_04_WINDOW = (50.0, 300.0)
 
 
 def _formation(s: Li2020Scenario) -> RotatingFormation:
@@ -127,9 +130,15 @@ def metrics_of(s: Li2020Scenario) -> tuple[Metric, ...]:
           Metric("position_error_final", "position_error", "last", norm=True, spacecraft="each", units="m"),
           Metric("velocity_error_final", "velocity_error", "last", norm=True, spacecraft="each",
                  units="m s-1")]
+    lo, hi = E000_04_WINDOW
+    if T >= hi - 1e-9:
+        m.append(Metric("mu1_max_50_300s", "mu1", "max", units="m", start=as_float(lo), end=as_float(hi)))
     names = ("b_hat",) if s.controller.law == "sir-ftc" else ("m_hat", "beta_hat", "d_hat")
     units = {"m_hat": "kg", "beta_hat": "1", "d_hat": "N", "b_hat": "N"}
     m += [Metric(f"{n}_final", n, "last", spacecraft="each", units=units[n]) for n in names]
+    # value at the step t = 0.9 T (the adaptive parameters' drift over the last 10 % of the horizon)
+    m += [Metric(f"{n}_at_90pct", n, "at", spacecraft="each", units=units[n], start=as_float(0.9 * T))
+          for n in names]
     return tuple(m)
 
 
