@@ -99,3 +99,25 @@ def test_divergence_replays_compile_once_per_structure():
     assert size >= 1  # the diagnostic went through the compiled replay
     diverged(2e6)  # another run of the same structure: the replay program is reused
     assert engine._params_replay._cache_size() == size
+
+
+def test_block_metrics_from_a_scenario_file_need_a_block_and_match_numpy():
+    """`block_rms` / `block_dev_rms` are offered in [[metrics]]: a missing block is a validation error
+    naming the field; with one, the metric equals numpy on the every-step records."""
+    with pytest.raises(ValueError, match="block = 0: reduce = 'block_rms' needs a block"):
+        ftc.load_scenario(_raw(metrics=[{"name": "x", "signal": "position_error", "reduce": "block_rms"}]))
+    raw = _raw(metrics=[{"name": "lp", "signal": "position_error", "reduce": "block_rms", "block": 5,
+                         "norm": True, "spacecraft": "max"},
+                        {"name": "hf", "signal": "position_error", "reduce": "block_dev_rms", "block": 5,
+                         "norm": True, "spacecraft": "max"}])
+    raw["simulation"]["record_every"] = 1
+    ds, metrics = simulate_with_metrics(ftc.load_scenario(raw))
+    # spacecraft combined first (max over spacecraft at each step), the horizon sample excluded
+    e = np.linalg.norm(ds.position_error.values, axis=-1).max(axis=1)[:-1]
+    n_blocks = e.shape[0] // 5
+    blocks = e[: n_blocks * 5].reshape(n_blocks, 5)
+    lp = np.sqrt(np.mean(blocks.mean(axis=1) ** 2))
+    hf = np.sqrt(np.mean((blocks - blocks.mean(axis=1, keepdims=True)) ** 2))
+    assert n_blocks >= 4 and hf > 1e-6 * lp  # a real test: several blocks, a deviation inside them
+    np.testing.assert_allclose(metrics["lp"], lp, rtol=1e-12)
+    np.testing.assert_allclose(metrics["hf"], hf, rtol=1e-12)

@@ -41,7 +41,7 @@ from formation_ftc.registry import Condition, Method, register_method
 from formation_ftc.sim.compiled import Compiled, compile_loop
 from formation_ftc.sim.components import CompositionError, Plant, as_float
 from formation_ftc.sim.loop import ClosedLoop
-from formation_ftc.sim.metrics import REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
+from formation_ftc.sim.metrics import BLOCK_REDUCTIONS, REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
 
 __all__ = ["ComposedScenario", "ComponentType", "BuildContext", "register_component_type", "component_types",
            "make_loop", "build", "SLOTS", "KINDS", "per_spacecraft"]
@@ -140,11 +140,16 @@ class MetricSection(StrictModel):
     threshold: float = Field(0.0, description="Threshold of the 'settle' reduction [signal units].")
     norm_ord: Literal["2", "inf"] = Field("2", description="Norm of `norm`: '2' Euclidean, 'inf' largest |component|.")
     gate: str | None = Field(None, description="Name of a recorded signal: only samples where it is true count.")
+    block: int = Field(0, ge=0, le=10_000_000, description=(
+        "Block length of the 'block_rms' / 'block_dev_rms' reductions [steps] (>= 1 for those; 0 otherwise)."))
 
     @model_validator(mode="after")
     def _known(self):
         if self.reduce not in REDUCTIONS:
             raise ValueError(f"reduce = {self.reduce!r}: must be one of {', '.join(REDUCTIONS)}")
+        if self.reduce in BLOCK_REDUCTIONS and self.block < 1:
+            raise ValueError(f"block = {self.block}: reduce = {self.reduce!r} needs a block of >= 1 steps "
+                             "(e.g. block = 100)")
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
             raise ValueError(f"spacecraft = {self.spacecraft!r}: must be one of {', '.join(SPACECRAFT_REDUCTIONS)}")
         return self
@@ -241,7 +246,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
     metrics = tuple(Metric(m.name, m.signal, m.reduce, norm=m.norm, spacecraft=m.spacecraft, units=m.units,
                            start=as_float(m.start), end=as_float(m.end), threshold=as_float(m.threshold),
-                           norm_ord=m.norm_ord, gate=m.gate)
+                           norm_ord=m.norm_ord, gate=m.gate, block=m.block)
                     for m in s.metrics)
     sim = s.simulation
     return ClosedLoop(**parts, metrics=metrics, evaluations=tuple(ctx.evaluations),
