@@ -70,7 +70,9 @@ def test_scenario_runs_records_metrics_check_fault_and_supervisor():
     # ... the supervisor goes Nominal -> LLFR when the estimate arrives (60 s) and LLFR -> FLFR only
     # after the fault pushes the chain errors above e_s (two events, none before the fault)
     mode = ds["mode"].values
-    np.testing.assert_array_equal(mode[t <= 60.0], 0)
+    # a record at t_k holds the decision in force over [t_k, t_k+1): LLFR from the estimate's arrival at 60 s
+    np.testing.assert_array_equal(mode[t < 60.0], 0)
+    assert mode[np.flatnonzero(t >= 60.0)[0]] == 1
     assert 60.0 < m["t_flfr"] < 65.0 and m["n_events"] == 2.0
     np.testing.assert_array_equal(mode[t > m["t_flfr"]], 2)
     np.testing.assert_array_equal(ds.mode_changes.values[t > m["t_flfr"]], 2)
