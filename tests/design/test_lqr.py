@@ -94,3 +94,14 @@ def test_bad_input(kwargs, needle):
     args = dict(mean_motion=N_7000, max_position_error=10.0, max_velocity_error=1.0, max_acceleration=1.0) | kwargs
     with pytest.raises(ValueError, match=needle):
         cw_lqr(**args)
+
+
+def test_cw_lqr_solves_once_per_design_and_shares_read_only_arrays():
+    from formation_ftc.design.lqr import cw_lqr
+
+    a = cw_lqr(0.0011, 1.0, [0.1, 0.1, 0.1], 0.01)
+    b = cw_lqr(0.0011, [1.0, 1.0, 1.0], 0.1, [0.01, 0.01, 0.01])  # the same design written another way
+    assert b is a
+    assert not a.K.flags.writeable and not a.P.flags.writeable
+    c = cw_lqr(0.0011, 2.0, 0.1, 0.01)
+    assert c is not a and not np.allclose(c.K, a.K)

@@ -14,6 +14,7 @@ Offline design code (numpy/scipy); never called inside the time loop.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,8 +110,21 @@ def cw_lqr(mean_motion: float, max_position_error, max_velocity_error, max_accel
     """
     if not (np.isfinite(mean_motion) and mean_motion >= 0):
         raise ValueError(f"mean_motion = {mean_motion}: must be finite and >= 0 rad/s")
-    A, B = cw_matrices(float(mean_motion))
-    emax = np.concatenate([_positive(max_position_error, 3, "max_position_error"),
-                           _positive(max_velocity_error, 3, "max_velocity_error")])
-    Q, R = bryson_weights(emax, _positive(max_acceleration, 3, "max_acceleration"))
-    return lqr(A, B, Q, R)
+    pos = _positive(max_position_error, 3, "max_position_error")
+    vel = _positive(max_velocity_error, 3, "max_velocity_error")
+    acc = _positive(max_acceleration, 3, "max_acceleration")
+    return _cw_lqr_cached(float(mean_motion), tuple(pos.tolist()), tuple(vel.tolist()), tuple(acc.tolist()))
+
+
+@functools.lru_cache(maxsize=256)
+def _cw_lqr_cached(mean_motion: float, pos: tuple[float, ...], vel: tuple[float, ...],
+                   acc: tuple[float, ...]) -> LqrDesign:
+    """The design of :func:`cw_lqr` for validated inputs, solved once per distinct input (a campaign or
+    league builds the same controller for every run); its arrays are read-only since they are shared."""
+    A, B = cw_matrices(mean_motion)
+    Q, R = bryson_weights(np.asarray(pos + vel), np.asarray(acc))
+    design = lqr(A, B, Q, R)
+    for value in vars(design).values():
+        if isinstance(value, np.ndarray):
+            value.setflags(write=False)
+    return design
