@@ -84,7 +84,7 @@ def _n_chunks(out: Path) -> int:
 
 @pytest.mark.slow
 def test_second_writer_is_refused_and_the_first_finishes(tmp_path, tiny, write_campaign, capsys):
-    raw, spec = _slow_campaign(tiny, write_campaign, tmp_path / "slow.toml", n_chunks=30, horizon=6000.0)
+    raw, spec = _slow_campaign(tiny, write_campaign, tmp_path / "slow.toml", n_chunks=12, horizon=6000.0)
     out = tmp_path / "out"
     first = subprocess.Popen([sys.executable, "-m", "formation_ftc.campaign.cli", "run", str(spec), "--out", str(out),
                               "--no-progress", "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -105,7 +105,7 @@ def test_second_writer_is_refused_and_the_first_finishes(tmp_path, tiny, write_c
             first.kill()
             first.wait()
     results = CampaignStore.read(out).load_results()
-    assert results["run_id"].tolist() == list(range(60))
+    assert results["run_id"].tolist() == list(range(24))
 
 
 # -------------------------------------------------------------------------------------- checksum
