@@ -26,7 +26,7 @@ demo: $(STAMP)
 
 ## whole test suite (2 xdist workers)
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q --durations=15
+	$(BIN)/python -m pytest -n 2 --dist worksteal -q --durations=15
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -x -m "not slow"
