@@ -155,3 +155,12 @@ def test_random_structural_choice_splits_a_chunk_by_static_key(tmp_path, tiny):
     for r in (modes.index("continuous"), modes.index("sampled")):
         _, single = api.simulate_with_metrics(plan.scenario(plan.run_inputs(r)))
         assert df.loc[r, "metric:delta_v_total"] == pytest.approx(single["delta_v_total"], rel=RTOL)
+
+
+def test_clear_bindings_forgets_the_bound_templates():
+    from formation_ftc.campaign import runner
+
+    runner._BINDINGS[("plan", "group")] = None
+    runner._VERIFIED.add(("plan", "group"))
+    runner.clear_bindings()
+    assert ("plan", "group") not in runner._BINDINGS and ("plan", "group") not in runner._VERIFIED

@@ -10,7 +10,29 @@ import numpy as np
 import pytest
 
 from formation_ftc import api
+from formation_ftc.sim import batch as batch_module
 from formation_ftc.sim.batch import batched_run, stack_params
+
+
+def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
+    """The per-process cache of batch programs is bounded (least recently used dropped first), and a
+    cached program is returned unchanged on a second call."""
+    monkeypatch.setattr(batch_module, "MAX_KEPT", 2)
+    batch_module.clear()
+
+    def program(key):
+        return type("Compiled", (), {"static_key": key, "run": staticmethod(lambda p: {"y": 2.0 * p["x"]})})()
+
+    axes = {"x": 0}
+    a = batched_run(program("a"), axes, 3)
+    assert batched_run(program("a"), axes, 3) is a  # cached
+    b = batched_run(program("b"), axes, 3)
+    assert batched_run(program("a"), axes, 3) is a  # a used last: b is the oldest now
+    batched_run(program("c"), axes, 3)  # evicts b
+    assert batched_run(program("a"), axes, 3) is a
+    assert batched_run(program("b"), axes, 3) is not b  # rebuilt
+    np.testing.assert_array_equal(a({"x": np.arange(3.0)})["y"], [0.0, 2.0, 4.0])
+    batch_module.clear()
 
 
 def test_stack_params_shares_equal_leaves_and_pads():

@@ -137,6 +137,12 @@ _BINDINGS: dict[Any, Any] = {}
 _VERIFIED: set[Any] = set()
 
 
+def clear_bindings() -> None:
+    """Forget this process's bound-parameter templates (each holds a built scenario and its program)."""
+    _BINDINGS.clear()
+    _VERIFIED.clear()
+
+
 def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
                  t_start: float) -> Callable[[], ChunkResult] | None:
     """The fast path: one build per structural group, sampled values written into the parameter

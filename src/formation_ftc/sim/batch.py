@@ -15,15 +15,19 @@ compiled program's ``static_key``.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import jax
 import numpy as np
 
-__all__ = ["stack_params", "batched_run"]
+__all__ = ["stack_params", "batched_run", "clear"]
 
-_CACHE: dict[Any, Callable] = {}
+#: batch programs kept per process (least recently used dropped first): a campaign reuses one per
+#: structural group and chunk size, and an unbounded cache made a long session hold every executable
+MAX_KEPT = 16
+_CACHE: OrderedDict[Any, Callable] = OrderedDict()
 
 
 def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, Any]:
@@ -64,7 +68,7 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
 def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
-    Cached per ``(compiled.static_key, batched leaves, size)``."""
+    Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used."""
     flags = tuple(a is not None for a in jax.tree_util.tree_leaves(in_axes, is_leaf=lambda a: a is None))
     key = (compiled.static_key, flags, int(size))
     fn = _CACHE.get(key)
@@ -72,4 +76,14 @@ def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
         run = compiled.run
         fn = jax.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)))
         _CACHE[key] = fn
+        while len(_CACHE) > MAX_KEPT:
+            _CACHE.popitem(last=False)
+    else:
+        _CACHE.move_to_end(key)
     return fn
+
+
+def clear() -> None:
+    """Forget the cached batch programs (a long-lived process releases their executables once JAX's own
+    caches are cleared too, ``jax.clear_caches()``)."""
+    _CACHE.clear()
