@@ -15,6 +15,8 @@ from typing import Any
 
 import jax
 
+from formation_ftc.sim.cache import lru_get, lru_put
+
 __all__ = ["simulate", "jitted_run", "executable", "clear"]
 
 #: at most this many programs (and executables) are kept, least recently used dropped first, so that a
@@ -24,26 +26,12 @@ _PROGRAMS: OrderedDict[Hashable, Callable[[Any], Any]] = OrderedDict()
 _EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
 
 
-def _get(cache: OrderedDict, key: Hashable) -> Any:
-    value = cache.get(key)
-    if value is not None:
-        cache.move_to_end(key)
-    return value
-
-
-def _put(cache: OrderedDict, key: Hashable, value: Any) -> Any:
-    cache[key] = value
-    while len(cache) > MAX_KEPT:
-        cache.popitem(last=False)
-    return value
-
-
 def jitted_run(compiled) -> Callable[[Any], Any]:
     """``jax.jit(compiled.run)``, shared by every compiled scenario with the same ``static_key``
     (JAX still retraces if the parameters' shapes or static fields differ)."""
-    fn = _get(_PROGRAMS, compiled.static_key)
+    fn = lru_get(_PROGRAMS, compiled.static_key)
     if fn is None:
-        fn = _put(_PROGRAMS, compiled.static_key, jax.jit(compiled.run))
+        fn = lru_put(_PROGRAMS, compiled.static_key, jax.jit(compiled.run), MAX_KEPT)
     return fn
 
 
@@ -58,12 +46,12 @@ def executable(compiled) -> tuple[Any, float]:
     leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
     key = (compiled.static_key, treedef,
            tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves))
-    exe = _get(_EXECUTABLES, key)
+    exe = lru_get(_EXECUTABLES, key)
     if exe is not None:
         return exe, 0.0
     t0 = time.perf_counter()
     jitted: Any = jitted_run(compiled)  # a jax.jit function (its stubs type it as a plain callable)
-    exe = _put(_EXECUTABLES, key, jitted.lower(compiled.params).compile())
+    exe = lru_put(_EXECUTABLES, key, jitted.lower(compiled.params).compile(), MAX_KEPT)
     return exe, time.perf_counter() - t0
 
 

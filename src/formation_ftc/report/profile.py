@@ -33,6 +33,8 @@ __all__ = ["PHASES", "Profiler", "phase", "active", "format_breakdown"]
 
 #: Phases of the breakdown, in table order.
 PHASES = ("compile", "run", "post", "plot", "report")
+#: decimals [s] kept in stored phase times: to the microsecond, so that a fast phase is not stored as 0
+DIGITS = 6
 
 _COMPILE_EVENTS = frozenset({
     "/jax/core/compile/jaxpr_trace_duration",
@@ -140,7 +142,7 @@ class Profiler:
         for name, seconds in self.added.items():
             out[name] = out.get(name, 0.0) + seconds
         out["total"] = wall + sum(self.added.values())
-        return {k: round(v, 6) for k, v in out.items()}  # to the microsecond: a fast phase is not 0
+        return {k: round(v, DIGITS) for k, v in out.items()}
 
 
 def active() -> Profiler | None:

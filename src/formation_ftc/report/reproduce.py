@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 from formation_ftc import registry
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
-from formation_ftc.report.profile import PHASES, Profiler, format_breakdown
+from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
@@ -372,8 +372,9 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         _write_json(out / paper / "summary.json", {**summary, "paper": paper})
         if breakdown is not None:
             b = dict(breakdown)
-            b["report"] = round(b.get("report", 0.0) + report_s + time.perf_counter() - t_report, 6)
-            b["total"] = round(b.get("total", 0.0) + report_s + time.perf_counter() - t_report, 6)
+            writing = report_s + time.perf_counter() - t_report  # [s], counted in "report" and in "total"
+            b["report"] = round(b.get("report", 0.0) + writing, DIGITS)
+            b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
             breakdowns[paper] = b
 
     with _Bar(progress, len(selected)) as bar:
@@ -427,7 +428,7 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
-    extra = {"profile": {**breakdowns, "index.html": {"report": round(index_s, 6)}}} if profile else {}
+    extra = {"profile": {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}} if profile else {}
     return {
         "exit_code": 1 if failed else 0,
         "papers": {e["paper"]: {"status": e["status"], "wall_time_s": e["wall_time_s"], "error": e["error"]}

@@ -22,6 +22,8 @@ from typing import Any
 import jax
 import numpy as np
 
+from formation_ftc.sim.cache import lru_get, lru_put
+
 __all__ = ["stack_params", "batched_run", "clear"]
 
 #: batch programs kept per process (least recently used dropped first): a campaign reuses one per
@@ -71,15 +73,11 @@ def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used."""
     flags = tuple(a is not None for a in jax.tree_util.tree_leaves(in_axes, is_leaf=lambda a: a is None))
     key = (compiled.static_key, flags, int(size))
-    fn = _CACHE.get(key)
+    fn = lru_get(_CACHE, key)
     if fn is None:
         run = compiled.run
-        fn = jax.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)))
-        _CACHE[key] = fn
-        while len(_CACHE) > MAX_KEPT:
-            _CACHE.popitem(last=False)
-    else:
-        _CACHE.move_to_end(key)
+        fn = lru_put(_CACHE, key, jax.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))),
+                     MAX_KEPT)
     return fn
 
 

@@ -1,0 +1,33 @@
+"""Bounded caches of compiled programs: least recently used entries are dropped first.
+
+A long session (a notebook, a campaign service, a test run) builds many programs; keeping every
+executable it ever compiled makes its memory grow without bound. :func:`lru_get` and :func:`lru_put`
+keep an ``OrderedDict`` in recency order and cap its size.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Hashable
+from typing import Any, TypeVar
+
+__all__ = ["lru_get", "lru_put"]
+
+V = TypeVar("V")
+
+
+def lru_get(cache: OrderedDict, key: Hashable) -> Any:
+    """``cache[key]`` marked as most recently used, or None when absent."""
+    value = cache.get(key)
+    if value is not None:
+        cache.move_to_end(key)
+    return value
+
+
+def lru_put(cache: OrderedDict, key: Hashable, value: V, max_kept: int) -> V:
+    """Store ``value`` as the most recently used entry and drop the oldest beyond ``max_kept``."""
+    cache[key] = value
+    cache.move_to_end(key)
+    while len(cache) > max_kept:
+        cache.popitem(last=False)
+    return value
