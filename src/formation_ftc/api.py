@@ -20,6 +20,7 @@ from formation_ftc.config import loader
 from formation_ftc.config.base import ScenarioBase
 from formation_ftc.provenance import provenance
 from formation_ftc.registry import Compiled, Condition, get_method
+from formation_ftc.sim import xla
 from formation_ftc.sim.engine import SimulationDiverged, diagnose_divergence, trim_records
 
 __all__ = [
@@ -146,7 +147,7 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path):
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)
-    out = jax.jit(compiled.run)(compiled.params)
+    out = xla.jit(compiled.run)(compiled.params)
     return finish_run(scenario, compiled, out)
 
 

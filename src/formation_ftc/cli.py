@@ -311,6 +311,7 @@ def _cmd_run(args) -> int:
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.registry import get_method
     from formation_ftc.runout import check_out_dir, plot_view, staged_output
+    from formation_ftc.sim import xla
     from formation_ftc.sim.engine import SimulationDiverged
 
     console = Console(stderr=True, quiet=_VERBOSITY < 0)
@@ -328,7 +329,7 @@ def _cmd_run(args) -> int:
     t0 = time.perf_counter()
     with console.status(f"compiling and running {scenario.scenario.name} "
                         f"({scenario.simulation.n_steps:,} steps)..."):
-        out = jax.jit(compiled.run)(compiled.params)
+        out = xla.jit(compiled.run)(compiled.params)
         jax.block_until_ready(out)
     wall = time.perf_counter() - t0
     code = 0

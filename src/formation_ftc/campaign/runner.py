@@ -29,6 +29,7 @@ k is written by a background writer thread while chunk k+1 computes; the stored 
 
 from __future__ import annotations
 
+import functools
 import json
 import time
 import warnings
@@ -45,6 +46,7 @@ import pandas as pd
 from formation_ftc.campaign.sampling import CampaignPlan, Chunk, RunColumns, all_numbers
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
+from formation_ftc.sim import xla
 from formation_ftc.sim.batch import batched_run, stack_params
 
 __all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "start_chunk", "run_campaign", "metric_names", "make_plan"]
@@ -127,9 +129,16 @@ def _closed_loop_run(loop):
     return loop.run()
 
 
-#: one closed-loop run with its records, jitted once: the loop is an argument (a pytree), so every failed
-#: or traced run of one structure reuses one compiled program instead of tracing a new closure per run
-_run_alone = jax.jit(_closed_loop_run)
+@functools.cache
+def _run_alone_program() -> Callable:
+    """One closed-loop run with its records, jitted once (on first use: building it picks the backend's
+    compile options): the loop is an argument (a pytree), so every failed or traced run of one structure
+    reuses one compiled program instead of tracing a new closure per run."""
+    return xla.jit(_closed_loop_run)
+
+
+def _run_alone(loop):
+    return _run_alone_program()(loop)
 
 #: per-process cache: (plan hash, group key) -> (template Compiled, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}

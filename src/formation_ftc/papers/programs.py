@@ -15,6 +15,7 @@ from typing import Any
 
 import jax
 
+from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
 
 __all__ = ["simulate", "jitted_run", "executable", "clear"]
@@ -31,7 +32,7 @@ def jitted_run(compiled) -> Callable[[Any], Any]:
     (JAX still retraces if the parameters' shapes or static fields differ)."""
     fn = lru_get(_PROGRAMS, compiled.static_key)
     if fn is None:
-        fn = lru_put(_PROGRAMS, compiled.static_key, jax.jit(compiled.run), MAX_KEPT)
+        fn = lru_put(_PROGRAMS, compiled.static_key, xla.jit(compiled.run), MAX_KEPT)
     return fn
 
 

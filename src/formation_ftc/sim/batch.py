@@ -22,6 +22,7 @@ from typing import Any
 import jax
 import numpy as np
 
+from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
 
 __all__ = ["stack_params", "batched_run", "clear"]
@@ -70,14 +71,17 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
 def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
-    Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used."""
+    Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
+    Compiled with :func:`formation_ftc.sim.xla.compiler_options` (the fast-compile preset when the loop's
+    controller sets ``batch_fast_compile``)."""
     flags = tuple(a is not None for a in jax.tree_util.tree_leaves(in_axes, is_leaf=lambda a: a is None))
     key = (compiled.static_key, flags, int(size))
     fn = lru_get(_CACHE, key)
     if fn is None:
         run = compiled.run
-        fn = lru_put(_CACHE, key, jax.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))),
-                     MAX_KEPT)
+        fast = bool(getattr(getattr(getattr(compiled, "params", None), "controller", None), "batch_fast_compile", False))
+        fn = lru_put(_CACHE, key, xla.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)),
+                                          fast_compile=fast), MAX_KEPT)
     return fn
 
 

@@ -402,6 +402,9 @@ class Controller(_Kind):
 
     kind: ClassVar[str] = "controller"
     quantity: ClassVar[str] = "force"
+    #: compile batches of loops with this law with XLA's fast-compile preset (:mod:`formation_ftc.sim.xla`):
+    #: worth it only for a step with many operations per spacecraft; measured, not assumed
+    batch_fast_compile: ClassVar[bool] = False
 
     @property
     def sampled(self) -> bool:

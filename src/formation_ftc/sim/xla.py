@@ -1,0 +1,74 @@
+"""XLA:CPU compile options for the simulation programs, and the one ``jit`` that applies them.
+
+A closed-loop run is a long ``lax.scan`` of a step made of many tiny array operations (a few spacecraft,
+3-vectors, 3 x 3 matrices). On the CPU such a step costs what XLA's runtime spends dispatching its
+operations more than the arithmetic. Two compile options change that cost (measured on the 2-core
+machine, best of 3-5 alternating repeats; README "Performance"):
+
+* **YNNPACK library fusions off** (``xla_cpu_experimental_ynn_fusion_type`` empty), on every program:
+  XLA's default hands element-wise groups to a library call whose fixed cost is far above the work on a
+  60 x 8 x 3 array; with it off XLA emits its own loops. Mehrabian seed study (60 runs x 8 spacecraft):
+  21-23 -> 15-16 us per run-step; Li2020 ``reproduce`` run phase 16.4 -> 14.8 s; single Gui2022 observer
+  runs unchanged (1.8 us per step).
+* **The fast-compile optimisation preset** (``xla_cpu_opt_preset = CPU_OPT_PRESET_FAST_COMPILE``), on
+  batched programs whose controller asks for it (:attr:`~formation_ftc.sim.components.Controller.batch_fast_compile`):
+  Mehrabian seed study 15 -> 10.6-11 us per run-step, but it skips XLA's hoisting of small loops, which
+  makes small steps slower (single Azizi2009 run 1.7 -> 3.2 us per step, batched Gui2022 observer 0.38
+  -> 0.67 us per run-step). Hence opt-in per law, not a default.
+
+Neither option enables fast-math or reassociation; they change which kernels XLA emits, so a result
+can differ from the default build in the last bits (``reproduce all``: identical numbers except the
+Mehrabian batches, about 1e-14 relative; README "Engine"). The
+options go to each compilation (``jax.jit(..., compiler_options=...)``), never to the process-wide
+``XLA_FLAGS``: an option this jaxlib does not know is dropped after a one-time probe instead of
+aborting the process, and other JAX code in the same process is untouched.
+``FORMATION_FTC_XLA_OPTIONS=off`` switches them off (A/B measurements).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Callable
+from typing import Any
+
+import jax
+
+__all__ = ["DEFAULT_OPTIONS", "FAST_COMPILE_OPTIONS", "compiler_options", "jit", "ENV_SWITCH"]
+
+#: environment variable that switches the options off (``off``, ``0``, ``false`` or ``no``)
+ENV_SWITCH = "FORMATION_FTC_XLA_OPTIONS"
+
+#: options of every simulation program
+DEFAULT_OPTIONS: dict[str, str] = {"xla_cpu_experimental_ynn_fusion_type": ""}
+#: options of a batched program whose controller asks for the fast-compile preset
+FAST_COMPILE_OPTIONS: dict[str, str] = {**DEFAULT_OPTIONS, "xla_cpu_opt_preset": "CPU_OPT_PRESET_FAST_COMPILE"}
+
+
+def _enabled() -> bool:
+    return os.environ.get(ENV_SWITCH, "").strip().lower() not in {"off", "0", "false", "no"}
+
+
+@functools.cache
+def _supported(name: str, value: str) -> bool:
+    """Whether this jaxlib's compiler accepts ``name=value`` (compiles a one-operation program once)."""
+    try:
+        jax.jit(lambda x: x + 1.0).lower(jax.numpy.zeros(1)).compile(compiler_options={name: value})
+    except Exception:  # an unknown option or value: INVALID_ARGUMENT from the compiler
+        return False
+    return True
+
+
+def compiler_options(fast_compile: bool = False) -> dict[str, str]:
+    """:data:`DEFAULT_OPTIONS` (or :data:`FAST_COMPILE_OPTIONS`) that this jaxlib accepts, on the CPU
+    backend; empty on other backends or when :data:`ENV_SWITCH` is ``off``."""
+    if not _enabled() or jax.default_backend() != "cpu":
+        return {}
+    wanted = FAST_COMPILE_OPTIONS if fast_compile else DEFAULT_OPTIONS
+    return {k: v for k, v in wanted.items() if _supported(k, v)}
+
+
+def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) -> Callable[..., Any]:
+    """``jax.jit(fn, **kwargs)`` compiled with :func:`compiler_options`."""
+    opts = compiler_options(fast_compile)
+    return jax.jit(fn, compiler_options=opts, **kwargs) if opts else jax.jit(fn, **kwargs)

@@ -1,0 +1,70 @@
+"""XLA:CPU compile options (sim/xla.py): which options apply, that an unknown one is dropped instead of
+aborting, and that compiling with them leaves the arithmetic alone.
+
+Independent truth for the last point: the same program compiled by plain ``jax.jit`` (XLA's defaults).
+The options only change which kernels XLA emits (no fast-math), so a 1-orbit free drift, whose state is
+a sum of bounded trigonometric terms, must agree to 1e-12 relative (a few units in the last place
+accumulated over the orbit's steps); the closed form itself is checked in tests/core/test_cw.py.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import numpy as np
+import pytest
+
+from formation_ftc.api import compile_scenario, load_scenario
+from formation_ftc.sim import batch as batch_mod
+from formation_ftc.sim import xla
+
+
+def test_options_on_cpu_and_switch_off(monkeypatch):
+    monkeypatch.delenv(xla.ENV_SWITCH, raising=False)
+    opts = xla.compiler_options()
+
+    assert opts == {k: v for k, v in xla.DEFAULT_OPTIONS.items() if xla._supported(k, v)}
+    assert set(xla.compiler_options(fast_compile=True)) >= set(opts)
+    monkeypatch.setenv(xla.ENV_SWITCH, "off")
+    assert xla.compiler_options() == {} and xla.compiler_options(fast_compile=True) == {}
+
+
+def test_unknown_option_is_dropped_not_fatal(monkeypatch):
+    monkeypatch.setattr(xla, "DEFAULT_OPTIONS", {**xla.DEFAULT_OPTIONS, "xla_cpu_no_such_option": "1"})
+    assert "xla_cpu_no_such_option" not in xla.compiler_options()
+    assert not xla._supported("xla_cpu_opt_preset", "NOT_A_PRESET")
+    f = xla.jit(lambda x: 2.0 * x)
+    assert float(f(np.float64(1.5))) == 3.0
+
+
+def test_options_leave_the_arithmetic_alone():
+    c = compile_scenario(load_scenario("cw-free-drift"))
+    ours = jax.device_get(xla.jit(c.run)(c.params))
+    plain = jax.device_get(jax.jit(c.run)(c.params))
+    for a, b in zip(jax.tree_util.tree_leaves(ours["final"]), jax.tree_util.tree_leaves(plain["final"]), strict=True):
+        a, b = np.asarray(a), np.asarray(b)
+        if np.issubdtype(a.dtype, np.floating):
+            scale = max(float(np.max(np.abs(b))), 1e-300)
+            assert float(np.max(np.abs(a - b))) <= 1e-12 * scale
+
+
+@pytest.mark.parametrize("fast", [False, True])
+def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fast):
+    c = compile_scenario(load_scenario("cw-free-drift", {"simulation.horizon": 584.0, "simulation.record_every": 1}))
+    monkeypatch.setattr(type(c.params.controller), "batch_fast_compile", fast, raising=False)
+    seen = []
+    real = xla.jit
+
+    def spy(fn, **kw):
+        seen.append(kw.get("fast_compile", False))
+        return real(fn, **kw)
+
+    monkeypatch.setattr(xla, "jit", spy)
+    batch_mod.clear()
+    runs = [dataclasses.replace(c.params, seed=np.uint32(s)) for s in (1, 2)]
+    P, axes = batch_mod.stack_params(runs)
+    out = batch_mod.batched_run(c, axes, 2)(P)
+    batch_mod.clear()
+    assert seen == [fast]
+    assert np.asarray(out["diverged_step"]).tolist() == [-1, -1]
