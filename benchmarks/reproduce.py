@@ -11,6 +11,9 @@ the compile time of every built-in scenario as ``formation-ftc run`` compiles it
    before each scenario, so every number is a cold compile), in one fresh process: wall and process
    CPU time (XLA's compile threads included). The slowest (wall) is printed last.
 
+``FORMATION_FTC_XLA_OPTIONS=off`` in the environment measures XLA's default build instead of the
+package's compile options (``formation_ftc.sim.xla``), for an A/B comparison.
+
 Targets (issue "time to first result", 2 CPU cores): reproduce all cold < 90 s, warm < 40 s; compile
 < 2 s per scenario. Exit status 0 always (a measurement, not a gate); ``--json FILE`` stores the numbers.
 
@@ -37,6 +40,7 @@ _COMPILE_SCRIPT = r"""
 import json, sys, time
 import jax
 from formation_ftc.api import compile_scenario, list_scenarios, load_scenario
+from formation_ftc.sim import xla
 names = sorted(list_scenarios())
 out, cpu = {}, {}
 for name in names:
@@ -44,7 +48,7 @@ for name in names:
     try:
         c = compile_scenario(load_scenario(name))
         t0, c0 = time.perf_counter(), time.process_time()
-        jax.jit(c.run).lower(c.params).compile()
+        xla.jit(c.run).lower(c.params).compile()  # as `formation-ftc run` compiles it (its XLA options)
         out[name] = time.perf_counter() - t0
         cpu[name] = time.process_time() - c0
     except Exception as exc:  # a scenario that cannot compile is reported, not fatal
