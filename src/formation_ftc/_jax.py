@@ -26,4 +26,9 @@ if _cache_dir and _cache_dir.lower() != "off":
     except Exception:  # pragma: no cover - cache is an optimisation only
         pass
 
+# the threefry hash unrolled on the CPU too (identical random numbers; formation_ftc.sim.xla)
+from formation_ftc.sim.xla import use_unrolled_threefry  # noqa: E402
+
+use_unrolled_threefry()
+
 __all__ = ["jax"]

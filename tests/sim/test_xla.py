@@ -68,3 +68,32 @@ def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fa
     batch_mod.clear()
     assert seen == [fast]
     assert np.asarray(out["diverged_step"]).tolist() == [-1, -1]
+
+
+_DRAWS = """
+import json, sys
+import formation_ftc, jax, jax.numpy as jnp
+key = jax.random.fold_in(jax.random.PRNGKey(7), 123)
+k1, k2 = jax.random.split(key)
+draws = {"normal": jax.random.normal(k1, (4, 3), jnp.float64), "uniform": jax.random.uniform(k2, (5,), jnp.float64),
+         "bits": jax.random.bits(key, (6,), jnp.uint32).astype(jnp.float64),
+         "vmapped": jax.jit(jax.vmap(lambda s: jax.random.normal(jax.random.PRNGKey(s), (2,))))(jnp.arange(3))}
+json.dump({k: [float(x) for x in jnp.ravel(v)] for k, v in draws.items()}, sys.stdout)
+"""
+
+
+def test_unrolled_threefry_draws_the_same_numbers(tmp_path):
+    """The unrolled threefry lowering (this process, package default) against JAX's own rolled CPU
+    lowering (a process with the options off): the same random numbers, bit for bit."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env_on = {k: v for k, v in os.environ.items() if k != xla.ENV_SWITCH}
+    runs = {}
+    for name, env in (("unrolled", env_on), ("rolled", {**env_on, xla.ENV_SWITCH: "off"})):
+        out = subprocess.run([sys.executable, "-c", _DRAWS], env=env, capture_output=True, text=True, check=True)
+        runs[name] = json.loads(out.stdout)
+    assert runs["unrolled"] == runs["rolled"]
+    assert os.environ.get(xla.ENV_SWITCH, "") == "off" or xla.use_unrolled_threefry()
