@@ -79,9 +79,10 @@ def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     fn = lru_get(_CACHE, key)
     if fn is None:
         run = compiled.run
-        fast = bool(getattr(getattr(getattr(compiled, "params", None), "controller", None), "batch_fast_compile", False))
-        fn = lru_put(_CACHE, key, xla.jit(jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)),
-                                          fast_compile=fast), MAX_KEPT)
+        controller = getattr(getattr(compiled, "params", None), "controller", None)  # a ClosedLoop's law
+        fast = bool(getattr(controller, "batch_fast_compile", False))
+        batch = jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))
+        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=fast), MAX_KEPT)
     return fn
 
 
