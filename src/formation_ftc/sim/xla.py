@@ -2,7 +2,7 @@
 
 A closed-loop run is a long ``lax.scan`` of a step made of many tiny array operations (a few spacecraft,
 3-vectors, 3 x 3 matrices). On the CPU such a step costs what XLA's runtime spends dispatching its
-operations more than the arithmetic. Two compile options change that cost (measured on the 2-core
+operations more than the arithmetic. Three compile options change that cost (measured on the 2-core
 machine, best of 3-5 alternating repeats; README "Performance"):
 
 * **YNNPACK library fusions off** (``xla_cpu_experimental_ynn_fusion_type`` empty), on every program:
@@ -10,15 +10,27 @@ machine, best of 3-5 alternating repeats; README "Performance"):
   60 x 8 x 3 array; with it off XLA emits its own loops. Mehrabian seed study (60 runs x 8 spacecraft):
   21-23 -> 15-16 us per run-step; Li2020 ``reproduce`` run phase 16.4 -> 14.8 s; single Gui2022 observer
   runs unchanged (1.8 us per step).
+* **XLA's own loop emitter instead of its MLIR fusion emitters** (``xla_cpu_use_fusion_emitters`` off),
+  on every program: XLA:CPU compiles every fusion of the program through an MLIR pipeline of its own,
+  about 12 ms per fusion, and a closed-loop step has 150-200 fusions; its older emitter writes the same
+  loops straight into LLVM IR. Compile time of ``formation-ftc run`` per built-in scenario: li2020-thm1
+  3.5 -> 2.4 s, gui2022-lof2tc 2.9 -> 1.3 s, azizi2009-llfr 1.4 -> 0.8 s, the Mehrabian seed study 6.2
+  -> 3.8 s. Run time: the Mehrabian seed study 19 -> 8.7 us per run-step (with the preset below),
+  li2020-thm1 about 10 % faster, the small Gui2022 and Azizi2009 steps 5-40 % slower (1.5-1.8 ->
+  2.0-2.1 us per step; ``reproduce gui2022`` run phase 38-41 -> 42-44 s). Elementwise functions (sin,
+  exp, log, tanh, pow, arctan2, ...) give the same bits with either emitter (``tests/sim/test_xla.py``);
+  what differs is the order of some fused reductions, i.e. the last bit of a sum.
 * **The fast-compile optimisation preset** (``xla_cpu_opt_preset = CPU_OPT_PRESET_FAST_COMPILE``), on
   batched programs whose controller asks for it (:attr:`~formation_ftc.sim.components.Controller.batch_fast_compile`):
   Mehrabian seed study 15 -> 10.6-11 us per run-step, but it skips XLA's hoisting of small loops, which
   makes small steps slower (single Azizi2009 run 1.7 -> 3.2 us per step, batched Gui2022 observer 0.38
   -> 0.67 us per run-step). Hence opt-in per law, not a default.
 
-Neither option enables fast-math or reassociation; they change which kernels XLA emits, so a result
-can differ from the default build in the last bits (``reproduce all``: identical numbers except the
-Mehrabian batches, about 1e-14 relative; README "Engine"). The
+No option enables fast-math or reassociation; they change which kernels XLA emits, so a result can
+differ from XLA's default build in the last bits. ``reproduce all`` prints the same numbers and verdicts
+with and without them; underneath, Mehrabian and Yang2013 values differ by about 1e-15 relative,
+Gui2022 by 1e-12, Azizi2009 by 1e-11, and li2020's adaptive loop carries a last-bit difference to 1e-5
+relative over 3,000 s (README "Engine"). The
 options go to each compilation (``jax.jit(..., compiler_options=...)``), never to the process-wide
 ``XLA_FLAGS``: an option this jaxlib does not know is dropped after a one-time probe instead of
 aborting the process, and other JAX code in the same process is untouched.
@@ -49,9 +61,10 @@ __all__ = ["DEFAULT_OPTIONS", "FAST_COMPILE_OPTIONS", "compiler_options", "jit",
 ENV_SWITCH = "FORMATION_FTC_XLA_OPTIONS"
 
 #: options of every simulation program
-DEFAULT_OPTIONS: dict[str, str] = {"xla_cpu_experimental_ynn_fusion_type": ""}
+DEFAULT_OPTIONS: dict[str, str | bool] = {"xla_cpu_experimental_ynn_fusion_type": "",
+                                          "xla_cpu_use_fusion_emitters": False}
 #: options of a batched program whose controller asks for the fast-compile preset
-FAST_COMPILE_OPTIONS: dict[str, str] = {**DEFAULT_OPTIONS, "xla_cpu_opt_preset": "CPU_OPT_PRESET_FAST_COMPILE"}
+FAST_COMPILE_OPTIONS: dict[str, str | bool] = {**DEFAULT_OPTIONS, "xla_cpu_opt_preset": "CPU_OPT_PRESET_FAST_COMPILE"}
 
 
 def _enabled() -> bool:
@@ -59,7 +72,7 @@ def _enabled() -> bool:
 
 
 @functools.cache
-def _supported(name: str, value: str) -> bool:
+def _supported(name: str, value: str | bool) -> bool:
     """Whether this jaxlib's compiler accepts ``name=value`` (compiles a one-operation program once)."""
     try:
         jax.jit(lambda x: x + 1.0).lower(jax.numpy.zeros(1)).compile(compiler_options={name: value})
@@ -68,7 +81,7 @@ def _supported(name: str, value: str) -> bool:
     return True
 
 
-def compiler_options(fast_compile: bool = False) -> dict[str, str]:
+def compiler_options(fast_compile: bool = False) -> dict[str, str | bool]:
     """:data:`DEFAULT_OPTIONS` (or :data:`FAST_COMPILE_OPTIONS`) that this jaxlib accepts, on the CPU
     backend; empty on other backends or when :data:`ENV_SWITCH` is ``off``."""
     if not _enabled() or jax.default_backend() != "cpu":
