@@ -18,7 +18,7 @@ import jax
 from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
 
-__all__ = ["simulate", "jitted_run", "executable", "clear"]
+__all__ = ["simulate", "simulate_batched", "jitted_run", "executable", "clear"]
 
 #: at most this many programs (and executables) are kept, least recently used dropped first, so that a
 #: long session (a test run) does not hold every executable it ever compiled
@@ -64,6 +64,43 @@ def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str,
     compiled = compile_scenario(scenario)
     out = jitted_run(compiled)(compiled.params)
     return finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
+
+
+def simulate_batched(scenarios: list, compiled: list | None = None,
+                     timings: list | None = None) -> list[tuple[Any, dict[str, float]]]:
+    """Run scenarios as one ``jax.vmap`` batch per compiled structure (same ``static_key``: only numbers
+    differ; :func:`formation_ftc.sim.batch.batched_run`) and return ``[(xarray.Dataset, {metric: float})]``
+    in order, as :func:`simulate` returns them one by one (a divergence raises, as there).
+
+    ``compiled``: the scenarios' :class:`~formation_ftc.registry.Compiled` (default: compiled here).
+    ``timings``: a list that receives ``(compile_s, run_s)`` of each run's batch [s], in order."""
+    import time
+
+    import numpy as np
+
+    from formation_ftc.api import compile_scenario, finish_run
+    from formation_ftc.sim.batch import batched_run, stack_params
+
+    compiled = [compile_scenario(s) for s in scenarios] if compiled is None else compiled
+    groups: dict[Hashable, list[int]] = {}
+    for i, c in enumerate(compiled):
+        groups.setdefault(c.static_key, []).append(i)
+    results: list[Any] = [None] * len(compiled)
+    times: list[Any] = [None] * len(compiled)
+    for idx in groups.values():
+        batch, in_axes = stack_params([compiled[i].params for i in idx])
+        fn: Any = batched_run(compiled[idx[0]], in_axes, len(idx))  # a jax.jit function
+        t0 = time.perf_counter()
+        exe = fn.lower(batch).compile()
+        t1 = time.perf_counter()
+        out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(exe(batch)))
+        t2 = time.perf_counter()
+        for j, i in enumerate(idx):
+            results[i] = finish_run(scenarios[i], compiled[i], jax.tree_util.tree_map(lambda a, j=j: a[j], out))
+            times[i] = (t1 - t0, t2 - t1)
+    if timings is not None:
+        timings.extend(times)
+    return results
 
 
 def clear() -> None:

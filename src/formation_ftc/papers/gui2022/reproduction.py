@@ -16,7 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, cast
+from typing import cast
 
 import jax
 import numpy as np
@@ -33,10 +33,9 @@ from formation_ftc.papers.gui2022.method import (
     lmi_design_cached,
 )
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
-from formation_ftc.papers.programs import executable
+from formation_ftc.papers.programs import executable, simulate_batched
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
-from formation_ftc.sim.batch import batched_run, stack_params
 
 __all__ = ["run_reproduction", "run_scenario", "run_scenarios", "REPRODUCTION"]
 
@@ -61,7 +60,7 @@ def run_scenario(scn, timings: dict | None = None, label: str | None = None):
 
 def run_scenarios(scns: list, timings: dict | None = None, labels: list[str] | None = None) -> list:
     """Run scenarios of one structure (same ``static_key``: only numbers differ) as one ``jax.vmap``
-    batch (:func:`formation_ftc.sim.batch.batched_run`); returns ``[(deputy dataset, metrics), ...]`` in
+    batch (:func:`formation_ftc.papers.programs.simulate_batched`); returns ``[(deputy dataset, metrics), ...]`` in
     order, as :func:`run_scenario` would. A 3-million-step run of the 6-state observer costs what XLA
     spends dispatching its operations, which a batch shares: three runs take about the time of one.
 
@@ -70,21 +69,12 @@ def run_scenarios(scns: list, timings: dict | None = None, labels: list[str] | N
     if len({c.static_key for c in compiled}) != 1:
         raise ValueError("run_scenarios: the scenarios do not share one compiled program (static keys differ)")
     with phase("run"):
-        batch, axes = stack_params([c.params for c in compiled])
-        fn: Any = batched_run(compiled[0], axes, len(compiled))  # a jax.jit function (typed as a callable)
-        t0 = time.perf_counter()
-        exe = fn.lower(batch).compile()
-        t1 = time.perf_counter()
-        out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(exe(batch)))
-        t2 = time.perf_counter()
-        results = []
-        for i, (scn, c) in enumerate(zip(scns, compiled, strict=True)):
-            label = (labels[i] if labels else None) or scn.scenario.name
-            if timings is not None:
-                timings[label] = (t1 - t0, t2 - t1)
-            ds, metrics = finish_run(scn, c, jax.tree_util.tree_map(lambda a, i=i: a[i], out))
-            results.append((F.deputy(ds), metrics))
-        return results
+        times: list = []
+        runs = simulate_batched(scns, compiled, times)
+    if timings is not None:
+        for i, (scn, t) in enumerate(zip(scns, times, strict=True)):
+            timings[(labels[i] if labels else None) or scn.scenario.name] = t
+    return [(F.deputy(ds), metrics) for ds, metrics in runs]
 
 
 def _fmt(x, p=4):

@@ -38,32 +38,17 @@ def _windows(dt: float) -> tuple:
 
 def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
     """``[(scenario, dataset, metrics)]`` of yang2013 scenarios, run as one batch per compiled structure
-    (:mod:`formation_ftc.sim.batch`); the report's windowed input maxima are added to the metrics."""
-    from formation_ftc.api import finish_run, load_scenario
+    (:func:`formation_ftc.papers.programs.simulate_batched`); the report's windowed input maxima are added
+    to the metrics."""
+    from formation_ftc.api import load_scenario
+    from formation_ftc.papers.programs import simulate_batched
     from formation_ftc.papers.yang2013.method import make_loop
-    from formation_ftc.sim.batch import batched_run, stack_params
     from formation_ftc.sim.compiled import compile_loop
 
     scs: list[Yang2013Scenario] = [s if hasattr(s, "modes") else cast("Yang2013Scenario", load_scenario(s, overrides))
                                    for s in names_or_scenarios]
     compiled = [compile_loop(make_loop(sc, _windows(sc.simulation.dt))) for sc in scs]
-    results: list = [None] * len(scs)
-    groups: dict = {}
-    for i, c in enumerate(compiled):
-        groups.setdefault(c.static_key, []).append(i)
-    for idx in groups.values():
-        batch, in_axes = stack_params([compiled[i].params for i in idx])
-        out = batched_run(compiled[idx[0]], in_axes, len(idx))(batch)
-        for j, i in enumerate(idx):
-            ds, metrics = finish_run(scs[i], compiled[i], {k: _take(v, j) for k, v in out.items()})
-            results[i] = (scs[i], ds, metrics)
-    return results
-
-
-def _take(tree, j: int):
-    import jax
-
-    return jax.tree_util.tree_map(lambda a: np.asarray(a)[j], tree)
+    return [(sc, ds, metrics) for sc, (ds, metrics) in zip(scs, simulate_batched(scs, compiled), strict=True)]
 
 
 def run_scenario(name_or_scenario, overrides=None):
