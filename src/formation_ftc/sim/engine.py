@@ -18,10 +18,10 @@ Divergence: at the end of every record block the state (or the part ``check_of``
 for non-finite values. The first non-finite block records its first step index; a snapshot of the
 state at that block's start (the last finite state) is kept and returned, and the records after it
 (non-finite) are masked out by :func:`trim_records`. :func:`diagnose_divergence` then replays the block
-eagerly to name the time, variable and spacecraft. The snapshot is a separate carry (one select per
-block), never a select on the running state: under ``jax.vmap`` a per-run select would make every
-state leaf batched, even those that depend only on parameters shared by all runs (the reference orbit
-of Li2020), and multiply their cost by the batch size.
+(one compiled loop) to name the time, variable and spacecraft. The snapshot is a separate carry (one
+select per block), never a select on the running state: under ``jax.vmap`` a per-run select would make
+every state leaf batched, even those that depend only on parameters shared by all runs (the reference
+orbit of Li2020), and multiply their cost by the batch size.
 """
 
 from __future__ import annotations
@@ -257,27 +257,29 @@ def _accumulators(step, k, state) -> set[int]:
 
 
 def _replay_loop(step, ok, state, k, n):
+    """Step from ``state`` (step ``k``) until a state fails ``ok`` or ``n`` steps are done. Carry
+    ``(j, last_ok, latest, bad)``: ``latest`` is the state of the last step computed -- the first
+    failing state when ``bad`` -- so a diagnosis needs no separately compiled step to see it."""
     def cond(c):
-        j, _, bad = c
+        j, _, _, bad = c
         return jnp.logical_and(j < n, jnp.logical_not(bad))
 
     def body(c):
-        j, st, _ = c
+        j, st, _, _ = c
         new = step(jnp.asarray(k, dtype=jnp.int64) + j, st)
         bad = jnp.logical_not(ok(new))
         st = jax.tree_util.tree_map(lambda a, b: jnp.where(bad, a, b), st, new)
-        return j + jnp.where(bad, 0, 1), st, bad
+        return j + jnp.where(bad, 0, 1), st, new, bad
 
-    return jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), state, jnp.asarray(False)))
+    return jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), state, state, jnp.asarray(False)))
 
 
 @jax.jit
 def _params_replay(params, state, k, n):
-    """:func:`first_failing_step` of a closed loop given as a pytree argument: compiled once per loop
+    """:func:`_replay_loop` of a closed loop given as a pytree argument: compiled once per loop
     structure (the parameters are arguments, not constants of a closure), so the diagnostics of many
     failed runs of one campaign share one program."""
-    j, st, _ = _replay_loop(params.replay_step(), params.admissible, state, k, n)
-    return j, st
+    return _replay_loop(params.replay_step(), params.admissible, state, k, n)
 
 
 @jax.jit
@@ -285,14 +287,23 @@ def _params_step(params, k, state):
     return params.replay_step()(k, state)
 
 
+def _replay(step, state, k: int, n: int, ok, params: Any = None) -> tuple[int, PyTree, PyTree | None]:
+    """One compiled replay of up to ``n`` steps: ``(j, last_ok, failing)`` with ``failing`` the first
+    state that fails ``ok`` (None when none does in ``n`` steps, then ``j = n``)."""
+    if params is not None:
+        j, st, latest, bad = _params_replay(params, state, jnp.asarray(k, jnp.int64), jnp.asarray(n, jnp.int64))
+    else:
+        j, st, latest, bad = jax.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
+    return int(j), st, (latest if bool(bad) else None)
+
+
 def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTree, k: int, n: int,
                        ok: Callable[[PyTree], jax.Array]) -> tuple[int, PyTree]:
     """Replay up to ``n`` steps from ``state`` (at step ``k``) in one compiled loop and return ``(j,
     state_j)``: the number of steps after which the state first fails ``ok``, and the last state that
     passed (``j = n`` when none fails). Used to date a divergence exactly inside a long record block."""
-
-    j, st, _ = jax.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
-    return int(j), st
+    j, st, _ = _replay(step, state, k, n, ok)
+    return j, st
 
 
 def diagnose_divergence(
@@ -319,23 +330,31 @@ def diagnose_divergence(
     ``params``: the closed loop whose ``replay_step`` and ``admissible`` ``step`` and ``admissible`` are
     (optional); given, the replays are compiled once per loop structure and reused for every
     diagnosed run of that structure (a campaign with many failed runs compiles them once).
+
+    One compiled program does the usual diagnosis: the replay returns the first failing state along
+    with the last admissible one. A one-step program is compiled only when the run must be followed
+    past that state (only accumulators non-finite) or when the replay finds no failing step.
     """
     use_params = params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
-    if max_steps > 1:  # date it exactly first: one compiled replay of the block
-        if use_params:
-            j0a, state0 = _params_replay(params, last_finite, jnp.asarray(k, jnp.int64),
-                                         jnp.asarray(max_steps, jnp.int64))
-            j0 = int(j0a)
-        else:
-            def ok(st):
-                # ``admissible`` (when given) is the whole test, finiteness of the checked state included
-                return _all_finite(st) if admissible is None else admissible(st)
 
-            j0, state0 = first_failing_step(step, last_finite, k, max_steps, ok)
-        if j0 >= max_steps:
-            j0, state0 = 0, last_finite
-        last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
-    jstep = (lambda kk, st: _params_step(params, kk, st)) if use_params else jax.jit(step)
+    def ok(st):
+        # ``admissible`` (when given) is the whole test, finiteness of the checked state included
+        return _all_finite(st) if admissible is None else admissible(st)
+
+    # Date it exactly first: one compiled replay of the block (of one step when ``max_steps`` is 1). It
+    # also returns the first failing state, so the usual diagnosis compiles nothing else; a step
+    # program is compiled only to follow the run past that state (accumulators only) or when the
+    # replay does not fail.
+    j0, state0, failing = _replay(step, last_finite, k, max(1, max_steps), ok, params if use_params else None)
+    if failing is not None:
+        last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max(1, max_steps) - j0
+    compiled_step: list[Callable] = []
+
+    def jstep(kk, st):
+        if not compiled_step:
+            compiled_step.append((lambda k_, s_: _params_step(params, k_, s_)) if use_params else jax.jit(step))
+        return compiled_step[0](kk, st)
+
     state = last_finite
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
@@ -343,7 +362,7 @@ def diagnose_divergence(
     j = 0
     while j < n:
         kj = jnp.asarray(k + j, dtype=jnp.int64)
-        new = jstep(kj, state)
+        new = failing if (j == 0 and failing is not None) else jstep(kj, state)
         bad = _nonfinite_leaves(new)
         if admissible is not None:
             if bool(admissible(new)):  # inside the admissible set: leaves it does not check may be NaN
