@@ -67,6 +67,24 @@ def _axpy(a, x, y):
     return jax.tree_util.tree_map(lambda xi, yi: yi + a * xi, x, y)
 
 
+def _once(k, values):
+    """``values`` computed once per step: the operand of a conditional whose predicate (``k >= 0``, the
+    step index) always holds at run time.
+
+    XLA:CPU fuses cheap element-wise producers into each of their consumers, so a random draw held
+    over the step (threefry bits, the normal's inverse-erf polynomial) used to be evaluated again
+    inside every RK stage that reads it -- seven to nine copies in a Mehrabian step. A conditional's
+    operand cannot be fused into what reads its result, so the draw is evaluated once into a buffer.
+    The draws are the same bits; the arithmetic that reads them may round differently in the last
+    bit, because the fusion boundaries move (``benchmarks/held_draws.py``)."""
+    return jax.lax.cond(k >= 0, lambda v: v, lambda v: jax.tree_util.tree_map(jnp.zeros_like, v), values)
+
+
+def _held(k, values):
+    """:func:`_once` when the step index ``k`` is known, else ``values`` as they are."""
+    return values if k is None else _once(k, values)
+
+
 @component
 class ClosedLoop:
     """A scenario compiled into components (every number a leaf, every structural choice static).
@@ -171,9 +189,10 @@ class ClosedLoop:
                 and type(self.controller).desired_position_at is not Controller.desired_position_at)
 
     # ------------------------------------------------------------------ pieces of one step
-    def _time_table(self, t_k, first_only: bool = False):
+    def _time_table(self, t_k, first_only: bool = False, k=None):
         """Time-only signals at t_k, t_k + dt/2, t_k + dt (truth side at the left limit of t_{k+1});
-        ``first_only``: at t_k alone (an exact discrete plant, or a caller that reads only t_k)."""
+        ``first_only``: at t_k alone (an exact discrete plant, or a caller that reads only t_k). With
+        the step index ``k``, the values held over the step are computed once (:func:`_once`)."""
         dt = self.dt
         ts = t_k + dt * jnp.array([0.0] if first_only else [0.0, 0.5, 1.0])
         tf = t_k + dt * jnp.array([0.0] if first_only else [0.0, 0.5, 1.0 - LEFT_LIMIT])
@@ -190,7 +209,7 @@ class ClosedLoop:
         n = ts.shape[0]
         for s in held:  # sampled at t_k, held over the step (zero-order hold)
             table[s] = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
-                                              getattr(self, s).exogenous(t_k))
+                                              _held(k, getattr(self, s).exogenous(t_k)))
         return table
 
     def _reference_stages(self, r):
@@ -206,9 +225,10 @@ class ClosedLoop:
     def _noise(self, k):
         key = step_key(run_key(self.seed), k)
         if self.sensors.splits_step_key:  # the sensors split the step key into their own streams
-            return self.sensors.noise(key), self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM))
+            return _once(k, (self.sensors.noise(key),
+                             self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM))))
         k_sensor, k_plant = jax.random.split(key, 2)
-        return self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)
+        return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
     def _flight(self, y, received, est, decision, exo, ref):
         return FlightInputs(measurement=y, received=received, estimate=est, decision=decision,
@@ -279,13 +299,14 @@ class ClosedLoop:
         dt = self.dt
         t_k = self.t0 + k * dt
         exact = self.plant.integration == "exact"  # one stage: time signals at t_k only
-        table = self._time_table(t_k, first_only=exact)
+        table = self._time_table(t_k, first_only=exact, k=k)
         exos = [tree_take(table, j) for j in ((0, 0, 0, 0) if exact else (0, 1, 1, 2))]
         r_next, refs = self._reference_stages(state["reference"])
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
         y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, refs[0]))
         est_state, est, sup_state, dec = self._discrete(k, t_k, state, y, exos[0], refs[0])
+        est = _once(k, est)  # an estimate (a noisy FDI report, ...) is held over the step
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):
             # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
@@ -351,7 +372,7 @@ class ClosedLoop:
         """Signals at t_k from the state at t_k (what the step would compute at its first stage)."""
         dt = self.dt
         t_k = self.t0 + k * dt
-        exo = tree_take(self._time_table(t_k, first_only=True), 0)
+        exo = tree_take(self._time_table(t_k, first_only=True, k=k), 0)
         r = state["reference"]
         ref = None if isinstance(self.reference, NoReference) else self.reference.values(r)
         s_noise, p_noise = self._noise(k)
