@@ -7,8 +7,8 @@ every consumer) -- and both are compiled (persistent cache off) and timed altern
 ``--repeats``; a shared 2-core machine varies by 10-40 % between single passes). Printed per case:
 compile time of each, microseconds per run-step of each, their ratios (package / reference; < 1 is
 better), the number of optimised-HLO fusions that evaluate a normal draw (an ``erf_inv`` in their
-op names), and the largest difference of the final state relative to its leaf's scale (the draws are
-the same bits; what reads them may round differently in the last bit).
+op names), and the largest difference of the final state relative to its leaf's scale (the same
+operations; moved fusion boundaries may round differently in the last bit).
 
 Cases: single runs of mehrabian-isolation (FDI noise and disturbance), compose-li2020-on-cw (sensor
 noise on a chattering adaptive law), azizi2009-llfr with measurement noise on, and the Mehrabian

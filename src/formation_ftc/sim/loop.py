@@ -75,8 +75,9 @@ def _once(k, values):
     over the step (threefry bits, the normal's inverse-erf polynomial) used to be evaluated again
     inside every RK stage that reads it -- seven to nine copies in a Mehrabian step. A conditional's
     operand cannot be fused into what reads its result, so the draw is evaluated once into a buffer.
-    The draws are the same bits; the arithmetic that reads them may round differently in the last
-    bit, because the fusion boundaries move (``benchmarks/held_draws.py``)."""
+    The operations are the same; where the fusion boundaries move, XLA may round differently in the
+    last bit (a multiply-add contracted across the old boundary), so results agree to rounding, not
+    bit for bit (``benchmarks/held_draws.py`` prints both)."""
     return jax.lax.cond(k >= 0, lambda v: v, lambda v: jax.tree_util.tree_map(jnp.zeros_like, v), values)
 
 
