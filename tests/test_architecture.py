@@ -65,3 +65,23 @@ def test_no_eval_or_exec():
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in {"eval", "exec"}:
                 bad.append(f"{path.relative_to(PKG)}:{node.lineno}")
     assert not bad, bad
+
+
+def test_loading_the_plugins_imports_neither_matplotlib_nor_scipy_optimize():
+    """A process that only simulates or checks (a campaign worker, ``formation-ftc check``) does not pay
+    for plotting or root finding: both are imported where they are used (about 1 s of start-up)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, formation_ftc\n"
+            "from formation_ftc.registry import load_plugins\n"
+            "load_plugins()\n"
+            "from formation_ftc import plotting\n"
+            "heavy = sorted(m for m in ('matplotlib', 'scipy.optimize') if m in sys.modules)\n"
+            "assert not heavy, heavy\n"
+            "fig, axes = plotting.new_figure()\n"  # the first figure imports pyplot, on Agg
+            "import matplotlib\n"
+            "assert matplotlib.get_backend().lower() == 'agg', matplotlib.get_backend()\n"
+            "assert plotting.plt is sys.modules['matplotlib.pyplot']\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]

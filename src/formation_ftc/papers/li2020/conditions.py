@@ -23,7 +23,6 @@ from functools import lru_cache
 import jax
 import jax.numpy as jnp
 import numpy as np
-import scipy.optimize
 
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.graph import balance_report, is_strongly_connected
@@ -132,6 +131,8 @@ def validate_delays(scenario) -> list[DelayStats]:
 
 def lemma3_constant() -> tuple[float, float]:
     """(x*, r*) of Lemma 3: e^{-2x} + 1 - 2x = 0, r* = x*(1 - tanh x*)."""
+    import scipy.optimize  # here, not at import: loading the plug-in does not need it (about 0.4 s)
+
     x = scipy.optimize.brentq(lambda x: math.exp(-2 * x) + 1 - 2 * x, 0.1, 2.0, xtol=1e-15)
     return x, x * (1 - math.tanh(x))
 
