@@ -297,15 +297,6 @@ def _replay(step, state, k: int, n: int, ok, params: Any = None) -> tuple[int, P
     return int(j), st, (latest if bool(bad) else None)
 
 
-def first_failing_step(step: Callable[[jax.Array, PyTree], PyTree], state: PyTree, k: int, n: int,
-                       ok: Callable[[PyTree], jax.Array]) -> tuple[int, PyTree]:
-    """Replay up to ``n`` steps from ``state`` (at step ``k``) in one compiled loop and return ``(j,
-    state_j)``: the number of steps after which the state first fails ``ok``, and the last state that
-    passed (``j = n`` when none fails). Used to date a divergence exactly inside a long record block."""
-    j, st, _ = _replay(step, state, k, n, ok)
-    return j, st
-
-
 def diagnose_divergence(
     step: Callable[[jax.Array, PyTree], PyTree],
     last_finite: PyTree,
@@ -345,20 +336,16 @@ def diagnose_divergence(
     # also returns the first failing state, so the usual diagnosis compiles nothing else; a step
     # program is compiled only to follow the run past that state (accumulators only) or when the
     # replay does not fail.
-    j0, state0, failing = _replay(step, last_finite, k, max(1, max_steps), ok, params if use_params else None)
+    max_steps = max(1, max_steps)
+    j0, state0, failing = _replay(step, last_finite, k, max_steps, ok, params if use_params else None)
     if failing is not None:
-        last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max(1, max_steps) - j0
-    compiled_step: list[Callable] = []
-
-    def jstep(kk, st):
-        if not compiled_step:
-            compiled_step.append((lambda k_, s_: _params_step(params, k_, s_)) if use_params else jax.jit(step))
-        return compiled_step[0](kk, st)
-
+        last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
+    # compiled on its first call only (jit is lazy)
+    jstep = (lambda kk, st: _params_step(params, kk, st)) if use_params else jax.jit(step)
     state = last_finite
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
-    n = max(1, max_steps)
+    n = max_steps
     j = 0
     while j < n:
         kj = jnp.asarray(k + j, dtype=jnp.int64)
