@@ -4,9 +4,55 @@ Tests marked ``slow`` (full reproductions, multi-process campaign checks) are mo
 the collection (their relative order kept). Under ``pytest -n 2`` the workers then start on the
 longest tests and share the many short ones afterwards, instead of one worker finishing a long test
 alone at the end; run serially, the order of the other tests is unchanged.
+
+Memory: every program XLA compiles -- each eager operation on a new shape included -- keeps about
+1.4 MB of native heap for as long as JAX's in-memory caches hold it (up to thousands of entries). A
+worker that runs hundreds of tests would grow to 3-4 GB that way. After a test that leaves the worker
+above :data:`RSS_LIMIT_MB` resident, the caches are dropped (``jax.clear_caches``) and freed memory is
+returned to the system (glibc ``malloc_trim``). Programs compiled for more than a second come back
+from the persistent compilation cache; nothing a test asserts depends on which cache served it.
 """
 
+import ctypes
+import gc
+import os
+
+import jax
+import pytest
+
 import formation_ftc  # noqa: F401  (enables jax_enable_x64)
+
+#: resident memory [MiB] above which a worker drops JAX's compile caches after a test
+RSS_LIMIT_MB = int(os.environ.get("FORMATION_FTC_TEST_RSS_LIMIT_MB", "1200"))
+
+
+def _resident_mb() -> int | None:
+    """Current resident set size of this process [MiB] (Linux /proc), None elsewhere."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) // 1024
+    except OSError:
+        return None
+    return None
+
+
+def _malloc_trim() -> None:
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc
+        pass
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_teardown(item, nextitem):
+    """After the test's fixtures are finalised: drop the compile caches above :data:`RSS_LIMIT_MB`."""
+    rss = _resident_mb()
+    if rss is not None and rss > RSS_LIMIT_MB:
+        jax.clear_caches()
+        gc.collect()
+        _malloc_trim()
 
 
 def pytest_collection_modifyitems(session, config, items):
