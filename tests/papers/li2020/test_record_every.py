@@ -86,18 +86,46 @@ def test_metrics_independent_of_record_every(name, same_metrics):
     assert all(missed), (force_max(ds20), m1["max_control_force"], settle20, m1["settle_time_mu1_1m"])
 
 
+#: 1e-13 m on the 250 m initial x of spacecraft 1: about two units in the last place of that coordinate
+ULP_NUDGE = 1e-13
+
+
 def test_e000_04_window_maximum_independent_of_record_every(same_metrics):
-    """The literal '-' sign destabilises the adaptation (d_hat grows): last-bit differences between the
-    programs scanning blocks of 1 and 20 steps grow in the final states at 300 s (measured: ~3e-6 relative
-    with XLA's fusion emitters, 1e-11 with the package's options; any change to either program can move
-    this), so the run's other metrics are held to 1e-5 only; the maxima of mu1 (reached before the
-    differences grow) agree to 1e-12."""
+    """The literal '-' sign destabilises the adaptation (d_hat grows) and the run amplifies rounding:
+    moving one initial coordinate by two units in the last place changes final-state metrics at 300 s by
+    up to ~6e-3 relative (measured 2026-12-02). The programs scanning blocks of 1 and 20 steps round
+    differently in a few operations, by how much depends on the host CPU's instruction set (measured
+    1.5e-5 relative on an AVX2-only AMD EPYC, ~3e-6 on the machine this test was first written on).
+
+    So the claims are: (1) everything decided before the differences grow -- the mu1 samples at 10, 20
+    and 30 s, the 1 m settling time, the maxima of mu1 and of the control force -- agrees to 1e-12;
+    (2) no metric moves with ``record_every`` by more than it moves when the initial state moves by two
+    units in the last place (both signs; measured ratio at most 0.014)."""
     out = {every: simulate_li2020(load_li2020("li2020-thm2-delays", {**LITERAL, "simulation.record_every": every}))
            for every in (1, 20)}
     (ds1, m1), (_, m20) = out[1], out[20]
-    same_metrics(m1, m20, rtol=1e-5)
-    maxima = ("mu1_max_50_300s", "mu1_max_after_50s", "max_control_force")
-    same_metrics({k: m1[k] for k in maxima}, {k: m20[k] for k in maxima})
+    early = ("mu1_max_50_300s", "mu1_max_after_50s", "max_control_force", "mu1_at_10s", "mu1_at_20s",
+             "mu1_at_30s", "settle_time_mu1_1m")
+    same_metrics({k: m1[k] for k in early}, {k: m20[k] for k in early})
+
+    sc = load_li2020("li2020-thm2-delays").spacecraft  # the scenario's own initial positions
+    nudged = []
+    for sign in (1.0, -1.0):
+        pos = [list(map(float, r)) for r in sc.initial_position]
+        pos[0][0] += sign * ULP_NUDGE
+        nudged.append(simulate_li2020(load_li2020("li2020-thm2-delays", {
+            **LITERAL, "simulation.record_every": 1, "spacecraft.initial_position": pos}))[1])
+    assert m1.keys() == m20.keys() == nudged[0].keys()
+    sensitive = 0
+    for k, a in m1.items():
+        if math.isnan(a):
+            assert math.isnan(m20[k]), k
+            continue
+        bound = max(abs(m[k] - a) for m in nudged)
+        sensitive += bound > 1e-9 * abs(a)
+        assert abs(m20[k] - a) <= bound, (k, a, m20[k], bound)
+    assert sensitive > 10  # the run does amplify rounding (else the bound above would be no test)
+
     t = ds1.time.values
     assert t.size == 30001
     want = float(np.max(ds1["mu1"].values[(t >= 50.0 - 1e-9) & (t <= 300.0 + 1e-9)]))
