@@ -3,7 +3,9 @@
 float64 is mandatory: at 7,000 km the float32 spacing is 0.5 m and the gravity terms of the relative
 dynamics cancel from about 8 m/s^2 to 1e-3 m/s^2 (measured; see README "Engine"). Importing :mod:`formation_ftc`
 switches ``jax_enable_x64`` on before any array is created and enables the persistent compilation
-cache so that the command-line tool starts fast on the second call.
+cache so that the command-line tool starts fast on the second call. The cache keeps programs that
+compiled for at least ``JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS`` (JAX's own variable; 1 s unless
+set).
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ if _cache_dir and _cache_dir.lower() != "off":
     try:
         Path(_cache_dir).mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", _cache_dir)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs",
+                          float(os.environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "1.0")))
     except Exception:  # pragma: no cover - cache is an optimisation only
         pass
 
