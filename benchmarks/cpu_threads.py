@@ -7,10 +7,11 @@ fresh processes, one with ``PJRT_NPROC=1`` and one with ``PJRT_NPROC=<cores>`` (
 prints the best-of-``--repeats`` wall and CPU time of the run (compilation excluded), their ratios, and
 whether the two processes computed the same numbers (a SHA-256 digest of every output leaf's bytes).
 
-The package leaves the pool at JAX's default. One thread saves CPU, but the pool size also reaches the
-compiled program (XLA partitions some loops by it), and a chaotic run -- li2020-thm2-delays with the
-literal d_hat sign, compared across record blocks in ``tests/papers/li2020/test_record_every.py`` --
-then moves by 8e-5 relative at 300 s, beyond that test's tolerance.
+The package leaves a single process at JAX's default. Where processes share the cores -- the paper
+workers of ``formation-ftc reproduce`` and the pytest-xdist workers of the test suite -- each gets the
+cores divided by the number of processes (one on 2 cores). The pool size also reaches the compiled
+program (XLA partitions some loops by it), so the persistent compilation cache keeps one directory per
+thread count (``formation_ftc._compilation_cache_dir``).
 
 Run: ``python benchmarks/cpu_threads.py [--repeats 3] [--cases gui2022-lof2tc:300,li2020-thm1:100]``
 """

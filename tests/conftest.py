@@ -24,6 +24,14 @@ import os
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
+# Under pytest-xdist the workers share the cores: each worker's JAX CPU client gets its share of
+# threads (PJRT_NPROC, read when the client starts), as `formation-ftc reproduce` gives its paper
+# workers. More threads than cores make XLA hand small operations between threads at a CPU cost
+# (benchmarks/cpu_threads.py). The compilation cache is keyed by the thread count (formation_ftc).
+_XDIST_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
+if _XDIST_WORKERS > 1:
+    os.environ.setdefault("PJRT_NPROC", str(max(1, len(os.sched_getaffinity(0)) // _XDIST_WORKERS)))
+
 import jax  # noqa: E402
 import pytest  # noqa: E402
 

@@ -31,18 +31,46 @@ def _package_version() -> str:
         return "0+unknown"
 
 
+def _cpu_threads() -> int:
+    """Threads of JAX's CPU client in this process: ``PJRT_NPROC`` when set (JAX reads it when the client
+    starts), else JAX's default, one per CPU this process may run on."""
+    value = _os.environ.get("PJRT_NPROC", "").strip()
+    if value.isdigit() and int(value) > 0:
+        return int(value)
+    try:
+        return len(_os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return _os.cpu_count() or 1
+
+
+def _compilation_cache_dir() -> str | None:
+    """The persistent compilation cache of this process (None: off).
+
+    ``FORMATION_FTC_JAX_CACHE`` (default ``~/.cache/formation_ftc/jax``; ``off`` disables it), one
+    subdirectory per CPU-client thread count: XLA partitions some loops by the thread count when it
+    compiles, so a program compiled with 2 threads can round differently from the same program compiled
+    with 1, and JAX's cache key does not record the count. Keyed this way, a process never loads a
+    program compiled for another thread count (another machine sharing the home directory, or
+    ``PJRT_NPROC`` set differently)."""
+    cache = _os.environ.get("FORMATION_FTC_JAX_CACHE", str(_Path.home() / ".cache" / "formation_ftc" / "jax"))
+    if not cache or cache.lower() == "off":
+        return None
+    return str(_Path(cache) / f"cpu-threads-{_cpu_threads()}")
+
+
 def _configure_jax_environment() -> None:
     """x64 and the compilation cache for the JAX this process imports (now or later)."""
     _os.environ["JAX_ENABLE_X64"] = "1"
-    cache = _os.environ.get("FORMATION_FTC_JAX_CACHE",
-                            str(_Path.home() / ".cache" / "formation_ftc" / "jax"))
-    if cache and cache.lower() != "off":
+    cache = _compilation_cache_dir()
+    if cache is not None:
         try:
             _Path(cache).mkdir(parents=True, exist_ok=True)
-            _os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", cache)
+            _os.environ["JAX_COMPILATION_CACHE_DIR"] = cache  # also over one inherited from a parent process
             _os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "1.0")
         except OSError:  # pragma: no cover - the cache is an optimisation only
             pass
+    else:  # off: also when a parent process passed its cache directory down
+        _os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
     if "jax" in _sys.modules:  # JAX came first: its configuration is already read, set it directly
         from formation_ftc import _jax  # noqa: F401
 

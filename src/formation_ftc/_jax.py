@@ -17,10 +17,10 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-_cache_dir = os.environ.get(
-    "FORMATION_FTC_JAX_CACHE", str(Path.home() / ".cache" / "formation_ftc" / "jax")
-)
-if _cache_dir and _cache_dir.lower() != "off":
+from formation_ftc import _compilation_cache_dir  # noqa: E402
+
+_cache_dir = _compilation_cache_dir()
+if _cache_dir is not None:
     try:
         Path(_cache_dir).mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", _cache_dir)
@@ -28,6 +28,8 @@ if _cache_dir and _cache_dir.lower() != "off":
                           float(os.environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "1.0")))
     except Exception:  # pragma: no cover - cache is an optimisation only
         pass
+else:
+    jax.config.update("jax_compilation_cache_dir", None)
 
 # the threefry hash unrolled on the CPU too (identical random numbers; formation_ftc.sim.xla)
 from formation_ftc.sim.xla import use_unrolled_threefry  # noqa: E402

@@ -12,6 +12,7 @@ import os
 import platform
 import sys
 
+from formation_ftc import _cpu_threads
 from formation_ftc import provenance as _base
 from formation_ftc.provenance import git_commit, package_versions, utc_now
 
@@ -33,7 +34,8 @@ def provenance() -> dict[str, str]:
 
     Keys: ``version_<package>`` for each package (see :func:`package_versions`), ``git_commit``,
     ``python``, ``python_executable``, ``platform``, ``machine``, ``cpu_count``, ``jax_backend``,
-    ``created_utc``.
+    ``jax_cpu_threads`` (the CPU client's thread count, which XLA's compilation depends on; see
+    ``formation_ftc._compilation_cache_dir``), ``created_utc``.
     """
     out = _base.provenance()
     out.update(
@@ -41,5 +43,6 @@ def provenance() -> dict[str, str]:
         machine=platform.machine(),
         cpu_count=str(os.cpu_count() or "unknown"),
         jax_backend=_jax_backend(),
+        jax_cpu_threads=str(_cpu_threads()),
     )
     return out

@@ -403,6 +403,8 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         total_wall_time_s=round(total, 3),
         paper_workers=n_workers,
     )
+    if n_workers > 1:  # each worker's CPU-client threads (the compiled programs depend on it)
+        metadata["paper_worker_cpu_threads"] = os.environ.get("PJRT_NPROC") or str(_worker_threads(n_workers))
     breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
     if profile:
         metadata["profile_method"] = ("compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
@@ -456,6 +458,31 @@ def _paper_workers(workers: int | None, n_papers: int) -> int:
     except AttributeError:  # pragma: no cover - not Linux
         cores = os.cpu_count() or 1
     return max(1, min(cores, n_papers))
+
+
+def _worker_threads(n_workers: int) -> int:
+    """CPU-client threads of each paper worker: the process's CPUs shared out among the workers
+    (at least one). A simulation step is a chain of small operations; with more threads than cores
+    XLA's hand-over between threads costs more CPU than it saves (``benchmarks/cpu_threads.py``)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        cores = os.cpu_count() or 1
+    return max(1, cores // max(n_workers, 1))
+
+
+@contextlib.contextmanager
+def _threads_for_workers(n_workers: int):
+    """``PJRT_NPROC`` for the worker processes started inside the block (JAX reads it when a process's
+    CPU client starts); a value the user set is kept."""
+    if "PJRT_NPROC" in os.environ:
+        yield int(os.environ["PJRT_NPROC"]) if os.environ["PJRT_NPROC"].strip().isdigit() else None
+        return
+    os.environ["PJRT_NPROC"] = str(_worker_threads(n_workers))
+    try:
+        yield int(os.environ["PJRT_NPROC"])
+    finally:
+        os.environ.pop("PJRT_NPROC", None)
 
 
 def _paper_in_worker(rep: Reproduction | None, paper: str, paper_dir: str, profile: bool,
@@ -535,7 +562,7 @@ def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profil
     order = sorted(selected, key=lambda p: -PAPER_COST.get(p, 100.0))
     t0 = {p: time.perf_counter() for p in selected}
     try:
-        with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
+        with _threads_for_workers(n_workers), ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
             futures = {}
             for paper in order:
                 futures[pool.submit(_paper_in_worker, _shippable(found.get(paper)), paper, str(out / paper),
