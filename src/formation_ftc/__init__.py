@@ -31,16 +31,21 @@ def _package_version() -> str:
         return "0+unknown"
 
 
+def _schedulable_cpus() -> int:
+    """CPUs this process may run on (its affinity mask; the CPU count where there is none)."""
+    try:
+        return len(_os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return _os.cpu_count() or 1
+
+
 def _cpu_threads() -> int:
     """Threads of JAX's CPU client in this process: ``PJRT_NPROC`` when set (JAX reads it when the client
     starts), else JAX's default, one per CPU this process may run on."""
     value = _os.environ.get("PJRT_NPROC", "").strip()
     if value.isdigit() and int(value) > 0:
         return int(value)
-    try:
-        return len(_os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return _os.cpu_count() or 1
+    return _schedulable_cpus()
 
 
 def _compilation_cache_dir() -> str | None:

@@ -42,6 +42,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
+from formation_ftc import _schedulable_cpus
 from formation_ftc.campaign.spec import CampaignError
 
 if TYPE_CHECKING:  # optional dependency (the dask extra)
@@ -57,17 +58,10 @@ DEFAULT_CONNECT_TIMEOUT = 30.0
 AUTO_POOL_MIN_RUN_STEPS = 10_000_000
 
 
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
-
-
 def auto_workers(run_steps: int, n_chunks: int, cores: int | None = None) -> int:
     """Local workers for ``run_steps`` run-steps in ``n_chunks`` chunks: 1 (in-process) for small work,
     else one per core, at most one per chunk."""
-    cores = _cores() if cores is None else cores
+    cores = _schedulable_cpus() if cores is None else cores
     if run_steps < AUTO_POOL_MIN_RUN_STEPS:
         return 1
     return max(1, min(cores, n_chunks))

@@ -37,7 +37,7 @@ from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from formation_ftc import registry
+from formation_ftc import _schedulable_cpus, registry
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
@@ -404,7 +404,7 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         paper_workers=n_workers,
     )
     if n_workers > 1:  # each worker's CPU-client threads (the compiled programs depend on it)
-        metadata["paper_worker_cpu_threads"] = os.environ.get("PJRT_NPROC") or str(_worker_threads(n_workers))
+        metadata["paper_worker_cpu_threads"] = _worker_threads(n_workers)
     breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
     if profile:
         metadata["profile_method"] = ("compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
@@ -453,22 +453,15 @@ def _paper_workers(workers: int | None, n_papers: int) -> int:
         if workers < 1:
             raise ReproduceError(f"--workers must be >= 1, got {workers}")
         return min(workers, max(n_papers, 1))
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(cores, n_papers))
+    return max(1, min(_schedulable_cpus(), n_papers))
 
 
-def _worker_threads(n_workers: int) -> int:
-    """CPU-client threads of each paper worker: the process's CPUs shared out among the workers
-    (at least one). A simulation step is a chain of small operations; with more threads than cores
-    XLA's hand-over between threads costs more CPU than it saves (``benchmarks/cpu_threads.py``)."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        cores = os.cpu_count() or 1
-    return max(1, cores // max(n_workers, 1))
+def _worker_threads(n_workers: int) -> str:
+    """``PJRT_NPROC`` of each paper worker: the user's value when set, else the process's CPUs shared
+    out among the workers (at least one). A simulation step is a chain of small operations; with more
+    threads than cores XLA's hand-over between threads costs more CPU than it saves
+    (``benchmarks/cpu_threads.py``)."""
+    return os.environ.get("PJRT_NPROC") or str(max(1, _schedulable_cpus() // max(n_workers, 1)))
 
 
 @contextlib.contextmanager
@@ -476,11 +469,11 @@ def _threads_for_workers(n_workers: int):
     """``PJRT_NPROC`` for the worker processes started inside the block (JAX reads it when a process's
     CPU client starts); a value the user set is kept."""
     if "PJRT_NPROC" in os.environ:
-        yield int(os.environ["PJRT_NPROC"]) if os.environ["PJRT_NPROC"].strip().isdigit() else None
+        yield
         return
-    os.environ["PJRT_NPROC"] = str(_worker_threads(n_workers))
+    os.environ["PJRT_NPROC"] = _worker_threads(n_workers)
     try:
-        yield int(os.environ["PJRT_NPROC"])
+        yield
     finally:
         os.environ.pop("PJRT_NPROC", None)
 
