@@ -47,6 +47,27 @@ def test_divergence_is_caught_and_diagnosed():
     assert "t = 3.7 s" in str(info) and "spacecraft 2" in str(info)
 
 
+def test_observe_traced_once():
+    """One ``observe`` in the program: the initial record is the first point of the record scan (the
+    last point only records), and the records are those of the running state up to the divergence."""
+    calls = []
+
+    def observe(k, x):
+        calls.append(k)
+        return {"v": x["v"], "k": k}
+
+    def step(k, x):  # blows up at step 37
+        return {"v": x["v"].at[1, 0].set(jnp.where(k == 37, jnp.inf, x["v"][1, 0] + 1.0))}
+
+    out = jax.jit(lambda: run_fixed_step(step, observe, {"v": jnp.zeros((3, 2))}, 100, 5))()
+    assert len(calls) == 1
+    assert out["records"]["v"].shape == (21, 3, 2)
+    np.testing.assert_array_equal(out["records"]["k"], np.arange(0, 101, 5))
+    np.testing.assert_array_equal(out["records"]["v"][:8, 1, 0], np.arange(0.0, 36.0, 5.0))
+    assert not np.isfinite(out["records"]["v"][8, 1, 0])
+    np.testing.assert_array_equal(out["final"]["v"][1, 0], 35.0)
+
+
 def test_simulate_raises_with_partial_results():
     scn = ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 60.0, "controller.kp": 1e9,
                                             "sensors.position_noise_std": 0.0})

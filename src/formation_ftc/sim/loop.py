@@ -437,8 +437,11 @@ class ClosedLoop:
 
     def _run(self) -> dict:
         state0 = self.initial_state()
-        sig0 = self.observe(jnp.asarray(0, dtype=jnp.int64), state0)
-        acc0 = metric_ops.init_accumulators(self.metrics, sig0)
+        # the accumulators' shapes come from the signals' shapes (traced, not computed: the records'
+        # single ``observe`` in the loop computes the signals at t0)
+        shapes = jax.eval_shape(self.observe, jnp.asarray(0, dtype=jnp.int64), state0)
+        acc0 = metric_ops.init_accumulators(
+            self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
 
         def step(k, carry):
             state, acc = carry
@@ -460,9 +463,14 @@ class ClosedLoop:
                              check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
                              admissible=self.admissible)
         state_n, acc = out["final"]
-        sig_n = self.observe(jnp.asarray(self.n_steps, dtype=jnp.int64), state_n)
-        acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt,
-                                             sig_n, is_final=True)
+        # the horizon sample is the last record (the signals of the final state at t_n); a run that left
+        # its admissible set never reached the horizon: its metrics stay those accumulated up to the
+        # start of the failing record block (the returned snapshot), with no horizon sample
+        sig_n = jax.tree_util.tree_map(lambda r: r[-1], out["records"])
+        acc_n = metric_ops.update_accumulators(self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt,
+                                               sig_n, is_final=True)
+        reached = out["diverged_step"] < 0
+        acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
         return dict(records=out["records"], final=state_n, diverged_step=out["diverged_step"],
                     last_finite=out["last_finite"], metrics=metric_ops.finalize(self.metrics, acc))
 
