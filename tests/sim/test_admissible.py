@@ -88,3 +88,20 @@ def test_euler_pitch_bound_names_the_singular_angle():
     assert err.value.info.variable.startswith("plant.pitch")
     with pytest.raises(ValueError, match="max_pitch"):
         ftc.load_scenario("mehrabian-identification", {"simulation.max_pitch": 1.6})
+
+
+def test_metrics_of_a_diverged_run_stop_at_the_failing_block():
+    """A run that leaves its admissible set keeps the metrics accumulated up to the start of the failing
+    record block (the state it returns) and takes no horizon sample: with a record every step, the
+    maximum and the last in-window value are those of the records before the failing step."""
+    import json
+
+    err = _diverge(1)
+    ds, step = err.partial, err.info.step
+    metrics = json.loads(ds.attrs["metrics_json"])
+    # records 0 .. step: the state at the failing step's start is the last record kept
+    assert ds.sizes["time"] == step + 1
+    e = np.linalg.norm(ds.position_error.values, axis=-1)  # (time, spacecraft)
+    assert metrics["max_position_error"] == pytest.approx(e[:step].max(axis=1).max(), rel=1e-12)
+    assert metrics["final_position_error_mean"] == pytest.approx(e[step - 1].mean(), rel=1e-12)
+    assert metrics["final_position_error_mean"] != pytest.approx(e[step].mean(), rel=1e-6)

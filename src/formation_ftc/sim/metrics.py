@@ -4,8 +4,10 @@ A :class:`Metric` names a recorded signal, how to reduce it over its non-time ax
 over the vector axis, then over spacecraft) and over time (max, min, final, mean, integral, value at a
 time, settle time), and a time window. :func:`init_accumulators` / :func:`update_accumulators` /
 :func:`finalize` are pure JAX functions the closed loop calls at every step (k = 0 .. n-1, with the
-signals at t_k) and once more with the final sample (k = n), so a peak between two records is never
-missed.
+signals at t_k) and once more with the final sample (k = n, the run's last record), so a peak between
+two records is never missed. A run that leaves its admissible set never reaches the horizon: its metrics
+are those accumulated up to the start of the failing record block (the state the engine returns), with
+no horizon sample (``last`` is then NaN).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ REDUCTIONS = {
     "stage_root_mean": "sqrt(stage_integral / (end - start)): with square = True, the RMS over the window",
     "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
     "last": "value at the horizon (the run's last sample; window ignored), read once after the loop: no "
-            "per-step cost, unlike `final`",
+            "per-step cost, unlike `final`; NaN for a run that left its admissible set before the horizon",
     "block_rms": "low-pass RMS: the samples in the window (the horizon sample excluded) cut into consecutive "
                  "blocks of `block` steps from the first one; RMS over the complete blocks of each block's mean "
                  "(a boxcar filter of `block` steps, decimated; an incomplete last block is dropped)",
