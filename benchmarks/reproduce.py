@@ -10,6 +10,12 @@ the compile time of every built-in scenario as ``formation-ftc run`` compiles it
    (tracing, lowering and XLA compile; the persistent cache off and JAX's in-memory caches cleared
    before each scenario, so every number is a cold compile), in one fresh process: wall and process
    CPU time (XLA's compile threads included). The slowest (wall) is printed last.
+3. Running a scenario again in one process (a researcher who changes a gain and re-runs): for a few
+   built-in scenarios at a short horizon, ``formation_ftc.api.simulate_with_metrics`` once (traced,
+   compiled, run), then again (the process's program of that structure, ``formation_ftc.sim.programs``),
+   against the plain reference of a fresh ``jax.jit`` of the scenario's ``run`` per call with the
+   persistent compilation cache warm (traced, lowered and loaded from the cache every time). Another gain
+   is the same program (``tests/sim/test_programs.py``), so the same scenario is re-run here.
 
 ``FORMATION_FTC_XLA_OPTIONS=off`` in the environment measures XLA's default build instead of the
 package's compile options (``formation_ftc.sim.xla``), for an A/B comparison.
@@ -55,6 +61,42 @@ for name in names:
         out[name] = f"error: {type(exc).__name__}: {exc}"
     print(json.dumps({name: out[name], "cpu:" + name: cpu.get(name, float("nan"))}), flush=True)
 """
+
+
+_RERUN_SCRIPT = r"""
+import json, time
+import jax
+from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
+from formation_ftc.sim import xla
+for name in ("li2020-thm1", "yang2013-healthy", "gui2022-lof2tc", "mehrabian-isolation", "azizi2009-llfr"):
+    scn = load_scenario(name)
+    scn = load_scenario(name, {"simulation.horizon": 100 * scn.simulation.dt,
+                               "simulation.record_every": 1})
+    t = [time.perf_counter()]
+    for _ in range(3):  # first run, then the same structure again (twice)
+        simulate_with_metrics(scn)
+        t.append(time.perf_counter())
+    fresh = []
+    for _ in range(2):  # the plain reference: a new jax.jit per call, persistent cache warm
+        t0 = time.perf_counter()
+        c = compile_scenario(scn)
+        finish_run(scn, c, jax.block_until_ready(xla.jit(c.run)(c.params)))
+        fresh.append(time.perf_counter() - t0)
+    print(json.dumps({name: {"first_s": t[1] - t[0], "again_s": min(t[2] - t[1], t[3] - t[2]),
+                             "fresh_jit_s": min(fresh)}}), flush=True)
+"""
+
+
+def _rerun_times(cache: Path) -> dict:
+    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache)}
+    proc = subprocess.run([sys.executable, "-c", _RERUN_SCRIPT], env=env, capture_output=True, text=True)
+    times: dict = {}
+    for line in proc.stdout.splitlines():
+        if line.startswith("{"):
+            times.update(json.loads(line))
+    if proc.returncode != 0:
+        print(proc.stderr[-4000:], file=sys.stderr)
+    return times
 
 
 def _has_profile() -> bool:
@@ -109,6 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--papers", nargs="+", default=["all"], help="papers to reproduce (default: all)")
     ap.add_argument("--skip-reproduce", action="store_true", help="only the scenario compile times")
     ap.add_argument("--skip-compile", action="store_true", help="only reproduce (cold and warm)")
+    ap.add_argument("--skip-rerun", action="store_true", help="skip the re-run of a scenario in one process")
     ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     ap.add_argument("--keep", type=Path, help="copy the two reports (cold/, warm/) into this directory")
     args = ap.parse_args(argv)
@@ -124,6 +167,15 @@ def main(argv: list[str] | None = None) -> int:
             if args.keep:
                 for run in ("cold", "warm"):
                     shutil.copytree(tmp_path / run, args.keep / run, dirs_exist_ok=True)
+        if not args.skip_rerun:
+            rerun = _rerun_times(tmp_path / "rerun-cache")
+            result["rerun_s"] = rerun
+            print("\nthe same scenario again in one process (100 steps; api.simulate_with_metrics), against a "
+                  "fresh jax.jit per call with a warm persistent cache")
+            print(f"  {'scenario':24s} {'first':>8s} {'again':>8s} {'fresh jit':>10s} {'ratio':>7s}")
+            for name, r in rerun.items():
+                print(f"  {name:24s} {r['first_s']:6.2f} s {r['again_s']:6.3f} s {r['fresh_jit_s']:8.3f} s "
+                      f"{r['again_s'] / r['fresh_jit_s']:7.3f}")
     if not args.skip_compile:
         times = _compile_times()
         result["compile_s"] = times

@@ -20,8 +20,8 @@ from formation_ftc.config import loader
 from formation_ftc.config.base import ScenarioBase
 from formation_ftc.provenance import provenance
 from formation_ftc.registry import Compiled, Condition, get_method
-from formation_ftc.sim import xla
 from formation_ftc.sim.engine import SimulationDiverged, diagnose_divergence, trim_records
+from formation_ftc.sim.programs import jitted_run
 
 __all__ = [
     "load_scenario",
@@ -143,11 +143,15 @@ def _apply_cf(ds, scenario: ScenarioBase) -> None:
 
 
 def simulate_with_metrics(scenario: ScenarioBase | str | Path):
-    """Run one scenario: ``(xarray.Dataset, {metric: float})``."""
+    """Run one scenario: ``(xarray.Dataset, {metric: float})``.
+
+    The process keeps one compiled program per structure (:func:`formation_ftc.sim.programs.jitted_run`):
+    running a scenario again with other numbers -- a gain, a fault time, a seed -- reuses it (no
+    tracing, no compilation)."""
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)
-    out = xla.jit(compiled.run)(compiled.params)
+    out = jitted_run(compiled)(compiled.params)
     return finish_run(scenario, compiled, out)
 
 

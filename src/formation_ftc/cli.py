@@ -311,8 +311,8 @@ def _cmd_run(args) -> int:
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.registry import get_method
     from formation_ftc.runout import check_out_dir, plot_view, staged_output
-    from formation_ftc.sim import xla
     from formation_ftc.sim.engine import SimulationDiverged
+    from formation_ftc.sim.programs import jitted_run
 
     console = Console(stderr=True, quiet=_VERBOSITY < 0)
     out_dir = check_out_dir(args.out, force=args.force)  # before any computation
@@ -329,7 +329,7 @@ def _cmd_run(args) -> int:
     t0 = time.perf_counter()
     with console.status(f"compiling and running {scenario.scenario.name} "
                         f"({scenario.simulation.n_steps:,} steps)..."):
-        out = xla.jit(compiled.run)(compiled.params)
+        out = jitted_run(compiled)(compiled.params)
         jax.block_until_ready(out)
     wall = time.perf_counter() - t0
     code = 0

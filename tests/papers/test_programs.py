@@ -1,7 +1,8 @@
-"""One program per structure (formation_ftc.papers.programs): a second scenario of the same structure
-compiles nothing and gives bit-for-bit the results of the generic API, which compiles its own program.
+"""A reproduction's runs (formation_ftc.papers.programs): a second scenario of the same structure
+compiles nothing and gives bit-for-bit the results of a program compiled afresh for it; batches of one
+structure equal the runs alone. (The shared program itself: tests/sim/test_programs.py.)
 
-Truths: :func:`formation_ftc.api.simulate_with_metrics` (a fresh ``jax.jit`` per call) and JAX's own
+Truths: a fresh ``jax.jit`` of the scenario's own ``run`` with the same XLA options, and JAX's own
 compile events (``jax.monitoring``), counted for the ``run`` program only.
 """
 
@@ -11,8 +12,9 @@ import jax.monitoring
 import numpy as np
 import pytest
 
-from formation_ftc.api import compile_scenario, load_scenario, simulate_with_metrics
+from formation_ftc.api import compile_scenario, finish_run, load_scenario
 from formation_ftc.papers import programs
+from formation_ftc.sim import xla
 
 _COMPILES: list[str] = []
 
@@ -43,32 +45,12 @@ def test_same_structure_compiles_once_and_matches_the_api(scenarios):
     assert n_first == 1 and len(_COMPILES) == 1  # the second scenario reused the program
     assert m_a != m_b  # the gains differ, so do the results
     for scn, ds, m in ((a, ds_a, m_a), (b, ds_b, m_b)):
-        ref_ds, ref_m = simulate_with_metrics(scn)
+        c = compile_scenario(scn)
+        ref_ds, ref_m = finish_run(scn, c, xla.jit(c.run)(c.params))  # a program of its own
         assert m == ref_m  # bit for bit
         for name in ref_ds.data_vars:
             np.testing.assert_array_equal(ds[name].values, ref_ds[name].values)
-    assert len(_COMPILES) == 3  # the generic API compiled its own program each time
-
-
-def test_executable_is_shared_and_lru_bounded(scenarios, monkeypatch):
-    programs.clear()
-    c_a, c_b = (compile_scenario(s) for s in scenarios)
-    exe_a, t_a = programs.executable(c_a)
-    exe_b, t_b = programs.executable(c_b)
-    assert exe_a is exe_b and t_a > 0.0 and t_b == 0.0
-    c_long = compile_scenario(load_scenario("cw-pd-fault", {"simulation.horizon": 30.0}))
-    exe_long, t_long = programs.executable(c_long)  # more steps: another program
-    assert exe_long is not exe_a and t_long > 0.0
-    out = exe_b(c_b.params)
-    ref = jax.jit(c_b.run)(c_b.params)
-    np.testing.assert_array_equal(np.asarray(out["metrics"][0]), np.asarray(ref["metrics"][0]))
-    monkeypatch.setattr(programs, "MAX_KEPT", 1)
-    programs.clear()
-    programs.executable(c_a)
-    programs.executable(c_long)  # the least recently used (c_a's) is dropped
-    assert len(programs._EXECUTABLES) == 1
-    assert programs.executable(c_long)[1] == 0.0
-    assert programs.executable(c_b)[1] > 0.0  # c_a's program was dropped: compiled again
+    assert len(_COMPILES) == 3  # each fresh program was compiled
 
 
 def test_simulate_batched_groups_by_structure_and_keeps_the_order():

@@ -1,0 +1,70 @@
+"""One compiled program per structure, shared by every run of a process.
+
+A scenario compiles to a :class:`~formation_ftc.sim.compiled.Compiled` whose ``static_key`` names its
+structure (components, static fields, leaf shapes); its numbers -- gains, masses, fault data, initial
+states, seeds -- are leaves of the parameters. Two scenarios with equal keys therefore run the same
+program. :func:`jitted_run` keeps one ``jax.jit`` of ``run`` per key, so the second run of a structure
+in a process -- the same scenario again, or another gain, fault or seed -- is neither traced, lowered
+nor compiled again (JAX's in-memory caches hang off the ``jax.jit`` object); a fresh ``jax.jit`` per
+run traced and lowered the loop each time (0.3-0.6 s for a closed loop) and then compiled it or loaded
+it from the persistent cache. The program is the same, so the results are bit for bit those of a
+fresh ``jax.jit``.
+
+Every front end runs through it: :func:`formation_ftc.api.simulate_with_metrics`, ``formation-ftc run``
+and the paper reproductions (:mod:`formation_ftc.papers.programs`). At most :data:`MAX_KEPT` programs
+are kept (least recently used dropped first), so a long session does not hold every executable it
+ever compiled (:mod:`formation_ftc.sim.cache`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
+from typing import Any
+
+import jax
+import numpy as np
+
+from formation_ftc.sim import xla
+from formation_ftc.sim.cache import lru_get, lru_put
+
+__all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
+
+#: at most this many programs (and executables) are kept, least recently used dropped first, so that a
+#: long session (a notebook, a test run) does not hold every executable it ever compiled
+MAX_KEPT = 8
+_PROGRAMS: OrderedDict[Hashable, Callable[[Any], Any]] = OrderedDict()
+_EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
+
+
+def jitted_run(compiled) -> Callable[[Any], Any]:
+    """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.xla.compiler_options`, shared by
+    every compiled scenario with the same ``static_key`` (JAX still retraces if the parameters' shapes
+    or static fields differ)."""
+    fn = lru_get(_PROGRAMS, compiled.static_key)
+    if fn is None:
+        fn = lru_put(_PROGRAMS, compiled.static_key, xla.jit(compiled.run), MAX_KEPT)
+    return fn
+
+
+def executable(compiled) -> tuple[Any, float]:
+    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``) and the
+    seconds [s] that compiling it took here (0.0 when a scenario of the same structure and parameter
+    shapes compiled it before)."""
+    leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
+    key = (compiled.static_key, treedef,
+           tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves))
+    exe = lru_get(_EXECUTABLES, key)
+    if exe is not None:
+        return exe, 0.0
+    t0 = time.perf_counter()
+    jitted: Any = jitted_run(compiled)  # a jax.jit function (its stubs type it as a plain callable)
+    exe = lru_put(_EXECUTABLES, key, jitted.lower(compiled.params).compile(), MAX_KEPT)
+    return exe, time.perf_counter() - t0
+
+
+def clear() -> None:
+    """Forget the shared programs (JAX's own caches are untouched)."""
+    _PROGRAMS.clear()
+    _EXECUTABLES.clear()
