@@ -2,11 +2,14 @@
 
 A long session (a notebook, a campaign service, a test run) builds many programs; keeping every
 executable it ever compiled makes its memory grow without bound. :func:`lru_get` and :func:`lru_put`
-keep an ``OrderedDict`` in recency order and cap its size.
+keep an ``OrderedDict`` in recency order and cap its size. Both hold one lock while they touch the
+dictionary, so runs started from several threads (a thread pool in a notebook, a threaded executor)
+never see an entry disappear between the lookup and the recency update.
 """
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from collections.abc import Hashable
 from typing import Any, TypeVar
@@ -15,19 +18,23 @@ __all__ = ["lru_get", "lru_put"]
 
 V = TypeVar("V")
 
+_LOCK = threading.Lock()
+
 
 def lru_get(cache: OrderedDict, key: Hashable) -> Any:
     """``cache[key]`` marked as most recently used, or None when absent."""
-    value = cache.get(key)
-    if value is not None:
-        cache.move_to_end(key)
-    return value
+    with _LOCK:
+        value = cache.get(key)
+        if value is not None:
+            cache.move_to_end(key)
+        return value
 
 
 def lru_put(cache: OrderedDict, key: Hashable, value: V, max_kept: int) -> V:
     """Store ``value`` as the most recently used entry and drop the oldest beyond ``max_kept``."""
-    cache[key] = value
-    cache.move_to_end(key)
-    while len(cache) > max_kept:
-        cache.popitem(last=False)
-    return value
+    with _LOCK:
+        cache[key] = value
+        cache.move_to_end(key)
+        while len(cache) > max_kept:
+            cache.popitem(last=False)
+        return value
