@@ -11,7 +11,8 @@ import pytest
 
 from formation_ftc import api
 from formation_ftc.sim import batch as batch_module
-from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
+from formation_ftc.sim.programs import jitted_run
 
 
 def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
@@ -110,3 +111,51 @@ def test_run_independent_work_is_not_batched(li2020_runs):
     assert trig, "expected the orbit/formation trigonometry in the program"
     batched = [(n, s) for n, s in trig if B in s]
     assert not batched, f"trigonometry evaluated per run: {batched}"
+
+
+def test_stack_params_grid_stores_each_leaf_by_what_it_depends_on():
+    def run(r, c):
+        return {"shared": np.array([1.0, 2.0]), "row": np.array([10.0 * r]), "col": float(c),
+                "cell": np.array([r, c], dtype=float), "nan": np.array([np.nan])}
+
+    grid = [[run(r, c) for c in range(3)] for r in range(2)]
+    batch, row_axes, col_axes = stack_params_grid(grid)
+    assert (row_axes, col_axes) == ({"shared": None, "row": 0, "col": None, "cell": 0, "nan": None},
+                                     {"shared": None, "row": None, "col": 0, "cell": 0, "nan": None})
+    assert batch["shared"].shape == (2,) and batch["row"].shape == (2, 1) and batch["col"].shape == (3,)
+    assert batch["cell"].shape == (2, 3, 2) and batch["nan"].shape == (1,)
+    np.testing.assert_array_equal(batch["row"][:, 0], [0.0, 10.0])
+    np.testing.assert_array_equal(batch["col"], [0.0, 1.0, 2.0])
+    np.testing.assert_array_equal(batch["cell"][1, 2], [1.0, 2.0])
+    with pytest.raises(ValueError, match="row 1 has 2 runs, row 0 has 3"):
+        stack_params_grid([grid[0], grid[1][:2]])
+    with pytest.raises(ValueError, match=r"run \(1, 0\) has a different parameter structure"):
+        stack_params_grid([grid[0], [{"x": 1.0}] + grid[1][1:]])
+    with pytest.raises(ValueError, match="no runs"):
+        stack_params_grid([])
+
+
+def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
+    """A grid of noisy runs, seeds (rows) x gains (columns): every cell equals the run alone (a program
+    of its own; 1e-12 relative, the programs are compiled separately), and every random draw in the
+    step acts on the seeds only -- its shapes carry the row count, never the column count."""
+    R, C = 3, 7  # 7: no dimension of the cw-pd-fault state or noise
+    h = {"simulation.horizon": 20.0}
+    scns = [[api.load_scenario("cw-pd-fault", {**h, "simulation.seed": 11 + r, "controller.kp": 1.0 + 0.25 * c})
+             for c in range(C)] for r in range(R)]
+    compiled = [[api.compile_scenario(s) for s in row] for row in scns]
+    c0 = compiled[0][0]
+    batch, row_axes, col_axes = stack_params_grid([[c.params for c in row] for row in compiled])
+    assert row_axes.seed == 0 and col_axes.seed is None  # the seed is a row leaf
+    out = jax.device_get(batched_grid_run(c0, row_axes, col_axes, R, C)(batch))
+    assert np.shape(out["metrics"][0])[:2] == (R, C)
+    for r in range(R):
+        for c in range(C):
+            alone = jax.device_get(jitted_run(compiled[r][c])(compiled[r][c].params))  # one program, unbatched
+            for k, (a, b) in enumerate(zip(out["metrics"], alone["metrics"], strict=True)):
+                np.testing.assert_allclose(np.asarray(a)[r, c], b, rtol=1e-12, atol=1e-300, err_msg=f"({r},{c}) {k}")
+    inner = jax.vmap(c0.run, in_axes=(col_axes,), axis_size=C)
+    jaxpr = jax.make_jaxpr(jax.vmap(inner, in_axes=(row_axes,), axis_size=R))(batch).jaxpr
+    draws = _jaxpr_ops(jaxpr, {"random_bits", "erf_inv"}, [], loops_only=True)
+    assert draws, "expected random draws in the step"
+    assert all(R in shape and C not in shape for _, shape in draws), draws

@@ -11,6 +11,14 @@ the last bit (XLA compiles the two programs separately).
 
 :func:`batched_run` returns the jitted ``vmap`` for a given set of batched leaves, cached by the
 compiled program's ``static_key``.
+
+**Grids of runs.** A study often crosses two sets of parameters: seeds x gains, say. In one flat batch
+every run draws its own measurement noise, although all runs of one seed draw the same numbers.
+:func:`stack_params_grid` and :func:`batched_grid_run` lay the runs out on a grid instead (``rows x
+columns``) and nest two ``jax.vmap``: a leaf that changes only from row to row (the seed) is batched
+by the outer map alone, so the work that depends on it alone -- the noise draws -- is done once per row
+and shared by the row's columns. Azizi2009's seed study (20 seeds x 12 weights): 3.3x faster than one
+flat batch, metrics bit for bit equal (``benchmarks/engine.py``, ``tests/sim/test_batch.py``).
 """
 
 from __future__ import annotations
@@ -25,7 +33,7 @@ import numpy as np
 from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
 
-__all__ = ["stack_params", "batched_run", "clear"]
+__all__ = ["stack_params", "batched_run", "stack_params_grid", "batched_grid_run", "clear"]
 
 #: batch programs kept per process (least recently used dropped first): a campaign reuses one per
 #: structural group and chunk size, and an unbounded cache made a long session hold every executable
@@ -68,21 +76,98 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(treedef, axes)
 
 
+def _batched_flags(axes: Any) -> tuple[bool, ...]:
+    """Which leaves an ``in_axes`` tree batches (part of a batch program's cache key)."""
+    return tuple(a is not None for a in jax.tree_util.tree_leaves(axes, is_leaf=lambda a: a is None))
+
+
+def _fast_compile(compiled) -> bool:
+    """Whether a ClosedLoop's controller asks for XLA's fast-compile preset in batches."""
+    controller = getattr(getattr(compiled, "params", None), "controller", None)
+    return bool(getattr(controller, "batch_fast_compile", False))
+
+
 def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
     Compiled with :func:`formation_ftc.sim.xla.compiler_options` (the fast-compile preset when the loop's
     controller sets ``batch_fast_compile``)."""
-    flags = tuple(a is not None for a in jax.tree_util.tree_leaves(in_axes, is_leaf=lambda a: a is None))
-    key = (compiled.static_key, flags, int(size))
+    key = (compiled.static_key, _batched_flags(in_axes), int(size))
     fn = lru_get(_CACHE, key)
     if fn is None:
         run = compiled.run
-        controller = getattr(getattr(compiled, "params", None), "controller", None)  # a ClosedLoop's law
-        fast = bool(getattr(controller, "batch_fast_compile", False))
         batch = jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))
-        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=fast), MAX_KEPT)
+        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=_fast_compile(compiled)), MAX_KEPT)
+    return fn
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")
+
+
+def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
+    """Batch runs laid out on a grid, ``params[r][c]`` (every row as long, every run the same
+    structure), for :func:`batched_grid_run`.
+
+    Returns ``(batch, row_axes, column_axes)``. Each leaf is stored by what it depends on:
+
+    * equal in every run: once, unbatched (``None``, ``None``);
+    * equal along every row, different between rows (a seed per row): shape ``(rows, ...)``, batched by
+      the outer map only (``0``, ``None``);
+    * equal down every column, different between columns (a gain per column): ``(columns, ...)``,
+      batched by the inner map only (``None``, ``0``);
+    * otherwise ``(rows, columns, ...)``, batched by both (``0``, ``0``).
+    """
+    rows = [list(r) for r in params]
+    if not rows or not rows[0]:
+        raise ValueError("stack_params_grid: no runs")
+    n_cols = len(rows[0])
+    for r, row in enumerate(rows):
+        if len(row) != n_cols:
+            raise ValueError(f"stack_params_grid: row {r} has {len(row)} runs, row 0 has {n_cols}")
+    flat = [[jax.tree_util.tree_flatten(p) for p in row] for row in rows]
+    treedef: Any = flat[0][0][1]
+    for r, row in enumerate(flat):
+        for c, (_, td) in enumerate(row):
+            if td != treedef:
+                raise ValueError(f"stack_params_grid: run ({r}, {c}) has a different parameter structure "
+                                 "than run (0, 0)")
+    leaves: list[np.ndarray] = []
+    row_axes: list[int | None] = []
+    col_axes: list[int | None] = []
+    for j in range(len(flat[0][0][0])):
+        grid = [[np.asarray(row[c][0][j]) for c in range(n_cols)] for row in flat]
+        first = grid[0][0]
+        along_rows = all(_same(a, g[0]) for g in grid for a in g)  # every row constant
+        down_cols = all(_same(grid[r][c], grid[0][c]) for r in range(len(grid)) for c in range(n_cols))
+        if along_rows and down_cols:
+            leaf, ra, ca = first, None, None
+        elif along_rows:  # one value per row
+            leaf, ra, ca = np.stack([g[0] for g in grid]), 0, None
+        elif down_cols:  # one value per column
+            leaf, ra, ca = np.stack(grid[0]), None, 0
+        else:
+            leaf, ra, ca = np.stack([np.stack(g) for g in grid]), 0, 0
+        leaves.append(leaf)
+        row_axes.append(ra)
+        col_axes.append(ca)
+    unflat = jax.tree_util.tree_unflatten
+    return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
+
+
+def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> Callable[[Any], dict]:
+    """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
+    :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
+    only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs."""
+    key = (compiled.static_key, "grid", _batched_flags(row_axes), _batched_flags(column_axes), int(rows),
+           int(columns))
+    fn = lru_get(_CACHE, key)
+    if fn is None:
+        run = compiled.run
+        inner = jax.vmap(lambda p: dict(run(p)), in_axes=(column_axes,), axis_size=int(columns))
+        outer = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
+        fn = lru_put(_CACHE, key, xla.jit(outer, fast_compile=_fast_compile(compiled)), MAX_KEPT)
     return fn
 
 

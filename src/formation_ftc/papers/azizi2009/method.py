@@ -55,7 +55,7 @@ from formation_ftc.papers.azizi2009.conditions import (
 )
 from formation_ftc.papers.azizi2009.schema import Azizi2009Scenario
 from formation_ftc.registry import Method, register_method
-from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
 from formation_ftc.sim.compiled import Compiled, compile_loop
 from formation_ftc.sim.components import as_float
 from formation_ftc.sim.loop import ClosedLoop
@@ -174,11 +174,17 @@ def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
     return loop
 
 
-def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> list[dict[str, float]]:
+def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray],
+              grid: tuple[int, int] | None = None) -> list[dict[str, float]]:
     """Metrics of len(batch) runs of ``sc`` that differ only in the given leaves (see :data:`VARIABLE`:
     ``alpha`` (B, N), ``alpha_flfr`` (B,), ``seed`` (B,)), run as one compiled, vmapped program through
     :mod:`formation_ftc.sim.batch` (leaves shared by every run stay unbatched). Each run's metrics also
     carry ``D_norm_llfr`` / ``D_norm_flfr``: ||D||_2 of eq. (6) from its weights (true eps).
+
+    ``grid = (rows, columns)``: run b is cell ``(b // columns, b % columns)`` of a grid (B = rows x
+    columns), batched by two nested maps (:func:`formation_ftc.sim.batch.stack_params_grid`): a leaf
+    that changes only from row to row -- a seed per row -- is batched once per row, and so is the work
+    that depends on it alone (the noise draws). Same metrics, in the same order.
     Raises ``RuntimeError`` naming a run that diverged."""
     unknown = set(variations) - set(VARIABLE)
     if unknown:
@@ -190,8 +196,16 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray]) -> li
     loop = make_loop(sc)
     compiled = compile_loop(loop)
     loops = [_variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)]
-    batch, axes = stack_params(loops)
-    out = jax.device_get(batched_run(compiled, axes, size)(batch))
+    if grid is None:
+        batch, axes = stack_params(loops)
+        out = jax.device_get(batched_run(compiled, axes, size)(batch))
+    else:
+        rows, cols = (int(g) for g in grid)
+        if rows < 1 or cols < 1 or rows * cols != size:
+            raise ValueError(f"grid = {grid}: rows x columns must equal the batch size {size}")
+        batch, row_axes, col_axes = stack_params_grid([loops[r * cols:(r + 1) * cols] for r in range(rows)])
+        out = jax.device_get(batched_grid_run(compiled, row_axes, col_axes, rows, cols)(batch))
+        out = jax.tree_util.tree_map(lambda a: np.reshape(a, (size,) + np.shape(a)[2:]), out)
     res = []
     for b, lp in enumerate(loops):
         div = int(out["diverged_step"][b])

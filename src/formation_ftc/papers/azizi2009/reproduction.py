@@ -106,7 +106,8 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     SA[:, 1] = np.tile(per_seed, seeds)
     SS = np.repeat(seed_ids, per_seed.size)
     with phase("run"):
-        res_s = run_batch(sc_noise, {"alpha": SA, "seed": SS})
+        # a grid, seeds x weights: each seed's noise is drawn once for its row of weights
+        res_s = run_batch(sc_noise, {"alpha": SA, "seed": SS}, grid=(seeds, per_seed.size))
     me_s = np.array([r["max_err"] for r in res_s]).reshape(seeds, per_seed.size)
     llfr_seed = me_s[:, 0]
     amin_seed = []
