@@ -60,6 +60,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/li2020.py
 	$(BIN)/python benchmarks/gui2022.py
 	$(BIN)/python benchmarks/campaign.py
+	$(BIN)/python benchmarks/grid_batch.py
 	$(BIN)/python benchmarks/cli.py
 
 clean:

@@ -18,7 +18,8 @@ every run draws its own measurement noise, although all runs of one seed draw th
 columns``) and nest two ``jax.vmap``: a leaf that changes only from row to row (the seed) is batched
 by the outer map alone, so the work that depends on it alone -- the noise draws -- is done once per row
 and shared by the row's columns. Azizi2009's seed study (20 seeds x 12 weights): 3.3x faster than one
-flat batch, metrics bit for bit equal (``benchmarks/engine.py``, ``tests/sim/test_batch.py``).
+flat batch, metrics bit for bit equal (``benchmarks/grid_batch.py``; ``tests/sim/test_batch.py`` checks
+the runs against runs alone and that the draws carry the row count only).
 """
 
 from __future__ import annotations
