@@ -19,7 +19,7 @@ import gc
 import os
 
 # every compiled program goes to the persistent cache, however short its compile (the package's
-# default keeps programs that compiled for >= 1 s): the other xdist worker, and this one after a cache
+# default keeps programs that compiled for >= 0.2 s): the other xdist worker, and this one after a cache
 # clear below, load it instead of compiling it again (measured on tests/components + methods + sim,
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")

@@ -32,8 +32,8 @@ def _probe(tmp_path, **env_extra) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-@pytest.mark.parametrize("override, expected", [(None, 1.0), ("0", 0.0), ("0.25", 0.25)])
-def test_cache_threshold_defaults_to_one_second_and_follows_jax_variable(tmp_path, override, expected):
+@pytest.mark.parametrize("override, expected", [(None, 0.2), ("0", 0.0), ("1.5", 1.5)])
+def test_cache_threshold_defaults_to_a_fifth_of_a_second_and_follows_jax_variable(tmp_path, override, expected):
     extra = {} if override is None else {"JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": override}
     got = _probe(tmp_path, **extra)
     assert got["x64"] is True
