@@ -138,8 +138,8 @@ def test_stack_params_grid_stores_each_leaf_by_what_it_depends_on():
 def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
     """A grid of noisy runs, seeds (rows) x gains (columns): every cell equals the run alone (a program
     of its own; 1e-12 relative, the programs are compiled separately), and every random draw in the
-    step acts on the seeds only -- its shapes carry the row count, never the column count."""
-    R, C = 3, 7  # 7: no dimension of the cw-pd-fault state or noise
+    step acts on the seeds only -- its shapes lead with the row count and never carry the column count."""
+    R, C = 5, 7  # neither is a dimension of the cw-pd-fault noise (4 spacecraft x 3 axes)
     h = {"simulation.horizon": 20.0}
     scns = [[api.load_scenario("cw-pd-fault", {**h, "simulation.seed": 11 + r, "controller.kp": 1.0 + 0.25 * c})
              for c in range(C)] for r in range(R)]
@@ -158,4 +158,4 @@ def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
     jaxpr = jax.make_jaxpr(jax.vmap(inner, in_axes=(row_axes,), axis_size=R))(batch).jaxpr
     draws = _jaxpr_ops(jaxpr, {"random_bits", "erf_inv"}, [], loops_only=True)
     assert draws, "expected random draws in the step"
-    assert all(R in shape and C not in shape for _, shape in draws), draws
+    assert all(shape[:1] == (R,) and C not in shape for _, shape in draws), draws  # (R, 4, 3), not (R, C, ...)
