@@ -88,15 +88,7 @@ for name in ("li2020-thm1", "yang2013-healthy", "gui2022-lof2tc", "mehrabian-iso
 
 
 def _rerun_times(cache: Path) -> dict:
-    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache)}
-    proc = subprocess.run([sys.executable, "-c", _RERUN_SCRIPT], env=env, capture_output=True, text=True)
-    times: dict = {}
-    for line in proc.stdout.splitlines():
-        if line.startswith("{"):
-            times.update(json.loads(line))
-    if proc.returncode != 0:
-        print(proc.stderr[-4000:], file=sys.stderr)
-    return times
+    return _json_lines(_RERUN_SCRIPT, str(cache))
 
 
 def _has_profile() -> bool:
@@ -133,17 +125,22 @@ def _print_reproduce(label: str, r: dict, target: float) -> None:
               + ("" if r["status"].get(paper) == "ok" else "  FAILED"))
 
 
-def _compile_times() -> dict:
-    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": "off"}
-    proc = subprocess.run([sys.executable, "-c", _COMPILE_SCRIPT], env=env, capture_output=True,
-                          text=True)
-    times: dict = {}
+def _json_lines(script: str, cache: str) -> dict:
+    """Run ``script`` in a fresh interpreter with ``FORMATION_FTC_JAX_CACHE=cache`` and merge the JSON
+    objects it prints, one per line (its error output is shown when it fails)."""
+    env = {**os.environ, "FORMATION_FTC_JAX_CACHE": cache}
+    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+    out: dict = {}
     for line in proc.stdout.splitlines():
         if line.startswith("{"):
-            times.update(json.loads(line))
+            out.update(json.loads(line))
     if proc.returncode != 0:
         print(proc.stderr[-4000:], file=sys.stderr)
-    return times
+    return out
+
+
+def _compile_times() -> dict:
+    return _json_lines(_COMPILE_SCRIPT, "off")
 
 
 def main(argv: list[str] | None = None) -> int:

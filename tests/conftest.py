@@ -33,6 +33,7 @@ if _XDIST_WORKERS > 1:
     os.environ.setdefault("PJRT_NPROC", str(max(1, len(os.sched_getaffinity(0)) // _XDIST_WORKERS)))
 
 import jax  # noqa: E402
+import jax.monitoring  # noqa: E402
 import pytest  # noqa: E402
 
 import formation_ftc  # noqa: E402, F401  (enables jax_enable_x64)
@@ -68,6 +69,33 @@ def pytest_runtest_teardown(item, nextitem):
         jax.clear_caches()
         gc.collect()
         _malloc_trim()
+
+
+#: compile events of a closed-loop ``run`` program (JAX's ``jax.monitoring``), for :func:`run_compiles`
+_RUN_COMPILES: list[str] = []
+
+
+def _count_run_compiles(event: str, duration: float, **kw) -> None:
+    if event == "/jax/core/compile/backend_compile_duration" and kw.get("fun_name") == "jit(run)":
+        _RUN_COMPILES.append(event)
+
+
+jax.monitoring.register_event_duration_secs_listener(_count_run_compiles)
+
+
+@pytest.fixture
+def run_compiles() -> list[str]:
+    """XLA compiles (persistent-cache loads included) of a closed-loop ``run`` program from here on."""
+    _RUN_COMPILES.clear()
+    return _RUN_COMPILES
+
+
+@pytest.fixture(scope="module")
+def cw_gain_pair():
+    """Two cw-pd-fault scenarios of one structure (20 s) that differ only in the gain ``controller.kp``."""
+    from formation_ftc.api import load_scenario
+
+    return [load_scenario("cw-pd-fault", {"simulation.horizon": 20.0, "controller.kp": kp}) for kp in (2.0, 3.0)]
 
 
 def pytest_collection_modifyitems(session, config, items):

@@ -142,8 +142,9 @@ def _apply_cf(ds, scenario: ScenarioBase) -> None:
              version=str(ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))))
 
 
-def simulate_with_metrics(scenario: ScenarioBase | str | Path):
-    """Run one scenario: ``(xarray.Dataset, {metric: float})``.
+def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergence: bool = True):
+    """Run one scenario: ``(xarray.Dataset, {metric: float})``; a run that diverges raises
+    :class:`SimulationDiverged` (``raise_on_divergence=False``: returns what it computed instead).
 
     The process keeps one compiled program per structure (:func:`formation_ftc.sim.programs.jitted_run`):
     running a scenario again with other numbers -- a gain, a fault time, a seed -- reuses it (no
@@ -152,7 +153,7 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)
     out = jitted_run(compiled)(compiled.params)
-    return finish_run(scenario, compiled, out)
+    return finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
 
 
 def simulate(scenario: ScenarioBase | str | Path):

@@ -3,46 +3,27 @@ compiles nothing and gives bit-for-bit the results of a program compiled afresh 
 structure equal the runs alone. (The shared program itself: tests/sim/test_programs.py.)
 
 Truths: a fresh ``jax.jit`` of the scenario's own ``run`` with the same XLA options, and JAX's own
-compile events (``jax.monitoring``), counted for the ``run`` program only.
+compile events (``jax.monitoring``, the ``run_compiles`` fixture of tests/conftest.py).
 """
 
 from __future__ import annotations
 
-import jax.monitoring
 import numpy as np
-import pytest
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
 from formation_ftc.papers import programs
 from formation_ftc.sim import xla
 
-_COMPILES: list[str] = []
 
-
-def _listener(event: str, duration: float, **kw) -> None:
-    if event == "/jax/core/compile/backend_compile_duration" and kw.get("fun_name") == "jit(run)":
-        _COMPILES.append(event)
-
-
-jax.monitoring.register_event_duration_secs_listener(_listener)
-
-OV = {"simulation.horizon": 20.0}
-
-
-@pytest.fixture(scope="module")
-def scenarios():
-    return [load_scenario("cw-pd-fault", {**OV, "controller.kp": kp}) for kp in (2.0, 3.0)]
-
-
-def test_same_structure_compiles_once_and_matches_the_api(scenarios):
-    a, b = scenarios
+def test_same_structure_compiles_once_and_matches_the_api(cw_gain_pair, run_compiles):
+    a, b = cw_gain_pair
     assert compile_scenario(a).static_key == compile_scenario(b).static_key
     programs.clear()
-    _COMPILES.clear()
+    run_compiles.clear()
     ds_a, m_a = programs.simulate(a)
-    n_first = len(_COMPILES)
+    n_first = len(run_compiles)
     ds_b, m_b = programs.simulate(b)
-    assert n_first == 1 and len(_COMPILES) == 1  # the second scenario reused the program
+    assert n_first == 1 and len(run_compiles) == 1  # the second scenario reused the program
     assert m_a != m_b  # the gains differ, so do the results
     for scn, ds, m in ((a, ds_a, m_a), (b, ds_b, m_b)):
         c = compile_scenario(scn)
@@ -50,7 +31,7 @@ def test_same_structure_compiles_once_and_matches_the_api(scenarios):
         assert m == ref_m  # bit for bit
         for name in ref_ds.data_vars:
             np.testing.assert_array_equal(ds[name].values, ref_ds[name].values)
-    assert len(_COMPILES) == 3  # each fresh program was compiled
+    assert len(run_compiles) == 3  # each fresh program was compiled
 
 
 def test_simulate_batched_groups_by_structure_and_keeps_the_order():

@@ -3,37 +3,20 @@
 compiled again, and gives bit for bit the results of a program compiled afresh for it.
 
 Truths: a fresh ``jax.jit`` of the scenario's own ``run`` with the same XLA options (compiled anew,
-independent of the shared cache); JAX's compile events (``jax.monitoring``, the ``run`` program only);
+independent of the shared cache); JAX's compile events (``jax.monitoring``, the ``run_compiles``
+fixture of tests/conftest.py);
 a count of the traces of the closed loop (``ClosedLoop._run`` is called once per trace, never per step).
 """
 
 from __future__ import annotations
 
 import jax
-import jax.monitoring
 import numpy as np
 import pytest
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
 from formation_ftc.sim import programs, xla
 from formation_ftc.sim.loop import ClosedLoop
-
-_COMPILES: list[str] = []
-
-
-def _listener(event: str, duration: float, **kw) -> None:
-    if event == "/jax/core/compile/backend_compile_duration" and kw.get("fun_name") == "jit(run)":
-        _COMPILES.append(event)
-
-
-jax.monitoring.register_event_duration_secs_listener(_listener)
-
-OV = {"simulation.horizon": 20.0}
-
-
-@pytest.fixture(scope="module")
-def scenarios():
-    return [load_scenario("cw-pd-fault", {**OV, "controller.kp": kp}) for kp in (2.0, 3.0)]
 
 
 @pytest.fixture
@@ -56,26 +39,26 @@ def _fresh(scenario):
     return finish_run(scenario, c, xla.jit(c.run)(c.params))
 
 
-def test_api_reruns_of_a_structure_trace_and_compile_once(scenarios, traces):
-    a, b = scenarios
+def test_api_reruns_of_a_structure_trace_and_compile_once(cw_gain_pair, traces, run_compiles):
+    a, b = cw_gain_pair
     assert compile_scenario(a).static_key == compile_scenario(b).static_key
     programs.clear()
-    _COMPILES.clear()
+    run_compiles.clear()
     ds_a, m_a = simulate_with_metrics(a)
-    assert traces[0] == 1 and len(_COMPILES) == 1
+    assert traces[0] == 1 and len(run_compiles) == 1
     ds_b, m_b = simulate_with_metrics(b)
-    assert traces[0] == 1 and len(_COMPILES) == 1  # another gain: the same program, not traced again
+    assert traces[0] == 1 and len(run_compiles) == 1  # another gain: the same program, not traced again
     assert m_a != m_b  # the gains differ, so do the results
     for scn, ds, m in ((a, ds_a, m_a), (b, ds_b, m_b)):
         ref_ds, ref_m = _fresh(scn)
         assert m == ref_m  # bit for bit
         for name in ref_ds.data_vars:
             np.testing.assert_array_equal(ds[name].values, ref_ds[name].values, err_msg=name)
-    assert traces[0] == 3 and len(_COMPILES) == 3  # each fresh program was traced and compiled
+    assert traces[0] == 3 and len(run_compiles) == 3  # each fresh program was traced and compiled
 
 
-def test_another_structure_is_traced_and_the_oldest_program_dropped(scenarios, traces, monkeypatch):
-    a, _ = scenarios
+def test_another_structure_is_traced_and_the_oldest_program_dropped(cw_gain_pair, traces, monkeypatch):
+    a, _ = cw_gain_pair
     longer = load_scenario("cw-pd-fault", {"simulation.horizon": 30.0})  # more steps: another structure
     assert compile_scenario(a).static_key != compile_scenario(longer).static_key
     monkeypatch.setattr(programs, "MAX_KEPT", 1)
@@ -90,9 +73,9 @@ def test_another_structure_is_traced_and_the_oldest_program_dropped(scenarios, t
     programs.clear()
 
 
-def test_executable_is_shared_and_lru_bounded(scenarios, monkeypatch):
+def test_executable_is_shared_and_lru_bounded(cw_gain_pair, monkeypatch):
     programs.clear()
-    c_a, c_b = (compile_scenario(s) for s in scenarios)
+    c_a, c_b = (compile_scenario(s) for s in cw_gain_pair)
     exe_a, t_a = programs.executable(c_a)
     exe_b, t_b = programs.executable(c_b)
     assert exe_a is exe_b and t_a > 0.0 and t_b == 0.0

@@ -19,13 +19,11 @@ __all__ = ["simulate", "simulate_batched", "jitted_run", "executable", "clear"]
 
 
 def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str, float]]:
-    """Run one validated scenario: ``(xarray.Dataset, {metric: float})`` as
-    :func:`formation_ftc.api.simulate_with_metrics` returns them, through :func:`jitted_run`."""
-    from formation_ftc.api import compile_scenario, finish_run
+    """Run one validated scenario: :func:`formation_ftc.api.simulate_with_metrics`, which runs the
+    process's shared program of its structure (:func:`jitted_run`)."""
+    from formation_ftc.api import simulate_with_metrics
 
-    compiled = compile_scenario(scenario)
-    out = jitted_run(compiled)(compiled.params)
-    return finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
+    return simulate_with_metrics(scenario, raise_on_divergence=raise_on_divergence)
 
 
 def simulate_batched(scenarios: list, compiled: list | None = None,

@@ -65,8 +65,7 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     for vals in zip(*(f[0] for f in flat), strict=True):
         arrs = [np.asarray(v) for v in vals]
         first = arrs[0]
-        shared = all(a.shape == first.shape and np.array_equal(a, first, equal_nan=first.dtype.kind in "fc")
-                     for a in arrs[1:])
+        shared = all(_same(a, first) for a in arrs[1:])
         if shared:
             leaves.append(first)
             axes.append(None)
@@ -104,7 +103,8 @@ def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    return a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")
+    """Equal leaves: same shape, same values, NaN equal to NaN."""
+    return a.shape == b.shape and np.array_equal(a, b, equal_nan=b.dtype.kind in "fc")
 
 
 def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
