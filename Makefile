@@ -61,6 +61,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/gui2022.py
 	$(BIN)/python benchmarks/campaign.py
 	$(BIN)/python benchmarks/grid_batch.py
+	$(BIN)/python benchmarks/metric_fold.py
 	$(BIN)/python benchmarks/cli.py
 
 clean:

@@ -29,6 +29,31 @@ def test_decimation_and_accumulated_metric():
     assert int(out["diverged_step"]) == -1
 
 
+@pytest.mark.parametrize("fold_every", [1, 2, 5, 10])
+def test_fold_receives_every_step_sample_in_order(fold_every):
+    # the step emits (k, x); fold gets the samples of fold_every consecutive steps with the first step's
+    # index: it checks the indices are contiguous and accumulates what a per-step accumulator would
+    def step(k, st):
+        return {"x": st["x"] * 0.9, "acc": st["acc"], "bad": st["bad"]}, {"k": k, "x": st["x"][0]}
+
+    def fold(k0, st, samples):
+        contiguous = jnp.all(samples["k"] == k0 + jnp.arange(fold_every))
+        return {**st, "acc": st["acc"] + jnp.sum(samples["x"]), "bad": st["bad"] + jnp.where(contiguous, 0, 1)}
+
+    st0 = {"x": jnp.ones(2), "acc": jnp.asarray(0.0), "bad": jnp.asarray(0)}
+    out = jax.jit(lambda: run_fixed_step(step, lambda k, x: {"x": x["x"]}, st0, 100, 10, fold=fold,
+                                         fold_every=fold_every))()
+    assert int(out["final"]["bad"]) == 0
+    assert float(out["final"]["acc"]) == pytest.approx((1 - 0.9**100) / 0.1, rel=1e-13)
+    np.testing.assert_allclose(out["records"]["x"][:, 0], 0.9 ** np.arange(0, 101, 10), rtol=1e-13)
+
+
+def test_fold_every_must_divide_the_record_interval():
+    with pytest.raises(ValueError, match="fold_every=3 must divide record_every=10"):
+        run_fixed_step(lambda k, x: (x, x), lambda k, x: x, jnp.zeros(1), 100, 10, fold=lambda k, s, y: s,
+                       fold_every=3)
+
+
 def test_divergence_is_caught_and_diagnosed():
     def step(k, x):  # blows up at step 37 in spacecraft 2's velocity
         v = x["v"].at[1, 0].set(jnp.where(k == 37, jnp.inf, x["v"][1, 0] + 1.0))

@@ -442,9 +442,10 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     }
 
 
-#: Relative cost of each built-in reproduction (wall seconds measured on 2 cores): workers take the
-#: longest first, so the last paper to start is a short one. Unknown papers count as long.
-PAPER_COST = {"azizi2009": 53.0, "mehrabian": 43.0, "li2020": 23.0, "gui2022": 14.0, "yang2013": 3.0}
+#: Relative cost of each built-in reproduction: wall seconds of a cold plus a warm compilation-cache
+#: run, measured side by side on 2 cores (``benchmarks/reproduce.py``). Workers take the longest first,
+#: so the last paper to start is a short one. Unknown papers count as long.
+PAPER_COST = {"mehrabian": 53.0, "azizi2009": 47.0, "gui2022": 45.0, "li2020": 38.0, "yang2013": 5.0}
 
 
 def _paper_workers(workers: int | None, n_papers: int) -> int:

@@ -85,6 +85,8 @@ def run_fixed_step(
     check_finite: bool = True,
     check_of: Callable[[PyTree], PyTree] | None = None,
     admissible: Callable[[PyTree], jax.Array] | None = None,
+    fold: Callable[[jax.Array, PyTree, PyTree], PyTree] | None = None,
+    fold_every: int = 1,
 ) -> RunOutput:
     """Run ``n_steps`` steps; record ``observe`` at k = 0, record_every, 2*record_every, ..., n_steps.
 
@@ -97,9 +99,16 @@ def run_fixed_step(
     records are not finite and :func:`trim_records` drops them); :func:`diagnose_divergence` replays the block to find
     the exact step and variable. ``observe`` is traced once (one scan over ``n_records + 1`` record
     points, the last of which only records). Returns a :data:`RunOutput`.
+
+    ``fold``: with it, ``step(k, state)`` returns ``(state, sample)`` and every ``fold_every`` steps
+    (a divisor of ``record_every``) ``fold(k_first, state, samples)`` receives the samples of those
+    steps stacked along a leading axis (k_first: the first one's step index) and returns the state --
+    per-step bookkeeping (metric accumulators) done once per block of steps, in vectorised form.
     """
     if n_steps % record_every:
         raise ValueError(f"record_every={record_every} must divide n_steps={n_steps}")
+    if fold is not None and (fold_every < 1 or record_every % fold_every):
+        raise ValueError(f"fold_every={fold_every} must divide record_every={record_every}")
     n_records = n_steps // record_every
     select = check_of if check_of is not None else (lambda s: s)
 
@@ -108,7 +117,23 @@ def run_fixed_step(
         return (k + 1, step(k, state)), None
 
     def block(k, state):
-        (k, state), _ = jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)
+        if fold is None:
+            (k, state), _ = jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)
+            return state
+
+        def emitting(carry, _):
+            k, state = carry
+            state, sample = step(k, state)
+            return (k + 1, state), sample
+
+        def folded(carry, _):
+            k, state = carry
+            (k_next, state), samples = jax.lax.scan(emitting, (k, state), None, length=fold_every, unroll=unroll)
+            return (k_next, fold(k, state, samples)), None
+
+        if fold_every == record_every:
+            return folded((k, state), None)[0][1]
+        (k, state), _ = jax.lax.scan(folded, (k, state), None, length=record_every // fold_every)
         return state
 
     def outer(carry, _):

@@ -57,6 +57,14 @@ POSITION_ERROR_SIGNAL = "position_error"
 APPLIED_SIGNAL = "applied"
 #: key under which :meth:`ClosedLoop.step` hands the stage-integrated metric increments to the run
 STAGE_INCREMENTS = "__stage_increments__"
+#: most steps whose metric samples are buffered and folded together when the loop chooses
+#: (memory: this many samples of the signals the metrics read, per run)
+METRIC_BLOCK_MAX = 50
+#: the loop folds its metrics a block at a time on its own when it has at least this many step metrics,
+#: a block of at least this many steps and a run of at least this many steps (ClosedLoop._metric_block)
+METRIC_FOLD_MIN_METRICS = 20
+METRIC_FOLD_MIN_BLOCK = 20
+METRIC_FOLD_MIN_STEPS = 100_000
 #: data folded into the step key for the plant's process noise when the sensors split the key themselves
 _PLANT_STREAM = 0x706C616E
 
@@ -121,6 +129,9 @@ class ClosedLoop:
     record_every: int = static(default=1)
     unroll: int = static(default=1)
     t0: float = static(default=0.0)
+    #: steps whose metric samples are folded together (:meth:`_metric_block`): 0 chooses, 1 folds at
+    #: every step, L > 1 (a divisor of ``record_every``) buffers L steps' samples and folds them at once
+    metric_block: int = static(default=0)
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> ClosedLoop:
@@ -151,6 +162,9 @@ class ClosedLoop:
         if self.n_steps % self.record_every:
             raise CompositionError(f"record_every = {self.record_every} must divide the number of steps "
                                    f"{self.n_steps}")
+        if self.metric_block < 0 or (self.metric_block and self.record_every % self.metric_block):
+            raise CompositionError(f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
+                                   f"record_every = {self.record_every}")
         names = [s.name for s in self.signals()]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -443,25 +457,34 @@ class ClosedLoop:
         acc0 = metric_ops.init_accumulators(
             self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
 
+        folding = self._metric_block() > 1
+
         def step(k, carry):
             state, acc = carry
             new, outputs = self.step(k, state)
             stage_inc = outputs.pop(STAGE_INCREMENTS, None)
             for name, v in state["usage"].items():
                 outputs[name] = v
-            outputs = self._evaluated(outputs)
-            acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs)
             if stage_inc is not None:
                 acc = metric_ops.update_stage_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt,
                                                            stage_inc)
+            outputs = self._evaluated(outputs)
+            if folding:  # the sample goes to fold(): the metrics of a block of steps are folded at once
+                return (new, acc), metric_ops.pack_sample(self.metrics, outputs)
+            acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs)
             return new, acc
+
+        def fold(k, carry, samples):
+            return carry[0], metric_ops.fold_block(self.metrics, carry[1], k, self.t0, self.dt,
+                                                   metric_ops.unpack_samples(self.metrics, shapes, samples))
 
         def observe(k, carry):
             return self.observe(k, carry[0])
 
         out = run_fixed_step(step, observe, (state0, acc0), self.n_steps, self.record_every, self.unroll,
                              check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
-                             admissible=self.admissible)
+                             admissible=self.admissible, fold=fold if folding else None,
+                             fold_every=self._metric_block())
         state_n, acc = out["final"]
         # the horizon sample is the last record (the signals of the final state at t_n); a run that left
         # its admissible set never reached the horizon: its metrics stay those accumulated up to the
@@ -473,6 +496,26 @@ class ClosedLoop:
         acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
         return dict(records=out["records"], final=state_n, diverged_step=out["diverged_step"],
                     last_finite=out["last_finite"], metrics=metric_ops.finalize(self.metrics, acc))
+
+    def _metric_block(self) -> int:
+        """Steps whose metric samples are folded together (:func:`~.metrics.fold_block`).
+
+        ``metric_block`` when set; otherwise (0) blocks of the largest divisor of ``record_every`` up to
+        :data:`METRIC_BLOCK_MAX` for a long run with many step metrics -- at least
+        :data:`METRIC_FOLD_MIN_METRICS` metrics, a block of at least :data:`METRIC_FOLD_MIN_BLOCK`
+        steps and :data:`METRIC_FOLD_MIN_STEPS` steps -- and 1 (every step) else. Folding takes the
+        metrics' small kernels out of every step, but its vectorised reductions make the program larger
+        (longer to compile) and, under ``vmap``, where a step's kernels already serve the whole batch,
+        cost more than they save; ``benchmarks/metric_fold.py`` measures both."""
+        if not metric_ops.block_signals(self.metrics):
+            return 1
+        if self.metric_block:
+            return self.metric_block
+        block = max(d for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1) if self.record_every % d == 0)
+        many = sum(m.reduce not in metric_ops.STAGE_REDUCTIONS and m.reduce != "last" for m in self.metrics)
+        if many >= METRIC_FOLD_MIN_METRICS and block >= METRIC_FOLD_MIN_BLOCK and self.n_steps >= METRIC_FOLD_MIN_STEPS:
+            return block
+        return 1
 
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""

@@ -8,6 +8,11 @@ signals at t_k) and once more with the final sample (k = n, the run's last recor
 two records is never missed. A run that leaves its admissible set never reaches the horizon: its metrics
 are those accumulated up to the start of the failing record block (the state the engine returns), with
 no horizon sample (``last`` is then NaN).
+
+A long run with many metrics folds them a block of steps at a time instead (:func:`fold_block`; the
+closed loop chooses, see ``ClosedLoop.metric_block``): each step only writes the signals the metrics
+read (:func:`pack_sample`), and the values and reductions of the whole block are computed at once --
+the same selections, and the same sums added in another order (they may differ in the last bits).
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ from formation_ftc.sim.components import component, static
 
 __all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
            "REDUCTIONS", "BLOCK_REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
-           "update_stage_accumulators"]
+           "update_stage_accumulators", "block_signals", "sample_values", "fold_block",
+           "pack_sample", "unpack_samples"]
 
 #: time reductions: name -> meaning
 REDUCTIONS = {
@@ -308,88 +314,274 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array | f
                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
     which the rectangle-rule integral does not count)."""
-    out = list(accs)
-    for slot, groups in _classes(metrics):
-        if not isinstance(groups[0][1], _Stack):
-            out[slot] = _update_accumulators([groups[0][1]], (accs[slot],), t, dt, signals, is_final)[0]
+    return _apply(metrics, accs, t, dt, sample_values(metrics, signals, is_final), is_final)
+
+
+def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
+    """Names of the signals :func:`fold_block` reads (the signals and gates of every metric folded at
+    the steps; stage-integrated metrics and ``last`` read none)."""
+    names: dict[str, None] = {}
+    for m in metrics:
+        if m.reduce in STAGE_REDUCTIONS or m.reduce == "last":
             continue
+        names[m.signal] = None
+        if m.gate is not None:
+            names[m.gate] = None
+    return tuple(names)
+
+
+def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> jax.Array:
+    """The signals of :func:`block_signals` of one sample as one flat float64 vector (a scan then
+    stacks one array per step instead of one per signal: each is a separate copy per step)."""
+    return jnp.concatenate([jnp.ravel(jnp.asarray(signals[n])).astype(jnp.float64) for n in block_signals(metrics)])
+
+
+def unpack_samples(metrics: Sequence[Metric], shapes: Mapping[str, Any], packed: jax.Array) -> dict[str, jax.Array]:
+    """Inverse of :func:`pack_sample` over a block: ``packed`` (L, F) -> ``{signal: (L, *shape)}`` in the
+    signals' dtypes (``shapes``: each signal's shape and dtype, e.g. from ``jax.eval_shape``)."""
+    out, col = {}, 0
+    for n in block_signals(metrics):
+        shape, dtype = tuple(shapes[n].shape), shapes[n].dtype
+        size = int(np.prod(shape, dtype=int))
+        out[n] = jnp.reshape(packed[:, col:col + size], packed.shape[:1] + shape).astype(dtype)
+        col += size
+    return out
+
+
+def sample_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
+    """What one sample contributes to the accumulators, per carry slot of :func:`_classes`: a group's
+    stacked values and gate (``(value, gate)``; ``gate`` None without one); ``None`` for the
+    stage-integrated metrics (folded by :func:`update_stage_accumulators`) and, except at the horizon
+    sample, for ``last``. The values are taken apart from the accumulator update so that a block of
+    samples can be evaluated in one vectorised operation (:func:`fold_block`)."""
+    out: list[Any] = []
+    for _, groups in _classes(metrics):
+        if not isinstance(groups[0][1], _Stack):
+            out.append(None)
+            continue
+        vals: list[Any] = []
+        for _, g in groups:
+            if g.reduce == "last" and not is_final:
+                vals.append(None)
+                continue
+            gate = None if g.gate is None else jnp.asarray(signals[g.gate]) > 0
+            vals.append((g.value(signals), gate))
+        out.append(tuple(vals))
+    return tuple(out)
+
+
+def _apply(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float, values: tuple,
+           is_final: bool = False) -> tuple:
+    """Fold one sample's :func:`sample_values` (taken at time ``t``) into the accumulators."""
+    out = list(accs)
+    for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
+        if not isinstance(groups[0][1], _Stack):
+            continue  # stage-integrated: folded in by update_stage_accumulators
         rows = _rows(groups)
-        new = [_pack(_update_accumulators([g], (acc,), t, dt, signals, is_final)[0], rows)
-               for (_, g), acc in zip(groups, _blocks(groups, accs[slot]), strict=True)]
+        new = [_pack(_update_group(g, acc, t, dt, v, is_final), rows)
+               for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)]
         out[slot] = jnp.concatenate(new, axis=1)
     return tuple(out)
 
 
-def _update_accumulators(metrics: Sequence[Any], accs: tuple, t: jax.Array | float, dt: float,
-                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
-    out = []
-    for m, acc in zip(metrics, accs, strict=True):
-        if m.reduce in STAGE_REDUCTIONS:  # folded in by update_stage_accumulators
-            out.append(acc)
-            continue
-        if m.reduce == "last":  # only the horizon sample (a static branch: nothing at the steps)
-            out.append((m.value(signals), jnp.ones_like(acc[1])) if is_final else acc)
-            continue
-        v = m.value(signals)
-        inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
-        if m.gate is not None:
-            inw = jnp.logical_and(inw, jnp.asarray(signals[m.gate]) > 0)
-        if m.reduce == "max":
-            a, seen = acc
-            out.append((jnp.where(inw, jnp.maximum(a, v), a), seen | inw))
-        elif m.reduce == "min":
-            a, seen = acc
-            out.append((jnp.where(inw, jnp.minimum(a, v), a), seen | inw))
-        elif m.reduce == "final":
-            a, seen = acc
-            out.append((jnp.where(inw, v, a), seen | inw))
-        elif m.reduce == "at":
-            a, seen = acc
-            take = jnp.logical_and(inw, jnp.logical_not(seen))
-            out.append((jnp.where(take, v, a), seen | inw))
-        elif m.reduce == "mean":
-            s, n = acc
-            out.append((s + jnp.where(inw, v, 0.0), n + jnp.where(inw, 1.0, 0.0)))
-        elif m.reduce == "integral":
-            s, n = acc
-            w = 0.0 if is_final else dt
-            out.append((s + jnp.where(inw, v * w, 0.0), n + jnp.where(inw, 1.0, 0.0)))
-        elif m.reduce == "rms":
-            s, n = acc
-            take = jnp.logical_and(inw, not is_final)
-            out.append((s + jnp.where(take, v * v, 0.0), n + jnp.where(take, 1.0, 0.0)))
-        elif m.reduce in ("settle", "settle_delay"):
-            ts, seen, last_above = acc
-            above = jnp.logical_not(v < m.threshold)
-            first = jnp.logical_and(inw, jnp.logical_not(seen))
-            # settle time = time of the first in-window sample below the threshold following a sample
-            # at or above it (the window start when it never was above); NaN while it is above
-            ts_new = jnp.where(above, jnp.nan, jnp.where(first | last_above, t, ts))
-            out.append((jnp.where(inw, ts_new, ts), seen | inw, jnp.where(inw, above, last_above)))
-        elif m.reduce == "first":
-            ts, found = acc
-            hit = inw & jnp.logical_not(v < m.threshold) & jnp.logical_not(found)
-            out.append((jnp.where(hit, t, ts), found | hit))
-        elif m.reduce == "block_rms":
-            s, n, q, nb = acc
-            take = jnp.logical_and(inw, not is_final)
-            s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
-            full = n >= m.block  # the block closes: fold its mean in, open the next one
-            mean = s / m.block
-            out.append((jnp.where(full, 0.0, s), jnp.where(full, 0.0, n), q + jnp.where(full, mean * mean, 0.0),
-                        nb + jnp.where(full, 1.0, 0.0)))
-        elif m.reduce == "block_dev_rms":
-            # shifted sums (shift = the block's first value): no cancellation when the mean is large
-            shift, s1, s2, n, q, nq = acc
-            take = jnp.logical_and(inw, not is_final)
-            shift = jnp.where(take & (n == 0), v, shift)
-            d = jnp.where(take, v - shift, 0.0)
-            s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
-            full = n >= m.block
-            dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
-            out.append((shift, jnp.where(full, 0.0, s1), jnp.where(full, 0.0, s2), jnp.where(full, 0.0, n),
-                        q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0)))
+def fold_block(metrics: Sequence[Metric], accs: tuple, k0: jax.Array, t0: float, dt: float,
+               samples: Mapping[str, jax.Array]) -> tuple:
+    """Fold a block of consecutive samples (steps ``k0 .. k0 + L - 1``, every signal of
+    :func:`block_signals` with a leading axis of length L) into the accumulators: the result of
+    :func:`update_accumulators` applied to the samples one by one.
+
+    Everything is computed for the whole block at once -- the metric values, then each group's
+    reduction over the block's samples (:func:`_fold_group`) -- instead of one small kernel per metric
+    and step. The selections (extremes, first / last / settling samples) are the same values bit for
+    bit; the sums (``mean``, ``integral``, ``rms``, the block reductions) add the block's samples first
+    and then to the running sum, so they may differ from the sample-by-sample order in the last bits."""
+    n = jax.tree_util.tree_leaves(samples)[0].shape[0]
+    values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
+    times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
+    out = list(accs)
+    for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
+        if not isinstance(groups[0][1], _Stack):
+            continue  # stage-integrated: folded in by update_stage_accumulators
+        rows = _rows(groups)
+        new = [_pack(acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v), rows)
+               for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)]
+        out[slot] = jnp.concatenate(new, axis=1)
     return tuple(out)
+
+
+def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -> tuple:
+    """:func:`_update_group` over a block of samples (leading axis ``j``), computed at once."""
+    v, gate = value
+    t = jnp.reshape(times, times.shape + (1,) * (v.ndim - 1))
+    inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+    if gate is not None:  # a gate of one sample broadcasts against its values from the right
+        gs = gate.shape[1:]
+        inw = jnp.logical_and(inw, jnp.reshape(gate, gate.shape[:1] + (1,) * (v.ndim - 1 - len(gs)) + gs))
+    inw = jnp.broadcast_to(inw, v.shape)
+    t = jnp.broadcast_to(t, v.shape)
+    n = v.shape[0]
+    idx = jnp.reshape(jnp.arange(n), (n,) + (1,) * (v.ndim - 1))
+    anyw = jnp.any(inw, axis=0)
+    count = jnp.sum(inw, axis=0).astype(jnp.float64)
+
+    def first_of(mask):  # index of the first true sample (n when none)
+        return jnp.min(jnp.where(mask, idx, n), axis=0)
+
+    def last_of(mask):  # index of the last true sample (-1 when none)
+        return jnp.max(jnp.where(mask, idx, -1), axis=0)
+
+    def take(x, i):  # x at sample i (clipped), per element
+        return jnp.take_along_axis(x, jnp.clip(i, 0, n - 1)[None], axis=0)[0]
+
+    if m.reduce == "max":
+        a, seen = acc
+        return (jnp.maximum(a, jnp.max(jnp.where(inw, v, -jnp.inf), axis=0)), seen | anyw)
+    if m.reduce == "min":
+        a, seen = acc
+        return (jnp.minimum(a, jnp.min(jnp.where(inw, v, jnp.inf), axis=0)), seen | anyw)
+    if m.reduce == "final":
+        a, seen = acc
+        return (jnp.where(anyw, take(v, last_of(inw)), a), seen | anyw)
+    if m.reduce == "at":
+        a, seen = acc
+        return (jnp.where(anyw & jnp.logical_not(seen), take(v, first_of(inw)), a), seen | anyw)
+    if m.reduce == "mean":
+        s, c = acc
+        return (s + jnp.sum(jnp.where(inw, v, 0.0), axis=0), c + count)
+    if m.reduce == "integral":
+        s, c = acc
+        return (s + jnp.sum(jnp.where(inw, v * dt, 0.0), axis=0), c + count)
+    if m.reduce == "rms":
+        s, c = acc
+        return (s + jnp.sum(jnp.where(inw, v * v, 0.0), axis=0), c + count)
+    if m.reduce in BLOCK_REDUCTIONS:
+        return _fold_blocks(m, acc, v, inw)
+    above = jnp.logical_not(v < m.threshold)
+    if m.reduce == "first":
+        ts, found = acc
+        hits = inw & above
+        hit = jnp.any(hits, axis=0) & jnp.logical_not(found)
+        return (jnp.where(hit, take(t, first_of(hits)), ts), found | hit)
+    # settle / settle_delay: after the block, the settle time is the time of the first in-window sample
+    # following the last one at or above the threshold (NaN when that is the block's last in-window
+    # sample); without one in the block, the first in-window sample's time when the run was above
+    # before (or had no sample yet), else unchanged
+    ts, seen, last_above = acc
+    j_above = last_of(inw & above)
+    after = first_of(inw & (idx > j_above))
+    ts_above = jnp.where(after < n, take(t, after), jnp.nan)
+    ts_below = jnp.where(last_above | jnp.logical_not(seen), take(t, first_of(inw)), ts)
+    ts_new = jnp.where(j_above >= 0, ts_above, ts_below)
+    return (jnp.where(anyw, ts_new, ts), seen | anyw, jnp.where(anyw, take(above, last_of(inw)), last_above))
+
+
+def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
+    """``block_rms`` / ``block_dev_rms`` over a block of L samples at once. The in-window samples
+    continue the open boxcar block (``n`` samples so far); sample j joins block
+    ``(n + its rank among the in-window samples) // block`` (0: the open one), and every block whose
+    ``block`` samples are complete is closed. At most ``(L + block - 1) // block + 1`` blocks are
+    touched; their sums are one-hot sums over the samples."""
+    size = m.block
+    n_open = acc[3] if m.reduce == "block_dev_rms" else acc[1]
+    rank = jnp.cumsum(inw.astype(jnp.int64), axis=0)  # in-window samples up to and including j
+    total = rank[-1]
+    filled = n_open.astype(jnp.int64) + total
+    closed = filled // size  # blocks completed by this fold (the open one counts as 0)
+    seg = (n_open.astype(jnp.int64) + rank - 1) // size  # block of sample j (when in window)
+    nseg = (v.shape[0] + size - 1) // size + 1
+    b = jnp.reshape(jnp.arange(nseg), (nseg,) + (1,) * v.ndim)
+    member = jnp.logical_and(inw[None], seg[None] == b)  # (segment, j, ...)
+    done = b[:, 0] < closed[None]  # segment closed by this fold
+    rem = (filled - closed * size).astype(jnp.float64)  # samples of the new open block
+
+    def pick(x, i):  # x[i] over the segment axis, per element
+        return jnp.take_along_axis(x, jnp.clip(i, 0, nseg - 1)[None], axis=0)[0]
+
+    if m.reduce == "block_rms":
+        s, _, q, nb = acc
+        sums = jnp.sum(jnp.where(member, v[None], 0.0), axis=1)
+        sums = sums.at[0].add(s)
+        mean = sums / size
+        q = q + jnp.sum(jnp.where(done, mean * mean, 0.0), axis=0)
+        return (pick(sums, closed), rem, q, nb + closed.astype(jnp.float64))
+    # block_dev_rms: each block's values shifted by its first value (the open block keeps its shift)
+    shift0, s1, s2, _, q, nq = acc
+    first_j = jnp.argmax(member, axis=1)  # first sample of each segment (0 when it has none)
+    shifts = jnp.take_along_axis(v[None], first_j[:, None], axis=1)[:, 0]
+    shifts = jnp.where((b[:, 0] == 0) & (n_open > 0)[None], shift0[None], shifts)
+    d = jnp.where(member, v[None] - shifts[:, None], 0.0)
+    sum1 = jnp.sum(d, axis=1).at[0].add(s1)
+    sum2 = jnp.sum(d * d, axis=1).at[0].add(s2)
+    dev = sum2 - sum1 * sum1 / size
+    q = q + jnp.sum(jnp.where(done, dev, 0.0), axis=0)
+    shift = jnp.where(rem > 0, pick(shifts, closed), jnp.where(total > 0, pick(shifts, closed - 1), shift0))
+    return (shift, pick(sum1, closed), pick(sum2, closed), rem, q, nq + (closed * size).astype(jnp.float64))
+
+
+def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: Any, is_final: bool) -> tuple:
+    """One group's (or metric's) accumulator after the sample ``value = (v, gate)`` at time ``t``."""
+    if m.reduce == "last":  # only the horizon sample (a static branch: nothing at the steps)
+        return (value[0], jnp.ones_like(acc[1])) if is_final else acc
+    v, gate = value
+    inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+    if gate is not None:
+        inw = jnp.logical_and(inw, gate)
+    if m.reduce == "max":
+        a, seen = acc
+        return (jnp.where(inw, jnp.maximum(a, v), a), seen | inw)
+    if m.reduce == "min":
+        a, seen = acc
+        return (jnp.where(inw, jnp.minimum(a, v), a), seen | inw)
+    if m.reduce == "final":
+        a, seen = acc
+        return (jnp.where(inw, v, a), seen | inw)
+    if m.reduce == "at":
+        a, seen = acc
+        take = jnp.logical_and(inw, jnp.logical_not(seen))
+        return (jnp.where(take, v, a), seen | inw)
+    if m.reduce == "mean":
+        s, n = acc
+        return (s + jnp.where(inw, v, 0.0), n + jnp.where(inw, 1.0, 0.0))
+    if m.reduce == "integral":
+        s, n = acc
+        w = 0.0 if is_final else dt
+        return (s + jnp.where(inw, v * w, 0.0), n + jnp.where(inw, 1.0, 0.0))
+    if m.reduce == "rms":
+        s, n = acc
+        take = jnp.logical_and(inw, not is_final)
+        return (s + jnp.where(take, v * v, 0.0), n + jnp.where(take, 1.0, 0.0))
+    if m.reduce in ("settle", "settle_delay"):
+        ts, seen, last_above = acc
+        above = jnp.logical_not(v < m.threshold)
+        first = jnp.logical_and(inw, jnp.logical_not(seen))
+        # settle time = time of the first in-window sample below the threshold following a sample
+        # at or above it (the window start when it never was above); NaN while it is above
+        ts_new = jnp.where(above, jnp.nan, jnp.where(first | last_above, t, ts))
+        return (jnp.where(inw, ts_new, ts), seen | inw, jnp.where(inw, above, last_above))
+    if m.reduce == "first":
+        ts, found = acc
+        hit = inw & jnp.logical_not(v < m.threshold) & jnp.logical_not(found)
+        return (jnp.where(hit, t, ts), found | hit)
+    if m.reduce == "block_rms":
+        s, n, q, nb = acc
+        take = jnp.logical_and(inw, not is_final)
+        s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
+        full = n >= m.block  # the block closes: fold its mean in, open the next one
+        mean = s / m.block
+        return (jnp.where(full, 0.0, s), jnp.where(full, 0.0, n), q + jnp.where(full, mean * mean, 0.0),
+                nb + jnp.where(full, 1.0, 0.0))
+    if m.reduce == "block_dev_rms":
+        # shifted sums (shift = the block's first value): no cancellation when the mean is large
+        shift, s1, s2, n, q, nq = acc
+        take = jnp.logical_and(inw, not is_final)
+        shift = jnp.where(take & (n == 0), v, shift)
+        d = jnp.where(take, v - shift, 0.0)
+        s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
+        full = n >= m.block
+        dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
+        return (shift, jnp.where(full, 0.0, s1), jnp.where(full, 0.0, s2), jnp.where(full, 0.0, n),
+                q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0))
+    raise AssertionError(f"unhandled reduction {m.reduce!r}")  # pragma: no cover - REDUCTIONS is checked
 
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
