@@ -133,3 +133,24 @@ def test_sigma_max_agrees_with_python_control_frequency_response():
         G = np.asarray(sys(1j * w))
         ref = np.linalg.svd(G, compute_uv=False)[0]
         assert sigma_max_response(A, np.eye(4), A, np.zeros((4, 4)), w)[0] == pytest.approx(ref, rel=1e-12)
+
+
+def test_convolution_supremum_is_remembered_per_exact_input(monkeypatch):
+    # a second design of the same formation (another violation probability or mission bound) reuses the
+    # simulated suprema: same values, no simulation, and a caller's copy cannot alter what is kept
+    import formation_ftc.design.flfr as flfr
+
+    A = error_dynamics_matrix(2.0, 3.0)
+    first = convolution_supremum(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))
+    calls = []
+    real = flfr.simulate_reduced_model
+    monkeypatch.setattr(flfr, "simulate_reduced_model", lambda *a, **k: calls.append(a) or real(*a, **k))
+    again = convolution_supremum(A.copy(), xdd_rel, 5.0, 1e-2, [1.0, 0.5, 0.25])
+    np.testing.assert_array_equal(again, first)
+    assert calls == []
+    again[:] = -1.0
+    np.testing.assert_array_equal(convolution_supremum(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25)), first)
+    other = convolution_supremum(A + 1e-9, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))  # another matrix: simulated
+    assert len(calls) == 1 and not np.array_equal(other, first)
+    _, peak = real(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))
+    np.testing.assert_array_equal(first, peak)  # what is remembered is the simulation's result

@@ -31,6 +31,8 @@ dimensionless; w in m/s^2.
 
 from __future__ import annotations
 
+import functools
+
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
@@ -129,9 +131,23 @@ def simulate_reduced_model(A_clp, w_fn: Callable, horizon: float, dt: float, wei
 def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,)) -> np.ndarray:
     """H_i = sup_{0<=t<=horizon} |(G_i4 - G_i2) * (weights . w)| for i = 1..4 (eq. (8)), by simulation.
 
-    The sign convention of the input direction does not matter (absolute value).
+    The sign convention of the input direction does not matter (absolute value). Remembered for the
+    last few distinct inputs (the matrix's and weights' exact values, ``w_fn`` by identity, horizon,
+    step): designs for several violation probabilities or mission bounds of one formation simulate the
+    same closed loops, each about 0.6 s at the paper's 300 s and 1 ms.
     """
-    _, peak = simulate_reduced_model(A_clp, w_fn, horizon, dt, weights)
+    A = np.ascontiguousarray(A_clp, dtype=np.float64)
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    peak = _supremum(A.tobytes(), A.shape, w_fn, float(horizon), float(dt), w.tobytes(), w.shape)
+    return peak.copy()
+
+
+@functools.lru_cache(maxsize=16)
+def _supremum(a_bytes: bytes, a_shape: tuple, w_fn: Callable, horizon: float, dt: float, w_bytes: bytes,
+              w_shape: tuple) -> np.ndarray:
+    A = np.frombuffer(a_bytes, dtype=np.float64).reshape(a_shape)
+    weights = np.frombuffer(w_bytes, dtype=np.float64).reshape(w_shape)
+    _, peak = simulate_reduced_model(A, w_fn, horizon, dt, weights)
     return peak
 
 
