@@ -32,7 +32,6 @@ dimensionless; w in m/s^2.
 from __future__ import annotations
 
 import functools
-
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
