@@ -457,7 +457,8 @@ class ClosedLoop:
         acc0 = metric_ops.init_accumulators(
             self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
 
-        folding = self._metric_block() > 1
+        metric_block = self._metric_block()
+        folding = metric_block > 1
 
         def step(k, carry):
             state, acc = carry
@@ -484,7 +485,7 @@ class ClosedLoop:
         out = run_fixed_step(step, observe, (state0, acc0), self.n_steps, self.record_every, self.unroll,
                              check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
                              admissible=self.admissible, fold=fold if folding else None,
-                             fold_every=self._metric_block())
+                             fold_every=metric_block)
         state_n, acc = out["final"]
         # the horizon sample is the last record (the signals of the final state at t_n); a run that left
         # its admissible set never reached the horizon: its metrics stay those accumulated up to the
@@ -512,7 +513,7 @@ class ClosedLoop:
         if self.metric_block:
             return self.metric_block
         block = max(d for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1) if self.record_every % d == 0)
-        many = sum(m.reduce not in metric_ops.STAGE_REDUCTIONS and m.reduce != "last" for m in self.metrics)
+        many = sum(metric_ops.reads_steps(m) for m in self.metrics)
         if many >= METRIC_FOLD_MIN_METRICS and block >= METRIC_FOLD_MIN_BLOCK and self.n_steps >= METRIC_FOLD_MIN_STEPS:
             return block
         return 1

@@ -30,7 +30,7 @@ from formation_ftc.sim.components import component, static
 __all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
            "REDUCTIONS", "BLOCK_REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
            "update_stage_accumulators", "block_signals", "sample_values", "fold_block",
-           "pack_sample", "unpack_samples"]
+           "pack_sample", "unpack_samples", "reads_steps"]
 
 #: time reductions: name -> meaning
 REDUCTIONS = {
@@ -317,12 +317,18 @@ def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array | f
     return _apply(metrics, accs, t, dt, sample_values(metrics, signals, is_final), is_final)
 
 
+def reads_steps(m: Metric) -> bool:
+    """Whether ``m`` is accumulated from every step's sample (stage-integrated metrics are folded from
+    the integrator's stages, ``last`` reads the horizon sample only)."""
+    return m.reduce not in STAGE_REDUCTIONS and m.reduce != "last"
+
+
 def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
-    """Names of the signals :func:`fold_block` reads (the signals and gates of every metric folded at
-    the steps; stage-integrated metrics and ``last`` read none)."""
+    """Names of the signals :func:`fold_block` reads (the signals and gates of every metric that
+    :func:`reads_steps`)."""
     names: dict[str, None] = {}
     for m in metrics:
-        if m.reduce in STAGE_REDUCTIONS or m.reduce == "last":
+        if not reads_steps(m):
             continue
         names[m.signal] = None
         if m.gate is not None:
@@ -373,12 +379,19 @@ def sample_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array], i
 def _apply(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float, values: tuple,
            is_final: bool = False) -> tuple:
     """Fold one sample's :func:`sample_values` (taken at time ``t``) into the accumulators."""
+    return _each_group(metrics, accs, values, lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final))
+
+
+def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -> tuple:
+    """The accumulators with ``update(group, its accumulator tuple, its values)`` applied to every
+    stacked group (unpacked from and packed back into its class's shared array); the stage-integrated
+    entries are left to :func:`update_stage_accumulators`."""
     out = list(accs)
     for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
         if not isinstance(groups[0][1], _Stack):
-            continue  # stage-integrated: folded in by update_stage_accumulators
+            continue
         rows = _rows(groups)
-        new = [_pack(_update_group(g, acc, t, dt, v, is_final), rows)
+        new = [_pack(update(g, acc, v), rows)
                for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)]
         out[slot] = jnp.concatenate(new, axis=1)
     return tuple(out)
@@ -398,22 +411,15 @@ def fold_block(metrics: Sequence[Metric], accs: tuple, k0: jax.Array, t0: float,
     n = jax.tree_util.tree_leaves(samples)[0].shape[0]
     values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
     times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
-    out = list(accs)
-    for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
-        if not isinstance(groups[0][1], _Stack):
-            continue  # stage-integrated: folded in by update_stage_accumulators
-        rows = _rows(groups)
-        new = [_pack(acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v), rows)
-               for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)]
-        out[slot] = jnp.concatenate(new, axis=1)
-    return tuple(out)
+    return _each_group(metrics, accs, values,
+                       lambda g, acc, v: acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v))
 
 
 def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -> tuple:
     """:func:`_update_group` over a block of samples (leading axis ``j``), computed at once."""
     v, gate = value
     t = jnp.reshape(times, times.shape + (1,) * (v.ndim - 1))
-    inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+    inw = _in_window(m, t)
     if gate is not None:  # a gate of one sample broadcasts against its values from the right
         gs = gate.shape[1:]
         inw = jnp.logical_and(inw, jnp.reshape(gate, gate.shape[:1] + (1,) * (v.ndim - 1 - len(gs)) + gs))
@@ -518,12 +524,17 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     return (shift, pick(sum1, closed), pick(sum2, closed), rem, q, nq + (closed * size).astype(jnp.float64))
 
 
+def _in_window(m: Any, t: Any) -> jax.Array:
+    """Whether time(s) ``t`` lie in the metric's window (edges inclusive to :data:`_TOL`)."""
+    return jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+
+
 def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: Any, is_final: bool) -> tuple:
     """One group's (or metric's) accumulator after the sample ``value = (v, gate)`` at time ``t``."""
     if m.reduce == "last":  # only the horizon sample (a static branch: nothing at the steps)
         return (value[0], jnp.ones_like(acc[1])) if is_final else acc
     v, gate = value
-    inw = jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
+    inw = _in_window(m, t)
     if gate is not None:
         inw = jnp.logical_and(inw, gate)
     if m.reduce == "max":
