@@ -24,6 +24,12 @@ import os
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
+# The on-disk program cache (formation_ftc.sim.program_cache) is off in the test run: the suite compiles
+# about 350 distinct programs, almost each once, so storing them (serializing and compressing each
+# executable, 0.1-0.15 s) cost more than the few loads saved (fresh cache: 7 min 08 s -> 7 min 55 s,
+# user CPU 773 -> 866 s). Its own tests (tests/sim/test_program_cache.py) switch it on where they need it.
+os.environ.setdefault("FORMATION_FTC_PROGRAM_CACHE", "off")
+
 # Under pytest-xdist the workers share the cores: each worker's JAX CPU client gets its share of
 # threads (PJRT_NPROC, read when the client starts), as `formation-ftc reproduce` gives its paper
 # workers. More threads than cores make XLA hand small operations between threads at a CPU cost
@@ -84,8 +90,11 @@ jax.monitoring.register_event_duration_secs_listener(_count_run_compiles)
 
 
 @pytest.fixture
-def run_compiles() -> list[str]:
-    """XLA compiles (persistent-cache loads included) of a closed-loop ``run`` program from here on."""
+def run_compiles(monkeypatch) -> list[str]:
+    """XLA compiles (persistent-cache loads included) of a closed-loop ``run`` program from here on.
+    The on-disk program cache is off meanwhile: it would serve, without a compile event, a program that
+    another test (or xdist worker) compiled before (it has its own tests, tests/sim/test_program_cache.py)."""
+    monkeypatch.setenv("FORMATION_FTC_PROGRAM_CACHE", "off")
     _RUN_COMPILES.clear()
     return _RUN_COMPILES
 

@@ -21,7 +21,9 @@ from formation_ftc.sim.loop import ClosedLoop
 
 @pytest.fixture
 def traces(monkeypatch):
-    """Number of closed-loop traces from here on."""
+    """Number of closed-loop traces from here on (the on-disk program cache off: it would load, without
+    a trace, a program another test compiled before)."""
+    monkeypatch.setenv("FORMATION_FTC_PROGRAM_CACHE", "off")
     count = [0]
     run = ClosedLoop._run
 

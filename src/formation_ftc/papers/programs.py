@@ -49,9 +49,9 @@ def simulate_batched(scenarios: list, compiled: list | None = None,
     times: list[Any] = [None] * len(compiled)
     for idx in groups.values():
         batch, in_axes = stack_params([compiled[i].params for i in idx])
-        fn: Any = batched_run(compiled[idx[0]], in_axes, len(idx))  # a jax.jit function
+        fn = batched_run(compiled[idx[0]], in_axes, len(idx))
         t0 = time.perf_counter()
-        exe = fn.lower(batch).compile()
+        exe = fn.executable(batch)
         t1 = time.perf_counter()
         out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(exe(batch)))
         t2 = time.perf_counter()

@@ -25,7 +25,7 @@ the runs against runs alone and that the draws carry the row count only).
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import jax
@@ -33,13 +33,14 @@ import numpy as np
 
 from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
+from formation_ftc.sim.program_cache import CachedProgram
 
 __all__ = ["stack_params", "batched_run", "stack_params_grid", "batched_grid_run", "clear"]
 
 #: batch programs kept per process (least recently used dropped first): a campaign reuses one per
 #: structural group and chunk size, and an unbounded cache made a long session hold every executable
 MAX_KEPT = 16
-_CACHE: OrderedDict[Any, Callable] = OrderedDict()
+_CACHE: OrderedDict[Any, CachedProgram] = OrderedDict()
 
 
 def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, Any]:
@@ -87,7 +88,7 @@ def _fast_compile(compiled) -> bool:
     return bool(getattr(controller, "batch_fast_compile", False))
 
 
-def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
+def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
@@ -98,7 +99,8 @@ def batched_run(compiled, in_axes: Any, size: int) -> Callable[[Any], dict]:
     if fn is None:
         run = compiled.run
         batch = jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))
-        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=_fast_compile(compiled)), MAX_KEPT)
+        fast = _fast_compile(compiled)
+        fn = lru_put(_CACHE, key, CachedProgram(xla.jit(batch, fast_compile=fast), "batch", (*key, fast)), MAX_KEPT)
     return fn
 
 
@@ -157,7 +159,7 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
 
 
-def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> Callable[[Any], dict]:
+def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> CachedProgram:
     """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
     :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
     only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs."""
@@ -168,7 +170,8 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
         run = compiled.run
         inner = jax.vmap(lambda p: dict(run(p)), in_axes=(column_axes,), axis_size=int(columns))
         outer = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
-        fn = lru_put(_CACHE, key, xla.jit(outer, fast_compile=_fast_compile(compiled)), MAX_KEPT)
+        fast = _fast_compile(compiled)
+        fn = lru_put(_CACHE, key, CachedProgram(xla.jit(outer, fast_compile=fast), "grid", (*key, fast)), MAX_KEPT)
     return fn
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Hashable
+from collections.abc import Hashable
 from typing import Any
 
 import jax
@@ -28,23 +28,25 @@ import numpy as np
 
 from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
+from formation_ftc.sim.program_cache import CachedProgram
 
 __all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
 
 #: at most this many programs (and executables) are kept, least recently used dropped first, so that a
 #: long session (a notebook, a test run) does not hold every executable it ever compiled
 MAX_KEPT = 8
-_PROGRAMS: OrderedDict[Hashable, Callable[[Any], Any]] = OrderedDict()
+_PROGRAMS: OrderedDict[Hashable, CachedProgram] = OrderedDict()
 _EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
 
 
-def jitted_run(compiled) -> Callable[[Any], Any]:
+def jitted_run(compiled) -> CachedProgram:
     """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.xla.compiler_options`, shared by
-    every compiled scenario with the same ``static_key`` (JAX still retraces if the parameters' shapes
-    or static fields differ)."""
+    every compiled scenario with the same ``static_key``: one executable per parameter signature, kept
+    on disk under a key known before tracing (:mod:`formation_ftc.sim.program_cache`)."""
     fn = lru_get(_PROGRAMS, compiled.static_key)
     if fn is None:
-        fn = lru_put(_PROGRAMS, compiled.static_key, xla.jit(compiled.run), MAX_KEPT)
+        fn = lru_put(_PROGRAMS, compiled.static_key,
+                     CachedProgram(xla.jit(compiled.run), "run", compiled.static_key), MAX_KEPT)
     return fn
 
 
@@ -59,8 +61,7 @@ def executable(compiled) -> tuple[Any, float]:
     if exe is not None:
         return exe, 0.0
     t0 = time.perf_counter()
-    jitted: Any = jitted_run(compiled)  # a jax.jit function (its stubs type it as a plain callable)
-    exe = lru_put(_EXECUTABLES, key, jitted.lower(compiled.params).compile(), MAX_KEPT)
+    exe = lru_put(_EXECUTABLES, key, jitted_run(compiled).executable(compiled.params), MAX_KEPT)
     return exe, time.perf_counter() - t0
 
 

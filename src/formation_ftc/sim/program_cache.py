@@ -1,0 +1,357 @@
+"""Compiled simulation programs kept on disk under a key known before tracing.
+
+JAX's persistent compilation cache (on by default, :mod:`formation_ftc._jax`) saves XLA's compile,
+but it finds a program by a hash of the lowered module: every process still traces the closed loop
+and lowers it before it can look the executable up. For a closed loop that costs 0.1-0.5 s per program
+(the batched Mehrabian programs 0.4-0.6 s), and it is most of what a warm ``reproduce`` spends in its
+compile phase. This module keys a program by what determines it *before* tracing and keeps its
+serialized executable (``jax.experimental.serialize_executable``) in ``programs/`` beside JAX's cache:
+
+* the program: its kind (a single run, a batch, a grid) and the compiled scenario's ``static_key`` --
+  the tree definition of the closed loop with every static field (components, metrics, step counts,
+  fold block) and the shape and dtype of every leaf (:func:`formation_ftc.sim.components.structure_key`);
+* the arguments: tree definition, shape, dtype and weak type of every leaf;
+* the code that traces it: a digest of every ``.py`` file of the installed ``formation_ftc`` package;
+  an object of a class (or a function) defined outside the package and the libraries it builds on (a
+  plugin component) makes the program *not* cacheable here -- its code is not in the digest -- and it
+  is traced as before;
+* everything else the trace or the executable depends on: Python, JAX, jaxlib and numpy versions, every
+  JAX configuration value and the thread-local ones in force (``jax.default_matmul_precision(...)``
+  blocks), the backend and its devices, the CPU's feature flags, ``XLA_FLAGS``,
+  ``PJRT_NPROC`` (also in the directory name of the cache) and the package's compile-option switch
+  (:data:`formation_ftc.sim.xla.ENV_SWITCH`).
+
+What is stored: an executable XLA compiled in this process (zlib-compressed), and only when every
+custom call in it is a LAPACK call (``jnp.linalg.solve``), whose bindings are initialised before any
+load -- JAX initialises them while it lowers a program that uses them, and a process that loads such a
+program without lowering one would call a null pointer. Not stored: an executable JAX loaded from its
+own persistent cache, since XLA:CPU (jaxlib 0.10.2) serializes such an executable without its compiled
+kernels; that program is stored the next time XLA compiles it (a cold cache, a new JAX, a changed
+program).
+
+A key that cannot be formed, an entry that cannot be read and a write that fails all fall back to the
+ordinary ``jax.jit`` path (trace, lower, compile or load from JAX's cache); an unreadable entry is
+removed. A loaded executable is the one that was compiled, so its results are bit for bit those of a
+program traced in this process (``tests/sim/test_program_cache.py`` compares two processes).
+
+A process that replaces package functions at run time (``monkeypatch``, a debugger) changes what a
+trace would produce without changing the source digest: switch the cache off there.
+``FORMATION_FTC_PROGRAM_CACHE=off`` does; it is also off when JAX's persistent cache is
+(``FORMATION_FTC_JAX_CACHE=off``). Measured on 2 cores (README "Performance"): warm ``reproduce
+mehrabian`` compile phase 5.4 -> 1.8 s.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import pickle
+import platform
+import re
+import sys
+import threading
+import types
+import zlib
+from collections.abc import Callable, Hashable
+from pathlib import Path
+from typing import Any
+
+import jax
+import numpy as np
+
+__all__ = ["ENV_SWITCH", "CachedProgram", "directory", "program_key", "load_or_compile"]
+
+#: environment variable that switches the program cache off (``off``, ``0``, ``false`` or ``no``)
+ENV_SWITCH = "FORMATION_FTC_PROGRAM_CACHE"
+#: layout of an entry; raised when it changes, so that old entries are never read
+FORMAT = 1
+
+#: top-level modules whose classes and functions may appear in a key: the package (whose code is in the
+#: digest), the standard library pieces dataclasses and pytrees are made of, and the numeric libraries
+#: (whose versions are in the key)
+_TRUSTED_ROOTS = frozenset({"formation_ftc", "builtins", "numpy", "jax", "jaxlib", "collections", "functools",
+                            "operator", "_operator", "enum", "copyreg", "typing", "dataclasses", "types",
+                            "math", "fractions", "decimal", "_collections", "datetime", "pathlib"})
+
+
+class Uncacheable(Exception):
+    """A program whose key would not determine it (code from outside the package, an unpicklable part)."""
+
+
+def _enabled() -> bool:
+    return os.environ.get(ENV_SWITCH, "").strip().lower() not in {"off", "0", "false", "no"}
+
+
+def directory() -> Path | None:
+    """Where entries are kept: ``programs/`` inside JAX's persistent compilation cache directory of this
+    process, or None when either cache is off."""
+    if not _enabled():
+        return None
+    base = getattr(jax.config, "jax_compilation_cache_dir", None)  # a dynamic option: not in the stubs
+    return Path(base) / "programs" if base else None
+
+
+class _KeyPickler(pickle.Pickler):
+    """A pickler that refuses objects whose class (or which, as a function or class) comes from a module
+    outside :data:`_TRUSTED_ROOTS`."""
+
+    def reducer_override(self, obj: Any) -> Any:
+        if isinstance(obj, type | types.FunctionType | types.BuiltinFunctionType):
+            module = getattr(obj, "__module__", None) or ""
+        else:
+            module = type(obj).__module__ or ""
+        if module.split(".")[0] not in _TRUSTED_ROOTS:
+            raise Uncacheable(f"{module}.{getattr(obj, '__qualname__', type(obj).__qualname__)} is defined "
+                              "outside formation_ftc")
+        return NotImplemented
+
+
+def _dumps(obj: Any) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    pickler = _KeyPickler(buf, protocol=5)
+    # no memo: equal objects give equal bytes whether or not they are the same object in this process
+    # (a shared shape tuple would otherwise be written once and referenced, and the key would differ)
+    pickler.fast = True
+    try:
+        pickler.dump(obj)
+    except Uncacheable:
+        raise
+    except Exception as exc:  # a lambda, a local class, an open handle: no stable name to key by
+        raise Uncacheable(f"{type(exc).__name__}: {exc}") from exc
+    return buf.getvalue()
+
+
+_DIGEST: dict[tuple, str] = {}
+
+
+def _source_digest() -> str:
+    """SHA-256 over the relative path and bytes of every ``.py`` file of the installed package; read
+    again when a file's size or modification time changed (an editable install being edited)."""
+    root = Path(__file__).resolve().parents[1]
+    paths = sorted(root.rglob("*.py"))
+    stamp = tuple((str(p), st.st_size, st.st_mtime_ns) for p in paths for st in (p.stat(),))
+    digest = _DIGEST.get(stamp)
+    if digest is None:
+        h = hashlib.sha256()
+        for path in paths:
+            h.update(str(path.relative_to(root)).encode())
+            h.update(b"\0")
+            h.update(path.read_bytes())
+            h.update(b"\0")
+        digest = h.hexdigest()
+        _DIGEST.clear()
+        _DIGEST[stamp] = digest
+    return digest
+
+
+@functools.cache
+def _cpu_flags() -> str:
+    """The CPU's feature flags (Linux ``/proc/cpuinfo``), else the processor name: an executable is
+    machine code for the CPU that compiled it."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith(("flags", "Features")):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _trace_context() -> tuple:
+    """The thread-local JAX settings a trace depends on (what ``jax.jit`` keys its own cache by:
+    ``with jax.default_matmul_precision(...)`` and the like, which :data:`jax.config.values` does not
+    show). JAX's internal API; without it nothing is keyed. An object that prints its address (the
+    axis environment, empty outside ``vmap``) counts by its type."""
+    try:
+        from jax._src import config as jax_config
+
+        values = jax_config.trace_context()
+    except Exception as exc:  # noqa: BLE001 - another JAX layout
+        raise Uncacheable(f"JAX's trace context is not readable: {exc}") from exc
+    return tuple(type(v).__qualname__ if " at 0x" in repr(v) else repr(v) for v in values)
+
+
+def _environment() -> tuple:
+    """What, besides the program, decides the trace and the executable (see the module docstring)."""
+    import jaxlib
+
+    from formation_ftc.sim import xla
+
+    devices = jax.devices()
+    return (FORMAT, sys.version, jax.__version__, jaxlib.__version__, np.__version__, platform.machine(),
+            _cpu_flags(), jax.default_backend(), tuple(d.device_kind for d in devices), len(devices),
+            tuple(sorted((k, repr(v)) for k, v in jax.config.values.items())), _trace_context(),
+            os.environ.get("XLA_FLAGS", ""), os.environ.get("PJRT_NPROC", ""),
+            os.environ.get(xla.ENV_SWITCH, ""), _source_digest())
+
+
+def _signature(args: tuple) -> tuple:
+    """Tree definition and (shape, dtype, weak type) of every leaf of ``args``: what a jitted function
+    retraces on."""
+    leaves, treedef = jax.tree_util.tree_flatten(args)
+    avals = []
+    for x in leaves:
+        aval = jax.api_util.shaped_abstractify(x)
+        avals.append((tuple(aval.shape), str(aval.dtype), bool(getattr(aval, "weak_type", False))))
+    return treedef, tuple(avals)
+
+
+def program_key(kind: str, parts: Hashable, args: tuple) -> str | None:
+    """Hex digest naming the program ``kind``/``parts`` applied to ``args``, or None when it cannot be
+    keyed safely (:class:`Uncacheable`)."""
+    try:
+        payload = _dumps((kind, parts, _signature(args), _environment()))
+    except Exception:  # noqa: BLE001 - Uncacheable, or an environment that cannot be read: no key
+        return None
+    return hashlib.sha256(payload).hexdigest()
+
+
+#: custom calls a stored program may contain: LAPACK (``jnp.linalg.solve`` / ``inv``: ``getrf``,
+#: ``trsm``), whose library pointers :func:`_prepare_custom_calls` initialises before a load. JAX sets
+#: them up while it lowers a program that uses them; a process that loads such a program without
+#: lowering one calls a null pointer (a crash, measured with jaxlib 0.10.2). A program with any other
+#: custom call is not stored.
+_CUSTOM_CALL_PREFIXES = ("lapack_",)
+_CUSTOM_CALL = re.compile(r'custom_call_target="([^"]+)"')
+
+
+@functools.cache
+def _prepare_custom_calls() -> bool:
+    """Initialise the LAPACK bindings of jaxlib's CPU custom calls (what lowering a solve does first);
+    False when this jaxlib lacks the entry point (then nothing is loaded or stored)."""
+    try:
+        from jaxlib import lapack
+
+        lapack.prepare_lapack_call("getrf", np.float64)
+    except Exception:  # noqa: BLE001 - another jaxlib layout: the program cache stays unused
+        return False
+    return True
+
+
+def _storable(exe: Any) -> bool:
+    """Whether every custom call of ``exe`` is one :func:`_prepare_custom_calls` prepares."""
+    try:
+        text = exe.as_text()
+    except Exception:  # noqa: BLE001 - no HLO text: cannot check, do not store
+        return False
+    return all(t.startswith(_CUSTOM_CALL_PREFIXES) for t in _CUSTOM_CALL.findall(text or ""))
+
+
+def _load(path: Path) -> Any | None:
+    from jax.experimental import serialize_executable
+
+    try:
+        blob = path.read_bytes()
+    except OSError:
+        return None
+    try:
+        serialized, in_tree, out_tree = pickle.loads(zlib.decompress(blob))
+        return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
+    except Exception:  # noqa: BLE001 - a truncated or foreign entry: forget it, compile instead
+        path.unlink(missing_ok=True)
+        return None
+
+
+def _store(path: Path, exe: Any) -> None:
+    from jax.experimental import serialize_executable
+
+    try:
+        blob = zlib.compress(pickle.dumps(serialize_executable.serialize(exe), protocol=5), 1)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+        tmp.write_bytes(blob)
+        os.replace(tmp, path)  # atomic: a reader sees no entry or the whole entry
+    except Exception:  # noqa: BLE001 - the cache is an optimisation only (read-only disk, full disk, ...)
+        pass
+
+
+_WRITES = threading.local()
+
+
+def _count_jax_cache_write(event: str, **kwargs: Any) -> None:
+    # JAX records this event when it writes an executable XLA has just compiled to its persistent cache
+    # (never for one it loaded from there or found in its in-memory cache)
+    if event == "/jax/compilation_cache/cache_misses":
+        _WRITES.count = getattr(_WRITES, "count", 0) + 1
+
+
+jax.monitoring.register_event_listener(_count_jax_cache_write)
+
+
+def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any:
+    """The executable of ``jitted`` (a ``jax.jit`` function) for ``args``: loaded from :func:`directory`
+    when an entry for (``kind``, ``parts``, ``args``) is there, else ``jitted.lower(*args).compile()``.
+
+    Stored only when XLA compiled it during this call -- JAX signals that by writing it to its own cache
+    (``/jax/compilation_cache/cache_misses``). An executable JAX loaded from its persistent cache, or
+    kept in memory after such a load, is not: XLA:CPU (jaxlib 0.10.2) serializes a deserialized
+    executable without its compiled kernels, and loading that fails ("Function ... not found"). Such a
+    program is stored the next time XLA compiles it."""
+    folder = directory() if _prepare_custom_calls() else None
+    key = program_key(kind, parts, args) if folder is not None else None
+    path = folder / f"{key}.bin" if folder is not None and key is not None else None
+    if path is not None:
+        exe = _load(path)
+        if exe is not None:
+            return _CheckedOnFirstCall(exe, path, lambda: jitted.lower(*args).compile())
+    writes = getattr(_WRITES, "count", 0)
+    exe = jitted.lower(*args).compile()
+    if path is not None and getattr(_WRITES, "count", 0) > writes and _storable(exe):
+        _store(path, exe)
+    return exe
+
+
+class _CheckedOnFirstCall:
+    """A loaded executable whose first call waits for its results: an entry that loads but cannot run
+    (a kernel missing from it: ``NOT_FOUND`` from XLA) is removed, and the program compiled and run
+    the ordinary way instead. Later calls go straight to the executable that worked."""
+
+    def __init__(self, exe: Any, path: Path, compile_fresh: Callable[[], Any]) -> None:
+        self._exe = exe
+        self._path = path
+        self._compile_fresh = compile_fresh
+        self._checked = False
+
+    def __call__(self, *args: Any) -> Any:
+        if self._checked:
+            return self._exe(*args)
+        try:
+            out = jax.block_until_ready(self._exe(*args))
+        except jax.errors.JaxRuntimeError as exc:
+            if "NOT_FOUND" not in str(exc):
+                raise  # an error of the computation itself, not of the entry
+            self._path.unlink(missing_ok=True)
+            self._exe = self._compile_fresh()
+            out = self._exe(*args)
+        self._checked = True
+        return out
+
+
+class CachedProgram:
+    """A ``jax.jit`` function whose executables come from :func:`load_or_compile`: called like it, one
+    executable per argument signature (tree definition, shapes, dtypes, weak types), kept in memory;
+    ``lower`` is the jitted function's own. ``kind`` and ``parts`` name the program in the key."""
+
+    def __init__(self, jitted: Callable[..., Any], kind: str, parts: Hashable) -> None:
+        self.jitted = jitted
+        self.kind = kind
+        self.parts = parts
+        self._executables: dict[tuple, Any] = {}
+
+    def executable(self, *args: Any) -> Any:
+        """The compiled executable for ``args`` (loaded, compiled or kept from an earlier call)."""
+        sig = _signature(args)
+        exe = self._executables.get(sig)
+        if exe is None:
+            exe = self._executables.setdefault(sig, load_or_compile(self.jitted, self.kind, self.parts, args))
+        return exe
+
+    def __call__(self, *args: Any) -> Any:
+        return self.executable(*args)(*args)
+
+    def lower(self, *args: Any) -> Any:
+        return self.jitted.lower(*args)  # type: ignore[attr-defined]  # a jax.jit function
