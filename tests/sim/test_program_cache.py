@@ -191,3 +191,18 @@ def test_an_entry_that_loads_but_cannot_run_is_removed_and_the_program_compiled(
     np.testing.assert_array_equal(np.asarray(exe(np.ones(2))), [2.0, 2.0])
     assert not entry.exists()
     np.testing.assert_array_equal(np.asarray(exe(np.full(2, 3.0))), [6.0, 6.0])  # the fresh one from now on
+
+
+def test_jax_debugging_modes_call_the_jitted_function_itself():
+    import jax
+
+    calls = []
+
+    def jitted(x):
+        calls.append(x)
+        return x
+
+    program = pc.CachedProgram(jitted, "test", "debug")
+    with jax.debug_nans(True):
+        assert program(1.0) == 1.0
+    assert calls == [1.0]

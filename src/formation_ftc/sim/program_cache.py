@@ -305,6 +305,10 @@ def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any
     return exe
 
 
+#: JAX settings under which a call goes through ``jax.jit`` itself (op-by-op execution, NaN / Inf checks)
+_DEBUG_FLAGS = ("jax_disable_jit", "jax_debug_nans", "jax_debug_infs")
+
+
 class _CheckedOnFirstCall:
     """A loaded executable whose first call waits for its results: an entry that loads but cannot run
     (a kernel missing from it: ``NOT_FOUND`` from XLA) is removed, and the program compiled and run
@@ -351,6 +355,8 @@ class CachedProgram:
         return exe
 
     def __call__(self, *args: Any) -> Any:
+        if any(getattr(jax.config, flag, False) for flag in _DEBUG_FLAGS):
+            return self.jitted(*args)  # JAX's debugging modes act in jax.jit's own call path
         return self.executable(*args)(*args)
 
     def lower(self, *args: Any) -> Any:
