@@ -8,7 +8,8 @@ alone at the end; run serially, the order of the other tests is unchanged.
 Memory: every program XLA compiles -- each eager operation on a new shape included -- keeps about
 1.4 MB of native heap for as long as JAX's in-memory caches hold it (up to thousands of entries). A
 worker that runs hundreds of tests would grow to 3-4 GB that way. After a test that leaves the worker
-above :data:`RSS_LIMIT_MB` resident, the caches are dropped (``jax.clear_caches``) and freed memory is
+above :data:`RSS_LIMIT_MB` resident, the caches are dropped (the package's shared programs,
+``formation_ftc.sim.programs`` and ``sim.batch``, then ``jax.clear_caches``) and freed memory is
 returned to the system (glibc ``malloc_trim``). The programs come back from the persistent compilation
 cache, which in the test run keeps every program (``JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0``);
 nothing a test asserts depends on which cache served it.
@@ -24,11 +25,10 @@ import os
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
-# The on-disk program cache (formation_ftc.sim.program_cache) is off in the test run: the suite compiles
-# about 350 distinct programs, almost each once, so storing them (serializing and compressing each
-# executable, 0.1-0.15 s) cost more than the few loads saved (fresh cache: 7 min 08 s -> 7 min 55 s,
-# user CPU 773 -> 866 s). Its own tests (tests/sim/test_program_cache.py) switch it on where they need it.
-os.environ.setdefault("FORMATION_FTC_PROGRAM_CACHE", "off")
+# The on-disk program cache (formation_ftc.sim.program_cache) stays on, as for a user: the suite compiles
+# about 350 distinct programs, almost each once, and storing them costs about what the loads save
+# (fresh cache, same host: 7 min 28 s / 820 s user CPU off, 7 min 31 s / 818 s on, 7 min 26 s / 814 s
+# before the cache existed). Tests that count traces or compiles switch it off (fixtures below).
 
 # Under pytest-xdist the workers share the cores: each worker's JAX CPU client gets its share of
 # threads (PJRT_NPROC, read when the client starts), as `formation-ftc reproduce` gives its paper
@@ -72,6 +72,10 @@ def pytest_runtest_teardown(item, nextitem):
     """After the test's fixtures are finalised: drop the compile caches above :data:`RSS_LIMIT_MB`."""
     rss = _resident_mb()
     if rss is not None and rss > RSS_LIMIT_MB:
+        from formation_ftc.sim import batch, programs
+
+        programs.clear()  # the process's shared programs hold their executables outside JAX's caches
+        batch.clear()
         jax.clear_caches()
         gc.collect()
         _malloc_trim()

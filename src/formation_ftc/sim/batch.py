@@ -176,6 +176,6 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
 
 
 def clear() -> None:
-    """Forget the cached batch programs (a long-lived process releases their executables once JAX's own
-    caches are cleared too, ``jax.clear_caches()``)."""
+    """Forget the cached batch programs and release their executables (held by each
+    :class:`~formation_ftc.sim.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach)."""
     _CACHE.clear()

@@ -51,9 +51,9 @@ def jitted_run(compiled) -> CachedProgram:
 
 
 def executable(compiled) -> tuple[Any, float]:
-    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``) and the
-    seconds [s] that compiling it took here (0.0 when a scenario of the same structure and parameter
-    shapes compiled it before)."""
+    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``, or loaded from
+    the program cache, :mod:`formation_ftc.sim.program_cache`) and the seconds [s] that getting it took
+    here (0.0 when a scenario of the same structure and parameter shapes got it before)."""
     leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
     key = (compiled.static_key, treedef,
            tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves))
@@ -66,6 +66,9 @@ def executable(compiled) -> tuple[Any, float]:
 
 
 def clear() -> None:
-    """Forget the shared programs (JAX's own caches are untouched)."""
+    """Forget the shared programs and release their executables (each :class:`CachedProgram` holds its
+    own, which ``jax.clear_caches()`` does not reach; JAX's own caches are untouched). A long-lived
+    process that wants its memory back calls this, :func:`formation_ftc.sim.batch.clear` and
+    ``jax.clear_caches()``."""
     _PROGRAMS.clear()
     _EXECUTABLES.clear()
