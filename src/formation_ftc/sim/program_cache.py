@@ -291,7 +291,9 @@ def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any
     kept in memory after such a load, is not: XLA:CPU (jaxlib 0.10.2) serializes a deserialized
     executable without its compiled kernels, and loading that fails ("Function ... not found"). Such a
     program is stored the next time XLA compiles it."""
-    folder = directory() if _prepare_custom_calls() else None
+    folder = directory()
+    if folder is not None and not _prepare_custom_calls():
+        folder = None
     key = program_key(kind, parts, args) if folder is not None else None
     path = folder / f"{key}.bin" if folder is not None and key is not None else None
     if path is not None:
@@ -317,11 +319,10 @@ class _CheckedOnFirstCall:
     def __init__(self, exe: Any, path: Path, compile_fresh: Callable[[], Any]) -> None:
         self._exe = exe
         self._path = path
-        self._compile_fresh = compile_fresh
-        self._checked = False
+        self._compile_fresh: Callable[[], Any] | None = compile_fresh
 
     def __call__(self, *args: Any) -> Any:
-        if self._checked:
+        if self._compile_fresh is None:  # checked
             return self._exe(*args)
         try:
             out = jax.block_until_ready(self._exe(*args))
@@ -331,7 +332,7 @@ class _CheckedOnFirstCall:
             self._path.unlink(missing_ok=True)
             self._exe = self._compile_fresh()
             out = self._exe(*args)
-        self._checked = True
+        self._compile_fresh = None  # (it holds the arguments it was made with: a batch's arrays)
         return out
 
 
