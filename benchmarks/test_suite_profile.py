@@ -14,7 +14,7 @@ includes loads from the persistent cache) and the persistent-cache loads themsel
 
 What it does not see: work in subprocesses a test starts (the command-line and multi-process campaign
 tests), which counts in their test time but not in the compile columns. This is the reference
-measurement behind README "Performance" (``make test``) and the issue's 3-minute target: the suite is
+measurement behind the ``make test`` row of docs/performance.md and its 3-minute target: the suite is
 compile-bound, and no single test dominates.
 
 Run: ``python benchmarks/test_suite_profile.py [--workers 2] [--top 15] [--json FILE] [pytest args]``

@@ -37,7 +37,7 @@ program traced in this process (``tests/sim/test_program_cache.py`` compares two
 A process that replaces package functions at run time (``monkeypatch``, a debugger) changes what a
 trace would produce without changing the source digest: switch the cache off there.
 ``FORMATION_FTC_PROGRAM_CACHE=off`` does; it is also off when JAX's persistent cache is
-(``FORMATION_FTC_JAX_CACHE=off``). Measured on 2 cores (README "Performance"): warm ``reproduce
+(``FORMATION_FTC_JAX_CACHE=off``). Measured on 2 cores (docs/performance.md): warm ``reproduce
 mehrabian`` compile phase 5.4 -> 1.8 s.
 """
 

@@ -3,7 +3,7 @@
 A closed-loop run is a long ``lax.scan`` of a step made of many tiny array operations (a few spacecraft,
 3-vectors, 3 x 3 matrices). On the CPU such a step costs what XLA's runtime spends dispatching its
 operations more than the arithmetic. Three compile options change that cost (measured on the 2-core
-machine, best of 3-5 alternating repeats; README "Performance"):
+machine, best of 3-5 alternating repeats; docs/performance.md):
 
 * **YNNPACK library fusions off** (``xla_cpu_experimental_ynn_fusion_type`` empty), on every program:
   XLA's default hands element-wise groups to a library call whose fixed cost is far above the work on a
