@@ -91,7 +91,7 @@ def test_executable_is_shared_and_lru_bounded(cw_gain_pair, monkeypatch):
     programs.clear()
     programs.executable(c_a)
     programs.executable(c_long)  # the least recently used (c_a's) is dropped
-    assert len(programs._EXECUTABLES) == 1
+    assert len(programs._PROGRAMS) == 1  # each shared program keeps its executables
     assert programs.executable(c_long)[1] == 0.0
     assert programs.executable(c_b)[1] > 0.0  # c_a's program was dropped: compiled again
     programs.clear()

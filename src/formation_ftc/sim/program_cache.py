@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import os
 import pickle
 import platform
@@ -108,8 +109,6 @@ class _KeyPickler(pickle.Pickler):
 
 
 def _dumps(obj: Any) -> bytes:
-    import io
-
     buf = io.BytesIO()
     pickler = _KeyPickler(buf, protocol=5)
     # no memo: equal objects give equal bytes whether or not they are the same object in this process
@@ -346,6 +345,10 @@ class CachedProgram:
         self.kind = kind
         self.parts = parts
         self._executables: dict[tuple, Any] = {}
+
+    def kept(self, *args: Any) -> bool:
+        """Whether the executable for ``args`` is already kept here (no load or compile needed)."""
+        return _signature(args) in self._executables
 
     def executable(self, *args: Any) -> Any:
         """The compiled executable for ``args`` (loaded, compiled or kept from an earlier call)."""

@@ -23,9 +23,6 @@ from collections import OrderedDict
 from collections.abc import Hashable
 from typing import Any
 
-import jax
-import numpy as np
-
 from formation_ftc.sim import xla
 from formation_ftc.sim.cache import lru_get, lru_put
 from formation_ftc.sim.program_cache import CachedProgram
@@ -36,7 +33,6 @@ __all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
 #: long session (a notebook, a test run) does not hold every executable it ever compiled
 MAX_KEPT = 8
 _PROGRAMS: OrderedDict[Hashable, CachedProgram] = OrderedDict()
-_EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
 
 
 def jitted_run(compiled) -> CachedProgram:
@@ -53,15 +49,13 @@ def jitted_run(compiled) -> CachedProgram:
 def executable(compiled) -> tuple[Any, float]:
     """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``, or loaded from
     the program cache, :mod:`formation_ftc.sim.program_cache`) and the seconds [s] that getting it took
-    here (0.0 when a scenario of the same structure and parameter shapes got it before)."""
-    leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
-    key = (compiled.static_key, treedef,
-           tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves))
-    exe = lru_get(_EXECUTABLES, key)
-    if exe is not None:
-        return exe, 0.0
+    here (0.0 when a scenario of the same structure and parameter shapes got it before: the shared
+    program of :func:`jitted_run` keeps it)."""
+    fn = jitted_run(compiled)
+    if fn.kept(compiled.params):
+        return fn.executable(compiled.params), 0.0
     t0 = time.perf_counter()
-    exe = lru_put(_EXECUTABLES, key, jitted_run(compiled).executable(compiled.params), MAX_KEPT)
+    exe = fn.executable(compiled.params)
     return exe, time.perf_counter() - t0
 
 
@@ -71,4 +65,3 @@ def clear() -> None:
     process that wants its memory back calls this, :func:`formation_ftc.sim.batch.clear` and
     ``jax.clear_caches()``."""
     _PROGRAMS.clear()
-    _EXECUTABLES.clear()
