@@ -63,6 +63,37 @@ def _compilation_cache_dir() -> str | None:
     return str(_Path(cache) / f"cpu-threads-{_cpu_threads()}")
 
 
+_UNSAFE_CACHE_REPORTED: set[str] = set()
+
+
+def _private_cache_dir(cache: str) -> bool:
+    """Create the compilation cache ``cache`` (new directories mode 0700) and check that it and its parent
+    are real directories owned by this user and writable by nobody else. A cached executable is machine
+    code that JAX runs when it loads it, so a directory that another user could write to is not used
+    (the cache is off for this process, with one line on stderr)."""
+    import stat
+
+    path = _Path(cache)
+    try:
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        for p in (path.parent, path):
+            st = _os.lstat(p)
+            if (not stat.S_ISDIR(st.st_mode) or st.st_uid != _os.geteuid()
+                    or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
+                if cache not in _UNSAFE_CACHE_REPORTED:
+                    _UNSAFE_CACHE_REPORTED.add(cache)
+                    try:
+                        print(f"formation-ftc: compilation cache off: {p} is not a directory owned by this user "
+                              "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your "
+                              "own, or to off)", file=_sys.stderr)
+                    except (OSError, ValueError):  # a closed or full stderr
+                        pass
+                return False
+    except OSError:  # cannot be created or read: the cache is an optimisation only
+        return False
+    return True
+
+
 #: the persistent cache keeps programs that took at least this long [s] to compile (JAX's default is 1 s):
 #: every simulation program (0.4-2.6 s) but not the eager operations (< 0.05 s), so that a second
 #: ``reproduce all`` loads what the first compiled (warm compile phases 16.4 -> 12.8 s, 1 s -> 0.2 s)
@@ -73,14 +104,10 @@ def _configure_jax_environment() -> None:
     """x64 and the compilation cache for the JAX this process imports (now or later)."""
     _os.environ["JAX_ENABLE_X64"] = "1"
     cache = _compilation_cache_dir()
-    if cache is not None:
-        try:
-            _Path(cache).mkdir(parents=True, exist_ok=True)
-            _os.environ["JAX_COMPILATION_CACHE_DIR"] = cache  # also over one inherited from a parent process
-            _os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S)
-        except OSError:  # pragma: no cover - the cache is an optimisation only
-            pass
-    else:  # off: also when a parent process passed its cache directory down
+    if cache is not None and _private_cache_dir(cache):
+        _os.environ["JAX_COMPILATION_CACHE_DIR"] = cache  # also over one inherited from a parent process
+        _os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S)
+    else:  # off, or not private: also when a parent process passed its cache directory down
         _os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
     if "jax" in _sys.modules:  # JAX came first: its configuration is already read, set it directly
         from formation_ftc import _jax  # noqa: F401

@@ -11,18 +11,20 @@ set, :data:`formation_ftc.DEFAULT_CACHE_MIN_COMPILE_S`).
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from formation_ftc import DEFAULT_CACHE_MIN_COMPILE_S, _compilation_cache_dir  # noqa: E402
+from formation_ftc import (  # noqa: E402
+    DEFAULT_CACHE_MIN_COMPILE_S,
+    _compilation_cache_dir,
+    _private_cache_dir,
+)
 
 _cache_dir = _compilation_cache_dir()
-if _cache_dir is not None:
+if _cache_dir is not None and _private_cache_dir(_cache_dir):
     try:
-        Path(_cache_dir).mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", _cache_dir)
         jax.config.update("jax_persistent_cache_min_compile_time_secs",
                           float(os.environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS",

@@ -206,3 +206,183 @@ def test_jax_debugging_modes_call_the_jitted_function_itself():
     with jax.debug_nans(True):
         assert program(1.0) == 1.0
     assert calls == [1.0]
+
+
+# --- safety: nothing in the cache directory is trusted unless this user wrote it -------------------------
+
+def _fresh_program():
+    """A jitted function no cache has seen (a random constant), its arguments and its result."""
+    import jax
+
+    scale = float(np.random.default_rng().uniform(1.0, 2.0))
+    args = (np.arange(4.0),)
+    return jax.jit(lambda x: scale * x + 1.0), args, scale * np.arange(4.0) + 1.0
+
+
+def _stored(folder, kind="test", parts="p"):
+    """Store a freshly compiled program under (kind, parts) in ``folder``; returns (path, args, result)."""
+    jitted, args, expected = _fresh_program()
+    assert pc._safe_folder(folder)
+    key = pc.program_key(kind, parts, args)
+    path = folder / f"{key}.bin"
+    pc._store(path, key, pc._secret(folder), jitted.lower(*args).compile())
+    assert path.is_file()
+    return path, args, expected
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch):
+    programs = tmp_path / "cache" / "programs"
+    monkeypatch.setattr(pc, "directory", lambda: programs)
+    pc._SECRETS.clear()
+    yield programs
+    pc._SECRETS.clear()
+
+
+def test_the_directory_key_and_entries_are_private_to_this_user(folder):
+    path, args, expected = _stored(folder)
+    assert os.stat(folder).st_mode & 0o777 == 0o700
+    assert os.stat(folder / pc._SECRET_FILE).st_mode & 0o777 == 0o600
+    assert os.stat(path).st_mode & 0o777 == 0o600
+    exe = pc.load_or_compile(None, "test", "p", args)  # loaded: no jitted function is needed
+    np.testing.assert_array_equal(np.asarray(exe(*args)), expected)
+
+
+def test_a_planted_pickle_is_never_unpickled(folder, tmp_path):
+    import pickle
+
+    import jax
+
+    marker = tmp_path / "pwned"
+
+    class Payload:
+        def __reduce__(self):
+            return (os.system, (f"touch {marker}",))
+
+    args = (np.arange(3.0),)
+    assert pc._safe_folder(folder)
+    key = pc.program_key("test", "double", args)
+    entry = folder / f"{key}.bin"
+    import zlib
+
+    for blob in (pickle.dumps(Payload()), zlib.compress(pickle.dumps((Payload(), None, None))),
+                 pc.MAGIC + key.encode() + b"\0" * 32 + zlib.compress(pickle.dumps(Payload()))):
+        entry.write_bytes(blob)
+        os.chmod(entry, 0o600)
+        exe = pc.load_or_compile(jax.jit(lambda x: 2.0 * x), "test", "double", args)
+        np.testing.assert_array_equal(np.asarray(exe(*args)), [0.0, 2.0, 4.0])
+        assert not marker.exists()
+        assert not entry.exists() or entry.read_bytes() != blob  # removed (or replaced by a real entry)
+
+
+def test_an_entry_owned_by_another_user_or_writable_by_others_is_not_loaded(folder, monkeypatch):
+    import jax
+
+    path, args, expected = _stored(folder)
+    good = path.read_bytes()
+    wrong = jax.jit(lambda x: -x)  # what a refused entry must give: the program compiled here
+    os.chmod(path, 0o666)
+    np.testing.assert_array_equal(np.asarray(pc.load_or_compile(wrong, "test", "p", args)(*args)), -args[0])
+    assert not path.exists() or path.read_bytes() != good
+    # another owner: really (as root), else as this process would see it
+    path.write_bytes(good)
+    os.chmod(path, 0o600)
+    if os.geteuid() == 0:
+        os.chown(path, 65534, 65534)
+    else:
+        real = os.geteuid()
+        monkeypatch.setattr(pc.os, "geteuid", lambda: real + 1)
+        pc._SECRETS.clear()
+    assert pc._load(path, pc.program_key("test", "p", args), b"k" * 32, args) is None
+    assert not path.exists()
+
+
+def test_a_directory_writable_by_others_switches_the_cache_off_and_is_left_alone(folder):
+    import jax
+
+    path, args, expected = _stored(folder)
+    os.chmod(folder, 0o777)
+    with pytest.warns(pc.UnsafeCacheWarning, match="not a directory owned by this user"):
+        exe = pc.load_or_compile(jax.jit(lambda x: -x), "test", "p", args)
+    np.testing.assert_array_equal(np.asarray(exe(*args)), -args[0])  # compiled, not loaded
+    assert path.is_file()  # not ours to clean: untouched
+    os.chmod(folder, 0o700)
+    os.chmod(folder.parent, 0o757)  # the parent counts too (the folder could be swapped from there)
+    with pytest.warns(pc.UnsafeCacheWarning):
+        pc._WARNED.clear()
+        assert not pc._safe_folder(folder)
+
+
+def test_an_entry_under_another_programs_name_is_refused_and_removed(folder):
+    import jax
+
+    a_path, args, a_result = _stored(folder, parts="A")
+    b_key = pc.program_key("test", "B", args)
+    b_path = folder / f"{b_key}.bin"
+    b_path.write_bytes(a_path.read_bytes())
+    os.chmod(b_path, 0o600)
+    exe = pc.load_or_compile(jax.jit(lambda x: -x), "test", "B", args)
+    np.testing.assert_array_equal(np.asarray(exe(*args)), -args[0])  # B's own numbers, not A's
+    assert not b_path.exists() or b_path.read_bytes() != a_path.read_bytes()
+    # A altered by one byte fails its tag: removed, compiled
+    blob = bytearray(a_path.read_bytes())
+    blob[-1] ^= 1
+    a_path.write_bytes(bytes(blob))
+    exe = pc.load_or_compile(jax.jit(lambda x: -x), "test", "A", args)
+    np.testing.assert_array_equal(np.asarray(exe(*args)), -args[0])
+    assert not a_path.exists()
+
+
+def test_a_key_file_that_is_not_private_is_replaced_and_its_entries_fail(folder):
+    path, args, _ = _stored(folder)
+    key_file = folder / pc._SECRET_FILE
+    old = key_file.read_bytes()
+    os.chmod(key_file, 0o644)  # readable by others: anyone could sign entries
+    pc._SECRETS.clear()
+    new = pc._secret(folder)
+    assert new is not None and new != old and os.stat(key_file).st_mode & 0o777 == 0o600
+    assert pc._load(path, pc.program_key("test", "p", args), new, args) is None and not path.exists()
+
+
+def test_an_entry_that_fails_on_its_first_call_for_any_reason_is_removed(tmp_path):
+    import jax
+
+    class Broken:
+        def __call__(self, *args):
+            raise ValueError("an executable that does not match its arguments")
+
+    entry = tmp_path / "k.bin"
+    entry.write_bytes(b"entry")
+    exe = pc._CheckedOnFirstCall(Broken(), entry, lambda: jax.jit(lambda x: 2.0 * x).lower(np.ones(2)).compile())
+    np.testing.assert_array_equal(np.asarray(exe(np.ones(2))), [2.0, 2.0])
+    assert not entry.exists()
+
+
+def test_result_trees_round_trip_through_json_and_foreign_classes_are_refused():
+    import collections
+
+    import jax
+
+    from formation_ftc.blocks.supervisors.hierarchical_supervisor import HlState  # a package named tuple
+
+    state = HlState(*range(len(HlState._fields)))
+    tree = jax.tree_util.tree_structure({"a": (1, None, [2, ()]), "b": {"c": 3}, "s": state})
+    assert pc._tree_from_json(json.loads(json.dumps(pc._tree_to_json(tree)))) == tree
+    Local = collections.namedtuple("Local", "x")
+    with pytest.raises(pc.Uncacheable):
+        pc._tree_to_json(jax.tree_util.tree_structure(Local(1)))
+    with pytest.raises(ValueError, match="untrusted"):
+        pc._tree_from_json(["os:system", None, []])
+    with pytest.raises(ValueError, match="not a named tuple"):
+        pc._tree_from_json(["formation_ftc.sim.program_cache:CachedProgram", None, []])
+
+
+def test_a_compilation_cache_directory_writable_by_others_is_not_used(tmp_path, capsys):
+    import formation_ftc
+
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    assert formation_ftc._private_cache_dir(str(shared / "cpu-threads-2"))
+    os.chmod(shared, 0o777)
+    assert not formation_ftc._private_cache_dir(str(shared / "cpu-threads-2"))
+    assert "compilation cache off" in capsys.readouterr().err

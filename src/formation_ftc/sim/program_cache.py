@@ -29,6 +29,18 @@ own persistent cache, since XLA:CPU (jaxlib 0.10.2) serializes such an executabl
 kernels; that program is stored the next time XLA compiles it (a cold cache, a new JAX, a changed
 program).
 
+Safety. Loading an executable runs its machine code, so an entry is trusted only when this user wrote
+it: ``programs/`` is created with mode 0700 and is used only while it and its parent are real
+directories owned by this user and writable by nobody else (otherwise the cache is off, with one
+:class:`UnsafeCacheWarning`); entries are written 0600, atomically, as ``MAGIC | key | tag | body``,
+where the tag is an HMAC-SHA256 over the key and the body with a per-user secret (``programs/hmac-key``,
+32 random bytes, 0600). A file that is a link, not owned by this user, writable by others, fails its
+tag, or carries another program's key (an entry copied under another name) is removed without being
+interpreted. The body holds no pickle of the package's: the argument tree is rebuilt from the call's
+arguments, the result tree is stored as JSON (built-in containers and the package's named tuples; a
+program whose result tree has other classes is not stored), and the executable is JAX's serialized form. An entry that loads but fails on
+its first call -- whatever the error -- is removed and the program compiled afresh.
+
 A key that cannot be formed, an entry that cannot be read and a write that fails all fall back to the
 ordinary ``jax.jit`` path (trace, lower, compile or load from JAX's cache); an unreadable entry is
 removed. A loaded executable is the one that was compiled, so its results are bit for bit those of a
@@ -45,14 +57,19 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import hmac
 import io
+import json
 import os
 import pickle
 import platform
 import re
+import secrets
+import stat
 import sys
 import threading
 import types
+import warnings
 import zlib
 from collections.abc import Callable, Hashable
 from pathlib import Path
@@ -61,12 +78,12 @@ from typing import Any
 import jax
 import numpy as np
 
-__all__ = ["ENV_SWITCH", "CachedProgram", "directory", "program_key", "load_or_compile"]
+__all__ = ["ENV_SWITCH", "CachedProgram", "UnsafeCacheWarning", "directory", "program_key", "load_or_compile"]
 
 #: environment variable that switches the program cache off (``off``, ``0``, ``false`` or ``no``)
 ENV_SWITCH = "FORMATION_FTC_PROGRAM_CACHE"
 #: layout of an entry; raised when it changes, so that old entries are never read
-FORMAT = 1
+FORMAT = 2
 
 #: top-level modules whose classes and functions may appear in a key: the package (whose code is in the
 #: digest), the standard library pieces dataclasses and pytrees are made of, and the numeric libraries
@@ -240,31 +257,215 @@ def _storable(exe: Any) -> bool:
     return all(t.startswith(_CUSTOM_CALL_PREFIXES) for t in _CUSTOM_CALL.findall(text or ""))
 
 
-def _load(path: Path) -> Any | None:
-    from jax.experimental import serialize_executable
+#: the first bytes of an entry: a name and the layout (:data:`FORMAT`)
+MAGIC = b"formation-ftc program cache\x00" + bytes([FORMAT])
+_KEY_LEN = 64  # hex SHA-256 of the program key
+_TAG_LEN = 32  # HMAC-SHA256
+_SECRET_FILE = "hmac-key"
+_SECRET_LEN = 32
 
+
+def _owned_and_private(st: os.stat_result) -> bool:
+    """Owned by this process's effective user, and writable by nobody else (no group / world write bit)."""
+    return st.st_uid == os.geteuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+
+
+_WARNED: set[str] = set()
+
+
+def _warn_once(message: str) -> None:
+    if message not in _WARNED:
+        _WARNED.add(message)
+        warnings.warn(message, UnsafeCacheWarning, stacklevel=3)
+
+
+class UnsafeCacheWarning(UserWarning):
+    """The program cache's directory or key file is not this user's alone: the cache is not used."""
+
+
+def _safe_folder(folder: Path) -> bool:
+    """Create ``folder`` (mode 0700) and check it and its parent: real directories (not links), owned
+    by this user and writable by nobody else. A folder that fails is never read, written or cleaned."""
     try:
-        blob = path.read_bytes()
+        folder.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        try:
+            folder.mkdir(mode=0o700)
+        except FileExistsError:
+            pass
+        for path in (folder.parent, folder):
+            st = os.lstat(path)
+            if not stat.S_ISDIR(st.st_mode) or not _owned_and_private(st):
+                _warn_once(f"program cache off: {path} is not a directory owned by this user and writable by "
+                           "it alone (delete it, or set FORMATION_FTC_JAX_CACHE to a directory of your own)")
+                return False
+        if stat.S_IMODE(os.lstat(folder).st_mode) != 0o700:
+            os.chmod(folder, 0o700)  # ours and private: an entry directory of an earlier version (0755)
+    except OSError:
+        return False
+    return True
+
+
+def _read_private(path: Path, size: int | None = None, *, secret: bool = False) -> bytes | None:
+    """The bytes of ``path`` if it is a regular file (not a link) owned by this user and writable by it
+    alone -- with ``secret``, also readable by it alone -- (and, with ``size``, exactly that long);
+    else None."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
     except OSError:
         return None
     try:
-        serialized, in_tree, out_tree = pickle.loads(zlib.decompress(blob))
-        return serialize_executable.deserialize_and_load(serialized, in_tree, out_tree)
-    except Exception:  # noqa: BLE001 - a truncated or foreign entry: forget it, compile instead
+        st = os.fstat(fd)
+        if (not stat.S_ISREG(st.st_mode) or not _owned_and_private(st)
+                or (secret and st.st_mode & (stat.S_IRWXG | stat.S_IRWXO))):
+            return None
+        with os.fdopen(fd, "rb", closefd=False) as f:
+            data = f.read()
+        return data if size is None or len(data) == size else None
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+
+
+def _write_private(path: Path, data: bytes, *, replace: bool = True) -> bool:
+    """Write ``data`` to ``path`` atomically, mode 0600: a reader sees no file or the whole file. With
+    ``replace=False`` an existing file wins (False is returned)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        if replace:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)  # fails when another process made it first
+            except FileExistsError:
+                return False
+        return True
+    except OSError:
+        return False
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+_SECRETS: dict[Path, bytes] = {}
+
+
+def _secret(folder: Path) -> bytes | None:
+    """This user's key for authenticating entries: ``folder/hmac-key``, 32 random bytes, mode 0600, made
+    on first use. A key file that is not this user's alone is replaced (every entry signed with it then
+    fails authentication and is removed)."""
+    secret = _SECRETS.get(folder)
+    if secret is None:
+        path = folder / _SECRET_FILE
+        secret = _read_private(path, _SECRET_LEN, secret=True)
+        if secret is None:
+            if path.exists() or path.is_symlink():
+                path.unlink(missing_ok=True)
+            _write_private(path, secrets.token_bytes(_SECRET_LEN), replace=False)
+            secret = _read_private(path, _SECRET_LEN, secret=True)  # ours, or the one another process made first
+        if secret is None:
+            return None
+        _SECRETS[folder] = secret
+    return secret
+
+
+def _tag(secret: bytes, key: str, body: bytes) -> bytes:
+    return hmac.new(secret, MAGIC + key.encode() + body, hashlib.sha256).digest()
+
+
+_BUILTIN_NODES: dict[str, type] = {"tuple": tuple, "list": list, "dict": dict, "None": type(None)}
+
+
+def _tree_to_json(tree: Any) -> Any:
+    """A result tree as JSON data: ``null`` for a leaf, ``[node type, dict keys or null, children]``
+    otherwise. Node types are the built-in containers and named tuples of :data:`_TRUSTED_ROOTS`
+    modules (``module:qualname``); anything else raises :class:`Uncacheable`."""
+    data = tree.node_data()
+    if data is None:
+        return None
+    cls, aux = data
+    names = {v: k for k, v in _BUILTIN_NODES.items()}
+    if cls in names:
+        name = names[cls]
+    elif issubclass(cls, tuple) and hasattr(cls, "_fields") and cls.__module__.split(".")[0] in _TRUSTED_ROOTS:
+        name = f"{cls.__module__}:{cls.__qualname__}"
+    else:
+        raise Uncacheable(f"result tree node {cls!r}")
+    if cls is dict:
+        if not all(isinstance(k, str) for k in aux):
+            raise Uncacheable("a result dictionary with keys that are not strings")
+        aux = list(aux)
+    elif aux is not None:
+        raise Uncacheable(f"result tree node {cls!r} with node data")
+    return [name, aux, [_tree_to_json(c) for c in tree.children()]]
+
+
+def _tree_from_json(node: Any) -> Any:
+    """Inverse of :func:`_tree_to_json` (imports only modules of :data:`_TRUSTED_ROOTS`)."""
+    import importlib
+
+    tu = jax.tree_util
+    if node is None:
+        return tu.tree_structure(0)
+    name, aux, children = node
+    cls: Any = _BUILTIN_NODES.get(name)
+    if cls is None:
+        module, qualname = name.split(":")
+        if module.split(".")[0] not in _TRUSTED_ROOTS:
+            raise ValueError(f"untrusted node type {name}")
+        cls = importlib.import_module(module)
+        for part in qualname.split("."):
+            cls = getattr(cls, part)
+        if not (isinstance(cls, type) and issubclass(cls, tuple) and hasattr(cls, "_fields")):
+            raise ValueError(f"{name} is not a named tuple")
+    return tu.PyTreeDef.from_node_data_and_children(tu.default_registry, (cls, aux),
+                                                     [_tree_from_json(c) for c in children])
+
+
+def _load(path: Path, key: str, secret: bytes, args: tuple) -> Any | None:
+    """The executable stored in ``path`` for ``key``, or None. Nothing of the file is interpreted before
+    its authentication tag (HMAC-SHA256 with this user's key over the key and the body) verifies and
+    the key written in it equals ``key``: a file that another user placed or altered, or an entry copied
+    under another program's name, is removed unread. The entry holds no pickle of ours -- the argument
+    tree is rebuilt from ``args``, the result tree is JSON -- and JAX reads the executable."""
+    from jax.experimental import serialize_executable
+
+    blob = _read_private(path)
+    if blob is None:
+        if path.exists() or path.is_symlink():
+            path.unlink(missing_ok=True)  # not a private regular file of this user's
+        return None
+    head = len(MAGIC) + _KEY_LEN
+    stored_key = blob[len(MAGIC):head].decode("ascii", "replace")
+    tag, body = blob[head:head + _TAG_LEN], blob[head + _TAG_LEN:]
+    if (not blob.startswith(MAGIC) or stored_key != key
+            or not hmac.compare_digest(tag, _tag(secret, key, body))):
+        path.unlink(missing_ok=True)
+        return None
+    try:
+        raw = zlib.decompress(body)
+        n = int.from_bytes(raw[:4], "big")
+        out_tree = _tree_from_json(json.loads(raw[4:4 + n]))
+        in_tree = jax.tree_util.tree_structure((args, {}))
+        return serialize_executable.deserialize_and_load(raw[4 + n:], in_tree, out_tree)
+    except Exception:  # noqa: BLE001 - ours, but not loadable here: forget it, compile instead
         path.unlink(missing_ok=True)
         return None
 
 
-def _store(path: Path, exe: Any) -> None:
+def _store(path: Path, key: str, secret: bytes, exe: Any) -> None:
+    """Write ``exe`` to ``path`` (mode 0600, atomically) with its key and tag. A program whose result
+    tree has nodes :func:`_tree_to_json` cannot write is not stored."""
     from jax.experimental import serialize_executable
 
     try:
-        blob = zlib.compress(pickle.dumps(serialize_executable.serialize(exe), protocol=5), 1)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_bytes(blob)
-        os.replace(tmp, path)  # atomic: a reader sees no entry or the whole entry
-    except Exception:  # noqa: BLE001 - the cache is an optimisation only (read-only disk, full disk, ...)
+        serialized, _in_tree, out_tree = serialize_executable.serialize(exe)
+        tree = json.dumps(_tree_to_json(out_tree)).encode()
+        body = zlib.compress(len(tree).to_bytes(4, "big") + tree + serialized, 1)
+        _write_private(path, MAGIC + key.encode() + _tag(secret, key, body) + body)
+    except Exception:  # noqa: BLE001 - the cache is an optimisation only (not serializable, disk full, ...)
         pass
 
 
@@ -283,7 +484,8 @@ jax.monitoring.register_event_listener(_count_jax_cache_write)
 
 def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any:
     """The executable of ``jitted`` (a ``jax.jit`` function) for ``args``: loaded from :func:`directory`
-    when an entry for (``kind``, ``parts``, ``args``) is there, else ``jitted.lower(*args).compile()``.
+    when an authenticated entry for (``kind``, ``parts``, ``args``) is there, else
+    ``jitted.lower(*args).compile()``.
 
     Stored only when XLA compiled it during this call -- JAX signals that by writing it to its own cache
     (``/jax/compilation_cache/cache_misses``). An executable JAX loaded from its persistent cache, or
@@ -291,18 +493,20 @@ def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any
     executable without its compiled kernels, and loading that fails ("Function ... not found"). Such a
     program is stored the next time XLA compiles it."""
     folder = directory()
-    if folder is not None and not _prepare_custom_calls():
+    if folder is not None and not (_prepare_custom_calls() and _safe_folder(folder)):
         folder = None
-    key = program_key(kind, parts, args) if folder is not None else None
+    secret = _secret(folder) if folder is not None else None
+    key = program_key(kind, parts, args) if secret is not None else None
     path = folder / f"{key}.bin" if folder is not None and key is not None else None
-    if path is not None:
-        exe = _load(path)
+    if path is not None and secret is not None and key is not None:
+        exe = _load(path, key, secret, args)
         if exe is not None:
             return _CheckedOnFirstCall(exe, path, lambda: jitted.lower(*args).compile())
     writes = getattr(_WRITES, "count", 0)
     exe = jitted.lower(*args).compile()
-    if path is not None and getattr(_WRITES, "count", 0) > writes and _storable(exe):
-        _store(path, exe)
+    if (path is not None and secret is not None and key is not None
+            and getattr(_WRITES, "count", 0) > writes and _storable(exe)):
+        _store(path, key, secret, exe)
     return exe
 
 
@@ -311,9 +515,10 @@ _DEBUG_FLAGS = ("jax_disable_jit", "jax_debug_nans", "jax_debug_infs")
 
 
 class _CheckedOnFirstCall:
-    """A loaded executable whose first call waits for its results: an entry that loads but cannot run
-    (a kernel missing from it: ``NOT_FOUND`` from XLA) is removed, and the program compiled and run
-    the ordinary way instead. Later calls go straight to the executable that worked."""
+    """A loaded executable whose first call waits for its results: an entry that loads but fails to run
+    (a kernel missing from it, ``NOT_FOUND`` from XLA, or any other error) is removed, and the program
+    compiled and run the ordinary way instead; an error of the freshly compiled program is the
+    computation's own and is raised. Later calls go straight to the executable that worked."""
 
     def __init__(self, exe: Any, path: Path, compile_fresh: Callable[[], Any]) -> None:
         self._exe = exe
@@ -325,9 +530,7 @@ class _CheckedOnFirstCall:
             return self._exe(*args)
         try:
             out = jax.block_until_ready(self._exe(*args))
-        except jax.errors.JaxRuntimeError as exc:
-            if "NOT_FOUND" not in str(exc):
-                raise  # an error of the computation itself, not of the entry
+        except Exception:  # noqa: BLE001 - whatever the stored program did, trust the compiler instead
             self._path.unlink(missing_ok=True)
             self._exe = self._compile_fresh()
             out = self._exe(*args)
