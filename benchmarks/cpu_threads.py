@@ -11,7 +11,7 @@ The package leaves a single process at JAX's default. Where processes share the 
 workers of ``formation-ftc reproduce`` and the pytest-xdist workers of the test suite -- each gets the
 cores divided by the number of processes (one on 2 cores). The pool size also reaches the compiled
 program (XLA partitions some loops by it), so the persistent compilation cache keeps one directory per
-thread count (``formation_ftc._compilation_cache_dir``).
+thread count (``formation_ftc.sim.runtime.compilation_cache_dir``).
 
 Run: ``python benchmarks/cpu_threads.py [--repeats 3] [--cases gui2022-lof2tc:300,li2020-thm1:100]``
 """
@@ -31,7 +31,7 @@ _CHILD = """
 import hashlib, json, resource, sys, time
 import jax, numpy as np
 from formation_ftc.api import compile_scenario, load_scenario
-from formation_ftc.sim import xla
+from formation_ftc.sim.runtime import xla
 name, horizon, repeats = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
 c = compile_scenario(load_scenario(name, {"simulation.horizon": horizon}))
 run = xla.jit(c.run).lower(c.params).compile()

@@ -33,7 +33,8 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
-from formation_ftc.sim import loop, xla  # noqa: E402
+from formation_ftc.sim import loop  # noqa: E402
+from formation_ftc.sim.runtime import xla  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from xla_options import _mehrabian  # noqa: E402  (the Mehrabian seed-study batch, built as there)

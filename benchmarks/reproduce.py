@@ -18,7 +18,7 @@ the compile time of every built-in scenario as ``formation-ftc run`` compiles it
    is the same program (``tests/sim/test_programs.py``), so the same scenario is re-run here.
 
 ``FORMATION_FTC_XLA_OPTIONS=off`` in the environment measures XLA's default build instead of the
-package's compile options (``formation_ftc.sim.xla``), for an A/B comparison.
+package's compile options (``formation_ftc.sim.runtime.xla``), for an A/B comparison.
 
 Targets (issue "time to first result", 2 CPU cores): reproduce all cold < 90 s, warm < 40 s; compile
 < 2 s per scenario. Exit status 0 always (a measurement, not a gate); ``--json FILE`` stores the numbers.
@@ -46,7 +46,7 @@ _COMPILE_SCRIPT = r"""
 import json, sys, time
 import jax
 from formation_ftc.api import compile_scenario, list_scenarios, load_scenario
-from formation_ftc.sim import xla
+from formation_ftc.sim.runtime import xla
 names = sorted(list_scenarios())
 out, cpu = {}, {}
 for name in names:
@@ -67,7 +67,7 @@ _RERUN_SCRIPT = r"""
 import json, time
 import jax
 from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
-from formation_ftc.sim import xla
+from formation_ftc.sim.runtime import xla
 for name in ("li2020-thm1", "yang2013-healthy", "gui2022-lof2tc", "mehrabian-isolation", "azizi2009-llfr"):
     scn = load_scenario(name)
     scn = load_scenario(name, {"simulation.horizon": 100 * scn.simulation.dt,

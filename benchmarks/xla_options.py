@@ -1,7 +1,7 @@
 """Cost per step of the package's XLA:CPU compile options against XLA's default build, in one run.
 
 For each case the same lowered program is compiled twice -- with XLA's defaults (the reference) and
-with :func:`formation_ftc.sim.xla.compiler_options` as the package compiles it -- and both executables
+with :func:`formation_ftc.sim.runtime.xla.compiler_options` as the package compiles it -- and both executables
 are timed alternately (fastest of ``--repeats``; a shared 2-core machine varies by 10-40 % between
 single passes). Printed: microseconds per run-step of each, their ratio (package / default; < 1 is
 faster), the compile times, and whether the two results agree bit for bit (else the largest relative
@@ -27,7 +27,7 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
-from formation_ftc.sim import xla  # noqa: E402
+from formation_ftc.sim.runtime import xla  # noqa: E402
 
 
 def _mehrabian(scale: float):

@@ -25,7 +25,7 @@ import os
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
-# The on-disk program cache (formation_ftc.sim.program_cache) stays on, as for a user: the suite compiles
+# The on-disk program cache (formation_ftc.sim.runtime.program_cache) stays on, as for a user: the suite compiles
 # about 350 distinct programs, almost each once, and storing them costs about what the loads save
 # (fresh cache, same host: 7 min 28 s / 820 s user CPU off, 7 min 31 s / 818 s on, 7 min 26 s / 814 s
 # before the cache existed). Tests that count traces or compiles switch it off (fixtures below).
@@ -43,6 +43,11 @@ import jax.monitoring  # noqa: E402
 import pytest  # noqa: E402
 
 import formation_ftc  # noqa: E402, F401  (enables jax_enable_x64)
+from formation_ftc.sim import runtime  # noqa: E402
+
+# the compilation caches and compiler tuning, as the command line has them (the suite's second worker
+# loads what the first compiled); inherited by the processes tests start
+runtime.configure()
 
 #: resident memory [MiB] above which a worker drops JAX's compile caches after a test
 RSS_LIMIT_MB = int(os.environ.get("FORMATION_FTC_TEST_RSS_LIMIT_MB", "1200"))

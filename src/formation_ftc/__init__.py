@@ -8,17 +8,20 @@ Public entry points::
     table = ftc.check(scenario)            # theorem / design conditions
 
 float64 is mandatory. Importing :mod:`formation_ftc` does not import JAX (so that the command line
-answers ``--help`` at once); it sets ``JAX_ENABLE_X64`` and the persistent compilation cache for the
-JAX that any later import loads, and when JAX is already imported it switches ``jax_enable_x64`` on
-directly (see :mod:`formation_ftc._jax`). The names below are loaded on first use.
+answers ``--help`` at once); it sets ``JAX_ENABLE_X64`` for the JAX that any later import loads, and
+when JAX is already imported it switches ``jax_enable_x64`` on directly (see :mod:`formation_ftc._jax`).
+That is the only process-wide change an import makes: the compilation caches and compiler tuning are
+switched on by :func:`formation_ftc.sim.runtime.configure` (``formation-ftc`` calls it; a script may).
+The names below are loaded on first use.
 """
 
 from __future__ import annotations
 
 import os as _os
 import sys as _sys
-from pathlib import Path as _Path
 from typing import TYPE_CHECKING
+
+from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus  # noqa: F401 - TODO executors
 
 
 def _package_version() -> str:
@@ -31,86 +34,19 @@ def _package_version() -> str:
         return "0+unknown"
 
 
-def _schedulable_cpus() -> int:
-    """CPUs this process may run on (its affinity mask; the CPU count where there is none)."""
-    try:
-        return len(_os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return _os.cpu_count() or 1
-
-
-def _cpu_threads() -> int:
-    """Threads of JAX's CPU client in this process: ``PJRT_NPROC`` when set (JAX reads it when the client
-    starts), else JAX's default, one per CPU this process may run on."""
-    value = _os.environ.get("PJRT_NPROC", "").strip()
-    if value.isdigit() and int(value) > 0:
-        return int(value)
-    return _schedulable_cpus()
-
-
-def _compilation_cache_dir() -> str | None:
-    """The persistent compilation cache of this process (None: off).
-
-    ``FORMATION_FTC_JAX_CACHE`` (default ``~/.cache/formation_ftc/jax``; ``off`` disables it), one
-    subdirectory per CPU-client thread count: XLA partitions some loops by the thread count when it
-    compiles, so a program compiled with 2 threads can round differently from the same program compiled
-    with 1, and JAX's cache key does not record the count. Keyed this way, a process never loads a
-    program compiled for another thread count (another machine sharing the home directory, or
-    ``PJRT_NPROC`` set differently)."""
-    cache = _os.environ.get("FORMATION_FTC_JAX_CACHE", str(_Path.home() / ".cache" / "formation_ftc" / "jax"))
-    if not cache or cache.lower() == "off":
-        return None
-    return str(_Path(cache) / f"cpu-threads-{_cpu_threads()}")
-
-
-_UNSAFE_CACHE_REPORTED: set[str] = set()
-
-
-def _private_cache_dir(cache: str) -> bool:
-    """Create the compilation cache ``cache`` (new directories mode 0700) and check that it and its parent
-    are real directories owned by this user and writable by nobody else. A cached executable is machine
-    code that JAX runs when it loads it, so a directory that another user could write to is not used
-    (the cache is off for this process, with one line on stderr)."""
-    import stat
-
-    path = _Path(cache)
-    try:
-        path.mkdir(mode=0o700, parents=True, exist_ok=True)
-        for p in (path.parent, path):
-            st = _os.lstat(p)
-            if (not stat.S_ISDIR(st.st_mode) or st.st_uid != _os.geteuid()
-                    or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
-                if cache not in _UNSAFE_CACHE_REPORTED:
-                    _UNSAFE_CACHE_REPORTED.add(cache)
-                    try:
-                        print(f"formation-ftc: compilation cache off: {p} is not a directory owned by this user "
-                              "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your "
-                              "own, or to off)", file=_sys.stderr)
-                    except (OSError, ValueError):  # a closed or full stderr
-                        pass
-                return False
-    except OSError:  # cannot be created or read: the cache is an optimisation only
-        return False
-    return True
-
-
-#: the persistent cache keeps programs that took at least this long [s] to compile (JAX's default is 1 s):
-#: every simulation program (0.4-2.6 s) but not the eager operations (< 0.05 s), so that a second
-#: ``reproduce all`` loads what the first compiled (warm compile phases 16.4 -> 12.8 s, 1 s -> 0.2 s)
-DEFAULT_CACHE_MIN_COMPILE_S = "0.2"
-
-
 def _configure_jax_environment() -> None:
-    """x64 and the compilation cache for the JAX this process imports (now or later)."""
+    """float64 for the JAX this process imports (now or later) -- the one process-wide setting an import
+    makes. The compilation caches and compiler tuning are opt-in (:func:`formation_ftc.sim.runtime.configure`,
+    which the command line calls); a process started by a configured one (its environment says so)
+    configures itself here."""
     _os.environ["JAX_ENABLE_X64"] = "1"
-    cache = _compilation_cache_dir()
-    if cache is not None and _private_cache_dir(cache):
-        _os.environ["JAX_COMPILATION_CACHE_DIR"] = cache  # also over one inherited from a parent process
-        _os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S)
-    else:  # off, or not private: also when a parent process passed its cache directory down
-        _os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
     if "jax" in _sys.modules:  # JAX came first: its configuration is already read, set it directly
         from formation_ftc import _jax  # noqa: F401
+    else:
+        from formation_ftc.sim import runtime
+
+        if runtime.configured():
+            runtime.configure()
 
 
 _configure_jax_environment()

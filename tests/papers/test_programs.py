@@ -12,7 +12,7 @@ import numpy as np
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
 from formation_ftc.papers import programs
-from formation_ftc.sim import xla
+from formation_ftc.sim.runtime import xla
 
 
 def test_same_structure_compiles_once_and_matches_the_api(cw_gain_pair, run_compiles):

@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
-from formation_ftc.sim import programs, xla
+from formation_ftc.sim import programs
 from formation_ftc.sim.loop import ClosedLoop
+from formation_ftc.sim.runtime import xla
 
 
 @pytest.fixture

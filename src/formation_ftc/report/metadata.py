@@ -12,9 +12,9 @@ import os
 import platform
 import sys
 
-from formation_ftc import _cpu_threads
 from formation_ftc import provenance as _base
 from formation_ftc.provenance import git_commit, package_versions, utc_now
+from formation_ftc.sim.runtime import cpu_threads as _cpu_threads
 
 __all__ = ["provenance", "package_versions", "git_commit", "utc_now"]
 
@@ -35,7 +35,7 @@ def provenance() -> dict[str, str]:
     Keys: ``version_<package>`` for each package (see :func:`package_versions`), ``git_commit``,
     ``python``, ``python_executable``, ``platform``, ``machine``, ``cpu_count``, ``jax_backend``,
     ``jax_cpu_threads`` (the CPU client's thread count, which XLA's compilation depends on; see
-    ``formation_ftc._compilation_cache_dir``), ``created_utc``.
+    ``formation_ftc.sim.runtime.compilation_cache_dir``), ``created_utc``.
     """
     out = _base.provenance()
     out.update(

@@ -37,10 +37,11 @@ from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from formation_ftc import _schedulable_cpus, registry
+from formation_ftc import registry
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
+from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus
 
 if TYPE_CHECKING:
     from rich.progress import TaskID

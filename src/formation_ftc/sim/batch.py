@@ -31,9 +31,9 @@ from typing import Any
 import jax
 import numpy as np
 
-from formation_ftc.sim import xla
-from formation_ftc.sim.cache import lru_get, lru_put
-from formation_ftc.sim.program_cache import CachedProgram
+from formation_ftc.sim.runtime import xla
+from formation_ftc.sim.runtime.lru import lru_get, lru_put
+from formation_ftc.sim.runtime.program_cache import CachedProgram
 
 __all__ = ["stack_params", "batched_run", "stack_params_grid", "batched_grid_run", "clear"]
 
@@ -92,7 +92,7 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
-    Compiled with :func:`formation_ftc.sim.xla.compiler_options` (the fast-compile preset when the loop's
+    Compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options` (the fast-compile preset when the loop's
     controller sets ``batch_fast_compile``)."""
     key = (compiled.static_key, _batched_flags(in_axes), int(size))
     fn = lru_get(_CACHE, key)
@@ -177,5 +177,5 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
 
 def clear() -> None:
     """Forget the cached batch programs and release their executables (held by each
-    :class:`~formation_ftc.sim.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach)."""
+    :class:`~formation_ftc.sim.runtime.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach)."""
     _CACHE.clear()

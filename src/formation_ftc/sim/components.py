@@ -402,7 +402,7 @@ class Controller(_Kind):
 
     kind: ClassVar[str] = "controller"
     quantity: ClassVar[str] = "force"
-    #: compile batches of loops with this law with XLA's fast-compile preset (:mod:`formation_ftc.sim.xla`):
+    #: compile batches of loops with this law with XLA's fast-compile preset (:mod:`formation_ftc.sim.runtime.xla`):
     #: worth it only for a step with many operations per spacecraft; measured, not assumed
     batch_fast_compile: ClassVar[bool] = False
 

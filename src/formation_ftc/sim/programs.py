@@ -13,7 +13,7 @@ fresh ``jax.jit``.
 Every front end runs through it: :func:`formation_ftc.api.simulate_with_metrics`, ``formation-ftc run``
 and the paper reproductions (:mod:`formation_ftc.papers.programs`). At most :data:`MAX_KEPT` programs
 are kept (least recently used dropped first), so a long session does not hold every executable it
-ever compiled (:mod:`formation_ftc.sim.cache`).
+ever compiled (:mod:`formation_ftc.sim.runtime.lru`).
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from collections import OrderedDict
 from collections.abc import Hashable
 from typing import Any
 
-from formation_ftc.sim import xla
-from formation_ftc.sim.cache import lru_get, lru_put
-from formation_ftc.sim.program_cache import CachedProgram
+from formation_ftc.sim.runtime import xla
+from formation_ftc.sim.runtime.lru import lru_get, lru_put
+from formation_ftc.sim.runtime.program_cache import CachedProgram
 
 __all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
 
@@ -36,9 +36,9 @@ _PROGRAMS: OrderedDict[Hashable, CachedProgram] = OrderedDict()
 
 
 def jitted_run(compiled) -> CachedProgram:
-    """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.xla.compiler_options`, shared by
+    """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options`, shared by
     every compiled scenario with the same ``static_key``: one executable per parameter signature, kept
-    on disk under a key known before tracing (:mod:`formation_ftc.sim.program_cache`)."""
+    on disk under a key known before tracing (:mod:`formation_ftc.sim.runtime.program_cache`)."""
     fn = lru_get(_PROGRAMS, compiled.static_key)
     if fn is None:
         fn = lru_put(_PROGRAMS, compiled.static_key,
@@ -48,7 +48,7 @@ def jitted_run(compiled) -> CachedProgram:
 
 def executable(compiled) -> tuple[Any, float]:
     """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``, or loaded from
-    the program cache, :mod:`formation_ftc.sim.program_cache`) and the seconds [s] that getting it took
+    the program cache, :mod:`formation_ftc.sim.runtime.program_cache`) and the seconds [s] that getting it took
     here (0.0 when a scenario of the same structure and parameter shapes got it before: the shared
     program of :func:`jitted_run` keeps it)."""
     fn = jitted_run(compiled)

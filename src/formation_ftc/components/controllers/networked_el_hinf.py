@@ -50,7 +50,7 @@ class NetworkedElHinfController(Controller):
     """
 
     quantity = "torque"
-    #: the seed study's batch (60 runs x 8 spacecraft): 15 -> 10.6-11 us per run-step (sim.xla)
+    #: the seed study's batch (60 runs x 8 spacecraft): 15 -> 10.6-11 us per run-step (sim.runtime.xla)
     batch_fast_compile = True
 
     count: int = static()

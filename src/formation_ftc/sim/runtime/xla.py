@@ -36,7 +36,7 @@ options go to each compilation (``jax.jit(..., compiler_options=...)``), never t
 aborting the process, and other JAX code in the same process is untouched.
 ``FORMATION_FTC_XLA_OPTIONS=off`` switches them off (A/B measurements).
 
-**Unrolled threefry on the CPU** (:func:`use_unrolled_threefry`, called on import of the package). JAX
+**Unrolled threefry on the CPU** (:func:`use_unrolled_threefry`, called by :func:`formation_ftc.sim.runtime.configure`). JAX
 lowers its threefry hash on the CPU as a 5-iteration loop (smaller programs); inside a simulation step
 each noise draw then runs as a nested loop whose iterations XLA dispatches one by one. The unrolled
 lowering -- the one JAX uses on other backends -- does the same integer operations, so the random
@@ -91,17 +91,25 @@ def compiler_options(fast_compile: bool = False) -> dict[str, str | bool]:
 
 
 def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) -> Callable[..., Any]:
-    """``jax.jit(fn, **kwargs)`` compiled with :func:`compiler_options`."""
+    """``jax.jit(fn, **kwargs)`` compiled with :func:`compiler_options` (and, in a process the runtime is
+    configured for, :func:`use_unrolled_threefry` first)."""
+    from formation_ftc.sim import runtime
+
+    if runtime.configured():
+        use_unrolled_threefry()
     opts = compiler_options(fast_compile)
     return jax.jit(fn, compiler_options=opts, **kwargs) if opts else jax.jit(fn, **kwargs)
 
 
 def use_unrolled_threefry() -> bool:
     """Lower ``jax.random``'s threefry hash unrolled on the CPU as well (same integer operations, same
-    bits; see the module docstring). Returns True when the lowering was registered, False when switched
+    bits; see the module docstring). Returns True when the lowering is registered, False when switched
     off (:data:`ENV_SWITCH`) or when this JAX lacks the internals it needs."""
-    if not _enabled():
-        return False
+    return _enabled() and _register_unrolled_threefry()
+
+
+@functools.cache
+def _register_unrolled_threefry() -> bool:
     try:
         from jax._src.interpreters import mlir
         from jax._src.random import threefry2x32 as threefry

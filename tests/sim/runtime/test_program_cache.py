@@ -1,4 +1,4 @@
-"""Compiled programs kept on disk under a key known before tracing (formation_ftc.sim.program_cache).
+"""Compiled programs kept on disk under a key known before tracing (formation_ftc.sim.runtime.program_cache).
 
 Truths: a second process with a fresh persistent cache that compiles the same scenario itself (the
 results of a loaded program must equal a program traced and compiled in the process, bit for bit);
@@ -18,7 +18,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from formation_ftc.sim import program_cache as pc
+from formation_ftc.sim.runtime import program_cache as pc
 
 # One process: run azizi2009-llfr (its step solves with LAPACK, the custom call a loading process must
 # prepare) for 0.2 s through the API and print the run program's traces and a digest of the results.
@@ -374,15 +374,15 @@ def test_result_trees_round_trip_through_json_and_foreign_classes_are_refused():
     with pytest.raises(ValueError, match="untrusted"):
         pc._tree_from_json(["os:system", None, []])
     with pytest.raises(ValueError, match="not a named tuple"):
-        pc._tree_from_json(["formation_ftc.sim.program_cache:CachedProgram", None, []])
+        pc._tree_from_json(["formation_ftc.sim.runtime.program_cache:CachedProgram", None, []])
 
 
 def test_a_compilation_cache_directory_writable_by_others_is_not_used(tmp_path, capsys):
-    import formation_ftc
+    from formation_ftc.sim import runtime
 
     shared = tmp_path / "shared"
     shared.mkdir()
-    assert formation_ftc._private_cache_dir(str(shared / "cpu-threads-2"))
+    assert runtime.private_cache_dir(str(shared / "cpu-threads-2"))
     os.chmod(shared, 0o777)
-    assert not formation_ftc._private_cache_dir(str(shared / "cpu-threads-2"))
+    assert not runtime.private_cache_dir(str(shared / "cpu-threads-2"))
     assert "compilation cache off" in capsys.readouterr().err

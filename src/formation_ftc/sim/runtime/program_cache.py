@@ -19,7 +19,7 @@ serialized executable (``jax.experimental.serialize_executable``) in ``programs/
   JAX configuration value and the thread-local ones in force (``jax.default_matmul_precision(...)``
   blocks), the backend and its devices, the CPU's feature flags, ``XLA_FLAGS``,
   ``PJRT_NPROC`` (also in the directory name of the cache) and the package's compile-option switch
-  (:data:`formation_ftc.sim.xla.ENV_SWITCH`).
+  (:data:`formation_ftc.sim.runtime.xla.ENV_SWITCH`).
 
 What is stored: an executable XLA compiled in this process (zlib-compressed), and only when every
 custom call in it is a LAPACK call (``jnp.linalg.solve``), whose bindings are initialised before any
@@ -146,7 +146,7 @@ _DIGEST: dict[tuple, str] = {}
 def _source_digest() -> str:
     """SHA-256 over the relative path and bytes of every ``.py`` file of the installed package; read
     again when a file's size or modification time changed (an editable install being edited)."""
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]  # the formation_ftc package
     paths = sorted(root.rglob("*.py"))
     stamp = tuple((str(p), st.st_size, st.st_mtime_ns) for p in paths for st in (p.stat(),))
     digest = _DIGEST.get(stamp)
@@ -195,7 +195,7 @@ def _environment() -> tuple:
     """What, besides the program, decides the trace and the executable (see the module docstring)."""
     import jaxlib
 
-    from formation_ftc.sim import xla
+    from formation_ftc.sim.runtime import xla
 
     devices = jax.devices()
     return (FORMAT, sys.version, jax.__version__, jaxlib.__version__, np.__version__, platform.machine(),

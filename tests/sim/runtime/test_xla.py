@@ -1,4 +1,4 @@
-"""XLA:CPU compile options (sim/xla.py): which options apply, that an unknown one is dropped instead of
+"""XLA:CPU compile options (sim/runtime/xla.py): which options apply, that an unknown one is dropped instead of
 aborting, and that compiling with them leaves the arithmetic alone.
 
 Independent truth for the last point: the same program compiled by plain ``jax.jit`` (XLA's defaults).
@@ -21,7 +21,7 @@ import pytest
 
 from formation_ftc.api import compile_scenario, load_scenario
 from formation_ftc.sim import batch as batch_mod
-from formation_ftc.sim import xla
+from formation_ftc.sim.runtime import xla
 
 
 def test_options_on_cpu_and_switch_off(monkeypatch):
@@ -93,6 +93,8 @@ def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fa
 _DRAWS = """
 import json, sys
 import formation_ftc, jax, jax.numpy as jnp
+from formation_ftc.sim.runtime import xla
+xla.use_unrolled_threefry()  # what a configured runtime does (off: FORMATION_FTC_XLA_OPTIONS=off)
 key = jax.random.fold_in(jax.random.PRNGKey(7), 123)
 k1, k2 = jax.random.split(key)
 draws = {"normal": jax.random.normal(k1, (4, 3), jnp.float64), "uniform": jax.random.uniform(k2, (5,), jnp.float64),

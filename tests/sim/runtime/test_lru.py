@@ -1,8 +1,8 @@
-"""Bounded program caches (sim/cache.py): recency order, eviction of the least recently used."""
+"""Bounded program caches (sim/runtime/lru.py): recency order, eviction of the least recently used."""
 
 from collections import OrderedDict
 
-from formation_ftc.sim.cache import lru_get, lru_put
+from formation_ftc.sim.runtime.lru import lru_get, lru_put
 
 
 def test_least_recently_used_entry_is_dropped_first():
