@@ -62,22 +62,9 @@ def list_scenarios() -> dict[str, str]:
 
 
 def compile_scenario(scenario: ScenarioBase) -> Compiled:
-    """The method's compiled form of a scenario (no JAX compilation happens yet). A component loop
-    gets the scenario's admissible set (``simulation.max_position`` / ``max_velocity`` / ``max_rate`` /
-    ``max_pitch``)."""
-    import dataclasses
-
-    from formation_ftc.sim.loop import ClosedLoop
-
-    compiled = get_method(scenario.scenario.method).build(scenario)
-    sim = scenario.simulation
-    if isinstance(compiled.params, ClosedLoop) and hasattr(sim, "max_position"):
-        loop = dataclasses.replace(compiled.params, max_position=np.float64(sim.max_position),
-                                   max_velocity=np.float64(sim.max_velocity),
-                                   max_rate=np.float64(getattr(sim, "max_rate", 100.0)),
-                                   max_pitch=np.float64(getattr(sim, "max_pitch", 1.5607963267948966)))
-        compiled = dataclasses.replace(compiled, params=loop)
-    return compiled
+    """The method's compiled form of a scenario (no JAX compilation happens yet). Its loop carries the
+    scenario's step, horizon, seed and admissible set (:meth:`~formation_ftc.sim.loop.ClosedLoop.from_simulation`)."""
+    return get_method(scenario.scenario.method).build(scenario)
 
 
 def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True):

@@ -105,3 +105,23 @@ def test_metrics_of_a_diverged_run_stop_at_the_failing_block():
     assert metrics["max_position_error"] == pytest.approx(e[:step].max(axis=1).max(), rel=1e-12)
     assert metrics["final_position_error_mean"] == pytest.approx(e[step - 1].mean(), rel=1e-12)
     assert metrics["final_position_error_mean"] != pytest.approx(e[step].mean(), rel=1e-6)
+
+
+_LIMITS = {"simulation.max_position": 123.0, "simulation.max_velocity": 4.5, "simulation.max_rate": 6.7,
+           "simulation.max_pitch": 1.2}
+
+
+@pytest.mark.parametrize("name", sorted(ftc.list_scenarios()))
+def test_every_builder_takes_the_admissible_set_from_the_simulation_section(name):
+    """The loop of every built-in scenario -- through the API and through its method's own builder,
+    which the paper reproductions call directly -- carries ``[simulation]``'s admissible set
+    (:meth:`ClosedLoop.from_simulation`), not the loop's defaults."""
+    from formation_ftc.api import compile_scenario
+    from formation_ftc.registry import get_method
+
+    scn = ftc.load_scenario(name, _LIMITS)
+    loops = [compile_scenario(scn).params, get_method(scn.scenario.method).build(scn).params]
+    for loop in loops:
+        got = [float(loop.max_position), float(loop.max_velocity), float(loop.max_rate), float(loop.max_pitch)]
+        assert got == list(_LIMITS.values())
+        assert loop.dt == scn.simulation.dt and loop.n_steps == scn.simulation.n_steps

@@ -126,9 +126,8 @@ def make_loop(s: CwFormationScenario) -> ClosedLoop:
                 Metric("control_effort", "control_effort", reduce="final", spacecraft="each", units="N2 s"),
                 Metric("delta_v_total", "delta_v", reduce="final", spacecraft="sum", units="m s-1")]
     sim = s.simulation
-    return ClosedLoop(plant=plant, controller=controller, sensors=sensors, actuator=actuator,
-                      metrics=tuple(metrics), seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt),
-                      n_steps=sim.n_steps, record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, sensors=sensors, actuator=actuator,
+                                      metrics=tuple(metrics))
 
 
 def build(s: CwFormationScenario) -> Compiled:

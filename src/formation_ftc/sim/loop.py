@@ -14,6 +14,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.core.disturbances import run_key, step_key
 from formation_ftc.core.integrators import rk4_autonomous_stages
@@ -122,7 +123,7 @@ class ClosedLoop:
     #: largest body rate [rad/s] and largest |pitch| of an Euler-angle attitude state [rad] (its kinematics
     #: are singular at pi/2): plants that report them
     max_rate: Any = 100.0
-    max_pitch: Any = 1.5607963267948966  # pi/2 - 0.01
+    max_pitch: Any = 1.5607963267948966  # pi/2 - 0.01 (SimulationSection's default)
     evaluations: tuple = ()
     dt: float = static(default=0.1)
     n_steps: int = static(default=1)
@@ -132,6 +133,18 @@ class ClosedLoop:
     #: steps whose metric samples are folded together (:meth:`_metric_block`): 0 chooses, 1 folds at
     #: every step, L > 1 (a divisor of ``record_every``) buffers L steps' samples and folds them at once
     metric_block: int = static(default=0)
+
+    @classmethod
+    def from_simulation(cls, sim: Any, **slots: Any) -> ClosedLoop:
+        """A loop of ``slots`` (components, metrics, evaluations) run as a ``[simulation]`` section says:
+        step, number of steps (horizon), recording interval, unroll, noise seed and the admissible set
+        (``max_position`` [m], ``max_velocity`` [m/s], ``max_rate`` [rad/s], ``max_pitch`` [rad]) --
+        set here once for every builder. ``sim`` is a
+        :class:`~formation_ftc.config.base.SimulationSection` (or an object with its fields)."""
+        return cls(**slots, seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt), n_steps=int(sim.n_steps),
+                   record_every=int(sim.record_every), unroll=int(sim.unroll),
+                   max_position=np.float64(sim.max_position), max_velocity=np.float64(sim.max_velocity),
+                   max_rate=np.float64(sim.max_rate), max_pitch=np.float64(sim.max_pitch))
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> ClosedLoop:

@@ -125,10 +125,9 @@ def make_loop(sc: Azizi2009Scenario) -> ClosedLoop:
     if sim.horizon >= EFFORT_TIME - 1e-9:
         metrics.append(Metric("effort_x_100s", "effort", reduce="at", start=as_float(EFFORT_TIME), component=0,
                               spacecraft="each", units="m2 s-3"))
-    return ClosedLoop(plant=plant, controller=controller, sensors=sensors, supervisor=supervisor,
-                      actuator=actuator, evaluations=evaluations, metrics=tuple(metrics),
-                      seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(dt), n_steps=sim.n_steps,
-                      record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, sensors=sensors,
+                                      supervisor=supervisor, actuator=actuator, evaluations=evaluations,
+                                      metrics=tuple(metrics))
 
 
 def _dataset_attrs(sc: Azizi2009Scenario, loop: ClosedLoop) -> dict[str, float]:

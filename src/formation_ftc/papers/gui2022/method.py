@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.blocks.observers.iterative_learning_observer import learning_steps
@@ -200,11 +199,9 @@ def make_loop(s: Gui2022Scenario) -> ClosedLoop:
         fault_prehistory=as_float(np.zeros((N_DEPUTIES, 3))),
         learning_steps=learning_steps(o.learning_interval, sim.dt, "observer.learning_interval"),
         sign_term=o.sign_term, mean_steps=sim.record_every)
-    return ClosedLoop(plant=plant, controller=_controller(s, g["K"]),
-                      sensors=ExactRelativeStateSensors(count=N_DEPUTIES), estimator=estimator,
-                      actuator=_actuator(s), metrics=metrics_of(s), evaluations=_evaluations(s),
-                      seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(sim.dt), n_steps=sim.n_steps,
-                      record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, controller=_controller(s, g["K"]),
+                                      sensors=ExactRelativeStateSensors(count=N_DEPUTIES), estimator=estimator,
+                                      actuator=_actuator(s), metrics=metrics_of(s), evaluations=_evaluations(s))
 
 
 def build(s: Gui2022Scenario) -> Compiled:

@@ -25,7 +25,6 @@ every step inside the run. ``delta_v`` integrates the commanded ||f_i|| / m_i.
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.components.actuators.expression_faults import ExpressionFaultActuator
@@ -155,11 +154,10 @@ def make_loop(s: Li2020Scenario) -> ClosedLoop:
                                    eccentricity=as_float(o.eccentricity), mu=as_float(o.mu),
                                    true_anomaly0=as_float(o.true_anomaly0))
     sim = s.simulation
-    return ClosedLoop(plant=plant, reference=reference, sensors=ExactRelativeStateSensors(count=N),
-                      network=_network(s), controller=_controller(s), actuator=_actuator(s),
-                      metrics=metrics_of(s), evaluations=(FormationErrors(),),
-                      seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(sim.dt), n_steps=sim.n_steps,
-                      record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, reference=reference,
+                                      sensors=ExactRelativeStateSensors(count=N), network=_network(s),
+                                      controller=_controller(s), actuator=_actuator(s), metrics=metrics_of(s),
+                                      evaluations=(FormationErrors(),))
 
 
 def build(s: Li2020Scenario) -> Compiled:

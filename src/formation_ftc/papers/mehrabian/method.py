@@ -139,9 +139,8 @@ def make_loop(s: MehrabianScenario) -> ClosedLoop:
         law=c.law, compensation=c.compensation, desired_attitude=cast(tuple[str, str, str], tuple(str(x) for x in s.desired.attitude)),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
     sim = s.simulation
-    return ClosedLoop(plant=plant, controller=controller, estimator=estimator, actuator=actuator,
-                      metrics=_metrics(s), seed=seed, dt=dt, n_steps=sim.n_steps, record_every=sim.record_every,
-                      unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, estimator=estimator,
+                                      actuator=actuator, metrics=_metrics(s))
 
 
 def with_seed(loop: ClosedLoop, seed: int) -> ClosedLoop:

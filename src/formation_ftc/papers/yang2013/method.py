@@ -191,11 +191,9 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
         eta1=as_float(np.full(n, sc.design.eta1)), delay_bound_steps=jnp.asarray(delay),
         desired_position=_desired_table(sc))
     sim = sc.simulation
-    return ClosedLoop(plant=plant, controller=controller, sensors=TrackingErrorSensors(count=n),
-                      estimator=estimator, supervisor=supervisor, actuator=actuator,
-                      metrics=tuple(_metrics(sc, st)) + tuple(extra_metrics),
-                      seed=jnp.asarray(sim.seed, dtype=jnp.uint32), dt=float(dt), n_steps=sim.n_steps,
-                      record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, sensors=TrackingErrorSensors(count=n),
+                                      estimator=estimator, supervisor=supervisor, actuator=actuator,
+                                      metrics=tuple(_metrics(sc, st)) + tuple(extra_metrics))
 
 
 def build(sc: Yang2013Scenario) -> Compiled:
