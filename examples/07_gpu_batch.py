@@ -4,7 +4,7 @@
 # A compiled scenario is a pure function `params -> outputs`. `sim.batch.stack_params` stacks the
 # parameters that differ between runs (here the PD gains and the noise seed) and keeps the shared ones
 # once; `sim.batch.batched_run` is the jitted `vmap` of the run. The same code runs on a GPU when JAX
-# sees one (`pip install 'formation-ftc[gpu]'`); otherwise on the CPU, as in this page's build.
+# sees one (`pip install -e '.[gpu]'` in the clone); otherwise on the CPU, as in this page's build.
 
 # %%
 import time

@@ -44,7 +44,7 @@ its first call -- whatever the error -- is removed and the program compiled afre
 A key that cannot be formed, an entry that cannot be read and a write that fails all fall back to the
 ordinary ``jax.jit`` path (trace, lower, compile or load from JAX's cache); an unreadable entry is
 removed. A loaded executable is the one that was compiled, so its results are bit for bit those of a
-program traced in this process (``tests/sim/test_program_cache.py`` compares two processes).
+program traced in this process (``tests/sim/runtime/test_program_cache.py`` compares two processes).
 
 A process that replaces package functions at run time (``monkeypatch``, a debugger) changes what a
 trace would produce without changing the source digest: switch the cache off there.

@@ -18,7 +18,7 @@ machine, best of 3-5 alternating repeats; docs/performance.md):
   -> 3.8 s. Run time: the Mehrabian seed study 19 -> 8.7 us per run-step (with the preset below),
   li2020-thm1 about 10 % faster, the small Gui2022 and Azizi2009 steps 5-40 % slower (1.5-1.8 ->
   2.0-2.1 us per step; ``reproduce gui2022`` run phase 38-41 -> 42-44 s). Elementwise functions (sin,
-  exp, log, tanh, pow, arctan2, ...) give the same bits with either emitter (``tests/sim/test_xla.py``);
+  exp, log, tanh, pow, arctan2, ...) give the same bits with either emitter (``tests/sim/runtime/test_xla.py``);
   what differs is the order of some fused reductions, i.e. the last bit of a sum.
 * **The fast-compile optimisation preset** (``xla_cpu_opt_preset = CPU_OPT_PRESET_FAST_COMPILE``), on
   batched programs whose controller asks for it (:attr:`~formation_ftc.sim.components.Controller.batch_fast_compile`):
@@ -30,7 +30,7 @@ No option enables fast-math or reassociation; they change which kernels XLA emit
 differ from XLA's default build in the last bits. ``reproduce all`` prints the same numbers and verdicts
 with and without them; underneath, Mehrabian and Yang2013 values differ by about 1e-15 relative,
 Gui2022 by 1e-12, Azizi2009 by 1e-11, and li2020's adaptive loop carries a last-bit difference to 1e-5
-relative over 3,000 s (README "Engine"). The
+relative over 3,000 s (docs/performance.md). The
 options go to each compilation (``jax.jit(..., compiler_options=...)``), never to the process-wide
 ``XLA_FLAGS``: an option this jaxlib does not know is dropped after a one-time probe instead of
 aborting the process, and other JAX code in the same process is untouched.
@@ -40,7 +40,7 @@ aborting the process, and other JAX code in the same process is untouched.
 lowers its threefry hash on the CPU as a 5-iteration loop (smaller programs); inside a simulation step
 each noise draw then runs as a nested loop whose iterations XLA dispatches one by one. The unrolled
 lowering -- the one JAX uses on other backends -- does the same integer operations, so the random
-numbers are identical bit for bit (``tests/sim/test_xla.py`` compares them with a process that keeps
+numbers are identical bit for bit (``tests/sim/runtime/test_xla.py`` compares them with a process that keeps
 the loop). Azizi2009 noisy seed batch (220 runs): 0.82 -> 0.68 us per run-step. It uses JAX's internal
 lowering registry; on a JAX without those internals nothing changes.
 """
