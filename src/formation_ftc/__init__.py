@@ -21,8 +21,6 @@ import os as _os
 import sys as _sys
 from typing import TYPE_CHECKING
 
-from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus  # noqa: F401 - TODO executors
-
 
 def _package_version() -> str:
     """The version in pyproject.toml (the single source), read from the installed package's metadata."""

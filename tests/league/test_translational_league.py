@@ -4,7 +4,6 @@ leaderboard, resume, and the rejections of bad league files (exit code 2 from th
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 import tomllib
@@ -21,24 +20,6 @@ from formation_ftc.league.report import ranking, winners, write_leaderboard
 from formation_ftc.league.runner import plan_cells, run_league
 
 DATA = Path(builtin_leagues()["translational"]).parent
-
-
-def _tiny_league(tmp_path: Path, methods=("sir-ftc", "lqr"), **league) -> Path:
-    """The built-in translational league, shortened: 60 s, scores from 20 s, two methods, onset in
-    [30, 40] s, two battery cases would be too few to rank, so every case is kept."""
-    raw = tomllib.loads((DATA / "league-translational.toml").read_text())
-    raw["league"].update(horizon=60.0, settle_start=20.0, chunk_size=4, **league)
-    raw["league"]["onset"].update(low=30.0, high=40.0)
-    for m in raw["metrics"]:
-        if m.get("start") == 300.0:
-            m["start"] = 20.0
-    raw["methods"] = [m for m in raw["methods"] if m["name"] in methods]
-    (tmp_path / "translational").mkdir(exist_ok=True)
-    for m in raw["methods"]:
-        shutil.copy(DATA / m["scenario"], tmp_path / m["scenario"])
-    path = tmp_path / "tiny.toml"
-    path.write_text(tomli_w.dumps(raw))
-    return path
 
 
 def test_builtin_league_loads_and_every_cell_validates():
@@ -74,8 +55,8 @@ def test_every_method_gets_the_same_truth_faults_and_scores():
     assert len({r["controller"]["type"] for r in raws}) == len(raws) - 1  # li2020 Thm 1 and Thm 2 share a law
 
 
-def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path):
-    path = _tiny_league(tmp_path)
+def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_league):
+    path = tiny_league(tmp_path)
     out = tmp_path / "out"
     outcome = run_league(path, out, seeds=2)
     spec = load_league(path)
@@ -164,8 +145,8 @@ def test_formation_scores_against_numpy(tmp_path):
     (lambda r: r["league"]["initial_error"].update(seed_field="plant.no_such_seed"), "no_such_seed"),
     (lambda r: r["league"]["initial_error"].update(field="plant.initial_position"), "either seed_field"),
 ])
-def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, edit, message):
-    path = _tiny_league(tmp_path)
+def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, tiny_league, edit, message):
+    path = tiny_league(tmp_path)
     raw = tomllib.loads(path.read_text())
     edit(raw)
     path.write_text(tomli_w.dumps(raw))
@@ -174,8 +155,8 @@ def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, edit, message)
     assert not (tmp_path / "out").exists()  # rejected before anything is written
 
 
-def test_a_method_that_cannot_drive_the_league_plant_is_rejected(tmp_path):
-    path = _tiny_league(tmp_path)
+def test_a_method_that_cannot_drive_the_league_plant_is_rejected(tmp_path, tiny_league):
+    path = tiny_league(tmp_path)
     bad = tmp_path / "translational" / "attitude-law.toml"
     bad.write_text(tomli_w.dumps({"controller": {"type": "networked-el-hinf", "edges": [[1, 2], [2, 3], [3, 4]]}}))
     raw = tomllib.loads(path.read_text())

@@ -21,8 +21,10 @@ context is entered. Every executor calls the same pure
   ``LocalCluster`` of N single-threaded worker processes.
 
 Workers die with their parent: local pool workers set ``PR_SET_PDEATHSIG`` (Linux) and watch their
-parent's PID, so a campaign process killed with SIGKILL leaves no worker computing on; the worker
-processes of a Dask ``LocalCluster`` exit when their nanny's process (the campaign) goes away.
+parent's PID (:func:`die_with_parent`, the pool's initializer; the league's method pool uses it too),
+so a campaign process killed with SIGKILL leaves no worker computing on; the worker processes of a Dask
+``LocalCluster`` exit when their nanny's process (the campaign) goes away. :func:`cap_workers` lowers a
+requested number of worker processes to the schedulable cores and the available memory, with a warning.
 """
 
 from __future__ import annotations
@@ -42,14 +44,15 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
-from formation_ftc import _schedulable_cpus
 from formation_ftc.campaign.spec import CampaignError
+from formation_ftc.sim.runtime import schedulable_cpus
 
 if TYPE_CHECKING:  # optional dependency (the dask extra)
     from dask.distributed import Client, LocalCluster
 
 __all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable",
-           "check_scheduler", "auto_workers", "AUTO_POOL_MIN_RUN_STEPS", "DEFAULT_CONNECT_TIMEOUT"]
+           "check_scheduler", "auto_workers", "cap_workers", "available_memory", "die_with_parent",
+           "AUTO_POOL_MIN_RUN_STEPS", "DEFAULT_CONNECT_TIMEOUT"]
 
 #: seconds allowed to reach a Dask scheduler and get its handshake reply
 DEFAULT_CONNECT_TIMEOUT = 30.0
@@ -61,14 +64,51 @@ AUTO_POOL_MIN_RUN_STEPS = 10_000_000
 def auto_workers(run_steps: int, n_chunks: int, cores: int | None = None) -> int:
     """Local workers for ``run_steps`` run-steps in ``n_chunks`` chunks: 1 (in-process) for small work,
     else one per core, at most one per chunk."""
-    cores = _schedulable_cpus() if cores is None else cores
+    cores = schedulable_cpus() if cores is None else cores
     if run_steps < AUTO_POOL_MIN_RUN_STEPS:
         return 1
     return max(1, min(cores, n_chunks))
 
 
-def _die_with_parent(parent_pid: int, poll_s: float = 1.0) -> None:
-    """Worker initializer: exit when the campaign process (``parent_pid``) dies, even by SIGKILL.
+def available_memory() -> int | None:
+    """Memory available to new processes [bytes]: ``MemAvailable`` of ``/proc/meminfo`` (Linux), else
+    the free physical pages; None when unknown."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return None
+
+
+def cap_workers(requested: int, *, per_worker_bytes: int, what: str) -> int:
+    """``requested`` worker processes, at most one per schedulable CPU core and as many as the available
+    memory holds at ``per_worker_bytes`` each (not capped on memory when that is unknown); at least 1.
+    Lowering it prints one warning line on stderr naming ``what`` (e.g. ``"--workers"``)."""
+    cores = schedulable_cpus()
+    memory = available_memory()
+    by_memory = max(1, memory // per_worker_bytes) if memory is not None and per_worker_bytes > 0 else None
+    n = max(1, min(requested, cores, by_memory if by_memory is not None else requested))
+    if n < requested:
+        from formation_ftc.limits import format_bytes
+
+        room = "" if memory is None else (f", {format_bytes(memory)} of memory available at about "
+                                          f"{format_bytes(per_worker_bytes)} per worker")
+        try:
+            print(f"warning: {what}: {requested} worker processes asked for, using {n} ({cores} schedulable CPU "
+                  f"core(s){room})", file=sys.stderr)
+        except (OSError, ValueError):  # a closed or full stderr costs the warning, nothing else
+            pass
+    return n
+
+
+def die_with_parent(parent_pid: int, poll_s: float = 1.0) -> None:
+    """Worker initializer: exit when the parent process (``parent_pid``) dies, even by SIGKILL.
 
     Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; everywhere: a daemon thread polling ``os.getppid()``
     (a reparented worker has lost its parent) every ``poll_s`` seconds.
@@ -111,7 +151,7 @@ class LocalExecutor:
         if self.workers > 1:
             self._pool = ProcessPoolExecutor(max_workers=self.workers,
                                              mp_context=multiprocessing.get_context("spawn"),
-                                             initializer=_die_with_parent, initargs=(os.getpid(),))
+                                             initializer=die_with_parent, initargs=(os.getpid(),))
         return self
 
     def __exit__(self, *exc) -> None:

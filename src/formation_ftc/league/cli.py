@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from formation_ftc.campaign.cli import add_dask_options
@@ -23,34 +22,48 @@ def _cmd_list(args) -> int:
     return 0
 
 
+def _stderr_line(text: str) -> None:
+    """One line on stderr; a closed or full stderr costs the line, never the league's results."""
+    try:
+        print(text, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
 def _cmd_run(args) -> int:
-    from formation_ftc.campaign.executors import make_executor
+    from formation_ftc.campaign.executors import cap_workers, make_executor
+    from formation_ftc.league.definition import LeagueError, load_league
     from formation_ftc.league.report import write_leaderboard
-    from formation_ftc.league.runner import run_league
+    from formation_ftc.league.runner import METHOD_WORKER_BYTES, run_league
+    from formation_ftc.limits import Budgets
+    from formation_ftc.sim.runtime import schedulable_cpus
 
     if not str(args.out).strip():
-        from formation_ftc.league.definition import LeagueError
-
         raise LeagueError("--out: empty path; give the league directory, e.g. --out out/league")
+    budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
     distributed = bool(args.scheduler or args.dask_local)
     if distributed:
         make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)  # checked now
     if args.workers is not None and args.workers < 1:
-        from formation_ftc.league.definition import LeagueError
-
         raise LeagueError(f"--workers must be >= 1, got {args.workers}")
-    # locally: one process per method, as many side by side as --workers (default: the CPU cores)
-    parallel = 1 if distributed else (args.workers or os.cpu_count() or 1)
+    methods = [m.strip() for m in args.methods.split(",")] if args.methods else None
+    # locally: one process per method, as many side by side as --workers (default: the CPU cores), at
+    # most as many as the cores and the available memory hold
+    parallel = 1
+    if not distributed:
+        n_methods = len(methods) if methods else len(load_league(args.league).methods)
+        what = "--workers" if args.workers else "--workers (default: one per CPU core)"
+        parallel = cap_workers(min(args.workers or schedulable_cpus(), n_methods),
+                               per_worker_bytes=METHOD_WORKER_BYTES, what=what)
 
     def factory():
         if distributed:
             return make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
         return make_executor(workers=1)
 
-    methods = [m.strip() for m in args.methods.split(",")] if args.methods else None
     outcome = run_league(args.league, args.out, seeds=args.seeds, quick=args.quick, methods=methods,
-                         executor_factory=factory, progress=not args.no_progress and parallel == 1,
-                         log=lambda s: print(s, file=sys.stderr), parallel_methods=parallel)
+                         executor_factory=factory, progress=not args.no_progress, log=_stderr_line,
+                         parallel_methods=parallel, budgets=budgets)
     print(f"league done: {outcome}")
     board = write_leaderboard(args.out, plots=not args.no_plots)
     _print_ranking(board)
@@ -90,9 +103,17 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)")
     q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
     q.add_argument("--workers", type=int, default=None,
-                   help="methods run side by side, one process each (default: one per CPU core; 1: in-process)")
+                   help="methods run side by side, one process each (default: one per CPU core; at most one per core "
+                        "and per 1.2 GB of available memory; 1: in-process)")
     add_dask_options(q)
-    q.add_argument("--no-progress", action="store_true", help="no progress bar")
+    q.add_argument("--max-memory", metavar="SIZE", default=None,
+                   help="memory budget of one batch of a method's runs, e.g. 32GB (default 8 GiB or half the "
+                        "RAM; 0 = none)")
+    q.add_argument("--max-run-steps", metavar="N", default=None,
+                   help="integration steps allowed per run (default 1e9; 0 = none)")
+    q.add_argument("--max-campaign-steps", metavar="N", default=None,
+                   help="run-steps allowed in the whole league, all methods together (default 1e11; 0 = none)")
+    q.add_argument("--no-progress", action="store_true", help="no progress bars (one line per method)")
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
     q.set_defaults(func=_cmd_run)
     q = sub.add_parser("report", help="(re)write the leaderboard of a league directory")

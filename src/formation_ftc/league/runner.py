@@ -8,12 +8,19 @@ every cell and for every method, so differences between cells and between method
 noise. Every cell of a method has the same structure, so one compiled program serves the whole method.
 
 Everything is checked before the first run (unknown method or fault, a method that cannot drive the
-league plant, metrics): a bad league fails with exit code 2 and writes nothing.
+league plant, metrics, the resource budgets of :mod:`formation_ftc.limits` applied to every method's
+campaign and to their sum, the results directory): a bad league fails with exit code 2 and writes
+nothing. ``league.json`` and the cell files are written atomically (temporary file, then
+:func:`os.replace`), so a killed league resumes: run the same command again and only the missing chunks
+run.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import re
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -30,10 +37,17 @@ from formation_ftc.league.definition import (
     load_league,
     method_scenario,
 )
+from formation_ftc.limits import Budgets
 
-__all__ = ["Cell", "LeagueOutcome", "plan_cells", "run_league", "load_league_results", "LEAGUE_FILE"]
+__all__ = ["Cell", "LeagueOutcome", "plan_cells", "check_league_budgets", "run_league", "load_league_results",
+           "LEAGUE_FILE", "METHOD_WORKER_BYTES"]
 
 LEAGUE_FILE = "league.json"
+#: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
+METHOD_WORKER_BYTES = 1_200_000_000
+#: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
+_TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
+_CHUNK_RE = re.compile(r"^chunk-(\d{6,})\.parquet$")
 
 
 @dataclass(frozen=True)
@@ -43,6 +57,7 @@ class Cell:
     fault_kind: str
     level: str
     raw: dict  # the full composed scenario
+    n_steps: int  # integration steps of one run
 
     @property
     def key(self) -> str:
@@ -93,11 +108,11 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 act = case.actuator_fields(saturation=level.saturation, quantity=quantity)
                 raw = method_scenario(spec, m, level, act, net_fields)
                 try:
-                    load_scenario(raw)
+                    n_steps = int(load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
                     raise LeagueError(f"method {m.name} cannot run cell {case.name}/{level.name} of league "
                                       f"{spec.league.name}: {exc}") from None
-                cells.append(Cell(m.name, case.name, case.kind, level.name, raw))
+                cells.append(Cell(m.name, case.name, case.kind, level.name, raw, n_steps))
         out[m.name] = cells
     return out
 
@@ -161,6 +176,268 @@ def _provenance() -> dict[str, Any]:
         return {}
 
 
+# ------------------------------------------------------------------------------------------ budgets
+def check_league_budgets(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets) -> None:
+    """Refuse, before anything is compiled or written, a league over the budgets campaigns have: the
+    integration steps of every cell's run, at most :data:`~formation_ftc.campaign.spec.MAX_RUNS` seeds per
+    cell (a campaign's runs per grid point) and the run-steps of every method's campaign (seeds x its
+    cells' steps) and of their sum, within ``budgets.max_campaign_steps``. The message names ``--seeds``
+    and the range it allows."""
+    from formation_ftc.campaign.spec import MAX_RUNS
+    from formation_ftc.limits import check_run_steps
+
+    name = spec.league.name
+    for method, mcells in cells.items():
+        for c in mcells:
+            check_run_steps(c.n_steps, budgets, f"league {name}, method {method}, cell {c.key}")
+    steps_per_seed = {m: sum(c.n_steps for c in mc) for m, mc in cells.items()}
+    total_per_seed = sum(steps_per_seed.values())  # the sum bounds every method's campaign too
+    allowed, limit = MAX_RUNS, f"the {MAX_RUNS:,} runs per cell a campaign allows"
+    budget = budgets.max_campaign_steps
+    if budget is not None and total_per_seed and budget // total_per_seed < allowed:
+        allowed = budget // total_per_seed
+        limit = (f"the budget of {budget:,} run-steps (raise it with --max-campaign-steps / "
+                 "FORMATION_FTC_MAX_CAMPAIGN_STEPS)")
+    if seeds <= allowed:
+        return
+    n_cells = sum(len(mc) for mc in cells.values())
+    big = max(cells, key=lambda m: steps_per_seed[m])
+
+    def size(k: int) -> str:
+        return (f"{k * n_cells:,} runs ({n_cells} cells of {len(cells)} method(s); method {big}: "
+                f"{k * len(cells[big]):,} runs) and {k * total_per_seed:,} run-steps")
+
+    if allowed < 1:
+        raise LeagueError(f"league {name}: even 1 seed per cell makes {size(1)}, over {limit}; shorten "
+                          "league.horizon or run fewer methods (--methods)")
+    raise LeagueError(f"--seeds {seeds:,}: league {name} would run {size(seeds)}, over {limit}; allowed: --seeds 1 "
+                      f"to {allowed:,} for these methods")
+
+
+def _check_batch_memory(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets) -> None:
+    """Refuse a method whose batch of ``min(chunk_size, seeds)`` runs needs more memory than the budget
+    (first cell of each method, shapes only: every cell of a method has the same structure)."""
+    if budgets.max_memory is None:
+        return
+    from formation_ftc import api
+    from formation_ftc.limits import format_bytes, run_memory_bytes
+
+    batch = min(spec.league.chunk_size, seeds)
+    for method, mcells in cells.items():
+        if not mcells:
+            continue
+        try:
+            need = run_memory_bytes(api.compile_scenario(api.load_scenario(mcells[0].raw))) * batch
+        except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+            raise LeagueError(f"league {spec.league.name}: method {method} cannot be compiled: {exc}") from None
+        if need > budgets.max_memory:
+            raise LeagueError(f"league {spec.league.name}, method {method}: a batch of {batch} runs needs about "
+                              f"{format_bytes(need)} of memory, over the budget of "
+                              f"{format_bytes(budgets.max_memory)}; lower league.chunk_size in the league file, "
+                              "or raise the budget with --max-memory / FORMATION_FTC_MAX_MEMORY")
+
+
+# ------------------------------------------------------------------------------ league directory
+def _read_meta(path: Path, what: str, advice: str = "restore the file, or give another --out (new or empty)"
+               ) -> dict[str, Any]:
+    """``league.json`` as a dict; LeagueError naming ``what`` (e.g. ``--out DIR``) when it is damaged."""
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # JSONDecodeError, UnicodeDecodeError are ValueErrors
+        reason = getattr(exc, "strerror", None) or exc
+        raise LeagueError(f"{what}: {LEAGUE_FILE} is damaged or unreadable ({reason}); refusing to use the "
+                          f"directory: {advice}") from None
+    if not isinstance(meta, dict) or not {"hash", "seeds", "methods", "battery"} <= set(meta):
+        raise LeagueError(f"{what}: {LEAGUE_FILE} is not a league description (damaged, or another program's "
+                          f"file); refusing to use the directory: {advice}")
+    return meta
+
+
+def _campaign_at_or_above(path: Path) -> Path | None:
+    """The nearest campaign directory holding ``path`` (or ``path`` itself): one with a campaign
+    manifest, the marker the campaign store writes first."""
+    from formation_ftc.campaign.storage import FORMAT, MANIFEST
+
+    real = Path(os.path.realpath(path))
+    for d in (real, *real.parents):
+        try:
+            if (d / MANIFEST).is_file() and json.loads((d / MANIFEST).read_text("utf-8")).get("format") == FORMAT:
+                return d
+        except (OSError, ValueError, AttributeError):
+            continue
+    return None
+
+
+def _check_out(out: Path, spec: LeagueSpec, digest: str, seeds: int) -> dict[str, Any] | None:
+    """Refuse, before anything is written, an ``--out`` this league may not use: a file or a device, a
+    path inside (or equal to) a campaign directory, a directory that is neither empty nor this league
+    (same definition and seeds: resumed). Returns the ``league.json`` found there, or None."""
+    what = f"--out {out}"
+    try:
+        campaign = _campaign_at_or_above(out)
+        if campaign is not None:
+            where = "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
+            raise LeagueError(f"{what}: {where} a campaign directory; a league writes one campaign per method in "
+                              "its own directory: give another --out (new or empty)")
+        if not (out.exists() or out.is_symlink()):
+            return None
+        if not out.is_dir():
+            kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+            raise LeagueError(f"{what}: exists and is {kind}; give a directory (new or empty, or this league's "
+                              "to resume it)")
+        entries = [e.name for e in out.iterdir()]
+        if LEAGUE_FILE not in entries:
+            stray = sorted(e for e in entries if not _TMP_RE.match(e))
+            if stray:
+                raise LeagueError(f"{what}: is not empty and holds no {LEAGUE_FILE} (e.g. {stray[:3]}): not a "
+                                  "league directory; refusing to write there. Give a new or empty directory")
+            return None
+    except OSError as exc:
+        raise LeagueError(f"{what}: unusable path ({exc.strerror or exc})") from None
+    old = _read_meta(out / LEAGUE_FILE, what)
+    if old.get("hash") != digest or old.get("seeds") != seeds:
+        raise LeagueError(f"{out}: holds league {old.get('name')!r} (definition {str(old.get('hash'))[:12]}, "
+                          f"{old.get('seeds')} seeds); this is {spec.league.name!r} ({digest[:12]}, {seeds} "
+                          "seeds). Use another --out directory")
+    return old
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same directory and :func:`os.replace`:
+    ``path`` holds its old content or the new one, never a part (the temporary file goes on failure)."""
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _write_inputs(out: Path, meta: dict[str, Any], cells: dict[str, list[Cell]]) -> dict[str, list[Path]]:
+    """``league.json`` and every method's cell files (only those whose content changed); the cell files."""
+    import tomli_w
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        _atomic_write_text(out / LEAGUE_FILE, json.dumps(meta, indent=1, default=str))
+        files: dict[str, list[Path]] = {}
+        for name, mcells in cells.items():
+            cdir = out / name / "cells"
+            cdir.mkdir(parents=True, exist_ok=True)
+            files[name] = []
+            for c in mcells:
+                p = cdir / f"{c.key}.toml"
+                text = tomli_w.dumps(c.raw)  # tomli_w writes tuples as arrays and inf as ``inf``
+                if not p.is_file() or p.read_text(encoding="utf-8") != text:
+                    _atomic_write_text(p, text)
+                files[name].append(p)
+        return files
+    except OSError as exc:
+        raise LeagueError(f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
+                          "directory") from None
+
+
+# ------------------------------------------------------------------------------------------- progress
+def _stored_runs(chunks: Path, seeds: int, chunk_size: int) -> int:
+    """Runs in the chunk files a method's campaign has stored (a chunk file exists once it is finished;
+    a cell's ``seeds`` runs are ``ceil(seeds / chunk_size)`` chunks, the last one shorter)."""
+    per_cell = -(-seeds // chunk_size)
+    try:
+        names = os.listdir(chunks)
+    except OSError:
+        return 0
+    n = 0
+    for name in names:
+        m = _CHUNK_RE.match(name)
+        if m:
+            n += min(chunk_size, seeds - (int(m.group(1)) % per_cell) * chunk_size)
+    return n
+
+
+class _MethodProgress:
+    """One progress line per method (runs done, elapsed, ETA) on a terminal's stderr, read from the chunk
+    files each method's campaign has stored: a thread polls them every ``interval`` s, so it follows
+    methods computed side by side in other processes. A failing stderr (closed, full) turns it off; it
+    never stops the league."""
+
+    def __init__(self, methods: list[tuple[str, Path, int]], seeds: int, chunk_size: int, *,
+                 enabled: bool = True, console: Any = None, interval: float = 0.5):
+        self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size  # (name, chunks dir, runs)
+        self.enabled, self.console, self.interval = enabled, console, interval
+        self._bar: Any = None
+        self._tasks: dict[str, Any] = {}
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> _MethodProgress:
+        if not self.enabled or not self.methods:
+            return self
+        try:
+            from rich.console import Console
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
+
+            console = self.console if self.console is not None else Console(stderr=True)
+            if not console.is_terminal:
+                return self
+            width = max(len(name) for name, _, _ in self.methods)
+            self._bar = Progress(TextColumn(f"[bold]{{task.description:<{width}}}"), BarColumn(),
+                                 MofNCompleteColumn(), TextColumn("runs"), TimeElapsedColumn(), TextColumn("ETA"),
+                                 TimeRemainingColumn(), console=console, auto_refresh=False)
+            self._tasks = {name: self._bar.add_task(name, total=total) for name, _, total in self.methods}
+            self._bar.start()
+            self._poll()
+        except (OSError, ValueError):
+            self._close_bar()
+            return self
+        self._thread = threading.Thread(target=self._watch, name="formation-ftc-league-progress", daemon=True)
+        self._thread.start()
+        return self
+
+    def _poll(self) -> None:
+        for name, chunks, total in self.methods:
+            done = min(total, _stored_runs(chunks, self.seeds, self.chunk_size))
+            self._bar.update(self._tasks[name], completed=done)
+        self._bar.refresh()
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.interval):
+            try:
+                self._poll()
+            except (OSError, ValueError):  # stderr closed or full: no more progress, the league goes on
+                return
+
+    def _close_bar(self) -> None:
+        bar, self._bar = self._bar, None
+        if bar is not None:
+            try:
+                bar.stop()  # restores sys.stdout/sys.stderr even when its last refresh fails
+            except (OSError, ValueError):
+                pass
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._bar is not None:
+            try:
+                self._poll()
+            except (OSError, ValueError):
+                pass
+        self._close_bar()
+
+
+# ----------------------------------------------------------------------------------------------- run
 def _run_method_campaign(campaign: dict, out_dir: str) -> tuple[int, int, float]:
     """One method's campaign in this process (a worker of :func:`run_league`): (runs, failed, seconds)."""
     from formation_ftc.campaign.executors import LocalExecutor
@@ -174,15 +451,18 @@ def _run_method_campaign(campaign: dict, out_dir: str) -> tuple[int, int, float]
 def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: int | None = None,
                quick: bool = False, methods: list[str] | None = None, executor_factory: Callable | None = None,
                progress: bool = False, log: Callable[[str], None] | None = None,
-               parallel_methods: int = 1) -> LeagueOutcome:
+               parallel_methods: int = 1, budgets: Budgets | None = None) -> LeagueOutcome:
     """Run (or resume) ``league`` into ``out_dir``: ``DIR/league.json`` (definition, battery, seeds,
     provenance) and one campaign directory per method (``DIR/<method>/campaign``).
 
     ``parallel_methods`` > 1: that many methods run side by side, one process each (each method's chunks
-    in that process); otherwise the methods run one after the other, each campaign with the executor from
-    ``executor_factory`` (local processes by default, or Dask)."""
-    import tomli_w
-
+    in that process; the processes exit when this one dies); otherwise the methods run one after the
+    other, each campaign with the executor from ``executor_factory`` (local processes by default, or
+    Dask). ``budgets`` (default: :meth:`Budgets.resolve`, the environment's or the defaults) bound the
+    league before anything is written. ``progress``: one line per method on a terminal's stderr.
+    ``log`` gets one line per finished method; an OSError or ValueError it raises (a closed or full
+    stderr) is ignored."""
+    from formation_ftc.campaign.executors import die_with_parent
     from formation_ftc.campaign.runner import run_campaign
 
     t0 = time.perf_counter()
@@ -200,18 +480,15 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
                     raise LeagueError(f"league {spec.league.name}: the league samples {path!r}, but method {name}'s "
                                       f"cell {c.key} has no such field (give it a value in [truth], [actuator] or "
                                       "the method's network)")
-    battery = _battery(spec)
+    budgets = budgets if budgets is not None else Budgets.resolve()
+    check_league_budgets(spec, cells, n_seeds, budgets)
     out = Path(out_dir)
     digest = league_hash(spec)
-    meta_path = out / LEAGUE_FILE
-    if meta_path.exists():
-        old = json.loads(meta_path.read_text())
-        if old.get("hash") != digest or old.get("seeds") != n_seeds:
-            raise LeagueError(f"{out}: holds league {old.get('name')!r} (definition {str(old.get('hash'))[:12]}, "
-                              f"{old.get('seeds')} seeds); this is {spec.league.name!r} ({digest[:12]}, {n_seeds} "
-                              "seeds). Use another --out directory")
-    out.mkdir(parents=True, exist_ok=True)
+    old = _check_out(out, spec, digest, n_seeds)
+    _check_batch_memory(spec, cells, n_seeds, budgets)
+    battery = _battery(spec)
     assert spec.source is not None
+    listed = set(cells) | {m.get("name") for m in (old or {}).get("methods", []) if isinstance(m, dict)}
     meta = {
         "name": spec.league.name, "version": spec.league.version, "kind": spec.league.kind, "hash": digest,
         "seeds": n_seeds,
@@ -219,26 +496,19 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         "method_files": {m.name: (spec.source.parent / m.scenario).read_text() for m in spec.methods},
         "battery": {"name": battery.name, "version": battery.version, "sha256": battery.sha256,
                     "cases": [{"name": c.name, "kind": c.kind} for c in battery.cases]},
-        "methods": [m.model_dump() for m in spec.methods if m.name in cells],
+        # the methods of earlier runs into this directory stay listed (a resume with another --methods)
+        "methods": [m.model_dump() for m in spec.methods if m.name in listed],
         "levels": [lv.model_dump() for lv in spec.levels],
         "provenance": _provenance(),
     }
-    meta_path.write_text(json.dumps(meta, indent=1, default=str))
-    per_method: dict[str, float] = {}
-    n_runs = n_failed = 0
+    files = _write_inputs(out, meta, cells)
     jobs = []
     for name, mcells in cells.items():
-        cdir = out / name / "cells"
-        cdir.mkdir(parents=True, exist_ok=True)
-        files = []
-        for c in mcells:
-            p = cdir / f"{c.key}.toml"
-            text = tomli_w.dumps(c.raw)  # tomli_w writes tuples as arrays and inf as ``inf``
-            if not p.exists() or p.read_text() != text:
-                p.write_text(text)
-            files.append(p)
         traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed, spec.league.trace_cases)
-        jobs.append((name, _campaign(spec, name, files, n_seeds, traced, _network_kind(spec, spec.method(name))[0])))
+        jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced,
+                                     _network_kind(spec, spec.method(name))[0])))
+    per_method: dict[str, float] = {}
+    n_runs = n_failed = 0
 
     def done(name: str, runs: int, failed: int, seconds: float) -> None:
         nonlocal n_runs, n_failed
@@ -246,28 +516,38 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         n_runs += runs
         n_failed += failed
         if log is not None:
-            log(f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
+            try:
+                log(f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
+            except (OSError, ValueError):  # a closed or full stderr must not cost a computed result
+                pass
 
-    if parallel_methods > 1 and len(jobs) > 1:
-        # one process per method (each compiles its program once and runs its chunks in-process):
-        # the methods' campaigns are independent directories, so they run side by side
-        import concurrent.futures
-        import multiprocessing
+    chunk_size = min(spec.league.chunk_size, n_seeds)
+    watched = [(name, out / name / "campaign" / "chunks", n_seeds * len(cells[name])) for name, _ in jobs]
+    with _MethodProgress(watched, n_seeds, chunk_size, enabled=progress):
+        if parallel_methods > 1 and len(jobs) > 1:
+            # one process per method (each compiles its program once and runs its chunks in-process):
+            # the methods' campaigns are independent directories, so they run side by side
+            import concurrent.futures
+            import multiprocessing
 
-        ctx = multiprocessing.get_context("spawn")
-        with concurrent.futures.ProcessPoolExecutor(max_workers=min(parallel_methods, len(jobs)),
-                                                    mp_context=ctx) as pool:
-            futures = {pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
-                       for name, campaign in jobs}
-            for fut in concurrent.futures.as_completed(futures):
-                runs, failed, seconds = fut.result()
-                done(futures[fut], runs, failed, seconds)
-    else:
-        for name, campaign in jobs:
-            t_m = time.perf_counter()
-            executor = executor_factory() if executor_factory is not None else None
-            outcome = run_campaign(campaign, out / name / "campaign", executor=executor, progress=progress)
-            done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
+            ctx = multiprocessing.get_context("spawn")
+            with concurrent.futures.ProcessPoolExecutor(max_workers=min(parallel_methods, len(jobs)), mp_context=ctx,
+                                                        initializer=die_with_parent,
+                                                        initargs=(os.getpid(),)) as pool:
+                futures = {pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
+                           for name, campaign in jobs}
+                try:
+                    for fut in concurrent.futures.as_completed(futures):
+                        done(futures[fut], *fut.result())
+                finally:
+                    for fut in futures:
+                        fut.cancel()  # methods not started yet; the running ones finish their chunk
+        else:
+            for name, campaign in jobs:
+                t_m = time.perf_counter()
+                executor = executor_factory() if executor_factory is not None else None
+                outcome = run_campaign(campaign, out / name / "campaign", executor=executor)
+                done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
 
 
@@ -300,7 +580,7 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
     meta_path = out / LEAGUE_FILE
     if not meta_path.is_file():
         raise LeagueError(f"{out}: no {LEAGUE_FILE}; run `formation-ftc league run NAME --out {out}` first")
-    meta = json.loads(meta_path.read_text())
+    meta = _read_meta(meta_path, str(out), f"run `formation-ftc league run NAME --out {out}` into a new directory")
     kinds = {c["name"]: c["kind"] for c in meta["battery"]["cases"]}
     frames = []
     for m in meta["methods"]:

@@ -1,0 +1,38 @@
+"""Shared league fixtures: ``tiny_league(dir, methods=..., **league)`` writes a shortened copy of the
+built-in translational league (60 s, scores from 20 s, onset in [30, 40] s, chunks of 4 runs, only the
+given methods; every battery case is kept) and returns the path of its file."""
+
+from __future__ import annotations
+
+import shutil
+import tomllib
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+import tomli_w
+
+from formation_ftc.league.definition import builtin_leagues
+
+DATA = Path(builtin_leagues()["translational"]).parent
+
+
+def write_tiny_league(tmp_path: Path, methods=("sir-ftc", "lqr"), **league) -> Path:
+    raw = tomllib.loads((DATA / "league-translational.toml").read_text())
+    raw["league"].update(horizon=60.0, settle_start=20.0, chunk_size=4, **league)
+    raw["league"]["onset"].update(low=30.0, high=40.0)
+    for m in raw["metrics"]:
+        if m.get("start") == 300.0:
+            m["start"] = 20.0
+    raw["methods"] = [m for m in raw["methods"] if m["name"] in methods]
+    (tmp_path / "translational").mkdir(exist_ok=True)
+    for m in raw["methods"]:
+        shutil.copy(DATA / m["scenario"], tmp_path / m["scenario"])
+    path = tmp_path / "tiny.toml"
+    path.write_text(tomli_w.dumps(raw))
+    return path
+
+
+@pytest.fixture(scope="session")
+def tiny_league() -> Callable[..., Path]:
+    return write_tiny_league

@@ -1,0 +1,323 @@
+"""``league run`` as robust as ``campaign run``: budgets on the seed count and bad ``--out`` paths end with
+exit status 2 before anything is written, ``league.json`` is written atomically, an interrupted league
+resumes to the same numbers, method worker processes die with a killed league, ``--workers`` is capped
+with a warning, and a failing stderr never costs a result."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from formation_ftc.campaign import executors
+from formation_ftc.campaign.storage import FORMAT, MANIFEST, CampaignStore
+from formation_ftc.cli import main
+from formation_ftc.league import cli as league_cli
+from formation_ftc.league import runner
+from formation_ftc.league.definition import LeagueError
+from formation_ftc.league.runner import LEAGUE_FILE, load_league_results, run_league
+
+
+def _run(league: Path, out: Path | str, *extra: str) -> list[str]:
+    return ["league", "run", str(league), "--out", str(out), "--methods", "lqr", "--no-plots", "--workers", "1",
+            *extra]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory, tiny_league):
+    """The tiny league with lqr alone, 2 seeds, run once without interruption: (league file, directory,
+    results sorted by run)."""
+    root = tmp_path_factory.mktemp("league-reference")
+    path = tiny_league(root, methods=("lqr",))
+    run_league(path, root / "out", seeds=2)
+    return path, root / "out", _sorted(load_league_results(root / "out")[1])
+
+
+def _sorted(runs: pd.DataFrame) -> pd.DataFrame:
+    cols = ["method", "run_id", "status"] + sorted(c for c in runs.columns if c.startswith(("metric:", "input:")))
+    return runs[cols].sort_values(["method", "run_id"]).reset_index(drop=True)
+
+
+# ------------------------------------------------------------------------------------------- budgets
+@pytest.mark.parametrize("extra, fragment", [
+    (["--seeds", "1000000000"], "allowed: --seeds 1 to 10,000,000"),
+    (["--seeds", "10000001"], "allowed: --seeds 1 to 10,000,000"),
+    (["--seeds", "1000", "--max-campaign-steps", "1e6"], "allowed: --seeds 1 to 238 "),
+    (["--seeds", "1", "--max-campaign-steps", "1000"], "even 1 seed per cell"),
+    (["--seeds", "2", "--max-run-steps", "100"], "--max-run-steps"),
+    (["--seeds", "2", "--max-memory", "1kB"], "lower league.chunk_size"),
+], ids=["1e9-seeds", "over-max-runs", "run-steps-budget", "budget-below-one-seed", "steps-per-run", "memory"])
+def test_league_over_budget_exits_2_before_writing(tmp_path, tiny_league, capsys, extra, fragment):
+    league = tiny_league(tmp_path, methods=("lqr",))  # 14 cells of 300 steps: 4,200 run-steps per seed
+    out = tmp_path / "out"
+    assert main(_run(league, out, *extra)) == 2
+    err = capsys.readouterr().err
+    assert fragment in err and "Traceback" not in err, err
+    if "allowed" in fragment:
+        assert err.startswith(f"error: --seeds {int(extra[1]):,}: league ")
+    assert not out.exists()  # nothing written
+
+
+# --------------------------------------------------------------------------------------------- --out
+def _campaign_dir(d: Path) -> Path:
+    d.mkdir(parents=True)
+    (d / MANIFEST).write_text(json.dumps({"format": FORMAT, "spec_hash": "0" * 64}))
+    return d
+
+
+@pytest.mark.parametrize("kind, fragment", [
+    ("file", "exists and is a file"),
+    ("dev-null", "exists and is not a directory"),
+    ("non-json", "league.json is damaged or unreadable"),
+    ("truncated", "league.json is damaged or unreadable"),
+    ("not-a-league", "league.json is not a league description"),
+    ("campaign", "is a campaign directory"),
+    ("inside-campaign", "which is a campaign directory"),
+    ("foreign", "is not empty and holds no league.json"),
+])
+def test_bad_out_exits_2_naming_out(tmp_path, tiny_league, capsys, kind, fragment):
+    league = tiny_league(tmp_path, methods=("lqr",))
+    out = tmp_path / "out"
+    if kind == "file":
+        out.write_text("keep me")
+    elif kind == "dev-null":
+        out = Path("/dev/null")
+    elif kind in ("non-json", "truncated", "not-a-league"):
+        out.mkdir()
+        text = {"non-json": "not json at all", "truncated": '{"name": "translational-tiny", "hash": "ab',
+                "not-a-league": '["a", "list"]'}[kind]
+        (out / LEAGUE_FILE).write_text(text)
+    elif kind == "campaign":
+        _campaign_dir(out)
+    elif kind == "inside-campaign":
+        out = _campaign_dir(tmp_path / "campaign") / "league"
+    else:
+        out.mkdir()
+        (out / "notes.txt").write_text("mine")
+    before = sorted((p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
+                    for p in tmp_path.rglob("*"))
+    assert main(_run(league, out, "--seeds", "1")) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --out {out}: ") and fragment in err and "Traceback" not in err, err
+    after = sorted((p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
+                   for p in tmp_path.rglob("*"))
+    assert after == before  # nothing written, nothing changed
+
+
+# ----------------------------------------------------------------------------------- atomic inputs
+def _stop_before_running(*args, **kwargs):
+    raise KeyboardInterrupt  # stands for a kill once the league's inputs are written
+
+
+def test_league_json_and_cells_are_written_atomically(tmp_path, tiny_league, monkeypatch):
+    league = tiny_league(tmp_path, methods=("lqr",))
+    out = tmp_path / "out"
+    monkeypatch.setattr(runner, "_check_batch_memory", lambda *args: None)
+    monkeypatch.setattr("formation_ftc.campaign.runner.run_campaign", _stop_before_running)
+    with pytest.raises(KeyboardInterrupt):
+        run_league(league, out, seeds=1)
+    old = (out / LEAGUE_FILE).read_text()
+    assert json.loads(old)["seeds"] == 1 and len(list((out / "lqr" / "cells").glob("*.toml"))) == 14
+    cell = sorted((out / "lqr" / "cells").glob("*.toml"))[0]
+    cell.write_text("# edited: rewritten by the next run")
+    fsync = os.fsync
+    calls: list[int] = []
+
+    def fsync_failing_at(n: int):
+        def fail(fd: int) -> None:
+            calls.append(fd)
+            if len(calls) >= n:
+                raise OSError(28, "No space left on device")  # data written, not yet renamed into place
+            fsync(fd)
+        return fail
+
+    monkeypatch.setattr(os, "fsync", fsync_failing_at(1))  # league.json fails
+    with pytest.raises(LeagueError, match=r"--out .*: cannot write the league there \(No space left on device\)"):
+        run_league(league, out, seeds=1)
+    assert (out / LEAGUE_FILE).read_text() == old  # the previous league.json, whole
+    calls.clear()
+    monkeypatch.setattr(os, "fsync", fsync_failing_at(2))  # league.json written, then the edited cell fails
+    with pytest.raises(LeagueError, match="No space left on device"):
+        run_league(league, out, seeds=1)
+    assert json.loads((out / LEAGUE_FILE).read_text())["hash"] == json.loads(old)["hash"]
+    assert cell.read_text() == "# edited: rewritten by the next run"  # the previous content, whole
+    assert not [p for p in out.rglob(".*") if ".tmp-" in p.name]  # no temporary file left behind
+
+
+# --------------------------------------------------------------------------------------------- resume
+def test_an_interrupted_league_resumes_to_the_same_numbers(tmp_path, reference, monkeypatch):
+    league, _, expected = reference
+    out = tmp_path / "out"
+    write_chunk = CampaignStore.write_chunk
+    written: list[int] = []
+
+    def interrupted(self, chunk_id, table, traces=None):
+        if len(written) == 5:
+            raise KeyboardInterrupt  # as a kill after 5 of the 14 chunks
+        written.append(chunk_id)
+        return write_chunk(self, chunk_id, table, traces)
+
+    monkeypatch.setattr(CampaignStore, "write_chunk", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_league(league, out, seeds=2)
+    monkeypatch.undo()
+    chunks = out / "lqr" / "campaign" / "chunks"
+    kept = {p.name: p.stat().st_mtime_ns for p in chunks.glob("chunk-*.parquet")}
+    assert len(kept) == 5
+
+    def broken_stderr(line: str) -> None:
+        raise OSError(28, "No space left on device")  # 2>/dev/full
+
+    outcome = run_league(league, out, seeds=2, log=broken_stderr, progress=True)
+    assert outcome.n_runs == 28
+    assert {p.name: p.stat().st_mtime_ns for p in chunks.glob("chunk-*.parquet") if p.name in kept} == kept
+    pd.testing.assert_frame_equal(_sorted(load_league_results(out)[1]), expected)
+
+
+def test_a_resume_with_other_methods_keeps_the_earlier_ones_listed(tmp_path, tiny_league, monkeypatch):
+    league = tiny_league(tmp_path)  # sir-ftc and lqr
+    out = tmp_path / "out"
+    monkeypatch.setattr(runner, "_check_batch_memory", lambda *args: None)
+    monkeypatch.setattr("formation_ftc.campaign.runner.run_campaign", _stop_before_running)
+    for method in ("sir-ftc", "lqr"):
+        with pytest.raises(KeyboardInterrupt):
+            run_league(league, out, seeds=1, methods=[method])
+    assert [m["name"] for m in json.loads((out / LEAGUE_FILE).read_text())["methods"]] == ["sir-ftc", "lqr"]
+
+
+# -------------------------------------------------------------------------------------------- workers
+def _children(pid: int) -> set[int]:
+    out = set()
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.add(int(entry))
+    return out
+
+
+def _loaded_jax(pid: int) -> bool:
+    try:
+        return "jaxlib" in Path(f"/proc/{pid}/maps").read_text()
+    except OSError:
+        return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_method_workers_die_with_a_killed_league(tmp_path, tiny_league):
+    if executors.cap_workers(2, per_worker_bytes=runner.METHOD_WORKER_BYTES, what="test") < 2:
+        pytest.skip("fewer than 2 cores or too little memory for 2 method processes")
+    league = tiny_league(tmp_path)  # sir-ftc and lqr
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "formation_ftc", "league", "run", str(league), "--out", str(out),
+                             "--seeds", "1", "--workers", "2", "--no-progress", "--no-plots", "--max-memory", "0"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    children: set[int] = set()
+    try:
+        deadline = time.monotonic() + 90
+        # both method workers have imported JAX (the pool's initializer and then the method's campaign
+        # come right after): without the initializer they would compute on for the whole campaign
+        while len([c for c in _children(proc.pid) if _loaded_jax(c)]) < 2:
+            assert proc.poll() is None, proc.stderr.read().decode() if proc.stderr else ""
+            assert time.monotonic() < deadline, "the method workers did not start"
+            time.sleep(0.2)
+        time.sleep(1.0)
+        children = _children(proc.pid)
+        assert len(children) >= 2
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.monotonic() + 10
+        while any(_alive(c) for c in children) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not [c for c in children if _alive(c)], "worker processes outlived their killed league"
+    finally:
+        proc.kill()
+        proc.wait()
+        for c in children:
+            if _alive(c):
+                os.kill(c, signal.SIGKILL)
+
+
+def test_cap_workers_warns_when_it_lowers_the_count(monkeypatch, capsys):
+    monkeypatch.setattr(executors, "schedulable_cpus", lambda: 4)
+    monkeypatch.setattr(executors, "available_memory", lambda: 3_000_000_000)
+    assert executors.cap_workers(2, per_worker_bytes=1_200_000_000, what="--workers") == 2
+    assert capsys.readouterr().err == ""
+    assert executors.cap_workers(8, per_worker_bytes=1_200_000_000, what="--workers") == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("warning: --workers: 8 worker processes asked for, using 2 (4 ")
+    assert "2.79 GiB of memory available" in err
+    monkeypatch.setattr(executors, "available_memory", lambda: None)  # unknown: capped by the cores only
+    assert executors.cap_workers(8, per_worker_bytes=1_200_000_000, what="--workers") == 4
+    monkeypatch.setattr(executors, "available_memory", lambda: 10)
+    assert executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1  # at least one
+    monkeypatch.setattr(sys, "stderr", open(os.devnull, "w"))  # noqa: SIM115
+    sys.stderr.close()
+    assert executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1  # closed stderr
+
+
+# ------------------------------------------------------------------------------------ progress, stderr
+def test_method_progress_lines_follow_the_stored_chunks(tmp_path):
+    from rich.console import Console
+
+    chunks = {m: tmp_path / m / "chunks" for m in ("lqr", "sir-ftc")}
+    for d in chunks.values():
+        d.mkdir(parents=True)
+    # 5 seeds in chunks of 2 per cell: chunks 0, 1, 2 (2, 2, 1 runs) are cell 0, chunk 3 starts cell 1
+    for cid in (0, 2, 3):
+        (chunks["lqr"] / f"chunk-{cid:06d}.parquet").write_bytes(b"")
+    (chunks["lqr"] / ".chunk-000001.parquet.tmp-77").write_bytes(b"")  # in progress: not counted
+    assert runner._stored_runs(chunks["lqr"], 5, 2) == 5
+    assert runner._stored_runs(tmp_path / "absent", 5, 2) == 0
+    buf = io.StringIO()
+    console = Console(file=buf, force_terminal=True, width=120)
+    watched = [(m, d, 10) for m, d in chunks.items()]
+    with runner._MethodProgress(watched, 5, 2, console=console, interval=0.05):
+        (chunks["sir-ftc"] / "chunk-000001.parquet").write_bytes(b"")
+        time.sleep(0.3)
+    text = buf.getvalue()
+    assert "lqr" in text and "5/10" in text and "sir-ftc" in text and "2/10" in text
+
+    class Full(io.StringIO):
+        def write(self, s):
+            raise OSError(28, "No space left on device")
+
+    for enabled in (True, False):  # a full stderr or --no-progress: no bar, no error
+        with runner._MethodProgress(watched, 5, 2, enabled=enabled,
+                                    console=Console(file=Full(), force_terminal=True), interval=0.01):
+            time.sleep(0.05)
+    not_a_tty = io.StringIO()
+    with runner._MethodProgress(watched, 5, 2, console=Console(file=not_a_tty), interval=0.01):
+        time.sleep(0.05)
+    assert not_a_tty.getvalue() == ""
+
+
+def test_league_log_lines_survive_a_closed_or_full_stderr(monkeypatch):
+    closed = io.StringIO()
+    closed.close()
+    full = open("/dev/full", "w")  # noqa: SIM115 - closed below, where its unwritten line fails again
+    for stream in (full, closed):
+        monkeypatch.setattr(sys, "stderr", stream)
+        league_cli._stderr_line("lqr: 28 runs, 0 failed, 3.0 s")  # no exception
+    monkeypatch.undo()
+    with pytest.raises(OSError):
+        full.close()
