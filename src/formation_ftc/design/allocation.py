@@ -52,6 +52,29 @@ def validate_allocation_inputs(alpha, b_hat, name_alpha: str = "alpha", name_b: 
 
     ``alpha_i <= 0`` makes the cost not positive definite (no unique minimiser); ``b_hat_i = 0`` is a
     dead actuator, for which J_aug (eq. (3)) is undefined (division by b_hat).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights alpha_i of eq. (3) [-]; each finite and > 0, N >= 2.
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains b_hat_i [-]; each finite and > 0.
+    name_alpha, name_b : str, optional
+        Names of the two arrays in the error messages.
+
+    Raises
+    ------
+    ValueError
+        Shapes differ, fewer than 2 satellites, or a weight or gain that is not finite and > 0.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.allocation import validate_allocation_inputs
+    >>> validate_allocation_inputs([1.0, 2.0, 1.0], [1.0, 0.5, 1.0])  # valid: returns None
+    >>> validate_allocation_inputs([1.0, 2.0], [1.0, 0.0])
+    Traceback (most recent call last):
+    ...
+    ValueError: b_hat must be finite and > 0 (estimated actuator gains; 0 is a dead actuator and makes J_aug of eq. (3) undefined), got [1.0, 0.0]
     """
     a = np.asarray(alpha, dtype=float)
     b = np.asarray(b_hat, dtype=float)
@@ -69,7 +92,26 @@ def validate_allocation_inputs(alpha, b_hat, name_alpha: str = "alpha", name_b: 
 
 
 def chain_matrix(b_hat):
-    """(N-1) x N relative-output matrix J of eq. (2) (JAX; ``b_hat`` shape (N,))."""
+    """(N-1) x N relative-output matrix J of eq. (2) (JAX; ``b_hat`` shape (N,)).
+
+    Parameters
+    ----------
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains [-].
+
+    Returns
+    -------
+    jax.Array, shape (N-1, N)
+        ``J[k, k] = -b_hat_k``, ``J[k, k+1] = b_hat_{k+1}`` [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import chain_matrix
+    >>> np.asarray(chain_matrix([1.0, 2.0, 3.0]))
+    array([[-1.,  2.,  0.],
+           [ 0., -2.,  3.]])
+    """
     b_hat = jnp.asarray(b_hat)
     n = b_hat.shape[-1]
     rows = jnp.arange(n - 1)
@@ -79,7 +121,29 @@ def chain_matrix(b_hat):
 
 
 def augmented_matrix(alpha, b_hat):
-    """N x N matrix J_aug of eq. (3): J with the optimality row alpha_i / b_hat_i appended (E004-02)."""
+    """N x N matrix J_aug of eq. (3): J with the optimality row alpha_i / b_hat_i appended (E004-02).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains [-].
+
+    Returns
+    -------
+    jax.Array, shape (N, N)
+        ``[[J], [alpha_1/b_hat_1, ..., alpha_N/b_hat_N]]`` [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import augmented_matrix
+    >>> np.asarray(augmented_matrix([1.0, 1.0, 4.0], [1.0, 1.0, 2.0]))
+    array([[-1.,  1.,  0.],
+           [ 0., -1.,  2.],
+           [ 1.,  1.,  2.]])
+    """
     alpha = jnp.asarray(alpha)
     b_hat = jnp.asarray(b_hat)
     return jnp.concatenate([chain_matrix(b_hat), (alpha / b_hat)[None, :]], axis=0)
@@ -89,6 +153,30 @@ def allocation_matrix(alpha, b_hat):
     """N x (N-1) matrix M with ``u = M p``: weighted least-norm solution W^-1 J^T (J W^-1 J^T)^-1.
 
     JAX, differentiable and vmappable; call once per (alpha, b_hat), not per step.
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights (> 0) [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains (> 0) [-].
+
+    Returns
+    -------
+    jax.Array, shape (N, N-1)
+        M [N per unit gain per m/s^2]: maps the relative commands p [m/s^2] to the inputs u.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import allocation_matrix, chain_matrix
+    >>> M = allocation_matrix([1.0, 1.0, 1.0], [1.0, 1.0, 1.0])
+    >>> np.round(3.0 * np.asarray(M), 12)
+    array([[-2., -1.],
+           [ 1., -1.],
+           [ 1.,  2.]])
+    >>> bool(np.allclose(chain_matrix([1.0, 1.0, 1.0]) @ M, np.eye(2)))  # J M = I: constraints (2) met
+    True
     """
     alpha = jnp.asarray(alpha)
     J = chain_matrix(b_hat)
@@ -98,12 +186,58 @@ def allocation_matrix(alpha, b_hat):
 
 
 def allocate(alpha, b_hat, p):
-    """u = M p [N/unit gain] for relative commands ``p`` [m/s^2] of shape (N-1,)."""
+    """u = M p [N/unit gain] for relative commands ``p`` [m/s^2] of shape (N-1,).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights (> 0) [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains (> 0) [-].
+    p : array_like, shape (N-1,)
+        Relative commands of the chain pairs [m/s^2].
+
+    Returns
+    -------
+    jax.Array, shape (N,)
+        Least-effort inputs u [N per unit gain].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import allocate
+    >>> u = allocate([1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 0.0])
+    >>> np.round(3.0 * np.asarray(u), 12)
+    array([-2.,  1.,  1.])
+    """
     return allocation_matrix(alpha, b_hat) @ jnp.asarray(p)
 
 
 def allocate_augmented(alpha, b_hat, p):
-    """u = J_aug^-1 [p; 0] (eq. (3)) -- the paper's form; equals :func:`allocate`."""
+    """u = J_aug^-1 [p; 0] (eq. (3)) -- the paper's form; equals :func:`allocate`.
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights (> 0) [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains (> 0) [-].
+    p : array_like, shape (N-1,)
+        Relative commands of the chain pairs [m/s^2].
+
+    Returns
+    -------
+    jax.Array, shape (N,)
+        Inputs u [N per unit gain], equal to :func:`allocate`'s to rounding.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import allocate, allocate_augmented
+    >>> args = ([1.0, 2.0, 0.5], [1.0, 0.8, 1.2], [0.3, -0.1])
+    >>> bool(np.allclose(allocate_augmented(*args), allocate(*args), rtol=1e-12))
+    True
+    """
     p = jnp.asarray(p)
     rhs = jnp.concatenate([p, jnp.zeros((1,), dtype=p.dtype)])
     return jnp.linalg.solve(augmented_matrix(alpha, b_hat), rhs)
@@ -142,6 +276,38 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
     det(J_aug) is affine in alpha_k (expansion along the last row), so q2 and q1 follow from two
     evaluations; the sign is chosen so that q2 > 0, giving DET = q2 alpha_k + q1 (E004-03).
     ``d_m = -eps (J_aug^-1)_{k,m} = -eps C_{m,k} / det = eps f_m / DET`` with ``f = -sign * C[:, k]``.
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights (> 0) [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains (> 0) [-].
+    k : int
+        Faulty satellite, 0-based, interior (``0 < k < N - 1``).
+
+    Returns
+    -------
+    PerturbationCoefficients
+        ``q1``, ``q2`` [-] with ``DET = q2 alpha_k + q1``, the cofactor column ``f`` (N,) [-] and ``sign``
+        = DET / det(J_aug) [-].
+
+    Raises
+    ------
+    ValueError
+        Invalid weights or gains, or ``k`` not interior.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import closed_form_n4, perturbation_coefficients
+    >>> alpha, b_hat = [1.0, 2.0, 1.5, 0.5], [1.0, 0.9, 1.1, 1.2]
+    >>> c = perturbation_coefficients(alpha, b_hat, k=1)
+    >>> round(c.q1, 6), round(c.q2, 6), c.sign
+    (3.073227, 1.466667, -1.0)
+    >>> ref = closed_form_n4(alpha, b_hat, b_hat2=0.9)  # E004-03 closed forms agree
+    >>> bool(np.isclose(c.q1, ref["q1"]) and np.isclose(c.q2, ref["q2"]))
+    True
     """
     alpha = np.asarray(alpha, dtype=float)
     b_hat = np.asarray(b_hat, dtype=float)
@@ -168,6 +334,30 @@ def closed_form_n4(alpha, b, b_hat2: float) -> dict[str, object]:
     Returns q1, q2, DET (= q2 alpha_2 + q1 = -det J_aug) and the cofactors
     C_{k2} = [-a1 b3 b4/b1, b1(a3 b4^2 + a4 b3^2)/(b3 b4), a4 b1 b3/b4, -b1 b3 b4].
     ``b`` are the (healthy) gains of satellites 1, 3, 4 (b[1] is ignored and replaced by b_hat2).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (4,)
+        Allocation weights alpha_1..alpha_4 [-].
+    b : array_like, shape (4,)
+        Actuator gains b_1..b_4 [-] (``b[1]`` is ignored).
+    b_hat2 : float
+        Estimated gain of the faulty satellite 2 [-].
+
+    Returns
+    -------
+    dict
+        ``"q1"``, ``"q2"``, ``"DET"`` (floats [-]) and ``"C"`` (the four cofactors C_{k2}, ndarray [-]).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import closed_form_n4
+    >>> r = closed_form_n4([1.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 1.0], b_hat2=0.5)
+    >>> r["q1"], r["q2"], r["DET"]
+    (1.5, 2.0, 3.5)
+    >>> r["C"]
+    array([-1.,  2.,  1., -1.])
     """
     a1, a2, a3, a4 = (float(x) for x in alpha)
     b1, _, b3, b4 = (float(x) for x in b)
@@ -180,7 +370,37 @@ def closed_form_n4(alpha, b, b_hat2: float) -> dict[str, object]:
 
 
 def perturbation_matrix(alpha, b_hat, k: int, eps: float) -> np.ndarray:
-    """D = E J_aug^-1 (eq. (6)) with E[k-1, k] = -eps, E[k, k] = +eps; shape (N-1, N)."""
+    """D = E J_aug^-1 (eq. (6)) with E[k-1, k] = -eps, E[k, k] = +eps; shape (N-1, N).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights (> 0) [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains (> 0) [-].
+    k : int
+        Faulty satellite, 0-based, interior.
+    eps : float
+        Gain estimation error eps = b_hat_k - b_k [-].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N-1, N)
+        D [-]; rows k-1 and k are ``d`` and ``-d`` with ``d`` = :meth:`PerturbationCoefficients.d`
+        (Lemma 1), the other rows zero.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import perturbation_coefficients, perturbation_matrix
+    >>> alpha, b_hat = [1.0, 2.0, 1.5, 0.5], [1.0, 0.9, 1.1, 1.2]
+    >>> D = perturbation_matrix(alpha, b_hat, k=1, eps=0.1)
+    >>> D.shape
+    (3, 4)
+    >>> d = perturbation_coefficients(alpha, b_hat, k=1).d(0.1, alpha[1])
+    >>> bool(np.allclose(D[0], d) and np.allclose(D[1], -d))
+    True
+    """
     alpha = np.asarray(alpha, dtype=float)
     b_hat = np.asarray(b_hat, dtype=float)
     n = alpha.size

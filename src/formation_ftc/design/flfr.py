@@ -68,7 +68,34 @@ class InfeasibleSpecification(ValueError):
 
 
 def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
-    """A of eq. (7): blkdiag([[0, 1], [-lambda0, -lambda1]] x 2) [1/s, 1/s^2]."""
+    """A of eq. (7): blkdiag([[0, 1], [-lambda0, -lambda1]] x 2) [1/s, 1/s^2].
+
+    Parameters
+    ----------
+    lam0 : float
+        lambda0 of the error dynamics s^2 + lambda1 s + lambda0 (> 0) [1/s^2].
+    lam1 : float
+        lambda1 (> 0) [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, 4)
+        A [1/s, 1/s^2].
+
+    Raises
+    ------
+    ValueError
+        ``lam0 <= 0`` or ``lam1 <= 0``.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.flfr import error_dynamics_matrix
+    >>> error_dynamics_matrix(2.0, 3.0)
+    array([[ 0.,  1.,  0.,  0.],
+           [-2., -3.,  0.,  0.],
+           [ 0.,  0.,  0.,  1.],
+           [ 0.,  0., -2., -3.]])
+    """
     if lam0 <= 0 or lam1 <= 0:
         raise ValueError(f"lambda0 and lambda1 must be > 0 (Hurwitz s^2 + l1 s + l0), got {lam0}, {lam1}")
     blk = np.array([[0.0, 1.0], [-lam0, -lam1]])
@@ -79,7 +106,35 @@ def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
 
 
 def reduced_model(lam0: float, lam1: float, d12: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(A, Delta, A_clp = (I + Delta) A) of eq. (7) for the first two D entries (d1, d2)."""
+    """(A, Delta, A_clp = (I + Delta) A) of eq. (7) for the first two D entries (d1, d2).
+
+    Parameters
+    ----------
+    lam0 : float
+        lambda0 (> 0) [1/s^2].
+    lam1 : float
+        lambda1 (> 0) [1/s].
+    d12 : tuple of float
+        The first two entries (d1, d2) of the D row of the faulty satellite [-].
+
+    Returns
+    -------
+    A : numpy.ndarray, shape (4, 4)
+        Nominal error dynamics [1/s, 1/s^2].
+    Delta : numpy.ndarray, shape (4, 4)
+        Perturbation [-]: rows 2 and 4 are ``+/-[0, d1, 0, d2]``.
+    A_clp : numpy.ndarray, shape (4, 4)
+        ``(I + Delta) A`` [1/s, 1/s^2].
+
+    Examples
+    --------
+    >>> from formation_ftc.design.flfr import reduced_model
+    >>> A, Delta, A_clp = reduced_model(2.0, 3.0, (0.1, 0.0))
+    >>> A_clp[1]
+    array([-2.2, -3.3,  0. ,  0. ])
+    >>> A_clp[3]
+    array([ 0.2,  0.3, -2. , -3. ])
+    """
     A = error_dynamics_matrix(lam0, lam1)
     d1, d2 = (float(x) for x in d12)
     Delta = np.zeros((4, 4))
@@ -115,6 +170,50 @@ def simulate_reduced_model(A_clp, w_fn: Callable, horizon: float, dt: float, wei
     ``w_fn(t)`` is a JAX-traceable function returning a scalar or a vector matching ``weights``; it is a
     static jit argument, so pass the same function object to reuse the compilation.
     Returns (records of shape (n_steps/record_every + 1, 4), per-state sup_t |X_i| over every step).
+
+    Parameters
+    ----------
+    A_clp : array_like, shape (4, 4)
+        Closed-loop matrix [1/s, 1/s^2].
+    w_fn : callable
+        ``w(t)`` [m/s^2], t [s]; JAX-traceable.
+    horizon : float
+        Simulated time [s]; a multiple of ``dt``.
+    dt : float
+        RK4 step [s].
+    weights : array_like, optional
+        Weights of the components of ``w`` [-].
+    record_every : int, optional
+        Steps between records (a divisor of ``horizon / dt``).
+    b_vec : array_like, shape (4,), optional
+        Input direction [-] (default :data:`INPUT_DIRECTION`).
+
+    Returns
+    -------
+    records : numpy.ndarray, shape (horizon / dt / record_every + 1, 4)
+        X at the recorded times [m, m/s].
+    peak : numpy.ndarray, shape (4,)
+        sup_t |X_i| over every step [m, m/s].
+
+    Raises
+    ------
+    ValueError
+        ``dt`` does not divide ``horizon`` or ``record_every`` does not divide the step count.
+
+    Examples
+    --------
+    Unit step of w on the nominal model (DC gain of the position errors 1 / lambda0 = 0.5 m):
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.flfr import error_dynamics_matrix, simulate_reduced_model
+    >>> A = error_dynamics_matrix(2.0, 3.0)
+    >>> xs, peak = simulate_reduced_model(A, lambda t: 1.0 + 0.0 * t, horizon=10.0, dt=0.01, record_every=500)
+    >>> xs.shape
+    (3, 4)
+    >>> np.round(xs[-1, [0, 2]], 4)  # position errors at t = 10 s [m]
+    array([ 0.5, -0.5])
+    >>> np.round(peak, 4)
+    array([0.5 , 0.25, 0.5 , 0.25])
     """
     n_steps = round(horizon / dt)
     if n_steps < 1 or abs(n_steps * dt - horizon) > 1e-9 * max(horizon, 1.0):
@@ -134,6 +233,32 @@ def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weigh
     last few distinct inputs (the matrix's and weights' exact values, ``w_fn`` by identity, horizon,
     step): designs for several violation probabilities or mission bounds of one formation simulate the
     same closed loops, each about 0.6 s at the paper's 300 s and 1 ms.
+
+    Parameters
+    ----------
+    A_clp : array_like, shape (4, 4)
+        Closed-loop matrix [1/s, 1/s^2].
+    w_fn : callable
+        ``w(t)`` [m/s^2], t [s]; JAX-traceable.
+    horizon : float
+        Time over which the supremum is taken [s].
+    dt : float
+        RK4 step [s].
+    weights : array_like, optional
+        Weights of the components of ``w`` (the cofactors f) [-].
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        H_i [m, m/s] (per unit |eps| / DET).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.flfr import convolution_supremum, error_dynamics_matrix
+    >>> A = error_dynamics_matrix(2.0, 3.0)
+    >>> np.round(convolution_supremum(A, lambda t: 1.0 + 0.0 * t, horizon=10.0, dt=0.01, weights=(2.0,)), 4)
+    array([0.9999, 0.5   , 0.9999, 0.5   ])
     """
     A = np.ascontiguousarray(A_clp, dtype=np.float64)
     w = np.ascontiguousarray(weights, dtype=np.float64)
@@ -159,6 +284,32 @@ def disturbance_floor(A_clp, b_ext: float) -> np.ndarray:
 
     The supremum is the certified H-infinity norm (upper bound, see :func:`hinf_norm`); an A_clp that is
     not Hurwitz gives T_i = inf (no finite floor, so every e_s is infeasible).
+
+    Parameters
+    ----------
+    A_clp : array_like, shape (4, 4)
+        Closed-loop matrix [1/s, 1/s^2].
+    b_ext : float
+        Bound on the external disturbance acceleration (>= 0) [m/s^2].
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        T_i [m for the position errors, m/s for their rates].
+
+    Raises
+    ------
+    ValueError
+        ``b_ext < 0``.
+
+    Examples
+    --------
+    For ``1 / (s^2 + 3 s + 2)`` the peak gain is the DC gain 0.5, for ``s / (s^2 + 3 s + 2)`` it is 1/3:
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.flfr import disturbance_floor, error_dynamics_matrix
+    >>> np.round(disturbance_floor(error_dynamics_matrix(2.0, 3.0), b_ext=0.01), 6)
+    array([0.005   , 0.003333, 0.005   , 0.003333])
     """
     if b_ext < 0:
         raise ValueError(f"b_ext (disturbance bound) must be >= 0 m/s^2, got {b_ext}")
@@ -173,7 +324,33 @@ def disturbance_floor(A_clp, b_ext: float) -> np.ndarray:
 
 
 def validate_violation_probability(pi: float) -> float:
-    """Accept 0 <= pi < 1 (pi = 0 is the deterministic design (9)); raise ValueError otherwise."""
+    """Accept 0 <= pi < 1 (pi = 0 is the deterministic design (9)); raise ValueError otherwise.
+
+    Parameters
+    ----------
+    pi : float
+        Allowed violation probability [-].
+
+    Returns
+    -------
+    float
+        ``pi`` as a float [-].
+
+    Raises
+    ------
+    ValueError
+        ``pi`` outside [0, 1) or not finite.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.flfr import validate_violation_probability
+    >>> validate_violation_probability(0.05)
+    0.05
+    >>> validate_violation_probability(1.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: violation probability pi must satisfy 0 <= pi < 1 (pi = 0 is the deterministic design of eq. (9)), got 1.0
+    """
     p = float(pi)
     if not np.isfinite(p) or p < 0.0 or p >= 1.0:
         raise ValueError(
@@ -187,6 +364,41 @@ def alpha_probabilistic(b_eps: float, H: float, q1: float, q2: float, e_s: float
     """alpha_k of eq. (11) (eq. (9) for pi = 0) with the mission bound reduced by ``floor`` [m].
 
     Raises :class:`InfeasibleSpecification` if ``e_s <= floor`` and ValueError on bad input.
+
+    Parameters
+    ----------
+    b_eps : float
+        Bound B_eps on the gain estimation error (> 0) [-].
+    H : float
+        Convolution supremum H of eq. (8) [m].
+    q1, q2 : float
+        Coefficients of DET = q2 alpha_k + q1 (q2 > 0) [-].
+    e_s : float
+        Mission bound on the relative position error (> 0) [m].
+    pi : float, optional
+        Allowed violation probability, 0 <= pi < 1 [-].
+    floor : float, optional
+        Disturbance floor T subtracted from ``e_s`` [m].
+
+    Returns
+    -------
+    float
+        alpha_k [-].
+
+    Raises
+    ------
+    InfeasibleSpecification
+        ``e_s <= floor``.
+    ValueError
+        Bad input.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.flfr import alpha_probabilistic
+    >>> round(alpha_probabilistic(b_eps=0.5, H=1.0, q1=1.0, q2=2.0, e_s=0.1), 6)
+    2.0
+    >>> round(alpha_probabilistic(b_eps=0.5, H=1.0, q1=1.0, q2=2.0, e_s=0.1, pi=0.2), 6)
+    1.5
     """
     pi = validate_violation_probability(pi)
     if not b_eps > 0:
@@ -203,7 +415,37 @@ def alpha_probabilistic(b_eps: float, H: float, q1: float, q2: float, e_s: float
 
 
 def alpha_deterministic(b_eps: float, H: float, q1: float, q2: float, e_s: float, floor: float = 0.0) -> float:
-    """alpha_k of eq. (9) (conservative, worst-case eps)."""
+    """alpha_k of eq. (9) (conservative, worst-case eps).
+
+    Parameters
+    ----------
+    b_eps : float
+        Bound B_eps on the gain estimation error (> 0) [-].
+    H : float
+        Convolution supremum H of eq. (8) [m].
+    q1, q2 : float
+        Coefficients of DET = q2 alpha_k + q1 (q2 > 0) [-].
+    e_s : float
+        Mission bound (> 0) [m].
+    floor : float, optional
+        Disturbance floor T subtracted from ``e_s`` [m].
+
+    Returns
+    -------
+    float
+        alpha_k [-] (:func:`alpha_probabilistic` with pi = 0).
+
+    Raises
+    ------
+    InfeasibleSpecification
+        ``e_s <= floor``.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.flfr import alpha_deterministic
+    >>> round(alpha_deterministic(b_eps=0.5, H=1.0, q1=1.0, q2=2.0, e_s=0.1), 6)
+    2.0
+    """
     return alpha_probabilistic(b_eps, H, q1, q2, e_s, 0.0, floor)  # Azizi2009 eq. (9)
 
 
@@ -239,6 +481,59 @@ def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_
     ``w_fn(t)`` [m/s^2] must be the *unscaled* desired relative acceleration row ``xdd_des`` (shape
     (N-1,)) as a JAX function; it is combined with the cofactors f inside. H uses A_clp at
     ``alpha_k = alpha_ref`` and eps = +/- b_eps (larger kept). ``subtract_floor`` uses e_s - T in (11).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (4,)
+        Current allocation weights [-].
+    b_hat : array_like, shape (4,)
+        Estimated actuator gains [-].
+    k : int
+        Faulty satellite, 0-based (the reduced model (7) is implemented for k = 1).
+    b_eps : float
+        Bound B_eps on the gain estimation error (> 0) [-].
+    lam0 : float
+        lambda0 (> 0) [1/s^2].
+    lam1 : float
+        lambda1 (> 0) [1/s].
+    e_s : float
+        Mission bound on the relative position error (> 0) [m].
+    pis : iterable of float
+        Violation probabilities to design for, each 0 <= pi < 1 [-].
+    w_fn : callable
+        ``xdd_des(t)`` [m/s^2], shape (N-1,), t [s]; JAX-traceable.
+    horizon : float
+        Time over which H is taken [s].
+    dt : float
+        RK4 step [s].
+    b_ext : float, optional
+        External disturbance bound [m/s^2] (0: no floor).
+    alpha_ref : float, optional
+        Reference alpha_k of A_clp [-].
+    subtract_floor : bool, optional
+        Use ``e_s - T`` in (11).
+
+    Returns
+    -------
+    FlfrDesign
+        Verdict, message, H, floor and alpha_k per pi (see :class:`FlfrDesign`).
+
+    Raises
+    ------
+    ValueError
+        N != 4 or k != 1, or invalid inputs.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.design.flfr import design_flfr
+    >>> d = design_flfr([1.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 1.0], k=1, b_eps=0.5, lam0=2.0, lam1=3.0,
+    ...                 e_s=0.01, pis=[0.0, 0.5], horizon=5.0, dt=0.01,
+    ...                 w_fn=lambda t: jnp.array([jnp.sin(t), 0.0, jnp.cos(t)]))
+    >>> d.verdict
+    'feasible'
+    >>> {pi: round(a, 3) for pi, a in d.alpha.items()}
+    {0.0: 35.644, 0.5: 16.322}
     """
     alpha = np.asarray(alpha, dtype=float)
     coeff = perturbation_coefficients(alpha, b_hat, k)

@@ -95,6 +95,23 @@ def rounding_margin(M) -> float:
     ``10 n eps ||M||_2`` covers the backward error of the symmetric eigenvalue solver and the rounding
     of forming M from products of the design matrices; a definiteness claim ``lambda_max(M) < 0`` is
     only *verified* when ``lambda_max(M) < -rounding_margin(M)``.
+
+    Parameters
+    ----------
+    M : array_like, shape (n, n)
+        Symmetric matrix (any units).
+
+    Returns
+    -------
+    float
+        The margin, in the units of M.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.lmi import rounding_margin
+    >>> f"{rounding_margin(np.diag([-1.0, -2.0])):.3e}"  # 10 * 2 * eps * 2
+    '8.882e-15'
     """
     M = np.atleast_2d(np.asarray(M, dtype=float))
     return float(10 * M.shape[0] * np.finfo(float).eps * np.linalg.norm(M, 2))
@@ -104,13 +121,44 @@ def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float =
                       disk_radius: float = 2.0) -> dict[str, float]:
     """Numerical certificate of a candidate (P, Y, L2), recomputed in numpy from the matrices themselves.
 
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    C : array_like, shape (p, n)
+        Output matrix [-].
+    H : array_like, shape (n, m)
+        Fault distribution matrix [-].
+    P : array_like, shape (n, n)
+        Candidate Lyapunov matrix [-].
+    Y : array_like, shape (n, p)
+        Candidate ``P L1`` [1/s].
+    L2 : array_like, shape (m, p)
+        Candidate learning gain [-].
+    lam : float, optional
+        The small positive scalar of (27) [-].
+    disk_center, disk_radius : float, optional
+        Pole region S(c, r): centre c and radius r [1/s].
+
     Returns
     -------
-    dict with ``max_eig_8`` (< 0 required), ``max_eig_27`` (< 0), ``max_abs_9`` = max|H^T P - L2 C|
-    (0 for (9) exactly), ``max_eig_disk`` (< 0), ``min_eig_P`` (> 0), ``max_pole_distance`` =
-    max |eig(A - L1 C) - c| (< r), ``max_pole_real`` [1/s], and ``tol_8``, ``tol_27``, ``tol_disk``,
-    ``tol_P``: the rounding margins (:func:`rounding_margin`) each eigenvalue must clear for the
-    inequality to count as verified.
+    dict
+        ``max_eig_8`` (< 0 required), ``max_eig_27`` (< 0), ``max_abs_9`` = max|H^T P - L2 C|
+        (0 for (9) exactly), ``max_eig_disk`` (< 0), ``min_eig_P`` (> 0), ``max_pole_distance`` =
+        max |eig(A - L1 C) - c| (< r), ``max_pole_real`` [1/s], and ``tol_8``, ``tol_27``, ``tol_disk``,
+        ``tol_P``: the rounding margins (:func:`rounding_margin`) each eigenvalue must clear for the
+        inequality to count as verified.
+
+    Examples
+    --------
+    A double integrator with P = I, L1 = 4 I (poles -4, -4, inside S(-5, 2)) and L2 with H^T P = L2 C:
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.lmi import ilo_lmi_residuals
+    >>> A, C, H = np.array([[0.0, 1.0], [0.0, 0.0]]), np.eye(2), np.array([[0.0], [1.0]])
+    >>> r = ilo_lmi_residuals(A, C, H, P=np.eye(2), Y=4.0 * np.eye(2), L2=np.array([[0.0, 1.0]]))
+    >>> round(r["max_eig_8"], 6), r["max_abs_9"], round(r["max_eig_disk"], 6), r["max_pole_distance"]
+    (-7.0, 0.0, -0.381966, 1.0)
     """
     A, C, H, P, Y, L2 = (np.asarray(x, dtype=float) for x in (A, C, H, P, Y, L2))
     n, m = A.shape[0], H.shape[1]
@@ -194,17 +242,47 @@ def design_ilo_gains(A, C, H, *, lam: float = 1e-8, disk_center: float = -5.0, d
 
     Parameters
     ----------
-    A : (n, n) [1/s]; C : (p, n) output matrix; H : (n, m) fault distribution matrix.
-    lam : the small positive scalar of (27) (paper: 1e-8).
-    disk_center, disk_radius : the pole region S(c, r): centre c (< 0) and radius r (> 0) [1/s].
-    eps : margin of the strict inequalities.
-    solver : cvxpy solver name; default CLARABEL with SCS as fallback.
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    C : array_like, shape (p, n)
+        Output matrix [-].
+    H : array_like, shape (n, m)
+        Fault distribution matrix [-].
+    lam : float, optional
+        The small positive scalar of (27) (paper: 1e-8) [-].
+    disk_center, disk_radius : float, optional
+        The pole region S(c, r): centre c (< 0) and radius r (> 0) [1/s].
+    eps : float, optional
+        Margin of the strict inequalities [-].
+    solver : str, optional
+        cvxpy solver name; default CLARABEL with SCS as fallback.
+
+    Returns
+    -------
+    IloLmiDesign
+        P, Y, L1 = P^-1 Y [1/s], L2 [-], the residual certificate of :func:`ilo_lmi_residuals` and the
+        poles eig(A - L1 C) [1/s].
 
     Raises
     ------
-    DesignInfeasible : no solution; the message names the constraint(s) whose removal makes the
-        problem feasible and the solver status.
-    ValueError : bad arguments (radius <= 0, lam <= 0, shapes).
+    DesignInfeasible
+        No solution; the message names the constraint(s) whose removal makes the problem feasible and
+        the solver status.
+    ValueError
+        Bad arguments (radius <= 0, lam <= 0, shapes).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.lmi import design_ilo_gains
+    >>> A, C, H = np.array([[0.0, 1.0], [0.0, 0.0]]), np.eye(2), np.array([[0.0], [1.0]])
+    >>> d = design_ilo_gains(A, C, H, disk_center=-5.0, disk_radius=2.0)
+    >>> d.status
+    'optimal'
+    >>> bool(np.all(np.abs(d.poles - d.disk_center) < d.disk_radius))  # poles inside S(-5, 2)
+    True
+    >>> d.residuals["max_eig_8"] < -d.residuals["tol_8"]  # (8) verified in numpy
+    True
     """
     A, C, H = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, C, H))
     if not (disk_radius > 0):
@@ -253,6 +331,35 @@ def rescale_design(design: IloLmiDesign, factor: float, A, C, H) -> IloLmiDesign
     """Apply the free scale of the homogeneous LMIs: (P, Y, L2) -> factor * (P, Y, L2); L1 unchanged.
 
     ``factor >= 1`` keeps every ``-eps I`` margin; residuals are recomputed.
+
+    Parameters
+    ----------
+    design : IloLmiDesign
+        A design from :func:`design_ilo_gains`.
+    factor : float
+        Scale factor (> 0) [-].
+    A, C, H : array_like
+        The matrices the design was made for ([1/s], [-], [-]).
+
+    Returns
+    -------
+    IloLmiDesign
+        The scaled design, residuals recomputed.
+
+    Raises
+    ------
+    ValueError
+        ``factor <= 0``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.lmi import design_ilo_gains, rescale_design
+    >>> A, C, H = np.array([[0.0, 1.0], [0.0, 0.0]]), np.eye(2), np.array([[0.0], [1.0]])
+    >>> d = design_ilo_gains(A, C, H)
+    >>> d2 = rescale_design(d, 10.0, A, C, H)
+    >>> bool(np.allclose(d2.L2, 10.0 * d.L2) and np.allclose(d2.L1, d.L1))
+    True
     """
     if not factor > 0:
         raise ValueError(f"factor must be > 0, got {factor}")

@@ -65,8 +65,32 @@ def bryson_weights(max_state, max_input) -> tuple[np.ndarray, np.ndarray]:
 
     Parameters
     ----------
-    max_state : (n,) largest acceptable value of each state (same units as the state).
-    max_input : (m,) largest acceptable value of each input (same units as the input).
+    max_state : array_like, shape (n,)
+        Largest acceptable value of each state (same units as the state, e.g. [m] or [m/s]); > 0.
+    max_input : array_like, shape (m,)
+        Largest acceptable value of each input (same units as the input, e.g. [m/s^2]); > 0.
+
+    Returns
+    -------
+    Q : numpy.ndarray, shape (n, n)
+        State weight [1 / state unit^2].
+    R : numpy.ndarray, shape (m, m)
+        Input weight [1 / input unit^2].
+
+    Raises
+    ------
+    ValueError
+        A value that is not finite and > 0.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.lqr import bryson_weights
+    >>> Q, R = bryson_weights([10.0, 0.5], [0.1])
+    >>> Q
+    array([[0.01, 0.  ],
+           [0.  , 4.  ]])
+    >>> R.round(6)
+    array([[100.]])
     """
     xs = _positive(max_state, np.size(max_state), "max_state")
     us = _positive(max_input, np.size(max_input), "max_input")
@@ -75,7 +99,36 @@ def bryson_weights(max_state, max_input) -> tuple[np.ndarray, np.ndarray]:
 
 def care_relative_residual(P, A, B, Q, R) -> float:
     """``||A^T P + P A - P B R^-1 B^T P + Q||_F`` divided by the sum of the Frobenius norms of the four
-    terms [-]: 0 for an exact solution, about machine precision for a well-solved one."""
+    terms [-]: 0 for an exact solution, about machine precision for a well-solved one.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Candidate CARE solution.
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    Q : array_like, shape (n, n)
+        State weight.
+    R : array_like, shape (m, m)
+        Input weight (invertible).
+
+    Returns
+    -------
+    float
+        The relative residual [-].
+
+    Examples
+    --------
+    Scalar ``x' = u`` with Q = R = 1 has P = 1:
+
+    >>> from formation_ftc.design.lqr import care_relative_residual
+    >>> care_relative_residual([[1.0]], [[0.0]], [[1.0]], [[1.0]], [[1.0]])
+    0.0
+    >>> care_relative_residual([[2.0]], [[0.0]], [[1.0]], [[1.0]], [[1.0]])  # |-4 + 1| / (4 + 1)
+    0.6
+    """
     P, A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (P, A, B, Q, R))
     terms = (A.T @ P, P @ A, -P @ B @ np.linalg.solve(R, B.T @ P), Q)
     scale = sum(np.linalg.norm(t) for t in terms)
@@ -86,6 +139,40 @@ def lqr(A, B, Q, R) -> LqrDesign:
     """LQR gain of ``x_dot = A x + B u`` for the weights Q (n x n, >= 0) and R (m x m, > 0).
 
     Raises ``ValueError`` (from the CARE solver) when no stabilising solution exists.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix [state unit / (input unit s)].
+    Q : array_like, shape (n, n)
+        State weight (symmetric, >= 0) [1 / state unit^2].
+    R : array_like, shape (m, m)
+        Input weight (symmetric, > 0) [1 / input unit^2].
+
+    Returns
+    -------
+    LqrDesign
+        Gain K = R^-1 B^T P [input unit / state unit], P, the weights, the model, the CARE residual and
+        the closed-loop eigenvalues [1/s].
+
+    Raises
+    ------
+    ValueError
+        No stabilising CARE solution.
+
+    Examples
+    --------
+    Double integrator with Q = I, R = 1: K = [1, sqrt(3)]:
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.lqr import lqr
+    >>> d = lqr([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], np.eye(2), [[1.0]])
+    >>> np.round(d.K, 6)
+    array([[1.      , 1.732051]])
+    >>> bool(np.all(d.closed_loop_eigenvalues.real < 0)), d.relative_residual < 1e-14
+    (True, True)
     """
     A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
     sol = solve_care(A, B, Q, R)
@@ -99,14 +186,37 @@ def cw_lqr(mean_motion: float, max_position_error, max_velocity_error, max_accel
 
     Parameters
     ----------
-    mean_motion : n of the circular reference orbit [rad/s] (>= 0; 0 gives three double integrators).
-    max_position_error : largest acceptable position error [m], one number or one per LVLH axis.
-    max_velocity_error : largest acceptable velocity error [m/s], one number or one per axis.
-    max_acceleration : largest acceptable commanded acceleration [m/s^2], one number or one per axis.
+    mean_motion : float
+        n of the circular reference orbit [rad/s] (>= 0; 0 gives three double integrators).
+    max_position_error : float or array_like, shape (3,)
+        Largest acceptable position error [m], one number or one per LVLH axis.
+    max_velocity_error : float or array_like, shape (3,)
+        Largest acceptable velocity error [m/s], one number or one per axis.
+    max_acceleration : float or array_like, shape (3,)
+        Largest acceptable commanded acceleration [m/s^2], one number or one per axis.
 
     Returns
     -------
-    LqrDesign with K (3, 6): the commanded acceleration is ``-K (q - q_d)`` [m/s^2].
+    LqrDesign
+        K (3, 6) [1/s^2 | 1/s]: the commanded acceleration is ``-K (q - q_d)`` [m/s^2]. Solved once
+        per distinct input (cached; the arrays are read-only).
+
+    Raises
+    ------
+    ValueError
+        A negative or non-finite mean motion, or a bound that is not finite and > 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.lqr import cw_lqr
+    >>> d = cw_lqr(0.0011, max_position_error=10.0, max_velocity_error=0.1, max_acceleration=1e-3)
+    >>> d.K.shape
+    (3, 6)
+    >>> np.round(d.K[2, [2, 5]], 6)  # out-of-plane gains on z [1/s^2] and vz [1/s]
+    array([9.9000e-05, 1.7251e-02])
+    >>> bool(np.all(d.closed_loop_eigenvalues.real < 0))
+    True
     """
     if not (np.isfinite(mean_motion) and mean_motion >= 0):
         raise ValueError(f"mean_motion = {mean_motion}: must be finite and >= 0 rad/s")

@@ -35,7 +35,34 @@ class CareSolution:
 
 
 def care_residual(P, A, B, Q, R) -> float:
-    """``max |P A + A^T P - P B R^-1 B^T P + Q|`` (element-wise max norm)."""
+    """``max |P A + A^T P - P B R^-1 B^T P + Q|`` (element-wise max norm).
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Candidate solution.
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    Q : array_like, shape (n, n)
+        State weight.
+    R : array_like, shape (m, m)
+        Input weight (invertible).
+
+    Returns
+    -------
+    float
+        The absolute residual, in the units of Q.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.riccati import care_residual
+    >>> care_residual([[1.0]], [[0.0]], [[1.0]], [[1.0]], [[1.0]])  # x' = u, Q = R = 1: P = 1
+    0.0
+    >>> care_residual([[2.0]], [[0.0]], [[1.0]], [[1.0]], [[1.0]])  # |-4 + 1|
+    3.0
+    """
     P, A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (P, A, B, Q, R))
     res = P @ A + A.T @ P - P @ B @ np.linalg.solve(R, B.T @ P) + Q
     return float(np.max(np.abs(res)))
@@ -46,6 +73,42 @@ def solve_care(A, B, Q, R) -> CareSolution:
 
     Raises ``ValueError`` with the reason when no stabilising solution exists (e.g. (A, B) not
     stabilisable or Q/R not positive (semi)definite).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    Q : array_like, shape (n, n)
+        State weight (symmetric, >= 0).
+    R : array_like, shape (m, m)
+        Input weight (symmetric, > 0).
+
+    Returns
+    -------
+    CareSolution
+        P, the gain K = R^-1 B^T P, the residual of :func:`care_residual` and the closed-loop eigenvalues
+        [1/s].
+
+    Raises
+    ------
+    ValueError
+        Inconsistent shapes, R not positive definite, Q not positive semidefinite, or no stabilising
+        solution.
+
+    Examples
+    --------
+    Double integrator with Q = I, R = 1: P = [[sqrt(3), 1], [1, sqrt(3)]]:
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.riccati import solve_care
+    >>> s = solve_care([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], np.eye(2), [[1.0]])
+    >>> np.round(s.P, 6)
+    array([[1.732051, 1.      ],
+           [1.      , 1.732051]])
+    >>> s.residual < 1e-12
+    True
     """
     A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
     n, m = A.shape[0], B.shape[1]

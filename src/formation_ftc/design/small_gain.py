@@ -43,7 +43,35 @@ _EPS = np.finfo(float).eps
 
 
 def sigma_max_response(A, B, C, D, omega) -> np.ndarray:
-    """sigma_max of G(j omega) = C (j omega I - A)^-1 B + D for each omega [rad/s] (array)."""
+    """sigma_max of G(j omega) = C (j omega I - A)^-1 B + D for each omega [rad/s] (array).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    D : array_like, shape (p, m)
+        Feedthrough.
+    omega : float or array_like
+        Frequencies [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (len(omega),)
+        sigma_max(G(j omega)) [output unit / input unit].
+
+    Examples
+    --------
+    First-order lag ``1 / (s + 1)``: gain 1 at DC, 1/sqrt(2) at 1 rad/s:
+
+    >>> import numpy as np
+    >>> from formation_ftc.design.small_gain import sigma_max_response
+    >>> np.round(sigma_max_response([[-1.0]], [[1.0]], [[1.0]], [[0.0]], [0.0, 1.0]), 6)
+    array([1.      , 0.707107])
+    """
     A = np.asarray(A, dtype=complex)
     B = np.asarray(B, dtype=complex)
     C = np.asarray(C, dtype=complex)
@@ -57,7 +85,19 @@ def sigma_max_response(A, B, C, D, omega) -> np.ndarray:
 
 
 def hinf_method() -> str:
-    """Name of the estimator python-control uses here (Slycot AB13DD if installed, else its bisection)."""
+    """Name of the estimator python-control uses here (Slycot AB13DD if installed, else its bisection).
+
+    Returns
+    -------
+    str
+        The estimator's description.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.small_gain import hinf_method
+    >>> hinf_method().startswith("python-control norm(sys, 'inf')")
+    True
+    """
     try:
         import slycot  # noqa: F401
     except ImportError:
@@ -135,6 +175,36 @@ def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
     ``R = gamma^2 I - D^T D`` and verifies ``lambda_max(M(X)) < -margin`` and ``lambda_min(X) > margin``,
     where the margins bound the floating-point error of forming M (element-wise |.| products times
     ``(n + m + 2) eps``) plus the eigenvalue solver's backward error. Returns (certified, detail).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    D : array_like, shape (p, m)
+        Feedthrough.
+    gamma : float
+        Candidate bound on ||G||_inf [output unit / input unit].
+
+    Returns
+    -------
+    certified : bool
+        Whether ``||G||_inf < gamma`` is proven.
+    detail : str
+        The checked eigenvalues, or why the certificate failed.
+
+    Examples
+    --------
+    ``1 / (s + 1)`` has ||G||_inf = 1:
+
+    >>> from formation_ftc.design.small_gain import kyp_certificate
+    >>> kyp_certificate([[-1.0]], [[1.0]], [[1.0]], [[0.0]], gamma=1.01)[0]
+    True
+    >>> kyp_certificate([[-1.0]], [[1.0]], [[1.0]], [[0.0]], gamma=0.99)[0]
+    False
     """
     A, B, C, D = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, C, D))
     n, m = A.shape[0], B.shape[1]
@@ -215,13 +285,37 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
 
     Parameters
     ----------
-    A, B, C, D : state-space matrices (D defaults to zero).
-    rtol : target relative gap between the certified upper bound and the exact lower bound.
+    A : array_like, shape (n, n)
+        System matrix [1/s].
+    B : array_like, shape (n, m)
+        Input matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    D : array_like, shape (p, m), optional
+        Feedthrough (defaults to zero).
+    rtol : float, optional
+        Target relative gap between the certified upper bound and the exact lower bound [-].
 
     Returns
     -------
-    HinfNorm : ``value`` is the certified upper bound (use it in a small-gain test); ``inf`` with a
-        reason when A is not Hurwitz or when no bound could be certified (``certified = False``).
+    HinfNorm
+        ``value`` is the certified upper bound [output unit / input unit] (use it in a small-gain test);
+        ``inf`` with a reason when A is not Hurwitz or when no bound could be certified
+        (``certified = False``).
+
+    Raises
+    ------
+    ValueError
+        Inconsistent shapes or non-finite matrices.
+
+    Examples
+    --------
+    >>> from formation_ftc.design.small_gain import hinf_norm
+    >>> h = hinf_norm([[0.0, 1.0], [-2.0, -3.0]], [[0.0], [1.0]], [[1.0, 0.0]])  # 1 / (s^2 + 3 s + 2)
+    >>> round(h.value, 5), round(h.lower, 5), h.certified
+    (0.5, 0.5, True)
+    >>> hinf_norm([[0.0]], [[1.0]], [[1.0]]).value  # an integrator: not internally stable
+    inf
     """
     A, B, C = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, C))
     n = A.shape[0]
@@ -289,7 +383,31 @@ class SmallGainResult:
 
 
 def small_gain_margin(A) -> SmallGainResult:
-    """Azizi2009 Theorem 1: gamma_1 = ||A (s I - A)^-1||_inf (certified upper bound), B_Delta = 1/gamma_1."""
+    """Azizi2009 Theorem 1: gamma_1 = ||A (s I - A)^-1||_inf (certified upper bound), B_Delta = 1/gamma_1.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        The nominal error dynamics, e.g. :func:`formation_ftc.design.flfr.error_dynamics_matrix`
+        [1/s, 1/s^2].
+
+    Returns
+    -------
+    SmallGainResult
+        gamma_1 [-], its peak frequency [rad/s] and B_Delta = 1 / gamma_1 [-].
+
+    Examples
+    --------
+    lambda0 = 2, lambda1 = 3 gives gamma_1 = sqrt(2) (E004-05):
+
+    >>> from formation_ftc.design.flfr import error_dynamics_matrix
+    >>> from formation_ftc.design.small_gain import small_gain_margin
+    >>> r = small_gain_margin(error_dynamics_matrix(2.0, 3.0))
+    >>> round(r.gamma1, 5), round(r.b_delta, 5)
+    (1.41421, 0.70711)
+    >>> r.holds(0.5), r.holds(0.8)
+    (True, False)
+    """
     A = np.asarray(A, dtype=float)
     n = A.shape[0]
     res = hinf_norm(A, np.eye(n), A, np.zeros((n, n)))

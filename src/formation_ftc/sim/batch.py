@@ -50,6 +50,40 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     and padded to ``size`` runs (default: ``len(params)``) with the last run's value, so that every
     chunk of a campaign uses the same program; a leaf equal (same shape, same values, NaN equal to
     NaN) in every run is kept once and its ``in_axes`` entry is None.
+
+    Parameters
+    ----------
+    params : sequence of pytree
+        Parameters of each run (same structure; SI units).
+    size : int, optional
+        Number of runs of the batch (>= ``len(params)``).
+
+    Returns
+    -------
+    batch : pytree
+        Stacked (axis 0, length ``size``) or shared leaves.
+    in_axes : pytree
+        0 for a stacked leaf, None for a shared one.
+
+    Raises
+    ------
+    ValueError
+        No runs, ``size`` too small, or runs of different structure.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.batch import stack_params
+    >>> runs = [{"gain": np.array([1.0, 2.0]), "mass": 3.0}, {"gain": np.array([1.0, 2.5]), "mass": 3.0}]
+    >>> batch, in_axes = stack_params(runs, size=3)
+    >>> in_axes
+    {'gain': 0, 'mass': None}
+    >>> batch["gain"]
+    array([[1. , 2. ],
+           [1. , 2.5],
+           [1. , 2.5]])
+    >>> batch["mass"]
+    array(3.)
     """
     if not params:
         raise ValueError("stack_params: no runs")
@@ -93,7 +127,32 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
     Compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options` (the fast-compile preset when the loop's
-    controller sets ``batch_fast_compile``)."""
+    controller sets ``batch_fast_compile``).
+
+    Parameters
+    ----------
+    compiled : Compiled
+        A compiled scenario (anything with ``static_key`` and ``run``).
+    in_axes : pytree
+        From :func:`stack_params`.
+    size : int
+        Runs per batch.
+
+    Returns
+    -------
+    CachedProgram
+        Called with the batch of :func:`stack_params`; outputs with the run axis first.
+
+    Examples
+    --------
+    >>> import types
+    >>> import numpy as np
+    >>> from formation_ftc.sim.batch import batched_run, stack_params
+    >>> prog = types.SimpleNamespace(static_key="doc-batched-run", run=lambda p: {"y": p["mass"] * p["gain"]})
+    >>> batch, in_axes = stack_params([{"gain": 1.0, "mass": 3.0}, {"gain": 2.0, "mass": 3.0}])
+    >>> np.asarray(batched_run(prog, in_axes, size=2)(batch)["y"])
+    array([3., 6.])
+    """
     key = (compiled.static_key, _batched_flags(in_axes), int(size))
     fn = lru_get(_CACHE, key)
     if fn is None:
@@ -121,6 +180,35 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     * equal down every column, different between columns (a gain per column): ``(columns, ...)``,
       batched by the inner map only (``None``, ``0``);
     * otherwise ``(rows, columns, ...)``, batched by both (``0``, ``0``).
+
+    Parameters
+    ----------
+    params : sequence of sequence of pytree
+        ``params[r][c]``: parameters of the run in row r, column c (SI units).
+
+    Returns
+    -------
+    batch : pytree
+        Leaves stored by what they depend on (see above).
+    row_axes : pytree
+        0 for the leaves batched by the outer map, else None.
+    column_axes : pytree
+        0 for the leaves batched by the inner map, else None.
+
+    Raises
+    ------
+    ValueError
+        No runs, rows of different lengths, or runs of different structure.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.batch import stack_params_grid
+    >>> grid = [[{"offset": x, "gain": g} for g in (1.0, 2.0, 3.0)] for x in (10.0, 20.0)]
+    >>> batch, row_axes, column_axes = stack_params_grid(grid)
+    >>> row_axes, column_axes
+    ({'gain': None, 'offset': 0}, {'gain': 0, 'offset': None})
+    >>> batch["offset"], batch["gain"]
+    (array([10., 20.]), array([1., 2., 3.]))
     """
     rows = [list(r) for r in params]
     if not rows or not rows[0]:
@@ -162,7 +250,36 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
 def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> CachedProgram:
     """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
     :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
-    only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs."""
+    only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs.
+
+    Parameters
+    ----------
+    compiled : Compiled
+        A compiled scenario (anything with ``static_key`` and ``run``).
+    row_axes, column_axes : pytree
+        From :func:`stack_params_grid`.
+    rows, columns : int
+        Grid size.
+
+    Returns
+    -------
+    CachedProgram
+        Called with the batch of :func:`stack_params_grid`; outputs with the axes ``(rows, columns)``
+        first.
+
+    Examples
+    --------
+    >>> import types
+    >>> import numpy as np
+    >>> from formation_ftc.sim.batch import batched_grid_run, stack_params_grid
+    >>> prog = types.SimpleNamespace(static_key="doc-batched-grid-run",
+    ...                              run=lambda p: {"y": p["gain"] + p["offset"]})
+    >>> grid = [[{"offset": x, "gain": g} for g in (1.0, 2.0, 3.0)] for x in (10.0, 20.0)]
+    >>> batch, row_axes, column_axes = stack_params_grid(grid)
+    >>> np.asarray(batched_grid_run(prog, row_axes, column_axes, rows=2, columns=3)(batch)["y"])
+    array([[11., 12., 13.],
+           [21., 22., 23.]])
+    """
     key = (compiled.static_key, "grid", _batched_flags(row_axes), _batched_flags(column_axes), int(rows),
            int(columns))
     fn = lru_get(_CACHE, key)
@@ -177,5 +294,18 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
 
 def clear() -> None:
     """Forget the cached batch programs and release their executables (held by each
-    :class:`~formation_ftc.sim.runtime.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach)."""
+    :class:`~formation_ftc.sim.runtime.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach).
+
+    Examples
+    --------
+    >>> import types
+    >>> from formation_ftc.sim.batch import batched_run, clear
+    >>> prog = types.SimpleNamespace(static_key="doc-batch-clear", run=lambda p: {"y": 2.0 * p["x"]})
+    >>> fn = batched_run(prog, {"x": 0}, 2)
+    >>> batched_run(prog, {"x": 0}, 2) is fn  # cached
+    True
+    >>> clear()
+    >>> batched_run(prog, {"x": 0}, 2) is fn  # built again
+    False
+    """
     _CACHE.clear()

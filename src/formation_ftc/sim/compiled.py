@@ -55,7 +55,45 @@ class Compiled:
 
 def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None = None):
     """Records of a run of ``loop`` -> ``xarray.Dataset`` with every declared signal, its dims, units,
-    long_name and frame; time [s] from ``t0 + j * dt * record_every``."""
+    long_name and frame; time [s] from ``t0 + j * dt * record_every``.
+
+    Parameters
+    ----------
+    loop : ClosedLoop
+        The loop whose signals were recorded.
+    records : dict of str to array
+        Recorded signals (leading axis = record index; SI units).
+    n_records : int
+        Records to keep.
+    attrs : dict, optional
+        Dataset attributes.
+
+    Returns
+    -------
+    xarray.Dataset
+        Every recorded declared signal with its dims, units, long_name and frame.
+
+    Raises
+    ------
+    ValueError
+        A record whose shape does not match its declared dims.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
+    >>> from formation_ftc.sim.loop import ClosedLoop
+    >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
+    ...                                initial_state_lvlh=np.array([[100.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
+    >>> loop = ClosedLoop(plant=plant, controller=ZeroController(count=1), dt=10.0, n_steps=2)
+    >>> from formation_ftc.sim.compiled import records_to_dataset
+    >>> ds = records_to_dataset(loop, {"position": np.ones((3, 1, 3))}, n_records=3)
+    >>> ds["position"].dims, ds["position"].attrs["units"], ds["position"].attrs["frame"]
+    (('time', 'spacecraft', 'axis'), 'm', 'LVLH')
+    >>> ds["time"].values
+    array([ 0., 10., 20.])
+    """
     import xarray as xr
 
     time = loop.t0 + np.arange(n_records) * loop.dt * loop.record_every
@@ -92,7 +130,42 @@ def _components(loop):
 
 
 def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:
-    """The engine's view of a closed loop: everything derived from the component declarations."""
+    """The engine's view of a closed loop: everything derived from the component declarations.
+
+    Parameters
+    ----------
+    loop : ClosedLoop
+        The loop (validated here).
+    dataset_attrs : dict, optional
+        Attributes of the datasets ``to_dataset`` builds.
+
+    Returns
+    -------
+    Compiled
+        ``run``, ``params`` (the loop), ``static_key`` (``("closed-loop", structure_key(loop))``), step
+        [s], decimation, dataset and metric builders, divergence replay and spacecraft axes.
+
+    Raises
+    ------
+    CompositionError
+        Components that cannot work together (from ``loop.validate()``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
+    >>> from formation_ftc.sim.loop import ClosedLoop
+    >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
+    ...                                initial_state_lvlh=np.array([[100.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
+    >>> loop = ClosedLoop(plant=plant, controller=ZeroController(count=1), dt=10.0, n_steps=2)
+    >>> from formation_ftc.sim.compiled import compile_loop
+    >>> c = compile_loop(loop)
+    >>> c.static_key[0], c.dt, c.record_every, c.params is loop
+    ('closed-loop', 10.0, 1, True)
+    >>> c.spacecraft_axis("0.plant.q")  # a leaf of the run's carry (state, accumulators), by path
+    0
+    """
     from formation_ftc.sim.loop import ClosedLoop
 
     loop.validate()

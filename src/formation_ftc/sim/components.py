@@ -90,6 +90,30 @@ def static(default: Any = dataclasses.MISSING, **kwargs: Any) -> Any:
 
     Pass the default by keyword (``static(default=1)``): type checkers read field specifiers per
     PEP 681 and only recognise a keyword ``default`` (a positional one is accepted at run time).
+
+    Parameters
+    ----------
+    default : Any, optional
+        Default value (hashable).
+    **kwargs
+        Further :func:`dataclasses.field` arguments (``metadata`` is merged).
+
+    Returns
+    -------
+    dataclasses.Field
+        A field whose metadata marks it static.
+
+    Examples
+    --------
+    >>> import jax
+    >>> import numpy as np
+    >>> from formation_ftc.sim.components import component, static
+    >>> @component
+    ... class Gain:
+    ...     k: object                       # a leaf [1/s]
+    ...     count: int = static(default=1)  # structure
+    >>> jax.tree_util.tree_leaves(Gain(k=np.array([0.5, 0.7]), count=2))
+    [array([0.5, 0.7])]
     """
     metadata = dict(kwargs.pop("metadata", {}) or {}, static=True)
     return dataclasses.field(default=default, metadata=metadata, **kwargs)
@@ -101,6 +125,32 @@ def component(cls: type[T]) -> type[T]:
 
     Fields declared with :func:`static` are metadata of the tree definition (compile key); every other
     field is a child (an array leaf or a nested component). Subclasses must be decorated again.
+
+    Parameters
+    ----------
+    cls : type
+        The class to decorate.
+
+    Returns
+    -------
+    type
+        ``cls`` as a frozen dataclass registered with ``jax.tree_util.register_dataclass``.
+
+    Examples
+    --------
+    >>> import dataclasses
+    >>> import jax
+    >>> import numpy as np
+    >>> from formation_ftc.sim.components import component, static
+    >>> @component
+    ... class Damper:
+    ...     c: object                       # damping [N s/m]
+    ...     count: int = static(default=1)
+    >>> d = Damper(c=np.array([2.0]))
+    >>> jax.tree_util.tree_map(lambda x: 3.0 * x, d)
+    Damper(c=array([6.]), count=1)
+    >>> dataclasses.replace(d, count=2).count
+    2
     """
     cls = dataclasses.dataclass(frozen=True, eq=False)(cls)
     fields = dataclasses.fields(cls)  # type: ignore[arg-type]  # cls is a dataclass from the line above
@@ -119,7 +169,33 @@ def component(cls: type[T]) -> type[T]:
 
 def structure_key(tree: PyTree) -> Any:
     """Compile key of a component tree: its tree definition (static fields included) and the shapes
-    and dtypes of its leaves. Two trees with equal keys run with one compiled program."""
+    and dtypes of its leaves. Two trees with equal keys run with one compiled program.
+
+    Parameters
+    ----------
+    tree : pytree
+        A component (or any pytree).
+
+    Returns
+    -------
+    tuple
+        ``(treedef, ((shape, dtype name), ...))``, hashable.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.components import component, static, structure_key
+    >>> @component
+    ... class Gain:
+    ...     k: object
+    ...     count: int = static(default=1)
+    >>> structure_key(Gain(k=np.array([0.5]))) == structure_key(Gain(k=np.array([9.0])))  # numbers differ
+    True
+    >>> structure_key(Gain(k=np.array([0.5]))) == structure_key(Gain(k=np.array([0.5]), count=2))
+    False
+    >>> structure_key(Gain(k=np.array([0.5])))[1]
+    (((1,), 'float64'),)
+    """
     leaves, treedef = jax.tree_util.tree_flatten(tree)
     return treedef, tuple((jnp.shape(x), jnp.result_type(x).name) for x in leaves)
 
@@ -503,10 +579,50 @@ class Evaluation(_Kind):
 
 
 def tree_take(tree: PyTree, j: int) -> PyTree:
-    """Entry ``j`` of every leaf's leading axis."""
+    """Entry ``j`` of every leaf's leading axis.
+
+    Parameters
+    ----------
+    tree : pytree
+        Arrays with a common leading axis (e.g. one entry per spacecraft or per run).
+    j : int
+        Index along that axis.
+
+    Returns
+    -------
+    pytree
+        The same structure with ``a[j]`` for every leaf ``a``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.components import tree_take
+    >>> t = tree_take({"q": np.arange(6.0).reshape(3, 2), "m": np.array([10.0, 20.0, 30.0])}, 1)
+    >>> t["q"], float(t["m"])
+    (array([2., 3.]), 20.0)
+    """
     return jax.tree_util.tree_map(lambda a: a[j], tree)
 
 
 def as_float(x: Any) -> np.ndarray:
-    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called)."""
+    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called).
+
+    Parameters
+    ----------
+    x : array_like
+        Numbers (any SI unit; unchanged).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x`` as float64.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.components import as_float
+    >>> as_float([1, 2])
+    array([1., 2.])
+    >>> as_float(3).dtype
+    dtype('float64')
+    """
     return np.asarray(x, dtype=np.float64)

@@ -54,7 +54,40 @@ RunOutput = dict
 
 
 def steps_from_horizon(horizon: float, dt: float, record_every: int = 1, field: str = "simulation") -> int:
-    """Number of steps for ``horizon``; the step must divide the horizon (to 1e-9 relative)."""
+    """Number of steps for ``horizon``; the step must divide the horizon (to 1e-9 relative).
+
+    Parameters
+    ----------
+    horizon : float
+        Simulated time (> 0) [s].
+    dt : float
+        Step (> 0) [s].
+    record_every : int, optional
+        Steps between records; must divide the step count.
+    field : str, optional
+        Section name used in the error messages.
+
+    Returns
+    -------
+    int
+        ``horizon / dt``.
+
+    Raises
+    ------
+    ValueError
+        Non-positive ``dt`` or ``horizon``, ``dt`` not dividing ``horizon``, or ``record_every`` not
+        dividing the step count.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.engine import steps_from_horizon
+    >>> steps_from_horizon(600.0, 0.1, record_every=10)
+    6000
+    >>> steps_from_horizon(10.0, 0.3)
+    Traceback (most recent call last):
+    ...
+    ValueError: simulation.dt = 0.3 s does not divide simulation.horizon = 10.0 s
+    """
     if dt <= 0:
         raise ValueError(f"{field}.dt must be > 0 s, got {dt}")
     if horizon <= 0:
@@ -104,6 +137,60 @@ def run_fixed_step(
     (a divisor of ``record_every``) ``fold(k_first, state, samples)`` receives the samples of those
     steps stacked along a leading axis (k_first: the first one's step index) and returns the state --
     per-step bookkeeping (metric accumulators) done once per block of steps, in vectorised form.
+
+    Parameters
+    ----------
+    step : callable
+        ``step(k, state) -> state`` (``(state, sample)`` with ``fold``); k is the int64 step index
+        (``t_k = t0 + k dt`` [s]).
+    observe : callable
+        ``observe(k, state) -> pytree`` recorded every ``record_every`` steps.
+    state0 : pytree
+        Initial state (SI units).
+    n_steps : int
+        Number of steps (static).
+    record_every : int, optional
+        Steps between records (a divisor of ``n_steps``; static).
+    unroll : int, optional
+        ``lax.scan`` unroll of the inner loop.
+    check_finite : bool, optional
+        Test the state for non-finite values at the end of every record block.
+    check_of : callable, optional
+        ``check_of(state)``: the part of the state tested.
+    admissible : callable, optional
+        ``admissible(state) -> bool``: further bounds of the admissible set.
+    fold : callable, optional
+        ``fold(k_first, state, samples) -> state``: per-step bookkeeping folded a block at a time.
+    fold_every : int, optional
+        Steps per fold (a divisor of ``record_every``).
+
+    Returns
+    -------
+    RunOutput
+        ``{"records", "final", "diverged_step", "last_finite"}``: the records (leading axis
+        ``n_steps / record_every + 1``), the final (or last finite) state, the first step of the first
+        failing block (-1 when none) and the last finite state.
+
+    Raises
+    ------
+    ValueError
+        ``record_every`` does not divide ``n_steps`` or ``fold_every`` does not divide ``record_every``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> import numpy as np
+    >>> from formation_ftc.sim.engine import run_fixed_step
+    >>> out = run_fixed_step(lambda k, x: 0.5 * x, lambda k, x: {"x": x}, jnp.asarray(1.0), n_steps=4,
+    ...                      record_every=2)
+    >>> np.asarray(out["records"]["x"]), int(out["diverged_step"])
+    (array([1.    , 0.25  , 0.0625]), -1)
+
+    A run that overflows keeps its last finite state and dates the failing block:
+
+    >>> out = run_fixed_step(lambda k, x: 1e200 * x, lambda k, x: {"x": x}, jnp.asarray(1.0), n_steps=4)
+    >>> int(out["diverged_step"]), float(out["final"])
+    (1, 1e+200)
     """
     if n_steps % record_every:
         raise ValueError(f"record_every={record_every} must divide n_steps={n_steps}")
@@ -167,7 +254,34 @@ def run_fixed_step(
 
 
 def trim_records(records: PyTree, diverged_step: int, record_every: int) -> tuple[PyTree, int]:
-    """Keep the records computed before divergence (all of them when ``diverged_step < 0``)."""
+    """Keep the records computed before divergence (all of them when ``diverged_step < 0``).
+
+    Parameters
+    ----------
+    records : pytree
+        Records of :func:`run_fixed_step` (leading axis = record index).
+    diverged_step : int
+        ``RunOutput["diverged_step"]`` (-1: the run stayed finite).
+    record_every : int
+        Steps between records.
+
+    Returns
+    -------
+    records : pytree
+        The records up to the first failing block's start (numpy arrays when trimmed).
+    n_records : int
+        How many were kept.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.engine import trim_records
+    >>> records = {"x": np.array([1.0, 1e200, np.inf, np.inf, np.inf])}
+    >>> trim_records(records, diverged_step=1, record_every=1)
+    ({'x': array([1.e+000, 1.e+200])}, 2)
+    >>> trim_records(records, diverged_step=-1, record_every=1)[1]
+    5
+    """
     n = jax.tree_util.tree_leaves(records)[0].shape[0]
     if diverged_step < 0:
         return records, n
@@ -353,6 +467,45 @@ def diagnose_divergence(
     One compiled program does the usual diagnosis: the replay returns the first failing state along
     with the last admissible one. A one-step program is compiled only when the run must be followed
     past that state (only accumulators non-finite) or when the replay finds no failing step.
+
+    Parameters
+    ----------
+    step : callable
+        ``step(k, state) -> state`` of the run.
+    last_finite : pytree
+        The last finite state (``RunOutput["last_finite"]``).
+    k : int
+        Its step index.
+    t : float
+        Its time [s].
+    spacecraft_axis : callable, optional
+        ``variable name -> axis of the spacecraft dimension or None`` (default: axis 0 of leaves with
+        two or more dimensions).
+    max_steps : int, optional
+        Steps replayed at most (a record block).
+    dt : float, optional
+        Step [s], to date the failing step.
+    admissible : callable, optional
+        ``admissible(state) -> bool``, the whole test of a state when given.
+    violations : callable, optional
+        ``violations(state) -> [(name, index, spacecraft), ...]`` naming a bound that was left.
+    params : ClosedLoop, optional
+        The loop whose ``replay_step`` and ``admissible`` are ``step`` and ``admissible``.
+
+    Returns
+    -------
+    DivergenceInfo
+        Step, time [s], variable, 0-based spacecraft (or None), index and reason.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.engine import diagnose_divergence
+    >>> def step(k, state):
+    ...     return {"q": 1e200 * state["q"]}
+    >>> last = {"q": jnp.array([[1.0, 1.0, 1.0], [1.0, 1e200, 1.0]])}
+    >>> print(diagnose_divergence(step, last, k=5, t=0.5, dt=0.1))
+    simulation diverged at t = 0.5 s (step 5): spacecraft 2, variable 'q' index [1, 1] became non-finite
     """
     use_params = params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
 

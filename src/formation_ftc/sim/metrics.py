@@ -70,7 +70,7 @@ _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt i
 class Metric:
     """One scalar metric (or one per spacecraft with ``spacecraft = "each"``).
 
-    Parameters
+    Attributes
     ----------
     name : metric name (``"each"`` appends ``_sc1``, ``_sc2``, ...).
     signal : name of a recorded signal of the closed loop.
@@ -154,7 +154,28 @@ class Metric:
 
 
 def metric_names(metrics: Sequence[Metric], count: int) -> list[str]:
-    """Flat metric names (per-spacecraft metrics expanded)."""
+    """Flat metric names (per-spacecraft metrics expanded).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    count : int
+        Number of spacecraft N.
+
+    Returns
+    -------
+    list of str
+        One name per scalar value.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.metrics import Metric, metric_names
+    >>> ms = (Metric("peak", "position_error", norm=True, spacecraft="each", units="m"),
+    ...       Metric("t_settle", "mu1", reduce="settle", threshold=0.1, units="s"))
+    >>> metric_names(ms, count=2)
+    ['peak_sc1', 'peak_sc2', 't_settle']
+    """
     out = []
     for m in metrics:
         if m.spacecraft == "each":
@@ -265,7 +286,32 @@ def _unpack(reduce: str, packed: jax.Array) -> tuple:
 def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
     """Initial accumulator of each metric (shapes taken from the signals at t0). Metrics accumulated
     together keep their common accumulator (one array, see :func:`_classes`) in the first member's
-    entry (the others hold ``()``)."""
+    entry (the others hold ``()``).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    signals : mapping of str to array
+        One sample of every signal the metrics read (SI units).
+
+    Returns
+    -------
+    tuple
+        One entry per metric (``()`` for the members after the first of a group).
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import finalize, init_accumulators
+    >>> ms = (Metric("peak", "e", reduce="max", units="m"), Metric("avg", "e", reduce="mean", units="m"))
+    >>> accs = init_accumulators(ms, {"e": jnp.asarray(0.0)})
+    >>> accs[1]  # the group's accumulator is held in the first entry
+    ()
+    >>> [float(v) for v in finalize(ms, accs)]  # no sample yet
+    [nan, nan]
+    """
     accs: list[Any] = [()] * len(metrics)
     for slot, groups in _classes(metrics):
         if not isinstance(groups[0][1], _Stack):
@@ -313,19 +359,89 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
 def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float,
                         signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
-    which the rectangle-rule integral does not count)."""
+    which the rectangle-rule integral does not count).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    accs : tuple
+        Accumulators from :func:`init_accumulators` or an earlier update.
+    t : float or jax.Array
+        Time of the sample [s].
+    dt : float
+        Step [s] (weight of the rectangle-rule integral).
+    signals : mapping of str to array
+        The sample's signals (SI units).
+    is_final : bool, optional
+        The horizon sample.
+
+    Returns
+    -------
+    tuple
+        The updated accumulators.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import finalize, init_accumulators, update_accumulators
+    >>> ms = (Metric("peak", "e", reduce="max", units="m"), Metric("avg", "e", reduce="mean", units="m"),
+    ...       Metric("area", "e", reduce="integral", units="m s"))
+    >>> accs = init_accumulators(ms, {"e": jnp.asarray(0.0)})
+    >>> for k, v in enumerate([1.0, 3.0, 2.0]):
+    ...     accs = update_accumulators(ms, accs, t=0.1 * k, dt=0.1, signals={"e": jnp.asarray(v)})
+    >>> [round(float(v), 6) for v in finalize(ms, accs)]
+    [3.0, 2.0, 0.6]
+    """
     return _apply(metrics, accs, t, dt, sample_values(metrics, signals, is_final), is_final)
 
 
 def reads_steps(m: Metric) -> bool:
     """Whether ``m`` is accumulated from every step's sample (stage-integrated metrics are folded from
-    the integrator's stages, ``last`` reads the horizon sample only)."""
+    the integrator's stages, ``last`` reads the horizon sample only).
+
+    Parameters
+    ----------
+    m : Metric
+        The metric.
+
+    Returns
+    -------
+    bool
+        True when the metric reads every step's sample.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.metrics import Metric, reads_steps
+    >>> reads_steps(Metric("peak", "e")), reads_steps(Metric("end", "e", reduce="last"))
+    (True, False)
+    """
     return m.reduce not in STAGE_REDUCTIONS and m.reduce != "last"
 
 
 def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
     """Names of the signals :func:`fold_block` reads (the signals and gates of every metric that
-    :func:`reads_steps`)."""
+    :func:`reads_steps`).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+
+    Returns
+    -------
+    tuple of str
+        Signal names, in order of first use, each once.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.metrics import Metric, block_signals
+    >>> ms = (Metric("a", "e"), Metric("b", "f", gate="mode"), Metric("c", "e", reduce="mean"),
+    ...       Metric("d", "g", reduce="last"))
+    >>> block_signals(ms)
+    ('e', 'f', 'mode')
+    """
     names: dict[str, None] = {}
     for m in metrics:
         if not reads_steps(m):
@@ -338,13 +454,67 @@ def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
 
 def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> jax.Array:
     """The signals of :func:`block_signals` of one sample as one flat float64 vector (a scan then
-    stacks one array per step instead of one per signal: each is a separate copy per step)."""
+    stacks one array per step instead of one per signal: each is a separate copy per step).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    signals : mapping of str to array
+        One sample's signals (SI units).
+
+    Returns
+    -------
+    jax.Array, shape (F,)
+        The signals of :func:`block_signals`, raveled and concatenated, as float64.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> import numpy as np
+    >>> from formation_ftc.sim.metrics import pack_sample
+    >>> ms = (Metric("a", "e", norm=True), Metric("b", "f"))
+    >>> np.asarray(pack_sample(ms, {"e": jnp.array([3.0, 4.0]), "f": jnp.asarray(1.5)}))
+    array([3. , 4. , 1.5])
+    """
     return jnp.concatenate([jnp.ravel(jnp.asarray(signals[n])).astype(jnp.float64) for n in block_signals(metrics)])
 
 
 def unpack_samples(metrics: Sequence[Metric], shapes: Mapping[str, Any], packed: jax.Array) -> dict[str, jax.Array]:
     """Inverse of :func:`pack_sample` over a block: ``packed`` (L, F) -> ``{signal: (L, *shape)}`` in the
-    signals' dtypes (``shapes``: each signal's shape and dtype, e.g. from ``jax.eval_shape``)."""
+    signals' dtypes (``shapes``: each signal's shape and dtype, e.g. from ``jax.eval_shape``).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    shapes : mapping of str to shape-and-dtype
+        Each signal of :func:`block_signals` with ``.shape`` and ``.dtype`` (e.g. ``jax.ShapeDtypeStruct``).
+    packed : jax.Array, shape (L, F)
+        L packed samples.
+
+    Returns
+    -------
+    dict of str to jax.Array
+        ``{signal: (L, *shape)}``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> import jax
+    >>> import numpy as np
+    >>> from formation_ftc.sim.metrics import pack_sample, unpack_samples
+    >>> ms = (Metric("a", "e", norm=True), Metric("b", "f"))
+    >>> samples = [{"e": jnp.array([3.0, 4.0]), "f": jnp.asarray(1.5)}, {"e": jnp.array([0.0, 1.0]), "f": jnp.asarray(2.5)}]
+    >>> packed = jnp.stack([pack_sample(ms, s) for s in samples])
+    >>> shapes = {"e": jax.ShapeDtypeStruct((2,), jnp.float64), "f": jax.ShapeDtypeStruct((), jnp.float64)}
+    >>> out = unpack_samples(ms, shapes, packed)
+    >>> np.asarray(out["e"]), np.asarray(out["f"])
+    (array([[3., 4.],
+           [0., 1.]]), array([1.5, 2.5]))
+    """
     out, col = {}, 0
     for n in block_signals(metrics):
         shape, dtype = tuple(shapes[n].shape), shapes[n].dtype
@@ -359,7 +529,33 @@ def sample_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array], i
     stacked values and gate (``(value, gate)``; ``gate`` None without one); ``None`` for the
     stage-integrated metrics (folded by :func:`update_stage_accumulators`) and, except at the horizon
     sample, for ``last``. The values are taken apart from the accumulator update so that a block of
-    samples can be evaluated in one vectorised operation (:func:`fold_block`)."""
+    samples can be evaluated in one vectorised operation (:func:`fold_block`).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    signals : mapping of str to array
+        One sample's signals (SI units).
+    is_final : bool, optional
+        The horizon sample.
+
+    Returns
+    -------
+    tuple
+        One entry per carry slot: a tuple of ``(values, gate)`` per group, or None.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> import numpy as np
+    >>> from formation_ftc.sim.metrics import sample_values
+    >>> ms = (Metric("peak", "e"), Metric("avg", "e", reduce="mean"))
+    >>> (slot,) = sample_values(ms, {"e": jnp.asarray(2.0)})  # both scalar: one carry slot
+    >>> [(np.asarray(v), gate) for v, gate in slot]  # one (values, gate) per group
+    [(array([2.]), None), (array([2.]), None)]
+    """
     out: list[Any] = []
     for _, groups in _classes(metrics):
         if not isinstance(groups[0][1], _Stack):
@@ -407,7 +603,40 @@ def fold_block(metrics: Sequence[Metric], accs: tuple, k0: jax.Array, t0: float,
     reduction over the block's samples (:func:`_fold_group`) -- instead of one small kernel per metric
     and step. The selections (extremes, first / last / settling samples) are the same values bit for
     bit; the sums (``mean``, ``integral``, ``rms``, the block reductions) add the block's samples first
-    and then to the running sum, so they may differ from the sample-by-sample order in the last bits."""
+    and then to the running sum, so they may differ from the sample-by-sample order in the last bits.
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    accs : tuple
+        Accumulators before the block.
+    k0 : int or jax.Array
+        Step index of the block's first sample.
+    t0 : float
+        Start time of the run [s] (sample j is at ``t0 + (k0 + j) dt``).
+    dt : float
+        Step [s].
+    samples : mapping of str to array
+        Every signal of :func:`block_signals` with a leading axis of length L.
+
+    Returns
+    -------
+    tuple
+        The accumulators after the block.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import finalize, fold_block, init_accumulators
+    >>> ms = (Metric("peak", "e"), Metric("avg", "e", reduce="mean"), Metric("t_hit", "e", reduce="first",
+    ...                                                                      threshold=2.5, units="s"))
+    >>> accs = init_accumulators(ms, {"e": jnp.asarray(0.0)})
+    >>> accs = fold_block(ms, accs, k0=0, t0=0.0, dt=0.1, samples={"e": jnp.array([1.0, 3.0, 2.0])})
+    >>> [round(float(v), 6) for v in finalize(ms, accs)]
+    [3.0, 2.0, 0.1]
+    """
     n = jax.tree_util.tree_leaves(samples)[0].shape[0]
     values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
     times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
@@ -596,7 +825,32 @@ def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: An
 
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
-    """Accumulators -> metric values (NaN where the window held no sample)."""
+    """Accumulators -> metric values (NaN where the window held no sample).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    accs : tuple
+        Their accumulators.
+
+    Returns
+    -------
+    tuple of jax.Array
+        One value per metric (scalar, or (N,) for ``spacecraft = "each"``), in the metric's units.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import finalize, init_accumulators, update_accumulators
+    >>> ms = (Metric("low", "e", reduce="min", start=0.15, units="m"), Metric("rms", "e", reduce="rms", units="m"))
+    >>> accs = init_accumulators(ms, {"e": jnp.asarray(0.0)})
+    >>> for k, v in enumerate([3.0, 4.0, 1.0]):
+    ...     accs = update_accumulators(ms, accs, t=0.1 * k, dt=0.1, signals={"e": jnp.asarray(v)})
+    >>> [round(float(v), 6) for v in finalize(ms, accs)]
+    [1.0, 2.94392]
+    """
     out: list[Any] = [None] * len(metrics)
     for slot, groups in _classes(metrics):
         if not isinstance(groups[0][1], _Stack):
@@ -646,14 +900,71 @@ def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
 
 
 def stage_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
-    """Values of the stage-integrated metrics at one integrator stage (None for the others)."""
+    """Values of the stage-integrated metrics at one integrator stage (None for the others).
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    signals : mapping of str to array
+        The signals at one integrator stage (SI units).
+
+    Returns
+    -------
+    tuple
+        The value of each stage-integrated metric, None for the others.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import stage_values
+    >>> ms = (Metric("effort", "command", reduce="stage_integral", norm=True, square=True, spacecraft="sum",
+    ...              units="N2 s"), Metric("peak", "command", norm=True, spacecraft="max", units="N"))
+    >>> values = stage_values(ms, {"command": jnp.array([[1.0, 2.0, 2.0]])})
+    >>> float(values[0]), values[1]
+    (9.0, None)
+    """
     return tuple(m.value(signals) if m.reduce in STAGE_REDUCTIONS else None for m in metrics)
 
 
 def update_stage_accumulators(metrics: Sequence[Metric], accs: tuple, t_k: jax.Array, dt: float,
                               increments: Sequence[Any]) -> tuple:
     """Add the integral over the step [t_k, t_k + dt] (``increments``, from the integrator's stages) to
-    every stage-integrated metric whose window contains the whole step."""
+    every stage-integrated metric whose window contains the whole step.
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    accs : tuple
+        Their accumulators.
+    t_k : jax.Array or float
+        Start of the step [s].
+    dt : float
+        Step [s].
+    increments : sequence
+        Integral over the step of each stage-integrated metric's value (None for the others) [signal
+        unit x s].
+
+    Returns
+    -------
+    tuple
+        The updated accumulators.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from formation_ftc.sim.metrics import Metric
+    >>> from formation_ftc.sim.metrics import finalize, init_accumulators, update_stage_accumulators
+    >>> ms = (Metric("effort", "command", reduce="stage_integral", norm=True, square=True, spacecraft="sum",
+    ...              units="N2 s"),)
+    >>> accs = init_accumulators(ms, {"command": jnp.zeros((1, 3))})
+    >>> for k in range(2):
+    ...     accs = update_stage_accumulators(ms, accs, t_k=0.1 * k, dt=0.1, increments=(jnp.asarray(0.9),))
+    >>> round(float(finalize(ms, accs)[0]), 6)
+    1.8
+    """
     out = []
     for m, acc, inc in zip(metrics, accs, increments, strict=True):
         if m.reduce not in STAGE_REDUCTIONS:
@@ -666,7 +977,27 @@ def update_stage_accumulators(metrics: Sequence[Metric], accs: tuple, t_k: jax.A
 
 
 def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, float]:
-    """Numpy metric values -> flat ``{name: float}``."""
+    """Numpy metric values -> flat ``{name: float}``.
+
+    Parameters
+    ----------
+    metrics : sequence of Metric
+        The metrics.
+    values : sequence of array_like
+        Their values (from :func:`finalize`), in the metrics' units.
+
+    Returns
+    -------
+    dict of str to float
+        Names as :func:`metric_names` gives them.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.metrics import Metric, metrics_dict
+    >>> ms = (Metric("peak", "e", spacecraft="each", units="m"), Metric("t_end", "e", reduce="last", units="m"))
+    >>> metrics_dict(ms, ([1.0, 2.0], 0.5))
+    {'peak_sc1': 1.0, 'peak_sc2': 2.0, 't_end': 0.5}
+    """
     res: dict[str, float] = {}
     for m, v in zip(metrics, values, strict=True):
         arr = np.asarray(v, dtype=float)

@@ -49,7 +49,33 @@ _CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
 
 
 def fault_kind_code(name: str) -> int:
-    """The numeric code of the fault kind ``name`` (raises ``ValueError`` naming the allowed names)."""
+    """The numeric code of the fault kind ``name`` (raises ``ValueError`` naming the allowed names).
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`FAULT_KINDS`.
+
+    Returns
+    -------
+    int
+        Its index in :data:`FAULT_KINDS` (the ``fault_kind`` leaf) [-].
+
+    Raises
+    ------
+    ValueError
+        Unknown name.
+
+    Examples
+    --------
+    >>> from formation_ftc.components.actuators.fault_battery import fault_kind_code
+    >>> fault_kind_code("none"), fault_kind_code("stuck")
+    (0, 3)
+    >>> fault_kind_code("jammed")
+    Traceback (most recent call last):
+    ...
+    ValueError: unknown fault kind 'jammed' (allowed: none, loss_of_effectiveness, bias, stuck, outage, intermittent, degrading)
+    """
     try:
         return _CODE[name]
     except KeyError:

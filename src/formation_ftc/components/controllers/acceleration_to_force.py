@@ -100,7 +100,38 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     """``law`` (acceleration command) driving a force plant with the flight side's ``nominal_mass``
     (N,) [kg], checked here (one finite mass > 0 per spacecraft of the law; not on pytree
     reconstruction, where a batch stacks the leaves); the law's position objective, if it declares
-    one, is kept."""
+    one, is kept.
+
+    Parameters
+    ----------
+    law : Controller
+        A law with ``quantity = "acceleration"`` and a ``count`` of N spacecraft.
+    nominal_mass : array_like, shape (N,)
+        Nominal masses known on board (finite, > 0) [kg].
+
+    Returns
+    -------
+    AccelerationToForce
+        A :class:`TrackingAccelerationToForce` when ``law`` declares a desired position.
+
+    Raises
+    ------
+    CompositionError
+        Not one finite mass > 0 per spacecraft, or a law that does not command accelerations.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    >>> from formation_ftc.components.controllers.output_feedback import FreeDrift
+    >>> ctrl = force_from_acceleration(FreeDrift(count=2), np.array([100.0, 120.0]))
+    >>> type(ctrl).__name__, ctrl.quantity, ctrl.count
+    ('AccelerationToForce', 'force', 2)
+    >>> force_from_acceleration(FreeDrift(count=2), np.array([100.0]))
+    Traceback (most recent call last):
+    ...
+    formation_ftc.sim.components.CompositionError: AccelerationToForce: nominal masses [100.0] kg for controller FreeDrift of 2 spacecraft (need 2, each > 0)
+    """
     m = np.asarray(nominal_mass, dtype=float)
     n = int(law.count)  # type: ignore[attr-defined]  # every translational law has a count
     if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):

@@ -21,7 +21,33 @@ __all__ = ["AttitudePdController", "error_quaternion"]
 def error_quaternion(q, q_desired):
     """Attitude error ``q_e = q_d^* (x) q`` (body -> desired frame), vector first, shape (..., 4) [-].
 
-    ``q`` and ``q_desired`` are body -> reference and desired -> reference quaternions."""
+    ``q`` and ``q_desired`` are body -> reference and desired -> reference quaternions.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Body -> reference quaternion(s), vector first [-].
+    q_desired : array_like, shape (..., 4)
+        Desired -> reference quaternion(s), vector first [-].
+
+    Returns
+    -------
+    jax.Array, shape (..., 4)
+        The error quaternion q_e [-].
+
+    Examples
+    --------
+    A body turned 90 deg about z from a desired attitude turned 30 deg about z: a 60 deg error about z.
+
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.attitude_pd import error_quaternion
+    >>> def about_z(deg):
+    ...     h = np.radians(deg) / 2
+    ...     return np.array([0.0, 0.0, np.sin(h), np.cos(h)])
+    >>> qe = np.asarray(error_quaternion(about_z(90.0), about_z(30.0)))
+    >>> bool(np.allclose(qe, about_z(60.0)))
+    True
+    """
     return quat_multiply(quat_conjugate(q_desired), q)
 
 

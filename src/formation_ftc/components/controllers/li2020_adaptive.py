@@ -24,7 +24,36 @@ VEC = ("spacecraft", "axis")
 
 def composite_error(y, desired: dict, k):
     """(s, e1, e2) from the measured (N, 6) relative state ``y``: e_i1 = rho_i - rho_i^d [m],
-    e_i2 = v_i - v_i^d [m/s], s_i = e_i2 + k_i e_i1 [m/s] (eq. (6))."""
+    e_i2 = v_i - v_i^d [m/s], s_i = e_i2 + k_i e_i1 [m/s] (eq. (6)).
+
+    Parameters
+    ----------
+    y : array_like, shape (N, 6)
+        Measured relative state [m, m/s].
+    desired : dict
+        ``"rho_d"`` (N, 3) desired position [m] and ``"v_d"`` (N, 3) desired velocity [m/s].
+    k : array_like, shape (N,)
+        Gains k_i [1/s].
+
+    Returns
+    -------
+    s : jax.Array, shape (N, 3)
+        Composite error [m/s].
+    e1 : jax.Array, shape (N, 3)
+        Position error [m].
+    e2 : jax.Array, shape (N, 3)
+        Velocity error [m/s].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.li2020_adaptive import composite_error
+    >>> y = np.array([[1.0, 0.0, 0.0, 0.1, 0.0, 0.0]])
+    >>> desired = {"rho_d": np.zeros((1, 3)), "v_d": np.zeros((1, 3))}
+    >>> s, e1, e2 = composite_error(y, desired, np.array([0.5]))
+    >>> np.asarray(s)
+    array([[0.6, 0. , 0. ]])
+    """
     e1 = y[:, :3] - desired["rho_d"]  # eq. (6)
     e2 = y[:, 3:] - desired["v_d"]
     return e2 + k[:, None] * e1, e1, e2
@@ -32,7 +61,32 @@ def composite_error(y, desired: dict, k):
 
 def consensus(received, s):
     """sum_j c_ij (s_i - s_j(t - T_ij)) from a graph network's delivery (eqs. (24) / (42)); zero
-    without a network."""
+    without a network.
+
+    Parameters
+    ----------
+    received : dict or None
+        A graph network's delivery: ``"in_weight"`` (N,) sum_j c_ij [-] and ``"weighted_sum"`` (N, 3)
+        sum_j c_ij s_j [m/s]; None without a network.
+    s : array_like, shape (N, 3)
+        Own composite errors s_i [m/s].
+
+    Returns
+    -------
+    jax.Array, shape (N, 3)
+        The consensus term [m/s].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.li2020_adaptive import consensus
+    >>> s = np.array([[1.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+    >>> received = {"in_weight": np.array([1.0, 1.0]), "weighted_sum": s[::-1]}  # c_12 = c_21 = 1
+    >>> np.asarray(consensus(received, s))[:, 0]
+    array([-2.,  2.])
+    >>> np.asarray(consensus(None, s))[:, 0]
+    array([0., 0.])
+    """
     if received is None:
         return jnp.zeros_like(s)
     return received["in_weight"][:, None] * s - received["weighted_sum"]

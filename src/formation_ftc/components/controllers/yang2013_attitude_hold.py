@@ -28,7 +28,36 @@ def yang2013_error_state(omega, q, q_desired):
 
     Every component of (2) is zero at the desired attitude, at rest, as the error state of Yang2013's
     error-level model (whose attitude error starts at zero); the signs are those with which the law (13)
-    with positive gains is stabilising (the error-level plant is driven by +tau)."""
+    with positive gains is stabilising (the error-level plant is driven by +tau).
+
+    Parameters
+    ----------
+    omega : array_like, shape (N, 3)
+        Body rate relative to the frame of ``q``, body axes [rad/s].
+    q : array_like, shape (N, 4)
+        Body -> frame quaternions, vector first [-].
+    q_desired : array_like, shape (N, 4)
+        Desired body -> frame quaternions, vector first [-].
+
+    Returns
+    -------
+    dict
+        ``"omega"`` (N, 3) [rad/s] and ``"q"`` (N, 4) ``[e_q, e_q4]`` [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.yang2013_attitude_hold import yang2013_error_state
+    >>> at_rest = yang2013_error_state(np.zeros((1, 3)), np.array([[0.0, 0.0, 0.0, -1.0]]),
+    ...                                np.array([[0.0, 0.0, 0.0, 1.0]]))  # -q is the same attitude
+    >>> bool(np.all(np.asarray(at_rest["q"]) == 0.0))
+    True
+    >>> h = np.radians(60.0) / 2  # turned 60 deg about z: e_q = [0, 0, sin 30 deg], e_q4 = cos 30 deg - 1
+    >>> e = yang2013_error_state(np.zeros((1, 3)), np.array([[0.0, 0.0, np.sin(h), np.cos(h)]]),
+    ...                          np.array([[0.0, 0.0, 0.0, 1.0]]))
+    >>> np.round(np.asarray(e["q"])[0, 2:], 6)
+    array([ 0.5     , -0.133975])
+    """
     qe = error_quaternion(q, q_desired)
     qe = jnp.where(qe[:, 3:4] < 0.0, -qe, qe)  # (1)
     return {"omega": omega, "q": jnp.concatenate([qe[:, 0:3], qe[:, 3:4] - 1.0], axis=-1)}  # (2)

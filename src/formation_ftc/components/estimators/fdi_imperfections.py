@@ -28,7 +28,26 @@ VEC = ("spacecraft", "axis")
 
 def fdi_noise_key(seed):
     """Root key of the FDI noise: the fourth of the run's four streams (see
-    :func:`formation_ftc.components.plants.euler_angle_attitude.seed_streams`)."""
+    :func:`formation_ftc.components.plants.euler_angle_attitude.seed_streams`).
+
+    Parameters
+    ----------
+    seed : int or array_like
+        The run's seed (uint32) [-].
+
+    Returns
+    -------
+    jax.Array
+        The FDI stream's root key.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.estimators.fdi_imperfections import fdi_noise_key
+    >>> from formation_ftc.components.plants.euler_angle_attitude import seed_streams
+    >>> bool(np.array_equal(fdi_noise_key(7), seed_streams(7)[3]))
+    True
+    """
     return jax.random.split(run_key(seed), 4)[3]
 
 

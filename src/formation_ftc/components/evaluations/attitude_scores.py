@@ -19,16 +19,57 @@ __all__ = ["AttitudeScores", "rotation_angle", "relative_angle"]
 
 
 def rotation_angle(q):
-    """Rotation angle of the unit quaternion(s) ``q`` (..., 4), vector first, in [0, pi] [rad]::
+    """Rotation angle of the unit quaternion(s) ``q`` (..., 4), vector first, in ``[0, pi]`` [rad]::
 
         theta = 2 atan2(|q_v|, |q4|)                                     (1)
 
-    (the shorter rotation: q and -q give the same angle)."""
+    (the shorter rotation: q and -q give the same angle).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternion(s), vector first [-].
+
+    Returns
+    -------
+    jax.Array, shape (...)
+        theta [rad].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.evaluations.attitude_scores import rotation_angle
+    >>> h = np.radians(90.0) / 2
+    >>> q = np.array([[0.0, 0.0, np.sin(h), np.cos(h)], [0.0, 0.0, -np.sin(h), -np.cos(h)]])
+    >>> np.degrees(np.asarray(rotation_angle(q))).round(6)  # q and -q: the same 90 deg
+    array([90., 90.])
+    """
     return 2.0 * jnp.arctan2(jnp.linalg.norm(q[..., 0:3], axis=-1), jnp.abs(q[..., 3]))  # (1)
 
 
 def relative_angle(p, q):
-    """Angle of the rotation from attitude ``p`` to attitude ``q`` (..., 4) [rad]: (1) of ``p^* (x) q``."""
+    """Angle of the rotation from attitude ``p`` to attitude ``q`` (..., 4) [rad]: (1) of ``p^* (x) q``.
+
+    Parameters
+    ----------
+    p, q : array_like, shape (..., 4)
+        Unit quaternions, vector first [-].
+
+    Returns
+    -------
+    jax.Array, shape (...)
+        The angle in ``[0, pi]`` [rad].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.evaluations.attitude_scores import relative_angle
+    >>> def about_x(deg):
+    ...     h = np.radians(deg) / 2
+    ...     return np.array([np.sin(h), 0.0, 0.0, np.cos(h)])
+    >>> round(float(np.degrees(relative_angle(about_x(10.0), about_x(35.0)))), 6)
+    25.0
+    """
     return rotation_angle(quat_multiply(quat_conjugate(p), q))
 
 

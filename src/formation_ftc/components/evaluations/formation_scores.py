@@ -21,7 +21,30 @@ def shape_error(rho: jnp.ndarray, desired: jnp.ndarray) -> jnp.ndarray:
     """max over pairs i < j of ||(rho_i - rho_j) - (d_i - d_j)|| [m]; rho, desired (..., N, 3).
 
     The formation-keeping error: it ignores a common translation of the whole formation (a law that keeps
-    the shape while the formation drifts as a whole scores 0 here, not on the slot error)."""
+    the shape while the formation drifts as a whole scores 0 here, not on the slot error).
+
+    Parameters
+    ----------
+    rho : array_like, shape (..., N, 3)
+        Positions [m].
+    desired : array_like, shape (..., N, 3)
+        Desired slots [m].
+
+    Returns
+    -------
+    jax.Array, shape (...)
+        The shape error [m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.evaluations.formation_scores import shape_error
+    >>> desired = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0]])
+    >>> float(shape_error(desired + 7.0, desired))  # a common drift
+    0.0
+    >>> float(shape_error(desired + np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 0.0, 0.0]]), desired))
+    2.0
+    """
     n = rho.shape[-2]
     iu, ju = np.triu_indices(n, k=1)
     c = rho - desired

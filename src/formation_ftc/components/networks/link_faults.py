@@ -28,7 +28,36 @@ __all__ = ["GraphLinkLossNetwork", "DelayedGraphLinkLossNetwork", "faulty_weight
 
 
 def faulty_weights(weights, lost, onset, t_k):
-    """``c_ij (1 - lost_ij [t_k >= onset])`` [-]: the weights in force over the step starting at ``t_k`` [s]."""
+    """``c_ij (1 - lost_ij [t_k >= onset])`` [-]: the weights in force over the step starting at ``t_k`` [s].
+
+    Parameters
+    ----------
+    weights : array_like, shape (N, N)
+        Link weights c_ij, row i = receiver [-].
+    lost : array_like, shape (N, N)
+        1 where the link (i <- j) is lost after the onset [-].
+    onset : float
+        Onset of the link loss [s].
+    t_k : float or jax.Array
+        Start of the step [s].
+
+    Returns
+    -------
+    jax.Array, shape (N, N)
+        The weights in force [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.networks.link_faults import faulty_weights
+    >>> w, lost = np.array([[0.0, 1.0], [1.0, 0.0]]), np.array([[0.0, 1.0], [0.0, 0.0]])
+    >>> np.asarray(faulty_weights(w, lost, onset=5.0, t_k=4.0))
+    array([[0., 1.],
+           [1., 0.]])
+    >>> np.asarray(faulty_weights(w, lost, onset=5.0, t_k=5.0))
+    array([[0., 0.],
+           [1., 0.]])
+    """
     return jnp.where(t_k >= onset, weights * (1.0 - lost), weights)
 
 

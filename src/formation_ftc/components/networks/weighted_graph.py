@@ -25,7 +25,24 @@ __all__ = ["GraphNetwork", "DelayedGraphNetwork", "delay_vector_function", "grap
 
 
 def graph_edges(weights) -> tuple[tuple[int, int], ...]:
-    """Used links (i, j) (0-based receiver, sender) of a weight matrix, row-major order."""
+    """Used links (i, j) (0-based receiver, sender) of a weight matrix, row-major order.
+
+    Parameters
+    ----------
+    weights : array_like, shape (N, N)
+        Link weights c_ij, row i = receiver [-]; a link is used where c_ij > 0.
+
+    Returns
+    -------
+    tuple of tuple of int
+        ``(i, j)`` pairs.
+
+    Examples
+    --------
+    >>> from formation_ftc.components.networks.weighted_graph import graph_edges
+    >>> graph_edges([[0.0, 1.0, 0.0], [0.5, 0.0, 2.0], [0.0, 0.0, 0.0]])
+    ((0, 1), (1, 0), (1, 2))
+    """
     w = np.asarray(weights, dtype=float)
     return tuple((int(i), int(j)) for i, j in zip(*np.nonzero(w > 0), strict=True))
 
@@ -42,7 +59,29 @@ def _link_selections(edges: tuple[tuple[int, int], ...], n: int):
 @lru_cache(maxsize=256)
 def delay_vector_function(texts: tuple[tuple[str, ...], ...], pairs: tuple[tuple[int, int], ...]):
     """``T(t) -> (E,)`` [s]: the delay expressions (in t [s], i receiver, j sender, 1-based) of the listed
-    ``pairs`` ((i, j) 0-based), in that order (compiled once per texts and pairs)."""
+    ``pairs`` ((i, j) 0-based), in that order (compiled once per texts and pairs).
+
+    Parameters
+    ----------
+    texts : tuple of tuple of str
+        (N, N) delay expressions T_ij, row i = receiver, giving seconds.
+    pairs : tuple of tuple of int
+        The links ``(i, j)``, 0-based.
+
+    Returns
+    -------
+    callable
+        ``T(t)`` with t [s] -> jax.Array of shape ``(len(pairs),) + shape(t)`` [s].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.networks.weighted_graph import delay_vector_function
+    >>> texts = (("0", "0.1 + 0.01 * t"), ("0.2 * i", "0"))
+    >>> T = delay_vector_function(texts, ((0, 1), (1, 0)))
+    >>> np.asarray(T(2.0)).round(12)
+    array([0.12, 0.4 ])
+    """
     fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
            for i, j in pairs]
 

@@ -36,7 +36,28 @@ VEC = ("spacecraft", "axis")
 
 
 def batched_inverse_3x3(J):
-    """Inverse of every (..., 3, 3) matrix by its adjugate (plain arithmetic that XLA fuses)."""
+    """Inverse of every (..., 3, 3) matrix by its adjugate (plain arithmetic that XLA fuses).
+
+    Parameters
+    ----------
+    J : array_like, shape (..., 3, 3)
+        Invertible matrices, e.g. inertias [kg m^2].
+
+    Returns
+    -------
+    jax.Array, shape (..., 3, 3)
+        The inverses (e.g. [1/(kg m^2)]).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.plants.attitude_truth import batched_inverse_3x3
+    >>> J = np.array([np.diag([10.0, 20.0, 40.0]), [[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 1.0]]])
+    >>> bool(np.allclose(batched_inverse_3x3(J), np.linalg.inv(J)))
+    True
+    >>> np.asarray(batched_inverse_3x3(J))[0].diagonal()
+    array([0.1  , 0.05 , 0.025])
+    """
     a, b, c = J[..., 0, :], J[..., 1, :], J[..., 2, :]
     cols = jnp.stack([jnp.cross(b, c), jnp.cross(c, a), jnp.cross(a, b)], axis=-1)
     det = jnp.sum(a * jnp.cross(b, c), axis=-1)

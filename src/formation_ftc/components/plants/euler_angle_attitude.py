@@ -37,7 +37,28 @@ AXES = ("pitch", "roll", "yaw")
 
 
 def seed_streams(seed) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
-    """The four random streams of a run: (initial attitudes, inertia, disturbance, FDI noise)."""
+    """The four random streams of a run: (initial attitudes, inertia, disturbance, FDI noise).
+
+    Parameters
+    ----------
+    seed : int or array_like
+        The run's seed (uint32) [-].
+
+    Returns
+    -------
+    tuple of jax.Array
+        Four independent root keys.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.plants.euler_angle_attitude import seed_streams
+    >>> keys = seed_streams(42)
+    >>> len(keys), bool(np.array_equal(keys[0], seed_streams(42)[0]))
+    (4, True)
+    >>> bool(np.array_equal(keys[0], keys[1]))
+    False
+    """
     k_q0, k_J, k_d, k_fdi = jax.random.split(run_key(seed), 4)
     return k_q0, k_J, k_d, k_fdi
 

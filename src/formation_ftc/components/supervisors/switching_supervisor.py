@@ -131,7 +131,37 @@ class SwitchingSupervisor(Supervisor):
 def decision_events(decision, decision_time, decision_mode, margin, dt: float, mode_names=None) -> list[dict]:
     """Event log of the supervisor decisions from the recorded signals of one sample (the last record
     holds every decision taken up to the horizon): ``supervisor_decision``, ``supervisor_decision_time``
-    [s], ``supervisor_decision_mode`` (1-based) and ``condition_29_margin``, each (N,)."""
+    [s], ``supervisor_decision_mode`` (1-based) and ``condition_29_margin``, each (N,).
+
+    Parameters
+    ----------
+    decision : array_like, shape (N,)
+        Decision code per spacecraft (0: none) [-].
+    decision_time : array_like, shape (N,)
+        Time of the decision [s].
+    decision_mode : array_like, shape (N,)
+        Mode in force, 1-based [-].
+    margin : array_like, shape (N,)
+        Margin of condition (29) at the decision [-].
+    dt : float
+        Step [s].
+    mode_names : sequence of str, optional
+        Names of the modes (1-based ``decision_mode`` indexes them).
+
+    Returns
+    -------
+    list of dict
+        One event per decision, by time: time [s], step, spacecraft (1-based), event, decision, mode and
+        ``condition_29_margin`` [-].
+
+    Examples
+    --------
+    >>> from formation_ftc.components.supervisors.switching_supervisor import decision_events
+    >>> events = decision_events([0, 1], [0.0, 12.5], [1, 2], [0.0, 0.3], dt=0.5, mode_names=["M1", "M2"])
+    >>> events == [{"time": 12.5, "step": 25, "spacecraft": 2, "event": "supervisor decision",
+    ...             "decision": "tolerate by switching", "mode": "M2", "condition_29_margin": 0.3}]
+    True
+    """
     events = []
     for s, code in enumerate(np.asarray(decision).astype(int)):
         if code == block.NO_DECISION:

@@ -47,7 +47,19 @@ DEFAULT_CACHE_MIN_COMPILE_S = "0.2"
 
 
 def schedulable_cpus() -> int:
-    """CPUs this process may run on (its affinity mask; the CPU count where there is none)."""
+    """CPUs this process may run on (its affinity mask; the CPU count where there is none).
+
+    Returns
+    -------
+    int
+        Number of CPUs (>= 1).
+
+    Examples
+    --------
+    >>> from formation_ftc.sim import runtime
+    >>> runtime.schedulable_cpus() >= 1
+    True
+    """
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
@@ -56,7 +68,25 @@ def schedulable_cpus() -> int:
 
 def cpu_threads() -> int:
     """Threads of JAX's CPU client in this process: ``PJRT_NPROC`` when set (JAX reads it when the client
-    starts), else JAX's default, one per CPU this process may run on."""
+    starts), else JAX's default, one per CPU this process may run on.
+
+    Returns
+    -------
+    int
+        Thread count (>= 1).
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> from formation_ftc.sim import runtime
+    >>> with mock.patch.dict(os.environ, {"PJRT_NPROC": "3"}):
+    ...     runtime.cpu_threads()
+    3
+    >>> with mock.patch.dict(os.environ, {"PJRT_NPROC": ""}):
+    ...     runtime.cpu_threads() == runtime.schedulable_cpus()
+    True
+    """
     value = os.environ.get("PJRT_NPROC", "").strip()
     if value.isdigit() and int(value) > 0:
         return int(value)
@@ -64,7 +94,25 @@ def cpu_threads() -> int:
 
 
 def configured() -> bool:
-    """Whether :func:`configure` ran in this process or in the process that started it."""
+    """Whether :func:`configure` ran in this process or in the process that started it.
+
+    Returns
+    -------
+    bool
+        True when :data:`ENV_SWITCH` is ``on`` in the environment.
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> from formation_ftc.sim import runtime
+    >>> with mock.patch.dict(os.environ, {runtime.ENV_SWITCH: "on"}):
+    ...     runtime.configured()
+    True
+    >>> with mock.patch.dict(os.environ, {runtime.ENV_SWITCH: ""}):
+    ...     runtime.configured()
+    False
+    """
     return os.environ.get(ENV_SWITCH, "").strip().lower() == "on"
 
 
@@ -76,7 +124,25 @@ def compilation_cache_dir() -> str | None:
     compiles, so a program compiled with 2 threads can round differently from the same program compiled
     with 1, and JAX's cache key does not record the count. Keyed this way, a process never loads a
     program compiled for another thread count (another machine sharing the home directory, or
-    ``PJRT_NPROC`` set differently)."""
+    ``PJRT_NPROC`` set differently).
+
+    Returns
+    -------
+    str or None
+        The directory, or None when the cache is off.
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> from formation_ftc.sim import runtime
+    >>> with mock.patch.dict(os.environ, {"FORMATION_FTC_JAX_CACHE": "/scratch/jax", "PJRT_NPROC": "2"}):
+    ...     runtime.compilation_cache_dir()
+    '/scratch/jax/cpu-threads-2'
+    >>> with mock.patch.dict(os.environ, {"FORMATION_FTC_JAX_CACHE": "off"}):
+    ...     print(runtime.compilation_cache_dir())
+    None
+    """
     cache = os.environ.get("FORMATION_FTC_JAX_CACHE", str(Path.home() / ".cache" / "formation_ftc" / "jax"))
     if not cache or cache.lower() == "off":
         return None
@@ -90,7 +156,29 @@ def private_cache_dir(cache: str) -> bool:
     """Create the compilation cache ``cache`` (new directories mode 0700) and check that it and its parent
     are real directories owned by this user and writable by nobody else. A cached executable is machine
     code that JAX runs when it loads it, so a directory that another user could write to is not used
-    (the cache stays off, with one line on stderr)."""
+    (the cache stays off, with one line on stderr).
+
+    Parameters
+    ----------
+    cache : str
+        Path of the cache directory.
+
+    Returns
+    -------
+    bool
+        True when the directory may be used.
+
+    Examples
+    --------
+    >>> import os
+    >>> import tempfile
+    >>> from formation_ftc.sim import runtime
+    >>> with tempfile.TemporaryDirectory() as tmp:  # created 0700, owned by this user
+    ...     ok = runtime.private_cache_dir(os.path.join(tmp, "jax"))
+    ...     mode = oct(os.stat(os.path.join(tmp, "jax")).st_mode & 0o777)
+    >>> ok, mode
+    (True, '0o700')
+    """
     path = Path(cache)
     try:
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
@@ -114,7 +202,24 @@ def private_cache_dir(cache: str) -> bool:
 
 def configure() -> str | None:
     """Switch the runtime on for this process and the processes it starts (see the module docstring);
-    idempotent. Returns the compilation cache directory in use (None: no persistent cache)."""
+    idempotent. Returns the compilation cache directory in use (None: no persistent cache).
+
+    Returns
+    -------
+    str or None
+        The cache directory (see :func:`compilation_cache_dir`), or None.
+
+    Examples
+    --------
+    Idempotent: a second call in a configured process (as here) changes nothing.
+
+    >>> from formation_ftc.sim import runtime
+    >>> cache = runtime.configure()
+    >>> runtime.configured()
+    True
+    >>> cache is None or cache.endswith(f"cpu-threads-{runtime.cpu_threads()}")
+    True
+    """
     os.environ[ENV_SWITCH] = "on"
     cache = compilation_cache_dir()
     if cache is not None and private_cache_dir(cache):

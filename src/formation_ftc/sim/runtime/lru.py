@@ -22,7 +22,30 @@ _LOCK = threading.Lock()
 
 
 def lru_get(cache: OrderedDict, key: Hashable) -> Any:
-    """``cache[key]`` marked as most recently used, or None when absent."""
+    """``cache[key]`` marked as most recently used, or None when absent.
+
+    Parameters
+    ----------
+    cache : collections.OrderedDict
+        The cache, in recency order.
+    key : hashable
+        The key.
+
+    Returns
+    -------
+    Any
+        The value, or None.
+
+    Examples
+    --------
+    >>> from collections import OrderedDict
+    >>> from formation_ftc.sim.runtime.lru import lru_get
+    >>> cache = OrderedDict(a=1, b=2)
+    >>> lru_get(cache, "a"), lru_get(cache, "z")
+    (1, None)
+    >>> list(cache)  # "a" is now the most recently used
+    ['b', 'a']
+    """
     with _LOCK:
         value = cache.get(key)
         if value is not None:
@@ -31,7 +54,34 @@ def lru_get(cache: OrderedDict, key: Hashable) -> Any:
 
 
 def lru_put(cache: OrderedDict, key: Hashable, value: V, max_kept: int) -> V:
-    """Store ``value`` as the most recently used entry and drop the oldest beyond ``max_kept``."""
+    """Store ``value`` as the most recently used entry and drop the oldest beyond ``max_kept``.
+
+    Parameters
+    ----------
+    cache : collections.OrderedDict
+        The cache, in recency order.
+    key : hashable
+        The key.
+    value : Any
+        The value.
+    max_kept : int
+        Most entries kept.
+
+    Returns
+    -------
+    Any
+        ``value``.
+
+    Examples
+    --------
+    >>> from collections import OrderedDict
+    >>> from formation_ftc.sim.runtime.lru import lru_put
+    >>> cache = OrderedDict()
+    >>> for k in "abc":
+    ...     _ = lru_put(cache, k, k.upper(), max_kept=2)
+    >>> dict(cache)
+    {'b': 'B', 'c': 'C'}
+    """
     with _LOCK:
         cache[key] = value
         cache.move_to_end(key)

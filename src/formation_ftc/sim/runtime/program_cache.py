@@ -103,7 +103,22 @@ def _enabled() -> bool:
 
 def directory() -> Path | None:
     """Where entries are kept: ``programs/`` inside JAX's persistent compilation cache directory of this
-    process, or None when either cache is off."""
+    process, or None when either cache is off.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder, or None.
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> from formation_ftc.sim.runtime import program_cache
+    >>> with mock.patch.dict(os.environ, {program_cache.ENV_SWITCH: "off"}):
+    ...     print(program_cache.directory())
+    None
+    """
     if not _enabled():
         return None
     base = getattr(jax.config, "jax_compilation_cache_dir", None)  # a dynamic option: not in the stubs
@@ -218,7 +233,32 @@ def _signature(args: tuple) -> tuple:
 
 def program_key(kind: str, parts: Hashable, args: tuple) -> str | None:
     """Hex digest naming the program ``kind``/``parts`` applied to ``args``, or None when it cannot be
-    keyed safely (:class:`Uncacheable`)."""
+    keyed safely (:class:`Uncacheable`).
+
+    Parameters
+    ----------
+    kind : str
+        Kind of program (``"run"``, ``"batch"``, ``"grid"``, ...).
+    parts : hashable
+        What names the program within its kind (e.g. the compiled scenario's ``static_key``).
+    args : tuple
+        The call's arguments.
+
+    Returns
+    -------
+    str or None
+        64 hexadecimal digits (SHA-256), or None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.runtime.program_cache import program_key
+    >>> key = program_key("doc-example", ("double", 1), (np.arange(3.0),))
+    >>> len(key), key == program_key("doc-example", ("double", 1), (np.ones(3),))  # same shapes
+    (64, True)
+    >>> key == program_key("doc-example", ("double", 1), (np.arange(4.0),))
+    False
+    """
     try:
         payload = _dumps((kind, parts, _signature(args), _environment()))
     except Exception:  # noqa: BLE001 - Uncacheable, or an environment that cannot be read: no key
@@ -491,7 +531,33 @@ def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any
     (``/jax/compilation_cache/cache_misses``). An executable JAX loaded from its persistent cache, or
     kept in memory after such a load, is not: XLA:CPU (jaxlib 0.10.2) serializes a deserialized
     executable without its compiled kernels, and loading that fails ("Function ... not found"). Such a
-    program is stored the next time XLA compiles it."""
+    program is stored the next time XLA compiles it.
+
+    Parameters
+    ----------
+    jitted : jax.stages.Wrapped
+        A ``jax.jit`` function.
+    kind : str
+        Kind of program, part of the key.
+    parts : hashable
+        What names the program within its kind; together with ``kind`` it must determine ``jitted``.
+    args : tuple
+        The call's arguments.
+
+    Returns
+    -------
+    Any
+        A compiled executable, called with ``*args``.
+
+    Examples
+    --------
+    >>> import jax
+    >>> import numpy as np
+    >>> from formation_ftc.sim.runtime.program_cache import load_or_compile
+    >>> exe = load_or_compile(jax.jit(lambda x: 2.0 * x), "doc-example", ("double", 1), (np.arange(3.0),))
+    >>> np.asarray(exe(np.arange(3.0)))
+    array([0., 2., 4.])
+    """
     folder = directory()
     if folder is not None and not (_prepare_custom_calls() and _safe_folder(folder)):
         folder = None

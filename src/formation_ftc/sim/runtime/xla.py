@@ -83,7 +83,29 @@ def _supported(name: str, value: str | bool) -> bool:
 
 def compiler_options(fast_compile: bool = False) -> dict[str, str | bool]:
     """:data:`DEFAULT_OPTIONS` (or :data:`FAST_COMPILE_OPTIONS`) that this jaxlib accepts, on the CPU
-    backend; empty on other backends or when :data:`ENV_SWITCH` is ``off``."""
+    backend; empty on other backends or when :data:`ENV_SWITCH` is ``off``.
+
+    Parameters
+    ----------
+    fast_compile : bool, optional
+        Add the fast-compile preset.
+
+    Returns
+    -------
+    dict
+        Option name -> value, for ``jax.jit(..., compiler_options=...)``.
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> from formation_ftc.sim.runtime import xla
+    >>> set(xla.compiler_options(fast_compile=True)) <= set(xla.FAST_COMPILE_OPTIONS)
+    True
+    >>> with mock.patch.dict(os.environ, {xla.ENV_SWITCH: "off"}):
+    ...     xla.compiler_options()
+    {}
+    """
     if not _enabled() or jax.default_backend() != "cpu":
         return {}
     wanted = FAST_COMPILE_OPTIONS if fast_compile else DEFAULT_OPTIONS
@@ -92,7 +114,29 @@ def compiler_options(fast_compile: bool = False) -> dict[str, str | bool]:
 
 def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) -> Callable[..., Any]:
     """``jax.jit(fn, **kwargs)`` compiled with :func:`compiler_options` (and, in a process the runtime is
-    configured for, :func:`use_unrolled_threefry` first)."""
+    configured for, :func:`use_unrolled_threefry` first).
+
+    Parameters
+    ----------
+    fn : callable
+        The function.
+    fast_compile : bool, optional
+        Use the fast-compile preset.
+    **kwargs
+        Further ``jax.jit`` arguments.
+
+    Returns
+    -------
+    callable
+        The jitted function.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.sim.runtime import xla
+    >>> np.asarray(xla.jit(lambda x: 2.0 * x)(np.arange(3.0)))
+    array([0., 2., 4.])
+    """
     from formation_ftc.sim import runtime
 
     if runtime.configured():
@@ -104,7 +148,19 @@ def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) ->
 def use_unrolled_threefry() -> bool:
     """Lower ``jax.random``'s threefry hash unrolled on the CPU as well (same integer operations, same
     bits; see the module docstring). Returns True when the lowering is registered, False when switched
-    off (:data:`ENV_SWITCH`) or when this JAX lacks the internals it needs."""
+    off (:data:`ENV_SWITCH`) or when this JAX lacks the internals it needs.
+
+    Returns
+    -------
+    bool
+        Whether the unrolled lowering is in use.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.runtime import xla
+    >>> xla.use_unrolled_threefry()  # False where switched off or where JAX's internals differ
+    True
+    """
     return _enabled() and _register_unrolled_threefry()
 
 
