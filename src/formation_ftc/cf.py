@@ -1,14 +1,30 @@
 """CF-1.10 conventions for result datasets: global attributes, per-variable metadata, attribute hygiene.
 
-``formation_ftc.api.finish_run`` calls :func:`apply_cf` on every result, so a ``result.nc`` opens in
-any CF-aware tool (xarray, Panoply, ncview, ``nccopy -k classic``):
+``formation_ftc.api.finish_run`` calls :func:`apply_cf` on every result, and the campaign store on every
+trace, so every NetCDF file the package writes (``result.nc``, ``traces/run-NNNNNN.nc``, both through
+:func:`write_netcdf`) opens in any CF-aware tool (xarray, Panoply, ncview, ``nccopy -k classic``) and
+passes the CF checker (``cfchecks``) without errors:
 
-* global attributes ``Conventions``, ``title``, ``institution``, ``source``, ``history``, ``references``;
+* global attributes ``Conventions``, ``title``, ``institution``, ``source``, ``history``, ``references``,
+  next to the provenance (``version_<package>``, ``git_commit``, ``created_utc``, ``scenario_name``,
+  ``seed``, ...);
 * every data variable and coordinate carries ``units`` (a UDUNITS string, ``"1"`` when dimensionless)
   and ``long_name``; vectors keep the ``frame`` their component declared;
+* ``time`` is the time since the start of the simulation in seconds (``units = "s"``, ``long_name =
+  "time since the start of the simulation"``). A simulation has no calendar epoch, and CF (section 4.4)
+  makes a variable a *time coordinate* only with units ``<unit> since <reference time>``; a duration in
+  ``s`` is an ordinary coordinate, so it must not claim ``standard_name = "time"`` or ``axis = "T"``
+  (either makes CF tools require a reference time). Any variable whose units have no reference time
+  loses those two attributes. Inventing an epoch (``seconds since 1970-01-01``) would put a false date
+  on every sample;
+* no coordinate variable has a ``_FillValue`` (CF 2.5.1: coordinates have no missing values);
 * attribute names contain only letters, digits and underscores (``version_formation-ftc`` is written
   ``version_formation_ftc``), and attribute values are strings or numbers (netCDF4-classic compatible:
   booleans become 0/1, ``None`` becomes ``""``, anything nested becomes its JSON text).
+
+Text coordinates (``axis``, ``pair``, ...) are stored as character arrays named after their dimension,
+so xarray reads them back as coordinates; the CF checker warns about those ("possible incorrect
+declaration of a coordinate variable", CF 5), which is the price of the round trip.
 """
 
 from __future__ import annotations
@@ -19,14 +35,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CONVENTIONS", "apply_cf", "cf_problems", "clean_attrs", "MIXED_UNITS_NOTE"]
+__all__ = ["CONVENTIONS", "ELAPSED_TIME", "apply_cf", "cf_problems", "clean_attrs", "write_netcdf", "MIXED_UNITS_NOTE"]
 
 CONVENTIONS = "CF-1.10"
+ELAPSED_TIME = "time since the start of the simulation"
 MIXED_UNITS_NOTE = ("components carry different units (see component_units); the variable as a whole is "
                     "stored with units '1'")
 
 _COORD_DEFAULTS: dict[str, tuple[str, str]] = {
-    "time": ("s", "time"),
+    "time": ("s", ELAPSED_TIME),
     "spacecraft": ("1", "spacecraft number (1-based)"),
     "axis": ("1", "vector component"),
     "component": ("1", "state component"),
@@ -100,8 +117,14 @@ def apply_cf(ds, *, scenario_name: str = "", method: str = "", description: str 
             attrs["comment"] = MIXED_UNITS_NOTE
             units = "1"
         attrs["units"] = units
-        if not str(attrs.get("long_name", "") or "").strip():
+        long_name = str(attrs.get("long_name", "") or "").strip()
+        if not long_name or (name == "time" and long_name == "time"):
             attrs["long_name"] = default_long
+        if " since " not in units:  # not a CF time coordinate (see the module docstring)
+            if attrs.get("standard_name") in ("time", "forecast_reference_time"):
+                del attrs["standard_name"]
+            if attrs.get("axis") == "T":
+                del attrs["axis"]
         var.attrs.clear()
         var.attrs.update(clean_attrs(attrs))
     attrs = dict(ds.attrs)
@@ -160,13 +183,16 @@ def classic_compatible(ds):
 
     Text attributes are written as character arrays (``NC_CHAR``) rather than variable-length strings,
     integer attributes and 64-bit integer variables as 32-bit integers, and text coordinates as
-    character arrays. Values read back with xarray are unchanged (text stays text).
+    character arrays; coordinates get no ``_FillValue``. Values read back with xarray are unchanged (text
+    stays text).
     """
     out = ds.copy(deep=False)
     out.attrs = _classic_attrs(ds.attrs)
     for name in list(out.variables):
         var = out.variables[name]
         var.attrs = _classic_attrs(ds.variables[name].attrs)
+        if name in out.coords:  # CF: no missing values in coordinates (xarray adds a NaN fill to floats)
+            var.encoding["_FillValue"] = None
         if var.dtype.kind in "UO":  # char array + _Encoding (fixed by ``fix_text_encoding_attrs``)
             var.encoding["dtype"] = "S1"
         elif var.dtype.kind in "iu" and var.dtype.itemsize > 4:

@@ -18,6 +18,7 @@ from formation_ftc.league.battery import load_battery
 from formation_ftc.league.definition import LeagueError, builtin_leagues, load_league, method_scenario
 from formation_ftc.league.report import ranking, winners, write_leaderboard
 from formation_ftc.league.runner import plan_cells, run_league
+from formation_ftc.parquet_units import UNKNOWN, read_units
 
 DATA = Path(builtin_leagues()["translational"]).parent
 
@@ -84,6 +85,12 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
         ok = sel[sel.status == "ok"][f"metric:{req['metric']}"]
         if len(ok):
             assert c[f"{req['metric']}_median"] == pytest.approx(np.median(ok))
+    # units on every numeric column of every Parquet file (league tables and the campaign chunks)
+    for table in [lb / "cells.parquet", lb / "runs.parquet", *sorted(out.glob("*/campaign/chunks/*.parquet"))]:
+        _assert_parquet_units(table)
+    cell_units = read_units(lb / "cells.parquet")
+    assert cell_units["pass_rate"] == "1" and cell_units["delta_v_total_median"] == "m s-1"
+    assert read_units(lb / "runs.parquet")["metric:delta_v_total"] == "m s-1"
     html = (lb / "index.html").read_text()
     assert "data:image/png;base64," in html and "Ranking" in html and "sir-ftc" in html
     assert "<script src=" not in html  # self-contained
@@ -95,6 +102,20 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
     # a different seed count is another league directory
     with pytest.raises(LeagueError, match="another --out"):
         run_league(path, out, seeds=3)
+
+
+def _assert_parquet_units(path: Path) -> None:
+    """A ``units`` field metadata entry on every numeric column, none on the others, nothing else."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema, units = pq.read_schema(path), read_units(path)
+    for f in schema:
+        numeric = pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
+        assert (f.name in units) == numeric and (not numeric or units[f.name]), (path.name, f.name)
+        assert units.get(f.name) != UNKNOWN or f.name.startswith("input:"), (path.name, f.name)
+    assert set(schema.metadata or {}) <= {b"pandas"}, path.name  # no PANDAS_ATTRS
+    assert not json.loads((schema.metadata or {}).get(b"pandas", b"{}")).get("attributes"), path.name
 
 
 def test_ranking_and_winners_follow_pass_rate_then_median():

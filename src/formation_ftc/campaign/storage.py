@@ -5,8 +5,10 @@ Layout::
     DIR/manifest.json                 campaign spec, its hash, package version, run/chunk counts and
                                       the SHA-256 of every chunk file (``chunk_sha256``)
     DIR/.lock                         advisory lock of the process writing the campaign (host, PID)
-    DIR/chunks/chunk-000012.parquet   one row per run of chunk 12 (inputs, seed, status, metrics)
-    DIR/traces/run-000005.nc          optional decimated time history of run 5 (NetCDF, h5netcdf)
+    DIR/chunks/chunk-000012.parquet   one row per run of chunk 12 (inputs, seed, status, metrics; units
+                                      as in :mod:`formation_ftc.parquet_units`)
+    DIR/traces/run-000005.nc          optional decimated time history of run 5 (NetCDF, h5netcdf; CF-1.10
+                                      and provenance attributes as a ``result.nc``)
     DIR/report/                       written by ``formation-ftc campaign report``
 
 Every file is written under a temporary name in the same directory and renamed with
@@ -47,6 +49,9 @@ import pyarrow.parquet as pq
 
 from formation_ftc.campaign.sampling import CampaignPlan
 from formation_ftc.campaign.spec import CampaignError
+from formation_ftc.cf import apply_cf, write_netcdf
+from formation_ftc.parquet_units import read_units, write_parquet
+from formation_ftc.provenance import provenance
 
 try:  # POSIX advisory locks; other platforms run without a lock
     import fcntl
@@ -64,6 +69,8 @@ _TRACE_RE = re.compile(r"^run-(\d{6,})\.nc$")
 _TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
 _TOP_LEVEL = {MANIFEST, LOCK, "chunks", "traces", "report"}
 _ROOT_TMP_RE = re.compile(r"^\.manifest\.json\.tmp-\d+$")
+#: integer bookkeeping columns of a chunk (identifiers, indices, seeds): dimensionless
+_COUNT_COLUMNS = ("run_id", "chunk_id", "grid_index", "replicate", "seed")
 
 
 def chunk_filename(chunk_id: int) -> str:
@@ -411,21 +418,13 @@ class CampaignStore:
             tdir.mkdir(exist_ok=True)
             path = tdir / trace_filename(run_id)
             tmp = _tmp_path(path)
-            ds.to_netcdf(tmp, engine="h5netcdf")
+            write_netcdf(self._cf_trace(ds), tmp)
             os.replace(tmp, path)
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
-        units = {c: u for c, u in dict(table.attrs.get("metric_units", {})).items() if c in table.columns}
-        if units:  # metric columns carry their UDUNITS unit as Parquet field metadata {"units": ...}
-            import pyarrow as pa
-
-            arrow = pa.Table.from_pandas(table, preserve_index=False)
-            fields = [f.with_metadata({**(f.metadata or {}), b"units": units[f.name].encode()})
-                      if f.name in units else f for f in arrow.schema]
-            arrow = arrow.cast(pa.schema(fields, metadata=arrow.schema.metadata))
-            pq.write_table(arrow, buf, write_page_checksum=True)
-        else:
-            table.to_parquet(buf, index=False, engine="pyarrow", write_page_checksum=True)
+        # metric units come from the runner (``table.attrs["metric_units"]``); inputs: see parquet_units
+        units = {**dict.fromkeys(_COUNT_COLUMNS, "1"), **table.attrs.get("metric_units", {})}
+        write_parquet(table, buf, units, write_page_checksum=True)
         data = buf.getvalue()
         # the checksum is recorded first: a chunk file never exists without one
         self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(data).hexdigest()
@@ -433,6 +432,23 @@ class CampaignStore:
         atomic_write_bytes(path, data)
         self._finished.add(chunk_id)
         return path
+
+    def _cf_trace(self, ds):
+        """A run's trace with the provenance and CF-1.10 metadata of a ``result.nc`` (:mod:`formation_ftc.cf`)."""
+        prov = provenance()
+        methods = sorted(set(self.manifest.get("plan", {}).get("methods", [])))
+        ds = ds.copy()
+        ds.attrs = {**prov, **ds.attrs, "method": " or ".join(methods)}
+        return apply_cf(ds, scenario_name=str(ds.attrs.get("scenario_name", "")), method=ds.attrs["method"],
+                        description=f"trace of run {ds.attrs.get('run_id')} of campaign {ds.attrs.get('campaign')!r}",
+                        created_utc=prov["created_utc"], version=prov["version_formation-ftc"])
+
+    def units(self) -> dict[str, str]:
+        """Column -> units of the finished chunks (:func:`formation_ftc.parquet_units.read_units`)."""
+        out: dict[str, str] = {}
+        for cid in sorted(self._finished):
+            out.update(read_units(self.chunk_path(cid)))
+        return out
 
     def load_results(self) -> pd.DataFrame:
         """All finished runs, sorted by run id (columns: run_id, seed, status, input:*, metric:*, ...)."""

@@ -5,6 +5,7 @@
 * ``DIR/leaderboard/leaderboard.json`` -- definition, provenance, per-cell statistics, ranking, winners;
 * ``DIR/leaderboard/cells.parquet`` -- one row per (method, level, case) cell;
 * ``DIR/leaderboard/runs.parquet`` -- one row per run (every score, seed, status, diagnostic);
+  both Parquet files carry the units of every numeric column (:mod:`formation_ftc.parquet_units`);
 * ``DIR/leaderboard/index.html`` -- the self-contained leaderboard page (figures embedded).
 
 Statistics: medians and 95th percentiles over the runs that finished (a diverged run has no score), the
@@ -25,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from formation_ftc.league.runner import load_league_results
+from formation_ftc.parquet_units import write_parquet
 
 __all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "markdown_summary", "SCORES", "COSTS"]
 
@@ -369,6 +371,28 @@ def markdown_summary(board: dict[str, Any]) -> str:
     return "\n".join(out) + "\n"
 
 
+def _run_units(league_dir: Path, meta: dict[str, Any]) -> dict[str, str]:
+    """Units of the run columns, as the methods' campaign chunks store them (:mod:`formation_ftc.parquet_units`)."""
+    from formation_ftc.campaign.storage import CampaignStore
+
+    units: dict[str, str] = {}
+    for m in meta["methods"]:
+        cdir = league_dir / m["name"] / "campaign"
+        if cdir.is_dir():
+            units.update(CampaignStore.read(cdir).units())
+    return units
+
+
+def _cell_units(cells: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
+    """Cell statistics: counts and pass rate dimensionless, a score's median and p95 in its unit."""
+    units = {"runs": "1", "failed": "1", "pass_rate": "1"}
+    for col in cells.columns:
+        score, _, stat = str(col).rpartition("_")
+        if stat in ("median", "p95") and f"metric:{score}" in run_units:
+            units[col] = run_units[f"metric:{score}"]
+    return units
+
+
 def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, Any]:
     """Write the leaderboard files of a league directory; returns the leaderboard dictionary."""
     league_dir = Path(league_dir)
@@ -388,8 +412,9 @@ def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, A
              "requirement": {"metric": metric, "max": limit, "units": units}, "provenance": meta.get("provenance"),
              "ranking": rank, "winners": wins, "cells": cells.to_dict("records")}
     (out / "leaderboard.json").write_text(json.dumps(_json_safe(board), indent=1))
-    cells.to_parquet(out / "cells.parquet")
-    runs.to_parquet(out / "runs.parquet")
+    run_units = _run_units(league_dir, meta)
+    write_parquet(cells, out / "cells.parquet", _cell_units(cells, run_units))
+    write_parquet(runs, out / "runs.parquet", run_units)
     (out / "index.html").write_text(_page(meta, cells, rank, wins, figures))
     (out / "leaderboard.md").write_text(markdown_summary(_json_safe(board)))
     return board
