@@ -1,9 +1,10 @@
 """Python API: load a scenario, simulate it, check its conditions.
 
 >>> import formation_ftc as ftc
->>> scn = ftc.load_scenario("cw-free-drift", overrides={"simulation.horizon": 600.0})
+>>> scn = ftc.load_scenario("cw-free-drift", overrides={"simulation.horizon": 10.0})
 >>> ds = ftc.simulate(scn)                     # xarray.Dataset
->>> ds.attrs["seed"], ds.attrs["git_commit"]   # provenance travels with the data
+>>> int(ds.attrs["seed"]), "git_commit" in ds.attrs   # provenance travels with the data
+(0, True)
 """
 
 from __future__ import annotations
@@ -39,7 +40,34 @@ __all__ = [
 
 def load_scenario(name_or_path: str | Path | Mapping[str, Any],
                   overrides: Mapping[str, Any] | Iterable[str] | None = None) -> ScenarioBase:
-    """Built-in name, TOML path or raw dict -> validated scenario (overrides applied first)."""
+    """Built-in name, TOML path or raw dict -> validated scenario (overrides applied first).
+
+    Parameters
+    ----------
+    name_or_path : str, Path, Mapping or ScenarioBase
+        A built-in scenario name (``formation-ftc list``), the path of a TOML file, a raw dictionary of
+        its tables, or an already loaded scenario (validated again, with the overrides).
+    overrides : Mapping or iterable of str, optional
+        Field values applied before validation: ``{"simulation.horizon": 300.0}`` or
+        ``["controller.kp=3"]`` (dotted paths, list items by index: ``spacecraft.mass.0``).
+
+    Returns
+    -------
+    ScenarioBase
+        The validated scenario (the method's pydantic model; SI units as its fields state).
+
+    Raises
+    ------
+    formation_ftc.errors.ScenarioError
+        A field out of range, an unknown field or an impossible composition (the message names it).
+
+    Examples
+    --------
+    >>> from formation_ftc.api import load_scenario
+    >>> scn = load_scenario("cw-pd-fault", overrides={"controller.kp": 3.0})
+    >>> scn.controller.kp, scn.simulation.dt
+    (3.0, 0.1)
+    """
     if isinstance(name_or_path, ScenarioBase):
         raw, source = name_or_path.model_dump(mode="json", exclude_none=True), "<scenario object>"
     elif isinstance(name_or_path, Mapping):
@@ -51,7 +79,19 @@ def load_scenario(name_or_path: str | Path | Mapping[str, Any],
 
 
 def list_scenarios() -> dict[str, str]:
-    """Built-in scenario name -> one-line description."""
+    """Built-in scenario name -> one-line description.
+
+    Returns
+    -------
+    dict of str to str
+        Every built-in scenario (what ``formation-ftc list`` prints), sorted by name.
+
+    Examples
+    --------
+    >>> from formation_ftc.api import list_scenarios
+    >>> "li2020-thm1" in list_scenarios()
+    True
+    """
     import tomllib
 
     out = {}
@@ -63,12 +103,59 @@ def list_scenarios() -> dict[str, str]:
 
 def compile_scenario(scenario: ScenarioBase) -> Compiled:
     """The method's compiled form of a scenario (no JAX compilation happens yet). Its loop carries the
-    scenario's step, horizon, seed and admissible set (:meth:`~formation_ftc.sim.loop.ClosedLoop.from_simulation`)."""
+    scenario's step, horizon, seed and admissible set (:meth:`~formation_ftc.sim.loop.ClosedLoop.from_simulation`).
+
+    Parameters
+    ----------
+    scenario : ScenarioBase
+        A validated scenario (:func:`load_scenario`).
+
+    Returns
+    -------
+    formation_ftc.registry.Compiled
+        The closed loop as parameters (``params``, every number a leaf) and its run function, step
+        ``dt`` [s] and record interval.
+
+    Examples
+    --------
+    >>> from formation_ftc.api import compile_scenario, load_scenario
+    >>> compiled = compile_scenario(load_scenario("cw-pd-fault"))
+    >>> compiled.dt, compiled.params.n_steps
+    (0.1, 6000)
+    """
     return get_method(scenario.scenario.method).build(scenario)
 
 
 def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True):
-    """numpy RunOutput -> (Dataset with provenance, metrics); raises SimulationDiverged with .partial."""
+    """numpy RunOutput -> (Dataset with provenance, metrics); raises SimulationDiverged with .partial.
+
+    Parameters
+    ----------
+    scenario : ScenarioBase
+        The scenario that was run (recorded in the dataset's attributes).
+    compiled : formation_ftc.registry.Compiled
+        Its compiled form (:func:`compile_scenario`).
+    out : dict
+        What the compiled run returned (records, metrics, final state, ``diverged_step``).
+    raise_on_divergence : bool, optional
+        Raise :class:`~formation_ftc.sim.engine.SimulationDiverged` (default) or return the partial
+        result of a diverged run, its diagnostic in ``ds.attrs["diverged"]``.
+
+    Returns
+    -------
+    tuple of (xarray.Dataset, dict of str to float)
+        The CF-1.10 dataset with provenance, and the scalar metrics (SI units, see :func:`metric_units`).
+
+    Examples
+    --------
+    >>> from formation_ftc.api import compile_scenario, finish_run, load_scenario
+    >>> from formation_ftc.sim.programs import jitted_run
+    >>> scn = load_scenario("cw-free-drift", {"simulation.horizon": 10.0})
+    >>> compiled = compile_scenario(scn)
+    >>> ds, metrics = finish_run(scn, compiled, jitted_run(compiled)(compiled.params))
+    >>> ds.sizes["spacecraft"], ds.attrs["diverged"]
+    (2, '')
+    """
     out = jax.tree_util.tree_map(np.asarray, dict(out))
     div = int(out["diverged_step"])
     records, n_kept = trim_records(out["records"], div, compiled.record_every)
@@ -135,7 +222,28 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergen
 
     The process keeps one compiled program per structure (:func:`formation_ftc.sim.programs.jitted_run`):
     running a scenario again with other numbers -- a gain, a fault time, a seed -- reuses it (no
-    tracing, no compilation)."""
+    tracing, no compilation).
+
+    Parameters
+    ----------
+    scenario : ScenarioBase, str or Path
+        A loaded scenario, a built-in name or a TOML path.
+    raise_on_divergence : bool, optional
+        See :func:`finish_run`.
+
+    Returns
+    -------
+    tuple of (xarray.Dataset, dict of str to float)
+        Time histories (``time`` [s], ``spacecraft``, ``axis``, ...) with provenance attributes, and the
+        scalar metrics.
+
+    Examples
+    --------
+    >>> from formation_ftc.api import simulate_with_metrics
+    >>> ds, metrics = simulate_with_metrics("cw-free-drift")
+    >>> float(ds.time[-1]), sorted(metrics)[:1]
+    (5840.0, ['control_effort_sc1'])
+    """
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)
@@ -144,17 +252,70 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergen
 
 
 def simulate(scenario: ScenarioBase | str | Path):
-    """Run one scenario and return its ``xarray.Dataset`` (metrics in ``attrs['metrics_json']``)."""
+    """Run one scenario and return its ``xarray.Dataset`` (metrics in ``attrs['metrics_json']``).
+
+    Parameters
+    ----------
+    scenario : ScenarioBase, str or Path
+        A loaded scenario, a built-in name or a TOML path.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`simulate_with_metrics`; a diverged run raises
+        :class:`~formation_ftc.sim.engine.SimulationDiverged` (its ``partial`` holds what was computed).
+
+    Examples
+    --------
+    >>> from formation_ftc.api import simulate
+    >>> ds = simulate("cw-free-drift")
+    >>> ds.position.dims
+    ('time', 'spacecraft', 'axis')
+    """
     return simulate_with_metrics(scenario)[0]
 
 
 def result_metrics(ds) -> dict[str, float]:
-    """Scalar metrics stored in a result dataset."""
+    """Scalar metrics stored in a result dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`simulate` (or read back from ``result.nc``).
+
+    Returns
+    -------
+    dict of str to float
+        Metric name -> value (SI units: :func:`metric_units`).
+
+    Examples
+    --------
+    >>> from formation_ftc.api import result_metrics, simulate
+    >>> round(result_metrics(simulate("cw-free-drift"))["delta_v_total"], 6)
+    0.0
+    """
     return json.loads(ds.attrs.get("metrics_json", "{}"))
 
 
 def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
-    """Evaluate the stability / design conditions the scenario's method declares."""
+    """Evaluate the stability / design conditions the scenario's method declares.
+
+    Parameters
+    ----------
+    scenario : ScenarioBase, str or Path
+        A loaded scenario, a built-in name or a TOML path.
+
+    Returns
+    -------
+    list of formation_ftc.registry.Condition
+        One row per condition: name, value, requirement, whether it holds, whether it is required.
+
+    Examples
+    --------
+    >>> from formation_ftc.api import check
+    >>> all(c.holds for c in check("cw-pd-fault") if c.required)
+    True
+    """
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     method = get_method(scenario.scenario.method)
@@ -174,7 +335,24 @@ def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str,
 
 
 def metric_units(ds) -> dict[str, str]:
-    """Units of the scalar metrics stored in a result dataset (``{metric: UDUNITS string}``)."""
+    """Units of the scalar metrics stored in a result dataset (``{metric: UDUNITS string}``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`simulate`.
+
+    Returns
+    -------
+    dict of str to str
+        Metric name -> UDUNITS unit (``"1"`` for dimensionless).
+
+    Examples
+    --------
+    >>> from formation_ftc.api import metric_units, simulate
+    >>> metric_units(simulate("cw-free-drift"))["delta_v_total"]
+    'm s-1'
+    """
     return json.loads(ds.attrs.get("metric_units_json", "{}"))
 
 
@@ -185,6 +363,29 @@ def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = N
     while writing either leaves the previous pair untouched (never a new result with old metrics).
     ``formation-ftc run`` additionally writes into a temporary sibling directory that replaces
     ``out_dir`` as a whole.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`simulate`.
+    out_dir : str or Path
+        Directory to write into (created if missing).
+    metrics : Mapping of str to float, optional
+        Metrics to write (default: those stored in ``ds``).
+
+    Returns
+    -------
+    dict of str to Path
+        ``{"result": .../result.nc, "metrics": .../metrics.json}``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from formation_ftc.api import save_result, simulate
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     paths = save_result(simulate("cw-free-drift"), d)
+    ...     sorted(p.name for p in paths.values())
+    ['metrics.json', 'result.nc']
     """
     import os
 
