@@ -45,7 +45,7 @@ HOSTILE = [
     ("bool-in-list", ["--set", "spacecraft.mass=[true, 1.0, 1.0, 1.0]"], "got a boolean"),
     ("trailing-toml", ["--set", "simulation.horizon=100\nsimulation.dt=2"], "a single TOML value on one line"),
     ("broken-toml-value", ["--set", "spacecraft.mass=[1,"], "invalid TOML value"),
-    ("mass-inf", ["--set", "spacecraft.mass.0=inf"], "field spacecraft.mass.0"),
+    ("mass-inf", ["--set", "spacecraft.mass.0=inf"], "field spacecraft.mass[0]: inf is refused: must be a finite number"),
     ("gain-inf", ["--set", "controller.kp=inf"], "field controller.kp"),
     ("sma-inf", ["--set", "orbit.semi_major_axis=inf"], "field orbit.semi_major_axis"),
     ("expr-number-inf", ["--set", "faults.bias.0=inf"], "finite number"),
@@ -314,3 +314,51 @@ def test_path_texts_the_system_refuses_exit_2(tmp_path, capsys):
         assert call() == 2
         err = capsys.readouterr().err
         assert "File name too long" in err and "Traceback" not in err and len(err) < 400
+
+
+class _FullStream:
+    """A stderr whose every write fails like a full disk (ENOSPC)."""
+
+    encoding = "utf-8"
+
+    def write(self, text):
+        raise OSError(28, "No space left on device")
+
+    def flush(self):
+        raise OSError(28, "No space left on device")
+
+    def isatty(self):
+        return False
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+@pytest.mark.parametrize("stream", ["stderr", "stdout"])
+def test_a_full_stderr_or_stdout_costs_no_result(stream, tmp_path):
+    out = tmp_path / "run"
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "formation_ftc.cli", "run", SCN, *SHORT, "--out", str(out)],
+                              **{stream: full}, timeout=600)
+    assert proc.returncode == 0
+    assert (out / "result.nc").is_file() and (out / "metrics.json").is_file() and (out / "index.html").is_file()
+
+
+def test_a_full_stderr_costs_no_campaign_chunk_nor_error_status(tmp_path, monkeypatch):
+    from formation_ftc.campaign import runner
+    from formation_ftc.campaign.cli import main as campaign_main
+
+    spec = tmp_path / "c.toml"
+    spec.write_text('[campaign]\nname = "full"\nbase = "cw-pd-fault"\nruns = 2\nchunk_size = 2\n'
+                    '[overrides]\n"simulation.horizon" = 2.0\n'
+                    '[sample]\n"controller.kp" = {dist = "uniform", low = 1.0, high = 3.0}\n')
+    store = runner._store_chunk
+
+    def log_then_store(*a):
+        print("a log line nobody can read", file=sys.stderr)
+        return store(*a)
+
+    monkeypatch.setattr(runner, "_store_chunk", log_then_store)
+    monkeypatch.setattr(sys, "stderr", _FullStream())
+    assert campaign_main(["run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0  # progress on
+    assert main(["campaign", "run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0  # resumed
+    assert main(["show", "no-such-scenario"]) == 2  # the error line is lost, not the exit status
+    assert len(list((tmp_path / "c" / "chunks").glob("*.parquet"))) == 1

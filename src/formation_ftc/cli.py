@@ -9,12 +9,15 @@ list answer at once. Exit codes: 0 success, 1 a required condition failed or a r
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
+from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any, TextIO
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "lossy_stderr"]
 
 EXIT_CODES = ("exit status:\n"
               "  0  success\n"
@@ -472,15 +475,55 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
     return parser
 
 
+class _LossyStream:
+    """``stream`` whose failed writes and flushes are dropped (a closed or full stderr)."""
+
+    def __init__(self, stream: TextIO):
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except (OSError, ValueError):
+            return len(text)
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            self.stream.flush()
+
+    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno, ... of the stream
+        return getattr(self.stream, name)
+
+
+@contextlib.contextmanager
+def lossy_stderr() -> Iterator[None]:
+    """``sys.stderr`` drops what it cannot write while the block runs: warnings, progress bars, log
+    lines and error messages never cost a computed result or change the exit status."""
+    original = sys.stderr
+    sys.stderr = _LossyStream(original)  # type: ignore[assignment]  # a TextIO by delegation
+    try:
+        yield
+    finally:
+        sys.stderr = original
+
+
 def main(argv: list[str] | None = None) -> int:
     global _VERBOSITY
-    argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser(_command_of(argv))
-    args = parser.parse_args(argv)
-    _VERBOSITY = int(getattr(args, "verbosity", 0))
-    from formation_ftc.exitcodes import run_guarded
+    with lossy_stderr():
+        argv = list(sys.argv[1:] if argv is None else argv)
+        parser = build_parser(_command_of(argv))
+        args = parser.parse_args(argv)
+        _VERBOSITY = int(getattr(args, "verbosity", 0))
+        from formation_ftc.exitcodes import run_guarded
+        from formation_ftc.sim import runtime
 
-    return run_guarded(args.func, args, verbose=_VERBOSITY > 0)
+        runtime.configure()  # compilation caches and compiler tuning, for this command and its workers
+
+        return run_guarded(args.func, args, verbose=_VERBOSITY > 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -23,6 +23,20 @@ def _cmd_list(args) -> int:
     return 0
 
 
+#: memory of one local worker process before its batch: Python, JAX and the compiled programs [bytes]
+WORKER_BYTES = 2**29
+
+
+def _capped(requested: int | None, what: str, batch_bytes: int) -> int | None:
+    """``--workers`` / ``--dask-local``: at most the schedulable cores and what the available memory holds
+    (one warning line on stderr when lowered); None and 1 stay as they are."""
+    from formation_ftc.campaign.executors import cap_workers
+
+    if requested is None or requested <= 1:
+        return requested
+    return cap_workers(requested, per_worker_bytes=WORKER_BYTES + batch_bytes, what=what)
+
+
 def _cmd_run(args) -> int:
     from rich.console import Console
 
@@ -34,11 +48,12 @@ def _cmd_run(args) -> int:
     console = Console(stderr=True)
     if not str(args.out).strip():
         raise CampaignError("--out: empty path; give the results directory, e.g. --out out/campaign1")
-    executor = make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
-                             connect_timeout=args.connect_timeout)
     plan = make_plan(args.campaign, runs=args.runs, chunk_size=args.chunk_size)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
-    check_campaign_budgets(plan, budgets)  # before anything is compiled for the run or written
+    batch = check_campaign_budgets(plan, budgets)["batch_memory"]  # before anything is compiled or written
+    executor = make_executor(workers=_capped(args.workers, "--workers", batch), scheduler=args.scheduler,
+                             dask_local=_capped(args.dask_local, "--dask-local", batch),
+                             connect_timeout=args.connect_timeout)
     outcome = run_campaign(plan, args.out, executor=executor, progress=not args.no_progress)
     console.print(f"campaign done ({outcome.executor}): {outcome}", soft_wrap=True, markup=False)
     return 0
@@ -101,6 +116,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry point: ``main(["run", ...])`` or ``main(["campaign", "run", ...])``."""
+    from formation_ftc.cli import lossy_stderr
     from formation_ftc.exitcodes import run_guarded
 
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -108,8 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         argv = ["campaign", *argv]
     parser = argparse.ArgumentParser(prog="formation-ftc")
     add_cli(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return run_guarded(args.func, args)
+    with lossy_stderr():
+        args = parser.parse_args(argv)
+        return run_guarded(args.func, args)
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

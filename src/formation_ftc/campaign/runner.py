@@ -33,7 +33,7 @@ import functools
 import json
 import time
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,11 +43,11 @@ import jax
 import numpy as np
 import pandas as pd
 
-from formation_ftc.campaign.sampling import CampaignPlan, Chunk, RunColumns, all_numbers
+from formation_ftc.campaign.sampling import CampaignPlan, Chunk, ChunkList, RunColumns, all_numbers
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
-from formation_ftc.sim import xla
 from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.runtime import xla
 
 __all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "start_chunk", "run_campaign", "metric_names", "make_plan"]
 
@@ -482,7 +482,7 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
     store = CampaignStore.prepare(out_dir, plan)
     executor = executor if executor is not None else LocalExecutor()
     done_before = store.finished()
-    todo = [c for c in plan.chunks() if c.chunk_id not in done_before]
+    todo = plan.chunks(done=done_before)
     if hasattr(executor, "prepare"):  # the automatic local pool sizes itself to the work left
         executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
@@ -493,7 +493,7 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
         writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer")
         writing: Future | None = None
         try:
-            for res in executor.map(run_chunk, plan, todo, start=start_chunk):
+            for res in _map_in_windows(executor, plan, todo):
                 if writing is not None:
                     bar.advance(writing.result())
                 writing = writer.submit(_store_chunk, store, res)
@@ -509,15 +509,33 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
                            len(done_before), time.perf_counter() - t0, results, executor.describe())
 
 
+#: chunks handed to the executor at once: what it holds for pending chunks (futures, queued calls) stays
+#: bounded in a campaign of millions of chunks, and the pool idles only while a window's last chunks finish
+MAP_WINDOW = 4096
+
+
+def _map_in_windows(executor, plan: CampaignPlan, chunks: ChunkList) -> Iterator[ChunkResult]:
+    """``executor.map(run_chunk, plan, chunks)``, :data:`MAP_WINDOW` chunks at a time."""
+    for a in range(0, len(chunks), MAP_WINDOW):
+        yield from executor.map(run_chunk, plan, chunks[a:a + MAP_WINDOW], start=start_chunk)
+
+
 def _store_chunk(store: CampaignStore, res: ChunkResult) -> int:
     store.write_chunk(res.chunk_id, res.table, res.traces)
     return res.n_runs
 
 
-def _run_steps(plan: CampaignPlan, chunks: list[Chunk]) -> int:
-    """Integration steps over all runs of ``chunks`` (each chunk's first run gives its step count)."""
+def _run_steps(plan: CampaignPlan, chunks: Sequence[Chunk]) -> int:
+    """Integration steps over all runs of ``chunks``: each chunk's first run gives its step count, found
+    once per grid point unless a ``simulation.*`` field is sampled."""
+    per_chunk = any(s.path.startswith("simulation.") for s in plan.random_samplers)
+    per_point: dict[int, int] = {}
     total = 0
     for c in chunks:
-        scenario = plan.scenario(plan.run_inputs(c.start))
-        total += len(c) * int(getattr(scenario.simulation, "n_steps", 0) or 0)
+        n = per_point.get(c.grid_index)
+        if n is None:
+            n = int(getattr(plan.scenario(plan.run_inputs(c.start)).simulation, "n_steps", 0) or 0)
+            if not per_chunk:
+                per_point[c.grid_index] = n
+        total += len(c) * n
     return total

@@ -49,16 +49,17 @@ import copy
 import json
 import math
 import zlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 from scipy import stats
 
 from formation_ftc.campaign import streams
 from formation_ftc.campaign.spec import (
+    MAX_RUNS,
     CampaignError,
     CampaignSpec,
     Choice,
@@ -72,7 +73,7 @@ from formation_ftc.campaign.spec import (
 )
 from formation_ftc.config import loader
 
-__all__ = ["RunInputs", "RunColumns", "Chunk", "CampaignPlan", "run_seed", "run_seeds", "draw_value",
+__all__ = ["RunInputs", "RunColumns", "Chunk", "ChunkList", "CampaignPlan", "run_seed", "run_seeds", "draw_value",
            "draw_values", "value_from_unit", "qmc_design",
            "path_exists"]
 
@@ -92,7 +93,7 @@ class RunInputs:
     values: dict[str, Any] = field(default_factory=dict)  # dotted path -> value (grid and sampled)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Chunk:
     """Runs ``start .. stop-1`` of one grid point: one vmap batch and one Parquet file."""
 
@@ -107,6 +108,28 @@ class Chunk:
 
     def __len__(self) -> int:
         return self.stop - self.start
+
+
+class ChunkList(Sequence[Chunk]):
+    """Chunks of a plan by id, each made when it is read: a campaign of millions of chunks is planned
+    in a ``range`` (or 8 bytes per pending chunk), not in one object per chunk."""
+
+    def __init__(self, plan: CampaignPlan, ids: range | np.ndarray):
+        self.plan, self.ids = plan, ids
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @overload
+    def __getitem__(self, k: int) -> Chunk: ...
+
+    @overload
+    def __getitem__(self, k: slice) -> ChunkList: ...
+
+    def __getitem__(self, k: int | slice) -> Chunk | ChunkList:
+        if isinstance(k, slice):
+            return ChunkList(self.plan, self.ids[k])
+        return self.plan.chunk(int(self.ids[k]))
 
 
 @dataclass(frozen=True)
@@ -227,6 +250,16 @@ def value_from_unit(sampler: Sampler, u: float) -> Any:
     raise TypeError(f"no quasi-Monte Carlo mapping for {type(sampler).__name__}")  # pragma: no cover
 
 
+#: most numbers (rows x random fields) of a quasi-Monte Carlo design: 32 MiB, about 100 MiB while SciPy
+#: builds it (random sampling has no such limit: its values are derived per chunk)
+MAX_DESIGN_VALUES = 2**22
+
+
+def _design_length(kind: str, n: int) -> int:
+    """Rows :func:`qmc_design` builds for ``n`` keys: the next power of two for Sobol', ``n`` for LHS."""
+    return 2 ** max(0, math.ceil(math.log2(max(n, 1)))) if kind == "sobol" else n
+
+
 def qmc_design(kind: str, d: int, n: int, campaign_seed: int) -> np.ndarray:
     """Rows ``0 .. n-1`` (at least) of the ``d``-dimensional ``kind`` design ("sobol" or "lhs") in [0, 1)^d.
 
@@ -244,7 +277,7 @@ def qmc_design(kind: str, d: int, n: int, campaign_seed: int) -> np.ndarray:
     except TypeError:  # pragma: no cover - SciPy < 1.15 names the generator ``seed``
         engine = cls(d, scramble=True, seed=rng)
     if kind == "sobol":
-        return engine.random_base2(max(0, math.ceil(math.log2(max(n, 1)))))
+        return engine.random_base2(int(math.log2(_design_length(kind, n))))
     return engine.random(n)
 
 
@@ -335,6 +368,82 @@ def _describe_dump(node: Any) -> str:
     return f"a value ({node!r})"
 
 
+#: runs whose inputs :meth:`CampaignPlan.validate_all` derives at once (bounds the memory of planning)
+VALIDATION_BLOCK = 2**14
+
+
+class _Validation:
+    """What :meth:`CampaignPlan.validate_all` gathers block by block: bound violations (first run and
+    count), non-finite values, the runs holding each numeric field's extremes and one run per structure."""
+
+    def __init__(self, plan: CampaignPlan):
+        self.plan = plan
+        self.numeric = [s.path for s in plan.samplers if s.numeric]
+        self.other = [s.path for s in plan.samplers if not s.numeric]
+        self.bases = range(len(plan.base_names))
+        self.bounds = {(p, b): _schema_bounds(plan.methods[b], p) for p in self.numeric for b in self.bases}
+        self.violations: dict[tuple[str, int, int], list[Any]] = {}  # -> [run id, value, runs in all]
+        self.non_finite: dict[tuple[str, int], tuple[int, Any]] = {}  # -> (run id, value)
+        self.lowest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
+        self.highest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
+        self.structures: dict[str, RunInputs] = {}
+
+    def add(self, cols: RunColumns) -> None:
+        names = self.plan.base_names
+        sels = {b: np.flatnonzero(cols.base == b) for b in self.bases}
+        for path in self.numeric:
+            vals = np.array(cols.values[path], dtype=np.float64)
+            for b, sel in sels.items():
+                if not sel.size:
+                    continue
+                for i, (_, _, ok) in enumerate(self.bounds[path, b]):
+                    bad = sel[np.flatnonzero(~np.asarray(ok(vals[sel]), dtype=bool))]
+                    if bad.size:
+                        first = [int(cols.run_id[bad[0]]), vals[bad[0]], 0]
+                        self.violations.setdefault((path, b, i), first)[2] += bad.size
+                v = vals[sel]
+                finite = np.isfinite(v)
+                if not finite.all():
+                    k = int(sel[np.flatnonzero(~finite)[0]])
+                    self.non_finite.setdefault((path, b), (int(cols.run_id[k]), vals[k]))
+                    continue
+                lo, hi = int(sel[int(np.argmin(v))]), int(sel[int(np.argmax(v))])
+                if (path, b) not in self.lowest or vals[lo] < self.lowest[path, b][0]:
+                    self.lowest[path, b] = (vals[lo], cols.row(lo, names))
+                if (path, b) not in self.highest or vals[hi] > self.highest[path, b][0]:
+                    self.highest[path, b] = (vals[hi], cols.row(hi, names))
+        for b, sel in sels.items():  # one run per structure (base and non-numeric values)
+            for k in (sel[:1] if not self.other else sel).tolist():
+                key = names[b] + json.dumps({p: cols.values[p][k] for p in self.other}, sort_keys=True, default=str)
+                if key not in self.structures:
+                    self.structures[key] = cols.row(k, names)
+
+    def errors(self) -> list[str]:
+        """The bound and finiteness errors, field by field and base by base."""
+        out = []
+        for path in self.numeric:
+            for b in self.bases:
+                for i, (bound, op, _) in enumerate(self.bounds[path, b]):
+                    if (path, b, i) in self.violations:
+                        r, v, n = self.violations[path, b, i]
+                        out.append(f"run {r}: {path} = {v!r} violates {path} {op} {bound} ({n} run(s) in all)")
+                if (path, b) in self.non_finite:
+                    r, v = self.non_finite[path, b]
+                    out.append(f"run {r}: {path} = {v!r} is not finite")
+        return out
+
+    @property
+    def chosen(self) -> dict[int, RunInputs]:
+        """Run id -> inputs of the runs validated in full: extremes of the finite fields, one per structure."""
+        out: dict[int, RunInputs] = {}
+        for key in self.lowest.keys() - self.non_finite.keys():
+            for _, row in (self.lowest[key], self.highest[key]):
+                out.setdefault(row.run_id, row)
+        for row in self.structures.values():
+            out.setdefault(row.run_id, row)
+        return out
+
+
 class CampaignPlan:
     """A validated campaign: base scenarios, grid, samplers, run ids and chunks. Picklable (sent to
     worker processes and Dask workers with every chunk)."""
@@ -379,6 +488,7 @@ class CampaignPlan:
         self.n_runs = self.n_grid * self.runs
         self.chunks_per_point = -(-self.runs // self.chunk_size)
         self.n_chunks = self.n_grid * self.chunks_per_point
+        self._check_design_size()
         bad = [r for r in spec.traces.runs if r >= self.n_runs]
         if bad and drop_missing_traces:  # --runs made the campaign smaller: keep the traces that exist
             kept = [r for r in spec.traces.runs if r < self.n_runs]
@@ -483,12 +593,33 @@ class CampaignPlan:
         """:meth:`run_inputs` of many runs (same values; see :meth:`run_columns`)."""
         return self.run_columns(run_ids).rows(self.base_names)
 
+    def _design_rows(self) -> int:
+        """Rows of the quasi-Monte Carlo design: one per sampling key."""
+        return self.runs if self.paired else self.n_runs
+
     def design(self) -> np.ndarray:
         """The quasi-Monte Carlo unit-cube design of this campaign (rows indexed by sampling key)."""
         if self._design is None:
-            n = self.runs if self.paired else self.n_runs
-            self._design = qmc_design(self.sampling, len(self.random_samplers), n, self.seed)
+            self._design = qmc_design(self.sampling, len(self.random_samplers), self._design_rows(), self.seed)
         return self._design
+
+    def _check_design_size(self) -> None:
+        """Refuse a quasi-Monte Carlo design of more than :data:`MAX_DESIGN_VALUES` numbers: it is held
+        whole in memory (by this process and every worker), unlike random samples, derived per chunk."""
+        d = len(self.random_samplers)
+        if self.sampling == "random" or not d:
+            return
+        rows = _design_length(self.sampling, self._design_rows())
+        if rows * d <= MAX_DESIGN_VALUES:
+            return
+        most = MAX_DESIGN_VALUES // d  # design rows, i.e. sampling keys (Sobol': a power of two)
+        most = 2 ** int(math.log2(most)) if self.sampling == "sobol" else most
+        allowed = most if self.paired else most // self.n_grid
+        fits = f"1 <= runs <= {allowed:,} here" if allowed else "no --runs fits this grid"
+        raise CampaignError(
+            f"--runs / campaign.runs = {self.runs:,}: the {self.sampling} design would hold {rows:,} rows x {d} random "
+            f"fields = {rows * d * 8 / 2**20:,.0f} MiB, over the {MAX_DESIGN_VALUES * 8 // 2**20} MiB a design may "
+            f"take ({fits}); or use sampling = \"random\" (up to {MAX_RUNS:,} runs per grid point)")
 
     def scenario_raw(self, inputs: RunInputs) -> dict[str, Any]:
         raw = copy.deepcopy(self.base_raws[self.base_names.index(inputs.base)])
@@ -505,60 +636,21 @@ class CampaignPlan:
             shown = ", ".join(f"{p} = {v!r}" for p, v in inputs.values.items())
             raise CampaignError(f"run {inputs.run_id} ({shown}): sampled scenario is invalid:\n{exc}") from None
 
-    def validate_all(self, run_ids: list[int] | None = None) -> None:
+    def validate_all(self, run_ids: list[int] | np.ndarray | None = None) -> None:
         """Validate every run (default: all) before anything runs, without building each scenario.
 
         Numeric fields are checked as arrays against the bounds the scenario schema declares for them
         (the message names the field, the run id and the value); then the scenario is validated in
         full for one run per structure (base and non-numeric values) and for the runs holding the
         smallest and the largest value of every numeric field (cross-field rules see the extremes).
+        The runs are derived :data:`VALIDATION_BLOCK` at a time: validating millions of runs takes the
+        memory of one block.
         """
-        ids = np.arange(self.n_runs) if run_ids is None else np.asarray(run_ids, dtype=np.int64)
-        cols = self.run_columns(ids)
-        run_id = cols.run_id
-        errors: list[str] = []
-        numeric_paths = [s.path for s in self.samplers if all_numbers(cols.values[s.path])]
-        chosen: dict[int, RunInputs] = {}
-
-        def pick(k: int) -> None:
-            chosen.setdefault(int(run_id[k]), cols.row(k, self.base_names))
-
-        base_sel = {b: np.flatnonzero(cols.base == b) for b in range(len(self.base_names))}
-        for path in numeric_paths:
-            vals = np.array(cols.values[path], dtype=np.float64)
-            for base_k in range(len(self.base_names)):
-                sel = base_sel[base_k]
-                if not sel.size:
-                    continue
-                for bound, op, ok in _schema_bounds(self.methods[base_k], path):
-                    good = np.asarray(ok(vals[sel]), dtype=bool)
-                    bad = sel[np.flatnonzero(~good)]
-                    if bad.size:
-                        k = int(bad[0])
-                        errors.append(f"run {int(run_id[k])}: {path} = {vals[k]!r} violates {path} {op} "
-                                      f"{bound} ({bad.size} run(s) in all)")
-                v_sel = vals[sel]
-                if np.any(~np.isfinite(v_sel)):
-                    k = int(sel[int(np.flatnonzero(~np.isfinite(v_sel))[0])])
-                    errors.append(f"run {int(run_id[k])}: {path} = {vals[k]!r} is not finite")
-                    continue
-                for k in (int(sel[int(np.argmin(v_sel))]), int(sel[int(np.argmax(v_sel))])):
-                    pick(k)
-        # one run per structure (base and non-numeric values)
-        other = [p for p in cols.values if p not in numeric_paths]
-        if not other:
-            for sel in base_sel.values():
-                if sel.size:
-                    pick(int(sel[0]))
-        else:
-            structures: dict[str, int] = {}
-            for k in range(len(cols)):
-                key = self.base_names[int(cols.base[k])] + json.dumps(
-                    {p: cols.values[p][k] for p in other}, sort_keys=True, default=str)
-                structures.setdefault(key, k)
-            for k in structures.values():
-                pick(k)
-        for i in sorted(chosen.values(), key=lambda x: x.run_id):
+        seen = _Validation(self)
+        for block in self._run_id_blocks(run_ids):
+            seen.add(self.run_columns(block))
+        errors = seen.errors()
+        for i in sorted(seen.chosen.values(), key=lambda x: x.run_id):
             if len(errors) >= 3:
                 break
             try:
@@ -569,15 +661,24 @@ class CampaignPlan:
             raise CampaignError("samples outside what the scenario allows (nothing was run):\n"
                                 + "\n".join(errors[:3]))
 
+    def _run_id_blocks(self, run_ids: list[int] | np.ndarray | None) -> Iterator[np.ndarray]:
+        """``run_ids`` (default: every run) in blocks of at most :data:`VALIDATION_BLOCK`."""
+        if run_ids is None:
+            for a in range(0, self.n_runs, VALIDATION_BLOCK):
+                yield np.arange(a, min(a + VALIDATION_BLOCK, self.n_runs), dtype=np.int64)
+            return
+        ids = np.asarray(run_ids, dtype=np.int64).reshape(-1)
+        for a in range(0, ids.size, VALIDATION_BLOCK):
+            yield ids[a:a + VALIDATION_BLOCK]
+
     # ------------------------------------------------------------------------------------ chunks
-    def chunks(self) -> list[Chunk]:
-        out = []
-        for g in range(self.n_grid):
-            for c in range(self.chunks_per_point):
-                start = g * self.runs + c * self.chunk_size
-                stop = min(start + self.chunk_size, (g + 1) * self.runs)
-                out.append(Chunk(g * self.chunks_per_point + c, g, start, stop))
-        return out
+    def chunks(self, done: set[int] | frozenset[int] = frozenset()) -> ChunkList:
+        """Every chunk in id order, except those in ``done`` (made on access, see :class:`ChunkList`)."""
+        ids = range(self.n_chunks)
+        if not done:
+            return ChunkList(self, ids)
+        return ChunkList(self, np.setdiff1d(np.arange(self.n_chunks, dtype=np.int64),
+                                            np.fromiter(done, dtype=np.int64, count=len(done))))
 
     def chunk(self, chunk_id: int) -> Chunk:
         g, c = divmod(int(chunk_id), self.chunks_per_point)

@@ -48,7 +48,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 from scipy import stats
 
-from formation_ftc.config.base import StrictModel
+from formation_ftc.config.base import StrictModel, error_location
 from formation_ftc.errors import InputError
 
 __all__ = [
@@ -446,7 +446,7 @@ class CampaignSpec(StrictModel):
 def _format_error(exc: ValidationError, source: str) -> str:
     lines = [f"{source}: invalid campaign ({exc.error_count()} error(s))"]
     for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"]) or "<root>"
+        loc = error_location(err) or "<root>"
         msg = err["msg"]
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, "):]

@@ -27,6 +27,8 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+from pydantic.fields import FieldInfo
+from pydantic_core import ErrorDetails, PydanticCustomError
 
 from formation_ftc.core.expressions import ExpressionError, compile_expression
 
@@ -38,6 +40,7 @@ __all__ = [
     "ExprText",
     "expression_validator",
     "MAX_SEED",
+    "error_location",
 ]
 
 #: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
@@ -59,16 +62,43 @@ def _allows_bool(annotation: Any) -> bool:
     return False
 
 
-def _find_bool(value: Any, path: str = "") -> str | None:
-    """Dotted/indexed location of the first boolean inside ``value`` (lists/tuples), else None."""
-    stack = [(value, path)]
+def _mentions_float(annotation: Any) -> bool:
+    """Whether a field annotation admits a float anywhere (float, unions and containers of it)."""
+    if annotation is float:
+        return True
+    return any(_mentions_float(a) for a in typing.get_args(annotation) if a is not Ellipsis)
+
+
+def _find_bad_number(value: Any, *, booleans: bool, non_finite: bool) -> tuple[str, Any] | None:
+    """``(index path, item)`` of the first boolean (with ``booleans``) or nan/inf (with ``non_finite``)
+    inside the lists/tuples of ``value``, e.g. ``("[1][2]", nan)``; None when there is none."""
+    stack: list[tuple[Any, str]] = [(value, "")]
     while stack:
         v, p = stack.pop()
         if isinstance(v, bool):
-            return p
-        if isinstance(v, list | tuple):
+            if booleans:
+                return p, v
+        elif isinstance(v, float):
+            if non_finite and not math.isfinite(v):
+                return p, v
+        elif isinstance(v, list | tuple):
             stack.extend((x, f"{p}[{k}]") for k, x in reversed(list(enumerate(v))))
     return None
+
+
+def _allowed_range(field: FieldInfo) -> str:
+    """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
+    bounds = [f"{op} {getattr(c, name)}" for c in field.metadata
+              for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
+              if getattr(c, name, None) is not None]
+    return ", ".join(["a finite number", *bounds])
+
+
+def error_location(err: ErrorDetails) -> str:
+    """Location of a pydantic error, list indices in brackets, down to the refused list item when the
+    error names one: ``faults[0].bias``, ``magnitude[1][2]``."""
+    loc = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"]).lstrip(".")
+    return loc + str(err.get("ctx", {}).get("index", ""))
 
 
 class StrictModel(BaseModel):
@@ -78,18 +108,25 @@ class StrictModel(BaseModel):
 
     @field_validator("*", mode="before")
     @classmethod
-    def _no_bool_as_number(cls, v: Any, info: ValidationInfo) -> Any:
-        """Booleans are not numbers: refuse ``true``/``false`` where the field takes no boolean."""
+    def _numbers_in_lists(cls, v: Any, info: ValidationInfo) -> Any:
+        """Booleans are not numbers: refuse ``true``/``false`` where the field takes no boolean. Every
+        list item obeys the scalar rule: a field that takes a float refuses nan/inf in its lists too,
+        whatever the lists' declared item type (``magnitude = [0.0, nan]`` like ``magnitude = nan``)."""
         if not isinstance(v, bool | list | tuple) or info.field_name is None:
             return v
         field = cls.model_fields.get(info.field_name)
-        if field is None or _allows_bool(field.annotation):
+        if field is None:
             return v
-        where = _find_bool(v)
-        if where is not None:
-            raise ValueError(f"expected a number{' at ' + where if where else ''}, got a boolean "
+        bad = _find_bad_number(v, booleans=not _allows_bool(field.annotation),
+                               non_finite=_mentions_float(field.annotation))
+        if bad is None:
+            return v
+        index, item = bad
+        if isinstance(item, bool):
+            raise ValueError(f"expected a number{' at ' + index if index else ''}, got a boolean "
                              f"(booleans are not numbers)")
-        return v
+        raise PydanticCustomError("finite_number", "{value} is refused: must be {allowed} (never nan or inf)",
+                                  {"index": index, "value": repr(item), "allowed": _allowed_range(field)})
 
 
 def expression_validator(variables: tuple[str, ...] = ("t", "i")):

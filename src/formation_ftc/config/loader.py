@@ -23,6 +23,7 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
+from formation_ftc.config.base import error_location
 from formation_ftc.errors import InputError
 
 __all__ = [
@@ -262,7 +263,7 @@ def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any] | Iterable
 def _format_validation_error(exc: ValidationError, source: str) -> str:
     lines = [f"{source}: invalid scenario ({exc.error_count()} error(s))"]
     for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"]) or "<root>"
+        loc = error_location(err) or "<root>"
         msg = err["msg"]
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, "):]

@@ -28,6 +28,7 @@ Catalog modules (``catalog_*.py``) register the built-in types; a plug-in may re
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal, cast
@@ -36,7 +37,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
-from formation_ftc.config.base import ScenarioBase, StrictModel
+from formation_ftc.config.base import ScenarioBase, StrictModel, error_location
 from formation_ftc.registry import Condition, Method, register_method
 from formation_ftc.sim.compiled import Compiled, compile_loop
 from formation_ftc.sim.components import CompositionError, Plant, as_float
@@ -44,7 +45,7 @@ from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import BLOCK_REDUCTIONS, REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
 
 __all__ = ["ComposedScenario", "ComponentType", "BuildContext", "register_component_type", "component_types",
-           "make_loop", "build", "SLOTS", "KINDS", "per_spacecraft"]
+           "make_loop", "build", "SLOTS", "KINDS", "per_spacecraft", "require_slot"]
 
 #: slots a composed scenario may fill (plant and controller are required)
 SLOTS = ("plant", "reference", "sensors", "network", "estimator", "supervisor", "controller", "actuator")
@@ -69,6 +70,14 @@ class BuildContext:
     def section(self, slot: str) -> Any:
         """The validated section of another slot (None when the slot is empty)."""
         return self.scenario.section(slot)
+
+
+def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
+    """Refuse to build the ``slot`` component without the ``needed`` slot it reads ``what`` from (a
+    component would otherwise silently drop that input): a CompositionError naming both parts."""
+    if ctx.scenario.type_of(needed) is None:
+        raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)} reads {what} from the [{needed}] section, "
+                               f"but the loop has no [{needed}]: add one")
 
 
 @dataclass(frozen=True)
@@ -136,7 +145,7 @@ class MetricSection(StrictModel):
     spacecraft: str = Field("none", description=f"Spacecraft reduction: one of {', '.join(SPACECRAFT_REDUCTIONS)}.")
     units: str = Field("1", description="Units of the metric (UDUNITS).")
     start: float = Field(0.0, description="Window start [s].")
-    end: float = Field(float("inf"), description="Window end [s] (inf: until the horizon).")
+    end: float | None = Field(None, description="Window end [s] (omit: until the horizon).")
     threshold: float = Field(0.0, description="Threshold of the 'settle' reduction [signal units].")
     norm_ord: Literal["2", "inf"] = Field("2", description="Norm of `norm`: '2' Euclidean, 'inf' largest |component|.")
     gate: str | None = Field(None, description="Name of a recorded signal: only samples where it is true count.")
@@ -153,6 +162,15 @@ class MetricSection(StrictModel):
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
             raise ValueError(f"spacecraft = {self.spacecraft!r}: must be one of {', '.join(SPACECRAFT_REDUCTIONS)}")
         return self
+
+
+def _section_errors(where: str, exc: ValidationError) -> ValueError:
+    """One error listing a section's validation errors, each named ``where.field[index]: reason``."""
+    lines = []
+    for err in exc.errors():
+        loc, msg = error_location(err), err["msg"].removeprefix("Value error, ")
+        lines.append(f"{where}.{loc}: {msg}" if loc else f"{where}: {msg}")
+    return ValueError("; ".join(lines))
 
 
 class ComposedScenario(ScenarioBase):
@@ -173,7 +191,7 @@ class ComposedScenario(ScenarioBase):
     _evaluation_sections: list[tuple[str, Any]] = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
-    def _compose(self):
+    def _compose(self) -> ComposedScenario:
         _load_catalogs()
         sections: dict[str, Any] = {}
         for slot in SLOTS:
@@ -191,11 +209,7 @@ class ComposedScenario(ScenarioBase):
             try:
                 sections[slot] = entry.section.model_validate(body)
             except ValidationError as exc:
-                lines = []
-                for err in exc.errors():
-                    loc = ".".join(str(p) for p in err.get("loc", ()))
-                    lines.append(f"{slot}.{loc}: {err.get('msg')}" if loc else f"{slot}: {err.get('msg')}")
-                raise ValueError("; ".join(lines)) from None
+                raise _section_errors(slot, exc) from None
         self._sections = sections
         evaluations: list[tuple[str, Any]] = []
         known = sorted(n for (k, n) in _CATALOG if k == "evaluation")
@@ -209,8 +223,7 @@ class ComposedScenario(ScenarioBase):
                 evaluations.append((str(name), entry.section.model_validate(
                     {k: v for k, v in raw.items() if k != "type"})))
             except ValidationError as exc:
-                raise ValueError("; ".join(f"evaluations[{j}].{'.'.join(str(p) for p in e.get('loc', ()))}: "
-                                           f"{e.get('msg')}" for e in exc.errors())) from None
+                raise _section_errors(f"evaluations[{j}]", exc) from None
         self._evaluation_sections = evaluations
         try:
             make_loop(self).validate()
@@ -245,13 +258,10 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
     metrics = tuple(Metric(m.name, m.signal, m.reduce, norm=m.norm, spacecraft=m.spacecraft, units=m.units,
-                           start=as_float(m.start), end=as_float(m.end), threshold=as_float(m.threshold),
-                           norm_ord=m.norm_ord, gate=m.gate, block=m.block)
+                           start=as_float(m.start), end=as_float(math.inf if m.end is None else m.end),
+                           threshold=as_float(m.threshold), norm_ord=m.norm_ord, gate=m.gate, block=m.block)
                     for m in s.metrics)
-    sim = s.simulation
-    return ClosedLoop(**parts, metrics=metrics, evaluations=tuple(ctx.evaluations),
-                      seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt),
-                      n_steps=sim.n_steps, record_every=sim.record_every, unroll=sim.unroll)
+    return ClosedLoop.from_simulation(s.simulation, **parts, metrics=metrics, evaluations=tuple(ctx.evaluations))
 
 
 def build(s: ComposedScenario) -> Compiled:

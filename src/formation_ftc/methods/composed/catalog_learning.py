@@ -51,7 +51,7 @@ from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
 from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.methods.composed import BuildContext, register_component_type
+from formation_ftc.methods.composed import BuildContext, register_component_type, require_slot
 from formation_ftc.sim.components import CompositionError, as_float
 
 __all__ = ["ILO", "LOF2TC", "COF2TC", "IloSection", "Lof2tcSection", "Cof2tcSection", "onboard_mean_motion",
@@ -320,6 +320,9 @@ def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
     return law
 
 
+_FAULT_ESTIMATE = "the fault estimate F_hat it compensates (e.g. type = \"iterative-learning-observer\")"
+
+
 class Lof2tcSection(_OutputFeedbackSection):
     """LOF2TC (30)-(32): u = pi K e_y - B^+E v - B^+H F_hat with the learning gain pi and compensation v."""
 
@@ -333,6 +336,7 @@ class Lof2tcSection(_OutputFeedbackSection):
 
 
 def _lof2tc(sec: Lof2tcSection, ctx: BuildContext):
+    require_slot(ctx, "controller", "estimator", _FAULT_ESTIMATE)
     common = sec.common(ctx)
     N = ctx.count
     law = LearningOutputFeedbackController(
@@ -350,6 +354,8 @@ class Cof2tcSection(_OutputFeedbackSection):
 
 
 def _cof2tc(sec: Cof2tcSection, ctx: BuildContext):
+    if sec.fault_compensation:
+        require_slot(ctx, "controller", "estimator", f"(with fault_compensation = true) {_FAULT_ESTIMATE}")
     law = ConventionalOutputFeedbackController(**sec.common(ctx), fault_compensation=sec.fault_compensation)
     return _on_plant(law, sec, ctx)
 

@@ -25,7 +25,7 @@ from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.history import required_capacity
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
-from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
+from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type, require_slot
 from formation_ftc.sim.components import as_float
 
 Vec3 = tuple[float, float, float]
@@ -233,6 +233,8 @@ class Li2020Section(StrictModel):
 
 
 def _li2020(sec: Li2020Section, ctx: BuildContext):
+    require_slot(ctx, "controller", "reference", "the reference orbit of its on-board model (the natural "
+                 "acceleration in its regressor Y_i, eq. (8))")
     n = ctx.count
 
     def ps(name):
