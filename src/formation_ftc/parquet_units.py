@@ -23,8 +23,12 @@ from pathlib import Path
 from typing import IO, Any
 
 import pandas as pd
-import pyarrow as pa
-import pyarrow.parquet as pq
+
+from formation_ftc.errors import require_extra
+
+#: the ``campaign`` extra (``pip install -e '.[campaign]'``)
+pa = require_extra("pyarrow", "campaign", "Parquet files (campaigns, leagues)")
+pq = require_extra("pyarrow.parquet", "campaign", "Parquet files (campaigns, leagues)")
 
 __all__ = ["UNKNOWN", "read_units", "write_parquet"]
 

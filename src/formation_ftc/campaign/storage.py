@@ -45,13 +45,16 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import pyarrow.parquet as pq
 
 from formation_ftc.campaign.sampling import CampaignPlan
 from formation_ftc.campaign.spec import CampaignError
 from formation_ftc.cf import apply_cf, write_netcdf
+from formation_ftc.errors import require_extra
 from formation_ftc.parquet_units import read_units, write_parquet
 from formation_ftc.provenance import provenance
+
+#: Parquet I/O: the ``campaign`` extra (``pip install -e '.[campaign]'``)
+pq = require_extra("pyarrow.parquet", "campaign", "campaign and league storage (Parquet files)")
 
 try:  # POSIX advisory locks; other platforms run without a lock
     import fcntl

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from formation_ftc.errors import InputError
+from formation_ftc.errors import InputError, require_extra
 
 __all__ = [
     "DesignInfeasible",
@@ -183,7 +183,7 @@ def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float =
 
 
 def _build_problem(A, C, H, lam, c, r, eps, groups):
-    import cvxpy as cp
+    cp = require_extra("cvxpy", "lmi", "LMI design (formation_ftc.design.lmi)")
 
     n, p, m = A.shape[0], C.shape[0], H.shape[1]
     P = cp.Variable((n, n), symmetric=True)
@@ -211,7 +211,7 @@ def _build_problem(A, C, H, lam, c, r, eps, groups):
 
 def _solve(prob, solver):
     """Solve with ``solver`` (or CLARABEL, then SCS); return (status, solver_name)."""
-    import cvxpy as cp
+    cp = require_extra("cvxpy", "lmi", "LMI design (formation_ftc.design.lmi)")
 
     order = [solver] if solver else ["CLARABEL", "SCS"]
     installed = set(cp.installed_solvers())
