@@ -216,6 +216,7 @@ def test_run_with_hundreds_of_spacecraft_plots_a_subset(tmp_path, capsys):
     raw = tomllib.loads(builtin_scenarios()[SCN])
     n = 300
     raw["spacecraft"]["mass"] = [100.0] * n
+    raw["controller"]["nominal_mass"] = [100.0] * n  # the law's stated masses, one per deputy too
     raw["spacecraft"]["initial_position"] = [[float(k % 20), float(k // 20), 0.0] for k in range(n)]
     raw["simulation"]["horizon"] = 2.0
     path = tmp_path / "many.toml"

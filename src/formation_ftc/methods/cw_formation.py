@@ -10,13 +10,17 @@ evaluated at every RK stage (``controller.mode = "continuous"``) or held over th
 Model per deputy i (mass m_i [kg], x radial, y along-track, z orbit normal)::
 
     q_dot = A q + B (Gamma_i(t) u_i + delta_i(t) + d_i(t) + w_i) / m_i
-    u_i   = -kp (p_i - p_i^d(t)) - kd (v_i - v_i^d(t)) + m_i a_i^d(t)  (PD + feed-forward, measured state)
+    u_i   = -kp (p_i - p_i^d(t)) - kd (v_i - v_i^d(t)) + m^nom_i a_i^d(t)  (PD + feed-forward, measured state)
+
+``m^nom_i`` is ``controller.nominal_mass`` (default :data:`NOMINAL_MASS` = 100 kg), the law's stated
+knowledge: the true masses ``spacecraft.mass`` drive the plant only.
 
 ``p^d(t)`` is an expression; ``v^d`` and ``a^d`` are its exact time derivatives (JAX autodiff).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
@@ -38,6 +42,9 @@ from formation_ftc.sim.metrics import Metric
 __all__ = ["CwFormationScenario", "build", "make_loop"]
 
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
+
+#: the PD law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``)
+NOMINAL_MASS = 100.0
 
 
 class OrbitSection(StrictModel):
@@ -66,6 +73,17 @@ class ControllerSection(StrictModel):
     kd: float = Field(0.0, ge=0, description="Velocity gain [N s/m].")
     desired_position: Vec3Expr = Field(("0", "0", "0"), description="Desired LVLH position p^d(t) per axis, expressions in t [s], i [m].")
     max_force: float | None = Field(None, gt=0, description="Per-axis saturation of the commanded force [N].")
+    nominal_mass: float | list[float] = Field(NOMINAL_MASS, description=(
+        "Masses the PD law knows on board, used by its feed-forward m_i a_i^d [kg], > 0: one number for every "
+        "deputy or one per deputy. Default 100 kg, a stated nominal value: never the true spacecraft.mass, so "
+        "a campaign that samples the true mass leaves the law's knowledge unchanged."))
+
+    @model_validator(mode="after")
+    def _positive_masses(self):
+        values = self.nominal_mass if isinstance(self.nominal_mass, list) else [self.nominal_mass]
+        if not values or any(not (math.isfinite(m) and m > 0) for m in values):
+            raise ValueError(f"controller.nominal_mass = {self.nominal_mass}: every mass must be finite and > 0 kg")
+        return self
 
 
 class FaultSection(StrictModel):
@@ -91,6 +109,14 @@ class CwFormationScenario(ScenarioBase):
     disturbance: DisturbanceSection = DisturbanceSection()
     sensors: SensorSection = SensorSection()
 
+    @model_validator(mode="after")
+    def _nominal_masses_per_deputy(self):
+        m = self.controller.nominal_mass
+        if isinstance(m, list) and len(m) != self.spacecraft.count:
+            raise ValueError(f"controller.nominal_mass: {len(m)} values for {self.spacecraft.count} spacecraft "
+                             f"(give one number or {self.spacecraft.count})")
+        return self
+
 
 
 def make_loop(s: CwFormationScenario) -> ClosedLoop:
@@ -106,7 +132,8 @@ def make_loop(s: CwFormationScenario) -> ClosedLoop:
     if s.controller.type == "pd":
         sat = s.controller.max_force
         controller: PdFormationController | ZeroController = PdFormationController(
-            count=N, kp=as_float(s.controller.kp), kd=as_float(s.controller.kd), mass=mass,
+            count=N, kp=as_float(s.controller.kp), kd=as_float(s.controller.kd),
+            mass=as_float(np.broadcast_to(np.asarray(s.controller.nominal_mass, float), (N,)).copy()),
             max_force=as_float(np.inf if sat is None else sat),
             desired_position=s.controller.desired_position,
             is_sampled=s.controller.mode == "sampled")

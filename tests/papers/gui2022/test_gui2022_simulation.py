@@ -44,7 +44,7 @@ LAM = pub.L1_PRINTED[0, 0]
 def test_jax_scan_matches_numpy_reference(over):
     base = {"simulation.horizon": 2.0, "simulation.record_every": 1, "simulation.unroll": 1,
             "faults.x_onset": 0.5, "faults.z_onset": 1.0, "faults.z_decay_shifted": True,
-            "initial.estimate_offset": list(pub.ESTIMATE_OFFSET)}
+            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET)}
     scn = ftc.load_scenario("gui2022-lof2tc", {**base, **over})
     ds, _ = simulate_with_metrics(scn)
     ref = simulate_numpy(scn)
@@ -96,7 +96,7 @@ def test_observer_position_error_exact_recursion():
     # plant's dt^2/2 acceleration terms of the ZOH; d = 0 keeps them below 1e-12 m here).
     scn = ftc.load_scenario("gui2022-ilo", {"simulation.horizon": 3.0, "simulation.record_every": 10,
                                             "disturbance.amplitude": 0.0,
-                                            "initial.estimate_offset": list(pub.ESTIMATE_OFFSET)})
+                                            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET)})
     ds, _ = simulate_with_metrics(scn)
     e0 = -pub.ESTIMATE_OFFSET[:3]
     rho = 1 - LAM * 1e-3

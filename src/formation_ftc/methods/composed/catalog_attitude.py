@@ -52,6 +52,9 @@ EULER_SENSORS = "quaternion-euler"
 EULER_LAW = "networked-el-hinf"
 EULER_ALLOCATION = "euler-torque-allocation"
 SCRIPTED_FDI = "scripted-fdi"
+#: the Euler-angle law's model inertia when a scenario states none [kg m^2] (``controller.nominal_inertia``):
+#: Mehrabian's nominal J^ (our choice E003-10, as the ``mehrabian`` method)
+NOMINAL_INERTIA = (20.0, 18.0, 15.0)
 #: plant types whose state is {"omega": (N, 3), "q": (N, 4)} (body rate, quaternion vector first): the Euler
 #: sensors, the torque allocation and the Euler-angle law accept them; other catalogs add theirs
 QUATERNION_PLANTS: set[str] = {QUATERNION_PLANT}
@@ -270,8 +273,10 @@ class NetworkedElHinfSection(StrictModel):
     sigma: float = Field(0.5, gt=0.0, description="Adaptation gain sigma I_3 [N m / rad].")
     e_gain: float = Field(1.0, gt=0.0, description="Estimate pull towards the FDI estimate [1/s].")
     boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s].")
-    nominal_inertia: Vec3 | None = Field(None, description="Principal inertia of the law's model [kg m^2] "
-                                                           "(default: the plant's inertia).")
+    nominal_inertia: Vec3 = Field(NOMINAL_INERTIA, description="Principal inertia of the law's model, known on "
+                                                               "board [kg m^2] (default 20, 18, 15 kg m^2, "
+                                                               "Mehrabian's nominal J^, a stated value: never the "
+                                                               "plant's true inertia).")
     desired_attitude: Vec3Expr = Field(("0", "0", "0"), description="Desired [theta, phi, psi] per spacecraft, "
                                                                     "expressions in t [s], i [rad].")
 
@@ -282,7 +287,7 @@ class NetworkedElHinfSection(StrictModel):
         for k, (a, b) in enumerate(self.edges):
             if a < 1 or b < 1 or a == b:
                 raise ValueError(f"edges[{k}] = [{a}, {b}]: 1-based spacecraft numbers, no self-loops")
-        if self.nominal_inertia is not None and any(not x > 0 for x in self.nominal_inertia):
+        if any(not x > 0 for x in self.nominal_inertia):
             raise ValueError(f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2")
         return self
 
@@ -310,6 +315,11 @@ def _attitude_chain_fits(ctx: BuildContext) -> None:
 
 def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
     _attitude_chain_fits(ctx)
+    quantity = getattr(ctx.plant, "quantity", "torque")
+    if quantity != "torque":
+        raise CompositionError(f"controller {EULER_LAW} (NetworkedElHinfController) is an attitude law commanding a "
+                               f"torque, but plant {ctx.scenario.type_of('plant')} ({type(ctx.plant).__name__}) is "
+                               f"driven by a {quantity}: use an attitude plant")
     m = ctx.count
     for k, (a, b) in enumerate(sec.edges):
         if a > m or b > m:
@@ -319,13 +329,7 @@ def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
     if not graphs.is_connected_undirected(A):
         raise ValueError("controller.edges: the communication graph is not connected; the synchronisation law "
                          "needs a connected undirected graph")
-    J = sec.nominal_inertia
-    if J is None:
-        J = getattr(ctx.section("plant"), "inertia", None)
-        if J is None:
-            raise CompositionError(f"controller {EULER_LAW} is an attitude law (torque on Euler angles), but plant "
-                                   f"{ctx.scenario.type_of('plant')} has no inertia to build its model from (use an "
-                                   "attitude plant, or give controller.nominal_inertia [kg m^2])")
+    J = sec.nominal_inertia  # stated on board, never the plant's inertia
     ones = np.ones((m, 3))
     pj, pn = np.nonzero(np.triu(A > 0, 1))
     return NetworkedElHinfController(

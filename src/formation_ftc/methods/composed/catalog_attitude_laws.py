@@ -40,6 +40,10 @@ ATTITUDE_SCORES = "attitude-scores"
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
 
+#: the yang2013-attitude law's model inertia when a scenario states none [kg m^2] (``controller.inertia``):
+#: the yang2013 scenarios' spacecraft
+NOMINAL_INERTIA = (25.0, 25.0, 25.0)
+
 
 def _state_frame(ctx: BuildContext) -> str:
     """The frame of the plant's attitude state ("inertial" for a plant that does not say)."""
@@ -56,12 +60,9 @@ def _reads_plant_state(name: str, ctx: BuildContext) -> None:
                                "the plant state)")
 
 
-def _inertia(name: str, given: Vec3 | None, ctx: BuildContext) -> np.ndarray:
-    J = given if given is not None else getattr(ctx.section("plant"), "inertia", None)
-    if J is None:
-        raise CompositionError(f"controller {name}: plant {ctx.scenario.type_of('plant')} states no inertia; "
-                               "give controller.inertia [kg m^2]")
-    return np.diag(np.asarray(J, dtype=float))
+def _inertia(given: Vec3) -> np.ndarray:
+    """The law's model inertia matrix from its stated principal inertia (never the plant's)."""
+    return np.diag(np.asarray(given, dtype=float))
 
 
 def _quaternions(rows: Quat | list[Quat] | None, n: int, field: str) -> np.ndarray:
@@ -94,15 +95,16 @@ class Yang2013AttitudeSection(StrictModel):
     K4: float = Field(1.0, gt=0.0, description="Quaternion-vector shaping gain K4 [1/s].")
     K5: float = Field(1.0, gt=0.0, description="Quaternion-scalar shaping gain K5 [1/s].")
     kappa: float = Field(1e-3, gt=0.0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
-    inertia: Vec3 | None = Field(None, description="Principal inertia of the law's model [kg m^2] (default: the "
-                                                   "plant's).")
+    inertia: Vec3 = Field(NOMINAL_INERTIA, description="Principal inertia of the law's model, known on board "
+                                                       "[kg m^2] (default 25, 25, 25 kg m^2, Yang2013's spacecraft, a "
+                                                       "stated value: never the plant's true inertia).")
     desired_quaternion: Quat | list[Quat] | None = Field(
         None, description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
                           "first) or one per spacecraft [-] (default identity: aligned with the state frame).")
 
     @model_validator(mode="after")
     def _check(self):
-        if self.inertia is not None and any(not x > 0 for x in self.inertia):
+        if any(not x > 0 for x in self.inertia):
             raise ValueError(f"inertia = {self.inertia}: every entry must be > 0 kg m^2")
         _unit_quaternions(self.desired_quaternion)
         return self
@@ -110,7 +112,7 @@ class Yang2013AttitudeSection(StrictModel):
 
 def _yang2013_attitude(sec: Yang2013AttitudeSection, ctx: BuildContext):
     _reads_plant_state(YANG2013_ATTITUDE, ctx)
-    law = Yang2013AttitudeController(count=ctx.count, inertia=as_float(_inertia(YANG2013_ATTITUDE, sec.inertia, ctx)),
+    law = Yang2013AttitudeController(count=ctx.count, inertia=as_float(_inertia(sec.inertia)),
                                      K3=as_float(sec.K3), K4=as_float(sec.K4), K5=as_float(sec.K5),
                                      kappa=as_float(sec.kappa))
     q_d = _quaternions(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")

@@ -36,8 +36,8 @@ class AttitudeTruthSection(RigidBodyAttitudeSection):
     """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
 
     inertia: Vec3 = Field(description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
-                                      "spacecraft unless inertia_matrices is given, and the model an attitude "
-                                      "law uses by default.")
+                                      "spacecraft unless inertia_matrices is given (an attitude law's model is "
+                                      "stated in its own section).")
     inertia_matrices: list[Mat3] | None = Field(
         None, description="Full inertia matrix per spacecraft (one 3x3 row list each, or a single one for all) "
                           "[kg m^2]: symmetric, positive definite, satisfying the triangle inequalities; "

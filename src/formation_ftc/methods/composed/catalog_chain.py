@@ -11,7 +11,7 @@ How the parts fit a plant they were not written for:
 * ``controller.type = "azizi2009-llfr"`` commands accelerations u_i [m/s^2]. On a force-driven
   plant it is wrapped in :class:`~formation_ftc.components.controllers.acceleration_to_force.AccelerationToForce`:
   ``f_i = m_i^nom u_i`` with the flight side's nominal masses ``controller.nominal_mass`` [kg]
-  (default: the plant's masses, i.e. masses known exactly on board). The law models each spacecraft
+  (default 100 kg, a stated nominal value: never the plant's true masses). The law models each spacecraft
   as a double integrator ``x_i'' = b_i u_i`` (deep space): any other dynamics of the plant (orbital
   relative motion, disturbances) act on it as unmodelled accelerations.
 * The desired formation is the law's own: a regular N-gon of side ``controller.side`` [m] rotating at
@@ -50,6 +50,8 @@ CHAIN_SENSORS = "chain-relative"
 CHAIN_LAW = "azizi2009-llfr"
 HL_SUPERVISOR = "hierarchical"
 AXES = ("x", "y", "z")
+#: the law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``)
+NOMINAL_MASS = 100.0
 
 
 _per_spacecraft = per_spacecraft
@@ -116,7 +118,8 @@ class ChainLlfrSection(StrictModel):
     b_hat: float = Field(1.0, gt=0, description="FDI estimate of the faulty actuator's gain (LLFR) [-].")
     nominal_mass: float | list[float] | None = Field(
         None, description="Masses the flight side scales the acceleration command with on a force-driven plant "
-                          "[kg] (default: the plant's masses).")
+                          "[kg] (default 100 kg each, a stated nominal value: never the plant's true masses; not "
+                          "used on an acceleration-driven plant).")
     sampling: Literal["zoh", "continuous"] = Field(
         "zoh", description="'zoh': computed at t_k and held over the step; 'continuous': every RK stage.")
 
@@ -167,10 +170,7 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
     if quantity != "force":
         raise CompositionError(f"controller {CHAIN_LAW} commands accelerations, but plant "
                                f"{ctx.scenario.type_of('plant')} is driven by a {quantity}")
-    mass = sec.nominal_mass if sec.nominal_mass is not None else getattr(ctx.section("plant"), "mass", None)
-    if mass is None:
-        raise ValueError(f"controller.nominal_mass: plant {ctx.scenario.type_of('plant')} has no masses; "
-                         "give the nominal masses [kg]")
+    mass = NOMINAL_MASS if sec.nominal_mass is None else sec.nominal_mass  # stated, never the plant's
     return force_from_acceleration(law, as_float(_per_spacecraft(mass, n, "controller.nominal_mass")))
 
 

@@ -26,6 +26,10 @@ Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
 _per_spacecraft = per_spacecraft
 
+#: the law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``):
+#: Yang2013's spacecraft
+NOMINAL_MASS = 150.0
+
 
 class Yang2013TranslationalSection(StrictModel):
     """Yang2013 eq. (12): f_i = M_i (a^d_i + (K1 + 1) e_R + K2 e_V), e_R = p^d - p, e_V = v^d - v
@@ -33,15 +37,16 @@ class Yang2013TranslationalSection(StrictModel):
 
     K1: float = Field(0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0.")
     K2: float = Field(0.01, gt=0, description="Velocity gain K2 [1/s], > 0.")
-    nominal_mass: float | list[float] | None = Field(
-        None, description="Mass M_i used by the law [kg] (one or per spacecraft; default: the plant's).")
+    nominal_mass: float | list[float] = Field(
+        NOMINAL_MASS, description="Mass M_i used by the law [kg] (one or per spacecraft; default 150 kg, Yang2013's "
+                                  "spacecraft, a stated nominal value: never the plant's true masses).")
     desired_position: Vec3Expr = Field(("0", "0", "0"),
                                        description="Desired position p^d per axis, expressions in t [s], i [m].")
 
     @model_validator(mode="after")
     def _masses(self):
         m = self.nominal_mass
-        values = [] if m is None else ([m] if isinstance(m, (int, float)) else list(m))
+        values = [m] if isinstance(m, (int, float)) else list(m)
         if any(not (v > 0 and math.isfinite(v)) for v in values):
             raise ValueError("nominal_mass: every mass must be finite and > 0 kg")
         return self
@@ -62,11 +67,9 @@ class Yang2013RelativeSection(Yang2013TranslationalSection):
 
 def _yang2013_law(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2013TranslationalController:
     n = ctx.count
-    mass = sec.nominal_mass if sec.nominal_mass is not None else getattr(ctx.section("plant"), "mass", None)
-    if mass is None:
-        raise ValueError("controller.nominal_mass: the plant has no masses, give the law's masses [kg]")
     px, py, pz = sec.desired_position
-    return Yang2013TranslationalController(count=n, mass=as_float(_per_spacecraft(mass, n, "controller.nominal_mass")),
+    return Yang2013TranslationalController(count=n, mass=as_float(_per_spacecraft(sec.nominal_mass, n,
+                                                                                  "controller.nominal_mass")),
                                            K1=as_float(sec.K1), K2=as_float(sec.K2),
                                            desired_position=(str(px), str(py), str(pz)))
 

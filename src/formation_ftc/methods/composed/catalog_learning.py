@@ -6,7 +6,7 @@ How the flight side's CW design meets a plant it was not designed for:
 
 * **On-board model.** The ILO's internal model and the laws' nominal orbit q0(t) are the linear
   Clohessy-Wiltshire equations with a mean motion ``mean_motion`` [rad/s] (default: the mean motion
-  sqrt(mu / a^3) of the ``[reference]`` orbit, or the CW plant's own). On a nonlinear plant about an
+  sqrt(mu / a^3) of the ``[reference]`` orbit, known on board; required without one). On a nonlinear plant about an
   elliptic reference (``plant.type = "relative-lvlh"``) the difference between the true relative
   acceleration and the CW model -- eccentricity, nonlinearity, and the plant's disturbance -- enters
   the ILO as an unknown input in the velocity channel, exactly where the thruster faults enter (H = B):
@@ -15,8 +15,9 @@ How the flight side's CW design meets a plant it was not designed for:
   plant the law's command is scaled by the nominal masses known on board,
   ``f_i = m_i^nom u_i`` [N] (:mod:`~formation_ftc.components.controllers.acceleration_to_force`), and the
   ILO's time update divides the loop's force command by the same masses, ``u_i = f_i / m_i^nom``
-  (:mod:`~formation_ftc.components.estimators.acceleration_model`). ``nominal_mass`` defaults to the
-  plant's masses (masses known exactly on board); a different value acts like an actuator-gain error.
+  (:mod:`~formation_ftc.components.estimators.acceleration_model`). ``nominal_mass`` defaults to
+  100 kg each (a stated nominal value, never the plant's masses); a value other than the true masses
+  acts like an actuator-gain error. The ILO starts from its stated ``initial_estimate`` (default zero).
 * **Gains.** ``gains = "printed"`` uses the L1, L2 / K given in the section (the paper's printed gains,
   designed at its own mean motion); ``gains = "lmi"`` (observer) re-solves the LMIs (8), (27) and the
   pole-region LMI at the on-board mean motion, ``gains = "care"`` (law) the CARE (34) with
@@ -62,6 +63,8 @@ LOF2TC = "gui2022-lof2tc"
 COF2TC = "gui2022-cof2tc"
 #: sensors that deliver the (N, 6) relative state y = q the ILO and the laws need (C = I6)
 STATE_SENSORS = (None, "relative-state", "lvlh-relative-state")
+#: the flight side's nominal on-board mass when a scenario states none [kg] (``nominal_mass``)
+NOMINAL_MASS = 100.0
 
 VEC = ("spacecraft", "axis")
 SC = ("spacecraft",)
@@ -101,18 +104,15 @@ def _on_grid(tau: float, dt: float, field: str) -> int:
 # ------------------------------------------------------------------------------- shared decisions
 def onboard_mean_motion(given: float | None, ctx: BuildContext, slot: str) -> float:
     """The mean motion of the on-board CW model [rad/s]: ``given``, else sqrt(mu / a^3) of the
-    ``[reference]`` orbit, else the plant's own (a CW plant)."""
+    ``[reference]`` orbit (known on board); never the plant's (truth)."""
     if given is not None:
         return float(given)
     ref = ctx.section("reference")
     if ref is not None and hasattr(ref, "semi_major_axis"):
         return math.sqrt(ref.mu / ref.semi_major_axis**3)
-    n = getattr(ctx.section("plant"), "mean_motion", None)
-    if n is None:
-        raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but plant "
-                               f"{ctx.scenario.type_of('plant')} has no reference orbit to take it from "
-                               f"(give {slot}.mean_motion [rad/s])")
-    return float(n)
+    raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but the loop "
+                           f"has no [reference] orbit to take it from (give {slot}.mean_motion [rad/s]; the "
+                           f"plant's orbit is truth the flight side does not read)")
 
 
 def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
@@ -136,13 +136,9 @@ def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
 
 
 def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:
-    """The flight side's nominal masses [kg]: ``given``, else the plant's true masses."""
-    if given is None:
-        given = getattr(ctx.section("plant"), "mass", None)
-        if given is None:
-            raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: plant {ctx.scenario.type_of('plant')} "
-                                   f"has no masses to take the nominal masses from (give {slot}.nominal_mass [kg])")
-    return _per_spacecraft(given, ctx.count, f"{slot}.nominal_mass")
+    """The flight side's nominal masses [kg]: ``given``, else :data:`NOMINAL_MASS` (100 kg) each; never
+    the plant's true masses."""
+    return _per_spacecraft(NOMINAL_MASS if given is None else given, ctx.count, f"{slot}.nominal_mass")
 
 
 @functools.lru_cache(maxsize=16)
@@ -185,11 +181,22 @@ class IloSection(StrictModel):
     sign_term: bool = Field(True, description="Include gamma sgn(e_y) (false: the ILO without the sign term).")
     learning_interval: float = Field(gt=0, description="tau: a positive integer multiple of simulation.dt [s].")
     mean_motion: float | None = Field(None, gt=0, description=(
-        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit)."))
+        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
+        "required without one)."))
     nominal_mass: float | list[float] | None = Field(None, description=(
         "On-board masses m_nom [kg] dividing a force command into the model's acceleration (default: the "
-        "controller's nominal_mass, else the plant's masses)."))
-    estimate_offset: Vec6 = Field((0.0,) * 6, description="q_hat(0) - y(0), same for every spacecraft [m, m/s].")
+        "controller's nominal_mass, else 100 kg each; never the plant's masses)."))
+    initial_estimate: Vec6 | list[Vec6] = Field((0.0,) * 6, description=(
+        "q_hat(0), the observer's initial estimate [m, m/s]: one row for every spacecraft or one per spacecraft "
+        "(default: a zero initial estimate, a stated value, never the plant's initial state)."))
+
+    @model_validator(mode="before")
+    @classmethod
+    def _offset_moved(cls, data):
+        if isinstance(data, dict) and "estimate_offset" in data:
+            raise ValueError("estimate_offset (q_hat(0) - y(0)) was replaced by initial_estimate, the observer's own "
+                             "q_hat(0) [m, m/s] (the flight side never reads the true initial state)")
+        return data
 
     @field_validator("L1")
     @classmethod
@@ -235,15 +242,20 @@ def _nominal_mass_for_estimator(sec: IloSection, ctx: BuildContext) -> np.ndarra
 
 
 def _ilo(sec: IloSection, ctx: BuildContext):
-    q_init = _relative_state(ctx, "estimator")
+    _relative_state(ctx, "estimator")  # the composition check only: the true initial state is not used
     m = _on_grid(sec.learning_interval, ctx.dt, "estimator.learning_interval")
     n = onboard_mean_motion(sec.mean_motion, ctx, "estimator")
     L1, L2 = sec.gains_at(n)
     N = ctx.count
+    q_hat0 = np.asarray(sec.initial_estimate, dtype=float)
+    if q_hat0.ndim == 1:
+        q_hat0 = np.broadcast_to(q_hat0, (N, 6)).copy()
+    elif q_hat0.shape != (N, 6):
+        raise ValueError(f"estimator.initial_estimate: {q_hat0.shape[0]} rows for {N} spacecraft (give one row or {N})")
     ilo = IterativeLearningObserver(
         count=N, mean_motion=as_float(n), L1=as_float(L1), L2=as_float(L2), Q1=as_float(sec.Q1),
         Q2=as_float(sec.Q2), gamma=as_float(sec.gamma),
-        initial_estimate=as_float(q_init + np.asarray(sec.estimate_offset)),  # y(0) = q(0): exact sensors
+        initial_estimate=as_float(q_hat0),  # stated, never the plant's initial state
         fault_prehistory=as_float(np.zeros((N, 3))),
         learning_steps=m, sign_term=sec.sign_term, mean_steps=int(ctx.scenario.simulation.record_every))
     force_loop = ctx.plant.quantity == "force"
@@ -280,9 +292,11 @@ class _OutputFeedbackSection(StrictModel):
     K: list[list[float]] | None = Field(None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed').")
     care_q_scale: float = Field(4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care').")
     mean_motion: float | None = Field(None, gt=0, description=(
-        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit)."))
+        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
+        "required without one)."))
     nominal_mass: float | list[float] | None = Field(None, description=(
-        "On-board masses m_nom [kg], f = m_nom u on a force-driven plant (default: the plant's masses)."))
+        "On-board masses m_nom [kg], f = m_nom u on a force-driven plant (default 100 kg each, a stated nominal "
+        "value: never the plant's masses)."))
 
     @field_validator("K")
     @classmethod

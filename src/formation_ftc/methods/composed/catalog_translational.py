@@ -34,6 +34,9 @@ Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
 _per_spacecraft = per_spacecraft
 
+#: the PD law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``)
+PD_NOMINAL_MASS = 100.0
+
 
 def _per_axis(value, n: int, field: str) -> np.ndarray:
     """A number, 3 values (per axis, every spacecraft) or N x 3 values -> (N, 3)."""
@@ -269,7 +272,9 @@ def _sir_ftc(sec: SirFtcSection, ctx: BuildContext):
 class PdSection(StrictModel):
     kp: float = Field(ge=0, description="Position gain [N/m].")
     kd: float = Field(ge=0, description="Velocity gain [N s/m].")
-    nominal_mass: float | list[float] | None = Field(None, description="Mass used for feed-forward [kg] (default: the plant's).")
+    nominal_mass: float | list[float] = Field(PD_NOMINAL_MASS, description=(
+        "Mass the feed-forward uses, known on board [kg], one or per spacecraft (default 100 kg, a stated "
+        "nominal value: never the plant's true masses)."))
     max_force: float | None = Field(None, gt=0, description="Per-axis saturation [N].")
     desired_position: Vec3Expr = Field(("0", "0", "0"), description="Desired LVLH position, expressions in t, i [m].")
     mode: Literal["continuous", "sampled"] = Field("continuous", description="Every RK stage or held over the step.")
@@ -277,9 +282,8 @@ class PdSection(StrictModel):
 
 def _pd(sec: PdSection, ctx: BuildContext):
     n = ctx.count
-    mass = sec.nominal_mass if sec.nominal_mass is not None else getattr(ctx.section("plant"), "mass", 1.0)
     return PdFormationController(count=n, kp=as_float(sec.kp), kd=as_float(sec.kd),
-                                 mass=as_float(_per_spacecraft(mass, n, "controller.nominal_mass")),
+                                 mass=as_float(_per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
                                  max_force=as_float(np.inf if sec.max_force is None else sec.max_force),
                                  desired_position=sec.desired_position, is_sampled=sec.mode == "sampled")
 

@@ -195,7 +195,7 @@ def make_loop(s: Gui2022Scenario) -> ClosedLoop:
     estimator = IterativeLearningObserver(
         count=N_DEPUTIES, mean_motion=as_float(n), L1=as_float(g["L1"]), L2=as_float(g["L2"]),
         Q1=as_float(o.Q1), Q2=as_float(o.Q2), gamma=as_float(o.gamma),
-        initial_estimate=as_float(q_init + np.asarray(s.initial.estimate_offset)),
+        initial_estimate=as_float(np.asarray(o.initial_estimate, dtype=float)[None, :]),  # stated, not q(0)
         fault_prehistory=as_float(np.zeros((N_DEPUTIES, 3))),
         learning_steps=learning_steps(o.learning_interval, sim.dt, "observer.learning_interval"),
         sign_term=o.sign_term, mean_steps=sim.record_every)

@@ -115,7 +115,7 @@ def run_reproduction(out_dir: Path, progress: Callable[[float, str], None] = lam
     ds_base, m_base = run_scenario(load_scenario("gui2022-ilo-baseline", ov), timings)
     progress(2 / steps, "gui2022-ilo (q_hat offset)")
     ov_off = {"simulation.horizon": 20.0, "simulation.record_every": 10,
-              "initial.estimate_offset": list(pub.ESTIMATE_OFFSET)}
+              "observer.initial_estimate": list(pub.ESTIMATE_OFFSET)}
     ds_off, m_off = run_scenario(load_scenario("gui2022-ilo", ov_off), timings, "gui2022-ilo-offset")
     progress(3 / steps, "gui2022-lof2tc")
     ds_lof, m_lof = run_scenario(load_scenario("gui2022-lof2tc", ov), timings)

@@ -65,8 +65,17 @@ class FaultSection(StrictModel):
 
 class InitialSection(StrictModel):
     desired_state: Vec6 = Field(tuple(pub.Q0_INITIAL), description="q0(0) of the nominal orbit (28) [m, m/s].")
-    state: Vec6 = Field((0.0,) * 6, description="q(0) of the deputy [m, m/s].")
-    estimate_offset: Vec6 = Field((0.0,) * 6, description="q_hat(0) - q(0) [m, m/s] (default 0; the Figs. 4-5 run uses an offset).")
+    state: Vec6 = Field((0.0,) * 6, description="Truth: q(0) of the deputy [m, m/s] (the observer starts from "
+                                                 "observer.initial_estimate, never from this).")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _offset_moved(cls, data):
+        if isinstance(data, dict) and "estimate_offset" in data:
+            raise ValueError("initial.estimate_offset (q_hat(0) - q(0)) was replaced by observer.initial_estimate, "
+                             "the observer's own q_hat(0) [m, m/s]: give observer.initial_estimate = initial.state "
+                             "+ the offset (the flight side never reads the true initial state)")
+        return data
 
 
 class ObserverSection(StrictModel):
@@ -90,6 +99,9 @@ class ObserverSection(StrictModel):
     disk_center: float = Field(-5.0, description=(
         "Centre c of the pole region S(c, r) [1/s] (a region in the right half plane makes the LMI infeasible)."))
     disk_radius: float = Field(2.0, gt=0, description="Radius r of the pole region S(c, r) [1/s].")
+    initial_estimate: Vec6 = Field((0.0,) * 6, description=(
+        "q_hat(0), the ILO's initial state estimate [m, m/s] (default 0: a zero initial estimate, a stated "
+        "value, never the true initial.state; the Figs. 4-5 run starts from an offset estimate with q(0) = 0)."))
 
     @field_validator("L1")
     @classmethod

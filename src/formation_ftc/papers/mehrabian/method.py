@@ -4,6 +4,8 @@ FDI, as a composition of components:
 
 * plant :class:`~formation_ftc.components.plants.euler_angle_attitude.EulerAngleAttitudePlant` -- rigid
   bodies in Euler angles with the true (perturbed) inertia and the held Gaussian input disturbance;
+  the true inertias are drawn about ``formation.nominal_inertia``, while the law's model J^ is the
+  stated ``controller.nominal_inertia``;
 * actuator :class:`~formation_ftc.components.actuators.additive_faults.HeldAdditiveFaultActuator` --
   the true additive faults u_bar (2), sampled at t_k and held over the step;
 * estimator :class:`~formation_ftc.components.estimators.fdi_imperfections.ScriptedFdi` -- the FDI
@@ -135,7 +137,7 @@ def make_loop(s: MehrabianScenario) -> ClosedLoop:
         sigma=as_float(c.sigma * ones), e_gain=as_float(c.e_gain * ones), alpha=as_float(c.alpha * np.ones(m)),
         gamma=as_float(c.gamma * np.ones(m)), phi_b=as_float(c.boundary_layer),
         avg=as_float(graphs.row_normalized(A)),
-        J_hat=as_float(np.stack([np.diag(s.formation.nominal_inertia)] * m)),
+        J_hat=as_float(np.stack([np.diag(c.nominal_inertia)] * m)),  # the law's stated model, not the truth's
         law=c.law, compensation=c.compensation, desired_attitude=cast(tuple[str, str, str], tuple(str(x) for x in s.desired.attitude)),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
     sim = s.simulation

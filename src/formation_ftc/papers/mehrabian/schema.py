@@ -18,6 +18,7 @@ from formation_ftc.core.dynamics.euler_lagrange import SINGULAR_PITCH_LIMIT_RAD,
 
 __all__ = [
     "DEFAULT_EDGES",
+    "NOMINAL_INERTIA",
     "FormationSection",
     "InitialSection",
     "DesiredSection",
@@ -33,6 +34,10 @@ __all__ = [
 #: Our choice (the paper is silent): ring 1-2-...-8-1 plus chords 1-5 and 3-7 (the paper's Fig. 1 is not in the text).
 DEFAULT_EDGES: list[tuple[int, int]] = [(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7), (7, 8), (8, 1), (1, 5), (3, 7)]
 
+#: Our choice (E003-10): the nominal principal inertia diag(20, 18, 15) kg m^2, the default of the truth's
+#: formation.nominal_inertia and of the law's model controller.nominal_inertia (J^)
+NOMINAL_INERTIA = (20.0, 18.0, 15.0)
+
 _PITCH_LIMIT_DEG = float(np.rad2deg(SINGULAR_PITCH_LIMIT_RAD))
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
@@ -44,7 +49,8 @@ class FormationSection(StrictModel):
         description="Undirected communication links as 1-based spacecraft pairs, unit weights [-]. "
                     "Default: ring 1..8 plus chords 1-5, 3-7 (our choice; the paper's Fig. 1 is not given).")
     nominal_inertia: tuple[float, float, float] = Field(
-        (20.0, 18.0, 15.0), description="Nominal principal inertia J^ = diag(...) of every spacecraft [kg m^2].")
+        NOMINAL_INERTIA, description="Truth: principal inertia diag(...) about which every spacecraft's true inertia "
+                                     "is drawn [kg m^2] (the law's model is controller.nominal_inertia).")
     inertia_uncertainty: float = Field(
         0.1, ge=0.0, lt=1.0, description="True J = J^ diag(1 + delta), delta ~ U[-u, u]^3 per spacecraft, "
                                          "drawn from the run seed [-] (paper: +-10 %).")
@@ -138,6 +144,18 @@ class ControllerSection(StrictModel):
     sigma: float = Field(0.5, gt=0.0, description="Adaptation gain Sigma-bar_j = sigma I_3 [N m / (rad)].")
     e_gain: float = Field(1.0, gt=0.0, description="Estimate pull E-bar_j = e I_3 towards the FDI estimate [1/s].")
     boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s] (our choice).")
+    nominal_inertia: tuple[float, float, float] = Field(
+        NOMINAL_INERTIA, description="Principal inertia J^ = diag(...) of the law's model, known on board [kg m^2], "
+                                     "each > 0 (default 20, 18, 15 kg m^2, a stated nominal value: never the "
+                                     "truth's formation.nominal_inertia).")
+
+    @field_validator("nominal_inertia")
+    @classmethod
+    def _positive(cls, v):
+        for k, x in enumerate(v):
+            if not x > 0:
+                raise ValueError(f"controller.nominal_inertia[{k}] = {x}: principal inertias must be > 0 kg m^2")
+        return v
 
 
 class FaultEntry(StrictModel):

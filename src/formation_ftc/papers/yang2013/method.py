@@ -156,8 +156,11 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
     n = sc.spacecraft.count
     dt = sc.simulation.dt
     c = sc.controller
-    mass = as_float(np.full(n, sc.spacecraft.mass))
+    mass = as_float(np.full(n, sc.spacecraft.mass))  # truth
     J = as_float(np.diag(sc.spacecraft.inertia))
+    # the laws' stated knowledge (controller.nominal_*), never the truth above
+    mass_nom = as_float(np.full(n, c.nominal_mass))
+    J_nom = as_float(np.diag(c.nominal_inertia))
     attitude = QuaternionRigidBodyPlant(inertia=J, initial_omega=as_float(st.x0[:, 6:9]),
                                         initial_quaternion=as_float(st.x0[:, 9:13]),
                                         disturbance_torque=sc.disturbance.torque, gyroscopic=False)
@@ -166,8 +169,8 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
                                    disturbance_force=sc.disturbance.force,
                                    rotation_coupling=c.rotation_coupling)
     controller = ForceTorqueController(
-        force_law=Yang2013TranslationalController(count=n, mass=mass, K1=as_float(c.K1), K2=as_float(c.K2)),
-        torque_law=Yang2013AttitudeController(count=n, inertia=J, K3=as_float(c.K3), K4=as_float(c.K4),
+        force_law=Yang2013TranslationalController(count=n, mass=mass_nom, K1=as_float(c.K1), K2=as_float(c.K2)),
+        torque_law=Yang2013AttitudeController(count=n, inertia=J_nom, K3=as_float(c.K3), K4=as_float(c.K4),
                                               K5=as_float(c.K5), kappa=as_float(c.kappa)))
     # faults on the step grid: times k dt computed as the loop computes t_k (exact comparisons)
     onset = np.full(n, np.inf)
@@ -181,7 +184,8 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
         onset[s] = k_f * dt
         diagnosis[s] = (k_f + delay[s]) * dt
         K2f[s] = f.K2_faulty
-    actuator = VelocityGainFaultActuator(count=n, mass=mass, K2=as_float(c.K2), K2_faulty=as_float(K2f),
+    # the faulty law's extra force M_i (K2f - K2) e_V, with the law's mass M_i
+    actuator = VelocityGainFaultActuator(count=n, mass=mass_nom, K2=as_float(c.K2), K2_faulty=as_float(K2f),
                                          onset=as_float(onset),
                                          reconfigurable=sc.supervisor.reconfiguration == "restore_nominal")
     estimator = ScheduledDiagnosis(count=n, diagnosis_time=as_float(diagnosis))

@@ -31,6 +31,8 @@ __all__ = [
     "SupervisorSection",
     "Yang2013Scenario",
     "STATE_DIM",
+    "NOMINAL_MASS",
+    "NOMINAL_INERTIA",
 ]
 
 STATE_DIM = 13  # x_i = [e_R, e_V, e_w, e_q, e_q4] (7)
@@ -53,11 +55,19 @@ class ErrorState(StrictModel):
         return np.concatenate([self.e_R, self.e_V, self.e_omega, self.e_q, [self.e_q4]]).astype(float)
 
 
+#: the laws' nominal on-board mass [kg] and principal inertia [kg m^2] when a scenario states none
+#: (``controller.nominal_mass``, ``controller.nominal_inertia``): the paper's spacecraft (E001-10)
+NOMINAL_MASS = 150.0
+NOMINAL_INERTIA = (25.0, 25.0, 25.0)
+
+
 class SpacecraftSection(StrictModel):
     count: int = Field(ge=1, le=64, description="Number of spacecraft slots N_max (numbered 1..count) [-].")
-    mass: float = Field(150.0, gt=0, description="Mass M_i of every spacecraft [kg].")
+    mass: float = Field(150.0, gt=0, description="True mass M_i of every spacecraft [kg] (truth; the laws use "
+                                                 "controller.nominal_mass).")
     inertia: tuple[float, float, float] = Field(
-        (25.0, 25.0, 25.0), description="Principal inertia diag(J_i) of every spacecraft [kg m^2].")
+        (25.0, 25.0, 25.0), description="True principal inertia diag(J_i) of every spacecraft [kg m^2] (truth; the "
+                                        "laws use controller.nominal_inertia).")
 
     @field_validator("inertia")
     @classmethod
@@ -76,9 +86,22 @@ class ControllerSection(StrictModel):
     K4: float = Field(1.0, gt=0, description="Quaternion-vector shaping gain K4 [1/s].")
     K5: float = Field(1.0, gt=0, description="Quaternion-scalar shaping gain K5 [1/s].")
     kappa: float = Field(1e-3, gt=0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
+    nominal_mass: float = Field(NOMINAL_MASS, gt=0, description=(
+        "Mass M_i the translational law (12) knows on board [kg] (default 150 kg, a stated nominal value: never "
+        "the true spacecraft.mass). Also the mass of the faulty law's K2 -> K2f term."))
+    nominal_inertia: tuple[float, float, float] = Field(NOMINAL_INERTIA, description=(
+        "Principal inertia diag(J_i) the attitude law (13) knows on board [kg m^2], each > 0 (default 25, 25, "
+        "25 kg m^2, a stated nominal value: never the true spacecraft.inertia)."))
     rotation_coupling: bool = Field(
         True, description="Keep the norm-preserving omega_i x e terms of (2) with omega_i = -e_omega "
         "(reference at rest); false drops them (the terms preserve the error norm).")
+
+    @field_validator("nominal_inertia")
+    @classmethod
+    def _positive_nominal_inertia(cls, v):
+        if min(v) <= 0:
+            raise ValueError(f"controller.nominal_inertia must be > 0 kg m^2 on every axis, got {v}")
+        return v
 
 
 class DisturbanceSection(StrictModel):
