@@ -35,7 +35,7 @@ __all__ = ["UNKNOWN", "read_units", "write_parquet"]
 UNKNOWN = "unknown"
 
 
-def _numeric(field: pa.Field) -> bool:
+def _numeric(field: Any) -> bool:  # a pyarrow.Field
     return pa.types.is_integer(field.type) or pa.types.is_floating(field.type)
 
 
@@ -51,7 +51,7 @@ def write_parquet(df: pd.DataFrame, where: str | Path | IO[bytes], units: Mappin
     pq.write_table(table.cast(pa.schema(fields, metadata=table.schema.metadata)), where, **options)
 
 
-def read_units(source: str | Path | pa.Schema) -> dict[str, str]:
-    """``{column: units}`` of a Parquet file (or its schema) written by :func:`write_parquet`."""
+def read_units(source: Any) -> dict[str, str]:
+    """``{column: units}`` of a Parquet file (a path) or its ``pyarrow.Schema``, written by :func:`write_parquet`."""
     schema = source if isinstance(source, pa.Schema) else pq.read_schema(source)
     return {f.name: f.metadata[b"units"].decode() for f in schema if f.metadata and b"units" in f.metadata}
