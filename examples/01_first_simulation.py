@@ -9,7 +9,7 @@
 
 # %%
 import matplotlib.pyplot as plt
-from _common import size
+from _common import save_figure, size
 
 import formation_ftc as ftc
 
@@ -43,3 +43,4 @@ for sc in ds.spacecraft.values:
 axes[1].axvline(200.0, color="k", ls="--", lw=0.8)
 axes[1].set(xlabel="t [s]", ylabel="|position error| [m]", title="Tracking error (fault at 200 s)")
 fig.tight_layout()
+save_figure(fig, "trajectories")

@@ -7,7 +7,7 @@
 
 # %%
 import matplotlib.pyplot as plt
-from _common import size
+from _common import save_figure, size
 
 import formation_ftc as ftc
 
@@ -36,3 +36,4 @@ for label, (ds, _) in results.items():
 ax.set(xlabel="t [s]", ylabel="deputy 2 |position error| [m]", title="Same controller, three fault cases")
 ax.legend()
 fig.tight_layout()
+save_figure(fig, "fault_cases")

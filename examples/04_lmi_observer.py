@@ -11,6 +11,7 @@
 # %%
 import matplotlib.pyplot as plt
 import numpy as np
+from _common import save_figure
 
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.design.lmi import design_ilo_gains
@@ -40,3 +41,4 @@ ax.set(xlabel="Re [1/s]", ylabel="Im [1/s]", title="Observer poles")
 ax.axis("equal")
 ax.legend()
 fig.tight_layout()
+save_figure(fig, "poles")

@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
-from _common import size
+from _common import save_figure, size
 
 from formation_ftc.campaign import run_campaign, write_report
 
@@ -46,6 +46,7 @@ for kd, group in df.groupby("input:controller.kd"):
 ax.set(xlabel="kp [N/m]", ylabel="total delta-v [m/s]", title=f"{len(df)} runs")
 ax.legend()
 fig.tight_layout()
+save_figure(fig, "delta_v_vs_kp")
 
 # %% [markdown]
 # `write_report` writes `summary.json`, `summary.csv` and sensitivity plots into `DIR/report`.

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-from _common import size
+from _common import save_figure, size
 
 from formation_ftc.campaign import make_plan, run_campaign
 
@@ -44,6 +44,7 @@ for ax, sampling in zip(axes, ["random", "sobol", "lhs"], strict=True):
     ax.set(title=sampling, xlabel="kp [N/m]", yscale="log")
 axes[0].set_ylabel("kd [N s/m]")
 fig.tight_layout()
+save_figure(fig, "designs")
 
 # %% [markdown]
 # Running both campaigns and plotting the running mean of the total delta-v against the number of runs
@@ -62,3 +63,4 @@ for sampling, m in means.items():
 ax.set(xscale="log", xlabel="runs", ylabel="running mean of total delta-v [m/s]")
 ax.legend()
 fig.tight_layout()
+save_figure(fig, "running_mean")

@@ -3,7 +3,9 @@
 ``python docs/hooks/run_example.py examples/NN_name.py OUT_DIR`` writes ``OUT_DIR/result.json``
 (``{"cells": [{"type", "source", "stdout", "figures"}], "wall_s", "dir"}``) and one PNG per figure.
 Cells share one namespace, as in a notebook; the example's folder is on ``sys.path`` (for
-``_common``). A failing cell ends the process with status 1 and its traceback.
+``_common``). A failing cell ends the process with status 1 and its traceback. The figures are taken
+from matplotlib after each cell, so the example's own saving (``_common.save_figure``, which writes
+``examples/figures/`` when an example runs as a script) is switched off (``FORMATION_FTC_EXAMPLES_SAVE=0``).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import sys
 import time
 import traceback
@@ -29,6 +32,7 @@ def main(path: str, out_dir: str) -> int:
     out.mkdir(parents=True, exist_ok=True)
     sys.path.insert(0, str(src.parent))
     sys.argv = [str(src), "--quick"]
+    os.environ["FORMATION_FTC_EXAMPLES_SAVE"] = "0"  # figures are captured below, not saved by the example
     namespace: dict = {"__name__": "__main__", "__file__": str(src)}
     cells = []
     t0 = time.perf_counter()

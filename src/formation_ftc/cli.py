@@ -1,27 +1,33 @@
-"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign, league.
+"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign, league, completion.
 
 Thin edge layer over formation_ftc.api; every command works for every registered method. Heavy
-modules (JAX, SciPy, pandas) are imported by the commands that need them, so --help, --version and
-list answer at once. Exit codes: 0 success, 1 a required condition failed or a run diverged,
-2 bad input.
+modules (JAX, SciPy, pandas) are imported by the commands that need them, so --help, --version,
+list and completion answer at once. Exit codes: 0 success, 1 a required condition failed, a run
+diverged or stdout could not be written, 2 bad input, 3 unexpected error (formation_ftc.exitcodes).
+
+``--json`` (list, show, check, run, campaign list/report, league list/report) prints one JSON document
+on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
+docs/cli.md.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
+import re
 import sys
 import time
-from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn
 
-__all__ = ["main", "build_parser", "lossy_stderr"]
+from formation_ftc.exitcodes import add_json_option, lossy_stderr, print_json, print_json_error
+
+__all__ = ["main", "build_parser", "completion_parser", "lossy_stderr", "print_json"]
 
 EXIT_CODES = ("exit status:\n"
               "  0  success\n"
-              "  1  a required condition failed or a run diverged (partial results are still written)\n"
+              "  1  a required condition failed or a run diverged (partial results are still written), or\n"
+              "     standard output could not be written\n"
               "  2  bad input (the message names the file, the field and the allowed range)\n"
               "  3  unexpected error (one line, and the path of a file holding the traceback)")
 
@@ -31,10 +37,11 @@ HELP: dict[str, tuple[str, list[str]]] = {
          ["formation-ftc list", "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300",
           "formation-ftc reproduce all --out out/reproduction", "formation-ftc COMMAND --help"]),
     "list": ("List the built-in scenarios, one line each (name, then description).",
-             ["formation-ftc list", "formation-ftc list | grep li2020"]),
+             ["formation-ftc list", "formation-ftc list | grep li2020", "formation-ftc list --json"]),
     "show": ("Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied), "
              "each field followed by its unit and meaning as a comment.",
-             ["formation-ftc show li2020-thm1", "formation-ftc show my-scenario.toml --set controller.kp=3"]),
+             ["formation-ftc show li2020-thm1", "formation-ftc show my-scenario.toml --set controller.kp=3",
+              "formation-ftc show cw-pd-fault --json"]),
     "check": ("Evaluate the theorem and design conditions of a scenario's method before any run.",
               ["formation-ftc check li2020-thm2-delays", "formation-ftc check gui2022-lof2tc --json"]),
     "schema": ("Print the JSON Schema of a method's scenario file (for editor completion and validation). "
@@ -42,7 +49,8 @@ HELP: dict[str, tuple[str, list[str]]] = {
                ["formation-ftc schema", "formation-ftc schema cw-formation > cw-formation.schema.json"]),
     "run": ("Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
             ["formation-ftc run cw-pd-fault --out out/run1",
-             "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3"]),
+             "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3",
+             "formation-ftc run cw-free-drift --out out/run2 --json"]),
     "reproduce": ("Run the papers' simulation studies and write DIR/index.html, DIR/summary.json and one "
                   "folder per paper.",
                   ["formation-ftc reproduce li2020 --out out/li2020",
@@ -55,19 +63,28 @@ HELP: dict[str, tuple[str, list[str]]] = {
                "ranked on the same scores.",
                ["formation-ftc league list", "formation-ftc league run translational --quick --out out/league",
                 "formation-ftc league report out/league"]),
-    "league list": ("List the built-in leagues (name, description, methods).", ["formation-ftc league list"]),
+    "league list": ("List the built-in leagues (name, description, methods).",
+                    ["formation-ftc league list", "formation-ftc league list --json"]),
     "league run": ("Run (or resume) a league into a directory and write its leaderboard.",
                    ["formation-ftc league run translational --quick --out out/league",
                     "formation-ftc league run attitude --quick --out out/att --workers 2"]),
     "league report": ("(Re)write the leaderboard (index.html, leaderboard.json, Parquet) of a league "
-                      "directory.", ["formation-ftc league report out/league"]),
-    "campaign list": ("List the built-in campaigns (name, then description).", ["formation-ftc campaign list"]),
+                      "directory.", ["formation-ftc league report out/league",
+                                     "formation-ftc league report out/league --json"]),
+    "campaign list": ("List the built-in campaigns (name, then description).",
+                      ["formation-ftc campaign list", "formation-ftc campaign list --json"]),
     "campaign run": ("Run a campaign into a results directory; run the same command again to resume a "
                      "killed one.",
                      ["formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
                       "formation-ftc campaign run my-campaign.toml --out out/c --dask-local 4"]),
     "campaign report": ("Summary statistics (summary.json, summary.csv) and sensitivity plots of a "
-                        "campaign directory.", ["formation-ftc campaign report out/c"]),
+                        "campaign directory.", ["formation-ftc campaign report out/c",
+                                                "formation-ftc campaign report out/c --json --no-plots"]),
+    "completion": ("Print the shell completion script of formation-ftc (sub-commands, options, built-in "
+                   "scenario, campaign, league and paper names); install it once, see docs/cli.md.",
+                   ["formation-ftc completion bash > ~/.local/share/bash-completion/completions/formation-ftc",
+                    "formation-ftc completion zsh > ~/.zfunc/_formation-ftc",
+                    "formation-ftc completion tcsh > ~/.formation-ftc.completion.csh"]),
 }
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
@@ -83,6 +100,106 @@ def _debug(msg: str) -> None:
     """Detail shown with --verbose only (stderr)."""
     if _VERBOSITY > 0:
         print(msg, file=sys.stderr)
+
+
+# ------------------------------------------------------------------------------------------ --json
+_NUM = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?(?![\w.+-])"
+_UNIT_ATOM = r"(?:kg|rad|deg|Hz|m|s|N|J|W)(?:\^-?\d+)?"
+_UNIT = rf"(?:1/)?{_UNIT_ATOM}(?:[ /*]{_UNIT_ATOM})*(?![\w^/])"
+#: one clause of a condition's statement: ``[NAME = ]VALUE [UNITS]`` (VALUE a number, a list of numbers,
+#: True or False; NAME without "=" or ":" and not ending in a relation such as "<=")
+_CLAUSE = re.compile(rf"(?:(?P<name>[^=:]+?)(?<![<>!])\s*[=:]\s*)?"
+                     rf"(?P<value>\[\s*{_NUM}(?:\s*,\s*{_NUM})*\s*\]|{_NUM}|True|False)"
+                     rf"(?:\s+(?P<units>{_UNIT}))?")
+#: a requirement that is a plain comparison with a number: ``< -2.9e-13 (rounding margin)``
+_BOUND = re.compile(rf"(?P<relation><=|>=|<|>|=)\s*(?P<value>{_NUM})(?:\s+(?P<units>{_UNIT}))?\s*(?:$|[(,;])")
+
+
+def _closing(text: str, start: int) -> int:
+    """Index of the bracket that closes the one at ``start`` (the last index when it is not closed)."""
+    pair = {"(": ")", "[": "]"}[text[start]]
+    depth = 0
+    for k in range(start, len(text)):
+        depth += (text[k] == text[start]) - (text[k] == pair)
+        if depth == 0:
+            return k
+    return len(text) - 1
+
+
+def _clauses(text: str, remark: bool = False) -> list[tuple[str, bool]]:
+    """``text`` cut at top-level ``", "`` and ``"; "`` into ``(clause, in_remark)``: a parenthesised
+    remark after a space gives clauses of its own (after the clause it follows, ``in_remark`` True);
+    brackets of lists, function calls and leading expressions are kept whole."""
+    out: list[tuple[str, bool]] = []
+    cur: list[str] = []
+    remarks: list[tuple[str, bool]] = []
+
+    def close() -> None:
+        if "".join(cur).strip():
+            out.append(("".join(cur).strip(), remark))
+        out.extend(remarks)
+        cur.clear()
+        remarks.clear()
+
+    k = 0
+    while k < len(text):
+        ch = text[k]
+        if ch in "([":
+            end = _closing(text, k)
+            if ch == "(" and k > 0 and text[k - 1] == " ":
+                remarks.extend(_clauses(text[k + 1:end], remark=True))
+            else:
+                cur.append(text[k:end + 1])
+            k = end + 1
+            continue
+        if ch in ",;" and text[k + 1:k + 2] in (" ", ""):
+            close()
+        else:
+            cur.append(ch)
+        k += 1
+    close()
+    return out
+
+
+def _value(text: str) -> Any:
+    if text in ("True", "False"):
+        return text == "True"
+    if text.startswith("["):
+        return [float(v) for v in text.strip("[] ").split(",")]
+    return float(text)
+
+
+def _quantities(statement: str) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The numbers a condition's statement gives (``"max Re(eig) = -0.09989 1/s"`` ->
+    ``[{"name": "max Re(eig)", "value": -0.09989, "units": "1/s"}]``), as printed by its method: every
+    clause ``[NAME = ]NUMBER [UNITS]`` (or a list of numbers, or True/False); other clauses are skipped.
+    Also those of them outside parenthesised remarks."""
+    out, main = [], []
+    for clause, in_remark in _clauses(statement):
+        m = _CLAUSE.fullmatch(clause)
+        if m:
+            out.append({"name": m["name"], "value": _value(m["value"]), "units": m["units"]})
+            if not in_remark:
+                main.append(out[-1])
+    return out, main
+
+
+def _condition_json(c) -> dict[str, Any]:
+    """One condition with typed values (docs/cli.md, ``check --json``)."""
+    d = c.as_dict()
+    quantities, main = _quantities(d["value"])
+    # the statement's value: its one quantity outside remarks ("max eig = -1e-08 (lambda = 1e-08)");
+    # None when it states several side by side ("e_s = 0.03 m, T = 1.07e-05 m") or none
+    single = main[0] if len(main) == 1 else None
+    bound = _BOUND.match(d["requirement"].strip())
+    return {"name": d["name"], "reference": d["reference"],
+            "value": single["value"] if single else None, "units": single["units"] if single else None,
+            "value_text": d["value"], "quantities": quantities,
+            "requirement": d["requirement"],
+            "bound": {"relation": bound["relation"], "value": float(bound["value"]), "units": bound["units"]}
+            if bound else None,
+            "holds": d["holds"], "unproven": bool(c.unproven), "required": d["required"], "basis": d["basis"],
+            "detail": d["detail"]}
 
 
 def _builtin_scenario_names() -> list[str]:
@@ -165,9 +282,15 @@ def _cmd_list(args) -> int:
     d = resources.files("formation_ftc") / "scenarios"
     items: dict[str, str] = {}
     composed: dict[str, str] = {}
+    rows = []
     for name in _builtin_scenario_names():
         meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get("scenario", {})
         (composed if meta.get("method") == "composed" else items)[name] = str(meta.get("description", ""))
+        rows.append({"name": name, "method": str(meta.get("method", "")),
+                     "description": str(meta.get("description", "")), "composed": meta.get("method") == "composed"})
+    if args.json:
+        print_json({"scenarios": rows})
+        return 0
     width = max((len(n) for n in [*items, *composed]), default=10)
     for name, desc in items.items():
         print(f"{name:<{width}}  {desc}")
@@ -207,11 +330,60 @@ def _annotate_toml(text: str, schema: dict) -> str:
     return tomlkit.dumps(doc)
 
 
+_UNIT_WORD = re.compile(r"\b(?:kg|rad|deg|Hz|m|s|N|J|W|g)\b")
+
+
+def _description_unit(desc: str) -> str | None:
+    """The unit a field's description states in brackets (``"Position gain [N/m]."`` -> ``"N/m"``,
+    ``[-]`` -> ``"1"``); None when it states none, or several different ones (``"... [rad], in t [s]"``)."""
+    found = []
+    for text in re.findall(r"\[([^\[\]]+)\]", desc):
+        text = text.strip()
+        if text == "-":
+            found.append("1")
+        elif _UNIT_WORD.search(text) and not re.sub(r"[\s/^*()\d,.-]", "", _UNIT_WORD.sub("", text)):
+            found.append(text)
+    return found[0] if len(set(found)) == 1 else None
+
+
+def _field_units(resolved: dict, schema: dict) -> dict[str, str]:
+    """``{"controller.kp": "N/m", ...}``: the unit of every field of ``resolved`` (a scenario) whose
+    description in ``schema`` (its method's JSON Schema) states one (lists of tables are not entered)."""
+    from formation_ftc.suggest import _resolve
+
+    units: dict[str, str] = {}
+
+    def walk(data: dict, node: dict, prefix: str) -> None:
+        props: dict = {}
+        for option in _resolve(node, schema):
+            props.update(option.get("properties", {}))
+        for key, value in data.items():
+            sub = props.get(key)
+            if sub is None:
+                continue
+            if isinstance(value, dict):
+                walk(value, sub, f"{prefix}{key}.")
+                continue
+            desc = " ".join(str(next((o.get("description") for o in [sub, *_resolve(sub, schema)]
+                                      if o.get("description")), "")).split())
+            unit = _description_unit(desc)
+            if unit is not None:
+                units[f"{prefix}{key}"] = unit
+
+    walk(resolved, schema, "")
+    return units
+
+
 def _cmd_show(args) -> int:
     from formation_ftc.config.loader import dump_toml
     from formation_ftc.registry import get_method
 
     scenario = _load(args)
+    if args.json:  # the content of the TOML below, and the unit of each field that states one
+        resolved = scenario.model_dump(mode="json", exclude_none=True)
+        schema = get_method(scenario.scenario.method).schema.model_json_schema()
+        print_json({"scenario": resolved, "units": _field_units(resolved, schema)})
+        return 0
     text = dump_toml(scenario)
     if not args.no_comments:
         text = _annotate_toml(text, get_method(scenario.scenario.method).schema.model_json_schema())
@@ -226,15 +398,18 @@ def _holds_text(c) -> str:
     return "yes" if c.holds else "NO"
 
 
-def _print_conditions(conds, as_json: bool) -> int:
+def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     failed_required = [c for c in conds if c.required and c.holds is False]
     unproven_required = [c for c in conds if c.required and c.holds is None]
     cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
+    code = 1 if failed_required else 0
     if as_json:
-        print(json.dumps({"conditions": [c.as_dict() for c in conds],
-                          "all_required_hold": not failed_required,
-                          "required_unproven": len(unproven_required)}, indent=2))
-        return 1 if failed_required else 0
+        print_json({"scenario": scenario.scenario.name if scenario is not None else None,
+                    "method": scenario.scenario.method if scenario is not None else None,
+                    "conditions": [_condition_json(c) for c in conds],
+                    "all_required_hold": not failed_required, "required_failed": len(failed_required),
+                    "required_unproven": len(unproven_required), "exit_code": code})
+        return code
     if not sys.stdout.isatty():
         rows = [cols]
         rows += [(str(c.name), str(c.reference), str(c.value), str(c.requirement), _holds_text(c), str(c.basis),
@@ -279,7 +454,7 @@ def _cmd_check(args) -> int:
             raise
         raise ScenarioError(f"{args.scenario}: the conditions cannot be evaluated for these values "
                             f"({type(exc).__name__}: {exc})") from None
-    return _print_conditions(conds, args.json)
+    return _print_conditions(conds, args.json, scenario)
 
 
 def _cmd_schema(args) -> int:
@@ -303,6 +478,14 @@ def _cmd_schema(args) -> int:
                                                                       if k != "title"}}
     print(json.dumps(schema, indent=2))
     return 0
+
+
+def _moved(path, stage: Path, out_dir: Path) -> Path:
+    """Where ``path``, written into the staging directory, lies once it replaced ``out_dir``."""
+    try:
+        return out_dir / Path(path).relative_to(stage)
+    except ValueError:  # written elsewhere
+        return Path(path)
 
 
 def _cmd_run(args) -> int:
@@ -336,6 +519,7 @@ def _cmd_run(args) -> int:
         jax.block_until_ready(out)
     wall = time.perf_counter() - t0
     code = 0
+    diverged = None
     try:
         ds, metrics = finish_run(scenario, compiled, out)
     except SimulationDiverged as exc:
@@ -345,6 +529,11 @@ def _cmd_run(args) -> int:
 
         metrics = result_metrics(ds)
         code = 1
+        info = exc.info
+        diverged = {"message": str(exc), "time": float(info.time), "step": int(info.step),
+                    "variable": str(info.variable),
+                    "spacecraft": None if info.spacecraft is None else int(info.spacecraft) + 1,
+                    "index": [int(i) for i in info.index], "reason": str(info.reason), "units": {"time": "s"}}
     ds.attrs["wall_time_s"] = wall
     method = get_method(scenario.scenario.method)
     with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written
@@ -357,9 +546,19 @@ def _cmd_run(args) -> int:
 
         figs = standard_figures(view, stage)
         figs += method.plot(view, scenario, stage) if method.plot else []
-        write_run_page(stage, ds, metrics, figs, metric_units(ds))
+        units = metric_units(ds)
+        write_run_page(stage, ds, metrics, figs, units)
     console.print(f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'}, {len(figs)} figure(s) and "
                   f"{out_dir / 'index.html'} in {wall:.2f} s")
+    if args.json:
+        print_json({
+            "scenario": scenario.scenario.name, "method": scenario.scenario.method, "exit_code": code,
+            "diverged": diverged,
+            "metrics": {k: {"value": v, "units": units.get(k, "1")} for k, v in metrics.items()},
+            "outputs": {"dir": str(out_dir), "result": str(out_dir / "result.nc"),
+                        "metrics": str(out_dir / "metrics.json"), "index": str(out_dir / "index.html"),
+                        "figures": [str(_moved(f, stage, out_dir)) for f in figs]},
+            "n_steps": int(scenario.simulation.n_steps), "wall_time": wall, "units": {"wall_time": "s"}})
     return code
 
 
@@ -414,35 +613,154 @@ _PLUGGED = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors (exit status 2) carry their message, for ``--json``
+    (the sub-command parsers are of the same class)."""
+
+    def error(self, message: str) -> NoReturn:
+        try:
+            super().error(message)
+        except SystemExit as exc:
+            exc.usage_error = f"{self.prog}: {message}"  # type: ignore[attr-defined]
+            raise
+
+
+# ------------------------------------------------------------------------------------ completion
+_SHELLS = ("bash", "zsh", "tcsh")
+
+
+def _reproduce_stand_in(subparsers) -> argparse.ArgumentParser:
+    """The arguments of ``reproduce`` (report.reproduce.add_cli) for the completion script, whose module
+    imports JAX; tests/test_cli_json.py checks that both give the same completion."""
+    p = subparsers.add_parser("reproduce", help=_PLUGGED["reproduce"][1])
+    p.add_argument("paper", nargs="+", metavar="PAPER", help="paper name or 'all'")
+    p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
+    p.add_argument("--force", action="store_true", help="write into an existing non-empty directory")
+    p.add_argument("--no-3d", dest="include_3d", action="store_false", help="no interactive 3-D views")
+    p.add_argument("--profile", action="store_true", help="time each paper's phases")
+    p.add_argument("--workers", type=int, default=None, metavar="N", help="papers computed side by side")
+    p.add_argument("--league", action="append", type=Path, default=None, metavar="DIR",
+                   help="link this league directory's leaderboard")
+    return p
+
+
+#: plugged commands whose module is too heavy for the completion script: name -> stand-in
+_STAND_INS = {"reproduce": _reproduce_stand_in}
+
+
+def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> list[str]:
+    """Names of the package's files ``folder/PREFIX*SUFFIX`` (without prefix and suffix), found
+    without importing the modules that use them."""
+    from importlib import resources
+
+    d = resources.files("formation_ftc")
+    for part in folder.split("/"):
+        d = d / part
+    try:
+        names = sorted(e.name for e in d.iterdir())
+    except (OSError, FileNotFoundError):  # pragma: no cover - a damaged installation
+        return []
+    return [n[len(prefix):len(n) - len(suffix)] for n in names if n.startswith(prefix) and n.endswith(suffix)]
+
+
+def _paper_names() -> list[str]:
+    """The built-in paper packages (formation_ftc/papers/NAME/), without importing them."""
+    from importlib import resources
+
+    d = resources.files("formation_ftc") / "papers"
+    return sorted(e.name for e in d.iterdir() if e.is_dir() and (e / "__init__.py").is_file())
+
+
+def _names_completer(kind: str, names: list[str], files: bool) -> dict[str, Any]:
+    """shtab completion of a positional taking a built-in ``kind`` name (or, with ``files``, a TOML
+    file): bash and zsh functions in the script's preamble, a word list for tcsh."""
+    words = " ".join(names)
+    fn = f"_formation_ftc_{kind}{'_or_file' if files else ''}"  # "_file": bash completes file names
+    bash = [f"{fn}() {{", f'  compgen -W "{words}" -- "$1"']
+    zsh = f"{fn}() {{\n  _alternative 'names:built-in {kind}:({words})'"
+    if files:
+        bash += ["  compgen -f -X '!*.toml' -- \"$1\"", '  compgen -d -- "$1"']
+        zsh += " 'files:TOML file:_files -g \"*.toml\"'"
+    return {"bash": fn, "zsh": fn, "tcsh": f"({words})",
+            "preamble": {"bash": "\n".join([*bash, "}"]), "zsh": zsh + "\n}"}}
+
+
+def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
+    """Completions of argument values: built-in scenario, campaign, league and paper names (or TOML
+    files) for the positionals that take them, directories for --out and DIR arguments."""
+    import shtab
+
+    scenarios = _names_completer("scenario", _builtin_scenario_names(), files=True)
+    by_command = {
+        "reproduce": {"paper": _names_completer("paper", [*_paper_names(), "all"], files=False)},
+        "campaign run": {"campaign": _names_completer("campaign", _resource_names("campaign/builtin"), True)},
+        "league run": {"league": _names_completer("league", _resource_names("league/data", "league-"), True)},
+    }
+
+    def walk(p: argparse.ArgumentParser, key: str) -> None:
+        for action in p._actions:  # noqa: SLF001 - argparse keeps them here
+            if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+                for name, sub in action.choices.items():
+                    walk(sub, f"{key} {name}".strip())
+                continue
+            hint = by_command.get(key, {}).get(action.dest)
+            if hint is None and action.dest == "scenario":
+                hint = scenarios
+            if hint is None and (action.dest in ("out", "dir") or action.metavar == "DIR"):
+                hint = shtab.DIRECTORY
+            if hint is not None:
+                action.complete = hint  # type: ignore[attr-defined]  # read by shtab
+
+    walk(parser, "")
+
+
+def completion_parser() -> argparse.ArgumentParser:
+    """The full ``formation-ftc`` parser with completion hints, built without importing JAX."""
+    parser = build_parser("", completion=True)
+    _add_completion_hints(parser)
+    return parser
+
+
+def _cmd_completion(args) -> int:
+    import shtab
+
+    print(shtab.complete(completion_parser(), shell=args.shell), end="")
+    return 0
+
+
 def _command_of(argv: list[str]) -> str | None:
     """The sub-command named in ``argv`` (top-level options are all flags), or None."""
     return next((a for a in argv if not a.startswith("-")), None)
 
 
-def build_parser(command: str | None = "") -> argparse.ArgumentParser:
+def build_parser(command: str | None = "", *, completion: bool = False) -> argparse.ArgumentParser:
     """The ``formation-ftc`` parser.
 
     ``command`` = "" (default) builds every sub-command; a command name (or None: no command) builds
     the modules of that command only (the others get a placeholder with their one-line help), so
-    that ``--help``, ``--version`` and ``list`` import no JAX, SciPy or pandas.
+    that ``--help``, ``--version`` and ``list`` import no JAX, SciPy or pandas. ``completion``: every
+    sub-command, a command whose module imports JAX (``reproduce``) from a stand-in with the same
+    arguments (:func:`completion_parser`).
     """
-    parser = argparse.ArgumentParser(prog="formation-ftc")
+    parser = _Parser(prog="formation-ftc")
     parser.add_argument("--version", action=_VersionAction)
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("list", help="list the built-in scenarios")
+    add_json_option(p)
     p.set_defaults(func=_cmd_list)
 
     p = sub.add_parser("show", help="print the resolved TOML of a scenario")
     _scenario_args(p)
     p.add_argument("--no-comments", action="store_true",
                    help="bare TOML (default: each field's unit and meaning as a comment)")
+    add_json_option(p)
     p.set_defaults(func=_cmd_show)
 
     p = sub.add_parser("check", help="evaluate the scenario's stability/design conditions")
     _scenario_args(p)
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    add_json_option(p)
     p.set_defaults(func=_cmd_check)
 
     p = sub.add_parser("schema", help="print the JSON Schema of a method's scenario file")
@@ -459,9 +777,13 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
                    help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)")
     p.add_argument("--max-run-steps", metavar="N", default=None,
                    help="integration steps allowed per run (default 1e9; 0 = none)")
+    add_json_option(p)
     p.set_defaults(func=_cmd_run)
 
     for name, (module, short) in _PLUGGED.items():
+        if completion and name in _STAND_INS:
+            _STAND_INS[name](sub)
+            continue
         if command not in ("", name):
             sub.add_parser(name, help=short, add_help=False).add_argument("rest", nargs=argparse.REMAINDER)
             continue
@@ -471,44 +793,12 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
             print(f"warning: {module} unavailable: {exc}", file=sys.stderr)
             continue
         mod.add_cli(sub)
+
+    p = sub.add_parser("completion", help="print the shell completion script (bash, zsh, tcsh)")
+    p.add_argument("shell", choices=_SHELLS, metavar="SHELL", help=f"the shell: {', '.join(_SHELLS)}")
+    p.set_defaults(func=_cmd_completion)
     _decorate(parser, "")
     return parser
-
-
-class _LossyStream:
-    """``stream`` whose failed writes and flushes are dropped (a closed or full stderr)."""
-
-    def __init__(self, stream: TextIO):
-        self.stream = stream
-
-    def write(self, text: str) -> int:
-        try:
-            return self.stream.write(text)
-        except (OSError, ValueError):
-            return len(text)
-
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
-
-    def flush(self) -> None:
-        with contextlib.suppress(OSError, ValueError):
-            self.stream.flush()
-
-    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno, ... of the stream
-        return getattr(self.stream, name)
-
-
-@contextlib.contextmanager
-def lossy_stderr() -> Iterator[None]:
-    """``sys.stderr`` drops what it cannot write while the block runs: warnings, progress bars, log
-    lines and error messages never cost a computed result or change the exit status."""
-    original = sys.stderr
-    sys.stderr = _LossyStream(original)  # type: ignore[assignment]  # a TextIO by delegation
-    try:
-        yield
-    finally:
-        sys.stderr = original
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -516,7 +806,13 @@ def main(argv: list[str] | None = None) -> int:
     with lossy_stderr():
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser(_command_of(argv))
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # a usage error (status 2): with --json, also as a JSON document
+            message = getattr(exc, "usage_error", None)
+            if message and "--json" in argv[:argv.index("--") if "--" in argv else len(argv)]:
+                print_json_error(message, int(exc.code or 2))
+            raise
         _VERBOSITY = int(getattr(args, "verbosity", 0))
         from formation_ftc.exitcodes import run_guarded
         from formation_ftc.sim import runtime

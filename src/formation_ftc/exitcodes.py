@@ -1,6 +1,8 @@
 """Exit statuses of the command line and the guard that maps exceptions to them.
 
-* 0 -- success; 1 -- a required condition failed or a run diverged (set by the command itself);
+* 0 -- success; 1 -- a required condition failed or a run diverged (set by the command itself), or
+  standard output could not be written (a full disk or ``/dev/full``, a closed descriptor ``>&-``):
+  one line ``cannot write to standard output: ...``; the result files already written stay;
 * 2 -- bad input (:class:`formation_ftc.errors.InputError`: scenario, campaign, expression, option,
   output path, resource budget): one line ``error: ...`` naming what to change;
 * 3 -- an unexpected error (a bug or an environment failure): one line naming the exception and the
@@ -8,21 +10,36 @@
   ``~/.cache/formation_ftc``, else the temporary directory);
 * 130 -- interrupted (Ctrl-C).
 
-Writing into a closed pipe (``formation-ftc check --json | head``) ends quietly with status 0.
+Writing into a pipe whose reader has already exited (``formation-ftc check --json | head``) ends
+quietly with status 0: the reader took what it wanted.
+
+Machine-readable output (shared by every command module, which import this module and not each
+other): :func:`add_json_option` gives a command ``--json``, :func:`print_json` prints its one JSON
+document (typed values: numbers, booleans, null; schemas in docs/cli.md). With ``--json``
+(``args.json``), a command that ends with status 2, 3 or 130 also prints ``{"error": MESSAGE,
+"exit_code": N}`` on standard output (the message stays on stderr as well), so that a script parsing
+stdout sees failures too (:func:`print_json_error`). :func:`lossy_stderr`: a closed or full stderr
+never costs a result or changes the exit status.
 """
 
 from __future__ import annotations
 
+import argparse
+import contextlib
 import datetime as _dt
+import errno
+import json
+import math
 import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
-__all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_UNEXPECTED", "run_guarded", "save_traceback"]
+__all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_UNEXPECTED", "run_guarded", "save_traceback",
+           "add_json_option", "jsonable", "print_json", "print_json_error", "lossy_stderr"]
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_UNEXPECTED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
@@ -59,7 +76,7 @@ def save_traceback(exc: BaseException) -> Path | None:
 
 
 def _quiet_stdout() -> None:
-    """After a broken pipe: point stdout at /dev/null so the interpreter's final flush is silent."""
+    """After a failed write: point stdout at /dev/null so the interpreter's final flush is silent."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
@@ -68,29 +85,182 @@ def _quiet_stdout() -> None:
         pass
 
 
+class _GuardedStdout:
+    """``sys.stdout`` while a command runs: remembers the first write or flush that failed (``failure``)
+    and re-raises it, so that :func:`run_guarded` can tell a failure of standard output itself from an
+    ``OSError`` of anything else (a result file, a socket). A closed descriptor (``>&-``: Python's
+    ``sys.stdout`` is None) fails like one on the first write."""
+
+    def __init__(self, stream: Any):
+        self.stream = stream
+        self.failure: OSError | None = None
+
+    def _failed(self, exc: OSError) -> OSError:
+        if self.failure is None:
+            self.failure = exc
+        return exc
+
+    def _closed(self) -> OSError:
+        return self._failed(OSError(errno.EBADF, "standard output is closed"))
+
+    def write(self, text: str) -> int:
+        if self.stream is None:
+            raise self._closed()
+        try:
+            return self.stream.write(text)
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        if self.stream is None:
+            return
+        try:
+            self.stream.flush()
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def isatty(self) -> bool:
+        return False if self.stream is None else bool(self.stream.isatty())
+
+    def __getattr__(self, name: str) -> Any:  # encoding, fileno, buffer, ... of the stream
+        if self.stream is None:
+            raise AttributeError(name)
+        return getattr(self.stream, name)
+
+
+def add_json_option(parser: argparse.ArgumentParser) -> None:
+    """``--json`` on a command: one JSON document on stdout instead of the text (docs/cli.md)."""
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON document on stdout (typed values, units in separate keys; "
+                             "schema in docs/cli.md); errors also as {\"error\": ..., \"exit_code\": N}")
+
+
+def jsonable(obj: Any) -> Any:
+    """``obj`` with JSON types only: numpy scalars and arrays as Python numbers, booleans and lists,
+    non-finite floats as None (JSON has no NaN or infinity), paths and other objects as strings."""
+    if obj is None or isinstance(obj, bool | int | str):
+        return obj
+    if isinstance(obj, float):  # numpy.float64 too
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [jsonable(v) for v in obj]
+    if type(obj).__module__.startswith("numpy") and hasattr(obj, "tolist"):
+        return jsonable(obj.tolist())
+    return str(obj)
+
+
+def print_json(doc: Any) -> None:
+    """The one JSON document of a ``--json`` command on stdout (through :func:`jsonable`)."""
+    print(json.dumps(jsonable(doc), indent=2, allow_nan=False))
+
+
+def print_json_error(message: str, code: int) -> None:
+    """``{"error": message, "exit_code": code}`` on one line of standard output (``--json``); a stdout
+    that cannot be written costs the document, never the exit status."""
+    try:
+        print(json.dumps({"error": message, "exit_code": code}), flush=True)
+    except (OSError, ValueError, AttributeError):  # full, closed (None) or broken stdout
+        pass
+
+
+def _stdout_message(exc: OSError) -> str:
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return f"cannot write to standard output: {reason}"
+
+
 def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = False) -> int:
     """Call ``fn(args)`` and map every exception to an exit status (see the module docstring);
-    ``verbose`` also prints the traceback of a bad-input error."""
+    ``verbose`` also prints the traceback of a bad-input error. With ``args.json`` true, an exit
+    status 2, 3 or 130 also prints ``{"error": ..., "exit_code": N}`` on standard output."""
     from formation_ftc.errors import InputError
 
+    as_json = bool(getattr(args, "json", False))
+    original = sys.stdout
+    guard = _GuardedStdout(original)
+    sys.stdout = guard  # type: ignore[assignment]  # a TextIO by delegation
     try:
-        code = int(fn(args) or 0)
-        sys.stdout.flush()
+        try:
+            code = int(fn(args) or 0)
+            sys.stdout.flush()
+        finally:
+            if sys.stdout is guard:  # (a command that replaced stdout restores its own)
+                sys.stdout = original
+        if guard.failure is not None:  # a write failed and the command went on
+            raise guard.failure
         return code
-    except BrokenPipeError:
+    except OSError as exc:
+        if exc is not guard.failure:  # a result file, a socket, a worker's pipe: not standard output
+            return _unexpected(exc, as_json)
         _quiet_stdout()
-        return EXIT_OK
+        if isinstance(exc, BrokenPipeError):  # the reader left (`| head`): it took what it wanted
+            return EXIT_OK
+        print(_stdout_message(exc), file=sys.stderr)
+        return EXIT_FAILED
     except InputError as exc:
         if verbose:
             traceback.print_exc()
         print(f"error: {exc}", file=sys.stderr)
+        if as_json:
+            print_json_error(str(exc), EXIT_INPUT)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
+        if as_json:
+            print_json_error("interrupted", EXIT_INTERRUPTED)
         return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the last line of defence: never a raw traceback
-        path = save_traceback(exc)
-        where = f"traceback saved to {path}" if path else "the traceback could not be saved"
-        first = str(exc).splitlines()[0][:300] if str(exc) else ""
-        print(f"internal error: {type(exc).__name__}: {first} ({where}; please report it)", file=sys.stderr)
-        return EXIT_UNEXPECTED
+        return _unexpected(exc, as_json)
+
+
+def _unexpected(exc: Exception, as_json: bool) -> int:
+    """Exit status 3: one line naming the exception and where its traceback was saved."""
+    path = save_traceback(exc)
+    where = f"traceback saved to {path}" if path else "the traceback could not be saved"
+    first = str(exc).splitlines()[0][:300] if str(exc) else ""
+    message = f"internal error: {type(exc).__name__}: {first} ({where}; please report it)"
+    print(message, file=sys.stderr)
+    if as_json:
+        print_json_error(message, EXIT_UNEXPECTED)
+    return EXIT_UNEXPECTED
+
+
+class _LossyStream:
+    """``stream`` whose failed writes and flushes are dropped (a closed or full stderr)."""
+
+    def __init__(self, stream: TextIO):
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except (OSError, ValueError):
+            return len(text)
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            self.stream.flush()
+
+    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno, ... of the stream
+        return getattr(self.stream, name)
+
+
+@contextlib.contextmanager
+def lossy_stderr() -> Iterator[None]:
+    """``sys.stderr`` drops what it cannot write while the block runs: warnings, progress bars, log
+    lines and error messages never cost a computed result or change the exit status."""
+    original = sys.stderr
+    sys.stderr = _LossyStream(original)  # type: ignore[assignment]  # a TextIO by delegation
+    try:
+        yield
+    finally:
+        sys.stderr = original

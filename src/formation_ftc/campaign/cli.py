@@ -1,13 +1,16 @@
 """``formation-ftc campaign {list, run, report}``.
 
 The main command line calls :func:`add_cli` with its sub-parsers; this module also runs alone:
-``python -m formation_ftc.campaign.cli run NAME_OR_FILE --out DIR``.
+``python -m formation_ftc.campaign.cli run NAME_OR_FILE --out DIR``. ``list`` and ``report`` take
+``--json`` (one JSON document on stdout; schemas in docs/cli.md).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+
+from formation_ftc.exitcodes import add_json_option, print_json
 
 __all__ = ["add_cli", "main"]
 
@@ -17,9 +20,18 @@ def _cmd_list(args) -> int:
 
     from formation_ftc.campaign.spec import builtin_campaigns
 
+    rows = []
     for name, text in builtin_campaigns().items():
         meta = tomllib.loads(text).get("campaign", {})
-        print(f"{name}  {meta.get('description', '')}")
+        if args.json:
+            base = meta.get("base", [])
+            rows.append({"name": name, "description": str(meta.get("description", "")),
+                         "base": [str(b) for b in (base if isinstance(base, list) else [base])],
+                         "runs": meta.get("runs") if isinstance(meta.get("runs"), int) else None})
+        else:
+            print(f"{name}  {meta.get('description', '')}")
+    if args.json:
+        print_json({"campaigns": rows})
     return 0
 
 
@@ -60,12 +72,25 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
+    from pathlib import Path
+
     from rich.console import Console
 
     from formation_ftc.campaign.report import write_report
 
-    console = Console(width=None if sys.stdout.isatty() else 160)
-    _, figures = write_report(args.dir, console=console, plots=not args.no_plots)
+    console = None if args.json else Console(width=None if sys.stdout.isatty() else 160)
+    summary, figures = write_report(args.dir, console=console, plots=not args.no_plots)
+    if args.json:
+        from formation_ftc.campaign.storage import CampaignStore
+
+        report = Path(args.dir) / "report"
+        units = CampaignStore.read(args.dir).units()  # of the chunks' columns (parquet_units)
+        print_json({"dir": str(args.dir), "summary": summary,
+                    "units": {c.removeprefix("metric:"): u for c, u in units.items() if c.startswith("metric:")},
+                    "outputs": {"summary_json": str(report / "summary.json"),
+                                "summary_csv": str(report / "summary.csv"),
+                                "figures": [str(f) for f in figures]}})
+        return 0
     print(f"wrote {args.dir}/report/summary.json, summary.csv and {len(figures)} figure(s)")
     return 0
 
@@ -84,6 +109,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="campaign_command", required=True)
 
     q = sub.add_parser("list", help="list the built-in campaigns (name first)")
+    add_json_option(q)
     q.set_defaults(func=_cmd_list)
 
     q = sub.add_parser("run", help="run or resume a campaign into a results directory")
@@ -110,14 +136,14 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q = sub.add_parser("report", help="summary statistics and sensitivity plots of a campaign directory")
     q.add_argument("dir", metavar="DIR", help="campaign results directory")
     q.add_argument("--no-plots", action="store_true", help="tables only")
+    add_json_option(q)
     q.set_defaults(func=_cmd_report)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry point: ``main(["run", ...])`` or ``main(["campaign", "run", ...])``."""
-    from formation_ftc.cli import lossy_stderr
-    from formation_ftc.exitcodes import run_guarded
+    from formation_ftc.exitcodes import lossy_stderr, run_guarded
 
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] != "campaign":

@@ -1,4 +1,5 @@
-"""``formation-ftc league {list, run, report}``."""
+"""``formation-ftc league {list, run, report}``; ``list`` and ``report`` take ``--json`` (one JSON
+document on stdout; schemas in docs/cli.md)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import argparse
 import sys
 
 from formation_ftc.campaign.cli import add_dask_options
+from formation_ftc.exitcodes import add_json_option, print_json
 
 __all__ = ["add_cli"]
 
@@ -13,12 +15,25 @@ __all__ = ["add_cli"]
 def _cmd_list(args) -> int:
     from formation_ftc.league.definition import builtin_leagues, load_league
 
+    rows = []
     for name in builtin_leagues():
         spec = load_league(name)
+        if args.json:
+            meta = spec.league
+            rows.append({"name": name, "description": meta.description, "kind": meta.kind,
+                         "methods": [m.name for m in spec.methods], "levels": [lv.name for lv in spec.levels],
+                         "battery": meta.battery, "seeds": meta.seeds, "quick_seeds": meta.quick_seeds,
+                         "horizon": meta.horizon,
+                         "requirement": {"metric": meta.requirement.metric, "max": meta.requirement.max,
+                                         "units": meta.requirement.units},
+                         "units": {"horizon": "s"}})
+            continue
         methods = ", ".join(m.name for m in spec.methods)
         print(f"{name}  {spec.league.description}")
         print(f"    methods: {methods}; battery {spec.league.battery}; {spec.league.seeds} seeds per cell "
               f"({spec.league.quick_seeds} with --quick)")
+    if args.json:
+        print_json({"leagues": rows})
     return 0
 
 
@@ -82,9 +97,21 @@ def _print_ranking(board) -> None:
 
 
 def _cmd_report(args) -> int:
+    from pathlib import Path
+
     from formation_ftc.league.report import write_leaderboard
 
     board = write_leaderboard(args.dir, plots=not args.no_plots)
+    if args.json:
+        from formation_ftc.parquet_units import read_units
+
+        out = Path(args.dir) / "leaderboard"
+        print_json({"dir": str(args.dir), "leaderboard": board,
+                    "units": read_units(out / "cells.parquet"),  # of the cells' (and ranking rows') columns
+                    "outputs": {"index": str(out / "index.html"), "leaderboard_json": str(out / "leaderboard.json"),
+                                "leaderboard_md": str(out / "leaderboard.md"),
+                                "cells": str(out / "cells.parquet"), "runs": str(out / "runs.parquet")}})
+        return 0
     _print_ranking(board)
     print(f"wrote {args.dir}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet")
     return 0
@@ -95,6 +122,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser("league", help="FTC league: every method on one realistic formation, same faults")
     sub = p.add_subparsers(dest="league_command", required=True)
     q = sub.add_parser("list", help="list the built-in leagues")
+    add_json_option(q)
     q.set_defaults(func=_cmd_list)
     q = sub.add_parser("run", help="run or resume a league and write its leaderboard")
     q.add_argument("league", metavar="NAME_OR_FILE", help="built-in league name or league TOML file")
@@ -119,5 +147,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q = sub.add_parser("report", help="(re)write the leaderboard of a league directory")
     q.add_argument("dir", metavar="DIR", help="league directory")
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
+    add_json_option(q)
     q.set_defaults(func=_cmd_report)
     return p

@@ -638,7 +638,12 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
 
 # ----------------------------------------------------------------------------------------------- CLI
 def add_cli(subparsers) -> argparse.ArgumentParser:
-    """Add the ``reproduce`` subcommand to an ``argparse`` subparsers object (handler in ``func``)."""
+    """Add the ``reproduce`` subcommand to an ``argparse`` subparsers object (handler in ``func``).
+
+    The completion script (``formation-ftc completion``) must not import this module (JAX): it takes
+    these arguments from ``formation_ftc.cli._reproduce_stand_in``, which tests/test_cli_json.py keeps
+    in step with this function (same options, nargs, metavars).
+    """
     valid = ", ".join(registry.PAPER_MODULES)
     p = subparsers.add_parser(
         "reproduce", help="reproduce the papers' studies and write an HTML report",
