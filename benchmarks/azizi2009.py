@@ -30,8 +30,14 @@ def main(argv: list[str] | None = None) -> int:
     from formation_ftc.api import compile_scenario
     from formation_ftc.papers.azizi2009.method import load, run_batch
 
-    sc = load("azizi2009-llfr", {"simulation.horizon": args.horizon, "formation.n_axes": 1,
-                                 "simulation.record_every": 1000})
+    sc = load(
+        "azizi2009-llfr",
+        {
+            "simulation.horizon": args.horizon,
+            "formation.n_axes": 1,
+            "simulation.record_every": 1000,
+        },
+    )
     A = np.ones((args.runs, 4))
     A[:, 1] = np.linspace(1.0, 10.0, args.runs)
     t0 = time.perf_counter()
@@ -46,8 +52,10 @@ def main(argv: list[str] | None = None) -> int:
     w, c = statistics.median(walls), statistics.median(cpus)
     steps = args.runs * sc.simulation.n_steps
     print(f"azizi2009 benchmark: horizon {args.horizon:g} s, dt = 1 ms, devices {jax.devices()}")
-    print(f"alpha_2 sweep, {args.runs} runs x {sc.simulation.n_steps} steps: first call (compile + run) "
-          f"{first:.2f} s, then wall {w:.2f} s, CPU {c:.2f} s, {steps / w:.3g} run-steps/s")
+    print(
+        f"alpha_2 sweep, {args.runs} runs x {sc.simulation.n_steps} steps: first call (compile + run) "
+        f"{first:.2f} s, then wall {w:.2f} s, CPU {c:.2f} s, {steps / w:.3g} run-steps/s"
+    )
     for name in ("azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"):
         c_ = compile_scenario(load(name, {"simulation.horizon": args.horizon}))
         f = jax.jit(c_.run).lower(c_.params).compile()

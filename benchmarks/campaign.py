@@ -34,8 +34,9 @@ import time
 from pathlib import Path
 
 
-def overhead(name: str, campaign, runs_per_chunk: int, repeats: int = 3,
-             only: str | None = None) -> tuple[float, float]:
+def overhead(
+    name: str, campaign, runs_per_chunk: int, repeats: int = 3, only: str | None = None
+) -> tuple[float, float]:
     """(campaign wall, engine wall) [s] for ``campaign`` (a dict): both warm (compile excluded from
     both), on the same batches, measured ``repeats`` times alternately (campaign, engine, campaign,
     ...); the fastest of each is reported (on a shared machine the other processes only ever add
@@ -50,11 +51,15 @@ def overhead(name: str, campaign, runs_per_chunk: int, repeats: int = 3,
     if only is not None and only not in name:
         return float("nan"), float("nan")
     with tempfile.TemporaryDirectory() as tmp:
-        outcome = run_campaign(campaign, Path(tmp) / "warm", executor=LocalExecutor(1))  # compile + bind
+        outcome = run_campaign(
+            campaign, Path(tmp) / "warm", executor=LocalExecutor(1)
+        )  # compile + bind
         plan = make_plan(campaign)
         entries = [v for k, v in _BINDINGS.items() if k[0] == plan.hash and v is not None]
         if not entries:
-            print(f"{name}: the campaign did not take the bound-parameter path (method not a component loop)")
+            print(
+                f"{name}: the campaign did not take the bound-parameter path (method not a component loop)"
+            )
             return float("nan"), float("nan")
         batches = []
         for chunk in plan.chunks():
@@ -81,15 +86,19 @@ def overhead(name: str, campaign, runs_per_chunk: int, repeats: int = 3,
     t_campaign, t_engine = min(walls["campaign"]), min(walls["engine"])
     n = outcome.n_runs
     shown = {k: ", ".join(f"{w:.2f}" for w in v) for k, v in walls.items()}
-    print(f"{name}: {n} runs in {len(batches)} chunk(s) of {runs_per_chunk}, {repeats} alternate repeats "
-          f"(both warm: compile excluded from both); load average {os.getloadavg()[0]:.2f} on "
-          f"{os.cpu_count()} CPU(s)")
+    print(
+        f"{name}: {n} runs in {len(batches)} chunk(s) of {runs_per_chunk}, {repeats} alternate repeats "
+        f"(both warm: compile excluded from both); load average {os.getloadavg()[0]:.2f} on "
+        f"{os.cpu_count()} CPU(s)"
+    )
     print(f"  wall [s]: campaign {shown['campaign']}; engine {shown['engine']}")
     print(f"  campaign {t_campaign:.3f} s, engine {t_engine:.3f} s (fastest of each)")
     print(f"campaign/engine time ratio: {t_campaign / t_engine:.3f}")
     print(f"campaign overhead per run: {(t_campaign - t_engine) / n * 1e6:.0f} us")
-    print(f"  CPU time: campaign {min(cpus['campaign']):.3f} s, engine {min(cpus['engine']):.3f} s -> "
-          f"{(min(cpus['campaign']) - min(cpus['engine'])) / n * 1e6:.0f} us per run")
+    print(
+        f"  CPU time: campaign {min(cpus['campaign']):.3f} s, engine {min(cpus['engine']):.3f} s -> "
+        f"{(min(cpus['campaign']) - min(cpus['engine'])) / n * 1e6:.0f} us per run"
+    )
     return t_campaign, t_engine
 
 
@@ -100,11 +109,20 @@ def run_overhead(repeats: int = 5, only: str | None = None, li2020_horizon: floa
     cw = spec.model_dump(mode="json")
     cw["traces"] = {"runs": [], "every": 1}
     overhead("cw-pd-gains", cw, 4096, repeats, only)
-    li = {"campaign": {"name": "bench-li2020-overhead", "base": "li2020-thm1", "runs": 1000, "seed": 1,
-                       "chunk_size": 1000},
-          "overrides": {"simulation.horizon": li2020_horizon},
-          "sample": {f"spacecraft.mass.{i}": {"dist": "uniform", "low": 0.9 * m, "high": 1.1 * m}
-                     for i, m in enumerate([100.0, 120.0, 115.0, 108.0])}}
+    li = {
+        "campaign": {
+            "name": "bench-li2020-overhead",
+            "base": "li2020-thm1",
+            "runs": 1000,
+            "seed": 1,
+            "chunk_size": 1000,
+        },
+        "overrides": {"simulation.horizon": li2020_horizon},
+        "sample": {
+            f"spacecraft.mass.{i}": {"dist": "uniform", "low": 0.9 * m, "high": 1.1 * m}
+            for i, m in enumerate([100.0, 120.0, 115.0, 108.0])
+        },
+    }
     overhead(f"li2020-thm1 ({li2020_horizon:g} s)", li, 1000, repeats, only)
     return 0
 
@@ -115,14 +133,26 @@ def main(argv: list[str] | None = None) -> int:
     if "--throughput" not in argv:
         ap = argparse.ArgumentParser(description="campaign overhead (default mode)")
         ap.add_argument("--overhead", action="store_true", help="the default mode")
-        ap.add_argument("--repeats", type=int, default=5,
-                        help="alternate timed repeats (fastest reported); the wall time of one engine pass "
-                             "varies by 10-15 %% on a shared 2-core machine, so 3 repeats can leave a few "
-                             "100 us/run of noise in the overhead line")
-        ap.add_argument("--li2020-horizon", type=float, default=100.0,
-                        help="li2020-thm1 horizon [s] (default 100, the issue's); 1 s isolates the fixed "
-                             "per-run cost")
-        ap.add_argument("--only", default=None, help="only the case whose name contains this (cw-pd-gains, li2020)")
+        ap.add_argument(
+            "--repeats",
+            type=int,
+            default=5,
+            help="alternate timed repeats (fastest reported); the wall time of one engine pass "
+            "varies by 10-15 %% on a shared 2-core machine, so 3 repeats can leave a few "
+            "100 us/run of noise in the overhead line",
+        )
+        ap.add_argument(
+            "--li2020-horizon",
+            type=float,
+            default=100.0,
+            help="li2020-thm1 horizon [s] (default 100, the issue's); 1 s isolates the fixed "
+            "per-run cost",
+        )
+        ap.add_argument(
+            "--only",
+            default=None,
+            help="only the case whose name contains this (cw-pd-gains, li2020)",
+        )
         args = ap.parse_args(argv)
         return run_overhead(args.repeats, args.only, args.li2020_horizon)
     argv = [a for a in argv if a != "--throughput"]
@@ -131,8 +161,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, default=1000)
     ap.add_argument("--chunk-size", type=int, default=50)
     ap.add_argument("--horizon", type=float, default=None, help="override simulation.horizon [s]")
-    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                    help="local worker processes (spawn); default: one per CPU core")
+    ap.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="local worker processes (spawn); default: one per CPU core",
+    )
     ap.add_argument("--repeats", type=int, default=3, help="single runs timed (median)")
     ap.add_argument("--out", default=None, help="campaign directory (default: a temporary one)")
     args = ap.parse_args(argv)
@@ -164,11 +198,18 @@ def main(argv: list[str] | None = None) -> int:
 
     # -- campaign
     campaign = {
-        "campaign": {"name": f"bench-{args.scenario}", "base": args.scenario, "runs": args.runs, "seed": 1,
-                     "chunk_size": args.chunk_size},
+        "campaign": {
+            "name": f"bench-{args.scenario}",
+            "base": args.scenario,
+            "runs": args.runs,
+            "seed": 1,
+            "chunk_size": args.chunk_size,
+        },
         "overrides": overrides,
-        "sample": {f"spacecraft.mass.{i}": {"dist": "uniform", "low": 0.9 * m, "high": 1.1 * m}
-                   for i, m in enumerate(scenario.spacecraft.mass)},
+        "sample": {
+            f"spacecraft.mass.{i}": {"dist": "uniform", "low": 0.9 * m, "high": 1.1 * m}
+            for i, m in enumerate(scenario.spacecraft.mass)
+        },
     }
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(args.out) if args.out else Path(tmp) / "campaign"
@@ -184,13 +225,16 @@ def main(argv: list[str] | None = None) -> int:
                 res = finish()
                 chunk_walls.append(res.wall_s)
                 return res
+
             return timed_finish
 
         t0 = time.perf_counter()
         if args.workers == 1:
             runner.start_chunk = timed_start  # in-process: record each chunk's wall time
         try:
-            outcome = run_campaign(campaign, out, executor=LocalExecutor(args.workers), progress=sys.stderr.isatty())
+            outcome = run_campaign(
+                campaign, out, executor=LocalExecutor(args.workers), progress=sys.stderr.isatty()
+            )
         finally:
             runner.start_chunk = original
         wall = time.perf_counter() - t0
@@ -200,16 +244,26 @@ def main(argv: list[str] | None = None) -> int:
     if len(chunk_walls) > 1:
         steady = (args.runs - args.chunk_size) * n_steps / sum(chunk_walls[1:])
 
-    print(f"scenario {args.scenario}: {n_sc} spacecraft, {n_steps} steps of {scenario.simulation.dt} s, "
-          f"JAX backend {jax.default_backend()}, {os.cpu_count()} CPU(s)")
-    print(f"single run      : {t_single:.3f} s median of {args.repeats} (compile {t_compile_single:.1f} s) "
-          f"-> {single_rate:,.0f} run-steps/s")
-    print(f"campaign        : {args.runs} runs in chunks of {args.chunk_size}, {args.workers} worker(s): "
-          f"{wall:.1f} s wall ({outcome.n_failed} failed)")
-    print(f"batch (overall) : {batch_rate:,.0f} run-steps/s = {batch_rate / single_rate:.2f} x single")
+    print(
+        f"scenario {args.scenario}: {n_sc} spacecraft, {n_steps} steps of {scenario.simulation.dt} s, "
+        f"JAX backend {jax.default_backend()}, {os.cpu_count()} CPU(s)"
+    )
+    print(
+        f"single run      : {t_single:.3f} s median of {args.repeats} (compile {t_compile_single:.1f} s) "
+        f"-> {single_rate:,.0f} run-steps/s"
+    )
+    print(
+        f"campaign        : {args.runs} runs in chunks of {args.chunk_size}, {args.workers} worker(s): "
+        f"{wall:.1f} s wall ({outcome.n_failed} failed)"
+    )
+    print(
+        f"batch (overall) : {batch_rate:,.0f} run-steps/s = {batch_rate / single_rate:.2f} x single"
+    )
     if steady is not None:
-        print(f"batch (compiled): {steady:,.0f} run-steps/s = {steady / single_rate:.2f} x single "
-              f"(chunks after the first)")
+        print(
+            f"batch (compiled): {steady:,.0f} run-steps/s = {steady / single_rate:.2f} x single "
+            f"(chunks after the first)"
+        )
     return 0
 
 

@@ -25,7 +25,9 @@ import subprocess
 import sys
 
 #: scenario:horizon [s] pairs measured by default (single runs of each paper's step)
-DEFAULT_CASES = "gui2022-lof2tc:300,li2020-thm2-delays:100,mehrabian-isolation:100,azizi2009-llfr:300"
+DEFAULT_CASES = (
+    "gui2022-lof2tc:300,li2020-thm2-delays:100,mehrabian-isolation:100,azizi2009-llfr:300"
+)
 
 _CHILD = """
 import hashlib, json, resource, sys, time
@@ -54,8 +56,13 @@ print(json.dumps({"wall": best_wall, "cpu": best_cpu, "digest": digest.hexdigest
 
 def _measure(name: str, horizon: float, threads: int, repeats: int) -> dict:
     env = dict(os.environ, PJRT_NPROC=str(threads), FORMATION_FTC_JAX_CACHE="off")
-    proc = subprocess.run([sys.executable, "-c", _CHILD, name, str(horizon), str(repeats)],
-                          capture_output=True, text=True, env=env, timeout=1800)
+    proc = subprocess.run(
+        [sys.executable, "-c", _CHILD, name, str(horizon), str(repeats)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=1800,
+    )
     if proc.returncode != 0:
         raise RuntimeError(f"{name} with PJRT_NPROC={threads} failed:\n{proc.stderr[-2000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -67,16 +74,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
     cores = os.cpu_count() or 1
-    print(f"run time (compile excluded), best of {args.repeats}; 1 pool thread vs {cores} (one per core)")
-    print(f"  {'case':32s} {'1 thread: wall / CPU':>22s} {f'{cores} threads: wall / CPU':>24s}"
-          f" {'wall ratio':>10s} {'CPU ratio':>10s}  same numbers")
+    print(
+        f"run time (compile excluded), best of {args.repeats}; 1 pool thread vs {cores} (one per core)"
+    )
+    print(
+        f"  {'case':32s} {'1 thread: wall / CPU':>22s} {f'{cores} threads: wall / CPU':>24s}"
+        f" {'wall ratio':>10s} {'CPU ratio':>10s}  same numbers"
+    )
     for case in args.cases.split(","):
         name, horizon = case.rsplit(":", 1)
         one = _measure(name, float(horizon), 1, args.repeats)
         many = _measure(name, float(horizon), cores, args.repeats)
-        print(f"  {name + ' (' + horizon + ' s)':32s} {one['wall']:9.3f} / {one['cpu']:7.3f} s "
-              f"{many['wall']:11.3f} / {many['cpu']:7.3f} s {one['wall'] / many['wall']:10.2f} "
-              f"{one['cpu'] / many['cpu']:10.2f}  {one['digest'] == many['digest']}", flush=True)
+        print(
+            f"  {name + ' (' + horizon + ' s)':32s} {one['wall']:9.3f} / {one['cpu']:7.3f} s "
+            f"{many['wall']:11.3f} / {many['cpu']:7.3f} s {one['wall'] / many['wall']:10.2f} "
+            f"{one['cpu'] / many['cpu']:10.2f}  {one['digest'] == many['digest']}",
+            flush=True,
+        )
     return 0
 
 

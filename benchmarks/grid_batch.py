@@ -39,12 +39,22 @@ def _azizi(horizon: float):
     from formation_ftc.papers.azizi2009.reproduction import NOISE_SIGMA, SEEDS
     from formation_ftc.sim.compiled import compile_loop
 
-    sc = load_scenario("azizi2009-llfr", {"simulation.horizon": horizon, "formation.n_axes": 1,
-                                          "simulation.record_every": 1000, "noise.sigma_position": NOISE_SIGMA,
-                                          "noise.sigma_velocity": NOISE_SIGMA})
+    sc = load_scenario(
+        "azizi2009-llfr",
+        {
+            "simulation.horizon": horizon,
+            "formation.n_axes": 1,
+            "simulation.record_every": 1000,
+            "noise.sigma_position": NOISE_SIGMA,
+            "noise.sigma_velocity": NOISE_SIGMA,
+        },
+    )
     loop = make_loop(sc)
     weights = np.round(np.concatenate([[1.0], 4.5 + 0.1 * np.arange(-5, 6)]), 10)
-    grid = [[_variant(loop, {"alpha": [1.0, w, 1.0, 1.0], "seed": s}) for w in weights] for s in range(SEEDS)]
+    grid = [
+        [_variant(loop, {"alpha": [1.0, w, 1.0, 1.0], "seed": s}) for w in weights]
+        for s in range(SEEDS)
+    ]
     return compile_loop(loop), grid
 
 
@@ -70,13 +80,21 @@ def _time(fn, args) -> tuple[float, float, object]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--horizon", type=float, default=30.0, help="Azizi2009 horizon [s] (paper: 300)")
-    ap.add_argument("--mehrabian-scale", type=float, default=0.25, help="fraction of the Mehrabian horizon")
+    ap.add_argument(
+        "--horizon", type=float, default=30.0, help="Azizi2009 horizon [s] (paper: 300)"
+    )
+    ap.add_argument(
+        "--mehrabian-scale", type=float, default=0.25, help="fraction of the Mehrabian horizon"
+    )
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
-    cases = {"azizi2009 seeds x weights": _azizi(args.horizon),
-             "mehrabian cases x seeds": _mehrabian(args.mehrabian_scale)}
-    print(f"{'case':28s} {'runs':>5s} {'compile flat/grid [s]':>22s} {'run flat/grid [s]':>20s} {'ratio':>6s}  bitwise")
+    cases = {
+        "azizi2009 seeds x weights": _azizi(args.horizon),
+        "mehrabian cases x seeds": _mehrabian(args.mehrabian_scale),
+    }
+    print(
+        f"{'case':28s} {'runs':>5s} {'compile flat/grid [s]':>22s} {'run flat/grid [s]':>20s} {'ratio':>6s}  bitwise"
+    )
     for name, (compiled, grid) in cases.items():
         rows, cols = len(grid), len(grid[0])
         flat_batch, axes = stack_params([p for row in grid for p in row])
@@ -87,16 +105,25 @@ def main(argv: list[str] | None = None) -> int:
             jax.clear_caches()
             for kind in ("flat", "grid"):
                 batch_programs.clear()  # a fresh program each repeat: the compile is timed too
-                fn = (batched_run(compiled, axes, rows * cols) if kind == "flat"
-                      else batched_grid_run(compiled, row_axes, col_axes, rows, cols))
+                fn = (
+                    batched_run(compiled, axes, rows * cols)
+                    if kind == "flat"
+                    else batched_grid_run(compiled, row_axes, col_axes, rows, cols)
+                )
                 c, r, out = _time(fn, flat_batch if kind == "flat" else grid_batch)
                 best[kind] = [min(best[kind][0], c), min(best[kind][1], r)]
                 outs[kind] = out
         flat_m = [np.asarray(v) for v in outs["flat"]["metrics"]]
-        grid_m = [np.asarray(v).reshape((rows * cols,) + np.shape(v)[2:]) for v in outs["grid"]["metrics"]]
-        same = all(np.array_equal(a, b, equal_nan=True) for a, b in zip(flat_m, grid_m, strict=True))
-        print(f"{name:28s} {rows * cols:5d} {best['flat'][0]:10.2f} / {best['grid'][0]:5.2f} "
-              f"{best['flat'][1]:12.2f} / {best['grid'][1]:5.2f} {best['grid'][1] / best['flat'][1]:6.2f}  {same}")
+        grid_m = [
+            np.asarray(v).reshape((rows * cols,) + np.shape(v)[2:]) for v in outs["grid"]["metrics"]
+        ]
+        same = all(
+            np.array_equal(a, b, equal_nan=True) for a, b in zip(flat_m, grid_m, strict=True)
+        )
+        print(
+            f"{name:28s} {rows * cols:5d} {best['flat'][0]:10.2f} / {best['grid'][0]:5.2f} "
+            f"{best['flat'][1]:12.2f} / {best['grid'][1]:5.2f} {best['grid'][1] / best['flat'][1]:6.2f}  {same}"
+        )
     return 0
 
 

@@ -51,8 +51,10 @@ def main(argv: list[str] | None = None) -> int:
             cpu.append(time.process_time() - p0)
         return tc, statistics.median(ts), scn.simulation.n_steps, min(cpu)
 
-    print(f"gui2022 benchmark: JAX horizon {args.horizon:g} s, numpy horizon {args.numpy_horizon:g} s, "
-          f"dt = 1 ms, devices {jax.devices()}")
+    print(
+        f"gui2022 benchmark: JAX horizon {args.horizon:g} s, numpy horizon {args.numpy_horizon:g} s, "
+        f"dt = 1 ms, devices {jax.devices()}"
+    )
     rows = []
     for name in ("gui2022-ilo", "gui2022-lof2tc"):
         scn = ftc.load_scenario(name, {"simulation.horizon": args.numpy_horizon})
@@ -62,20 +64,26 @@ def main(argv: list[str] | None = None) -> int:
             simulate_numpy(scn)
             ts.append(time.perf_counter() - t0)
         us_np = statistics.median(ts) / scn.simulation.n_steps * 1e6
-        print(f"  {name:16s} numpy loop      : {us_np:8.2f} us/step "
-              f"(3e6 steps would take {us_np * 3:.0f} s)")
+        print(
+            f"  {name:16s} numpy loop      : {us_np:8.2f} us/step "
+            f"(3e6 steps would take {us_np * 3:.0f} s)"
+        )
         for u in (int(x) for x in args.unrolls.split(",")):
             tc, tr, n, cpu = time_jax(name, args.horizon, u)
             us = tr / n * 1e6
-            print(f"  {name:16s} JAX unroll={u:<3d}: {us:8.3f} us/step, run {tr:6.2f} s for {n} steps "
-                  f"(CPU time {cpu:6.2f} s), compile {tc:5.1f} s, numpy/JAX = {us_np / us:6.1f}x")
+            print(
+                f"  {name:16s} JAX unroll={u:<3d}: {us:8.3f} us/step, run {tr:6.2f} s for {n} steps "
+                f"(CPU time {cpu:6.2f} s), compile {tc:5.1f} s, numpy/JAX = {us_np / us:6.1f}x"
+            )
             rows.append((name, u, tr, tc))
     print("full runs of the built-in scenarios (their own unroll):")
     for name in ("gui2022-ilo", "gui2022-ilo-baseline", "gui2022-lof2tc", "gui2022-cof2tc"):
         scn = ftc.load_scenario(name, {"simulation.horizon": args.horizon})
         tc, tr, n, cpu = time_jax(name, args.horizon, scn.simulation.unroll)
-        print(f"  {name:22s}: run {tr:6.2f} s (CPU time {cpu:6.2f} s; {n} steps, target < 10 s), "
-              f"compile {tc:5.1f} s")
+        print(
+            f"  {name:22s}: run {tr:6.2f} s (CPU time {cpu:6.2f} s; {n} steps, target < 10 s), "
+            f"compile {tc:5.1f} s"
+        )
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak RSS of this process: {rss:.0f} MiB (target < 2048 MiB)")
     return 0

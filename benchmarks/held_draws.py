@@ -42,24 +42,35 @@ from xla_options import _mehrabian  # noqa: E402  (the Mehrabian seed-study batc
 
 def _single(name: str, horizon: float, overrides: dict | None = None):
     def make(scale: float):
-        c = compile_scenario(load_scenario(name, {**(overrides or {}), "simulation.horizon": horizon * scale}))
+        c = compile_scenario(
+            load_scenario(name, {**(overrides or {}), "simulation.horizon": horizon * scale})
+        )
         return f"{name} (single run)", c.run, c.params, c.params.n_steps, False
+
     return make
 
 
-CASES = [_single("mehrabian-isolation", 20.0), _single("compose-li2020-on-cw", 100.0),
-         _single("azizi2009-llfr", 30.0, {"noise.sigma_position": 1e-5, "noise.sigma_velocity": 1e-5}),
-         _mehrabian]
+CASES = [
+    _single("mehrabian-isolation", 20.0),
+    _single("compose-li2020-on-cw", 100.0),
+    _single("azizi2009-llfr", 30.0, {"noise.sigma_position": 1e-5, "noise.sigma_velocity": 1e-5}),
+    _mehrabian,
+]
 
 
 def _normal_fusions(hlo: str) -> int:
     """Fusion computations of the optimised HLO whose op names include an inverse-erf (a normal draw)."""
-    return sum(1 for comp in re.split(r"\n(?=\S)", hlo) if comp.startswith("%fused") and "erf_inv" in comp)
+    return sum(
+        1 for comp in re.split(r"\n(?=\S)", hlo) if comp.startswith("%fused") and "erf_inv" in comp
+    )
 
 
 def _final(out) -> list[np.ndarray]:
-    return [np.asarray(x, dtype=float) for x in jax.tree_util.tree_leaves(out["final"])
-            if np.asarray(x).dtype.kind == "f"]
+    return [
+        np.asarray(x, dtype=float)
+        for x in jax.tree_util.tree_leaves(out["final"])
+        if np.asarray(x).dtype.kind == "f"
+    ]
 
 
 def _build(case, scale: float, materialise: bool):
@@ -85,8 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--horizon-scale", type=float, default=1.0, help="scale every case's horizon")
     ap.add_argument("--repeats", type=int, default=3, help="alternate timed passes per executable")
     args = ap.parse_args(argv)
-    print(f"{'case':44s} {'compile ref / pkg':>18s} {'ratio':>6s} {'us/run-step ref / pkg':>22s} {'ratio':>6s}"
-          f"  {'normal fusions':>14s}  final state")
+    print(
+        f"{'case':44s} {'compile ref / pkg':>18s} {'ratio':>6s} {'us/run-step ref / pkg':>22s} {'ratio':>6s}"
+        f"  {'normal fusions':>14s}  final state"
+    )
     for case in CASES:
         ref = _build(case, args.horizon_scale, materialise=False)
         pkg = _build(case, args.horizon_scale, materialise=True)
@@ -104,9 +117,12 @@ def main(argv: list[str] | None = None) -> int:
             diffs.append(float(np.max(np.abs(a[fin] - b[fin]))) / scale if scale > 0 else 0.0)
         worst = max(diffs, default=0.0)
         us = [t / ref[3] * 1e6 for t in best]
-        print(f"{ref[0]:44s} {ref[4]:7.2f} / {pkg[4]:5.2f} s {pkg[4] / ref[4]:6.2f} {us[0]:10.2f} / {us[1]:8.2f}"
-              f" {us[1] / us[0]:6.2f}  {ref[5]:6d} / {pkg[5]:<5d}  "
-              f"{'bitwise' if worst == 0.0 else f'max diff {worst:.1e} of scale'}", flush=True)
+        print(
+            f"{ref[0]:44s} {ref[4]:7.2f} / {pkg[4]:5.2f} s {pkg[4] / ref[4]:6.2f} {us[0]:10.2f} / {us[1]:8.2f}"
+            f" {us[1] / us[0]:6.2f}  {ref[5]:6d} / {pkg[5]:<5d}  "
+            f"{'bitwise' if worst == 0.0 else f'max diff {worst:.1e} of scale'}",
+            flush=True,
+        )
     return 0
 
 

@@ -38,18 +38,32 @@ def _paper_functions():
         return np.stack([a1, a2, a3], axis=-1)
 
     def delta(t):
-        return 0.1 * np.stack([(i + 1) * np.cos(0.1 * t) + 2 * np.exp(-0.2 * t),
-                               i * np.sin(0.2 * t) + np.exp(-0.3 * t),
-                               (2 * i - 1) * np.cos(0.3 * t) - np.exp(-0.4 * t)], axis=-1)
+        return 0.1 * np.stack(
+            [
+                (i + 1) * np.cos(0.1 * t) + 2 * np.exp(-0.2 * t),
+                i * np.sin(0.2 * t) + np.exp(-0.3 * t),
+                (2 * i - 1) * np.cos(0.3 * t) - np.exp(-0.4 * t),
+            ],
+            axis=-1,
+        )
 
     def h(t):
-        return 0.05 * np.stack([(i + 1) * np.cos(0.1 * t) + 2 * i * np.sin(0.2 * t),
-                                2 * i * np.cos(0.2 * t) + 3 * i,
-                                (i - 3) * np.sin(0.1 * t) - 2 * i], axis=-1)
+        return 0.05 * np.stack(
+            [
+                (i + 1) * np.cos(0.1 * t) + 2 * i * np.sin(0.2 * t),
+                2 * i * np.cos(0.2 * t) + 3 * i,
+                (i - 3) * np.sin(0.1 * t) - 2 * i,
+            ],
+            axis=-1,
+        )
 
-    delays = {(0, 2): lambda t: 1 - 0.2 * math.cos(0.4 * t), (1, 0): lambda t: 1 + 0.2 * math.sin(0.2 * t),
-              (2, 1): lambda t: 2 + 0.4 * math.sin(0.2 * t), (2, 3): lambda t: 3 + 0.6 * math.sin(0.2 * t),
-              (3, 0): lambda t: 1 + 0.2 * math.cos(0.2 * t)}
+    delays = {
+        (0, 2): lambda t: 1 - 0.2 * math.cos(0.4 * t),
+        (1, 0): lambda t: 1 + 0.2 * math.sin(0.2 * t),
+        (2, 1): lambda t: 2 + 0.4 * math.sin(0.2 * t),
+        (2, 3): lambda t: 3 + 0.6 * math.sin(0.2 * t),
+        (3, 0): lambda t: 1 + 0.2 * math.cos(0.2 * t),
+    }
     return gamma, delta, h, delays
 
 
@@ -63,13 +77,17 @@ class NumpyLi2020:
         self.p, self.e = a * (1 - e**2), e
         self.C = np.array([[0, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]], float)
         ph = np.array([0, np.pi / 2, np.pi, 3 * np.pi / 2])
-        self.rho_bar = 500 * np.stack([0.5 * np.cos(ph), -np.sin(ph), np.sqrt(3) / 2 * np.cos(ph)], -1)
+        self.rho_bar = 500 * np.stack(
+            [0.5 * np.cos(ph), -np.sin(ph), np.sqrt(3) / 2 * np.cos(ph)], -1
+        )
         Tc = 2 * np.pi / np.sqrt(MU / a**3)
         self.chi = -0.25 * Tc**2 / (2 * np.log(1e-6))
         self.k, self.lam = 0.2, (20.0 if law == "thm1" else 15.0)
         self.gamma_a, self.eta, self.mu_a, self.ups = 0.1, 1.0, 1.0, 0.01
         self.gamma, self.delta, self.h, self.delays = _paper_functions()
-        rho0 = np.array([[250, 20, 423], [-15, -505, 10], [-238, -10, -250 * np.sqrt(3)], [5, 500, 15]], float)
+        rho0 = np.array(
+            [[250, 20, 423], [-15, -505, 10], [-238, -10, -250 * np.sqrt(3)], [5, 500, 15]], float
+        )
         # state vector: theta, rho (12), v (12), then m_hat, beta_hat, d_hat (4 each) or b_hat (4)
         adapt = [100.0] * 4 + [1.0] * 4 + [0.001] * 4 if law != "sir-ftc" else [10.0] * 4
         self.x = np.concatenate([[0.0], rho0.ravel(), np.zeros(12), adapt])
@@ -116,9 +134,19 @@ class NumpyLi2020:
         thdd = -2 * MU / self.p**3 * self.e * np.sin(th) * one**3
         ri = np.sqrt((rc + rho[:, 0]) ** 2 + rho[:, 1] ** 2 + rho[:, 2] ** 2)
         g = MU / ri**3
-        acc = np.stack([2 * thd * v[:, 1] + thd**2 * rho[:, 0] + thdd * rho[:, 1] - g * rho[:, 0] - MU * rc / ri**3 + MU / rc**2,
-                        -2 * thd * v[:, 0] - thdd * rho[:, 0] + thd**2 * rho[:, 1] - g * rho[:, 1],
-                        -g * rho[:, 2]], -1)
+        acc = np.stack(
+            [
+                2 * thd * v[:, 1]
+                + thd**2 * rho[:, 0]
+                + thdd * rho[:, 1]
+                - g * rho[:, 0]
+                - MU * rc / ri**3
+                + MU / rc**2,
+                -2 * thd * v[:, 0] - thdd * rho[:, 0] + thd**2 * rho[:, 1] - g * rho[:, 1],
+                -g * rho[:, 2],
+            ],
+            -1,
+        )
         rd, vd, ad = self._desired(t)
         s = (v - vd) + self.k * (rho - rd)
         Y = acc + self.k * (v - vd) - ad
@@ -141,7 +169,9 @@ class NumpyLi2020:
                         else:
                             sj = self._delayed(j, t - self.delays[(i, j)](t))
                         cons[i] += self.C[i, j] * (s[i] - sj)
-            xi = mh[:, None] * Y + self.lam * s + cons + self.d_sign * dh[:, None] * np.tanh(s / sig)
+            xi = (
+                mh[:, None] * Y + self.lam * s + cons + self.d_sign * dh[:, None] * np.tanh(s / sig)
+            )
             w = np.sum(xi * s, axis=1)
             f = -(bh**2 * w / np.sqrt(bh**2 * w**2 + sig**2))[:, None] * xi
             dx[25:29] = self.eta * np.sum(s * Y, axis=1)
@@ -192,8 +222,12 @@ def numpy_reference_step_time(n_steps: int = 1000, law: str = "thm2", repeats: i
     return statistics.median(times)
 
 
-def jax_closed_loop(scenario: str = "li2020-thm2-delays", horizon: float | None = None,
-                    overrides: dict | None = None, check_finite: bool = True):
+def jax_closed_loop(
+    scenario: str = "li2020-thm2-delays",
+    horizon: float | None = None,
+    overrides: dict | None = None,
+    check_finite: bool = True,
+):
     """(jitted run, params, n_steps) of the JAX closed loop of a built-in li2020 scenario.
 
     ``jax.block_until_ready(run(params))`` runs it; the first call compiles. ``check_finite=False``
@@ -228,8 +262,12 @@ def jax_closed_loop(scenario: str = "li2020-thm2-delays", horizon: float | None 
     return jax.jit(run), compiled.params, n
 
 
-def jax_full_run_time(scenario: str = "li2020-thm2-delays", horizon: float | None = None,
-                      repeats: int = 3, check_finite: bool = True) -> tuple[float, float, int]:
+def jax_full_run_time(
+    scenario: str = "li2020-thm2-delays",
+    horizon: float | None = None,
+    repeats: int = 3,
+    check_finite: bool = True,
+) -> tuple[float, float, int]:
     """(compile + first run [s], median wall time of a compiled run [s], n_steps)."""
     import jax
 
@@ -248,30 +286,45 @@ def jax_full_run_time(scenario: str = "li2020-thm2-delays", horizon: float | Non
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=1000, help="numpy reference steps to time")
-    ap.add_argument("--horizon", type=float, default=None, help="JAX run horizon [s] (default: scenario's)")
-    ap.add_argument("--single-thread", action="store_true",
-                    help="XLA:CPU with one intra-op thread (faster for single runs, PERFORMANCE.md)")
+    ap.add_argument(
+        "--horizon", type=float, default=None, help="JAX run horizon [s] (default: scenario's)"
+    )
+    ap.add_argument(
+        "--single-thread",
+        action="store_true",
+        help="XLA:CPU with one intra-op thread (faster for single runs, PERFORMANCE.md)",
+    )
     args = ap.parse_args()
     if args.single_thread:
         import os
 
-        os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
-                                   + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
+        os.environ["XLA_FLAGS"] = (
+            os.environ.get("XLA_FLAGS", "")
+            + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+        )
     import formation_ftc  # noqa: F401  (x64)
 
     np_step = numpy_reference_step_time(args.steps)
     first, run_t, n = jax_full_run_time("li2020-thm2-delays", args.horizon)
     jax_step = run_t / n
-    print(f"numpy reference (thm2, delays): {np_step * 1e6:8.1f} us/step -> {np_step * n:8.1f} s for {n} steps")
-    print(f"JAX li2020-thm2-delays        : {jax_step * 1e6:8.2f} us/step -> {run_t:8.3f} s for {n} steps "
-          f"(compile + first run {first:.1f} s)")
+    print(
+        f"numpy reference (thm2, delays): {np_step * 1e6:8.1f} us/step -> {np_step * n:8.1f} s for {n} steps"
+    )
+    print(
+        f"JAX li2020-thm2-delays        : {jax_step * 1e6:8.2f} us/step -> {run_t:8.3f} s for {n} steps "
+        f"(compile + first run {first:.1f} s)"
+    )
     print(f"speed-up JAX / numpy           : {np_step / jax_step:8.1f}x")
     _, run_nc, _ = jax_full_run_time("li2020-thm2-delays", args.horizon, check_finite=False)
-    print(f"  same without the engine's finite check: {run_nc / n * 1e6:8.2f} us/step -> "
-          f"{run_nc:8.3f} s")
+    print(
+        f"  same without the engine's finite check: {run_nc / n * 1e6:8.2f} us/step -> "
+        f"{run_nc:8.3f} s"
+    )
     for name in ("li2020-thm1", "li2020-sirftc"):
         f1, r1, n1 = jax_full_run_time(name, args.horizon)
-        print(f"JAX {name:<27}: {r1 / n1 * 1e6:8.2f} us/step -> {r1:8.3f} s (compile + first {f1:.1f} s)")
+        print(
+            f"JAX {name:<27}: {r1 / n1 * 1e6:8.2f} us/step -> {r1:8.3f} s (compile + first {f1:.1f} s)"
+        )
 
 
 if __name__ == "__main__":

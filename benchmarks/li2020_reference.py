@@ -56,7 +56,9 @@ def main() -> None:
     from formation_ftc.papers.li2020.reproduction import REFERENCE_RUN as USED
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--horizon", type=float, default=30.0, help="simulated time [s] (3000 for all values)")
+    ap.add_argument(
+        "--horizon", type=float, default=30.0, help="simulated time [s] (3000 for all values)"
+    )
     ap.add_argument("--full", action="store_true", help="the full 3000 s horizon")
     args = ap.parse_args()
     horizon = 3000.0 if args.full else args.horizon
@@ -64,7 +66,9 @@ def main() -> None:
         got = reference_metrics(law, horizon)
         for key, val in got.items():
             used = USED.get(scn, {}).get(key)
-            print(f"{scn:20s} {key:18s} numpy {val:10.4g} m   report uses {used if used is not None else '-'}")
+            print(
+                f"{scn:20s} {key:18s} numpy {val:10.4g} m   report uses {used if used is not None else '-'}"
+            )
 
 
 if __name__ == "__main__":

@@ -78,6 +78,7 @@ def _single(loop):
 def _batched(axes):
     def fn(batch):
         return jax.vmap(_single, in_axes=(axes,))(batch)
+
     return fn
 
 
@@ -87,34 +88,59 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
 
-    cases = [("gui2022-lof2tc", 50, 1), ("gui2022-ilo", 50, 1), ("gui2022-cof2tc", 50, 1),
-             ("li2020-thm1", 10, 1), ("azizi2009-llfr", 50, 1), ("azizi2009-llfr", 50, 16)]
-    print(f"metric fold: blocks of L steps vs every step; {args.horizon:g} s per run, fastest of {args.repeats}; "
-          "a batch's time per step is that of all its runs")
-    print(f"{'scenario':22s} {'runs':>4s} {'L':>3s} {'auto':>4s}  {'compile step/fold [s]':>22s}  "
-          f"{'per step: step/fold [us]':>25s}  {'ratio':>5s}  {'max rel diff':>12s}")
+    cases = [
+        ("gui2022-lof2tc", 50, 1),
+        ("gui2022-ilo", 50, 1),
+        ("gui2022-cof2tc", 50, 1),
+        ("li2020-thm1", 10, 1),
+        ("azizi2009-llfr", 50, 1),
+        ("azizi2009-llfr", 50, 16),
+    ]
+    print(
+        f"metric fold: blocks of L steps vs every step; {args.horizon:g} s per run, fastest of {args.repeats}; "
+        "a batch's time per step is that of all its runs"
+    )
+    print(
+        f"{'scenario':22s} {'runs':>4s} {'L':>3s} {'auto':>4s}  {'compile step/fold [s]':>22s}  "
+        f"{'per step: step/fold [us]':>25s}  {'ratio':>5s}  {'max rel diff':>12s}"
+    )
     for name, block, runs in cases:
         ov = {"simulation.horizon": args.horizon}
         loop = compile_scenario(load_scenario(name, ov)).params
         n = loop.n_steps
-        if runs > 1:  # a sweep of the second actuator's weight alpha_2 from 1 to 10, as the reproduction's
-            loops = [compile_scenario(load_scenario(name, {**ov, "allocation.alpha": [1.0, a, 1.0, 1.0]})).params
-                     for a in np.linspace(1.0, 10.0, runs)]
+        if (
+            runs > 1
+        ):  # a sweep of the second actuator's weight alpha_2 from 1 to 10, as the reproduction's
+            loops = [
+                compile_scenario(
+                    load_scenario(name, {**ov, "allocation.alpha": [1.0, a, 1.0, 1.0]})
+                ).params
+                for a in np.linspace(1.0, 10.0, runs)
+            ]
             batch, axes = stack_params([dataclasses.replace(p, metric_block=1) for p in loops])
-            batch_fold, axes_fold = stack_params([dataclasses.replace(p, metric_block=block) for p in loops])
+            batch_fold, axes_fold = stack_params(
+                [dataclasses.replace(p, metric_block=block) for p in loops]
+            )
             stepwise, folded = batch, batch_fold
             fn_step, fn_fold = (_batched(a) for a in (axes, axes_fold))
         else:
-            stepwise, folded = dataclasses.replace(loop, metric_block=1), dataclasses.replace(loop, metric_block=block)
+            stepwise, folded = (
+                dataclasses.replace(loop, metric_block=1),
+                dataclasses.replace(loop, metric_block=block),
+            )
             fn_step = fn_fold = _single
         c_step, t_step, m_step = _timed(fn_step, stepwise, args.repeats)
         c_fold, t_fold, m_fold = _timed(fn_fold, folded, args.repeats)
-        diff = max(_worst(loop.metrics, a, b) for a, b in zip(_per_run(m_step, runs), _per_run(m_fold, runs),
-                                                               strict=True))
+        diff = max(
+            _worst(loop.metrics, a, b)
+            for a, b in zip(_per_run(m_step, runs), _per_run(m_fold, runs), strict=True)
+        )
         auto = loop._metric_block()
-        print(f"{name:22s} {runs:4d} {block:3d} {auto:4d}  {c_step:10.2f} / {c_fold:9.2f}  "
-              f"{t_step / n * 1e6:12.3f} / {t_fold / n * 1e6:10.3f}  {t_fold / t_step:5.2f}  {diff:12.1e}",
-              flush=True)
+        print(
+            f"{name:22s} {runs:4d} {block:3d} {auto:4d}  {c_step:10.2f} / {c_fold:9.2f}  "
+            f"{t_step / n * 1e6:12.3f} / {t_fold / n * 1e6:10.3f}  {t_fold / t_step:5.2f}  {diff:12.1e}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

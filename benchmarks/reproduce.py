@@ -93,15 +93,29 @@ def _rerun_times(cache: Path) -> dict:
 
 def _has_profile() -> bool:
     """Whether this checkout's ``reproduce`` has ``--profile`` (older ones: wall times only)."""
-    proc = subprocess.run([sys.executable, "-m", "formation_ftc", "reproduce", "--help"], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "formation_ftc", "reproduce", "--help"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     return "--profile" in proc.stdout
 
 
 def _reproduce(papers: list[str], out: Path, cache: Path) -> dict:
     env = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache)}
-    cmd = [sys.executable, "-m", "formation_ftc", "reproduce", *papers, "--out", str(out), "--force", "--no-3d",
-           *(["--profile"] if _has_profile() else [])]
+    cmd = [
+        sys.executable,
+        "-m",
+        "formation_ftc",
+        "reproduce",
+        *papers,
+        "--out",
+        str(out),
+        "--force",
+        "--no-3d",
+        *(["--profile"] if _has_profile() else []),
+    ]
     t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     wall, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -109,20 +123,33 @@ def _reproduce(papers: list[str], out: Path, cache: Path) -> dict:
     if proc.returncode != 0:
         print(proc.stdout[-4000:], file=sys.stderr)
     meta = json.loads((out / "summary.json").read_text())["metadata"]
-    return {"wall_s": wall, "cpu_s": cpu, "load_avg": os.getloadavg(), "exit_code": proc.returncode, "papers": meta["wall_time_s"],
-            "profile": meta.get("profile", {}), "status": meta["status"]}
+    return {
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "load_avg": os.getloadavg(),
+        "exit_code": proc.returncode,
+        "papers": meta["wall_time_s"],
+        "profile": meta.get("profile", {}),
+        "status": meta["status"],
+    }
 
 
 def _print_reproduce(label: str, r: dict, target: float) -> None:
     ok = "yes" if r["wall_s"] < target else "NO"
-    print(f"\nreproduce ({label}): {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU (user + sys), exit "
-          f"{r['exit_code']} (target < {target:g} s wall: {ok}; load average after: "
-          + ", ".join(f"{x:.1f}" for x in r["load_avg"]) + ")")
+    print(
+        f"\nreproduce ({label}): {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU (user + sys), exit "
+        f"{r['exit_code']} (target < {target:g} s wall: {ok}; load average after: "
+        + ", ".join(f"{x:.1f}" for x in r["load_avg"])
+        + ")"
+    )
     print(f"  {'paper':12s} {'wall':>7s} " + " ".join(f"{p:>8s}" for p in PHASES))
     for paper, wall in r["papers"].items():
         b = r["profile"].get(paper, {})
-        print(f"  {paper:12s} {wall:7.1f} " + " ".join(f"{b.get(p, float('nan')):8.1f}" for p in PHASES)
-              + ("" if r["status"].get(paper) == "ok" else "  FAILED"))
+        print(
+            f"  {paper:12s} {wall:7.1f} "
+            + " ".join(f"{b.get(p, float('nan')):8.1f}" for p in PHASES)
+            + ("" if r["status"].get(paper) == "ok" else "  FAILED")
+        )
 
 
 def _json_lines(script: str, cache: str) -> dict:
@@ -145,12 +172,18 @@ def _compile_times() -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--papers", nargs="+", default=["all"], help="papers to reproduce (default: all)")
+    ap.add_argument(
+        "--papers", nargs="+", default=["all"], help="papers to reproduce (default: all)"
+    )
     ap.add_argument("--skip-reproduce", action="store_true", help="only the scenario compile times")
     ap.add_argument("--skip-compile", action="store_true", help="only reproduce (cold and warm)")
-    ap.add_argument("--skip-rerun", action="store_true", help="skip the re-run of a scenario in one process")
+    ap.add_argument(
+        "--skip-rerun", action="store_true", help="skip the re-run of a scenario in one process"
+    )
     ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
-    ap.add_argument("--keep", type=Path, help="copy the two reports (cold/, warm/) into this directory")
+    ap.add_argument(
+        "--keep", type=Path, help="copy the two reports (cold/, warm/) into this directory"
+    )
     args = ap.parse_args(argv)
     result: dict = {"cpu_count": os.cpu_count()}
     with tempfile.TemporaryDirectory(prefix="ftc-bench-") as tmp:
@@ -167,24 +200,40 @@ def main(argv: list[str] | None = None) -> int:
         if not args.skip_rerun:
             rerun = _rerun_times(tmp_path / "rerun-cache")
             result["rerun_s"] = rerun
-            print("\nthe same scenario again in one process (100 steps; api.simulate_with_metrics), against a "
-                  "fresh jax.jit per call with a warm persistent cache")
-            print(f"  {'scenario':24s} {'first':>8s} {'again':>8s} {'fresh jit':>10s} {'ratio':>7s}")
+            print(
+                "\nthe same scenario again in one process (100 steps; api.simulate_with_metrics), against a "
+                "fresh jax.jit per call with a warm persistent cache"
+            )
+            print(
+                f"  {'scenario':24s} {'first':>8s} {'again':>8s} {'fresh jit':>10s} {'ratio':>7s}"
+            )
             for name, r in rerun.items():
-                print(f"  {name:24s} {r['first_s']:6.2f} s {r['again_s']:6.3f} s {r['fresh_jit_s']:8.3f} s "
-                      f"{r['again_s'] / r['fresh_jit_s']:7.3f}")
+                print(
+                    f"  {name:24s} {r['first_s']:6.2f} s {r['again_s']:6.3f} s {r['fresh_jit_s']:8.3f} s "
+                    f"{r['again_s'] / r['fresh_jit_s']:7.3f}"
+                )
     if not args.skip_compile:
         times = _compile_times()
         result["compile_s"] = times
-        print(f"\nformation-ftc run: compile time per built-in scenario (cold; target < {TARGET_COMPILE_S:g} s)")
+        print(
+            f"\nformation-ftc run: compile time per built-in scenario (cold; target < {TARGET_COMPILE_S:g} s)"
+        )
         cpu = {k[4:]: v for k, v in times.items() if k.startswith("cpu:")}
         times = {k: v for k, v in times.items() if not k.startswith("cpu:")}
         numeric = {k: v for k, v in times.items() if isinstance(v, float)}
         print(f"  {'scenario':36s} {'wall':>8s} {'CPU':>8s}")
-        for name, t in sorted(times.items(), key=lambda kv: (isinstance(kv[1], str), kv[1] if
-                                                             isinstance(kv[1], float) else 0.0)):
-            print(f"  {name:36s} " + (f"{t:6.2f} s {cpu.get(name, float('nan')):6.2f} s" if isinstance(t, float)
-                                      else t))
+        for name, t in sorted(
+            times.items(),
+            key=lambda kv: (isinstance(kv[1], str), kv[1] if isinstance(kv[1], float) else 0.0),
+        ):
+            print(
+                f"  {name:36s} "
+                + (
+                    f"{t:6.2f} s {cpu.get(name, float('nan')):6.2f} s"
+                    if isinstance(t, float)
+                    else t
+                )
+            )
         if numeric:
             worst = max(numeric, key=numeric.__getitem__)
             ok = "yes" if numeric[worst] < TARGET_COMPILE_S else "NO"

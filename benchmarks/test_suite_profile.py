@@ -72,9 +72,12 @@ PLUGIN = textwrap.dedent('''
                        "durations": DURATIONS}, f)
 ''')
 
-PHASE_NAMES = {"jaxpr_trace_duration": "trace", "jaxpr_to_mlir_module_duration": "lower to StableHLO",
-               "backend_compile_duration": "XLA compile (cache loads included)",
-               "cache_retrieval_time_sec": "  of which persistent-cache loads"}
+PHASE_NAMES = {
+    "jaxpr_trace_duration": "trace",
+    "jaxpr_to_mlir_module_duration": "lower to StableHLO",
+    "backend_compile_duration": "XLA compile (cache loads included)",
+    "cache_retrieval_time_sec": "  of which persistent-cache loads",
+}
 
 
 def _merge(out_dir: Path) -> dict:
@@ -97,9 +100,20 @@ def _merge(out_dir: Path) -> dict:
             total += d
         for nodeid, ev in data["per_test"].items():
             f = nodeid.split("::")[0]
-            files[f][1] += sum(ev.get(k, 0.0) for k in ("jaxpr_trace_duration", "jaxpr_to_mlir_module_duration",
-                                                        "backend_compile_duration"))
-    return {"phases": dict(phases), "programs": dict(programs), "files": dict(files), "test_seconds": total}
+            files[f][1] += sum(
+                ev.get(k, 0.0)
+                for k in (
+                    "jaxpr_trace_duration",
+                    "jaxpr_to_mlir_module_duration",
+                    "backend_compile_duration",
+                )
+            )
+    return {
+        "phases": dict(phases),
+        "programs": dict(programs),
+        "files": dict(files),
+        "test_seconds": total,
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -114,10 +128,24 @@ def main(argv: list[str] | None = None) -> int:
         (tmp_path / "plugin").mkdir()
         (tmp_path / "plugin" / "_ftc_test_profile.py").write_text(PLUGIN)
         (tmp_path / "out").mkdir()
-        env = dict(os.environ, FORMATION_FTC_JAX_CACHE=str(tmp_path / "jax-cache"),
-                   FTC_TEST_PROFILE_DIR=str(tmp_path / "out"),
-                   PYTHONPATH=os.pathsep.join([str(tmp_path / "plugin"), os.environ.get("PYTHONPATH", "")]))
-        cmd = [sys.executable, "-m", "pytest", "-p", "_ftc_test_profile", "-q", "-p", "no:cacheprovider"]
+        env = dict(
+            os.environ,
+            FORMATION_FTC_JAX_CACHE=str(tmp_path / "jax-cache"),
+            FTC_TEST_PROFILE_DIR=str(tmp_path / "out"),
+            PYTHONPATH=os.pathsep.join(
+                [str(tmp_path / "plugin"), os.environ.get("PYTHONPATH", "")]
+            ),
+        )
+        cmd = [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-p",
+            "_ftc_test_profile",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+        ]
         if args.workers > 1:
             cmd += ["-n", str(args.workers), "--dist", "worksteal"]
         cmd += pytest_args
@@ -126,8 +154,10 @@ def main(argv: list[str] | None = None) -> int:
         wall = time.perf_counter() - t0
         merged = _merge(tmp_path / "out")
     total = merged["test_seconds"]
-    print(f"\ntest suite: {wall:.1f} s wall with {args.workers} worker(s), cold compilation cache; "
-          f"summed test time {total:.1f} s (exit {rc})")
+    print(
+        f"\ntest suite: {wall:.1f} s wall with {args.workers} worker(s), cold compilation cache; "
+        f"summed test time {total:.1f} s (exit {rc})"
+    )
     print(f"\n{'compile phase':40s} {'seconds':>9s} {'count':>7s} {'of test time':>13s}")
     compile_total = 0.0
     for key, label in PHASE_NAMES.items():
@@ -135,16 +165,20 @@ def main(argv: list[str] | None = None) -> int:
         if not label.startswith(" "):
             compile_total += s
         print(f"{label:40s} {s:9.1f} {n:7d} {100 * s / max(total, 1e-9):12.0f}%")
-    print(f"{'trace + lower + XLA compile':40s} {compile_total:9.1f} {'':7s} "
-          f"{100 * compile_total / max(total, 1e-9):12.0f}%")
+    print(
+        f"{'trace + lower + XLA compile':40s} {compile_total:9.1f} {'':7s} "
+        f"{100 * compile_total / max(total, 1e-9):12.0f}%"
+    )
     print(f"\n{'program (XLA compile)':40s} {'seconds':>9s} {'count':>7s} {'mean':>7s}")
-    for name, (n, s) in sorted(merged["programs"].items(), key=lambda kv: -kv[1][1])[:args.top]:
+    for name, (n, s) in sorted(merged["programs"].items(), key=lambda kv: -kv[1][1])[: args.top]:
         print(f"{name[:40]:40s} {s:9.1f} {n:7d} {s / max(n, 1):7.2f}")
     print(f"\n{'test file':60s} {'tests':>6s} {'test s':>8s} {'compile s':>10s}")
-    for name, (s, c, n) in sorted(merged["files"].items(), key=lambda kv: -kv[1][0])[:args.top]:
+    for name, (s, c, n) in sorted(merged["files"].items(), key=lambda kv: -kv[1][0])[: args.top]:
         print(f"{name[:60]:60s} {n:6d} {s:8.1f} {c:10.1f}")
     if args.json:
-        args.json.write_text(json.dumps({"wall_s": wall, "workers": args.workers, "exit": rc, **merged}, indent=1))
+        args.json.write_text(
+            json.dumps({"wall_s": wall, "workers": args.workers, "exit": rc, **merged}, indent=1)
+        )
     return rc
 
 

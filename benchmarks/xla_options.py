@@ -48,16 +48,27 @@ def _single(name: str, horizon: float):
     def make(scale: float):
         c = compile_scenario(load_scenario(name, {"simulation.horizon": horizon * scale}))
         return f"{name} (single run)", c.run, c.params, c.params.n_steps, False
+
     return make
 
 
-CASES = [_mehrabian, _single("li2020-thm1", 30.0), _single("azizi2009-llfr", 60.0), _single("gui2022-ilo", 100.0)]
+CASES = [
+    _mehrabian,
+    _single("li2020-thm1", 30.0),
+    _single("azizi2009-llfr", 60.0),
+    _single("gui2022-ilo", 100.0),
+]
 
 
 def _leaves(out) -> np.ndarray:
     tree = {"final": out["final"], "metrics": out["metrics"]}
-    return np.concatenate([np.ravel(np.asarray(x, dtype=float)) for x in jax.tree_util.tree_leaves(tree)
-                           if np.asarray(x).dtype.kind in "fiu"])
+    return np.concatenate(
+        [
+            np.ravel(np.asarray(x, dtype=float))
+            for x in jax.tree_util.tree_leaves(tree)
+            if np.asarray(x).dtype.kind in "fiu"
+        ]
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -65,7 +76,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--horizon-scale", type=float, default=1.0, help="scale every case's horizon")
     ap.add_argument("--repeats", type=int, default=3, help="alternate timed passes per executable")
     args = ap.parse_args(argv)
-    print(f"{'case':48s} {'default':>10s} {'package':>10s} {'ratio':>6s}  compile default / package   same")
+    print(
+        f"{'case':48s} {'default':>10s} {'package':>10s} {'ratio':>6s}  compile default / package   same"
+    )
     for case in CASES:
         label, fn, params, run_steps, fast = case(args.horizon_scale)
         lowered = jax.jit(fn).lower(params)
@@ -84,10 +97,17 @@ def main(argv: list[str] | None = None) -> int:
         a, b = _leaves(outs[0]), _leaves(outs[1])
         fin = np.isfinite(a) & np.isfinite(b)
         same = np.array_equal(a[fin], b[fin]) and np.array_equal(np.isfinite(a), np.isfinite(b))
-        rel = 0.0 if same else float(np.max(np.abs(a[fin] - b[fin]) / np.maximum(np.abs(a[fin]), 1e-300)))
+        rel = (
+            0.0
+            if same
+            else float(np.max(np.abs(a[fin] - b[fin]) / np.maximum(np.abs(a[fin]), 1e-300)))
+        )
         us = [t / run_steps * 1e6 for t in best]
-        print(f"{label:48s} {us[0]:8.3f}us {us[1]:8.3f}us {us[1] / us[0]:6.3f}  {compile_s[0]:6.2f} s / "
-              f"{compile_s[1]:6.2f} s   {'bitwise' if same else f'max rel diff {rel:.1e}'}", flush=True)
+        print(
+            f"{label:48s} {us[0]:8.3f}us {us[1]:8.3f}us {us[1] / us[0]:6.3f}  {compile_s[0]:6.2f} s / "
+            f"{compile_s[1]:6.2f} s   {'bitwise' if same else f'max rel diff {rel:.1e}'}",
+            flush=True,
+        )
     return 0
 
 

@@ -37,7 +37,7 @@ for sc in ds.spacecraft.values:
 axes[0].set(xlabel="x (radial) [m]", ylabel="y (along-track) [m]", title="Trajectories in LVLH")
 axes[0].axis("equal")
 axes[0].legend()
-err = (ds.position_error ** 2).sum("axis") ** 0.5
+err = (ds.position_error**2).sum("axis") ** 0.5
 for sc in ds.spacecraft.values:
     axes[1].semilogy(ds.time, err.sel(spacecraft=sc), label=f"deputy {sc}")
 axes[1].axvline(200.0, color="k", ls="--", lw=0.8)

@@ -23,17 +23,25 @@ for label, overrides in cases.items():
     results[label] = ftc.simulate_with_metrics(scn)
 
 # %%
-print(f"{'case':22s} {'max error [m]':>14s} {'final mean error [m]':>21s} {'total delta-v [m/s]':>20s}")
+print(
+    f"{'case':22s} {'max error [m]':>14s} {'final mean error [m]':>21s} {'total delta-v [m/s]':>20s}"
+)
 for label, (_ds, m) in results.items():
-    print(f"{label:22s} {m['max_position_error']:14.3f} {m['final_position_error_mean']:21.4f} "
-          f"{m['delta_v_total']:20.3f}")
+    print(
+        f"{label:22s} {m['max_position_error']:14.3f} {m['final_position_error_mean']:21.4f} "
+        f"{m['delta_v_total']:20.3f}"
+    )
 
 # %%
 fig, ax = plt.subplots(figsize=(7, 4))
 for label, (ds, _) in results.items():
-    err = ((ds.position_error.sel(spacecraft=2) ** 2).sum("axis") ** 0.5)
+    err = (ds.position_error.sel(spacecraft=2) ** 2).sum("axis") ** 0.5
     ax.semilogy(ds.time, err, label=label)
-ax.set(xlabel="t [s]", ylabel="deputy 2 |position error| [m]", title="Same controller, three fault cases")
+ax.set(
+    xlabel="t [s]",
+    ylabel="deputy 2 |position error| [m]",
+    title="Same controller, three fault cases",
+)
 ax.legend()
 fig.tight_layout()
 save_figure(fig, "fault_cases")

@@ -17,13 +17,18 @@ from formation_ftc.campaign import run_campaign, write_report
 
 runs = size(500, 20)  # per kd value: 2 x 500 = 1,000 runs at full size
 campaign = {
-    "campaign": {"name": "kp-kd-study", "base": "cw-pd-fault", "runs": runs, "seed": 7,
-                 "chunk_size": min(runs, 250),
-                 "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"]},
+    "campaign": {
+        "name": "kp-kd-study",
+        "base": "cw-pd-fault",
+        "runs": runs,
+        "seed": 7,
+        "chunk_size": min(runs, 250),
+        "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"],
+    },
     "overrides": {"simulation.horizon": size(300.0, 100.0)},
     "sample": {
-        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 4.0},           # N/m
-        "controller.kd": {"grid": [30.0, 60.0]},                                 # N s/m
+        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 4.0},  # N/m
+        "controller.kd": {"grid": [30.0, 60.0]},  # N s/m
         "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},  # kg
     },
 }
@@ -42,7 +47,9 @@ print(df.groupby("input:controller.kd")["metric:final_position_error_mean"].desc
 # %%
 fig, ax = plt.subplots(figsize=(7, 4))
 for kd, group in df.groupby("input:controller.kd"):
-    ax.scatter(group["input:controller.kp"], group["metric:delta_v_total"], s=8, label=f"kd = {kd:g} N s/m")
+    ax.scatter(
+        group["input:controller.kp"], group["metric:delta_v_total"], s=8, label=f"kd = {kd:g} N s/m"
+    )
 ax.set(xlabel="kp [N/m]", ylabel="total delta-v [m/s]", title=f"{len(df)} runs")
 ax.legend()
 fig.tight_layout()

@@ -23,8 +23,10 @@ rng = np.random.default_rng(0)
 kps = rng.uniform(1.0, 4.0, n_runs)
 params = []
 for k, kp in enumerate(kps):
-    scn = ftc.load_scenario("cw-pd-fault", overrides={"simulation.horizon": 200.0, "controller.kp": float(kp),
-                                                      "simulation.seed": k})
+    scn = ftc.load_scenario(
+        "cw-pd-fault",
+        overrides={"simulation.horizon": 200.0, "controller.kp": float(kp), "simulation.seed": k},
+    )
     compiled = compile_scenario(scn)
     params.append(compiled.params)
 batch, in_axes = stack_params(params)
@@ -38,14 +40,19 @@ t0 = time.perf_counter()
 out = jax.block_until_ready(run(batch))
 second = time.perf_counter() - t0
 steps = n_runs * scn.simulation.n_steps
-print(f"{n_runs} runs x {scn.simulation.n_steps} steps: {first:.2f} s with compilation, {second:.3f} s after "
-      f"({steps / second:,.0f} run-steps/s on {jax.devices()[0].platform})")
+print(
+    f"{n_runs} runs x {scn.simulation.n_steps} steps: {first:.2f} s with compilation, {second:.3f} s after "
+    f"({steps / second:,.0f} run-steps/s on {jax.devices()[0].platform})"
+)
 
 # %% [markdown]
 # Each run's metrics come from its slice of the batched output.
 
 # %%
-per_run = [compiled.metrics(jax.tree_util.tree_map(lambda a, r=r: np.asarray(a[r]), out)) for r in range(n_runs)]
+per_run = [
+    compiled.metrics(jax.tree_util.tree_map(lambda a, r=r: np.asarray(a[r]), out))
+    for r in range(n_runs)
+]
 errs = np.array([m["final_position_error_mean"] for m in per_run])
 order = np.argsort(kps)
 print("kp [N/m]   final mean error [m]")

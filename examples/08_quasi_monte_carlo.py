@@ -20,11 +20,20 @@ runs = size(256, 16)
 
 def campaign(sampling):
     return {
-        "campaign": {"name": f"kp-{sampling}", "base": "cw-pd-fault", "runs": runs, "seed": 3,
-                     "chunk_size": runs, "sampling": sampling, "metrics": ["delta_v_total"]},
+        "campaign": {
+            "name": f"kp-{sampling}",
+            "base": "cw-pd-fault",
+            "runs": runs,
+            "seed": 3,
+            "chunk_size": runs,
+            "sampling": sampling,
+            "metrics": ["delta_v_total"],
+        },
         "overrides": {"simulation.horizon": 100.0},
-        "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 4.0},
-                   "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 100.0}},
+        "sample": {
+            "controller.kp": {"dist": "uniform", "low": 1.0, "high": 4.0},
+            "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 100.0},
+        },
     }
 
 
@@ -36,8 +45,12 @@ def campaign(sampling):
 fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), sharey=True)
 for ax, sampling in zip(axes, ["random", "sobol", "lhs"], strict=True):
     plan = make_plan(campaign(sampling), runs=16)
-    pts = np.array([[plan.run_inputs(r).values["controller.kp"], plan.run_inputs(r).values["controller.kd"]]
-                    for r in range(16)])
+    pts = np.array(
+        [
+            [plan.run_inputs(r).values["controller.kp"], plan.run_inputs(r).values["controller.kd"]]
+            for r in range(16)
+        ]
+    )
     ax.scatter(pts[:, 0], pts[:, 1])
     for x in np.linspace(1.0, 4.0, 17):
         ax.axvline(x, color="0.85", lw=0.5)

@@ -113,7 +113,10 @@ def cw_gain_pair():
     """Two cw-pd-fault scenarios of one structure (20 s) that differ only in the gain ``controller.kp``."""
     from formation_ftc.api import load_scenario
 
-    return [load_scenario("cw-pd-fault", {"simulation.horizon": 20.0, "controller.kp": kp}) for kp in (2.0, 3.0)]
+    return [
+        load_scenario("cw-pd-fault", {"simulation.horizon": 20.0, "controller.kp": kp})
+        for kp in (2.0, 3.0)
+    ]
 
 
 def pytest_collection_modifyitems(session, config, items):

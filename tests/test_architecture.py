@@ -13,10 +13,44 @@ PKG = Path(__file__).resolve().parents[1] / "src" / "formation_ftc"
 
 # layer -> packages it must not import
 FORBIDDEN = {
-    "core": ["blocks", "design", "sim", "config", "papers", "report", "campaign", "cli", "api",
-             "plotting", "methods", "registry", "league"],
-    "blocks": ["sim", "config", "papers", "report", "campaign", "cli", "api", "plotting", "methods", "league"],
-    "design": ["sim", "papers", "report", "campaign", "cli", "api", "plotting", "methods", "league"],
+    "core": [
+        "blocks",
+        "design",
+        "sim",
+        "config",
+        "papers",
+        "report",
+        "campaign",
+        "cli",
+        "api",
+        "plotting",
+        "methods",
+        "registry",
+        "league",
+    ],
+    "blocks": [
+        "sim",
+        "config",
+        "papers",
+        "report",
+        "campaign",
+        "cli",
+        "api",
+        "plotting",
+        "methods",
+        "league",
+    ],
+    "design": [
+        "sim",
+        "papers",
+        "report",
+        "campaign",
+        "cli",
+        "api",
+        "plotting",
+        "methods",
+        "league",
+    ],
     "sim": ["papers", "report", "campaign", "cli", "plotting", "methods", "league"],
     "config": ["papers", "report", "campaign", "cli", "plotting", "methods", "league"],
     "campaign": ["papers", "report", "cli", "league"],
@@ -62,7 +96,11 @@ def test_no_eval_or_exec():
     for path in PKG.rglob("*.py"):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
-            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in {"eval", "exec"}:
+            if (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Name)
+                and node.func.id in {"eval", "exec"}
+            ):
                 bad.append(f"{path.relative_to(PKG)}:{node.lineno}")
     assert not bad, bad
 
@@ -73,15 +111,17 @@ def test_loading_the_plugins_imports_neither_matplotlib_nor_scipy_optimize():
     import subprocess
     import sys
 
-    code = ("import sys, formation_ftc\n"
-            "from formation_ftc.registry import load_plugins\n"
-            "load_plugins()\n"
-            "from formation_ftc import plotting\n"
-            "heavy = sorted(m for m in ('matplotlib', 'scipy.optimize') if m in sys.modules)\n"
-            "assert not heavy, heavy\n"
-            "fig, axes = plotting.new_figure()\n"  # the first figure imports pyplot, on Agg
-            "import matplotlib\n"
-            "assert matplotlib.get_backend().lower() == 'agg', matplotlib.get_backend()\n"
-            "assert plotting.plt is sys.modules['matplotlib.pyplot']\n")
+    code = (
+        "import sys, formation_ftc\n"
+        "from formation_ftc.registry import load_plugins\n"
+        "load_plugins()\n"
+        "from formation_ftc import plotting\n"
+        "heavy = sorted(m for m in ('matplotlib', 'scipy.optimize') if m in sys.modules)\n"
+        "assert not heavy, heavy\n"
+        "fig, axes = plotting.new_figure()\n"  # the first figure imports pyplot, on Agg
+        "import matplotlib\n"
+        "assert matplotlib.get_backend().lower() == 'agg', matplotlib.get_backend()\n"
+        "assert plotting.plt is sys.modules['matplotlib.pyplot']\n"
+    )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]

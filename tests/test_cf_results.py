@@ -58,8 +58,10 @@ def _classic_attr_ok(v) -> bool:
     if isinstance(v, str | float | np.floating):
         return True
     if isinstance(v, int | np.integer):
-        return -2**31 <= int(v) < 2**31
-    return isinstance(v, np.ndarray) and v.ndim == 1 and v.dtype.kind in "if" and v.dtype.itemsize <= 8
+        return -(2**31) <= int(v) < 2**31
+    return (
+        isinstance(v, np.ndarray) and v.ndim == 1 and v.dtype.kind in "if" and v.dtype.itemsize <= 8
+    )
 
 
 def _short(name: str) -> dict:
@@ -109,11 +111,17 @@ def test_every_builtin_result_is_cf_and_classic_compatible(name, tmp_path, cf_ch
             assert _classic_attr_ok(v), (where, k, type(v))
     for vname in back.variables:
         assert back[vname].dtype != np.int64 or back[vname].encoding.get("dtype") != np.int64, vname
-    if cf_checker is not None:  # the CF checker when installed (test_cf_checker_* say when it is not)
+    if (
+        cf_checker is not None
+    ):  # the CF checker when installed (test_cf_checker_* say when it is not)
         assert cf_checker(tmp_path / "result.nc") == []
     if shutil.which("nccopy"):
-        proc = subprocess.run(["nccopy", "-k", "classic", str(tmp_path / "result.nc"), str(tmp_path / "c.nc")],
-                              capture_output=True, text=True, timeout=60)
+        proc = subprocess.run(
+            ["nccopy", "-k", "classic", str(tmp_path / "result.nc"), str(tmp_path / "c.nc")],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert proc.returncode == 0, proc.stderr
     # metric units: a table next to the unchanged flat numbers
     mj = json.loads((tmp_path / "metrics.json").read_text())
@@ -132,28 +140,51 @@ def _assert_no_fill_value_on_coordinates(path, ds) -> None:
             assert "_FillValue" not in f[cname].attrs, cname
 
 
-def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(tmp_path, cf_checker):
+def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(
+    tmp_path, cf_checker
+):
     import pandas as pd
     import pyarrow.dataset as pads
     import xarray as xr
 
     from formation_ftc.campaign.runner import run_campaign
 
-    raw = {"campaign": {"name": "cf", "base": "cw-pd-fault", "runs": 2, "seed": 3, "chunk_size": 2,
-                        "metrics": ["max_position_error", "delta_v_total"]},
-           "overrides": {"simulation.horizon": 2.0},
-           "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}},
-           "traces": {"runs": [1]}}
+    raw = {
+        "campaign": {
+            "name": "cf",
+            "base": "cw-pd-fault",
+            "runs": 2,
+            "seed": 3,
+            "chunk_size": 2,
+            "metrics": ["max_position_error", "delta_v_total"],
+        },
+        "overrides": {"simulation.horizon": 2.0},
+        "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}},
+        "traces": {"runs": [1]},
+    }
     results = run_campaign(raw, tmp_path / "c").results
     # the trace is CF-1.10 with the provenance of a result.nc
     trace = tmp_path / "c" / "traces" / "run-000001.nc"
     with xr.open_dataset(trace, engine="h5netcdf") as tr:
         assert tr.attrs["Conventions"] == CONVENTIONS and "cw-pd-fault" in tr.attrs["title"]
-        for key in ("git_commit", "version_formation_ftc", "version_cvxpy", "created_utc", "history", "source"):
+        for key in (
+            "git_commit",
+            "version_formation_ftc",
+            "version_cvxpy",
+            "created_utc",
+            "history",
+            "source",
+        ):
             assert isinstance(tr.attrs.get(key), str) and tr.attrs[key], key
         assert tr.attrs["scenario_name"] == "cw-pd-fault" and tr.attrs["method"] == "cw-formation"
-        assert tr.attrs["seed"] == int(results.set_index("run_id").loc[1, "seed"]) and tr.attrs["run_id"] == 1
-        assert tr["time"].attrs["long_name"] == ELAPSED_TIME and "standard_name" not in tr["time"].attrs
+        assert (
+            tr.attrs["seed"] == int(results.set_index("run_id").loc[1, "seed"])
+            and tr.attrs["run_id"] == 1
+        )
+        assert (
+            tr["time"].attrs["long_name"] == ELAPSED_TIME
+            and "standard_name" not in tr["time"].attrs
+        )
         for vname in tr.variables:
             assert udunits_ok(tr[vname].attrs.get("units")), vname
         _assert_no_fill_value_on_coordinates(trace, tr)
@@ -162,8 +193,10 @@ def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(
     chunks = tmp_path / "c" / "chunks"
     df = pd.read_parquet(chunks)
     assert sorted(df["run_id"]) == sorted(results["run_id"]) and len(df) == 2
-    np.testing.assert_array_equal(df.sort_values("run_id")["metric:max_position_error"].to_numpy(),
-                                  results.sort_values("run_id")["metric:max_position_error"].to_numpy())
+    np.testing.assert_array_equal(
+        df.sort_values("run_id")["metric:max_position_error"].to_numpy(),
+        results.sort_values("run_id")["metric:max_position_error"].to_numpy(),
+    )
     schema = pads.dataset(chunks, format="parquet").schema
     # physical units of these metrics: a position error in metres, a velocity increment in m/s; an
     # identifier is dimensionless, a text column has no units
@@ -189,11 +222,18 @@ def assert_parquet_units(path) -> None:
         numeric = pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
         assert (f.name in units) == numeric, (path.name, f.name, f.type)
         if numeric:
-            ok = udunits_ok(units[f.name]) or (f.name.startswith("input:") and units[f.name] == UNKNOWN)
+            ok = udunits_ok(units[f.name]) or (
+                f.name.startswith("input:") and units[f.name] == UNKNOWN
+            )
             assert ok, (path.name, f.name, units[f.name])
     meta = schema.metadata or {}
-    assert set(meta) <= {b"pandas"}, (path.name, set(meta))  # no PANDAS_ATTRS or other file-level units
-    assert not json.loads(meta.get(b"pandas", b"{}")).get("attributes"), path.name  # no DataFrame.attrs
+    assert set(meta) <= {b"pandas"}, (
+        path.name,
+        set(meta),
+    )  # no PANDAS_ATTRS or other file-level units
+    assert not json.loads(meta.get(b"pandas", b"{}")).get("attributes"), (
+        path.name
+    )  # no DataFrame.attrs
 
 
 # ------------------------------------------------------------------------------------- CF checker
@@ -202,10 +242,10 @@ def assert_parquet_units(path) -> None:
 # error until it is listed here with its canonical units.
 _CF_TABLES = {
     "standard-names.xml": "<standard_name_table><version_number>0</version_number>"
-                          "<last_modified>-</last_modified></standard_name_table>",
+    "<last_modified>-</last_modified></standard_name_table>",
     "area-types.xml": "<area_type_table><version_number>0</version_number><date>-</date></area_type_table>",
     "regions.xml": "<standardized_region_list><version_number>0</version_number><date>-</date>"
-                   "</standardized_region_list>",
+    "</standardized_region_list>",
 }
 
 
@@ -220,9 +260,11 @@ def cf_checker(tmp_path_factory):
     try:
         from cfchecker import cfchecks as cfc
     except Exception as exc:  # not installed, or cfunits without the UDUNITS-2 C library
-        _CF_CHECKER_MISSING.append(f"CF checker not usable ({type(exc).__name__}: {exc}); install it with "
-                                   f"`apt-get install libudunits2-0` and `pip install cfchecker` (.ci/run "
-                                   f"does when it can)")
+        _CF_CHECKER_MISSING.append(
+            f"CF checker not usable ({type(exc).__name__}: {exc}); install it with "
+            f"`apt-get install libudunits2-0` and `pip install cfchecker` (.ci/run "
+            f"does when it can)"
+        )
         yield None
         return
     tables = tmp_path_factory.mktemp("cf-tables")
@@ -231,14 +273,21 @@ def cf_checker(tmp_path_factory):
     version = cfc.CFVersion(CONVENTIONS)
 
     def run(path) -> list[str]:
-        chk = cfc.CFChecker(cfStandardNamesXML=str(tables / "standard-names.xml"),
-                            cfAreaTypesXML=str(tables / "area-types.xml"),
-                            cfRegionNamesXML=str(tables / "regions.xml"), version=version, silent=True)
+        chk = cfc.CFChecker(
+            cfStandardNamesXML=str(tables / "standard-names.xml"),
+            cfAreaTypesXML=str(tables / "area-types.xml"),
+            cfRegionNamesXML=str(tables / "regions.xml"),
+            version=version,
+            silent=True,
+        )
         with contextlib.redirect_stdout(io.StringIO()):
             chk.checker(str(path))
         res = chk.all_results[str(path)]
-        return [f"{where}: {msg}" for where, r in [("global", res["global"]), *res["variables"].items()]
-                for msg in [*r.get("FATAL", []), *r.get("ERROR", [])]]
+        return [
+            f"{where}: {msg}"
+            for where, r in [("global", res["global"]), *res["variables"].items()]
+            for msg in [*r.get("FATAL", []), *r.get("ERROR", [])]
+        ]
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(cfc, "cfVersions", [*cfc.cfVersions, version])
@@ -261,9 +310,11 @@ def test_cf_checker_runs_and_rejects_a_time_coordinate_without_epoch(tmp_path, c
     with units ``s`` (no reference time) is a CF error (4.4), the one result.nc had."""
     import xarray as xr
 
-    ds = xr.Dataset({"x": ("time", np.zeros(3), {"units": "m", "long_name": "x"})},
-                    coords={"time": ("time", np.arange(3.0), {"units": "s", "standard_name": "time"})},
-                    attrs={"Conventions": CONVENTIONS})
+    ds = xr.Dataset(
+        {"x": ("time", np.zeros(3), {"units": "m", "long_name": "x"})},
+        coords={"time": ("time", np.arange(3.0), {"units": "s", "standard_name": "time"})},
+        attrs={"Conventions": CONVENTIONS},
+    )
     ds.to_netcdf(tmp_path / "bad.nc", engine="h5netcdf")
     assert any("4.4" in e for e in cfchecks(tmp_path / "bad.nc"))
 
@@ -283,13 +334,19 @@ def test_package_versions_come_from_the_distribution_that_installed_each_import_
         raise metadata.PackageNotFoundError(dist)
 
     monkeypatch.setattr(prov.metadata, "version", version)
-    monkeypatch.setattr(prov.metadata, "packages_distributions", lambda: {"cvxpy": ["cvxpy-base"], "numpy": ["numpy"]})
+    monkeypatch.setattr(
+        prov.metadata,
+        "packages_distributions",
+        lambda: {"cvxpy": ["cvxpy-base"], "numpy": ["numpy"]},
+    )
     prov.package_versions.cache_clear()
     try:
         fake = prov.package_versions()
     finally:
         prov.package_versions.cache_clear()
-    assert fake["cvxpy"] == "1.5.0" and fake["numpy"] == "2.0.0" and fake["scipy"] == "not installed"
+    assert (
+        fake["cvxpy"] == "1.5.0" and fake["numpy"] == "2.0.0" and fake["scipy"] == "not installed"
+    )
     monkeypatch.undo()
     real = prov.package_versions()
     assert real["numpy"] == np.__version__ and real["formation-ftc"] == ftc.__version__

@@ -25,8 +25,10 @@ SRC = ROOT / "src" / "formation_ftc"
 
 ERRATA_IDS = set(re.findall(r"\*\*(E\d{3}-\d{2})\*\*", (ROOT / "docs" / "errata.md").read_text()))
 ID = re.compile(r"\bE\d{3}-\d{2}\b")
-FORBIDDEN = re.compile(r"\bSPEC\b|SPEC\.md|ERRATA\.md|ARCHITECTURE\.md|PERFORMANCE\.md|reviewer'?s (reference )?script"
-                       r"|\breviewer's\b")
+FORBIDDEN = re.compile(
+    r"\bSPEC\b|SPEC\.md|ERRATA\.md|ARCHITECTURE\.md|PERFORMANCE\.md|reviewer'?s (reference )?script"
+    r"|\breviewer's\b"
+)
 PATH = re.compile(r"(?<![\w/.])((?:docs|benchmarks|tests)/[\w./-]*\w\.(?:md|py|toml))")
 
 #: Files outside the H2 brief (engine, methods, paper models/schemas/methods under rewrite) that still
@@ -37,16 +39,25 @@ PENDING: set[str] = set()
 def problems(text: str) -> list[str]:
     """Citations in ``text`` that do not resolve inside the repository."""
     out = [f"cites {m.group(0)!r} (not in the repository)" for m in FORBIDDEN.finditer(text)]
-    out += [f"erratum {m.group(0)} not defined in docs/errata.md" for m in ID.finditer(text)
-            if m.group(0) not in ERRATA_IDS]
-    out += [f"path {m.group(1)} does not exist" for m in PATH.finditer(text) if not (ROOT / m.group(1)).exists()]
+    out += [
+        f"erratum {m.group(0)} not defined in docs/errata.md"
+        for m in ID.finditer(text)
+        if m.group(0) not in ERRATA_IDS
+    ]
+    out += [
+        f"path {m.group(1)} does not exist"
+        for m in PATH.finditer(text)
+        if not (ROOT / m.group(1)).exists()
+    ]
     return out
 
 
 def python_strings(path: Path) -> str:
     """All string literals of a module (docstrings, messages, f-string parts), newline-joined."""
     toks = tokenize.generate_tokens(io.StringIO(path.read_text()).readline)
-    kinds = {tokenize.STRING} | ({tokenize.FSTRING_MIDDLE} if hasattr(tokenize, "FSTRING_MIDDLE") else set())
+    kinds = {tokenize.STRING} | (
+        {tokenize.FSTRING_MIDDLE} if hasattr(tokenize, "FSTRING_MIDDLE") else set()
+    )
     return "\n".join(t.string for t in toks if t.type in kinds)
 
 
@@ -72,13 +83,18 @@ def test_strings_and_docstrings_in_src_resolve():
     assert not stale, f"no longer citing unresolved documents, remove from PENDING: {stale}"
 
 
-@pytest.mark.parametrize("path", sorted([*(SRC / "scenarios").glob("*.toml"), *(SRC / "campaign" / "builtin").glob("*.toml")]),
-                         ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path",
+    sorted([*(SRC / "scenarios").glob("*.toml"), *(SRC / "campaign" / "builtin").glob("*.toml")]),
+    ids=lambda p: p.name,
+)
 def test_scenario_and_campaign_files_resolve(path):
     assert problems(path.read_text()) == []
 
 
-@pytest.mark.parametrize("path", [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))], ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path", [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))], ids=lambda p: p.name
+)
 def test_readme_and_docs_resolve(path):
     assert problems(path.read_text()) == []
 
@@ -101,8 +117,14 @@ def test_report_html_from_fakes_resolves(tmp_path):
     from formation_ftc.report.reproduce import reproduce
 
     out = tmp_path / "rep"
-    reproduce(["all"], out, progress=False, available={"alpha": ok_reproduction("alpha")},
-              console=Console(file=io.StringIO()), include_3d=False)
+    reproduce(
+        ["all"],
+        out,
+        progress=False,
+        available={"alpha": ok_reproduction("alpha")},
+        console=Console(file=io.StringIO()),
+        include_3d=False,
+    )
     page = (out / "index.html").read_text()
     assert "paper (where printed)" in page and "reference (how obtained)" in page
     assert problems(page) == []

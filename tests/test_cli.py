@@ -18,15 +18,27 @@ def test_list_show_check_run(tmp_path, capsys):
     assert main(["check", "cw-pd-fault", "--set", "controller.kp=-1"]) == 2
     assert "controller.kp" in capsys.readouterr().err
     out_dir = tmp_path / "run"
-    assert main(["run", "cw-pd-fault", "--out", str(out_dir), "--set", "simulation.horizon=20"]) == 0
+    assert (
+        main(["run", "cw-pd-fault", "--out", str(out_dir), "--set", "simulation.horizon=20"]) == 0
+    )
     assert (out_dir / "result.nc").exists() and (out_dir / "position.png").exists()
     metrics = json.loads((out_dir / "metrics.json").read_text())
     assert metrics["scenario"] == "cw-pd-fault" and "delta_v_total" in metrics
 
 
 def test_run_divergence_exit_code_keeps_partial(tmp_path, capsys):
-    code = main(["run", "cw-pd-fault", "--out", str(tmp_path), "--set", "simulation.horizon=60",
-                 "--set", "controller.kp=1e9"])
+    code = main(
+        [
+            "run",
+            "cw-pd-fault",
+            "--out",
+            str(tmp_path),
+            "--set",
+            "simulation.horizon=60",
+            "--set",
+            "controller.kp=1e9",
+        ]
+    )
     assert code == 1
     assert (tmp_path / "result.nc").exists()
     assert "diverged" in capsys.readouterr().err
@@ -34,7 +46,9 @@ def test_run_divergence_exit_code_keeps_partial(tmp_path, capsys):
 
 def test_check_fails_for_unstable_design(capsys):
     # free drift needs no condition; a pd loop with zero damping and gains -> marginal: max Re = 0
-    assert main(["check", "cw-pd-fault", "--set", "controller.kd=0", "--set", "controller.kp=0"]) == 1
+    assert (
+        main(["check", "cw-pd-fault", "--set", "controller.kd=0", "--set", "controller.kp=0"]) == 1
+    )
 
 
 def test_check_json_for_every_builtin_scenario(capsys):

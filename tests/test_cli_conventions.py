@@ -25,22 +25,37 @@ def _all_parsers(parser: argparse.ArgumentParser, key: str = ""):
 
 
 def test_parser_imports_no_heavy_module():
-    code = ("import sys; from formation_ftc.cli import build_parser; build_parser(None); build_parser('list');"
-            "print(sorted(m for m in ('jax', 'scipy', 'pandas', 'pyarrow', 'xarray', 'matplotlib') "
-            "if m in sys.modules))")
+    code = (
+        "import sys; from formation_ftc.cli import build_parser; build_parser(None); build_parser('list');"
+        "print(sorted(m for m in ('jax', 'scipy', 'pandas', 'pyarrow', 'xarray', 'matplotlib') "
+        "if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]", out.stdout
 
 
 def test_version_from_metadata_and_python_m():
-    out = subprocess.run([sys.executable, "-m", "formation_ftc", "--version"], capture_output=True,
-                         text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-m", "formation_ftc", "--version"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     assert out.stdout.strip() == f"formation-ftc {metadata.version('formation-ftc')}"
 
 
 def test_every_command_has_examples_exit_codes_and_verbosity():
     parsers = dict(_all_parsers(cli.build_parser()))
-    assert {"list", "show", "check", "schema", "run", "reproduce", "campaign", "campaign run"} <= set(parsers)
+    assert {
+        "list",
+        "show",
+        "check",
+        "schema",
+        "run",
+        "reproduce",
+        "campaign",
+        "campaign run",
+    } <= set(parsers)
     for key, p in parsers.items():
         text = p.format_help()
         assert "exit status:" in text and "  2  bad input" in text, key
@@ -52,7 +67,9 @@ def test_every_command_has_examples_exit_codes_and_verbosity():
             for example in cli.HELP[key][1]:
                 argv = example.split()[1:]
                 if "COMMAND" in argv or "|" in argv or ">" in argv:
-                    argv = argv[: next(i for i, a in enumerate(argv + ["|"]) if a in ("COMMAND", "|", ">"))]
+                    argv = argv[
+                        : next(i for i, a in enumerate(argv + ["|"]) if a in ("COMMAND", "|", ">"))
+                    ]
                 if argv:
                     cli.build_parser().parse_args(argv)
 
@@ -71,8 +88,12 @@ def test_list_matches_the_scenario_loader(capsys):
     from formation_ftc.api import list_scenarios
 
     assert cli.main(["list"]) == 0
-    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip() and not ln.endswith(":")]
-    expected = list_scenarios()  # (section headings such as "Cross-paper compositions ...:" skipped)
+    lines = [
+        ln for ln in capsys.readouterr().out.splitlines() if ln.strip() and not ln.endswith(":")
+    ]
+    expected = (
+        list_scenarios()
+    )  # (section headings such as "Cross-paper compositions ...:" skipped)
     assert sorted(ln.split()[0] for ln in lines) == sorted(expected)
     assert all(ln.rstrip().endswith(expected[ln.split()[0]]) for ln in lines)
 

@@ -35,17 +35,37 @@ HOSTILE = [
     ("power-tower", _expr("9**9**9**9"), "not a finite float64 (overflow"),
     ("ten-to-400", _expr("10**400"), "not a finite float64 (overflow"),
     ("log-zero", _expr("2*log(0)"), "not a finite float64"),
-    ("horizon-inf", ["--set", "simulation.horizon=inf"], "field simulation.horizon: Input should be a finite number"),
+    (
+        "horizon-inf",
+        ["--set", "simulation.horizon=inf"],
+        "field simulation.horizon: Input should be a finite number",
+    ),
     ("horizon-nan", ["--set", "simulation.horizon=nan"], "finite number"),
     ("seed-2**32", ["--set", f"simulation.seed={2**32}"], "field simulation.seed"),
-    ("set-index-out-of-range", ["--set", "spacecraft.mass.99=5"], "index 99 is out of range; the list has 4"),
+    (
+        "set-index-out-of-range",
+        ["--set", "spacecraft.mass.99=5"],
+        "index 99 is out of range; the list has 4",
+    ),
     ("set-through-a-number", ["--set", "spacecraft.mass.0.x=1"], "spacecraft.mass.0 is a number"),
     ("set-negative-index", ["--set", "spacecraft.mass.-1=1"], "must be a non-negative integer"),
-    ("bool-as-number", ["--set", "simulation.horizon=true"], "got a boolean (booleans are not numbers)"),
+    (
+        "bool-as-number",
+        ["--set", "simulation.horizon=true"],
+        "got a boolean (booleans are not numbers)",
+    ),
     ("bool-in-list", ["--set", "spacecraft.mass=[true, 1.0, 1.0, 1.0]"], "got a boolean"),
-    ("trailing-toml", ["--set", "simulation.horizon=100\nsimulation.dt=2"], "a single TOML value on one line"),
+    (
+        "trailing-toml",
+        ["--set", "simulation.horizon=100\nsimulation.dt=2"],
+        "a single TOML value on one line",
+    ),
     ("broken-toml-value", ["--set", "spacecraft.mass=[1,"], "invalid TOML value"),
-    ("mass-inf", ["--set", "spacecraft.mass.0=inf"], "field spacecraft.mass[0]: inf is refused: must be a finite number"),
+    (
+        "mass-inf",
+        ["--set", "spacecraft.mass.0=inf"],
+        "field spacecraft.mass[0]: inf is refused: must be a finite number",
+    ),
     ("gain-inf", ["--set", "controller.kp=inf"], "field controller.kp"),
     ("sma-inf", ["--set", "orbit.semi_major_axis=inf"], "field orbit.semi_major_axis"),
     ("expr-number-inf", ["--set", "faults.bias.0=inf"], "finite number"),
@@ -63,12 +83,25 @@ def test_hostile_scenario_input_exits_2(command, args, fragment, tmp_path, capsy
     assert not (tmp_path / "o").exists()  # nothing written
 
 
-@pytest.mark.parametrize("args,fragment", [
-    (["--set", "simulation.horizon=1e308", "--set", "simulation.dt=1e-308"], "not a countable number of steps"),
-    (["--set", "orbit.semi_major_axis=1e300"], "the conditions cannot be evaluated for these values"),
-    (["--set", "spacecraft.mass.0=1e-320"], "the conditions cannot be evaluated for these values"),
-    (["--set", "spacecraft.mass.\u0663=1"], "must be a non-negative integer"),
-], ids=["steps-overflow", "sma-1e300", "subnormal-mass", "non-ascii-index"])
+@pytest.mark.parametrize(
+    "args,fragment",
+    [
+        (
+            ["--set", "simulation.horizon=1e308", "--set", "simulation.dt=1e-308"],
+            "not a countable number of steps",
+        ),
+        (
+            ["--set", "orbit.semi_major_axis=1e300"],
+            "the conditions cannot be evaluated for these values",
+        ),
+        (
+            ["--set", "spacecraft.mass.0=1e-320"],
+            "the conditions cannot be evaluated for these values",
+        ),
+        (["--set", "spacecraft.mass.\u0663=1"], "must be a non-negative integer"),
+    ],
+    ids=["steps-overflow", "sma-1e300", "subnormal-mass", "non-ascii-index"],
+)
 def test_extreme_values_in_check_exit_2(args, fragment, capsys):
     assert main(["check", SCN, *args]) == 2
     err = capsys.readouterr().err
@@ -92,7 +125,10 @@ def test_deeply_nested_and_non_utf8_and_unreadable_files(tmp_path, capsys, monke
 
     monkeypatch.setattr(Path, "read_bytes", deny)
     assert main(["check", str(locked)]) == 2
-    assert f"scenario file {str(locked)!r} cannot be read (Permission denied)" in capsys.readouterr().err
+    assert (
+        f"scenario file {str(locked)!r} cannot be read (Permission denied)"
+        in capsys.readouterr().err
+    )
     monkeypatch.undo()
     a_dir = tmp_path / "dir.toml"
     a_dir.mkdir()
@@ -100,13 +136,17 @@ def test_deeply_nested_and_non_utf8_and_unreadable_files(tmp_path, capsys, monke
     assert "is not a regular file" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("out,fragment", [
-    ("", "--out: empty path"),
-    ("/dev/null", "is not a directory"),
-    ("FILE", "exists and is a file"),
-    ("/sys/formation-ftc-test/x", "cannot write in /sys"),
-    ("/proc/formation-ftc-test", "cannot write in /proc"),
-], ids=["empty", "dev-null", "file", "read-only-sysfs", "procfs"])
+@pytest.mark.parametrize(
+    "out,fragment",
+    [
+        ("", "--out: empty path"),
+        ("/dev/null", "is not a directory"),
+        ("FILE", "exists and is a file"),
+        ("/sys/formation-ftc-test/x", "cannot write in /sys"),
+        ("/proc/formation-ftc-test", "cannot write in /proc"),
+    ],
+    ids=["empty", "dev-null", "file", "read-only-sysfs", "procfs"],
+)
 def test_bad_out_paths_exit_2_before_running(out, fragment, tmp_path, capsys):
     if out == "FILE":
         out = str(tmp_path / "a-file")
@@ -127,10 +167,14 @@ def test_run_refuses_foreign_directory_without_force_and_replaces_its_own_result
     assert (foreign / "chapter1.tex").read_text() == "precious"
     out = tmp_path / "run"
     assert main(["run", SCN, *SHORT, "--out", str(out)]) == 0
-    assert main(["run", SCN, "--set", "simulation.horizon=3", "--out", str(out)]) == 0  # its own: replaced
+    assert (
+        main(["run", SCN, "--set", "simulation.horizon=3", "--out", str(out)]) == 0
+    )  # its own: replaced
     with xr.open_dataset(out / "result.nc", engine="h5netcdf") as ds:
         assert float(ds["time"][-1]) == pytest.approx(3.0)
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging directory left
+    assert not [
+        p for p in tmp_path.iterdir() if p.name.startswith(".")
+    ]  # no staging directory left
     assert main(["run", SCN, *SHORT, "--out", str(foreign), "--force"]) == 0
     assert not (foreign / "chapter1.tex").exists() and (foreign / "result.nc").exists()
 
@@ -181,9 +225,21 @@ def test_save_result_never_pairs_a_new_result_with_old_metrics(tmp_path, monkeyp
 def test_resource_budgets_refuse_before_compiling(tmp_path, capsys, monkeypatch):
     assert main(["run", SCN, "--set", "simulation.horizon=1e12", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "integration steps per run" in err and "simulation.horizon" in err and "--max-run-steps" in err
-    args = ["run", SCN, "--set", "simulation.horizon=1e6", "--set", "simulation.record_every=1",
-            "--out", str(tmp_path / "o")]
+    assert (
+        "integration steps per run" in err
+        and "simulation.horizon" in err
+        and "--max-run-steps" in err
+    )
+    args = [
+        "run",
+        SCN,
+        "--set",
+        "simulation.horizon=1e6",
+        "--set",
+        "simulation.record_every=1",
+        "--out",
+        str(tmp_path / "o"),
+    ]
     assert main([*args, "--max-memory", "50MB"]) == 2
     err = capsys.readouterr().err
     assert "of memory for its records and state" in err and "simulation.record_every" in err
@@ -203,7 +259,10 @@ def test_plots_subsample_thousands_of_spacecraft():
     ds = xr.Dataset({"x": (("time", "spacecraft"), np.zeros((2, 10_000)))})
     view, note = plot_view(ds, 50)
     assert view.sizes["spacecraft"] == 50 and "50 of 10000 spacecraft" in note
-    assert int(view["spacecraft"].size) == 50 and plot_view(ds.isel(spacecraft=slice(0, 7)), 50)[1] == ""
+    assert (
+        int(view["spacecraft"].size) == 50
+        and plot_view(ds.isel(spacecraft=slice(0, 7)), 50)[1] == ""
+    )
 
 
 def test_run_with_hundreds_of_spacecraft_plots_a_subset(tmp_path, capsys):
@@ -239,17 +298,26 @@ def test_unexpected_error_exits_3_with_a_saved_traceback(tmp_path, capsys, monke
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "RuntimeError: something inside broke" in err
     crash = next(tmp_path.glob("crash-*.txt"))
-    assert str(crash) in err and "Traceback" in crash.read_text() and "something inside broke" in crash.read_text()
+    assert (
+        str(crash) in err
+        and "Traceback" in crash.read_text()
+        and "something inside broke" in crash.read_text()
+    )
     monkeypatch.setattr(cli, "_cmd_check", lambda args: {}["missing-key"])
     assert main(["check", SCN]) == 3  # a KeyError inside is not "bad input"
 
 
 def test_closed_pipe_ends_quietly():
-    proc = subprocess.Popen([sys.executable, "-m", "formation_ftc.cli", "check", SCN, "--json"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "formation_ftc.cli", "check", SCN, "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     proc.stdout.close()  # like `| head` that has already exited
     _, err = proc.communicate(timeout=300)
-    assert proc.returncode == 0 and b"Traceback" not in err and b"BrokenPipe" not in err, err.decode()[-2000:]
+    assert proc.returncode == 0 and b"Traceback" not in err and b"BrokenPipe" not in err, (
+        err.decode()[-2000:]
+    )
 
 
 def test_campaign_hostile_input_exits_2(tmp_path, capsys):
@@ -278,9 +346,14 @@ def test_campaign_hostile_input_exits_2(tmp_path, capsys):
     import tomli_w
 
     bad = tmp_path / "div0.toml"
-    bad.write_text(tomli_w.dumps({
-        "campaign": {"name": "div0", "base": "cw-pd-fault", "runs": 2, "chunk_size": 2},
-        "overrides": {"simulation.horizon": 2.0, "faults.bias": ["1/0", "0", "0"]}}))
+    bad.write_text(
+        tomli_w.dumps(
+            {
+                "campaign": {"name": "div0", "base": "cw-pd-fault", "runs": 2, "chunk_size": 2},
+                "overrides": {"simulation.horizon": 2.0, "faults.bias": ["1/0", "0", "0"]},
+            }
+        )
+    )
     assert campaign_main(["run", str(bad), "--out", out, "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "faults.bias" in err and "division by a constant zero" in err and "Traceback" not in err
@@ -296,8 +369,21 @@ class _nullcontext:
 
 
 def test_metrics_json_of_a_diverged_run_names_a_state_not_an_accumulator(tmp_path, capsys):
-    assert main(["run", SCN, "--set", "simulation.horizon=60", "--set", "controller.kp=1e6",
-                 "--out", str(tmp_path / "o")]) == 1
+    assert (
+        main(
+            [
+                "run",
+                SCN,
+                "--set",
+                "simulation.horizon=60",
+                "--set",
+                "controller.kp=1e6",
+                "--out",
+                str(tmp_path / "o"),
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert "simulation diverged" in err
     assert "delta_v" not in err and "effort" not in err and "'dv'" not in err
@@ -308,10 +394,13 @@ def test_path_texts_the_system_refuses_exit_2(tmp_path, capsys):
     from formation_ftc.campaign.cli import main as campaign_main
 
     long = "a" * 5000
-    for call in (lambda: main(["show", long]), lambda: main(["check", long + ".toml"]),
-                 lambda: main(["run", SCN, *SHORT, "--out", long]),
-                 lambda: campaign_main(["run", long, "--out", str(tmp_path / "c")]),
-                 lambda: campaign_main(["report", long])):
+    for call in (
+        lambda: main(["show", long]),
+        lambda: main(["check", long + ".toml"]),
+        lambda: main(["run", SCN, *SHORT, "--out", long]),
+        lambda: campaign_main(["run", long, "--out", str(tmp_path / "c")]),
+        lambda: campaign_main(["report", long]),
+    ):
         assert call() == 2
         err = capsys.readouterr().err
         assert "File name too long" in err and "Traceback" not in err and len(err) < 400
@@ -337,10 +426,17 @@ class _FullStream:
 def test_a_full_stderr_or_stdout_costs_no_result(stream, tmp_path):
     out = tmp_path / "run"
     with open("/dev/full", "w") as full:
-        proc = subprocess.run([sys.executable, "-m", "formation_ftc.cli", "run", SCN, *SHORT, "--out", str(out)],
-                              **{stream: full}, timeout=600)
+        proc = subprocess.run(
+            [sys.executable, "-m", "formation_ftc.cli", "run", SCN, *SHORT, "--out", str(out)],
+            **{stream: full},
+            timeout=600,
+        )
     assert proc.returncode == 0
-    assert (out / "result.nc").is_file() and (out / "metrics.json").is_file() and (out / "index.html").is_file()
+    assert (
+        (out / "result.nc").is_file()
+        and (out / "metrics.json").is_file()
+        and (out / "index.html").is_file()
+    )
 
 
 def test_a_full_stderr_costs_no_campaign_chunk_nor_error_status(tmp_path, monkeypatch):
@@ -348,9 +444,11 @@ def test_a_full_stderr_costs_no_campaign_chunk_nor_error_status(tmp_path, monkey
     from formation_ftc.campaign.cli import main as campaign_main
 
     spec = tmp_path / "c.toml"
-    spec.write_text('[campaign]\nname = "full"\nbase = "cw-pd-fault"\nruns = 2\nchunk_size = 2\n'
-                    '[overrides]\n"simulation.horizon" = 2.0\n'
-                    '[sample]\n"controller.kp" = {dist = "uniform", low = 1.0, high = 3.0}\n')
+    spec.write_text(
+        '[campaign]\nname = "full"\nbase = "cw-pd-fault"\nruns = 2\nchunk_size = 2\n'
+        '[overrides]\n"simulation.horizon" = 2.0\n'
+        '[sample]\n"controller.kp" = {dist = "uniform", low = 1.0, high = 3.0}\n'
+    )
     store = runner._store_chunk
 
     def log_then_store(*a):
@@ -359,7 +457,11 @@ def test_a_full_stderr_costs_no_campaign_chunk_nor_error_status(tmp_path, monkey
 
     monkeypatch.setattr(runner, "_store_chunk", log_then_store)
     monkeypatch.setattr(sys, "stderr", _FullStream())
-    assert campaign_main(["run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0  # progress on
-    assert main(["campaign", "run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0  # resumed
+    assert (
+        campaign_main(["run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0
+    )  # progress on
+    assert (
+        main(["campaign", "run", str(spec), "--out", str(tmp_path / "c"), "--workers", "1"]) == 0
+    )  # resumed
     assert main(["show", "no-such-scenario"]) == 2  # the error line is lost, not the exit status
     assert len(list((tmp_path / "c" / "chunks").glob("*.parquet"))) == 1

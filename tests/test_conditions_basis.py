@@ -62,8 +62,12 @@ def test_every_builtin_condition_states_an_honest_basis(all_checks):
 
 def test_li2020_delay_conditions_are_verified(all_checks):
     conds = {c.name: c for c in all_checks["li2020-thm2-delays"]}
-    for key in ("delays non-negative", "delay rate bound (used edges)", "delay rate bound (all printed delays)",
-                "lambda_i > (rho - 1)/2 sum_j c_ij"):
+    for key in (
+        "delays non-negative",
+        "delay rate bound (used edges)",
+        "delay rate bound (all printed delays)",
+        "lambda_i > (rho - 1)/2 sum_j c_ij",
+    ):
         assert conds[key].basis == "verified" and conds[key].holds is True, key
     assert "verified h <= 0.12" in conds["delay rate bound (used edges)"].value
 
@@ -85,15 +89,18 @@ def test_heuristic_and_sampled_passes_are_unproven(all_checks):
 def test_a_jumping_delay_falls_back_to_sampling():
     d = [list(r) for r in ftc.load_scenario("li2020-thm2-delays").network.delays]
     d[2][3] = "3 + 0.5*step(t - 100)"  # T34, a used edge: jumps by 0.5 s at t = 100 s
-    conds = {c.name: c for c in api.check(ftc.load_scenario("li2020-thm2-delays", {"network.delays": d}))}
+    conds = {
+        c.name: c for c in api.check(ftc.load_scenario("li2020-thm2-delays", {"network.delays": d}))
+    }
     rate = conds["delay rate bound (used edges)"]
     assert rate.basis == "sampled" and rate.holds is None and "unproven" in rate.detail
     assert conds["delays non-negative"].basis == "verified"
 
 
 def test_a_spike_between_samples_is_not_certified(capsys):
-    scn = ftc.load_scenario("yang2013-healthy",
-                            {"disturbance.force": ["0.1*window(t, 1000.0001, 1000.0002)", "0", "0"]})
+    scn = ftc.load_scenario(
+        "yang2013-healthy", {"disturbance.force": ["0.1*window(t, 1000.0001, 1000.0002)", "0", "0"]}
+    )
     c = {c.name: c for c in api.check(scn)}["|d_i(t)| <= d_bar"]
     assert c.basis == "sampled" and c.holds is None  # the old sampled check said "holds" here
     assert c.value.startswith("0 (sampled peak)")
@@ -114,5 +121,7 @@ def test_cli_and_html_show_basis_and_unproven(capsys, tmp_path):
     page = rh._checks_table(rows)
     assert "<th>basis</th>" in page and 'class="holds-unproven"' in page and ">unproven<" in page
     assert page.count('<td class="basis">exact</td>') >= 10
-    old = {k: v for k, v in rows[0].items() if k != "basis"}  # a report.json written before the basis
+    old = {
+        k: v for k, v in rows[0].items() if k != "basis"
+    }  # a report.json written before the basis
     assert 'class="holds-yes"' in rh._checks_table([old])

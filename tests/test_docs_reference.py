@@ -17,7 +17,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def hook():
-    spec = importlib.util.spec_from_file_location("formation_docs", ROOT / "docs" / "hooks" / "formation_docs.py")
+    spec = importlib.util.spec_from_file_location(
+        "formation_docs", ROOT / "docs" / "hooks" / "formation_docs.py"
+    )
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
@@ -26,7 +28,9 @@ def hook():
 def test_unit_extraction(hook):
     assert hook._unit_and_text("Position gain [N/m].") == ("N/m", "Position gain.")
     assert hook._unit_and_text("Desired position, expressions in t [s], i [m].") == (
-        "m", "Desired position, expressions in t [s], i.")
+        "m",
+        "Desired position, expressions in t [s], i.",
+    )
     assert hook._unit_and_text("No unit here.") == ("", "No unit here.")
 
 

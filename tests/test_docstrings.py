@@ -56,8 +56,12 @@ def _sections(doc: str) -> dict[str, list[str]]:
     current: list[str] | None = None
     i = 0
     while i < len(lines):
-        if i + 1 < len(lines) and lines[i].strip() and not lines[i].startswith(" ") \
-                and _HEADER_RULE.fullmatch(lines[i + 1].strip()):
+        if (
+            i + 1 < len(lines)
+            and lines[i].strip()
+            and not lines[i].startswith(" ")
+            and _HEADER_RULE.fullmatch(lines[i + 1].strip())
+        ):
             current = out.setdefault(lines[i].strip(), [])
             i += 2
             continue
@@ -133,12 +137,18 @@ def test_public_functions_have_numpydoc_sections(group):
     for path in _files(group):
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
         for node in tree.body:
-            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and not node.name.startswith("_"):
+            if isinstance(
+                node, ast.FunctionDef | ast.AsyncFunctionDef
+            ) and not node.name.startswith("_"):
                 n += 1
                 for problem in _problems(node):
-                    offenders.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}: {problem}")
+                    offenders.append(
+                        f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}: {problem}"
+                    )
     assert n > 0, f"no public functions found for {group}"
-    assert not offenders, f"{len(offenders)} docstring problem(s) in {group}:\n" + "\n".join(offenders)
+    assert not offenders, f"{len(offenders)} docstring problem(s) in {group}:\n" + "\n".join(
+        offenders
+    )
 
 
 @pytest.mark.parametrize("group", CASES)

@@ -23,8 +23,12 @@ _WITHOUT = textwrap.dedent("""
 
 
 def _cli_without(modules: str, *argv: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", _WITHOUT, modules, *argv], capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [sys.executable, "-c", _WITHOUT, modules, *argv],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_require_extra_names_the_pip_install():
@@ -35,15 +39,33 @@ def test_require_extra_names_the_pip_install():
 
 
 def test_a_campaign_without_the_campaign_extra_exits_2_naming_it(tmp_path):
-    proc = _cli_without("pyarrow,pyarrow.parquet", "campaign", "run", "cw-pd-gains", "--out", str(tmp_path / "c"),
-                        "--runs", "2", "--workers", "1", "--no-progress")
+    proc = _cli_without(
+        "pyarrow,pyarrow.parquet",
+        "campaign",
+        "run",
+        "cw-pd-gains",
+        "--out",
+        str(tmp_path / "c"),
+        "--runs",
+        "2",
+        "--workers",
+        "1",
+        "--no-progress",
+    )
     assert proc.returncode == 2, proc.stderr
     assert "pip install -e '.[campaign]'" in proc.stderr and "pyarrow" in proc.stderr
 
 
 def test_without_the_extras_a_scenario_still_runs_and_checks(tmp_path):
-    proc = _cli_without("pyarrow,pyarrow.parquet,cvxpy", "run", "cw-pd-fault", "--out", str(tmp_path / "r"),
-                        "--set", "simulation.horizon=10")
+    proc = _cli_without(
+        "pyarrow,pyarrow.parquet,cvxpy",
+        "run",
+        "cw-pd-fault",
+        "--out",
+        str(tmp_path / "r"),
+        "--set",
+        "simulation.horizon=10",
+    )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "result.nc").is_file()
 

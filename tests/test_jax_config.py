@@ -41,12 +41,26 @@ print(json.dumps({"x64": jax.config.jax_enable_x64,
 
 
 def _probe(tmp_path, configure: bool = True, **env_extra) -> dict:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "PJRT_NPROC", "JAX_COMPILATION_CACHE_DIR",
-                        runtime.ENV_SWITCH, "JAX_ENABLE_X64")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k
+        not in (
+            "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS",
+            "PJRT_NPROC",
+            "JAX_COMPILATION_CACHE_DIR",
+            runtime.ENV_SWITCH,
+            "JAX_ENABLE_X64",
+        )
+    }
     env.update({"FORMATION_FTC_JAX_CACHE": str(tmp_path / "cache"), **env_extra})
-    proc = subprocess.run([sys.executable, "-c", _PROBE, "configure" if configure else "import"],
-                          capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-c", _PROBE, "configure" if configure else "import"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
@@ -69,7 +83,9 @@ def test_configure_sets_the_cache_and_tuning_and_is_inherited(tmp_path):
 
 
 @pytest.mark.parametrize("override, expected", [(None, 0.2), ("0", 0.0), ("1.5", 1.5)])
-def test_cache_threshold_defaults_to_a_fifth_of_a_second_and_follows_jax_variable(tmp_path, override, expected):
+def test_cache_threshold_defaults_to_a_fifth_of_a_second_and_follows_jax_variable(
+    tmp_path, override, expected
+):
     extra = {} if override is None else {"JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": override}
     got = _probe(tmp_path, **extra)
     assert got["x64"] is True
@@ -80,7 +96,9 @@ def test_cache_directory_is_keyed_by_the_cpu_client_thread_count(tmp_path):
     """XLA's compiled program depends on the thread count and JAX's cache key does not record it."""
     cores = len(os.sched_getaffinity(0))
     default = _probe(tmp_path)
-    assert default["dir"] == str(tmp_path / "cache" / f"cpu-threads-{cores}") and default["threads"] == str(cores)
+    assert default["dir"] == str(tmp_path / "cache" / f"cpu-threads-{cores}") and default[
+        "threads"
+    ] == str(cores)
     for n in ("1", "3"):
         got = _probe(tmp_path, PJRT_NPROC=n)
         assert got["dir"] == str(tmp_path / "cache" / f"cpu-threads-{n}") and got["threads"] == n
@@ -88,5 +106,7 @@ def test_cache_directory_is_keyed_by_the_cpu_client_thread_count(tmp_path):
 
 
 def test_cache_off_also_drops_a_directory_inherited_from_the_parent(tmp_path):
-    got = _probe(tmp_path, FORMATION_FTC_JAX_CACHE="off", JAX_COMPILATION_CACHE_DIR=str(tmp_path / "parent"))
+    got = _probe(
+        tmp_path, FORMATION_FTC_JAX_CACHE="off", JAX_COMPILATION_CACHE_DIR=str(tmp_path / "parent")
+    )
     assert got["dir"] is None

@@ -20,9 +20,24 @@ PLUGIN = Path(__file__).parent / "plugins" / "example_plugin"
 
 def _install(tmp_path: Path) -> Path:
     target = tmp_path / "site"
-    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-                           "--no-index", "--target", str(target), str(PLUGIN)],
-                          capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "--target",
+            str(target),
+            str(PLUGIN),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     if proc.returncode != 0:
         pytest.fail(f"pip could not install the example plug-in:\n{proc.stdout}\n{proc.stderr}")
     return target
@@ -30,7 +45,9 @@ def _install(tmp_path: Path) -> Path:
 
 def _python(code: str, site: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONPATH=str(site), FORMATION_FTC_JAX_CACHE="off")
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env
+    )
 
 
 def test_example_plugin_registers_and_runs(tmp_path):

@@ -52,8 +52,15 @@ def _cell(text: str) -> str:
 
 def _md_escape(text: str) -> str:
     """Text for a Markdown table cell (no pipes, newlines or reference-link brackets)."""
-    return (str(text).replace("|", "\\|").replace("\n", " ").replace("[", "\\[").replace("]", "\\]")
-            .replace("*", "\\*").replace("_", "\\_"))
+    return (
+        str(text)
+        .replace("|", "\\|")
+        .replace("\n", " ")
+        .replace("[", "\\[")
+        .replace("]", "\\]")
+        .replace("*", "\\*")
+        .replace("_", "\\_")
+    )
 
 
 # --------------------------------------------------------------------------------------------- CLI
@@ -63,12 +70,18 @@ def cli_reference() -> str:
     os.environ["COLUMNS"] = "100"  # argparse wraps at the terminal width: fix it for the page
     from formation_ftc.cli import build_parser
 
-    lines = ["# Command-line reference", "",
-             "Generated from the `formation-ftc` argument parser. Every command accepts `-q/--quiet` and "
-             "`-v/--verbose`; `python -m formation_ftc` is the same program.", ""]
+    lines = [
+        "# Command-line reference",
+        "",
+        "Generated from the `formation-ftc` argument parser. Every command accepts `-q/--quiet` and "
+        "`-v/--verbose`; `python -m formation_ftc` is the same program.",
+        "",
+    ]
 
     def walk(parser: argparse.ArgumentParser, name: str, level: int) -> None:
-        lines.extend([f"{'#' * level} `{name}`", "", "```text", parser.format_help().rstrip(), "```", ""])
+        lines.extend(
+            [f"{'#' * level} `{name}`", "", "```text", parser.format_help().rstrip(), "```", ""]
+        )
         for action in parser._actions:  # noqa: SLF001
             if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
                 for sub_name, sub in action.choices.items():
@@ -91,7 +104,9 @@ def _resolve(node: dict, root: dict) -> dict:
 def _type(node: dict, root: dict) -> str:
     node = _resolve(node, root)
     if "anyOf" in node or "oneOf" in node:
-        return " or ".join(dict.fromkeys(_type(n, root) for n in node.get("anyOf", node.get("oneOf", []))))
+        return " or ".join(
+            dict.fromkeys(_type(n, root) for n in node.get("anyOf", node.get("oneOf", [])))
+        )
     if "enum" in node:
         return "one of " + ", ".join(f"`{v}`" for v in node["enum"])
     if "const" in node:
@@ -99,7 +114,13 @@ def _type(node: dict, root: dict) -> str:
     t = node.get("type")
     if t == "array":
         items = node.get("prefixItems")
-        inner = _type(items[0], root) if items else _type(node.get("items", {}), root) if node.get("items") else "any"
+        inner = (
+            _type(items[0], root)
+            if items
+            else _type(node.get("items", {}), root)
+            if node.get("items")
+            else "any"
+        )
         n = node.get("minItems"), node.get("maxItems")
         size = f"{n[0]}" if n[0] is not None and n[0] == n[1] else ""
         return f"list of {size + ' ' if size else ''}{inner}".strip()
@@ -107,8 +128,13 @@ def _type(node: dict, root: dict) -> str:
         return "table"
     if t == "object":
         return "table of values"
-    return {"number": "number", "integer": "integer", "string": "string", "boolean": "boolean",
-            "null": "none"}.get(str(t), str(t or "any"))
+    return {
+        "number": "number",
+        "integer": "integer",
+        "string": "string",
+        "boolean": "boolean",
+        "null": "none",
+    }.get(str(t), str(t or "any"))
 
 
 def _range(node: dict, root: dict) -> str:
@@ -118,7 +144,12 @@ def _range(node: dict, root: dict) -> str:
         r = _range(sub, root)
         if r:
             parts.append(r)
-    for key, op in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="), ("exclusiveMaximum", "<")):
+    for key, op in (
+        ("minimum", ">="),
+        ("exclusiveMinimum", ">"),
+        ("maximum", "<="),
+        ("exclusiveMaximum", "<"),
+    ):
         if key in node:
             parts.append(f"{op} {node[key]}")
     if node.get("type") == "array":
@@ -137,12 +168,12 @@ def _range(node: dict, root: dict) -> str:
 def _unit_and_text(description: str) -> tuple[str, str]:
     """``"Position gain [N/m]."`` -> ``("N/m", "Position gain.")``: the last bracketed unit."""
     d = description.strip()
-    if "[" in d and "]" in d[d.rfind("["):]:
+    if "[" in d and "]" in d[d.rfind("[") :]:
         start = d.rfind("[")
         end = d.find("]", start)
-        unit = d[start + 1:end].strip()
+        unit = d[start + 1 : end].strip()
         if unit and len(unit) <= 24 and " or " not in unit and "," not in unit:
-            return unit, (d[:start].rstrip() + d[end + 1:]).strip()
+            return unit, (d[:start].rstrip() + d[end + 1 :]).strip()
     return "", d
 
 
@@ -154,7 +185,9 @@ def _default(node: dict) -> str:
     return f"`{_cell(text)}`" if len(text) <= 60 else f"`{_cell(text[:57])}...`"
 
 
-def _section_rows(props: dict, root: dict, prefix: str, out: list[str], tables: list[tuple[str, dict]]) -> None:
+def _section_rows(
+    props: dict, root: dict, prefix: str, out: list[str], tables: list[tuple[str, dict]]
+) -> None:
     for name, node in props.items():
         full = _resolve(node, root)
         path = f"{prefix}{name}"
@@ -162,9 +195,11 @@ def _section_rows(props: dict, root: dict, prefix: str, out: list[str], tables: 
             tables.append((path, full))
             continue
         unit, text = _unit_and_text(full.get("description", node.get("description", "")))
-        out.append(f"| `{path}` | {_cell(_type(node, root))} | {_md_escape(unit) or '-'} | "
-                   f"{_cell(_range(node, root)) or '-'} | {_default(full if 'default' in full else node)} | "
-                   f"{_md_escape(text)} |")
+        out.append(
+            f"| `{path}` | {_cell(_type(node, root))} | {_md_escape(unit) or '-'} | "
+            f"{_cell(_range(node, root)) or '-'} | {_default(full if 'default' in full else node)} | "
+            f"{_md_escape(text)} |"
+        )
 
 
 def schema_tables(schema: dict) -> list[str]:
@@ -174,7 +209,12 @@ def schema_tables(schema: dict) -> list[str]:
     top_rows: list[str] = []
     _section_rows(schema.get("properties", {}), schema, "", top_rows, queue)
     if top_rows:
-        lines += ["| field | type | unit | range | default | meaning |", "|---|---|---|---|---|---|", *top_rows, ""]
+        lines += [
+            "| field | type | unit | range | default | meaning |",
+            "|---|---|---|---|---|---|",
+            *top_rows,
+            "",
+        ]
     while queue:
         path, node = queue.pop(0)
         rows: list[str] = []
@@ -188,7 +228,12 @@ def schema_tables(schema: dict) -> list[str]:
         if required:
             lines += ["Required fields: " + ", ".join(f"`{r}`" for r in sorted(required)) + ".", ""]
         if rows:
-            lines += ["| field | type | unit | range | default | meaning |", "|---|---|---|---|---|---|", *rows, ""]
+            lines += [
+                "| field | type | unit | range | default | meaning |",
+                "|---|---|---|---|---|---|",
+                *rows,
+                "",
+            ]
     return lines
 
 
@@ -200,27 +245,43 @@ def scenario_reference() -> dict[str, str]:
 
     registered = methods()
     if PLUGIN_ERRORS:
-        raise PluginError("plug-ins failed to import (their reference pages would be missing): "
-                          + "; ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items()))
+        raise PluginError(
+            "plug-ins failed to import (their reference pages would be missing): "
+            + "; ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
+        )
     by_method: dict[str, list[tuple[str, str]]] = {}
     for name, text in builtin_scenarios().items():
         meta = tomllib.loads(text)["scenario"]
         by_method.setdefault(meta["method"], []).append((name, meta.get("description", "")))
     pages = {}
-    index = ["# Scenario file reference", "",
-             "A scenario file is TOML data validated by the schema of the method named in `[scenario].method`. "
-             "The pages below are generated from those schemas: every field, its type, unit, allowed range "
-             "and default. Expressions (strings evaluated in `t` and `i`) follow the "
-             "[expression language](../../expressions.md). `formation-ftc schema METHOD` prints the same "
-             "schema as JSON Schema for editors ([how](../../howto/write-a-scenario.md#editor-completion)).", "",
-             "| method | description | built-in scenarios |", "|---|---|---|"]
+    index = [
+        "# Scenario file reference",
+        "",
+        "A scenario file is TOML data validated by the schema of the method named in `[scenario].method`. "
+        "The pages below are generated from those schemas: every field, its type, unit, allowed range "
+        "and default. Expressions (strings evaluated in `t` and `i`) follow the "
+        "[expression language](../../expressions.md). `formation-ftc schema METHOD` prints the same "
+        "schema as JSON Schema for editors ([how](../../howto/write-a-scenario.md#editor-completion)).",
+        "",
+        "| method | description | built-in scenarios |",
+        "|---|---|---|",
+    ]
     for name, method in sorted(registered.items()):
         schema = method.schema.model_json_schema()
         scenarios = by_method.get(name, [])
-        index.append(f"| [`{name}`]({name}.md) | {_md_escape(method.description)} | "
-                     + ", ".join(f"`{s}`" for s, _ in scenarios) + " |")
-        lines = [f"# Method `{name}`", "", _md_escape(method.description), "",
-                 f"`[scenario] method = \"{name}\"`. JSON Schema: `formation-ftc schema {name}`.", ""]
+        index.append(
+            f"| [`{name}`]({name}.md) | {_md_escape(method.description)} | "
+            + ", ".join(f"`{s}`" for s, _ in scenarios)
+            + " |"
+        )
+        lines = [
+            f"# Method `{name}`",
+            "",
+            _md_escape(method.description),
+            "",
+            f'`[scenario] method = "{name}"`. JSON Schema: `formation-ftc schema {name}`.',
+            "",
+        ]
         if scenarios:
             lines += ["Built-in scenarios (`formation-ftc show NAME` prints one resolved):", ""]
             lines += [f"* `{s}` -- {_md_escape(d)}" for s, d in scenarios] + [""]
@@ -236,21 +297,31 @@ def campaign_reference() -> str:
     schema = campaign_spec.CampaignSpec.model_json_schema()
     doc = (campaign_spec.__doc__ or "").split("\n\n", 1)
     example = doc[1] if len(doc) > 1 else ""
-    lines = ["# Campaign file reference", "",
-             "A campaign file is TOML: a base scenario, fixed overrides, sampled or swept fields and optional "
-             "traces. Generated from the campaign schema; the samplers are described after the tables.", ""]
+    lines = [
+        "# Campaign file reference",
+        "",
+        "A campaign file is TOML: a base scenario, fixed overrides, sampled or swept fields and optional "
+        "traces. Generated from the campaign schema; the samplers are described after the tables.",
+        "",
+    ]
     lines += ["## Fields", ""] + schema_tables(schema)
     body = example.replace("A campaign file looks like::", "## Example\n\n```toml").replace(
-        "\n\nSamplers:", "\n```\n\n## Samplers\n\nSamplers:")
+        "\n\nSamplers:", "\n```\n\n## Samplers\n\nSamplers:"
+    )
     body = "\n".join(ln[4:] if ln.startswith("    ") else ln for ln in body.splitlines())
     body = body.replace("``", "`")
-    lines += [body, "",
-              "## Sampling designs", "",
-              "`[campaign] sampling` chooses how the random (non-grid) fields are drawn: `\"random\"` "
-              "(independent pseudo-random draws, the default), `\"sobol\"` (scrambled Sobol' points) or "
-              "`\"lhs\"` (Latin hypercube). With `sobol` a run's values depend only on the campaign seed, "
-              "its replicate number and the list of random fields; with `lhs` also on the number of runs. "
-              "See [sweep a gain](../howto/sweep-a-gain.md).", ""]
+    lines += [
+        body,
+        "",
+        "## Sampling designs",
+        "",
+        '`[campaign] sampling` chooses how the random (non-grid) fields are drawn: `"random"` '
+        '(independent pseudo-random draws, the default), `"sobol"` (scrambled Sobol\' points) or '
+        '`"lhs"` (Latin hypercube). With `sobol` a run\'s values depend only on the campaign seed, '
+        "its replicate number and the list of random fields; with `lhs` also on the number of runs. "
+        "See [sweep a gain](../howto/sweep-a-gain.md).",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -264,25 +335,41 @@ def papers_page() -> str:
     scen: dict[str, list[str]] = {}
     for name, text in builtin_scenarios().items():
         scen.setdefault(tomllib.loads(text)["scenario"]["method"], []).append(name)
-    lines = ["# The papers", "",
-             "Each paper's method is a reusable part (a registered method with its scenario schema) and its "
-             "simulation study is one command: `formation-ftc reproduce PAPER --out DIR` writes the figures, "
-             "a table of published versus reproduced values with the criterion and verdict of each row, the "
-             "condition checks and `summary.json`; `formation-ftc reproduce all` writes one HTML page for all "
-             "of them. The published-versus-ours table is computed by that command (it runs the full study), "
-             "so it is not copied here.", "",
-             "Where a paper is ambiguous or inconsistent, the implementation makes a documented choice; the "
-             "identifiers below are the ones the condition checks and reports cite, each explained in "
-             "[errata](errata.md); values the report compares with that no paper prints are in "
-             "[reference values](references.md).", ""]
+    lines = [
+        "# The papers",
+        "",
+        "Each paper's method is a reusable part (a registered method with its scenario schema) and its "
+        "simulation study is one command: `formation-ftc reproduce PAPER --out DIR` writes the figures, "
+        "a table of published versus reproduced values with the criterion and verdict of each row, the "
+        "condition checks and `summary.json`; `formation-ftc reproduce all` writes one HTML page for all "
+        "of them. The published-versus-ours table is computed by that command (it runs the full study), "
+        "so it is not copied here.",
+        "",
+        "Where a paper is ambiguous or inconsistent, the implementation makes a documented choice; the "
+        "identifiers below are the ones the condition checks and reports cite, each explained in "
+        "[errata](errata.md); values the report compares with that no paper prints are in "
+        "[reference values](references.md).",
+        "",
+    ]
     for paper, rep in reproductions().items():
-        lines += [f"## `{paper}` -- {_md_escape(rep.title)}", "", f"*{_md_escape(rep.citation)}*", "",
-                  f"**What the reproduction runs:** {_md_escape(rep.description)}", "",
-                  f"Command: `formation-ftc reproduce {paper} --out out/{paper}`.", ""]
+        lines += [
+            f"## `{paper}` -- {_md_escape(rep.title)}",
+            "",
+            f"*{_md_escape(rep.citation)}*",
+            "",
+            f"**What the reproduction runs:** {_md_escape(rep.description)}",
+            "",
+            f"Command: `formation-ftc reproduce {paper} --out out/{paper}`.",
+            "",
+        ]
         names = scen.get(paper, [])
         if names:
-            lines += ["Scenarios: " + ", ".join(f"`{n}`" for n in names)
-                      + f" ([fields](reference/scenarios/{paper}.md)).", ""]
+            lines += [
+                "Scenarios: "
+                + ", ".join(f"`{n}`" for n in names)
+                + f" ([fields](reference/scenarios/{paper}.md)).",
+                "",
+            ]
         if rep.errata:
             lines += ["| id | choice made where the paper is ambiguous or wrong |", "|---|---|"]
             lines += [f"| `{eid}` | {_md_escape(text)} |" for eid, text in rep.errata] + [""]
@@ -300,18 +387,33 @@ def _sources_digest() -> str:
 
 
 def _run_example(path: Path, digest: str) -> dict:
-    key = hashlib.sha256((path.read_text() + (EXAMPLES / "_common.py").read_text() + digest).encode()).hexdigest()[:16]
+    key = hashlib.sha256(
+        (path.read_text() + (EXAMPLES / "_common.py").read_text() + digest).encode()
+    ).hexdigest()[:16]
     out = CACHE / f"{path.stem}-{key}"
     result = out / "result.json"
     if result.is_file():
         return json.loads(result.read_text())
     out.mkdir(parents=True, exist_ok=True)
-    env = {**os.environ, "FORMATION_FTC_EXAMPLES_QUICK": "1", "MPLBACKEND": "Agg",
-           "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep)}
-    proc = subprocess.run([sys.executable, str(Path(__file__).with_name("run_example.py")), str(path), str(out)],
-                          env=env, capture_output=True, text=True, cwd=str(ROOT))
+    env = {
+        **os.environ,
+        "FORMATION_FTC_EXAMPLES_QUICK": "1",
+        "MPLBACKEND": "Agg",
+        "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]).rstrip(
+            os.pathsep
+        ),
+    }
+    proc = subprocess.run(
+        [sys.executable, str(Path(__file__).with_name("run_example.py")), str(path), str(out)],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=str(ROOT),
+    )
     if proc.returncode != 0:
-        raise PluginError(f"example {path.name} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-6000:]}")
+        raise PluginError(
+            f"example {path.name} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-6000:]}"
+        )
     return json.loads(result.read_text())
 
 
@@ -320,8 +422,10 @@ def _example_page(path: Path, run: dict | None, files: Files, config) -> str:
     if run is None:
         import jupytext
 
-        cells = [{"type": c.cell_type, "source": c.source, "stdout": "", "figures": []}
-                 for c in jupytext.read(path).cells]
+        cells = [
+            {"type": c.cell_type, "source": c.source, "stdout": "", "figures": []}
+            for c in jupytext.read(path).cells
+        ]
     else:
         cells = run["cells"]
     for cell in cells:
@@ -335,10 +439,18 @@ def _example_page(path: Path, run: dict | None, files: Files, config) -> str:
                 png = Path(run["dir"]) / fig
                 _gen(files, config, f"examples/img/{fig}", png.read_bytes())
                 lines += [f"![figure](img/{fig})", ""]
-    note = (f"*Executed for this page with `--quick` (reduced size) in {run['wall_s']:.1f} s.* "
-            if run else "*Not executed in this build (FORMATION_FTC_DOCS_EXAMPLES=0).* ")
-    lines += ["---", "", note + f"Source: `examples/{path.name}`; run it with `python examples/{path.name}` "
-              "(full size) or add `--quick`.", ""]
+    note = (
+        f"*Executed for this page with `--quick` (reduced size) in {run['wall_s']:.1f} s.* "
+        if run
+        else "*Not executed in this build (FORMATION_FTC_DOCS_EXAMPLES=0).* "
+    )
+    lines += [
+        "---",
+        "",
+        note + f"Source: `examples/{path.name}`; run it with `python examples/{path.name}` "
+        "(full size) or add `--quick`.",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -354,11 +466,15 @@ def examples_pages(files: Files, config) -> None:
             for fut in concurrent.futures.as_completed(futures):
                 runs[futures[fut]] = fut.result()
                 log.info("example %s: %.1f s", futures[fut].name, runs[futures[fut]]["wall_s"])
-    index = ["# Examples", "",
-             "Each example is a script under `examples/` in jupytext percent format: run it with "
-             "`python examples/NAME.py` (add `--quick` for a reduced size), or open it as a notebook with "
-             "`jupytext --to notebook`. The pages below were produced by running them at reduced size "
-             "during the documentation build.", ""]
+    index = [
+        "# Examples",
+        "",
+        "Each example is a script under `examples/` in jupytext percent format: run it with "
+        "`python examples/NAME.py` (add `--quick` for a reduced size), or open it as a notebook with "
+        "`jupytext --to notebook`. The pages below were produced by running them at reduced size "
+        "during the documentation build.",
+        "",
+    ]
     for p in paths:
         page = _example_page(p, runs[p], files, config)
         title = next((ln[2:] for ln in page.splitlines() if ln.startswith("# ")), p.stem)
@@ -384,7 +500,9 @@ def on_config(config):
             if isinstance(item, dict):
                 for title, value in item.items():
                     if title == "Scenario files" and isinstance(value, list) and value:
-                        item[title] = [value[0]] + [{n: f"reference/scenarios/{n}.md"} for n in _method_names()]
+                        item[title] = [value[0]] + [
+                            {n: f"reference/scenarios/{n}.md"} for n in _method_names()
+                        ]
                     elif isinstance(value, list):
                         fill(value)
 

@@ -32,7 +32,9 @@ def main(path: str, out_dir: str) -> int:
     out.mkdir(parents=True, exist_ok=True)
     sys.path.insert(0, str(src.parent))
     sys.argv = [str(src), "--quick"]
-    os.environ["FORMATION_FTC_EXAMPLES_SAVE"] = "0"  # figures are captured below, not saved by the example
+    os.environ["FORMATION_FTC_EXAMPLES_SAVE"] = (
+        "0"  # figures are captured below, not saved by the example
+    )
     namespace: dict = {"__name__": "__main__", "__file__": str(src)}
     cells = []
     t0 = time.perf_counter()
@@ -54,7 +56,9 @@ def main(path: str, out_dir: str) -> int:
             plt.figure(num).savefig(out / name, dpi=90, bbox_inches="tight")
             figures.append(name)
         plt.close("all")
-        cells.append({"type": "code", "source": cell.source, "stdout": buf.getvalue(), "figures": figures})
+        cells.append(
+            {"type": "code", "source": cell.source, "stdout": buf.getvalue(), "figures": figures}
+        )
     result = {"cells": cells, "wall_s": time.perf_counter() - t0, "dir": str(out.resolve())}
     (out / "result.json").write_text(json.dumps(result, indent=1))
     return 0

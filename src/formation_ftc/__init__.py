@@ -60,8 +60,14 @@ _LAZY = {
 }
 
 __all__ = [
-    "__version__", "check", "list_scenarios", "load_scenario", "save_result", "simulate",
-    "simulate_with_metrics", "SimulationDiverged",
+    "__version__",
+    "check",
+    "list_scenarios",
+    "load_scenario",
+    "save_result",
+    "simulate",
+    "simulate_with_metrics",
+    "SimulationDiverged",
 ]
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
@@ -86,7 +92,9 @@ def __getattr__(name: str):
         raise AttributeError(f"module 'formation_ftc' has no attribute {name!r}")
     import importlib
 
-    importlib.import_module("formation_ftc._jax")  # x64 and cache, also if JAX was imported meanwhile
+    importlib.import_module(
+        "formation_ftc._jax"
+    )  # x64 and cache, also if JAX was imported meanwhile
     value = getattr(importlib.import_module(module), name)
     globals()[name] = value
     return value

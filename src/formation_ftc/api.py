@@ -38,8 +38,10 @@ __all__ = [
 ]
 
 
-def load_scenario(name_or_path: str | Path | Mapping[str, Any],
-                  overrides: Mapping[str, Any] | Iterable[str] | None = None) -> ScenarioBase:
+def load_scenario(
+    name_or_path: str | Path | Mapping[str, Any],
+    overrides: Mapping[str, Any] | Iterable[str] | None = None,
+) -> ScenarioBase:
     """Built-in name, TOML path or raw dict -> validated scenario (overrides applied first).
 
     Parameters
@@ -126,7 +128,9 @@ def compile_scenario(scenario: ScenarioBase) -> Compiled:
     return get_method(scenario.scenario.method).build(scenario)
 
 
-def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True):
+def finish_run(
+    scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True
+):
     """numpy RunOutput -> (Dataset with provenance, metrics); raises SimulationDiverged with .partial.
 
     Parameters
@@ -176,11 +180,22 @@ def finish_run(scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_d
     if div >= 0:
         t = compiled.t0 + div * compiled.dt
         p = compiled.params
-        info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
-                                   compiled.spacecraft_axis, max_steps=compiled.record_every,
-                                   dt=compiled.dt, admissible=getattr(p, "admissible", None),
-                                   violations=getattr(p, "violations", None),
-                                   params=p) if compiled.make_step else None
+        info = (
+            diagnose_divergence(
+                compiled.make_step(p),
+                out["last_finite"],
+                div,
+                t,
+                compiled.spacecraft_axis,
+                max_steps=compiled.record_every,
+                dt=compiled.dt,
+                admissible=getattr(p, "admissible", None),
+                violations=getattr(p, "violations", None),
+                params=p,
+            )
+            if compiled.make_step
+            else None
+        )
         if info is None:
             from formation_ftc.sim.engine import DivergenceInfo
 
@@ -210,10 +225,17 @@ def _apply_cf(ds, scenario: ScenarioBase) -> None:
     """CF-1.10 global attributes and per-variable metadata on a result (see ``formation_ftc.cf``)."""
     from formation_ftc.cf import apply_cf
 
-    apply_cf(ds, scenario_name=scenario.scenario.name, method=scenario.scenario.method,
-             description=scenario.scenario.description, references=_references(scenario),
-             created_utc=str(ds.attrs.get("created_utc", "")),
-             version=str(ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))))
+    apply_cf(
+        ds,
+        scenario_name=scenario.scenario.name,
+        method=scenario.scenario.method,
+        description=scenario.scenario.description,
+        references=_references(scenario),
+        created_utc=str(ds.attrs.get("created_utc", "")),
+        version=str(
+            ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))
+        ),
+    )
 
 
 def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergence: bool = True):
@@ -329,7 +351,9 @@ def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str,
     for m in getattr(compiled.params, "metrics", ()) or ():
         units = str(getattr(m, "units", "") or "1")
         declared[m.name] = units
-        if getattr(m, "spacecraft", None) == "each":  # expanded per spacecraft: name_sc1, name_sc2, ...
+        if (
+            getattr(m, "spacecraft", None) == "each"
+        ):  # expanded per spacecraft: name_sc1, name_sc2, ...
             declared.update({f"{m.name}_sc{i + 1}": units for i in range(count)})
     return {k: declared.get(k, "1") for k in metrics}
 
@@ -356,7 +380,9 @@ def metric_units(ds) -> dict[str, str]:
     return json.loads(ds.attrs.get("metric_units_json", "{}"))
 
 
-def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = None) -> dict[str, Path]:
+def save_result(
+    ds, out_dir: str | Path, metrics: Mapping[str, float] | None = None
+) -> dict[str, Path]:
     """Write ``result.nc`` (NetCDF via h5netcdf) and ``metrics.json`` into ``out_dir``.
 
     Both files are first written under temporary names and only then renamed into place, so a failure
@@ -394,7 +420,10 @@ def save_result(ds, out_dir: str | Path, metrics: Mapping[str, float] | None = N
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
-    tmp_nc, tmp_mj = out_dir / f".result.nc.tmp-{os.getpid()}", out_dir / f".metrics.json.tmp-{os.getpid()}"
+    tmp_nc, tmp_mj = (
+        out_dir / f".result.nc.tmp-{os.getpid()}",
+        out_dir / f".metrics.json.tmp-{os.getpid()}",
+    )
     m: dict[str, Any] = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
     units = metric_units(ds)

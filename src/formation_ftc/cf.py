@@ -35,12 +35,22 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CONVENTIONS", "ELAPSED_TIME", "apply_cf", "cf_problems", "clean_attrs", "write_netcdf", "MIXED_UNITS_NOTE"]
+__all__ = [
+    "CONVENTIONS",
+    "ELAPSED_TIME",
+    "apply_cf",
+    "cf_problems",
+    "clean_attrs",
+    "write_netcdf",
+    "MIXED_UNITS_NOTE",
+]
 
 CONVENTIONS = "CF-1.10"
 ELAPSED_TIME = "time since the start of the simulation"
-MIXED_UNITS_NOTE = ("components carry different units (see component_units); the variable as a whole is "
-                    "stored with units '1'")
+MIXED_UNITS_NOTE = (
+    "components carry different units (see component_units); the variable as a whole is "
+    "stored with units '1'"
+)
 
 _COORD_DEFAULTS: dict[str, tuple[str, str]] = {
     "time": ("s", ELAPSED_TIME),
@@ -70,7 +80,11 @@ def _attr_value(v: Any) -> str | int | float | np.integer | np.floating | np.nda
         return v
     if isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.ndim == 1:
         return v
-    if isinstance(v, list | tuple) and v and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
+    if (
+        isinstance(v, list | tuple)
+        and v
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+    ):
         return np.asarray(v)
     try:
         return json.dumps(v, default=str)
@@ -88,8 +102,16 @@ def _title(scenario_name: str, method: str, description: str) -> str:
     return f"{head}: {description}" if description else head
 
 
-def apply_cf(ds, *, scenario_name: str = "", method: str = "", description: str = "",
-             references: str = "", created_utc: str = "", version: str = "") -> Any:
+def apply_cf(
+    ds,
+    *,
+    scenario_name: str = "",
+    method: str = "",
+    description: str = "",
+    references: str = "",
+    created_utc: str = "",
+    version: str = "",
+) -> Any:
     """Make ``ds`` a CF-1.10 result in place (and return it).
 
     Parameters
@@ -108,7 +130,9 @@ def apply_cf(ds, *, scenario_name: str = "", method: str = "", description: str 
     for name in list(ds.variables):
         var = ds[name] if name in ds.data_vars else ds.coords[name]
         attrs = dict(var.attrs)
-        default_units, default_long = _COORD_DEFAULTS.get(str(name), ("1", str(name).replace("_", " ")))
+        default_units, default_long = _COORD_DEFAULTS.get(
+            str(name), ("1", str(name).replace("_", " "))
+        )
         units = str(attrs.get("units", "") or "").strip()
         if not units or units == "-":
             units = default_units
@@ -135,7 +159,9 @@ def apply_cf(ds, *, scenario_name: str = "", method: str = "", description: str 
         institution=str(attrs.get("institution", "")) or "formation-ftc (open-source toolkit)",
         source=f"formation-ftc {version}, method {method}, JAX float64 fixed-step simulation".strip(),
         history=history if not attrs.get("history") else f"{attrs['history']}\n{history}",
-        references=references or str(attrs.get("references", "")) or "see the method's documentation",
+        references=references
+        or str(attrs.get("references", ""))
+        or "see the method's documentation",
     )
     ds.attrs.clear()
     ds.attrs.update(clean_attrs(attrs))
@@ -153,7 +179,9 @@ def cf_problems(ds) -> list[str]:
         for k, v in attrs.items():
             if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", str(k)):
                 out.append(f"{where}: attribute name {k!r} is not netCDF-safe")
-            ok = isinstance(v, str | int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
+            ok = isinstance(v, str | int | float | np.integer | np.floating) and not isinstance(
+                v, bool | np.bool_
+            )
             ok = ok or (isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.ndim == 1)
             if not ok:
                 out.append(f"{where}: attribute {k!r} has type {type(v).__name__}")
@@ -167,12 +195,16 @@ def cf_problems(ds) -> list[str]:
 def _classic_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for k, v in clean_attrs(attrs).items():
-        if isinstance(v, str):  # NC_CHAR, not NC_STRING (h5py writes np.bytes_ as a fixed-length string)
+        if isinstance(
+            v, str
+        ):  # NC_CHAR, not NC_STRING (h5py writes np.bytes_ as a fixed-length string)
             out[k] = np.bytes_(v.encode("utf-8"))
         elif isinstance(v, int | np.integer):
-            out[k] = np.int32(v) if -2**31 <= int(v) < 2**31 else float(v)
+            out[k] = np.int32(v) if -(2**31) <= int(v) < 2**31 else float(v)
         elif isinstance(v, np.ndarray) and v.dtype.kind in "iu":
-            out[k] = v.astype(np.int32) if v.size == 0 or np.abs(v).max() < 2**31 else v.astype(float)
+            out[k] = (
+                v.astype(np.int32) if v.size == 0 or np.abs(v).max() < 2**31 else v.astype(float)
+            )
         else:
             out[k] = v
     return out
@@ -191,7 +223,9 @@ def classic_compatible(ds):
     for name in list(out.variables):
         var = out.variables[name]
         var.attrs = _classic_attrs(ds.variables[name].attrs)
-        if name in out.coords:  # CF: no missing values in coordinates (xarray adds a NaN fill to floats)
+        if (
+            name in out.coords
+        ):  # CF: no missing values in coordinates (xarray adds a NaN fill to floats)
             var.encoding["_FillValue"] = None
         if var.dtype.kind in "UO":  # char array + _Encoding (fixed by ``fix_text_encoding_attrs``)
             var.encoding["dtype"] = "S1"

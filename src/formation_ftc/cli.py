@@ -24,67 +24,126 @@ from formation_ftc.exitcodes import add_json_option, lossy_stderr, print_json, p
 
 __all__ = ["main", "build_parser", "completion_parser", "lossy_stderr", "print_json"]
 
-EXIT_CODES = ("exit status:\n"
-              "  0  success\n"
-              "  1  a required condition failed or a run diverged (partial results are still written), or\n"
-              "     standard output could not be written\n"
-              "  2  bad input (the message names the file, the field and the allowed range)\n"
-              "  3  unexpected error (one line, and the path of a file holding the traceback)")
+EXIT_CODES = (
+    "exit status:\n"
+    "  0  success\n"
+    "  1  a required condition failed or a run diverged (partial results are still written), or\n"
+    "     standard output could not be written\n"
+    "  2  bad input (the message names the file, the field and the allowed range)\n"
+    "  3  unexpected error (one line, and the path of a file holding the traceback)"
+)
 
 #: command path -> (description, examples); shown by ``formation-ftc COMMAND --help`` as plain text
 HELP: dict[str, tuple[str, list[str]]] = {
-    "": ("Simulate, design and verify fault-tolerant control of spacecraft formations (JAX, float64).",
-         ["formation-ftc list", "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300",
-          "formation-ftc reproduce all --out out/reproduction", "formation-ftc COMMAND --help"]),
-    "list": ("List the built-in scenarios, one line each (name, then description).",
-             ["formation-ftc list", "formation-ftc list | grep li2020", "formation-ftc list --json"]),
-    "show": ("Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied), "
-             "each field followed by its unit and meaning as a comment.",
-             ["formation-ftc show li2020-thm1", "formation-ftc show my-scenario.toml --set controller.kp=3",
-              "formation-ftc show cw-pd-fault --json"]),
-    "check": ("Evaluate the theorem and design conditions of a scenario's method before any run.",
-              ["formation-ftc check li2020-thm2-delays", "formation-ftc check gui2022-lof2tc --json"]),
-    "schema": ("Print the JSON Schema of a method's scenario file (for editor completion and validation). "
-               "Without METHOD, list the registered methods.",
-               ["formation-ftc schema", "formation-ftc schema cw-formation > cw-formation.schema.json"]),
-    "run": ("Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
-            ["formation-ftc run cw-pd-fault --out out/run1",
-             "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3",
-             "formation-ftc run cw-free-drift --out out/run2 --json"]),
-    "reproduce": ("Run the papers' simulation studies and write DIR/index.html, DIR/summary.json and one "
-                  "folder per paper.",
-                  ["formation-ftc reproduce li2020 --out out/li2020",
-                   "formation-ftc reproduce all --out out/reproduction",
-                   "formation-ftc reproduce li2020 --out out/li2020 --profile"]),
-    "campaign": ("Monte Carlo campaigns: list the built-in ones, run (resumable) and report.",
-                 ["formation-ftc campaign list", "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
-                  "formation-ftc campaign report out/c"]),
-    "league": ("FTC league: every method on one realistic truth (J2, drag) under the same fault battery, "
-               "ranked on the same scores.",
-               ["formation-ftc league list", "formation-ftc league run translational --quick --out out/league",
-                "formation-ftc league report out/league"]),
-    "league list": ("List the built-in leagues (name, description, methods).",
-                    ["formation-ftc league list", "formation-ftc league list --json"]),
-    "league run": ("Run (or resume) a league into a directory and write its leaderboard.",
-                   ["formation-ftc league run translational --quick --out out/league",
-                    "formation-ftc league run attitude --quick --out out/att --workers 2"]),
-    "league report": ("(Re)write the leaderboard (index.html, leaderboard.json, Parquet) of a league "
-                      "directory.", ["formation-ftc league report out/league",
-                                     "formation-ftc league report out/league --json"]),
-    "campaign list": ("List the built-in campaigns (name, then description).",
-                      ["formation-ftc campaign list", "formation-ftc campaign list --json"]),
-    "campaign run": ("Run a campaign into a results directory; run the same command again to resume a "
-                     "killed one.",
-                     ["formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
-                      "formation-ftc campaign run my-campaign.toml --out out/c --dask-local 4"]),
-    "campaign report": ("Summary statistics (summary.json, summary.csv) and sensitivity plots of a "
-                        "campaign directory.", ["formation-ftc campaign report out/c",
-                                                "formation-ftc campaign report out/c --json --no-plots"]),
-    "completion": ("Print the shell completion script of formation-ftc (sub-commands, options, built-in "
-                   "scenario, campaign, league and paper names); install it once, see docs/cli.md.",
-                   ["formation-ftc completion bash > ~/.local/share/bash-completion/completions/formation-ftc",
-                    "formation-ftc completion zsh > ~/.zfunc/_formation-ftc",
-                    "formation-ftc completion tcsh > ~/.formation-ftc.completion.csh"]),
+    "": (
+        "Simulate, design and verify fault-tolerant control of spacecraft formations (JAX, float64).",
+        [
+            "formation-ftc list",
+            "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300",
+            "formation-ftc reproduce all --out out/reproduction",
+            "formation-ftc COMMAND --help",
+        ],
+    ),
+    "list": (
+        "List the built-in scenarios, one line each (name, then description).",
+        ["formation-ftc list", "formation-ftc list | grep li2020", "formation-ftc list --json"],
+    ),
+    "show": (
+        "Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied), "
+        "each field followed by its unit and meaning as a comment.",
+        [
+            "formation-ftc show li2020-thm1",
+            "formation-ftc show my-scenario.toml --set controller.kp=3",
+            "formation-ftc show cw-pd-fault --json",
+        ],
+    ),
+    "check": (
+        "Evaluate the theorem and design conditions of a scenario's method before any run.",
+        ["formation-ftc check li2020-thm2-delays", "formation-ftc check gui2022-lof2tc --json"],
+    ),
+    "schema": (
+        "Print the JSON Schema of a method's scenario file (for editor completion and validation). "
+        "Without METHOD, list the registered methods.",
+        ["formation-ftc schema", "formation-ftc schema cw-formation > cw-formation.schema.json"],
+    ),
+    "run": (
+        "Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
+        [
+            "formation-ftc run cw-pd-fault --out out/run1",
+            "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3",
+            "formation-ftc run cw-free-drift --out out/run2 --json",
+        ],
+    ),
+    "reproduce": (
+        "Run the papers' simulation studies and write DIR/index.html, DIR/summary.json and one "
+        "folder per paper.",
+        [
+            "formation-ftc reproduce li2020 --out out/li2020",
+            "formation-ftc reproduce all --out out/reproduction",
+            "formation-ftc reproduce li2020 --out out/li2020 --profile",
+        ],
+    ),
+    "campaign": (
+        "Monte Carlo campaigns: list the built-in ones, run (resumable) and report.",
+        [
+            "formation-ftc campaign list",
+            "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
+            "formation-ftc campaign report out/c",
+        ],
+    ),
+    "league": (
+        "FTC league: every method on one realistic truth (J2, drag) under the same fault battery, "
+        "ranked on the same scores.",
+        [
+            "formation-ftc league list",
+            "formation-ftc league run translational --quick --out out/league",
+            "formation-ftc league report out/league",
+        ],
+    ),
+    "league list": (
+        "List the built-in leagues (name, description, methods).",
+        ["formation-ftc league list", "formation-ftc league list --json"],
+    ),
+    "league run": (
+        "Run (or resume) a league into a directory and write its leaderboard.",
+        [
+            "formation-ftc league run translational --quick --out out/league",
+            "formation-ftc league run attitude --quick --out out/att --workers 2",
+        ],
+    ),
+    "league report": (
+        "(Re)write the leaderboard (index.html, leaderboard.json, Parquet) of a league directory.",
+        ["formation-ftc league report out/league", "formation-ftc league report out/league --json"],
+    ),
+    "campaign list": (
+        "List the built-in campaigns (name, then description).",
+        ["formation-ftc campaign list", "formation-ftc campaign list --json"],
+    ),
+    "campaign run": (
+        "Run a campaign into a results directory; run the same command again to resume a "
+        "killed one.",
+        [
+            "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
+            "formation-ftc campaign run my-campaign.toml --out out/c --dask-local 4",
+        ],
+    ),
+    "campaign report": (
+        "Summary statistics (summary.json, summary.csv) and sensitivity plots of a "
+        "campaign directory.",
+        [
+            "formation-ftc campaign report out/c",
+            "formation-ftc campaign report out/c --json --no-plots",
+        ],
+    ),
+    "completion": (
+        "Print the shell completion script of formation-ftc (sub-commands, options, built-in "
+        "scenario, campaign, league and paper names); install it once, see docs/cli.md.",
+        [
+            "formation-ftc completion bash > ~/.local/share/bash-completion/completions/formation-ftc",
+            "formation-ftc completion zsh > ~/.zfunc/_formation-ftc",
+            "formation-ftc completion tcsh > ~/.formation-ftc.completion.csh",
+        ],
+    ),
 }
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
@@ -108,11 +167,15 @@ _UNIT_ATOM = r"(?:kg|rad|deg|Hz|m|s|N|J|W)(?:\^-?\d+)?"
 _UNIT = rf"(?:1/)?{_UNIT_ATOM}(?:[ /*]{_UNIT_ATOM})*(?![\w^/])"
 #: one clause of a condition's statement: ``[NAME = ]VALUE [UNITS]`` (VALUE a number, a list of numbers,
 #: True or False; NAME without "=" or ":" and not ending in a relation such as "<=")
-_CLAUSE = re.compile(rf"(?:(?P<name>[^=:]+?)(?<![<>!])\s*[=:]\s*)?"
-                     rf"(?P<value>\[\s*{_NUM}(?:\s*,\s*{_NUM})*\s*\]|{_NUM}|True|False)"
-                     rf"(?:\s+(?P<units>{_UNIT}))?")
+_CLAUSE = re.compile(
+    rf"(?:(?P<name>[^=:]+?)(?<![<>!])\s*[=:]\s*)?"
+    rf"(?P<value>\[\s*{_NUM}(?:\s*,\s*{_NUM})*\s*\]|{_NUM}|True|False)"
+    rf"(?:\s+(?P<units>{_UNIT}))?"
+)
 #: a requirement that is a plain comparison with a number: ``< -2.9e-13 (rounding margin)``
-_BOUND = re.compile(rf"(?P<relation><=|>=|<|>|=)\s*(?P<value>{_NUM})(?:\s+(?P<units>{_UNIT}))?\s*(?:$|[(,;])")
+_BOUND = re.compile(
+    rf"(?P<relation><=|>=|<|>|=)\s*(?P<value>{_NUM})(?:\s+(?P<units>{_UNIT}))?\s*(?:$|[(,;])"
+)
 
 
 def _closing(text: str, start: int) -> int:
@@ -147,12 +210,12 @@ def _clauses(text: str, remark: bool = False) -> list[tuple[str, bool]]:
         if ch in "([":
             end = _closing(text, k)
             if ch == "(" and k > 0 and text[k - 1] == " ":
-                remarks.extend(_clauses(text[k + 1:end], remark=True))
+                remarks.extend(_clauses(text[k + 1 : end], remark=True))
             else:
-                cur.append(text[k:end + 1])
+                cur.append(text[k : end + 1])
             k = end + 1
             continue
-        if ch in ",;" and text[k + 1:k + 2] in (" ", ""):
+        if ch in ",;" and text[k + 1 : k + 2] in (" ", ""):
             close()
         else:
             cur.append(ch)
@@ -192,21 +255,36 @@ def _condition_json(c) -> dict[str, Any]:
     # None when it states several side by side ("e_s = 0.03 m, T = 1.07e-05 m") or none
     single = main[0] if len(main) == 1 else None
     bound = _BOUND.match(d["requirement"].strip())
-    return {"name": d["name"], "reference": d["reference"],
-            "value": single["value"] if single else None, "units": single["units"] if single else None,
-            "value_text": d["value"], "quantities": quantities,
-            "requirement": d["requirement"],
-            "bound": {"relation": bound["relation"], "value": float(bound["value"]), "units": bound["units"]}
-            if bound else None,
-            "holds": d["holds"], "unproven": bool(c.unproven), "required": d["required"], "basis": d["basis"],
-            "detail": d["detail"]}
+    return {
+        "name": d["name"],
+        "reference": d["reference"],
+        "value": single["value"] if single else None,
+        "units": single["units"] if single else None,
+        "value_text": d["value"],
+        "quantities": quantities,
+        "requirement": d["requirement"],
+        "bound": {
+            "relation": bound["relation"],
+            "value": float(bound["value"]),
+            "units": bound["units"],
+        }
+        if bound
+        else None,
+        "holds": d["holds"],
+        "unproven": bool(c.unproven),
+        "required": d["required"],
+        "basis": d["basis"],
+        "detail": d["detail"],
+    }
 
 
 def _builtin_scenario_names() -> list[str]:
     from importlib import resources
 
     d = resources.files("formation_ftc") / "scenarios"
-    return [n[:-5] for n in sorted(e.name for e in d.iterdir()) if n.endswith(".toml")]  # loader's order
+    return [
+        n[:-5] for n in sorted(e.name for e in d.iterdir()) if n.endswith(".toml")
+    ]  # loader's order
 
 
 def _check_scenario_name(name: str) -> None:
@@ -221,12 +299,14 @@ def _check_scenario_name(name: str) -> None:
         return
     names = _builtin_scenario_names()
     if name not in names:
-        raise ScenarioError(f"unknown scenario {name!r}: not a file and not a built-in scenario"
-                            f"{did_you_mean(name, names)}; see `formation-ftc list`")
+        raise ScenarioError(
+            f"unknown scenario {name!r}: not a file and not a built-in scenario"
+            f"{did_you_mean(name, names)}; see `formation-ftc list`"
+        )
 
 
 def _field_hints(scenario: str, overrides: list[str]) -> str:
-    """"did you mean" lines for unknown fields of a scenario (file or --set paths); "" if none."""
+    """ "did you mean" lines for unknown fields of a scenario (file or --set paths); "" if none."""
     from formation_ftc.config import loader
     from formation_ftc.registry import get_method
     from formation_ftc.suggest import unknown_fields
@@ -255,12 +335,20 @@ def _load(args):
         raise ScenarioError(f"{exc}{hints}") from None
 
 
-
 def _scenario_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", metavar="SCENARIO",
-                   help="built-in scenario name (see `formation-ftc list`) or path to a TOML file")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
-                   help="override a field, e.g. --set simulation.horizon=100 (repeatable)")
+    p.add_argument(
+        "scenario",
+        metavar="SCENARIO",
+        help="built-in scenario name (see `formation-ftc list`) or path to a TOML file",
+    )
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="PATH=VALUE",
+        help="override a field, e.g. --set simulation.horizon=100 (repeatable)",
+    )
 
 
 def _scenario_table(text: str) -> str:
@@ -271,7 +359,9 @@ def _scenario_table(text: str) -> str:
         start = next(k for k, ln in enumerate(lines) if ln.strip() == "[scenario]")
     except StopIteration:
         return text  # unusual layout: parse everything
-    end = next((k for k in range(start + 1, len(lines)) if lines[k].lstrip().startswith("[")), len(lines))
+    end = next(
+        (k for k in range(start + 1, len(lines)) if lines[k].lstrip().startswith("[")), len(lines)
+    )
     return "\n".join(lines[start:end])
 
 
@@ -284,10 +374,20 @@ def _cmd_list(args) -> int:
     composed: dict[str, str] = {}
     rows = []
     for name in _builtin_scenario_names():
-        meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get("scenario", {})
-        (composed if meta.get("method") == "composed" else items)[name] = str(meta.get("description", ""))
-        rows.append({"name": name, "method": str(meta.get("method", "")),
-                     "description": str(meta.get("description", "")), "composed": meta.get("method") == "composed"})
+        meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get(
+            "scenario", {}
+        )
+        (composed if meta.get("method") == "composed" else items)[name] = str(
+            meta.get("description", "")
+        )
+        rows.append(
+            {
+                "name": name,
+                "method": str(meta.get("method", "")),
+                "description": str(meta.get("description", "")),
+                "composed": meta.get("method") == "composed",
+            }
+        )
     if args.json:
         print_json({"scenarios": rows})
         return 0
@@ -295,7 +395,9 @@ def _cmd_list(args) -> int:
     for name, desc in items.items():
         print(f"{name:<{width}}  {desc}")
     if composed:
-        print("\nCross-paper compositions (method \"composed\": one paper's law on another's plant):")
+        print(
+            "\nCross-paper compositions (method \"composed\": one paper's law on another's plant):"
+        )
         for name, desc in composed.items():
             print(f"{name:<{width}}  {desc}")
     return 0
@@ -321,8 +423,18 @@ def _annotate_toml(text: str, schema: dict) -> str:
             if isinstance(item, tomlkit.items.Table):
                 walk(item, sub)
                 continue
-            desc = " ".join(str(next((o.get("description") for o in [sub, *_resolve(sub, schema)]
-                                      if o.get("description")), "")).split())
+            desc = " ".join(
+                str(
+                    next(
+                        (
+                            o.get("description")
+                            for o in [sub, *_resolve(sub, schema)]
+                            if o.get("description")
+                        ),
+                        "",
+                    )
+                ).split()
+            )
             if desc and hasattr(item, "comment"):
                 item.comment(desc if len(desc) <= 100 else desc[:97] + "...")
 
@@ -341,7 +453,9 @@ def _description_unit(desc: str) -> str | None:
         text = text.strip()
         if text == "-":
             found.append("1")
-        elif _UNIT_WORD.search(text) and not re.sub(r"[\s/^*()\d,.-]", "", _UNIT_WORD.sub("", text)):
+        elif _UNIT_WORD.search(text) and not re.sub(
+            r"[\s/^*()\d,.-]", "", _UNIT_WORD.sub("", text)
+        ):
             found.append(text)
     return found[0] if len(set(found)) == 1 else None
 
@@ -364,8 +478,18 @@ def _field_units(resolved: dict, schema: dict) -> dict[str, str]:
             if isinstance(value, dict):
                 walk(value, sub, f"{prefix}{key}.")
                 continue
-            desc = " ".join(str(next((o.get("description") for o in [sub, *_resolve(sub, schema)]
-                                      if o.get("description")), "")).split())
+            desc = " ".join(
+                str(
+                    next(
+                        (
+                            o.get("description")
+                            for o in [sub, *_resolve(sub, schema)]
+                            if o.get("description")
+                        ),
+                        "",
+                    )
+                ).split()
+            )
             unit = _description_unit(desc)
             if unit is not None:
                 units[f"{prefix}{key}"] = unit
@@ -404,17 +528,32 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
     code = 1 if failed_required else 0
     if as_json:
-        print_json({"scenario": scenario.scenario.name if scenario is not None else None,
-                    "method": scenario.scenario.method if scenario is not None else None,
-                    "conditions": [_condition_json(c) for c in conds],
-                    "all_required_hold": not failed_required, "required_failed": len(failed_required),
-                    "required_unproven": len(unproven_required), "exit_code": code})
+        print_json(
+            {
+                "scenario": scenario.scenario.name if scenario is not None else None,
+                "method": scenario.scenario.method if scenario is not None else None,
+                "conditions": [_condition_json(c) for c in conds],
+                "all_required_hold": not failed_required,
+                "required_failed": len(failed_required),
+                "required_unproven": len(unproven_required),
+                "exit_code": code,
+            }
+        )
         return code
     if not sys.stdout.isatty():
         rows = [cols]
-        rows += [(str(c.name), str(c.reference), str(c.value), str(c.requirement), _holds_text(c), str(c.basis),
-                  "yes" if c.required else "info")
-                 for c in conds]
+        rows += [
+            (
+                str(c.name),
+                str(c.reference),
+                str(c.value),
+                str(c.requirement),
+                _holds_text(c),
+                str(c.basis),
+                "yes" if c.required else "info",
+            )
+            for c in conds
+        ]
         widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
         for r in rows if conds else []:
             print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
@@ -426,10 +565,20 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
         for col in cols:
             table.add_column(col)
         for c in conds:
-            mark = {"yes": "[green]yes[/]", "NO": "[red]NO[/]", "unproven": "[yellow]unproven[/]"}.get(
-                _holds_text(c), "n/a")
-            table.add_row(c.name, c.reference, c.value, c.requirement, mark, c.basis,
-                          "yes" if c.required else "info")
+            mark = {
+                "yes": "[green]yes[/]",
+                "NO": "[red]NO[/]",
+                "unproven": "[yellow]unproven[/]",
+            }.get(_holds_text(c), "n/a")
+            table.add_row(
+                c.name,
+                c.reference,
+                c.value,
+                c.requirement,
+                mark,
+                c.basis,
+                "yes" if c.required else "info",
+            )
         Console().print(table)
     for c in conds:
         if c.detail and (c.holds is False or (c.required and c.holds is None)):
@@ -437,8 +586,10 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     if not conds:
         print("this scenario's method declares no conditions")
     else:
-        print(f"{len(unproven_required)} required condition(s) unproven (not evaluated, or sampled / heuristic "
-              "with no violation found)")
+        print(
+            f"{len(unproven_required)} required condition(s) unproven (not evaluated, or sampled / heuristic "
+            "with no violation found)"
+        )
     return 1 if failed_required else 0
 
 
@@ -452,8 +603,10 @@ def _cmd_check(args) -> int:
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         if isinstance(exc, ScenarioError):
             raise
-        raise ScenarioError(f"{args.scenario}: the conditions cannot be evaluated for these values "
-                            f"({type(exc).__name__}: {exc})") from None
+        raise ScenarioError(
+            f"{args.scenario}: the conditions cannot be evaluated for these values "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
     return _print_conditions(conds, args.json, scenario)
 
 
@@ -470,12 +623,16 @@ def _cmd_schema(args) -> int:
     if args.method not in registered:
         from formation_ftc.errors import InputError
 
-        raise InputError(f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
-                         f"registered: {', '.join(sorted(registered))}")
+        raise InputError(
+            f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
+            f"registered: {', '.join(sorted(registered))}"
+        )
     schema = registered[args.method].schema.model_json_schema()
-    schema = {"$schema": "https://json-schema.org/draft/2020-12/schema",
-              "title": f"formation-ftc scenario ({args.method})", **{k: v for k, v in schema.items()
-                                                                      if k != "title"}}
+    schema = {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": f"formation-ftc scenario ({args.method})",
+        **{k: v for k, v in schema.items() if k != "title"},
+    }
     print(json.dumps(schema, indent=2))
     return 0
 
@@ -513,8 +670,9 @@ def _cmd_run(args) -> int:
         raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
     check_memory(compiled, budgets, args.scenario)
     t0 = time.perf_counter()
-    with console.status(f"compiling and running {scenario.scenario.name} "
-                        f"({scenario.simulation.n_steps:,} steps)..."):
+    with console.status(
+        f"compiling and running {scenario.scenario.name} ({scenario.simulation.n_steps:,} steps)..."
+    ):
         out = jitted_run(compiled)(compiled.params)
         jax.block_until_ready(out)
     wall = time.perf_counter() - t0
@@ -530,10 +688,16 @@ def _cmd_run(args) -> int:
         metrics = result_metrics(ds)
         code = 1
         info = exc.info
-        diverged = {"message": str(exc), "time": float(info.time), "step": int(info.step),
-                    "variable": str(info.variable),
-                    "spacecraft": None if info.spacecraft is None else int(info.spacecraft) + 1,
-                    "index": [int(i) for i in info.index], "reason": str(info.reason), "units": {"time": "s"}}
+        diverged = {
+            "message": str(exc),
+            "time": float(info.time),
+            "step": int(info.step),
+            "variable": str(info.variable),
+            "spacecraft": None if info.spacecraft is None else int(info.spacecraft) + 1,
+            "index": [int(i) for i in info.index],
+            "reason": str(info.reason),
+            "units": {"time": "s"},
+        }
     ds.attrs["wall_time_s"] = wall
     method = get_method(scenario.scenario.method)
     with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written
@@ -548,26 +712,48 @@ def _cmd_run(args) -> int:
         figs += method.plot(view, scenario, stage) if method.plot else []
         units = metric_units(ds)
         write_run_page(stage, ds, metrics, figs, units)
-    console.print(f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'}, {len(figs)} figure(s) and "
-                  f"{out_dir / 'index.html'} in {wall:.2f} s")
+    console.print(
+        f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'}, {len(figs)} figure(s) and "
+        f"{out_dir / 'index.html'} in {wall:.2f} s"
+    )
     if args.json:
-        print_json({
-            "scenario": scenario.scenario.name, "method": scenario.scenario.method, "exit_code": code,
-            "diverged": diverged,
-            "metrics": {k: {"value": v, "units": units.get(k, "1")} for k, v in metrics.items()},
-            "outputs": {"dir": str(out_dir), "result": str(out_dir / "result.nc"),
-                        "metrics": str(out_dir / "metrics.json"), "index": str(out_dir / "index.html"),
-                        "figures": [str(_moved(f, stage, out_dir)) for f in figs]},
-            "n_steps": int(scenario.simulation.n_steps), "wall_time": wall, "units": {"wall_time": "s"}})
+        print_json(
+            {
+                "scenario": scenario.scenario.name,
+                "method": scenario.scenario.method,
+                "exit_code": code,
+                "diverged": diverged,
+                "metrics": {
+                    k: {"value": v, "units": units.get(k, "1")} for k, v in metrics.items()
+                },
+                "outputs": {
+                    "dir": str(out_dir),
+                    "result": str(out_dir / "result.nc"),
+                    "metrics": str(out_dir / "metrics.json"),
+                    "index": str(out_dir / "index.html"),
+                    "figures": [str(_moved(f, stage, out_dir)) for f in figs],
+                },
+                "n_steps": int(scenario.simulation.n_steps),
+                "wall_time": wall,
+                "units": {"wall_time": "s"},
+            }
+        )
     return code
 
 
 class _VersionAction(argparse.Action):
     """``--version``: reads the package metadata only when asked (not for every command)."""
 
-    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
-        super().__init__(option_strings, dest=dest, default=default, nargs=0,
-                         help=help or "show the version and exit")
+    def __init__(
+        self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None
+    ):
+        super().__init__(
+            option_strings,
+            dest=dest,
+            default=default,
+            nargs=0,
+            help=help or "show the version and exit",
+        )
 
     def __call__(self, parser, namespace, values, option_string=None):
         import formation_ftc
@@ -578,11 +764,27 @@ class _VersionAction(argparse.Action):
 
 def _add_verbosity(p: argparse.ArgumentParser, top: bool = False) -> None:
     g = p.add_mutually_exclusive_group()
-    default = 0 if top else argparse.SUPPRESS  # a sub-command's flag must not reset the top-level one
-    g.add_argument("-q", "--quiet", dest="verbosity", action="store_const", const=-1, default=default,
-                   help="print only results and errors (no progress or informational lines)")
-    g.add_argument("-v", "--verbose", dest="verbosity", action="store_const", const=1, default=default,
-                   help="more detail (timings, full tracebacks on errors)")
+    default = (
+        0 if top else argparse.SUPPRESS
+    )  # a sub-command's flag must not reset the top-level one
+    g.add_argument(
+        "-q",
+        "--quiet",
+        dest="verbosity",
+        action="store_const",
+        const=-1,
+        default=default,
+        help="print only results and errors (no progress or informational lines)",
+    )
+    g.add_argument(
+        "-v",
+        "--verbose",
+        dest="verbosity",
+        action="store_const",
+        const=1,
+        default=default,
+        help="more detail (timings, full tracebacks on errors)",
+    )
 
 
 def _epilog(key: str) -> str:
@@ -607,9 +809,18 @@ def _decorate(parser: argparse.ArgumentParser, key: str) -> None:
 
 #: commands whose parsers live in other modules: name -> (module with add_cli, one-line help)
 _PLUGGED = {
-    "reproduce": ("formation_ftc.report.reproduce", "reproduce the papers' studies and write an HTML report"),
-    "campaign": ("formation_ftc.campaign.cli", "Monte Carlo campaigns: list, run (resumable), report"),
-    "league": ("formation_ftc.league.cli", "FTC league: every method on one realistic formation, same faults"),
+    "reproduce": (
+        "formation_ftc.report.reproduce",
+        "reproduce the papers' studies and write an HTML report",
+    ),
+    "campaign": (
+        "formation_ftc.campaign.cli",
+        "Monte Carlo campaigns: list, run (resumable), report",
+    ),
+    "league": (
+        "formation_ftc.league.cli",
+        "FTC league: every method on one realistic formation, same faults",
+    ),
 }
 
 
@@ -635,12 +846,24 @@ def _reproduce_stand_in(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser("reproduce", help=_PLUGGED["reproduce"][1])
     p.add_argument("paper", nargs="+", metavar="PAPER", help="paper name or 'all'")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
-    p.add_argument("--force", action="store_true", help="write into an existing non-empty directory")
-    p.add_argument("--no-3d", dest="include_3d", action="store_false", help="no interactive 3-D views")
+    p.add_argument(
+        "--force", action="store_true", help="write into an existing non-empty directory"
+    )
+    p.add_argument(
+        "--no-3d", dest="include_3d", action="store_false", help="no interactive 3-D views"
+    )
     p.add_argument("--profile", action="store_true", help="time each paper's phases")
-    p.add_argument("--workers", type=int, default=None, metavar="N", help="papers computed side by side")
-    p.add_argument("--league", action="append", type=Path, default=None, metavar="DIR",
-                   help="link this league directory's leaderboard")
+    p.add_argument(
+        "--workers", type=int, default=None, metavar="N", help="papers computed side by side"
+    )
+    p.add_argument(
+        "--league",
+        action="append",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="link this league directory's leaderboard",
+    )
     return p
 
 
@@ -660,7 +883,11 @@ def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> lis
         names = sorted(e.name for e in d.iterdir())
     except (OSError, FileNotFoundError):  # pragma: no cover - a damaged installation
         return []
-    return [n[len(prefix):len(n) - len(suffix)] for n in names if n.startswith(prefix) and n.endswith(suffix)]
+    return [
+        n[len(prefix) : len(n) - len(suffix)]
+        for n in names
+        if n.startswith(prefix) and n.endswith(suffix)
+    ]
 
 
 def _paper_names() -> list[str]:
@@ -681,8 +908,12 @@ def _names_completer(kind: str, names: list[str], files: bool) -> dict[str, Any]
     if files:
         bash += ["  compgen -f -X '!*.toml' -- \"$1\"", '  compgen -d -- "$1"']
         zsh += " 'files:TOML file:_files -g \"*.toml\"'"
-    return {"bash": fn, "zsh": fn, "tcsh": f"({words})",
-            "preamble": {"bash": "\n".join([*bash, "}"]), "zsh": zsh + "\n}"}}
+    return {
+        "bash": fn,
+        "zsh": fn,
+        "tcsh": f"({words})",
+        "preamble": {"bash": "\n".join([*bash, "}"]), "zsh": zsh + "\n}"},
+    }
 
 
 def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
@@ -693,8 +924,12 @@ def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
     scenarios = _names_completer("scenario", _builtin_scenario_names(), files=True)
     by_command = {
         "reproduce": {"paper": _names_completer("paper", [*_paper_names(), "all"], files=False)},
-        "campaign run": {"campaign": _names_completer("campaign", _resource_names("campaign/builtin"), True)},
-        "league run": {"league": _names_completer("league", _resource_names("league/data", "league-"), True)},
+        "campaign run": {
+            "campaign": _names_completer("campaign", _resource_names("campaign/builtin"), True)
+        },
+        "league run": {
+            "league": _names_completer("league", _resource_names("league/data", "league-"), True)
+        },
     }
 
     def walk(p: argparse.ArgumentParser, key: str) -> None:
@@ -753,8 +988,11 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
 
     p = sub.add_parser("show", help="print the resolved TOML of a scenario")
     _scenario_args(p)
-    p.add_argument("--no-comments", action="store_true",
-                   help="bare TOML (default: each field's unit and meaning as a comment)")
+    p.add_argument(
+        "--no-comments",
+        action="store_true",
+        help="bare TOML (default: each field's unit and meaning as a comment)",
+    )
     add_json_option(p)
     p.set_defaults(func=_cmd_show)
 
@@ -764,19 +1002,35 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     p.set_defaults(func=_cmd_check)
 
     p = sub.add_parser("schema", help="print the JSON Schema of a method's scenario file")
-    p.add_argument("method", metavar="METHOD", nargs="?", default=None,
-                   help="method name (the [scenario].method of a scenario file); omit to list them")
+    p.add_argument(
+        "method",
+        metavar="METHOD",
+        nargs="?",
+        default=None,
+        help="method name (the [scenario].method of a scenario file); omit to list them",
+    )
     p.set_defaults(func=_cmd_schema)
 
     p = sub.add_parser("run", help="simulate a scenario and write result.nc, metrics.json, figures")
     _scenario_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--force", action="store_true",
-                   help="replace DIR even when it is not empty and not an earlier run's result")
-    p.add_argument("--max-memory", metavar="SIZE", default=None,
-                   help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)")
-    p.add_argument("--max-run-steps", metavar="N", default=None,
-                   help="integration steps allowed per run (default 1e9; 0 = none)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace DIR even when it is not empty and not an earlier run's result",
+    )
+    p.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        default=None,
+        help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
+    )
+    p.add_argument(
+        "--max-run-steps",
+        metavar="N",
+        default=None,
+        help="integration steps allowed per run (default 1e9; 0 = none)",
+    )
     add_json_option(p)
     p.set_defaults(func=_cmd_run)
 
@@ -785,7 +1039,9 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
             _STAND_INS[name](sub)
             continue
         if command not in ("", name):
-            sub.add_parser(name, help=short, add_help=False).add_argument("rest", nargs=argparse.REMAINDER)
+            sub.add_parser(name, help=short, add_help=False).add_argument(
+                "rest", nargs=argparse.REMAINDER
+            )
             continue
         try:
             mod = __import__(module, fromlist=["add_cli"])
@@ -795,7 +1051,9 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         mod.add_cli(sub)
 
     p = sub.add_parser("completion", help="print the shell completion script (bash, zsh, tcsh)")
-    p.add_argument("shell", choices=_SHELLS, metavar="SHELL", help=f"the shell: {', '.join(_SHELLS)}")
+    p.add_argument(
+        "shell", choices=_SHELLS, metavar="SHELL", help=f"the shell: {', '.join(_SHELLS)}"
+    )
     p.set_defaults(func=_cmd_completion)
     _decorate(parser, "")
     return parser
@@ -810,7 +1068,7 @@ def main(argv: list[str] | None = None) -> int:
             args = parser.parse_args(argv)
         except SystemExit as exc:  # a usage error (status 2): with --json, also as a JSON document
             message = getattr(exc, "usage_error", None)
-            if message and "--json" in argv[:argv.index("--") if "--" in argv else len(argv)]:
+            if message and "--json" in argv[: argv.index("--") if "--" in argv else len(argv)]:
                 print_json_error(message, int(exc.code or 2))
             raise
         _VERBOSITY = int(getattr(args, "verbosity", 0))

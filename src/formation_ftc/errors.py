@@ -33,4 +33,5 @@ def require_extra(module: str, extra: str, feature: str):
         raise MissingExtraError(
             f"{feature} needs the optional dependency {module.split('.')[0]!r}, which is not installed: "
             f"run `pip install -e '.[{extra}]'` in your clone of formation-ftc (or `pip install "
-            f"'formation-ftc[{extra}]'` from a wheel; docs/install.md)") from None
+            f"'formation-ftc[{extra}]'` from a wheel; docs/install.md)"
+        ) from None

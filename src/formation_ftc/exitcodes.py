@@ -38,8 +38,19 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
-__all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_UNEXPECTED", "run_guarded", "save_traceback",
-           "add_json_option", "jsonable", "print_json", "print_json_error", "lossy_stderr"]
+__all__ = [
+    "EXIT_OK",
+    "EXIT_FAILED",
+    "EXIT_INPUT",
+    "EXIT_UNEXPECTED",
+    "run_guarded",
+    "save_traceback",
+    "add_json_option",
+    "jsonable",
+    "print_json",
+    "print_json_error",
+    "lossy_stderr",
+]
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_UNEXPECTED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
@@ -81,7 +92,11 @@ def _quiet_stdout() -> None:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
-    except (OSError, ValueError, AttributeError):  # pragma: no cover - stdout without a file descriptor
+    except (
+        OSError,
+        ValueError,
+        AttributeError,
+    ):  # pragma: no cover - stdout without a file descriptor
         pass
 
 
@@ -134,9 +149,12 @@ class _GuardedStdout:
 
 def add_json_option(parser: argparse.ArgumentParser) -> None:
     """``--json`` on a command: one JSON document on stdout instead of the text (docs/cli.md)."""
-    parser.add_argument("--json", action="store_true",
-                        help="print one JSON document on stdout (typed values, units in separate keys; "
-                             "schema in docs/cli.md); errors also as {\"error\": ..., \"exit_code\": N}")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON document on stdout (typed values, units in separate keys; "
+        'schema in docs/cli.md); errors also as {"error": ..., "exit_code": N}',
+    )
 
 
 def jsonable(obj: Any) -> Any:
@@ -195,7 +213,9 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
             raise guard.failure
         return code
     except OSError as exc:
-        if exc is not guard.failure:  # a result file, a socket, a worker's pipe: not standard output
+        if (
+            exc is not guard.failure
+        ):  # a result file, a socket, a worker's pipe: not standard output
             return _unexpected(exc, as_json)
         _quiet_stdout()
         if isinstance(exc, BrokenPipeError):  # the reader left (`| head`): it took what it wanted

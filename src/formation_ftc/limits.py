@@ -31,14 +31,38 @@ from typing import Any
 
 from formation_ftc.errors import InputError, ResourceLimitError
 
-__all__ = ["Budgets", "parse_bytes", "parse_count", "format_bytes", "run_memory_bytes", "check_run_steps",
-           "check_memory", "DEFAULT_MAX_RUN_STEPS", "DEFAULT_MAX_CAMPAIGN_STEPS", "default_max_memory"]
+__all__ = [
+    "Budgets",
+    "parse_bytes",
+    "parse_count",
+    "format_bytes",
+    "run_memory_bytes",
+    "check_run_steps",
+    "check_memory",
+    "DEFAULT_MAX_RUN_STEPS",
+    "DEFAULT_MAX_CAMPAIGN_STEPS",
+    "default_max_memory",
+]
 
 DEFAULT_MAX_RUN_STEPS = 1_000_000_000
 DEFAULT_MAX_CAMPAIGN_STEPS = 100_000_000_000
 _DEFAULT_MAX_MEMORY = 8 * 2**30
-_UNITS = {"": 1, "b": 1, "k": 10**3, "kb": 10**3, "m": 10**6, "mb": 10**6, "g": 10**9, "gb": 10**9,
-          "t": 10**12, "tb": 10**12, "kib": 2**10, "mib": 2**20, "gib": 2**30, "tib": 2**40}
+_UNITS = {
+    "": 1,
+    "b": 1,
+    "k": 10**3,
+    "kb": 10**3,
+    "m": 10**6,
+    "mb": 10**6,
+    "g": 10**9,
+    "gb": 10**9,
+    "t": 10**12,
+    "tb": 10**12,
+    "kib": 2**10,
+    "mib": 2**20,
+    "gib": 2**30,
+    "tib": 2**40,
+}
 
 
 def _physical_memory() -> int | None:
@@ -65,7 +89,9 @@ def parse_bytes(text: str | int | float | None, what: str = "--max-memory") -> i
         if str(text).strip().lower() in ("none", "off", "unlimited"):
             return None
         if not m or m.group(2).lower() not in _UNITS:
-            raise ResourceLimitError(f"{what}: expected a size such as 8GB, 512MiB or 2e9 (bytes), got {text!r}")
+            raise ResourceLimitError(
+                f"{what}: expected a size such as 8GB, 512MiB or 2e9 (bytes), got {text!r}"
+            )
         value, unit = float(m.group(1)), m.group(2).lower()
     if not math.isfinite(value) or value < 0:
         raise ResourceLimitError(f"{what}: expected a finite size >= 0, got {text!r}")
@@ -104,8 +130,9 @@ class Budgets:
     max_campaign_steps: int | None = DEFAULT_MAX_CAMPAIGN_STEPS
 
     @classmethod
-    def resolve(cls, max_memory: Any = None, max_run_steps: Any = None,
-                max_campaign_steps: Any = None) -> Budgets:
+    def resolve(
+        cls, max_memory: Any = None, max_run_steps: Any = None, max_campaign_steps: Any = None
+    ) -> Budgets:
         env = os.environ
 
         def pick(flag, var, parse, default, what):
@@ -116,12 +143,27 @@ class Budgets:
             return default
 
         return cls(
-            max_memory=pick(max_memory, "FORMATION_FTC_MAX_MEMORY", parse_bytes, default_max_memory(),
-                            "--max-memory"),
-            max_run_steps=pick(max_run_steps, "FORMATION_FTC_MAX_RUN_STEPS", parse_count, DEFAULT_MAX_RUN_STEPS,
-                               "--max-run-steps"),
-            max_campaign_steps=pick(max_campaign_steps, "FORMATION_FTC_MAX_CAMPAIGN_STEPS", parse_count,
-                                    DEFAULT_MAX_CAMPAIGN_STEPS, "--max-campaign-steps"),
+            max_memory=pick(
+                max_memory,
+                "FORMATION_FTC_MAX_MEMORY",
+                parse_bytes,
+                default_max_memory(),
+                "--max-memory",
+            ),
+            max_run_steps=pick(
+                max_run_steps,
+                "FORMATION_FTC_MAX_RUN_STEPS",
+                parse_count,
+                DEFAULT_MAX_RUN_STEPS,
+                "--max-run-steps",
+            ),
+            max_campaign_steps=pick(
+                max_campaign_steps,
+                "FORMATION_FTC_MAX_CAMPAIGN_STEPS",
+                parse_count,
+                DEFAULT_MAX_CAMPAIGN_STEPS,
+                "--max-campaign-steps",
+            ),
         )
 
 
@@ -131,17 +173,21 @@ def check_run_steps(n_steps: int, budgets: Budgets, where: str = "scenario") -> 
         raise ResourceLimitError(
             f"{where}: {n_steps:.3g} integration steps per run (simulation.horizon / simulation.dt) exceed the "
             f"budget of {budgets.max_run_steps:.3g}; shorten simulation.horizon or enlarge simulation.dt, or "
-            f"raise the budget with --max-run-steps / FORMATION_FTC_MAX_RUN_STEPS")
+            f"raise the budget with --max-run-steps / FORMATION_FTC_MAX_RUN_STEPS"
+        )
 
 
-def check_campaign_steps(run_steps: int, n_runs: int, budgets: Budgets, where: str = "campaign") -> None:
+def check_campaign_steps(
+    run_steps: int, n_runs: int, budgets: Budgets, where: str = "campaign"
+) -> None:
     """Refuse a campaign of more than ``budgets.max_campaign_steps`` run-steps in total."""
     if budgets.max_campaign_steps is not None and run_steps > budgets.max_campaign_steps:
         raise ResourceLimitError(
             f"{where}: {n_runs:,} runs, {run_steps:.3g} run-steps in total exceed the budget of "
             f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
             f"simulation.horizon, or raise the budget with --max-campaign-steps / "
-            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS")
+            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS"
+        )
 
 
 def _tree_bytes(tree: Any) -> int:
@@ -179,7 +225,8 @@ def check_memory(compiled: Any, budgets: Budgets, where: str = "scenario", batch
             f"{where}: {what} needs about {format_bytes(need)} of memory for its records and state, over the "
             f"budget of {format_bytes(budgets.max_memory)}; {fix}raise simulation.record_every (fewer "
             f"records), shorten simulation.horizon or use fewer spacecraft, or raise the budget with "
-            f"--max-memory / FORMATION_FTC_MAX_MEMORY")
+            f"--max-memory / FORMATION_FTC_MAX_MEMORY"
+        )
     return need
 
 
@@ -213,6 +260,8 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
         except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
             if isinstance(exc, InputError):
                 raise
-            raise InputError(f"{where}: base scenario {base!r} (run {r}) cannot be compiled: {exc}") from None
+            raise InputError(
+                f"{where}: base scenario {base!r} (run {r}) cannot be compiled: {exc}"
+            ) from None
         batch = max(batch, check_memory(compiled, budgets, where, batch=int(plan.chunk_size)))
     return {"run_steps": steps, "campaign_steps": total, "batch_memory": batch}

@@ -39,19 +39,28 @@ def _numeric(field: Any) -> bool:  # a pyarrow.Field
     return pa.types.is_integer(field.type) or pa.types.is_floating(field.type)
 
 
-def write_parquet(df: pd.DataFrame, where: str | Path | IO[bytes], units: Mapping[str, str],
-                  **options: Any) -> None:
+def write_parquet(
+    df: pd.DataFrame, where: str | Path | IO[bytes], units: Mapping[str, str], **options: Any
+) -> None:
     """Write ``df`` (without its index) as Parquet with ``units[column]`` on every numeric column
     (:data:`UNKNOWN` for one not in ``units``); ``options`` go to :func:`pyarrow.parquet.write_table`."""
     plain = df.copy(deep=False)
     plain.attrs = {}  # pyarrow would store them in the file ("pandas" metadata); units live in the fields
     table = pa.Table.from_pandas(plain, preserve_index=False)
-    fields = [f.with_metadata({**(f.metadata or {}), b"units": units.get(f.name, UNKNOWN).encode()})
-              if _numeric(f) else f for f in table.schema]
+    fields = [
+        f.with_metadata({**(f.metadata or {}), b"units": units.get(f.name, UNKNOWN).encode()})
+        if _numeric(f)
+        else f
+        for f in table.schema
+    ]
     pq.write_table(table.cast(pa.schema(fields, metadata=table.schema.metadata)), where, **options)
 
 
 def read_units(source: Any) -> dict[str, str]:
     """``{column: units}`` of a Parquet file (a path) or its ``pyarrow.Schema``, written by :func:`write_parquet`."""
     schema = source if isinstance(source, pa.Schema) else pq.read_schema(source)
-    return {f.name: f.metadata[b"units"].decode() for f in schema if f.metadata and b"units" in f.metadata}
+    return {
+        f.name: f.metadata[b"units"].decode()
+        for f in schema
+        if f.metadata and b"units" in f.metadata
+    }

@@ -17,7 +17,16 @@ if TYPE_CHECKING:
 
 __all__ = ["plt", "new_figure", "save_figure", "SPACECRAFT_COLORS"]
 
-SPACECRAFT_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"]
+SPACECRAFT_COLORS = [
+    "#1f77b4",
+    "#d62728",
+    "#2ca02c",
+    "#9467bd",
+    "#ff7f0e",
+    "#8c564b",
+    "#e377c2",
+    "#17becf",
+]
 
 
 @functools.cache
@@ -54,13 +63,21 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 6.4, height: float | None = None,
-               sharex: bool = True, title: str | None = None):
+def new_figure(
+    nrows: int = 1,
+    ncols: int = 1,
+    *,
+    width: float = 6.4,
+    height: float | None = None,
+    sharex: bool = True,
+    title: str | None = None,
+):
     """Figure and axes with the package style; height defaults to 2.2 in per row."""
     pyplot = _pyplot()
     with pyplot.rc_context(_style()):
-        fig, axes = pyplot.subplots(nrows, ncols, figsize=(width, height or 1.0 + 2.2 * nrows),
-                                    sharex=sharex, squeeze=False)
+        fig, axes = pyplot.subplots(
+            nrows, ncols, figsize=(width, height or 1.0 + 2.2 * nrows), sharex=sharex, squeeze=False
+        )
     if title:
         fig.suptitle(title)
     return fig, axes

@@ -19,9 +19,27 @@ def utc_now() -> str:
 
 
 #: packages the toolkit uses, by import name; the key of each version is the name written here
-_PACKAGES = ["formation_ftc", "jax", "jaxlib", "numpy", "scipy", "xarray", "pydantic", "cvxpy",
-             "networkx", "matplotlib", "dask", "h5netcdf", "h5py", "pyarrow", "pandas", "clarabel",
-             "control", "rich", "plotly"]
+_PACKAGES = [
+    "formation_ftc",
+    "jax",
+    "jaxlib",
+    "numpy",
+    "scipy",
+    "xarray",
+    "pydantic",
+    "cvxpy",
+    "networkx",
+    "matplotlib",
+    "dask",
+    "h5netcdf",
+    "h5py",
+    "pyarrow",
+    "pandas",
+    "clarabel",
+    "control",
+    "rich",
+    "plotly",
+]
 
 
 def _version(import_name: str, providers: Mapping[str, list[str]]) -> str:
@@ -49,10 +67,21 @@ def git_commit() -> str:
     """HEAD commit of the checkout the package runs from ('+dirty' when modified), else 'unknown'."""
     here = Path(__file__).resolve().parent
     try:
-        sha = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
-                             timeout=5, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
-                               capture_output=True, text=True, timeout=5).stdout.strip()
+        sha = subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=here,
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=here,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        ).stdout.strip()
         return sha + ("+dirty" if dirty else "")
     except Exception:
         return "unknown"

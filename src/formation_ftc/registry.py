@@ -90,14 +90,22 @@ class Condition:
 
     def __post_init__(self) -> None:
         if self.basis not in BASES:
-            raise ValueError(f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}")
+            raise ValueError(
+                f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}"
+            )
         if self.holds is not None and not isinstance(self.holds, bool | np.bool_):
-            raise ValueError(f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}")
+            raise ValueError(
+                f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}"
+            )
         if self.basis == "informative" and self.required:
-            raise ValueError(f"condition {self.name!r}: an informative condition cannot be required")
+            raise ValueError(
+                f"condition {self.name!r}: an informative condition cannot be required"
+            )
         if self.holds is not None and bool(self.holds) and self.basis not in CERTIFYING_BASES:
-            raise ValueError(f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
-                             "holds; report holds=None (unproven) when no violation is found")
+            raise ValueError(
+                f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
+                "holds; report holds=None (unproven) when no violation is found"
+            )
 
     @property
     def unproven(self) -> bool:
@@ -105,10 +113,16 @@ class Condition:
         return self.holds is None and self.basis in ("sampled", "heuristic")
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(name=str(self.name), reference=str(self.reference), value=str(self.value),
-                    requirement=str(self.requirement),
-                    holds=None if self.holds is None else bool(self.holds),  # numpy bools too
-                    required=bool(self.required), detail=str(self.detail), basis=str(self.basis))
+        return dict(
+            name=str(self.name),
+            reference=str(self.reference),
+            value=str(self.value),
+            requirement=str(self.requirement),
+            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
+            required=bool(self.required),
+            detail=str(self.detail),
+            basis=str(self.basis),
+        )
 
 
 @dataclass(frozen=True)
@@ -118,7 +132,9 @@ class Method:
     build: Callable[[Any], Compiled]
     description: str = ""
     check: Callable[[Any], list[Condition]] | None = None
-    plot: Callable[[Any, Any, Path], list[Path]] | None = None  # (dataset, scenario, out_dir) -> PNGs
+    plot: Callable[[Any, Any, Path], list[Path]] | None = (
+        None  # (dataset, scenario, out_dir) -> PNGs
+    )
 
 
 #: Relations a verdict basis may use: name -> (arity, predicate on (lhs, rhs, tol)).
@@ -199,15 +215,33 @@ class ComparisonRow:
                 raise ValueError(f"row {self.quantity!r}: a {self.verdict!r} verdict needs a basis")
             want = "match" if basis_holds(self.basis) else "differs"
             if want != self.verdict:
-                raise ValueError(f"row {self.quantity!r}: verdict {self.verdict!r} but its basis gives {want!r}")
+                raise ValueError(
+                    f"row {self.quantity!r}: verdict {self.verdict!r} but its basis gives {want!r}"
+                )
 
     @classmethod
-    def judged(cls, quantity: str, published: str, ours: str, criterion: str, basis: tuple, note: str = "",
-               reference: str = "") -> ComparisonRow:
+    def judged(
+        cls,
+        quantity: str,
+        published: str,
+        ours: str,
+        criterion: str,
+        basis: tuple,
+        note: str = "",
+        reference: str = "",
+    ) -> ComparisonRow:
         """Row whose verdict is computed from ``basis`` ("match" when every clause holds)."""
         basis = tuple(tuple(_plain(x) for x in c) for c in basis)
-        return cls(quantity, published, ours, criterion, "match" if basis_holds(basis) else "differs", note,
-                   reference, basis)
+        return cls(
+            quantity,
+            published,
+            ours,
+            criterion,
+            "match" if basis_holds(basis) else "differs",
+            note,
+            reference,
+            basis,
+        )
 
     @property
     def paper(self) -> str:
@@ -215,9 +249,16 @@ class ComparisonRow:
         return self.published
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(quantity=self.quantity, published=self.published, ours=self.ours,
-                    criterion=self.criterion, verdict=self.verdict, note=self.note, reference=self.reference,
-                    basis=[list(c) for c in self.basis])
+        return dict(
+            quantity=self.quantity,
+            published=self.published,
+            ours=self.ours,
+            criterion=self.criterion,
+            verdict=self.verdict,
+            note=self.note,
+            reference=self.reference,
+            basis=[list(c) for c in self.basis],
+        )
 
 
 @dataclass(frozen=True)
@@ -270,8 +311,10 @@ def register_method(method: Method) -> Method:
 def get_method(name: str) -> Method:
     load_plugins()
     if name not in _METHODS:
-        raise KeyError(f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}"
-                       + _plugin_error_hint())
+        raise KeyError(
+            f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}"
+            + _plugin_error_hint()
+        )
     return _METHODS[name]
 
 
@@ -288,8 +331,10 @@ def register_reproduction(rep: Reproduction) -> Reproduction:
 def get_reproduction(paper: str) -> Reproduction:
     load_plugins()
     if paper not in _REPRODUCTIONS:
-        raise KeyError(f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all"
-                       + _plugin_error_hint())
+        raise KeyError(
+            f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all"
+            + _plugin_error_hint()
+        )
     return _REPRODUCTIONS[paper]
 
 
@@ -315,8 +360,11 @@ def plugin_modules() -> list[str]:
         import pkgutil
 
         papers = importlib.import_module("formation_ftc.papers")  # the built-in paper packages
-        names = ["formation_ftc.methods"] + [f"formation_ftc.papers.{m.name}"
-                                             for m in pkgutil.iter_modules(papers.__path__)] + names
+        names = (
+            ["formation_ftc.methods"]
+            + [f"formation_ftc.papers.{m.name}" for m in pkgutil.iter_modules(papers.__path__)]
+            + names
+        )
     own = [n for n in names if n.startswith("formation_ftc.")]
     return list(dict.fromkeys(own + [n for n in names if not n.startswith("formation_ftc.")]))
 
@@ -343,5 +391,8 @@ def load_plugins() -> None:
 def _plugin_error_hint() -> str:
     if not PLUGIN_ERRORS:
         return ""
-    return " (plug-ins that failed to import: " + ", ".join(
-        f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items()) + ")"
+    return (
+        " (plug-ins that failed to import: "
+        + ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
+        + ")"
+    )

@@ -22,8 +22,15 @@ from typing import Any
 
 from formation_ftc.errors import InputError
 
-__all__ = ["OutputError", "MARKER", "MAX_PLOT_SPACECRAFT", "check_out_dir", "staged_output", "plot_view",
-           "is_run_result"]
+__all__ = [
+    "OutputError",
+    "MARKER",
+    "MAX_PLOT_SPACECRAFT",
+    "check_out_dir",
+    "staged_output",
+    "plot_view",
+    "is_run_result",
+]
 
 #: file in a run directory listing what the run wrote (so a rerun may replace exactly that)
 MARKER = ".formation-ftc-run.json"
@@ -37,8 +44,12 @@ def _plot_limit() -> int:
     if not text:
         return MAX_PLOT_SPACECRAFT
     if not text.isdigit() or int(text) < 1:
-        raise OutputError(f"FORMATION_FTC_MAX_PLOT_SPACECRAFT={text!r}: expected a positive integer")
+        raise OutputError(
+            f"FORMATION_FTC_MAX_PLOT_SPACECRAFT={text!r}: expected a positive integer"
+        )
     return int(text)
+
+
 _RESULT_SUFFIXES = {".nc", ".json", ".png", ".svg", ".pdf", ".html"}
 
 
@@ -57,8 +68,9 @@ def is_run_result(d: Path) -> bool:
             return False
         return entries <= written | {MARKER}
     # a result written before the marker existed: result.nc + metrics.json and figures only
-    return ({"result.nc", "metrics.json"} <= entries
-            and all((d / e).is_file() and Path(e).suffix in _RESULT_SUFFIXES for e in entries))
+    return {"result.nc", "metrics.json"} <= entries and all(
+        (d / e).is_file() and Path(e).suffix in _RESULT_SUFFIXES for e in entries
+    )
 
 
 def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
@@ -93,9 +105,11 @@ def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
         except OSError as exc:
             raise OutputError(f"--out {text}: cannot be read ({exc.strerror or exc})") from None
         if entries and not force and not is_run_result(d):
-            raise OutputError(f"--out {text}: is not empty and is not the result of an earlier `formation-ftc "
-                              f"run` (it holds e.g. {sorted(e.name for e in entries)[:3]}); use another "
-                              f"directory, or --force to replace its content")
+            raise OutputError(
+                f"--out {text}: is not empty and is not the result of an earlier `formation-ftc "
+                f"run` (it holds e.g. {sorted(e.name for e in entries)[:3]}); use another "
+                f"directory, or --force to replace its content"
+            )
     # the nearest existing ancestor must be a writable directory (the staging sibling is created there)
     anc = d.absolute().parent
     while not anc.exists():
@@ -107,8 +121,10 @@ def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
         probe.mkdir()
         probe.rmdir()
     except OSError as exc:
-        raise OutputError(f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
-                          f"directory") from None
+        raise OutputError(
+            f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
+            f"directory"
+        ) from None
     return d
 
 
@@ -125,8 +141,9 @@ def staged_output(out_dir: Path) -> Iterator[Path]:
             shutil.rmtree(stage)
         stage.mkdir()
     except OSError as exc:
-        raise OutputError(f"--out {out_dir}: cannot create a directory in {parent} "
-                          f"({exc.strerror or exc})") from None
+        raise OutputError(
+            f"--out {out_dir}: cannot create a directory in {parent} ({exc.strerror or exc})"
+        ) from None
     try:
         yield stage
         files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
@@ -164,5 +181,6 @@ def plot_view(ds: Any, max_spacecraft: int | None = None) -> tuple[Any, str]:
     if limit <= 0 or n <= limit:
         return ds, ""
     keep = np.unique(np.linspace(0, n - 1, limit).round().astype(int))
-    return ds.isel(spacecraft=keep), (f"figures show {len(keep)} of {n} spacecraft (evenly spaced); "
-                                      f"result.nc holds all of them")
+    return ds.isel(spacecraft=keep), (
+        f"figures show {len(keep)} of {n} spacecraft (evenly spaced); result.nc holds all of them"
+    )

@@ -1,4 +1,4 @@
-""""Did you mean ...?" for mistyped scenario names, method names and scenario fields.
+""" "Did you mean ...?" for mistyped scenario names, method names and scenario fields.
 
 Pure helpers (standard library only) used by the command line: :func:`close_matches` ranks names by
 similarity (:mod:`difflib`), :func:`unknown_fields` walks a raw scenario dict against a JSON Schema
@@ -16,7 +16,9 @@ from typing import Any
 __all__ = ["close_matches", "did_you_mean", "UnknownField", "unknown_fields", "schema_paths"]
 
 
-def close_matches(word: str, candidates: Iterable[str], n: int = 3, cutoff: float = 0.6) -> list[str]:
+def close_matches(
+    word: str, candidates: Iterable[str], n: int = 3, cutoff: float = 0.6
+) -> list[str]:
     """Up to ``n`` candidates most similar to ``word`` (similarity ratio >= ``cutoff``), best first."""
     cands = list(dict.fromkeys(str(c) for c in candidates))
     found = difflib.get_close_matches(word, cands, n=n, cutoff=cutoff)
@@ -64,8 +66,12 @@ def _resolve(schema: Mapping[str, Any], root: Mapping[str, Any]) -> list[Mapping
     return out
 
 
-def unknown_fields(raw: Mapping[str, Any], schema: Mapping[str, Any], root: Mapping[str, Any] | None = None,
-                   prefix: str = "") -> list[UnknownField]:
+def unknown_fields(
+    raw: Mapping[str, Any],
+    schema: Mapping[str, Any],
+    root: Mapping[str, Any] | None = None,
+    prefix: str = "",
+) -> list[UnknownField]:
     """Every key of ``raw`` (recursively through tables) that the JSON Schema does not allow.
 
     Only objects that forbid extra keys (``additionalProperties: false``) report unknown keys; a key
@@ -96,8 +102,12 @@ def unknown_fields(raw: Mapping[str, Any], schema: Mapping[str, Any], root: Mapp
     return out
 
 
-def schema_paths(schema: Mapping[str, Any], root: Mapping[str, Any] | None = None, prefix: str = "",
-                 depth: int = 0) -> list[str]:
+def schema_paths(
+    schema: Mapping[str, Any],
+    root: Mapping[str, Any] | None = None,
+    prefix: str = "",
+    depth: int = 0,
+) -> list[str]:
     """Every dotted field path a JSON Schema allows (tables followed, lists not), sorted."""
     root = schema if root is None else root
     out: set[str] = set()

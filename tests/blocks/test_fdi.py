@@ -13,7 +13,13 @@ import numpy as np
 import pytest
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.fdi import FDIModel, fdi_output, fdi_params, identity_routing, isolation_routing
+from formation_ftc.blocks.fdi import (
+    FDIModel,
+    fdi_output,
+    fdi_params,
+    identity_routing,
+    isolation_routing,
+)
 
 M, K, DT = 8, 3, 0.01
 
@@ -42,7 +48,9 @@ def test_spec_identification_estimate_closed_form():
     ks = np.arange(0, 30001, 7)
     flag, est = outputs(p, ks)
     t = ks * DT
-    want = np.where((t >= 45.0 - 1e-9) & (t <= 245.0 + 1e-9), 0.05 * np.sin(0.02 * (t - 5.0)) + 0.5, 0.0)
+    want = np.where(
+        (t >= 45.0 - 1e-9) & (t <= 245.0 + 1e-9), 0.05 * np.sin(0.02 * (t - 5.0)) + 0.5, 0.0
+    )
     np.testing.assert_allclose(est[:, 0, 2], want, atol=1e-12)
     # every other channel reports nothing; the flag is latched from 45 s (also after 245 s)
     others = est.copy()
@@ -77,7 +85,9 @@ def test_scale_and_delay():
     ks = np.arange(4250, 24251, 13)
     _, est = outputs(p, ks)
     t = ks * DT
-    np.testing.assert_allclose(est[:, 0, 2], 0.8 * (0.05 * np.sin(0.02 * (t - 2.5)) + 0.6), atol=1e-12)
+    np.testing.assert_allclose(
+        est[:, 0, 2], 0.8 * (0.05 * np.sin(0.02 * (t - 2.5)) + 0.6), atol=1e-12
+    )
 
 
 def test_noise_statistics_and_determinism():
@@ -96,8 +106,10 @@ def test_noise_statistics_and_determinism():
 
 
 def test_conformance_float64_and_batched_equals_single():
-    ps = [fdi_params(M, K, fault_mask=MASK, onset=40.0, delay=d, bias=b, noise_std=0.01)
-          for d, b in ((5.0, -0.1), (1.0, 0.2), (0.0, 0.0))]
+    ps = [
+        fdi_params(M, K, fault_mask=MASK, onset=40.0, delay=d, bias=b, noise_std=0.01)
+        for d, b in ((5.0, -0.1), (1.0, 0.2), (0.0, 0.0))
+    ]
     P = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *ps)
     k = jnp.asarray(9000)
     key = jax.random.PRNGKey(3)

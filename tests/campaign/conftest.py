@@ -10,8 +10,14 @@ import tomli_w
 
 #: A 2 x 3 campaign on the lead's cw-pd-fault scenario cut to 20 s (200 RK4 steps of 0.1 s).
 TINY = {
-    "campaign": {"name": "tiny", "base": "cw-pd-fault", "runs": 3, "seed": 11, "chunk_size": 2,
-                 "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"]},
+    "campaign": {
+        "name": "tiny",
+        "base": "cw-pd-fault",
+        "runs": 3,
+        "seed": 11,
+        "chunk_size": 2,
+        "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"],
+    },
     "overrides": {"simulation.horizon": 20.0},
     "sample": {
         "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},

@@ -18,13 +18,20 @@ def test_list_names_first(capsys):
     lines = capsys.readouterr().out.strip().splitlines()
     names = [ln.split()[0] for ln in lines]
     assert names == sorted(builtin_campaigns())
-    assert {"li2020-thm1-vs-sirftc", "azizi2009-alpha2-sweep", "mehrabian-cases", "cw-pd-gains"} <= set(names)
+    assert {
+        "li2020-thm1-vs-sirftc",
+        "azizi2009-alpha2-sweep",
+        "mehrabian-cases",
+        "cw-pd-gains",
+    } <= set(names)
 
 
 def test_run_report_and_errors(tmp_path, tiny, write_campaign, capsys):
     spec = write_campaign(tmp_path / "c.toml", tiny())
     out = tmp_path / "out"
-    assert main(["campaign", "run", str(spec), "--out", str(out), "--runs", "2", "--no-progress"]) == 0
+    assert (
+        main(["campaign", "run", str(spec), "--out", str(out), "--runs", "2", "--no-progress"]) == 0
+    )
     err = capsys.readouterr().err
     assert "4 runs (4 ok, 0 failed)" in err
     # --runs changed the campaign: the same directory with the file's runs = 3 is another campaign
@@ -41,10 +48,33 @@ def test_run_report_and_errors(tmp_path, tiny, write_campaign, capsys):
 
     bad = tiny()
     bad["sample"]["controller.gain"] = {"dist": "uniform", "low": 0.0, "high": 1.0}
-    assert main(["campaign", "run", str(write_campaign(tmp_path / "bad.toml", bad)), "--out",
-                 str(tmp_path / "bad")]) == 2
+    assert (
+        main(
+            [
+                "campaign",
+                "run",
+                str(write_campaign(tmp_path / "bad.toml", bad)),
+                "--out",
+                str(tmp_path / "bad"),
+            ]
+        )
+        == 2
+    )
     assert "sample.controller.gain: dotted path does not exist" in capsys.readouterr().err
-    assert main(["campaign", "run", str(spec), "--out", str(tmp_path / "x"), "--scheduler", "tcp://nohost"]) == 2
+    assert (
+        main(
+            [
+                "campaign",
+                "run",
+                str(spec),
+                "--out",
+                str(tmp_path / "x"),
+                "--scheduler",
+                "tcp://nohost",
+            ]
+        )
+        == 2
+    )
     assert "expected tcp://HOST:PORT" in capsys.readouterr().err
     (tmp_path / "foreign").mkdir()
     (tmp_path / "foreign" / "data.csv").write_text("1,2")
@@ -61,8 +91,10 @@ def test_builtin_campaigns_validate(name):
         plan = make_plan(name, runs=min(meta["runs"], 5))
     except CampaignError as exc:
         if name == "li2020-thm1-vs-sirftc" and "faults.profile" in str(exc):
-            pytest.xfail("li2020 scenario has no numeric fault profile fields yet (faults.profile/"
-                         "step_effectiveness/step_onset); see the campaign file header")
+            pytest.xfail(
+                "li2020 scenario has no numeric fault profile fields yet (faults.profile/"
+                "step_effectiveness/step_onset); see the campaign file header"
+            )
         raise
     plan.validate_all()
     assert plan.n_runs == plan.n_grid * min(meta["runs"], 5)

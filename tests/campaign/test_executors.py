@@ -24,11 +24,19 @@ def local_result(tmp_path_factory):
 
 def _raw():
     return {
-        "campaign": {"name": "exec", "base": "cw-pd-fault", "runs": 3, "seed": 5, "chunk_size": 2,
-                     "metrics": ["final_position_error_mean", "delta_v_total"]},
+        "campaign": {
+            "name": "exec",
+            "base": "cw-pd-fault",
+            "runs": 3,
+            "seed": 5,
+            "chunk_size": 2,
+            "metrics": ["final_position_error_mean", "delta_v_total"],
+        },
         "overrides": {"simulation.horizon": 20.0},
-        "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-                   "controller.kd": {"grid": [10.0, 30.0]}},
+        "sample": {
+            "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
+            "controller.kd": {"grid": [10.0, 30.0]},
+        },
     }
 
 
@@ -51,7 +59,9 @@ def test_unreachable_scheduler_fails_fast_before_any_run(tmp_path):
         port = s.getsockname()[1]
     out = tmp_path / "never"
     t0 = time.monotonic()
-    with pytest.raises(CampaignError, match=rf"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"):
+    with pytest.raises(
+        CampaignError, match=rf"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"
+    ):
         run_campaign(_raw(), out, executor=DaskExecutor(scheduler=f"tcp://127.0.0.1:{port}"))
     assert time.monotonic() - t0 < 30
     assert not out.exists()  # no manifest, no chunk
@@ -106,7 +116,14 @@ def test_in_process_pipeline_starts_the_next_chunk_before_finishing_one():
 
     got = list(LocalExecutor(1).map(None, None, [0, 1, 2], start=start))
     assert got == [0, 1, 2]
-    assert events == [("start", 0), ("start", 1), ("finish", 0), ("start", 2), ("finish", 1), ("finish", 2)]
+    assert events == [
+        ("start", 0),
+        ("start", 1),
+        ("finish", 0),
+        ("start", 2),
+        ("finish", 1),
+        ("finish", 2),
+    ]
 
 
 def test_in_process_pipeline_delivers_a_finished_chunk_before_a_start_error():
@@ -130,6 +147,10 @@ def test_pipelined_in_process_equals_chunk_by_chunk(local_result, tmp_path):
     outcome = run_campaign(raw, tmp_path / "inproc", executor=LocalExecutor(1))
     plan = make_plan(raw)
     tables = [run_chunk(plan, c).table for c in plan.chunks()]
-    expected = pd.concat(tables, ignore_index=True).sort_values("run_id", kind="stable").reset_index(drop=True)
+    expected = (
+        pd.concat(tables, ignore_index=True)
+        .sort_values("run_id", kind="stable")
+        .reset_index(drop=True)
+    )
     pd.testing.assert_frame_equal(outcome.results, expected, check_dtype=False)
     assert outcome.chunks_computed == plan.n_chunks

@@ -57,8 +57,14 @@ class _SilentServer:
 
 def _raw(runs=3, horizon=20.0):
     return {
-        "campaign": {"name": "dask-hard", "base": "cw-pd-fault", "runs": runs, "seed": 5, "chunk_size": 2,
-                     "metrics": ["final_position_error_mean", "delta_v_total"]},
+        "campaign": {
+            "name": "dask-hard",
+            "base": "cw-pd-fault",
+            "runs": runs,
+            "seed": 5,
+            "chunk_size": 2,
+            "metrics": ["final_position_error_mean", "delta_v_total"],
+        },
         "overrides": {"simulation.horizon": horizon},
         "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}},
     }
@@ -69,8 +75,14 @@ def test_not_a_scheduler_fails_within_the_timeout_naming_the_address(tmp_path):
     addr = f"tcp://127.0.0.1:{server.port}"
     try:
         t0 = time.monotonic()
-        with pytest.raises(CampaignError, match=rf"--scheduler {addr}: no Dask scheduler handshake within 2 s"):
-            run_campaign(_raw(), tmp_path / "never", executor=DaskExecutor(scheduler=addr, connect_timeout=2.0))
+        with pytest.raises(
+            CampaignError, match=rf"--scheduler {addr}: no Dask scheduler handshake within 2 s"
+        ):
+            run_campaign(
+                _raw(),
+                tmp_path / "never",
+                executor=DaskExecutor(scheduler=addr, connect_timeout=2.0),
+            )
         assert time.monotonic() - t0 < 15
         assert not (tmp_path / "never").exists()
         # the command line: exit status 2 and one line naming the address, within the timeout
@@ -79,8 +91,19 @@ def test_not_a_scheduler_fails_within_the_timeout_naming_the_address(tmp_path):
 
         spec.write_text(tomli_w.dumps(_raw()))
         t0 = time.monotonic()
-        code = campaign_main(["run", str(spec), "--out", str(tmp_path / "cli"), "--scheduler", addr,
-                              "--connect-timeout", "2", "--no-progress"])
+        code = campaign_main(
+            [
+                "run",
+                str(spec),
+                "--out",
+                str(tmp_path / "cli"),
+                "--scheduler",
+                addr,
+                "--connect-timeout",
+                "2",
+                "--no-progress",
+            ]
+        )
         assert code == 2 and time.monotonic() - t0 < 30
     finally:
         server.close()
@@ -117,8 +140,22 @@ def test_real_cluster_survives_a_killed_worker_and_equals_local(tmp_path):
     log = open(tmp_path / "cluster.log", "wb")  # noqa: SIM115 - closed in finally
     procs = []
     try:
-        procs.append(_start([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                             "--scheduler-file", str(sched_file)], log))
+        procs.append(
+            _start(
+                [
+                    str(DASK),
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(sched_file),
+                ],
+                log,
+            )
+        )
         deadline = time.monotonic() + 60
         while not sched_file.exists() and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -126,9 +163,26 @@ def test_real_cluster_survives_a_killed_worker_and_equals_local(tmp_path):
         time.sleep(0.2)
         address = json.loads(sched_file.read_text())["address"]
         assert address.startswith("tcp://127.0.0.1:")
-        workers = [_start([str(DASK), "worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
-                           "--no-nanny", "--host", "127.0.0.1", "--no-dashboard", "--name", f"w{i}"], log)
-                   for i in range(2)]
+        workers = [
+            _start(
+                [
+                    str(DASK),
+                    "worker",
+                    "--scheduler-file",
+                    str(sched_file),
+                    "--nthreads",
+                    "1",
+                    "--no-nanny",
+                    "--host",
+                    "127.0.0.1",
+                    "--no-dashboard",
+                    "--name",
+                    f"w{i}",
+                ],
+                log,
+            )
+            for i in range(2)
+        ]
         procs += workers
         from dask.distributed import Client
 
@@ -136,9 +190,24 @@ def test_real_cluster_survives_a_killed_worker_and_equals_local(tmp_path):
             c.wait_for_workers(2, timeout=90)
         out = tmp_path / "out"
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        run = subprocess.Popen([sys.executable, "-m", "formation_ftc.cli", "campaign", "run", str(spec), "--out",
-                                str(out), "--scheduler", address, "--no-progress"], env=env,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        run = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "formation_ftc.cli",
+                "campaign",
+                "run",
+                str(spec),
+                "--out",
+                str(out),
+                "--scheduler",
+                address,
+                "--no-progress",
+            ],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
         procs.append(run)
         deadline = time.monotonic() + 240
         chunks = out / "chunks"
@@ -147,7 +216,9 @@ def test_real_cluster_survives_a_killed_worker_and_equals_local(tmp_path):
                 break
             time.sleep(0.05)
         n_done_at_kill = len([p for p in chunks.iterdir() if p.name.endswith(".parquet")])
-        assert run.poll() is None and n_done_at_kill < 8, "the campaign finished before a worker could be killed"
+        assert run.poll() is None and n_done_at_kill < 8, (
+            "the campaign finished before a worker could be killed"
+        )
         os.kill(workers[0].pid, signal.SIGKILL)  # one worker dies mid-campaign
         _, err = run.communicate(timeout=240)
         assert run.returncode == 0, err.decode()[-3000:]

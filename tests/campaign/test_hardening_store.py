@@ -24,7 +24,9 @@ from formation_ftc.campaign.cli import main as campaign_main
 
 def _table(plan, chunk_id):
     ids = plan.chunk(chunk_id).run_ids
-    return pd.DataFrame({"run_id": ids, "status": ["ok"] * len(ids), "metric:x": [float(i) for i in ids]})
+    return pd.DataFrame(
+        {"run_id": ids, "status": ["ok"] * len(ids), "metric:x": [float(i) for i in ids]}
+    )
 
 
 # ------------------------------------------------------------------------------------------- lock
@@ -35,8 +37,11 @@ def test_second_store_is_refused_naming_host_and_pid(tmp_path, tiny):
     first.initialize()
     try:
         second = CampaignStore.prepare(root, plan)
-        with pytest.raises(CampaignError, match=rf"in use by another campaign run \(host {socket.gethostname()}, "
-                                                rf"PID {os.getpid()}"):
+        with pytest.raises(
+            CampaignError,
+            match=rf"in use by another campaign run \(host {socket.gethostname()}, "
+            rf"PID {os.getpid()}",
+        ):
             second.initialize()
         first.write_chunk(0, _table(plan, 0))  # the first writer is unharmed
     finally:
@@ -55,7 +60,9 @@ def test_stale_lock_of_a_dead_process_is_taken_over(tmp_path, tiny):
     s.write_chunk(1, _table(plan, 1))
     s.close()
     # what a run killed with SIGKILL leaves: the text of the lock, but no lock held (the kernel freed it)
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True
+    )
     (root / ".lock").write_text(json.dumps({"host": socket.gethostname(), "pid": int(dead.stdout)}))
     tmp = root / "chunks" / f".chunk-000002.parquet.tmp-{int(dead.stdout)}"
     tmp.write_bytes(b"half written")
@@ -84,19 +91,43 @@ def _n_chunks(out: Path) -> int:
 
 @pytest.mark.slow
 def test_second_writer_is_refused_and_the_first_finishes(tmp_path, tiny, write_campaign, capsys):
-    raw, spec = _slow_campaign(tiny, write_campaign, tmp_path / "slow.toml", n_chunks=12, horizon=6000.0)
+    raw, spec = _slow_campaign(
+        tiny, write_campaign, tmp_path / "slow.toml", n_chunks=12, horizon=6000.0
+    )
     out = tmp_path / "out"
-    first = subprocess.Popen([sys.executable, "-m", "formation_ftc.campaign.cli", "run", str(spec), "--out", str(out),
-                              "--no-progress", "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "formation_ftc.campaign.cli",
+            "run",
+            str(spec),
+            "--out",
+            str(out),
+            "--no-progress",
+            "--workers",
+            "1",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     try:
         deadline = time.monotonic() + 240
         while _n_chunks(out) == 0 and first.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         assert first.poll() is None, first.stderr.read().decode()[-2000:]
         for _ in range(2):  # the scan of a second writer deletes nothing; its run is refused
-            assert campaign_main(["run", str(spec), "--out", str(out), "--no-progress", "--workers", "1"]) == 2
+            assert (
+                campaign_main(
+                    ["run", str(spec), "--out", str(out), "--no-progress", "--workers", "1"]
+                )
+                == 2
+            )
             err = capsys.readouterr().err
-            assert f"in use by another campaign run (host {socket.gethostname()}, PID {first.pid}" in err
+            assert (
+                f"in use by another campaign run (host {socket.gethostname()}, PID {first.pid}"
+                in err
+            )
         assert first.poll() is None, "the first writer finished before the second one tried"
         _, err = first.communicate(timeout=500)
         assert first.returncode == 0, err.decode()[-2000:]
@@ -148,7 +179,7 @@ def _children(pid: int) -> set[int]:
                 stat = (d / "stat").read_text()
             except OSError:
                 continue
-            parents[int(d.name)] = int(stat[stat.rindex(")") + 2:].split()[1])
+            parents[int(d.name)] = int(stat[stat.rindex(")") + 2 :].split()[1])
     out, frontier = set(), {pid}
     while frontier:
         nxt = {c for c, p in parents.items() if p in frontier and c not in out}
@@ -167,12 +198,29 @@ def _alive(pid: int) -> bool:
 
 @pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
-@pytest.mark.parametrize("executor", [["--workers", "2"], ["--dask-local", "2"]], ids=["pool", "dask-local"])
+@pytest.mark.parametrize(
+    "executor", [["--workers", "2"], ["--dask-local", "2"]], ids=["pool", "dask-local"]
+)
 def test_workers_die_with_a_killed_campaign(tmp_path, tiny, write_campaign, executor):
-    _, spec = _slow_campaign(tiny, write_campaign, tmp_path / "orphan.toml", n_chunks=40, horizon=4000.0)
+    _, spec = _slow_campaign(
+        tiny, write_campaign, tmp_path / "orphan.toml", n_chunks=40, horizon=4000.0
+    )
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "formation_ftc.campaign.cli", "run", str(spec), "--out", str(out),
-                             "--no-progress", *executor], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "formation_ftc.campaign.cli",
+            "run",
+            str(spec),
+            "--out",
+            str(out),
+            "--no-progress",
+            *executor,
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     workers: set[int] = set()
     try:
         deadline = time.monotonic() + 240
@@ -210,5 +258,7 @@ def test_file_system_without_locks_is_named(tmp_path, tiny, monkeypatch):
     monkeypatch.setattr(storage.fcntl, "flock", no_locks)
     plan = make_plan(tiny(runs=3, chunk_size=2))
     store = CampaignStore.prepare(tmp_path / "c", plan)
-    with pytest.raises(CampaignError, match="refuses advisory locks on .lock \\(No locks available\\)"):
+    with pytest.raises(
+        CampaignError, match="refuses advisory locks on .lock \\(No locks available\\)"
+    ):
         store.initialize()

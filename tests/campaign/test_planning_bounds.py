@@ -25,7 +25,11 @@ def _validation_message(plan) -> str:
 
 def test_validation_in_blocks_gives_the_verdicts_of_one_block(tiny, monkeypatch):
     raw = tiny(runs=40, chunk_size=8)
-    raw["sample"]["controller.kp"] = {"dist": "normal", "mean": 0.5, "std": 1.0}  # kp >= 0: some runs violate
+    raw["sample"]["controller.kp"] = {
+        "dist": "normal",
+        "mean": 0.5,
+        "std": 1.0,
+    }  # kp >= 0: some runs violate
     whole = _validation_message(make_plan(raw))
     assert "controller.kp" in whole and "run(s) in all" in whole
     monkeypatch.setattr(sampling, "VALIDATION_BLOCK", 3)
@@ -72,23 +76,35 @@ def test_the_executor_gets_the_chunks_a_window_at_a_time(tiny, monkeypatch):
             windows.append([c.chunk_id for c in chunks])
             yield from (c.chunk_id for c in chunks)
 
-    assert list(runner._map_in_windows(Recorder(), plan, plan.chunks(done={2}))) == [0, 1, *range(3, 10)]
+    assert list(runner._map_in_windows(Recorder(), plan, plan.chunks(done={2}))) == [
+        0,
+        1,
+        *range(3, 10),
+    ]
     assert windows == [[0, 1, 3, 4], [5, 6, 7, 8], [9]]
 
 
-@pytest.mark.parametrize("sampling_kind, runs, allowed", [("sobol", 3_000_000, "2,097,152"),
-                                                          ("lhs", 3_000_000, "2,097,152")])
+@pytest.mark.parametrize(
+    "sampling_kind, runs, allowed",
+    [("sobol", 3_000_000, "2,097,152"), ("lhs", 3_000_000, "2,097,152")],
+)
 def test_a_design_too_large_to_hold_is_refused_naming_runs(tiny, sampling_kind, runs, allowed):
     raw = tiny(runs=10, sampling=sampling_kind)
-    with pytest.raises(CampaignError, match=rf"--runs / campaign.runs = 3,000,000: .*1 <= runs <= {allowed} "):
+    with pytest.raises(
+        CampaignError, match=rf"--runs / campaign.runs = 3,000,000: .*1 <= runs <= {allowed} "
+    ):
         make_plan(raw, runs=runs)
-    raw["campaign"]["paired"] = False  # one design row per run: the grid's 2 points share the budget
+    raw["campaign"]["paired"] = (
+        False  # one design row per run: the grid's 2 points share the budget
+    )
     with pytest.raises(CampaignError, match=r"1 <= runs <= 1,048,576 "):
         make_plan(raw, runs=runs)
     assert make_plan(tiny(runs=10, sampling=sampling_kind), runs=4096).design().shape[0] == 4096
 
 
-def test_workers_are_capped_with_one_warning_line(tiny, write_campaign, tmp_path, monkeypatch, capsys):
+def test_workers_are_capped_with_one_warning_line(
+    tiny, write_campaign, tmp_path, monkeypatch, capsys
+):
     from formation_ftc.campaign import executors
     from formation_ftc.cli import main
 
@@ -101,11 +117,16 @@ def test_workers_are_capped_with_one_warning_line(tiny, write_campaign, tmp_path
 
     monkeypatch.setattr(executors, "make_executor", fake_make_executor)
     path = write_campaign(tmp_path / "c.toml", tiny())
-    assert main(["campaign", "run", str(path), "--out", str(tmp_path / "o"), "--workers", "32"]) == 2
+    assert (
+        main(["campaign", "run", str(path), "--out", str(tmp_path / "o"), "--workers", "32"]) == 2
+    )
     assert asked["workers"] == 2
     warnings = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning:")]
     assert len(warnings) == 1 and "--workers: 32 worker processes asked for, using 2" in warnings[0]
-    assert campaign_cli._capped(1, "--workers", 0) == 1 and campaign_cli._capped(None, "--workers", 0) is None
+    assert (
+        campaign_cli._capped(1, "--workers", 0) == 1
+        and campaign_cli._capped(None, "--workers", 0) is None
+    )
     monkeypatch.setattr(executors, "available_memory", lambda: 3 * campaign_cli.WORKER_BYTES)
     assert campaign_cli._capped(2, "--dask-local", 2 * campaign_cli.WORKER_BYTES) == 1
 

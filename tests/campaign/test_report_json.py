@@ -14,9 +14,11 @@ import tomli_w
 from formation_ftc.cli import main
 
 #: 2 runs of cw-free-drift cut to 10 s (10 steps of 1 s): the cheapest campaign there is
-CHEAP = {"campaign": {"name": "cheap", "base": "cw-free-drift", "runs": 2, "seed": 1, "chunk_size": 2},
-         "overrides": {"simulation.horizon": 10.0},
-         "sample": {"spacecraft.mass.0": {"dist": "uniform", "low": 90.0, "high": 110.0}}}
+CHEAP = {
+    "campaign": {"name": "cheap", "base": "cw-free-drift", "runs": 2, "seed": 1, "chunk_size": 2},
+    "overrides": {"simulation.horizon": 10.0},
+    "sample": {"spacecraft.mass.0": {"dist": "uniform", "low": 90.0, "high": 110.0}},
+}
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +27,22 @@ def campaign_dir(tmp_path_factory) -> Path:
     spec = tmp / "cheap.toml"
     spec.write_text(tomli_w.dumps(CHEAP))
     out = tmp / "out"
-    assert main(["campaign", "run", str(spec), "--out", str(out), "--workers", "1", "--no-progress", "-q"]) == 0
+    assert (
+        main(
+            [
+                "campaign",
+                "run",
+                str(spec),
+                "--out",
+                str(out),
+                "--workers",
+                "1",
+                "--no-progress",
+                "-q",
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -34,7 +51,9 @@ def test_campaign_report_json(campaign_dir, capsys):
     assert main(["campaign", "report", str(campaign_dir), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)  # one document, no table in front of it
     summary = doc["summary"]
-    assert summary["campaign"] == "cheap" and summary["runs_done"] == 2 and summary["runs_failed"] == 0
+    assert (
+        summary["campaign"] == "cheap" and summary["runs_done"] == 2 and summary["runs_failed"] == 0
+    )
     assert summary == json.loads((campaign_dir / "report" / "summary.json").read_text())
     stats = summary["metrics"]["delta_v_total"]
     assert isinstance(stats["n_ok"], int) and isinstance(stats["mean"], float)
@@ -50,9 +69,25 @@ def test_campaign_report_into_a_full_stdout(campaign_dir):
     summary = campaign_dir / "report" / "summary.json"
     summary.unlink(missing_ok=True)
     with open("/dev/full", "w") as full:
-        proc = subprocess.run([sys.executable, "-m", "formation_ftc.cli", "campaign", "report", str(campaign_dir),
-                               "--no-plots"], stdout=full, stderr=subprocess.PIPE, text=True, timeout=600)
+        proc = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "formation_ftc.cli",
+                "campaign",
+                "report",
+                str(campaign_dir),
+                "--no-plots",
+            ],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=600,
+        )
     assert proc.returncode == 1
-    assert proc.stderr.strip().splitlines()[-1] == "cannot write to standard output: No space left on device"
+    assert (
+        proc.stderr.strip().splitlines()[-1]
+        == "cannot write to standard output: No space left on device"
+    )
     assert "internal error" not in proc.stderr and "Traceback" not in proc.stderr
     assert json.loads(summary.read_text())["runs_done"] == 2  # the report was written all the same

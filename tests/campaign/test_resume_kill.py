@@ -22,15 +22,30 @@ def _chunks(out):
 
 
 def test_sigkill_then_resume_equals_uninterrupted(tmp_path, tiny, write_campaign):
-    raw = tiny(runs=2 * N_CHUNKS, chunk_size=2, metrics=["final_position_error_mean", "delta_v_total"])
+    raw = tiny(
+        runs=2 * N_CHUNKS, chunk_size=2, metrics=["final_position_error_mean", "delta_v_total"]
+    )
     raw["overrides"]["simulation.horizon"] = 2000.0  # 20,000 steps: ~0.3 s per chunk, time to kill
     raw["sample"].pop("controller.kd")  # no grid: one grid point, 8 chunks
     raw["traces"]["runs"] = [3]
     spec = write_campaign(tmp_path / "kill.toml", raw)
     out = tmp_path / "killed"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "formation_ftc.campaign.cli", "run", str(spec), "--out",
-                             str(out), "--no-progress"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "formation_ftc.campaign.cli",
+            "run",
+            str(spec),
+            "--out",
+            str(out),
+            "--no-progress",
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     deadline = time.monotonic() + 240
     while not _chunks(out) and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.005)
@@ -41,7 +56,9 @@ def test_sigkill_then_resume_equals_uninterrupted(tmp_path, tiny, write_campaign
     assert 1 <= len(before) < N_CHUNKS, f"kill came too late/early: {sorted(before)}"
 
     resumed = run_campaign(spec, out)
-    assert resumed.chunks_resumed == len(before) and resumed.chunks_computed == N_CHUNKS - len(before)
+    assert resumed.chunks_resumed == len(before) and resumed.chunks_computed == N_CHUNKS - len(
+        before
+    )
     after = _chunks(out)
     assert len(after) == N_CHUNKS
     for name, stamp in before.items():  # finished chunks were neither recomputed nor rewritten
@@ -50,6 +67,10 @@ def test_sigkill_then_resume_equals_uninterrupted(tmp_path, tiny, write_campaign
     assert not [p for p in (out / "chunks").iterdir() if p.name.startswith(".")]
 
     clean = run_campaign(spec, tmp_path / "clean")
-    assert resumed.results["run_id"].tolist() == list(range(2 * N_CHUNKS))  # none lost or duplicated
-    pd.testing.assert_frame_equal(resumed.results, clean.results)  # same chunk size: identical numbers
+    assert resumed.results["run_id"].tolist() == list(
+        range(2 * N_CHUNKS)
+    )  # none lost or duplicated
+    pd.testing.assert_frame_equal(
+        resumed.results, clean.results
+    )  # same chunk size: identical numbers
     assert (out / "traces" / "run-000003.nc").exists()

@@ -29,12 +29,20 @@ def base_run(tmp_path_factory):
     from formation_ftc.campaign.spec import load_campaign  # noqa: F401  (import check)
 
     raw = {
-        "campaign": {"name": "tiny", "base": "cw-pd-fault", "runs": 3, "seed": 11, "chunk_size": 2,
-                     "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"]},
+        "campaign": {
+            "name": "tiny",
+            "base": "cw-pd-fault",
+            "runs": 3,
+            "seed": 11,
+            "chunk_size": 2,
+            "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"],
+        },
         "overrides": {"simulation.horizon": 20.0},
-        "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-                   "controller.kd": {"grid": [10.0, 30.0]},
-                   "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0}},
+        "sample": {
+            "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
+            "controller.kd": {"grid": [10.0, 30.0]},
+            "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
+        },
         "traces": {"runs": [0, 4], "every": 2},
     }
     out = tmp_path_factory.mktemp("campaign") / "tiny"
@@ -49,7 +57,10 @@ def test_batched_runs_equal_single_runs(base_run):
     plan = make_plan(raw)
     for r in (0, 4, 5):  # one from each of three different chunks
         inp = plan.run_inputs(r)
-        assert df.loc[r, "seed"] == inp.seed and df.loc[r, "input:controller.kp"] == inp.values["controller.kp"]
+        assert (
+            df.loc[r, "seed"] == inp.seed
+            and df.loc[r, "input:controller.kp"] == inp.values["controller.kp"]
+        )
         _, single = api.simulate_with_metrics(plan.scenario(inp))  # independent, unbatched path
         for name in raw["campaign"]["metrics"]:
             assert df.loc[r, f"metric:{name}"] == pytest.approx(single[name], rel=RTOL)
@@ -61,8 +72,16 @@ def test_chunking_invariance(base_run, tmp_path):
     raw, _, outcome = base_run
     again = run_campaign(raw, tmp_path / "k3", chunk_size=3)
     a, b = outcome.results, again.results
-    cols = ["run_id", "grid_index", "replicate", "seed", "input:controller.kp", "input:controller.kd",
-            "input:spacecraft.mass.0", "status"]
+    cols = [
+        "run_id",
+        "grid_index",
+        "replicate",
+        "seed",
+        "input:controller.kp",
+        "input:controller.kd",
+        "input:spacecraft.mass.0",
+        "status",
+    ]
     pd.testing.assert_frame_equal(a[cols], b[cols])
     np.testing.assert_allclose(_metrics(a), _metrics(b), rtol=RTOL, atol=0)
     assert again.chunks_computed == 2  # 3 runs per grid point fit one chunk each
@@ -101,12 +120,16 @@ def test_diverged_runs_are_recorded_failed_and_the_campaign_continues(tmp_path, 
     assert df["status"].tolist() == ["ok", "ok", "failed", "failed"]
     assert outcome.n_failed == 2
     assert df.loc[2, "diagnostic"].startswith("simulation diverged at t = ")
-    assert "left its admissible set" in df.loc[2, "diagnostic"] and np.isnan(df.loc[2, "metric:delta_v_total"])
+    assert "left its admissible set" in df.loc[2, "diagnostic"] and np.isnan(
+        df.loc[2, "metric:delta_v_total"]
+    )
     # the replay of the diverging block names the spacecraft and the variable
     assert "spacecraft" in df.loc[2, "diagnostic"] and "<unknown>" not in df.loc[2, "diagnostic"]
     assert np.isfinite(df.loc[0, "metric:delta_v_total"])
     ds = xr.open_dataset(tmp_path / "div" / "traces" / "run-000002.nc", engine="h5netcdf")
-    assert ds.attrs["status"] == "failed" and np.isfinite(ds["position"].values).all()  # partial, finite part
+    assert (
+        ds.attrs["status"] == "failed" and np.isfinite(ds["position"].values).all()
+    )  # partial, finite part
     ds.close()
     summary, figures = write_report(tmp_path / "div")
     assert summary["runs_failed"] == 2 and summary["failure_rate"] == 0.5
@@ -122,12 +145,18 @@ def test_report_statistics_match_numpy(base_run):
     x = df["metric:final_position_error_mean"].to_numpy()
     st = summary["metrics"]["final_position_error_mean"]
     assert st["n_ok"] == 6 and st["failure_rate"] == 0.0
-    assert st["mean"] == pytest.approx(x.mean(), rel=1e-14) and st["std"] == pytest.approx(x.std(ddof=1), rel=1e-14)
+    assert st["mean"] == pytest.approx(x.mean(), rel=1e-14) and st["std"] == pytest.approx(
+        x.std(ddof=1), rel=1e-14
+    )
     assert st["p5"] == pytest.approx(np.percentile(x, 5), rel=1e-14) and st["max"] == x.max()
     g = summary["by_swept_value"]["controller.kd"]["30.0"]["metrics"]["final_position_error_mean"]
     assert g["mean"] == pytest.approx(x[3:].mean(), rel=1e-14) and g["n_ok"] == 3
     names = sorted(p.name for p in figures)
-    assert names == ["sensitivity_controller.kp.png", "sensitivity_spacecraft.mass.0.png", "sweep_controller.kd.png"]
+    assert names == [
+        "sensitivity_controller.kp.png",
+        "sensitivity_spacecraft.mass.0.png",
+        "sweep_controller.kd.png",
+    ]
     assert all(p.stat().st_size > 10_000 for p in figures)
     saved = json.loads((out / "report" / "summary.json").read_text())
     assert saved["runs_done"] == 6
@@ -144,8 +173,10 @@ def test_random_structural_choice_splits_a_chunk_by_static_key(tmp_path, tiny):
     """A random choice of a structural field (controller.mode changes Compiled.static_key) mixes two
     programs in one chunk: each group is its own vmap batch; every run still equals its single run."""
     raw = tiny(runs=4, chunk_size=4, metrics=["delta_v_total"])
-    raw["sample"] = {"controller.mode": {"choice": ["continuous", "sampled"]},
-                     "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}}
+    raw["sample"] = {
+        "controller.mode": {"choice": ["continuous", "sampled"]},
+        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
+    }
     raw["traces"]["runs"] = []
     plan = make_plan(raw)
     modes = [plan.run_inputs(r).values["controller.mode"] for r in range(4)]

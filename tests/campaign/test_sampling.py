@@ -36,7 +36,12 @@ def test_subset_is_independent_of_campaign_size_and_chunking(tiny):
     for g in range(2):
         for j in range(3):
             x, y = small.run_inputs(g * 3 + j), big.run_inputs(g * 50 + j)
-            assert (x.seed, x.values, x.grid_index, x.replicate) == (y.seed, y.values, y.grid_index, y.replicate)
+            assert (x.seed, x.values, x.grid_index, x.replicate) == (
+                y.seed,
+                y.values,
+                y.grid_index,
+                y.replicate,
+            )
 
 
 def test_paired_common_random_numbers_and_unpaired(tiny):
@@ -79,7 +84,9 @@ def test_multiple_bases_are_a_grid_axis(tiny, tmp_path):
     from formation_ftc.config.loader import builtin_scenarios
 
     other = tmp_path / "cw-other.toml"
-    other.write_text(builtin_scenarios()["cw-pd-fault"].replace('name = "cw-pd-fault"', 'name = "cw-other"'))
+    other.write_text(
+        builtin_scenarios()["cw-pd-fault"].replace('name = "cw-pd-fault"', 'name = "cw-other"')
+    )
     raw = tiny(runs=2, base=["cw-pd-fault", "missing.toml"])
     raw["traces"]["runs"] = [0]
     with pytest.raises(Exception, match="does not exist"):

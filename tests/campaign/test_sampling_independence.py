@@ -15,12 +15,22 @@ FIELDS = ("spacecraft.mass.0", "spacecraft.mass.1", "controller.kp")
 
 
 def _raw(paired: bool, sampling: str | None):
-    camp = {"name": "indep", "base": "cw-pd-fault", "runs": 400, "seed": 5, "chunk_size": 100,
-            "paired": paired, "metrics": ["max_position_error"]}
+    camp = {
+        "name": "indep",
+        "base": "cw-pd-fault",
+        "runs": 400,
+        "seed": 5,
+        "chunk_size": 100,
+        "paired": paired,
+        "metrics": ["max_position_error"],
+    }
     if sampling:
         camp["sampling"] = sampling
-    return {"campaign": camp, "overrides": {"simulation.horizon": 20.0},
-            "sample": {f: {"dist": "uniform", "low": 1.0, "high": 2.0} for f in FIELDS}}
+    return {
+        "campaign": camp,
+        "overrides": {"simulation.horizon": 20.0},
+        "sample": {f: {"dist": "uniform", "low": 1.0, "high": 2.0} for f in FIELDS},
+    }
 
 
 @pytest.mark.parametrize(("paired", "sampling"), [(False, None), (True, None), (False, "lhs")])

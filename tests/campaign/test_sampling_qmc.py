@@ -18,16 +18,22 @@ from formation_ftc.campaign.spec import parse_sampler
 
 def _qmc(tiny, sampling, runs, **extra):
     raw = tiny(runs=runs, sampling=sampling, **extra)
-    raw["sample"] = {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-                     "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 1000.0}}
+    raw["sample"] = {
+        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
+        "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 1000.0},
+    }
     return make_plan(raw)
 
 
 def _units(plan):
     """Back to the unit square: kp uniform on [1, 3], kd loguniform on [10, 1000]."""
     pts = [plan.run_inputs(r).values for r in range(plan.n_runs)]
-    return np.array([[(v["controller.kp"] - 1.0) / 2.0,
-                      (np.log10(v["controller.kd"]) - 1.0) / 2.0] for v in pts])
+    return np.array(
+        [
+            [(v["controller.kp"] - 1.0) / 2.0, (np.log10(v["controller.kd"]) - 1.0) / 2.0]
+            for v in pts
+        ]
+    )
 
 
 def _one_per_cell(u, cells):
@@ -59,8 +65,10 @@ def test_sobol_run_values_do_not_depend_on_runs_or_order(tiny):
     # paired: replicate j has the same QMC point at both kd grid values... here kd is sampled, so one grid
     # point; the campaign seed changes the scrambling
     raw = tiny(runs=8, sampling="sobol", seed=12)
-    raw["sample"] = {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-                     "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 1000.0}}
+    raw["sample"] = {
+        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
+        "controller.kd": {"dist": "loguniform", "low": 10.0, "high": 1000.0},
+    }
     assert make_plan(raw).run_inputs(3).values != small.run_inputs(3).values
 
 
@@ -91,8 +99,10 @@ def test_lhs_unpaired_spans_all_runs(tiny):
 
 def test_integer_and_choice_through_the_inverse_cdf(tiny):
     raw = tiny(runs=12, sampling="lhs")
-    raw["sample"] = {"controller.kp": {"dist": "integer", "low": 1, "high": 4},
-                     "controller.kd": {"choice": [10.0, 20.0, 40.0], "weights": [1, 1, 2]}}
+    raw["sample"] = {
+        "controller.kp": {"dist": "integer", "low": 1, "high": 4},
+        "controller.kd": {"choice": [10.0, 20.0, 40.0], "weights": [1, 1, 2]},
+    }
     plan = make_plan(raw)
     kp = [plan.run_inputs(r).values["controller.kp"] for r in range(12)]
     kd = [plan.run_inputs(r).values["controller.kd"] for r in range(12)]
@@ -139,5 +149,7 @@ def test_qmc_campaign_runs_end_to_end(tiny, tmp_path):
     outcome = run_campaign(raw, tmp_path / "c", executor=LocalExecutor(workers=1), progress=False)
     df = outcome.results.sort_values("run_id")
     plan = make_plan(raw)
-    assert list(df["input:controller.kp"]) == [plan.run_inputs(r).values["controller.kp"] for r in range(8)]
+    assert list(df["input:controller.kp"]) == [
+        plan.run_inputs(r).values["controller.kp"] for r in range(8)
+    ]
     assert (df["status"] == "ok").all()

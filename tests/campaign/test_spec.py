@@ -5,26 +5,37 @@ from __future__ import annotations
 import pytest
 
 from formation_ftc.campaign import CampaignError, load_campaign, make_plan, run_campaign
-from formation_ftc.campaign.spec import Choice, Grid, Integer, LogUniform, Normal, Uniform, parse_sampler
+from formation_ftc.campaign.spec import (
+    Choice,
+    Grid,
+    Integer,
+    LogUniform,
+    Normal,
+    Uniform,
+    parse_sampler,
+)
 
 
-@pytest.mark.parametrize("spec, message", [
-    ({"dist": "uniform", "low": 3.0, "high": 1.0}, "uniform needs low < high"),
-    ({"dist": "uniform", "low": 1.0}, "needs high"),
-    ({"dist": "normal", "mean": 1.0, "std": 0.0}, "std > 0"),
-    ({"dist": "normal", "mean": 1.0, "std": 1.0, "low": 2.0, "high": 1.0}, "low < high"),
-    ({"dist": "loguniform", "low": 0.0, "high": 1.0}, "0 < low < high"),
-    ({"dist": "integer", "low": 1.5, "high": 3}, "must be an integer"),
-    ({"dist": "integer", "low": 4, "high": 3}, "low <= high"),
-    ({"dist": "uniform", "low": float("nan"), "high": 1.0}, "finite"),
-    ({"dist": "beta", "a": 1}, "unknown dist 'beta'"),
-    ({"dist": "uniform", "low": 0.0, "high": 1.0, "mean": 2.0}, "unknown key"),
-    ({"grid": []}, "non-empty list"),
-    ({"grid": [1], "choice": [2]}, "exactly one of"),
-    ({"choice": [1, 2], "weights": [1.0]}, "weights must be a list of 2"),
-    ({"choice": [1, 2], "weights": [-1.0, 0.5]}, ">= 0"),
-    (5.0, "expected a table"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ({"dist": "uniform", "low": 3.0, "high": 1.0}, "uniform needs low < high"),
+        ({"dist": "uniform", "low": 1.0}, "needs high"),
+        ({"dist": "normal", "mean": 1.0, "std": 0.0}, "std > 0"),
+        ({"dist": "normal", "mean": 1.0, "std": 1.0, "low": 2.0, "high": 1.0}, "low < high"),
+        ({"dist": "loguniform", "low": 0.0, "high": 1.0}, "0 < low < high"),
+        ({"dist": "integer", "low": 1.5, "high": 3}, "must be an integer"),
+        ({"dist": "integer", "low": 4, "high": 3}, "low <= high"),
+        ({"dist": "uniform", "low": float("nan"), "high": 1.0}, "finite"),
+        ({"dist": "beta", "a": 1}, "unknown dist 'beta'"),
+        ({"dist": "uniform", "low": 0.0, "high": 1.0, "mean": 2.0}, "unknown key"),
+        ({"grid": []}, "non-empty list"),
+        ({"grid": [1], "choice": [2]}, "exactly one of"),
+        ({"choice": [1, 2], "weights": [1.0]}, "weights must be a list of 2"),
+        ({"choice": [1, 2], "weights": [-1.0, 0.5]}, ">= 0"),
+        (5.0, "expected a table"),
+    ],
+)
 def test_invalid_distribution_parameters(spec, message):
     with pytest.raises(CampaignError, match=message) as exc:
         parse_sampler("controller.kp", spec)
@@ -65,8 +76,10 @@ def test_campaign_file_errors_name_the_field(tmp_path, tiny, write_campaign):
 def test_nested_tables_equal_quoted_dotted_keys(tiny):
     a = tiny()
     b = tiny()
-    b["sample"] = {"controller": {"kp": a["sample"]["controller.kp"], "kd": a["sample"]["controller.kd"]},
-                   "spacecraft": {"mass": {"0": a["sample"]["spacecraft.mass.0"]}}}
+    b["sample"] = {
+        "controller": {"kp": a["sample"]["controller.kp"], "kd": a["sample"]["controller.kd"]},
+        "spacecraft": {"mass": {"0": a["sample"]["spacecraft.mass.0"]}},
+    }
     b["overrides"] = {"simulation": {"horizon": 20.0}}
     sa, _ = load_campaign(a)
     sb, _ = load_campaign(b)
@@ -74,11 +87,14 @@ def test_nested_tables_equal_quoted_dotted_keys(tiny):
     assert make_plan(a).hash == make_plan(b).hash
 
 
-@pytest.mark.parametrize("path, where", [
-    ("controller.kpp", "at controller it has fields: type, mode, kp"),
-    ("spacecraft.mass.7", "a list of 4 item(s)"),
-    ("nosuch.section", "<top level>"),
-])
+@pytest.mark.parametrize(
+    "path, where",
+    [
+        ("controller.kpp", "at controller it has fields: type, mode, kp"),
+        ("spacecraft.mass.7", "a list of 4 item(s)"),
+        ("nosuch.section", "<top level>"),
+    ],
+)
 def test_bad_dotted_path_is_refused_before_any_run(tmp_path, path, where, tiny):
     raw = tiny()
     raw["sample"][path] = {"dist": "uniform", "low": 1.0, "high": 2.0}
@@ -91,7 +107,11 @@ def test_bad_dotted_path_is_refused_before_any_run(tmp_path, path, where, tiny):
 
 def test_bound_outside_allowed_range_is_refused_before_any_run(tmp_path, tiny):
     raw = tiny()
-    raw["sample"]["controller.kp"] = {"dist": "uniform", "low": -1.0, "high": 2.0}  # schema: kp >= 0
+    raw["sample"]["controller.kp"] = {
+        "dist": "uniform",
+        "low": -1.0,
+        "high": 2.0,
+    }  # schema: kp >= 0
     out = tmp_path / "out"
     with pytest.raises(CampaignError, match=r"sample.controller.kp: value -1.0 .* outside") as exc:
         run_campaign(raw, out)

@@ -21,10 +21,30 @@ from .conftest import TINY
 
 CASES = [
     # base scenario, sampled true-mass field, (plant leaf, flight leaf) holding it / the stated value
-    pytest.param("cw-pd-fault", "spacecraft.mass.0", ("plant", "mass"), ("controller", "mass"), 100.0, id="cw-pd"),
-    pytest.param("compose-lqr-on-cw", "plant.mass.1", ("plant", "mass"), ("controller", "mass"), 120.0, id="lqr"),
-    pytest.param("yang2013-healthy", "spacecraft.mass", ("plant", "mass"), ("controller", "force_law", "mass"), 150.0,
-                 id="yang2013"),
+    pytest.param(
+        "cw-pd-fault",
+        "spacecraft.mass.0",
+        ("plant", "mass"),
+        ("controller", "mass"),
+        100.0,
+        id="cw-pd",
+    ),
+    pytest.param(
+        "compose-lqr-on-cw",
+        "plant.mass.1",
+        ("plant", "mass"),
+        ("controller", "mass"),
+        120.0,
+        id="lqr",
+    ),
+    pytest.param(
+        "yang2013-healthy",
+        "spacecraft.mass",
+        ("plant", "mass"),
+        ("controller", "force_law", "mass"),
+        150.0,
+        id="yang2013",
+    ),
 ]
 
 
@@ -35,13 +55,25 @@ def _leaf(loop, path):
 
 
 @pytest.mark.parametrize(("base", "field", "plant_leaf", "flight_leaf", "stated"), CASES)
-def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(base, field, plant_leaf, flight_leaf, stated):
+def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(
+    base, field, plant_leaf, flight_leaf, stated
+):
     raw = copy.deepcopy(TINY)
     raw["campaign"].update(base=base, runs=4, chunk_size=4)
     raw["campaign"].pop("metrics")
     sim = api.load_scenario(base).simulation
-    raw["overrides"] = {"simulation.horizon": 2 * sim.record_every * sim.dt}  # nothing runs: a valid horizon
-    raw["sample"] = {field: {"dist": "normal", "mean": stated, "std": 5.0, "low": stated - 20.0, "high": stated + 20.0}}
+    raw["overrides"] = {
+        "simulation.horizon": 2 * sim.record_every * sim.dt
+    }  # nothing runs: a valid horizon
+    raw["sample"] = {
+        field: {
+            "dist": "normal",
+            "mean": stated,
+            "std": 5.0,
+            "low": stated - 20.0,
+            "high": stated + 20.0,
+        }
+    }
     raw.pop("traces")
     plan = make_plan(raw)
     runs = list(range(plan.n_runs))
@@ -57,7 +89,9 @@ def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(base, field, plant_
         return api.compile_scenario(plan.scenario(inp)).params
 
     template = build({})
-    bindings = bind_fields(build, {field: first.values[field]}, {field: [stated - 20.0, stated + 20.0]}, {})
+    bindings = bind_fields(
+        build, {field: first.values[field]}, {field: [stated - 20.0, stated + 20.0]}, {}
+    )
     assert bindings is not None, f"{field} should bind to parameter leaves"
     batch, axes = apply_bindings(template, bindings, {field: sampled}, len(runs))
     index = int(field.rsplit(".", 1)[1]) if field[-1].isdigit() else 0
@@ -73,4 +107,6 @@ def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(base, field, plant_
         loop = api.compile_scenario(plan.scenario(inp)).params
         np.testing.assert_array_equal(np.asarray(_leaf(loop, flight_leaf)), nominal)
         assert np.asarray(_leaf(loop, plant_leaf))[index] == sampled[r]
-        np.testing.assert_array_equal(np.asarray(_leaf(take_run(batch, axes, r), flight_leaf)), nominal)
+        np.testing.assert_array_equal(
+            np.asarray(_leaf(take_run(batch, axes, r), flight_leaf)), nominal
+        )

@@ -13,7 +13,9 @@ from formation_ftc.campaign import CampaignError, CampaignStore, make_plan
 
 def _table(plan, chunk_id):
     ids = plan.chunk(chunk_id).run_ids
-    return pd.DataFrame({"run_id": ids, "status": ["ok"] * len(ids), "metric:x": [float(i) for i in ids]})
+    return pd.DataFrame(
+        {"run_id": ids, "status": ["ok"] * len(ids), "metric:x": [float(i) for i in ids]}
+    )
 
 
 @pytest.fixture
@@ -27,11 +29,15 @@ def test_new_store_resume_and_results(tmp_path, plan):
     assert store.is_new and not root.exists()  # prepare writes nothing
     store.initialize()
     manifest = json.loads((root / "manifest.json").read_text())
-    assert manifest["spec_hash"] == plan.hash and manifest["n_chunks"] == 4 and manifest["n_runs"] == 6
+    assert (
+        manifest["spec_hash"] == plan.hash and manifest["n_chunks"] == 4 and manifest["n_runs"] == 6
+    )
     assert manifest["package_version"] and manifest["swept"] == ["input:controller.kd"]
     store.write_chunk(2, _table(plan, 2))
     store.write_chunk(0, _table(plan, 0))
-    assert not [p for p in (root / "chunks").iterdir() if p.name.startswith(".")]  # no temporary left
+    assert not [
+        p for p in (root / "chunks").iterdir() if p.name.startswith(".")
+    ]  # no temporary left
     again = CampaignStore.prepare(root, plan)
     assert not again.is_new and again.finished() == {0, 2}
     with pytest.raises(CampaignError, match="already stored"):
@@ -69,7 +75,9 @@ def test_other_campaign_is_refused_naming_the_difference(tmp_path, plan, tiny):
     s.initialize()
     s.write_chunk(0, _table(plan, 0))
     other = make_plan(tiny(runs=4, chunk_size=2))
-    with pytest.raises(CampaignError, match=r"holds another campaign .*campaign.runs: 3 there, 4 here"):
+    with pytest.raises(
+        CampaignError, match=r"holds another campaign .*campaign.runs: 3 there, 4 here"
+    ):
         CampaignStore.prepare(root, other)
     assert CampaignStore.prepare(root, plan).finished() == {0}  # untouched
 
@@ -82,7 +90,9 @@ def test_corrupt_manifest_chunk_and_unknown_files_are_refused(tmp_path, plan):
     (root / "chunks" / "chunk-000001.parquet").write_bytes(b"not parquet")
     # a chunk that does not match its checksum is reported and recomputed, never used
     assert CampaignStore.prepare(root, plan).finished() == set()
-    with pytest.raises(CampaignError, match=r"corrupt chunk file.*chunk-000001.parquet: content does not match"):
+    with pytest.raises(
+        CampaignError, match=r"corrupt chunk file.*chunk-000001.parquet: content does not match"
+    ):
         CampaignStore.read(root)
     (root / "chunks" / "chunk-000001.parquet").unlink()
     (root / "chunks" / "notes.txt").write_text("x")
@@ -96,7 +106,9 @@ def test_corrupt_manifest_chunk_and_unknown_files_are_refused(tmp_path, plan):
     # a chunk file holding the wrong runs (copied from another chunk): its checksum does not match
     s2 = CampaignStore.prepare(root, plan)
     s2.write_chunk(0, _table(plan, 0))
-    (root / "chunks" / "chunk-000001.parquet").write_bytes((root / "chunks" / "chunk-000000.parquet").read_bytes())
+    (root / "chunks" / "chunk-000001.parquet").write_bytes(
+        (root / "chunks" / "chunk-000000.parquet").read_bytes()
+    )
     assert CampaignStore.prepare(root, plan).finished() == {0}
     # ... and with a forged checksum, the run ids still give it away
     m = json.loads((root / "manifest.json").read_text())

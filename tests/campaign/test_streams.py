@@ -12,15 +12,28 @@ from formation_ftc.campaign.sampling import draw_value, draw_values, run_seed, r
 from formation_ftc.campaign.spec import Choice, Integer, LogUniform, Normal, Uniform
 
 # keys spread over the whole spawn-key range (run ids / replicates), including the edges
-KEYS = np.unique(np.concatenate([np.arange(0, 300), np.random.default_rng(0).integers(0, 2**32 - 1, 300),
-                                 [2**31 - 1, 2**31, 2**32 - 2, 2**32 - 1]]))
+KEYS = np.unique(
+    np.concatenate(
+        [
+            np.arange(0, 300),
+            np.random.default_rng(0).integers(0, 2**32 - 1, 300),
+            [2**31 - 1, 2**31, 2**32 - 2, 2**32 - 1],
+        ]
+    )
+)
 
 
 @pytest.mark.parametrize("entropy", [0, 1, 2026, 2**32 - 1, 2**32, 2**70 + 12345])
-@pytest.mark.parametrize("suffix", [(0,), (1, 0), (1, 0xFFFFFFFF), (1, zlib.crc32(b"controller.kp"))])
+@pytest.mark.parametrize(
+    "suffix", [(0,), (1, 0), (1, 0xFFFFFFFF), (1, zlib.crc32(b"controller.kp"))]
+)
 def test_seed_states_equal_numpy_seed_sequence(entropy, suffix):
-    ref = np.array([np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)).generate_state(8)
-                    for k in KEYS])
+    ref = np.array(
+        [
+            np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)).generate_state(8)
+            for k in KEYS
+        ]
+    )
     assert np.array_equal(streams.seed_states(entropy, KEYS, suffix, 8), ref)
 
 
@@ -32,27 +45,34 @@ def test_pcg64_state_and_first_double_equal_numpy(entropy):
     for n, k in enumerate(KEYS.tolist()):
         bg = np.random.PCG64(np.random.SeedSequence(entropy, spawn_key=(k, *suffix)))
         st = bg.state["state"]
-        assert (int(hi[n]) << 64 | int(lo[n])) == st["state"] and (int(ihi[n]) << 64 | int(ilo[n])) == st["inc"]
+        assert (int(hi[n]) << 64 | int(lo[n])) == st["state"] and (
+            int(ihi[n]) << 64 | int(ilo[n])
+        ) == st["inc"]
         assert d[n] == np.random.Generator(bg).random()
 
 
 def test_run_seeds_equal_run_seed():
     assert run_seeds(2026, KEYS).tolist() == [run_seed(2026, int(k)) for k in KEYS]
-    assert run_seeds(2**33 + 9, KEYS[:50]).tolist() == [run_seed(2**33 + 9, int(k)) for k in KEYS[:50]]
+    assert run_seeds(2**33 + 9, KEYS[:50]).tolist() == [
+        run_seed(2**33 + 9, int(k)) for k in KEYS[:50]
+    ]
 
 
-@pytest.mark.parametrize("sampler", [
-    Uniform("a.b", 1.0, 4.0),
-    Uniform("x", -3.5e-7, 2.25e9),
-    LogUniform("a.c", 1e-3, 50.0),
-    Normal("a.d", 100.0, 5.0),
-    Normal("a.e", 100.0, 5.0, 80.0, 120.0),
-    Normal("a.f", 0.0, 1.0, None, 0.5),
-    Integer("a.g", -3, 17),
-    Integer("a.h", 0, 2**40),
-    Choice("a.i", ("pd", "lqr", {"k": [1, 2]})),
-    Choice("a.j", (1.0, 2.0, 3.0), (0.2, 0.5, 0.3)),
-])
+@pytest.mark.parametrize(
+    "sampler",
+    [
+        Uniform("a.b", 1.0, 4.0),
+        Uniform("x", -3.5e-7, 2.25e9),
+        LogUniform("a.c", 1e-3, 50.0),
+        Normal("a.d", 100.0, 5.0),
+        Normal("a.e", 100.0, 5.0, 80.0, 120.0),
+        Normal("a.f", 0.0, 1.0, None, 0.5),
+        Integer("a.g", -3, 17),
+        Integer("a.h", 0, 2**40),
+        Choice("a.i", ("pd", "lqr", {"k": [1, 2]})),
+        Choice("a.j", (1.0, 2.0, 3.0), (0.2, 0.5, 0.3)),
+    ],
+)
 def test_draw_values_equal_per_run_generators(sampler):
     got = draw_values(sampler, 2026, KEYS)
     ref = [draw_value(sampler, 2026, int(k)) for k in KEYS]
@@ -68,8 +88,15 @@ def test_draw_values_fall_back_when_the_stream_module_disagrees(monkeypatch):
     assert draw_values(s, 7, KEYS[:40]) == [draw_value(s, 7, int(k)) for k in KEYS[:40]]
 
 
-@pytest.mark.parametrize("fields", [dict(paired=False), dict(paired=True), dict(sampling="sobol"),
-                                    dict(sampling="lhs", paired=False)])
+@pytest.mark.parametrize(
+    "fields",
+    [
+        dict(paired=False),
+        dict(paired=True),
+        dict(sampling="sobol"),
+        dict(sampling="lhs", paired=False),
+    ],
+)
 def test_run_columns_equal_run_inputs(tiny, fields):
     plan = make_plan(tiny(runs=7, **fields))
     ids = [13, 0, 6, 7, 2, 9, 8]

@@ -8,17 +8,28 @@ import numpy as np
 import pytest
 
 from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
-from formation_ftc.components.estimators.iterative_learning_observer import IterativeLearningObserver
+from formation_ftc.components.estimators.iterative_learning_observer import (
+    IterativeLearningObserver,
+)
 from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
 from formation_ftc.sim.components import CompositionError, FlightInputs
 
 
 def _ilo(n_sc: int, rng) -> IterativeLearningObserver:
     return IterativeLearningObserver(
-        count=n_sc, mean_motion=np.float64(1.1e-3), L1=rng.normal(size=(6, 6)), L2=rng.normal(size=(3, 6)),
-        Q1=np.array([0.9, 0.8, 0.7]), Q2=np.float64(0.5), gamma=np.float64(0.01),
-        initial_estimate=rng.normal(size=(n_sc, 6)), fault_prehistory=rng.normal(size=(n_sc, 3)),
-        learning_steps=1, sign_term=True, mean_steps=1)
+        count=n_sc,
+        mean_motion=np.float64(1.1e-3),
+        L1=rng.normal(size=(6, 6)),
+        L2=rng.normal(size=(3, 6)),
+        Q1=np.array([0.9, 0.8, 0.7]),
+        Q2=np.float64(0.5),
+        gamma=np.float64(0.01),
+        initial_estimate=rng.normal(size=(n_sc, 6)),
+        fault_prehistory=rng.normal(size=(n_sc, 3)),
+        learning_steps=1,
+        sign_term=True,
+        mean_steps=1,
+    )
 
 
 def test_time_update_receives_the_force_per_nominal_mass():
@@ -28,7 +39,9 @@ def test_time_update_receives_the_force_per_nominal_mass():
     est = AccelerationModelEstimator(inner=ilo, nominal_mass=mass)
     y = rng.normal(size=(2, 6))
     state0 = est.initial_state(y)
-    state, estimate = est.update(0.0, state0, FlightInputs(jnp.asarray(y), None, None, None, None, None))
+    state, estimate = est.update(
+        0.0, state0, FlightInputs(jnp.asarray(y), None, None, None, None, None)
+    )
     force = rng.normal(size=(2, 3)) * 50.0
     dt = 0.001
     got = np.asarray(est.predict(0.0, state, jnp.asarray(force), dt)["q_hat"])
@@ -39,7 +52,10 @@ def test_time_update_receives_the_force_per_nominal_mass():
     A[3, 0], A[3, 4], A[4, 3], A[5, 2] = 3 * n**2, 2 * n, -2 * n, -(n**2)
     q_hat = np.asarray(ilo.initial_estimate)
     e_y = y - q_hat
-    F_hat = np.array([0.9, 0.8, 0.7]) * np.asarray(ilo.fault_prehistory) + 0.5 * e_y @ np.asarray(ilo.L2).T
+    F_hat = (
+        np.array([0.9, 0.8, 0.7]) * np.asarray(ilo.fault_prehistory)
+        + 0.5 * e_y @ np.asarray(ilo.L2).T
+    )
     np.testing.assert_allclose(np.asarray(estimate["fault"]), F_hat, rtol=1e-12, atol=1e-14)
     u = force / mass[:, None]
     B = np.vstack([np.zeros((3, 3)), np.eye(3)])
@@ -60,4 +76,6 @@ def test_per_unit_mass_divides_each_spacecraft_by_its_mass():
     f = np.arange(12.0).reshape(4, 3) - 5.0
     m = np.array([100.0, 120.0, 115.0, 108.0])
     out = PerUnitMass("a", "f", mass=m).outputs({"f": jnp.asarray(f)})["a"]
-    np.testing.assert_allclose(np.asarray(out), np.stack([f[i] / m[i] for i in range(4)]), rtol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(out), np.stack([f[i] / m[i] for i in range(4)]), rtol=1e-15
+    )

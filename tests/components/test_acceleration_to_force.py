@@ -29,15 +29,26 @@ MASS = np.array([100.0, 120.0, 115.0, 108.0])
 
 
 def _law(sampled=True):
-    return ChainLlfrController(lambda0=as_float(2.0), lambda1=as_float(3.0), alpha=as_float(np.ones(4)),
-                               alpha_flfr=as_float(4.7), b_nominal=as_float(np.ones((4, 3))),
-                               b_hat=as_float(np.array([[1, 1, 1], [0.88, 1, 1], [1, 1, 1], [1, 1, 1.0]])),
-                               side=as_float(200.0), omega=as_float(0.1), fault_index=1, is_sampled=sampled)
+    return ChainLlfrController(
+        lambda0=as_float(2.0),
+        lambda1=as_float(3.0),
+        alpha=as_float(np.ones(4)),
+        alpha_flfr=as_float(4.7),
+        b_nominal=as_float(np.ones((4, 3))),
+        b_hat=as_float(np.array([[1, 1, 1], [0.88, 1, 1], [1, 1, 1], [1, 1, 1.0]])),
+        side=as_float(200.0),
+        omega=as_float(0.1),
+        fault_index=1,
+        is_sampled=sampled,
+    )
 
 
 def _chain_y(seed=0):
     rng = np.random.default_rng(seed)
-    return {"position": jnp.asarray(rng.normal(size=(3, 3)) * 100), "velocity": jnp.asarray(rng.normal(size=(3, 3)))}
+    return {
+        "position": jnp.asarray(rng.normal(size=(3, 3)) * 100),
+        "velocity": jnp.asarray(rng.normal(size=(3, 3))),
+    }
 
 
 def test_force_is_nominal_mass_times_the_laws_acceleration_in_every_mode():
@@ -53,8 +64,12 @@ def test_force_is_nominal_mass_times_the_laws_acceleration_in_every_mode():
         f, nxt, out_f = ctl.output(jnp.asarray(2.5), ctl.initial_state(), flight)
         np.testing.assert_allclose(np.asarray(f), MASS[:, None] * np.asarray(u), rtol=1e-15)
         np.testing.assert_array_equal(np.asarray(out_f["acceleration_command"]), np.asarray(u))
-        np.testing.assert_array_equal(np.asarray(out_f["desired_position"]), np.asarray(out["desired_position"]))
-        np.testing.assert_array_equal(np.asarray(nxt["allocation"]), np.asarray(law.initial_state()["allocation"]))
+        np.testing.assert_array_equal(
+            np.asarray(out_f["desired_position"]), np.asarray(out["desired_position"])
+        )
+        np.testing.assert_array_equal(
+            np.asarray(nxt["allocation"]), np.asarray(law.initial_state()["allocation"])
+        )
     names = [s.name for s in ctl.signals()]
     assert names == ["desired_position", "acceleration_command"]
     assert ctl.coords() == law.coords()
@@ -63,21 +78,35 @@ def test_force_is_nominal_mass_times_the_laws_acceleration_in_every_mode():
 def test_adapter_output_takes_flight_inputs_only_and_is_a_pytree():
     hints = typing.get_type_hints(AccelerationToForce.output)
     assert hints["inputs"] is FlightInputs
-    assert list(inspect.signature(AccelerationToForce.output).parameters) == ["self", "t", "state", "inputs"]
+    assert list(inspect.signature(AccelerationToForce.output).parameters) == [
+        "self",
+        "t",
+        "state",
+        "inputs",
+    ]
     ctl = force_from_acceleration(_law(), as_float(MASS))
     leaves, treedef = jax.tree_util.tree_flatten(ctl)
-    assert any(np.array_equal(np.asarray(leaf), MASS) for leaf in leaves)  # the masses are a leaf (batchable)
+    assert any(
+        np.array_equal(np.asarray(leaf), MASS) for leaf in leaves
+    )  # the masses are a leaf (batchable)
     again = jax.tree_util.tree_unflatten(treedef, leaves)
     assert type(again) is AccelerationToForce and again.law.fault_index == 1
     # a batch that varies the masses and a law leaf stacks without tripping any construction check
-    other = force_from_acceleration(dataclasses.replace(_law(), alpha_flfr=as_float(2.0)), as_float(MASS * 1.1))
+    other = force_from_acceleration(
+        dataclasses.replace(_law(), alpha_flfr=as_float(2.0)), as_float(MASS * 1.1)
+    )
     batch, axes = stack_params([ctl, other])
-    assert np.shape(batch.nominal_mass) == (2, 4) and axes.nominal_mass == 0 and axes.law.lambda0 is None
+    assert (
+        np.shape(batch.nominal_mass) == (2, 4)
+        and axes.nominal_mass == 0
+        and axes.law.lambda0 is None
+    )
 
 
 def test_adapter_keeps_a_position_objective_and_rejects_other_quantities():
-    pd = PdFormationController(count=4, kp=as_float(1.0), kd=as_float(1.0), mass=as_float(MASS),
-                               max_force=as_float(np.inf))
+    pd = PdFormationController(
+        count=4, kp=as_float(1.0), kd=as_float(1.0), mass=as_float(MASS), max_force=as_float(np.inf)
+    )
     with pytest.raises(CompositionError, match="PdFormationController commands a force"):
         force_from_acceleration(pd, as_float(MASS))
     with pytest.raises(CompositionError, match="ChainLlfrController of 4 spacecraft"):
@@ -101,12 +130,20 @@ def test_chain_sensors_on_the_relative_state_match_numpy_differences_and_noise_s
     np.testing.assert_allclose(np.asarray(y["position"]), q[1:, :3] - q[:-1, :3], rtol=1e-15)
     np.testing.assert_allclose(np.asarray(y["velocity"]), q[1:, 3:] - q[:-1, 3:], rtol=1e-15)
     # with noise: the same draws as the r/v sensors on the same key (same streams), added to the differences
-    kw = dict(count=4, n_axes=3, position_noise_std=as_float(0.5), velocity_noise_std=as_float(0.01), noisy=True)
+    kw = dict(
+        count=4,
+        n_axes=3,
+        position_noise_std=as_float(0.5),
+        velocity_noise_std=as_float(0.01),
+        noisy=True,
+    )
     s_q, s_rv = ChainRelativeStateSensors(**kw), ChainRelativeSensors(**kw)
     key = jax.random.PRNGKey(7)
     n_q, n_rv = s_q.noise(key), s_rv.noise(key)
     y_q = s_q.measure(0.0, {"q": jnp.asarray(q)}, SensorInputs(n_q, None))
-    y_rv = s_rv.measure(0.0, {"r": jnp.asarray(q[:, :3]), "v": jnp.asarray(q[:, 3:])}, SensorInputs(n_rv, None))
+    y_rv = s_rv.measure(
+        0.0, {"r": jnp.asarray(q[:, :3]), "v": jnp.asarray(q[:, 3:])}, SensorInputs(n_rv, None)
+    )
     for k in ("position", "velocity"):
         np.testing.assert_allclose(np.asarray(y_q[k]), np.asarray(y_rv[k]), rtol=1e-15)
     assert np.std(np.asarray(y_q["position"]) - (q[1:, :3] - q[:-1, :3])) > 0.05

@@ -29,10 +29,16 @@ def _rbar(th, ph):
 
 
 def _state(n):
-    angles = np.stack([np.deg2rad(RNG.uniform(-80, 80, n)), RNG.uniform(-3, 3, n), RNG.uniform(-3, 3, n)], -1)
+    angles = np.stack(
+        [np.deg2rad(RNG.uniform(-80, 80, n)), RNG.uniform(-3, 3, n), RNG.uniform(-3, 3, n)], -1
+    )
     # quaternion built from elementary rotations: yaw about z, then pitch about y, then roll about x
-    p = np.array([_mul(_mul(_quat([0, 0, 1], ps), _quat([0, 1, 0], th)), _quat([1, 0, 0], ph))
-                  for th, ph, ps in angles])
+    p = np.array(
+        [
+            _mul(_mul(_quat([0, 0, 1], ps), _quat([0, 1, 0], th)), _quat([1, 0, 0], ph))
+            for th, ph, ps in angles
+        ]
+    )
     p *= np.where(RNG.uniform(size=(n, 1)) < 0.5, -1.0, 1.0)  # either sign of the same attitude
     return angles, {"omega": RNG.normal(size=(n, 3)), "q": jnp.asarray(1.0001 * p)}
 
@@ -47,8 +53,14 @@ def test_sensors_report_3_2_1_angles_and_body_rates():
 def test_allocation_maps_command_plus_fault_to_the_body_torque_of_equal_power():
     n = 4
     angles, x = _state(n)
-    inner = HeldAdditiveFaultActuator(count=n, windows=as_float([[0.0, 10.0]]), torques=("0.7",), spacecraft=(2,),
-                                      channels=(1,), step=0.1)
+    inner = HeldAdditiveFaultActuator(
+        count=n,
+        windows=as_float([[0.0, 10.0]]),
+        torques=("0.7",),
+        spacecraft=(2,),
+        channels=(1,),
+        step=0.1,
+    )
     act = EulerTorqueAllocation(inner=inner)
     assert act.holds_exogenous and act.count == n
     assert {s.name for s in act.signals()} == {"fault", "generalised_applied", "attitude"}
@@ -61,12 +73,18 @@ def test_allocation_maps_command_plus_fault_to_the_body_torque_of_equal_power():
         R = _rbar(angles[k, 0], angles[k, 1])
         np.testing.assert_allclose(tau_body[k], R.T @ gen[k], rtol=1e-10, atol=1e-12)
         w = np.asarray(x["omega"][k])
-        np.testing.assert_allclose(tau_body[k] @ w, gen[k] @ (R @ w), rtol=1e-10, atol=1e-12)  # power
+        np.testing.assert_allclose(
+            tau_body[k] @ w, gen[k] @ (R @ w), rtol=1e-10, atol=1e-12
+        )  # power
     out = act.outputs(1.0, jnp.asarray(u), inputs)
     np.testing.assert_allclose(np.asarray(out["generalised_applied"]), gen, atol=1e-14)
     np.testing.assert_allclose(np.asarray(out["attitude"]), angles, atol=1e-12)
     # without an inner chain the map is applied to the command alone
     bare = EulerTorqueAllocation()
     assert not bare.holds_exogenous and bare.count is None
-    np.testing.assert_allclose(np.asarray(bare.apply(0.0, jnp.asarray(u), ActuatorInputs(None, None, None, x))),
-                               np.stack([_rbar(*angles[k, :2]).T @ u[k] for k in range(n)]), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(bare.apply(0.0, jnp.asarray(u), ActuatorInputs(None, None, None, x))),
+        np.stack([_rbar(*angles[k, :2]).T @ u[k] for k in range(n)]),
+        rtol=1e-10,
+        atol=1e-12,
+    )

@@ -41,10 +41,16 @@ def _plant(J, w0, q0, gg=True, u0=0.0, frame="inertial"):
     w0 = np.atleast_2d(np.asarray(w0, float))
     if J.ndim == 2:
         J = np.broadcast_to(J, (w0.shape[0], 3, 3)).copy()
-    return AttitudeTruthPlant(inertia=as_float(J), initial_omega=as_float(w0),
-                              initial_quaternion=as_float(np.atleast_2d(q0)), semi_major_axis=as_float(A),
-                              mu=as_float(MU_EARTH), initial_argument_of_latitude=as_float(u0), gravity_gradient=gg,
-                              state_frame=frame)
+    return AttitudeTruthPlant(
+        inertia=as_float(J),
+        initial_omega=as_float(w0),
+        initial_quaternion=as_float(np.atleast_2d(q0)),
+        semi_major_axis=as_float(A),
+        mu=as_float(MU_EARTH),
+        initial_argument_of_latitude=as_float(u0),
+        gravity_gradient=gg,
+        state_frame=frame,
+    )
 
 
 @partial(jax.jit, static_argnames="n_steps")
@@ -69,9 +75,14 @@ def _propagate(plant, dt, n_steps):
 
 def _dcm(p):
     x, y, z, w = np.moveaxis(p / np.linalg.norm(p, axis=-1, keepdims=True), -1, 0)
-    return np.stack([np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-                     np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
-                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1)], -2)
+    return np.stack(
+        [
+            np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1),
+        ],
+        -2,
+    )
 
 
 def _rz(u):
@@ -145,7 +156,9 @@ def test_pitch_libration_period_against_closed_form():
     measured = 2.0 * np.mean(np.diff(crossings))
     assert measured == pytest.approx(period, rel=1e-3), (measured, period)
     assert measured == pytest.approx(period * (1.0 + th0**2 / 4.0), rel=1e-6), (measured, period)
-    assert np.abs(pitch).max() == pytest.approx(math.sin(th0), rel=1e-4)  # amplitude: the initial offset
+    assert np.abs(pitch).max() == pytest.approx(
+        math.sin(th0), rel=1e-4
+    )  # amplitude: the initial offset
     assert np.abs(ang[:, :2]).max() < 1e-12  # planar motion stays planar
 
 
@@ -201,43 +214,71 @@ def test_lvlh_state_frame_flies_the_same_body():
     # the same initial condition relative to LVLH (numpy): q_L = q_z(-u0) (x) q, w_r = omega - n o_b
     C = _dcm(q_i[None])[0]
     v, s4 = _rz(-u0)[:3], _rz(-u0)[3]
-    q_l = np.concatenate([s4 * q_i[:3] + q_i[3] * v + np.cross(v, q_i[:3]), [s4 * q_i[3] - v @ q_i[:3]]])
+    q_l = np.concatenate(
+        [s4 * q_i[:3] + q_i[3] * v + np.cross(v, q_i[:3]), [s4 * q_i[3] - v @ q_i[:3]]]
+    )
     lvlh = _plant(J, w_i - N * C[2], q_l, u0=u0, frame="lvlh")
     diffs = []
     n_steps = int(2 * math.pi / N / 2.0)
     convert = jax.jit(jax.vmap(lambda tk, w, q: lvlh.inertial_and_lvlh(tk, {"omega": w, "q": q})))
-    for dt in (2.0, 1.0):  # one orbit, then half an orbit with the same number of steps (one compilation)
+    for dt in (
+        2.0,
+        1.0,
+    ):  # one orbit, then half an orbit with the same number of steps (one compilation)
         t, w_a, q_a = _propagate(inertial, dt, n_steps)
         _, w_b, q_b = _propagate(lvlh, dt, n_steps)
         conv = convert(jnp.asarray(t), jnp.asarray(w_b), jnp.asarray(q_b))
-        diffs.append((np.abs(_dcm(np.asarray(conv[1])) - _dcm(q_a)).max(), np.abs(np.asarray(conv[0]) - w_a).max()))
+        diffs.append(
+            (
+                np.abs(_dcm(np.asarray(conv[1])) - _dcm(q_a)).max(),
+                np.abs(np.asarray(conv[0]) - w_a).max(),
+            )
+        )
     (dc2, dw2), (dc1, dw1) = diffs
     assert dc2 < 3e-8 and dw2 < 2e-11, diffs
     assert dc2 / dc1 > 10 and dw2 / dw1 > 10, diffs  # fourth order: 16
     rest = _plant(J, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], u0=u0, frame="lvlh")
-    J_diag = _plant(np.diag([10.0, 20.0, 25.0]), [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], frame="lvlh")
+    J_diag = _plant(
+        np.diag([10.0, 20.0, 25.0]), [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], frame="lvlh"
+    )
     r = J_diag.rates(0.0, J_diag.initial_state(), jnp.zeros((1, 3)))
     assert np.abs(np.asarray(r["omega"])).max() < 1e-20 and np.abs(np.asarray(r["q"])).max() == 0.0
     # a non-principal body at rest relative to LVLH feels a gravity-gradient and gyroscopic torque
-    assert np.abs(np.asarray(rest.rates(0.0, rest.initial_state(), jnp.zeros((1, 3)))["omega"])).max() > 1e-9
+    assert (
+        np.abs(np.asarray(rest.rates(0.0, rest.initial_state(), jnp.zeros((1, 3)))["omega"])).max()
+        > 1e-9
+    )
 
 
 # ------------------------------------------------------------------------- composed plant type
 def _raw(**plant):
-    base = dict(type="attitude-truth", inertia=[10.0, 20.0, 25.0], initial_attitude_deg=[[0.0, 0.0, 0.0]] * 2)
+    base = dict(
+        type="attitude-truth",
+        inertia=[10.0, 20.0, 25.0],
+        initial_attitude_deg=[[0.0, 0.0, 0.0]] * 2,
+    )
     base.update(plant)
-    return {"scenario": {"name": "attitude-truth-test", "method": "composed"},
-            "simulation": {"horizon": 1.0, "dt": 0.1, "record_every": 1, "seed": 1},
-            "plant": base, "controller": {"type": "networked-el-hinf", "edges": [[1, 2]]},
-            "sensors": {"type": "quaternion-euler"}, "actuator": {"type": "euler-torque-allocation"}}
+    return {
+        "scenario": {"name": "attitude-truth-test", "method": "composed"},
+        "simulation": {"horizon": 1.0, "dt": 0.1, "record_every": 1, "seed": 1},
+        "plant": base,
+        "controller": {"type": "networked-el-hinf", "edges": [[1, 2]]},
+        "sensors": {"type": "quaternion-euler"},
+        "actuator": {"type": "euler-torque-allocation"},
+    }
 
 
 def test_lvlh_initial_frame_converts_to_inertial():
     from formation_ftc.methods.composed.catalog_attitude_truth import initial_inertial_state
 
-    scn = ftc.load_scenario(_raw(initial_frame="lvlh", initial_argument_of_latitude_deg=40.0,
-                                 initial_attitude_deg=[[5.0, -3.0, 10.0], [0.0, 0.0, 0.0]],
-                                 initial_body_rate=[[1e-3, 0.0, 0.0], [0.0, 0.0, 0.0]]))
+    scn = ftc.load_scenario(
+        _raw(
+            initial_frame="lvlh",
+            initial_argument_of_latitude_deg=40.0,
+            initial_attitude_deg=[[5.0, -3.0, 10.0], [0.0, 0.0, 0.0]],
+            initial_body_rate=[[1e-3, 0.0, 0.0], [0.0, 0.0, 0.0]],
+        )
+    )
     sec = scn.section("plant")
     w, q = initial_inertial_state(sec)
     u0 = math.radians(40.0)
@@ -245,14 +286,22 @@ def test_lvlh_initial_frame_converts_to_inertial():
     C_l = _dcm(sec.given_quaternions())
     np.testing.assert_allclose(_dcm(q), Rz @ C_l, atol=1e-14)  # C_BI = C_IL C_BL
     # omega = omega_rel + n (orbit normal in body axes) = omega_rel + n C_BL^T e_z
-    np.testing.assert_allclose(w, np.array([[1e-3, 0, 0], [0, 0, 0]]) + N * C_l[:, 2, :], atol=1e-17)
+    np.testing.assert_allclose(
+        w, np.array([[1e-3, 0, 0], [0, 0, 0]]) + N * C_l[:, 2, :], atol=1e-17
+    )
     np.testing.assert_allclose(w[1], [0.0, 0.0, N], atol=1e-17)
 
 
 def _euler_zyx(C):
     """[theta, phi, psi] of C = Rz(psi) Ry(theta) Rx(phi)."""
-    return np.stack([np.arctan2(-C[..., 2, 0], np.hypot(C[..., 2, 1], C[..., 2, 2])),
-                     np.arctan2(C[..., 2, 1], C[..., 2, 2]), np.arctan2(C[..., 1, 0], C[..., 0, 0])], axis=-1)
+    return np.stack(
+        [
+            np.arctan2(-C[..., 2, 0], np.hypot(C[..., 2, 1], C[..., 2, 2])),
+            np.arctan2(C[..., 2, 1], C[..., 2, 2]),
+            np.arctan2(C[..., 1, 0], C[..., 0, 0]),
+        ],
+        axis=-1,
+    )
 
 
 @pytest.mark.parametrize("frame", ["inertial", "lvlh"])
@@ -262,8 +311,11 @@ def test_composed_run_records_gravity_gradient_and_usage(frame):
     3-2-1 angles of the recorded inertial or LVLH attitude); the recorded gravity-gradient torque equals
     an independent numpy value from the recorded quaternion and time; torque_impulse = int |command| dt
     (trapezoid on the records, the command being smooth); attitude_lvlh is Rz(u)^T C(q)."""
-    raw = _raw(initial_attitude_deg=[[20.0, 10.0, -15.0], [-5.0, 30.0, 12.0]], initial_argument_of_latitude_deg=25.0,
-               state_frame=frame)
+    raw = _raw(
+        initial_attitude_deg=[[20.0, 10.0, -15.0], [-5.0, 30.0, 12.0]],
+        initial_argument_of_latitude_deg=25.0,
+        state_frame=frame,
+    )
     raw["simulation"].update(horizon=2.0, dt=0.05, record_every=2)
     ds, _ = ftc.simulate_with_metrics(ftc.load_scenario(raw))
     t = ds.time.values
@@ -275,19 +327,33 @@ def test_composed_run_records_gravity_gradient_and_usage(frame):
     np.testing.assert_allclose(ds.gravity_gradient_torque.values, tau, rtol=1e-8, atol=1e-17)
     assert np.abs(tau).max() > 1e-6  # the torque acts here
     cmd = np.linalg.norm(ds.command.values, axis=-1)
-    trap = np.concatenate([np.zeros((1, cmd.shape[1])),
-                           np.cumsum(0.5 * (cmd[1:] + cmd[:-1]) * np.diff(t)[:, None], axis=0)])
+    trap = np.concatenate(
+        [
+            np.zeros((1, cmd.shape[1])),
+            np.cumsum(0.5 * (cmd[1:] + cmd[:-1]) * np.diff(t)[:, None], axis=0),
+        ]
+    )
     np.testing.assert_allclose(ds.torque_impulse.values, trap, rtol=2e-3, atol=1e-6)
     assert trap[-1].min() > 0.0
-    C_bl = np.einsum("tji,tnjk->tnik", np.stack([np.stack([np.cos(u), -np.sin(u), 0 * u], -1),
-                                                  np.stack([np.sin(u), np.cos(u), 0 * u], -1),
-                                                  np.stack([0 * u, 0 * u, 1 + 0 * u], -1)], -2), _dcm(q))
+    C_bl = np.einsum(
+        "tji,tnjk->tnik",
+        np.stack(
+            [
+                np.stack([np.cos(u), -np.sin(u), 0 * u], -1),
+                np.stack([np.sin(u), np.cos(u), 0 * u], -1),
+                np.stack([0 * u, 0 * u, 1 + 0 * u], -1),
+            ],
+            -2,
+        ),
+        _dcm(q),
+    )
     np.testing.assert_allclose(_dcm(ds.attitude_lvlh.values), C_bl, atol=1e-12)
     seen = C_bl if frame == "lvlh" else _dcm(q)
     np.testing.assert_allclose(ds.tracking_error.values, _euler_zyx(seen), atol=1e-10)
     # initial attitude: the given inertial 3-2-1 angles whatever the state frame
-    np.testing.assert_allclose(_euler_zyx(_dcm(q[0])), np.radians([[20.0, 10.0, -15.0], [-5.0, 30.0, 12.0]]),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        _euler_zyx(_dcm(q[0])), np.radians([[20.0, 10.0, -15.0], [-5.0, 30.0, 12.0]]), atol=1e-12
+    )
 
 
 def test_builtin_scenario_validates():
@@ -296,16 +362,19 @@ def test_builtin_scenario_validates():
     assert scn.section("plant").semi_major_axis == 7.0e6
 
 
-@pytest.mark.parametrize("field, value, needle", [
-    ("inertia", [10.0, -1.0, 25.0], "inertia"),
-    ("semi_major_axis", 6.0e6, "plant.semi_major_axis"),
-    ("mu", 0.0, "plant.mu"),
-    ("inertia_matrices", [[[10.0, 1.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 25.0]]], "symmetric"),
-    ("inertia_matrices", [[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 5.0]]], "triangle"),
-    ("initial_frame", "ecef", "plant.initial_frame"),
-    ("state_frame", "body", "plant.state_frame"),
-    ("gravity_gradiant", True, "plant.gravity_gradiant"),
-])
+@pytest.mark.parametrize(
+    "field, value, needle",
+    [
+        ("inertia", [10.0, -1.0, 25.0], "inertia"),
+        ("semi_major_axis", 6.0e6, "plant.semi_major_axis"),
+        ("mu", 0.0, "plant.mu"),
+        ("inertia_matrices", [[[10.0, 1.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 25.0]]], "symmetric"),
+        ("inertia_matrices", [[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 5.0]]], "triangle"),
+        ("initial_frame", "ecef", "plant.initial_frame"),
+        ("state_frame", "body", "plant.state_frame"),
+        ("gravity_gradiant", True, "plant.gravity_gradiant"),
+    ],
+)
 def test_bad_section_is_rejected_naming_the_field(field, value, needle):
     with pytest.raises(ScenarioError, match=needle):
         ftc.load_scenario(_raw(**{field: value}))

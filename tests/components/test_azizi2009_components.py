@@ -25,7 +25,9 @@ def _loop(name="azizi2009-flfr", **ov):
 
 def _other_truth(loop):
     """The same loop with different true faults and disturbance (truth side only)."""
-    act = dataclasses.replace(loop.actuator, faulty_gain=loop.actuator.faulty_gain * 0.3, onset=jnp.asarray(0.7))
+    act = dataclasses.replace(
+        loop.actuator, faulty_gain=loop.actuator.faulty_gain * 0.3, onset=jnp.asarray(0.7)
+    )
     plant = dataclasses.replace(loop.plant, disturbance="1e-2*sin(t) + i")
     return dataclasses.replace(loop, actuator=act, plant=plant)
 
@@ -33,7 +35,12 @@ def _other_truth(loop):
 def test_controller_output_takes_flight_inputs_only():
     hints = typing.get_type_hints(ChainLlfrController.output)
     assert hints["inputs"] is FlightInputs
-    assert list(inspect.signature(ChainLlfrController.output).parameters) == ["self", "t", "state", "inputs"]
+    assert list(inspect.signature(ChainLlfrController.output).parameters) == [
+        "self",
+        "t",
+        "state",
+        "inputs",
+    ]
     assert not {"state", "true_state", "fault", "disturbance", "force"} & set(FlightInputs._fields)
 
 
@@ -43,13 +50,19 @@ def test_controller_blind_to_true_faults_and_disturbance():
     other = _other_truth(loop)
     assert other.controller is loop.controller  # the truth change does not touch the flight side
     rng = np.random.default_rng(0)
-    y = {"position": jnp.asarray(rng.normal(size=(3, 3))), "velocity": jnp.asarray(rng.normal(size=(3, 3)))}
+    y = {
+        "position": jnp.asarray(rng.normal(size=(3, 3))),
+        "velocity": jnp.asarray(rng.normal(size=(3, 3))),
+    }
     outs = []
     for lp in (loop, other):
         c = lp.controller
         for mode in (0, 1, 2):
-            u, _, _ = c.output(jnp.asarray(1.3), c.initial_state(),
-                               FlightInputs(y, None, None, jnp.asarray(mode), None, None))
+            u, _, _ = c.output(
+                jnp.asarray(1.3),
+                c.initial_state(),
+                FlightInputs(y, None, None, jnp.asarray(mode), None, None),
+            )
             outs.append(np.asarray(u))
     for a, b in zip(outs[:3], outs[3:], strict=True):
         np.testing.assert_array_equal(a, b)
@@ -63,18 +76,29 @@ def test_controller_blind_to_true_faults_and_disturbance():
 def test_controller_law_against_hand_formula():
     """Sec. II p_ij and eq. (3) for N = 3 on one axis, LLFR mode, checked by the constraint J(b_hat) u = p
     and the optimality condition sum alpha_i u_i / b_hat_i = 0 (E004-02)."""
-    c = ChainLlfrController(lambda0=jnp.asarray(2.0), lambda1=jnp.asarray(3.0), alpha=jnp.asarray([1.0, 4.0, 2.0]),
-                            alpha_flfr=jnp.asarray(9.0), b_nominal=jnp.ones((3, 1)),
-                            b_hat=jnp.asarray([[1.0], [0.8], [1.1]]), side=jnp.asarray(100.0),
-                            omega=jnp.asarray(0.0), fault_index=1)
+    c = ChainLlfrController(
+        lambda0=jnp.asarray(2.0),
+        lambda1=jnp.asarray(3.0),
+        alpha=jnp.asarray([1.0, 4.0, 2.0]),
+        alpha_flfr=jnp.asarray(9.0),
+        b_nominal=jnp.ones((3, 1)),
+        b_hat=jnp.asarray([[1.0], [0.8], [1.1]]),
+        side=jnp.asarray(100.0),
+        omega=jnp.asarray(0.0),
+        fault_index=1,
+    )
     rd, _, _ = c.desired(0.0)  # omega = 0: the desired formation is at rest (xdd^d = 0)
     e, ed = np.array([0.1, -0.2]), np.array([0.01, 0.03])
     y = {"position": (rd[1:] - rd[:-1]) + e[:, None], "velocity": jnp.asarray(ed[:, None])}
-    u, _, _ = c.output(0.0, c.initial_state(), FlightInputs(y, None, None, jnp.asarray(1), None, None))
+    u, _, _ = c.output(
+        0.0, c.initial_state(), FlightInputs(y, None, None, jnp.asarray(1), None, None)
+    )
     u = np.asarray(u)[:, 0]
     p = -3.0 * ed - 2.0 * e
     b = np.array([1.0, 0.8, 1.1])
-    np.testing.assert_allclose([b[1] * u[1] - b[0] * u[0], b[2] * u[2] - b[1] * u[1]], p, rtol=1e-12)
+    np.testing.assert_allclose(
+        [b[1] * u[1] - b[0] * u[0], b[2] * u[2] - b[1] * u[1]], p, rtol=1e-12
+    )
     assert abs(np.sum(np.array([1.0, 4.0, 2.0]) * u / b)) < 1e-12
 
 
@@ -91,22 +115,36 @@ def test_plant_sensor_actuator_and_evaluation_against_formulas():
     t, dt = 0.3, 1e-3
     d = 1e-5 * np.cos(0.01 * t + np.arange(1, 5))[:, None] * np.ones(3)
     acc = np.full((4, 3), 0.5)
-    new = p.exact_step(t, x, TruthInputs(jnp.asarray(acc), p.exogenous(jnp.asarray(t)), None, None), dt)
-    np.testing.assert_allclose(new["r"], x["r"] + x["v"] * dt + 0.5 * (acc + d) * dt**2, rtol=0, atol=1e-13)
+    new = p.exact_step(
+        t, x, TruthInputs(jnp.asarray(acc), p.exogenous(jnp.asarray(t)), None, None), dt
+    )
+    np.testing.assert_allclose(
+        new["r"], x["r"] + x["v"] * dt + 0.5 * (acc + d) * dt**2, rtol=0, atol=1e-13
+    )
     np.testing.assert_allclose(new["v"], x["v"] + (acc + d) * dt, rtol=0, atol=1e-15)
     # sensors: chain differences plus the noise drawn for the step (position and velocity streams)
     key = jax.random.PRNGKey(3)
     noise = s.noise(key)
     y = s.measure(0.0, x, SensorInputs(noise, None))
-    np.testing.assert_allclose(y["position"], np.diff(np.asarray(x["r"]), axis=0) + noise["position"], atol=1e-12)
+    np.testing.assert_allclose(
+        y["position"], np.diff(np.asarray(x["r"]), axis=0) + noise["position"], atol=1e-12
+    )
     k_r, k_v = jax.random.split(key)
-    np.testing.assert_allclose(noise["velocity"], 2e-3 * np.asarray(jax.random.normal(k_v, (3, 3))), rtol=1e-15)
+    np.testing.assert_allclose(
+        noise["velocity"], 2e-3 * np.asarray(jax.random.normal(k_v, (3, 3))), rtol=1e-15
+    )
     # evaluation: (x_j - x_i) - (x_j^d - x_i^d)
     pos, des = np.arange(12.0).reshape(4, 3) ** 2, np.arange(12.0).reshape(4, 3)
-    te = ChainTrackingError().outputs({"position": jnp.asarray(pos), "desired_position": jnp.asarray(des)})
+    te = ChainTrackingError().outputs(
+        {"position": jnp.asarray(pos), "desired_position": jnp.asarray(des)}
+    )
     np.testing.assert_allclose(te["tracking_error"], (pos[1:] - pos[:-1]) - (des[1:] - des[:-1]))
     flag = ThresholdFlag(name="f", source="s", threshold=jnp.asarray(0.25))
-    assert [bool(flag.outputs({"s": jnp.asarray(v)})["f"]) for v in (0.2, 0.25, 0.3)] == [False, True, True]
+    assert [bool(flag.outputs({"s": jnp.asarray(v)})["f"]) for v in (0.2, 0.25, 0.3)] == [
+        False,
+        True,
+        True,
+    ]
 
 
 def test_force_law_is_rejected_on_the_acceleration_plant():

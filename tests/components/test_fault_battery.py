@@ -20,8 +20,15 @@ from formation_ftc.components.actuators.fault_battery import (
     FaultBatteryActuator,
     fault_kind_code,
 )
-from formation_ftc.components.networks.link_faults import DelayedGraphLinkLossNetwork, GraphLinkLossNetwork
-from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork, graph_edges
+from formation_ftc.components.networks.link_faults import (
+    DelayedGraphLinkLossNetwork,
+    GraphLinkLossNetwork,
+)
+from formation_ftc.components.networks.weighted_graph import (
+    DelayedGraphNetwork,
+    GraphNetwork,
+    graph_edges,
+)
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.history import history_init, history_push, required_capacity
 from formation_ftc.sim.components import ActuatorInputs, NetworkInputs
@@ -33,18 +40,31 @@ SC, AX, ONSET = 2, 1, 10.0  # faulty channel (spacecraft 2, axis 1), onset [s]
 
 
 def _actuator(kind: str, **kw) -> FaultBatteryActuator:
-    leaves = dict(saturation=LIMIT, fault_kind=float(fault_kind_code(kind)), spacecraft=float(SC), axis=float(AX),
-                  onset=ONSET, effectiveness=0.3, bias=0.25, period=6.0, duty=0.5, rate=0.01,
-                  min_effectiveness=0.4)
+    leaves = dict(
+        saturation=LIMIT,
+        fault_kind=float(fault_kind_code(kind)),
+        spacecraft=float(SC),
+        axis=float(AX),
+        onset=ONSET,
+        effectiveness=0.3,
+        bias=0.25,
+        period=6.0,
+        duty=0.5,
+        rate=0.01,
+        min_effectiveness=0.4,
+    )
     leaves.update(kw)
-    return FaultBatteryActuator(count=N, **{k: np.asarray(v, dtype=float) for k, v in leaves.items()})
+    return FaultBatteryActuator(
+        count=N, **{k: np.asarray(v, dtype=float) for k, v in leaves.items()}
+    )
 
 
 def _apply(act, t, cmd=CMD, state=None):
     exo = act.exogenous(jnp.asarray(t, dtype=jnp.float64))
     st = act.initial_state() if state is None else state
     return np.asarray(act.apply(t, jnp.asarray(cmd), ActuatorInputs(exo, st))), act.outputs(
-        t, jnp.asarray(cmd), ActuatorInputs(exo, st))
+        t, jnp.asarray(cmd), ActuatorInputs(exo, st)
+    )
 
 
 def _clipped(cmd=CMD):
@@ -57,8 +77,15 @@ def _expected(gain, bias=0.0, cmd=CMD):
     return out
 
 
-@pytest.mark.parametrize("kind, gain, bias", [
-    ("none", 1.0, 0.0), ("loss_of_effectiveness", 0.3, 0.0), ("bias", 1.0, 0.25), ("outage", 0.0, 0.0)])
+@pytest.mark.parametrize(
+    "kind, gain, bias",
+    [
+        ("none", 1.0, 0.0),
+        ("loss_of_effectiveness", 0.3, 0.0),
+        ("bias", 1.0, 0.25),
+        ("outage", 0.0, 0.0),
+    ],
+)
 def test_constant_kinds_before_and_after_onset(kind, gain, bias):
     act = _actuator(kind)
     for t in (0.0, 9.99):
@@ -91,15 +118,28 @@ def test_bias_acts_after_saturation():
 
 
 def test_intermittent_on_off_pattern():
-    act = _actuator("intermittent")  # period 6 s, duty 0.5: on [10, 13), off [13, 16), on [16, 19) ...
+    act = _actuator(
+        "intermittent"
+    )  # period 6 s, duty 0.5: on [10, 13), off [13, 16), on [16, 19) ...
     c = _clipped()[SC - 1, AX]
-    for t, on in [(9.0, True), (10.0, True), (12.9, True), (13.0, False), (15.9, False), (16.0, True),
-                  (18.5, True), (19.5, False), (100.0, (100.0 - 10.0) % 6.0 < 3.0)]:
+    for t, on in [
+        (9.0, True),
+        (10.0, True),
+        (12.9, True),
+        (13.0, False),
+        (15.9, False),
+        (16.0, True),
+        (18.5, True),
+        (19.5, False),
+        (100.0, (100.0 - 10.0) % 6.0 < 3.0),
+    ]:
         y, out = _apply(act, t)
         assert y[SC - 1, AX] == (c if on else 0.0), t
         assert float(np.asarray(out["effectiveness"])[SC - 1, AX]) == (1.0 if on else 0.0)
-        np.testing.assert_array_equal(np.delete(y.ravel(), (SC - 1) * 3 + AX),
-                                      np.delete(_clipped().ravel(), (SC - 1) * 3 + AX))
+        np.testing.assert_array_equal(
+            np.delete(y.ravel(), (SC - 1) * 3 + AX),
+            np.delete(_clipped().ravel(), (SC - 1) * 3 + AX),
+        )
 
 
 def test_degrading_ramp_and_floor():
@@ -116,13 +156,19 @@ def test_stuck_holds_the_value_at_onset_while_the_command_changes():
     act = _actuator("stuck")
     state = act.initial_state()
     inputs = lambda t, s: ActuatorInputs(act.exogenous(jnp.asarray(t)), s)  # noqa: E731
-    commands = [0.4 * CMD * (1.0 + 0.1 * k) * (-1) ** k for k in range(6)]  # channel within its limit
+    commands = [
+        0.4 * CMD * (1.0 + 0.1 * k) * (-1) ** k for k in range(6)
+    ]  # channel within its limit
     frozen = None
-    for k, t in enumerate([8.0, 9.0, 10.0, 11.0, 12.0, 13.0]):  # steps of 1 s; onset on the grid at 10 s
+    for k, t in enumerate(
+        [8.0, 9.0, 10.0, 11.0, 12.0, 13.0]
+    ):  # steps of 1 s; onset on the grid at 10 s
         y = np.asarray(act.apply(t, jnp.asarray(commands[k]), inputs(t, state)))
         if t < ONSET:
             np.testing.assert_array_equal(y, _clipped(commands[k]))
-        elif t == ONSET:  # the onset step: the channel still passes its saturated command, which freezes
+        elif (
+            t == ONSET
+        ):  # the onset step: the channel still passes its saturated command, which freezes
             frozen = _clipped(commands[k])[SC - 1, AX]
             np.testing.assert_array_equal(y, _clipped(commands[k]))
         else:
@@ -142,14 +188,20 @@ def test_one_compilation_serves_every_kind():
         traces.append(1)
         return act.apply(t, cmd, ActuatorInputs(act.exogenous(t), act.initial_state()))
 
-    outs = {kind: np.asarray(applied(_actuator(kind), jnp.asarray(20.0), jnp.asarray(CMD))) for kind in FAULT_KINDS}
+    outs = {
+        kind: np.asarray(applied(_actuator(kind), jnp.asarray(20.0), jnp.asarray(CMD)))
+        for kind in FAULT_KINDS
+    }
     assert len(traces) == 1
     np.testing.assert_allclose(outs["loss_of_effectiveness"], _expected(0.3))
     np.testing.assert_allclose(outs["bias"], _expected(1.0, 0.25))
     np.testing.assert_allclose(outs["degrading"], _expected(0.9))
     # the channel and the saturation are leaves too
-    other = applied(_actuator("outage", spacecraft=1.0, axis=0.0, saturation=np.full(N, 0.5)), jnp.asarray(20.0),
-                    jnp.asarray(CMD))
+    other = applied(
+        _actuator("outage", spacecraft=1.0, axis=0.0, saturation=np.full(N, 0.5)),
+        jnp.asarray(20.0),
+        jnp.asarray(CMD),
+    )
     assert len(traces) == 1
     want = np.clip(CMD, -0.5, 0.5)
     want[0, 0] = 0.0
@@ -162,7 +214,9 @@ def test_unknown_kind_name():
 
 
 # ------------------------------------------------------------------------------------------ networks
-C = np.array([[0.0, 0.0, 0.5, 0.0], [0.6, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.4], [0.6, 0.0, 0.0, 0.0]])
+C = np.array(
+    [[0.0, 0.0, 0.5, 0.0], [0.6, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.4], [0.6, 0.0, 0.0, 0.0]]
+)
 LOST = np.zeros((4, 4))
 LOST[2, 3] = 1.0  # 3 <- 4
 MSG = np.arange(12.0).reshape(4, 3) + 1.0
@@ -189,7 +243,9 @@ def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
     edges = graph_edges(C)
     cap = required_capacity(3 * T, dt) + 1
     base = dict(weights=C, delays=delays, edges=edges, capacity=cap, dt=dt)
-    net = DelayedGraphLinkLossNetwork(**base, lost=LOST, onset=np.asarray(20.0), delay_scale=np.asarray(3.0))
+    net = DelayedGraphLinkLossNetwork(
+        **base, lost=LOST, onset=np.asarray(20.0), delay_scale=np.asarray(3.0)
+    )
     healthy = DelayedGraphNetwork(**base)
     # messages m(t) = (t + 1) MSG pushed at t = 0 .. 30 s
     state = history_init(jnp.asarray(MSG), cap)
@@ -218,8 +274,12 @@ def _raw(actuator=None, network=None, plant_count=2):
     raw = {
         "scenario": {"name": "battery", "method": "composed"},
         "simulation": {"horizon": 10.0, "dt": 0.1},
-        "plant": {"type": "clohessy-wiltshire", "semi_major_axis": 7000e3, "mass": [10.0] * plant_count,
-                  "initial_position": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]][:plant_count]},
+        "plant": {
+            "type": "clohessy-wiltshire",
+            "semi_major_axis": 7000e3,
+            "mass": [10.0] * plant_count,
+            "initial_position": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]][:plant_count],
+        },
         "controller": {"type": "pd", "kp": 1.0, "kd": 1.0},
     }
     if actuator is not None:
@@ -229,29 +289,41 @@ def _raw(actuator=None, network=None, plant_count=2):
     return raw
 
 
-@pytest.mark.parametrize("actuator, needle", [
-    ({"kind": "jammed"}, "actuator.kind"),
-    ({"kind": "jammed"}, "allowed: none, loss_of_effectiveness, bias, stuck, outage, intermittent, degrading"),
-    ({"kind": "bias", "spacecraft": 3}, "actuator.spacecraft = 3: must be in 1..2"),
-    ({"kind": "bias", "spacecraft": 0}, "actuator.spacecraft"),
-    ({"kind": "bias", "axis": 3}, "actuator.axis"),
-    ({"kind": "bias", "saturation": [1.0, 2.0, 3.0]}, "actuator.saturation"),
-    ({"kind": "bias", "saturation": -1.0}, "actuator.saturation"),
-    ({"kind": "intermittent", "duty": 1.5}, "actuator.duty"),
-    ({"kind": "bias", "euler_allocation": True}, "quaternion"),
-])
+@pytest.mark.parametrize(
+    "actuator, needle",
+    [
+        ({"kind": "jammed"}, "actuator.kind"),
+        (
+            {"kind": "jammed"},
+            "allowed: none, loss_of_effectiveness, bias, stuck, outage, intermittent, degrading",
+        ),
+        ({"kind": "bias", "spacecraft": 3}, "actuator.spacecraft = 3: must be in 1..2"),
+        ({"kind": "bias", "spacecraft": 0}, "actuator.spacecraft"),
+        ({"kind": "bias", "axis": 3}, "actuator.axis"),
+        ({"kind": "bias", "saturation": [1.0, 2.0, 3.0]}, "actuator.saturation"),
+        ({"kind": "bias", "saturation": -1.0}, "actuator.saturation"),
+        ({"kind": "intermittent", "duty": 1.5}, "actuator.duty"),
+        ({"kind": "bias", "euler_allocation": True}, "quaternion"),
+    ],
+)
 def test_catalog_rejects_bad_actuator_sections_naming_the_field(actuator, needle):
     with pytest.raises(ScenarioError) as err:
         ftc.load_scenario(_raw(actuator=actuator))
     assert needle in str(err.value)
 
 
-@pytest.mark.parametrize("network, needle", [
-    ({"adjacency": [[0, 1], [1, 0]], "lost_links": [[1, 3]]}, "lost_links[0] = [1, 3]"),
-    ({"adjacency": [[0, 0], [1, 0]], "lost_links": [[1, 2]]}, "spacecraft 1 does not receive from 2"),
-    ({"adjacency": [[0, 1], [1, 0]], "delay_scale": 2.0}, "network.delay_scale"),
-    ({"adjacency": [[0, 1], [1, 0]], "delays": [["1", "1"], ["1", "1"]]}, "max_delay"),
-])
+@pytest.mark.parametrize(
+    "network, needle",
+    [
+        ({"adjacency": [[0, 1], [1, 0]], "lost_links": [[1, 3]]}, "lost_links[0] = [1, 3]"),
+        (
+            {"adjacency": [[0, 0], [1, 0]], "lost_links": [[1, 2]]},
+            "spacecraft 1 does not receive from 2",
+        ),
+        ({"adjacency": [[0, 1], [1, 0]], "delay_scale": 2.0}, "network.delay_scale"),
+        ({"adjacency": [[0, 1], [1, 0]], "delays": [["1", "1"], ["1", "1"]]}, "max_delay"),
+    ],
+)
 def test_catalog_rejects_bad_network_sections_naming_the_field(network, needle):
     with pytest.raises(ScenarioError) as err:
         ftc.load_scenario(_raw(network=network))
@@ -261,11 +333,30 @@ def test_catalog_rejects_bad_network_sections_naming_the_field(network, needle):
 def test_catalog_builds_leaves_not_static_fields():
     from formation_ftc.methods.composed import make_loop
 
-    a = make_loop(ftc.load_scenario(_raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 1, "onset": 3.0,
-                                                   "saturation": 4.0}))).actuator
-    b = make_loop(ftc.load_scenario(_raw(actuator={"kind": "degrading", "rate": 0.1, "saturation": [1.0, 2.0]}))).actuator
+    a = make_loop(
+        ftc.load_scenario(
+            _raw(
+                actuator={
+                    "kind": "stuck",
+                    "spacecraft": 2,
+                    "axis": 1,
+                    "onset": 3.0,
+                    "saturation": 4.0,
+                }
+            )
+        )
+    ).actuator
+    b = make_loop(
+        ftc.load_scenario(
+            _raw(actuator={"kind": "degrading", "rate": 0.1, "saturation": [1.0, 2.0]})
+        )
+    ).actuator
     assert jax.tree_util.tree_structure(a) == jax.tree_util.tree_structure(b)
-    assert float(a.fault_kind) == FAULT_KINDS.index("stuck") and float(a.spacecraft) == 2.0 and float(a.axis) == 1.0
+    assert (
+        float(a.fault_kind) == FAULT_KINDS.index("stuck")
+        and float(a.spacecraft) == 2.0
+        and float(a.axis) == 1.0
+    )
     np.testing.assert_array_equal(a.saturation, [4.0, 4.0])
     np.testing.assert_array_equal(b.saturation, [1.0, 2.0])
     c = make_loop(ftc.load_scenario(_raw(actuator={"kind": "none"}))).actuator
@@ -277,11 +368,18 @@ def test_li2020_on_cw_with_a_loss_of_effectiveness_runs_and_records_the_switch(t
     src = Path(ftc.__file__).parent / "scenarios" / "compose-li2020-on-cw.toml"
     raw = tomllib.loads(src.read_text())
     raw["simulation"].update(horizon=20.0, record_every=100)  # dt 0.01 s: records every 1 s
-    raw["actuator"] = {"type": "fault-battery", "kind": "loss_of_effectiveness", "spacecraft": 2, "axis": 0,
-                       "onset": 10.0, "effectiveness": 0.5}
+    raw["actuator"] = {
+        "type": "fault-battery",
+        "kind": "loss_of_effectiveness",
+        "spacecraft": 2,
+        "axis": 0,
+        "onset": 10.0,
+        "effectiveness": 0.5,
+    }
     raw["metrics"] = [m for m in raw["metrics"] if m["name"] != "max_position_error_after_1000s"]
-    raw["metrics"].append({"name": "saturated_fraction", "signal": "saturated", "reduce": "mean",
-                           "spacecraft": "max"})
+    raw["metrics"].append(
+        {"name": "saturated_fraction", "signal": "saturated", "reduce": "mean", "spacecraft": "max"}
+    )
     path = tmp_path / "li2020-loe.toml"
     path.write_bytes(tomli_w.dumps(raw).encode())
     ds, metrics = ftc.simulate_with_metrics(ftc.load_scenario(path))
@@ -302,7 +400,9 @@ def test_li2020_on_cw_with_a_loss_of_effectiveness_runs_and_records_the_switch(t
 def test_stuck_in_a_closed_loop_freezes_the_applied_output_at_onset():
     """A sampled PD law on CW: after the onset the faulty channel applies the command of the onset step
     (clipped at the limit) while the command keeps changing; other channels apply the clipped command."""
-    raw = _raw(actuator={"kind": "stuck", "spacecraft": 2, "axis": 0, "onset": 3.0, "saturation": 0.2})
+    raw = _raw(
+        actuator={"kind": "stuck", "spacecraft": 2, "axis": 0, "onset": 3.0, "saturation": 0.2}
+    )
     raw["simulation"].update(horizon=8.0, dt=0.1, record_every=1)
     raw["controller"].update(kp=0.3, kd=1.0, mode="sampled")
     ds = ftc.simulate(ftc.load_scenario(raw))
@@ -326,15 +426,25 @@ def test_euler_allocation_is_the_torque_allocation_then_saturation_and_fault():
     from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
     from formation_ftc.core.euler_quaternion import quaternion_from_euler_zyx
 
-    q = jnp.asarray(quaternion_from_euler_zyx(jnp.asarray([[0.3, -0.2, 0.5], [0.1, 0.4, -0.7], [0.0, 0.0, 0.0]])))
+    q = jnp.asarray(
+        quaternion_from_euler_zyx(
+            jnp.asarray([[0.3, -0.2, 0.5], [0.1, 0.4, -0.7], [0.0, 0.0, 0.0]])
+        )
+    )
     plant_state = {"q": q, "omega": jnp.zeros((N, 3))}
     tau_gen = jnp.asarray(0.1 * CMD)
-    body = np.asarray(EulerTorqueAllocation().apply(0.0, tau_gen, ActuatorInputs(None, None, None, plant_state)))
+    body = np.asarray(
+        EulerTorqueAllocation().apply(0.0, tau_gen, ActuatorInputs(None, None, None, plant_state))
+    )
     for kind in ("none", "loss_of_effectiveness"):
         act = _actuator(kind, saturation=np.full(N, 0.3))
-        act = FaultBatteryActuator(**{**{f: getattr(act, f) for f in act.__dataclass_fields__}, "euler_allocation": True})
+        act = FaultBatteryActuator(
+            **{**{f: getattr(act, f) for f in act.__dataclass_fields__}, "euler_allocation": True}
+        )
         exo = act.exogenous(jnp.asarray(20.0))
-        y = np.asarray(act.apply(20.0, tau_gen, ActuatorInputs(exo, act.initial_state(), None, plant_state)))
+        y = np.asarray(
+            act.apply(20.0, tau_gen, ActuatorInputs(exo, act.initial_state(), None, plant_state))
+        )
         want = np.clip(body, -0.3, 0.3)
         if kind != "none":
             want[SC - 1, AX] *= 0.3
@@ -344,9 +454,16 @@ def test_euler_allocation_is_the_torque_allocation_then_saturation_and_fault():
 def test_euler_law_on_the_quaternion_plant_accepts_the_battery_with_euler_allocation():
     from formation_ftc.methods.composed import make_loop
 
-    raw = tomllib.loads((Path(ftc.__file__).parent / "scenarios" / "compose-mehrabian-on-yang2013.toml").read_text())
+    raw = tomllib.loads(
+        (Path(ftc.__file__).parent / "scenarios" / "compose-mehrabian-on-yang2013.toml").read_text()
+    )
     raw.pop("estimator", None)  # the scripted FDI reports the euler-torque-allocation's own faults
-    raw["actuator"] = {"type": "fault-battery", "kind": "bias", "bias": 0.1, "euler_allocation": True}
+    raw["actuator"] = {
+        "type": "fault-battery",
+        "kind": "bias",
+        "bias": 0.1,
+        "euler_allocation": True,
+    }
     loop = make_loop(ftc.load_scenario(raw))
     act = loop.actuator
     assert isinstance(act, FaultBatteryActuator) and act.euler_allocation and act.units == "N m"

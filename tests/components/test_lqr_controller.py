@@ -29,18 +29,32 @@ A_ORBIT = 7000e3
 N = math.sqrt(MU_EARTH / A_ORBIT**3)
 MASS = [100.0, 120.0]
 # per-axis Bryson weights: slowest closed-loop mode ~ -0.025 1/s (z), well apart from the others
-BRYSON = {"max_position_error": [10.0, 20.0, 40.0], "max_velocity_error": 1.0, "max_acceleration": 1.0}
+BRYSON = {
+    "max_position_error": [10.0, 20.0, 40.0],
+    "max_velocity_error": 1.0,
+    "max_acceleration": 1.0,
+}
 
 
 def _raw(desired, *, mode="continuous", horizon=250.0, dt=0.1, controller=None, **slots):
     raw = {
         "scenario": {"name": "lqr-test", "method": "composed"},
         "simulation": {"horizon": horizon, "dt": dt, "record_every": 10},
-        "plant": {"type": "clohessy-wiltshire", "semi_major_axis": A_ORBIT, "mass": MASS,
-                  "initial_position": [[30.0, -20.0, 15.0], [-10.0, 40.0, -25.0]],
-                  "initial_velocity": [[0.1, 0.0, -0.05], [0.0, -0.2, 0.1]]},
-        "controller": {"type": "lqr", "semi_major_axis": A_ORBIT, **BRYSON, "desired_position": desired,
-                       "mode": mode, **(controller or {})},
+        "plant": {
+            "type": "clohessy-wiltshire",
+            "semi_major_axis": A_ORBIT,
+            "mass": MASS,
+            "initial_position": [[30.0, -20.0, 15.0], [-10.0, 40.0, -25.0]],
+            "initial_velocity": [[0.1, 0.0, -0.05], [0.0, -0.2, 0.1]],
+        },
+        "controller": {
+            "type": "lqr",
+            "semi_major_axis": A_ORBIT,
+            **BRYSON,
+            "desired_position": desired,
+            "mode": mode,
+            **(controller or {}),
+        },
     }
     raw.update(slots)
     return raw
@@ -51,8 +65,16 @@ def _desired_numpy(t, i, moving):
     if not moving:
         return np.array([50.0 * i, -100.0, 20.0, 0.0, 0.0, 0.0])
     w = 0.01
-    return np.array([50.0 * i + 20 * np.sin(w * t), -100.0 + 5 * t, 20.0 * np.cos(w * t),
-                     20 * w * np.cos(w * t), 5.0, -20.0 * w * np.sin(w * t)])
+    return np.array(
+        [
+            50.0 * i + 20 * np.sin(w * t),
+            -100.0 + 5 * t,
+            20.0 * np.cos(w * t),
+            20 * w * np.cos(w * t),
+            5.0,
+            -20.0 * w * np.sin(w * t),
+        ]
+    )
 
 
 FIXED = ["50*i", "-100", "20"]
@@ -66,8 +88,14 @@ def test_output_equals_the_formula():
     assert isinstance(law, LqrFormationController)
     t = 37.0
     y = np.random.default_rng(3).normal(size=(2, 6)) * [50, 50, 50, 1, 1, 1]
-    inputs = FlightInputs(measurement=jnp.asarray(y), received=None, estimate=None, decision=None,
-                          exogenous=law.exogenous(jnp.asarray(t)), reference=None)
+    inputs = FlightInputs(
+        measurement=jnp.asarray(y),
+        received=None,
+        estimate=None,
+        decision=None,
+        exogenous=law.exogenous(jnp.asarray(t)),
+        reference=None,
+    )
     u, _, _ = law.output(jnp.asarray(t), None, inputs)
     A, _ = cw_matrices(N)
     K = cw_lqr(N, **BRYSON).K
@@ -94,7 +122,9 @@ def test_continuous_error_follows_expm_and_decays_at_the_slowest_eigenvalue(desi
     for i in range(2):
         e0 = q0[i] - _desired_numpy(0.0, i + 1, moving)
         e = np.stack([scipy.linalg.expm(Acl * tk) @ e0 for tk in t])
-        np.testing.assert_allclose(ds.position_error.values[:, i], e[:, :3], rtol=0, atol=1e-6 * np.abs(e0).max())
+        np.testing.assert_allclose(
+            ds.position_error.values[:, i], e[:, :3], rtol=0, atol=1e-6 * np.abs(e0).max()
+        )
     # decay rate: least-squares slope of log |e| over [150, 400] s, where the slowest mode (z axis,
     # ~ -0.025 1/s) dominates the next one (y axis, ~ -0.05 1/s) by e^(-0.025 * 150) < 3 %
     sigma = np.max(np.linalg.eigvals(Acl).real)
@@ -112,7 +142,9 @@ def test_sampled_mode_follows_the_zoh_recursion():
     ds = ftc.simulate(ftc.load_scenario(_raw(FIXED, mode="sampled", horizon=100.0, dt=dt)))
     A, B = cw_matrices(N)
     K = cw_lqr(N, **BRYSON).K
-    M = scipy.linalg.expm(np.block([[A, B], [np.zeros((3, 9))]]) * dt)  # Van Loan: [[Phi, Gamma], [0, I]]
+    M = scipy.linalg.expm(
+        np.block([[A, B], [np.zeros((3, 9))]]) * dt
+    )  # Van Loan: [[Phi, Gamma], [0, I]]
     Phi, Gam = M[:6, :6], M[:6, 6:]
     F = Phi - Gam @ K
     q0 = np.array([[30.0, -20.0, 15.0, 0.1, 0.0, -0.05], [-10.0, 40.0, -25.0, 0.0, -0.2, 0.1]])
@@ -122,7 +154,9 @@ def test_sampled_mode_follows_the_zoh_recursion():
         traj = [e]
         for _ in range(steps[-1]):
             traj.append(F @ traj[-1])
-        np.testing.assert_allclose(ds.position_error.values[:, i], np.array(traj)[steps, :3], rtol=0, atol=1e-7)
+        np.testing.assert_allclose(
+            ds.position_error.values[:, i], np.array(traj)[steps, :3], rtol=0, atol=1e-7
+        )
     # and it is not the continuous law: the held command differs from the continuous one
     dc = ftc.simulate(ftc.load_scenario(_raw(FIXED, horizon=100.0, dt=dt)))
     assert np.max(np.abs(dc.position_error.values - ds.position_error.values)) > 1e-3
@@ -131,13 +165,23 @@ def test_sampled_mode_follows_the_zoh_recursion():
 def test_controller_cannot_see_the_truth():
     """With identical flight inputs the command is unchanged when the plant's masses and disturbance
     and the actuator's faults change, while the applied force does change."""
-    hints = typing.get_type_hints(LqrFormationController.output,
-                                  globalns=vars(inspect.getmodule(LqrFormationController)) | {"FlightInputs": FlightInputs})
+    hints = typing.get_type_hints(
+        LqrFormationController.output,
+        globalns=vars(inspect.getmodule(LqrFormationController)) | {"FlightInputs": FlightInputs},
+    )
     assert hints["inputs"] is FlightInputs
-    loop = make_loop(ftc.load_scenario("compose-lqr-on-cw", {"simulation.horizon": 1.0, "simulation.record_every": 1}))
+    loop = make_loop(
+        ftc.load_scenario(
+            "compose-lqr-on-cw", {"simulation.horizon": 1.0, "simulation.record_every": 1}
+        )
+    )
     assert isinstance(loop.controller, LqrFormationController)
-    act = dataclasses.replace(loop.actuator, onset=loop.actuator.onset * 0.0, magnitude=loop.actuator.magnitude + 3.0)
-    plant = dataclasses.replace(loop.plant, mass=loop.plant.mass * 1.7, disturbance_force=("5", "5*t", "-5"))
+    act = dataclasses.replace(
+        loop.actuator, onset=loop.actuator.onset * 0.0, magnitude=loop.actuator.magnitude + 3.0
+    )
+    plant = dataclasses.replace(
+        loop.plant, mass=loop.plant.mass * 1.7, disturbance_force=("5", "5*t", "-5")
+    )
     other = dataclasses.replace(loop, actuator=act, plant=plant)
     k = jnp.asarray(3, dtype=jnp.int64)
     state = loop.initial_state()
@@ -161,18 +205,31 @@ def test_builtin_scenario_reaches_the_steady_offset_of_a_constant_fault():
     np.testing.assert_allclose(e[-1], np.broadcast_to(e_ss, e[-1].shape), atol=0.2)
 
 
-@pytest.mark.parametrize("controller, slots, needle", [
-    ({"max_position_error": 0.0}, {}, "controller.max_position_error"),
-    ({"max_acceleration": [1.0, 2.0]}, {}, "controller.max_acceleration"),
-    ({"max_velocity_error": -1.0}, {}, "controller.max_velocity_error"),
-    ({"mass": [1.0, 2.0, 3.0]}, {}, "controller.mass"),
-    ({"mass": -5.0}, {}, "controller.mass"),
-    ({"kp": 1.0}, {}, "controller.kp"),
-    ({"mode": "hybrid"}, {}, "controller.mode"),
-    ({"semi_major_axis": -1.0}, {}, "controller.semi_major_axis"),
-    ({}, {"network": {"type": "delayed-graph", "adjacency": [[0, 1], [1, 0]], "delays": [["1", "1"], ["1", "1"]],
-                      "max_delay": 1.0}}, "LqrFormationController"),
-])
+@pytest.mark.parametrize(
+    "controller, slots, needle",
+    [
+        ({"max_position_error": 0.0}, {}, "controller.max_position_error"),
+        ({"max_acceleration": [1.0, 2.0]}, {}, "controller.max_acceleration"),
+        ({"max_velocity_error": -1.0}, {}, "controller.max_velocity_error"),
+        ({"mass": [1.0, 2.0, 3.0]}, {}, "controller.mass"),
+        ({"mass": -5.0}, {}, "controller.mass"),
+        ({"kp": 1.0}, {}, "controller.kp"),
+        ({"mode": "hybrid"}, {}, "controller.mode"),
+        ({"semi_major_axis": -1.0}, {}, "controller.semi_major_axis"),
+        (
+            {},
+            {
+                "network": {
+                    "type": "delayed-graph",
+                    "adjacency": [[0, 1], [1, 0]],
+                    "delays": [["1", "1"], ["1", "1"]],
+                    "max_delay": 1.0,
+                }
+            },
+            "LqrFormationController",
+        ),
+    ],
+)
 def test_bad_sections_are_rejected(controller, slots, needle):
     with pytest.raises(ScenarioError) as err:
         ftc.load_scenario(_raw(FIXED, controller=controller, **slots))

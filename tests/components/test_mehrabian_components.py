@@ -29,7 +29,9 @@ TRUTH_FIELDS = {"state", "true_state", "fault", "faults", "disturbance", "force"
 
 
 def _loop(name="mehrabian-identification", **ov):
-    return make_loop(ftc.load_scenario(name, {"simulation.horizon": 1.0, "simulation.record_every": 1, **ov}))
+    return make_loop(
+        ftc.load_scenario(name, {"simulation.horizon": 1.0, "simulation.record_every": 1, **ov})
+    )
 
 
 def _hints(cls, meth):
@@ -46,11 +48,18 @@ def test_controller_and_fdi_cannot_see_the_truth():
     assert not TRUTH_FIELDS & set(FlightInputs._fields)
     # fault active from t = 0 and the FDI reporting from 0 s (no latency)
     loop = _loop(**{"faults.0.start": 0.0, "fdi.delay": 0.0})
-    assert isinstance(loop.controller, NetworkedElHinfController) and isinstance(loop.estimator, ScriptedFdi)
+    assert isinstance(loop.controller, NetworkedElHinfController) and isinstance(
+        loop.estimator, ScriptedFdi
+    )
     assert isinstance(loop.actuator, HeldAdditiveFaultActuator)
-    act = dataclasses.replace(loop.actuator, torques=("3*sin(t) - 2",), windows=loop.actuator.windows + 0.0)
-    plant = dataclasses.replace(loop.plant, disturbance_std=loop.plant.disturbance_std * 50.0,
-                                inertia_spread=loop.plant.inertia_spread * 0.1)
+    act = dataclasses.replace(
+        loop.actuator, torques=("3*sin(t) - 2",), windows=loop.actuator.windows + 0.0
+    )
+    plant = dataclasses.replace(
+        loop.plant,
+        disturbance_std=loop.plant.disturbance_std * 50.0,
+        inertia_spread=loop.plant.inertia_spread * 0.1,
+    )
     other = dataclasses.replace(loop, actuator=act, plant=plant)
     k = jnp.asarray(3, dtype=jnp.int64)
     state = loop.initial_state()  # same true state (same seed), hence the same measurement
@@ -106,16 +115,29 @@ def test_held_time_signals_and_fault_and_fdi_profiles():
         assert flag[0, 2] == float(on) and flag.sum() == float(on)
         tw = t_k - 5.0
         seen = 4000 <= k - 500 <= 24000
-        np.testing.assert_allclose(est[0, 2], (0.05 * np.sin(0.02 * tw) + 0.5) if on and seen else 0.0,
-                                   rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(
+            est[0, 2],
+            (0.05 * np.sin(0.02 * tw) + 0.5) if on and seen else 0.0,
+            rtol=1e-14,
+            atol=1e-15,
+        )
 
 
 def _cw_loop(metrics, dt=1.0, n=600):
     n_mm = 0.0011
-    plant = ClohessyWiltshirePlant(mean_motion=jnp.asarray(n_mm), mass=jnp.asarray([100.0]),
-                                   initial_state_lvlh=jnp.asarray([[50.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
-    return ClosedLoop(plant=plant, controller=ZeroController(count=1), metrics=tuple(metrics), dt=dt,
-                      n_steps=n, record_every=n)
+    plant = ClohessyWiltshirePlant(
+        mean_motion=jnp.asarray(n_mm),
+        mass=jnp.asarray([100.0]),
+        initial_state_lvlh=jnp.asarray([[50.0, 0.0, 0.0, 0.0, 0.0, 0.0]]),
+    )
+    return ClosedLoop(
+        plant=plant,
+        controller=ZeroController(count=1),
+        metrics=tuple(metrics),
+        dt=dt,
+        n_steps=n,
+        record_every=n,
+    )
 
 
 def test_stage_integral_is_the_rk4_quadrature():
@@ -124,10 +146,20 @@ def test_stage_integral_is_the_rk4_quadrature():
     quadrature), the rectangle-rule ``integral`` only to O(dt); ``stage_root_mean`` of x^2 is the RMS."""
     n_mm, x0 = 0.0011, 50.0
     a, b = 100.0, 500.0
-    mets = [Metric("si", "position", "stage_integral", component=0, spacecraft="sum", start=a, end=b),
-            Metric("rect", "position", "integral", component=0, spacecraft="sum", start=a, end=b - 0.5),
-            Metric("rms", "position", "stage_root_mean", component=0, square=True, spacecraft="sum",
-                   start=a, end=b)]
+    mets = [
+        Metric("si", "position", "stage_integral", component=0, spacecraft="sum", start=a, end=b),
+        Metric("rect", "position", "integral", component=0, spacecraft="sum", start=a, end=b - 0.5),
+        Metric(
+            "rms",
+            "position",
+            "stage_root_mean",
+            component=0,
+            square=True,
+            spacecraft="sum",
+            start=a,
+            end=b,
+        ),
+    ]
     out = jax.jit(lambda lp: lp.run()["metrics"])(_cw_loop(mets))
     si, rect, rms = (float(v) for v in out)
     want = x0 * (4 * (b - a) - 3 * (np.sin(n_mm * b) - np.sin(n_mm * a)) / n_mm)
@@ -145,14 +177,20 @@ def test_metric_component_square_and_range_options():
     rng = np.random.default_rng(3)
     v = rng.normal(size=(5, 3))
     sig = {"s": jnp.asarray(v)}
-    cases = [(Metric("a", "s", component=1, spacecraft="range"), np.ptp(v[:, 1])),
-             (Metric("b", "s", component=2, norm=True, spacecraft="max"), np.abs(v[:, 2]).max()),
-             (Metric("c", "s", norm=True, square=True, spacecraft="mean"), np.mean(np.sum(v**2, -1))),
-             (Metric("d", "s", square=True, component=0, spacecraft="sum"), np.sum(v[:, 0] ** 2))]
+    cases = [
+        (Metric("a", "s", component=1, spacecraft="range"), np.ptp(v[:, 1])),
+        (Metric("b", "s", component=2, norm=True, spacecraft="max"), np.abs(v[:, 2]).max()),
+        (Metric("c", "s", norm=True, square=True, spacecraft="mean"), np.mean(np.sum(v**2, -1))),
+        (Metric("d", "s", square=True, component=0, spacecraft="sum"), np.sum(v[:, 0] ** 2)),
+    ]
     for m, want in cases:
         assert float(m.value(sig)) == pytest.approx(want, rel=1e-14)
-    m = Metric("e", "s", "stage_integral", norm=True, square=True, spacecraft="sum", start=1.0, end=3.0)
+    m = Metric(
+        "e", "s", "stage_integral", norm=True, square=True, spacecraft="sum", start=1.0, end=3.0
+    )
     acc = init_accumulators([m], sig)
     for k in range(5):  # steps [k, k + 1]: only k = 1, 2 lie inside [1, 3]
-        acc = update_stage_accumulators([m], acc, jnp.asarray(float(k)), 1.0, (jnp.asarray(10.0**k),))
+        acc = update_stage_accumulators(
+            [m], acc, jnp.asarray(float(k)), 1.0, (jnp.asarray(10.0**k),)
+        )
     assert float(finalize([m], acc)[0]) == 110.0

@@ -30,21 +30,45 @@ def _loop(plant: dict, sensors: dict | None, reference: bool = True) -> dict:
     raw = {
         "scenario": {"name": "truth-vs-model", "method": "composed"},
         "simulation": {"horizon": 600.0, "dt": 1.0, "record_every": 30},
-        "plant": {"mass": [100.0, 120.0], "initial_position": OFFSETS,
-                  "initial_velocity": [[0.05, -0.02, 0.01], [0.0, 0.03, -0.04]],
-                  "disturbance_force": DISTURBANCE, **plant},
-        "controller": {"type": "pd", "kp": 0.02, "kd": 2.0, "nominal_mass": 0.0,
-                       "desired_position": ["100", "50*i", "-20"]},
+        "plant": {
+            "mass": [100.0, 120.0],
+            "initial_position": OFFSETS,
+            "initial_velocity": [[0.05, -0.02, 0.01], [0.0, 0.03, -0.04]],
+            "disturbance_force": DISTURBANCE,
+            **plant,
+        },
+        "controller": {
+            "type": "pd",
+            "kp": 0.02,
+            "kd": 2.0,
+            "nominal_mass": 0.0,
+            "desired_position": ["100", "50*i", "-20"],
+        },
     }
     if reference:
-        raw["reference"] = {"type": "keplerian", "semi_major_axis": A, "eccentricity": E, "true_anomaly0": NU0}
+        raw["reference"] = {
+            "type": "keplerian",
+            "semi_major_axis": A,
+            "eccentricity": E,
+            "true_anomaly0": NU0,
+        }
     if sensors is not None:
         raw["sensors"] = sensors
     return raw
 
 
-TRUTH = {"type": "orbital-truth", "semi_major_axis": A, "eccentricity": E, "inclination": 0.9, "raan": 0.4,
-         "arg_perigee": 1.1, "true_anomaly": NU0, "j2": False, "drag": False, "srp": False}
+TRUTH = {
+    "type": "orbital-truth",
+    "semi_major_axis": A,
+    "eccentricity": E,
+    "inclination": 0.9,
+    "raan": 0.4,
+    "arg_perigee": 1.1,
+    "true_anomaly": NU0,
+    "j2": False,
+    "drag": False,
+    "srp": False,
+}
 
 
 def test_inertial_truth_in_a_closed_loop_equals_the_relative_lvlh_plant():
@@ -55,7 +79,9 @@ def test_inertial_truth_in_a_closed_loop_equals_the_relative_lvlh_plant():
     agree to 1e-8 relative. A wrong LVLH -> ECI force rotation (e.g. R instead of
     R^T) moves the spacecraft by metres here."""
     ds_t = ftc.simulate(ftc.load_scenario(_loop(TRUTH, {"type": "lvlh-relative-state"})))
-    ds_m = ftc.simulate(ftc.load_scenario(_loop({"type": "relative-lvlh"}, {"type": "relative-state"})))
+    ds_m = ftc.simulate(
+        ftc.load_scenario(_loop({"type": "relative-lvlh"}, {"type": "relative-state"}))
+    )
     np.testing.assert_allclose(ds_t.position.values, ds_m.position.values, rtol=0, atol=1e-6)
     np.testing.assert_allclose(ds_t.velocity.values, ds_m.velocity.values, rtol=0, atol=1e-8)
     np.testing.assert_allclose(ds_t.command.values, ds_m.command.values, rtol=0, atol=1e-8)
@@ -71,13 +97,18 @@ def test_inertial_truth_in_a_closed_loop_equals_the_relative_lvlh_plant():
 
 def test_initial_state_maps_elements_and_offsets():
     plant = InertialFormationPlant(
-        mass=np.array([100.0, 50.0]), chief_elements=np.array([A, E, 0.9, 0.4, 1.1, NU0]),
+        mass=np.array([100.0, 50.0]),
+        chief_elements=np.array([A, E, 0.9, 0.4, 1.1, NU0]),
         initial_state_lvlh=np.array([[300.0, -200, 100, 0.1, 0.2, 0.3], [0, 0, 0, 0, 0, 0]]),
-        ballistic_coefficient=np.array([0.02, 0.02]), chief_ballistic_coefficient=np.array(0.02),
-        srp_coefficient=np.array([0.01, 0.01]), chief_srp_coefficient=np.array(0.01))
+        ballistic_coefficient=np.array([0.02, 0.02]),
+        chief_ballistic_coefficient=np.array(0.02),
+        srp_coefficient=np.array([0.01, 0.01]),
+        chief_srp_coefficient=np.array(0.01),
+    )
     x0 = plant.initial_state()
-    np.testing.assert_allclose([float(v) for v in eci_to_elements(x0["chief"])], [A, E, 0.9, 0.4, 1.1, NU0],
-                               rtol=1e-11)
+    np.testing.assert_allclose(
+        [float(v) for v in eci_to_elements(x0["chief"])], [A, E, 0.9, 0.4, 1.1, NU0], rtol=1e-11
+    )
     np.testing.assert_allclose(plant.position(x0), [[300.0, -200, 100], [0, 0, 0]], atol=1e-7)
     np.testing.assert_allclose(plant.velocity(x0), [[0.1, 0.2, 0.3], [0, 0, 0]], atol=1e-10)
     # a deputy at the chief's place with the chief's velocity has the chief's ECI state
@@ -88,17 +119,30 @@ def test_perturbations_act_on_the_truth_chief():
     """J2 + drag + SRP on, chief on a 400 km-perigee orbit: the chief's altitude differs from the two-body
     conic, and drag with a larger ballistic coefficient for spacecraft 2 makes it fall behind (negative
     along-track drift relative to spacecraft 1, which has the chief's coefficient)."""
-    plant = {**TRUTH, "semi_major_axis": 6778137.0, "eccentricity": 0.0, "j2": True, "drag": True, "srp": True,
-             "ballistic_coefficient": [0.02, 0.2], "chief_ballistic_coefficient": 0.02,
-             "srp_coefficient": 0.015, "disturbance_force": ["0", "0", "0"]}
+    plant = {
+        **TRUTH,
+        "semi_major_axis": 6778137.0,
+        "eccentricity": 0.0,
+        "j2": True,
+        "drag": True,
+        "srp": True,
+        "ballistic_coefficient": [0.02, 0.2],
+        "chief_ballistic_coefficient": 0.02,
+        "srp_coefficient": 0.015,
+        "disturbance_force": ["0", "0", "0"],
+    }
     raw = _loop(plant, {"type": "lvlh-relative-state"}, reference=False)
     raw["controller"] = {"type": "pd", "kp": 0.0, "kd": 0.0, "nominal_mass": 0.0}
     raw["plant"]["initial_position"] = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
     raw["plant"].pop("initial_velocity")
     ds = ftc.simulate(ftc.load_scenario(raw))
     pos = ds.position.values
-    np.testing.assert_allclose(pos[:, 0], 0.0, atol=1e-6)  # same B and C_R A/m as the chief: stays with it
-    assert pos[-1, 1, 1] < -1.0  # differential drag (Delta B = 0.18 m^2/kg at 400 km): measured -2.76 m at 600 s
+    np.testing.assert_allclose(
+        pos[:, 0], 0.0, atol=1e-6
+    )  # same B and C_R A/m as the chief: stays with it
+    assert (
+        pos[-1, 1, 1] < -1.0
+    )  # differential drag (Delta B = 0.18 m^2/kg at 400 km): measured -2.76 m at 600 s
     alt = ds.chief_altitude.values
     assert np.ptp(alt) > 1e3  # J2 makes the 'circular' orbit's radius vary by kilometres
 
@@ -106,20 +150,28 @@ def test_perturbations_act_on_the_truth_chief():
 # -------------------------------------------------------------------------------------------- sensors
 def _plant():
     return InertialFormationPlant(
-        mass=np.full(3, 100.0), chief_elements=np.array([A, E, 0.9, 0.4, 1.1, NU0]),
-        initial_state_lvlh=np.array([[300.0, -200, 100, 0.1, 0.2, 0.3], [10, 20, 30, 0, 0, 0],
-                                     [-500, 0, 0, 0, -0.5, 0]]),
-        ballistic_coefficient=np.full(3, 0.02), chief_ballistic_coefficient=np.array(0.02),
-        srp_coefficient=np.full(3, 0.01), chief_srp_coefficient=np.array(0.01))
+        mass=np.full(3, 100.0),
+        chief_elements=np.array([A, E, 0.9, 0.4, 1.1, NU0]),
+        initial_state_lvlh=np.array(
+            [[300.0, -200, 100, 0.1, 0.2, 0.3], [10, 20, 30, 0, 0, 0], [-500, 0, 0, 0, -0.5, 0]]
+        ),
+        ballistic_coefficient=np.full(3, 0.02),
+        chief_ballistic_coefficient=np.array(0.02),
+        srp_coefficient=np.full(3, 0.01),
+        chief_srp_coefficient=np.array(0.01),
+    )
 
 
 def test_sensors_output_is_the_relative_state_sensors_output_plus_bias():
     plant = _plant()
     x0 = plant.initial_state()
     bias = np.arange(18.0).reshape(3, 6) * 0.1
-    lv = LvlhRelativeStateSensors(count=3, position_noise_std=np.array(2.0), velocity_noise_std=np.array(0.01),
-                                  bias=bias)
-    rs = RelativeStateSensors(count=3, position_noise_std=np.array(2.0), velocity_noise_std=np.array(0.01))
+    lv = LvlhRelativeStateSensors(
+        count=3, position_noise_std=np.array(2.0), velocity_noise_std=np.array(0.01), bias=bias
+    )
+    rs = RelativeStateSensors(
+        count=3, position_noise_std=np.array(2.0), velocity_noise_std=np.array(0.01)
+    )
     key = jax.random.PRNGKey(3)
     y_lv = lv.measure(0.0, x0, SensorInputs(noise=lv.noise(key), reference=None))
     q = np.hstack([plant.position(x0), plant.velocity(x0)])
@@ -135,11 +187,14 @@ def test_sensor_noise_and_bias_statistics():
     x0 = plant.initial_state()
     sp, sv = 3.0, 0.02
     bias = np.tile([1.0, -2.0, 0.5, 0.01, -0.02, 0.0], (3, 1))
-    lv = LvlhRelativeStateSensors(count=3, position_noise_std=np.array(sp), velocity_noise_std=np.array(sv),
-                                  bias=bias)
+    lv = LvlhRelativeStateSensors(
+        count=3, position_noise_std=np.array(sp), velocity_noise_std=np.array(sv), bias=bias
+    )
     n = 20000
     keys = jax.random.split(jax.random.PRNGKey(11), n)
-    ys = np.asarray(jax.jit(jax.vmap(lambda k: lv.measure(0.0, x0, SensorInputs(lv.noise(k), None))))(keys))
+    ys = np.asarray(
+        jax.jit(jax.vmap(lambda k: lv.measure(0.0, x0, SensorInputs(lv.noise(k), None))))(keys)
+    )
     err = ys - np.hstack([plant.position(x0), plant.velocity(x0)])
     sig = np.array([sp] * 3 + [sv] * 3)
     assert np.all(np.abs(err.mean(axis=0) - bias) < 5 * sig / np.sqrt(n))
@@ -151,28 +206,45 @@ def test_biased_sensors_in_a_closed_loop_shift_the_command_by_the_pd_gain():
     -kp * position_bias - kd * velocity_bias (the law sees the bias, the truth does not); a noisy loop
     runs and stays finite."""
     bias_p, bias_v = np.array([2.0, 0.0, -1.0]), np.array([0.0, 0.01, 0.0])
-    raw = _loop(TRUTH, {"type": "lvlh-relative-state", "position_bias": bias_p.tolist(),
-                        "velocity_bias": bias_v.tolist(), "position_noise_std": 0.0})
+    raw = _loop(
+        TRUTH,
+        {
+            "type": "lvlh-relative-state",
+            "position_bias": bias_p.tolist(),
+            "velocity_bias": bias_v.tolist(),
+            "position_noise_std": 0.0,
+        },
+    )
     raw0 = _loop(TRUTH, {"type": "lvlh-relative-state"})
-    raw_noisy = _loop(TRUTH, {"type": "lvlh-relative-state", "position_noise_std": 0.5, "velocity_noise_std": 1e-3})
+    raw_noisy = _loop(
+        TRUTH,
+        {"type": "lvlh-relative-state", "position_noise_std": 0.5, "velocity_noise_std": 1e-3},
+    )
     for r in (raw, raw0, raw_noisy):
         r["simulation"]["horizon"] = 60.0
     ds, ds0, ds_n = (ftc.simulate(ftc.load_scenario(r)) for r in (raw, raw0, raw_noisy))
     kp, kd = raw["controller"]["kp"], raw["controller"]["kd"]
-    np.testing.assert_allclose(ds.command.values[0] - ds0.command.values[0],
-                               np.broadcast_to(-kp * bias_p - kd * bias_v, (2, 3)), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(
+        ds.command.values[0] - ds0.command.values[0],
+        np.broadcast_to(-kp * bias_p - kd * bias_v, (2, 3)),
+        rtol=0,
+        atol=1e-10,
+    )
     assert np.all(np.isfinite(ds_n.position.values))
     assert np.max(np.abs(ds_n.command.values - ds0.command.values)) > 1e-3
 
 
 # ------------------------------------------------------------------------------------------- catalog
-@pytest.mark.parametrize("field, value, needle", [
-    ("eccentricity", 0.95, "plant.eccentricity"),
-    ("semi_major_axis", 6.0e6, "plant.semi_major_axis"),
-    ("ballistic_coefficient", [0.02, -0.01], "ballistic_coefficient"),
-    ("mass", [100.0, 0.0], "mass"),
-    ("inclination", 4.0, "plant.inclination"),
-])
+@pytest.mark.parametrize(
+    "field, value, needle",
+    [
+        ("eccentricity", 0.95, "plant.eccentricity"),
+        ("semi_major_axis", 6.0e6, "plant.semi_major_axis"),
+        ("ballistic_coefficient", [0.02, -0.01], "ballistic_coefficient"),
+        ("mass", [100.0, 0.0], "mass"),
+        ("inclination", 4.0, "plant.inclination"),
+    ],
+)
 def test_catalog_rejects_bad_plant_fields_naming_them(field, value, needle):
     raw = _loop({**TRUTH, field: value}, {"type": "lvlh-relative-state"})
     with pytest.raises(ScenarioError) as exc:
@@ -188,11 +260,15 @@ def test_catalog_rejects_perigee_inside_the_earth_and_sensors_without_a_relative
     with pytest.raises(ScenarioError, match="eccentricity: perigee radius"):
         ftc.load_scenario(_loop({**TRUTH, "eccentricity": 0.1}, {"type": "lvlh-relative-state"}))
     with pytest.raises(ScenarioError, match="sensors.position_bias"):
-        ftc.load_scenario(_loop(TRUTH, {"type": "lvlh-relative-state", "position_bias": [1.0, 2.0]}))
+        ftc.load_scenario(
+            _loop(TRUTH, {"type": "lvlh-relative-state", "position_bias": [1.0, 2.0]})
+        )
     # on a plant whose sensed state has no (N, 6) relative state the sensors are refused, naming both
     entry = component_types("sensors")[("sensors", "lvlh-relative-state")]
-    plant = SimpleNamespace(initial_state=lambda: {"r": np.zeros((2, 3)), "v": np.zeros((2, 3))},
-                            sensed_state=lambda x: x)
+    plant = SimpleNamespace(
+        initial_state=lambda: {"r": np.zeros((2, 3)), "v": np.zeros((2, 3))},
+        sensed_state=lambda x: x,
+    )
     ctx = BuildContext(scenario=None, count=2, dt=1.0, plant=plant)
     with pytest.raises(ValueError, match="sensors lvlh-relative-state .* SimpleNamespace has no"):
         entry.build(entry.section.model_validate({}), ctx)
@@ -205,14 +281,20 @@ def test_relative_state_sensors_and_the_default_run_unchanged_on_the_truth():
     draws) and the default exact sensors give the loop of the lvlh-relative-state sensors exactly."""
     noise = {"position_noise_std": 0.5, "velocity_noise_std": 1e-3}
     runs = []
-    for sensors in ({"type": "lvlh-relative-state", **noise}, {"type": "relative-state", **noise},
-                    {"type": "lvlh-relative-state"}, None):
+    for sensors in (
+        {"type": "lvlh-relative-state", **noise},
+        {"type": "relative-state", **noise},
+        {"type": "lvlh-relative-state"},
+        None,
+    ):
         raw = _loop(TRUTH, sensors)
         raw["simulation"]["horizon"] = 60.0
         runs.append(ftc.simulate(ftc.load_scenario(raw)))
     np.testing.assert_array_equal(runs[0].command.values, runs[1].command.values)
     np.testing.assert_array_equal(runs[2].command.values, runs[3].command.values)
-    assert np.max(np.abs(runs[0].command.values - runs[2].command.values)) > 1e-3  # the noise is there
+    assert (
+        np.max(np.abs(runs[0].command.values - runs[2].command.values)) > 1e-3
+    )  # the noise is there
 
 
 def test_builtin_scenario_validates_with_the_truth_plant_and_sensors():
@@ -220,7 +302,9 @@ def test_builtin_scenario_validates_with_the_truth_plant_and_sensors():
     plant with J2 and drag, the LVLH sensors and an on-board Keplerian model with the chief's a and e."""
     scn = ftc.load_scenario("compose-li2020-on-orbital-truth", {"simulation.horizon": 2.0})
     plant, ref = scn.section("plant"), scn.section("reference")
-    assert scn.type_of("plant") == "orbital-truth" and scn.type_of("sensors") == "lvlh-relative-state"
+    assert (
+        scn.type_of("plant") == "orbital-truth" and scn.type_of("sensors") == "lvlh-relative-state"
+    )
     assert plant.j2 and plant.drag and not plant.srp
     assert (ref.semi_major_axis, ref.eccentricity) == (plant.semi_major_axis, plant.eccentricity)
     raw = copy.deepcopy(_loop(TRUTH, {"type": "lvlh-relative-state"}))
@@ -244,7 +328,9 @@ def test_initial_condition_from_relative_orbital_elements():
     x0 = loop.plant.initial_state()
     chief = [float(v) for v in eci_to_elements(x0["chief"])]
     roe = np.asarray(elements_to_roe(chief, eci_to_elements(x0["deputies"])))
-    np.testing.assert_allclose(roe * A, roe_m, atol=1e-5)  # ~1e-12 relative rounding of the elements
+    np.testing.assert_allclose(
+        roe * A, roe_m, atol=1e-5
+    )  # ~1e-12 relative rounding of the elements
     # the LVLH offsets are ~ the ROE scale (hundreds of metres), not zero
     assert 100.0 < np.max(np.abs(loop.plant.position(x0))) < 1000.0
     with pytest.raises(ScenarioError, match="plant: .*initial_position: give either"):
@@ -263,11 +349,17 @@ def test_initial_dispersion_is_seeded_gaussian_and_zero_by_default():
     from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
 
     def plant(n, std, seed):
-        return InertialFormationPlant(mass=np.full(n, 100.0), chief_elements=np.array([7e6, 0.01, 1.0, 0, 0, 0]),
-                                      initial_state_lvlh=np.zeros((n, 6)), ballistic_coefficient=np.zeros(n),
-                                      chief_ballistic_coefficient=np.asarray(0.0), srp_coefficient=np.zeros(n),
-                                      chief_srp_coefficient=np.asarray(0.0), initial_dispersion=np.asarray(std),
-                                      dispersion_seed=np.asarray(float(seed)))
+        return InertialFormationPlant(
+            mass=np.full(n, 100.0),
+            chief_elements=np.array([7e6, 0.01, 1.0, 0, 0, 0]),
+            initial_state_lvlh=np.zeros((n, 6)),
+            ballistic_coefficient=np.zeros(n),
+            chief_ballistic_coefficient=np.asarray(0.0),
+            srp_coefficient=np.zeros(n),
+            chief_srp_coefficient=np.asarray(0.0),
+            initial_dispersion=np.asarray(std),
+            dispersion_seed=np.asarray(float(seed)),
+        )
 
     assert np.all(np.asarray(plant(4, [0.0, 0.0], 7).dispersion()) == 0.0)
     a = np.asarray(plant(4, [10.0, 0.01], 7).dispersion())

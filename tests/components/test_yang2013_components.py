@@ -29,32 +29,50 @@ from formation_ftc.sim.components import ActuatorInputs, CompositionError, Fligh
 from formation_ftc.sim.loop import ClosedLoop
 
 TRUTH_FIELDS = {"state", "true_state", "fault", "faults", "disturbance", "force", "process_noise"}
-SHORT = {"simulation.horizon": 100.0, "modes.1.start": 20.0, "modes.2.start": 40.0, "modes.3.start": 60.0,
-         "modes.4.start": 80.0, "faults.0.onset": 70.0, "simulation.record_every": 1}
+SHORT = {
+    "simulation.horizon": 100.0,
+    "modes.1.start": 20.0,
+    "modes.2.start": 40.0,
+    "modes.3.start": 60.0,
+    "modes.4.start": 80.0,
+    "faults.0.onset": 70.0,
+    "simulation.record_every": 1,
+}
 
 
 def _loop(**ov):
     return make_loop(ftc.load_scenario("yang2013-controller-fault", {**SHORT, **ov}))
 
 
-@pytest.mark.parametrize("cls", [Yang2013TranslationalController, Yang2013AttitudeController,
-                                 ForceTorqueController])
+@pytest.mark.parametrize(
+    "cls", [Yang2013TranslationalController, Yang2013AttitudeController, ForceTorqueController]
+)
 def test_controller_cannot_see_the_truth(cls):
     """``output`` takes FlightInputs (no truth fields); with the same true state (hence the same
     measurement) the command is unchanged when the true disturbances, the controller fault (gain,
     onset) and the masses of the truth side change, while the applied wrench changes."""
-    hints = typing.get_type_hints(cls.output, globalns=vars(inspect.getmodule(cls)) | {"FlightInputs": FlightInputs})
+    hints = typing.get_type_hints(
+        cls.output, globalns=vars(inspect.getmodule(cls)) | {"FlightInputs": FlightInputs}
+    )
     assert hints["inputs"] is FlightInputs
     assert not TRUTH_FIELDS & set(FlightInputs._fields)
     loop = _loop()
     assert isinstance(loop.controller, ForceTorqueController)
     plant = dataclasses.replace(
-        loop.plant, mass=loop.plant.mass * 1.7, disturbance_force=("5", "5*t", "-5"),
-        attitude=dataclasses.replace(loop.plant.attitude, disturbance_torque=("1", "2", "t")))
-    actuator = dataclasses.replace(loop.actuator, K2_faulty=loop.actuator.K2_faulty * 0 - 0.3,
-                                   onset=np.zeros_like(loop.actuator.onset))
+        loop.plant,
+        mass=loop.plant.mass * 1.7,
+        disturbance_force=("5", "5*t", "-5"),
+        attitude=dataclasses.replace(loop.plant.attitude, disturbance_torque=("1", "2", "t")),
+    )
+    actuator = dataclasses.replace(
+        loop.actuator,
+        K2_faulty=loop.actuator.K2_faulty * 0 - 0.3,
+        onset=np.zeros_like(loop.actuator.onset),
+    )
     other = dataclasses.replace(loop, plant=plant, actuator=actuator)
-    k = jnp.asarray(1500, dtype=jnp.int64)  # t = 75 s: fault (onset 70 s) tolerated, not reconfigured
+    k = jnp.asarray(
+        1500, dtype=jnp.int64
+    )  # t = 75 s: fault (onset 70 s) tolerated, not reconfigured
     state = loop.initial_state()
     state["plant"]["x"] = state["plant"]["x"].at[:, 3:9].set(0.01)  # nonzero e_V, e_omega
     step = jax.jit(lambda lp, st: lp.step(k, st))
@@ -63,16 +81,23 @@ def test_controller_cannot_see_the_truth(cls):
     assert not np.allclose(np.asarray(out_a["applied"]), np.asarray(out_b["applied"]))
     assert not np.allclose(np.asarray(new_a["plant"]["x"]), np.asarray(new_b["plant"]["x"]))
     # the law alone, called directly: same flight inputs -> same output, whatever the truth
-    law = {Yang2013TranslationalController: loop.controller.force_law,
-           Yang2013AttitudeController: loop.controller.torque_law,
-           ForceTorqueController: loop.controller}[cls]
+    law = {
+        Yang2013TranslationalController: loop.controller.force_law,
+        Yang2013AttitudeController: loop.controller.torque_law,
+        ForceTorqueController: loop.controller,
+    }[cls]
     assert isinstance(law, cls)
 
 
 def test_translational_law_by_hand_and_on_a_cw_plant():
     n = 2
-    law = Yang2013TranslationalController(count=n, mass=jnp.array([10.0, 20.0]), K1=jnp.asarray(0.5),
-                                          K2=jnp.asarray(0.8), desired_position=("10*i", "0.1*t**2", "0"))
+    law = Yang2013TranslationalController(
+        count=n,
+        mass=jnp.array([10.0, 20.0]),
+        K1=jnp.asarray(0.5),
+        K2=jnp.asarray(0.8),
+        desired_position=("10*i", "0.1*t**2", "0"),
+    )
     y = jnp.array([[1.0, 2.0, 3.0, 0.1, 0.2, 0.3], [-1.0, 0.5, 0.0, 0.0, -0.1, 0.2]])
     t = 2.0
     f, _, _ = law.output(t, None, FlightInputs(y, None, None, None, law.exogenous(t), None))
@@ -80,15 +105,31 @@ def test_translational_law_by_hand_and_on_a_cw_plant():
     v_d = np.array([[0.0, 0.4, 0.0]] * 2)
     a_d = np.array([[0.0, 0.2, 0.0]] * 2)
     m = np.array([[10.0], [20.0]])
-    np.testing.assert_allclose(f, m * (a_d + 1.5 * (p_d - y[:, :3]) + 0.8 * (v_d - y[:, 3:])), rtol=1e-14)
+    np.testing.assert_allclose(
+        f, m * (a_d + 1.5 * (p_d - y[:, :3]) + 0.8 * (v_d - y[:, 3:])), rtol=1e-14
+    )
     # reusable on another translational plant: CW deputies regulated to a fixed offset
     mass = jnp.array([10.0, 20.0])
-    plant = ClohessyWiltshirePlant(mean_motion=jnp.asarray(0.0011), mass=mass,
-                                   initial_state_lvlh=jnp.array([[5.0, 0, 0, 0, 0, 0], [0, -5.0, 0, 0, 0, 0]]))
-    law = Yang2013TranslationalController(count=n, mass=mass, K1=jnp.asarray(0.01), K2=jnp.asarray(0.5),
-                                          desired_position=("10", "20", "0"))
-    loop = ClosedLoop(plant=plant, controller=law, sensors=RelativeStateSensors(count=n), dt=0.5, n_steps=200,
-                      record_every=200).validate()
+    plant = ClohessyWiltshirePlant(
+        mean_motion=jnp.asarray(0.0011),
+        mass=mass,
+        initial_state_lvlh=jnp.array([[5.0, 0, 0, 0, 0, 0], [0, -5.0, 0, 0, 0, 0]]),
+    )
+    law = Yang2013TranslationalController(
+        count=n,
+        mass=mass,
+        K1=jnp.asarray(0.01),
+        K2=jnp.asarray(0.5),
+        desired_position=("10", "20", "0"),
+    )
+    loop = ClosedLoop(
+        plant=plant,
+        controller=law,
+        sensors=RelativeStateSensors(count=n),
+        dt=0.5,
+        n_steps=200,
+        record_every=200,
+    ).validate()
     out = jax.jit(lambda p: p.run())(loop)
     pos = np.asarray(out["final"]["plant"]["q"][:, :3])
     # the residual CW drift the law does not cancel (2 n v, 3 n^2 x: < 4e-6 m/s^2 per m) leaves a
@@ -98,38 +139,65 @@ def test_translational_law_by_hand_and_on_a_cw_plant():
 
 def test_attitude_law_and_quaternion_plant_against_independent_formulas():
     J = jnp.diag(jnp.array([20.0, 25.0, 30.0]))
-    law = Yang2013AttitudeController(count=1, inertia=J, K3=jnp.asarray(0.2), K4=jnp.asarray(1.0),
-                                     K5=jnp.asarray(2.0), kappa=jnp.asarray(1e-3))
+    law = Yang2013AttitudeController(
+        count=1,
+        inertia=J,
+        K3=jnp.asarray(0.2),
+        K4=jnp.asarray(1.0),
+        K5=jnp.asarray(2.0),
+        kappa=jnp.asarray(1e-3),
+    )
     w = jnp.array([[0.01, -0.02, 0.03]])
     q = jnp.array([[0.1, 0.2, -0.1, 0.9]])
-    tau, _, _ = law.output(0.0, None, FlightInputs({"omega": w, "q": q}, None, None, None, None, None))
+    tau, _, _ = law.output(
+        0.0, None, FlightInputs({"omega": w, "q": q}, None, None, None, None, None)
+    )
     s = (np.sum(q[0, :3] ** 2) + 2.0 * q[0, 3] ** 2) / (2 * (np.sum(w[0] ** 2) + 1e-3))
-    np.testing.assert_allclose(tau[0], -np.asarray(J) @ (0.2 * w[0] + q[0, :3] + w[0] * s), rtol=1e-14)
+    np.testing.assert_allclose(
+        tau[0], -np.asarray(J) @ (0.2 * w[0] + q[0, :3] + w[0] * s), rtol=1e-14
+    )
     # the plant with the gyroscopic term is eq. (4) of the core model (no gravity gradient)
-    plant = QuaternionRigidBodyPlant(inertia=J, initial_omega=w, initial_quaternion=q,
-                                     disturbance_torque=("0.1", "0", "-0.2"))
+    plant = QuaternionRigidBodyPlant(
+        inertia=J, initial_omega=w, initial_quaternion=q, disturbance_torque=("0.1", "0", "-0.2")
+    )
     torque = jnp.array([[0.3, -0.1, 0.05]])
-    d = plant.derivative(0.0, plant.initial_state(), TruthInputs(torque, plant.exogenous(0.0), None, None))
-    ref = attitude_rhs(0.0, jnp.concatenate([w, q], -1)[0], J, torque[0], jnp.array([0.1, 0.0, -0.2]))
+    d = plant.derivative(
+        0.0, plant.initial_state(), TruthInputs(torque, plant.exogenous(0.0), None, None)
+    )
+    ref = attitude_rhs(
+        0.0, jnp.concatenate([w, q], -1)[0], J, torque[0], jnp.array([0.1, 0.0, -0.2])
+    )
     np.testing.assert_allclose(np.concatenate([d["omega"][0], d["q"][0]]), ref, rtol=1e-14)
     assert plant.quantity == "torque" and law.quantity == "torque"
 
 
 def test_compositions_that_cannot_work_are_rejected():
     loop = _loop()
-    with pytest.raises(CompositionError, match="torque"):  # a torque law cannot drive a wrench plant
+    with pytest.raises(
+        CompositionError, match="torque"
+    ):  # a torque law cannot drive a wrench plant
         dataclasses.replace(loop, controller=loop.controller.torque_law).validate()
     with pytest.raises(CompositionError, match="force law and a torque law"):
-        ForceTorqueController(force_law=loop.controller.torque_law, torque_law=loop.controller.force_law)
+        ForceTorqueController(
+            force_law=loop.controller.torque_law, torque_law=loop.controller.force_law
+        )
 
 
 def test_switched_plant_membership_jump_and_gain_fault():
     loop = _loop()
     plant, act = loop.plant, loop.actuator
-    x = {"x": jnp.arange(6 * 13, dtype=jnp.float64).reshape(6, 13) / 100.0, "left_norm": jnp.zeros(6)}
+    x = {
+        "x": jnp.arange(6 * 13, dtype=jnp.float64).reshape(6, 13) / 100.0,
+        "left_norm": jnp.zeros(6),
+    }
     active = jnp.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.0])
-    dec = SwitchDecision(mode=jnp.asarray(3), next_mode=jnp.asarray(4), active=active,
-                         reconfigure=jnp.zeros(6, bool), desired_position=jnp.zeros((6, 3)))
+    dec = SwitchDecision(
+        mode=jnp.asarray(3),
+        next_mode=jnp.asarray(4),
+        active=active,
+        reconfigure=jnp.zeros(6, bool),
+        desired_position=jnp.zeros((6, 3)),
+    )
     # S_45 on the slots: spacecraft 1 and 3 keep their states, 2, 4, 5 leave, 6 joins with X* = 0.2 e_1
     new = plant.jump(80.0, x, dec)
     X, Xn = np.asarray(x["x"]), np.asarray(new["x"])

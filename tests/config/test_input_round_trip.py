@@ -53,20 +53,29 @@ def _set(raw: dict, path: tuple, value: Any) -> None:
     node[path[-1]] = value
 
 
-CASES = [(name, path, float("nan") if k % 2 else float("-inf"))
-         for k, (name, path) in enumerate((name, path) for name in SCENARIOS
-                                          for path in _numeric_list_items(loader.read_raw(name)[0]))]
+CASES = [
+    (name, path, float("nan") if k % 2 else float("-inf"))
+    for k, (name, path) in enumerate(
+        (name, path) for name in SCENARIOS for path in _numeric_list_items(loader.read_raw(name)[0])
+    )
+]
 
 
 def test_the_sweep_covers_the_composed_catalog_lists():
     covered = {(name, _location(p)) for name, p, _ in CASES}
-    for expected in [("compose-li2020-on-cw", "actuator.magnitude[0]"), ("compose-li2020-on-cw", "plant.mass[0]"),
-                     ("compose-li2020-on-cw", "network.adjacency[0][0]"), ("cw-pd-fault", "spacecraft.mass[0]")]:
+    for expected in [
+        ("compose-li2020-on-cw", "actuator.magnitude[0]"),
+        ("compose-li2020-on-cw", "plant.mass[0]"),
+        ("compose-li2020-on-cw", "network.adjacency[0][0]"),
+        ("cw-pd-fault", "spacecraft.mass[0]"),
+    ]:
         assert expected in covered
     assert len(CASES) > 50
 
 
-@pytest.mark.parametrize("name, path, value", CASES, ids=[f"{n}:{_location(p)}={v}" for n, p, v in CASES])
+@pytest.mark.parametrize(
+    "name, path, value", CASES, ids=[f"{n}:{_location(p)}={v}" for n, p, v in CASES]
+)
 def test_nan_and_inf_in_list_fields_are_refused_naming_the_item(name, path, value):
     raw = loader.read_raw(name)[0]
     _set(raw, path, value)
@@ -96,35 +105,52 @@ def _takes(annotation: Any, kind: type) -> bool:
     return any(_takes(a, kind) for a in typing.get_args(annotation))
 
 
-CATALOG_FIELDS = sorted({(f"{kind}.{name}", model, field) for (kind, name), entry in component_types().items()
-                         for model in _models(entry.section) for field, info in model.model_fields.items()
-                         if _takes(info.annotation, float) and (_takes(info.annotation, list)
-                                                                or _takes(info.annotation, tuple))},
-                        key=lambda c: (c[0], c[1].__name__, c[2]))
+CATALOG_FIELDS = sorted(
+    {
+        (f"{kind}.{name}", model, field)
+        for (kind, name), entry in component_types().items()
+        for model in _models(entry.section)
+        for field, info in model.model_fields.items()
+        if _takes(info.annotation, float)
+        and (_takes(info.annotation, list) or _takes(info.annotation, tuple))
+    },
+    key=lambda c: (c[0], c[1].__name__, c[2]),
+)
 
 
-@pytest.mark.parametrize("where, model, field", CATALOG_FIELDS,
-                         ids=[f"{w}:{m.__name__}.{f}" for w, m, f in CATALOG_FIELDS])
+@pytest.mark.parametrize(
+    "where, model, field",
+    CATALOG_FIELDS,
+    ids=[f"{w}:{m.__name__}.{f}" for w, m, f in CATALOG_FIELDS],
+)
 def test_every_list_field_of_the_composed_catalog_refuses_nan_and_inf(where, model, field):
     for bad in (float("nan"), float("inf")):
         with pytest.raises(ValidationError) as err:
             model.model_validate({field: [1.0, [2.0, bad]]})
-        assert any(error_location(e) == f"{field}[1][1]" and "finite" in e["msg"] for e in err.value.errors()), \
-            err.value
+        assert any(
+            error_location(e) == f"{field}[1][1]" and "finite" in e["msg"]
+            for e in err.value.errors()
+        ), err.value
 
 
 def test_thruster_bias_per_spacecraft_rows_name_field_index_and_range():
     raw = loader.read_raw("compose-li2020-on-cw")[0]
     raw["actuator"]["magnitude"] = [[0.5, 0.0, 0.0], [0.0, 0.0, float("nan")], [0.0] * 3, [0.0] * 3]
-    with pytest.raises(ScenarioError, match=r"actuator\.magnitude\[1\]\[2\]: nan is refused: must be a finite "
-                                            r"number"):
+    with pytest.raises(
+        ScenarioError,
+        match=r"actuator\.magnitude\[1\]\[2\]: nan is refused: must be a finite "
+        r"number",
+    ):
         load_scenario(raw)
 
 
-@pytest.mark.parametrize("name, drop, slot_type", [
-    ("compose-li2020-on-cw", "reference", "controller li2020-adaptive"),
-    ("compose-gui2022-on-li2020", "estimator", "controller gui2022-lof2tc"),
-])
+@pytest.mark.parametrize(
+    "name, drop, slot_type",
+    [
+        ("compose-li2020-on-cw", "reference", "controller li2020-adaptive"),
+        ("compose-gui2022-on-li2020", "estimator", "controller gui2022-lof2tc"),
+    ],
+)
 def test_a_law_missing_an_input_it_needs_is_refused_naming_both_parts(name, drop, slot_type):
     raw = loader.read_raw(name)[0]
     del raw[drop]
@@ -138,10 +164,15 @@ def test_cof2tc_compensation_without_an_estimator_is_refused():
     raw = loader.read_raw("compose-gui2022-on-li2020")[0]
     del raw["estimator"]
     raw["metrics"] = []
-    law = {k: v for k, v in raw["controller"].items()
-           if k not in ("G1", "G2", "G3", "G4", "pi_initial", "v_initial", "learning_interval")}
+    law = {
+        k: v
+        for k, v in raw["controller"].items()
+        if k not in ("G1", "G2", "G3", "G4", "pi_initial", "v_initial", "learning_interval")
+    }
     raw["controller"] = {**law, "type": "gui2022-cof2tc", "fault_compensation": True}
-    with pytest.raises(ScenarioError, match=r"controller gui2022-cof2tc reads \(with fault_compensation = true\)"):
+    with pytest.raises(
+        ScenarioError, match=r"controller gui2022-cof2tc reads \(with fault_compensation = true\)"
+    ):
         load_scenario(raw)
     raw["controller"]["fault_compensation"] = False  # the plain baseline needs no estimate
     load_scenario(raw)
@@ -168,6 +199,8 @@ def test_every_builtin_scenario_round_trips(name):
     assert again == scn
     text = loader.dump_toml(scn)
     assert load_scenario(loader.parse_toml(text, "<dump>")) == scn
-    shown = _annotate_toml(text, get_method(scn.scenario.method).schema.model_json_schema())  # `show`
+    shown = _annotate_toml(
+        text, get_method(scn.scenario.method).schema.model_json_schema()
+    )  # `show`
     assert load_scenario(loader.parse_toml(shown, "<show>")) == scn
     assert load_scenario(copy.deepcopy(again)) == scn

@@ -9,19 +9,28 @@ import formation_ftc as ftc
 from formation_ftc.config.loader import ScenarioError, dump_toml, parse_override
 
 
-@pytest.mark.parametrize("overrides,fragment", [
-    ({"controller.gain": 3.0}, "field controller.gain: unknown field"),
-    ({"simulation.dt": "fast"}, "field simulation.dt"),
-    ({"spacecraft.mass": [100.0, -1.0, 1.0, 1.0]}, "spacecraft.mass[1] = -1.0: masses must be > 0 kg"),
-    ({"simulation.dt": 0.7}, "must divide simulation.horizon"),
-    ({"simulation.dt": 0.0}, "simulation.dt"),
-    ({"spacecraft.initial_position": [[0.0, 0.0, 0.0]]}, "spacecraft.initial_position: 1 rows for 4"),
-    ({"faults.bias": ["0", "foo(t)", "0"]}, "unknown function 'foo'"),
-    ({"faults.bias": ["0", "t.__class__", "0"]}, "attribute"),
-    ({"faults.bias": ["0", "y*2", "0"]}, "unknown name 'y'"),
-    ({"controller.type": "lqr"}, "field controller.type"),
-    ({"scenario.method": "nope"}, "unknown method 'nope'"),
-])
+@pytest.mark.parametrize(
+    "overrides,fragment",
+    [
+        ({"controller.gain": 3.0}, "field controller.gain: unknown field"),
+        ({"simulation.dt": "fast"}, "field simulation.dt"),
+        (
+            {"spacecraft.mass": [100.0, -1.0, 1.0, 1.0]},
+            "spacecraft.mass[1] = -1.0: masses must be > 0 kg",
+        ),
+        ({"simulation.dt": 0.7}, "must divide simulation.horizon"),
+        ({"simulation.dt": 0.0}, "simulation.dt"),
+        (
+            {"spacecraft.initial_position": [[0.0, 0.0, 0.0]]},
+            "spacecraft.initial_position: 1 rows for 4",
+        ),
+        ({"faults.bias": ["0", "foo(t)", "0"]}, "unknown function 'foo'"),
+        ({"faults.bias": ["0", "t.__class__", "0"]}, "attribute"),
+        ({"faults.bias": ["0", "y*2", "0"]}, "unknown name 'y'"),
+        ({"controller.type": "lqr"}, "field controller.type"),
+        ({"scenario.method": "nope"}, "unknown method 'nope'"),
+    ],
+)
 def test_bad_input_names_field(overrides, fragment):
     with pytest.raises(ScenarioError) as info:
         ftc.load_scenario("cw-pd-fault", overrides)
@@ -44,8 +53,10 @@ def test_unknown_scenario_lists_builtins(tmp_path):
 
 
 def test_overrides_and_round_trip(tmp_path):
-    scn = ftc.load_scenario("cw-pd-fault", ["simulation.horizon=100", "controller.kp=3.5",
-                                            'faults.bias=["0", "0.1", "0"]'])
+    scn = ftc.load_scenario(
+        "cw-pd-fault",
+        ["simulation.horizon=100", "controller.kp=3.5", 'faults.bias=["0", "0.1", "0"]'],
+    )
     assert scn.simulation.horizon == 100.0 and scn.controller.kp == 3.5
     path = tmp_path / "s.toml"
     path.write_text(dump_toml(scn))
@@ -59,7 +70,14 @@ def test_overrides_and_round_trip(tmp_path):
 def test_result_records_provenance(tmp_path):
     scn = ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 20.0})
     ds, metrics = ftc.simulate_with_metrics(scn)
-    for key in ("scenario_toml", "seed", "git_commit", "version_jax", "version_numpy", "metrics_json"):
+    for key in (
+        "scenario_toml",
+        "seed",
+        "git_commit",
+        "version_jax",
+        "version_numpy",
+        "metrics_json",
+    ):
         assert key in ds.attrs, key
     paths = ftc.save_result(ds, tmp_path)
     import xarray as xr
@@ -68,4 +86,6 @@ def test_result_records_provenance(tmp_path):
     np.testing.assert_array_equal(back.position.values, ds.position.values)
     assert back.attrs["scenario_name"] == "cw-pd-fault"
     m = json.loads(paths["metrics"].read_text())
-    assert m["scenario"] == "cw-pd-fault" and m["delta_v_total"] == pytest.approx(metrics["delta_v_total"])
+    assert m["scenario"] == "cw-pd-fault" and m["delta_v_total"] == pytest.approx(
+        metrics["delta_v_total"]
+    )

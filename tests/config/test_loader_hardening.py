@@ -12,28 +12,34 @@ from formation_ftc.config.loader import ScenarioError, parse_override, set_dotte
 from formation_ftc.errors import InputError
 
 
-@pytest.mark.parametrize("text,expected", [
-    ("a.b=1.5", ("a.b", 1.5)),
-    ("a.b = [1, 2]", ("a.b", [1, 2])),
-    ("a.b=true", ("a.b", True)),
-    ("f=1 - 0.1*t", ("f", "1 - 0.1*t")),          # not TOML: an expression string
-    ("f=where(i==2, 0.5, 1)", ("f", "where(i==2, 0.5, 1)")),
-    ('s="quoted # not a comment"', ("s", "quoted # not a comment")),
-])
+@pytest.mark.parametrize(
+    "text,expected",
+    [
+        ("a.b=1.5", ("a.b", 1.5)),
+        ("a.b = [1, 2]", ("a.b", [1, 2])),
+        ("a.b=true", ("a.b", True)),
+        ("f=1 - 0.1*t", ("f", "1 - 0.1*t")),  # not TOML: an expression string
+        ("f=where(i==2, 0.5, 1)", ("f", "where(i==2, 0.5, 1)")),
+        ('s="quoted # not a comment"', ("s", "quoted # not a comment")),
+    ],
+)
 def test_override_values(text, expected):
     assert parse_override(text) == expected
 
 
-@pytest.mark.parametrize("text,fragment", [
-    ("a=1\nb=2", "single TOML value on one line"),
-    ("a=1\rb=2", "single TOML value"),
-    ("a=[1, 2", "invalid TOML value"),
-    ("a={x = 1", "invalid TOML value"),
-    ('a="open', "invalid TOML value"),
-    ("a=", "empty value"),
-    ("=1", "empty dotted path"),
-    ("novalue", "must look like dotted.path=value"),
-])
+@pytest.mark.parametrize(
+    "text,fragment",
+    [
+        ("a=1\nb=2", "single TOML value on one line"),
+        ("a=1\rb=2", "single TOML value"),
+        ("a=[1, 2", "invalid TOML value"),
+        ("a={x = 1", "invalid TOML value"),
+        ('a="open', "invalid TOML value"),
+        ("a=", "empty value"),
+        ("=1", "empty dotted path"),
+        ("novalue", "must look like dotted.path=value"),
+    ],
+)
 def test_bad_override_values(text, fragment):
     with pytest.raises(ScenarioError, match=fragment):
         parse_override(text)
@@ -44,10 +50,14 @@ def test_set_dotted_indices_and_scalars():
     set_dotted(raw, "s.mass.1", 5.0)
     set_dotted(raw, "s.new.deep", 3)  # missing tables are created
     assert raw["s"]["mass"] == [1.0, 5.0] and raw["s"]["new"] == {"deep": 3}
-    for path, fragment in [("s.mass.2", "index 2 is out of range; the list has 2"),
-                           ("s.mass.-1", "non-negative integer"), ("s.mass.x", "non-negative integer"),
-                           ("s.mass.0.x", "s.mass.0 is a number"), ("s.name.x", "s.name is a str"),
-                           ("s..x", "empty part")]:
+    for path, fragment in [
+        ("s.mass.2", "index 2 is out of range; the list has 2"),
+        ("s.mass.-1", "non-negative integer"),
+        ("s.mass.x", "non-negative integer"),
+        ("s.mass.0.x", "s.mass.0 is a number"),
+        ("s.name.x", "s.name is a str"),
+        ("s..x", "empty part"),
+    ]:
         with pytest.raises(ScenarioError, match=fragment):
             set_dotted(raw, path, 1)
     assert raw["s"]["mass"] == [1.0, 5.0]

@@ -41,7 +41,9 @@ def test_torque_free_tumbling_preserves_norm_energy_and_momentum():
     T0 = float(rotational_kinetic_energy(s0, J))
     H0 = np.asarray(angular_momentum_reference(s0, J))
     assert np.max(np.abs(np.asarray(rotational_kinetic_energy(traj, J)) - T0)) < 1e-9 * T0
-    assert np.max(np.linalg.norm(np.asarray(angular_momentum_reference(traj, J)) - H0, axis=1)) < 1e-8 * np.linalg.norm(H0)
+    assert np.max(
+        np.linalg.norm(np.asarray(angular_momentum_reference(traj, J)) - H0, axis=1)
+    ) < 1e-8 * np.linalg.norm(H0)
 
 
 def test_axisymmetric_precession_closed_form():
@@ -54,7 +56,9 @@ def test_axisymmetric_precession_closed_form():
     t = dt * np.arange(1, n + 1)
     lam = (J3 - J1) / J1 * w0[2]
     # Euler: w1_dot = -lam w2, w2_dot = lam w1
-    truth = np.stack([w0[0] * np.cos(lam * t), w0[0] * np.sin(lam * t), np.full_like(t, w0[2])], axis=1)
+    truth = np.stack(
+        [w0[0] * np.cos(lam * t), w0[0] * np.sin(lam * t), np.full_like(t, w0[2])], axis=1
+    )
     np.testing.assert_allclose(traj[:, :3], truth, atol=1e-9)
 
 
@@ -66,12 +70,16 @@ def test_gravity_gradient_planar_closed_form_and_principal_axis():
     tau = gravity_gradient_torque(R, J)
     expected_z = 3 * MU_EARTH / r**3 * (25.0 - 20.0) * np.sin(th) * np.cos(th)
     np.testing.assert_allclose(tau, [0.0, 0.0, expected_z], rtol=1e-12, atol=1e-20)
-    np.testing.assert_allclose(gravity_gradient_torque(jnp.array([0.0, r, 0.0]), J), 0.0, atol=1e-20)
+    np.testing.assert_allclose(
+        gravity_gradient_torque(jnp.array([0.0, r, 0.0]), J), 0.0, atol=1e-20
+    )
 
 
 def test_gravity_gradient_and_control_torque_keep_norm_and_add_linearly():
     J = jnp.diag(jnp.array([25.0, 25.0, 25.0])) + 0.5 * (jnp.ones((3, 3)) - jnp.eye(3))
-    s = jnp.concatenate([jnp.array([0.01, 0.02, -0.01]), quat_normalize(jnp.array([0.2, 0.1, 0.0, 1.0]))])
+    s = jnp.concatenate(
+        [jnp.array([0.01, 0.02, -0.01]), quat_normalize(jnp.array([0.2, 0.1, 0.0, 1.0]))]
+    )
     R_body = jnp.array([6.9e6, 1.0e5, 2.0e5])
     tau = jnp.array([0.1, -0.2, 0.05])
     iota = jnp.array([0.02, 0.0, -0.08])

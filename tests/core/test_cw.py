@@ -12,7 +12,9 @@ def test_closed_form_equals_expm():
     n = 0.0011
     A, _ = cw_matrices(n)
     for t in (0.0, 100.0, 2500.0, 5700.0):
-        np.testing.assert_allclose(cw_state_transition(n, t), scipy.linalg.expm(A * t), atol=1e-9, rtol=1e-10)
+        np.testing.assert_allclose(
+            cw_state_transition(n, t), scipy.linalg.expm(A * t), atol=1e-9, rtol=1e-10
+        )
 
 
 def test_free_drift_scenario_matches_closed_form_over_one_orbit():

@@ -14,7 +14,9 @@ from formation_ftc.core.integrators import rk4_step, zoh_discretize
 
 
 def _state(rng, shape=(4, 3)):
-    return DoubleIntegratorState(jnp.asarray(rng.normal(size=shape) * 100), jnp.asarray(rng.normal(size=shape)))
+    return DoubleIntegratorState(
+        jnp.asarray(rng.normal(size=shape) * 100), jnp.asarray(rng.normal(size=shape))
+    )
 
 
 def test_zoh_step_matches_closed_form_over_many_steps():

@@ -26,23 +26,29 @@ J_TEST = np.array([[20.0, 0.4, -0.3], [0.4, 18.0, 0.2], [-0.3, 0.2, 15.0]])
 
 def torque_body(t):
     """Smooth body torque [N m] used by both propagations."""
-    return np.array([0.005 * np.sin(0.05 * t), 0.003 * np.sin(0.07 * t), 0.004 * np.sin(0.03 * t + 1.0)])
+    return np.array(
+        [0.005 * np.sin(0.05 * t), 0.003 * np.sin(0.07 * t), 0.004 * np.sin(0.03 * t + 1.0)]
+    )
 
 
 def torque_body_jax(t):
-    return jnp.stack([0.005 * jnp.sin(0.05 * t), 0.003 * jnp.sin(0.07 * t), 0.004 * jnp.sin(0.03 * t + 1.0)])
+    return jnp.stack(
+        [0.005 * jnp.sin(0.05 * t), 0.003 * jnp.sin(0.07 * t), 0.004 * jnp.sin(0.03 * t + 1.0)]
+    )
 
 
 def quat_mul(p, q):
     """Hamilton product, scalar-last [x, y, z, w]."""
     px, py, pz, pw = p
     qx, qy, qz, qw = q
-    return np.array([
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-        pw * qw - px * qx - py * qy - pz * qz,
-    ])
+    return np.array(
+        [
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+            pw * qw - px * qx - py * qy - pz * qz,
+        ]
+    )
 
 
 def truth_rhs(t, y):
@@ -73,7 +79,9 @@ def truth():
     rot0 = Rotation.from_euler("ZYX", [Q0[2], Q0[0], Q0[1]])
     y0 = np.concatenate([rot0.as_quat(), W0])
     t_eval = np.arange(0.0, T_END + 1e-9, DT * EVERY)
-    sol = solve_ivp(truth_rhs, (0.0, T_END), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=t_eval)
+    sol = solve_ivp(
+        truth_rhs, (0.0, T_END), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=t_eval
+    )
     assert sol.success
     quat = sol.y[:4].T
     q = euler_from_rotation(Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)))
@@ -84,11 +92,15 @@ def _scan(step, x0, n_steps):
     def outer(x, k0):
         def inner(x, k):
             return step(k, x), None
+
         x, _ = jax.lax.scan(inner, x, k0 + jnp.arange(EVERY))
         return x, x
+
     ks = jnp.arange(n_steps // EVERY) * EVERY
     _, xs = jax.jit(lambda x: jax.lax.scan(outer, x, ks))(x0)
-    return jax.tree_util.tree_map(lambda a0, a: np.concatenate([np.asarray(a0)[None], np.asarray(a)]), x0, xs)
+    return jax.tree_util.tree_map(
+        lambda a0, a: np.concatenate([np.asarray(a0)[None], np.asarray(a)]), x0, xs
+    )
 
 
 def test_el_form_matches_quaternion_truth(truth):
@@ -125,8 +137,11 @@ def test_rigid_body_plant_matches_quaternion_truth(truth):
         u = el.body_to_generalized_force(q, torque_body_jax(t))
         return el.rigid_body_rhs(q, w, u, J, Ji)
 
-    qs, ws = _scan(lambda k, x: rk4_step(rhs, k * DT, x, DT), (jnp.asarray(Q0), jnp.asarray(W0)),
-                   round(T_END / DT))
+    qs, ws = _scan(
+        lambda k, x: rk4_step(rhs, k * DT, x, DT),
+        (jnp.asarray(Q0), jnp.asarray(W0)),
+        round(T_END / DT),
+    )
     assert np.max(np.abs(wrap(qs - q_ref))) < 1e-8
     assert np.max(np.abs(ws - w_ref)) < 1e-9
 
@@ -189,8 +204,9 @@ def test_identities_and_positive_definiteness():
     h = 1e-6
     for qi, qdi in zip(q[:10], qd[:10], strict=True):
         fd = (el.rbar(jnp.asarray(qi + h * qdi)) - el.rbar(jnp.asarray(qi - h * qdi))) / (2 * h)
-        np.testing.assert_allclose(np.asarray(el.rbar_dot(jnp.asarray(qi), jnp.asarray(qdi))), np.asarray(fd),
-                                   atol=1e-6)
+        np.testing.assert_allclose(
+            np.asarray(el.rbar_dot(jnp.asarray(qi), jnp.asarray(qdi))), np.asarray(fd), atol=1e-6
+        )
     # the kinematics match scipy's Z-Y-X Euler angles: finite-difference of the rotation gives omega
     qi = q[0]
     w = np.array([0.3, -0.2, 0.1])
@@ -204,7 +220,9 @@ def test_identities_and_positive_definiteness():
 def test_singular_attitude_is_rejected():
     el.check_away_from_singularity(np.deg2rad([[60.0, 10.0, 5.0]]))
     with pytest.raises(ValueError, match="singular at theta = \\+-90 deg"):
-        el.check_away_from_singularity(np.deg2rad([[10.0, 0.0, 0.0], [90.0, 0.0, 0.0]]), field="initial")
+        el.check_away_from_singularity(
+            np.deg2rad([[10.0, 0.0, 0.0], [90.0, 0.0, 0.0]]), field="initial"
+        )
     # D really loses rank there
     D = np.asarray(el.inertia_matrix(jnp.asarray([np.pi / 2, 0.3, 0.1]), jnp.asarray(J_TEST)))
     assert np.min(np.abs(np.linalg.eigvalsh(D))) < 1e-12
@@ -220,4 +238,6 @@ def test_el_forces_equals_matrix_form():
     D = el.inertia_matrix(jnp.asarray(q), J)
     C = el.coriolis_matrix(jnp.asarray(q), jnp.asarray(qd), J)
     want = (D @ jnp.asarray(a)[..., None])[..., 0] + (C @ jnp.asarray(v)[..., None])[..., 0]
-    np.testing.assert_allclose(np.asarray(got), np.asarray(want), atol=1e-12 * float(np.abs(want).max()))
+    np.testing.assert_allclose(
+        np.asarray(got), np.asarray(want), atol=1e-12 * float(np.abs(want).max())
+    )

@@ -48,8 +48,12 @@ def _rz(a):
 
 def test_dcm_is_rz_ry_rx_and_the_quaternion_rotates_the_same_way():
     q = _angles(50)
-    for row, C, Cq in zip(q, np.asarray(dcm_from_euler_zyx(q)),
-                          np.asarray(rotation_matrix(quaternion_from_euler_zyx(q))), strict=True):
+    for row, C, Cq in zip(
+        q,
+        np.asarray(dcm_from_euler_zyx(q)),
+        np.asarray(rotation_matrix(quaternion_from_euler_zyx(q))),
+        strict=True,
+    ):
         th, ph, ps = row
         truth = _rz(ps) @ _ry(th) @ _rx(ph)  # 3-2-1: yaw, then pitch, then roll
         np.testing.assert_allclose(C, truth, atol=1e-14)
@@ -58,7 +62,9 @@ def test_dcm_is_rz_ry_rx_and_the_quaternion_rotates_the_same_way():
 
 def test_euler_quaternion_round_trips():
     q = _angles(500)
-    np.testing.assert_allclose(np.asarray(euler_zyx_from_quaternion(quaternion_from_euler_zyx(q))), q, atol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(euler_zyx_from_quaternion(quaternion_from_euler_zyx(q))), q, atol=1e-12
+    )
     np.testing.assert_allclose(np.asarray(euler_zyx_from_dcm(dcm_from_euler_zyx(q))), q, atol=1e-12)
     p = RNG.normal(size=(500, 4))
     p /= np.linalg.norm(p, axis=-1, keepdims=True)
@@ -66,8 +72,11 @@ def test_euler_quaternion_round_trips():
     sign = np.sign(np.sum(back * p, axis=-1, keepdims=True))  # p and -p are the same attitude
     np.testing.assert_allclose(sign * back, p, atol=1e-12)
     # a non-unit quaternion (RK4 drift) is normalised before the conversion
-    np.testing.assert_allclose(np.asarray(euler_zyx_from_quaternion(1.001 * p)),
-                               np.asarray(euler_zyx_from_quaternion(p)), atol=1e-14)
+    np.testing.assert_allclose(
+        np.asarray(euler_zyx_from_quaternion(1.001 * p)),
+        np.asarray(euler_zyx_from_quaternion(p)),
+        atol=1e-14,
+    )
 
 
 def test_euler_rates_match_finite_differences_of_the_exact_attitude_under_a_constant_body_rate():
@@ -81,12 +90,21 @@ def test_euler_rates_match_finite_differences_of_the_exact_attitude_under_a_cons
 
     def p_at(t):
         a = np.linalg.norm(w, axis=-1, keepdims=True)
-        return np.asarray(quat_multiply(p0, np.concatenate([np.sin(0.5 * a * t) * w / a, np.cos(0.5 * a * t)], -1)))
+        return np.asarray(
+            quat_multiply(
+                p0, np.concatenate([np.sin(0.5 * a * t) * w / a, np.cos(0.5 * a * t)], -1)
+            )
+        )
 
     # the closed form solves the plant's kinematics (checked by its own finite difference)
     h = 1e-5
-    np.testing.assert_allclose((p_at(h) - p_at(-h)) / (2 * h), np.asarray(quat_kinematics(p0, w)), atol=1e-9)
-    fd = (np.asarray(euler_zyx_from_quaternion(p_at(h))) - np.asarray(euler_zyx_from_quaternion(p_at(-h)))) / (2 * h)
+    np.testing.assert_allclose(
+        (p_at(h) - p_at(-h)) / (2 * h), np.asarray(quat_kinematics(p0, w)), atol=1e-9
+    )
+    fd = (
+        np.asarray(euler_zyx_from_quaternion(p_at(h)))
+        - np.asarray(euler_zyx_from_quaternion(p_at(-h)))
+    ) / (2 * h)
     np.testing.assert_allclose(np.asarray(euler_rates_zyx(q0, w)), fd, rtol=1e-7, atol=1e-8)
     # and omega = E(q) q_dot inverts it
     np.testing.assert_allclose(np.asarray(body_rates_zyx(q0, fd)), w, atol=1e-7)
@@ -98,7 +116,9 @@ def test_euler_rates_are_the_exact_derivative_of_the_conversion():
     w = RNG.normal(size=(30, 3))
     p = quaternion_from_euler_zyx(q)
     _, qdot = jax.jvp(euler_zyx_from_quaternion, (p,), (quat_kinematics(p, w),))
-    np.testing.assert_allclose(np.asarray(qdot), np.asarray(euler_rates_zyx(q, w)), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(qdot), np.asarray(euler_rates_zyx(q, w)), rtol=1e-10, atol=1e-12
+    )
 
 
 def test_kinematic_matrix_and_its_singularity():
@@ -107,9 +127,15 @@ def test_kinematic_matrix_and_its_singularity():
     E = np.asarray(rbar_inv(q))
     for k in range(20):  # E(q) as written in formation_ftc.core.euler_quaternion
         st, ct, sp, cp = np.sin(th[k]), np.cos(th[k]), np.sin(ph[k]), np.cos(ph[k])
-        np.testing.assert_allclose(E[k], [[0, 1, -st], [cp, 0, sp * ct], [-sp, 0, cp * ct]], atol=1e-15)
-    np.testing.assert_allclose(np.linalg.det(E), -np.cos(th), atol=1e-14)  # singular at theta = +-90 deg
-    np.testing.assert_allclose(np.asarray(rbar(q)) @ E, np.broadcast_to(np.eye(3), E.shape), atol=1e-12)
+        np.testing.assert_allclose(
+            E[k], [[0, 1, -st], [cp, 0, sp * ct], [-sp, 0, cp * ct]], atol=1e-15
+        )
+    np.testing.assert_allclose(
+        np.linalg.det(E), -np.cos(th), atol=1e-14
+    )  # singular at theta = +-90 deg
+    np.testing.assert_allclose(
+        np.asarray(rbar(q)) @ E, np.broadcast_to(np.eye(3), E.shape), atol=1e-12
+    )
     near = np.array([[np.deg2rad(89.999), 0.3, 0.2]])
     assert np.abs(np.asarray(rbar(near))).max() > 1e4  # R_bar blows up next to gimbal lock
 
@@ -122,9 +148,17 @@ def test_torque_map_conserves_power(pitch_deg):
     tau_gen = RNG.normal(size=(200, 3))
     omega = np.asarray(body_rates_zyx(q, qdot))
     tau_body = np.asarray(body_torque_from_generalised(q, tau_gen))
-    np.testing.assert_allclose(np.sum(tau_body * omega, -1), np.sum(tau_gen * qdot, -1), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(
+        np.sum(tau_body * omega, -1), np.sum(tau_gen * qdot, -1), rtol=1e-10, atol=1e-12
+    )
     # independent: solve E^T tau_body = tau_gen with numpy
     E = np.asarray(rbar_inv(q))
-    np.testing.assert_allclose(tau_body, np.linalg.solve(np.swapaxes(E, -1, -2), tau_gen[..., None])[..., 0],
-                               rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(np.asarray(generalised_torque_from_body(q, tau_body)), tau_gen, atol=1e-9)
+    np.testing.assert_allclose(
+        tau_body,
+        np.linalg.solve(np.swapaxes(E, -1, -2), tau_gen[..., None])[..., 0],
+        rtol=1e-9,
+        atol=1e-9,
+    )
+    np.testing.assert_allclose(
+        np.asarray(generalised_torque_from_body(q, tau_body)), tau_gen, atol=1e-9
+    )

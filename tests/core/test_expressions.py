@@ -24,8 +24,16 @@ def test_li2020_effectiveness_expression():
 @given(st.floats(-50, 50), st.floats(-5, 5))
 @settings(max_examples=60, deadline=None)
 def test_matches_numpy(t, a):
-    text = f"{a!r}*sin(0.2*t) + sqrt(abs(t)) - t**2/(1 + cos(t)**2) + atan2(t, 3) + max(t, 0, {a!r})"
-    ref = a * np.sin(0.2 * t) + np.sqrt(abs(t)) - t**2 / (1 + np.cos(t) ** 2) + np.arctan2(t, 3) + max(t, 0, a)
+    text = (
+        f"{a!r}*sin(0.2*t) + sqrt(abs(t)) - t**2/(1 + cos(t)**2) + atan2(t, 3) + max(t, 0, {a!r})"
+    )
+    ref = (
+        a * np.sin(0.2 * t)
+        + np.sqrt(abs(t))
+        - t**2 / (1 + np.cos(t) ** 2)
+        + np.arctan2(t, 3)
+        + max(t, 0, a)
+    )
     np.testing.assert_allclose(ev(text, t=t), ref, rtol=1e-12, atol=1e-12)
 
 
@@ -49,22 +57,25 @@ def test_numbers_are_expressions():
     assert float(compile_expression(2.5)(t=0, i=0)) == 2.5
 
 
-@pytest.mark.parametrize("text,fragment", [
-    ("__import__('os')", "unknown function '__import__'"),
-    ("t.real", "attribute"),
-    ("os.system('x')", "call of 'os.system'"),
-    ("x + 1", "unknown name 'x'"),
-    ("sin", "functions must be called"),
-    ("[1, 2]", "list"),
-    ("lambda: 1", "lambda"),
-    ("'abc'", "not a number"),
-    ("sin(1, 2)", "takes 1 argument"),
-    ("piecewise(t<1, 2)", "piecewise"),
-    ("t +", "syntax error"),
-    ("t @ t", "MatMult"),
-    ("sin(x=1)", "keyword"),
-    ("t[0]", "subscript"),
-])
+@pytest.mark.parametrize(
+    "text,fragment",
+    [
+        ("__import__('os')", "unknown function '__import__'"),
+        ("t.real", "attribute"),
+        ("os.system('x')", "call of 'os.system'"),
+        ("x + 1", "unknown name 'x'"),
+        ("sin", "functions must be called"),
+        ("[1, 2]", "list"),
+        ("lambda: 1", "lambda"),
+        ("'abc'", "not a number"),
+        ("sin(1, 2)", "takes 1 argument"),
+        ("piecewise(t<1, 2)", "piecewise"),
+        ("t +", "syntax error"),
+        ("t @ t", "MatMult"),
+        ("sin(x=1)", "keyword"),
+        ("t[0]", "subscript"),
+    ],
+)
 def test_rejected(text, fragment):
     with pytest.raises(ExpressionError) as info:
         compile_expression(text, field="faults.bias")
@@ -81,7 +92,9 @@ def test_error_has_caret_column():
 def test_vector_expression_per_spacecraft():
     from formation_ftc.core.expressions import compile_vector_expression
 
-    f = compile_vector_expression(["0.1*i*t", "1", "where(t >= 10, 1 - 0.05*(i+2), 1)"], field="faults.x")
+    f = compile_vector_expression(
+        ["0.1*i*t", "1", "where(t >= 10, 1 - 0.05*(i+2), 1)"], field="faults.x"
+    )
     idx = np.arange(1, 5, dtype=float)
     out = np.asarray(f(12.0, idx))
     assert out.shape == (4, 3)

@@ -11,24 +11,27 @@ from formation_ftc.core import expressions as ex
 from formation_ftc.core.expressions import ExpressionError, compile_expression
 
 
-@pytest.mark.parametrize("text,fragment", [
-    ("+".join(["1"] * 999), "nested too deeply (more than 200 levels"),
-    ("-" * 999 + "t", "nested too deeply"),
-    ("not " * 300 + "t", "nested too deeply"),
-    ("(" * 250 + "t" + ")" * 250, "too many nested parentheses"),
-    ("1" + "0" * 400, "outside the float64 range"),
-    ("1e400", "outside the float64 range"),
-    ("1/0", "division by a constant zero"),
-    ("t/(2-2)", "division by a constant zero"),
-    ("1%0", "modulo by a constant zero"),
-    ("9**9**9**9", "overflow in power"),
-    ("10**400", "overflow in power"),
-    ("t + exp(1000)", "not a finite float64 (overflow in exp)"),
-    ("where(t > 0, 1, log(0))", "divide by zero in log"),
-    ("sqrt(-1) * t", "invalid value in sqrt"),
-    ("acos(2)", "invalid value in arccos"),
-    ("t\x00", "NUL character"),
-])
+@pytest.mark.parametrize(
+    "text,fragment",
+    [
+        ("+".join(["1"] * 999), "nested too deeply (more than 200 levels"),
+        ("-" * 999 + "t", "nested too deeply"),
+        ("not " * 300 + "t", "nested too deeply"),
+        ("(" * 250 + "t" + ")" * 250, "too many nested parentheses"),
+        ("1" + "0" * 400, "outside the float64 range"),
+        ("1e400", "outside the float64 range"),
+        ("1/0", "division by a constant zero"),
+        ("t/(2-2)", "division by a constant zero"),
+        ("1%0", "modulo by a constant zero"),
+        ("9**9**9**9", "overflow in power"),
+        ("10**400", "overflow in power"),
+        ("t + exp(1000)", "not a finite float64 (overflow in exp)"),
+        ("where(t > 0, 1, log(0))", "divide by zero in log"),
+        ("sqrt(-1) * t", "invalid value in sqrt"),
+        ("acos(2)", "invalid value in arccos"),
+        ("t\x00", "NUL character"),
+    ],
+)
 def test_rejected_at_validation(text, fragment):
     with pytest.raises(ExpressionError) as info:
         compile_expression(text, field="faults.bias[0]")
@@ -50,14 +53,20 @@ def test_node_limit_has_its_own_message(monkeypatch):
         compile_expression(text)
 
 
-@pytest.mark.parametrize("text,ref", [
-    ("2*pi*t + 1/3", lambda t: 2 * np.pi * t + 1 / 3),
-    ("t*0 + 10**300", lambda t: t * 0 + 1e300),
-    ("where(t >= 1, exp(-(t-1)), 1/(1+1))", lambda t: np.where(t >= 1, np.exp(-(t - 1)), 0.5)),
-    ("1/(t - 5)", lambda t: 1 / (t - 5)),  # a singularity in t is the run's business, not a constant's
-    ("(1 if 2 > 1 else 0) * t % 3", lambda t: (1.0 * t) % 3),
-    ("max(t, 0, 2**0.5) + min(1, 2)", lambda t: max(t, 0, 2**0.5) + 1),
-])
+@pytest.mark.parametrize(
+    "text,ref",
+    [
+        ("2*pi*t + 1/3", lambda t: 2 * np.pi * t + 1 / 3),
+        ("t*0 + 10**300", lambda t: t * 0 + 1e300),
+        ("where(t >= 1, exp(-(t-1)), 1/(1+1))", lambda t: np.where(t >= 1, np.exp(-(t - 1)), 0.5)),
+        (
+            "1/(t - 5)",
+            lambda t: 1 / (t - 5),
+        ),  # a singularity in t is the run's business, not a constant's
+        ("(1 if 2 > 1 else 0) * t % 3", lambda t: (1.0 * t) % 3),
+        ("max(t, 0, 2**0.5) + min(1, 2)", lambda t: max(t, 0, 2**0.5) + 1),
+    ],
+)
 def test_valid_expressions_keep_their_values(text, ref):
     f = compile_expression(text)
     for t in (0.0, 0.5, 2.0, 7.25):

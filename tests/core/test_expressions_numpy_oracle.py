@@ -48,22 +48,34 @@ ORACLES = {
     "ceil": ("ceil(x)", np.ceil, [_u(-10, 10)]),
     "min": ("min(x, y, z)", lambda a, b, c: np.min(np.stack([a, b, c]), axis=0), [_u(-5, 5)] * 3),
     "max": ("max(x, y, z)", lambda a, b, c: np.max(np.stack([a, b, c]), axis=0), [_u(-5, 5)] * 3),
-    "clip": ("clip(x, y, z)", lambda a, lo, hi: np.minimum(np.maximum(a, lo), hi),
-             [_u(-5, 5), _u(-3, -1), _u(1, 3)]),
+    "clip": (
+        "clip(x, y, z)",
+        lambda a, lo, hi: np.minimum(np.maximum(a, lo), hi),
+        [_u(-5, 5), _u(-3, -1), _u(1, 3)],
+    ),
     "where": ("where(x > y, z, w)", lambda a, b, c, d: np.where(a > b, c, d), [_u(-1, 1)] * 4),
     "step": ("step(x)", lambda a: (a >= 0).astype(float), [_u(-1, 1)]),
-    "window": ("window(x, y, z)", lambda a, lo, hi: ((a >= lo) & (a <= hi)).astype(float),
-               [_u(-2, 2), _u(-1, 0), _u(0, 1)]),
-    "piecewise": ("piecewise(x > 0.5, y, x < -0.5, z, w)",
-                  lambda a, b, c, d: _piecewise_oracle(a > 0.5, b, a < -0.5, c, d), [_u(-1, 1)] * 4),
+    "window": (
+        "window(x, y, z)",
+        lambda a, lo, hi: ((a >= lo) & (a <= hi)).astype(float),
+        [_u(-2, 2), _u(-1, 0), _u(0, 1)],
+    ),
+    "piecewise": (
+        "piecewise(x > 0.5, y, x < -0.5, z, w)",
+        lambda a, b, c, d: _piecewise_oracle(a > 0.5, b, a < -0.5, c, d),
+        [_u(-1, 1)] * 4,
+    ),
 }
 VARS = ("x", "y", "z", "w")
 
 
 def _substitute(text, values):
     """Replace the variable names (whole words only) by parenthesised literals."""
-    return re.sub(r"\b([xyzw])\b", lambda m: f"({float(values[m.group(1)])!r})" if m.group(1) in values
-                  else m.group(1), text)
+    return re.sub(
+        r"\b([xyzw])\b",
+        lambda m: f"({float(values[m.group(1)])!r})" if m.group(1) in values else m.group(1),
+        text,
+    )
 
 
 def test_every_whitelisted_function_has_an_oracle():
@@ -87,23 +99,40 @@ def test_constant_folder_matches_numpy(name):
     for k in range(20):
         vals = [float(s()[k]) for s in samplers]
         lit = _substitute(text, dict(zip(VARS, vals, strict=False)))
-        assert float(compile_expression(lit, ())()) == pytest.approx(float(oracle(*[np.float64(v) for v in vals])),
-                                                                      rel=1e-13, abs=1e-15)
-        folded = ex._NP_FUNCTIONS[name](*[np.float64(v) for v in vals]) if name not in (
-            "where", "piecewise") else None
+        assert float(compile_expression(lit, ())()) == pytest.approx(
+            float(oracle(*[np.float64(v) for v in vals])), rel=1e-13, abs=1e-15
+        )
+        folded = (
+            ex._NP_FUNCTIONS[name](*[np.float64(v) for v in vals])
+            if name not in ("where", "piecewise")
+            else None
+        )
         if folded is not None:
-            assert float(folded) == pytest.approx(float(oracle(*[np.float64(v) for v in vals])), rel=1e-13,
-                                                  abs=1e-15)
+            assert float(folded) == pytest.approx(
+                float(oracle(*[np.float64(v) for v in vals])), rel=1e-13, abs=1e-15
+            )
 
 
 BINARY = {
-    "x + y": np.add, "x - y": np.subtract, "x * y": np.multiply, "x / y": np.divide,
-    "x ** y": np.power, "x % y": np.mod,
-    "x < y": np.less, "x <= y": np.less_equal, "x > y": np.greater, "x >= y": np.greater_equal,
-    "x == y": np.equal, "x != y": np.not_equal,
-    "(x > 0) and (y > 0)": lambda a, b: (a > 0) & (b > 0), "(x > 0) or (y > 0)": lambda a, b: (a > 0) | (b > 0),
-    "not (x > y)": lambda a, b: ~(a > b), "-x + y": lambda a, b: -a + b, "+x - y": lambda a, b: a - b,
-    "x if x > y else y": np.maximum, "x < y <= 0.5": lambda a, b: (a < b) & (b <= 0.5),
+    "x + y": np.add,
+    "x - y": np.subtract,
+    "x * y": np.multiply,
+    "x / y": np.divide,
+    "x ** y": np.power,
+    "x % y": np.mod,
+    "x < y": np.less,
+    "x <= y": np.less_equal,
+    "x > y": np.greater,
+    "x >= y": np.greater_equal,
+    "x == y": np.equal,
+    "x != y": np.not_equal,
+    "(x > 0) and (y > 0)": lambda a, b: (a > 0) & (b > 0),
+    "(x > 0) or (y > 0)": lambda a, b: (a > 0) | (b > 0),
+    "not (x > y)": lambda a, b: ~(a > b),
+    "-x + y": lambda a, b: -a + b,
+    "+x - y": lambda a, b: a - b,
+    "x if x > y else y": np.maximum,
+    "x < y <= 0.5": lambda a, b: (a < b) & (b <= 0.5),
 }
 
 
@@ -116,8 +145,14 @@ def test_operator_matches_numpy(text):
     if "==" in text or "!=" in text:
         b = np.where(RNG.random(N) < 0.3, a, b)  # some exact equalities
     f = compile_expression(text, ("x", "y"))
-    np.testing.assert_allclose(np.asarray(f(x=a, y=b), dtype=float), np.asarray(BINARY[text](a, b), dtype=float),
-                               rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(f(x=a, y=b), dtype=float),
+        np.asarray(BINARY[text](a, b), dtype=float),
+        rtol=1e-13,
+        atol=1e-15,
+    )
     for k in range(10):  # constant folder
         lit = _substitute(text, {"x": a[k], "y": b[k]})
-        assert float(compile_expression(lit, ())()) == pytest.approx(float(BINARY[text](a[k], b[k])), rel=1e-13)
+        assert float(compile_expression(lit, ())()) == pytest.approx(
+            float(BINARY[text](a[k], b[k])), rel=1e-13
+        )

@@ -13,8 +13,10 @@ def test_actuator_fault_composition():
     gam = jnp.array([[0.5, 1.0, 0.2]])
     delta = jnp.array([[0.1, 0.0, -0.1]])
     np.testing.assert_allclose(faults.actuator_fault(u, gam, delta), [[0.6, -2.0, 0.5]])
-    np.testing.assert_allclose(faults.additive_bias(faults.loss_of_effectiveness(u, gam), delta),
-                               faults.actuator_fault(u, gam, delta))
+    np.testing.assert_allclose(
+        faults.additive_bias(faults.loss_of_effectiveness(u, gam), delta),
+        faults.actuator_fault(u, gam, delta),
+    )
 
 
 def test_lock_in_place_and_intermittent():
@@ -37,7 +39,9 @@ def test_time_functions():
     np.testing.assert_allclose(timefunctions.window(t, 9.0, 10.0, 2.0), [0, 2, 2, 0])
     loe = timefunctions.exp_recovery_loe(t, 10.0, 0.3, 0.5)
     np.testing.assert_allclose(loe, [1, 1, 0.7, 1 - 0.3 * np.exp(-2.5)])
-    np.testing.assert_allclose(timefunctions.sinusoid(2.0, 0.05, 0.02, 0.0, 0.6), 0.6 + 0.05 * np.sin(0.04))
+    np.testing.assert_allclose(
+        timefunctions.sinusoid(2.0, 0.05, 0.02, 0.0, 0.6), 0.6 + 0.05 * np.sin(0.04)
+    )
 
 
 def test_smooth_transition_derivatives_by_autodiff():

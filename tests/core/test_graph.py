@@ -38,12 +38,15 @@ def test_undirected_ring():
     np.testing.assert_allclose(graph.row_normalized(C).sum(axis=1), 1.0)
 
 
-@pytest.mark.parametrize("C,msg", [
-    (np.ones((2, 3)), "square"),
-    (np.array([[0, -1.0], [1, 0]]), ">= 0"),
-    (np.array([[1.0, 0], [1, 0]]), "self-loops"),
-    (np.array([[0, np.nan], [1, 0]]), "finite"),
-])
+@pytest.mark.parametrize(
+    "C,msg",
+    [
+        (np.ones((2, 3)), "square"),
+        (np.array([[0, -1.0], [1, 0]]), ">= 0"),
+        (np.array([[1.0, 0], [1, 0]]), "self-loops"),
+        (np.array([[0, np.nan], [1, 0]]), "finite"),
+    ],
+)
 def test_bad_adjacency(C, msg):
     with pytest.raises(graph.GraphError, match=msg):
         graph.validate_adjacency(C)

@@ -36,9 +36,13 @@ N = math.sqrt(MU_EARTH / A**3)
 def _dcm_numpy(p):
     """Body -> reference DCM of a vector-first unit quaternion, element by element."""
     x, y, z, w = p / np.linalg.norm(p)
-    return np.array([[w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z]])
+    return np.array(
+        [
+            [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
+        ]
+    )
 
 
 def _random_inertia(rng):
@@ -60,11 +64,14 @@ def test_pitch_torque_hand_computed():
     th = math.radians(30.0)
     q = quat_from_axis_angle(jnp.array([0.0, 0.0, 1.0]), jnp.asarray(th))
     tau = np.asarray(gravity_gradient_torque_circular(0.0, q, J, A))
-    expected_z = -3.0 * N**2 * (30.0 - 20.0) * math.sin(th) * math.cos(th)  # = -3 n^2 * 10 * sqrt(3)/4
+    expected_z = (
+        -3.0 * N**2 * (30.0 - 20.0) * math.sin(th) * math.cos(th)
+    )  # = -3 n^2 * 10 * sqrt(3)/4
     np.testing.assert_allclose(tau, [0.0, 0.0, expected_z], atol=1e-18)
     assert tau[2] < 0.0  # pulls the pitch back towards 0
-    np.testing.assert_allclose(np.asarray(radial_unit_in_body(q, 0.0)), [math.cos(th), -math.sin(th), 0.0],
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(radial_unit_in_body(q, 0.0)), [math.cos(th), -math.sin(th), 0.0], atol=1e-15
+    )
 
 
 def test_roll_torque_hand_computed():
@@ -72,15 +79,18 @@ def test_roll_torque_hand_computed():
     along-track = -inertial x): r_b = [cos ph, 0, sin ph], tau_y = 3 n^2 (J_x - J_z) sin ph cos ph."""
     J = np.diag([20.0, 30.0, 25.0])
     ph, u = math.radians(20.0), math.pi / 2
-    q_l = quat_from_axis_angle(jnp.array([0.0, 1.0, 0.0]), jnp.asarray(ph))   # body -> LVLH
+    q_l = quat_from_axis_angle(jnp.array([0.0, 1.0, 0.0]), jnp.asarray(ph))  # body -> LVLH
     q = np.asarray(quaternion_lvlh_to_inertial(jnp.asarray(u)))
     x, y, z, w = q
     qv = np.asarray(q_l)
     # q_IL (x) q_L written out (Hamilton, vector first)
-    q_i = np.concatenate([w * qv[:3] + qv[3] * q[:3] + np.cross(q[:3], qv[:3]), [w * qv[3] - q[:3] @ qv[:3]]])
+    q_i = np.concatenate(
+        [w * qv[:3] + qv[3] * q[:3] + np.cross(q[:3], qv[:3]), [w * qv[3] - q[:3] @ qv[:3]]]
+    )
     tau = np.asarray(gravity_gradient_torque_circular(u / N, jnp.asarray(q_i), J, A))
-    np.testing.assert_allclose(tau, [0.0, 3.0 * N**2 * (20.0 - 25.0) * math.sin(ph) * math.cos(ph), 0.0],
-                               atol=1e-18)
+    np.testing.assert_allclose(
+        tau, [0.0, 3.0 * N**2 * (20.0 - 25.0) * math.sin(ph) * math.cos(ph), 0.0], atol=1e-18
+    )
 
 
 def test_torque_matches_position_vector_form_and_numpy():
@@ -97,22 +107,31 @@ def test_torque_matches_position_vector_form_and_numpy():
         R_body = _dcm_numpy(p).T @ (A * np.array([math.cos(u), math.sin(u), 0.0]))
         ref = 3.0 * MU_EARTH / A**5 * np.cross(R_body, J @ R_body)
         np.testing.assert_allclose(tau, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
-        np.testing.assert_allclose(tau, np.asarray(gravity_gradient_torque(R_body, J)), rtol=1e-10,
-                                   atol=1e-12 * np.abs(ref).max())
+        np.testing.assert_allclose(
+            tau,
+            np.asarray(gravity_gradient_torque(R_body, J)),
+            rtol=1e-10,
+            atol=1e-12 * np.abs(ref).max(),
+        )
     # batched: per-spacecraft inertia (N, 3, 3) against the loop above
     Js = np.stack([_random_inertia(rng) for _ in range(3)])
     ps = rng.normal(size=(3, 4))
     ps /= np.linalg.norm(ps, axis=1, keepdims=True)
     batched = np.asarray(gravity_gradient_torque_circular(100.0, jnp.asarray(ps), Js, A))
     for k in range(3):
-        np.testing.assert_allclose(batched[k], np.asarray(gravity_gradient_torque_circular(100.0, ps[k], Js[k], A)),
-                                   rtol=1e-12)
+        np.testing.assert_allclose(
+            batched[k],
+            np.asarray(gravity_gradient_torque_circular(100.0, ps[k], Js[k], A)),
+            rtol=1e-12,
+        )
 
 
 def test_zero_torque_when_a_principal_axis_is_radial():
     J = np.diag([20.0, 30.0, 25.0])
     for axis in ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]):
-        q = quat_from_axis_angle(jnp.asarray(axis), jnp.asarray(math.pi / 2))  # some principal axis -> radial
+        q = quat_from_axis_angle(
+            jnp.asarray(axis), jnp.asarray(math.pi / 2)
+        )  # some principal axis -> radial
         assert np.abs(np.asarray(gravity_gradient_torque_circular(0.0, q, J, A))).max() < 1e-20
 
 
@@ -124,7 +143,9 @@ def test_lvlh_axes_are_radial_along_track_normal():
         np.testing.assert_allclose(C[:, 0], r, atol=1e-15)
         np.testing.assert_allclose(C[:, 1], v, atol=1e-15)
         np.testing.assert_allclose(C[:, 2], np.cross(r, v), atol=1e-15)
-        np.testing.assert_allclose(np.asarray(rotation_matrix(quaternion_lvlh_to_inertial(u))), C, atol=1e-15)
+        np.testing.assert_allclose(
+            np.asarray(rotation_matrix(quaternion_lvlh_to_inertial(u))), C, atol=1e-15
+        )
         p = np.array([0.2, -0.4, 0.1, 0.88])
         p /= np.linalg.norm(p)
         q_l = np.asarray(attitude_relative_to_lvlh(jnp.asarray(p), u))
@@ -133,7 +154,9 @@ def test_lvlh_axes_are_radial_along_track_normal():
 
 def test_libration_formulas():
     # pitch: n sqrt(3 (J_y - J_x) / J_z), unstable (rejected) when the radial inertia exceeds the along-track one
-    assert pitch_libration_frequency((10.0, 20.0, 25.0), N) == pytest.approx(N * math.sqrt(3 * 10 / 25), rel=1e-15)
+    assert pitch_libration_frequency((10.0, 20.0, 25.0), N) == pytest.approx(
+        N * math.sqrt(3 * 10 / 25), rel=1e-15
+    )
     with pytest.raises(ValueError, match="J_y"):
         pitch_libration_frequency((20.0, 10.0, 25.0), N)
     # roll/yaw: sum and product of the squared roots (Vieta) for a body in the stable Lagrange region

@@ -45,7 +45,9 @@ def test_zoh_matches_integration_with_held_input():
     dt = 0.37
     Ad, Bd = zoh_discretize(A, B, dt)
     np.testing.assert_allclose(Ad, scipy.linalg.expm(A * dt), rtol=1e-13)
-    sol = solve_ivp(lambda t, x: A @ x + B @ u, (0, dt), x0, rtol=1e-13, atol=1e-13, method="DOP853")
+    sol = solve_ivp(
+        lambda t, x: A @ x + B @ u, (0, dt), x0, rtol=1e-13, atol=1e-13, method="DOP853"
+    )
     np.testing.assert_allclose(Ad @ x0 + Bd @ u, sol.y[:, -1], rtol=1e-10, atol=1e-12)
 
 

@@ -48,10 +48,15 @@ CASES = {
     "op /": ("1/(t - 0.3) + t/7", (-10, 10)),
     "op **": ("abs(t)**1.5 + t**3 + (t**2 + 1)**(-2) + 2**t + (t + 11)**(0.1*t)", (-10, 10)),
     "op %": ("t % 2.5 + (t*t) % 1.5 + t % (-2)", (-10, 10)),
-    "op compare": ("(t < 1)*1 + (t <= 2)*2 + (t > 0)*3 + (t >= -1)*4 + (t == 0.5)*5 + (t != 0.5)*6",
-                   (-10, 10)),
+    "op compare": (
+        "(t < 1)*1 + (t <= 2)*2 + (t > 0)*3 + (t >= -1)*4 + (t == 0.5)*5 + (t != 0.5)*6",
+        (-10, 10),
+    ),
     "op chain": ("(0 <= t < 3)*t", (-10, 10)),
-    "op bool add": ("(t > 0) + (t > 1) + 2*(step(t) + window(t, -1, 3) + window(t, 0, 5))", (-10, 10)),
+    "op bool add": (
+        "(t > 0) + (t > 1) + 2*(step(t) + window(t, -1, 3) + window(t, 0, 5))",
+        (-10, 10),
+    ),
     "op and/or/not": ("(t > 1 and t < 4) + 2*(t < -5 or t > 8) + 4*(not t > 0)", (-10, 10)),
     "op ifexp": ("t**2 if t > 1 else -t", (-10, 10)),
     "constants": ("pi*e*t", (-10, 10)),
@@ -81,8 +86,13 @@ def test_enclosure_contains_the_values(name):
     assert finite.mean() > 0.5, name
     inside = (got >= lo[:, None]) & (got <= hi[:, None])
     bad = finite & ~inside
-    assert not bad.any(), (name, t[bad][:5], got[bad][:5], np.broadcast_to(lo[:, None], t.shape)[bad][:5],
-                           np.broadcast_to(hi[:, None], t.shape)[bad][:5])
+    assert not bad.any(), (
+        name,
+        t[bad][:5],
+        got[bad][:5],
+        np.broadcast_to(lo[:, None], t.shape)[bad][:5],
+        np.broadcast_to(hi[:, None], t.shape)[bad][:5],
+    )
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -159,20 +169,30 @@ def test_refinement_proves_a_bound_the_coarse_grid_cannot():
     text = "sin(t) + sin(1.1*t)"  # max 1.99610 over [0, 50] (the peaks never coincide there)
     _, coarse = iv.enclose(text, ("t",), 0.0, 50.0, n_sub=8)
     assert coarse >= 1.999
-    bx = iv.enclose_boxes([text], ("t",), 0.0, 50.0, n_sub=8, refine=lambda lo, hi: hi[0] >= 1.999, max_rounds=20)
+    bx = iv.enclose_boxes(
+        [text], ("t",), 0.0, 50.0, n_sub=8, refine=lambda lo, hi: hi[0] >= 1.999, max_rounds=20
+    )
     fine = bx.hi.max()
     t = np.linspace(0, 50, 1_000_001)
     assert np.max(np.sin(t) + np.sin(1.1 * t)) <= fine < 1.999
     assert bx.a[0] == 0.0 and bx.b[-1] == 50.0 and np.all(bx.a[1:] == bx.b[:-1])  # still a cover
-    _, capped = iv.enclose(text, ("t",), 0.0, 50.0, n_sub=8, upper=1.999, max_rounds=2)  # bounded work
+    _, capped = iv.enclose(
+        text, ("t",), 0.0, 50.0, n_sub=8, upper=1.999, max_rounds=2
+    )  # bounded work
     assert capped >= 1.999
 
 
 def test_norm_bound_of_a_vector():
     texts = ["0.06/sqrt(3)*sin(t + i)", "0.06/sqrt(3)*cos(t + 2*i)", "0.06/sqrt(3)*sin(t + 3*i)"]
     t = np.linspace(0, 200, 400_001)
-    norm = np.linalg.norm([0.06 / np.sqrt(3) * np.sin(t + 1), 0.06 / np.sqrt(3) * np.cos(t + 2),
-                           0.06 / np.sqrt(3) * np.sin(t + 3)], axis=0)
+    norm = np.linalg.norm(
+        [
+            0.06 / np.sqrt(3) * np.sin(t + 1),
+            0.06 / np.sqrt(3) * np.cos(t + 2),
+            0.06 / np.sqrt(3) * np.sin(t + 3),
+        ],
+        axis=0,
+    )
     b = iv.enclose_norm(texts, ("t", "i"), 0.0, 200.0, upper=0.06, i=1.0)
     assert norm.max() <= b < 0.06
 

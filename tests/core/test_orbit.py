@@ -19,8 +19,15 @@ def test_theta_ode_matches_kepler_equation(e):
     """Integrating theta_dot(theta) at tight tolerance reproduces the Kepler-equation anomaly."""
     orb = KeplerOrbit(a=7000e3, e=e, theta0=0.3)
     t = np.linspace(0, orb.period, 50)
-    sol = solve_ivp(lambda _, th: [float(orb.theta_dot(th[0]))], (0, orb.period), [orb.theta0],
-                    t_eval=t, rtol=1e-12, atol=1e-12, method="DOP853")
+    sol = solve_ivp(
+        lambda _, th: [float(orb.theta_dot(th[0]))],
+        (0, orb.period),
+        [orb.theta0],
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-12,
+        method="DOP853",
+    )
     np.testing.assert_allclose(sol.y[0], true_anomaly_at(orb, t), atol=1e-8)
     # one full period advances theta by exactly 2 pi (SPEC P0.6-3: +-1e-6)
     assert sol.y[0][-1] - orb.theta0 == pytest.approx(2 * np.pi, abs=1e-6)

@@ -73,23 +73,33 @@ def test_j2_acceleration_is_the_negative_gradient_of_its_potential():
     r = r / np.linalg.norm(r, axis=1, keepdims=True) * rng.uniform(6.6e6, 4.2e7, (20, 1))
     grad = jax.vmap(jax.grad(lambda x: j2_potential(x)))(jnp.asarray(r))
     # autodiff of the potential is independent of the hand-written acceleration; rounding ~1e-15 relative
-    np.testing.assert_allclose(np.asarray(j2_acceleration(r)), -np.asarray(grad), rtol=1e-11, atol=1e-20)
+    np.testing.assert_allclose(
+        np.asarray(j2_acceleration(r)), -np.asarray(grad), rtol=1e-11, atol=1e-20
+    )
     # on the equator the J2 term adds -3/2 J2 mu / r^2 radially (stronger pull; closed form)
     a_eq = np.asarray(j2_acceleration(np.array([7e6, 0.0, 0.0])))
-    np.testing.assert_allclose(a_eq, [-1.5 * J2_EARTH * MU_EARTH * R_EARTH**2 / 7e6**4, 0, 0], rtol=1e-13)
+    np.testing.assert_allclose(
+        a_eq, [-1.5 * J2_EARTH * MU_EARTH * R_EARTH**2 / 7e6**4, 0, 0], rtol=1e-13
+    )
 
 
 def test_exponential_atmosphere_matches_the_table_and_its_bands():
     h0, rho0, H = EXPONENTIAL_ATMOSPHERE[20]  # 400 km band (Vallado 2013 Table 8-4)
     assert (h0, rho0, H) == (400e3, 3.725e-12, 58.515e3)
     # at a base altitude the density is the tabulated nominal one; inside a band it decays with its H
-    np.testing.assert_allclose(atmospheric_density(EXPONENTIAL_ATMOSPHERE[:, 0]), EXPONENTIAL_ATMOSPHERE[:, 1],
-                               rtol=1e-14)
-    np.testing.assert_allclose(atmospheric_density(425e3), 3.725e-12 * np.exp(-25.0 / 58.515), rtol=1e-14)
+    np.testing.assert_allclose(
+        atmospheric_density(EXPONENTIAL_ATMOSPHERE[:, 0]), EXPONENTIAL_ATMOSPHERE[:, 1], rtol=1e-14
+    )
+    np.testing.assert_allclose(
+        atmospheric_density(425e3), 3.725e-12 * np.exp(-25.0 / 58.515), rtol=1e-14
+    )
     # a one-row table is a single exponential everywhere (below its base altitude too)
     one = np.array([[100e3, 1e-6, 8e3]])
-    np.testing.assert_allclose(atmospheric_density(np.array([50e3, 300e3]), one),
-                               1e-6 * np.exp(-np.array([-50.0, 200.0]) / 8.0), rtol=1e-14)
+    np.testing.assert_allclose(
+        atmospheric_density(np.array([50e3, 300e3]), one),
+        1e-6 * np.exp(-np.array([-50.0, 200.0]) / 8.0),
+        rtol=1e-14,
+    )
 
 
 def test_srp_pushes_away_from_the_sun_with_the_cannonball_magnitude():
@@ -109,7 +119,9 @@ def test_elements_round_trip_and_orbit_geometry():
     assert np.isclose(np.linalg.norm(r), p / (1 + el[1] * np.cos(el[5])), rtol=1e-14)
     h = np.cross(r, v)
     assert np.isclose(np.linalg.norm(h), np.sqrt(MU_EARTH * p), rtol=1e-14)
-    assert np.isclose(0.5 * v @ v - MU_EARTH / np.linalg.norm(r), -MU_EARTH / (2 * el[0]), rtol=1e-13)
+    assert np.isclose(
+        0.5 * v @ v - MU_EARTH / np.linalg.norm(r), -MU_EARTH / (2 * el[0]), rtol=1e-13
+    )
     assert np.isclose(h[2] / np.linalg.norm(h), np.cos(el[2]), rtol=1e-14)
     np.testing.assert_allclose([float(x) for x in eci_to_elements(s)], el, rtol=1e-11)
     # equatorial orbit: no node line, raan = 0 and argp is the longitude of perigee (finite, not nan)
@@ -152,14 +164,18 @@ def test_j2_secular_drift_of_raan_and_argp_matches_the_analytic_rates():
     dt, T = 20.0, _period(a0)
     per = int(round(T / dt))
     n_orbits = 12
-    xs = np.asarray(_propagate(_j2_rhs, elements_to_eci(a0, e0, i0, 0.4, 1.0, 0.0), dt, per * n_orbits))
+    xs = np.asarray(
+        _propagate(_j2_rhs, elements_to_eci(a0, e0, i0, 0.4, 1.0, 0.0), dt, per * n_orbits)
+    )
     a, e, i, raan, argp, _ = (np.asarray(v) for v in eci_to_elements(xs))
     raan, argp = np.unwrap(raan), np.unwrap(argp)
     first, last = slice(0, per), slice(per * (n_orbits - 1), per * n_orbits)
     span = per * (n_orbits - 1) * dt
     rate_raan = (raan[last].mean() - raan[first].mean()) / span
     rate_argp = (argp[last].mean() - argp[first].mean()) / span
-    ref_raan, ref_argp = (float(x) for x in j2_secular_rates(a[first].mean(), e[first].mean(), i[first].mean()))
+    ref_raan, ref_argp = (
+        float(x) for x in j2_secular_rates(a[first].mean(), e[first].mean(), i[first].mean())
+    )
     assert ref_raan < 0 < ref_argp  # prograde orbit below the critical inclination
     assert abs(rate_raan / ref_raan - 1) < 0.02, (rate_raan, ref_raan)
     assert abs(rate_argp / ref_argp - 1) < 0.02, (rate_argp, ref_argp)
@@ -193,7 +209,9 @@ def _drag_decay(inclination, n_orbits=4, B=0.02, h=400e3, dt=20.0):
         return jnp.concatenate([s[3:], perturbed_acceleration(s[:3], s[3:], ballistic=B)])
 
     per = int(round(_period(a0) / dt))
-    xs = np.asarray(_propagate(rhs, elements_to_eci(a0, 0.0, inclination, 0.0, 0.0, 0.0), dt, per * n_orbits))
+    xs = np.asarray(
+        _propagate(rhs, elements_to_eci(a0, 0.0, inclination, 0.0, 0.0, 0.0), dt, per * n_orbits)
+    )
     a = np.asarray(eci_to_elements(xs)[0])
     span = per * (n_orbits - 1) * dt
     measured = (a[-per:].mean() - a[:per].mean()) / span
@@ -239,8 +257,13 @@ def test_inertial_truth_equals_the_nonlinear_elliptic_relative_dynamics():
     positions) and < 1e-8 m/s (measured 1.4e-10 m/s)."""
     a0, e0, nu0 = 7000e3, 0.05, 0.3
     chief0 = elements_to_eci(a0, e0, 0.8, 0.2, 0.6, nu0)
-    rel0 = np.array([[600.0, -700.0, 300.0, 0.2, -0.3, 0.1], [-400.0, 500.0, -800.0, -0.1, 0.5, -0.2],
-                     [0.0, 1000.0, 0.0, 0.0, 0.0, 0.0]])
+    rel0 = np.array(
+        [
+            [600.0, -700.0, 300.0, 0.2, -0.3, 0.1],
+            [-400.0, 500.0, -800.0, -0.1, 0.5, -0.2],
+            [0.0, 1000.0, 0.0, 0.0, 0.0, 0.0],
+        ]
+    )
     dt = 1.0
     n = int(np.ceil(_period(a0) / dt / 10) * 10)
     truth = _relative_from_truth(chief0, rel0, dt, n, 10)
@@ -286,10 +309,13 @@ def test_clohessy_wiltshire_limit_for_small_separation_and_eccentricity(size):
 def test_anomaly_conversions_and_roe_round_trip():
     nu = np.linspace(-3.0, 9.0, 25)
     for e in (0.0, 0.02, 0.5, 0.85):
-        np.testing.assert_allclose(np.asarray(mean_to_true_anomaly(true_to_mean_anomaly(nu, e), e)), nu,
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            np.asarray(mean_to_true_anomaly(true_to_mean_anomaly(nu, e), e)), nu, atol=1e-12
+        )
     chief = (7000e3, 0.02, 0.9, 0.4, 1.1, 0.3)
-    roe = np.array([[1e-5, 3e-5, -2e-5, 1e-5, 4e-5, -3e-5], [0, 1e-4, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0]])
+    roe = np.array(
+        [[1e-5, 3e-5, -2e-5, 1e-5, 4e-5, -3e-5], [0, 1e-4, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0]]
+    )
     dep = roe_to_elements(chief, roe)
     np.testing.assert_allclose(np.asarray(elements_to_roe(chief, dep)), roe, atol=1e-15)
     # through the ECI state and back (osculating elements of the deputy): rounding ~1e-13
@@ -304,12 +330,25 @@ def test_roe_match_the_linear_relative_motion_of_a_circular_chief():
     a, i, u = 7000e3, 0.9, 0.7
     n_mean = np.sqrt(MU_EARTH / a**3)
     chief = (a, 0.0, i, 0.4, 0.0, u)
-    roe = np.array([[20.0, 200.0, 100.0, -50.0, 80.0, 60.0], [0.0, -300.0, -80.0, 120.0, -40.0, 150.0]]) / a
-    q = np.asarray(eci_to_lvlh(elements_to_eci(*chief), elements_to_eci(*roe_to_elements(chief, roe))))
+    roe = (
+        np.array(
+            [[20.0, 200.0, 100.0, -50.0, 80.0, 60.0], [0.0, -300.0, -80.0, 120.0, -40.0, 150.0]]
+        )
+        / a
+    )
+    q = np.asarray(
+        eci_to_lvlh(elements_to_eci(*chief), elements_to_eci(*roe_to_elements(chief, roe)))
+    )
     da, dl, dex, dey, dix, diy = roe.T
     c, s = np.cos(u), np.sin(u)
-    pos = a * np.stack([da - dex * c - dey * s, dl + 2 * dex * s - 2 * dey * c, dix * s - diy * c], -1)
-    vel = n_mean * a * np.stack([dex * s - dey * c, -1.5 * da + 2 * (dex * c + dey * s), dix * c + diy * s], -1)
+    pos = a * np.stack(
+        [da - dex * c - dey * s, dl + 2 * dex * s - 2 * dey * c, dix * s - diy * c], -1
+    )
+    vel = (
+        n_mean
+        * a
+        * np.stack([dex * s - dey * c, -1.5 * da + 2 * (dex * c + dey * s), dix * c + diy * s], -1)
+    )
     np.testing.assert_allclose(q[:, :3], pos, atol=0.1)
     np.testing.assert_allclose(q[:, 3:], vel, atol=1e-4)
 

@@ -27,8 +27,11 @@ from formation_ftc.core.quaternion import (
 
 finite = st.floats(-1.0, 1.0, allow_nan=False, allow_infinity=False)
 vec3 = st.tuples(finite, finite, finite).map(np.array)
-quat = st.tuples(finite, finite, finite, finite).filter(lambda v: np.linalg.norm(v) > 0.1).map(
-    lambda v: np.array(v) / np.linalg.norm(v))
+quat = (
+    st.tuples(finite, finite, finite, finite)
+    .filter(lambda v: np.linalg.norm(v) > 0.1)
+    .map(lambda v: np.array(v) / np.linalg.norm(v))
+)
 
 TOL = 1e-12
 SETTINGS = settings(max_examples=40, deadline=None)
@@ -56,7 +59,9 @@ def test_rotation_matrix_homomorphism_and_vector_rotation(p, q, v):
     R = rotation_matrix(q)
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=TOL)
     np.testing.assert_allclose(jnp.linalg.det(R), 1.0, atol=TOL)
-    np.testing.assert_allclose(rotation_matrix(quat_multiply(p, q)), rotation_matrix(p) @ R, atol=TOL)
+    np.testing.assert_allclose(
+        rotation_matrix(quat_multiply(p, q)), rotation_matrix(p) @ R, atol=TOL
+    )
     np.testing.assert_allclose(rotate_vector(q, v), R @ v, atol=TOL)
     np.testing.assert_allclose(dcm_body_from_reference(q) @ (R @ v), v, atol=TOL)
     np.testing.assert_allclose(rotation_matrix(-q), R, atol=TOL)  # double cover

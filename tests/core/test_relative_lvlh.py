@@ -53,7 +53,9 @@ def _propagate_lvlh(rho0, v0, t_end, dt):
     mass = jnp.ones(1)
 
     def rhs(t, x):
-        return relative_lvlh_rhs(t, x, jnp.zeros((1, 3)), mass, orbit.semi_latus_rectum, orbit.e, orbit.mu)
+        return relative_lvlh_rhs(
+            t, x, jnp.zeros((1, 3)), mass, orbit.semi_latus_rectum, orbit.e, orbit.mu
+        )
 
     def body(x, k):
         x = rk4_step(rhs, k * dt, x, dt)
@@ -63,11 +65,14 @@ def _propagate_lvlh(rho0, v0, t_end, dt):
     return np.asarray(rho), np.asarray(v), np.asarray(th)
 
 
-@pytest.mark.parametrize("rho0, v0", [
-    ([250.0, 20.0, 423.0], [0.0, 0.0, 0.0]),
-    ([-15.0, -505.0, 10.0], [0.05, -0.3, 0.1]),
-    ([2000.0, -3000.0, 1500.0], [1.0, -2.0, 0.5]),  # larger, clearly nonlinear separation
-])
+@pytest.mark.parametrize(
+    "rho0, v0",
+    [
+        ([250.0, 20.0, 423.0], [0.0, 0.0, 0.0]),
+        ([-15.0, -505.0, 10.0], [0.05, -0.3, 0.1]),
+        ([2000.0, -3000.0, 1500.0], [1.0, -2.0, 0.5]),  # larger, clearly nonlinear separation
+    ],
+)
 def test_matches_inertial_two_body_over_one_orbit(rho0, v0):
     """Relative position error < 1e-6 of the separation over one orbit (issue 3). Truth: DOP853 at
     rtol 1e-12 (inertial error ~1e-5 m at 7000 km, i.e. far below the 1e-6 * ~500 m tolerance); our model
@@ -137,6 +142,10 @@ def test_reduces_to_cw_for_circular_small_separation():
 def test_axes_follow_the_equations():
     """E000-01: Coriolis couples x and y (along-track), z decouples (orbit normal)."""
     rho = jnp.zeros((1, 3))
-    a_vy = np.asarray(natural_acceleration(rho, jnp.array([[0.0, 1.0, 0.0]]), 0.0, P, E, MU_EARTH))[0]
-    a_vz = np.asarray(natural_acceleration(rho, jnp.array([[0.0, 0.0, 1.0]]), 0.0, P, E, MU_EARTH))[0]
+    a_vy = np.asarray(natural_acceleration(rho, jnp.array([[0.0, 1.0, 0.0]]), 0.0, P, E, MU_EARTH))[
+        0
+    ]
+    a_vz = np.asarray(natural_acceleration(rho, jnp.array([[0.0, 0.0, 1.0]]), 0.0, P, E, MU_EARTH))[
+        0
+    ]
     assert a_vy[0] > 0 and np.allclose(a_vz, 0.0, atol=1e-12)  # n_i cancels to round-off

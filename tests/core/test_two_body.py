@@ -60,7 +60,9 @@ def test_two_body_matches_kepler_closed_form_and_invariants():
     e0 = float(specific_energy(s0))
     h0 = np.asarray(specific_angular_momentum(s0))
     assert np.max(np.abs(np.asarray(specific_energy(traj)) - e0)) < 1e-8 * abs(e0)
-    assert np.max(np.linalg.norm(np.asarray(specific_angular_momentum(traj)) - h0, axis=1)) < 1e-8 * np.linalg.norm(h0)
+    assert np.max(
+        np.linalg.norm(np.asarray(specific_angular_momentum(traj)) - h0, axis=1)
+    ) < 1e-8 * np.linalg.norm(h0)
 
 
 def test_force_and_disturbance_enter_divided_by_mass():
@@ -72,7 +74,9 @@ def test_force_and_disturbance_enter_divided_by_mass():
     np.testing.assert_allclose(full[3:] - base[3:], (f + d) / 150.0, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(base[:3], s[3:])
     R = s[:3]
-    np.testing.assert_allclose(gravity_acceleration(R), -MU_EARTH * R / np.linalg.norm(R) ** 3, rtol=1e-14)
+    np.testing.assert_allclose(
+        gravity_acceleration(R), -MU_EARTH * R / np.linalg.norm(R) ** 3, rtol=1e-14
+    )
 
 
 def test_constant_thrust_changes_energy_at_the_work_rate():

@@ -43,8 +43,12 @@ def test_least_norm_and_augmented_forms_equal_kkt_solution(n):
         b_hat = rng.uniform(0.3, 1.5, n)
         p = rng.normal(size=n - 1)
         ref = _kkt(alpha, b_hat, p)
-        np.testing.assert_allclose(np.asarray(allocate(alpha, b_hat, p)), ref, rtol=1e-10, atol=1e-12)
-        np.testing.assert_allclose(np.asarray(allocate_augmented(alpha, b_hat, p)), ref, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(
+            np.asarray(allocate(alpha, b_hat, p)), ref, rtol=1e-10, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            np.asarray(allocate_augmented(alpha, b_hat, p)), ref, rtol=1e-10, atol=1e-12
+        )
         # constraints (2) hold and the optimality row sum alpha_i u_i / b_hat_i = 0 (E004-02)
         np.testing.assert_allclose(np.asarray(chain_matrix(b_hat)) @ ref, p, atol=1e-11)
         assert abs(np.sum(alpha * ref / b_hat)) < 1e-11
@@ -52,7 +56,11 @@ def test_least_norm_and_augmented_forms_equal_kkt_solution(n):
 
 def test_allocation_is_the_minimum_cost_feasible_input():
     rng = np.random.default_rng(3)
-    alpha, b_hat, p = np.array([1.0, 6.0, 1.0, 1.0]), np.array([1.0, 0.88, 1.0, 1.0]), rng.normal(size=3)
+    alpha, b_hat, p = (
+        np.array([1.0, 6.0, 1.0, 1.0]),
+        np.array([1.0, 0.88, 1.0, 1.0]),
+        rng.normal(size=3),
+    )
     u = np.asarray(allocate(alpha, b_hat, p))
     null = 1.0 / b_hat  # J (1/b_hat) = 0
     cost = lambda v: 0.5 * np.sum(alpha * v**2)  # noqa: E731
@@ -70,7 +78,10 @@ def test_spec_reference_numbers_n4():
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.lists(st.floats(0.2, 10.0), min_size=4, max_size=4), st.lists(st.floats(0.3, 1.5), min_size=4, max_size=4))
+@given(
+    st.lists(st.floats(0.2, 10.0), min_size=4, max_size=4),
+    st.lists(st.floats(0.3, 1.5), min_size=4, max_size=4),
+)
 def test_closed_forms_equal_numeric_determinant_and_cofactors(alpha, b):
     alpha, b = np.array(alpha), np.array(b)
     bh2 = b[1]
@@ -101,17 +112,22 @@ def test_perturbation_matrix_structure_and_decrease_in_alpha2():
     np.testing.assert_allclose(D[0], pc.d(eps, 1.0), atol=1e-14)
     np.testing.assert_allclose(D[1], -D[0], atol=1e-14)
     np.testing.assert_allclose(D[2], 0.0, atol=1e-14)
-    norms = [np.linalg.norm(perturbation_matrix([1, a, 1, 1], b_hat, 1, eps), 2) for a in (1, 2, 5, 10)]
+    norms = [
+        np.linalg.norm(perturbation_matrix([1, a, 1, 1], b_hat, 1, eps), 2) for a in (1, 2, 5, 10)
+    ]
     assert np.all(np.diff(norms) < 0)
 
 
-@pytest.mark.parametrize("alpha,b_hat,match", [
-    ([1, 0, 1, 1], [1, 1, 1, 1], "alpha"),
-    ([1, -2, 1, 1], [1, 1, 1, 1], "alpha"),
-    ([1, 1, 1, 1], [1, 0.0, 1, 1], "b_hat"),
-    ([1, 1, 1, 1], [1, float("nan"), 1, 1], "b_hat"),
-    ([1, 1, 1], [1, 1, 1, 1], "shape"),
-])
+@pytest.mark.parametrize(
+    "alpha,b_hat,match",
+    [
+        ([1, 0, 1, 1], [1, 1, 1, 1], "alpha"),
+        ([1, -2, 1, 1], [1, 1, 1, 1], "alpha"),
+        ([1, 1, 1, 1], [1, 0.0, 1, 1], "b_hat"),
+        ([1, 1, 1, 1], [1, float("nan"), 1, 1], "b_hat"),
+        ([1, 1, 1], [1, 1, 1, 1], "shape"),
+    ],
+)
 def test_bad_allocation_inputs_are_rejected(alpha, b_hat, match):
     with pytest.raises(ValueError, match=match):
         validate_allocation_inputs(alpha, b_hat)

@@ -13,8 +13,18 @@ from formation_ftc.design.lmi import rounding_margin
 
 #: conditions built in papers/*/method.py (outside this test's scope) are listed by paper
 OWN = ("gui2022", "li2020", "mehrabian", "yang2013")
-WORDS = ("exact", "verified", "certified", "sampled", "heuristic", "residual", "eigenvalues", "informative",
-         "not applicable", "untestable")
+WORDS = (
+    "exact",
+    "verified",
+    "certified",
+    "sampled",
+    "heuristic",
+    "residual",
+    "eigenvalues",
+    "informative",
+    "not applicable",
+    "untestable",
+)
 
 
 @pytest.mark.parametrize("name", sorted(n for n in api.list_scenarios() if n.split("-")[0] in OWN))
@@ -27,7 +37,9 @@ def test_every_condition_that_holds_states_how(name):
 def test_rounding_margin_rejects_a_marginal_negative_eigenvalue():
     rng = np.random.default_rng(3)
     Q, _ = np.linalg.qr(rng.normal(size=(6, 6)))
-    lam = np.array([-1e6, -3e5, -1.0, -2.0, -5.0, -1e-12])  # the last one is below the rounding level
+    lam = np.array(
+        [-1e6, -3e5, -1.0, -2.0, -5.0, -1e-12]
+    )  # the last one is below the rounding level
     M = Q @ np.diag(lam) @ Q.T
     M = (M + M.T) / 2
     tol = rounding_margin(M)

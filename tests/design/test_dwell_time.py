@@ -38,8 +38,12 @@ def test_spec_p1_6_numbers():
     t21 = dw.dwell_time_bound(ETA, S, ZETA, D, EPS, EPS1, TAU)
     assert t21 == pytest.approx(200 * np.log(15.090), abs=0.1)
     assert t21 == pytest.approx(542.8, abs=0.1)
-    assert dw.dwell_time_bound(ETA, np.sqrt(3), ZETA, D, EPS, EPS1, TAU) == pytest.approx(525.3, abs=0.1)
-    assert dw.dwell_time_bound(ETA, S, ZETA, D, EPS, EPS1, TAU, s_offset=1.0) == pytest.approx(506.6, abs=0.1)
+    assert dw.dwell_time_bound(ETA, np.sqrt(3), ZETA, D, EPS, EPS1, TAU) == pytest.approx(
+        525.3, abs=0.1
+    )
+    assert dw.dwell_time_bound(ETA, S, ZETA, D, EPS, EPS1, TAU, s_offset=1.0) == pytest.approx(
+        506.6, abs=0.1
+    )
     assert dw.dwell_time_bound(ETA, S, ZETA, D, EPS, EPS1, tau=600.0) == 600.0  # tau dominates
     assert dw.initial_state_bound(EPS, S, ZETA, D) == pytest.approx(2.518, abs=1e-3)
     assert dw.new_state_bound(EPS2, ZETA, D) == pytest.approx(0.9, abs=1e-12)
@@ -53,7 +57,11 @@ def test_checks_flag_violations_with_the_inequality():
     ok = dw.check_dwell_time(1000.0, ETA, S, ZETA, D, EPS, EPS1, TAU)
     bad = dw.check_dwell_time(500.0, ETA, S, ZETA, D, EPS, EPS1, TAU)
     assert ok.holds and not bad.holds
-    assert bad.reference == "(21)" and "VIOLATED" in str(bad) and bad.rhs == pytest.approx(542.8, abs=0.1)
+    assert (
+        bad.reference == "(21)"
+        and "VIOLATED" in str(bad)
+        and bad.rhs == pytest.approx(542.8, abs=0.1)
+    )
     assert not dw.check_new_state(0.95, EPS2, ZETA, D).holds
     assert dw.check_new_state(0.2, EPS2, ZETA, D).holds
     assert not dw.check_initial_state(2.6, EPS, S, ZETA, D).holds
@@ -73,6 +81,8 @@ def test_gain_choice_realises_eta_and_eta1():
     assert dw.translational_decay_rate(0.0, 3.0) == pytest.approx((3 - np.sqrt(5)) / 2, rel=1e-12)
     # printed (18) with nu's: eta = 2 min[...]; also zeta = max sqrt(n_j eps)
     assert dw.eta_from_gains(0.005, 0.02, 2.0, 2.0, 1.0, 0.01, 0.5, 1.0) == pytest.approx(0.01)
-    assert dw.eta_from_gains(0.005, 0.01, 0.2, 1.0, 1.0, 0.001, 0.05, 0.1) < 0  # SPEC gains: (18) fails (E001-03)
+    assert (
+        dw.eta_from_gains(0.005, 0.01, 0.2, 1.0, 1.0, 0.001, 0.05, 0.1) < 0
+    )  # SPEC gains: (18) fails (E001-03)
     assert dw.zeta_from_epsilon([3, 5, 5, 5, 4], 5.0) == pytest.approx(5.0)
     assert dw.lyapunov_epsilon(1e-4, 0.2, [150.0]) == pytest.approx(5.0)

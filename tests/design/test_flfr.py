@@ -31,7 +31,7 @@ R, OMEGA = 200 / np.sqrt(2), 0.1
 def xdd_rel(t):
     """Desired relative accelerations of the rotating square (SPEC P4.2), pairs (1,2), (2,3), (3,4)."""
     i = jnp.arange(4)
-    a = -OMEGA**2 * R * jnp.cos(OMEGA * t + jnp.pi / 4 + i * jnp.pi / 2)
+    a = -(OMEGA**2) * R * jnp.cos(OMEGA * t + jnp.pi / 4 + i * jnp.pi / 2)
     return a[1:] - a[:-1]
 
 
@@ -53,7 +53,12 @@ def test_reduced_model_simulation_matches_closed_form_sinusoid_response():
     xs, peak = simulate_reduced_model(A, w_fn, 40.0, 1e-3, record_every=100)
     t = np.arange(xs.shape[0]) * 0.1
     Xs = np.linalg.solve(1j * OMEGA * np.eye(4) - A, b * W)
-    ref = np.array([np.real(Xs * np.exp(1j * OMEGA * tt)) - scipy.linalg.expm(A * tt) @ np.real(Xs) for tt in t])
+    ref = np.array(
+        [
+            np.real(Xs * np.exp(1j * OMEGA * tt)) - scipy.linalg.expm(A * tt) @ np.real(Xs)
+            for tt in t
+        ]
+    )
     np.testing.assert_allclose(xs, ref, atol=1e-11)
     assert np.all(peak >= np.max(np.abs(ref), axis=0) - 1e-11)
 
@@ -63,7 +68,9 @@ def test_alpha_equations_invert_the_bound():
     for p in (0.0, 0.15, 0.4):
         a = alpha_probabilistic(b_eps, H, q1, q2, e_s, p)
         assert b_eps * (1 - p) * H / (q2 * a + q1) == pytest.approx(e_s, rel=1e-12)
-    assert alpha_deterministic(b_eps, H, q1, q2, e_s) == alpha_probabilistic(b_eps, H, q1, q2, e_s, 0.0)
+    assert alpha_deterministic(b_eps, H, q1, q2, e_s) == alpha_probabilistic(
+        b_eps, H, q1, q2, e_s, 0.0
+    )
 
 
 @pytest.mark.parametrize("pi", [1.0, 1.2, -0.1, float("nan")])
@@ -95,8 +102,20 @@ def test_disturbance_floor_of_unstable_loop_is_infinite():
 
 
 def test_design_matches_spec_reference_numbers():
-    des = design_flfr([1, 1, 1, 1], [1, 0.88, 1, 1], 1, 0.08, 2.0, 3.0, 0.03, [0.0, 0.15, 0.2, 0.4],
-                      xdd_rel, 300.0, 1e-3, b_ext=2e-5)
+    des = design_flfr(
+        [1, 1, 1, 1],
+        [1, 0.88, 1, 1],
+        1,
+        0.08,
+        2.0,
+        3.0,
+        0.03,
+        [0.0, 0.15, 0.2, 0.4],
+        xdd_rel,
+        300.0,
+        1e-3,
+        b_ext=2e-5,
+    )
     assert des.verdict == "feasible"
     assert des.H == pytest.approx(3.003, abs=1.5e-3)
     assert des.H_nominal == pytest.approx(2.811, abs=1.5e-3)
@@ -110,13 +129,27 @@ def test_design_matches_spec_reference_numbers():
     assert des.delta_norm_reference == pytest.approx(0.067, abs=1e-3)
     assert np.all(des.eig_clp.real < 0) and np.all(np.abs(des.eig_clp.imag) < 1e-12)  # SPEC P4.6-6
     # H from the simulated convolution equals sup of the same response in the nominal case
-    nom = convolution_supremum(error_dynamics_matrix(2.0, 3.0), xdd_rel, 300.0, 1e-3, des.coefficients.f[:3])
+    nom = convolution_supremum(
+        error_dynamics_matrix(2.0, 3.0), xdd_rel, 300.0, 1e-3, des.coefficients.f[:3]
+    )
     assert des.H_nominal == pytest.approx(max(nom[0], nom[2]), rel=1e-12)
 
 
 def test_design_reports_infeasible_with_floor():
-    des = design_flfr([1, 1, 1, 1], [1, 0.88, 1, 1], 1, 0.08, 2.0, 3.0, 0.03, [0.0], xdd_rel, 20.0, 1e-2,
-                      b_ext=1.0)
+    des = design_flfr(
+        [1, 1, 1, 1],
+        [1, 0.88, 1, 1],
+        1,
+        0.08,
+        2.0,
+        3.0,
+        0.03,
+        [0.0],
+        xdd_rel,
+        20.0,
+        1e-2,
+        b_ext=1.0,
+    )
     assert des.verdict == "infeasible"
     assert "floor" in des.message and des.alpha[0.0] is None
     assert des.floor > 0.03
@@ -132,7 +165,9 @@ def test_sigma_max_agrees_with_python_control_frequency_response():
     for w in (0.01, 0.5, 1.0, 7.0):
         G = np.asarray(sys(1j * w))
         ref = np.linalg.svd(G, compute_uv=False)[0]
-        assert sigma_max_response(A, np.eye(4), A, np.zeros((4, 4)), w)[0] == pytest.approx(ref, rel=1e-12)
+        assert sigma_max_response(A, np.eye(4), A, np.zeros((4, 4)), w)[0] == pytest.approx(
+            ref, rel=1e-12
+        )
 
 
 def test_convolution_supremum_is_remembered_per_exact_input(monkeypatch):
@@ -144,13 +179,19 @@ def test_convolution_supremum_is_remembered_per_exact_input(monkeypatch):
     first = convolution_supremum(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))
     calls = []
     real = flfr.simulate_reduced_model
-    monkeypatch.setattr(flfr, "simulate_reduced_model", lambda *a, **k: calls.append(a) or real(*a, **k))
+    monkeypatch.setattr(
+        flfr, "simulate_reduced_model", lambda *a, **k: calls.append(a) or real(*a, **k)
+    )
     again = convolution_supremum(A.copy(), xdd_rel, 5.0, 1e-2, [1.0, 0.5, 0.25])
     np.testing.assert_array_equal(again, first)
     assert calls == []
     again[:] = -1.0
-    np.testing.assert_array_equal(convolution_supremum(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25)), first)
-    other = convolution_supremum(A + 1e-9, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))  # another matrix: simulated
+    np.testing.assert_array_equal(
+        convolution_supremum(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25)), first
+    )
+    other = convolution_supremum(
+        A + 1e-9, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25)
+    )  # another matrix: simulated
     assert len(calls) == 1 and not np.array_equal(other, first)
     _, peak = real(A, xdd_rel, 5.0, 1e-2, (1.0, 0.5, 0.25))
     np.testing.assert_array_equal(first, peak)  # what is remembered is the simulation's result

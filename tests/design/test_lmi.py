@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.design.lmi import DesignInfeasible, design_ilo_gains, ilo_lmi_residuals, rescale_design
+from formation_ftc.design.lmi import (
+    DesignInfeasible,
+    design_ilo_gains,
+    ilo_lmi_residuals,
+    rescale_design,
+)
 from formation_ftc.papers.gui2022 import published as pub
 
 A, B = cw_matrices(pub.N_MEAN_MOTION)
@@ -39,14 +44,18 @@ def test_homogeneity_rescaling_keeps_feasibility_and_L1(design):
     np.testing.assert_allclose(big.L1, design.L1, atol=1e-12)
     assert big.L2[0, 3] == pytest.approx(456.271 * design.L2[0, 3])
     assert big.residuals["max_eig_8"] < 0 and big.residuals["max_eig_disk"] < 0
-    assert big.residuals["max_eig_8"] == pytest.approx(456.271 * design.residuals["max_eig_8"], rel=1e-9)
+    assert big.residuals["max_eig_8"] == pytest.approx(
+        456.271 * design.residuals["max_eig_8"], rel=1e-9
+    )
 
 
 def test_printed_gains_facts():
     # SPEC P2.6 #2 / E002-06
     poles = np.sort(np.linalg.eigvals(A - pub.L1_PRINTED).real)
     np.testing.assert_allclose(poles, [-4.5471] * 5 + [-4.5470], atol=6e-5)
-    assert np.max(np.abs(np.linalg.eigvals(A - pub.L1_PRINTED) + 5)) == pytest.approx(0.453, abs=1e-3)
+    assert np.max(np.abs(np.linalg.eigvals(A - pub.L1_PRINTED) + 5)) == pytest.approx(
+        0.453, abs=1e-3
+    )
     P = np.diag([1, 1, 1, *np.diag(pub.L2_PRINTED[:, 3:])])
     r = ilo_lmi_residuals(A, C, B, P, P @ pub.L1_PRINTED, pub.L2_PRINTED)
     assert r["max_eig_8"] == pytest.approx(-9.09, abs=0.01)

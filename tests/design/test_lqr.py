@@ -11,8 +11,11 @@ from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.design.lqr import bryson_weights, care_relative_residual, cw_lqr, lqr
 
 N_7000 = math.sqrt(MU_EARTH / 7000e3**3)  # mean motion of a 7,000 km circular orbit [rad/s]
-DESIGNS = [(N_7000, 10.0, 1.0, 1.0), (N_7000, (10.0, 20.0, 40.0), (1.0, 0.5, 2.0), (1.0, 0.1, 0.3)),
-           (0.0, 5.0, 0.2, 0.05)]
+DESIGNS = [
+    (N_7000, 10.0, 1.0, 1.0),
+    (N_7000, (10.0, 20.0, 40.0), (1.0, 0.5, 2.0), (1.0, 0.1, 0.3)),
+    (0.0, 5.0, 0.2, 0.05),
+]
 
 
 def _double_integrator_closed_form(q1, q2, r):
@@ -45,7 +48,9 @@ def test_riccati_residual_and_hurwitz(n, pmax, vmax, amax):
     np.testing.assert_allclose(d.K, np.linalg.inv(d.R) @ B.T @ d.P, rtol=1e-12)
     eig = np.linalg.eigvals(A - B @ d.K)
     assert np.max(eig.real) < 0
-    np.testing.assert_allclose(np.sort_complex(eig), np.sort_complex(d.closed_loop_eigenvalues), rtol=1e-10)
+    np.testing.assert_allclose(
+        np.sort_complex(eig), np.sort_complex(d.closed_loop_eigenvalues), rtol=1e-10
+    )
 
 
 def test_bryson_weights():
@@ -54,7 +59,9 @@ def test_bryson_weights():
     np.testing.assert_allclose(R, [[0.25]])
 
 
-@pytest.mark.parametrize("q1, q2, r", [(1.0, 1.0, 1.0), (0.01, 1.0, 1.0), (3.0, 0.0, 0.2), (1e-4, 25.0, 400.0)])
+@pytest.mark.parametrize(
+    "q1, q2, r", [(1.0, 1.0, 1.0), (0.01, 1.0, 1.0), (3.0, 0.0, 0.2), (1e-4, 25.0, 400.0)]
+)
 def test_double_integrator_closed_form(q1, q2, r):
     P_exact, K_exact = _double_integrator_closed_form(q1, q2, r)
     d = lqr([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], np.diag([q1, q2]), [[r]])
@@ -65,11 +72,17 @@ def test_double_integrator_closed_form(q1, q2, r):
 def test_cw_lqr_at_zero_mean_motion_is_three_double_integrators():
     """n = 0: the CW model is three decoupled double integrators; with Bryson's weights per axis the
     gain of axis k is the closed form with q1 = 1/p_max^2, q2 = 1/v_max^2, r = 1/a_max^2."""
-    pmax, vmax, amax = np.array([10.0, 20.0, 40.0]), np.array([1.0, 0.5, 2.0]), np.array([1.0, 0.1, 0.3])
+    pmax, vmax, amax = (
+        np.array([10.0, 20.0, 40.0]),
+        np.array([1.0, 0.5, 2.0]),
+        np.array([1.0, 0.1, 0.3]),
+    )
     d = cw_lqr(0.0, pmax, vmax, amax)
     K = np.zeros((3, 6))
     for k in range(3):
-        _, (kp, kd) = _double_integrator_closed_form(1 / pmax[k] ** 2, 1 / vmax[k] ** 2, 1 / amax[k] ** 2)
+        _, (kp, kd) = _double_integrator_closed_form(
+            1 / pmax[k] ** 2, 1 / vmax[k] ** 2, 1 / amax[k] ** 2
+        )
         K[k, k], K[k, 3 + k] = kp, kd
     np.testing.assert_allclose(d.K, K, rtol=1e-10, atol=1e-12)
 
@@ -81,17 +94,30 @@ def test_gain_equals_python_control(n, pmax, vmax, amax):
     K, S, E = control.lqr(d.A, d.B, d.Q, d.R)
     np.testing.assert_allclose(d.K, np.asarray(K), rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(d.P, np.asarray(S), rtol=1e-8, atol=1e-12)
-    np.testing.assert_allclose(np.sort_complex(d.closed_loop_eigenvalues), np.sort_complex(np.asarray(E)), rtol=1e-8)
+    np.testing.assert_allclose(
+        np.sort_complex(d.closed_loop_eigenvalues), np.sort_complex(np.asarray(E)), rtol=1e-8
+    )
 
 
-@pytest.mark.parametrize("kwargs, needle", [
-    (dict(max_position_error=0.0), "max_position_error"),
-    (dict(max_velocity_error=[1.0, 2.0]), "max_velocity_error"),
-    (dict(max_acceleration=float("inf")), "max_acceleration"),
-    (dict(mean_motion=-1e-3), "mean_motion"),
-])
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        (dict(max_position_error=0.0), "max_position_error"),
+        (dict(max_velocity_error=[1.0, 2.0]), "max_velocity_error"),
+        (dict(max_acceleration=float("inf")), "max_acceleration"),
+        (dict(mean_motion=-1e-3), "mean_motion"),
+    ],
+)
 def test_bad_input(kwargs, needle):
-    args = dict(mean_motion=N_7000, max_position_error=10.0, max_velocity_error=1.0, max_acceleration=1.0) | kwargs
+    args = (
+        dict(
+            mean_motion=N_7000,
+            max_position_error=10.0,
+            max_velocity_error=1.0,
+            max_acceleration=1.0,
+        )
+        | kwargs
+    )
     with pytest.raises(ValueError, match=needle):
         cw_lqr(**args)
 
@@ -100,7 +126,9 @@ def test_cw_lqr_solves_once_per_design_and_shares_read_only_arrays():
     from formation_ftc.design.lqr import cw_lqr
 
     a = cw_lqr(0.0011, 1.0, [0.1, 0.1, 0.1], 0.01)
-    b = cw_lqr(0.0011, [1.0, 1.0, 1.0], 0.1, [0.01, 0.01, 0.01])  # the same design written another way
+    b = cw_lqr(
+        0.0011, [1.0, 1.0, 1.0], 0.1, [0.01, 0.01, 0.01]
+    )  # the same design written another way
     assert b is a
     assert not a.K.flags.writeable and not a.P.flags.writeable
     c = cw_lqr(0.0011, 2.0, 0.1, 0.01)

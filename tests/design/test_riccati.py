@@ -24,7 +24,9 @@ def test_gui2022_P1_and_K_from_Q_4e5():
     # printed to 4 decimals -> |error| <= 5e-5 (reference 3.15e-5, E002-05)
     assert np.max(np.abs(sol.P - pub.P1_PRINTED)) <= 5e-5
     assert sol.residual <= 1e-12
-    assert care_residual(sol.P, A, B, pub.CARE_Q_SCALE * np.eye(6), np.eye(3)) == pytest.approx(sol.residual)
+    assert care_residual(sol.P, A, B, pub.CARE_Q_SCALE * np.eye(6), np.eye(3)) == pytest.approx(
+        sol.residual
+    )
     np.testing.assert_array_equal(np.round(B.T @ sol.P, 4) + 0.0, pub.K_PRINTED)
 
 

@@ -26,21 +26,28 @@ def grid_norm(A, B, C, D, w_min=1e-4, w_max=1e3, n=4000):
     i = int(np.argmax(s))
     best = s[i]
     if 0 < i < w.size - 1:
-        res = scipy.optimize.minimize_scalar(lambda lw: -_sigma(A, B, C, D, 10.0**lw),
-                                             bounds=(np.log10(max(w[i - 1], 1e-12)), np.log10(w[i + 1])),
-                                             method="bounded", options={"xatol": 1e-12})
+        res = scipy.optimize.minimize_scalar(
+            lambda lw: -_sigma(A, B, C, D, 10.0**lw),
+            bounds=(np.log10(max(w[i - 1], 1e-12)), np.log10(w[i + 1])),
+            method="bounded",
+            options={"xatol": 1e-12},
+        )
         best = max(best, -res.fun)
     return best
 
 
 def second_order(wn, zeta):
-    A = np.array([[0.0, 1.0], [-wn**2, -2 * zeta * wn]])
+    A = np.array([[0.0, 1.0], [-(wn**2), -2 * zeta * wn]])
     return A, np.array([[0.0], [wn**2]]), np.array([[1.0, 0.0]]), np.zeros((1, 1))
 
 
 def test_first_order_dc_gain_and_feedthrough():
     r = hinf_norm([[-4.0]], [[1.0]], [[1.0]])
-    assert r.certified and 0.25 <= r.value <= 0.25 * (1 + 2e-6) and r.lower == pytest.approx(0.25, rel=1e-14)
+    assert (
+        r.certified
+        and 0.25 <= r.value <= 0.25 * (1 + 2e-6)
+        and r.lower == pytest.approx(0.25, rel=1e-14)
+    )
     r = hinf_norm([[-4.0]], [[1.0]], [[1.0]], [[-3.0]])  # G(0) = 0.25 - 3, |G| -> 3 at infinity
     assert 2.75 <= r.value <= 3 * (1 + 2e-6) and r.lower >= 2.75
 
@@ -103,4 +110,6 @@ def test_random_mimo_systems_agree_with_the_grid_cross_check():
         g = grid_norm(A, B, C, D, 1e-3, 1e3, 3000)
         assert r.certified
         assert g <= r.value * (1 + 1e-12)  # the certified value is an upper bound
-        assert r.value <= g * (1 + 1e-5)  # and tight (the grid is fine for these well-damped systems)
+        assert r.value <= g * (
+            1 + 1e-5
+        )  # and tight (the grid is fine for these well-damped systems)

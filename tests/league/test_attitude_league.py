@@ -52,7 +52,9 @@ def test_every_cell_validates_with_the_battery_and_level(spec, cells):
             act = c.raw["actuator"]
             assert act["type"] == "fault-battery" and act["kind"] == battery[c.case].kind
             assert act.get("saturation") == (0.1 if c.level == "limited" else None)
-            if c.case == "bias":  # torque magnitudes of the battery: 0.5 N m, or half the 0.1 N m limit
+            if (
+                c.case == "bias"
+            ):  # torque magnitudes of the battery: 0.5 N m, or half the 0.1 N m limit
                 assert act["bias"] == pytest.approx(0.05 if c.level == "limited" else 0.5)
             assert act.get("euler_allocation", False) is (name == "mehrabian")
             assert c.raw["plant"] == spec.truth and c.raw["simulation"]["horizon"] == 300.0
@@ -67,7 +69,9 @@ def test_campaign_samples_the_initial_attitude_and_the_onset(spec, cells, tmp_pa
     camp = _campaign(spec, "pd", [tmp_path / "a.toml"], 10, [0], networked=False)
     sample = camp["sample"]
     keys = {f"plant.initial_attitude_deg.{i}.{k}" for i in range(4) for k in range(3)}
-    assert keys <= set(sample) and all(sample[k]["std"] == 10.0 and sample[k]["mean"] == 0.0 for k in keys)
+    assert keys <= set(sample) and all(
+        sample[k]["std"] == 10.0 and sample[k]["mean"] == 0.0 for k in keys
+    )
     assert sample["actuator.onset"] == {"dist": "uniform", "low": 100.0, "high": 150.0}
     # the sampled paths set the plant's initial Euler angles of a cell (what the campaign does per run)
     raw = copy.deepcopy(cells["yang2013"][0].raw)
@@ -94,7 +98,9 @@ def test_unknown_method_scenario_file_is_rejected(tmp_path):
     path, raw = _copy_league(tmp_path, "attitude")
     raw["methods"].append({"name": "lqg", "scenario": "attitude/lqg.toml"})
     path.write_text(tomli_w.dumps(raw))
-    with pytest.raises(LeagueError, match=r"methods\[lqg\]\.scenario = 'attitude/lqg\.toml': no such file"):
+    with pytest.raises(
+        LeagueError, match=r"methods\[lqg\]\.scenario = 'attitude/lqg\.toml': no such file"
+    ):
         load_league(path)
 
 
@@ -103,7 +109,10 @@ def test_attitude_law_on_the_translational_truth_is_rejected(tmp_path):
     raw["methods"].append({"name": "attitude-pd", "scenario": "attitude/pd.toml"})
     path.write_text(tomli_w.dumps(raw))
     spec = load_league(path)
-    with pytest.raises(LeagueError, match="(?s)method attitude-pd cannot run cell none/unsaturated of league "
-                                          "translational: .*controller attitude-pd converts a quaternion attitude, "
-                                          "but plant orbital-truth has none"):
+    with pytest.raises(
+        LeagueError,
+        match="(?s)method attitude-pd cannot run cell none/unsaturated of league "
+        "translational: .*controller attitude-pd converts a quaternion attitude, "
+        "but plant orbital-truth has none",
+    ):
         plan_cells(spec, ["attitude-pd"])

@@ -29,7 +29,9 @@ def test_v1_loads_with_version_hash_and_every_kind():
     assert set(c.kind for c in b) == set(FAULT_KINDS) | set(COMMUNICATION_KINDS)
     assert len(set(b.names)) == len(b) == 9
     loe, deg, inter = b["loe-50"], b["degrading"], b["intermittent"]
-    assert loe.effectiveness == 0.5 and loe.spacecraft == 2 and loe.axis == 0 and loe.onset == 1000.0
+    assert (
+        loe.effectiveness == 0.5 and loe.spacecraft == 2 and loe.axis == 0 and loe.onset == 1000.0
+    )
     assert deg.rate * 1000.0 == pytest.approx(1.0 - deg.min_effectiveness)  # 1 -> 0.2 over 1000 s
     assert (inter.period, inter.duty) == (60.0, 0.5)
     assert b["link-loss"].lost_links == ((3, 4),)
@@ -49,21 +51,46 @@ def _write(tmp_path: Path, raw: dict) -> Path:
 
 
 def _raw(*cases, defaults=None):
-    return {"battery": {"name": "test", "version": 2}, "defaults": defaults or {}, "cases": list(cases)}
+    return {
+        "battery": {"name": "test", "version": 2},
+        "defaults": defaults or {},
+        "cases": list(cases),
+    }
 
 
-@pytest.mark.parametrize("raw, needle", [
-    (_raw({"name": "a", "kind": "jammed"}), "cases[0] (a).kind: Value error, kind = 'jammed' is not a fault kind "
-                                            "(allowed: none, loss_of_effectiveness"),
-    (_raw({"name": "a", "kind": "loss_of_effectiveness"}), "kind loss_of_effectiveness needs effectiveness"),
-    (_raw({"name": "a", "kind": "bias", "bias_force": 1.0}), "needs bias_fraction, bias_torque"),
-    (_raw({"name": "a", "kind": "none"}, {"name": "a", "kind": "outage"}), "duplicate case names a"),
-    (_raw({"name": "a", "kind": "none", "magnitude": 1.0}), "cases[0] (a).magnitude"),
-    (_raw({"name": "a", "kind": "none"}, defaults={"sc": 1}), "defaults: sc cannot be defaults"),
-    (_raw({"name": "a", "kind": "stuck", "axis": 3}), "cases[0] (a).axis"),
-    (_raw({"name": "a", "kind": "link_loss", "lost_links": [[2, 2]]}), "receiver != sender"),
-    ({"battery": {"name": "t", "version": 0}, "cases": [{"name": "a", "kind": "none"}]}, "battery.version"),
-])
+@pytest.mark.parametrize(
+    "raw, needle",
+    [
+        (
+            _raw({"name": "a", "kind": "jammed"}),
+            "cases[0] (a).kind: Value error, kind = 'jammed' is not a fault kind "
+            "(allowed: none, loss_of_effectiveness",
+        ),
+        (
+            _raw({"name": "a", "kind": "loss_of_effectiveness"}),
+            "kind loss_of_effectiveness needs effectiveness",
+        ),
+        (
+            _raw({"name": "a", "kind": "bias", "bias_force": 1.0}),
+            "needs bias_fraction, bias_torque",
+        ),
+        (
+            _raw({"name": "a", "kind": "none"}, {"name": "a", "kind": "outage"}),
+            "duplicate case names a",
+        ),
+        (_raw({"name": "a", "kind": "none", "magnitude": 1.0}), "cases[0] (a).magnitude"),
+        (
+            _raw({"name": "a", "kind": "none"}, defaults={"sc": 1}),
+            "defaults: sc cannot be defaults",
+        ),
+        (_raw({"name": "a", "kind": "stuck", "axis": 3}), "cases[0] (a).axis"),
+        (_raw({"name": "a", "kind": "link_loss", "lost_links": [[2, 2]]}), "receiver != sender"),
+        (
+            {"battery": {"name": "t", "version": 0}, "cases": [{"name": "a", "kind": "none"}]},
+            "battery.version",
+        ),
+    ],
+)
 def test_bad_battery_files_are_rejected_naming_the_field(tmp_path, raw, needle):
     with pytest.raises(BatteryError) as err:
         load_battery(_write(tmp_path, raw))
@@ -78,8 +105,16 @@ def test_not_toml(tmp_path):
 
 
 def test_defaults_apply_and_cases_override(tmp_path):
-    b = load_battery(_write(tmp_path, _raw({"name": "a", "kind": "outage"}, {"name": "b", "kind": "outage", "axis": 2},
-                                          defaults={"spacecraft": 3, "axis": 1, "onset": 5.0})))
+    b = load_battery(
+        _write(
+            tmp_path,
+            _raw(
+                {"name": "a", "kind": "outage"},
+                {"name": "b", "kind": "outage", "axis": 2},
+                defaults={"spacecraft": 3, "axis": 1, "onset": 5.0},
+            ),
+        )
+    )
     assert (b["a"].spacecraft, b["a"].axis, b["a"].onset) == (3, 1, 5.0)
     assert b["b"].axis == 2 and b.version == 2
 
@@ -105,10 +140,16 @@ def test_actuator_fields():
 def test_network_fields_and_applicability():
     b = load_battery("v1")
     assert b["link-loss"].network_fields()["lost_links"] == [[3, 4]]
-    assert b["loe-50"].network_fields() == {"type": "graph-link-loss", "lost_links": [], "onset": 1000.0}
+    assert b["loe-50"].network_fields() == {
+        "type": "graph-link-loss",
+        "lost_links": [],
+        "onset": 1000.0,
+    }
     d = b["larger-delays"].network_fields(delayed=True)
     assert d["delay_scale"] == 3.0 and d["max_delay_scale"] == 3.0
-    assert b["link-loss"].network_fields(delayed=True)["max_delay_scale"] == 3.0  # one buffer for all cases
+    assert (
+        b["link-loss"].network_fields(delayed=True)["max_delay_scale"] == 3.0
+    )  # one buffer for all cases
     with pytest.raises(BatteryError, match="larger_delays needs a network with delays"):
         b["larger-delays"].network_fields(delayed=False)
     assert not b["link-loss"].applies_to(network=False)
@@ -117,8 +158,10 @@ def test_network_fields_and_applicability():
     assert b["outage"].applies_to(network=False)
 
 
-@pytest.mark.parametrize("scenario, delayed", [("compose-li2020-on-cw", False),
-                                               ("compose-li2020-delays-on-yang2013", True)])
+@pytest.mark.parametrize(
+    "scenario, delayed",
+    [("compose-li2020-on-cw", False), ("compose-li2020-delays-on-yang2013", True)],
+)
 def test_every_case_builds_one_program_structure(scenario, delayed):
     """Each case's fields make a valid composed scenario, and all cases of one method (both actuator
     levels) have one compile key: the league runs them in one compiled program."""
@@ -131,7 +174,10 @@ def test_every_case_builds_one_program_structure(scenario, delayed):
         if not case.applies_to(network=True, delayed=delayed):
             continue
         for sat in (None, 0.2):
-            raw = dict(base, actuator={"type": "fault-battery", **case.actuator_fields(saturation=sat)},
-                       network={**base["network"], **case.network_fields(delayed=delayed)})
+            raw = dict(
+                base,
+                actuator={"type": "fault-battery", **case.actuator_fields(saturation=sat)},
+                network={**base["network"], **case.network_fields(delayed=delayed)},
+            )
             keys.add(structure_key(make_loop(ftc.load_scenario(raw))))
     assert len(keys) == 1

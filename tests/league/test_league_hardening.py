@@ -27,8 +27,19 @@ from formation_ftc.league.runner import LEAGUE_FILE, load_league_results, run_le
 
 
 def _run(league: Path, out: Path | str, *extra: str) -> list[str]:
-    return ["league", "run", str(league), "--out", str(out), "--methods", "lqr", "--no-plots", "--workers", "1",
-            *extra]
+    return [
+        "league",
+        "run",
+        str(league),
+        "--out",
+        str(out),
+        "--methods",
+        "lqr",
+        "--no-plots",
+        "--workers",
+        "1",
+        *extra,
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -42,21 +53,36 @@ def reference(tmp_path_factory, tiny_league):
 
 
 def _sorted(runs: pd.DataFrame) -> pd.DataFrame:
-    cols = ["method", "run_id", "status"] + sorted(c for c in runs.columns if c.startswith(("metric:", "input:")))
+    cols = ["method", "run_id", "status"] + sorted(
+        c for c in runs.columns if c.startswith(("metric:", "input:"))
+    )
     return runs[cols].sort_values(["method", "run_id"]).reset_index(drop=True)
 
 
 # ------------------------------------------------------------------------------------------- budgets
-@pytest.mark.parametrize("extra, fragment", [
-    (["--seeds", "1000000000"], "allowed: --seeds 1 to 10,000,000"),
-    (["--seeds", "10000001"], "allowed: --seeds 1 to 10,000,000"),
-    (["--seeds", "1000", "--max-campaign-steps", "1e6"], "allowed: --seeds 1 to 238 "),
-    (["--seeds", "1", "--max-campaign-steps", "1000"], "even 1 seed per cell"),
-    (["--seeds", "2", "--max-run-steps", "100"], "--max-run-steps"),
-    (["--seeds", "2", "--max-memory", "1kB"], "lower league.chunk_size"),
-], ids=["1e9-seeds", "over-max-runs", "run-steps-budget", "budget-below-one-seed", "steps-per-run", "memory"])
+@pytest.mark.parametrize(
+    "extra, fragment",
+    [
+        (["--seeds", "1000000000"], "allowed: --seeds 1 to 10,000,000"),
+        (["--seeds", "10000001"], "allowed: --seeds 1 to 10,000,000"),
+        (["--seeds", "1000", "--max-campaign-steps", "1e6"], "allowed: --seeds 1 to 238 "),
+        (["--seeds", "1", "--max-campaign-steps", "1000"], "even 1 seed per cell"),
+        (["--seeds", "2", "--max-run-steps", "100"], "--max-run-steps"),
+        (["--seeds", "2", "--max-memory", "1kB"], "lower league.chunk_size"),
+    ],
+    ids=[
+        "1e9-seeds",
+        "over-max-runs",
+        "run-steps-budget",
+        "budget-below-one-seed",
+        "steps-per-run",
+        "memory",
+    ],
+)
 def test_league_over_budget_exits_2_before_writing(tmp_path, tiny_league, capsys, extra, fragment):
-    league = tiny_league(tmp_path, methods=("lqr",))  # 14 cells of 300 steps: 4,200 run-steps per seed
+    league = tiny_league(
+        tmp_path, methods=("lqr",)
+    )  # 14 cells of 300 steps: 4,200 run-steps per seed
     out = tmp_path / "out"
     assert main(_run(league, out, *extra)) == 2
     err = capsys.readouterr().err
@@ -73,16 +99,19 @@ def _campaign_dir(d: Path) -> Path:
     return d
 
 
-@pytest.mark.parametrize("kind, fragment", [
-    ("file", "exists and is a file"),
-    ("dev-null", "exists and is not a directory"),
-    ("non-json", "league.json is damaged or unreadable"),
-    ("truncated", "league.json is damaged or unreadable"),
-    ("not-a-league", "league.json is not a league description"),
-    ("campaign", "is a campaign directory"),
-    ("inside-campaign", "which is a campaign directory"),
-    ("foreign", "is not empty and holds no league.json"),
-])
+@pytest.mark.parametrize(
+    "kind, fragment",
+    [
+        ("file", "exists and is a file"),
+        ("dev-null", "exists and is not a directory"),
+        ("non-json", "league.json is damaged or unreadable"),
+        ("truncated", "league.json is damaged or unreadable"),
+        ("not-a-league", "league.json is not a league description"),
+        ("campaign", "is a campaign directory"),
+        ("inside-campaign", "which is a campaign directory"),
+        ("foreign", "is not empty and holds no league.json"),
+    ],
+)
 def test_bad_out_exits_2_naming_out(tmp_path, tiny_league, capsys, kind, fragment):
     league = tiny_league(tmp_path, methods=("lqr",))
     out = tmp_path / "out"
@@ -92,8 +121,11 @@ def test_bad_out_exits_2_naming_out(tmp_path, tiny_league, capsys, kind, fragmen
         out = Path("/dev/null")
     elif kind in ("non-json", "truncated", "not-a-league"):
         out.mkdir()
-        text = {"non-json": "not json at all", "truncated": '{"name": "translational-tiny", "hash": "ab',
-                "not-a-league": '["a", "list"]'}[kind]
+        text = {
+            "non-json": "not json at all",
+            "truncated": '{"name": "translational-tiny", "hash": "ab',
+            "not-a-league": '["a", "list"]',
+        }[kind]
         (out / LEAGUE_FILE).write_text(text)
     elif kind == "campaign":
         _campaign_dir(out)
@@ -102,13 +134,19 @@ def test_bad_out_exits_2_naming_out(tmp_path, tiny_league, capsys, kind, fragmen
     else:
         out.mkdir()
         (out / "notes.txt").write_text("mine")
-    before = sorted((p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
-                    for p in tmp_path.rglob("*"))
+    before = sorted(
+        (p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
+        for p in tmp_path.rglob("*")
+    )
     assert main(_run(league, out, "--seeds", "1")) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"error: --out {out}: ") and fragment in err and "Traceback" not in err, err
-    after = sorted((p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
-                   for p in tmp_path.rglob("*"))
+    assert err.startswith(f"error: --out {out}: ") and fragment in err and "Traceback" not in err, (
+        err
+    )
+    after = sorted(
+        (p.relative_to(tmp_path).as_posix(), p.read_bytes() if p.is_file() else b"")
+        for p in tmp_path.rglob("*")
+    )
     assert after == before  # nothing written, nothing changed
 
 
@@ -135,16 +173,23 @@ def test_league_json_and_cells_are_written_atomically(tmp_path, tiny_league, mon
         def fail(fd: int) -> None:
             calls.append(fd)
             if len(calls) >= n:
-                raise OSError(28, "No space left on device")  # data written, not yet renamed into place
+                raise OSError(
+                    28, "No space left on device"
+                )  # data written, not yet renamed into place
             fsync(fd)
+
         return fail
 
     monkeypatch.setattr(os, "fsync", fsync_failing_at(1))  # league.json fails
-    with pytest.raises(LeagueError, match=r"--out .*: cannot write the league there \(No space left on device\)"):
+    with pytest.raises(
+        LeagueError, match=r"--out .*: cannot write the league there \(No space left on device\)"
+    ):
         run_league(league, out, seeds=1)
     assert (out / LEAGUE_FILE).read_text() == old  # the previous league.json, whole
     calls.clear()
-    monkeypatch.setattr(os, "fsync", fsync_failing_at(2))  # league.json written, then the edited cell fails
+    monkeypatch.setattr(
+        os, "fsync", fsync_failing_at(2)
+    )  # league.json written, then the edited cell fails
     with pytest.raises(LeagueError, match="No space left on device"):
         run_league(league, out, seeds=1)
     assert json.loads((out / LEAGUE_FILE).read_text())["hash"] == json.loads(old)["hash"]
@@ -178,11 +223,15 @@ def test_an_interrupted_league_resumes_to_the_same_numbers(tmp_path, reference, 
 
     outcome = run_league(league, out, seeds=2, log=broken_stderr, progress=True)
     assert outcome.n_runs == 28
-    assert {p.name: p.stat().st_mtime_ns for p in chunks.glob("chunk-*.parquet") if p.name in kept} == kept
+    assert {
+        p.name: p.stat().st_mtime_ns for p in chunks.glob("chunk-*.parquet") if p.name in kept
+    } == kept
     pd.testing.assert_frame_equal(_sorted(load_league_results(out)[1]), expected)
 
 
-def test_a_resume_with_other_methods_keeps_the_earlier_ones_listed(tmp_path, tiny_league, monkeypatch):
+def test_a_resume_with_other_methods_keeps_the_earlier_ones_listed(
+    tmp_path, tiny_league, monkeypatch
+):
     league = tiny_league(tmp_path)  # sir-ftc and lqr
     out = tmp_path / "out"
     monkeypatch.setattr(runner, "_check_batch_memory", lambda *args: None)
@@ -190,7 +239,10 @@ def test_a_resume_with_other_methods_keeps_the_earlier_ones_listed(tmp_path, tin
     for method in ("sir-ftc", "lqr"):
         with pytest.raises(KeyboardInterrupt):
             run_league(league, out, seeds=1, methods=[method])
-    assert [m["name"] for m in json.loads((out / LEAGUE_FILE).read_text())["methods"]] == ["sir-ftc", "lqr"]
+    assert [m["name"] for m in json.loads((out / LEAGUE_FILE).read_text())["methods"]] == [
+        "sir-ftc",
+        "lqr",
+    ]
 
 
 # -------------------------------------------------------------------------------------------- workers
@@ -228,9 +280,28 @@ def test_method_workers_die_with_a_killed_league(tmp_path, tiny_league):
         pytest.skip("fewer than 2 cores or too little memory for 2 method processes")
     league = tiny_league(tmp_path)  # sir-ftc and lqr
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "formation_ftc", "league", "run", str(league), "--out", str(out),
-                             "--seeds", "1", "--workers", "2", "--no-progress", "--no-plots", "--max-memory", "0"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "formation_ftc",
+            "league",
+            "run",
+            str(league),
+            "--out",
+            str(out),
+            "--seeds",
+            "1",
+            "--workers",
+            "2",
+            "--no-progress",
+            "--no-plots",
+            "--max-memory",
+            "0",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     children: set[int] = set()
     try:
         deadline = time.monotonic() + 90
@@ -248,7 +319,9 @@ def test_method_workers_die_with_a_killed_league(tmp_path, tiny_league):
         deadline = time.monotonic() + 10
         while any(_alive(c) for c in children) and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert not [c for c in children if _alive(c)], "worker processes outlived their killed league"
+        assert not [c for c in children if _alive(c)], (
+            "worker processes outlived their killed league"
+        )
     finally:
         proc.kill()
         proc.wait()
@@ -264,15 +337,23 @@ def test_cap_workers_warns_when_it_lowers_the_count(monkeypatch, capsys):
     assert capsys.readouterr().err == ""
     assert executors.cap_workers(8, per_worker_bytes=1_200_000_000, what="--workers") == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("warning: --workers: 8 worker processes asked for, using 2 (4 ")
+    assert err.count("\n") == 1 and err.startswith(
+        "warning: --workers: 8 worker processes asked for, using 2 (4 "
+    )
     assert "2.79 GiB of memory available" in err
-    monkeypatch.setattr(executors, "available_memory", lambda: None)  # unknown: capped by the cores only
+    monkeypatch.setattr(
+        executors, "available_memory", lambda: None
+    )  # unknown: capped by the cores only
     assert executors.cap_workers(8, per_worker_bytes=1_200_000_000, what="--workers") == 4
     monkeypatch.setattr(executors, "available_memory", lambda: 10)
-    assert executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1  # at least one
+    assert (
+        executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1
+    )  # at least one
     monkeypatch.setattr(sys, "stderr", open(os.devnull, "w"))  # noqa: SIM115
     sys.stderr.close()
-    assert executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1  # closed stderr
+    assert (
+        executors.cap_workers(3, per_worker_bytes=1_200_000_000, what="--workers") == 1
+    )  # closed stderr
 
 
 # ------------------------------------------------------------------------------------ progress, stderr
@@ -302,8 +383,14 @@ def test_method_progress_lines_follow_the_stored_chunks(tmp_path):
             raise OSError(28, "No space left on device")
 
     for enabled in (True, False):  # a full stderr or --no-progress: no bar, no error
-        with runner._MethodProgress(watched, 5, 2, enabled=enabled,
-                                    console=Console(file=Full(), force_terminal=True), interval=0.01):
+        with runner._MethodProgress(
+            watched,
+            5,
+            2,
+            enabled=enabled,
+            console=Console(file=Full(), force_terminal=True),
+            interval=0.01,
+        ):
             time.sleep(0.05)
     not_a_tty = io.StringIO()
     with runner._MethodProgress(watched, 5, 2, console=Console(file=not_a_tty), interval=0.01):

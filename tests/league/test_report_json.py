@@ -18,19 +18,52 @@ from formation_ftc.parquet_units import write_parquet
 def test_league_report_json(tmp_path, monkeypatch, capsys):
     from formation_ftc.league import report
 
-    cells = pd.DataFrame({"method": ["lqr"], "level": ["limited"], "case": ["bias"], "runs": [2], "failed": [0],
-                          "pass_rate": [0.5], "rms_shape_error_median": [1.25], "settle_time_median": [math.nan]})
-    board = {"league": "tiny", "seeds": np.int64(2), "quick": np.bool_(False),
-             "requirement": {"metric": "rms_shape_error", "max": 5.0, "units": "m"},
-             "ranking": {"limited": [{"method": "lqr", "rank": 1, "pass_rate": np.float64(0.5),
-                                      "rms_shape_error_median": np.float64(1.25), "failed": 0, "runs": 2}]},
-             "cells": cells.to_dict("records")}
+    cells = pd.DataFrame(
+        {
+            "method": ["lqr"],
+            "level": ["limited"],
+            "case": ["bias"],
+            "runs": [2],
+            "failed": [0],
+            "pass_rate": [0.5],
+            "rms_shape_error_median": [1.25],
+            "settle_time_median": [math.nan],
+        }
+    )
+    board = {
+        "league": "tiny",
+        "seeds": np.int64(2),
+        "quick": np.bool_(False),
+        "requirement": {"metric": "rms_shape_error", "max": 5.0, "units": "m"},
+        "ranking": {
+            "limited": [
+                {
+                    "method": "lqr",
+                    "rank": 1,
+                    "pass_rate": np.float64(0.5),
+                    "rms_shape_error_median": np.float64(1.25),
+                    "failed": 0,
+                    "runs": 2,
+                }
+            ]
+        },
+        "cells": cells.to_dict("records"),
+    }
 
     def fake_write_leaderboard(league_dir, plots=True):
         out = tmp_path / "leaderboard"
         out.mkdir(exist_ok=True)
-        write_parquet(cells, out / "cells.parquet", {"runs": "1", "failed": "1", "pass_rate": "1",
-                                                     "rms_shape_error_median": "m", "settle_time_median": "s"})
+        write_parquet(
+            cells,
+            out / "cells.parquet",
+            {
+                "runs": "1",
+                "failed": "1",
+                "pass_rate": "1",
+                "rms_shape_error_median": "m",
+                "settle_time_median": "s",
+            },
+        )
         return board
 
     monkeypatch.setattr(report, "write_leaderboard", fake_write_leaderboard)

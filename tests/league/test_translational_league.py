@@ -15,7 +15,12 @@ import pytest
 import tomli_w
 
 from formation_ftc.league.battery import load_battery
-from formation_ftc.league.definition import LeagueError, builtin_leagues, load_league, method_scenario
+from formation_ftc.league.definition import (
+    LeagueError,
+    builtin_leagues,
+    load_league,
+    method_scenario,
+)
 from formation_ftc.league.report import ranking, winners, write_leaderboard
 from formation_ftc.league.runner import plan_cells, run_league
 from formation_ftc.parquet_units import UNKNOWN, read_units
@@ -25,15 +30,25 @@ DATA = Path(builtin_leagues()["translational"]).parent
 
 def test_builtin_league_loads_and_every_cell_validates():
     spec = load_league("translational")
-    assert {m.name for m in spec.methods} >= {"li2020-thm1", "li2020-thm2", "sir-ftc", "gui2022-lof2tc",
-                                               "gui2022-cof2tc", "azizi2009", "yang2013", "lqr"}
+    assert {m.name for m in spec.methods} >= {
+        "li2020-thm1",
+        "li2020-thm2",
+        "sir-ftc",
+        "gui2022-lof2tc",
+        "gui2022-cof2tc",
+        "azizi2009",
+        "yang2013",
+        "lqr",
+    }
     cells = plan_cells(spec)
     battery = load_battery(spec.league.battery)
     n_levels = len(spec.levels)
     actuator_cases = [c for c in battery.cases if not c.communication]
     for cs in cells.values():
         # every actuator case at every level, for every method; communication cases only with a network
-        assert {(c.case, c.level) for c in cs} >= {(c.name, lv.name) for c in actuator_cases for lv in spec.levels}
+        assert {(c.case, c.level) for c in cs} >= {
+            (c.name, lv.name) for c in actuator_cases for lv in spec.levels
+        }
         assert len(cs) % n_levels == 0
     assert any(c.case == "link-loss" for c in cells["li2020-thm1"])
     assert not any(c.case == "link-loss" for c in cells["sir-ftc"])
@@ -46,14 +61,21 @@ def test_every_method_gets_the_same_truth_faults_and_scores():
     battery = load_battery(spec.league.battery)
     case = battery["bias"]
     level = spec.levels[1]
-    raws = [method_scenario(spec, m, level, case.actuator_fields(saturation=level.saturation)) for m in spec.methods]
+    raws = [
+        method_scenario(spec, m, level, case.actuator_fields(saturation=level.saturation))
+        for m in spec.methods
+    ]
     for raw in raws:
         assert raw["plant"] == raws[0]["plant"]
-        assert raw["actuator"]["kind"] == "bias" and raw["actuator"]["saturation"] == level.saturation
+        assert (
+            raw["actuator"]["kind"] == "bias" and raw["actuator"]["saturation"] == level.saturation
+        )
         assert raw["actuator"]["bias"] == pytest.approx(0.5 * level.saturation)  # half the limit
         assert raw["metrics"] == raws[0]["metrics"] and raw["evaluations"] == raws[0]["evaluations"]
         assert raw["simulation"]["horizon"] == spec.league.horizon
-    assert len({r["controller"]["type"] for r in raws}) == len(raws) - 1  # li2020 Thm 1 and Thm 2 share a law
+    assert (
+        len({r["controller"]["type"] for r in raws}) == len(raws) - 1
+    )  # li2020 Thm 1 and Thm 2 share a law
 
 
 def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_league):
@@ -64,11 +86,22 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
     n_cells = sum(len(c) for c in plan_cells(spec).values())
     assert outcome.n_runs == 2 * n_cells
     meta = json.loads((out / "league.json").read_text())
-    assert meta["battery"]["name"] == "v1" and meta["seeds"] == 2 and "git_commit" in json.dumps(meta["provenance"])
+    assert (
+        meta["battery"]["name"] == "v1"
+        and meta["seeds"] == 2
+        and "git_commit" in json.dumps(meta["provenance"])
+    )
     board = write_leaderboard(out)
     lb = out / "leaderboard"
-    for f in ("index.html", "leaderboard.json", "leaderboard.md", "cells.parquet", "runs.parquet",
-              "pareto-limited.png", "trajectories.png"):
+    for f in (
+        "index.html",
+        "leaderboard.json",
+        "leaderboard.md",
+        "cells.parquet",
+        "runs.parquet",
+        "pareto-limited.png",
+        "trajectories.png",
+    ):
         assert (lb / f).is_file(), f
     runs = pd.read_parquet(lb / "runs.parquet")
     assert len(runs) == outcome.n_runs and set(runs["method"]) == {"sir-ftc", "lqr"}
@@ -86,7 +119,11 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
         if len(ok):
             assert c[f"{req['metric']}_median"] == pytest.approx(np.median(ok))
     # units on every numeric column of every Parquet file (league tables and the campaign chunks)
-    for table in [lb / "cells.parquet", lb / "runs.parquet", *sorted(out.glob("*/campaign/chunks/*.parquet"))]:
+    for table in [
+        lb / "cells.parquet",
+        lb / "runs.parquet",
+        *sorted(out.glob("*/campaign/chunks/*.parquet")),
+    ]:
         _assert_parquet_units(table)
     cell_units = read_units(lb / "cells.parquet")
     assert cell_units["pass_rate"] == "1" and cell_units["delta_v_total_median"] == "m s-1"
@@ -115,25 +152,77 @@ def _assert_parquet_units(path: Path) -> None:
         assert (f.name in units) == numeric and (not numeric or units[f.name]), (path.name, f.name)
         assert units.get(f.name) != UNKNOWN or f.name.startswith("input:"), (path.name, f.name)
     assert set(schema.metadata or {}) <= {b"pandas"}, path.name  # no PANDAS_ATTRS
-    assert not json.loads((schema.metadata or {}).get(b"pandas", b"{}")).get("attributes"), path.name
+    assert not json.loads((schema.metadata or {}).get(b"pandas", b"{}")).get("attributes"), (
+        path.name
+    )
 
 
 def test_ranking_and_winners_follow_pass_rate_then_median():
     meta = {"definition": (DATA / "league-translational.toml").read_text()}
-    cells = pd.DataFrame([
-        dict(method="a", level="L", case="none", runs=10, failed=0, pass_rate=1.0, rms_shape_error_median=0.5,
-             delta_v_total_median=1.0),
-        dict(method="b", level="L", case="none", runs=10, failed=0, pass_rate=1.0, rms_shape_error_median=0.2,
-             delta_v_total_median=2.0),
-        dict(method="c", level="L", case="none", runs=10, failed=5, pass_rate=0.5, rms_shape_error_median=0.1,
-             delta_v_total_median=0.5),
-        dict(method="a", level="L", case="bias", runs=10, failed=0, pass_rate=0.9, rms_shape_error_median=0.6,
-             delta_v_total_median=1.0),
-        dict(method="b", level="L", case="bias", runs=10, failed=0, pass_rate=0.1, rms_shape_error_median=3.0,
-             delta_v_total_median=2.0),
-        dict(method="c", level="L", case="bias", runs=10, failed=0, pass_rate=0.0, rms_shape_error_median=9.0,
-             delta_v_total_median=0.5),
-    ])
+    cells = pd.DataFrame(
+        [
+            dict(
+                method="a",
+                level="L",
+                case="none",
+                runs=10,
+                failed=0,
+                pass_rate=1.0,
+                rms_shape_error_median=0.5,
+                delta_v_total_median=1.0,
+            ),
+            dict(
+                method="b",
+                level="L",
+                case="none",
+                runs=10,
+                failed=0,
+                pass_rate=1.0,
+                rms_shape_error_median=0.2,
+                delta_v_total_median=2.0,
+            ),
+            dict(
+                method="c",
+                level="L",
+                case="none",
+                runs=10,
+                failed=5,
+                pass_rate=0.5,
+                rms_shape_error_median=0.1,
+                delta_v_total_median=0.5,
+            ),
+            dict(
+                method="a",
+                level="L",
+                case="bias",
+                runs=10,
+                failed=0,
+                pass_rate=0.9,
+                rms_shape_error_median=0.6,
+                delta_v_total_median=1.0,
+            ),
+            dict(
+                method="b",
+                level="L",
+                case="bias",
+                runs=10,
+                failed=0,
+                pass_rate=0.1,
+                rms_shape_error_median=3.0,
+                delta_v_total_median=2.0,
+            ),
+            dict(
+                method="c",
+                level="L",
+                case="bias",
+                runs=10,
+                failed=0,
+                pass_rate=0.0,
+                rms_shape_error_median=9.0,
+                delta_v_total_median=0.5,
+            ),
+        ]
+    )
     rank = ranking(meta, cells)["L"]
     assert [r["method"] for r in rank] == ["a", "b", "c"]  # 0.95, 0.55, 0.25
     assert rank[0]["pass_rate"] == pytest.approx(0.95)
@@ -146,26 +235,49 @@ def test_formation_scores_against_numpy(tmp_path):
 
     rng = np.random.default_rng(3)
     rho, d = rng.normal(size=(4, 3)) * 100, rng.normal(size=(4, 3)) * 100
-    ref = max(np.linalg.norm((rho[i] - rho[j]) - (d[i] - d[j])) for i in range(4) for j in range(i + 1, 4))
+    ref = max(
+        np.linalg.norm((rho[i] - rho[j]) - (d[i] - d[j])) for i in range(4) for j in range(i + 1, 4)
+    )
     assert float(shape_error(rho, d)) == pytest.approx(ref, rel=1e-14)
-    assert float(shape_error(rho + 57.0, d)) == pytest.approx(ref, rel=1e-12)  # blind to a common translation
+    assert float(shape_error(rho + 57.0, d)) == pytest.approx(
+        ref, rel=1e-12
+    )  # blind to a common translation
     f = rng.normal(size=(4, 3))
     m = np.array([100.0, 120.0, 115.0, 108.0])
     out = FormationScores(desired=d, mass=m).outputs({"position": rho, "applied": f})
     np.testing.assert_allclose(out["slot_error"], np.linalg.norm(rho - d, axis=1), rtol=1e-14)
-    np.testing.assert_allclose(out["applied_acceleration"], np.linalg.norm(f, axis=1) / m, rtol=1e-14)
+    np.testing.assert_allclose(
+        out["applied_acceleration"], np.linalg.norm(f, axis=1) / m, rtol=1e-14
+    )
 
 
-@pytest.mark.parametrize("edit, message", [
-    (lambda r: r["methods"].append({"name": "ghost", "scenario": "translational/ghost.toml"}), "ghost.toml"),
-    (lambda r: r["league"].update(battery="v99"), "v99"),
-    (lambda r: r["league"]["requirement"].update(metric="no_such_metric"), "no_such_metric"),
-    (lambda r: r["metrics"].append({"name": "bad", "signal": "no_such_signal"}), "no_such_signal"),
-    (lambda r: r["league"].update(seeds=0), "seeds"),
-    (lambda r: r["levels"].append({"name": "limited", "saturation": 1.0}), "duplicate"),
-    (lambda r: r["league"]["initial_error"].update(seed_field="plant.no_such_seed"), "no_such_seed"),
-    (lambda r: r["league"]["initial_error"].update(field="plant.initial_position"), "either seed_field"),
-])
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (
+            lambda r: r["methods"].append(
+                {"name": "ghost", "scenario": "translational/ghost.toml"}
+            ),
+            "ghost.toml",
+        ),
+        (lambda r: r["league"].update(battery="v99"), "v99"),
+        (lambda r: r["league"]["requirement"].update(metric="no_such_metric"), "no_such_metric"),
+        (
+            lambda r: r["metrics"].append({"name": "bad", "signal": "no_such_signal"}),
+            "no_such_signal",
+        ),
+        (lambda r: r["league"].update(seeds=0), "seeds"),
+        (lambda r: r["levels"].append({"name": "limited", "saturation": 1.0}), "duplicate"),
+        (
+            lambda r: r["league"]["initial_error"].update(seed_field="plant.no_such_seed"),
+            "no_such_seed",
+        ),
+        (
+            lambda r: r["league"]["initial_error"].update(field="plant.initial_position"),
+            "either seed_field",
+        ),
+    ],
+)
 def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, tiny_league, edit, message):
     path = tiny_league(tmp_path)
     raw = tomllib.loads(path.read_text())
@@ -179,22 +291,46 @@ def test_bad_league_files_are_rejected_naming_the_entry(tmp_path, tiny_league, e
 def test_a_method_that_cannot_drive_the_league_plant_is_rejected(tmp_path, tiny_league):
     path = tiny_league(tmp_path)
     bad = tmp_path / "translational" / "attitude-law.toml"
-    bad.write_text(tomli_w.dumps({"controller": {"type": "networked-el-hinf", "edges": [[1, 2], [2, 3], [3, 4]]}}))
+    bad.write_text(
+        tomli_w.dumps(
+            {"controller": {"type": "networked-el-hinf", "edges": [[1, 2], [2, 3], [3, 4]]}}
+        )
+    )
     raw = tomllib.loads(path.read_text())
     raw["methods"].append({"name": "attitude-law", "scenario": "translational/attitude-law.toml"})
     path.write_text(tomli_w.dumps(raw))
     with pytest.raises(LeagueError, match="attitude-law cannot run"):
         run_league(path, tmp_path / "out", seeds=1)
     # a method file may not replace the truth or the faults
-    bad.write_text(tomli_w.dumps({"plant": {"type": "clohessy-wiltshire"}, "controller": {"type": "pd"}}))
+    bad.write_text(
+        tomli_w.dumps({"plant": {"type": "clohessy-wiltshire"}, "controller": {"type": "pd"}})
+    )
     with pytest.raises(LeagueError, match="the league owns the truth"):
         plan_cells(load_league(path))
 
 
 def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "formation_ftc", "league", "run", "translational", "--out",
-                        str(tmp_path / "o"), "--methods", "nope", "--seeds", "1"], capture_output=True, text=True)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "formation_ftc",
+            "league",
+            "run",
+            "translational",
+            "--out",
+            str(tmp_path / "o"),
+            "--methods",
+            "nope",
+            "--seeds",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 2, r.stderr
     assert "nope" in r.stderr and "li2020-thm1" in r.stderr
-    r = subprocess.run([sys.executable, "-m", "formation_ftc", "league", "list"], capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "formation_ftc", "league", "list"], capture_output=True, text=True
+    )
     assert r.returncode == 0 and "translational" in r.stdout

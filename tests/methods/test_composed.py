@@ -22,8 +22,11 @@ def test_li2020_law_on_cw_runs_records_metrics_and_check():
     fault_x = ds.fault.sel(axis="x").values
     t = ds.time.values
     np.testing.assert_allclose(fault_x[t < 20.0], 0.0)
-    np.testing.assert_allclose(fault_x[t >= 20.0], np.broadcast_to(0.5 * np.array([100.0, 120.0, 115.0, 108.0]),
-                                                                  fault_x[t >= 20.0].shape), rtol=1e-12)
+    np.testing.assert_allclose(
+        fault_x[t >= 20.0],
+        np.broadcast_to(0.5 * np.array([100.0, 120.0, 115.0, 108.0]), fault_x[t >= 20.0].shape),
+        rtol=1e-12,
+    )
     np.testing.assert_allclose(ds.applied.values - ds.command.values, ds.fault.values, atol=1e-9)
     # every metric is finite except the one whose window (from 1000 s) lies beyond this 40 s run
     assert np.isnan(m.pop("max_position_error_after_1000s"))
@@ -42,9 +45,13 @@ def test_cw_plant_in_a_composition_matches_cw_closed_form():
     raw = {
         "scenario": {"name": "drift", "method": "composed"},
         "simulation": {"horizon": 600.0, "dt": 1.0, "record_every": 60},
-        "plant": {"type": "clohessy-wiltshire", "semi_major_axis": 7000e3, "mass": [10.0, 10.0],
-                  "initial_position": [[10.0, 0.0, 0.0], [0.0, 5.0, 1.0]],
-                  "initial_velocity": [[0.0, 0.01, 0.0], [0.001, 0.0, 0.0]]},
+        "plant": {
+            "type": "clohessy-wiltshire",
+            "semi_major_axis": 7000e3,
+            "mass": [10.0, 10.0],
+            "initial_position": [[10.0, 0.0, 0.0], [0.0, 5.0, 1.0]],
+            "initial_velocity": [[0.0, 0.01, 0.0], [0.001, 0.0, 0.0]],
+        },
         "controller": {"type": "pd", "kp": 0.0, "kd": 0.0, "nominal_mass": 0.0},
     }
     ds = ftc.simulate(ftc.load_scenario(raw))
@@ -59,23 +66,51 @@ def _raw(**slots):
     base = {
         "scenario": {"name": "bad", "method": "composed"},
         "simulation": {"horizon": 10.0, "dt": 0.1},
-        "plant": {"type": "clohessy-wiltshire", "semi_major_axis": 7000e3, "mass": [10.0, 10.0],
-                  "initial_position": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]},
+        "plant": {
+            "type": "clohessy-wiltshire",
+            "semi_major_axis": 7000e3,
+            "mass": [10.0, 10.0],
+            "initial_position": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        },
         "controller": {"type": "pd", "kp": 1.0, "kd": 1.0},
     }
     base.update(slots)
     return base
 
 
-@pytest.mark.parametrize("slots, needle", [
-    ({"network": {"type": "delayed-graph", "adjacency": [[0, 1], [1, 0]], "delays": [["1", "1"], ["1", "1"]],
-                  "max_delay": 1.0}}, "PdFormationController"),
-    ({"network": {"type": "graph", "adjacency": [[0, 1, 0], [1, 0, 0], [0, 0, 0]]}}, "3 spacecraft"),
-    ({"plant": {"type": "relative-lvlh", "mass": [10.0], "initial_position": [[1.0, 0.0, 0.0]]}}, "reference"),
-    ({"controller": {"type": "no-such-law"}}, "controller.type"),
-    ({"controller": {"type": "pd", "kp": -1.0, "kd": 1.0}}, "controller.kp"),
-    ({"actuator": {"type": "thruster-bias", "onset": [1.0, 2.0]}}, "actuator.onset"),
-])
+@pytest.mark.parametrize(
+    "slots, needle",
+    [
+        (
+            {
+                "network": {
+                    "type": "delayed-graph",
+                    "adjacency": [[0, 1], [1, 0]],
+                    "delays": [["1", "1"], ["1", "1"]],
+                    "max_delay": 1.0,
+                }
+            },
+            "PdFormationController",
+        ),
+        (
+            {"network": {"type": "graph", "adjacency": [[0, 1, 0], [1, 0, 0], [0, 0, 0]]}},
+            "3 spacecraft",
+        ),
+        (
+            {
+                "plant": {
+                    "type": "relative-lvlh",
+                    "mass": [10.0],
+                    "initial_position": [[1.0, 0.0, 0.0]],
+                }
+            },
+            "reference",
+        ),
+        ({"controller": {"type": "no-such-law"}}, "controller.type"),
+        ({"controller": {"type": "pd", "kp": -1.0, "kd": 1.0}}, "controller.kp"),
+        ({"actuator": {"type": "thruster-bias", "onset": [1.0, 2.0]}}, "actuator.onset"),
+    ],
+)
 def test_incompatible_compositions_are_rejected_at_validation(slots, needle):
     with pytest.raises(ScenarioError) as err:
         ftc.load_scenario(_raw(**slots))

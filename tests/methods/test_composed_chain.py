@@ -40,8 +40,21 @@ def _raw(**slots):
 def test_scenario_runs_records_metrics_check_fault_and_supervisor():
     scn = ftc.load_scenario(NAME, {"simulation.horizon": 70.0, "simulation.record_every": 100})
     ds, m = ftc.simulate_with_metrics(scn)
-    for var in ("position", "velocity", "tracking_error", "desired_position", "mode", "mode_changes", "time_in_flfr",
-                "flfr_settled", "command", "acceleration_command", "applied", "actuator_gain", "delta_v"):
+    for var in (
+        "position",
+        "velocity",
+        "tracking_error",
+        "desired_position",
+        "mode",
+        "mode_changes",
+        "time_in_flfr",
+        "flfr_settled",
+        "command",
+        "acceleration_command",
+        "applied",
+        "actuator_gain",
+        "delta_v",
+    ):
         assert var in ds, var
     assert ds.sizes["spacecraft"] == 4 and ds.sizes["pair"] == 3 and ds.sizes["time"] == 71
     assert ds.command.attrs["units"] == "N" and ds.acceleration_command.attrs["units"] == "m s-2"
@@ -56,10 +69,14 @@ def test_scenario_runs_records_metrics_check_fault_and_supervisor():
     np.testing.assert_array_equal(gain, expected)
     np.testing.assert_allclose(ds.applied.values, gain * ds.command.values, rtol=1e-14)
     # flight side: force = nominal mass x the law's acceleration
-    np.testing.assert_allclose(ds.command.values, MASS[None, :, None] * ds.acceleration_command.values, rtol=1e-14)
+    np.testing.assert_allclose(
+        ds.command.values, MASS[None, :, None] * ds.acceleration_command.values, rtol=1e-14
+    )
     # the true chain errors are the measured ones of the sensors (exact): x_{i+1} - x_i minus the square's
     pos, des = ds.position.values, ds.desired_position.values
-    np.testing.assert_allclose(ds.tracking_error.values, np.diff(pos, axis=1) - np.diff(des, axis=1), atol=1e-9)
+    np.testing.assert_allclose(
+        ds.tracking_error.values, np.diff(pos, axis=1) - np.diff(des, axis=1), atol=1e-9
+    )
     rd, _, _ = rotating_polygon(t[-1], 4, 3, 200.0, 0.1)
     np.testing.assert_allclose(des[-1], np.asarray(rd), atol=1e-9)
     # the square is acquired from Li2020's initial positions (~700 m chain errors) within e_s ...
@@ -76,7 +93,9 @@ def test_scenario_runs_records_metrics_check_fault_and_supervisor():
     assert 60.0 < m["t_flfr"] < 65.0 and m["n_events"] == 2.0
     np.testing.assert_array_equal(mode[t > m["t_flfr"]], 2)
     np.testing.assert_array_equal(ds.mode_changes.values[t > m["t_flfr"]], 2)
-    assert np.max(err[t > m["t_flfr"]]) > E_S  # the deep-space FLFR design does not absorb the orbit
+    assert (
+        np.max(err[t > m["t_flfr"]]) > E_S
+    )  # the deep-space FLFR design does not absorb the orbit
     assert all(c.holds for c in ftc.check(scn))
 
 
@@ -86,22 +105,40 @@ def test_deep_space_limit_reproduces_the_azizi2009_method():
     Azizi2009's double-integrator closed loop (the azizi2009 method, an independent implementation of
     the plant and the sensors) with the FLFR weight that method designs by eq. (11)."""
     horizon = 30.0
-    az = ftc.load_scenario("azizi2009-flfr", {"simulation.horizon": horizon, "simulation.dt": 0.01,
-                                              "simulation.record_every": 10, "disturbance.acceleration": "0"})
+    az = ftc.load_scenario(
+        "azizi2009-flfr",
+        {
+            "simulation.horizon": horizon,
+            "simulation.dt": 0.01,
+            "simulation.record_every": 10,
+            "disturbance.acceleration": "0",
+        },
+    )
     ds_a, m_a = ftc.simulate_with_metrics(az)
     rd, vd, _ = rotating_polygon(0.0, 4, 3, 200.0, 0.1)
-    co = ftc.load_scenario(NAME, {
-        "simulation.horizon": horizon, "simulation.record_every": 10,
-        "plant.initial_position": np.asarray(rd).tolist(), "plant.initial_velocity": np.asarray(vd).tolist(),
-        "plant.disturbance_force": ["0", "0", "0"], "reference.semi_major_axis": 7e12,
-        "supervisor.estimate_time": 0.0, "supervisor.monitor_start": 0.0, "actuator.onset": 0.0})
+    co = ftc.load_scenario(
+        NAME,
+        {
+            "simulation.horizon": horizon,
+            "simulation.record_every": 10,
+            "plant.initial_position": np.asarray(rd).tolist(),
+            "plant.initial_velocity": np.asarray(vd).tolist(),
+            "plant.disturbance_force": ["0", "0", "0"],
+            "reference.semi_major_axis": 7e12,
+            "supervisor.estimate_time": 0.0,
+            "supervisor.monitor_start": 0.0,
+            "actuator.onset": 0.0,
+        },
+    )
     ds_c, m_c = ftc.simulate_with_metrics(co)
     assert co.section("controller").alpha_flfr == pytest.approx(ds_a.attrs["alpha_flfr"], rel=1e-12)
     e_a, e_c = ds_a.tracking_error.values, ds_c.tracking_error.values
     assert np.max(np.abs(e_a)) > E_S  # the fault does violate e_s (a non-trivial comparison)
     np.testing.assert_allclose(e_c, e_a, rtol=0, atol=1e-8)
     np.testing.assert_array_equal(ds_c["mode"].values, ds_a["mode"].values)
-    np.testing.assert_allclose(ds_c.acceleration_command.values, ds_a.command.values, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(
+        ds_c.acceleration_command.values, ds_a.command.values, rtol=0, atol=1e-8
+    )
     assert m_c["t_flfr"] == m_a["t_flfr"]
     assert m_c["max_err_after_flfr"] == pytest.approx(m_a["max_err_after_flfr"], rel=1e-6)
 
@@ -110,32 +147,65 @@ def test_flfr_reduces_the_post_fault_error_against_llfr_alone_but_not_below_e_s_
     """One vmapped program, two runs that differ only in the supervisor's FLFR flag (a leaf)."""
     scn = ftc.load_scenario(NAME, {"simulation.horizon": 100.0, "simulation.record_every": 100})
     loop = make_loop(scn)
-    llfr_only = dataclasses.replace(loop, supervisor=dataclasses.replace(loop.supervisor,
-                                                                         flfr_enabled=np.asarray(False)))
+    llfr_only = dataclasses.replace(
+        loop, supervisor=dataclasses.replace(loop.supervisor, flfr_enabled=np.asarray(False))
+    )
     batch, axes = stack_params([loop, llfr_only])
     out = jax.device_get(batched_run(compile_loop(loop), axes, 2)(batch))
     assert np.all(np.asarray(out["diverged_step"]) < 0)
-    flfr, llfr = (metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]]) for b in range(2))
+    flfr, llfr = (
+        metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]]) for b in range(2)
+    )
     assert flfr["n_events"] == 2.0 and llfr["n_events"] == 1.0 and np.isnan(llfr["t_flfr"])
-    assert flfr["max_err_before_fault"] == llfr["max_err_before_fault"] < E_S  # identical until the switch
+    assert (
+        flfr["max_err_before_fault"] == llfr["max_err_before_fault"] < E_S
+    )  # identical until the switch
     assert flfr["max_err_after_fault"] < 0.75 * llfr["max_err_after_fault"]  # FLFR helps ...
     assert flfr["max_err_after_flfr"] > E_S  # ... but the orbit's unmodelled accelerations remain
 
 
-_ATTITUDE_PLANT = {"type": "quaternion-rigid-body", "inertia": [25.0, 25.0, 25.0],
-                   "initial_attitude_deg": [[0.0, 0.0, 0.0]] * 4}
+_ATTITUDE_PLANT = {
+    "type": "quaternion-rigid-body",
+    "inertia": [25.0, 25.0, 25.0],
+    "initial_attitude_deg": [[0.0, 0.0, 0.0]] * 4,
+}
 
 
-@pytest.mark.parametrize("slots, needles", [
-    ({"sensors": {"type": "relative-state"}}, ("supervisor hierarchical", "sensors relative-state")),
-    ({"sensors": None, "supervisor": None}, ("controller azizi2009-llfr", "sensors default")),
-    ({"controller": {"type": "pd", "kp": 1.0, "kd": 1.0}}, ("supervisor hierarchical", "controller pd")),
-    ({"plant": _ATTITUDE_PLANT, "reference": None, "supervisor": None, "actuator": None},
-     ("sensors chain-relative", "plant quaternion-rigid-body")),
-    ({"controller": {"type": "azizi2009-llfr", "lambda0": 2.0, "lambda1": 3.0, "side": 200.0, "omega": 0.1,
-                     "alpha": [1.0, 1.0, 1.0]}}, ("controller.alpha", "4 spacecraft")),
-    ({"actuator": {"type": "actuator-gains", "spacecraft": 5}}, ("actuator.spacecraft", "4 spacecraft")),
-])
+@pytest.mark.parametrize(
+    "slots, needles",
+    [
+        (
+            {"sensors": {"type": "relative-state"}},
+            ("supervisor hierarchical", "sensors relative-state"),
+        ),
+        ({"sensors": None, "supervisor": None}, ("controller azizi2009-llfr", "sensors default")),
+        (
+            {"controller": {"type": "pd", "kp": 1.0, "kd": 1.0}},
+            ("supervisor hierarchical", "controller pd"),
+        ),
+        (
+            {"plant": _ATTITUDE_PLANT, "reference": None, "supervisor": None, "actuator": None},
+            ("sensors chain-relative", "plant quaternion-rigid-body"),
+        ),
+        (
+            {
+                "controller": {
+                    "type": "azizi2009-llfr",
+                    "lambda0": 2.0,
+                    "lambda1": 3.0,
+                    "side": 200.0,
+                    "omega": 0.1,
+                    "alpha": [1.0, 1.0, 1.0],
+                }
+            },
+            ("controller.alpha", "4 spacecraft"),
+        ),
+        (
+            {"actuator": {"type": "actuator-gains", "spacecraft": 5}},
+            ("actuator.spacecraft", "4 spacecraft"),
+        ),
+    ],
+)
 def test_impossible_compositions_are_rejected_at_validation(slots, needles):
     with pytest.raises(ScenarioError) as err:
         ftc.load_scenario(_raw(**slots))
@@ -149,7 +219,9 @@ def test_flfr_needs_an_interior_faulty_spacecraft():
 
 
 def test_cli_rejects_the_law_without_chain_sensors_with_exit_2(tmp_path, capsys):
-    text = loader.builtin_scenarios()[NAME].replace('type = "chain-relative"', 'type = "relative-state"')
+    text = loader.builtin_scenarios()[NAME].replace(
+        'type = "chain-relative"', 'type = "relative-state"'
+    )
     path = tmp_path / "bad.toml"
     path.write_text(text)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2

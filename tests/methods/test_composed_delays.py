@@ -36,8 +36,15 @@ def delayed():
 
 def test_scenario_runs_records_metrics_and_check(delayed):
     ds, m = delayed
-    for var in ("position", "position_error", "relative_formation_error", "referenced_formation_error",
-                "command", "applied", "delta_v"):
+    for var in (
+        "position",
+        "position_error",
+        "relative_formation_error",
+        "referenced_formation_error",
+        "command",
+        "applied",
+        "delta_v",
+    ):
         assert var in ds, var
     assert ds.sizes["spacecraft"] == 4 and ds.sizes["time"] == 801
     assert np.isnan(m.pop("max_relative_error_after_500s"))  # window beyond this 40 s run
@@ -59,11 +66,21 @@ def test_received_errors_are_the_senders_errors_at_the_delayed_times(delayed):
     eps = ds.position_error.values  # sensors are exact: eps_j = measured p_j - p^d_j
     T32 = 2 + 0.4 * np.sin(0.2 * t)
     T34 = 3 + 0.6 * np.sin(0.2 * t)
-    expect = np.stack([(0.5 * np.interp(t - T32, t, eps[:, 1, a]) + 0.4 * np.interp(t - T34, t, eps[:, 3, a])) / 0.9
-                       for a in range(3)], axis=-1)
-    np.testing.assert_allclose(ds.referenced_formation_error.values[:, 2], expect, rtol=0, atol=1e-9)
+    expect = np.stack(
+        [
+            (0.5 * np.interp(t - T32, t, eps[:, 1, a]) + 0.4 * np.interp(t - T34, t, eps[:, 3, a]))
+            / 0.9
+            for a in range(3)
+        ],
+        axis=-1,
+    )
+    np.testing.assert_allclose(
+        ds.referenced_formation_error.values[:, 2], expect, rtol=0, atol=1e-9
+    )
     # spacecraft 1 (coupling 0) ignores what it receives: its regulated error is its own
-    np.testing.assert_allclose(ds.relative_formation_error.values[:, 0], eps[:, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        ds.relative_formation_error.values[:, 0], eps[:, 0], rtol=0, atol=1e-12
+    )
 
 
 def test_zero_delays_equal_the_undelayed_law_and_delays_change_the_result(delayed):
@@ -75,12 +92,16 @@ def test_zero_delays_equal_the_undelayed_law_and_delays_change_the_result(delaye
     ds0 = ftc.simulate(ftc.load_scenario(zero))
     ds_i = ftc.simulate(ftc.load_scenario(instant))
     for var in ("position", "velocity", "command", "referenced_formation_error"):
-        np.testing.assert_allclose(ds0[var].values, ds_i[var].values, rtol=1e-12, atol=1e-12, err_msg=var)
+        np.testing.assert_allclose(
+            ds0[var].values, ds_i[var].values, rtol=1e-12, atol=1e-12, err_msg=var
+        )
     # the delays change where spacecraft 3 flies (it references 2 and 4 through 2-3.6 s delays) ...
     d3 = np.abs(ds_delayed.position.values[:, 2] - ds0.position.values[:, 2]).max()
     assert d3 > 1e-2
     # ... and nothing for the main spacecraft, which ignores what it receives
-    np.testing.assert_allclose(ds_delayed.position.values[:, 0], ds0.position.values[:, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        ds_delayed.position.values[:, 0], ds0.position.values[:, 0], rtol=0, atol=1e-12
+    )
 
 
 def test_coupling_zero_is_the_plain_yang2013_law():
@@ -101,24 +122,42 @@ def test_coupling_zero_is_the_plain_yang2013_law():
 def test_delayed_graph_reads_interpolate_toward_the_message_sent_now():
     """Delays shorter than the elapsed part of the step: linear between m(t_k) and the message m(t)."""
     C = [[0.0, 1.0], [0.0, 0.0]]
-    net = DelayedGraphNetwork(weights=as_float(C), delays=(("0", "0.1"), ("0", "0")), edges=graph_edges(C),
-                              capacity=4, dt=0.1)
-    h = history_push(history_init(jnp.array([[0.0], [1.0]]), 4), jnp.array([[0.0], [2.0]]))  # m_2(t_k) = 2
+    net = DelayedGraphNetwork(
+        weights=as_float(C),
+        delays=(("0", "0.1"), ("0", "0")),
+        edges=graph_edges(C),
+        capacity=4,
+        dt=0.1,
+    )
+    h = history_push(
+        history_init(jnp.array([[0.0], [1.0]]), 4), jnp.array([[0.0], [2.0]])
+    )  # m_2(t_k) = 2
     now = jnp.array([[0.0], [6.0]])  # m_2(t) = 6 at t = t_k + 0.08
     for T, want in ((0.0, 6.0), (0.02, 5.0), (0.08, 2.0), (0.13, 1.5)):
-        got = net.receive(jnp.asarray(1.08), h, NetworkInputs(now, jnp.asarray(1.0), {"T": jnp.array([T])}))
+        got = net.receive(
+            jnp.asarray(1.08), h, NetworkInputs(now, jnp.asarray(1.0), {"T": jnp.array([T])})
+        )
         np.testing.assert_allclose(float(got["weighted_sum"][0, 0]), want, rtol=1e-12)
 
 
-@pytest.mark.parametrize("controller, network, needles", [
-    ({"type": "yang2013-translational"}, True, ("DelayedGraphNetwork", "Yang2013TranslationalController")),
-    ({"type": "yang2013-relative"}, False, ("yang2013-relative", "[network]")),
-    ({"type": "yang2013-relative", "coupling": 1.5}, True, ("coupling", "[0, 1]")),
-])
+@pytest.mark.parametrize(
+    "controller, network, needles",
+    [
+        (
+            {"type": "yang2013-translational"},
+            True,
+            ("DelayedGraphNetwork", "Yang2013TranslationalController"),
+        ),
+        ({"type": "yang2013-relative"}, False, ("yang2013-relative", "[network]")),
+        ({"type": "yang2013-relative", "coupling": 1.5}, True, ("coupling", "[0, 1]")),
+    ],
+)
 def test_impossible_compositions_are_rejected_at_validation(controller, network, needles):
     raw = _raw()
-    raw["controller"] = {**{k: v for k, v in raw["controller"].items() if k not in ("type", "coupling")},
-                         **controller}
+    raw["controller"] = {
+        **{k: v for k, v in raw["controller"].items() if k not in ("type", "coupling")},
+        **controller,
+    }
     if not network:
         del raw["network"]
     with pytest.raises(ScenarioError) as err:

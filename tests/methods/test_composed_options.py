@@ -34,28 +34,42 @@ def _raw(base=RAW, **edits):
 
 
 def test_explicit_formation_offsets_are_the_desired_positions():
-    loop = make_loop(ftc.load_scenario(_raw(controller__formation={"offsets": SLOTS, "period": 5800.0})))
+    loop = make_loop(
+        ftc.load_scenario(_raw(controller__formation={"offsets": SLOTS, "period": 5800.0}))
+    )
     np.testing.assert_array_equal(np.asarray(loop.controller.formation.offsets), SLOTS)
-    out = loop.controller.formation.at(np.asarray(123.0))  # no rotation, growth or centre motion: fixed
+    out = loop.controller.formation.at(
+        np.asarray(123.0)
+    )  # no rotation, growth or centre motion: fixed
     np.testing.assert_allclose(np.asarray(out["rho_d"]), SLOTS, atol=1e-12)
     np.testing.assert_allclose(np.asarray(out["v_d"]), 0.0, atol=1e-12)
-    for bad in ({"offsets": SLOTS, "radius": 5.0, "phase": [0, 1, 2, 3], "period": 5800.0}, {"period": 5800.0},
-                {"offsets": SLOTS[:3], "period": 5800.0}):
+    for bad in (
+        {"offsets": SLOTS, "radius": 5.0, "phase": [0, 1, 2, 3], "period": 5800.0},
+        {"period": 5800.0},
+        {"offsets": SLOTS[:3], "period": 5800.0},
+    ):
         with pytest.raises(ValueError, match="formation"):
             ftc.load_scenario(_raw(controller__formation=bad))
 
 
 def test_gui2022_laws_hold_fixed_slots_or_follow_free_cw_motion():
     desired = [row + [0.0, 0.0, 0.0] for row in SLOTS]
-    held = make_loop(ftc.load_scenario(_raw(GUI, controller__desired_state=desired,
-                                            controller__desired_motion="hold"))).controller
+    held = make_loop(
+        ftc.load_scenario(
+            _raw(GUI, controller__desired_state=desired, controller__desired_motion="hold")
+        )
+    ).controller
     free = make_loop(ftc.load_scenario(_raw(GUI, controller__desired_state=desired))).controller
     law_h, law_f = getattr(held, "law", held), getattr(free, "law", free)
     t = np.asarray(500.0)
     np.testing.assert_allclose(np.asarray(law_h.exogenous(t)["q0"]), desired, atol=1e-12)
     n = float(law_f.mean_motion)
-    np.testing.assert_allclose(np.asarray(law_f.exogenous(t)["q0"]),
-                               np.asarray(cw_free_motion(n, np.asarray(desired), t)), rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(
+        np.asarray(law_f.exogenous(t)["q0"]),
+        np.asarray(cw_free_motion(n, np.asarray(desired), t)),
+        rtol=1e-12,
+        atol=1e-9,
+    )
     # a radial offset is not free motion: the natural reference leaves the slot
     assert np.abs(np.asarray(law_f.exogenous(t)["q0"])[:, :3] - np.asarray(SLOTS)).max() > 1.0
     with pytest.raises(ValueError, match="desired_motion"):
@@ -63,12 +77,20 @@ def test_gui2022_laws_hold_fixed_slots_or_follow_free_cw_motion():
 
 
 def test_evaluation_sections_are_validated_and_recorded():
-    ds, m = simulate_with_metrics(ftc.load_scenario(_raw(
-        evaluations=[{"type": "formation-scores", "desired": SLOTS}],
-        metrics=[{"name": "shape", "signal": "shape_error", "reduce": "max"}])))
+    ds, m = simulate_with_metrics(
+        ftc.load_scenario(
+            _raw(
+                evaluations=[{"type": "formation-scores", "desired": SLOTS}],
+                metrics=[{"name": "shape", "signal": "shape_error", "reduce": "max"}],
+            )
+        )
+    )
     rho = ds["position"].values
-    ref = max(np.linalg.norm((rho[:, i] - rho[:, j]) - (np.subtract(SLOTS[i], SLOTS[j])), axis=-1).max()
-              for i in range(4) for j in range(i + 1, 4))
+    ref = max(
+        np.linalg.norm((rho[:, i] - rho[:, j]) - (np.subtract(SLOTS[i], SLOTS[j])), axis=-1).max()
+        for i in range(4)
+        for j in range(i + 1, 4)
+    )
     assert m["shape"] >= ref - 1e-9  # every step counts in the metric, the records are a subset
     with pytest.raises(ValueError, match=r"evaluations\[0\]\.type = 'nope'"):
         ftc.load_scenario(_raw(evaluations=[{"type": "nope"}]))
@@ -82,7 +104,9 @@ def test_a_metric_of_an_unrecorded_signal_is_rejected_naming_it():
     with pytest.raises(ValueError, match="'no_such_signal' is not a recorded signal"):
         ftc.load_scenario(_raw(metrics=[{"name": "x", "signal": "no_such_signal"}]))
     with pytest.raises(ValueError, match="gate 'no_gate'"):
-        ftc.load_scenario(_raw(metrics=[{"name": "x", "signal": "position_error", "gate": "no_gate"}]))
+        ftc.load_scenario(
+            _raw(metrics=[{"name": "x", "signal": "position_error", "gate": "no_gate"}])
+        )
 
 
 def test_divergence_replays_compile_once_per_structure():
@@ -108,11 +132,29 @@ def test_block_metrics_from_a_scenario_file_need_a_block_and_match_numpy():
     """`block_rms` / `block_dev_rms` are offered in [[metrics]]: a missing block is a validation error
     naming the field; with one, the metric equals numpy on the every-step records."""
     with pytest.raises(ValueError, match="block = 0: reduce = 'block_rms' needs a block"):
-        ftc.load_scenario(_raw(metrics=[{"name": "x", "signal": "position_error", "reduce": "block_rms"}]))
-    raw = _raw(metrics=[{"name": "lp", "signal": "position_error", "reduce": "block_rms", "block": 5,
-                         "norm": True, "spacecraft": "max"},
-                        {"name": "hf", "signal": "position_error", "reduce": "block_dev_rms", "block": 5,
-                         "norm": True, "spacecraft": "max"}])
+        ftc.load_scenario(
+            _raw(metrics=[{"name": "x", "signal": "position_error", "reduce": "block_rms"}])
+        )
+    raw = _raw(
+        metrics=[
+            {
+                "name": "lp",
+                "signal": "position_error",
+                "reduce": "block_rms",
+                "block": 5,
+                "norm": True,
+                "spacecraft": "max",
+            },
+            {
+                "name": "hf",
+                "signal": "position_error",
+                "reduce": "block_dev_rms",
+                "block": 5,
+                "norm": True,
+                "spacecraft": "max",
+            },
+        ]
+    )
     raw["simulation"]["record_every"] = 1
     ds, metrics = simulate_with_metrics(ftc.load_scenario(raw))
     # spacecraft combined first (max over spacecraft at each step), the horizon sample excluded

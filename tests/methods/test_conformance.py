@@ -53,7 +53,12 @@ FLIGHT_SLOTS = ("controller", "estimator", "supervisor")
 FLIGHT_KINDS = (contract.Controller, contract.Estimator, contract.Supervisor)
 #: methods of a flight component that receive the loop's inputs
 FLIGHT_METHODS = ("update", "output", "message", "step")
-TRUTH_INPUTS = (contract.TruthInputs, contract.ActuatorInputs, contract.SensorInputs, contract.NetworkInputs)
+TRUTH_INPUTS = (
+    contract.TruthInputs,
+    contract.ActuatorInputs,
+    contract.SensorInputs,
+    contract.NetworkInputs,
+)
 
 #: estimators that model an FDI's report as a function of the true faults (scripted by design): exempt
 #: from the fault perturbations only
@@ -64,21 +69,41 @@ FAULT_ORACLES = {
 
 # ------------------------------------------------------------------------------------------ sources
 MASS4 = [100.0, 120.0, 115.0, 108.0]
-_CW_PLANT = {"type": "clohessy-wiltshire", "semi_major_axis": 7000e3, "mass": MASS4,
-             "initial_position": [[250.0, 20.0, 423.0], [-15.0, -505.0, 10.0], [-238.0, -10.0, -433.0],
-                                  [5.0, 500.0, 15.0]],
-             "disturbance_force": ["1e-3*sin(0.01*t + i)", "0", "1e-3*cos(0.01*t)"]}
+_CW_PLANT = {
+    "type": "clohessy-wiltshire",
+    "semi_major_axis": 7000e3,
+    "mass": MASS4,
+    "initial_position": [
+        [250.0, 20.0, 423.0],
+        [-15.0, -505.0, 10.0],
+        [-238.0, -10.0, -433.0],
+        [5.0, 500.0, 15.0],
+    ],
+    "disturbance_force": ["1e-3*sin(0.01*t + i)", "0", "1e-3*cos(0.01*t)"],
+}
 _SHORT_SIM = {"horizon": 1.0, "dt": 0.1, "record_every": 5}
 
 
 def _synthetic_pd() -> dict:
     """``pd`` and ``expression-faults``: no built-in composition uses them."""
-    return {"scenario": {"name": "synthetic-pd-on-cw", "method": "composed"}, "simulation": dict(_SHORT_SIM),
-            "plant": copy.deepcopy(_CW_PLANT), "sensors": {"type": "relative-state"},
-            "controller": {"type": "pd", "kp": 2.0, "kd": 30.0, "nominal_mass": MASS4,
-                           "desired_position": ["50*cos(0.001*t)", "100*sin(0.001*t)", "0"]},
-            "actuator": {"type": "expression-faults", "effectiveness": ["where(t >= 0.5, 0.6, 1)", "1", "1"],
-                         "bias": ["0", "where(t >= 0.5, 0.05, 0)", "0"]}}
+    return {
+        "scenario": {"name": "synthetic-pd-on-cw", "method": "composed"},
+        "simulation": dict(_SHORT_SIM),
+        "plant": copy.deepcopy(_CW_PLANT),
+        "sensors": {"type": "relative-state"},
+        "controller": {
+            "type": "pd",
+            "kp": 2.0,
+            "kd": 30.0,
+            "nominal_mass": MASS4,
+            "desired_position": ["50*cos(0.001*t)", "100*sin(0.001*t)", "0"],
+        },
+        "actuator": {
+            "type": "expression-faults",
+            "effectiveness": ["where(t >= 0.5, 0.6, 1)", "1", "1"],
+            "bias": ["0", "where(t >= 0.5, 0.05, 0)", "0"],
+        },
+    }
 
 
 def _synthetic_learning_on_cw() -> dict:
@@ -86,24 +111,41 @@ def _synthetic_learning_on_cw() -> dict:
     model's mean motion is stated (the default would come from the plant)."""
     base = loader.read_raw("compose-gui2022-on-li2020")[0]
     n = math.sqrt(3.986004418e14 / 7000e3**3)
-    ctl = {k: v for k, v in base["controller"].items()
-           if k in ("desired_state", "K", "nominal_mass", "gains")}
-    return {"scenario": {"name": "synthetic-learning-on-cw", "method": "composed"},
-            "simulation": {"horizon": 0.004, "dt": 0.001, "record_every": 2},
-            "plant": copy.deepcopy(_CW_PLANT), "sensors": {"type": "relative-state"},
-            "estimator": {**base["estimator"], "mean_motion": n},
-            "controller": {**ctl, "type": "gui2022-cof2tc", "fault_compensation": True, "mean_motion": n},
-            "actuator": copy.deepcopy(base["actuator"])}
+    ctl = {
+        k: v
+        for k, v in base["controller"].items()
+        if k in ("desired_state", "K", "nominal_mass", "gains")
+    }
+    return {
+        "scenario": {"name": "synthetic-learning-on-cw", "method": "composed"},
+        "simulation": {"horizon": 0.004, "dt": 0.001, "record_every": 2},
+        "plant": copy.deepcopy(_CW_PLANT),
+        "sensors": {"type": "relative-state"},
+        "estimator": {**base["estimator"], "mean_motion": n},
+        "controller": {
+            **ctl,
+            "type": "gui2022-cof2tc",
+            "fault_compensation": True,
+            "mean_motion": n,
+        },
+        "actuator": copy.deepcopy(base["actuator"]),
+    }
 
 
-SYNTHETIC: dict[str, Callable[[], dict]] = {"synthetic:pd-on-cw": _synthetic_pd,
-                                            "synthetic:learning-on-cw": _synthetic_learning_on_cw}
+SYNTHETIC: dict[str, Callable[[], dict]] = {
+    "synthetic:pd-on-cw": _synthetic_pd,
+    "synthetic:learning-on-cw": _synthetic_learning_on_cw,
+}
 
 
 def _league_keys() -> list[str]:
     from formation_ftc.league.definition import builtin_leagues, load_league
 
-    return [f"league:{name}:{m.name}" for name in sorted(builtin_leagues()) for m in load_league(name).methods]
+    return [
+        f"league:{name}:{m.name}"
+        for name in sorted(builtin_leagues())
+        for m in load_league(name).methods
+    ]
 
 
 @functools.cache
@@ -120,12 +162,20 @@ def source_raw(key: str) -> dict:
         entry = spec.method(method)
         network, delayed = _network_kind(spec, entry)
         # the first actuator case that applies (a fault on the truth side), the league's first level
-        case = next(c for c in _battery(spec).cases
-                    if c.applies_to(network=network, delayed=delayed) and not c.communication)
+        case = next(
+            c
+            for c in _battery(spec).cases
+            if c.applies_to(network=network, delayed=delayed) and not c.communication
+        )
         quantity = "torque" if spec.league.kind == "attitude" else "force"
         level = spec.levels[0]
-        return method_scenario(spec, entry, level, case.actuator_fields(saturation=level.saturation, quantity=quantity),
-                               case.network_fields(delayed=delayed) if network else None)
+        return method_scenario(
+            spec,
+            entry,
+            level,
+            case.actuator_fields(saturation=level.saturation, quantity=quantity),
+            case.network_fields(delayed=delayed) if network else None,
+        )
     return loader.read_raw(key)[0]
 
 
@@ -153,7 +203,10 @@ def type_of(raw: dict, slot: str) -> str | None:
 #: default (a constant, or the [reference] orbit known on board), never a truth value
 KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("controller", "pd"): ("nominal_mass",),
-    ("controller", "lqr"): ("mass", "mu"),  # semi_major_axis: the [reference]'s, required without one
+    ("controller", "lqr"): (
+        "mass",
+        "mu",
+    ),  # semi_major_axis: the [reference]'s, required without one
     ("controller", "azizi2009-llfr"): ("nominal_mass",),
     ("controller", "yang2013-translational"): ("nominal_mass",),
     ("controller", "yang2013-relative"): ("nominal_mass",),
@@ -164,7 +217,11 @@ KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("controller", "sir-ftc"): ("b_hat0",),
     ("controller", "gui2022-lof2tc"): ("nominal_mass", "mean_motion"),
     ("controller", "gui2022-cof2tc"): ("nominal_mass", "mean_motion"),
-    ("estimator", "iterative-learning-observer"): ("nominal_mass", "mean_motion", "initial_estimate"),
+    ("estimator", "iterative-learning-observer"): (
+        "nominal_mass",
+        "mean_motion",
+        "initial_estimate",
+    ),
     ("estimator", "scripted-fdi"): (),
     ("supervisor", "hierarchical"): (),
 }
@@ -205,10 +262,17 @@ def _dropped(raw: dict) -> set[str]:
     if raw["scenario"]["method"] == "composed":
         for slot in FLIGHT_SLOTS:
             section = raw.get(slot) or {}
-            out |= {name for name in KNOWLEDGE.get((slot, section.get("type", "")), ()) if name in section}
+            out |= {
+                name
+                for name in KNOWLEDGE.get((slot, section.get("type", "")), ())
+                if name in section
+            }
     else:
-        out = {path.split(".")[1] for path in METHOD_KNOWLEDGE[raw["scenario"]["method"]]
-               if path.split(".")[1] in raw.get(path.split(".")[0], {})}
+        out = {
+            path.split(".")[1]
+            for path in METHOD_KNOWLEDGE[raw["scenario"]["method"]]
+            if path.split(".")[1] in raw.get(path.split(".")[0], {})
+        }
     return out
 
 
@@ -233,9 +297,20 @@ def _types_used(keys) -> set[tuple[str, str]]:
         raw = source_raw(key)
         if raw["scenario"]["method"] != "composed":
             continue
-        used |= {(slot, str(type_of(raw, slot))) for slot in
-                 ("plant", "reference", "sensors", "network", "estimator", "supervisor", "controller", "actuator")
-                 if type_of(raw, slot)}
+        used |= {
+            (slot, str(type_of(raw, slot)))
+            for slot in (
+                "plant",
+                "reference",
+                "sensors",
+                "network",
+                "estimator",
+                "supervisor",
+                "controller",
+                "actuator",
+            )
+            if type_of(raw, slot)
+        }
         used |= {("evaluation", e["type"]) for e in raw.get("evaluations", [])}
     return used
 
@@ -268,32 +343,53 @@ def _expr_bias(v):
 PLANT_TRUTH: dict[str, dict[str, Callable[[Any], Any]]] = {
     "mass": {"mass": lambda v: _scale(v, 1.1)},
     "inertia": {"inertia": lambda v: _scale(v, 1.1), "inertia_matrices": lambda v: _scale(v, 1.1)},
-    "initial_state": {"initial_position": lambda v: _scale(v, 1.0, 1.0),
-                      "initial_velocity": lambda v: _scale(v, 1.0, 0.01),
-                      "initial_roe": lambda v: _scale(v, 1.0, 1.0),
-                      "initial_attitude_deg": lambda v: _scale(v, 1.0, 2.0),
-                      "initial_body_rate": lambda v: _scale(v, 1.0, 0.001),
-                      "initial_position_std": lambda v: v + 1.0, "dispersion_seed": lambda v: v + 1},
-    "disturbance": {"disturbance_force": _expr, "disturbance_torque": _expr,
-                    "process_noise_std": lambda v: v + 1e-4,
-                    "ballistic_coefficient": lambda v: _scale(v, 1.1),
-                    "srp_coefficient": lambda v: _scale(v, 1.1, 0.001)},
-    "orbit": {"semi_major_axis": lambda v: v * 1.001, "eccentricity": lambda v: v + 0.001,
-              "mu": lambda v: v * 1.0001},
+    "initial_state": {
+        "initial_position": lambda v: _scale(v, 1.0, 1.0),
+        "initial_velocity": lambda v: _scale(v, 1.0, 0.01),
+        "initial_roe": lambda v: _scale(v, 1.0, 1.0),
+        "initial_attitude_deg": lambda v: _scale(v, 1.0, 2.0),
+        "initial_body_rate": lambda v: _scale(v, 1.0, 0.001),
+        "initial_position_std": lambda v: v + 1.0,
+        "dispersion_seed": lambda v: v + 1,
+    },
+    "disturbance": {
+        "disturbance_force": _expr,
+        "disturbance_torque": _expr,
+        "process_noise_std": lambda v: v + 1e-4,
+        "ballistic_coefficient": lambda v: _scale(v, 1.1),
+        "srp_coefficient": lambda v: _scale(v, 1.1, 0.001),
+    },
+    "orbit": {
+        "semi_major_axis": lambda v: v * 1.001,
+        "eccentricity": lambda v: v + 0.001,
+        "mu": lambda v: v * 1.0001,
+    },
 }
 #: composed actuator fields (true faults, limits) -> perturbation
 ACTUATOR_TRUTH: dict[str, Callable[[Any], Any]] = {
     "onset": lambda v: _scale(v, 1.0, 1.0),
-    "effectiveness": lambda v: _expr(v, "0.9") if isinstance(v, list) and isinstance(v[0], str) else _scale(v, 0.9),
-    "bias": lambda v: _expr_bias(v) if isinstance(v, list) and isinstance(v[0], str) else _scale(v, 1.1, 0.001),
-    "gain": lambda v: _scale(v, 1.1), "magnitude": lambda v: _scale(v, 1.1, 0.001),
-    "amplitude": lambda v: _scale(v, 1.1, 0.001), "decay_amplitude": lambda v: _scale(v, 1.1, 0.001),
-    "omega": lambda v: _scale(v, 1.0, 0.001), "phase": lambda v: _scale(v, 1.0, 0.01),
-    "decay_rate": lambda v: _scale(v, 1.0, 0.001), "saturation": lambda v: _scale(v, 1.1),
-    "rate": lambda v: v + 0.001, "period": lambda v: v + 1.0, "duty": lambda v: v * 0.9,
+    "effectiveness": lambda v: (
+        _expr(v, "0.9") if isinstance(v, list) and isinstance(v[0], str) else _scale(v, 0.9)
+    ),
+    "bias": lambda v: (
+        _expr_bias(v) if isinstance(v, list) and isinstance(v[0], str) else _scale(v, 1.1, 0.001)
+    ),
+    "gain": lambda v: _scale(v, 1.1),
+    "magnitude": lambda v: _scale(v, 1.1, 0.001),
+    "amplitude": lambda v: _scale(v, 1.1, 0.001),
+    "decay_amplitude": lambda v: _scale(v, 1.1, 0.001),
+    "omega": lambda v: _scale(v, 1.0, 0.001),
+    "phase": lambda v: _scale(v, 1.0, 0.01),
+    "decay_rate": lambda v: _scale(v, 1.0, 0.001),
+    "saturation": lambda v: _scale(v, 1.1),
+    "rate": lambda v: v + 0.001,
+    "period": lambda v: v + 1.0,
+    "duty": lambda v: v * 0.9,
     "min_effectiveness": lambda v: v * 0.9 + 0.01,
-    "faults": lambda v: [{**f, "torque": _expr(f["torque"]), "start": f["start"] + 1.0, "end": f["end"] + 1.0}
-                         for f in v],
+    "faults": lambda v: [
+        {**f, "torque": _expr(f["torque"]), "start": f["start"] + 1.0, "end": f["end"] + 1.0}
+        for f in v
+    ],
 }
 
 
@@ -316,55 +412,96 @@ def _method_truth(scn) -> dict[str, dict]:
     method = scn.scenario.method
     if method in ("cw-formation", "li2020"):
         sc = scn.spacecraft
-        out = {"mass": {"spacecraft.mass": _scale(sc.mass, 1.1)},
-               "initial_state": {"spacecraft.initial_position": _scale([list(p) for p in sc.initial_position], 1.0, 1.0)}}
+        out = {
+            "mass": {"spacecraft.mass": _scale(sc.mass, 1.1)},
+            "initial_state": {
+                "spacecraft.initial_position": _scale(
+                    [list(p) for p in sc.initial_position], 1.0, 1.0
+                )
+            },
+        }
         if method == "cw-formation":
             o = scn.orbit
-            out["orbit"] = ({"orbit.semi_major_axis": o.semi_major_axis * 1.001} if o.semi_major_axis is not None
-                            else {"orbit.mean_motion": o.mean_motion * 1.001})
-            out["fault"] = {"faults.effectiveness": ["0.7", "0.9", "1"], "faults.bias": ["0.01", "0", "0"]}
-            out["disturbance"] = {"disturbance.force": _expr(list(scn.disturbance.force)),
-                                  "disturbance.process_noise_std": scn.disturbance.process_noise_std + 1e-4}
+            out["orbit"] = (
+                {"orbit.semi_major_axis": o.semi_major_axis * 1.001}
+                if o.semi_major_axis is not None
+                else {"orbit.mean_motion": o.mean_motion * 1.001}
+            )
+            out["fault"] = {
+                "faults.effectiveness": ["0.7", "0.9", "1"],
+                "faults.bias": ["0.01", "0", "0"],
+            }
+            out["disturbance"] = {
+                "disturbance.force": _expr(list(scn.disturbance.force)),
+                "disturbance.process_noise_std": scn.disturbance.process_noise_std + 1e-4,
+            }
         else:
             f = scn.faults
-            out["fault"] = {"faults.additive": _expr(list(f.additive)),
-                            "faults.effectiveness": _expr(list(f.effectiveness), "0.9"),
-                            "faults.step_effectiveness": [[0.9, 0.8, 0.7]] * sc.count,
-                            "faults.step_onset": [[1.0, 2.0, 3.0]] * sc.count}
+            out["fault"] = {
+                "faults.additive": _expr(list(f.additive)),
+                "faults.effectiveness": _expr(list(f.effectiveness), "0.9"),
+                "faults.step_effectiveness": [[0.9, 0.8, 0.7]] * sc.count,
+                "faults.step_onset": [[1.0, 2.0, 3.0]] * sc.count,
+            }
             out["disturbance"] = {"disturbance.force": _expr(list(scn.disturbance.force))}
         return out
     if method == "gui2022":
         f = scn.faults
-        return {"initial_state": {"initial.state": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]},
-                "fault": {"faults.x_magnitude": f.x_magnitude * 1.1 + 0.01, "faults.x_onset": f.x_onset + 1.0,
-                          "faults.z_amplitude": f.z_amplitude * 1.1, "faults.z_onset": f.z_onset + 1.0},
-                "disturbance": {"disturbance.amplitude": scn.disturbance.amplitude * 1.5 + 1e-6}}
+        return {
+            "initial_state": {"initial.state": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]},
+            "fault": {
+                "faults.x_magnitude": f.x_magnitude * 1.1 + 0.01,
+                "faults.x_onset": f.x_onset + 1.0,
+                "faults.z_amplitude": f.z_amplitude * 1.1,
+                "faults.z_onset": f.z_onset + 1.0,
+            },
+            "disturbance": {"disturbance.amplitude": scn.disturbance.amplitude * 1.5 + 1e-6},
+        }
     if method == "yang2013":
         sc = scn.spacecraft
-        out = {"mass": {"spacecraft.mass": sc.mass * 1.1},
-               "inertia": {"spacecraft.inertia": _scale(list(sc.inertia), 1.1)},
-               "initial_state": {"initial_state.0.e_R": _scale(list(scn.initial_state[0].e_R), 1.0, 0.1)},
-               "disturbance": {"disturbance.force": _expr(list(scn.disturbance.force)),
-                               "disturbance.torque": _expr(list(scn.disturbance.torque))}}
+        out = {
+            "mass": {"spacecraft.mass": sc.mass * 1.1},
+            "inertia": {"spacecraft.inertia": _scale(list(sc.inertia), 1.1)},
+            "initial_state": {
+                "initial_state.0.e_R": _scale(list(scn.initial_state[0].e_R), 1.0, 0.1)
+            },
+            "disturbance": {
+                "disturbance.force": _expr(list(scn.disturbance.force)),
+                "disturbance.torque": _expr(list(scn.disturbance.torque)),
+            },
+        }
         if scn.faults:
-            out["fault"] = {"faults.0.K2_faulty": scn.faults[0].K2_faulty * 1.5,
-                            "faults.0.onset": scn.faults[0].onset + 10 * scn.simulation.dt}
+            out["fault"] = {
+                "faults.0.K2_faulty": scn.faults[0].K2_faulty * 1.5,
+                "faults.0.onset": scn.faults[0].onset + 10 * scn.simulation.dt,
+            }
         return out
     if method == "mehrabian":
-        out = {"inertia": {"formation.nominal_inertia": _scale(list(scn.formation.nominal_inertia), 1.1),
-                           "formation.inertia_uncertainty": scn.formation.inertia_uncertainty * 0.5},
-               "initial_state": {"initial.attitude_range_deg": [5.0, 50.0]},
-               "disturbance": {"disturbance.variance": scn.disturbance.variance * 2 + 1e-4}}
+        out = {
+            "inertia": {
+                "formation.nominal_inertia": _scale(list(scn.formation.nominal_inertia), 1.1),
+                "formation.inertia_uncertainty": scn.formation.inertia_uncertainty * 0.5,
+            },
+            "initial_state": {"initial.attitude_range_deg": [5.0, 50.0]},
+            "disturbance": {"disturbance.variance": scn.disturbance.variance * 2 + 1e-4},
+        }
         if scn.faults:
             f = scn.faults[0]
             out["fault"] = {"faults.0.torque": _expr(f.torque), "faults.0.start": f.start + 1.0}
         return out
     if method == "azizi2009":
         n = scn.formation.n_satellites
-        out = {"initial_state": {"formation.initial_offset_x": [1.0, -1.0, 0.5, 0.25][:n] + [0.0] * max(0, n - 4)},
-               "disturbance": {"disturbance.acceleration": _expr(scn.disturbance.acceleration)}}
+        out = {
+            "initial_state": {
+                "formation.initial_offset_x": [1.0, -1.0, 0.5, 0.25][:n] + [0.0] * max(0, n - 4)
+            },
+            "disturbance": {"disturbance.acceleration": _expr(scn.disturbance.acceleration)},
+        }
         if scn.fault.enabled:
-            out["fault"] = {"fault.effectiveness": scn.fault.effectiveness * 0.9, "fault.onset": scn.fault.onset + 1.0}
+            out["fault"] = {
+                "fault.effectiveness": scn.fault.effectiveness * 0.9,
+                "fault.onset": scn.fault.onset + 1.0,
+            }
         return out
     raise AssertionError(f"no truth perturbations for method {method}")
 
@@ -390,7 +527,11 @@ def differing_leaves(a, b) -> list[str]:
     out = []
     for (path, x), (_, y) in zip(la, lb, strict=True):
         x, y = np.asarray(x), np.asarray(y)
-        if x.dtype != y.dtype or x.shape != y.shape or not np.array_equal(x, y, equal_nan=x.dtype.kind == "f"):
+        if (
+            x.dtype != y.dtype
+            or x.shape != y.shape
+            or not np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
+        ):
             out.append(jax.tree_util.keystr(path))
     return out
 
@@ -436,16 +577,20 @@ def test_flight_components_are_blind_to_truth(key, variant, kind):
     moved = build(raw, overrides)
     # the perturbation reaches the truth side (else the test proves nothing)
     truth = (moved.plant, moved.actuator)
-    assert differing_leaves((ref.plant, ref.actuator), truth) or \
-        structure_key((ref.plant, ref.actuator)) != structure_key(truth), f"{kind}: {overrides} changes no truth"
+    assert differing_leaves((ref.plant, ref.actuator), truth) or structure_key(
+        (ref.plant, ref.actuator)
+    ) != structure_key(truth), f"{kind}: {overrides} changes no truth"
     for slot, comp in flight_view(ref).items():
         other = getattr(moved, slot)
         if kind == "fault" and type(comp).__name__ in FAULT_ORACLES:
             continue
-        assert structure_key(comp) == structure_key(other), \
+        assert structure_key(comp) == structure_key(other), (
             f"{slot} {type(comp).__name__}: structure changed with truth {kind} ({overrides})"
+        )
         diff = differing_leaves(comp, other)
-        assert not diff, f"{slot} {type(comp).__name__}: leaves {diff} moved with truth {kind} ({overrides})"
+        assert not diff, (
+            f"{slot} {type(comp).__name__}: leaves {diff} moved with truth {kind} ({overrides})"
+        )
 
 
 def _flight_components(loop: ClosedLoop):
@@ -494,10 +639,13 @@ def test_flight_components_take_flight_inputs_only(key):
         for name, fn in inspect.getmembers(cls, inspect.isfunction):
             hints = _hints(fn)
             for param, hint in hints.items():
-                assert not re.search(rf"\b({'|'.join(truth_types)})\b", _name(hint)), \
+                assert not re.search(rf"\b({'|'.join(truth_types)})\b", _name(hint)), (
                     f"{cls.__name__}.{name}({param}): a truth-side input type {hint}"
+                )
             if name in FLIGHT_METHODS and "inputs" in inspect.signature(fn).parameters:
-                assert hints.get("inputs") is FlightInputs, f"{cls.__name__}.{name}: inputs is {hints.get('inputs')}"
+                assert hints.get("inputs") is FlightInputs, (
+                    f"{cls.__name__}.{name}: inputs is {hints.get('inputs')}"
+                )
                 checked += 1
         assert checked, f"{cls.__name__}: no method takes FlightInputs"
     assert not {"state", "fault", "disturbance", "force"} & set(FlightInputs._fields)
@@ -507,21 +655,28 @@ def test_flight_components_take_flight_inputs_only(key):
 def _short(raw: dict) -> dict:
     """``raw`` cut to 4 steps, recorded every 2."""
     scn = api.load_scenario(copy.deepcopy(raw))
-    return api.load_scenario(scn, overrides={"simulation.horizon": 4 * scn.simulation.dt,
-                                             "simulation.record_every": 2})
+    return api.load_scenario(
+        scn, overrides={"simulation.horizon": 4 * scn.simulation.dt, "simulation.record_every": 2}
+    )
 
 
 def _check_records(loop: ClosedLoop, records: dict[str, Any]) -> None:
     """The records of a run of ``loop`` (arrays or shape structs) are exactly its declared signals."""
     declared = loop.signals()
     names = [s.name for s in declared]
-    assert len(names) == len(set(names)), f"signals declared twice: {sorted({n for n in names if names.count(n) > 1})}"
-    assert set(records) == set(names), (f"recorded but not declared: {sorted(set(records) - set(names))}; "
-                                        f"declared but not recorded: {sorted(set(names) - set(records))}")
+    assert len(names) == len(set(names)), (
+        f"signals declared twice: {sorted({n for n in names if names.count(n) > 1})}"
+    )
+    assert set(records) == set(names), (
+        f"recorded but not declared: {sorted(set(records) - set(names))}; "
+        f"declared but not recorded: {sorted(set(names) - set(records))}"
+    )
     n_rec = loop.n_steps // loop.record_every + 1
     for sig in declared:
         shape = tuple(np.shape(records[sig.name]))
-        assert len(shape) == 1 + len(sig.dims), f"{sig.name}: dims {sig.dims}, recorded shape {shape}"
+        assert len(shape) == 1 + len(sig.dims), (
+            f"{sig.name}: dims {sig.dims}, recorded shape {shape}"
+        )
         assert shape[0] >= n_rec, f"{sig.name}: {shape[0]} records for {n_rec}"
         for dim, size in zip(sig.dims, shape[1:], strict=True):
             if dim == "spacecraft":
@@ -536,7 +691,9 @@ def _check_dataset(loop: ClosedLoop, ds, cf: bool) -> None:
         assert var.dims == ("time", *sig.dims), (sig.name, var.dims, sig.dims)
         assert var.sizes["time"] == n_rec, sig.name
         units = var.attrs["units"]
-        if cf and "," in sig.units:  # a stacked vector of mixed units: CF stores "1" and the components' units
+        if (
+            cf and "," in sig.units
+        ):  # a stacked vector of mixed units: CF stores "1" and the components' units
             assert (units, var.attrs.get("component_units")) == ("1", sig.units), sig.name
         else:
             assert units == sig.units, (sig.name, units, sig.units)

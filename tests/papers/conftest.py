@@ -11,6 +11,7 @@ import pytest
 
 def _clause(rel, *args) -> bool:
     """Independent evaluation of one basis clause (not the registry's code)."""
+
     def num(x):
         return float(x)
 
@@ -18,8 +19,11 @@ def _clause(rel, *args) -> bool:
         return bool(args[0])
     if rel == "decreasing":
         seq = [num(v) for v in args[0]]
-        return len(seq) >= 2 and all(b < a for a, b in zip(seq, seq[1:], strict=False)) and \
-            not any(math.isnan(v) for v in seq)
+        return (
+            len(seq) >= 2
+            and all(b < a for a, b in zip(seq, seq[1:], strict=False))
+            and not any(math.isnan(v) for v in seq)
+        )
     a, b = num(args[0]), num(args[1])
     if math.isnan(a) or math.isnan(b):
         return False
@@ -54,7 +58,9 @@ def recheck(rows) -> dict[str, int]:
         assert not _UNPRINTED.search(d["published"] or ""), (d["quantity"], d["published"])
         if d["verdict"] == "not stated":
             continue
-        assert d["basis"], f"{d['quantity']}: verdict {d['verdict']!r} without a basis (written by hand?)"
+        assert d["basis"], (
+            f"{d['quantity']}: verdict {d['verdict']!r} without a basis (written by hand?)"
+        )
         want = "match" if all(_clause(*c) for c in d["basis"]) else "differs"
         assert d["verdict"] == want, (d["quantity"], d["verdict"], d["basis"])
     return counts

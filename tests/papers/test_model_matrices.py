@@ -34,8 +34,10 @@ def test_yang2013_slot_variation_maps_of_the_builtin_sequence():
     np.testing.assert_array_equal(st.P[2], P_id5)
     np.testing.assert_array_equal(st.P[3], P_id5)
     np.testing.assert_array_equal(st.P[4], P4)
-    np.testing.assert_array_equal(st.active.astype(int), [[1, 1, 1, 0, 0, 0]] + [[1, 1, 1, 1, 1, 0]] * 3
-                                  + [[1, 0, 1, 0, 0, 1]])
+    np.testing.assert_array_equal(
+        st.active.astype(int),
+        [[1, 1, 1, 0, 0, 0]] + [[1, 1, 1, 1, 1, 0]] * 3 + [[1, 0, 1, 0, 0, 1]],
+    )
     leaves = np.zeros((5, 6), dtype=bool)
     leaves[3, [1, 3, 4]] = True  # spacecraft 2, 4 and 5 have zero columns in S_45
     np.testing.assert_array_equal(st.leaves, leaves)
@@ -61,7 +63,10 @@ def test_yang2013_attitude_error_dynamics_by_hand():
     J = np.diag([2.0, 4.0, 5.0])
     torque = jnp.array([2.0, 1.0, -3.0])  # Upsilon + tau + iota
     w = jnp.array([0.01, 0.0, 0.0])
-    dw, dq = (np.asarray(a) for a in rigid_body_quaternion_rates(w, jnp.array([0.0, 0, 0, 1]), torque, J, False))
+    dw, dq = (
+        np.asarray(a)
+        for a in rigid_body_quaternion_rates(w, jnp.array([0.0, 0, 0, 1]), torque, J, False)
+    )
     np.testing.assert_allclose(dw, [2.0 / 2, 1.0 / 4, -3.0 / 5], rtol=0, atol=1e-15)
     np.testing.assert_allclose(dq, [0.005, 0, 0, 0], rtol=0, atol=1e-15)
     q = jnp.array([0.0, 0.6, 0.0, 0.8])  # w x q_v = (0, 0, 0.006), w . q_v = 0
@@ -73,15 +78,23 @@ def test_azizi_rotating_square_by_hand():
     side, omega = 200.0, 0.1
     r = 100.0 * np.sqrt(2.0)  # circumradius of a 200 m square
     pos, vel, acc = (np.asarray(a) for a in desired_state(0.0, 4, 3, side, omega))
-    np.testing.assert_allclose(pos, [[100, 100, 0], [-100, 100, 0], [-100, -100, 0], [100, -100, 0]],
-                               rtol=0, atol=1e-12)
-    np.testing.assert_allclose(vel, 0.1 * np.array([[-100, 100, 0], [-100, -100, 0], [100, -100, 0],
-                                                    [100, 100, 0]]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        pos, [[100, 100, 0], [-100, 100, 0], [-100, -100, 0], [100, -100, 0]], rtol=0, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        vel,
+        0.1 * np.array([[-100, 100, 0], [-100, -100, 0], [100, -100, 0], [100, 100, 0]]),
+        rtol=0,
+        atol=1e-12,
+    )
     np.testing.assert_allclose(acc, -0.01 * pos, rtol=0, atol=1e-12)
     t = 7.0  # rotated by 0.7 rad: satellite 1 at angle pi/4 + 0.7 on the circle
     pos, _, acc = (np.asarray(a) for a in desired_state(t, 4, 2, side, omega))
-    np.testing.assert_allclose(pos[0], r * np.array([np.cos(np.pi / 4 + 0.7), np.sin(np.pi / 4 + 0.7)]), rtol=1e-14)
+    np.testing.assert_allclose(
+        pos[0], r * np.array([np.cos(np.pi / 4 + 0.7), np.sin(np.pi / 4 + 0.7)]), rtol=1e-14
+    )
     np.testing.assert_allclose(np.linalg.norm(pos, axis=1), r, rtol=1e-14)
     rel = np.asarray(relative_acceleration_fn(4, side, omega, 0)(t))
-    np.testing.assert_allclose(rel, [acc[1, 0] - acc[0, 0], acc[2, 0] - acc[1, 0], acc[3, 0] - acc[2, 0]],
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        rel, [acc[1, 0] - acc[0, 0], acc[2, 0] - acc[1, 0], acc[3, 0] - acc[2, 0]], rtol=1e-14
+    )

@@ -39,8 +39,11 @@ def test_simulate_batched_groups_by_structure_and_keeps_the_order():
     results in the callers' order and equal to the runs alone through :func:`programs.simulate`
     (separately compiled programs: same arithmetic per element, so 1e-12 relative)."""
     h = {"simulation.horizon": 2.0}
-    scns = [load_scenario("gui2022-ilo", h), load_scenario("gui2022-ilo-baseline", h),
-            load_scenario("gui2022-ilo", {**h, "observer.gains": "lmi"})]
+    scns = [
+        load_scenario("gui2022-ilo", h),
+        load_scenario("gui2022-ilo-baseline", h),
+        load_scenario("gui2022-ilo", {**h, "observer.gains": "lmi"}),
+    ]
     timings: list = []
     batched = programs.simulate_batched(scns, timings=timings)
     assert len(batched) == len(timings) == 3

@@ -32,7 +32,7 @@ from li2020_reference import LAWS, reference_metrics  # noqa: E402
 def half_unit(value: float) -> float:
     """Half a unit of the last quoted digit of ``value`` (0.073 -> 5e-4, 3.24 -> 5e-3, 7e-4 -> 5e-5)."""
     exp = Decimal(repr(float(value))).normalize().as_tuple().exponent
-    return 0.5 * 10.0 ** exp
+    return 0.5 * 10.0**exp
 
 
 @pytest.fixture(scope="module")
@@ -51,12 +51,21 @@ def test_li2020_reference_run_values_up_to_30s(li2020_30s):
                 checked += 1
     assert checked == 5  # thm1 at 10, 20, 30 s; thm2-delays and SIR-FTC at 30 s
     # every other value is a mu1 sample at 100 s or later, or the max after 50 s (the --full run)
-    later = [k for v in REFERENCE_RUN.values() for k in v if not any(k == f"mu1_at_{t}s" for t in (10, 20, 30))]
-    assert all(k in ("mu1_max_after_50s", "mu1_at_100s", "mu1_at_1000s", "mu1_at_3000s") for k in later)
+    later = [
+        k
+        for v in REFERENCE_RUN.values()
+        for k in v
+        if not any(k == f"mu1_at_{t}s" for t in (10, 20, 30))
+    ]
+    assert all(
+        k in ("mu1_max_after_50s", "mu1_at_100s", "mu1_at_1000s", "mu1_at_3000s") for k in later
+    )
 
 
-@pytest.mark.skipif(not os.environ.get("FORMATION_FTC_FULL_REFERENCE"),
-                    reason="full 3000 s numpy reference (about 10 min): set FORMATION_FTC_FULL_REFERENCE=1")
+@pytest.mark.skipif(
+    not os.environ.get("FORMATION_FTC_FULL_REFERENCE"),
+    reason="full 3000 s numpy reference (about 10 min): set FORMATION_FTC_FULL_REFERENCE=1",
+)
 def test_li2020_reference_run_values_full_horizon():
     """Every li2020 reference-run value, over the full 3000 s (the CI test above covers the first 30 s)."""
     from formation_ftc.papers.li2020.reproduction import REFERENCE_RUN
@@ -72,9 +81,13 @@ def test_li2020_mu1_initial_from_printed_data():
 
     # printed initial positions [m] (Sec. IV) and rho_bar_iF = R [cos/2, -sin, sqrt(3)/2 cos] (E000-10),
     # R = 500 m, phi_i = 0, pi/2, pi, 3 pi/2; at t = 0 the desired positions are rho_bar_iF
-    rho0 = np.array([[250, 20, 423], [-15, -505, 10], [-238, -10, -250 * math.sqrt(3)], [5, 500, 15]], float)
+    rho0 = np.array(
+        [[250, 20, 423], [-15, -505, 10], [-238, -10, -250 * math.sqrt(3)], [5, 500, 15]], float
+    )
     phi = np.array([0.0, 0.5, 1.0, 1.5]) * math.pi
-    rho_f = 500.0 * np.stack([np.cos(phi) / 2, -np.sin(phi), math.sqrt(3) / 2 * np.cos(phi)], axis=1)
+    rho_f = 500.0 * np.stack(
+        [np.cos(phi) / 2, -np.sin(phi), math.sqrt(3) / 2 * np.cos(phi)], axis=1
+    )
     mu1_0 = float(np.mean(np.linalg.norm(rho0 - rho_f, axis=1)))
     assert mu1_0 == pytest.approx(MU1_INITIAL, abs=half_unit(MU1_INITIAL))
 
@@ -100,9 +113,17 @@ def test_mehrabian_closed_forms():
     Km = K - 1 / gamma**2
     assert 1 / Km == pytest.approx(ref["R"], abs=half_unit(ref["R"]))  # eq. (13)
     sum_q = [alpha * K * KI**2, alpha * K * KP**2, alpha * K]  # eq. (14)
-    q_j = [(1 - alpha) * K * KI**2, (1 - alpha) * K * KP**2 - 2 * KI * K, (1 - alpha) * K]  # eq. (15)
+    q_j = [
+        (1 - alpha) * K * KI**2,
+        (1 - alpha) * K * KP**2 - 2 * KI * K,
+        (1 - alpha) * K,
+    ]  # eq. (15)
     for got, want in zip(sum_q + q_j, list(ref["sum_Q_jn"]) + list(ref["Q_j"]), strict=True):
         assert got == pytest.approx(want, abs=half_unit(want))
-    assert (1 - alpha) * KP**2 - 2 * KI == pytest.approx(ref["cond11"], abs=half_unit(ref["cond11"]))  # (11)
-    damping = 0.5 * ((1 - alpha) * K - 1 / gamma**2)  # consensus mode of the literal law (8), E003-01
+    assert (1 - alpha) * KP**2 - 2 * KI == pytest.approx(
+        ref["cond11"], abs=half_unit(ref["cond11"])
+    )  # (11)
+    damping = 0.5 * (
+        (1 - alpha) * K - 1 / gamma**2
+    )  # consensus mode of the literal law (8), E003-01
     assert damping == pytest.approx(ref["damping"], abs=half_unit(ref["damping"]))

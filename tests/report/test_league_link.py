@@ -12,9 +12,19 @@ from formation_ftc.report import html as html_report
 def _league(d: Path, name: str) -> Path:
     (d / "leaderboard").mkdir(parents=True)
     (d / "leaderboard" / "index.html").write_text("<html></html>")
-    board = {"league": name, "seeds": 10, "requirement": {"metric": "rms_shape_error"},
-             "ranking": {"unsaturated": [{"method": "azizi2009"}, {"method": "sir-ftc"}, {"method": "li2020-thm1"},
-                                         {"method": "lqr"}]}}
+    board = {
+        "league": name,
+        "seeds": 10,
+        "requirement": {"metric": "rms_shape_error"},
+        "ranking": {
+            "unsaturated": [
+                {"method": "azizi2009"},
+                {"method": "sir-ftc"},
+                {"method": "li2020-thm1"},
+                {"method": "lqr"},
+            ]
+        },
+    }
     (d / "leaderboard" / "leaderboard.json").write_text(json.dumps(board))
     return d
 
@@ -27,6 +37,9 @@ def test_given_and_found_leagues_are_linked(tmp_path):
     page = html_report.render_index([], out, {}, leagues=[given])
     assert 'href="../elsewhere/lg/leaderboard/index.html"' in page
     assert 'href="att/leaderboard/index.html"' in page
-    assert "azizi2009, sir-ftc, li2020-thm1" in page and "lqr" not in page.split("league translational")[1][:200]
+    assert (
+        "azizi2009, sir-ftc, li2020-thm1" in page
+        and "lqr" not in page.split("league translational")[1][:200]
+    )
     # nothing to link: no section
     assert "FTC league leaderboards" not in html_report.render_index([], tmp_path / "empty", {})

@@ -29,12 +29,15 @@ from rich.console import Console
 from formation_ftc.report.html import plotly_available
 from formation_ftc.report.reproduce import reproduce
 
-CHROMIUM = shutil.which("chromium") or (str(Path("/usr/bin/chromium")) if Path("/usr/bin/chromium").exists() else None)
+CHROMIUM = shutil.which("chromium") or (
+    str(Path("/usr/bin/chromium")) if Path("/usr/bin/chromium").exists() else None
+)
 
 pytestmark = pytest.mark.skipif(
     CHROMIUM is None,
     reason="headless Chromium not found (Debian package 'chromium': apt-get install -y chromium); "
-           "this test installs nothing itself")
+    "this test installs nothing itself",
+)
 
 _PROBE = """<script>(function () {
   var errs = [];
@@ -70,20 +73,37 @@ _PROBE = """<script>(function () {
 
 # Notices Chromium itself prints about software rendering; they are not page errors.
 _BENIGN = re.compile(r"GL Driver Message|willReadFrequently|software WebGL|SwiftShader", re.I)
-_ERRORISH = re.compile(r"uncaught|error|exception|failed|refused|not allowed|cannot|undefined", re.I)
+_ERRORISH = re.compile(
+    r"uncaught|error|exception|failed|refused|not allowed|cannot|undefined", re.I
+)
 
 
 def _render(page: Path, workdir: Path) -> tuple[dict, list[str]]:
     text = page.read_text(encoding="utf-8")
     assert '<meta charset="utf-8">' in text
     probe_page = page.with_name("__probe.html")
-    probe_page.write_text(text.replace('<meta charset="utf-8">', '<meta charset="utf-8">' + _PROBE, 1),
-                          encoding="utf-8")
-    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-           "--enable-unsafe-swiftshader", "--no-first-run", "--disable-extensions", "--mute-audio",
-           f"--user-data-dir={workdir / 'chromium-profile'}", "--window-size=1280,2000",
-           "--enable-logging=stderr", "--v=0", "--virtual-time-budget=8000", "--dump-dom",
-           probe_page.resolve().as_uri()]
+    probe_page.write_text(
+        text.replace('<meta charset="utf-8">', '<meta charset="utf-8">' + _PROBE, 1),
+        encoding="utf-8",
+    )
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--no-first-run",
+        "--disable-extensions",
+        "--mute-audio",
+        f"--user-data-dir={workdir / 'chromium-profile'}",
+        "--window-size=1280,2000",
+        "--enable-logging=stderr",
+        "--v=0",
+        "--virtual-time-budget=8000",
+        "--dump-dom",
+        probe_page.resolve().as_uri(),
+    ]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90)
     assert proc.returncode == 0, proc.stderr[-3000:]
     match = re.search(r'<pre id="__probe">(.*?)</pre>', proc.stdout, re.S)
@@ -95,11 +115,15 @@ def _render(page: Path, workdir: Path) -> tuple[dict, list[str]]:
 
 def test_index_renders_in_headless_chromium(tmp_path):
     with_3d = plotly_available()
-    avail = {"alpha": ok_reproduction("alpha", figure_sizes=((40, 30), (24, 18)), trajectory=with_3d),
-             "broken": failing_reproduction("broken"),
-             "gamma": ok_reproduction("gamma", figure_sizes=((17, 11),))}
+    avail = {
+        "alpha": ok_reproduction("alpha", figure_sizes=((40, 30), (24, 18)), trajectory=with_3d),
+        "broken": failing_reproduction("broken"),
+        "gamma": ok_reproduction("gamma", figure_sizes=((17, 11),)),
+    }
     out = tmp_path / "report"
-    result = reproduce(["all"], out, progress=False, available=avail, console=Console(file=io.StringIO()))
+    result = reproduce(
+        ["all"], out, progress=False, available=avail, console=Console(file=io.StringIO())
+    )
     assert result["exit_code"] == 1  # "broken" failed; its section must still render
 
     probe, console = _render(out / "index.html", tmp_path)
@@ -116,7 +140,11 @@ def test_index_renders_in_headless_chromium(tmp_path):
     assert [s["status"] for s in sections.values()] == ["ok", "failed", "ok"]
     # every figure decoded, at exactly the pixel size the fake PNG has, and displayed
     sizes = {sid: [(im["w"], im["h"]) for im in s["images"]] for sid, s in sections.items()}
-    assert sizes == {"paper-alpha": [(40, 30), (24, 18)], "paper-broken": [], "paper-gamma": [(17, 11)]}
+    assert sizes == {
+        "paper-alpha": [(40, 30), (24, 18)],
+        "paper-broken": [],
+        "paper-gamma": [(17, 11)],
+    }
     assert all(im["complete"] and im["shown"] > 0 for s in sections.values() for im in s["images"])
     assert [s["rows"] for s in sections.values()] == [3, 0, 3]
     assert [s["checks"] for s in sections.values()] == [3, 0, 3]

@@ -52,13 +52,22 @@ def _parse(text: str) -> _Collector:
 
 def _make(tmp_path, avail, **kw):
     out = tmp_path / "rep"
-    reproduce(list(kw.pop("papers", ["all"])), out, progress=False, available=avail,
-              console=Console(file=io.StringIO()), **kw)
+    reproduce(
+        list(kw.pop("papers", ["all"])),
+        out,
+        progress=False,
+        available=avail,
+        console=Console(file=io.StringIO()),
+        **kw,
+    )
     return out, (out / "index.html").read_text()
 
 
 def test_sections_tables_and_embedded_figures(tmp_path):
-    avail = {"alpha": ok_reproduction("alpha"), "broken": failing_reproduction("broken", "nan in <state>")}
+    avail = {
+        "alpha": ok_reproduction("alpha"),
+        "broken": failing_reproduction("broken", "nan in <state>"),
+    }
     out, page = _make(tmp_path, avail, include_3d=False)
     doc = _parse(page)
     sections = doc.find("section", class_="paper")
@@ -71,11 +80,19 @@ def test_sections_tables_and_embedded_figures(tmp_path):
     for img, name in zip(imgs, ["fig3.png", "fig4.png"], strict=True):
         prefix = "data:image/png;base64,"
         assert img["src"].startswith(prefix)
-        assert base64.b64decode(img["src"][len(prefix):]) == (out / "alpha" / name).read_bytes()
+        assert base64.b64decode(img["src"][len(prefix) :]) == (out / "alpha" / name).read_bytes()
     # verdict colouring classes, one row per ComparisonRow
-    rows = [a.get("class") for t, a in doc.tags if t == "tr" and (a.get("class") or "").startswith("verdict-")]
+    rows = [
+        a.get("class")
+        for t, a in doc.tags
+        if t == "tr" and (a.get("class") or "").startswith("verdict-")
+    ]
     assert rows == ["verdict-match", "verdict-differs", "verdict-not-stated"]
-    holds = [a.get("class") for t, a in doc.tags if t == "tr" and (a.get("class") or "").startswith("holds-")]
+    holds = [
+        a.get("class")
+        for t, a in doc.tags
+        if t == "tr" and (a.get("class") or "").startswith("holds-")
+    ]
     assert holds == ["holds-yes", "holds-no", "holds-na"]
     # errata, seeds, notes, wall time, failure traceback (escaped), provenance
     assert "E001-01" in page and "alpha: sign of eq. (7) corrected" in page
@@ -92,7 +109,9 @@ def test_page_is_self_contained(tmp_path):
     avail = {"alpha": ok_reproduction("alpha", trajectory=True)}
     _, page = _make(tmp_path, avail, include_3d=rh.plotly_available())
     doc = _parse(page)
-    refs = [(t, a.get("src") or a.get("href")) for t, a in doc.tags if a.get("src") or a.get("href")]
+    refs = [
+        (t, a.get("src") or a.get("href")) for t, a in doc.tags if a.get("src") or a.get("href")
+    ]
     assert refs, "expected images and anchors"
     for tag, ref in refs:
         assert ref.startswith("data:") or ref.startswith("#"), (tag, ref[:80])
@@ -103,7 +122,10 @@ def test_page_is_self_contained(tmp_path):
 def test_trajectory_view_with_plotly(tmp_path):
     from plotly.offline import get_plotlyjs
 
-    avail = {"alpha": ok_reproduction("alpha", trajectory=True), "beta": ok_reproduction("beta", trajectory=True)}
+    avail = {
+        "alpha": ok_reproduction("alpha", trajectory=True),
+        "beta": ok_reproduction("beta", trajectory=True),
+    }
     _, page = _make(tmp_path, avail)
     assert page.count(get_plotlyjs()) == 1  # plotly inlined once for every view
     assert page.count("Plotly.newPlot(") == 2
@@ -138,8 +160,14 @@ def test_write_and_load_trajectory3d(tmp_path):
     with pytest.raises(ValueError, match=r"shape \(n, 3\)"):
         rh.write_trajectory3d(tmp_path, {"SC1": np.zeros((4, 2))})
     bad = tmp_path / "bad.json"
-    bad.write_text(json.dumps({"title": "x", "spacecraft": {"A": [[0, 0, 0], [1, 1, 1]], "B": [[0, 0]],
-                                                             "C": [[0, 0, "nan"]]}}))
+    bad.write_text(
+        json.dumps(
+            {
+                "title": "x",
+                "spacecraft": {"A": [[0, 0, 0], [1, 1, 1]], "B": [[0, 0]], "C": [[0, 0, "nan"]]},
+            }
+        )
+    )
     views, problems = rh.load_trajectories(bad)
     assert list(views[0]["spacecraft"]) == ["A"] and len(problems) == 2
     bad.write_text("{not json")
@@ -177,8 +205,19 @@ def _head_from_git_dir(repo: Path) -> str | None:
 def test_provenance_fields():
     prov = metadata.provenance()
     assert all(isinstance(k, str) and isinstance(v, str) for k, v in prov.items())
-    for key in ("git_commit", "python", "platform", "created_utc", "jax_backend", "version_jax",
-                "version_numpy", "version_scipy", "version_xarray", "version_plotly", "version_formation-ftc"):
+    for key in (
+        "git_commit",
+        "python",
+        "platform",
+        "created_utc",
+        "jax_backend",
+        "version_jax",
+        "version_numpy",
+        "version_scipy",
+        "version_xarray",
+        "version_plotly",
+        "version_formation-ftc",
+    ):
         assert key in prov, key
     import numpy
 

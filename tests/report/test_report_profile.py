@@ -31,7 +31,9 @@ def _profiled_reproduction(paper: str, measured: dict) -> Reproduction:
 
     def run(out_dir: Path, progress) -> PaperReport:
         t0 = time.perf_counter()
-        salt = time.perf_counter_ns() % 1000  # a new program every call: never in the in-memory jit cache
+        salt = (
+            time.perf_counter_ns() % 1000
+        )  # a new program every call: never in the in-memory jit cache
         with pf.phase("run"):
             f = jax.jit(lambda x: jnp.cumsum(jnp.sin(x * salt)) @ jnp.cos(x))
             f(jnp.arange(64.0)).block_until_ready()
@@ -43,15 +45,23 @@ def _profiled_reproduction(paper: str, measured: dict) -> Reproduction:
         measured[paper] = time.perf_counter() - t0
         return report
 
-    return Reproduction(paper=paper, title=base.title, citation=base.citation, description=base.description,
-                        errata=base.errata, run=run)
+    return Reproduction(
+        paper=paper,
+        title=base.title,
+        citation=base.citation,
+        description=base.description,
+        errata=base.errata,
+        run=run,
+    )
 
 
 def test_profile_table_and_metadata(tmp_path):
     measured: dict = {}
     avail = {p: _profiled_reproduction(p, measured) for p in ("alpha", "beta")}
     console = Console(file=io.StringIO(), width=160)
-    result = rp.reproduce(["all"], tmp_path / "r", available=avail, progress=False, console=console, profile=True)
+    result = rp.reproduce(
+        ["all"], tmp_path / "r", available=avail, progress=False, console=console, profile=True
+    )
     text = console.file.getvalue()
     assert result["exit_code"] == 0
     assert "wall time per phase" in text
@@ -63,7 +73,9 @@ def test_profile_table_and_metadata(tmp_path):
 
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
     prof = summary["metadata"]["profile"]
-    assert set(prof) == {"alpha", "beta"} and prof == {p: result["profile"][p] for p in ("alpha", "beta")}
+    assert set(prof) == {"alpha", "beta"} and prof == {
+        p: result["profile"][p] for p in ("alpha", "beta")
+    }
     for paper, b in prof.items():
         assert set(b) == {*pf.PHASES, "total"}
         assert b["compile"] > 0.0  # the fresh jitted function was traced and compiled
@@ -79,8 +91,13 @@ def test_profile_table_and_metadata(tmp_path):
 
 def test_without_profile_nothing_is_recorded(tmp_path):
     console = Console(file=io.StringIO(), width=160)
-    result = rp.reproduce(["alpha"], tmp_path / "r", available={"alpha": ok_reproduction("alpha")},
-                          progress=False, console=console)
+    result = rp.reproduce(
+        ["alpha"],
+        tmp_path / "r",
+        available={"alpha": ok_reproduction("alpha")},
+        progress=False,
+        console=console,
+    )
     assert "profile" not in result and "per phase" not in console.file.getvalue()
     meta = json.loads((tmp_path / "r" / "summary.json").read_text())["metadata"]
     assert not any(k.startswith("profile") for k in meta)

@@ -31,27 +31,39 @@ def _console() -> Console:
 
 def _run(papers, out, available, **kw):
     console = _console()
-    result = rp.reproduce(papers, out, available=available, progress=kw.pop("progress", False),
-                          console=console, **kw)
+    result = rp.reproduce(
+        papers, out, available=available, progress=kw.pop("progress", False), console=console, **kw
+    )
     return result, console.file.getvalue()
 
 
 def _read(path):
     # strict JSON: the standard parser must accept it with NaN/Infinity rejected
-    return json.loads(path.read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON constant {c}"))
+    return json.loads(
+        path.read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON constant {c}")
+    )
 
 
 def test_all_papers_files_and_summary_layout(tmp_path):
     calls = []
-    avail = {"alpha": ok_reproduction("alpha", calls=calls), "beta": ok_reproduction("beta", calls=calls)}
+    avail = {
+        "alpha": ok_reproduction("alpha", calls=calls),
+        "beta": ok_reproduction("beta", calls=calls),
+    }
     out = tmp_path / "rep"
     result, text = _run(["all"], out, avail)
     assert result["exit_code"] == 0
     assert [c[0] for c in calls] == ["alpha", "beta"]  # registry order kept
     assert [c[1] for c in calls] == [out / "alpha", out / "beta"]
     assert (out / rp.MARKER_NAME).is_file()
-    for name in ("index.html", "summary.json", "alpha/report.json", "alpha/summary.json", "alpha/fig3.png",
-                 "beta/fig4.png"):
+    for name in (
+        "index.html",
+        "summary.json",
+        "alpha/report.json",
+        "alpha/summary.json",
+        "alpha/fig3.png",
+        "beta/fig4.png",
+    ):
         assert (out / name).is_file(), name
 
     summary = _read(out / "summary.json")
@@ -66,11 +78,22 @@ def test_all_papers_files_and_summary_layout(tmp_path):
     assert "git_commit" in meta and "version_jax" in meta
 
     report = _read(out / "alpha" / "report.json")
-    assert report["schema"] == rp.REPORT_SCHEMA and report["status"] == "ok" and report["error"] is None
+    assert (
+        report["schema"] == rp.REPORT_SCHEMA
+        and report["status"] == "ok"
+        and report["error"] is None
+    )
     assert report["verdicts"] == {"match": 1, "differs": 1, "not stated": 1}
-    assert report["checks_summary"] == {"hold": 1, "fail": 1, "unproven": 0, "not evaluated": 1,
-                                       "required_failed": 1}
-    assert [f["number"] for f in report["figures"]] == ["3", "4"] and all(f["exists"] for f in report["figures"])
+    assert report["checks_summary"] == {
+        "hold": 1,
+        "fail": 1,
+        "unproven": 0,
+        "not evaluated": 1,
+        "required_failed": 1,
+    }
+    assert [f["number"] for f in report["figures"]] == ["3", "4"] and all(
+        f["exists"] for f in report["figures"]
+    )
     assert report["seeds"] == [7, 8] and report["notes"] == ["alpha note"]
     assert report["errata"] == [{"id": "E001-01", "text": "alpha: sign of eq. (7) corrected"}]
     assert report["wall_time_s"] >= 0.0
@@ -84,7 +107,11 @@ def test_single_paper_summary_is_top_level(tmp_path):
     avail = {"alpha": ok_reproduction("alpha"), "beta": ok_reproduction("beta")}
     result, _ = _run(["beta"], tmp_path / "one", avail)
     summary = _read(tmp_path / "one" / "summary.json")
-    assert summary["paper"] == "beta" and summary["tracking_error_m"] == 0.0125 and "metadata" in summary
+    assert (
+        summary["paper"] == "beta"
+        and summary["tracking_error_m"] == 0.0125
+        and "metadata" in summary
+    )
     assert "alpha" not in summary and not (tmp_path / "one" / "alpha").exists()
     assert result["summary"] == summary
 
@@ -104,8 +131,12 @@ def test_wall_time_is_measured_around_the_run(tmp_path):
 
 
 def test_failing_paper_is_recorded_and_others_still_run(tmp_path):
-    avail = {"alpha": ok_reproduction("alpha"), "broken": failing_reproduction("broken", "solver exploded"),
-             "gamma": ok_reproduction("gamma"), "wrongtype": wrong_type_reproduction()}
+    avail = {
+        "alpha": ok_reproduction("alpha"),
+        "broken": failing_reproduction("broken", "solver exploded"),
+        "gamma": ok_reproduction("gamma"),
+        "wrongtype": wrong_type_reproduction(),
+    }
     out = tmp_path / "f"
     result, text = _run(["all"], out, avail)
     assert result["exit_code"] == 1
@@ -113,8 +144,11 @@ def test_failing_paper_is_recorded_and_others_still_run(tmp_path):
     assert status == {"alpha": "ok", "broken": "failed", "gamma": "ok", "wrongtype": "failed"}
     broken = _read(out / "broken" / "report.json")
     assert "Traceback" in broken["error"] and "RuntimeError: solver exploded" in broken["error"]
-    assert _read(out / "broken" / "summary.json") == {"status": "failed", "error": "RuntimeError: solver exploded",
-                                                      "paper": "broken"}
+    assert _read(out / "broken" / "summary.json") == {
+        "status": "failed",
+        "error": "RuntimeError: solver exploded",
+        "paper": "broken",
+    }
     assert "PaperReport" in _read(out / "wrongtype" / "report.json")["error"]
     summary = _read(out / "summary.json")
     assert summary["broken"]["status"] == "failed" and summary["gamma"]["settled"] is True
@@ -152,7 +186,9 @@ def test_progress_bar_callback_tolerates_odd_values(tmp_path):
         assert bar._progress.tasks[0].completed == 1.0  # clamped to this paper's share
         cb(float("nan"), "nan")
         assert bar._progress.tasks[0].completed == 0.0
-    result, _ = _run(["p"], tmp_path / "pb", {"p": Reproduction("p", "P", "", "", [], run)}, progress=True)
+    result, _ = _run(
+        ["p"], tmp_path / "pb", {"p": Reproduction("p", "P", "", "", [], run)}, progress=True
+    )
     assert result["exit_code"] == 0
 
 
@@ -208,11 +244,27 @@ def test_previous_report_is_overwritten_and_stale_figures_removed(tmp_path):
 def test_to_jsonable_conversions():
     import jax.numpy as jnp
 
-    data = {1: np.float32(0.5), "a": jnp.array([1.0, 2.0]), "b": (np.int64(3), {np.inf, -np.inf}),
-            "c": float("-inf"), "d": np.array([[1, 2]]), "e": np.bool_(True), "f": 1 + 2j, "g": None}
+    data = {
+        1: np.float32(0.5),
+        "a": jnp.array([1.0, 2.0]),
+        "b": (np.int64(3), {np.inf, -np.inf}),
+        "c": float("-inf"),
+        "d": np.array([[1, 2]]),
+        "e": np.bool_(True),
+        "f": 1 + 2j,
+        "g": None,
+    }
     out = rp.to_jsonable(data)
-    assert out == {"1": 0.5, "a": [1.0, 2.0], "b": [3, ["-inf", "inf"]], "c": "-inf", "d": [[1, 2]],
-                   "e": True, "f": "(1+2j)", "g": None}
+    assert out == {
+        "1": 0.5,
+        "a": [1.0, 2.0],
+        "b": [3, ["-inf", "inf"]],
+        "c": "-inf",
+        "d": [[1, 2]],
+        "e": True,
+        "f": "(1+2j)",
+        "g": None,
+    }
     json.dumps(out, allow_nan=False)
     assert math.isclose(rp.to_jsonable(jnp.float64(0.1)), 0.1)
 
@@ -237,8 +289,15 @@ def test_cli_arguments_and_exit_codes(tmp_path, monkeypatch, capsys):
     assert "unknown paper 'nope'; valid: alpha, broken, all" in capsys.readouterr().err
     (tmp_path / "c4").mkdir()
     (tmp_path / "c4" / "x").write_text("x")
-    assert args.func(_parser().parse_args(["reproduce", "alpha", "--out", str(tmp_path / "c4")])) == 2
-    assert args.func(_parser().parse_args(["reproduce", "alpha", "--out", str(tmp_path / "c4"), "--force"])) == 0
+    assert (
+        args.func(_parser().parse_args(["reproduce", "alpha", "--out", str(tmp_path / "c4")])) == 2
+    )
+    assert (
+        args.func(
+            _parser().parse_args(["reproduce", "alpha", "--out", str(tmp_path / "c4"), "--force"])
+        )
+        == 0
+    )
     with pytest.raises(SystemExit):  # --out is required
         _parser().parse_args(["reproduce", "alpha"])
 
@@ -252,20 +311,28 @@ def test_broken_paper_package_becomes_a_failed_section(tmp_path, monkeypatch):
     (pkg_dir / "zzfake_good.py").write_text(
         "from report_fakes import ok_reproduction\n"
         "from formation_ftc.registry import register_reproduction\n"
-        "register_reproduction(ok_reproduction('zzfake_good'))\n")
+        "register_reproduction(ok_reproduction('zzfake_good'))\n"
+    )
     (pkg_dir / "zzfake_bad.py").write_text("raise ImportError('missing dependency xyz')\n")
     monkeypatch.setattr(papers_pkg, "__path__", list(papers_pkg.__path__) + [str(pkg_dir)])
-    monkeypatch.setattr(registry, "plugin_modules",
-                        lambda: ["formation_ftc.papers.zzfake_bad", "formation_ftc.papers.zzfake_good"])
+    monkeypatch.setattr(
+        registry,
+        "plugin_modules",
+        lambda: ["formation_ftc.papers.zzfake_bad", "formation_ftc.papers.zzfake_good"],
+    )
     monkeypatch.setattr(registry, "_REPRODUCTIONS", {})
     monkeypatch.setattr(registry, "PLUGIN_ERRORS", {})
     monkeypatch.setattr(registry, "_LOADED", False)
     try:
         found, failures = rp.available_reproductions()
         assert list(found) == ["zzfake_good"]
-        assert list(failures) == ["zzfake_bad"] and "missing dependency xyz" in failures["zzfake_bad"]
+        assert (
+            list(failures) == ["zzfake_bad"] and "missing dependency xyz" in failures["zzfake_bad"]
+        )
         # in this process: the monkeypatched registry does not exist in a spawned worker
-        result = rp.reproduce(["all"], tmp_path / "out", progress=False, console=_console(), workers=1)
+        result = rp.reproduce(
+            ["all"], tmp_path / "out", progress=False, console=_console(), workers=1
+        )
     finally:
         for name in ("zzfake_good", "zzfake_bad"):
             sys.modules.pop(f"formation_ftc.papers.{name}", None)
@@ -280,18 +347,32 @@ def test_papers_in_worker_processes_equal_one_after_the_other(tmp_path):
     one the sequential run writes; a paper that raises in its worker is a failed section."""
     from report_fakes import shippable_reproduction
 
-    avail = {"alpha": shippable_reproduction("alpha"), "gamma": shippable_reproduction("gamma", fail=True),
-             "beta": shippable_reproduction("beta")}
+    avail = {
+        "alpha": shippable_reproduction("alpha"),
+        "gamma": shippable_reproduction("gamma", fail=True),
+        "beta": shippable_reproduction("beta"),
+    }
     seq, _ = _run(["all"], tmp_path / "seq", avail, workers=1)
     par, text = _run(["all"], tmp_path / "par", avail, workers=2, profile=True)
     assert seq["exit_code"] == par["exit_code"] == 1
     assert par["papers"]["gamma"]["status"] == "failed"
     assert "gamma exploded in its worker" in par["papers"]["gamma"]["error"]
     for paper in ("alpha", "beta"):
-        a, b = _read(tmp_path / "seq" / paper / "report.json"), _read(tmp_path / "par" / paper / "report.json")
-        for key in ("rows", "checks", "figures", "verdicts", "summary" if "summary" in a else "seeds"):
+        a, b = (
+            _read(tmp_path / "seq" / paper / "report.json"),
+            _read(tmp_path / "par" / paper / "report.json"),
+        )
+        for key in (
+            "rows",
+            "checks",
+            "figures",
+            "verdicts",
+            "summary" if "summary" in a else "seeds",
+        ):
             assert a[key] == b[key], (paper, key)
-        assert _read(tmp_path / "seq" / paper / "summary.json") == _read(tmp_path / "par" / paper / "summary.json")
+        assert _read(tmp_path / "seq" / paper / "summary.json") == _read(
+            tmp_path / "par" / paper / "summary.json"
+        )
         assert (tmp_path / "par" / paper / "fig3.png").is_file()
     meta = _read(tmp_path / "par" / "summary.json")["metadata"]
     assert meta["papers"] == ["alpha", "gamma", "beta"] and meta["paper_workers"] == 2

@@ -9,8 +9,13 @@ import formation_ftc as ftc
 from formation_ftc.cli import main
 from formation_ftc.methods.cw_formation import rk4_amplification
 
-STIFF = {"controller.kd": 3000.0, "simulation.horizon": 20.0, "sensors.position_noise_std": 0.0,
-         "sensors.velocity_noise_std": 0.0, "disturbance.process_noise_std": 0.0}
+STIFF = {
+    "controller.kd": 3000.0,
+    "simulation.horizon": 20.0,
+    "sensors.position_noise_std": 0.0,
+    "sensors.velocity_noise_std": 0.0,
+    "disturbance.process_noise_std": 0.0,
+}
 
 
 def _diverge(record_every: int):
@@ -39,8 +44,15 @@ def test_divergence_time_does_not_depend_on_the_record_block():
 
 
 def test_admissible_bound_is_a_scenario_field():
-    scn = ftc.load_scenario("cw-pd-fault", {**STIFF, "simulation.max_velocity": 1e30,
-                                            "simulation.max_position": 1e30, "simulation.horizon": 5.0})
+    scn = ftc.load_scenario(
+        "cw-pd-fault",
+        {
+            **STIFF,
+            "simulation.max_velocity": 1e30,
+            "simulation.max_position": 1e30,
+            "simulation.horizon": 5.0,
+        },
+    )
     ds = ftc.simulate(scn)  # the same run stays "admissible" up to 5 s with huge bounds
     assert np.isfinite(ds.position.values).all()
 
@@ -67,22 +79,33 @@ def test_check_uses_closed_loop_eigenvalues(capsys):
 def test_body_rate_bound_is_part_of_the_admissible_set_and_overridable():
     """A constant 5 N m torque on a 25 kg m^2 body spins it up at 0.2 rad/s^2: with max_rate = 0.5 rad/s
     the run leaves its admissible set at about 2.5 s (the attitude plants report their body rates)."""
-    scn = ftc.load_scenario("compose-mehrabian-on-yang2013", {
-        "simulation.horizon": 10.0, "simulation.max_rate": 0.5,
-        "plant.disturbance_torque": ["5.0", "0", "0"]})
+    scn = ftc.load_scenario(
+        "compose-mehrabian-on-yang2013",
+        {
+            "simulation.horizon": 10.0,
+            "simulation.max_rate": 0.5,
+            "plant.disturbance_torque": ["5.0", "0", "0"],
+        },
+    )
     with pytest.raises(ftc.SimulationDiverged) as err:
         ftc.simulate(scn)
     assert err.value.info.variable.startswith("plant.angular_rate")
     assert 1.0 < err.value.info.time < 4.0
     # the default bound (100 rad/s) lets the same run finish
-    ftc.simulate(ftc.load_scenario("compose-mehrabian-on-yang2013", {
-        "simulation.horizon": 2.0, "plant.disturbance_torque": ["5.0", "0", "0"]}))
+    ftc.simulate(
+        ftc.load_scenario(
+            "compose-mehrabian-on-yang2013",
+            {"simulation.horizon": 2.0, "plant.disturbance_torque": ["5.0", "0", "0"]},
+        )
+    )
 
 
 def test_euler_pitch_bound_names_the_singular_angle():
     """Mehrabian's plant holds 3-2-1 Euler angles (singular at pitch +-pi/2): its initial pitches lie in
     [0, 60] deg, so a 0.3 rad bound is left at once and the diagnostic names the pitch."""
-    scn = ftc.load_scenario("mehrabian-identification", {"simulation.horizon": 1.0, "simulation.max_pitch": 0.3})
+    scn = ftc.load_scenario(
+        "mehrabian-identification", {"simulation.horizon": 1.0, "simulation.max_pitch": 0.3}
+    )
     with pytest.raises(ftc.SimulationDiverged) as err:
         ftc.simulate(scn)
     assert err.value.info.variable.startswith("plant.pitch")
@@ -107,8 +130,12 @@ def test_metrics_of_a_diverged_run_stop_at_the_failing_block():
     assert metrics["final_position_error_mean"] != pytest.approx(e[step].mean(), rel=1e-6)
 
 
-_LIMITS = {"simulation.max_position": 123.0, "simulation.max_velocity": 4.5, "simulation.max_rate": 6.7,
-           "simulation.max_pitch": 1.2}
+_LIMITS = {
+    "simulation.max_position": 123.0,
+    "simulation.max_velocity": 4.5,
+    "simulation.max_rate": 6.7,
+    "simulation.max_pitch": 1.2,
+}
 
 
 @pytest.mark.parametrize("name", sorted(ftc.list_scenarios()))
@@ -122,6 +149,11 @@ def test_every_builder_takes_the_admissible_set_from_the_simulation_section(name
     scn = ftc.load_scenario(name, _LIMITS)
     loops = [compile_scenario(scn).params, get_method(scn.scenario.method).build(scn).params]
     for loop in loops:
-        got = [float(loop.max_position), float(loop.max_velocity), float(loop.max_rate), float(loop.max_pitch)]
+        got = [
+            float(loop.max_position),
+            float(loop.max_velocity),
+            float(loop.max_rate),
+            float(loop.max_pitch),
+        ]
         assert got == list(_LIMITS.values())
         assert loop.dt == scn.simulation.dt and loop.n_steps == scn.simulation.n_steps

@@ -22,7 +22,9 @@ def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
     batch_module.clear()
 
     def program(key):
-        return type("Compiled", (), {"static_key": key, "run": staticmethod(lambda p: {"y": 2.0 * p["x"]})})()
+        return type(
+            "Compiled", (), {"static_key": key, "run": staticmethod(lambda p: {"y": 2.0 * p["x"]})}
+        )()
 
     axes = {"x": 0}
     a = batched_run(program("a"), axes, 3)
@@ -37,11 +39,15 @@ def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
 
 
 def test_stack_params_shares_equal_leaves_and_pads():
-    p = [{"a": np.array([1.0, 2.0]), "b": 3.0, "c": np.array([np.nan])},
-         {"a": np.array([1.0, 2.5]), "b": 3.0, "c": np.array([np.nan])}]
+    p = [
+        {"a": np.array([1.0, 2.0]), "b": 3.0, "c": np.array([np.nan])},
+        {"a": np.array([1.0, 2.5]), "b": 3.0, "c": np.array([np.nan])},
+    ]
     batch, axes = stack_params(p, size=4)
     assert axes == {"a": 0, "b": None, "c": None}
-    assert batch["a"].shape == (4, 2) and np.array_equal(batch["a"][3], [1.0, 2.5])  # padded with the last
+    assert batch["a"].shape == (4, 2) and np.array_equal(
+        batch["a"][3], [1.0, 2.5]
+    )  # padded with the last
     assert batch["b"] == 3.0 and batch["c"].shape == (1,)  # NaN == NaN: shared
     with pytest.raises(ValueError, match="size = 1 < number of runs 2"):
         stack_params(p, size=1)
@@ -62,18 +68,29 @@ def _jaxpr_ops(jaxpr, names, found, loops_only=False, in_loop=False):
             for sub in subs:
                 inner = getattr(sub, "jaxpr", sub)
                 if hasattr(inner, "eqns"):
-                    _jaxpr_ops(inner, names, found, loops_only,
-                               in_loop or eqn.primitive.name in ("scan", "while"))
+                    _jaxpr_ops(
+                        inner,
+                        names,
+                        found,
+                        loops_only,
+                        in_loop or eqn.primitive.name in ("scan", "while"),
+                    )
     return found
 
 
 @pytest.fixture(scope="module")
 def li2020_runs():
-    scn = api.load_scenario("li2020-thm1", {"simulation.horizon": 2.0, "simulation.record_every": 50})
+    scn = api.load_scenario(
+        "li2020-thm1", {"simulation.horizon": 2.0, "simulation.record_every": 50}
+    )
     c = api.compile_scenario(scn)
     masses = (1.0, 1.07, 0.93)
-    params = [dataclasses.replace(c.params, plant=dataclasses.replace(c.params.plant, mass=c.params.plant.mass * m))
-              for m in masses]
+    params = [
+        dataclasses.replace(
+            c.params, plant=dataclasses.replace(c.params.plant, mass=c.params.plant.mass * m)
+        )
+        for m in masses
+    ]
     return c, params
 
 
@@ -89,10 +106,18 @@ def test_shared_batch_equals_single_and_fully_stacked_runs(li2020_runs):
     single = jax.jit(c.run)
     for k, p in enumerate(params):
         ref = np.asarray(single(p)["final"]["plant"]["q"])[:, :3]  # positions
-        np.testing.assert_allclose(shared["final"]["plant"]["q"][k][:, :3], ref, rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(full["final"]["plant"]["q"][k][:, :3], ref, rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(shared["records"]["mu1"][k], np.asarray(single(p)["records"]["mu1"]),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            shared["final"]["plant"]["q"][k][:, :3], ref, rtol=1e-12, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            full["final"]["plant"]["q"][k][:, :3], ref, rtol=1e-12, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            shared["records"]["mu1"][k],
+            np.asarray(single(p)["records"]["mu1"]),
+            rtol=1e-12,
+            atol=1e-12,
+        )
     assert shared["final"]["reference"].shape == (3,)  # outputs are broadcast to the run axis
 
 
@@ -115,14 +140,25 @@ def test_run_independent_work_is_not_batched(li2020_runs):
 
 def test_stack_params_grid_stores_each_leaf_by_what_it_depends_on():
     def run(r, c):
-        return {"shared": np.array([1.0, 2.0]), "row": np.array([10.0 * r]), "col": float(c),
-                "cell": np.array([r, c], dtype=float), "nan": np.array([np.nan])}
+        return {
+            "shared": np.array([1.0, 2.0]),
+            "row": np.array([10.0 * r]),
+            "col": float(c),
+            "cell": np.array([r, c], dtype=float),
+            "nan": np.array([np.nan]),
+        }
 
     grid = [[run(r, c) for c in range(3)] for r in range(2)]
     batch, row_axes, col_axes = stack_params_grid(grid)
-    assert (row_axes, col_axes) == ({"shared": None, "row": 0, "col": None, "cell": 0, "nan": None},
-                                     {"shared": None, "row": None, "col": 0, "cell": 0, "nan": None})
-    assert batch["shared"].shape == (2,) and batch["row"].shape == (2, 1) and batch["col"].shape == (3,)
+    assert (row_axes, col_axes) == (
+        {"shared": None, "row": 0, "col": None, "cell": 0, "nan": None},
+        {"shared": None, "row": None, "col": 0, "cell": 0, "nan": None},
+    )
+    assert (
+        batch["shared"].shape == (2,)
+        and batch["row"].shape == (2, 1)
+        and batch["col"].shape == (3,)
+    )
     assert batch["cell"].shape == (2, 3, 2) and batch["nan"].shape == (1,)
     np.testing.assert_array_equal(batch["row"][:, 0], [0.0, 10.0])
     np.testing.assert_array_equal(batch["col"], [0.0, 1.0, 2.0])
@@ -141,8 +177,15 @@ def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
     step acts on the seeds only -- its shapes lead with the row count and never carry the column count."""
     R, C = 5, 7  # neither is a dimension of the cw-pd-fault noise (4 spacecraft x 3 axes)
     h = {"simulation.horizon": 20.0}
-    scns = [[api.load_scenario("cw-pd-fault", {**h, "simulation.seed": 11 + r, "controller.kp": 1.0 + 0.25 * c})
-             for c in range(C)] for r in range(R)]
+    scns = [
+        [
+            api.load_scenario(
+                "cw-pd-fault", {**h, "simulation.seed": 11 + r, "controller.kp": 1.0 + 0.25 * c}
+            )
+            for c in range(C)
+        ]
+        for r in range(R)
+    ]
     compiled = [[api.compile_scenario(s) for s in row] for row in scns]
     c0 = compiled[0][0]
     batch, row_axes, col_axes = stack_params_grid([[c.params for c in row] for row in compiled])
@@ -151,11 +194,17 @@ def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
     assert np.shape(out["metrics"][0])[:2] == (R, C)
     for r in range(R):
         for c in range(C):
-            alone = jax.device_get(jitted_run(compiled[r][c])(compiled[r][c].params))  # one program, unbatched
+            alone = jax.device_get(
+                jitted_run(compiled[r][c])(compiled[r][c].params)
+            )  # one program, unbatched
             for k, (a, b) in enumerate(zip(out["metrics"], alone["metrics"], strict=True)):
-                np.testing.assert_allclose(np.asarray(a)[r, c], b, rtol=1e-12, atol=1e-300, err_msg=f"({r},{c}) {k}")
+                np.testing.assert_allclose(
+                    np.asarray(a)[r, c], b, rtol=1e-12, atol=1e-300, err_msg=f"({r},{c}) {k}"
+                )
     inner = jax.vmap(c0.run, in_axes=(col_axes,), axis_size=C)
     jaxpr = jax.make_jaxpr(jax.vmap(inner, in_axes=(row_axes,), axis_size=R))(batch).jaxpr
     draws = _jaxpr_ops(jaxpr, {"random_bits", "erf_inv"}, [], loops_only=True)
     assert draws, "expected random draws in the step"
-    assert all(shape[:1] == (R,) and C not in shape for _, shape in draws), draws  # (R, 4, 3), not (R, C, ...)
+    assert all(shape[:1] == (R,) and C not in shape for _, shape in draws), (
+        draws
+    )  # (R, 4, 3), not (R, C, ...)

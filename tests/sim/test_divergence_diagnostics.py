@@ -13,18 +13,30 @@ def _step(k, s):
     # x doubles with an exploding gain after step 3; "a_dv" and "b_effort" integrate |u| (u = -g x)
     g = jnp.where(k >= 3, 1e308, 0.5)
     u = -g * s["x"]
-    return {"a_dv": s["a_dv"] + jnp.abs(u), "b_effort": s["b_effort"] + u**2, "x": s["x"] + u * 0 + 2.0 * s["x"],
-            "z_mode": s["z_mode"]}
+    return {
+        "a_dv": s["a_dv"] + jnp.abs(u),
+        "b_effort": s["b_effort"] + u**2,
+        "x": s["x"] + u * 0 + 2.0 * s["x"],
+        "z_mode": s["z_mode"],
+    }
 
 
 def _state():
-    return {"a_dv": jnp.zeros(2), "b_effort": jnp.zeros(2), "x": jnp.array([1e-300, 1e300]),
-            "z_mode": jnp.asarray(1.0)}
+    return {
+        "a_dv": jnp.zeros(2),
+        "b_effort": jnp.zeros(2),
+        "x": jnp.array([1e-300, 1e300]),
+        "z_mode": jnp.asarray(1.0),
+    }
 
 
 def test_accumulators_are_found_from_the_jaxpr():
     acc = _accumulators(_step, jnp.asarray(0, dtype=jnp.int64), _state())
-    assert acc == {0, 1, 3}  # a_dv, b_effort and the constant mode: nothing else reads them; x is read
+    assert acc == {
+        0,
+        1,
+        3,
+    }  # a_dv, b_effort and the constant mode: nothing else reads them; x is read
 
 
 def test_names_the_state_not_the_accumulator_that_sorts_first():
@@ -49,6 +61,12 @@ def test_only_accumulators_non_finite_follows_to_the_cause():
     info = diagnose_divergence(step, s0, 0, 0.0, max_steps=3, dt=1.0)
     assert info.variable == "x" and info.step == 4
     # when the state never follows, the accumulator is named (never "<unknown>")
-    info = diagnose_divergence(lambda k, s: {"dv": s["dv"] + jnp.where(k >= 1, jnp.inf, 1.0), "x": s["x"]},
-                               s0, 0, 0.0, max_steps=3, dt=1.0)
+    info = diagnose_divergence(
+        lambda k, s: {"dv": s["dv"] + jnp.where(k >= 1, jnp.inf, 1.0), "x": s["x"]},
+        s0,
+        0,
+        0.0,
+        max_steps=3,
+        dt=1.0,
+    )
     assert info.variable == "dv" and info.step == 1

@@ -28,7 +28,9 @@ def test_held_draw_is_the_compiled_draw_bit_for_bit():
         held = jax.jit(lambda k_: _once(k_, _draw(k_)))(kk)
         assert np.array_equal(np.asarray(held["d"]), direct) and held["none"] is None
         # one draw read by several consumers in one program, as the RK stages read it
-        stages = jax.jit(lambda k_: (lambda d: [d, 2.0 * d, d + 1.0])(_once(k_, _draw(k_))["d"]))(kk)
+        stages = jax.jit(lambda k_: (lambda d: [d, 2.0 * d, d + 1.0])(_once(k_, _draw(k_))["d"]))(
+            kk
+        )
         assert np.array_equal(np.asarray(stages[0]), direct)
         np.testing.assert_array_equal(np.asarray(stages[1]), 2.0 * direct)  # exact: a power of two
         np.testing.assert_allclose(np.asarray(stages[2]), direct + 1.0, rtol=1e-15)

@@ -14,15 +14,19 @@ def _fold(metrics, samples):
     """samples: list of signal dicts at t = k DT; the last one is the horizon sample."""
     acc = init_accumulators(metrics, samples[0])
     for k, sig in enumerate(samples):
-        acc = update_accumulators(metrics, acc, jnp.asarray(k * DT), DT, sig, is_final=k == len(samples) - 1)
+        acc = update_accumulators(
+            metrics, acc, jnp.asarray(k * DT), DT, sig, is_final=k == len(samples) - 1
+        )
     return [np.asarray(v) for v in finalize(metrics, acc)]
 
 
 def test_first_time_at_or_above_threshold():
     x = np.array([0.0, 1.0, 0.5, 2.0, 2.0, 1.0])
-    m = [Metric("first", "x", reduce="first", threshold=2.0),
-         Metric("first_late", "x", reduce="first", threshold=0.9, start=0.25),
-         Metric("never", "x", reduce="first", threshold=5.0)]
+    m = [
+        Metric("first", "x", reduce="first", threshold=2.0),
+        Metric("first_late", "x", reduce="first", threshold=0.9, start=0.25),
+        Metric("never", "x", reduce="first", threshold=5.0),
+    ]
     got = _fold(m, [{"x": jnp.asarray(v)} for v in x])
     t = np.arange(x.size) * DT
     assert got[0] == pytest.approx(t[np.argmax(x >= 2.0)])
@@ -35,9 +39,11 @@ def test_gate_opens_the_window_on_a_signal():
     e = rng.normal(size=(12, 2, 3))  # (time, pair, axis)
     gate = np.array([0, 0, 1, 1, 0, 1, 1, 1, 0, 0, 1, 0], bool)
     samples = [{"e": jnp.asarray(e[k]), "g": jnp.asarray(gate[k])} for k in range(12)]
-    m = [Metric("gmax", "e", reduce="max", norm=True, norm_ord="inf", spacecraft="max", gate="g"),
-         Metric("gmean", "e", reduce="mean", component=1, spacecraft="max", gate="g", start=0.55),
-         Metric("closed", "e", reduce="max", norm=True, spacecraft="max", gate="g", end=0.15)]
+    m = [
+        Metric("gmax", "e", reduce="max", norm=True, norm_ord="inf", spacecraft="max", gate="g"),
+        Metric("gmean", "e", reduce="mean", component=1, spacecraft="max", gate="g", start=0.55),
+        Metric("closed", "e", reduce="max", norm=True, spacecraft="max", gate="g", end=0.15),
+    ]
     got = _fold(m, samples)
     assert got[0] == pytest.approx(np.max(np.abs(e[gate])))
     t = np.arange(12) * DT

@@ -28,18 +28,56 @@ def _metrics():
     """Every reduction the block fold handles, with windows that open and close inside a block, gates,
     per-spacecraft values and block sizes smaller than, equal to and larger than a fold block."""
     ms = []
-    for red in ("max", "min", "final", "at", "mean", "integral", "rms", "settle", "settle_delay", "first"):
-        ms += [Metric(f"{red}_all", "s", reduce=red, threshold=0.3),
-               Metric(f"{red}_win", "s", reduce=red, start=3.7, end=11.3, threshold=0.5),
-               Metric(f"{red}_each", "v", reduce=red, norm=True, spacecraft="each", start=1.0, threshold=1.2),
-               Metric(f"{red}_gated", "s", reduce=red, gate="g", threshold=-0.2),
-               Metric(f"{red}_gated_each", "v", reduce=red, component=2, spacecraft="each", gate="g", end=15.0)]
+    for red in (
+        "max",
+        "min",
+        "final",
+        "at",
+        "mean",
+        "integral",
+        "rms",
+        "settle",
+        "settle_delay",
+        "first",
+    ):
+        ms += [
+            Metric(f"{red}_all", "s", reduce=red, threshold=0.3),
+            Metric(f"{red}_win", "s", reduce=red, start=3.7, end=11.3, threshold=0.5),
+            Metric(
+                f"{red}_each",
+                "v",
+                reduce=red,
+                norm=True,
+                spacecraft="each",
+                start=1.0,
+                threshold=1.2,
+            ),
+            Metric(f"{red}_gated", "s", reduce=red, gate="g", threshold=-0.2),
+            Metric(
+                f"{red}_gated_each",
+                "v",
+                reduce=red,
+                component=2,
+                spacecraft="each",
+                gate="g",
+                end=15.0,
+            ),
+        ]
     for red in ("block_rms", "block_dev_rms"):
         for block in (1, 7, 40):
-            ms += [Metric(f"{red}_{block}", "s", reduce=red, block=block),
-                   Metric(f"{red}_{block}_win", "s", reduce=red, block=block, start=2.25, end=13.0),
-                   Metric(f"{red}_{block}_each", "v", reduce=red, component=0, spacecraft="each", block=block,
-                          gate="g")]
+            ms += [
+                Metric(f"{red}_{block}", "s", reduce=red, block=block),
+                Metric(f"{red}_{block}_win", "s", reduce=red, block=block, start=2.25, end=13.0),
+                Metric(
+                    f"{red}_{block}_each",
+                    "v",
+                    reduce=red,
+                    component=0,
+                    spacecraft="each",
+                    block=block,
+                    gate="g",
+                ),
+            ]
     ms.append(Metric("last_all", "s", reduce="last"))
     return tuple(ms)
 
@@ -48,9 +86,11 @@ def _metrics():
 def _programs(ms, dt):
     """Compiled (step update, horizon update, block fold) of the metrics ``ms`` at step ``dt``, shared by
     the tests (a fold recompiles per block length)."""
-    return (jax.jit(lambda a, t, x: update_accumulators(ms, a, t, dt, x)),
-            jax.jit(lambda a, t, x: update_accumulators(ms, a, t, dt, x, is_final=True)),
-            jax.jit(lambda a, k0, b: mo.fold_block(ms, a, k0, 0.0, dt, b)))
+    return (
+        jax.jit(lambda a, t, x: update_accumulators(ms, a, t, dt, x)),
+        jax.jit(lambda a, t, x: update_accumulators(ms, a, t, dt, x, is_final=True)),
+        jax.jit(lambda a, k0, b: mo.fold_block(ms, a, k0, 0.0, dt, b)),
+    )
 
 
 def _series(n, rng):
@@ -79,8 +119,11 @@ def _folded(ms, s, v, g, dt, lengths):
     acc = init_accumulators(ms, sample(0))
     k = 0
     for length in lengths:
-        block = {"s": jnp.asarray(s[k:k + length]), "v": jnp.asarray(v[k:k + length]),
-                 "g": jnp.asarray(g[k:k + length])}
+        block = {
+            "s": jnp.asarray(s[k : k + length]),
+            "v": jnp.asarray(v[k : k + length]),
+            "g": jnp.asarray(g[k : k + length]),
+        }
         acc = fold(acc, jnp.asarray(k, jnp.int64), block)
         k += length
     assert k == n
@@ -121,7 +164,9 @@ def test_fold_block_equals_the_sample_by_sample_fold(lengths):
             assert x == pytest.approx(w, rel=1e-15, abs=0.0), name  # the same sample, to an ulp
         else:
             assert x == pytest.approx(w, rel=1e-12, abs=1e-15), name
-    assert checked_value > 80 and checked_nan > 0  # the comparison covered values and NaN propagation
+    assert (
+        checked_value > 80 and checked_nan > 0
+    )  # the comparison covered values and NaN propagation
 
 
 def test_fold_block_equals_the_sample_by_sample_fold_without_nan():
@@ -135,7 +180,9 @@ def test_fold_block_equals_the_sample_by_sample_fold_without_nan():
     finite = [k for k, w in want.items() if np.isfinite(w)]
     assert len(finite) > 0.8 * len(want)
     for name in want:
-        assert (np.isnan(got[name]) and np.isnan(want[name])) or got[name] == pytest.approx(want[name], rel=1e-12), name
+        assert (np.isnan(got[name]) and np.isnan(want[name])) or got[name] == pytest.approx(
+            want[name], rel=1e-12
+        ), name
 
 
 def test_block_metric_accumulators_equal_across_fold_boundaries():
@@ -143,7 +190,10 @@ def test_block_metric_accumulators_equal_across_fold_boundaries():
     rng = np.random.default_rng(3)
     n, dt = 50, 1.0
     s, v, g = _series(n, rng)
-    ms = (Metric("b", "s", reduce="block_rms", block=7), Metric("d", "s", reduce="block_dev_rms", block=7))
+    ms = (
+        Metric("b", "s", reduce="block_rms", block=7),
+        Metric("d", "s", reduce="block_dev_rms", block=7),
+    )
     seq = _sequential(ms, s, v, g, dt)
     fold = _folded(ms, s, v, g, dt, (3, 9, 5, 20, 13))
     for a, b in zip(jax.tree_util.tree_leaves(seq), jax.tree_util.tree_leaves(fold), strict=True):
@@ -162,28 +212,39 @@ def test_closed_loop_metrics_folded_per_block_equal_the_per_step_fold():
     assert blocked._metric_block() == 50
     folded = jax.jit(lambda p: p.run())(blocked)
     stepwise = jax.jit(lambda p: p.run())(params)
-    got, want = (mo.metrics_dict(params.metrics, [np.asarray(x) for x in out["metrics"]])
-                 for out in (folded, stepwise))
+    got, want = (
+        mo.metrics_dict(params.metrics, [np.asarray(x) for x in out["metrics"]])
+        for out in (folded, stepwise)
+    )
     assert len(want) > 30
     for name, w in want.items():
-        assert (np.isnan(w) and np.isnan(got[name])) or got[name] == pytest.approx(w, rel=1e-12, abs=1e-300), name
+        assert (np.isnan(w) and np.isnan(got[name])) or got[name] == pytest.approx(
+            w, rel=1e-12, abs=1e-300
+        ), name
     # the dynamics are the same program either way: records bit for bit
     for name, rec in stepwise["records"].items():
-        np.testing.assert_array_equal(np.asarray(folded["records"][name]), np.asarray(rec), err_msg=name)
+        np.testing.assert_array_equal(
+            np.asarray(folded["records"][name]), np.asarray(rec), err_msg=name
+        )
 
 
 def test_automatic_metric_block_folds_long_runs_with_many_metrics():
     from formation_ftc import api
     from formation_ftc.sim.components import CompositionError
 
-    lof2tc = api.compile_scenario(api.load_scenario("gui2022-lof2tc")).params  # 42 metrics, 3e6 steps
+    lof2tc = api.compile_scenario(
+        api.load_scenario("gui2022-lof2tc")
+    ).params  # 42 metrics, 3e6 steps
     assert lof2tc.record_every == 100 and lof2tc._metric_block() == 50
     azizi = api.compile_scenario(api.load_scenario("azizi2009-llfr")).params  # 7 metrics
     assert azizi._metric_block() == 1
     li2020 = api.compile_scenario(api.load_scenario("li2020-thm1")).params  # records every 10 steps
     assert li2020.record_every == 10 and li2020._metric_block() == 1
     assert dataclasses.replace(li2020, metric_block=5)._metric_block() == 5
-    with pytest.raises(CompositionError, match="metric_block = 3 must be 0 .automatic. or a divisor of record_every = 10"):
+    with pytest.raises(
+        CompositionError,
+        match="metric_block = 3 must be 0 .automatic. or a divisor of record_every = 10",
+    ):
         dataclasses.replace(li2020, metric_block=3).validate()
 
 
@@ -196,18 +257,33 @@ def test_folded_metrics_in_a_vmapped_batch_equal_the_batch_folded_per_step():
     from formation_ftc.sim.compiled import compile_loop
 
     overrides = ({}, {"observer.initial_estimate": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]})
-    loops = [api.compile_scenario(api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 1.0, **ov})).params
-             for ov in overrides]
+    loops = [
+        api.compile_scenario(
+            api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 1.0, **ov})
+        ).params
+        for ov in overrides
+    ]
     outs = {}
     for block in (1, 20):
         batch, axes = stack_params([dataclasses.replace(p, metric_block=block) for p in loops])
-        outs[block] = batched_run(compile_loop(dataclasses.replace(loops[0], metric_block=block)), axes, 2)(batch)
+        outs[block] = batched_run(
+            compile_loop(dataclasses.replace(loops[0], metric_block=block)), axes, 2
+        )(batch)
     for name, rec in outs[1]["records"].items():
-        np.testing.assert_array_equal(np.asarray(outs[20]["records"][name]), np.asarray(rec), err_msg=name)
+        np.testing.assert_array_equal(
+            np.asarray(outs[20]["records"][name]), np.asarray(rec), err_msg=name
+        )
     rows = []
     for r in range(2):
-        got, want = (mo.metrics_dict(loops[0].metrics, [np.asarray(x)[r] for x in outs[b]["metrics"]]) for b in (20, 1))
+        got, want = (
+            mo.metrics_dict(loops[0].metrics, [np.asarray(x)[r] for x in outs[b]["metrics"]])
+            for b in (20, 1)
+        )
         for name, w in want.items():
-            assert (np.isnan(w) and np.isnan(got[name])) or got[name] == pytest.approx(w, rel=1e-12, abs=1e-300), name
+            assert (np.isnan(w) and np.isnan(got[name])) or got[name] == pytest.approx(
+                w, rel=1e-12, abs=1e-300
+            ), name
         rows.append(got)
-    assert any(rows[0][n] != rows[1][n] for n in rows[0] if np.isfinite(rows[0][n]))  # two different runs
+    assert any(
+        rows[0][n] != rows[1][n] for n in rows[0] if np.isfinite(rows[0][n])
+    )  # two different runs

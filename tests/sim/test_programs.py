@@ -50,7 +50,9 @@ def test_api_reruns_of_a_structure_trace_and_compile_once(cw_gain_pair, traces, 
     ds_a, m_a = simulate_with_metrics(a)
     assert traces[0] == 1 and len(run_compiles) == 1
     ds_b, m_b = simulate_with_metrics(b)
-    assert traces[0] == 1 and len(run_compiles) == 1  # another gain: the same program, not traced again
+    assert (
+        traces[0] == 1 and len(run_compiles) == 1
+    )  # another gain: the same program, not traced again
     assert m_a != m_b  # the gains differ, so do the results
     for scn, ds, m in ((a, ds_a, m_a), (b, ds_b, m_b)):
         ref_ds, ref_m = _fresh(scn)
@@ -60,9 +62,13 @@ def test_api_reruns_of_a_structure_trace_and_compile_once(cw_gain_pair, traces, 
     assert traces[0] == 3 and len(run_compiles) == 3  # each fresh program was traced and compiled
 
 
-def test_another_structure_is_traced_and_the_oldest_program_dropped(cw_gain_pair, traces, monkeypatch):
+def test_another_structure_is_traced_and_the_oldest_program_dropped(
+    cw_gain_pair, traces, monkeypatch
+):
     a, _ = cw_gain_pair
-    longer = load_scenario("cw-pd-fault", {"simulation.horizon": 30.0})  # more steps: another structure
+    longer = load_scenario(
+        "cw-pd-fault", {"simulation.horizon": 30.0}
+    )  # more steps: another structure
     assert compile_scenario(a).static_key != compile_scenario(longer).static_key
     monkeypatch.setattr(programs, "MAX_KEPT", 1)
     programs.clear()

@@ -18,7 +18,14 @@ import numpy as np
 import formation_ftc  # noqa: F401  (x64)
 from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
 from formation_ftc.sim.compiled import compile_loop
-from formation_ftc.sim.components import Controller, FlightInputs, Signal, Supervisor, component, static
+from formation_ftc.sim.components import (
+    Controller,
+    FlightInputs,
+    Signal,
+    Supervisor,
+    component,
+    static,
+)
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric
 
@@ -47,11 +54,16 @@ class LatchSupervisor(Supervisor):
         return state["mode"]
 
     def signals(self):
-        return (Signal("mode", (), "1", "mode in force over [t_k, t_k+1) (decision taken at t_k)"),
-                Signal("mode_changes", (), "1", "mode changes up to t_k, the decision at t_k included"))
+        return (
+            Signal("mode", (), "1", "mode in force over [t_k, t_k+1) (decision taken at t_k)"),
+            Signal("mode_changes", (), "1", "mode changes up to t_k, the decision at t_k included"),
+        )
 
     def outputs(self, t, state, decision):
-        return {"mode": decision.astype(jnp.float64), "mode_changes": state["changes"].astype(jnp.float64)}
+        return {
+            "mode": decision.astype(jnp.float64),
+            "mode_changes": state["changes"].astype(jnp.float64),
+        }
 
 
 @component
@@ -67,14 +79,26 @@ class ModeGainController(Controller):
 
 
 def _loop(record_every: int) -> ClosedLoop:
-    at = [Metric(f"{sig}_at_{k}", sig, reduce="at", start=float(k * DT), **kw)
-          for k in range(N_STEPS + 1)
-          for sig, kw in (("mode", {}), ("mode_changes", {}), ("command", {"norm": True, "spacecraft": "max"}))]
+    at = [
+        Metric(f"{sig}_at_{k}", sig, reduce="at", start=float(k * DT), **kw)
+        for k in range(N_STEPS + 1)
+        for sig, kw in (
+            ("mode", {}),
+            ("mode_changes", {}),
+            ("command", {"norm": True, "spacecraft": "max"}),
+        )
+    ]
     return ClosedLoop(
-        plant=DoubleIntegratorPlant(initial_position=jnp.array([[1.0]]), initial_velocity=jnp.array([[0.0]])),
-        controller=ModeGainController(count=1), supervisor=LatchSupervisor(dt=DT, switch=jnp.asarray(SWITCH)),
+        plant=DoubleIntegratorPlant(
+            initial_position=jnp.array([[1.0]]), initial_velocity=jnp.array([[0.0]])
+        ),
+        controller=ModeGainController(count=1),
+        supervisor=LatchSupervisor(dt=DT, switch=jnp.asarray(SWITCH)),
         metrics=tuple(at) + (Metric("t_switch", "mode", reduce="first", threshold=1.0),),
-        dt=DT, n_steps=N_STEPS, record_every=record_every)
+        dt=DT,
+        n_steps=N_STEPS,
+        record_every=record_every,
+    )
 
 
 def _run(record_every: int):
@@ -96,11 +120,16 @@ def test_recorded_mode_is_the_decision_in_force():
         assert ds["mode_changes"].values[k] == m[f"mode_changes_at_{k}"], k
         assert abs(ds["command"].values[k, 0, 0]) == m[f"command_at_{k}"], k
     # the recorded command moved the plant over [t_k, t_{k+1}) (exact step with the acceleration held)
-    r, v, u = ds["position"].values[:, 0, 0], ds["velocity"].values[:, 0, 0], ds["command"].values[:, 0, 0]
-    np.testing.assert_allclose(r[1:], r[:-1] + DT * v[:-1] + 0.5 * DT**2 * u[:-1], rtol=1e-13, atol=1e-15)
+    r, v, u = (
+        ds["position"].values[:, 0, 0],
+        ds["velocity"].values[:, 0, 0],
+        ds["command"].values[:, 0, 0],
+    )
+    np.testing.assert_allclose(
+        r[1:], r[:-1] + DT * v[:-1] + 0.5 * DT**2 * u[:-1], rtol=1e-13, atol=1e-15
+    )
     np.testing.assert_allclose(u, -(1.0 + 2.0 * mode) * r, rtol=1e-15)
     # decimated records are samples of the same signal
     ds3, m3 = _run(3)
     np.testing.assert_array_equal(ds3["mode"].values, mode[::3])
     assert m3 == m
-

@@ -78,8 +78,9 @@ def identity_routing(n_agents: int, n_channels: int) -> np.ndarray:
     return np.eye(n_agents * n_channels).reshape(n_agents, n_channels, n_agents, n_channels)
 
 
-def isolation_routing(n_agents: int, n_channels: int,
-                      moves: Mapping[tuple[int, int], tuple[int, int]]) -> np.ndarray:
+def isolation_routing(
+    n_agents: int, n_channels: int, moves: Mapping[tuple[int, int], tuple[int, int]]
+) -> np.ndarray:
     """Routing with isolation errors: ``moves[(n, q)] = (j, p)`` reports the fault of spacecraft n,
     channel q (0-based) as if it were in spacecraft j, channel p; other channels are routed correctly.
 
@@ -87,8 +88,12 @@ def isolation_routing(n_agents: int, n_channels: int,
     """
     R = identity_routing(n_agents, n_channels)
     for (n, q), (j, p) in moves.items():
-        for name, v, hi in (("spacecraft", n, n_agents), ("channel", q, n_channels),
-                            ("reported spacecraft", j, n_agents), ("reported channel", p, n_channels)):
+        for name, v, hi in (
+            ("spacecraft", n, n_agents),
+            ("channel", q, n_channels),
+            ("reported spacecraft", j, n_agents),
+            ("reported channel", p, n_channels),
+        ):
             if not 0 <= v < hi:
                 raise ValueError(f"fdi isolation: {name} index {v} out of range 0..{hi - 1}")
         R[:, :, n, q] = 0.0
@@ -96,9 +101,20 @@ def isolation_routing(n_agents: int, n_channels: int,
     return R
 
 
-def fdi_params(n_agents: int, n_channels: int, *, fault_mask, onset: float, delay: float = 0.0,
-               detected: bool = True, scale=1.0, bias=0.0, noise_std=0.0, routing=None,
-               presence_threshold: float = 0.0) -> dict[str, jax.Array]:
+def fdi_params(
+    n_agents: int,
+    n_channels: int,
+    *,
+    fault_mask,
+    onset: float,
+    delay: float = 0.0,
+    detected: bool = True,
+    scale=1.0,
+    bias=0.0,
+    noise_std=0.0,
+    routing=None,
+    presence_threshold: float = 0.0,
+) -> dict[str, jax.Array]:
     """Parameter pytree of the FDI (float64 arrays; vmappable).
 
     Parameters

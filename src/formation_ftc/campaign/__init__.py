@@ -20,11 +20,22 @@ from typing import TYPE_CHECKING
 
 # loaded on first use, so that ``formation-ftc --help`` does not import SciPy, pandas or JAX
 _LAZY = {
-    "DaskExecutor": "executors", "LocalExecutor": "executors", "make_executor": "executors",
-    "summarize": "report", "write_report": "report",
-    "CampaignOutcome": "runner", "make_plan": "runner", "run_campaign": "runner", "run_chunk": "runner",
-    "CampaignPlan": "sampling", "Chunk": "sampling", "RunInputs": "sampling",
-    "CampaignError": "spec", "CampaignSpec": "spec", "builtin_campaigns": "spec", "load_campaign": "spec",
+    "DaskExecutor": "executors",
+    "LocalExecutor": "executors",
+    "make_executor": "executors",
+    "summarize": "report",
+    "write_report": "report",
+    "CampaignOutcome": "runner",
+    "make_plan": "runner",
+    "run_campaign": "runner",
+    "run_chunk": "runner",
+    "CampaignPlan": "sampling",
+    "Chunk": "sampling",
+    "RunInputs": "sampling",
+    "CampaignError": "spec",
+    "CampaignSpec": "spec",
+    "builtin_campaigns": "spec",
+    "load_campaign": "spec",
     "CampaignStore": "storage",
 }
 
@@ -33,7 +44,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from formation_ftc.campaign.report import summarize, write_report
     from formation_ftc.campaign.runner import CampaignOutcome, make_plan, run_campaign, run_chunk
     from formation_ftc.campaign.sampling import CampaignPlan, Chunk, RunInputs
-    from formation_ftc.campaign.spec import CampaignError, CampaignSpec, builtin_campaigns, load_campaign
+    from formation_ftc.campaign.spec import (
+        CampaignError,
+        CampaignSpec,
+        builtin_campaigns,
+        load_campaign,
+    )
     from formation_ftc.campaign.storage import CampaignStore
 
 

@@ -29,7 +29,15 @@ from typing import Any
 import jax
 import numpy as np
 
-__all__ = ["FieldBinding", "Target", "bind_field", "bind_fields", "apply_bindings", "take_run", "params_close"]
+__all__ = [
+    "FieldBinding",
+    "Target",
+    "bind_field",
+    "bind_fields",
+    "apply_bindings",
+    "take_run",
+    "params_close",
+]
 
 _RTOL = 1e-12
 
@@ -75,8 +83,13 @@ def _probe_values(v0: float, candidates: Sequence[float], integer: bool) -> list
     return out[:2]
 
 
-def bind_field(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str, Any], path: str,
-               candidates: Sequence[float], integer: bool = False) -> FieldBinding | None:
+def bind_field(
+    build: Callable[[Mapping[str, Any]], Any],
+    values0: Mapping[str, Any],
+    path: str,
+    candidates: Sequence[float],
+    integer: bool = False,
+) -> FieldBinding | None:
     """Affine binding of ``path`` or None when the field changes the structure or is not affine.
 
     ``build(values)`` returns the compiled parameter pytree for the template values with ``values``
@@ -93,8 +106,11 @@ def bind_field(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str, 
     l0, t0 = _leaves(p0)
     l1, t1 = _leaves(p1)
     l2, t2 = _leaves(p2)
-    if t0 != t1 or t0 != t2 or any(a.shape != b.shape or a.shape != c.shape
-                                   for a, b, c in zip(l0, l1, l2, strict=True)):
+    if (
+        t0 != t1
+        or t0 != t2
+        or any(a.shape != b.shape or a.shape != c.shape for a, b, c in zip(l0, l1, l2, strict=True))
+    ):
         return None  # structural field
     v1, v2 = probes
     targets = []
@@ -109,16 +125,21 @@ def bind_field(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str, 
         if not np.allclose(pred, f2[changed], rtol=1e-10, atol=0.0):
             return None
         # snap exact identities (a gain or a mass copied into a leaf)
-        ident = np.isclose(scale, 1.0, rtol=1e-12, atol=0) & np.isclose(offset, 0.0, rtol=0, atol=1e-12 * max(1.0, abs(v0)))
+        ident = np.isclose(scale, 1.0, rtol=1e-12, atol=0) & np.isclose(
+            offset, 0.0, rtol=0, atol=1e-12 * max(1.0, abs(v0))
+        )
         scale = np.where(ident, 1.0, scale)
         offset = np.where(ident, 0.0, offset)
         targets.append(Target(n, changed, scale, offset))
     return FieldBinding(path, tuple(targets))
 
 
-def bind_fields(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str, Any],
-                candidates: Mapping[str, Sequence[float]], integer: Mapping[str, bool]
-                ) -> dict[str, FieldBinding] | None:
+def bind_fields(
+    build: Callable[[Mapping[str, Any]], Any],
+    values0: Mapping[str, Any],
+    candidates: Mapping[str, Sequence[float]],
+    integer: Mapping[str, bool],
+) -> dict[str, FieldBinding] | None:
     """Bindings of every field in ``candidates`` (None when any field is not bindable, or two fields
     write the same element)."""
     out = {}
@@ -136,8 +157,9 @@ def bind_fields(build: Callable[[Mapping[str, Any]], Any], values0: Mapping[str,
     return out
 
 
-def apply_bindings(template, bindings: Mapping[str, FieldBinding], values: Mapping[str, np.ndarray],
-                   size: int) -> tuple[Any, Any]:
+def apply_bindings(
+    template, bindings: Mapping[str, FieldBinding], values: Mapping[str, np.ndarray], size: int
+) -> tuple[Any, Any]:
     """Batch of ``size`` parameter pytrees: the template with every bound field's per-run values
     written into its targets. Returns ``(batch, in_axes)`` as :func:`formation_ftc.sim.batch.stack_params`:
     untouched leaves stay shared (``in_axes`` None)."""
@@ -159,7 +181,9 @@ def apply_bindings(template, bindings: Mapping[str, FieldBinding], values: Mappi
     for n, arr in batched.items():
         leaves[n] = arr.reshape((size,) + leaves[n].shape).astype(leaves[n].dtype)
         axes[n] = 0
-    return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(treedef, axes)
+    return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(
+        treedef, axes
+    )
 
 
 def take_run(batch, in_axes, j: int):
@@ -167,7 +191,8 @@ def take_run(batch, in_axes, j: int):
     leaves, treedef = jax.tree_util.tree_flatten(batch)
     axes = treedef.flatten_up_to(in_axes)  # type: ignore[attr-defined]  # PyTreeDef unresolved in jax stubs  # fields that are None are empty subtrees, not leaves
     return jax.tree_util.tree_unflatten(
-        treedef, [a if ax is None else np.asarray(a)[j] for a, ax in zip(leaves, axes, strict=True)])
+        treedef, [a if ax is None else np.asarray(a)[j] for a, ax in zip(leaves, axes, strict=True)]
+    )
 
 
 def params_close(a, b) -> bool:
@@ -185,4 +210,3 @@ def params_close(a, b) -> bool:
         elif not np.array_equal(x, y):
             return False
     return True
-

@@ -25,9 +25,14 @@ def _cmd_list(args) -> int:
         meta = tomllib.loads(text).get("campaign", {})
         if args.json:
             base = meta.get("base", [])
-            rows.append({"name": name, "description": str(meta.get("description", "")),
-                         "base": [str(b) for b in (base if isinstance(base, list) else [base])],
-                         "runs": meta.get("runs") if isinstance(meta.get("runs"), int) else None})
+            rows.append(
+                {
+                    "name": name,
+                    "description": str(meta.get("description", "")),
+                    "base": [str(b) for b in (base if isinstance(base, list) else [base])],
+                    "runs": meta.get("runs") if isinstance(meta.get("runs"), int) else None,
+                }
+            )
         else:
             print(f"{name}  {meta.get('description', '')}")
     if args.json:
@@ -59,13 +64,20 @@ def _cmd_run(args) -> int:
 
     console = Console(stderr=True)
     if not str(args.out).strip():
-        raise CampaignError("--out: empty path; give the results directory, e.g. --out out/campaign1")
+        raise CampaignError(
+            "--out: empty path; give the results directory, e.g. --out out/campaign1"
+        )
     plan = make_plan(args.campaign, runs=args.runs, chunk_size=args.chunk_size)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
-    batch = check_campaign_budgets(plan, budgets)["batch_memory"]  # before anything is compiled or written
-    executor = make_executor(workers=_capped(args.workers, "--workers", batch), scheduler=args.scheduler,
-                             dask_local=_capped(args.dask_local, "--dask-local", batch),
-                             connect_timeout=args.connect_timeout)
+    batch = check_campaign_budgets(plan, budgets)[
+        "batch_memory"
+    ]  # before anything is compiled or written
+    executor = make_executor(
+        workers=_capped(args.workers, "--workers", batch),
+        scheduler=args.scheduler,
+        dask_local=_capped(args.dask_local, "--dask-local", batch),
+        connect_timeout=args.connect_timeout,
+    )
     outcome = run_campaign(plan, args.out, executor=executor, progress=not args.no_progress)
     console.print(f"campaign done ({outcome.executor}): {outcome}", soft_wrap=True, markup=False)
     return 0
@@ -85,11 +97,22 @@ def _cmd_report(args) -> int:
 
         report = Path(args.dir) / "report"
         units = CampaignStore.read(args.dir).units()  # of the chunks' columns (parquet_units)
-        print_json({"dir": str(args.dir), "summary": summary,
-                    "units": {c.removeprefix("metric:"): u for c, u in units.items() if c.startswith("metric:")},
-                    "outputs": {"summary_json": str(report / "summary.json"),
-                                "summary_csv": str(report / "summary.csv"),
-                                "figures": [str(f) for f in figures]}})
+        print_json(
+            {
+                "dir": str(args.dir),
+                "summary": summary,
+                "units": {
+                    c.removeprefix("metric:"): u
+                    for c, u in units.items()
+                    if c.startswith("metric:")
+                },
+                "outputs": {
+                    "summary_json": str(report / "summary.json"),
+                    "summary_csv": str(report / "summary.csv"),
+                    "figures": [str(f) for f in figures],
+                },
+            }
+        )
         return 0
     print(f"wrote {args.dir}/report/summary.json, summary.csv and {len(figures)} figure(s)")
     return 0
@@ -98,14 +121,23 @@ def _cmd_report(args) -> int:
 def add_dask_options(parser: argparse.ArgumentParser) -> None:
     """The Dask executor options shared by ``campaign run`` and ``league run`` (mutually exclusive)."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT")
-    g.add_argument("--dask-local", metavar="N", type=int, default=None,
-                   help="start a Dask LocalCluster with N worker processes")
+    g.add_argument(
+        "--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT"
+    )
+    g.add_argument(
+        "--dask-local",
+        metavar="N",
+        type=int,
+        default=None,
+        help="start a Dask LocalCluster with N worker processes",
+    )
 
 
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``campaign`` command (with ``list``, ``run``, ``report``) to ``subparsers``."""
-    p = subparsers.add_parser("campaign", help="Monte Carlo campaigns: list, run (resumable), report")
+    p = subparsers.add_parser(
+        "campaign", help="Monte Carlo campaigns: list, run (resumable), report"
+    )
     sub = p.add_subparsers(dest="campaign_command", required=True)
 
     q = sub.add_parser("list", help="list the built-in campaigns (name first)")
@@ -113,27 +145,58 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.set_defaults(func=_cmd_list)
 
     q = sub.add_parser("run", help="run or resume a campaign into a results directory")
-    q.add_argument("campaign", metavar="NAME_OR_FILE", help="built-in campaign name or campaign TOML file")
-    q.add_argument("--out", required=True, help="results directory (resumed when it holds this campaign)")
-    q.add_argument("--runs", type=int, default=None, help="runs per grid point (overrides the file)")
-    q.add_argument("--chunk-size", type=int, default=None, help="runs per vmap batch (overrides the file)")
-    q.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
-                        "one per chunk), in-process for campaigns under 10 million run-steps")
+    q.add_argument(
+        "campaign", metavar="NAME_OR_FILE", help="built-in campaign name or campaign TOML file"
+    )
+    q.add_argument(
+        "--out", required=True, help="results directory (resumed when it holds this campaign)"
+    )
+    q.add_argument(
+        "--runs", type=int, default=None, help="runs per grid point (overrides the file)"
+    )
+    q.add_argument(
+        "--chunk-size", type=int, default=None, help="runs per vmap batch (overrides the file)"
+    )
+    q.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
+        "one per chunk), in-process for campaigns under 10 million run-steps",
+    )
     add_dask_options(q)
-    q.add_argument("--connect-timeout", metavar="S", type=float, default=None,
-                   help="seconds allowed for the Dask scheduler handshake (default 30)")
-    q.add_argument("--max-memory", metavar="SIZE", default=None,
-                   help="memory budget of one batch of chunk-size runs, e.g. 32GB (default 8 GiB or half the "
-                        "RAM; 0 = none)")
-    q.add_argument("--max-run-steps", metavar="N", default=None,
-                   help="integration steps allowed per run (default 1e9; 0 = none)")
-    q.add_argument("--max-campaign-steps", metavar="N", default=None,
-                   help="run-steps allowed in the whole campaign (default 1e11; 0 = none)")
+    q.add_argument(
+        "--connect-timeout",
+        metavar="S",
+        type=float,
+        default=None,
+        help="seconds allowed for the Dask scheduler handshake (default 30)",
+    )
+    q.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        default=None,
+        help="memory budget of one batch of chunk-size runs, e.g. 32GB (default 8 GiB or half the "
+        "RAM; 0 = none)",
+    )
+    q.add_argument(
+        "--max-run-steps",
+        metavar="N",
+        default=None,
+        help="integration steps allowed per run (default 1e9; 0 = none)",
+    )
+    q.add_argument(
+        "--max-campaign-steps",
+        metavar="N",
+        default=None,
+        help="run-steps allowed in the whole campaign (default 1e11; 0 = none)",
+    )
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_run)
 
-    q = sub.add_parser("report", help="summary statistics and sensitivity plots of a campaign directory")
+    q = sub.add_parser(
+        "report", help="summary statistics and sensitivity plots of a campaign directory"
+    )
     q.add_argument("dir", metavar="DIR", help="campaign results directory")
     q.add_argument("--no-plots", action="store_true", help="tables only")
     add_json_option(q)
@@ -153,6 +216,7 @@ def main(argv: list[str] | None = None) -> int:
     with lossy_stderr():
         args = parser.parse_args(argv)
         return run_guarded(args.func, args)
+
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

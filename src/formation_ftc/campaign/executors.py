@@ -50,9 +50,20 @@ from formation_ftc.sim.runtime import schedulable_cpus
 if TYPE_CHECKING:  # optional dependency (the dask extra)
     from dask.distributed import Client, LocalCluster
 
-__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "parse_scheduler_address", "check_reachable",
-           "check_scheduler", "auto_workers", "cap_workers", "available_memory", "die_with_parent",
-           "AUTO_POOL_MIN_RUN_STEPS", "DEFAULT_CONNECT_TIMEOUT"]
+__all__ = [
+    "LocalExecutor",
+    "DaskExecutor",
+    "make_executor",
+    "parse_scheduler_address",
+    "check_reachable",
+    "check_scheduler",
+    "auto_workers",
+    "cap_workers",
+    "available_memory",
+    "die_with_parent",
+    "AUTO_POOL_MIN_RUN_STEPS",
+    "DEFAULT_CONNECT_TIMEOUT",
+]
 
 #: seconds allowed to reach a Dask scheduler and get its handshake reply
 DEFAULT_CONNECT_TIMEOUT = 30.0
@@ -92,16 +103,27 @@ def cap_workers(requested: int, *, per_worker_bytes: int, what: str) -> int:
     Lowering it prints one warning line on stderr naming ``what`` (e.g. ``"--workers"``)."""
     cores = schedulable_cpus()
     memory = available_memory()
-    by_memory = max(1, memory // per_worker_bytes) if memory is not None and per_worker_bytes > 0 else None
+    by_memory = (
+        max(1, memory // per_worker_bytes) if memory is not None and per_worker_bytes > 0 else None
+    )
     n = max(1, min(requested, cores, by_memory if by_memory is not None else requested))
     if n < requested:
         from formation_ftc.limits import format_bytes
 
-        room = "" if memory is None else (f", {format_bytes(memory)} of memory available at about "
-                                          f"{format_bytes(per_worker_bytes)} per worker")
+        room = (
+            ""
+            if memory is None
+            else (
+                f", {format_bytes(memory)} of memory available at about "
+                f"{format_bytes(per_worker_bytes)} per worker"
+            )
+        )
         try:
-            print(f"warning: {what}: {requested} worker processes asked for, using {n} ({cores} schedulable CPU "
-                  f"core(s){room})", file=sys.stderr)
+            print(
+                f"warning: {what}: {requested} worker processes asked for, using {n} ({cores} schedulable CPU "
+                f"core(s){room})",
+                file=sys.stderr,
+            )
         except (OSError, ValueError):  # a closed or full stderr costs the warning, nothing else
             pass
     return n
@@ -149,9 +171,12 @@ class LocalExecutor:
 
     def __enter__(self) -> LocalExecutor:
         if self.workers > 1:
-            self._pool = ProcessPoolExecutor(max_workers=self.workers,
-                                             mp_context=multiprocessing.get_context("spawn"),
-                                             initializer=die_with_parent, initargs=(os.getpid(),))
+            self._pool = ProcessPoolExecutor(
+                max_workers=self.workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=die_with_parent,
+                initargs=(os.getpid(),),
+            )
         return self
 
     def __exit__(self, *exc) -> None:
@@ -159,7 +184,9 @@ class LocalExecutor:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
-    def map(self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None) -> Iterator[Any]:
+    def map(
+        self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None
+    ) -> Iterator[Any]:
         """Results of ``fn(plan, chunk)`` for every chunk, as they finish.
 
         In-process with ``start`` (``start(plan, chunk)`` returns the call that finishes the chunk, as
@@ -192,7 +219,11 @@ class LocalExecutor:
                 f.cancel()
 
     def describe(self) -> str:
-        return "local (in-process)" if self.workers == 1 else f"local process pool ({self.workers} workers)"
+        return (
+            "local (in-process)"
+            if self.workers == 1
+            else f"local process pool ({self.workers} workers)"
+        )
 
 
 def parse_scheduler_address(address: str) -> tuple[str, int]:
@@ -204,7 +235,9 @@ def parse_scheduler_address(address: str) -> tuple[str, int]:
     except ValueError:
         port = None
     if parts.scheme != "tcp" or not parts.hostname or port is None:
-        raise CampaignError(f"--scheduler {address!r}: expected tcp://HOST:PORT (e.g. tcp://10.0.0.5:8786)")
+        raise CampaignError(
+            f"--scheduler {address!r}: expected tcp://HOST:PORT (e.g. tcp://10.0.0.5:8786)"
+        )
     return parts.hostname, port
 
 
@@ -236,12 +269,16 @@ def check_scheduler(address: str, timeout: float = DEFAULT_CONNECT_TIMEOUT) -> d
     t.join(timeout + 5.0)  # the probe bounds itself; this join bounds even a stuck event loop
     reply, exc = result.get("reply"), result.get("error")
     if t.is_alive() or isinstance(exc, asyncio.TimeoutError | TimeoutError):
-        raise CampaignError(f"--scheduler {address}: no Dask scheduler handshake within {timeout:g} s (something "
-                            f"accepts connections there but does not answer like a Dask scheduler; check the "
-                            f"address and port, or raise --connect-timeout)")
+        raise CampaignError(
+            f"--scheduler {address}: no Dask scheduler handshake within {timeout:g} s (something "
+            f"accepts connections there but does not answer like a Dask scheduler; check the "
+            f"address and port, or raise --connect-timeout)"
+        )
     if exc is not None:
-        raise CampaignError(f"--scheduler {address}: not a Dask scheduler, or it refused the handshake "
-                            f"({type(exc).__name__}: {exc})")
+        raise CampaignError(
+            f"--scheduler {address}: not a Dask scheduler, or it refused the handshake "
+            f"({type(exc).__name__}: {exc})"
+        )
     if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
         kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
         raise CampaignError(f"--scheduler {address}: answered as {kind!r}, not as a Dask scheduler")
@@ -255,15 +292,21 @@ def check_reachable(address: str, timeout: float = 3.0) -> None:
         with socket.create_connection((host, port), timeout=timeout):
             pass
     except OSError as exc:
-        raise CampaignError(f"cannot reach the Dask scheduler at {address} ({type(exc).__name__}: {exc}; "
-                            f"checked with a {timeout:g} s timeout before starting any run)") from None
+        raise CampaignError(
+            f"cannot reach the Dask scheduler at {address} ({type(exc).__name__}: {exc}; "
+            f"checked with a {timeout:g} s timeout before starting any run)"
+        ) from None
 
 
 class DaskExecutor:
     """Chunks as tasks on a Dask cluster (existing scheduler, or a LocalCluster of ``n_local`` workers)."""
 
-    def __init__(self, scheduler: str | None = None, n_local: int | None = None,
-                 connect_timeout: float | None = None):
+    def __init__(
+        self,
+        scheduler: str | None = None,
+        n_local: int | None = None,
+        connect_timeout: float | None = None,
+    ):
         if (scheduler is None) == (n_local is None):
             raise CampaignError("give exactly one of --scheduler ADDR and --dask-local N")
         if n_local is not None and n_local < 1:
@@ -277,7 +320,9 @@ class DaskExecutor:
             try:
                 connect_timeout = float(env) if env else DEFAULT_CONNECT_TIMEOUT
             except ValueError:
-                raise CampaignError(f"FORMATION_FTC_DASK_CONNECT_TIMEOUT={env!r}: expected seconds") from None
+                raise CampaignError(
+                    f"FORMATION_FTC_DASK_CONNECT_TIMEOUT={env!r}: expected seconds"
+                ) from None
         if not (connect_timeout > 0 and connect_timeout < 1e6):
             raise CampaignError(f"--connect-timeout must be > 0 s, got {connect_timeout}")
         self.connect_timeout = float(connect_timeout)
@@ -288,18 +333,26 @@ class DaskExecutor:
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
-            raise CampaignError("Dask executors need the optional dask extra: "
-                                "pip install 'formation-ftc[dask]'") from None
+            raise CampaignError(
+                "Dask executors need the optional dask extra: pip install 'formation-ftc[dask]'"
+            ) from None
 
         if self.scheduler is not None:
             check_scheduler(self.scheduler, self.connect_timeout)
             try:
                 self.client = Client(self.scheduler, timeout=f"{self.connect_timeout}s")
             except Exception as exc:  # noqa: BLE001
-                raise CampaignError(f"cannot connect to the Dask scheduler at {self.scheduler}: {exc}") from None
+                raise CampaignError(
+                    f"cannot connect to the Dask scheduler at {self.scheduler}: {exc}"
+                ) from None
         else:
-            self._cluster = LocalCluster(n_workers=self.n_local, threads_per_worker=1, processes=True,
-                                         dashboard_address=None, silence_logs=logging.ERROR)
+            self._cluster = LocalCluster(
+                n_workers=self.n_local,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
             self.client = Client(self._cluster)
         return self
 
@@ -311,7 +364,9 @@ class DaskExecutor:
             self._cluster.close()
             self._cluster = None
 
-    def map(self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None) -> Iterator[Any]:
+    def map(
+        self, fn: Callable, plan: Any, chunks: list, start: Callable | None = None
+    ) -> Iterator[Any]:
         """Results of ``fn(plan, chunk)`` as the cluster finishes them (``start`` is for in-process
         executors and is not used here: each worker runs whole chunks)."""
         from dask.distributed import as_completed as dask_as_completed
@@ -320,9 +375,16 @@ class DaskExecutor:
             return
         assert self.client is not None, "DaskExecutor.map outside its with block"
         plan_future = self.client.scatter(plan, broadcast=True)
-        futures = [self.client.submit(fn, plan_future, c, pure=False,
-                                      key=f"campaign-{plan.hash[:10]}-chunk-{c.chunk_id}-{os.getpid()}")
-                   for c in chunks]
+        futures = [
+            self.client.submit(
+                fn,
+                plan_future,
+                c,
+                pure=False,
+                key=f"campaign-{plan.hash[:10]}-chunk-{c.chunk_id}-{os.getpid()}",
+            )
+            for c in chunks
+        ]
         try:
             for f in dask_as_completed(futures):
                 yield f.result()
@@ -331,14 +393,26 @@ class DaskExecutor:
                 f.cancel()
 
     def describe(self) -> str:
-        return f"dask ({self.scheduler})" if self.scheduler else f"dask LocalCluster ({self.n_local} workers)"
+        return (
+            f"dask ({self.scheduler})"
+            if self.scheduler
+            else f"dask LocalCluster ({self.n_local} workers)"
+        )
 
 
-def make_executor(workers: int | None = None, scheduler: str | None = None, dask_local: int | None = None,
-                  connect_timeout: float | None = None):
+def make_executor(
+    workers: int | None = None,
+    scheduler: str | None = None,
+    dask_local: int | None = None,
+    connect_timeout: float | None = None,
+):
     """The executor the command-line options ask for (``workers=None``: automatic local pool)."""
     if scheduler is not None or dask_local is not None:
         if workers is not None:
-            raise CampaignError("--workers is for the local executor; with Dask the cluster sets the workers")
-        return DaskExecutor(scheduler=scheduler, n_local=dask_local, connect_timeout=connect_timeout)
+            raise CampaignError(
+                "--workers is for the local executor; with Dask the cluster sets the workers"
+            )
+        return DaskExecutor(
+            scheduler=scheduler, n_local=dask_local, connect_timeout=connect_timeout
+        )
     return LocalExecutor(workers)

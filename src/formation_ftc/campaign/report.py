@@ -30,16 +30,27 @@ _MAX_METRICS_PER_FIGURE = 6
 def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
     v = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
     finite = v[np.isfinite(v)]
-    out: dict[str, Any] = {"n_ok": int(finite.size), "n_runs": int(n_runs),
-                           "failure_rate": float(1 - finite.size / n_runs) if n_runs else float("nan")}
+    out: dict[str, Any] = {
+        "n_ok": int(finite.size),
+        "n_runs": int(n_runs),
+        "failure_rate": float(1 - finite.size / n_runs) if n_runs else float("nan"),
+    }
     if finite.size:
-        out.update(mean=float(finite.mean()),
-                   std=float(finite.std(ddof=1)) if finite.size > 1 else float("nan"),
-                   min=float(finite.min()), max=float(finite.max()))
+        out.update(
+            mean=float(finite.mean()),
+            std=float(finite.std(ddof=1)) if finite.size > 1 else float("nan"),
+            min=float(finite.min()),
+            max=float(finite.max()),
+        )
         for p, q in zip(PERCENTILES, np.percentile(finite, PERCENTILES), strict=True):
             out[f"p{p}"] = float(q)
     else:
-        out.update({k: float("nan") for k in ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))})
+        out.update(
+            {
+                k: float("nan")
+                for k in ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
+            }
+        )
     return out
 
 
@@ -69,7 +80,7 @@ def _metric_stats(df: pd.DataFrame, bases: dict[str, set] | None) -> dict[str, d
     for c in _metric_columns(df):
         sub = df if bases is None else df[df["scenario"].isin(bases[c])]
         if len(sub):
-            out[c[len("metric:"):]] = _stats(sub[c], len(sub))
+            out[c[len("metric:") :]] = _stats(sub[c], len(sub))
     return out
 
 
@@ -79,12 +90,19 @@ def summarize(df: pd.DataFrame, manifest: dict[str, Any]) -> dict[str, Any]:
     failed = int((df["status"] != "ok").sum()) if n else 0
     bases = _bases_returning(df) if n else None
     out: dict[str, Any] = {
-        "campaign": manifest.get("campaign"), "spec_hash": manifest.get("spec_hash"),
-        "runs_total": int(manifest.get("n_runs", n)), "runs_done": n, "runs_failed": failed,
+        "campaign": manifest.get("campaign"),
+        "spec_hash": manifest.get("spec_hash"),
+        "runs_total": int(manifest.get("n_runs", n)),
+        "runs_done": n,
+        "runs_failed": failed,
         "failure_rate": failed / n if n else float("nan"),
         "metrics": _metric_stats(df, bases),
         "by_swept_value": {},
-        "failures": df.loc[df["status"] != "ok", ["run_id", "diagnostic"]].head(20).to_dict("records") if n else [],
+        "failures": df.loc[df["status"] != "ok", ["run_id", "diagnostic"]]
+        .head(20)
+        .to_dict("records")
+        if n
+        else [],
     }
     for col in manifest.get("swept", []):
         if col not in df.columns:
@@ -92,7 +110,8 @@ def summarize(df: pd.DataFrame, manifest: dict[str, Any]) -> dict[str, Any]:
         groups = {}
         for value, sub in df.groupby(col, sort=True):
             groups[str(value)] = {
-                "runs": int(len(sub)), "failed": int((sub["status"] != "ok").sum()),
+                "runs": int(len(sub)),
+                "failed": int((sub["status"] != "ok").sum()),
                 "metrics": _metric_stats(sub, bases),
             }
         out["by_swept_value"][col.removeprefix("input:")] = groups
@@ -127,7 +146,9 @@ def field_unit(manifest: dict[str, Any], path: str) -> str:
             info = fields[part]
             desc = info.description or ""
             ann = info.annotation
-            model = next((a for a in getattr(ann, "__args__", (ann,)) if hasattr(a, "model_fields")), ann)
+            model = next(
+                (a for a in getattr(ann, "__args__", (ann,)) if hasattr(a, "model_fields")), ann
+            )
         m = re.findall(r"\[([^\]]+)\]", desc)
         return m[-1] if m else ""
     except Exception:  # noqa: BLE001 - a label is cosmetic
@@ -161,7 +182,9 @@ def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) 
             continue
         path = col.removeprefix("input:")
         unit = field_unit(manifest, path)
-        fig, axes = new_figure(len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: sensitivity to {path}")
+        fig, axes = new_figure(
+            len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: sensitivity to {path}"
+        )
         x_all = pd.to_numeric(df[col], errors="coerce")
         ok = df["status"] == "ok"
         for ax, m in zip(axes[:, 0], metrics, strict=False):
@@ -174,12 +197,20 @@ def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) 
             bad = df.index[~ok]
             if len(bad):
                 lo = np.nanmin(y[ok]) if ok.any() else 0.0
-                ax.scatter(x_all[bad], np.full(len(bad), lo), marker="x", color="k", s=14,
-                           label=f"failed ({len(bad)})")
+                ax.scatter(
+                    x_all[bad],
+                    np.full(len(bad), lo),
+                    marker="x",
+                    color="k",
+                    s=14,
+                    label=f"failed ({len(bad)})",
+                )
             ax.set_ylabel(m.removeprefix("metric:"))
         axes[-1, 0].set_xlabel(f"{path} [{unit}]" if unit else path)
         axes[0, 0].legend(loc="best")
-        paths.append(save_figure(fig, out / f"sensitivity_{re.sub(r'[^A-Za-z0-9_.-]', '_', path)}.png"))
+        paths.append(
+            save_figure(fig, out / f"sensitivity_{re.sub(r'[^A-Za-z0-9_.-]', '_', path)}.png")
+        )
     return paths
 
 
@@ -189,7 +220,9 @@ def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path)
     paths = []
     for field, groups in summary["by_swept_value"].items():
         values = list(groups)
-        metrics = list(next(iter(groups.values()))["metrics"])[:_MAX_METRICS_PER_FIGURE] if groups else []
+        metrics = (
+            list(next(iter(groups.values()))["metrics"])[:_MAX_METRICS_PER_FIGURE] if groups else []
+        )
         if not metrics:
             continue
         try:
@@ -198,7 +231,9 @@ def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path)
             xlabel = f"{field} [{unit}]" if unit else field
         except ValueError:
             xs, xlabel = list(range(len(values))), field
-        fig, axes = new_figure(len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: {field} sweep")
+        fig, axes = new_figure(
+            len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: {field} sweep"
+        )
         for ax, m in zip(axes[:, 0], metrics, strict=False):
             med = [groups[v]["metrics"][m]["p50"] for v in values]
             lo = [groups[v]["metrics"][m]["p5"] for v in values]
@@ -214,7 +249,9 @@ def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path)
     return paths
 
 
-def write_report(campaign_dir: str | Path, console=None, plots: bool = True) -> tuple[dict[str, Any], list[Path]]:
+def write_report(
+    campaign_dir: str | Path, console=None, plots: bool = True
+) -> tuple[dict[str, Any], list[Path]]:
     """Read ``campaign_dir``, print the tables, write ``report/`` (summary.json, summary.csv, PNGs)."""
     store = CampaignStore.read(campaign_dir)
     df = store.load_results()
@@ -236,8 +273,10 @@ def write_report(campaign_dir: str | Path, console=None, plots: bool = True) -> 
 def _print(console, summary: dict[str, Any], table: pd.DataFrame) -> None:
     from rich.table import Table
 
-    console.print(f"[bold]{summary['campaign']}[/]: {summary['runs_done']}/{summary['runs_total']} runs done, "
-                  f"{summary['runs_failed']} failed (failure rate {summary['failure_rate']:.3g})")
+    console.print(
+        f"[bold]{summary['campaign']}[/]: {summary['runs_done']}/{summary['runs_total']} runs done, "
+        f"{summary['runs_failed']} failed (failure rate {summary['failure_rate']:.3g})"
+    )
     cols = ["group", "value", "metric", "n_ok", "failure_rate", "mean", "std", "p5", "p50", "p95"]
     t = Table(*cols)
     for _, r in table.iterrows():

@@ -49,7 +49,16 @@ from formation_ftc.campaign.storage import CampaignStore
 from formation_ftc.sim.batch import batched_run, stack_params
 from formation_ftc.sim.runtime import xla
 
-__all__ = ["ChunkResult", "CampaignOutcome", "run_chunk", "start_chunk", "run_campaign", "metric_names", "make_plan"]
+__all__ = [
+    "ChunkResult",
+    "CampaignOutcome",
+    "run_chunk",
+    "start_chunk",
+    "run_campaign",
+    "metric_names",
+    "make_plan",
+]
+
 
 @dataclass
 class ChunkResult:
@@ -80,9 +89,11 @@ class CampaignOutcome:
     executor: str = ""
 
     def __str__(self) -> str:
-        return (f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
-                f"{self.out_dir}; {self.chunks_computed} chunk(s) computed, {self.chunks_resumed} kept from "
-                f"an earlier run, {self.wall_s:.1f} s")
+        return (
+            f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
+            f"{self.out_dir}; {self.chunks_computed} chunk(s) computed, {self.chunks_resumed} kept from "
+            f"an earlier run, {self.wall_s:.1f} s"
+        )
 
 
 def _value_cell(v: Any, numeric: bool) -> Any:
@@ -99,10 +110,18 @@ def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
         if compiled.make_step is None:
             raise RuntimeError("no make_step")
         p = compiled.params
-        info = diagnose_divergence(compiled.make_step(p), out["last_finite"], div, t,
-                                   compiled.spacecraft_axis, max_steps=compiled.record_every,
-                                   dt=compiled.dt, admissible=getattr(p, "admissible", None),
-                                   violations=getattr(p, "violations", None), params=p)
+        info = diagnose_divergence(
+            compiled.make_step(p),
+            out["last_finite"],
+            div,
+            t,
+            compiled.spacecraft_axis,
+            max_steps=compiled.record_every,
+            dt=compiled.dt,
+            admissible=getattr(p, "admissible", None),
+            violations=getattr(p, "violations", None),
+            params=p,
+        )
     except Exception:  # noqa: BLE001 - a diagnostic must never stop the campaign
         info = DivergenceInfo(div, t, "<state>", None, ())
     return str(info)
@@ -117,11 +136,19 @@ def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any
     if tr.variables:
         missing = [v for v in tr.variables if v not in ds.data_vars]
         if missing:
-            raise CampaignError(f"traces.variables: {missing} not in the dataset (has {list(ds.data_vars)})")
+            raise CampaignError(
+                f"traces.variables: {missing} not in the dataset (has {list(ds.data_vars)})"
+            )
         ds = ds[tr.variables]
     ds = ds.isel(time=slice(None, None, tr.every))
-    ds.attrs.update(campaign=plan.name, run_id=inputs.run_id, seed=inputs.seed, status=status,
-                    scenario_name=scenario.scenario.name, inputs_json=json.dumps(inputs.values, default=str))
+    ds.attrs.update(
+        campaign=plan.name,
+        run_id=inputs.run_id,
+        seed=inputs.seed,
+        status=status,
+        scenario_name=scenario.scenario.name,
+        inputs_json=json.dumps(inputs.values, default=str),
+    )
     return ds
 
 
@@ -140,6 +167,7 @@ def _run_alone_program() -> Callable:
 def _run_alone(loop):
     return _run_alone_program()(loop)
 
+
 #: per-process cache: (plan hash, group key) -> (template Compiled, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
@@ -152,8 +180,9 @@ def clear_bindings() -> None:
     _VERIFIED.clear()
 
 
-def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
-                 t_start: float) -> Callable[[], ChunkResult] | None:
+def _bound_chunk(
+    plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float
+) -> Callable[[], ChunkResult] | None:
     """The fast path: one build per structural group, sampled values written into the parameter
     arrays (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
     the result table assembled from columns (no per-run Python objects except for failed and traced
@@ -169,8 +198,11 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
     from formation_ftc.sim.loop import ClosedLoop
 
     n = len(cols)
-    bindable = [s.path for s in plan.random_samplers
-                if s.numeric and s.kind != "choice" and all_numbers(cols.values[s.path])]
+    bindable = [
+        s.path
+        for s in plan.random_samplers
+        if s.numeric and s.kind != "choice" and all_numbers(cols.values[s.path])
+    ]
     cands = {s.path: list(s.extremes()) for s in plan.random_samplers if s.path in bindable}
     integer = {s.path: s.kind == "integer" for s in plan.random_samplers if s.path in bindable}
     seed_path = "simulation.seed"
@@ -178,8 +210,11 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
     structural = [p for p in cols.values if p not in bindable]  # grid values (constant) and choices
 
     def group_key(k: int) -> str:
-        return base_names[k] + "|" + json.dumps({p: cols.values[p][k] for p in structural}, sort_keys=True,
-                                                default=str)
+        return (
+            base_names[k]
+            + "|"
+            + json.dumps({p: cols.values[p][k] for p in structural}, sort_keys=True, default=str)
+        )
 
     gkey = group_key(0)
     varying = [p for p in structural if any(v != cols.values[p][0] for v in cols.values[p])]
@@ -189,7 +224,9 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
 
     def build(values: Mapping[str, Any]):
         vals = {p: v for p, v in values.items() if p != seed_path}
-        inp = dataclasses.replace(first, values={**first.values, **vals}, seed=int(values[seed_path]))
+        inp = dataclasses.replace(
+            first, values={**first.values, **vals}, seed=int(values[seed_path])
+        )
         return api.compile_scenario(plan.scenario(inp))
 
     cache_key = (plan.hash, gkey)
@@ -199,11 +236,17 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
             _BINDINGS[cache_key] = None
         else:
             values0 = {**{p: first.values[p] for p in bindable}, seed_path: first.seed}
-            bindings = bind_fields(lambda v: build(v).params, values0,
-                                   {**cands, seed_path: []}, {**integer, seed_path: True})
+            bindings = bind_fields(
+                lambda v: build(v).params,
+                values0,
+                {**cands, seed_path: []},
+                {**integer, seed_path: True},
+            )
             # the batch needs no time histories (metrics are computed inside the run): one record at
             # the start and one at the end; trace runs and failed runs are re-run alone with records
-            lean = compile_loop(dataclasses.replace(template.params, record_every=template.params.n_steps))
+            lean = compile_loop(
+                dataclasses.replace(template.params, record_every=template.params.n_steps)
+            )
             _BINDINGS[cache_key] = None if bindings is None else (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:
@@ -243,11 +286,24 @@ def _bound_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns,
             inputs[f"input:{path}"] = [_value_cell(vals[0], False)] * n
         else:
             inputs[f"input:{path}"] = [_value_cell(v, False) for v in vals]
-    return lambda: _finish_bound(plan, chunk, cols, t_start, template, batch, axes, pending, data, inputs, first)
+    return lambda: _finish_bound(
+        plan, chunk, cols, t_start, template, batch, axes, pending, data, inputs, first
+    )
 
 
-def _finish_bound(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float, template, batch, axes,
-                  pending, data: dict[str, Any], inputs: dict[str, Any], first) -> ChunkResult:
+def _finish_bound(
+    plan: CampaignPlan,
+    chunk: Chunk,
+    cols: RunColumns,
+    t_start: float,
+    template,
+    batch,
+    axes,
+    pending,
+    data: dict[str, Any],
+    inputs: dict[str, Any],
+    first,
+) -> ChunkResult:
     """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
     import dataclasses
 
@@ -270,28 +326,36 @@ def _finish_bound(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: f
     keep = plan.spec.campaign.metrics
     missing = [m for m in keep if m not in metric_cols]
     if missing:
-        raise CampaignError(f"campaign.metrics: {missing} not returned by method "
-                            f"{plan.scenario(first).scenario.method!r} (it returns {sorted(names)})")
+        raise CampaignError(
+            f"campaign.metrics: {missing} not returned by method "
+            f"{plan.scenario(first).scenario.method!r} (it returns {sorted(names)})"
+        )
     div = np.asarray(out["diverged_step"])[:n]
     failed = div >= 0
     data.update({"status": np.where(failed, "failed", "ok"), "diagnostic": [""] * n})
     data.update(inputs)
-    for name in (keep or names):
+    for name in keep or names:
         data[f"metric:{name}"] = np.where(failed, np.nan, metric_cols[name]).astype("float64")
     table = pd.DataFrame(data)
     traces = {}
     trace_runs = set(plan.spec.traces.runs)
-    rerun = np.flatnonzero(failed | np.isin(cols.run_id, np.fromiter(trace_runs, dtype=np.int64, count=len(trace_runs))))
+    rerun = np.flatnonzero(
+        failed
+        | np.isin(cols.run_id, np.fromiter(trace_runs, dtype=np.int64, count=len(trace_runs)))
+    )
     for j in rerun.tolist():
         # re-run alone with the scenario's records (and the replay that names a divergence)
         inp = cols.row(j, plan.base_names)
         scn = plan.scenario(inp)
         comp_j = api.compile_scenario(scn)
-        params_j = dataclasses.replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
+        params_j = dataclasses.replace(
+            take_run(batch, axes, j), record_every=comp_j.params.record_every
+        )
         run_out = jax.device_get(_run_alone(params_j))
         if failed[j]:
-            table.at[j, "diagnostic"] = _diagnostic(dataclasses.replace(comp_j, params=params_j), run_out,
-                                                    int(run_out["diverged_step"]))
+            table.at[j, "diagnostic"] = _diagnostic(
+                dataclasses.replace(comp_j, params=params_j), run_out, int(run_out["diverged_step"])
+            )
         if inp.run_id in trace_runs:
             traces[inp.run_id] = _trace(plan, comp_j, scn, inp, run_out, str(table.at[j, "status"]))
     table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
@@ -319,7 +383,9 @@ def start_chunk(plan: CampaignPlan, chunk: Chunk) -> Callable[[], ChunkResult]:
     return lambda: result
 
 
-def _general_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float) -> ChunkResult:
+def _general_chunk(
+    plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float
+) -> ChunkResult:
     """Per-run builds grouped by structure (the path of methods that are not component loops)."""
     from formation_ftc import api
 
@@ -340,22 +406,30 @@ def _general_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: 
     rows, traces = [], {}
     for inp, scn, comp, out in zip(inputs, scenarios, compiled, outs, strict=True):
         div = int(out["diverged_step"])
-        row: dict[str, Any] = dict(run_id=inp.run_id, chunk_id=chunk.chunk_id, grid_index=inp.grid_index,
-                                   replicate=inp.replicate, seed=inp.seed, scenario=inp.base)
+        row: dict[str, Any] = dict(
+            run_id=inp.run_id,
+            chunk_id=chunk.chunk_id,
+            grid_index=inp.grid_index,
+            replicate=inp.replicate,
+            seed=inp.seed,
+            scenario=inp.base,
+        )
         if div < 0:
             with np.errstate(all="ignore"):
                 metrics = {k: float(v) for k, v in comp.metrics(out).items()}
             missing = [m for m in keep if m not in metrics]
             if missing:
-                raise CampaignError(f"campaign.metrics: {missing} not returned by method "
-                                    f"{scn.scenario.method!r} (it returns {sorted(metrics)})")
+                raise CampaignError(
+                    f"campaign.metrics: {missing} not returned by method "
+                    f"{scn.scenario.method!r} (it returns {sorted(metrics)})"
+                )
             row.update(status="ok", diagnostic="")
         else:
             metrics = {m: float("nan") for m in keep}
             row.update(status="failed", diagnostic=_diagnostic(comp, out, div))
         for path, v in inp.values.items():
             row[f"input:{path}"] = _value_cell(v, numeric[f"input:{path}"])
-        for name in (keep or metrics):
+        for name in keep or metrics:
             row[f"metric:{name}"] = metrics.get(name, float("nan"))
         rows.append(row)
         if inp.run_id in plan.spec.traces.runs:
@@ -364,8 +438,9 @@ def _general_chunk(plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: 
     for col in table.columns:
         if col.startswith("metric:"):
             table[col] = table[col].astype("float64")
-    table.attrs["metric_units"] = _metric_units(getattr(compiled[0].params, "metrics", ()),
-                                                getattr(compiled[0].params, "count", 0))
+    table.attrs["metric_units"] = _metric_units(
+        getattr(compiled[0].params, "metrics", ()), getattr(compiled[0].params, "count", 0)
+    )
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
 
@@ -374,7 +449,9 @@ def _metric_units(metrics, count: int) -> dict[str, str]:
     out = {}
     for m in metrics or ():
         units = str(getattr(m, "units", "") or "1")
-        names = [f"{m.name}_sc{i + 1}" for i in range(count)] if m.spacecraft == "each" else [m.name]
+        names = (
+            [f"{m.name}_sc{i + 1}" for i in range(count)] if m.spacecraft == "each" else [m.name]
+        )
         out.update({f"metric:{n}": units for n in names})
     return out
 
@@ -407,12 +484,18 @@ def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
     return out
 
 
-def make_plan(campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan, *,
-              runs: int | None = None, chunk_size: int | None = None) -> CampaignPlan:
+def make_plan(
+    campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan,
+    *,
+    runs: int | None = None,
+    chunk_size: int | None = None,
+) -> CampaignPlan:
     """Campaign name/path/dict/spec -> validated :class:`CampaignPlan` (nothing runs)."""
     if isinstance(campaign, CampaignPlan):
         if runs is not None or chunk_size is not None:
-            raise CampaignError("runs/chunk_size overrides need a campaign file or spec, not a plan")
+            raise CampaignError(
+                "runs/chunk_size overrides need a campaign file or spec, not a plan"
+            )
         return campaign
     if isinstance(campaign, CampaignSpec):
         raw = campaign.model_dump(mode="json")
@@ -444,9 +527,17 @@ class _Progress:
                 speed = task.finished_speed or task.speed
                 return Text("-- runs/s" if speed is None else f"{speed:.2f} runs/s")
 
-        self.p = Progress(TextColumn(f"[bold]{name}"), BarColumn(), MofNCompleteColumn(),
-                          TextColumn("runs"), RunsPerSecond(), TimeElapsedColumn(), TextColumn("ETA"),
-                          TimeRemainingColumn(), console=Console(stderr=True))
+        self.p = Progress(
+            TextColumn(f"[bold]{name}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("runs"),
+            RunsPerSecond(),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+        )
         self.p.start()
         self.task = self.p.add_task(name, total=total, completed=done)
 
@@ -459,9 +550,15 @@ class _Progress:
             self.p.stop()
 
 
-def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan,
-                 out_dir: str | Path, *, runs: int | None = None, chunk_size: int | None = None,
-                 executor=None, progress: bool = False) -> CampaignOutcome:
+def run_campaign(
+    campaign: str | Path | Mapping[str, Any] | CampaignSpec | CampaignPlan,
+    out_dir: str | Path,
+    *,
+    runs: int | None = None,
+    chunk_size: int | None = None,
+    executor=None,
+    progress: bool = False,
+) -> CampaignOutcome:
     """Run (or resume) a campaign into ``out_dir``; returns counts and the results table.
 
     Everything that can be checked is checked before the first run: campaign file, dotted paths,
@@ -477,8 +574,10 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
         for base, names in metric_names(plan).items():
             missing = [m for m in plan.spec.campaign.metrics if names and m not in names]
             if missing:
-                raise CampaignError(f"campaign.metrics: {missing} not returned for base scenario {base!r} "
-                                    f"(available: {', '.join(names)})")
+                raise CampaignError(
+                    f"campaign.metrics: {missing} not returned for base scenario {base!r} "
+                    f"(available: {', '.join(names)})"
+                )
     store = CampaignStore.prepare(out_dir, plan)
     executor = executor if executor is not None else LocalExecutor()
     done_before = store.finished()
@@ -487,7 +586,9 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
         executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
         store.initialize()  # takes the directory's lock (refused while another run writes there)
-        bar = _Progress(progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name)
+        bar = _Progress(
+            progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name
+        )
         # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
         # at most one write is in flight and a write error stops the campaign at the next chunk
         writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer")
@@ -500,13 +601,24 @@ def run_campaign(campaign: str | Path | Mapping[str, Any] | CampaignSpec | Campa
             if writing is not None:
                 bar.advance(writing.result())
         finally:
-            writer.shutdown(wait=True)  # a write under way completes: a finished chunk is never lost
+            writer.shutdown(
+                wait=True
+            )  # a write under way completes: a finished chunk is never lost
             bar.close()
             store.close()
     results = store.load_results()
     n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
-    return CampaignOutcome(Path(out_dir), len(results), n_failed, plan.n_chunks, len(todo),
-                           len(done_before), time.perf_counter() - t0, results, executor.describe())
+    return CampaignOutcome(
+        Path(out_dir),
+        len(results),
+        n_failed,
+        plan.n_chunks,
+        len(todo),
+        len(done_before),
+        time.perf_counter() - t0,
+        results,
+        executor.describe(),
+    )
 
 
 #: chunks handed to the executor at once: what it holds for pending chunks (futures, queued calls) stays
@@ -517,7 +629,7 @@ MAP_WINDOW = 4096
 def _map_in_windows(executor, plan: CampaignPlan, chunks: ChunkList) -> Iterator[ChunkResult]:
     """``executor.map(run_chunk, plan, chunks)``, :data:`MAP_WINDOW` chunks at a time."""
     for a in range(0, len(chunks), MAP_WINDOW):
-        yield from executor.map(run_chunk, plan, chunks[a:a + MAP_WINDOW], start=start_chunk)
+        yield from executor.map(run_chunk, plan, chunks[a : a + MAP_WINDOW], start=start_chunk)
 
 
 def _store_chunk(store: CampaignStore, res: ChunkResult) -> int:

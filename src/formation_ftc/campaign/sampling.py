@@ -73,9 +73,20 @@ from formation_ftc.campaign.spec import (
 )
 from formation_ftc.config import loader
 
-__all__ = ["RunInputs", "RunColumns", "Chunk", "ChunkList", "CampaignPlan", "run_seed", "run_seeds", "draw_value",
-           "draw_values", "value_from_unit", "qmc_design",
-           "path_exists"]
+__all__ = [
+    "RunInputs",
+    "RunColumns",
+    "Chunk",
+    "ChunkList",
+    "CampaignPlan",
+    "run_seed",
+    "run_seeds",
+    "draw_value",
+    "draw_values",
+    "value_from_unit",
+    "qmc_design",
+    "path_exists",
+]
 
 _QMC_SPAWN = 2**32 - 1  # spawn-key entry no run key reaches (run ids are below 2**32 - 1)
 _QMC_KINDS = {"sobol": 2, "lhs": 3}
@@ -148,20 +159,36 @@ class RunColumns:
 
     def row(self, k: int, base_names: list[str]) -> RunInputs:
         """Run ``k`` (position in the columns) as :class:`RunInputs` (grid values copied per run)."""
-        vals = {p: v[k] if isinstance(v[k], int | float | str | bool) or v[k] is None else copy.deepcopy(v[k])
-                for p, v in self.values.items()}
-        return RunInputs(int(self.run_id[k]), int(self.grid_index[k]), int(self.replicate[k]), int(self.seed[k]),
-                         base_names[int(self.base[k])], vals)
+        vals = {
+            p: v[k]
+            if isinstance(v[k], int | float | str | bool) or v[k] is None
+            else copy.deepcopy(v[k])
+            for p, v in self.values.items()
+        }
+        return RunInputs(
+            int(self.run_id[k]),
+            int(self.grid_index[k]),
+            int(self.replicate[k]),
+            int(self.seed[k]),
+            base_names[int(self.base[k])],
+            vals,
+        )
 
     def rows(self, base_names: list[str]) -> list[RunInputs]:
-        ids, gs, js, seeds, bases = (a.tolist() for a in (self.run_id, self.grid_index, self.replicate, self.seed,
-                                                           self.base))
+        ids, gs, js, seeds, bases = (
+            a.tolist() for a in (self.run_id, self.grid_index, self.replicate, self.seed, self.base)
+        )
         paths = list(self.values)
         cols = [self.values[p] for p in paths]
-        plain = [all(isinstance(v, int | float | str | bool) or v is None for v in col) for col in cols]
+        plain = [
+            all(isinstance(v, int | float | str | bool) or v is None for v in col) for col in cols
+        ]
         out = []
         for k in range(len(ids)):
-            vals = {p: c[k] if pl else copy.deepcopy(c[k]) for p, c, pl in zip(paths, cols, plain, strict=True)}
+            vals = {
+                p: c[k] if pl else copy.deepcopy(c[k])
+                for p, c, pl in zip(paths, cols, plain, strict=True)
+            }
             out.append(RunInputs(ids[k], gs[k], js[k], seeds[k], base_names[bases[k]], vals))
         return out
 
@@ -174,7 +201,9 @@ def run_seed(campaign_seed: int, key: int) -> int:
 
 def draw_value(sampler: Sampler, campaign_seed: int, key: int) -> Any:
     """The value of a random field for sampling key ``key`` (independent stream per field path)."""
-    ss = np.random.SeedSequence(campaign_seed, spawn_key=(int(key), 1, zlib.crc32(sampler.path.encode())))
+    ss = np.random.SeedSequence(
+        campaign_seed, spawn_key=(int(key), 1, zlib.crc32(sampler.path.encode()))
+    )
     return sampler.draw(np.random.default_rng(ss))
 
 
@@ -194,12 +223,16 @@ def draw_values(sampler: Sampler, campaign_seed: int, keys: list[int] | np.ndarr
         if values is None:
             values = [sampler.draw(g) for g in streams.generators(campaign_seed, ks, (1, crc))]
         tag = repr(sampler)
-        if tag in _CHECKED_SAMPLERS or all(_same(values[n], draw_value(sampler, campaign_seed, int(ks[n])))
-                                           for n in range(min(4, ks.size))):
+        if tag in _CHECKED_SAMPLERS or all(
+            _same(values[n], draw_value(sampler, campaign_seed, int(ks[n])))
+            for n in range(min(4, ks.size))
+        ):
             _CHECKED_SAMPLERS.add(tag)
             return values
-    rngs = [np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(int(k), 1, crc)))
-            for k in ks.tolist()]
+    rngs = [
+        np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(int(k), 1, crc)))
+        for k in ks.tolist()
+    ]
     return sampler.draw_many(rngs)
 
 
@@ -213,7 +246,9 @@ def run_seeds(campaign_seed: int, keys: list[int] | np.ndarray) -> np.ndarray:
 
 def all_numbers(values: list[Any]) -> bool:
     """Every value an int or float (not a bool): a check per distinct type, not per value."""
-    return all(issubclass(t, int | float) and not issubclass(t, bool) for t in set(map(type, values)))
+    return all(
+        issubclass(t, int | float) and not issubclass(t, bool) for t in set(map(type, values))
+    )
 
 
 #: samplers (by repr) whose array evaluation matched the per-run draws in this process
@@ -221,7 +256,9 @@ _CHECKED_SAMPLERS: set[str] = set()
 
 
 def _same(a: Any, b: Any) -> bool:
-    return type(a) is type(b) and (a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)))
+    return type(a) is type(b) and (
+        a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b))
+    )
 
 
 def value_from_unit(sampler: Sampler, u: float) -> Any:
@@ -239,15 +276,23 @@ def value_from_unit(sampler: Sampler, u: float) -> Any:
         b = np.inf if sampler.high is None else (sampler.high - sampler.mean) / sampler.std
         return float(stats.truncnorm.ppf(u, a, b, loc=sampler.mean, scale=sampler.std))
     if isinstance(sampler, Integer):
-        return int(min(sampler.low + math.floor((sampler.high - sampler.low + 1) * u), sampler.high))
+        return int(
+            min(sampler.low + math.floor((sampler.high - sampler.low + 1) * u), sampler.high)
+        )
     if isinstance(sampler, Choice):
-        w = np.ones(len(sampler.values)) if sampler.weights is None else np.asarray(sampler.weights, float)
+        w = (
+            np.ones(len(sampler.values))
+            if sampler.weights is None
+            else np.asarray(sampler.weights, float)
+        )
         edges = np.cumsum(w) / np.sum(w)
         k = min(int(np.searchsorted(edges, u, side="right")), len(sampler.values) - 1)
         return copy.deepcopy(sampler.values[k])
     if isinstance(sampler, Grid):
         raise TypeError("grid values are assigned by grid index, not drawn")
-    raise TypeError(f"no quasi-Monte Carlo mapping for {type(sampler).__name__}")  # pragma: no cover
+    raise TypeError(
+        f"no quasi-Monte Carlo mapping for {type(sampler).__name__}"
+    )  # pragma: no cover
 
 
 #: most numbers (rows x random fields) of a quasi-Monte Carlo design: 32 MiB, about 100 MiB while SciPy
@@ -269,8 +314,12 @@ def qmc_design(kind: str, d: int, n: int, campaign_seed: int) -> np.ndarray:
     from scipy.stats import qmc
 
     if kind not in _QMC_KINDS:
-        raise CampaignError(f"campaign.sampling: unknown quasi-Monte Carlo design {kind!r} (sobol, lhs)")
-    rng = np.random.default_rng(np.random.SeedSequence(campaign_seed, spawn_key=(_QMC_SPAWN, _QMC_KINDS[kind])))
+        raise CampaignError(
+            f"campaign.sampling: unknown quasi-Monte Carlo design {kind!r} (sobol, lhs)"
+        )
+    rng = np.random.default_rng(
+        np.random.SeedSequence(campaign_seed, spawn_key=(_QMC_SPAWN, _QMC_KINDS[kind]))
+    )
     cls = qmc.Sobol if kind == "sobol" else qmc.LatinHypercube
     try:
         engine = cls(d, scramble=True, rng=rng)
@@ -381,8 +430,12 @@ class _Validation:
         self.numeric = [s.path for s in plan.samplers if s.numeric]
         self.other = [s.path for s in plan.samplers if not s.numeric]
         self.bases = range(len(plan.base_names))
-        self.bounds = {(p, b): _schema_bounds(plan.methods[b], p) for p in self.numeric for b in self.bases}
-        self.violations: dict[tuple[str, int, int], list[Any]] = {}  # -> [run id, value, runs in all]
+        self.bounds = {
+            (p, b): _schema_bounds(plan.methods[b], p) for p in self.numeric for b in self.bases
+        }
+        self.violations: dict[
+            tuple[str, int, int], list[Any]
+        ] = {}  # -> [run id, value, runs in all]
         self.non_finite: dict[tuple[str, int], tuple[int, Any]] = {}  # -> (run id, value)
         self.lowest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
         self.highest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
@@ -414,7 +467,9 @@ class _Validation:
                     self.highest[path, b] = (vals[hi], cols.row(hi, names))
         for b, sel in sels.items():  # one run per structure (base and non-numeric values)
             for k in (sel[:1] if not self.other else sel).tolist():
-                key = names[b] + json.dumps({p: cols.values[p][k] for p in self.other}, sort_keys=True, default=str)
+                key = names[b] + json.dumps(
+                    {p: cols.values[p][k] for p in self.other}, sort_keys=True, default=str
+                )
                 if key not in self.structures:
                     self.structures[key] = cols.row(k, names)
 
@@ -426,7 +481,9 @@ class _Validation:
                 for i, (bound, op, _) in enumerate(self.bounds[path, b]):
                     if (path, b, i) in self.violations:
                         r, v, n = self.violations[path, b, i]
-                        out.append(f"run {r}: {path} = {v!r} violates {path} {op} {bound} ({n} run(s) in all)")
+                        out.append(
+                            f"run {r}: {path} = {v!r} violates {path} {op} {bound} ({n} run(s) in all)"
+                        )
                 if (path, b) in self.non_finite:
                     r, v = self.non_finite[path, b]
                     out.append(f"run {r}: {path} = {v!r} is not finite")
@@ -448,7 +505,9 @@ class CampaignPlan:
     """A validated campaign: base scenarios, grid, samplers, run ids and chunks. Picklable (sent to
     worker processes and Dask workers with every chunk)."""
 
-    def __init__(self, spec: CampaignSpec, base_dir: Path | None = None, drop_missing_traces: bool = False):
+    def __init__(
+        self, spec: CampaignSpec, base_dir: Path | None = None, drop_missing_traces: bool = False
+    ):
         self.spec = spec
         meta = spec.campaign
         self.name = meta.name
@@ -477,32 +536,44 @@ class CampaignPlan:
                     raise CampaignError(
                         f"sample.{s.path}: dotted path does not exist in base scenario {name!r} "
                         f"(method {raw['scenario']['method']}); at {where or '<top level>'} it has "
-                        f"{_describe_dump(node)}")
+                        f"{_describe_dump(node)}"
+                    )
                 if isinstance(node, Mapping):
-                    raise CampaignError(f"sample.{s.path}: names a whole table of {name!r}; sample one "
-                                        f"field ({_describe_dump(node)})")
+                    raise CampaignError(
+                        f"sample.{s.path}: names a whole table of {name!r}; sample one "
+                        f"field ({_describe_dump(node)})"
+                    )
                 _materialize(raw, dump, s.path)
-        self.grid_shape = ([len(self.base_names)] if len(self.base_names) > 1 else []) + \
-            [len(s.values) for s in self.grid_samplers]
+        self.grid_shape = ([len(self.base_names)] if len(self.base_names) > 1 else []) + [
+            len(s.values) for s in self.grid_samplers
+        ]
         self.n_grid = int(np.prod(self.grid_shape)) if self.grid_shape else 1
         self.n_runs = self.n_grid * self.runs
         self.chunks_per_point = -(-self.runs // self.chunk_size)
         self.n_chunks = self.n_grid * self.chunks_per_point
         self._check_design_size()
         bad = [r for r in spec.traces.runs if r >= self.n_runs]
-        if bad and drop_missing_traces:  # --runs made the campaign smaller: keep the traces that exist
+        if (
+            bad and drop_missing_traces
+        ):  # --runs made the campaign smaller: keep the traces that exist
             kept = [r for r in spec.traces.runs if r < self.n_runs]
             spec = spec.model_copy(update={"traces": spec.traces.model_copy(update={"runs": kept})})
             self.spec = spec
         elif bad:
-            raise CampaignError(f"traces.runs: run id(s) {bad} do not exist (run ids are 0..{self.n_runs - 1})")
+            raise CampaignError(
+                f"traces.runs: run id(s) {bad} do not exist (run ids are 0..{self.n_runs - 1})"
+            )
         self.hash = spec_hash(spec, self.base_raws)
         self._check_extremes()
 
     # ------------------------------------------------------------------------------ base scenarios
     def _load_base(self, name: str, base_dir: Path | None):
         candidate = Path(name)
-        if base_dir is not None and not candidate.is_absolute() and (base_dir / candidate).is_file():
+        if (
+            base_dir is not None
+            and not candidate.is_absolute()
+            and (base_dir / candidate).is_file()
+        ):
             candidate = base_dir / candidate
             raw, source = loader.read_raw(candidate)
         else:
@@ -530,7 +601,8 @@ class CampaignPlan:
                     except loader.ScenarioError as exc:
                         raise CampaignError(
                             f"sample.{s.path}: value {v!r} ({s.describe()}) is outside what the scenario "
-                            f"allows:\n{exc}") from None
+                            f"allows:\n{exc}"
+                        ) from None
 
     # --------------------------------------------------------------------------------- run inputs
     def grid_point(self, g: int) -> tuple[int, dict[str, Any]]:
@@ -539,7 +611,10 @@ class CampaignPlan:
             return 0, {}
         idx = list(np.unravel_index(g, self.grid_shape))
         b = int(idx.pop(0)) if len(self.base_names) > 1 else 0
-        return b, {s.path: copy.deepcopy(s.values[int(k)]) for s, k in zip(self.grid_samplers, idx, strict=True)}
+        return b, {
+            s.path: copy.deepcopy(s.values[int(k)])
+            for s, k in zip(self.grid_samplers, idx, strict=True)
+        }
 
     def run_inputs(self, run_id: int) -> RunInputs:
         if not 0 <= run_id < self.n_runs:
@@ -569,7 +644,7 @@ class CampaignPlan:
         points = {int(x): self.grid_point(int(x)) for x in np.unique(g)}
         values: dict[str, list[Any]] = {}
         if len(points) == 1:  # one grid point (a chunk): constant columns
-            (b0, grid0), = points.values()
+            ((b0, grid0),) = points.values()
             base = np.full(ids.size, b0, dtype=np.int64)
             for gs in self.grid_samplers:
                 values[gs.path] = [grid0[gs.path]] * ids.size
@@ -586,8 +661,14 @@ class CampaignPlan:
             for m, s in enumerate(self.random_samplers):
                 values[s.path] = [value_from_unit(s, u) for u in design[keys, m].tolist()]
         ordered = {s.path: values[s.path] for s in self.samplers}
-        return RunColumns(ids, g, j, run_seeds(self.seed, keys) if ids.size else np.zeros(0, np.int64), base,
-                          ordered)
+        return RunColumns(
+            ids,
+            g,
+            j,
+            run_seeds(self.seed, keys) if ids.size else np.zeros(0, np.int64),
+            base,
+            ordered,
+        )
 
     def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
         """:meth:`run_inputs` of many runs (same values; see :meth:`run_columns`)."""
@@ -600,7 +681,9 @@ class CampaignPlan:
     def design(self) -> np.ndarray:
         """The quasi-Monte Carlo unit-cube design of this campaign (rows indexed by sampling key)."""
         if self._design is None:
-            self._design = qmc_design(self.sampling, len(self.random_samplers), self._design_rows(), self.seed)
+            self._design = qmc_design(
+                self.sampling, len(self.random_samplers), self._design_rows(), self.seed
+            )
         return self._design
 
     def _check_design_size(self) -> None:
@@ -619,7 +702,8 @@ class CampaignPlan:
         raise CampaignError(
             f"--runs / campaign.runs = {self.runs:,}: the {self.sampling} design would hold {rows:,} rows x {d} random "
             f"fields = {rows * d * 8 / 2**20:,.0f} MiB, over the {MAX_DESIGN_VALUES * 8 // 2**20} MiB a design may "
-            f"take ({fits}); or use sampling = \"random\" (up to {MAX_RUNS:,} runs per grid point)")
+            f'take ({fits}); or use sampling = "random" (up to {MAX_RUNS:,} runs per grid point)'
+        )
 
     def scenario_raw(self, inputs: RunInputs) -> dict[str, Any]:
         raw = copy.deepcopy(self.base_raws[self.base_names.index(inputs.base)])
@@ -634,7 +718,9 @@ class CampaignPlan:
             return loader.validate(self.scenario_raw(inputs), f"run {inputs.run_id}")
         except loader.ScenarioError as exc:
             shown = ", ".join(f"{p} = {v!r}" for p, v in inputs.values.items())
-            raise CampaignError(f"run {inputs.run_id} ({shown}): sampled scenario is invalid:\n{exc}") from None
+            raise CampaignError(
+                f"run {inputs.run_id} ({shown}): sampled scenario is invalid:\n{exc}"
+            ) from None
 
     def validate_all(self, run_ids: list[int] | np.ndarray | None = None) -> None:
         """Validate every run (default: all) before anything runs, without building each scenario.
@@ -658,8 +744,10 @@ class CampaignPlan:
             except CampaignError as exc:
                 errors.append(str(exc))
         if errors:
-            raise CampaignError("samples outside what the scenario allows (nothing was run):\n"
-                                + "\n".join(errors[:3]))
+            raise CampaignError(
+                "samples outside what the scenario allows (nothing was run):\n"
+                + "\n".join(errors[:3])
+            )
 
     def _run_id_blocks(self, run_ids: list[int] | np.ndarray | None) -> Iterator[np.ndarray]:
         """``run_ids`` (default: every run) in blocks of at most :data:`VALIDATION_BLOCK`."""
@@ -669,7 +757,7 @@ class CampaignPlan:
             return
         ids = np.asarray(run_ids, dtype=np.int64).reshape(-1)
         for a in range(0, ids.size, VALIDATION_BLOCK):
-            yield ids[a:a + VALIDATION_BLOCK]
+            yield ids[a : a + VALIDATION_BLOCK]
 
     # ------------------------------------------------------------------------------------ chunks
     def chunks(self, done: set[int] | frozenset[int] = frozenset()) -> ChunkList:
@@ -677,8 +765,13 @@ class CampaignPlan:
         ids = range(self.n_chunks)
         if not done:
             return ChunkList(self, ids)
-        return ChunkList(self, np.setdiff1d(np.arange(self.n_chunks, dtype=np.int64),
-                                            np.fromiter(done, dtype=np.int64, count=len(done))))
+        return ChunkList(
+            self,
+            np.setdiff1d(
+                np.arange(self.n_chunks, dtype=np.int64),
+                np.fromiter(done, dtype=np.int64, count=len(done)),
+            ),
+        )
 
     def chunk(self, chunk_id: int) -> Chunk:
         g, c = divmod(int(chunk_id), self.chunks_per_point)
@@ -699,8 +792,17 @@ class CampaignPlan:
         return [f"input:{s.path}" for s in self.random_samplers]
 
     def summary(self) -> dict[str, Any]:
-        return dict(name=self.name, bases=self.base_names, methods=self.methods, runs_per_point=self.runs,
-                    grid_points=self.n_grid, total_runs=self.n_runs, chunk_size=self.chunk_size,
-                    chunks=self.n_chunks, seed=self.seed, paired=self.paired, sampling=self.sampling,
-                    samplers={s.path: s.describe() for s in self.samplers})
-
+        return dict(
+            name=self.name,
+            bases=self.base_names,
+            methods=self.methods,
+            runs_per_point=self.runs,
+            grid_points=self.n_grid,
+            total_runs=self.n_runs,
+            chunk_size=self.chunk_size,
+            chunks=self.n_chunks,
+            seed=self.seed,
+            paired=self.paired,
+            sampling=self.sampling,
+            samplers={s.path: s.describe() for s in self.samplers},
+        )

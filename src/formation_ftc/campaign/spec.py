@@ -90,7 +90,9 @@ class Sampler:
 
     kind = "random"  # "random" (drawn per run) or "grid" (swept)
 
-    def draw(self, rng: np.random.Generator) -> Any:  # pragma: no cover - every sampler overrides it
+    def draw(
+        self, rng: np.random.Generator
+    ) -> Any:  # pragma: no cover - every sampler overrides it
         """One value drawn with ``rng`` (subclasses define the distribution)."""
         return NotImplemented
 
@@ -131,8 +133,10 @@ class Uniform(Sampler):
 
     def __post_init__(self):
         if not self.low < self.high:
-            raise CampaignError(f"sample.{self.path}: uniform needs low < high, got low = {self.low}, "
-                                f"high = {self.high}")
+            raise CampaignError(
+                f"sample.{self.path}: uniform needs low < high, got low = {self.low}, "
+                f"high = {self.high}"
+            )
 
     def draw(self, rng):
         return float(rng.uniform(self.low, self.high))
@@ -155,15 +159,19 @@ class LogUniform(Sampler):
 
     def __post_init__(self):
         if not 0 < self.low < self.high:
-            raise CampaignError(f"sample.{self.path}: loguniform needs 0 < low < high, got low = {self.low}, "
-                                f"high = {self.high}")
+            raise CampaignError(
+                f"sample.{self.path}: loguniform needs 0 < low < high, got low = {self.low}, "
+                f"high = {self.high}"
+            )
 
     def draw(self, rng):
         return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
 
     def from_first_double(self, d):
         lo, hi = math.log(self.low), math.log(self.high)
-        return [math.exp(x) for x in (lo + (hi - lo) * d).tolist()]  # math.exp: the same libm as draw
+        return [
+            math.exp(x) for x in (lo + (hi - lo) * d).tolist()
+        ]  # math.exp: the same libm as draw
 
     def extremes(self):
         return [self.low, self.high]
@@ -185,8 +193,10 @@ class Normal(Sampler):
         lo = -math.inf if self.low is None else self.low
         hi = math.inf if self.high is None else self.high
         if not lo < hi:
-            raise CampaignError(f"sample.{self.path}: truncated normal needs low < high, got low = {self.low}, "
-                                f"high = {self.high}")
+            raise CampaignError(
+                f"sample.{self.path}: truncated normal needs low < high, got low = {self.low}, "
+                f"high = {self.high}"
+            )
 
     def draw(self, rng):
         return self._from_uniform(np.asarray([rng.uniform()]))[0]
@@ -211,8 +221,10 @@ class Normal(Sampler):
     def describe(self):
         s = f"normal(mean {self.mean:g}, std {self.std:g})"
         if self.low is not None or self.high is not None:
-            s += f" truncated to [{self.low if self.low is not None else '-inf'}, " \
-                 f"{self.high if self.high is not None else 'inf'}]"
+            s += (
+                f" truncated to [{self.low if self.low is not None else '-inf'}, "
+                f"{self.high if self.high is not None else 'inf'}]"
+            )
         return s
 
 
@@ -223,8 +235,10 @@ class Integer(Sampler):
 
     def __post_init__(self):
         if not self.low <= self.high:
-            raise CampaignError(f"sample.{self.path}: integer needs low <= high, got low = {self.low}, "
-                                f"high = {self.high}")
+            raise CampaignError(
+                f"sample.{self.path}: integer needs low <= high, got low = {self.low}, "
+                f"high = {self.high}"
+            )
 
     def draw(self, rng):
         return int(rng.integers(self.low, self.high, endpoint=True))
@@ -290,22 +304,30 @@ class Grid(Sampler):
 def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
     """``{dist = ...}`` / ``{grid = [...]}`` / ``{choice = [...]}`` -> :class:`Sampler` (errors name the field)."""
     if not isinstance(spec, Mapping):
-        raise CampaignError(f"sample.{path}: expected a table like {{dist = \"uniform\", low = 0, high = 1}}, "
-                            f"{{grid = [...]}} or {{choice = [...]}}, got {spec!r}")
+        raise CampaignError(
+            f'sample.{path}: expected a table like {{dist = "uniform", low = 0, high = 1}}, '
+            f"{{grid = [...]}} or {{choice = [...]}}, got {spec!r}"
+        )
     keys = set(spec)
     present = keys & _SAMPLER_KEYS
     if len(present) != 1:
-        raise CampaignError(f"sample.{path}: give exactly one of dist, grid, choice (got {sorted(keys)})")
+        raise CampaignError(
+            f"sample.{path}: give exactly one of dist, grid, choice (got {sorted(keys)})"
+        )
 
     def allowed(*names):
         extra = keys - set(names)
         if extra:
-            raise CampaignError(f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}")
+            raise CampaignError(
+                f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}"
+            )
 
     def need(*names):
         missing = [n for n in names if n not in spec]
         if missing:
-            raise CampaignError(f"sample.{path}: {spec.get('dist', '')} distribution needs {', '.join(missing)}")
+            raise CampaignError(
+                f"sample.{path}: {spec.get('dist', '')} distribution needs {', '.join(missing)}"
+            )
 
     if "grid" in spec or "choice" in spec:
         key = "grid" if "grid" in spec else "choice"
@@ -318,10 +340,14 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         w = spec.get("weights")
         if w is not None:
             if not isinstance(w, list) or len(w) != len(values):
-                raise CampaignError(f"sample.{path}: weights must be a list of {len(values)} numbers")
+                raise CampaignError(
+                    f"sample.{path}: weights must be a list of {len(values)} numbers"
+                )
             w = tuple(_finite(path, "weights", x) for x in w)
             if any(x < 0 for x in w) or sum(w) <= 0:
-                raise CampaignError(f"sample.{path}: weights must be >= 0 with a positive sum, got {list(w)}")
+                raise CampaignError(
+                    f"sample.{path}: weights must be >= 0 with a positive sum, got {list(w)}"
+                )
         return Choice(path, tuple(values), w)
 
     dist = spec["dist"]
@@ -332,22 +358,30 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
     if dist == "loguniform":
         allowed("dist", "low", "high")
         need("low", "high")
-        return LogUniform(path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"]))
+        return LogUniform(
+            path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"])
+        )
     if dist == "normal":
         allowed("dist", "mean", "std", "low", "high")
         need("mean", "std")
         lo = _finite(path, "low", spec["low"]) if "low" in spec else None
         hi = _finite(path, "high", spec["high"]) if "high" in spec else None
-        return Normal(path, _finite(path, "mean", spec["mean"]), _finite(path, "std", spec["std"]), lo, hi)
+        return Normal(
+            path, _finite(path, "mean", spec["mean"]), _finite(path, "std", spec["std"]), lo, hi
+        )
     if dist == "integer":
         allowed("dist", "low", "high")
         need("low", "high")
         for n in ("low", "high"):
             if isinstance(spec[n], bool) or not isinstance(spec[n], int):
-                raise CampaignError(f"sample.{path}: integer {n} must be an integer, got {spec[n]!r}")
+                raise CampaignError(
+                    f"sample.{path}: integer {n} must be an integer, got {spec[n]!r}"
+                )
         return Integer(path, int(spec["low"]), int(spec["high"]))
-    raise CampaignError(f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
-                        f"(or grid = [...], choice = [...])")
+    raise CampaignError(
+        f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
+        f"(or grid = [...], choice = [...])"
+    )
 
 
 def _flatten(table: Mapping[str, Any], prefix: str = "", stop=lambda v: False) -> dict[str, Any]:
@@ -365,32 +399,51 @@ def _flatten(table: Mapping[str, Any], prefix: str = "", stop=lambda v: False) -
 class CampaignMeta(StrictModel):
     name: str = Field(description="Campaign name.")
     description: str = Field("", description="One line shown by `formation-ftc campaign list`.")
-    base: str | list[str] = Field(description="Base scenario (built-in name or TOML path); a list adds a "
-                                  "grid axis over scenarios.")
-    runs: int = Field(ge=1, le=MAX_RUNS, description="Runs per grid point (total runs when nothing is swept), "
-                      "at most 10 million [-].")
-    seed: int = Field(0, ge=0, description="Campaign seed; run seeds and samples derive from it [-].")
+    base: str | list[str] = Field(
+        description="Base scenario (built-in name or TOML path); a list adds a "
+        "grid axis over scenarios."
+    )
+    runs: int = Field(
+        ge=1,
+        le=MAX_RUNS,
+        description="Runs per grid point (total runs when nothing is swept), "
+        "at most 10 million [-].",
+    )
+    seed: int = Field(
+        0, ge=0, description="Campaign seed; run seeds and samples derive from it [-]."
+    )
     chunk_size: int = Field(32, ge=1, le=100_000, description="Runs per vmap batch [-].")
     metrics: list[str] = Field(default_factory=list, description="Metrics to keep (empty: all).")
-    paired: bool = Field(True, description="Same samples and seed for replicate j at every grid point "
-                         "(common random numbers) [-].")
+    paired: bool = Field(
+        True,
+        description="Same samples and seed for replicate j at every grid point "
+        "(common random numbers) [-].",
+    )
     sampling: Literal["random", "sobol", "lhs"] = Field(
-        "random", description="How the random fields are drawn: 'random' (independent pseudo-random "
+        "random",
+        description="How the random fields are drawn: 'random' (independent pseudo-random "
         "draws), 'sobol' (scrambled Sobol' quasi-Monte Carlo points) or 'lhs' (Latin hypercube); see "
-        "formation_ftc.campaign.sampling.")
+        "formation_ftc.campaign.sampling.",
+    )
 
     @field_validator("base")
     @classmethod
     def _base_nonempty(cls, v):
         if isinstance(v, list) and (not v or len(set(v)) != len(v)):
-            raise ValueError("campaign.base: a list of base scenarios must be non-empty and without repeats")
+            raise ValueError(
+                "campaign.base: a list of base scenarios must be non-empty and without repeats"
+            )
         return v
 
 
 class TraceSpec(StrictModel):
-    runs: list[int] = Field(default_factory=list, description="Run ids whose time histories are kept [-].")
+    runs: list[int] = Field(
+        default_factory=list, description="Run ids whose time histories are kept [-]."
+    )
     every: int = Field(1, ge=1, description="Keep every k-th record of the scenario's records [-].")
-    variables: list[str] = Field(default_factory=list, description="Dataset variables to keep (empty: all).")
+    variables: list[str] = Field(
+        default_factory=list, description="Dataset variables to keep (empty: all)."
+    )
 
     @field_validator("runs")
     @classmethod
@@ -402,8 +455,12 @@ class TraceSpec(StrictModel):
 
 class CampaignSpec(StrictModel):
     campaign: CampaignMeta
-    overrides: dict[str, Any] = Field(default_factory=dict, description="Fixed dotted-path overrides of the base.")
-    sample: dict[str, Any] = Field(default_factory=dict, description="Dotted path -> sampler table.")
+    overrides: dict[str, Any] = Field(
+        default_factory=dict, description="Fixed dotted-path overrides of the base."
+    )
+    sample: dict[str, Any] = Field(
+        default_factory=dict, description="Dotted path -> sampler table."
+    )
     traces: TraceSpec = TraceSpec()
 
     @field_validator("overrides", mode="before")
@@ -425,10 +482,14 @@ class CampaignSpec(StrictModel):
         for path, s in self.sample.items():
             parse_sampler(path, s)  # raises CampaignError (a ValueError) naming the field
             if path == "simulation.seed":
-                raise ValueError("sample.simulation.seed: the run seed is set from the campaign seed and "
-                                 "the run id; sample another field")
+                raise ValueError(
+                    "sample.simulation.seed: the run seed is set from the campaign seed and "
+                    "the run id; sample another field"
+                )
             if path in self.overrides:
-                raise ValueError(f"sample.{path}: also fixed in [overrides]; give it in one place only")
+                raise ValueError(
+                    f"sample.{path}: also fixed in [overrides]; give it in one place only"
+                )
         if "simulation.seed" in self.overrides:
             raise ValueError("overrides.simulation.seed: the run seed is set from campaign.seed")
         return self
@@ -449,7 +510,7 @@ def _format_error(exc: ValidationError, source: str) -> str:
         loc = error_location(err) or "<root>"
         msg = err["msg"]
         if msg.startswith("Value error, "):
-            msg = msg[len("Value error, "):]
+            msg = msg[len("Value error, ") :]
         if err["type"] == "extra_forbidden":
             msg = "unknown field"
         lines.append(f"  field {loc}: {msg}" if loc != "<root>" else f"  {msg}")
@@ -473,8 +534,12 @@ def builtin_campaigns() -> dict[str, str]:
     return out
 
 
-def load_campaign(name_or_path: str | Path | Mapping[str, Any], *, runs: int | None = None,
-                  chunk_size: int | None = None) -> tuple[CampaignSpec, Path | None]:
+def load_campaign(
+    name_or_path: str | Path | Mapping[str, Any],
+    *,
+    runs: int | None = None,
+    chunk_size: int | None = None,
+) -> tuple[CampaignSpec, Path | None]:
     """Built-in name, TOML path or raw dict -> ``(CampaignSpec, directory of the file or None)``.
 
     ``runs``/``chunk_size`` override the file's values (the command-line options).
@@ -494,8 +559,10 @@ def load_campaign(name_or_path: str | Path | Mapping[str, Any], *, runs: int | N
         else:
             builtin = builtin_campaigns()
             if str(name_or_path) not in builtin:
-                raise CampaignError(f"unknown campaign {short_text(name_or_path)}: not a file and not a built-in "
-                                    f"campaign (built-in: {', '.join(builtin) or 'none'})")
+                raise CampaignError(
+                    f"unknown campaign {short_text(name_or_path)}: not a file and not a built-in "
+                    f"campaign (built-in: {', '.join(builtin) or 'none'})"
+                )
             text, source = builtin[str(name_or_path)], f"<built-in campaign {name_or_path}>"
         raw = parse_toml(text, source, CampaignError)
     meta = raw.get("campaign")
@@ -521,7 +588,9 @@ def spec_hash(spec: CampaignSpec, base_raws: list[dict[str, Any]]) -> str:
     """SHA-256 of the campaign spec and the *content* of its base scenarios (not their names only)."""
     h = hashlib.sha256()
     dump = spec.model_dump(mode="json")
-    if dump["campaign"].get("sampling") == "random":  # the default: same hash as before the option existed
+    if (
+        dump["campaign"].get("sampling") == "random"
+    ):  # the default: same hash as before the option existed
         del dump["campaign"]["sampling"]
     h.update(_canonical(dump).encode())
     for raw in base_raws:

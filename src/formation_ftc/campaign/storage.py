@@ -61,7 +61,15 @@ try:  # POSIX advisory locks; other platforms run without a lock
 except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]  # the optional-module idiom
 
-__all__ = ["CampaignStore", "MANIFEST", "LOCK", "FORMAT", "atomic_write_bytes", "chunk_filename", "sha256_file"]
+__all__ = [
+    "CampaignStore",
+    "MANIFEST",
+    "LOCK",
+    "FORMAT",
+    "atomic_write_bytes",
+    "chunk_filename",
+    "sha256_file",
+]
 
 MANIFEST = "manifest.json"
 FORMAT = "formation-ftc-campaign"
@@ -176,19 +184,26 @@ class CampaignStore:
         try:
             manifest = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise CampaignError(f"{path}: corrupt campaign manifest ({exc}); refusing to use or overwrite "
-                                f"{root}") from None
+            raise CampaignError(
+                f"{path}: corrupt campaign manifest ({exc}); refusing to use or overwrite {root}"
+            ) from None
         if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-            raise CampaignError(f"{path}: not a formation-ftc campaign manifest; refusing to use or "
-                                f"overwrite {root}")
+            raise CampaignError(
+                f"{path}: not a formation-ftc campaign manifest; refusing to use or "
+                f"overwrite {root}"
+            )
         if manifest.get("format_version") != FORMAT_VERSION:
-            raise CampaignError(f"{path}: campaign format version {manifest.get('format_version')} is not "
-                                f"{FORMAT_VERSION}; refusing to use it")
+            raise CampaignError(
+                f"{path}: campaign format version {manifest.get('format_version')} is not "
+                f"{FORMAT_VERSION}; refusing to use it"
+            )
         if not isinstance(manifest.get("chunk_sha256", {}), dict):
             raise CampaignError(f"{path}: corrupt campaign manifest (chunk_sha256 is not a table)")
         for key in ("spec_hash", "n_chunks", "n_runs", "spec", "chunk_sha256"):
             if key not in manifest:
-                raise CampaignError(f"{path}: corrupt campaign manifest (no {key!r}); refusing to use it")
+                raise CampaignError(
+                    f"{path}: corrupt campaign manifest (no {key!r}); refusing to use it"
+                )
         return manifest
 
     @staticmethod
@@ -197,8 +212,10 @@ class CampaignStore:
         files of a killed run are removed)."""
         for entry in root.iterdir():
             if entry.name not in _TOP_LEVEL and not _ROOT_TMP_RE.match(entry.name):
-                raise CampaignError(f"{root}: unknown entry {entry.name!r} in a campaign directory; refusing "
-                                    f"to write here (move it away or use another --out)")
+                raise CampaignError(
+                    f"{root}: unknown entry {entry.name!r} in a campaign directory; refusing "
+                    f"to write here (move it away or use another --out)"
+                )
         chunk_ids: set[int] = set()
         for sub, pattern in (("chunks", _CHUNK_RE), ("traces", _TRACE_RE)):
             d = root / sub
@@ -211,12 +228,16 @@ class CampaignStore:
                     continue  # a write in progress or interrupted: never counted; only the lock holder removes it
                 m = pattern.match(f.name)
                 if not m or not f.is_file():
-                    raise CampaignError(f"{f}: unknown file in a campaign directory; refusing to use {root}")
+                    raise CampaignError(
+                        f"{f}: unknown file in a campaign directory; refusing to use {root}"
+                    )
                 if sub == "chunks":
                     cid = int(m.group(1))
                     if cid >= n_chunks:
-                        raise CampaignError(f"{f}: chunk {cid} does not exist in this campaign "
-                                            f"({n_chunks} chunks); refusing to use {root}")
+                        raise CampaignError(
+                            f"{f}: chunk {cid} does not exist in this campaign "
+                            f"({n_chunks} chunks); refusing to use {root}"
+                        )
                     chunk_ids.add(cid)
         return chunk_ids
 
@@ -228,8 +249,10 @@ class CampaignStore:
         except (OSError, ValueError) as exc:
             if isinstance(exc, CampaignError):
                 raise
-            raise CampaignError(f"{_short(root)}: unusable results directory "
-                                f"({getattr(exc, 'strerror', None) or exc})") from None
+            raise CampaignError(
+                f"{_short(root)}: unusable results directory "
+                f"({getattr(exc, 'strerror', None) or exc})"
+            ) from None
 
     @classmethod
     def _prepare(cls, root: Path, plan: CampaignPlan) -> CampaignStore:
@@ -238,14 +261,18 @@ class CampaignStore:
         if not root.exists() or not any(e.name != LOCK for e in root.iterdir()):
             return cls(root, cls.manifest_for(plan), set(), True)
         if not (root / MANIFEST).exists():
-            raise CampaignError(f"{root}: not empty and has no {MANIFEST}: not a campaign directory; "
-                                f"refusing to overwrite it")
+            raise CampaignError(
+                f"{root}: not empty and has no {MANIFEST}: not a campaign directory; "
+                f"refusing to overwrite it"
+            )
         manifest = cls._read_manifest(root)
         if manifest["spec_hash"] != plan.hash:
             raise CampaignError(cls._difference(root, manifest, plan))
         if manifest.get("package_version") != _package_version():
-            raise CampaignError(f"{root}: written by formation-ftc {manifest.get('package_version')}, this is "
-                                f"{_package_version()}; resume with the same version or use a new directory")
+            raise CampaignError(
+                f"{root}: written by formation-ftc {manifest.get('package_version')}, this is "
+                f"{_package_version()}; resume with the same version or use a new directory"
+            )
         finished = cls._scan(root, int(manifest["n_chunks"]))
         store = cls(root, manifest, set(), False)
         for cid in sorted(finished):
@@ -260,12 +287,17 @@ class CampaignStore:
     @staticmethod
     def _difference(root: Path, manifest: dict[str, Any], plan: CampaignPlan) -> str:
         old, new = _flat(manifest.get("spec", {})), _flat(plan.spec.model_dump(mode="json"))
-        diffs = [f"{k}: {old.get(k, '<absent>')!r} there, {new.get(k, '<absent>')!r} here"
-                 for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k)]
+        diffs = [
+            f"{k}: {old.get(k, '<absent>')!r} there, {new.get(k, '<absent>')!r} here"
+            for k in sorted(set(old) | set(new))
+            if old.get(k) != new.get(k)
+        ]
         detail = "; ".join(diffs[:5]) if diffs else "the base scenario content differs"
-        return (f"{root}: holds another campaign ({manifest.get('campaign')!r}, spec hash "
-                f"{str(manifest['spec_hash'])[:12]}, this one {plan.hash[:12]}): {detail}. Refusing to mix "
-                f"results; use another --out directory")
+        return (
+            f"{root}: holds another campaign ({manifest.get('campaign')!r}, spec hash "
+            f"{str(manifest['spec_hash'])[:12]}, this one {plan.hash[:12]}): {detail}. Refusing to mix "
+            f"results; use another --out directory"
+        )
 
     @staticmethod
     def _check_chunk(root: Path, chunk_id: int, expected_runs: list[int]) -> None:
@@ -273,11 +305,15 @@ class CampaignStore:
         try:
             ids = pq.read_table(path, columns=["run_id"]).column("run_id").to_pylist()
         except Exception as exc:  # noqa: BLE001 - any read failure means a corrupt file
-            raise CampaignError(f"{path}: corrupt chunk file ({type(exc).__name__}: {exc}); refusing to "
-                                f"continue. Delete it to recompute that chunk") from None
+            raise CampaignError(
+                f"{path}: corrupt chunk file ({type(exc).__name__}: {exc}); refusing to "
+                f"continue. Delete it to recompute that chunk"
+            ) from None
         if ids != expected_runs:
-            raise CampaignError(f"{path}: holds runs {ids[:3]}... but chunk {chunk_id} is runs "
-                                f"{expected_runs[0]}..{expected_runs[-1]}; refusing to use this directory")
+            raise CampaignError(
+                f"{path}: holds runs {ids[:3]}... but chunk {chunk_id} is runs "
+                f"{expected_runs[0]}..{expected_runs[-1]}; refusing to use this directory"
+            )
 
     def initialize(self) -> None:
         """Take the directory's lock, then create the directory and manifest of a new campaign (when
@@ -290,13 +326,17 @@ class CampaignStore:
             return
         if (self.root / MANIFEST).exists():
             self.close()
-            raise CampaignError(f"{self.root}: another process created a campaign here meanwhile; run again")
+            raise CampaignError(
+                f"{self.root}: another process created a campaign here meanwhile; run again"
+            )
         (self.root / "chunks").mkdir(parents=True, exist_ok=True)
         self._write_manifest()
         self.is_new = False
 
     def _write_manifest(self) -> None:
-        atomic_write_bytes(self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True).encode())
+        atomic_write_bytes(
+            self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True).encode()
+        )
 
     # ------------------------------------------------------------------------------------ locking
     _lock_fd: int | None = None
@@ -309,16 +349,20 @@ class CampaignStore:
             self.root.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.root / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as exc:
-            raise CampaignError(f"{self.root}: cannot create the lock file {LOCK} ({exc.strerror or exc}); "
-                                f"is the directory writable?") from None
+            raise CampaignError(
+                f"{self.root}: cannot create the lock file {LOCK} ({exc.strerror or exc}); "
+                f"is the directory writable?"
+            ) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
             if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
                 os.close(fd)
-                raise CampaignError(f"{self.root}: the file system refuses advisory locks on {LOCK} "
-                                    f"({exc.strerror or exc}); use a results directory on a local disk or on "
-                                    f"a file system with locking") from None
+                raise CampaignError(
+                    f"{self.root}: the file system refuses advisory locks on {LOCK} "
+                    f"({exc.strerror or exc}); use a results directory on a local disk or on "
+                    f"a file system with locking"
+                ) from None
             holder = ""
             try:
                 holder = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
@@ -326,11 +370,18 @@ class CampaignStore:
                 pass
             os.close(fd)
             info = _lock_holder_text(holder)
-            raise CampaignError(f"{self.root}: in use by another campaign run ({info}); wait for it to finish "
-                                f"or stop it, or use another --out") from None
+            raise CampaignError(
+                f"{self.root}: in use by another campaign run ({info}); wait for it to finish "
+                f"or stop it, or use another --out"
+            ) from None
         # any text left in the file is a dead holder's (the kernel released its lock): taken over
-        text = json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
-                           "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")})
+        text = json.dumps(
+            {
+                "host": socket.gethostname(),
+                "pid": os.getpid(),
+                "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            }
+        )
         os.ftruncate(fd, 0)
         os.pwrite(fd, text.encode(), 0)
         self._lock_fd = fd
@@ -359,7 +410,7 @@ class CampaignStore:
 
     # --------------------------------------------------------------------------------- checksums
     def verify_chunk(self, chunk_id: int) -> str:
-        """"" when chunk ``chunk_id``'s file matches its recorded SHA-256, else what is wrong."""
+        """ "" when chunk ``chunk_id``'s file matches its recorded SHA-256, else what is wrong."""
         path = self.chunk_path(chunk_id)
         want = self.manifest.get("chunk_sha256", {}).get(str(chunk_id))
         if want is None:
@@ -380,8 +431,10 @@ class CampaignStore:
         except (OSError, ValueError) as exc:
             if isinstance(exc, CampaignError):
                 raise
-            raise CampaignError(f"{_short(root)}: unusable campaign directory "
-                                f"({getattr(exc, 'strerror', None) or exc})") from None
+            raise CampaignError(
+                f"{_short(root)}: unusable campaign directory "
+                f"({getattr(exc, 'strerror', None) or exc})"
+            ) from None
 
     @classmethod
     def _read(cls, root: Path) -> CampaignStore:
@@ -400,9 +453,11 @@ class CampaignStore:
             else:
                 store._finished.add(cid)
         if bad:
-            raise CampaignError(f"{root}: {len(bad)} corrupt chunk file(s), refusing to report them: {bad[0]}"
-                                f"{' (and more)' if len(bad) > 1 else ''}. Run `formation-ftc campaign run` on "
-                                f"this directory again to recompute them")
+            raise CampaignError(
+                f"{root}: {len(bad)} corrupt chunk file(s), refusing to report them: {bad[0]}"
+                f"{' (and more)' if len(bad) > 1 else ''}. Run `formation-ftc campaign run` on "
+                f"this directory again to recompute them"
+            )
         return store
 
     # ------------------------------------------------------------------------------------- access
@@ -412,7 +467,9 @@ class CampaignStore:
     def chunk_path(self, chunk_id: int) -> Path:
         return self.root / "chunks" / chunk_filename(chunk_id)
 
-    def write_chunk(self, chunk_id: int, table: pd.DataFrame, traces: dict[int, Any] | None = None) -> Path:
+    def write_chunk(
+        self, chunk_id: int, table: pd.DataFrame, traces: dict[int, Any] | None = None
+    ) -> Path:
         """Write the traces, then the chunk's Parquet file (atomically; the chunk then counts as done)."""
         if chunk_id in self._finished:
             raise CampaignError(f"chunk {chunk_id} is already stored in {self.root}")
@@ -430,7 +487,9 @@ class CampaignStore:
         write_parquet(table, buf, units, write_page_checksum=True)
         data = buf.getvalue()
         # the checksum is recorded first: a chunk file never exists without one
-        self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(data).hexdigest()
+        self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(
+            data
+        ).hexdigest()
         self._write_manifest()
         atomic_write_bytes(path, data)
         self._finished.add(chunk_id)
@@ -442,9 +501,14 @@ class CampaignStore:
         methods = sorted(set(self.manifest.get("plan", {}).get("methods", [])))
         ds = ds.copy()
         ds.attrs = {**prov, **ds.attrs, "method": " or ".join(methods)}
-        return apply_cf(ds, scenario_name=str(ds.attrs.get("scenario_name", "")), method=ds.attrs["method"],
-                        description=f"trace of run {ds.attrs.get('run_id')} of campaign {ds.attrs.get('campaign')!r}",
-                        created_utc=prov["created_utc"], version=prov["version_formation-ftc"])
+        return apply_cf(
+            ds,
+            scenario_name=str(ds.attrs.get("scenario_name", "")),
+            method=ds.attrs["method"],
+            description=f"trace of run {ds.attrs.get('run_id')} of campaign {ds.attrs.get('campaign')!r}",
+            created_utc=prov["created_utc"],
+            version=prov["version_formation-ftc"],
+        )
 
     def units(self) -> dict[str, str]:
         """Column -> units of the finished chunks (:func:`formation_ftc.parquet_units.read_units`)."""
@@ -482,4 +546,3 @@ def _lock_holder_text(holder: str) -> str:
         return f"host {info.get('host')}, PID {info.get('pid')}, since {info.get('since_utc')}"
     except (ValueError, AttributeError):
         return "holder unknown"
-

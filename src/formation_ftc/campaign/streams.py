@@ -86,7 +86,9 @@ def seed_states(entropy: int, keys: np.ndarray, suffix: Sequence[int], n_words: 
         words += _int_words(int(s))
     cols = [w if isinstance(w, np.ndarray) else np.full(n, w, dtype=np.uint32) for w in words]
     hc = [_INIT_A]
-    pool = [_hashmix(cols[i] if i < len(cols) else np.zeros(n, np.uint32), hc) for i in range(_POOL)]
+    pool = [
+        _hashmix(cols[i] if i < len(cols) else np.zeros(n, np.uint32), hc) for i in range(_POOL)
+    ]
     for i_src in range(_POOL):
         for i_dst in range(_POOL):
             if i_src != i_dst:
@@ -117,7 +119,9 @@ def _mul64(a: np.ndarray, b: np.uint64) -> tuple[np.ndarray, np.ndarray]:
     return hi, lo
 
 
-def _step(hi: np.ndarray, lo: np.ndarray, inc_hi: np.ndarray, inc_lo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _step(
+    hi: np.ndarray, lo: np.ndarray, inc_hi: np.ndarray, inc_lo: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """One PCG64 LCG step ``s <- s a + c`` (mod 2**128)."""
     ph, pl = _mul64(lo, _PCG_MULT[1])
     ph = ph + lo * _PCG_MULT[0] + hi * _PCG_MULT[1]
@@ -130,7 +134,9 @@ def pcg64_states(words: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     """State of ``PCG64(seed_sequence)`` right after seeding, from ``generate_state(8, uint32)``
     words ``(n, 8)``: (state high, state low, increment high, increment low) uint64 arrays."""
     w = words.astype(np.uint64)
-    u64 = [w[:, 2 * k] | (w[:, 2 * k + 1] << _U64(32)) for k in range(4)]  # generate_state(4, uint64)
+    u64 = [
+        w[:, 2 * k] | (w[:, 2 * k + 1] << _U64(32)) for k in range(4)
+    ]  # generate_state(4, uint64)
     s_hi, s_lo, i_hi, i_lo = u64
     inc_hi = (i_hi << _U64(1)) | (i_lo >> _U64(63))
     inc_lo = (i_lo << _U64(1)) | _U64(1)
@@ -158,15 +164,23 @@ def run_seeds(entropy: int, keys: np.ndarray) -> np.ndarray:
     return (seed_states(entropy, keys, (0,), 1)[:, 0] >> _U32(1)).astype(np.int64)
 
 
-def generators(entropy: int, keys: np.ndarray, suffix: Sequence[int]) -> Iterator[np.random.Generator]:
+def generators(
+    entropy: int, keys: np.ndarray, suffix: Sequence[int]
+) -> Iterator[np.random.Generator]:
     """One ``Generator`` per key, positioned as ``default_rng(SeedSequence(entropy, spawn_key=(key,
     *suffix)))`` (the same object, re-positioned at each step: use it before advancing)."""
     hi, lo, inc_hi, inc_lo = pcg64_states(seed_states(entropy, keys, suffix, 8))
     bitgen = np.random.PCG64(0)
     gen = np.random.Generator(bitgen)
-    for h, l_, ih, il in zip(hi.tolist(), lo.tolist(), inc_hi.tolist(), inc_lo.tolist(), strict=True):
-        bitgen.state = {"bit_generator": "PCG64", "state": {"state": (h << 64) | l_, "inc": (ih << 64) | il},
-                        "has_uint32": 0, "uinteger": 0}
+    for h, l_, ih, il in zip(
+        hi.tolist(), lo.tolist(), inc_hi.tolist(), inc_lo.tolist(), strict=True
+    ):
+        bitgen.state = {
+            "bit_generator": "PCG64",
+            "state": {"state": (h << 64) | l_, "inc": (ih << 64) | il},
+            "has_uint32": 0,
+            "uinteger": 0,
+        }
         yield gen
 
 
@@ -187,19 +201,36 @@ def available() -> bool:
 def _self_check() -> bool:
     keys = np.array([0, 1, 2, 7, 1000, 123456, 2**31 + 5, 2**32 - 2])
     for entropy, suffix in ((2026, (1, 0xDEADBEEF)), (2**40 + 3, (1, 0)), (0, ())):
-        ref_words = [np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)).generate_state(8)
-                     for k in keys]
+        ref_words = [
+            np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)).generate_state(8)
+            for k in keys
+        ]
         if not np.array_equal(seed_states(entropy, keys, suffix, 8), np.array(ref_words)):
             return False
-        ref = [np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix))).random()
-               for k in keys]
+        ref = [
+            np.random.default_rng(
+                np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix))
+            ).random()
+            for k in keys
+        ]
         if not np.array_equal(first_doubles(entropy, keys, suffix), np.array(ref)):
             return False
         ints = [int(g.integers(0, 1000)) for g in generators(entropy, keys, suffix)]
-        ref_i = [int(np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)))
-                     .integers(0, 1000)) for k in keys]
+        ref_i = [
+            int(
+                np.random.default_rng(
+                    np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix))
+                ).integers(0, 1000)
+            )
+            for k in keys
+        ]
         if ints != ref_i:
             return False
-    ref_s = [int(np.random.SeedSequence(5, spawn_key=(int(k), 0)).generate_state(1, dtype=np.uint32)[0] >> 1)
-             for k in keys]
+    ref_s = [
+        int(
+            np.random.SeedSequence(5, spawn_key=(int(k), 0)).generate_state(1, dtype=np.uint32)[0]
+            >> 1
+        )
+        for k in keys
+    ]
     return run_seeds(5, keys).tolist() == ref_s

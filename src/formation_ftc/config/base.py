@@ -88,9 +88,12 @@ def _find_bad_number(value: Any, *, booleans: bool, non_finite: bool) -> tuple[s
 
 def _allowed_range(field: FieldInfo) -> str:
     """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
-    bounds = [f"{op} {getattr(c, name)}" for c in field.metadata
-              for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
-              if getattr(c, name, None) is not None]
+    bounds = [
+        f"{op} {getattr(c, name)}"
+        for c in field.metadata
+        for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
+        if getattr(c, name, None) is not None
+    ]
     return ", ".join(["a finite number", *bounds])
 
 
@@ -104,7 +107,9 @@ def error_location(err: ErrorDetails) -> str:
 class StrictModel(BaseModel):
     """Base for every configuration model: unknown fields are errors, assignments are validated."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)
+    model_config = ConfigDict(
+        extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False
+    )
 
     @field_validator("*", mode="before")
     @classmethod
@@ -117,16 +122,24 @@ class StrictModel(BaseModel):
         field = cls.model_fields.get(info.field_name)
         if field is None:
             return v
-        bad = _find_bad_number(v, booleans=not _allows_bool(field.annotation),
-                               non_finite=_mentions_float(field.annotation))
+        bad = _find_bad_number(
+            v,
+            booleans=not _allows_bool(field.annotation),
+            non_finite=_mentions_float(field.annotation),
+        )
         if bad is None:
             return v
         index, item = bad
         if isinstance(item, bool):
-            raise ValueError(f"expected a number{' at ' + index if index else ''}, got a boolean "
-                             f"(booleans are not numbers)")
-        raise PydanticCustomError("finite_number", "{value} is refused: must be {allowed} (never nan or inf)",
-                                  {"index": index, "value": repr(item), "allowed": _allowed_range(field)})
+            raise ValueError(
+                f"expected a number{' at ' + index if index else ''}, got a boolean "
+                f"(booleans are not numbers)"
+            )
+        raise PydanticCustomError(
+            "finite_number",
+            "{value} is refused: must be {allowed} (never nan or inf)",
+            {"index": index, "value": repr(item), "allowed": _allowed_range(field)},
+        )
 
 
 def expression_validator(variables: tuple[str, ...] = ("t", "i")):
@@ -160,34 +173,67 @@ ExprText = Annotated[str, expression_validator(("t", "i"))]
 
 class ScenarioMeta(StrictModel):
     name: str = Field(description="Scenario name (built-in scenarios use paper-prefixed names).")
-    method: str = Field(description="Registered method that simulates this scenario, e.g. 'li2020'.")
+    method: str = Field(
+        description="Registered method that simulates this scenario, e.g. 'li2020'."
+    )
     description: str = Field("", description="One-line description shown by `formation-ftc list`.")
-    paper: str | None = Field(None, description="Paper short name this scenario reproduces, if any.")
+    paper: str | None = Field(
+        None, description="Paper short name this scenario reproduces, if any."
+    )
 
 
 class SimulationSection(StrictModel):
     horizon: float = Field(gt=0, description="Simulated time span [s].")
     dt: float = Field(gt=0, description="Fixed integration step [s]; must divide the horizon.")
-    record_every: int = Field(1, ge=1, description="Record every k-th step (output decimation) [-].")
-    seed: int = Field(0, ge=0, le=MAX_SEED, description="Root random seed of the run, 0 <= seed < 2**32 [-].")
-    unroll: int = Field(1, ge=1, le=64, description="lax.scan unroll factor (performance only) [-].")
-    max_position: float = Field(1.0e6, gt=0, description=(
-        "Admissible set: a run whose spacecraft position (relative to the formation frame's origin) exceeds "
-        "this magnitude has diverged and stops with a diagnostic [m]."))
-    max_velocity: float = Field(1.0e4, gt=0, description=(
-        "Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s]."))
-    max_rate: float = Field(100.0, gt=0, description=(
-        "Admissible set: a run whose spacecraft body rate exceeds this magnitude has diverged [rad/s]."))
-    max_pitch: float = Field(1.5607963267948966, gt=0, lt=1.5707963267948966, description=(
-        "Admissible set: a run whose 3-2-1 Euler pitch exceeds this magnitude has diverged (the Euler-angle "
-        "kinematics are singular at pi/2; default pi/2 - 0.01) [rad]."))
+    record_every: int = Field(
+        1, ge=1, description="Record every k-th step (output decimation) [-]."
+    )
+    seed: int = Field(
+        0, ge=0, le=MAX_SEED, description="Root random seed of the run, 0 <= seed < 2**32 [-]."
+    )
+    unroll: int = Field(
+        1, ge=1, le=64, description="lax.scan unroll factor (performance only) [-]."
+    )
+    max_position: float = Field(
+        1.0e6,
+        gt=0,
+        description=(
+            "Admissible set: a run whose spacecraft position (relative to the formation frame's origin) exceeds "
+            "this magnitude has diverged and stops with a diagnostic [m]."
+        ),
+    )
+    max_velocity: float = Field(
+        1.0e4,
+        gt=0,
+        description=(
+            "Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s]."
+        ),
+    )
+    max_rate: float = Field(
+        100.0,
+        gt=0,
+        description=(
+            "Admissible set: a run whose spacecraft body rate exceeds this magnitude has diverged [rad/s]."
+        ),
+    )
+    max_pitch: float = Field(
+        1.5607963267948966,
+        gt=0,
+        lt=1.5707963267948966,
+        description=(
+            "Admissible set: a run whose 3-2-1 Euler pitch exceeds this magnitude has diverged (the Euler-angle "
+            "kinematics are singular at pi/2; default pi/2 - 0.01) [rad]."
+        ),
+    )
 
     @model_validator(mode="after")
     def _step_divides_horizon(self) -> SimulationSection:
         ratio = self.horizon / self.dt
         if not math.isfinite(ratio) or ratio > 2**53:
-            raise ValueError(f"simulation.horizon / simulation.dt = {self.horizon:g} / {self.dt:g} s is not a "
-                             f"countable number of steps (at most 2**53); shorten the horizon or enlarge the step")
+            raise ValueError(
+                f"simulation.horizon / simulation.dt = {self.horizon:g} / {self.dt:g} s is not a "
+                f"countable number of steps (at most 2**53); shorten the horizon or enlarge the step"
+            )
         n = round(ratio)
         if n < 1 or abs(n * self.dt - self.horizon) > 1e-9 * max(self.horizon, 1.0):
             raise ValueError(

@@ -83,7 +83,9 @@ def _nesting_depth(obj: Any) -> int:
 def parse_toml(text: str, source: str, error: type[InputError] = ScenarioError) -> dict[str, Any]:
     """TOML text -> dict; invalid or too deeply nested TOML raises ``error`` naming ``source``."""
     if text.count("[") + text.count("{") > MAX_NESTING and _bracket_depth(text) > MAX_NESTING:
-        raise error(f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it")
+        raise error(
+            f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it"
+        )
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -91,7 +93,9 @@ def parse_toml(text: str, source: str, error: type[InputError] = ScenarioError) 
     except RecursionError:
         raise error(f"{source}: TOML nested too deeply (at most {MAX_NESTING} levels)") from None
     if _nesting_depth(raw) > MAX_NESTING:
-        raise error(f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it")
+        raise error(
+            f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it"
+        )
     return raw
 
 
@@ -110,10 +114,12 @@ def _bracket_depth(text: str) -> int:
 def short_text(text: object, limit: int = 80) -> str:
     """``repr`` of ``text`` cut to about ``limit`` characters (for messages about user input)."""
     r = repr(str(text))
-    return r if len(r) <= limit else r[:limit - 5] + "...'"
+    return r if len(r) <= limit else r[: limit - 5] + "...'"
 
 
-def path_exists(path: str | Path, kind: str = "scenario", error: type[InputError] = ScenarioError) -> bool:
+def path_exists(
+    path: str | Path, kind: str = "scenario", error: type[InputError] = ScenarioError
+) -> bool:
     """Whether ``path`` exists; a path text the system refuses (too long, NUL) raises ``error``."""
     try:
         return Path(path).exists()
@@ -122,7 +128,9 @@ def path_exists(path: str | Path, kind: str = "scenario", error: type[InputError
         raise error(f"invalid {kind} path {short_text(path)}: {reason}") from None
 
 
-def read_text_file(path: Path, kind: str = "scenario", error: type[InputError] = ScenarioError) -> str:
+def read_text_file(
+    path: Path, kind: str = "scenario", error: type[InputError] = ScenarioError
+) -> str:
     """UTF-8 text of a user file; unreadable, not a file or not UTF-8 raises ``error`` naming it."""
     if not path_exists(path, kind, error):
         raise error(f"{kind} file {short_text(path)} does not exist")
@@ -131,10 +139,14 @@ def read_text_file(path: Path, kind: str = "scenario", error: type[InputError] =
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise error(f"{kind} file {short_text(path)} cannot be read ({exc.strerror or exc})") from None
+        raise error(
+            f"{kind} file {short_text(path)} cannot be read ({exc.strerror or exc})"
+        ) from None
     if size > MAX_FILE_BYTES:
-        raise error(f"{kind} file {short_text(path)} is {size / 2**20:.0f} MiB; at most "
-                    f"{MAX_FILE_BYTES // 2**20} MiB of TOML is accepted (put large data in arrays elsewhere)")
+        raise error(
+            f"{kind} file {short_text(path)} is {size / 2**20:.0f} MiB; at most "
+            f"{MAX_FILE_BYTES // 2**20} MiB of TOML is accepted (put large data in arrays elsewhere)"
+        )
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -142,7 +154,9 @@ def read_text_file(path: Path, kind: str = "scenario", error: type[InputError] =
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise error(f"{kind} file {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+        raise error(
+            f"{kind} file {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+        ) from None
 
 
 def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
@@ -190,9 +204,11 @@ def set_dotted(raw: dict[str, Any], path: str, value: Any) -> None:
                 node[part] = {}
             node = node[part]
         if not isinstance(node, dict | list):
-            where = ".".join(parts[:depth + 1])
-            raise ScenarioError(f"override {path}: {where} is a {_kind(node)}, not a table or a list; "
-                                f"it has no field {parts[depth + 1]!r}")
+            where = ".".join(parts[: depth + 1])
+            raise ScenarioError(
+                f"override {path}: {where} is a {_kind(node)}, not a table or a list; "
+                f"it has no field {parts[depth + 1]!r}"
+            )
     last = parts[-1]
     if isinstance(node, list):
         node[_index(last, path, len(node))] = value
@@ -201,17 +217,27 @@ def set_dotted(raw: dict[str, Any], path: str, value: Any) -> None:
 
 
 def _kind(v: Any) -> str:
-    return "boolean" if isinstance(v, bool) else "number" if isinstance(v, int | float) else type(v).__name__
+    return (
+        "boolean"
+        if isinstance(v, bool)
+        else "number"
+        if isinstance(v, int | float)
+        else type(v).__name__
+    )
 
 
 def _index(part: str, path: str, length: int) -> int:
     if not (part.isascii() and part.isdigit()):
-        raise ScenarioError(f"override {path}: {part!r} indexes a list and must be a non-negative integer "
-                            f"(0 ... {length - 1})")
+        raise ScenarioError(
+            f"override {path}: {part!r} indexes a list and must be a non-negative integer "
+            f"(0 ... {length - 1})"
+        )
     k = int(part)
     if k >= length:
-        raise ScenarioError(f"override {path}: index {k} is out of range; the list has {length} item(s) "
-                            f"(indices 0 ... {length - 1})")
+        raise ScenarioError(
+            f"override {path}: index {k} is out of range; the list has {length} item(s) "
+            f"(indices 0 ... {length - 1})"
+        )
     return k
 
 
@@ -229,9 +255,13 @@ def parse_override(text: str) -> tuple[str, Any]:
     if not path:
         raise ScenarioError(f"override {text!r}: empty dotted path")
     if not value:
-        raise ScenarioError(f"--set {path}: empty value (give a number, a quoted string, a list or a table)")
+        raise ScenarioError(
+            f"--set {path}: empty value (give a number, a quoted string, a list or a table)"
+        )
     if any(c in value for c in "\n\r\x00"):
-        raise ScenarioError(f"--set {path}: the value must be a single TOML value on one line, got {value!r}")
+        raise ScenarioError(
+            f"--set {path}: the value must be a single TOML value on one line, got {value!r}"
+        )
     try:
         doc = tomllib.loads(f"v = {value}")
     except tomllib.TOMLDecodeError as exc:
@@ -241,20 +271,28 @@ def parse_override(text: str) -> tuple[str, Any]:
     except RecursionError:
         raise ScenarioError(f"--set {path}: value nested too deeply") from None
     if set(doc) != {"v"}:  # pragma: no cover - newlines are refused above
-        raise ScenarioError(f"--set {path}: the value must be exactly one TOML value, got {value!r}")
+        raise ScenarioError(
+            f"--set {path}: the value must be exactly one TOML value, got {value!r}"
+        )
     if _nesting_depth(doc["v"]) > MAX_NESTING:
         raise ScenarioError(f"--set {path}: value nested more than {MAX_NESTING} levels deep")
     return path, doc["v"]
 
 
-def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any] | Iterable[str] | None) -> dict[str, Any]:
+def apply_overrides(
+    raw: dict[str, Any], overrides: Mapping[str, Any] | Iterable[str] | None
+) -> dict[str, Any]:
     """Copy of ``raw`` with overrides applied (mapping of dotted path -> value, or "path=value" strings)."""
     if _nesting_depth(raw) > MAX_NESTING:
         raise ScenarioError(f"scenario nested more than {MAX_NESTING} levels deep (tables/arrays)")
     out = copy.deepcopy(raw)
     if not overrides:
         return out
-    items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(s) for s in overrides)
+    items = (
+        overrides.items()
+        if isinstance(overrides, Mapping)
+        else (parse_override(s) for s in overrides)
+    )
     for path, value in items:
         set_dotted(out, path, value)
     return out
@@ -266,7 +304,7 @@ def _format_validation_error(exc: ValidationError, source: str) -> str:
         loc = error_location(err) or "<root>"
         msg = err["msg"]
         if msg.startswith("Value error, "):
-            msg = msg[len("Value error, "):]
+            msg = msg[len("Value error, ") :]
         if err["type"] == "extra_forbidden":
             msg = "unknown field (not part of this method's scenario schema)"
         lines.append(f"  field {loc}: {msg}")
@@ -279,7 +317,9 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>"):
 
     meta = raw.get("scenario") if isinstance(raw, Mapping) else None
     if not isinstance(meta, Mapping) or "method" not in meta:
-        raise ScenarioError(f"{source}: field scenario.method is required (the method that simulates it)")
+        raise ScenarioError(
+            f"{source}: field scenario.method is required (the method that simulates it)"
+        )
     try:
         method = get_method(str(meta["method"]))
     except KeyError as exc:
@@ -290,7 +330,12 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>"):
         return method.schema.model_validate(dict(raw))
     except ValidationError as exc:
         raise ScenarioError(_format_validation_error(exc, source)) from None
-    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:  # raised outside pydantic's wrapping
+    except (
+        ValueError,
+        TypeError,
+        ArithmeticError,
+        RecursionError,
+    ) as exc:  # raised outside pydantic's wrapping
         raise ScenarioError(f"{source}: invalid scenario ({type(exc).__name__}: {exc})") from None
 
 

@@ -45,7 +45,12 @@ from formation_ftc.core.dynamics.euler_lagrange import (
     rbar,
     rbar_inv,
 )
-from formation_ftc.core.quaternion import quat_from_axis_angle, quat_multiply, quat_normalize, rotation_matrix
+from formation_ftc.core.quaternion import (
+    quat_from_axis_angle,
+    quat_multiply,
+    quat_normalize,
+    rotation_matrix,
+)
 
 __all__ = [
     "dcm_from_euler_zyx",
@@ -62,12 +67,22 @@ __all__ = [
 def dcm_from_euler_zyx(q):
     """``C = Rz(psi) Ry(theta) Rx(phi)`` (body to reference) [-], q = [theta, phi, psi] (..., 3) [rad]."""
     th, ph, ps = q[..., 0], q[..., 1], q[..., 2]
-    ct, st, cp, sp, cs, ss = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph), jnp.cos(ps), jnp.sin(ps)
-    return jnp.stack([
-        jnp.stack([cs * ct, cs * st * sp - ss * cp, cs * st * cp + ss * sp], -1),
-        jnp.stack([ss * ct, ss * st * sp + cs * cp, ss * st * cp - cs * sp], -1),
-        jnp.stack([-st, ct * sp, ct * cp], -1),
-    ], -2)
+    ct, st, cp, sp, cs, ss = (
+        jnp.cos(th),
+        jnp.sin(th),
+        jnp.cos(ph),
+        jnp.sin(ph),
+        jnp.cos(ps),
+        jnp.sin(ps),
+    )
+    return jnp.stack(
+        [
+            jnp.stack([cs * ct, cs * st * sp - ss * cp, cs * st * cp + ss * sp], -1),
+            jnp.stack([ss * ct, ss * st * sp + cs * cp, ss * st * cp - cs * sp], -1),
+            jnp.stack([-st, ct * sp, ct * cp], -1),
+        ],
+        -2,
+    )
 
 
 def euler_zyx_from_dcm(C):
@@ -118,4 +133,3 @@ def generalised_torque_from_body(q, tau_body):
 def body_rates_zyx(q, qdot):
     """``omega = E(q) q_dot`` [rad/s]."""
     return jnp.sum(rbar_inv(q) * qdot[..., None, :], axis=-1)
-

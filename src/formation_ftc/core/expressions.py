@@ -38,8 +38,17 @@ import numpy as np
 
 from formation_ftc.errors import InputError
 
-__all__ = ["ExpressionError", "Expression", "compile_expression", "compile_vector_expression", "FUNCTIONS",
-           "CONSTANTS", "MAX_LENGTH", "MAX_DEPTH", "MAX_NODES"]
+__all__ = [
+    "ExpressionError",
+    "Expression",
+    "compile_expression",
+    "compile_vector_expression",
+    "FUNCTIONS",
+    "CONSTANTS",
+    "MAX_LENGTH",
+    "MAX_DEPTH",
+    "MAX_NODES",
+]
 
 #: longest accepted expression text [characters]
 MAX_LENGTH = 2000
@@ -79,12 +88,24 @@ def _piecewise(*args):
 
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, int | None]]] = {
     # name: (function, (min args, max args))
-    "sin": (jnp.sin, (1, 1)), "cos": (jnp.cos, (1, 1)), "tan": (jnp.tan, (1, 1)),
-    "asin": (jnp.arcsin, (1, 1)), "acos": (jnp.arccos, (1, 1)), "atan": (jnp.arctan, (1, 1)),
-    "atan2": (jnp.arctan2, (2, 2)), "sinh": (jnp.sinh, (1, 1)), "cosh": (jnp.cosh, (1, 1)),
-    "tanh": (jnp.tanh, (1, 1)), "exp": (jnp.exp, (1, 1)), "log": (jnp.log, (1, 1)),
-    "log10": (jnp.log10, (1, 1)), "sqrt": (jnp.sqrt, (1, 1)), "abs": (jnp.abs, (1, 1)),
-    "sign": (jnp.sign, (1, 1)), "floor": (jnp.floor, (1, 1)), "ceil": (jnp.ceil, (1, 1)),
+    "sin": (jnp.sin, (1, 1)),
+    "cos": (jnp.cos, (1, 1)),
+    "tan": (jnp.tan, (1, 1)),
+    "asin": (jnp.arcsin, (1, 1)),
+    "acos": (jnp.arccos, (1, 1)),
+    "atan": (jnp.arctan, (1, 1)),
+    "atan2": (jnp.arctan2, (2, 2)),
+    "sinh": (jnp.sinh, (1, 1)),
+    "cosh": (jnp.cosh, (1, 1)),
+    "tanh": (jnp.tanh, (1, 1)),
+    "exp": (jnp.exp, (1, 1)),
+    "log": (jnp.log, (1, 1)),
+    "log10": (jnp.log10, (1, 1)),
+    "sqrt": (jnp.sqrt, (1, 1)),
+    "abs": (jnp.abs, (1, 1)),
+    "sign": (jnp.sign, (1, 1)),
+    "floor": (jnp.floor, (1, 1)),
+    "ceil": (jnp.ceil, (1, 1)),
     "min": (lambda *a: _reduce(jnp.minimum, a), (2, None)),
     "max": (lambda *a: _reduce(jnp.maximum, a), (2, None)),
     "clip": (jnp.clip, (3, 3)),
@@ -104,12 +125,20 @@ def _reduce(op, args):
 
 
 _BINOPS = {
-    ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
-    ast.Div: lambda a, b: a / b, ast.Pow: lambda a, b: a**b, ast.Mod: lambda a, b: a % b,
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+    ast.Pow: lambda a, b: a**b,
+    ast.Mod: lambda a, b: a % b,
 }
 _CMPOPS = {
-    ast.Lt: jnp.less, ast.LtE: jnp.less_equal, ast.Gt: jnp.greater, ast.GtE: jnp.greater_equal,
-    ast.Eq: jnp.equal, ast.NotEq: jnp.not_equal,
+    ast.Lt: jnp.less,
+    ast.LtE: jnp.less_equal,
+    ast.Gt: jnp.greater,
+    ast.GtE: jnp.greater_equal,
+    ast.Eq: jnp.equal,
+    ast.NotEq: jnp.not_equal,
 }
 
 Env = dict
@@ -128,14 +157,19 @@ class Expression:
         if missing:
             raise TypeError(f"expression {self.text!r} needs values for {missing}")
         out = self._fn(values)
-        return jnp.asarray(out, dtype=jnp.float64) if not isinstance(out, bool) else jnp.asarray(float(out))
+        return (
+            jnp.asarray(out, dtype=jnp.float64)
+            if not isinstance(out, bool)
+            else jnp.asarray(float(out))
+        )
 
     def __repr__(self) -> str:
         return f"Expression({self.text!r})"
 
 
-def compile_expression(text: str | float | int, variables: Sequence[str] = ("t", "i"),
-                       field: str = "") -> Expression:
+def compile_expression(
+    text: str | float | int, variables: Sequence[str] = ("t", "i"), field: str = ""
+) -> Expression:
     """Parse ``text`` and return an :class:`Expression` (JAX-traceable, differentiable in ``t``)."""
     if isinstance(text, bool):
         raise ExpressionError("booleans are not expressions", str(text), field)
@@ -145,10 +179,14 @@ def compile_expression(text: str | float | int, variables: Sequence[str] = ("t",
         except OverflowError:
             value = math.inf
         if not math.isfinite(value):
-            raise ExpressionError("a number used as an expression must be finite", str(text)[:40], field)
+            raise ExpressionError(
+                "a number used as an expression must be finite", str(text)[:40], field
+            )
         return Expression(repr(value), lambda env: value, tuple(variables))
     if not isinstance(text, str):
-        raise ExpressionError(f"expected a string or number, got {type(text).__name__}", str(text), field)
+        raise ExpressionError(
+            f"expected a string or number, got {type(text).__name__}", str(text), field
+        )
     return _compile_cached(text, tuple(variables), field)
 
 
@@ -159,14 +197,19 @@ def compile_vector_expression(texts: Sequence[str | float], field: str = "") -> 
     Errors name ``field[k]`` of the offending component.
     """
     fns = [compile_expression(s, ("t", "i"), field=f"{field}[{k}]") for k, s in enumerate(texts)]
-    return lambda t, i: jnp.stack([jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1)
+    return lambda t, i: jnp.stack(
+        [jnp.broadcast_to(f(t=t, i=i), jnp.shape(i)) for f in fns], axis=-1
+    )
 
 
 @lru_cache(maxsize=4096)
 def _compile_cached(text: str, variables: tuple[str, ...], field: str) -> Expression:
     if len(text) > MAX_LENGTH:
-        raise ExpressionError(f"expression longer than {MAX_LENGTH} characters ({len(text)})",
-                              text[:40] + "...", field)
+        raise ExpressionError(
+            f"expression longer than {MAX_LENGTH} characters ({len(text)})",
+            text[:40] + "...",
+            field,
+        )
     if "\x00" in text:
         raise ExpressionError("NUL character in expression", text.replace("\x00", "\\x00"), field)
     try:
@@ -175,8 +218,12 @@ def _compile_cached(text: str, variables: tuple[str, ...], field: str) -> Expres
         col = (exc.offset or 1) - 1
         raise ExpressionError(f"syntax error ({exc.msg})", text, field, col) from None
     except (RecursionError, MemoryError, ValueError) as exc:
-        raise ExpressionError(f"expression too deeply nested to parse ({type(exc).__name__}); at most "
-                              f"{MAX_DEPTH} levels", text, field) from None
+        raise ExpressionError(
+            f"expression too deeply nested to parse ({type(exc).__name__}); at most "
+            f"{MAX_DEPTH} levels",
+            text,
+            field,
+        ) from None
     _check_size(tree.body, text, field)
     compiler = _Compiler(text, set(variables), field)
     fn = compiler.visit(tree.body)
@@ -192,12 +239,20 @@ def _check_size(root: ast.AST, text: str, field: str) -> None:
         node, depth = stack.pop()
         n += 1
         if n > MAX_NODES:
-            raise ExpressionError(f"expression too large (more than {MAX_NODES} syntax nodes); split it or "
-                                  f"simplify it", text, field)
+            raise ExpressionError(
+                f"expression too large (more than {MAX_NODES} syntax nodes); split it or "
+                f"simplify it",
+                text,
+                field,
+            )
         if depth > MAX_DEPTH:
-            raise ExpressionError(f"expression nested too deeply (more than {MAX_DEPTH} levels, e.g. a chain "
-                                  f"of more than {MAX_DEPTH} operators); simplify it", text, field,
-                                  getattr(node, "col_offset", None))
+            raise ExpressionError(
+                f"expression nested too deeply (more than {MAX_DEPTH} levels, e.g. a chain "
+                f"of more than {MAX_DEPTH} operators); simplify it",
+                text,
+                field,
+                getattr(node, "col_offset", None),
+            )
         stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
 
 
@@ -210,20 +265,47 @@ def _np_piecewise(*args):
 
 #: numpy float64 twins of FUNCTIONS, used to fold constant sub-expressions at validation
 _NP_FUNCTIONS: dict[str, Callable] = {
-    "sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan,
-    "atan2": np.arctan2, "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "exp": np.exp, "log": np.log,
-    "log10": np.log10, "sqrt": np.sqrt, "abs": np.abs, "sign": np.sign, "floor": np.floor, "ceil": np.ceil,
-    "min": lambda *a: _reduce(np.minimum, a), "max": lambda *a: _reduce(np.maximum, a), "clip": np.clip,
-    "where": np.where, "step": lambda x: np.where(x >= 0, 1.0, 0.0),
-    "window": lambda x, lo, hi: np.where((x >= lo) & (x <= hi), 1.0, 0.0), "piecewise": _np_piecewise,
+    "sin": np.sin,
+    "cos": np.cos,
+    "tan": np.tan,
+    "asin": np.arcsin,
+    "acos": np.arccos,
+    "atan": np.arctan,
+    "atan2": np.arctan2,
+    "sinh": np.sinh,
+    "cosh": np.cosh,
+    "tanh": np.tanh,
+    "exp": np.exp,
+    "log": np.log,
+    "log10": np.log10,
+    "sqrt": np.sqrt,
+    "abs": np.abs,
+    "sign": np.sign,
+    "floor": np.floor,
+    "ceil": np.ceil,
+    "min": lambda *a: _reduce(np.minimum, a),
+    "max": lambda *a: _reduce(np.maximum, a),
+    "clip": np.clip,
+    "where": np.where,
+    "step": lambda x: np.where(x >= 0, 1.0, 0.0),
+    "window": lambda x, lo, hi: np.where((x >= lo) & (x <= hi), 1.0, 0.0),
+    "piecewise": _np_piecewise,
 }
 _NP_BINOPS = {
-    ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.true_divide,
-    ast.Pow: np.power, ast.Mod: np.remainder,
+    ast.Add: np.add,
+    ast.Sub: np.subtract,
+    ast.Mult: np.multiply,
+    ast.Div: np.true_divide,
+    ast.Pow: np.power,
+    ast.Mod: np.remainder,
 }
 _NP_CMPOPS = {
-    ast.Lt: np.less, ast.LtE: np.less_equal, ast.Gt: np.greater, ast.GtE: np.greater_equal,
-    ast.Eq: np.equal, ast.NotEq: np.not_equal,
+    ast.Lt: np.less,
+    ast.LtE: np.less_equal,
+    ast.Gt: np.greater,
+    ast.GtE: np.greater_equal,
+    ast.Eq: np.equal,
+    ast.NotEq: np.not_equal,
 }
 
 
@@ -249,9 +331,17 @@ class _Folder:
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             reason = str(exc).replace("encountered in ", "in ")
             self.c.fail(node, f"constant {token!r} is not a finite float64 ({reason})")
-        except (OverflowError, ZeroDivisionError, ValueError) as exc:  # pragma: no cover - numpy raises FPE
+        except (
+            OverflowError,
+            ZeroDivisionError,
+            ValueError,
+        ) as exc:  # pragma: no cover - numpy raises FPE
             self.c.fail(node, f"constant cannot be evaluated ({exc})")
-        if np.ndim(out) == 0 and np.issubdtype(np.asarray(out).dtype, np.floating) and not np.isfinite(out):
+        if (
+            np.ndim(out) == 0
+            and np.issubdtype(np.asarray(out).dtype, np.floating)
+            and not np.isfinite(out)
+        ):
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             self.c.fail(node, f"constant {token!r} is not finite ({out})")
         return out
@@ -300,7 +390,9 @@ class _Folder:
             args = [self._fold(a) for a in node.args]
             if any(a is None for a in args):
                 return None
-            return self._apply(node, _NP_FUNCTIONS[cast(ast.Name, node.func).id], *args)  # compiler: a Name
+            return self._apply(
+                node, _NP_FUNCTIONS[cast(ast.Name, node.func).id], *args
+            )  # compiler: a Name
         return None  # pragma: no cover - the compiler rejected every other node
 
 
@@ -404,6 +496,8 @@ class _Compiler:
             want = f"{lo}" if lo == hi else f"at least {lo}" if hi is None else f"{lo}..{hi}"
             self.fail(node, f"{name}() takes {want} argument(s), got {n}")
         if name == "piecewise" and n % 2 == 0:
-            self.fail(node, "piecewise() needs (condition, value) pairs followed by a default value")
+            self.fail(
+                node, "piecewise() needs (condition, value) pairs followed by a default value"
+            )
         args = [self.visit(a) for a in node.args]
         return lambda env: fn(*[a(env) for a in args])

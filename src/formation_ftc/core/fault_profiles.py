@@ -13,8 +13,16 @@ from formation_ftc.core.expressions import compile_expression
 __all__ = ["windowed_additive_faults"]
 
 
-def windowed_additive_faults(k, dt: float, windows, torques: tuple[str, ...], spacecraft: tuple[int, ...],
-                             channels: tuple[int, ...], count: int, n_channels: int = 3):
+def windowed_additive_faults(
+    k,
+    dt: float,
+    windows,
+    torques: tuple[str, ...],
+    spacecraft: tuple[int, ...],
+    channels: tuple[int, ...],
+    count: int,
+    n_channels: int = 3,
+):
     """(count, n_channels) additive faults at step ``k`` (int, may be traced; t = k dt) [command units].
 
     ``windows`` (n_faults, 2) [s] are snapped to the step grid (``round(window / dt)``, both ends

@@ -41,7 +41,9 @@ def validate_adjacency(C, n: int | None = None, field: str = "network.adjacency"
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise GraphError(f"{field}: must be a square matrix, got shape {A.shape}")
     if n is not None and A.shape[0] != n:
-        raise GraphError(f"{field}: must be {n}x{n} (one row/column per spacecraft), got {A.shape[0]}x{A.shape[1]}")
+        raise GraphError(
+            f"{field}: must be {n}x{n} (one row/column per spacecraft), got {A.shape[0]}x{A.shape[1]}"
+        )
     if not np.all(np.isfinite(A)):
         raise GraphError(f"{field}: entries must be finite")
     neg = np.argwhere(A < 0)
@@ -51,12 +53,15 @@ def validate_adjacency(C, n: int | None = None, field: str = "network.adjacency"
     diag = np.flatnonzero(np.diag(A) != 0)
     if diag.size:
         i = diag[0]
-        raise GraphError(f"{field}[{i}][{i}] = {A[i, i]}: self-loops are not allowed (diagonal must be 0)")
+        raise GraphError(
+            f"{field}[{i}][{i}] = {A[i, i]}: self-loops are not allowed (diagonal must be 0)"
+        )
     return A
 
 
-def adjacency(n: int, edges: list[tuple[int, int]], weights: list[float] | None = None,
-              directed: bool = True) -> np.ndarray:
+def adjacency(
+    n: int, edges: list[tuple[int, int]], weights: list[float] | None = None, directed: bool = True
+) -> np.ndarray:
     """Build an adjacency matrix from (receiver, sender) pairs (0-based)."""
     A = np.zeros((n, n))
     w = weights if weights is not None else [1.0] * len(edges)
@@ -103,7 +108,9 @@ class BalanceReport:
 
 def balance_report(C, tol: float = 1e-12) -> BalanceReport:
     """Balance verdict with the row (in) and column (out) sums."""
-    return BalanceReport(is_balanced(C, tol), tuple(map(float, in_degree(C))), tuple(map(float, out_degree(C))))
+    return BalanceReport(
+        is_balanced(C, tol), tuple(map(float, in_degree(C))), tuple(map(float, out_degree(C)))
+    )
 
 
 def to_networkx(C) -> nx.DiGraph:

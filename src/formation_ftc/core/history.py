@@ -54,7 +54,9 @@ def history_read(h: History, lag_steps, mode: str = "linear"):
     clamped to the oldest stored sample (the prehistory value for a buffer that never wrapped).
     """
     cap = h.values.shape[0]
-    lag = jnp.clip(jnp.asarray(lag_steps, dtype=h.values.dtype), 0.0, (h.count - 1).astype(h.values.dtype))
+    lag = jnp.clip(
+        jnp.asarray(lag_steps, dtype=h.values.dtype), 0.0, (h.count - 1).astype(h.values.dtype)
+    )
     lo = jnp.floor(lag)
     frac = lag - lo
     lo_i = lo.astype(jnp.int32)

@@ -20,8 +20,14 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
 
-__all__ = ["rk4_step", "rk4_step_staged", "rk4_autonomous_stages", "euler_step", "zoh_discretize",
-           "zoh_discretize_jax"]
+__all__ = [
+    "rk4_step",
+    "rk4_step_staged",
+    "rk4_autonomous_stages",
+    "euler_step",
+    "zoh_discretize",
+    "zoh_discretize_jax",
+]
 
 PyTree = Any
 
@@ -60,7 +66,9 @@ def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, 
         u0, u_half, u1 = stage_inputs
         stage_inputs = (u0, u_half, u_half, u1)
     if len(stage_inputs) != 4:
-        raise ValueError(f"rk4_step_staged: stage_inputs must hold 3 or 4 values, got {len(stage_inputs)}")
+        raise ValueError(
+            f"rk4_step_staged: stage_inputs must hold 3 or 4 values, got {len(stage_inputs)}"
+        )
     ua, ub, uc, ud = stage_inputs
     k1 = rhs(t, x, ua, *args)
     k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), ub, *args)

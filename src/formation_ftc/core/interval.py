@@ -49,8 +49,16 @@ import numpy as np
 
 from formation_ftc.core.expressions import CONSTANTS, FUNCTIONS, compile_expression
 
-__all__ = ["IntervalError", "Boxes", "LIB_ULPS", "evaluate", "enclose", "enclose_derivative", "enclose_boxes",
-           "enclose_norm"]
+__all__ = [
+    "IntervalError",
+    "Boxes",
+    "LIB_ULPS",
+    "evaluate",
+    "enclose",
+    "enclose_derivative",
+    "enclose_boxes",
+    "enclose_norm",
+]
 
 #: ulps by which a library function's (sin, exp, pow, ...) result is widened on each side [-]
 LIB_ULPS = 8
@@ -283,6 +291,7 @@ def _log(f: Callable) -> Callable[[_I], _I]:
     def g(a: _I) -> _I:
         ok = a.lo >= 0
         return _in_domain(_monotone(f, _I(np.maximum(a.lo, 0.0), np.maximum(a.hi, 0.0))), ok)
+
     return g
 
 
@@ -346,7 +355,9 @@ def _pow(a: _I, b: _I) -> _I:
         general_ok = a.lo > 0
         lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
         hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
-        ok = np.where(even, ok_even, np.where(integer, ok_odd, np.where(fixed, base_ok, general_ok)))
+        ok = np.where(
+            even, ok_even, np.where(integer, ok_odd, np.where(fixed, base_ok, general_ok))
+        )
         r = _out(lo, hi, LIB_ULPS)
         lo = np.where(zero, 1.0, np.where(ok, r.lo, out.lo))
         hi = np.where(zero, 1.0, np.where(ok, r.hi, out.hi))
@@ -365,8 +376,14 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
         r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
         # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
         lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
-        same = (fixed & (d != 0) & (k_lo == k_hi) & np.isfinite(k_lo)
-                & (np.minimum(r_lo, r_hi) > lo_end + slack) & (np.maximum(r_lo, r_hi) < hi_end - slack))
+        same = (
+            fixed
+            & (d != 0)
+            & (k_lo == k_hi)
+            & np.isfinite(k_lo)
+            & (np.minimum(r_lo, r_hi) > lo_end + slack)
+            & (np.maximum(r_lo, r_hi) < hi_end - slack)
+        )
         tight = _I(np.minimum(r_lo, r_hi) - slack, np.maximum(r_lo, r_hi) + slack)
         pos, neg = b.lo > 0, b.hi < 0
         lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
@@ -421,8 +438,15 @@ _UNARY_DERIV_FREE = {"sign", "floor", "ceil", "step"}
 class _Evaluator:
     """Walk the (already validated) syntax tree with interval (and optionally dual) arithmetic."""
 
-    def __init__(self, text: str, env: Mapping[str, _I], time: str | None, n: int, derivative: bool,
-                 variables: Sequence[str] = ()):
+    def __init__(
+        self,
+        text: str,
+        env: Mapping[str, _I],
+        time: str | None,
+        n: int,
+        derivative: bool,
+        variables: Sequence[str] = (),
+    ):
         self.text, self.env, self.time, self.n, self.der = text, env, time, n, derivative
         self.variables = tuple(variables)
 
@@ -580,14 +604,23 @@ class _Evaluator:
         return self._smooth(x, _tan, lambda a, v: _add(_const(1.0, self.n), _sqr(v)))
 
     def call_asin(self, x):
-        return self._smooth(x, _asin, lambda a, v: _div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a)))))
+        return self._smooth(
+            x,
+            _asin,
+            lambda a, v: _div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a)))),
+        )
 
     def call_acos(self, x):
-        return self._smooth(x, _acos,
-                            lambda a, v: _neg(_div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a))))))
+        return self._smooth(
+            x,
+            _acos,
+            lambda a, v: _neg(_div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a))))),
+        )
 
     def call_atan(self, x):
-        return self._smooth(x, _atan, lambda a, v: _div(_const(1.0, self.n), _add(_const(1.0, self.n), _sqr(a))))
+        return self._smooth(
+            x, _atan, lambda a, v: _div(_const(1.0, self.n), _add(_const(1.0, self.n), _sqr(a)))
+        )
 
     def call_atan2(self, y, x):
         (yv, dy), (xv, dx) = y, x
@@ -607,18 +640,27 @@ class _Evaluator:
         return self._smooth(x, _cosh, lambda a, v: _monotone(np.sinh, a))
 
     def call_tanh(self, x):
-        return self._smooth(x, lambda a: _clip_range(_monotone(np.tanh, a), -1.0, 1.0),
-                            lambda a, v: _sub(_const(1.0, self.n), _sqr(v)))
+        return self._smooth(
+            x,
+            lambda a: _clip_range(_monotone(np.tanh, a), -1.0, 1.0),
+            lambda a, v: _sub(_const(1.0, self.n), _sqr(v)),
+        )
 
     def call_exp(self, x):
-        return self._smooth(x, lambda a: _clip_range(_monotone(np.exp, a), 0.0, _INF), lambda a, v: v)
+        return self._smooth(
+            x, lambda a: _clip_range(_monotone(np.exp, a), 0.0, _INF), lambda a, v: v
+        )
 
     def call_log(self, x):
         return self._smooth(x, _log(np.log), lambda a, v: _div(_const(1.0, self.n), a))
 
     def call_log10(self, x):
-        ln10 = _I(_down(np.full(self.n, math.log(10.0)), 2), _up(np.full(self.n, math.log(10.0)), 2))
-        return self._smooth(x, _log(np.log10), lambda a, v: _div(_const(1.0, self.n), _mul(a, ln10)))
+        ln10 = _I(
+            _down(np.full(self.n, math.log(10.0)), 2), _up(np.full(self.n, math.log(10.0)), 2)
+        )
+        return self._smooth(
+            x, _log(np.log10), lambda a, v: _div(_const(1.0, self.n), _mul(a, ln10))
+        )
 
     def call_sqrt(self, x):
         return self._smooth(x, _sqrt, lambda a, v: _div(_const(0.5, self.n), v))
@@ -650,7 +692,9 @@ class _Evaluator:
         return self._piecewise_constant(x, _exact_monotone(np.ceil))
 
     def call_step(self, x):
-        return self._piecewise_constant(x, lambda a: _I(np.where(a.lo >= 0, 1.0, 0.0), np.where(a.hi >= 0, 1.0, 0.0)))
+        return self._piecewise_constant(
+            x, lambda a: _I(np.where(a.lo >= 0, 1.0, 0.0), np.where(a.hi >= 0, 1.0, 0.0))
+        )
 
     def _extreme(self, args, lower: bool) -> _Pair:
         out = args[0]
@@ -666,8 +710,10 @@ class _Evaluator:
             if self.der:
                 assert a[1] is not None and b[1] is not None
                 h = _hull(a[1], b[1])
-                d = _I(np.where(first, a[1].lo, np.where(second, b[1].lo, h.lo)),
-                       np.where(first, a[1].hi, np.where(second, b[1].hi, h.hi)))
+                d = _I(
+                    np.where(first, a[1].lo, np.where(second, b[1].lo, h.lo)),
+                    np.where(first, a[1].hi, np.where(second, b[1].hi, h.hi)),
+                )
             out = (v, d)
         return out
 
@@ -712,14 +758,24 @@ def _decided_truth(c: _I) -> np.ndarray:
 
 @lru_cache(maxsize=1024)
 def _parse(text: str | float | int, variables: tuple[str, ...]) -> ast.AST:
-    compile_expression(text, tuple(variables))  # the whitelist, the size limits and constant folding
+    compile_expression(
+        text, tuple(variables)
+    )  # the whitelist, the size limits and constant folding
     if isinstance(text, int | float):
         return ast.Constant(value=float(text))
     return ast.parse(text.strip(), mode="eval").body
 
 
-def evaluate(text: str | float | int, variables: Sequence[str], t_lo, t_hi, *, derivative: bool = False,
-             time: str = "t", **fixed: float) -> tuple[np.ndarray, np.ndarray]:
+def evaluate(
+    text: str | float | int,
+    variables: Sequence[str],
+    t_lo,
+    t_hi,
+    *,
+    derivative: bool = False,
+    time: str = "t",
+    **fixed: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """Enclosures of ``f`` (or ``df/dt``) on each sub-interval ``[t_lo[k], t_hi[k]]`` (arrays).
 
     Parameters
@@ -738,8 +794,15 @@ def evaluate(text: str | float | int, variables: Sequence[str], t_lo, t_hi, *, d
     return _evaluate(text, variables, t_lo, t_hi, derivative, time, fixed)
 
 
-def _evaluate(text: str | float | int, variables: Sequence[str], t_lo, t_hi, derivative: bool, time: str,
-              fixed: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+def _evaluate(
+    text: str | float | int,
+    variables: Sequence[str],
+    t_lo,
+    t_hi,
+    derivative: bool,
+    time: str,
+    fixed: Mapping[str, float],
+) -> tuple[np.ndarray, np.ndarray]:
     tree = _parse(text, tuple(variables))
     a = np.atleast_1d(np.asarray(t_lo, dtype=float))
     b = np.atleast_1d(np.asarray(t_hi, dtype=float))
@@ -772,10 +835,20 @@ class Boxes:
     rounds: int
 
 
-def enclose_boxes(texts: Sequence[str | float], variables: Sequence[str], t_lo: float, t_hi: float,
-                  n_sub: int = 4096, *, derivative: bool = False,
-                  refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                  max_rounds: int = 8, max_boxes: int = 1 << 20, time: str = "t", **fixed: float) -> Boxes:
+def enclose_boxes(
+    texts: Sequence[str | float],
+    variables: Sequence[str],
+    t_lo: float,
+    t_hi: float,
+    n_sub: int = 4096,
+    *,
+    derivative: bool = False,
+    refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    max_rounds: int = 8,
+    max_boxes: int = 1 << 20,
+    time: str = "t",
+    **fixed: float,
+) -> Boxes:
     """Enclose several expressions on ``n_sub`` equal sub-intervals of ``[t_lo, t_hi]``.
 
     ``refine(lo, hi)`` (arrays (m, k)) returns a boolean mask of the sub-intervals whose enclosure is
@@ -783,12 +856,24 @@ def enclose_boxes(texts: Sequence[str | float], variables: Sequence[str], t_lo: 
     ``max_boxes`` sub-intervals (bounded work). The union of the sub-intervals is always the whole range.
     Other variables of the expressions are given as keywords (``fixed``).
     """
-    return _boxes(texts, variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, max_boxes, time, fixed)
+    return _boxes(
+        texts, variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, max_boxes, time, fixed
+    )
 
 
-def _boxes(texts: Sequence[str | float], variables: Sequence[str], t_lo: float, t_hi: float, n_sub: int,
-           derivative: bool, refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None, max_rounds: int,
-           max_boxes: int, time: str, fixed: Mapping[str, float]) -> Boxes:
+def _boxes(
+    texts: Sequence[str | float],
+    variables: Sequence[str],
+    t_lo: float,
+    t_hi: float,
+    n_sub: int,
+    derivative: bool,
+    refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
+    max_rounds: int,
+    max_boxes: int,
+    time: str,
+    fixed: Mapping[str, float],
+) -> Boxes:
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi < t_lo:
         raise ValueError(f"need a finite range t_lo <= t_hi, got [{t_lo}, {t_hi}]")
     if n_sub < 1:
@@ -836,9 +921,19 @@ def _threshold_refiner(upper: float | None, lower: float | None):
     return refine
 
 
-def enclose(text: str | float, variables: Sequence[str], t_lo: float, t_hi: float, n_sub: int = 4096, *,
-            upper: float | None = None, lower: float | None = None, max_rounds: int = 8, time: str = "t",
-            **fixed: float) -> tuple[float, float]:
+def enclose(
+    text: str | float,
+    variables: Sequence[str],
+    t_lo: float,
+    t_hi: float,
+    n_sub: int = 4096,
+    *,
+    upper: float | None = None,
+    lower: float | None = None,
+    max_rounds: int = 8,
+    time: str = "t",
+    **fixed: float,
+) -> tuple[float, float]:
     """``(lo, hi)`` with ``lo <= f(t) <= hi`` for every ``t`` in ``[t_lo, t_hi]``.
 
     With ``upper`` (``lower``) the sub-intervals whose enclosure reaches the threshold without
@@ -846,18 +941,50 @@ def enclose(text: str | float, variables: Sequence[str], t_lo: float, t_hi: floa
     (``lo > lower``) is proved whenever a few bisections suffice. Other variables of the expression
     (e.g. the spacecraft number ``i``) are given as keywords.
     """
-    bx = _boxes([text], variables, t_lo, t_hi, n_sub, False, _threshold_refiner(upper, lower), max_rounds,
-                1 << 20, time, fixed)
+    bx = _boxes(
+        [text],
+        variables,
+        t_lo,
+        t_hi,
+        n_sub,
+        False,
+        _threshold_refiner(upper, lower),
+        max_rounds,
+        1 << 20,
+        time,
+        fixed,
+    )
     return float(bx.lo.min()), float(bx.hi.max())
 
 
-def enclose_derivative(text: str | float, variables: Sequence[str], t_lo: float, t_hi: float,
-                       n_sub: int = 4096, *, upper: float | None = None, lower: float | None = None,
-                       max_rounds: int = 8, time: str = "t", **fixed: float) -> tuple[float, float]:
+def enclose_derivative(
+    text: str | float,
+    variables: Sequence[str],
+    t_lo: float,
+    t_hi: float,
+    n_sub: int = 4096,
+    *,
+    upper: float | None = None,
+    lower: float | None = None,
+    max_rounds: int = 8,
+    time: str = "t",
+    **fixed: float,
+) -> tuple[float, float]:
     """``(lo, hi)`` enclosing ``df/dt`` over ``[t_lo, t_hi]`` (see :func:`enclose`); ``(-inf, inf)``
     when the expression may jump inside the range."""
-    bx = _boxes([text], variables, t_lo, t_hi, n_sub, True, _threshold_refiner(upper, lower), max_rounds,
-                1 << 20, time, fixed)
+    bx = _boxes(
+        [text],
+        variables,
+        t_lo,
+        t_hi,
+        n_sub,
+        True,
+        _threshold_refiner(upper, lower),
+        max_rounds,
+        1 << 20,
+        time,
+        fixed,
+    )
     return float(bx.lo.min()), float(bx.hi.max())
 
 
@@ -870,9 +997,18 @@ def _norm_upper(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.nextafter(np.sqrt(total), _INF)
 
 
-def enclose_norm(texts: Sequence[str | float], variables: Sequence[str], t_lo: float, t_hi: float,
-                 n_sub: int = 4096, *, upper: float | None = None, max_rounds: int = 8, time: str = "t",
-                 **fixed: float) -> float:
+def enclose_norm(
+    texts: Sequence[str | float],
+    variables: Sequence[str],
+    t_lo: float,
+    t_hi: float,
+    n_sub: int = 4096,
+    *,
+    upper: float | None = None,
+    max_rounds: int = 8,
+    time: str = "t",
+    **fixed: float,
+) -> float:
     """Upper bound of the Euclidean norm ``|(f_1(t), ..., f_m(t))|`` over ``[t_lo, t_hi]``.
 
     Per sub-interval the norm is bounded from the component enclosures (``sqrt(sum max|f_m|^2)``,
@@ -880,7 +1016,11 @@ def enclose_norm(texts: Sequence[str | float], variables: Sequence[str], t_lo: f
     """
     refine = None
     if upper is not None:
+
         def refine(lo, hi):
             return _norm_upper(lo, hi) >= upper
-    bx = _boxes(texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, 1 << 20, time, fixed)
+
+    bx = _boxes(
+        texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, 1 << 20, time, fixed
+    )
     return float(_norm_upper(bx.lo, bx.hi).max())

@@ -68,7 +68,9 @@ class KeplerOrbit:
     def theta_ddot(self, theta):
         """d^2 theta/dt^2 = -2 (mu/p^3) e sin theta (1 + e cos theta)^3 [rad/s^2]."""
         p = self.semi_latus_rectum
-        return -2.0 * (self.mu / p**3) * self.e * jnp.sin(theta) * (1.0 + self.e * jnp.cos(theta)) ** 3
+        return (
+            -2.0 * (self.mu / p**3) * self.e * jnp.sin(theta) * (1.0 + self.e * jnp.cos(theta)) ** 3
+        )
 
 
 def solve_kepler(mean_anomaly: np.ndarray | float, e: float, tol: float = 1e-15) -> np.ndarray:
@@ -93,7 +95,9 @@ def true_anomaly_at(orbit: KeplerOrbit, t: np.ndarray | float) -> np.ndarray:
     e = orbit.e
     t = np.asarray(t, dtype=float)
     # eccentric and mean anomaly at t = 0
-    E0 = 2.0 * np.arctan2(np.sqrt(1 - e) * np.sin(orbit.theta0 / 2), np.sqrt(1 + e) * np.cos(orbit.theta0 / 2))
+    E0 = 2.0 * np.arctan2(
+        np.sqrt(1 - e) * np.sin(orbit.theta0 / 2), np.sqrt(1 + e) * np.cos(orbit.theta0 / 2)
+    )
     M0 = E0 - e * np.sin(E0)
     M = M0 + orbit.mean_motion * t
     E = solve_kepler(M, e)

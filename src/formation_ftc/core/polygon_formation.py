@@ -26,8 +26,12 @@ def rotating_polygon(t, n: int, n_axes: int, side, omega) -> tuple[jax.Array, ja
     phase = omega * t + jnp.pi / 4 + i * (2.0 * jnp.pi / n)
     c, s = jnp.cos(phase), jnp.sin(phase)
     pos = jnp.stack([radius * c, radius * s, jnp.zeros_like(c)], axis=-1)[:, :n_axes]
-    vel = jnp.stack([-radius * omega * s, radius * omega * c, jnp.zeros_like(c)], axis=-1)[:, :n_axes]
-    acc = jnp.stack([-radius * omega**2 * c, -radius * omega**2 * s, jnp.zeros_like(c)], axis=-1)[:, :n_axes]
+    vel = jnp.stack([-radius * omega * s, radius * omega * c, jnp.zeros_like(c)], axis=-1)[
+        :, :n_axes
+    ]
+    acc = jnp.stack([-radius * omega**2 * c, -radius * omega**2 * s, jnp.zeros_like(c)], axis=-1)[
+        :, :n_axes
+    ]
     return pos, vel, acc
 
 
@@ -37,7 +41,9 @@ def chain_difference(x: jax.Array) -> jax.Array:
 
 
 @functools.lru_cache(maxsize=64)
-def relative_acceleration_fn(n: int, side: float, omega: float, axis: int) -> Callable[[jax.Array], jax.Array]:
+def relative_acceleration_fn(
+    n: int, side: float, omega: float, axis: int
+) -> Callable[[jax.Array], jax.Array]:
     """``t -> xdd_{i,i+1}^d(t)``: desired relative accelerations on the chain, one axis, shape (N-1,)
     [m/s^2]. Cached, so the same function object (a static argument of the FLFR design's H_i
     simulation) is reused."""

@@ -27,7 +27,9 @@ __all__ = ["formation_offsets", "chi_from_period", "desired_trajectory", "format
 def formation_offsets(radius: float, phases) -> np.ndarray:
     """rho_bar_iF (N, 3) [m] (E000-10 sign pattern)."""
     ph = np.asarray(phases, dtype=float)
-    return radius * np.stack([0.5 * np.cos(ph), -np.sin(ph), (math.sqrt(3) / 2) * np.cos(ph)], axis=-1)
+    return radius * np.stack(
+        [0.5 * np.cos(ph), -np.sin(ph), (math.sqrt(3) / 2) * np.cos(ph)], axis=-1
+    )
 
 
 def chi_from_period(period: float, fraction: float = 0.5, residual: float = 1e-6) -> float:

@@ -29,4 +29,3 @@ def sq_norm3(a):
 def norm3(a):
     """Euclidean norm ||a|| over the last axis (length 3)."""
     return jnp.sqrt(sq_norm3(a))
-

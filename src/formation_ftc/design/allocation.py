@@ -47,7 +47,9 @@ __all__ = [
 ]
 
 
-def validate_allocation_inputs(alpha, b_hat, name_alpha: str = "alpha", name_b: str = "b_hat") -> None:
+def validate_allocation_inputs(
+    alpha, b_hat, name_alpha: str = "alpha", name_b: str = "b_hat"
+) -> None:
     """Raise ``ValueError`` unless every ``alpha_i > 0`` and every ``b_hat_i > 0`` (finite).
 
     ``alpha_i <= 0`` makes the cost not positive definite (no unique minimiser); ``b_hat_i = 0`` is a
@@ -83,7 +85,9 @@ def validate_allocation_inputs(alpha, b_hat, name_alpha: str = "alpha", name_b: 
     if a.shape[-1] < 2:
         raise ValueError(f"need at least 2 satellites on the chain, got {a.shape[-1]}")
     if not np.all(np.isfinite(a)) or np.any(a <= 0):
-        raise ValueError(f"{name_alpha} must be finite and > 0 (allocation weights of eq. (3)), got {a.tolist()}")
+        raise ValueError(
+            f"{name_alpha} must be finite and > 0 (allocation weights of eq. (3)), got {a.tolist()}"
+        )
     if not np.all(np.isfinite(b)) or np.any(b <= 0):
         raise ValueError(
             f"{name_b} must be finite and > 0 (estimated actuator gains; 0 is a dead actuator and makes "
@@ -314,7 +318,9 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
     validate_allocation_inputs(alpha, b_hat)
     n = alpha.size
     if not 0 < k < n - 1:
-        raise ValueError(f"faulty satellite index k = {k} (0-based) must be interior: 0 < k < {n - 1}")
+        raise ValueError(
+            f"faulty satellite index k = {k} (0-based) must be interior: 0 < k < {n - 1}"
+        )
     a0 = alpha.copy()
     a0[k] = 0.0
     a1 = alpha.copy()
@@ -364,8 +370,14 @@ def closed_form_n4(alpha, b, b_hat2: float) -> dict[str, object]:
     bh = float(b_hat2)
     q1 = a1 * bh * b3 * b4 / b1 + a3 * b1 * bh * b4 / b3 + a4 * b1 * bh * b3 / b4  # Azizi2009 Thm 2
     q2 = b1 * b3 * b4 / bh
-    C = np.array([-a1 * b3 * b4 / b1, b1 * (a3 * b4**2 + a4 * b3**2) / (b3 * b4), a4 * b1 * b3 / b4,
-                  -b1 * b3 * b4])  # E004-03
+    C = np.array(
+        [
+            -a1 * b3 * b4 / b1,
+            b1 * (a3 * b4**2 + a4 * b3**2) / (b3 * b4),
+            a4 * b1 * b3 / b4,
+            -b1 * b3 * b4,
+        ]
+    )  # E004-03
     return {"q1": q1, "q2": q2, "DET": q2 * a2 + q1, "C": C}
 
 

@@ -59,7 +59,9 @@ class Inequality:
 
     def __str__(self) -> str:
         state = "holds" if self.holds else "VIOLATED"
-        return f"{self.reference} {self.name}: {self.lhs:.6g} {self.relation} {self.rhs:.6g} ({state})"
+        return (
+            f"{self.reference} {self.name}: {self.lhs:.6g} {self.relation} {self.rhs:.6g} ({state})"
+        )
 
 
 def _compare(lhs: float, relation: str, rhs: float, tol: float = 1e-12) -> bool:
@@ -214,8 +216,9 @@ def zeta_from_epsilon(mode_sizes: Sequence[int], eps_lyap: float) -> float:
     return float(np.sqrt(max(mode_sizes) * eps_lyap))
 
 
-def eta_from_gains(K1: float, K2: float, K3: float, K4: float, K5: float,
-                   nu1: float, nu2: float, nu3: float) -> float:
+def eta_from_gains(
+    K1: float, K2: float, K3: float, K4: float, K5: float, nu1: float, nu2: float, nu3: float
+) -> float:
     """Printed decay rate of (18): ``eta = 2 min[K1, K2 - nu1, K3 - nu2 - nu3, K4 - 1/nu3, K5]``.
 
     E001-03: (14) cannot be derived from (12)-(13), so this number is the paper's claim, not a proven
@@ -310,12 +313,22 @@ def gains_for_decay_rate(eta: float, K1: float | None = None) -> tuple[float, fl
     K1 = eta / 2.0 if K1 is None else K1
     K2 = eta
     if K2**2 >= 4.0 * (K1 + 1.0):
-        raise ValueError("K2 = eta is not underdamped for this K1; the decay rate would differ from eta/2")
+        raise ValueError(
+            "K2 = eta is not underdamped for this K1; the decay rate would differ from eta/2"
+        )
     return K1, K2
 
 
-def dwell_time_bound(eta: float, S: float, zeta: float, D: float, eps: float, eps1: float,
-                     tau: float = 0.0, s_offset: float = 2.0) -> float:
+def dwell_time_bound(
+    eta: float,
+    S: float,
+    zeta: float,
+    D: float,
+    eps: float,
+    eps1: float,
+    tau: float = 0.0,
+    s_offset: float = 2.0,
+) -> float:
     """Right side of (21): ``max[(2/eta) ln((eps + (S + 2) zeta D)/eps1), tau]`` [s].
 
     ``s_offset = 1`` gives the proof-consistent variant with (S + 1) (E001-07).
@@ -523,13 +536,27 @@ def check_epsilons(eps: float, eps1: float, eps2: float, S: float) -> list[Inequ
         Inequality("eps2 >= 0", "Thm 1", eps2, ">=", 0.0, _compare(eps2, ">=", 0.0)),
         Inequality("eps2 < eps", "Thm 1", eps2, "<", eps, _compare(eps2, "<", eps)),
         Inequality("eps1 > 0", "Thm 1", eps1, ">", 0.0, _compare(eps1, ">", 0.0)),
-        Inequality("S eps1 + eps2 <= eps", "Thm 1", S * eps1 + eps2, "<=", eps,
-                   _compare(S * eps1 + eps2, "<=", eps)),
+        Inequality(
+            "S eps1 + eps2 <= eps",
+            "Thm 1",
+            S * eps1 + eps2,
+            "<=",
+            eps,
+            _compare(S * eps1 + eps2, "<=", eps),
+        ),
     ]
 
 
-def check_dwell_time(min_activation: float, eta: float, S: float, zeta: float, D: float, eps: float,
-                     eps1: float, tau: float) -> Inequality:
+def check_dwell_time(
+    min_activation: float,
+    eta: float,
+    S: float,
+    zeta: float,
+    D: float,
+    eps: float,
+    eps1: float,
+    tau: float,
+) -> Inequality:
     """(21): the shortest activation time of the switching modes must reach the bound.
 
     Parameters
@@ -551,8 +578,14 @@ def check_dwell_time(min_activation: float, eta: float, S: float, zeta: float, D
     (21) min Delta t >= dwell-time bound: 5 >= 4.37734 (holds)
     """
     bound = dwell_time_bound(eta, S, zeta, D, eps, eps1, tau)
-    return Inequality("min Delta t >= dwell-time bound", "(21)",
-                      float(min_activation), ">=", bound, _compare(float(min_activation), ">=", bound))
+    return Inequality(
+        "min Delta t >= dwell-time bound",
+        "(21)",
+        float(min_activation),
+        ">=",
+        bound,
+        _compare(float(min_activation), ">=", bound),
+    )
 
 
 def check_new_state(norm: float, eps2: float, zeta: float, D: float, who: str = "") -> Inequality:
@@ -579,8 +612,14 @@ def check_new_state(norm: float, eps2: float, zeta: float, D: float, who: str = 
     (22) |X*| <= eps2 + zeta D (spacecraft 5): 0.3 <= 0.25 (VIOLATED)
     """
     bound = new_state_bound(eps2, zeta, D)
-    return Inequality(f"|X*| <= eps2 + zeta D{(' (' + who + ')') if who else ''}", "(22)", float(norm),
-                      "<=", bound, _compare(float(norm), "<=", bound))
+    return Inequality(
+        f"|X*| <= eps2 + zeta D{(' (' + who + ')') if who else ''}",
+        "(22)",
+        float(norm),
+        "<=",
+        bound,
+        _compare(float(norm), "<=", bound),
+    )
 
 
 def check_initial_state(norm: float, eps: float, S: float, zeta: float, D: float) -> Inequality:
@@ -605,8 +644,14 @@ def check_initial_state(norm: float, eps: float, S: float, zeta: float, D: float
     True
     """
     bound = initial_state_bound(eps, S, zeta, D)
-    return Inequality("|X(0)| <= eps + (S+1) zeta D", "(24)", float(norm), "<=", bound,
-                      _compare(float(norm), "<=", bound))
+    return Inequality(
+        "|X(0)| <= eps + (S+1) zeta D",
+        "(24)",
+        float(norm),
+        "<=",
+        bound,
+        _compare(float(norm), "<=", bound),
+    )
 
 
 def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequality:
@@ -632,5 +677,12 @@ def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequ
     'dt1 = 10 s, dt2 = 15 s, eta = 0.4, eta1 = 0.2'
     """
     m = condition_29_margin(eta, eta1, dt1, dt2)
-    return Inequality("(eta/2) dt1 - (eta1/2) dt2 >= 0", "(29)", m, ">=", 0.0, _compare(m, ">=", 0.0),
-                      detail=f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}")
+    return Inequality(
+        "(eta/2) dt1 - (eta1/2) dt2 >= 0",
+        "(29)",
+        m,
+        ">=",
+        0.0,
+        _compare(m, ">=", 0.0),
+        detail=f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}",
+    )

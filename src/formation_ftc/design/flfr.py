@@ -97,7 +97,9 @@ def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
            [ 0.,  0., -2., -3.]])
     """
     if lam0 <= 0 or lam1 <= 0:
-        raise ValueError(f"lambda0 and lambda1 must be > 0 (Hurwitz s^2 + l1 s + l0), got {lam0}, {lam1}")
+        raise ValueError(
+            f"lambda0 and lambda1 must be > 0 (Hurwitz s^2 + l1 s + l0), got {lam0}, {lam1}"
+        )
     blk = np.array([[0.0, 1.0], [-lam0, -lam1]])
     A = np.zeros((4, 4))
     A[:2, :2] = blk
@@ -105,7 +107,9 @@ def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
     return A
 
 
-def reduced_model(lam0: float, lam1: float, d12: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def reduced_model(
+    lam0: float, lam1: float, d12: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(A, Delta, A_clp = (I + Delta) A) of eq. (7) for the first two D entries (d1, d2).
 
     Parameters
@@ -163,8 +167,15 @@ def _simulate(A_clp, b_vec, weights, w_fn, dt, n_steps: int, record_every: int):
     return jnp.concatenate([x0[None], xs], axis=0), peak
 
 
-def simulate_reduced_model(A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,),
-                           record_every: int = 1, b_vec=INPUT_DIRECTION) -> tuple[np.ndarray, np.ndarray]:
+def simulate_reduced_model(
+    A_clp,
+    w_fn: Callable,
+    horizon: float,
+    dt: float,
+    weights=(1.0,),
+    record_every: int = 1,
+    b_vec=INPUT_DIRECTION,
+) -> tuple[np.ndarray, np.ndarray]:
     """Integrate ``X' = A_clp X + b_vec (weights . w(t))`` from X(0) = 0 with RK4 (w at the stages).
 
     ``w_fn(t)`` is a JAX-traceable function returning a scalar or a vector matching ``weights``; it is a
@@ -220,13 +231,21 @@ def simulate_reduced_model(A_clp, w_fn: Callable, horizon: float, dt: float, wei
         raise ValueError(f"dt = {dt} s must divide horizon = {horizon} s")
     if n_steps % record_every:
         raise ValueError(f"record_every = {record_every} must divide horizon/dt = {n_steps}")
-    xs, peak = _simulate(jnp.asarray(A_clp, dtype=jnp.float64), jnp.asarray(b_vec, dtype=jnp.float64),
-                         jnp.asarray(weights, dtype=jnp.float64), w_fn, jnp.asarray(dt, jnp.float64),
-                         n_steps, record_every)
+    xs, peak = _simulate(
+        jnp.asarray(A_clp, dtype=jnp.float64),
+        jnp.asarray(b_vec, dtype=jnp.float64),
+        jnp.asarray(weights, dtype=jnp.float64),
+        w_fn,
+        jnp.asarray(dt, jnp.float64),
+        n_steps,
+        record_every,
+    )
     return np.asarray(xs), np.asarray(peak)
 
 
-def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,)) -> np.ndarray:
+def convolution_supremum(
+    A_clp, w_fn: Callable, horizon: float, dt: float, weights=(1.0,)
+) -> np.ndarray:
     """H_i = sup_{0<=t<=horizon} |(G_i4 - G_i2) * (weights . w)| for i = 1..4 (eq. (8)), by simulation.
 
     The sign convention of the input direction does not matter (absolute value). Remembered for the
@@ -267,8 +286,15 @@ def convolution_supremum(A_clp, w_fn: Callable, horizon: float, dt: float, weigh
 
 
 @functools.lru_cache(maxsize=16)
-def _supremum(a_bytes: bytes, a_shape: tuple, w_fn: Callable, horizon: float, dt: float, w_bytes: bytes,
-              w_shape: tuple) -> np.ndarray:
+def _supremum(
+    a_bytes: bytes,
+    a_shape: tuple,
+    w_fn: Callable,
+    horizon: float,
+    dt: float,
+    w_bytes: bytes,
+    w_shape: tuple,
+) -> np.ndarray:
     A = np.frombuffer(a_bytes, dtype=np.float64).reshape(a_shape)
     weights = np.frombuffer(w_bytes, dtype=np.float64).reshape(w_shape)
     # the peak is taken at every step inside the loop; no record is needed between the two ends (one
@@ -355,12 +381,14 @@ def validate_violation_probability(pi: float) -> float:
     if not np.isfinite(p) or p < 0.0 or p >= 1.0:
         raise ValueError(
             f"violation probability pi must satisfy 0 <= pi < 1 (pi = 0 is the deterministic design "
-            f"of eq. (9)), got {pi}")
+            f"of eq. (9)), got {pi}"
+        )
     return p
 
 
-def alpha_probabilistic(b_eps: float, H: float, q1: float, q2: float, e_s: float, pi: float = 0.0,
-                        floor: float = 0.0) -> float:
+def alpha_probabilistic(
+    b_eps: float, H: float, q1: float, q2: float, e_s: float, pi: float = 0.0, floor: float = 0.0
+) -> float:
     """alpha_k of eq. (11) (eq. (9) for pi = 0) with the mission bound reduced by ``floor`` [m].
 
     Raises :class:`InfeasibleSpecification` if ``e_s <= floor`` and ValueError on bad input.
@@ -410,11 +438,14 @@ def alpha_probabilistic(b_eps: float, H: float, q1: float, q2: float, e_s: float
     if e_s <= floor:
         raise InfeasibleSpecification(
             f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m; "
-            f"no alpha can meet it (Azizi2009 Sec. IV)")
+            f"no alpha can meet it (Azizi2009 Sec. IV)"
+        )
     return b_eps * (1.0 - pi) * H / (q2 * (e_s - floor)) - q1 / q2  # Azizi2009 eq. (11)
 
 
-def alpha_deterministic(b_eps: float, H: float, q1: float, q2: float, e_s: float, floor: float = 0.0) -> float:
+def alpha_deterministic(
+    b_eps: float, H: float, q1: float, q2: float, e_s: float, floor: float = 0.0
+) -> float:
     """alpha_k of eq. (9) (conservative, worst-case eps).
 
     Parameters
@@ -473,9 +504,22 @@ class FlfrDesign:
     eig_clp: np.ndarray = field(repr=False)
 
 
-def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_s: float,
-                pis, w_fn: Callable, horizon: float, dt: float, b_ext: float = 0.0,
-                alpha_ref: float = 1.0, subtract_floor: bool = False) -> FlfrDesign:
+def design_flfr(
+    alpha,
+    b_hat,
+    k: int,
+    b_eps: float,
+    lam0: float,
+    lam1: float,
+    e_s: float,
+    pis,
+    w_fn: Callable,
+    horizon: float,
+    dt: float,
+    b_ext: float = 0.0,
+    alpha_ref: float = 1.0,
+    subtract_floor: bool = False,
+) -> FlfrDesign:
     """FLFR design for faulty satellite ``k`` (0-based, interior) with current weights ``alpha``.
 
     ``w_fn(t)`` [m/s^2] must be the *unscaled* desired relative acceleration row ``xdd_des`` (shape
@@ -540,7 +584,9 @@ def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_
     f = coeff.f[: len(coeff.f) - 1]  # f_N multiplies the 0 entry of [p; 0]
     n = alpha.size
     if n != 4 or k != 1:
-        raise ValueError("the reduced model (7) is implemented for N = 4 and faulty satellite 2 (k = 1)")
+        raise ValueError(
+            "the reduced model (7) is implemented for N = 4 and faulty satellite 2 (k = 1)"
+        )
 
     A = error_dynamics_matrix(lam0, lam1)
     H_nom = float(np.max(convolution_supremum(A, w_fn, horizon, dt, f)[[0, 2]]))
@@ -560,8 +606,10 @@ def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_
     out_nom: dict[float, float | None] = {}
     if e_s <= floor:
         verdict = "infeasible"
-        msg = (f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m "
-               f"(sup_omega |G_14 - G_12| B_ext with B_ext = {b_ext:.3g} m/s^2); no alpha_{k + 1} can meet it")
+        msg = (
+            f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m "
+            f"(sup_omega |G_14 - G_12| B_ext with B_ext = {b_ext:.3g} m/s^2); no alpha_{k + 1} can meet it"
+        )
         for p in pis:
             validate_violation_probability(p)
             out[float(p)] = None
@@ -576,10 +624,22 @@ def design_flfr(alpha, b_hat, k: int, b_eps: float, lam0: float, lam1: float, e_
             msg = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m <= e_s = {e_s} m: FLFR not needed"
         else:
             verdict = "feasible"
-            msg = (f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
-                   f"FLFR raises alpha_{k + 1} from {alpha_k:g}")
+            msg = (
+                f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
+                f"FLFR raises alpha_{k + 1} from {alpha_k:g}"
+            )
     return FlfrDesign(
-        verdict=verdict, message=msg, coefficients=coeff, H=best, H_nominal=H_nom, H_eps_sign=best_sign,
-        floor=floor, alpha=out, alpha_nominal_H=out_nom, bound_at_reference=bound_ref,
-        delta_norm_reference=float(np.linalg.norm(Delta_ref, 2)), small_gain=small_gain_margin(A),
-        eig_clp=np.linalg.eigvals(best_clp))
+        verdict=verdict,
+        message=msg,
+        coefficients=coeff,
+        H=best,
+        H_nominal=H_nom,
+        H_eps_sign=best_sign,
+        floor=floor,
+        alpha=out,
+        alpha_nominal_H=out_nom,
+        bound_at_reference=bound_ref,
+        delta_norm_reference=float(np.linalg.norm(Delta_ref, 2)),
+        small_gain=small_gain_margin(A),
+        eig_clp=np.linalg.eigvals(best_clp),
+    )

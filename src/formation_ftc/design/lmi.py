@@ -52,7 +52,9 @@ class DesignInfeasible(InputError):
     """The LMI problem has no solution. ``constraints`` names the conflicting groups, ``status`` is the
     solver status (e.g. ``'infeasible'``)."""
 
-    def __init__(self, message: str, constraints: tuple[str, ...] = (), status: str = "", solver: str = ""):
+    def __init__(
+        self, message: str, constraints: tuple[str, ...] = (), status: str = "", solver: str = ""
+    ):
         super().__init__(message)
         self.constraints = constraints
         self.status = status
@@ -117,8 +119,9 @@ def rounding_margin(M) -> float:
     return float(10 * M.shape[0] * np.finfo(float).eps * np.linalg.norm(M, 2))
 
 
-def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float = -5.0,
-                      disk_radius: float = 2.0) -> dict[str, float]:
+def ilo_lmi_residuals(
+    A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float = -5.0, disk_radius: float = 2.0
+) -> dict[str, float]:
     """Numerical certificate of a candidate (P, Y, L2), recomputed in numpy from the matrices themselves.
 
     Parameters
@@ -170,7 +173,9 @@ def ilo_lmi_residuals(A, C, H, P, Y, L2, lam: float = 1e-8, disk_center: float =
     L1 = np.linalg.solve(P, Y)
     poles = np.linalg.eigvals(A - L1 @ C)
     return {
-        "tol_8": rounding_margin(M8), "tol_27": rounding_margin(M27), "tol_disk": rounding_margin(MD),
+        "tol_8": rounding_margin(M8),
+        "tol_27": rounding_margin(M27),
+        "tol_disk": rounding_margin(MD),
         "tol_P": rounding_margin(P),
         "max_eig_8": float(np.max(np.linalg.eigvalsh(M8))),
         "max_eig_27": float(np.max(np.linalg.eigvalsh(_sym(M27)))),
@@ -236,8 +241,17 @@ def _solve(prob, solver):
     return last
 
 
-def design_ilo_gains(A, C, H, *, lam: float = 1e-8, disk_center: float = -5.0, disk_radius: float = 2.0,
-                     eps: float = 1e-6, solver: str | None = None) -> IloLmiDesign:
+def design_ilo_gains(
+    A,
+    C,
+    H,
+    *,
+    lam: float = 1e-8,
+    disk_center: float = -5.0,
+    disk_radius: float = 2.0,
+    eps: float = 1e-6,
+    solver: str | None = None,
+) -> IloLmiDesign:
     """Solve (8), (27) and the disk LMI (Gui2022 Remark 1, design steps (3)-(4)); ``L1 = P^-1 Y``.
 
     Parameters
@@ -304,27 +318,49 @@ def design_ilo_gains(A, C, H, *, lam: float = 1e-8, disk_center: float = -5.0, d
             st, _ = _solve(prob_g, solver)
             if st in ("optimal", "optimal_inaccurate"):
                 culprits.append(g)
-        names = "; ".join(CONSTRAINT_NAMES[g].replace("S(c, r)", region) for g in culprits) or \
-            "no single constraint (the combination of (8), (27) and the disk region is infeasible)"
+        names = (
+            "; ".join(CONSTRAINT_NAMES[g].replace("S(c, r)", region) for g in culprits)
+            or "no single constraint (the combination of (8), (27) and the disk region is infeasible)"
+        )
         raise DesignInfeasible(
             f"ILO gain LMI is infeasible (solver {used}, status '{status}'); conflicting constraint(s), "
             f"each of which alone makes the problem feasible when removed: {names}. Pole region {region}: centre {disk_center:g} 1/s, radius {disk_radius:g} 1/s.",
-            constraints=tuple(culprits), status=status, solver=used)
+            constraints=tuple(culprits),
+            status=status,
+            solver=used,
+        )
     Pv, Yv, L2v = np.asarray(P.value), np.asarray(Y.value), np.asarray(L2.value)
     Pv = _sym(Pv)
     res = ilo_lmi_residuals(A, C, H, Pv, Yv, L2v, lam, disk_center, disk_radius)
-    bad = [k for k, t in (("max_eig_8", "tol_8"), ("max_eig_27", "tol_27"), ("max_eig_disk", "tol_disk"))
-           if not res[k] < -res[t]]
+    bad = [
+        k
+        for k, t in (("max_eig_8", "tol_8"), ("max_eig_27", "tol_27"), ("max_eig_disk", "tol_disk"))
+        if not res[k] < -res[t]
+    ]
     if not res["min_eig_P"] > res["tol_P"]:
         bad.append("min_eig_P")
     if bad:
         raise DesignInfeasible(
             f"ILO gain LMI: solver {used} returned status '{status}' but the solution fails the numerical "
             f"check of {', '.join(bad)} ({', '.join(f'{k} = {res[k]:.3g}' for k in bad)})",
-            constraints=tuple(bad), status=status, solver=used)
+            constraints=tuple(bad),
+            status=status,
+            solver=used,
+        )
     L1 = np.linalg.solve(Pv, Yv)
-    return IloLmiDesign(P=Pv, Y=Yv, L1=L1, L2=L2v, lam=lam, disk_center=disk_center, disk_radius=disk_radius,
-                        residuals=res, poles=np.linalg.eigvals(A - L1 @ C), solver=used, status=status)
+    return IloLmiDesign(
+        P=Pv,
+        Y=Yv,
+        L1=L1,
+        L2=L2v,
+        lam=lam,
+        disk_center=disk_center,
+        disk_radius=disk_radius,
+        residuals=res,
+        poles=np.linalg.eigvals(A - L1 @ C),
+        solver=used,
+        status=status,
+    )
 
 
 def rescale_design(design: IloLmiDesign, factor: float, A, C, H) -> IloLmiDesign:

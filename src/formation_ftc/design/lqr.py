@@ -176,12 +176,21 @@ def lqr(A, B, Q, R) -> LqrDesign:
     """
     A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
     sol = solve_care(A, B, Q, R)
-    return LqrDesign(K=sol.K, P=sol.P, Q=Q, R=R, A=A, B=B,
-                     relative_residual=care_relative_residual(sol.P, A, B, Q, R),
-                     closed_loop_eigenvalues=sol.closed_loop_eigenvalues)
+    return LqrDesign(
+        K=sol.K,
+        P=sol.P,
+        Q=Q,
+        R=R,
+        A=A,
+        B=B,
+        relative_residual=care_relative_residual(sol.P, A, B, Q, R),
+        closed_loop_eigenvalues=sol.closed_loop_eigenvalues,
+    )
 
 
-def cw_lqr(mean_motion: float, max_position_error, max_velocity_error, max_acceleration) -> LqrDesign:
+def cw_lqr(
+    mean_motion: float, max_position_error, max_velocity_error, max_acceleration
+) -> LqrDesign:
     """LQR gain for the Clohessy-Wiltshire model (acceleration input), weights by Bryson's rule.
 
     Parameters
@@ -223,12 +232,15 @@ def cw_lqr(mean_motion: float, max_position_error, max_velocity_error, max_accel
     pos = _positive(max_position_error, 3, "max_position_error")
     vel = _positive(max_velocity_error, 3, "max_velocity_error")
     acc = _positive(max_acceleration, 3, "max_acceleration")
-    return _cw_lqr_cached(float(mean_motion), tuple(pos.tolist()), tuple(vel.tolist()), tuple(acc.tolist()))
+    return _cw_lqr_cached(
+        float(mean_motion), tuple(pos.tolist()), tuple(vel.tolist()), tuple(acc.tolist())
+    )
 
 
 @functools.lru_cache(maxsize=256)
-def _cw_lqr_cached(mean_motion: float, pos: tuple[float, ...], vel: tuple[float, ...],
-                   acc: tuple[float, ...]) -> LqrDesign:
+def _cw_lqr_cached(
+    mean_motion: float, pos: tuple[float, ...], vel: tuple[float, ...], acc: tuple[float, ...]
+) -> LqrDesign:
     """The design of :func:`cw_lqr` for validated inputs, solved once per distinct input (a campaign or
     league builds the same controller for every run); its arrays are read-only since they are shared."""
     A, B = cw_matrices(mean_motion)

@@ -113,7 +113,9 @@ def solve_care(A, B, Q, R) -> CareSolution:
     A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
     n, m = A.shape[0], B.shape[1]
     if A.shape != (n, n) or B.shape[0] != n or Q.shape != (n, n) or R.shape != (m, m):
-        raise ValueError(f"CARE: inconsistent shapes A{A.shape}, B{B.shape}, Q{Q.shape}, R{R.shape}")
+        raise ValueError(
+            f"CARE: inconsistent shapes A{A.shape}, B{B.shape}, Q{Q.shape}, R{R.shape}"
+        )
     if np.min(np.linalg.eigvalsh((R + R.T) / 2)) <= 0:
         raise ValueError("CARE: R must be symmetric positive definite")
     if np.min(np.linalg.eigvalsh((Q + Q.T) / 2)) < -1e-14 * max(1.0, np.abs(Q).max()):
@@ -124,5 +126,9 @@ def solve_care(A, B, Q, R) -> CareSolution:
         raise ValueError(f"CARE has no stabilising solution: {exc}") from None
     P = (P + P.T) / 2
     K = np.linalg.solve(R, B.T @ P)
-    return CareSolution(P=P, K=K, residual=care_residual(P, A, B, Q, R),
-                        closed_loop_eigenvalues=np.linalg.eigvals(A - B @ K))
+    return CareSolution(
+        P=P,
+        K=K,
+        residual=care_residual(P, A, B, Q, R),
+        closed_loop_eigenvalues=np.linalg.eigvals(A - B @ K),
+    )

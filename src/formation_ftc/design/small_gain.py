@@ -36,8 +36,15 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-__all__ = ["sigma_max_response", "HinfNorm", "hinf_norm", "kyp_certificate", "SmallGainResult",
-           "small_gain_margin", "hinf_method"]
+__all__ = [
+    "sigma_max_response",
+    "HinfNorm",
+    "hinf_norm",
+    "kyp_certificate",
+    "SmallGainResult",
+    "small_gain_margin",
+    "hinf_method",
+]
 
 _EPS = np.finfo(float).eps
 
@@ -101,7 +108,9 @@ def hinf_method() -> str:
     try:
         import slycot  # noqa: F401
     except ImportError:
-        return "python-control norm(sys, 'inf'), Hamiltonian bisection (scipy; slycot not installed)"
+        return (
+            "python-control norm(sys, 'inf'), Hamiltonian bisection (scipy; slycot not installed)"
+        )
     return "python-control norm(sys, 'inf') with Slycot AB13DD"
 
 
@@ -141,8 +150,10 @@ class HinfNorm:
             return f"||G||_inf = inf: {self.reason}"
         if not self.certified:
             return f"||G||_inf NOT certified ({self.reason}); estimate {self.estimate:.6g}"
-        return (f"||G||_inf <= {self.value:.8g} (certified: {self.method}); lower bound {self.lower:.8g} at "
-                f"omega = {self.omega_peak:.4g} rad/s; relative gap {self.relative_gap:.1e}")
+        return (
+            f"||G||_inf <= {self.value:.8g} (certified: {self.method}); lower bound {self.lower:.8g} at "
+            f"omega = {self.omega_peak:.4g} rad/s; relative gap {self.relative_gap:.1e}"
+        )
 
 
 def _pow2(x: float) -> float:
@@ -230,16 +241,22 @@ def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
         XB = X @ B + S
         M = np.block([[A.T @ X + X @ A + CC, XB], [XB.T, D.T @ D - gamma**2 * np.eye(m)]])
         aA, aB, aC, aD, aX = (np.abs(x) for x in (A, B, C, D, X))
-        Mabs = np.block([[aA.T @ aX + aX @ aA + aC.T @ aC, aX @ aB + aC.T @ aD],
-                         [(aX @ aB + aC.T @ aD).T, aD.T @ aD + gamma**2 * np.eye(m)]])
+        Mabs = np.block(
+            [
+                [aA.T @ aX + aX @ aA + aC.T @ aC, aX @ aB + aC.T @ aD],
+                [(aX @ aB + aC.T @ aD).T, aD.T @ aD + gamma**2 * np.eye(m)],
+            ]
+        )
         k = n + m
         margin = (k + 2) * _EPS * np.linalg.norm(Mabs, 2) + 10 * k * _EPS * np.linalg.norm(M, 2)
         lmax = float(np.linalg.eigvalsh(M).max())
         xmin = float(np.linalg.eigvalsh(X).min())
         x_margin = 10 * n * _EPS * np.linalg.norm(X, 2)
         if lmax < -margin and xmin > x_margin:
-            return True, (f"KYP: lambda_max(M) = {lmax:.3g} < -{margin:.2g} (rounding bound), "
-                          f"lambda_min(X) = {xmin:.3g} > 0")
+            return True, (
+                f"KYP: lambda_max(M) = {lmax:.3g} < -{margin:.2g} (rounding bound), "
+                f"lambda_min(X) = {xmin:.3g} > 0"
+            )
         last = f"KYP check failed: lambda_max(M) = {lmax:.3g} (margin {margin:.2g}), lambda_min(X) = {xmin:.3g}"
     return False, last
 
@@ -248,8 +265,9 @@ def _hamiltonian(A, B, C, D, g):
     m = B.shape[1]
     Rinv = np.linalg.inv(g * g * np.eye(m) - D.T @ D)
     Ah = A + B @ Rinv @ D.T @ C
-    return np.block([[Ah, B @ Rinv @ B.T],
-                     [-C.T @ (np.eye(C.shape[0]) + D @ Rinv @ D.T) @ C, -Ah.T]])
+    return np.block(
+        [[Ah, B @ Rinv @ B.T], [-C.T @ (np.eye(C.shape[0]) + D @ Rinv @ D.T) @ C, -Ah.T]]
+    )
 
 
 def _lower_bound(A, B, C, D, rtol):
@@ -271,7 +289,9 @@ def _lower_bound(A, B, C, D, rtol):
         ws = np.sort(np.abs(near.imag))
         if ws.size == 0:
             break
-        trial = np.concatenate([ws, np.sqrt(ws[:-1] * ws[1:]) if ws.size > 1 else [], (ws[:-1] + ws[1:]) / 2])
+        trial = np.concatenate(
+            [ws, np.sqrt(ws[:-1] * ws[1:]) if ws.size > 1 else [], (ws[:-1] + ws[1:]) / 2]
+        )
         st = sigma_max_response(A, B, C, D, trial)
         j = int(np.argmax(st))
         if st[j] <= gl * (1 + rtol / 10):
@@ -319,8 +339,17 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
     """
     A, B, C = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, C))
     n = A.shape[0]
-    D = np.zeros((C.shape[0], B.shape[1])) if D is None else np.atleast_2d(np.asarray(D, dtype=float))
-    if A.shape != (n, n) or B.shape[0] != n or C.shape[1] != n or D.shape != (C.shape[0], B.shape[1]):
+    D = (
+        np.zeros((C.shape[0], B.shape[1]))
+        if D is None
+        else np.atleast_2d(np.asarray(D, dtype=float))
+    )
+    if (
+        A.shape != (n, n)
+        or B.shape[0] != n
+        or C.shape[1] != n
+        or D.shape != (C.shape[0], B.shape[1])
+    ):
         raise ValueError(f"inconsistent shapes A{A.shape}, B{B.shape}, C{C.shape}, D{D.shape}")
     if not all(np.all(np.isfinite(x)) for x in (A, B, C, D)):
         raise ValueError("state-space matrices must be finite")
@@ -330,17 +359,27 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
     eig = np.linalg.eigvals(A)
     if np.any(eig.real >= 0):
         bad = eig[eig.real >= 0]
-        return HinfNorm(math.inf, math.inf, math.nan, math.inf, True, "eigenvalues of A",
-                        reason=f"A is not Hurwitz (eigenvalue(s) {np.round(bad, 6).tolist()} with Re >= 0): "
-                               "the system is not internally stable and its L2 gain is unbounded")
+        return HinfNorm(
+            math.inf,
+            math.inf,
+            math.nan,
+            math.inf,
+            True,
+            "eigenvalues of A",
+            reason=f"A is not Hurwitz (eigenvalue(s) {np.round(bad, 6).tolist()} with Re >= 0): "
+            "the system is not internally stable and its L2 gain is unbounded",
+        )
     As, Bs, Cs, w0 = _scaled(A, B, C)
     try:
         import control
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            est = float(control.norm(control.ss(As, Bs, Cs, D), "inf", tol=min(rtol / 10, 1e-8),
-                                     print_warning=False))
+            est = float(
+                control.norm(
+                    control.ss(As, Bs, Cs, D), "inf", tol=min(rtol / 10, 1e-8), print_warning=False
+                )
+            )
     except Exception:  # noqa: BLE001 - any estimator failure leaves the certificate to decide
         est = math.nan
     gl, wp = _lower_bound(As, Bs, Cs, D, rtol)
@@ -354,8 +393,15 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
         ok, detail = kyp_certificate(As, Bs, Cs, D, g)
         if ok:
             return HinfNorm(float(g), gl, wp * w0, est, True, method)
-    return HinfNorm(math.inf, gl, wp * w0, est, False, method,
-                    reason=f"no bound up to {max(tries):.6g} could be certified ({detail})")
+    return HinfNorm(
+        math.inf,
+        gl,
+        wp * w0,
+        est,
+        False,
+        method,
+        reason=f"no bound up to {max(tries):.6g} could be certified ({detail})",
+    )
 
 
 @dataclass(frozen=True)

@@ -36,8 +36,15 @@ from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.config.base import StrictModel
 from formation_ftc.errors import InputError
 
-__all__ = ["Battery", "BatteryCase", "BatteryError", "CASE_KINDS", "COMMUNICATION_KINDS", "builtin_batteries",
-           "load_battery"]
+__all__ = [
+    "Battery",
+    "BatteryCase",
+    "BatteryError",
+    "CASE_KINDS",
+    "COMMUNICATION_KINDS",
+    "builtin_batteries",
+    "load_battery",
+]
 
 #: communication fault kinds (act on the network; the actuator has no fault)
 COMMUNICATION_KINDS: tuple[str, ...] = ("link_loss", "larger_delays")
@@ -66,16 +73,30 @@ class _CaseModel(StrictModel):
     spacecraft: int = Field(1, ge=1, description="Faulty spacecraft (1-based) [-].")
     axis: int = Field(0, ge=0, le=2, description="Faulty axis 0, 1, 2 [-].")
     onset: float = Field(0.0, ge=0.0, description="Fault onset [s] (a league may draw its own).")
-    effectiveness: float | None = Field(None, ge=0.0, le=1.0, description="Loss of effectiveness gain [-].")
-    bias_fraction: float | None = Field(None, description="Bias as a fraction of the saturation limit [-].")
-    bias_force: float | None = Field(None, description="Bias without saturation on a force plant [N].")
-    bias_torque: float | None = Field(None, description="Bias without saturation on a torque plant [N m].")
+    effectiveness: float | None = Field(
+        None, ge=0.0, le=1.0, description="Loss of effectiveness gain [-]."
+    )
+    bias_fraction: float | None = Field(
+        None, description="Bias as a fraction of the saturation limit [-]."
+    )
+    bias_force: float | None = Field(
+        None, description="Bias without saturation on a force plant [N]."
+    )
+    bias_torque: float | None = Field(
+        None, description="Bias without saturation on a torque plant [N m]."
+    )
     period: float | None = Field(None, gt=0.0, description="Intermittent period [s].")
     duty: float | None = Field(None, ge=0.0, le=1.0, description="Intermittent on-fraction [-].")
     rate: float | None = Field(None, ge=0.0, description="Degrading effectiveness loss rate [1/s].")
-    min_effectiveness: float | None = Field(None, ge=0.0, le=1.0, description="Degrading floor [-].")
-    lost_links: list[tuple[int, int]] | None = Field(None, description="Links [i, j] lost (1-based, i <- j).")
-    delay_scale: float | None = Field(None, gt=0.0, description="Delay multiplier after the onset [-].")
+    min_effectiveness: float | None = Field(
+        None, ge=0.0, le=1.0, description="Degrading floor [-]."
+    )
+    lost_links: list[tuple[int, int]] | None = Field(
+        None, description="Links [i, j] lost (1-based, i <- j)."
+    )
+    delay_scale: float | None = Field(
+        None, gt=0.0, description="Delay multiplier after the onset [-]."
+    )
 
     @field_validator("kind")
     @classmethod
@@ -91,7 +112,9 @@ class _CaseModel(StrictModel):
             raise ValueError(f"kind {self.kind} needs {', '.join(missing)}")
         for k, (i, j) in enumerate(self.lost_links or []):
             if i < 1 or j < 1 or i == j:
-                raise ValueError(f"lost_links[{k}] = [{i}, {j}]: 1-based spacecraft numbers, receiver != sender")
+                raise ValueError(
+                    f"lost_links[{k}] = [{i}, {j}]: 1-based spacecraft numbers, receiver != sender"
+                )
         return self
 
 
@@ -103,7 +126,9 @@ class _Meta(StrictModel):
 
 class _BatteryModel(StrictModel):
     battery: _Meta
-    defaults: dict[str, Any] = Field(default_factory=dict, description="Fields every case inherits.")
+    defaults: dict[str, Any] = Field(
+        default_factory=dict, description="Fields every case inherits."
+    )
     cases: list[dict[str, Any]] = Field(min_length=1, description="The fault cases.")
 
 
@@ -144,8 +169,12 @@ class BatteryCase:
             return network and delayed
         return True
 
-    def actuator_fields(self, saturation: float | Sequence[float] | None = None, quantity: str = "force",
-                        onset: float | None = None) -> dict[str, Any]:
+    def actuator_fields(
+        self,
+        saturation: float | Sequence[float] | None = None,
+        quantity: str = "force",
+        onset: float | None = None,
+    ) -> dict[str, Any]:
         """Fields of the ``fault-battery`` actuator section for this case.
 
         Parameters
@@ -162,14 +191,22 @@ class BatteryCase:
         ``bias_force`` [N] or ``bias_torque`` [N m]. A communication case gives kind ``none``.
         """
         if quantity not in ("force", "torque"):
-            raise BatteryError(f"case {self.name}: quantity = {quantity!r}, expected 'force' or 'torque'")
+            raise BatteryError(
+                f"case {self.name}: quantity = {quantity!r}, expected 'force' or 'torque'"
+            )
         limits = None
         if saturation is not None:
-            sat = [float(saturation)] if isinstance(saturation, int | float) else [float(x) for x in saturation]
+            sat = (
+                [float(saturation)]
+                if isinstance(saturation, int | float)
+                else [float(x) for x in saturation]
+            )
             if all(math.isfinite(x) for x in sat):
                 limits = sat
             elif any(math.isfinite(x) for x in sat):
-                raise BatteryError(f"case {self.name}: saturation {sat}: all limits finite or all inf")
+                raise BatteryError(
+                    f"case {self.name}: saturation {sat}: all limits finite or all inf"
+                )
         bias = 0.0
         if self.kind == "bias":
             if limits is not None:
@@ -179,7 +216,9 @@ class BatteryCase:
                 bias = float(self.bias_force if quantity == "force" else self.bias_torque)  # type: ignore[arg-type]
         kind = "none" if self.communication else self.kind
         out: dict[str, Any] = {
-            "kind": kind, "spacecraft": self.spacecraft, "axis": self.axis,
+            "kind": kind,
+            "spacecraft": self.spacecraft,
+            "axis": self.axis,
             "onset": float(self.onset if onset is None else onset),
             "effectiveness": 1.0 if self.effectiveness is None else self.effectiveness,
             "bias": bias,
@@ -201,8 +240,11 @@ class BatteryCase:
         of the case's onset [s]."""
         if not delayed and self.kind == "larger_delays":
             raise BatteryError(f"case {self.name}: larger_delays needs a network with delays")
-        out: dict[str, Any] = {"type": "graph-link-loss", "lost_links": [list(p) for p in self.lost_links],
-                               "onset": float(self.onset if onset is None else onset)}
+        out: dict[str, Any] = {
+            "type": "graph-link-loss",
+            "lost_links": [list(p) for p in self.lost_links],
+            "onset": float(self.onset if onset is None else onset),
+        }
         if delayed:
             out["delay_scale"] = self.delay_scale
             out["max_delay_scale"] = max(self.max_delay_scale, self.delay_scale)
@@ -230,7 +272,9 @@ class Battery:
         for c in self.cases:
             if c.name == name:
                 return c
-        raise BatteryError(f"battery {self.name}: no case {name!r} (cases: {', '.join(self.names)})")
+        raise BatteryError(
+            f"battery {self.name}: no case {name!r} (cases: {', '.join(self.names)})"
+        )
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -269,8 +313,10 @@ def load_battery(name: str | Path = "v1") -> Battery:
     if path is None:
         path = Path(name)
         if path.suffix != ".toml" or not path.is_file():
-            raise BatteryError(f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
-                               "or give a battery .toml file)")
+            raise BatteryError(
+                f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
+                "or give a battery .toml file)"
+            )
     data = path.read_bytes()
     try:
         raw = tomllib.loads(data.decode("utf-8"))
@@ -280,30 +326,61 @@ def load_battery(name: str | Path = "v1") -> Battery:
         model = _BatteryModel.model_validate(raw)
     except ValidationError as exc:
         raise BatteryError(_errors(exc, str(path))) from None
-    unknown_defaults = sorted(set(model.defaults) - set(_CaseModel.model_fields) | ({"name", "kind"} & set(model.defaults)))
+    unknown_defaults = sorted(
+        set(model.defaults) - set(_CaseModel.model_fields)
+        | ({"name", "kind"} & set(model.defaults))
+    )
     if unknown_defaults:
-        raise BatteryError(f"{path}: defaults: {', '.join(unknown_defaults)} cannot be defaults "
-                           f"(case fields: {', '.join(f for f in _CaseModel.model_fields if f not in ('name', 'kind'))})")
+        raise BatteryError(
+            f"{path}: defaults: {', '.join(unknown_defaults)} cannot be defaults "
+            f"(case fields: {', '.join(f for f in _CaseModel.model_fields if f not in ('name', 'kind'))})"
+        )
     parsed = []
     for k, body in enumerate(model.cases):
-        where = f"{path}: cases[{k}]" + (f" ({body['name']})" if isinstance(body.get("name"), str) else "")
+        where = f"{path}: cases[{k}]" + (
+            f" ({body['name']})" if isinstance(body.get("name"), str) else ""
+        )
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:
             raise BatteryError(_errors(exc, where)) from None
     if str(name) in known and model.battery.name != str(name):
-        raise BatteryError(f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})")
+        raise BatteryError(
+            f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})"
+        )
     names = [c.name for c in parsed]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise BatteryError(f"{path}: duplicate case names {', '.join(dup)}")
     scales = [c.delay_scale for c in parsed if c.delay_scale is not None]
     max_scale = max([1.0, *scales])
-    cases = tuple(BatteryCase(
-        name=c.name, kind=c.kind, description=c.description, spacecraft=c.spacecraft, axis=c.axis, onset=c.onset,
-        effectiveness=c.effectiveness, bias_fraction=c.bias_fraction, bias_force=c.bias_force,
-        bias_torque=c.bias_torque, period=c.period, duty=c.duty, rate=c.rate, min_effectiveness=c.min_effectiveness,
-        lost_links=tuple((int(i), int(j)) for i, j in (c.lost_links or [])),
-        delay_scale=1.0 if c.delay_scale is None else c.delay_scale, max_delay_scale=max_scale) for c in parsed)
-    return Battery(name=model.battery.name, version=model.battery.version, description=model.battery.description,
-                   sha256=hashlib.sha256(data).hexdigest(), source=path.resolve(), cases=cases)
+    cases = tuple(
+        BatteryCase(
+            name=c.name,
+            kind=c.kind,
+            description=c.description,
+            spacecraft=c.spacecraft,
+            axis=c.axis,
+            onset=c.onset,
+            effectiveness=c.effectiveness,
+            bias_fraction=c.bias_fraction,
+            bias_force=c.bias_force,
+            bias_torque=c.bias_torque,
+            period=c.period,
+            duty=c.duty,
+            rate=c.rate,
+            min_effectiveness=c.min_effectiveness,
+            lost_links=tuple((int(i), int(j)) for i, j in (c.lost_links or [])),
+            delay_scale=1.0 if c.delay_scale is None else c.delay_scale,
+            max_delay_scale=max_scale,
+        )
+        for c in parsed
+    )
+    return Battery(
+        name=model.battery.name,
+        version=model.battery.version,
+        description=model.battery.description,
+        sha256=hashlib.sha256(data).hexdigest(),
+        source=path.resolve(),
+        cases=cases,
+    )

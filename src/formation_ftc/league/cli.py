@@ -20,18 +20,32 @@ def _cmd_list(args) -> int:
         spec = load_league(name)
         if args.json:
             meta = spec.league
-            rows.append({"name": name, "description": meta.description, "kind": meta.kind,
-                         "methods": [m.name for m in spec.methods], "levels": [lv.name for lv in spec.levels],
-                         "battery": meta.battery, "seeds": meta.seeds, "quick_seeds": meta.quick_seeds,
-                         "horizon": meta.horizon,
-                         "requirement": {"metric": meta.requirement.metric, "max": meta.requirement.max,
-                                         "units": meta.requirement.units},
-                         "units": {"horizon": "s"}})
+            rows.append(
+                {
+                    "name": name,
+                    "description": meta.description,
+                    "kind": meta.kind,
+                    "methods": [m.name for m in spec.methods],
+                    "levels": [lv.name for lv in spec.levels],
+                    "battery": meta.battery,
+                    "seeds": meta.seeds,
+                    "quick_seeds": meta.quick_seeds,
+                    "horizon": meta.horizon,
+                    "requirement": {
+                        "metric": meta.requirement.metric,
+                        "max": meta.requirement.max,
+                        "units": meta.requirement.units,
+                    },
+                    "units": {"horizon": "s"},
+                }
+            )
             continue
         methods = ", ".join(m.name for m in spec.methods)
         print(f"{name}  {spec.league.description}")
-        print(f"    methods: {methods}; battery {spec.league.battery}; {spec.league.seeds} seeds per cell "
-              f"({spec.league.quick_seeds} with --quick)")
+        print(
+            f"    methods: {methods}; battery {spec.league.battery}; {spec.league.seeds} seeds per cell "
+            f"({spec.league.quick_seeds} with --quick)"
+        )
     if args.json:
         print_json({"leagues": rows})
     return 0
@@ -58,7 +72,9 @@ def _cmd_run(args) -> int:
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
     distributed = bool(args.scheduler or args.dask_local)
     if distributed:
-        make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)  # checked now
+        make_executor(
+            workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
+        )  # checked now
     if args.workers is not None and args.workers < 1:
         raise LeagueError(f"--workers must be >= 1, got {args.workers}")
     methods = [m.strip() for m in args.methods.split(",")] if args.methods else None
@@ -68,21 +84,37 @@ def _cmd_run(args) -> int:
     if not distributed:
         n_methods = len(methods) if methods else len(load_league(args.league).methods)
         what = "--workers" if args.workers else "--workers (default: one per CPU core)"
-        parallel = cap_workers(min(args.workers or schedulable_cpus(), n_methods),
-                               per_worker_bytes=METHOD_WORKER_BYTES, what=what)
+        parallel = cap_workers(
+            min(args.workers or schedulable_cpus(), n_methods),
+            per_worker_bytes=METHOD_WORKER_BYTES,
+            what=what,
+        )
 
     def factory():
         if distributed:
-            return make_executor(workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local)
+            return make_executor(
+                workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
+            )
         return make_executor(workers=1)
 
-    outcome = run_league(args.league, args.out, seeds=args.seeds, quick=args.quick, methods=methods,
-                         executor_factory=factory, progress=not args.no_progress, log=_stderr_line,
-                         parallel_methods=parallel, budgets=budgets)
+    outcome = run_league(
+        args.league,
+        args.out,
+        seeds=args.seeds,
+        quick=args.quick,
+        methods=methods,
+        executor_factory=factory,
+        progress=not args.no_progress,
+        log=_stderr_line,
+        parallel_methods=parallel,
+        budgets=budgets,
+    )
     print(f"league done: {outcome}")
     board = write_leaderboard(args.out, plots=not args.no_plots)
     _print_ranking(board)
-    print(f"wrote {args.out}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet")
+    print(
+        f"wrote {args.out}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
+    )
     return 0
 
 
@@ -92,8 +124,10 @@ def _print_ranking(board) -> None:
         print(f"\n{level}: rank  method  pass-rate  median {metric}")
         for r in rows:
             med = r.get(f"{metric}_median")
-            print(f"  {r['rank']:>2}  {r['method']:<16} {r['pass_rate']:6.2f}  "
-                  f"{'-' if med is None else format(med, '.3g')}")
+            print(
+                f"  {r['rank']:>2}  {r['method']:<16} {r['pass_rate']:6.2f}  "
+                f"{'-' if med is None else format(med, '.3g')}"
+            )
 
 
 def _cmd_report(args) -> int:
@@ -106,42 +140,83 @@ def _cmd_report(args) -> int:
         from formation_ftc.parquet_units import read_units
 
         out = Path(args.dir) / "leaderboard"
-        print_json({"dir": str(args.dir), "leaderboard": board,
-                    "units": read_units(out / "cells.parquet"),  # of the cells' (and ranking rows') columns
-                    "outputs": {"index": str(out / "index.html"), "leaderboard_json": str(out / "leaderboard.json"),
-                                "leaderboard_md": str(out / "leaderboard.md"),
-                                "cells": str(out / "cells.parquet"), "runs": str(out / "runs.parquet")}})
+        print_json(
+            {
+                "dir": str(args.dir),
+                "leaderboard": board,
+                "units": read_units(
+                    out / "cells.parquet"
+                ),  # of the cells' (and ranking rows') columns
+                "outputs": {
+                    "index": str(out / "index.html"),
+                    "leaderboard_json": str(out / "leaderboard.json"),
+                    "leaderboard_md": str(out / "leaderboard.md"),
+                    "cells": str(out / "cells.parquet"),
+                    "runs": str(out / "runs.parquet"),
+                },
+            }
+        )
         return 0
     _print_ranking(board)
-    print(f"wrote {args.dir}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet")
+    print(
+        f"wrote {args.dir}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
+    )
     return 0
 
 
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``league`` command (``list``, ``run``, ``report``) to ``subparsers``."""
-    p = subparsers.add_parser("league", help="FTC league: every method on one realistic formation, same faults")
+    p = subparsers.add_parser(
+        "league", help="FTC league: every method on one realistic formation, same faults"
+    )
     sub = p.add_subparsers(dest="league_command", required=True)
     q = sub.add_parser("list", help="list the built-in leagues")
     add_json_option(q)
     q.set_defaults(func=_cmd_list)
     q = sub.add_parser("run", help="run or resume a league and write its leaderboard")
-    q.add_argument("league", metavar="NAME_OR_FILE", help="built-in league name or league TOML file")
-    q.add_argument("--out", required=True, help="league directory (resumed when it holds this league)")
-    q.add_argument("--seeds", type=int, default=None, help="Monte Carlo seeds per cell (overrides the file)")
-    q.add_argument("--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)")
+    q.add_argument(
+        "league", metavar="NAME_OR_FILE", help="built-in league name or league TOML file"
+    )
+    q.add_argument(
+        "--out", required=True, help="league directory (resumed when it holds this league)"
+    )
+    q.add_argument(
+        "--seeds", type=int, default=None, help="Monte Carlo seeds per cell (overrides the file)"
+    )
+    q.add_argument(
+        "--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)"
+    )
     q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
-    q.add_argument("--workers", type=int, default=None,
-                   help="methods run side by side, one process each (default: one per CPU core; at most one per core "
-                        "and per 1.2 GB of available memory; 1: in-process)")
+    q.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="methods run side by side, one process each (default: one per CPU core; at most one per core "
+        "and per 1.2 GB of available memory; 1: in-process)",
+    )
     add_dask_options(q)
-    q.add_argument("--max-memory", metavar="SIZE", default=None,
-                   help="memory budget of one batch of a method's runs, e.g. 32GB (default 8 GiB or half the "
-                        "RAM; 0 = none)")
-    q.add_argument("--max-run-steps", metavar="N", default=None,
-                   help="integration steps allowed per run (default 1e9; 0 = none)")
-    q.add_argument("--max-campaign-steps", metavar="N", default=None,
-                   help="run-steps allowed in the whole league, all methods together (default 1e11; 0 = none)")
-    q.add_argument("--no-progress", action="store_true", help="no progress bars (one line per method)")
+    q.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        default=None,
+        help="memory budget of one batch of a method's runs, e.g. 32GB (default 8 GiB or half the "
+        "RAM; 0 = none)",
+    )
+    q.add_argument(
+        "--max-run-steps",
+        metavar="N",
+        default=None,
+        help="integration steps allowed per run (default 1e9; 0 = none)",
+    )
+    q.add_argument(
+        "--max-campaign-steps",
+        metavar="N",
+        default=None,
+        help="run-steps allowed in the whole league, all methods together (default 1e11; 0 = none)",
+    )
+    q.add_argument(
+        "--no-progress", action="store_true", help="no progress bars (one line per method)"
+    )
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
     q.set_defaults(func=_cmd_run)
     q = sub.add_parser("report", help="(re)write the leaderboard of a league directory")

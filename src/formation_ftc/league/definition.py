@@ -36,8 +36,16 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from formation_ftc.config.base import StrictModel
 from formation_ftc.errors import InputError
 
-__all__ = ["LeagueError", "LeagueSpec", "MethodEntry", "Level", "builtin_leagues", "load_league",
-           "method_scenario", "league_hash"]
+__all__ = [
+    "LeagueError",
+    "LeagueSpec",
+    "MethodEntry",
+    "Level",
+    "builtin_leagues",
+    "load_league",
+    "method_scenario",
+    "league_hash",
+]
 
 #: the slots a method's own file may fill (the league owns plant, actuator, evaluations and metrics)
 METHOD_SLOTS = ("reference", "sensors", "network", "estimator", "supervisor", "controller")
@@ -48,7 +56,9 @@ class LeagueError(InputError):
 
 
 class Requirement(StrictModel):
-    metric: str = Field(description="Metric the requirement is stated on (one of the league's metrics).")
+    metric: str = Field(
+        description="Metric the requirement is stated on (one of the league's metrics)."
+    )
     max: float = Field(gt=0, description="Largest value that passes [metric units].")
     units: str = Field("1", description="Units of `max` (UDUNITS).")
 
@@ -58,11 +68,18 @@ class InitialError(StrictModel):
     a seed the league samples per replicate -- one sampled number per run, however many spacecraft; or
     ``field`` + ``std``: each component of a per-spacecraft list is sampled around its [truth] value."""
 
-    seed_field: str | None = Field(None, description="Dotted path of the plant's dispersion seed, e.g. "
-                                   "'plant.dispersion_seed'.")
-    field: str | None = Field(None, description="Dotted path of the plant's (N, 3) initial list, e.g. "
-                              "'plant.initial_position'.")
-    std: float | None = Field(None, ge=0, description="Standard deviation per component [m or deg] (with field).")
+    seed_field: str | None = Field(
+        None,
+        description="Dotted path of the plant's dispersion seed, e.g. 'plant.dispersion_seed'.",
+    )
+    field: str | None = Field(
+        None,
+        description="Dotted path of the plant's (N, 3) initial list, e.g. "
+        "'plant.initial_position'.",
+    )
+    std: float | None = Field(
+        None, ge=0, description="Standard deviation per component [m or deg] (with field)."
+    )
     units: str = Field("m", description="Units of `std`.")
 
     @model_validator(mode="after")
@@ -88,47 +105,78 @@ class Onset(StrictModel):
 
 class LeagueMeta(StrictModel):
     name: str = Field(description="League name.")
-    version: str = Field(description="League definition version (bump on any change of its content).")
+    version: str = Field(
+        description="League definition version (bump on any change of its content)."
+    )
     description: str = Field("", description="One line shown by `formation-ftc league list`.")
-    kind: str = Field("translational", description="'translational' or 'attitude' (what the scores mean).")
+    kind: str = Field(
+        "translational", description="'translational' or 'attitude' (what the scores mean)."
+    )
     battery: str = Field(description="Name of the fault battery (league/data/battery-NAME.toml).")
-    seeds: int = Field(100, ge=1, le=100_000, description="Monte Carlo seeds per cell (full league) [-].")
+    seeds: int = Field(
+        100, ge=1, le=100_000, description="Monte Carlo seeds per cell (full league) [-]."
+    )
     quick_seeds: int = Field(10, ge=1, le=100_000, description="Seeds per cell with --quick [-].")
-    seed: int = Field(0, ge=0, description="League seed: every run's seed and draws derive from it [-].")
+    seed: int = Field(
+        0, ge=0, description="League seed: every run's seed and draws derive from it [-]."
+    )
     horizon: float = Field(gt=0, description="Simulated time of every run [s].")
     chunk_size: int = Field(64, ge=1, le=100_000, description="Runs per vmap batch [-].")
-    settle_start: float = Field(ge=0, description="Start of the scoring window (after the acquisition) [s].")
+    settle_start: float = Field(
+        ge=0, description="Start of the scoring window (after the acquisition) [s]."
+    )
     requirement: Requirement
     initial_error: InitialError
     onset: Onset
-    trace_seed: int = Field(0, ge=0, description="Seed index whose time histories the report plots [-].")
-    trace_cases: list[str] = Field(["none", "loe-50"], description=(
-        "Fault cases whose time histories (trace seed, first level) are kept for the report's plot."))
+    trace_seed: int = Field(
+        0, ge=0, description="Seed index whose time histories the report plots [-]."
+    )
+    trace_cases: list[str] = Field(
+        ["none", "loe-50"],
+        description=(
+            "Fault cases whose time histories (trace seed, first level) are kept for the report's plot."
+        ),
+    )
 
 
 class Level(StrictModel):
     name: str = Field(description="Actuator level name (e.g. 'unsaturated', 'limited').")
-    saturation: float | None = Field(None, gt=0, description="Per-axis limit of every actuator [N or N m]; "
-                                     "leave it out for no limit.")
+    saturation: float | None = Field(
+        None,
+        gt=0,
+        description="Per-axis limit of every actuator [N or N m]; leave it out for no limit.",
+    )
     note: str = Field("", description="Why this limit (shown in the report).")
 
 
 class MethodEntry(StrictModel):
     name: str = Field(description="Method name in the leaderboard.")
-    scenario: str = Field(description="The method's partial composed scenario, relative to the league file.")
+    scenario: str = Field(
+        description="The method's partial composed scenario, relative to the league file."
+    )
     label: str = Field("", description="Long name shown in the report.")
-    reference: str = Field("", description="Where the law and its gains come from (docs/references.md).")
-    gain_rule: str = Field("", description="How the paper's gains were carried to the league plant.")
+    reference: str = Field(
+        "", description="Where the law and its gains come from (docs/references.md)."
+    )
+    gain_rule: str = Field(
+        "", description="How the paper's gains were carried to the league plant."
+    )
 
 
 class LeagueSpec(StrictModel):
     league: LeagueMeta
     truth: dict[str, Any] = Field(description="The truth plant table shared by every method.")
-    sensors: dict[str, Any] | None = Field(None, description="Default sensors (a method may replace them).")
-    actuator: dict[str, Any] = Field(description="The actuator table shared by every method (fault battery).")
+    sensors: dict[str, Any] | None = Field(
+        None, description="Default sensors (a method may replace them)."
+    )
+    actuator: dict[str, Any] = Field(
+        description="The actuator table shared by every method (fault battery)."
+    )
     levels: list[Level] = Field(min_length=1, description="Actuator levels.")
     evaluations: list[dict[str, Any]] = Field(default_factory=list, description="Score signals.")
-    metrics: list[dict[str, Any]] = Field(min_length=1, description="Scores computed inside every run.")
+    metrics: list[dict[str, Any]] = Field(
+        min_length=1, description="Scores computed inside every run."
+    )
     methods: list[MethodEntry] = Field(min_length=1, description="The methods ranked.")
     _source: Path | None = None
 
@@ -148,8 +196,10 @@ class LeagueSpec(StrictModel):
             raise ValueError(f"methods: duplicate method names {dup}")
         metric_names = [str(m.get("name")) for m in self.metrics]
         if self.league.requirement.metric not in metric_names:
-            raise ValueError(f"league.requirement.metric = {self.league.requirement.metric!r} is not one of the "
-                             f"league's metrics ({', '.join(metric_names)})")
+            raise ValueError(
+                f"league.requirement.metric = {self.league.requirement.metric!r} is not one of the "
+                f"league's metrics ({', '.join(metric_names)})"
+            )
         return self
 
     @property
@@ -160,8 +210,10 @@ class LeagueSpec(StrictModel):
         for m in self.methods:
             if m.name == name:
                 return m
-        raise LeagueError(f"method {name!r} is not in league {self.league.name!r} "
-                          f"(methods: {', '.join(m.name for m in self.methods)})")
+        raise LeagueError(
+            f"method {name!r} is not in league {self.league.name!r} "
+            f"(methods: {', '.join(m.name for m in self.methods)})"
+        )
 
 
 def _data_dir() -> Path:
@@ -191,8 +243,10 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
     if path is None:
         path = Path(name_or_path)
         if not path.is_file():
-            raise LeagueError(f"league {str(name_or_path)!r}: neither a built-in league "
-                              f"({', '.join(known) or 'none'}) nor a file")
+            raise LeagueError(
+                f"league {str(name_or_path)!r}: neither a built-in league "
+                f"({', '.join(known) or 'none'}) nor a file"
+            )
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
@@ -204,8 +258,10 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
     spec._source = path.resolve()
     for m in spec.methods:
         if not (spec._source.parent / m.scenario).is_file():
-            raise LeagueError(f"{path}: methods[{m.name}].scenario = {m.scenario!r}: no such file next to the "
-                              "league definition")
+            raise LeagueError(
+                f"{path}: methods[{m.name}].scenario = {m.scenario!r}: no such file next to the "
+                "league definition"
+            )
     return spec
 
 
@@ -219,13 +275,20 @@ def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
     allowed = {"scenario", "simulation", "actuator", *METHOD_SLOTS}
     extra = sorted(set(raw) - allowed)
     if extra:
-        raise LeagueError(f"method {method.name}: {path.name} sets {extra}; a method file gives only "
-                          f"{', '.join(sorted(allowed))} (the league owns the truth, faults and scores)")
+        raise LeagueError(
+            f"method {method.name}: {path.name} sets {extra}; a method file gives only "
+            f"{', '.join(sorted(allowed))} (the league owns the truth, faults and scores)"
+        )
     return raw
 
 
-def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, actuator_fields: dict[str, Any],
-                    network_fields: dict[str, Any] | None = None) -> dict[str, Any]:
+def method_scenario(
+    spec: LeagueSpec,
+    method: MethodEntry,
+    level: Level,
+    actuator_fields: dict[str, Any],
+    network_fields: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """The full composed scenario of one cell: the league's truth, sensors, actuator (with the level's
     saturation and the fault case in ``actuator_fields``), evaluations and metrics, with the method's own
     slots (and time step) on top; ``network_fields`` turn the method's network into a link-fault one."""
@@ -234,11 +297,16 @@ def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, actuato
     sim = dict(own.get("simulation", {}))
     unknown_sim = sorted(set(sim) - {"dt", "record_every", "unroll"})
     if unknown_sim:
-        raise LeagueError(f"method {method.name}: simulation.{unknown_sim[0]}: a method sets only its step "
-                          "(dt), record_every and unroll; the league sets the horizon and the seed")
+        raise LeagueError(
+            f"method {method.name}: simulation.{unknown_sim[0]}: a method sets only its step "
+            "(dt), record_every and unroll; the league sets the horizon and the seed"
+        )
     raw: dict[str, Any] = {
-        "scenario": {"name": f"league-{spec.league.name}-{method.name}", "method": "composed",
-                     "description": meta.get("description", method.label or method.name)},
+        "scenario": {
+            "name": f"league-{spec.league.name}-{method.name}",
+            "method": "composed",
+            "description": meta.get("description", method.label or method.name),
+        },
         "simulation": {"horizon": spec.league.horizon, **sim},
         "plant": copy.deepcopy(spec.truth),
     }
@@ -248,12 +316,16 @@ def method_scenario(spec: LeagueSpec, method: MethodEntry, level: Level, actuato
         if slot in own:
             raw[slot] = copy.deepcopy(own[slot])
     actuator = copy.deepcopy(spec.actuator)
-    actuator.update(copy.deepcopy(own.get("actuator", {})))  # structural options of the method (allocation)
+    actuator.update(
+        copy.deepcopy(own.get("actuator", {}))
+    )  # structural options of the method (allocation)
     actuator.update(copy.deepcopy(actuator_fields))
     raw["actuator"] = actuator
     if network_fields:
         if "network" not in raw:
-            raise LeagueError(f"method {method.name} has no network: a communication fault does not apply")
+            raise LeagueError(
+                f"method {method.name} has no network: a communication fault does not apply"
+            )
         raw["network"].update(copy.deepcopy(network_fields))
     raw["evaluations"] = copy.deepcopy(spec.evaluations)
     raw["metrics"] = copy.deepcopy(spec.metrics)

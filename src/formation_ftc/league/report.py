@@ -28,7 +28,15 @@ import pandas as pd
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
 
-__all__ = ["cell_table", "ranking", "winners", "write_leaderboard", "markdown_summary", "SCORES", "COSTS"]
+__all__ = [
+    "cell_table",
+    "ranking",
+    "winners",
+    "write_leaderboard",
+    "markdown_summary",
+    "SCORES",
+    "COSTS",
+]
 
 #: the actuator-usage score a league is ranked and plotted against, with its label (first one present)
 COSTS = (("delta_v_total", "total delta-v [m/s]"), ("control_impulse", "control impulse [N m s]"))
@@ -40,9 +48,20 @@ def _cost(cells: pd.DataFrame) -> tuple[str, str] | None:
             return name, label
     return None
 
+
 #: scores shown in the tables (when the league computes them)
-SCORES = ("rms_shape_error", "max_shape_error", "rms_slot_error", "settle_time", "delta_v_total", "peak_thrust",
-          "saturated_fraction", "rms_attitude_error", "max_attitude_error", "control_impulse")
+SCORES = (
+    "rms_shape_error",
+    "max_shape_error",
+    "rms_slot_error",
+    "settle_time",
+    "delta_v_total",
+    "peak_thrust",
+    "saturated_fraction",
+    "rms_attitude_error",
+    "max_attitude_error",
+    "control_impulse",
+)
 
 
 def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
@@ -66,9 +85,15 @@ def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
     rows = []
     for (method, level, case), g in runs.groupby(["method", "level", "case"], sort=False):
         ok = g[g["status"] == "ok"]
-        row: dict[str, Any] = {"method": method, "level": level, "case": case,
-                               "fault_kind": g["fault_kind"].iloc[0], "runs": len(g),
-                               "failed": int((g["status"] != "ok").sum()), "pass_rate": float(g["passed"].mean())}
+        row: dict[str, Any] = {
+            "method": method,
+            "level": level,
+            "case": case,
+            "fault_kind": g["fault_kind"].iloc[0],
+            "runs": len(g),
+            "failed": int((g["status"] != "ok").sum()),
+            "pass_rate": float(g["passed"].mean()),
+        }
         for s in SCORES:
             col = f"metric:{s}"
             if col in g:
@@ -98,9 +123,13 @@ def ranking(meta: dict[str, Any], cells: pd.DataFrame) -> dict[str, list[dict[st
         rows = []
         for method, h in g.groupby("method", sort=False):
             w = h["runs"].to_numpy(dtype=float)
-            row = {"method": method, "pass_rate": float(np.average(h["pass_rate"], weights=w)),
-                   f"{metric}_median": _nanmedian(h[f"{metric}_median"]),
-                   "failed": int(h["failed"].sum()), "runs": int(h["runs"].sum())}
+            row = {
+                "method": method,
+                "pass_rate": float(np.average(h["pass_rate"], weights=w)),
+                f"{metric}_median": _nanmedian(h[f"{metric}_median"]),
+                "failed": int(h["failed"].sum()),
+                "runs": int(h["runs"].sum()),
+            }
             if cost is not None:
                 row[f"{cost[0]}_median"] = _nanmedian(h[f"{cost[0]}_median"])
             rows.append(row)
@@ -127,9 +156,18 @@ def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
     metric, _, _ = _requirement(meta)
     out = []
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
-        best = sorted(g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))[0]
-        out.append({"level": level, "case": case, "method": best["method"], "pass_rate": best["pass_rate"],
-                    f"{metric}_median": best[f"{metric}_median"]})
+        best = sorted(
+            g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"]))
+        )[0]
+        out.append(
+            {
+                "level": level,
+                "case": case,
+                "method": best["method"],
+                "pass_rate": best["pass_rate"],
+                f"{metric}_median": best[f"{metric}_median"],
+            }
+        )
     return out
 
 
@@ -151,11 +189,16 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
     paths = []
     for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
         agg = g.groupby("method", sort=False)[[f"{metric}_median", f"{cost[0]}_median"]].median()
-        fig, axes = new_figure(1, 1, width=6.4, height=4.2,
-                               title=f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)")
+        fig, axes = new_figure(
+            1,
+            1,
+            width=6.4,
+            height=4.2,
+            title=f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)",
+        )
         ax = axes[0, 0]
         pts = agg.to_numpy(dtype=float)
-        for (name, (acc, dv)) in zip(agg.index, pts, strict=True):
+        for name, (acc, dv) in zip(agg.index, pts, strict=True):
             if math.isfinite(acc) and math.isfinite(dv):
                 ax.scatter(dv, acc, s=30)
                 ax.annotate(name, (dv, acc), fontsize=7, xytext=(3, 3), textcoords="offset points")
@@ -183,8 +226,15 @@ def _pareto_front(pts: np.ndarray) -> list[int]:
     for i, (a, d) in enumerate(pts):
         if not (math.isfinite(a) and math.isfinite(d)):
             continue
-        dominated = any(j != i and math.isfinite(pts[j][0]) and math.isfinite(pts[j][1]) and pts[j][0] <= a
-                        and pts[j][1] <= d and (pts[j][0] < a or pts[j][1] < d) for j in range(len(pts)))
+        dominated = any(
+            j != i
+            and math.isfinite(pts[j][0])
+            and math.isfinite(pts[j][1])
+            and pts[j][0] <= a
+            and pts[j][1] <= d
+            and (pts[j][0] < a or pts[j][1] < d)
+            for j in range(len(pts))
+        )
         if not dominated:
             idx.append(i)
     return idx
@@ -205,8 +255,12 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         if not tdir.is_dir():
             continue
         manifest = json.loads((league_dir / m["name"] / "campaign" / "manifest.json").read_text())
-        runs = int(meta.get("seeds") or manifest.get("runs_per_point", manifest.get("runs", 1)))  # runs per cell
-        plan_bases = manifest.get("plan", {}).get("bases") or manifest.get("bases")  # the cells in run order
+        runs = int(
+            meta.get("seeds") or manifest.get("runs_per_point", manifest.get("runs", 1))
+        )  # runs per cell
+        plan_bases = manifest.get("plan", {}).get("bases") or manifest.get(
+            "bases"
+        )  # the cells in run order
         bases = [Path(b).stem for b in plan_bases or sorted(p.name for p in cdir.glob("*.toml"))]
         for p in sorted(tdir.glob("run-*.nc")):
             rid = int(p.stem.split("-")[1])
@@ -223,8 +277,13 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
     cases = list(traces)
     if not cases:
         return paths
-    fig, axes = new_figure(len(cases), 1, width=7.0, height=1.0 + 2.0 * len(cases),
-                           title=f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level")
+    fig, axes = new_figure(
+        len(cases),
+        1,
+        width=7.0,
+        height=1.0 + 2.0 * len(cases),
+        title=f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level",
+    )
     for ax, case in zip(axes[:, 0], cases, strict=True):
         for name, (t, v) in traces[case].items():
             ax.plot(t, np.maximum(v, 1e-6), lw=0.8, label=name)
@@ -252,7 +311,9 @@ def _fmt(v: Any) -> str:
 
 def _table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "".join(f"<th>{_e(label)}</th>" for _, label in cols)
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k, _ in cols) + "</tr>" for r in rows)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k, _ in cols) + "</tr>" for r in rows
+    )
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
@@ -271,44 +332,81 @@ def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]
     metric, limit, units = _requirement(meta)
     cost = _cost(cells)
     prov = meta.get("provenance", {})
-    parts = [f"<h1>formation-ftc league: {_e(meta['name'])}</h1>",
-             f"<p>League definition version {_e(meta['version'])} (sha256 {_e(meta['hash'][:16])}), fault battery "
-             f"{_e(meta['battery']['name'])} v{_e(meta['battery']['version'])} "
-             f"(sha256 {_e(str(meta['battery'].get('sha256', ''))[:16])}), {meta['seeds']} seed(s) per cell"
-             f"{' (quick)' if meta.get('quick') else ''}. Requirement: <b>{_e(metric)} &le; {limit:g} {_e(units)}</b>; "
-             "a diverged run fails.</p>",
-             "<h2>Ranking</h2><p>Per actuator level: pass rate over the actuator-fault cases every method ran, "
-             f"then the median {_e(metric)}.</p>"]
+    parts = [
+        f"<h1>formation-ftc league: {_e(meta['name'])}</h1>",
+        f"<p>League definition version {_e(meta['version'])} (sha256 {_e(meta['hash'][:16])}), fault battery "
+        f"{_e(meta['battery']['name'])} v{_e(meta['battery']['version'])} "
+        f"(sha256 {_e(str(meta['battery'].get('sha256', ''))[:16])}), {meta['seeds']} seed(s) per cell"
+        f"{' (quick)' if meta.get('quick') else ''}. Requirement: <b>{_e(metric)} &le; {limit:g} {_e(units)}</b>; "
+        "a diverged run fails.</p>",
+        "<h2>Ranking</h2><p>Per actuator level: pass rate over the actuator-fault cases every method ran, "
+        f"then the median {_e(metric)}.</p>",
+    ]
     for level, rows in rank.items():
         parts.append(f"<h3>{_e(level)}</h3>")
-        parts.append(_table(rows, [("rank", "rank"), ("method", "method"), ("pass_rate", "pass rate"),
-                                   (f"{metric}_median", f"median {metric} [{units}]"),
-                                   *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
-                                   ("failed", "diverged"), ("runs", "runs")]))
+        parts.append(
+            _table(
+                rows,
+                [
+                    ("rank", "rank"),
+                    ("method", "method"),
+                    ("pass_rate", "pass rate"),
+                    (f"{metric}_median", f"median {metric} [{units}]"),
+                    *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
+                    ("failed", "diverged"),
+                    ("runs", "runs"),
+                ],
+            )
+        )
     parts.append("<h2>Winner per fault</h2>")
-    parts.append(_table(wins, [("level", "level"), ("case", "fault case"), ("method", "best method"),
-                               ("pass_rate", "pass rate"), (f"{metric}_median", f"median {metric} [{units}]")]))
+    parts.append(
+        _table(
+            wins,
+            [
+                ("level", "level"),
+                ("case", "fault case"),
+                ("method", "best method"),
+                ("pass_rate", "pass rate"),
+                (f"{metric}_median", f"median {metric} [{units}]"),
+            ],
+        )
+    )
     parts.append("<h2>Per-fault tables</h2>")
     score_cols = [s for s in SCORES if f"{s}_median" in cells]
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
         parts.append(f"<h3>{_e(case)} &mdash; {_e(level)}</h3>")
-        cols = [("method", "method"), ("runs", "runs"), ("failed", "diverged"), ("pass_rate", "pass rate")]
+        cols = [
+            ("method", "method"),
+            ("runs", "runs"),
+            ("failed", "diverged"),
+            ("pass_rate", "pass rate"),
+        ]
         for s in score_cols:
             cols += [(f"{s}_median", f"{s} median"), (f"{s}_p95", f"{s} p95")]
         parts.append(_table(g.to_dict("records"), cols))
     parts.append("<h2>Figures</h2>")
     parts += [_img(p) for p in figures]
     parts.append("<h2>Methods</h2>")
-    parts.append(_table(meta["methods"], [("name", "name"), ("label", "law"), ("reference", "source"),
-                                          ("gain_rule", "gains")]))
+    parts.append(
+        _table(
+            meta["methods"],
+            [("name", "name"), ("label", "law"), ("reference", "source"), ("gain_rule", "gains")],
+        )
+    )
     parts.append("<h2>League definition</h2>")
     parts.append(f"<pre>{_e(meta['definition'])}</pre>")
     for name, text in meta.get("method_files", {}).items():
         parts.append(f"<details><summary>{_e(name)}</summary><pre>{_e(text)}</pre></details>")
     parts.append("<h2>Provenance</h2>")
-    parts.append(_table([{"key": k, "value": v} for k, v in prov.items()], [("key", "key"), ("value", "value")]))
-    return (f"<!doctype html><html><head><meta charset='utf-8'><title>league {_e(meta['name'])}</title>"
-            f"<style>{_STYLE}</style></head><body>{''.join(parts)}</body></html>")
+    parts.append(
+        _table(
+            [{"key": k, "value": v} for k, v in prov.items()], [("key", "key"), ("value", "value")]
+        )
+    )
+    return (
+        f"<!doctype html><html><head><meta charset='utf-8'><title>league {_e(meta['name'])}</title>"
+        f"<style>{_STYLE}</style></head><body>{''.join(parts)}</body></html>"
+    )
 
 
 def _json_safe(obj: Any) -> Any:
@@ -326,7 +424,9 @@ def _json_safe(obj: Any) -> Any:
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
-    body = ["| " + " | ".join(_fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows]
+    body = [
+        "| " + " | ".join(_fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows
+    ]
     return "\n".join([head, sep, *body])
 
 
@@ -335,13 +435,19 @@ def markdown_summary(board: dict[str, Any]) -> str:
     metric = board["requirement"]["metric"]
     cells = pd.DataFrame(board["cells"])
     cost = _cost(cells) if len(cells) else None
-    out = [f"League `{board['league']}` (definition version {board['version']}), fault battery "
-           f"{board['battery']['name']} (version {board['battery']['version']}), {board['seeds']} seeds per cell; "
-           f"requirement {metric} <= "
-           f"{board['requirement']['max']:g} {board['requirement']['units']}."]
+    out = [
+        f"League `{board['league']}` (definition version {board['version']}), fault battery "
+        f"{board['battery']['name']} (version {board['battery']['version']}), {board['seeds']} seeds per cell; "
+        f"requirement {metric} <= "
+        f"{board['requirement']['max']:g} {board['requirement']['units']}."
+    ]
     for level, rows in board["ranking"].items():
-        cols = [("rank", "rank"), ("method", "method"), ("pass_rate", "pass rate"),
-                (f"{metric}_median", f"median {metric}")]
+        cols = [
+            ("rank", "rank"),
+            ("method", "method"),
+            ("pass_rate", "pass rate"),
+            (f"{metric}_median", f"median {metric}"),
+        ]
         if cost:
             cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
         cols += [("failed", "diverged"), ("runs", "runs")]
@@ -350,8 +456,10 @@ def markdown_summary(board: dict[str, Any]) -> str:
     for r in board["cells"]:
         key = (r["case"], r["level"])
         cur = best.get(key)
-        if cur is None or (r["pass_rate"], -_nan_last(r.get(f"{metric}_median", math.nan))) > \
-                (cur["pass_rate"], -_nan_last(cur.get(f"{metric}_median", math.nan))):
+        if cur is None or (r["pass_rate"], -_nan_last(r.get(f"{metric}_median", math.nan))) > (
+            cur["pass_rate"],
+            -_nan_last(cur.get(f"{metric}_median", math.nan)),
+        ):
             best[key] = r
     levels = list(board["ranking"])
     rows = []
@@ -366,8 +474,12 @@ def markdown_summary(board: dict[str, Any]) -> str:
             else:
                 row[lv] = f"none passes (lowest median: {b['method']})"
         rows.append(row)
-    out += ["", "Best method per fault case (pass rate):", "",
-            _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]])]
+    out += [
+        "",
+        "Best method per fault case (pass rate):",
+        "",
+        _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]]),
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -407,10 +519,20 @@ def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, A
         figures += _pareto(meta, cells, out)
         figures += _trajectories(meta, league_dir, out)
     metric, limit, units = _requirement(meta)
-    board = {"league": meta["name"], "version": meta["version"], "hash": meta["hash"], "seeds": meta["seeds"],
-             "quick": meta.get("quick", False), "battery": meta["battery"], "levels": meta["levels"],
-             "requirement": {"metric": metric, "max": limit, "units": units}, "provenance": meta.get("provenance"),
-             "ranking": rank, "winners": wins, "cells": cells.to_dict("records")}
+    board = {
+        "league": meta["name"],
+        "version": meta["version"],
+        "hash": meta["hash"],
+        "seeds": meta["seeds"],
+        "quick": meta.get("quick", False),
+        "battery": meta["battery"],
+        "levels": meta["levels"],
+        "requirement": {"metric": metric, "max": limit, "units": units},
+        "provenance": meta.get("provenance"),
+        "ranking": rank,
+        "winners": wins,
+        "cells": cells.to_dict("records"),
+    }
     (out / "leaderboard.json").write_text(json.dumps(_json_safe(board), indent=1))
     run_units = _run_units(league_dir, meta)
     write_parquet(cells, out / "cells.parquet", _cell_units(cells, run_units))

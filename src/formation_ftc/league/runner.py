@@ -39,8 +39,16 @@ from formation_ftc.league.definition import (
 )
 from formation_ftc.limits import Budgets
 
-__all__ = ["Cell", "LeagueOutcome", "plan_cells", "check_league_budgets", "run_league", "load_league_results",
-           "LEAGUE_FILE", "METHOD_WORKER_BYTES"]
+__all__ = [
+    "Cell",
+    "LeagueOutcome",
+    "plan_cells",
+    "check_league_budgets",
+    "run_league",
+    "load_league_results",
+    "LEAGUE_FILE",
+    "METHOD_WORKER_BYTES",
+]
 
 LEAGUE_FILE = "league.json"
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
@@ -73,7 +81,7 @@ class LeagueOutcome:
     per_method: dict[str, float]
 
     def __str__(self) -> str:
-        return (f"{self.n_runs} runs ({self.n_failed} failed or diverged) in {self.out_dir} in {self.seconds:.1f} s")
+        return f"{self.n_runs} runs ({self.n_failed} failed or diverged) in {self.out_dir} in {self.seconds:.1f} s"
 
 
 def _battery(spec: LeagueSpec):
@@ -110,8 +118,10 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 try:
                     n_steps = int(load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
-                    raise LeagueError(f"method {m.name} cannot run cell {case.name}/{level.name} of league "
-                                      f"{spec.league.name}: {exc}") from None
+                    raise LeagueError(
+                        f"method {m.name} cannot run cell {case.name}/{level.name} of league "
+                        f"{spec.league.name}: {exc}"
+                    ) from None
                 cells.append(Cell(m.name, case.name, case.kind, level.name, raw, n_steps))
         out[m.name] = cells
     return out
@@ -128,26 +138,42 @@ def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
     return True, net.get("delays") is not None
 
 
-def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int, traced: list[int],
-              networked: bool) -> dict:
+def _campaign(
+    spec: LeagueSpec,
+    method: str,
+    cell_files: list[Path],
+    seeds: int,
+    traced: list[int],
+    networked: bool,
+) -> dict:
     ie = spec.league.initial_error
     sample: dict[str, Any] = {}
     if ie.seed_field is not None:
         if not ie.seed_field.startswith("plant."):
-            raise LeagueError(f"league.initial_error.seed_field = {ie.seed_field!r}: must name a plant field")
+            raise LeagueError(
+                f"league.initial_error.seed_field = {ie.seed_field!r}: must name a plant field"
+            )
         sample[ie.seed_field] = {"dist": "integer", "low": 0, "high": 2**31 - 1}
     else:
         truth_field = str(ie.field)
         if not truth_field.startswith("plant."):
-            raise LeagueError(f"league.initial_error.field = {truth_field!r}: must name a plant field (plant.*)")
+            raise LeagueError(
+                f"league.initial_error.field = {truth_field!r}: must name a plant field (plant.*)"
+            )
         nominal = spec.truth.get(truth_field.removeprefix("plant."))
         if not isinstance(nominal, list) or not all(isinstance(r, list) for r in nominal):
-            raise LeagueError(f"league.initial_error.field = {truth_field!r}: [truth] has no list of "
-                              "per-spacecraft vectors there")
+            raise LeagueError(
+                f"league.initial_error.field = {truth_field!r}: [truth] has no list of "
+                "per-spacecraft vectors there"
+            )
         if ie.std and ie.std > 0:
             for i, row in enumerate(nominal):
                 for k, v in enumerate(row):
-                    sample[f"{truth_field}.{i}.{k}"] = {"dist": "normal", "mean": float(v), "std": ie.std}
+                    sample[f"{truth_field}.{i}.{k}"] = {
+                        "dist": "normal",
+                        "mean": float(v),
+                        "std": ie.std,
+                    }
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
@@ -157,10 +183,16 @@ def _campaign(spec: LeagueSpec, method: str, cell_files: list[Path], seeds: int,
         else:
             overrides[path] = on.low
     return {
-        "campaign": {"name": f"league-{spec.league.name}-{method}", "base": [str(p) for p in cell_files],
-                     # a chunk never spans two cells: no larger than the seeds (no padded runs)
-                     "runs": seeds, "seed": spec.league.seed, "chunk_size": min(spec.league.chunk_size, seeds),
-                     "paired": True, "description": f"league {spec.league.name}: {method}"},
+        "campaign": {
+            "name": f"league-{spec.league.name}-{method}",
+            "base": [str(p) for p in cell_files],
+            # a chunk never spans two cells: no larger than the seeds (no padded runs)
+            "runs": seeds,
+            "seed": spec.league.seed,
+            "chunk_size": min(spec.league.chunk_size, seeds),
+            "paired": True,
+            "description": f"league {spec.league.name}: {method}",
+        },
         "overrides": overrides,
         "sample": sample,
         "traces": {"runs": traced, "every": 1},
@@ -177,7 +209,9 @@ def _provenance() -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------------------ budgets
-def check_league_budgets(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets) -> None:
+def check_league_budgets(
+    spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets
+) -> None:
     """Refuse, before anything is compiled or written, a league over the budgets campaigns have: the
     integration steps of every cell's run, at most :data:`~formation_ftc.campaign.spec.MAX_RUNS` seeds per
     cell (a campaign's runs per grid point) and the run-steps of every method's campaign (seeds x its
@@ -196,25 +230,35 @@ def check_league_budgets(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: 
     budget = budgets.max_campaign_steps
     if budget is not None and total_per_seed and budget // total_per_seed < allowed:
         allowed = budget // total_per_seed
-        limit = (f"the budget of {budget:,} run-steps (raise it with --max-campaign-steps / "
-                 "FORMATION_FTC_MAX_CAMPAIGN_STEPS)")
+        limit = (
+            f"the budget of {budget:,} run-steps (raise it with --max-campaign-steps / "
+            "FORMATION_FTC_MAX_CAMPAIGN_STEPS)"
+        )
     if seeds <= allowed:
         return
     n_cells = sum(len(mc) for mc in cells.values())
     big = max(cells, key=lambda m: steps_per_seed[m])
 
     def size(k: int) -> str:
-        return (f"{k * n_cells:,} runs ({n_cells} cells of {len(cells)} method(s); method {big}: "
-                f"{k * len(cells[big]):,} runs) and {k * total_per_seed:,} run-steps")
+        return (
+            f"{k * n_cells:,} runs ({n_cells} cells of {len(cells)} method(s); method {big}: "
+            f"{k * len(cells[big]):,} runs) and {k * total_per_seed:,} run-steps"
+        )
 
     if allowed < 1:
-        raise LeagueError(f"league {name}: even 1 seed per cell makes {size(1)}, over {limit}; shorten "
-                          "league.horizon or run fewer methods (--methods)")
-    raise LeagueError(f"--seeds {seeds:,}: league {name} would run {size(seeds)}, over {limit}; allowed: --seeds 1 "
-                      f"to {allowed:,} for these methods")
+        raise LeagueError(
+            f"league {name}: even 1 seed per cell makes {size(1)}, over {limit}; shorten "
+            "league.horizon or run fewer methods (--methods)"
+        )
+    raise LeagueError(
+        f"--seeds {seeds:,}: league {name} would run {size(seeds)}, over {limit}; allowed: --seeds 1 "
+        f"to {allowed:,} for these methods"
+    )
 
 
-def _check_batch_memory(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets) -> None:
+def _check_batch_memory(
+    spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: int, budgets: Budgets
+) -> None:
     """Refuse a method whose batch of ``min(chunk_size, seeds)`` runs needs more memory than the budget
     (first cell of each method, shapes only: every cell of a method has the same structure)."""
     if budgets.max_memory is None:
@@ -229,27 +273,36 @@ def _check_batch_memory(spec: LeagueSpec, cells: dict[str, list[Cell]], seeds: i
         try:
             need = run_memory_bytes(api.compile_scenario(api.load_scenario(mcells[0].raw))) * batch
         except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-            raise LeagueError(f"league {spec.league.name}: method {method} cannot be compiled: {exc}") from None
+            raise LeagueError(
+                f"league {spec.league.name}: method {method} cannot be compiled: {exc}"
+            ) from None
         if need > budgets.max_memory:
-            raise LeagueError(f"league {spec.league.name}, method {method}: a batch of {batch} runs needs about "
-                              f"{format_bytes(need)} of memory, over the budget of "
-                              f"{format_bytes(budgets.max_memory)}; lower league.chunk_size in the league file, "
-                              "or raise the budget with --max-memory / FORMATION_FTC_MAX_MEMORY")
+            raise LeagueError(
+                f"league {spec.league.name}, method {method}: a batch of {batch} runs needs about "
+                f"{format_bytes(need)} of memory, over the budget of "
+                f"{format_bytes(budgets.max_memory)}; lower league.chunk_size in the league file, "
+                "or raise the budget with --max-memory / FORMATION_FTC_MAX_MEMORY"
+            )
 
 
 # ------------------------------------------------------------------------------ league directory
-def _read_meta(path: Path, what: str, advice: str = "restore the file, or give another --out (new or empty)"
-               ) -> dict[str, Any]:
+def _read_meta(
+    path: Path, what: str, advice: str = "restore the file, or give another --out (new or empty)"
+) -> dict[str, Any]:
     """``league.json`` as a dict; LeagueError naming ``what`` (e.g. ``--out DIR``) when it is damaged."""
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:  # JSONDecodeError, UnicodeDecodeError are ValueErrors
         reason = getattr(exc, "strerror", None) or exc
-        raise LeagueError(f"{what}: {LEAGUE_FILE} is damaged or unreadable ({reason}); refusing to use the "
-                          f"directory: {advice}") from None
+        raise LeagueError(
+            f"{what}: {LEAGUE_FILE} is damaged or unreadable ({reason}); refusing to use the "
+            f"directory: {advice}"
+        ) from None
     if not isinstance(meta, dict) or not {"hash", "seeds", "methods", "battery"} <= set(meta):
-        raise LeagueError(f"{what}: {LEAGUE_FILE} is not a league description (damaged, or another program's "
-                          f"file); refusing to use the directory: {advice}")
+        raise LeagueError(
+            f"{what}: {LEAGUE_FILE} is not a league description (damaged, or another program's "
+            f"file); refusing to use the directory: {advice}"
+        )
     return meta
 
 
@@ -261,7 +314,9 @@ def _campaign_at_or_above(path: Path) -> Path | None:
     real = Path(os.path.realpath(path))
     for d in (real, *real.parents):
         try:
-            if (d / MANIFEST).is_file() and json.loads((d / MANIFEST).read_text("utf-8")).get("format") == FORMAT:
+            if (d / MANIFEST).is_file() and json.loads((d / MANIFEST).read_text("utf-8")).get(
+                "format"
+            ) == FORMAT:
                 return d
         except (OSError, ValueError, AttributeError):
             continue
@@ -276,29 +331,43 @@ def _check_out(out: Path, spec: LeagueSpec, digest: str, seeds: int) -> dict[str
     try:
         campaign = _campaign_at_or_above(out)
         if campaign is not None:
-            where = "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
-            raise LeagueError(f"{what}: {where} a campaign directory; a league writes one campaign per method in "
-                              "its own directory: give another --out (new or empty)")
+            where = (
+                "is"
+                if campaign == Path(os.path.realpath(out))
+                else f"is inside {campaign}, which is"
+            )
+            raise LeagueError(
+                f"{what}: {where} a campaign directory; a league writes one campaign per method in "
+                "its own directory: give another --out (new or empty)"
+            )
         if not (out.exists() or out.is_symlink()):
             return None
         if not out.is_dir():
-            kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
-            raise LeagueError(f"{what}: exists and is {kind}; give a directory (new or empty, or this league's "
-                              "to resume it)")
+            kind = (
+                "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+            )
+            raise LeagueError(
+                f"{what}: exists and is {kind}; give a directory (new or empty, or this league's "
+                "to resume it)"
+            )
         entries = [e.name for e in out.iterdir()]
         if LEAGUE_FILE not in entries:
             stray = sorted(e for e in entries if not _TMP_RE.match(e))
             if stray:
-                raise LeagueError(f"{what}: is not empty and holds no {LEAGUE_FILE} (e.g. {stray[:3]}): not a "
-                                  "league directory; refusing to write there. Give a new or empty directory")
+                raise LeagueError(
+                    f"{what}: is not empty and holds no {LEAGUE_FILE} (e.g. {stray[:3]}): not a "
+                    "league directory; refusing to write there. Give a new or empty directory"
+                )
             return None
     except OSError as exc:
         raise LeagueError(f"{what}: unusable path ({exc.strerror or exc})") from None
     old = _read_meta(out / LEAGUE_FILE, what)
     if old.get("hash") != digest or old.get("seeds") != seeds:
-        raise LeagueError(f"{out}: holds league {old.get('name')!r} (definition {str(old.get('hash'))[:12]}, "
-                          f"{old.get('seeds')} seeds); this is {spec.league.name!r} ({digest[:12]}, {seeds} "
-                          "seeds). Use another --out directory")
+        raise LeagueError(
+            f"{out}: holds league {old.get('name')!r} (definition {str(old.get('hash'))[:12]}, "
+            f"{old.get('seeds')} seeds); this is {spec.league.name!r} ({digest[:12]}, {seeds} "
+            "seeds). Use another --out directory"
+        )
     return old
 
 
@@ -317,7 +386,9 @@ def _atomic_write_text(path: Path, text: str) -> None:
         raise
 
 
-def _write_inputs(out: Path, meta: dict[str, Any], cells: dict[str, list[Cell]]) -> dict[str, list[Path]]:
+def _write_inputs(
+    out: Path, meta: dict[str, Any], cells: dict[str, list[Cell]]
+) -> dict[str, list[Path]]:
     """``league.json`` and every method's cell files (only those whose content changed); the cell files."""
     import tomli_w
 
@@ -337,8 +408,10 @@ def _write_inputs(out: Path, meta: dict[str, Any], cells: dict[str, list[Cell]])
                 files[name].append(p)
         return files
     except OSError as exc:
-        raise LeagueError(f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
-                          "directory") from None
+        raise LeagueError(
+            f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
+            "directory"
+        ) from None
 
 
 # ------------------------------------------------------------------------------------------- progress
@@ -364,9 +437,21 @@ class _MethodProgress:
     methods computed side by side in other processes. A failing stderr (closed, full) turns it off; it
     never stops the league."""
 
-    def __init__(self, methods: list[tuple[str, Path, int]], seeds: int, chunk_size: int, *,
-                 enabled: bool = True, console: Any = None, interval: float = 0.5):
-        self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size  # (name, chunks dir, runs)
+    def __init__(
+        self,
+        methods: list[tuple[str, Path, int]],
+        seeds: int,
+        chunk_size: int,
+        *,
+        enabled: bool = True,
+        console: Any = None,
+        interval: float = 0.5,
+    ):
+        self.methods, self.seeds, self.chunk_size = (
+            methods,
+            seeds,
+            chunk_size,
+        )  # (name, chunks dir, runs)
         self.enabled, self.console, self.interval = enabled, console, interval
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
@@ -391,16 +476,28 @@ class _MethodProgress:
             if not console.is_terminal:
                 return self
             width = max(len(name) for name, _, _ in self.methods)
-            self._bar = Progress(TextColumn(f"[bold]{{task.description:<{width}}}"), BarColumn(),
-                                 MofNCompleteColumn(), TextColumn("runs"), TimeElapsedColumn(), TextColumn("ETA"),
-                                 TimeRemainingColumn(), console=console, auto_refresh=False)
-            self._tasks = {name: self._bar.add_task(name, total=total) for name, _, total in self.methods}
+            self._bar = Progress(
+                TextColumn(f"[bold]{{task.description:<{width}}}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("runs"),
+                TimeElapsedColumn(),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                console=console,
+                auto_refresh=False,
+            )
+            self._tasks = {
+                name: self._bar.add_task(name, total=total) for name, _, total in self.methods
+            }
             self._bar.start()
             self._poll()
         except (OSError, ValueError):
             self._close_bar()
             return self
-        self._thread = threading.Thread(target=self._watch, name="formation-ftc-league-progress", daemon=True)
+        self._thread = threading.Thread(
+            target=self._watch, name="formation-ftc-league-progress", daemon=True
+        )
         self._thread.start()
         return self
 
@@ -414,7 +511,10 @@ class _MethodProgress:
         while not self._stop.wait(self.interval):
             try:
                 self._poll()
-            except (OSError, ValueError):  # stderr closed or full: no more progress, the league goes on
+            except (
+                OSError,
+                ValueError,
+            ):  # stderr closed or full: no more progress, the league goes on
                 return
 
     def _close_bar(self) -> None:
@@ -448,10 +548,19 @@ def _run_method_campaign(campaign: dict, out_dir: str) -> tuple[int, int, float]
     return outcome.n_runs, outcome.n_failed, time.perf_counter() - t0
 
 
-def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: int | None = None,
-               quick: bool = False, methods: list[str] | None = None, executor_factory: Callable | None = None,
-               progress: bool = False, log: Callable[[str], None] | None = None,
-               parallel_methods: int = 1, budgets: Budgets | None = None) -> LeagueOutcome:
+def run_league(
+    league: str | Path | LeagueSpec,
+    out_dir: str | Path,
+    *,
+    seeds: int | None = None,
+    quick: bool = False,
+    methods: list[str] | None = None,
+    executor_factory: Callable | None = None,
+    progress: bool = False,
+    log: Callable[[str], None] | None = None,
+    parallel_methods: int = 1,
+    budgets: Budgets | None = None,
+) -> LeagueOutcome:
     """Run (or resume) ``league`` into ``out_dir``: ``DIR/league.json`` (definition, battery, seeds,
     provenance) and one campaign directory per method (``DIR/<method>/campaign``).
 
@@ -467,7 +576,9 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
 
     t0 = time.perf_counter()
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
-    n_seeds = int(seeds if seeds is not None else (spec.league.quick_seeds if quick else spec.league.seeds))
+    n_seeds = int(
+        seeds if seeds is not None else (spec.league.quick_seeds if quick else spec.league.seeds)
+    )
     if n_seeds < 1:
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
@@ -477,9 +588,11 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
         for path in [*sampled["sample"], *sampled["overrides"]]:
             for c in mcells:
                 if not _has_path(c.raw, path):
-                    raise LeagueError(f"league {spec.league.name}: the league samples {path!r}, but method {name}'s "
-                                      f"cell {c.key} has no such field (give it a value in [truth], [actuator] or "
-                                      "the method's network)")
+                    raise LeagueError(
+                        f"league {spec.league.name}: the league samples {path!r}, but method {name}'s "
+                        f"cell {c.key} has no such field (give it a value in [truth], [actuator] or "
+                        "the method's network)"
+                    )
     budgets = budgets if budgets is not None else Budgets.resolve()
     check_league_budgets(spec, cells, n_seeds, budgets)
     out = Path(out_dir)
@@ -488,14 +601,27 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
     assert spec.source is not None
-    listed = set(cells) | {m.get("name") for m in (old or {}).get("methods", []) if isinstance(m, dict)}
+    listed = set(cells) | {
+        m.get("name") for m in (old or {}).get("methods", []) if isinstance(m, dict)
+    }
     meta = {
-        "name": spec.league.name, "version": spec.league.version, "kind": spec.league.kind, "hash": digest,
+        "name": spec.league.name,
+        "version": spec.league.version,
+        "kind": spec.league.kind,
+        "hash": digest,
         "seeds": n_seeds,
-        "quick": quick, "definition_file": spec.source.name, "definition": spec.source.read_text(),
-        "method_files": {m.name: (spec.source.parent / m.scenario).read_text() for m in spec.methods},
-        "battery": {"name": battery.name, "version": battery.version, "sha256": battery.sha256,
-                    "cases": [{"name": c.name, "kind": c.kind} for c in battery.cases]},
+        "quick": quick,
+        "definition_file": spec.source.name,
+        "definition": spec.source.read_text(),
+        "method_files": {
+            m.name: (spec.source.parent / m.scenario).read_text() for m in spec.methods
+        },
+        "battery": {
+            "name": battery.name,
+            "version": battery.version,
+            "sha256": battery.sha256,
+            "cases": [{"name": c.name, "kind": c.kind} for c in battery.cases],
+        },
         # the methods of earlier runs into this directory stay listed (a resume with another --methods)
         "methods": [m.model_dump() for m in spec.methods if m.name in listed],
         "levels": [lv.model_dump() for lv in spec.levels],
@@ -505,8 +631,19 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
     jobs = []
     for name, mcells in cells.items():
         traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed, spec.league.trace_cases)
-        jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced,
-                                     _network_kind(spec, spec.method(name))[0])))
+        jobs.append(
+            (
+                name,
+                _campaign(
+                    spec,
+                    name,
+                    files[name],
+                    n_seeds,
+                    traced,
+                    _network_kind(spec, spec.method(name))[0],
+                ),
+            )
+        )
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
 
@@ -522,7 +659,9 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
                 pass
 
     chunk_size = min(spec.league.chunk_size, n_seeds)
-    watched = [(name, out / name / "campaign" / "chunks", n_seeds * len(cells[name])) for name, _ in jobs]
+    watched = [
+        (name, out / name / "campaign" / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
+    ]
     with _MethodProgress(watched, n_seeds, chunk_size, enabled=progress):
         if parallel_methods > 1 and len(jobs) > 1:
             # one process per method (each compiles its program once and runs its chunks in-process):
@@ -531,11 +670,16 @@ def run_league(league: str | Path | LeagueSpec, out_dir: str | Path, *, seeds: i
             import multiprocessing
 
             ctx = multiprocessing.get_context("spawn")
-            with concurrent.futures.ProcessPoolExecutor(max_workers=min(parallel_methods, len(jobs)), mp_context=ctx,
-                                                        initializer=die_with_parent,
-                                                        initargs=(os.getpid(),)) as pool:
-                futures = {pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
-                           for name, campaign in jobs}
+            with concurrent.futures.ProcessPoolExecutor(
+                max_workers=min(parallel_methods, len(jobs)),
+                mp_context=ctx,
+                initializer=die_with_parent,
+                initargs=(os.getpid(),),
+            ) as pool:
+                futures = {
+                    pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
+                    for name, campaign in jobs
+                }
                 try:
                     for fut in concurrent.futures.as_completed(futures):
                         done(futures[fut], *fut.result())
@@ -568,7 +712,9 @@ def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int, cases: list[str
     (each kept history is one more run, re-run alone with its records)."""
     j = min(trace_seed, seeds - 1)
     first_level = cells[0].level if cells else ""
-    return [g * seeds + j for g, c in enumerate(cells) if c.level == first_level and c.case in cases]
+    return [
+        g * seeds + j for g, c in enumerate(cells) if c.level == first_level and c.case in cases
+    ]
 
 
 def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFrame]:
@@ -579,8 +725,12 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
     out = Path(out_dir)
     meta_path = out / LEAGUE_FILE
     if not meta_path.is_file():
-        raise LeagueError(f"{out}: no {LEAGUE_FILE}; run `formation-ftc league run NAME --out {out}` first")
-    meta = _read_meta(meta_path, str(out), f"run `formation-ftc league run NAME --out {out}` into a new directory")
+        raise LeagueError(
+            f"{out}: no {LEAGUE_FILE}; run `formation-ftc league run NAME --out {out}` first"
+        )
+    meta = _read_meta(
+        meta_path, str(out), f"run `formation-ftc league run NAME --out {out}` into a new directory"
+    )
     kinds = {c["name"]: c["kind"] for c in meta["battery"]["cases"]}
     frames = []
     for m in meta["methods"]:
@@ -591,7 +741,9 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
         if not len(df):
             continue
         keys = df["scenario"].map(lambda s: Path(str(s)).stem)
-        df = df.assign(method=m["name"], case=keys.str.split("--").str[0], level=keys.str.split("--").str[1])
+        df = df.assign(
+            method=m["name"], case=keys.str.split("--").str[0], level=keys.str.split("--").str[1]
+        )
         df["fault_kind"] = df["case"].map(kinds)
         frames.append(df)
     if not frames:

@@ -26,8 +26,9 @@ def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str,
     return simulate_with_metrics(scenario, raise_on_divergence=raise_on_divergence)
 
 
-def simulate_batched(scenarios: list, compiled: list | None = None,
-                     timings: list | None = None) -> list[tuple[Any, dict[str, float]]]:
+def simulate_batched(
+    scenarios: list, compiled: list | None = None, timings: list | None = None
+) -> list[tuple[Any, dict[str, float]]]:
     """Run scenarios as one ``jax.vmap`` batch per compiled structure (same ``static_key``: only numbers
     differ; :func:`formation_ftc.sim.batch.batched_run`) and return ``[(xarray.Dataset, {metric: float})]``
     in order, as :func:`simulate` returns them one by one (a divergence raises, as there).
@@ -56,7 +57,9 @@ def simulate_batched(scenarios: list, compiled: list | None = None,
         out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(exe(batch)))
         t2 = time.perf_counter()
         for j, i in enumerate(idx):
-            results[i] = finish_run(scenarios[i], compiled[i], jax.tree_util.tree_map(lambda a, j=j: a[j], out))
+            results[i] = finish_run(
+                scenarios[i], compiled[i], jax.tree_util.tree_map(lambda a, j=j: a[j], out)
+            )
             times[i] = (t1 - t0, t2 - t1)
     if timings is not None:
         timings.extend(times)

@@ -16,7 +16,13 @@ from __future__ import annotations
 
 from formation_ftc.report.html import render_index, write_index, write_trajectory3d
 from formation_ftc.report.metadata import provenance
-from formation_ftc.report.reproduce import MARKER_NAME, ReproduceError, add_cli, run_cli, to_jsonable
+from formation_ftc.report.reproduce import (
+    MARKER_NAME,
+    ReproduceError,
+    add_cli,
+    run_cli,
+    to_jsonable,
+)
 
 # ``formation_ftc.report.reproduce`` stays the submodule (the CLI calls
 # ``formation_ftc.report.reproduce.add_cli``); the driver is ``formation_ftc.report.reproduce.reproduce``.

@@ -45,7 +45,11 @@ TRAJECTORY_FILE = "trajectory3d.json"
 #: Points kept per spacecraft in the interactive view (evenly decimated, last point kept).
 MAX_POINTS_3D = 2000
 
-_VERDICT_CLASS = {"match": "verdict-match", "differs": "verdict-differs", "not stated": "verdict-not-stated"}
+_VERDICT_CLASS = {
+    "match": "verdict-match",
+    "differs": "verdict-differs",
+    "not stated": "verdict-not-stated",
+}
 
 _CSS = """
 :root { --ok:#1e7b34; --okbg:#e3f4e6; --bad:#b3261e; --badbg:#fbe4e2; --na:#5f6368; --nabg:#eef0f2; }
@@ -130,9 +134,14 @@ def _decimate(points: list, max_points: int) -> list:
     return [points[i] for i in idx]
 
 
-def write_trajectory3d(out_dir: Path | str, spacecraft: Mapping[str, Any], title: str = "Formation trajectory",
-                       axis_labels: Sequence[str] = ("x [m]", "y [m]", "z [m]"),
-                       max_points: int = MAX_POINTS_3D, append: bool = True) -> Path:
+def write_trajectory3d(
+    out_dir: Path | str,
+    spacecraft: Mapping[str, Any],
+    title: str = "Formation trajectory",
+    axis_labels: Sequence[str] = ("x [m]", "y [m]", "z [m]"),
+    max_points: int = MAX_POINTS_3D,
+    append: bool = True,
+) -> Path:
     """Write (or append to) ``out_dir/trajectory3d.json`` for the report's interactive 3-D view.
 
     Parameters
@@ -170,22 +179,40 @@ def load_trajectories(path: Path) -> tuple[list[dict], list[str]]:
     raw_views = data if isinstance(data, list) else [data]
     views = []
     for k, view in enumerate(raw_views):
-        if not isinstance(view, dict) or not isinstance(view.get("spacecraft"), dict) or not view["spacecraft"]:
+        if (
+            not isinstance(view, dict)
+            or not isinstance(view.get("spacecraft"), dict)
+            or not view["spacecraft"]
+        ):
             problems.append(f"{Path(path).name}: view {k + 1} has no 'spacecraft' mapping")
             continue
         tracks = {}
         for name, pts in view["spacecraft"].items():
-            ok = isinstance(pts, list) and pts and all(
-                isinstance(p, list | tuple) and len(p) == 3
-                and all(isinstance(c, int | float) and math.isfinite(c) for c in p) for p in pts)
+            ok = (
+                isinstance(pts, list)
+                and pts
+                and all(
+                    isinstance(p, list | tuple)
+                    and len(p) == 3
+                    and all(isinstance(c, int | float) and math.isfinite(c) for c in p)
+                    for p in pts
+                )
+            )
             if ok:
                 tracks[str(name)] = _decimate([list(map(float, p)) for p in pts], MAX_POINTS_3D)
             else:
-                problems.append(f"{Path(path).name}: track {name!r} is not a list of finite [x, y, z]")
+                problems.append(
+                    f"{Path(path).name}: track {name!r} is not a list of finite [x, y, z]"
+                )
         if tracks:
             labels = view.get("axis_labels") or ["x [m]", "y [m]", "z [m]"]
-            views.append({"title": str(view.get("title", "Formation trajectory")),
-                          "axis_labels": [str(a) for a in list(labels)[:3]], "spacecraft": tracks})
+            views.append(
+                {
+                    "title": str(view.get("title", "Formation trajectory")),
+                    "axis_labels": [str(a) for a in list(labels)[:3]],
+                    "spacecraft": tracks,
+                }
+            )
     return views, problems
 
 
@@ -198,14 +225,33 @@ def _plotly_view(view: dict, div_id: str) -> str:
     for k, (name, pts) in enumerate(view["spacecraft"].items()):
         color = SPACECRAFT_COLORS[k % len(SPACECRAFT_COLORS)]
         xs, ys, zs = zip(*pts, strict=True)
-        fig.add_trace(go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", name=name, line=dict(color=color, width=4)))
-        fig.add_trace(go.Scatter3d(x=[xs[-1]], y=[ys[-1]], z=[zs[-1]], mode="markers", name=f"{name} (final)",
-                                   marker=dict(color=color, size=4), showlegend=False))
+        fig.add_trace(
+            go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", name=name, line=dict(color=color, width=4))
+        )
+        fig.add_trace(
+            go.Scatter3d(
+                x=[xs[-1]],
+                y=[ys[-1]],
+                z=[zs[-1]],
+                mode="markers",
+                name=f"{name} (final)",
+                marker=dict(color=color, size=4),
+                showlegend=False,
+            )
+        )
     ax = view["axis_labels"]
-    fig.update_layout(title=view["title"], margin=dict(l=0, r=0, t=40, b=0),
-                      scene=dict(xaxis_title=ax[0], yaxis_title=ax[1], zaxis_title=ax[2], aspectmode="data"))
-    return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id, default_height="520px",
-                       config={"displaylogo": False, "responsive": True})
+    fig.update_layout(
+        title=view["title"],
+        margin=dict(l=0, r=0, t=40, b=0),
+        scene=dict(xaxis_title=ax[0], yaxis_title=ax[1], zaxis_title=ax[2], aspectmode="data"),
+    )
+    return fig.to_html(
+        full_html=False,
+        include_plotlyjs=False,
+        div_id=div_id,
+        default_height="520px",
+        config={"displaylogo": False, "responsive": True},
+    )
 
 
 # ------------------------------------------------------------------------------------------ sections
@@ -214,17 +260,21 @@ def _comparison_table(rows: list[dict]) -> str:
         return '<p class="missing">No paper-vs-reproduced rows.</p>'
     # "paper" holds only what the paper prints (with where); values the paper does not print are in
     # "reference", with how they were obtained (docs/references.md of the repository)
-    out = ['<table class="comparison"><thead><tr><th>quantity</th><th>paper (where printed)</th>'
-           "<th>reference (how obtained)</th><th>ours</th><th>criterion</th><th>verdict</th><th>note</th>"
-           "</tr></thead><tbody>"]
+    out = [
+        '<table class="comparison"><thead><tr><th>quantity</th><th>paper (where printed)</th>'
+        "<th>reference (how obtained)</th><th>ours</th><th>criterion</th><th>verdict</th><th>note</th>"
+        "</tr></thead><tbody>"
+    ]
     for r in rows:
         verdict: Any = r.get("verdict")  # a JSON value
         cls = _VERDICT_CLASS.get(verdict, "verdict-not-stated")
         paper = r.get("published") or "not printed"
-        out.append(f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(paper)}</td>'
-                   f'<td>{_e(r.get("reference") or "")}</td>'
-                   f'<td>{_e(r.get("ours"))}</td><td>{_e(r.get("criterion"))}</td>'
-                   f'<td class="verdict">{_e(r.get("verdict"))}</td><td>{_e(r.get("note"))}</td></tr>')
+        out.append(
+            f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(paper)}</td>'
+            f"<td>{_e(r.get('reference') or '')}</td>"
+            f"<td>{_e(r.get('ours'))}</td><td>{_e(r.get('criterion'))}</td>"
+            f'<td class="verdict">{_e(r.get("verdict"))}</td><td>{_e(r.get("note"))}</td></tr>'
+        )
     out.append("</tbody></table>")
     return "\n".join(out)
 
@@ -232,20 +282,26 @@ def _comparison_table(rows: list[dict]) -> str:
 def _checks_table(checks: list[dict]) -> str:
     if not checks:
         return '<p class="missing">No conditions declared.</p>'
-    out = ['<table class="checks"><thead><tr><th>condition</th><th>reference</th><th>value</th>'
-           "<th>requirement</th><th>holds</th><th>basis</th><th>required</th><th>detail</th></tr></thead><tbody>"]
+    out = [
+        '<table class="checks"><thead><tr><th>condition</th><th>reference</th><th>value</th>'
+        "<th>requirement</th><th>holds</th><th>basis</th><th>required</th><th>detail</th></tr></thead><tbody>"
+    ]
     for c in checks:
         holds: Any = c.get("holds")  # a JSON value: true, false or null
         basis = c.get("basis") or ""  # absent in a report.json written before the basis existed
         if holds is None and basis in ("sampled", "heuristic"):
             cls, text = "holds-unproven", "unproven"  # no violation found, nothing proved
         else:
-            cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(holds, ("holds-na", "n/a"))
+            cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(
+                holds, ("holds-na", "n/a")
+            )
         required = "yes" if c.get("required", True) else "info"
-        out.append(f'<tr class="{cls}"><td>{_e(c.get("name"))}</td><td>{_e(c.get("reference"))}</td>'
-                   f'<td>{_e(c.get("value"))}</td><td>{_e(c.get("requirement"))}</td>'
-                   f'<td class="holds">{text}</td><td class="basis">{_e(basis)}</td><td>{required}</td>'
-                   f'<td>{_e(c.get("detail"))}</td></tr>')
+        out.append(
+            f'<tr class="{cls}"><td>{_e(c.get("name"))}</td><td>{_e(c.get("reference"))}</td>'
+            f"<td>{_e(c.get('value'))}</td><td>{_e(c.get('requirement'))}</td>"
+            f'<td class="holds">{text}</td><td class="basis">{_e(basis)}</td><td>{required}</td>'
+            f"<td>{_e(c.get('detail'))}</td></tr>"
+        )
     out.append("</tbody></table>")
     return "\n".join(out)
 
@@ -259,12 +315,16 @@ def _figures(entry: dict, paper_dir: Path) -> str:
         label = f"Fig. {_e(f.get('number'))}."
         path = paper_dir / str(f.get("path", ""))
         if path.is_file():
-            body = (f'<img class="figure-img" src="{_data_uri(path)}" '
-                    f'alt="Figure {_e(f.get("number"))}: {_e(f.get("caption"))}">')
+            body = (
+                f'<img class="figure-img" src="{_data_uri(path)}" '
+                f'alt="Figure {_e(f.get("number"))}: {_e(f.get("caption"))}">'
+            )
         else:
             body = f'<p class="missing">figure file {_e(f.get("path"))} is missing</p>'
-        out.append(f'<figure class="fig" data-figure="{_e(f.get("number"))}">{body}'
-                   f"<figcaption><b>{label}</b> {_e(f.get('caption'))}</figcaption></figure>")
+        out.append(
+            f'<figure class="fig" data-figure="{_e(f.get("number"))}">{body}'
+            f"<figcaption><b>{label}</b> {_e(f.get('caption'))}</figcaption></figure>"
+        )
     out.append("</div>")
     return "\n".join(out)
 
@@ -276,15 +336,19 @@ def _trajectory_block(entry: dict, paper_dir: Path, include_3d: bool, state: dic
     if not include_3d:
         return head + '<p class="unavailable">3-D view left out (--no-3d).</p>'
     if not plotly_available():
-        return head + ('<p class="unavailable">Interactive 3-D view unavailable: plotly is not installed '
-                       "(pip install plotly, then run the report again).</p>")
+        return head + (
+            '<p class="unavailable">Interactive 3-D view unavailable: plotly is not installed '
+            "(pip install plotly, then run the report again).</p>"
+        )
     views, problems = load_trajectories(paper_dir / str(entry["trajectory3d"]))
     parts = [head] + [f'<p class="warning">{_e(p)}</p>' for p in problems]
     for k, view in enumerate(views):
         state["plotly"] = True
         div_id = f"{_anchor(entry['paper'])}-traj3d-{k + 1}"
-        parts.append(f'<div class="traj3d-wrap" data-view="{_e(view["title"])}">'
-                     f"{_plotly_view(view, div_id)}</div>")
+        parts.append(
+            f'<div class="traj3d-wrap" data-view="{_e(view["title"])}">'
+            f"{_plotly_view(view, div_id)}</div>"
+        )
     return "\n".join(parts)
 
 
@@ -293,79 +357,111 @@ def _section(entry: dict, out_dir: Path, include_3d: bool, state: dict) -> str:
     paper_dir = out_dir / paper
     status = entry.get("status", "failed")
     badge = f'<span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span>'
-    parts = [f'<section class="paper {"ok" if status == "ok" else "failed"}" id="{_anchor(paper)}" '
-             f'data-paper="{_e(paper)}" data-status="{_e(status)}">',
-             f"<h2>{_e(entry.get('title') or paper)} {badge}</h2>"]
+    parts = [
+        f'<section class="paper {"ok" if status == "ok" else "failed"}" id="{_anchor(paper)}" '
+        f'data-paper="{_e(paper)}" data-status="{_e(status)}">',
+        f"<h2>{_e(entry.get('title') or paper)} {badge}</h2>",
+    ]
     if entry.get("citation"):
         parts.append(f'<p class="citation">{_e(entry["citation"])}</p>')
-    parts.append('<h3>Method</h3>' + (_paragraphs(entry.get("description", ""))
-                                      or '<p class="missing">No description.</p>'))
+    parts.append(
+        "<h3>Method</h3>"
+        + (_paragraphs(entry.get("description", "")) or '<p class="missing">No description.</p>')
+    )
     if status != "ok":
-        parts.append('<h3>Run failed</h3><p class="warning">This reproduction raised an exception; '
-                     "the other papers still ran.</p>"
-                     f'<pre class="traceback">{_e(entry.get("error"))}</pre>')
+        parts.append(
+            '<h3>Run failed</h3><p class="warning">This reproduction raised an exception; '
+            "the other papers still ran.</p>"
+            f'<pre class="traceback">{_e(entry.get("error"))}</pre>'
+        )
     for w in entry.get("warnings") or []:
         parts.append(f'<p class="warning">{_e(w)}</p>')
     v = entry.get("verdicts") or {}
-    parts.append(f'<h3>Published vs reproduced</h3><p>{v.get("match", 0)} match, {v.get("differs", 0)} '
-                 f'differ, {v.get("not stated", 0)} not stated.</p>')
+    parts.append(
+        f"<h3>Published vs reproduced</h3><p>{v.get('match', 0)} match, {v.get('differs', 0)} "
+        f"differ, {v.get('not stated', 0)} not stated.</p>"
+    )
     parts.append(_comparison_table(entry.get("rows") or []))
     parts.append("<h3>Figures</h3>" + _figures(entry, paper_dir))
     parts.append(_trajectory_block(entry, paper_dir, include_3d, state))
     parts.append("<h3>Condition checks</h3>" + _checks_table(entry.get("checks") or []))
     errata = entry.get("errata") or []
-    parts.append("<h3>Errata applied</h3>" + (
-        "<ul class=\"errata\">" + "".join(f"<li><code>{_e(e.get('id'))}</code> {_e(e.get('text'))}</li>"
-                                           for e in errata) + "</ul>" if errata
-        else '<p class="missing">None.</p>'))
+    parts.append(
+        "<h3>Errata applied</h3>"
+        + (
+            '<ul class="errata">'
+            + "".join(
+                f"<li><code>{_e(e.get('id'))}</code> {_e(e.get('text'))}</li>" for e in errata
+            )
+            + "</ul>"
+            if errata
+            else '<p class="missing">None.</p>'
+        )
+    )
     notes = entry.get("notes") or []
     if notes:
-        parts.append("<h3>Notes</h3><ul class=\"notes\">" + "".join(f"<li>{_e(n)}</li>" for n in notes)
-                     + "</ul>")
+        parts.append(
+            '<h3>Notes</h3><ul class="notes">'
+            + "".join(f"<li>{_e(n)}</li>" for n in notes)
+            + "</ul>"
+        )
     seeds = ", ".join(str(s) for s in entry.get("seeds") or []) or "none"
     scenarios = ", ".join(str(s) for s in entry.get("scenarios") or []) or "none"
-    parts.append("<h3>Run metadata</h3><dl class=\"meta\">"
-                 f"<dt>wall time</dt><dd>{_fmt_seconds(entry.get('wall_time_s'))}</dd>"
-                 f"<dt>seeds</dt><dd>{_e(seeds)}</dd><dt>scenarios</dt><dd>{_e(scenarios)}</dd>"
-                 f"<dt>finished</dt><dd>{_e(entry.get('finished_utc'))}</dd>"
-                 f"<dt>output</dt><dd>{_e(paper)}/ (report.json, summary.json, figures)</dd></dl>")
+    parts.append(
+        '<h3>Run metadata</h3><dl class="meta">'
+        f"<dt>wall time</dt><dd>{_fmt_seconds(entry.get('wall_time_s'))}</dd>"
+        f"<dt>seeds</dt><dd>{_e(seeds)}</dd><dt>scenarios</dt><dd>{_e(scenarios)}</dd>"
+        f"<dt>finished</dt><dd>{_e(entry.get('finished_utc'))}</dd>"
+        f"<dt>output</dt><dd>{_e(paper)}/ (report.json, summary.json, figures)</dd></dl>"
+    )
     parts.append("</section>")
     return "\n".join(p for p in parts if p)
 
 
 def _overview(entries: list[dict]) -> str:
-    out = ['<table class="overview"><thead><tr><th>paper</th><th>status</th><th>match</th><th>differs</th>'
-           "<th>not stated</th><th>conditions hold / fail / unproven / n.a.</th><th>figures</th><th>wall time</th>"
-           "</tr></thead><tbody>"]
+    out = [
+        '<table class="overview"><thead><tr><th>paper</th><th>status</th><th>match</th><th>differs</th>'
+        "<th>not stated</th><th>conditions hold / fail / unproven / n.a.</th><th>figures</th><th>wall time</th>"
+        "</tr></thead><tbody>"
+    ]
     for e in entries:
         v, c = e.get("verdicts") or {}, e.get("checks_summary") or {}
         status = e.get("status", "failed")
-        out.append(f'<tr><td><a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a></td>'
-                   f'<td><span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span></td>'
-                   f'<td class="num">{v.get("match", 0)}</td><td class="num">{v.get("differs", 0)}</td>'
-                   f'<td class="num">{v.get("not stated", 0)}</td>'
-                   f'<td class="num">{c.get("hold", 0)} / {c.get("fail", 0)} / {c.get("unproven", 0)} / '
-                   f'{c.get("not evaluated", 0)}</td>'
-                   f'<td class="num">{len(e.get("figures") or [])}</td>'
-                   f'<td class="num">{_fmt_seconds(e.get("wall_time_s"))}</td></tr>')
+        out.append(
+            f'<tr><td><a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a></td>'
+            f'<td><span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span></td>'
+            f'<td class="num">{v.get("match", 0)}</td><td class="num">{v.get("differs", 0)}</td>'
+            f'<td class="num">{v.get("not stated", 0)}</td>'
+            f'<td class="num">{c.get("hold", 0)} / {c.get("fail", 0)} / {c.get("unproven", 0)} / '
+            f"{c.get('not evaluated', 0)}</td>"
+            f'<td class="num">{len(e.get("figures") or [])}</td>'
+            f'<td class="num">{_fmt_seconds(e.get("wall_time_s"))}</td></tr>'
+        )
     out.append("</tbody></table>")
     return "\n".join(out)
 
 
 def _metadata_block(metadata: Mapping[str, Any]) -> str:
-    versions = {k[len("version_"):]: v for k, v in metadata.items() if k.startswith("version_")}
-    other = {k: v for k, v in metadata.items()
-             if not k.startswith("version_") and isinstance(v, str | int | float)}
+    versions = {k[len("version_") :]: v for k, v in metadata.items() if k.startswith("version_")}
+    other = {
+        k: v
+        for k, v in metadata.items()
+        if not k.startswith("version_") and isinstance(v, str | int | float)
+    }
     rows = "".join(f"<dt>{_e(k)}</dt><dd>{_e(v)}</dd>" for k, v in other.items())
     vrows = "".join(f"<tr><td>{_e(k)}</td><td>{_e(v)}</td></tr>" for k, v in versions.items())
-    return ('<section class="run-metadata" id="run-metadata"><h2>Run metadata</h2>'
-            f'<dl class="meta">{rows}</dl><h3>Package versions</h3>'
-            f'<table class="versions"><thead><tr><th>package</th><th>version</th></tr></thead>'
-            f"<tbody>{vrows}</tbody></table></section>")
+    return (
+        '<section class="run-metadata" id="run-metadata"><h2>Run metadata</h2>'
+        f'<dl class="meta">{rows}</dl><h3>Package versions</h3>'
+        f'<table class="versions"><thead><tr><th>package</th><th>version</th></tr></thead>'
+        f"<tbody>{vrows}</tbody></table></section>"
+    )
 
 
 # ------------------------------------------------------------------------------------------- public
-def league_links(out_dir: Path | str, leagues: list[Path | str] | None = None) -> list[dict[str, Any]]:
+def league_links(
+    out_dir: Path | str, leagues: list[Path | str] | None = None
+) -> list[dict[str, Any]]:
     """League leaderboards to link from the report: the given league directories and every
     ``<out_dir>/*/leaderboard/index.html``; each ``{name, href (relative), ranking}``."""
     import json
@@ -388,9 +484,13 @@ def league_links(out_dir: Path | str, leagues: list[Path | str] | None = None) -
             board = json.loads(board_path.read_text())
         except (OSError, ValueError):
             continue
-        found[key] = {"name": board.get("league", d.name), "seeds": board.get("seeds"),
-                      "href": os.path.relpath(page, out_dir), "ranking": board.get("ranking", {}),
-                      "metric": board.get("requirement", {}).get("metric", "")}
+        found[key] = {
+            "name": board.get("league", d.name),
+            "seeds": board.get("seeds"),
+            "href": os.path.relpath(page, out_dir),
+            "ranking": board.get("ranking", {}),
+            "metric": board.get("requirement", {}).get("metric", ""),
+        }
     return list(found.values())
 
 
@@ -399,17 +499,31 @@ def _league_block(links: list[dict[str, Any]]) -> str:
         return ""
     items = []
     for lk in links:
-        tops = "; ".join(f"{_e(level)}: " + ", ".join(_e(r.get("method")) for r in rows[:3])
-                         for level, rows in lk["ranking"].items())
-        items.append(f'<li><a href="{_e(lk["href"])}">league {_e(lk["name"])}</a> ({_e(lk["seeds"])} seeds per '
-                     f"cell; top three by pass rate on {_e(lk['metric'])}: {tops})</li>")
-    return ('<section id="leagues"><h2>FTC league leaderboards</h2><p>Every method on one realistic truth under '
-            "the same fault battery (<code>formation-ftc league</code>):</p><ul>" + "".join(items) + "</ul></section>")
+        tops = "; ".join(
+            f"{_e(level)}: " + ", ".join(_e(r.get("method")) for r in rows[:3])
+            for level, rows in lk["ranking"].items()
+        )
+        items.append(
+            f'<li><a href="{_e(lk["href"])}">league {_e(lk["name"])}</a> ({_e(lk["seeds"])} seeds per '
+            f"cell; top three by pass rate on {_e(lk['metric'])}: {tops})</li>"
+        )
+    return (
+        '<section id="leagues"><h2>FTC league leaderboards</h2><p>Every method on one realistic truth under '
+        "the same fault battery (<code>formation-ftc league</code>):</p><ul>"
+        + "".join(items)
+        + "</ul></section>"
+    )
 
 
-def render_index(entries: list[dict], out_dir: Path | str, metadata: Mapping[str, Any], *,
-                 include_3d: bool = True, title: str = "formation-ftc reproduction report",
-                 leagues: list[Path | str] | None = None) -> str:
+def render_index(
+    entries: list[dict],
+    out_dir: Path | str,
+    metadata: Mapping[str, Any],
+    *,
+    include_3d: bool = True,
+    title: str = "formation-ftc reproduction report",
+    leagues: list[Path | str] | None = None,
+) -> str:
     """The complete HTML text of the report page.
 
     ``entries`` are the per-paper ``report.json`` dicts; figure and trajectory files are read from
@@ -424,36 +538,53 @@ def render_index(entries: list[dict], out_dir: Path | str, metadata: Mapping[str
         from plotly.offline import get_plotlyjs
 
         head_js = f'<script type="text/javascript">{get_plotlyjs()}</script>'
-    toc = " ".join(f'<a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a>' for e in entries)
-    status_line = (f"{len(entries)} paper(s), all ran" if not n_failed
-                   else f"{len(entries)} paper(s), {n_failed} failed")
-    return "\n".join([
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_e(title)}</title><style>{_CSS}</style>{head_js}</head><body>",
-        f'<header class="top"><h1>{_e(title)}</h1><p>{_e(status_line)}; generated '
-        f'{_e(metadata.get("created_utc", ""))}; commit {_e(metadata.get("git_commit", "unknown"))}</p></header>',
-        "<main>",
-        f'<nav class="toc">{toc} <a href="#run-metadata">run metadata</a></nav>',
-        '<section class="overview" id="overview"><h2>Overview</h2>' + _overview(entries) + "</section>",
-        _league_block(league_links(out_dir, leagues)),
-        *sections,
-        _metadata_block(metadata),
-        "<footer><p>Written by <code>formation-ftc reproduce</code>. Per-paper data: "
-        "<code>&lt;paper&gt;/report.json</code>, <code>&lt;paper&gt;/summary.json</code>; merged: "
-        "<code>summary.json</code>.</p></footer>",
-        "</main></body></html>",
-    ])
+    toc = " ".join(
+        f'<a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a>' for e in entries
+    )
+    status_line = (
+        f"{len(entries)} paper(s), all ran"
+        if not n_failed
+        else f"{len(entries)} paper(s), {n_failed} failed"
+    )
+    return "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html lang="en"><head><meta charset="utf-8">',
+            '<meta name="viewport" content="width=device-width, initial-scale=1">',
+            f"<title>{_e(title)}</title><style>{_CSS}</style>{head_js}</head><body>",
+            f'<header class="top"><h1>{_e(title)}</h1><p>{_e(status_line)}; generated '
+            f"{_e(metadata.get('created_utc', ''))}; commit {_e(metadata.get('git_commit', 'unknown'))}</p></header>",
+            "<main>",
+            f'<nav class="toc">{toc} <a href="#run-metadata">run metadata</a></nav>',
+            '<section class="overview" id="overview"><h2>Overview</h2>'
+            + _overview(entries)
+            + "</section>",
+            _league_block(league_links(out_dir, leagues)),
+            *sections,
+            _metadata_block(metadata),
+            "<footer><p>Written by <code>formation-ftc reproduce</code>. Per-paper data: "
+            "<code>&lt;paper&gt;/report.json</code>, <code>&lt;paper&gt;/summary.json</code>; merged: "
+            "<code>summary.json</code>.</p></footer>",
+            "</main></body></html>",
+        ]
+    )
 
 
-def write_index(out_dir: Path | str, entries: list[dict], metadata: Mapping[str, Any], *,
-                include_3d: bool = True, leagues: list[Path | str] | None = None) -> Path:
+def write_index(
+    out_dir: Path | str,
+    entries: list[dict],
+    metadata: Mapping[str, Any],
+    *,
+    include_3d: bool = True,
+    leagues: list[Path | str] | None = None,
+) -> Path:
     """Render :func:`render_index` into ``out_dir/index.html`` and return its path."""
     out_dir = Path(out_dir)
     path = out_dir / "index.html"
     tmp = path.with_name("index.html.tmp")
-    tmp.write_text(render_index(entries, out_dir, metadata, include_3d=include_3d, leagues=leagues),
-                   encoding="utf-8")
+    tmp.write_text(
+        render_index(entries, out_dir, metadata, include_3d=include_3d, leagues=leagues),
+        encoding="utf-8",
+    )
     tmp.replace(path)
     return path

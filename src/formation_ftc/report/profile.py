@@ -36,11 +36,13 @@ PHASES = ("compile", "run", "post", "plot", "report")
 #: decimals [s] kept in stored phase times: to the microsecond, so that a fast phase is not stored as 0
 DIGITS = 6
 
-_COMPILE_EVENTS = frozenset({
-    "/jax/core/compile/jaxpr_trace_duration",
-    "/jax/core/compile/jaxpr_to_mlir_module_duration",
-    "/jax/core/compile/backend_compile_duration",
-})
+_COMPILE_EVENTS = frozenset(
+    {
+        "/jax/core/compile/jaxpr_trace_duration",
+        "/jax/core/compile/jaxpr_to_mlir_module_duration",
+        "/jax/core/compile/backend_compile_duration",
+    }
+)
 
 _ACTIVE: Profiler | None = None
 _LISTENING = False
@@ -127,8 +129,13 @@ class Profiler:
         """``{phase: seconds}`` for :data:`PHASES` plus ``"total"`` (the profiled wall time plus added
         segments); compile is the merged JAX compile spans inside the profiled interval."""
         end = self.end or time.time()
-        merged = _merge([(max(a, self.start), min(b, end)) for a, b in self.compile_spans
-                         if b > self.start and a < end])
+        merged = _merge(
+            [
+                (max(a, self.start), min(b, end))
+                for a, b in self.compile_spans
+                if b > self.start and a < end
+            ]
+        )
         compile_s = sum(b - a for a, b in merged)
         out = dict.fromkeys(PHASES, 0.0)
         out["compile"] = compile_s
@@ -166,4 +173,7 @@ def phase(name: str) -> Iterator[None]:
 
 def format_breakdown(b: dict[str, float]) -> str:
     """One line, e.g. ``"compile 3.1 s, run 10.2 s, post 0.4 s, plot 2.0 s, report 0.1 s (total 15.8 s)"``."""
-    return ", ".join(f"{k} {b.get(k, 0.0):.1f} s" for k in PHASES) + f" (total {b.get('total', 0.0):.1f} s)"
+    return (
+        ", ".join(f"{k} {b.get(k, 0.0):.1f} s" for k in PHASES)
+        + f" (total {b.get('total', 0.0):.1f} s)"
+    )

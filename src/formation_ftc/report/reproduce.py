@@ -118,7 +118,9 @@ def to_jsonable(obj: Any) -> Any:
 def _write_json(path: Path, data: Any) -> None:
     """Write strict JSON atomically (temporary file then rename)."""
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    tmp.write_text(
+        json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8"
+    )
     tmp.replace(path)
 
 
@@ -133,7 +135,10 @@ def available_reproductions() -> tuple[dict[str, Reproduction], dict[str, str]]:
     found = registry.reproductions()  # load_plugins records failing imports instead of raising
     failures = {m.rsplit(".", 1)[-1]: tb for m, tb in registry.PLUGIN_ERRORS.items()}
     if "methods" in failures:
-        print("warning: formation_ftc.methods failed to import:\n" + failures.pop("methods"), file=sys.stderr)
+        print(
+            "warning: formation_ftc.methods failed to import:\n" + failures.pop("methods"),
+            file=sys.stderr,
+        )
     return found, {p: tb for p, tb in failures.items() if p not in found}
 
 
@@ -173,12 +178,15 @@ def prepare_output(out: Path, force: bool = False) -> bool:
         if not previous and any(out.iterdir()) and not force:
             raise ReproduceError(
                 f"--out {out} exists, is not empty and is not a previous formation-ftc report "
-                f"(no {MARKER_NAME} file); choose a new directory or pass --force to write into it")
+                f"(no {MARKER_NAME} file); choose a new directory or pass --force to write into it"
+            )
     out.mkdir(parents=True, exist_ok=True)
     from formation_ftc import __version__
 
-    _write_json(out / MARKER_NAME, {"tool": "formation-ftc reproduce", "version": __version__,
-                                    "written_utc": utc_now()})
+    _write_json(
+        out / MARKER_NAME,
+        {"tool": "formation-ftc reproduce", "version": __version__, "written_utc": utc_now()},
+    )
     return previous
 
 
@@ -193,11 +201,22 @@ class _Bar:
         self._task: TaskID | None = None
         if self.enabled:
             from rich.console import Console
-            from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+            from rich.progress import (
+                BarColumn,
+                Progress,
+                TaskProgressColumn,
+                TextColumn,
+                TimeElapsedColumn,
+            )
 
-            self._progress = Progress(TextColumn("[bold]reproduce[/]"), BarColumn(), TaskProgressColumn(),
-                                      TimeElapsedColumn(), TextColumn("{task.description}"),
-                                      console=console or Console(stderr=True))
+            self._progress = Progress(
+                TextColumn("[bold]reproduce[/]"),
+                BarColumn(),
+                TaskProgressColumn(),
+                TimeElapsedColumn(),
+                TextColumn("{task.description}"),
+                console=console or Console(stderr=True),
+            )
 
     def __enter__(self) -> _Bar:
         if self._progress is not None:
@@ -231,28 +250,47 @@ def _counts(rows: list[dict], checks: list[dict]) -> tuple[dict[str, int], dict[
     checks_summary = {
         "hold": sum(1 for c in checks if c.get("holds") is True),
         "fail": sum(1 for c in checks if c.get("holds") is False),
-        "unproven": sum(1 for c in checks if c.get("holds") is None and c.get("basis") in ("sampled", "heuristic")),
-        "not evaluated": sum(1 for c in checks if c.get("holds") is None
-                             and c.get("basis") not in ("sampled", "heuristic")),
-        "required_failed": sum(1 for c in checks if c.get("holds") is False and c.get("required", True)),
+        "unproven": sum(
+            1
+            for c in checks
+            if c.get("holds") is None and c.get("basis") in ("sampled", "heuristic")
+        ),
+        "not evaluated": sum(
+            1
+            for c in checks
+            if c.get("holds") is None and c.get("basis") not in ("sampled", "heuristic")
+        ),
+        "required_failed": sum(
+            1 for c in checks if c.get("holds") is False and c.get("required", True)
+        ),
     }
     return verdicts, checks_summary
 
 
-def paper_entry(reproduction: Reproduction | None, paper: str, paper_dir: Path,
-                report: PaperReport | None, wall_time_s: float, error: str | None = None) -> dict[str, Any]:
+def paper_entry(
+    reproduction: Reproduction | None,
+    paper: str,
+    paper_dir: Path,
+    report: PaperReport | None,
+    wall_time_s: float,
+    error: str | None = None,
+) -> dict[str, Any]:
     """The ``report.json`` content of one paper (also what :mod:`formation_ftc.report.html` renders)."""
     rows = [r.as_dict() for r in report.rows] if report else []
     checks = [c.as_dict() for c in report.checks] if report else []
     warnings: list[str] = []
     figures = []
-    for fig in (report.figures if report else []):
+    for fig in report.figures if report else []:
         exists = (paper_dir / fig.path).is_file()
         if not exists:
             warnings.append(f"figure {fig.number}: file {fig.path} was not written")
-        figures.append(dict(path=str(fig.path), number=str(fig.number), caption=fig.caption, exists=exists))
+        figures.append(
+            dict(path=str(fig.path), number=str(fig.number), caption=fig.caption, exists=exists)
+        )
     if report is not None and report.paper != paper:
-        warnings.append(f"the reproduction returned a report for {report.paper!r}, expected {paper!r}")
+        warnings.append(
+            f"the reproduction returned a report for {report.paper!r}, expected {paper!r}"
+        )
     verdicts, checks_summary = _counts(rows, checks)
     traj = paper_dir / "trajectory3d.json"
     return {
@@ -261,7 +299,10 @@ def paper_entry(reproduction: Reproduction | None, paper: str, paper_dir: Path,
         "title": reproduction.title if reproduction else paper,
         "citation": reproduction.citation if reproduction else "",
         "description": reproduction.description if reproduction else "",
-        "errata": [{"id": str(e[0]), "text": str(e[1])} for e in (reproduction.errata if reproduction else [])],
+        "errata": [
+            {"id": str(e[0]), "text": str(e[1])}
+            for e in (reproduction.errata if reproduction else [])
+        ],
         "status": "ok" if error is None else "failed",
         "error": error,
         "wall_time_s": round(float(wall_time_s), 3),
@@ -286,8 +327,14 @@ def _paper_summary(entry: dict, report: PaperReport | None) -> dict[str, Any]:
     return {"status": "failed", "error": last[-1] if last else "failed"}
 
 
-def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Callable[[float, str], None],
-             import_error: str | None, profiler: Profiler | None = None) -> tuple[dict[str, Any], PaperReport | None]:
+def _run_one(
+    rep: Reproduction | None,
+    paper: str,
+    paper_dir: Path,
+    progress: Callable[[float, str], None],
+    import_error: str | None,
+    profiler: Profiler | None = None,
+) -> tuple[dict[str, Any], PaperReport | None]:
     t0 = time.perf_counter()
     report: PaperReport | None = None
     error = import_error
@@ -296,8 +343,10 @@ def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Ca
             with profiler if profiler is not None else contextlib.nullcontext():
                 result = rep.run(paper_dir, progress)
             if not isinstance(result, PaperReport):
-                raise TypeError(f"Reproduction {paper!r}.run returned {type(result).__name__}, "
-                                "expected registry.PaperReport")
+                raise TypeError(
+                    f"Reproduction {paper!r}.run returned {type(result).__name__}, "
+                    "expected registry.PaperReport"
+                )
             report = result
         except Exception:
             error = traceback.format_exc()
@@ -308,10 +357,19 @@ def _run_one(rep: Reproduction | None, paper: str, paper_dir: Path, progress: Ca
 
 
 # ------------------------------------------------------------------------------------------- driver
-def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, progress: bool = True, *,
-              include_3d: bool = True, available: Mapping[str, Reproduction] | None = None,
-              console=None, profile: bool = False, leagues: list[Path | str] | None = None,
-              workers: int | None = None) -> dict[str, Any]:
+def reproduce(
+    papers: list[str] | str,
+    out: Path | str,
+    force: bool = False,
+    progress: bool = True,
+    *,
+    include_3d: bool = True,
+    available: Mapping[str, Reproduction] | None = None,
+    console=None,
+    profile: bool = False,
+    leagues: list[Path | str] | None = None,
+    workers: int | None = None,
+) -> dict[str, Any]:
     """Run the selected paper reproductions into ``out`` and write the report.
 
     Parameters
@@ -356,7 +414,9 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     summaries: dict[str, dict[str, Any]] = {}
     breakdowns: dict[str, dict[str, float]] = {}
     # injected reproductions (tests) run in this process unless workers are asked for explicitly
-    n_workers = _paper_workers(workers, len(selected)) if (available is None or workers is not None) else 1
+    n_workers = (
+        _paper_workers(workers, len(selected)) if (available is None or workers is not None) else 1
+    )
     for paper in selected:
         paper_dir = out / paper
         if previous and paper_dir.is_dir():
@@ -364,8 +424,13 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         paper_dir.mkdir(parents=True, exist_ok=True)
     done: dict[str, dict[str, Any]] = {}
 
-    def finished(paper: str, entry: dict[str, Any], summary: dict[str, Any],
-                 breakdown: dict[str, float] | None, report_s: float) -> None:
+    def finished(
+        paper: str,
+        entry: dict[str, Any],
+        summary: dict[str, Any],
+        breakdown: dict[str, float] | None,
+        report_s: float,
+    ) -> None:
         t_report = time.perf_counter()
         summaries[paper] = summary
         done[paper] = entry
@@ -373,22 +438,37 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         _write_json(out / paper / "summary.json", {**summary, "paper": paper})
         if breakdown is not None:
             b = dict(breakdown)
-            writing = report_s + time.perf_counter() - t_report  # [s], counted in "report" and in "total"
+            writing = (
+                report_s + time.perf_counter() - t_report
+            )  # [s], counted in "report" and in "total"
             b["report"] = round(b.get("report", 0.0) + writing, DIGITS)
             b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
             breakdowns[paper] = b
 
     with _Bar(progress, len(selected)) as bar:
         if n_workers > 1:
-            _reproduce_in_workers(selected, out, n_workers, profile, bar, finished, found, import_failures)
+            _reproduce_in_workers(
+                selected, out, n_workers, profile, bar, finished, found, import_failures
+            )
         else:
             for i, paper in enumerate(selected):
                 bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
                 prof = Profiler() if profile else None
-                entry, report = _run_one(found.get(paper), paper, out / paper, bar.callback(i, paper),
-                                         import_failures.get(paper), prof)
-                finished(paper, entry, _paper_summary(entry, report),
-                         prof.breakdown() if prof is not None else None, 0.0)
+                entry, report = _run_one(
+                    found.get(paper),
+                    paper,
+                    out / paper,
+                    bar.callback(i, paper),
+                    import_failures.get(paper),
+                    prof,
+                )
+                finished(
+                    paper,
+                    entry,
+                    _paper_summary(entry, report),
+                    prof.breakdown() if prof is not None else None,
+                    0.0,
+                )
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     entries = [done[p] for p in selected]
     summaries = {p: summaries[p] for p in selected}
@@ -408,12 +488,17 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
         metadata["paper_worker_cpu_threads"] = _worker_threads(n_workers)
     breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
     if profile:
-        metadata["profile_method"] = ("compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
-                                      "reads) from jax.monitoring time spans; run/plot: marked blocks without "
-                                      "compile; post: the rest of the paper's wall time; report: JSON files"
-                                      + (f"; papers ran side by side in {n_workers} worker processes, so the "
-                                         "papers' times add up to more than the total wall time"
-                                         if n_workers > 1 else ""))
+        metadata["profile_method"] = (
+            "compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
+            "reads) from jax.monitoring time spans; run/plot: marked blocks without "
+            "compile; post: the rest of the paper's wall time; report: JSON files"
+            + (
+                f"; papers ran side by side in {n_workers} worker processes, so the "
+                "papers' times add up to more than the total wall time"
+                if n_workers > 1
+                else ""
+            )
+        )
         metadata["profile"] = breakdowns
         for p, b in breakdowns.items():
             metadata[f"profile_{p}"] = format_breakdown(b)
@@ -431,11 +516,21 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
-    extra = {"profile": {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}} if profile else {}
+    extra = (
+        {"profile": {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}}
+        if profile
+        else {}
+    )
     return {
         "exit_code": 1 if failed else 0,
-        "papers": {e["paper"]: {"status": e["status"], "wall_time_s": e["wall_time_s"], "error": e["error"]}
-                   for e in entries},
+        "papers": {
+            e["paper"]: {
+                "status": e["status"],
+                "wall_time_s": e["wall_time_s"],
+                "error": e["error"],
+            }
+            for e in entries
+        },
         "summary": to_jsonable(summary_doc),
         "index": str(index),
         "out": str(out),
@@ -446,7 +541,13 @@ def reproduce(papers: list[str] | str, out: Path | str, force: bool = False, pro
 #: Relative cost of each built-in reproduction: wall seconds of a cold plus a warm compilation-cache
 #: run, measured side by side on 2 cores (``benchmarks/reproduce.py``). Workers take the longest first,
 #: so the last paper to start is a short one. Unknown papers count as long.
-PAPER_COST = {"mehrabian": 53.0, "azizi2009": 47.0, "gui2022": 45.0, "li2020": 38.0, "yang2013": 5.0}
+PAPER_COST = {
+    "mehrabian": 53.0,
+    "azizi2009": 47.0,
+    "gui2022": 45.0,
+    "li2020": 38.0,
+    "yang2013": 5.0,
+}
 
 
 def _paper_workers(workers: int | None, n_papers: int) -> int:
@@ -480,9 +581,14 @@ def _threads_for_workers(n_workers: int):
         os.environ.pop("PJRT_NPROC", None)
 
 
-def _paper_in_worker(rep: Reproduction | None, paper: str, paper_dir: str, profile: bool,
-                     import_error: str | None,
-                     messages) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
+def _paper_in_worker(
+    rep: Reproduction | None,
+    paper: str,
+    paper_dir: str,
+    profile: bool,
+    import_error: str | None,
+    messages,
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
     """One paper in a worker process: (report.json entry, summary, phase breakdown or None).
     ``rep`` None: looked up by name in the worker's registry."""
     found: Mapping[str, Reproduction]
@@ -502,7 +608,11 @@ def _paper_in_worker(rep: Reproduction | None, paper: str, paper_dir: str, profi
     if rep is None and error is None:
         error = f"no reproduction named {paper!r} in this worker process (available: {', '.join(found)})"
     entry, report = _run_one(rep, paper, Path(paper_dir), progress, error, prof)
-    return entry, to_jsonable(_paper_summary(entry, report)), prof.breakdown() if prof is not None else None
+    return (
+        entry,
+        to_jsonable(_paper_summary(entry, report)),
+        prof.breakdown() if prof is not None else None,
+    )
 
 
 def _shippable(rep: Reproduction | None) -> Reproduction | None:
@@ -516,9 +626,16 @@ def _shippable(rep: Reproduction | None) -> Reproduction | None:
     return rep
 
 
-def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profile: bool, bar: _Bar,
-                          finished: Callable[..., None], found: Mapping[str, Reproduction],
-                          import_failures: Mapping[str, str]) -> None:
+def _reproduce_in_workers(
+    selected: list[str],
+    out: Path,
+    n_workers: int,
+    profile: bool,
+    bar: _Bar,
+    finished: Callable[..., None],
+    found: Mapping[str, Reproduction],
+    import_failures: Mapping[str, str],
+) -> None:
     """Run the papers in a spawn process pool, the longest first; progress messages come back
     through a queue; a worker that dies takes only its paper down (recorded as failed)."""
     import multiprocessing
@@ -538,7 +655,10 @@ def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profil
         with lock:
             running = {p: v for p, v in state.items() if v[0] < 1.0}
             text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
-            bar.update(n_done + sum(f for f, _ in running.values()), f"{n_done}/{len(selected)} done  {text}")
+            bar.update(
+                n_done + sum(f for f, _ in running.values()),
+                f"{n_done}/{len(selected)} done  {text}",
+            )
 
     def drain() -> None:
         while not stop.is_set():
@@ -557,11 +677,23 @@ def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profil
     order = sorted(selected, key=lambda p: -PAPER_COST.get(p, 100.0))
     t0 = {p: time.perf_counter() for p in selected}
     try:
-        with _threads_for_workers(n_workers), ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
+        with (
+            _threads_for_workers(n_workers),
+            ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool,
+        ):
             futures = {}
             for paper in order:
-                futures[pool.submit(_paper_in_worker, _shippable(found.get(paper)), paper, str(out / paper),
-                                    profile, import_failures.get(paper), messages)] = paper
+                futures[
+                    pool.submit(
+                        _paper_in_worker,
+                        _shippable(found.get(paper)),
+                        paper,
+                        str(out / paper),
+                        profile,
+                        import_failures.get(paper),
+                        messages,
+                    )
+                ] = paper
                 with lock:
                     state[paper] = (0.0, "")
             for fut in as_completed(futures):
@@ -569,8 +701,14 @@ def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profil
                 try:
                     entry, summary, breakdown = fut.result()
                 except Exception:  # the worker died (killed, out of memory): this paper failed
-                    entry = paper_entry(None, paper, out / paper, None, time.perf_counter() - t0[paper],
-                                        traceback.format_exc())
+                    entry = paper_entry(
+                        None,
+                        paper,
+                        out / paper,
+                        None,
+                        time.perf_counter() - t0[paper],
+                        traceback.format_exc(),
+                    )
                     summary, breakdown = _paper_summary(entry, None), None
                 finished(paper, entry, summary, breakdown, 0.0)
                 with lock:
@@ -583,7 +721,9 @@ def _reproduce_in_workers(selected: list[str], out: Path, n_workers: int, profil
         manager.shutdown()
 
 
-def _print_profile(breakdowns: Mapping[str, Mapping[str, float]], index_s: float, console=None) -> None:
+def _print_profile(
+    breakdowns: Mapping[str, Mapping[str, float]], index_s: float, console=None
+) -> None:
     """The ``--profile`` table: seconds per phase (rows: papers, then the index page and the total)."""
     from rich.console import Console
     from rich.markup import escape
@@ -604,9 +744,12 @@ def _print_profile(breakdowns: Mapping[str, Mapping[str, float]], index_s: float
     sums["total"] += index_s
     table.add_row("total", *(f"{sums[ph]:.2f}" for ph in (*PHASES, "total")), end_section=True)
     console.print(table)
-    console.print("compile = JAX tracing + lowering + XLA compile (jax.monitoring time spans, persistent-cache "
-                  "reads included); run / plot = the reproduction's marked blocks without compile; post = the "
-                  "rest (Python post-processing); report = JSON and HTML writing", highlight=False)
+    console.print(
+        "compile = JAX tracing + lowering + XLA compile (jax.monitoring time spans, persistent-cache "
+        "reads included); run / plot = the reproduction's marked blocks without compile; post = the "
+        "rest (Python post-processing); report = JSON and HTML writing",
+        highlight=False,
+    )
 
 
 def _print_table(entries: list[dict], total: float, index: Path, console=None) -> None:
@@ -616,23 +759,39 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
 
     console = console or Console()
     table = Table(title="formation-ftc reproduce: wall time per paper")
-    columns: list[tuple[str, dict[str, Any]]] = [("paper", {}), ("status", {}), (escape("wall time [s]"), {"justify": "right"}),
-                    ("match", {"justify": "right"}), ("differs", {"justify": "right"}),
-                    ("not stated", {"justify": "right"}), ("conditions hold/fail", {"justify": "right"})]
+    columns: list[tuple[str, dict[str, Any]]] = [
+        ("paper", {}),
+        ("status", {}),
+        (escape("wall time [s]"), {"justify": "right"}),
+        ("match", {"justify": "right"}),
+        ("differs", {"justify": "right"}),
+        ("not stated", {"justify": "right"}),
+        ("conditions hold/fail", {"justify": "right"}),
+    ]
     for col, kw in columns:
         table.add_column(col, **kw)
     for e in entries:
         status = "[green]ok[/]" if e["status"] == "ok" else "[red]FAILED[/]"
         v, c = e["verdicts"], e["checks_summary"]
-        table.add_row(e["paper"], status, f"{e['wall_time_s']:.1f}", str(v["match"]), str(v["differs"]),
-                      str(v["not stated"]), f"{c['hold']}/{c['fail']}")
+        table.add_row(
+            e["paper"],
+            status,
+            f"{e['wall_time_s']:.1f}",
+            str(v["match"]),
+            str(v["differs"]),
+            str(v["not stated"]),
+            f"{c['hold']}/{c['fail']}",
+        )
     table.add_row("total", "", f"{total:.1f}", "", "", "", "", end_section=True)
     console.print(table)
     for e in entries:
         if e["status"] != "ok":
             last = (e["error"] or "").strip().splitlines()
-            console.print(f"[red]{e['paper']} failed:[/] {last[-1] if last else ''} "
-                          f"(traceback in {e['paper']}/report.json)", highlight=False)
+            console.print(
+                f"[red]{e['paper']} failed:[/] {last[-1] if last else ''} "
+                f"(traceback in {e['paper']}/report.json)",
+                highlight=False,
+            )
     console.print(f"report: {index}", highlight=False)
 
 
@@ -646,24 +805,47 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     """
     valid = ", ".join(registry.PAPER_MODULES)
     p = subparsers.add_parser(
-        "reproduce", help="reproduce the papers' studies and write an HTML report",
+        "reproduce",
+        help="reproduce the papers' studies and write an HTML report",
         description="Run the paper reproductions and write DIR/index.html, DIR/summary.json and one "
-                    "folder per paper. Exit status: 0 all ran, 1 a paper failed, 2 bad input.")
+        "folder per paper. Exit status: 0 all ran, 1 a paper failed, 2 bad input.",
+    )
     p.add_argument("paper", nargs="+", metavar="PAPER", help=f"paper name ({valid}) or 'all'")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
-    p.add_argument("--force", action="store_true",
-                   help="write into an existing non-empty directory that is not a previous report")
-    p.add_argument("--no-3d", dest="include_3d", action="store_false",
-                   help="leave out the interactive 3-D trajectory views (smaller page)")
-    p.add_argument("--profile", action="store_true",
-                   help="time each paper's compile / run / post-processing / plotting / report phases, print "
-                        "them as a table and store them in the report's run metadata")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="papers computed side by side in N worker processes (default: one per CPU core, at "
-                        "most one per paper; 1: one after the other in this process); same numbers either way")
-    p.add_argument("--league", action="append", type=Path, default=None, metavar="DIR",
-                   help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
-                        "DIR/*/leaderboard/ of the report directory are linked anyway)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="write into an existing non-empty directory that is not a previous report",
+    )
+    p.add_argument(
+        "--no-3d",
+        dest="include_3d",
+        action="store_false",
+        help="leave out the interactive 3-D trajectory views (smaller page)",
+    )
+    p.add_argument(
+        "--profile",
+        action="store_true",
+        help="time each paper's compile / run / post-processing / plotting / report phases, print "
+        "them as a table and store them in the report's run metadata",
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="papers computed side by side in N worker processes (default: one per CPU core, at "
+        "most one per paper; 1: one after the other in this process); same numbers either way",
+    )
+    p.add_argument(
+        "--league",
+        action="append",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
+        "DIR/*/leaderboard/ of the report directory are linked anyway)",
+    )
     p.set_defaults(func=run_cli)
     return p
 
@@ -671,10 +853,16 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
 def run_cli(args: argparse.Namespace) -> int:
     """Handler of ``formation-ftc reproduce``; returns the exit status (0, 1 a paper failed, 2 bad input)."""
     try:
-        result = reproduce(args.paper, args.out, force=args.force, progress=True,
-                           include_3d=getattr(args, "include_3d", True),
-                           profile=getattr(args, "profile", False), leagues=getattr(args, "league", None),
-                           workers=getattr(args, "workers", None))
+        result = reproduce(
+            args.paper,
+            args.out,
+            force=args.force,
+            progress=True,
+            include_3d=getattr(args, "include_3d", True),
+            profile=getattr(args, "profile", False),
+            leagues=getattr(args, "league", None),
+            workers=getattr(args, "workers", None),
+        )
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

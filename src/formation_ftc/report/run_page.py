@@ -30,8 +30,16 @@ import numpy as np
 __all__ = ["standard_figures", "write_run_page", "ERROR_SIGNALS"]
 
 #: Signal names read as tracking errors (in this order, those present).
-ERROR_SIGNALS = ("position_error", "position_tracking_error", "tracking_error", "velocity_tracking_error",
-                 "attitude_error", "track_error", "sync_error", "formation_error")
+ERROR_SIGNALS = (
+    "position_error",
+    "position_tracking_error",
+    "tracking_error",
+    "velocity_tracking_error",
+    "attitude_error",
+    "track_error",
+    "sync_error",
+    "formation_error",
+)
 _MAX_POINTS = 4000
 
 
@@ -48,8 +56,9 @@ def _label(var) -> str:
 def _per_spacecraft(var):
     """(labels, 2-D list of (time,) or (time, k) arrays) with the spacecraft dimension split off."""
     if "spacecraft" in var.dims:
-        return [f"spacecraft {int(s)}" for s in var["spacecraft"].values], [var.sel(spacecraft=s)
-                                                                            for s in var["spacecraft"].values]
+        return [f"spacecraft {int(s)}" for s in var["spacecraft"].values], [
+            var.sel(spacecraft=s) for s in var["spacecraft"].values
+        ]
     return ["all"], [var]
 
 
@@ -76,7 +85,11 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     if "position" in ds and len(_axes_of(ds["position"])) >= 1:
         var = ds["position"]
         comps = _axes_of(var)
-        fig, axes = new_figure(len(comps), 1, title=f"Positions ({var.attrs.get('frame', '')} frame)".replace(" ( frame)", ""))
+        fig, axes = new_figure(
+            len(comps),
+            1,
+            title=f"Positions ({var.attrs.get('frame', '')} frame)".replace(" ( frame)", ""),
+        )
         for k, c in enumerate(comps):
             for lab, v in zip(*_per_spacecraft(var), strict=True):
                 axes[k, 0].plot(t, v.sel({var.dims[-1]: c}).values, label=lab)
@@ -84,8 +97,11 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
         axes[0, 0].legend(loc="best")
         axes[-1, 0].set_xlabel("time [s]")
         paths.append(save_figure(fig, out_dir / "run_position.png"))
-    errors = [n for n in ERROR_SIGNALS  # a stacked vector of mixed units has no meaningful norm
-              if n in ds and "time" in ds[n].dims and "component_units" not in ds[n].attrs]
+    errors = [
+        n
+        for n in ERROR_SIGNALS  # a stacked vector of mixed units has no meaningful norm
+        if n in ds and "time" in ds[n].dims and "component_units" not in ds[n].attrs
+    ]
     if errors:
         fig, axes = new_figure(len(errors), 1, title="Tracking errors (Euclidean norm)")
         for k, name in enumerate(errors):
@@ -100,7 +116,9 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     if "command" in ds and "applied" in ds and ds["command"].dims == ds["applied"].dims:
         cmd, app = ds["command"], ds["applied"]
         comps = _axes_of(cmd)
-        fig, axes = new_figure(len(comps) + 1, 1, title="Control: commanded (dashed) vs applied (solid)")
+        fig, axes = new_figure(
+            len(comps) + 1, 1, title="Control: commanded (dashed) vs applied (solid)"
+        )
         first = {"spacecraft": cmd["spacecraft"].values[0]} if "spacecraft" in cmd.dims else {}
         for k, c in enumerate(comps):
             sel = {**first, cmd.dims[-1]: c}
@@ -108,8 +126,13 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             axes[k, 0].plot(t, app.sel(sel).values, "-", label="applied")
             sc = f"spacecraft {int(first['spacecraft'])}, " if first else ""
             axes[k, 0].set_ylabel(f"{sc}{c} [{cmd.attrs.get('units', '')}]")
-        for j, ((lab, vc), (_, va)) in enumerate(zip(zip(*_per_spacecraft(cmd), strict=True),
-                                                     zip(*_per_spacecraft(app), strict=True), strict=True)):
+        for j, ((lab, vc), (_, va)) in enumerate(
+            zip(
+                zip(*_per_spacecraft(cmd), strict=True),
+                zip(*_per_spacecraft(app), strict=True),
+                strict=True,
+            )
+        ):
             color = f"C{j % 8}"
             axes[-1, 0].plot(t, _norm_over_rest(vc), "--", color=color)
             axes[-1, 0].plot(t, _norm_over_rest(va), "-", color=color, label=lab)
@@ -118,21 +141,38 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
         axes[-1, 0].legend(loc="best")
         axes[-1, 0].set_xlabel("time [s]")
         paths.append(save_figure(fig, out_dir / "run_control.png"))
-    truth = [n for n in ("fault", "fault_acceleration") if n in ds and "fault_estimate" in ds
-             and ds[n].dims == ds["fault_estimate"].dims
-             and ds[n].attrs.get("units") == ds["fault_estimate"].attrs.get("units")]
+    truth = [
+        n
+        for n in ("fault", "fault_acceleration")
+        if n in ds
+        and "fault_estimate" in ds
+        and ds[n].dims == ds["fault_estimate"].dims
+        and ds[n].attrs.get("units") == ds["fault_estimate"].attrs.get("units")
+    ]
     if truth:  # the true fault in the estimate's units
         f, fh = ds[truth[0]], ds["fault_estimate"]
         comps = _axes_of(f) or [None]
         fig, axes = new_figure(len(comps), 1, title="Fault (solid) vs its estimate (dashed)")
         for k, c in enumerate(comps):
             sel = {f.dims[-1]: c} if c is not None else {}
-            for j, ((lab, vf), (_, ve)) in enumerate(zip(zip(*_per_spacecraft(f.sel(sel)), strict=True),
-                                                         zip(*_per_spacecraft(fh.sel(sel)), strict=True),
-                                                         strict=True)):
+            for j, ((lab, vf), (_, ve)) in enumerate(
+                zip(
+                    zip(*_per_spacecraft(f.sel(sel)), strict=True),
+                    zip(*_per_spacecraft(fh.sel(sel)), strict=True),
+                    strict=True,
+                )
+            ):
                 color = f"C{j % 8}"
-                axes[k, 0].plot(t, _norm_over_rest(vf) if vf.ndim > 1 else vf.values, "-", color=color, label=lab)
-                axes[k, 0].plot(t, _norm_over_rest(ve) if ve.ndim > 1 else ve.values, "--", color=color)
+                axes[k, 0].plot(
+                    t,
+                    _norm_over_rest(vf) if vf.ndim > 1 else vf.values,
+                    "-",
+                    color=color,
+                    label=lab,
+                )
+                axes[k, 0].plot(
+                    t, _norm_over_rest(ve) if ve.ndim > 1 else ve.values, "--", color=color
+                )
             axes[k, 0].set_ylabel(f"{'' if c is None else c} [{f.attrs.get('units', '')}]")
         axes[0, 0].legend(loc="best")
         axes[-1, 0].set_xlabel("time [s]")
@@ -148,35 +188,58 @@ def _trajectory_html(ds, out_dir: Path) -> str:
         import plotly.graph_objects as go
         from plotly.offline import get_plotlyjs
     except ImportError:
-        return ('<p class="note">Interactive 3-D trajectory unavailable: plotly is not installed '
-                '(install the <code>interactive</code> extra).</p>')
+        return (
+            '<p class="note">Interactive 3-D trajectory unavailable: plotly is not installed '
+            "(install the <code>interactive</code> extra).</p>"
+        )
     var = _decimated(ds)["position"]
     fig = go.Figure()
     for lab, v in zip(*_per_spacecraft(var), strict=True):
         a = np.asarray(v.values, dtype=float)
         fig.add_trace(go.Scatter3d(x=a[:, 0], y=a[:, 1], z=a[:, 2], mode="lines", name=lab))
     units = var.attrs.get("units", "m")
-    fig.update_layout(scene={"xaxis_title": f"x [{units}]", "yaxis_title": f"y [{units}]",
-                             "zaxis_title": f"z [{units}]"}, margin={"l": 0, "r": 0, "t": 30, "b": 0},
-                      title=f"Trajectory ({var.attrs.get('frame', '')})")
+    fig.update_layout(
+        scene={
+            "xaxis_title": f"x [{units}]",
+            "yaxis_title": f"y [{units}]",
+            "zaxis_title": f"z [{units}]",
+        },
+        margin={"l": 0, "r": 0, "t": 30, "b": 0},
+        title=f"Trajectory ({var.attrs.get('frame', '')})",
+    )
     (out_dir / "plotly.min.js").write_text(get_plotlyjs(), encoding="utf-8")
-    return ('<h2>Trajectory (interactive)</h2>\n<script src="plotly.min.js"></script>\n'
-            + fig.to_html(full_html=False, include_plotlyjs=False, div_id="trajectory3d"))
+    return (
+        '<h2>Trajectory (interactive)</h2>\n<script src="plotly.min.js"></script>\n'
+        + fig.to_html(full_html=False, include_plotlyjs=False, div_id="trajectory3d")
+    )
 
 
-def write_run_page(out_dir: Path | str, ds, metrics: Mapping[str, Any], figures: Sequence[Path | str],
-                   units: Mapping[str, str] | None = None) -> Path:
+def write_run_page(
+    out_dir: Path | str,
+    ds,
+    metrics: Mapping[str, Any],
+    figures: Sequence[Path | str],
+    units: Mapping[str, str] | None = None,
+) -> Path:
     """Write ``out_dir/index.html``: title, metrics table (with units), figures, 3-D trajectory."""
     out_dir = Path(out_dir)
     e = html.escape
     name = str(ds.attrs.get("scenario_name", ""))
     units = dict(units or {})
-    rows = "".join(f"<tr><td>{e(str(k))}</td><td>{e(f'{v:.6g}' if isinstance(v, float) else str(v))}</td>"
-                   f"<td>{e(units.get(k, ''))}</td></tr>"
-                   for k, v in metrics.items() if isinstance(v, int | float) and not isinstance(v, bool))
-    figs = "".join(f'<figure><img src="{e(Path(p).name)}" alt="{e(Path(p).stem)}">'
-                   f"<figcaption>{e(Path(p).name)}</figcaption></figure>\n" for p in figures)
-    meta = {k: ds.attrs.get(k, "") for k in ("method", "seed", "git_commit", "created_utc", "diverged")}
+    rows = "".join(
+        f"<tr><td>{e(str(k))}</td><td>{e(f'{v:.6g}' if isinstance(v, float) else str(v))}</td>"
+        f"<td>{e(units.get(k, ''))}</td></tr>"
+        for k, v in metrics.items()
+        if isinstance(v, int | float) and not isinstance(v, bool)
+    )
+    figs = "".join(
+        f'<figure><img src="{e(Path(p).name)}" alt="{e(Path(p).stem)}">'
+        f"<figcaption>{e(Path(p).name)}</figcaption></figure>\n"
+        for p in figures
+    )
+    meta = {
+        k: ds.attrs.get(k, "") for k in ("method", "seed", "git_commit", "created_utc", "diverged")
+    }
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{e(name)} - formation-ftc run</title>
 <style>body{{font-family:sans-serif;max-width:60em;margin:1em auto;padding:0 1em}}

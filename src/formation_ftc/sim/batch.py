@@ -94,7 +94,9 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     treedef: Any = flat[0][1]  # jax's PyTreeDef is not resolvable from its stubs
     for k, (_, td) in enumerate(flat[1:], start=1):
         if td != treedef:
-            raise ValueError(f"stack_params: run {k} has a different parameter structure than run 0")
+            raise ValueError(
+                f"stack_params: run {k} has a different parameter structure than run 0"
+            )
     leaves: list[np.ndarray] = []
     axes: list[int | None] = []
     for vals in zip(*(f[0] for f in flat), strict=True):
@@ -108,12 +110,16 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
             arrs += [arrs[-1]] * (size - len(arrs))
             leaves.append(np.stack(arrs))
             axes.append(0)
-    return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(treedef, axes)
+    return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(
+        treedef, axes
+    )
 
 
 def _batched_flags(axes: Any) -> tuple[bool, ...]:
     """Which leaves an ``in_axes`` tree batches (part of a batch program's cache key)."""
-    return tuple(a is not None for a in jax.tree_util.tree_leaves(axes, is_leaf=lambda a: a is None))
+    return tuple(
+        a is not None for a in jax.tree_util.tree_leaves(axes, is_leaf=lambda a: a is None)
+    )
 
 
 def _fast_compile(compiled) -> bool:
@@ -159,7 +165,12 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
         run = compiled.run
         batch = jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))
         fast = _fast_compile(compiled)
-        fn = lru_put(_CACHE, key, CachedProgram(xla.jit(batch, fast_compile=fast), "batch", (*key, fast)), MAX_KEPT)
+        fn = lru_put(
+            _CACHE,
+            key,
+            CachedProgram(xla.jit(batch, fast_compile=fast), "batch", (*key, fast)),
+            MAX_KEPT,
+        )
     return fn
 
 
@@ -222,8 +233,10 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     for r, row in enumerate(flat):
         for c, (_, td) in enumerate(row):
             if td != treedef:
-                raise ValueError(f"stack_params_grid: run ({r}, {c}) has a different parameter structure "
-                                 "than run (0, 0)")
+                raise ValueError(
+                    f"stack_params_grid: run ({r}, {c}) has a different parameter structure "
+                    "than run (0, 0)"
+                )
     leaves: list[np.ndarray] = []
     row_axes: list[int | None] = []
     col_axes: list[int | None] = []
@@ -231,7 +244,9 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
         grid = [[np.asarray(row[c][0][j]) for c in range(n_cols)] for row in flat]
         first = grid[0][0]
         along_rows = all(_same(a, g[0]) for g in grid for a in g)  # every row constant
-        down_cols = all(_same(grid[r][c], grid[0][c]) for r in range(len(grid)) for c in range(n_cols))
+        down_cols = all(
+            _same(grid[r][c], grid[0][c]) for r in range(len(grid)) for c in range(n_cols)
+        )
         if along_rows and down_cols:
             leaf, ra, ca = first, None, None
         elif along_rows:  # one value per row
@@ -247,7 +262,9 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
 
 
-def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> CachedProgram:
+def batched_grid_run(
+    compiled, row_axes: Any, column_axes: Any, rows: int, columns: int
+) -> CachedProgram:
     """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
     :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
     only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs.
@@ -280,15 +297,26 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
     array([[11., 12., 13.],
            [21., 22., 23.]])
     """
-    key = (compiled.static_key, "grid", _batched_flags(row_axes), _batched_flags(column_axes), int(rows),
-           int(columns))
+    key = (
+        compiled.static_key,
+        "grid",
+        _batched_flags(row_axes),
+        _batched_flags(column_axes),
+        int(rows),
+        int(columns),
+    )
     fn = lru_get(_CACHE, key)
     if fn is None:
         run = compiled.run
         inner = jax.vmap(lambda p: dict(run(p)), in_axes=(column_axes,), axis_size=int(columns))
         outer = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
         fast = _fast_compile(compiled)
-        fn = lru_put(_CACHE, key, CachedProgram(xla.jit(outer, fast_compile=fast), "grid", (*key, fast)), MAX_KEPT)
+        fn = lru_put(
+            _CACHE,
+            key,
+            CachedProgram(xla.jit(outer, fast_compile=fast), "grid", (*key, fast)),
+            MAX_KEPT,
+        )
     return fn
 
 

@@ -97,10 +97,17 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
     import xarray as xr
 
     time = loop.t0 + np.arange(n_records) * loop.dt * loop.record_every
-    coords: dict[str, Any] = {"time": ("time", time, {"units": "s", "long_name": "time", "standard_name": "time"}),
-                              "spacecraft": ("spacecraft", np.arange(1, loop.count + 1),
-                                             {"long_name": "spacecraft number (1-based)", "units": "1"})}
-    for comp in _components(loop):  # declared coordinates first (they win over the default axis labels)
+    coords: dict[str, Any] = {
+        "time": ("time", time, {"units": "s", "long_name": "time", "standard_name": "time"}),
+        "spacecraft": (
+            "spacecraft",
+            np.arange(1, loop.count + 1),
+            {"long_name": "spacecraft number (1-based)", "units": "1"},
+        ),
+    }
+    for comp in _components(
+        loop
+    ):  # declared coordinates first (they win over the default axis labels)
         for name, values in comp.coords().items():
             coords.setdefault(name, (name, list(values)))
     data = {}
@@ -110,23 +117,36 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         arr = np.asarray(records[sig.name])[:n_records]
         dims = ("time",) + tuple(sig.dims)
         if arr.ndim != len(dims):
-            raise ValueError(f"signal {sig.name!r}: declared dims {dims} but recorded shape {arr.shape}")
+            raise ValueError(
+                f"signal {sig.name!r}: declared dims {dims} but recorded shape {arr.shape}"
+            )
         meta = {"units": sig.units, "long_name": sig.long_name}
         if sig.frame:
             meta["frame"] = sig.frame
         data[sig.name] = (dims, arr, meta)
         for d, n in zip(dims, arr.shape, strict=True):
             if d == "axis" and "axis" not in coords:
-                coords["axis"] = ("axis", ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
-                                  {"long_name": "vector component"})
+                coords["axis"] = (
+                    "axis",
+                    ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
+                    {"long_name": "vector component"},
+                )
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items() if k in used}
     return xr.Dataset(data, coords=coords, attrs=attrs or {})
 
 
 def _components(loop):
-    return [loop.plant, loop.reference, loop.sensors, loop.network, loop.estimator, loop.supervisor,
-            loop.controller, loop.actuator]
+    return [
+        loop.plant,
+        loop.reference,
+        loop.sensors,
+        loop.network,
+        loop.estimator,
+        loop.supervisor,
+        loop.controller,
+        loop.actuator,
+    ]
 
 
 def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:
@@ -186,13 +206,24 @@ def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:
         if leaf is None:
             return None
         shape = np.shape(leaf)
-        if "values" in name.split(".") and len(shape) >= 2 and shape[1] == n:  # history ring buffers
+        if (
+            "values" in name.split(".") and len(shape) >= 2 and shape[1] == n
+        ):  # history ring buffers
             return 1
         return 0 if len(shape) >= 1 and shape[0] == n else None
 
-    return Compiled(run=run, params=loop, static_key=("closed-loop", structure_key(loop)), dt=loop.dt,
-                    record_every=loop.record_every, to_dataset=to_dataset, metrics=metrics,
-                    make_step=lambda p: p.replay_step(), spacecraft_axis=spacecraft_axis, t0=loop.t0)
+    return Compiled(
+        run=run,
+        params=loop,
+        static_key=("closed-loop", structure_key(loop)),
+        dt=loop.dt,
+        record_every=loop.record_every,
+        to_dataset=to_dataset,
+        metrics=metrics,
+        make_step=lambda p: p.replay_step(),
+        spacecraft_axis=spacecraft_axis,
+        t0=loop.t0,
+    )
 
 
 def _leaf_by_name(loop, name: str):

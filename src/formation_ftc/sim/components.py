@@ -311,7 +311,9 @@ class Plant(_Kind):
     def initial_state(self) -> PyTree:  # pragma: no cover
         raise NotImplementedError
 
-    def derivative(self, t: jax.Array, x: PyTree, inputs: TruthInputs) -> PyTree:  # pragma: no cover
+    def derivative(
+        self, t: jax.Array, x: PyTree, inputs: TruthInputs
+    ) -> PyTree:  # pragma: no cover
         raise NotImplementedError
 
     def exact_step(self, t: jax.Array, x: PyTree, inputs: TruthInputs, dt: float) -> PyTree:
@@ -498,8 +500,9 @@ class Controller(_Kind):
         """What each spacecraft transmits (e.g. its sliding variable); None: nothing."""
         return None
 
-    def output(self, t: jax.Array, state: PyTree, inputs: FlightInputs
-               ) -> tuple[jax.Array, PyTree, dict[str, jax.Array]]:  # pragma: no cover
+    def output(
+        self, t: jax.Array, state: PyTree, inputs: FlightInputs
+    ) -> tuple[jax.Array, PyTree, dict[str, jax.Array]]:  # pragma: no cover
         raise NotImplementedError
 
 
@@ -514,19 +517,29 @@ class Actuator(_Kind):
     def apply(self, t: jax.Array, command: jax.Array, inputs: ActuatorInputs) -> jax.Array:
         return command
 
-    def update(self, t: jax.Array, state: PyTree, command: jax.Array, inputs: ActuatorInputs) -> PyTree:
+    def update(
+        self, t: jax.Array, state: PyTree, command: jax.Array, inputs: ActuatorInputs
+    ) -> PyTree:
         """Discrete actuator state after the step (e.g. a stuck thruster's frozen value)."""
         return state
 
-    def outputs(self, t: jax.Array, command: jax.Array, inputs: ActuatorInputs) -> dict[str, jax.Array]:
+    def outputs(
+        self, t: jax.Array, command: jax.Array, inputs: ActuatorInputs
+    ) -> dict[str, jax.Array]:
         """Recorded truth-side actuator signals (e.g. the true effectiveness)."""
         return {}
 
 
 #: slot name -> required base class
 KIND_SLOTS: dict[str, type] = {
-    "plant": Plant, "reference": Reference, "sensors": Sensors, "network": Network,
-    "estimator": Estimator, "supervisor": Supervisor, "controller": Controller, "actuator": Actuator,
+    "plant": Plant,
+    "reference": Reference,
+    "sensors": Sensors,
+    "network": Network,
+    "estimator": Estimator,
+    "supervisor": Supervisor,
+    "controller": Controller,
+    "actuator": Actuator,
 }
 
 

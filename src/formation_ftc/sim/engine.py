@@ -53,7 +53,9 @@ PyTree = Any
 RunOutput = dict
 
 
-def steps_from_horizon(horizon: float, dt: float, record_every: int = 1, field: str = "simulation") -> int:
+def steps_from_horizon(
+    horizon: float, dt: float, record_every: int = 1, field: str = "simulation"
+) -> int:
     """Number of steps for ``horizon``; the step must divide the horizon (to 1e-9 relative).
 
     Parameters
@@ -103,8 +105,11 @@ def steps_from_horizon(horizon: float, dt: float, record_every: int = 1, field: 
 
 
 def _all_finite(tree) -> jax.Array:
-    leaves = [jnp.all(jnp.isfinite(x)) for x in jax.tree_util.tree_leaves(tree)
-              if jnp.issubdtype(jnp.asarray(x).dtype, jnp.inexact)]
+    leaves = [
+        jnp.all(jnp.isfinite(x))
+        for x in jax.tree_util.tree_leaves(tree)
+        if jnp.issubdtype(jnp.asarray(x).dtype, jnp.inexact)
+    ]
     return jnp.all(jnp.stack(leaves)) if leaves else jnp.asarray(True)
 
 
@@ -205,7 +210,9 @@ def run_fixed_step(
 
     def block(k, state):
         if fold is None:
-            (k, state), _ = jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)
+            (k, state), _ = jax.lax.scan(
+                inner, (k, state), None, length=record_every, unroll=unroll
+            )
             return state
 
         def emitting(carry, _):
@@ -215,7 +222,9 @@ def run_fixed_step(
 
         def folded(carry, _):
             k, state = carry
-            (k_next, state), samples = jax.lax.scan(emitting, (k, state), None, length=fold_every, unroll=unroll)
+            (k_next, state), samples = jax.lax.scan(
+                emitting, (k, state), None, length=fold_every, unroll=unroll
+            )
             return (k_next, fold(k, state, samples)), None
 
         if fold_every == record_every:
@@ -300,8 +309,10 @@ class DivergenceInfo:
 
     def __str__(self) -> str:
         who = f"spacecraft {self.spacecraft + 1}" if self.spacecraft is not None else "formation"
-        return (f"simulation diverged at t = {self.time:.6g} s (step {self.step}): {who}, "
-                f"variable '{self.variable}' index {list(self.index)} {self.reason}")
+        return (
+            f"simulation diverged at t = {self.time:.6g} s (step {self.step}): {who}, "
+            f"variable '{self.variable}' index {list(self.index)} {self.reason}"
+        )
 
 
 class SimulationDiverged(RuntimeError):
@@ -402,6 +413,7 @@ def _replay_loop(step, ok, state, k, n):
     """Step from ``state`` (step ``k``) until a state fails ``ok`` or ``n`` steps are done. Carry
     ``(j, last_ok, latest, bad)``: ``latest`` is the state of the last step computed -- the first
     failing state when ``bad`` -- so a diagnosis needs no separately compiled step to see it."""
+
     def cond(c):
         j, _, _, bad = c
         return jnp.logical_and(j < n, jnp.logical_not(bad))
@@ -413,7 +425,9 @@ def _replay_loop(step, ok, state, k, n):
         st = jax.tree_util.tree_map(lambda a, b: jnp.where(bad, a, b), st, new)
         return j + jnp.where(bad, 0, 1), st, new, bad
 
-    return jax.lax.while_loop(cond, body, (jnp.asarray(0, jnp.int64), state, state, jnp.asarray(False)))
+    return jax.lax.while_loop(
+        cond, body, (jnp.asarray(0, jnp.int64), state, state, jnp.asarray(False))
+    )
 
 
 @jax.jit
@@ -429,11 +443,15 @@ def _params_step(params, k, state):
     return params.replay_step()(k, state)
 
 
-def _replay(step, state, k: int, n: int, ok, params: Any = None) -> tuple[int, PyTree, PyTree | None]:
+def _replay(
+    step, state, k: int, n: int, ok, params: Any = None
+) -> tuple[int, PyTree, PyTree | None]:
     """One compiled replay of up to ``n`` steps: ``(j, last_ok, failing)`` with ``failing`` the first
     state that fails ``ok`` (None when none does in ``n`` steps, then ``j = n``)."""
     if params is not None:
-        j, st, latest, bad = _params_replay(params, state, jnp.asarray(k, jnp.int64), jnp.asarray(n, jnp.int64))
+        j, st, latest, bad = _params_replay(
+            params, state, jnp.asarray(k, jnp.int64), jnp.asarray(n, jnp.int64)
+        )
     else:
         j, st, latest, bad = jax.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
     return int(j), st, (latest if bool(bad) else None)
@@ -507,7 +525,9 @@ def diagnose_divergence(
     >>> print(diagnose_divergence(step, last, k=5, t=0.5, dt=0.1))
     simulation diverged at t = 0.5 s (step 5): spacecraft 2, variable 'q' index [1, 1] became non-finite
     """
-    use_params = params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
+    use_params = (
+        params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
+    )
 
     def ok(st):
         # ``admissible`` (when given) is the whole test, finiteness of the checked state included
@@ -518,7 +538,9 @@ def diagnose_divergence(
     # program is compiled only to follow the run past that state (accumulators only) or when the
     # replay does not fail.
     max_steps = max(1, max_steps)
-    j0, state0, failing = _replay(step, last_finite, k, max_steps, ok, params if use_params else None)
+    j0, state0, failing = _replay(
+        step, last_finite, k, max_steps, ok, params if use_params else None
+    )
     if failing is not None:
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
@@ -533,7 +555,9 @@ def diagnose_divergence(
         new = failing if (j == 0 and failing is not None) else jstep(kj, state)
         bad = _nonfinite_leaves(new)
         if admissible is not None:
-            if bool(admissible(new)):  # inside the admissible set: leaves it does not check may be NaN
+            if bool(
+                admissible(new)
+            ):  # inside the admissible set: leaves it does not check may be NaN
                 state = new
                 j += 1
                 continue
@@ -543,8 +567,9 @@ def diagnose_divergence(
         if not bad and admissible is not None:
             found = violations(new) if violations is not None else []
             name, index, sc = found[0] if found else ("<admissible set>", (), None)
-            return DivergenceInfo(int(k + j), float(t + j * dt), name, sc, index,
-                                  reason="left its admissible set")
+            return DivergenceInfo(
+                int(k + j), float(t + j * dt), name, sc, index, reason="left its admissible set"
+            )
         if bad:
             if acc is None:
                 try:
@@ -556,7 +581,9 @@ def diagnose_divergence(
             info = _info(causes[0] if causes else bad[0], k + j, t + j * dt, spacecraft_axis)
             if causes:
                 return info
-            if first is None:  # only accumulators so far: follow the run a few steps to find the cause
+            if (
+                first is None
+            ):  # only accumulators so far: follow the run a few steps to find the cause
                 first, n = info, j + 1 + _FOLLOW_STEPS
         state = new
         j += 1

@@ -87,7 +87,9 @@ def _once(k, values):
     The operations are the same; where the fusion boundaries move, XLA may round differently in the
     last bit (a multiply-add contracted across the old boundary), so results agree to rounding, not
     bit for bit (``benchmarks/held_draws.py`` prints both)."""
-    return jax.lax.cond(k >= 0, lambda v: v, lambda v: jax.tree_util.tree_map(jnp.zeros_like, v), values)
+    return jax.lax.cond(
+        k >= 0, lambda v: v, lambda v: jax.tree_util.tree_map(jnp.zeros_like, v), values
+    )
 
 
 def _held(k, values):
@@ -141,10 +143,18 @@ class ClosedLoop:
         (``max_position`` [m], ``max_velocity`` [m/s], ``max_rate`` [rad/s], ``max_pitch`` [rad]) --
         set here once for every builder. ``sim`` is a
         :class:`~formation_ftc.config.base.SimulationSection` (or an object with its fields)."""
-        return cls(**slots, seed=np.asarray(sim.seed, dtype=np.uint32), dt=float(sim.dt), n_steps=int(sim.n_steps),
-                   record_every=int(sim.record_every), unroll=int(sim.unroll),
-                   max_position=np.float64(sim.max_position), max_velocity=np.float64(sim.max_velocity),
-                   max_rate=np.float64(sim.max_rate), max_pitch=np.float64(sim.max_pitch))
+        return cls(
+            **slots,
+            seed=np.asarray(sim.seed, dtype=np.uint32),
+            dt=float(sim.dt),
+            n_steps=int(sim.n_steps),
+            record_every=int(sim.record_every),
+            unroll=int(sim.unroll),
+            max_position=np.float64(sim.max_position),
+            max_velocity=np.float64(sim.max_velocity),
+            max_rate=np.float64(sim.max_rate),
+            max_pitch=np.float64(sim.max_pitch),
+        )
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> ClosedLoop:
@@ -154,57 +164,96 @@ class ClosedLoop:
         for slot, base in KIND_SLOTS.items():
             comp = getattr(self, slot)
             if not isinstance(comp, base):
-                raise CompositionError(f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}")
+                raise CompositionError(
+                    f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}"
+                )
         p, c = self.plant, self.controller
         if getattr(c, "quantity", "force") != getattr(p, "quantity", "force"):
             raise CompositionError(
                 f"controller {type(c).__name__} commands a {c.quantity}, but plant {type(p).__name__} "
-                f"is driven by a {p.quantity}: a {c.quantity} law cannot drive this plant")
+                f"is driven by a {p.quantity}: a {c.quantity} law cannot drive this plant"
+            )
         for slot in ("controller", "network", "estimator", "supervisor", "sensors", "actuator"):
             n = getattr(getattr(self, slot), "count", None)
             if n is not None and n != p.count:
-                raise CompositionError(f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
-                                       f"spacecraft, plant {type(p).__name__} has {p.count}")
+                raise CompositionError(
+                    f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
+                    f"spacecraft, plant {type(p).__name__} has {p.count}"
+                )
         if getattr(p, "needs_reference", False) and isinstance(self.reference, NoReference):
-            raise CompositionError(f"plant {type(p).__name__} needs a reference orbit (reference slot), "
-                                   "but the loop has none")
+            raise CompositionError(
+                f"plant {type(p).__name__} needs a reference orbit (reference slot), "
+                "but the loop has none"
+            )
         if self.network.delayed and not getattr(c, "uses_messages", False):
             raise CompositionError(
                 f"network {type(self.network).__name__} delays messages, but controller "
-                f"{type(c).__name__} exchanges none (it has no history to read delayed values from)")
+                f"{type(c).__name__} exchanges none (it has no history to read delayed values from)"
+            )
         if self.n_steps % self.record_every:
-            raise CompositionError(f"record_every = {self.record_every} must divide the number of steps "
-                                   f"{self.n_steps}")
+            raise CompositionError(
+                f"record_every = {self.record_every} must divide the number of steps {self.n_steps}"
+            )
         if self.metric_block < 0 or (self.metric_block and self.record_every % self.metric_block):
-            raise CompositionError(f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
-                                   f"record_every = {self.record_every}")
+            raise CompositionError(
+                f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
+                f"record_every = {self.record_every}"
+            )
         names = [s.name for s in self.signals()]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
-            raise CompositionError(f"two components record a signal with the same name: {', '.join(dup)}")
+            raise CompositionError(
+                f"two components record a signal with the same name: {', '.join(dup)}"
+            )
         recorded = {sig.name for sig in self.signals()}
         for m in self.metrics:
             for what, name in (("signal", m.signal), ("gate", m.gate)):
                 if name is not None and name not in recorded:
-                    raise CompositionError(f"metric {m.name!r}: {what} {name!r} is not a recorded signal of this "
-                                           f"loop (signals: {', '.join(sorted(recorded))})")
+                    raise CompositionError(
+                        f"metric {m.name!r}: {what} {name!r} is not a recorded signal of this "
+                        f"loop (signals: {', '.join(sorted(recorded))})"
+                    )
         return self
 
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:
         """Every recorded signal of the loop, in slot order."""
-        own: tuple[Signal, ...] = (Signal(COMMAND_SIGNAL, ("spacecraft", _vector_dim(self.controller.quantity)),
-                      _unit(self.controller.quantity), f"commanded {self.controller.quantity}"),
-               Signal(APPLIED_SIGNAL, ("spacecraft", _vector_dim(self.plant.quantity)), _unit(self.plant.quantity),
-                      f"applied {self.plant.quantity} (after actuator faults)"))
+        own: tuple[Signal, ...] = (
+            Signal(
+                COMMAND_SIGNAL,
+                ("spacecraft", _vector_dim(self.controller.quantity)),
+                _unit(self.controller.quantity),
+                f"commanded {self.controller.quantity}",
+            ),
+            Signal(
+                APPLIED_SIGNAL,
+                ("spacecraft", _vector_dim(self.plant.quantity)),
+                _unit(self.plant.quantity),
+                f"applied {self.plant.quantity} (after actuator faults)",
+            ),
+        )
         if self._tracks_position():
-            own += (Signal(POSITION_ERROR_SIGNAL, ("spacecraft", "axis"), "m",
-                           "true position minus desired position", "LVLH"),)
-        return (tuple(self.plant.signals()) + tuple(self.reference.signals()) + tuple(self.sensors.signals())
-                + tuple(self.network.signals()) + tuple(self.estimator.signals())
-                + tuple(self.supervisor.signals()) + tuple(self.controller.signals()) + own
-                + tuple(self.actuator.signals())
-                + tuple(sig for ev in self.evaluations for sig in ev.signals()))
+            own += (
+                Signal(
+                    POSITION_ERROR_SIGNAL,
+                    ("spacecraft", "axis"),
+                    "m",
+                    "true position minus desired position",
+                    "LVLH",
+                ),
+            )
+        return (
+            tuple(self.plant.signals())
+            + tuple(self.reference.signals())
+            + tuple(self.sensors.signals())
+            + tuple(self.network.signals())
+            + tuple(self.estimator.signals())
+            + tuple(self.supervisor.signals())
+            + tuple(self.controller.signals())
+            + own
+            + tuple(self.actuator.signals())
+            + tuple(sig for ev in self.evaluations for sig in ev.signals())
+        )
 
     @property
     def count(self) -> int:
@@ -213,8 +262,10 @@ class ClosedLoop:
     def _tracks_position(self) -> bool:
         """True when the plant reports positions and the controller a desired position (evaluation
         only: the flight side never sees the true position)."""
-        return (type(self.plant).position is not Plant.position
-                and type(self.controller).desired_position_at is not Controller.desired_position_at)
+        return (
+            type(self.plant).position is not Plant.position
+            and type(self.controller).desired_position_at is not Controller.desired_position_at
+        )
 
     # ------------------------------------------------------------------ pieces of one step
     def _time_table(self, t_k, first_only: bool = False, k=None):
@@ -230,14 +281,19 @@ class ClosedLoop:
         held = [s for s in slots if getattr(self, s).holds_exogenous]
 
         def at(t_flight, t_truth):
-            return {s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
-                    for s in slots if s not in held}
+            return {
+                s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
+                for s in slots
+                if s not in held
+            }
 
         table = jax.vmap(at)(ts, tf)
         n = ts.shape[0]
         for s in held:  # sampled at t_k, held over the step (zero-order hold)
-            table[s] = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
-                                              _held(k, getattr(self, s).exogenous(t_k)))
+            table[s] = jax.tree_util.tree_map(
+                lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
+                _held(k, getattr(self, s).exogenous(t_k)),
+            )
         return table
 
     def _reference_stages(self, r):
@@ -253,14 +309,25 @@ class ClosedLoop:
     def _noise(self, k):
         key = step_key(run_key(self.seed), k)
         if self.sensors.splits_step_key:  # the sensors split the step key into their own streams
-            return _once(k, (self.sensors.noise(key),
-                             self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM))))
+            return _once(
+                k,
+                (
+                    self.sensors.noise(key),
+                    self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM)),
+                ),
+            )
         k_sensor, k_plant = jax.random.split(key, 2)
         return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
     def _flight(self, y, received, est, decision, exo, ref):
-        return FlightInputs(measurement=y, received=received, estimate=est, decision=decision,
-                            exogenous=exo, reference=ref)
+        return FlightInputs(
+            measurement=y,
+            received=received,
+            estimate=est,
+            decision=decision,
+            exogenous=exo,
+            reference=ref,
+        )
 
     def _evaluate(self, t, z, ctx):
         """Derivatives of the integrated state ``z = {plant, controller, usage}`` and the outputs at
@@ -287,8 +354,9 @@ class ClosedLoop:
         outputs = dict(self.plant.outputs(t, x, truth))
         outputs.update(self.actuator.outputs(t, u, act_in))
         if self._tracks_position():
-            outputs[POSITION_ERROR_SIGNAL] = self.plant.position(x) - self.controller.desired_position_at(
-                exo["controller"])
+            outputs[POSITION_ERROR_SIGNAL] = self.plant.position(
+                x
+            ) - self.controller.desired_position_at(exo["controller"])
         outputs.update(ctl_out)
         outputs[COMMAND_SIGNAL] = u
         outputs[APPLIED_SIGNAL] = applied
@@ -296,10 +364,12 @@ class ClosedLoop:
 
     def _discrete(self, k, t_k, state, y, exo0, ref0):
         """Steps (3)-(5) at t_k: estimator, supervisor, sampled controller."""
-        est_state, est = self.estimator.update(t_k, state["estimator"],
-                                               self._flight(y, None, None, None, exo0["estimator"], ref0))
-        sup_state, dec = self.supervisor.update(t_k, state["supervisor"],
-                                                self._flight(y, None, est, None, exo0["supervisor"], ref0))
+        est_state, est = self.estimator.update(
+            t_k, state["estimator"], self._flight(y, None, None, None, exo0["estimator"], ref0)
+        )
+        sup_state, dec = self.supervisor.update(
+            t_k, state["supervisor"], self._flight(y, None, est, None, exo0["supervisor"], ref0)
+        )
         return est_state, est, sup_state, dec
 
     def initial_state(self) -> dict:
@@ -310,13 +380,20 @@ class ClosedLoop:
         t0 = jnp.asarray(self.t0, dtype=jnp.float64)
         s_noise, _ = self._noise(jnp.asarray(0, dtype=jnp.int64))
         y0 = self.sensors.measure(t0, self.plant.sensed_state(x0), SensorInputs(s_noise, ref0))
-        state = dict(plant=x0, reference=r0, controller=self.controller.initial_state(),
-                     estimator=self.estimator.initial_state(y0), supervisor=self.supervisor.initial_state(),
-                     actuator=self.actuator.initial_state(),
-                     usage={name: jnp.zeros(self.plant.usage_shape()) for name in self.plant.usage_names()})
+        state = dict(
+            plant=x0,
+            reference=r0,
+            controller=self.controller.initial_state(),
+            estimator=self.estimator.initial_state(y0),
+            supervisor=self.supervisor.initial_state(),
+            actuator=self.actuator.initial_state(),
+            usage={name: jnp.zeros(self.plant.usage_shape()) for name in self.plant.usage_names()},
+        )
         if not isinstance(self.network, NoNetwork):
             exo0 = tree_take(self._time_table(t0, first_only=True), 0)
-            msg0 = self.controller.message(t0, self._flight(y0, None, None, None, exo0["controller"], ref0))
+            msg0 = self.controller.message(
+                t0, self._flight(y0, None, None, None, exo0["controller"], ref0)
+            )
             state["network"] = self.network.initial_state(msg0)
         else:
             state["network"] = None
@@ -338,7 +415,9 @@ class ClosedLoop:
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):
             # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
-            msg_k = self.controller.message(t_k, self._flight(y, None, est, dec, exos[0]["controller"], refs[0]))
+            msg_k = self.controller.message(
+                t_k, self._flight(y, None, est, dec, exos[0]["controller"], refs[0])
+            )
             net_state = self.network.push(net_state, msg_k)
         held = None
         ctl_next = state["controller"]
@@ -346,48 +425,94 @@ class ClosedLoop:
             flight = self._flight(y, None, est, dec, exos[0]["controller"], refs[0])
             if not isinstance(self.network, NoNetwork):
                 msg = self.controller.message(t_k, flight)
-                flight = flight._replace(received=self.network.receive(
-                    t_k, net_state, NetworkInputs(msg, t_k, exos[0]["network"])))
+                flight = flight._replace(
+                    received=self.network.receive(
+                        t_k, net_state, NetworkInputs(msg, t_k, exos[0]["network"])
+                    )
+                )
             u, ctl_next, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
 
         def ctx(j):
-            return (exos[j], refs[j], s_noise, p_noise, est, dec, net_state, t_k, held, state["actuator"])
+            return (
+                exos[j],
+                refs[j],
+                s_noise,
+                p_noise,
+                est,
+                dec,
+                net_state,
+                t_k,
+                held,
+                state["actuator"],
+            )
 
-        z = {"plant": x, "controller": None if self.controller.sampled else state["controller"],
-             "usage": state["usage"]}
+        z = {
+            "plant": x,
+            "controller": None if self.controller.sampled else state["controller"],
+            "usage": state["usage"],
+        }
         if self.plant.integration == "exact":
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
             applied = outputs[APPLIED_SIGNAL]
-            x_next = self.plant.exact_step(t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt)
-            z_next = {"plant": x_next, "controller": None,
-                      "usage": _axpy(dt, deriv["usage"], z["usage"])}
+            x_next = self.plant.exact_step(
+                t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt
+            )
+            z_next = {
+                "plant": x_next,
+                "controller": None,
+                "usage": _axpy(dt, deriv["usage"], z["usage"]),
+            }
             if self._stage_metrics():  # rectangle rule over the step
-                stage_inc = tuple(None if v is None else dt * v
-                                  for v in metric_ops.stage_values(self.metrics, outputs))
+                stage_inc = tuple(
+                    None if v is None else dt * v
+                    for v in metric_ops.stage_values(self.metrics, outputs)
+                )
         else:
             k1, outputs = self._evaluate(t_k, z, ctx(0))
             k2, o2 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k1, z), ctx(1))
             k3, o3 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
             k4, o4 = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
             z_next = jax.tree_util.tree_map(
-                lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d), z, k1, k2, k3, k4)
-            if self._stage_metrics():  # integrals of stage-integrated metrics over the step (RK4 weights)
-                v1, v2, v3, v4 = (metric_ops.stage_values(self.metrics, o) for o in (outputs, o2, o3, o4))
-                stage_inc = tuple(None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
-                                  for a, b, c, d in zip(v1, v2, v3, v4, strict=True))
-        act_state = self.actuator.update(t_k, state["actuator"], outputs[COMMAND_SIGNAL],
-                                         ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x))
+                lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d),
+                z,
+                k1,
+                k2,
+                k3,
+                k4,
+            )
+            if (
+                self._stage_metrics()
+            ):  # integrals of stage-integrated metrics over the step (RK4 weights)
+                v1, v2, v3, v4 = (
+                    metric_ops.stage_values(self.metrics, o) for o in (outputs, o2, o3, o4)
+                )
+                stage_inc = tuple(
+                    None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
+                    for a, b, c, d in zip(v1, v2, v3, v4, strict=True)
+                )
+        act_state = self.actuator.update(
+            t_k,
+            state["actuator"],
+            outputs[COMMAND_SIGNAL],
+            ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x),
+        )
         # discrete change of the truth state at t_{k+1} commanded by the decision in force (default none)
         z_next = dict(z_next, plant=self.plant.jump(t_k + dt, z_next["plant"], dec))
         outputs.update(self.estimator.outputs(t_k, est_state, est))
         outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
         # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
         est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
-        new = dict(plant=z_next["plant"], reference=r_next,
-                   controller=ctl_next if self.controller.sampled else z_next["controller"],
-                   estimator=est_state, supervisor=sup_state, actuator=act_state,
-                   usage=z_next["usage"], network=net_state)
+        new = dict(
+            plant=z_next["plant"],
+            reference=r_next,
+            controller=ctl_next if self.controller.sampled else z_next["controller"],
+            estimator=est_state,
+            supervisor=sup_state,
+            actuator=act_state,
+            usage=z_next["usage"],
+            network=net_state,
+        )
         if self._stage_metrics():
             outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
@@ -414,21 +539,32 @@ class ClosedLoop:
         # recorded at t_k is computed with that decision
         est_state = state["estimator"]
         if self.estimator.refresh_on_observe:
-            est_state, est = self.estimator.update(t_k, est_state, self._flight(y, None, None, None,
-                                                                                exo["estimator"], ref))
+            est_state, est = self.estimator.update(
+                t_k, est_state, self._flight(y, None, None, None, exo["estimator"], ref)
+            )
         else:
             est = self.estimator.current(est_state)
         sup_state = state["supervisor"]
         if isinstance(self.supervisor, NoSupervisor):
             dec = self.supervisor.current(sup_state)
         else:
-            est_flight = est if self.estimator.refresh_on_observe else self.estimator.update(
-                t_k, state["estimator"], self._flight(y, None, None, None, exo["estimator"], ref))[1]
-            sup_state, dec = self.supervisor.update(t_k, sup_state, self._flight(y, None, est_flight, None,
-                                                                                exo["supervisor"], ref))
+            est_flight = (
+                est
+                if self.estimator.refresh_on_observe
+                else self.estimator.update(
+                    t_k,
+                    state["estimator"],
+                    self._flight(y, None, None, None, exo["estimator"], ref),
+                )[1]
+            )
+            sup_state, dec = self.supervisor.update(
+                t_k, sup_state, self._flight(y, None, est_flight, None, exo["supervisor"], ref)
+            )
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
-            msg_k = self.controller.message(t_k, self._flight(y, None, est, dec, exo["controller"], ref))
+            msg_k = self.controller.message(
+                t_k, self._flight(y, None, est, dec, exo["controller"], ref)
+            )
             net_state = self.network.push(net_state, msg_k)
         held = None
         if self.controller.sampled:
@@ -436,8 +572,9 @@ class ClosedLoop:
             u, _, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
         z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}
-        _, outputs = self._evaluate(t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held,
-                                            state["actuator"]))
+        _, outputs = self._evaluate(
+            t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held, state["actuator"])
+        )
         outputs.update(self.estimator.outputs(t_k, est_state, est))
         outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
         for name, v in state["usage"].items():
@@ -468,7 +605,8 @@ class ClosedLoop:
         # single ``observe`` in the loop computes the signals at t0)
         shapes = jax.eval_shape(self.observe, jnp.asarray(0, dtype=jnp.int64), state0)
         acc0 = metric_ops.init_accumulators(
-            self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
+            self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+        )
 
         metric_block = self._metric_block()
         folding = metric_block > 1
@@ -480,36 +618,61 @@ class ClosedLoop:
             for name, v in state["usage"].items():
                 outputs[name] = v
             if stage_inc is not None:
-                acc = metric_ops.update_stage_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt,
-                                                           stage_inc)
+                acc = metric_ops.update_stage_accumulators(
+                    self.metrics, acc, self.t0 + k * self.dt, self.dt, stage_inc
+                )
             outputs = self._evaluated(outputs)
-            if folding:  # the sample goes to fold(): the metrics of a block of steps are folded at once
+            if (
+                folding
+            ):  # the sample goes to fold(): the metrics of a block of steps are folded at once
                 return (new, acc), metric_ops.pack_sample(self.metrics, outputs)
-            acc = metric_ops.update_accumulators(self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs)
+            acc = metric_ops.update_accumulators(
+                self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs
+            )
             return new, acc
 
         def fold(k, carry, samples):
-            return carry[0], metric_ops.fold_block(self.metrics, carry[1], k, self.t0, self.dt,
-                                                   metric_ops.unpack_samples(self.metrics, shapes, samples))
+            return carry[0], metric_ops.fold_block(
+                self.metrics,
+                carry[1],
+                k,
+                self.t0,
+                self.dt,
+                metric_ops.unpack_samples(self.metrics, shapes, samples),
+            )
 
         def observe(k, carry):
             return self.observe(k, carry[0])
 
-        out = run_fixed_step(step, observe, (state0, acc0), self.n_steps, self.record_every, self.unroll,
-                             check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
-                             admissible=self.admissible, fold=fold if folding else None,
-                             fold_every=metric_block)
+        out = run_fixed_step(
+            step,
+            observe,
+            (state0, acc0),
+            self.n_steps,
+            self.record_every,
+            self.unroll,
+            check_of=lambda c: (c[0]["plant"], c[0]["controller"], c[0]["estimator"]),
+            admissible=self.admissible,
+            fold=fold if folding else None,
+            fold_every=metric_block,
+        )
         state_n, acc = out["final"]
         # the horizon sample is the last record (the signals of the final state at t_n); a run that left
         # its admissible set never reached the horizon: its metrics stay those accumulated up to the
         # start of the failing record block (the returned snapshot), with no horizon sample
         sig_n = jax.tree_util.tree_map(lambda r: r[-1], out["records"])
-        acc_n = metric_ops.update_accumulators(self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt,
-                                               sig_n, is_final=True)
+        acc_n = metric_ops.update_accumulators(
+            self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt, sig_n, is_final=True
+        )
         reached = out["diverged_step"] < 0
         acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
-        return dict(records=out["records"], final=state_n, diverged_step=out["diverged_step"],
-                    last_finite=out["last_finite"], metrics=metric_ops.finalize(self.metrics, acc))
+        return dict(
+            records=out["records"],
+            final=state_n,
+            diverged_step=out["diverged_step"],
+            last_finite=out["last_finite"],
+            metrics=metric_ops.finalize(self.metrics, acc),
+        )
 
     def _metric_block(self) -> int:
         """Steps whose metric samples are folded together (:func:`~.metrics.fold_block`).
@@ -525,9 +688,17 @@ class ClosedLoop:
             return 1
         if self.metric_block:
             return self.metric_block
-        block = max(d for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1) if self.record_every % d == 0)
+        block = max(
+            d
+            for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1)
+            if self.record_every % d == 0
+        )
         many = sum(metric_ops.reads_steps(m) for m in self.metrics)
-        if many >= METRIC_FOLD_MIN_METRICS and block >= METRIC_FOLD_MIN_BLOCK and self.n_steps >= METRIC_FOLD_MIN_STEPS:
+        if (
+            many >= METRIC_FOLD_MIN_METRICS
+            and block >= METRIC_FOLD_MIN_BLOCK
+            and self.n_steps >= METRIC_FOLD_MIN_STEPS
+        ):
             return block
         return 1
 
@@ -542,7 +713,9 @@ class ClosedLoop:
             out.append(("plant.velocity", jnp.sqrt(jnp.sum(vel * vel, axis=-1)), self.max_velocity))
         rate = self.plant.angular_rate(x) if hasattr(self.plant, "angular_rate") else None
         if rate is not None:
-            out.append(("plant.angular_rate", jnp.sqrt(jnp.sum(rate * rate, axis=-1)), self.max_rate))
+            out.append(
+                ("plant.angular_rate", jnp.sqrt(jnp.sum(rate * rate, axis=-1)), self.max_rate)
+            )
         pitch = self.plant.euler_pitch(x) if hasattr(self.plant, "euler_pitch") else None
         if pitch is not None:
             out.append(("plant.pitch", jnp.abs(pitch), self.max_pitch))
@@ -570,8 +743,13 @@ class ClosedLoop:
         for name, mag, bound in self._bounded(carry[0]["plant"]):
             bad = np.argwhere(np.asarray(mag) > np.asarray(bound))
             for idx in bad:
-                out.append((f"{name} (|.| > {float(np.asarray(bound)):g})", tuple(int(i) for i in idx),
-                            int(idx[0]) if len(idx) else None))
+                out.append(
+                    (
+                        f"{name} (|.| > {float(np.asarray(bound)):g})",
+                        tuple(int(i) for i in idx),
+                        int(idx[0]) if len(idx) else None,
+                    )
+                )
         return out
 
     def replay_step(self):
@@ -582,6 +760,7 @@ class ClosedLoop:
             state, acc = carry
             new, _ = loop.step(k, state)
             return new, acc
+
         return step
 
 

@@ -27,10 +27,25 @@ import numpy as np
 
 from formation_ftc.sim.components import component, static
 
-__all__ = ["Metric", "init_accumulators", "update_accumulators", "finalize", "metric_names",
-           "REDUCTIONS", "BLOCK_REDUCTIONS", "SPACECRAFT_REDUCTIONS", "STAGE_REDUCTIONS", "stage_values",
-           "update_stage_accumulators", "block_signals", "sample_values", "fold_block",
-           "pack_sample", "unpack_samples", "reads_steps"]
+__all__ = [
+    "Metric",
+    "init_accumulators",
+    "update_accumulators",
+    "finalize",
+    "metric_names",
+    "REDUCTIONS",
+    "BLOCK_REDUCTIONS",
+    "SPACECRAFT_REDUCTIONS",
+    "STAGE_REDUCTIONS",
+    "stage_values",
+    "update_stage_accumulators",
+    "block_signals",
+    "sample_values",
+    "fold_block",
+    "pack_sample",
+    "unpack_samples",
+    "reads_steps",
+]
 
 #: time reductions: name -> meaning
 REDUCTIONS = {
@@ -44,16 +59,16 @@ REDUCTIONS = {
     "settle_delay": "`settle` measured from the window start [s] (0 when it never was at or above)",
     "rms": "root mean square over the samples in the window, the horizon sample excluded (as `integral`)",
     "stage_integral": "integral over the steps [t_k, t_k + dt] inside the window, integrated with the plant "
-                      "(the RK4 stage values; rectangle rule for an exact-step plant) [signal unit x s]",
+    "(the RK4 stage values; rectangle rule for an exact-step plant) [signal unit x s]",
     "stage_root_mean": "sqrt(stage_integral / (end - start)): with square = True, the RMS over the window",
     "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
     "last": "value at the horizon (the run's last sample; window ignored), read once after the loop: no "
-            "per-step cost, unlike `final`; NaN for a run that left its admissible set before the horizon",
+    "per-step cost, unlike `final`; NaN for a run that left its admissible set before the horizon",
     "block_rms": "low-pass RMS: the samples in the window (the horizon sample excluded) cut into consecutive "
-                 "blocks of `block` steps from the first one; RMS over the complete blocks of each block's mean "
-                 "(a boxcar filter of `block` steps, decimated; an incomplete last block is dropped)",
+    "blocks of `block` steps from the first one; RMS over the complete blocks of each block's mean "
+    "(a boxcar filter of `block` steps, decimated; an incomplete last block is dropped)",
     "block_dev_rms": "RMS of the value minus the mean of its block (blocks as `block_rms`): the amplitude of "
-                     "what varies faster than `block` steps, e.g. a chatter",
+    "what varies faster than `block` steps, e.g. a chatter",
 }
 #: time reductions over blocks of ``Metric.block`` steps
 BLOCK_REDUCTIONS = ("block_rms", "block_dev_rms")
@@ -104,17 +119,29 @@ class Metric:
 
     def __post_init__(self) -> None:
         if self.norm_ord not in ("2", "inf"):
-            raise ValueError(f"metric {self.name!r}: norm_ord must be '2' or 'inf', got {self.norm_ord!r}")
+            raise ValueError(
+                f"metric {self.name!r}: norm_ord must be '2' or 'inf', got {self.norm_ord!r}"
+            )
         if self.reduce not in REDUCTIONS:
-            raise ValueError(f"metric {self.name!r}: reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}")
+            raise ValueError(
+                f"metric {self.name!r}: reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}"
+            )
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
-            raise ValueError(f"metric {self.name!r}: spacecraft must be one of {SPACECRAFT_REDUCTIONS}, "
-                             f"got {self.spacecraft!r}")
+            raise ValueError(
+                f"metric {self.name!r}: spacecraft must be one of {SPACECRAFT_REDUCTIONS}, "
+                f"got {self.spacecraft!r}"
+            )
         if self.gate is not None and self.reduce in STAGE_REDUCTIONS:
-            raise ValueError(f"metric {self.name!r}: a gate is not supported by the stage-integrated "
-                             f"reduction {self.reduce!r}")
-        if self.reduce in BLOCK_REDUCTIONS and not (isinstance(self.block, int) and self.block >= 1):
-            raise ValueError(f"metric {self.name!r}: reduce {self.reduce!r} needs block >= 1 steps, got {self.block!r}")
+            raise ValueError(
+                f"metric {self.name!r}: a gate is not supported by the stage-integrated "
+                f"reduction {self.reduce!r}"
+            )
+        if self.reduce in BLOCK_REDUCTIONS and not (
+            isinstance(self.block, int) and self.block >= 1
+        ):
+            raise ValueError(
+                f"metric {self.name!r}: reduce {self.reduce!r} needs block >= 1 steps, got {self.block!r}"
+            )
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         """The instantaneous value (scalar, or (N,) for ``"each"``)."""
@@ -145,11 +172,15 @@ class Metric:
             v = jnp.max(v, axis=0) - jnp.min(v, axis=0)
         if self.spacecraft == "each":
             if v.ndim != 1:
-                raise ValueError(f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
-                                 "expected (spacecraft,)")
+                raise ValueError(
+                    f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
+                    "expected (spacecraft,)"
+                )
         elif v.ndim != 0:
-            raise ValueError(f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
-                             "expected a scalar (set norm / spacecraft)")
+            raise ValueError(
+                f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
+                "expected a scalar (set norm / spacecraft)"
+            )
         return v
 
 
@@ -195,14 +226,25 @@ class _Stack:
     def __init__(self, metrics: Sequence[Metric]):
         m0 = metrics[0]
         self.metrics = tuple(metrics)
-        self.reduce, self.spacecraft, self.gate, self.block = m0.reduce, m0.spacecraft, m0.gate, m0.block
+        self.reduce, self.spacecraft, self.gate, self.block = (
+            m0.reduce,
+            m0.spacecraft,
+            m0.gate,
+            m0.block,
+        )
         trail = (1,) if m0.spacecraft == "each" else ()
 
         def stacked(name):
-            return jnp.reshape(jnp.stack([jnp.asarray(getattr(m, name), dtype=jnp.float64) for m in metrics]),
-                               (len(metrics),) + trail)
+            return jnp.reshape(
+                jnp.stack([jnp.asarray(getattr(m, name), dtype=jnp.float64) for m in metrics]),
+                (len(metrics),) + trail,
+            )
 
-        self.start, self.end, self.threshold = stacked("start"), stacked("end"), stacked("threshold")
+        self.start, self.end, self.threshold = (
+            stacked("start"),
+            stacked("end"),
+            stacked("threshold"),
+        )
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         return jnp.stack([m.value(signals) for m in self.metrics])
@@ -213,15 +255,26 @@ def _groups(metrics: Sequence[Metric]) -> list[list[int]]:
     their first member."""
     groups: dict[Any, list[int]] = {}
     for i, m in enumerate(metrics):
-        key = ("alone", i) if m.reduce in STAGE_REDUCTIONS else (m.reduce, m.spacecraft == "each", m.gate, m.block)
+        key = (
+            ("alone", i)
+            if m.reduce in STAGE_REDUCTIONS
+            else (m.reduce, m.spacecraft == "each", m.gate, m.block)
+        )
         groups.setdefault(key, []).append(i)
     return list(groups.values())
 
 
 def _grouped(metrics: Sequence[Metric]) -> list[tuple[list[int], Any]]:
     """(member indices, the metric or :class:`_Stack` that accumulates them)."""
-    return [(idx, metrics[idx[0]] if metrics[idx[0]].reduce in STAGE_REDUCTIONS else _Stack([metrics[i] for i in idx]))
-            for idx in _groups(metrics)]
+    return [
+        (
+            idx,
+            metrics[idx[0]]
+            if metrics[idx[0]].reduce in STAGE_REDUCTIONS
+            else _Stack([metrics[i] for i in idx]),
+        )
+        for idx in _groups(metrics)
+    ]
 
 
 class _Probe:
@@ -238,7 +291,9 @@ class _Probe:
 @functools.cache
 def _boolean_parts(reduce: str) -> tuple[bool, ...]:
     """Which parts of a reduction's accumulator tuple are booleans."""
-    return tuple(bool(jnp.asarray(a).dtype == jnp.bool_) for a in _init_accumulators([_Probe(reduce)], {})[0])
+    return tuple(
+        bool(jnp.asarray(a).dtype == jnp.bool_) for a in _init_accumulators([_Probe(reduce)], {})[0]
+    )
 
 
 def _pack(parts: tuple, rows: int) -> jax.Array:
@@ -274,7 +329,7 @@ def _blocks(groups, packed: jax.Array) -> list[tuple]:
     """The accumulator tuple of each group from the shared array."""
     out, col = [], 0
     for idx, g in groups:
-        out.append(_unpack(g.reduce, packed[:len(_boolean_parts(g.reduce)), col:col + len(idx)]))
+        out.append(_unpack(g.reduce, packed[: len(_boolean_parts(g.reduce)), col : col + len(idx)]))
         col += len(idx)
     return out
 
@@ -318,7 +373,9 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
             accs[slot] = _init_accumulators([groups[0][1]], signals)[0]
             continue
         rows = _rows(groups)
-        accs[slot] = jnp.concatenate([_pack(_init_accumulators([g], signals)[0], rows) for _, g in groups], axis=1)
+        accs[slot] = jnp.concatenate(
+            [_pack(_init_accumulators([g], signals)[0], rows) for _, g in groups], axis=1
+        )
     return tuple(accs)
 
 
@@ -356,8 +413,14 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
     return tuple(accs)
 
 
-def update_accumulators(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float,
-                        signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
+def update_accumulators(
+    metrics: Sequence[Metric],
+    accs: tuple,
+    t: jax.Array | float,
+    dt: float,
+    signals: Mapping[str, jax.Array],
+    is_final: bool = False,
+) -> tuple:
     """Fold the sample at time ``t`` into every accumulator (``is_final``: the sample at the horizon,
     which the rectangle-rule integral does not count).
 
@@ -478,10 +541,14 @@ def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> 
     >>> np.asarray(pack_sample(ms, {"e": jnp.array([3.0, 4.0]), "f": jnp.asarray(1.5)}))
     array([3. , 4. , 1.5])
     """
-    return jnp.concatenate([jnp.ravel(jnp.asarray(signals[n])).astype(jnp.float64) for n in block_signals(metrics)])
+    return jnp.concatenate(
+        [jnp.ravel(jnp.asarray(signals[n])).astype(jnp.float64) for n in block_signals(metrics)]
+    )
 
 
-def unpack_samples(metrics: Sequence[Metric], shapes: Mapping[str, Any], packed: jax.Array) -> dict[str, jax.Array]:
+def unpack_samples(
+    metrics: Sequence[Metric], shapes: Mapping[str, Any], packed: jax.Array
+) -> dict[str, jax.Array]:
     """Inverse of :func:`pack_sample` over a block: ``packed`` (L, F) -> ``{signal: (L, *shape)}`` in the
     signals' dtypes (``shapes``: each signal's shape and dtype, e.g. from ``jax.eval_shape``).
 
@@ -519,12 +586,14 @@ def unpack_samples(metrics: Sequence[Metric], shapes: Mapping[str, Any], packed:
     for n in block_signals(metrics):
         shape, dtype = tuple(shapes[n].shape), shapes[n].dtype
         size = int(np.prod(shape, dtype=int))
-        out[n] = jnp.reshape(packed[:, col:col + size], packed.shape[:1] + shape).astype(dtype)
+        out[n] = jnp.reshape(packed[:, col : col + size], packed.shape[:1] + shape).astype(dtype)
         col += size
     return out
 
 
-def sample_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array], is_final: bool = False) -> tuple:
+def sample_values(
+    metrics: Sequence[Metric], signals: Mapping[str, jax.Array], is_final: bool = False
+) -> tuple:
     """What one sample contributes to the accumulators, per carry slot of :func:`_classes`: a group's
     stacked values and gate (``(value, gate)``; ``gate`` None without one); ``None`` for the
     stage-integrated metrics (folded by :func:`update_stage_accumulators`) and, except at the horizon
@@ -572,10 +641,18 @@ def sample_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array], i
     return tuple(out)
 
 
-def _apply(metrics: Sequence[Metric], accs: tuple, t: jax.Array | float, dt: float, values: tuple,
-           is_final: bool = False) -> tuple:
+def _apply(
+    metrics: Sequence[Metric],
+    accs: tuple,
+    t: jax.Array | float,
+    dt: float,
+    values: tuple,
+    is_final: bool = False,
+) -> tuple:
     """Fold one sample's :func:`sample_values` (taken at time ``t``) into the accumulators."""
-    return _each_group(metrics, accs, values, lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final))
+    return _each_group(
+        metrics, accs, values, lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final)
+    )
 
 
 def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -> tuple:
@@ -587,14 +664,22 @@ def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -
         if not isinstance(groups[0][1], _Stack):
             continue
         rows = _rows(groups)
-        new = [_pack(update(g, acc, v), rows)
-               for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)]
+        new = [
+            _pack(update(g, acc, v), rows)
+            for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)
+        ]
         out[slot] = jnp.concatenate(new, axis=1)
     return tuple(out)
 
 
-def fold_block(metrics: Sequence[Metric], accs: tuple, k0: jax.Array, t0: float, dt: float,
-               samples: Mapping[str, jax.Array]) -> tuple:
+def fold_block(
+    metrics: Sequence[Metric],
+    accs: tuple,
+    k0: jax.Array,
+    t0: float,
+    dt: float,
+    samples: Mapping[str, jax.Array],
+) -> tuple:
     """Fold a block of consecutive samples (steps ``k0 .. k0 + L - 1``, every signal of
     :func:`block_signals` with a leading axis of length L) into the accumulators: the result of
     :func:`update_accumulators` applied to the samples one by one.
@@ -640,8 +725,12 @@ def fold_block(metrics: Sequence[Metric], accs: tuple, k0: jax.Array, t0: float,
     n = jax.tree_util.tree_leaves(samples)[0].shape[0]
     values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
     times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
-    return _each_group(metrics, accs, values,
-                       lambda g, acc, v: acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v))
+    return _each_group(
+        metrics,
+        accs,
+        values,
+        lambda g, acc, v: acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v),
+    )
 
 
 def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -> tuple:
@@ -651,7 +740,9 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     inw = _in_window(m, t)
     if gate is not None:  # a gate of one sample broadcasts against its values from the right
         gs = gate.shape[1:]
-        inw = jnp.logical_and(inw, jnp.reshape(gate, gate.shape[:1] + (1,) * (v.ndim - 1 - len(gs)) + gs))
+        inw = jnp.logical_and(
+            inw, jnp.reshape(gate, gate.shape[:1] + (1,) * (v.ndim - 1 - len(gs)) + gs)
+        )
     inw = jnp.broadcast_to(inw, v.shape)
     t = jnp.broadcast_to(t, v.shape)
     n = v.shape[0]
@@ -707,7 +798,11 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     ts_above = jnp.where(after < n, take(t, after), jnp.nan)
     ts_below = jnp.where(last_above | jnp.logical_not(seen), take(t, first_of(inw)), ts)
     ts_new = jnp.where(j_above >= 0, ts_above, ts_below)
-    return (jnp.where(anyw, ts_new, ts), seen | anyw, jnp.where(anyw, take(above, last_of(inw)), last_above))
+    return (
+        jnp.where(anyw, ts_new, ts),
+        seen | anyw,
+        jnp.where(anyw, take(above, last_of(inw)), last_above),
+    )
 
 
 def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
@@ -749,8 +844,17 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     sum2 = jnp.sum(d * d, axis=1).at[0].add(s2)
     dev = sum2 - sum1 * sum1 / size
     q = q + jnp.sum(jnp.where(done, dev, 0.0), axis=0)
-    shift = jnp.where(rem > 0, pick(shifts, closed), jnp.where(total > 0, pick(shifts, closed - 1), shift0))
-    return (shift, pick(sum1, closed), pick(sum2, closed), rem, q, nq + (closed * size).astype(jnp.float64))
+    shift = jnp.where(
+        rem > 0, pick(shifts, closed), jnp.where(total > 0, pick(shifts, closed - 1), shift0)
+    )
+    return (
+        shift,
+        pick(sum1, closed),
+        pick(sum2, closed),
+        rem,
+        q,
+        nq + (closed * size).astype(jnp.float64),
+    )
 
 
 def _in_window(m: Any, t: Any) -> jax.Array:
@@ -758,7 +862,9 @@ def _in_window(m: Any, t: Any) -> jax.Array:
     return jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
 
 
-def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: Any, is_final: bool) -> tuple:
+def _update_group(
+    m: Any, acc: tuple, t: jax.Array | float, dt: float, value: Any, is_final: bool
+) -> tuple:
     """One group's (or metric's) accumulator after the sample ``value = (v, gate)`` at time ``t``."""
     if m.reduce == "last":  # only the horizon sample (a static branch: nothing at the steps)
         return (value[0], jnp.ones_like(acc[1])) if is_final else acc
@@ -808,8 +914,12 @@ def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: An
         s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block  # the block closes: fold its mean in, open the next one
         mean = s / m.block
-        return (jnp.where(full, 0.0, s), jnp.where(full, 0.0, n), q + jnp.where(full, mean * mean, 0.0),
-                nb + jnp.where(full, 1.0, 0.0))
+        return (
+            jnp.where(full, 0.0, s),
+            jnp.where(full, 0.0, n),
+            q + jnp.where(full, mean * mean, 0.0),
+            nb + jnp.where(full, 1.0, 0.0),
+        )
     if m.reduce == "block_dev_rms":
         # shifted sums (shift = the block's first value): no cancellation when the mean is large
         shift, s1, s2, n, q, nq = acc
@@ -819,9 +929,17 @@ def _update_group(m: Any, acc: tuple, t: jax.Array | float, dt: float, value: An
         s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block
         dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
-        return (shift, jnp.where(full, 0.0, s1), jnp.where(full, 0.0, s2), jnp.where(full, 0.0, n),
-                q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0))
-    raise AssertionError(f"unhandled reduction {m.reduce!r}")  # pragma: no cover - REDUCTIONS is checked
+        return (
+            shift,
+            jnp.where(full, 0.0, s1),
+            jnp.where(full, 0.0, s2),
+            jnp.where(full, 0.0, n),
+            q + jnp.where(full, dev, 0.0),
+            nq + jnp.where(full, n, 0.0),
+        )
+    raise AssertionError(
+        f"unhandled reduction {m.reduce!r}"
+    )  # pragma: no cover - REDUCTIONS is checked
 
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
@@ -895,7 +1013,9 @@ def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
             out.append(jnp.where(nb > 0, jnp.sqrt(q / jnp.maximum(nb, 1.0)), jnp.nan))
         elif m.reduce == "block_dev_rms":
             *_, q, nq = acc
-            out.append(jnp.where(nq > 0, jnp.sqrt(jnp.maximum(q, 0.0) / jnp.maximum(nq, 1.0)), jnp.nan))
+            out.append(
+                jnp.where(nq > 0, jnp.sqrt(jnp.maximum(q, 0.0) / jnp.maximum(nq, 1.0)), jnp.nan)
+            )
     return tuple(out)
 
 
@@ -928,8 +1048,9 @@ def stage_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) ->
     return tuple(m.value(signals) if m.reduce in STAGE_REDUCTIONS else None for m in metrics)
 
 
-def update_stage_accumulators(metrics: Sequence[Metric], accs: tuple, t_k: jax.Array, dt: float,
-                              increments: Sequence[Any]) -> tuple:
+def update_stage_accumulators(
+    metrics: Sequence[Metric], accs: tuple, t_k: jax.Array, dt: float, increments: Sequence[Any]
+) -> tuple:
     """Add the integral over the step [t_k, t_k + dt] (``increments``, from the integrator's stages) to
     every stage-integrated metric whose window contains the whole step.
 

@@ -73,8 +73,12 @@ def jitted_run(compiled) -> CachedProgram:
     """
     fn = lru_get(_PROGRAMS, compiled.static_key)
     if fn is None:
-        fn = lru_put(_PROGRAMS, compiled.static_key,
-                     CachedProgram(xla.jit(compiled.run), "run", compiled.static_key), MAX_KEPT)
+        fn = lru_put(
+            _PROGRAMS,
+            compiled.static_key,
+            CachedProgram(xla.jit(compiled.run), "run", compiled.static_key),
+            MAX_KEPT,
+        )
     return fn
 
 

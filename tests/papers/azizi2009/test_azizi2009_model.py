@@ -20,8 +20,10 @@ ALPHAS = [1.0, 3.0, 4.0, 5.0, 6.0, 10.0]
 
 @pytest.fixture(scope="module")
 def sweep():
-    sc = load("azizi2009-llfr", {"simulation.horizon": 100.0, "formation.n_axes": 1,
-                                 "simulation.record_every": 1000})
+    sc = load(
+        "azizi2009-llfr",
+        {"simulation.horizon": 100.0, "formation.n_axes": 1, "simulation.record_every": 1000},
+    )
     A = np.ones((len(ALPHAS), 4))
     A[:, 1] = ALPHAS
     return run_batch(sc, {"alpha": A})
@@ -37,16 +39,30 @@ def test_fault_free_error_is_discretisation_level():  # SPEC P4.6-3
 def test_zoh_error_converges_first_order_in_dt():
     errs = []
     for dt in (2e-3, 1e-3):
-        _, m = simulate(load("azizi2009-fault-free", {"simulation.horizon": 20.0, "simulation.dt": dt,
-                                                      "formation.n_axes": 1, "simulation.record_every": 100,
-                                                      "disturbance.acceleration": "0"}))
+        _, m = simulate(
+            load(
+                "azizi2009-fault-free",
+                {
+                    "simulation.horizon": 20.0,
+                    "simulation.dt": dt,
+                    "formation.n_axes": 1,
+                    "simulation.record_every": 100,
+                    "disturbance.acceleration": "0",
+                },
+            )
+        )
         errs.append(m["max_err"])
     assert errs[0] / errs[1] == pytest.approx(2.0, rel=0.05)
 
 
 def test_reduced_model_7_matches_full_simulation():  # SPEC P4.6-2
-    over = {"simulation.horizon": 20.0, "formation.n_axes": 1, "controller.sampling": "continuous",
-            "disturbance.acceleration": "0", "simulation.record_every": 100}
+    over = {
+        "simulation.horizon": 20.0,
+        "formation.n_axes": 1,
+        "controller.sampling": "continuous",
+        "disturbance.acceleration": "0",
+        "simulation.record_every": 100,
+    }
     sc = load("azizi2009-llfr", over)
     ds, _ = simulate(sc)
     pc = perturbation_coefficients([1.0, 1.0, 1.0, 1.0], [1.0, 0.88, 1.0, 1.0], 1)
@@ -78,8 +94,15 @@ def test_llfr_error_band_and_monotone_in_alpha2(sweep):  # SPEC P4.6-4
 
 
 def test_effort_redistribution_matches_spec(sweep):  # SPEC P4.6-7 and P4.4 efforts
-    E = {a: [r[f"effort_x_100s_sc{j}"] for j in range(1, 5)] for a, r in zip(ALPHAS, sweep, strict=True)}
-    ref = {1.0: [98.8, 131.8, 97.1, 123.5], 6.0: [146.9, 19.4, 135.0, 281.3], 10.0: [164.7, 8.7, 150.7, 321.7]}
+    E = {
+        a: [r[f"effort_x_100s_sc{j}"] for j in range(1, 5)]
+        for a, r in zip(ALPHAS, sweep, strict=True)
+    }
+    ref = {
+        1.0: [98.8, 131.8, 97.1, 123.5],
+        6.0: [146.9, 19.4, 135.0, 281.3],
+        10.0: [164.7, 8.7, 150.7, 321.7],
+    }
     for a, vals in ref.items():
         np.testing.assert_allclose(E[a], vals, rtol=0.01)
     assert E[1.0][1] > E[6.0][1] > E[10.0][1]
@@ -88,9 +111,17 @@ def test_effort_redistribution_matches_spec(sweep):  # SPEC P4.6-7 and P4.4 effo
 
 
 def test_batched_member_equals_single_run(sweep):
-    _, m = simulate(load("azizi2009-llfr", {"simulation.horizon": 100.0, "formation.n_axes": 1,
-                                            "simulation.record_every": 1000,
-                                            "allocation.alpha": [1.0, 6.0, 1.0, 1.0]}))
+    _, m = simulate(
+        load(
+            "azizi2009-llfr",
+            {
+                "simulation.horizon": 100.0,
+                "formation.n_axes": 1,
+                "simulation.record_every": 1000,
+                "allocation.alpha": [1.0, 6.0, 1.0, 1.0],
+            },
+        )
+    )
     assert m["max_err"] == pytest.approx(sweep[ALPHAS.index(6.0)]["max_err"], rel=1e-12)
 
 
@@ -115,8 +146,13 @@ def test_supervisor_switches_to_flfr_and_meets_e_s(tmp_path):
 
 
 def test_noise_is_seeded():
-    over = {"simulation.horizon": 5.0, "formation.n_axes": 1, "noise.sigma_position": 1e-3,
-            "noise.sigma_velocity": 1e-3, "simulation.record_every": 100}
+    over = {
+        "simulation.horizon": 5.0,
+        "formation.n_axes": 1,
+        "noise.sigma_position": 1e-3,
+        "noise.sigma_velocity": 1e-3,
+        "simulation.record_every": 100,
+    }
     sc = load("azizi2009-llfr", over)
     A = np.ones((3, 4))
     r = run_batch(sc, {"alpha": A, "seed": np.array([0, 0, 1])})
@@ -127,12 +163,22 @@ def test_noise_is_seeded():
 def test_exact_estimate_recovers_fault_free_errors_general_n():
     """With b_hat = b the allocation cancels the fault exactly (eq. (4)): the errors equal the fault-free
     run's (ZOH discretisation level) -- here for N = 5 and a fault on satellite 3 (general N)."""
-    base = {"simulation.horizon": 10.0, "formation.n_satellites": 5, "formation.n_axes": 2,
-            "formation.b": [1.0] * 5, "allocation.alpha": [1.0, 2.0, 1.0, 0.5, 1.0], "fault.satellite": 3,
-            "simulation.record_every": 100}
+    base = {
+        "simulation.horizon": 10.0,
+        "formation.n_satellites": 5,
+        "formation.n_axes": 2,
+        "formation.b": [1.0] * 5,
+        "allocation.alpha": [1.0, 2.0, 1.0, 0.5, 1.0],
+        "fault.satellite": 3,
+        "simulation.record_every": 100,
+    }
     _, m_ff = simulate(load("azizi2009-llfr", {**base, "fault.enabled": False}))
-    _, m_ex = simulate(load("azizi2009-llfr", {**base, "fault.effectiveness": 0.6, "fault.estimate": 0.6}))
-    _, m_bad = simulate(load("azizi2009-llfr", {**base, "fault.effectiveness": 0.6, "fault.estimate": 0.66}))
+    _, m_ex = simulate(
+        load("azizi2009-llfr", {**base, "fault.effectiveness": 0.6, "fault.estimate": 0.6})
+    )
+    _, m_bad = simulate(
+        load("azizi2009-llfr", {**base, "fault.effectiveness": 0.6, "fault.estimate": 0.66})
+    )
     assert m_ff["max_err"] < 2e-4
     # the applied relative accelerations J(b) u = p are identical, so the errors agree to round-off
     assert m_ex["max_err"] == pytest.approx(m_ff["max_err"], rel=1e-6)
@@ -146,16 +192,25 @@ def test_seed_by_weight_grid_equals_the_flat_batch():
     order; the switching of the FLFR loop carries such a last-bit difference further (measured: 11 of
     the 12 runs bit for bit, one max_err 1.7e-12 apart; the flat batch and the runs alone agree bit for
     bit)."""
-    sc = load("azizi2009-llfr", {"simulation.horizon": 10.0, "formation.n_axes": 1,
-                                 "simulation.record_every": 1000, "noise.sigma_position": 1e-5,
-                                 "noise.sigma_velocity": 1e-5})
+    sc = load(
+        "azizi2009-llfr",
+        {
+            "simulation.horizon": 10.0,
+            "formation.n_axes": 1,
+            "simulation.record_every": 1000,
+            "noise.sigma_position": 1e-5,
+            "noise.sigma_velocity": 1e-5,
+        },
+    )
     seeds, weights = 3, [1.0, 4.0, 6.0, 10.0]
     A = np.ones((seeds * len(weights), 4))
     A[:, 1] = np.tile(weights, seeds)
     S = np.repeat(np.arange(seeds), len(weights))
     flat = run_batch(sc, {"alpha": A, "seed": S})
     grid = run_batch(sc, {"alpha": A, "seed": S}, grid=(seeds, len(weights)))
-    assert len({m["max_err"] for m in flat}) == len(flat)  # every run differs: seeds and weights matter
+    assert len({m["max_err"] for m in flat}) == len(
+        flat
+    )  # every run differs: seeds and weights matter
     for b, (f, g) in enumerate(zip(flat, grid, strict=True)):
         assert f.keys() == g.keys()
         for k in f:  # (NaN where a metric's window never opened, e.g. no FLFR event: NaN in both)

@@ -6,10 +6,21 @@ figures 2-4 as PNG files. The full study (300 s, 0.1 grid, 20 seeds) is run by
 import numpy as np
 import pytest
 
-from formation_ftc.papers.azizi2009.reproduction import REPRODUCTION, alpha_min_on_grid, run_reproduction
+from formation_ftc.papers.azizi2009.reproduction import (
+    REPRODUCTION,
+    alpha_min_on_grid,
+    run_reproduction,
+)
 
-KEYS = ["max_err_fault_free", "max_err_llfr", "alpha2_min_simulated", "alpha2_analytic_pi_0",
-        "alpha2_analytic_pi_0.15", "alpha2_analytic_pi_0.2", "alpha2_analytic_pi_0.4"]
+KEYS = [
+    "max_err_fault_free",
+    "max_err_llfr",
+    "alpha2_min_simulated",
+    "alpha2_analytic_pi_0",
+    "alpha2_analytic_pi_0.15",
+    "alpha2_analytic_pi_0.2",
+    "alpha2_analytic_pi_0.4",
+]
 
 
 def test_alpha_min_on_grid():
@@ -29,8 +40,15 @@ def test_summary_keys_and_values(report):
     for k in KEYS:
         assert k in rep.summary and rep.summary[k] is not None
     s = rep.summary
-    assert s["alpha2_analytic_pi_0"] > s["alpha2_analytic_pi_0.15"] > s["alpha2_analytic_pi_0.2"] > s["alpha2_analytic_pi_0.4"]
-    assert s["alpha2_analytic_pi_0"] == pytest.approx(4.72, abs=6e-3)  # design is horizon-independent (300 s)
+    assert (
+        s["alpha2_analytic_pi_0"]
+        > s["alpha2_analytic_pi_0.15"]
+        > s["alpha2_analytic_pi_0.2"]
+        > s["alpha2_analytic_pi_0.4"]
+    )
+    assert s["alpha2_analytic_pi_0"] == pytest.approx(
+        4.72, abs=6e-3
+    )  # design is horizon-independent (300 s)
     assert s["max_err_llfr"] > 0.03 > s["max_err_analytic_alpha2_pi_0"]
     assert s["seed_spread"]["seeds"] == 2
 
@@ -44,7 +62,9 @@ def test_rows_cover_published_values_and_relations(report, recheck_verdicts):
     rel = [r for r in rep.rows if r.quantity.startswith("relation")]
     assert len(rel) >= 5
     assert all(r.verdict in {"match", "differs", "not stated"} for r in rep.rows)
-    assert all(r.note for r in rep.rows if r.verdict == "differs")  # every difference has its reason
+    assert all(
+        r.note for r in rep.rows if r.verdict == "differs"
+    )  # every difference has its reason
 
 
 def test_figures_written(report):

@@ -58,10 +58,18 @@ def test_component_uniform_signature_reads_the_measured_error():
     """update(t, state, FlightInputs): the monitored error is the measured chain position minus the
     desired chain offsets; the step index comes from t = k dt; records counters and FLFR time."""
     dt, n = 0.5, 4
-    sup = HierarchicalSupervisor(count=n, n_axes=2, dt=dt, side=jnp.asarray(200.0), omega=jnp.asarray(0.1),
-                                 e_s=jnp.asarray(0.03), k_estimated=jnp.asarray(2, jnp.int64),
-                                 confirm_steps=jnp.asarray(1, jnp.int64), monitor_start=jnp.asarray(0, jnp.int64),
-                                 flfr_enabled=jnp.asarray(True))
+    sup = HierarchicalSupervisor(
+        count=n,
+        n_axes=2,
+        dt=dt,
+        side=jnp.asarray(200.0),
+        omega=jnp.asarray(0.1),
+        e_s=jnp.asarray(0.03),
+        k_estimated=jnp.asarray(2, jnp.int64),
+        confirm_steps=jnp.asarray(1, jnp.int64),
+        monitor_start=jnp.asarray(0, jnp.int64),
+        flfr_enabled=jnp.asarray(True),
+    )
     state = sup.initial_state()
     modes, times = [], []
     for k, err in enumerate([0.1, 0.1, 0.0, 0.02, 0.05, 0.0]):

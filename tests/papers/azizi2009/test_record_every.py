@@ -31,9 +31,18 @@ DT = 1e-3  # [s]
 HORIZON = 102.0  # [s]
 ONSET = 1.0  # [s]
 OVERRIDES = {"simulation.horizon": HORIZON, "fault.onset": ONSET, "fault.estimated_at": ONSET}
-NOISY = {"formation.n_axes": 1, "noise.sigma_position": 1e-5, "noise.sigma_velocity": 1e-5, "simulation.seed": 3}
-CASES = [("azizi2009-fault-free", {}), ("azizi2009-llfr", {}), ("azizi2009-flfr", {}), ("azizi2009-llfr", NOISY)]
-
+NOISY = {
+    "formation.n_axes": 1,
+    "noise.sigma_position": 1e-5,
+    "noise.sigma_velocity": 1e-5,
+    "simulation.seed": 3,
+}
+CASES = [
+    ("azizi2009-fault-free", {}),
+    ("azizi2009-llfr", {}),
+    ("azizi2009-flfr", {}),
+    ("azizi2009-llfr", NOISY),
+]
 
 
 def _from_records(ds) -> dict[str, float]:
@@ -46,13 +55,21 @@ def _from_records(ds) -> dict[str, float]:
     mode, gate = ds["mode"].values, ds["flfr_settled"].values > 0
     err = np.max(np.abs(ds["tracking_error"].values), axis=(1, 2))  # over spacecraft and axes [m]
     t_f = ds.time.values[mode >= FLFR]
-    return {"max_err": float(np.max(err)), "max_err_after_flfr": float(np.max(err[gate])) if gate.any() else math.nan,
-            "t_flfr": float(t_f[0]) if t_f.size else math.nan}
+    return {
+        "max_err": float(np.max(err)),
+        "max_err_after_flfr": float(np.max(err[gate])) if gate.any() else math.nan,
+        "t_flfr": float(t_f[0]) if t_f.size else math.nan,
+    }
 
 
-@pytest.mark.parametrize(("name", "extra"), CASES, ids=["fault-free", "llfr", "flfr", "llfr-noisy-x"])
+@pytest.mark.parametrize(
+    ("name", "extra"), CASES, ids=["fault-free", "llfr", "flfr", "llfr-noisy-x"]
+)
 def test_metrics_independent_of_record_every(name, extra, same_metrics):
-    out = {every: simulate(load(name, {**OVERRIDES, **extra, "simulation.record_every": every})) for every in (1, 20)}
+    out = {
+        every: simulate(load(name, {**OVERRIDES, **extra, "simulation.record_every": every}))
+        for every in (1, 20)
+    }
     (ds1, m1), (ds20, m20) = out[1], out[20]
     count = 4
     assert {"max_err", "max_err_x", "max_err_after_flfr", "t_flfr", "n_events"} <= m1.keys()
@@ -72,8 +89,11 @@ def test_metrics_independent_of_record_every(name, extra, same_metrics):
         else:
             assert v == pytest.approx(m1[k], rel=1e-12), k
     # effort is cumulative: its sample at 100 s is a record at every step (and every 20 steps)
-    np.testing.assert_allclose(ds1["effort"].sel(axis="x").sel(time=100.0).values,
-                               [m1[f"effort_x_100s_sc{i + 1}"] for i in range(count)], rtol=1e-12)
+    np.testing.assert_allclose(
+        ds1["effort"].sel(axis="x").sel(time=100.0).values,
+        [m1[f"effort_x_100s_sc{i + 1}"] for i in range(count)],
+        rtol=1e-12,
+    )
     # the decimated records miss the peak of the error (and quantise the switch time to 20 ms)
     assert r20["max_err"] < m1["max_err"] * (1 - 1e-12), (r20["max_err"], m1["max_err"])
     if name == "azizi2009-flfr":

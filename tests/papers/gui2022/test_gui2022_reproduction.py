@@ -13,9 +13,19 @@ def test_full_reproduction(tmp_path, recheck_verdicts):
     rep = run_reproduction(tmp_path)
     recheck_verdicts(rep.rows)  # every verdict follows from its stated criterion
     s = rep.summary
-    for key in ("ilo_rms_err_x", "ilo_rms_err_y", "ilo_rms_err_z", "ilo_baseline_rms_err_x",
-                "ilo_baseline_rms_err_y", "ilo_baseline_rms_err_z", "lof2tc_pos_rms", "cof2tc_pos_rms",
-                "lof2tc_final_pos_err", "cof2tc_final_pos_err", "ilo_final_err_x"):
+    for key in (
+        "ilo_rms_err_x",
+        "ilo_rms_err_y",
+        "ilo_rms_err_z",
+        "ilo_baseline_rms_err_x",
+        "ilo_baseline_rms_err_y",
+        "ilo_baseline_rms_err_z",
+        "lof2tc_pos_rms",
+        "cof2tc_pos_rms",
+        "lof2tc_final_pos_err",
+        "cof2tc_final_pos_err",
+        "ilo_final_err_x",
+    ):
         assert key in s
     json.dumps(s)  # serialisable
     assert len(rep.figures) == 8 and all((tmp_path / f.path).is_file() for f in rep.figures)
@@ -45,7 +55,16 @@ def test_full_reproduction(tmp_path, recheck_verdicts):
 
 
 def test_cli_infeasible_lmi_is_bad_input(capsys):
-    rc = main(["check", "gui2022-ilo", "--set", 'observer.gains="lmi"', "--set", "observer.disk_center=5.0"])
+    rc = main(
+        [
+            "check",
+            "gui2022-ilo",
+            "--set",
+            'observer.gains="lmi"',
+            "--set",
+            "observer.disk_center=5.0",
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2
     assert "infeasible" in err and "disk pole region S(5, 2)" in err and "Traceback" not in err

@@ -22,7 +22,9 @@ def test_builtin_scenarios_load_and_required_conditions_hold(name):
 
 
 def test_tau_not_multiple_of_dt_rejected():
-    with pytest.raises(ScenarioError, match=r"observer.learning_interval = 0.0015 s is not an integer multiple"):
+    with pytest.raises(
+        ScenarioError, match=r"observer.learning_interval = 0.0015 s is not an integer multiple"
+    ):
         ftc.load_scenario("gui2022-ilo", {"observer.learning_interval": 0.0015})
     with pytest.raises(ScenarioError, match="controller.learning_interval"):
         ftc.load_scenario("gui2022-lof2tc", {"controller.learning_interval": 0.0005})
@@ -58,10 +60,17 @@ def test_d_max_closed_form():
 
 def test_learning_loop_e002_12():
     A, _ = cw_matrices(pub.N_MEAN_MOTION)
-    rho, rho_osc, f_osc = learning_loop_radius(A, pub.L1_PRINTED, pub.L2_PRINTED, pub.Q1_PRINTED, pub.Q2_PRINTED, 1e-3)
+    rho, rho_osc, f_osc = learning_loop_radius(
+        A, pub.L1_PRINTED, pub.L2_PRINTED, pub.Q1_PRINTED, pub.Q2_PRINTED, 1e-3
+    )
     # per-axis 2x2 learning loop: |z|^2 = det = (1 - 4.5471e-3 - 0.999*0.4563)*0.99 + 0.99e-3*0.999*456.3
     assert rho_osc == pytest.approx(0.9927, abs=1e-4)
     assert f_osc == pytest.approx(110.0, abs=2.0)
     assert rho == pytest.approx(1 - 4.5471e-3, abs=1e-5)  # slow position-channel observer pole
     # 10x larger learning gain destabilises the discrete loop
-    assert learning_loop_radius(A, pub.L1_PRINTED, 10 * pub.L2_PRINTED, pub.Q1_PRINTED, pub.Q2_PRINTED, 1e-3)[0] > 1
+    assert (
+        learning_loop_radius(
+            A, pub.L1_PRINTED, 10 * pub.L2_PRINTED, pub.Q1_PRINTED, pub.Q2_PRINTED, 1e-3
+        )[0]
+        > 1
+    )

@@ -32,19 +32,37 @@ GAMMA = pub.GAMMA_PRINTED
 LAM = pub.L1_PRINTED[0, 0]
 
 
-@pytest.mark.parametrize("over", [
-    {"controller.law": "lof2tc"},
-    # delay lines with m > 1 (ring buffer path); printed gains are unstable for tau = 2 dt (see below),
-    # so a stable set (Q1 = 0.9, L2 / 10; learning-loop spectral radius 0.9955) is used here
-    {"controller.law": "lof2tc", "observer.learning_interval": 0.002, "observer.sign_term": False,
-     "observer.Q1": [0.9, 0.9, 0.9], "observer.L2": (0.1 * pub.L2_PRINTED).tolist(),
-     "controller.learning_interval": 0.003},
-    {"controller.law": "cof2tc", "controller.fault_compensation": True, "observer.sign_term": False},
-])
+@pytest.mark.parametrize(
+    "over",
+    [
+        {"controller.law": "lof2tc"},
+        # delay lines with m > 1 (ring buffer path); printed gains are unstable for tau = 2 dt (see below),
+        # so a stable set (Q1 = 0.9, L2 / 10; learning-loop spectral radius 0.9955) is used here
+        {
+            "controller.law": "lof2tc",
+            "observer.learning_interval": 0.002,
+            "observer.sign_term": False,
+            "observer.Q1": [0.9, 0.9, 0.9],
+            "observer.L2": (0.1 * pub.L2_PRINTED).tolist(),
+            "controller.learning_interval": 0.003,
+        },
+        {
+            "controller.law": "cof2tc",
+            "controller.fault_compensation": True,
+            "observer.sign_term": False,
+        },
+    ],
+)
 def test_jax_scan_matches_numpy_reference(over):
-    base = {"simulation.horizon": 2.0, "simulation.record_every": 1, "simulation.unroll": 1,
-            "faults.x_onset": 0.5, "faults.z_onset": 1.0, "faults.z_decay_shifted": True,
-            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET)}
+    base = {
+        "simulation.horizon": 2.0,
+        "simulation.record_every": 1,
+        "simulation.unroll": 1,
+        "faults.x_onset": 0.5,
+        "faults.z_onset": 1.0,
+        "faults.z_decay_shifted": True,
+        "observer.initial_estimate": list(pub.ESTIMATE_OFFSET),
+    }
     scn = ftc.load_scenario("gui2022-lof2tc", {**base, **over})
     ds, _ = simulate_with_metrics(scn)
     ref = simulate_numpy(scn)
@@ -69,11 +87,22 @@ def test_constant_fault_fixed_point_without_sign_term():
     # The ZOH term Bd F = dt H F + dt^2/2 A H F + ... differs from Euler by ~(dt/2) A2 F ~ 7.5e-7 through
     # the Coriolis block, so it is kept; the slowly growing q enters quasi-statically (evaluated at t_end).
     F = np.array([0.5, -0.2, 0.3])
-    scn = ftc.load_scenario("gui2022-ilo", {
-        "simulation.horizon": 20.0, "observer.sign_term": False, "disturbance.amplitude": 0.0,
-        "faults.x_onset": 0.0, "faults.y_onset": 0.0, "faults.z_onset": 0.0, "faults.x_magnitude": F[0],
-        "faults.y_magnitude": F[1], "faults.z_amplitude": 0.0, "faults.z_decay_amplitude": F[2],
-        "faults.z_decay_rate": 0.0})
+    scn = ftc.load_scenario(
+        "gui2022-ilo",
+        {
+            "simulation.horizon": 20.0,
+            "observer.sign_term": False,
+            "disturbance.amplitude": 0.0,
+            "faults.x_onset": 0.0,
+            "faults.y_onset": 0.0,
+            "faults.z_onset": 0.0,
+            "faults.x_magnitude": F[0],
+            "faults.y_magnitude": F[1],
+            "faults.z_amplitude": 0.0,
+            "faults.z_decay_amplitude": F[2],
+            "faults.z_decay_rate": 0.0,
+        },
+    )
     ds, _ = simulate_with_metrics(scn)
     from formation_ftc.core.integrators import zoh_discretize
 
@@ -94,9 +123,15 @@ def test_observer_position_error_exact_recursion():
     # A - L1 C has row x = [-L1_11, 0...] (printed L1 cancels the kinematic coupling), so with the sign
     # term e_{k+1} = (1 - lam dt) e_k - dt gamma sgn(e_k) while the sign is constant (exact truth up to the
     # plant's dt^2/2 acceleration terms of the ZOH; d = 0 keeps them below 1e-12 m here).
-    scn = ftc.load_scenario("gui2022-ilo", {"simulation.horizon": 3.0, "simulation.record_every": 10,
-                                            "disturbance.amplitude": 0.0,
-                                            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET)})
+    scn = ftc.load_scenario(
+        "gui2022-ilo",
+        {
+            "simulation.horizon": 3.0,
+            "simulation.record_every": 10,
+            "disturbance.amplitude": 0.0,
+            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET),
+        },
+    )
     ds, _ = simulate_with_metrics(scn)
     e0 = -pub.ESTIMATE_OFFSET[:3]
     rho = 1 - LAM * 1e-3
@@ -115,8 +150,14 @@ def test_observer_position_error_exact_recursion():
 
 def test_ilo_reconstruction_and_e002_11_mechanism():
     # faults moved early (x at 5 s, z at 10 s) to keep the test short
-    over = {"simulation.horizon": 30.0, "faults.x_onset": 5.0, "faults.z_onset": 10.0,
-            "metrics.fault_rms_delay": 5.0, "metrics.estimate_start": 2.0, "metrics.estimate_end": 5.0}
+    over = {
+        "simulation.horizon": 30.0,
+        "faults.x_onset": 5.0,
+        "faults.z_onset": 10.0,
+        "metrics.fault_rms_delay": 5.0,
+        "metrics.estimate_start": 2.0,
+        "metrics.estimate_end": 5.0,
+    }
     ds_new, m_new = simulate_with_metrics(ftc.load_scenario("gui2022-ilo", over))
     ds_old, m_old = simulate_with_metrics(ftc.load_scenario("gui2022-ilo-baseline", over))
     # SPEC P2.6 #5: settles below 0.01 within ~0.2 s (reference +0.198 s), z error < 8e-3 after 1 s
@@ -130,13 +171,20 @@ def test_ilo_reconstruction_and_e002_11_mechanism():
     d_x = ds_new.disturbance.sel(axis="x").values[-1]
     leak = (1 - 0.99) * pub.L1_PRINTED[3, 3] * 0.5 / (pub.Q2_PRINTED * pub.L2_PRINTED[0, 3])
     assert t_end == 30.0
-    assert ds_new.fault_error.sel(axis="x").values[-1] == pytest.approx(GAMMA - d_x + leak, abs=2e-5)
+    assert ds_new.fault_error.sel(axis="x").values[-1] == pytest.approx(
+        GAMMA - d_x + leak, abs=2e-5
+    )
     assert ds_old.fault_error.sel(axis="x").values[-1] == pytest.approx(-d_x + leak, abs=2e-5)
 
 
 def test_lof2tc_and_cof2tc_short_campaign():
-    over = {"simulation.horizon": 1000.0, "faults.x_onset": 300.0, "faults.z_onset": 800.0,
-            "metrics.position_rms_start": 900.0, "metrics.z_amplitude_start": 900.0}
+    over = {
+        "simulation.horizon": 1000.0,
+        "faults.x_onset": 300.0,
+        "faults.z_onset": 800.0,
+        "metrics.position_rms_start": 900.0,
+        "metrics.z_amplitude_start": 900.0,
+    }
     ds_l, m_l = simulate_with_metrics(ftc.load_scenario("gui2022-lof2tc", over))
     ds_c, m_c = simulate_with_metrics(ftc.load_scenario("gui2022-cof2tc", over))
     # SPEC P2.4/P2.6 #6: < 0.01 m after ~194 s, pi peak ~260, fault bumps < 2e-3 m
@@ -154,18 +202,30 @@ def test_lof2tc_and_cof2tc_short_campaign():
 
 
 def test_batched_equals_single_runs():
-    scn = ftc.load_scenario("gui2022-lof2tc", {"simulation.horizon": 0.5, "simulation.record_every": 50})
+    scn = ftc.load_scenario(
+        "gui2022-lof2tc", {"simulation.horizon": 0.5, "simulation.record_every": 50}
+    )
     c = compile_scenario(scn)
-    loops = [dataclasses.replace(c.params, plant=dataclasses.replace(
-        c.params.plant, disturbance_amplitude=jnp.asarray(a))) for a in (1.2e-3, 5e-3)]
+    loops = [
+        dataclasses.replace(
+            c.params,
+            plant=dataclasses.replace(c.params.plant, disturbance_amplitude=jnp.asarray(a)),
+        )
+        for a in (1.2e-3, 5e-3)
+    ]
     batch, axes = stack_params(loops)
     outb = batched_run(c, axes, 2)(batch)
     for i, loop in enumerate(loops):
         single = jax.jit(c.run)(loop)
-        np.testing.assert_allclose(np.asarray(outb["records"]["fault_estimate"][i]),
-                                   np.asarray(single["records"]["fault_estimate"]),
-                                   rtol=0, atol=1e-9)  # vmapped XLA fuses differently: rounding x 456
-    assert not np.allclose(outb["records"]["fault_estimate"][0], outb["records"]["fault_estimate"][1])
+        np.testing.assert_allclose(
+            np.asarray(outb["records"]["fault_estimate"][i]),
+            np.asarray(single["records"]["fault_estimate"]),
+            rtol=0,
+            atol=1e-9,
+        )  # vmapped XLA fuses differently: rounding x 456
+    assert not np.allclose(
+        outb["records"]["fault_estimate"][0], outb["records"]["fault_estimate"][1]
+    )
     assert outb["records"]["state"].dtype == jnp.float64
     ds, m = finish_run(scn, c, jax.jit(c.run)(c.params))
     assert set(ds.fault_estimate.dims) == {"time", "spacecraft", "axis"}
@@ -179,7 +239,9 @@ def test_nominal_orbit_closed_form_and_zoh_propagation():
     ref = cw_closed_form(n, q0, ts)
     got = np.stack([np.asarray(cw_free_motion(n, jnp.asarray(q0), t)) for t in ts])
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(got[-1], q0, rtol=0, atol=1e-9)  # returns after 4188.79 s (SPEC P2.6 #4)
+    np.testing.assert_allclose(
+        got[-1], q0, rtol=0, atol=1e-9
+    )  # returns after 4188.79 s (SPEC P2.6 #4)
     # ZOH propagation q_{k+1} = Ad q_k (the plant's discretisation) stays on the closed form
     from formation_ftc.core.integrators import zoh_discretize
 
@@ -191,15 +253,30 @@ def test_nominal_orbit_closed_form_and_zoh_propagation():
     qT = jax.lax.fori_loop(0, steps, lambda k, q: Adj @ q, jnp.asarray(q0))
     # 3e5 products with a matrix exact to ~eps: error <= N eps |q| ~ 3e5 * 2.2e-16 * 505 = 3.4e-8 m. The method
     # itself evaluates the closed form at every step (checked to 1e-9 m above), so it does not drift.
-    np.testing.assert_allclose(np.asarray(qT), cw_closed_form(n, q0, [3000.0])[0], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(
+        np.asarray(qT), cw_closed_form(n, q0, [3000.0])[0], rtol=0, atol=1e-7
+    )
 
 
 def test_fz_shifted_flag_e002_09():
-    over = {"simulation.horizon": 1.2, "simulation.record_every": 100, "faults.z_onset": 1.0,
-            "controller.law": "none"}
-    lit = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over))).fault.sel(axis="z", time=1.0).item()
-    sh = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "faults.z_decay_shifted": True}))).fault.sel(
-        axis="z", time=1.0).item()
+    over = {
+        "simulation.horizon": 1.2,
+        "simulation.record_every": 100,
+        "faults.z_onset": 1.0,
+        "controller.law": "none",
+    }
+    lit = (
+        deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over)))
+        .fault.sel(axis="z", time=1.0)
+        .item()
+    )
+    sh = (
+        deputy(
+            ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "faults.z_decay_shifted": True}))
+        )
+        .fault.sel(axis="z", time=1.0)
+        .item()
+    )
     base = 0.25 * np.sin(0.05 + np.pi / 4)
     assert lit == pytest.approx(base - 0.2 * np.exp(-0.1), abs=1e-14)
     assert sh == pytest.approx(base - 0.2, abs=1e-14)
@@ -208,11 +285,15 @@ def test_fz_shifted_flag_e002_09():
 def test_tau_two_steps_is_unstable_and_check_says_so():
     # E002-12 extended: with the printed gains any tau = m dt, m >= 2, destabilises the learning loop;
     # the eigenvalue check and the simulation agree
-    scn = ftc.load_scenario("gui2022-ilo", {"simulation.horizon": 1.0, "observer.learning_interval": 0.002})
+    scn = ftc.load_scenario(
+        "gui2022-ilo", {"simulation.horizon": 1.0, "observer.learning_interval": 0.002}
+    )
     cond = {c.name: c for c in ftc.check(scn)}["discrete learning loop stable"]
     assert cond.holds is False and cond.required
     ds, _ = simulate_with_metrics(scn)
-    assert np.max(np.abs(ds.fault_estimate.values[-1])) > 1e3  # grows (no fault, no disturbance needed)
+    assert (
+        np.max(np.abs(ds.fault_estimate.values[-1])) > 1e3
+    )  # grows (no fault, no disturbance needed)
 
 
 def test_sign_term_period_two_chatter_and_record_mean():
@@ -220,7 +301,9 @@ def test_sign_term_period_two_chatter_and_record_mean():
     # (~+-4.2e-4 m/s^2); the ILO of [25] does not. The record-interval mean removes it (mean over 2 steps).
     over = {"simulation.horizon": 4.0, "simulation.record_every": 1}
     ds1 = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over)))
-    ds2 = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "simulation.record_every": 2})))
+    ds2 = deputy(
+        ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "simulation.record_every": 2}))
+    )
     dsb = deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo-baseline", over)))
     w = ds1.time.values >= 3.0
     h = ds1.synthesized_disturbance.values[w]

@@ -14,7 +14,10 @@ H = {"simulation.horizon": 2.0}
 
 
 def test_batch_of_one_structure_equals_the_runs_alone():
-    scns = [load_scenario("gui2022-ilo", H), load_scenario("gui2022-ilo", {**H, "observer.gains": "lmi"})]
+    scns = [
+        load_scenario("gui2022-ilo", H),
+        load_scenario("gui2022-ilo", {**H, "observer.gains": "lmi"}),
+    ]
     timings: dict = {}
     batched = run_scenarios(scns, timings, ["printed", "lmi"])
     assert set(timings) == {"printed", "lmi"}
@@ -23,8 +26,9 @@ def test_batch_of_one_structure_equals_the_runs_alone():
         assert m_b.keys() == m_1.keys()
         for k in m_1:
             np.testing.assert_allclose(m_b[k], m_1[k], rtol=1e-12, atol=1e-300, err_msg=k)
-        np.testing.assert_allclose(ds_b["fault_estimate"].values, ds_1["fault_estimate"].values, rtol=1e-12,
-                                   atol=1e-15)
+        np.testing.assert_allclose(
+            ds_b["fault_estimate"].values, ds_1["fault_estimate"].values, rtol=1e-12, atol=1e-15
+        )
     # the two gain sets really differ (the batch did not run one scenario twice)
     assert abs(batched[0][1]["final_fault_err_x"] - batched[1][1]["final_fault_err_x"]) > 1e-4
 

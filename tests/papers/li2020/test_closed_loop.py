@@ -37,14 +37,17 @@ def _final(load, name, n_steps, **ov):
     return jax.jit(c.run)(c.params)
 
 
-@pytest.mark.parametrize("name, law, n_steps", [
-    ("li2020-thm2-delays", "thm2", 400),  # delayed reads from t = 0.8 s on (T41, T13 >= 0.8 s)
-    ("li2020-sirftc", "sir-ftc", 400),
-    # Thm 1 only to 200 steps: around t = 2.1 s the loop enters a stiff episode (w = xi^T s crosses 0
-    # with large |xi|, local gain ~ beta^2 |xi|^2 / sigma beyond RK4's stability at dt = 0.01 s) that
-    # amplifies round-off differences between the two implementations to ~1e-4 m (both stay bounded).
-    ("li2020-thm1", "thm1", 200),
-])
+@pytest.mark.parametrize(
+    "name, law, n_steps",
+    [
+        ("li2020-thm2-delays", "thm2", 400),  # delayed reads from t = 0.8 s on (T41, T13 >= 0.8 s)
+        ("li2020-sirftc", "sir-ftc", 400),
+        # Thm 1 only to 200 steps: around t = 2.1 s the loop enters a stiff episode (w = xi^T s crosses 0
+        # with large |xi|, local gain ~ beta^2 |xi|^2 / sigma beyond RK4's stability at dt = 0.01 s) that
+        # amplifies round-off differences between the two implementations to ~1e-4 m (both stay bounded).
+        ("li2020-thm1", "thm1", 200),
+    ],
+)
 def test_agrees_with_independent_numpy_loop(load, name, law, n_steps):
     """Same model, same RK4/dt, independent code (hard-coded paper functions, list history):
     states agree to round-off (1e-9 m, 1e-10 m/s)."""
@@ -67,11 +70,15 @@ def test_converges_as_dt_shrinks(load):
     (Thm 2, 20 s); we require a contraction by 0.75 per halving and mm-level position agreement."""
     finals = []
     for dt in (0.01, 0.005, 0.0025):
-        scn = load("li2020-thm2-delays", {"simulation.horizon": 20.0, "simulation.dt": dt,
-                                          "simulation.record_every": 1})
+        scn = load(
+            "li2020-thm2-delays",
+            {"simulation.horizon": 20.0, "simulation.dt": dt, "simulation.record_every": 1},
+        )
         c = build(scn)
         fin = jax.jit(c.run)(c.params)["final"]
-        finals.append((np.asarray(fin["plant"]["q"])[:, :3], np.asarray(fin["controller"]["beta_hat"])))
+        finals.append(
+            (np.asarray(fin["plant"]["q"])[:, :3], np.asarray(fin["controller"]["beta_hat"]))
+        )
     for k, tol in ((0, 5e-3), (1, 0.1)):
         d1 = np.max(np.abs(finals[0][k] - finals[1][k]))
         d2 = np.max(np.abs(finals[1][k] - finals[2][k]))
@@ -85,8 +92,15 @@ def test_thm1_acceptance(thm1_full):
     assert ds.attrs["diverged"] == ""
     assert m["mu1_at_30s"] < 0.2 and m["mu1_final"] < 0.02
     assert np.all(np.isfinite(ds.command.values)) and m["max_control_force"] < 1e4
-    for key, ref in {"mu1_at_10s": 3.24, "mu1_at_20s": 0.44, "mu1_at_30s": 0.073, "mu1_at_100s": 0.10,
-                     "mu1_at_1000s": 0.047, "mu1_at_3000s": 0.0094, "mu1_max_after_50s": 0.115}.items():
+    for key, ref in {
+        "mu1_at_10s": 3.24,
+        "mu1_at_20s": 0.44,
+        "mu1_at_30s": 0.073,
+        "mu1_at_100s": 0.10,
+        "mu1_at_1000s": 0.047,
+        "mu1_at_3000s": 0.0094,
+        "mu1_max_after_50s": 0.115,
+    }.items():
         assert abs(m[key] / ref - 1) < 0.10, (key, m[key], ref)
     assert abs(float(ds.mu1.values[0]) - 18.127) < 1e-3
     # adaptive parameters (SPEC P0.4 Fig. 7 description): beta_hat rises from 1 to ~8-12 within 10 s,
@@ -102,7 +116,11 @@ def test_thm2_acceptance(thm2_full):
     ds, m = thm2_full
     assert ds.attrs["diverged"] == ""
     assert m["mu1_final"] < 0.02
-    for key, ref in {"mu1_at_30s": 0.083, "mu1_at_3000s": 0.0095, "mu1_max_after_50s": 0.126}.items():
+    for key, ref in {
+        "mu1_at_30s": 0.083,
+        "mu1_at_3000s": 0.0095,
+        "mu1_max_after_50s": 0.126,
+    }.items():
         assert abs(m[key] / ref - 1) < 0.10, (key, m[key], ref)
 
 
@@ -117,8 +135,12 @@ def test_sir_ftc_is_worse(thm1_full, sir_full):
 def test_literal_dhat_sign_is_much_worse(load, simulate, thm2_full):
     """SPEC P0.6-6 (E000-04): with the printed '-' sign in (42), max mu1 on [50, 300] s grows > 10x
     (reference 0.126 -> 4.04 m)."""
-    ds_lit, _ = simulate(load("li2020-thm2-delays", {"simulation.horizon": 300.0,
-                                                     "controller.dhat_sign_literal": True}))
+    ds_lit, _ = simulate(
+        load(
+            "li2020-thm2-delays",
+            {"simulation.horizon": 300.0, "controller.dhat_sign_literal": True},
+        )
+    )
     ds, _ = thm2_full
     lit = max_over_window(ds_lit.time.values, ds_lit.mu1.values, 50.0, 300.0)
     cor = max_over_window(ds.time.values, ds.mu1.values, 50.0, 300.0)
@@ -143,7 +165,13 @@ def test_dataset_layout(thm1_full):
     assert ds.position.dims == ("time", "spacecraft", "axis")
     assert ds.time.attrs["units"] == "s" and float(ds.time[-1]) == 3000.0
     assert list(ds.spacecraft.values) == [1, 2, 3, 4]
-    for key in ("mu1_final", "mu2_final", "mu1_max_last_10pct", "settle_time_mu1_1m", "delta_v_total"):
+    for key in (
+        "mu1_final",
+        "mu2_final",
+        "mu1_max_last_10pct",
+        "settle_time_mu1_1m",
+        "delta_v_total",
+    ):
         assert np.isfinite(m[key])
     assert np.isclose(m["delta_v_total"], float(ds.delta_v.values[-1].sum()))
 
@@ -154,10 +182,17 @@ def test_divergence_is_reported(load, simulate):
     from formation_ftc.sim.engine import SimulationDiverged
 
     with pytest.raises(SimulationDiverged) as exc:
-        simulate(load("li2020-thm1", {"simulation.horizon": 20.0, "simulation.dt": 0.5,
-                                      "simulation.record_every": 1}))
+        simulate(
+            load(
+                "li2020-thm1",
+                {"simulation.horizon": 20.0, "simulation.dt": 0.5, "simulation.record_every": 1},
+            )
+        )
     variable = exc.value.info.variable  # a path in the run's carry, e.g. "0.controller.beta_hat"
-    assert any(part in variable for part in ("plant.", "controller.")) and exc.value.info.spacecraft is not None
+    assert (
+        any(part in variable for part in ("plant.", "controller."))
+        and exc.value.info.spacecraft is not None
+    )
     assert 0 < exc.value.info.time < 20.0
     assert np.all(np.isfinite(exc.value.partial.position.values))
 
@@ -168,8 +203,11 @@ def test_batched_run_equals_single_runs(load):
     scn = load("li2020-thm2-delays", {"simulation.horizon": 5.0})
     c = build(scn)
     p1 = c.params
-    p2 = dataclasses.replace(p1, plant=dataclasses.replace(p1.plant, mass=p1.plant.mass * 1.1),
-                             controller=dataclasses.replace(p1.controller, lam=p1.controller.lam * 0.8))
+    p2 = dataclasses.replace(
+        p1,
+        plant=dataclasses.replace(p1.plant, mass=p1.plant.mass * 1.1),
+        controller=dataclasses.replace(p1.controller, lam=p1.controller.lam * 0.8),
+    )
     batched = jax.tree_util.tree_map(lambda a, b: np.stack([a, b]), p1, p2)
     out_b = jax.jit(jax.vmap(c.run))(batched)
     run = jax.jit(c.run)

@@ -29,7 +29,11 @@ def test_printed_graph_not_balanced_with_sums(load):
     assert is_strongly_connected(C_PRINTED) and is_strongly_connected(C_BAL)
     c = _by_name(check(load("li2020-thm1")))["communication graph balanced"]
     assert c.holds is False and c.required
-    assert "NOT balanced" in c.value and "0.5, 0.6, 0.9, 0.6" in c.value and "1.2, 0.5, 0.5, 0.4" in c.value
+    assert (
+        "NOT balanced" in c.value
+        and "0.5, 0.6, 0.9, 0.6" in c.value
+        and "1.2, 0.5, 0.5, 0.4" in c.value
+    )
     cb = _by_name(check(load("li2020-thm2-balanced")))["communication graph balanced"]
     assert cb.holds is True
 
@@ -64,31 +68,48 @@ def test_lemma3_constant():
 
 def _delays_with(entry, value):
     base = [["0"] * 4 for _ in range(4)]
-    for i, j, v in [(0, 2, "1 - 0.2*cos(0.4*t)"), (1, 0, "1 + 0.2*sin(0.2*t)"), (2, 1, "2 + 0.4*sin(0.2*t)"),
-                    (2, 3, "3 + 0.6*sin(0.2*t)"), (3, 0, "1 + 0.2*cos(0.2*t)")]:
+    for i, j, v in [
+        (0, 2, "1 - 0.2*cos(0.4*t)"),
+        (1, 0, "1 + 0.2*sin(0.2*t)"),
+        (2, 1, "2 + 0.4*sin(0.2*t)"),
+        (2, 3, "3 + 0.6*sin(0.2*t)"),
+        (3, 0, "1 + 0.2*cos(0.2*t)"),
+    ]:
         base[i][j] = v
     base[entry[0]][entry[1]] = value
     return base
 
 
-@pytest.mark.parametrize("entry, expr, words", [
-    ((2, 3), "0.5 - 0.01*t", ["negative", "T34", "link 4 -> 3", "goes negative at t = 50"]),
-    ((0, 2), "1 + 0.2*sin(5*t)", ["rate", "T13", ">= 1"]),
-    ((1, 0), "0.005", ["shorter than the step", "T21"]),
-])
+@pytest.mark.parametrize(
+    "entry, expr, words",
+    [
+        ((2, 3), "0.5 - 0.01*t", ["negative", "T34", "link 4 -> 3", "goes negative at t = 50"]),
+        ((0, 2), "1 + 0.2*sin(5*t)", ["rate", "T13", ">= 1"]),
+        ((1, 0), "0.005", ["shorter than the step", "T21"]),
+    ],
+)
 def test_bad_delays_rejected(load, entry, expr, words):
     with pytest.raises(ScenarioError) as exc:
-        load("li2020-thm2-delays", {"network.delays": _delays_with(entry, expr), "simulation.horizon": 100.0})
+        load(
+            "li2020-thm2-delays",
+            {"network.delays": _delays_with(entry, expr), "simulation.horizon": 100.0},
+        )
     msg = str(exc.value)
     for w in words:
         assert w in msg, msg
 
 
-@pytest.mark.parametrize("C, words", [
-    ([[0, 0, -0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]], ["network.adjacency[0][2]", ">= 0"]),
-    ([[0.3, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]], ["self-loops"]),
-    ([[0, 0.5], [0.5, 0]], ["4x4"]),
-])
+@pytest.mark.parametrize(
+    "C, words",
+    [
+        (
+            [[0, 0, -0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]],
+            ["network.adjacency[0][2]", ">= 0"],
+        ),
+        ([[0.3, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]], ["self-loops"]),
+        ([[0, 0.5], [0.5, 0]], ["4x4"]),
+    ],
+)
 def test_bad_adjacency_rejected(load, C, words):
     with pytest.raises(ScenarioError) as exc:
         load("li2020-thm1", {"network.adjacency": C})
@@ -102,6 +123,9 @@ def test_other_validation_messages(load):
     with pytest.raises(ScenarioError, match="network.delays: required"):
         load("li2020-thm1", {"controller.law": "thm2"})
     with pytest.raises(ScenarioError, match="alpha3_literal"):
-        load("li2020-thm1", {"faults.alpha3_literal": True, "faults.effectiveness": ["1", "1", "0.9"]})
+        load(
+            "li2020-thm1",
+            {"faults.alpha3_literal": True, "faults.effectiveness": ["1", "1", "0.9"]},
+        )
     with pytest.raises(ScenarioError, match="unknown name"):
         load("li2020-thm1", {"disturbance.force": ["0", "0", "x*t"]})

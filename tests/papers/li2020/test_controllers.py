@@ -18,7 +18,11 @@ from formation_ftc.blocks.controllers.li2020_adaptive import (
 )
 from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_control, sir_ftc_rate
 from formation_ftc.components.controllers.li2020_adaptive import consensus
-from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork, graph_edges
+from formation_ftc.components.networks.weighted_graph import (
+    DelayedGraphNetwork,
+    GraphNetwork,
+    graph_edges,
+)
 from formation_ftc.core.history import history_init, history_push
 from formation_ftc.sim.components import NetworkInputs
 
@@ -32,14 +36,16 @@ def test_control_law_matches_per_agent_formula():
     C = np.array([[0, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]])
     m_hat, beta, d_hat = rng.uniform(90, 110, N), rng.uniform(1, 10, N), rng.uniform(0.1, 5, N)
     sig, lam = 0.7, 20.0
-    cons = consensus(GraphNetwork(weights=jnp.asarray(C)).receive(0.0, None, NetworkInputs(s, 0.0, None)), s)
+    cons = consensus(
+        GraphNetwork(weights=jnp.asarray(C)).receive(0.0, None, NetworkInputs(s, 0.0, None)), s
+    )
     f, xi = li2020_control(s, Y, cons, m_hat, beta, d_hat, sig, lam)
     bd, md, dd = li2020_adaptation_rates(s, Y, xi, d_hat, sig, 0.1, 1.0, 1.0, 0.01)
     for i in range(N):
         c_i = sum(C[i, j] * (s[i] - s[j]) for j in range(N))
         xi_i = m_hat[i] * Y[i] + lam * s[i] + c_i + d_hat[i] * np.tanh(s[i] / sig)
         w = xi_i @ s[i]
-        f_i = -beta[i] ** 2 * xi_i * w / np.sqrt(beta[i] ** 2 * w**2 + sig**2)
+        f_i = -(beta[i] ** 2) * xi_i * w / np.sqrt(beta[i] ** 2 * w**2 + sig**2)
         assert np.allclose(xi[i], xi_i, rtol=1e-13) and np.allclose(f[i], f_i, rtol=1e-13)
         assert np.isclose(bd[i], 0.1 * w) and np.isclose(md[i], s[i] @ Y[i])
         assert np.isclose(dd[i], -0.01 * sig * d_hat[i] + np.abs(s[i]).sum())
@@ -51,14 +57,18 @@ def test_delayed_consensus_reduces_to_undelayed():
     s = rng.normal(size=(4, 3))
     C = rng.uniform(0, 1, (4, 4)) * (1 - np.eye(4))
     delays = tuple(tuple("0.5 + 0.1*i + 0.01*j" for _ in range(4)) for _ in range(4))
-    net = DelayedGraphNetwork(weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=80, dt=0.01)
+    net = DelayedGraphNetwork(
+        weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=80, dt=0.01
+    )
     hist = history_init(jnp.asarray(s), 80)
     for _ in range(5):
         hist = history_push(hist, jnp.asarray(s))
     t = 0.043
     exo = net.exogenous(t)
     got = consensus(net.receive(t, hist, NetworkInputs(s, 0.04, exo)), s)
-    want = consensus(GraphNetwork(weights=jnp.asarray(C)).receive(t, None, NetworkInputs(s, 0.04, None)), s)
+    want = consensus(
+        GraphNetwork(weights=jnp.asarray(C)).receive(t, None, NetworkInputs(s, 0.04, None)), s
+    )
     assert np.allclose(got, want, atol=1e-14)
 
 
@@ -67,7 +77,9 @@ def test_delayed_network_reads_interpolated_past():
     N, dt = 3, 0.1
     C = np.array([[0, 0.5, 0.2], [0.3, 0, 0], [0, 0.7, 0]])
     delays = (("0", "0.25", "0.3 + 0.1*sin(t)"), ("0.15", "0", "0"), ("0", "0.2 + 0.01*t", "0"))
-    net = DelayedGraphNetwork(weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=8, dt=dt)
+    net = DelayedGraphNetwork(
+        weights=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=8, dt=dt
+    )
     samples = [rng.normal(size=(N, 2)) for _ in range(6)]  # m(t_0) .. m(t_5), t_k = k dt
     hist = history_init(jnp.asarray(samples[0]), 8)
     for m in samples[1:]:
@@ -81,12 +93,16 @@ def test_delayed_network_reads_interpolated_past():
         return (1 - w) * samples[k0][j] + w * samples[k0 + 1][j]
 
     T = {(0, 1): 0.25, (0, 2): 0.3 + 0.1 * np.sin(t), (1, 0): 0.15, (2, 1): 0.2 + 0.01 * t}
-    now = NetworkInputs(jnp.asarray(rng.normal(size=(N, 2))), t_k, net.exogenous(t))  # every T > t - t_k
+    now = NetworkInputs(
+        jnp.asarray(rng.normal(size=(N, 2))), t_k, net.exogenous(t)
+    )  # every T > t - t_k
     for network in (net, dataclasses.replace(net, short_delays=False)):
         got = network.receive(t, hist, now)
         for i in range(N):
             want = sum(C[i, j] * past(j, t - T[(i, j)]) for j in range(N) if C[i, j] > 0)
-            np.testing.assert_allclose(np.asarray(got["weighted_sum"][i]), want, rtol=1e-12, atol=1e-14)
+            np.testing.assert_allclose(
+                np.asarray(got["weighted_sum"][i]), want, rtol=1e-12, atol=1e-14
+            )
         np.testing.assert_allclose(np.asarray(got["in_weight"]), C.sum(axis=1))
 
 
@@ -96,8 +112,16 @@ def test_lemma1_bound_on_control_power(w, sigma, beta):
     """Lemma 1 / eq. (31): -s^T f = beta^2 w^2/sqrt(beta^2 w^2 + sigma^2) >= beta|w| - sigma."""
     xi = np.array([w, 0.0, 0.0])
     s = np.array([1.0, 0.0, 0.0])
-    f, _ = li2020_control(jnp.asarray(s[None]), jnp.zeros((1, 3)), jnp.asarray(xi[None]), jnp.zeros(1),
-                          jnp.array([beta]), jnp.zeros(1), sigma, 0.0)
+    f, _ = li2020_control(
+        jnp.asarray(s[None]),
+        jnp.zeros((1, 3)),
+        jnp.asarray(xi[None]),
+        jnp.zeros(1),
+        jnp.array([beta]),
+        jnp.zeros(1),
+        sigma,
+        0.0,
+    )
     power = -float(np.asarray(f)[0] @ s)
     assert power >= beta * abs(w) - sigma - 1e-9 * (1 + beta * abs(w))
     assert power <= beta * abs(w) + 1e-9 * (1 + beta * abs(w))
@@ -105,8 +129,12 @@ def test_lemma1_bound_on_control_power(w, sigma, beta):
 
 def test_dhat_sign_flag():
     s, Y = jnp.ones((1, 3)), jnp.zeros((1, 3))
-    _, xp = li2020_control(s, Y, jnp.zeros((1, 3)), jnp.zeros(1), jnp.ones(1), jnp.ones(1), 1.0, 0.0, 1.0)
-    _, xm = li2020_control(s, Y, jnp.zeros((1, 3)), jnp.zeros(1), jnp.ones(1), jnp.ones(1), 1.0, 0.0, -1.0)
+    _, xp = li2020_control(
+        s, Y, jnp.zeros((1, 3)), jnp.zeros(1), jnp.ones(1), jnp.ones(1), 1.0, 0.0, 1.0
+    )
+    _, xm = li2020_control(
+        s, Y, jnp.zeros((1, 3)), jnp.zeros(1), jnp.ones(1), jnp.ones(1), 1.0, 0.0, -1.0
+    )
     assert np.allclose(np.asarray(xp), np.tanh(1.0)) and np.allclose(np.asarray(xm), -np.tanh(1.0))
 
 

@@ -14,7 +14,11 @@ from formation_ftc.components.evaluations.formation_errors import (
     mu2_virtual_centre,
     settle_time,
 )
-from formation_ftc.core.rotating_formation import chi_from_period, desired_trajectory, formation_offsets
+from formation_ftc.core.rotating_formation import (
+    chi_from_period,
+    desired_trajectory,
+    formation_offsets,
+)
 from formation_ftc.papers.li2020.method import make_loop
 
 
@@ -22,7 +26,13 @@ def _formation(scn):
     """(rho0 (N, 3), desired-trajectory arguments) of the scenario's closed loop."""
     loop = make_loop(scn)
     f = loop.controller.formation
-    return np.asarray(loop.plant.initial_state_lvlh)[:, :3], (f.offsets, f.chi, f.rotation, f.growth, f.centre)
+    return np.asarray(loop.plant.initial_state_lvlh)[:, :3], (
+        f.offsets,
+        f.chi,
+        f.rotation,
+        f.growth,
+        f.centre,
+    )
 
 
 def test_constants(load):
@@ -75,7 +85,9 @@ def test_velocity_and_acceleration_are_exact_derivatives(load):
 def test_formation_offsets_sign_pattern():
     """E000-10: rho_bar_iF = R [cos/2, -sin, sqrt(3)/2 cos]."""
     rb = formation_offsets(500.0, [0, math.pi / 2, math.pi, 3 * math.pi / 2])
-    assert np.allclose(rb, [[250, 0, 433.0127], [0, -500, 0], [-250, 0, -433.0127], [0, 500, 0]], atol=1e-4)
+    assert np.allclose(
+        rb, [[250, 0, 433.0127], [0, -500, 0], [-250, 0, -433.0127], [0, 500, 0]], atol=1e-4
+    )
 
 
 def test_settle_time():

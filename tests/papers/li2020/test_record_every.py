@@ -30,8 +30,18 @@ from formation_ftc.papers.li2020.reproduction import adaptive_drift, load_li2020
 
 HORIZON = 60.0  # [s]
 #: metrics that must be present (windowed ones included), so that an empty comparison cannot pass
-EXPECTED = ("mu1_final", "mu1_max_last_10pct", "settle_time_mu1_1m", "mu1_max_after_50s", "delta_v_total",
-            "max_control_force", "mu1_at_10s", "mu1_at_20s", "mu1_at_30s", "position_error_final_sc1")
+EXPECTED = (
+    "mu1_final",
+    "mu1_max_last_10pct",
+    "settle_time_mu1_1m",
+    "mu1_max_after_50s",
+    "delta_v_total",
+    "max_control_force",
+    "mu1_at_10s",
+    "mu1_at_20s",
+    "mu1_at_30s",
+    "position_error_final_sc1",
+)
 LITERAL = {"controller.dhat_sign_literal": True, "simulation.horizon": 300.0}  # the E000-04 run
 
 
@@ -47,7 +57,9 @@ def _settle(t: np.ndarray, v: np.ndarray, threshold: float) -> float:
 def test_metrics_independent_of_record_every(name, same_metrics):
     out = {}
     for every in (1, 20):
-        ds, m = simulate_li2020(load_li2020(name, {"simulation.horizon": HORIZON, "simulation.record_every": every}))
+        ds, m = simulate_li2020(
+            load_li2020(name, {"simulation.horizon": HORIZON, "simulation.record_every": every})
+        )
         out[every] = (ds, m)
     (ds1, m1), (ds20, m20) = out[1], out[20]
     assert set(EXPECTED) <= m1.keys()
@@ -56,7 +68,9 @@ def test_metrics_independent_of_record_every(name, same_metrics):
 
     # independent reductions of the records in numpy (window edges as the metrics define them)
     def force_max(ds):
-        return float(np.max(np.abs(ds["command"].values)))  # max over time, spacecraft, axes of |f_i|
+        return float(
+            np.max(np.abs(ds["command"].values))
+        )  # max over time, spacecraft, axes of |f_i|
 
     def mu1_max_from(ds, start):
         t = ds.time.values
@@ -69,7 +83,9 @@ def test_metrics_independent_of_record_every(name, same_metrics):
     assert mu1_max_from(ds1, 0.9 * HORIZON) == pytest.approx(m1["mu1_max_last_10pct"], rel=1e-12)
     assert mu1_max_from(ds1, 50.0) == pytest.approx(m1["mu1_max_after_50s"], rel=1e-12)
     for tq in (10.0, 20.0, 30.0):
-        assert float(ds1["mu1"].values[round(tq / 0.01)]) == pytest.approx(m1[f"mu1_at_{int(tq)}s"], rel=1e-12)
+        assert float(ds1["mu1"].values[round(tq / 0.01)]) == pytest.approx(
+            m1[f"mu1_at_{int(tq)}s"], rel=1e-12
+        )
     # the adaptive parameters at the step t = 0.9 T, and their drift over the last 10 % of the horizon
     names = ("b_hat",) if name == "li2020-sirftc" else ("m_hat", "beta_hat", "d_hat")
     k90 = round(0.9 * HORIZON / 0.01)
@@ -77,13 +93,24 @@ def test_metrics_independent_of_record_every(name, same_metrics):
     assert drift.keys() == set(names)
     for n in names:
         v = ds1[n].values  # (time, spacecraft)
-        np.testing.assert_allclose([m1[f"{n}_at_90pct_sc{i + 1}"] for i in range(v.shape[1])], v[k90], rtol=1e-12)
-        assert drift[n] == pytest.approx(float(np.max(np.abs(v[-1] - v[k90]) / np.abs(v[-1]))), rel=1e-9)
+        np.testing.assert_allclose(
+            [m1[f"{n}_at_90pct_sc{i + 1}"] for i in range(v.shape[1])], v[k90], rtol=1e-12
+        )
+        assert drift[n] == pytest.approx(
+            float(np.max(np.abs(v[-1] - v[k90]) / np.abs(v[-1]))), rel=1e-9
+        )
     # the decimated records miss what the in-run accumulators see
     settle20 = _settle(ds20.time.values, ds20["mu1"].values, 1.0)
-    missed = [force_max(ds20) < m1["max_control_force"] * (1 - 1e-9),
-              abs(settle20 - m1["settle_time_mu1_1m"]) > 1e-6]
-    assert all(missed), (force_max(ds20), m1["max_control_force"], settle20, m1["settle_time_mu1_1m"])
+    missed = [
+        force_max(ds20) < m1["max_control_force"] * (1 - 1e-9),
+        abs(settle20 - m1["settle_time_mu1_1m"]) > 1e-6,
+    ]
+    assert all(missed), (
+        force_max(ds20),
+        m1["max_control_force"],
+        settle20,
+        m1["settle_time_mu1_1m"],
+    )
 
 
 #: 1e-13 m on the 250 m initial x of spacecraft 1: about two units in the last place of that coordinate
@@ -101,11 +128,22 @@ def test_e000_04_window_maximum_independent_of_record_every(same_metrics):
     and 30 s, the 1 m settling time, the maxima of mu1 and of the control force -- agrees to 1e-12;
     (2) no metric moves with ``record_every`` by more than it moves when the initial state moves by two
     units in the last place (both signs; measured ratio at most 0.014)."""
-    out = {every: simulate_li2020(load_li2020("li2020-thm2-delays", {**LITERAL, "simulation.record_every": every}))
-           for every in (1, 20)}
+    out = {
+        every: simulate_li2020(
+            load_li2020("li2020-thm2-delays", {**LITERAL, "simulation.record_every": every})
+        )
+        for every in (1, 20)
+    }
     (ds1, m1), (_, m20) = out[1], out[20]
-    early = ("mu1_max_50_300s", "mu1_max_after_50s", "max_control_force", "mu1_at_10s", "mu1_at_20s",
-             "mu1_at_30s", "settle_time_mu1_1m")
+    early = (
+        "mu1_max_50_300s",
+        "mu1_max_after_50s",
+        "max_control_force",
+        "mu1_at_10s",
+        "mu1_at_20s",
+        "mu1_at_30s",
+        "settle_time_mu1_1m",
+    )
     same_metrics({k: m1[k] for k in early}, {k: m20[k] for k in early})
 
     sc = load_li2020("li2020-thm2-delays").spacecraft  # the scenario's own initial positions
@@ -113,8 +151,14 @@ def test_e000_04_window_maximum_independent_of_record_every(same_metrics):
     for sign in (1.0, -1.0):
         pos = [list(map(float, r)) for r in sc.initial_position]
         pos[0][0] += sign * ULP_NUDGE
-        nudged.append(simulate_li2020(load_li2020("li2020-thm2-delays", {
-            **LITERAL, "simulation.record_every": 1, "spacecraft.initial_position": pos}))[1])
+        nudged.append(
+            simulate_li2020(
+                load_li2020(
+                    "li2020-thm2-delays",
+                    {**LITERAL, "simulation.record_every": 1, "spacecraft.initial_position": pos},
+                )
+            )[1]
+        )
     assert m1.keys() == m20.keys() == nudged[0].keys()
     sensitive = 0
     for k, a in m1.items():

@@ -15,23 +15,38 @@ def _as_expressions():
     # the same profile written as expressions in t and i (an independent code path)
     cols = []
     for j in range(3):
-        terms = " ".join(f"+ (i == {i + 1}) * where(t >= {ONSET[i][j]}, {EFF[i][j]}, 1)" for i in range(4))
+        terms = " ".join(
+            f"+ (i == {i + 1}) * where(t >= {ONSET[i][j]}, {EFF[i][j]}, 1)" for i in range(4)
+        )
         cols.append(terms[2:])
     return cols
 
 
-@pytest.mark.parametrize("scenario,atol", [
-    # SIR-FTC is smooth: the two code paths agree to round-off
-    ("li2020-sirftc", 1e-9),
-    # Thm 1 has a stiff episode near t = 2 s at dt = 0.01 s that amplifies round-off differences
-    # (operation order) to ~1e-4 m (notes of issue 3); 1e-3 m is still 5e-7 of the 500 m formation
-    ("li2020-thm1", 1e-3),
-])
+@pytest.mark.parametrize(
+    "scenario,atol",
+    [
+        # SIR-FTC is smooth: the two code paths agree to round-off
+        ("li2020-sirftc", 1e-9),
+        # Thm 1 has a stiff episode near t = 2 s at dt = 0.01 s that amplifies round-off differences
+        # (operation order) to ~1e-4 m (notes of issue 3); 1e-3 m is still 5e-7 of the 500 m formation
+        ("li2020-thm1", 1e-3),
+    ],
+)
 def test_step_profile_equals_expression_profile(scenario, atol):
-    step = ftc.simulate(ftc.load_scenario(scenario, {**BASE, "faults.profile": "step",
-                                                     "faults.step_effectiveness": EFF,
-                                                     "faults.step_onset": ONSET}))
-    expr = ftc.simulate(ftc.load_scenario(scenario, {**BASE, "faults.effectiveness": _as_expressions()}))
+    step = ftc.simulate(
+        ftc.load_scenario(
+            scenario,
+            {
+                **BASE,
+                "faults.profile": "step",
+                "faults.step_effectiveness": EFF,
+                "faults.step_onset": ONSET,
+            },
+        )
+    )
+    expr = ftc.simulate(
+        ftc.load_scenario(scenario, {**BASE, "faults.effectiveness": _as_expressions()})
+    )
     np.testing.assert_array_equal(step.effectiveness.values, expr.effectiveness.values)
     np.testing.assert_allclose(step.position.values, expr.position.values, rtol=0, atol=atol)
 
@@ -39,22 +54,45 @@ def test_step_profile_equals_expression_profile(scenario, atol):
 def test_step_profile_shares_one_program_across_values():
     from formation_ftc.api import compile_scenario
 
-    a = compile_scenario(ftc.load_scenario("li2020-thm1", {**BASE, "faults.profile": "step",
-                                                           "faults.step_effectiveness": EFF,
-                                                           "faults.step_onset": ONSET}))
-    b = compile_scenario(ftc.load_scenario("li2020-thm1", {**BASE, "faults.profile": "step",
-                                                           "faults.step_effectiveness": [[0.9] * 3] * 4,
-                                                           "faults.step_onset": [[1.0] * 3] * 4}))
+    a = compile_scenario(
+        ftc.load_scenario(
+            "li2020-thm1",
+            {
+                **BASE,
+                "faults.profile": "step",
+                "faults.step_effectiveness": EFF,
+                "faults.step_onset": ONSET,
+            },
+        )
+    )
+    b = compile_scenario(
+        ftc.load_scenario(
+            "li2020-thm1",
+            {
+                **BASE,
+                "faults.profile": "step",
+                "faults.step_effectiveness": [[0.9] * 3] * 4,
+                "faults.step_onset": [[1.0] * 3] * 4,
+            },
+        )
+    )
     assert a.static_key == b.static_key
     assert not np.array_equal(a.params.actuator.alpha, b.params.actuator.alpha)
 
 
-@pytest.mark.parametrize("field,value,msg", [
-    ("faults.step_effectiveness", [[0.0, 1.0, 1.0]] * 4, "step_effectiveness[0][0] = 0.0: must be (0, 1]"),
-    ("faults.step_effectiveness", [[1.0, 1.0, 1.2]] * 4, "must be (0, 1]"),
-    ("faults.step_onset", [[-1.0, 0.0, 0.0]] * 4, "step_onset[0][0] = -1.0: must be >= 0"),
-    ("faults.step_onset", [[0.0, 0.0, 0.0]] * 3, "faults.step_onset: 3 rows"),
-])
+@pytest.mark.parametrize(
+    "field,value,msg",
+    [
+        (
+            "faults.step_effectiveness",
+            [[0.0, 1.0, 1.0]] * 4,
+            "step_effectiveness[0][0] = 0.0: must be (0, 1]",
+        ),
+        ("faults.step_effectiveness", [[1.0, 1.0, 1.2]] * 4, "must be (0, 1]"),
+        ("faults.step_onset", [[-1.0, 0.0, 0.0]] * 4, "step_onset[0][0] = -1.0: must be >= 0"),
+        ("faults.step_onset", [[0.0, 0.0, 0.0]] * 3, "faults.step_onset: 3 rows"),
+    ],
+)
 def test_bad_step_profile(field, value, msg):
     with pytest.raises(ScenarioError) as info:
         ftc.load_scenario("li2020-thm1", {**BASE, "faults.profile": "step", field: value})

@@ -25,16 +25,25 @@ from formation_ftc.papers.programs import simulate
 
 DT = 0.01  # [s]
 HORIZON = 60.0  # [s]
-OVERRIDES = {"simulation.horizon": HORIZON, "faults.0.start": 10.0, "faults.0.end": 40.0,
-             "metrics.fault_window": [10.0, 30.0], "metrics.assessment_window": [15.0, 30.0],
-             "simulation.max_pitch": math.radians(45.0)}
+OVERRIDES = {
+    "simulation.horizon": HORIZON,
+    "faults.0.start": 10.0,
+    "faults.0.end": 40.0,
+    "metrics.fault_window": [10.0, 30.0],
+    "metrics.assessment_window": [15.0, 30.0],
+    "simulation.max_pitch": math.radians(45.0),
+}
 CASE, SEED = "mehrabian-isolation", 5
 
 
 def test_batched_divergence_step_is_exact():
     M, div = run_batch([CASE], [SEED], OVERRIDES)
     with pytest.raises(ftc.SimulationDiverged) as err:
-        simulate(ftc.load_scenario(CASE, {**OVERRIDES, "simulation.seed": SEED, "simulation.record_every": 1}))
+        simulate(
+            ftc.load_scenario(
+                CASE, {**OVERRIDES, "simulation.seed": SEED, "simulation.record_every": 1}
+            )
+        )
     info = err.value.info
     assert info.variable.startswith("plant.pitch")
     step = int(div[0, 0])

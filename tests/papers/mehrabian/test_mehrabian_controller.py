@@ -24,9 +24,17 @@ AVG = graphs.row_normalized(A)
 
 def gains(alpha=0.86):
     one = np.ones((M, 3))
-    return dict(K=jnp.asarray(20 * one), K_P=jnp.asarray(0.16 * one), K_I=jnp.asarray(0.001 * one),
-                sigma=jnp.asarray(0.5 * one), e_gain=jnp.asarray(one), alpha=jnp.asarray(alpha * np.ones(M)),
-                gamma=jnp.asarray(0.6 * np.ones(M)), phi_b=jnp.asarray(0.01), avg=jnp.asarray(AVG))
+    return dict(
+        K=jnp.asarray(20 * one),
+        K_P=jnp.asarray(0.16 * one),
+        K_I=jnp.asarray(0.001 * one),
+        sigma=jnp.asarray(0.5 * one),
+        e_gain=jnp.asarray(one),
+        alpha=jnp.asarray(alpha * np.ones(M)),
+        gamma=jnp.asarray(0.6 * np.ones(M)),
+        phi_b=jnp.asarray(0.01),
+        avg=jnp.asarray(AVG),
+    )
 
 
 @pytest.mark.parametrize("law", ["literal", "diffusive"])
@@ -51,8 +59,12 @@ def test_exact_model_gives_s_dynamics(law, comp):
     err = ctl.tracking_errors(q, qd, z, e, ed, edd, p["K_P"], p["K_I"])
     s_dot = qdd - err.r_dot  # d/dt(q_dot - r)
     lhs = el.el_forces(q, qd, s_dot, err.s, J)
-    np.testing.assert_allclose(np.asarray(lhs), np.asarray(out.tau_sync + out.gamma_comp), atol=1e-10)
-    np.testing.assert_allclose(np.asarray(err.s), np.asarray(qd - ed + 0.16 * (q - e) + 0.001 * z), atol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(lhs), np.asarray(out.tau_sync + out.gamma_comp), atol=1e-10
+    )
+    np.testing.assert_allclose(
+        np.asarray(err.s), np.asarray(qd - ed + 0.16 * (q - e) + 0.001 * z), atol=1e-15
+    )
 
 
 def test_literal_law_rewriting():
@@ -76,8 +88,11 @@ def test_modal_damping_matches_eigenvectors(law):
         v = np.real(V[:, k])
         s = jnp.asarray(np.repeat(v[:, None], 3, axis=1))
         tau = ctl.synchronisation_torque(s, p["avg"], p["K"], p["alpha"], p["gamma"], law)
-        np.testing.assert_allclose(np.asarray(tau), -ctl.modal_damping(20.0, 0.86, 0.6, np.real(mu[k]), law)
-                                   * np.asarray(s), atol=1e-11)
+        np.testing.assert_allclose(
+            np.asarray(tau),
+            -ctl.modal_damping(20.0, 0.86, 0.6, np.real(mu[k]), law) * np.asarray(s),
+            atol=1e-11,
+        )
     want = 0.5 * ((1 - 0.86) * 20 - 1 / 0.36) if law == "literal" else 0.5 * (20 - 1 / 0.36)
     assert ctl.modal_damping(20.0, 0.86, 0.6, 1.0, law) == pytest.approx(want, rel=1e-12)
 

@@ -25,9 +25,16 @@ from formation_ftc.sim.batch import batched_run, stack_params
 def test_energy_balance_of_the_exact_model_loop():
     """No fault, no disturbance, true inertia = nominal: V = 1/2 sum s^T D s changes by int sum s^T tau dt.
     Trapezoid on the 0.01 s records: error O(dt^2 |V''| T) ~ 1e-6 relative to the total change."""
-    s = ftc.load_scenario("mehrabian-identification", {
-        "faults": [], "disturbance.variance": 0.0, "formation.inertia_uncertainty": 0.0,
-        "simulation.horizon": 20.0, "simulation.record_every": 1})
+    s = ftc.load_scenario(
+        "mehrabian-identification",
+        {
+            "faults": [],
+            "disturbance.variance": 0.0,
+            "formation.inertia_uncertainty": 0.0,
+            "simulation.horizon": 20.0,
+            "simulation.record_every": 1,
+        },
+    )
     ds, _ = simulate_with_metrics(s)
     q, sv = ds.attitude.values, ds.sliding_variable.values
     J = jnp.asarray(np.diag(s.formation.nominal_inertia))
@@ -35,8 +42,15 @@ def test_energy_balance_of_the_exact_model_loop():
     V = 0.5 * np.einsum("tjp,tjpq,tjq->t", sv, D, sv)
     A = s.formation.adjacency()
     m = 8
-    tau = np.asarray(synchronisation_torque(jnp.asarray(sv), jnp.asarray(graphs.row_normalized(A)),
-                                            20.0 * jnp.ones((m, 3)), 0.86 * jnp.ones(m), 0.6 * jnp.ones(m)))
+    tau = np.asarray(
+        synchronisation_torque(
+            jnp.asarray(sv),
+            jnp.asarray(graphs.row_normalized(A)),
+            20.0 * jnp.ones((m, 3)),
+            0.86 * jnp.ones(m),
+            0.6 * jnp.ones(m),
+        )
+    )
     power = np.einsum("tjp,tjp->t", sv, tau)
     dt = 0.01
     work = np.concatenate([[0.0], np.cumsum(0.5 * dt * (power[1:] + power[:-1]))])
@@ -48,9 +62,17 @@ def test_energy_balance_of_the_exact_model_loop():
 @pytest.fixture(scope="module")
 def short_case_b():
     """Case 3 with the fault moved to [10, 40] s, 60 s, every step recorded; metric windows inside."""
-    s = ftc.load_scenario("mehrabian-identification", {
-        "faults.0.start": 10.0, "faults.0.end": 40.0, "simulation.horizon": 60.0, "simulation.record_every": 1,
-        "metrics.fault_window": [10.0, 40.0], "metrics.assessment_window": [15.0, 40.0]})
+    s = ftc.load_scenario(
+        "mehrabian-identification",
+        {
+            "faults.0.start": 10.0,
+            "faults.0.end": 40.0,
+            "simulation.horizon": 60.0,
+            "simulation.record_every": 1,
+            "metrics.fault_window": [10.0, 40.0],
+            "metrics.assessment_window": [15.0, 40.0],
+        },
+    )
     ds, metrics = simulate_with_metrics(s)
     return s, ds, metrics
 
@@ -60,10 +82,15 @@ def test_fault_and_fdi_signals(short_case_b):
     assert list(ds.axis.values) == ["pitch", "roll", "yaw"] and ds.attitude.attrs["units"] == "rad"
     t = ds.time.values
     on = (t >= 10.0 - 1e-9) & (t <= 40.0 + 1e-9)
-    np.testing.assert_allclose(ds.fault.values[:, 0, 2], np.where(on, 0.05 * np.sin(0.02 * t) + 0.6, 0.0), atol=1e-12)
+    np.testing.assert_allclose(
+        ds.fault.values[:, 0, 2], np.where(on, 0.05 * np.sin(0.02 * t) + 0.6, 0.0), atol=1e-12
+    )
     on_d = (t >= 15.0 - 1e-9) & (t <= 45.0 + 1e-9)
-    np.testing.assert_allclose(ds.fdi_estimate.values[:, 0, 2],
-                               np.where(on_d, 0.05 * np.sin(0.02 * (t - 5.0)) + 0.5, 0.0), atol=1e-12)
+    np.testing.assert_allclose(
+        ds.fdi_estimate.values[:, 0, 2],
+        np.where(on_d, 0.05 * np.sin(0.02 * (t - 5.0)) + 0.5, 0.0),
+        atol=1e-12,
+    )
     assert np.all(ds.fault_estimate_adaptive.values[t < 15.0 - 1e-9] == 0.0)
     assert ds.fault_estimate_adaptive.values[-1, 0, 2] != 0.0
     assert np.all(ds.fault_estimate_adaptive.values[:, 1:] == 0.0)
@@ -78,8 +105,12 @@ def test_metrics_agree_with_records(short_case_b):
     k0, k1 = 1000, 4000
     pair = np.linalg.norm(q[:, j] - q[:, n], axis=-1)
     assert m["sync_err_max_fault_window"] == pytest.approx(pair[k0:k1].max(), abs=1e-14)
-    assert m["track_err_max_fault_window"] == pytest.approx(np.linalg.norm(q, axis=-1)[k0:k1].max(), abs=1e-14)
-    assert m["spread_max_yaw_fault_window"] == pytest.approx(np.ptp(q[k0:k1, :, 2], axis=1).max(), abs=1e-14)
+    assert m["track_err_max_fault_window"] == pytest.approx(
+        np.linalg.norm(q, axis=-1)[k0:k1].max(), abs=1e-14
+    )
+    assert m["spread_max_yaw_fault_window"] == pytest.approx(
+        np.ptp(q[k0:k1, :, 2], axis=1).max(), abs=1e-14
+    )
     assert m["abs_max_pitch_run"] == pytest.approx(np.abs(q[:6000, :, 0]).max(), abs=1e-14)
     rms = np.sqrt(np.mean(np.mean(pair[k0:k1] ** 2, axis=1)))
     assert m["sync_err_rms_fault_window"] == pytest.approx(rms, rel=1e-2)
@@ -96,10 +127,18 @@ def test_converges_as_dt_shrinks():
     and by < 1e-4 rad (sat/sign terms make RK4 roughly first order, PERFORMANCE.md)."""
     finals = {}
     for dt in (0.02, 0.01, 0.005):
-        s = ftc.load_scenario("mehrabian-identification", {
-            "faults.0.start": 5.0, "simulation.horizon": 25.0, "simulation.dt": dt,
-            "simulation.record_every": round(25.0 / dt), "disturbance.variance": 0.0,
-            "metrics.fault_window": [5.0, 25.0], "metrics.assessment_window": [10.0, 25.0]})
+        s = ftc.load_scenario(
+            "mehrabian-identification",
+            {
+                "faults.0.start": 5.0,
+                "simulation.horizon": 25.0,
+                "simulation.dt": dt,
+                "simulation.record_every": round(25.0 / dt),
+                "disturbance.variance": 0.0,
+                "metrics.fault_window": [5.0, 25.0],
+                "metrics.assessment_window": [10.0, 25.0],
+            },
+        )
         c = compile_scenario(s)
         finals[dt] = np.asarray(jax.jit(c.run)(c.params)["final"]["plant"]["q"])
     e1 = np.abs(finals[0.02] - finals[0.005]).max()
@@ -108,7 +147,9 @@ def test_converges_as_dt_shrinks():
 
 
 def test_seeds_batched_equals_single_and_draws():
-    s = ftc.load_scenario("mehrabian-isolation", {"simulation.horizon": 2.0, "simulation.record_every": 200})
+    s = ftc.load_scenario(
+        "mehrabian-isolation", {"simulation.horizon": 2.0, "simulation.record_every": 200}
+    )
     c = compile_scenario(s)
     seeds = [1, 2, 7]
     P, axes = stack_params([with_seed(c.params, sd) for sd in seeds])
@@ -118,8 +159,12 @@ def test_seeds_batched_equals_single_and_draws():
     for i, seed in enumerate(seeds):
         one = single(with_seed(c.params, seed))
         # batched[i] == single run i (to the last bits: shared leaves compile to another program)
-        np.testing.assert_allclose(np.asarray(batched["final"]["plant"]["q"][i]),
-                                   np.asarray(one["final"]["plant"]["q"]), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            np.asarray(batched["final"]["plant"]["q"][i]),
+            np.asarray(one["final"]["plant"]["q"]),
+            rtol=0,
+            atol=1e-12,
+        )
         q0.append(np.asarray(one["records"]["attitude"][0]))
         finals.append(np.asarray(one["final"]["plant"]["q"]))
     again = single(with_seed(c.params, 1))  # deterministic in the seed
@@ -129,11 +174,23 @@ def test_seeds_batched_equals_single_and_draws():
     assert not np.allclose(q0[0], q0[1])
     # drawn inertia: J = J^ diag(1 + delta), |delta| <= 0.1 (inspect the setup through the step's effect)
     from formation_ftc.core.disturbances import run_key
+
     k_q0, k_J, _, _ = jax.random.split(run_key(jnp.asarray(1, dtype=jnp.uint32)), 4)
-    delta = 0.1 * np.asarray(jax.random.uniform(k_J, (8, 3), dtype=jnp.float64, minval=-1.0, maxval=1.0))
+    delta = 0.1 * np.asarray(
+        jax.random.uniform(k_J, (8, 3), dtype=jnp.float64, minval=-1.0, maxval=1.0)
+    )
     assert np.abs(delta).max() <= 0.1 and np.abs(delta).max() > 0.05
-    np.testing.assert_allclose(q0[0], np.rad2deg(np.asarray(jax.random.uniform(
-        k_q0, (8, 3), dtype=jnp.float64, minval=0.0, maxval=np.deg2rad(60.0)))), atol=1e-12)
+    np.testing.assert_allclose(
+        q0[0],
+        np.rad2deg(
+            np.asarray(
+                jax.random.uniform(
+                    k_q0, (8, 3), dtype=jnp.float64, minval=0.0, maxval=np.deg2rad(60.0)
+                )
+            )
+        ),
+        atol=1e-12,
+    )
 
 
 def test_disturbance_statistics(short_case_b):
@@ -157,13 +214,22 @@ def test_method_plot(short_case_b, tmp_path):
 
 
 def test_wrong_spacecraft_isolation_reconfigures_the_healthy_one():
-    s = ftc.load_scenario("mehrabian-isolation", {
-        "fdi.isolation.0.reported_spacecraft": 2, "fdi.isolation.0.reported_channel": 3,
-        "faults.0.start": 5.0, "simulation.horizon": 20.0, "simulation.record_every": 100})
+    s = ftc.load_scenario(
+        "mehrabian-isolation",
+        {
+            "fdi.isolation.0.reported_spacecraft": 2,
+            "fdi.isolation.0.reported_channel": 3,
+            "faults.0.start": 5.0,
+            "simulation.horizon": 20.0,
+            "simulation.record_every": 100,
+        },
+    )
     ds, _ = simulate_with_metrics(s)
     flag, u_hat = ds.fdi_flag.values, ds.fault_estimate_adaptive.values
     t = ds.time.values
     np.testing.assert_array_equal(flag[:, 1, 2], (t >= 10.0 - 1e-9).astype(float))
     assert flag.sum() == flag[:, 1, 2].sum()
     assert np.all(u_hat[:, 0] == 0.0) and u_hat[-1, 1, 2] != 0.0
-    np.testing.assert_allclose(ds.fdi_estimate.values[-1, 1, 2], 0.05 * np.sin(0.02 * 15.0) + 0.5, atol=1e-12)
+    np.testing.assert_allclose(
+        ds.fdi_estimate.values[-1, 1, 2], 0.05 * np.sin(0.02 * 15.0) + 0.5, atol=1e-12
+    )

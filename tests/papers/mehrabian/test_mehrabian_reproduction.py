@@ -30,8 +30,10 @@ def test_reproduction_structure_on_short_run(tmp_path, recheck_verdicts):
     assert any(c.name.startswith("(1 - alpha)") and c.holds for c in report.checks)
     # already after 20 s of fault, reconfiguration reduces the synchronisation error
     s = report.summary
-    assert s["mehrabian-identification"]["sync_err_rms_fault_window"]["mean"] < \
-        0.7 * s["mehrabian-no-reconfig"]["sync_err_rms_fault_window"]["mean"]
+    assert (
+        s["mehrabian-identification"]["sync_err_rms_fault_window"]["mean"]
+        < 0.7 * s["mehrabian-no-reconfig"]["sync_err_rms_fault_window"]["mean"]
+    )
 
 
 @pytest.mark.slow
@@ -41,9 +43,15 @@ def test_paper_claims_full_horizon_seeds_1_to_3():
     M, div = run_batch([CASES[c][0] for c in "ABC"], [1, 2, 3])
     A, B, C = 0, 1, 2
     assert np.all(div < 0)
-    assert np.all(M["spread_max_yaw_assessment_window"][B] < 0.7 * M["spread_max_yaw_assessment_window"][A])
-    assert np.all(M["abs_max_yaw_assessment_window"][B] < 0.7 * M["abs_max_yaw_assessment_window"][A])
-    assert np.all(M["spread_max_roll_assessment_window"][C] > 3 * M["spread_max_roll_assessment_window"][B])
+    assert np.all(
+        M["spread_max_yaw_assessment_window"][B] < 0.7 * M["spread_max_yaw_assessment_window"][A]
+    )
+    assert np.all(
+        M["abs_max_yaw_assessment_window"][B] < 0.7 * M["abs_max_yaw_assessment_window"][A]
+    )
+    assert np.all(
+        M["spread_max_roll_assessment_window"][C] > 3 * M["spread_max_roll_assessment_window"][B]
+    )
     assert np.all(M["sync_err_rms_fault_window"][B] < 0.5 * M["sync_err_rms_fault_window"][A])
     assert np.all(M["abs_max_yaw_assessment_window"][C] > M["abs_max_yaw_assessment_window"][B])
     assert np.rad2deg(M["abs_max_pitch_run"]).max() < 85.0

@@ -16,14 +16,23 @@ NAMES = ["mehrabian-no-reconfig", "mehrabian-identification", "mehrabian-isolati
 def test_builtin_scenarios_load_with_paper_data(name):
     s = ftc.load_scenario(name)
     c = s.controller
-    assert (c.gamma, c.alpha, c.K, c.K_P, c.K_I, c.sigma, c.e_gain) == (0.6, 0.86, 20.0, 0.16, 0.001, 0.5, 1.0)
+    assert (c.gamma, c.alpha, c.K, c.K_P, c.K_I, c.sigma, c.e_gain) == (
+        0.6,
+        0.86,
+        20.0,
+        0.16,
+        0.001,
+        0.5,
+        1.0,
+    )
     assert s.simulation.horizon == 300.0 and s.disturbance.variance == 0.001
     f = s.faults[0]
     assert (f.spacecraft, f.channel, f.start, f.end) == (1, 3, 40.0, 240.0)
     assert s.fdi.detected == (name != "mehrabian-no-reconfig")
     assert len(s.fdi.isolation) == (1 if name == "mehrabian-isolation" else 0)
-    assert sorted(map(tuple, s.formation.edges)) == sorted([(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7),
-                                                            (7, 8), (8, 1), (1, 5), (3, 7)])
+    assert sorted(map(tuple, s.formation.edges)) == sorted(
+        [(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7), (7, 8), (8, 1), (1, 5), (3, 7)]
+    )
 
 
 def test_disconnected_graph_is_rejected():
@@ -35,11 +44,15 @@ def test_disconnected_graph_is_rejected():
 def test_singular_initial_attitudes_are_rejected():
     rows = [[10.0, 0.0, 0.0]] * 7 + [[90.0, 5.0, 5.0]]
     with pytest.raises(ScenarioError, match="singular at theta = \\+-90 deg"):
-        ftc.load_scenario("mehrabian-identification", {"initial.random": False, "initial.attitude_deg": rows})
+        ftc.load_scenario(
+            "mehrabian-identification", {"initial.random": False, "initial.attitude_deg": rows}
+        )
     with pytest.raises(ScenarioError, match="singular at theta = \\+-90 deg"):
         ftc.load_scenario("mehrabian-identification", {"initial.attitude_range_deg": [0.0, 90.0]})
-    ok = ftc.load_scenario("mehrabian-identification", {"initial.random": False,
-                                                       "initial.attitude_deg": [[10.0, 0.0, 0.0]] * 8})
+    ok = ftc.load_scenario(
+        "mehrabian-identification",
+        {"initial.random": False, "initial.attitude_deg": [[10.0, 0.0, 0.0]] * 8},
+    )
     assert ok.initial.attitude_deg[0] == (10.0, 0.0, 0.0)
 
 
@@ -63,19 +76,29 @@ def test_paper_gains_satisfy_conditions_and_derived_values():
     conds = _by_name(ftc.check("mehrabian-identification"))
     assert all(c.holds for c in conds.values() if c.required)
     dq = conditions.design_quantities(20.0, 0.16, 0.001, 0.86, 0.6)
-    assert dq.R == pytest.approx(0.058065, abs=1e-6) and dq.K_minus == pytest.approx(17.2222, abs=1e-4)
+    assert dq.R == pytest.approx(0.058065, abs=1e-6) and dq.K_minus == pytest.approx(
+        17.2222, abs=1e-4
+    )
     np.testing.assert_allclose(dq.sum_Q_jn, [1.72e-5, 0.4403, 17.20], rtol=2e-3)
     np.testing.assert_allclose(dq.Q_j, [2.80e-6, 0.03168, 2.80], rtol=2e-3)
-    assert dq.cond11 == pytest.approx(1.584e-3, rel=1e-9) and dq.cond11_swapped == pytest.approx(-0.32, abs=1e-3)
+    assert dq.cond11 == pytest.approx(1.584e-3, rel=1e-9) and dq.cond11_swapped == pytest.approx(
+        -0.32, abs=1e-3
+    )
     assert dq.consensus_damping_literal == pytest.approx(0.011111, abs=1e-6)
     dq861 = conditions.design_quantities(20.0, 0.16, 0.001, 0.861, 0.6)
     # alpha = 0.861 reproduces the printed digits (truncated) except the middle Q_j entry (E003-05)
-    assert conditions.matches_printed(dq861.sum_Q_jn, conditions.PRINTED["sum_Q_jn"],
-                                      conditions.PRINTED_RESOLUTION["sum_Q_jn"]) == [True, True, True]
-    assert conditions.matches_printed(dq861.Q_j, conditions.PRINTED["Q_j"],
-                                      conditions.PRINTED_RESOLUTION["Q_j"]) == [True, False, True]
-    assert conditions.matches_printed(dq.sum_Q_jn, conditions.PRINTED["sum_Q_jn"],
-                                      conditions.PRINTED_RESOLUTION["sum_Q_jn"])[2] is False  # 17.20 at 0.86
+    assert conditions.matches_printed(
+        dq861.sum_Q_jn, conditions.PRINTED["sum_Q_jn"], conditions.PRINTED_RESOLUTION["sum_Q_jn"]
+    ) == [True, True, True]
+    assert conditions.matches_printed(
+        dq861.Q_j, conditions.PRINTED["Q_j"], conditions.PRINTED_RESOLUTION["Q_j"]
+    ) == [True, False, True]
+    assert (
+        conditions.matches_printed(
+            dq.sum_Q_jn, conditions.PRINTED["sum_Q_jn"], conditions.PRINTED_RESOLUTION["sum_Q_jn"]
+        )[2]
+        is False
+    )  # 17.20 at 0.86
     assert conds["sum_n Q_jn"].holds is True
     for D in (10 * np.eye(3), 20 * np.eye(3)):
         P = conditions.lyapunov_matrix(D, 20.0, 0.16, 0.001)
@@ -84,15 +107,27 @@ def test_paper_gains_satisfy_conditions_and_derived_values():
 
 
 def test_violated_gains_are_flagged_with_values():
-    swapped = _by_name(ftc.check(ftc.load_scenario("mehrabian-identification",
-                                                   {"controller.K_P": 0.001, "controller.K_I": 0.16})))
+    swapped = _by_name(
+        ftc.check(
+            ftc.load_scenario(
+                "mehrabian-identification", {"controller.K_P": 0.001, "controller.K_I": 0.16}
+            )
+        )
+    )
     c11 = swapped["(1 - alpha) K-bar^2 - 2 K-double-bar > 0"]
     assert c11.holds is False and "-0.32" in c11.value
-    a = _by_name(ftc.check(ftc.load_scenario("mehrabian-identification", {"controller.alpha": 0.87})))
+    a = _by_name(
+        ftc.check(ftc.load_scenario("mehrabian-identification", {"controller.alpha": 0.87}))
+    )
     cm = a["consensus-mode damping of the literal law"]
     assert cm.holds is False and "-0.08" in cm.value
     assert a["0 < alpha < 1"].holds is True
-    b = _by_name(ftc.check(ftc.load_scenario("mehrabian-identification", {"controller.alpha": 1.2,
-                                                                          "controller.K": 2.0})))
+    b = _by_name(
+        ftc.check(
+            ftc.load_scenario(
+                "mehrabian-identification", {"controller.alpha": 1.2, "controller.K": 2.0}
+            )
+        )
+    )
     assert b["0 < alpha < 1"].holds is False and b["K - I/gamma^2 > 0"].holds is False
     assert "-0.777778" in b["K - I/gamma^2 > 0"].value

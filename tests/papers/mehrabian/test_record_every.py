@@ -29,19 +29,27 @@ DT = 0.01  # [s]
 HORIZON = 60.0  # [s]
 FAULT = (10.0, 40.0)  # [s]
 ASSESS = (15.0, 40.0)  # [s]
-OVERRIDES = {"simulation.horizon": HORIZON, "faults.0.start": FAULT[0], "faults.0.end": FAULT[1],
-             "metrics.fault_window": list(FAULT), "metrics.assessment_window": list(ASSESS)}
+OVERRIDES = {
+    "simulation.horizon": HORIZON,
+    "faults.0.start": FAULT[0],
+    "faults.0.end": FAULT[1],
+    "metrics.fault_window": list(FAULT),
+    "metrics.assessment_window": list(ASSESS),
+}
 CASES = ["mehrabian-no-reconfig", "mehrabian-identification", "mehrabian-isolation"]
 WINDOWS = {"fault_window": FAULT, "run": (0.0, HORIZON), "assessment_window": ASSESS}
 AXES = ("pitch", "roll", "yaw")  # the attitude record's axis labels
 
 
-
 def _maxima(ds) -> dict[str, float]:
     """The sampled windowed maxima recomputed in numpy from the records: samples t_k with a <= t_k < b."""
     t = ds.time.values
-    sync = np.max(np.linalg.norm(ds["synchronisation_error"].values, axis=-1), axis=1)  # max over links
-    track = np.max(np.linalg.norm(ds["tracking_error"].values, axis=-1), axis=1)  # max over spacecraft
+    sync = np.max(
+        np.linalg.norm(ds["synchronisation_error"].values, axis=-1), axis=1
+    )  # max over links
+    track = np.max(
+        np.linalg.norm(ds["tracking_error"].values, axis=-1), axis=1
+    )  # max over spacecraft
     att = ds["attitude"]  # (time, spacecraft, axis)
     out = {}
     for w, (a, b) in WINDOWS.items():
@@ -56,12 +64,16 @@ def _maxima(ds) -> dict[str, float]:
 
 
 def test_metrics_independent_of_record_every(same_metrics):
-    batched, diverged = run_batch(CASES, [1], OVERRIDES)  # the reproduction's path: one record per run
+    batched, diverged = run_batch(
+        CASES, [1], OVERRIDES
+    )  # the reproduction's path: one record per run
     assert np.all(diverged == -1)
     for i, name in enumerate(CASES):
         ds1, m1 = simulate(ftc.load_scenario(name, {**OVERRIDES, "simulation.record_every": 1}))
         ds20, m20 = simulate(ftc.load_scenario(name, {**OVERRIDES, "simulation.record_every": 20}))
-        assert len(m1) == 36 and all(math.isfinite(v) for v in m1.values()), name  # 12 metrics x 3 windows
+        assert len(m1) == 36 and all(math.isfinite(v) for v in m1.values()), (
+            name
+        )  # 12 metrics x 3 windows
         same_metrics(m1, m20)
         same_metrics(m1, {k: float(v[i, 0]) for k, v in batched.items()})
         assert ds1.time.size == round(HORIZON / DT) + 1

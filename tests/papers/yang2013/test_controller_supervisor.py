@@ -18,7 +18,10 @@ from formation_ftc.blocks.controllers.yang2013_individual import (
     translational_control,
 )
 from formation_ftc.blocks.supervisors.switching_supervisor import RECONFIGURE, TOLERATE_BY_SWITCHING
-from formation_ftc.components.supervisors.switching_supervisor import SwitchingSupervisor, decision_events
+from formation_ftc.components.supervisors.switching_supervisor import (
+    SwitchingSupervisor,
+    decision_events,
+)
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.core.integrators import rk4_step
@@ -51,8 +54,9 @@ def closed_form(e0, v0, K1, K2, t):
     """Solution of e'' + K2 e' + (K1+1) e = 0 (underdamped)."""
     a = K2 / 2
     wd = np.sqrt(K1 + 1 - a**2)
-    return np.exp(-a * t)[:, None] * (e0 * np.cos(wd * t)[:, None]
-                                      + (v0 + a * e0) / wd * np.sin(wd * t)[:, None])
+    return np.exp(-a * t)[:, None] * (
+        e0 * np.cos(wd * t)[:, None] + (v0 + a * e0) / wd * np.sin(wd * t)[:, None]
+    )
 
 
 @pytest.mark.parametrize("K2", [0.01, -0.01])
@@ -90,31 +94,43 @@ def test_drift_cancellation_and_laws_by_hand():
     tau = attitude_control(e_w, e_q, e_q4, z, J, 0.2, 1.0, 1.0, 1e-3)
     shaping = (jnp.sum(e_q**2) + e_q4**2) / (2 * (jnp.sum(e_w**2) + 1e-3))
     np.testing.assert_allclose(tau, -J @ (0.2 * e_w + e_q + e_w * shaping), rtol=1e-14)
-    np.testing.assert_allclose(input_norm(f, tau), np.sqrt(np.sum(f**2) + np.sum(tau**2)), rtol=1e-14)
+    np.testing.assert_allclose(
+        input_norm(f, tau), np.sqrt(np.sum(f**2) + np.sum(tau**2)), rtol=1e-14
+    )
 
 
 def make_supervisor(leaves_slot1=True, delay=0):
     # modes start at 0, 1000, 2000 s (dt = 1 s); slot 1 leaves at the switch out of mode 2 (index 1)
     leaves = np.zeros((3, 3), bool)
     leaves[1, 1] = leaves_slot1
-    return SwitchingSupervisor(count=3, dt=1.0, switch_steps=jnp.array([0, 1000, 2000]),
-                               active=jnp.ones((3, 3)), leaves_at_next_switch=jnp.asarray(leaves),
-                               eta=0.01, eta1=jnp.full(3, 0.01), delay_bound_steps=jnp.full(3, delay),
-                               desired_position=((("0", "0", "0"),) * 3,) * 3)
+    return SwitchingSupervisor(
+        count=3,
+        dt=1.0,
+        switch_steps=jnp.array([0, 1000, 2000]),
+        active=jnp.ones((3, 3)),
+        leaves_at_next_switch=jnp.asarray(leaves),
+        eta=0.01,
+        eta1=jnp.full(3, 0.01),
+        delay_bound_steps=jnp.full(3, delay),
+        desired_position=((("0", "0", "0"),) * 3,) * 3,
+    )
 
 
 def flight(diagnosed):
     return FlightInputs(None, None, {"diagnosed": jnp.asarray(diagnosed)}, None, None, None)
 
 
-@pytest.mark.parametrize("k_diag, leaves, delay, expected, margin", [
-    (1800, True, 0, TOLERATE_BY_SWITCHING, 3.0),  # dt1 = 800, dt2 = 200: 0.005*800 - 0.005*200
-    (1500, True, 0, TOLERATE_BY_SWITCHING, 0.0),  # dt1 = dt2: boundary of (29)
-    (1300, True, 0, RECONFIGURE, -2.0),  # fault too early: (29) fails
-    (1800, False, 0, RECONFIGURE, 3.0),  # (29) holds, but the spacecraft stays: reconfigure
-    (1850, True, 100, TOLERATE_BY_SWITCHING, 2.5),  # delay bound counted in dt2: t_f = 1750
-    (2500, True, 0, RECONFIGURE, -np.inf),  # last mode: nothing to switch to
-])
+@pytest.mark.parametrize(
+    "k_diag, leaves, delay, expected, margin",
+    [
+        (1800, True, 0, TOLERATE_BY_SWITCHING, 3.0),  # dt1 = 800, dt2 = 200: 0.005*800 - 0.005*200
+        (1500, True, 0, TOLERATE_BY_SWITCHING, 0.0),  # dt1 = dt2: boundary of (29)
+        (1300, True, 0, RECONFIGURE, -2.0),  # fault too early: (29) fails
+        (1800, False, 0, RECONFIGURE, 3.0),  # (29) holds, but the spacecraft stays: reconfigure
+        (1850, True, 100, TOLERATE_BY_SWITCHING, 2.5),  # delay bound counted in dt2: t_f = 1750
+        (2500, True, 0, RECONFIGURE, -np.inf),  # last mode: nothing to switch to
+    ],
+)
 def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
     sup = make_supervisor(leaves, delay)
     update = jax.jit(sup.update)
@@ -130,9 +146,24 @@ def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
     held = sup.current(state2)
     assert int(held.mode) == int(np.searchsorted([0, 1000, 2000], k_diag + 11, side="right") - 1)
     out = sup.outputs(0.0, state2, held)
-    ev = decision_events(*(out[name] for name in ("supervisor_decision", "supervisor_decision_time",
-                                                  "supervisor_decision_mode", "condition_29_margin")), 1.0)
-    assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == k_diag and ev[0]["step"] == k_diag
+    ev = decision_events(
+        *(
+            out[name]
+            for name in (
+                "supervisor_decision",
+                "supervisor_decision_time",
+                "supervisor_decision_mode",
+                "condition_29_margin",
+            )
+        ),
+        1.0,
+    )
+    assert (
+        len(ev) == 1
+        and ev[0]["spacecraft"] == 2
+        and ev[0]["time"] == k_diag
+        and ev[0]["step"] == k_diag
+    )
 
 
 def test_supervisor_ignores_a_diagnosis_outside_the_formation_and_vmaps():
@@ -142,5 +173,6 @@ def test_supervisor_ignores_a_diagnosis_outside_the_formation_and_vmaps():
     assert int(state["decision"][1]) == 0
     sup = make_supervisor()
     new, _ = jax.vmap(lambda t: sup.update(t, sup.initial_state(), flight([False, True, False])))(
-        jnp.array([1800.0, 1300.0]))
+        jnp.array([1800.0, 1300.0])
+    )
     assert new["decision"][:, 1].tolist() == [TOLERATE_BY_SWITCHING, RECONFIGURE]

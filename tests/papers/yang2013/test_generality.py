@@ -17,13 +17,26 @@ RAW = {
     "simulation": {"horizon": 30.0, "dt": 0.05, "record_every": 10},
     "spacecraft": {"count": 4},
     "controller": {"K1": 0.5, "K2": 0.8, "rotation_coupling": False},
-    "initial_state": [{"spacecraft": 1, "e_R": [0.1, 0.0, 0.0]}, {"spacecraft": 2, "e_V": [0.0, 0.2, 0.0]}],
+    "initial_state": [
+        {"spacecraft": 1, "e_R": [0.1, 0.0, 0.0]},
+        {"spacecraft": 2, "e_V": [0.0, 0.2, 0.0]},
+    ],
     "modes": [
         {"name": "a", "start": 0.0, "members": [1, 2]},
-        {"name": "b", "start": 10.0, "members": [1, 3], "variation": [[1.0, 0.0]],
-         "new_states": [{"spacecraft": 3, "e_R": [0.0, 0.0, 0.1]}]},
-        {"name": "c", "start": 20.0, "members": [1, 3, 2], "variation": [[1.0, 0.0], [0.0, 1.0]],
-         "new_states": [{"spacecraft": 2, "e_R": [-0.05, 0.0, 0.0]}]},
+        {
+            "name": "b",
+            "start": 10.0,
+            "members": [1, 3],
+            "variation": [[1.0, 0.0]],
+            "new_states": [{"spacecraft": 3, "e_R": [0.0, 0.0, 0.1]}],
+        },
+        {
+            "name": "c",
+            "start": 20.0,
+            "members": [1, 3, 2],
+            "variation": [[1.0, 0.0], [0.0, 1.0]],
+            "new_states": [{"spacecraft": 2, "e_R": [-0.05, 0.0, 0.0]}],
+        },
     ],
 }
 
@@ -48,12 +61,16 @@ def test_general_mode_sequence_with_return(tmp_path):
     assert ds["active"].sel(time=25.0).values.tolist() == [1, 1, 1, 0]
     # spacecraft 1 is never reset: it follows the closed form over the whole run
     t = ds["time"].values
-    np.testing.assert_allclose(x.sel(spacecraft=1, component="e_R_x").values,
-                               closed_form(0.1, 0.0, 0.5, 0.8, t), atol=1e-7)
+    np.testing.assert_allclose(
+        x.sel(spacecraft=1, component="e_R_x").values, closed_form(0.1, 0.0, 0.5, 0.8, t), atol=1e-7
+    )
     # returning spacecraft 2 follows the closed form from its new state
     late = t >= 20.0
-    np.testing.assert_allclose(x.sel(spacecraft=2, component="e_R_x").values[late],
-                               closed_form(-0.05, 0.0, 0.5, 0.8, t[late] - 20.0), atol=1e-7)
+    np.testing.assert_allclose(
+        x.sel(spacecraft=2, component="e_R_x").values[late],
+        closed_form(-0.05, 0.0, 0.5, 0.8, t[late] - 20.0),
+        atol=1e-7,
+    )
     # |X(t_k)|^2 = |S X(t_k^-)|^2 + |X*|^2 (10), with S = [1, 0] at 10 s
     m = json.loads(ds.attrs["metrics_json"])
     pre_sc = [m[f"pre_switch_sc_norm_2_sc{s}"] for s in (1, 2)]

@@ -9,7 +9,10 @@ from formation_ftc.papers.yang2013.conditions import design_quantities
 
 
 def conditions(overrides=None):
-    return {c.reference + " " + c.name: c for c in ftc.check(ftc.load_scenario("yang2013-controller-fault", overrides))}
+    return {
+        c.reference + " " + c.name: c
+        for c in ftc.check(ftc.load_scenario("yang2013-controller-fault", overrides))
+    }
 
 
 def failing(conds):
@@ -19,18 +22,29 @@ def failing(conds):
 def test_builtin_scenarios_load_and_all_conditions_hold():
     for name in ("yang2013-healthy", "yang2013-controller-fault"):
         sc = ftc.load_scenario(name)
-        assert sc.mode_sizes() == [3, 5, 5, 5, 4]  # SPEC P1.6-5 (mode 5 with the zero-row placeholder)
+        assert sc.mode_sizes() == [
+            3,
+            5,
+            5,
+            5,
+            4,
+        ]  # SPEC P1.6-5 (mode 5 with the zero-row placeholder)
         q = design_quantities(sc)
         assert q["dwell_time_required"] == pytest.approx(542.8, abs=0.1)
     assert failing(conditions()) == []
 
 
 def test_wrong_variation_shape_is_rejected():
-    with pytest.raises(ScenarioError, match=r"modes\[1\]\.variation has shape \(2, 3\); expected \(5, 3\)"):
+    with pytest.raises(
+        ScenarioError, match=r"modes\[1\]\.variation has shape \(2, 3\); expected \(5, 3\)"
+    ):
         ftc.load_scenario("yang2013-healthy", {"modes.1.variation": [[1, 0, 0], [0, 1, 0]]})
-    with pytest.raises(ScenarioError, match=r"modes\[4\]\.variation has shape \(3, 4\); expected \(3, 5\)"):
-        ftc.load_scenario("yang2013-healthy",
-                          {"modes.4.variation": [[1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 1, 0]]})
+    with pytest.raises(
+        ScenarioError, match=r"modes\[4\]\.variation has shape \(3, 4\); expected \(3, 5\)"
+    ):
+        ftc.load_scenario(
+            "yang2013-healthy", {"modes.4.variation": [[1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 1, 0]]}
+        )
 
 
 def test_mode_without_spacecraft_is_rejected():

@@ -62,7 +62,9 @@ def test_fault_growth_and_input_growth(runs):
     assert h["condition_29_holds"] is None
     ev = n["supervisor_events"]
     assert len(ev) == 1 and ev[0]["spacecraft"] == 2 and ev[0]["time"] == 3800.0
-    assert ev[0]["decision"] == "tolerate by switching" and ev[0]["condition_29_margin"] == pytest.approx(3.0)
+    assert ev[0]["decision"] == "tolerate by switching" and ev[0][
+        "condition_29_margin"
+    ] == pytest.approx(3.0)
 
 
 def test_variation_model_bookkeeping(runs):
@@ -95,7 +97,9 @@ def test_fault_only_affects_spacecraft_2(runs):
     others = [0, 2, 3, 4, 5]
     np.testing.assert_array_equal(xh[:, others], xf[:, others])
     t = runs["yang2013-healthy"][1]["time"].values
-    np.testing.assert_array_equal(xh[t >= 4000.0], xf[t >= 4000.0])  # formation unaffected after departure
+    np.testing.assert_array_equal(
+        xh[t >= 4000.0], xf[t >= 4000.0]
+    )  # formation unaffected after departure
     assert not np.array_equal(xh[(t > 3800) & (t < 4000), 1], xf[(t > 3800) & (t < 4000), 1])
 
 
@@ -111,8 +115,15 @@ def test_early_fault_is_reconfigured_by_the_supervisor(runs):
     np.testing.assert_array_equal(ds["error_state"].values, xh)
 
 
-SHORT = {"simulation.horizon": 100.0, "modes.1.start": 20.0, "modes.2.start": 40.0, "modes.3.start": 60.0,
-         "modes.4.start": 80.0, "faults.0.onset": 70.0, "simulation.record_every": 100}
+SHORT = {
+    "simulation.horizon": 100.0,
+    "modes.1.start": 20.0,
+    "modes.2.start": 40.0,
+    "modes.3.start": 60.0,
+    "modes.4.start": 80.0,
+    "faults.0.onset": 70.0,
+    "simulation.record_every": 100,
+}
 
 
 def test_batched_params_equal_single_runs():
@@ -128,8 +139,12 @@ def test_batched_params_equal_single_runs():
     run = jax.jit(lambda p: p.run())
     for i, p in enumerate((loop, loop2)):
         single = run(p)
-        np.testing.assert_allclose(outb["records"]["error_state"][i], single["records"]["error_state"],
-                                   rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(
+            outb["records"]["error_state"][i],
+            single["records"]["error_state"],
+            rtol=1e-12,
+            atol=1e-15,
+        )
     assert int(single["diverged_step"]) == -1
     assert outb["records"]["error_state"].dtype == np.float64
     assert not np.allclose(outb["records"]["error_state"][0], outb["records"]["error_state"][1])
@@ -140,13 +155,23 @@ def test_windowed_input_maxima_are_taken_at_every_step():
     # equal the maxima of the every-step records (an independent reduction of the records in numpy);
     # the maxima of the decimated records miss the peaks of the 1 rad/s oscillation
     over = dict(SHORT, **{"faults.0.onset": 75.0})
-    windows = (input_norm_window("w_60_75", 60.0, 75.0, 0.05), input_norm_window("w_75_80", 75.0, 80.0, 0.05))
+    windows = (
+        input_norm_window("w_60_75", 60.0, 75.0, 0.05),
+        input_norm_window("w_75_80", 75.0, 80.0, 0.05),
+    )
     out = {}
     for every in (1, 20):
-        loop = make_loop(ftc.load_scenario("yang2013-controller-fault",
-                                           dict(over, **{"simulation.record_every": every})), windows)
+        loop = make_loop(
+            ftc.load_scenario(
+                "yang2013-controller-fault", dict(over, **{"simulation.record_every": every})
+            ),
+            windows,
+        )
         res = jax.jit(lambda p: p.run())(loop)
-        out[every] = (metrics_dict(loop.metrics, res["metrics"]), np.asarray(res["records"]["input_norm"]))
+        out[every] = (
+            metrics_dict(loop.metrics, res["metrics"]),
+            np.asarray(res["records"]["input_norm"]),
+        )
     m1, u1 = out[1]
     m20, u20 = out[20]
     assert m1 == pytest.approx(m20, rel=1e-13, abs=0, nan_ok=True)
@@ -155,21 +180,35 @@ def test_windowed_input_maxima_are_taken_at_every_step():
     for name, lo, hi in (("w_60_75", 60.0, 75.0), ("w_75_80", 75.0, 80.0)):
         sel = (t1 >= lo - 1e-9) & (t1 < hi - 1e-9)
         for s in range(6):
-            assert m1[f"{name}_sc{s + 1}"] == pytest.approx(float(np.max(u1[sel, s])), rel=1e-13), (name, s)
+            assert m1[f"{name}_sc{s + 1}"] == pytest.approx(float(np.max(u1[sel, s])), rel=1e-13), (
+                name,
+                s,
+            )
     dec = (t20 >= 75.0 - 1e-9) & (t20 < 80.0 - 1e-9)
     assert np.max(u20[dec, 1]) < m1["w_75_80_sc2"]  # the decimated records miss the growing peak
     assert m1["max_input_norm_sc2"] == pytest.approx(float(np.max(u1[:, 1])), rel=1e-13)
     # |X| at the left limit of every switch, and sup |X| over both limits, against the every-step records
-    x1 = np.asarray(jax.jit(lambda p: p.run())(make_loop(ftc.load_scenario(
-        "yang2013-controller-fault", dict(over, **{"simulation.record_every": 1}))))["records"]["state_norm"])
+    x1 = np.asarray(
+        jax.jit(lambda p: p.run())(
+            make_loop(
+                ftc.load_scenario(
+                    "yang2013-controller-fault", dict(over, **{"simulation.record_every": 1})
+                )
+            )
+        )["records"]["state_norm"]
+    )
     assert m1["post_switch_norm_5"] == pytest.approx(float(x1[1600]), rel=1e-13)
     assert m1["max_state_norm"] >= float(np.max(x1))
 
 
 def test_diagnosis_delay_is_counted_by_the_supervisor():
-    sc = ftc.load_scenario("yang2013-controller-fault", dict(SHORT, **{"faults.0.diagnosis_delay": 2.0}))
+    sc = ftc.load_scenario(
+        "yang2013-controller-fault", dict(SHORT, **{"faults.0.diagnosis_delay": 2.0})
+    )
     _, ds, metrics = run_scenario(sc)
-    last = {name: ds[name].values[-1] for name in ("supervisor_decision_time", "condition_29_margin")}
+    last = {
+        name: ds[name].values[-1] for name in ("supervisor_decision_time", "condition_29_margin")
+    }
     # diagnosed at 72 s; the estimated fault time 72 - 2 = 70 s: margin 0.005 (10) - 0.005 (10) = 0
     assert last["supervisor_decision_time"][1] == pytest.approx(72.0)
     assert last["condition_29_margin"][1] == pytest.approx(0.0, abs=1e-12)

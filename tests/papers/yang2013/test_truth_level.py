@@ -10,7 +10,10 @@ import jax.numpy as jnp
 import numpy as np
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.controllers.yang2013_individual import translational_control, translational_drift
+from formation_ftc.blocks.controllers.yang2013_individual import (
+    translational_control,
+    translational_drift,
+)
 from formation_ftc.core.dynamics.attitude_quaternion import (
     angular_momentum_reference,
     gravity_gradient_torque,
@@ -53,8 +56,9 @@ def test_follower_relative_error_obeys_error_level_closed_loop():
     t = dt * np.arange(1, n + 1)
     a = K2 / 2
     wd = np.sqrt(K1 + 1 - a**2)
-    truth = np.exp(-a * t)[:, None] * (np.asarray(e0) * np.cos(wd * t)[:, None]
-                                       + a * np.asarray(e0) / wd * np.sin(wd * t)[:, None])
+    truth = np.exp(-a * t)[:, None] * (
+        np.asarray(e0) * np.cos(wd * t)[:, None] + a * np.asarray(e0) / wd * np.sin(wd * t)[:, None]
+    )
     # truth-level error = error-level closed form up to RK4 phase error (~5e-5 relative after
     # 1000 s) and float64 cancellation of 7e6 m positions (~1e-9 m): 1e-4 of the 0.87 m amplitude
     assert np.max(np.abs(e_R - truth)) < 1e-4 * 0.87
@@ -65,7 +69,9 @@ def test_6dof_uncontrolled_invariants_with_gravity_gradient():
     v = np.sqrt(MU_EARTH / r)
     q0 = jnp.array([0.1, 0.2, -0.1, 1.0])
     q0 = q0 / jnp.linalg.norm(q0)
-    s0 = jnp.concatenate([jnp.array([r, 0.0, 0.0, 0.0, v * 0.9, v * 0.3]), jnp.array([0.01, -0.02, 0.005]), q0])
+    s0 = jnp.concatenate(
+        [jnp.array([r, 0.0, 0.0, 0.0, v * 0.9, v * 0.3]), jnp.array([0.01, -0.02, 0.005]), q0]
+    )
     J = jnp.diag(jnp.array([20.0, 25.0, 30.0]))
     zero = jnp.zeros(3)
     dt, n = 1.0, 3000

@@ -17,7 +17,6 @@ def test_least_recently_used_entry_is_dropped_first():
     assert list(cache) == ["a", "d"] and cache["a"] == 10
 
 
-
 class _SlowOrderedDict(OrderedDict):
     """An OrderedDict that gives the other threads the processor inside every recency update, so that
     an eviction can fall between a lookup and its update whenever nothing prevents it."""

@@ -44,8 +44,9 @@ def _child(cache_dir, **env) -> dict:
     environ = {**os.environ, "FORMATION_FTC_JAX_CACHE": str(cache_dir), **env}
     environ.pop("FORMATION_FTC_PROGRAM_CACHE", None)
     environ.update(env)
-    proc = subprocess.run([sys.executable, "-c", _CHILD], capture_output=True, text=True, env=environ,
-                          timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-c", _CHILD], capture_output=True, text=True, env=environ, timeout=300
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
@@ -57,7 +58,9 @@ def test_a_stored_program_is_loaded_untraced_and_gives_the_same_bits(tmp_path):
     assert first["run_traces"] == 1 and len(entries) == 1
     second = _child(tmp_path / "cache")  # warm: loads the entry, no trace of the closed loop
     assert second["run_traces"] == 0
-    off = _child(tmp_path / "other", FORMATION_FTC_PROGRAM_CACHE="off")  # compiled in its own process
+    off = _child(
+        tmp_path / "other", FORMATION_FTC_PROGRAM_CACHE="off"
+    )  # compiled in its own process
     assert off["run_traces"] == 1 and not list((tmp_path / "other").rglob("programs/*.bin"))
     for got in (second, off):
         assert got["records"] == first["records"] and got["metrics"] == first["metrics"]
@@ -66,12 +69,17 @@ def test_a_stored_program_is_loaded_untraced_and_gives_the_same_bits(tmp_path):
 def test_the_key_changes_with_every_input_and_not_otherwise():
     args = (np.zeros(3), np.float64(1.0))
     base = pc.program_key("run", ("a", 1), args)
-    assert base is not None and base == pc.program_key("run", ("a", 1), (np.ones(3), np.float64(2.0)))
-    others = [pc.program_key("batch", ("a", 1), args), pc.program_key("run", ("a", 2), args),
-              pc.program_key("run", ("a", 1), (np.zeros(4), np.float64(1.0))),  # a shape
-              pc.program_key("run", ("a", 1), (np.zeros(3, np.int64), np.float64(1.0))),  # a dtype
-              pc.program_key("run", ("a", 1), (np.zeros(3), 1.0)),  # a weak type (Python float)
-              pc.program_key("run", ("a", 1), [np.zeros(3), np.float64(1.0)])]  # the tree
+    assert base is not None and base == pc.program_key(
+        "run", ("a", 1), (np.ones(3), np.float64(2.0))
+    )
+    others = [
+        pc.program_key("batch", ("a", 1), args),
+        pc.program_key("run", ("a", 2), args),
+        pc.program_key("run", ("a", 1), (np.zeros(4), np.float64(1.0))),  # a shape
+        pc.program_key("run", ("a", 1), (np.zeros(3, np.int64), np.float64(1.0))),  # a dtype
+        pc.program_key("run", ("a", 1), (np.zeros(3), 1.0)),  # a weak type (Python float)
+        pc.program_key("run", ("a", 1), [np.zeros(3), np.float64(1.0)]),
+    ]  # the tree
     assert None not in others and len({base, *others}) == len(others) + 1
 
 
@@ -98,7 +106,9 @@ class _OutsideComponent:
 def test_code_from_outside_the_package_is_not_keyed():
     assert pc.program_key("run", ("loop", _OutsideComponent()), (np.zeros(1),)) is None
     assert pc.program_key("run", ("loop", lambda x: x), (np.zeros(1),)) is None  # no stable name
-    assert pc.program_key("run", ("loop", np.tanh), (np.zeros(1),)) is not None  # a library function
+    assert (
+        pc.program_key("run", ("loop", np.tanh), (np.zeros(1),)) is not None
+    )  # a library function
 
 
 def test_a_corrupted_entry_is_removed_and_the_program_compiled(tmp_path, monkeypatch):
@@ -110,7 +120,9 @@ def test_a_corrupted_entry_is_removed_and_the_program_compiled(tmp_path, monkeyp
     (tmp_path / f"{key}.bin").write_bytes(b"not an executable")
     exe = pc.load_or_compile(jax.jit(lambda x: 2.0 * x), "test", "double", args)
     np.testing.assert_array_equal(np.asarray(exe(*args)), [0.0, 2.0, 4.0])
-    entry = tmp_path / f"{key}.bin"  # removed; stored again when XLA compiled it (not a JAX-cache load)
+    entry = (
+        tmp_path / f"{key}.bin"
+    )  # removed; stored again when XLA compiled it (not a JAX-cache load)
     assert not entry.exists() or entry.read_bytes() != b"not an executable"
 
 
@@ -120,9 +132,13 @@ def test_switched_off_and_without_a_jax_cache_there_is_no_directory(monkeypatch)
     monkeypatch.setenv(pc.ENV_SWITCH, "off")
     assert pc.directory() is None
     monkeypatch.setenv(pc.ENV_SWITCH, "on")
-    monkeypatch.setattr(pc, "jax", SimpleNamespace(config=SimpleNamespace(jax_compilation_cache_dir="/c")))
+    monkeypatch.setattr(
+        pc, "jax", SimpleNamespace(config=SimpleNamespace(jax_compilation_cache_dir="/c"))
+    )
     assert str(pc.directory()) == os.path.join("/c", "programs")
-    monkeypatch.setattr(pc, "jax", SimpleNamespace(config=SimpleNamespace(jax_compilation_cache_dir=None)))
+    monkeypatch.setattr(
+        pc, "jax", SimpleNamespace(config=SimpleNamespace(jax_compilation_cache_dir=None))
+    )
     assert pc.directory() is None  # FORMATION_FTC_JAX_CACHE=off
 
 
@@ -135,8 +151,12 @@ def test_only_programs_whose_custom_calls_a_loader_prepares_are_stored():
             return self.text
 
     assert pc._storable(Exe("ROOT %a = f64[3] add(...)"))
-    assert pc._storable(Exe('custom_call_target="lapack_dgetrf_ffi" custom_call_target="lapack_dtrsm_ffi"'))
-    assert not pc._storable(Exe('custom_call_target="lapack_dgetrf_ffi" custom_call_target="my_kernel"'))
+    assert pc._storable(
+        Exe('custom_call_target="lapack_dgetrf_ffi" custom_call_target="lapack_dtrsm_ffi"')
+    )
+    assert not pc._storable(
+        Exe('custom_call_target="lapack_dgetrf_ffi" custom_call_target="my_kernel"')
+    )
 
 
 def test_the_key_changes_inside_a_jax_configuration_context():
@@ -190,7 +210,9 @@ def test_an_entry_that_loads_but_cannot_run_is_removed_and_the_program_compiled(
     exe = pc._CheckedOnFirstCall(Broken(), entry, lambda: fresh)
     np.testing.assert_array_equal(np.asarray(exe(np.ones(2))), [2.0, 2.0])
     assert not entry.exists()
-    np.testing.assert_array_equal(np.asarray(exe(np.full(2, 3.0))), [6.0, 6.0])  # the fresh one from now on
+    np.testing.assert_array_equal(
+        np.asarray(exe(np.full(2, 3.0))), [6.0, 6.0]
+    )  # the fresh one from now on
 
 
 def test_jax_debugging_modes_call_the_jitted_function_itself():
@@ -209,6 +231,7 @@ def test_jax_debugging_modes_call_the_jitted_function_itself():
 
 
 # --- safety: nothing in the cache directory is trusted unless this user wrote it -------------------------
+
 
 def _fresh_program():
     """A jitted function no cache has seen (a random constant), its arguments and its result."""
@@ -265,14 +288,19 @@ def test_a_planted_pickle_is_never_unpickled(folder, tmp_path):
     entry = folder / f"{key}.bin"
     import zlib
 
-    for blob in (pickle.dumps(Payload()), zlib.compress(pickle.dumps((Payload(), None, None))),
-                 pc.MAGIC + key.encode() + b"\0" * 32 + zlib.compress(pickle.dumps(Payload()))):
+    for blob in (
+        pickle.dumps(Payload()),
+        zlib.compress(pickle.dumps((Payload(), None, None))),
+        pc.MAGIC + key.encode() + b"\0" * 32 + zlib.compress(pickle.dumps(Payload())),
+    ):
         entry.write_bytes(blob)
         os.chmod(entry, 0o600)
         exe = pc.load_or_compile(jax.jit(lambda x: 2.0 * x), "test", "double", args)
         np.testing.assert_array_equal(np.asarray(exe(*args)), [0.0, 2.0, 4.0])
         assert not marker.exists()
-        assert not entry.exists() or entry.read_bytes() != blob  # removed (or replaced by a real entry)
+        assert (
+            not entry.exists() or entry.read_bytes() != blob
+        )  # removed (or replaced by a real entry)
 
 
 def test_an_entry_owned_by_another_user_or_writable_by_others_is_not_loaded(folder, monkeypatch):
@@ -282,7 +310,9 @@ def test_an_entry_owned_by_another_user_or_writable_by_others_is_not_loaded(fold
     good = path.read_bytes()
     wrong = jax.jit(lambda x: -x)  # what a refused entry must give: the program compiled here
     os.chmod(path, 0o666)
-    np.testing.assert_array_equal(np.asarray(pc.load_or_compile(wrong, "test", "p", args)(*args)), -args[0])
+    np.testing.assert_array_equal(
+        np.asarray(pc.load_or_compile(wrong, "test", "p", args)(*args)), -args[0]
+    )
     assert not path.exists() or path.read_bytes() != good
     # another owner: really (as root), else as this process would see it
     path.write_bytes(good)
@@ -341,7 +371,9 @@ def test_a_key_file_that_is_not_private_is_replaced_and_its_entries_fail(folder)
     pc._SECRETS.clear()
     new = pc._secret(folder)
     assert new is not None and new != old and os.stat(key_file).st_mode & 0o777 == 0o600
-    assert pc._load(path, pc.program_key("test", "p", args), new, args) is None and not path.exists()
+    assert (
+        pc._load(path, pc.program_key("test", "p", args), new, args) is None and not path.exists()
+    )
 
 
 def test_an_entry_that_fails_on_its_first_call_for_any_reason_is_removed(tmp_path):
@@ -353,7 +385,9 @@ def test_an_entry_that_fails_on_its_first_call_for_any_reason_is_removed(tmp_pat
 
     entry = tmp_path / "k.bin"
     entry.write_bytes(b"entry")
-    exe = pc._CheckedOnFirstCall(Broken(), entry, lambda: jax.jit(lambda x: 2.0 * x).lower(np.ones(2)).compile())
+    exe = pc._CheckedOnFirstCall(
+        Broken(), entry, lambda: jax.jit(lambda x: 2.0 * x).lower(np.ones(2)).compile()
+    )
     np.testing.assert_array_equal(np.asarray(exe(np.ones(2))), [2.0, 2.0])
     assert not entry.exists()
 
@@ -363,7 +397,9 @@ def test_result_trees_round_trip_through_json_and_foreign_classes_are_refused():
 
     import jax
 
-    from formation_ftc.blocks.supervisors.hierarchical_supervisor import HlState  # a package named tuple
+    from formation_ftc.blocks.supervisors.hierarchical_supervisor import (
+        HlState,
+    )  # a package named tuple
 
     state = HlState(*range(len(HlState._fields)))
     tree = jax.tree_util.tree_structure({"a": (1, None, [2, ()]), "b": {"c": 3}, "s": state})

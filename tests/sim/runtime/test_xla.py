@@ -35,7 +35,9 @@ def test_options_on_cpu_and_switch_off(monkeypatch):
 
 
 def test_unknown_option_is_dropped_not_fatal(monkeypatch):
-    monkeypatch.setattr(xla, "DEFAULT_OPTIONS", {**xla.DEFAULT_OPTIONS, "xla_cpu_no_such_option": "1"})
+    monkeypatch.setattr(
+        xla, "DEFAULT_OPTIONS", {**xla.DEFAULT_OPTIONS, "xla_cpu_no_such_option": "1"}
+    )
     assert "xla_cpu_no_such_option" not in xla.compiler_options()
     assert not xla._supported("xla_cpu_opt_preset", "NOT_A_PRESET")
     f = xla.jit(lambda x: 2.0 * x)
@@ -46,7 +48,11 @@ def test_options_leave_the_arithmetic_alone():
     c = compile_scenario(load_scenario("cw-free-drift"))
     ours = jax.device_get(xla.jit(c.run)(c.params))
     plain = jax.device_get(jax.jit(c.run)(c.params))
-    for a, b in zip(jax.tree_util.tree_leaves(ours["final"]), jax.tree_util.tree_leaves(plain["final"]), strict=True):
+    for a, b in zip(
+        jax.tree_util.tree_leaves(ours["final"]),
+        jax.tree_util.tree_leaves(plain["final"]),
+        strict=True,
+    ):
         a, b = np.asarray(a), np.asarray(b)
         if np.issubdtype(a.dtype, np.floating):
             scale = max(float(np.max(np.abs(b))), 1e-300)
@@ -60,8 +66,17 @@ def test_elementwise_functions_give_the_same_bits_with_the_options():
     x, y = rng.uniform(-20.0, 20.0, 20_000), rng.uniform(0.01, 50.0, 20_000)
 
     def f(a, b):
-        return (jax.numpy.sin(a), jax.numpy.cos(a), jax.numpy.exp(a), jax.numpy.log(b), jax.numpy.sqrt(b),
-                jax.numpy.tanh(a), b**1.5, jax.numpy.arctan2(a, 3.0), jax.numpy.arccos(a / 21.0))
+        return (
+            jax.numpy.sin(a),
+            jax.numpy.cos(a),
+            jax.numpy.exp(a),
+            jax.numpy.log(b),
+            jax.numpy.sqrt(b),
+            jax.numpy.tanh(a),
+            b**1.5,
+            jax.numpy.arctan2(a, 3.0),
+            jax.numpy.arccos(a / 21.0),
+        )
 
     ours = jax.device_get(xla.jit(f)(x, y))
     plain = jax.device_get(jax.jit(f)(x, y))
@@ -71,7 +86,9 @@ def test_elementwise_functions_give_the_same_bits_with_the_options():
 
 @pytest.mark.parametrize("fast", [False, True])
 def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fast):
-    c = compile_scenario(load_scenario("cw-free-drift", {"simulation.horizon": 584.0, "simulation.record_every": 1}))
+    c = compile_scenario(
+        load_scenario("cw-free-drift", {"simulation.horizon": 584.0, "simulation.record_every": 1})
+    )
     monkeypatch.setattr(type(c.params.controller), "batch_fast_compile", fast, raising=False)
     seen = []
     real = xla.jit
@@ -111,13 +128,18 @@ def test_unrolled_threefry_draws_the_same_numbers(monkeypatch):
     monkeypatch.delenv(xla.ENV_SWITCH, raising=False)
     try:
         from jax._src.random import threefry2x32 as threefry
+
         has_internals = hasattr(threefry, "_threefry2x32_lowering_rule")
     except ImportError:
         has_internals = False
-    assert xla.use_unrolled_threefry() is has_internals  # registered exactly when the internals exist
+    assert (
+        xla.use_unrolled_threefry() is has_internals
+    )  # registered exactly when the internals exist
     env_on = {k: v for k, v in os.environ.items() if k != xla.ENV_SWITCH}
     runs = {}
     for name, env in (("unrolled", env_on), ("rolled", {**env_on, xla.ENV_SWITCH: "off"})):
-        out = subprocess.run([sys.executable, "-c", _DRAWS], env=env, capture_output=True, text=True, check=True)
+        out = subprocess.run(
+            [sys.executable, "-c", _DRAWS], env=env, capture_output=True, text=True, check=True
+        )
         runs[name] = json.loads(out.stdout)
     assert runs["unrolled"] == runs["rolled"]

@@ -39,8 +39,12 @@ def mode_allocation_matrices(alpha, alpha_flfr, k: int, b_nominal, b_hat) -> jax
     alpha = jnp.asarray(alpha)
     alpha_f = alpha.at[k].set(alpha_flfr)
     alphas = jnp.stack([alpha, alpha, alpha_f])
-    b_hats = jnp.stack([jnp.asarray(b_nominal), jnp.asarray(b_hat), jnp.asarray(b_hat)])  # (3, N, axes)
-    return jax.vmap(lambda a, bh: jax.vmap(lambda bcol: allocation_matrix(a, bcol), in_axes=1)(bh))(alphas, b_hats)
+    b_hats = jnp.stack(
+        [jnp.asarray(b_nominal), jnp.asarray(b_hat), jnp.asarray(b_hat)]
+    )  # (3, N, axes)
+    return jax.vmap(lambda a, bh: jax.vmap(lambda bcol: allocation_matrix(a, bcol), in_axes=1)(bh))(
+        alphas, b_hats
+    )
 
 
 def allocate(M, p) -> jax.Array:

@@ -27,8 +27,19 @@ from formation_ftc.core.linear import matvec
 __all__ = ["lof2tc_law"]
 
 
-def lof2tc_law(e_y: jax.Array, F_hat: jax.Array, pi_past: jax.Array, v_past: jax.Array, K, G1, G2, G3, G4,
-               BpE, BpH) -> tuple[jax.Array, jax.Array, jax.Array]:
+def lof2tc_law(
+    e_y: jax.Array,
+    F_hat: jax.Array,
+    pi_past: jax.Array,
+    v_past: jax.Array,
+    K,
+    G1,
+    G2,
+    G3,
+    G4,
+    BpE,
+    BpH,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
     """``(u, pi, v)`` at the current sample from e_y (..., p), F_hat (..., m), pi(t - tau) (...,) and
     v(t - tau) (..., m)."""
     Ke = matvec(K, e_y)

@@ -64,8 +64,12 @@ def li2020_control(s, Y, consensus, m_hat, beta_hat, d_hat, sigma, lam, d_sign=1
     """
     sigma = jnp.broadcast_to(jnp.asarray(sigma), m_hat.shape)
     lam = jnp.broadcast_to(jnp.asarray(lam), m_hat.shape)
-    xi = (m_hat[:, None] * Y + lam[:, None] * s + consensus
-          + d_sign * d_hat[:, None] * jnp.tanh(s / sigma[:, None]))  # eq. (24)/(42), E000-04
+    xi = (
+        m_hat[:, None] * Y
+        + lam[:, None] * s
+        + consensus
+        + d_sign * d_hat[:, None] * jnp.tanh(s / sigma[:, None])
+    )  # eq. (24)/(42), E000-04
     w = jnp.sum(xi * s, axis=-1)  # xi^T s, E000-05
     b2 = beta_hat**2
     f = -(b2 * w / jnp.sqrt(b2 * w**2 + sigma**2))[:, None] * xi  # eq. (23)/(41), E000-05

@@ -72,7 +72,9 @@ class ELHinfConfig:
         if self.law not in LAWS:
             raise ValueError(f"controller.law must be one of {LAWS}, got {self.law!r}")
         if self.compensation not in COMPENSATIONS:
-            raise ValueError(f"controller.compensation must be one of {COMPENSATIONS}, got {self.compensation!r}")
+            raise ValueError(
+                f"controller.compensation must be one of {COMPENSATIONS}, got {self.compensation!r}"
+            )
 
 
 class ELHinfErrors(NamedTuple):
@@ -107,7 +109,9 @@ def synchronisation_torque(s, avg, K, alpha, gamma, law: str = "literal"):
     if law == "literal":
         return own + 0.5 * a * K * s_avg  # (8) first line, E003-01
     if law == "diffusive":
-        return own - 0.5 * a * K * (avg.sum(axis=1, keepdims=True) * s - s_avg)  # E003-01 alternative
+        return own - 0.5 * a * K * (
+            avg.sum(axis=1, keepdims=True) * s - s_avg
+        )  # E003-01 alternative
     raise ValueError(f"unknown law {law!r}; valid: {LAWS}")
 
 

@@ -25,7 +25,13 @@ import jax.numpy as jnp
 
 from formation_ftc.core.linear import matvec
 
-__all__ = ["ilo_learning_update", "ilo_correction", "ilo_propagate", "learning_steps", "LearningIntervalError"]
+__all__ = [
+    "ilo_learning_update",
+    "ilo_correction",
+    "ilo_propagate",
+    "learning_steps",
+    "LearningIntervalError",
+]
 
 
 class LearningIntervalError(ValueError):
@@ -42,7 +48,8 @@ def learning_steps(tau: float, dt: float, field: str = "learning_interval") -> i
         raise LearningIntervalError(
             f"{field} = {tau:g} s is not an integer multiple of simulation.dt = {dt:g} s "
             f"(tau/dt = {tau / dt:.6g}); the learning law reads F_hat(t - tau) from the step grid, so "
-            f"tau must be k*dt with an integer k >= 1")
+            f"tau must be k*dt with an integer k >= 1"
+        )
     return int(m)
 
 
@@ -59,9 +66,24 @@ def ilo_correction(e_y: jax.Array, L1, gamma, sign_term: bool) -> jax.Array:
     return corr
 
 
-def ilo_propagate(q_hat: jax.Array, u: jax.Array, F_hat: jax.Array, e_y: jax.Array, A, B, H, L1, gamma,
-                  dt: float, sign_term: bool) -> jax.Array:
+def ilo_propagate(
+    q_hat: jax.Array,
+    u: jax.Array,
+    F_hat: jax.Array,
+    e_y: jax.Array,
+    A,
+    B,
+    H,
+    L1,
+    gamma,
+    dt: float,
+    sign_term: bool,
+) -> jax.Array:
     """Forward-Euler step of ``q_hat`` over [t_k, t_k + dt] with u, F_hat_k, e_y,k held [m, m/s]."""
-    qh_dot = (matvec(A, q_hat) + matvec(B, u) + matvec(H, F_hat)
-              + ilo_correction(e_y, L1, gamma, sign_term))  # (5), observer
+    qh_dot = (
+        matvec(A, q_hat)
+        + matvec(B, u)
+        + matvec(H, F_hat)
+        + ilo_correction(e_y, L1, gamma, sign_term)
+    )  # (5), observer
     return q_hat + dt * qh_dot

@@ -45,8 +45,9 @@ def initial_state() -> HlState:
     return HlState(mode=jnp.asarray(NOMINAL, jnp.int64), violations=z, mode_changes=z, flfr_steps=z)
 
 
-def transition(state: HlState, k, error_max, k_estimated, e_s, confirm_steps, monitor_start,
-               flfr_enabled) -> HlState:
+def transition(
+    state: HlState, k, error_max, k_estimated, e_s, confirm_steps, monitor_start, flfr_enabled
+) -> HlState:
     """The machine at step ``k`` given the measured max |e_ij| [m]; its ``mode`` is the mode of step k.
 
     ``k_estimated``, ``confirm_steps``, ``monitor_start``: step indices / counts (int); ``e_s`` [m];

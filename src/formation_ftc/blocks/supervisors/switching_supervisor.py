@@ -35,8 +35,11 @@ __all__ = [
 NO_DECISION = 0
 TOLERATE_BY_SWITCHING = 1
 RECONFIGURE = 2
-DECISION_NAMES = {NO_DECISION: "none", TOLERATE_BY_SWITCHING: "tolerate by switching",
-                  RECONFIGURE: "request controller reconfiguration"}
+DECISION_NAMES = {
+    NO_DECISION: "none",
+    TOLERATE_BY_SWITCHING: "tolerate by switching",
+    RECONFIGURE: "request controller reconfiguration",
+}
 
 
 def mode_index(switch_steps, k):

@@ -42,8 +42,18 @@ class HeldAdditiveFaultActuator(Actuator):
         k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
         if not self.torques:
             return {"fault": jnp.zeros((self.count, self.n_channels))}
-        return {"fault": windowed_additive_faults(k, self.step, self.windows, self.torques, self.spacecraft,
-                                                  self.channels, self.count, self.n_channels)}
+        return {
+            "fault": windowed_additive_faults(
+                k,
+                self.step,
+                self.windows,
+                self.torques,
+                self.spacecraft,
+                self.channels,
+                self.count,
+                self.n_channels,
+            )
+        }
 
     def apply(self, t, command, inputs: ActuatorInputs):
         return command + inputs.exogenous["fault"]  # (2)

@@ -22,7 +22,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from formation_ftc.core.euler_quaternion import body_torque_from_generalised, euler_zyx_from_quaternion
+from formation_ftc.core.euler_quaternion import (
+    body_torque_from_generalised,
+    euler_zyx_from_quaternion,
+)
 from formation_ftc.sim.components import Actuator, ActuatorInputs, IdealActuator, Signal, component
 
 __all__ = ["EulerTorqueAllocation"]
@@ -60,17 +63,28 @@ class EulerTorqueAllocation(Actuator):
 
     def apply(self, t, command, inputs: ActuatorInputs):
         q = euler_zyx_from_quaternion(inputs.plant_state["q"])
-        return body_torque_from_generalised(q, self._generalised(t, command, inputs))  # tau_b = R_bar^T tau_gen
+        return body_torque_from_generalised(
+            q, self._generalised(t, command, inputs)
+        )  # tau_b = R_bar^T tau_gen
 
     def update(self, t, state, command, inputs: ActuatorInputs):
         return self.inner.update(t, state, command, inputs)
 
     def signals(self):
         return tuple(self.inner.signals()) + (
-            Signal("generalised_applied", VEC, "N m",
-                   "applied generalised torque conjugate to [theta, phi, psi] (command + faults)"),
-            Signal("attitude", VEC, "rad", "true Euler angles [theta, phi, psi] (pitch, roll, yaw)",
-                   "body to reference Z-Y-X"),
+            Signal(
+                "generalised_applied",
+                VEC,
+                "N m",
+                "applied generalised torque conjugate to [theta, phi, psi] (command + faults)",
+            ),
+            Signal(
+                "attitude",
+                VEC,
+                "rad",
+                "true Euler angles [theta, phi, psi] (pitch, roll, yaw)",
+                "body to reference Z-Y-X",
+            ),
         )
 
     def coords(self):

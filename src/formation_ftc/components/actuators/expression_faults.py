@@ -19,14 +19,18 @@ class ExpressionFaultActuator(Actuator):
     bias: tuple[str, str, str] = static(default=("0", "0", "0"))  # delta(t) [command units]
 
     def exogenous(self, t):
-        return {"gamma": vector_expression(self.effectiveness, "faults.effectiveness", t, self.count),
-                "bias": vector_expression(self.bias, "faults.bias", t, self.count)}
+        return {
+            "gamma": vector_expression(self.effectiveness, "faults.effectiveness", t, self.count),
+            "bias": vector_expression(self.bias, "faults.bias", t, self.count),
+        }
 
     def apply(self, t, command, inputs: ActuatorInputs):
         return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])
 
     def signals(self):
-        return (Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),)
+        return (
+            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
+        )
 
     def outputs(self, t, command, inputs: ActuatorInputs):
         return {"effectiveness": inputs.exogenous["gamma"]}

@@ -43,8 +43,15 @@ from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, compo
 __all__ = ["FaultBatteryActuator", "FAULT_KINDS", "fault_kind_code"]
 
 #: fault kind names; a kind's code (the ``fault_kind`` leaf) is its index in this tuple
-FAULT_KINDS: tuple[str, ...] = ("none", "loss_of_effectiveness", "bias", "stuck", "outage", "intermittent",
-                                "degrading")
+FAULT_KINDS: tuple[str, ...] = (
+    "none",
+    "loss_of_effectiveness",
+    "bias",
+    "stuck",
+    "outage",
+    "intermittent",
+    "degrading",
+)
 _CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
 
 
@@ -79,7 +86,9 @@ def fault_kind_code(name: str) -> int:
     try:
         return _CODE[name]
     except KeyError:
-        raise ValueError(f"unknown fault kind {name!r} (allowed: {', '.join(FAULT_KINDS)})") from None
+        raise ValueError(
+            f"unknown fault kind {name!r} (allowed: {', '.join(FAULT_KINDS)})"
+        ) from None
 
 
 @component
@@ -126,7 +135,9 @@ class FaultBatteryActuator(Actuator):
 
     def _limit(self) -> jnp.ndarray:
         """(N, 1) per-axis limit [N or N m]."""
-        return jnp.broadcast_to(jnp.asarray(self.saturation, dtype=jnp.float64), (self.count,))[:, None]
+        return jnp.broadcast_to(jnp.asarray(self.saturation, dtype=jnp.float64), (self.count,))[
+            :, None
+        ]
 
     def _body(self, t, command, inputs: ActuatorInputs):
         """The command in the actuator's axes (after the Euler-angle allocation when static-enabled)."""
@@ -142,13 +153,17 @@ class FaultBatteryActuator(Actuator):
         g = jnp.where(self._is("loss_of_effectiveness"), self.effectiveness, 1.0)
         g = jnp.where(self._is("stuck") | self._is("outage"), 0.0, g)
         g = jnp.where(self._is("intermittent"), jnp.where(on, 1.0, 0.0), g)
-        g = jnp.where(self._is("degrading"), jnp.maximum(self.min_effectiveness, 1.0 - self.rate * tau), g)
+        g = jnp.where(
+            self._is("degrading"), jnp.maximum(self.min_effectiveness, 1.0 - self.rate * tau), g
+        )
         b = jnp.where(self._is("bias"), self.bias, 0.0)
         on_channel = self._channel() & active
-        return {"gain": jnp.where(on_channel, g, 1.0),  # (N, 3)
-                "bias": jnp.where(on_channel, b, 0.0),  # (N, 3)
-                "stuck": on_channel & self._is("stuck"),  # (N, 3)
-                "active": active}
+        return {
+            "gain": jnp.where(on_channel, g, 1.0),  # (N, 3)
+            "bias": jnp.where(on_channel, b, 0.0),  # (N, 3)
+            "stuck": on_channel & self._is("stuck"),  # (N, 3)
+            "active": active,
+        }
 
     def initial_state(self):
         return {"value": jnp.zeros((self.count, 3)), "frozen": jnp.asarray(False)}
@@ -162,7 +177,9 @@ class FaultBatteryActuator(Actuator):
         exo = inputs.exogenous
         y = exo["gain"] * u + exo["bias"]
         state = inputs.state
-        if state is None:  # a caller without the actuator state: the channel passes its saturated command
+        if (
+            state is None
+        ):  # a caller without the actuator state: the channel passes its saturated command
             return jnp.where(exo["stuck"], u, y)
         return jnp.where(exo["stuck"], jnp.where(state["frozen"], state["value"], u), y)
 
@@ -172,14 +189,28 @@ class FaultBatteryActuator(Actuator):
         return {"value": jnp.where(freeze, u, state["value"]), "frozen": state["frozen"] | freeze}
 
     def signals(self):
-        return (Signal("effectiveness", ("spacecraft", "axis"), "1",
-                       "true actuator effectiveness g (after saturation; 0 on a stuck or outage channel)"),
-                Signal("saturated", ("spacecraft",), "1", "1 when any axis command is at its saturation limit"),
-                Signal("fault_active", (), "1", "1 from the actuator fault onset on"))
+        return (
+            Signal(
+                "effectiveness",
+                ("spacecraft", "axis"),
+                "1",
+                "true actuator effectiveness g (after saturation; 0 on a stuck or outage channel)",
+            ),
+            Signal(
+                "saturated",
+                ("spacecraft",),
+                "1",
+                "1 when any axis command is at its saturation limit",
+            ),
+            Signal("fault_active", (), "1", "1 from the actuator fault onset on"),
+        )
 
     def outputs(self, t, command, inputs: ActuatorInputs):
         u = self._body(t, command, inputs)
         at_limit = jnp.any(jnp.abs(u) >= self._limit(), axis=-1)
         exo = inputs.exogenous
-        return {"effectiveness": exo["gain"], "saturated": jnp.where(at_limit, 1.0, 0.0),
-                "fault_active": jnp.where(exo["active"], 1.0, 0.0)}
+        return {
+            "effectiveness": exo["gain"],
+            "saturated": jnp.where(at_limit, 1.0, 0.0),
+            "fault_active": jnp.where(exo["active"], 1.0, 0.0),
+        }

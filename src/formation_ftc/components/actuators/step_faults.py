@@ -31,14 +31,20 @@ class StepFaultActuator(Actuator):
         return int(jnp.shape(self.alpha)[0])
 
     def exogenous(self, t):
-        return {"gamma": jnp.where(t >= self.onset, self.alpha, 1.0),
-                "bias": vector_expression(self.bias, "faults.additive", t, self.count)}
+        return {
+            "gamma": jnp.where(t >= self.onset, self.alpha, 1.0),
+            "bias": vector_expression(self.bias, "faults.additive", t, self.count),
+        }
 
     def apply(self, t, command, inputs: ActuatorInputs):
-        return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])  # eq. (5)
+        return actuator_fault(
+            command, inputs.exogenous["gamma"], inputs.exogenous["bias"]
+        )  # eq. (5)
 
     def signals(self):
-        return (Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),)
+        return (
+            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
+        )
 
     def outputs(self, t, command, inputs):
         return {"effectiveness": inputs.exogenous["gamma"]}

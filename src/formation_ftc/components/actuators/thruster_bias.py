@@ -36,15 +36,20 @@ class ThrusterBiasFaultActuator(Actuator):
     units: str = static(default="m s-2")
 
     def exogenous(self, t):
-        f = (self.magnitude + self.amplitude * jnp.sin(self.omega * t + self.phase)
-             + self.decay_amplitude * jnp.exp(-self.decay_rate * (t - self.decay_origin)))
+        f = (
+            self.magnitude
+            + self.amplitude * jnp.sin(self.omega * t + self.phase)
+            + self.decay_amplitude * jnp.exp(-self.decay_rate * (t - self.decay_origin))
+        )
         return {"F": jnp.where(t >= self.onset, f, 0.0)}
 
     def apply(self, t, command, inputs: ActuatorInputs):
         return command + inputs.exogenous["F"]
 
     def signals(self):
-        return (Signal("fault", ("spacecraft", "axis"), self.units, "thruster bias fault F (true)"),)
+        return (
+            Signal("fault", ("spacecraft", "axis"), self.units, "thruster bias fault F (true)"),
+        )
 
     def outputs(self, t, command, inputs):
         return {"fault": inputs.exogenous["F"]}

@@ -6,10 +6,20 @@ from typing import Any
 
 import numpy as np
 
-from formation_ftc.sim.components import CompositionError, Controller, FlightInputs, Signal, component
+from formation_ftc.sim.components import (
+    CompositionError,
+    Controller,
+    FlightInputs,
+    Signal,
+    component,
+)
 
-__all__ = ["AccelerationToForce", "TrackingAccelerationToForce", "force_from_acceleration",
-           "ACCELERATION_COMMAND_SIGNAL"]
+__all__ = [
+    "AccelerationToForce",
+    "TrackingAccelerationToForce",
+    "force_from_acceleration",
+    "ACCELERATION_COMMAND_SIGNAL",
+]
 
 #: the wrapped law's own command, recorded next to the loop's ``command`` (the force)
 ACCELERATION_COMMAND_SIGNAL = "acceleration_command"
@@ -40,8 +50,10 @@ class AccelerationToForce(Controller):
         if not isinstance(law, Controller):
             return  # pytree reconstruction with placeholders
         if law.quantity != "acceleration":
-            raise CompositionError(f"AccelerationToForce scales an acceleration command by the nominal mass, but "
-                                   f"controller {type(law).__name__} commands a {law.quantity}")
+            raise CompositionError(
+                f"AccelerationToForce scales an acceleration command by the nominal mass, but "
+                f"controller {type(law).__name__} commands a {law.quantity}"
+            )
 
     # the wrapped law's structure
     @property
@@ -76,8 +88,13 @@ class AccelerationToForce(Controller):
 
     def signals(self):
         return tuple(self.law.signals()) + (
-            Signal(ACCELERATION_COMMAND_SIGNAL, ("spacecraft", "axis"), "m s-2",
-                   "acceleration commanded by the law (before the nominal-mass scaling)"),)
+            Signal(
+                ACCELERATION_COMMAND_SIGNAL,
+                ("spacecraft", "axis"),
+                "m s-2",
+                "acceleration commanded by the law (before the nominal-mass scaling)",
+            ),
+        )
 
     def coords(self):
         return self.law.coords()
@@ -135,8 +152,10 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     m = np.asarray(nominal_mass, dtype=float)
     n = int(law.count)  # type: ignore[attr-defined]  # every translational law has a count
     if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):
-        raise CompositionError(f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
-                               f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)")
+        raise CompositionError(
+            f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
+            f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)"
+        )
     tracks = type(law).desired_position_at is not Controller.desired_position_at
     cls = TrackingAccelerationToForce if tracks else AccelerationToForce
     return cls(law=law, nominal_mass=nominal_mass)

@@ -90,5 +90,12 @@ class AttitudePdController(Controller):
         return tau, None, {"attitude_error_quaternion": qe}
 
     def signals(self):
-        return (Signal("attitude_error_quaternion", ("spacecraft", "quaternion_component"), "1",
-                       "attitude error quaternion q_d^* (x) q (vector part first)", "body"),)
+        return (
+            Signal(
+                "attitude_error_quaternion",
+                ("spacecraft", "quaternion_component"),
+                "1",
+                "attitude error quaternion q_d^* (x) q (vector part first)",
+                "body",
+            ),
+        )

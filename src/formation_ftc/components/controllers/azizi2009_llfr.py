@@ -71,15 +71,20 @@ class ChainLlfrController(Controller):
         return rotating_polygon(t, self.count, self.n_axes, self.side, self.omega)
 
     def initial_state(self):
-        return {"allocation": mode_allocation_matrices(self.alpha, self.alpha_flfr, self.fault_index,
-                                                       self.b_nominal, self.b_hat)}
+        return {
+            "allocation": mode_allocation_matrices(
+                self.alpha, self.alpha_flfr, self.fault_index, self.b_nominal, self.b_hat
+            )
+        }
 
     def output(self, t, state, inputs: FlightInputs):
         rd, vd, ad = self.desired(t)
         y = inputs.measurement
         e = y["position"] - chain_difference(rd)
         e_dot = y["velocity"] - chain_difference(vd)
-        p = relative_output_law(e, e_dot, chain_difference(ad), self.lambda0, self.lambda1)  # Sec. II
+        p = relative_output_law(
+            e, e_dot, chain_difference(ad), self.lambda0, self.lambda1
+        )  # Sec. II
         mode = LLFR if inputs.decision is None else inputs.decision
         u = allocate(state["allocation"][mode], p)  # eq. (3)
         if self.sampled:
@@ -89,7 +94,15 @@ class ChainLlfrController(Controller):
         return u, nxt, {"desired_position": rd}
 
     def signals(self):
-        return (Signal("desired_position", VEC, "m", "desired position of the rotating formation", self.frame),)
+        return (
+            Signal(
+                "desired_position",
+                VEC,
+                "m",
+                "desired position of the rotating formation",
+                self.frame,
+            ),
+        )
 
     def coords(self):
         return {"pair": [f"{j + 1}-{j + 2}" for j in range(self.count - 1)]}

@@ -23,6 +23,7 @@ class RotatingFormation:
     centre: Any  # (3,) final centre offset [m]
 
     def at(self, t) -> dict:
-        rho_d, v_d, a_d, rho_f = desired_trajectory(t, self.offsets, self.chi, self.rotation, self.growth,
-                                                    self.centre)
+        rho_d, v_d, a_d, rho_f = desired_trajectory(
+            t, self.offsets, self.chi, self.rotation, self.growth, self.centre
+        )
         return {"rho_d": rho_d, "v_d": v_d, "a_d": a_d, "rho_f": rho_f}

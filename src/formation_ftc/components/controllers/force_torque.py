@@ -31,11 +31,20 @@ class ForceTorqueController(Controller):
         if not isinstance(f, Controller) or not isinstance(t, Controller):
             return  # pytree reconstruction with placeholders
         if f.quantity != "force" or t.quantity != "torque":
-            raise CompositionError(f"ForceTorqueController needs a force law and a torque law, got "
-                                   f"{type(f).__name__} ({f.quantity}) and {type(t).__name__} ({t.quantity})")
-        if f.sampled or t.sampled or getattr(f, "uses_messages", False) or getattr(t, "uses_messages", False):
-            raise CompositionError(f"ForceTorqueController combines continuous laws without messages; "
-                                   f"{type(f).__name__} / {type(t).__name__} are sampled or exchange messages")
+            raise CompositionError(
+                f"ForceTorqueController needs a force law and a torque law, got "
+                f"{type(f).__name__} ({f.quantity}) and {type(t).__name__} ({t.quantity})"
+            )
+        if (
+            f.sampled
+            or t.sampled
+            or getattr(f, "uses_messages", False)
+            or getattr(t, "uses_messages", False)
+        ):
+            raise CompositionError(
+                f"ForceTorqueController combines continuous laws without messages; "
+                f"{type(f).__name__} / {type(t).__name__} are sampled or exchange messages"
+            )
 
     @property
     def count(self) -> int:
@@ -50,10 +59,18 @@ class ForceTorqueController(Controller):
     def output(self, t, state, inputs: FlightInputs):
         m = inputs.measurement
         state = state or {"force": None, "torque": None}
-        f, df, of = self.force_law.output(t, state["force"], inputs._replace(
-            measurement=m["translation"], exogenous=inputs.exogenous["force"]))
-        tau, dt_, ot = self.torque_law.output(t, state["torque"], inputs._replace(
-            measurement={"omega": m["omega"], "q": m["q"]}, exogenous=inputs.exogenous["torque"]))
+        f, df, of = self.force_law.output(
+            t,
+            state["force"],
+            inputs._replace(measurement=m["translation"], exogenous=inputs.exogenous["force"]),
+        )
+        tau, dt_, ot = self.torque_law.output(
+            t,
+            state["torque"],
+            inputs._replace(
+                measurement={"omega": m["omega"], "q": m["q"]}, exogenous=inputs.exogenous["torque"]
+            ),
+        )
         u = jnp.concatenate([f, tau], axis=-1)
         active = getattr(inputs.decision, "active", None)
         if active is not None:
@@ -64,4 +81,8 @@ class ForceTorqueController(Controller):
         return tuple(self.force_law.signals()) + tuple(self.torque_law.signals())
 
     def coords(self):
-        return {**self.force_law.coords(), **self.torque_law.coords(), "wrench_component": WRENCH_COMPONENTS}
+        return {
+            **self.force_law.coords(),
+            **self.torque_law.coords(),
+            "wrench_component": WRENCH_COMPONENTS,
+        }

@@ -119,7 +119,9 @@ class Li2020AdaptiveController(Controller):
     sigma_t0: Any = 1.0  # t0 of the inverse-square sigma [s]
     d_sign: Any = 1.0  # +1 corrected (E000-04), -1 literal eq. (42)
     mu: Any = MU_EARTH  # gravitational parameter of the on-board model [m^3/s^2]
-    sigma_form: str = static(default="exponential")  # "exponential" (eq. (13)) or "inverse_square" (eq. (14))
+    sigma_form: str = static(
+        default="exponential"
+    )  # "exponential" (eq. (13)) or "inverse_square" (eq. (14))
     uses_messages: ClassVar[bool] = True
 
     def initial_state(self):
@@ -145,20 +147,43 @@ class Li2020AdaptiveController(Controller):
         if ref is None:
             acc_nat = jnp.zeros_like(s)
         else:
-            acc_nat = natural_acceleration_from_rates(y[:, :3], y[:, 3:], ref["r_c"], ref["theta_dot"],
-                                                      ref["theta_ddot"], self.mu)
+            acc_nat = natural_acceleration_from_rates(
+                y[:, :3], y[:, 3:], ref["r_c"], ref["theta_dot"], ref["theta_ddot"], self.mu
+            )
         Y = acc_nat + self.k[:, None] * (y[:, 3:] - d["v_d"]) - d["a_d"]  # eq. (8)
         cons = consensus(inputs.received, s)  # eq. (24) / (42)
-        f, xi = li2020_control(s, Y, cons, state["m_hat"], state["beta_hat"], state["d_hat"], d["sigma"],
-                               self.lam, self.d_sign)  # eqs. (23)-(24) / (41)-(42)
-        beta_dot, m_dot, d_dot = li2020_adaptation_rates(s, Y, xi, state["d_hat"], d["sigma"], self.gamma,
-                                                         self.eta, self.adapt_mu, self.upsilon)  # (25)-(27)
-        outputs = {"velocity_error": e2, "m_hat": state["m_hat"], "beta_hat": state["beta_hat"],
-                   "d_hat": state["d_hat"]}
+        f, xi = li2020_control(
+            s,
+            Y,
+            cons,
+            state["m_hat"],
+            state["beta_hat"],
+            state["d_hat"],
+            d["sigma"],
+            self.lam,
+            self.d_sign,
+        )  # eqs. (23)-(24) / (41)-(42)
+        beta_dot, m_dot, d_dot = li2020_adaptation_rates(
+            s, Y, xi, state["d_hat"], d["sigma"], self.gamma, self.eta, self.adapt_mu, self.upsilon
+        )  # (25)-(27)
+        outputs = {
+            "velocity_error": e2,
+            "m_hat": state["m_hat"],
+            "beta_hat": state["beta_hat"],
+            "d_hat": state["d_hat"],
+        }
         return f, {"m_hat": m_dot, "beta_hat": beta_dot, "d_hat": d_dot}, outputs
 
     def signals(self):
-        return (Signal("velocity_error", VEC, "m s-1", "measured velocity minus desired velocity e_i2", "LVLH"),
-                Signal("m_hat", ("spacecraft",), "kg", "mass estimate m_hat_i"),
-                Signal("beta_hat", ("spacecraft",), "1", "inverse-effectiveness estimate beta_hat_i"),
-                Signal("d_hat", ("spacecraft",), "N", "disturbance-bound estimate d_hat_i"))
+        return (
+            Signal(
+                "velocity_error",
+                VEC,
+                "m s-1",
+                "measured velocity minus desired velocity e_i2",
+                "LVLH",
+            ),
+            Signal("m_hat", ("spacecraft",), "kg", "mass estimate m_hat_i"),
+            Signal("beta_hat", ("spacecraft",), "1", "inverse-effectiveness estimate beta_hat_i"),
+            Signal("d_hat", ("spacecraft",), "N", "disturbance-bound estimate d_hat_i"),
+        )

@@ -27,7 +27,13 @@ from typing import Any, ClassVar
 import jax
 import jax.numpy as jnp
 
-from formation_ftc.sim.components import CompositionError, Controller, FlightInputs, Signal, component
+from formation_ftc.sim.components import (
+    CompositionError,
+    Controller,
+    FlightInputs,
+    Signal,
+    component,
+)
 
 __all__ = ["NeighbourRelativeController"]
 
@@ -50,14 +56,18 @@ class NeighbourRelativeController(Controller):
             return  # pytree reconstruction with placeholders
         name = type(law).__name__
         if law.quantity != "force":
-            raise CompositionError(f"NeighbourRelativeController wraps a force law; {name} commands a "
-                                   f"{law.quantity}")
+            raise CompositionError(
+                f"NeighbourRelativeController wraps a force law; {name} commands a {law.quantity}"
+            )
         if law.sampled or getattr(law, "uses_messages", False):
-            raise CompositionError(f"NeighbourRelativeController wraps a continuous law without messages; "
-                                   f"{name} is sampled or exchanges messages itself")
+            raise CompositionError(
+                f"NeighbourRelativeController wraps a continuous law without messages; "
+                f"{name} is sampled or exchanges messages itself"
+            )
         if type(law).desired_position_at is Controller.desired_position_at:
-            raise CompositionError(f"NeighbourRelativeController needs a law with a desired position; "
-                                   f"{name} has none")
+            raise CompositionError(
+                f"NeighbourRelativeController needs a law with a desired position; {name} has none"
+            )
 
     @property
     def count(self) -> int:
@@ -69,6 +79,7 @@ class NeighbourRelativeController(Controller):
     def exogenous(self, t):
         def p_d(tt):
             return self.law.desired_position_at(self.law.exogenous(tt))
+
         return {"law": self.law.exogenous(t), "v": jax.jacfwd(p_d)(t)}  # v^d = dp^d/dt [m/s]
 
     def desired_position_at(self, exogenous):
@@ -85,28 +96,45 @@ class NeighbourRelativeController(Controller):
         """eps_bar_i (N, 6) [m, m/s]: weighted mean of the received formation errors (0 without links)."""
         w = received["in_weight"]
         has = w > 0
-        return jnp.where(has[:, None], received["weighted_sum"] / jnp.where(has, w, 1.0)[:, None], 0.0)
+        return jnp.where(
+            has[:, None], received["weighted_sum"] / jnp.where(has, w, 1.0)[:, None], 0.0
+        )
 
     def output(self, t, state, inputs: FlightInputs):
         eps_bar = self.referenced_error(inputs.received)
         shifted = inputs.measurement - self.coupling[:, None] * eps_bar
-        u, d, out = self.law.output(t, state, inputs._replace(measurement=shifted, received=None,
-                                                              exogenous=inputs.exogenous["law"]))
+        u, d, out = self.law.output(
+            t,
+            state,
+            inputs._replace(measurement=shifted, received=None, exogenous=inputs.exogenous["law"]),
+        )
         out = dict(out)
         # what the law regulates: own formation error minus beta_i times the referenced one [m]
-        out["relative_formation_error"] = (inputs.measurement[:, 0:3] - self.desired_position_at(inputs.exogenous)
-                                           - self.coupling[:, None] * eps_bar[:, 0:3])
+        out["relative_formation_error"] = (
+            inputs.measurement[:, 0:3]
+            - self.desired_position_at(inputs.exogenous)
+            - self.coupling[:, None] * eps_bar[:, 0:3]
+        )
         out["referenced_formation_error"] = eps_bar[:, 0:3]
         return u, d, out
 
     def signals(self):
         return tuple(self.law.signals()) + (
-            Signal("relative_formation_error", VEC, "m",
-                   "measured formation error minus coupling times the referenced spacecraft's received one",
-                   "LVLH"),
-            Signal("referenced_formation_error", VEC, "m",
-                   "weighted mean of the received (delayed) formation errors of the referenced spacecraft",
-                   "LVLH"))
+            Signal(
+                "relative_formation_error",
+                VEC,
+                "m",
+                "measured formation error minus coupling times the referenced spacecraft's received one",
+                "LVLH",
+            ),
+            Signal(
+                "referenced_formation_error",
+                VEC,
+                "m",
+                "weighted mean of the received (delayed) formation errors of the referenced spacecraft",
+                "LVLH",
+            ),
+        )
 
     def coords(self):
         return self.law.coords()

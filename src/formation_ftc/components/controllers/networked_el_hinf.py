@@ -26,7 +26,11 @@ from typing import Any, Literal
 import jax
 import jax.numpy as jnp
 
-from formation_ftc.blocks.controllers.networked_el_hinf import ELHinfConfig, adaptation_rate, control
+from formation_ftc.blocks.controllers.networked_el_hinf import (
+    ELHinfConfig,
+    adaptation_rate,
+    control,
+)
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.core.dynamics.euler_lagrange import euler_rates_from_body_rates
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
@@ -79,6 +83,7 @@ class NetworkedElHinfController(Controller):
     def exogenous(self, t):
         def e(tt):
             return vector_expression(self.desired_attitude, "desired.attitude", tt, self.count)
+
         e_d = jax.jacfwd(e)
         return {"e": e(t), "e_dot": e_d(t), "e_ddot": jax.jacfwd(e_d)(t)}
 
@@ -90,13 +95,37 @@ class NetworkedElHinfController(Controller):
             flag = u_star = jnp.zeros((self.count, 3))
         else:
             flag, u_star = inputs.estimate.flag, inputs.estimate.estimate
-        p = {"K": self.K, "K_P": self.K_P, "K_I": self.K_I, "alpha": self.alpha, "gamma": self.gamma,
-             "phi_b": self.phi_b, "avg": self.avg}
-        ctl = control(q, qdot, state["z"], state["u_hat"], flag, d["e"], d["e_dot"], d["e_ddot"], self.J_hat, p,
-                      ELHinfConfig(self.law, self.compensation))  # (6) + (8) + (18)
-        u_hat_dot = adaptation_rate(ctl.s, state["u_hat"], u_star, flag, self.sigma, self.e_gain)  # (19)
+        p = {
+            "K": self.K,
+            "K_P": self.K_P,
+            "K_I": self.K_I,
+            "alpha": self.alpha,
+            "gamma": self.gamma,
+            "phi_b": self.phi_b,
+            "avg": self.avg,
+        }
+        ctl = control(
+            q,
+            qdot,
+            state["z"],
+            state["u_hat"],
+            flag,
+            d["e"],
+            d["e_dot"],
+            d["e_ddot"],
+            self.J_hat,
+            p,
+            ELHinfConfig(self.law, self.compensation),
+        )  # (6) + (8) + (18)
+        u_hat_dot = adaptation_rate(
+            ctl.s, state["u_hat"], u_star, flag, self.sigma, self.e_gain
+        )  # (19)
         qt = ctl.q_tilde
-        outputs = {"sliding_variable": ctl.s, "fault_estimate_adaptive": state["u_hat"], "tracking_error": qt}
+        outputs = {
+            "sliding_variable": ctl.s,
+            "fault_estimate_adaptive": state["u_hat"],
+            "tracking_error": qt,
+        }
         if self.links:
             j = jnp.asarray([a for a, _ in self.links])
             n = jnp.asarray([b for _, b in self.links])
@@ -104,12 +133,20 @@ class NetworkedElHinfController(Controller):
         return ctl.u, {"z": qt, "u_hat": u_hat_dot}, outputs
 
     def signals(self):
-        sig = (Signal("sliding_variable", VEC, "rad s-1", "sliding variable s = q_dot - r"),
-               Signal("fault_estimate_adaptive", VEC, "N m", "adaptive fault estimate u^ of (19)"),
-               Signal("tracking_error", VEC, "rad", "tracking error q - e (measured)"))
+        sig = (
+            Signal("sliding_variable", VEC, "rad s-1", "sliding variable s = q_dot - r"),
+            Signal("fault_estimate_adaptive", VEC, "N m", "adaptive fault estimate u^ of (19)"),
+            Signal("tracking_error", VEC, "rad", "tracking error q - e (measured)"),
+        )
         if self.links:
-            sig += (Signal("synchronisation_error", ("link", "axis"), "rad",
-                           "tracking-error difference q~_j - q~_n over each undirected link"),)
+            sig += (
+                Signal(
+                    "synchronisation_error",
+                    ("link", "axis"),
+                    "rad",
+                    "tracking-error difference q~_j - q~_n over each undirected link",
+                ),
+            )
         return sig
 
     def coords(self):

@@ -15,8 +15,12 @@ from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.dynamics.cw import cw_free_motion
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
 
-__all__ = ["NominalOrbitTracking", "LearningOutputFeedbackController", "ConventionalOutputFeedbackController",
-           "FreeDrift"]
+__all__ = [
+    "NominalOrbitTracking",
+    "LearningOutputFeedbackController",
+    "ConventionalOutputFeedbackController",
+    "FreeDrift",
+]
 
 STATE = ("spacecraft", "component")
 VEC = ("spacecraft", "axis")
@@ -56,7 +60,9 @@ class NominalOrbitTracking(Controller):
 
     def exogenous(self, t):
         if self.hold_desired:
-            return {"q0": self.desired_initial + 0.0 * t}  # fixed slots (same shape and dtype as (28))
+            return {
+                "q0": self.desired_initial + 0.0 * t
+            }  # fixed slots (same shape and dtype as (28))
         return {"q0": cw_free_motion(self.mean_motion, self.desired_initial, t)}  # (28)
 
     def desired_position_at(self, exogenous):
@@ -69,9 +75,22 @@ class NominalOrbitTracking(Controller):
         return q0, q0 - inputs.measurement, F_hat  # (29)
 
     def signals(self):
-        return (Signal("desired_state", STATE, "m, m s-1", "nominal orbit q0 (28) (positions [m], velocities "
-                       "[m s-1])", "LVLH"),
-                Signal("tracking_error", STATE, "m, m s-1", "measured tracking error e_y = q0 - y (29)", "LVLH"))
+        return (
+            Signal(
+                "desired_state",
+                STATE,
+                "m, m s-1",
+                "nominal orbit q0 (28) (positions [m], velocities [m s-1])",
+                "LVLH",
+            ),
+            Signal(
+                "tracking_error",
+                STATE,
+                "m, m s-1",
+                "measured tracking error e_y = q0 - y (29)",
+                "LVLH",
+            ),
+        )
 
     def output(self, t, state, inputs):  # pragma: no cover - subclasses define the law
         raise NotImplementedError
@@ -106,15 +125,31 @@ class LearningOutputFeedbackController(NominalOrbitTracking):
     def output(self, t, state, inputs: FlightInputs):
         m = self.learning_steps
         q0, e_y, F_hat = self.tracking(inputs)
-        u, pi, v = lof2tc_law(e_y, F_hat, delay_read(state["pi"], m), delay_read(state["v"], m), self.K,
-                              self.G1, self.G2, self.G3, self.G4, self.BpE, self.BpH)  # (30)-(32)
+        u, pi, v = lof2tc_law(
+            e_y,
+            F_hat,
+            delay_read(state["pi"], m),
+            delay_read(state["v"], m),
+            self.K,
+            self.G1,
+            self.G2,
+            self.G3,
+            self.G4,
+            self.BpE,
+            self.BpH,
+        )  # (30)-(32)
         nxt = {"pi": delay_push(state["pi"], pi, m), "v": delay_push(state["v"], v, m)}
-        return u, nxt, {"desired_state": q0, "tracking_error": e_y, "learning_gain": pi, "compensation": v}
+        return (
+            u,
+            nxt,
+            {"desired_state": q0, "tracking_error": e_y, "learning_gain": pi, "compensation": v},
+        )
 
     def signals(self):
         return super().signals() + (
             Signal("learning_gain", ("spacecraft",), "1", "learning gain pi (31)"),
-            Signal("compensation", VEC, "m s-2", "learning compensation v (32)", "LVLH"))
+            Signal("compensation", VEC, "m s-2", "learning compensation v (32)", "LVLH"),
+        )
 
 
 @component

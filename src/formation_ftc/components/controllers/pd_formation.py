@@ -43,7 +43,10 @@ class DesiredPositionLaw(Controller):
 
     def _desired(self, t):
         def p(tt):
-            return vector_expression(self.desired_position, "controller.desired_position", tt, self.count)
+            return vector_expression(
+                self.desired_position, "controller.desired_position", tt, self.count
+            )
+
         v = jax.jacfwd(p)
         a = jax.jacfwd(v)
         return p(t), v(t), a(t)
@@ -72,8 +75,10 @@ class PdFormationController(DesiredPositionLaw):
 
     def output(self, t, state, inputs: FlightInputs):
         y, d = inputs.measurement, inputs.exogenous
-        u = -self.kp * (y[:, :3] - d["p"]) - self.kd * (y[:, 3:] - d["v"]) + self.mass[:, None] * d["a"]
+        u = (
+            -self.kp * (y[:, :3] - d["p"])
+            - self.kd * (y[:, 3:] - d["v"])
+            + self.mass[:, None] * d["a"]
+        )
         u = jnp.clip(u, -self.max_force, self.max_force)
         return u, None, {}
-
-

@@ -45,5 +45,13 @@ class SirFtcController(Controller):
         return f, {"b_hat": rate}, {"velocity_error": e2, "b_hat": state["b_hat"]}
 
     def signals(self):
-        return (Signal("velocity_error", VEC, "m s-1", "measured velocity minus desired velocity e_i2", "LVLH"),
-                Signal("b_hat", ("spacecraft",), "N", "adaptive gain b_hat_i"))
+        return (
+            Signal(
+                "velocity_error",
+                VEC,
+                "m s-1",
+                "measured velocity minus desired velocity e_i2",
+                "LVLH",
+            ),
+            Signal("b_hat", ("spacecraft",), "N", "adaptive gain b_hat_i"),
+        )

@@ -10,7 +10,10 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-from formation_ftc.blocks.controllers.yang2013_individual import attitude_control, translational_control
+from formation_ftc.blocks.controllers.yang2013_individual import (
+    attitude_control,
+    translational_control,
+)
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.sim.components import Controller, FlightInputs, component, static
 
@@ -39,7 +42,10 @@ class Yang2013TranslationalController(Controller):
 
     def exogenous(self, t):
         def p(tt):
-            return vector_expression(self.desired_position, "controller.desired_position", tt, self.count)
+            return vector_expression(
+                self.desired_position, "controller.desired_position", tt, self.count
+            )
+
         v = jax.jacfwd(p)
         return {"p": p(t), "v": v(t), "a": jax.jacfwd(v)(t)}
 
@@ -50,7 +56,9 @@ class Yang2013TranslationalController(Controller):
         y, d = inputs.measurement, inputs.exogenous
         e_R = d["p"] - y[:, 0:3]
         e_V = d["v"] - y[:, 3:6]
-        f = translational_control(e_R, e_V, d["a"], self.mass[:, None], self.K1, self.K2)  # eq. (12)
+        f = translational_control(
+            e_R, e_V, d["a"], self.mass[:, None], self.K1, self.K2
+        )  # eq. (12)
         return f, None, {}
 
 
@@ -76,6 +84,15 @@ class Yang2013AttitudeController(Controller):
 
     def output(self, t, state, inputs: FlightInputs):
         w, q = inputs.measurement["omega"], inputs.measurement["q"]
-        tau = attitude_control(w, q[:, 0:3], q[:, 3], jnp.zeros_like(w), self.inertia, self.K3, self.K4,
-                               self.K5, self.kappa)  # Yang2013 eq. (13)
+        tau = attitude_control(
+            w,
+            q[:, 0:3],
+            q[:, 3],
+            jnp.zeros_like(w),
+            self.inertia,
+            self.K3,
+            self.K4,
+            self.K5,
+            self.kappa,
+        )  # Yang2013 eq. (13)
         return tau, None, {}

@@ -34,9 +34,15 @@ class AccelerationModelEstimator(Estimator):
         if not isinstance(self.inner, Estimator) or not isinstance(m, np.ndarray):
             return  # pytree reconstruction with placeholders
         n = getattr(self.inner, "count", None)
-        if m.ndim != 1 or (n is not None and m.shape != (n,)) or not np.all(np.isfinite(m) & (m > 0)):
-            raise CompositionError(f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
-                                   f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)")
+        if (
+            m.ndim != 1
+            or (n is not None and m.shape != (n,))
+            or not np.all(np.isfinite(m) & (m > 0))
+        ):
+            raise CompositionError(
+                f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
+                f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)"
+            )
 
     @property
     def count(self) -> int | None:
@@ -60,7 +66,9 @@ class AccelerationModelEstimator(Estimator):
         return self.inner.update(t, state, inputs)
 
     def predict(self, t, state, command, dt):
-        return self.inner.predict(t, state, command / self.nominal_mass[:, None], dt)  # u_i = f_i / m_i^nom
+        return self.inner.predict(
+            t, state, command / self.nominal_mass[:, None], dt
+        )  # u_i = f_i / m_i^nom
 
     def current(self, state):
         return self.inner.current(state)

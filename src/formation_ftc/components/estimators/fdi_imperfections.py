@@ -76,17 +76,30 @@ class ScriptedFdi(Estimator):
 
     def _model(self) -> FDIModel:
         def fault_fn(k):
-            return windowed_additive_faults(k, self.step, self.windows, self.torques, self.spacecraft,
-                                            self.channels, self.count, self.n_channels)
+            return windowed_additive_faults(
+                k,
+                self.step,
+                self.windows,
+                self.torques,
+                self.spacecraft,
+                self.channels,
+                self.count,
+                self.n_channels,
+            )
+
         return FDIModel(self.count, self.n_channels, fault_fn, self.step)
 
     def update(self, t, state, inputs: FlightInputs):
         k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
-        return state, fdi_output(self._model(), self.params, k, step_key(fdi_noise_key(self.seed), k))
+        return state, fdi_output(
+            self._model(), self.params, k, step_key(fdi_noise_key(self.seed), k)
+        )
 
     def signals(self):
-        return (Signal("fdi_flag", VEC, "1", "channel reported faulty by the FDI (reconfigure)"),
-                Signal("fdi_estimate", VEC, "N m", "fault estimate u* reported by the FDI"))
+        return (
+            Signal("fdi_flag", VEC, "1", "channel reported faulty by the FDI (reconfigure)"),
+            Signal("fdi_estimate", VEC, "N m", "fault estimate u* reported by the FDI"),
+        )
 
     def outputs(self, t, state, estimate):
         return {"fdi_flag": estimate.flag, "fdi_estimate": estimate.estimate}

@@ -32,7 +32,14 @@ class ScheduledDiagnosis(Estimator):
         return state
 
     def signals(self):
-        return (Signal("fault_diagnosed", ("spacecraft",), "1", "fault diagnosed by the FDI unit (flight side)"),)
+        return (
+            Signal(
+                "fault_diagnosed",
+                ("spacecraft",),
+                "1",
+                "fault diagnosed by the FDI unit (flight side)",
+            ),
+        )
 
     def outputs(self, t, state, estimate):
         return {"fault_diagnosed": estimate["diagnosed"].astype(jnp.float64)}

@@ -91,10 +91,18 @@ class AttitudeScores(Evaluation):
     attitude_signal: str = static(default="quaternion")
 
     def signals(self):
-        return (Signal("attitude_error", ("spacecraft",), "rad", "rotation angle from the desired attitude"),
-                Signal("attitude_synchronisation_error", (), "rad",
-                       "max over pairs of the rotation angle between two spacecraft's attitudes"),
-                Signal("torque", ("spacecraft",), "N m", "norm of the applied body torque"))
+        return (
+            Signal(
+                "attitude_error", ("spacecraft",), "rad", "rotation angle from the desired attitude"
+            ),
+            Signal(
+                "attitude_synchronisation_error",
+                (),
+                "rad",
+                "max over pairs of the rotation angle between two spacecraft's attitudes",
+            ),
+            Signal("torque", ("spacecraft",), "N m", "norm of the applied body torque"),
+        )
 
     def outputs(self, signals):
         q = signals[self.attitude_signal]
@@ -105,5 +113,8 @@ class AttitudeScores(Evaluation):
             sync = jnp.max(relative_angle(q[..., iu, :], q[..., ju, :]), axis=-1)
         else:
             sync = jnp.zeros(q.shape[:-2])
-        return {"attitude_error": err, "attitude_synchronisation_error": sync,
-                "torque": jnp.linalg.norm(signals["applied"], axis=-1)}
+        return {
+            "attitude_error": err,
+            "attitude_synchronisation_error": sync,
+            "torque": jnp.linalg.norm(signals["applied"], axis=-1),
+        }

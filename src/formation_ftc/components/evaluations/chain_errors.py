@@ -21,11 +21,20 @@ class ChainTrackingError(Evaluation):
     from the plant's ``position`` and the controller's ``desired_position`` signals (N, axes)."""
 
     def signals(self):
-        return (Signal("tracking_error", ("pair", "axis"), "m",
-                       "true relative tracking error e_ij = (x_j - x_i) - (x_j^d - x_i^d)"),)
+        return (
+            Signal(
+                "tracking_error",
+                ("pair", "axis"),
+                "m",
+                "true relative tracking error e_ij = (x_j - x_i) - (x_j^d - x_i^d)",
+            ),
+        )
 
     def outputs(self, signals):
-        return {"tracking_error": chain_difference(signals["position"]) - chain_difference(signals["desired_position"])}
+        return {
+            "tracking_error": chain_difference(signals["position"])
+            - chain_difference(signals["desired_position"])
+        }
 
 
 @component

@@ -20,8 +20,15 @@ import numpy as np
 
 from formation_ftc.sim.components import Evaluation, Signal, component
 
-__all__ = ["FormationErrors", "mu1", "mu2_literal", "mu2_virtual_centre", "pairwise_error_sum",
-           "settle_time", "max_over_window"]
+__all__ = [
+    "FormationErrors",
+    "mu1",
+    "mu2_literal",
+    "mu2_virtual_centre",
+    "pairwise_error_sum",
+    "settle_time",
+    "max_over_window",
+]
 
 
 def mu1(e1):
@@ -138,9 +145,11 @@ class FormationErrors(Evaluation):
     """Signals ``mu1``, ``mu2`` (literal) and ``mu2_vc`` [m] from ``position_error`` and ``position``."""
 
     def signals(self):
-        return (Signal("mu1", (), "m", "formation tracking error (1/N) sum |e_i1|"),
-                Signal("mu2", (), "m", "formation keeping error, literal printed formula (E000-08)"),
-                Signal("mu2_vc", (), "m", "virtual-centre formation keeping error"))
+        return (
+            Signal("mu1", (), "m", "formation tracking error (1/N) sum |e_i1|"),
+            Signal("mu2", (), "m", "formation keeping error, literal printed formula (E000-08)"),
+            Signal("mu2_vc", (), "m", "virtual-centre formation keeping error"),
+        )
 
     def outputs(self, signals):
         e1, rho = signals["position_error"], signals["position"]
@@ -184,7 +193,9 @@ def settle_time(time: np.ndarray, signal: np.ndarray, threshold: float) -> float
     return float(time[last + 1])
 
 
-def max_over_window(time: np.ndarray, signal: np.ndarray, t_lo: float, t_hi: float = np.inf) -> float:
+def max_over_window(
+    time: np.ndarray, signal: np.ndarray, t_lo: float, t_hi: float = np.inf
+) -> float:
     """max of ``signal`` over t_lo <= t <= t_hi (NaN if the window is empty).
 
     Parameters

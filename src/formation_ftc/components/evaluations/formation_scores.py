@@ -68,15 +68,29 @@ class FormationScores(Evaluation):
     mass: Any  # (N,) [kg]
 
     def signals(self):
-        return (Signal("slot_error", ("spacecraft",), "m", "distance from the desired slot"),
-                Signal("shape_error", (), "m", "formation-keeping error, max over pairs of the relative-position error"),
-                Signal("thrust", ("spacecraft",), "N", "norm of the applied force"),
-                Signal("applied_acceleration", ("spacecraft",), "m s-2", "norm of the applied force per unit mass"))
+        return (
+            Signal("slot_error", ("spacecraft",), "m", "distance from the desired slot"),
+            Signal(
+                "shape_error",
+                (),
+                "m",
+                "formation-keeping error, max over pairs of the relative-position error",
+            ),
+            Signal("thrust", ("spacecraft",), "N", "norm of the applied force"),
+            Signal(
+                "applied_acceleration",
+                ("spacecraft",),
+                "m s-2",
+                "norm of the applied force per unit mass",
+            ),
+        )
 
     def outputs(self, signals):
         rho = signals["position"]
         force = jnp.linalg.norm(signals["applied"], axis=-1)
-        return {"slot_error": jnp.linalg.norm(rho - self.desired, axis=-1),
-                "shape_error": shape_error(rho, self.desired),
-                "thrust": force,
-                "applied_acceleration": force / self.mass}
+        return {
+            "slot_error": jnp.linalg.norm(rho - self.desired, axis=-1),
+            "shape_error": shape_error(rho, self.desired),
+            "thrust": force,
+            "applied_acceleration": force / self.mass,
+        }

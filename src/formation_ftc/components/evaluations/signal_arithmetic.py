@@ -27,7 +27,9 @@ class SignalSum(Evaluation):
 
     def __post_init__(self) -> None:
         if not self.terms or any(sign not in ("+", "-") for sign, _ in self.terms):
-            raise ValueError(f"evaluation {self.name!r}: terms must be (sign, signal) pairs with sign '+' or '-'")
+            raise ValueError(
+                f"evaluation {self.name!r}: terms must be (sign, signal) pairs with sign '+' or '-'"
+            )
 
     def signals(self):
         return (Signal(self.name, self.dims, self.units, self.long_name, self.frame),)
@@ -56,5 +58,5 @@ class PartNorm(Evaluation):
         return (Signal(self.name, self.dims, self.units, self.long_name),)
 
     def outputs(self, signals):
-        v = signals[self.signal][..., self.start:self.stop]
+        v = signals[self.signal][..., self.start : self.stop]
         return {self.name: jnp.sqrt(jnp.sum(v * v, axis=-1))}

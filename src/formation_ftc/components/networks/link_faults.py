@@ -86,5 +86,9 @@ class DelayedGraphLinkLossNetwork(DelayedGraphNetwork):
         after = inputs.t_k >= self.onset
         w = faulty_weights(self.weights, self.lost, self.onset, inputs.t_k)
         T = inputs.exogenous["T"] * jnp.where(after, self.delay_scale, 1.0)
-        return DelayedGraphNetwork.receive(dataclasses.replace(self, weights=w), t, state,
-                                           inputs._replace(exogenous={**inputs.exogenous, "T": T}))
+        return DelayedGraphNetwork.receive(
+            dataclasses.replace(self, weights=w),
+            t,
+            state,
+            inputs._replace(exogenous={**inputs.exogenous, "T": T}),
+        )

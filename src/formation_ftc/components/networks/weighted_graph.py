@@ -82,12 +82,18 @@ def delay_vector_function(texts: tuple[tuple[str, ...], ...], pairs: tuple[tuple
     >>> np.asarray(T(2.0)).round(12)
     array([0.12, 0.4 ])
     """
-    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
-           for i, j in pairs]
+    fns = [
+        compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
+        for i, j in pairs
+    ]
 
     def T(t):
-        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), jnp.shape(t))
-                          for f, (i, j) in zip(fns, pairs, strict=True)])
+        return jnp.stack(
+            [
+                jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), jnp.shape(t))
+                for f, (i, j) in zip(fns, pairs, strict=True)
+            ]
+        )
 
     return T
 
@@ -147,13 +153,17 @@ class DelayedGraphNetwork(Network):
         return history_push(state, messages)
 
     def receive(self, t, state, inputs: NetworkInputs):
-        rows, _, sender_onehot, receiver_onehot = _link_selections(self.edges, self.count)  # (E, N), (N, E)
+        rows, _, sender_onehot, receiver_onehot = _link_selections(
+            self.edges, self.count
+        )  # (E, N), (N, E)
         C = self.weights
         T = inputs.exogenous["T"]
         elapsed = t - inputs.t_k
         # steps before the newest sample m(t_k) (read clamps at 0: the newest sample)
         lag = (T - elapsed) / self.dt
-        rows_all = history_read(state, lag)  # (E, N, d): every sender's message at each link's delayed time
+        rows_all = history_read(
+            state, lag
+        )  # (E, N, d): every sender's message at each link's delayed time
         m_j = jnp.einsum("en,enk->ek", sender_onehot, rows_all)  # (E, d): m_{j_e}(t - T_e)
         if not self.short_delays:
             return self._combine(C, rows, sender_onehot, receiver_onehot, m_j)

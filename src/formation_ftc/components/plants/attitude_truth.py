@@ -25,7 +25,14 @@ from formation_ftc.core.dynamics.gravity_gradient import (
 )
 from formation_ftc.core.quaternion import quat_kinematics, quat_multiply, rotation_matrix
 from formation_ftc.core.vector3 import norm3
-from formation_ftc.sim.components import CompositionError, Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import (
+    CompositionError,
+    Plant,
+    Signal,
+    TruthInputs,
+    component,
+    static,
+)
 
 __all__ = ["AttitudeTruthPlant", "batched_inverse_3x3", "STATE_FRAMES"]
 
@@ -113,7 +120,9 @@ class AttitudeTruthPlant(Plant):
 
     def __post_init__(self):
         if self.state_frame not in STATE_FRAMES:
-            raise CompositionError(f"AttitudeTruthPlant.state_frame = {self.state_frame!r}: one of {STATE_FRAMES}")
+            raise CompositionError(
+                f"AttitudeTruthPlant.state_frame = {self.state_frame!r}: one of {STATE_FRAMES}"
+            )
 
     @property
     def count(self) -> int:
@@ -126,7 +135,9 @@ class AttitudeTruthPlant(Plant):
         return x["omega"]
 
     def exogenous(self, t):
-        return {"iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)}
+        return {
+            "iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)
+        }
 
     def orbit_rate(self):
         """n = sqrt(mu / a^3) [rad/s]."""
@@ -141,7 +152,11 @@ class AttitudeTruthPlant(Plant):
 
     def gravity_gradient_torque(self, t, q):
         """tau_gg (N, 3) [N m, body axes] at time t [s] for the attitudes q (N, 4) of ``state_frame``."""
-        r_b = rotation_matrix(q)[..., 0, :] if self._lvlh() else radial_unit_in_body(q, self.argument_of_latitude(t))
+        r_b = (
+            rotation_matrix(q)[..., 0, :]
+            if self._lvlh()
+            else radial_unit_in_body(q, self.argument_of_latitude(t))
+        )
         return gravity_gradient_torque_unit(r_b, self.inertia, self.mu / self.semi_major_axis**3)
 
     def rates(self, t, x, torque):
@@ -158,9 +173,14 @@ class AttitudeTruthPlant(Plant):
         total = -jnp.cross(omega, jnp.einsum("nij,nj->ni", J, omega)) + torque
         if self.gravity_gradient:
             total = total + self.gravity_gradient_torque(t, q)
-        omega_dot = jnp.einsum("nij,nj->ni", batched_inverse_3x3(J), total)  # J w' = -w x J w + tau_gg + tau + iota
+        omega_dot = jnp.einsum(
+            "nij,nj->ni", batched_inverse_3x3(J), total
+        )  # J w' = -w x J w + tau_gg + tau + iota
         if self._lvlh():
-            return {"omega": omega_dot + n * jnp.cross(w, o_b), "q": quat_kinematics(q, w)}  # w_r' = w' + n w_r x o_b
+            return {
+                "omega": omega_dot + n * jnp.cross(w, o_b),
+                "q": quat_kinematics(q, w),
+            }  # w_r' = w' + n w_r x o_b
         return {"omega": omega_dot, "q": quat_kinematics(q, omega)}
 
     def inertial_and_lvlh(self, t, x):
@@ -185,21 +205,55 @@ class AttitudeTruthPlant(Plant):
         return {"torque_impulse": norm3(command)}
 
     def signals(self):
-        return (Signal("angular_velocity", VEC, "rad s-1", "body angular velocity relative to the inertial frame",
-                       "body"),
-                Signal("quaternion", ("spacecraft", "quaternion_component"), "1",
-                       "attitude quaternion body -> inertial (vector part first)", "body"),
-                Signal("attitude_lvlh", ("spacecraft", "quaternion_component"), "1",
-                       "attitude quaternion body -> LVLH (vector part first)", "body"),
-                Signal("angular_velocity_lvlh", VEC, "rad s-1", "body angular velocity relative to LVLH", "body"),
-                Signal("gravity_gradient_torque", VEC, "N m", "gravity-gradient torque", "body"),
-                Signal("torque_impulse", ("spacecraft",), "N m s", "integral of the commanded torque norm"))
+        return (
+            Signal(
+                "angular_velocity",
+                VEC,
+                "rad s-1",
+                "body angular velocity relative to the inertial frame",
+                "body",
+            ),
+            Signal(
+                "quaternion",
+                ("spacecraft", "quaternion_component"),
+                "1",
+                "attitude quaternion body -> inertial (vector part first)",
+                "body",
+            ),
+            Signal(
+                "attitude_lvlh",
+                ("spacecraft", "quaternion_component"),
+                "1",
+                "attitude quaternion body -> LVLH (vector part first)",
+                "body",
+            ),
+            Signal(
+                "angular_velocity_lvlh",
+                VEC,
+                "rad s-1",
+                "body angular velocity relative to LVLH",
+                "body",
+            ),
+            Signal("gravity_gradient_torque", VEC, "N m", "gravity-gradient torque", "body"),
+            Signal(
+                "torque_impulse", ("spacecraft",), "N m s", "integral of the commanded torque norm"
+            ),
+        )
 
     def coords(self):
         return {"quaternion_component": QUATERNION_COMPONENTS}
 
     def outputs(self, t, x, inputs):
         omega, q, w_r, q_l = self.inertial_and_lvlh(t, x)
-        gg = self.gravity_gradient_torque(t, x["q"]) if self.gravity_gradient else jnp.zeros_like(omega)
-        return {"angular_velocity": omega, "quaternion": q, "attitude_lvlh": q_l, "angular_velocity_lvlh": w_r,
-                "gravity_gradient_torque": gg}
+        gg = (
+            self.gravity_gradient_torque(t, x["q"])
+            if self.gravity_gradient
+            else jnp.zeros_like(omega)
+        )
+        return {
+            "angular_velocity": omega,
+            "quaternion": q,
+            "attitude_lvlh": q_l,
+            "angular_velocity_lvlh": w_r,
+            "gravity_gradient_torque": gg,
+        }

@@ -30,7 +30,9 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     process_noise_std: Any = 0.0  # [N]
-    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))  # expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(
+        default=("0", "0", "0")
+    )  # expressions in t, i [N]
 
     @property
     def count(self) -> int:
@@ -50,15 +52,18 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
         return {"q": cw_rhs(t, x["q"], f / self.mass[:, None], self.mean_motion)}
 
     def usage_rates(self, t, x, command):
-        return {"delta_v": jnp.linalg.norm(command, axis=-1) / self.mass,
-                "control_effort": jnp.sum(command**2, axis=-1)}
+        return {
+            "delta_v": jnp.linalg.norm(command, axis=-1) / self.mass,
+            "control_effort": jnp.sum(command**2, axis=-1),
+        }
 
     def signals(self):
-        return (Signal("position", VEC, "m", "position relative to the reference", "LVLH"),
-                Signal("velocity", VEC, "m s-1", "velocity relative to the reference", "LVLH"),
-                Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |u|/m"),
-                Signal("control_effort", ("spacecraft",), "N2 s", "integral of |u|^2"))
+        return (
+            Signal("position", VEC, "m", "position relative to the reference", "LVLH"),
+            Signal("velocity", VEC, "m s-1", "velocity relative to the reference", "LVLH"),
+            Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |u|/m"),
+            Signal("control_effort", ("spacecraft",), "N2 s", "integral of |u|^2"),
+        )
 
     def outputs(self, t, x, inputs):
         return {"position": x["q"][:, :3], "velocity": x["q"][:, 3:]}
-

@@ -56,7 +56,9 @@ class ZohClohessyWiltshirePlant(Plant):
     def exogenous(self, t):
         nt = self.mean_motion * t
         s, c = jnp.sin(nt), jnp.cos(nt)
-        d = self.disturbance_amplitude * jnp.stack([1.0 - 1.5 * s, s * c, s])  # 0.5 sin 2nt = sin nt cos nt
+        d = self.disturbance_amplitude * jnp.stack(
+            [1.0 - 1.5 * s, s * c, s]
+        )  # 0.5 sin 2nt = sin nt cos nt
         return {"d": jnp.broadcast_to(d, (self.count, 3))}
 
     def derivative(self, t, x, inputs: TruthInputs):
@@ -74,9 +76,16 @@ class ZohClohessyWiltshirePlant(Plant):
         return x["q"][:, 3:]
 
     def signals(self):
-        return (Signal("state", ("spacecraft", "component"), "m, m s-1",
-                       "relative state q (positions [m], velocities [m s-1])", "LVLH"),
-                Signal("disturbance", ("spacecraft", "axis"), "m s-2", "space perturbation d", "LVLH"))
+        return (
+            Signal(
+                "state",
+                ("spacecraft", "component"),
+                "m, m s-1",
+                "relative state q (positions [m], velocities [m s-1])",
+                "LVLH",
+            ),
+            Signal("disturbance", ("spacecraft", "axis"), "m s-2", "space perturbation d", "LVLH"),
+        )
 
     def coords(self):
         return {"component": list(STATE_COMPONENTS)}

@@ -7,7 +7,10 @@ from typing import Any
 import jax.numpy as jnp
 
 from formation_ftc.components.expressions import spacecraft_numbers
-from formation_ftc.core.dynamics.double_integrator import DoubleIntegratorState, held_acceleration_step
+from formation_ftc.core.dynamics.double_integrator import (
+    DoubleIntegratorState,
+    held_acceleration_step,
+)
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
 
@@ -61,7 +64,9 @@ class DoubleIntegratorPlant(Plant):
         return {"r": x["v"], "v": inputs.force + inputs.exogenous["d"]}
 
     def exact_step(self, t, x, inputs: TruthInputs, dt):
-        new = held_acceleration_step(DoubleIntegratorState(x["r"], x["v"]), inputs.force + inputs.exogenous["d"], dt)
+        new = held_acceleration_step(
+            DoubleIntegratorState(x["r"], x["v"]), inputs.force + inputs.exogenous["d"], dt
+        )
         return {"r": new.r, "v": new.v}
 
     def position(self, x):
@@ -80,9 +85,17 @@ class DoubleIntegratorPlant(Plant):
         return {"effort": command * command}
 
     def signals(self):
-        return (Signal("position", VEC, "m", "position", "inertial"),
-                Signal("velocity", VEC, "m s-1", "velocity", "inertial"),
-                Signal("effort", VEC, "m2 s-3", "cumulative effort E_i = int u_i^2 dt of the command u", "inertial"))
+        return (
+            Signal("position", VEC, "m", "position", "inertial"),
+            Signal("velocity", VEC, "m s-1", "velocity", "inertial"),
+            Signal(
+                "effort",
+                VEC,
+                "m2 s-3",
+                "cumulative effort E_i = int u_i^2 dt of the command u",
+                "inertial",
+            ),
+        )
 
     def outputs(self, t, x, inputs):
         return {"position": x["r"], "velocity": x["v"]}

@@ -101,8 +101,9 @@ class EulerAngleAttitudePlant(Plant):
         """Draw the true inertia J = J^ diag(1 + delta), delta ~ U[-spread, spread]^3, and derive the
         disturbance key (once per run)."""
         _, k_J, k_d, _ = seed_streams(self.seed)
-        delta = self.inertia_spread * jax.random.uniform(k_J, (self.count, 3), dtype=jnp.float64,
-                                                         minval=-1.0, maxval=1.0)
+        delta = self.inertia_spread * jax.random.uniform(
+            k_J, (self.count, 3), dtype=jnp.float64, minval=-1.0, maxval=1.0
+        )
         J = jax.vmap(jnp.diag)(self.J_nominal * (1.0 + delta))
         return dataclasses.replace(self, J=J, J_inv=jnp.linalg.inv(J), noise_key=k_d)
 
@@ -124,22 +125,33 @@ class EulerAngleAttitudePlant(Plant):
         # the disturbance stream's root key (prepare computes it once per run)
         k_d = seed_streams(self.seed)[2] if isinstance(self.noise_key, tuple) else self.noise_key
         k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
-        return {"d": self.disturbance_std * jax.random.normal(step_key(k_d, k), (self.count, 3),
-                                                              dtype=jnp.float64)}
+        return {
+            "d": self.disturbance_std
+            * jax.random.normal(step_key(k_d, k), (self.count, 3), dtype=jnp.float64)
+        }
 
     def derivative(self, t, x, inputs: TruthInputs):
         # (1), (27): J w_dot = -w x J w + R_bar^T (u + d)
-        q_dot, w_dot = rigid_body_rhs(x["q"], x["w"], inputs.force + inputs.exogenous["d"], self.J, self.J_inv)
+        q_dot, w_dot = rigid_body_rhs(
+            x["q"], x["w"], inputs.force + inputs.exogenous["d"], self.J, self.J_inv
+        )
         return {"q": q_dot, "w": w_dot}
 
     def signals(self):
-        return (Signal("attitude", VEC, "rad", "Euler angles [theta, phi, psi]", "body to inertial Z-Y-X"),
-                Signal("attitude_rate", VEC, "rad s-1", "Euler-angle rates", "body to inertial Z-Y-X"),
-                Signal("disturbance", VEC, "N m", "input disturbance d, held over the step"))
+        return (
+            Signal(
+                "attitude", VEC, "rad", "Euler angles [theta, phi, psi]", "body to inertial Z-Y-X"
+            ),
+            Signal("attitude_rate", VEC, "rad s-1", "Euler-angle rates", "body to inertial Z-Y-X"),
+            Signal("disturbance", VEC, "N m", "input disturbance d, held over the step"),
+        )
 
     def coords(self):
         return {"axis": list(AXES)}
 
     def outputs(self, t, x, inputs: TruthInputs):
-        return {"attitude": x["q"], "attitude_rate": euler_rates_from_body_rates(x["q"], x["w"]),
-                "disturbance": inputs.exogenous["d"]}
+        return {
+            "attitude": x["q"],
+            "attitude_rate": euler_rates_from_body_rates(x["q"], x["w"]),
+            "disturbance": inputs.exogenous["d"],
+        }

@@ -69,8 +69,12 @@ class InertialFormationPlant(Plant):
     chief_ballistic_coefficient: Any  # () C_D A / m of the virtual chief [m^2/kg]
     srp_coefficient: Any  # (N,) C_R A / m [m^2/kg]
     chief_srp_coefficient: Any  # () [m^2/kg]
-    sun_direction: Any = dataclasses.field(default_factory=lambda: _SUN_X.copy())  # (3,) ECI direction towards the Sun [-]
-    density_table: Any = dataclasses.field(default_factory=EXPONENTIAL_ATMOSPHERE.copy)  # (K, 3) [h_0 m, rho_0 kg/m^3, H m]
+    sun_direction: Any = dataclasses.field(
+        default_factory=lambda: _SUN_X.copy()
+    )  # (3,) ECI direction towards the Sun [-]
+    density_table: Any = dataclasses.field(
+        default_factory=EXPONENTIAL_ATMOSPHERE.copy
+    )  # (K, 3) [h_0 m, rho_0 kg/m^3, H m]
     mu: Any = MU_EARTH  # [m^3/s^2]
     j2_coefficient: Any = J2_EARTH  # [-]
     earth_radius: Any = R_EARTH  # [m]
@@ -99,7 +103,10 @@ class InertialFormationPlant(Plant):
         if self.initial_roe is not None:
             deputies = elements_to_eci(*roe_to_elements(tuple(el), self.initial_roe), self.mu)
             return {"chief": chief, "deputies": deputies}
-        return {"chief": chief, "deputies": lvlh_to_eci(chief, self.initial_state_lvlh + self.dispersion())}
+        return {
+            "chief": chief,
+            "deputies": lvlh_to_eci(chief, self.initial_state_lvlh + self.dispersion()),
+        }
 
     def dispersion(self):
         """(N, 6) LVLH initial-state dispersion [m, m/s]: standard normal draws from ``dispersion_seed``
@@ -114,22 +121,33 @@ class InertialFormationPlant(Plant):
 
     def _acceleration(self, s, ballistic, srp_coefficient):
         return perturbed_acceleration(
-            s[..., :3], s[..., 3:], mu=self.mu,
-            j2=self.j2_coefficient if self.j2 else None, r_earth=self.earth_radius,
-            ballistic=ballistic if self.drag else None, table=self.density_table,
+            s[..., :3],
+            s[..., 3:],
+            mu=self.mu,
+            j2=self.j2_coefficient if self.j2 else None,
+            r_earth=self.earth_radius,
+            ballistic=ballistic if self.drag else None,
+            table=self.density_table,
             omega_earth=self.earth_rotation_rate,
-            srp_coefficient=srp_coefficient if self.srp else None, sun_direction=self.sun_direction,
-            pressure=self.solar_pressure)
+            srp_coefficient=srp_coefficient if self.srp else None,
+            sun_direction=self.sun_direction,
+            pressure=self.solar_pressure,
+        )
 
     def derivative(self, t, x, inputs: TruthInputs):
         chief, dep = x["chief"], x["deputies"]
-        a_chief = self._acceleration(chief, self.chief_ballistic_coefficient, self.chief_srp_coefficient)
+        a_chief = self._acceleration(
+            chief, self.chief_ballistic_coefficient, self.chief_srp_coefficient
+        )
         R = lvlh_rotation(chief[:3], chief[3:])  # ECI -> chief LVLH
         f_lvlh = (inputs.force + inputs.exogenous["h"]) / jnp.asarray(self.mass)[:, None]
-        a_dep = (self._acceleration(dep, self.ballistic_coefficient, self.srp_coefficient)
-                 + f_lvlh @ R)  # R^T f for every row: LVLH -> ECI
-        return {"chief": jnp.concatenate([chief[3:], a_chief]),
-                "deputies": jnp.concatenate([dep[:, 3:], a_dep], axis=-1)}
+        a_dep = (
+            self._acceleration(dep, self.ballistic_coefficient, self.srp_coefficient) + f_lvlh @ R
+        )  # R^T f for every row: LVLH -> ECI
+        return {
+            "chief": jnp.concatenate([chief[3:], a_chief]),
+            "deputies": jnp.concatenate([dep[:, 3:], a_dep], axis=-1),
+        }
 
     def relative_state(self, x):
         """(N, 6) LVLH relative state [m, m/s] of the deputies w.r.t. the chief."""
@@ -153,13 +171,26 @@ class InertialFormationPlant(Plant):
         return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
 
     def signals(self):
-        return (Signal("position", VEC, "m", "position relative to the truth chief", "LVLH"),
-                Signal("velocity", VEC, "m s-1", "velocity relative to the truth chief (rotating frame)", "LVLH"),
-                Signal("chief_altitude", (), "m", "altitude of the truth chief above the spherical Earth"),
-                Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |f_i|/m_i"),
-                Signal("control_effort", ("spacecraft",), "N2 s", "integral of |f_i|^2"))
+        return (
+            Signal("position", VEC, "m", "position relative to the truth chief", "LVLH"),
+            Signal(
+                "velocity",
+                VEC,
+                "m s-1",
+                "velocity relative to the truth chief (rotating frame)",
+                "LVLH",
+            ),
+            Signal(
+                "chief_altitude", (), "m", "altitude of the truth chief above the spherical Earth"
+            ),
+            Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |f_i|/m_i"),
+            Signal("control_effort", ("spacecraft",), "N2 s", "integral of |f_i|^2"),
+        )
 
     def outputs(self, t, x, inputs):
         q = self.relative_state(x)
-        return {"position": q[:, :3], "velocity": q[:, 3:],
-                "chief_altitude": jnp.linalg.norm(x["chief"][:3]) - self.earth_radius}
+        return {
+            "position": q[:, :3],
+            "velocity": q[:, 3:],
+            "chief_altitude": jnp.linalg.norm(x["chief"][:3]) - self.earth_radius,
+        }

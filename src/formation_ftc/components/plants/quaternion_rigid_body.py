@@ -48,20 +48,37 @@ class QuaternionRigidBodyPlant(Plant):
         return x["omega"]
 
     def exogenous(self, t):
-        return {"iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)}
+        return {
+            "iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)
+        }
 
     def rates(self, x, torque):
         """``{"omega": omega', "q": q'}`` under the total torque (control + disturbance) [N m]."""
-        dw, dq = rigid_body_quaternion_rates(x["omega"], x["q"], torque, self.inertia, self.gyroscopic)
+        dw, dq = rigid_body_quaternion_rates(
+            x["omega"], x["q"], torque, self.inertia, self.gyroscopic
+        )
         return {"omega": dw, "q": dq}
 
     def derivative(self, t, x, inputs: TruthInputs):
         return self.rates(x, inputs.force + inputs.exogenous["iota"])  # Yang2013 eq. (4)
 
     def signals(self):
-        return (Signal("angular_velocity", ("spacecraft", "axis"), "rad s-1", "body angular velocity", "body"),
-                Signal("quaternion", ("spacecraft", "quaternion_component"), "1",
-                       "attitude quaternion (vector part first)", "body"))
+        return (
+            Signal(
+                "angular_velocity",
+                ("spacecraft", "axis"),
+                "rad s-1",
+                "body angular velocity",
+                "body",
+            ),
+            Signal(
+                "quaternion",
+                ("spacecraft", "quaternion_component"),
+                "1",
+                "attitude quaternion (vector part first)",
+                "body",
+            ),
+        )
 
     def coords(self):
         return {"quaternion_component": QUATERNION_COMPONENTS}

@@ -36,7 +36,9 @@ class RelativeLvlhPlant(RelativeStatePlant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     mu: Any  # gravitational parameter [m^3/s^2]
-    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))  # h_i(t), expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(
+        default=("0", "0", "0")
+    )  # h_i(t), expressions in t, i [N]
     needs_reference: ClassVar[bool] = True
 
     @property
@@ -52,12 +54,15 @@ class RelativeLvlhPlant(RelativeStatePlant):
     def derivative(self, t, x, inputs: TruthInputs):
         ref = inputs.reference
         if ref is None:
-            raise CompositionError("plant RelativeLvlhPlant needs a reference orbit (reference slot "
-                                   "KeplerianReference), got none")
+            raise CompositionError(
+                "plant RelativeLvlhPlant needs a reference orbit (reference slot "
+                "KeplerianReference), got none"
+            )
         q = x["q"]
         rho, v = q[:, :3], q[:, 3:]
-        acc_nat = natural_acceleration_from_rates(rho, v, ref["r_c"], ref["theta_dot"], ref["theta_ddot"],
-                                                  self.mu)  # eqs. (2)-(4) / m_i
+        acc_nat = natural_acceleration_from_rates(
+            rho, v, ref["r_c"], ref["theta_dot"], ref["theta_ddot"], self.mu
+        )  # eqs. (2)-(4) / m_i
         acc = acc_nat + (inputs.exogenous["h"] + inputs.force) / self.mass[:, None]  # eq. (1)
         return {"q": jnp.concatenate([v, acc], axis=-1)}
 
@@ -65,12 +70,17 @@ class RelativeLvlhPlant(RelativeStatePlant):
         return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
 
     def signals(self):
-        return (Signal("position", VEC, "m", "position rho_i relative to the reference", "LVLH"),
-                Signal("velocity", VEC, "m s-1", "velocity v_i relative to the reference", "LVLH"),
-                Signal("true_anomaly", (), "rad", "true anomaly of the reference orbit"),
-                Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |f_i|/m_i"),
-                Signal("control_effort", ("spacecraft",), "N2 s", "integral of |f_i|^2"))
+        return (
+            Signal("position", VEC, "m", "position rho_i relative to the reference", "LVLH"),
+            Signal("velocity", VEC, "m s-1", "velocity v_i relative to the reference", "LVLH"),
+            Signal("true_anomaly", (), "rad", "true anomaly of the reference orbit"),
+            Signal("delta_v", ("spacecraft",), "m s-1", "commanded delta-v, integral of |f_i|/m_i"),
+            Signal("control_effort", ("spacecraft",), "N2 s", "integral of |f_i|^2"),
+        )
 
     def outputs(self, t, x, inputs):
-        return {"position": x["q"][:, :3], "velocity": x["q"][:, 3:],
-                "true_anomaly": inputs.reference["theta"]}
+        return {
+            "position": x["q"][:, :3],
+            "velocity": x["q"][:, 3:],
+            "true_anomaly": inputs.reference["theta"],
+        }

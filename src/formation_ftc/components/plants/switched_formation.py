@@ -30,8 +30,21 @@ from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, 
 
 __all__ = ["SwitchedFormationPlant", "ERROR_COMPONENTS", "STATE_DIM"]
 
-ERROR_COMPONENTS = ["e_R_x", "e_R_y", "e_R_z", "e_V_x", "e_V_y", "e_V_z", "e_w_x", "e_w_y", "e_w_z",
-                    "e_q_1", "e_q_2", "e_q_3", "e_q_4"]
+ERROR_COMPONENTS = [
+    "e_R_x",
+    "e_R_y",
+    "e_R_z",
+    "e_V_x",
+    "e_V_y",
+    "e_V_z",
+    "e_w_x",
+    "e_w_y",
+    "e_w_z",
+    "e_q_1",
+    "e_q_2",
+    "e_q_3",
+    "e_q_4",
+]
 STATE_DIM = 13  # x_i = [e_R, e_V, e_w, e_q, e_q4] (7)
 
 
@@ -73,21 +86,32 @@ class SwitchedFormationPlant(Plant):
         return {"x": x0, "left_norm": jnp.linalg.norm(x0, axis=-1)}
 
     def exogenous(self, t):
-        return {"d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count),
-                "attitude": self.attitude.exogenous(t)}
+        return {
+            "d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count),
+            "attitude": self.attitude.exogenous(t),
+        }
 
     def derivative(self, t, x, inputs: TruthInputs):
         X = x["x"]
         e_R, e_V, e_w, e_q = X[:, 0:3], X[:, 3:6], X[:, 6:9], X[:, 9:13]
         f, tau = inputs.force[:, :3], inputs.force[:, 3:]
-        zero = jnp.zeros_like(e_R)  # drift Phi_i, Upsilon_i: cancelled exactly by (12)-(13) (E001-02)
-        omega = -e_w if self.rotation_coupling else None  # omega_i = -e_omega with the reference at rest
-        de_R, de_V = translational_error_rates(e_R, e_V, zero, f, inputs.exogenous["d"],
-                                               self.mass[:, None], omega)  # Yang2013 eq. (2)
-        att = self.attitude.rates({"omega": e_w, "q": e_q},
-                                  tau + inputs.exogenous["attitude"]["iota"])  # Yang2013 eq. (5)
+        zero = jnp.zeros_like(
+            e_R
+        )  # drift Phi_i, Upsilon_i: cancelled exactly by (12)-(13) (E001-02)
+        omega = (
+            -e_w if self.rotation_coupling else None
+        )  # omega_i = -e_omega with the reference at rest
+        de_R, de_V = translational_error_rates(
+            e_R, e_V, zero, f, inputs.exogenous["d"], self.mass[:, None], omega
+        )  # Yang2013 eq. (2)
+        att = self.attitude.rates(
+            {"omega": e_w, "q": e_q}, tau + inputs.exogenous["attitude"]["iota"]
+        )  # Yang2013 eq. (5)
         dx = jnp.concatenate([de_R, de_V, att["omega"], att["q"]], axis=-1)
-        return {"x": dx * _active(inputs.decision, self.count)[:, None], "left_norm": jnp.zeros(self.count)}
+        return {
+            "x": dx * _active(inputs.decision, self.count)[:, None],
+            "left_norm": jnp.zeros(self.count),
+        }
 
     def jump(self, t, x, decision):
         X = x["x"]
@@ -96,23 +120,50 @@ class SwitchedFormationPlant(Plant):
         if mode is None:
             return {"x": X, "left_norm": left}
         nxt = decision.next_mode
-        switched = jnp.einsum("ab,bc->ac", self.variation[nxt], X) + self.new_states[nxt]  # Yang2013 eq. (10)
+        switched = (
+            jnp.einsum("ab,bc->ac", self.variation[nxt], X) + self.new_states[nxt]
+        )  # Yang2013 eq. (10)
         return {"x": jnp.where(nxt != mode, switched, X), "left_norm": left}
 
     def signals(self):
         sc = ("spacecraft",)
         return (
-            Signal("error_state", ("spacecraft", "component"), "1",
-                   "error state x_i (7), desired minus actual (m, m s-1, rad s-1, 1 by component)", "F_i"),
+            Signal(
+                "error_state",
+                ("spacecraft", "component"),
+                "1",
+                "error state x_i (7), desired minus actual (m, m s-1, rad s-1, 1 by component)",
+                "F_i",
+            ),
             Signal("state_norm", (), "1", "|X_sigma(t)(t)|, norm of the stacked error states"),
-            Signal("state_norm_left", (), "1", "|X(t_k^-)|, norm before the state variation (10) at t_k"),
+            Signal(
+                "state_norm_left",
+                (),
+                "1",
+                "|X(t_k^-)|, norm before the state variation (10) at t_k",
+            ),
             Signal("state_norm_peak", (), "1", "max(|X(t_k^-)|, |X(t_k)|)"),
             Signal("spacecraft_norm", sc, "1", "|x_i|"),
-            Signal("spacecraft_norm_left", sc, "1", "|x_i(t_k^-)|, before the state variation (10) at t_k"),
-            Signal("input_norm", sc, "1", "|u_i| = |[f_i; tau_i]| of the applied inputs (N and N m "
-                   "combined, as in Yang2013 Fig. 5); 0 outside the formation"),
-            Signal("relative_position", ("spacecraft", "axis"), "m",
-                   "relative position R~ = R~^d - e_R (0 outside the formation)", "F_i"),
+            Signal(
+                "spacecraft_norm_left",
+                sc,
+                "1",
+                "|x_i(t_k^-)|, before the state variation (10) at t_k",
+            ),
+            Signal(
+                "input_norm",
+                sc,
+                "1",
+                "|u_i| = |[f_i; tau_i]| of the applied inputs (N and N m "
+                "combined, as in Yang2013 Fig. 5); 0 outside the formation",
+            ),
+            Signal(
+                "relative_position",
+                ("spacecraft", "axis"),
+                "m",
+                "relative position R~ = R~^d - e_R (0 outside the formation)",
+                "F_i",
+            ),
         )
 
     def coords(self):

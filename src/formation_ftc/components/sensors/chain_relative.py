@@ -37,8 +37,10 @@ class ChainRelativeSensors(Sensors):
             return None
         k_r, k_v = jax.random.split(key)
         shape = (self.count - 1, self.n_axes)
-        return {"position": gaussian_noise(k_r, shape, self.position_noise_std),
-                "velocity": gaussian_noise(k_v, shape, self.velocity_noise_std)}
+        return {
+            "position": gaussian_noise(k_r, shape, self.position_noise_std),
+            "velocity": gaussian_noise(k_v, shape, self.velocity_noise_std),
+        }
 
     def measure(self, t, x, inputs: SensorInputs):
         y = {"position": chain_difference(x["r"]), "velocity": chain_difference(x["v"])}

@@ -25,7 +25,10 @@ class ChainRelativeStateSensors(ChainRelativeSensors):  # type: ignore[misc]  # 
     def measure(self, t, x, inputs: SensorInputs):
         q = x["q"]
         na = self.n_axes
-        y = {"position": chain_difference(q[:, :na]), "velocity": chain_difference(q[:, 3:3 + na])}
+        y = {
+            "position": chain_difference(q[:, :na]),
+            "velocity": chain_difference(q[:, 3 : 3 + na]),
+        }
         if inputs.noise is not None:
             y = {k: y[k] + inputs.noise[k] for k in y}
         return y

@@ -26,8 +26,13 @@ class RelativeStateSensors(Sensors):
     def noise(self, key):
         n = self.count
         k_p, k_v = jax.random.split(key, 2)
-        return jnp.concatenate([gaussian_noise(k_p, (n, 3), self.position_noise_std),
-                                gaussian_noise(k_v, (n, 3), self.velocity_noise_std)], axis=-1)
+        return jnp.concatenate(
+            [
+                gaussian_noise(k_p, (n, 3), self.position_noise_std),
+                gaussian_noise(k_v, (n, 3), self.velocity_noise_std),
+            ],
+            axis=-1,
+        )
 
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"] + inputs.noise

@@ -7,7 +7,11 @@ from typing import Any
 
 import jax.numpy as jnp
 
-from formation_ftc.blocks.supervisors.hierarchical_supervisor import MODE_NAMES, initial_state, transition
+from formation_ftc.blocks.supervisors.hierarchical_supervisor import (
+    MODE_NAMES,
+    initial_state,
+    transition,
+)
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.sim.components import FlightInputs, Signal, Supervisor, component, static
 
@@ -47,19 +51,38 @@ class HierarchicalSupervisor(Supervisor):
         k = jnp.round((t - self.t0) / self.dt).astype(jnp.int64)
         rd, _, _ = rotating_polygon(t, self.count, self.n_axes, self.side, self.omega)
         e = inputs.measurement["position"] - chain_difference(rd)
-        new = transition(state, k, jnp.max(jnp.abs(e)), self.k_estimated, self.e_s, self.confirm_steps,
-                         self.monitor_start, self.flfr_enabled)
+        new = transition(
+            state,
+            k,
+            jnp.max(jnp.abs(e)),
+            self.k_estimated,
+            self.e_s,
+            self.confirm_steps,
+            self.monitor_start,
+            self.flfr_enabled,
+        )
         return new, new.mode
 
     def current(self, state):
         return state.mode
 
     def signals(self):
-        return (Signal("mode", (), "1", "HL supervisor mode: " + ", ".join(
-                    f"{j} = {m}" for j, m in enumerate(MODE_NAMES))),
-                Signal("mode_changes", (), "1", "number of mode changes so far"),
-                Signal("time_in_flfr", (), "s", "time spent in FLFR (the switch step counts as one step)"))
+        return (
+            Signal(
+                "mode",
+                (),
+                "1",
+                "HL supervisor mode: " + ", ".join(f"{j} = {m}" for j, m in enumerate(MODE_NAMES)),
+            ),
+            Signal("mode_changes", (), "1", "number of mode changes so far"),
+            Signal(
+                "time_in_flfr", (), "s", "time spent in FLFR (the switch step counts as one step)"
+            ),
+        )
 
     def outputs(self, t, state, decision):
-        return {"mode": state.mode, "mode_changes": state.mode_changes,
-                "time_in_flfr": state.flfr_steps * self.dt}
+        return {
+            "mode": state.mode,
+            "mode_changes": state.mode_changes,
+            "time_in_flfr": state.flfr_steps * self.dt,
+        }

@@ -20,7 +20,9 @@ class SwitchDecision(NamedTuple):
     """The supervisor's decision in force over one step."""
 
     mode: jax.Array  # index of the mode in force (0-based)
-    next_mode: jax.Array  # index of the mode in force from the end of the step (a switch if != mode)
+    next_mode: (
+        jax.Array
+    )  # index of the mode in force from the end of the step (a switch if != mode)
     active: jax.Array  # (N,) 1 for the spacecraft of the mode, 0 for the others
     reconfigure: jax.Array  # (N,) bool: controller reconfiguration requested (decision 2)
     desired_position: jax.Array  # (N, 3) desired relative positions R~^d(t) of the mode [m]
@@ -28,8 +30,10 @@ class SwitchDecision(NamedTuple):
 
 @lru_cache(maxsize=256)
 def _desired_fns(table: tuple) -> tuple:
-    return tuple(tuple(compile_vector_expression(texts, f"modes[{j}].desired") for texts in row)
-                 for j, row in enumerate(table))
+    return tuple(
+        tuple(compile_vector_expression(texts, f"modes[{j}].desired") for texts in row)
+        for j, row in enumerate(table)
+    )
 
 
 @component
@@ -63,25 +67,35 @@ class SwitchingSupervisor(Supervisor):
 
     def initial_state(self):
         n = self.count
-        return {"k": jnp.asarray(0, dtype=jnp.int64),
-                "decision": jnp.zeros(n, dtype=jnp.int64),
-                "decision_step": jnp.full(n, -1, dtype=jnp.int64),
-                "margin_29": jnp.full(n, jnp.nan),
-                "decision_mode": jnp.full(n, -1, dtype=jnp.int64)}
+        return {
+            "k": jnp.asarray(0, dtype=jnp.int64),
+            "decision": jnp.zeros(n, dtype=jnp.int64),
+            "decision_step": jnp.full(n, -1, dtype=jnp.int64),
+            "margin_29": jnp.full(n, jnp.nan),
+            "decision_mode": jnp.full(n, -1, dtype=jnp.int64),
+        }
 
     def _desired(self, k, mode):
         t = self.t0 + k * self.dt
         i = jnp.arange(1, self.count + 1, dtype=jnp.float64)
-        table = jnp.stack([jnp.stack([fn(t, i[s]) for s, fn in enumerate(row)])
-                           for row in _desired_fns(self.desired_position)])  # (n_modes, N, 3)
+        table = jnp.stack(
+            [
+                jnp.stack([fn(t, i[s]) for s, fn in enumerate(row)])
+                for row in _desired_fns(self.desired_position)
+            ]
+        )  # (n_modes, N, 3)
         return table[mode]
 
     def _decision(self, k, state) -> SwitchDecision:
         mode = block.mode_index(self.switch_steps, k)
         active = self.active[mode]
-        return SwitchDecision(mode=mode, next_mode=block.mode_index(self.switch_steps, k + 1), active=active,
-                              reconfigure=state["decision"] == block.RECONFIGURE,
-                              desired_position=self._desired(k, mode) * active[:, None])
+        return SwitchDecision(
+            mode=mode,
+            next_mode=block.mode_index(self.switch_steps, k + 1),
+            active=active,
+            reconfigure=state["decision"] == block.RECONFIGURE,
+            desired_position=self._desired(k, mode) * active[:, None],
+        )
 
     def update(self, t, state, inputs: FlightInputs):
         k = jnp.round((t - self.t0) / self.dt).astype(jnp.int64)
@@ -89,14 +103,19 @@ class SwitchingSupervisor(Supervisor):
         est = inputs.estimate
         diagnosed = jnp.zeros(self.count, dtype=bool) if est is None else est["diagnosed"]
         diagnosed = diagnosed & (self.active[mode] > 0)  # only spacecraft in the formation
-        margin, has_next, gain, loss = block.condition_29(self.switch_steps, k, self.delay_bound_steps,
-                                                          self.eta, self.eta1, self.dt)  # (29)
-        decision, new = block.decide(state["decision"], diagnosed, self.leaves_at_next_switch[mode] > 0,
-                                     has_next, gain, loss)
-        state = {"k": k + 1, "decision": decision,
-                 "decision_step": jnp.where(new, k, state["decision_step"]),
-                 "margin_29": jnp.where(new, margin, state["margin_29"]),
-                 "decision_mode": jnp.where(new, mode, state["decision_mode"])}
+        margin, has_next, gain, loss = block.condition_29(
+            self.switch_steps, k, self.delay_bound_steps, self.eta, self.eta1, self.dt
+        )  # (29)
+        decision, new = block.decide(
+            state["decision"], diagnosed, self.leaves_at_next_switch[mode] > 0, has_next, gain, loss
+        )
+        state = {
+            "k": k + 1,
+            "decision": decision,
+            "decision_step": jnp.where(new, k, state["decision_step"]),
+            "margin_29": jnp.where(new, margin, state["margin_29"]),
+            "decision_mode": jnp.where(new, mode, state["decision_mode"]),
+        }
         return state, self._decision(k, state)
 
     def current(self, state):
@@ -107,12 +126,34 @@ class SwitchingSupervisor(Supervisor):
         return (
             Signal("mode", (), "1", "active mode sigma(t) (1-based)"),
             Signal("active", sc, "1", "spacecraft in the formation (1) or not (0)"),
-            Signal("desired_position", ("spacecraft", "axis"), "m", "desired relative position R~^d", "F_i"),
-            Signal("supervisor_decision", sc, "1",
-                   "supervisor decision: 0 none, 1 tolerate by switching, 2 request controller reconfiguration"),
-            Signal("supervisor_decision_time", sc, "s", "time of the supervisor decision (NaN: none)"),
-            Signal("supervisor_decision_mode", sc, "1", "mode (1-based) in which the decision was taken (0: none)"),
-            Signal("condition_29_margin", sc, "1", "(eta/2) dt1 - (eta1/2) dt2 of (29) at the decision (NaN: none)"),
+            Signal(
+                "desired_position",
+                ("spacecraft", "axis"),
+                "m",
+                "desired relative position R~^d",
+                "F_i",
+            ),
+            Signal(
+                "supervisor_decision",
+                sc,
+                "1",
+                "supervisor decision: 0 none, 1 tolerate by switching, 2 request controller reconfiguration",
+            ),
+            Signal(
+                "supervisor_decision_time", sc, "s", "time of the supervisor decision (NaN: none)"
+            ),
+            Signal(
+                "supervisor_decision_mode",
+                sc,
+                "1",
+                "mode (1-based) in which the decision was taken (0: none)",
+            ),
+            Signal(
+                "condition_29_margin",
+                sc,
+                "1",
+                "(eta/2) dt1 - (eta1/2) dt2 of (29) at the decision (NaN: none)",
+            ),
         )
 
     def outputs(self, t, state, decision: SwitchDecision):
@@ -128,7 +169,9 @@ class SwitchingSupervisor(Supervisor):
         }
 
 
-def decision_events(decision, decision_time, decision_mode, margin, dt: float, mode_names=None) -> list[dict]:
+def decision_events(
+    decision, decision_time, decision_mode, margin, dt: float, mode_names=None
+) -> list[dict]:
     """Event log of the supervisor decisions from the recorded signals of one sample (the last record
     holds every decision taken up to the horizon): ``supervisor_decision``, ``supervisor_decision_time``
     [s], ``supervisor_decision_mode`` (1-based) and ``condition_29_margin``, each (N,).
@@ -168,8 +211,15 @@ def decision_events(decision, decision_time, decision_mode, margin, dt: float, m
             continue
         t = float(np.asarray(decision_time)[s])
         mode = int(np.asarray(decision_mode)[s])
-        events.append({"time": t, "step": int(round(t / dt)), "spacecraft": s + 1, "event": "supervisor decision",
-                       "decision": block.DECISION_NAMES[int(code)],
-                       "mode": mode_names[mode - 1] if mode_names else mode,
-                       "condition_29_margin": float(np.asarray(margin)[s])})
+        events.append(
+            {
+                "time": t,
+                "step": int(round(t / dt)),
+                "spacecraft": s + 1,
+                "event": "supervisor decision",
+                "decision": block.DECISION_NAMES[int(code)],
+                "mode": mode_names[mode - 1] if mode_names else mode,
+                "condition_29_margin": float(np.asarray(margin)[s]),
+            }
+        )
     return sorted(events, key=lambda e: e["time"])

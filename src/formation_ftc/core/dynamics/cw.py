@@ -10,7 +10,14 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["cw_matrices", "cw_rhs", "cw_state_transition", "cw_closed_form", "cw_matrices_jax", "cw_free_motion"]
+__all__ = [
+    "cw_matrices",
+    "cw_rhs",
+    "cw_state_transition",
+    "cw_closed_form",
+    "cw_matrices_jax",
+    "cw_free_motion",
+]
 
 
 def cw_matrices(n: float) -> tuple[np.ndarray, np.ndarray]:
@@ -37,14 +44,16 @@ def cw_rhs(t, q, u, n):
 def cw_state_transition(n: float, t: float) -> np.ndarray:
     """Closed-form 6x6 state-transition matrix Phi(t)."""
     c, s = np.cos(n * t), np.sin(n * t)
-    return np.array([
-        [4 - 3 * c, 0, 0, s / n, 2 * (1 - c) / n, 0],
-        [6 * (s - n * t), 1, 0, -2 * (1 - c) / n, (4 * s - 3 * n * t) / n, 0],
-        [0, 0, c, 0, 0, s / n],
-        [3 * n * s, 0, 0, c, 2 * s, 0],
-        [-6 * n * (1 - c), 0, 0, -2 * s, 4 * c - 3, 0],
-        [0, 0, -n * s, 0, 0, c],
-    ])
+    return np.array(
+        [
+            [4 - 3 * c, 0, 0, s / n, 2 * (1 - c) / n, 0],
+            [6 * (s - n * t), 1, 0, -2 * (1 - c) / n, (4 * s - 3 * n * t) / n, 0],
+            [0, 0, c, 0, 0, s / n],
+            [3 * n * s, 0, 0, c, 2 * s, 0],
+            [-6 * n * (1 - c), 0, 0, -2 * s, 4 * c - 3, 0],
+            [0, 0, -n * s, 0, 0, c],
+        ]
+    )
 
 
 def cw_closed_form(n: float, q0, t) -> np.ndarray:
@@ -85,11 +94,14 @@ def cw_free_motion(n, q0, t):
     nt = n * t
     c, s = jnp.cos(nt), jnp.sin(nt)
     x0, y0, z0, xd, yd, zd = (q0[..., i] for i in range(6))
-    return jnp.stack([
-        (4 - 3 * c) * x0 + (s / n) * xd + (2 / n) * (1 - c) * yd,
-        6 * (s - nt) * x0 + y0 - (2 / n) * (1 - c) * xd + ((4 * s - 3 * nt) / n) * yd,
-        c * z0 + (s / n) * zd,
-        3 * n * s * x0 + c * xd + 2 * s * yd,
-        -6 * n * (1 - c) * x0 - 2 * s * xd + (4 * c - 3) * yd,
-        -n * s * z0 + c * zd,
-    ], axis=-1)
+    return jnp.stack(
+        [
+            (4 - 3 * c) * x0 + (s / n) * xd + (2 / n) * (1 - c) * yd,
+            6 * (s - nt) * x0 + y0 - (2 / n) * (1 - c) * xd + ((4 * s - 3 * nt) / n) * yd,
+            c * z0 + (s / n) * zd,
+            3 * n * s * x0 + c * xd + 2 * s * yd,
+            -6 * n * (1 - c) * x0 - 2 * s * xd + (4 * c - 3) * yd,
+            -n * s * z0 + c * zd,
+        ],
+        axis=-1,
+    )

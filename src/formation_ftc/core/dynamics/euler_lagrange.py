@@ -75,11 +75,14 @@ def skew(x):
     """Cross-product matrix S(x) with S(x) y = x x y; x (..., 3) -> (..., 3, 3)."""
     x1, x2, x3 = x[..., 0], x[..., 1], x[..., 2]
     z = jnp.zeros_like(x1)
-    return jnp.stack([
-        jnp.stack([z, -x3, x2], -1),
-        jnp.stack([x3, z, -x1], -1),
-        jnp.stack([-x2, x1, z], -1),
-    ], -2)
+    return jnp.stack(
+        [
+            jnp.stack([z, -x3, x2], -1),
+            jnp.stack([x3, z, -x1], -1),
+            jnp.stack([-x2, x1, z], -1),
+        ],
+        -2,
+    )
 
 
 def rbar(q):
@@ -88,11 +91,14 @@ def rbar(q):
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     tt = st / ct
     z, o = jnp.zeros_like(th), jnp.ones_like(th)
-    return jnp.stack([
-        jnp.stack([z, cp, -sp], -1),
-        jnp.stack([o, sp * tt, cp * tt], -1),
-        jnp.stack([z, sp / ct, cp / ct], -1),
-    ], -2)
+    return jnp.stack(
+        [
+            jnp.stack([z, cp, -sp], -1),
+            jnp.stack([o, sp * tt, cp * tt], -1),
+            jnp.stack([z, sp / ct, cp / ct], -1),
+        ],
+        -2,
+    )
 
 
 def rbar_inv(q):
@@ -100,11 +106,14 @@ def rbar_inv(q):
     th, ph = q[..., 0], q[..., 1]
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     z, o = jnp.zeros_like(th), jnp.ones_like(th)
-    return jnp.stack([
-        jnp.stack([z, o, -st], -1),
-        jnp.stack([cp, z, sp * ct], -1),
-        jnp.stack([-sp, z, cp * ct], -1),
-    ], -2)
+    return jnp.stack(
+        [
+            jnp.stack([z, o, -st], -1),
+            jnp.stack([cp, z, sp * ct], -1),
+            jnp.stack([-sp, z, cp * ct], -1),
+        ],
+        -2,
+    )
 
 
 def rbar_inv_dot(q, qdot):
@@ -113,11 +122,14 @@ def rbar_inv_dot(q, qdot):
     thd, phd = qdot[..., 0], qdot[..., 1]
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     z = jnp.zeros_like(th)
-    return jnp.stack([
-        jnp.stack([z, z, -ct * thd], -1),
-        jnp.stack([-sp * phd, z, cp * ct * phd - sp * st * thd], -1),
-        jnp.stack([-cp * phd, z, -sp * ct * phd - cp * st * thd], -1),
-    ], -2)
+    return jnp.stack(
+        [
+            jnp.stack([z, z, -ct * thd], -1),
+            jnp.stack([-sp * phd, z, cp * ct * phd - sp * st * thd], -1),
+            jnp.stack([-cp * phd, z, -sp * ct * phd - cp * st * thd], -1),
+        ],
+        -2,
+    )
 
 
 def rbar_dot(q, qdot):
@@ -150,7 +162,9 @@ def el_forces(q, qdot, acc, vel, J):
     """
     W = rbar_inv(q)
     h = _mv(J, _mv(W, qdot))
-    inner = _mv(J, _mv(W, acc)) - jnp.cross(h, _mv(W, vel)) + _mv(J, _mv(rbar_inv_dot(q, qdot), vel))
+    inner = (
+        _mv(J, _mv(W, acc)) - jnp.cross(h, _mv(W, vel)) + _mv(J, _mv(rbar_inv_dot(q, qdot), vel))
+    )
     return _mtv(W, inner)
 
 
@@ -196,7 +210,9 @@ def rigid_body_rhs(q, omega, u, J, J_inv=None):
     return euler_rates_from_body_rates(q, omega), omega_dot
 
 
-def check_away_from_singularity(q, field: str = "attitude", limit_rad: float = SINGULAR_PITCH_LIMIT_RAD) -> None:
+def check_away_from_singularity(
+    q, field: str = "attitude", limit_rad: float = SINGULAR_PITCH_LIMIT_RAD
+) -> None:
     """Raise ValueError if any pitch |theta| >= limit (default 85 deg): Euler-angle singularity.
 
     ``q`` is array-like (..., 3) [rad]; the message names ``field`` and the offending entry.
@@ -209,5 +225,6 @@ def check_away_from_singularity(q, field: str = "attitude", limit_rad: float = S
             f"{field}: pitch theta = {np.rad2deg(arr[i, 0]):.3f} deg (row {i}) is at or beyond "
             f"+-{np.rad2deg(limit_rad):.1f} deg. The Euler-angle EL model is singular at theta = +-90 deg "
             "(R_bar contains 1/cos(theta) and D = R_bar^-T J R_bar^-1 loses rank, Mehrabian (27), "
-            "E003-08); choose |theta| < " f"{np.rad2deg(limit_rad):.0f} deg."
+            "E003-08); choose |theta| < "
+            f"{np.rad2deg(limit_rad):.0f} deg."
         )

@@ -46,7 +46,12 @@ import math
 import jax.numpy as jnp
 
 from formation_ftc.core.orbit import MU_EARTH
-from formation_ftc.core.quaternion import quat_conjugate, quat_from_axis_angle, quat_multiply, rotation_matrix
+from formation_ftc.core.quaternion import (
+    quat_conjugate,
+    quat_from_axis_angle,
+    quat_multiply,
+    rotation_matrix,
+)
 
 __all__ = [
     "orbit_rate",
@@ -87,7 +92,9 @@ def lvlh_to_inertial(u):
     u = jnp.asarray(u)
     c, s = jnp.cos(u), jnp.sin(u)
     z, o = jnp.zeros_like(u), jnp.ones_like(u)
-    return jnp.stack([jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2)
+    return jnp.stack(
+        [jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2
+    )
 
 
 def quaternion_lvlh_to_inertial(u):
@@ -107,7 +114,9 @@ def attitude_relative_to_lvlh(q, u):
 def radial_unit_in_body(q, u):
     """Unit radial (zenith) vector ``r_b = C(q)^T [cos u, sin u, 0]`` in body axes (..., 3)."""
     e_r = jnp.stack([jnp.cos(u), jnp.sin(u), jnp.zeros_like(u)], axis=-1)
-    return jnp.einsum("...ji,...j->...i", rotation_matrix(q), jnp.broadcast_to(e_r, jnp.shape(q)[:-1] + (3,)))
+    return jnp.einsum(
+        "...ji,...j->...i", rotation_matrix(q), jnp.broadcast_to(e_r, jnp.shape(q)[:-1] + (3,))
+    )
 
 
 def orbit_normal_in_body(q):
@@ -144,7 +153,9 @@ def pitch_libration_frequency(J_principal, n: float) -> float:
     """
     jx, jy, jz = (float(v) for v in J_principal)
     if not jy > jx:
-        raise ValueError(f"pitch is not a libration: J_y = {jy} <= J_x = {jx} kg m^2 (needs J_y > J_x)")
+        raise ValueError(
+            f"pitch is not a libration: J_y = {jy} <= J_x = {jx} kg m^2 (needs J_y > J_x)"
+        )
     return n * math.sqrt(3.0 * (jy - jx) / jz)
 
 
@@ -161,8 +172,10 @@ def roll_yaw_libration_frequencies(J_principal, n: float) -> tuple[float, float]
     c = 4.0 * kr * ky
     disc = b * b - 4.0 * c
     if disc < 0.0 or b <= 0.0 or c <= 0.0:
-        raise ValueError(f"roll/yaw motion is not a libration for J = {J_principal} kg m^2 "
-                         f"(k_r = {kr:.4g}, k_y = {ky:.4g})")
+        raise ValueError(
+            f"roll/yaw motion is not a libration for J = {J_principal} kg m^2 "
+            f"(k_r = {kr:.4g}, k_y = {ky:.4g})"
+        )
     lo, hi = 0.5 * (b - math.sqrt(disc)), 0.5 * (b + math.sqrt(disc))
     return n * math.sqrt(lo), n * math.sqrt(hi)
 

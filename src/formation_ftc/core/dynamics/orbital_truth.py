@@ -84,17 +84,38 @@ OMEGA_EARTH = 7.292115e-5  # rad/s, WGS-84 rotation rate
 SOLAR_PRESSURE = 1361.0 / 299792458.0  # N/m^2, TSI 1361 W/m^2 (Kopp & Lean 2011) / c
 
 #: Vallado (2013) Table 8-4: rows [base altitude h_0 [m], nominal density rho_0 [kg/m^3], scale height H [m]]
-EXPONENTIAL_ATMOSPHERE = np.array([
-    [0.0, 1.225, 7.249], [25.0, 3.899e-2, 6.349], [30.0, 1.774e-2, 6.682], [40.0, 3.972e-3, 7.554],
-    [50.0, 1.057e-3, 8.382], [60.0, 3.206e-4, 7.714], [70.0, 8.770e-5, 6.549], [80.0, 1.905e-5, 5.799],
-    [90.0, 3.396e-6, 5.382], [100.0, 5.297e-7, 5.877], [110.0, 9.661e-8, 7.263], [120.0, 2.438e-8, 9.473],
-    [130.0, 8.484e-9, 12.636], [140.0, 3.845e-9, 16.149], [150.0, 2.070e-9, 22.523],
-    [180.0, 5.464e-10, 29.740], [200.0, 2.789e-10, 37.105], [250.0, 7.248e-11, 45.546],
-    [300.0, 2.418e-11, 53.628], [350.0, 9.518e-12, 53.298], [400.0, 3.725e-12, 58.515],
-    [450.0, 1.585e-12, 60.828], [500.0, 6.967e-13, 63.822], [600.0, 1.454e-13, 71.835],
-    [700.0, 3.614e-14, 88.667], [800.0, 1.170e-14, 124.64], [900.0, 5.245e-15, 181.05],
-    [1000.0, 3.019e-15, 268.00],
-]) * np.array([1e3, 1.0, 1e3])  # km -> m for the altitudes and scale heights
+EXPONENTIAL_ATMOSPHERE = np.array(
+    [
+        [0.0, 1.225, 7.249],
+        [25.0, 3.899e-2, 6.349],
+        [30.0, 1.774e-2, 6.682],
+        [40.0, 3.972e-3, 7.554],
+        [50.0, 1.057e-3, 8.382],
+        [60.0, 3.206e-4, 7.714],
+        [70.0, 8.770e-5, 6.549],
+        [80.0, 1.905e-5, 5.799],
+        [90.0, 3.396e-6, 5.382],
+        [100.0, 5.297e-7, 5.877],
+        [110.0, 9.661e-8, 7.263],
+        [120.0, 2.438e-8, 9.473],
+        [130.0, 8.484e-9, 12.636],
+        [140.0, 3.845e-9, 16.149],
+        [150.0, 2.070e-9, 22.523],
+        [180.0, 5.464e-10, 29.740],
+        [200.0, 2.789e-10, 37.105],
+        [250.0, 7.248e-11, 45.546],
+        [300.0, 2.418e-11, 53.628],
+        [350.0, 9.518e-12, 53.298],
+        [400.0, 3.725e-12, 58.515],
+        [450.0, 1.585e-12, 60.828],
+        [500.0, 6.967e-13, 63.822],
+        [600.0, 1.454e-13, 71.835],
+        [700.0, 3.614e-14, 88.667],
+        [800.0, 1.170e-14, 124.64],
+        [900.0, 5.245e-15, 181.05],
+        [1000.0, 3.019e-15, 268.00],
+    ]
+) * np.array([1e3, 1.0, 1e3])  # km -> m for the altitudes and scale heights
 
 
 def _norm(v):
@@ -131,7 +152,11 @@ def specific_energy_j2(state, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
     two-body + J2 motion (the J2 field is axisymmetric about the ECI z axis, hence time-invariant)."""
     state = jnp.asarray(state)
     r, v = state[..., :3], state[..., 3:]
-    return 0.5 * jnp.sum(v * v, axis=-1) - mu / jnp.linalg.norm(r, axis=-1) + j2_potential(r, mu, j2, r_earth)
+    return (
+        0.5 * jnp.sum(v * v, axis=-1)
+        - mu / jnp.linalg.norm(r, axis=-1)
+        + j2_potential(r, mu, j2, r_earth)
+    )
 
 
 def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
@@ -146,8 +171,9 @@ def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
     return row[..., 1] * jnp.exp(-(h - row[..., 0]) / row[..., 2])
 
 
-def drag_acceleration(r, v, ballistic, table=EXPONENTIAL_ATMOSPHERE, omega_earth=OMEGA_EARTH,
-                      r_earth=R_EARTH):
+def drag_acceleration(
+    r, v, ballistic, table=EXPONENTIAL_ATMOSPHERE, omega_earth=OMEGA_EARTH, r_earth=R_EARTH
+):
     """Drag -1/2 rho B |v_rel| v_rel [m/s^2] with v_rel = v - omega_E x r (eq. (3)).
 
     Parameters
@@ -175,9 +201,20 @@ def srp_acceleration(srp_coefficient, sun_direction, pressure=SOLAR_PRESSURE):
     return (-pressure * jnp.asarray(srp_coefficient))[..., None] * s  # eq. (4)
 
 
-def perturbed_acceleration(r, v, *, mu=MU_EARTH, j2=None, r_earth=R_EARTH, ballistic=None,
-                           table=EXPONENTIAL_ATMOSPHERE, omega_earth=OMEGA_EARTH, srp_coefficient=None,
-                           sun_direction=(1.0, 0.0, 0.0), pressure=SOLAR_PRESSURE):
+def perturbed_acceleration(
+    r,
+    v,
+    *,
+    mu=MU_EARTH,
+    j2=None,
+    r_earth=R_EARTH,
+    ballistic=None,
+    table=EXPONENTIAL_ATMOSPHERE,
+    omega_earth=OMEGA_EARTH,
+    srp_coefficient=None,
+    sun_direction=(1.0, 0.0, 0.0),
+    pressure=SOLAR_PRESSURE,
+):
     """Natural acceleration (1) + optional (2)-(4) [m/s^2]; a term is off when its parameter is None
     (``j2``, ``ballistic``, ``srp_coefficient``). Shapes as in the individual terms."""
     a = two_body_acceleration(r, mu)
@@ -194,13 +231,17 @@ def perturbed_acceleration(r, v, *, mu=MU_EARTH, j2=None, r_earth=R_EARTH, balli
 def _rot3(angle):
     c, s = jnp.cos(angle), jnp.sin(angle)
     z, o = jnp.zeros_like(c), jnp.ones_like(c)
-    return jnp.stack([jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2)
+    return jnp.stack(
+        [jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2
+    )
 
 
 def _rot1(angle):
     c, s = jnp.cos(angle), jnp.sin(angle)
     z, o = jnp.zeros_like(c), jnp.ones_like(c)
-    return jnp.stack([jnp.stack([o, z, z], -1), jnp.stack([z, c, -s], -1), jnp.stack([z, s, c], -1)], -2)
+    return jnp.stack(
+        [jnp.stack([o, z, z], -1), jnp.stack([z, c, -s], -1), jnp.stack([z, s, c], -1)], -2
+    )
 
 
 def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
@@ -219,8 +260,9 @@ def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
     k = jnp.sqrt(mu / p)
     v_pf = jnp.stack([-k * jnp.sin(nu), k * (e + jnp.cos(nu)), jnp.zeros_like(r)], -1)
     Q = _rot3(raan) @ _rot1(i) @ _rot3(argp)  # perifocal -> ECI
-    return jnp.concatenate([jnp.einsum("...ij,...j->...i", Q, r_pf),
-                            jnp.einsum("...ij,...j->...i", Q, v_pf)], -1)
+    return jnp.concatenate(
+        [jnp.einsum("...ij,...j->...i", Q, r_pf), jnp.einsum("...ij,...j->...i", Q, v_pf)], -1
+    )
 
 
 def eci_to_elements(state, mu=MU_EARTH):
@@ -233,7 +275,9 @@ def eci_to_elements(state, mu=MU_EARTH):
     rn = jnp.linalg.norm(r, axis=-1)
     h = jnp.cross(r, v)
     hn = jnp.linalg.norm(h, axis=-1)
-    n_vec = jnp.stack([-h[..., 1], h[..., 0], jnp.zeros_like(hn)], -1)  # z x h: towards the ascending node
+    n_vec = jnp.stack(
+        [-h[..., 1], h[..., 0], jnp.zeros_like(hn)], -1
+    )  # z x h: towards the ascending node
     e_vec = jnp.cross(v, h) / mu - r / rn[..., None]
     e = jnp.linalg.norm(e_vec, axis=-1)
     energy = 0.5 * jnp.sum(v * v, axis=-1) - mu / rn
@@ -244,7 +288,9 @@ def eci_to_elements(state, mu=MU_EARTH):
     hz = h / hn[..., None]
     n_norm = jnp.linalg.norm(n_vec, axis=-1, keepdims=True)
     # equatorial orbit: no node line; measure from the ECI x axis (raan = 0)
-    n_hat = jnp.where(n_norm > 0, n_vec / jnp.where(n_norm > 0, n_norm, 1.0), jnp.array([1.0, 0.0, 0.0]))
+    n_hat = jnp.where(
+        n_norm > 0, n_vec / jnp.where(n_norm > 0, n_norm, 1.0), jnp.array([1.0, 0.0, 0.0])
+    )
     m_hat = jnp.cross(hz, n_hat)
 
     def angle(u):
@@ -260,7 +306,9 @@ def true_to_mean_anomaly(nu, e):
     whole revolutions of ``nu`` are kept."""
     nu = jnp.asarray(nu)
     nu_w = jnp.remainder(nu + jnp.pi, 2 * jnp.pi) - jnp.pi
-    E = 2.0 * jnp.arctan2(jnp.sqrt(1.0 - e) * jnp.sin(nu_w / 2), jnp.sqrt(1.0 + e) * jnp.cos(nu_w / 2))
+    E = 2.0 * jnp.arctan2(
+        jnp.sqrt(1.0 - e) * jnp.sin(nu_w / 2), jnp.sqrt(1.0 + e) * jnp.cos(nu_w / 2)
+    )
     return E - e * jnp.sin(E) + (nu - nu_w)
 
 
@@ -315,9 +363,17 @@ def elements_to_roe(chief, deputy):
 
     d_raan = wrap(raand - raan)
     du = wrap(argpd + true_to_mean_anomaly(nud, ed) - argp - true_to_mean_anomaly(nu, e))
-    return jnp.stack([ad / a - 1.0, du + d_raan * jnp.cos(i),
-                      ed * jnp.cos(argpd) - e * jnp.cos(argp), ed * jnp.sin(argpd) - e * jnp.sin(argp),
-                      id_ - i, d_raan * jnp.sin(i)], axis=-1)
+    return jnp.stack(
+        [
+            ad / a - 1.0,
+            du + d_raan * jnp.cos(i),
+            ed * jnp.cos(argpd) - e * jnp.cos(argp),
+            ed * jnp.sin(argpd) - e * jnp.sin(argp),
+            id_ - i,
+            d_raan * jnp.sin(i),
+        ],
+        axis=-1,
+    )
 
 
 # --------------------------------------------------------------------------------------- LVLH
@@ -350,7 +406,9 @@ def eci_to_lvlh(chief, deputy):
     w = lvlh_angular_velocity(rc, vc)
     dr = deputy[..., :3] - rc
     dv = deputy[..., 3:] - vc - jnp.cross(jnp.broadcast_to(w, dr.shape), dr)
-    return jnp.concatenate([jnp.einsum("...ij,...j->...i", R, dr), jnp.einsum("...ij,...j->...i", R, dv)], -1)
+    return jnp.concatenate(
+        [jnp.einsum("...ij,...j->...i", R, dr), jnp.einsum("...ij,...j->...i", R, dv)], -1
+    )
 
 
 def lvlh_to_eci(chief, relative):
@@ -361,7 +419,9 @@ def lvlh_to_eci(chief, relative):
     R = lvlh_rotation(rc, vc)
     w = lvlh_angular_velocity(rc, vc)
     dr = jnp.einsum("...ji,...j->...i", R, relative[..., :3])
-    dv = jnp.einsum("...ji,...j->...i", R, relative[..., 3:]) + jnp.cross(jnp.broadcast_to(w, dr.shape), dr)
+    dv = jnp.einsum("...ji,...j->...i", R, relative[..., 3:]) + jnp.cross(
+        jnp.broadcast_to(w, dr.shape), dr
+    )
     return jnp.concatenate([rc + dr, vc + dv], -1)
 
 

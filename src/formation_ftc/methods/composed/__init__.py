@@ -44,11 +44,31 @@ from formation_ftc.sim.components import CompositionError, Plant, as_float
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import BLOCK_REDUCTIONS, REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
 
-__all__ = ["ComposedScenario", "ComponentType", "BuildContext", "register_component_type", "component_types",
-           "make_loop", "build", "SLOTS", "KINDS", "per_spacecraft", "require_slot"]
+__all__ = [
+    "ComposedScenario",
+    "ComponentType",
+    "BuildContext",
+    "register_component_type",
+    "component_types",
+    "make_loop",
+    "build",
+    "SLOTS",
+    "KINDS",
+    "per_spacecraft",
+    "require_slot",
+]
 
 #: slots a composed scenario may fill (plant and controller are required)
-SLOTS = ("plant", "reference", "sensors", "network", "estimator", "supervisor", "controller", "actuator")
+SLOTS = (
+    "plant",
+    "reference",
+    "sensors",
+    "network",
+    "estimator",
+    "supervisor",
+    "controller",
+    "actuator",
+)
 #: kinds of the catalog: the slots plus ``evaluation`` (a list: ``[[evaluations]]``, truth-side signals
 #: for records and metrics only)
 KINDS = (*SLOTS, "evaluation")
@@ -76,8 +96,10 @@ def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
     """Refuse to build the ``slot`` component without the ``needed`` slot it reads ``what`` from (a
     component would otherwise silently drop that input): a CompositionError naming both parts."""
     if ctx.scenario.type_of(needed) is None:
-        raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)} reads {what} from the [{needed}] section, "
-                               f"but the loop has no [{needed}]: add one")
+        raise CompositionError(
+            f"{slot} {ctx.scenario.type_of(slot)} reads {what} from the [{needed}] section, "
+            f"but the loop has no [{needed}]: add one"
+        )
 
 
 @dataclass(frozen=True)
@@ -102,8 +124,13 @@ def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
     return arr
 
 
-def register_component_type(kind: str, name: str, section: type[StrictModel],
-                            build: Callable[[Any, BuildContext], Any], description: str) -> ComponentType:
+def register_component_type(
+    kind: str,
+    name: str,
+    section: type[StrictModel],
+    build: Callable[[Any, BuildContext], Any],
+    description: str,
+) -> ComponentType:
     """Make ``[kind] type = "name"`` available in composed scenarios. ``section`` validates the table
     (without its ``type`` key); ``build(section, context)`` returns the component."""
     if kind not in KINDS:
@@ -138,29 +165,47 @@ def _load_catalogs() -> None:
 class MetricSection(StrictModel):
     """One metric computed at every step inside the run (see ``formation_ftc.sim.metrics``)."""
 
-    name: str = Field(description="Metric name (per-spacecraft metrics get _sc1, _sc2, ... appended).")
+    name: str = Field(
+        description="Metric name (per-spacecraft metrics get _sc1, _sc2, ... appended)."
+    )
     signal: str = Field(description="Name of a recorded signal of the composed loop.")
     reduce: str = Field("max", description=f"Time reduction: one of {', '.join(REDUCTIONS)}.")
     norm: bool = Field(False, description="Euclidean norm over the signal's last axis first.")
-    spacecraft: str = Field("none", description=f"Spacecraft reduction: one of {', '.join(SPACECRAFT_REDUCTIONS)}.")
+    spacecraft: str = Field(
+        "none", description=f"Spacecraft reduction: one of {', '.join(SPACECRAFT_REDUCTIONS)}."
+    )
     units: str = Field("1", description="Units of the metric (UDUNITS).")
     start: float = Field(0.0, description="Window start [s].")
     end: float | None = Field(None, description="Window end [s] (omit: until the horizon).")
     threshold: float = Field(0.0, description="Threshold of the 'settle' reduction [signal units].")
-    norm_ord: Literal["2", "inf"] = Field("2", description="Norm of `norm`: '2' Euclidean, 'inf' largest |component|.")
-    gate: str | None = Field(None, description="Name of a recorded signal: only samples where it is true count.")
-    block: int = Field(0, ge=0, le=10_000_000, description=(
-        "Block length of the 'block_rms' / 'block_dev_rms' reductions [steps] (>= 1 for those; 0 otherwise)."))
+    norm_ord: Literal["2", "inf"] = Field(
+        "2", description="Norm of `norm`: '2' Euclidean, 'inf' largest |component|."
+    )
+    gate: str | None = Field(
+        None, description="Name of a recorded signal: only samples where it is true count."
+    )
+    block: int = Field(
+        0,
+        ge=0,
+        le=10_000_000,
+        description=(
+            "Block length of the 'block_rms' / 'block_dev_rms' reductions [steps] (>= 1 for those; 0 otherwise)."
+        ),
+    )
 
     @model_validator(mode="after")
     def _known(self):
         if self.reduce not in REDUCTIONS:
             raise ValueError(f"reduce = {self.reduce!r}: must be one of {', '.join(REDUCTIONS)}")
         if self.reduce in BLOCK_REDUCTIONS and self.block < 1:
-            raise ValueError(f"block = {self.block}: reduce = {self.reduce!r} needs a block of >= 1 steps "
-                             "(e.g. block = 100)")
+            raise ValueError(
+                f"block = {self.block}: reduce = {self.reduce!r} needs a block of >= 1 steps "
+                "(e.g. block = 100)"
+            )
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
-            raise ValueError(f"spacecraft = {self.spacecraft!r}: must be one of {', '.join(SPACECRAFT_REDUCTIONS)}")
+            raise ValueError(
+                f"spacecraft = {self.spacecraft!r}: must be one of {', '.join(SPACECRAFT_REDUCTIONS)}"
+            )
         return self
 
 
@@ -179,14 +224,24 @@ class ComposedScenario(ScenarioBase):
     plant: dict[str, Any] = Field(description="Truth plant: `type` and that type's fields.")
     controller: dict[str, Any] = Field(description="Control law: `type` and that type's fields.")
     reference: dict[str, Any] | None = Field(None, description="Reference orbit (optional).")
-    sensors: dict[str, Any] | None = Field(None, description="Sensors (optional; default: exact state).")
+    sensors: dict[str, Any] | None = Field(
+        None, description="Sensors (optional; default: exact state)."
+    )
     network: dict[str, Any] | None = Field(None, description="Communication network (optional).")
     estimator: dict[str, Any] | None = Field(None, description="Observer / FDI (optional).")
     supervisor: dict[str, Any] | None = Field(None, description="Supervisor (optional).")
-    actuator: dict[str, Any] | None = Field(None, description="Actuator chain with faults (optional).")
-    evaluations: list[dict[str, Any]] = Field(default_factory=list, description=(
-        "Truth-side evaluation signals (records and metrics only): `type` and that type's fields."))
-    metrics: list[MetricSection] = Field(default_factory=list, description="Metrics computed at every step.")
+    actuator: dict[str, Any] | None = Field(
+        None, description="Actuator chain with faults (optional)."
+    )
+    evaluations: list[dict[str, Any]] = Field(
+        default_factory=list,
+        description=(
+            "Truth-side evaluation signals (records and metrics only): `type` and that type's fields."
+        ),
+    )
+    metrics: list[MetricSection] = Field(
+        default_factory=list, description="Metrics computed at every step."
+    )
     _sections: dict[str, Any] = PrivateAttr(default_factory=dict)
     _evaluation_sections: list[tuple[str, Any]] = PrivateAttr(default_factory=list)
 
@@ -201,10 +256,14 @@ class ComposedScenario(ScenarioBase):
             kind_types = sorted(n for (k, n) in _CATALOG if k == slot)
             name = raw.get("type")
             if name is None:
-                raise ValueError(f"{slot}.type is required (one of: {', '.join(kind_types) or 'none registered'})")
+                raise ValueError(
+                    f"{slot}.type is required (one of: {', '.join(kind_types) or 'none registered'})"
+                )
             entry = _CATALOG.get((slot, str(name)))
             if entry is None:
-                raise ValueError(f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(kind_types)})")
+                raise ValueError(
+                    f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(kind_types)})"
+                )
             body = {k: v for k, v in raw.items() if k != "type"}
             try:
                 sections[slot] = entry.section.model_validate(body)
@@ -217,11 +276,17 @@ class ComposedScenario(ScenarioBase):
             name = raw.get("type")
             entry = _CATALOG.get(("evaluation", str(name)))
             if entry is None:
-                raise ValueError(f"evaluations[{j}].type = {name!r} is not an evaluation type "
-                                 f"(known: {', '.join(known) or 'none registered'})")
+                raise ValueError(
+                    f"evaluations[{j}].type = {name!r} is not an evaluation type "
+                    f"(known: {', '.join(known) or 'none registered'})"
+                )
             try:
-                evaluations.append((str(name), entry.section.model_validate(
-                    {k: v for k, v in raw.items() if k != "type"})))
+                evaluations.append(
+                    (
+                        str(name),
+                        entry.section.model_validate({k: v for k, v in raw.items() if k != "type"}),
+                    )
+                )
             except ValidationError as exc:
                 raise _section_errors(f"evaluations[{j}]", exc) from None
         self._evaluation_sections = evaluations
@@ -241,12 +306,16 @@ class ComposedScenario(ScenarioBase):
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
     """The composed scenario's closed loop (components built from their sections)."""
-    plant_entry = _CATALOG[("plant", cast(str, s.type_of("plant")))]  # the plant section is required
+    plant_entry = _CATALOG[
+        ("plant", cast(str, s.type_of("plant")))
+    ]  # the plant section is required
     plant_section = s.section("plant")
     count = int(getattr(plant_section, "count", len(getattr(plant_section, "mass", []) or [])))
     ctx = BuildContext(scenario=s, count=count, dt=float(s.simulation.dt))
     parts: dict[str, Any] = {"plant": plant_entry.build(plant_section, ctx)}
-    ctx = BuildContext(scenario=s, count=parts["plant"].count, dt=float(s.simulation.dt), plant=parts["plant"])
+    ctx = BuildContext(
+        scenario=s, count=parts["plant"].count, dt=float(s.simulation.dt), plant=parts["plant"]
+    )
     for slot in SLOTS[1:]:
         name = s.type_of(slot)
         if name is None:
@@ -257,11 +326,26 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
-    metrics = tuple(Metric(m.name, m.signal, m.reduce, norm=m.norm, spacecraft=m.spacecraft, units=m.units,
-                           start=as_float(m.start), end=as_float(math.inf if m.end is None else m.end),
-                           threshold=as_float(m.threshold), norm_ord=m.norm_ord, gate=m.gate, block=m.block)
-                    for m in s.metrics)
-    return ClosedLoop.from_simulation(s.simulation, **parts, metrics=metrics, evaluations=tuple(ctx.evaluations))
+    metrics = tuple(
+        Metric(
+            m.name,
+            m.signal,
+            m.reduce,
+            norm=m.norm,
+            spacecraft=m.spacecraft,
+            units=m.units,
+            start=as_float(m.start),
+            end=as_float(math.inf if m.end is None else m.end),
+            threshold=as_float(m.threshold),
+            norm_ord=m.norm_ord,
+            gate=m.gate,
+            block=m.block,
+        )
+        for m in s.metrics
+    )
+    return ClosedLoop.from_simulation(
+        s.simulation, **parts, metrics=metrics, evaluations=tuple(ctx.evaluations)
+    )
 
 
 def build(s: ComposedScenario) -> Compiled:
@@ -274,10 +358,18 @@ def check(s: ComposedScenario) -> list[Condition]:
     fastest linearised closed-loop mode where the components expose one."""
     loop = make_loop(s)
     parts = ", ".join(f"{slot} {s.type_of(slot)}" for slot in SLOTS if s.type_of(slot))
-    out = [Condition(name="components fit together", reference="component contract",
-                     value=parts, requirement="compatible quantities, counts, messages, reference",
-                     holds=True, required=True, basis="exact",
-                     detail="exact: structural check of the composition (done when the loop is built)")]
+    out = [
+        Condition(
+            name="components fit together",
+            reference="component contract",
+            value=parts,
+            requirement="compatible quantities, counts, messages, reference",
+            holds=True,
+            required=True,
+            basis="exact",
+            detail="exact: structural check of the composition (done when the loop is built)",
+        )
+    ]
     for slot in SLOTS:
         comp = getattr(loop, slot)
         conds = getattr(comp, "conditions", None)
@@ -294,7 +386,9 @@ def _plot(ds, scenario, out_dir):
         if var not in ds:
             continue
         da = ds[var]
-        fig, axes = new_figure(1, 1, title=f"{scenario.scenario.name}: {da.attrs.get('long_name', var)}")
+        fig, axes = new_figure(
+            1, 1, title=f"{scenario.scenario.name}: {da.attrs.get('long_name', var)}"
+        )
         ax = axes[0, 0]
         vals = np.linalg.norm(da.values, axis=-1) if "axis" in da.dims else da.values
         for k, sc in enumerate(ds.spacecraft.values):
@@ -306,5 +400,13 @@ def _plot(ds, scenario, out_dir):
     return paths
 
 
-METHOD = register_method(Method(name="composed", schema=ComposedScenario, build=build, check=check, plot=_plot,
-                                description="any law on any compatible plant with any fault (component catalog)"))
+METHOD = register_method(
+    Method(
+        name="composed",
+        schema=ComposedScenario,
+        build=build,
+        check=check,
+        plot=_plot,
+        description="any law on any compatible plant with any fault (component catalog)",
+    )
+)

@@ -70,39 +70,61 @@ class RigidBodyAttitudeSection(StrictModel):
     """Fields shared by the rigid-body attitude plants: principal inertia, initial attitude (Euler
     angles or quaternions), initial body rate and disturbance torque, with their checks."""
 
-    inertia: Vec3 = Field(description="Principal inertia diag(J) of every spacecraft [kg m^2], each > 0.")
+    inertia: Vec3 = Field(
+        description="Principal inertia diag(J) of every spacecraft [kg m^2], each > 0."
+    )
     initial_attitude_deg: list[Vec3] | None = Field(
-        None, description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
-                          "[deg] (converted to quaternions; give this or initial_quaternion).")
+        None,
+        description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
+        "[deg] (converted to quaternions; give this or initial_quaternion).",
+    )
     initial_quaternion: list[tuple[float, float, float, float]] | None = Field(
-        None, description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].")
+        None,
+        description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].",
+    )
     initial_body_rate: list[Vec3] | None = Field(
-        None, description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0).")
+        None,
+        description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0).",
+    )
     disturbance_torque: Vec3Expr = Field(
-        ("0", "0", "0"), description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].")
+        ("0", "0", "0"),
+        description="Disturbance torque iota(t) in body axes, expressions in t [s], i [N m].",
+    )
 
     @model_validator(mode="after")
     def _initial_attitude(self):
         for k, x in enumerate(self.inertia):
             if not (x > 0 and math.isfinite(x)):
-                raise ValueError(f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2")
+                raise ValueError(
+                    f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2"
+                )
         if (self.initial_attitude_deg is None) == (self.initial_quaternion is None):
-            raise ValueError("give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]")
+            raise ValueError(
+                "give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]"
+            )
         if self.initial_quaternion is not None:
             for k, p in enumerate(self.initial_quaternion):
                 norm = float(np.linalg.norm(p))
                 if not abs(norm - 1.0) <= 1e-6:
-                    raise ValueError(f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed")
+                    raise ValueError(
+                        f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed"
+                    )
         n = self.count
         if n < 1:
             raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")
         if self.initial_body_rate is not None and len(self.initial_body_rate) != n:
-            raise ValueError(f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft")
+            raise ValueError(
+                f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft"
+            )
         return self
 
     @property
     def count(self) -> int:
-        rows = self.initial_attitude_deg if self.initial_attitude_deg is not None else self.initial_quaternion
+        rows = (
+            self.initial_attitude_deg
+            if self.initial_attitude_deg is not None
+            else self.initial_quaternion
+        )
         return len(rows or [])
 
     def given_quaternions(self) -> np.ndarray:
@@ -110,7 +132,9 @@ class RigidBodyAttitudeSection(StrictModel):
         if self.initial_quaternion is not None:
             p = np.asarray(self.initial_quaternion, dtype=float)
             return p / np.linalg.norm(p, axis=-1, keepdims=True)
-        return np.asarray(_quaternion_from_euler(np.deg2rad(np.asarray(self.initial_attitude_deg, float))))
+        return np.asarray(
+            _quaternion_from_euler(np.deg2rad(np.asarray(self.initial_attitude_deg, float)))
+        )
 
     def quaternions(self) -> np.ndarray:
         """(N, 4) initial unit quaternions of the plant's state."""
@@ -124,26 +148,43 @@ class RigidBodyAttitudeSection(StrictModel):
 class QuaternionPlantSection(RigidBodyAttitudeSection):
     """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
 
-    gyroscopic: bool = Field(True, description="Include -omega x J omega (false: the error-level form).")
+    gyroscopic: bool = Field(
+        True, description="Include -omega x J omega (false: the error-level form)."
+    )
 
 
 def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):
     n = sec.count
-    w0 = np.zeros((n, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
-    return QuaternionRigidBodyPlant(inertia=as_float(np.diag(sec.inertia)), initial_omega=as_float(w0),
-                                    initial_quaternion=as_float(sec.quaternions()),
-                                    disturbance_torque=_vec3_text(sec.disturbance_torque), gyroscopic=sec.gyroscopic)
+    w0 = (
+        np.zeros((n, 3))
+        if sec.initial_body_rate is None
+        else np.asarray(sec.initial_body_rate, float)
+    )
+    return QuaternionRigidBodyPlant(
+        inertia=as_float(np.diag(sec.inertia)),
+        initial_omega=as_float(w0),
+        initial_quaternion=as_float(sec.quaternions()),
+        disturbance_torque=_vec3_text(sec.disturbance_torque),
+        gyroscopic=sec.gyroscopic,
+    )
 
 
-register_component_type("plant", QUATERNION_PLANT, QuaternionPlantSection, _quaternion_plant,
-                        "rigid-body attitudes with quaternion kinematics, driven by body torques (Yang2013 (4))")
+register_component_type(
+    "plant",
+    QUATERNION_PLANT,
+    QuaternionPlantSection,
+    _quaternion_plant,
+    "rigid-body attitudes with quaternion kinematics, driven by body torques (Yang2013 (4))",
+)
 
 
 def _needs_quaternion_plant(slot: str, name: str, ctx: BuildContext) -> None:
     plant = ctx.scenario.type_of("plant")
     if plant not in QUATERNION_PLANTS:
-        raise CompositionError(f"{slot} {name} converts a quaternion attitude, but plant {plant} has none "
-                               f"(use it with plant {' or '.join(sorted(QUATERNION_PLANTS))})")
+        raise CompositionError(
+            f"{slot} {name} converts a quaternion attitude, but plant {plant} has none "
+            f"(use it with plant {' or '.join(sorted(QUATERNION_PLANTS))})"
+        )
 
 
 # ----------------------------------------------------------------------------------------- sensors
@@ -156,16 +197,27 @@ def _quaternion_euler(sec: QuaternionEulerSection, ctx: BuildContext):
     return QuaternionToEulerSensors(count=ctx.count)
 
 
-register_component_type("sensors", EULER_SENSORS, QuaternionEulerSection, _quaternion_euler,
-                        "attitude as 3-2-1 Euler angles [theta, phi, psi] and body rates, from a quaternion plant")
+register_component_type(
+    "sensors",
+    EULER_SENSORS,
+    QuaternionEulerSection,
+    _quaternion_euler,
+    "attitude as 3-2-1 Euler angles [theta, phi, psi] and body rates, from a quaternion plant",
+)
 
 
 # -------------------------------------------------------------------------------------- actuators
 class FaultEntry(StrictModel):
     spacecraft: int = Field(ge=1, description="Faulty spacecraft (1-based) [-].")
-    channel: int = Field(ge=1, le=3, description="Faulty generalised channel 1 = pitch, 2 = roll, 3 = yaw [-].")
-    torque: ExprText = Field(description="Additive fault u_bar(t) while active, expression in t [s] [N m].")
-    start: float = Field(ge=0.0, description="Fault start (inclusive, snapped to the step grid) [s].")
+    channel: int = Field(
+        ge=1, le=3, description="Faulty generalised channel 1 = pitch, 2 = roll, 3 = yaw [-]."
+    )
+    torque: ExprText = Field(
+        description="Additive fault u_bar(t) while active, expression in t [s] [N m]."
+    )
+    start: float = Field(
+        ge=0.0, description="Fault start (inclusive, snapped to the step grid) [s]."
+    )
     end: float = Field(description="Fault end (inclusive, snapped to the step grid) [s].")
 
     @model_validator(mode="after")
@@ -178,17 +230,24 @@ class FaultEntry(StrictModel):
 class EulerAllocationSection(StrictModel):
     """tau_body = R_bar(q)^T (tau_gen + u_bar), u_bar the additive faults held over each step."""
 
-    faults: list[FaultEntry] = Field(default_factory=list,
-                                     description="Additive faults in the law's generalised channels [N m].")
+    faults: list[FaultEntry] = Field(
+        default_factory=list, description="Additive faults in the law's generalised channels [N m]."
+    )
 
 
 def _fault_data(sec: EulerAllocationSection, ctx: BuildContext):
     for k, f in enumerate(sec.faults):
         if f.spacecraft > ctx.count:
-            raise CompositionError(f"actuator.faults[{k}].spacecraft = {f.spacecraft}: plant {ctx.scenario.type_of('plant')} "
-                                   f"has {ctx.count} spacecraft")
-    statics = dict(torques=tuple(str(f.torque) for f in sec.faults), spacecraft=tuple(f.spacecraft - 1 for f in sec.faults),
-                   channels=tuple(f.channel - 1 for f in sec.faults), step=ctx.dt)
+            raise CompositionError(
+                f"actuator.faults[{k}].spacecraft = {f.spacecraft}: plant {ctx.scenario.type_of('plant')} "
+                f"has {ctx.count} spacecraft"
+            )
+    statics = dict(
+        torques=tuple(str(f.torque) for f in sec.faults),
+        spacecraft=tuple(f.spacecraft - 1 for f in sec.faults),
+        channels=tuple(f.channel - 1 for f in sec.faults),
+        step=ctx.dt,
+    )
     windows = as_float(np.array([(f.start, f.end) for f in sec.faults], dtype=float).reshape(-1, 2))
     return statics, windows
 
@@ -198,11 +257,18 @@ def _euler_allocation(sec: EulerAllocationSection, ctx: BuildContext):
     if not sec.faults:
         return EulerTorqueAllocation(inner=IdealActuator())
     statics, windows = _fault_data(sec, ctx)
-    return EulerTorqueAllocation(inner=HeldAdditiveFaultActuator(count=ctx.count, windows=windows, **statics))
+    return EulerTorqueAllocation(
+        inner=HeldAdditiveFaultActuator(count=ctx.count, windows=windows, **statics)
+    )
 
 
-register_component_type("actuator", EULER_ALLOCATION, EulerAllocationSection, _euler_allocation,
-                        "generalised (Euler-angle) torque + additive faults -> body torque R_bar(q)^T (...)")
+register_component_type(
+    "actuator",
+    EULER_ALLOCATION,
+    EulerAllocationSection,
+    _euler_allocation,
+    "generalised (Euler-angle) torque + additive faults -> body torque R_bar(q)^T (...)",
+)
 
 
 # -------------------------------------------------------------------------------------- estimators
@@ -217,20 +283,29 @@ class ScriptedFdiSection(StrictModel):
     """FDI report (flag, u*) of the actuator's faults with imperfections."""
 
     detected: bool = Field(True, description="False models a missed detection.")
-    delay: float = Field(5.0, ge=0.0, description="Detection latency; the estimate also lags by it [s].")
-    scale: float = Field(1.0, description="Identification scale error: u* = scale u_bar(t - delay) + bias [-].")
+    delay: float = Field(
+        5.0, ge=0.0, description="Detection latency; the estimate also lags by it [s]."
+    )
+    scale: float = Field(
+        1.0, description="Identification scale error: u* = scale u_bar(t - delay) + bias [-]."
+    )
     bias: float = Field(0.0, description="Identification bias while the fault is seen [N m].")
-    noise_std: float = Field(0.0, ge=0.0, description="Std of a per-step Gaussian identification noise [N m].")
-    isolation: list[IsolationEntry] = Field(default_factory=list,
-                                            description="Isolation errors: report a true fault elsewhere.")
+    noise_std: float = Field(
+        0.0, ge=0.0, description="Std of a per-step Gaussian identification noise [N m]."
+    )
+    isolation: list[IsolationEntry] = Field(
+        default_factory=list, description="Isolation errors: report a true fault elsewhere."
+    )
 
 
 def _scripted_fdi(sec: ScriptedFdiSection, ctx: BuildContext):
     act = ctx.section("actuator")
     if ctx.scenario.type_of("actuator") != EULER_ALLOCATION or not act.faults:
-        raise CompositionError(f"estimator {SCRIPTED_FDI} reports the faults of the actuator, but actuator "
-                               f"{ctx.scenario.type_of('actuator')} has no faults (give actuator {EULER_ALLOCATION} "
-                               "with faults)")
+        raise CompositionError(
+            f"estimator {SCRIPTED_FDI} reports the faults of the actuator, but actuator "
+            f"{ctx.scenario.type_of('actuator')} has no faults (give actuator {EULER_ALLOCATION} "
+            "with faults)"
+        )
     statics, windows = _fault_data(act, ctx)
     m, nch = ctx.count, 3
     mask = np.zeros((m, nch))
@@ -240,31 +315,55 @@ def _scripted_fdi(sec: ScriptedFdiSection, ctx: BuildContext):
     moves = {}
     for k, e in enumerate(sec.isolation):
         if (e.spacecraft, e.channel) not in faulty:
-            raise ValueError(f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault")
+            raise ValueError(
+                f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault"
+            )
         if max(e.spacecraft, e.reported_spacecraft) > m:
             raise ValueError(f"estimator.isolation[{k}]: spacecraft numbers must be in 1..{m}")
-        moves[(e.spacecraft - 1, e.channel - 1)] = (e.reported_spacecraft - 1, e.reported_channel - 1)
-    params = fdi_params(m, nch, fault_mask=mask, onset=min(f.start for f in act.faults), delay=sec.delay,
-                        detected=sec.detected, scale=sec.scale, bias=sec.bias, noise_std=sec.noise_std,
-                        routing=isolation_routing(m, nch, moves))
+        moves[(e.spacecraft - 1, e.channel - 1)] = (
+            e.reported_spacecraft - 1,
+            e.reported_channel - 1,
+        )
+    params = fdi_params(
+        m,
+        nch,
+        fault_mask=mask,
+        onset=min(f.start for f in act.faults),
+        delay=sec.delay,
+        detected=sec.detected,
+        scale=sec.scale,
+        bias=sec.bias,
+        noise_std=sec.noise_std,
+        routing=isolation_routing(m, nch, moves),
+    )
     seed = np.asarray(ctx.scenario.simulation.seed, dtype=np.uint32)
     return ScriptedFdi(count=m, seed=seed, windows=windows, params=params, **statics)
 
 
-register_component_type("estimator", SCRIPTED_FDI, ScriptedFdiSection, _scripted_fdi,
-                        "scripted FDI report (flag, u*) of the actuator's faults: latency, missed detection, "
-                        "isolation and identification errors")
+register_component_type(
+    "estimator",
+    SCRIPTED_FDI,
+    ScriptedFdiSection,
+    _scripted_fdi,
+    "scripted FDI report (flag, u*) of the actuator's faults: latency, missed detection, "
+    "isolation and identification errors",
+)
 
 
 # ------------------------------------------------------------------------------------- controllers
 class NetworkedElHinfSection(StrictModel):
     """Distributed H-infinity synchronisation / tracking law with adaptive fault recovery (Euler angles)."""
 
-    edges: list[tuple[int, int]] = Field(description="Undirected links as 1-based spacecraft pairs, unit weights [-]; "
-                                                     "the graph must be connected.")
-    law: Literal["literal", "diffusive"] = Field("literal", description="Reading of the synchronisation law.")
+    edges: list[tuple[int, int]] = Field(
+        description="Undirected links as 1-based spacecraft pairs, unit weights [-]; "
+        "the graph must be connected."
+    )
+    law: Literal["literal", "diffusive"] = Field(
+        "literal", description="Reading of the synchronisation law."
+    )
     compensation: Literal["sat", "sign", "certainty_equivalence"] = Field(
-        "sat", description="Fault compensation Gamma: sat(s/phi_b) u^, sgn(s) u^ or -u^.")
+        "sat", description="Fault compensation Gamma: sat(s/phi_b) u^, sgn(s) u^ or -u^."
+    )
     gamma: float = Field(0.6, gt=0.0, description="H-infinity level gamma_j [-].")
     alpha: float = Field(0.86, description="Synchronisation weight alpha_j [-].")
     K: float = Field(20.0, description="K_j = K I_3 [N m s].")
@@ -273,12 +372,17 @@ class NetworkedElHinfSection(StrictModel):
     sigma: float = Field(0.5, gt=0.0, description="Adaptation gain sigma I_3 [N m / rad].")
     e_gain: float = Field(1.0, gt=0.0, description="Estimate pull towards the FDI estimate [1/s].")
     boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s].")
-    nominal_inertia: Vec3 = Field(NOMINAL_INERTIA, description="Principal inertia of the law's model, known on "
-                                                               "board [kg m^2] (default 20, 18, 15 kg m^2, "
-                                                               "Mehrabian's nominal J^, a stated value: never the "
-                                                               "plant's true inertia).")
-    desired_attitude: Vec3Expr = Field(("0", "0", "0"), description="Desired [theta, phi, psi] per spacecraft, "
-                                                                    "expressions in t [s], i [rad].")
+    nominal_inertia: Vec3 = Field(
+        NOMINAL_INERTIA,
+        description="Principal inertia of the law's model, known on "
+        "board [kg m^2] (default 20, 18, 15 kg m^2, "
+        "Mehrabian's nominal J^, a stated value: never the "
+        "plant's true inertia).",
+    )
+    desired_attitude: Vec3Expr = Field(
+        ("0", "0", "0"),
+        description="Desired [theta, phi, psi] per spacecraft, expressions in t [s], i [rad].",
+    )
 
     @model_validator(mode="after")
     def _check(self):
@@ -286,9 +390,13 @@ class NetworkedElHinfSection(StrictModel):
             raise ValueError("edges: at least one link is needed")
         for k, (a, b) in enumerate(self.edges):
             if a < 1 or b < 1 or a == b:
-                raise ValueError(f"edges[{k}] = [{a}, {b}]: 1-based spacecraft numbers, no self-loops")
+                raise ValueError(
+                    f"edges[{k}] = [{a}, {b}]: 1-based spacecraft numbers, no self-loops"
+                )
         if any(not x > 0 for x in self.nominal_inertia):
-            raise ValueError(f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2")
+            raise ValueError(
+                f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2"
+            )
         return self
 
 
@@ -302,45 +410,72 @@ def _attitude_chain_fits(ctx: BuildContext) -> None:
         raise CompositionError(
             f"controller {EULER_LAW} reads 3-2-1 Euler angles, but plant {plant} has a quaternion "
             f"attitude and sensors {s.type_of('sensors') or '(none: the raw plant state)'} do not convert it "
-            f"(use sensors type = \"{EULER_SENSORS}\")")
-    if s.type_of("actuator") != EULER_ALLOCATION and not getattr(ctx.section("actuator"), "euler_allocation", False):
+            f'(use sensors type = "{EULER_SENSORS}")'
+        )
+    if s.type_of("actuator") != EULER_ALLOCATION and not getattr(
+        ctx.section("actuator"), "euler_allocation", False
+    ):
         raise CompositionError(
             f"controller {EULER_LAW} commands a generalised torque conjugate to the Euler angles, but plant "
             f"{plant} is driven by a body torque and actuator {s.type_of('actuator') or '(ideal)'} "
-            f"does not map one to the other (use actuator type = \"{EULER_ALLOCATION}\", or one with "
-            "euler_allocation = true)")
+            f'does not map one to the other (use actuator type = "{EULER_ALLOCATION}", or one with '
+            "euler_allocation = true)"
+        )
     # the law's model is singular at pitch +-90 deg: start well away from it
-    check_away_from_singularity(ctx.section("plant").euler_angles(), field="plant initial attitude (3-2-1 Euler angles)")
+    check_away_from_singularity(
+        ctx.section("plant").euler_angles(), field="plant initial attitude (3-2-1 Euler angles)"
+    )
 
 
 def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
     _attitude_chain_fits(ctx)
     quantity = getattr(ctx.plant, "quantity", "torque")
     if quantity != "torque":
-        raise CompositionError(f"controller {EULER_LAW} (NetworkedElHinfController) is an attitude law commanding a "
-                               f"torque, but plant {ctx.scenario.type_of('plant')} ({type(ctx.plant).__name__}) is "
-                               f"driven by a {quantity}: use an attitude plant")
+        raise CompositionError(
+            f"controller {EULER_LAW} (NetworkedElHinfController) is an attitude law commanding a "
+            f"torque, but plant {ctx.scenario.type_of('plant')} ({type(ctx.plant).__name__}) is "
+            f"driven by a {quantity}: use an attitude plant"
+        )
     m = ctx.count
     for k, (a, b) in enumerate(sec.edges):
         if a > m or b > m:
-            raise CompositionError(f"controller.edges[{k}] = [{a}, {b}]: plant {ctx.scenario.type_of('plant')} "
-                                   f"has {m} spacecraft")
+            raise CompositionError(
+                f"controller.edges[{k}] = [{a}, {b}]: plant {ctx.scenario.type_of('plant')} "
+                f"has {m} spacecraft"
+            )
     A = graphs.adjacency(m, [(a - 1, b - 1) for a, b in sec.edges], directed=False)
     if not graphs.is_connected_undirected(A):
-        raise ValueError("controller.edges: the communication graph is not connected; the synchronisation law "
-                         "needs a connected undirected graph")
+        raise ValueError(
+            "controller.edges: the communication graph is not connected; the synchronisation law "
+            "needs a connected undirected graph"
+        )
     J = sec.nominal_inertia  # stated on board, never the plant's inertia
     ones = np.ones((m, 3))
     pj, pn = np.nonzero(np.triu(A > 0, 1))
     return NetworkedElHinfController(
-        count=m, K=as_float(sec.K * ones), K_P=as_float(sec.K_P * ones), K_I=as_float(sec.K_I * ones),
-        sigma=as_float(sec.sigma * ones), e_gain=as_float(sec.e_gain * ones), alpha=as_float(sec.alpha * np.ones(m)),
-        gamma=as_float(sec.gamma * np.ones(m)), phi_b=as_float(sec.boundary_layer),
-        avg=as_float(graphs.row_normalized(A)), J_hat=as_float(np.stack([np.diag(J)] * m)),
-        law=sec.law, compensation=sec.compensation, desired_attitude=_vec3_text(sec.desired_attitude),
-        links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)))
+        count=m,
+        K=as_float(sec.K * ones),
+        K_P=as_float(sec.K_P * ones),
+        K_I=as_float(sec.K_I * ones),
+        sigma=as_float(sec.sigma * ones),
+        e_gain=as_float(sec.e_gain * ones),
+        alpha=as_float(sec.alpha * np.ones(m)),
+        gamma=as_float(sec.gamma * np.ones(m)),
+        phi_b=as_float(sec.boundary_layer),
+        avg=as_float(graphs.row_normalized(A)),
+        J_hat=as_float(np.stack([np.diag(J)] * m)),
+        law=sec.law,
+        compensation=sec.compensation,
+        desired_attitude=_vec3_text(sec.desired_attitude),
+        links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)),
+    )
 
 
-register_component_type("controller", EULER_LAW, NetworkedElHinfSection, _networked_el_hinf,
-                        "Mehrabian distributed H-infinity attitude synchronisation with adaptive fault recovery "
-                        "(3-2-1 Euler angles, generalised torque)")
+register_component_type(
+    "controller",
+    EULER_LAW,
+    NetworkedElHinfSection,
+    _networked_el_hinf,
+    "Mehrabian distributed H-infinity attitude synchronisation with adaptive fault recovery "
+    "(3-2-1 Euler angles, generalised torque)",
+)

@@ -27,11 +27,20 @@ from formation_ftc.components.controllers.yang2013_individual import Yang2013Att
 from formation_ftc.components.evaluations.attitude_scores import AttitudeScores
 from formation_ftc.config.base import StrictModel
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS, _needs_quaternion_plant
+from formation_ftc.methods.composed.catalog_attitude import (
+    QUATERNION_PLANTS,
+    _needs_quaternion_plant,
+)
 from formation_ftc.sim.components import CompositionError, as_float
 
-__all__ = ["YANG2013_ATTITUDE", "ATTITUDE_PD", "ATTITUDE_SCORES", "Yang2013AttitudeSection", "AttitudePdSection",
-           "AttitudeScoresSection"]
+__all__ = [
+    "YANG2013_ATTITUDE",
+    "ATTITUDE_PD",
+    "ATTITUDE_SCORES",
+    "Yang2013AttitudeSection",
+    "AttitudePdSection",
+    "AttitudeScoresSection",
+]
 
 YANG2013_ATTITUDE = "yang2013-attitude"
 ATTITUDE_PD = "attitude-pd"
@@ -55,9 +64,11 @@ def _reads_plant_state(name: str, ctx: BuildContext) -> None:
     _needs_quaternion_plant("controller", name, ctx)
     sensors = ctx.scenario.type_of("sensors")
     if sensors is not None:
-        raise CompositionError(f"controller {name} reads the plant's quaternion state (body rate, quaternion), "
-                               f"but sensors {sensors} replace it; leave [sensors] out (the measurement is then "
-                               "the plant state)")
+        raise CompositionError(
+            f"controller {name} reads the plant's quaternion state (body rate, quaternion), "
+            f"but sensors {sensors} replace it; leave [sensors] out (the measurement is then "
+            "the plant state)"
+        )
 
 
 def _inertia(given: Vec3) -> np.ndarray:
@@ -72,7 +83,9 @@ def _quaternions(rows: Quat | list[Quat] | None, n: int, field: str) -> np.ndarr
     arr = np.asarray(rows, dtype=float)
     arr = np.tile(arr, (n, 1)) if arr.ndim == 1 else arr
     if arr.shape != (n, 4):
-        raise ValueError(f"{field}: {arr.shape[0]} quaternions for {n} spacecraft (give one or {n})")
+        raise ValueError(
+            f"{field}: {arr.shape[0]} quaternions for {n} spacecraft (give one or {n})"
+        )
     return arr
 
 
@@ -83,7 +96,9 @@ def _unit_quaternions(value):
     for k, p in enumerate(rows):
         norm = float(np.linalg.norm(p))
         if not abs(norm - 1.0) <= 1e-6:
-            raise ValueError(f"quaternion {k}: norm {norm:.9g}, a unit quaternion [q1, q2, q3, q4] is needed")
+            raise ValueError(
+                f"quaternion {k}: norm {norm:.9g}, a unit quaternion [q1, q2, q3, q4] is needed"
+            )
     return value
 
 
@@ -95,12 +110,17 @@ class Yang2013AttitudeSection(StrictModel):
     K4: float = Field(1.0, gt=0.0, description="Quaternion-vector shaping gain K4 [1/s].")
     K5: float = Field(1.0, gt=0.0, description="Quaternion-scalar shaping gain K5 [1/s].")
     kappa: float = Field(1e-3, gt=0.0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
-    inertia: Vec3 = Field(NOMINAL_INERTIA, description="Principal inertia of the law's model, known on board "
-                                                       "[kg m^2] (default 25, 25, 25 kg m^2, Yang2013's spacecraft, a "
-                                                       "stated value: never the plant's true inertia).")
+    inertia: Vec3 = Field(
+        NOMINAL_INERTIA,
+        description="Principal inertia of the law's model, known on board "
+        "[kg m^2] (default 25, 25, 25 kg m^2, Yang2013's spacecraft, a "
+        "stated value: never the plant's true inertia).",
+    )
     desired_quaternion: Quat | list[Quat] | None = Field(
-        None, description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
-                          "first) or one per spacecraft [-] (default identity: aligned with the state frame).")
+        None,
+        description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
+        "first) or one per spacecraft [-] (default identity: aligned with the state frame).",
+    )
 
     @model_validator(mode="after")
     def _check(self):
@@ -112,27 +132,43 @@ class Yang2013AttitudeSection(StrictModel):
 
 def _yang2013_attitude(sec: Yang2013AttitudeSection, ctx: BuildContext):
     _reads_plant_state(YANG2013_ATTITUDE, ctx)
-    law = Yang2013AttitudeController(count=ctx.count, inertia=as_float(_inertia(sec.inertia)),
-                                     K3=as_float(sec.K3), K4=as_float(sec.K4), K5=as_float(sec.K5),
-                                     kappa=as_float(sec.kappa))
+    law = Yang2013AttitudeController(
+        count=ctx.count,
+        inertia=as_float(_inertia(sec.inertia)),
+        K3=as_float(sec.K3),
+        K4=as_float(sec.K4),
+        K5=as_float(sec.K5),
+        kappa=as_float(sec.kappa),
+    )
     q_d = _quaternions(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
     return Yang2013AttitudeHold(law=law, desired_quaternion=as_float(q_d))
 
 
-register_component_type("controller", YANG2013_ATTITUDE, Yang2013AttitudeSection, _yang2013_attitude,
-                        "Yang2013 attitude law (13) on a quaternion plant's state (holds the state frame's axes)")
+register_component_type(
+    "controller",
+    YANG2013_ATTITUDE,
+    Yang2013AttitudeSection,
+    _yang2013_attitude,
+    "Yang2013 attitude law (13) on a quaternion plant's state (holds the state frame's axes)",
+)
 
 
 # ------------------------------------------------------------------------------------------- PD
 class AttitudePdSection(StrictModel):
     """tau = -K_p sign(q_e4) q_e,v - K_d omega, q_e = q_d^* (x) q, in the plant's state frame."""
 
-    K_p: float | list[float] = Field(description="Attitude gain K_p [N m] per unit error-quaternion vector (small-"
-                                                 "angle stiffness K_p / 2 [N m/rad]), one or per spacecraft, > 0.")
-    K_d: float | list[float] = Field(description="Rate gain K_d [N m s], one or per spacecraft, > 0.")
+    K_p: float | list[float] = Field(
+        description="Attitude gain K_p [N m] per unit error-quaternion vector (small-"
+        "angle stiffness K_p / 2 [N m/rad]), one or per spacecraft, > 0."
+    )
+    K_d: float | list[float] = Field(
+        description="Rate gain K_d [N m s], one or per spacecraft, > 0."
+    )
     desired_quaternion: Quat | list[Quat] | None = Field(
-        None, description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
-                          "first) or one per spacecraft [-] (default identity: aligned with the state frame).")
+        None,
+        description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
+        "first) or one per spacecraft [-] (default identity: aligned with the state frame).",
+    )
 
     @model_validator(mode="after")
     def _unit(self):
@@ -147,14 +183,24 @@ def _attitude_pd(sec: AttitudePdSection, ctx: BuildContext):
     kd = per_spacecraft(sec.K_d, n, "controller.K_d")
     if np.any(~(kp > 0)) or np.any(~(kd > 0)):
         raise ValueError(f"controller.K_p = {list(kp)}, K_d = {list(kd)}: every gain must be > 0")
-    return AttitudePdController(count=n, K_p=as_float(kp), K_d=as_float(kd),
-                                desired_quaternion=as_float(_quaternions(sec.desired_quaternion, n,
-                                                                         "controller.desired_quaternion")))
+    return AttitudePdController(
+        count=n,
+        K_p=as_float(kp),
+        K_d=as_float(kd),
+        desired_quaternion=as_float(
+            _quaternions(sec.desired_quaternion, n, "controller.desired_quaternion")
+        ),
+    )
 
 
-register_component_type("controller", ATTITUDE_PD, AttitudePdSection, _attitude_pd,
-                        "quaternion PD attitude baseline towards a fixed attitude in the plant's state frame, "
-                        "no fault tolerance")
+register_component_type(
+    "controller",
+    ATTITUDE_PD,
+    AttitudePdSection,
+    _attitude_pd,
+    "quaternion PD attitude baseline towards a fixed attitude in the plant's state frame, "
+    "no fault tolerance",
+)
 
 
 # ------------------------------------------------------------------------------------ evaluation
@@ -162,10 +208,15 @@ class AttitudeScoresSection(StrictModel):
     """Attitude error, pairwise synchronisation error and applied torque against a common attitude."""
 
     desired_quaternion: Quat | list[Quat] | None = Field(
-        None, description="Desired attitude body -> `frame`, one unit quaternion [q1, q2, q3, q4] (vector first) "
-                          "or one per spacecraft [-] (default identity).")
-    frame: str = Field("state", description="Frame of desired_quaternion: 'inertial', 'lvlh' or 'state' (the "
-                                            "plant's state_frame).")
+        None,
+        description="Desired attitude body -> `frame`, one unit quaternion [q1, q2, q3, q4] (vector first) "
+        "or one per spacecraft [-] (default identity).",
+    )
+    frame: str = Field(
+        "state",
+        description="Frame of desired_quaternion: 'inertial', 'lvlh' or 'state' (the "
+        "plant's state_frame).",
+    )
 
     @model_validator(mode="after")
     def _unit(self):
@@ -176,19 +227,28 @@ class AttitudeScoresSection(StrictModel):
 def _attitude_scores(sec: AttitudeScoresSection, ctx: BuildContext):
     plant = ctx.scenario.type_of("plant")
     if plant not in QUATERNION_PLANTS or ctx.plant is None or ctx.plant.quantity != "torque":
-        raise CompositionError(f"evaluation {ATTITUDE_SCORES} scores attitudes and torques, but plant {plant} "
-                               "has no quaternion attitude (use it with plant "
-                               f"{' or '.join(sorted(QUATERNION_PLANTS))})")
+        raise CompositionError(
+            f"evaluation {ATTITUDE_SCORES} scores attitudes and torques, but plant {plant} "
+            "has no quaternion attitude (use it with plant "
+            f"{' or '.join(sorted(QUATERNION_PLANTS))})"
+        )
     frame = _state_frame(ctx) if sec.frame == "state" else sec.frame
     signal = {"inertial": "quaternion", "lvlh": "attitude_lvlh"}.get(frame)
     if signal is None:
         raise ValueError(f"evaluations.frame = {sec.frame!r}: one of 'inertial', 'lvlh', 'state'")
     if not any(s.name == signal for s in ctx.plant.signals()):
-        raise CompositionError(f"evaluation {ATTITUDE_SCORES} with frame {frame} reads the plant's {signal}, but "
-                               f"plant {plant} records none")
+        raise CompositionError(
+            f"evaluation {ATTITUDE_SCORES} with frame {frame} reads the plant's {signal}, but "
+            f"plant {plant} records none"
+        )
     q = _quaternions(sec.desired_quaternion, ctx.count, "evaluations.desired_quaternion")
     return AttitudeScores(desired_quaternion=as_float(q), attitude_signal=signal)
 
 
-register_component_type("evaluation", ATTITUDE_SCORES, AttitudeScoresSection, _attitude_scores,
-                        "attitude error against a common attitude, pairwise synchronisation error, applied torque")
+register_component_type(
+    "evaluation",
+    ATTITUDE_SCORES,
+    AttitudeScoresSection,
+    _attitude_scores,
+    "attitude error against a common attitude, pairwise synchronisation error, applied torque",
+)

@@ -20,10 +20,18 @@ from pydantic import Field, model_validator
 from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.methods.composed import BuildContext, register_component_type
-from formation_ftc.methods.composed.catalog_attitude import QUATERNION_PLANTS, RigidBodyAttitudeSection
+from formation_ftc.methods.composed.catalog_attitude import (
+    QUATERNION_PLANTS,
+    RigidBodyAttitudeSection,
+)
 from formation_ftc.sim.components import as_float
 
-__all__ = ["ATTITUDE_TRUTH_PLANT", "AttitudeTruthSection", "initial_inertial_state", "initial_state_in"]
+__all__ = [
+    "ATTITUDE_TRUTH_PLANT",
+    "AttitudeTruthSection",
+    "initial_inertial_state",
+    "initial_state_in",
+]
 
 ATTITUDE_TRUTH_PLANT = "attitude-truth"
 EARTH_RADIUS = 6_378_137.0  # equatorial radius [m] (WGS 84), lower bound of the orbit radius
@@ -35,37 +43,57 @@ Mat3 = tuple[Vec3, Vec3, Vec3]
 class AttitudeTruthSection(RigidBodyAttitudeSection):
     """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
 
-    inertia: Vec3 = Field(description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
-                                      "spacecraft unless inertia_matrices is given (an attitude law's model is "
-                                      "stated in its own section).")
+    inertia: Vec3 = Field(
+        description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
+        "spacecraft unless inertia_matrices is given (an attitude law's model is "
+        "stated in its own section)."
+    )
     inertia_matrices: list[Mat3] | None = Field(
-        None, description="Full inertia matrix per spacecraft (one 3x3 row list each, or a single one for all) "
-                          "[kg m^2]: symmetric, positive definite, satisfying the triangle inequalities; "
-                          "overrides `inertia` in the truth.")
-    semi_major_axis: float = Field(7.0e6, ge=EARTH_RADIUS, le=1.0e9,
-                                   description="Radius of the circular orbit [m] (>= the Earth's equatorial radius).")
+        None,
+        description="Full inertia matrix per spacecraft (one 3x3 row list each, or a single one for all) "
+        "[kg m^2]: symmetric, positive definite, satisfying the triangle inequalities; "
+        "overrides `inertia` in the truth.",
+    )
+    semi_major_axis: float = Field(
+        7.0e6,
+        ge=EARTH_RADIUS,
+        le=1.0e9,
+        description="Radius of the circular orbit [m] (>= the Earth's equatorial radius).",
+    )
     mu: float = Field(MU_EARTH, gt=0.0, description="Gravitational parameter [m^3/s^2].")
     initial_argument_of_latitude_deg: float = Field(
-        0.0, ge=-360.0, le=360.0, description="Argument of latitude u0 of the spacecraft at t = 0 [deg].")
+        0.0,
+        ge=-360.0,
+        le=360.0,
+        description="Argument of latitude u0 of the spacecraft at t = 0 [deg].",
+    )
     gravity_gradient: bool = Field(True, description="Apply the gravity-gradient torque.")
     state_frame: Literal["inertial", "lvlh"] = Field(
-        "inertial", description="Frame of the attitude the plant integrates and its sensors measure: 'inertial', or "
-                                "'lvlh' (attitude and body rate relative to LVLH: an attitude law then holds LVLH "
-                                "pointing, its desired attitude 0 being LVLH alignment).")
+        "inertial",
+        description="Frame of the attitude the plant integrates and its sensors measure: 'inertial', or "
+        "'lvlh' (attitude and body rate relative to LVLH: an attitude law then holds LVLH "
+        "pointing, its desired attitude 0 being LVLH alignment).",
+    )
     initial_frame: Literal["inertial", "lvlh"] = Field(
-        "inertial", description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
-                                "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).")
+        "inertial",
+        description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
+        "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).",
+    )
     initial_body_rate: list[Vec3] | None = Field(
-        None, description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0 in "
-                          "initial_frame).")
+        None,
+        description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0 in "
+        "initial_frame).",
+    )
 
     @model_validator(mode="after")
     def _check(self):
         n = self.count
         if self.inertia_matrices is not None:
             if len(self.inertia_matrices) not in (1, n):
-                raise ValueError(f"inertia_matrices: {len(self.inertia_matrices)} matrices for {n} spacecraft "
-                                 f"(give one or {n})")
+                raise ValueError(
+                    f"inertia_matrices: {len(self.inertia_matrices)} matrices for {n} spacecraft "
+                    f"(give one or {n})"
+                )
             for k, m in enumerate(self.inertia_matrices):
                 _check_inertia(np.asarray(m, dtype=float), f"inertia_matrices[{k}]")
         return self
@@ -94,10 +122,14 @@ def _check_inertia(m: np.ndarray, field: str) -> None:
         raise ValueError(f"{field}: not symmetric")
     eig = np.linalg.eigvalsh(m)
     if not eig[0] > 0:
-        raise ValueError(f"{field}: not positive definite (smallest principal inertia {eig[0]:.6g} kg m^2)")
+        raise ValueError(
+            f"{field}: not positive definite (smallest principal inertia {eig[0]:.6g} kg m^2)"
+        )
     if eig[0] + eig[1] < eig[2] * (1.0 - 1e-12):
-        raise ValueError(f"{field}: principal inertias {eig[0]:.6g}, {eig[1]:.6g}, {eig[2]:.6g} kg m^2 violate "
-                         "the triangle inequality J1 + J2 >= J3 of a rigid body")
+        raise ValueError(
+            f"{field}: principal inertias {eig[0]:.6g}, {eig[1]:.6g}, {eig[2]:.6g} kg m^2 violate "
+            "the triangle inequality J1 + J2 >= J3 of a rigid body"
+        )
 
 
 def _rz_quaternion(u: float) -> np.ndarray:
@@ -107,14 +139,22 @@ def _rz_quaternion(u: float) -> np.ndarray:
 def _quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     pv, p4 = p[..., :3], p[..., 3:]
     qv, q4 = q[..., :3], q[..., 3:]
-    return np.concatenate([p4 * qv + q4 * pv + np.cross(pv, qv), p4 * q4 - np.sum(pv * qv, -1, keepdims=True)], -1)
+    return np.concatenate(
+        [p4 * qv + q4 * pv + np.cross(pv, qv), p4 * q4 - np.sum(pv * qv, -1, keepdims=True)], -1
+    )
 
 
 def _orbit_normal_in_body(q: np.ndarray) -> np.ndarray:
     """Third row of C(q) (the reference frame's z axis in body axes), (N, 3)."""
     qv, q4 = q[:, :3], q[:, 3]
-    return np.stack([2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]), 2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
-                     q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2], axis=-1)
+    return np.stack(
+        [
+            2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]),
+            2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
+            q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2,
+        ],
+        axis=-1,
+    )
 
 
 def initial_state_in(sec: AttitudeTruthSection, frame: str) -> tuple[np.ndarray, np.ndarray]:
@@ -127,7 +167,11 @@ def initial_state_in(sec: AttitudeTruthSection, frame: str) -> tuple[np.ndarray,
     """
     n_sc = sec.count
     q = sec.given_quaternions()
-    w = np.zeros((n_sc, 3)) if sec.initial_body_rate is None else np.asarray(sec.initial_body_rate, float)
+    w = (
+        np.zeros((n_sc, 3))
+        if sec.initial_body_rate is None
+        else np.asarray(sec.initial_body_rate, float)
+    )
     if sec.initial_frame == frame:
         return w, q
     u0 = math.radians(sec.initial_argument_of_latitude_deg)
@@ -146,14 +190,24 @@ def _attitude_truth(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTru
     w0, q0 = initial_state_in(sec, sec.state_frame)
     a, b, c = sec.disturbance_torque
     return AttitudeTruthPlant(
-        inertia=as_float(sec.inertia_tensor()), initial_omega=as_float(w0), initial_quaternion=as_float(q0),
-        semi_major_axis=as_float(sec.semi_major_axis), mu=as_float(sec.mu),
+        inertia=as_float(sec.inertia_tensor()),
+        initial_omega=as_float(w0),
+        initial_quaternion=as_float(q0),
+        semi_major_axis=as_float(sec.semi_major_axis),
+        mu=as_float(sec.mu),
         initial_argument_of_latitude=as_float(math.radians(sec.initial_argument_of_latitude_deg)),
-        disturbance_torque=(str(a), str(b), str(c)), gravity_gradient=sec.gravity_gradient,
-        state_frame=sec.state_frame)
+        disturbance_torque=(str(a), str(b), str(c)),
+        gravity_gradient=sec.gravity_gradient,
+        state_frame=sec.state_frame,
+    )
 
 
 QUATERNION_PLANTS.add(ATTITUDE_TRUTH_PLANT)
-register_component_type("plant", ATTITUDE_TRUTH_PLANT, AttitudeTruthSection, _attitude_truth,
-                        "rigid-body attitudes (inertial quaternion) on a circular orbit with the gravity-gradient "
-                        "torque, driven by body torques")
+register_component_type(
+    "plant",
+    ATTITUDE_TRUTH_PLANT,
+    AttitudeTruthSection,
+    _attitude_truth,
+    "rigid-body attitudes (inertial quaternion) on a circular orbit with the gravity-gradient "
+    "torque, driven by body torques",
+)

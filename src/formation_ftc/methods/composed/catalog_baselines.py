@@ -35,23 +35,39 @@ class LqrSection(StrictModel):
     """LQR on the CW model: weights by Bryson's rule, Q = diag(1/e_max^2), R = diag(1/a_max^2)."""
 
     max_position_error: float | Vec3 = Field(
-        description="Bryson's rule: largest acceptable position error [m], one number or one per LVLH axis; > 0.")
+        description="Bryson's rule: largest acceptable position error [m], one number or one per LVLH axis; > 0."
+    )
     max_velocity_error: float | Vec3 = Field(
-        description="Bryson's rule: largest acceptable velocity error [m/s], one number or one per axis; > 0.")
+        description="Bryson's rule: largest acceptable velocity error [m/s], one number or one per axis; > 0."
+    )
     max_acceleration: float | Vec3 = Field(
-        description="Bryson's rule: largest acceptable commanded acceleration [m/s^2], one number or one per axis; > 0.")
+        description="Bryson's rule: largest acceptable commanded acceleration [m/s^2], one number or one per axis; > 0."
+    )
     semi_major_axis: float | None = Field(
-        None, gt=0, description="Radius of the circular orbit the gain is designed on [m] (default: the [reference] "
-                                "orbit's semi_major_axis, known on board; required without a [reference]; never the "
-                                "plant's).")
-    mu: float | None = Field(None, gt=0, description="Gravitational parameter of the on-board model [m^3/s^2] "
-                                                     "(default: the [reference] orbit's, else Earth's "
-                                                     "3.986004418e14; never the plant's).")
+        None,
+        gt=0,
+        description="Radius of the circular orbit the gain is designed on [m] (default: the [reference] "
+        "orbit's semi_major_axis, known on board; required without a [reference]; never the "
+        "plant's).",
+    )
+    mu: float | None = Field(
+        None,
+        gt=0,
+        description="Gravitational parameter of the on-board model [m^3/s^2] "
+        "(default: the [reference] orbit's, else Earth's "
+        "3.986004418e14; never the plant's).",
+    )
     mass: float | list[float] = Field(
-        NOMINAL_MASS, description="Nominal on-board mass per spacecraft [kg], one or per spacecraft, > 0 (default "
-                                  "100 kg, a stated nominal value: never the plant's true masses).")
-    desired_position: Vec3Expr = Field(("0", "0", "0"), description="Desired LVLH position, expressions in t [s], i [m].")
-    mode: Literal["continuous", "sampled"] = Field("continuous", description="Every RK stage or held over the step.")
+        NOMINAL_MASS,
+        description="Nominal on-board mass per spacecraft [kg], one or per spacecraft, > 0 (default "
+        "100 kg, a stated nominal value: never the plant's true masses).",
+    )
+    desired_position: Vec3Expr = Field(
+        ("0", "0", "0"), description="Desired LVLH position, expressions in t [s], i [m]."
+    )
+    mode: Literal["continuous", "sampled"] = Field(
+        "continuous", description="Every RK stage or held over the step."
+    )
 
     @field_validator(*_BRYSON)
     @classmethod
@@ -78,17 +94,33 @@ def _from_reference(ctx: BuildContext, name: str):
 
 def _lqr(sec: LqrSection, ctx: BuildContext):
     n_sc = ctx.count
-    a = sec.semi_major_axis if sec.semi_major_axis is not None else _from_reference(ctx, "semi_major_axis")
+    a = (
+        sec.semi_major_axis
+        if sec.semi_major_axis is not None
+        else _from_reference(ctx, "semi_major_axis")
+    )
     if a is None:
-        raise ValueError("controller.semi_major_axis: required (the loop has no [reference] orbit to take the design "
-                         "orbit from; the plant's orbit is truth the law does not read)")
+        raise ValueError(
+            "controller.semi_major_axis: required (the loop has no [reference] orbit to take the design "
+            "orbit from; the plant's orbit is truth the law does not read)"
+        )
     mu = sec.mu if sec.mu is not None else _from_reference(ctx, "mu") or MU_EARTH
     n = math.sqrt(mu / a**3)  # mean motion of the circular design orbit [rad/s]
     design = cw_lqr(n, sec.max_position_error, sec.max_velocity_error, sec.max_acceleration)
-    return LqrFormationController(count=n_sc, gain=as_float(design.K), mean_motion=as_float(n),
-                                  mass=as_float(per_spacecraft(sec.mass, n_sc, "controller.mass")),
-                                  desired_position=sec.desired_position, is_sampled=sec.mode == "sampled")
+    return LqrFormationController(
+        count=n_sc,
+        gain=as_float(design.K),
+        mean_motion=as_float(n),
+        mass=as_float(per_spacecraft(sec.mass, n_sc, "controller.mass")),
+        desired_position=sec.desired_position,
+        is_sampled=sec.mode == "sampled",
+    )
 
 
-register_component_type("controller", "lqr", LqrSection, _lqr,
-                        "LQR baseline designed on Clohessy-Wiltshire (Bryson weights), no fault tolerance")
+register_component_type(
+    "controller",
+    "lqr",
+    LqrSection,
+    _lqr,
+    "LQR baseline designed on Clohessy-Wiltshire (Bryson weights), no fault tolerance",
+)

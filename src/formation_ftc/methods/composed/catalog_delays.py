@@ -35,13 +35,18 @@ class Yang2013TranslationalSection(StrictModel):
     """Yang2013 eq. (12): f_i = M_i (a^d_i + (K1 + 1) e_R + K2 e_V), e_R = p^d - p, e_V = v^d - v
     (the plant's drift is not cancelled; on a Clohessy-Wiltshire plant it is of order n^2 |p|)."""
 
-    K1: float = Field(0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0.")
+    K1: float = Field(
+        0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0."
+    )
     K2: float = Field(0.01, gt=0, description="Velocity gain K2 [1/s], > 0.")
     nominal_mass: float | list[float] = Field(
-        NOMINAL_MASS, description="Mass M_i used by the law [kg] (one or per spacecraft; default 150 kg, Yang2013's "
-                                  "spacecraft, a stated nominal value: never the plant's true masses).")
-    desired_position: Vec3Expr = Field(("0", "0", "0"),
-                                       description="Desired position p^d per axis, expressions in t [s], i [m].")
+        NOMINAL_MASS,
+        description="Mass M_i used by the law [kg] (one or per spacecraft; default 150 kg, Yang2013's "
+        "spacecraft, a stated nominal value: never the plant's true masses).",
+    )
+    desired_position: Vec3Expr = Field(
+        ("0", "0", "0"), description="Desired position p^d per axis, expressions in t [s], i [m]."
+    )
 
     @model_validator(mode="after")
     def _masses(self):
@@ -54,8 +59,10 @@ class Yang2013TranslationalSection(StrictModel):
 
 class Yang2013RelativeSection(Yang2013TranslationalSection):
     coupling: float | list[float] = Field(
-        1.0, description="beta_i [-] in [0, 1] (one or per spacecraft): weight of the referenced spacecraft's "
-                         "received formation error; 1 keeps the offset relative to them, 0 tracks the own slot.")
+        1.0,
+        description="beta_i [-] in [0, 1] (one or per spacecraft): weight of the referenced spacecraft's "
+        "received formation error; 1 keeps the offset relative to them, 0 tracks the own slot.",
+    )
 
     @model_validator(mode="after")
     def _coupling(self):
@@ -65,26 +72,46 @@ class Yang2013RelativeSection(Yang2013TranslationalSection):
         return self
 
 
-def _yang2013_law(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2013TranslationalController:
+def _yang2013_law(
+    sec: Yang2013TranslationalSection, ctx: BuildContext
+) -> Yang2013TranslationalController:
     n = ctx.count
     px, py, pz = sec.desired_position
-    return Yang2013TranslationalController(count=n, mass=as_float(_per_spacecraft(sec.nominal_mass, n,
-                                                                                  "controller.nominal_mass")),
-                                           K1=as_float(sec.K1), K2=as_float(sec.K2),
-                                           desired_position=(str(px), str(py), str(pz)))
+    return Yang2013TranslationalController(
+        count=n,
+        mass=as_float(_per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
+        K1=as_float(sec.K1),
+        K2=as_float(sec.K2),
+        desired_position=(str(px), str(py), str(pz)),
+    )
 
 
-def _yang2013_relative(sec: Yang2013RelativeSection, ctx: BuildContext) -> NeighbourRelativeController:
+def _yang2013_relative(
+    sec: Yang2013RelativeSection, ctx: BuildContext
+) -> NeighbourRelativeController:
     if ctx.section("network") is None:
-        raise ValueError("controller.type = 'yang2013-relative' references other spacecraft through the "
-                         "network: add a [network] (e.g. type = 'graph' or 'delayed-graph')")
+        raise ValueError(
+            "controller.type = 'yang2013-relative' references other spacecraft through the "
+            "network: add a [network] (e.g. type = 'graph' or 'delayed-graph')"
+        )
     return NeighbourRelativeController(
         law=_yang2013_law(sec, ctx),
-        coupling=as_float(_per_spacecraft(sec.coupling, ctx.count, "controller.coupling")))
+        coupling=as_float(_per_spacecraft(sec.coupling, ctx.count, "controller.coupling")),
+    )
 
 
-register_component_type("controller", "yang2013-translational", Yang2013TranslationalSection, _yang2013_law,
-                        "Yang2013 feedback-linearising translational law (12), own desired slot, no messages")
-register_component_type("controller", "yang2013-relative", Yang2013RelativeSection, _yang2013_relative,
-                        "Yang2013 law (12) keeping each spacecraft's offset relative to the (delayed) formation "
-                        "errors received from the spacecraft it references")
+register_component_type(
+    "controller",
+    "yang2013-translational",
+    Yang2013TranslationalSection,
+    _yang2013_law,
+    "Yang2013 feedback-linearising translational law (12), own desired slot, no messages",
+)
+register_component_type(
+    "controller",
+    "yang2013-relative",
+    Yang2013RelativeSection,
+    _yang2013_relative,
+    "Yang2013 law (12) keeping each spacecraft's offset relative to the (delayed) formation "
+    "errors received from the spacecraft it references",
+)

@@ -40,14 +40,19 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from formation_ftc.blocks.observers.iterative_learning_observer import LearningIntervalError, learning_steps
+from formation_ftc.blocks.observers.iterative_learning_observer import (
+    LearningIntervalError,
+    learning_steps,
+)
 from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
 from formation_ftc.components.controllers.output_feedback import (
     ConventionalOutputFeedbackController,
     LearningOutputFeedbackController,
 )
 from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
-from formation_ftc.components.estimators.iterative_learning_observer import IterativeLearningObserver
+from formation_ftc.components.estimators.iterative_learning_observer import (
+    IterativeLearningObserver,
+)
 from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
 from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
 from formation_ftc.config.base import StrictModel
@@ -55,8 +60,18 @@ from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.methods.composed import BuildContext, register_component_type, require_slot
 from formation_ftc.sim.components import CompositionError, as_float
 
-__all__ = ["ILO", "LOF2TC", "COF2TC", "IloSection", "Lof2tcSection", "Cof2tcSection", "onboard_mean_motion",
-           "nominal_mass_of", "ilo_lmi_gains", "care_gain"]
+__all__ = [
+    "ILO",
+    "LOF2TC",
+    "COF2TC",
+    "IloSection",
+    "Lof2tcSection",
+    "Cof2tcSection",
+    "onboard_mean_motion",
+    "nominal_mass_of",
+    "ilo_lmi_gains",
+    "care_gain",
+]
 
 ILO = "iterative-learning-observer"
 LOF2TC = "gui2022-lof2tc"
@@ -77,7 +92,9 @@ def _matrix(value, shape, field: str):
         return None
     arr = np.asarray(value, dtype=float)
     if arr.shape != shape:
-        raise ValueError(f"{field}: expected a {shape[0]}x{shape[1]} matrix (list of rows), got shape {arr.shape}")
+        raise ValueError(
+            f"{field}: expected a {shape[0]}x{shape[1]} matrix (list of rows), got shape {arr.shape}"
+        )
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{field}: entries must be finite")
     return arr.tolist()
@@ -110,39 +127,53 @@ def onboard_mean_motion(given: float | None, ctx: BuildContext, slot: str) -> fl
     ref = ctx.section("reference")
     if ref is not None and hasattr(ref, "semi_major_axis"):
         return math.sqrt(ref.mu / ref.semi_major_axis**3)
-    raise CompositionError(f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but the loop "
-                           f"has no [reference] orbit to take it from (give {slot}.mean_motion [rad/s]; the "
-                           f"plant's orbit is truth the flight side does not read)")
+    raise CompositionError(
+        f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but the loop "
+        f"has no [reference] orbit to take it from (give {slot}.mean_motion [rad/s]; the "
+        f"plant's orbit is truth the flight side does not read)"
+    )
 
 
 def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
     """The plant's initial (N, 6) relative state; a CompositionError naming both parts without one."""
     plant, name = ctx.plant, ctx.scenario.type_of(slot)
     plant_name = ctx.scenario.type_of("plant")
-    state = plant.sensed_state(plant.initial_state()) if plant is not None else None  # what sensors see
+    state = (
+        plant.sensed_state(plant.initial_state()) if plant is not None else None
+    )  # what sensors see
     q = state.get("q") if isinstance(state, dict) else None
-    if q is None or np.shape(q) != (ctx.count, 6) or getattr(plant, "quantity", "force") not in ("force",
-                                                                                               "acceleration"):
+    if (
+        q is None
+        or np.shape(q) != (ctx.count, 6)
+        or getattr(plant, "quantity", "force") not in ("force", "acceleration")
+    ):
         keys = ", ".join(sorted(state)) if isinstance(state, dict) else type(state).__name__
         raise CompositionError(
             f"{slot} {name} works on the (N, 6) relative position/velocity state of a CW model, but plant "
             f"{plant_name} ({type(plant).__name__}, driven by a {getattr(plant, 'quantity', '?')}) has no such state "
-            f"(state: {keys}); use a translational plant (clohessy-wiltshire, relative-lvlh)")
+            f"(state: {keys}); use a translational plant (clohessy-wiltshire, relative-lvlh)"
+        )
     sensors = ctx.scenario.type_of("sensors")
     if sensors not in STATE_SENSORS:
-        raise CompositionError(f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state or lvlh-relative-state), "
-                               f"but sensors {sensors} deliver something else")
+        raise CompositionError(
+            f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state or lvlh-relative-state), "
+            f"but sensors {sensors} deliver something else"
+        )
     return np.asarray(q, dtype=float)
 
 
 def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:
     """The flight side's nominal masses [kg]: ``given``, else :data:`NOMINAL_MASS` (100 kg) each; never
     the plant's true masses."""
-    return _per_spacecraft(NOMINAL_MASS if given is None else given, ctx.count, f"{slot}.nominal_mass")
+    return _per_spacecraft(
+        NOMINAL_MASS if given is None else given, ctx.count, f"{slot}.nominal_mass"
+    )
 
 
 @functools.lru_cache(maxsize=16)
-def ilo_lmi_gains(n: float, lam: float, center: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
+def ilo_lmi_gains(
+    n: float, lam: float, center: float, radius: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(L1, L2) from the LMIs (8), (27) and the pole region S(c, r) on the CW model of mean motion n
     [rad/s] (C = I6, H = B), normalised P >= I; cached by input (an offline design)."""
     from formation_ftc.design.lmi import design_ilo_gains
@@ -165,37 +196,73 @@ def care_gain(n: float, q_scale: float) -> np.ndarray:
 class IloSection(StrictModel):
     """Iterative learning observer (5) on an on-board CW model, one per spacecraft."""
 
-    gains: Literal["printed", "lmi"] = Field("printed", description=(
-        "'printed': L1, L2 as given; 'lmi': solve (8), (27) and the pole-region LMI at the on-board mean motion."))
-    L1: list[list[float]] | None = Field(None, description="Observer gain L1 (6x6) [1/s] (gains = 'printed').")
-    L2: list[list[float]] | None = Field(None, description="Learning gain L2 (3x6) [1/s] (gains = 'printed').")
+    gains: Literal["printed", "lmi"] = Field(
+        "printed",
+        description=(
+            "'printed': L1, L2 as given; 'lmi': solve (8), (27) and the pole-region LMI at the on-board mean motion."
+        ),
+    )
+    L1: list[list[float]] | None = Field(
+        None, description="Observer gain L1 (6x6) [1/s] (gains = 'printed')."
+    )
+    L2: list[list[float]] | None = Field(
+        None, description="Learning gain L2 (3x6) [1/s] (gains = 'printed')."
+    )
     lmi_lambda: float = Field(1e-8, gt=0, description="lambda of (27) [-] (gains = 'lmi').")
-    disk_center: float = Field(-5.0, lt=0, description="Centre c of the pole region S(c, r) [1/s] (gains = 'lmi').")
-    disk_radius: float = Field(2.0, gt=0, description="Radius r of the pole region S(c, r) [1/s] (gains = 'lmi').")
-    lmi_l2_scale: float | None = Field(None, gt=0, description=(
-        "Magnitude of L2's diagonal after the LMI solve (the free scale of the homogeneous LMIs) [1/s]; "
-        "default: as solved with P >= I."))
+    disk_center: float = Field(
+        -5.0, lt=0, description="Centre c of the pole region S(c, r) [1/s] (gains = 'lmi')."
+    )
+    disk_radius: float = Field(
+        2.0, gt=0, description="Radius r of the pole region S(c, r) [1/s] (gains = 'lmi')."
+    )
+    lmi_l2_scale: float | None = Field(
+        None,
+        gt=0,
+        description=(
+            "Magnitude of L2's diagonal after the LMI solve (the free scale of the homogeneous LMIs) [1/s]; "
+            "default: as solved with P >= I."
+        ),
+    )
     Q1: Vec3 = Field(description="Diagonal of Q1, each in (0, 1] [-].")
     Q2: float = Field(gt=0, description="Learning gain Q2 [-].")
     gamma: float = Field(ge=0, description="Sign-term gain gamma [m/s^2].")
-    sign_term: bool = Field(True, description="Include gamma sgn(e_y) (false: the ILO without the sign term).")
-    learning_interval: float = Field(gt=0, description="tau: a positive integer multiple of simulation.dt [s].")
-    mean_motion: float | None = Field(None, gt=0, description=(
-        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
-        "required without one)."))
-    nominal_mass: float | list[float] | None = Field(None, description=(
-        "On-board masses m_nom [kg] dividing a force command into the model's acceleration (default: the "
-        "controller's nominal_mass, else 100 kg each; never the plant's masses)."))
-    initial_estimate: Vec6 | list[Vec6] = Field((0.0,) * 6, description=(
-        "q_hat(0), the observer's initial estimate [m, m/s]: one row for every spacecraft or one per spacecraft "
-        "(default: a zero initial estimate, a stated value, never the plant's initial state)."))
+    sign_term: bool = Field(
+        True, description="Include gamma sgn(e_y) (false: the ILO without the sign term)."
+    )
+    learning_interval: float = Field(
+        gt=0, description="tau: a positive integer multiple of simulation.dt [s]."
+    )
+    mean_motion: float | None = Field(
+        None,
+        gt=0,
+        description=(
+            "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
+            "required without one)."
+        ),
+    )
+    nominal_mass: float | list[float] | None = Field(
+        None,
+        description=(
+            "On-board masses m_nom [kg] dividing a force command into the model's acceleration (default: the "
+            "controller's nominal_mass, else 100 kg each; never the plant's masses)."
+        ),
+    )
+    initial_estimate: Vec6 | list[Vec6] = Field(
+        (0.0,) * 6,
+        description=(
+            "q_hat(0), the observer's initial estimate [m, m/s]: one row for every spacecraft or one per spacecraft "
+            "(default: a zero initial estimate, a stated value, never the plant's initial state)."
+        ),
+    )
 
     @model_validator(mode="before")
     @classmethod
     def _offset_moved(cls, data):
         if isinstance(data, dict) and "estimate_offset" in data:
-            raise ValueError("estimate_offset (q_hat(0) - y(0)) was replaced by initial_estimate, the observer's own "
-                             "q_hat(0) [m, m/s] (the flight side never reads the true initial state)")
+            raise ValueError(
+                "estimate_offset (q_hat(0) - y(0)) was replaced by initial_estimate, the observer's own "
+                "q_hat(0) [m, m/s] (the flight side never reads the true initial state)"
+            )
         return data
 
     @field_validator("L1")
@@ -237,12 +304,19 @@ def _nominal_mass_for_estimator(sec: IloSection, ctx: BuildContext) -> np.ndarra
     if sec.nominal_mass is not None:
         return nominal_mass_of(sec.nominal_mass, ctx, "estimator")
     ctl = ctx.section("controller")
-    return nominal_mass_of(getattr(ctl, "nominal_mass", None) if ctx.scenario.type_of("controller") in
-                           (LOF2TC, COF2TC) else None, ctx, "estimator")
+    return nominal_mass_of(
+        getattr(ctl, "nominal_mass", None)
+        if ctx.scenario.type_of("controller") in (LOF2TC, COF2TC)
+        else None,
+        ctx,
+        "estimator",
+    )
 
 
 def _ilo(sec: IloSection, ctx: BuildContext):
-    _relative_state(ctx, "estimator")  # the composition check only: the true initial state is not used
+    _relative_state(
+        ctx, "estimator"
+    )  # the composition check only: the true initial state is not used
     m = _on_grid(sec.learning_interval, ctx.dt, "estimator.learning_interval")
     n = onboard_mean_motion(sec.mean_motion, ctx, "estimator")
     L1, L2 = sec.gains_at(n)
@@ -251,52 +325,110 @@ def _ilo(sec: IloSection, ctx: BuildContext):
     if q_hat0.ndim == 1:
         q_hat0 = np.broadcast_to(q_hat0, (N, 6)).copy()
     elif q_hat0.shape != (N, 6):
-        raise ValueError(f"estimator.initial_estimate: {q_hat0.shape[0]} rows for {N} spacecraft (give one row or {N})")
+        raise ValueError(
+            f"estimator.initial_estimate: {q_hat0.shape[0]} rows for {N} spacecraft (give one row or {N})"
+        )
     ilo = IterativeLearningObserver(
-        count=N, mean_motion=as_float(n), L1=as_float(L1), L2=as_float(L2), Q1=as_float(sec.Q1),
-        Q2=as_float(sec.Q2), gamma=as_float(sec.gamma),
+        count=N,
+        mean_motion=as_float(n),
+        L1=as_float(L1),
+        L2=as_float(L2),
+        Q1=as_float(sec.Q1),
+        Q2=as_float(sec.Q2),
+        gamma=as_float(sec.gamma),
         initial_estimate=as_float(q_hat0),  # stated, never the plant's initial state
         fault_prehistory=as_float(np.zeros((N, 3))),
-        learning_steps=m, sign_term=sec.sign_term, mean_steps=int(ctx.scenario.simulation.record_every))
+        learning_steps=m,
+        sign_term=sec.sign_term,
+        mean_steps=int(ctx.scenario.simulation.record_every),
+    )
     force_loop = ctx.plant.quantity == "force"
-    est = AccelerationModelEstimator(inner=ilo, nominal_mass=as_float(_nominal_mass_for_estimator(sec, ctx))) \
-        if force_loop else ilo
+    est = (
+        AccelerationModelEstimator(
+            inner=ilo, nominal_mass=as_float(_nominal_mass_for_estimator(sec, ctx))
+        )
+        if force_loop
+        else ilo
+    )
     if ctx.scenario.type_of("actuator") == "thruster-bias":
         fault = "fault"
         if force_loop:
             mass = getattr(ctx.section("plant"), "mass", None)
             if mass is not None:
-                ctx.evaluations.append(PerUnitMass("fault_acceleration", "fault", mass=as_float(mass), dims=VEC,
-                                                   long_name="true thruster fault per unit true mass F_i / m_i",
-                                                   frame="LVLH"))
+                ctx.evaluations.append(
+                    PerUnitMass(
+                        "fault_acceleration",
+                        "fault",
+                        mass=as_float(mass),
+                        dims=VEC,
+                        long_name="true thruster fault per unit true mass F_i / m_i",
+                        frame="LVLH",
+                    )
+                )
                 fault = "fault_acceleration"
-        ctx.evaluations.append(SignalSum("fault_error", (("+", fault), ("-", "fault_estimate")), dims=VEC, units="m s-2",
-                                         long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
-                                         frame="LVLH"))
+        ctx.evaluations.append(
+            SignalSum(
+                "fault_error",
+                (("+", fault), ("-", "fault_estimate")),
+                dims=VEC,
+                units="m s-2",
+                long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
+                frame="LVLH",
+            )
+        )
     return est
 
 
-register_component_type("estimator", ILO, IloSection, _ilo,
-                        "Gui2022 iterative learning observer (5): thruster-fault reconstruction on a CW model")
+register_component_type(
+    "estimator",
+    ILO,
+    IloSection,
+    _ilo,
+    "Gui2022 iterative learning observer (5): thruster-fault reconstruction on a CW model",
+)
 
 
 # ------------------------------------------------------------------------------------ controllers
 class _OutputFeedbackSection(StrictModel):
-    desired_state: list[Vec6] = Field(description=(
-        "q0(0) of each spacecraft's nominal orbit (28), CW free motion on board [m, m/s] (one row each)."))
-    desired_motion: Literal["natural", "hold"] = Field("natural", description=(
-        "'natural': q0(t) is the CW free motion (28) from desired_state; 'hold': desired_state held fixed "
-        "in LVLH (slots that are not free motion: the holding force is then an unmodelled disturbance)."))
-    gains: Literal["printed", "care"] = Field("printed", description=(
-        "K: 'printed' as given, or 'care' = B^T P1 from the CARE (34) at the on-board mean motion."))
-    K: list[list[float]] | None = Field(None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed').")
-    care_q_scale: float = Field(4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care').")
-    mean_motion: float | None = Field(None, gt=0, description=(
-        "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
-        "required without one)."))
-    nominal_mass: float | list[float] | None = Field(None, description=(
-        "On-board masses m_nom [kg], f = m_nom u on a force-driven plant (default 100 kg each, a stated nominal "
-        "value: never the plant's masses)."))
+    desired_state: list[Vec6] = Field(
+        description=(
+            "q0(0) of each spacecraft's nominal orbit (28), CW free motion on board [m, m/s] (one row each)."
+        )
+    )
+    desired_motion: Literal["natural", "hold"] = Field(
+        "natural",
+        description=(
+            "'natural': q0(t) is the CW free motion (28) from desired_state; 'hold': desired_state held fixed "
+            "in LVLH (slots that are not free motion: the holding force is then an unmodelled disturbance)."
+        ),
+    )
+    gains: Literal["printed", "care"] = Field(
+        "printed",
+        description=(
+            "K: 'printed' as given, or 'care' = B^T P1 from the CARE (34) at the on-board mean motion."
+        ),
+    )
+    K: list[list[float]] | None = Field(
+        None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed')."
+    )
+    care_q_scale: float = Field(
+        4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care')."
+    )
+    mean_motion: float | None = Field(
+        None,
+        gt=0,
+        description=(
+            "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
+            "required without one)."
+        ),
+    )
+    nominal_mass: float | list[float] | None = Field(
+        None,
+        description=(
+            "On-board masses m_nom [kg], f = m_nom u on a force-driven plant (default 100 kg each, a stated nominal "
+            "value: never the plant's masses)."
+        ),
+    )
 
     @field_validator("K")
     @classmethod
@@ -313,28 +445,62 @@ class _OutputFeedbackSection(StrictModel):
         _relative_state(ctx, slot)
         N = ctx.count
         if len(self.desired_state) != N:
-            raise ValueError(f"{slot}.desired_state: {len(self.desired_state)} rows for {N} spacecraft")
+            raise ValueError(
+                f"{slot}.desired_state: {len(self.desired_state)} rows for {N} spacecraft"
+            )
         n = onboard_mean_motion(self.mean_motion, ctx, slot)
-        K = np.asarray(self.K, float) if self.gains == "printed" else care_gain(n, self.care_q_scale)
+        K = (
+            np.asarray(self.K, float)
+            if self.gains == "printed"
+            else care_gain(n, self.care_q_scale)
+        )
         _, B = cw_matrices(n)
         BpB = np.linalg.pinv(B) @ B  # B^+ H with H = B (and B^+ E with E = B)
-        return dict(count=N, mean_motion=as_float(n), desired_initial=as_float(self.desired_state),
-                    K=as_float(K), BpH=as_float(BpB), hold_desired=self.desired_motion == "hold")
+        return dict(
+            count=N,
+            mean_motion=as_float(n),
+            desired_initial=as_float(self.desired_state),
+            K=as_float(K),
+            BpH=as_float(BpB),
+            hold_desired=self.desired_motion == "hold",
+        )
 
 
 def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
     """The acceleration law as is on an acceleration-driven plant; f = m_nom u on a force-driven one;
     any other plant keeps the law unwrapped so the loop rejects the pair naming both."""
-    ctx.evaluations.extend([PartNorm("position_tracking_error", "tracking_error", 0, 3, dims=SC, units="m",
-                                     long_name="||position part of e_y = q0 - y||"),
-                            PartNorm("velocity_tracking_error", "tracking_error", 3, 6, dims=SC, units="m s-1",
-                                     long_name="||velocity part of e_y = q0 - y||")])
+    ctx.evaluations.extend(
+        [
+            PartNorm(
+                "position_tracking_error",
+                "tracking_error",
+                0,
+                3,
+                dims=SC,
+                units="m",
+                long_name="||position part of e_y = q0 - y||",
+            ),
+            PartNorm(
+                "velocity_tracking_error",
+                "tracking_error",
+                3,
+                6,
+                dims=SC,
+                units="m s-1",
+                long_name="||velocity part of e_y = q0 - y||",
+            ),
+        ]
+    )
     if ctx.plant.quantity == "force":
-        return force_from_acceleration(law, as_float(nominal_mass_of(sec.nominal_mass, ctx, "controller")))
+        return force_from_acceleration(
+            law, as_float(nominal_mass_of(sec.nominal_mass, ctx, "controller"))
+        )
     return law
 
 
-_FAULT_ESTIMATE = "the fault estimate F_hat it compensates (e.g. type = \"iterative-learning-observer\")"
+_FAULT_ESTIMATE = (
+    'the fault estimate F_hat it compensates (e.g. type = "iterative-learning-observer")'
+)
 
 
 class Lof2tcSection(_OutputFeedbackSection):
@@ -346,7 +512,9 @@ class Lof2tcSection(_OutputFeedbackSection):
     G4: float = Field(description="G4 of (32) [-].")
     pi_initial: float = Field(1.0, description="pi(-tau) [-].")
     v_initial: Vec3 = Field((0.0, 0.0, 0.0), description="v(-tau) [m/s^2].")
-    learning_interval: float = Field(gt=0, description="tau of (31)-(32): a positive integer multiple of simulation.dt [s].")
+    learning_interval: float = Field(
+        gt=0, description="tau of (31)-(32): a positive integer multiple of simulation.dt [s]."
+    )
 
 
 def _lof2tc(sec: Lof2tcSection, ctx: BuildContext):
@@ -354,27 +522,49 @@ def _lof2tc(sec: Lof2tcSection, ctx: BuildContext):
     common = sec.common(ctx)
     N = ctx.count
     law = LearningOutputFeedbackController(
-        **common, G1=as_float(sec.G1), G2=as_float(sec.G2), G3=as_float(sec.G3), G4=as_float(sec.G4),
-        BpE=common["BpH"], pi_initial=as_float(np.full(N, sec.pi_initial)),
+        **common,
+        G1=as_float(sec.G1),
+        G2=as_float(sec.G2),
+        G3=as_float(sec.G3),
+        G4=as_float(sec.G4),
+        BpE=common["BpH"],
+        pi_initial=as_float(np.full(N, sec.pi_initial)),
         v_initial=as_float(np.broadcast_to(np.asarray(sec.v_initial, float), (N, 3)).copy()),
-        learning_steps=_on_grid(sec.learning_interval, ctx.dt, "controller.learning_interval"))
+        learning_steps=_on_grid(sec.learning_interval, ctx.dt, "controller.learning_interval"),
+    )
     return _on_plant(law, sec, ctx)
 
 
 class Cof2tcSection(_OutputFeedbackSection):
     """COF2TC: u = K e_y, or u = K e_y - B^+H F_hat with ``fault_compensation``."""
 
-    fault_compensation: bool = Field(False, description="Subtract the estimator's fault estimate F_hat.")
+    fault_compensation: bool = Field(
+        False, description="Subtract the estimator's fault estimate F_hat."
+    )
 
 
 def _cof2tc(sec: Cof2tcSection, ctx: BuildContext):
     if sec.fault_compensation:
-        require_slot(ctx, "controller", "estimator", f"(with fault_compensation = true) {_FAULT_ESTIMATE}")
-    law = ConventionalOutputFeedbackController(**sec.common(ctx), fault_compensation=sec.fault_compensation)
+        require_slot(
+            ctx, "controller", "estimator", f"(with fault_compensation = true) {_FAULT_ESTIMATE}"
+        )
+    law = ConventionalOutputFeedbackController(
+        **sec.common(ctx), fault_compensation=sec.fault_compensation
+    )
     return _on_plant(law, sec, ctx)
 
 
-register_component_type("controller", LOF2TC, Lof2tcSection, _lof2tc,
-                        "Gui2022 LOF2TC (30)-(32): learning output feedback on a CW nominal orbit (acceleration law)")
-register_component_type("controller", COF2TC, Cof2tcSection, _cof2tc,
-                        "Gui2022 COF2TC baseline u = K e_y (optionally - F_hat) on a CW nominal orbit")
+register_component_type(
+    "controller",
+    LOF2TC,
+    Lof2tcSection,
+    _lof2tc,
+    "Gui2022 LOF2TC (30)-(32): learning output feedback on a CW nominal orbit (acceleration law)",
+)
+register_component_type(
+    "controller",
+    COF2TC,
+    Cof2tcSection,
+    _cof2tc,
+    "Gui2022 COF2TC baseline u = K e_y (optionally - F_hat) on a CW nominal orbit",
+)

@@ -32,8 +32,17 @@ from formation_ftc.design.small_gain import small_gain_margin
 from formation_ftc.papers.azizi2009.schema import Azizi2009Scenario
 from formation_ftc.registry import Condition
 
-__all__ = ["check", "AXES", "b_nominal", "b_hat_estimated", "b_true", "flfr_design", "alpha_flfr",
-           "perturbation_norm", "d_norms"]
+__all__ = [
+    "check",
+    "AXES",
+    "b_nominal",
+    "b_hat_estimated",
+    "b_true",
+    "flfr_design",
+    "alpha_flfr",
+    "perturbation_norm",
+    "d_norms",
+]
 
 AXES = ("x", "y", "z")
 
@@ -62,10 +71,40 @@ def b_true(sc: Azizi2009Scenario) -> np.ndarray:
 
 @functools.lru_cache(maxsize=32)
 def _design_cached(key: tuple) -> FlfrDesign:
-    (alpha, b_hat, k, b_eps, lam0, lam1, e_s, pis, n, side, omega, axis, horizon, dt, b_ext, a_ref) = key
+    (
+        alpha,
+        b_hat,
+        k,
+        b_eps,
+        lam0,
+        lam1,
+        e_s,
+        pis,
+        n,
+        side,
+        omega,
+        axis,
+        horizon,
+        dt,
+        b_ext,
+        a_ref,
+    ) = key
     w_fn = relative_acceleration_fn(n, side, omega, axis)
-    return design_flfr(np.asarray(alpha), np.asarray(b_hat), k, b_eps, lam0, lam1, e_s, pis, w_fn,
-                       horizon, dt, b_ext, a_ref)
+    return design_flfr(
+        np.asarray(alpha),
+        np.asarray(b_hat),
+        k,
+        b_eps,
+        lam0,
+        lam1,
+        e_s,
+        pis,
+        w_fn,
+        horizon,
+        dt,
+        b_ext,
+        a_ref,
+    )
 
 
 def flfr_design(sc: Azizi2009Scenario, pis=None, e_s: float | None = None) -> FlfrDesign:
@@ -76,13 +115,27 @@ def flfr_design(sc: Azizi2009Scenario, pis=None, e_s: float | None = None) -> Fl
     if not sc.fault.enabled:
         raise ValueError("FLFR design needs fault.enabled = true")
     axis = AXES.index(sc.fault.axis)
-    pis = tuple(float(p) for p in (pis if pis is not None else (sc.supervisor.violation_probability,)))
-    key = (tuple(float(a) for a in sc.allocation.alpha), tuple(float(b) for b in b_hat_estimated(sc)[:, axis]),
-           sc.fault.satellite - 1, float(sc.fault.b_eps), float(sc.controller.lambda0),
-           float(sc.controller.lambda1), float(e_s if e_s is not None else sc.supervisor.e_s), pis,
-           sc.formation.n_satellites, float(sc.formation.side), float(sc.formation.omega), axis,
-           300.0, float(sc.supervisor.design_dt), float(sc.disturbance.bound),
-           float(sc.supervisor.alpha_reference))
+    pis = tuple(
+        float(p) for p in (pis if pis is not None else (sc.supervisor.violation_probability,))
+    )
+    key = (
+        tuple(float(a) for a in sc.allocation.alpha),
+        tuple(float(b) for b in b_hat_estimated(sc)[:, axis]),
+        sc.fault.satellite - 1,
+        float(sc.fault.b_eps),
+        float(sc.controller.lambda0),
+        float(sc.controller.lambda1),
+        float(e_s if e_s is not None else sc.supervisor.e_s),
+        pis,
+        sc.formation.n_satellites,
+        float(sc.formation.side),
+        float(sc.formation.omega),
+        axis,
+        300.0,
+        float(sc.supervisor.design_dt),
+        float(sc.disturbance.bound),
+        float(sc.supervisor.alpha_reference),
+    )
     return _design_cached(key)
 
 
@@ -98,7 +151,9 @@ def alpha_flfr(sc: Azizi2009Scenario) -> float:
         raise ValueError(f"supervisor: {des.message}")
     a = des.alpha[float(sc.supervisor.violation_probability)]
     assert a is not None  # None only when infeasible (raised above)
-    return max(float(a), float(sc.allocation.alpha[k]))  # never lower the weight (LLFR already suffices)
+    return max(
+        float(a), float(sc.allocation.alpha[k])
+    )  # never lower the weight (LLFR already suffices)
 
 
 def perturbation_norm(alpha, b_hat, k: int, eps: float) -> float:
@@ -135,37 +190,78 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
     out: list[Condition] = []
     n = sc.formation.n_satellites
     alpha = np.asarray(sc.allocation.alpha, float)
-    out.append(Condition("allocation weights", "Azizi2009 eq. (3)", f"alpha = {alpha.tolist()}",
-                         "alpha_i > 0", bool(np.all(alpha > 0)), basis="exact",
-                         detail="exact: comparison of the scenario values"))
+    out.append(
+        Condition(
+            "allocation weights",
+            "Azizi2009 eq. (3)",
+            f"alpha = {alpha.tolist()}",
+            "alpha_i > 0",
+            bool(np.all(alpha > 0)),
+            basis="exact",
+            detail="exact: comparison of the scenario values",
+        )
+    )
     if not sc.fault.enabled:
-        out.append(Condition("fault-free allocation", "Azizi2009 eq. (4)", "b_hat = b",
-                             "exact cancellation: e'' = -l1 e' - l0 e", True, required=False, basis="exact",
-                             detail="exact: without a fault the estimate equals the true gain by construction"))
+        out.append(
+            Condition(
+                "fault-free allocation",
+                "Azizi2009 eq. (4)",
+                "b_hat = b",
+                "exact cancellation: e'' = -l1 e' - l0 e",
+                True,
+                required=False,
+                basis="exact",
+                detail="exact: without a fault the estimate equals the true gain by construction",
+            )
+        )
         return out
     k = sc.fault.satellite - 1
     ax = AXES.index(sc.fault.axis)
     b_hat = b_hat_estimated(sc)[:, ax]
     b_tr = b_true(sc)[:, ax]
     eps = float(b_hat[k] - b_tr[k])
-    out.append(Condition("estimation error within B_eps", "Azizi2009 Sec. IV, |eps| < B_eps",
-                         f"|eps| = {abs(eps):.4g}, B_eps = {sc.fault.b_eps:.4g}", "|b_hat - b| <= B_eps",
-                         abs(eps) <= sc.fault.b_eps + 1e-12, required=False, basis="exact",
-                         detail="exact (tolerance 1e-12): uses the true gain (truth side); the design only knows B_eps"))
+    out.append(
+        Condition(
+            "estimation error within B_eps",
+            "Azizi2009 Sec. IV, |eps| < B_eps",
+            f"|eps| = {abs(eps):.4g}, B_eps = {sc.fault.b_eps:.4g}",
+            "|b_hat - b| <= B_eps",
+            abs(eps) <= sc.fault.b_eps + 1e-12,
+            required=False,
+            basis="exact",
+            detail="exact (tolerance 1e-12): uses the true gain (truth side); the design only knows B_eps",
+        )
+    )
     if not 0 < k < n - 1:
-        out.append(Condition("interior faulty satellite", "Azizi2009 eq. (6)-(7)", f"satellite {k + 1}",
-                             f"2..{n - 1} for the reduced model (7)", None, required=False, basis="informative",
-                             detail="informative: the reduced model (7) and its conditions need an interior "
-                                    "satellite; not evaluated"))
+        out.append(
+            Condition(
+                "interior faulty satellite",
+                "Azizi2009 eq. (6)-(7)",
+                f"satellite {k + 1}",
+                f"2..{n - 1} for the reduced model (7)",
+                None,
+                required=False,
+                basis="informative",
+                detail="informative: the reduced model (7) and its conditions need an interior "
+                "satellite; not evaluated",
+            )
+        )
         return out
     coeff = perturbation_coefficients(alpha, b_hat, k)
     det_num = float(np.linalg.det(np.asarray(augmented_matrix(alpha, b_hat))))
     DET = coeff.det(alpha[k])
-    out.append(Condition("DET = q2 alpha_k + q1", "Lemma 1, E004-03",
-                         f"DET = {DET:.6g}, sign*det(J_aug) = {coeff.sign * det_num:.6g}, q1 = {coeff.q1:.5g}, "
-                         f"q2 = {coeff.q2:.5g}", "DET > 0 and equal", DET > 0 and abs(DET - coeff.sign * det_num) < 1e-9 * max(1, abs(DET)),
-                         basis="exact",
-                         detail="exact: closed-form DET against the LU determinant of J_aug (relative tolerance 1e-9)"))
+    out.append(
+        Condition(
+            "DET = q2 alpha_k + q1",
+            "Lemma 1, E004-03",
+            f"DET = {DET:.6g}, sign*det(J_aug) = {coeff.sign * det_num:.6g}, q1 = {coeff.q1:.5g}, "
+            f"q2 = {coeff.q2:.5g}",
+            "DET > 0 and equal",
+            DET > 0 and abs(DET - coeff.sign * det_num) < 1e-9 * max(1, abs(DET)),
+            basis="exact",
+            detail="exact: closed-form DET against the LU determinant of J_aug (relative tolerance 1e-9)",
+        )
+    )
     lam0, lam1 = sc.controller.lambda0, sc.controller.lambda1
     sg = small_gain_margin(error_dynamics_matrix(lam0, lam1))
     try:
@@ -183,36 +279,65 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
             # ||Delta||_2 from the SVD: relative error <= 10 n eps, added before the comparison
             dn_up = dn * (1 + 10 * Delta.shape[0] * np.finfo(float).eps)
             ok = sg.holds(dn_up) if certified else None
-            out.append(Condition(
-                f"small gain ({label}, alpha_{k + 1} = {a_k:.4g})", "Theorem 1, E004-05",
-                f"||Delta||_2 = {dn:.4g} (worst eps = B_eps), gamma_1 = {sg.gamma1:.5g}",
-                f"||Delta|| < B_Delta = {sg.b_delta:.5g}", ok, basis="verified" if certified else "heuristic",
-                detail=("verified: gamma_1 is a certified upper bound, " if certified else
-                        "heuristic (gamma_1 could not be certified, nothing is proved): ")
-                       + f"{sg.certificate}; ||Delta||_2 with its SVD rounding bound; "
-                         f"eig((I + Delta) A) = {np.round(eig, 4).tolist()}"))
+            out.append(
+                Condition(
+                    f"small gain ({label}, alpha_{k + 1} = {a_k:.4g})",
+                    "Theorem 1, E004-05",
+                    f"||Delta||_2 = {dn:.4g} (worst eps = B_eps), gamma_1 = {sg.gamma1:.5g}",
+                    f"||Delta|| < B_Delta = {sg.b_delta:.5g}",
+                    ok,
+                    basis="verified" if certified else "heuristic",
+                    detail=(
+                        "verified: gamma_1 is a certified upper bound, "
+                        if certified
+                        else "heuristic (gamma_1 could not be certified, nothing is proved): "
+                    )
+                    + f"{sg.certificate}; ||Delta||_2 with its SVD rounding bound; "
+                    f"eig((I + Delta) A) = {np.round(eig, 4).tolist()}",
+                )
+            )
         if sc.supervisor.flfr or sc.supervisor.alpha_flfr is not None:
             des = flfr_design(sc)
             feasible = des.verdict != "infeasible"
-            out.append(Condition("e_s above the disturbance floor", "Azizi2009 Sec. IV, T_i (E004-07)",
-                                 f"e_s = {sc.supervisor.e_s:.4g} m, T = {des.floor:.3g} m",
-                                 "e_s > T_i", feasible, basis="verified",
-                                 detail="verified: T_i is a certified upper bound of sup_omega |G_i4 - G_i2| "
-                                        "B_ext (bounded-real certificate), so e_s > T_i holds for the true floor; "
-                                        "a failure is decided with the same upper bound (relative gap <= 1e-6); "
-                                        + des.message))
+            out.append(
+                Condition(
+                    "e_s above the disturbance floor",
+                    "Azizi2009 Sec. IV, T_i (E004-07)",
+                    f"e_s = {sc.supervisor.e_s:.4g} m, T = {des.floor:.3g} m",
+                    "e_s > T_i",
+                    feasible,
+                    basis="verified",
+                    detail="verified: T_i is a certified upper bound of sup_omega |G_i4 - G_i2| "
+                    "B_ext (bounded-real certificate), so e_s > T_i holds for the true floor; "
+                    "a failure is decided with the same upper bound (relative gap <= 1e-6); "
+                    + des.message,
+                )
+            )
             if feasible and a_f is not None:
                 bound = sc.fault.b_eps * des.H / coeff.det(a_f)
                 pi = sc.supervisor.violation_probability
-                limit = sc.supervisor.e_s * (1 + 1e-9) / max(1e-12, 1 - pi) if pi > 0 else sc.supervisor.e_s * (1 + 1e-9)
+                limit = (
+                    sc.supervisor.e_s * (1 + 1e-9) / max(1e-12, 1 - pi)
+                    if pi > 0
+                    else sc.supervisor.e_s * (1 + 1e-9)
+                )
                 meets = bound <= limit
-                out.append(Condition(
-                    "error bound (8) at the FLFR weight", "Theorem 2, eq. (8), (11)",
-                    f"B_eps H / DET = {bound:.4g} m (H = {des.H:.4g}, alpha_{k + 1} = {a_f:.4g}, "
-                    f"pi = {pi})", f"<= e_s = {sc.supervisor.e_s} m (pi = 0)",
-                    None if meets else False, basis="sampled",
-                    detail="sampled: H is the largest |X_i| of the simulated response over 300 s (RK4), not a "
-                           "bound on the supremum over all t, so a pass is unproven and an excess is real"
-                           + ("; for pi > 0 the bound is met with probability >= 1 - pi (uniform eps)"
-                              if pi > 0 else "")))
+                out.append(
+                    Condition(
+                        "error bound (8) at the FLFR weight",
+                        "Theorem 2, eq. (8), (11)",
+                        f"B_eps H / DET = {bound:.4g} m (H = {des.H:.4g}, alpha_{k + 1} = {a_f:.4g}, "
+                        f"pi = {pi})",
+                        f"<= e_s = {sc.supervisor.e_s} m (pi = 0)",
+                        None if meets else False,
+                        basis="sampled",
+                        detail="sampled: H is the largest |X_i| of the simulated response over 300 s (RK4), not a "
+                        "bound on the supremum over all t, so a pass is unproven and an excess is real"
+                        + (
+                            "; for pi > 0 the bound is met with probability >= 1 - pi (uniform eps)"
+                            if pi > 0
+                            else ""
+                        ),
+                    )
+                )
     return out

@@ -18,15 +18,27 @@ from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
 __all__ = ["plot_fig2", "plot_fig3", "plot_fig4", "plot_run"]
 
 
-def plot_fig2(efforts: Sequence[tuple[str, np.ndarray, np.ndarray]], path: Path, t_max: float = 100.0) -> Path:
+def plot_fig2(
+    efforts: Sequence[tuple[str, np.ndarray, np.ndarray]], path: Path, t_max: float = 100.0
+) -> Path:
     """``efforts``: four (title, time [s], E (T, N)) tuples; plotted up to ``t_max`` [s]."""
-    fig, axes = new_figure(2, 2, width=8.0, height=5.6, sharex=False,
-                           title="Fig. 2: x-axis cumulative input effort E_xi(t)")
+    fig, axes = new_figure(
+        2,
+        2,
+        width=8.0,
+        height=5.6,
+        sharex=False,
+        title="Fig. 2: x-axis cumulative input effort E_xi(t)",
+    )
     for ax, (title, t, E) in zip(axes.flat, efforts, strict=True):
         sel = t <= t_max + 1e-9
         for j in range(E.shape[1]):
-            ax.plot(t[sel], E[sel, j], color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-                    label=f"satellite {j + 1}")
+            ax.plot(
+                t[sel],
+                E[sel, j],
+                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
+                label=f"satellite {j + 1}",
+            )
         ax.set_title(title)
         ax.set_xlabel("time t [s]")
         ax.set_ylabel("E_xi [m^2 s^-3]")
@@ -34,11 +46,23 @@ def plot_fig2(efforts: Sequence[tuple[str, np.ndarray, np.ndarray]], path: Path,
     return save_figure(fig, path)
 
 
-def plot_fig3(alpha2: np.ndarray, d_norm: np.ndarray, max_err: np.ndarray, e_s: float,
-              alpha_min: float | None, path: Path) -> Path:
+def plot_fig3(
+    alpha2: np.ndarray,
+    d_norm: np.ndarray,
+    max_err: np.ndarray,
+    e_s: float,
+    alpha_min: float | None,
+    path: Path,
+) -> Path:
     """alpha_2 versus ||D||_2 (a) and versus the simulated max |e_ij| (b)."""
-    fig, axes = new_figure(1, 2, width=8.0, height=3.4, sharex=False,
-                           title="Fig. 3: FLFR weight alpha_2 (satellite 2 faulty, LLFR b_hat_2 = 0.88)")
+    fig, axes = new_figure(
+        1,
+        2,
+        width=8.0,
+        height=3.4,
+        sharex=False,
+        title="Fig. 3: FLFR weight alpha_2 (satellite 2 faulty, LLFR b_hat_2 = 0.88)",
+    )
     ax = axes[0, 0]
     ax.plot(d_norm, alpha2, color=SPACECRAFT_COLORS[1], label="formation (satellite 2 weighted)")
     ax.set_xlabel("||D||_2 [-]")
@@ -57,16 +81,29 @@ def plot_fig3(alpha2: np.ndarray, d_norm: np.ndarray, max_err: np.ndarray, e_s: 
     return save_figure(fig, path)
 
 
-def plot_fig4(e_s_grid: np.ndarray, analytic: Mapping[float, np.ndarray], sim_err: np.ndarray,
-              sim_alpha: np.ndarray, path: Path, e_s: float) -> Path:
+def plot_fig4(
+    e_s_grid: np.ndarray,
+    analytic: Mapping[float, np.ndarray],
+    sim_err: np.ndarray,
+    sim_alpha: np.ndarray,
+    path: Path,
+    e_s: float,
+) -> Path:
     """Analytic alpha_2(e_s) of eq. (11) for each pi, and the simulated alpha_2 vs max error."""
-    fig, axes = new_figure(1, 1, width=6.4, height=4.2, title="Fig. 4: analytic and simulated alpha_2 vs e_s")
+    fig, axes = new_figure(
+        1, 1, width=6.4, height=4.2, title="Fig. 4: analytic and simulated alpha_2 vs e_s"
+    )
     ax = axes[0, 0]
     cmap = __import__("matplotlib").colormaps["viridis"]
     pis = sorted(analytic)
     for j, p in enumerate(pis):
-        ax.plot(e_s_grid, analytic[p], color=cmap(j / max(1, len(pis) - 1)), lw=1.0,
-                label=f"analytic eq. (11), pi = {p:.2f}")
+        ax.plot(
+            e_s_grid,
+            analytic[p],
+            color=cmap(j / max(1, len(pis) - 1)),
+            lw=1.0,
+            label=f"analytic eq. (11), pi = {p:.2f}",
+        )
     ax.plot(sim_err, sim_alpha, "k-", lw=2.0, label="simulation (4 satellites)")
     ax.axvline(e_s, color="0.5", ls="--", lw=0.8, label=f"e_s = {e_s} m")
     ax.set_xlabel("error specification e_s / max tracking error [m]")
@@ -82,8 +119,12 @@ def plot_run(ds, sc, out_dir: Path) -> list[Path]:
     fig, axes = new_figure(3, 1, width=7.0, height=7.0, title=f"{sc.scenario.name}: x axis")
     ax = axes[0, 0]
     for j, pair in enumerate(ds["pair"].values):
-        ax.plot(t, ds["tracking_error"].sel(axis="x", pair=pair).values, label=f"e_{pair.replace('-', '')}",
-                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)])
+        ax.plot(
+            t,
+            ds["tracking_error"].sel(axis="x", pair=pair).values,
+            label=f"e_{pair.replace('-', '')}",
+            color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
+        )
     ax.axhline(sc.supervisor.e_s, color="k", ls="--", lw=0.8, label="+/- e_s")
     ax.axhline(-sc.supervisor.e_s, color="k", ls="--", lw=0.8)
     ax.set_ylabel("tracking error [m]")
@@ -95,8 +136,12 @@ def plot_run(ds, sc, out_dir: Path) -> list[Path]:
     ax.legend()
     ax = axes[2, 0]
     for j, scn in enumerate(ds["spacecraft"].values):
-        ax.plot(t, ds["effort"].sel(axis="x", spacecraft=scn).values, label=f"satellite {scn}",
-                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)])
+        ax.plot(
+            t,
+            ds["effort"].sel(axis="x", spacecraft=scn).values,
+            label=f"satellite {scn}",
+            color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
+        )
     ax.set_ylabel("E_xi [m^2 s^-3]")
     ax.set_xlabel("time t [s]")
     ax.legend(ncol=4)

@@ -61,7 +61,17 @@ from formation_ftc.sim.components import as_float
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric, metrics_dict
 
-__all__ = ["make_loop", "build", "load", "simulate", "run_batch", "plot", "METHOD", "EFFORT_TIME", "VARIABLE"]
+__all__ = [
+    "make_loop",
+    "build",
+    "load",
+    "simulate",
+    "run_batch",
+    "plot",
+    "METHOD",
+    "EFFORT_TIME",
+    "VARIABLE",
+]
 
 #: time of the ``effort_x_100s_sc*`` metrics (Fig. 2 compares the efforts there) [s]
 EFFORT_TIME = 100.0
@@ -91,47 +101,123 @@ def make_loop(sc: Azizi2009Scenario) -> ClosedLoop:
     continuous = sc.controller.sampling == "continuous"
     offset = np.zeros(n) if fm.initial_offset_x is None else np.asarray(fm.initial_offset_x, float)
     side, omega = as_float(fm.side), as_float(fm.omega)
-    rd0, vd0, _ = _desired_state(0.0, n, na, side, omega)  # start on the desired formation (+ x offsets)
-    plant = DoubleIntegratorPlant(initial_position=rd0.at[:, 0].add(as_float(offset)), initial_velocity=vd0,
-                                  disturbance=str(sc.disturbance.acceleration), zoh=not continuous)
+    rd0, vd0, _ = _desired_state(
+        0.0, n, na, side, omega
+    )  # start on the desired formation (+ x offsets)
+    plant = DoubleIntegratorPlant(
+        initial_position=rd0.at[:, 0].add(as_float(offset)),
+        initial_velocity=vd0,
+        disturbance=str(sc.disturbance.acceleration),
+        zoh=not continuous,
+    )
     noisy = sc.noise.sigma_position > 0 or sc.noise.sigma_velocity > 0
-    sensors = ChainRelativeSensors(count=n, n_axes=na, position_noise_std=as_float(sc.noise.sigma_position),
-                                   velocity_noise_std=as_float(sc.noise.sigma_velocity), noisy=noisy)
+    sensors = ChainRelativeSensors(
+        count=n,
+        n_axes=na,
+        position_noise_std=as_float(sc.noise.sigma_position),
+        velocity_noise_std=as_float(sc.noise.sigma_velocity),
+        noisy=noisy,
+    )
     supervisor = HierarchicalSupervisor(
-        count=n, n_axes=na, dt=float(dt), side=side, omega=omega, e_s=as_float(sc.supervisor.e_s),
+        count=n,
+        n_axes=na,
+        dt=float(dt),
+        side=side,
+        omega=omega,
+        e_s=as_float(sc.supervisor.e_s),
         k_estimated=jnp.asarray(k_est, jnp.int64),
         confirm_steps=jnp.asarray(round(sc.supervisor.confirm_time / dt), jnp.int64),
         monitor_start=jnp.asarray(round(sc.supervisor.monitor_start / dt), jnp.int64),
-        flfr_enabled=jnp.asarray(bool(sc.supervisor.flfr and sc.fault.enabled)))
+        flfr_enabled=jnp.asarray(bool(sc.supervisor.flfr and sc.fault.enabled)),
+    )
     controller = ChainLlfrController(
-        lambda0=as_float(sc.controller.lambda0), lambda1=as_float(sc.controller.lambda1),
-        alpha=as_float(sc.allocation.alpha), alpha_flfr=as_float(alpha_flfr(sc)), b_nominal=as_float(b_nom),
-        b_hat=as_float(b_hat), side=side, omega=omega, fault_index=sc.fault.satellite - 1,
-        is_sampled=not continuous)
-    actuator = StepGainActuator(gain=as_float(b_nom), faulty_gain=as_float(b_true(sc)), onset=as_float(k_onset * dt))
+        lambda0=as_float(sc.controller.lambda0),
+        lambda1=as_float(sc.controller.lambda1),
+        alpha=as_float(sc.allocation.alpha),
+        alpha_flfr=as_float(alpha_flfr(sc)),
+        b_nominal=as_float(b_nom),
+        b_hat=as_float(b_hat),
+        side=side,
+        omega=omega,
+        fault_index=sc.fault.satellite - 1,
+        is_sampled=not continuous,
+    )
+    actuator = StepGainActuator(
+        gain=as_float(b_nom), faulty_gain=as_float(b_true(sc)), onset=as_float(k_onset * dt)
+    )
     settle_steps = round(sc.supervisor.settle_time / dt)
-    evaluations = (ChainTrackingError(),
-                   ThresholdFlag(name="flfr_settled", source="time_in_flfr", threshold=as_float((settle_steps + 0.5) * dt),
-                                 long_name="FLFR active for longer than supervisor.settle_time"))
+    evaluations = (
+        ChainTrackingError(),
+        ThresholdFlag(
+            name="flfr_settled",
+            source="time_in_flfr",
+            threshold=as_float((settle_steps + 0.5) * dt),
+            long_name="FLFR active for longer than supervisor.settle_time",
+        ),
+    )
     metrics = [
-        Metric("max_err", "tracking_error", reduce="max", norm=True, norm_ord="inf", spacecraft="max", units="m"),
-        Metric("max_err_x", "tracking_error", reduce="max", norm=True, component=0, spacecraft="max", units="m"),
-        Metric("max_err_after_flfr", "tracking_error", reduce="max", norm=True, norm_ord="inf", spacecraft="max",
-               units="m", gate="flfr_settled"),
+        Metric(
+            "max_err",
+            "tracking_error",
+            reduce="max",
+            norm=True,
+            norm_ord="inf",
+            spacecraft="max",
+            units="m",
+        ),
+        Metric(
+            "max_err_x",
+            "tracking_error",
+            reduce="max",
+            norm=True,
+            component=0,
+            spacecraft="max",
+            units="m",
+        ),
+        Metric(
+            "max_err_after_flfr",
+            "tracking_error",
+            reduce="max",
+            norm=True,
+            norm_ord="inf",
+            spacecraft="max",
+            units="m",
+            gate="flfr_settled",
+        ),
         Metric("t_flfr", "mode", reduce="first", threshold=as_float(FLFR), units="s"),
         Metric("n_events", "mode_changes", reduce="final"),
-        Metric("effort_x", "effort", reduce="final", component=0, spacecraft="each", units="m2 s-3"),
+        Metric(
+            "effort_x", "effort", reduce="final", component=0, spacecraft="each", units="m2 s-3"
+        ),
     ]
     if sim.horizon >= EFFORT_TIME - 1e-9:
-        metrics.append(Metric("effort_x_100s", "effort", reduce="at", start=as_float(EFFORT_TIME), component=0,
-                              spacecraft="each", units="m2 s-3"))
-    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, sensors=sensors,
-                                      supervisor=supervisor, actuator=actuator, evaluations=evaluations,
-                                      metrics=tuple(metrics))
+        metrics.append(
+            Metric(
+                "effort_x_100s",
+                "effort",
+                reduce="at",
+                start=as_float(EFFORT_TIME),
+                component=0,
+                spacecraft="each",
+                units="m2 s-3",
+            )
+        )
+    return ClosedLoop.from_simulation(
+        sim,
+        plant=plant,
+        controller=controller,
+        sensors=sensors,
+        supervisor=supervisor,
+        actuator=actuator,
+        evaluations=evaluations,
+        metrics=tuple(metrics),
+    )
 
 
 def _dataset_attrs(sc: Azizi2009Scenario, loop: ClosedLoop) -> dict[str, float]:
-    a_f = float(np.asarray(cast(ChainLlfrController, loop.controller).alpha_flfr))  # make_loop's controller
+    a_f = float(
+        np.asarray(cast(ChainLlfrController, loop.controller).alpha_flfr)
+    )  # make_loop's controller
     d_llfr, d_flfr = d_norms(sc, sc.allocation.alpha, a_f)
     return {"alpha_flfr": a_f, "D_norm_llfr": d_llfr, "D_norm_flfr": d_flfr}
 
@@ -146,18 +232,26 @@ def build(sc: Azizi2009Scenario) -> Compiled:
 # --------------------------------------------------------------------------------------------------
 # running: one scenario, or a batch of variations of one scenario (one compiled program)
 # --------------------------------------------------------------------------------------------------
-def load(name_or_path: str | Path, overrides: Mapping[str, Any] | Iterable[str] | None = None) -> Azizi2009Scenario:
+def load(
+    name_or_path: str | Path, overrides: Mapping[str, Any] | Iterable[str] | None = None
+) -> Azizi2009Scenario:
     """Built-in scenario name or TOML path (+ overrides) -> validated :class:`Azizi2009Scenario`."""
     from formation_ftc.api import load_scenario
 
     sc = load_scenario(name_or_path, overrides)
     if not isinstance(sc, Azizi2009Scenario):
-        raise loader.ScenarioError(f"{name_or_path}: scenario.method must be 'azizi2009', got {sc.scenario.method!r}")
+        raise loader.ScenarioError(
+            f"{name_or_path}: scenario.method must be 'azizi2009', got {sc.scenario.method!r}"
+        )
     return sc
 
 
 #: what :func:`run_batch` may vary: name -> (component, field) of the closed loop (None: the loop)
-VARIABLE = {"alpha": ("controller", "alpha"), "alpha_flfr": ("controller", "alpha_flfr"), "seed": (None, "seed")}
+VARIABLE = {
+    "alpha": ("controller", "alpha"),
+    "alpha_flfr": ("controller", "alpha_flfr"),
+    "seed": (None, "seed"),
+}
 
 
 def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
@@ -169,12 +263,15 @@ def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
         if slot is None:
             loop = dataclasses.replace(loop, **change)
         else:
-            loop = dataclasses.replace(loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)})
+            loop = dataclasses.replace(
+                loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)}
+            )
     return loop
 
 
-def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray],
-              grid: tuple[int, int] | None = None) -> list[dict[str, float]]:
+def run_batch(
+    sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray], grid: tuple[int, int] | None = None
+) -> list[dict[str, float]]:
     """Metrics of len(batch) runs of ``sc`` that differ only in the given leaves (see :data:`VARIABLE`:
     ``alpha`` (B, N), ``alpha_flfr`` (B,), ``seed`` (B,)), run as one compiled, vmapped program through
     :mod:`formation_ftc.sim.batch` (leaves shared by every run stay unbatched). Each run's metrics also
@@ -194,7 +291,9 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray],
     (size,) = sizes
     loop = make_loop(sc)
     compiled = compile_loop(loop)
-    loops = [_variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)]
+    loops = [
+        _variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)
+    ]
     if grid is None:
         batch, axes = stack_params(loops)
         out = jax.device_get(batched_run(compiled, axes, size)(batch))
@@ -202,7 +301,9 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray],
         rows, cols = (int(g) for g in grid)
         if rows < 1 or cols < 1 or rows * cols != size:
             raise ValueError(f"grid = {grid}: rows x columns must equal the batch size {size}")
-        batch, row_axes, col_axes = stack_params_grid([loops[r * cols:(r + 1) * cols] for r in range(rows)])
+        batch, row_axes, col_axes = stack_params_grid(
+            [loops[r * cols : (r + 1) * cols] for r in range(rows)]
+        )
         out = jax.device_get(batched_grid_run(compiled, row_axes, col_axes, rows, cols)(batch))
         out = jax.tree_util.tree_map(lambda a: np.reshape(a, (size,) + np.shape(a)[2:]), out)
     res = []
@@ -212,7 +313,9 @@ def run_batch(sc: Azizi2009Scenario, variations: Mapping[str, np.ndarray],
             raise RuntimeError(f"batch member {b} diverged at step {div}")
         m = metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]])
         ctl = cast(ChainLlfrController, lp.controller)  # make_loop's controller
-        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(sc, np.asarray(ctl.alpha), float(np.asarray(ctl.alpha_flfr)))
+        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(
+            sc, np.asarray(ctl.alpha), float(np.asarray(ctl.alpha_flfr))
+        )
         res.append(m)
     return res
 
@@ -231,7 +334,13 @@ def plot(ds, sc: Azizi2009Scenario, out_dir: Path) -> list[Path]:
     return plot_run(ds, sc, Path(out_dir))
 
 
-METHOD = register_method(Method(
-    name="azizi2009", schema=Azizi2009Scenario, build=build,
-    description="Azizi & Khorasani 2009: deep-space double integrators, LLFR allocation, HL supervisor, FLFR",
-    check=check, plot=plot))
+METHOD = register_method(
+    Method(
+        name="azizi2009",
+        schema=Azizi2009Scenario,
+        build=build,
+        description="Azizi & Khorasani 2009: deep-space double integrators, LLFR allocation, HL supervisor, FLFR",
+        check=check,
+        plot=plot,
+    )
+)

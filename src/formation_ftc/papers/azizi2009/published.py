@@ -4,8 +4,10 @@ from __future__ import annotations
 
 __all__ = ["PUBLISHED", "TITLE", "CITATION"]
 
-TITLE = ("A hierarchical architecture for cooperative fault accommodation of formation flying satellites in "
-         "deep space")
+TITLE = (
+    "A hierarchical architecture for cooperative fault accommodation of formation flying satellites in "
+    "deep space"
+)
 CITATION = "S.M. Azizi, K. Khorasani, American Control Conference 2009"
 
 #: max |e_ij| fault-free [m] and LLFR-only [m], simulated minimum alpha_2 for e_s = 0.03 m, analytic

@@ -21,8 +21,19 @@ from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.registry import Condition
 
-__all__ = ["check", "implied_lyapunov", "learning_loop_radius", "learning_loop_eigenvalues", "learning_loop_matrix", "d_max", "observer_conditions",
-           "controller_conditions", "gains_of", "lmi_design_cached", "care_cached"]
+__all__ = [
+    "check",
+    "implied_lyapunov",
+    "learning_loop_radius",
+    "learning_loop_eigenvalues",
+    "learning_loop_matrix",
+    "d_max",
+    "observer_conditions",
+    "controller_conditions",
+    "gains_of",
+    "lmi_design_cached",
+    "care_cached",
+]
 
 
 @functools.lru_cache(maxsize=16)
@@ -87,12 +98,12 @@ def learning_loop_matrix(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray
     nz = 6 + 3 * m
     M = np.zeros((nz, nz))
     M[:6, :6] = np.eye(6) + dt * (A - L1) - dt * Q2 * H @ L2
-    M[:6, 6 + 3 * (m - 1):] = -dt * H @ Q1  # F_{k-m}
+    M[:6, 6 + 3 * (m - 1) :] = -dt * H @ Q1  # F_{k-m}
     # new F_k goes to slot 0, older ones shift
     M[6:9, :6] = Q2 * L2
-    M[6:9, 6 + 3 * (m - 1):] += Q1
+    M[6:9, 6 + 3 * (m - 1) :] += Q1
     for j in range(1, m):
-        M[6 + 3 * j:9 + 3 * j, 6 + 3 * (j - 1):9 + 3 * (j - 1)] = np.eye(3)
+        M[6 + 3 * j : 9 + 3 * j, 6 + 3 * (j - 1) : 9 + 3 * (j - 1)] = np.eye(3)
     return M
 
 
@@ -108,7 +119,11 @@ def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[floa
     if osc.size == 0:
         return float(np.max(np.abs(z))), float("nan"), 0.0
     k = int(np.argmax(np.abs(osc)))
-    return float(np.max(np.abs(z))), float(np.abs(osc[k])), float(abs(np.angle(osc[k])) / (2 * np.pi * dt))
+    return (
+        float(np.max(np.abs(z))),
+        float(np.abs(osc[k])),
+        float(abs(np.angle(osc[k])) / (2 * np.pi * dt)),
+    )
 
 
 def observer_conditions(s: Gui2022Scenario) -> list[Condition]:
@@ -138,59 +153,123 @@ def observer_conditions(s: Gui2022Scenario) -> list[Condition]:
     pole_tol = eigenvalue_margin(A - g["L1"] @ C)
     disk_verified = bool(r["max_eig_disk"] < -r["tol_disk"] and r["min_eig_P"] > r["tol_P"])
     region = f"S({o.disk_center:g}, {o.disk_radius:g})"
-    ver = ("exact up to rounding: symmetric eigenvalues recomputed in numpy from the returned matrices clear "
-           "the rounding margin 10 n eps ||M|| (solver backward error and the rounding of forming M)")
+    ver = (
+        "exact up to rounding: symmetric eigenvalues recomputed in numpy from the returned matrices clear "
+        "the rounding margin 10 n eps ||M|| (solver backward error and the rounding of forming M)"
+    )
     out = [
-        Condition("(8) observer Lyapunov LMI", "Gui2022 Thm 1 eq. (8)", f"max eig = {r['max_eig_8']:.4g}",
-                  f"< -{r['tol_8']:.2g} (rounding margin)", r["max_eig_8"] < -r["tol_8"], basis="exact",
-                  detail=f"{src}; {ver}"),
-        Condition("(9) H^T P = L2 C", "Gui2022 Thm 1 eq. (9)", f"max|H^T P - L2 C| = {r['max_abs_9']:.3g}",
-                  "= 0 (relaxed by (27))", None if o.gains == "lmi" else r["max_abs_9"] <= 1e-12, required=False,
-                  basis="exact",
-                  detail="exact up to rounding (max entry <= 1e-12): P is built from L2 entry by entry; "
-                         + ("not evaluated for LMI gains: (27) is what the design enforces" if o.gains == "lmi"
-                            else "(27) is what the design enforces")),
-        Condition("(27) Schur relaxation of (9)", "Gui2022 Remark 1 eq. (27)",
-                  f"max eig = {r['max_eig_27']:.4g} (lambda = {o.lmi_lambda:g})", f"< -{r['tol_27']:.2g} (rounding margin)",
-                  r["max_eig_27"] < -r["tol_27"], basis="exact", detail=ver),
-        Condition("P > 0", "Gui2022 Thm 1", f"min eig P = {r['min_eig_P']:.4g}", f"> {r['tol_P']:.2g} (rounding margin)",
-                  r["min_eig_P"] > r["tol_P"], basis="exact", detail=ver),
-        Condition(f"poles of A - L1 C in {region}", "Gui2022 Sec. 5.1, ref. [29]",
-                  f"eig = {np.round(np.sort_complex(poles), 4).tolist()}; max |lambda - c| = {r['max_pole_distance']:.4g}",
-                  f"< {o.disk_radius:g}", bool(r["max_pole_distance"] < o.disk_radius - pole_tol or disk_verified),
-                  basis="exact",
-                  detail=(f"exact up to rounding: the disk LMI [[-r P, P A - Y C - c P], [*, -r P]] < 0 with P > 0 holds beyond "
-                          f"its rounding margin (max eig {r['max_eig_disk']:.4g} < -{r['tol_disk']:.2g})"
-                          if disk_verified else
-                          f"exact up to rounding: eigenvalues of A - L1 C (LAPACK) must clear the radius by the "
-                          f"Bauer-Fike margin {pole_tol:.2g}; disk LMI max eig = {r['max_eig_disk']:.4g} (not "
-                          f"verified, rounding margin {r['tol_disk']:.2g})")),
-        Condition("(10) (eta + gamma1) Q1^2 - I <= 0", "Gui2022 Thm 1 eq. (10)",
-                  f"max = {c10:.4g} (bound on sigma: {1 / np.sqrt(eta + o.gamma1):.6f})", "<= 0", c10 <= 0,
-                  basis="exact",
-                  detail="exact: scalar arithmetic in float64 (rounding ~1e-16); E002-04: the printed Q1 = 0.99 sits "
-                         "close to the boundary"),
-        Condition("Q2 = 1/(beta eta)", "Gui2022 design step (1)",
-                  f"Q2 = {o.Q2:g}, 1/(beta eta) = {1 / (o.beta * eta):.6f}", "relative difference <= 1e-3",
-                  abs(o.Q2 * o.beta * eta - 1) <= 1e-3, required=False, basis="exact",
-                  detail="exact: scalar arithmetic"),
-        Condition("(11) gamma >= d_max", "Gui2022 Thm 1 eq. (11), E002-07",
-                  f"gamma = {o.gamma:.6g}, d_max = {dm:.6g} (gamma - d_max = {o.gamma - dm:.3g})",
-                  ">= d_max (relative tolerance 1e-4: gamma is printed to 4 digits)",
-                  (o.gamma >= dm * (1 - 1e-4)) if o.sign_term else None, required=o.sign_term,
-                  basis="exact" if o.sign_term else "informative",
-                  detail="informative: baseline ILO (no sign term), not applicable" if not o.sign_term else
-                  "exact: d_max = A0 sqrt(7.25) in closed form (|d|^2/A0^2 = 1 - 3 s + 4.25 s^2 - s^4 with "
-                  "s = sin(n t) is largest at s = -1 on [-1, 1], E002-07); a 200,001-point sample over one "
-                  "orbit never exceeds it"),
-        Condition("mu > 0", "E002-02 (proof needs delta = min(lambda_min, beta mu) > 0)", f"mu = {o.mu:g}",
-                  "> 0", o.mu > 0, basis="exact", detail="exact: scalar comparison"),
-        Condition("discrete learning loop stable", "E002-12 (tau = m dt, forward Euler, gamma = 0)",
-                  f"spectral radius = {rho:.6f}; learning-loop pair |z| = {rho_osc:.5f} at {f_osc:.1f} Hz",
-                  f"< 1 - {rho_tol:.2g} (rounding margin)", bool(rho < 1 - rho_tol), basis="exact",
-                  detail=f"exact up to rounding: eigenvalues of the one-step map (LAPACK; Bauer-Fike margin "
-                         f"{rho_tol:.2g}); radius = slow observer pole (position channel); the oscillatory pair is the lightly "
-                         "damped learning loop that rings after a step fault"),
+        Condition(
+            "(8) observer Lyapunov LMI",
+            "Gui2022 Thm 1 eq. (8)",
+            f"max eig = {r['max_eig_8']:.4g}",
+            f"< -{r['tol_8']:.2g} (rounding margin)",
+            r["max_eig_8"] < -r["tol_8"],
+            basis="exact",
+            detail=f"{src}; {ver}",
+        ),
+        Condition(
+            "(9) H^T P = L2 C",
+            "Gui2022 Thm 1 eq. (9)",
+            f"max|H^T P - L2 C| = {r['max_abs_9']:.3g}",
+            "= 0 (relaxed by (27))",
+            None if o.gains == "lmi" else r["max_abs_9"] <= 1e-12,
+            required=False,
+            basis="exact",
+            detail="exact up to rounding (max entry <= 1e-12): P is built from L2 entry by entry; "
+            + (
+                "not evaluated for LMI gains: (27) is what the design enforces"
+                if o.gains == "lmi"
+                else "(27) is what the design enforces"
+            ),
+        ),
+        Condition(
+            "(27) Schur relaxation of (9)",
+            "Gui2022 Remark 1 eq. (27)",
+            f"max eig = {r['max_eig_27']:.4g} (lambda = {o.lmi_lambda:g})",
+            f"< -{r['tol_27']:.2g} (rounding margin)",
+            r["max_eig_27"] < -r["tol_27"],
+            basis="exact",
+            detail=ver,
+        ),
+        Condition(
+            "P > 0",
+            "Gui2022 Thm 1",
+            f"min eig P = {r['min_eig_P']:.4g}",
+            f"> {r['tol_P']:.2g} (rounding margin)",
+            r["min_eig_P"] > r["tol_P"],
+            basis="exact",
+            detail=ver,
+        ),
+        Condition(
+            f"poles of A - L1 C in {region}",
+            "Gui2022 Sec. 5.1, ref. [29]",
+            f"eig = {np.round(np.sort_complex(poles), 4).tolist()}; max |lambda - c| = {r['max_pole_distance']:.4g}",
+            f"< {o.disk_radius:g}",
+            bool(r["max_pole_distance"] < o.disk_radius - pole_tol or disk_verified),
+            basis="exact",
+            detail=(
+                f"exact up to rounding: the disk LMI [[-r P, P A - Y C - c P], [*, -r P]] < 0 with P > 0 holds beyond "
+                f"its rounding margin (max eig {r['max_eig_disk']:.4g} < -{r['tol_disk']:.2g})"
+                if disk_verified
+                else f"exact up to rounding: eigenvalues of A - L1 C (LAPACK) must clear the radius by the "
+                f"Bauer-Fike margin {pole_tol:.2g}; disk LMI max eig = {r['max_eig_disk']:.4g} (not "
+                f"verified, rounding margin {r['tol_disk']:.2g})"
+            ),
+        ),
+        Condition(
+            "(10) (eta + gamma1) Q1^2 - I <= 0",
+            "Gui2022 Thm 1 eq. (10)",
+            f"max = {c10:.4g} (bound on sigma: {1 / np.sqrt(eta + o.gamma1):.6f})",
+            "<= 0",
+            c10 <= 0,
+            basis="exact",
+            detail="exact: scalar arithmetic in float64 (rounding ~1e-16); E002-04: the printed Q1 = 0.99 sits "
+            "close to the boundary",
+        ),
+        Condition(
+            "Q2 = 1/(beta eta)",
+            "Gui2022 design step (1)",
+            f"Q2 = {o.Q2:g}, 1/(beta eta) = {1 / (o.beta * eta):.6f}",
+            "relative difference <= 1e-3",
+            abs(o.Q2 * o.beta * eta - 1) <= 1e-3,
+            required=False,
+            basis="exact",
+            detail="exact: scalar arithmetic",
+        ),
+        Condition(
+            "(11) gamma >= d_max",
+            "Gui2022 Thm 1 eq. (11), E002-07",
+            f"gamma = {o.gamma:.6g}, d_max = {dm:.6g} (gamma - d_max = {o.gamma - dm:.3g})",
+            ">= d_max (relative tolerance 1e-4: gamma is printed to 4 digits)",
+            (o.gamma >= dm * (1 - 1e-4)) if o.sign_term else None,
+            required=o.sign_term,
+            basis="exact" if o.sign_term else "informative",
+            detail="informative: baseline ILO (no sign term), not applicable"
+            if not o.sign_term
+            else "exact: d_max = A0 sqrt(7.25) in closed form (|d|^2/A0^2 = 1 - 3 s + 4.25 s^2 - s^4 with "
+            "s = sin(n t) is largest at s = -1 on [-1, 1], E002-07); a 200,001-point sample over one "
+            "orbit never exceeds it",
+        ),
+        Condition(
+            "mu > 0",
+            "E002-02 (proof needs delta = min(lambda_min, beta mu) > 0)",
+            f"mu = {o.mu:g}",
+            "> 0",
+            o.mu > 0,
+            basis="exact",
+            detail="exact: scalar comparison",
+        ),
+        Condition(
+            "discrete learning loop stable",
+            "E002-12 (tau = m dt, forward Euler, gamma = 0)",
+            f"spectral radius = {rho:.6f}; learning-loop pair |z| = {rho_osc:.5f} at {f_osc:.1f} Hz",
+            f"< 1 - {rho_tol:.2g} (rounding margin)",
+            bool(rho < 1 - rho_tol),
+            basis="exact",
+            detail=f"exact up to rounding: eigenvalues of the one-step map (LAPACK; Bauer-Fike margin "
+            f"{rho_tol:.2g}); radius = slow observer pole (position channel); the oscillatory pair is the lightly "
+            "damped learning loop that rings after a step fault",
+        ),
     ]
     return out
 
@@ -205,7 +284,9 @@ def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
     Qm = c.care_q_scale * np.eye(6)
     res = care_residual(care.P, A, B, Qm, np.eye(3))
     nP, nA, nB = (float(np.linalg.norm(x, 2)) for x in (care.P, A, B))
-    res_err = 10 * 6 * np.finfo(float).eps * (2 * nP * nA + nP**2 * nB**2 + float(np.linalg.norm(Qm, 2)))
+    res_err = (
+        10 * 6 * np.finfo(float).eps * (2 * nP * nA + nP**2 * nB**2 + float(np.linalg.norm(Qm, 2)))
+    )
     dP = float(np.max(np.abs(care.P - pub.P1_PRINTED)))
     dK = float(np.max(np.abs(K - B.T @ care.P)))
     c36 = (1 + c.mu1 + c.gamma3) * c.G1**2 - 1
@@ -214,31 +295,84 @@ def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
     ev = np.linalg.eigvals(A - B @ K)
     ev_tol = eigenvalue_margin(A - B @ K)
     out = [
-        Condition("(34) CARE P1 A + A^T P1 - P1 B B^T P1 = -Q", "Gui2022 Thm 2 eq. (34), E002-05",
-                  f"residual = {res:.3g} (Q = {c.care_q_scale:g} I6)", "<= 1e-12", bool(res + res_err <= 1e-12), basis="exact",
-                  detail=f"exact up to rounding: residual of the returned P1 recomputed in numpy, plus the bound "
-                         f"{res_err:.2g} on its float64 evaluation error; max |P1 - P1_printed| = "
-                         f"{dP:.3g} (<= 5e-5 reproduces the printed P1)"),
-        Condition("(35) K C = B^T P1", "Gui2022 Thm 2 eq. (35)", f"max |K - B^T P1| = {dK:.3g}",
-                  "<= 5e-5 (K printed to 4 decimals)", dK <= 5e-5, basis="exact", detail="exact: entry-wise difference"),
-        Condition("(36) (1 + mu1 + gamma3) G1^2 - 1 < 0", "Gui2022 Thm 2 eq. (36)", f"{c36:.4g}", "< 0", c36 < 0,
-                  basis="exact", detail="exact: scalar arithmetic"),
-        Condition("(37) (1 + mu1 + gamma2) G3^T G3 - I < 0", "Gui2022 Thm 2 eq. (37)", f"max eig = {c37:.4g}",
-                  "< 0", c37 < 0, basis="exact", detail="exact: diagonal matrix, eigenvalues are its entries"),
-        Condition("G2 = 1/(l (1 + mu1))", "Gui2022 Thm 2, E002-08", f"G2 = {c.G2:g}, formula {1 / (c.l * (1 + c.mu1)):.6f}",
-                  "relative difference <= 1e-3", abs(c.G2 * c.l * (1 + c.mu1) - 1) <= 1e-3, required=False,
-                  basis="exact", detail="exact: scalar arithmetic"),
-        Condition("G4 = -1/(beta1 (1 + mu1))", "Gui2022 Thm 2, E002-08",
-                  f"G4 = {c.G4:g}, formula {-1 / (c.beta1 * (1 + c.mu1)):.6f}", "relative difference <= 1e-3",
-                  abs(-c.G4 * c.beta1 * (1 + c.mu1) - 1) <= 1e-3, required=False, basis="exact",
-                  detail="exact: scalar arithmetic"),
-        Condition("2 Sigma_min >= 1", "Gui2022 proof of Thm 2, E002-08", f"pi(-tau) = {c.pi_initial:g}",
-                  "Sigma never defined: untestable", None, required=False, basis="informative",
-                  detail="informative: pi(-tau) = 1 chosen so that pi >= 1/2 initially"),
-        Condition("A - B K C Hurwitz (pi = 1)", "closed loop (33) with pi = 1",
-                  f"max Re eig = {ev.real.max():.4g} 1/s", f"< -{ev_tol:.2g} (rounding margin)",
-                  bool(ev.real.max() < -ev_tol), required=False, basis="exact",
-                  detail=f"exact up to rounding: eigenvalues of A - B K (LAPACK; Bauer-Fike margin {ev_tol:.2g} 1/s)"),
+        Condition(
+            "(34) CARE P1 A + A^T P1 - P1 B B^T P1 = -Q",
+            "Gui2022 Thm 2 eq. (34), E002-05",
+            f"residual = {res:.3g} (Q = {c.care_q_scale:g} I6)",
+            "<= 1e-12",
+            bool(res + res_err <= 1e-12),
+            basis="exact",
+            detail=f"exact up to rounding: residual of the returned P1 recomputed in numpy, plus the bound "
+            f"{res_err:.2g} on its float64 evaluation error; max |P1 - P1_printed| = "
+            f"{dP:.3g} (<= 5e-5 reproduces the printed P1)",
+        ),
+        Condition(
+            "(35) K C = B^T P1",
+            "Gui2022 Thm 2 eq. (35)",
+            f"max |K - B^T P1| = {dK:.3g}",
+            "<= 5e-5 (K printed to 4 decimals)",
+            dK <= 5e-5,
+            basis="exact",
+            detail="exact: entry-wise difference",
+        ),
+        Condition(
+            "(36) (1 + mu1 + gamma3) G1^2 - 1 < 0",
+            "Gui2022 Thm 2 eq. (36)",
+            f"{c36:.4g}",
+            "< 0",
+            c36 < 0,
+            basis="exact",
+            detail="exact: scalar arithmetic",
+        ),
+        Condition(
+            "(37) (1 + mu1 + gamma2) G3^T G3 - I < 0",
+            "Gui2022 Thm 2 eq. (37)",
+            f"max eig = {c37:.4g}",
+            "< 0",
+            c37 < 0,
+            basis="exact",
+            detail="exact: diagonal matrix, eigenvalues are its entries",
+        ),
+        Condition(
+            "G2 = 1/(l (1 + mu1))",
+            "Gui2022 Thm 2, E002-08",
+            f"G2 = {c.G2:g}, formula {1 / (c.l * (1 + c.mu1)):.6f}",
+            "relative difference <= 1e-3",
+            abs(c.G2 * c.l * (1 + c.mu1) - 1) <= 1e-3,
+            required=False,
+            basis="exact",
+            detail="exact: scalar arithmetic",
+        ),
+        Condition(
+            "G4 = -1/(beta1 (1 + mu1))",
+            "Gui2022 Thm 2, E002-08",
+            f"G4 = {c.G4:g}, formula {-1 / (c.beta1 * (1 + c.mu1)):.6f}",
+            "relative difference <= 1e-3",
+            abs(-c.G4 * c.beta1 * (1 + c.mu1) - 1) <= 1e-3,
+            required=False,
+            basis="exact",
+            detail="exact: scalar arithmetic",
+        ),
+        Condition(
+            "2 Sigma_min >= 1",
+            "Gui2022 proof of Thm 2, E002-08",
+            f"pi(-tau) = {c.pi_initial:g}",
+            "Sigma never defined: untestable",
+            None,
+            required=False,
+            basis="informative",
+            detail="informative: pi(-tau) = 1 chosen so that pi >= 1/2 initially",
+        ),
+        Condition(
+            "A - B K C Hurwitz (pi = 1)",
+            "closed loop (33) with pi = 1",
+            f"max Re eig = {ev.real.max():.4g} 1/s",
+            f"< -{ev_tol:.2g} (rounding margin)",
+            bool(ev.real.max() < -ev_tol),
+            required=False,
+            basis="exact",
+            detail=f"exact up to rounding: eigenvalues of A - B K (LAPACK; Bauer-Fike margin {ev_tol:.2g} 1/s)",
+        ),
     ]
     return out
 

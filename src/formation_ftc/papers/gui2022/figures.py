@@ -13,8 +13,16 @@ import numpy as np
 
 from formation_ftc.plotting import new_figure, save_figure
 
-__all__ = ["deputy", "fig3_fault_reconstruction", "fig45_estimation_errors", "fig6_ilo_comparison",
-           "fig78_tracking_errors", "fig9_trajectory", "fig10_synthesized_disturbance", "plot"]
+__all__ = [
+    "deputy",
+    "fig3_fault_reconstruction",
+    "fig45_estimation_errors",
+    "fig6_ilo_comparison",
+    "fig78_tracking_errors",
+    "fig9_trajectory",
+    "fig10_synthesized_disturbance",
+    "plot",
+]
 
 AX = ["x", "y", "z"]
 
@@ -31,7 +39,11 @@ def fig3_fault_reconstruction(ds, path: Path) -> Path:
     for k, a in enumerate(AX):
         ax = axes[k, 0]
         ax.plot(t, ds.fault.sel(axis=a), "k--", label=f"true fault F_{a}")
-        ax.plot(t, ds.fault_estimate_mean.sel(axis=a), label=f"reconstructed F_hat_{a} (record-interval mean)")
+        ax.plot(
+            t,
+            ds.fault_estimate_mean.sel(axis=a),
+            label=f"reconstructed F_hat_{a} (record-interval mean)",
+        )
         ax.set_ylabel(f"F_{a} [m/s^2]")
     axes[0, 0].legend(loc="upper left")
     axes[-1, 0].set_xlabel("time [s]")
@@ -44,10 +56,18 @@ def fig45_estimation_errors(ds_offset, ds_full, path: Path, velocity: bool) -> P
     unit = "m/s" if velocity else "m"
     what = "velocity" if velocity else "position"
     num = 5 if velocity else 4
-    fig, axes = new_figure(1, 2, width=9.0, height=3.4, sharex=False,
-                           title=f"Fig. {num}: {what} estimation error of the ILO (deputy)")
-    for ax, ds, ttl in ((axes[0, 0], ds_offset, "q_hat(0) = q(0) + offset"),
-                        (axes[0, 1], ds_full, "q_hat(0) = q(0), faults at 1500 s / 2000 s")):
+    fig, axes = new_figure(
+        1,
+        2,
+        width=9.0,
+        height=3.4,
+        sharex=False,
+        title=f"Fig. {num}: {what} estimation error of the ILO (deputy)",
+    )
+    for ax, ds, ttl in (
+        (axes[0, 0], ds_offset, "q_hat(0) = q(0) + offset"),
+        (axes[0, 1], ds_full, "q_hat(0) = q(0), faults at 1500 s / 2000 s"),
+    ):
         for c in comps:
             ax.plot(ds.time, ds.estimation_error.sel(component=c), label=f"e_{c}")
         ax.set_title(ttl)
@@ -63,7 +83,12 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
     t = ds_new.time.values
     axes[0, 0].plot(t, ds_new.fault.sel(axis="x"), "k--", label="true F_x")
     axes[0, 0].plot(t, ds_new.fault_estimate_mean.sel(axis="x"), label="new ILO (with gamma sgn)")
-    axes[0, 0].plot(ds_base.time, ds_base.fault_estimate_mean.sel(axis="x"), ":", label="ILO of [25] (gamma = 0)")
+    axes[0, 0].plot(
+        ds_base.time,
+        ds_base.fault_estimate_mean.sel(axis="x"),
+        ":",
+        label="ILO of [25] (gamma = 0)",
+    )
     axes[0, 0].set_ylabel("F_x [m/s^2]")
     axes[0, 0].legend(loc="upper left")
     sel = t >= 1400
@@ -71,7 +96,9 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
     e_old = (ds_base.fault - ds_base.fault_estimate_mean).sel(axis="x").values
     axes[1, 0].plot(t[sel], e_new[sel], label="new ILO: F_x - mean F_hat_x")
     axes[1, 0].plot(ds_base.time[sel], e_old[sel], ":", label="ILO of [25]")
-    axes[1, 0].plot(t[sel], ds_new.disturbance.sel(axis="x")[sel], "k--", lw=0.8, label="perturbation d_x")
+    axes[1, 0].plot(
+        t[sel], ds_new.disturbance.sel(axis="x")[sel], "k--", lw=0.8, label="perturbation d_x"
+    )
     axes[1, 0].set_ylim(-6e-3, 6e-3)
     axes[1, 0].set_ylabel("error [m/s^2]")
     axes[1, 0].set_xlabel("time [s]")
@@ -84,8 +111,12 @@ def fig78_tracking_errors(ds_lof, ds_cof, path: Path, velocity: bool) -> Path:
     comps = ["vx", "vy", "vz"] if velocity else ["x", "y", "z"]
     unit = "m/s" if velocity else "m"
     num = 8 if velocity else 7
-    fig, axes = new_figure(3, 1, title=f"Fig. {num}: relative {'velocity' if velocity else 'position'} "
-                                       "tracking error (deputy)")
+    fig, axes = new_figure(
+        3,
+        1,
+        title=f"Fig. {num}: relative {'velocity' if velocity else 'position'} "
+        "tracking error (deputy)",
+    )
     for k, c in enumerate(comps):
         ax = axes[k, 0]
         ax.plot(ds_cof.time, ds_cof.tracking_error.sel(component=c), label="COF2TC (u = K e_y)")
@@ -118,12 +149,18 @@ def fig9_trajectory(ds_lof, ds_cof, path: Path) -> Path:
 
 def fig10_synthesized_disturbance(ds_lof, path: Path) -> Path:
     """Fig. 10: learning term v(t) vs synthesized disturbance h = d + e_F (33)."""
-    fig, axes = new_figure(3, 1, title="Fig. 10: estimate v of the synthesized disturbance h = d + e_F (deputy)")
+    fig, axes = new_figure(
+        3, 1, title="Fig. 10: estimate v of the synthesized disturbance h = d + e_F (deputy)"
+    )
     t = ds_lof.time.values
     for k, a in enumerate(AX):
         ax = axes[k, 0]
-        ax.plot(t, ds_lof.synthesized_disturbance_mean.sel(axis=a), "k--",
-                label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)")
+        ax.plot(
+            t,
+            ds_lof.synthesized_disturbance_mean.sel(axis=a),
+            "k--",
+            label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)",
+        )
         ax.plot(t, ds_lof.compensation.sel(axis=a), label=f"v_{a} (32)")
         h = ds_lof.synthesized_disturbance_mean.sel(axis=a).values[t > 50]
         lim = 1.5 * np.max(np.abs(h)) if h.size else 1e-2
@@ -140,7 +177,9 @@ def plot(ds, scenario, out_dir) -> list[Path]:
     ds = deputy(ds)
     paths = [fig3_fault_reconstruction(ds, out_dir / "fault_reconstruction.png")]
     if "tracking_error" in ds:
-        fig, axes = new_figure(3, 1, title=f"{scenario.scenario.name}: position tracking error (deputy)")
+        fig, axes = new_figure(
+            3, 1, title=f"{scenario.scenario.name}: position tracking error (deputy)"
+        )
         for k, c in enumerate(["x", "y", "z"]):
             axes[k, 0].plot(ds.time, ds.tracking_error.sel(component=c), label=f"e_{c}")
             axes[k, 0].set_ylabel(f"e_{c} [m]")

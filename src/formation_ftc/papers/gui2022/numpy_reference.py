@@ -53,8 +53,16 @@ def simulate_numpy(s: Gui2022Scenario, n_steps: int | None = None) -> dict[str, 
         t = k * dt
         d = A0 * np.array([1 - 1.5 * math.sin(n * t), 0.5 * math.sin(2 * n * t), math.sin(n * t)])
         t_dec = t - kz * dt if f.z_decay_shifted else t
-        Fz = f.z_amplitude * math.sin(f.z_omega * t + f.z_phase) + f.z_decay_amplitude * math.exp(-f.z_decay_rate * t_dec)
-        F = np.array([f.x_magnitude if k >= kx else 0.0, f.y_magnitude if k >= ky else 0.0, Fz if k >= kz else 0.0])
+        Fz = f.z_amplitude * math.sin(f.z_omega * t + f.z_phase) + f.z_decay_amplitude * math.exp(
+            -f.z_decay_rate * t_dec
+        )
+        F = np.array(
+            [
+                f.x_magnitude if k >= kx else 0.0,
+                f.y_magnitude if k >= ky else 0.0,
+                Fz if k >= kz else 0.0,
+            ]
+        )
         y = q.copy()
         ey = y - qh
         F_hat = Q1 * F_hist[0] + Q2 * (L2 @ ey)  # (5)
@@ -75,6 +83,13 @@ def simulate_numpy(s: Gui2022Scenario, n_steps: int | None = None) -> dict[str, 
         F_hist = F_hist[1:] + [F_hat]
         pi_hist = pi_hist[1:] + [pi]
         v_hist = v_hist[1:] + [v]
-        out["F"][k], out["F_hat"][k], out["u"][k], out["d"][k], out["v"][k], out["pi"][k] = F, F_hat, u, d, v, pi
+        out["F"][k], out["F_hat"][k], out["u"][k], out["d"][k], out["v"][k], out["pi"][k] = (
+            F,
+            F_hat,
+            u,
+            d,
+            v,
+            pi,
+        )
         out["q"][k + 1], out["q_hat"][k + 1] = q, qh
     return out

@@ -6,54 +6,81 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "N_MEAN_MOTION", "A0", "L1_PRINTED", "L2_PRINTED", "P1_PRINTED", "K_PRINTED", "Q1_PRINTED",
-    "Q2_PRINTED", "GAMMA_PRINTED", "G1", "G2", "G3", "G4", "Q0_INITIAL", "CARE_Q_SCALE", "ESTIMATE_OFFSET",
-    "CITATION", "TITLE",
+    "N_MEAN_MOTION",
+    "A0",
+    "L1_PRINTED",
+    "L2_PRINTED",
+    "P1_PRINTED",
+    "K_PRINTED",
+    "Q1_PRINTED",
+    "Q2_PRINTED",
+    "GAMMA_PRINTED",
+    "G1",
+    "G2",
+    "G3",
+    "G4",
+    "Q0_INITIAL",
+    "CARE_Q_SCALE",
+    "ESTIMATE_OFFSET",
+    "CITATION",
+    "TITLE",
 ]
 
 TITLE = "Reconfigurable fault-tolerant control for spacecraft formation flying based on iterative learning algorithms"
-CITATION = ("Gui, H., Jia, Q., Li, X., Cheng, Y. (2022). Reconfigurable Fault-Tolerant Control for Spacecraft "
-            "Formation Flying Based on Iterative Learning Algorithms. Applied Sciences 12.")
+CITATION = (
+    "Gui, H., Jia, Q., Li, X., Cheng, Y. (2022). Reconfigurable Fault-Tolerant Control for Spacecraft "
+    "Formation Flying Based on Iterative Learning Algorithms. Applied Sciences 12."
+)
 
 N_MEAN_MOTION = 0.0015  # [rad/s], section 5
 A0 = 1.2e-3  # perturbation amplitude [m/s^2] (printed "N", per unit mass: E002-03)
 
 # Section 5.1 (observer) -- printed to 4 decimals
-L1_PRINTED = np.array([
-    [4.5471, 0, 0, 1.0, 0, 0],
-    [0, 4.5471, 0, 0, 1.0, 0],
-    [0, 0, 4.5471, 0, 0, 1.0],
-    [0, 0, 0, 4.5470, 0.0030, 0],
-    [0, 0, 0, -0.0030, 4.5471, 0],
-    [0, 0, 0, 0, 0, 4.5471],
-])
-L2_PRINTED = np.array([
-    [0, 0, 0, 456.2710, 0, 0],
-    [0, 0, 0, 0, 456.2530, 0],
-    [0, 0, 0, 0, 0, 456.2642],
-])
+L1_PRINTED = np.array(
+    [
+        [4.5471, 0, 0, 1.0, 0, 0],
+        [0, 4.5471, 0, 0, 1.0, 0],
+        [0, 0, 4.5471, 0, 0, 1.0],
+        [0, 0, 0, 4.5470, 0.0030, 0],
+        [0, 0, 0, -0.0030, 4.5471, 0],
+        [0, 0, 0, 0, 0, 4.5471],
+    ]
+)
+L2_PRINTED = np.array(
+    [
+        [0, 0, 0, 456.2710, 0, 0],
+        [0, 0, 0, 0, 456.2530, 0],
+        [0, 0, 0, 0, 0, 456.2642],
+    ]
+)
 Q1_PRINTED = np.array([0.99, 0.99, 0.99])
 Q2_PRINTED = 0.999
 GAMMA_PRINTED = 3.231e-3
 MU, GAMMA1, BETA = 0.001, 0.0193, 1.0
 
 # Section 5.2 (controller)
-P1_PRINTED = np.array([
-    [0.0007, 0, 0, 0.0063, 0.0002, 0],
-    [0, 0.0007, 0, -0.0002, 0.0063, 0],
-    [0, 0, 0.0007, 0, 0, 0.0063],
-    [0.0063, -0.0002, 0, 0.1127, 0, 0],
-    [0.0002, 0.0063, 0, 0, 0.1126, 0],
-    [0, 0, 0.0063, 0, 0, 0.1126],
-])
-K_PRINTED = np.array([
-    [0.0063, -0.0002, 0, 0.1127, 0, 0],
-    [0.0002, 0.0063, 0, 0, 0.1126, 0],
-    [0, 0, 0.0063, 0, 0, 0.1126],
-])
+P1_PRINTED = np.array(
+    [
+        [0.0007, 0, 0, 0.0063, 0.0002, 0],
+        [0, 0.0007, 0, -0.0002, 0.0063, 0],
+        [0, 0, 0.0007, 0, 0, 0.0063],
+        [0.0063, -0.0002, 0, 0.1127, 0, 0],
+        [0.0002, 0.0063, 0, 0, 0.1126, 0],
+        [0, 0, 0.0063, 0, 0, 0.1126],
+    ]
+)
+K_PRINTED = np.array(
+    [
+        [0.0063, -0.0002, 0, 0.1127, 0, 0],
+        [0.0002, 0.0063, 0, 0, 0.1126, 0],
+        [0, 0, 0.0063, 0, 0, 0.1126],
+    ]
+)
 G1, G2, G4 = 0.999, 0.9999, -0.9999
 G3 = np.array([0.999, 0.999, 0.999])
 L_LOF, MU1, BETA1, GAMMA2, GAMMA3 = 1.0, 1e-4, 1.0, 9e-4, 9e-4
 Q0_INITIAL = np.array([-15.0, -505.0, 20.0, -0.37875, 0.045, 0.0])
 CARE_Q_SCALE = 4e-5  # Q = 4e-5 I6 reproduces the printed P1 (E002-05) [DERIVED]
-ESTIMATE_OFFSET = np.array([10.0, -10.0, 5.0, 0.1, -0.1, 0.05])  # q_hat(0) - q(0) for Figs. 4-5 [CHOICE]
+ESTIMATE_OFFSET = np.array(
+    [10.0, -10.0, 5.0, 0.1, -0.1, 0.05]
+)  # q_hat(0) - q(0) for Figs. 4-5 [CHOICE]

@@ -65,15 +65,23 @@ class DelayStats:
 
 
 @lru_cache(maxsize=64)
-def _delay_statistics(texts: tuple[tuple[str, ...], ...], horizon: float, dt: float) -> tuple[DelayStats, ...]:
+def _delay_statistics(
+    texts: tuple[tuple[str, ...], ...], horizon: float, dt: float
+) -> tuple[DelayStats, ...]:
     n = len(texts)
     pairs = [(i, j) for i in range(n) for j in range(n) if i != j]
-    fns = [compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
-           for i, j in pairs]
+    fns = [
+        compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
+        for i, j in pairs
+    ]
 
     def vec(t):
-        return jnp.stack([jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), ())
-                          for f, (i, j) in zip(fns, pairs, strict=True)])
+        return jnp.stack(
+            [
+                jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), ())
+                for f, (i, j) in zip(fns, pairs, strict=True)
+            ]
+        )
 
     n_steps = int(round(horizon / dt))
     grid = jnp.arange(n_steps + 1, dtype=jnp.float64) * dt
@@ -89,9 +97,18 @@ def _delay_statistics(texts: tuple[tuple[str, ...], ...], horizon: float, dt: fl
         v, r = vals[:, k], rates[:, k]
         kmin, kr = int(np.argmin(v)), int(np.argmax(r))
         neg, fast = np.flatnonzero(v < 0), np.flatnonzero(r >= 1)
-        out.append(DelayStats(pair, float(tg[kmin]), float(v[kmin]), float(np.max(v)), float(r[kr]),
-                              float(tg[kr]), float(tg[neg[0]]) if neg.size else float("nan"),
-                              float(tg[fast[0]]) if fast.size else float("nan")))
+        out.append(
+            DelayStats(
+                pair,
+                float(tg[kmin]),
+                float(v[kmin]),
+                float(np.max(v)),
+                float(r[kr]),
+                float(tg[kr]),
+                float(tg[neg[0]]) if neg.size else float("nan"),
+                float(tg[fast[0]]) if fast.size else float("nan"),
+            )
+        )
     return tuple(out)
 
 
@@ -101,7 +118,9 @@ def delay_statistics(scenario) -> list[DelayStats]:
     if d is None:
         return []
     texts = tuple(tuple(str(x) for x in row) for row in d)
-    return list(_delay_statistics(texts, float(scenario.simulation.horizon), float(scenario.simulation.dt)))
+    return list(
+        _delay_statistics(texts, float(scenario.simulation.horizon), float(scenario.simulation.dt))
+    )
 
 
 def _used(scenario) -> np.ndarray:
@@ -117,15 +136,21 @@ def validate_delays(scenario) -> list[DelayStats]:
         i, j = st.pair
         where = f"network.delays[{i}][{j}] ({st.name}, link {j + 1} -> {i + 1})"
         if st.value_min < 0:
-            raise DelayError(f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
-                             f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)")
+            raise DelayError(
+                f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
+                f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)"
+            )
         if st.rate_max >= 1:
-            raise DelayError(f"{where}: delay rate reaches dT/dt >= 1 at t = {st.t_first_rate_violation:.6g} s "
-                             f"(max {st.rate_max:.6g} at t = {st.t_rate_max:.6g} s; eq. (46) needs "
-                             "dT/dt <= h < 1)")
+            raise DelayError(
+                f"{where}: delay rate reaches dT/dt >= 1 at t = {st.t_first_rate_violation:.6g} s "
+                f"(max {st.rate_max:.6g} at t = {st.t_rate_max:.6g} s; eq. (46) needs "
+                "dT/dt <= h < 1)"
+            )
         if used[i, j] and st.value_min < dt:
-            raise DelayError(f"{where}: T = {st.value_min:.6g} s at t = {st.t_min:.6g} s is shorter than "
-                             f"the step simulation.dt = {dt} s (a used link needs T >= dt)")
+            raise DelayError(
+                f"{where}: T = {st.value_min:.6g} s at t = {st.t_min:.6g} s is shorter than "
+                f"the step simulation.dt = {dt} s (a used link needs T >= dt)"
+            )
     return stats
 
 
@@ -138,11 +163,15 @@ def lemma3_constant() -> tuple[float, float]:
 
 
 #: How the delay values shown are computed (the simulation reads the delays only at these times).
-GRID = ("sampled at every simulation step over the horizon (values and d/dt by automatic differentiation): "
-        "a violation found is real, a pass is not a proof")
+GRID = (
+    "sampled at every simulation step over the horizon (values and d/dt by automatic differentiation): "
+    "a violation found is real, a pass is not a proof"
+)
 #: How the delay conditions are verified.
-INTERVAL = ("verified by interval arithmetic over the continuous horizon (outward-rounded enclosures of T and "
-            "dT/dt on 4,096 sub-intervals, bisected where inconclusive); values shown are sampled at every step")
+INTERVAL = (
+    "verified by interval arithmetic over the continuous horizon (outward-rounded enclosures of T and "
+    "dT/dt on 4,096 sub-intervals, bisected where inconclusive); values shown are sampled at every step"
+)
 
 
 @dataclass(frozen=True)
@@ -156,7 +185,9 @@ class DelayBounds:
 
 
 @lru_cache(maxsize=256)
-def _delay_bound(text: str, i: int, j: int, horizon: float, rate_target: float) -> tuple[float | None, float | None]:
+def _delay_bound(
+    text: str, i: int, j: int, horizon: float, rate_target: float
+) -> tuple[float | None, float | None]:
     names = ("t", "i", "j")
     lo: float | None
     hi: float | None
@@ -165,7 +196,9 @@ def _delay_bound(text: str, i: int, j: int, horizon: float, rate_target: float) 
     except IntervalError:
         lo = None
     try:
-        _, hi = enclose_derivative(text, names, 0.0, horizon, upper=rate_target, i=float(i + 1), j=float(j + 1))
+        _, hi = enclose_derivative(
+            text, names, 0.0, horizon, upper=rate_target, i=float(i + 1), j=float(j + 1)
+        )
     except IntervalError:
         hi = None
     return lo, hi
@@ -229,7 +262,9 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
     value = ", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats)
     if neg:
         holds, basis = False, "sampled"
-        detail = "; ".join([f"sampled: {st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID])
+        detail = "; ".join(
+            [f"sampled: {st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID]
+        )
     elif proved:
         holds, basis = True, "verified"
         value += f"; verified T >= {lo_all:.4g} s on every pair"
@@ -237,8 +272,17 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
     else:
         holds, basis = None, "sampled"
         detail = "sampled (unproven; the interval enclosure reaches below 0): " + GRID
-    out.append(Condition(name="delays non-negative", reference="Li2020 Sec. III-B", value=value,
-                         requirement=">= 0 on every pair", holds=holds, basis=basis, detail=detail))
+    out.append(
+        Condition(
+            name="delays non-negative",
+            reference="Li2020 Sec. III-B",
+            value=value,
+            requirement=">= 0 on every pair",
+            holds=holds,
+            basis=basis,
+            detail=detail,
+        )
+    )
     # dT/dt <= h < 1 on the used edges (eq. (46))
     worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
     h = worst.rate_max if worst else 0.0
@@ -246,8 +290,9 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
     if worst is None:
         value = "no edges"
     else:
-        value = (f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
-                 + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats))
+        value = f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); " + ", ".join(
+            f"{st.name}: {st.rate_max:.4f}" for st in used_stats
+        )
     if h >= 1:
         holds, basis, detail = False, "sampled", "sampled: the rate reaches 1 at a step; " + GRID
     elif h_up is not None and h_up < 1:
@@ -256,23 +301,48 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
     else:
         holds, basis = None, "sampled"
         detail = f"sampled (unproven; the rate enclosure reaches {h_up}): " + GRID
-    out.append(Condition(name="delay rate bound (used edges)", reference="Li2020 eq. (46); E000-15", value=value,
-                         requirement="h_ij < 1", holds=holds, basis=basis, detail=detail))
+    out.append(
+        Condition(
+            name="delay rate bound (used edges)",
+            reference="Li2020 eq. (46); E000-15",
+            value=value,
+            requirement="h_ij < 1",
+            holds=holds,
+            basis=basis,
+            detail=detail,
+        )
+    )
     if stats:
         wa = max(stats, key=lambda st: st.rate_max)
         ha_up = _worst_bound([vb_all[st.pair] for st in stats])
         value = f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)"
         if wa.rate_max >= 1:
-            holds, basis, detail = False, "sampled", "sampled: the rate reaches 1 at a step; " + GRID
+            holds, basis, detail = (
+                False,
+                "sampled",
+                "sampled: the rate reaches 1 at a step; " + GRID,
+            )
         elif ha_up is not None and ha_up < 1:
             holds, basis, detail = True, "verified", INTERVAL
             value += f"; verified <= {ha_up:.6g}"
         else:
-            holds, basis, detail = None, "sampled", "sampled (unproven by the interval enclosure): " + GRID
-        out.append(Condition(
-            name="delay rate bound (all printed delays)", reference="Li2020 Sec. IV-A; E000-15", value=value,
-            requirement="< 1", holds=holds, required=False, basis=basis,
-            detail="not required (unused delays do not enter the closed loop); " + detail))
+            holds, basis, detail = (
+                None,
+                "sampled",
+                "sampled (unproven by the interval enclosure): " + GRID,
+            )
+        out.append(
+            Condition(
+                name="delay rate bound (all printed delays)",
+                reference="Li2020 Sec. IV-A; E000-15",
+                value=value,
+                requirement="< 1",
+                holds=holds,
+                required=False,
+                basis=basis,
+                detail="not required (unused delays do not enter the closed loop); " + detail,
+            )
+        )
     if h < 1:
         rows = C.sum(axis=1)
 
@@ -282,22 +352,38 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
 
         margin = margin_at(h)
         rho = 1.0 / (1.0 - h)
-        value = (f"rho = {rho:.4f}; rhs = {_fmt((rho - 1.0) / 2.0 * rows)}; lambda = {_fmt(lam)}; "
-                 f"margin = {_fmt(margin)}")
+        value = (
+            f"rho = {rho:.4f}; rhs = {_fmt((rho - 1.0) / 2.0 * rows)}; lambda = {_fmt(lam)}; "
+            f"margin = {_fmt(margin)}"
+        )
         slack = 1e-12 * max(1.0, float(np.max(np.abs(lam))))  # rounding of rho and the products
         if not bool(np.all(margin > 0)):
             holds, basis = False, "sampled"
-            detail = "sampled: the margin fails already at the sampled h (the true h is at least as large); " + GRID
+            detail = (
+                "sampled: the margin fails already at the sampled h (the true h is at least as large); "
+                + GRID
+            )
         elif h_up is not None and h_up < 1 and bool(np.all(margin_at(h_up) > slack)):
             holds, basis = True, "verified"
             value += f"; with the verified h <= {h_up:.6g}: margin >= {_fmt(margin_at(h_up))}"
-            detail = f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is " + INTERVAL
+            detail = (
+                f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is "
+                + INTERVAL
+            )
         else:
             holds, basis = None, "sampled"
             detail = "sampled (unproven): arithmetic with the sampled h; h is " + GRID
-        out.append(Condition(
-            name="lambda_i > (rho - 1)/2 sum_j c_ij", reference="Li2020 eq. (47)", value=value,
-            requirement="margin > 0 with rho (1 - h) >= 1", holds=holds, basis=basis, detail=detail))
+        out.append(
+            Condition(
+                name="lambda_i > (rho - 1)/2 sum_j c_ij",
+                reference="Li2020 eq. (47)",
+                value=value,
+                requirement="margin > 0 with rho (1 - h) >= 1",
+                holds=holds,
+                basis=basis,
+                detail=detail,
+            )
+        )
     return out
 
 
@@ -310,45 +396,114 @@ def check(scenario) -> list[Condition]:
     proposed = law in ("thm1", "thm2")
     thm = "Theorem 1" if law == "thm1" else "Theorem 2"
     br = balance_report(C, tol=1e-12)
-    out.append(Condition(
-        name="communication graph balanced", reference=f"Li2020 {thm}, Sec. II-C; E000-07",
-        value=str(br), requirement="row sums = column sums", holds=br.balanced, required=proposed, basis="exact",
-        detail="exact: row/column sums (tolerance 1e-12)" + ("" if br.balanced else "; the theorems assume a "
-        "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)")))
+    out.append(
+        Condition(
+            name="communication graph balanced",
+            reference=f"Li2020 {thm}, Sec. II-C; E000-07",
+            value=str(br),
+            requirement="row sums = column sums",
+            holds=br.balanced,
+            required=proposed,
+            basis="exact",
+            detail="exact: row/column sums (tolerance 1e-12)"
+            + (
+                ""
+                if br.balanced
+                else "; the theorems assume a "
+                "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)"
+            ),
+        )
+    )
     sc = is_strongly_connected(C)
-    out.append(Condition(name="communication graph strongly connected", reference="Li2020 Sec. IV-A, Fig. 3",
-                         value=str(sc), requirement="True", holds=sc, required=False, basis="exact",
-                         detail="exact: reachability on the adjacency pattern"))
+    out.append(
+        Condition(
+            name="communication graph strongly connected",
+            reference="Li2020 Sec. IV-A, Fig. 3",
+            value=str(sc),
+            requirement="True",
+            holds=sc,
+            required=False,
+            basis="exact",
+            detail="exact: reachability on the adjacency pattern",
+        )
+    )
     k = scenario.per_spacecraft("k")
-    out.append(Condition(name="k_i > 0", reference="Li2020 Lemma 2", value=_fmt(k), requirement="> 0",
-                         holds=bool(np.all(k > 0)), basis="exact", detail="exact: comparison of the scenario values"))
+    out.append(
+        Condition(
+            name="k_i > 0",
+            reference="Li2020 Lemma 2",
+            value=_fmt(k),
+            requirement="> 0",
+            holds=bool(np.all(k > 0)),
+            basis="exact",
+            detail="exact: comparison of the scenario values",
+        )
+    )
     if proposed:
         d0 = scenario.per_spacecraft("d_hat0")
-        out.append(Condition(name="d_hat_i(0) > 0", reference="Li2020 eq. (27)", value=_fmt(d0),
-                             requirement="> 0", holds=bool(np.all(d0 > 0)), basis="exact",
-                             detail="exact: comparison of the scenario values"))
+        out.append(
+            Condition(
+                name="d_hat_i(0) > 0",
+                reference="Li2020 eq. (27)",
+                value=_fmt(d0),
+                requirement="> 0",
+                holds=bool(np.all(d0 > 0)),
+                basis="exact",
+                detail="exact: comparison of the scenario values",
+            )
+        )
         form = scenario.controller.sigma_form
-        out.append(Condition(name="sigma_i integrable", reference="Li2020 eq. (11), (13)-(16)",
-                             value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
-                             requirement="int_0^inf sigma < inf", holds=True, basis="exact",
-                             detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)"))
+        out.append(
+            Condition(
+                name="sigma_i integrable",
+                reference="Li2020 eq. (11), (13)-(16)",
+                value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
+                requirement="int_0^inf sigma < inf",
+                holds=True,
+                basis="exact",
+                detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
+            )
+        )
         literal = scenario.controller.dhat_sign_literal
         sign = -1 if (literal and law == "thm2") else 1
-        out.append(Condition(name="sign of d_hat tanh term", reference="Li2020 eq. (24)/(42); E000-04",
-                             value=f"{sign:+d}", requirement="+1 (proof steps (34)-(36))", holds=sign > 0,
-                             basis="exact", detail="exact: sign chosen by the scenario"))
+        out.append(
+            Condition(
+                name="sign of d_hat tanh term",
+                reference="Li2020 eq. (24)/(42); E000-04",
+                value=f"{sign:+d}",
+                requirement="+1 (proof steps (34)-(36))",
+                holds=sign > 0,
+                basis="exact",
+                detail="exact: sign chosen by the scenario",
+            )
+        )
         lam = scenario.per_spacecraft("lam")
         if law == "thm2":
             out += _delay_conditions(scenario, C, lam)
         x_star, r_star = lemma3_constant()
-        out.append(Condition(name="Lemma 3 constant r*", reference="Li2020 eq. (22)",
-                             value=f"x* = {x_star:.6f}, r* = {r_star:.6f}", requirement="informative",
-                             holds=True, required=False, basis="informative",
-                             detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)"))
+        out.append(
+            Condition(
+                name="Lemma 3 constant r*",
+                reference="Li2020 eq. (22)",
+                value=f"x* = {x_star:.6f}, r* = {r_star:.6f}",
+                requirement="informative",
+                holds=True,
+                required=False,
+                basis="informative",
+                detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",
+            )
+        )
     else:
-        out.append(Condition(name="SIR-FTC gains positive", reference="Li2020 Sec. IV-D",
-                             value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
-                             requirement="> 0", holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0,
-                             basis="exact", detail="exact: comparison of the scenario values"))
+        out.append(
+            Condition(
+                name="SIR-FTC gains positive",
+                reference="Li2020 Sec. IV-D",
+                value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
+                requirement="> 0",
+                holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0,
+                basis="exact",
+                detail="exact: comparison of the scenario values",
+            )
+        )
     del n
     return out

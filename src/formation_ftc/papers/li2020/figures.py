@@ -31,7 +31,11 @@ def plot_errors(ds, path: Path, variable: str, title: str, unit: str) -> Path:
         for c, mask in enumerate([zoom, slice(None)]):
             ax = axes[r, c]
             for sc in ds.spacecraft.values:
-                ax.plot(t[mask], ds[variable].sel(spacecraft=sc, axis=ax_name).values[mask], label=_label(sc))
+                ax.plot(
+                    t[mask],
+                    ds[variable].sel(spacecraft=sc, axis=ax_name).values[mask],
+                    label=_label(sc),
+                )
             ax.set_ylabel(f"${sym},{ax_name}$ [{unit}]")
             if c == 1:
                 ax.set_yscale("symlog", linthresh=1e-2 if unit == "m" else 1e-3)
@@ -46,7 +50,11 @@ def plot_mu(ds, path: Path, title: str) -> Path:
     fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
     t = ds.time.values
     zoom = t <= ZOOM
-    names = [("mu1", r"$\mu_1$ [m]"), ("mu2", r"$\mu_2$ literal [m]"), ("mu2_vc", r"$\mu_{2,vc}$ [m]")]
+    names = [
+        ("mu1", r"$\mu_1$ [m]"),
+        ("mu2", r"$\mu_2$ literal [m]"),
+        ("mu2_vc", r"$\mu_{2,vc}$ [m]"),
+    ]
     for r, (name, lab) in enumerate(names):
         y = ds[name].values
         axes[r, 0].plot(t[zoom], y[zoom], color="k", label=name)
@@ -60,8 +68,16 @@ def plot_mu(ds, path: Path, title: str) -> Path:
 
 def plot_adaptive(ds, path: Path, title: str) -> Path:
     """m_hat, beta_hat, d_hat (Thm 1/2) or b_hat (SIR-FTC) per spacecraft."""
-    names = [(n, u) for n, u in (("m_hat", r"$\hat m_i$ [kg]"), ("beta_hat", r"$\hat\beta_i$ [-]"),
-                                 ("d_hat", r"$\hat d_i$ [N]"), ("b_hat", r"$\hat b_i$ [N]")) if n in ds]
+    names = [
+        (n, u)
+        for n, u in (
+            ("m_hat", r"$\hat m_i$ [kg]"),
+            ("beta_hat", r"$\hat\beta_i$ [-]"),
+            ("d_hat", r"$\hat d_i$ [N]"),
+            ("b_hat", r"$\hat b_i$ [N]"),
+        )
+        if n in ds
+    ]
     fig, axes = new_figure(len(names), 2, width=10.0, sharex=False, title=title)
     t = ds.time.values
     zoom = t <= ZOOM
@@ -101,12 +117,28 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
     out_dir = Path(out_dir)
     name = scenario.scenario.name
     law = scenario.controller.law
-    ctrl = {"thm1": "Thm 1, eqs. (23)-(27)", "thm2": "Thm 2, eqs. (41)-(45)", "sir-ftc": "SIR-FTC"}[law]
+    ctrl = {"thm1": "Thm 1, eqs. (23)-(27)", "thm2": "Thm 2, eqs. (41)-(45)", "sir-ftc": "SIR-FTC"}[
+        law
+    ]
     return [
-        plot_errors(ds, out_dir / f"{name}_position_error.png", "position_error",
-                    f"{name}: position tracking errors ({ctrl})", "m"),
-        plot_errors(ds, out_dir / f"{name}_velocity_error.png", "velocity_error",
-                    f"{name}: velocity tracking errors ({ctrl})", "m/s"),
-        plot_mu(ds, out_dir / f"{name}_mu.png", f"{name}: formation tracking / keeping errors ({ctrl})"),
-        plot_adaptive(ds, out_dir / f"{name}_adaptive.png", f"{name}: adaptive parameters ({ctrl})"),
+        plot_errors(
+            ds,
+            out_dir / f"{name}_position_error.png",
+            "position_error",
+            f"{name}: position tracking errors ({ctrl})",
+            "m",
+        ),
+        plot_errors(
+            ds,
+            out_dir / f"{name}_velocity_error.png",
+            "velocity_error",
+            f"{name}: velocity tracking errors ({ctrl})",
+            "m/s",
+        ),
+        plot_mu(
+            ds, out_dir / f"{name}_mu.png", f"{name}: formation tracking / keeping errors ({ctrl})"
+        ),
+        plot_adaptive(
+            ds, out_dir / f"{name}_adaptive.png", f"{name}: adaptive parameters ({ctrl})"
+        ),
     ]

@@ -14,7 +14,15 @@ from formation_ftc.core import graph as graphs
 from formation_ftc.design.lmi import rounding_margin
 from formation_ftc.registry import Condition
 
-__all__ = ["PRINTED", "PRINTED_RESOLUTION", "matches_printed", "DesignQuantities", "design_quantities", "lyapunov_matrix", "check"]
+__all__ = [
+    "PRINTED",
+    "PRINTED_RESOLUTION",
+    "matches_printed",
+    "DesignQuantities",
+    "design_quantities",
+    "lyapunov_matrix",
+    "check",
+]
 
 #: Values printed in Sec. V (per channel; the paper repeats each three times).
 PRINTED: dict[str, Any] = {  # a number or a diagonal (3 numbers) per quantity
@@ -38,7 +46,9 @@ class DesignQuantities:
     alpha_limit: float  # 1 - 1/(K gamma^2): literal law needs alpha below it
 
 
-def design_quantities(K: float, K_P: float, K_I: float, alpha: float, gamma: float) -> DesignQuantities:
+def design_quantities(
+    K: float, K_P: float, K_I: float, alpha: float, gamma: float
+) -> DesignQuantities:
     """Mehrabian (13)-(15) with K-bar = K_P (proportional), K-double-bar = K_I (integral), E003-03."""
     km = K - 1.0 / gamma**2
     base = np.array([K_I**2 * K, K_P**2 * K, K])
@@ -65,9 +75,9 @@ def lyapunov_matrix(D: np.ndarray, K: float, K_P: float, K_I: float) -> np.ndarr
     V = np.hstack([K_I * I, K_P * I, I])
     P = V.T @ D @ V
     P[:n, :n] += K_I * K_P * K * I
-    P[:n, n:2 * n] += K_I * K * I
-    P[n:2 * n, :n] += K_I * K * I
-    P[n:2 * n, n:2 * n] += K_P * K * I
+    P[:n, n : 2 * n] += K_I * K * I
+    P[n : 2 * n, :n] += K_I * K * I
+    P[n : 2 * n, n : 2 * n] += K_P * K * I
     return P
 
 
@@ -93,80 +103,185 @@ def check(s) -> list[Condition]:
     K, KP, KI, a, g = c.K, c.K_P, c.K_I, c.alpha, c.gamma
     dq = design_quantities(K, KP, KI, a, g)
     out: list[Condition] = []
-    out.append(Condition("K-bar > 0 (proportional gain)", "Mehrabian (9), E003-03", f"K_P = {KP:.4g}",
-                         "> 0", KP > 0, basis="exact",
-                         detail="exact: scalar comparison of the scenario values"))
-    out.append(Condition("K-double-bar > 0 (integral gain)", "Mehrabian (9), E003-03", f"K_I = {KI:.4g}",
-                         "> 0", KI > 0, basis="exact",
-                         detail="exact: scalar comparison of the scenario values"))
-    out.append(Condition("K - I/gamma^2 > 0", "Mehrabian (9)", f"{K:.4g} - 1/{g:.4g}^2 = {dq.K_minus:.6g}",
-                         "> 0", dq.K_minus > 0, basis="exact",
-                         detail="exact: scalar arithmetic on the scenario values (float64; the sign is decided "
-                                "unless K gamma^2 = 1 to within 1e-16)"))
-    out.append(Condition("0 < alpha < 1", "Mehrabian (10)", f"alpha = {a:.4g}", "0 < alpha < 1", 0 < a < 1,
-                         basis="exact", detail="exact: scalar comparison of the scenario values"))
-    out.append(Condition(
-        "(1 - alpha) K-bar^2 - 2 K-double-bar > 0", "Mehrabian (11), E003-03",
-        f"(1 - {a:.4g}) {KP:.4g}^2 - 2 {KI:.4g} = {dq.cond11:.6g}", "> 0", dq.cond11 > 0, basis="exact",
-        detail=f"exact: scalar arithmetic; with the gain letters swapped (K-bar = {KI:g}): {dq.cond11_swapped:.4g} "
-               "(E003-03)"))
+    out.append(
+        Condition(
+            "K-bar > 0 (proportional gain)",
+            "Mehrabian (9), E003-03",
+            f"K_P = {KP:.4g}",
+            "> 0",
+            KP > 0,
+            basis="exact",
+            detail="exact: scalar comparison of the scenario values",
+        )
+    )
+    out.append(
+        Condition(
+            "K-double-bar > 0 (integral gain)",
+            "Mehrabian (9), E003-03",
+            f"K_I = {KI:.4g}",
+            "> 0",
+            KI > 0,
+            basis="exact",
+            detail="exact: scalar comparison of the scenario values",
+        )
+    )
+    out.append(
+        Condition(
+            "K - I/gamma^2 > 0",
+            "Mehrabian (9)",
+            f"{K:.4g} - 1/{g:.4g}^2 = {dq.K_minus:.6g}",
+            "> 0",
+            dq.K_minus > 0,
+            basis="exact",
+            detail="exact: scalar arithmetic on the scenario values (float64; the sign is decided "
+            "unless K gamma^2 = 1 to within 1e-16)",
+        )
+    )
+    out.append(
+        Condition(
+            "0 < alpha < 1",
+            "Mehrabian (10)",
+            f"alpha = {a:.4g}",
+            "0 < alpha < 1",
+            0 < a < 1,
+            basis="exact",
+            detail="exact: scalar comparison of the scenario values",
+        )
+    )
+    out.append(
+        Condition(
+            "(1 - alpha) K-bar^2 - 2 K-double-bar > 0",
+            "Mehrabian (11), E003-03",
+            f"(1 - {a:.4g}) {KP:.4g}^2 - 2 {KI:.4g} = {dq.cond11:.6g}",
+            "> 0",
+            dq.cond11 > 0,
+            basis="exact",
+            detail=f"exact: scalar arithmetic; with the gain letters swapped (K-bar = {KI:g}): {dq.cond11_swapped:.4g} "
+            "(E003-03)",
+        )
+    )
     if c.law == "literal":
-        out.append(Condition(
-            "consensus-mode damping of the literal law", "Mehrabian (8) first line, E003-01",
-            f"1/2[(1 - alpha) K - 1/gamma^2] = {dq.consensus_damping_literal:.6g} N m s",
-            f"> 0 (alpha < 1 - 1/(K gamma^2) = {dq.alpha_limit:.6g})", dq.consensus_damping_literal > 0,
-            basis="exact", detail="exact: scalar arithmetic on the scenario values"))
+        out.append(
+            Condition(
+                "consensus-mode damping of the literal law",
+                "Mehrabian (8) first line, E003-01",
+                f"1/2[(1 - alpha) K - 1/gamma^2] = {dq.consensus_damping_literal:.6g} N m s",
+                f"> 0 (alpha < 1 - 1/(K gamma^2) = {dq.alpha_limit:.6g})",
+                dq.consensus_damping_literal > 0,
+                basis="exact",
+                detail="exact: scalar arithmetic on the scenario values",
+            )
+        )
     else:
-        out.append(Condition(
-            "consensus-mode damping of the diffusive law", "E003-01 alternative",
-            f"1/2 (K - 1/gamma^2) = {0.5 * dq.K_minus:.6g} N m s", "> 0", dq.K_minus > 0, basis="exact",
-            detail="exact: scalar arithmetic on the scenario values"))
+        out.append(
+            Condition(
+                "consensus-mode damping of the diffusive law",
+                "E003-01 alternative",
+                f"1/2 (K - 1/gamma^2) = {0.5 * dq.K_minus:.6g} N m s",
+                "> 0",
+                dq.K_minus > 0,
+                basis="exact",
+                detail="exact: scalar arithmetic on the scenario values",
+            )
+        )
     Jn = np.diag(s.formation.nominal_inertia)
     Ps = [lyapunov_matrix(D, K, KP, KI) for D in (Jn, 10 * np.eye(3), 20 * np.eye(3))]
     eigs = [np.linalg.eigvalsh(P).min() for P in Ps]
     tol = max(rounding_margin(P) for P in Ps)
-    out.append(Condition(
-        "P_j positive definite", "Mehrabian (21) (reconstructed)",
-        f"min eig = {eigs[0]:.4g} (D = J^), {eigs[1]:.4g} (D = 10 I), {eigs[2]:.4g} (D = 20 I)",
-        "> 0 (iff K_P > K_I for scalar gains)", bool(min(eigs) > tol), required=False, basis="exact",
-        detail=f"exact up to rounding: symmetric eigenvalues (numpy) clear the rounding margin {tol:.2g} "
-               "(10 n eps ||P||)"))
+    out.append(
+        Condition(
+            "P_j positive definite",
+            "Mehrabian (21) (reconstructed)",
+            f"min eig = {eigs[0]:.4g} (D = J^), {eigs[1]:.4g} (D = 10 I), {eigs[2]:.4g} (D = 20 I)",
+            "> 0 (iff K_P > K_I for scalar gains)",
+            bool(min(eigs) > tol),
+            required=False,
+            basis="exact",
+            detail=f"exact up to rounding: symmetric eigenvalues (numpy) clear the rounding margin {tol:.2g} "
+            "(10 n eps ||P||)",
+        )
+    )
     A = s.formation.adjacency()
     L = graphs.laplacian(A)
     lam = np.sort(np.linalg.eigvalsh(L))
-    out.append(Condition("communication graph connected", "Mehrabian Sec. II-B",
-                         f"lambda_2(L) = {lam[1]:.4g}", "> 1e-9 (rounding margin)", bool(lam[1] > 1e-9),
-                         basis="exact",
-                         detail="exact up to rounding: symmetric eigenvalues of the Laplacian (numpy, error "
-                                "<= 10 n eps ||L||, far below the 1e-9 margin)"))
+    out.append(
+        Condition(
+            "communication graph connected",
+            "Mehrabian Sec. II-B",
+            f"lambda_2(L) = {lam[1]:.4g}",
+            "> 1e-9 (rounding margin)",
+            bool(lam[1] > 1e-9),
+            basis="exact",
+            detail="exact up to rounding: symmetric eigenvalues of the Laplacian (numpy, error "
+            "<= 10 n eps ||L||, far below the 1e-9 margin)",
+        )
+    )
     # derived design quantities next to the printed ones (informational)
-    out.append(Condition(
-        "R_j", "Mehrabian (13), E003-02", f"{dq.R:.6g} I3 (its inverse K - I/gamma^2 = {dq.K_minus:.6g})",
-        f"paper prints {PRINTED['R']} I3, which is R_j^-1", abs(dq.K_minus - PRINTED["R"]) < 5e-3, required=False,
-        basis="exact", detail="informative (exact arithmetic): 17.22 equals K - I/gamma^2 = R_j^-1, not R_j (E003-02)"))
+    out.append(
+        Condition(
+            "R_j",
+            "Mehrabian (13), E003-02",
+            f"{dq.R:.6g} I3 (its inverse K - I/gamma^2 = {dq.K_minus:.6g})",
+            f"paper prints {PRINTED['R']} I3, which is R_j^-1",
+            abs(dq.K_minus - PRINTED["R"]) < 5e-3,
+            required=False,
+            basis="exact",
+            detail="informative (exact arithmetic): 17.22 equals K - I/gamma^2 = R_j^-1, not R_j (E003-02)",
+        )
+    )
     dq861 = design_quantities(K, KP, KI, 0.861, g)
-    out.append(Condition(
-        "sum_n Q_jn", "Mehrabian (14), E003-05", f"diag {_fmt3(dq.sum_Q_jn)} (alpha = {a:g}); "
-        f"{_fmt3(dq861.sum_Q_jn)} (alpha = 0.861)", f"paper prints diag {_fmt3(PRINTED['sum_Q_jn'])}",
-        all(matches_printed(dq861.sum_Q_jn, PRINTED["sum_Q_jn"], PRINTED_RESOLUTION["sum_Q_jn"])), required=False,
-        basis="exact", detail="informative (exact arithmetic): alpha = 0.861 reproduces the printed (truncated) digits (E003-05)"))
-    out.append(Condition(
-        "Q_j", "Mehrabian (15), E003-05", f"diag {_fmt3(dq.Q_j)} (alpha = {a:g}); {_fmt3(dq861.Q_j)} (alpha = 0.861)",
-        f"paper prints diag {_fmt3(PRINTED['Q_j'])}; > 0 needed", bool(min(dq.Q_j) > 0), required=False,
-        basis="exact", detail="exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)"))
+    out.append(
+        Condition(
+            "sum_n Q_jn",
+            "Mehrabian (14), E003-05",
+            f"diag {_fmt3(dq.sum_Q_jn)} (alpha = {a:g}); {_fmt3(dq861.sum_Q_jn)} (alpha = 0.861)",
+            f"paper prints diag {_fmt3(PRINTED['sum_Q_jn'])}",
+            all(
+                matches_printed(dq861.sum_Q_jn, PRINTED["sum_Q_jn"], PRINTED_RESOLUTION["sum_Q_jn"])
+            ),
+            required=False,
+            basis="exact",
+            detail="informative (exact arithmetic): alpha = 0.861 reproduces the printed (truncated) digits (E003-05)",
+        )
+    )
+    out.append(
+        Condition(
+            "Q_j",
+            "Mehrabian (15), E003-05",
+            f"diag {_fmt3(dq.Q_j)} (alpha = {a:g}); {_fmt3(dq861.Q_j)} (alpha = 0.861)",
+            f"paper prints diag {_fmt3(PRINTED['Q_j'])}; > 0 needed",
+            bool(min(dq.Q_j) > 0),
+            required=False,
+            basis="exact",
+            detail="exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)",
+        )
+    )
     # RK4 step against the fastest closed-loop rate (sat boundary layer and coupling)
     mu_min = float(np.min(np.linalg.eigvals(graphs.row_normalized(A)).real))
     damp = max(modal_damping(K, a, g, mu, c.law) for mu in (mu_min, 1.0))
     u_hat_ref = 1.0  # N m: order of the fault estimate, sets the sat slope u^/phi_b
-    rate = (damp + (u_hat_ref / c.boundary_layer if c.compensation == "sat" else 0.0)) / min(s.formation.nominal_inertia)
+    rate = (damp + (u_hat_ref / c.boundary_layer if c.compensation == "sat" else 0.0)) / min(
+        s.formation.nominal_inertia
+    )
     h = s.simulation.dt * rate
     over = bool(h >= 2.78)
-    out.append(Condition("RK4 step vs fastest rate", "dt * (max modal damping + 1 N m/phi_b) / min J",
-                         f"{h:.3g}", "< 2.78 (RK4 real-axis stability limit)", False if over else None,
-                         required=False, basis="heuristic",
-                         detail="heuristic: the fastest rate is estimated from the modal damping and an assumed "
-                                "1 N m fault estimate in the sat boundary layer (not a bound on the closed-loop "
-                                "eigenvalues of the nonlinear loop); "
-                                + ("the estimate exceeds the limit: a warning, not a proof" if over else
-                                   "below the limit, which proves nothing (unproven)")))
+    out.append(
+        Condition(
+            "RK4 step vs fastest rate",
+            "dt * (max modal damping + 1 N m/phi_b) / min J",
+            f"{h:.3g}",
+            "< 2.78 (RK4 real-axis stability limit)",
+            False if over else None,
+            required=False,
+            basis="heuristic",
+            detail="heuristic: the fastest rate is estimated from the modal damping and an assumed "
+            "1 N m fault estimate in the sat boundary layer (not a bound on the closed-loop "
+            "eigenvalues of the nonlinear loop); "
+            + (
+                "the estimate exceeds the limit: a warning, not a proof"
+                if over
+                else "below the limit, which proves nothing (unproven)"
+            ),
+        )
+    )
     return out

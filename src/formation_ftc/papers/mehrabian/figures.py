@@ -22,9 +22,14 @@ def plot_attitudes(ds, path: Path, title: str, window: tuple[float, float] | Non
     for p in range(3):
         ax = axes[p, 0]
         for j in range(q.shape[1]):
-            ax.plot(t, q[:, j, p], color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-                    linestyle="-." if j == 0 else "-", linewidth=1.6 if j == 0 else 1.0,
-                    label=f"spacecraft {int(ds.spacecraft.values[j])}")
+            ax.plot(
+                t,
+                q[:, j, p],
+                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
+                linestyle="-." if j == 0 else "-",
+                linewidth=1.6 if j == 0 else 1.0,
+                label=f"spacecraft {int(ds.spacecraft.values[j])}",
+            )
         if window is not None:
             ax.axvspan(*window, color="0.9", zorder=0)
         ax.set_ylabel(_LABELS[p])
@@ -33,17 +38,33 @@ def plot_attitudes(ds, path: Path, title: str, window: tuple[float, float] | Non
     return save_figure(fig, path)
 
 
-def plot_fault_estimate(ds, path: Path, spacecraft: int = 1, channel: int = 3, title: str = "") -> Path:
+def plot_fault_estimate(
+    ds, path: Path, spacecraft: int = 1, channel: int = 3, title: str = ""
+) -> Path:
     """True additive fault u_bar and the FDI estimate u* in one channel (paper Fig. 2)."""
     fig, axes = new_figure(1, 1, width=6.4, height=3.2, title=title or None)
     ax = axes[0, 0]
     t = ds.time.values
-    ax.plot(t, ds.fault.values[:, spacecraft - 1, channel - 1], color="#1f77b4",
-            label=rf"fault $\bar u_{{{spacecraft},{channel}}}$ (spacecraft {spacecraft})")
-    ax.plot(t, ds.fdi_estimate.values[:, spacecraft - 1, channel - 1], "--", color="#2ca02c",
-            label=rf"FDI estimate $\bar u^*_{{{spacecraft},{channel}}}$")
-    ax.plot(t, ds.fault_estimate_adaptive.values[:, spacecraft - 1, channel - 1], ":", color="#d62728",
-            label=rf"adaptive estimate $\hat u_{{{spacecraft},{channel}}}$ (19)")
+    ax.plot(
+        t,
+        ds.fault.values[:, spacecraft - 1, channel - 1],
+        color="#1f77b4",
+        label=rf"fault $\bar u_{{{spacecraft},{channel}}}$ (spacecraft {spacecraft})",
+    )
+    ax.plot(
+        t,
+        ds.fdi_estimate.values[:, spacecraft - 1, channel - 1],
+        "--",
+        color="#2ca02c",
+        label=rf"FDI estimate $\bar u^*_{{{spacecraft},{channel}}}$",
+    )
+    ax.plot(
+        t,
+        ds.fault_estimate_adaptive.values[:, spacecraft - 1, channel - 1],
+        ":",
+        color="#d62728",
+        label=rf"adaptive estimate $\hat u_{{{spacecraft},{channel}}}$ (19)",
+    )
     ax.set_xlabel("time [s]")
     ax.set_ylabel("generalised force [N m]")
     ax.legend(loc="best")
@@ -59,7 +80,13 @@ def plot_seed_spread(values: dict[str, np.ndarray], path: Path, ylabel: str, tit
     ax.boxplot(data)
     ax.set_xticks(range(1, len(names) + 1), names)
     for k, d in enumerate(data):
-        ax.plot(np.full(d.shape, k + 1.0) + np.linspace(-0.12, 0.12, d.size), d, ".", color="0.3", markersize=4)
+        ax.plot(
+            np.full(d.shape, k + 1.0) + np.linspace(-0.12, 0.12, d.size),
+            d,
+            ".",
+            color="0.3",
+            markersize=4,
+        )
     ax.set_ylabel(ylabel)
     return save_figure(fig, path)
 
@@ -67,10 +94,23 @@ def plot_seed_spread(values: dict[str, np.ndarray], path: Path, ylabel: str, tit
 def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     """Figures of one run: attitudes, and the fault vs FDI estimate of the first fault."""
     out_dir = Path(out_dir)
-    paths = [plot_attitudes(ds, out_dir / "attitudes.png", f"{scenario.scenario.name}: Euler angles",
-                            tuple(scenario.metrics.fault_window))]
+    paths = [
+        plot_attitudes(
+            ds,
+            out_dir / "attitudes.png",
+            f"{scenario.scenario.name}: Euler angles",
+            tuple(scenario.metrics.fault_window),
+        )
+    ]
     if scenario.faults:
         f = scenario.faults[0]
-        paths.append(plot_fault_estimate(ds, out_dir / "fault_estimate.png", f.spacecraft, f.channel,
-                                         f"{scenario.scenario.name}: fault and estimates"))
+        paths.append(
+            plot_fault_estimate(
+                ds,
+                out_dir / "fault_estimate.png",
+                f.spacecraft,
+                f.channel,
+                f"{scenario.scenario.name}: fault and estimates",
+            )
+        )
     return paths

@@ -19,7 +19,13 @@ from formation_ftc.design.dwell_time import Inequality
 from formation_ftc.papers.yang2013.schema import Yang2013Scenario
 from formation_ftc.registry import Condition
 
-__all__ = ["design_quantities", "fault_conditions", "check", "disturbance_peaks", "disturbance_bounds"]
+__all__ = [
+    "design_quantities",
+    "fault_conditions",
+    "check",
+    "disturbance_peaks",
+    "disturbance_bounds",
+]
 
 
 def design_quantities(sc: Yang2013Scenario) -> dict[str, float]:
@@ -39,13 +45,18 @@ def design_quantities(sc: Yang2013Scenario) -> dict[str, float]:
         "S_induced2": S_2,
         "envelope": dw.state_envelope(d.epsilon, S, d.zeta, D),
         "pre_switch_bound": dw.pre_switch_bound(d.epsilon1, d.zeta, D),
-        "dwell_time_required": dw.dwell_time_bound(d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time),
-        "dwell_time_required_frobenius": dw.dwell_time_bound(d.eta, S_fro, d.zeta, D, d.epsilon,
-                                                             d.epsilon1, d.dwell_time),
-        "dwell_time_required_induced2": dw.dwell_time_bound(d.eta, S_2, d.zeta, D, d.epsilon,
-                                                            d.epsilon1, d.dwell_time),
-        "dwell_time_required_proof_S_plus_1": dw.dwell_time_bound(d.eta, S, d.zeta, D, d.epsilon,
-                                                                  d.epsilon1, d.dwell_time, s_offset=1.0),
+        "dwell_time_required": dw.dwell_time_bound(
+            d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
+        ),
+        "dwell_time_required_frobenius": dw.dwell_time_bound(
+            d.eta, S_fro, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
+        ),
+        "dwell_time_required_induced2": dw.dwell_time_bound(
+            d.eta, S_2, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
+        ),
+        "dwell_time_required_proof_S_plus_1": dw.dwell_time_bound(
+            d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time, s_offset=1.0
+        ),
         "min_activation_time": min(act) if act else float("inf"),
         "initial_state_norm": float(x0),
         "initial_state_bound": dw.initial_state_bound(d.epsilon, S, d.zeta, D),
@@ -66,8 +77,15 @@ def fault_conditions(sc: Yang2013Scenario) -> list[tuple[int, Inequality, bool]]
     for f in sc.faults:
         j = max(i for i, s in enumerate(starts) if s <= f.onset)
         if j + 1 >= len(starts):
-            ineq = Inequality("(eta/2) dt1 - (eta1/2) dt2 >= 0", "(29)", float("-inf"), ">=", 0.0, False,
-                              detail="fault in the last mode: no switch can remove the faulty spacecraft")
+            ineq = Inequality(
+                "(eta/2) dt1 - (eta1/2) dt2 >= 0",
+                "(29)",
+                float("-inf"),
+                ">=",
+                0.0,
+                False,
+                detail="fault in the last mode: no switch can remove the faulty spacecraft",
+            )
             out.append((f.spacecraft, ineq, False))
             continue
         dt1, dt2 = f.onset - starts[j], starts[j + 1] - f.onset
@@ -86,14 +104,20 @@ def disturbance_peaks(sc: Yang2013Scenario, n_samples: int = 20001) -> tuple[flo
     for texts in (sc.disturbance.force, sc.disturbance.torque):
         worst = 0.0
         for i in range(1, sc.spacecraft.count + 1):
-            comps = [np.broadcast_to(np.asarray(compile_expression(tx, ("t", "i"))(t=t, i=float(i))), t.shape)
-                     for tx in texts]
+            comps = [
+                np.broadcast_to(
+                    np.asarray(compile_expression(tx, ("t", "i"))(t=t, i=float(i))), t.shape
+                )
+                for tx in texts
+            ]
             worst = max(worst, float(np.max(np.linalg.norm(np.stack(comps), axis=0))))
         peaks.append(worst)
     return peaks[0], peaks[1]
 
 
-def disturbance_bounds(sc: Yang2013Scenario, tol: float = 1e-9) -> tuple[float | None, float | None]:
+def disturbance_bounds(
+    sc: Yang2013Scenario, tol: float = 1e-9
+) -> tuple[float | None, float | None]:
     """Verified upper bounds of max_t,i |d_i(t)| and |iota_i(t)| over [0, horizon] (None if not enclosed).
 
     Interval arithmetic (:func:`formation_ftc.core.interval.enclose_norm`): the norm of the 3-vector is
@@ -101,14 +125,24 @@ def disturbance_bounds(sc: Yang2013Scenario, tol: float = 1e-9) -> tuple[float |
     the stated bound times (1 + tol).
     """
     out: list[float | None] = []
-    for texts, bound in ((sc.disturbance.force, sc.disturbance.force_bound),
-                         (sc.disturbance.torque, sc.disturbance.torque_bound)):
+    for texts, bound in (
+        (sc.disturbance.force, sc.disturbance.force_bound),
+        (sc.disturbance.torque, sc.disturbance.torque_bound),
+    ):
         worst = 0.0
         try:
             for i in range(1, sc.spacecraft.count + 1):
-                worst = max(worst, enclose_norm([str(tx) for tx in texts], ("t", "i"), 0.0,
-                                                float(sc.simulation.horizon), upper=float(bound) * (1 + tol),
-                                                i=float(i)))
+                worst = max(
+                    worst,
+                    enclose_norm(
+                        [str(tx) for tx in texts],
+                        ("t", "i"),
+                        0.0,
+                        float(sc.simulation.horizon),
+                        upper=float(bound) * (1 + tol),
+                        i=float(i),
+                    ),
+                )
         except IntervalError:
             out.append(None)
             continue
@@ -117,21 +151,32 @@ def disturbance_bounds(sc: Yang2013Scenario, tol: float = 1e-9) -> tuple[float |
 
 
 #: Detail of the sampled disturbance checks (a violation found is real; a pass is an estimate).
-SAMPLED = ("sampled on 20,001 points over the horizon: a violation found is real, a pass is not a proof "
-           "(no verified bound between samples)")
+SAMPLED = (
+    "sampled on 20,001 points over the horizon: a violation found is real, a pass is not a proof "
+    "(no verified bound between samples)"
+)
 #: Detail of the verified disturbance checks.
-VERIFIED = ("verified by interval arithmetic over the continuous horizon: the norm is bounded from outward-"
-            "rounded enclosures of its components on sub-intervals (relative tolerance 1e-9); value = sampled "
-            "peak on 20,001 points")
+VERIFIED = (
+    "verified by interval arithmetic over the continuous horizon: the norm is bounded from outward-"
+    "rounded enclosures of its components on sub-intervals (relative tolerance 1e-9); value = sampled "
+    "peak on 20,001 points"
+)
 #: Detail of the closed-form scalar inequalities.
 EXACT = "exact: closed-form scalar inequality on the scenario values (tolerance 1e-12 on <= / >=)"
 
 
 def _cond(ineq: Inequality, required: bool = True, detail: str = "") -> Condition:
     text = detail or ineq.detail
-    return Condition(name=ineq.name, reference=f"Yang2013 {ineq.reference}", value=f"{ineq.lhs:.6g}",
-                     requirement=f"{ineq.relation} {ineq.rhs:.6g}", holds=bool(ineq.holds), required=required,
-                     basis="exact", detail=f"{text}; {EXACT}" if text else EXACT)
+    return Condition(
+        name=ineq.name,
+        reference=f"Yang2013 {ineq.reference}",
+        value=f"{ineq.lhs:.6g}",
+        requirement=f"{ineq.relation} {ineq.rhs:.6g}",
+        holds=bool(ineq.holds),
+        required=required,
+        basis="exact",
+        detail=f"{text}; {EXACT}" if text else EXACT,
+    )
 
 
 def check(sc: Yang2013Scenario) -> list[Condition]:
@@ -139,45 +184,100 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
     d = sc.design
     q = design_quantities(sc)
     out: list[Condition] = []
-    out.append(Condition(
-        name="S = max|S_ij| (Frobenius, as printed) and induced 2-norm", reference="Yang2013 after (20), E001-04",
-        value=f"S_F = {q['S_frobenius']:.4f}, S_2 = {q['S_induced2']:.4f}; D = {q['D']:.4g}",
-        requirement=f"using {d.variation_norm}", holds=None, required=False, basis="informative",
-        detail="informative: the two norms of the variation matrices (numpy), shown for E001-04"))
+    out.append(
+        Condition(
+            name="S = max|S_ij| (Frobenius, as printed) and induced 2-norm",
+            reference="Yang2013 after (20), E001-04",
+            value=f"S_F = {q['S_frobenius']:.4f}, S_2 = {q['S_induced2']:.4f}; D = {q['D']:.4g}",
+            requirement=f"using {d.variation_norm}",
+            holds=None,
+            required=False,
+            basis="informative",
+            detail="informative: the two norms of the variation matrices (numpy), shown for E001-04",
+        )
+    )
     c = sc.controller
     rate = dw.translational_decay_rate(c.K1, c.K2)
-    out.append(Condition(
-        name="gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0", reference="Yang2013 (12), (20)",
-        value=f"{2 * rate:.6g} 1/s (K1 = {c.K1:g}, K2 = {c.K2:g})", requirement=f">= eta = {d.eta:g}",
-        holds=bool(2 * rate >= d.eta * (1 - 1e-9)), required=True, basis="exact",
-        detail="underdamped loop: rate = K2/2, so K2 = eta (design.dwell_time.gains_for_decay_rate); " + EXACT))
-    out.append(Condition(
-        name="attitude-rate loop at least as fast: K3 >= eta/2", reference="Yang2013 (13)",
-        value=f"{c.K3:g}", requirement=f">= {d.eta / 2:g}", holds=bool(c.K3 >= d.eta / 2), required=True,
-        basis="exact", detail=EXACT))
+    out.append(
+        Condition(
+            name="gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0",
+            reference="Yang2013 (12), (20)",
+            value=f"{2 * rate:.6g} 1/s (K1 = {c.K1:g}, K2 = {c.K2:g})",
+            requirement=f">= eta = {d.eta:g}",
+            holds=bool(2 * rate >= d.eta * (1 - 1e-9)),
+            required=True,
+            basis="exact",
+            detail="underdamped loop: rate = K2/2, so K2 = eta (design.dwell_time.gains_for_decay_rate); "
+            + EXACT,
+        )
+    )
+    out.append(
+        Condition(
+            name="attitude-rate loop at least as fast: K3 >= eta/2",
+            reference="Yang2013 (13)",
+            value=f"{c.K3:g}",
+            requirement=f">= {d.eta / 2:g}",
+            holds=bool(c.K3 >= d.eta / 2),
+            required=True,
+            basis="exact",
+            detail=EXACT,
+        )
+    )
     for f in sc.faults:
         growth = -2.0 * dw.translational_decay_rate(c.K1, f.K2_faulty)
-        out.append(Condition(
-            name=f"eta1 bounds the faulty growth of spacecraft {f.spacecraft}", reference="Yang2013 (28)",
-            value=f"{growth:.6g} 1/s (K2f = {f.K2_faulty:g})", requirement=f"<= eta1 = {d.eta1:g}",
-            holds=bool(growth <= d.eta1 * (1 + 1e-9)), required=True, basis="exact", detail=EXACT))
+        out.append(
+            Condition(
+                name=f"eta1 bounds the faulty growth of spacecraft {f.spacecraft}",
+                reference="Yang2013 (28)",
+                value=f"{growth:.6g} 1/s (K2f = {f.K2_faulty:g})",
+                requirement=f"<= eta1 = {d.eta1:g}",
+                holds=bool(growth <= d.eta1 * (1 + 1e-9)),
+                required=True,
+                basis="exact",
+                detail=EXACT,
+            )
+        )
     for ineq in dw.check_epsilons(d.epsilon, d.epsilon1, d.epsilon2, q["S"]):
         out.append(_cond(ineq))
-    out.append(_cond(dw.check_dwell_time(q["min_activation_time"], d.eta, q["S"], d.zeta, q["D"], d.epsilon,
-                                         d.epsilon1, d.dwell_time),
-                     detail=f"bound {q['dwell_time_required']:.1f} s; with S_2: "
-                            f"{q['dwell_time_required_induced2']:.1f} s; proof-consistent (S+1): "
-                            f"{q['dwell_time_required_proof_S_plus_1']:.1f} s (E001-07)"))
-    out.append(_cond(dw.check_initial_state(q["initial_state_norm"], d.epsilon, q["S"], d.zeta, q["D"])))
+    out.append(
+        _cond(
+            dw.check_dwell_time(
+                q["min_activation_time"],
+                d.eta,
+                q["S"],
+                d.zeta,
+                q["D"],
+                d.epsilon,
+                d.epsilon1,
+                d.dwell_time,
+            ),
+            detail=f"bound {q['dwell_time_required']:.1f} s; with S_2: "
+            f"{q['dwell_time_required_induced2']:.1f} s; proof-consistent (S+1): "
+            f"{q['dwell_time_required_proof_S_plus_1']:.1f} s (E001-07)",
+        )
+    )
+    out.append(
+        _cond(dw.check_initial_state(q["initial_state_norm"], d.epsilon, q["S"], d.zeta, q["D"]))
+    )
     for j, m in enumerate(sc.modes):
         for ns in m.new_states:
-            out.append(_cond(dw.check_new_state(float(np.linalg.norm(ns.vector())), d.epsilon2, d.zeta, q["D"],
-                                                who=f"spacecraft {ns.spacecraft} joining mode {j + 1}")))
+            out.append(
+                _cond(
+                    dw.check_new_state(
+                        float(np.linalg.norm(ns.vector())),
+                        d.epsilon2,
+                        d.zeta,
+                        q["D"],
+                        who=f"spacecraft {ns.spacecraft} joining mode {j + 1}",
+                    )
+                )
+            )
     d_peak, i_peak = disturbance_peaks(sc)
     d_up, i_up = disturbance_bounds(sc)
-    for name, ref, peak, up, bound in (("|d_i(t)| <= d_bar", "Yang2013 (1)", d_peak, d_up, sc.disturbance.force_bound),
-                                       ("|iota_i(t)| <= iota_bar", "Yang2013 (4)", i_peak, i_up,
-                                        sc.disturbance.torque_bound)):
+    for name, ref, peak, up, bound in (
+        ("|d_i(t)| <= d_bar", "Yang2013 (1)", d_peak, d_up, sc.disturbance.force_bound),
+        ("|iota_i(t)| <= iota_bar", "Yang2013 (4)", i_peak, i_up, sc.disturbance.torque_bound),
+    ):
         limit = bound * (1 + 1e-9)
         value = f"{peak:.4g} (sampled peak)"
         if peak > limit:
@@ -187,14 +287,36 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
             value += f"; verified bound {up:.8g}"
         else:
             holds, basis = None, "sampled"
-            detail = ("the interval bound could not prove it" + (f" (reached {up:.6g})" if up is not None else "")
-                      + "; " + SAMPLED)
-        out.append(Condition(name=name, reference=ref, value=value, requirement=f"<= {bound:g}", holds=holds,
-                             required=True, basis=basis, detail=detail))
+            detail = (
+                "the interval bound could not prove it"
+                + (f" (reached {up:.6g})" if up is not None else "")
+                + "; "
+                + SAMPLED
+            )
+        out.append(
+            Condition(
+                name=name,
+                reference=ref,
+                value=value,
+                requirement=f"<= {bound:g}",
+                holds=holds,
+                required=True,
+                basis=basis,
+                detail=detail,
+            )
+        )
     for scn, ineq, leaves in fault_conditions(sc):
-        out.append(Condition(
-            name=f"spacecraft {scn} leaves at the next switch (Case 1/2)", reference="Yang2013 Thm 2",
-            value=str(leaves), requirement="True", holds=leaves, required=True, basis="exact",
-            detail="exact: structural zero pattern of the variation matrix"))
+        out.append(
+            Condition(
+                name=f"spacecraft {scn} leaves at the next switch (Case 1/2)",
+                reference="Yang2013 Thm 2",
+                value=str(leaves),
+                requirement="True",
+                holds=leaves,
+                required=True,
+                basis="exact",
+                detail="exact: structural zero pattern of the variation matrix",
+            )
+        )
         out.append(_cond(ineq, detail=f"spacecraft {scn}: {ineq.detail}"))
     return out

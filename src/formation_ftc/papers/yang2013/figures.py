@@ -18,7 +18,9 @@ def _semilogy_active(ax, t, ds, variable: str, act) -> None:
         if not act[:, s].any():
             continue
         y = np.where(act[:, s], ds[variable].values[:, s], np.nan)
-        ax.semilogy(t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}")
+        ax.semilogy(
+            t, y, color=SPACECRAFT_COLORS[s % len(SPACECRAFT_COLORS)], label=f"spacecraft {sc_id}"
+        )
 
 
 def _switch_lines(ax, ds) -> None:
@@ -40,7 +42,12 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     ax = axes[0, 0]
     ax.plot(t, ds["state_norm"].values, color="k", label="|X_sigma(t)(t)|")
     ax.axhline(q["envelope"], color="r", ls="--", label=f"eps + (S+2) zeta D = {q['envelope']:.3f}")
-    ax.axhline(q["pre_switch_bound"], color="0.4", ls="-.", label=f"eps1 + zeta D = {q['pre_switch_bound']:.2f}")
+    ax.axhline(
+        q["pre_switch_bound"],
+        color="0.4",
+        ls="-.",
+        label=f"eps1 + zeta D = {q['pre_switch_bound']:.2f}",
+    )
     _switch_lines(ax, ds)
     ax.set_ylabel("|X| [-]")
     ax.legend(loc="upper right")
@@ -61,14 +68,33 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
 
 def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path) -> Path:
     """Fig. 4: trajectories of |X_sigma(t)(t)| (healthy and spacecraft-2 controller fault)."""
-    fig, axes = new_figure(2, 1, width=7.0, height=6.0, sharex=True,
-                           title="Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|")
+    fig, axes = new_figure(
+        2,
+        1,
+        width=7.0,
+        height=6.0,
+        sharex=True,
+        title="Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|",
+    )
     ax = axes[0, 0]
     ax.plot(ds_healthy["time"], ds_healthy["state_norm"], color="#1f77b4", label="healthy")
-    ax.plot(ds_fault["time"], ds_fault["state_norm"], color="#d62728", ls="--",
-            label="spacecraft 2 controller fault at 3800 s")
-    ax.axhline(envelope, color="k", ls="--", lw=0.9, label=f"envelope eps + (S+2) zeta D = {envelope:.3f}")
-    ax.axhline(pre_bound, color="0.5", ls="-.", lw=0.9, label=f"switch bound eps1 + zeta D = {pre_bound:.2f}")
+    ax.plot(
+        ds_fault["time"],
+        ds_fault["state_norm"],
+        color="#d62728",
+        ls="--",
+        label="spacecraft 2 controller fault at 3800 s",
+    )
+    ax.axhline(
+        envelope, color="k", ls="--", lw=0.9, label=f"envelope eps + (S+2) zeta D = {envelope:.3f}"
+    )
+    ax.axhline(
+        pre_bound,
+        color="0.5",
+        ls="-.",
+        lw=0.9,
+        label=f"switch bound eps1 + zeta D = {pre_bound:.2f}",
+    )
     _switch_lines(ax, ds_healthy)
     ax.set_ylabel("|X_sigma(t)(t)| [-]")
     ax.legend(loc="upper right")
@@ -85,14 +111,24 @@ def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path
 
 def figure_5(ds_healthy, ds_fault, path: Path, t_end: float = 4000.0) -> Path:
     """Fig. 5: |u_2(t)| on [0, 4000) s until spacecraft 2 departs."""
-    fig, axes = new_figure(1, 1, width=7.0, height=3.4, title="Yang2013 Fig. 5: trajectories of |u_2(t)|")
+    fig, axes = new_figure(
+        1, 1, width=7.0, height=3.4, title="Yang2013 Fig. 5: trajectories of |u_2(t)|"
+    )
     ax = axes[0, 0]
-    for ds, style, color, label in ((ds_fault, "-", "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
-                                    (ds_healthy, "-", "#1f77b4", "spacecraft 2, healthy")):
+    for ds, style, color, label in (
+        (ds_fault, "-", "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
+        (ds_healthy, "-", "#1f77b4", "spacecraft 2, healthy"),
+    ):
         t = ds["time"].values
         keep = t < t_end
-        ax.semilogy(t[keep], ds["input_norm"].sel(spacecraft=2).values[keep], ls=style, color=color,
-                    lw=0.8, label=label)
+        ax.semilogy(
+            t[keep],
+            ds["input_norm"].sel(spacecraft=2).values[keep],
+            ls=style,
+            color=color,
+            lw=0.8,
+            label=label,
+        )
     ax.axvline(3800.0, color="0.5", lw=0.8, ls=":")
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("|u_2| = |[f_2; tau_2]| [N, N m]")

@@ -50,7 +50,14 @@ from formation_ftc.sim.components import as_float
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric
 
-__all__ = ["SwitchedStructure", "switched_structure", "make_loop", "build", "input_norm_window", "METHOD"]
+__all__ = [
+    "SwitchedStructure",
+    "switched_structure",
+    "make_loop",
+    "build",
+    "input_norm_window",
+    "METHOD",
+]
 
 
 @dataclass(frozen=True)
@@ -97,7 +104,9 @@ def switched_structure(sc: Yang2013Scenario) -> SwitchedStructure:
                 continue
             for c, pc in enumerate(prev):
                 if pc > 0:
-                    P[j, m.members[r] - 1, pc - 1] = S[r, c]  # Yang2013 eq. (10): S_ij (x) I_13 on slots
+                    P[j, m.members[r] - 1, pc - 1] = S[
+                        r, c
+                    ]  # Yang2013 eq. (10): S_ij (x) I_13 on slots
         for ns in m.new_states:
             xstar[j, ns.spacecraft - 1] = ns.vector()
         for c, pc in enumerate(prev):
@@ -123,29 +132,48 @@ def _desired_table(sc: Yang2013Scenario) -> tuple:
 
 def input_norm_window(name: str, start: float, end: float, dt: float) -> Metric:
     """Every-step maximum of |u_i| per spacecraft on the half-open window [start, end) [s]."""
-    return Metric(name, "input_norm", reduce="max", spacecraft="each", units="1",
-                  start=as_float(start), end=as_float(end - 0.5 * dt))
+    return Metric(
+        name,
+        "input_norm",
+        reduce="max",
+        spacecraft="each",
+        units="1",
+        start=as_float(start),
+        end=as_float(end - 0.5 * dt),
+    )
 
 
 def _metrics(sc: Yang2013Scenario, st: SwitchedStructure) -> list[Metric]:
     dt = sc.simulation.dt
     n_steps = sc.simulation.n_steps
     horizon = n_steps * dt
-    out = [Metric("max_state_norm", "state_norm_peak", reduce="max", units="1"),
-           Metric("final_state_norm", "state_norm", reduce="final", units="1"),
-           input_norm_window("max_input_norm", 0.0, horizon, dt)]
+    out = [
+        Metric("max_state_norm", "state_norm_peak", reduce="max", units="1"),
+        Metric("final_state_norm", "state_norm", reduce="final", units="1"),
+        input_norm_window("max_input_norm", 0.0, horizon, dt),
+    ]
     starts = [float(k * dt) for k in st.switch_steps]
     for j in range(1, len(starts)):
         if st.switch_steps[j] > n_steps:
             continue
         t = as_float(starts[j])
-        out += [Metric(f"pre_switch_norm_{j + 1}", "state_norm_left", reduce="at", units="1", start=t),
-                Metric(f"post_switch_norm_{j + 1}", "state_norm", reduce="at", units="1", start=t),
-                Metric(f"pre_switch_sc_norm_{j + 1}", "spacecraft_norm_left", reduce="at", spacecraft="each",
-                       units="1", start=t)]
+        out += [
+            Metric(f"pre_switch_norm_{j + 1}", "state_norm_left", reduce="at", units="1", start=t),
+            Metric(f"post_switch_norm_{j + 1}", "state_norm", reduce="at", units="1", start=t),
+            Metric(
+                f"pre_switch_sc_norm_{j + 1}",
+                "spacecraft_norm_left",
+                reduce="at",
+                spacecraft="each",
+                units="1",
+                start=t,
+            ),
+        ]
     # decision codes (0 none, 1 tolerate by switching, 2 reconfigure); times, modes and (29) margins are
     # recorded signals (the last record holds every decision)
-    out.append(Metric("supervisor_decision", "supervisor_decision", reduce="final", spacecraft="each"))
+    out.append(
+        Metric("supervisor_decision", "supervisor_decision", reduce="final", spacecraft="each")
+    )
     return out
 
 
@@ -161,17 +189,35 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
     # the laws' stated knowledge (controller.nominal_*), never the truth above
     mass_nom = as_float(np.full(n, c.nominal_mass))
     J_nom = as_float(np.diag(c.nominal_inertia))
-    attitude = QuaternionRigidBodyPlant(inertia=J, initial_omega=as_float(st.x0[:, 6:9]),
-                                        initial_quaternion=as_float(st.x0[:, 9:13]),
-                                        disturbance_torque=sc.disturbance.torque, gyroscopic=False)
-    plant = SwitchedFormationPlant(mass=mass, attitude=attitude, initial_translation=as_float(st.x0[:, 0:6]),
-                                   variation=as_float(st.P), new_states=as_float(st.xstar),
-                                   disturbance_force=sc.disturbance.force,
-                                   rotation_coupling=c.rotation_coupling)
+    attitude = QuaternionRigidBodyPlant(
+        inertia=J,
+        initial_omega=as_float(st.x0[:, 6:9]),
+        initial_quaternion=as_float(st.x0[:, 9:13]),
+        disturbance_torque=sc.disturbance.torque,
+        gyroscopic=False,
+    )
+    plant = SwitchedFormationPlant(
+        mass=mass,
+        attitude=attitude,
+        initial_translation=as_float(st.x0[:, 0:6]),
+        variation=as_float(st.P),
+        new_states=as_float(st.xstar),
+        disturbance_force=sc.disturbance.force,
+        rotation_coupling=c.rotation_coupling,
+    )
     controller = ForceTorqueController(
-        force_law=Yang2013TranslationalController(count=n, mass=mass_nom, K1=as_float(c.K1), K2=as_float(c.K2)),
-        torque_law=Yang2013AttitudeController(count=n, inertia=J_nom, K3=as_float(c.K3), K4=as_float(c.K4),
-                                              K5=as_float(c.K5), kappa=as_float(c.kappa)))
+        force_law=Yang2013TranslationalController(
+            count=n, mass=mass_nom, K1=as_float(c.K1), K2=as_float(c.K2)
+        ),
+        torque_law=Yang2013AttitudeController(
+            count=n,
+            inertia=J_nom,
+            K3=as_float(c.K3),
+            K4=as_float(c.K4),
+            K5=as_float(c.K5),
+            kappa=as_float(c.kappa),
+        ),
+    )
     # faults on the step grid: times k dt computed as the loop computes t_k (exact comparisons)
     onset = np.full(n, np.inf)
     diagnosis = np.full(n, np.inf)
@@ -185,19 +231,37 @@ def make_loop(sc: Yang2013Scenario, extra_metrics: tuple[Metric, ...] = ()) -> C
         diagnosis[s] = (k_f + delay[s]) * dt
         K2f[s] = f.K2_faulty
     # the faulty law's extra force M_i (K2f - K2) e_V, with the law's mass M_i
-    actuator = VelocityGainFaultActuator(count=n, mass=mass_nom, K2=as_float(c.K2), K2_faulty=as_float(K2f),
-                                         onset=as_float(onset),
-                                         reconfigurable=sc.supervisor.reconfiguration == "restore_nominal")
+    actuator = VelocityGainFaultActuator(
+        count=n,
+        mass=mass_nom,
+        K2=as_float(c.K2),
+        K2_faulty=as_float(K2f),
+        onset=as_float(onset),
+        reconfigurable=sc.supervisor.reconfiguration == "restore_nominal",
+    )
     estimator = ScheduledDiagnosis(count=n, diagnosis_time=as_float(diagnosis))
     supervisor = SwitchingSupervisor(
-        count=n, dt=float(dt), switch_steps=jnp.asarray(st.switch_steps), active=as_float(st.active),
-        leaves_at_next_switch=jnp.asarray(st.leaves), eta=as_float(sc.design.eta),
-        eta1=as_float(np.full(n, sc.design.eta1)), delay_bound_steps=jnp.asarray(delay),
-        desired_position=_desired_table(sc))
+        count=n,
+        dt=float(dt),
+        switch_steps=jnp.asarray(st.switch_steps),
+        active=as_float(st.active),
+        leaves_at_next_switch=jnp.asarray(st.leaves),
+        eta=as_float(sc.design.eta),
+        eta1=as_float(np.full(n, sc.design.eta1)),
+        delay_bound_steps=jnp.asarray(delay),
+        desired_position=_desired_table(sc),
+    )
     sim = sc.simulation
-    return ClosedLoop.from_simulation(sim, plant=plant, controller=controller, sensors=TrackingErrorSensors(count=n),
-                                      estimator=estimator, supervisor=supervisor, actuator=actuator,
-                                      metrics=tuple(_metrics(sc, st)) + tuple(extra_metrics))
+    return ClosedLoop.from_simulation(
+        sim,
+        plant=plant,
+        controller=controller,
+        sensors=TrackingErrorSensors(count=n),
+        estimator=estimator,
+        supervisor=supervisor,
+        actuator=actuator,
+        metrics=tuple(_metrics(sc, st)) + tuple(extra_metrics),
+    )
 
 
 def build(sc: Yang2013Scenario) -> Compiled:
@@ -205,12 +269,14 @@ def build(sc: Yang2013Scenario) -> Compiled:
     return compile_loop(make_loop(sc))
 
 
-METHOD = register_method(Method(
-    name="yang2013",
-    schema=Yang2013Scenario,
-    build=build,
-    description="Yang2013 state-varying switched formation (docking, undocking, departure, participation), "
-                "error-level closed loop of (12)-(13), dwell-time supervisor and fault tolerance by switching",
-    check=check,
-    plot=plot_scenario,
-))
+METHOD = register_method(
+    Method(
+        name="yang2013",
+        schema=Yang2013Scenario,
+        build=build,
+        description="Yang2013 state-varying switched formation (docking, undocking, departure, participation), "
+        "error-level closed loop of (12)-(13), dwell-time supervisor and fault tolerance by switching",
+        check=check,
+        plot=plot_scenario,
+    )
+)

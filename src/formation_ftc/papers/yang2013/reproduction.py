@@ -32,8 +32,10 @@ def _windows(dt: float) -> tuple:
     """Every-step maxima of |u_i| on the windows the report compares, [2000, 3800) and [3800, 4000) s."""
     from formation_ftc.papers.yang2013.method import input_norm_window
 
-    return (input_norm_window("max_input_norm_2000_3800", 2000.0, 3800.0, dt),
-            input_norm_window("max_input_norm_3800_4000", 3800.0, 4000.0, dt))
+    return (
+        input_norm_window("max_input_norm_2000_3800", 2000.0, 3800.0, dt),
+        input_norm_window("max_input_norm_3800_4000", 3800.0, 4000.0, dt),
+    )
 
 
 def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
@@ -45,10 +47,15 @@ def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
     from formation_ftc.papers.yang2013.method import make_loop
     from formation_ftc.sim.compiled import compile_loop
 
-    scs: list[Yang2013Scenario] = [s if hasattr(s, "modes") else cast("Yang2013Scenario", load_scenario(s, overrides))
-                                   for s in names_or_scenarios]
+    scs: list[Yang2013Scenario] = [
+        s if hasattr(s, "modes") else cast("Yang2013Scenario", load_scenario(s, overrides))
+        for s in names_or_scenarios
+    ]
     compiled = [compile_loop(make_loop(sc, _windows(sc.simulation.dt))) for sc in scs]
-    return [(sc, ds, metrics) for sc, (ds, metrics) in zip(scs, simulate_batched(scs, compiled), strict=True)]
+    return [
+        (sc, ds, metrics)
+        for sc, (ds, metrics) in zip(scs, simulate_batched(scs, compiled), strict=True)
+    ]
 
 
 def run_scenario(name_or_scenario, overrides=None):
@@ -100,9 +107,18 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
         "x2_growth_ratio": x2_pre4000 / x2_3800 if x2_3800 > 0 else float("nan"),
         "state_norm_after_4000": post.get(4000.0, float("nan")),
         "supervisor_events": decision_events(  # type: ignore[call-arg]  # a starred generator of 4 items
-            *(ds[name].values[-1] for name in ("supervisor_decision", "supervisor_decision_time",
-                                               "supervisor_decision_mode", "condition_29_margin")),
-            sc.simulation.dt, [m.name for m in sc.modes]),
+            *(
+                ds[name].values[-1]
+                for name in (
+                    "supervisor_decision",
+                    "supervisor_decision_time",
+                    "supervisor_decision_mode",
+                    "condition_29_margin",
+                )
+            ),
+            sc.simulation.dt,
+            [m.name for m in sc.modes],
+        ),
         "design": q,
     }
 
@@ -124,8 +140,10 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     progress(0.0, "simulating " + ", ".join(SCENARIOS) + " (one batch)")
     with phase("run"):
         runs = run_scenarios(SCENARIOS)
-    results = {name: (sc, ds, scenario_numbers(sc, ds, metrics))
-               for name, (sc, ds, metrics) in zip(SCENARIOS, runs, strict=True)}
+    results = {
+        name: (sc, ds, scenario_numbers(sc, ds, metrics))
+        for name, (sc, ds, metrics) in zip(SCENARIOS, runs, strict=True)
+    }
     progress(len(SCENARIOS) / (len(SCENARIOS) + 1), "figures")
     sc_h, ds_h, n_h = results["yang2013-healthy"]
     sc_f, ds_f, n_f = results["yang2013-controller-fault"]
@@ -134,11 +152,25 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
         figure_4(ds_h, ds_f, q["envelope"], q["pre_switch_bound"], out_dir / "fig4_state_norm.png")
         figure_5(ds_h, ds_f, out_dir / "fig5_input_norm_sc2.png")
     figures = [
-        Figure("fig4_state_norm.png", "4", "Trajectories of |X_sigma(t)(t)|, healthy and with the spacecraft-2 "
-               "controller fault at 3800 s, inside the envelope eps + (S+2) zeta D; lower panel |x_i|."),
-        Figure("fig5_input_norm_sc2.png", "5", "Input norm |u_2(t)| on [0, 4000) s, healthy and faulty."),
+        Figure(
+            "fig4_state_norm.png",
+            "4",
+            "Trajectories of |X_sigma(t)(t)|, healthy and with the spacecraft-2 "
+            "controller fault at 3800 s, inside the envelope eps + (S+2) zeta D; lower panel |x_i|.",
+        ),
+        Figure(
+            "fig5_input_norm_sc2.png",
+            "5",
+            "Input norm |u_2(t)| on [0, 4000) s, healthy and faulty.",
+        ),
     ]
-    keys = ["max_state_norm", "state_norm_bound", "dwell_time_required", "condition_29_holds", "max_input_norm_sc2"]
+    keys = [
+        "max_state_norm",
+        "state_norm_bound",
+        "dwell_time_required",
+        "condition_29_holds",
+        "max_input_norm_sc2",
+    ]
     summary = {key: {name: results[name][2][key] for name in SCENARIOS} for key in keys}
     summary["S_frobenius"] = q["S_frobenius"]
     summary["S_induced2"] = q["S_induced2"]
@@ -146,7 +178,9 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     summary["x2_growth_ratio"] = n_f["x2_growth_ratio"]
     for key in ("max_input_norm_sc2_2000_3800", "max_input_norm_sc2_3800_4000"):
         summary[key] = {name: results[name][2][key] for name in SCENARIOS}
-    summary["state_norm_after_4000"] = {name: results[name][2]["state_norm_after_4000"] for name in SCENARIOS}
+    summary["state_norm_after_4000"] = {
+        name: results[name][2]["state_norm_after_4000"] for name in SCENARIOS
+    }
     summary["pre_switch_norms"] = {name: results[name][2]["pre_switch_norms"] for name in SCENARIOS}
     summary["supervisor_events"] = n_f["supervisor_events"]
 
@@ -157,35 +191,89 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     cond29 = n_f["condition_29_holds"]
     margin29 = n_f["condition_29_margin"] if n_f["condition_29_margin"] is not None else nan
     rows = [
-        _row("S = max|S_ij|", "sqrt(5) = 2.2361 (Sec. 4)", f"{q['S_frobenius']:.4f} (Frobenius); induced 2-norm "
-             f"{q['S_induced2']:.4f}", "|diff| < 1e-4", (("abs<=", q["S_frobenius"], float(np.sqrt(5)), 1e-4),),
-             "E001-04: the proof needs the induced 2-norm sqrt(3)"),
-        _row("D = |[d_bar, iota_bar]|", "0.1 (Sec. 4)", f"{q['D']:.4f}", "|diff| < 1e-9",
-             (("abs<=", q["D"], 0.1, 1e-9),)),
-        _row("Delta t = 1000 s satisfies (21)", "Delta t = 1000 s chosen from (21)-(22) (Sec. 4)",
-             f"bound {q['dwell_time_required']:.1f} s (S_2: {q['dwell_time_required_induced2']:.1f} s)",
-             "bound of (21) <= 1000 s", (("<=", q["dwell_time_required"], 1000.0),),
-             "the bound itself is not printed (E001-07)"),
-        _row("initial |X(0)| satisfies (24)", "1.5 (Sec. 4)",
-             f"{q['initial_state_norm']:.4f} <= {q['initial_state_bound']:.4f}", "|X(0)| = 1.5 and (24) holds",
-             (("abs<=", q["initial_state_norm"], 1.5, 1e-9), ("<=", q["initial_state_norm"], q["initial_state_bound"]))),
-        _row("joining |x6| satisfies (22)", "0.2 <= eps = 0.9 (Sec. 4)", f"0.2 <= {q['new_state_bound']:.4f}",
-             "(22) holds: 0.2 <= bound", (("<=", 0.2, q["new_state_bound"]),)),
-        _row("(29) with fault at 3800 s", "holds since Delta t1 >= Delta t2 (Sec. 4)", f"margin {margin29:.4g}",
-             "(29) holds and the faulty spacecraft leaves at the next switch, margin >= 0",
-             (("true", bool(cond29)), (">=", margin29, 0.0))),
-        _row("|X_sigma(t)(t)| bounded within the envelope", "always bounded within the prescribed region (Sec. 4, Fig. 4)",
-             f"sup|X| = {max_all:.4f} <= {q['envelope']:.4f}", "sup|X| <= eps + (S+2) zeta D",
-             (("<=", max_all, q["envelope"]),)),
-        _row("|X(t_k^-)| at the switches", "<= eps1 + zeta D (proof of Theorem 1)", f"max {pre_max:.4f}",
-             f"<= {q['pre_switch_bound']:.2f}", (("<=", pre_max, q["pre_switch_bound"]),)),
-        _row("|x2| grows on [3800, 4000) s", "|x2| increases in [3800, 4000) s (Sec. 4, Fig. 4)",
-             f"x {n_f['x2_growth_ratio']:.2f}", "ratio >= 2", ((">=", n_f["x2_growth_ratio"], 2.0),)),
-        _row("|X(4000)| after departure of 2 and arrival of 6", "spacecraft 6 joins with state norm 0.2 (Sec. 4)",
-             f"{n_f['state_norm_after_4000']:.4f}", "0.20 +- 0.05", (("abs<=", n_f["state_norm_after_4000"], 0.2, 0.05),)),
-        _row("|u_2| grows after the fault", "the input magnitude becomes large after 3800 s (Sec. 4, Fig. 5)",
-             f"max {n_f['max_input_norm_sc2_2000_3800']:.2f} -> {n_f['max_input_norm_sc2_3800_4000']:.2f} "
-             f"(x {u_ratio:.2f})", "ratio > 2", ((">", u_ratio, 2.0),)),
+        _row(
+            "S = max|S_ij|",
+            "sqrt(5) = 2.2361 (Sec. 4)",
+            f"{q['S_frobenius']:.4f} (Frobenius); induced 2-norm {q['S_induced2']:.4f}",
+            "|diff| < 1e-4",
+            (("abs<=", q["S_frobenius"], float(np.sqrt(5)), 1e-4),),
+            "E001-04: the proof needs the induced 2-norm sqrt(3)",
+        ),
+        _row(
+            "D = |[d_bar, iota_bar]|",
+            "0.1 (Sec. 4)",
+            f"{q['D']:.4f}",
+            "|diff| < 1e-9",
+            (("abs<=", q["D"], 0.1, 1e-9),),
+        ),
+        _row(
+            "Delta t = 1000 s satisfies (21)",
+            "Delta t = 1000 s chosen from (21)-(22) (Sec. 4)",
+            f"bound {q['dwell_time_required']:.1f} s (S_2: {q['dwell_time_required_induced2']:.1f} s)",
+            "bound of (21) <= 1000 s",
+            (("<=", q["dwell_time_required"], 1000.0),),
+            "the bound itself is not printed (E001-07)",
+        ),
+        _row(
+            "initial |X(0)| satisfies (24)",
+            "1.5 (Sec. 4)",
+            f"{q['initial_state_norm']:.4f} <= {q['initial_state_bound']:.4f}",
+            "|X(0)| = 1.5 and (24) holds",
+            (
+                ("abs<=", q["initial_state_norm"], 1.5, 1e-9),
+                ("<=", q["initial_state_norm"], q["initial_state_bound"]),
+            ),
+        ),
+        _row(
+            "joining |x6| satisfies (22)",
+            "0.2 <= eps = 0.9 (Sec. 4)",
+            f"0.2 <= {q['new_state_bound']:.4f}",
+            "(22) holds: 0.2 <= bound",
+            (("<=", 0.2, q["new_state_bound"]),),
+        ),
+        _row(
+            "(29) with fault at 3800 s",
+            "holds since Delta t1 >= Delta t2 (Sec. 4)",
+            f"margin {margin29:.4g}",
+            "(29) holds and the faulty spacecraft leaves at the next switch, margin >= 0",
+            (("true", bool(cond29)), (">=", margin29, 0.0)),
+        ),
+        _row(
+            "|X_sigma(t)(t)| bounded within the envelope",
+            "always bounded within the prescribed region (Sec. 4, Fig. 4)",
+            f"sup|X| = {max_all:.4f} <= {q['envelope']:.4f}",
+            "sup|X| <= eps + (S+2) zeta D",
+            (("<=", max_all, q["envelope"]),),
+        ),
+        _row(
+            "|X(t_k^-)| at the switches",
+            "<= eps1 + zeta D (proof of Theorem 1)",
+            f"max {pre_max:.4f}",
+            f"<= {q['pre_switch_bound']:.2f}",
+            (("<=", pre_max, q["pre_switch_bound"]),),
+        ),
+        _row(
+            "|x2| grows on [3800, 4000) s",
+            "|x2| increases in [3800, 4000) s (Sec. 4, Fig. 4)",
+            f"x {n_f['x2_growth_ratio']:.2f}",
+            "ratio >= 2",
+            ((">=", n_f["x2_growth_ratio"], 2.0),),
+        ),
+        _row(
+            "|X(4000)| after departure of 2 and arrival of 6",
+            "spacecraft 6 joins with state norm 0.2 (Sec. 4)",
+            f"{n_f['state_norm_after_4000']:.4f}",
+            "0.20 +- 0.05",
+            (("abs<=", n_f["state_norm_after_4000"], 0.2, 0.05),),
+        ),
+        _row(
+            "|u_2| grows after the fault",
+            "the input magnitude becomes large after 3800 s (Sec. 4, Fig. 5)",
+            f"max {n_f['max_input_norm_sc2_2000_3800']:.2f} -> {n_f['max_input_norm_sc2_3800_4000']:.2f} "
+            f"(x {u_ratio:.2f})",
+            "ratio > 2",
+            ((">", u_ratio, 2.0),),
+        ),
     ]
     checks = api_check(sc_f)
     notes = [
@@ -198,9 +286,17 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
         "|u_2| per window are taken at every step inside the run.",
     ]
     progress(1.0, "done")
-    return PaperReport(paper="yang2013", summary=summary, rows=rows, figures=figures, checks=checks,
-                       scenarios=list(SCENARIOS), seeds=[0], notes=notes,
-                       wall_time_s=time.perf_counter() - t_start)
+    return PaperReport(
+        paper="yang2013",
+        summary=summary,
+        rows=rows,
+        figures=figures,
+        checks=checks,
+        scenarios=list(SCENARIOS),
+        seeds=[0],
+        notes=notes,
+        wall_time_s=time.perf_counter() - t_start,
+    )
 
 
 REPRODUCTION = Reproduction(
@@ -208,13 +304,16 @@ REPRODUCTION = Reproduction(
     title="Spacecraft formation stabilization and fault tolerance: a state-varying switched system approach",
     citation="H. Yang, B. Jiang, V. Cocquempot, M. Chen, Systems & Control Letters 62(9), 715-722, 2013",
     description="Five-mode switched formation with undocking, docking, departure and participation; "
-                "dwell-time condition (21), new-state bound (22), fault tolerance by switching (29); Figs. 4-5.",
+    "dwell-time condition (21), new-state bound (22), fault tolerance by switching (29); Figs. 4-5.",
     errata=[
-        ("E001-01", "positive gains"), ("E001-02", "Phi, Upsilon exclude f, d, tau, iota"),
+        ("E001-01", "positive gains"),
+        ("E001-02", "Phi, Upsilon exclude f, d, tau, iota"),
         ("E001-03", "(14) not derivable; attitude error starts at zero"),
         ("E001-04", "S = sqrt(5) is a Frobenius norm; induced 2-norm sqrt(3) reported too"),
-        ("E001-05", "upper integral limit t in mode 2"), ("E001-07", "(S+2) in (21) is conservative"),
-        ("E001-09", "zero row of S_45 kept as a placeholder"), ("E001-10", "missing simulation data: our documented choices"),
+        ("E001-05", "upper integral limit t in mode 2"),
+        ("E001-07", "(S+2) in (21) is conservative"),
+        ("E001-09", "zero row of S_45 kept as a placeholder"),
+        ("E001-10", "missing simulation data: our documented choices"),
     ],
     run=run,
 )

@@ -33,8 +33,16 @@ import stat
 import sys
 from pathlib import Path
 
-__all__ = ["configure", "configured", "compilation_cache_dir", "private_cache_dir", "cpu_threads",
-           "schedulable_cpus", "ENV_SWITCH", "DEFAULT_CACHE_MIN_COMPILE_S"]
+__all__ = [
+    "configure",
+    "configured",
+    "compilation_cache_dir",
+    "private_cache_dir",
+    "cpu_threads",
+    "schedulable_cpus",
+    "ENV_SWITCH",
+    "DEFAULT_CACHE_MIN_COMPILE_S",
+]
 
 #: set to ``on`` by :func:`configure` (and so inherited by the processes it starts); a process whose
 #: environment has it configures itself when it imports the package
@@ -143,7 +151,9 @@ def compilation_cache_dir() -> str | None:
     ...     print(runtime.compilation_cache_dir())
     None
     """
-    cache = os.environ.get("FORMATION_FTC_JAX_CACHE", str(Path.home() / ".cache" / "formation_ftc" / "jax"))
+    cache = os.environ.get(
+        "FORMATION_FTC_JAX_CACHE", str(Path.home() / ".cache" / "formation_ftc" / "jax")
+    )
     if not cache or cache.lower() == "off":
         return None
     return str(Path(cache) / f"cpu-threads-{cpu_threads()}")
@@ -184,14 +194,20 @@ def private_cache_dir(cache: str) -> bool:
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
         for p in (path.parent, path):
             st = os.lstat(p)
-            if (not stat.S_ISDIR(st.st_mode) or st.st_uid != os.geteuid()
-                    or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
+            if (
+                not stat.S_ISDIR(st.st_mode)
+                or st.st_uid != os.geteuid()
+                or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+            ):
                 if cache not in _UNSAFE_REPORTED:
                     _UNSAFE_REPORTED.add(cache)
                     try:
-                        print(f"formation-ftc: compilation cache off: {p} is not a directory owned by this user "
-                              "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your "
-                              "own, or to off)", file=sys.stderr)
+                        print(
+                            f"formation-ftc: compilation cache off: {p} is not a directory owned by this user "
+                            "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your "
+                            "own, or to off)",
+                            file=sys.stderr,
+                        )
                     except (OSError, ValueError):  # a closed or full stderr
                         pass
                 return False
@@ -223,8 +239,12 @@ def configure() -> str | None:
     os.environ[ENV_SWITCH] = "on"
     cache = compilation_cache_dir()
     if cache is not None and private_cache_dir(cache):
-        os.environ["JAX_COMPILATION_CACHE_DIR"] = cache  # also over one inherited from a parent process
-        os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S)
+        os.environ["JAX_COMPILATION_CACHE_DIR"] = (
+            cache  # also over one inherited from a parent process
+        )
+        os.environ.setdefault(
+            "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
+        )
     else:  # off, or not private: also when a parent process passed its cache directory down
         cache = None
         os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
@@ -241,6 +261,12 @@ def _configure_jax(cache: str | None) -> None:
 
     jax.config.update("jax_compilation_cache_dir", cache)
     if cache is not None:
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", float(
-            os.environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S)))
+        jax.config.update(
+            "jax_persistent_cache_min_compile_time_secs",
+            float(
+                os.environ.get(
+                    "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
+                )
+            ),
+        )
     use_unrolled_threefry()

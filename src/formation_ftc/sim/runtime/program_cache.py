@@ -78,7 +78,14 @@ from typing import Any
 import jax
 import numpy as np
 
-__all__ = ["ENV_SWITCH", "CachedProgram", "UnsafeCacheWarning", "directory", "program_key", "load_or_compile"]
+__all__ = [
+    "ENV_SWITCH",
+    "CachedProgram",
+    "UnsafeCacheWarning",
+    "directory",
+    "program_key",
+    "load_or_compile",
+]
 
 #: environment variable that switches the program cache off (``off``, ``0``, ``false`` or ``no``)
 ENV_SWITCH = "FORMATION_FTC_PROGRAM_CACHE"
@@ -88,9 +95,30 @@ FORMAT = 2
 #: top-level modules whose classes and functions may appear in a key: the package (whose code is in the
 #: digest), the standard library pieces dataclasses and pytrees are made of, and the numeric libraries
 #: (whose versions are in the key)
-_TRUSTED_ROOTS = frozenset({"formation_ftc", "builtins", "numpy", "jax", "jaxlib", "collections", "functools",
-                            "operator", "_operator", "enum", "copyreg", "typing", "dataclasses", "types",
-                            "math", "fractions", "decimal", "_collections", "datetime", "pathlib"})
+_TRUSTED_ROOTS = frozenset(
+    {
+        "formation_ftc",
+        "builtins",
+        "numpy",
+        "jax",
+        "jaxlib",
+        "collections",
+        "functools",
+        "operator",
+        "_operator",
+        "enum",
+        "copyreg",
+        "typing",
+        "dataclasses",
+        "types",
+        "math",
+        "fractions",
+        "decimal",
+        "_collections",
+        "datetime",
+        "pathlib",
+    }
+)
 
 
 class Uncacheable(Exception):
@@ -121,7 +149,9 @@ def directory() -> Path | None:
     """
     if not _enabled():
         return None
-    base = getattr(jax.config, "jax_compilation_cache_dir", None)  # a dynamic option: not in the stubs
+    base = getattr(
+        jax.config, "jax_compilation_cache_dir", None
+    )  # a dynamic option: not in the stubs
     return Path(base) / "programs" if base else None
 
 
@@ -135,8 +165,10 @@ class _KeyPickler(pickle.Pickler):
         else:
             module = type(obj).__module__ or ""
         if module.split(".")[0] not in _TRUSTED_ROOTS:
-            raise Uncacheable(f"{module}.{getattr(obj, '__qualname__', type(obj).__qualname__)} is defined "
-                              "outside formation_ftc")
+            raise Uncacheable(
+                f"{module}.{getattr(obj, '__qualname__', type(obj).__qualname__)} is defined "
+                "outside formation_ftc"
+            )
         return NotImplemented
 
 
@@ -213,11 +245,24 @@ def _environment() -> tuple:
     from formation_ftc.sim.runtime import xla
 
     devices = jax.devices()
-    return (FORMAT, sys.version, jax.__version__, jaxlib.__version__, np.__version__, platform.machine(),
-            _cpu_flags(), jax.default_backend(), tuple(d.device_kind for d in devices), len(devices),
-            tuple(sorted((k, repr(v)) for k, v in jax.config.values.items())), _trace_context(),
-            os.environ.get("XLA_FLAGS", ""), os.environ.get("PJRT_NPROC", ""),
-            os.environ.get(xla.ENV_SWITCH, ""), _source_digest())
+    return (
+        FORMAT,
+        sys.version,
+        jax.__version__,
+        jaxlib.__version__,
+        np.__version__,
+        platform.machine(),
+        _cpu_flags(),
+        jax.default_backend(),
+        tuple(d.device_kind for d in devices),
+        len(devices),
+        tuple(sorted((k, repr(v)) for k, v in jax.config.values.items())),
+        _trace_context(),
+        os.environ.get("XLA_FLAGS", ""),
+        os.environ.get("PJRT_NPROC", ""),
+        os.environ.get(xla.ENV_SWITCH, ""),
+        _source_digest(),
+    )
 
 
 def _signature(args: tuple) -> tuple:
@@ -335,11 +380,15 @@ def _safe_folder(folder: Path) -> bool:
         for path in (folder.parent, folder):
             st = os.lstat(path)
             if not stat.S_ISDIR(st.st_mode) or not _owned_and_private(st):
-                _warn_once(f"program cache off: {path} is not a directory owned by this user and writable by "
-                           "it alone (delete it, or set FORMATION_FTC_JAX_CACHE to a directory of your own)")
+                _warn_once(
+                    f"program cache off: {path} is not a directory owned by this user and writable by "
+                    "it alone (delete it, or set FORMATION_FTC_JAX_CACHE to a directory of your own)"
+                )
                 return False
         if stat.S_IMODE(os.lstat(folder).st_mode) != 0o700:
-            os.chmod(folder, 0o700)  # ours and private: an entry directory of an earlier version (0755)
+            os.chmod(
+                folder, 0o700
+            )  # ours and private: an entry directory of an earlier version (0755)
     except OSError:
         return False
     return True
@@ -355,8 +404,11 @@ def _read_private(path: Path, size: int | None = None, *, secret: bool = False) 
         return None
     try:
         st = os.fstat(fd)
-        if (not stat.S_ISREG(st.st_mode) or not _owned_and_private(st)
-                or (secret and st.st_mode & (stat.S_IRWXG | stat.S_IRWXO))):
+        if (
+            not stat.S_ISREG(st.st_mode)
+            or not _owned_and_private(st)
+            or (secret and st.st_mode & (stat.S_IRWXG | stat.S_IRWXO))
+        ):
             return None
         with os.fdopen(fd, "rb", closefd=False) as f:
             data = f.read()
@@ -372,7 +424,9 @@ def _write_private(path: Path, data: bytes, *, replace: bool = True) -> bool:
     ``replace=False`` an existing file wins (False is returned)."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
+        fd = os.open(
+            tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600
+        )
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         if replace:
@@ -404,7 +458,9 @@ def _secret(folder: Path) -> bytes | None:
             if path.exists() or path.is_symlink():
                 path.unlink(missing_ok=True)
             _write_private(path, secrets.token_bytes(_SECRET_LEN), replace=False)
-            secret = _read_private(path, _SECRET_LEN, secret=True)  # ours, or the one another process made first
+            secret = _read_private(
+                path, _SECRET_LEN, secret=True
+            )  # ours, or the one another process made first
         if secret is None:
             return None
         _SECRETS[folder] = secret
@@ -429,7 +485,11 @@ def _tree_to_json(tree: Any) -> Any:
     names = {v: k for k, v in _BUILTIN_NODES.items()}
     if cls in names:
         name = names[cls]
-    elif issubclass(cls, tuple) and hasattr(cls, "_fields") and cls.__module__.split(".")[0] in _TRUSTED_ROOTS:
+    elif (
+        issubclass(cls, tuple)
+        and hasattr(cls, "_fields")
+        and cls.__module__.split(".")[0] in _TRUSTED_ROOTS
+    ):
         name = f"{cls.__module__}:{cls.__qualname__}"
     else:
         raise Uncacheable(f"result tree node {cls!r}")
@@ -460,8 +520,9 @@ def _tree_from_json(node: Any) -> Any:
             cls = getattr(cls, part)
         if not (isinstance(cls, type) and issubclass(cls, tuple) and hasattr(cls, "_fields")):
             raise ValueError(f"{name} is not a named tuple")
-    return tu.PyTreeDef.from_node_data_and_children(tu.default_registry, (cls, aux),
-                                                     [_tree_from_json(c) for c in children])
+    return tu.PyTreeDef.from_node_data_and_children(
+        tu.default_registry, (cls, aux), [_tree_from_json(c) for c in children]
+    )
 
 
 def _load(path: Path, key: str, secret: bytes, args: tuple) -> Any | None:
@@ -478,18 +539,21 @@ def _load(path: Path, key: str, secret: bytes, args: tuple) -> Any | None:
             path.unlink(missing_ok=True)  # not a private regular file of this user's
         return None
     head = len(MAGIC) + _KEY_LEN
-    stored_key = blob[len(MAGIC):head].decode("ascii", "replace")
-    tag, body = blob[head:head + _TAG_LEN], blob[head + _TAG_LEN:]
-    if (not blob.startswith(MAGIC) or stored_key != key
-            or not hmac.compare_digest(tag, _tag(secret, key, body))):
+    stored_key = blob[len(MAGIC) : head].decode("ascii", "replace")
+    tag, body = blob[head : head + _TAG_LEN], blob[head + _TAG_LEN :]
+    if (
+        not blob.startswith(MAGIC)
+        or stored_key != key
+        or not hmac.compare_digest(tag, _tag(secret, key, body))
+    ):
         path.unlink(missing_ok=True)
         return None
     try:
         raw = zlib.decompress(body)
         n = int.from_bytes(raw[:4], "big")
-        out_tree = _tree_from_json(json.loads(raw[4:4 + n]))
+        out_tree = _tree_from_json(json.loads(raw[4 : 4 + n]))
         in_tree = jax.tree_util.tree_structure((args, {}))
-        return serialize_executable.deserialize_and_load(raw[4 + n:], in_tree, out_tree)
+        return serialize_executable.deserialize_and_load(raw[4 + n :], in_tree, out_tree)
     except Exception:  # noqa: BLE001 - ours, but not loadable here: forget it, compile instead
         path.unlink(missing_ok=True)
         return None
@@ -570,8 +634,13 @@ def load_or_compile(jitted: Any, kind: str, parts: Hashable, args: tuple) -> Any
             return _CheckedOnFirstCall(exe, path, lambda: jitted.lower(*args).compile())
     writes = getattr(_WRITES, "count", 0)
     exe = jitted.lower(*args).compile()
-    if (path is not None and secret is not None and key is not None
-            and getattr(_WRITES, "count", 0) > writes and _storable(exe)):
+    if (
+        path is not None
+        and secret is not None
+        and key is not None
+        and getattr(_WRITES, "count", 0) > writes
+        and _storable(exe)
+    ):
         _store(path, key, secret, exe)
     return exe
 
@@ -624,7 +693,9 @@ class CachedProgram:
         sig = _signature(args)
         exe = self._executables.get(sig)
         if exe is None:
-            exe = self._executables.setdefault(sig, load_or_compile(self.jitted, self.kind, self.parts, args))
+            exe = self._executables.setdefault(
+                sig, load_or_compile(self.jitted, self.kind, self.parts, args)
+            )
         return exe
 
     def __call__(self, *args: Any) -> Any:

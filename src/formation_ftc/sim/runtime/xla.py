@@ -54,17 +54,28 @@ from typing import Any
 
 import jax
 
-__all__ = ["DEFAULT_OPTIONS", "FAST_COMPILE_OPTIONS", "compiler_options", "jit", "ENV_SWITCH",
-           "use_unrolled_threefry"]
+__all__ = [
+    "DEFAULT_OPTIONS",
+    "FAST_COMPILE_OPTIONS",
+    "compiler_options",
+    "jit",
+    "ENV_SWITCH",
+    "use_unrolled_threefry",
+]
 
 #: environment variable that switches the options off (``off``, ``0``, ``false`` or ``no``)
 ENV_SWITCH = "FORMATION_FTC_XLA_OPTIONS"
 
 #: options of every simulation program
-DEFAULT_OPTIONS: dict[str, str | bool] = {"xla_cpu_experimental_ynn_fusion_type": "",
-                                          "xla_cpu_use_fusion_emitters": False}
+DEFAULT_OPTIONS: dict[str, str | bool] = {
+    "xla_cpu_experimental_ynn_fusion_type": "",
+    "xla_cpu_use_fusion_emitters": False,
+}
 #: options of a batched program whose controller asks for the fast-compile preset
-FAST_COMPILE_OPTIONS: dict[str, str | bool] = {**DEFAULT_OPTIONS, "xla_cpu_opt_preset": "CPU_OPT_PRESET_FAST_COMPILE"}
+FAST_COMPILE_OPTIONS: dict[str, str | bool] = {
+    **DEFAULT_OPTIONS,
+    "xla_cpu_opt_preset": "CPU_OPT_PRESET_FAST_COMPILE",
+}
 
 
 def _enabled() -> bool:
@@ -170,7 +181,9 @@ def _register_unrolled_threefry() -> bool:
         from jax._src.interpreters import mlir
         from jax._src.random import threefry2x32 as threefry
 
-        mlir.register_lowering(threefry.threefry2x32_p, threefry._threefry2x32_lowering_rule, platform="cpu")
+        mlir.register_lowering(
+            threefry.threefry2x32_p, threefry._threefry2x32_lowering_rule, platform="cpu"
+        )
     except (ImportError, AttributeError, TypeError):  # another JAX layout: keep JAX's own lowering
         return False
     return True

@@ -38,7 +38,9 @@ class SmoothPdSection(StrictModel):
     kp: float = Field(2.0, ge=0, description="Position gain [N/m].")
     kd: float = Field(30.0, ge=0, description="Velocity gain [N s/m].")
     max_force: float = Field(1.0, gt=0, description="Smooth per-axis force limit u_max [N].")
-    desired_position: tuple[str, str, str] = Field(("0", "0", "0"), description="Desired LVLH position [m].")
+    desired_position: tuple[str, str, str] = Field(
+        ("0", "0", "0"), description="Desired LVLH position [m]."
+    )
 
 
 class SmoothPdScenario(CwFormationScenario):
@@ -48,11 +50,22 @@ class SmoothPdScenario(CwFormationScenario):
 def build(s: SmoothPdScenario):
     loop = make_loop(s)
     c = s.smooth_pd
-    controller: Any = SmoothSaturationPd(count=s.spacecraft.count, kp=as_float(c.kp), kd=as_float(c.kd),
-                                         mass=as_float(s.spacecraft.mass), max_force=as_float(c.max_force),
-                                         desired_position=tuple(c.desired_position))
+    controller: Any = SmoothSaturationPd(
+        count=s.spacecraft.count,
+        kp=as_float(c.kp),
+        kd=as_float(c.kd),
+        mass=as_float(s.spacecraft.mass),
+        max_force=as_float(c.max_force),
+        desired_position=tuple(c.desired_position),
+    )
     return compile_loop(dataclasses.replace(loop, controller=controller))
 
 
-register_method(Method(name="example-smooth-pd", schema=SmoothPdScenario, build=build,
-                       description="example plug-in: smoothly saturated PD on the CW plant"))
+register_method(
+    Method(
+        name="example-smooth-pd",
+        schema=SmoothPdScenario,
+        build=build,
+        description="example plug-in: smoothly saturated PD on the CW plant",
+    )
+)
