@@ -118,6 +118,29 @@ def _cmd_report(args) -> int:
     return 0
 
 
+def add_budget_options(parser: argparse.ArgumentParser, *, batch: str, whole: str) -> None:
+    """``--max-memory``, ``--max-run-steps`` and ``--max-campaign-steps`` (formation_ftc.limits), for
+    ``campaign run`` and ``league run``: ``batch`` and ``whole`` say what the first and last one bound."""
+    parser.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        default=None,
+        help=f"memory budget of {batch}, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
+    )
+    parser.add_argument(
+        "--max-run-steps",
+        metavar="N",
+        default=None,
+        help="integration steps allowed per run (default 1e9; 0 = none)",
+    )
+    parser.add_argument(
+        "--max-campaign-steps",
+        metavar="N",
+        default=None,
+        help=f"run-steps allowed in {whole} (default 1e11; 0 = none)",
+    )
+
+
 def add_dask_options(parser: argparse.ArgumentParser) -> None:
     """The Dask executor options shared by ``campaign run`` and ``league run`` (mutually exclusive)."""
     g = parser.add_mutually_exclusive_group()
@@ -172,25 +195,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         default=None,
         help="seconds allowed for the Dask scheduler handshake (default 30)",
     )
-    q.add_argument(
-        "--max-memory",
-        metavar="SIZE",
-        default=None,
-        help="memory budget of one batch of chunk-size runs, e.g. 32GB (default 8 GiB or half the "
-        "RAM; 0 = none)",
-    )
-    q.add_argument(
-        "--max-run-steps",
-        metavar="N",
-        default=None,
-        help="integration steps allowed per run (default 1e9; 0 = none)",
-    )
-    q.add_argument(
-        "--max-campaign-steps",
-        metavar="N",
-        default=None,
-        help="run-steps allowed in the whole campaign (default 1e11; 0 = none)",
-    )
+    add_budget_options(q, batch="one batch of chunk-size runs", whole="the whole campaign")
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_run)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from formation_ftc.campaign.cli import add_dask_options
+from formation_ftc.campaign.cli import add_budget_options, add_dask_options
 from formation_ftc.exitcodes import add_json_option, print_json
 
 __all__ = ["add_cli"]
@@ -195,24 +195,8 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "and per 1.2 GB of available memory; 1: in-process)",
     )
     add_dask_options(q)
-    q.add_argument(
-        "--max-memory",
-        metavar="SIZE",
-        default=None,
-        help="memory budget of one batch of a method's runs, e.g. 32GB (default 8 GiB or half the "
-        "RAM; 0 = none)",
-    )
-    q.add_argument(
-        "--max-run-steps",
-        metavar="N",
-        default=None,
-        help="integration steps allowed per run (default 1e9; 0 = none)",
-    )
-    q.add_argument(
-        "--max-campaign-steps",
-        metavar="N",
-        default=None,
-        help="run-steps allowed in the whole league, all methods together (default 1e11; 0 = none)",
+    add_budget_options(
+        q, batch="one batch of a method's runs", whole="the whole league, all methods together"
     )
     q.add_argument(
         "--no-progress", action="store_true", help="no progress bars (one line per method)"
