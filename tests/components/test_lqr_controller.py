@@ -50,6 +50,7 @@ def _raw(desired, *, mode="continuous", horizon=250.0, dt=0.1, controller=None, 
         "controller": {
             "type": "lqr",
             "semi_major_axis": A_ORBIT,
+            "mass": MASS,  # the law's stated masses, here the true ones
             **BRYSON,
             "desired_position": desired,
             "mode": mode,

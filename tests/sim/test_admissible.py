@@ -72,7 +72,7 @@ def test_check_uses_closed_loop_eigenvalues(capsys):
 
     out = json.loads(capsys.readouterr().out)
     row = next(c for c in out["conditions"] if c["name"] == "RK4 step vs closed-loop modes")
-    assert row["holds"] is False and "1.375" in row["value"]
+    assert row["holds"] is False and "1.375" in row["value_text"]
     assert main(["check", "cw-pd-fault", "--json"]) == 0
 
 
