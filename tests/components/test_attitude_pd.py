@@ -114,7 +114,9 @@ def test_pd_closed_loop_single_axis_against_scipy():
 def test_yang2013_attitude_composed_equals_the_component():
     """The composed law is Yang2013AttitudeController on the error state (e_w, e_q, e_q4) = (omega,
     q_v, q4 - 1) (desired identity); evaluated directly on that state it gives the same torque."""
-    loop = make_loop(ftc.load_scenario(_raw({"type": "yang2013-attitude", "inertia": list(INERTIA)})))
+    loop = make_loop(
+        ftc.load_scenario(_raw({"type": "yang2013-attitude", "inertia": list(INERTIA)}))
+    )
     hold = loop.controller
     assert isinstance(hold, Yang2013AttitudeHold)
     rng = np.random.default_rng(11)
