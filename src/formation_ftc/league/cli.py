@@ -51,14 +51,6 @@ def _cmd_list(args) -> int:
     return 0
 
 
-def _stderr_line(text: str) -> None:
-    """One line on stderr; a closed or full stderr costs the line, never the league's results."""
-    try:
-        print(text, file=sys.stderr, flush=True)
-    except (OSError, ValueError):
-        pass
-
-
 def _cmd_run(args) -> int:
     from formation_ftc.campaign.executors import cap_workers, make_executor
     from formation_ftc.league.definition import LeagueError, load_league
@@ -105,7 +97,7 @@ def _cmd_run(args) -> int:
         methods=methods,
         executor_factory=factory,
         progress=not args.no_progress,
-        log=_stderr_line,
+        log=lambda line: print(line, file=sys.stderr, flush=True),  # lossy_stderr (cli.main)
         parallel_methods=parallel,
         budgets=budgets,
     )

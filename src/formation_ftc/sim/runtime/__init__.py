@@ -40,6 +40,8 @@ __all__ = [
     "private_cache_dir",
     "cpu_threads",
     "schedulable_cpus",
+    "owned_and_private",
+    "unsafe_directory",
     "ENV_SWITCH",
     "DEFAULT_CACHE_MIN_COMPILE_S",
 ]
@@ -189,31 +191,87 @@ def private_cache_dir(cache: str) -> bool:
     >>> ok, mode
     (True, '0o700')
     """
-    path = Path(cache)
+    unsafe = unsafe_directory(Path(cache))
+    if unsafe is not None and cache not in _UNSAFE_REPORTED:
+        _UNSAFE_REPORTED.add(cache)
+        try:
+            print(
+                f"formation-ftc: compilation cache off: {unsafe} is not a directory owned by this user "
+                "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your own, or to off)",
+                file=sys.stderr,
+            )
+        except (OSError, ValueError):  # a closed or full stderr
+            pass
+    return unsafe is None
+
+
+def owned_and_private(st: os.stat_result) -> bool:
+    """Whether a file or directory (its ``os.lstat``) is owned by this process's effective user and
+    writable by nobody else (no group or world write bit): what a cache may trust.
+
+    Parameters
+    ----------
+    st : os.stat_result
+        The file's or directory's status (``os.lstat``, ``os.fstat``).
+
+    Returns
+    -------
+    bool
+        True when this user owns it and nobody else may write it.
+
+    Examples
+    --------
+    >>> import os
+    >>> import tempfile
+    >>> from formation_ftc.sim.runtime import owned_and_private
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     mine = owned_and_private(os.lstat(tmp))
+    ...     os.chmod(tmp, 0o777)
+    ...     shared = owned_and_private(os.lstat(tmp))
+    >>> mine, shared
+    (True, False)
+    """
+    return st.st_uid == os.geteuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+
+
+def unsafe_directory(path: Path) -> Path | str | None:
+    """Create ``path`` (new directories mode 0700) and check it and its parent: real directories (not
+    links) that :func:`owned_and_private` trusts. Returns None when both pass, else the first one that
+    does not (or the error's text when they cannot be created or read).
+
+    Parameters
+    ----------
+    path : Path
+        The directory to create and check.
+
+    Returns
+    -------
+    Path, str or None
+        None when ``path`` and its parent may be trusted; else the first directory that may not, or the
+        text of the error that kept them from being created or read.
+
+    Examples
+    --------
+    >>> import os
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from formation_ftc.sim.runtime import unsafe_directory
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     fine = unsafe_directory(Path(tmp) / "cache")
+    ...     os.chmod(tmp, 0o777)  # the parent: anyone could swap the cache directory
+    ...     refused = unsafe_directory(Path(tmp) / "cache") == Path(tmp)
+    >>> fine, refused
+    (None, True)
+    """
     try:
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
         for p in (path.parent, path):
             st = os.lstat(p)
-            if (
-                not stat.S_ISDIR(st.st_mode)
-                or st.st_uid != os.geteuid()
-                or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
-            ):
-                if cache not in _UNSAFE_REPORTED:
-                    _UNSAFE_REPORTED.add(cache)
-                    try:
-                        print(
-                            f"formation-ftc: compilation cache off: {p} is not a directory owned by this user "
-                            "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your "
-                            "own, or to off)",
-                            file=sys.stderr,
-                        )
-                    except (OSError, ValueError):  # a closed or full stderr
-                        pass
-                return False
-    except OSError:  # cannot be created or read: the cache is an optimisation only
-        return False
-    return True
+            if not stat.S_ISDIR(st.st_mode) or not owned_and_private(st):
+                return p
+    except OSError as exc:  # cannot be created or read
+        return str(exc)
+    return None
 
 
 def configure() -> str | None:

@@ -78,6 +78,8 @@ from typing import Any
 import jax
 import numpy as np
 
+from formation_ftc.sim.runtime import owned_and_private, unsafe_directory
+
 __all__ = [
     "ENV_SWITCH",
     "CachedProgram",
@@ -350,11 +352,6 @@ _SECRET_FILE = "hmac-key"
 _SECRET_LEN = 32
 
 
-def _owned_and_private(st: os.stat_result) -> bool:
-    """Owned by this process's effective user, and writable by nobody else (no group / world write bit)."""
-    return st.st_uid == os.geteuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
-
-
 _WARNED: set[str] = set()
 
 
@@ -369,22 +366,17 @@ class UnsafeCacheWarning(UserWarning):
 
 
 def _safe_folder(folder: Path) -> bool:
-    """Create ``folder`` (mode 0700) and check it and its parent: real directories (not links), owned
-    by this user and writable by nobody else. A folder that fails is never read, written or cleaned."""
+    """Create ``folder`` (mode 0700) and check it and its parent (:func:`~formation_ftc.sim.runtime.unsafe_directory`).
+    A folder that fails is never read, written or cleaned."""
+    unsafe = unsafe_directory(folder)
+    if unsafe is not None:
+        if isinstance(unsafe, Path):
+            _warn_once(
+                f"program cache off: {unsafe} is not a directory owned by this user and writable by "
+                "it alone (delete it, or set FORMATION_FTC_JAX_CACHE to a directory of your own)"
+            )
+        return False
     try:
-        folder.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        try:
-            folder.mkdir(mode=0o700)
-        except FileExistsError:
-            pass
-        for path in (folder.parent, folder):
-            st = os.lstat(path)
-            if not stat.S_ISDIR(st.st_mode) or not _owned_and_private(st):
-                _warn_once(
-                    f"program cache off: {path} is not a directory owned by this user and writable by "
-                    "it alone (delete it, or set FORMATION_FTC_JAX_CACHE to a directory of your own)"
-                )
-                return False
         if stat.S_IMODE(os.lstat(folder).st_mode) != 0o700:
             os.chmod(
                 folder, 0o700
@@ -406,7 +398,7 @@ def _read_private(path: Path, size: int | None = None, *, secret: bool = False) 
         st = os.fstat(fd)
         if (
             not stat.S_ISREG(st.st_mode)
-            or not _owned_and_private(st)
+            or not owned_and_private(st)
             or (secret and st.st_mode & (stat.S_IRWXG | stat.S_IRWXO))
         ):
             return None
