@@ -405,7 +405,9 @@ def test_league_log_lines_survive_a_closed_or_full_stderr(monkeypatch):
 
     for stream in (full, closed):
         monkeypatch.setattr(sys, "stderr", stream)
-        with lossy_stderr():  # what formation-ftc's main wraps every command in, league run included
+        with (
+            lossy_stderr()
+        ):  # what formation-ftc's main wraps every command in, league run included
             print("lqr: 28 runs, 0 failed, 3.0 s", file=sys.stderr, flush=True)  # no exception
     monkeypatch.undo()
     with pytest.raises(OSError):
