@@ -56,6 +56,7 @@ __all__ = [
     "KINDS",
     "per_spacecraft",
     "require_slot",
+    "register_paper_figures",
 ]
 
 #: slots a composed scenario may fill (plant and controller are required)
@@ -77,15 +78,24 @@ KINDS = (*SLOTS, "evaluation")
 @dataclass(frozen=True)
 class BuildContext:
     """What a component builder may use besides its own section: the scenario, the spacecraft count,
-    the step, the built plant (None while the plant itself is built) and ``evaluations``, a list a
+    the step, the built plant (None while the plant itself is built), ``evaluations``, a list a
     builder may append :class:`~formation_ftc.sim.components.Evaluation` components to (truth-side
-    signals derived from the records, e.g. a law's own error measure, for records and metrics only)."""
+    signals derived from the records, e.g. a law's own error measure, for records and metrics only),
+    and ``metrics``, a list a builder may append :class:`~formation_ftc.sim.metrics.Metric` s to (a
+    paper's score set declared next to the evaluation that records its signals; they come after the
+    scenario's own ``[[metrics]]``)."""
 
     scenario: ComposedScenario
     count: int  # number of spacecraft (from the plant section)
     dt: float  # step [s]
     plant: Any = None
     evaluations: list = field(default_factory=list)
+    metrics: list = field(default_factory=list)
+
+    @property
+    def horizon(self) -> float:
+        """The scenario's horizon [s]."""
+        return float(self.scenario.simulation.horizon)
 
     def section(self, slot: str) -> Any:
         """The validated section of another slot (None when the slot is empty)."""
@@ -326,22 +336,25 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
-    metrics = tuple(
-        Metric(
-            m.name,
-            m.signal,
-            m.reduce,
-            norm=m.norm,
-            spacecraft=m.spacecraft,
-            units=m.units,
-            start=as_float(m.start),
-            end=as_float(math.inf if m.end is None else m.end),
-            threshold=as_float(m.threshold),
-            norm_ord=m.norm_ord,
-            gate=m.gate,
-            block=m.block,
-        )
-        for m in s.metrics
+    metrics = (
+        *(
+            Metric(
+                m.name,
+                m.signal,
+                m.reduce,
+                norm=m.norm,
+                spacecraft=m.spacecraft,
+                units=m.units,
+                start=as_float(m.start),
+                end=as_float(math.inf if m.end is None else m.end),
+                threshold=as_float(m.threshold),
+                norm_ord=m.norm_ord,
+                gate=m.gate,
+                block=m.block,
+            )
+            for m in s.metrics
+        ),
+        *ctx.metrics,
     )
     return ClosedLoop.from_simulation(
         s.simulation, **parts, metrics=metrics, evaluations=tuple(ctx.evaluations)
@@ -378,9 +391,24 @@ def check(s: ComposedScenario) -> list[Condition]:
     return out
 
 
+#: figure makers of papers (``[scenario] paper = "<name>"``): ``fn(ds, scenario, out_dir) -> paths``
+_PAPER_FIGURES: dict[str, Callable[[Any, ComposedScenario, Any], list]] = {}
+
+
+def register_paper_figures(
+    paper: str, figures: Callable[[Any, ComposedScenario, Any], list]
+) -> None:
+    """``formation-ftc run --plot`` of a scenario with ``[scenario] paper = paper`` draws these figures
+    (the paper's own figure set) instead of the generic error and command plots."""
+    _PAPER_FIGURES[paper] = figures
+
+
 def _plot(ds, scenario, out_dir):
     from formation_ftc.plotting import new_figure, save_figure
 
+    paper = scenario.scenario.paper
+    if paper in _PAPER_FIGURES:
+        return _PAPER_FIGURES[paper](ds, scenario, out_dir)
     paths = []
     for var in ("position_error", "command"):
         if var not in ds:
