@@ -57,6 +57,7 @@ __all__ = [
     "per_spacecraft",
     "require_slot",
     "register_paper_figures",
+    "register_conditions",
 ]
 
 #: slots a composed scenario may fill (plant and controller are required)
@@ -366,6 +367,19 @@ def build(s: ComposedScenario) -> Compiled:
     return compile_loop(make_loop(s))
 
 
+#: conditions of component types: (kind, name) -> [fn(scenario, loop) -> [Condition]]
+_CONDITIONS: dict[tuple[str, str], list[Callable[[ComposedScenario, ClosedLoop], list]]] = {}
+
+
+def register_conditions(
+    kind: str, name: str, conditions: Callable[[ComposedScenario, ClosedLoop], list]
+) -> None:
+    """``formation-ftc check`` of every composed scenario whose ``[kind]`` is of type ``name`` also
+    states ``conditions(scenario, loop)`` (e.g. a paper's theorem conditions for its law, registered by
+    the paper's package, which may return ``[]`` where the composition is outside the theorem)."""
+    _CONDITIONS.setdefault((kind, name), []).append(conditions)
+
+
 def check(s: ComposedScenario) -> list[Condition]:
     """Conditions every composed loop can state: the composition fits, and the RK4 step against the
     fastest linearised closed-loop mode where the components expose one."""
@@ -388,6 +402,11 @@ def check(s: ComposedScenario) -> list[Condition]:
         conds = getattr(comp, "conditions", None)
         if callable(conds):
             out += list(conds(loop))
+    for slot in KINDS:
+        names = [s.type_of(slot)] if slot in SLOTS else [n for n, _ in s._evaluation_sections]
+        for name in names:
+            for fn in _CONDITIONS.get((slot, str(name)), []):
+                out += list(fn(s, loop))
     return out
 
 
