@@ -433,6 +433,18 @@ class ClosedLoop:
             u, ctl_next, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
 
+        def stage_signals(o: dict) -> dict:
+            # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per
+            # unit mass): the evaluations see the stage's outputs and the step's held FDI / supervisor
+            # signals (computed only when such a metric exists)
+            if not self._stage_reads_evaluations():
+                return o
+            held_signals = {
+                **self.estimator.outputs(t_k, est_state, est),
+                **self.supervisor.outputs(t_k, sup_state, dec),
+            }
+            return self._evaluated({**o, **held_signals})
+
         def ctx(j):
             return (
                 exos[j],
@@ -466,7 +478,7 @@ class ClosedLoop:
             if self._stage_metrics():  # rectangle rule over the step
                 stage_inc = tuple(
                     None if v is None else dt * v
-                    for v in metric_ops.stage_values(self.metrics, outputs)
+                    for v in metric_ops.stage_values(self.metrics, stage_signals(outputs))
                 )
         else:
             k1, outputs = self._evaluate(t_k, z, ctx(0))
@@ -485,7 +497,8 @@ class ClosedLoop:
                 self._stage_metrics()
             ):  # integrals of stage-integrated metrics over the step (RK4 weights)
                 v1, v2, v3, v4 = (
-                    metric_ops.stage_values(self.metrics, o) for o in (outputs, o2, o3, o4)
+                    metric_ops.stage_values(self.metrics, stage_signals(o))
+                    for o in (outputs, o2, o3, o4)
                 )
                 stage_inc = tuple(
                     None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
@@ -516,6 +529,13 @@ class ClosedLoop:
         if self._stage_metrics():
             outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
+
+    def _stage_reads_evaluations(self) -> bool:
+        """True when a stage-integrated metric reads a signal of an evaluation."""
+        names = {sig.name for ev in self.evaluations for sig in ev.signals()}
+        return any(
+            m.reduce in metric_ops.STAGE_REDUCTIONS and m.signal in names for m in self.metrics
+        )
 
     def _stage_metrics(self) -> bool:
         """True when a metric is integrated at the integrator's stages (:data:`~.metrics.STAGE_REDUCTIONS`)."""
