@@ -1,6 +1,7 @@
 """Shared league fixtures: ``tiny_league(dir, methods=..., **league)`` writes a shortened copy of the
 built-in translational league (60 s, scores from 20 s, onset in [30, 40] s, chunks of 4 runs, only the
-given methods; every battery case is kept) and returns the path of its file."""
+given methods; every battery case is kept; no step-convergence check unless ``step_check`` is given)
+and returns the path of its file."""
 
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ DATA = Path(builtin_leagues()["translational"]).parent
 
 def write_tiny_league(tmp_path: Path, methods=("sir-ftc", "lqr"), **league) -> Path:
     raw = tomllib.loads((DATA / "league-translational.toml").read_text())
+    # the step-convergence check has its own test (test_step_check.py): off unless asked for
+    league = {"step_check": {"enabled": False}, **league}
     raw["league"].update(horizon=60.0, settle_start=20.0, chunk_size=4, **league)
     raw["league"]["onset"].update(low=30.0, high=40.0)
     for m in raw["metrics"]:

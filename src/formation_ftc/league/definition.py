@@ -103,6 +103,25 @@ class Onset(StrictModel):
         return self
 
 
+class StepCheckSection(StrictModel):
+    """The step-convergence check run before each method's campaign (:mod:`formation_ftc.league.step_check`)."""
+
+    enabled: bool = Field(True, description="Run the check (false: every method keeps its own dt).")
+    case: str = Field("bias", description="Fault case of the check cell (a battery case name).")
+    level: str | None = Field(
+        None, description="Level of the check cell (default: the first level)."
+    )
+    tolerance: float = Field(
+        0.02,
+        gt=0,
+        lt=1,
+        description="Largest relative change of any score when the step halves [-].",
+    )
+    max_halvings: int = Field(
+        3, ge=0, le=6, description="How many times the check may halve a method's step [-]."
+    )
+
+
 class LeagueMeta(StrictModel):
     name: str = Field(description="League name.")
     version: str = Field(
@@ -130,6 +149,10 @@ class LeagueMeta(StrictModel):
     onset: Onset
     trace_seed: int = Field(
         0, ge=0, description="Seed index whose time histories the report plots [-]."
+    )
+    step_check: StepCheckSection = Field(
+        default_factory=StepCheckSection,
+        description="Step-convergence check of every method before its campaign.",
     )
     trace_cases: list[str] = Field(
         ["none", "loe-50"],

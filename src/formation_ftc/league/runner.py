@@ -17,6 +17,7 @@ run.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -598,6 +599,9 @@ def run_league(
     out = Path(out_dir)
     digest = league_hash(spec)
     old = _check_out(out, spec, digest, n_seeds)
+    step_checks = _step_checks(spec, cells, old, log)
+    if step_checks:  # a finer chosen step: the budgets again, on the steps that will run
+        check_league_budgets(spec, cells, n_seeds, budgets)
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
     assert spec.source is not None
@@ -625,6 +629,7 @@ def run_league(
         # the methods of earlier runs into this directory stay listed (a resume with another --methods)
         "methods": [m.model_dump() for m in spec.methods if m.name in listed],
         "levels": [lv.model_dump() for lv in spec.levels],
+        "step_check": {**(old or {}).get("step_check", {}), **step_checks},
         "provenance": _provenance(),
     }
     files = _write_inputs(out, meta, cells)
@@ -693,6 +698,64 @@ def run_league(
                 outcome = run_campaign(campaign, out / name / "campaign", executor=executor)
                 done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
+
+
+def _step_checks(
+    spec: LeagueSpec,
+    cells: dict[str, list[Cell]],
+    old: dict[str, Any] | None,
+    log: Callable[[str], None] | None,
+) -> dict[str, dict[str, Any]]:
+    """Run (or, on a resume, reuse) each method's step-convergence check
+    (:mod:`formation_ftc.league.step_check`) and give every cell of the method the chosen step.
+    Returns the checks' records for ``league.json`` ({} when the league disables the check)."""
+    from formation_ftc.league.step_check import check_step
+
+    sc = spec.league.step_check
+    if not sc.enabled:
+        return {}
+    level = sc.level if sc.level is not None else spec.levels[0].name
+    if level not in {lv.name for lv in spec.levels}:
+        raise LeagueError(f"league.step_check.level = {level!r}: not a level of this league")
+    done = (old or {}).get("step_check", {})
+    out: dict[str, dict[str, Any]] = {}
+    for name, mcells in cells.items():
+        record = done.get(name)
+        if record is None:
+            cell = next((c for c in mcells if (c.case, c.level) == (sc.case, level)), None)
+            if cell is None:
+                raise LeagueError(
+                    f"league.step_check.case = {sc.case!r}: method {name} has no cell "
+                    f"{sc.case}/{level} (give a fault case of the battery that applies to it)"
+                )
+            record = check_step(
+                name,
+                cell.raw,
+                case=sc.case,
+                level=level,
+                onset_field=spec.league.onset.field,
+                onset=spec.league.onset.low,
+                tolerance=sc.tolerance,
+                max_halvings=sc.max_halvings,
+            ).as_dict()
+            if log is not None:
+                verdict = "converged" if record["converged"] else "NOT converged, kept"
+                try:
+                    log(
+                        f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
+                        f"(largest score change per halving: "
+                        + ", ".join(f"{c:.2%}" for c in record["changes"])
+                        + ")"
+                    )
+                except (OSError, ValueError):
+                    pass
+        out[name] = record
+        dt = float(record["chosen_dt"])
+        for j, c in enumerate(mcells):
+            c.raw["simulation"]["dt"] = dt
+            n_steps = int(round(float(c.raw["simulation"]["horizon"]) / dt))
+            mcells[j] = dataclasses.replace(c, n_steps=n_steps)
+    return out
 
 
 def _has_path(raw: dict, path: str) -> bool:
