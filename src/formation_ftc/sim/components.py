@@ -432,6 +432,9 @@ class Estimator(_Kind):
     #: True: the signals recorded at t_k are those of :meth:`update` at t_k (evaluated on the recorded
     #: state and discarded, as the step computes them); False: those of :meth:`current`
     refresh_on_observe: ClassVar[bool] = False
+    #: True: a navigation filter -- its estimate has the layout of the sensors' measurement and the
+    #: controller reads it in place of the measurement (and no other estimate)
+    navigation: ClassVar[bool] = False
 
     def initial_state(self, measurement0: PyTree) -> PyTree:
         return None

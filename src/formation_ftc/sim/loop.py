@@ -319,6 +319,14 @@ class ClosedLoop:
         k_sensor, k_plant = jax.random.split(key, 2)
         return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
+    def _law_flight(self, y, est, decision, exo, ref):
+        """The controller's flight inputs: the sensors' measurement ``y`` and the estimate, or, where
+        the estimator is a navigation filter (``navigation = True``), its state estimate in place of the
+        measurement (held over the step: the navigation solution at the control rate)."""
+        if self.estimator.navigation:
+            return self._flight(est, None, None, decision, exo, ref)
+        return self._flight(y, None, est, decision, exo, ref)
+
     def _flight(self, y, received, est, decision, exo, ref):
         return FlightInputs(
             measurement=y,
@@ -335,7 +343,7 @@ class ClosedLoop:
         exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held, act_state = ctx
         x = z["plant"]
         y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
-        flight = self._flight(y, None, est, dec, exo["controller"], ref)
+        flight = self._law_flight(y, est, dec, exo["controller"], ref)
         received = None
         if not isinstance(self.network, NoNetwork):
             msg = self.controller.message(t, flight)
@@ -416,13 +424,13 @@ class ClosedLoop:
         if not isinstance(self.network, NoNetwork):
             # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
             msg_k = self.controller.message(
-                t_k, self._flight(y, None, est, dec, exos[0]["controller"], refs[0])
+                t_k, self._law_flight(y, est, dec, exos[0]["controller"], refs[0])
             )
             net_state = self.network.push(net_state, msg_k)
         held = None
         ctl_next = state["controller"]
         if self.controller.sampled:
-            flight = self._flight(y, None, est, dec, exos[0]["controller"], refs[0])
+            flight = self._law_flight(y, est, dec, exos[0]["controller"], refs[0])
             if not isinstance(self.network, NoNetwork):
                 msg = self.controller.message(t_k, flight)
                 flight = flight._replace(
@@ -583,12 +591,12 @@ class ClosedLoop:
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
             msg_k = self.controller.message(
-                t_k, self._flight(y, None, est, dec, exo["controller"], ref)
+                t_k, self._law_flight(y, est, dec, exo["controller"], ref)
             )
             net_state = self.network.push(net_state, msg_k)
         held = None
         if self.controller.sampled:
-            flight = self._flight(y, None, est, dec, exo["controller"], ref)
+            flight = self._law_flight(y, est, dec, exo["controller"], ref)
             u, _, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
         z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}

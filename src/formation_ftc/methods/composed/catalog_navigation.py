@@ -1,0 +1,145 @@
+"""Catalog: relative navigation (``[estimator] type = "relative-navigation-filter"``).
+
+A linear Kalman filter on the measured LVLH relative states with the on-board Clohessy-Wiltshire model
+of a stated circular orbit (:class:`~formation_ftc.components.estimators.relative_navigation.RelativeNavigationFilter`,
+design in :mod:`formation_ftc.design.kalman`). The controller then runs on the filter's estimate
+instead of the raw measurement. Every number of the filter is flight knowledge and is stated in the
+section: the orbit, the assumed measurement noise, the acceleration noise and the nominal masses.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydantic import Field
+
+from formation_ftc.components.estimators.relative_navigation import RelativeNavigationFilter
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.dynamics.cw import cw_matrices
+from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.design.kalman import (
+    dare_relative_residual,
+    discrete_model,
+    steady_state_kalman,
+)
+from formation_ftc.methods.composed import (
+    BuildContext,
+    per_spacecraft,
+    register_component_type,
+    register_conditions,
+)
+from formation_ftc.registry import Condition
+from formation_ftc.sim.components import CompositionError, Plant, as_float
+
+#: the filter's nominal on-board mass when a scenario states none [kg] (as the PD law's)
+NAVIGATION_NOMINAL_MASS = 100.0
+
+
+class RelativeNavigationSection(StrictModel):
+    """Kalman filter of the LVLH relative states (on-board CW model of a circular orbit)."""
+
+    semi_major_axis: float = Field(
+        gt=0, description="Radius of the on-board circular reference orbit [m]."
+    )
+    mu: float = Field(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+    position_noise_std: float = Field(
+        gt=0, description="Assumed std of the position measurement noise [m]."
+    )
+    velocity_noise_std: float = Field(
+        gt=0, description="Assumed std of the velocity measurement noise [m/s]."
+    )
+    acceleration_noise_psd: float = Field(
+        1e-10,
+        ge=0,
+        description=(
+            "Spectral density of the unmodelled acceleration per axis [(m/s^2)^2/Hz] (J2, drag, "
+            "model error, faults the filter does not know)."
+        ),
+    )
+    nominal_mass: float | list[float] = Field(
+        NAVIGATION_NOMINAL_MASS,
+        description="On-board mass per spacecraft that turns the commanded force into acceleration [kg].",
+    )
+
+    def model(self, dt: float):
+        """(discrete model, R) of the filter at step ``dt`` [s]."""
+        n = math.sqrt(self.mu / self.semi_major_axis**3)
+        A, B = cw_matrices(n)
+        model = discrete_model(A, B, B, self.acceleration_noise_psd, dt)
+        R = np.diag([self.position_noise_std**2] * 3 + [self.velocity_noise_std**2] * 3)
+        return model, R
+
+
+def _navigation_filter(sec: RelativeNavigationSection, ctx: BuildContext):
+    if ctx.plant is None or type(ctx.plant).position is Plant.position:
+        raise CompositionError(
+            f"estimator relative-navigation-filter estimates LVLH relative states, but plant "
+            f"{ctx.scenario.type_of('plant')} has none (a translational plant is needed)"
+        )
+    model, R = sec.model(ctx.dt)
+    mass = per_spacecraft(sec.nominal_mass, ctx.count, "estimator.nominal_mass")
+    if not np.all(np.isfinite(mass) & (mass > 0)):
+        raise CompositionError(f"estimator.nominal_mass: {mass.tolist()} kg, every one must be > 0")
+    return RelativeNavigationFilter(
+        count=ctx.count,
+        phi=as_float(model.phi),
+        gamma=as_float(model.gamma),
+        qd=as_float(model.qd),
+        r=as_float(R),
+        p0=as_float(R),
+        nominal_mass=as_float(mass),
+    )
+
+
+register_component_type(
+    "estimator",
+    "relative-navigation-filter",
+    RelativeNavigationSection,
+    _navigation_filter,
+    "Kalman filter of the LVLH relative states; the controller reads its estimate instead of the "
+    "measurement",
+)
+
+
+def _navigation_conditions(scenario, loop) -> list[Condition]:
+    """The steady-state filter: Riccati residual, stability of the error dynamics, and the steady-state
+    position and velocity standard deviations it promises."""
+    sec: RelativeNavigationSection = scenario.section("estimator")
+    model, R = sec.model(float(loop.dt))
+    P, K = steady_state_kalman(model.phi, model.qd, R)
+    residual = dare_relative_residual(P, model.phi, model.qd, R)
+    posterior = (np.eye(6) - K) @ P
+    rho = float(np.max(np.abs(np.linalg.eigvals(model.phi @ (np.eye(6) - K)))))
+    sig = np.sqrt(np.diag(posterior))
+    return [
+        Condition(
+            name="navigation filter: steady-state error dynamics stable",
+            reference="design/kalman.py",
+            value=f"spectral radius of phi (I - K) = {rho:.6f} (Riccati residual {residual:.1e})",
+            requirement="< 1",
+            holds=rho < 1.0 - 1e-9 and residual < 1e-8,
+            required=True,
+            basis="exact",
+            detail=(
+                "exact: eigenvalues of the estimation-error transition of the steady-state filter, "
+                "with the discrete Riccati equation solved to the stated residual"
+            ),
+        ),
+        Condition(
+            name="navigation filter: steady-state standard deviation",
+            reference="design/kalman.py",
+            value=(
+                f"position {np.max(sig[:3]):.3g} m, velocity {np.max(sig[3:]):.3g} m/s "
+                f"(measurement {sec.position_noise_std:g} m, {sec.velocity_noise_std:g} m/s)"
+            ),
+            requirement="informative",
+            holds=True,
+            required=False,
+            basis="informative",
+            detail="after the measurement update, from the model the filter states",
+        ),
+    ]
+
+
+register_conditions("estimator", "relative-navigation-filter", _navigation_conditions)
