@@ -203,6 +203,12 @@ class FaultBatteryActuator(Actuator):
                 "1 when any axis command is at its saturation limit",
             ),
             Signal("fault_active", (), "1", "1 from the actuator fault onset on"),
+            Signal(
+                "fault_channel",
+                ("spacecraft", "axis"),
+                "1",
+                "1 on the faulty (spacecraft, axis) channel from the onset on",
+            ),
         )
 
     def outputs(self, t, command, inputs: ActuatorInputs):
@@ -213,4 +219,5 @@ class FaultBatteryActuator(Actuator):
             "effectiveness": exo["gain"],
             "saturated": jnp.where(at_limit, 1.0, 0.0),
             "fault_active": jnp.where(exo["active"], 1.0, 0.0),
+            "fault_channel": jnp.where(self._channel() & exo["active"], 1.0, 0.0),
         }

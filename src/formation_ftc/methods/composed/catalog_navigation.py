@@ -1,5 +1,13 @@
-"""Catalog: relative navigation (``[estimator] type = "relative-navigation-filter"``).
+"""Catalog: relative navigation and fault detection from its residuals.
 
+* ``[estimator] type = "relative-navigation-filter"``: the law flies on a Kalman filter's estimate;
+* ``[estimator] type = "residual-fdi"``: detection and isolation of a thruster fault from the Kalman
+  innovation or the parity residual, with a CUSUM or fixed-threshold test
+  (:class:`~formation_ftc.components.estimators.residual_fdi.ResidualFdi`);
+* ``[[evaluations]] type = "fdi-scores"``: detection delay, missed detection, false alarm and correct
+  isolation against the fault-battery actuator's true fault.
+
+The navigation filter:
 A linear Kalman filter on the measured LVLH relative states with the on-board Clohessy-Wiltshire model
 of a stated circular orbit (:class:`~formation_ftc.components.estimators.relative_navigation.RelativeNavigationFilter`,
 design in :mod:`formation_ftc.design.kalman`). The controller then runs on the filter's estimate
@@ -10,11 +18,14 @@ section: the orbit, the assumed measurement noise, the acceleration noise and th
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
 from pydantic import Field
 
 from formation_ftc.components.estimators.relative_navigation import RelativeNavigationFilter
+from formation_ftc.components.estimators.residual_fdi import ResidualFdi
+from formation_ftc.components.evaluations.fdi_scores import FdiScores
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.core.orbit import MU_EARTH
@@ -143,3 +154,76 @@ def _navigation_conditions(scenario, loop) -> list[Condition]:
 
 
 register_conditions("estimator", "relative-navigation-filter", _navigation_conditions)
+
+
+# ------------------------------------------------------------------------------------------- FDI
+class ResidualFdiSection(RelativeNavigationSection):
+    """Thruster-fault detection and isolation from the relative-state residuals."""
+
+    residual: Literal["kalman", "parity"] = Field(
+        "kalman",
+        description="Residual generator: the Kalman innovation or the one-step parity relation.",
+    )
+    test: Literal["cusum", "fixed"] = Field(
+        "cusum",
+        description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold.",
+    )
+    drift: float = Field(
+        0.5, ge=0, description="CUSUM drift (half the standardised shift to detect) [-]."
+    )
+    threshold: float = Field(
+        20.0, gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-]."
+    )
+
+
+def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
+    nav = _navigation_filter(sec, ctx)
+    return ResidualFdi(
+        count=ctx.count,
+        residual=sec.residual,
+        test=sec.test,
+        phi=nav.phi,
+        gamma=nav.gamma,
+        qd=nav.qd,
+        r=nav.r,
+        parity_cov=as_float(nav.r + nav.phi @ nav.r @ nav.phi.T + nav.qd),
+        nominal_mass=nav.nominal_mass,
+        drift=as_float(sec.drift),
+        threshold=as_float(sec.threshold),
+    )
+
+
+register_component_type(
+    "estimator",
+    "residual-fdi",
+    ResidualFdiSection,
+    _residual_fdi,
+    "thruster-fault detection and isolation: Kalman or parity residual, CUSUM or fixed threshold",
+)
+
+
+class FdiScoresSection(StrictModel):
+    """Truth-side FDI scores (no fields)."""
+
+
+def _fdi_scores(sec: FdiScoresSection, ctx: BuildContext):
+    if ctx.scenario.type_of("estimator") != "residual-fdi":
+        raise CompositionError(
+            "evaluation fdi-scores compares an FDI's alarm with the true fault: it needs "
+            f'[estimator] type = "residual-fdi" (the loop has {ctx.scenario.type_of("estimator")})'
+        )
+    if ctx.scenario.type_of("actuator") != "fault-battery":
+        raise CompositionError(
+            "evaluation fdi-scores reads the true fault of the fault-battery actuator "
+            f"(the loop's actuator is {ctx.scenario.type_of('actuator')})"
+        )
+    return FdiScores()
+
+
+register_component_type(
+    "evaluation",
+    "fdi-scores",
+    FdiScoresSection,
+    _fdi_scores,
+    "detection delay, missed detection, false alarm and isolation of an FDI against the true fault",
+)
