@@ -35,18 +35,18 @@ from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params,
 
 
 def _azizi(horizon: float):
-    from formation_ftc.papers.azizi2009.method import _variant, make_loop
-    from formation_ftc.papers.azizi2009.reproduction import NOISE_SIGMA, SEEDS
+    from formation_ftc.methods.composed import make_loop
+    from formation_ftc.papers.azizi2009.reproduction import NOISE_SIGMA, SEEDS, _variant
     from formation_ftc.sim.compiled import compile_loop
 
     sc = load_scenario(
         "azizi2009-llfr",
         {
             "simulation.horizon": horizon,
-            "formation.n_axes": 1,
+            "plant.axes": 1,
             "simulation.record_every": 1000,
-            "noise.sigma_position": NOISE_SIGMA,
-            "noise.sigma_velocity": NOISE_SIGMA,
+            "sensors.position_noise_std": NOISE_SIGMA,
+            "sensors.velocity_noise_std": NOISE_SIGMA,
         },
     )
     loop = make_loop(sc)
@@ -59,8 +59,7 @@ def _azizi(horizon: float):
 
 
 def _mehrabian(scale: float):
-    from formation_ftc.papers.mehrabian.method import with_seed
-    from formation_ftc.papers.mehrabian.reproduction import CASES, SEEDS
+    from formation_ftc.papers.mehrabian.reproduction import CASES, SEEDS, with_seed
 
     names = [CASES[c][0] for c in "ABC"]
     base = load_scenario(names[0])

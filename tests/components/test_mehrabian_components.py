@@ -20,7 +20,7 @@ from formation_ftc.components.controllers.pd_formation import ZeroController
 from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
 from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
 from formation_ftc.core.dynamics.euler_lagrange import rigid_body_rhs
-from formation_ftc.papers.mehrabian.method import make_loop
+from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import FlightInputs, TruthInputs
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import Metric, finalize, init_accumulators, update_stage_accumulators
@@ -47,7 +47,7 @@ def test_controller_and_fdi_cannot_see_the_truth():
     assert _hints(ScriptedFdi, "update")["inputs"] is FlightInputs
     assert not TRUTH_FIELDS & set(FlightInputs._fields)
     # fault active from t = 0 and the FDI reporting from 0 s (no latency)
-    loop = _loop(**{"faults.0.start": 0.0, "fdi.delay": 0.0})
+    loop = _loop(**{"actuator.faults.0.start": 0.0, "estimator.delay": 0.0})
     assert isinstance(loop.controller, NetworkedElHinfController) and isinstance(
         loop.estimator, ScriptedFdi
     )

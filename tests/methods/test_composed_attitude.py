@@ -142,8 +142,12 @@ def test_scenario_runs_records_metrics_check_and_the_conversions_hold():
         m.pop("sync_err_max_after_45s")
     )  # window > 10 s
     assert all(np.isfinite(v) for v in m.values())
-    conds = ftc.check(scn)
-    assert conds and all(c.holds for c in conds)
+    conds = {c.name: c for c in ftc.check(scn)}
+    # the law's theorem conditions (registered by papers/mehrabian) come with it on this plant too;
+    # the RK4 step estimate is a heuristic (holds None: unproven)
+    assert {"components fit together", "0 < alpha < 1", "P_j positive definite"} <= set(conds)
+    assert all(c.holds is not False for c in conds.values())
+    assert all(c.holds for c in conds.values() if c.required)
 
 
 def test_composition_equals_the_law_on_the_euler_angle_plant():

@@ -27,10 +27,10 @@ DT = 0.01  # [s]
 HORIZON = 60.0  # [s]
 OVERRIDES = {
     "simulation.horizon": HORIZON,
-    "faults.0.start": 10.0,
-    "faults.0.end": 40.0,
-    "metrics.fault_window": [10.0, 30.0],
-    "metrics.assessment_window": [15.0, 30.0],
+    "actuator.faults.0.start": 10.0,
+    "actuator.faults.0.end": 40.0,
+    "evaluations.0.fault_window": [10.0, 30.0],
+    "evaluations.0.assessment_window": [15.0, 30.0],
     "simulation.max_pitch": math.radians(45.0),
 }
 CASE, SEED = "mehrabian-isolation", 5

@@ -15,9 +15,10 @@ import formation_ftc  # noqa: F401
 from formation_ftc.blocks.controllers import networked_el_hinf as ctl
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics import euler_lagrange as el
-from formation_ftc.papers.mehrabian.schema import DEFAULT_EDGES
 
 M = 8
+#: the Mehrabian scenarios' graph: ring 1-2-...-8-1 plus chords 1-5 and 3-7 (E003-10)
+DEFAULT_EDGES = [(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7), (7, 8), (8, 1), (1, 5), (3, 7)]
 A = graphs.adjacency(M, [(a - 1, b - 1) for a, b in DEFAULT_EDGES], directed=False)
 AVG = graphs.row_normalized(A)
 

@@ -31,10 +31,10 @@ FAULT = (10.0, 40.0)  # [s]
 ASSESS = (15.0, 40.0)  # [s]
 OVERRIDES = {
     "simulation.horizon": HORIZON,
-    "faults.0.start": FAULT[0],
-    "faults.0.end": FAULT[1],
-    "metrics.fault_window": list(FAULT),
-    "metrics.assessment_window": list(ASSESS),
+    "actuator.faults.0.start": FAULT[0],
+    "actuator.faults.0.end": FAULT[1],
+    "evaluations.0.fault_window": list(FAULT),
+    "evaluations.0.assessment_window": list(ASSESS),
 }
 CASES = ["mehrabian-no-reconfig", "mehrabian-identification", "mehrabian-isolation"]
 WINDOWS = {"fault_window": FAULT, "run": (0.0, HORIZON), "assessment_window": ASSESS}

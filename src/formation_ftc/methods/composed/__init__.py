@@ -321,7 +321,8 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         ("plant", cast(str, s.type_of("plant")))
     ]  # the plant section is required
     plant_section = s.section("plant")
-    count = int(getattr(plant_section, "count", len(getattr(plant_section, "mass", []) or [])))
+    count = getattr(plant_section, "count", None)  # else one mass per spacecraft
+    count = int(len(getattr(plant_section, "mass", []) or []) if count is None else count)
     ctx = BuildContext(scenario=s, count=count, dt=float(s.simulation.dt))
     parts: dict[str, Any] = {"plant": plant_entry.build(plant_section, ctx)}
     ctx = BuildContext(
@@ -333,7 +334,9 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
             continue
         parts[slot] = _CATALOG[(slot, name)].build(s.section(slot), ctx)
     for name, section in s._evaluation_sections:  # after every slot: they may read any signal
-        ctx.evaluations.append(_CATALOG[("evaluation", name)].build(section, ctx))
+        ev = _CATALOG[("evaluation", name)].build(section, ctx)
+        if ev is not None:  # None: the type only declares metrics (ctx.metrics)
+            ctx.evaluations.append(ev)
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)

@@ -13,12 +13,18 @@ quaternion state and is driven by a body torque. The two fit through
 
 A composition of the law on the quaternion plant without either is rejected at validation, naming
 both parts (see :mod:`formation_ftc.core.euler_quaternion` for the conversions).
+
+The Euler-angle plant (``plant.type = "euler-angle-attitude"``, Mehrabian (1), (27)-(28)) has the law's
+own state and input: the law reads its state directly (no ``[sensors]``), and
+``euler-torque-allocation`` applies its additive faults to the generalised torque without a mapping.
+``[[evaluations]] type = "mehrabian-metrics"`` declares Mehrabian's metric set (synchronisation and
+tracking errors, effort, spreads over the fault window, the run and the assessment window).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Any, ClassVar, Literal
 
 import jax
 import numpy as np
@@ -29,14 +35,19 @@ from formation_ftc.components.actuators.additive_faults import HeldAdditiveFault
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
 from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
 from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
+from formation_ftc.components.plants.euler_angle_attitude import AXES, EulerAngleAttitudePlant
 from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
 from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core import graph as graphs
-from formation_ftc.core.dynamics.euler_lagrange import check_away_from_singularity
+from formation_ftc.core.dynamics.euler_lagrange import (
+    SINGULAR_PITCH_LIMIT_RAD,
+    check_away_from_singularity,
+)
 from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
 from formation_ftc.methods.composed import BuildContext, register_component_type
 from formation_ftc.sim.components import CompositionError, IdealActuator, as_float
+from formation_ftc.sim.metrics import Metric
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
@@ -48,12 +59,15 @@ _quaternion_from_euler = jax.jit(quaternion_from_euler_zyx)
 _euler_from_quaternion = jax.jit(euler_zyx_from_quaternion)
 
 QUATERNION_PLANT = "quaternion-rigid-body"
+EULER_PLANT = "euler-angle-attitude"
+MEHRABIAN_METRICS = "mehrabian-metrics"
 EULER_SENSORS = "quaternion-euler"
 EULER_LAW = "networked-el-hinf"
 EULER_ALLOCATION = "euler-torque-allocation"
 SCRIPTED_FDI = "scripted-fdi"
 #: the Euler-angle law's model inertia when a scenario states none [kg m^2] (``controller.nominal_inertia``):
-#: Mehrabian's nominal J^ (our choice E003-10, as the ``mehrabian`` method)
+#: Mehrabian's nominal J^ (our choice E003-10); also the default principal inertia about which the
+#: Euler-angle plant draws its true inertias
 NOMINAL_INERTIA = (20.0, 18.0, 15.0)
 #: plant types whose state is {"omega": (N, 3), "q": (N, 4)} (body rate, quaternion vector first): the Euler
 #: sensors, the torque allocation and the Euler-angle law accept them; other catalogs add theirs
@@ -153,6 +167,20 @@ class QuaternionPlantSection(RigidBodyAttitudeSection):
     )
 
 
+def quaternion_plant(
+    inertia: Vec3, omega0, q0, disturbance_torque: Vec3Expr, gyroscopic: bool
+) -> QuaternionRigidBodyPlant:
+    """Rigid bodies of principal inertia [kg m^2] from (N, 3) body rates [rad/s] and (N, 4) quaternions
+    (the one builder: also the attitude part of the ``switched-formation`` plant)."""
+    return QuaternionRigidBodyPlant(
+        inertia=as_float(np.diag(inertia)),
+        initial_omega=as_float(omega0),
+        initial_quaternion=as_float(q0),
+        disturbance_torque=_vec3_text(disturbance_torque),
+        gyroscopic=gyroscopic,
+    )
+
+
 def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):
     n = sec.count
     w0 = (
@@ -160,12 +188,8 @@ def _quaternion_plant(sec: QuaternionPlantSection, ctx: BuildContext):
         if sec.initial_body_rate is None
         else np.asarray(sec.initial_body_rate, float)
     )
-    return QuaternionRigidBodyPlant(
-        inertia=as_float(np.diag(sec.inertia)),
-        initial_omega=as_float(w0),
-        initial_quaternion=as_float(sec.quaternions()),
-        disturbance_torque=_vec3_text(sec.disturbance_torque),
-        gyroscopic=sec.gyroscopic,
+    return quaternion_plant(
+        sec.inertia, w0, sec.quaternions(), sec.disturbance_torque, sec.gyroscopic
     )
 
 
@@ -175,6 +199,116 @@ register_component_type(
     QuaternionPlantSection,
     _quaternion_plant,
     "rigid-body attitudes with quaternion kinematics, driven by body torques (Yang2013 (4))",
+)
+
+_PITCH_LIMIT_DEG = float(np.rad2deg(SINGULAR_PITCH_LIMIT_RAD))
+
+
+class EulerAnglePlantSection(StrictModel):
+    """m rigid bodies in 3-2-1 Euler angles driven by generalised torques (Mehrabian (1), (27)-(28)):
+    true inertias drawn about ``inertia``, random or given initial angles, a Gaussian input disturbance
+    held over each step; every draw from the run seed. Defaults: the paper's data and our choices
+    (E003-10)."""
+
+    count: int = Field(8, ge=1, le=64, description="Number m of spacecraft [-].")
+    inertia: Vec3 = Field(
+        NOMINAL_INERTIA,
+        description="Principal inertia diag(...) about which every spacecraft's true inertia is drawn "
+        "[kg m^2], each > 0 (default 20, 18, 15 kg m^2, our choice E003-10; an attitude law's "
+        "model is stated in its own section).",
+    )
+    inertia_uncertainty: float = Field(
+        0.1,
+        ge=0.0,
+        lt=1.0,
+        description="True J = diag(inertia) diag(1 + delta), delta ~ U[-u, u]^3 per spacecraft, drawn "
+        "from the run seed [-] (paper: +-10 %).",
+    )
+    random_initial_attitude: bool = Field(
+        True,
+        description="Draw every initial Euler angle from U[initial_attitude_range_deg] with the run seed "
+        "(inside the run, so a campaign varies it through the seed); false: initial_attitude_deg.",
+    )
+    initial_attitude_range_deg: tuple[float, float] = Field(
+        (0.0, 60.0), description="Range of the random initial Euler angles [deg] (paper: 0..60)."
+    )
+    initial_attitude_deg: list[Vec3] | None = Field(
+        None,
+        description="Initial [theta (pitch), phi (roll), psi (yaw)] per spacecraft [deg] (used when "
+        "random_initial_attitude = false).",
+    )
+    initial_rate_deg_s: list[Vec3] | None = Field(
+        None,
+        description="Initial Euler-angle rates per spacecraft [deg/s] (default 0, our choice).",
+    )
+    disturbance_variance: float = Field(
+        0.001,
+        ge=0.0,
+        description="Variance of the Gaussian input disturbance d_j, i.i.d. per spacecraft and channel, "
+        "held over each step [(N m)^2] (paper: 0.001).",
+    )
+
+    @model_validator(mode="after")
+    def _check(self):
+        for k, x in enumerate(self.inertia):
+            if not (x > 0 and math.isfinite(x)):
+                raise ValueError(
+                    f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2"
+                )
+        lo, hi = self.initial_attitude_range_deg
+        if not lo <= hi:
+            raise ValueError(
+                f"initial_attitude_range_deg = [{lo}, {hi}]: lower bound must be <= upper bound"
+            )
+        if self.random_initial_attitude and max(abs(lo), abs(hi)) >= _PITCH_LIMIT_DEG:
+            raise ValueError(
+                f"initial_attitude_range_deg = [{lo}, {hi}] deg can draw a pitch at or beyond "
+                f"+-{_PITCH_LIMIT_DEG:.0f} deg: the Euler-angle EL model is singular at theta = +-90 deg "
+                "(R_bar has 1/cos(theta), E003-08); use a range inside "
+                f"(-{_PITCH_LIMIT_DEG:.0f}, {_PITCH_LIMIT_DEG:.0f}) deg"
+            )
+        if not self.random_initial_attitude:
+            if self.initial_attitude_deg is None:
+                raise ValueError(
+                    "initial_attitude_deg is required when random_initial_attitude = false"
+                )
+            check_away_from_singularity(
+                np.deg2rad(np.asarray(self.initial_attitude_deg, dtype=float)),
+                field="initial_attitude_deg",
+            )
+        for name in ("initial_attitude_deg", "initial_rate_deg_s"):
+            rows = getattr(self, name)
+            if rows is not None and len(rows) != self.count:
+                raise ValueError(f"{name}: {len(rows)} rows for {self.count} spacecraft")
+        return self
+
+
+def _euler_angle_plant(sec: EulerAnglePlantSection, ctx: BuildContext):
+    m = sec.count
+
+    def rows(v):
+        return np.zeros((m, 3)) if v is None else np.deg2rad(np.asarray(v, dtype=float))
+
+    return EulerAngleAttitudePlant(
+        seed=np.asarray(ctx.scenario.simulation.seed, dtype=np.uint32),
+        random_initial=as_float(1.0 if sec.random_initial_attitude else 0.0),
+        q0_range=as_float(np.deg2rad(sec.initial_attitude_range_deg)),
+        q0_fixed=as_float(rows(sec.initial_attitude_deg)),
+        qdot0=as_float(rows(sec.initial_rate_deg_s)),
+        J_nominal=as_float(np.tile(np.asarray(sec.inertia), (m, 1))),
+        inertia_spread=as_float(sec.inertia_uncertainty),
+        disturbance_std=as_float(np.sqrt(sec.disturbance_variance)),
+        step=ctx.dt,
+    )
+
+
+register_component_type(
+    "plant",
+    EULER_PLANT,
+    EulerAnglePlantSection,
+    _euler_angle_plant,
+    "rigid-body attitudes in 3-2-1 Euler angles driven by generalised torques, drawn inertias, held "
+    "input noise (Mehrabian (1), (27)-(28))",
 )
 
 
@@ -228,7 +362,8 @@ class FaultEntry(StrictModel):
 
 
 class EulerAllocationSection(StrictModel):
-    """tau_body = R_bar(q)^T (tau_gen + u_bar), u_bar the additive faults held over each step."""
+    """tau_body = R_bar(q)^T (tau_gen + u_bar), u_bar the additive faults held over each step (on the
+    Euler-angle plant, whose input is the generalised torque: tau_gen + u_bar, Mehrabian (2))."""
 
     faults: list[FaultEntry] = Field(
         default_factory=list, description="Additive faults in the law's generalised channels [N m]."
@@ -253,6 +388,9 @@ def _fault_data(sec: EulerAllocationSection, ctx: BuildContext):
 
 
 def _euler_allocation(sec: EulerAllocationSection, ctx: BuildContext):
+    if ctx.scenario.type_of("plant") == EULER_PLANT:  # driven by the generalised torque: no mapping
+        statics, windows = _fault_data(sec, ctx)
+        return HeldAdditiveFaultActuator(count=ctx.count, windows=windows, **statics)
     _needs_quaternion_plant("actuator", EULER_ALLOCATION, ctx)
     if not sec.faults:
         return EulerTorqueAllocation(inner=IdealActuator())
@@ -267,7 +405,8 @@ register_component_type(
     EULER_ALLOCATION,
     EulerAllocationSection,
     _euler_allocation,
-    "generalised (Euler-angle) torque + additive faults -> body torque R_bar(q)^T (...)",
+    "generalised (Euler-angle) torque + additive faults -> body torque R_bar(q)^T (...) "
+    "(unmapped on the Euler-angle plant)",
 )
 
 
@@ -354,6 +493,8 @@ register_component_type(
 class NetworkedElHinfSection(StrictModel):
     """Distributed H-infinity synchronisation / tracking law with adaptive fault recovery (Euler angles)."""
 
+    #: fields whose NetworkedElHinfController attribute has another name (campaign.binding)
+    leaf_paths: ClassVar[dict[str, str]] = {"boundary_layer": "phi_b"}
     edges: list[tuple[int, int]] = Field(
         description="Undirected links as 1-based spacecraft pairs, unit weights [-]; "
         "the graph must be connected."
@@ -478,4 +619,124 @@ register_component_type(
     _networked_el_hinf,
     "Mehrabian distributed H-infinity attitude synchronisation with adaptive fault recovery "
     "(3-2-1 Euler angles, generalised torque)",
+)
+
+
+# ------------------------------------------------------------------------------------- evaluation
+class MehrabianMetricsSection(StrictModel):
+    """Mehrabian's metric set over three windows (fault window, whole run, assessment window), clipped
+    to the horizon; a window that starts after the horizon yields no metrics."""
+
+    fault_window: tuple[float, float] = Field(
+        (40.0, 240.0), description="Window of the fault-window metrics [s]."
+    )
+    assessment_window: tuple[float, float] = Field(
+        (45.0, 240.0),
+        description="Window of the reproduction's comparisons (from the reconfiguration) [s].",
+    )
+
+    @model_validator(mode="after")
+    def _order(self):
+        for name in ("fault_window", "assessment_window"):
+            a, b = getattr(self, name)
+            if not 0 <= a < b:
+                raise ValueError(f"{name} = [{a}, {b}]: need 0 <= start < end [s]")
+        return self
+
+
+def metric_windows(scenario: Any) -> dict[str, tuple[float, float]] | None:
+    """The windows [s] of a composed scenario's ``mehrabian-metrics`` evaluation (fault window, run,
+    assessment window), clipped to the horizon; None without one.
+
+    Parameters
+    ----------
+    scenario : ComposedScenario
+        A validated composed scenario.
+
+    Returns
+    -------
+    dict or None
+        ``{"fault_window": (a, b), "run": (0, H), "assessment_window": (a, b)}`` [s].
+    """
+    sec = next((v for n, v in scenario._evaluation_sections if n == MEHRABIAN_METRICS), None)
+    return None if sec is None else _clipped_windows(sec, float(scenario.simulation.horizon))
+
+
+def _clipped_windows(sec: MehrabianMetricsSection, H: float) -> dict[str, tuple[float, float]]:
+    raw = {
+        "fault_window": sec.fault_window,
+        "run": (0.0, H),
+        "assessment_window": sec.assessment_window,
+    }
+    return {w: (min(float(a), H), min(float(b), H)) for w, (a, b) in raw.items()}
+
+
+def _mehrabian_metrics(sec: MehrabianMetricsSection, ctx: BuildContext) -> None:
+    """Per window: RMS synchronisation / tracking error and RMS control (integrated at the RK stages)
+    [rad, N m], effort int sum_j |u_j|^2 dt [(N m)^2 s]; maxima over the step starts t_k in the window of
+    the largest link / tracking error norm, the spread (max - min over spacecraft) and |angle| per Euler
+    angle [rad]. Declares metrics only (no evaluation component)."""
+    if ctx.scenario.type_of("controller") != EULER_LAW or ctx.plant.quantity != "torque":
+        raise CompositionError(
+            f"evaluation {MEHRABIAN_METRICS} scores the tracking and synchronisation errors of "
+            f"controller {EULER_LAW}, but the loop has controller {ctx.scenario.type_of('controller')}"
+        )
+    if not any(s.name == "attitude" for s in ctx.plant.signals()):
+        raise CompositionError(
+            f"evaluation {MEHRABIAN_METRICS} reads the plant's Euler angles (attitude), but plant "
+            f"{ctx.scenario.type_of('plant')} records none (use plant {EULER_PLANT})"
+        )
+    dt = ctx.dt
+    rms = dict(norm=True, square=True)  # RK-stage integrals of |.|^2
+    # (name, signal, reduction, window kind, options, spacecraft reduction, units); window kind
+    # "stage": integrated over [a, b) at the RK stages, "sample": the step starts t_k in [a, b)
+    table = [
+        ("sync_err_rms", "synchronisation_error", "stage_root_mean", "stage", rms, "mean", "rad"),
+        ("track_err_rms", "tracking_error", "stage_root_mean", "stage", rms, "mean", "rad"),
+        ("control_effort", "command", "stage_integral", "stage", rms, "sum", "N2 m2 s"),
+        ("control_rms", "command", "stage_root_mean", "stage", rms, "mean", "N m"),
+        ("sync_err_max", "synchronisation_error", "max", "sample", dict(norm=True), "max", "rad"),
+        ("track_err_max", "tracking_error", "max", "sample", dict(norm=True), "max", "rad"),
+        *(
+            (f"spread_max_{ax}", "attitude", "max", "sample", dict(component=p), "range", "rad")
+            for p, ax in enumerate(AXES)
+        ),
+        *(
+            (
+                f"abs_max_{ax}",
+                "attitude",
+                "max",
+                "sample",
+                dict(component=p, norm=True),
+                "max",
+                "rad",
+            )
+            for p, ax in enumerate(AXES)
+        ),
+    ]
+    for w, (a, b) in _clipped_windows(sec, ctx.horizon).items():
+        if b - a <= 0:  # window after the horizon (shortened run): no metrics
+            continue
+        ends = {"stage": as_float(b), "sample": as_float(b - 0.5 * dt)}  # sample: a <= t_k < b
+        ctx.metrics.extend(
+            Metric(
+                f"{name}_{w}",
+                signal,
+                reduce,
+                spacecraft=sc,
+                units=units,
+                start=as_float(a),
+                end=ends[kind],
+                **opts,
+            )
+            for name, signal, reduce, kind, opts, sc, units in table
+        )
+
+
+register_component_type(
+    "evaluation",
+    MEHRABIAN_METRICS,
+    MehrabianMetricsSection,
+    _mehrabian_metrics,
+    "Mehrabian's metrics: synchronisation / tracking error, effort, Euler-angle spreads per window",
 )

@@ -1,6 +1,6 @@
 """Mehrabian, Tafazoli, Khorasani: reconfigurable control of networked nonlinear Euler-Lagrange systems
-subject to FDI imperfections. Registers method ``mehrabian`` and reproduction ``mehrabian``
-(errata E003-* in docs/errata.md).
+subject to FDI imperfections. Registers reproduction ``mehrabian``, the law's conditions and the paper's
+figures; its scenarios are composed (errata E003-* in docs/errata.md).
 """
 
 from formation_ftc.papers.mehrabian import registration  # noqa: F401

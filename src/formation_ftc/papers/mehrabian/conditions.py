@@ -1,5 +1,10 @@
 """Gain conditions (9)-(11) and the derived design quantities R_j (13), sum Q_jn (14), Q_j (15), P_j (21)
 of Mehrabian et al., printed next to the paper's values (E003-02, E003-03, E003-05). Pure numpy.
+
+:func:`check` is registered for every composed loop with ``controller.type = "networked-el-hinf"``: the
+conditions are on the law's gains, its graph, its model inertia J^ and the step, so they apply on any
+plant the law composes with (the Euler-angle plant, or a quaternion plant seen through the Euler
+sensors and the equal-power torque allocation: the same Euler-Lagrange system (1)).
 """
 
 from __future__ import annotations
@@ -97,9 +102,22 @@ def _fmt3(v) -> str:
     return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
 
 
-def check(s) -> list[Condition]:
-    """Conditions (9)-(11), the literal law's consensus-mode damping, P_j > 0, graph, derived values."""
-    c = s.controller
+def check(s: Any, loop: Any) -> list[Condition]:
+    """Conditions (9)-(11), the literal law's consensus-mode damping, P_j > 0, graph, derived values.
+
+    Parameters
+    ----------
+    s : ComposedScenario
+        A composed scenario whose controller is ``networked-el-hinf``.
+    loop : ClosedLoop
+        Its built loop (the spacecraft count is the plant's).
+
+    Returns
+    -------
+    list of Condition
+        Gains, graph and design quantities with the paper's printed values [SI].
+    """
+    c = s.section("controller")
     K, KP, KI, a, g = c.K, c.K_P, c.K_I, c.alpha, c.gamma
     dq = design_quantities(K, KP, KI, a, g)
     out: list[Condition] = []
@@ -184,7 +202,7 @@ def check(s) -> list[Condition]:
                 detail="exact: scalar arithmetic on the scenario values",
             )
         )
-    Jn = np.diag(s.formation.nominal_inertia)
+    Jn = np.diag(c.nominal_inertia)  # the law's model J^ (stated on board)
     Ps = [lyapunov_matrix(D, K, KP, KI) for D in (Jn, 10 * np.eye(3), 20 * np.eye(3))]
     eigs = [np.linalg.eigvalsh(P).min() for P in Ps]
     tol = max(rounding_margin(P) for P in Ps)
@@ -201,7 +219,8 @@ def check(s) -> list[Condition]:
             "(10 n eps ||P||)",
         )
     )
-    A = s.formation.adjacency()
+    m = loop.plant.count
+    A = graphs.adjacency(m, [(a - 1, b - 1) for a, b in c.edges], directed=False)
     L = graphs.laplacian(A)
     lam = np.sort(np.linalg.eigvalsh(L))
     out.append(
@@ -261,7 +280,7 @@ def check(s) -> list[Condition]:
     damp = max(modal_damping(K, a, g, mu, c.law) for mu in (mu_min, 1.0))
     u_hat_ref = 1.0  # N m: order of the fault estimate, sets the sat slope u^/phi_b
     rate = (damp + (u_hat_ref / c.boundary_layer if c.compensation == "sat" else 0.0)) / min(
-        s.formation.nominal_inertia
+        c.nominal_inertia
     )
     h = s.simulation.dt * rate
     over = bool(h >= 2.78)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_ftc.methods.composed.catalog_attitude import metric_windows
 from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
 
 __all__ = ["plot_attitudes", "plot_fault_estimate", "plot_seed_spread", "plot_scenario"]
@@ -92,25 +93,47 @@ def plot_seed_spread(values: dict[str, np.ndarray], path: Path, ylabel: str, tit
 
 
 def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
-    """Figures of one run: attitudes, and the fault vs FDI estimate of the first fault."""
+    """Figures of one run of a composed scenario with ``[scenario] paper = "mehrabian"``: attitudes
+    (grey: the fault window of its ``mehrabian-metrics`` evaluation), and the fault vs the FDI and
+    adaptive estimates of the actuator's first fault.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The run's records (Euler angles ``attitude`` [rad], faults and estimates [N m]).
+    scenario : ComposedScenario
+        The scenario that was run.
+    out_dir : Path
+        Folder of the PNG files.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     out_dir = Path(out_dir)
-    paths = [
-        plot_attitudes(
-            ds,
-            out_dir / "attitudes.png",
-            f"{scenario.scenario.name}: Euler angles",
-            tuple(scenario.metrics.fault_window),
+    name = scenario.scenario.name
+    windows = metric_windows(scenario)
+    paths = []
+    if "attitude" in ds:
+        paths.append(
+            plot_attitudes(
+                ds,
+                out_dir / "attitudes.png",
+                f"{name}: Euler angles",
+                None if windows is None else windows["fault_window"],
+            )
         )
-    ]
-    if scenario.faults:
-        f = scenario.faults[0]
+    faults = getattr(scenario.section("actuator"), "faults", None)
+    if faults and all(v in ds for v in ("fault", "fdi_estimate", "fault_estimate_adaptive")):
+        f = faults[0]
         paths.append(
             plot_fault_estimate(
                 ds,
                 out_dir / "fault_estimate.png",
                 f.spacecraft,
                 f.channel,
-                f"{scenario.scenario.name}: fault and estimates",
+                f"{name}: fault and estimates",
             )
         )
     return paths

@@ -1,4 +1,4 @@
-"""End-to-end tests of the ``mehrabian`` method on shortened runs.
+"""End-to-end tests of the composed Mehrabian scenarios on shortened runs.
 
 Truths: the energy balance d/dt(1/2 s^T D s) = s^T tau of the exact-model loop (passivity, E003-07) on
 the simulated rigid-body plant; exact agreement of the in-run maxima with the every-step records;
@@ -18,7 +18,7 @@ from formation_ftc.api import compile_scenario, simulate_with_metrics
 from formation_ftc.blocks.controllers.networked_el_hinf import synchronisation_torque
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics.euler_lagrange import inertia_matrix
-from formation_ftc.papers.mehrabian.method import neighbour_pairs, with_seed
+from formation_ftc.papers.mehrabian.reproduction import with_seed
 from formation_ftc.sim.batch import batched_run, stack_params
 
 
@@ -28,20 +28,23 @@ def test_energy_balance_of_the_exact_model_loop():
     s = ftc.load_scenario(
         "mehrabian-identification",
         {
-            "faults": [],
-            "disturbance.variance": 0.0,
-            "formation.inertia_uncertainty": 0.0,
+            "actuator.faults": [],
+            "estimator": None,
+            "plant.disturbance_variance": 0.0,
+            "plant.inertia_uncertainty": 0.0,
             "simulation.horizon": 20.0,
             "simulation.record_every": 1,
         },
     )
     ds, _ = simulate_with_metrics(s)
     q, sv = ds.attitude.values, ds.sliding_variable.values
-    J = jnp.asarray(np.diag(s.formation.nominal_inertia))
+    J = jnp.asarray(np.diag(s.section("plant").inertia))
     D = np.asarray(inertia_matrix(jnp.asarray(q), J))
     V = 0.5 * np.einsum("tjp,tjpq,tjq->t", sv, D, sv)
-    A = s.formation.adjacency()
     m = 8
+    A = graphs.adjacency(
+        m, [(a - 1, b - 1) for a, b in s.section("controller").edges], directed=False
+    )
     tau = np.asarray(
         synchronisation_torque(
             jnp.asarray(sv),
@@ -65,12 +68,12 @@ def short_case_b():
     s = ftc.load_scenario(
         "mehrabian-identification",
         {
-            "faults.0.start": 10.0,
-            "faults.0.end": 40.0,
+            "actuator.faults.0.start": 10.0,
+            "actuator.faults.0.end": 40.0,
             "simulation.horizon": 60.0,
             "simulation.record_every": 1,
-            "metrics.fault_window": [10.0, 40.0],
-            "metrics.assessment_window": [15.0, 40.0],
+            "evaluations.0.fault_window": [10.0, 40.0],
+            "evaluations.0.assessment_window": [15.0, 40.0],
         },
     )
     ds, metrics = simulate_with_metrics(s)
@@ -101,7 +104,10 @@ def test_metrics_agree_with_records(short_case_b):
     integrals vs a rectangle rule on the 0.01 s records, 1 % (first-order quadrature difference)."""
     s, ds, m = short_case_b
     q = ds.attitude.values
-    j, n = neighbour_pairs(s.formation.adjacency())
+    edges = s.section("controller").edges
+    A = graphs.adjacency(8, [(a - 1, b - 1) for a, b in edges], directed=False)
+    j, n = np.nonzero(np.triu(A > 0, 1))  # each undirected link once
+    assert list(ds.link.values) == [f"{a + 1}-{b + 1}" for a, b in zip(j, n, strict=True)]
     k0, k1 = 1000, 4000
     pair = np.linalg.norm(q[:, j] - q[:, n], axis=-1)
     assert m["sync_err_max_fault_window"] == pytest.approx(pair[k0:k1].max(), abs=1e-14)
@@ -130,13 +136,13 @@ def test_converges_as_dt_shrinks():
         s = ftc.load_scenario(
             "mehrabian-identification",
             {
-                "faults.0.start": 5.0,
+                "actuator.faults.0.start": 5.0,
                 "simulation.horizon": 25.0,
                 "simulation.dt": dt,
                 "simulation.record_every": round(25.0 / dt),
-                "disturbance.variance": 0.0,
-                "metrics.fault_window": [5.0, 25.0],
-                "metrics.assessment_window": [10.0, 25.0],
+                "plant.disturbance_variance": 0.0,
+                "evaluations.0.fault_window": [5.0, 25.0],
+                "evaluations.0.assessment_window": [10.0, 25.0],
             },
         )
         c = compile_scenario(s)
@@ -205,21 +211,23 @@ def test_disturbance_statistics(short_case_b):
     assert abs(r1) < 0.02
 
 
-def test_method_plot(short_case_b, tmp_path):
+def test_paper_figures(short_case_b, tmp_path):
+    """``[scenario] paper = "mehrabian"``: the composed method draws the paper's figures."""
     from formation_ftc.registry import get_method
 
     s, ds, _ = short_case_b
-    paths = get_method("mehrabian").plot(ds, s, tmp_path)
-    assert len(paths) == 2 and all(p.stat().st_size > 10_000 for p in paths)
+    paths = get_method("composed").plot(ds, s, tmp_path)
+    assert [p.name for p in paths] == ["attitudes.png", "fault_estimate.png"]
+    assert all(p.stat().st_size > 10_000 for p in paths)
 
 
 def test_wrong_spacecraft_isolation_reconfigures_the_healthy_one():
     s = ftc.load_scenario(
         "mehrabian-isolation",
         {
-            "fdi.isolation.0.reported_spacecraft": 2,
-            "fdi.isolation.0.reported_channel": 3,
-            "faults.0.start": 5.0,
+            "estimator.isolation.0.reported_spacecraft": 2,
+            "estimator.isolation.0.reported_channel": 3,
+            "actuator.faults.0.start": 5.0,
             "simulation.horizon": 20.0,
             "simulation.record_every": 100,
         },

@@ -1,4 +1,5 @@
-"""Scenario validation (bad input) and the design conditions / derived values (SPEC P3.6-1..4)."""
+"""Scenario validation (bad input) and the design conditions / derived values (SPEC P3.6-1..4) of the
+composed Mehrabian scenarios (conditions registered for controller ``networked-el-hinf``)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ NAMES = ["mehrabian-no-reconfig", "mehrabian-identification", "mehrabian-isolati
 @pytest.mark.parametrize("name", NAMES)
 def test_builtin_scenarios_load_with_paper_data(name):
     s = ftc.load_scenario(name)
-    c = s.controller
+    assert s.scenario.method == "composed" and s.scenario.paper == "mehrabian"
+    c = s.section("controller")
     assert (c.gamma, c.alpha, c.K, c.K_P, c.K_I, c.sigma, c.e_gain) == (
         0.6,
         0.86,
@@ -25,12 +27,17 @@ def test_builtin_scenarios_load_with_paper_data(name):
         0.5,
         1.0,
     )
-    assert s.simulation.horizon == 300.0 and s.disturbance.variance == 0.001
-    f = s.faults[0]
+    p = s.section("plant")
+    assert s.simulation.horizon == 300.0 and p.disturbance_variance == 0.001
+    assert (p.count, p.inertia_uncertainty, p.initial_attitude_range_deg) == (8, 0.1, (0.0, 60.0))
+    assert p.inertia == c.nominal_inertia == (20.0, 18.0, 15.0)
+    f = s.section("actuator").faults[0]
     assert (f.spacecraft, f.channel, f.start, f.end) == (1, 3, 40.0, 240.0)
-    assert s.fdi.detected == (name != "mehrabian-no-reconfig")
-    assert len(s.fdi.isolation) == (1 if name == "mehrabian-isolation" else 0)
-    assert sorted(map(tuple, s.formation.edges)) == sorted(
+    fdi = s.section("estimator")
+    assert fdi.detected == (name != "mehrabian-no-reconfig")
+    assert (fdi.delay, fdi.scale, fdi.bias) == (5.0, 1.0, -0.1)
+    assert len(fdi.isolation) == (1 if name == "mehrabian-isolation" else 0)
+    assert sorted(map(tuple, c.edges)) == sorted(
         [(1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7), (7, 8), (8, 1), (1, 5), (3, 7)]
     )
 
@@ -38,33 +45,41 @@ def test_builtin_scenarios_load_with_paper_data(name):
 def test_disconnected_graph_is_rejected():
     edges = [[1, 2], [2, 3], [3, 4], [4, 1], [5, 6], [6, 7], [7, 8], [8, 5]]
     with pytest.raises(ScenarioError, match="not connected"):
-        ftc.load_scenario("mehrabian-identification", {"formation.edges": edges})
+        ftc.load_scenario("mehrabian-identification", {"controller.edges": edges})
 
 
 def test_singular_initial_attitudes_are_rejected():
     rows = [[10.0, 0.0, 0.0]] * 7 + [[90.0, 5.0, 5.0]]
     with pytest.raises(ScenarioError, match="singular at theta = \\+-90 deg"):
         ftc.load_scenario(
-            "mehrabian-identification", {"initial.random": False, "initial.attitude_deg": rows}
+            "mehrabian-identification",
+            {"plant.random_initial_attitude": False, "plant.initial_attitude_deg": rows},
         )
     with pytest.raises(ScenarioError, match="singular at theta = \\+-90 deg"):
-        ftc.load_scenario("mehrabian-identification", {"initial.attitude_range_deg": [0.0, 90.0]})
+        ftc.load_scenario(
+            "mehrabian-identification", {"plant.initial_attitude_range_deg": [0.0, 90.0]}
+        )
     ok = ftc.load_scenario(
         "mehrabian-identification",
-        {"initial.random": False, "initial.attitude_deg": [[10.0, 0.0, 0.0]] * 8},
+        {
+            "plant.random_initial_attitude": False,
+            "plant.initial_attitude_deg": [[10.0, 0.0, 0.0]] * 8,
+        },
     )
-    assert ok.initial.attitude_deg[0] == (10.0, 0.0, 0.0)
+    assert ok.section("plant").initial_attitude_deg[0] == (10.0, 0.0, 0.0)
 
 
 def test_other_bad_inputs_name_the_field():
-    with pytest.raises(ScenarioError, match="formation.edges\\[0\\]"):
-        ftc.load_scenario("mehrabian-identification", {"formation.edges": [[1, 9]]})
-    with pytest.raises(ScenarioError, match="fdi.isolation\\[0\\]"):
-        ftc.load_scenario("mehrabian-isolation", {"fdi.isolation.0.channel": 1})
+    with pytest.raises(ScenarioError, match="controller.edges\\[0\\]"):
+        ftc.load_scenario("mehrabian-identification", {"controller.edges": [[1, 9]]})
+    with pytest.raises(ScenarioError, match="estimator.isolation\\[0\\]"):
+        ftc.load_scenario("mehrabian-isolation", {"estimator.isolation.0.channel": 1})
     with pytest.raises(ScenarioError, match="controller.law|law"):
         ftc.load_scenario("mehrabian-identification", {"controller.law": "other"})
-    with pytest.raises(ScenarioError, match="initial.attitude_deg is required"):
-        ftc.load_scenario("mehrabian-identification", {"initial.random": False})
+    with pytest.raises(ScenarioError, match="initial_attitude_deg is required"):
+        ftc.load_scenario("mehrabian-identification", {"plant.random_initial_attitude": False})
+    with pytest.raises(ScenarioError, match="evaluations\\[0\\]: fault_window"):
+        ftc.load_scenario("mehrabian-identification", {"evaluations.0.fault_window": [50.0, 40.0]})
 
 
 def _by_name(conds):
@@ -131,3 +146,16 @@ def test_violated_gains_are_flagged_with_values():
     )
     assert b["0 < alpha < 1"].holds is False and b["K - I/gamma^2 > 0"].holds is False
     assert "-0.777778" in b["K - I/gamma^2 > 0"].value
+
+
+def test_conditions_follow_the_law_on_any_plant():
+    """The law's conditions come with controller networked-el-hinf on every plant it flies (the
+    quaternion plants through the Euler sensors and the torque allocation), with that scenario's gains
+    and graph."""
+    names = {c.name for c in ftc.check("mehrabian-identification")}
+    other = _by_name(ftc.check("compose-mehrabian-on-yang2013"))
+    assert names <= set(other) | {"components fit together"}
+    assert "components fit together" in other and other["0 < alpha < 1"].holds is True
+    # the model inertia J^ of the P_j check is the law's stated one (25 kg m^2 there)
+    P = conditions.lyapunov_matrix(np.diag([25.0] * 3), 20.0, 0.16, 0.001)
+    assert f"{np.linalg.eigvalsh(P).min():.4g} (D = J^)" in other["P_j positive definite"].value
