@@ -3,7 +3,7 @@
 Prints (medians of ``--repeats``; timings on shared machines are noisy, compare the CPU seconds):
 
 * the alpha_2 sweep (``--runs`` weights on 1 ... 10, x axis only, ``--horizon`` s at dt = 1 ms) through
-  :func:`formation_ftc.papers.azizi2009.method.run_batch`: compile time, wall and process CPU time per
+  :func:`formation_ftc.papers.azizi2009.reproduction.run_batch`: compile time, wall and process CPU time per
   call, run-steps per second;
 * the single run of each built-in scenario (3 axes) over ``--horizon``: wall time after compilation.
 
@@ -27,14 +27,14 @@ def main(argv: list[str] | None = None) -> int:
     import jax
     import numpy as np
 
-    from formation_ftc.api import compile_scenario
-    from formation_ftc.papers.azizi2009.method import load, run_batch
+    from formation_ftc.api import compile_scenario, load_scenario
+    from formation_ftc.papers.azizi2009.reproduction import run_batch
 
-    sc = load(
+    sc = load_scenario(
         "azizi2009-llfr",
         {
             "simulation.horizon": args.horizon,
-            "formation.n_axes": 1,
+            "plant.axes": 1,
             "simulation.record_every": 1000,
         },
     )
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{first:.2f} s, then wall {w:.2f} s, CPU {c:.2f} s, {steps / w:.3g} run-steps/s"
     )
     for name in ("azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"):
-        c_ = compile_scenario(load(name, {"simulation.horizon": args.horizon}))
+        c_ = compile_scenario(load_scenario(name, {"simulation.horizon": args.horizon}))
         f = jax.jit(c_.run).lower(c_.params).compile()
         ts = []
         for _ in range(args.repeats):

@@ -53,7 +53,11 @@ def _single(name: str, horizon: float, overrides: dict | None = None):
 CASES = [
     _single("mehrabian-isolation", 20.0),
     _single("compose-li2020-on-cw", 100.0),
-    _single("azizi2009-llfr", 30.0, {"noise.sigma_position": 1e-5, "noise.sigma_velocity": 1e-5}),
+    _single(
+        "azizi2009-llfr",
+        30.0,
+        {"sensors.position_noise_std": 1e-5, "sensors.velocity_noise_std": 1e-5},
+    ),
     _mehrabian,
 ]
 

@@ -113,7 +113,7 @@ def main() -> None:
         ):  # a sweep of the second actuator's weight alpha_2 from 1 to 10, as the reproduction's
             loops = [
                 compile_scenario(
-                    load_scenario(name, {**ov, "allocation.alpha": [1.0, a, 1.0, 1.0]})
+                    load_scenario(name, {**ov, "controller.alpha": [1.0, a, 1.0, 1.0]})
                 ).params
                 for a in np.linspace(1.0, 10.0, runs)
             ]

@@ -12,15 +12,18 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from formation_ftc.api import load_scenario
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
 from formation_ftc.components.controllers.pd_formation import PdFormationController
 from formation_ftc.components.evaluations.chain_errors import ChainTrackingError, ThresholdFlag
-from formation_ftc.papers.azizi2009.method import load, make_loop
+from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import CompositionError, FlightInputs, SensorInputs, TruthInputs
 
 
 def _loop(name="azizi2009-flfr", **ov):
-    return make_loop(load(name, {"simulation.horizon": 2.0, "simulation.record_every": 100, **ov}))
+    return make_loop(
+        load_scenario(name, {"simulation.horizon": 2.0, "simulation.record_every": 100, **ov})
+    )
 
 
 def _other_truth(loop):
@@ -103,7 +106,13 @@ def test_controller_law_against_hand_formula():
 
 
 def test_plant_sensor_actuator_and_evaluation_against_formulas():
-    loop = _loop(**{"fault.onset": 1.0, "noise.sigma_position": 1e-3, "noise.sigma_velocity": 2e-3})
+    loop = _loop(
+        **{
+            "actuator.onset": 1.0,
+            "sensors.position_noise_std": 1e-3,
+            "sensors.velocity_noise_std": 2e-3,
+        }
+    )
     p, s, a = loop.plant, loop.sensors, loop.actuator
     x = p.initial_state()
     u = jnp.ones((4, 3))

@@ -1,6 +1,6 @@
 """Azizi2009 metrics do not depend on the record decimation (``simulation.record_every``).
 
-Every metric of an ``azizi2009`` run is accumulated inside the run at every step; the reproduction's
+Every metric of an azizi2009 run is accumulated inside the run at every step; the reproduction's
 alpha_2 sweep and seed spread rely on this and record every 1,000 steps. The three scenarios of the
 reproduction (fault-free, LLFR, FLFR with its supervisor) and the noisy x-axis run of the seed spread
 run 102 s (102,000 steps of 1 ms) with the fault at 1 s, so that the FLFR switch, the window gated on
@@ -24,17 +24,23 @@ import math
 import numpy as np
 import pytest
 
-from formation_ftc.papers.azizi2009.method import FLFR, load, run_batch
+from formation_ftc.api import load_scenario as load
+from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
+from formation_ftc.papers.azizi2009.reproduction import run_batch
 from formation_ftc.papers.programs import simulate
 
 DT = 1e-3  # [s]
 HORIZON = 102.0  # [s]
 ONSET = 1.0  # [s]
-OVERRIDES = {"simulation.horizon": HORIZON, "fault.onset": ONSET, "fault.estimated_at": ONSET}
+OVERRIDES = {
+    "simulation.horizon": HORIZON,
+    "actuator.onset": ONSET,
+    "supervisor.estimate_time": ONSET,
+}
 NOISY = {
-    "formation.n_axes": 1,
-    "noise.sigma_position": 1e-5,
-    "noise.sigma_velocity": 1e-5,
+    "plant.axes": 1,
+    "sensors.position_noise_std": 1e-5,
+    "sensors.velocity_noise_std": 1e-5,
     "simulation.seed": 3,
 }
 CASES = [

@@ -1,7 +1,13 @@
-"""Catalog: relative-output formation control on a chain of spacecraft pairs -- chain relative
-sensors, the relative-output law with LLFR allocation (Azizi & Khorasani 2009), its hierarchical (HL)
-supervisor (Nominal -> LLFR -> FLFR) and the step loss of actuator effectiveness -- for composed
-scenarios on any translational plant.
+"""Catalog: relative-output formation control on a chain of spacecraft pairs -- the deep-space
+double-integrator plant, chain relative sensors, the relative-output law with LLFR allocation and its
+FLFR weight design (Azizi & Khorasani 2009), its hierarchical (HL) supervisor (Nominal -> LLFR -> FLFR),
+the step loss of actuator effectiveness and the true chain errors -- for composed scenarios on any
+translational plant.
+
+* ``plant.type = "double-integrator"``: the paper's deep-space plant ``x_i'' = b_i u_i + d_i(t)``
+  (Sec. II), driven by accelerations.
+* ``[[evaluations]] type = "chain-errors"``: the true chain errors ``tracking_error`` (added by the law
+  itself when no scenario lists it); ``metrics = "azizi2009"`` also declares the paper's metric set.
 
 How the parts fit a plant they were not written for:
 
@@ -28,30 +34,43 @@ sensor on a plant without positions is rejected at validation, naming both parts
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
+from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
 from formation_ftc.components.actuators.actuator_gains import StepGainActuator
 from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
 from formation_ftc.components.evaluations.chain_errors import ChainTrackingError, ThresholdFlag
+from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
 from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
 from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
 from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
-from formation_ftc.config.base import StrictModel
+from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.core.polygon_formation import relative_acceleration_fn
 from formation_ftc.design.allocation import validate_allocation_inputs
+from formation_ftc.design.flfr import FlfrDesign, design_flfr
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.sim.components import CompositionError, as_float
+from formation_ftc.sim.metrics import Metric
 
+DOUBLE_INTEGRATOR = "double-integrator"
 CHAIN_SENSORS = "chain-relative"
 CHAIN_LAW = "azizi2009-llfr"
 HL_SUPERVISOR = "hierarchical"
+CHAIN_ERRORS = "chain-errors"
 AXES = ("x", "y", "z")
 #: the law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``)
 NOMINAL_MASS = 100.0
+#: horizon of the simulated supremum H_i of the FLFR design (several rotation periods) [s]
+DESIGN_HORIZON = 300.0
+#: time of the ``effort_x_100s_sc*`` metrics of the Azizi2009 set (Fig. 2 compares the efforts there) [s]
+EFFORT_TIME = 100.0
+Vec3 = tuple[float, float, float]
 
 
 _per_spacecraft = per_spacecraft
@@ -78,6 +97,71 @@ def _plant_layout(ctx: BuildContext, slot: str, name: str) -> tuple[str, int]:
 
 def _steps(time: float, dt: float) -> int:
     return int(round(time / dt))
+
+
+# ------------------------------------------------------------------------------------------ plants
+class DoubleIntegratorSection(StrictModel):
+    """Deep space (Azizi & Khorasani 2009 Sec. II): decoupled double integrators per axis,
+    ``x_i'' = a_i + d_i(t)`` with the actuator's applied acceleration ``a_i = b_i u_i`` [m/s^2]."""
+
+    initial_position: list[Vec3] = Field(
+        description="Initial inertial position per spacecraft, x, y, z [m] (the first `axes` are used)."
+    )
+    initial_velocity: list[Vec3] | None = Field(
+        None, description="Initial inertial velocity per spacecraft, x, y, z [m/s] (default 0)."
+    )
+    axes: int = Field(
+        3, ge=1, le=3, description="Simulated axes: 1 = x, 2 = x, y, 3 = x, y, z [-]."
+    )
+    disturbance_acceleration: ExprText = Field(
+        "0",
+        description="Disturbance d_i(t) on every axis, an expression in t [s] and i "
+        "(1-based spacecraft number) [m/s^2].",
+    )
+    integration: Literal["exact", "rk4"] = Field(
+        "exact",
+        description="'exact': the exact step with the applied and disturbance accelerations held over "
+        "the step (zero-order hold); 'rk4': RK4 (a 'continuous' law is re-evaluated at the stages).",
+    )
+
+    @model_validator(mode="after")
+    def _sizes(self):
+        n = len(self.initial_position)
+        if n < 1:
+            raise ValueError("initial_position: at least one spacecraft")
+        if self.initial_velocity is not None and len(self.initial_velocity) != n:
+            raise ValueError(
+                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
+            )
+        return self
+
+    @property
+    def count(self) -> int:
+        return len(self.initial_position)
+
+
+def _double_integrator(sec: DoubleIntegratorSection, ctx: BuildContext) -> DoubleIntegratorPlant:
+    r0 = np.asarray(sec.initial_position, float)[:, : sec.axes]
+    v0 = (
+        np.zeros_like(r0)
+        if sec.initial_velocity is None
+        else np.asarray(sec.initial_velocity, float)[:, : sec.axes]
+    )
+    return DoubleIntegratorPlant(
+        initial_position=as_float(r0),
+        initial_velocity=as_float(v0),
+        disturbance=str(sec.disturbance_acceleration),
+        zoh=sec.integration == "exact",
+    )
+
+
+register_component_type(
+    "plant",
+    DOUBLE_INTEGRATOR,
+    DoubleIntegratorSection,
+    _double_integrator,
+    "deep-space double integrators x'' = b u + d(t) per axis (Azizi2009), driven by accelerations",
+)
 
 
 # ----------------------------------------------------------------------------------------- sensors
@@ -138,8 +222,9 @@ class ChainLlfrSection(StrictModel):
     alpha_flfr: float | None = Field(
         None,
         gt=0,
-        description="FLFR weight of the faulty spacecraft [-] "
-        "(default: its LLFR weight, i.e. FLFR changes nothing).",
+        description="FLFR weight of the faulty spacecraft [-] (default: designed by eq. (11) from the "
+        "fields below when a hierarchical supervisor may switch to FLFR -- 4 spacecraft, spacecraft "
+        "2 faulty -- otherwise its LLFR weight, i.e. FLFR changes nothing).",
     )
     b: float | list[float] = Field(
         1.0, description="Nominal actuator gains b_i the law allocates with (every axis) [-]."
@@ -164,6 +249,30 @@ class ChainLlfrSection(StrictModel):
         "zoh",
         description="'zoh': computed at t_k and held over the step; 'continuous': every RK stage.",
     )
+    b_eps: float = Field(
+        0.08,
+        gt=0,
+        description="Known bound B_eps on |b_hat - b| of the FDI estimate [-] (eq. (8)).",
+    )
+    violation_probability: float = Field(
+        0.0,
+        ge=0,
+        lt=1,
+        description="pi of eq. (11) for the FLFR weight design, 0 <= pi < 1 (0: deterministic "
+        "design (9)) [-].",
+    )
+    disturbance_bound: float = Field(
+        2e-5,
+        ge=0,
+        description="Bound B_ext on the differential disturbance |d_j - d_i| the FLFR design "
+        "assumes [m/s^2].",
+    )
+    design_dt: float = Field(
+        1e-3, gt=0, description="Step of the simulated H_i of the FLFR design [s]."
+    )
+    alpha_reference: float = Field(
+        1.0, gt=0, description="alpha_k at which the FLFR design evaluates A_clp for H_i [-]."
+    )
 
     @model_validator(mode="after")
     def _values(self):
@@ -174,15 +283,12 @@ class ChainLlfrSection(StrictModel):
         return self
 
 
-def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
-    n = ctx.count
-    sensors = ctx.scenario.type_of("sensors")
-    if sensors != CHAIN_SENSORS:
-        raise CompositionError(
-            f"controller {CHAIN_LAW} reads relative outputs on the chain pairs (sensors {CHAIN_SENSORS}), but "
-            f"sensors {sensors or 'default (exact (N, 6) state)'} measure something else"
-        )
-    layout, axes = _plant_layout(ctx, "controller", CHAIN_LAW)
+def law_gains(
+    sec: ChainLlfrSection, n: int, axes: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The law's numbers for ``n`` spacecraft on ``axes`` axes: weights alpha (N,), nominal gains
+    (N, axes), estimated gains b_hat (N, axes) (the FDI estimate on the faulty axis) and the 0-based
+    faulty spacecraft k (0 when none is reported)."""
     alpha = _per_spacecraft(sec.alpha, n, "controller.alpha")
     b_nom = np.tile(_per_spacecraft(sec.b, n, "controller.b")[:, None], (1, axes))
     b_hat = b_nom.copy()
@@ -191,17 +297,98 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
         k = sec.faulty_spacecraft - 1
         if k >= n:
             raise ValueError(
-                f"controller.faulty_spacecraft = {sec.faulty_spacecraft}: plant "
-                f"{ctx.scenario.type_of('plant')} has {n} spacecraft"
+                f"controller.faulty_spacecraft = {sec.faulty_spacecraft}: the plant has {n} spacecraft"
             )
         if AXES.index(sec.faulty_axis) >= axes:
             raise ValueError(
                 f"controller.faulty_axis = {sec.faulty_axis!r}: the plant has {axes} axes"
             )
         b_hat[k, AXES.index(sec.faulty_axis)] = sec.b_hat
+    return alpha, b_nom, b_hat, k
+
+
+@functools.lru_cache(maxsize=32)
+def _design_cached(key: tuple) -> FlfrDesign:
+    alpha, b_hat, k, b_eps, lam0, lam1, e_s, pis, n, side, omega, axis, dt, b_ext, a_ref = key
+    w_fn = relative_acceleration_fn(n, side, omega, axis)
+    return design_flfr(
+        np.asarray(alpha), np.asarray(b_hat), k, b_eps, lam0, lam1, e_s, pis, w_fn,
+        DESIGN_HORIZON, dt, b_ext, a_ref,
+    )  # fmt: skip
+
+
+def flfr_design(
+    sec: ChainLlfrSection, n: int, e_s: float, pis: tuple[float, ...] | None = None
+) -> FlfrDesign:
+    """Offline FLFR design of eqs. (8)-(11) (:func:`formation_ftc.design.flfr.design_flfr`) of the law
+    on ``n`` spacecraft for its faulty spacecraft and axis, mission bound ``e_s`` [m] and violation
+    probabilities ``pis`` (default: the law's ``violation_probability``); cached by its inputs. H_i is
+    simulated over :data:`DESIGN_HORIZON` (the sup over t needs several rotation periods)."""
+    if sec.faulty_spacecraft is None:
+        raise ValueError("the FLFR design needs controller.faulty_spacecraft")
+    axis = AXES.index(sec.faulty_axis)
+    alpha, _, b_hat, k = law_gains(sec, n, axis + 1)
+    pis = (sec.violation_probability,) if pis is None else pis
+    key = (
+        tuple(float(a) for a in alpha),
+        tuple(float(b) for b in b_hat[:, axis]),
+        k,
+        float(sec.b_eps),
+        float(sec.lambda0),
+        float(sec.lambda1),
+        float(e_s),
+        tuple(float(p) for p in pis),
+        n,
+        float(sec.side),
+        float(sec.omega),
+        axis,
+        float(sec.design_dt),
+        float(sec.disturbance_bound),
+        float(sec.alpha_reference),
+    )
+    return _design_cached(key)
+
+
+def _alpha_flfr(sec: ChainLlfrSection, ctx: BuildContext, alpha: np.ndarray, k: int) -> float:
+    """The FLFR weight: stated, or designed by eq. (11) for the HL supervisor's e_s (never below the
+    LLFR weight), or the LLFR weight where no supervisor may switch to FLFR."""
+    if sec.alpha_flfr is not None:
+        return float(sec.alpha_flfr)
+    sup = ctx.section("supervisor") if ctx.scenario.type_of("supervisor") == HL_SUPERVISOR else None
+    if sup is None or not sup.flfr or sec.faulty_spacecraft is None:
+        return float(alpha[k])
+    if ctx.count != 4 or k != 1:
+        raise ValueError(
+            "controller.alpha_flfr: its design by eq. (11) (reduced model (7)) is implemented for 4 "
+            "spacecraft with spacecraft 2 faulty; give controller.alpha_flfr"
+        )
+    des = flfr_design(sec, ctx.count, sup.e_s)
+    if des.verdict == "infeasible":
+        raise ValueError(f"controller.alpha_flfr: {des.message}")
+    a = des.alpha[float(sec.violation_probability)]
+    assert a is not None  # None only when infeasible (raised above)
+    return max(float(a), float(alpha[k]))  # never lower the weight (LLFR already suffices)
+
+
+def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
+    n = ctx.count
+    sensors = ctx.scenario.type_of("sensors")
+    if sensors != CHAIN_SENSORS:
+        raise CompositionError(
+            f"controller {CHAIN_LAW} reads relative outputs on the chain pairs (sensors {CHAIN_SENSORS}), but "
+            f"sensors {sensors or 'default (exact (N, 6) state)'} measure something else"
+        )
+    if sec.sampling == "continuous" and ctx.plant.integration == "exact":
+        raise CompositionError(
+            f"controller {CHAIN_LAW} with sampling 'continuous' is re-evaluated at the RK stages, but "
+            f"plant {ctx.scenario.type_of('plant')} steps exactly with the command held: give the "
+            "plant integration = 'rk4'"
+        )
+    layout, axes = _plant_layout(ctx, "controller", CHAIN_LAW)
+    alpha, b_nom, b_hat, k = law_gains(sec, n, axes)
     for a in range(axes):
         validate_allocation_inputs(alpha, b_hat[:, a], "controller.alpha", "controller.b_hat")
-    a_flfr = alpha[k] if sec.alpha_flfr is None else sec.alpha_flfr
+    a_flfr = _alpha_flfr(sec, ctx, alpha, k)
     law = ChainLlfrController(
         lambda0=as_float(sec.lambda0),
         lambda1=as_float(sec.lambda1),
@@ -215,8 +402,9 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
         is_sampled=sec.sampling == "zoh",
         frame="LVLH" if layout == "q" else "inertial",
     )
-    if any(s.name == "position" for s in ctx.plant.signals()):
-        ctx.evaluations.append(ChainTrackingError())  # true chain errors (records and metrics only)
+    listed = any(e.get("type") == CHAIN_ERRORS for e in ctx.scenario.evaluations)
+    if not listed and any(s.name == "position" for s in ctx.plant.signals()):
+        ctx.evaluations.append(_chain_errors(ChainErrorsSection(), ctx))  # true chain errors
     quantity = ctx.plant.quantity
     if quantity == "acceleration":
         if sec.nominal_mass is not None:
@@ -368,4 +556,68 @@ register_component_type(
     ActuatorGainsSection,
     _actuator_gains,
     "true actuator gains with a step loss of effectiveness on one axis (applied = b(t) u)",
+)
+
+
+# ------------------------------------------------------------------------------------ evaluations
+class ChainErrorsSection(StrictModel):
+    """True chain errors ``tracking_error`` e_ij = (x_j - x_i) - (x_j^d - x_i^d) on the pairs (1, 2),
+    ..., (N-1, N), from the plant's positions and the law's desired polygon (records and metrics)."""
+
+    metrics: Literal["none", "azizi2009"] = Field(
+        "none",
+        description="'azizi2009': also compute the paper's metric set -- max_err (largest |e_ij|), "
+        "max_err_x, effort_x_sc* (int u_x^2 dt) and effort_x_100s_sc* (at 100 s, when the horizon "
+        "reaches it) where the plant records its effort, and max_err_after_flfr, t_flfr, n_events "
+        "with the hierarchical supervisor.",
+    )
+
+
+def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
+    """Azizi2009's metric set (see :class:`ChainErrorsSection`)."""
+    worst = {"norm": True, "norm_ord": "inf", "spacecraft": "max", "units": "m"}
+    out = [
+        Metric("max_err", "tracking_error", reduce="max", **worst),
+        Metric(
+            "max_err_x",
+            "tracking_error",
+            reduce="max",
+            norm=True,
+            component=0,
+            spacecraft="max",
+            units="m",
+        ),
+    ]
+    if ctx.scenario.type_of("supervisor") == HL_SUPERVISOR:
+        out += [
+            Metric(
+                "max_err_after_flfr", "tracking_error", reduce="max", gate="flfr_settled", **worst
+            ),
+            Metric("t_flfr", "mode", reduce="first", threshold=as_float(FLFR), units="s"),
+            Metric("n_events", "mode_changes", reduce="final"),
+        ]
+    if any(s.name == "effort" for s in ctx.plant.signals()):
+        effort = {"component": 0, "spacecraft": "each", "units": "m2 s-3"}
+        out.append(Metric("effort_x", "effort", reduce="final", **effort))
+        if ctx.horizon >= EFFORT_TIME - 1e-9:
+            out.append(
+                Metric(
+                    "effort_x_100s", "effort", reduce="at", start=as_float(EFFORT_TIME), **effort
+                )
+            )
+    return out
+
+
+def _chain_errors(sec: ChainErrorsSection, ctx: BuildContext) -> ChainTrackingError:
+    if sec.metrics == "azizi2009":
+        ctx.metrics.extend(_azizi2009_metrics(ctx))
+    return ChainTrackingError()
+
+
+register_component_type(
+    "evaluation",
+    CHAIN_ERRORS,
+    ChainErrorsSection,
+    _chain_errors,
+    "true chain errors e_ij (tracking_error); metrics = 'azizi2009': the paper's metric set",
 )

@@ -1,8 +1,10 @@
-"""Offline design and condition checks of the ``azizi2009`` method (``formation-ftc check``).
+"""Design conditions of Azizi & Khorasani 2009 for composed scenarios of its law (``formation-ftc
+check`` of a ``controller.type = "azizi2009-llfr"`` loop on the deep-space ``double-integrator``
+plant; registered by the paper's package, see :mod:`.registration`).
 
-Scenario -> numbers: the LLFR estimate b_hat (flight side), the true faulty gains (truth side), the
-FLFR design of eqs. (8)-(11) (:func:`formation_ftc.design.flfr.design_flfr`, cached) and ||D||_2 of
-eq. (6).
+Loop -> numbers: the weights, the LLFR estimate b_hat and the FLFR weight of the law (flight side),
+the true faulty gains of the actuator (truth side), the FLFR design of eqs. (8)-(11)
+(:func:`formation_ftc.methods.composed.catalog_chain.flfr_design`, cached) and ||D||_2 of eq. (6).
 
 Conditions, all from Azizi & Khorasani 2009:
 
@@ -16,144 +18,35 @@ Conditions, all from Azizi & Khorasani 2009:
 Bases (:class:`formation_ftc.registry.Condition`): scalar and determinant conditions are exact; the small
 gain and the floor are *verified* (gamma_1 and T_i are certified upper bounds of H-infinity norms,
 :func:`formation_ftc.design.small_gain.hinf_norm`); the bound (8) is *sampled*: H_i is the supremum of a
-simulated response over 300 s (RK4), not a bound, so a pass is reported unproven.
+simulated response over 300 s (RK4), not a bound, so a pass is reported unproven. Other plants (the
+law flying orbital relative motion) are outside the theorems: no conditions.
 """
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-from formation_ftc.core.polygon_formation import relative_acceleration_fn
+from formation_ftc.components.actuators.actuator_gains import StepGainActuator
 from formation_ftc.design.allocation import augmented_matrix, perturbation_coefficients
-from formation_ftc.design.flfr import FlfrDesign, design_flfr, error_dynamics_matrix, reduced_model
+from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
 from formation_ftc.design.small_gain import small_gain_margin
-from formation_ftc.papers.azizi2009.schema import Azizi2009Scenario
+from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.methods.composed.catalog_chain import (
+    AXES,
+    DOUBLE_INTEGRATOR,
+    HL_SUPERVISOR,
+    flfr_design,
+)
 from formation_ftc.registry import Condition
+from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = [
-    "check",
-    "AXES",
-    "b_nominal",
-    "b_hat_estimated",
-    "b_true",
-    "flfr_design",
-    "alpha_flfr",
-    "perturbation_norm",
-    "d_norms",
-]
-
-AXES = ("x", "y", "z")
+__all__ = ["conditions", "perturbation_norm", "d_norms", "true_gains"]
 
 
-def b_nominal(sc: Azizi2009Scenario) -> np.ndarray:
-    """Nominal actuator gains (N, axes) [-]."""
-    return np.tile(np.asarray(sc.formation.b, float)[:, None], (1, sc.formation.n_axes))
-
-
-def b_hat_estimated(sc: Azizi2009Scenario) -> np.ndarray:
-    """Estimated actuator gains b_hat (N, axes) the LLFR allocates with [-]."""
-    b_hat = b_nominal(sc)
-    if sc.fault.enabled:
-        b_hat[sc.fault.satellite - 1, AXES.index(sc.fault.axis)] = sc.fault.estimate
-    return b_hat
-
-
-def b_true(sc: Azizi2009Scenario) -> np.ndarray:
-    """True actuator gains after the fault (N, axes) [-] (truth side)."""
-    b = b_nominal(sc)
-    if sc.fault.enabled:
-        k, a = sc.fault.satellite - 1, AXES.index(sc.fault.axis)
-        b[k, a] = b[k, a] * sc.fault.effectiveness
-    return b
-
-
-@functools.lru_cache(maxsize=32)
-def _design_cached(key: tuple) -> FlfrDesign:
-    (
-        alpha,
-        b_hat,
-        k,
-        b_eps,
-        lam0,
-        lam1,
-        e_s,
-        pis,
-        n,
-        side,
-        omega,
-        axis,
-        horizon,
-        dt,
-        b_ext,
-        a_ref,
-    ) = key
-    w_fn = relative_acceleration_fn(n, side, omega, axis)
-    return design_flfr(
-        np.asarray(alpha),
-        np.asarray(b_hat),
-        k,
-        b_eps,
-        lam0,
-        lam1,
-        e_s,
-        pis,
-        w_fn,
-        horizon,
-        dt,
-        b_ext,
-        a_ref,
-    )
-
-
-def flfr_design(sc: Azizi2009Scenario, pis=None, e_s: float | None = None) -> FlfrDesign:
-    """Offline FLFR design (eqs. (8)-(11)) for the scenario's faulty satellite/axis (cached by inputs).
-
-    H_i is simulated over 300 s (the sup over t needs several rotation periods and the transient).
-    """
-    if not sc.fault.enabled:
-        raise ValueError("FLFR design needs fault.enabled = true")
-    axis = AXES.index(sc.fault.axis)
-    pis = tuple(
-        float(p) for p in (pis if pis is not None else (sc.supervisor.violation_probability,))
-    )
-    key = (
-        tuple(float(a) for a in sc.allocation.alpha),
-        tuple(float(b) for b in b_hat_estimated(sc)[:, axis]),
-        sc.fault.satellite - 1,
-        float(sc.fault.b_eps),
-        float(sc.controller.lambda0),
-        float(sc.controller.lambda1),
-        float(e_s if e_s is not None else sc.supervisor.e_s),
-        pis,
-        sc.formation.n_satellites,
-        float(sc.formation.side),
-        float(sc.formation.omega),
-        axis,
-        300.0,
-        float(sc.supervisor.design_dt),
-        float(sc.disturbance.bound),
-        float(sc.supervisor.alpha_reference),
-    )
-    return _design_cached(key)
-
-
-def alpha_flfr(sc: Azizi2009Scenario) -> float:
-    """The FLFR weight alpha_k: given, or designed by eq. (11) (never below the LLFR weight)."""
-    k = sc.fault.satellite - 1
-    if sc.supervisor.alpha_flfr is not None:
-        return float(sc.supervisor.alpha_flfr)
-    if not (sc.supervisor.flfr and sc.fault.enabled):
-        return float(sc.allocation.alpha[k])
-    des = flfr_design(sc)
-    if des.verdict == "infeasible":
-        raise ValueError(f"supervisor: {des.message}")
-    a = des.alpha[float(sc.supervisor.violation_probability)]
-    assert a is not None  # None only when infeasible (raised above)
-    return max(
-        float(a), float(sc.allocation.alpha[k])
-    )  # never lower the weight (LLFR already suffices)
+def true_gains(loop: ClosedLoop) -> np.ndarray | None:
+    """True actuator gains after the fault (N, axes) [-] (truth side; None: not a gain actuator)."""
+    act = loop.actuator
+    return np.asarray(act.faulty_gain, float) if isinstance(act, StepGainActuator) else None
 
 
 def perturbation_norm(alpha, b_hat, k: int, eps: float) -> float:
@@ -174,22 +67,38 @@ def perturbation_norm(alpha, b_hat, k: int, eps: float) -> float:
     return float(np.linalg.norm(E @ np.linalg.inv(J_aug), 2))
 
 
-def d_norms(sc: Azizi2009Scenario, alpha, a_flfr: float) -> tuple[float, float]:
-    """||D||_2 at the LLFR weights and at the FLFR weight, with the true eps on the faulty axis."""
-    k, ax = sc.fault.satellite - 1, AXES.index(sc.fault.axis)
-    b_hat = b_hat_estimated(sc)[:, ax]
-    eps = float(b_hat[k] - b_true(sc)[k, ax])
+def d_norms(
+    scenario: ComposedScenario, loop: ClosedLoop, alpha, a_flfr: float
+) -> tuple[float, float]:
+    """||D||_2 at the LLFR weights ``alpha`` and with the FLFR weight ``a_flfr`` of the law's faulty
+    spacecraft, with the true eps of the loop's actuator on the faulty axis."""
+    ax = AXES.index(scenario.section("controller").faulty_axis)
+    k = loop.controller.fault_index
+    b_hat = np.asarray(loop.controller.b_hat, float)[:, ax]
+    gains = true_gains(loop)
+    if gains is None:
+        raise ValueError("||D||_2 needs the true gains of an actuator-gains actuator")
+    eps = float(b_hat[k] - gains[k, ax])
     alpha = np.asarray(alpha, float)
     alpha_f = alpha.copy()
     alpha_f[k] = a_flfr
     return perturbation_norm(alpha, b_hat, k, eps), perturbation_norm(alpha_f, b_hat, k, eps)
 
 
-def check(sc: Azizi2009Scenario) -> list[Condition]:
-    """Evaluate the paper's design conditions for a scenario (see module docstring)."""
+def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
+    """The paper's design conditions for a loop of its law (see module docstring); [] off the
+    deep-space plant."""
+    if scenario.type_of("plant") != DOUBLE_INTEGRATOR:
+        return []
     out: list[Condition] = []
-    n = sc.formation.n_satellites
-    alpha = np.asarray(sc.allocation.alpha, float)
+    c = scenario.section("controller")
+    law = loop.controller  # the law itself: the double integrators are driven by accelerations
+    sup = (
+        scenario.section("supervisor") if scenario.type_of("supervisor") == HL_SUPERVISOR else None
+    )
+    flfr = sup is not None and sup.flfr
+    alpha = np.asarray(law.alpha, float)
+    n = alpha.size
     out.append(
         Condition(
             "allocation weights",
@@ -201,7 +110,7 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
             detail="exact: comparison of the scenario values",
         )
     )
-    if not sc.fault.enabled:
+    if c.faulty_spacecraft is None:
         out.append(
             Condition(
                 "fault-free allocation",
@@ -215,23 +124,25 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
             )
         )
         return out
-    k = sc.fault.satellite - 1
-    ax = AXES.index(sc.fault.axis)
-    b_hat = b_hat_estimated(sc)[:, ax]
-    b_tr = b_true(sc)[:, ax]
-    eps = float(b_hat[k] - b_tr[k])
-    out.append(
-        Condition(
-            "estimation error within B_eps",
-            "Azizi2009 Sec. IV, |eps| < B_eps",
-            f"|eps| = {abs(eps):.4g}, B_eps = {sc.fault.b_eps:.4g}",
-            "|b_hat - b| <= B_eps",
-            abs(eps) <= sc.fault.b_eps + 1e-12,
-            required=False,
-            basis="exact",
-            detail="exact (tolerance 1e-12): uses the true gain (truth side); the design only knows B_eps",
+    k = c.faulty_spacecraft - 1
+    ax = AXES.index(c.faulty_axis)
+    b_hat = np.asarray(law.b_hat, float)[:, ax]
+    gains = true_gains(loop)
+    if gains is not None:
+        eps = float(b_hat[k] - gains[k, ax])
+        out.append(
+            Condition(
+                "estimation error within B_eps",
+                "Azizi2009 Sec. IV, |eps| < B_eps",
+                f"|eps| = {abs(eps):.4g}, B_eps = {c.b_eps:.4g}",
+                "|b_hat - b| <= B_eps",
+                abs(eps) <= c.b_eps + 1e-12,
+                required=False,
+                basis="exact",
+                detail="exact (tolerance 1e-12): uses the true gain (truth side); the design only "
+                "knows B_eps",
+            )
         )
-    )
     if not 0 < k < n - 1:
         out.append(
             Condition(
@@ -262,16 +173,12 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
             detail="exact: closed-form DET against the LU determinant of J_aug (relative tolerance 1e-9)",
         )
     )
-    lam0, lam1 = sc.controller.lambda0, sc.controller.lambda1
+    lam0, lam1 = c.lambda0, c.lambda1
     sg = small_gain_margin(error_dynamics_matrix(lam0, lam1))
-    try:
-        a_f: float | None = alpha_flfr(sc) if sc.supervisor.flfr else float(alpha[k])
-    except ValueError:  # infeasible design: reported by the floor condition below
-        a_f = None
+    a_f = float(np.asarray(law.alpha_flfr)) if flfr else float(alpha[k])
     if n == 4 and k == 1:
-        weights = [("LLFR", float(alpha[k]))] + ([("FLFR", a_f)] if a_f is not None else [])
-        for label, a_k in weights:
-            d = coeff.d(sc.fault.b_eps, a_k)
+        for label, a_k in (("LLFR", float(alpha[k])), ("FLFR", a_f)):
+            d = coeff.d(c.b_eps, a_k)
             _, Delta, A_clp = reduced_model(lam0, lam1, (d[0], d[1]))
             dn = float(np.linalg.norm(Delta, 2))
             eig = np.linalg.eigvals(A_clp)
@@ -296,14 +203,14 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
                     f"eig((I + Delta) A) = {np.round(eig, 4).tolist()}",
                 )
             )
-        if sc.supervisor.flfr or sc.supervisor.alpha_flfr is not None:
-            des = flfr_design(sc)
+        if sup is not None and (flfr or c.alpha_flfr is not None):
+            des = flfr_design(c, n, sup.e_s)
             feasible = des.verdict != "infeasible"
             out.append(
                 Condition(
                     "e_s above the disturbance floor",
                     "Azizi2009 Sec. IV, T_i (E004-07)",
-                    f"e_s = {sc.supervisor.e_s:.4g} m, T = {des.floor:.3g} m",
+                    f"e_s = {sup.e_s:.4g} m, T = {des.floor:.3g} m",
                     "e_s > T_i",
                     feasible,
                     basis="verified",
@@ -313,13 +220,11 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
                     + des.message,
                 )
             )
-            if feasible and a_f is not None:
-                bound = sc.fault.b_eps * des.H / coeff.det(a_f)
-                pi = sc.supervisor.violation_probability
+            if feasible:
+                bound = c.b_eps * des.H / coeff.det(a_f)
+                pi = c.violation_probability
                 limit = (
-                    sc.supervisor.e_s * (1 + 1e-9) / max(1e-12, 1 - pi)
-                    if pi > 0
-                    else sc.supervisor.e_s * (1 + 1e-9)
+                    sup.e_s * (1 + 1e-9) / max(1e-12, 1 - pi) if pi > 0 else sup.e_s * (1 + 1e-9)
                 )
                 meets = bound <= limit
                 out.append(
@@ -328,7 +233,7 @@ def check(sc: Azizi2009Scenario) -> list[Condition]:
                         "Theorem 2, eq. (8), (11)",
                         f"B_eps H / DET = {bound:.4g} m (H = {des.H:.4g}, alpha_{k + 1} = {a_f:.4g}, "
                         f"pi = {pi})",
-                        f"<= e_s = {sc.supervisor.e_s} m (pi = 0)",
+                        f"<= e_s = {sup.e_s} m (pi = 0)",
                         None if meets else False,
                         basis="sampled",
                         detail="sampled: H is the largest |X_i| of the simulated response over 300 s (RK4), not a "

@@ -113,10 +113,12 @@ def plot_fig4(
     return save_figure(fig, path)
 
 
-def plot_run(ds, sc, out_dir: Path) -> list[Path]:
-    """Scenario figure: x-axis tracking errors per pair with e_s and the supervisor mode; x efforts."""
+def plot_run(ds, scenario, out_dir: Path) -> list[Path]:
+    """Figure of one run of a composed scenario of the paper (``formation-ftc run --plot``): x-axis
+    tracking errors per pair with the supervisor's e_s [m], its mode, and the x efforts."""
     t = ds["time"].values
-    fig, axes = new_figure(3, 1, width=7.0, height=7.0, title=f"{sc.scenario.name}: x axis")
+    e_s = scenario.section("supervisor").e_s
+    fig, axes = new_figure(3, 1, width=7.0, height=7.0, title=f"{scenario.scenario.name}: x axis")
     ax = axes[0, 0]
     for j, pair in enumerate(ds["pair"].values):
         ax.plot(
@@ -125,8 +127,8 @@ def plot_run(ds, sc, out_dir: Path) -> list[Path]:
             label=f"e_{pair.replace('-', '')}",
             color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
         )
-    ax.axhline(sc.supervisor.e_s, color="k", ls="--", lw=0.8, label="+/- e_s")
-    ax.axhline(-sc.supervisor.e_s, color="k", ls="--", lw=0.8)
+    ax.axhline(e_s, color="k", ls="--", lw=0.8, label="+/- e_s")
+    ax.axhline(-e_s, color="k", ls="--", lw=0.8)
     ax.set_ylabel("tracking error [m]")
     ax.legend(ncol=4, loc="lower right", fontsize=7)
     ax = axes[1, 0]
@@ -145,4 +147,4 @@ def plot_run(ds, sc, out_dir: Path) -> list[Path]:
     ax.set_ylabel("E_xi [m^2 s^-3]")
     ax.set_xlabel("time t [s]")
     ax.legend(ncol=4)
-    return [save_figure(fig, Path(out_dir) / f"{sc.scenario.name}.png")]
+    return [save_figure(fig, Path(out_dir) / f"{scenario.scenario.name}.png")]

@@ -17,21 +17,38 @@ Steps (all runs fixed-seed; noise off except in the seed spread, E004-09):
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.papers.azizi2009.conditions import check, flfr_design
+from formation_ftc.api import load_scenario
+from formation_ftc.methods.composed import ComposedScenario, make_loop
+from formation_ftc.methods.composed.catalog_chain import flfr_design
+from formation_ftc.papers.azizi2009.conditions import conditions, d_norms
 from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fig4
-from formation_ftc.papers.azizi2009.method import load, run_batch
 from formation_ftc.papers.azizi2009.published import CITATION, PUBLISHED, TITLE
 from formation_ftc.papers.programs import simulate
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
+from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
+from formation_ftc.sim.compiled import compile_loop
+from formation_ftc.sim.loop import ClosedLoop
+from formation_ftc.sim.metrics import metrics_dict
 
-__all__ = ["run_reproduction", "REPRODUCTION", "PUBLISHED", "alpha_min_on_grid"]
+__all__ = [
+    "run_reproduction",
+    "run_batch",
+    "VARIABLE",
+    "REPRODUCTION",
+    "PUBLISHED",
+    "alpha_min_on_grid",
+]
 
 PI_GRID = tuple(round(0.05 * j, 2) for j in range(9))
 SEEDS = 20
@@ -54,6 +71,83 @@ def _rel(ours: float, pub: float) -> float:
     return abs(ours - pub) / abs(pub)
 
 
+#: what :func:`run_batch` may vary: name -> (component, field) of the closed loop (None: the loop)
+VARIABLE = {
+    "alpha": ("controller", "alpha"),
+    "alpha_flfr": ("controller", "alpha_flfr"),
+    "seed": (None, "seed"),
+}
+
+
+def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
+    for name, value in values.items():
+        slot, field = VARIABLE[name]
+        old = getattr(loop, field) if slot is None else getattr(getattr(loop, slot), field)
+        new = jnp.asarray(value, dtype=jnp.result_type(old))
+        change: dict[str, Any] = {field: new}
+        if slot is None:
+            loop = dataclasses.replace(loop, **change)
+        else:
+            loop = dataclasses.replace(
+                loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)}
+            )
+    return loop
+
+
+def run_batch(
+    sc: ComposedScenario,
+    variations: Mapping[str, np.ndarray],
+    grid: tuple[int, int] | None = None,
+) -> list[dict[str, float]]:
+    """Metrics of len(batch) runs of ``sc`` (a scenario of the paper's law on the double-integrator
+    plant) that differ only in the given leaves (see :data:`VARIABLE`: ``alpha`` (B, N),
+    ``alpha_flfr`` (B,), ``seed`` (B,)), run as one compiled, vmapped program through
+    :mod:`formation_ftc.sim.batch` (leaves shared by every run stay unbatched). Each run's metrics also
+    carry ``D_norm_llfr`` / ``D_norm_flfr``: ||D||_2 of eq. (6) from its weights (true eps).
+
+    ``grid = (rows, columns)``: run b is cell ``(b // columns, b % columns)`` of a grid (B = rows x
+    columns), batched by two nested maps (:func:`formation_ftc.sim.batch.stack_params_grid`): a leaf
+    that changes only from row to row -- a seed per row -- is batched once per row, and so is the work
+    that depends on it alone (the noise draws). Same metrics, in the same order.
+    Raises ``RuntimeError`` naming a run that diverged."""
+    unknown = set(variations) - set(VARIABLE)
+    if unknown:
+        raise KeyError(f"unknown variations {sorted(unknown)}; valid: {sorted(VARIABLE)}")
+    sizes = {np.asarray(v).shape[0] for v in variations.values()}
+    if len(sizes) != 1:
+        raise ValueError(f"all variations need the same batch size, got {sizes}")
+    (size,) = sizes
+    loop = make_loop(sc)
+    compiled = compile_loop(loop)
+    loops = [
+        _variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)
+    ]
+    if grid is None:
+        batch, axes = stack_params(loops)
+        out = jax.device_get(batched_run(compiled, axes, size)(batch))
+    else:
+        rows, cols = (int(g) for g in grid)
+        if rows < 1 or cols < 1 or rows * cols != size:
+            raise ValueError(f"grid = {grid}: rows x columns must equal the batch size {size}")
+        batch, row_axes, col_axes = stack_params_grid(
+            [loops[r * cols : (r + 1) * cols] for r in range(rows)]
+        )
+        out = jax.device_get(batched_grid_run(compiled, row_axes, col_axes, rows, cols)(batch))
+        out = jax.tree_util.tree_map(lambda a: np.reshape(a, (size,) + np.shape(a)[2:]), out)
+    res = []
+    for b, lp in enumerate(loops):
+        div = int(out["diverged_step"][b])
+        if div >= 0:
+            raise RuntimeError(f"batch member {b} diverged at step {div}")
+        m = metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]])
+        ctl = lp.controller
+        m["D_norm_llfr"], m["D_norm_flfr"] = d_norms(
+            sc, lp, np.asarray(ctl.alpha), float(np.asarray(ctl.alpha_flfr))
+        )
+        res.append(m)
+    return res
+
+
 def run_reproduction(
     out_dir: Path,
     progress: Callable[[float, str], None] = lambda f, m: None,
@@ -70,31 +164,33 @@ def run_reproduction(
     e_s = 0.03
 
     progress(0.02, "FLFR design (H_i, eq. (11))")
-    sc_llfr = load("azizi2009-llfr", hz)
-    design = flfr_design(sc_llfr, pis=PI_GRID, e_s=e_s)
+    sc_llfr = load_scenario("azizi2009-llfr", hz)
+    law = sc_llfr.section("controller")
+    design = flfr_design(law, sc_llfr.section("plant").count, e_s, PI_GRID)
     a_an = design.alpha
     a_an0 = float(a_an[0.0])
 
     progress(0.08, "scenarios (a), (b), supervisor")
-    x_only = {**hz, "formation.n_axes": 1}
+    x_only = {**hz, "plant.axes": 1}
+    sc_sv = load_scenario("azizi2009-flfr", hz)
     with phase("run"):
-        ds_ff, m_ff = simulate(load("azizi2009-fault-free", hz))
+        ds_ff, m_ff = simulate(load_scenario("azizi2009-fault-free", hz))
         ds_ll, m_ll = simulate(sc_llfr)
-        ds_sv, m_sv = simulate(load("azizi2009-flfr", hz))
+        _, m_sv = simulate(sc_sv)
         ds_6, m_6 = simulate(
-            load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 6.0, 1.0, 1.0]})
+            load_scenario("azizi2009-llfr", {**x_only, "controller.alpha": [1.0, 6.0, 1.0, 1.0]})
         )
         ds_10, m_10 = simulate(
-            load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, 10.0, 1.0, 1.0]})
+            load_scenario("azizi2009-llfr", {**x_only, "controller.alpha": [1.0, 10.0, 1.0, 1.0]})
         )
         _, m_an = simulate(
-            load("azizi2009-llfr", {**x_only, "allocation.alpha": [1.0, a_an0, 1.0, 1.0]})
+            load_scenario("azizi2009-llfr", {**x_only, "controller.alpha": [1.0, a_an0, 1.0, 1.0]})
         )
 
     progress(0.25, "alpha_2 sweep (one vmapped batch)")
     n_grid = round(9.0 / sweep_step) + 1
     alpha_grid = np.round(1.0 + sweep_step * np.arange(n_grid), 10)
-    sc_sweep = load("azizi2009-llfr", {**x_only, "simulation.record_every": 1000})
+    sc_sweep = load_scenario("azizi2009-llfr", {**x_only, "simulation.record_every": 1000})
     A = np.ones((n_grid, 4))
     A[:, 1] = alpha_grid
     with phase("run"):
@@ -110,13 +206,13 @@ def run_reproduction(
     win = np.round(center + sweep_step * np.arange(-half, half + 1), 10)
     win = win[(win >= 1.0 - 1e-9) & (win <= 10.0 + 1e-9)]
     per_seed = np.concatenate([[1.0], win])
-    sc_noise = load(
+    sc_noise = load_scenario(
         "azizi2009-llfr",
         {
             **x_only,
             "simulation.record_every": 1000,
-            "noise.sigma_position": NOISE_SIGMA,
-            "noise.sigma_velocity": NOISE_SIGMA,
+            "sensors.position_noise_std": NOISE_SIGMA,
+            "sensors.velocity_noise_std": NOISE_SIGMA,
         },
     )
     seed_ids = np.arange(seeds)
@@ -170,10 +266,7 @@ def run_reproduction(
     coeff = design.coefficients
     analytic_curves = {
         p: np.array(
-            [
-                sc_llfr.fault.b_eps * (1 - p) * design.H / (coeff.q2 * e) - coeff.q1 / coeff.q2
-                for e in es_grid
-            ]
+            [law.b_eps * (1 - p) * design.H / (coeff.q2 * e) - coeff.q1 / coeff.q2 for e in es_grid]
         )
         for p in PI_GRID
     }
@@ -230,7 +323,7 @@ def run_reproduction(
         "disturbance_floor_T": design.floor,
         "max_err_analytic_alpha2_pi_0": m_an["max_err"],
         "supervisor_t_flfr": m_sv["t_flfr"],
-        "supervisor_alpha2": float(ds_sv.attrs["alpha_flfr"]),
+        "supervisor_alpha2": float(np.asarray(make_loop(sc_sv).controller.alpha_flfr)),
         "supervisor_max_err_after_settle": m_sv["max_err_after_flfr"],
         "supervisor_max_err": m_sv["max_err"],
         f"effort_x_at_{t_cmp:g}s": E,
@@ -438,7 +531,8 @@ def run_reproduction(
 
 def _run(out_dir: Path, progress: Callable[[float, str], None]) -> PaperReport:
     rep = run_reproduction(out_dir, progress)
-    rep.checks = check(load("azizi2009-flfr"))
+    sc = load_scenario("azizi2009-flfr")
+    rep.checks = conditions(sc, make_loop(sc))
     return rep
 
 
