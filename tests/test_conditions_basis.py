@@ -87,7 +87,7 @@ def test_heuristic_and_sampled_passes_are_unproven(all_checks):
 
 
 def test_a_jumping_delay_falls_back_to_sampling():
-    d = [list(r) for r in ftc.load_scenario("li2020-thm2-delays").network.delays]
+    d = [list(r) for r in ftc.load_scenario("li2020-thm2-delays").section("network").delays]
     d[2][3] = "3 + 0.5*step(t - 100)"  # T34, a used edge: jumps by 0.5 s at t = 100 s
     conds = {
         c.name: c for c in api.check(ftc.load_scenario("li2020-thm2-delays", {"network.delays": d}))
@@ -99,7 +99,8 @@ def test_a_jumping_delay_falls_back_to_sampling():
 
 def test_a_spike_between_samples_is_not_certified(capsys):
     scn = ftc.load_scenario(
-        "yang2013-healthy", {"disturbance.force": ["0.1*window(t, 1000.0001, 1000.0002)", "0", "0"]}
+        "yang2013-healthy",
+        {"plant.disturbance_force": ["0.1*window(t, 1000.0001, 1000.0002)", "0", "0"]},
     )
     c = {c.name: c for c in api.check(scn)}["|d_i(t)| <= d_bar"]
     assert c.basis == "sampled" and c.holds is None  # the old sampled check said "holds" here

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
+from formation_ftc import api
 from formation_ftc.components.controllers.force_torque import ForceTorqueController
 from formation_ftc.components.controllers.yang2013_individual import (
     Yang2013AttitudeController,
@@ -24,24 +25,24 @@ from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigi
 from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.components.supervisors.switching_supervisor import SwitchDecision
 from formation_ftc.core.dynamics.attitude_quaternion import attitude_rhs
-from formation_ftc.papers.yang2013.method import make_loop
 from formation_ftc.sim.components import ActuatorInputs, CompositionError, FlightInputs, TruthInputs
 from formation_ftc.sim.loop import ClosedLoop
 
 TRUTH_FIELDS = {"state", "true_state", "fault", "faults", "disturbance", "force", "process_noise"}
 SHORT = {
     "simulation.horizon": 100.0,
-    "modes.1.start": 20.0,
-    "modes.2.start": 40.0,
-    "modes.3.start": 60.0,
-    "modes.4.start": 80.0,
-    "faults.0.onset": 70.0,
+    "supervisor.modes.1.start": 20.0,
+    "supervisor.modes.2.start": 40.0,
+    "supervisor.modes.3.start": 60.0,
+    "supervisor.modes.4.start": 80.0,
+    "actuator.faults.0.onset": 70.0,
     "simulation.record_every": 1,
 }
 
 
 def _loop(**ov):
-    return make_loop(ftc.load_scenario("yang2013-controller-fault", {**SHORT, **ov}))
+    scn = ftc.load_scenario("yang2013-controller-fault", {**SHORT, **ov})
+    return api.compile_scenario(scn).params
 
 
 @pytest.mark.parametrize(

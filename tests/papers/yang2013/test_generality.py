@@ -1,9 +1,10 @@
-"""Method yang2013 on a formation that is not the paper's: 4 spacecraft, 3 modes, a departure with
+"""The switched-formation composition on a formation that is not the paper's: 4 spacecraft, 3 modes, a departure with
 a simultaneous arrival, then the departed spacecraft returning as a new state (Sec. 2.4, item 4).
 Truth: the variation model (10) applied by hand to the pre-switch state (kept in the final carry)
 and the decoupled closed-loop error ODE (each slot follows its own closed form without disturbance).
 """
 
+import copy
 import json
 
 import numpy as np
@@ -13,31 +14,42 @@ import formation_ftc as ftc
 from formation_ftc.registry import get_method
 
 RAW = {
-    "scenario": {"name": "yang2013-general-test", "method": "yang2013"},
+    "scenario": {"name": "yang2013-general-test", "method": "composed", "paper": "yang2013"},
     "simulation": {"horizon": 30.0, "dt": 0.05, "record_every": 10},
-    "spacecraft": {"count": 4},
-    "controller": {"K1": 0.5, "K2": 0.8, "rotation_coupling": False},
-    "initial_state": [
-        {"spacecraft": 1, "e_R": [0.1, 0.0, 0.0]},
-        {"spacecraft": 2, "e_V": [0.0, 0.2, 0.0]},
-    ],
-    "modes": [
-        {"name": "a", "start": 0.0, "members": [1, 2]},
-        {
-            "name": "b",
-            "start": 10.0,
-            "members": [1, 3],
-            "variation": [[1.0, 0.0]],
-            "new_states": [{"spacecraft": 3, "e_R": [0.0, 0.0, 0.1]}],
-        },
-        {
-            "name": "c",
-            "start": 20.0,
-            "members": [1, 3, 2],
-            "variation": [[1.0, 0.0], [0.0, 1.0]],
-            "new_states": [{"spacecraft": 2, "e_R": [-0.05, 0.0, 0.0]}],
-        },
-    ],
+    "plant": {
+        "type": "switched-formation",
+        "count": 4,
+        "rotation_coupling": False,
+        "initial_state": [
+            {"spacecraft": 1, "e_R": [0.1, 0.0, 0.0]},
+            {"spacecraft": 2, "e_V": [0.0, 0.2, 0.0]},
+        ],
+    },
+    "sensors": {"type": "tracking-error"},
+    "controller": {"type": "yang2013-force-torque", "K1": 0.5, "K2": 0.8},
+    "actuator": {"type": "velocity-gain-fault"},
+    "estimator": {"type": "scheduled-diagnosis"},
+    "supervisor": {
+        "type": "switching",
+        "modes": [
+            {"name": "a", "start": 0.0, "members": [1, 2]},
+            {
+                "name": "b",
+                "start": 10.0,
+                "members": [1, 3],
+                "variation": [[1.0, 0.0]],
+                "new_states": [{"spacecraft": 3, "e_R": [0.0, 0.0, 0.1]}],
+            },
+            {
+                "name": "c",
+                "start": 20.0,
+                "members": [1, 3, 2],
+                "variation": [[1.0, 0.0], [0.0, 1.0]],
+                "new_states": [{"spacecraft": 2, "e_R": [-0.05, 0.0, 0.0]}],
+            },
+        ],
+    },
+    "evaluations": [{"type": "switch-norms"}],
 }
 
 
@@ -50,7 +62,7 @@ def closed_form(e0, v0, K1, K2, t):
 
 def test_general_mode_sequence_with_return(tmp_path):
     sc = ftc.load_scenario(RAW)
-    assert sc.mode_sizes() == [2, 2, 3]
+    assert [len(m.members) for m in sc.section("supervisor").modes] == [2, 2, 3]
     ds = ftc.simulate(sc)
     x = ds["error_state"]
     # spacecraft 2 leaves at 10 s, returns at 20 s with its new state X*
@@ -77,12 +89,14 @@ def test_general_mode_sequence_with_return(tmp_path):
     assert m["post_switch_norm_2"] == pytest.approx(np.hypot(pre_sc[0], 0.1), rel=1e-12)
     # the left limit is the state the closed loop reached before the switch (recorded at 9.5 s + 0.5 s)
     assert pre_sc[1] > 0 and m["pre_switch_norm_2"] == pytest.approx(np.hypot(*pre_sc), rel=1e-12)
-    paths = get_method("yang2013").plot(ds, sc, tmp_path)
-    assert paths and paths[0].stat().st_size > 10_000
+    paths = get_method("composed").plot(ds, sc, tmp_path)  # the paper's figure ([scenario] paper)
+    assert [p.name for p in paths] == ["yang2013-general-test.png"]
+    assert paths[0].stat().st_size > 10_000
 
 
 def test_inactive_fault_is_not_diagnosed_before_joining():
-    raw = dict(RAW, faults=[{"spacecraft": 4, "onset": 5.0, "K2_faulty": -0.1}])
+    raw = copy.deepcopy(RAW)
+    raw["actuator"]["faults"] = [{"spacecraft": 4, "onset": 5.0, "K2_faulty": -0.1}]
     ds, metrics = ftc.simulate_with_metrics(ftc.load_scenario(raw))
     assert metrics["supervisor_decision_sc4"] == 0  # spacecraft 4 never joins: no decision
     assert np.isnan(ds["supervisor_decision_time"].values[-1, 3])

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.papers.yang2013.method import input_norm_window, make_loop
+from formation_ftc import api
+from formation_ftc.config import loader
 from formation_ftc.papers.yang2013.reproduction import run_scenario, run_scenarios, scenario_numbers
 from formation_ftc.sim.batch import batched_run, stack_params
 from formation_ftc.sim.compiled import compile_loop
@@ -105,7 +106,7 @@ def test_fault_only_affects_spacecraft_2(runs):
 
 def test_early_fault_is_reconfigured_by_the_supervisor(runs):
     # fault at 3300 s: (29) fails (dt1 = 300 < dt2 = 700) -> reconfiguration (nominal K2 restored)
-    sc, ds, metrics = run_scenario("yang2013-controller-fault", {"faults.0.onset": 3300.0})
+    sc, ds, metrics = run_scenario("yang2013-controller-fault", {"actuator.faults.0.onset": 3300.0})
     n = scenario_numbers(sc, ds, metrics)
     ev = n["supervisor_events"]
     assert ev[0]["decision"] == "request controller reconfiguration"
@@ -117,18 +118,26 @@ def test_early_fault_is_reconfigured_by_the_supervisor(runs):
 
 SHORT = {
     "simulation.horizon": 100.0,
-    "modes.1.start": 20.0,
-    "modes.2.start": 40.0,
-    "modes.3.start": 60.0,
-    "modes.4.start": 80.0,
-    "faults.0.onset": 70.0,
+    "supervisor.modes.1.start": 20.0,
+    "supervisor.modes.2.start": 40.0,
+    "supervisor.modes.3.start": 60.0,
+    "supervisor.modes.4.start": 80.0,
+    "actuator.faults.0.onset": 70.0,
     "simulation.record_every": 100,
 }
 
 
+def make_loop(overrides: dict, windows: list | None = None):
+    """The closed loop of yang2013-controller-fault with ``overrides`` (and the input-norm windows
+    [a, b) [s] of its switch-norms evaluation replaced by ``windows``), as the API compiles it."""
+    raw = loader.read_raw("yang2013-controller-fault")[0]
+    if windows is not None:
+        raw["evaluations"] = [{"type": "switch-norms", "input_windows": windows}]
+    return api.compile_scenario(ftc.load_scenario(raw, overrides)).params
+
+
 def test_batched_params_equal_single_runs():
-    sc = ftc.load_scenario("yang2013-controller-fault", SHORT)
-    loop = make_loop(sc)
+    loop = make_loop(SHORT)
     act = loop.actuator
     K2f = np.array(act.K2_faulty)
     K2f[1] = -0.05
@@ -154,19 +163,11 @@ def test_windowed_input_maxima_are_taken_at_every_step():
     # the same run recorded every step and every 20 steps: the in-run window maxima agree exactly and
     # equal the maxima of the every-step records (an independent reduction of the records in numpy);
     # the maxima of the decimated records miss the peaks of the 1 rad/s oscillation
-    over = dict(SHORT, **{"faults.0.onset": 75.0})
-    windows = (
-        input_norm_window("w_60_75", 60.0, 75.0, 0.05),
-        input_norm_window("w_75_80", 75.0, 80.0, 0.05),
-    )
+    over = dict(SHORT, **{"actuator.faults.0.onset": 75.0})
+    windows = [[60.0, 75.0], [75.0, 80.0]]
     out = {}
     for every in (1, 20):
-        loop = make_loop(
-            ftc.load_scenario(
-                "yang2013-controller-fault", dict(over, **{"simulation.record_every": every})
-            ),
-            windows,
-        )
+        loop = make_loop(dict(over, **{"simulation.record_every": every}), windows)
         res = jax.jit(lambda p: p.run())(loop)
         out[every] = (
             metrics_dict(loop.metrics, res["metrics"]),
@@ -177,7 +178,10 @@ def test_windowed_input_maxima_are_taken_at_every_step():
     assert m1 == pytest.approx(m20, rel=1e-13, abs=0, nan_ok=True)
     t1 = 0.05 * np.arange(u1.shape[0])
     t20 = 1.0 * np.arange(u20.shape[0])
-    for name, lo, hi in (("w_60_75", 60.0, 75.0), ("w_75_80", 75.0, 80.0)):
+    for name, lo, hi in (
+        ("max_input_norm_60_75", 60.0, 75.0),
+        ("max_input_norm_75_80", 75.0, 80.0),
+    ):
         sel = (t1 >= lo - 1e-9) & (t1 < hi - 1e-9)
         for s in range(6):
             assert m1[f"{name}_sc{s + 1}"] == pytest.approx(float(np.max(u1[sel, s])), rel=1e-13), (
@@ -185,26 +189,22 @@ def test_windowed_input_maxima_are_taken_at_every_step():
                 s,
             )
     dec = (t20 >= 75.0 - 1e-9) & (t20 < 80.0 - 1e-9)
-    assert np.max(u20[dec, 1]) < m1["w_75_80_sc2"]  # the decimated records miss the growing peak
+    assert (
+        np.max(u20[dec, 1]) < m1["max_input_norm_75_80_sc2"]
+    )  # the decimated records miss the growing peak
     assert m1["max_input_norm_sc2"] == pytest.approx(float(np.max(u1[:, 1])), rel=1e-13)
     # |X| at the left limit of every switch, and sup |X| over both limits, against the every-step records
     x1 = np.asarray(
-        jax.jit(lambda p: p.run())(
-            make_loop(
-                ftc.load_scenario(
-                    "yang2013-controller-fault", dict(over, **{"simulation.record_every": 1})
-                )
-            )
-        )["records"]["state_norm"]
+        jax.jit(lambda p: p.run())(make_loop(dict(over, **{"simulation.record_every": 1})))[
+            "records"
+        ]["state_norm"]
     )
     assert m1["post_switch_norm_5"] == pytest.approx(float(x1[1600]), rel=1e-13)
     assert m1["max_state_norm"] >= float(np.max(x1))
 
 
 def test_diagnosis_delay_is_counted_by_the_supervisor():
-    sc = ftc.load_scenario(
-        "yang2013-controller-fault", dict(SHORT, **{"faults.0.diagnosis_delay": 2.0})
-    )
+    sc = ftc.load_scenario("yang2013-controller-fault", dict(SHORT, **{"estimator.delay": 2.0}))
     _, ds, metrics = run_scenario(sc)
     last = {
         name: ds[name].values[-1] for name in ("supervisor_decision_time", "condition_29_margin")

@@ -40,6 +40,7 @@ __all__ = [
     "Yang2013AttitudeSection",
     "AttitudePdSection",
     "AttitudeScoresSection",
+    "yang2013_attitude_law",
 ]
 
 YANG2013_ATTITUDE = "yang2013-attitude"
@@ -130,16 +131,24 @@ class Yang2013AttitudeSection(StrictModel):
         return self
 
 
+def yang2013_attitude_law(
+    ctx: BuildContext, inertia: Vec3, K3: float, K4: float, K5: float, kappa: float
+) -> Yang2013AttitudeController:
+    """Yang2013's law (13) with the stated principal inertia [kg m^2], gains K3, K4, K5 [1/s] and
+    kappa [rad^2/s^2] (the one builder of the law: the catalog's Yang2013 controller types use it)."""
+    return Yang2013AttitudeController(
+        count=ctx.count,
+        inertia=as_float(_inertia(inertia)),
+        K3=as_float(K3),
+        K4=as_float(K4),
+        K5=as_float(K5),
+        kappa=as_float(kappa),
+    )
+
+
 def _yang2013_attitude(sec: Yang2013AttitudeSection, ctx: BuildContext):
     _reads_plant_state(YANG2013_ATTITUDE, ctx)
-    law = Yang2013AttitudeController(
-        count=ctx.count,
-        inertia=as_float(_inertia(sec.inertia)),
-        K3=as_float(sec.K3),
-        K4=as_float(sec.K4),
-        K5=as_float(sec.K5),
-        kappa=as_float(sec.kappa),
-    )
+    law = yang2013_attitude_law(ctx, sec.inertia, sec.K3, sec.K4, sec.K5, sec.kappa)
     q_d = _quaternions(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
     return Yang2013AttitudeHold(law=law, desired_quaternion=as_float(q_d))
 

@@ -12,6 +12,7 @@ the spacecraft each one references over a (delayed) network.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 from pydantic import Field, model_validator
 
@@ -23,9 +24,6 @@ from formation_ftc.sim.components import as_float
 
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
-
-_per_spacecraft = per_spacecraft
-
 #: the law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``):
 #: Yang2013's spacecraft
 NOMINAL_MASS = 150.0
@@ -35,6 +33,8 @@ class Yang2013TranslationalSection(StrictModel):
     """Yang2013 eq. (12): f_i = M_i (a^d_i + (K1 + 1) e_R + K2 e_V), e_R = p^d - p, e_V = v^d - v
     (the plant's drift is not cancelled; on a Clohessy-Wiltshire plant it is of order n^2 |p|)."""
 
+    #: fields whose Yang2013TranslationalController attribute has another name (campaign.binding)
+    leaf_paths: ClassVar[dict[str, str]] = {"nominal_mass": "mass"}
     K1: float = Field(
         0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0."
     )
@@ -72,18 +72,30 @@ class Yang2013RelativeSection(Yang2013TranslationalSection):
         return self
 
 
+def translational_law(
+    ctx: BuildContext,
+    nominal_mass: float | list[float],
+    K1: float,
+    K2: float,
+    desired_position: Vec3Expr = ("0", "0", "0"),
+) -> Yang2013TranslationalController:
+    """Yang2013's law (12) with the stated masses M_i [kg] and gains K1 [1/s^2], K2 [1/s] (the one
+    builder of the law: the catalog's Yang2013 controller types use it)."""
+    n = ctx.count
+    px, py, pz = desired_position
+    return Yang2013TranslationalController(
+        count=n,
+        mass=as_float(per_spacecraft(nominal_mass, n, "controller.nominal_mass")),
+        K1=as_float(K1),
+        K2=as_float(K2),
+        desired_position=(str(px), str(py), str(pz)),
+    )
+
+
 def _yang2013_law(
     sec: Yang2013TranslationalSection, ctx: BuildContext
 ) -> Yang2013TranslationalController:
-    n = ctx.count
-    px, py, pz = sec.desired_position
-    return Yang2013TranslationalController(
-        count=n,
-        mass=as_float(_per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
-        K1=as_float(sec.K1),
-        K2=as_float(sec.K2),
-        desired_position=(str(px), str(py), str(pz)),
-    )
+    return translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2, sec.desired_position)
 
 
 def _yang2013_relative(
@@ -96,7 +108,7 @@ def _yang2013_relative(
         )
     return NeighbourRelativeController(
         law=_yang2013_law(sec, ctx),
-        coupling=as_float(_per_spacecraft(sec.coupling, ctx.count, "controller.coupling")),
+        coupling=as_float(per_spacecraft(sec.coupling, ctx.count, "controller.coupling")),
     )
 
 

@@ -1,5 +1,6 @@
 """Yang, Jiang, Cocquempot, Chen (2013): spacecraft formation stabilization and fault tolerance, a
-state-varying switched system approach (Systems & Control Letters 62(9)). Registers method
-``yang2013`` and reproduction ``yang2013``."""
+state-varying switched system approach (Systems & Control Letters 62(9)). Registers reproduction
+``yang2013``, the theorem conditions of the ``switching`` supervisor and the paper's figures; the
+scenarios are composed (:mod:`formation_ftc.methods.composed.catalog_switched`)."""
 
 from formation_ftc.papers.yang2013 import registration  # noqa: F401

@@ -1,7 +1,10 @@
-"""Theorem 1 / Theorem 2 conditions of a ``yang2013`` scenario (Yang2013 (21), (22), (24), (29)).
+"""Theorem 1 / Theorem 2 conditions of a switched formation (Yang2013 (21), (22), (24), (29)).
 
+For a composed scenario with plant ``switched-formation``, controller ``yang2013-force-torque`` and
+supervisor ``switching`` (:mod:`formation_ftc.methods.composed.catalog_switched`):
 :func:`design_quantities` computes D, S (Frobenius as printed and induced 2-norm, E001-04), the
-dwell-time bounds, the envelope and the initial/new-state bounds; :func:`check` turns them into
+dwell-time bounds, the envelope and the initial/new-state bounds; :func:`conditions` (registered for
+the switching supervisor: ``formation-ftc check`` states them) turns them into
 :class:`formation_ftc.registry.Condition` rows naming the violated inequality when one fails. The
 disturbance bounds (1), (4) are verified over the continuous horizon by interval arithmetic
 (:func:`disturbance_bounds`); the sampled peaks (:func:`disturbance_peaks`) are shown beside them and
@@ -16,28 +19,40 @@ from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.interval import IntervalError, enclose_norm
 from formation_ftc.design import dwell_time as dw
 from formation_ftc.design.dwell_time import Inequality
-from formation_ftc.papers.yang2013.schema import Yang2013Scenario
+from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.methods.composed.catalog_switched import (
+    SWITCHED_PLANT,
+    YANG2013_FORCE_TORQUE,
+    VelocityFault,
+)
 from formation_ftc.registry import Condition
+from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
     "design_quantities",
+    "faults",
     "fault_conditions",
-    "check",
+    "conditions",
     "disturbance_peaks",
     "disturbance_bounds",
 ]
 
 
-def design_quantities(sc: Yang2013Scenario) -> dict[str, float]:
-    """Numbers of Theorem 1 for the scenario (S per ``design.variation_norm``)."""
-    d = sc.design
-    mats = sc.variation_matrices()
+def faults(sc: ComposedScenario) -> list[VelocityFault]:
+    """The controller faults of the scenario's ``velocity-gain-fault`` actuator (none without one)."""
+    return list(getattr(sc.section("actuator"), "faults", []))
+
+
+def design_quantities(sc: ComposedScenario) -> dict[str, float]:
+    """Numbers of Theorem 1 for the scenario (S per ``supervisor.variation_norm``)."""
+    d = sc.section("supervisor")
+    mats = d.variation_matrices()
     S_fro = dw.max_variation_norm(mats, "frobenius") if mats else 1.0
     S_2 = dw.max_variation_norm(mats, "induced2") if mats else 1.0
     S = S_fro if d.variation_norm == "frobenius" else S_2
-    D = dw.disturbance_bound(sc.disturbance.force_bound, sc.disturbance.torque_bound)
-    x0 = np.linalg.norm(np.stack([s.vector() for s in sc.initial_state]))
-    act = sc.activation_times()
+    D = dw.disturbance_bound(d.force_bound, d.torque_bound)
+    x0 = np.linalg.norm(np.stack([s.vector() for s in sc.section("plant").initial_state]))
+    act = d.activation_times()
     return {
         "D": D,
         "S": S,
@@ -65,16 +80,17 @@ def design_quantities(sc: Yang2013Scenario) -> dict[str, float]:
     }
 
 
-def fault_conditions(sc: Yang2013Scenario) -> list[tuple[int, Inequality, bool]]:
+def fault_conditions(sc: ComposedScenario) -> list[tuple[int, Inequality, bool]]:
     """For each fault: (spacecraft, (29) inequality, leaves at the next switch).
 
     ``t_f`` is the onset; the diagnosis delay is part of dt2 (Sec. 3.2), which is what the flight-side
     supervisor computes from the diagnosis time minus the a-priori delay bound.
     """
     out = []
-    starts = sc.switch_times()
-    mats = sc.variation_matrices()
-    for f in sc.faults:
+    d = sc.section("supervisor")
+    starts = d.switch_times()
+    mats = d.variation_matrices()
+    for f in faults(sc):
         j = max(i for i, s in enumerate(starts) if s <= f.onset)
         if j + 1 >= len(starts):
             ineq = Inequality(
@@ -89,21 +105,22 @@ def fault_conditions(sc: Yang2013Scenario) -> list[tuple[int, Inequality, bool]]
             out.append((f.spacecraft, ineq, False))
             continue
         dt1, dt2 = f.onset - starts[j], starts[j + 1] - f.onset
-        ineq = dw.check_condition_29(sc.design.eta, sc.design.eta1, dt1, dt2)
-        prev = sc.modes[j].members
+        ineq = dw.check_condition_29(d.eta, d.eta1, dt1, dt2)
+        prev = d.modes[j].members
         S = mats[j]
         leaves = f.spacecraft in prev and not np.any(S[:, prev.index(f.spacecraft)])
         out.append((f.spacecraft, ineq, bool(leaves)))
     return out
 
 
-def disturbance_peaks(sc: Yang2013Scenario, n_samples: int = 20001) -> tuple[float, float]:
+def disturbance_peaks(sc: ComposedScenario, n_samples: int = 20001) -> tuple[float, float]:
     """max_t,i |d_i(t)| and |iota_i(t)| on a grid over the horizon (sampled check of the bounds)."""
     t = np.linspace(0.0, sc.simulation.horizon, n_samples)
+    plant = sc.section("plant")
     peaks = []
-    for texts in (sc.disturbance.force, sc.disturbance.torque):
+    for texts in (plant.disturbance_force, plant.disturbance_torque):
         worst = 0.0
-        for i in range(1, sc.spacecraft.count + 1):
+        for i in range(1, plant.count + 1):
             comps = [
                 np.broadcast_to(
                     np.asarray(compile_expression(tx, ("t", "i"))(t=t, i=float(i))), t.shape
@@ -116,7 +133,7 @@ def disturbance_peaks(sc: Yang2013Scenario, n_samples: int = 20001) -> tuple[flo
 
 
 def disturbance_bounds(
-    sc: Yang2013Scenario, tol: float = 1e-9
+    sc: ComposedScenario, tol: float = 1e-9
 ) -> tuple[float | None, float | None]:
     """Verified upper bounds of max_t,i |d_i(t)| and |iota_i(t)| over [0, horizon] (None if not enclosed).
 
@@ -125,13 +142,14 @@ def disturbance_bounds(
     the stated bound times (1 + tol).
     """
     out: list[float | None] = []
+    plant, d = sc.section("plant"), sc.section("supervisor")
     for texts, bound in (
-        (sc.disturbance.force, sc.disturbance.force_bound),
-        (sc.disturbance.torque, sc.disturbance.torque_bound),
+        (plant.disturbance_force, d.force_bound),
+        (plant.disturbance_torque, d.torque_bound),
     ):
         worst = 0.0
         try:
-            for i in range(1, sc.spacecraft.count + 1):
+            for i in range(1, plant.count + 1):
                 worst = max(
                     worst,
                     enclose_norm(
@@ -179,9 +197,12 @@ def _cond(ineq: Inequality, required: bool = True, detail: str = "") -> Conditio
     )
 
 
-def check(sc: Yang2013Scenario) -> list[Condition]:
-    """Conditions of Theorems 1-2; a failing required one names the violated inequality."""
-    d = sc.design
+def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Condition]:
+    """Conditions of Theorems 1-2 of a switched formation under the laws (12)-(13) (none for other
+    compositions: the theorems do not apply); a failing required one names the violated inequality."""
+    if (sc.type_of("plant"), sc.type_of("controller")) != (SWITCHED_PLANT, YANG2013_FORCE_TORQUE):
+        return []
+    d = sc.section("supervisor")
     q = design_quantities(sc)
     out: list[Condition] = []
     out.append(
@@ -196,7 +217,7 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
             detail="informative: the two norms of the variation matrices (numpy), shown for E001-04",
         )
     )
-    c = sc.controller
+    c = sc.section("controller")
     rate = dw.translational_decay_rate(c.K1, c.K2)
     out.append(
         Condition(
@@ -223,7 +244,7 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
             detail=EXACT,
         )
     )
-    for f in sc.faults:
+    for f in faults(sc):
         growth = -2.0 * dw.translational_decay_rate(c.K1, f.K2_faulty)
         out.append(
             Condition(
@@ -259,7 +280,7 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
     out.append(
         _cond(dw.check_initial_state(q["initial_state_norm"], d.epsilon, q["S"], d.zeta, q["D"]))
     )
-    for j, m in enumerate(sc.modes):
+    for j, m in enumerate(d.modes):
         for ns in m.new_states:
             out.append(
                 _cond(
@@ -275,8 +296,8 @@ def check(sc: Yang2013Scenario) -> list[Condition]:
     d_peak, i_peak = disturbance_peaks(sc)
     d_up, i_up = disturbance_bounds(sc)
     for name, ref, peak, up, bound in (
-        ("|d_i(t)| <= d_bar", "Yang2013 (1)", d_peak, d_up, sc.disturbance.force_bound),
-        ("|iota_i(t)| <= iota_bar", "Yang2013 (4)", i_peak, i_up, sc.disturbance.torque_bound),
+        ("|d_i(t)| <= d_bar", "Yang2013 (1)", d_peak, d_up, d.force_bound),
+        ("|iota_i(t)| <= iota_bar", "Yang2013 (4)", i_peak, i_up, d.torque_bound),
     ):
         limit = bound * (1 + 1e-9)
         value = f"{peak:.4g} (sampled peak)"

@@ -4,7 +4,8 @@ Runs the built-in scenarios ``yang2013-healthy`` and ``yang2013-controller-fault
 dt = 0.05 s), writes ``fig4_state_norm.png`` and ``fig5_input_norm_sc2.png`` and returns a
 :class:`formation_ftc.registry.PaperReport`. Summary keys (each a dict scenario -> value):
 ``max_state_norm``, ``state_norm_bound`` (eps + (S+2) zeta D), ``dwell_time_required`` ((21)),
-``condition_29_holds`` (None without a fault), ``max_input_norm_sc2`` (on [0, 4000) s).
+``condition_29_holds`` (None without a fault), ``max_input_norm_sc2`` (on [0, 4000) s). The scenarios
+are composed (:mod:`formation_ftc.methods.composed.catalog_switched`) and run through the API.
 """
 
 from __future__ import annotations
@@ -13,49 +14,28 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 
-if TYPE_CHECKING:
-    from formation_ftc.papers.yang2013.schema import Yang2013Scenario
-
 __all__ = ["SCENARIOS", "run_scenario", "run_scenarios", "scenario_numbers", "run", "REPRODUCTION"]
 
 SCENARIOS = ["yang2013-healthy", "yang2013-controller-fault"]
 
 
-def _windows(dt: float) -> tuple:
-    """Every-step maxima of |u_i| on the windows the report compares, [2000, 3800) and [3800, 4000) s."""
-    from formation_ftc.papers.yang2013.method import input_norm_window
-
-    return (
-        input_norm_window("max_input_norm_2000_3800", 2000.0, 3800.0, dt),
-        input_norm_window("max_input_norm_3800_4000", 3800.0, 4000.0, dt),
-    )
-
-
 def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
-    """``[(scenario, dataset, metrics)]`` of yang2013 scenarios, run as one batch per compiled structure
-    (:func:`formation_ftc.papers.programs.simulate_batched`); the report's windowed input maxima are added
-    to the metrics."""
+    """``[(scenario, dataset, metrics)]`` of switched-formation scenarios (names are loaded with
+    ``overrides``), compiled by :func:`formation_ftc.api.compile_scenario` and run as one batch per
+    compiled structure (:func:`formation_ftc.papers.programs.simulate_batched`)."""
     from formation_ftc.api import load_scenario
     from formation_ftc.papers.programs import simulate_batched
-    from formation_ftc.papers.yang2013.method import make_loop
-    from formation_ftc.sim.compiled import compile_loop
 
-    scs: list[Yang2013Scenario] = [
-        s if hasattr(s, "modes") else cast("Yang2013Scenario", load_scenario(s, overrides))
-        for s in names_or_scenarios
+    scs = [
+        load_scenario(s, overrides) if isinstance(s, str | Path) else s for s in names_or_scenarios
     ]
-    compiled = [compile_loop(make_loop(sc, _windows(sc.simulation.dt))) for sc in scs]
-    return [
-        (sc, ds, metrics)
-        for sc, (ds, metrics) in zip(scs, simulate_batched(scs, compiled), strict=True)
-    ]
+    return [(sc, ds, metrics) for sc, (ds, metrics) in zip(scs, simulate_batched(scs), strict=True)]
 
 
 def run_scenario(name_or_scenario, overrides=None):
@@ -69,6 +49,8 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
     from formation_ftc.components.supervisors.switching_supervisor import decision_events
     from formation_ftc.papers.yang2013.conditions import design_quantities, fault_conditions
 
+    modes = sc.section("supervisor").modes
+
     if metrics is None:
         metrics = json.loads(ds.attrs["metrics_json"])
     q = design_quantities(sc)
@@ -76,7 +58,7 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
     t = ds["time"].values
     x2 = ds["spacecraft_norm"].sel(spacecraft=2).values
     horizon = sc.simulation.n_steps * sc.simulation.dt
-    switches = [(j, m.start) for j, m in enumerate(sc.modes) if 0 < m.start <= horizon]
+    switches = [(j, m.start) for j, m in enumerate(modes) if 0 < m.start <= horizon]
     pre = {float(ts): metrics[f"pre_switch_norm_{j + 1}"] for j, ts in switches}
     post = {float(ts): metrics[f"post_switch_norm_{j + 1}"] for j, ts in switches}
     faults = fault_conditions(sc)
@@ -117,7 +99,7 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
                 )
             ),
             sc.simulation.dt,
-            [m.name for m in sc.modes],
+            [m.name for m in modes],
         ),
         "design": q,
     }
