@@ -17,9 +17,9 @@ orbit). Checks:
 (c) *pytree round trip*: unflattening a loop's leaves gives the loop back;
 (d) *TOML round trip*: a scenario re-validated and its dumped TOML loaded again build the same loop.
 
-Truth and flight: a paper method's ``[orbit]`` section (li2020, gui2022) and a composed ``[reference]``
-are the reference orbit, a mission definition known on board, so they are not perturbed; a composed
-plant's own orbit fields (a CW plant's ``semi_major_axis``) are truth. Two estimators are scripted
+Truth and flight: a composed ``[reference]`` is the reference orbit, a mission definition known on
+board, so it is not perturbed; a plant's own orbit fields (a CW plant's ``semi_major_axis`` or
+``mean_motion``) are truth. Two estimators are scripted
 reports of the true faults by design (their model *is* an FDI outcome as a function of the fault):
 :class:`~formation_ftc.components.estimators.fdi_imperfections.ScriptedFdi` and
 :class:`~formation_ftc.components.estimators.scheduled_diagnosis.ScheduledDiagnosis`; they are exempt
@@ -81,29 +81,6 @@ _CW_PLANT = {
     ],
     "disturbance_force": ["1e-3*sin(0.01*t + i)", "0", "1e-3*cos(0.01*t)"],
 }
-_SHORT_SIM = {"horizon": 1.0, "dt": 0.1, "record_every": 5}
-
-
-def _synthetic_pd() -> dict:
-    """``pd`` and ``expression-faults``: no built-in composition uses them."""
-    return {
-        "scenario": {"name": "synthetic-pd-on-cw", "method": "composed"},
-        "simulation": dict(_SHORT_SIM),
-        "plant": copy.deepcopy(_CW_PLANT),
-        "sensors": {"type": "relative-state"},
-        "controller": {
-            "type": "pd",
-            "kp": 2.0,
-            "kd": 30.0,
-            "nominal_mass": MASS4,
-            "desired_position": ["50*cos(0.001*t)", "100*sin(0.001*t)", "0"],
-        },
-        "actuator": {
-            "type": "expression-faults",
-            "effectiveness": ["where(t >= 0.5, 0.6, 1)", "1", "1"],
-            "bias": ["0", "where(t >= 0.5, 0.05, 0)", "0"],
-        },
-    }
 
 
 def _synthetic_learning_on_cw() -> dict:
@@ -132,9 +109,23 @@ def _synthetic_learning_on_cw() -> dict:
     }
 
 
+def _synthetic_step_faults() -> dict:
+    """``step-faults`` (the numeric profile of the li2020 campaign, no built-in scenario uses it) on
+    li2020-thm1."""
+    raw = loader.read_raw("li2020-thm1")[0]
+    raw["simulation"] = {"horizon": 0.2, "dt": 0.01, "record_every": 5}
+    raw["actuator"] = {
+        "type": "step-faults",
+        "effectiveness": [[0.5, 1.0, 1.0], [1.0, 0.6, 1.0], [1.0, 1.0, 0.7], [0.4, 0.4, 0.4]],
+        "onset": [[0.1, 0.0, 0.0], [0.0, 0.15, 0.0], [0.0, 0.0, 0.2], [0.05, 0.05, 0.05]],
+        "bias": raw["actuator"]["bias"],
+    }
+    return raw
+
+
 SYNTHETIC: dict[str, Callable[[], dict]] = {
-    "synthetic:pd-on-cw": _synthetic_pd,
     "synthetic:learning-on-cw": _synthetic_learning_on_cw,
+    "synthetic:step-faults": _synthetic_step_faults,
 }
 
 
@@ -203,11 +194,12 @@ def type_of(raw: dict, slot: str) -> str | None:
 #: default (a constant, or the [reference] orbit known on board), never a truth value
 KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("controller", "pd"): ("nominal_mass",),
+    ("controller", "none"): (),
     ("controller", "lqr"): (
         "mass",
         "mu",
     ),  # semi_major_axis: the [reference]'s, required without one
-    ("controller", "azizi2009-llfr"): ("nominal_mass",),
+    ("controller", "azizi2009-llfr"): ("nominal_mass", "b", "b_hat"),
     ("controller", "yang2013-translational"): ("nominal_mass",),
     ("controller", "yang2013-relative"): ("nominal_mass",),
     ("controller", "networked-el-hinf"): ("nominal_inertia",),
@@ -223,16 +215,12 @@ KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
         "initial_estimate",
     ),
     ("estimator", "scripted-fdi"): (),
+    ("estimator", "relative-navigation-filter"): ("nominal_mass", "mu", "acceleration_noise_psd"),
+    ("estimator", "residual-fdi"): ("nominal_mass", "mu", "acceleration_noise_psd"),
     ("supervisor", "hierarchical"): (),
-}
-#: the same for the paper methods and cw-formation (dotted paths)
-METHOD_KNOWLEDGE: dict[str, tuple[str, ...]] = {
-    "cw-formation": ("controller.nominal_mass",),
-    "yang2013": ("controller.nominal_mass", "controller.nominal_inertia"),
-    "mehrabian": ("controller.nominal_inertia",),
-    "gui2022": ("observer.initial_estimate",),
-    "li2020": ("controller.m_hat0",),
-    "azizi2009": ("fault.estimate",),
+    ("controller", "yang2013-force-torque"): ("nominal_mass", "nominal_inertia"),
+    ("estimator", "scheduled-diagnosis"): (),
+    ("supervisor", "switching"): (),
 }
 
 
@@ -241,37 +229,22 @@ def without_knowledge(raw: dict) -> dict | None:
     leave out)."""
     out = copy.deepcopy(raw)
     dropped = False
-    method = raw["scenario"]["method"]
-    if method == "composed":
-        for slot in FLIGHT_SLOTS:
-            section = out.get(slot)
-            if section is None:
-                continue
-            for name in KNOWLEDGE[(slot, section["type"])]:
-                dropped |= section.pop(name, None) is not None
-    else:
-        for path in METHOD_KNOWLEDGE[method]:
-            section, name = path.split(".")
-            dropped |= out.get(section, {}).pop(name, None) is not None
+    for slot in FLIGHT_SLOTS:
+        section = out.get(slot)
+        if section is None:
+            continue
+        for name in KNOWLEDGE[(slot, section["type"])]:
+            dropped |= section.pop(name, None) is not None
     return out if dropped else None
 
 
 def _dropped(raw: dict) -> set[str]:
     """Names of the knowledge fields :func:`without_knowledge` leaves out of ``raw``."""
     out = set()
-    if raw["scenario"]["method"] == "composed":
-        for slot in FLIGHT_SLOTS:
-            section = raw.get(slot) or {}
-            out |= {
-                name
-                for name in KNOWLEDGE.get((slot, section.get("type", "")), ())
-                if name in section
-            }
-    else:
-        out = {
-            path.split(".")[1]
-            for path in METHOD_KNOWLEDGE[raw["scenario"]["method"]]
-            if path.split(".")[1] in raw.get(path.split(".")[0], {})
+    for slot in FLIGHT_SLOTS:
+        section = raw.get(slot) or {}
+        out |= {
+            name for name in KNOWLEDGE.get((slot, section.get("type", "")), ()) if name in section
         }
     return out
 
@@ -288,15 +261,13 @@ def test_every_flight_type_declares_its_knowledge():
 
 
 #: catalog types no built-in scenario or league uses: covered by the synthetic sources only
-UNUSED_BY_BUILTINS = {("controller", "pd"), ("actuator", "expression-faults")}
+UNUSED_BY_BUILTINS = {("actuator", "step-faults")}
 
 
 def _types_used(keys) -> set[tuple[str, str]]:
     used = set()
     for key in keys:
         raw = source_raw(key)
-        if raw["scenario"]["method"] != "composed":
-            continue
         used |= {
             (slot, str(type_of(raw, slot)))
             for slot in (
@@ -342,25 +313,38 @@ def _expr_bias(v):
 #: composed plant fields by kind of truth -> perturbation
 PLANT_TRUTH: dict[str, dict[str, Callable[[Any], Any]]] = {
     "mass": {"mass": lambda v: _scale(v, 1.1)},
-    "inertia": {"inertia": lambda v: _scale(v, 1.1), "inertia_matrices": lambda v: _scale(v, 1.1)},
+    "inertia": {
+        "inertia": lambda v: _scale(v, 1.1),
+        "inertia_matrices": lambda v: _scale(v, 1.1),
+        "inertia_uncertainty": lambda v: v * 0.5,
+    },
     "initial_state": {
         "initial_position": lambda v: _scale(v, 1.0, 1.0),
         "initial_velocity": lambda v: _scale(v, 1.0, 0.01),
         "initial_roe": lambda v: _scale(v, 1.0, 1.0),
         "initial_attitude_deg": lambda v: _scale(v, 1.0, 2.0),
         "initial_body_rate": lambda v: _scale(v, 1.0, 0.001),
+        "initial_attitude_range_deg": lambda v: _scale(v, 0.8, 5.0),
+        "initial_rate_deg_s": lambda v: _scale(v, 1.0, 0.1),
         "initial_position_std": lambda v: v + 1.0,
         "dispersion_seed": lambda v: v + 1,
+        "initial_state": lambda v: [
+            {**s, "e_R": _scale(list(s.get("e_R", [0.0] * 3)), 1.0, 0.1)} for s in v
+        ],
     },
     "disturbance": {
         "disturbance_force": _expr,
         "disturbance_torque": _expr,
+        "disturbance_acceleration": _expr,
+        "disturbance_amplitude": lambda v: v * 1.5 + 1e-6,
         "process_noise_std": lambda v: v + 1e-4,
+        "disturbance_variance": lambda v: v * 2 + 1e-4,
         "ballistic_coefficient": lambda v: _scale(v, 1.1),
         "srp_coefficient": lambda v: _scale(v, 1.1, 0.001),
     },
     "orbit": {
         "semi_major_axis": lambda v: v * 1.001,
+        "mean_motion": lambda v: v * 1.001,
         "eccentricity": lambda v: v + 0.001,
         "mu": lambda v: v * 1.0001,
     },
@@ -388,6 +372,8 @@ ACTUATOR_TRUTH: dict[str, Callable[[Any], Any]] = {
     "min_effectiveness": lambda v: v * 0.9 + 0.01,
     "faults": lambda v: [
         {**f, "torque": _expr(f["torque"]), "start": f["start"] + 1.0, "end": f["end"] + 1.0}
+        if "torque" in f
+        else {**f, "K2_faulty": f["K2_faulty"] * 1.5, "onset": f["onset"] + 1.0}  # velocity gain
         for f in v
     ],
 }
@@ -407,109 +393,8 @@ def _composed_truth(raw: dict) -> dict[str, dict]:
     return out
 
 
-def _method_truth(scn) -> dict[str, dict]:
-    """Truth perturbations of a paper method's (or cw-formation's) validated scenario."""
-    method = scn.scenario.method
-    if method in ("cw-formation", "li2020"):
-        sc = scn.spacecraft
-        out = {
-            "mass": {"spacecraft.mass": _scale(sc.mass, 1.1)},
-            "initial_state": {
-                "spacecraft.initial_position": _scale(
-                    [list(p) for p in sc.initial_position], 1.0, 1.0
-                )
-            },
-        }
-        if method == "cw-formation":
-            o = scn.orbit
-            out["orbit"] = (
-                {"orbit.semi_major_axis": o.semi_major_axis * 1.001}
-                if o.semi_major_axis is not None
-                else {"orbit.mean_motion": o.mean_motion * 1.001}
-            )
-            out["fault"] = {
-                "faults.effectiveness": ["0.7", "0.9", "1"],
-                "faults.bias": ["0.01", "0", "0"],
-            }
-            out["disturbance"] = {
-                "disturbance.force": _expr(list(scn.disturbance.force)),
-                "disturbance.process_noise_std": scn.disturbance.process_noise_std + 1e-4,
-            }
-        else:
-            f = scn.faults
-            out["fault"] = {
-                "faults.additive": _expr(list(f.additive)),
-                "faults.effectiveness": _expr(list(f.effectiveness), "0.9"),
-                "faults.step_effectiveness": [[0.9, 0.8, 0.7]] * sc.count,
-                "faults.step_onset": [[1.0, 2.0, 3.0]] * sc.count,
-            }
-            out["disturbance"] = {"disturbance.force": _expr(list(scn.disturbance.force))}
-        return out
-    if method == "gui2022":
-        f = scn.faults
-        return {
-            "initial_state": {"initial.state": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]},
-            "fault": {
-                "faults.x_magnitude": f.x_magnitude * 1.1 + 0.01,
-                "faults.x_onset": f.x_onset + 1.0,
-                "faults.z_amplitude": f.z_amplitude * 1.1,
-                "faults.z_onset": f.z_onset + 1.0,
-            },
-            "disturbance": {"disturbance.amplitude": scn.disturbance.amplitude * 1.5 + 1e-6},
-        }
-    if method == "yang2013":
-        sc = scn.spacecraft
-        out = {
-            "mass": {"spacecraft.mass": sc.mass * 1.1},
-            "inertia": {"spacecraft.inertia": _scale(list(sc.inertia), 1.1)},
-            "initial_state": {
-                "initial_state.0.e_R": _scale(list(scn.initial_state[0].e_R), 1.0, 0.1)
-            },
-            "disturbance": {
-                "disturbance.force": _expr(list(scn.disturbance.force)),
-                "disturbance.torque": _expr(list(scn.disturbance.torque)),
-            },
-        }
-        if scn.faults:
-            out["fault"] = {
-                "faults.0.K2_faulty": scn.faults[0].K2_faulty * 1.5,
-                "faults.0.onset": scn.faults[0].onset + 10 * scn.simulation.dt,
-            }
-        return out
-    if method == "mehrabian":
-        out = {
-            "inertia": {
-                "formation.nominal_inertia": _scale(list(scn.formation.nominal_inertia), 1.1),
-                "formation.inertia_uncertainty": scn.formation.inertia_uncertainty * 0.5,
-            },
-            "initial_state": {"initial.attitude_range_deg": [5.0, 50.0]},
-            "disturbance": {"disturbance.variance": scn.disturbance.variance * 2 + 1e-4},
-        }
-        if scn.faults:
-            f = scn.faults[0]
-            out["fault"] = {"faults.0.torque": _expr(f.torque), "faults.0.start": f.start + 1.0}
-        return out
-    if method == "azizi2009":
-        n = scn.formation.n_satellites
-        out = {
-            "initial_state": {
-                "formation.initial_offset_x": [1.0, -1.0, 0.5, 0.25][:n] + [0.0] * max(0, n - 4)
-            },
-            "disturbance": {"disturbance.acceleration": _expr(scn.disturbance.acceleration)},
-        }
-        if scn.fault.enabled:
-            out["fault"] = {
-                "fault.effectiveness": scn.fault.effectiveness * 0.9,
-                "fault.onset": scn.fault.onset + 1.0,
-            }
-        return out
-    raise AssertionError(f"no truth perturbations for method {method}")
-
-
 def truth_perturbations(raw: dict) -> dict[str, dict]:
-    if raw["scenario"]["method"] == "composed":
-        return _composed_truth(raw)
-    return _method_truth(api.load_scenario(copy.deepcopy(raw)))
+    return _composed_truth(raw)
 
 
 # ------------------------------------------------------------- known truth copies in two catalog files
