@@ -127,7 +127,7 @@ def _cmd_report(args) -> int:
 
     from formation_ftc.league.report import write_leaderboard
 
-    board = write_leaderboard(args.dir, plots=not args.no_plots)
+    board = write_leaderboard(args.dir, plots=not args.no_plots, tuned=args.tuned)
     if args.json:
         from formation_ftc.parquet_units import read_units
 
@@ -198,6 +198,13 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q = sub.add_parser("report", help="(re)write the leaderboard of a league directory")
     q.add_argument("dir", metavar="DIR", help="league directory")
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
+    q.add_argument(
+        "--tuned",
+        default=None,
+        metavar="TUNED_DIR",
+        help="directory of `formation-ftc tune` results for the ranking's tuned column "
+        "(default: DIR/tuned when it exists)",
+    )
     add_json_option(q)
     q.set_defaults(func=_cmd_report)
     return p

@@ -45,6 +45,9 @@ __all__ = [
     "load_league",
     "method_scenario",
     "league_hash",
+    "TuneBounds",
+    "TuneSection",
+    "method_tune",
 ]
 
 #: the slots a method's own file may fill (the league owns plant, actuator, evaluations and metrics)
@@ -186,6 +189,53 @@ class MethodEntry(StrictModel):
     )
 
 
+class TuneBounds(StrictModel):
+    low: float = Field(description="Smallest value the tuning may give the field [field units].")
+    high: float = Field(description="Largest value [field units].")
+    log: bool = Field(False, description="Search the field on a logarithmic scale (low > 0).")
+
+
+class TuneSection(StrictModel):
+    """A method file's ``[tune]`` table: which of its numbers ``formation-ftc tune`` may choose."""
+
+    fields: dict[str, TuneBounds | list[float]] = Field(
+        min_length=1,
+        description="Dotted field (e.g. 'controller.k') -> [low, high] or {low, high, log}.",
+    )
+    objective: str = Field("delta_v_total", description="League metric minimised.")
+    statistic: str = Field("mean", description="'mean' or 'median' over the training runs.")
+    note: str = Field("", description="Why these fields and bounds.")
+
+    @field_validator("statistic")
+    @classmethod
+    def _statistic(cls, v):
+        if v not in ("mean", "median"):
+            raise ValueError(f"statistic = {v!r}: 'mean' or 'median'")
+        return v
+
+    @field_validator("fields")
+    @classmethod
+    def _bounds(cls, v):
+        out = {}
+        for path, b in v.items():
+            slot, _, name = path.partition(".")
+            if slot not in METHOD_SLOTS or not name or "." in name:
+                raise ValueError(
+                    f"{path}: give 'slot.field' of a slot the method owns "
+                    f"({', '.join(METHOD_SLOTS)}), e.g. 'controller.k'"
+                )
+            if isinstance(b, list):
+                if len(b) != 2:
+                    raise ValueError(f"{path}: bounds [low, high], got {b}")
+                b = TuneBounds(low=b[0], high=b[1])
+            if not (math.isfinite(b.low) and math.isfinite(b.high) and b.low < b.high):
+                raise ValueError(f"{path}: bounds [{b.low:g}, {b.high:g}] need low < high, finite")
+            if b.log and b.low <= 0:
+                raise ValueError(f"{path}: a log scale needs low > 0, got {b.low:g}")
+            out[path] = b
+        return out
+
+
 class LeagueSpec(StrictModel):
     league: LeagueMeta
     truth: dict[str, Any] = Field(description="The truth plant table shared by every method.")
@@ -295,14 +345,88 @@ def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise LeagueError(f"method {method.name}: {path}: not valid TOML: {exc}") from None
-    allowed = {"scenario", "simulation", "actuator", *METHOD_SLOTS}
+    allowed = {"scenario", "simulation", "actuator", "tune", *METHOD_SLOTS}
     extra = sorted(set(raw) - allowed)
     if extra:
         raise LeagueError(
             f"method {method.name}: {path.name} sets {extra}; a method file gives only "
             f"{', '.join(sorted(allowed))} (the league owns the truth, faults and scores)"
         )
+    if "tune" in raw:
+        _check_tune(spec, method, raw, path)
     return raw
+
+
+def _check_tune(
+    spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path
+) -> TuneSection:
+    """The method file's ``[tune]`` table validated: every field a number of the method's own section
+    within its bounds, the objective a league metric (whether a field is a leaf of the built loop is
+    checked when tuning, :func:`formation_ftc.league.tuning.build_problem`)."""
+    where = f"method {method.name}: {path.name}: tune"
+    try:
+        tune = TuneSection.model_validate(raw["tune"])
+    except ValidationError as exc:
+        raise LeagueError(_format(exc, where)) from None
+    for fpath, b in tune.fields.items():
+        slot, _, name = fpath.partition(".")
+        value = raw.get(slot, {}).get(name) if isinstance(raw.get(slot), dict) else None
+        if value is None:
+            raise LeagueError(
+                f"{where}.fields.{fpath}: the method file sets no {name} in [{slot}] (a tuned field "
+                "starts from the law's paper value, given in the file)"
+            )
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise LeagueError(
+                f"{where}.fields.{fpath}: {value!r} is not one number (a tunable field is a scalar gain)"
+            )
+        assert isinstance(b, TuneBounds)
+        if not b.low <= float(value) <= b.high:
+            raise LeagueError(
+                f"{where}.fields.{fpath}: the paper value {value:g} lies outside the bounds "
+                f"[{b.low:g}, {b.high:g}]"
+            )
+    metrics = [str(m.get("name")) for m in spec.metrics]
+    if tune.objective not in metrics:
+        raise LeagueError(
+            f"{where}.objective = {tune.objective!r}: not a metric of league {spec.league.name} "
+            f"({', '.join(metrics)})"
+        )
+    return tune
+
+
+def method_tune(spec: LeagueSpec, method: MethodEntry) -> TuneSection | None:
+    """A method's validated ``[tune]`` table, or None when its file has none.
+
+    Parameters
+    ----------
+    spec : LeagueSpec
+        The league.
+    method : MethodEntry
+        One of its methods.
+
+    Returns
+    -------
+    TuneSection or None
+        Fields with bounds, objective and statistic.
+
+    Raises
+    ------
+    LeagueError
+        A table with an unknown key, bad bounds, a field the method file does not set as one number
+        inside its bounds, or an objective that is not a league metric (the message names it).
+
+    Examples
+    --------
+    >>> spec = load_league("translational")
+    >>> sorted(method_tune(spec, spec.method("yang2013")).fields)
+    ['controller.K1', 'controller.K2']
+    """
+    raw = _method_raw(spec, method)
+    if "tune" not in raw:
+        return None
+    assert spec.source is not None
+    return _check_tune(spec, method, raw, spec.source.parent / method.scenario)
 
 
 def method_scenario(

@@ -36,6 +36,7 @@ __all__ = [
     "markdown_summary",
     "SCORES",
     "COSTS",
+    "tuned_column",
 ]
 
 #: the actuator-usage score a league is ranked and plotted against, with its label (first one present)
@@ -328,6 +329,76 @@ text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:
 pre{background:#f7f7f7;padding:0.6em;overflow-x:auto;font-size:0.8em}"""
 
 
+def _tuned_text(result: dict[str, Any] | None) -> str:
+    """One line for the leaderboard's "tuned" column: gains, objective and held-out pass rate."""
+    if result is None:
+        return "not tuned"
+
+    def _fmt(v: Any) -> str:
+        return f"{v:.3g}" if isinstance(v, int | float) and math.isfinite(v) else "-"
+
+    obj = result.get("objective", {})
+    name, units = obj.get("metric", "objective"), obj.get("units", "")
+    ho = result.get("holdout", {})
+    paper, tuned = ho.get("paper", {}), ho.get("tuned", {})
+    gains = ", ".join(
+        f"{str(k).rpartition('.')[2]} {_fmt(v)}" for k, v in result.get("tuned_gains", {}).items()
+    )
+    stat = obj.get("statistic", "mean")
+    return (
+        f"{gains}; {stat} {name} {_fmt(tuned.get(f'{name}_{stat}'))} {units} "
+        f"(paper {_fmt(paper.get(f'{name}_{stat}'))}); held-out pass rate "
+        f"{_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
+        f"{tuned.get('runs', '?')} runs)"
+    )
+
+
+def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -> int:
+    """Give every ranking row a ``"tuned"`` entry (:func:`_tuned_text` of the method's tuning at that
+    level in ``tuned_dir``, or "not tuned") and ``"tuning"`` (the result's summary or None); returns
+    how many rows have a tuning.
+
+    Parameters
+    ----------
+    rank : dict
+        From :func:`ranking` (changed in place).
+    tuned_dir : str or Path
+        A directory of ``formation-ftc tune`` results (``METHOD--LEVEL.json``).
+
+    Returns
+    -------
+    int
+        Rows with a tuning result.
+
+    Examples
+    --------
+    >>> rank = {"limited": [{"method": "lqr"}]}
+    >>> tuned_column(rank, "/nonexistent"), rank["limited"][0]["tuned"]
+    (0, 'not tuned')
+    """
+    from formation_ftc.league.tuning import load_tunings
+
+    results = load_tunings(tuned_dir)
+    n = 0
+    for level, rows in rank.items():
+        for r in rows:
+            res = results.get((str(r["method"]), str(level)))
+            r["tuned"] = _tuned_text(res)
+            r["tuning"] = (
+                None
+                if res is None
+                else {
+                    "gains": res.get("tuned_gains"),
+                    "paper_gains": res.get("paper_gains"),
+                    "objective": res.get("objective", {}).get("metric"),
+                    "holdout": {k: res.get("holdout", {}).get(k) for k in ("paper", "tuned")},
+                    "optimiser": res.get("optimiser", {}).get("name"),
+                }
+            )
+            n += res is not None
+    return n
+
+
 def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]) -> str:
     metric, limit, units = _requirement(meta)
     cost = _cost(cells)
@@ -355,6 +426,11 @@ def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]
                     *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
                     ("failed", "diverged"),
                     ("runs", "runs"),
+                    *(
+                        [("tuned", "tuned (formation-ftc tune)")]
+                        if rows and "tuned" in rows[0]
+                        else []
+                    ),
                 ],
             )
         )
@@ -451,6 +527,8 @@ def markdown_summary(board: dict[str, Any]) -> str:
         if cost:
             cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
         cols += [("failed", "diverged"), ("runs", "runs")]
+        if rows and "tuned" in rows[0]:
+            cols.append(("tuned", "tuned"))
         out += ["", f"**{level}**", "", _md_table(rows, cols)]
     best: dict[tuple[str, str], dict[str, Any]] = {}
     for r in board["cells"]:
@@ -505,12 +583,21 @@ def _cell_units(cells: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str
     return units
 
 
-def write_leaderboard(league_dir: str | Path, plots: bool = True) -> dict[str, Any]:
-    """Write the leaderboard files of a league directory; returns the leaderboard dictionary."""
+def write_leaderboard(
+    league_dir: str | Path, plots: bool = True, tuned: str | Path | None = None
+) -> dict[str, Any]:
+    """Write the leaderboard files of a league directory; returns the leaderboard dictionary.
+
+    ``tuned``: a directory of ``formation-ftc tune`` results (default ``league_dir/tuned`` when it
+    exists): the ranking rows get a "tuned" column next to the paper-gain results (gains, objective,
+    held-out pass rate; "not tuned" for a method without a result)."""
     league_dir = Path(league_dir)
     meta, runs = load_league_results(league_dir)
     cells = cell_table(meta, runs)
     rank = ranking(meta, cells)
+    tuned_dir = Path(tuned) if tuned is not None else league_dir / "tuned"
+    if tuned is not None or tuned_dir.is_dir():
+        tuned_column(rank, tuned_dir)
     wins = winners(meta, cells)
     out = league_dir / "leaderboard"
     out.mkdir(parents=True, exist_ok=True)
