@@ -1,65 +1,48 @@
-"""Campaigns vary parameters, not scenarios: bind sampled scenario fields to parameter leaves.
+"""Campaigns vary parameters, not scenarios: a sampled field's path is the leaf it sets.
 
-A campaign run differs from its base scenario only in a few numeric fields (a gain, a mass, a fault
-onset, the seed). Rebuilding and re-validating the whole scenario for every run costs far more than
-the run itself on a GPU, so :class:`FieldBinding` finds, once per structural group, where each sampled
-field lands in the compiled parameter pytree (a :class:`~formation_ftc.sim.loop.ClosedLoop`) and how:
+The runs of one structural group share one template build (a
+:class:`~formation_ftc.sim.loop.ClosedLoop`) and each sampled field is written into the leaf its
+path names:
 
-1. *probe*: the scenario is built at three values of the field (the template's value and two
-   others inside the sampler's validated range); the parameter leaves whose elements change are the
-   field's targets, and each changed element must be an affine function ``a v + b`` of the field value
-   (identity for a gain or a mass; a scale for a unit conversion) -- checked on the third value;
-2. *apply*: for a batch of runs, the values of every bound field are written into the target
-   elements as arrays (``a v + b``; exactly ``v`` where ``a = 1, b = 0``) -- a few numpy operations per
-   chunk, no per-run Python;
-3. *verify*: the chunk's last run is also built the slow way and its parameters compared with the
-   bound ones (to 1e-12 relative); any difference -- a field whose effect is not affine (e.g. a fault
-   onset snapped to the step grid, an orbit radius turned into a mean motion), a field that changes
-   the structure, two fields that interact -- makes the group fall back to one build per run.
+* ``slot.field`` is ``loop.<slot>.<field>``: the attribute ``field`` of the slot's component, or
+  of a component it wraps one level down (``AccelerationToForce.law``); exactly one match. A
+  section whose field is named otherwise in its component declares it once, next to the field:
+  ``leaf_paths: ClassVar = {"mu": "adapt_mu"}``;
+* ``slot.field.k`` (``.k.l``) is one element of that leaf; ``slot.field`` as one number fills
+  every element (a per-spacecraft field); ``simulation.seed`` is the loop's ``seed``; the other
+  ``simulation.*`` fields are structural.
 
-A field that is not bindable falls back the same way; nothing is ever silently wrong.
+:func:`bind_fields` checks on the template that each leaf holds its field's value: a derived leaf
+(an orbit radius turned into a mean motion, an onset snapped to the step grid, a unit conversion)
+or a path naming no leaf is not bound, and the group is built run by run. The runner also builds
+each chunk's last run the slow way and compares it with the bound one (:func:`params_close`): a
+field that moves another leaf too, or interacting fields, fall back the same way. Nothing is
+silently wrong.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import jax
 import numpy as np
 
-__all__ = [
-    "FieldBinding",
-    "Target",
-    "bind_field",
-    "bind_fields",
-    "apply_bindings",
-    "take_run",
-    "params_close",
-]
+__all__ = ["FieldBinding", "bind_fields", "apply_bindings", "take_run", "params_close"]
 
 _RTOL = 1e-12
-
-
-@dataclass(frozen=True)
-class Target:
-    """Elements of one parameter leaf set by a field: ``leaf.flat[index] = scale * v + offset``."""
-
-    leaf: int  # position in the flattened parameter pytree
-    index: np.ndarray  # flat element indices inside the leaf
-    scale: np.ndarray
-    offset: np.ndarray
-
-    @property
-    def identity(self) -> bool:
-        return bool(np.all(self.scale == 1.0) and np.all(self.offset == 0.0))
+SEED_PATH = "simulation.seed"
 
 
 @dataclass(frozen=True)
 class FieldBinding:
-    path: str
-    targets: tuple[Target, ...]
+    """Where a sampled field is written: elements ``index`` (flat) of parameter leaf ``leaf``."""
+
+    path: str  # the campaign's dotted path
+    leaf: int  # position in the flattened parameter pytree
+    index: np.ndarray  # flat element indices inside the leaf
 
 
 def _leaves(params) -> tuple[list[np.ndarray], Any]:
@@ -67,93 +50,73 @@ def _leaves(params) -> tuple[list[np.ndarray], Any]:
     return [np.asarray(x) for x in leaves], treedef
 
 
-def _probe_values(v0: float, candidates: Sequence[float], integer: bool) -> list[float]:
-    """Two probe values different from ``v0`` (validated extremes first, then small steps)."""
-    out: list[float] = []
-    for c in candidates:
-        if c is not None and np.isfinite(c) and c != v0 and c not in out:
-            out.append(float(c))
-    step = 1.0 if integer else max(abs(v0) * 1e-3, 1e-6)
-    k = 1
-    while len(out) < 2:
-        c = v0 + k * step
-        if c not in out:
-            out.append(c)
-        k += 1
-    return out[:2]
+def _leaf_keys(loop) -> dict[str, int]:
+    """Key path of every leaf of ``loop`` (``.plant.mass``) -> its position in the flattened tree."""
+    flat, _ = jax.tree_util.tree_flatten_with_path(loop)
+    return {jax.tree_util.keystr(kp): n for n, (kp, _) in enumerate(flat)}
 
 
-def bind_field(
-    build: Callable[[Mapping[str, Any]], Any],
-    values0: Mapping[str, Any],
-    path: str,
-    candidates: Sequence[float],
-    integer: bool = False,
-) -> FieldBinding | None:
-    """Affine binding of ``path`` or None when the field changes the structure or is not affine.
-
-    ``build(values)`` returns the compiled parameter pytree for the template values with ``values``
-    applied (it may raise for invalid values: the field is then not bindable).
-    """
-    v0 = float(values0[path])
-    probes = _probe_values(v0, candidates, integer)
-    try:
-        p0 = build(values0)
-        p1 = build({**values0, path: int(probes[0]) if integer else probes[0]})
-        p2 = build({**values0, path: int(probes[1]) if integer else probes[1]})
-    except Exception:  # noqa: BLE001 - an invalid probe: fall back to per-run builds
+def _leaf_of(
+    path: str, keys: Mapping[str, int], scenario: Any
+) -> tuple[int, tuple[int, ...]] | None:
+    """(leaf position, element indices) named by a campaign path, or None when it names no leaf."""
+    if path == SEED_PATH:
+        return (keys[".seed"], ()) if ".seed" in keys else None
+    slot, _, rest = path.partition(".")
+    name, *idx = rest.split(".")
+    if slot == "simulation" or not name or not all(i.lstrip("-").isdigit() for i in idx):
         return None
-    l0, t0 = _leaves(p0)
-    l1, t1 = _leaves(p1)
-    l2, t2 = _leaves(p2)
-    if (
-        t0 != t1
-        or t0 != t2
-        or any(a.shape != b.shape or a.shape != c.shape for a, b, c in zip(l0, l1, l2, strict=True))
-    ):
-        return None  # structural field
-    v1, v2 = probes
-    targets = []
-    for n, (a0, a1, a2) in enumerate(zip(l0, l1, l2, strict=True)):
-        f0, f1, f2 = (np.asarray(x, dtype=np.float64).ravel() for x in (a0, a1, a2))
-        changed = np.flatnonzero((f0 != f1) | (f0 != f2))
-        if changed.size == 0:
-            continue
-        scale = (f1[changed] - f0[changed]) / (v1 - v0)
-        offset = f0[changed] - scale * v0
-        pred = scale * v2 + offset
-        if not np.allclose(pred, f2[changed], rtol=1e-10, atol=0.0):
-            return None
-        # snap exact identities (a gain or a mass copied into a leaf)
-        ident = np.isclose(scale, 1.0, rtol=1e-12, atol=0) & np.isclose(
-            offset, 0.0, rtol=0, atol=1e-12 * max(1.0, abs(v0))
-        )
-        scale = np.where(ident, 1.0, scale)
-        offset = np.where(ident, 0.0, offset)
-        targets.append(Target(n, changed, scale, offset))
-    return FieldBinding(path, tuple(targets))
+    section_of = getattr(scenario, "section", None)
+    section = section_of(slot) if callable(section_of) else None
+    attr = getattr(section, "leaf_paths", {}).get(name, name)
+    # the slot's component itself, or a component it wraps one level down: exactly one match
+    own, wrapped = f".{slot}.{attr}", re.compile(rf"\.{re.escape(slot)}\.\w+\.{re.escape(attr)}")
+    found = [n for k, n in keys.items() if k == own or wrapped.fullmatch(k)]
+    if len(found) != 1:
+        return None
+    return found[0], tuple(int(i) for i in idx)
 
 
-def bind_fields(
-    build: Callable[[Mapping[str, Any]], Any],
-    values0: Mapping[str, Any],
-    candidates: Mapping[str, Sequence[float]],
-    integer: Mapping[str, bool],
-) -> dict[str, FieldBinding] | None:
-    """Bindings of every field in ``candidates`` (None when any field is not bindable, or two fields
-    write the same element)."""
-    out = {}
-    seen: dict[tuple[int, int], str] = {}
-    for path, cands in candidates.items():
-        b = bind_field(build, values0, path, cands, integer.get(path, False))
-        if b is None:
+def bind_fields(loop, scenario: Any, values: Mapping[str, float]) -> dict[str, FieldBinding] | None:
+    """Bindings of every field of ``values`` in the template ``loop`` built from ``scenario`` with
+    those values, or None when a field names no leaf whose elements hold its value (the group is then
+    built per run), or two fields write the same element.
+
+    Parameters
+    ----------
+    loop : ClosedLoop
+        The template's compiled parameters.
+    scenario : ScenarioBase
+        The validated template scenario (a section may declare ``leaf_paths``).
+    values : Mapping[str, float]
+        Dotted path -> the template's value of each sampled field (``simulation.seed`` included).
+
+    Returns
+    -------
+    dict[str, FieldBinding] or None
+        One binding per field.
+    """
+    keys = _leaf_keys(loop)
+    leaves, _ = _leaves(loop)
+    out: dict[str, FieldBinding] = {}
+    seen: set[tuple[int, int]] = set()
+    for path, v in values.items():
+        where = _leaf_of(path, keys, scenario)
+        if where is None:
             return None
-        for t in b.targets:
-            for i in t.index.tolist():
-                if (t.leaf, i) in seen:
-                    return None
-                seen[(t.leaf, i)] = path
-        out[path] = b
+        n, idx = where
+        leaf = leaves[n]
+        try:
+            index = np.arange(leaf.size).reshape(leaf.shape)[idx].ravel()
+        except IndexError:
+            return None
+        if index.size == 0 or not np.all(leaf.ravel()[index] == v):
+            return None  # a derived leaf (or another element layout): not the field's value
+        for i in index.tolist():
+            if (n, i) in seen:
+                return None
+            seen.add((n, i))
+        out[path] = FieldBinding(path, n, index)
     return out
 
 
@@ -161,8 +124,8 @@ def apply_bindings(
     template, bindings: Mapping[str, FieldBinding], values: Mapping[str, np.ndarray], size: int
 ) -> tuple[Any, Any]:
     """Batch of ``size`` parameter pytrees: the template with every bound field's per-run values
-    written into its targets. Returns ``(batch, in_axes)`` as :func:`formation_ftc.sim.batch.stack_params`:
-    untouched leaves stay shared (``in_axes`` None)."""
+    written into its elements. Returns ``(batch, in_axes)`` as
+    :func:`formation_ftc.sim.batch.stack_params`: untouched leaves stay shared (``in_axes`` None)."""
     leaves, treedef = _leaves(template)
     axes: list[int | None] = [None] * len(leaves)
     batched: dict[int, np.ndarray] = {}
@@ -170,14 +133,12 @@ def apply_bindings(
         v = np.asarray(values[path], dtype=np.float64)
         if v.shape[0] < size:  # pad with the last run (so every chunk has one shape)
             v = np.concatenate([v, np.repeat(v[-1:], size - v.shape[0])])
-        for t in b.targets:
-            base = leaves[t.leaf]
-            arr = batched.get(t.leaf)
-            if arr is None:
-                arr = np.broadcast_to(base.reshape(-1), (size, base.size)).copy()
-                batched[t.leaf] = arr
-            new = v[:, None] if t.identity else v[:, None] * t.scale[None, :] + t.offset[None, :]
-            arr[:, t.index] = new.astype(base.dtype) if base.dtype.kind in "ui" else new
+        base = leaves[b.leaf]
+        arr = batched.get(b.leaf)
+        if arr is None:
+            arr = np.broadcast_to(base.reshape(-1), (size, base.size)).copy()
+            batched[b.leaf] = arr
+        arr[:, b.index] = v[:, None].astype(base.dtype) if base.dtype.kind in "ui" else v[:, None]
     for n, arr in batched.items():
         leaves[n] = arr.reshape((size,) + leaves[n].shape).astype(leaves[n].dtype)
         axes[n] = 0

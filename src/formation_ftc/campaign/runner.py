@@ -183,8 +183,8 @@ def clear_bindings() -> None:
 def _bound_chunk(
     plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float
 ) -> Callable[[], ChunkResult] | None:
-    """The fast path: one build per structural group, sampled values written into the parameter
-    arrays (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
+    """The fast path: one build per structural group, sampled values written into the leaves their
+    paths name (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
     the result table assembled from columns (no per-run Python objects except for failed and traced
     runs). None when the method's parameters are not a ClosedLoop or a field cannot be bound.
 
@@ -193,7 +193,13 @@ def _bound_chunk(
     import dataclasses
 
     from formation_ftc import api
-    from formation_ftc.campaign.binding import apply_bindings, bind_fields, params_close, take_run
+    from formation_ftc.campaign.binding import (
+        SEED_PATH,
+        apply_bindings,
+        bind_fields,
+        params_close,
+        take_run,
+    )
     from formation_ftc.sim.compiled import compile_loop
     from formation_ftc.sim.loop import ClosedLoop
 
@@ -203,9 +209,6 @@ def _bound_chunk(
         for s in plan.random_samplers
         if s.numeric and s.kind != "choice" and all_numbers(cols.values[s.path])
     ]
-    cands = {s.path: list(s.extremes()) for s in plan.random_samplers if s.path in bindable}
-    integer = {s.path: s.kind == "integer" for s in plan.random_samplers if s.path in bindable}
-    seed_path = "simulation.seed"
     base_names = [plan.base_names[b] for b in cols.base.tolist()]
     structural = [p for p in cols.values if p not in bindable]  # grid values (constant) and choices
 
@@ -221,49 +224,38 @@ def _bound_chunk(
     if len(set(base_names)) > 1 or (varying and any(group_key(k) != gkey for k in range(1, n))):
         return None  # structure differs inside the chunk (a choice): the general path groups it
     first = cols.row(0, plan.base_names)
-
-    def build(values: Mapping[str, Any]):
-        vals = {p: v for p, v in values.items() if p != seed_path}
-        inp = dataclasses.replace(
-            first, values={**first.values, **vals}, seed=int(values[seed_path])
-        )
-        return api.compile_scenario(plan.scenario(inp))
-
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
-        template = build({**first.values, seed_path: first.seed})
-        if not isinstance(template.params, ClosedLoop):
+        scenario = plan.scenario(first)
+        template = api.compile_scenario(scenario)
+        bindings = None
+        if isinstance(template.params, ClosedLoop):
+            values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
+            bindings = bind_fields(template.params, scenario, values0)
+        if bindings is None:
             _BINDINGS[cache_key] = None
         else:
-            values0 = {**{p: first.values[p] for p in bindable}, seed_path: first.seed}
-            bindings = bind_fields(
-                lambda v: build(v).params,
-                values0,
-                {**cands, seed_path: []},
-                {**integer, seed_path: True},
-            )
             # the batch needs no time histories (metrics are computed inside the run): one record at
             # the start and one at the end; trace runs and failed runs are re-run alone with records
             lean = compile_loop(
                 dataclasses.replace(template.params, record_every=template.params.n_steps)
             )
-            _BINDINGS[cache_key] = None if bindings is None else (lean, bindings)
+            _BINDINGS[cache_key] = (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:
         return None
     template, bindings = entry
     values = {p: np.asarray(cols.values[p], dtype=np.float64) for p in bindable}
-    values[seed_path] = cols.seed.astype(np.float64)
+    values[SEED_PATH] = cols.seed.astype(np.float64)
     batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
     engine = batched_run(template, axes, plan.chunk_size)
     # a group whose binding was verified before in this process starts computing now (JAX dispatches
     # asynchronously) and the Python work below overlaps it; a first chunk is verified first
     pending = engine(batch) if cache_key in _VERIFIED else None
-    last = cols.row(n - 1, plan.base_names)
-    check = build({**{p: last.values[p] for p in bindable}, seed_path: last.seed})
+    check = api.compile_scenario(plan.scenario(cols.row(n - 1, plan.base_names)))
     check_params = dataclasses.replace(check.params, record_every=template.params.record_every)
     if not params_close(check_params, take_run(batch, axes, n - 1)):
-        _BINDINGS[cache_key] = None  # not affine after all (or interacting fields): build per run
+        _BINDINGS[cache_key] = None  # a field moves another leaf too (or fields interact): per run
         _VERIFIED.discard(cache_key)
         return None  # (a speculative batch in flight is dropped)
     _VERIFIED.add(cache_key)
