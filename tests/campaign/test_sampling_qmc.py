@@ -77,7 +77,7 @@ def test_lhs_one_point_per_stratum_and_paired_grid(tiny):
     plan = make_plan(raw)
     assert plan.n_runs == 20
     kp = np.array([plan.run_inputs(r).values["controller.kp"] for r in range(10)])
-    mass = np.array([plan.run_inputs(r).values["spacecraft.mass.0"] for r in range(10)])
+    mass = np.array([plan.run_inputs(r).values["plant.mass.0"] for r in range(10)])
     u_kp = (kp - 1.0) / 2.0
     assert sorted(np.floor(u_kp * 10).astype(int)) == list(range(10))
     # the truncated normal through its CDF: again one value per decile of its distribution

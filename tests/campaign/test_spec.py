@@ -78,7 +78,7 @@ def test_nested_tables_equal_quoted_dotted_keys(tiny):
     b = tiny()
     b["sample"] = {
         "controller": {"kp": a["sample"]["controller.kp"], "kd": a["sample"]["controller.kd"]},
-        "spacecraft": {"mass": {"0": a["sample"]["spacecraft.mass.0"]}},
+        "plant": {"mass": {"0": a["sample"]["plant.mass.0"]}},
     }
     b["overrides"] = {"simulation": {"horizon": 20.0}}
     sa, _ = load_campaign(a)
@@ -91,7 +91,7 @@ def test_nested_tables_equal_quoted_dotted_keys(tiny):
     "path, where",
     [
         ("controller.kpp", "at controller it has fields: type, mode, kp"),
-        ("spacecraft.mass.7", "a list of 4 item(s)"),
+        ("plant.mass.7", "a list of 4 item(s)"),
         ("nosuch.section", "<top level>"),
     ],
 )
@@ -122,10 +122,10 @@ def test_bound_outside_allowed_range_is_refused_before_any_run(tmp_path, tiny):
 def test_unbounded_sample_outside_range_is_caught_for_every_run_before_any_run(tmp_path, tiny):
     raw = tiny()
     # a normal mass with mean 5 kg and std 20 kg gives negative masses in some runs (schema: > 0)
-    raw["sample"]["spacecraft.mass.0"] = {"dist": "normal", "mean": 5.0, "std": 20.0}
+    raw["sample"]["plant.mass.0"] = {"dist": "normal", "mean": 5.0, "std": 20.0}
     raw["campaign"]["runs"] = 20
     out = tmp_path / "out"
-    with pytest.raises(CampaignError, match=r"nothing was run[\s\S]*spacecraft.mass\[0\]"):
+    with pytest.raises(CampaignError, match=r"nothing was run[\s\S]*plant: mass: at least one spacecraft"):
         run_campaign(raw, out)
     assert not out.exists()
 

@@ -18,7 +18,7 @@ from formation_ftc.components.controllers.li2020_adaptive import Li2020AdaptiveC
 from formation_ftc.components.controllers.sir_ftc import SirFtcController
 from formation_ftc.components.evaluations.formation_errors import FormationErrors
 from formation_ftc.core.dynamics.relative_lvlh import relative_lvlh_rhs
-from formation_ftc.papers.li2020.method import make_loop
+from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import ActuatorInputs, FlightInputs, TruthInputs
 from formation_ftc.sim.metrics import Metric, finalize, init_accumulators, update_accumulators
 

@@ -1,5 +1,5 @@
-"""Fixtures for the Li2020 tests: scenarios are validated with the li2020 schema directly (independent of
-the plugin registry, so a sibling paper package in progress cannot break these tests)."""
+"""Fixtures for the Li2020 tests: the paper's composed scenarios (``[scenario] paper = "li2020"``) loaded
+and run through the generic API."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Li2020 condition checks and bad-input rejection (SPEC P0.6-1/2/3, issue 3 "Bad input")."""
+"""Li2020 condition checks of composed scenarios and bad-input rejection (SPEC P0.6-1/2/3, issue 3
+"Bad input")."""
 
 from __future__ import annotations
 
@@ -7,9 +8,11 @@ import math
 import numpy as np
 import pytest
 
+from formation_ftc.api import check as api_check
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.graph import balance_report, is_strongly_connected
-from formation_ftc.papers.li2020.conditions import check, delay_statistics, lemma3_constant
+from formation_ftc.methods.composed import make_loop
+from formation_ftc.papers.li2020.conditions import check, delay_stats, lemma3_constant
 
 C_PRINTED = [[0, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]]
 C_BAL = [[0, 0, 0.9, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0.4], [0.4, 0, 0, 0]]
@@ -42,7 +45,7 @@ def test_delay_rate_bound_and_lambda_condition(load):
     """P0.6-2: max dT/dt over used edges = 0.120 (T34) +- 1e-3; rho = 1/(1 - 0.12); lambda margin > 0
     with largest rhs 0.0614; all 12 printed delays have rate < 1 (max 0.44, T12)."""
     scn = load("li2020-thm2-delays")
-    stats = {st.name: st for st in delay_statistics(scn)}
+    stats = {st.name: st for st in delay_stats(scn)}
     used = ["T13", "T21", "T32", "T34", "T41"]
     worst = max(used, key=lambda n: stats[n].rate_max)
     assert worst == "T34" and abs(stats["T34"].rate_max - 0.12) < 1e-3
@@ -80,23 +83,60 @@ def _delays_with(entry, value):
     return base
 
 
-@pytest.mark.parametrize(
-    "entry, expr, words",
-    [
+def test_rejected_on_negative_delay_or_beyond_the_history(load):
+    """A used delay must stay in [0, max_delay] at every step (the history holds max_delay seconds)."""
+    for entry, expr, words in (
         ((2, 3), "0.5 - 0.01*t", ["negative", "T34", "link 4 -> 3", "goes negative at t = 50"]),
-        ((0, 2), "1 + 0.2*sin(5*t)", ["rate", "T13", ">= 1"]),
-        ((1, 0), "0.005", ["shorter than the step", "T21"]),
-    ],
-)
-def test_bad_delays_rejected(load, entry, expr, words):
-    with pytest.raises(ScenarioError) as exc:
-        load(
-            "li2020-thm2-delays",
-            {"network.delays": _delays_with(entry, expr), "simulation.horizon": 100.0},
-        )
-    msg = str(exc.value)
-    for w in words:
-        assert w in msg, msg
+        ((2, 3), "3.5 + 0.2*sin(0.2*t)", ["T34", "3.7", "exceeds network.max_delay = 3.6"]),
+    ):
+        with pytest.raises(ScenarioError) as exc:
+            load(
+                "li2020-thm2-delays",
+                {"network.delays": _delays_with(entry, expr), "simulation.horizon": 100.0},
+            )
+        for w in words:
+            assert w in str(exc.value), str(exc.value)
+    # an unused link may carry any delay: it is not read (the non-negativity condition states it)
+    scn = load(
+        "li2020-thm2-delays",
+        {"network.delays": _delays_with((0, 1), "-1"), "simulation.horizon": 100.0},
+    )
+    assert _by_name(check(scn))["delays non-negative"].holds is False
+
+
+def test_rate_of_one_fails_the_theorem_condition(load):
+    """dT/dt >= 1 on a used link (eq. (46)) is outside Thm 2: the condition fails (the loop still runs)."""
+    scn = load(
+        "li2020-thm2-delays",
+        {"network.delays": _delays_with((0, 2), "1 + 0.2*sin(5*t)"), "simulation.horizon": 100.0},
+    )
+    rate = _by_name(check(scn))["delay rate bound (used edges)"]
+    assert rate.holds is False and "T13" in rate.value and rate.required
+
+
+def test_delays_shorter_than_the_step_read_the_message_sent_now(load):
+    """T >= dt on every used link: the reads never need the message sent within the step (the built-in
+    scenarios); a shorter delay switches on the blend with it (DelayedGraphNetwork.short_delays)."""
+    assert make_loop(load("li2020-thm2-delays")).network.short_delays is False
+    short = load(
+        "li2020-thm2-delays",
+        {"network.delays": _delays_with((1, 0), "0.005"), "simulation.horizon": 100.0},
+    )
+    assert make_loop(short).network.short_delays is True
+
+
+def test_conditions_apply_to_the_li2020_laws_only(load):
+    """Registered on the controller types: the law over a graph / delayed graph states the theorem's
+    conditions, SIR-FTC its own, a law over a graph that loses links none (outside the theorems)."""
+    names = {c.name for c in api_check(load("li2020-thm2-delays"))}
+    assert {"components fit together", "lambda_i > (rho - 1)/2 sum_j c_ij"} <= names
+    sir = {c.name for c in api_check(load("li2020-sirftc"))}
+    assert sir == {"components fit together", "k_i > 0", "SIR-FTC gains positive"}
+    lossy = load(
+        "li2020-thm1",
+        {"network.type": "graph-link-loss", "network.lost_links": [[1, 3]], "network.onset": 5.0},
+    )
+    assert check(lossy) == []
 
 
 @pytest.mark.parametrize(
@@ -104,7 +144,7 @@ def test_bad_delays_rejected(load, entry, expr, words):
     [
         (
             [[0, 0, -0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]],
-            ["network.adjacency[0][2]", ">= 0"],
+            ["adjacency[0][2]", ">= 0"],
         ),
         ([[0.3, 0, 0.5, 0], [0.6, 0, 0, 0], [0, 0.5, 0, 0.4], [0.6, 0, 0, 0]], ["self-loops"]),
         ([[0, 0.5], [0.5, 0]], ["4x4"]),
@@ -118,14 +158,9 @@ def test_bad_adjacency_rejected(load, C, words):
 
 
 def test_other_validation_messages(load):
-    with pytest.raises(ScenarioError, match="controller.k"):
+    with pytest.raises(ScenarioError, match="k must be > 0"):
         load("li2020-thm1", {"controller.k": -0.2})
-    with pytest.raises(ScenarioError, match="network.delays: required"):
-        load("li2020-thm1", {"controller.law": "thm2"})
-    with pytest.raises(ScenarioError, match="alpha3_literal"):
-        load(
-            "li2020-thm1",
-            {"faults.alpha3_literal": True, "faults.effectiveness": ["1", "1", "0.9"]},
-        )
+    with pytest.raises(ScenarioError, match="network.delays"):
+        load("li2020-thm1", {"network.type": "delayed-graph"})
     with pytest.raises(ScenarioError, match="unknown name"):
-        load("li2020-thm1", {"disturbance.force": ["0", "0", "x*t"]})
+        load("li2020-thm1", {"plant.disturbance_force": ["0", "0", "x*t"]})

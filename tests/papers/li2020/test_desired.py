@@ -19,7 +19,7 @@ from formation_ftc.core.rotating_formation import (
     desired_trajectory,
     formation_offsets,
 )
-from formation_ftc.papers.li2020.method import make_loop
+from formation_ftc.methods.composed import make_loop
 
 
 def _formation(scn):
@@ -38,8 +38,11 @@ def _formation(scn):
 def test_constants(load):
     """n_c, T_c, chi to rel. 1e-5; g(T_c/2) = 1 - 1e-6 (E000-09)."""
     scn = load("li2020-thm1")
-    n, T = scn.orbit.mean_motion, scn.orbit.period
+    orbit = scn.section("reference")
+    n = math.sqrt(orbit.mu / orbit.semi_major_axis**3)
+    T = scn.section("controller").formation.period
     assert abs(n / 1.078008e-3 - 1) < 1e-5 and abs(T / 5828.52 - 1) < 1e-5
+    assert T == 2 * math.pi / n  # the stated period is the reference orbit's, to the last bit
     chi = chi_from_period(T)
     assert abs(chi / 3.07368e5 - 1) < 1e-5
     assert abs(float(make_loop(scn).controller.formation.chi) - chi) < 1e-9

@@ -1,6 +1,6 @@
 """Li2020 metrics do not depend on the record decimation (``simulation.record_every``).
 
-Every metric of a ``li2020`` run is accumulated inside the run at every step; the records are only an
+Every metric of a Li2020 run is accumulated inside the run at every step; the records are only an
 output decimation. Each built-in scenario of the reproduction runs 60 s (6,000 RK4 steps of 0.01 s: the
 fault onsets at 10, 15 and 20 s, the ``at`` samples at 10, 20 and 30 s and the window starts at 50 s
 and 54 s = 0.9 T all lie inside) at ``record_every = 1`` and ``= 20``, and every metric must agree.
@@ -146,16 +146,17 @@ def test_e000_04_window_maximum_independent_of_record_every(same_metrics):
     )
     same_metrics({k: m1[k] for k in early}, {k: m20[k] for k in early})
 
-    sc = load_li2020("li2020-thm2-delays").spacecraft  # the scenario's own initial positions
+    # the scenario's own initial positions
+    plant = load_li2020("li2020-thm2-delays").section("plant")
     nudged = []
     for sign in (1.0, -1.0):
-        pos = [list(map(float, r)) for r in sc.initial_position]
+        pos = [list(map(float, r)) for r in plant.initial_position]
         pos[0][0] += sign * ULP_NUDGE
         nudged.append(
             simulate_li2020(
                 load_li2020(
                     "li2020-thm2-delays",
-                    {**LITERAL, "simulation.record_every": 1, "spacecraft.initial_position": pos},
+                    {**LITERAL, "simulation.record_every": 1, "plant.initial_position": pos},
                 )
             )[1]
         )

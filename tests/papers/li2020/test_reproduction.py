@@ -1,5 +1,6 @@
-"""The li2020 reproduction end to end on a shortened horizon (figures, summary keys, rows), the
-registered method's check/plot hooks and the built-in scenario files."""
+"""The li2020 reproduction end to end on a shortened horizon (figures, summary keys, rows), the paper's
+figures drawn for its composed scenarios (``[scenario] paper = "li2020"``) and the built-in scenario
+files."""
 
 from __future__ import annotations
 
@@ -8,8 +9,8 @@ import json
 import numpy as np
 
 from formation_ftc.config import loader
-from formation_ftc.papers.li2020.figures import plot_scenario
 from formation_ftc.papers.li2020.reproduction import SCENARIOS, SUMMARY_KEYS, run_reproduction
+from formation_ftc.registry import get_method
 
 
 def test_reproduction_short_horizon(tmp_path, recheck_verdicts):
@@ -38,9 +39,10 @@ def test_builtin_scenarios_validate_and_plot(load, simulate, tmp_path):
     for n in names:
         scn = load(n)
         assert scn.simulation.horizon == 3000.0 and scn.simulation.dt == 0.01
-        assert scn.scenario.name == n
+        assert scn.scenario.name == n and scn.scenario.method == "composed"
     scn = load("li2020-sirftc", {"simulation.horizon": 5.0})
     ds, m = simulate(scn)
-    paths = plot_scenario(ds, scn, tmp_path)
+    paths = get_method("composed").plot(ds, scn, tmp_path)  # the paper's figure set
     assert len(paths) == 4 and all(p.exists() for p in paths)
+    assert {p.name for p in paths} >= {"li2020-sirftc_mu.png", "li2020-sirftc_adaptive.png"}
     assert "b_hat" in ds and np.isfinite(m["delta_v_total"])

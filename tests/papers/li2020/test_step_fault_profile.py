@@ -1,4 +1,4 @@
-"""Numeric step fault profile (faults.profile = "step") used by Monte Carlo campaigns."""
+"""Numeric step fault profile (actuator type "step-faults") used by Monte Carlo campaigns."""
 
 import numpy as np
 import pytest
@@ -9,6 +9,16 @@ from formation_ftc.config.loader import ScenarioError
 BASE = {"simulation.horizon": 30.0}
 EFF = [[0.5, 1.0, 1.0], [1.0, 0.6, 1.0], [1.0, 1.0, 0.7], [0.4, 0.4, 0.4]]
 ONSET = [[10.0, 0.0, 0.0], [0.0, 15.0, 0.0], [0.0, 0.0, 20.0], [5.0, 5.0, 5.0]]
+
+
+def _step(effectiveness=EFF, onset=ONSET) -> dict:
+    """Overrides that replace the expression faults by the step profile (as the campaign does)."""
+    return {
+        **BASE,
+        "actuator.type": "step-faults",
+        "actuator.effectiveness": effectiveness,
+        "actuator.onset": onset,
+    }
 
 
 def _as_expressions():
@@ -33,19 +43,9 @@ def _as_expressions():
     ],
 )
 def test_step_profile_equals_expression_profile(scenario, atol):
-    step = ftc.simulate(
-        ftc.load_scenario(
-            scenario,
-            {
-                **BASE,
-                "faults.profile": "step",
-                "faults.step_effectiveness": EFF,
-                "faults.step_onset": ONSET,
-            },
-        )
-    )
+    step = ftc.simulate(ftc.load_scenario(scenario, _step()))
     expr = ftc.simulate(
-        ftc.load_scenario(scenario, {**BASE, "faults.effectiveness": _as_expressions()})
+        ftc.load_scenario(scenario, {**BASE, "actuator.effectiveness": _as_expressions()})
     )
     np.testing.assert_array_equal(step.effectiveness.values, expr.effectiveness.values)
     np.testing.assert_allclose(step.position.values, expr.position.values, rtol=0, atol=atol)
@@ -54,28 +54,8 @@ def test_step_profile_equals_expression_profile(scenario, atol):
 def test_step_profile_shares_one_program_across_values():
     from formation_ftc.api import compile_scenario
 
-    a = compile_scenario(
-        ftc.load_scenario(
-            "li2020-thm1",
-            {
-                **BASE,
-                "faults.profile": "step",
-                "faults.step_effectiveness": EFF,
-                "faults.step_onset": ONSET,
-            },
-        )
-    )
-    b = compile_scenario(
-        ftc.load_scenario(
-            "li2020-thm1",
-            {
-                **BASE,
-                "faults.profile": "step",
-                "faults.step_effectiveness": [[0.9] * 3] * 4,
-                "faults.step_onset": [[1.0] * 3] * 4,
-            },
-        )
-    )
+    a = compile_scenario(ftc.load_scenario("li2020-thm1", _step()))
+    b = compile_scenario(ftc.load_scenario("li2020-thm1", _step([[0.9] * 3] * 4, [[1.0] * 3] * 4)))
     assert a.static_key == b.static_key
     assert not np.array_equal(a.params.actuator.alpha, b.params.actuator.alpha)
 
@@ -83,17 +63,13 @@ def test_step_profile_shares_one_program_across_values():
 @pytest.mark.parametrize(
     "field,value,msg",
     [
-        (
-            "faults.step_effectiveness",
-            [[0.0, 1.0, 1.0]] * 4,
-            "step_effectiveness[0][0] = 0.0: must be (0, 1]",
-        ),
-        ("faults.step_effectiveness", [[1.0, 1.0, 1.2]] * 4, "must be (0, 1]"),
-        ("faults.step_onset", [[-1.0, 0.0, 0.0]] * 4, "step_onset[0][0] = -1.0: must be >= 0"),
-        ("faults.step_onset", [[0.0, 0.0, 0.0]] * 3, "faults.step_onset: 3 rows"),
+        ("effectiveness", [[0.0, 1.0, 1.0]] * 4, "effectiveness[0][0] = 0.0: must be (0, 1]"),
+        ("effectiveness", [[1.0, 1.0, 1.2]] * 4, "must be (0, 1]"),
+        ("onset", [[-1.0, 0.0, 0.0]] * 4, "onset[0][0] = -1.0: must be >= 0"),
+        ("onset", [[0.0, 0.0, 0.0]] * 3, "actuator.onset: 3 rows for 4 spacecraft"),
     ],
 )
 def test_bad_step_profile(field, value, msg):
     with pytest.raises(ScenarioError) as info:
-        ftc.load_scenario("li2020-thm1", {**BASE, "faults.profile": "step", field: value})
+        ftc.load_scenario("li2020-thm1", {**_step(), f"actuator.{field}": value})
     assert msg in str(info.value)

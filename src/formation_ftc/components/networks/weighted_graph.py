@@ -11,9 +11,11 @@ Both networks deliver to spacecraft i the in-weight and the weighted sum of the 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, ClassVar
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -21,7 +23,14 @@ from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.history import history_init, history_push, history_read
 from formation_ftc.sim.components import Network, NetworkInputs, component, static
 
-__all__ = ["GraphNetwork", "DelayedGraphNetwork", "delay_vector_function", "graph_edges"]
+__all__ = [
+    "GraphNetwork",
+    "DelayedGraphNetwork",
+    "DelayStats",
+    "delay_statistics",
+    "delay_vector_function",
+    "graph_edges",
+]
 
 
 def graph_edges(weights) -> tuple[tuple[int, int], ...]:
@@ -96,6 +105,87 @@ def delay_vector_function(texts: tuple[tuple[str, ...], ...], pairs: tuple[tuple
         )
 
     return T
+
+
+@dataclass(frozen=True)
+class DelayStats:
+    """Extremes of one delay T_ij over the step grid of a horizon (pair (i, j) 0-based receiver, sender)."""
+
+    pair: tuple[int, int]
+    t_min: float  # time of min T [s]
+    value_min: float  # [s]
+    value_max: float  # [s]
+    rate_max: float  # max dT/dt [-]
+    t_rate_max: float  # [s]
+    t_first_negative: float = float("nan")  # first grid time with T < 0 [s]
+    t_first_rate_violation: float = float("nan")  # first grid time with dT/dt >= 1 [s]
+    t_max: float = float("nan")  # time of max T [s]
+
+    @property
+    def name(self) -> str:
+        i, j = self.pair
+        return f"T{i + 1}{j + 1}"
+
+
+@lru_cache(maxsize=64)
+def delay_statistics(
+    texts: tuple[tuple[str, ...], ...], horizon: float, dt: float
+) -> tuple[DelayStats, ...]:
+    """Values and rates of every off-diagonal delay T_ij(t), sampled at every step t_k = k dt of
+    [0, horizon] (the rate dT/dt by forward-mode automatic differentiation).
+
+    Parameters
+    ----------
+    texts : tuple of tuple of str
+        (N, N) delay expressions in t [s], i (receiver) and j (sender), 1-based, giving seconds.
+    horizon : float
+        End of the grid [s].
+    dt : float
+        Grid step [s].
+
+    Returns
+    -------
+    tuple of DelayStats
+        One per pair (i, j), i != j, row-major order. Sampled: a violation found is real, a bound is
+        not proven between the samples.
+
+    Examples
+    --------
+    >>> from formation_ftc.components.networks.weighted_graph import delay_statistics
+    >>> st = delay_statistics((("0", "1 + 0.5*t"), ("2 - 0.1*t", "0")), 10.0, 0.5)
+    >>> [(s.name, s.value_min, s.value_max, round(s.rate_max, 12)) for s in st]
+    [('T12', 1.0, 6.0, 0.5), ('T21', 1.0, 2.0, -0.1)]
+    """
+    n = len(texts)
+    pairs = tuple((i, j) for i in range(n) for j in range(n) if i != j)
+    vec = delay_vector_function(texts, pairs)
+    grid = jnp.arange(int(round(horizon / dt)) + 1, dtype=jnp.float64) * dt
+
+    @jax.jit
+    def evaluate(tt):
+        return jax.vmap(vec)(tt), jax.vmap(jax.jacfwd(vec))(tt)
+
+    vals, rates = (np.asarray(a) for a in evaluate(grid))
+    tg = np.asarray(grid)
+    out = []
+    for k, pair in enumerate(pairs):
+        v, r = vals[:, k], rates[:, k]
+        kmin, kmax, kr = int(np.argmin(v)), int(np.argmax(v)), int(np.argmax(r))
+        neg, fast = np.flatnonzero(v < 0), np.flatnonzero(r >= 1)
+        out.append(
+            DelayStats(
+                pair,
+                float(tg[kmin]),
+                float(v[kmin]),
+                float(v[kmax]),
+                float(r[kr]),
+                float(tg[kr]),
+                float(tg[neg[0]]) if neg.size else float("nan"),
+                float(tg[fast[0]]) if fast.size else float("nan"),
+                float(tg[kmax]),
+            )
+        )
+    return tuple(out)
 
 
 @component

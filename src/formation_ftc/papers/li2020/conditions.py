@@ -1,17 +1,24 @@
-"""Condition checks of Li et al. 2020 (the checkable conditions of its theorems) and delay validation.
+"""Conditions of Li et al. 2020's theorems for composed scenarios whose controller is
+``li2020-adaptive`` (Thm 1 over a ``graph`` network, Thm 2 over a ``delayed-graph``) or ``sir-ftc``
+(the baseline of Sec. IV-D); registered by :mod:`.registration` with
+:func:`~formation_ftc.methods.composed.register_conditions`:
 
 * graph balance (Thms 1-2 assume it; the printed C is NOT balanced, E000-07) with row/column sums;
 * strong connectivity (informative);
-* delay validity: T_ij(t) >= 0 for every printed pair, dT_ij/dt < 1 (eq. (46)), and T_ij >= dt on used
-  edges (the delayed sample must lie in the stored history). The conditions are *verified* over the
-  continuous horizon by interval arithmetic (:mod:`formation_ftc.core.interval`: enclosures of T and
-  dT/dt); the values shown are sampled at every simulation step (``jax.jacfwd`` for the rate), and
-  when the enclosure is inconclusive the condition falls back to that sample (basis "sampled": a
-  violation found is real, a pass is unproven). :func:`validate_delays` uses the samples;
+* delay conditions (Thm 2): T_ij(t) >= 0 for every printed pair and dT_ij/dt < 1 (eq. (46)). They are
+  *verified* over the continuous horizon by interval arithmetic (:mod:`formation_ftc.core.interval`:
+  enclosures of T and dT/dt); the values shown are sampled at every simulation step
+  (:func:`~formation_ftc.components.networks.weighted_graph.delay_statistics`, ``jax.jacfwd`` for the
+  rate), and when the enclosure is inconclusive the condition falls back to that sample (basis
+  "sampled": a violation found is real, a pass is unproven). That every used delay stays in
+  [0, max_delay] is checked when the network is built (the history holds max_delay seconds);
 * gain/delay coupling (47): rho = 1/(1 - max h_ij), lambda_i > (rho - 1)/2 sum_j c_ij;
 * k_i > 0 (Lemma 2), d_hat_i(0) > 0, sigma integrable (eq. (11));
 * sign of the d_hat tanh term consistent with the proof (E000-04);
 * Lemma 3 constant r* = x*(1 - tanh x*), e^{-2x*} + 1 - 2x* = 0.
+
+A ``li2020-adaptive`` law over another network (none, or a graph that loses links) is outside the
+theorems: no condition.
 """
 
 from __future__ import annotations
@@ -20,138 +27,51 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.core.expressions import compile_expression
+from formation_ftc.components.networks.weighted_graph import DelayStats, delay_statistics
 from formation_ftc.core.graph import balance_report, is_strongly_connected
 from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
+from formation_ftc.methods.composed import ComposedScenario, per_spacecraft
 from formation_ftc.registry import Condition
+from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
-    "DelayError",
-    "DelayStats",
     "DelayBounds",
-    "delay_statistics",
+    "delay_stats",
     "delay_bounds",
-    "validate_delays",
+    "law_of",
     "lemma3_constant",
     "check",
 ]
 
-
-class DelayError(ValueError):
-    """A delay expression that is negative, too short, or whose rate reaches 1."""
-
-
-@dataclass(frozen=True)
-class DelayStats:
-    """Per pair (i, j) (0-based receiver, sender): extreme values over the horizon grid."""
-
-    pair: tuple[int, int]
-    t_min: float  # time of min T [s]
-    value_min: float  # [s]
-    value_max: float  # [s]
-    rate_max: float  # max dT/dt [-]
-    t_rate_max: float  # [s]
-    t_first_negative: float = float("nan")  # first grid time with T < 0 [s]
-    t_first_rate_violation: float = float("nan")  # first grid time with dT/dt >= 1 [s]
-
-    @property
-    def name(self) -> str:
-        i, j = self.pair
-        return f"T{i + 1}{j + 1}"
+#: network type -> theorem of the ``li2020-adaptive`` law over it
+THEOREMS = {"graph": "thm1", "delayed-graph": "thm2"}
 
 
-@lru_cache(maxsize=64)
-def _delay_statistics(
-    texts: tuple[tuple[str, ...], ...], horizon: float, dt: float
-) -> tuple[DelayStats, ...]:
-    n = len(texts)
-    pairs = [(i, j) for i in range(n) for j in range(n) if i != j]
-    fns = [
-        compile_expression(texts[i][j], ("t", "i", "j"), field=f"network.delays[{i}][{j}]")
-        for i, j in pairs
-    ]
-
-    def vec(t):
-        return jnp.stack(
-            [
-                jnp.broadcast_to(f(t=t, i=float(i + 1), j=float(j + 1)), ())
-                for f, (i, j) in zip(fns, pairs, strict=True)
-            ]
-        )
-
-    n_steps = int(round(horizon / dt))
-    grid = jnp.arange(n_steps + 1, dtype=jnp.float64) * dt
-
-    @jax.jit
-    def evaluate(tt):
-        return jax.vmap(vec)(tt), jax.vmap(jax.jacfwd(vec))(tt)
-
-    vals, rates = (np.asarray(a) for a in evaluate(grid))
-    tg = np.asarray(grid)
-    out = []
-    for k, pair in enumerate(pairs):
-        v, r = vals[:, k], rates[:, k]
-        kmin, kr = int(np.argmin(v)), int(np.argmax(r))
-        neg, fast = np.flatnonzero(v < 0), np.flatnonzero(r >= 1)
-        out.append(
-            DelayStats(
-                pair,
-                float(tg[kmin]),
-                float(v[kmin]),
-                float(np.max(v)),
-                float(r[kr]),
-                float(tg[kr]),
-                float(tg[neg[0]]) if neg.size else float("nan"),
-                float(tg[fast[0]]) if fast.size else float("nan"),
-            )
-        )
-    return tuple(out)
+def law_of(scenario: ComposedScenario) -> str | None:
+    """'thm1', 'thm2' or 'sir-ftc': the Li2020 law a composed scenario flies (None: none of them)."""
+    controller = scenario.type_of("controller")
+    if controller == "sir-ftc":
+        return "sir-ftc"
+    if controller == "li2020-adaptive":
+        return THEOREMS.get(str(scenario.type_of("network")))
+    return None
 
 
-def delay_statistics(scenario) -> list[DelayStats]:
-    """Delay extremes and rates for every off-diagonal entry of ``network.delays`` (empty if none)."""
-    d = scenario.network.delays
-    if d is None:
+def _texts(scenario: ComposedScenario) -> tuple[tuple[str, ...], ...] | None:
+    delays = getattr(scenario.section("network"), "delays", None)
+    return None if delays is None else tuple(tuple(str(x) for x in row) for row in delays)
+
+
+def delay_stats(scenario: ComposedScenario) -> list[DelayStats]:
+    """Delay extremes and rates sampled at every step for every off-diagonal entry of
+    ``network.delays`` (empty without delays)."""
+    texts = _texts(scenario)
+    if texts is None:
         return []
-    texts = tuple(tuple(str(x) for x in row) for row in d)
-    return list(
-        _delay_statistics(texts, float(scenario.simulation.horizon), float(scenario.simulation.dt))
-    )
-
-
-def _used(scenario) -> np.ndarray:
-    return np.asarray(scenario.network.adjacency, dtype=float) > 0
-
-
-def validate_delays(scenario) -> list[DelayStats]:
-    """Raise :class:`DelayError` naming the pair and the time if a delay is invalid (see module doc)."""
-    stats = delay_statistics(scenario)
-    used = _used(scenario)
-    dt = scenario.simulation.dt
-    for st in stats:
-        i, j = st.pair
-        where = f"network.delays[{i}][{j}] ({st.name}, link {j + 1} -> {i + 1})"
-        if st.value_min < 0:
-            raise DelayError(
-                f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
-                f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)"
-            )
-        if st.rate_max >= 1:
-            raise DelayError(
-                f"{where}: delay rate reaches dT/dt >= 1 at t = {st.t_first_rate_violation:.6g} s "
-                f"(max {st.rate_max:.6g} at t = {st.t_rate_max:.6g} s; eq. (46) needs "
-                "dT/dt <= h < 1)"
-            )
-        if used[i, j] and st.value_min < dt:
-            raise DelayError(
-                f"{where}: T = {st.value_min:.6g} s at t = {st.t_min:.6g} s is shorter than "
-                f"the step simulation.dt = {dt} s (a used link needs T >= dt)"
-            )
-    return stats
+    sim = scenario.simulation
+    return list(delay_statistics(texts, float(sim.horizon), float(sim.dt)))
 
 
 def lemma3_constant() -> tuple[float, float]:
@@ -204,11 +124,13 @@ def _delay_bound(
     return lo, hi
 
 
-def delay_bounds(scenario, rate_target: float = 1.0) -> dict[tuple[int, int], DelayBounds]:
+def delay_bounds(
+    scenario: ComposedScenario, rate_target: float = 1.0
+) -> dict[tuple[int, int], DelayBounds]:
     """Verified lower bound of T_ij and upper bound of dT_ij/dt over [0, horizon] for every off-diagonal
     pair (interval arithmetic; the rate enclosure is refined until it is below ``rate_target`` where a
     few bisections suffice)."""
-    d = scenario.network.delays
+    d = _texts(scenario)
     if d is None:
         return {}
     n = len(d)
@@ -245,10 +167,12 @@ def _worst_bound(bounds: list[DelayBounds]) -> float | None:
     return max((float(h) for h in his if h is not None), default=0.0)
 
 
-def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Condition]:
+def _delay_conditions(
+    scenario: ComposedScenario, C: np.ndarray, lam: np.ndarray
+) -> list[Condition]:
     """Delay conditions of Theorem 2: verified by interval arithmetic, else sampled (see module doc)."""
     out: list[Condition] = []
-    stats = delay_statistics(scenario)
+    stats = delay_stats(scenario)
     used = C > 0
     used_stats = [st for st in stats if used[st.pair]]
     target = _rate_target(lam, C)
@@ -387,23 +311,64 @@ def _delay_conditions(scenario, C: np.ndarray, lam: np.ndarray) -> list[Conditio
     return out
 
 
-def check(scenario) -> list[Condition]:
-    """Theorem conditions for a ``li2020`` scenario (see module docstring)."""
-    law = scenario.controller.law
-    C = np.asarray(scenario.network.adjacency, dtype=float)
-    n = C.shape[0]
-    out: list[Condition] = []
-    proposed = law in ("thm1", "thm2")
+def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Condition]:
+    """Conditions of Li2020's theorems (Thm 1, Thm 2) or of the SIR-FTC baseline for a composed
+    scenario (see the module docstring).
+
+    Parameters
+    ----------
+    scenario : ComposedScenario
+        A scenario whose controller is ``li2020-adaptive`` or ``sir-ftc``; the numbers are read from its
+        sections (network adjacency and delays, the law's gains, the horizon and step).
+    loop : ClosedLoop, optional
+        Its built loop (unused; the signature of
+        :func:`~formation_ftc.methods.composed.register_conditions`).
+
+    Returns
+    -------
+    list of Condition
+        Empty when the composition is outside the theorems (``li2020-adaptive`` without a ``graph`` or
+        ``delayed-graph`` network).
+    """
+    law = law_of(scenario)
+    if law is None:
+        return []
+    ctl = scenario.section("controller")
+    n = scenario.section("plant").count
+    k = per_spacecraft(ctl.k, n, "controller.k")
+    k_positive = Condition(
+        name="k_i > 0",
+        reference="Li2020 Lemma 2",
+        value=_fmt(k),
+        requirement="> 0",
+        holds=bool(np.all(k > 0)),
+        basis="exact",
+        detail="exact: comparison of the scenario values",
+    )
+    if law == "sir-ftc":
+        return [
+            k_positive,
+            Condition(
+                name="SIR-FTC gains positive",
+                reference="Li2020 Sec. IV-D",
+                value=f"k0 = {ctl.k0}, Phi = {ctl.phi}",
+                requirement="> 0",
+                holds=ctl.k0 > 0 and ctl.phi > 0,
+                basis="exact",
+                detail="exact: comparison of the scenario values",
+            ),
+        ]
+    C = np.asarray(scenario.section("network").adjacency, dtype=float)
     thm = "Theorem 1" if law == "thm1" else "Theorem 2"
-    br = balance_report(C, tol=1e-12)
-    out.append(
+    br, sc = balance_report(C, tol=1e-12), is_strongly_connected(C)
+    out = [
         Condition(
             name="communication graph balanced",
             reference=f"Li2020 {thm}, Sec. II-C; E000-07",
             value=str(br),
             requirement="row sums = column sums",
             holds=br.balanced,
-            required=proposed,
+            required=True,
             basis="exact",
             detail="exact: row/column sums (tolerance 1e-12)"
             + (
@@ -412,10 +377,7 @@ def check(scenario) -> list[Condition]:
                 else "; the theorems assume a "
                 "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)"
             ),
-        )
-    )
-    sc = is_strongly_connected(C)
-    out.append(
+        ),
         Condition(
             name="communication graph strongly connected",
             reference="Li2020 Sec. IV-A, Fig. 3",
@@ -425,85 +387,58 @@ def check(scenario) -> list[Condition]:
             required=False,
             basis="exact",
             detail="exact: reachability on the adjacency pattern",
-        )
-    )
-    k = scenario.per_spacecraft("k")
+        ),
+        k_positive,
+    ]
+    d0 = per_spacecraft(ctl.d_hat0, n, "controller.d_hat0")
     out.append(
         Condition(
-            name="k_i > 0",
-            reference="Li2020 Lemma 2",
-            value=_fmt(k),
+            name="d_hat_i(0) > 0",
+            reference="Li2020 eq. (27)",
+            value=_fmt(d0),
             requirement="> 0",
-            holds=bool(np.all(k > 0)),
+            holds=bool(np.all(d0 > 0)),
             basis="exact",
             detail="exact: comparison of the scenario values",
         )
     )
-    if proposed:
-        d0 = scenario.per_spacecraft("d_hat0")
-        out.append(
-            Condition(
-                name="d_hat_i(0) > 0",
-                reference="Li2020 eq. (27)",
-                value=_fmt(d0),
-                requirement="> 0",
-                holds=bool(np.all(d0 > 0)),
-                basis="exact",
-                detail="exact: comparison of the scenario values",
-            )
+    sigma_a = per_spacecraft(ctl.sigma_a, n, "controller.sigma_a")
+    out.append(
+        Condition(
+            name="sigma_i integrable",
+            reference="Li2020 eq. (11), (13)-(16)",
+            value=f"{ctl.sigma_form}, a = {_fmt(sigma_a)}",
+            requirement="int_0^inf sigma < inf",
+            holds=True,
+            basis="exact",
+            detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
         )
-        form = scenario.controller.sigma_form
-        out.append(
-            Condition(
-                name="sigma_i integrable",
-                reference="Li2020 eq. (11), (13)-(16)",
-                value=f"{form}, a = {_fmt(scenario.per_spacecraft('sigma_a'))}",
-                requirement="int_0^inf sigma < inf",
-                holds=True,
-                basis="exact",
-                detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
-            )
+    )
+    sign = -1 if (ctl.dhat_sign_literal and law == "thm2") else 1  # as the catalog builds the law
+    out.append(
+        Condition(
+            name="sign of d_hat tanh term",
+            reference="Li2020 eq. (24)/(42); E000-04",
+            value=f"{sign:+d}",
+            requirement="+1 (proof steps (34)-(36))",
+            holds=sign > 0,
+            basis="exact",
+            detail="exact: sign chosen by the scenario",
         )
-        literal = scenario.controller.dhat_sign_literal
-        sign = -1 if (literal and law == "thm2") else 1
-        out.append(
-            Condition(
-                name="sign of d_hat tanh term",
-                reference="Li2020 eq. (24)/(42); E000-04",
-                value=f"{sign:+d}",
-                requirement="+1 (proof steps (34)-(36))",
-                holds=sign > 0,
-                basis="exact",
-                detail="exact: sign chosen by the scenario",
-            )
+    )
+    if law == "thm2":
+        out += _delay_conditions(scenario, C, per_spacecraft(ctl.lam, n, "controller.lam"))
+    x_star, r_star = lemma3_constant()
+    out.append(
+        Condition(
+            name="Lemma 3 constant r*",
+            reference="Li2020 eq. (22)",
+            value=f"x* = {x_star:.6f}, r* = {r_star:.6f}",
+            requirement="informative",
+            holds=True,
+            required=False,
+            basis="informative",
+            detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",
         )
-        lam = scenario.per_spacecraft("lam")
-        if law == "thm2":
-            out += _delay_conditions(scenario, C, lam)
-        x_star, r_star = lemma3_constant()
-        out.append(
-            Condition(
-                name="Lemma 3 constant r*",
-                reference="Li2020 eq. (22)",
-                value=f"x* = {x_star:.6f}, r* = {r_star:.6f}",
-                requirement="informative",
-                holds=True,
-                required=False,
-                basis="informative",
-                detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",
-            )
-        )
-    else:
-        out.append(
-            Condition(
-                name="SIR-FTC gains positive",
-                reference="Li2020 Sec. IV-D",
-                value=f"k0 = {scenario.sir_ftc.k0}, Phi = {scenario.sir_ftc.phi}",
-                requirement="> 0",
-                holds=scenario.sir_ftc.k0 > 0 and scenario.sir_ftc.phi > 0,
-                basis="exact",
-                detail="exact: comparison of the scenario values",
-            )
-        )
-    del n
+    )
     return out

@@ -1,4 +1,4 @@
-"""Figures of Li et al. 2020 (Figs. 4-12) drawn from result datasets of method ``li2020``.
+"""Figures of Li et al. 2020 (Figs. 4-12) drawn from result datasets of its composed scenarios.
 
 Each time history is drawn twice: a 0-100 s zoom (faults at 10/15/20 s, initial convergence) and the
 whole horizon. Matplotlib is used only through :mod:`formation_ftc.plotting`.
@@ -113,13 +113,33 @@ def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path
 
 
 def plot_scenario(ds, scenario, out_dir) -> list[Path]:
-    """Figures of one ``li2020`` run (position/velocity errors, mu1/mu2, adaptive parameters)."""
+    """Figures of one run of a ``[scenario] paper = "li2020"`` scenario (position/velocity errors,
+    mu1/mu2, adaptive parameters).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The run's records (``position_error``, ``velocity_error``, ``mu1``, ``mu2``, ``mu2_vc`` and the
+        law's adaptive parameters).
+    scenario : ComposedScenario
+        The scenario (its name and its law label the figures).
+    out_dir : path-like
+        Directory of the PNG files.
+
+    Returns
+    -------
+    list of Path
+        The four figures.
+    """
+    from formation_ftc.papers.li2020.conditions import law_of
+
     out_dir = Path(out_dir)
     name = scenario.scenario.name
-    law = scenario.controller.law
-    ctrl = {"thm1": "Thm 1, eqs. (23)-(27)", "thm2": "Thm 2, eqs. (41)-(45)", "sir-ftc": "SIR-FTC"}[
-        law
-    ]
+    ctrl = {
+        "thm1": "Thm 1, eqs. (23)-(27)",
+        "thm2": "Thm 2, eqs. (41)-(45)",
+        "sir-ftc": "SIR-FTC",
+    }.get(str(law_of(scenario)), str(scenario.type_of("controller")))
     return [
         plot_errors(
             ds,
