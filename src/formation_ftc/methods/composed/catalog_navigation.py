@@ -148,7 +148,7 @@ def _navigation_conditions(scenario, loop) -> list[Condition]:
             holds=True,
             required=False,
             basis="informative",
-            detail="after the measurement update, from the model the filter states",
+            detail="informative: after the measurement update, from the model the filter states",
         ),
     ]
 
