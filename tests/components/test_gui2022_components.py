@@ -24,27 +24,20 @@ from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, Sig
 from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.core.integrators import zoh_discretize
-from formation_ftc.papers.gui2022.method import make_loop
+from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import ActuatorInputs, FlightInputs, TruthInputs
 
+#: scenario of each law -> its controller component
 CONTROLLERS = {
-    "none": FreeDrift,
-    "lof2tc": LearningOutputFeedbackController,
-    "cof2tc": ConventionalOutputFeedbackController,
+    "gui2022-ilo": FreeDrift,
+    "gui2022-lof2tc": LearningOutputFeedbackController,
+    "gui2022-cof2tc": ConventionalOutputFeedbackController,
 }
 
 
-def _loop(law, **over):
+def _loop(name):
     return make_loop(
-        ftc.load_scenario(
-            "gui2022-lof2tc",
-            {
-                "simulation.horizon": 0.01,
-                "simulation.record_every": 1,
-                "controller.law": law,
-                **over,
-            },
-        )
+        ftc.load_scenario(name, {"simulation.horizon": 0.01, "simulation.record_every": 1})
     )
 
 
@@ -64,11 +57,11 @@ def _with_other_truth(loop):
     return dataclasses.replace(loop, plant=plant2, actuator=act2)
 
 
-@pytest.mark.parametrize("law", sorted(CONTROLLERS))
-def test_controller_reads_flight_inputs_only(law):
-    loop = _loop(law)
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+def test_controller_reads_flight_inputs_only(name):
+    loop = _loop(name)
     ctl = loop.controller
-    assert type(ctl) is CONTROLLERS[law]
+    assert type(ctl) is CONTROLLERS[name]
     hints = typing.get_type_hints(type(ctl).output)
     assert hints["inputs"] is FlightInputs
     assert list(inspect.signature(type(ctl).output).parameters) == ["self", "t", "state", "inputs"]
@@ -111,7 +104,7 @@ def test_controller_reads_flight_inputs_only(law):
 
 
 def test_ilo_reads_flight_inputs_only():
-    loop = _loop("lof2tc")
+    loop = _loop("gui2022-lof2tc")
     est = loop.estimator
     assert isinstance(est, IterativeLearningObserver)
     assert typing.get_type_hints(type(est).update)["inputs"] is FlightInputs

@@ -42,7 +42,7 @@ def test_simulate_batched_groups_by_structure_and_keeps_the_order():
     scns = [
         load_scenario("gui2022-ilo", h),
         load_scenario("gui2022-ilo-baseline", h),
-        load_scenario("gui2022-ilo", {**h, "observer.gains": "lmi"}),
+        load_scenario("gui2022-ilo", {**h, "estimator.gains": "lmi"}),
     ]
     timings: list = []
     batched = programs.simulate_batched(scns, timings=timings)

@@ -98,7 +98,7 @@ def test_gui2022_offset_estimation_error():
     from formation_ftc.papers.gui2022.numpy_reference import simulate_numpy
     from formation_ftc.papers.gui2022.reproduction import OFFSET_ERROR_REFERENCE
 
-    s = load_scenario("gui2022-ilo", {"observer.initial_estimate": list(pub.ESTIMATE_OFFSET)})
+    s = load_scenario("gui2022-ilo", {"estimator.initial_estimate": list(pub.ESTIMATE_OFFSET)})
     dt = s.simulation.dt
     out = simulate_numpy(s, round(2.0 / dt))
     e = np.linalg.norm(out["q"][:, :3] - out["q_hat"][:, :3], axis=1)

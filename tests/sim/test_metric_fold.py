@@ -256,7 +256,7 @@ def test_folded_metrics_in_a_vmapped_batch_equal_the_batch_folded_per_step():
     from formation_ftc.sim.batch import batched_run, stack_params
     from formation_ftc.sim.compiled import compile_loop
 
-    overrides = ({}, {"observer.initial_estimate": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]})
+    overrides = ({}, {"estimator.initial_estimate": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]})
     loops = [
         api.compile_scenario(
             api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 1.0, **ov})

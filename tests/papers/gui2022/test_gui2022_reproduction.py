@@ -54,23 +54,24 @@ def test_full_reproduction(tmp_path, recheck_verdicts):
     assert not any(c.required and c.holds is False for c in rep.checks)
 
 
-def test_cli_infeasible_lmi_is_bad_input(capsys):
+def test_cli_pole_region_in_the_right_half_plane_is_bad_input(capsys):
+    # a pole region S(c, r) with c >= 0 makes the LMIs infeasible: refused before any design
     rc = main(
         [
             "check",
             "gui2022-ilo",
             "--set",
-            'observer.gains="lmi"',
+            'estimator.gains="lmi"',
             "--set",
-            "observer.disk_center=5.0",
+            "estimator.disk_center=5.0",
         ]
     )
     err = capsys.readouterr().err
     assert rc == 2
-    assert "infeasible" in err and "disk pole region S(5, 2)" in err and "Traceback" not in err
+    assert "estimator.disk_center" in err and "less than 0" in err and "Traceback" not in err
 
 
 def test_cli_tau_not_multiple_is_bad_input(capsys):
-    rc = main(["check", "gui2022-ilo", "--set", "observer.learning_interval=0.0025"])
+    rc = main(["check", "gui2022-ilo", "--set", "estimator.learning_interval=0.0025"])
     assert rc == 2
     assert "not an integer multiple of simulation.dt" in capsys.readouterr().err

@@ -33,37 +33,37 @@ LAM = pub.L1_PRINTED[0, 0]
 
 
 @pytest.mark.parametrize(
-    "over",
+    ("name", "over"),
     [
-        {"controller.law": "lof2tc"},
+        ("gui2022-lof2tc", {}),
         # delay lines with m > 1 (ring buffer path); printed gains are unstable for tau = 2 dt (see below),
         # so a stable set (Q1 = 0.9, L2 / 10; learning-loop spectral radius 0.9955) is used here
-        {
-            "controller.law": "lof2tc",
-            "observer.learning_interval": 0.002,
-            "observer.sign_term": False,
-            "observer.Q1": [0.9, 0.9, 0.9],
-            "observer.L2": (0.1 * pub.L2_PRINTED).tolist(),
-            "controller.learning_interval": 0.003,
-        },
-        {
-            "controller.law": "cof2tc",
-            "controller.fault_compensation": True,
-            "observer.sign_term": False,
-        },
+        (
+            "gui2022-lof2tc",
+            {
+                "estimator.learning_interval": 0.002,
+                "estimator.sign_term": False,
+                "estimator.Q1": [0.9, 0.9, 0.9],
+                "estimator.L2": (0.1 * pub.L2_PRINTED).tolist(),
+                "controller.learning_interval": 0.003,
+            },
+        ),
+        (
+            "gui2022-cof2tc",
+            {"controller.fault_compensation": True, "estimator.sign_term": False},
+        ),
     ],
 )
-def test_jax_scan_matches_numpy_reference(over):
+def test_jax_scan_matches_numpy_reference(name, over):
     base = {
         "simulation.horizon": 2.0,
         "simulation.record_every": 1,
         "simulation.unroll": 1,
-        "faults.x_onset": 0.5,
-        "faults.z_onset": 1.0,
-        "faults.z_decay_shifted": True,
-        "observer.initial_estimate": list(pub.ESTIMATE_OFFSET),
+        "actuator.onset": [0.5, 0.0, 1.0],
+        "actuator.decay_origin": [0.0, 0.0, 1.0],  # the shifted e^{-0.1 (t - onset)} (E002-09)
+        "estimator.initial_estimate": list(pub.ESTIMATE_OFFSET),
     }
-    scn = ftc.load_scenario("gui2022-lof2tc", {**base, **over})
+    scn = ftc.load_scenario(name, {**base, **over})
     ds, _ = simulate_with_metrics(scn)
     ref = simulate_numpy(scn)
     N = scn.simulation.n_steps
@@ -74,7 +74,7 @@ def test_jax_scan_matches_numpy_reference(over):
     np.testing.assert_allclose(ds.state.values, ref["q"], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(ds.estimate.values, ref["q_hat"], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(ds.command.values[:N], ref["u"], rtol=1e-9, atol=1e-9)
-    if over["controller.law"] == "lof2tc":
+    if name == "gui2022-lof2tc":
         assert not np.allclose(ref["pi"], ref["pi"][0])  # the learning laws were exercised
         np.testing.assert_allclose(ds.learning_gain.values[:N], ref["pi"], rtol=1e-9)
         np.testing.assert_allclose(ds.compensation.values[:N], ref["v"], rtol=0, atol=1e-9)
@@ -91,16 +91,13 @@ def test_constant_fault_fixed_point_without_sign_term():
         "gui2022-ilo",
         {
             "simulation.horizon": 20.0,
-            "observer.sign_term": False,
-            "disturbance.amplitude": 0.0,
-            "faults.x_onset": 0.0,
-            "faults.y_onset": 0.0,
-            "faults.z_onset": 0.0,
-            "faults.x_magnitude": F[0],
-            "faults.y_magnitude": F[1],
-            "faults.z_amplitude": 0.0,
-            "faults.z_decay_amplitude": F[2],
-            "faults.z_decay_rate": 0.0,
+            "estimator.sign_term": False,
+            "plant.disturbance_amplitude": 0.0,
+            "actuator.onset": [0.0, 0.0, 0.0],
+            "actuator.magnitude": [F[0], F[1], 0.0],
+            "actuator.amplitude": [0.0, 0.0, 0.0],
+            "actuator.decay_amplitude": [0.0, 0.0, F[2]],
+            "actuator.decay_rate": [0.0, 0.0, 0.0],
         },
     )
     ds, _ = simulate_with_metrics(scn)
@@ -128,8 +125,8 @@ def test_observer_position_error_exact_recursion():
         {
             "simulation.horizon": 3.0,
             "simulation.record_every": 10,
-            "disturbance.amplitude": 0.0,
-            "observer.initial_estimate": list(pub.ESTIMATE_OFFSET),
+            "plant.disturbance_amplitude": 0.0,
+            "estimator.initial_estimate": list(pub.ESTIMATE_OFFSET),
         },
     )
     ds, _ = simulate_with_metrics(scn)
@@ -152,11 +149,10 @@ def test_ilo_reconstruction_and_e002_11_mechanism():
     # faults moved early (x at 5 s, z at 10 s) to keep the test short
     over = {
         "simulation.horizon": 30.0,
-        "faults.x_onset": 5.0,
-        "faults.z_onset": 10.0,
-        "metrics.fault_rms_delay": 5.0,
-        "metrics.estimate_start": 2.0,
-        "metrics.estimate_end": 5.0,
+        "actuator.onset": [5.0, 0.0, 10.0],
+        "evaluations.0.fault_rms_delay": 5.0,
+        "evaluations.0.estimate_start": 2.0,
+        "evaluations.0.estimate_end": 5.0,
     }
     ds_new, m_new = simulate_with_metrics(ftc.load_scenario("gui2022-ilo", over))
     ds_old, m_old = simulate_with_metrics(ftc.load_scenario("gui2022-ilo-baseline", over))
@@ -180,10 +176,9 @@ def test_ilo_reconstruction_and_e002_11_mechanism():
 def test_lof2tc_and_cof2tc_short_campaign():
     over = {
         "simulation.horizon": 1000.0,
-        "faults.x_onset": 300.0,
-        "faults.z_onset": 800.0,
-        "metrics.position_rms_start": 900.0,
-        "metrics.z_amplitude_start": 900.0,
+        "actuator.onset": [300.0, 0.0, 800.0],
+        "evaluations.0.position_rms_start": 900.0,
+        "evaluations.0.z_amplitude_start": 900.0,
     }
     ds_l, m_l = simulate_with_metrics(ftc.load_scenario("gui2022-lof2tc", over))
     ds_c, m_c = simulate_with_metrics(ftc.load_scenario("gui2022-cof2tc", over))
@@ -258,12 +253,11 @@ def test_nominal_orbit_closed_form_and_zoh_propagation():
     )
 
 
-def test_fz_shifted_flag_e002_09():
+def test_fz_literal_and_shifted_e002_09():
     over = {
         "simulation.horizon": 1.2,
         "simulation.record_every": 100,
-        "faults.z_onset": 1.0,
-        "controller.law": "none",
+        "actuator.onset": [1500.0, 0.0, 1.0],
     }
     lit = (
         deputy(ftc.simulate(ftc.load_scenario("gui2022-ilo", over)))
@@ -272,7 +266,9 @@ def test_fz_shifted_flag_e002_09():
     )
     sh = (
         deputy(
-            ftc.simulate(ftc.load_scenario("gui2022-ilo", {**over, "faults.z_decay_shifted": True}))
+            ftc.simulate(
+                ftc.load_scenario("gui2022-ilo", {**over, "actuator.decay_origin": [0.0, 0.0, 1.0]})
+            )
         )
         .fault.sel(axis="z", time=1.0)
         .item()
@@ -286,7 +282,7 @@ def test_tau_two_steps_is_unstable_and_check_says_so():
     # E002-12 extended: with the printed gains any tau = m dt, m >= 2, destabilises the learning loop;
     # the eigenvalue check and the simulation agree
     scn = ftc.load_scenario(
-        "gui2022-ilo", {"simulation.horizon": 1.0, "observer.learning_interval": 0.002}
+        "gui2022-ilo", {"simulation.horizon": 1.0, "estimator.learning_interval": 0.002}
     )
     cond = {c.name: c for c in ftc.check(scn)}["discrete learning loop stable"]
     assert cond.holds is False and cond.required

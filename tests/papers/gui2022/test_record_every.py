@@ -1,6 +1,6 @@
 """Gui2022 metrics do not depend on the record decimation (``simulation.record_every``).
 
-Every metric of a ``gui2022`` run is accumulated inside the run at every step; the records are only an
+Every metric of a ``gui2022-*`` run (``gui2022-scores``) is accumulated inside the run at every step; the records are only an
 output decimation. The three scenarios of the reproduction (new ILO alone, LOF2TC, COF2TC) run 4 s
 (4,000 steps of 1 ms) with the x fault at 1 s and the z fault at 2 s and every metric window moved inside
 (RMS from onset + 0.5 s, estimate window [0.1, 1) s, |e_z| from 2.1 s, position RMS from 1.5 s), at
@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.papers.gui2022.method import lowpass_steps
+from formation_ftc.methods.composed.catalog_learning import lowpass_steps
 from formation_ftc.papers.gui2022.reproduction import run_scenario
 
 DT = 1e-3  # [s]
@@ -36,13 +36,12 @@ HORIZON = 4.0  # [s]
 X_ONSET, Z_ONSET = 1.0, 2.0  # [s]
 OVERRIDES = {
     "simulation.horizon": HORIZON,
-    "faults.x_onset": X_ONSET,
-    "faults.z_onset": Z_ONSET,
-    "metrics.fault_rms_delay": 0.5,
-    "metrics.position_rms_start": 1.5,
-    "metrics.estimate_start": 0.1,
-    "metrics.estimate_end": 1.0,
-    "metrics.z_amplitude_start": 2.1,
+    "actuator.onset": [X_ONSET, 0.0, Z_ONSET],
+    "evaluations.0.fault_rms_delay": 0.5,
+    "evaluations.0.position_rms_start": 1.5,
+    "evaluations.0.estimate_start": 0.1,
+    "evaluations.0.estimate_end": 1.0,
+    "evaluations.0.z_amplitude_start": 2.1,
 }
 EXPECTED = (
     "fault_rms_err_x",

@@ -16,7 +16,7 @@ H = {"simulation.horizon": 2.0}
 def test_batch_of_one_structure_equals_the_runs_alone():
     scns = [
         load_scenario("gui2022-ilo", H),
-        load_scenario("gui2022-ilo", {**H, "observer.gains": "lmi"}),
+        load_scenario("gui2022-ilo", {**H, "estimator.gains": "lmi"}),
     ]
     timings: dict = {}
     batched = run_scenarios(scns, timings, ["printed", "lmi"])

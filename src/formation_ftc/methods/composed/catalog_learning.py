@@ -1,6 +1,8 @@
 """Catalog: the iterative learning observer (ILO) and the learning / conventional output-feedback
 formation-keeping laws (LOF2TC, COF2TC) of Gui et al. 2022, for composed scenarios on any
-translational plant with an (N, 6) relative state.
+translational plant with an (N, 6) relative state; Gui2022's own plant (``clohessy-wiltshire-zoh``:
+linear CW deputies driven by accelerations, stepped exactly, with the perturbation d(t) of its
+ref. [12]) and its evaluation (``gui2022-scores``: the signals and metric set of its Sec. 5).
 
 How the flight side's CW design meets a plant it was not designed for:
 
@@ -20,8 +22,8 @@ How the flight side's CW design meets a plant it was not designed for:
   acts like an actuator-gain error. The ILO starts from its stated ``initial_estimate`` (default zero).
 * **Gains.** ``gains = "printed"`` uses the L1, L2 / K given in the section (the paper's printed gains,
   designed at its own mean motion); ``gains = "lmi"`` (observer) re-solves the LMIs (8), (27) and the
-  pole-region LMI at the on-board mean motion, ``gains = "care"`` (law) the CARE (34) with
-  Q = care_q_scale I6, R = I3.
+  pole-region LMI at the on-board mean motion (``lmi_scale``: the free scale of these homogeneous
+  LMIs), ``gains = "care"`` (law) the CARE (34) with Q = care_q_scale I6, R = I3.
 * **Fault in acceleration units.** With a ``thruster-bias`` actuator the loop records
   ``fault_acceleration`` = F_i / m_i (the true fault per unit true mass) and ``fault_error`` =
   fault_acceleration - F_hat [m/s^2]; the laws add ``position_tracking_error`` and
@@ -35,7 +37,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -55,34 +57,52 @@ from formation_ftc.components.estimators.iterative_learning_observer import (
 )
 from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
 from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
+from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.methods.composed import BuildContext, register_component_type, require_slot
 from formation_ftc.sim.components import CompositionError, as_float
+from formation_ftc.sim.metrics import Metric
 
 __all__ = [
     "ILO",
     "LOF2TC",
     "COF2TC",
+    "ZOH_CW",
+    "SCORES",
     "IloSection",
     "Lof2tcSection",
     "Cof2tcSection",
+    "ZohCwPlantSection",
+    "ScoresSection",
     "onboard_mean_motion",
     "nominal_mass_of",
-    "ilo_lmi_gains",
-    "care_gain",
+    "ilo_lmi_design",
+    "care_solution",
+    "lowpass_steps",
+    "LOWPASS_WINDOW",
+    "ESTIMATE_ERROR_AT",
 ]
 
 ILO = "iterative-learning-observer"
 LOF2TC = "gui2022-lof2tc"
 COF2TC = "gui2022-cof2tc"
+ZOH_CW = "clohessy-wiltshire-zoh"
+SCORES = "gui2022-scores"
 #: sensors that deliver the (N, 6) relative state y = q the ILO and the laws need (C = I6)
 STATE_SENSORS = (None, "relative-state", "lvlh-relative-state")
 #: the flight side's nominal on-board mass when a scenario states none [kg] (``nominal_mass``)
 NOMINAL_MASS = 100.0
+#: boxcar of the low-pass metrics of ``gui2022-scores`` [s]: F - F_hat (and v - h) averaged over
+#: consecutive blocks of this length before the RMS (``block_rms``); the deviation of F_hat from its
+#: block mean measures the chatter (``block_dev_rms``). Fixed, independent of ``simulation.record_every``.
+LOWPASS_WINDOW = 0.1
+#: times [s] of the exact samples ``estimate_pos_err_at_<t>s`` of ||q - q_hat|| (position part)
+ESTIMATE_ERROR_AT = (0.0, 1.0, 2.0)
 
 VEC = ("spacecraft", "axis")
 SC = ("spacecraft",)
+ACC = "m s-2"
 Vec3 = tuple[float, float, float]
 Vec6 = tuple[float, float, float, float, float, float]
 
@@ -118,17 +138,23 @@ def _on_grid(tau: float, dt: float, field: str) -> int:
         raise ValueError(str(exc)) from None
 
 
+def lowpass_steps(dt: float) -> int:
+    """Steps of the low-pass boxcar: LOWPASS_WINDOW / dt [s / s] rounded to an even number >= 2 (an
+    even boxcar removes a chatter of period 2 steps exactly)."""
+    return max(2, 2 * round(LOWPASS_WINDOW / dt / 2))
+
+
 # ------------------------------------------------------------------------------- shared decisions
-def onboard_mean_motion(given: float | None, ctx: BuildContext, slot: str) -> float:
+def onboard_mean_motion(given: float | None, scenario: Any, slot: str) -> float:
     """The mean motion of the on-board CW model [rad/s]: ``given``, else sqrt(mu / a^3) of the
-    ``[reference]`` orbit (known on board); never the plant's (truth)."""
+    composed ``scenario``'s ``[reference]`` orbit (known on board); never the plant's (truth)."""
     if given is not None:
         return float(given)
-    ref = ctx.section("reference")
+    ref = scenario.section("reference")
     if ref is not None and hasattr(ref, "semi_major_axis"):
         return math.sqrt(ref.mu / ref.semi_major_axis**3)
     raise CompositionError(
-        f"{slot} {ctx.scenario.type_of(slot)}: its CW model needs a mean motion, but the loop "
+        f"{slot} {scenario.type_of(slot)}: its CW model needs a mean motion, but the loop "
         f"has no [reference] orbit to take it from (give {slot}.mean_motion [rad/s]; the "
         f"plant's orbit is truth the flight side does not read)"
     )
@@ -171,25 +197,77 @@ def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=16)
-def ilo_lmi_gains(
-    n: float, lam: float, center: float, radius: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """(L1, L2) from the LMIs (8), (27) and the pole region S(c, r) on the CW model of mean motion n
-    [rad/s] (C = I6, H = B), normalised P >= I; cached by input (an offline design)."""
+def ilo_lmi_design(n: float, lam: float, center: float, radius: float):
+    """The ILO design (P, Y, L1, L2) of the LMIs (8), (27) and the pole region S(c, r) on the CW model
+    of mean motion n [rad/s] (C = I6, H = B), normalised P >= I; cached by input (an offline design).
+    Returns an :class:`~formation_ftc.design.lmi.IloLmiDesign`."""
     from formation_ftc.design.lmi import design_ilo_gains
 
     A, B = cw_matrices(n)
-    des = design_ilo_gains(A, np.eye(6), B, lam=lam, disk_center=center, disk_radius=radius)
-    return des.L1, des.L2
+    return design_ilo_gains(A, np.eye(6), B, lam=lam, disk_center=center, disk_radius=radius)
 
 
 @functools.lru_cache(maxsize=16)
-def care_gain(n: float, q_scale: float) -> np.ndarray:
-    """K = B^T P1 from the CARE (34) with Q = q_scale I6, R = I3 on the CW model of mean motion n."""
+def care_solution(n: float, q_scale: float):
+    """The CARE (34) with Q = q_scale I6, R = I3 on the CW model of mean motion n [rad/s] (K = B^T P1);
+    cached. Returns a :class:`~formation_ftc.design.riccati.CareSolution`."""
     from formation_ftc.design.riccati import solve_care
 
     A, B = cw_matrices(n)
-    return solve_care(A, B, q_scale * np.eye(6), np.eye(3)).K
+    return solve_care(A, B, q_scale * np.eye(6), np.eye(3))
+
+
+# ------------------------------------------------------------------------------------------ plant
+class ZohCwPlantSection(StrictModel):
+    """Deputies on linear CW dynamics driven by accelerations, stepped exactly (Gui2022 (1)-(3))."""
+
+    mean_motion: float = Field(
+        gt=0, description="Mean motion n of the chief's circular orbit [rad/s] (truth)."
+    )
+    initial_position: list[Vec3] = Field(description="Initial LVLH position per spacecraft [m].")
+    initial_velocity: list[Vec3] | None = Field(
+        None, description="Initial LVLH velocity per spacecraft [m/s] (default 0)."
+    )
+    disturbance_amplitude: float = Field(
+        0.0,
+        ge=0,
+        description=(
+            "A0 of d(t) = A0 [1 - 1.5 sin nt, 0.5 sin 2nt, sin nt] (Gui2022's ref. [12]) [m/s^2]; 0: none."
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _sizes(self):
+        n = len(self.initial_position)
+        if n < 1:
+            raise ValueError("initial_position: at least one spacecraft")
+        if self.initial_velocity is not None and len(self.initial_velocity) != n:
+            raise ValueError(
+                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
+            )
+        return self
+
+    @property
+    def count(self) -> int:
+        return len(self.initial_position)
+
+
+def _zoh_cw_plant(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
+    v0 = np.zeros((sec.count, 3)) if sec.initial_velocity is None else sec.initial_velocity
+    return ZohClohessyWiltshirePlant(
+        mean_motion=as_float(sec.mean_motion),
+        initial_state_lvlh=as_float(np.hstack([np.asarray(sec.initial_position, float), v0])),
+        disturbance_amplitude=as_float(sec.disturbance_amplitude),
+    )
+
+
+register_component_type(
+    "plant",
+    ZOH_CW,
+    ZohCwPlantSection,
+    _zoh_cw_plant,
+    "linear CW deputies driven by accelerations, exact ZOH step, Gui2022's perturbation d(t)",
+)
 
 
 # ------------------------------------------------------------------------------------- estimator
@@ -215,12 +293,12 @@ class IloSection(StrictModel):
     disk_radius: float = Field(
         2.0, gt=0, description="Radius r of the pole region S(c, r) [1/s] (gains = 'lmi')."
     )
-    lmi_l2_scale: float | None = Field(
-        None,
+    lmi_scale: float = Field(
+        1.0,
         gt=0,
         description=(
-            "Magnitude of L2's diagonal after the LMI solve (the free scale of the homogeneous LMIs) [1/s]; "
-            "default: as solved with P >= I."
+            "Free scale s of the homogeneous LMIs: (P, Y, L2) -> s (P, Y, L2) after the normalised solve "
+            "(P >= I) [-] (gains = 'lmi')."
         ),
     )
     Q1: Vec3 = Field(description="Diagonal of Q1, each in (0, 1] [-].")
@@ -228,6 +306,15 @@ class IloSection(StrictModel):
     gamma: float = Field(ge=0, description="Sign-term gain gamma [m/s^2].")
     sign_term: bool = Field(
         True, description="Include gamma sgn(e_y) (false: the ILO without the sign term)."
+    )
+    mu: float = Field(
+        0.001, gt=0, description="mu of Theorem 1, eta = 1 + mu [-] (for `check`; Gui2022: 0.001)."
+    )
+    gamma1: float = Field(
+        0.0193, gt=0, description="gamma_1 of (10) [-] (for `check`; Gui2022: 0.0193)."
+    )
+    beta: float = Field(
+        1.0, gt=0, description="beta of (17), Q2 = 1/(beta eta) [-] (for `check`; Gui2022: 1)."
     )
     learning_interval: float = Field(
         gt=0, description="tau: a positive integer multiple of simulation.dt [s]."
@@ -290,14 +377,23 @@ class IloSection(StrictModel):
             raise ValueError(f"{missing}: required with gains = 'printed' (or set gains = 'lmi')")
         return self
 
+    def design_at(self, n: float):
+        """The LMI design (gains = 'lmi') on the CW model of mean motion n [rad/s], scaled by
+        ``lmi_scale`` (an :class:`~formation_ftc.design.lmi.IloLmiDesign`)."""
+        des = ilo_lmi_design(n, self.lmi_lambda, self.disk_center, self.disk_radius)
+        if self.lmi_scale == 1.0:
+            return des
+        from formation_ftc.design.lmi import rescale_design
+
+        A, B = cw_matrices(n)
+        return rescale_design(des, self.lmi_scale, A, np.eye(6), B)
+
     def gains_at(self, n: float) -> tuple[np.ndarray, np.ndarray]:
         """(L1, L2) used on the CW model of mean motion n [rad/s]."""
         if self.gains == "printed":
             return np.asarray(self.L1, float), np.asarray(self.L2, float)
-        L1, L2 = ilo_lmi_gains(n, self.lmi_lambda, self.disk_center, self.disk_radius)
-        if self.lmi_l2_scale is not None:  # (P, Y, L2) -> s (P, Y, L2): L1 unchanged
-            L2 = L2 * (self.lmi_l2_scale / float(np.mean(np.diag(L2[:, 3:]))))
-        return L1, L2
+        des = self.design_at(n)
+        return des.L1, des.L2
 
 
 def _nominal_mass_for_estimator(sec: IloSection, ctx: BuildContext) -> np.ndarray:
@@ -318,7 +414,7 @@ def _ilo(sec: IloSection, ctx: BuildContext):
         ctx, "estimator"
     )  # the composition check only: the true initial state is not used
     m = _on_grid(sec.learning_interval, ctx.dt, "estimator.learning_interval")
-    n = onboard_mean_motion(sec.mean_motion, ctx, "estimator")
+    n = onboard_mean_motion(sec.mean_motion, ctx.scenario, "estimator")
     L1, L2 = sec.gains_at(n)
     N = ctx.count
     q_hat0 = np.asarray(sec.initial_estimate, dtype=float)
@@ -448,11 +544,11 @@ class _OutputFeedbackSection(StrictModel):
             raise ValueError(
                 f"{slot}.desired_state: {len(self.desired_state)} rows for {N} spacecraft"
             )
-        n = onboard_mean_motion(self.mean_motion, ctx, slot)
+        n = onboard_mean_motion(self.mean_motion, ctx.scenario, slot)
         K = (
             np.asarray(self.K, float)
             if self.gains == "printed"
-            else care_gain(n, self.care_q_scale)
+            else care_solution(n, self.care_q_scale).K
         )
         _, B = cw_matrices(n)
         BpB = np.linalg.pinv(B) @ B  # B^+ H with H = B (and B^+ E with E = B)
@@ -510,6 +606,21 @@ class Lof2tcSection(_OutputFeedbackSection):
     G2: float = Field(description="G2 of (31) [s^4/m^2].")
     G3: Vec3 = Field(description="Diagonal of G3 in (32) [-].")
     G4: float = Field(description="G4 of (32) [-].")
+    l: float = Field(
+        1.0, gt=0, description="l of (43), G2 = 1/(l (1 + mu1)) [-] (for `check`; Gui2022: 1)."
+    )
+    mu1: float = Field(1e-4, gt=0, description="mu1 of Theorem 2 [-] (for `check`; Gui2022: 1e-4).")
+    beta1: float = Field(
+        1.0,
+        gt=0,
+        description="beta1 of (43), G4 = -1/(beta1 (1 + mu1)) [-] (for `check`; Gui2022: 1).",
+    )
+    gamma2: float = Field(
+        9e-4, gt=0, description="gamma2 of (37) [-] (for `check`; Gui2022: 9e-4)."
+    )
+    gamma3: float = Field(
+        9e-4, gt=0, description="gamma3 of (36) [-] (for `check`; Gui2022: 9e-4)."
+    )
     pi_initial: float = Field(1.0, description="pi(-tau) [-].")
     v_initial: Vec3 = Field((0.0, 0.0, 0.0), description="v(-tau) [m/s^2].")
     learning_interval: float = Field(
@@ -567,4 +678,272 @@ register_component_type(
     Cof2tcSection,
     _cof2tc,
     "Gui2022 COF2TC baseline u = K e_y (optionally - F_hat) on a CW nominal orbit",
+)
+
+
+# ------------------------------------------------------------------------------------- evaluation
+class ScoresSection(StrictModel):
+    """Gui2022's evaluation signals and metric set (Sec. 5): windows of the metrics accumulated at every
+    step inside the run (the fault onsets are the ``thruster-bias`` actuator's)."""
+
+    fault_rms_delay: float = Field(
+        100.0, ge=0, description="RMS of F - F_hat per axis from that axis' onset + this delay [s]."
+    )
+    position_rms_start: float = Field(
+        1600.0, ge=0, description="RMS of ||e_pos|| (and Fig. 10's v - h, h) from this time [s]."
+    )
+    settle_threshold: float = Field(
+        0.01, gt=0, description="|F - F_hat| threshold of the settling-time metric [m/s^2]."
+    )
+    estimate_start: float = Field(
+        10.0, ge=0, description="max ||q - q_hat|| of the observer from this time [s] ..."
+    )
+    estimate_end: float = Field(
+        1500.0, ge=0, description="... up to this time (before the first fault) [s]."
+    )
+    z_amplitude_start: float = Field(
+        2100.0, ge=0, description="max |e_z| tracking error from this time [s]."
+    )
+
+
+def _scores_fit(ctx: BuildContext) -> None:
+    """The signals ``gui2022-scores`` reads exist: the ILO's, the thruster faults, the plant's d(t)."""
+    needs = {
+        "estimator": (ILO, "the ILO's estimate, output error and fault estimate"),
+        "actuator": ("thruster-bias", "the thruster faults F and their onsets"),
+    }
+    for slot, (name, what) in needs.items():
+        if ctx.scenario.type_of(slot) != name:
+            raise CompositionError(
+                f"evaluation {SCORES} reads {what} from a {slot} {name}, but the loop's {slot} is "
+                f"{ctx.scenario.type_of(slot)}"
+            )
+    if not any(sig.name == "disturbance" for sig in ctx.plant.signals()):
+        raise CompositionError(
+            f"evaluation {SCORES} reads the perturbation d of the plant (h = d + e_F), but plant "
+            f"{ctx.scenario.type_of('plant')} records none (use plant {ZOH_CW})"
+        )
+
+
+def _scores_metrics(sec: ScoresSection, ctx: BuildContext, onset_s, law: str | None) -> list:
+    """The paper's metrics, accumulated at every step k < n (final values at the horizon sample);
+    ``onset_s`` the fault onsets per axis [s]."""
+    sim = ctx.scenario.simulation
+    dt, n_steps = ctx.dt, sim.n_steps
+
+    def ks(t):
+        return round(t / dt)
+
+    def at(k):
+        return float(k * dt)
+
+    last = (n_steps - 0.5) * dt  # window end that excludes the horizon sample
+    onset = [ks(t) for t in onset_s]
+    k_rms = [k + ks(sec.fault_rms_delay) for k in onset]
+    out = []
+    for i, ax in enumerate("xyz"):
+        err: dict[str, Any] = dict(
+            signal="fault_error", component=i, norm=True, spacecraft="max", units=ACC, end=last
+        )
+        out += [
+            Metric(f"fault_rms_err_{ax}", reduce="rms", start=at(k_rms[i]), **err),
+            Metric(
+                f"fault_settle_time_{ax}",
+                reduce="settle_delay",
+                start=at(onset[i]),
+                threshold=sec.settle_threshold,
+                **{**err, "units": "s"},
+            ),
+            Metric(
+                f"fault_max_err_after_1s_{ax}", reduce="max", start=at(onset[i] + ks(1.0)), **err
+            ),
+            Metric(
+                f"final_fault_err_{ax}",
+                "fault_error",
+                reduce="final",
+                component=i,
+                spacecraft="max",
+                units=ACC,
+            ),
+        ]
+    for c, name in enumerate(("x", "y", "z", "vx", "vy", "vz")):
+        out.append(
+            Metric(
+                f"sign_mean_{name}",
+                "estimation_error_sign",
+                reduce="mean",
+                component=c,
+                spacecraft="mean",
+                start=at(k_rms[c % 3]),
+                end=last,
+            )
+        )
+    out.append(
+        Metric(
+            "estimate_max_err_after_start",
+            "estimation_error",
+            reduce="max",
+            norm=True,
+            spacecraft="max",
+            units="1",
+            start=at(ks(sec.estimate_start)),
+            end=(ks(sec.estimate_end) - 0.5) * dt,
+        )
+    )
+    # low-pass (boxcar of lowpass_steps) RMS of F - F_hat per axis over the fault_rms window, and the RMS
+    # of F_hat about its boxcar mean (the chatter) from fault_rms_delay to the x fault onset
+    box = lowpass_steps(dt)
+    for i, ax in enumerate("xyz"):
+        out += [
+            Metric(
+                f"fault_lowpass_rms_err_{ax}",
+                "fault_error",
+                reduce="block_rms",
+                component=i,
+                spacecraft="max",
+                units=ACC,
+                start=at(k_rms[i]),
+                end=last,
+                block=box,
+            ),
+            Metric(
+                f"fault_estimate_chatter_rms_{ax}",
+                "fault_estimate",
+                reduce="block_dev_rms",
+                component=i,
+                spacecraft="max",
+                units=ACC,
+                start=at(ks(sec.fault_rms_delay)),
+                end=(onset[0] - 0.5) * dt,
+                block=box,
+            ),
+        ]
+    out += [
+        Metric(
+            f"estimate_pos_err_at_{tq:g}s",
+            "estimation_position_error",
+            reduce="at",
+            spacecraft="max",
+            units="m",
+            start=at(ks(tq)),
+        )
+        for tq in ESTIMATE_ERROR_AT
+        if ks(tq) <= n_steps
+    ]
+    if law not in (LOF2TC, COF2TC):
+        return out
+    pos: dict[str, Any] = dict(signal="position_tracking_error", spacecraft="max", units="m")
+    out += [
+        Metric("pos_rms", reduce="rms", start=at(ks(sec.position_rms_start)), end=last, **pos),
+        Metric("pos_max_after_fault", reduce="max", start=at(onset[0]), end=last, **pos),
+        Metric(
+            "ex_max_fault_window",
+            "tracking_error",
+            reduce="max",
+            component=0,
+            norm=True,
+            spacecraft="max",
+            units="m",
+            start=at(onset[0]),
+            end=(onset[2] - 0.5) * dt,
+        ),
+        Metric(
+            "ez_max_after",
+            "tracking_error",
+            reduce="max",
+            component=2,
+            norm=True,
+            spacecraft="max",
+            units="m",
+            start=at(ks(sec.z_amplitude_start)),
+            end=last,
+        ),
+        Metric(
+            "pos_settle_time_0p01",
+            reduce="settle",
+            threshold=0.01,
+            end=last,
+            **{**pos, "units": "s"},
+        ),
+        Metric("final_pos_err", reduce="final", **pos),
+        Metric(
+            "final_vel_err",
+            "velocity_tracking_error",
+            reduce="final",
+            spacecraft="max",
+            units="m s-1",
+        ),
+    ]
+    if law == LOF2TC:
+        out.append(Metric("pi_max", "learning_gain", reduce="max", spacecraft="max", end=last))
+        # Fig. 10: low-pass RMS per axis of v - h and of h = d + F - F_hat from position_rms_start
+        for i, ax in enumerate("xyz"):
+            out += [
+                Metric(
+                    f"{sig}_lowpass_rms_{ax}",
+                    sig,
+                    reduce="block_rms",
+                    component=i,
+                    spacecraft="max",
+                    units=ACC,
+                    start=at(ks(sec.position_rms_start)),
+                    end=last,
+                    block=box,
+                )
+                for sig in ("compensation_error", "synthesized_disturbance")
+            ]
+    return out
+
+
+def _scores(sec: ScoresSection, ctx: BuildContext):
+    """Gui2022's signals h = d + e_F (33), its record-interval mean, ||position part of q - q_hat|| and,
+    with LOF2TC, v - h; the paper's metric set goes to ``ctx.metrics``."""
+    _scores_fit(ctx)
+    law = ctx.scenario.type_of("controller")
+    onsets = np.asarray(ctx.section("actuator").onset, dtype=float)
+    onset_s = np.broadcast_to(onsets, (ctx.count, 3)).min(axis=0)  # earliest per axis [s]
+    ctx.metrics.extend(_scores_metrics(sec, ctx, onset_s, law))
+    h = (("+", "disturbance"), ("+", "fault"))
+    ctx.evaluations.extend(
+        [
+            SignalSum(
+                "synthesized_disturbance",
+                (*h, ("-", "fault_estimate")),
+                units=ACC,
+                long_name="h = d + e_F (33)",
+            ),
+            SignalSum(
+                "synthesized_disturbance_mean",
+                (*h, ("-", "fault_estimate_mean")),
+                units=ACC,
+                long_name="h = d + F - mean(F_hat) over the record interval",
+            ),
+        ]
+    )
+    if law == LOF2TC:
+        ctx.evaluations.append(
+            SignalSum(
+                "compensation_error",
+                (("+", "compensation"), ("-", "synthesized_disturbance")),
+                units=ACC,
+                long_name="v - h, h = d + e_F (33)",
+            )
+        )
+    return PartNorm(
+        "estimation_position_error",
+        "estimation_error",
+        0,
+        3,
+        units="m",
+        long_name="||q - q_hat position part|| of the ILO",
+    )
+
+
+register_component_type(
+    "evaluation",
+    SCORES,
+    ScoresSection,
+    _scores,
+    "Gui2022 Sec. 5 signals (h = d + e_F, v - h, ||q - q_hat||) and metric set (needs the ILO, "
+    "thruster-bias faults and the plant's d)",
 )

@@ -1,6 +1,7 @@
 """Paper package gui2022: Gui et al. 2022, ILO fault reconstruction + LOF2TC.
 
-Registers the method ``gui2022`` and the reproduction ``gui2022`` (see registry.PAPER_MODULES).
+Registers the reproduction ``gui2022``, the Theorem 1/2 conditions of its observer and laws and its
+figures (see registry.PAPER_MODULES); its scenarios are composed (``scenarios/gui2022-*.toml``).
 """
 
 from formation_ftc.papers.gui2022 import registration  # noqa: F401

@@ -1,5 +1,8 @@
 """Design-condition checks of Gui et al. 2022 with residuals: Theorem 1 (8)-(11), (27), the pole region,
-the discrete learning loop (E002-12); Theorem 2 (34)-(37) and the gain formulas.
+the discrete learning loop (E002-12); Theorem 2 (34)-(37) and the gain formulas. Stated by
+``formation-ftc check`` of every composed scenario with the ILO (``iterative-learning-observer``:
+Theorem 1) or a Gui2022 law (``gui2022-lof2tc``: Theorem 2; ``gui2022-cof2tc``: the conditions on K
+only), on the flight side's CW model (its mean motion, gains and design data from the sections).
 
 For printed gains the Lyapunov matrix of Theorem 1 is not printed; (9) with C = I6 fixes rows 4-6 of P
 to L2, so we use ``P = [[I3, L2[:, :3]^T], [L2[:, :3], L2[:, 3:]]]`` (E002-06: P = blkdiag(I3, diag(L2)))
@@ -8,21 +11,25 @@ and ``Y = P L1``. For LMI gains the solver's P and Y are used.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from formation_ftc.blocks.observers.iterative_learning_observer import learning_steps
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.core.rounding import eigenvalue_margin
-from formation_ftc.design.lmi import design_ilo_gains, ilo_lmi_residuals, rescale_design
-from formation_ftc.design.riccati import care_residual, solve_care
+from formation_ftc.design.lmi import ilo_lmi_residuals
+from formation_ftc.design.riccati import care_residual
+from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.methods.composed.catalog_learning import (
+    LOF2TC,
+    ZOH_CW,
+    care_solution,
+    onboard_mean_motion,
+)
 from formation_ftc.papers.gui2022 import published as pub
-from formation_ftc.papers.gui2022.schema import Gui2022Scenario
 from formation_ftc.registry import Condition
+from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
-    "check",
     "implied_lyapunov",
     "learning_loop_radius",
     "learning_loop_eigenvalues",
@@ -30,40 +37,7 @@ __all__ = [
     "d_max",
     "observer_conditions",
     "controller_conditions",
-    "gains_of",
-    "lmi_design_cached",
-    "care_cached",
 ]
-
-
-@functools.lru_cache(maxsize=16)
-def lmi_design_cached(n: float, lam: float, center: float, radius: float):
-    """ILO gains from the LMIs (8), (27), disk S(c, r); cached by input (design/ is offline code)."""
-    A, B = cw_matrices(n)
-    return design_ilo_gains(A, np.eye(6), B, lam=lam, disk_center=center, disk_radius=radius)
-
-
-@functools.lru_cache(maxsize=16)
-def care_cached(n: float, q_scale: float):
-    """CARE (34) with Q = q_scale I6, R = I3; cached."""
-    A, B = cw_matrices(n)
-    return solve_care(A, B, q_scale * np.eye(6), np.eye(3))
-
-
-def gains_of(s: Gui2022Scenario) -> dict[str, np.ndarray]:
-    """Numeric gains a run uses: L1, L2 (printed or LMI) and K (printed or CARE)."""
-    n = s.orbit.mean_motion
-    A, B = cw_matrices(n)
-    o, c = s.observer, s.controller
-    if o.gains == "lmi":
-        des = lmi_design_cached(n, o.lmi_lambda, o.disk_center, o.disk_radius)
-        if o.lmi_scale != 1.0:
-            des = rescale_design(des, o.lmi_scale, A, np.eye(6), B)
-        L1, L2 = des.L1, des.L2
-    else:
-        L1, L2 = np.asarray(o.L1), np.asarray(o.L2)
-    K = care_cached(n, c.care_q_scale).K if c.gains == "care" else np.asarray(c.K)
-    return {"L1": L1, "L2": L2, "K": K}
 
 
 def d_max(A0: float, n: float, samples: int = 200_001) -> float:
@@ -126,31 +100,33 @@ def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[floa
     )
 
 
-def observer_conditions(s: Gui2022Scenario) -> list[Condition]:
-    """Theorem 1: (8), (9), (27), P > 0, pole region, (10), Q2, (11), discrete learning loop."""
-    o = s.observer
-    n, dt = s.orbit.mean_motion, s.simulation.dt
+def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
+    """Theorem 1 for the ILO of a composed scenario on the ``clohessy-wiltshire-zoh`` plant: (8), (9),
+    (27), P > 0, pole region, (10), Q2, (11), discrete learning loop (on the on-board CW model);
+    none on another plant (outside the theorem)."""
+    if s.type_of("plant") != ZOH_CW:
+        return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
+    o = s.section("estimator")
+    n, dt = onboard_mean_motion(o.mean_motion, s, "estimator"), s.simulation.dt
     A, B = cw_matrices(n)
     C, H = np.eye(6), B
-    g = gains_of(s)
+    L1, L2 = o.gains_at(n)
     if o.gains == "lmi":
-        des = lmi_design_cached(n, o.lmi_lambda, o.disk_center, o.disk_radius)
-        P, Y = des.P * o.lmi_scale, des.Y * o.lmi_scale
+        des = o.design_at(n)
+        P, Y = des.P, des.Y
         src = f"LMI solution (solver {des.solver}, status {des.status}, scale {o.lmi_scale:g})"
     else:
-        P, Y = implied_lyapunov(g["L1"], g["L2"])
+        P, Y = implied_lyapunov(L1, L2)
         src = "P = [[I3, *], [L2]] implied by (9) with the printed L2 (E002-06)"
-    L2 = g["L2"]
     r = ilo_lmi_residuals(A, C, H, P, Y, L2, o.lmi_lambda, o.disk_center, o.disk_radius)
-    poles = np.linalg.eigvals(A - g["L1"] @ C)
+    poles = np.linalg.eigvals(A - L1 @ C)
     eta = 1 + o.mu
     q1 = np.asarray(o.Q1)
     c10 = float(np.max((eta + o.gamma1) * q1**2 - 1))
-    dm = d_max(s.disturbance.amplitude, n)
-    m = learning_steps(o.learning_interval, dt, "observer.learning_interval")
-    rho, rho_osc, f_osc = learning_loop_radius(A, g["L1"], L2, q1, o.Q2, dt, m)
-    rho_tol = eigenvalue_margin(learning_loop_matrix(A, g["L1"], L2, q1, o.Q2, dt, m))
-    pole_tol = eigenvalue_margin(A - g["L1"] @ C)
+    m = learning_steps(o.learning_interval, dt, "estimator.learning_interval")
+    rho, rho_osc, f_osc = learning_loop_radius(A, L1, L2, q1, o.Q2, dt, m)
+    rho_tol = eigenvalue_margin(learning_loop_matrix(A, L1, L2, q1, o.Q2, dt, m))
+    pole_tol = eigenvalue_margin(A - L1 @ C)
     disk_verified = bool(r["max_eig_disk"] < -r["tol_disk"] and r["min_eig_P"] > r["tol_P"])
     region = f"S({o.disk_center:g}, {o.disk_radius:g})"
     ver = (
@@ -236,20 +212,7 @@ def observer_conditions(s: Gui2022Scenario) -> list[Condition]:
             basis="exact",
             detail="exact: scalar arithmetic",
         ),
-        Condition(
-            "(11) gamma >= d_max",
-            "Gui2022 Thm 1 eq. (11), E002-07",
-            f"gamma = {o.gamma:.6g}, d_max = {dm:.6g} (gamma - d_max = {o.gamma - dm:.3g})",
-            ">= d_max (relative tolerance 1e-4: gamma is printed to 4 digits)",
-            (o.gamma >= dm * (1 - 1e-4)) if o.sign_term else None,
-            required=o.sign_term,
-            basis="exact" if o.sign_term else "informative",
-            detail="informative: baseline ILO (no sign term), not applicable"
-            if not o.sign_term
-            else "exact: d_max = A0 sqrt(7.25) in closed form (|d|^2/A0^2 = 1 - 3 s + 4.25 s^2 - s^4 with "
-            "s = sin(n t) is largest at s = -1 on [-1, 1], E002-07); a 200,001-point sample over one "
-            "orbit never exceeds it",
-        ),
+        _condition_11(s, o.gamma, o.sign_term, n),
         Condition(
             "mu > 0",
             "E002-02 (proof needs delta = min(lambda_min, beta mu) > 0)",
@@ -274,13 +237,17 @@ def observer_conditions(s: Gui2022Scenario) -> list[Condition]:
     return out
 
 
-def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
-    """Theorem 2: (34), (35), (36), (37), G2, G4, 2 Sigma_min >= 1; closed-loop A - B K C."""
-    c = s.controller
-    n = s.orbit.mean_motion
+def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
+    """Theorem 2 for a Gui2022 law of a composed scenario on the ``clohessy-wiltshire-zoh`` plant:
+    (34), (35) and the closed loop A - B K C (LOF2TC and COF2TC); (36), (37), G2, G4 and
+    2 Sigma_min >= 1 (LOF2TC's learning laws only); none on another plant (outside the theorem)."""
+    if s.type_of("plant") != ZOH_CW:
+        return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
+    c = s.section("controller")
+    n = onboard_mean_motion(c.mean_motion, s, "controller")
     A, B = cw_matrices(n)
-    care = care_cached(n, c.care_q_scale)
-    K = gains_of(s)["K"]
+    care = care_solution(n, c.care_q_scale)
+    K = np.asarray(c.K, float) if c.gains == "printed" else care.K
     Qm = c.care_q_scale * np.eye(6)
     res = care_residual(care.P, A, B, Qm, np.eye(3))
     nP, nA, nB = (float(np.linalg.norm(x, 2)) for x in (care.P, A, B))
@@ -289,9 +256,6 @@ def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
     )
     dP = float(np.max(np.abs(care.P - pub.P1_PRINTED)))
     dK = float(np.max(np.abs(K - B.T @ care.P)))
-    c36 = (1 + c.mu1 + c.gamma3) * c.G1**2 - 1
-    G3 = np.diag(c.G3)
-    c37 = float(np.max(np.linalg.eigvalsh((1 + c.mu1 + c.gamma2) * G3.T @ G3 - np.eye(3))))
     ev = np.linalg.eigvals(A - B @ K)
     ev_tol = eigenvalue_margin(A - B @ K)
     out = [
@@ -315,6 +279,30 @@ def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
             basis="exact",
             detail="exact: entry-wise difference",
         ),
+    ]
+    if s.type_of("controller") == LOF2TC:
+        out += _learning_law_conditions(c)
+    out.append(
+        Condition(
+            "A - B K C Hurwitz (pi = 1)",
+            "closed loop (33) with pi = 1",
+            f"max Re eig = {ev.real.max():.4g} 1/s",
+            f"< -{ev_tol:.2g} (rounding margin)",
+            bool(ev.real.max() < -ev_tol),
+            required=False,
+            basis="exact",
+            detail=f"exact up to rounding: eigenvalues of A - B K (LAPACK; Bauer-Fike margin {ev_tol:.2g} 1/s)",
+        )
+    )
+    return out
+
+
+def _learning_law_conditions(c) -> list[Condition]:
+    """(36), (37), G2, G4 and 2 Sigma_min >= 1 of Theorem 2 for a LOF2TC section ``c``."""
+    c36 = (1 + c.mu1 + c.gamma3) * c.G1**2 - 1
+    G3 = np.diag(c.G3)
+    c37 = float(np.max(np.linalg.eigvalsh((1 + c.mu1 + c.gamma2) * G3.T @ G3 - np.eye(3))))
+    return [
         Condition(
             "(36) (1 + mu1 + gamma3) G1^2 - 1 < 0",
             "Gui2022 Thm 2 eq. (36)",
@@ -363,23 +351,23 @@ def controller_conditions(s: Gui2022Scenario) -> list[Condition]:
             basis="informative",
             detail="informative: pi(-tau) = 1 chosen so that pi >= 1/2 initially",
         ),
-        Condition(
-            "A - B K C Hurwitz (pi = 1)",
-            "closed loop (33) with pi = 1",
-            f"max Re eig = {ev.real.max():.4g} 1/s",
-            f"< -{ev_tol:.2g} (rounding margin)",
-            bool(ev.real.max() < -ev_tol),
-            required=False,
-            basis="exact",
-            detail=f"exact up to rounding: eigenvalues of A - B K (LAPACK; Bauer-Fike margin {ev_tol:.2g} 1/s)",
-        ),
     ]
-    return out
 
 
-def check(s: Gui2022Scenario) -> list[Condition]:
-    """All conditions relevant to the scenario (observer always; controller for lof2tc/cof2tc)."""
-    out = observer_conditions(s)
-    if s.controller.law != "none":
-        out += controller_conditions(s)
-    return out
+def _condition_11(s: ComposedScenario, gamma: float, sign_term: bool, n: float) -> Condition:
+    """(11) gamma >= d_max for the perturbation d(t) of the plant (required with the sign term)."""
+    dm = d_max(s.section("plant").disturbance_amplitude, n)
+    return Condition(
+        "(11) gamma >= d_max",
+        "Gui2022 Thm 1 eq. (11), E002-07",
+        f"gamma = {gamma:.6g}, d_max = {dm:.6g} (gamma - d_max = {gamma - dm:.3g})",
+        ">= d_max (relative tolerance 1e-4: gamma is printed to 4 digits)",
+        (gamma >= dm * (1 - 1e-4)) if sign_term else None,
+        required=sign_term,
+        basis="exact" if sign_term else "informative",
+        detail="informative: baseline ILO (no sign term), not applicable"
+        if not sign_term
+        else "exact: d_max = A0 sqrt(7.25) in closed form (|d|^2/A0^2 = 1 - 3 s + 4.25 s^2 - s^4 with "
+        "s = sin(n t) is largest at s = -1 on [-1, 1], E002-07); a 200,001-point sample over one "
+        "orbit never exceeds it",
+    )

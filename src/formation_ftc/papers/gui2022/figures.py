@@ -1,7 +1,8 @@
 """Figures 3-10 of Gui et al. 2022 from result datasets (matplotlib via formation_ftc.plotting).
 
-Every figure function takes xarray Datasets of the deputy (:func:`deputy` of a ``gui2022`` result) and
-returns the written PNG path.
+Every figure function takes xarray Datasets of the deputy (:func:`deputy` of a result of a
+``gui2022-*`` scenario) and returns the written PNG path; :func:`plot` is the figure set of
+``formation-ftc run --plot`` for a scenario with ``[scenario] paper = "gui2022"``.
 The single deputy is called "deputy" in legends; times in s, positions in m, accelerations in m/s^2.
 """
 
@@ -172,7 +173,8 @@ def fig10_synthesized_disturbance(ds_lof, path: Path) -> Path:
 
 
 def plot(ds, scenario, out_dir) -> list[Path]:
-    """Method plot hook: fault reconstruction, and tracking errors when a controller runs."""
+    """Figures of one run of a composed ``scenario`` with ``paper = "gui2022"``: the fault
+    reconstruction, and the position tracking error when a Gui2022 law runs; returns the PNG paths."""
     out_dir = Path(out_dir)
     ds = deputy(ds)
     paths = [fig3_fault_reconstruction(ds, out_dir / "fault_reconstruction.png")]

@@ -1,5 +1,6 @@
 """Values printed in Gui et al. 2022 (Appl. Sci. 12, 2022), section 5, and our documented choices for the
-data the paper does not give (E002-10). Kept in one place so that scenarios, checks and the report agree."""
+data the paper does not give (E002-10), as the checks, the report and the tests read them (the scenario
+files ``gui2022-*.toml`` state the same numbers as data)."""
 
 from __future__ import annotations
 
@@ -15,10 +16,6 @@ __all__ = [
     "Q1_PRINTED",
     "Q2_PRINTED",
     "GAMMA_PRINTED",
-    "G1",
-    "G2",
-    "G3",
-    "G4",
     "Q0_INITIAL",
     "CARE_Q_SCALE",
     "ESTIMATE_OFFSET",
@@ -56,7 +53,6 @@ L2_PRINTED = np.array(
 Q1_PRINTED = np.array([0.99, 0.99, 0.99])
 Q2_PRINTED = 0.999
 GAMMA_PRINTED = 3.231e-3
-MU, GAMMA1, BETA = 0.001, 0.0193, 1.0
 
 # Section 5.2 (controller)
 P1_PRINTED = np.array(
@@ -76,9 +72,6 @@ K_PRINTED = np.array(
         [0, 0, 0.0063, 0, 0, 0.1126],
     ]
 )
-G1, G2, G4 = 0.999, 0.9999, -0.9999
-G3 = np.array([0.999, 0.999, 0.999])
-L_LOF, MU1, BETA1, GAMMA2, GAMMA3 = 1.0, 1e-4, 1.0, 9e-4, 9e-4
 Q0_INITIAL = np.array([-15.0, -505.0, 20.0, -0.37875, 0.045, 0.0])
 CARE_Q_SCALE = 4e-5  # Q = 4e-5 I6 reproduces the printed P1 (E002-05) [DERIVED]
 ESTIMATE_OFFSET = np.array(
