@@ -11,7 +11,7 @@ import pytest
 from formation_ftc import api
 from formation_ftc.design.lmi import rounding_margin
 
-#: conditions built in papers/*/method.py (outside this test's scope) are listed by paper
+#: conditions registered by papers/*/registration.py on their laws are listed by paper
 OWN = ("gui2022", "li2020", "mehrabian", "yang2013")
 WORDS = (
     "exact",
