@@ -13,9 +13,11 @@ import formation_ftc as ftc
 
 horizon = size(600.0, 300.0)
 cases = {
-    "no fault": {"faults.effectiveness": ["1", "1", "1"], "faults.bias": ["0", "0", "0"]},
+    "no fault": {"actuator.effectiveness": ["1", "1", "1"], "actuator.bias": ["0", "0", "0"]},
     "nominal faults": {},
-    "deputy 2 loses 70 %": {"faults.effectiveness": ["where((t >= 100) and (i == 2), 0.3, 1)"] * 3},
+    "deputy 2 loses 70 %": {
+        "actuator.effectiveness": ["where((t >= 100) and (i == 2), 0.3, 1)"] * 3
+    },
 }
 results = {}
 for label, overrides in cases.items():

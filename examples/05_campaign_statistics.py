@@ -29,7 +29,7 @@ campaign = {
     "sample": {
         "controller.kp": {"dist": "uniform", "low": 1.0, "high": 4.0},  # N/m
         "controller.kd": {"grid": [30.0, 60.0]},  # N s/m
-        "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},  # kg
+        "plant.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},  # kg
     },
 }
 out = Path(tempfile.mkdtemp()) / "kp-kd-study"

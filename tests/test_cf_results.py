@@ -176,7 +176,7 @@ def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(
             "source",
         ):
             assert isinstance(tr.attrs.get(key), str) and tr.attrs[key], key
-        assert tr.attrs["scenario_name"] == "cw-pd-fault" and tr.attrs["method"] == "cw-formation"
+        assert tr.attrs["scenario_name"] == "cw-pd-fault" and tr.attrs["method"] == "composed"
         assert (
             tr.attrs["seed"] == int(results.set_index("run_id").loc[1, "seed"])
             and tr.attrs["run_id"] == 1

@@ -21,7 +21,7 @@ def test_list_show_check_run(tmp_path, capsys):
     assert (
         main(["run", "cw-pd-fault", "--out", str(out_dir), "--set", "simulation.horizon=20"]) == 0
     )
-    assert (out_dir / "result.nc").exists() and (out_dir / "position.png").exists()
+    assert (out_dir / "result.nc").exists() and (out_dir / "run_position.png").exists()
     metrics = json.loads((out_dir / "metrics.json").read_text())
     assert metrics["scenario"] == "cw-pd-fault" and "delta_v_total" in metrics
 

@@ -19,7 +19,7 @@ SHORT = ["--set", "simulation.horizon=2"]
 
 
 def _expr(text: str) -> list[str]:
-    return ["--set", f"faults.bias.0={text}"]
+    return ["--set", f"actuator.bias.0={text}"]
 
 
 DEEP_TOML = "a = " + "[" * 900 + "]" * 900 + "\n"
@@ -44,31 +44,31 @@ HOSTILE = [
     ("seed-2**32", ["--set", f"simulation.seed={2**32}"], "field simulation.seed"),
     (
         "set-index-out-of-range",
-        ["--set", "spacecraft.mass.99=5"],
+        ["--set", "plant.mass.99=5"],
         "index 99 is out of range; the list has 4",
     ),
-    ("set-through-a-number", ["--set", "spacecraft.mass.0.x=1"], "spacecraft.mass.0 is a number"),
-    ("set-negative-index", ["--set", "spacecraft.mass.-1=1"], "must be a non-negative integer"),
+    ("set-through-a-number", ["--set", "plant.mass.0.x=1"], "plant.mass.0 is a number"),
+    ("set-negative-index", ["--set", "plant.mass.-1=1"], "must be a non-negative integer"),
     (
         "bool-as-number",
         ["--set", "simulation.horizon=true"],
         "got a boolean (booleans are not numbers)",
     ),
-    ("bool-in-list", ["--set", "spacecraft.mass=[true, 1.0, 1.0, 1.0]"], "got a boolean"),
+    ("bool-in-list", ["--set", "plant.mass=[true, 1.0, 1.0, 1.0]"], "got a boolean"),
     (
         "trailing-toml",
         ["--set", "simulation.horizon=100\nsimulation.dt=2"],
         "a single TOML value on one line",
     ),
-    ("broken-toml-value", ["--set", "spacecraft.mass=[1,"], "invalid TOML value"),
+    ("broken-toml-value", ["--set", "plant.mass=[1,"], "invalid TOML value"),
     (
         "mass-inf",
-        ["--set", "spacecraft.mass.0=inf"],
-        "field spacecraft.mass[0]: inf is refused: must be a finite number",
+        ["--set", "plant.mass.0=inf"],
+        "plant.mass[0]: inf is refused: must be a finite number",
     ),
-    ("gain-inf", ["--set", "controller.kp=inf"], "field controller.kp"),
-    ("sma-inf", ["--set", "orbit.semi_major_axis=inf"], "field orbit.semi_major_axis"),
-    ("expr-number-inf", ["--set", "faults.bias.0=inf"], "finite number"),
+    ("gain-inf", ["--set", "controller.kp=inf"], "controller.kp: Input should be a finite number"),
+    ("sma-inf", ["--set", "plant.semi_major_axis=inf"], "plant.semi_major_axis"),
+    ("expr-number-inf", ["--set", "actuator.bias.0=inf"], "finite number"),
 ]
 
 
@@ -91,14 +91,14 @@ def test_hostile_scenario_input_exits_2(command, args, fragment, tmp_path, capsy
             "not a countable number of steps",
         ),
         (
-            ["--set", "orbit.semi_major_axis=1e300"],
-            "the conditions cannot be evaluated for these values",
+            ["--set", "plant.semi_major_axis=1e300"],
+            "plant: semi_major_axis = 1e+300 m: the mean motion sqrt(mu / a^3) [rad/s] is not a finite",
         ),
         (
-            ["--set", "spacecraft.mass.0=1e-320"],
+            ["--set", "plant.mass.0=1e-320"],
             "the conditions cannot be evaluated for these values",
         ),
-        (["--set", "spacecraft.mass.\u0663=1"], "must be a non-negative integer"),
+        (["--set", "plant.mass.\u0663=1"], "must be a non-negative integer"),
     ],
     ids=["steps-overflow", "sma-1e300", "subnormal-mass", "non-ascii-index"],
 )
@@ -274,9 +274,9 @@ def test_run_with_hundreds_of_spacecraft_plots_a_subset(tmp_path, capsys):
 
     raw = tomllib.loads(builtin_scenarios()[SCN])
     n = 300
-    raw["spacecraft"]["mass"] = [100.0] * n
+    raw["plant"]["mass"] = [100.0] * n
     raw["controller"]["nominal_mass"] = [100.0] * n  # the law's stated masses, one per deputy too
-    raw["spacecraft"]["initial_position"] = [[float(k % 20), float(k // 20), 0.0] for k in range(n)]
+    raw["plant"]["initial_position"] = [[float(k % 20), float(k // 20), 0.0] for k in range(n)]
     raw["simulation"]["horizon"] = 2.0
     path = tmp_path / "many.toml"
     path.write_text(tomli_w.dumps(raw))
@@ -350,13 +350,15 @@ def test_campaign_hostile_input_exits_2(tmp_path, capsys):
         tomli_w.dumps(
             {
                 "campaign": {"name": "div0", "base": "cw-pd-fault", "runs": 2, "chunk_size": 2},
-                "overrides": {"simulation.horizon": 2.0, "faults.bias": ["1/0", "0", "0"]},
+                "overrides": {"simulation.horizon": 2.0, "actuator.bias": ["1/0", "0", "0"]},
             }
         )
     )
     assert campaign_main(["run", str(bad), "--out", out, "--no-progress"]) == 2
     err = capsys.readouterr().err
-    assert "faults.bias" in err and "division by a constant zero" in err and "Traceback" not in err
+    assert (
+        "actuator.bias" in err and "division by a constant zero" in err and "Traceback" not in err
+    )
     assert not Path(out).exists()
 
 

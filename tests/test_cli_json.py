@@ -53,7 +53,7 @@ def test_show_json_is_the_toml_with_units(capsys):
     )
     units = doc["units"]
     assert units["controller.kp"] == "N/m" and units["simulation.horizon"] == "s"
-    assert units["spacecraft.mass"] == "kg" and units["faults.effectiveness"] == "1"  # "[-]"
+    assert units["plant.mass"] == "kg" and units["actuator.effectiveness"] == "1"  # "[-]"
     assert (
         "controller.desired_position" not in units
     )  # its description states [s] and [m]: no guess
@@ -73,10 +73,10 @@ def test_description_units():
 def test_check_json_typed(capsys):
     assert main(["check", "cw-pd-fault", "--json"]) == 0
     doc = _doc(capsys)
-    assert doc["scenario"] == "cw-pd-fault" and doc["method"] == "cw-formation"
+    assert doc["scenario"] == "cw-pd-fault" and doc["method"] == "composed"
     assert doc["all_required_hold"] is True and doc["exit_code"] == 0
     assert doc["required_failed"] == 0 and doc["required_unproven"] == 0
-    first = doc["conditions"][0]
+    first = next(c for c in doc["conditions"] if c["name"].startswith("closed-loop stable"))
     assert first["value_text"].startswith("max Re(eig) = ")
     assert _is_number(first["value"]) and first["value"] < 0 and first["units"] == "1/s"
     assert first["quantities"] == [{"name": "max Re(eig)", "value": first["value"], "units": "1/s"}]

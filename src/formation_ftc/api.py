@@ -51,7 +51,7 @@ def load_scenario(
         its tables, or an already loaded scenario (validated again, with the overrides).
     overrides : Mapping or iterable of str, optional
         Field values applied before validation: ``{"simulation.horizon": 300.0}`` or
-        ``["controller.kp=3"]`` (dotted paths, list items by index: ``spacecraft.mass.0``).
+        ``["controller.kp=3"]`` (dotted paths, list items by index: ``plant.mass.0``).
 
     Returns
     -------
@@ -67,7 +67,7 @@ def load_scenario(
     --------
     >>> from formation_ftc.api import load_scenario
     >>> scn = load_scenario("cw-pd-fault", overrides={"controller.kp": 3.0})
-    >>> scn.controller.kp, scn.simulation.dt
+    >>> scn.section("controller").kp, scn.simulation.dt
     (3.0, 0.1)
     """
     if isinstance(name_or_path, ScenarioBase):

@@ -64,7 +64,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
     "schema": (
         "Print the JSON Schema of a method's scenario file (for editor completion and validation). "
         "Without METHOD, list the registered methods.",
-        ["formation-ftc schema", "formation-ftc schema cw-formation > cw-formation.schema.json"],
+        ["formation-ftc schema", "formation-ftc schema composed > composed.schema.json"],
     ),
     "run": (
         "Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
@@ -114,6 +114,14 @@ HELP: dict[str, tuple[str, list[str]]] = {
     "league report": (
         "(Re)write the leaderboard (index.html, leaderboard.json, Parquet) of a league directory.",
         ["formation-ftc league report out/league", "formation-ftc league report out/league --json"],
+    ),
+    "tune": (
+        "Choose a league method's [tune] gains for one actuator level (training seeds), report them on "
+        "held-out seeds; `league report` shows them in its tuned column (docs/tuning.md).",
+        [
+            "formation-ftc tune yang2013 --league translational --level limited --out out/league/tuned",
+            "formation-ftc tune li2020-thm1 --cases none,loe-50 --train-seeds 4 --out out/league/tuned",
+        ],
     ),
     "campaign list": (
         "List the built-in campaigns (name, then description).",
@@ -308,16 +316,38 @@ def _check_scenario_name(name: str) -> None:
 def _field_hints(scenario: str, overrides: list[str]) -> str:
     """ "did you mean" lines for unknown fields of a scenario (file or --set paths); "" if none."""
     from formation_ftc.config import loader
-    from formation_ftc.registry import get_method
     from formation_ftc.suggest import unknown_fields
 
     try:
         raw, _ = loader.read_raw(scenario)
         raw = loader.apply_overrides(raw, overrides)
-        schema = get_method(str(raw["scenario"]["method"])).schema.model_json_schema()
+        schema = _scenario_schema(raw)
     except Exception:  # noqa: BLE001 - hints are best effort; the original error is reported anyway
         return ""
     return "".join(f"\n  {u.message()}" for u in unknown_fields(raw, schema) if u.suggestions)
+
+
+def _scenario_schema(raw: dict) -> dict:
+    """The JSON Schema of the scenario ``raw``'s method; in a composed scenario each slot table gets
+    the schema of the component type it names, so that its fields have units, comments and hints."""
+    from formation_ftc.registry import get_method
+
+    method = str(raw["scenario"]["method"])
+    schema = get_method(method).schema.model_json_schema()
+    if method != "composed":
+        return schema
+    from formation_ftc.methods.composed import component_types
+
+    catalog = component_types()
+    for slot, table in raw.items():
+        entry = catalog.get((slot, str(table.get("type")))) if isinstance(table, dict) else None
+        if entry is not None:
+            sub = entry.section.model_json_schema()
+            schema.setdefault("$defs", {}).update(sub.pop("$defs", {}))
+            type_field = {"const": entry.name, "description": entry.description}
+            sub["properties"] = {"type": type_field, **sub.get("properties", {})}
+            schema["properties"][slot] = sub
+    return schema
 
 
 def _load(args):
@@ -370,20 +400,16 @@ def _cmd_list(args) -> int:
     from importlib import resources
 
     d = resources.files("formation_ftc") / "scenarios"
-    items: dict[str, str] = {}
-    composed: dict[str, str] = {}
     rows = []
     for name in _builtin_scenario_names():
         meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get(
             "scenario", {}
         )
-        (composed if meta.get("method") == "composed" else items)[name] = str(
-            meta.get("description", "")
-        )
         rows.append(
             {
                 "name": name,
                 "method": str(meta.get("method", "")),
+                "paper": meta.get("paper"),
                 "description": str(meta.get("description", "")),
                 "composed": meta.get("method") == "composed",
             }
@@ -391,15 +417,19 @@ def _cmd_list(args) -> int:
     if args.json:
         print_json({"scenarios": rows})
         return 0
-    width = max((len(n) for n in [*items, *composed]), default=10)
-    for name, desc in items.items():
-        print(f"{name:<{width}}  {desc}")
-    if composed:
-        print(
-            "\nCross-paper compositions (method \"composed\": one paper's law on another's plant):"
-        )
-        for name, desc in composed.items():
-            print(f"{name:<{width}}  {desc}")
+    width = max((len(r["name"]) for r in rows), default=10)
+    # the papers' reproductions first (grouped by paper), then every other scenario
+    groups: dict[str, list[dict]] = {}
+    for r in rows:
+        groups.setdefault(r["paper"] or "", []).append(r)
+    first = True
+    for paper in sorted(p for p in groups if p) + ([""] if "" in groups else []):
+        if not first:
+            print()
+        first = False
+        print(f"{paper}:" if paper else "Other scenarios (compositions across papers, examples):")
+        for r in groups[paper]:
+            print(f"  {r['name']:<{width}}  {r['description']}")
     return 0
 
 
@@ -500,17 +530,17 @@ def _field_units(resolved: dict, schema: dict) -> dict[str, str]:
 
 def _cmd_show(args) -> int:
     from formation_ftc.config.loader import dump_toml
-    from formation_ftc.registry import get_method
 
     scenario = _load(args)
     if args.json:  # the content of the TOML below, and the unit of each field that states one
         resolved = scenario.model_dump(mode="json", exclude_none=True)
-        schema = get_method(scenario.scenario.method).schema.model_json_schema()
-        print_json({"scenario": resolved, "units": _field_units(resolved, schema)})
+        print_json(
+            {"scenario": resolved, "units": _field_units(resolved, _scenario_schema(resolved))}
+        )
         return 0
     text = dump_toml(scenario)
     if not args.no_comments:
-        text = _annotate_toml(text, get_method(scenario.scenario.method).schema.model_json_schema())
+        text = _annotate_toml(text, _scenario_schema(scenario.model_dump(mode="json")))
     print(text, end="")
     return 0
 
@@ -820,6 +850,10 @@ _PLUGGED = {
     "league": (
         "formation_ftc.league.cli",
         "FTC league: every method on one realistic formation, same faults",
+    ),
+    "tune": (
+        "formation_ftc.league.tune_cli",
+        "choose a league method's gains for a level, reported on held-out seeds",
     ),
 }
 

@@ -22,7 +22,7 @@ TINY = {
     "sample": {
         "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
         "controller.kd": {"grid": [10.0, 30.0]},
-        "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
+        "plant.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
     },
     "traces": {"runs": [0, 4], "every": 2},
 }

@@ -17,7 +17,7 @@ from formation_ftc.cli import main
 CHEAP = {
     "campaign": {"name": "cheap", "base": "cw-free-drift", "runs": 2, "seed": 1, "chunk_size": 2},
     "overrides": {"simulation.horizon": 10.0},
-    "sample": {"spacecraft.mass.0": {"dist": "uniform", "low": 90.0, "high": 110.0}},
+    "sample": {"plant.mass.0": {"dist": "uniform", "low": 90.0, "high": 110.0}},
 }
 
 

@@ -41,7 +41,7 @@ def base_run(tmp_path_factory):
         "sample": {
             "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
             "controller.kd": {"grid": [10.0, 30.0]},
-            "spacecraft.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
+            "plant.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
         },
         "traces": {"runs": [0, 4], "every": 2},
     }
@@ -79,7 +79,7 @@ def test_chunking_invariance(base_run, tmp_path):
         "seed",
         "input:controller.kp",
         "input:controller.kd",
-        "input:spacecraft.mass.0",
+        "input:plant.mass.0",
         "status",
     ]
     pd.testing.assert_frame_equal(a[cols], b[cols])
@@ -154,7 +154,7 @@ def test_report_statistics_match_numpy(base_run):
     names = sorted(p.name for p in figures)
     assert names == [
         "sensitivity_controller.kp.png",
-        "sensitivity_spacecraft.mass.0.png",
+        "sensitivity_plant.mass.0.png",
         "sweep_controller.kd.png",
     ]
     assert all(p.stat().st_size > 10_000 for p in figures)

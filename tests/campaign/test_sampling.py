@@ -24,9 +24,9 @@ def test_same_plan_same_inputs_any_order(tiny):
     # every input column is set and the scenario seed equals the run's derived seed
     scn = a.scenario(forward[5])
     assert scn.simulation.seed == forward[5].seed
-    assert scn.controller.kp == forward[5].values["controller.kp"]
-    assert scn.controller.kd == forward[5].values["controller.kd"]
-    assert scn.spacecraft.mass[0] == forward[5].values["spacecraft.mass.0"]
+    assert scn.section("controller").kp == forward[5].values["controller.kp"]
+    assert scn.section("controller").kd == forward[5].values["controller.kd"]
+    assert scn.section("plant").mass[0] == forward[5].values["plant.mass.0"]
     assert scn.simulation.horizon == 20.0  # the campaign's fixed override
 
 
@@ -60,11 +60,12 @@ def test_paired_common_random_numbers_and_unpaired(tiny):
 def test_adding_a_sampled_field_keeps_the_others(tiny):
     raw = tiny(runs=5)
     p1 = make_plan(raw)
-    raw["sample"]["controller.max_force"] = {"dist": "uniform", "low": 1.0, "high": 2.0}
+    raw["sample"]["sensors.position_noise_std"] = {"dist": "uniform", "low": 1.0, "high": 2.0}
     p2 = make_plan(raw)
     for r in range(p1.n_runs):
         v1, v2 = p1.run_inputs(r).values, p2.run_inputs(r).values
-        assert all(v2[k] == v for k, v in v1.items()) and 1.0 <= v2["controller.max_force"] <= 2.0
+        assert all(v2[k] == v for k, v in v1.items())
+        assert 1.0 <= v2["sensors.position_noise_std"] <= 2.0
     assert p1.hash != p2.hash
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from formation_ftc.campaign import make_plan
 
-FIELDS = ("spacecraft.mass.0", "spacecraft.mass.1", "controller.kp")
+FIELDS = ("plant.mass.0", "plant.mass.1", "controller.kp")
 
 
 def _raw(paired: bool, sampling: str | None):

@@ -67,7 +67,7 @@ def test_the_sweep_covers_the_composed_catalog_lists():
         ("compose-li2020-on-cw", "actuator.magnitude[0]"),
         ("compose-li2020-on-cw", "plant.mass[0]"),
         ("compose-li2020-on-cw", "network.adjacency[0][0]"),
-        ("cw-pd-fault", "spacecraft.mass[0]"),
+        ("cw-pd-fault", "plant.mass[0]"),
     ]:
         assert expected in covered
     assert len(CASES) > 50

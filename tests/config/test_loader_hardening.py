@@ -107,7 +107,7 @@ def test_errors_are_input_errors_naming_the_file(tmp_path):
     deep.write_text("a = " + "{b = " * 40 + "1" + "}" * 40 + "\n")
     with pytest.raises(ScenarioError, match=rf"{deep}: TOML nested more than 32 levels"):
         load_scenario(deep)
-    nested = {"scenario": {"method": "cw-formation"}}
+    nested = {"scenario": {"method": "composed"}}
     node = nested
     for _ in range(2000):  # a dict nested beyond the stack: refused before any recursion
         node["x"] = {}

@@ -22,10 +22,11 @@ def test_free_drift_scenario_matches_closed_form_over_one_orbit():
     # one orbit. RK4 global error ~ (n dt)^4 n T = (1.1e-3)^4 * 6 ~ 1e-11: 1e-9 leaves margin.
     scn = ftc.load_scenario("cw-free-drift")
     ds = ftc.simulate(scn)
-    n = scn.orbit.n
+    plant = scn.section("plant")
+    n = plant.mean_motion
     period = 2 * np.pi / n
     assert ds.time.values[-1] >= period - 10
-    q0 = np.hstack([scn.spacecraft.initial_position, scn.spacecraft.initial_velocity])
+    q0 = plant.q0()
     for i in range(2):
         ref = cw_closed_form(n, q0[i], ds.time.values)
         pos = ds.position.values[:, i]

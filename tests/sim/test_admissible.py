@@ -7,14 +7,14 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.cli import main
-from formation_ftc.methods.cw_formation import rk4_amplification
+from formation_ftc.methods.composed.catalog_translational import rk4_amplification
 
 STIFF = {
     "controller.kd": 3000.0,
     "simulation.horizon": 20.0,
     "sensors.position_noise_std": 0.0,
     "sensors.velocity_noise_std": 0.0,
-    "disturbance.process_noise_std": 0.0,
+    "plant.process_noise_std": 0.0,
 }
 
 

@@ -175,7 +175,7 @@ def test_sampled_and_continuous_modes_converge_as_dt_shrinks():
         "simulation.horizon": 100.0,
         "sensors.position_noise_std": 0.0,
         "sensors.velocity_noise_std": 0.0,
-        "disturbance.process_noise_std": 0.0,
+        "plant.process_noise_std": 0.0,
     }
     ref = ftc.simulate(
         ftc.load_scenario(

@@ -19,7 +19,7 @@ A campaign file looks like::
     [sample]                          # dotted path = distribution or sweep
     "controller.kp" = {dist = "uniform", low = 1.0, high = 3.0}
     "controller.kd" = {grid = [10.0, 30.0]}
-    "spacecraft.mass.0" = {dist = "normal", mean = 100.0, std = 5.0, low = 80.0}
+    "plant.mass.0" = {dist = "normal", mean = 100.0, std = 5.0, low = 80.0}
 
     [traces]                          # optional decimated time histories for a few runs
     runs = [0, 1]

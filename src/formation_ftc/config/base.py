@@ -1,10 +1,10 @@
 """Typed scenario configuration (pydantic v2): the sections every scenario has.
 
 A scenario file is TOML. Its ``[scenario]`` table names the ``method`` (a registered method such as
-``"li2020"``, ``"cw-formation"``); that method's schema (a subclass of :class:`ScenarioBase`)
-validates the whole file. Unknown fields are rejected (``extra="forbid"``), every numeric field
-carries its unit in its description, and cross-field rules (the step divides the horizon, matrix sizes
-match the number of spacecraft) are model validators whose messages name the field.
+``"composed"``); that method's schema (a subclass of :class:`ScenarioBase`) validates the whole file.
+Unknown fields are rejected (``extra="forbid"``), every numeric field carries its unit in its
+description, and cross-field rules (the step divides the horizon, matrix sizes match the number of
+spacecraft) are model validators whose messages name the field.
 
 Values are strict: a boolean is never accepted as a number (``horizon = true`` is an error, not 1.0),
 floats must be finite (``inf``/``nan`` are refused for every physical quantity) and the run seed is
@@ -174,7 +174,7 @@ ExprText = Annotated[str, expression_validator(("t", "i"))]
 class ScenarioMeta(StrictModel):
     name: str = Field(description="Scenario name (built-in scenarios use paper-prefixed names).")
     method: str = Field(
-        description="Registered method that simulates this scenario, e.g. 'li2020'."
+        description="Registered method that simulates this scenario, e.g. 'composed'."
     )
     description: str = Field("", description="One-line description shown by `formation-ftc list`.")
     paper: str | None = Field(

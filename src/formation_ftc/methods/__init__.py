@@ -1,3 +1,3 @@
 """Built-in generic methods (not tied to one paper). Importing registers them."""
 
-from formation_ftc.methods import composed, cw_formation  # noqa: F401
+from formation_ftc.methods import composed  # noqa: F401

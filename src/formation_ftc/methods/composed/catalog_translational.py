@@ -4,20 +4,23 @@ laws and thruster faults for composed scenarios."""
 from __future__ import annotations
 
 import math
-from typing import Literal, cast
+from typing import ClassVar, Literal, cast
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from formation_ftc.components.actuators.expression_faults import ExpressionFaultActuator
+from formation_ftc.components.actuators.step_faults import StepFaultActuator
 from formation_ftc.components.actuators.thruster_bias import ThrusterBiasFaultActuator
 from formation_ftc.components.controllers.desired_formation import RotatingFormation
 from formation_ftc.components.controllers.li2020_adaptive import Li2020AdaptiveController
-from formation_ftc.components.controllers.pd_formation import PdFormationController
+from formation_ftc.components.controllers.output_feedback import FreeDrift
+from formation_ftc.components.controllers.pd_formation import PdFormationController, ZeroController
 from formation_ftc.components.controllers.sir_ftc import SirFtcController
 from formation_ftc.components.networks.weighted_graph import (
     DelayedGraphNetwork,
     GraphNetwork,
+    delay_statistics,
     graph_edges,
 )
 from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
@@ -26,16 +29,23 @@ from formation_ftc.components.references.keplerian import KeplerianReference
 from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
 from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.core.dynamics.cw import cw_matrices
+from formation_ftc.core.graph import GraphError, validate_adjacency
 from formation_ftc.core.history import required_capacity
 from formation_ftc.core.orbit import MU_EARTH
 from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
+from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.methods.composed import (
     BuildContext,
+    ComposedScenario,
     per_spacecraft,
     register_component_type,
+    register_conditions,
     require_slot,
 )
+from formation_ftc.registry import Condition
 from formation_ftc.sim.components import as_float
+from formation_ftc.sim.loop import ClosedLoop
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
@@ -102,6 +112,19 @@ class CwPlantSection(_PointMassSection):
     semi_major_axis: float = Field(gt=0, description="Radius of the circular reference orbit [m].")
     mu: float = Field(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
     process_noise_std: float = Field(0.0, ge=0, description="Std of a per-step Gaussian force [N].")
+
+    @model_validator(mode="after")
+    def _finite_mean_motion(self):
+        try:
+            n = self.mean_motion
+        except ArithmeticError:  # a^3 overflows or underflows float64
+            n = math.nan
+        if not (n > 0 and math.isfinite(n)):
+            raise ValueError(
+                f"semi_major_axis = {self.semi_major_axis:g} m: the mean motion sqrt(mu / a^3) "
+                "[rad/s] is not a finite float64 > 0"
+            )
+        return self
 
     @property
     def mean_motion(self) -> float:
@@ -207,17 +230,19 @@ class GraphSection(StrictModel):
 
     @model_validator(mode="after")
     def _square(self):
-        n = len(self.adjacency)
-        if any(len(r) != n for r in self.adjacency):
+        if len({len(r) for r in self.adjacency} | {len(self.adjacency)}) != 1:
             raise ValueError("adjacency: must be square (N x N)")
-        if any(not (c >= 0 and math.isfinite(c)) for r in self.adjacency for c in r):
-            raise ValueError("adjacency: entries must be finite and >= 0")
+        try:  # finite, >= 0, no self-loops
+            validate_adjacency(self.adjacency, field="adjacency")
+        except GraphError as exc:
+            raise ValueError(str(exc)) from None
         return self
 
 
 class DelayedGraphSection(GraphSection):
     delays: list[list[ExprText]] = Field(
-        description="T_ij(t) per link, expressions in t, i, j [s] (N x N); >= 0."
+        description="T_ij(t) per link, expressions in t, i (receiver), j (sender) [s] (N x N, row i = "
+        "receiver; the diagonal and unused links are not read); >= 0 on the used links."
     )
     max_delay: float = Field(
         gt=0, description="Largest delay on any used link [s] (sizes the history buffer)."
@@ -225,20 +250,39 @@ class DelayedGraphSection(GraphSection):
 
 
 def _graph(sec: GraphSection, ctx: BuildContext):
-    return GraphNetwork(weights=as_float(sec.adjacency))
+    return GraphNetwork(weights=as_float(validate_adjacency(sec.adjacency, ctx.count)))
 
 
 def _delayed_graph(sec: DelayedGraphSection, ctx: BuildContext):
-    n = len(sec.adjacency)
+    """The delays of the used links, sampled at every step of the horizon, must stay in [0, max_delay]
+    (the history holds max_delay seconds); when they also stay >= dt the reads never need the message
+    sent within the step, and that blend is left out (``short_delays``)."""
+    n = len(validate_adjacency(sec.adjacency, ctx.count))
     if len(sec.delays) != n or any(len(r) != n for r in sec.delays):
         raise ValueError(f"network.delays: must be {n} x {n} like network.adjacency")
     edges = graph_edges(sec.adjacency)
+    texts = tuple(tuple(str(x) for x in r) for r in sec.delays)
+    stats = {st.pair: st for st in delay_statistics(texts, ctx.horizon, ctx.dt)}
+    for i, j in edges:
+        st = stats[(i, j)]
+        where = f"network.delays[{i}][{j}] ({st.name}, link {j + 1} -> {i + 1})"
+        if st.value_min < 0:
+            raise ValueError(
+                f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
+                f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)"
+            )
+        if st.value_max > sec.max_delay:
+            raise ValueError(
+                f"{where}: T = {st.value_max:.6g} s at t = {st.t_max:.6g} s exceeds "
+                f"network.max_delay = {sec.max_delay:g} s (the history holds max_delay seconds)"
+            )
     return DelayedGraphNetwork(
         weights=as_float(sec.adjacency),
-        delays=tuple(tuple(str(x) for x in r) for r in sec.delays),
+        delays=texts,
         edges=edges,
         capacity=required_capacity(sec.max_delay, ctx.dt) + 1,
         dt=ctx.dt,
+        short_delays=any(stats[e].value_min < ctx.dt for e in edges),
     )
 
 
@@ -315,32 +359,71 @@ class FormationSection(StrictModel):
 
 
 class Li2020Section(StrictModel):
+    """Li2020 adaptive FTC: Thm 1 (eqs. (23)-(27)) over a ``graph`` network, Thm 2 (eqs. (41)-(45))
+    over a ``delayed-graph``. Per-spacecraft fields take one number or N."""
+
+    #: fields whose Li2020AdaptiveController attribute has another name (campaign.binding)
+    leaf_paths: ClassVar[dict[str, str]] = {"mu": "adapt_mu", "orbit_mu": "mu"}
     formation: FormationSection
     k: float | list[float] = Field(
-        0.2, description="Sliding gain k_i [1/s] (one or per spacecraft)."
+        0.2, description="k_i of s_i = e_i2 + k_i e_i1 (eq. (6)) [1/s], > 0 (Lemma 2)."
     )
-    lam: float | list[float] = Field(20.0, description="Feedback gain lambda_i [kg/s].")
-    gamma: float | list[float] = Field(0.1, description="beta_hat adaptation gain [-].")
-    eta: float | list[float] = Field(1.0, description="m_hat adaptation gain [-].")
-    mu: float | list[float] = Field(1.0, description="d_hat adaptation gain [-].")
-    upsilon: float | list[float] = Field(0.01, description="d_hat leakage [-].")
-    m_hat0: float | list[float] = Field(100.0, description="Initial mass estimate [kg].")
+    lam: float | list[float] = Field(
+        20.0, description="lambda_i [kg/s] (Li2020: Thm 1 20, Thm 2 15)."
+    )
+    gamma: float | list[float] = Field(
+        0.1,
+        description="gamma_i, beta_hat adaptation gain [s/(kg m^2)] (not in the paper: our choice, "
+        "E000-12).",
+    )
+    eta: float | list[float] = Field(
+        1.0,
+        description="eta_i, m_hat adaptation gain [kg s/m^2] (not in the paper: our choice, E000-12).",
+    )
+    mu: float | list[float] = Field(
+        1.0,
+        description="mu_i, d_hat adaptation gain [N s/m] (not in the paper: our choice, E000-12).",
+    )
+    upsilon: float | list[float] = Field(
+        0.01,
+        description="upsilon_i, d_hat leakage gain [1/(N s)] per unit sigma (not in the paper: our "
+        "choice, E000-12).",
+    )
+    m_hat0: float | list[float] = Field(
+        100.0, description="m_hat_i(0), initial mass estimate [kg], > 0 (nominal, stated)."
+    )
     beta_hat0: float | list[float] = Field(
-        1.0, description="Initial inverse-effectiveness estimate [-]."
+        1.0, description="beta_hat_i(0), initial inverse-effectiveness estimate [-]."
     )
     d_hat0: float | list[float] = Field(
-        0.001, description="Initial disturbance-bound estimate [N]."
+        0.001, description="d_hat_i(0), initial disturbance-bound estimate [N], > 0 (eq. (27))."
     )
     sigma_a: float | list[float] = Field(
-        0.001, description="a_i of the smoothing function sigma_i(t) [1/s]."
+        0.001,
+        description="a_i of sigma_i(t) [1/s] (exponential) or [1/s^2] (inverse square), > 0.",
     )
     sigma_form: Literal["exponential", "inverse_square"] = Field(
-        "exponential", description="Form of sigma_i(t)."
+        "exponential",
+        description="sigma_i(t): 'exponential' exp(-a t) (eq. (13)) or 'inverse_square' "
+        "1/(a (t + t0)^2) (eq. (14), shifted by t0).",
     )
     sigma_t0: float = Field(1.0, gt=0, description="t0 of the inverse-square sigma [s].")
     orbit_mu: float = Field(
         MU_EARTH, gt=0, description="Gravitational parameter of the on-board model [m^3/s^2]."
     )
+    dhat_sign_literal: bool = Field(
+        False,
+        description="Use the printed sign of the d_hat tanh term (+ in eq. (24), Thm 1; - in eq. (42), "
+        "Thm 2, i.e. over a delayed network) instead of + in both (E000-04).",
+    )
+
+    @field_validator("k", "m_hat0", "d_hat0", "sigma_a")
+    @classmethod
+    def _positive(cls, v, info):
+        vals = v if isinstance(v, list) else [v]
+        if any(not x > 0 for x in vals):
+            raise ValueError(f"{info.field_name} must be > 0, got {v}")
+        return v
 
 
 def _li2020(sec: Li2020Section, ctx: BuildContext):
@@ -356,6 +439,8 @@ def _li2020(sec: Li2020Section, ctx: BuildContext):
     def ps(name):
         return as_float(_per_spacecraft(getattr(sec, name), n, f"controller.{name}"))
 
+    # the printed '-' of eq. (42) belongs to Thm 2, the law over delayed links (E000-04)
+    delayed = getattr(ctx.section("network"), "delays", None) is not None
     return Li2020AdaptiveController(
         count=n,
         formation=sec.formation.component(n),
@@ -370,7 +455,7 @@ def _li2020(sec: Li2020Section, ctx: BuildContext):
         d_hat0=ps("d_hat0"),
         sigma_a=ps("sigma_a"),
         sigma_t0=as_float(sec.sigma_t0),
-        d_sign=as_float(1.0),
+        d_sign=as_float(-1.0 if sec.dhat_sign_literal and delayed else 1.0),
         mu=as_float(sec.orbit_mu),
         sigma_form=sec.sigma_form,
     )
@@ -403,6 +488,8 @@ def _sir_ftc(sec: SirFtcSection, ctx: BuildContext):
 
 
 class PdSection(StrictModel):
+    #: fields whose PdFormationController attribute has another name (campaign.binding)
+    leaf_paths: ClassVar[dict[str, str]] = {"nominal_mass": "mass"}
     kp: float = Field(ge=0, description="Position gain [N/m].")
     kd: float = Field(ge=0, description="Velocity gain [N s/m].")
     nominal_mass: float | list[float] = Field(
@@ -414,7 +501,8 @@ class PdSection(StrictModel):
     )
     max_force: float | None = Field(None, gt=0, description="Per-axis saturation [N].")
     desired_position: Vec3Expr = Field(
-        ("0", "0", "0"), description="Desired LVLH position, expressions in t, i [m]."
+        ("0", "0", "0"),
+        description="Desired LVLH position p^d(t) per axis [m], expressions in t [s] and i.",
     )
     mode: Literal["continuous", "sampled"] = Field(
         "continuous", description="Every RK stage or held over the step."
@@ -453,6 +541,120 @@ register_component_type(
 )
 
 
+class NoControlSection(StrictModel):
+    """No fields: the command is zero."""
+
+
+def _no_control(sec: NoControlSection, ctx: BuildContext):
+    if ctx.plant.quantity == "acceleration":  # u = 0 [m/s^2] (e.g. Gui2022's observer runs)
+        return FreeDrift(count=ctx.count)
+    return ZeroController(count=ctx.count)
+
+
+register_component_type(
+    "controller", "none", NoControlSection, _no_control, "no control (free drift): u = 0"
+)
+
+
+def rk4_amplification(z: np.ndarray) -> np.ndarray:
+    """|R(z)| of classical RK4, the amplification of one step of a linear mode.
+
+    Parameters
+    ----------
+    z : array_like
+        Eigenvalue times step, lambda dt [-] (complex).
+
+    Returns
+    -------
+    numpy.ndarray
+        |R(z)| = |1 + z + z^2/2 + z^3/6 + z^4/24| [-]: the mode is integrated stably when <= 1.
+    """
+    z = np.asarray(z, dtype=complex)
+    return np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24)
+
+
+def cw_linear_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
+    """PD (or no control) on the CW plant: the closed-loop eigenvalues of A - B [kp kd]/m_i (true
+    masses m_i [kg]) must have negative real parts, and the RK4 step must integrate every closed-loop
+    mode stably (|R(lambda dt)| <= 1). Both are exact for the linear model up to the eigenvalues'
+    rounding margin (:func:`formation_ftc.core.rounding.eigenvalue_margin`): a real part within the
+    margin of 0 does not count as stable. Other plants are outside the linear model: no condition.
+
+    Parameters
+    ----------
+    s : ComposedScenario
+        A scenario whose controller is ``pd`` or ``none``.
+    loop : ClosedLoop
+        Its built loop (unused: the numbers are read from the sections).
+
+    Returns
+    -------
+    list of Condition
+        One stability condition per spacecraft (``pd`` only) and the RK4 step condition.
+    """
+    if s.type_of("plant") != "clohessy-wiltshire":
+        return []
+    plant = s.section("plant")
+    A, B = cw_matrices(plant.mean_motion)
+    out = []
+    if s.type_of("controller") != "pd":
+        eigs = [np.linalg.eigvals(A)]
+        margins = [np.full(A.shape[0], eigenvalue_margin(A))]
+    else:
+        pd = s.section("controller")
+        eigs, margins = [], []
+        for i, m in enumerate(plant.mass):
+            with np.errstate(over="raise"):  # a subnormal mass: FloatingPointError, not inf gains
+                K = np.hstack([pd.kp * np.eye(3), pd.kd * np.eye(3)]) / m
+            M = A - B @ K  # closed loop of the linear CW model
+            ev = np.linalg.eigvals(M)
+            tol = eigenvalue_margin(M)
+            eigs.append(ev)
+            margins.append(np.full(ev.shape, tol))
+            out.append(
+                Condition(
+                    name=f"closed-loop stable, spacecraft {i + 1}",
+                    reference="linear CW + PD",
+                    value=f"max Re(eig) = {ev.real.max():.4g} 1/s",
+                    requirement=f"< -{tol:.2g} (rounding margin)",
+                    holds=bool(ev.real.max() < -tol),
+                    required=True,
+                    basis="exact",
+                    detail="exact: eigenvalues of the 6 x 6 closed-loop matrix (LAPACK, float64), "
+                    f"rounding margin {tol:.2g} 1/s (Bauer-Fike: kappa(V) 10 n eps ||A - BK||)",
+                )
+            )
+    ev_all = np.concatenate(eigs)
+    tol_all = np.concatenate(margins)
+    dt = s.simulation.dt
+    amp = rk4_amplification(ev_all * dt)
+    worst = int(np.argmax(amp))
+    stable_modes = ev_all.real < -tol_all
+    # a mode that is stable in continuous time must stay damped by the RK4 step (|R| <= 1)
+    ok = bool(np.all(amp[stable_modes] <= 1.0)) if stable_modes.any() else True
+    out.append(
+        Condition(
+            name="RK4 step vs closed-loop modes",
+            reference="RK4 stability region",
+            value=f"dt max|lambda| = {dt * np.abs(ev_all).max():.3g}, max |R(lambda dt)| = "
+            f"{amp.max():.4g} (at lambda = {ev_all[worst]:.3g} 1/s)",
+            requirement="|R(lambda dt)| <= 1 for every stable mode",
+            holds=ok,
+            required=True,
+            basis="exact",
+            detail="exact for the linear closed loop: RK4 amplification factor R(z) = 1 + z + z^2/2 "
+            "+ z^3/6 + z^4/24 evaluated at every closed-loop eigenvalue times dt (LAPACK "
+            "eigenvalues; modes within the rounding margin of the imaginary axis are not counted "
+            "as stable)",
+        )
+    )
+    return out
+
+
+register_conditions("controller", "pd", cw_linear_conditions)
+register_conditions("controller", "none", cw_linear_conditions)
+
+
 # -------------------------------------------------------------------------------------- actuators
 class ExpressionFaultSection(StrictModel):
     effectiveness: Vec3Expr = Field(
@@ -465,6 +667,47 @@ class ExpressionFaultSection(StrictModel):
 
 def _expression_faults(sec: ExpressionFaultSection, ctx: BuildContext):
     return ExpressionFaultActuator(count=ctx.count, effectiveness=sec.effectiveness, bias=sec.bias)
+
+
+class StepFaultSection(StrictModel):
+    """alpha_ij(t) = effectiveness[i][j] from onset[i][j] on, 1 before (Li2020 eq. (5)); numbers, not
+    expressions, so that campaigns vary them without recompiling."""
+
+    #: fields whose StepFaultActuator attribute has another name (campaign.binding)
+    leaf_paths: ClassVar[dict[str, str]] = {"effectiveness": "alpha"}
+    effectiveness: list[Vec3] = Field(
+        description="Effectiveness after the onset per spacecraft and axis, in (0, 1] [-] (N x 3)."
+    )
+    onset: list[Vec3] = Field(
+        description="Onset per spacecraft and axis, >= 0 [s] (N x 3; snapped to the step grid)."
+    )
+    bias: Vec3Expr = Field(
+        ("0", "0", "0"), description="Additive fault per axis, expressions in t, i [N]."
+    )
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        for name, ok, rng, unit in (
+            ("effectiveness", lambda v: 0.0 < v <= 1.0, "(0, 1]", "-"),
+            ("onset", lambda v: v >= 0.0, ">= 0", "s"),
+        ):
+            for i, row in enumerate(getattr(self, name)):
+                for j, v in enumerate(row):
+                    if not ok(v):
+                        raise ValueError(f"{name}[{i}][{j}] = {v}: must be {rng} [{unit}]")
+        return self
+
+
+def _step_faults(sec: StepFaultSection, ctx: BuildContext):
+    for name in ("effectiveness", "onset"):
+        rows = len(getattr(sec, name))
+        if rows != ctx.count:
+            raise ValueError(f"actuator.{name}: {rows} rows for {ctx.count} spacecraft (N x 3)")
+    # onsets snapped to the step grid so that no RK step straddles a fault onset
+    onset = np.round(np.asarray(sec.onset, float) / ctx.dt) * ctx.dt
+    return StepFaultActuator(
+        alpha=as_float(sec.effectiveness), onset=as_float(onset), bias=tuple(sec.bias)
+    )
 
 
 class ThrusterBiasSection(StrictModel):
@@ -508,7 +751,7 @@ def _thruster_bias(sec: ThrusterBiasSection, ctx: BuildContext):
         decay_amplitude=ax("decay_amplitude", True),
         decay_rate=ax("decay_rate"),
         decay_origin=ax("decay_origin"),
-        units="N",
+        units="m s-2" if ctx.plant.quantity == "acceleration" else "N",
     )
 
 
@@ -518,6 +761,13 @@ register_component_type(
     ExpressionFaultSection,
     _expression_faults,
     "loss of effectiveness and additive bias written as expressions",
+)
+register_component_type(
+    "actuator",
+    "step-faults",
+    StepFaultSection,
+    _step_faults,
+    "step loss of effectiveness per spacecraft and axis (numbers) and additive bias expressions",
 )
 register_component_type(
     "actuator",
