@@ -125,7 +125,9 @@ def test_unbounded_sample_outside_range_is_caught_for_every_run_before_any_run(t
     raw["sample"]["plant.mass.0"] = {"dist": "normal", "mean": 5.0, "std": 20.0}
     raw["campaign"]["runs"] = 20
     out = tmp_path / "out"
-    with pytest.raises(CampaignError, match=r"nothing was run[\s\S]*plant: mass: at least one spacecraft"):
+    with pytest.raises(
+        CampaignError, match=r"nothing was run[\s\S]*plant: mass: at least one spacecraft"
+    ):
         run_campaign(raw, out)
     assert not out.exists()
 

@@ -97,7 +97,7 @@ def _raw(**slots):
         ),
         (
             {"network": {"type": "graph", "adjacency": [[0, 1, 0], [1, 0, 0], [0, 0, 0]]}},
-            "3 spacecraft",
+            "network.adjacency: must be 2x2 (one row/column per spacecraft), got 3x3",
         ),
         (
             {

@@ -41,6 +41,7 @@ def discrete_model(A, B, G, q: float, dt: float) -> DiscreteModel:
     Parameters
     ----------
     A : array_like, shape (n, n)
+        State matrix of the continuous model.
     B : array_like, shape (n, m)
         Input matrix (the held input, e.g. the commanded acceleration [m/s^2]).
     G : array_like, shape (n, p)
@@ -114,7 +115,26 @@ def steady_state_kalman(phi, qd, R) -> tuple[np.ndarray, np.ndarray]:
 
 
 def dare_relative_residual(P, phi, qd, R) -> float:
-    """Relative residual of the filter Riccati equation (see module docstring) at ``P`` [-]."""
+    """Relative residual of the filter Riccati equation (see module docstring) at ``P``.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Candidate predicted covariance.
+    phi, qd, R : array_like, shape (n, n)
+        Transition, process-noise and measurement-noise matrices of :func:`steady_state_kalman`.
+
+    Returns
+    -------
+    float
+        ``||P - (phi P phi^T - phi P (P + R)^-1 P phi^T + qd)|| / ||P||`` (Frobenius) [-].
+
+    Examples
+    --------
+    >>> P, _ = steady_state_kalman([[1.0]], [[1.0]], [[1.0]])
+    >>> dare_relative_residual(P, [[1.0]], [[1.0]], [[1.0]]) < 1e-12
+    True
+    """
     P, phi, qd, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (P, phi, qd, R))
     rhs = phi @ P @ phi.T - phi @ P @ np.linalg.solve(P + R, P) @ phi.T + qd
-    return float(np.linalg.norm(P - rhs) / max(np.linalg.norm(P), 1e-300))
+    return float(np.linalg.norm(P - rhs) / max(float(np.linalg.norm(P)), 1e-300))

@@ -278,13 +278,15 @@ class GainProblem:
         out = jax.vmap(self._compiled.run, in_axes=(in_axes,), axis_size=self.size)(params)
         return dict(zip(self.metric_names, out["metrics"], strict=True)), out["diverged_step"] >= 0
 
-    def evaluate(self, theta: Sequence[float]) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    def evaluate(
+        self, theta: Sequence[float] | np.ndarray
+    ) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Run every run at gains ``theta`` [field units] through the package's cached batch program
         (:func:`formation_ftc.sim.batch.batched_run`: one compilation for every batch of the layout).
 
         Parameters
         ----------
-        theta : sequence of float
+        theta : sequence of float or numpy.ndarray
             One value per field [field units].
 
         Returns
@@ -321,7 +323,7 @@ def _stack_like(params: Sequence[Any], in_axes: Any, size: int) -> Any | None:
 
     flat = [jax.tree_util.tree_flatten(p) for p in params]
     treedef = flat[0][1]
-    if any(td != treedef for _, td in flat[1:]):
+    if any(td != treedef for _, td in flat[1:]):  # type: ignore[operator]  # PyTreeDef unresolved in jax stubs
         return None
     axes = treedef.flatten_up_to(in_axes)  # type: ignore[attr-defined]
     leaves = []
@@ -440,14 +442,14 @@ def build_problem(
     template = compiled[0].params
     bindings = {}
     for f, v0 in zip(fields, initial, strict=True):
-        b = bind_fields(template, scenarios[0], {f.path: v0})
-        if not b:
+        bound = bind_fields(template, scenarios[0], {f.path: v0})
+        if not bound:
             raise TuneError(
                 f"tune field {f.path!r}: not a numeric leaf of the built loop (its builder derives "
                 "the parameters from it, or it names no component attribute); only gains the loop "
                 "holds as they are can be tuned"
             )
-        bindings[f.path] = b[f.path]
+        bindings[f.path] = bound[f.path]
     if like is None:
         _check_bindings(raws[0], fields, initial, template, key, bindings)
         size = len(raws)
@@ -521,7 +523,9 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
                 f"tune field {f.path!r}: structural (another value changes the compiled program); "
                 "only numeric gains can be tuned"
             )
-        batch, axes = apply_bindings(template, {f.path: bindings[f.path]}, {f.path: [v1]}, 1)
+        batch, axes = apply_bindings(
+            template, {f.path: bindings[f.path]}, {f.path: np.asarray([v1], dtype=float)}, 1
+        )
         if not params_close(take_run(batch, axes, 0), c.params):
             raise TuneError(
                 f"tune field {f.path!r}: not a numeric leaf of the built loop -- another value also "

@@ -24,7 +24,7 @@ tracking errors, effort, spreads over the fault window, the run and the assessme
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, TypedDict
 
 import jax
 import numpy as np
@@ -671,6 +671,14 @@ def _clipped_windows(sec: MehrabianMetricsSection, H: float) -> dict[str, tuple[
     return {w: (min(float(a), H), min(float(b), H)) for w, (a, b) in raw.items()}
 
 
+class _Opts(TypedDict, total=False):
+    """Keyword arguments of :class:`Metric` that vary between the rows of a metric table."""
+
+    norm: bool
+    square: bool
+    component: int
+
+
 def _mehrabian_metrics(sec: MehrabianMetricsSection, ctx: BuildContext) -> None:
     """Per window: RMS synchronisation / tracking error and RMS control (integrated at the RK stages)
     [rad, N m], effort int sum_j |u_j|^2 dt [(N m)^2 s]; maxima over the step starts t_k in the window of
@@ -687,18 +695,18 @@ def _mehrabian_metrics(sec: MehrabianMetricsSection, ctx: BuildContext) -> None:
             f"{ctx.scenario.type_of('plant')} records none (use plant {EULER_PLANT})"
         )
     dt = ctx.dt
-    rms = dict(norm=True, square=True)  # RK-stage integrals of |.|^2
+    rms = _Opts(norm=True, square=True)  # RK-stage integrals of |.|^2
     # (name, signal, reduction, window kind, options, spacecraft reduction, units); window kind
     # "stage": integrated over [a, b) at the RK stages, "sample": the step starts t_k in [a, b)
-    table = [
+    table: list[tuple[str, str, str, str, _Opts, str, str]] = [
         ("sync_err_rms", "synchronisation_error", "stage_root_mean", "stage", rms, "mean", "rad"),
         ("track_err_rms", "tracking_error", "stage_root_mean", "stage", rms, "mean", "rad"),
         ("control_effort", "command", "stage_integral", "stage", rms, "sum", "N2 m2 s"),
         ("control_rms", "command", "stage_root_mean", "stage", rms, "mean", "N m"),
-        ("sync_err_max", "synchronisation_error", "max", "sample", dict(norm=True), "max", "rad"),
-        ("track_err_max", "tracking_error", "max", "sample", dict(norm=True), "max", "rad"),
+        ("sync_err_max", "synchronisation_error", "max", "sample", _Opts(norm=True), "max", "rad"),
+        ("track_err_max", "tracking_error", "max", "sample", _Opts(norm=True), "max", "rad"),
         *(
-            (f"spread_max_{ax}", "attitude", "max", "sample", dict(component=p), "range", "rad")
+            (f"spread_max_{ax}", "attitude", "max", "sample", _Opts(component=p), "range", "rad")
             for p, ax in enumerate(AXES)
         ),
         *(
@@ -707,7 +715,7 @@ def _mehrabian_metrics(sec: MehrabianMetricsSection, ctx: BuildContext) -> None:
                 "attitude",
                 "max",
                 "sample",
-                dict(component=p, norm=True),
+                _Opts(component=p, norm=True),
                 "max",
                 "rad",
             )

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Literal
+from typing import Literal, TypedDict
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -573,9 +573,19 @@ class ChainErrorsSection(StrictModel):
     )
 
 
+class _MetricOptions(TypedDict, total=False):
+    """Keyword arguments of :class:`Metric` shared by several metrics of one set."""
+
+    norm: bool
+    norm_ord: str
+    spacecraft: str
+    units: str
+    component: int
+
+
 def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
     """Azizi2009's metric set (see :class:`ChainErrorsSection`)."""
-    worst = {"norm": True, "norm_ord": "inf", "spacecraft": "max", "units": "m"}
+    worst: _MetricOptions = {"norm": True, "norm_ord": "inf", "spacecraft": "max", "units": "m"}
     out = [
         Metric("max_err", "tracking_error", reduce="max", **worst),
         Metric(
@@ -597,7 +607,7 @@ def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
             Metric("n_events", "mode_changes", reduce="final"),
         ]
     if any(s.name == "effort" for s in ctx.plant.signals()):
-        effort = {"component": 0, "spacecraft": "each", "units": "m2 s-3"}
+        effort: _MetricOptions = {"component": 0, "spacecraft": "each", "units": "m2 s-3"}
         out.append(Metric("effort_x", "effort", reduce="final", **effort))
         if ctx.horizon >= EFFORT_TIME - 1e-9:
             out.append(

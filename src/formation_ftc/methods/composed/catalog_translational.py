@@ -706,7 +706,9 @@ def _step_faults(sec: StepFaultSection, ctx: BuildContext):
     # onsets snapped to the step grid so that no RK step straddles a fault onset
     onset = np.round(np.asarray(sec.onset, float) / ctx.dt) * ctx.dt
     return StepFaultActuator(
-        alpha=as_float(sec.effectiveness), onset=as_float(onset), bias=tuple(sec.bias)
+        alpha=as_float(sec.effectiveness),
+        onset=as_float(onset),
+        bias=cast(Vec3Expr, tuple(sec.bias)),
     )
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from formation_ftc.components.actuators.actuator_gains import StepGainActuator
+from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
 from formation_ftc.design.allocation import augmented_matrix, perturbation_coefficients
 from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
 from formation_ftc.design.small_gain import small_gain_margin
@@ -47,6 +48,14 @@ def true_gains(loop: ClosedLoop) -> np.ndarray | None:
     """True actuator gains after the fault (N, axes) [-] (truth side; None: not a gain actuator)."""
     act = loop.actuator
     return np.asarray(act.faulty_gain, float) if isinstance(act, StepGainActuator) else None
+
+
+def _chain_law(loop: ClosedLoop) -> ChainLlfrController:
+    """The loop's controller, the law itself (the double integrators are driven by accelerations)."""
+    law = loop.controller
+    if not isinstance(law, ChainLlfrController):
+        raise TypeError(f"controller {type(law).__name__} is not the Azizi2009 chain law")
+    return law
 
 
 def perturbation_norm(alpha, b_hat, k: int, eps: float) -> float:
@@ -73,8 +82,9 @@ def d_norms(
     """||D||_2 at the LLFR weights ``alpha`` and with the FLFR weight ``a_flfr`` of the law's faulty
     spacecraft, with the true eps of the loop's actuator on the faulty axis."""
     ax = AXES.index(scenario.section("controller").faulty_axis)
-    k = loop.controller.fault_index
-    b_hat = np.asarray(loop.controller.b_hat, float)[:, ax]
+    law = _chain_law(loop)
+    k = law.fault_index
+    b_hat = np.asarray(law.b_hat, float)[:, ax]
     gains = true_gains(loop)
     if gains is None:
         raise ValueError("||D||_2 needs the true gains of an actuator-gains actuator")
@@ -92,7 +102,7 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
         return []
     out: list[Condition] = []
     c = scenario.section("controller")
-    law = loop.controller  # the law itself: the double integrators are driven by accelerations
+    law = _chain_law(loop)
     sup = (
         scenario.section("supervisor") if scenario.type_of("supervisor") == HL_SUPERVISOR else None
     )

@@ -22,7 +22,7 @@ import numpy as np
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
 from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.methods.composed import make_loop
+from formation_ftc.methods.composed import ComposedScenario, make_loop
 from formation_ftc.methods.composed.catalog_learning import (
     ESTIMATE_ERROR_AT,
     LOWPASS_WINDOW,
@@ -445,6 +445,8 @@ def run_reproduction(
         "[0, 0, 2000] gives the shifted form.",
     ]
     scn_lof = load_scenario("gui2022-lof2tc", ov)
+    if not isinstance(scn_lof, ComposedScenario):
+        raise TypeError("gui2022-lof2tc: not a composed scenario")
     loop_lof = make_loop(scn_lof)
     checks = observer_conditions(scn_lof, loop_lof) + controller_conditions(scn_lof, loop_lof)
     progress(1.0, "done")
