@@ -36,9 +36,12 @@ def test_list_json(capsys):
 
     assert sorted(r["name"] for r in rows) == sorted(list_scenarios())
     for r in rows:
-        assert set(r) == {"name", "method", "description", "composed"}
+        assert set(r) == {"name", "method", "paper", "description", "composed"}
         assert isinstance(r["composed"], bool) and r["composed"] == (r["method"] == "composed")
         assert isinstance(r["description"], str) and r["description"]
+        assert r["paper"] is None or isinstance(r["paper"], str)
+    papers = {r["paper"] for r in rows}
+    assert papers >= {"li2020", "yang2013", "gui2022", "mehrabian", "azizi2009", None}
 
 
 def test_show_json_is_the_toml_with_units(capsys):

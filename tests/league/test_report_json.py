@@ -50,7 +50,7 @@ def test_league_report_json(tmp_path, monkeypatch, capsys):
         "cells": cells.to_dict("records"),
     }
 
-    def fake_write_leaderboard(league_dir, plots=True):
+    def fake_write_leaderboard(league_dir, plots=True, tuned=None):
         out = tmp_path / "leaderboard"
         out.mkdir(exist_ok=True)
         write_parquet(

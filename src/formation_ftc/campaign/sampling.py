@@ -373,9 +373,12 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
         node, ref = node[part], ref[part]
 
 
-def _schema_bounds(method: str, path: str) -> list[tuple[Any, str, Any]]:
+def _schema_bounds(
+    method: str, path: str, raw: dict[str, Any] | None = None
+) -> list[tuple[Any, str, Any]]:
     """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
-    elements inherit the bounds of their list's field items when declared there)."""
+    elements inherit the bounds of their list's field items when declared there). In a composed
+    scenario ``raw`` (the base scenario) names each slot's component type, whose section declares them."""
     import annotated_types as at
 
     from formation_ftc.registry import get_method
@@ -384,8 +387,16 @@ def _schema_bounds(method: str, path: str) -> list[tuple[Any, str, Any]]:
         model: Any = get_method(method).schema
     except KeyError:
         return []
+    parts = path.split(".")
+    if method == "composed" and raw is not None and isinstance(raw.get(parts[0]), dict):
+        from formation_ftc.methods.composed import component_types
+
+        entry = component_types().get((parts[0], str(raw[parts[0]].get("type"))))
+        if entry is None:
+            return []
+        model, parts = entry.section, parts[1:]
     info = None
-    for part in path.split("."):
+    for part in parts:
         if part.isdigit():
             continue
         fields = getattr(model, "model_fields", None)
@@ -431,7 +442,9 @@ class _Validation:
         self.other = [s.path for s in plan.samplers if not s.numeric]
         self.bases = range(len(plan.base_names))
         self.bounds = {
-            (p, b): _schema_bounds(plan.methods[b], p) for p in self.numeric for b in self.bases
+            (p, b): _schema_bounds(plan.methods[b], p, plan.base_raws[b])
+            for p in self.numeric
+            for b in self.bases
         }
         self.violations: dict[
             tuple[str, int, int], list[Any]
