@@ -373,12 +373,10 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
         node, ref = node[part], ref[part]
 
 
-def _schema_bounds(
-    method: str, path: str, raw: dict[str, Any] | None = None
-) -> list[tuple[Any, str, Any]]:
+def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[Any, str, Any]]:
     """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
-    elements inherit the bounds of their list's field items when declared there). In a composed
-    scenario ``raw`` (the base scenario) names each slot's component type, whose section declares them."""
+    elements inherit the bounds of their list's field items when declared there). A composed
+    ``scenario`` (the validated base) gives each slot's section, whose model declares them."""
     import annotated_types as at
 
     from formation_ftc.registry import get_method
@@ -388,13 +386,11 @@ def _schema_bounds(
     except KeyError:
         return []
     parts = path.split(".")
-    if method == "composed" and raw is not None and isinstance(raw.get(parts[0]), dict):
-        from formation_ftc.methods.composed import component_types
-
-        entry = component_types().get((parts[0], str(raw[parts[0]].get("type"))))
-        if entry is None:
-            return []
-        model, parts = entry.section, parts[1:]
+    section = getattr(scenario, "section", None)
+    if (
+        callable(section) and section(parts[0]) is not None
+    ):  # a composed slot: its component's section
+        model, parts = type(section(parts[0])), parts[1:]
     info = None
     for part in parts:
         if part.isdigit():
@@ -442,7 +438,7 @@ class _Validation:
         self.other = [s.path for s in plan.samplers if not s.numeric]
         self.bases = range(len(plan.base_names))
         self.bounds = {
-            (p, b): _schema_bounds(plan.methods[b], p, plan.base_raws[b])
+            (p, b): _schema_bounds(plan.methods[b], p, plan.base_scenarios[b])
             for p in self.numeric
             for b in self.bases
         }
@@ -532,11 +528,13 @@ class CampaignPlan:
         self._design: np.ndarray | None = None  # quasi-Monte Carlo rows, built on first use
         self.base_names = spec.bases
         self.base_raws: list[dict[str, Any]] = []
+        self.base_scenarios: list[Any] = []  # validated (with the campaign's overrides)
         self.methods: list[str] = []
         dumps: list[dict[str, Any]] = []
         for name in self.base_names:
-            raw, dump, method = self._load_base(name, base_dir)
+            raw, dump, method, scenario = self._load_base(name, base_dir)
             self.base_raws.append(raw)
+            self.base_scenarios.append(scenario)
             dumps.append(dump)
             self.methods.append(method)
         self.samplers = spec.samplers()
@@ -600,7 +598,7 @@ class CampaignPlan:
         except loader.ScenarioError as exc:
             raise CampaignError(f"campaign.base {name!r}: {exc}") from None
         dump = scenario.model_dump(mode="json")
-        return raw, dump, scenario.scenario.method
+        return raw, dump, scenario.scenario.method, scenario
 
     def _check_extremes(self) -> None:
         """Every bound of every sampler must validate on every base, before any run."""
