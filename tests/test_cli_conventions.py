@@ -166,3 +166,24 @@ def test_show_annotates_units_without_changing_values(capsys):
     assert "#" not in bare and tomllib.loads(annotated) == tomllib.loads(bare)
     kp_line = next(ln for ln in annotated.splitlines() if ln.startswith("kp ="))
     assert kp_line.startswith("kp = 3 ") and "[N/m]" in kp_line  # a composed table keeps its values
+
+
+def test_composed_schema_validates_every_builtin_scenario_and_rejects_bad_tables(capsys):
+    """`schema composed` gives each slot a oneOf over its component types: every built-in scenario
+    validates against it (an independent JSON Schema validator), a wrong value or an unknown field in
+    a slot table does not."""
+    jsonschema = pytest.importorskip("jsonschema")
+    import tomllib
+
+    from formation_ftc.config.loader import builtin_scenarios
+
+    assert cli.main(["schema", "composed"]) == 0
+    validator = jsonschema.Draft202012Validator(json.loads(capsys.readouterr().out))
+    for name, text in builtin_scenarios().items():
+        assert not list(validator.iter_errors(tomllib.loads(text))), name
+    raw = tomllib.loads(builtin_scenarios()["cw-pd-fault"])
+    raw["controller"]["kp"] = -1.0  # the pd section: kp >= 0
+    assert list(validator.iter_errors(raw))
+    raw = tomllib.loads(builtin_scenarios()["cw-pd-fault"])
+    raw["controller"]["kpp"] = 1.0  # no such field of any controller type
+    assert list(validator.iter_errors(raw))

@@ -657,7 +657,12 @@ def _cmd_schema(args) -> int:
             f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
             f"registered: {', '.join(sorted(registered))}"
         )
-    schema = registered[args.method].schema.model_json_schema()
+    if args.method == "composed":  # every slot: a oneOf over the catalog's component types
+        from formation_ftc.methods.composed import composed_json_schema
+
+        schema = composed_json_schema()
+    else:
+        schema = registered[args.method].schema.model_json_schema()
     schema = {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": f"formation-ftc scenario ({args.method})",

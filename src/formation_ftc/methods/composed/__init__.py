@@ -58,6 +58,7 @@ __all__ = [
     "require_slot",
     "register_paper_figures",
     "register_conditions",
+    "composed_json_schema",
 ]
 
 #: slots a composed scenario may fill (plant and controller are required)
@@ -313,6 +314,52 @@ class ComposedScenario(ScenarioBase):
     def type_of(self, slot: str) -> str | None:
         raw = getattr(self, slot)
         return None if raw is None else str(raw.get("type"))
+
+
+def composed_json_schema() -> dict[str, Any]:
+    """JSON Schema of a composed scenario file in which every slot table (and every
+    ``[[evaluations]]`` item) is one of the catalog's component types: a ``oneOf`` over the types of
+    that slot, each the type's section with ``type`` fixed to its name (for editor completion and
+    validation; ``formation-ftc schema composed``).
+
+    Returns
+    -------
+    dict
+        The schema (draft 2020-12 keywords, ``$defs`` merged).
+
+    Examples
+    --------
+    >>> schema = composed_json_schema()
+    >>> any(o["properties"]["type"]["const"] == "pd" for o in schema["properties"]["controller"]["oneOf"])
+    True
+    """
+    schema = ComposedScenario.model_json_schema()
+    defs = schema.setdefault("$defs", {})
+
+    def one_of(kind: str) -> dict[str, Any]:
+        options = []
+        for (_, name), entry in sorted(component_types(kind).items()):
+            sub = entry.section.model_json_schema(ref_template="#/$defs/{model}")
+            defs.update(sub.pop("$defs", {}))
+            sub["properties"] = {
+                "type": {"const": name, "description": entry.description},
+                **sub.get("properties", {}),
+            }
+            sub["required"] = ["type", *sub.get("required", [])]
+            sub["title"] = f"{kind} {name}"
+            options.append(sub)
+        return {"oneOf": options}
+
+    for slot in SLOTS:
+        description = schema["properties"][slot].get("description", "")
+        schema["properties"][slot] = {"description": description, **one_of(slot)}
+    ev = schema["properties"]["evaluations"]
+    schema["properties"]["evaluations"] = {
+        "description": ev.get("description", ""),
+        "type": "array",
+        "items": one_of("evaluation"),
+    }
+    return schema
 
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
