@@ -19,7 +19,7 @@ TRAIN_START = 10_000
 def _cmd_tune(args) -> int:
     import sys
 
-    from formation_ftc.league.tuning import TuneError, _json_safe, tune_league_method, write_tuning
+    from formation_ftc.league.tuning import TuneError, tune_league_method, write_tuning
 
     if not str(args.out).strip():
         raise TuneError("--out: empty path; give a directory, e.g. --out out/league/tuned")
@@ -45,7 +45,7 @@ def _cmd_tune(args) -> int:
     if getattr(args, "json", False):
         from formation_ftc.exitcodes import print_json
 
-        print_json({"result": str(path), "tuning": _json_safe(result)})
+        print_json({"result": str(path), "tuning": result})  # print_json makes it JSON-safe
         return 0
     obj = result["objective"]["metric"]
     tr, ho = result["train"], result["holdout"]

@@ -81,6 +81,7 @@ from typing import Any
 import numpy as np
 
 from formation_ftc.errors import InputError
+from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.tune_cli import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
 
 __all__ = [
@@ -1116,18 +1117,6 @@ def _provenance() -> dict[str, Any]:
         return {}
 
 
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return _json_safe(obj.item())
-    return obj
-
-
 def result_name(method: str, level: str) -> str:
     """File name of a tuning result: ``<method>--<level>.json``."""
     return f"{method}--{level}.json"
@@ -1160,7 +1149,9 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         path = out / result_name(str(result["method"]), str(result["level"]))
         tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-        tmp.write_text(json.dumps(_json_safe(dict(result)), indent=1), encoding="utf-8")
+        tmp.write_text(
+            json.dumps(jsonable(dict(result)), indent=1, allow_nan=False), encoding="utf-8"
+        )
         os.replace(tmp, path)
     except OSError as exc:
         raise TuneError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None

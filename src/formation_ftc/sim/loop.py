@@ -441,17 +441,20 @@ class ClosedLoop:
             u, ctl_next, ctl_out = self.controller.output(t_k, state["controller"], flight)
             held = (u, ctl_out)
 
-        def stage_signals(o: dict) -> dict:
-            # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per
-            # unit mass): the evaluations see the stage's outputs and the step's held FDI / supervisor
-            # signals (computed only when such a metric exists)
-            if not self._stage_reads_evaluations():
-                return o
-            held_signals = {
+        # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
+        # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
+        # (computed once per step, and only when such a metric exists)
+        held_signals = (
+            {
                 **self.estimator.outputs(t_k, est_state, est),
                 **self.supervisor.outputs(t_k, sup_state, dec),
             }
-            return self._evaluated({**o, **held_signals})
+            if self._stage_reads_evaluations()
+            else None
+        )
+
+        def stage_signals(o: dict) -> dict:
+            return o if held_signals is None else self._evaluated({**o, **held_signals})
 
         def ctx(j):
             return (

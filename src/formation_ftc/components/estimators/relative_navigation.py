@@ -8,9 +8,72 @@ import jax.numpy as jnp
 
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
 
-__all__ = ["RelativeNavigationFilter", "NavigationState"]
+__all__ = ["RelativeNavigationFilter", "NavigationState", "kalman_update", "kalman_predict"]
 
 STATE = ("spacecraft", "component")
+
+
+def kalman_update(x, p, y, r):
+    """Measurement update of a full-state measurement ``y = x + v``, ``v ~ N(0, r)`` (Joseph form).
+
+    Parameters
+    ----------
+    x : array, shape (N, 6)
+        Predicted states (one row per spacecraft) [m, m/s].
+    p : array, shape (6, 6)
+        Their common predicted covariance.
+    y : array, shape (N, 6)
+        Measurements [m, m/s].
+    r : array, shape (6, 6)
+        Measurement-noise covariance.
+
+    Returns
+    -------
+    tuple of array
+        ``x + (y - x) K^T`` and ``(I - K) P (I - K)^T + K r K^T`` with ``K = P (P + r)^-1``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> x, p = kalman_update(jnp.zeros((1, 6)), jnp.eye(6), jnp.ones((1, 6)), jnp.eye(6))
+    >>> float(x[0, 0]), float(p[0, 0])  # equal confidence: halfway, half the variance
+    (0.5, 0.5)
+    """
+    gain = jnp.linalg.solve((p + r).T, p.T).T
+    eye = jnp.eye(p.shape[0])
+    p = (eye - gain) @ p @ (eye - gain).T + gain @ r @ gain.T
+    return x + (y - x) @ gain.T, 0.5 * (p + p.T)
+
+
+def kalman_predict(x, p, accel, phi, gamma, qd):
+    """Time update over one step with the acceleration held.
+
+    Parameters
+    ----------
+    x : array, shape (N, 6)
+        States after the update [m, m/s].
+    p : array, shape (6, 6)
+        Their common covariance.
+    accel : array, shape (N, 3)
+        Acceleration held over the step [m/s^2].
+    phi, gamma, qd : array
+        The discrete model (:func:`formation_ftc.design.kalman.discrete_model`).
+
+    Returns
+    -------
+    tuple of array
+        ``x phi^T + accel gamma^T`` and ``phi P phi^T + qd``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> x, p = kalman_predict(jnp.ones((1, 6)), jnp.eye(6), jnp.zeros((1, 3)), jnp.eye(6),
+    ...                       jnp.zeros((6, 3)), jnp.eye(6))
+    >>> float(x[0, 0]), float(p[0, 0])
+    (1.0, 2.0)
+    """
+    p = phi @ p @ phi.T + qd
+    return x @ phi.T + accel @ gamma.T, 0.5 * (p + p.T)
 
 
 class NavigationState(NamedTuple):
@@ -61,20 +124,14 @@ class RelativeNavigationFilter(Estimator):
         return NavigationState(jnp.asarray(measurement0), jnp.asarray(self.p0))
 
     def update(self, t, state: NavigationState, inputs: FlightInputs):
-        x, p = state
-        gain = jnp.linalg.solve((p + self.r).T, p.T).T  # K = P (P + R)^-1
-        x = x + (inputs.measurement - x) @ gain.T
-        eye = jnp.eye(6)
-        p = (eye - gain) @ p @ (eye - gain).T + gain @ self.r @ gain.T  # Joseph form
-        new = NavigationState(x, 0.5 * (p + p.T))
-        return new, x
+        x, p = kalman_update(state.x_hat, state.p, inputs.measurement, self.r)
+        return NavigationState(x, p), x
 
     def predict(self, t, state: NavigationState, command, dt):
-        x, p = state
         accel = command / self.nominal_mass[:, None]
-        x = x @ self.phi.T + accel @ self.gamma.T
-        p = self.phi @ p @ self.phi.T + self.qd
-        return NavigationState(x, 0.5 * (p + p.T))
+        return NavigationState(
+            *kalman_predict(state.x_hat, state.p, accel, self.phi, self.gamma, self.qd)
+        )
 
     def current(self, state: NavigationState):
         return state.x_hat

@@ -8,6 +8,7 @@ from typing import Any, NamedTuple
 
 import jax.numpy as jnp
 
+from formation_ftc.components.estimators.relative_navigation import kalman_predict, kalman_update
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
 
 __all__ = ["ResidualFdi", "FdiState", "RESIDUALS", "TESTS"]
@@ -121,14 +122,11 @@ class ResidualFdi(Estimator):
         top = jnp.arange(stat.size).reshape(stat.shape) == jnp.argmax(stat)
         isolated = jnp.where(first, top, state.isolated)
         x_hat, p = state.x_hat, state.p
-        if self.residual == "kalman":  # measurement update (Joseph form)
-            gain = jnp.linalg.solve((p + self.r).T, p.T).T
-            x_hat = x_hat + e @ gain.T
-            eye = jnp.eye(6)
-            p = (eye - gain) @ p @ (eye - gain).T + gain @ self.r @ gain.T
+        if self.residual == "kalman":  # the filter's measurement update
+            x_hat, p = kalman_update(x_hat, p, y, self.r)
         new = FdiState(
             x_hat=x_hat,
-            p=0.5 * (p + p.T),
+            p=p,
             y_prev=y,
             a_prev=state.a_prev,
             started=jnp.asarray(True),
@@ -143,9 +141,8 @@ class ResidualFdi(Estimator):
         accel = command / self.nominal_mass[:, None]
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":
-            x_hat = x_hat @ self.phi.T + accel @ self.gamma.T
-            p = self.phi @ p @ self.phi.T + self.qd
-        return state._replace(x_hat=x_hat, p=0.5 * (p + p.T), a_prev=accel)
+            x_hat, p = kalman_predict(x_hat, p, accel, self.phi, self.gamma, self.qd)
+        return state._replace(x_hat=x_hat, p=p, a_prev=accel)
 
     def current(self, state: FdiState):
         stat = jnp.maximum(state.g_pos, state.g_neg)

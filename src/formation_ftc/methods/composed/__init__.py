@@ -59,6 +59,7 @@ __all__ = [
     "register_paper_figures",
     "register_conditions",
     "composed_json_schema",
+    "InitialStateRows",
 ]
 
 #: slots a composed scenario may fill (plant and controller are required)
@@ -112,6 +113,35 @@ def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
             f"{slot} {ctx.scenario.type_of(slot)} reads {what} from the [{needed}] section, "
             f"but the loop has no [{needed}]: add one"
         )
+
+
+class InitialStateRows(StrictModel):
+    """A plant section of N spacecraft given by their initial states, one row each (N is the number of
+    ``initial_position`` rows; ``initial_velocity``, when given, has as many). Subclasses restate the
+    two fields with their frame in the description."""
+
+    initial_position: list[tuple[float, float, float]] = Field(
+        description="Initial position per spacecraft [m]."
+    )
+    initial_velocity: list[tuple[float, float, float]] | None = Field(
+        None, description="Initial velocity per spacecraft [m/s] (default 0)."
+    )
+
+    @model_validator(mode="after")
+    def _rows(self):
+        n = len(self.initial_position)
+        if n < 1:
+            raise ValueError("initial_position: at least one spacecraft")
+        if self.initial_velocity is not None and len(self.initial_velocity) != n:
+            raise ValueError(
+                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
+            )
+        return self
+
+    @property
+    def count(self) -> int:
+        """Number of spacecraft [-]."""
+        return len(self.initial_position)
 
 
 @dataclass(frozen=True)

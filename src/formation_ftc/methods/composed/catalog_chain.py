@@ -54,7 +54,12 @@ from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.polygon_formation import relative_acceleration_fn
 from formation_ftc.design.allocation import validate_allocation_inputs
 from formation_ftc.design.flfr import FlfrDesign, design_flfr
-from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
+from formation_ftc.methods.composed import (
+    BuildContext,
+    InitialStateRows,
+    per_spacecraft,
+    register_component_type,
+)
 from formation_ftc.sim.components import CompositionError, as_float
 from formation_ftc.sim.metrics import Metric
 
@@ -100,7 +105,7 @@ def _steps(time: float, dt: float) -> int:
 
 
 # ------------------------------------------------------------------------------------------ plants
-class DoubleIntegratorSection(StrictModel):
+class DoubleIntegratorSection(InitialStateRows):
     """Deep space (Azizi & Khorasani 2009 Sec. II): decoupled double integrators per axis,
     ``x_i'' = a_i + d_i(t)`` with the actuator's applied acceleration ``a_i = b_i u_i`` [m/s^2]."""
 
@@ -123,21 +128,6 @@ class DoubleIntegratorSection(StrictModel):
         description="'exact': the exact step with the applied and disturbance accelerations held over "
         "the step (zero-order hold); 'rk4': RK4 (a 'continuous' law is re-evaluated at the stages).",
     )
-
-    @model_validator(mode="after")
-    def _sizes(self):
-        n = len(self.initial_position)
-        if n < 1:
-            raise ValueError("initial_position: at least one spacecraft")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(
-                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
-            )
-        return self
-
-    @property
-    def count(self) -> int:
-        return len(self.initial_position)
 
 
 def _double_integrator(sec: DoubleIntegratorSection, ctx: BuildContext) -> DoubleIntegratorPlant:

@@ -60,7 +60,12 @@ from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, Sig
 from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.methods.composed import BuildContext, register_component_type, require_slot
+from formation_ftc.methods.composed import (
+    BuildContext,
+    InitialStateRows,
+    register_component_type,
+    require_slot,
+)
 from formation_ftc.sim.components import CompositionError, as_float
 from formation_ftc.sim.metrics import Metric
 
@@ -218,7 +223,7 @@ def care_solution(n: float, q_scale: float):
 
 
 # ------------------------------------------------------------------------------------------ plant
-class ZohCwPlantSection(StrictModel):
+class ZohCwPlantSection(InitialStateRows):
     """Deputies on linear CW dynamics driven by accelerations, stepped exactly (Gui2022 (1)-(3))."""
 
     mean_motion: float = Field(
@@ -235,21 +240,6 @@ class ZohCwPlantSection(StrictModel):
             "A0 of d(t) = A0 [1 - 1.5 sin nt, 0.5 sin 2nt, sin nt] (Gui2022's ref. [12]) [m/s^2]; 0: none."
         ),
     )
-
-    @model_validator(mode="after")
-    def _sizes(self):
-        n = len(self.initial_position)
-        if n < 1:
-            raise ValueError("initial_position: at least one spacecraft")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(
-                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
-            )
-        return self
-
-    @property
-    def count(self) -> int:
-        return len(self.initial_position)
 
 
 def _zoh_cw_plant(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:

@@ -82,25 +82,30 @@ class RelativeNavigationSection(StrictModel):
         return model, R
 
 
-def _navigation_filter(sec: RelativeNavigationSection, ctx: BuildContext):
+def _filter_model(sec: RelativeNavigationSection, ctx: BuildContext, name: str) -> dict:
+    """The on-board model's arrays (phi, gamma, qd, r, nominal_mass) at the scenario's step, checked
+    against the loop (``name``: the estimator type, for the messages)."""
     if ctx.plant is None or type(ctx.plant).position is Plant.position:
         raise CompositionError(
-            f"estimator relative-navigation-filter estimates LVLH relative states, but plant "
+            f"estimator {name} estimates LVLH relative states, but plant "
             f"{ctx.scenario.type_of('plant')} has none (a translational plant is needed)"
         )
     model, R = sec.model(ctx.dt)
     mass = per_spacecraft(sec.nominal_mass, ctx.count, "estimator.nominal_mass")
     if not np.all(np.isfinite(mass) & (mass > 0)):
         raise CompositionError(f"estimator.nominal_mass: {mass.tolist()} kg, every one must be > 0")
-    return RelativeNavigationFilter(
-        count=ctx.count,
+    return dict(
         phi=as_float(model.phi),
         gamma=as_float(model.gamma),
         qd=as_float(model.qd),
         r=as_float(R),
-        p0=as_float(R),
         nominal_mass=as_float(mass),
     )
+
+
+def _navigation_filter(sec: RelativeNavigationSection, ctx: BuildContext):
+    arrays = _filter_model(sec, ctx, "relative-navigation-filter")
+    return RelativeNavigationFilter(count=ctx.count, p0=arrays["r"], **arrays)
 
 
 register_component_type(
@@ -177,19 +182,15 @@ class ResidualFdiSection(RelativeNavigationSection):
 
 
 def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
-    nav = _navigation_filter(sec, ctx)
+    a = _filter_model(sec, ctx, "residual-fdi")
     return ResidualFdi(
         count=ctx.count,
         residual=sec.residual,
         test=sec.test,
-        phi=nav.phi,
-        gamma=nav.gamma,
-        qd=nav.qd,
-        r=nav.r,
-        parity_cov=as_float(nav.r + nav.phi @ nav.r @ nav.phi.T + nav.qd),
-        nominal_mass=nav.nominal_mass,
+        parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
         drift=as_float(sec.drift),
         threshold=as_float(sec.threshold),
+        **a,
     )
 
 
