@@ -92,20 +92,22 @@ velocity_noise_std = 0.001
 """
 
 
+#: the scenario's fields: a noise-free parity residual with a threshold never reached
+FIELDS = dict(
+    horizon=60.0,
+    sensors="",
+    kind="bias",
+    residual="parity",
+    test="fixed",
+    drift=0.5,
+    threshold=1e6,
+    bias=BIAS,
+)
+
+
 def _run(tmp_path, **kw):
-    fields = dict(
-        horizon=60.0,
-        sensors="",
-        kind="bias",
-        residual="parity",
-        test="fixed",
-        drift=0.5,
-        threshold=1e6,
-        bias=BIAS,
-    )
-    fields.update(kw)
     path = tmp_path / "fdi.toml"
-    path.write_text(SCENARIO.format(**fields))
+    path.write_text(SCENARIO.format(**{**FIELDS, **kw}))
     return simulate_with_metrics(load_scenario(path))
 
 
@@ -165,16 +167,7 @@ def test_noisy_navigation_no_false_alarm_then_a_correct_detection(tmp_path, resi
 
 def test_fdi_scores_need_the_fault_battery(tmp_path):
     path = tmp_path / "bad.toml"
-    text = SCENARIO.format(
-        horizon=60.0,
-        sensors="",
-        kind="bias",
-        residual="parity",
-        test="fixed",
-        drift=0.5,
-        threshold=5.0,
-        bias=BIAS,
-    )
+    text = SCENARIO.format(**{**FIELDS, "threshold": 5.0})
     text = text.replace('type = "residual-fdi"', 'type = "relative-navigation-filter"').replace(
         'residual = "parity"\ntest = "fixed"\ndrift = 0.5\nthreshold = 5.0\n', ""
     )
