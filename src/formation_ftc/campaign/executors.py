@@ -153,6 +153,16 @@ def die_with_parent(parent_pid: int, poll_s: float = 1.0) -> None:
     threading.Thread(target=watch, name="formation-ftc-parent-watch", daemon=True).start()
 
 
+def _results(futures: list, as_completed: Callable) -> Iterator:
+    """The futures' results as they complete; the others are cancelled when the caller stops."""
+    try:
+        for f in as_completed(futures):
+            yield f.result()
+    finally:
+        for f in futures:
+            f.cancel()
+
+
 class LocalExecutor:
     """In-process batches (``workers=1``), a spawn-context process pool of ``workers`` processes, or
     ``workers=None``: chosen by :meth:`prepare` from the size of the work (:func:`auto_workers`)."""
@@ -210,13 +220,7 @@ class LocalExecutor:
             if finish is not None:
                 yield finish()
             return
-        futures = [self._pool.submit(fn, plan, c) for c in chunks]
-        try:
-            for f in as_completed(futures):
-                yield f.result()
-        finally:
-            for f in futures:
-                f.cancel()
+        yield from _results([self._pool.submit(fn, plan, c) for c in chunks], as_completed)
 
     def describe(self) -> str:
         return (
@@ -385,12 +389,7 @@ class DaskExecutor:
             )
             for c in chunks
         ]
-        try:
-            for f in dask_as_completed(futures):
-                yield f.result()
-        finally:
-            for f in futures:
-                f.cancel()
+        yield from _results(futures, dask_as_completed)
 
     def describe(self) -> str:
         return (

@@ -11,7 +11,6 @@ runs marked on the axis) and one figure per swept field (median and 5-95 % band 
 from __future__ import annotations
 
 import json
-import math
 import re
 from pathlib import Path
 from typing import Any
@@ -20,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from formation_ftc.campaign.storage import CampaignStore
+from formation_ftc.exitcodes import jsonable
 
 __all__ = ["summarize", "write_report", "field_unit", "PERCENTILES"]
 
@@ -155,18 +155,6 @@ def field_unit(manifest: dict[str, Any], path: str) -> str:
         return ""
 
 
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return _json_safe(obj.item())
-    return obj
-
-
 def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) -> list[Path]:
     from formation_ftc.plotting import new_figure, save_figure
 
@@ -258,7 +246,7 @@ def write_report(
     summary = summarize(df, store.manifest)
     out = Path(campaign_dir) / "report"
     out.mkdir(exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(_json_safe(summary), indent=2))
+    (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2))
     table = _table_rows(summary)
     table.to_csv(out / "summary.csv", index=False)
     figures: list[Path] = []

@@ -41,6 +41,7 @@ import os
 import re
 import socket
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -244,15 +245,7 @@ class CampaignStore:
     @classmethod
     def prepare(cls, root: str | Path, plan: CampaignPlan) -> CampaignStore:
         """Check ``root`` for ``plan`` (a new, empty or same-campaign directory); writes nothing."""
-        try:
-            return cls._prepare(Path(root), plan)
-        except (OSError, ValueError) as exc:
-            if isinstance(exc, CampaignError):
-                raise
-            raise CampaignError(
-                f"{_short(root)}: unusable results directory "
-                f"({getattr(exc, 'strerror', None) or exc})"
-            ) from None
+        return _opened(lambda r: cls._prepare(r, plan), root, "results directory")
 
     @classmethod
     def _prepare(cls, root: Path, plan: CampaignPlan) -> CampaignStore:
@@ -426,15 +419,7 @@ class CampaignStore:
     @classmethod
     def read(cls, root: str | Path) -> CampaignStore:
         """Open an existing campaign directory for reading (report)."""
-        try:
-            return cls._read(Path(root))
-        except (OSError, ValueError) as exc:
-            if isinstance(exc, CampaignError):
-                raise
-            raise CampaignError(
-                f"{_short(root)}: unusable campaign directory "
-                f"({getattr(exc, 'strerror', None) or exc})"
-            ) from None
+        return _opened(cls._read, root, "campaign directory")
 
     @classmethod
     def _read(cls, root: Path) -> CampaignStore:
@@ -531,8 +516,17 @@ class CampaignStore:
         df = pd.concat(frames, ignore_index=True)
         return df.sort_values("run_id", kind="stable").reset_index(drop=True)
 
-    def trace_path(self, run_id: int) -> Path:
-        return self.root / "traces" / trace_filename(run_id)
+
+def _opened(open_: Callable[[Path], CampaignStore], root: str | Path, what: str) -> CampaignStore:
+    """``open_(Path(root))``, an OSError or ValueError (not a CampaignError) as "unusable ``what``"."""
+    try:
+        return open_(Path(root))
+    except (OSError, ValueError) as exc:
+        if isinstance(exc, CampaignError):
+            raise
+        raise CampaignError(
+            f"{_short(root)}: unusable {what} ({getattr(exc, 'strerror', None) or exc})"
+        ) from None
 
 
 def _short(path: str | Path) -> str:

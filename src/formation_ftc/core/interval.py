@@ -56,7 +56,6 @@ __all__ = [
     "evaluate",
     "enclose",
     "enclose_derivative",
-    "enclose_boxes",
     "enclose_norm",
 ]
 
@@ -431,8 +430,6 @@ def _not(a: _I) -> _I:
 
 
 _Pair = tuple[_I, "_I | None"]
-
-_UNARY_DERIV_FREE = {"sign", "floor", "ceil", "step"}
 
 
 class _Evaluator:
@@ -833,32 +830,6 @@ class Boxes:
     lo: np.ndarray
     hi: np.ndarray
     rounds: int
-
-
-def enclose_boxes(
-    texts: Sequence[str | float],
-    variables: Sequence[str],
-    t_lo: float,
-    t_hi: float,
-    n_sub: int = 4096,
-    *,
-    derivative: bool = False,
-    refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-    max_rounds: int = 8,
-    max_boxes: int = 1 << 20,
-    time: str = "t",
-    **fixed: float,
-) -> Boxes:
-    """Enclose several expressions on ``n_sub`` equal sub-intervals of ``[t_lo, t_hi]``.
-
-    ``refine(lo, hi)`` (arrays (m, k)) returns a boolean mask of the sub-intervals whose enclosure is
-    inconclusive; those are bisected and re-evaluated, at most ``max_rounds`` times and never beyond
-    ``max_boxes`` sub-intervals (bounded work). The union of the sub-intervals is always the whole range.
-    Other variables of the expressions are given as keywords (``fixed``).
-    """
-    return _boxes(
-        texts, variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, max_boxes, time, fixed
-    )
 
 
 def _boxes(

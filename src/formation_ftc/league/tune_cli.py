@@ -35,8 +35,6 @@ def _cmd_tune(args) -> int:
         train_start=args.train_start,
         optimiser=args.optimiser,
         max_evaluations=args.max_evaluations,
-        objective=args.objective,
-        statistic=args.statistic,
         margin=args.margin,
         penalty=args.penalty,
         log=lambda line: print(line, file=sys.stderr, flush=True),
@@ -70,17 +68,7 @@ def _fmt(v: Any) -> str:
 
 
 def add_cli(subparsers) -> argparse.ArgumentParser:
-    """Add the ``tune`` command to ``subparsers``.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        The top-level sub-commands.
-
-    Returns
-    -------
-    argparse.ArgumentParser
-        The ``tune`` parser.
+    """Add the ``tune`` command to ``subparsers`` (the top-level sub-commands); returns its parser.
 
     Examples
     --------
@@ -118,8 +106,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument(
         "--max-evaluations", type=int, default=60, help="batch evaluations of the training set"
     )
-    p.add_argument("--objective", default=None, help="league metric minimised (default: [tune])")
-    p.add_argument("--statistic", choices=("mean", "median"), default=None, help="over the runs")
     p.add_argument(
         "--margin", type=float, default=0.1, help="requirement tightening on training runs [-]"
     )

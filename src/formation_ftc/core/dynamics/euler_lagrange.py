@@ -40,7 +40,6 @@ __all__ = [
     "rbar",
     "rbar_inv",
     "rbar_inv_dot",
-    "rbar_dot",
     "inertia_matrix",
     "coriolis_matrix",
     "el_forces",
@@ -130,12 +129,6 @@ def rbar_inv_dot(q, qdot):
         ],
         -2,
     )
-
-
-def rbar_dot(q, qdot):
-    """d/dt R_bar(q) = -R_bar W_dot R_bar (..., 3, 3) [1/s]."""
-    R = rbar(q)
-    return -R @ rbar_inv_dot(q, qdot) @ R
 
 
 def inertia_matrix(q, J):
