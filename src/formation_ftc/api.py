@@ -41,6 +41,8 @@ __all__ = [
 def load_scenario(
     name_or_path: str | Path | Mapping[str, Any],
     overrides: Mapping[str, Any] | Iterable[str] | None = None,
+    *,
+    build: bool = True,
 ) -> ScenarioBase:
     """Built-in name, TOML path or raw dict -> validated scenario (overrides applied first).
 
@@ -52,6 +54,9 @@ def load_scenario(
     overrides : Mapping or iterable of str, optional
         Field values applied before validation: ``{"simulation.horizon": 300.0}`` or
         ``["controller.kp=3"]`` (dotted paths, list items by index: ``plant.mass.0``).
+    build : bool, default True
+        Also assemble the loop to check that the components fit together (as ``check`` and ``run``
+        do). False checks every field of every section only (what ``formation-ftc show`` does).
 
     Returns
     -------
@@ -77,7 +82,7 @@ def load_scenario(
     else:
         raw, source = loader.read_raw(name_or_path)
     raw = loader.apply_overrides(raw, overrides)
-    return loader.validate(raw, source)
+    return loader.validate(raw, source, build=build)
 
 
 def list_scenarios() -> dict[str, str]:

@@ -50,7 +50,8 @@ HELP: dict[str, tuple[str, list[str]]] = {
     ),
     "show": (
         "Print the fully resolved TOML of a scenario (defaults filled in, --set overrides applied), "
-        "each field followed by its unit and meaning as a comment.",
+        "each field followed by its unit and meaning as a comment. `show` checks every field of every "
+        "section; `check` also builds the loop to check that the components fit together.",
         [
             "formation-ftc show li2020-thm1",
             "formation-ftc show my-scenario.toml --set controller.kp=3",
@@ -350,13 +351,19 @@ def _scenario_schema(raw: dict) -> dict:
     return schema
 
 
-def _load(args):
-    """The validated scenario of ``args.scenario`` with ``--set`` overrides; errors get "did you mean"."""
-    from formation_ftc.api import load_scenario
+def _load(args, build: bool = True):
+    """The validated scenario of ``args.scenario`` with ``--set`` overrides; errors get "did you mean".
+    ``build=False``: every field checked, the loop not built (no JAX imported: ``show``)."""
+    from formation_ftc.config import loader
     from formation_ftc.config.loader import ScenarioError
 
     _check_scenario_name(args.scenario)
     try:
+        if not build:  # what api.load_scenario does, without importing the api (and JAX)
+            raw, source = loader.read_raw(args.scenario)
+            return loader.validate(loader.apply_overrides(raw, args.overrides), source, build=False)
+        from formation_ftc.api import load_scenario
+
         return load_scenario(args.scenario, args.overrides)
     except ScenarioError as exc:
         hints = _field_hints(args.scenario, args.overrides)
@@ -531,7 +538,7 @@ def _field_units(resolved: dict, schema: dict) -> dict[str, str]:
 def _cmd_show(args) -> int:
     from formation_ftc.config.loader import dump_toml
 
-    scenario = _load(args)
+    scenario = _load(args, build=False)  # fields only: `check` also builds the loop
     if args.json:  # the content of the TOML below, and the unit of each field that states one
         resolved = scenario.model_dump(mode="json", exclude_none=True)
         print_json(

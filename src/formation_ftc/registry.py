@@ -18,12 +18,14 @@ import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from pydantic import BaseModel
 
-from formation_ftc.sim.compiled import Compiled
+if TYPE_CHECKING:
+    from formation_ftc.sim.compiled import Compiled
+
 
 __all__ = [
     "Compiled",
@@ -50,6 +52,16 @@ __all__ = [
 ]
 
 PyTree = Any
+
+
+def __getattr__(name: str) -> Any:
+    """``Compiled`` (re-exported from :mod:`formation_ftc.sim.compiled`) is imported when first read:
+    that module imports JAX, and the registry is read by commands that never compile (``show``)."""
+    if name == "Compiled":
+        from formation_ftc.sim.compiled import Compiled
+
+        return Compiled
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 #: How a condition's verdict was computed (:attr:`Condition.basis`).

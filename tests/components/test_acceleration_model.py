@@ -40,7 +40,7 @@ def test_time_update_receives_the_force_per_nominal_mass():
     y = rng.normal(size=(2, 6))
     state0 = est.initial_state(y)
     state, estimate = est.update(
-        0.0, state0, FlightInputs(jnp.asarray(y), None, None, None, None, None)
+        0.0, state0, FlightInputs(jnp.asarray(y), None, None, None, None, None, None)
     )
     force = rng.normal(size=(2, 3)) * 50.0
     dt = 0.001
@@ -62,7 +62,7 @@ def test_time_update_receives_the_force_per_nominal_mass():
     rate = q_hat @ A.T + (u + F_hat) @ B.T + e_y @ np.asarray(ilo.L1).T + 0.01 * np.sign(e_y)
     np.testing.assert_allclose(got, q_hat + dt * rate, rtol=1e-12, atol=1e-12)
     # everything else is the inner observer's
-    assert est.signals() == ilo.signals() and est.count == 2 and est.refresh_on_observe
+    assert est.signals() == ilo.signals() and est.count == 2
 
 
 def test_bad_nominal_masses_are_refused_naming_the_estimator():

@@ -59,7 +59,7 @@ def test_force_is_nominal_mass_times_the_laws_acceleration_in_every_mode():
     assert ctl.sampled and ctl.count == 4
     y = _chain_y()
     for mode in (0, 1, 2):
-        flight = FlightInputs(y, None, None, jnp.asarray(mode), None, None)
+        flight = FlightInputs(y, None, None, jnp.asarray(mode), None, None, None)
         u, _, out = law.output(jnp.asarray(2.5), law.initial_state(), flight)
         f, nxt, out_f = ctl.output(jnp.asarray(2.5), ctl.initial_state(), flight)
         np.testing.assert_allclose(np.asarray(f), MASS[:, None] * np.asarray(u), rtol=1e-15)

@@ -61,6 +61,7 @@ def _inputs(omega, q):
         decision=None,
         exogenous=None,
         reference=None,
+        step=None,
     )
 
 

@@ -64,7 +64,7 @@ def test_controller_blind_to_true_faults_and_disturbance():
             u, _, _ = c.output(
                 jnp.asarray(1.3),
                 c.initial_state(),
-                FlightInputs(y, None, None, jnp.asarray(mode), None, None),
+                FlightInputs(y, None, None, jnp.asarray(mode), None, None, None),
             )
             outs.append(np.asarray(u))
     for a, b in zip(outs[:3], outs[3:], strict=True):
@@ -94,7 +94,7 @@ def test_controller_law_against_hand_formula():
     e, ed = np.array([0.1, -0.2]), np.array([0.01, 0.03])
     y = {"position": (rd[1:] - rd[:-1]) + e[:, None], "velocity": jnp.asarray(ed[:, None])}
     u, _, _ = c.output(
-        0.0, c.initial_state(), FlightInputs(y, None, None, jnp.asarray(1), None, None)
+        0.0, c.initial_state(), FlightInputs(y, None, None, jnp.asarray(1), None, None, None)
     )
     u = np.asarray(u)[:, 0]
     p = -3.0 * ed - 2.0 * e

@@ -88,6 +88,7 @@ def test_controller_reads_flight_inputs_only(name):
         decision=None,
         exogenous=ctl.exogenous(t0),
         reference=None,
+        step=None,
     )
     out_a = ctl.output(t0, ctl.initial_state(), flight)
     out_b = other.controller.output(t0, other.controller.initial_state(), flight)
@@ -117,7 +118,7 @@ def test_ilo_reads_flight_inputs_only():
     ]
     other = _with_other_truth(loop)
     y = jnp.asarray(np.random.default_rng(2).normal(size=(1, 6)))
-    flight = FlightInputs(y, None, None, None, None, None)
+    flight = FlightInputs(y, None, None, None, None, None, None)
     s_a, e_a = est.update(0.0, est.initial_state(y), flight)
     s_b, e_b = other.estimator.update(0.0, other.estimator.initial_state(y), flight)
     jax.tree_util.tree_map(np.testing.assert_array_equal, (s_a, e_a), (s_b, e_b))

@@ -96,6 +96,7 @@ def test_output_equals_the_formula():
         decision=None,
         exogenous=law.exogenous(jnp.asarray(t)),
         reference=None,
+        step=None,
     )
     u, _, _ = law.output(jnp.asarray(t), None, inputs)
     A, _ = cw_matrices(N)

@@ -109,7 +109,9 @@ def test_held_time_signals_and_fault_and_fdi_profiles():
         assert np.count_nonzero(f[:, 1:]) == 0 and np.count_nonzero(f[:, 0, :2]) == 0
         d = np.asarray(table["plant"]["d"])
         np.testing.assert_array_equal(d[0], d[2])
-        _, rep = loop.estimator.update(jnp.asarray(t_k), None, None)
+        _, rep = loop.estimator.update(
+            jnp.asarray(t_k), None, FlightInputs(*[None] * 6, loop._step_context(jnp.asarray(k)))
+        )
         flag, est = np.asarray(rep.flag), np.asarray(rep.estimate)
         on = k >= 4500
         assert flag[0, 2] == float(on) and flag.sum() == float(on)

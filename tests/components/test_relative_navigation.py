@@ -73,7 +73,7 @@ def test_component_equals_a_textbook_filter_and_its_errors_match_the_riccati_ste
         nominal_mass=mass,
     )
     update = jax.jit(
-        lambda s, y: comp.update(0.0, s, FlightInputs(y, None, None, None, None, None))
+        lambda s, y: comp.update(0.0, s, FlightInputs(y, None, None, None, None, None, None))
     )
     predict = jax.jit(lambda s, f: comp.predict(0.0, s, f, DT))
     state = comp.initial_state(ys[0])

@@ -101,7 +101,7 @@ def test_translational_law_by_hand_and_on_a_cw_plant():
     )
     y = jnp.array([[1.0, 2.0, 3.0, 0.1, 0.2, 0.3], [-1.0, 0.5, 0.0, 0.0, -0.1, 0.2]])
     t = 2.0
-    f, _, _ = law.output(t, None, FlightInputs(y, None, None, None, law.exogenous(t), None))
+    f, _, _ = law.output(t, None, FlightInputs(y, None, None, None, law.exogenous(t), None, None))
     p_d = np.array([[10.0, 0.4, 0.0], [20.0, 0.4, 0.0]])
     v_d = np.array([[0.0, 0.4, 0.0]] * 2)
     a_d = np.array([[0.0, 0.2, 0.0]] * 2)
@@ -151,7 +151,7 @@ def test_attitude_law_and_quaternion_plant_against_independent_formulas():
     w = jnp.array([[0.01, -0.02, 0.03]])
     q = jnp.array([[0.1, 0.2, -0.1, 0.9]])
     tau, _, _ = law.output(
-        0.0, None, FlightInputs({"omega": w, "q": q}, None, None, None, None, None)
+        0.0, None, FlightInputs({"omega": w, "q": q}, None, None, None, None, None, None)
     )
     s = (np.sum(q[0, :3] ** 2) + 2.0 * q[0, 3] ** 2) / (2 * (np.sum(w[0] ** 2) + 1e-3))
     np.testing.assert_allclose(

@@ -58,9 +58,14 @@ def test_every_cell_validates_with_the_battery_and_level(spec, cells):
                 assert act["bias"] == pytest.approx(0.05 if c.level == "limited" else 0.5)
             assert act.get("euler_allocation", False) is (name == "mehrabian")
             assert c.raw["plant"] == spec.truth and c.raw["simulation"]["horizon"] == 300.0
-            assert [e["type"] for e in c.raw["evaluations"]] == ["attitude-scores"]
+            # the league scores a method's fault detector (mehrabian's) with fdi-scores too
+            fdi = ["fdi-scores"] if name == "mehrabian" else []
+            assert [e["type"] for e in c.raw["evaluations"]] == ["attitude-scores", *fdi]
     mehrabian = cells["mehrabian"][0].raw
-    assert mehrabian["sensors"]["type"] == "quaternion-euler" and "estimator" not in mehrabian
+    assert mehrabian["sensors"]["type"] == "quaternion-euler"
+    # the law reconfigures on detected, not scripted, faults
+    assert mehrabian["estimator"]["type"] == "attitude-residual-fdi"
+    assert all("estimator" not in c.raw for m in ("pd", "yang2013") for c in cells[m])
     assert "sensors" not in cells["pd"][0].raw and "sensors" not in cells["yang2013"][0].raw
     assert {c.raw["simulation"]["dt"] for m in cells.values() for c in m} == {0.05}
 

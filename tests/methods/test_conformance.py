@@ -217,6 +217,12 @@ KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("estimator", "scripted-fdi"): (),
     ("estimator", "relative-navigation-filter"): ("nominal_mass", "mu", "acceleration_noise_psd"),
     ("estimator", "residual-fdi"): ("nominal_mass", "mu", "acceleration_noise_psd"),
+    ("estimator", "attitude-residual-fdi"): (
+        "nominal_inertia",
+        "semi_major_axis",
+        "mu",
+        "torque_limit",
+    ),
     ("supervisor", "hierarchical"): (),
     ("controller", "yang2013-force-torque"): ("nominal_mass", "nominal_inertia"),
     ("estimator", "scheduled-diagnosis"): (),

@@ -36,22 +36,18 @@ SWITCH = 5  # step of the decision
 
 @component
 class LatchSupervisor(Supervisor):
-    """Mode 0 until step ``switch`` (an int leaf), then 1 for good (latched in the state)."""
+    """Mode 0 until step ``switch`` (an int leaf, read against the step context's index), then 1 for
+    good (latched in the state)."""
 
-    dt: float = static()
     switch: Any = 0
 
     def initial_state(self):
         return {"mode": jnp.asarray(0, dtype=jnp.int64), "changes": jnp.asarray(0, dtype=jnp.int64)}
 
     def update(self, t, state, inputs: FlightInputs):
-        k = jnp.round(t / self.dt).astype(jnp.int64)
-        mode = jnp.where(k >= self.switch, 1, state["mode"])
+        mode = jnp.where(inputs.step.k >= self.switch, 1, state["mode"])
         new = {"mode": mode, "changes": state["changes"] + (mode != state["mode"])}
         return new, new["mode"]
-
-    def current(self, state):
-        return state["mode"]
 
     def signals(self):
         return (
@@ -93,7 +89,7 @@ def _loop(record_every: int) -> ClosedLoop:
             initial_position=jnp.array([[1.0]]), initial_velocity=jnp.array([[0.0]])
         ),
         controller=ModeGainController(count=1),
-        supervisor=LatchSupervisor(dt=DT, switch=jnp.asarray(SWITCH)),
+        supervisor=LatchSupervisor(switch=jnp.asarray(SWITCH)),
         metrics=tuple(at) + (Metric("t_switch", "mode", reduce="first", threshold=1.0),),
         dt=DT,
         n_steps=N_STEPS,

@@ -311,8 +311,12 @@ def _format_validation_error(exc: ValidationError, source: str) -> str:
     return "\n".join(lines)
 
 
-def validate(raw: Mapping[str, Any], source: str = "<scenario>"):
-    """Validate ``raw`` with the schema of the method named in ``[scenario].method``."""
+def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool = True):
+    """Validate ``raw`` with the schema of the method named in ``[scenario].method``.
+
+    ``build=False`` checks every field of every section (the same checks and messages) but does not
+    assemble the method's loop to check that its parts fit (``formation-ftc show``): no JAX is
+    imported. The default also builds it, as ``check``, ``run`` and campaigns need."""
     from formation_ftc.registry import get_method
 
     meta = raw.get("scenario") if isinstance(raw, Mapping) else None
@@ -327,7 +331,7 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>"):
     if _nesting_depth(raw) > MAX_NESTING:
         raise ScenarioError(f"{source}: nested more than {MAX_NESTING} levels deep (tables/arrays)")
     try:
-        return method.schema.model_validate(dict(raw))
+        return method.schema.model_validate(dict(raw), context=None if build else {"build": False})
     except ValidationError as exc:
         raise ScenarioError(_format_validation_error(exc, source)) from None
     except (

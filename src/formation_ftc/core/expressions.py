@@ -33,7 +33,6 @@ from collections.abc import Callable, Sequence
 from functools import lru_cache
 from typing import Any, NoReturn, cast
 
-import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.errors import InputError
@@ -77,6 +76,26 @@ class ExpressionError(InputError):
         self.col = col
 
 
+class _LazyJaxNumpy:
+    """:mod:`jax.numpy`, imported when an expression is first evaluated (each name is kept after its
+    first use): parsing and checking an expression -- what validating a scenario does -- needs no JAX."""
+
+    def __getattr__(self, name: str) -> Any:
+        import jax.numpy
+
+        value = getattr(jax.numpy, name)
+        setattr(self, name, value)
+        return value
+
+
+jnp: Any = _LazyJaxNumpy()
+
+
+def _jnp(name: str) -> Callable:
+    """``jax.numpy.<name>``, looked up when called (so that the tables below import no JAX)."""
+    return lambda *args: getattr(jnp, name)(*args)
+
+
 def _piecewise(*args):
     if len(args) < 3 or len(args) % 2 == 0:
         raise TypeError("piecewise needs pairs (condition, value) followed by a default value")
@@ -88,28 +107,28 @@ def _piecewise(*args):
 
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, int | None]]] = {
     # name: (function, (min args, max args))
-    "sin": (jnp.sin, (1, 1)),
-    "cos": (jnp.cos, (1, 1)),
-    "tan": (jnp.tan, (1, 1)),
-    "asin": (jnp.arcsin, (1, 1)),
-    "acos": (jnp.arccos, (1, 1)),
-    "atan": (jnp.arctan, (1, 1)),
-    "atan2": (jnp.arctan2, (2, 2)),
-    "sinh": (jnp.sinh, (1, 1)),
-    "cosh": (jnp.cosh, (1, 1)),
-    "tanh": (jnp.tanh, (1, 1)),
-    "exp": (jnp.exp, (1, 1)),
-    "log": (jnp.log, (1, 1)),
-    "log10": (jnp.log10, (1, 1)),
-    "sqrt": (jnp.sqrt, (1, 1)),
-    "abs": (jnp.abs, (1, 1)),
-    "sign": (jnp.sign, (1, 1)),
-    "floor": (jnp.floor, (1, 1)),
-    "ceil": (jnp.ceil, (1, 1)),
-    "min": (lambda *a: _reduce(jnp.minimum, a), (2, None)),
-    "max": (lambda *a: _reduce(jnp.maximum, a), (2, None)),
-    "clip": (jnp.clip, (3, 3)),
-    "where": (jnp.where, (3, 3)),
+    "sin": (_jnp("sin"), (1, 1)),
+    "cos": (_jnp("cos"), (1, 1)),
+    "tan": (_jnp("tan"), (1, 1)),
+    "asin": (_jnp("arcsin"), (1, 1)),
+    "acos": (_jnp("arccos"), (1, 1)),
+    "atan": (_jnp("arctan"), (1, 1)),
+    "atan2": (_jnp("arctan2"), (2, 2)),
+    "sinh": (_jnp("sinh"), (1, 1)),
+    "cosh": (_jnp("cosh"), (1, 1)),
+    "tanh": (_jnp("tanh"), (1, 1)),
+    "exp": (_jnp("exp"), (1, 1)),
+    "log": (_jnp("log"), (1, 1)),
+    "log10": (_jnp("log10"), (1, 1)),
+    "sqrt": (_jnp("sqrt"), (1, 1)),
+    "abs": (_jnp("abs"), (1, 1)),
+    "sign": (_jnp("sign"), (1, 1)),
+    "floor": (_jnp("floor"), (1, 1)),
+    "ceil": (_jnp("ceil"), (1, 1)),
+    "min": (lambda *a: _reduce(_jnp("minimum"), a), (2, None)),
+    "max": (lambda *a: _reduce(_jnp("maximum"), a), (2, None)),
+    "clip": (_jnp("clip"), (3, 3)),
+    "where": (_jnp("where"), (3, 3)),
     "step": (lambda x: jnp.where(x >= 0, 1.0, 0.0), (1, 1)),
     "window": (lambda x, lo, hi: jnp.where((x >= lo) & (x <= hi), 1.0, 0.0), (3, 3)),
     "piecewise": (_piecewise, (3, None)),
@@ -133,12 +152,12 @@ _BINOPS = {
     ast.Mod: lambda a, b: a % b,
 }
 _CMPOPS = {
-    ast.Lt: jnp.less,
-    ast.LtE: jnp.less_equal,
-    ast.Gt: jnp.greater,
-    ast.GtE: jnp.greater_equal,
-    ast.Eq: jnp.equal,
-    ast.NotEq: jnp.not_equal,
+    ast.Lt: _jnp("less"),
+    ast.LtE: _jnp("less_equal"),
+    ast.Gt: _jnp("greater"),
+    ast.GtE: _jnp("greater_equal"),
+    ast.Eq: _jnp("equal"),
+    ast.NotEq: _jnp("not_equal"),
 }
 
 Env = dict
@@ -454,7 +473,7 @@ class _Compiler:
 
     def visit_BoolOp(self, node: ast.BoolOp):
         parts = [self.visit(v) for v in node.values]
-        op = jnp.logical_and if isinstance(node.op, ast.And) else jnp.logical_or
+        op = _jnp("logical_and") if isinstance(node.op, ast.And) else _jnp("logical_or")
         return lambda env: _reduce(op, [p(env) for p in parts])
 
     def visit_Compare(self, node: ast.Compare):

@@ -25,11 +25,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
 
 __all__ = [
     "cell_table",
+    "fdi_table",
+    "FDI_COLUMNS",
     "ranking",
     "winners",
     "write_leaderboard",
@@ -104,6 +107,112 @@ def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
                 row[f"{s}_p95"] = float(np.percentile(v, 95)) if v.size else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+#: the FDI table's columns (key, label) -- :func:`fdi_table`
+FDI_COLUMNS = (
+    ("method", "method"),
+    ("level", "level"),
+    ("case", "fault case"),
+    ("runs", "runs"),
+    ("detection_rate", "detection rate"),
+    ("mean_detection_delay", "mean detection delay [s]"),
+    ("missed", "missed"),
+    ("false_alarms", "false alarms"),
+    ("false_alarms_per_hour", "false alarms per hour"),
+    ("correct_isolation_rate", "correct isolation rate"),
+)
+
+
+def _horizon(meta: dict[str, Any]) -> float:
+    import tomllib
+
+    return float(tomllib.loads(meta["definition"])["league"]["horizon"])
+
+
+def _col(g: pd.DataFrame, name: str) -> np.ndarray:
+    col = f"metric:{name}"
+    return g[col].to_numpy(dtype=float) if col in g else np.full(len(g), np.nan)
+
+
+def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
+    """The fault detection scores of the methods that fly a fault detector (their runs have the
+    league's FDI metrics, :data:`formation_ftc.league.runner.FDI_METRICS`), one row per (method,
+    level, case) over the runs that finished:
+
+    * ``detection_rate``: runs with a first alarm at or after the fault's first active sample, over
+      the runs with a fault (None for the no-fault case);
+    * ``mean_detection_delay`` [s]: mean over those runs of ``fdi_detection_delay``, the time the fault
+      was active before the alarm;
+    * ``missed``: runs with a fault and no alarm up to the horizon;
+    * ``false_alarms``: runs whose first alarm came while no fault was active (the alarm latches: at
+      most one per run); ``false_alarms_per_hour``: their number per hour of observed fault-free
+      flight (each run up to its first alarm, its fault or the horizon);
+    * ``correct_isolation_rate``: detected runs whose isolated (spacecraft, axis) is the faulty one,
+      over the detected runs.
+
+    Returns ``{"methods": [...], "without_fdi": [...], "rows": [...]}``; counts are ints, rates and
+    times floats (NaN where undefined).
+    """
+    horizon = _horizon(meta)
+    methods = list(dict.fromkeys(runs["method"])) if len(runs) else []
+    with_fdi = [
+        m
+        for m in methods
+        if np.isfinite(_col(runs[runs["method"] == m], "fdi_detection_delay")).any()
+    ]
+    rows = []
+    for (method, level, case), g in runs[runs["method"].isin(with_fdi)].groupby(
+        ["method", "level", "case"], sort=False
+    ):
+        ok = g[g["status"] == "ok"]
+        alarm, fault = _col(ok, "fdi_alarm_time"), _col(ok, "fdi_fault_time")
+        faulted = np.isfinite(fault)
+        alarmed = np.isfinite(alarm)
+        early = alarmed & (~faulted | (alarm < fault))
+        detected = faulted & alarmed & (alarm >= fault)
+        exposure = np.minimum(np.where(alarmed, alarm, np.inf), np.where(faulted, fault, horizon))
+        hours = float(np.sum(exposure)) / 3600.0
+        n_fault = int(faulted.sum())
+        delay = _col(ok, "fdi_detection_delay")[detected]
+        isolation = _col(ok, "fdi_correct_isolation")[detected]
+        rows.append(
+            {
+                "method": str(method),
+                "level": str(level),
+                "case": str(case),
+                "fault_kind": str(g["fault_kind"].iloc[0]),
+                "runs": int(len(ok)),
+                "failed": int(len(g) - len(ok)),
+                "fault_runs": n_fault,
+                "detected": int(detected.sum()),
+                "detection_rate": float(detected.sum() / n_fault) if n_fault else math.nan,
+                "mean_detection_delay": float(np.mean(delay)) if delay.size else math.nan,
+                "missed": int((faulted & ~alarmed).sum()),
+                "false_alarms": int(early.sum()),
+                "false_alarms_per_hour": float(early.sum() / hours) if hours > 0 else math.nan,
+                "fault_free_hours": hours,
+                "correct_isolation_rate": float(np.mean(isolation)) if isolation.size else math.nan,
+            }
+        )
+    return {
+        "methods": with_fdi,
+        "without_fdi": [m for m in methods if m not in with_fdi],
+        "rows": rows,
+    }
+
+
+def _fdi_note(fdi: dict[str, Any]) -> str:
+    """One sentence on who has an FDI in the loop."""
+    none = ", ".join(fdi["without_fdi"]) or "none"
+    if not fdi["methods"]:
+        return "No method flies a fault detector: no FDI in the loop of any method."
+    return (
+        f"Fault detection of the methods that fly one ({', '.join(fdi['methods'])}), scored against "
+        "the true fault of the battery; detection delay: time the fault was active before the first "
+        "alarm; false alarms: alarms with no active fault (latched: at most one per run), per hour of "
+        f"fault-free flight. No FDI in the loop: {none}."
+    )
 
 
 def _common_cases(cells: pd.DataFrame) -> list[str]:
@@ -399,7 +508,14 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
     return n
 
 
-def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]) -> str:
+def _page(
+    meta,
+    cells: pd.DataFrame,
+    rank: dict,
+    wins: list,
+    figures: list[Path],
+    fdi: dict[str, Any] | None = None,
+) -> str:
     metric, limit, units = _requirement(meta)
     cost = _cost(cells)
     prov = meta.get("provenance", {})
@@ -447,6 +563,11 @@ def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]
             ],
         )
     )
+    if fdi is not None:
+        parts.append("<h2>FDI</h2>")
+        parts.append(f"<p>{_e(_fdi_note(fdi))}</p>")
+        if fdi["rows"]:
+            parts.append(_table(fdi["rows"], list(FDI_COLUMNS)))
     parts.append("<h2>Per-fault tables</h2>")
     score_cols = [s for s in SCORES if f"{s}_median" in cells]
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
@@ -483,18 +604,6 @@ def _page(meta, cells: pd.DataFrame, rank: dict, wins: list, figures: list[Path]
         f"<!doctype html><html><head><meta charset='utf-8'><title>league {_e(meta['name'])}</title>"
         f"<style>{_STYLE}</style></head><body>{''.join(parts)}</body></html>"
     )
-
-
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return _json_safe(obj.item())
-    return obj
 
 
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
@@ -558,6 +667,12 @@ def markdown_summary(board: dict[str, Any]) -> str:
         "",
         _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]]),
     ]
+    fdi = board.get("fdi")
+    if fdi is not None:
+        out += ["", "**FDI**", "", _fdi_note(fdi)]
+        if fdi["rows"]:
+            shown = [{k: "-" if v is None else v for k, v in r.items()} for r in fdi["rows"]]
+            out += ["", _md_table(shown, list(FDI_COLUMNS))]
     return "\n".join(out) + "\n"
 
 
@@ -599,6 +714,7 @@ def write_leaderboard(
     if tuned is not None or tuned_dir.is_dir():
         tuned_column(rank, tuned_dir)
     wins = winners(meta, cells)
+    fdi = fdi_table(meta, runs)
     out = league_dir / "leaderboard"
     out.mkdir(parents=True, exist_ok=True)
     figures: list[Path] = []
@@ -619,11 +735,12 @@ def write_leaderboard(
         "ranking": rank,
         "winners": wins,
         "cells": cells.to_dict("records"),
+        "fdi": fdi,
     }
-    (out / "leaderboard.json").write_text(json.dumps(_json_safe(board), indent=1))
+    (out / "leaderboard.json").write_text(json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
     write_parquet(cells, out / "cells.parquet", _cell_units(cells, run_units))
     write_parquet(runs, out / "runs.parquet", run_units)
-    (out / "index.html").write_text(_page(meta, cells, rank, wins, figures))
-    (out / "leaderboard.md").write_text(markdown_summary(_json_safe(board)))
+    (out / "index.html").write_text(_page(meta, cells, rank, wins, figures, fdi))
+    (out / "leaderboard.md").write_text(markdown_summary(jsonable(board)))
     return board

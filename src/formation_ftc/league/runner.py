@@ -52,6 +52,22 @@ __all__ = [
 ]
 
 LEAGUE_FILE = "league.json"
+#: the FDI scores the league adds to such a method's cells (fdi-scores evaluation, docs/league.md)
+FDI_METRICS: tuple[dict[str, Any], ...] = (
+    # time the fault was active before the first alarm (to the horizon when never detected) [s]
+    {"name": "fdi_detection_delay", "signal": "fdi_pending", "reduce": "integral", "units": "s"},
+    # 1: the fault is active and undetected at the horizon
+    {"name": "fdi_missed", "signal": "fdi_missed", "reduce": "last"},
+    # 1: an alarm while no fault was active
+    {"name": "fdi_false_alarm", "signal": "fdi_false_alarm", "reduce": "max"},
+    # 1: detected while the fault was active, isolating its (spacecraft, axis) channel
+    {"name": "fdi_correct_isolation", "signal": "fdi_correct_isolation", "reduce": "max"},
+    # time of the first alarm (NaN: none) and of the fault's onset (NaN: no fault) [s]
+    {"name": "fdi_alarm_time", "signal": "fdi_detected", "reduce": "first", "threshold": 0.5,
+     "units": "s"},
+    {"name": "fdi_fault_time", "signal": "fault_active", "reduce": "first", "threshold": 0.5,
+     "units": "s"},
+)  # fmt: skip
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -115,7 +131,7 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
             net_fields = case.network_fields(delayed=delayed) if network else None
             for level in spec.levels:
                 act = case.actuator_fields(saturation=level.saturation, quantity=quantity)
-                raw = method_scenario(spec, m, level, act, net_fields)
+                raw = _with_fdi_scores(method_scenario(spec, m, level, act, net_fields))
                 try:
                     n_steps = int(load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
@@ -126,6 +142,24 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 cells.append(Cell(m.name, case.name, case.kind, level.name, raw, n_steps))
         out[m.name] = cells
     return out
+
+
+def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
+    """A cell whose method flies a fault detector (an estimator type the ``fdi-scores`` evaluation
+    scores, :data:`~formation_ftc.methods.composed.catalog_navigation.FDI_ESTIMATORS`) on the league's
+    ``fault-battery`` actuator also gets the league's FDI scores: the ``fdi-scores`` evaluation and
+    :data:`FDI_METRICS` (the league owns the scores; a method file gives none)."""
+    from formation_ftc.methods.composed import component_types
+    from formation_ftc.methods.composed.catalog_navigation import FDI_ESTIMATORS
+
+    component_types("estimator")  # every catalog loaded: each fault detector has declared itself
+    est = (raw.get("estimator") or {}).get("type")
+    act = (raw.get("actuator") or {}).get("type")
+    if est not in FDI_ESTIMATORS or act != "fault-battery":
+        return raw
+    raw["evaluations"] = [*raw.get("evaluations", []), {"type": "fdi-scores"}]
+    raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in FDI_METRICS)]
+    return raw
 
 
 def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:

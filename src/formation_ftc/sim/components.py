@@ -47,7 +47,11 @@ from typing import Any, ClassVar, NamedTuple, TypeVar, dataclass_transform
 
 import jax
 import jax.numpy as jnp
-import numpy as np
+import numpy as np  # noqa: F401 - the doctests' np
+
+# JAX-free names that catalog sections use while validating (re-exported here)
+from formation_ftc.sim.contract import CompositionError
+from formation_ftc.sim.contract import as_float as as_float
 
 __all__ = [
     "component",
@@ -58,6 +62,7 @@ __all__ = [
     "ActuatorInputs",
     "SensorInputs",
     "FlightInputs",
+    "StepContext",
     "NetworkInputs",
     "Plant",
     "Reference",
@@ -200,10 +205,6 @@ def structure_key(tree: PyTree) -> Any:
     return treedef, tuple((jnp.shape(x), jnp.result_type(x).name) for x in leaves)
 
 
-class CompositionError(ValueError):
-    """Two components that cannot work together (raised before any computation)."""
-
-
 class Signal(NamedTuple):
     """One recorded signal: ``dims`` exclude the time dimension; units are UDUNITS strings."""
 
@@ -255,6 +256,21 @@ class NetworkInputs(NamedTuple):
     exogenous: PyTree
 
 
+class StepContext(NamedTuple):
+    """The control step in progress, given to the flight side with its inputs: step index ``k``
+    (int64), its time ``t = t0 + k dt`` [s], the control step ``dt`` [s] and the run's start ``t0``
+    [s]. A component that counts steps reads ``k`` here instead of recovering it from a time."""
+
+    k: jax.Array
+    t: jax.Array
+    dt: float
+    t0: float
+
+    def time(self, j: Any) -> jax.Array:
+        """Time [s] of step ``j`` on the run's grid (``t0 + j dt``, as the loop computes ``t_k``)."""
+        return self.t0 + j * self.dt
+
+
 class FlightInputs(NamedTuple):
     """Everything the flight side (estimator, supervisor, controller) may see. There is deliberately
     no field for the true state, the true fault or the true disturbance."""
@@ -265,6 +281,7 @@ class FlightInputs(NamedTuple):
     decision: PyTree  # the supervisor's output (None without a supervisor)
     exogenous: PyTree  # the receiving component's own time-only signals (desired trajectory, ...)
     reference: PyTree  # reference-orbit values known on board (None without a reference)
+    step: StepContext  # the control step in progress (index, time, dt)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -429,12 +446,12 @@ class Estimator(_Kind):
     """Observer / FDI: discrete update once per step from flight inputs."""
 
     kind: ClassVar[str] = "estimator"
-    #: True: the signals recorded at t_k are those of :meth:`update` at t_k (evaluated on the recorded
-    #: state and discarded, as the step computes them); False: those of :meth:`current`
-    refresh_on_observe: ClassVar[bool] = False
     #: True: a navigation filter -- its estimate has the layout of the sensors' measurement and the
     #: controller reads it in place of the measurement (and no other estimate)
     navigation: ClassVar[bool] = False
+    #: the entries of the estimate when it is a mapping (e.g. ``("detected", "isolated")`` of a fault
+    #: detector), read by compositions that check what a supervisor or law can use
+    estimate_keys: ClassVar[tuple[str, ...]] = ()
 
     def initial_state(self, measurement0: PyTree) -> PyTree:
         return None
@@ -445,11 +462,9 @@ class Estimator(_Kind):
         return state
 
     def update(self, t: jax.Array, state: PyTree, inputs: FlightInputs) -> tuple[PyTree, PyTree]:
+        """``(state, estimate)`` at t_k; the signals recorded at t_k are those of this update (the
+        estimate the step uses)."""
         return state, None
-
-    def current(self, state: PyTree) -> PyTree:
-        """The estimate held in ``state`` (what :meth:`update` last returned)."""
-        return None
 
     def outputs(self, t: jax.Array, state: PyTree, estimate: PyTree) -> dict[str, jax.Array]:
         return {}
@@ -464,11 +479,8 @@ class Supervisor(_Kind):
         return None
 
     def update(self, t: jax.Array, state: PyTree, inputs: FlightInputs) -> tuple[PyTree, PyTree]:
+        """``(state, decision)`` at t_k: the decision in force over [t_k, t_{k+1})."""
         return state, None
-
-    def current(self, state: PyTree) -> PyTree:
-        """The decision held in ``state`` (what :meth:`update` last returned)."""
-        return None
 
     def outputs(self, t: jax.Array, state: PyTree, decision: PyTree) -> dict[str, jax.Array]:
         return {}
@@ -618,27 +630,3 @@ def tree_take(tree: PyTree, j: int) -> PyTree:
     (array([2., 3.]), 20.0)
     """
     return jax.tree_util.tree_map(lambda a: a[j], tree)
-
-
-def as_float(x: Any) -> np.ndarray:
-    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called).
-
-    Parameters
-    ----------
-    x : array_like
-        Numbers (any SI unit; unchanged).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``x`` as float64.
-
-    Examples
-    --------
-    >>> from formation_ftc.sim.components import as_float
-    >>> as_float([1, 2])
-    array([1., 2.])
-    >>> as_float(3).dtype
-    dtype('float64')
-    """
-    return np.asarray(x, dtype=np.float64)

@@ -40,6 +40,7 @@ from formation_ftc.sim.components import (
     SensorInputs,
     Sensors,
     Signal,
+    StepContext,
     Supervisor,
     TruthInputs,
     component,
@@ -319,15 +320,15 @@ class ClosedLoop:
         k_sensor, k_plant = jax.random.split(key, 2)
         return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
-    def _law_flight(self, y, est, decision, exo, ref):
+    def _law_flight(self, y, est, decision, exo, ref, sc):
         """The controller's flight inputs: the sensors' measurement ``y`` and the estimate, or, where
         the estimator is a navigation filter (``navigation = True``), its state estimate in place of the
         measurement (held over the step: the navigation solution at the control rate)."""
         if self.estimator.navigation:
-            return self._flight(est, None, None, decision, exo, ref)
-        return self._flight(y, None, est, decision, exo, ref)
+            return self._flight(est, None, None, decision, exo, ref, sc)
+        return self._flight(y, None, est, decision, exo, ref, sc)
 
-    def _flight(self, y, received, est, decision, exo, ref):
+    def _flight(self, y, received, est, decision, exo, ref, sc):
         return FlightInputs(
             measurement=y,
             received=received,
@@ -335,19 +336,24 @@ class ClosedLoop:
             decision=decision,
             exogenous=exo,
             reference=ref,
+            step=sc,
         )
+
+    def _step_context(self, k) -> StepContext:
+        """The context of step ``k`` (its time ``t_k = t0 + k dt``, computed here once)."""
+        return StepContext(k, self.t0 + k * self.dt, self.dt, self.t0)
 
     def _evaluate(self, t, z, ctx):
         """Derivatives of the integrated state ``z = {plant, controller, usage}`` and the outputs at
         one RK stage; ``ctx`` holds the step's held values and this stage's time signals."""
-        exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held, act_state = ctx
+        exo, ref, s_noise, p_noise, est, dec, net_state, sc, held, act_state = ctx
         x = z["plant"]
         y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
-        flight = self._law_flight(y, est, dec, exo["controller"], ref)
+        flight = self._law_flight(y, est, dec, exo["controller"], ref, sc)
         received = None
         if not isinstance(self.network, NoNetwork):
             msg = self.controller.message(t, flight)
-            received = self.network.receive(t, net_state, NetworkInputs(msg, t_k, exo["network"]))
+            received = self.network.receive(t, net_state, NetworkInputs(msg, sc.t, exo["network"]))
             flight = flight._replace(received=received)
         if self.controller.sampled:
             u, ctl_out = held
@@ -370,15 +376,48 @@ class ClosedLoop:
         outputs[APPLIED_SIGNAL] = applied
         return deriv, outputs
 
-    def _discrete(self, k, t_k, state, y, exo0, ref0):
-        """Steps (3)-(5) at t_k: estimator, supervisor, sampled controller."""
+    def _discrete(self, sc, state, y, exo0, ref0):
+        """Steps (3)-(4) at t_k: estimator and supervisor updates."""
         est_state, est = self.estimator.update(
-            t_k, state["estimator"], self._flight(y, None, None, None, exo0["estimator"], ref0)
+            sc.t, state["estimator"], self._flight(y, None, None, None, exo0["estimator"], ref0, sc)
         )
         sup_state, dec = self.supervisor.update(
-            t_k, state["supervisor"], self._flight(y, None, est, None, exo0["supervisor"], ref0)
+            sc.t,
+            state["supervisor"],
+            self._flight(y, None, est, None, exo0["supervisor"], ref0, sc),
         )
         return est_state, est, sup_state, dec
+
+    def _start(self, sc: StepContext, state: dict, exo0, ref0, s_noise):
+        """Steps (1)-(5) at t_k, shared by :meth:`step` and :meth:`observe`: the measurement, the
+        estimator and supervisor updates, the message of t_k pushed into the network history and the
+        sampled controller's command (held over the step)."""
+        y = self.sensors.measure(
+            sc.t, self.plant.sensed_state(state["plant"]), SensorInputs(s_noise, ref0)
+        )
+        est_state, est, sup_state, dec = self._discrete(sc, state, y, exo0, ref0)
+        est = _once(sc.k, est)  # an estimate (a noisy FDI report, ...) is held over the step
+        net_state = state["network"]
+        if not isinstance(self.network, NoNetwork):
+            # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
+            msg_k = self.controller.message(
+                sc.t, self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
+            )
+            net_state = self.network.push(net_state, msg_k)
+        held = None
+        ctl_next = state["controller"]
+        if self.controller.sampled:
+            flight = self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
+            if not isinstance(self.network, NoNetwork):
+                msg = self.controller.message(sc.t, flight)
+                flight = flight._replace(
+                    received=self.network.receive(
+                        sc.t, net_state, NetworkInputs(msg, sc.t, exo0["network"])
+                    )
+                )
+            u, ctl_next, ctl_out = self.controller.output(sc.t, state["controller"], flight)
+            held = (u, ctl_out)
+        return y, est_state, est, sup_state, dec, net_state, held, ctl_next
 
     def initial_state(self) -> dict:
         """State at t0 (the loop's every-step metric accumulators start from the t0 signals)."""
@@ -399,8 +438,9 @@ class ClosedLoop:
         )
         if not isinstance(self.network, NoNetwork):
             exo0 = tree_take(self._time_table(t0, first_only=True), 0)
+            sc0 = self._step_context(jnp.asarray(0, dtype=jnp.int64))
             msg0 = self.controller.message(
-                t0, self._flight(y0, None, None, None, exo0["controller"], ref0)
+                t0, self._flight(y0, None, None, None, exo0["controller"], ref0, sc0)
             )
             state["network"] = self.network.initial_state(msg0)
         else:
@@ -410,36 +450,17 @@ class ClosedLoop:
     def step(self, k, state: dict) -> tuple[dict, dict]:
         """One control step k -> k + 1; returns the new state and the signals at t_k."""
         dt = self.dt
-        t_k = self.t0 + k * dt
+        sc = self._step_context(k)
+        t_k = sc.t
         exact = self.plant.integration == "exact"  # one stage: time signals at t_k only
         table = self._time_table(t_k, first_only=exact, k=k)
         exos = [tree_take(table, j) for j in ((0, 0, 0, 0) if exact else (0, 1, 1, 2))]
         r_next, refs = self._reference_stages(state["reference"])
         s_noise, p_noise = self._noise(k)
         x = state["plant"]
-        y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, refs[0]))
-        est_state, est, sup_state, dec = self._discrete(k, t_k, state, y, exos[0], refs[0])
-        est = _once(k, est)  # an estimate (a noisy FDI report, ...) is held over the step
-        net_state = state["network"]
-        if not isinstance(self.network, NoNetwork):
-            # (2) the message of t_k joins the history before anyone reads it (newest sample = t_k)
-            msg_k = self.controller.message(
-                t_k, self._law_flight(y, est, dec, exos[0]["controller"], refs[0])
-            )
-            net_state = self.network.push(net_state, msg_k)
-        held = None
-        ctl_next = state["controller"]
-        if self.controller.sampled:
-            flight = self._law_flight(y, est, dec, exos[0]["controller"], refs[0])
-            if not isinstance(self.network, NoNetwork):
-                msg = self.controller.message(t_k, flight)
-                flight = flight._replace(
-                    received=self.network.receive(
-                        t_k, net_state, NetworkInputs(msg, t_k, exos[0]["network"])
-                    )
-                )
-            u, ctl_next, ctl_out = self.controller.output(t_k, state["controller"], flight)
-            held = (u, ctl_out)
+        y, est_state, est, sup_state, dec, net_state, held, ctl_next = self._start(
+            sc, state, exos[0], refs[0], s_noise
+        )
 
         # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
         # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
@@ -465,7 +486,7 @@ class ClosedLoop:
                 est,
                 dec,
                 net_state,
-                t_k,
+                sc,
                 held,
                 state["actuator"],
             )
@@ -553,61 +574,26 @@ class ClosedLoop:
         return any(m.reduce in metric_ops.STAGE_REDUCTIONS for m in self.metrics)
 
     def observe(self, k, state: dict) -> dict:
-        """Signals at t_k from the state at t_k (what the step would compute at its first stage)."""
-        dt = self.dt
-        t_k = self.t0 + k * dt
-        exo = tree_take(self._time_table(t_k, first_only=True, k=k), 0)
+        """Signals at t_k from the state at t_k: what :meth:`step` computes from t_k -- the same
+        :meth:`_start` (estimator and supervisor updates at t_k, the sampled command) and the same first
+        stage -- without the rest of the step, so a record is what the step used."""
+        sc = self._step_context(k)
+        exo = tree_take(self._time_table(sc.t, first_only=True, k=k), 0)
         r = state["reference"]
         ref = None if isinstance(self.reference, NoReference) else self.reference.values(r)
         s_noise, p_noise = self._noise(k)
-        x = state["plant"]
-        y = self.sensors.measure(t_k, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
-        # the estimator outputs recorded are those of its current state (an estimator with
-        # ``refresh_on_observe`` records its update at t_k, as the step computes it); the supervisor's
-        # are those of its decision taken at t_k -- the decision in force over [t_k, t_{k+1}), which the
-        # step's controller, actuator and plant use and the step's metric sample sees -- taken here on
-        # the estimate the step gives it (the estimator's update at t_k), and the controller's command
-        # recorded at t_k is computed with that decision
-        est_state = state["estimator"]
-        if self.estimator.refresh_on_observe:
-            est_state, est = self.estimator.update(
-                t_k, est_state, self._flight(y, None, None, None, exo["estimator"], ref)
-            )
-        else:
-            est = self.estimator.current(est_state)
-        sup_state = state["supervisor"]
-        if isinstance(self.supervisor, NoSupervisor):
-            dec = self.supervisor.current(sup_state)
-        else:
-            est_flight = (
-                est
-                if self.estimator.refresh_on_observe
-                else self.estimator.update(
-                    t_k,
-                    state["estimator"],
-                    self._flight(y, None, None, None, exo["estimator"], ref),
-                )[1]
-            )
-            sup_state, dec = self.supervisor.update(
-                t_k, sup_state, self._flight(y, None, est_flight, None, exo["supervisor"], ref)
-            )
-        net_state = state["network"]
-        if not isinstance(self.network, NoNetwork):  # the message of t_k is in the history at t_k
-            msg_k = self.controller.message(
-                t_k, self._law_flight(y, est, dec, exo["controller"], ref)
-            )
-            net_state = self.network.push(net_state, msg_k)
-        held = None
-        if self.controller.sampled:
-            flight = self._law_flight(y, est, dec, exo["controller"], ref)
-            u, _, ctl_out = self.controller.output(t_k, state["controller"], flight)
-            held = (u, ctl_out)
-        z = {"plant": x, "controller": state["controller"], "usage": state["usage"]}
-        _, outputs = self._evaluate(
-            t_k, z, (exo, ref, s_noise, p_noise, est, dec, net_state, t_k, held, state["actuator"])
+        _, est_state, est, sup_state, dec, net_state, held, _ = self._start(
+            sc, state, exo, ref, s_noise
         )
-        outputs.update(self.estimator.outputs(t_k, est_state, est))
-        outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
+        z = {"plant": state["plant"], "controller": state["controller"], "usage": state["usage"]}
+        ctx = (exo, ref, s_noise, p_noise, est, dec, net_state, sc, held, state["actuator"])
+        _, outputs = self._evaluate(sc.t, z, ctx)
+        outputs.update(self.estimator.outputs(sc.t, est_state, est))
+        outputs.update(self.supervisor.outputs(sc.t, sup_state, dec))
+        return self._sample(state, outputs)
+
+    def _sample(self, state: dict, outputs: dict) -> dict:
+        """The step's ``outputs`` at t_k with the usage integrals at t_k and every evaluation's signals."""
         for name, v in state["usage"].items():
             outputs[name] = v
         return self._evaluated(outputs)
@@ -646,13 +632,11 @@ class ClosedLoop:
             state, acc = carry
             new, outputs = self.step(k, state)
             stage_inc = outputs.pop(STAGE_INCREMENTS, None)
-            for name, v in state["usage"].items():
-                outputs[name] = v
             if stage_inc is not None:
                 acc = metric_ops.update_stage_accumulators(
                     self.metrics, acc, self.t0 + k * self.dt, self.dt, stage_inc
                 )
-            outputs = self._evaluated(outputs)
+            outputs = self._sample(state, outputs)
             if (
                 folding
             ):  # the sample goes to fold(): the metrics of a block of steps are folded at once

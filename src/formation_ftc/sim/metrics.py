@@ -47,36 +47,13 @@ __all__ = [
     "reads_steps",
 ]
 
-#: time reductions: name -> meaning
-REDUCTIONS = {
-    "max": "maximum over the window",
-    "min": "minimum over the window",
-    "final": "last value in the window",
-    "mean": "mean over the samples in the window",
-    "integral": "rectangle-rule integral over the window (value at t_k times dt) [signal unit x s]",
-    "at": "value at the first sample with t >= start",
-    "settle": "first time after which the value stays below `threshold` (NaN if it ends above) [s]",
-    "settle_delay": "`settle` measured from the window start [s] (0 when it never was at or above)",
-    "rms": "root mean square over the samples in the window, the horizon sample excluded (as `integral`)",
-    "stage_integral": "integral over the steps [t_k, t_k + dt] inside the window, integrated with the plant "
-    "(the RK4 stage values; rectangle rule for an exact-step plant) [signal unit x s]",
-    "stage_root_mean": "sqrt(stage_integral / (end - start)): with square = True, the RMS over the window",
-    "first": "time of the first sample at or above `threshold` (NaN if there is none) [s]",
-    "last": "value at the horizon (the run's last sample; window ignored), read once after the loop: no "
-    "per-step cost, unlike `final`; NaN for a run that left its admissible set before the horizon",
-    "block_rms": "low-pass RMS: the samples in the window (the horizon sample excluded) cut into consecutive "
-    "blocks of `block` steps from the first one; RMS over the complete blocks of each block's mean "
-    "(a boxcar filter of `block` steps, decimated; an incomplete last block is dropped)",
-    "block_dev_rms": "RMS of the value minus the mean of its block (blocks as `block_rms`): the amplitude of "
-    "what varies faster than `block` steps, e.g. a chatter",
-}
-#: time reductions over blocks of ``Metric.block`` steps
-BLOCK_REDUCTIONS = ("block_rms", "block_dev_rms")
-#: time reductions integrated at the integrator's stages (need a signal evaluated at every RK stage:
-#: plant, controller and actuator outputs, ``command``, ``applied``)
-STAGE_REDUCTIONS = ("stage_integral", "stage_root_mean")
-#: how spacecraft are combined before the time reduction
-SPACECRAFT_REDUCTIONS = ("each", "max", "mean", "sum", "none", "range")
+# the names of the reductions (JAX-free: scenario sections validate them without JAX)
+from formation_ftc.sim.contract import (  # noqa: E402
+    BLOCK_REDUCTIONS,
+    REDUCTIONS,
+    SPACECRAFT_REDUCTIONS,
+    STAGE_REDUCTIONS,
+)
 
 _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt in float64)
 

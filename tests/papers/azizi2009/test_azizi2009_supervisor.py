@@ -16,13 +16,13 @@ from formation_ftc.blocks.supervisors.hierarchical_supervisor import (
 )
 from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
-from formation_ftc.sim.components import FlightInputs
+from formation_ftc.sim.components import FlightInputs, StepContext
 
 
 def _run(errors, k_est=3, e_s=0.03, confirm=2, monitor=0, enabled=True):
     def body(s, inp):
         k, e = inp
-        s = transition(s, k, e, k_est, e_s, confirm, monitor, enabled)
+        s = transition(s, k, e, k_est, e_s, confirm, monitor, enabled, 0.5)
         return s, (s.mode, s.mode_changes, s.flfr_steps)
 
     ks = jnp.arange(len(errors), dtype=jnp.int64)
@@ -56,12 +56,11 @@ def test_vmap_batched_equals_single():
 
 def test_component_uniform_signature_reads_the_measured_error():
     """update(t, state, FlightInputs): the monitored error is the measured chain position minus the
-    desired chain offsets; the step index comes from t = k dt; records counters and FLFR time."""
+    desired chain offsets; the step index comes with the step context; records counters and FLFR time."""
     dt, n = 0.5, 4
     sup = HierarchicalSupervisor(
         count=n,
         n_axes=2,
-        dt=dt,
         side=jnp.asarray(200.0),
         omega=jnp.asarray(0.1),
         e_s=jnp.asarray(0.03),
@@ -76,7 +75,8 @@ def test_component_uniform_signature_reads_the_measured_error():
         t = jnp.asarray(k * dt)
         rd, _, _ = rotating_polygon(t, n, 2, 200.0, 0.1)
         y = {"position": chain_difference(rd).at[1, 0].add(err), "velocity": jnp.zeros((n - 1, 2))}
-        state, dec = sup.update(t, state, FlightInputs(y, None, None, None, None, None))
+        sc = StepContext(jnp.asarray(k), t, dt, 0.0)
+        state, dec = sup.update(t, state, FlightInputs(y, None, None, None, None, None, sc))
         out = sup.outputs(t, state, dec)
         modes.append(int(dec))
         times.append(float(out["time_in_flfr"]))

@@ -25,7 +25,7 @@ from formation_ftc.components.supervisors.switching_supervisor import (
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.core.integrators import rk4_step
-from formation_ftc.sim.components import FlightInputs
+from formation_ftc.sim.components import FlightInputs, StepContext
 
 M = 150.0
 J = jnp.diag(jnp.array([25.0, 25.0, 25.0]))
@@ -105,7 +105,6 @@ def make_supervisor(leaves_slot1=True, delay=0):
     leaves[1, 1] = leaves_slot1
     return SwitchingSupervisor(
         count=3,
-        dt=1.0,
         switch_steps=jnp.array([0, 1000, 2000]),
         active=jnp.ones((3, 3)),
         leaves_at_next_switch=jnp.asarray(leaves),
@@ -116,8 +115,11 @@ def make_supervisor(leaves_slot1=True, delay=0):
     )
 
 
-def flight(diagnosed):
-    return FlightInputs(None, None, {"diagnosed": jnp.asarray(diagnosed)}, None, None, None)
+def flight(diagnosed, k):
+    """Flight inputs at step k (dt = 1 s, t0 = 0: t_k = k s)."""
+    k = jnp.asarray(k, dtype=jnp.int64)
+    step = StepContext(k, 1.0 * k, 1.0, 0.0)
+    return FlightInputs(None, None, {"diagnosed": jnp.asarray(diagnosed)}, None, None, None, step)
 
 
 @pytest.mark.parametrize(
@@ -135,16 +137,15 @@ def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
     sup = make_supervisor(leaves, delay)
     update = jax.jit(sup.update)
     diagnosed = [False, True, False]
-    state, dec = update(float(k_diag), sup.initial_state(), flight(diagnosed))
+    state, dec = update(float(k_diag), sup.initial_state(), flight(diagnosed, k_diag))
     assert int(state["decision"][1]) == expected
     assert float(state["margin_29"][1]) == pytest.approx(margin)
     assert bool(dec.reconfigure[1]) == (expected == RECONFIGURE)
     assert int(state["decision"][0]) == 0 and int(state["decision"][2]) == 0
-    # decided once: later steps keep the decision; the held decision is the one of the next step
-    state2, _ = update(float(k_diag + 10), state, flight(diagnosed))
-    assert int(state2["decision_step"][1]) == k_diag
-    held = sup.current(state2)
-    assert int(held.mode) == int(np.searchsorted([0, 1000, 2000], k_diag + 11, side="right") - 1)
+    # decided once: later steps keep the decision (and its time); the decision of a step is its mode
+    state2, held = update(float(k_diag + 10), state, flight(diagnosed, k_diag + 10))
+    assert float(state2["decision_time"][1]) == k_diag
+    assert int(held.mode) == int(np.searchsorted([0, 1000, 2000], k_diag + 10, side="right") - 1)
     out = sup.outputs(0.0, state2, held)
     ev = decision_events(
         *(
@@ -169,10 +170,10 @@ def test_supervisor_decision_table(k_diag, leaves, delay, expected, margin):
 def test_supervisor_ignores_a_diagnosis_outside_the_formation_and_vmaps():
     sup = make_supervisor()
     sup = type(sup)(**{**sup.__dict__, "active": jnp.asarray([[1.0, 0.0, 1.0]] * 3)})
-    state, _ = sup.update(1800.0, sup.initial_state(), flight([False, True, False]))
+    state, _ = sup.update(1800.0, sup.initial_state(), flight([False, True, False], 1800))
     assert int(state["decision"][1]) == 0
     sup = make_supervisor()
-    new, _ = jax.vmap(lambda t: sup.update(t, sup.initial_state(), flight([False, True, False])))(
-        jnp.array([1800.0, 1300.0])
-    )
+    new, _ = jax.vmap(
+        lambda k: sup.update(1.0 * k, sup.initial_state(), flight([False, True, False], k))
+    )(jnp.array([1800, 1300]))
     assert new["decision"][:, 1].tolist() == [TOLERATE_BY_SWITCHING, RECONFIGURE]

@@ -5,7 +5,9 @@ Events and guards, evaluated once per control step k, branch-free (``jnp.where``
 inside ``lax.scan`` and under ``vmap``:
 
 * Nominal -> LLFR on "fault estimated": the fault estimate b_hat has reached the supervisor
-  (``k >= k_estimated``); the low level then allocates with b_hat (eq. (3)).
+  (``k >= k_estimated``); the low level then allocates with b_hat (eq. (3)). The component passes
+  either a scripted step or, fed by a fault detector in the loop, the current step once the detector
+  has alarmed (``fault_information = "estimator"``).
 * LLFR -> FLFR on "mission bound violated": the *measured* max |e_ij| exceeds e_s for
   ``confirm_steps`` consecutive steps (a dwell counter that rejects single noisy samples), monitoring
   only from ``monitor_start`` on and only if FLFR is enabled. The formation level then raises the
@@ -31,27 +33,43 @@ MODE_NAMES = ("Nominal", "LLFR", "FLFR")
 
 
 class HlState(NamedTuple):
-    """mode (int), consecutive-violation counter, number of mode changes, steps spent in FLFR."""
+    """mode (int), consecutive-violation counter, number of mode changes, steps spent in FLFR and
+    that time [s]."""
 
     mode: jax.Array
     violations: jax.Array
     mode_changes: jax.Array
     flfr_steps: jax.Array
+    time_in_flfr: jax.Array
 
 
 def initial_state() -> HlState:
     """Nominal mode, all counters zero."""
     z = jnp.asarray(0, jnp.int64)
-    return HlState(mode=jnp.asarray(NOMINAL, jnp.int64), violations=z, mode_changes=z, flfr_steps=z)
+    return HlState(
+        mode=jnp.asarray(NOMINAL, jnp.int64),
+        violations=z,
+        mode_changes=z,
+        flfr_steps=z,
+        time_in_flfr=jnp.asarray(0.0),
+    )
 
 
 def transition(
-    state: HlState, k, error_max, k_estimated, e_s, confirm_steps, monitor_start, flfr_enabled
+    state: HlState,
+    k,
+    error_max,
+    k_estimated,
+    e_s,
+    confirm_steps,
+    monitor_start,
+    flfr_enabled,
+    dt: float,
 ) -> HlState:
     """The machine at step ``k`` given the measured max |e_ij| [m]; its ``mode`` is the mode of step k.
 
     ``k_estimated``, ``confirm_steps``, ``monitor_start``: step indices / counts (int); ``e_s`` [m];
-    ``flfr_enabled``: bool.
+    ``flfr_enabled``: bool; ``dt``: the control step [s] (for the time spent in FLFR).
     """
     mode = state.mode
     # Nominal -> LLFR: fault estimate available
@@ -65,4 +83,10 @@ def transition(
     mode2 = jnp.where(to_flfr, FLFR, mode1)
     changes = state.mode_changes + (mode2 != mode).astype(jnp.int64)
     flfr_steps = jnp.where(mode2 == FLFR, state.flfr_steps + 1, 0)
-    return HlState(mode=mode2, violations=violations, mode_changes=changes, flfr_steps=flfr_steps)
+    return HlState(
+        mode=mode2,
+        violations=violations,
+        mode_changes=changes,
+        flfr_steps=flfr_steps,
+        time_in_flfr=flfr_steps * dt,
+    )

@@ -49,10 +49,6 @@ class AccelerationModelEstimator(Estimator):
         return getattr(self.inner, "count", None)
 
     @property
-    def refresh_on_observe(self) -> bool:  # type: ignore[override]
-        return bool(self.inner.refresh_on_observe)
-
-    @property
     def holds_exogenous(self) -> bool:  # type: ignore[override]
         return bool(self.inner.holds_exogenous)
 
@@ -69,9 +65,6 @@ class AccelerationModelEstimator(Estimator):
         return self.inner.predict(
             t, state, command / self.nominal_mass[:, None], dt
         )  # u_i = f_i / m_i^nom
-
-    def current(self, state):
-        return self.inner.current(state)
 
     def signals(self):
         return self.inner.signals()

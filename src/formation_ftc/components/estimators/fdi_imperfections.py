@@ -14,7 +14,6 @@ from __future__ import annotations
 from typing import Any
 
 import jax
-import jax.numpy as jnp
 
 from formation_ftc.blocks.fdi import FDIModel, fdi_output
 from formation_ftc.core.disturbances import run_key, step_key
@@ -57,11 +56,9 @@ class ScriptedFdi(Estimator):
 
     Leaves: ``seed`` (uint32), ``windows`` (n_faults, 2) fault windows [s], ``params`` (the
     :func:`formation_ftc.blocks.fdi.fdi_params` pytree: onset, delay, detected, scale, bias, noise_std,
-    routing, fault mask). Static: the fault expressions, 0-based spacecraft / channels, ``step`` (the
-    step grid [s]) and ``t0`` [s]. The estimate is an :class:`~formation_ftc.blocks.fdi.FDIOutput`.
+    routing, fault mask). Static: the fault expressions, 0-based spacecraft / channels, and the number
+    of channels; the step index and the step come with the flight inputs. The estimate is an :class:`~formation_ftc.blocks.fdi.FDIOutput`.
     """
-
-    refresh_on_observe = True  # the report recorded at t_k is the one the step at t_k uses
 
     count: int = static()
     seed: Any = 0
@@ -70,15 +67,13 @@ class ScriptedFdi(Estimator):
     torques: tuple[str, ...] = static(default=())
     spacecraft: tuple[int, ...] = static(default=())
     channels: tuple[int, ...] = static(default=())
-    step: float = static(default=1.0)
-    t0: float = static(default=0.0)
     n_channels: int = static(default=3)
 
-    def _model(self) -> FDIModel:
+    def _model(self, dt: float) -> FDIModel:
         def fault_fn(k):
             return windowed_additive_faults(
                 k,
-                self.step,
+                dt,
                 self.windows,
                 self.torques,
                 self.spacecraft,
@@ -87,12 +82,12 @@ class ScriptedFdi(Estimator):
                 self.n_channels,
             )
 
-        return FDIModel(self.count, self.n_channels, fault_fn, self.step)
+        return FDIModel(self.count, self.n_channels, fault_fn, dt)
 
     def update(self, t, state, inputs: FlightInputs):
-        k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
+        k = inputs.step.k
         return state, fdi_output(
-            self._model(), self.params, k, step_key(fdi_noise_key(self.seed), k)
+            self._model(inputs.step.dt), self.params, k, step_key(fdi_noise_key(self.seed), k)
         )
 
     def signals(self):

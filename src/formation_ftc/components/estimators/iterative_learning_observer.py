@@ -44,8 +44,6 @@ class IterativeLearningObserver(Estimator):
     the sign term F_hat chatters with a period of 2 steps, which decimated samples would alias).
     """
 
-    refresh_on_observe = True
-
     count: int = static()
     mean_motion: Any = 0.0  # n of the CW model [rad/s]
     L1: Any = 0.0  # (6, 6) [1/s]
@@ -93,7 +91,7 @@ class IterativeLearningObserver(Estimator):
             mean_last=mean_last,
             mean_n=jnp.where(reset, 1, n + 1).astype(jnp.int32),
         )
-        return new, self.current(new)
+        return new, self._estimate(new)
 
     def predict(self, t, state, command, dt):
         A, B = cw_matrices_jax(self.mean_motion)
@@ -112,7 +110,7 @@ class IterativeLearningObserver(Estimator):
         )  # (5), H = B
         return {**state, "q_hat": q_hat}
 
-    def current(self, state):
+    def _estimate(self, state):
         return {"fault": state["F_hat"], "state": state["q_hat"], "output_error": state["e_y"]}
 
     def signals(self):

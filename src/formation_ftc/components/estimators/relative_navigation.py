@@ -107,7 +107,6 @@ class RelativeNavigationFilter(Estimator):
     nominal_mass: Any  # (N,) [kg]
 
     navigation = True
-    refresh_on_observe = True  # records: the estimate the law uses (after the update at t_k)
 
     def signals(self):
         return (
@@ -132,9 +131,6 @@ class RelativeNavigationFilter(Estimator):
         return NavigationState(
             *kalman_predict(state.x_hat, state.p, accel, self.phi, self.gamma, self.qd)
         )
-
-    def current(self, state: NavigationState):
-        return state.x_hat
 
     def outputs(self, t, state, estimate):
         return {

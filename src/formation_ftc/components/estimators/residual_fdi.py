@@ -11,13 +11,94 @@ import jax.numpy as jnp
 from formation_ftc.components.estimators.relative_navigation import kalman_predict, kalman_update
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
 
-__all__ = ["ResidualFdi", "FdiState", "RESIDUALS", "TESTS"]
+__all__ = ["ResidualFdi", "FdiState", "RESIDUALS", "TESTS", "sequential_test", "latch_first_alarm"]
 
 #: residual generators: the Kalman filter's innovation, or the one-step parity relation
 RESIDUALS = ("kalman", "parity")
 #: tests on the standardised residual of each (spacecraft, axis) channel
 TESTS = ("cusum", "fixed")
 VEC = ("spacecraft", "axis")
+
+
+def sequential_test(test: str, g_pos, g_neg, z, drift, threshold):
+    """One step of the test on standardised residuals ``z`` of every channel.
+
+    ``cusum``: Page's two-sided CUSUM ``g+ = max(0, g+ + z - drift)``, ``g- = max(0, g- - z - drift)``,
+    statistic ``max(g+, g-)``; ``fixed``: statistic ``|z|`` (``g+``, ``g-`` returned unchanged).
+
+    Parameters
+    ----------
+    test : str
+        ``"cusum"`` or ``"fixed"`` (:data:`TESTS`).
+    g_pos, g_neg : array_like
+        CUSUM statistics of a positive / negative shift before this step, shape of ``z`` [-].
+    z : array_like
+        Standardised residual of every channel [-].
+    drift : float
+        CUSUM drift [-].
+    threshold : float
+        Alarm threshold on the statistic [-].
+
+    Returns
+    -------
+    tuple
+        ``(g_pos, g_neg, statistic, alarm)``: the updated statistics, the test statistic per channel
+        and ``alarm`` () true when any statistic exceeds ``threshold``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.estimators.residual_fdi import sequential_test
+    >>> g = np.zeros(2)
+    >>> g_pos, g_neg, stat, alarm = sequential_test("cusum", g, g, np.array([3.0, -1.0]), 0.5, 2.0)
+    >>> stat.tolist(), bool(alarm)
+    ([2.5, 0.5], True)
+    """
+    if test == "cusum":
+        g_pos = jnp.maximum(0.0, g_pos + z - drift)
+        g_neg = jnp.maximum(0.0, g_neg - z - drift)
+        stat = jnp.maximum(g_pos, g_neg)
+    else:
+        stat = jnp.abs(z)
+    return g_pos, g_neg, stat, jnp.any(stat > threshold)
+
+
+def latch_first_alarm(stat, alarm, detected, isolated):
+    """Latches the first alarm and isolates the channel with the largest statistic at that step.
+
+    Parameters
+    ----------
+    stat : array_like
+        Test statistic of every channel at this step [-].
+    alarm : array_like, shape ()
+        An alarm at this step.
+    detected : array_like, shape ()
+        The latched alarm before this step.
+    isolated : array_like
+        The latched one-hot channel before this step (shape of ``stat``, bool).
+
+    Returns
+    -------
+    tuple
+        ``(detected, isolated, first)``: the latched alarm, the one-hot channel of the largest
+        statistic at the first alarm (held afterwards) and ``first`` () true at the first alarm's step.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.estimators.residual_fdi import latch_first_alarm
+    >>> none = np.zeros((2, 3), dtype=bool)
+    >>> stat = np.array([[0.0, 5.0, 1.0], [2.0, 0.0, 0.0]])
+    >>> det, iso, first = latch_first_alarm(stat, np.array(True), np.array(False), none)
+    >>> bool(det), bool(first), np.argwhere(iso).tolist()
+    (True, True, [[0, 1]])
+    >>> det, iso, first = latch_first_alarm(stat[::-1], np.array(True), det, iso)
+    >>> bool(first), np.argwhere(iso).tolist()
+    (False, [[0, 1]])
+    """
+    first = alarm & ~detected
+    top = jnp.arange(stat.size).reshape(stat.shape) == jnp.argmax(stat)
+    return detected | alarm, jnp.where(first, top, isolated), first
 
 
 class FdiState(NamedTuple):
@@ -68,7 +149,7 @@ class ResidualFdi(Estimator):
     drift: Any  # CUSUM drift [-]
     threshold: Any  # alarm threshold [-]
 
-    refresh_on_observe = True  # records: the test at t_k as the step computes it
+    estimate_keys = ("detected", "isolated", "statistic")
 
     def signals(self):
         return (
@@ -110,17 +191,10 @@ class ResidualFdi(Estimator):
         e, S, valid = self._residual(state, y)
         z = e[:, 3:] / jnp.sqrt(jnp.diagonal(S)[3:])  # standardised velocity residual (N, 3)
         z = jnp.where(valid, z, 0.0)
-        if self.test == "cusum":
-            g_pos = jnp.maximum(0.0, state.g_pos + z - self.drift)
-            g_neg = jnp.maximum(0.0, state.g_neg - z - self.drift)
-            stat = jnp.maximum(g_pos, g_neg)
-        else:
-            g_pos, g_neg = state.g_pos, state.g_neg
-            stat = jnp.abs(z)
-        alarm = jnp.any(stat > self.threshold)
-        first = alarm & ~state.detected
-        top = jnp.arange(stat.size).reshape(stat.shape) == jnp.argmax(stat)
-        isolated = jnp.where(first, top, state.isolated)
+        g_pos, g_neg, stat, alarm = sequential_test(
+            self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
+        )
+        detected, isolated, _ = latch_first_alarm(stat, alarm, state.detected, state.isolated)
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":  # the filter's measurement update
             x_hat, p = kalman_update(x_hat, p, y, self.r)
@@ -132,7 +206,7 @@ class ResidualFdi(Estimator):
             started=jnp.asarray(True),
             g_pos=g_pos,
             g_neg=g_neg,
-            detected=state.detected | alarm,
+            detected=detected,
             isolated=isolated,
         )
         return new, {"detected": new.detected, "isolated": isolated, "statistic": stat}
@@ -143,10 +217,6 @@ class ResidualFdi(Estimator):
         if self.residual == "kalman":
             x_hat, p = kalman_predict(x_hat, p, accel, self.phi, self.gamma, self.qd)
         return state._replace(x_hat=x_hat, p=p, a_prev=accel)
-
-    def current(self, state: FdiState):
-        stat = jnp.maximum(state.g_pos, state.g_neg)
-        return {"detected": state.detected, "isolated": state.isolated, "statistic": stat}
 
     def outputs(self, t, state, estimate):
         return {

@@ -18,6 +18,8 @@ class ScheduledDiagnosis(Estimator):
     this diagnosis, ``{"diagnosed": (N,) bool}``, never the fault itself. Times are compared with the
     step times t_k, so they should lie on the step grid."""
 
+    estimate_keys = ("diagnosed",)
+
     count: int = static()
     diagnosis_time: Any = float("inf")
 
@@ -27,9 +29,6 @@ class ScheduledDiagnosis(Estimator):
     def update(self, t, state, inputs: FlightInputs):
         est = {"diagnosed": state["diagnosed"] | (t >= self.diagnosis_time)}
         return est, est
-
-    def current(self, state):
-        return state
 
     def signals(self):
         return (

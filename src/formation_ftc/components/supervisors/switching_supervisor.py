@@ -55,7 +55,6 @@ class SwitchingSupervisor(Supervisor):
     """
 
     count: int = static()
-    dt: float = static()
     switch_steps: Any = None
     active: Any = None
     leaves_at_next_switch: Any = None
@@ -63,20 +62,17 @@ class SwitchingSupervisor(Supervisor):
     eta1: Any = 0.01
     delay_bound_steps: Any = 0
     desired_position: tuple = static(default=())
-    t0: float = static(default=0.0)
 
     def initial_state(self):
         n = self.count
         return {
-            "k": jnp.asarray(0, dtype=jnp.int64),
             "decision": jnp.zeros(n, dtype=jnp.int64),
-            "decision_step": jnp.full(n, -1, dtype=jnp.int64),
+            "decision_time": jnp.full(n, jnp.nan),
             "margin_29": jnp.full(n, jnp.nan),
             "decision_mode": jnp.full(n, -1, dtype=jnp.int64),
         }
 
-    def _desired(self, k, mode):
-        t = self.t0 + k * self.dt
+    def _desired(self, t, mode):
         i = jnp.arange(1, self.count + 1, dtype=jnp.float64)
         table = jnp.stack(
             [
@@ -86,7 +82,7 @@ class SwitchingSupervisor(Supervisor):
         )  # (n_modes, N, 3)
         return table[mode]
 
-    def _decision(self, k, state) -> SwitchDecision:
+    def _decision(self, k, t, state) -> SwitchDecision:
         mode = block.mode_index(self.switch_steps, k)
         active = self.active[mode]
         return SwitchDecision(
@@ -94,32 +90,28 @@ class SwitchingSupervisor(Supervisor):
             next_mode=block.mode_index(self.switch_steps, k + 1),
             active=active,
             reconfigure=state["decision"] == block.RECONFIGURE,
-            desired_position=self._desired(k, mode) * active[:, None],
+            desired_position=self._desired(t, mode) * active[:, None],
         )
 
     def update(self, t, state, inputs: FlightInputs):
-        k = jnp.round((t - self.t0) / self.dt).astype(jnp.int64)
+        k, dt = inputs.step.k, inputs.step.dt
         mode = block.mode_index(self.switch_steps, k)
         est = inputs.estimate
         diagnosed = jnp.zeros(self.count, dtype=bool) if est is None else est["diagnosed"]
         diagnosed = diagnosed & (self.active[mode] > 0)  # only spacecraft in the formation
         margin, has_next, gain, loss = block.condition_29(
-            self.switch_steps, k, self.delay_bound_steps, self.eta, self.eta1, self.dt
+            self.switch_steps, k, self.delay_bound_steps, self.eta, self.eta1, dt
         )  # (29)
         decision, new = block.decide(
             state["decision"], diagnosed, self.leaves_at_next_switch[mode] > 0, has_next, gain, loss
         )
         state = {
-            "k": k + 1,
             "decision": decision,
-            "decision_step": jnp.where(new, k, state["decision_step"]),
+            "decision_time": jnp.where(new, t, state["decision_time"]),
             "margin_29": jnp.where(new, margin, state["margin_29"]),
             "decision_mode": jnp.where(new, mode, state["decision_mode"]),
         }
-        return state, self._decision(k, state)
-
-    def current(self, state):
-        return self._decision(state["k"], state)
+        return state, self._decision(k, t, state)
 
     def signals(self):
         sc = ("spacecraft",)
@@ -157,13 +149,12 @@ class SwitchingSupervisor(Supervisor):
         )
 
     def outputs(self, t, state, decision: SwitchDecision):
-        step = state["decision_step"]
         return {
             "mode": decision.mode + 1,
             "active": decision.active,
             "desired_position": decision.desired_position,
             "supervisor_decision": state["decision"],
-            "supervisor_decision_time": jnp.where(step >= 0, self.t0 + step * self.dt, jnp.nan),
+            "supervisor_decision_time": state["decision_time"],
             "supervisor_decision_mode": state["decision_mode"] + 1,
             "condition_29_margin": state["margin_29"],
         }

@@ -31,18 +31,25 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Literal, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
-from pydantic import Field, PrivateAttr, ValidationError, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, ValidationInfo, model_validator
 
-from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
 from formation_ftc.config.base import ScenarioBase, StrictModel, error_location
 from formation_ftc.registry import Condition, Method, register_method
-from formation_ftc.sim.compiled import Compiled, compile_loop
-from formation_ftc.sim.components import CompositionError, Plant, as_float
-from formation_ftc.sim.loop import ClosedLoop
-from formation_ftc.sim.metrics import BLOCK_REDUCTIONS, REDUCTIONS, SPACECRAFT_REDUCTIONS, Metric
+from formation_ftc.sim.contract import (
+    BLOCK_REDUCTIONS,
+    REDUCTIONS,
+    SPACECRAFT_REDUCTIONS,
+    CompositionError,
+    as_float,
+)
+
+# the loop and its components import JAX: only make_loop, build and check import them
+if TYPE_CHECKING:
+    from formation_ftc.sim.compiled import Compiled
+    from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
     "ComposedScenario",
@@ -288,7 +295,7 @@ class ComposedScenario(ScenarioBase):
     _evaluation_sections: list[tuple[str, Any]] = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
-    def _compose(self) -> ComposedScenario:
+    def _compose(self, info: ValidationInfo) -> ComposedScenario:
         _load_catalogs()
         sections: dict[str, Any] = {}
         for slot in SLOTS:
@@ -332,6 +339,8 @@ class ComposedScenario(ScenarioBase):
             except ValidationError as exc:
                 raise _section_errors(f"evaluations[{j}]", exc) from None
         self._evaluation_sections = evaluations
+        if isinstance(info.context, dict) and info.context.get("build") is False:
+            return self  # fields only (`show`): check, run and campaigns build the loop
         try:
             make_loop(self).validate()
         except CompositionError as exc:
@@ -394,6 +403,11 @@ def composed_json_schema() -> dict[str, Any]:
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
     """The composed scenario's closed loop (components built from their sections)."""
+    from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
+    from formation_ftc.sim.components import Plant
+    from formation_ftc.sim.loop import ClosedLoop
+    from formation_ftc.sim.metrics import Metric
+
     plant_entry = _CATALOG[
         ("plant", cast(str, s.type_of("plant")))
     ]  # the plant section is required
@@ -444,6 +458,8 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
 
 def build(s: ComposedScenario) -> Compiled:
     """Compile a composed scenario."""
+    from formation_ftc.sim.compiled import compile_loop
+
     return compile_loop(make_loop(s))
 
 

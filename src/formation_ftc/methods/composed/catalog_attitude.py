@@ -476,6 +476,7 @@ def _scripted_fdi(sec: ScriptedFdiSection, ctx: BuildContext):
         routing=isolation_routing(m, nch, moves),
     )
     seed = np.asarray(ctx.scenario.simulation.seed, dtype=np.uint32)
+    statics.pop("step")  # the FDI reads the step from its flight inputs
     return ScriptedFdi(count=m, seed=seed, windows=windows, params=params, **statics)
 
 

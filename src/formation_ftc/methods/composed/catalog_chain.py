@@ -51,7 +51,7 @@ from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
 from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
 from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.polygon_formation import relative_acceleration_fn
+from formation_ftc.core.polygon_formation import chain_difference, relative_acceleration_fn
 from formation_ftc.design.allocation import validate_allocation_inputs
 from formation_ftc.design.flfr import FlfrDesign, design_flfr
 from formation_ftc.methods.composed import (
@@ -60,11 +60,14 @@ from formation_ftc.methods.composed import (
     per_spacecraft,
     register_component_type,
 )
-from formation_ftc.sim.components import CompositionError, as_float
+from formation_ftc.sim.components import CompositionError, FlightInputs, as_float, component
 from formation_ftc.sim.metrics import Metric
 
 DOUBLE_INTEGRATOR = "double-integrator"
 CHAIN_SENSORS = "chain-relative"
+#: sensors of the (N, 6) LVLH relative state from which the law and the supervisor form the chain
+#: outputs on board (``y_ij = q_{i+1} - q_i``): the league's common sensor, which a residual FDI reads
+STATE_SENSORS = "lvlh-relative-state"
 CHAIN_LAW = "azizi2009-llfr"
 HL_SUPERVISOR = "hierarchical"
 CHAIN_ERRORS = "chain-errors"
@@ -360,14 +363,47 @@ def _alpha_flfr(sec: ChainLlfrSection, ctx: BuildContext, alpha: np.ndarray, k: 
     return max(float(a), float(alpha[k]))  # never lower the weight (LLFR already suffices)
 
 
+@component
+class ChainLlfrOnBoardController(ChainLlfrController):  # type: ignore[misc]  # fields inherited as declared
+    """:class:`~formation_ftc.components.controllers.azizi2009_llfr.ChainLlfrController` reading the
+    (N, 6) LVLH relative-state measurement (``lvlh-relative-state`` sensors): the chain outputs are
+    formed on board from it, ``y_ij = q_{i+1} - q_i`` on the first ``n_axes`` position and velocity
+    axes (the same law; the noise of a chain output is that of two spacecraft's states)."""
+
+    def output(self, t, state, inputs: FlightInputs):
+        q = inputs.measurement
+        na = self.n_axes
+        y = {
+            "position": chain_difference(q[:, :na]),
+            "velocity": chain_difference(q[:, 3 : 3 + na]),
+        }
+        return ChainLlfrController.output(self, t, state, inputs._replace(measurement=y))
+
+
+def _chain_sensors(ctx: BuildContext, slot: str) -> bool:
+    """True when the chain outputs are formed on board from ``lvlh-relative-state`` sensors, False for
+    ``chain-relative`` sensors; any other sensors: a CompositionError naming ``slot`` and the sensors."""
+    sensors = ctx.scenario.type_of("sensors")
+    if sensors == CHAIN_SENSORS:
+        return False
+    if sensors == STATE_SENSORS:
+        layout, _ = _plant_layout(ctx, slot, CHAIN_LAW if slot == "controller" else HL_SUPERVISOR)
+        if layout == "q":
+            return True
+    what = (
+        f"controller {CHAIN_LAW} reads relative outputs on the chain pairs"
+        if slot == "controller"
+        else f"supervisor {HL_SUPERVISOR} monitors the chain errors"
+    )
+    raise CompositionError(
+        f"{what} (sensors {CHAIN_SENSORS}, or {STATE_SENSORS} on a relative-state plant: formed on "
+        f"board), but sensors {sensors or 'default (exact (N, 6) state)'} measure something else"
+    )
+
+
 def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
     n = ctx.count
-    sensors = ctx.scenario.type_of("sensors")
-    if sensors != CHAIN_SENSORS:
-        raise CompositionError(
-            f"controller {CHAIN_LAW} reads relative outputs on the chain pairs (sensors {CHAIN_SENSORS}), but "
-            f"sensors {sensors or 'default (exact (N, 6) state)'} measure something else"
-        )
+    on_board = _chain_sensors(ctx, "controller")
     if sec.sampling == "continuous" and ctx.plant.integration == "exact":
         raise CompositionError(
             f"controller {CHAIN_LAW} with sampling 'continuous' is re-evaluated at the RK stages, but "
@@ -379,7 +415,7 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
     for a in range(axes):
         validate_allocation_inputs(alpha, b_hat[:, a], "controller.alpha", "controller.b_hat")
     a_flfr = _alpha_flfr(sec, ctx, alpha, k)
-    law = ChainLlfrController(
+    law = (ChainLlfrOnBoardController if on_board else ChainLlfrController)(
         lambda0=as_float(sec.lambda0),
         lambda1=as_float(sec.lambda1),
         alpha=as_float(alpha),
@@ -428,13 +464,24 @@ register_component_type(
 
 # ------------------------------------------------------------------------------------- supervisors
 class HierarchicalSection(StrictModel):
-    """HL supervisor: Nominal -> LLFR when the fault estimate arrives; LLFR -> FLFR when the measured
-    max |e_ij| exceeds e_s (for ``confirm_time``, from ``monitor_start`` on)."""
+    """HL supervisor: Nominal -> LLFR when the fault estimate arrives (at ``estimate_time``, or when the
+    estimator in the loop detects the fault); LLFR -> FLFR when the measured max |e_ij| exceeds e_s
+    (for ``confirm_time``, from ``monitor_start`` on)."""
 
     e_s: float = Field(gt=0, description="Mission error bound e_s on the chain errors [m].")
     flfr: bool = Field(True, description="Allow the switch to FLFR [-].")
+    fault_information: Literal["scripted", "estimator"] = Field(
+        "scripted",
+        description="Source of the 'fault estimated' event (Nominal -> LLFR): 'scripted' -- at "
+        "estimate_time, for the fault stated in controller.faulty_spacecraft; 'estimator' -- at the "
+        "first step the [estimator]'s estimate reports 'detected' (e.g. residual-fdi), whatever the "
+        "controller states [-].",
+    )
     estimate_time: float = Field(
-        0.0, ge=0, description="Time the fault estimate reaches the supervisor [s]."
+        0.0,
+        ge=0,
+        description="Time the fault estimate reaches the supervisor (fault_information = "
+        "'scripted') [s].",
     )
     confirm_time: float = Field(
         0.0, ge=0, description="A violation must persist this long before FLFR [s]."
@@ -445,6 +492,37 @@ class HierarchicalSection(StrictModel):
     )
 
 
+def _estimate_keys(ctx: BuildContext) -> set[str] | None:
+    """The keys of the estimate of the loop's [estimator] as its type declares them
+    (:attr:`~formation_ftc.sim.components.Estimator.estimate_keys`; None: no estimator)."""
+    from formation_ftc.methods.composed import component_types
+
+    name = ctx.scenario.type_of("estimator")
+    if name is None:
+        return None
+    est = component_types("estimator")[("estimator", name)].build(ctx.section("estimator"), ctx)
+    return set(type(est).estimate_keys)
+
+
+def _check_estimator_information(ctx: BuildContext) -> None:
+    """``fault_information = 'estimator'`` needs an estimator whose estimate has ``detected``."""
+    name = ctx.scenario.type_of("estimator")
+    keys = _estimate_keys(ctx)
+    if keys is not None and "detected" in keys:
+        return
+    got = (
+        "the loop has no [estimator]"
+        if name is None
+        else f"estimator {name} gives "
+        + ("no estimate with named entries" if not keys else f"{{{', '.join(sorted(keys))}}}")
+    )
+    raise CompositionError(
+        f"supervisor.fault_information = 'estimator': supervisor {HL_SUPERVISOR} switches to LLFR "
+        f"when the estimator's estimate reports 'detected' (e.g. [estimator] type = "
+        f'"residual-fdi"), but {got}'
+    )
+
+
 def _hierarchical(sec: HierarchicalSection, ctx: BuildContext):
     law = ctx.scenario.type_of("controller")
     if law != CHAIN_LAW:
@@ -452,13 +530,11 @@ def _hierarchical(sec: HierarchicalSection, ctx: BuildContext):
             f"supervisor {HL_SUPERVISOR} selects the allocation mode (Nominal / LLFR / FLFR) of "
             f"controller {CHAIN_LAW}; controller {law} has no such modes"
         )
-    sensors = ctx.scenario.type_of("sensors")
-    if sensors != CHAIN_SENSORS:
-        raise CompositionError(
-            f"supervisor {HL_SUPERVISOR} monitors the chain errors of sensors {CHAIN_SENSORS}, "
-            f"but sensors {sensors or 'default (exact (N, 6) state)'} measure something else"
-        )
+    on_board = _chain_sensors(ctx, "supervisor")
     _, axes = _plant_layout(ctx, "supervisor", HL_SUPERVISOR)
+    estimated = sec.fault_information == "estimator"
+    if estimated:
+        _check_estimator_information(ctx)
     c = ctx.section("controller")
     n, dt = ctx.count, ctx.dt
     never = ctx.scenario.simulation.n_steps + 1
@@ -479,15 +555,17 @@ def _hierarchical(sec: HierarchicalSection, ctx: BuildContext):
     return HierarchicalSupervisor(
         count=n,
         n_axes=axes,
-        dt=float(dt),
         side=as_float(c.side),
         omega=as_float(c.omega),
         e_s=as_float(sec.e_s),
-        k_estimated=np.asarray(_steps(sec.estimate_time, dt) if known else never, np.int64),
+        k_estimated=np.asarray(
+            _steps(sec.estimate_time, dt) if known and not estimated else never, np.int64
+        ),
         confirm_steps=np.asarray(_steps(sec.confirm_time, dt), np.int64),
         monitor_start=np.asarray(_steps(sec.monitor_start, dt), np.int64),
         flfr_enabled=np.asarray(bool(sec.flfr and known)),
-        t0=0.0,
+        fault_information=sec.fault_information,
+        on_board_chain=on_board,
     )
 
 

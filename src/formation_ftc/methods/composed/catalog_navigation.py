@@ -207,11 +207,16 @@ class FdiScoresSection(StrictModel):
     """Truth-side FDI scores (no fields)."""
 
 
+#: estimator types that record ``fdi_detected`` and ``fdi_isolated`` in the actuator's channels
+FDI_ESTIMATORS = ["residual-fdi"]
+
+
 def _fdi_scores(sec: FdiScoresSection, ctx: BuildContext):
-    if ctx.scenario.type_of("estimator") != "residual-fdi":
+    if ctx.scenario.type_of("estimator") not in FDI_ESTIMATORS:
         raise CompositionError(
-            "evaluation fdi-scores compares an FDI's alarm with the true fault: it needs "
-            f'[estimator] type = "residual-fdi" (the loop has {ctx.scenario.type_of("estimator")})'
+            "evaluation fdi-scores compares an FDI's alarm with the true fault: it needs [estimator] "
+            f"type = {' or '.join(repr(n) for n in FDI_ESTIMATORS)} (the loop has "
+            f"{ctx.scenario.type_of('estimator')})"
         )
     if ctx.scenario.type_of("actuator") != "fault-battery":
         raise CompositionError(

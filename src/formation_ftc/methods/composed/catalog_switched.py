@@ -376,7 +376,6 @@ def _switching_supervisor(sec: SwitchingSupervisorSection, ctx: BuildContext):
         table.append(tuple(row))
     return SwitchingSupervisor(
         count=ctx.count,
-        dt=float(ctx.dt),
         switch_steps=jnp.asarray(st.switch_steps),
         active=as_float(st.active),
         leaves_at_next_switch=jnp.asarray(st.leaves),
