@@ -42,6 +42,7 @@ __all__ = [
     "get_method",
     "methods",
     "register_reproduction",
+    "resolve_reference",
     "get_reproduction",
     "reproductions",
     "load_plugins",
@@ -307,7 +308,9 @@ class Reproduction:
 
 
 _METHODS: dict[str, Method] = {}
-_REPRODUCTIONS: dict[str, Reproduction] = {}
+_REPRODUCTIONS: dict[
+    str, Reproduction | str
+] = {}  # a str: "module:attribute", see resolve_reference
 
 #: Display order of the built-in papers in the report (loading is by entry point, not by this list).
 PAPER_MODULES = ["li2020", "yang2013", "gui2022", "mehrabian", "azizi2009"]
@@ -335,8 +338,32 @@ def methods() -> dict[str, Method]:
     return dict(_METHODS)
 
 
-def register_reproduction(rep: Reproduction) -> Reproduction:
-    _REPRODUCTIONS[rep.paper] = rep
+def resolve_reference(ref: Any) -> Any:
+    """``ref`` itself, or for a ``"module:attribute"`` string the attribute, its module imported on
+    first use: a plug-in registers its conditions, figures and reproduction by such references so that
+    importing it (which every lookup does) does not import JAX or matplotlib (issue 37)."""
+    if isinstance(ref, str):
+        module, _, attr = ref.partition(":")
+        return getattr(importlib.import_module(module), attr)
+    return ref
+
+
+def register_reproduction(rep: Reproduction | str, paper: str | None = None) -> Reproduction | str:
+    """Register a reproduction, or by a ``"module:attribute"`` reference (give ``paper``), imported
+    when it is looked up."""
+    if isinstance(rep, str):
+        if paper is None:
+            raise ValueError(f"register_reproduction({rep!r}): a reference needs its paper")
+        _REPRODUCTIONS[paper] = rep
+    else:
+        _REPRODUCTIONS[rep.paper] = rep
+    return rep
+
+
+def _resolved_reproduction(paper: str) -> Reproduction:
+    rep = _REPRODUCTIONS[paper]
+    if isinstance(rep, str):
+        rep = _REPRODUCTIONS[paper] = resolve_reference(rep)
     return rep
 
 
@@ -347,13 +374,28 @@ def get_reproduction(paper: str) -> Reproduction:
             f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all"
             + _plugin_error_hint()
         )
-    return _REPRODUCTIONS[paper]
+    return _resolved_reproduction(paper)
 
 
 def reproductions() -> dict[str, Reproduction]:
+    """The registered reproductions; one whose reference fails to import is recorded in
+    :data:`PLUGIN_ERRORS` (under its module) and left out, like a plug-in that fails to import."""
     load_plugins()
+    import traceback
+
+    for paper, rep in list(_REPRODUCTIONS.items()):
+        try:
+            _resolved_reproduction(paper)
+        except Exception:  # noqa: BLE001 - recorded and reported on lookup
+            PLUGIN_ERRORS[rep.partition(":")[0] if isinstance(rep, str) else paper] = (
+                traceback.format_exc()
+            )
+            del _REPRODUCTIONS[paper]
     order = {p: k for k, p in enumerate(PAPER_MODULES)}
-    return dict(sorted(_REPRODUCTIONS.items(), key=lambda kv: order.get(kv[0], 99)))
+    return {
+        paper: _resolved_reproduction(paper)
+        for paper in sorted(_REPRODUCTIONS, key=lambda p: order.get(p, 99))
+    }
 
 
 _LOADED = False

@@ -174,3 +174,36 @@ def test_fdi_scores_need_the_fault_battery(tmp_path):
     path.write_text(text)
     with pytest.raises(ValueError, match="fdi-scores compares an FDI"):
         load_scenario(path)
+
+
+SATURATING = """
+[controller]                # holds the spacecraft at the origin from 10 m: commands far above 0.2 N
+type = "pd"
+mode = "sampled"
+kp = 2.0
+kd = 30.0
+desired_position = ["0", "0", "0"]
+nominal_mass = [100.0, 120.0]
+"""
+
+
+@pytest.mark.parametrize("limit", [None, 0.2])
+def test_a_thrust_limit_is_not_a_fault_when_the_rating_is_stated(tmp_path, limit):
+    """No fault, a 0.2 N per-axis limit on the truth, a law that saturates: the parity residual of a
+    saturated step is the force the limit cut (up to |u| dt / m), an alarm; with the rated thrust
+    stated (``force_limit``) those channels are not tested and no alarm is raised, while the residual
+    statistic of the channels below the rating stays tested."""
+    text = SCENARIO.format(**{**FIELDS, "kind": "none", "test": "fixed", "threshold": 5.0})
+    text = text.replace('[controller]\ntype = "none"\n', SATURATING)
+    text = text.replace('kind = "none"', 'kind = "none"\nsaturation = 0.2')
+    if limit is not None:
+        text = text.replace("threshold = 5.0", f"threshold = 5.0\nforce_limit = {limit}")
+    path = tmp_path / "sat.toml"
+    path.write_text(text)
+    ds, m = simulate_with_metrics(load_scenario(path))
+    saturated = np.abs(ds["command"].values) >= 0.2
+    assert saturated[:10].all(axis=0).sum() == 4  # the acquisition saturates the 4 displaced axes
+    if limit is None:
+        assert m["false_alarm"] == 1.0
+    else:
+        assert m["false_alarm"] == 0.0 and float(ds["fdi_statistic"].values.max()) < 5.0

@@ -82,3 +82,26 @@ def test_unknown_check_case_is_named(tmp_path, tiny_league):
     spec = load_league(path)
     with pytest.raises(LeagueError, match="step_check.case"):
         runner._step_checks(spec, plan_cells(spec), None, None)
+
+
+def test_ignored_scores_such_as_alarm_times_on_the_step_grid_are_left_out(monkeypatch):
+    """A detection delay of one step halves with the step by construction: with it ignored the check
+    converges on the other scores; with it compared, it never does."""
+    import formation_ftc.api as api
+    from formation_ftc.league.step_check import check_step
+
+    monkeypatch.setattr(api, "load_scenario", lambda raw: raw)
+    monkeypatch.setattr(
+        api,
+        "simulate_with_metrics",
+        lambda cell, raise_on_divergence: (
+            None,
+            {"rms": 0.5, "fdi_detection_delay": cell["simulation"]["dt"]},
+        ),
+    )
+    raw = {"simulation": {"dt": 0.2}, "actuator": {"onset": 9.0}}
+    kw = dict(case="bias", level="u", onset_field="actuator.onset", onset=1.0, max_halvings=1)
+    kept = check_step("m", raw, ignore=("fdi_detection_delay",), **kw)
+    assert kept.converged and kept.chosen_dt == 0.2 and set(kept.scores[0]) == {"rms"}
+    compared = check_step("m", raw, **kw)
+    assert not compared.converged and compared.changes == [0.5, 0.5]

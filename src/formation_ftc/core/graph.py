@@ -7,9 +7,12 @@ In-weight = row sums, out-weight = column sums, Laplacian ``L = diag(rowsum) - C
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
+
+if TYPE_CHECKING:  # networkx is slow to import: the functions that use it import it (issue 37)
+    import networkx as nx
 
 __all__ = [
     "GraphError",
@@ -115,6 +118,8 @@ def balance_report(C, tol: float = 1e-12) -> BalanceReport:
 
 def to_networkx(C) -> nx.DiGraph:
     """Directed graph with an edge j -> i for every C[i, j] > 0 (information flows sender -> receiver)."""
+    import networkx as nx
+
     A = np.asarray(C, dtype=float)
     G = nx.DiGraph()
     G.add_nodes_from(range(A.shape[0]))
@@ -124,11 +129,15 @@ def to_networkx(C) -> nx.DiGraph:
 
 
 def is_strongly_connected(C) -> bool:
+    import networkx as nx
+
     return bool(nx.is_strongly_connected(to_networkx(C)))
 
 
 def is_connected_undirected(C) -> bool:
     """True when C is symmetric and its graph is connected."""
+    import networkx as nx
+
     A = np.asarray(C, dtype=float)
     return bool(np.allclose(A, A.T) and nx.is_connected(to_networkx(A).to_undirected()))
 

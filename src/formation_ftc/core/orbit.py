@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-MU_EARTH = 3.986004418e14  # m^3/s^2, standard value (our choice)
+from formation_ftc.core.constants import MU_EARTH
 
 __all__ = ["MU_EARTH", "KeplerOrbit", "solve_kepler", "true_anomaly_at"]
 

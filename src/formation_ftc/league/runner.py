@@ -771,6 +771,7 @@ def _step_checks(
                 onset=spec.league.onset.low,
                 tolerance=sc.tolerance,
                 max_halvings=sc.max_halvings,
+                ignore=tuple(m["name"] for m in FDI_METRICS),  # alarm times are on the step grid
             ).as_dict()
             if log is not None:
                 verdict = "converged" if record["converged"] else "NOT converged, kept"

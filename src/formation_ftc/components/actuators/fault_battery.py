@@ -38,20 +38,11 @@ from typing import Any
 import jax.numpy as jnp
 
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
+from formation_ftc.core.constants import FAULT_KINDS
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
 
 __all__ = ["FaultBatteryActuator", "FAULT_KINDS", "fault_kind_code"]
 
-#: fault kind names; a kind's code (the ``fault_kind`` leaf) is its index in this tuple
-FAULT_KINDS: tuple[str, ...] = (
-    "none",
-    "loss_of_effectiveness",
-    "bias",
-    "stuck",
-    "outage",
-    "intermittent",
-    "degrading",
-)
 _CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
 
 

@@ -16,7 +16,7 @@ from formation_ftc.blocks.supervisors.hierarchical_supervisor import LLFR
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
 
-__all__ = ["ChainLlfrController"]
+__all__ = ["ChainLlfrController", "ChainLlfrOnBoardController"]
 
 VEC = ("spacecraft", "axis")
 
@@ -106,3 +106,20 @@ class ChainLlfrController(Controller):
 
     def coords(self):
         return {"pair": [f"{j + 1}-{j + 2}" for j in range(self.count - 1)]}
+
+
+@component
+class ChainLlfrOnBoardController(ChainLlfrController):  # type: ignore[misc]  # fields inherited as declared
+    """:class:`ChainLlfrController` reading the
+    (N, 6) LVLH relative-state measurement (``lvlh-relative-state`` sensors): the chain outputs are
+    formed on board from it, ``y_ij = q_{i+1} - q_i`` on the first ``n_axes`` position and velocity
+    axes (the same law; the noise of a chain output is that of two spacecraft's states)."""
+
+    def output(self, t, state, inputs: FlightInputs):
+        q = inputs.measurement
+        na = self.n_axes
+        y = {
+            "position": chain_difference(q[:, :na]),
+            "velocity": chain_difference(q[:, 3 : 3 + na]),
+        }
+        return ChainLlfrController.output(self, t, state, inputs._replace(measurement=y))

@@ -107,6 +107,7 @@ class FdiState(NamedTuple):
     y_prev: Any  # (N, 6) previous measurement (parity residual)
     a_prev: Any  # (N, 3) previous commanded acceleration [m/s^2] (parity residual)
     started: Any  # () a previous sample exists (parity residual)
+    tested: Any  # (N, 3) channels whose command stayed below the rated thrust over the last step
     g_pos: Any  # (N, 3) CUSUM statistic of a positive shift [-]
     g_neg: Any  # (N, 3) CUSUM statistic of a negative shift [-]
     detected: Any  # () latched alarm
@@ -129,7 +130,9 @@ class ResidualFdi(Estimator):
     channel: ``cusum`` -- ``g+ = max(0, g+ + z - drift)``, ``g- = max(0, g- - z - drift)``, alarm when
     either exceeds ``threshold`` (Page's two-sided CUSUM); ``fixed`` -- alarm when ``|z| > threshold``.
     The first alarm is latched (``detected``) and isolates the channel with the largest statistic at
-    that step (``isolated``, one-hot (N, 3)). A fault of the force shows in the velocity residual of its
+    that step (``isolated``, one-hot (N, 3)). A channel whose command reaches the stated rated thrust
+    ``force_limit`` [N] is not tested on the residual spanning that step (a thrust limit may cut the
+    force; the residual cannot tell it from a fault). A fault of the force shows in the velocity residual of its
     own spacecraft and axis first (the Coriolis coupling moves it to the other in-plane axis only over
     a fraction of an orbit), which is what isolation relies on.
 
@@ -148,6 +151,7 @@ class ResidualFdi(Estimator):
     nominal_mass: Any  # (N,) [kg]
     drift: Any  # CUSUM drift [-]
     threshold: Any  # alarm threshold [-]
+    force_limit: Any = float("inf")  # rated thrust per axis [N]: not tested at or above it
 
     estimate_keys = ("detected", "isolated", "statistic")
 
@@ -173,6 +177,7 @@ class ResidualFdi(Estimator):
             y_prev=jnp.asarray(measurement0),
             a_prev=zeros,
             started=jnp.asarray(False),
+            tested=jnp.ones((n, 3), dtype=bool),
             g_pos=zeros,
             g_neg=zeros,
             detected=jnp.asarray(False),
@@ -190,7 +195,7 @@ class ResidualFdi(Estimator):
         y = inputs.measurement
         e, S, valid = self._residual(state, y)
         z = e[:, 3:] / jnp.sqrt(jnp.diagonal(S)[3:])  # standardised velocity residual (N, 3)
-        z = jnp.where(valid, z, 0.0)
+        z = jnp.where(valid & state.tested, z, 0.0)
         g_pos, g_neg, stat, alarm = sequential_test(
             self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
         )
@@ -204,6 +209,7 @@ class ResidualFdi(Estimator):
             y_prev=y,
             a_prev=state.a_prev,
             started=jnp.asarray(True),
+            tested=state.tested,
             g_pos=g_pos,
             g_neg=g_neg,
             detected=detected,
@@ -216,7 +222,8 @@ class ResidualFdi(Estimator):
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":
             x_hat, p = kalman_predict(x_hat, p, accel, self.phi, self.gamma, self.qd)
-        return state._replace(x_hat=x_hat, p=p, a_prev=accel)
+        tested = jnp.abs(command) < self.force_limit
+        return state._replace(x_hat=x_hat, p=p, a_prev=accel, tested=tested)
 
     def outputs(self, t, state, estimate):
         return {

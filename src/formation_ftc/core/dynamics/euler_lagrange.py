@@ -32,7 +32,8 @@ All functions are pure jax.numpy and broadcast over leading axes ``(..., 3)``.
 from __future__ import annotations
 
 import jax.numpy as jnp
-import numpy as np
+
+from formation_ftc.core.constants import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
 
 __all__ = [
     "SINGULAR_PITCH_LIMIT_RAD",
@@ -53,7 +54,6 @@ __all__ = [
 ]
 
 #: Attitudes with |theta| at or above this are rejected (cos(85 deg) = 0.087: R_bar entries up to ~11.5).
-SINGULAR_PITCH_LIMIT_RAD = float(np.deg2rad(85.0))
 
 
 def _mT(a):
@@ -201,23 +201,3 @@ def rigid_body_rhs(q, omega, u, J, J_inv=None):
     h = _mv(J, omega)
     omega_dot = _mv(J_inv, jnp.cross(h, omega) + tau_b)
     return euler_rates_from_body_rates(q, omega), omega_dot
-
-
-def check_away_from_singularity(
-    q, field: str = "attitude", limit_rad: float = SINGULAR_PITCH_LIMIT_RAD
-) -> None:
-    """Raise ValueError if any pitch |theta| >= limit (default 85 deg): Euler-angle singularity.
-
-    ``q`` is array-like (..., 3) [rad]; the message names ``field`` and the offending entry.
-    """
-    arr = np.asarray(q, dtype=float).reshape(-1, 3)
-    bad = np.flatnonzero(np.abs(arr[:, 0]) >= limit_rad)
-    if bad.size:
-        i = int(bad[0])
-        raise ValueError(
-            f"{field}: pitch theta = {np.rad2deg(arr[i, 0]):.3f} deg (row {i}) is at or beyond "
-            f"+-{np.rad2deg(limit_rad):.1f} deg. The Euler-angle EL model is singular at theta = +-90 deg "
-            "(R_bar contains 1/cos(theta) and D = R_bar^-T J R_bar^-1 loses rank, Mehrabian (27), "
-            "E003-08); choose |theta| < "
-            f"{np.rad2deg(limit_rad):.0f} deg."
-        )

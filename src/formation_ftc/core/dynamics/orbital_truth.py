@@ -45,9 +45,8 @@ drag the frame's small rotation about the radial axis, of order |r| a_normal / |
 from __future__ import annotations
 
 import jax.numpy as jnp
-import numpy as np
 
-from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
 
 __all__ = [
     "MU_EARTH",
@@ -78,44 +77,9 @@ __all__ = [
     "drag_decay_rate_circular",
 ]
 
-R_EARTH = 6378137.0  # m, WGS-84 equatorial radius
 J2_EARTH = 1.0826266835531513e-3  # -, EGM96 (-sqrt(5) * C20bar, C20bar = -4.84165371736e-4)
 OMEGA_EARTH = 7.292115e-5  # rad/s, WGS-84 rotation rate
 SOLAR_PRESSURE = 1361.0 / 299792458.0  # N/m^2, TSI 1361 W/m^2 (Kopp & Lean 2011) / c
-
-#: Vallado (2013) Table 8-4: rows [base altitude h_0 [m], nominal density rho_0 [kg/m^3], scale height H [m]]
-EXPONENTIAL_ATMOSPHERE = np.array(
-    [
-        [0.0, 1.225, 7.249],
-        [25.0, 3.899e-2, 6.349],
-        [30.0, 1.774e-2, 6.682],
-        [40.0, 3.972e-3, 7.554],
-        [50.0, 1.057e-3, 8.382],
-        [60.0, 3.206e-4, 7.714],
-        [70.0, 8.770e-5, 6.549],
-        [80.0, 1.905e-5, 5.799],
-        [90.0, 3.396e-6, 5.382],
-        [100.0, 5.297e-7, 5.877],
-        [110.0, 9.661e-8, 7.263],
-        [120.0, 2.438e-8, 9.473],
-        [130.0, 8.484e-9, 12.636],
-        [140.0, 3.845e-9, 16.149],
-        [150.0, 2.070e-9, 22.523],
-        [180.0, 5.464e-10, 29.740],
-        [200.0, 2.789e-10, 37.105],
-        [250.0, 7.248e-11, 45.546],
-        [300.0, 2.418e-11, 53.628],
-        [350.0, 9.518e-12, 53.298],
-        [400.0, 3.725e-12, 58.515],
-        [450.0, 1.585e-12, 60.828],
-        [500.0, 6.967e-13, 63.822],
-        [600.0, 1.454e-13, 71.835],
-        [700.0, 3.614e-14, 88.667],
-        [800.0, 1.170e-14, 124.64],
-        [900.0, 5.245e-15, 181.05],
-        [1000.0, 3.019e-15, 268.00],
-    ]
-) * np.array([1e3, 1.0, 1e3])  # km -> m for the altitudes and scale heights
 
 
 def _norm(v):

@@ -37,7 +37,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationError, ValidationInfo, model_validator
 
 from formation_ftc.config.base import ScenarioBase, StrictModel, error_location
-from formation_ftc.registry import Condition, Method, register_method
+from formation_ftc.registry import Condition, Method, register_method, resolve_reference
 from formation_ftc.sim.contract import (
     BLOCK_REDUCTIONS,
     REDUCTIONS,
@@ -464,15 +464,17 @@ def build(s: ComposedScenario) -> Compiled:
 
 
 #: conditions of component types: (kind, name) -> [fn(scenario, loop) -> [Condition]]
-_CONDITIONS: dict[tuple[str, str], list[Callable[[ComposedScenario, ClosedLoop], list]]] = {}
+_CONDITIONS: dict[tuple[str, str], list[Callable[[ComposedScenario, ClosedLoop], list] | str]] = {}
 
 
 def register_conditions(
-    kind: str, name: str, conditions: Callable[[ComposedScenario, ClosedLoop], list]
+    kind: str, name: str, conditions: Callable[[ComposedScenario, ClosedLoop], list] | str
 ) -> None:
     """``formation-ftc check`` of every composed scenario whose ``[kind]`` is of type ``name`` also
     states ``conditions(scenario, loop)`` (e.g. a paper's theorem conditions for its law, registered by
-    the paper's package, which may return ``[]`` where the composition is outside the theorem)."""
+    the paper's package, which may return ``[]`` where the composition is outside the theorem).
+    ``conditions`` may be a ``"module:attribute"`` reference, imported by the first check that needs it
+    (:func:`formation_ftc.registry.resolve_reference`)."""
     _CONDITIONS.setdefault((kind, name), []).append(conditions)
 
 
@@ -502,19 +504,20 @@ def check(s: ComposedScenario) -> list[Condition]:
         names = [s.type_of(slot)] if slot in SLOTS else [n for n, _ in s._evaluation_sections]
         for name in names:
             for fn in _CONDITIONS.get((slot, str(name)), []):
-                out += list(fn(s, loop))
+                out += list(resolve_reference(fn)(s, loop))
     return out
 
 
 #: figure makers of papers (``[scenario] paper = "<name>"``): ``fn(ds, scenario, out_dir) -> paths``
-_PAPER_FIGURES: dict[str, Callable[[Any, ComposedScenario, Any], list]] = {}
+_PAPER_FIGURES: dict[str, Callable[[Any, ComposedScenario, Any], list] | str] = {}
 
 
 def register_paper_figures(
-    paper: str, figures: Callable[[Any, ComposedScenario, Any], list]
+    paper: str, figures: Callable[[Any, ComposedScenario, Any], list] | str
 ) -> None:
     """``formation-ftc run --plot`` of a scenario with ``[scenario] paper = paper`` draws these figures
-    (the paper's own figure set) instead of the generic error and command plots."""
+    (the paper's own figure set) instead of the generic error and command plots. ``figures`` may be a
+    ``"module:attribute"`` reference, imported when a run draws them."""
     _PAPER_FIGURES[paper] = figures
 
 
@@ -523,7 +526,7 @@ def _plot(ds, scenario, out_dir):
 
     paper = scenario.scenario.paper
     if paper in _PAPER_FIGURES:
-        return _PAPER_FIGURES[paper](ds, scenario, out_dir)
+        return resolve_reference(_PAPER_FIGURES[paper])(ds, scenario, out_dir)
     paths = []
     for var in ("position_error", "command"):
         if var not in ds:

@@ -23,40 +23,48 @@ tracking errors, effort, spreads over the fault window, the run and the assessme
 
 from __future__ import annotations
 
+import functools
 import math
-from typing import Any, ClassVar, Literal, TypedDict
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, TypedDict
 
-import jax
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.blocks.fdi import fdi_params, isolation_routing
-from formation_ftc.components.actuators.additive_faults import HeldAdditiveFaultActuator
-from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
-from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
-from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
-from formation_ftc.components.plants.euler_angle_attitude import AXES, EulerAngleAttitudePlant
-from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
-from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core import graph as graphs
-from formation_ftc.core.dynamics.euler_lagrange import (
-    SINGULAR_PITCH_LIMIT_RAD,
-    check_away_from_singularity,
-)
-from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion, quaternion_from_euler_zyx
+from formation_ftc.core.constants import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
 from formation_ftc.methods.composed import BuildContext, register_component_type
-from formation_ftc.sim.components import CompositionError, IdealActuator, as_float
-from formation_ftc.sim.metrics import Metric
+from formation_ftc.sim.contract import CompositionError, as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
+
 # Build-time conversions of a section's initial attitude, each one compiled program: evaluated operation
 # by operation they compiled about 50 small programs (1.4-1.5 s) the first time a process loaded such a
 # scenario.
-_quaternion_from_euler = jax.jit(quaternion_from_euler_zyx)
-_euler_from_quaternion = jax.jit(euler_zyx_from_quaternion)
+@functools.cache
+def _quaternion_from_euler():
+    """The jitted ZYX Euler -> quaternion map (compiled on first use: JAX is imported by builds only)."""
+    import jax
+
+    from formation_ftc.core.euler_quaternion import quaternion_from_euler_zyx
+
+    return jax.jit(quaternion_from_euler_zyx)
+
+
+@functools.cache
+def _euler_from_quaternion():
+    """The jitted quaternion -> ZYX Euler map (compiled on first use)."""
+    import jax
+
+    from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion
+
+    return jax.jit(euler_zyx_from_quaternion)
+
 
 QUATERNION_PLANT = "quaternion-rigid-body"
 EULER_PLANT = "euler-angle-attitude"
@@ -147,7 +155,7 @@ class RigidBodyAttitudeSection(StrictModel):
             p = np.asarray(self.initial_quaternion, dtype=float)
             return p / np.linalg.norm(p, axis=-1, keepdims=True)
         return np.asarray(
-            _quaternion_from_euler(np.deg2rad(np.asarray(self.initial_attitude_deg, float)))
+            _quaternion_from_euler()(np.deg2rad(np.asarray(self.initial_attitude_deg, float)))
         )
 
     def quaternions(self) -> np.ndarray:
@@ -156,7 +164,7 @@ class RigidBodyAttitudeSection(StrictModel):
 
     def euler_angles(self) -> np.ndarray:
         """(N, 3) initial 3-2-1 Euler angles [rad] of the plant's state."""
-        return np.asarray(_euler_from_quaternion(self.quaternions()))
+        return np.asarray(_euler_from_quaternion()(self.quaternions()))
 
 
 class QuaternionPlantSection(RigidBodyAttitudeSection):
@@ -172,6 +180,8 @@ def quaternion_plant(
 ) -> QuaternionRigidBodyPlant:
     """Rigid bodies of principal inertia [kg m^2] from (N, 3) body rates [rad/s] and (N, 4) quaternions
     (the one builder: also the attitude part of the ``switched-formation`` plant)."""
+    from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
+
     return QuaternionRigidBodyPlant(
         inertia=as_float(np.diag(inertia)),
         initial_omega=as_float(omega0),
@@ -284,6 +294,8 @@ class EulerAnglePlantSection(StrictModel):
 
 
 def _euler_angle_plant(sec: EulerAnglePlantSection, ctx: BuildContext):
+    from formation_ftc.components.plants.euler_angle_attitude import EulerAngleAttitudePlant
+
     m = sec.count
 
     def rows(v):
@@ -327,6 +339,8 @@ class QuaternionEulerSection(StrictModel):
 
 
 def _quaternion_euler(sec: QuaternionEulerSection, ctx: BuildContext):
+    from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
+
     _needs_quaternion_plant("sensors", EULER_SENSORS, ctx)
     return QuaternionToEulerSensors(count=ctx.count)
 
@@ -388,6 +402,10 @@ def _fault_data(sec: EulerAllocationSection, ctx: BuildContext):
 
 
 def _euler_allocation(sec: EulerAllocationSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.additive_faults import HeldAdditiveFaultActuator
+    from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
+    from formation_ftc.sim.components import IdealActuator
+
     if ctx.scenario.type_of("plant") == EULER_PLANT:  # driven by the generalised torque: no mapping
         statics, windows = _fault_data(sec, ctx)
         return HeldAdditiveFaultActuator(count=ctx.count, windows=windows, **statics)
@@ -438,6 +456,9 @@ class ScriptedFdiSection(StrictModel):
 
 
 def _scripted_fdi(sec: ScriptedFdiSection, ctx: BuildContext):
+    from formation_ftc.blocks.fdi import fdi_params, isolation_routing
+    from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
+
     act = ctx.section("actuator")
     if ctx.scenario.type_of("actuator") != EULER_ALLOCATION or not act.faults:
         raise CompositionError(
@@ -570,6 +591,8 @@ def _attitude_chain_fits(ctx: BuildContext) -> None:
 
 
 def _networked_el_hinf(sec: NetworkedElHinfSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
+
     _attitude_chain_fits(ctx)
     quantity = getattr(ctx.plant, "quantity", "torque")
     if quantity != "torque":
@@ -685,6 +708,9 @@ def _mehrabian_metrics(sec: MehrabianMetricsSection, ctx: BuildContext) -> None:
     [rad, N m], effort int sum_j |u_j|^2 dt [(N m)^2 s]; maxima over the step starts t_k in the window of
     the largest link / tracking error norm, the spread (max - min over spacecraft) and |angle| per Euler
     angle [rad]. Declares metrics only (no evaluation component)."""
+    from formation_ftc.components.plants.euler_angle_attitude import AXES
+    from formation_ftc.sim.metrics import Metric
+
     if ctx.scenario.type_of("controller") != EULER_LAW or ctx.plant.quantity != "torque":
         raise CompositionError(
             f"evaluation {MEHRABIAN_METRICS} scores the tracking and synchronisation errors of "

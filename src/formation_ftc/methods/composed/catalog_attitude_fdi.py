@@ -19,9 +19,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from formation_ftc.components.estimators.attitude_residual_fdi import AttitudeResidualFdi
 from formation_ftc.config.base import StrictModel
-from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import (
     BuildContext,
     per_spacecraft,
@@ -36,7 +35,7 @@ from formation_ftc.methods.composed.catalog_attitude import (
 )
 from formation_ftc.methods.composed.catalog_navigation import FDI_ESTIMATORS
 from formation_ftc.registry import Condition
-from formation_ftc.sim.components import CompositionError, as_float
+from formation_ftc.sim.contract import CompositionError, as_float
 
 __all__ = ["ATTITUDE_RESIDUAL_FDI", "AttitudeResidualFdiSection"]
 
@@ -96,6 +95,8 @@ class AttitudeResidualFdiSection(StrictModel):
 
 
 def _attitude_residual_fdi(sec: AttitudeResidualFdiSection, ctx: BuildContext):
+    from formation_ftc.components.estimators.attitude_residual_fdi import AttitudeResidualFdi
+
     s = ctx.scenario
     if s.type_of("controller") != EULER_LAW:
         raise CompositionError(

@@ -18,20 +18,21 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.components.controllers.attitude_pd import AttitudePdController
-from formation_ftc.components.controllers.yang2013_attitude_hold import Yang2013AttitudeHold
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
-from formation_ftc.components.evaluations.attitude_scores import AttitudeScores
 from formation_ftc.config.base import StrictModel
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.methods.composed.catalog_attitude import (
     QUATERNION_PLANTS,
     _needs_quaternion_plant,
 )
-from formation_ftc.sim.components import CompositionError, as_float
+from formation_ftc.sim.contract import CompositionError, as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 
 __all__ = [
     "YANG2013_ATTITUDE",
@@ -136,6 +137,8 @@ def yang2013_attitude_law(
 ) -> Yang2013AttitudeController:
     """Yang2013's law (13) with the stated principal inertia [kg m^2], gains K3, K4, K5 [1/s] and
     kappa [rad^2/s^2] (the one builder of the law: the catalog's Yang2013 controller types use it)."""
+    from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
+
     return Yang2013AttitudeController(
         count=ctx.count,
         inertia=as_float(_inertia(inertia)),
@@ -147,6 +150,8 @@ def yang2013_attitude_law(
 
 
 def _yang2013_attitude(sec: Yang2013AttitudeSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.yang2013_attitude_hold import Yang2013AttitudeHold
+
     _reads_plant_state(YANG2013_ATTITUDE, ctx)
     law = yang2013_attitude_law(ctx, sec.inertia, sec.K3, sec.K4, sec.K5, sec.kappa)
     q_d = _quaternions(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
@@ -186,6 +191,8 @@ class AttitudePdSection(StrictModel):
 
 
 def _attitude_pd(sec: AttitudePdSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.attitude_pd import AttitudePdController
+
     _reads_plant_state(ATTITUDE_PD, ctx)
     n = ctx.count
     kp = per_spacecraft(sec.K_p, n, "controller.K_p")
@@ -234,6 +241,8 @@ class AttitudeScoresSection(StrictModel):
 
 
 def _attitude_scores(sec: AttitudeScoresSection, ctx: BuildContext):
+    from formation_ftc.components.evaluations.attitude_scores import AttitudeScores
+
     plant = ctx.scenario.type_of("plant")
     if plant not in QUATERNION_PLANTS or ctx.plant is None or ctx.plant.quantity != "torque":
         raise CompositionError(

@@ -12,19 +12,21 @@ attitude -- then work relative to LVLH (LVLH pointing).
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
-from formation_ftc.core.orbit import MU_EARTH
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import BuildContext, register_component_type
 from formation_ftc.methods.composed.catalog_attitude import (
     QUATERNION_PLANTS,
     RigidBodyAttitudeSection,
 )
-from formation_ftc.sim.components import as_float
+from formation_ftc.sim.contract import as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
 
 __all__ = [
     "ATTITUDE_TRUTH_PLANT",
@@ -187,6 +189,8 @@ def initial_inertial_state(sec: AttitudeTruthSection) -> tuple[np.ndarray, np.nd
 
 
 def _attitude_truth(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTruthPlant:
+    from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
+
     w0, q0 = initial_state_in(sec, sec.state_frame)
     a, b, c = sec.disturbance_torque
     return AttitudeTruthPlant(

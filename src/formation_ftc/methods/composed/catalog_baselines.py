@@ -16,12 +16,10 @@ from typing import Literal
 
 from pydantic import Field, field_validator
 
-from formation_ftc.components.controllers.lqr_formation import LqrFormationController
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.orbit import MU_EARTH
-from formation_ftc.design.lqr import cw_lqr
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.sim.components import as_float
+from formation_ftc.sim.contract import as_float
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
@@ -93,6 +91,9 @@ def _from_reference(ctx: BuildContext, name: str):
 
 
 def _lqr(sec: LqrSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.lqr_formation import LqrFormationController
+    from formation_ftc.design.lqr import cw_lqr
+
     n_sc = ctx.count
     a = (
         sec.semi_major_axis

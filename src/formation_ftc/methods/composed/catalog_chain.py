@@ -36,32 +36,25 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Literal, TypedDict
+from typing import TYPE_CHECKING, Literal, TypedDict
 
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
-from formation_ftc.components.actuators.actuator_gains import StepGainActuator
-from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
-from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
-from formation_ftc.components.evaluations.chain_errors import ChainTrackingError, ThresholdFlag
-from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
-from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
-from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
-from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.polygon_formation import chain_difference, relative_acceleration_fn
-from formation_ftc.design.allocation import validate_allocation_inputs
-from formation_ftc.design.flfr import FlfrDesign, design_flfr
 from formation_ftc.methods.composed import (
     BuildContext,
     InitialStateRows,
     per_spacecraft,
     register_component_type,
 )
-from formation_ftc.sim.components import CompositionError, FlightInputs, as_float, component
-from formation_ftc.sim.metrics import Metric
+from formation_ftc.sim.contract import CompositionError, as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.evaluations.chain_errors import ChainTrackingError
+    from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
+    from formation_ftc.design.flfr import FlfrDesign
+    from formation_ftc.sim.metrics import Metric
 
 DOUBLE_INTEGRATOR = "double-integrator"
 CHAIN_SENSORS = "chain-relative"
@@ -134,6 +127,8 @@ class DoubleIntegratorSection(InitialStateRows):
 
 
 def _double_integrator(sec: DoubleIntegratorSection, ctx: BuildContext) -> DoubleIntegratorPlant:
+    from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
+
     r0 = np.asarray(sec.initial_position, float)[:, : sec.axes]
     v0 = (
         np.zeros_like(r0)
@@ -170,6 +165,9 @@ class ChainRelativeSection(StrictModel):
 
 
 def _chain_relative(sec: ChainRelativeSection, ctx: BuildContext):
+    from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
+    from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
+
     layout, axes = _plant_layout(ctx, "sensors", CHAIN_SENSORS)
     if ctx.count < 2:
         raise CompositionError(
@@ -302,6 +300,9 @@ def law_gains(
 
 @functools.lru_cache(maxsize=32)
 def _design_cached(key: tuple) -> FlfrDesign:
+    from formation_ftc.core.polygon_formation import relative_acceleration_fn
+    from formation_ftc.design.flfr import design_flfr
+
     alpha, b_hat, k, b_eps, lam0, lam1, e_s, pis, n, side, omega, axis, dt, b_ext, a_ref = key
     w_fn = relative_acceleration_fn(n, side, omega, axis)
     return design_flfr(
@@ -363,23 +364,6 @@ def _alpha_flfr(sec: ChainLlfrSection, ctx: BuildContext, alpha: np.ndarray, k: 
     return max(float(a), float(alpha[k]))  # never lower the weight (LLFR already suffices)
 
 
-@component
-class ChainLlfrOnBoardController(ChainLlfrController):  # type: ignore[misc]  # fields inherited as declared
-    """:class:`~formation_ftc.components.controllers.azizi2009_llfr.ChainLlfrController` reading the
-    (N, 6) LVLH relative-state measurement (``lvlh-relative-state`` sensors): the chain outputs are
-    formed on board from it, ``y_ij = q_{i+1} - q_i`` on the first ``n_axes`` position and velocity
-    axes (the same law; the noise of a chain output is that of two spacecraft's states)."""
-
-    def output(self, t, state, inputs: FlightInputs):
-        q = inputs.measurement
-        na = self.n_axes
-        y = {
-            "position": chain_difference(q[:, :na]),
-            "velocity": chain_difference(q[:, 3 : 3 + na]),
-        }
-        return ChainLlfrController.output(self, t, state, inputs._replace(measurement=y))
-
-
 def _chain_sensors(ctx: BuildContext, slot: str) -> bool:
     """True when the chain outputs are formed on board from ``lvlh-relative-state`` sensors, False for
     ``chain-relative`` sensors; any other sensors: a CompositionError naming ``slot`` and the sensors."""
@@ -402,6 +386,10 @@ def _chain_sensors(ctx: BuildContext, slot: str) -> bool:
 
 
 def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
+    from formation_ftc.design.allocation import validate_allocation_inputs
+
     n = ctx.count
     on_board = _chain_sensors(ctx, "controller")
     if sec.sampling == "continuous" and ctx.plant.integration == "exact":
@@ -415,6 +403,8 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
     for a in range(axes):
         validate_allocation_inputs(alpha, b_hat[:, a], "controller.alpha", "controller.b_hat")
     a_flfr = _alpha_flfr(sec, ctx, alpha, k)
+    from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrOnBoardController
+
     law = (ChainLlfrOnBoardController if on_board else ChainLlfrController)(
         lambda0=as_float(sec.lambda0),
         lambda1=as_float(sec.lambda1),
@@ -524,6 +514,9 @@ def _check_estimator_information(ctx: BuildContext) -> None:
 
 
 def _hierarchical(sec: HierarchicalSection, ctx: BuildContext):
+    from formation_ftc.components.evaluations.chain_errors import ThresholdFlag
+    from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
+
     law = ctx.scenario.type_of("controller")
     if law != CHAIN_LAW:
         raise CompositionError(
@@ -595,6 +588,8 @@ class ActuatorGainsSection(StrictModel):
 
 
 def _actuator_gains(sec: ActuatorGainsSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.actuator_gains import StepGainActuator
+
     n = ctx.count
     _, axes = _plant_layout(ctx, "actuator", "actuator-gains")
     gain = _per_spacecraft(sec.gain, n, "actuator.gain")
@@ -653,6 +648,9 @@ class _MetricOptions(TypedDict, total=False):
 
 def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
     """Azizi2009's metric set (see :class:`ChainErrorsSection`)."""
+    from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
+    from formation_ftc.sim.metrics import Metric
+
     worst: _MetricOptions = {"norm": True, "norm_ord": "inf", "spacecraft": "max", "units": "m"}
     out = [
         Metric("max_err", "tracking_error", reduce="max", **worst),
@@ -687,6 +685,8 @@ def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
 
 
 def _chain_errors(sec: ChainErrorsSection, ctx: BuildContext) -> ChainTrackingError:
+    from formation_ftc.components.evaluations.chain_errors import ChainTrackingError
+
     if sec.metrics == "azizi2009":
         ctx.metrics.extend(_azizi2009_metrics(ctx))
     return ChainTrackingError()

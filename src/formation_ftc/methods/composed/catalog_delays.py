@@ -12,15 +12,19 @@ the spacecraft each one references over a (delayed) network.
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from pydantic import Field, model_validator
 
-from formation_ftc.components.controllers.neighbour_relative import NeighbourRelativeController
-from formation_ftc.components.controllers.yang2013_individual import Yang2013TranslationalController
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.sim.components import as_float
+from formation_ftc.sim.contract import as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.controllers.neighbour_relative import NeighbourRelativeController
+    from formation_ftc.components.controllers.yang2013_individual import (
+        Yang2013TranslationalController,
+    )
 
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
@@ -81,6 +85,10 @@ def translational_law(
 ) -> Yang2013TranslationalController:
     """Yang2013's law (12) with the stated masses M_i [kg] and gains K1 [1/s^2], K2 [1/s] (the one
     builder of the law: the catalog's Yang2013 controller types use it)."""
+    from formation_ftc.components.controllers.yang2013_individual import (
+        Yang2013TranslationalController,
+    )
+
     n = ctx.count
     px, py, pz = desired_position
     return Yang2013TranslationalController(
@@ -101,6 +109,8 @@ def _yang2013_law(
 def _yang2013_relative(
     sec: Yang2013RelativeSection, ctx: BuildContext
 ) -> NeighbourRelativeController:
+    from formation_ftc.components.controllers.neighbour_relative import NeighbourRelativeController
+
     if ctx.section("network") is None:
         raise ValueError(
             "controller.type = 'yang2013-relative' references other spacecraft through the "

@@ -8,15 +8,17 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from pydantic import Field
 
-from formation_ftc.components.evaluations.formation_errors import FormationErrors
-from formation_ftc.components.evaluations.formation_scores import FormationScores
 from formation_ftc.config.base import StrictModel
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.sim.components import CompositionError, as_float
-from formation_ftc.sim.metrics import Metric
+from formation_ftc.sim.contract import CompositionError, as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.sim.metrics import Metric
 
 Vec3 = tuple[float, float, float]
 
@@ -33,6 +35,8 @@ class FormationScoresSection(StrictModel):
 
 
 def _formation_scores(sec: FormationScoresSection, ctx: BuildContext):
+    from formation_ftc.components.evaluations.formation_scores import FormationScores
+
     n = ctx.count
     if ctx.plant is None or not any(s.name == "position" for s in ctx.plant.signals()):
         raise CompositionError(
@@ -98,6 +102,8 @@ def li2020_metrics(horizon: float, controller: str | None) -> tuple[Metric, ...]
     tuple of Metric
         Final values, maxima, 1 m settling time of mu1 [s], delta-v [m/s], peak force [N], ...
     """
+    from formation_ftc.sim.metrics import Metric
+
     T = float(horizon)
     # values at the horizon: "last" (read once after the loop, no per-step cost)
     m = [
@@ -158,6 +164,8 @@ def li2020_metrics(horizon: float, controller: str | None) -> tuple[Metric, ...]
 
 
 def _li2020_formation_errors(sec: Li2020FormationErrorsSection, ctx: BuildContext):
+    from formation_ftc.components.evaluations.formation_errors import FormationErrors
+
     ctx.metrics.extend(li2020_metrics(ctx.horizon, ctx.scenario.type_of("controller")))
     return FormationErrors()
 

@@ -27,25 +27,20 @@ compiled program.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from formation_ftc.components.actuators.fault_battery import (
-    FAULT_KINDS,
-    FaultBatteryActuator,
-    fault_kind_code,
-)
-from formation_ftc.components.networks.link_faults import (
-    DelayedGraphLinkLossNetwork,
-    GraphLinkLossNetwork,
-)
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.history import required_capacity
+from formation_ftc.core.constants import FAULT_KINDS
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.methods.composed.catalog_attitude import _needs_quaternion_plant
 from formation_ftc.methods.composed.catalog_translational import GraphSection, _delayed_graph
-from formation_ftc.sim.components import as_float
+from formation_ftc.sim.contract import as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.actuators.fault_battery import FaultBatteryActuator
 
 __all__ = ["FaultBatterySection", "GraphLinkLossSection", "FAULT_BATTERY", "GRAPH_LINK_LOSS"]
 
@@ -110,6 +105,11 @@ class FaultBatterySection(StrictModel):
 
 
 def _fault_battery(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryActuator:
+    from formation_ftc.components.actuators.fault_battery import (
+        FaultBatteryActuator,
+        fault_kind_code,
+    )
+
     n = ctx.count
     if sec.spacecraft > n:
         raise ValueError(
@@ -224,6 +224,12 @@ class GraphLinkLossSection(GraphSection):
 
 
 def _graph_link_loss(sec: GraphLinkLossSection, ctx: BuildContext):
+    from formation_ftc.components.networks.link_faults import (
+        DelayedGraphLinkLossNetwork,
+        GraphLinkLossNetwork,
+    )
+    from formation_ftc.core.history import required_capacity
+
     lost, onset = as_float(sec.lost_mask()), as_float(sec.onset)
     if sec.delays is None:
         return GraphLinkLossNetwork(weights=as_float(sec.adjacency), lost=lost, onset=onset)

@@ -37,37 +37,22 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from formation_ftc.blocks.observers.iterative_learning_observer import (
-    LearningIntervalError,
-    learning_steps,
-)
-from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
-from formation_ftc.components.controllers.output_feedback import (
-    ConventionalOutputFeedbackController,
-    LearningOutputFeedbackController,
-)
-from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
-from formation_ftc.components.estimators.iterative_learning_observer import (
-    IterativeLearningObserver,
-)
-from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
-from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
-from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
 from formation_ftc.config.base import StrictModel
-from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.methods.composed import (
     BuildContext,
     InitialStateRows,
     register_component_type,
     require_slot,
 )
-from formation_ftc.sim.components import CompositionError, as_float
-from formation_ftc.sim.metrics import Metric
+from formation_ftc.sim.contract import CompositionError, as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
 
 __all__ = [
     "ILO",
@@ -137,6 +122,11 @@ def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
 
 
 def _on_grid(tau: float, dt: float, field: str) -> int:
+    from formation_ftc.blocks.observers.iterative_learning_observer import (
+        LearningIntervalError,
+        learning_steps,
+    )
+
     try:
         return learning_steps(tau, dt, field)
     except LearningIntervalError as exc:
@@ -206,6 +196,7 @@ def ilo_lmi_design(n: float, lam: float, center: float, radius: float):
     """The ILO design (P, Y, L1, L2) of the LMIs (8), (27) and the pole region S(c, r) on the CW model
     of mean motion n [rad/s] (C = I6, H = B), normalised P >= I; cached by input (an offline design).
     Returns an :class:`~formation_ftc.design.lmi.IloLmiDesign`."""
+    from formation_ftc.core.dynamics.cw import cw_matrices
     from formation_ftc.design.lmi import design_ilo_gains
 
     A, B = cw_matrices(n)
@@ -216,6 +207,7 @@ def ilo_lmi_design(n: float, lam: float, center: float, radius: float):
 def care_solution(n: float, q_scale: float):
     """The CARE (34) with Q = q_scale I6, R = I3 on the CW model of mean motion n [rad/s] (K = B^T P1);
     cached. Returns a :class:`~formation_ftc.design.riccati.CareSolution`."""
+    from formation_ftc.core.dynamics.cw import cw_matrices
     from formation_ftc.design.riccati import solve_care
 
     A, B = cw_matrices(n)
@@ -243,6 +235,8 @@ class ZohCwPlantSection(InitialStateRows):
 
 
 def _zoh_cw_plant(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
+    from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohClohessyWiltshirePlant
+
     v0 = np.zeros((sec.count, 3)) if sec.initial_velocity is None else sec.initial_velocity
     return ZohClohessyWiltshirePlant(
         mean_motion=as_float(sec.mean_motion),
@@ -370,6 +364,8 @@ class IloSection(StrictModel):
     def design_at(self, n: float):
         """The LMI design (gains = 'lmi') on the CW model of mean motion n [rad/s], scaled by
         ``lmi_scale`` (an :class:`~formation_ftc.design.lmi.IloLmiDesign`)."""
+        from formation_ftc.core.dynamics.cw import cw_matrices
+
         des = ilo_lmi_design(n, self.lmi_lambda, self.disk_center, self.disk_radius)
         if self.lmi_scale == 1.0:
             return des
@@ -400,6 +396,13 @@ def _nominal_mass_for_estimator(sec: IloSection, ctx: BuildContext) -> np.ndarra
 
 
 def _ilo(sec: IloSection, ctx: BuildContext):
+    from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
+    from formation_ftc.components.estimators.iterative_learning_observer import (
+        IterativeLearningObserver,
+    )
+    from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
+    from formation_ftc.components.evaluations.signal_arithmetic import SignalSum
+
     _relative_state(
         ctx, "estimator"
     )  # the composition check only: the true initial state is not used
@@ -528,6 +531,8 @@ class _OutputFeedbackSection(StrictModel):
         return self
 
     def common(self, ctx: BuildContext, slot: str = "controller") -> dict:
+        from formation_ftc.core.dynamics.cw import cw_matrices
+
         _relative_state(ctx, slot)
         N = ctx.count
         if len(self.desired_state) != N:
@@ -555,6 +560,9 @@ class _OutputFeedbackSection(StrictModel):
 def _on_plant(law, sec: _OutputFeedbackSection, ctx: BuildContext):
     """The acceleration law as is on an acceleration-driven plant; f = m_nom u on a force-driven one;
     any other plant keeps the law unwrapped so the loop rejects the pair naming both."""
+    from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    from formation_ftc.components.evaluations.signal_arithmetic import PartNorm
+
     ctx.evaluations.extend(
         [
             PartNorm(
@@ -619,6 +627,10 @@ class Lof2tcSection(_OutputFeedbackSection):
 
 
 def _lof2tc(sec: Lof2tcSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.output_feedback import (
+        LearningOutputFeedbackController,
+    )
+
     require_slot(ctx, "controller", "estimator", _FAULT_ESTIMATE)
     common = sec.common(ctx)
     N = ctx.count
@@ -645,6 +657,10 @@ class Cof2tcSection(_OutputFeedbackSection):
 
 
 def _cof2tc(sec: Cof2tcSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.output_feedback import (
+        ConventionalOutputFeedbackController,
+    )
+
     if sec.fault_compensation:
         require_slot(
             ctx, "controller", "estimator", f"(with fault_compensation = true) {_FAULT_ESTIMATE}"
@@ -718,6 +734,8 @@ def _scores_fit(ctx: BuildContext) -> None:
 def _scores_metrics(sec: ScoresSection, ctx: BuildContext, onset_s, law: str | None) -> list:
     """The paper's metrics, accumulated at every step k < n (final values at the horizon sample);
     ``onset_s`` the fault onsets per axis [s]."""
+    from formation_ftc.sim.metrics import Metric
+
     sim = ctx.scenario.simulation
     dt, n_steps = ctx.dt, sim.n_steps
 
@@ -888,6 +906,8 @@ def _scores_metrics(sec: ScoresSection, ctx: BuildContext, onset_s, law: str | N
 def _scores(sec: ScoresSection, ctx: BuildContext):
     """Gui2022's signals h = d + e_F (33), its record-interval mean, ||position part of q - q_hat|| and,
     with LOF2TC, v - h; the paper's metric set goes to ``ctx.metrics``."""
+    from formation_ftc.components.evaluations.signal_arithmetic import PartNorm, SignalSum
+
     _scores_fit(ctx)
     law = ctx.scenario.type_of("controller")
     onsets = np.asarray(ctx.section("actuator").onset, dtype=float)

@@ -23,17 +23,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from formation_ftc.components.estimators.relative_navigation import RelativeNavigationFilter
-from formation_ftc.components.estimators.residual_fdi import ResidualFdi
-from formation_ftc.components.evaluations.fdi_scores import FdiScores
 from formation_ftc.config.base import StrictModel
-from formation_ftc.core.dynamics.cw import cw_matrices
-from formation_ftc.core.orbit import MU_EARTH
-from formation_ftc.design.kalman import (
-    dare_relative_residual,
-    discrete_model,
-    steady_state_kalman,
-)
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import (
     BuildContext,
     per_spacecraft,
@@ -41,7 +32,7 @@ from formation_ftc.methods.composed import (
     register_conditions,
 )
 from formation_ftc.registry import Condition
-from formation_ftc.sim.components import CompositionError, Plant, as_float
+from formation_ftc.sim.contract import CompositionError, as_float
 
 #: the filter's nominal on-board mass when a scenario states none [kg] (as the PD law's)
 NAVIGATION_NOMINAL_MASS = 100.0
@@ -75,6 +66,9 @@ class RelativeNavigationSection(StrictModel):
 
     def model(self, dt: float):
         """(discrete model, R) of the filter at step ``dt`` [s]."""
+        from formation_ftc.core.dynamics.cw import cw_matrices
+        from formation_ftc.design.kalman import discrete_model
+
         n = math.sqrt(self.mu / self.semi_major_axis**3)
         A, B = cw_matrices(n)
         model = discrete_model(A, B, B, self.acceleration_noise_psd, dt)
@@ -85,6 +79,8 @@ class RelativeNavigationSection(StrictModel):
 def _filter_model(sec: RelativeNavigationSection, ctx: BuildContext, name: str) -> dict:
     """The on-board model's arrays (phi, gamma, qd, r, nominal_mass) at the scenario's step, checked
     against the loop (``name``: the estimator type, for the messages)."""
+    from formation_ftc.sim.components import Plant
+
     if ctx.plant is None or type(ctx.plant).position is Plant.position:
         raise CompositionError(
             f"estimator {name} estimates LVLH relative states, but plant "
@@ -104,6 +100,8 @@ def _filter_model(sec: RelativeNavigationSection, ctx: BuildContext, name: str) 
 
 
 def _navigation_filter(sec: RelativeNavigationSection, ctx: BuildContext):
+    from formation_ftc.components.estimators.relative_navigation import RelativeNavigationFilter
+
     arrays = _filter_model(sec, ctx, "relative-navigation-filter")
     return RelativeNavigationFilter(count=ctx.count, p0=arrays["r"], **arrays)
 
@@ -121,6 +119,8 @@ register_component_type(
 def _navigation_conditions(scenario, loop) -> list[Condition]:
     """The steady-state filter: Riccati residual, stability of the error dynamics, and the steady-state
     position and velocity standard deviations it promises."""
+    from formation_ftc.design.kalman import dare_relative_residual, steady_state_kalman
+
     sec: RelativeNavigationSection = scenario.section("estimator")
     model, R = sec.model(float(loop.dt))
     P, K = steady_state_kalman(model.phi, model.qd, R)
@@ -179,9 +179,20 @@ class ResidualFdiSection(RelativeNavigationSection):
     threshold: float = Field(
         20.0, gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-]."
     )
+    force_limit: float = Field(
+        math.inf,
+        gt=0,
+        description=(
+            "Rated thrust per axis [N] (flight knowledge): a channel whose command reaches it is not "
+            "tested over that step (a thrust limit may cut the force, which the residual cannot tell "
+            "from a fault); inf: every channel always tested."
+        ),
+    )
 
 
 def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
+    from formation_ftc.components.estimators.residual_fdi import ResidualFdi
+
     a = _filter_model(sec, ctx, "residual-fdi")
     return ResidualFdi(
         count=ctx.count,
@@ -190,6 +201,7 @@ def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
         parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
         drift=as_float(sec.drift),
         threshold=as_float(sec.threshold),
+        force_limit=as_float(sec.force_limit),
         **a,
     )
 
@@ -212,6 +224,8 @@ FDI_ESTIMATORS = ["residual-fdi"]
 
 
 def _fdi_scores(sec: FdiScoresSection, ctx: BuildContext):
+    from formation_ftc.components.evaluations.fdi_scores import FdiScores
+
     if ctx.scenario.type_of("estimator") not in FDI_ESTIMATORS:
         raise CompositionError(
             "evaluation fdi-scores compares an FDI's alarm with the true fault: it needs [estimator] "

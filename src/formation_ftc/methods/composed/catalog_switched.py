@@ -25,16 +25,9 @@ from __future__ import annotations
 
 from typing import Literal, NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, PositiveFloat, field_validator, model_validator
 
-from formation_ftc.components.actuators.velocity_gain_fault import VelocityGainFaultActuator
-from formation_ftc.components.controllers.force_torque import ForceTorqueController
-from formation_ftc.components.estimators.scheduled_diagnosis import ScheduledDiagnosis
-from formation_ftc.components.plants.switched_formation import STATE_DIM, SwitchedFormationPlant
-from formation_ftc.components.sensors.tracking_error import TrackingErrorSensors
-from formation_ftc.components.supervisors.switching_supervisor import SwitchingSupervisor
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.methods.composed import (
     BuildContext,
@@ -47,8 +40,7 @@ from formation_ftc.methods.composed.catalog_attitude_laws import (
     yang2013_attitude_law,
 )
 from formation_ftc.methods.composed.catalog_delays import NOMINAL_MASS, translational_law
-from formation_ftc.sim.components import CompositionError, as_float
-from formation_ftc.sim.metrics import Metric
+from formation_ftc.sim.contract import CompositionError, as_float
 
 __all__ = ["SWITCHED_PLANT", "SWITCHING_SUPERVISOR", "YANG2013_FORCE_TORQUE", "switched_structure"]
 
@@ -290,6 +282,8 @@ class SwitchedStructure(NamedTuple):
 def switched_structure(sec: SwitchingSupervisorSection, count: int, dt: float) -> SwitchedStructure:
     """The mode sequence placed on ``count`` spacecraft slots with step ``dt`` [s] (variation model
     (10)); a member beyond the slots or a switch off the step grid is an error."""
+    from formation_ftc.components.plants.switched_formation import STATE_DIM
+
     modes = sec.modes
     n_modes = len(modes)
     for j, m in enumerate(modes):
@@ -339,6 +333,8 @@ def _plan(ctx: BuildContext, who: str) -> SwitchingSupervisorSection:
 
 
 def _switched_formation(sec: SwitchedFormationSection, ctx: BuildContext):
+    from formation_ftc.components.plants.switched_formation import STATE_DIM, SwitchedFormationPlant
+
     plan = _plan(ctx, f"plant {SWITCHED_PLANT}")
     st = switched_structure(plan, sec.count, ctx.dt)
     first = sorted(s.spacecraft for s in sec.initial_state)
@@ -367,6 +363,10 @@ def _switched_formation(sec: SwitchedFormationSection, ctx: BuildContext):
 
 
 def _switching_supervisor(sec: SwitchingSupervisorSection, ctx: BuildContext):
+    import jax.numpy as jnp
+
+    from formation_ftc.components.supervisors.switching_supervisor import SwitchingSupervisor
+
     st = switched_structure(sec, ctx.count, ctx.dt)
     table = []
     for m in sec.modes:  # per mode and slot the three expressions of R~^d(t) [m] (default 0)
@@ -392,6 +392,8 @@ class TrackingErrorSection(StrictModel):
 
 
 def _tracking_error(sec: TrackingErrorSection, ctx: BuildContext):
+    from formation_ftc.components.sensors.tracking_error import TrackingErrorSensors
+
     if ctx.scenario.type_of("plant") != SWITCHED_PLANT:
         raise CompositionError(
             f"sensors tracking-error read the error state of plant {SWITCHED_PLANT}, but the "
@@ -424,6 +426,8 @@ class Yang2013ForceTorqueSection(StrictModel):
 
 
 def _yang2013_force_torque(sec: Yang2013ForceTorqueSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.force_torque import ForceTorqueController
+
     if ctx.scenario.type_of("sensors") != "tracking-error":
         raise CompositionError(
             f"controller {YANG2013_FORCE_TORQUE} acts on the error state (translation, omega, q) of "
@@ -477,6 +481,8 @@ def _fault_steps(ctx: BuildContext) -> dict[int, tuple[int, float]]:
 
 
 def _velocity_gain_fault(sec: VelocityGainFaultSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.velocity_gain_fault import VelocityGainFaultActuator
+
     law = ctx.section("controller")
     if not all(hasattr(law, k) for k in ("K2", "nominal_mass")):
         raise CompositionError(
@@ -517,6 +523,8 @@ def _delay_steps(ctx: BuildContext) -> np.ndarray:
 
 
 def _scheduled_diagnosis(sec: ScheduledDiagnosisSection, ctx: BuildContext):
+    from formation_ftc.components.estimators.scheduled_diagnosis import ScheduledDiagnosis
+
     delay = _delay_steps(ctx)
     diagnosis = np.full(ctx.count, np.inf)
     for s, (k_f, _) in _fault_steps(ctx).items():
@@ -536,6 +544,8 @@ class SwitchNormsSection(StrictModel):
 
 
 def _switch_norms(sec: SwitchNormsSection, ctx: BuildContext):
+    from formation_ftc.sim.metrics import Metric
+
     plan = _plan(ctx, "evaluation switch-norms")  # with plant switched-formation (its signals)
     st = switched_structure(plan, ctx.count, ctx.dt)
     n_steps = ctx.scenario.simulation.n_steps

@@ -4,36 +4,14 @@ laws and thruster faults for composed scenarios."""
 from __future__ import annotations
 
 import math
-from typing import ClassVar, Literal, cast
+from typing import TYPE_CHECKING, ClassVar, Literal, cast
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from formation_ftc.components.actuators.expression_faults import ExpressionFaultActuator
-from formation_ftc.components.actuators.step_faults import StepFaultActuator
-from formation_ftc.components.actuators.thruster_bias import ThrusterBiasFaultActuator
-from formation_ftc.components.controllers.desired_formation import RotatingFormation
-from formation_ftc.components.controllers.li2020_adaptive import Li2020AdaptiveController
-from formation_ftc.components.controllers.output_feedback import FreeDrift
-from formation_ftc.components.controllers.pd_formation import PdFormationController, ZeroController
-from formation_ftc.components.controllers.sir_ftc import SirFtcController
-from formation_ftc.components.networks.weighted_graph import (
-    DelayedGraphNetwork,
-    GraphNetwork,
-    delay_statistics,
-    graph_edges,
-)
-from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
-from formation_ftc.components.plants.relative_lvlh import RelativeLvlhPlant
-from formation_ftc.components.references.keplerian import KeplerianReference
-from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
-from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.config.base import ExprText, StrictModel
-from formation_ftc.core.dynamics.cw import cw_matrices
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.graph import GraphError, validate_adjacency
-from formation_ftc.core.history import required_capacity
-from formation_ftc.core.orbit import MU_EARTH
-from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
 from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.methods.composed import (
     BuildContext,
@@ -44,8 +22,11 @@ from formation_ftc.methods.composed import (
     require_slot,
 )
 from formation_ftc.registry import Condition
-from formation_ftc.sim.components import as_float
-from formation_ftc.sim.loop import ClosedLoop
+from formation_ftc.sim.contract import as_float
+
+if TYPE_CHECKING:
+    from formation_ftc.components.controllers.desired_formation import RotatingFormation
+    from formation_ftc.sim.loop import ClosedLoop
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
@@ -132,6 +113,8 @@ class CwPlantSection(_PointMassSection):
 
 
 def _cw_plant(sec: CwPlantSection, ctx: BuildContext):
+    from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
+
     return ClohessyWiltshirePlant(
         mean_motion=as_float(sec.mean_motion),
         mass=as_float(sec.mass),
@@ -146,6 +129,8 @@ class RelativeLvlhSection(_PointMassSection):
 
 
 def _relative_lvlh_plant(sec: RelativeLvlhSection, ctx: BuildContext):
+    from formation_ftc.components.plants.relative_lvlh import RelativeLvlhPlant
+
     return RelativeLvlhPlant(
         mass=as_float(sec.mass),
         initial_state_lvlh=as_float(sec.q0()),
@@ -179,6 +164,8 @@ class KeplerianSection(StrictModel):
 
 
 def _keplerian(sec: KeplerianSection, ctx: BuildContext):
+    from formation_ftc.components.references.keplerian import KeplerianReference
+
     p = sec.semi_major_axis * (1.0 - sec.eccentricity**2)
     return KeplerianReference(
         semi_latus_rectum=as_float(p),
@@ -204,6 +191,9 @@ class RelativeStateSection(StrictModel):
 
 
 def _relative_state(sec: RelativeStateSection, ctx: BuildContext):
+    from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
+    from formation_ftc.components.sensors.relative_state import RelativeStateSensors
+
     if sec.position_noise_std == 0 and sec.velocity_noise_std == 0:
         return ExactRelativeStateSensors(count=ctx.count)
     return RelativeStateSensors(
@@ -250,6 +240,8 @@ class DelayedGraphSection(GraphSection):
 
 
 def _graph(sec: GraphSection, ctx: BuildContext):
+    from formation_ftc.components.networks.weighted_graph import GraphNetwork
+
     return GraphNetwork(weights=as_float(validate_adjacency(sec.adjacency, ctx.count)))
 
 
@@ -257,6 +249,13 @@ def _delayed_graph(sec: DelayedGraphSection, ctx: BuildContext):
     """The delays of the used links, sampled at every step of the horizon, must stay in [0, max_delay]
     (the history holds max_delay seconds); when they also stay >= dt the reads never need the message
     sent within the step, and that blend is left out (``short_delays``)."""
+    from formation_ftc.components.networks.weighted_graph import (
+        DelayedGraphNetwork,
+        delay_statistics,
+        graph_edges,
+    )
+    from formation_ftc.core.history import required_capacity
+
     n = len(validate_adjacency(sec.adjacency, ctx.count))
     if len(sec.delays) != n or any(len(r) != n for r in sec.delays):
         raise ValueError(f"network.delays: must be {n} x {n} like network.adjacency")
@@ -331,6 +330,9 @@ class FormationSection(StrictModel):
         return self
 
     def component(self, n: int) -> RotatingFormation:
+        from formation_ftc.components.controllers.desired_formation import RotatingFormation
+        from formation_ftc.core.rotating_formation import chi_from_period, formation_offsets
+
         if self.offsets is not None:
             if len(self.offsets) != n:
                 raise ValueError(
@@ -427,6 +429,8 @@ class Li2020Section(StrictModel):
 
 
 def _li2020(sec: Li2020Section, ctx: BuildContext):
+    from formation_ftc.components.controllers.li2020_adaptive import Li2020AdaptiveController
+
     require_slot(
         ctx,
         "controller",
@@ -473,6 +477,8 @@ class SirFtcSection(StrictModel):
 
 
 def _sir_ftc(sec: SirFtcSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.sir_ftc import SirFtcController
+
     n = ctx.count
     return SirFtcController(
         count=n,
@@ -510,6 +516,8 @@ class PdSection(StrictModel):
 
 
 def _pd(sec: PdSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.pd_formation import PdFormationController
+
     n = ctx.count
     return PdFormationController(
         count=n,
@@ -546,6 +554,9 @@ class NoControlSection(StrictModel):
 
 
 def _no_control(sec: NoControlSection, ctx: BuildContext):
+    from formation_ftc.components.controllers.output_feedback import FreeDrift
+    from formation_ftc.components.controllers.pd_formation import ZeroController
+
     if ctx.plant.quantity == "acceleration":  # u = 0 [m/s^2] (e.g. Gui2022's observer runs)
         return FreeDrift(count=ctx.count)
     return ZeroController(count=ctx.count)
@@ -592,6 +603,8 @@ def cw_linear_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Conditio
     list of Condition
         One stability condition per spacecraft (``pd`` only) and the RK4 step condition.
     """
+    from formation_ftc.core.dynamics.cw import cw_matrices
+
     if s.type_of("plant") != "clohessy-wiltshire":
         return []
     plant = s.section("plant")
@@ -666,6 +679,8 @@ class ExpressionFaultSection(StrictModel):
 
 
 def _expression_faults(sec: ExpressionFaultSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.expression_faults import ExpressionFaultActuator
+
     return ExpressionFaultActuator(count=ctx.count, effectiveness=sec.effectiveness, bias=sec.bias)
 
 
@@ -699,6 +714,8 @@ class StepFaultSection(StrictModel):
 
 
 def _step_faults(sec: StepFaultSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.step_faults import StepFaultActuator
+
     for name in ("effectiveness", "onset"):
         rows = len(getattr(sec, name))
         if rows != ctx.count:
@@ -731,6 +748,8 @@ class ThrusterBiasSection(StrictModel):
 
 
 def _thruster_bias(sec: ThrusterBiasSection, ctx: BuildContext):
+    from formation_ftc.components.actuators.thruster_bias import ThrusterBiasFaultActuator
+
     n = ctx.count
     scale = np.ones((n, 1))
     if sec.per_unit_mass:

@@ -7,13 +7,11 @@ import math
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
-from formation_ftc.components.sensors.lvlh_relative_state import LvlhRelativeStateSensors
 from formation_ftc.config.base import StrictModel
-from formation_ftc.core.dynamics.orbital_truth import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
+from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
 from formation_ftc.methods.composed.catalog_translational import Vec3, Vec3Expr, _per_axis
-from formation_ftc.sim.components import as_float
+from formation_ftc.sim.contract import as_float
 
 __all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]
 
@@ -189,6 +187,8 @@ class OrbitalTruthSection(StrictModel):
 
 
 def _orbital_truth(sec: OrbitalTruthSection, ctx: BuildContext):
+    from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
+
     n = sec.count
     b = per_spacecraft(sec.ballistic_coefficient, n, "plant.ballistic_coefficient")
     c = per_spacecraft(sec.srp_coefficient, n, "plant.srp_coefficient")
@@ -241,6 +241,9 @@ class LvlhRelativeStateSection(StrictModel):
 
 
 def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
+    from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
+    from formation_ftc.components.sensors.lvlh_relative_state import LvlhRelativeStateSensors
+
     if ctx.plant is not None and not isinstance(ctx.plant, InertialFormationPlant):
         sensed = ctx.plant.sensed_state(ctx.plant.initial_state())
         if not (isinstance(sensed, dict) and "q" in sensed and np.shape(sensed["q"])[-1:] == (6,)):

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
 from formation_ftc.methods.composed.catalog_chain import CHAIN_LAW
-from formation_ftc.papers.azizi2009.conditions import conditions
-from formation_ftc.papers.azizi2009.figures import plot_run
-from formation_ftc.papers.azizi2009.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-register_conditions("controller", CHAIN_LAW, conditions)
-register_paper_figures("azizi2009", plot_run)
-register_reproduction(REPRODUCTION)
+_HERE = (
+    "formation_ftc.papers.azizi2009"  # its modules import JAX: referenced, imported on first use
+)
+register_conditions("controller", CHAIN_LAW, f"{_HERE}.conditions:conditions")
+register_paper_figures("azizi2009", f"{_HERE}.figures:plot_run")
+register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="azizi2009")

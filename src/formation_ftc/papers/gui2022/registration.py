@@ -5,13 +5,11 @@ from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
 from formation_ftc.methods.composed.catalog_learning import COF2TC, ILO, LOF2TC
-from formation_ftc.papers.gui2022.conditions import controller_conditions, observer_conditions
-from formation_ftc.papers.gui2022.figures import plot
-from formation_ftc.papers.gui2022.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-register_conditions("estimator", ILO, observer_conditions)
-register_conditions("controller", LOF2TC, controller_conditions)
-register_conditions("controller", COF2TC, controller_conditions)
-register_paper_figures("gui2022", plot)
-register_reproduction(REPRODUCTION)
+_HERE = "formation_ftc.papers.gui2022"  # its modules import JAX: referenced, imported on first use
+register_conditions("estimator", ILO, f"{_HERE}.conditions:observer_conditions")
+register_conditions("controller", LOF2TC, f"{_HERE}.conditions:controller_conditions")
+register_conditions("controller", COF2TC, f"{_HERE}.conditions:controller_conditions")
+register_paper_figures("gui2022", f"{_HERE}.figures:plot")
+register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="gui2022")

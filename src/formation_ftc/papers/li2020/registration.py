@@ -4,14 +4,10 @@
 from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
-from formation_ftc.papers.li2020.conditions import check
-from formation_ftc.papers.li2020.figures import plot_scenario
-from formation_ftc.papers.li2020.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-__all__ = ["REPRODUCTION"]
-
-register_reproduction(REPRODUCTION)
-register_conditions("controller", "li2020-adaptive", check)
-register_conditions("controller", "sir-ftc", check)
-register_paper_figures("li2020", plot_scenario)
+_HERE = "formation_ftc.papers.li2020"  # its modules import JAX: referenced, imported on first use
+register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="li2020")
+register_conditions("controller", "li2020-adaptive", f"{_HERE}.conditions:check")
+register_conditions("controller", "sir-ftc", f"{_HERE}.conditions:check")
+register_paper_figures("li2020", f"{_HERE}.figures:plot_scenario")

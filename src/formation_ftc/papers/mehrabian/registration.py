@@ -5,13 +5,11 @@ from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
 from formation_ftc.methods.composed.catalog_attitude import EULER_LAW
-from formation_ftc.papers.mehrabian import conditions
-from formation_ftc.papers.mehrabian.figures import plot_scenario
-from formation_ftc.papers.mehrabian.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-__all__ = ["REPRODUCTION"]
-
-register_reproduction(REPRODUCTION)
-register_conditions("controller", EULER_LAW, conditions.check)
-register_paper_figures("mehrabian", plot_scenario)
+_HERE = (
+    "formation_ftc.papers.mehrabian"  # its modules import JAX: referenced, imported on first use
+)
+register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="mehrabian")
+register_conditions("controller", EULER_LAW, f"{_HERE}.conditions:check")
+register_paper_figures("mehrabian", f"{_HERE}.figures:plot_scenario")

@@ -5,11 +5,9 @@ from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
 from formation_ftc.methods.composed.catalog_switched import SWITCHING_SUPERVISOR
-from formation_ftc.papers.yang2013.conditions import conditions
-from formation_ftc.papers.yang2013.figures import plot_scenario
-from formation_ftc.papers.yang2013.reproduction import REPRODUCTION
 from formation_ftc.registry import register_reproduction
 
-register_reproduction(REPRODUCTION)
-register_conditions("supervisor", SWITCHING_SUPERVISOR, conditions)
-register_paper_figures("yang2013", plot_scenario)
+_HERE = "formation_ftc.papers.yang2013"  # its modules import JAX: referenced, imported on first use
+register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="yang2013")
+register_conditions("supervisor", SWITCHING_SUPERVISOR, f"{_HERE}.conditions:conditions")
+register_paper_figures("yang2013", f"{_HERE}.figures:plot_scenario")
