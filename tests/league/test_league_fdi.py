@@ -118,6 +118,12 @@ def test_tiny_league_fdi_table_matches_the_runs(tmp_path, tiny_league):
     raw["league"].update(horizon=10.0, settle_start=3.0)
     raw["league"]["onset"].update(low=3.0, high=5.0)
     raw["levels"] = [lv for lv in raw["levels"] if lv["name"] == "unsaturated"]
+    method = (
+        tmp_path / "translational" / "azizi2009.toml"
+    )  # its [levels.limited] goes with the level
+    method.write_text(
+        tomli_w.dumps({k: v for k, v in tomllib.loads(method.read_text()).items() if k != "levels"})
+    )
     for m in raw["metrics"]:
         if m.get("start") == 20.0:
             m["start"] = 3.0

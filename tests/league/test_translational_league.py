@@ -334,3 +334,29 @@ def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path):
         [sys.executable, "-m", "formation_ftc", "league", "list"], capture_output=True, text=True
     )
     assert r.returncode == 0 and "translational" in r.stdout
+
+
+def test_a_method_states_flight_knowledge_per_level_and_nothing_else(tmp_path, tiny_league):
+    """``[levels.<name>]`` of a method file sets its own flight fields at that level only (azizi2009:
+    the FDI's thrust rating and residual at 0.2 N); an unknown level, a truth slot or a slot the file
+    does not set is rejected, naming it."""
+    path = tiny_league(tmp_path, methods=("azizi2009",))
+    cells = plan_cells(load_league(path))["azizi2009"]
+    est = {c.level: c.raw["estimator"] for c in cells}
+    assert est["limited"]["force_limit"] == 0.2 and est["limited"]["residual"] == "parity"
+    assert "force_limit" not in est["unsaturated"] and est["unsaturated"]["residual"] == "kalman"
+    method = tmp_path / "translational" / "azizi2009.toml"
+    base = tomllib.loads(method.read_text())
+    for levels, message in [
+        ({"tight": {"estimator.force_limit": 0.1}}, "tight: not a level of the league"),
+        ({"limited": {"plant.mass": [1.0] * 4}}, "flight slots"),
+        ({"limited": {"network.graph": "ring"}}, "flight slots"),
+    ]:
+        method.write_text(tomli_w.dumps({**base, "levels": levels}))
+        with pytest.raises(LeagueError, match=message):
+            plan_cells(load_league(path))
+    no_estimator = {k: v for k, v in base.items() if k != "estimator"}
+    no_estimator["supervisor"] = {**base["supervisor"], "fault_information": "scripted"}
+    method.write_text(tomli_w.dumps(no_estimator))
+    with pytest.raises(LeagueError, match=r"has no \[estimator\]"):
+        plan_cells(load_league(path))

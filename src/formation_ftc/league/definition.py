@@ -345,7 +345,7 @@ def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise LeagueError(f"method {method.name}: {path}: not valid TOML: {exc}") from None
-    allowed = {"scenario", "simulation", "actuator", "tune", *METHOD_SLOTS}
+    allowed = {"scenario", "simulation", "actuator", "tune", "levels", *METHOD_SLOTS}
     extra = sorted(set(raw) - allowed)
     if extra:
         raise LeagueError(
@@ -354,7 +354,39 @@ def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
         )
     if "tune" in raw:
         _check_tune(spec, method, raw, path)
+    if "levels" in raw:
+        _check_levels(spec, method, raw, path)
     return raw
+
+
+#: slots whose fields a method may state per actuator level (flight knowledge, never the truth)
+LEVEL_SLOTS = ("estimator", "supervisor", "controller")
+
+
+def _check_levels(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path) -> None:
+    """The method file's ``[levels.<name>]`` tables: per actuator level, dotted fields of the method's
+    own flight slots (e.g. ``"estimator.force_limit" = 0.2``: the thrust rating the method knows at
+    that level). Each names a level of the league and a field of a slot the file sets."""
+    where = f"method {method.name}: {path.name}: levels"
+    names = [lv.name for lv in spec.levels]
+    if not isinstance(raw["levels"], dict):
+        raise LeagueError(f"{where}: a table of levels ([levels.<name>]), not {raw['levels']!r}")
+    for level, fields in raw["levels"].items():
+        if level not in names:
+            raise LeagueError(f"{where}.{level}: not a level of the league ({', '.join(names)})")
+        if not isinstance(fields, dict):
+            raise LeagueError(f"{where}.{level}: a table of dotted fields, not {fields!r}")
+        for fpath in fields:
+            slot, _, name = str(fpath).partition(".")
+            if slot not in LEVEL_SLOTS or not name or "." in name:
+                raise LeagueError(
+                    f"{where}.{level}.{fpath}: a level may set '<slot>.<field>' of the method's "
+                    f"flight slots ({', '.join(LEVEL_SLOTS)}), not the truth or the league's scores"
+                )
+            if not isinstance(raw.get(slot), dict):
+                raise LeagueError(
+                    f"{where}.{level}.{fpath}: the method file has no [{slot}] to set {name} in"
+                )
 
 
 def _check_tune(
@@ -438,7 +470,8 @@ def method_scenario(
 ) -> dict[str, Any]:
     """The full composed scenario of one cell: the league's truth, sensors, actuator (with the level's
     saturation and the fault case in ``actuator_fields``), evaluations and metrics, with the method's own
-    slots (and time step) on top; ``network_fields`` turn the method's network into a link-fault one."""
+    slots (and time step) on top and its ``[levels.<level>]`` fields for this level (flight knowledge
+    of the level, e.g. a thrust rating); ``network_fields`` turn the method's network into a link-fault one."""
     own = _method_raw(spec, method)
     meta = own.get("scenario", {})
     sim = dict(own.get("simulation", {}))
@@ -462,6 +495,9 @@ def method_scenario(
     for slot in METHOD_SLOTS:
         if slot in own:
             raw[slot] = copy.deepcopy(own[slot])
+    for fpath, value in own.get("levels", {}).get(level.name, {}).items():  # the level's knowledge
+        slot, _, name = fpath.partition(".")
+        raw[slot][name] = copy.deepcopy(value)
     actuator = copy.deepcopy(spec.actuator)
     actuator.update(
         copy.deepcopy(own.get("actuator", {}))
