@@ -52,7 +52,7 @@ examples: $(STAMP)
 wheel-smoke: $(STAMP)
 	.ci/wheel-smoke $(BIN)/python
 
-## command-line start-up times (--help, --version, list) against 0.5 s
+## command-line start-up times (--help, --version, list, show, schema) against 0.5 s
 bench-cli: $(STAMP)
 	$(BIN)/python benchmarks/cli.py
 

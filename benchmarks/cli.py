@@ -1,7 +1,8 @@
-"""Command-line start-up benchmark: wall time of ``formation-ftc --help``, ``--version`` and ``list``.
+"""Command-line start-up benchmark: wall time of the text commands ``formation-ftc --help``,
+``--version``, ``list``, ``show`` and ``schema composed`` (none imports JAX: tests/test_cli_startup.py).
 
 Each command runs as a fresh process (as a user types it), ``--repeat`` times; the median and the
-maximum are printed next to the target (0.5 s) and, for scale, the time of ``python -c pass`` (the
+maximum are printed next to the target (0.5 s; issue 37 asks 0.3 s) and, for scale, the time of ``python -c pass`` (the
 interpreter's own start) and of ``import jax`` (what the commands must not pay for). Exit status 1
 when a median misses the target.
 
@@ -41,6 +42,8 @@ def main(argv: list[str] | None = None) -> int:
         "formation-ftc --help": [exe, "--help"],
         "formation-ftc --version": [exe, "--version"],
         "formation-ftc list": [exe, "list"],
+        "formation-ftc show cw-pd-fault": [exe, "show", "cw-pd-fault"],
+        "formation-ftc schema composed": [exe, "schema", "composed"],
         "python -m formation_ftc --help": [sys.executable, "-m", "formation_ftc", "--help"],
     }
     print(f"{'command':40s} {'median [s]':>10s} {'max [s]':>8s}  target")

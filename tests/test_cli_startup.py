@@ -2,7 +2,7 @@
 validation depth of ``show`` (every field checked, the loop not built) against ``check``'s.
 
 The import checks run the command in a fresh interpreter and read ``sys.modules`` at exit: a check of
-the import graph, not a timing (the wall times are in ``benchmarks/cli_startup.py``)."""
+the import graph, not a timing (the wall times are in ``benchmarks/cli.py``)."""
 
 from __future__ import annotations
 
