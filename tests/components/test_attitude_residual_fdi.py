@@ -66,7 +66,7 @@ def _fdi(**kw) -> AttitudeResidualFdi:
 def _measure(w):
     y = {"q": jnp.zeros((2, 3)), "w": jnp.asarray(w)}
     k = jnp.asarray(0, dtype=jnp.int64)  # the residual reads the step dt from the context
-    return FlightInputs(y, None, None, None, None, None, StepContext(k, 0.0 * k, DT, 0.0))
+    return FlightInputs(y, None, None, None, None, None, StepContext(k, 0.0 * k, DT))
 
 
 def test_a_body_bias_is_isolated_and_reported_in_the_laws_channel():

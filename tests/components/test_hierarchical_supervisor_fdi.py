@@ -41,7 +41,7 @@ def _sup(**kw) -> HierarchicalSupervisor:
 def _step(k):
     """The context of step k (t_k = k DT)."""
     k = jnp.asarray(k, dtype=jnp.int64)
-    return StepContext(k, k * DT, DT, 0.0)
+    return StepContext(k, k * DT, DT)
 
 
 def _chain_measurement(t, err):

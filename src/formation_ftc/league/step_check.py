@@ -138,11 +138,7 @@ def check_step(
         cell = copy.deepcopy(base)
         cell["simulation"]["dt"] = dt
         _, metrics = simulate_with_metrics(load_scenario(cell), raise_on_divergence=False)
-        return {
-            k: float(v)
-            for k, v in metrics.items()
-            if k not in ignore and not any(k.startswith(f"{n}_sc") for n in ignore)
-        }
+        return {k: float(v) for k, v in metrics.items() if k not in ignore}
 
     dt = dt0
     result.steps.append(dt)

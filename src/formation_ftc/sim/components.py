@@ -258,17 +258,12 @@ class NetworkInputs(NamedTuple):
 
 class StepContext(NamedTuple):
     """The control step in progress, given to the flight side with its inputs: step index ``k``
-    (int64), its time ``t = t0 + k dt`` [s], the control step ``dt`` [s] and the run's start ``t0``
-    [s]. A component that counts steps reads ``k`` here instead of recovering it from a time."""
+    (int64), its time ``t = t0 + k dt`` [s] and the control step ``dt`` [s]. A component that counts
+    steps reads ``k`` here instead of recovering it from a time."""
 
     k: jax.Array
     t: jax.Array
     dt: float
-    t0: float
-
-    def time(self, j: Any) -> jax.Array:
-        """Time [s] of step ``j`` on the run's grid (``t0 + j dt``, as the loop computes ``t_k``)."""
-        return self.t0 + j * self.dt
 
 
 class FlightInputs(NamedTuple):

@@ -341,7 +341,7 @@ class ClosedLoop:
 
     def _step_context(self, k) -> StepContext:
         """The context of step ``k`` (its time ``t_k = t0 + k dt``, computed here once)."""
-        return StepContext(k, self.t0 + k * self.dt, self.dt, self.t0)
+        return StepContext(k, self.t0 + k * self.dt, self.dt)
 
     def _evaluate(self, t, z, ctx):
         """Derivatives of the integrated state ``z = {plant, controller, usage}`` and the outputs at

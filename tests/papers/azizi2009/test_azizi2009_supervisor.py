@@ -75,7 +75,7 @@ def test_component_uniform_signature_reads_the_measured_error():
         t = jnp.asarray(k * dt)
         rd, _, _ = rotating_polygon(t, n, 2, 200.0, 0.1)
         y = {"position": chain_difference(rd).at[1, 0].add(err), "velocity": jnp.zeros((n - 1, 2))}
-        sc = StepContext(jnp.asarray(k), t, dt, 0.0)
+        sc = StepContext(jnp.asarray(k), t, dt)
         state, dec = sup.update(t, state, FlightInputs(y, None, None, None, None, None, sc))
         out = sup.outputs(t, state, dec)
         modes.append(int(dec))

@@ -118,7 +118,7 @@ def make_supervisor(leaves_slot1=True, delay=0):
 def flight(diagnosed, k):
     """Flight inputs at step k (dt = 1 s, t0 = 0: t_k = k s)."""
     k = jnp.asarray(k, dtype=jnp.int64)
-    step = StepContext(k, 1.0 * k, 1.0, 0.0)
+    step = StepContext(k, 1.0 * k, 1.0)
     return FlightInputs(None, None, {"diagnosed": jnp.asarray(diagnosed)}, None, None, None, step)
 
 

@@ -33,7 +33,12 @@ from formation_ftc.methods.composed.catalog_attitude import (
     EULER_SENSORS,
     NOMINAL_INERTIA,
 )
-from formation_ftc.methods.composed.catalog_navigation import FDI_ESTIMATORS
+from formation_ftc.methods.composed.catalog_navigation import (
+    FDI_ESTIMATORS,
+    FdiDrift,
+    FdiTest,
+    FdiThreshold,
+)
 from formation_ftc.registry import Condition
 from formation_ftc.sim.contract import CompositionError, as_float
 
@@ -76,16 +81,9 @@ class AttitudeResidualFdiSection(StrictModel):
         description="Mean command over a step: held (a sampled law) or extrapolated to the step's "
         "midpoint, 1.5 tau_k - 0.5 tau_k-1 (a law evaluated inside the step, as networked-el-hinf).",
     )
-    test: Literal["cusum", "fixed"] = Field(
-        "cusum",
-        description="Test per (spacecraft, body axis): Page's two-sided CUSUM or |z| > threshold.",
-    )
-    drift: float = Field(
-        0.5, ge=0, description="CUSUM drift (half the standardised shift to detect) [-]."
-    )
-    threshold: float = Field(
-        20.0, gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-]."
-    )
+    test: FdiTest = "cusum"
+    drift: FdiDrift = 0.5
+    threshold: FdiThreshold = 20.0
     identification_time: float = Field(
         2.0,
         gt=0,

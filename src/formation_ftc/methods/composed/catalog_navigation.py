@@ -18,7 +18,7 @@ section: the orbit, the assumed measurement noise, the acceleration noise and th
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field
@@ -162,6 +162,19 @@ register_conditions("estimator", "relative-navigation-filter", _navigation_condi
 
 
 # ------------------------------------------------------------------------------------------- FDI
+#: the sequential test's three fields, shared by the translational and the attitude residual FDI
+FdiTest = Annotated[
+    Literal["cusum", "fixed"],
+    Field(description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold."),
+]
+FdiDrift = Annotated[
+    float, Field(ge=0, description="CUSUM drift (half the standardised shift to detect) [-].")
+]
+FdiThreshold = Annotated[
+    float, Field(gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-].")
+]
+
+
 class ResidualFdiSection(RelativeNavigationSection):
     """Thruster-fault detection and isolation from the relative-state residuals."""
 
@@ -169,16 +182,9 @@ class ResidualFdiSection(RelativeNavigationSection):
         "kalman",
         description="Residual generator: the Kalman innovation or the one-step parity relation.",
     )
-    test: Literal["cusum", "fixed"] = Field(
-        "cusum",
-        description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold.",
-    )
-    drift: float = Field(
-        0.5, ge=0, description="CUSUM drift (half the standardised shift to detect) [-]."
-    )
-    threshold: float = Field(
-        20.0, gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-]."
-    )
+    test: FdiTest = "cusum"
+    drift: FdiDrift = 0.5
+    threshold: FdiThreshold = 20.0
     force_limit: float = Field(
         math.inf,
         gt=0,
