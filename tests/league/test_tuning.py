@@ -223,3 +223,29 @@ def test_tune_command_end_to_end_and_tuned_column(tmp_path, tiny_league, capsys)
     lqr_league = tiny_league(tmp_path / "l", methods=("lqr",))
     assert main(["tune", "lqr", "--league", str(lqr_league), "--out", str(out)]) == 2
     assert "has no [tune] table" in capsys.readouterr().err
+
+
+def test_tuning_flies_at_the_step_the_league_check_chose(tmp_path, tiny_league):
+    """With the league's step check on, tune flies the method at the check's chosen step; a check a
+    league run recorded (league.json ``step_check``) is reused, not run again, and is recorded."""
+    from formation_ftc.league.tune_cli import _league_step_checks
+    from formation_ftc.league.tuning import tune_league_method
+
+    league = tiny_league(tmp_path, methods=("yang2013",), step_check={"enabled": True})
+    record = {"chosen_dt": 0.1, "converged": True, "changes": [0.001], "dts": [0.2, 0.1]}
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "league.json").write_text(json.dumps({"step_check": {"yang2013": record}}))
+    reused = _league_step_checks(str(tmp_path / "run"))
+    result = tune_league_method(
+        league,
+        "yang2013",
+        "limited",
+        cases=["bias"],
+        train_seeds=1,
+        holdout_seeds=1,
+        max_evaluations=2,
+        step_checks=reused,
+    )
+    assert result["dt"] == 0.1 and result["step_check"] == record
+    with pytest.raises(TuneError, match="--step-check-from"):
+        _league_step_checks(str(tmp_path / "nowhere"))

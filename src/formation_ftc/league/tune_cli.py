@@ -24,6 +24,7 @@ def _cmd_tune(args) -> int:
     if not str(args.out).strip():
         raise TuneError("--out: empty path; give a directory, e.g. --out out/league/tuned")
     cases = [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None
+    step_checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
 
     result = tune_league_method(
         args.league,
@@ -37,6 +38,7 @@ def _cmd_tune(args) -> int:
         max_evaluations=args.max_evaluations,
         margin=args.margin,
         penalty=args.penalty,
+        step_checks=step_checks,
         log=lambda line: print(line, file=sys.stderr, flush=True),
     )
     path = write_tuning(result, args.out)
@@ -61,6 +63,23 @@ def _cmd_tune(args) -> int:
         )
     print(f"wrote {path}")
     return 0
+
+
+def _league_step_checks(directory: str) -> dict[str, Any]:
+    """The step checks recorded in league directory ``directory`` (``league.json``)."""
+    import json
+    from pathlib import Path
+
+    from formation_ftc.league.tuning import TuneError
+
+    path = Path(directory) / "league.json"
+    try:
+        meta = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise TuneError(
+            f"--step-check-from {directory}: no readable league.json there ({exc})"
+        ) from None
+    return dict(meta.get("step_check") or {})
 
 
 def _fmt(v: Any) -> str:
@@ -110,6 +129,12 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--margin", type=float, default=0.1, help="requirement tightening on training runs [-]"
     )
     p.add_argument("--penalty", type=float, default=10.0, help="weight of the requirement penalty")
+    p.add_argument(
+        "--step-check-from",
+        metavar="LEAGUE_DIR",
+        default=None,
+        help="reuse the step check a league run recorded (default: run it, as `league run` does)",
+    )
     add_json_option(p)
     p.set_defaults(func=_cmd_tune)
     return p

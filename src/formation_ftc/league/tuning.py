@@ -545,15 +545,18 @@ def tune_league_method(
     max_evaluations: int = 60,
     margin: float = 0.1,
     penalty: float = 10.0,
+    step_checks: Mapping[str, Any] | None = None,
     log: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Tune ``method``'s ``[tune]`` fields at actuator ``level`` of ``league`` (a name, file or
     :class:`~formation_ftc.league.definition.LeagueSpec`); the result as a JSON-able dict (the fields
     of docs/tuning.md). The options are those of ``formation-ftc tune``; ``log`` receives progress
-    lines. Raises TuneError or LeagueError (exit code 2) naming a bad league, method, level, case,
+    lines. The runs fly at the step the league's step check chooses for the method (as ``league
+    run`` does): the check runs here unless ``step_checks`` (a league's ``league.json`` record
+    ``step_check``, ``{method: record}``) holds it. Raises TuneError or LeagueError (exit code 2) naming a bad league, method, level, case,
     field or option."""
     from formation_ftc.league.definition import LeagueSpec, load_league, method_tune
-    from formation_ftc.league.runner import _provenance, plan_cells
+    from formation_ftc.league.runner import _provenance, _step_checks, plan_cells
 
     say = log or (lambda _line: None)
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -577,7 +580,13 @@ def tune_league_method(
     objective, statistic = tune.objective, tune.statistic
     req = spec.league.requirement
     requirement = (req.metric, float(req.max))
-    cells = [c for c in plan_cells(spec, [method])[method] if c.level == level]
+    planned = plan_cells(spec, [method])
+    # the step the league flies this method at: its step check (run here, or reused from a league)
+    old = {"step_check": dict(step_checks)} if step_checks else None
+    step_check = _step_checks(spec, planned, old, log).get(method)
+    if step_check is not None:
+        say(f"{method}: flying at dt = {step_check['chosen_dt']:g} s (the league's step check)")
+    cells = [c for c in planned[method] if c.level == level]
     applying = [c.case for c in cells]
     unknown = [c for c in cases or () if c not in applying]
     if unknown:
@@ -638,6 +647,8 @@ def tune_league_method(
         "method": method,
         "level": level,
         "cases": [c.case for c in cells],
+        "dt": float(cells[0].raw["simulation"]["dt"]) if cells else None,
+        "step_check": step_check,
         "fields": [{"path": f.path, "low": f.low, "high": f.high, "log": f.log} for f in fields],
         "paper_gains": {f.path: float(v) for f, v in zip(fields, paper, strict=True)},
         "tuned_gains": {f.path: float(v) for f, v in zip(fields, outcome.gains, strict=True)},
