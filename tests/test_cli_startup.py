@@ -22,12 +22,15 @@ _PROBE = (
     "except SystemExit as exc:\n"
     "    code = exc.code\n"
     "sys.stdout.flush()\n"
-    "print('\\n@@' + repr(sorted(m for m in ('jax', 'jaxlib') if m in sys.modules)), flush=True)\n"
+    "catalogs = sorted(m.rsplit('.', 1)[1] for m in sys.modules if '.catalog_' in m)\n"
+    "print('\\n@@' + repr(catalogs), flush=True)\n"
+    "print('@@' + repr(sorted(m for m in ('jax', 'jaxlib') if m in sys.modules)), flush=True)\n"
     "print('@@' + repr(code), flush=True)\n"
 )
 
 
-def _imports_of(argv: list[str]) -> tuple[list[str], object]:
+def _probe(argv: list[str]) -> tuple[list[str], list[str], object]:
+    """The catalog modules and JAX modules imported by the command, and its exit code."""
     out = subprocess.run(
         [sys.executable, "-c", _PROBE.format(argv=argv)],
         capture_output=True,
@@ -35,8 +38,13 @@ def _imports_of(argv: list[str]) -> tuple[list[str], object]:
         check=True,
         timeout=600,
     )
-    *_, heavy, code = out.stdout.strip().splitlines()
-    return eval(heavy[2:]), eval(code[2:])  # noqa: S307 - our own probe's reprs
+    *_, catalogs, heavy, code = out.stdout.strip().splitlines()
+    return eval(catalogs[2:]), eval(heavy[2:]), eval(code[2:])  # noqa: S307 - our own probe's reprs
+
+
+def _imports_of(argv: list[str]) -> tuple[list[str], object]:
+    _, heavy, code = _probe(argv)
+    return heavy, code
 
 
 @pytest.mark.parametrize("argv", [["--help"], ["list"], ["list", "--json"]])
@@ -53,6 +61,26 @@ def test_text_commands_import_no_jax(argv):
     heavy, code = _imports_of(argv)
     assert code in (0, None)
     assert heavy == []
+
+
+# validation imports only the catalog modules of the types the scenario names (the index
+# ``methods/composed/_catalog_index.py``); the annotated ``show`` still loads every catalog for the
+# schemas of its comments until ``cli._scenario_schema`` looks types up one by one
+@pytest.mark.parametrize(
+    ("argv", "catalogs"),
+    [
+        (["show", "cw-pd-fault", "--no-comments"], ["catalog_translational"]),
+        (
+            ["show", "compose-lqr-on-cw", "--no-comments"],
+            ["catalog_baselines", "catalog_translational"],
+        ),
+    ],
+)
+def test_show_imports_only_the_catalogs_it_names(argv, catalogs):
+    got, heavy, code = _probe(argv)
+    assert code in (0, None)
+    assert heavy == []
+    assert got == catalogs
 
 
 def _misfit() -> dict:

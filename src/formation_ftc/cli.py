@@ -337,11 +337,11 @@ def _scenario_schema(raw: dict) -> dict:
     schema = get_method(method).schema.model_json_schema()
     if method != "composed":
         return schema
-    from formation_ftc.methods.composed import component_types
+    from formation_ftc.methods.composed import SLOTS, component_type
 
-    catalog = component_types()
     for slot, table in raw.items():
-        entry = catalog.get((slot, str(table.get("type")))) if isinstance(table, dict) else None
+        known = slot in SLOTS and isinstance(table, dict)
+        entry = component_type(slot, str(table.get("type"))) if known else None
         if entry is not None:
             sub = entry.section.model_json_schema()
             schema.setdefault("$defs", {}).update(sub.pop("$defs", {}))

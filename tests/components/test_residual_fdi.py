@@ -207,3 +207,42 @@ def test_a_thrust_limit_is_not_a_fault_when_the_rating_is_stated(tmp_path, limit
         assert m["false_alarm"] == 1.0
     else:
         assert m["false_alarm"] == 0.0 and float(ds["fdi_statistic"].values.max()) < 5.0
+
+
+@pytest.mark.parametrize("at_limit", ["skip", "clip"])
+def test_a_fault_of_a_saturated_thruster_shows_when_the_model_clips(tmp_path, at_limit):
+    """Spacecraft 2's along-track thruster is held at the 0.2 N rating for the whole run (acquisition
+    from 5 m) and goes out at 20 s; noise-free Kalman innovation, CUSUM. With the clipped command as
+    the model's force (clip) the healthy run gives no alarm and the outage is detected and isolated
+    to that channel within 5 s. Skipping the saturated channel is not enough for a Kalman residual:
+    its prediction carries the unclipped command, the error leaks into the tested radial channel
+    through the Coriolis coupling, and the healthy run raises a false alarm (why clip exists; the
+    parity residual, memoryless, is the one to pair with skip)."""
+    text = SCENARIO.format(**{**FIELDS, "residual": "kalman", "test": "cusum", "threshold": 5.0})
+    text = text.replace('[controller]\ntype = "none"\n', SATURATING)
+    text = text.replace(
+        "threshold = 5.0", f'threshold = 5.0\nforce_limit = 0.2\nat_limit = "{at_limit}"'
+    )
+    kinds = ("none", "outage") if at_limit == "clip" else ("none",)
+    for kind in kinds:
+        path = tmp_path / f"sat-{kind}.toml"
+        path.write_text(text.replace('kind = "bias"', f'kind = "{kind}"\nsaturation = 0.2'))
+        ds, m = simulate_with_metrics(load_scenario(path))
+        along = ds["command"].values[:, 1, 1]  # spacecraft 2, along-track [N]
+        assert np.all(np.abs(along) >= 0.2)  # saturated throughout
+        if at_limit == "skip":
+            assert m["false_alarm"] == 1.0
+        elif kind == "none":
+            assert m["false_alarm"] == 0.0
+        else:
+            assert m["missed"] == 0.0 and m["isolated"] == 1.0 and m["detection_delay"] < 5.0
+
+
+def test_clipping_needs_the_rating(tmp_path):
+    text = SCENARIO.format(**FIELDS).replace(
+        "threshold = 1000000.0", 'threshold = 1e6\nat_limit = "clip"'
+    )
+    path = tmp_path / "noclip.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match="at_limit.*force_limit"):
+        load_scenario(path)

@@ -111,6 +111,9 @@ def test_unknown_method_scenario_file_is_rejected(tmp_path):
 
 def test_attitude_law_on_the_translational_truth_is_rejected(tmp_path):
     path, raw = _copy_league(tmp_path, "translational")
+    pd = tomllib.loads((tmp_path / "attitude" / "pd.toml").read_text())
+    del pd["tune"]  # its objective (control_impulse) is no translational metric: rejected first
+    (tmp_path / "attitude" / "pd.toml").write_text(tomli_w.dumps(pd))
     raw["methods"].append({"name": "attitude-pd", "scenario": "attitude/pd.toml"})
     path.write_text(tomli_w.dumps(raw))
     spec = load_league(path)

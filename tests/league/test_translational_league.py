@@ -338,13 +338,13 @@ def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path):
 
 def test_a_method_states_flight_knowledge_per_level_and_nothing_else(tmp_path, tiny_league):
     """``[levels.<name>]`` of a method file sets its own flight fields at that level only (azizi2009:
-    the FDI's thrust rating and residual at 0.2 N); an unknown level, a truth slot or a slot the file
+    the FDI's thrust rating and what it does at it, at 0.2 N); an unknown level, a truth slot or a slot the file
     does not set is rejected, naming it."""
     path = tiny_league(tmp_path, methods=("azizi2009",))
     cells = plan_cells(load_league(path))["azizi2009"]
     est = {c.level: c.raw["estimator"] for c in cells}
-    assert est["limited"]["force_limit"] == 0.2 and est["limited"]["residual"] == "parity"
-    assert "force_limit" not in est["unsaturated"] and est["unsaturated"]["residual"] == "kalman"
+    assert est["limited"]["force_limit"] == 0.2 and est["limited"]["at_limit"] == "clip"
+    assert "force_limit" not in est["unsaturated"] and "at_limit" not in est["unsaturated"]
     method = tmp_path / "translational" / "azizi2009.toml"
     base = tomllib.loads(method.read_text())
     for levels, message in [

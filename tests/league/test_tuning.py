@@ -118,6 +118,24 @@ def test_penalty_counts_violations_and_diverged_runs():
     assert float(value) == pytest.approx(1.0 + 2.0 * 7.5 / 3)
 
 
+def test_a_run_far_from_the_requirement_counts_as_one_failure():
+    """The violation cap: a run 10 times over the requirement weighs what a run twice over it does (one
+    failure), so gains cannot buy a large error reduction on hopeless runs with failures elsewhere;
+    below the cap the penalty keeps its slope. ``inf`` restores the uncapped L1 penalty."""
+    import jax.numpy as jnp
+
+    metrics = {"dv": jnp.array([1.0, 1.0, 1.0]), "err": jnp.array([0.5, 1.5, 10.0])}
+    ok = jnp.array([False, False, False])
+    capped = penalised_objective("dv", requirement=("err", 1.0), margin=0.0, penalty=1.0)
+    uncapped = penalised_objective(
+        "dv", requirement=("err", 1.0), margin=0.0, penalty=1.0, violation_cap=float("inf")
+    )
+    assert float(capped(metrics, ok)[1]["violation"]) == pytest.approx((0.0 + 0.5 + 1.0) / 3)
+    assert float(uncapped(metrics, ok)[1]["violation"]) == pytest.approx((0.0 + 0.5 + 9.0) / 3)
+    with pytest.raises(TuneError, match="violation_cap"):
+        penalised_objective("dv", requirement=("err", 1.0), violation_cap=0.0)
+
+
 def test_fields_that_are_not_leaves_are_rejected():
     raw = _double_integrator([1.0, 0.0, 0.0], kp=1.0, kd=5.0)
     # the plant holds its mean motion, derived from the orbit radius
@@ -165,6 +183,9 @@ def test_builtin_tune_tables_validate():
     tables = {m.name: method_tune(spec, m) for m in spec.methods}
     assert {n for n, t in tables.items() if t is not None} >= {"yang2013", "li2020-thm1", "sir-ftc"}
     assert tables["lqr"] is None  # its gain is derived (Bryson's maxima -> Riccati): not a leaf
+    attitude = load_league("attitude")
+    tuned = {m.name for m in attitude.methods if method_tune(attitude, m) is not None}
+    assert tuned == {"mehrabian", "pd", "yang2013"}
 
 
 def test_replicates_are_paired_and_drawn_as_the_league_draws_them(tmp_path, tiny_league):

@@ -38,6 +38,7 @@ def _cmd_tune(args) -> int:
         max_evaluations=args.max_evaluations,
         margin=args.margin,
         penalty=args.penalty,
+        violation_cap=args.violation_cap,
         step_checks=step_checks,
         log=lambda line: print(line, file=sys.stderr, flush=True),
     )
@@ -128,7 +129,13 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument(
         "--margin", type=float, default=0.1, help="requirement tightening on training runs [-]"
     )
-    p.add_argument("--penalty", type=float, default=10.0, help="weight of the requirement penalty")
+    p.add_argument("--penalty", type=float, default=100.0, help="weight of the requirement penalty")
+    p.add_argument(
+        "--violation-cap",
+        type=float,
+        default=1.0,
+        help="largest relative violation one run counts (inf: no cap)",
+    )
     p.add_argument(
         "--step-check-from",
         metavar="LEAGUE_DIR",

@@ -301,16 +301,19 @@ def penalised_objective(
     statistic: str = "mean",
     requirement: tuple[str, float] | None = None,
     margin: float = 0.1,
-    penalty: float = 10.0,
+    penalty: float = 100.0,
+    violation_cap: float = 1.0,
     bad_run_penalty: float = 10.0,
     scale: float = 1.0,
 ) -> Callable[[Mapping[str, Any], Any], Any]:
     """``J(metrics, bad) -> (value, terms)`` of docs/tuning.md, a JAX function of one batch's metrics.
 
     ``objective``: a metric name or ``metrics -> (runs,)`` cost; ``requirement``: (metric, maximum),
-    tightened by ``margin`` and weighted by ``penalty`` (None: unconstrained); a diverged or non-finite
-    run counts as ``f = scale`` with a violation of ``bad_run_penalty``. ``terms``: the statistic of
-    the objective (unscaled), the mean violation and the fraction of failing runs.
+    tightened by ``margin``, each run's relative violation capped at ``violation_cap`` (a run that
+    fails by more counts as one failure, whatever its error) and weighted by ``penalty`` (None:
+    unconstrained); a diverged or non-finite run counts as ``f = scale`` with a violation of
+    ``bad_run_penalty``. ``terms``: the statistic of the objective (unscaled), the mean violation and
+    the fraction of failing runs.
 
     Examples
     --------
@@ -319,6 +322,9 @@ def penalised_objective(
     >>> value, terms = J({"dv": jnp.array([1.0, 3.0]), "err": jnp.array([0.5, 1.5])}, jnp.array([False, False]))
     >>> float(value), float(terms["objective"]), float(terms["fail_fraction"])
     (3.5, 2.0, 0.5)
+    >>> value, _ = J({"dv": jnp.array([1.0, 3.0]), "err": jnp.array([0.5, 9.0])}, jnp.array([False, False]))
+    >>> float(value)  # 9 m counts as a violation of 1 (the cap), as 2 m would
+    6.0
     """
     import jax.numpy as jnp
 
@@ -326,6 +332,8 @@ def penalised_objective(
         raise TuneError(f"statistic = {statistic!r}: 'mean' or 'median'")
     if not 0 <= margin < 1:
         raise TuneError(f"margin = {margin}: in [0, 1)")
+    if not violation_cap > 0:
+        raise TuneError(f"violation_cap = {violation_cap}: > 0 (inf: no cap)")
     stat = jnp.mean if statistic == "mean" else jnp.median
 
     def J(metrics, bad):
@@ -339,7 +347,8 @@ def penalised_objective(
             bad_m = bad | ~jnp.isfinite(m)
             m_ok = jnp.where(bad_m, 0.0, m)
             limit = (1.0 - margin) * requirement[1]
-            viol = jnp.where(bad_m, bad_run_penalty, jnp.maximum(m_ok / limit - 1.0, 0.0))
+            excess = jnp.clip(m_ok / limit - 1.0, 0.0, violation_cap)
+            viol = jnp.where(bad_m, bad_run_penalty, excess)
             fail = bad_f | bad_m | (m_ok > requirement[1])
         viol = jnp.where(bad_f, bad_run_penalty, viol)
         obj = stat(f_ok)
@@ -544,7 +553,8 @@ def tune_league_method(
     optimiser: str = DEFAULT_OPTIMISER,
     max_evaluations: int = 60,
     margin: float = 0.1,
-    penalty: float = 10.0,
+    penalty: float = 100.0,
+    violation_cap: float = 1.0,
     step_checks: Mapping[str, Any] | None = None,
     log: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
@@ -572,6 +582,11 @@ def tune_league_method(
         raise TuneError(f"--level {level!r}: not a level of league {spec.league.name} ({levels})")
     if train_seeds < 1 or holdout_seeds < 1:
         raise TuneError("--train-seeds and --holdout-seeds: at least 1 each")
+    if not 0 <= margin < 1 or not penalty >= 0 or not violation_cap > 0:
+        raise TuneError(
+            f"--margin {margin} (in [0, 1)), --penalty {penalty} (>= 0), --violation-cap "
+            f"{violation_cap} (> 0, inf: no cap): one is out of range"
+        )
     if train_start < holdout_seeds:
         raise TuneError(
             f"--train-start {train_start}: the training replicates would overlap the held-out ones "
@@ -616,6 +631,7 @@ def tune_league_method(
         requirement=requirement,
         margin=margin,
         penalty=penalty,
+        violation_cap=violation_cap,
         scale=scale,
     )
     outcome = minimise(problem, J, optimiser=optimiser, max_evaluations=max_evaluations)
@@ -660,8 +676,11 @@ def tune_league_method(
             ),
             "scale": scale,
             "penalty": penalty,
+            "violation_cap": violation_cap,
             "margin": margin,
-            "form": "J = S(f)/f0 + penalty * mean(max(0, m / ((1 - margin) max) - 1))",
+            "form": (
+                "J = S(f)/f0 + penalty * mean(min(max(0, m / ((1 - margin) max) - 1), violation_cap))"
+            ),
         },
         "requirement": {"metric": requirement[0], "max": requirement[1], "units": req.units},
         "J": {"paper": outcome.initial_value, "tuned": outcome.value},

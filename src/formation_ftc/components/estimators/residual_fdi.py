@@ -132,9 +132,13 @@ class ResidualFdi(Estimator):
     The first alarm is latched (``detected``) and isolates the channel with the largest statistic at
     that step (``isolated``, one-hot (N, 3)). A channel whose command reaches the stated rated thrust
     ``force_limit`` [N] is not tested on the residual spanning that step (a thrust limit may cut the
-    force; the residual cannot tell it from a fault). A fault of the force shows in the velocity residual of its
-    own spacecraft and axis first (the Coriolis coupling moves it to the other in-plane axis only over
-    a fraction of an orbit), which is what isolation relies on.
+    force; the residual cannot tell it from a fault); with ``at_limit = "clip"`` the model applies
+    ``clip(f_k, -force_limit, force_limit)`` instead (the force of a healthy rated thruster, per axis)
+    and every channel stays tested, so a fault of a saturated thruster shows as well. A fault of the
+    force shows in the velocity residual of its own spacecraft and axis first (the Coriolis coupling
+    moves it to the other in-plane axis only over a fraction of an orbit), which is what isolation
+    relies on. Pair ``skip`` with the memoryless parity residual: a Kalman prediction carries the
+    unclipped command into the tested channels.
 
     Estimate (what a supervisor or a law may read): ``{"detected": (), "isolated": (N, 3),
     "statistic": (N, 3)}``. Records ``fdi_statistic``, ``fdi_detected`` and ``fdi_isolated``.
@@ -151,7 +155,8 @@ class ResidualFdi(Estimator):
     nominal_mass: Any  # (N,) [kg]
     drift: Any  # CUSUM drift [-]
     threshold: Any  # alarm threshold [-]
-    force_limit: Any = float("inf")  # rated thrust per axis [N]: not tested at or above it
+    force_limit: Any = float("inf")  # rated thrust per axis [N]
+    at_limit: str = static(default="skip")  # "skip" or "clip" at force_limit (docstring)
 
     estimate_keys = ("detected", "isolated", "statistic")
 
@@ -218,11 +223,16 @@ class ResidualFdi(Estimator):
         return new, {"detected": new.detected, "isolated": isolated, "statistic": stat}
 
     def predict(self, t, state: FdiState, command, dt):
-        accel = command / self.nominal_mass[:, None]
+        if self.at_limit == "clip":  # the force a healthy rated thruster applies; all tested
+            force = jnp.clip(command, -self.force_limit, self.force_limit)
+            tested = jnp.ones_like(state.tested)
+        else:
+            force = command
+            tested = jnp.abs(command) < self.force_limit
+        accel = force / self.nominal_mass[:, None]
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":
             x_hat, p = kalman_predict(x_hat, p, accel, self.phi, self.gamma, self.qd)
-        tested = jnp.abs(command) < self.force_limit
         return state._replace(x_hat=x_hat, p=p, a_prev=accel, tested=tested)
 
     def outputs(self, t, state, estimate):

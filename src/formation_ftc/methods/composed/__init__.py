@@ -57,6 +57,7 @@ __all__ = [
     "BuildContext",
     "register_component_type",
     "component_types",
+    "component_type",
     "make_loop",
     "build",
     "SLOTS",
@@ -211,6 +212,38 @@ def _load_catalogs() -> None:
             importlib.import_module(f"{__name__}.{mod.name}")
 
 
+def _load_catalogs_for(keys: list[tuple[str, str]]) -> None:
+    """Import only the catalog modules that register the ``(kind, name)`` types ``keys`` (from
+    :data:`~formation_ftc.methods.composed._catalog_index.CATALOG_INDEX`); every catalog when one is
+    neither in the index nor registered otherwise (a plug-in), or when the index is stale, so that
+    errors list every known type."""
+    if _CATALOGS_LOADED:
+        return
+    import importlib
+
+    from formation_ftc.methods.composed._catalog_index import CATALOG_INDEX
+
+    modules = set()
+    for key in keys:
+        module = CATALOG_INDEX.get(key)
+        if module is None and key not in _CATALOG:
+            _load_catalogs()
+            return
+        if module is not None:
+            modules.add(module)
+    for module in sorted(modules):
+        importlib.import_module(module)
+    if any(key not in _CATALOG for key in keys):  # an index entry naming the wrong module
+        _load_catalogs()
+
+
+def component_type(kind: str, name: str) -> ComponentType | None:
+    """The catalog entry of ``[kind] type = "name"`` (None if there is none), importing only the catalog
+    module that registers it where the index knows it (cheaper than :func:`component_types`)."""
+    _load_catalogs_for([(kind, name)])
+    return _CATALOG.get((kind, name))
+
+
 class MetricSection(StrictModel):
     """One metric computed at every step inside the run (see ``formation_ftc.sim.metrics``)."""
 
@@ -296,7 +329,11 @@ class ComposedScenario(ScenarioBase):
 
     @model_validator(mode="after")
     def _compose(self, info: ValidationInfo) -> ComposedScenario:
-        _load_catalogs()
+        # only the catalog modules of the named types (a missing type loads all, for the message)
+        tables = {slot: getattr(self, slot) for slot in SLOTS}
+        named = [(slot, raw.get("type")) for slot, raw in tables.items() if raw is not None]
+        named += [("evaluation", raw.get("type")) for raw in self.evaluations]
+        _load_catalogs_for([(kind, str(name)) for kind, name in named])
         sections: dict[str, Any] = {}
         for slot in SLOTS:
             raw = getattr(self, slot)
@@ -408,6 +445,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
 
+    _load_catalogs()  # builders and conditions may use any catalog type (the loop imports JAX anyway)
     plant_entry = _CATALOG[
         ("plant", cast(str, s.type_of("plant")))
     ]  # the plant section is required

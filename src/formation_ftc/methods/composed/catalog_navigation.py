@@ -21,7 +21,7 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -191,9 +191,26 @@ class ResidualFdiSection(RelativeNavigationSection):
         description=(
             "Rated thrust per axis [N] (flight knowledge): a channel whose command reaches it is not "
             "tested over that step (a thrust limit may cut the force, which the residual cannot tell "
-            "from a fault); inf: every channel always tested."
+            "from a fault); inf: every channel always tested. See at_limit."
         ),
     )
+    at_limit: Literal["skip", "clip"] = Field(
+        "skip",
+        description=(
+            "What the residual does at the rated thrust force_limit: skip -- a channel whose command "
+            "reaches it is not tested over that step; clip -- the on-board model applies the command "
+            "clipped to +-force_limit per axis (what a healthy rated thruster gives) and every channel "
+            "is tested, so a fault of a saturated thruster shows too. clip needs a finite force_limit."
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _clip_needs_a_limit(self):
+        if self.at_limit == "clip" and not math.isfinite(self.force_limit):
+            raise ValueError(
+                'at_limit = "clip": give the rated thrust force_limit [N] (finite, > 0) to clip at'
+            )
+        return self
 
 
 def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
@@ -208,6 +225,7 @@ def _residual_fdi(sec: ResidualFdiSection, ctx: BuildContext):
         drift=as_float(sec.drift),
         threshold=as_float(sec.threshold),
         force_limit=as_float(sec.force_limit),
+        at_limit=sec.at_limit,
         **a,
     )
 

@@ -5,12 +5,13 @@ reproduction ``azizi2009``."""
 from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
-from formation_ftc.methods.composed.catalog_chain import CHAIN_LAW
 from formation_ftc.registry import register_reproduction
 
 _HERE = (
     "formation_ftc.papers.azizi2009"  # its modules import JAX: referenced, imported on first use
 )
-register_conditions("controller", CHAIN_LAW, f"{_HERE}.conditions:conditions")
+# type names as text, not the catalog's constants: importing a catalog module costs start-up time
+# (tests/methods/composed/test_catalog_index.py checks they match)
+register_conditions("controller", "azizi2009-llfr", f"{_HERE}.conditions:conditions")
 register_paper_figures("azizi2009", f"{_HERE}.figures:plot_run")
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="azizi2009")

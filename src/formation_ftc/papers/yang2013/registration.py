@@ -4,10 +4,11 @@ supervisor) and its figures (scenarios with ``[scenario] paper = "yang2013"``)."
 from __future__ import annotations
 
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
-from formation_ftc.methods.composed.catalog_switched import SWITCHING_SUPERVISOR
 from formation_ftc.registry import register_reproduction
 
 _HERE = "formation_ftc.papers.yang2013"  # its modules import JAX: referenced, imported on first use
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="yang2013")
-register_conditions("supervisor", SWITCHING_SUPERVISOR, f"{_HERE}.conditions:conditions")
+# type names as text, not the catalog's constants: importing a catalog module costs start-up time
+# (tests/methods/composed/test_catalog_index.py checks they match)
+register_conditions("supervisor", "switching", f"{_HERE}.conditions:conditions")
 register_paper_figures("yang2013", f"{_HERE}.figures:plot_scenario")
