@@ -151,6 +151,35 @@ def test_fields_that_are_not_leaves_are_rejected():
         TuneField("controller.kp", 0.0, 3.0, log=True)
 
 
+def test_a_rebuilt_field_gives_the_runs_its_builder_gives():
+    """``rebuild``: a field the builder derives parameters from (the plant's mean motion from its orbit
+    radius) is tuned by building the runs again. Oracle: the scenario built and simulated directly with
+    the same values, for a rebuilt field alone and with a leaf field beside it; the gradient optimiser,
+    which cannot differentiate a rebuild, is refused."""
+    from formation_ftc.api import load_scenario, simulate_with_metrics
+    from formation_ftc.config.loader import apply_overrides
+
+    raws = [_double_integrator(x0, kp=1.0, kd=5.0) for x0 in ([1.0, 0.0, 0.0], [0.0, 2.0, 0.0])]
+    orbit = TuneField("plant.semi_major_axis", 1e6, 1e11, log=True, rebuild=True)
+    for fields, theta in (
+        ([orbit], [7.0e6]),
+        ([TuneField("controller.kp", 0.1, 10.0), orbit], [2.0, 7.0e6]),
+    ):
+        problem = build_problem(raws, fields)
+        metrics, diverged = problem.evaluate(theta)
+        assert not diverged.any()
+        values = {f.path: v for f, v in zip(fields, theta, strict=True)}
+        for j, raw in enumerate(raws):
+            _, direct = simulate_with_metrics(load_scenario(apply_overrides(dict(raw), values)))
+            for name in ("position_rms", "effort"):
+                assert metrics[name][j] == pytest.approx(direct[name], rel=1e-12)
+        at_paper, _ = problem.evaluate(problem.initial)
+        assert not np.allclose(at_paper["position_rms"], metrics["position_rms"])  # the CW coupling
+    J = penalised_objective("effort")
+    with pytest.raises(TuneError, match="rebuilt at each evaluation"):
+        minimise(problem, J, optimiser="gradient", max_evaluations=3)
+
+
 def _league_with_tune(tmp_path: Path, tiny_league, method: str, tune: dict) -> Path:
     path = tiny_league(tmp_path, methods=(method,))
     mfile = tmp_path / "translational" / f"{method}.toml"
@@ -182,7 +211,9 @@ def test_builtin_tune_tables_validate():
     spec = load_league("translational")
     tables = {m.name: method_tune(spec, m) for m in spec.methods}
     assert {n for n, t in tables.items() if t is not None} >= {"yang2013", "li2020-thm1", "sir-ftc"}
-    assert tables["lqr"] is None  # its gain is derived (Bryson's maxima -> Riccati): not a leaf
+    # lqr's gain is derived (Bryson's maxima -> Riccati): its maxima are tuned by rebuilding the runs
+    assert all(b.rebuild for b in tables["lqr"].fields.values())
+    assert tables["gui2022-cof2tc"] is None and tables["gui2022-lof2tc"] is None  # gain matrices
     attitude = load_league("attitude")
     tuned = {m.name for m in attitude.methods if method_tune(attitude, m) is not None}
     assert tuned == {"mehrabian", "pd", "yang2013"}
@@ -241,8 +272,8 @@ def test_tune_command_end_to_end_and_tuned_column(tmp_path, tiny_league, capsys)
     assert rank["unsaturated"][0]["tuned"] == "not tuned"  # tuned at another level
     # a method without a [tune] table: exit code 2, named
     (tmp_path / "l").mkdir()
-    lqr_league = tiny_league(tmp_path / "l", methods=("lqr",))
-    assert main(["tune", "lqr", "--league", str(lqr_league), "--out", str(out)]) == 2
+    cof_league = tiny_league(tmp_path / "l", methods=("gui2022-cof2tc",))
+    assert main(["tune", "gui2022-cof2tc", "--league", str(cof_league), "--out", str(out)]) == 2
     assert "has no [tune] table" in capsys.readouterr().err
 
 

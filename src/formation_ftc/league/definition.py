@@ -193,6 +193,14 @@ class TuneBounds(StrictModel):
     low: float = Field(description="Smallest value the tuning may give the field [field units].")
     high: float = Field(description="Largest value [field units].")
     log: bool = Field(False, description="Search the field on a logarithmic scale (low > 0).")
+    rebuild: bool = Field(
+        False,
+        description=(
+            "The field is an input of its builder, not a leaf of the loop (e.g. Bryson's maxima, "
+            "from which the LQR builder derives its Riccati gain): the runs are built again at "
+            "every evaluation (derivative-free optimisers only; slower)."
+        ),
+    )
 
 
 class TuneSection(StrictModel):

@@ -48,12 +48,15 @@ class TuneError(InputError):
 @dataclass(frozen=True)
 class TuneField:
     """A tunable field ``slot.name`` and its bounds ``low < high`` [field units]; ``log``: searched in
-    ``log(value)`` (``low > 0``). The optimisers see it scaled to [0, 1]."""
+    ``log(value)`` (``low > 0``); ``rebuild``: the field is an input of its builder (a derived
+    gain), so the runs are built again at each evaluation instead of writing a leaf. The optimisers
+    see it scaled to [0, 1]."""
 
     path: str
     low: float
     high: float
     log: bool = False
+    rebuild: bool = False
 
     def __post_init__(self) -> None:
         lo, hi = self.low, self.high
@@ -93,7 +96,8 @@ class GainProblem:
     size: int
     _compiled: Any
     _chunks: list[tuple[Any, Any, int]]  # (batch, in_axes, real runs)
-    _slots: list[tuple[int, np.ndarray]]  # (leaf position, flat element indices) per field
+    _slots: list[tuple[int, np.ndarray] | None]  # (leaf position, flat indices); None: rebuilt
+    _raws: list[list[Mapping[str, Any]]] | None = None  # each chunk's scenarios (rebuilt fields)
 
     @property
     def batch(self) -> Any:
@@ -105,7 +109,10 @@ class GainProblem:
         import jax.numpy as jnp
 
         leaves, treedef = jax.tree_util.tree_flatten(batch)
-        for (n, index), v in zip(self._slots, theta, strict=True):
+        for slot, v in zip(self._slots, theta, strict=True):
+            if slot is None:  # a rebuilt field: already in the batch
+                continue
+            n, index = slot
             if traced:
                 leaf = jnp.asarray(leaves[n])
                 leaves[n] = leaf.reshape(-1).at[index].set(v).reshape(leaf.shape)
@@ -134,13 +141,34 @@ class GainProblem:
         from formation_ftc.sim.batch import batched_run
 
         parts, bads = [], []
-        for batch, in_axes, n in self._chunks:
+        for k, (batch, in_axes, n) in enumerate(self._chunks):
+            if self._raws is not None:
+                batch = self._rebuilt(self._raws[k], theta, in_axes)
             fn = batched_run(self._compiled, in_axes, self.size)
             out = jax.device_get(fn(self._write(batch, theta)))
             parts.append([np.asarray(v)[:n] for v in out["metrics"]])
             bads.append(np.asarray(out["diverged_step"])[:n] >= 0)
         metrics = {k: np.concatenate(vs) for k, *vs in zip(self.metric_names, *parts, strict=True)}
         return metrics, np.concatenate(bads)
+
+    def _rebuilt(self, raws, theta, in_axes) -> Any:
+        """The batch of ``raws`` built with the rebuilt fields at ``theta``, laid out as ``in_axes``."""
+        from formation_ftc import api
+        from formation_ftc.config.loader import apply_overrides
+
+        values = {f.path: float(v) for f, v in zip(self.fields, theta, strict=True) if f.rebuild}
+        built = [
+            api.compile_scenario(api.load_scenario(apply_overrides(dict(r), values))) for r in raws
+        ]
+        if any(c.static_key != self._compiled.static_key for c in built):
+            raise TuneError(
+                f"tune fields {sorted(values)} at {values}: the loop's structure changes (another "
+                "compiled program); only numeric inputs can be tuned"
+            )
+        batch, axes = _stack_like([c.params for c in built], in_axes, self.size)
+        if axes is not in_axes:
+            raise TuneError(f"tune fields {sorted(values)}: the rebuilt runs differ in layout")
+        return batch
 
 
 def _stack_like(params: Sequence[Any], in_axes: Any, size: int) -> tuple[Any, Any]:
@@ -212,6 +240,8 @@ def build_problem(
                 f"[{f.low:g}, {f.high:g}]"
             )
         initial.append(float(v0))
+    if like is not None and [f.rebuild for f in fields] != [f.rebuild for f in like.fields]:
+        raise TuneError("tuning: the held-out fields are not the training ones")
     try:
         scenarios = [api.load_scenario(dict(r)) for r in raws]
         compiled = [api.compile_scenario(s) for s in scenarios]
@@ -227,26 +257,32 @@ def build_problem(
         raise TuneError("tuning: the scenario computes no metrics (nothing to minimise)")
     bindings = {}
     for f, v0 in zip(fields, initial, strict=True):
+        if f.rebuild:
+            continue
         bound = bind_fields(template, scenarios[0], {f.path: v0})
         if not bound:
             raise TuneError(
                 f"tune field {f.path!r}: not a numeric leaf of the built loop (its builder derives "
-                "the parameters from it, or it names no component attribute); only gains the loop "
-                "holds as they are can be tuned"
+                "the parameters from it, or it names no component attribute); declare it with "
+                "rebuild = true to build the runs again at each evaluation"
             )
         bindings[f.path] = bound[f.path]
     if like is None:
         _check_bindings(raws[0], fields, initial, template, key, bindings)
         size = len(raws)
         chunks = [(*stack_params([c.params for c in compiled]), size)]
+        raw_chunks = [list(raws)]
     else:
         if like._compiled.static_key != key:
             raise TuneError("tuning: these runs do not have the structure of the training runs")
         size, in_axes = like.size, like._chunks[0][1]
         parts = [[c.params for c in compiled[s : s + size]] for s in range(0, len(compiled), size)]
         chunks = [(*_stack_like(p, in_axes, size), len(p)) for p in parts]
+        raw_chunks = [list(raws[s : s + size]) for s in range(0, len(raws), size)]
     treedef = jax.tree_util.tree_structure(template)
     for f in fields:
+        if f.rebuild:
+            continue
         if any(treedef.flatten_up_to(ax)[bindings[f.path].leaf] is not None for _, ax, _ in chunks):  # type: ignore[attr-defined]
             raise TuneError(
                 f"tune field {f.path!r}: its leaf differs between the runs (another field or a "
@@ -259,7 +295,11 @@ def build_problem(
         size=size,
         _compiled=compiled[0],
         _chunks=chunks,
-        _slots=[(bindings[f.path].leaf, np.asarray(bindings[f.path].index)) for f in fields],
+        _slots=[
+            None if f.rebuild else (bindings[f.path].leaf, np.asarray(bindings[f.path].index))
+            for f in fields
+        ],
+        _raws=raw_chunks if any(f.rebuild for f in fields) else None,
     )
 
 
@@ -271,6 +311,8 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
     from formation_ftc.config.loader import apply_overrides
 
     for f, v0 in zip(fields, initial, strict=True):
+        if f.rebuild:
+            continue
         z0 = f.to_unit(v0)
         v1 = float(f.from_unit(0.5 * z0 + 0.37 if abs(z0 - 0.74) > 1e-3 else 0.3))  # inside
         try:
@@ -430,6 +472,12 @@ def minimise(
 
     t0 = time.perf_counter()
     if optimiser == "gradient":
+        rebuilt = [f.path for f in fields if f.rebuild]
+        if rebuilt:
+            raise TuneError(
+                f"optimiser 'gradient': {rebuilt} are rebuilt at each evaluation (rebuild = true), "
+                "which has no derivative; use nelder-mead or powell"
+            )
         if len(problem._chunks) != 1:
             raise TuneError("optimiser 'gradient': the training runs must be one batch")
 
@@ -609,7 +657,7 @@ def tune_league_method(
             f"--cases: {unknown} not among the cases of {method} ({', '.join(applying)})"
         )
     cells = [c for c in cells if not cases or c.case in cases]
-    fields = [TuneField(p, b.low, b.high, b.log) for p, b in tune.fields.items()]  # type: ignore[union-attr]  # TuneBounds once validated
+    fields = [TuneField(p, b.low, b.high, b.log, b.rebuild) for p, b in tune.fields.items()]  # type: ignore[union-attr]  # TuneBounds once validated
     t0 = time.perf_counter()
     train = list(range(train_start, train_start + train_seeds))
     held = list(range(holdout_seeds))
@@ -665,7 +713,10 @@ def tune_league_method(
         "cases": [c.case for c in cells],
         "dt": float(cells[0].raw["simulation"]["dt"]) if cells else None,
         "step_check": step_check,
-        "fields": [{"path": f.path, "low": f.low, "high": f.high, "log": f.log} for f in fields],
+        "fields": [
+            {"path": f.path, "low": f.low, "high": f.high, "log": f.log, "rebuild": f.rebuild}
+            for f in fields
+        ],
         "paper_gains": {f.path: float(v) for f, v in zip(fields, paper, strict=True)},
         "tuned_gains": {f.path: float(v) for f, v in zip(fields, outcome.gains, strict=True)},
         "objective": {
