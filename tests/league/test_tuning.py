@@ -180,6 +180,23 @@ def test_a_rebuilt_field_gives_the_runs_its_builder_gives():
         minimise(problem, J, optimiser="gradient", max_evaluations=3)
 
 
+def test_a_rebuilt_field_the_builder_ignores_is_refused(tmp_path, tiny_league):
+    """gui2022-cof2tc with the printed K: its CARE weight changes nothing, so tuning it is an error."""
+    from formation_ftc.league.tuning import tune_league_method
+
+    path = tiny_league(tmp_path, methods=("gui2022-cof2tc",))
+    mfile = tmp_path / "translational" / "gui2022-cof2tc.toml"
+    raw = tomllib.loads(mfile.read_text())
+    raw["controller"].update(gains="printed", K=[[0.0063, 0, 0, 0.1127, 0, 0]] * 3)
+    mfile.write_text(tomli_w.dumps(raw))
+    with pytest.raises(
+        TuneError, match=r"'controller\.care_q_scale': another value changes nothing"
+    ):
+        tune_league_method(
+            path, "gui2022-cof2tc", "limited", cases=["none"], train_seeds=1, holdout_seeds=1
+        )
+
+
 def _league_with_tune(tmp_path: Path, tiny_league, method: str, tune: dict) -> Path:
     path = tiny_league(tmp_path, methods=(method,))
     mfile = tmp_path / "translational" / f"{method}.toml"
@@ -211,9 +228,10 @@ def test_builtin_tune_tables_validate():
     spec = load_league("translational")
     tables = {m.name: method_tune(spec, m) for m in spec.methods}
     assert {n for n, t in tables.items() if t is not None} >= {"yang2013", "li2020-thm1", "sir-ftc"}
-    # lqr's gain is derived (Bryson's maxima -> Riccati): its maxima are tuned by rebuilding the runs
-    assert all(b.rebuild for b in tables["lqr"].fields.values())
-    assert tables["gui2022-cof2tc"] is None and tables["gui2022-lof2tc"] is None  # gain matrices
+    # derived gains (Bryson's maxima -> Riccati gain, the CARE weight -> K): tuned by rebuilding
+    for method in ("lqr", "gui2022-cof2tc", "gui2022-lof2tc"):
+        assert all(b.rebuild for b in tables[method].fields.values()), method
+    assert all(t is not None for t in tables.values())  # every translational method is tunable
     attitude = load_league("attitude")
     tuned = {m.name for m in attitude.methods if method_tune(attitude, m) is not None}
     assert tuned == {"mehrabian", "pd", "yang2013"}
@@ -272,8 +290,12 @@ def test_tune_command_end_to_end_and_tuned_column(tmp_path, tiny_league, capsys)
     assert rank["unsaturated"][0]["tuned"] == "not tuned"  # tuned at another level
     # a method without a [tune] table: exit code 2, named
     (tmp_path / "l").mkdir()
-    cof_league = tiny_league(tmp_path / "l", methods=("gui2022-cof2tc",))
-    assert main(["tune", "gui2022-cof2tc", "--league", str(cof_league), "--out", str(out)]) == 2
+    lqr_league = tiny_league(tmp_path / "l", methods=("lqr",))
+    lqr_file = tmp_path / "l" / "translational" / "lqr.toml"
+    lqr_file.write_text(
+        tomli_w.dumps({k: v for k, v in tomllib.loads(lqr_file.read_text()).items() if k != "tune"})
+    )
+    assert main(["tune", "lqr", "--league", str(lqr_league), "--out", str(out)]) == 2
     assert "has no [tune] table" in capsys.readouterr().err
 
 

@@ -311,8 +311,6 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
     from formation_ftc.config.loader import apply_overrides
 
     for f, v0 in zip(fields, initial, strict=True):
-        if f.rebuild:
-            continue
         z0 = f.to_unit(v0)
         v1 = float(f.from_unit(0.5 * z0 + 0.37 if abs(z0 - 0.74) > 1e-3 else 0.3))  # inside
         try:
@@ -327,6 +325,13 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
                 f"tune field {f.path!r}: structural (another value changes the compiled program); "
                 "only numeric gains can be tuned"
             )
+        if f.rebuild:
+            if params_close(template, c.params):
+                raise TuneError(
+                    f"tune field {f.path!r}: another value changes nothing in the built loop (the "
+                    "builder does not use it in this scenario)"
+                )
+            continue
         one = {f.path: bindings[f.path]}
         batch, axes = apply_bindings(template, one, {f.path: np.asarray([v1])}, 1)
         if not params_close(take_run(batch, axes, 0), c.params):
