@@ -178,6 +178,8 @@ def test_a_rebuilt_field_gives_the_runs_its_builder_gives():
     J = penalised_objective("effort")
     with pytest.raises(TuneError, match="rebuilt at each evaluation"):
         minimise(problem, J, optimiser="gradient", max_evaluations=3)
+    with pytest.raises(TuneError, match="no traced form"):
+        problem.outputs(problem.initial)
 
 
 def test_a_rebuilt_field_the_builder_ignores_is_refused(tmp_path, tiny_league):

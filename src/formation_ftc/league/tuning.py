@@ -126,6 +126,8 @@ class GainProblem:
         caller passes ``batch`` as an argument, so that it is not compiled in as constants)."""
         import jax
 
+        if self._raws is not None:
+            raise TuneError("a rebuilt field (rebuild = true) has no traced form: use evaluate()")
         params = self._write(self.batch if batch is None else batch, theta, traced=True)
         run = jax.vmap(self._compiled.run, in_axes=(self._chunks[0][1],), axis_size=self.size)
         out = run(params)
