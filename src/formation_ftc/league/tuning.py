@@ -127,7 +127,11 @@ class GainProblem:
         import jax
 
         if self._raws is not None:
-            raise TuneError("a rebuilt field (rebuild = true) has no traced form: use evaluate()")
+            rebuilt = [f.path for f in self.fields if f.rebuild]
+            raise TuneError(
+                f"{rebuilt} are rebuilt at each evaluation (rebuild = true): no traced form, so no "
+                "gradient; use evaluate() (optimisers nelder-mead, powell)"
+            )
         params = self._write(self.batch if batch is None else batch, theta, traced=True)
         run = jax.vmap(self._compiled.run, in_axes=(self._chunks[0][1],), axis_size=self.size)
         out = run(params)
@@ -155,14 +159,9 @@ class GainProblem:
 
     def _rebuilt(self, raws, theta, in_axes) -> Any:
         """The batch of ``raws`` built with the rebuilt fields at ``theta``, laid out as ``in_axes``."""
-        from formation_ftc import api
-        from formation_ftc.config.loader import apply_overrides
-
         values = {f.path: float(v) for f, v in zip(self.fields, theta, strict=True) if f.rebuild}
-        built = [
-            api.compile_scenario(api.load_scenario(apply_overrides(dict(r), values))) for r in raws
-        ]
-        if any(c.static_key != self._compiled.static_key for c in built):
+        _, built = _build_runs(raws, values)
+        if built[0].static_key != self._compiled.static_key:
             raise TuneError(
                 f"tune fields {sorted(values)} at {values}: the loop's structure changes (another "
                 "compiled program); only numeric inputs can be tuned"
@@ -171,6 +170,26 @@ class GainProblem:
         if axes is not in_axes:
             raise TuneError(f"tune fields {sorted(values)}: the rebuilt runs differ in layout")
         return batch
+
+
+def _build_runs(
+    raws: Sequence[Mapping[str, Any]], values: Mapping[str, float] | None = None
+) -> tuple[list[Any], list[Any]]:
+    """The scenarios of ``raws`` (with the dotted ``values`` set) and their compiled loops, which must
+    share one structure; a run that does not build is a TuneError."""
+    from formation_ftc import api
+    from formation_ftc.config.loader import apply_overrides
+
+    try:
+        scenarios = [api.load_scenario(apply_overrides(dict(r), dict(values or {}))) for r in raws]
+        compiled = [api.compile_scenario(s) for s in scenarios]
+    except InputError:
+        raise
+    except (ValueError, TypeError) as exc:
+        raise TuneError(f"tuning: a run cannot be built: {exc}") from None
+    if any(c.static_key != compiled[0].static_key for c in compiled[1:]):
+        raise TuneError("tuning: the runs do not share one structure (one compiled program)")
+    return scenarios, compiled
 
 
 def _stack_like(params: Sequence[Any], in_axes: Any, size: int) -> tuple[Any, Any]:
@@ -208,7 +227,6 @@ def build_problem(
     """
     import jax
 
-    from formation_ftc import api
     from formation_ftc.campaign.binding import bind_fields
     from formation_ftc.config.loader import get_dotted
     from formation_ftc.sim.batch import stack_params
@@ -244,16 +262,8 @@ def build_problem(
         initial.append(float(v0))
     if like is not None and [f.rebuild for f in fields] != [f.rebuild for f in like.fields]:
         raise TuneError("tuning: the held-out fields are not the training ones")
-    try:
-        scenarios = [api.load_scenario(dict(r)) for r in raws]
-        compiled = [api.compile_scenario(s) for s in scenarios]
-    except InputError:
-        raise
-    except (ValueError, TypeError) as exc:
-        raise TuneError(f"tuning: a run cannot be built: {exc}") from None
+    scenarios, compiled = _build_runs(raws)
     key = compiled[0].static_key
-    if any(c.static_key != key for c in compiled[1:]):
-        raise TuneError("tuning: the runs do not share one structure (one compiled program)")
     template = compiled[0].params
     if not getattr(template, "metrics", ()):
         raise TuneError("tuning: the scenario computes no metrics (nothing to minimise)")
@@ -344,6 +354,17 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
             )
 
 
+def _check_penalty_options(margin: float, penalty: float, violation_cap: float) -> None:
+    """The requirement penalty's options of :func:`penalised_objective`, each named when out of range."""
+    for name, value, ok, allowed in (
+        ("margin", margin, 0 <= margin < 1, "in [0, 1)"),
+        ("penalty", penalty, penalty >= 0, ">= 0"),
+        ("violation_cap", violation_cap, violation_cap > 0, "> 0 (inf: no cap)"),
+    ):
+        if not ok:
+            raise TuneError(f"{name} = {value}: {allowed}")
+
+
 def penalised_objective(
     objective: str | Callable[[Mapping[str, Any]], Any],
     *,
@@ -379,10 +400,7 @@ def penalised_objective(
 
     if statistic not in ("mean", "median"):
         raise TuneError(f"statistic = {statistic!r}: 'mean' or 'median'")
-    if not 0 <= margin < 1:
-        raise TuneError(f"margin = {margin}: in [0, 1)")
-    if not violation_cap > 0:
-        raise TuneError(f"violation_cap = {violation_cap}: > 0 (inf: no cap)")
+    _check_penalty_options(margin, penalty, violation_cap)
     stat = jnp.mean if statistic == "mean" else jnp.median
 
     def J(metrics, bad):
@@ -479,12 +497,6 @@ def minimise(
 
     t0 = time.perf_counter()
     if optimiser == "gradient":
-        rebuilt = [f.path for f in fields if f.rebuild]
-        if rebuilt:
-            raise TuneError(
-                f"optimiser 'gradient': {rebuilt} are rebuilt at each evaluation (rebuild = true), "
-                "which has no derivative; use nelder-mead or powell"
-            )
         if len(problem._chunks) != 1:
             raise TuneError("optimiser 'gradient': the training runs must be one batch")
 
@@ -637,11 +649,7 @@ def tune_league_method(
         raise TuneError(f"--level {level!r}: not a level of league {spec.league.name} ({levels})")
     if train_seeds < 1 or holdout_seeds < 1:
         raise TuneError("--train-seeds and --holdout-seeds: at least 1 each")
-    if not 0 <= margin < 1 or not penalty >= 0 or not violation_cap > 0:
-        raise TuneError(
-            f"--margin {margin} (in [0, 1)), --penalty {penalty} (>= 0), --violation-cap "
-            f"{violation_cap} (> 0, inf: no cap): one is out of range"
-        )
+    _check_penalty_options(margin, penalty, violation_cap)  # before any run is built
     if train_start < holdout_seeds:
         raise TuneError(
             f"--train-start {train_start}: the training replicates would overlap the held-out ones "
