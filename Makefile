@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install demo test test-fast lint typecheck bench bench-cli docs examples wheel-smoke clean
+.PHONY: install demo test test-fast lint typecheck bench bench-cli docs examples wheel-smoke schema-file clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -52,7 +52,11 @@ examples: $(STAMP)
 wheel-smoke: $(STAMP)
 	.ci/wheel-smoke $(BIN)/python
 
-## command-line start-up times (--help, --version, list, show, schema) against 0.5 s
+## regenerate the composed schema shipped with the package (a test says when it is stale)
+schema-file: $(STAMP)
+	$(BIN)/python -m formation_ftc.shipped_schema
+
+## command-line start-up times (--help, --version, list, show, schema) against 0.3 s
 bench-cli: $(STAMP)
 	$(BIN)/python benchmarks/cli.py
 

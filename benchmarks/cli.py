@@ -2,7 +2,7 @@
 ``--version``, ``list``, ``show`` and ``schema composed`` (none imports JAX: tests/test_cli_startup.py).
 
 Each command runs as a fresh process (as a user types it), ``--repeat`` times; the median and the
-maximum are printed next to the target (0.5 s; issue 37 asks 0.3 s) and, for scale, the time of ``python -c pass`` (the
+maximum are printed next to the target (0.3 s, issue 37) and, for scale, the time of ``python -c pass`` (the
 interpreter's own start) and of ``import jax`` (what the commands must not pay for). Exit status 1
 when a median misses the target.
 
@@ -12,6 +12,7 @@ Run: ``python benchmarks/cli.py [--repeat 7]``
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import statistics
 import subprocess
@@ -19,14 +20,19 @@ import sys
 import time
 from pathlib import Path
 
-TARGET_S = 0.5
+TARGET_S = 0.3
 
 
 def _wall(argv: list[str], repeat: int) -> list[float]:
+    # as installed: bytecode cached (pip compiles it at install; PYTHONDONTWRITEBYTECODE would make
+    # every process compile the package's sources again), and one untimed run writes it
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    run = dict(check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    subprocess.run(argv, **run)
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.run(argv, **run)
         times.append(time.perf_counter() - t0)
     return times
 

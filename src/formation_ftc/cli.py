@@ -648,27 +648,27 @@ def _cmd_check(args) -> int:
 
 
 def _cmd_schema(args) -> int:
-    from formation_ftc.registry import methods
-    from formation_ftc.suggest import did_you_mean
-
-    registered = methods()
-    if args.method is None:
-        width = max((len(n) for n in registered), default=10)
-        for name, m in sorted(registered.items()):
-            print(f"{name:<{width}}  {m.description}")
-        return 0
-    if args.method not in registered:
-        from formation_ftc.errors import InputError
-
-        raise InputError(
-            f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
-            f"registered: {', '.join(sorted(registered))}"
-        )
     if args.method == "composed":  # every slot: a oneOf over the catalog's component types
-        from formation_ftc.methods.composed import composed_json_schema
+        from formation_ftc.shipped_schema import composed_schema
 
-        schema = composed_json_schema()
+        schema = composed_schema()  # the shipped copy while current: no catalog import (start-up)
     else:
+        from formation_ftc.registry import methods
+        from formation_ftc.suggest import did_you_mean
+
+        registered = methods()
+        if args.method is None:
+            width = max((len(n) for n in registered), default=10)
+            for name, m in sorted(registered.items()):
+                print(f"{name:<{width}}  {m.description}")
+            return 0
+        if args.method not in registered:
+            from formation_ftc.errors import InputError
+
+            raise InputError(
+                f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
+                f"registered: {', '.join(sorted(registered))}"
+            )
         schema = registered[args.method].schema.model_json_schema()
     schema = {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
