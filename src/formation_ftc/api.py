@@ -21,7 +21,12 @@ from formation_ftc.config import loader
 from formation_ftc.config.base import ScenarioBase
 from formation_ftc.provenance import provenance
 from formation_ftc.registry import Compiled, Condition, get_method
-from formation_ftc.sim.engine import SimulationDiverged, diagnose_divergence, trim_records
+from formation_ftc.sim.engine import (
+    DivergenceInfo,
+    SimulationDiverged,
+    diagnose_divergence,
+    trim_records,
+)
 from formation_ftc.sim.programs import jitted_run
 
 __all__ = [
@@ -183,33 +188,37 @@ def finish_run(
     )
     _apply_cf(ds, scenario)
     if div >= 0:
-        t = compiled.t0 + div * compiled.dt
-        p = compiled.params
-        info = (
-            diagnose_divergence(
-                compiled.make_step(p),
-                out["last_finite"],
-                div,
-                t,
-                compiled.spacecraft_axis,
-                max_steps=compiled.record_every,
-                dt=compiled.dt,
-                admissible=getattr(p, "admissible", None),
-                violations=getattr(p, "violations", None),
-                params=p,
-            )
-            if compiled.make_step
-            else None
-        )
-        if info is None:
-            from formation_ftc.sim.engine import DivergenceInfo
-
-            info = DivergenceInfo(div, t, "<state>", None, ())
+        info = _divergence_info(compiled, out, div)
         ds.attrs["diverged"] = str(info)
         ds.attrs["history"] += f"\n{ds.attrs['created_utc']} diverged: {info}"
         if raise_on_divergence:
             raise SimulationDiverged(info, partial=ds)
     return ds, metrics
+
+
+def _divergence_info(compiled: Compiled, out: Mapping[str, Any], div: int) -> DivergenceInfo:
+    """Where and what diverged in the run ``out`` of ``compiled`` (first non-finite step ``div``):
+    replayed from the last finite state. A replay that cannot run gives the step and time alone: a
+    diagnostic never loses the run (also used by campaigns)."""
+    t = compiled.t0 + div * compiled.dt
+    try:
+        if compiled.make_step is None:
+            raise RuntimeError("no make_step")
+        p = compiled.params
+        return diagnose_divergence(
+            compiled.make_step(p),
+            out["last_finite"],
+            div,
+            t,
+            compiled.spacecraft_axis,
+            max_steps=compiled.record_every,
+            dt=compiled.dt,
+            admissible=getattr(p, "admissible", None),
+            violations=getattr(p, "violations", None),
+            params=p,
+        )
+    except Exception:  # noqa: BLE001 - the run and its partial results matter more
+        return DivergenceInfo(div, t, "<state>", None, ())
 
 
 def _references(scenario: ScenarioBase) -> str:

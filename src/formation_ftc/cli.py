@@ -440,42 +440,44 @@ def _cmd_list(args) -> int:
     return 0
 
 
+def _described_fields(data, schema: dict, is_table) -> list[tuple[str, Any, str]]:
+    """``(dotted path, value, description)`` of every field of ``data`` (a scenario: a dict or a
+    tomlkit document) that ``schema`` (its method's JSON Schema) knows; tables (``is_table(value)``)
+    are entered, lists of tables are not; the description is "" where the schema gives none."""
+    from formation_ftc.suggest import _resolve
+
+    found: list[tuple[str, Any, str]] = []
+
+    def walk(container, node: dict, prefix: str) -> None:
+        props: dict = {}
+        for option in _resolve(node, schema):
+            props.update(option.get("properties", {}))
+        for key, value in container.items():
+            sub = props.get(key)
+            if sub is None:
+                continue
+            if is_table(value):
+                walk(value, sub, f"{prefix}{key}.")
+                continue
+            options = [sub, *_resolve(sub, schema)]
+            desc = next((o.get("description") for o in options if o.get("description")), "")
+            found.append((f"{prefix}{key}", value, " ".join(str(desc).split())))
+
+    walk(data, schema, "")
+    return found
+
+
 def _annotate_toml(text: str, schema: dict) -> str:
     """``text`` (TOML of a scenario) with each field's unit and meaning from ``schema`` as a trailing
     comment (``kp = 2.0  # [N/m] Position gain.``); the values are unchanged."""
     import tomlkit
 
-    from formation_ftc.suggest import _resolve
-
     doc = tomlkit.parse(text)
-
-    def walk(container, node: dict) -> None:
-        props: dict = {}
-        for option in _resolve(node, schema):
-            props.update(option.get("properties", {}))
-        for key, item in container.items():
-            sub = props.get(key)
-            if sub is None:
-                continue
-            if isinstance(item, tomlkit.items.Table):
-                walk(item, sub)
-                continue
-            desc = " ".join(
-                str(
-                    next(
-                        (
-                            o.get("description")
-                            for o in [sub, *_resolve(sub, schema)]
-                            if o.get("description")
-                        ),
-                        "",
-                    )
-                ).split()
-            )
-            if desc and hasattr(item, "comment"):
-                item.comment(desc if len(desc) <= 100 else desc[:97] + "...")
-
-    walk(doc, schema)
+    for _, item, desc in _described_fields(
+        doc, schema, lambda v: isinstance(v, tomlkit.items.Table)
+    ):
+        if desc and hasattr(item, "comment"):
+            item.comment(desc if len(desc) <= 100 else desc[:97] + "...")
     return tomlkit.dumps(doc)
 
 
@@ -500,39 +502,11 @@ def _description_unit(desc: str) -> str | None:
 def _field_units(resolved: dict, schema: dict) -> dict[str, str]:
     """``{"controller.kp": "N/m", ...}``: the unit of every field of ``resolved`` (a scenario) whose
     description in ``schema`` (its method's JSON Schema) states one (lists of tables are not entered)."""
-    from formation_ftc.suggest import _resolve
-
-    units: dict[str, str] = {}
-
-    def walk(data: dict, node: dict, prefix: str) -> None:
-        props: dict = {}
-        for option in _resolve(node, schema):
-            props.update(option.get("properties", {}))
-        for key, value in data.items():
-            sub = props.get(key)
-            if sub is None:
-                continue
-            if isinstance(value, dict):
-                walk(value, sub, f"{prefix}{key}.")
-                continue
-            desc = " ".join(
-                str(
-                    next(
-                        (
-                            o.get("description")
-                            for o in [sub, *_resolve(sub, schema)]
-                            if o.get("description")
-                        ),
-                        "",
-                    )
-                ).split()
-            )
-            unit = _description_unit(desc)
-            if unit is not None:
-                units[f"{prefix}{key}"] = unit
-
-    walk(resolved, schema, "")
-    return units
+    units = {
+        path: _description_unit(desc)
+        for path, _, desc in _described_fields(resolved, schema, lambda v: isinstance(v, dict))
+    }
+    return {path: unit for path, unit in units.items() if unit is not None}
 
 
 def _cmd_show(args) -> int:

@@ -103,28 +103,9 @@ def _value_cell(v: Any, numeric: bool) -> Any:
 
 
 def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
-    from formation_ftc.sim.engine import DivergenceInfo, diagnose_divergence
+    from formation_ftc.api import _divergence_info
 
-    t = compiled.t0 + div * compiled.dt
-    try:
-        if compiled.make_step is None:
-            raise RuntimeError("no make_step")
-        p = compiled.params
-        info = diagnose_divergence(
-            compiled.make_step(p),
-            out["last_finite"],
-            div,
-            t,
-            compiled.spacecraft_axis,
-            max_steps=compiled.record_every,
-            dt=compiled.dt,
-            admissible=getattr(p, "admissible", None),
-            violations=getattr(p, "violations", None),
-            params=p,
-        )
-    except Exception:  # noqa: BLE001 - a diagnostic must never stop the campaign
-        info = DivergenceInfo(div, t, "<state>", None, ())
-    return str(info)
+    return str(_divergence_info(compiled, out, div))
 
 
 def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any], status: str):

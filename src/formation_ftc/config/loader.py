@@ -82,10 +82,11 @@ def _nesting_depth(obj: Any) -> int:
 
 def parse_toml(text: str, source: str, error: type[InputError] = ScenarioError) -> dict[str, Any]:
     """TOML text -> dict; invalid or too deeply nested TOML raises ``error`` naming ``source``."""
+    too_deep = (
+        f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it"
+    )
     if text.count("[") + text.count("{") > MAX_NESTING and _bracket_depth(text) > MAX_NESTING:
-        raise error(
-            f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it"
-        )
+        raise error(too_deep)
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -93,9 +94,7 @@ def parse_toml(text: str, source: str, error: type[InputError] = ScenarioError) 
     except RecursionError:
         raise error(f"{source}: TOML nested too deeply (at most {MAX_NESTING} levels)") from None
     if _nesting_depth(raw) > MAX_NESTING:
-        raise error(
-            f"{source}: TOML nested more than {MAX_NESTING} levels deep (tables/arrays); flatten it"
-        )
+        raise error(too_deep)
     return raw
 
 

@@ -96,13 +96,18 @@ def _jnp(name: str) -> Callable:
     return lambda *args: getattr(jnp, name)(*args)
 
 
+def _first_true(where: Callable, args):
+    """``piecewise(c1, v1, c2, v2, ..., default)``: the value of the first true condition."""
+    out = args[-1]
+    for k in range(len(args) - 3, -1, -2):
+        out = where(args[k], args[k + 1], out)
+    return out
+
+
 def _piecewise(*args):
     if len(args) < 3 or len(args) % 2 == 0:
         raise TypeError("piecewise needs pairs (condition, value) followed by a default value")
-    out = args[-1]
-    for k in range(len(args) - 3, -1, -2):
-        out = jnp.where(args[k], args[k + 1], out)
-    return out
+    return _first_true(jnp.where, args)
 
 
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, int | None]]] = {
@@ -275,13 +280,6 @@ def _check_size(root: ast.AST, text: str, field: str) -> None:
         stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
 
 
-def _np_piecewise(*args):
-    out = args[-1]
-    for k in range(len(args) - 3, -1, -2):
-        out = np.where(args[k], args[k + 1], out)
-    return out
-
-
 #: numpy float64 twins of FUNCTIONS, used to fold constant sub-expressions at validation
 _NP_FUNCTIONS: dict[str, Callable] = {
     "sin": np.sin,
@@ -308,7 +306,7 @@ _NP_FUNCTIONS: dict[str, Callable] = {
     "where": np.where,
     "step": lambda x: np.where(x >= 0, 1.0, 0.0),
     "window": lambda x, lo, hi: np.where((x >= lo) & (x <= hi), 1.0, 0.0),
-    "piecewise": _np_piecewise,
+    "piecewise": lambda *a: _first_true(np.where, a),
 }
 _NP_BINOPS = {
     ast.Add: np.add,

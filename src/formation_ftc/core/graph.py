@@ -87,8 +87,7 @@ def out_degree(C) -> np.ndarray:
 
 def laplacian(C) -> np.ndarray:
     """L = diag(row sums) - C."""
-    A = np.asarray(C, dtype=float)
-    return np.diag(A.sum(axis=1)) - A
+    return np.diag(in_degree(C)) - np.asarray(C, dtype=float)
 
 
 def is_balanced(C, tol: float = 1e-12) -> bool:

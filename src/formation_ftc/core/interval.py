@@ -47,7 +47,7 @@ from typing import cast
 
 import numpy as np
 
-from formation_ftc.core.expressions import CONSTANTS, FUNCTIONS, compile_expression
+from formation_ftc.core.expressions import CONSTANTS, FUNCTIONS, _first_true, compile_expression
 
 __all__ = [
     "IntervalError",
@@ -64,6 +64,8 @@ LIB_ULPS = 8
 _INF = math.inf
 _EPS = float(np.finfo(float).eps)
 _PI = math.pi
+#: most sub-intervals the bisection of :func:`_boxes` may create [-]
+_MAX_BOXES = 1 << 20
 
 
 class IntervalError(ValueError):
@@ -105,11 +107,7 @@ def _down(x, ulps: int = 1):
 
 def _up(x, ulps: int = 1):
     """At least ``ulps`` ulps above x (an overflowed -inf becomes the most negative float)."""
-    x = np.asarray(x, dtype=float)
-    if ulps == 1:
-        return np.nextafter(x, _INF)
-    step = np.abs(np.spacing(x))
-    return np.where(np.isfinite(x), np.nextafter(x + ulps * step, _INF), np.nextafter(x, _INF))
+    return -_down(-np.asarray(x, dtype=float), ulps)  # IEEE rounding is symmetric
 
 
 def _out(lo, hi, ulps: int = 1) -> _I:
@@ -194,9 +192,7 @@ def _sqr(a: _I) -> _I:
 
 def _div(a: _I, b: _I) -> _I:
     zero = (b.lo <= 0) & (b.hi >= 0)
-    lo, hi = _corners(np.true_divide, a, b)
-    r = _out(lo, hi)
-    return _I(np.where(zero, -_INF, r.lo), np.where(zero, _INF, r.hi))
+    return _in_domain(_out(*_corners(np.true_divide, a, b)), ~zero)
 
 
 def _monotone(f: Callable, a: _I, increasing: bool = True, ulps: int = LIB_ULPS) -> _I:
@@ -222,28 +218,27 @@ def _contains_point(a: _I, offset: float, period: float) -> np.ndarray:
     return hit | wide
 
 
-def _sin(a: _I) -> _I:
-    lo = np.minimum(np.sin(a.lo), np.sin(a.hi))
-    hi = np.maximum(np.sin(a.lo), np.sin(a.hi))
+def _sinusoid(f: Callable, a: _I, top: float, bottom: float) -> _I:
+    """sin or cos: the values at the ends, and 1 / -1 where a maximum ``top`` / minimum ``bottom``
+    (+ k 2 pi) may lie inside."""
+    lo = np.minimum(f(a.lo), f(a.hi))
+    hi = np.maximum(f(a.lo), f(a.hi))
     r = _out(lo, hi, LIB_ULPS)
-    hi = np.where(_contains_point(a, _PI / 2, 2 * _PI), 1.0, r.hi)
-    lo = np.where(_contains_point(a, -_PI / 2, 2 * _PI), -1.0, r.lo)
+    hi = np.where(_contains_point(a, top, 2 * _PI), 1.0, r.hi)
+    lo = np.where(_contains_point(a, bottom, 2 * _PI), -1.0, r.lo)
     return _I(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+
+
+def _sin(a: _I) -> _I:
+    return _sinusoid(np.sin, a, _PI / 2, -_PI / 2)
 
 
 def _cos(a: _I) -> _I:
-    lo = np.minimum(np.cos(a.lo), np.cos(a.hi))
-    hi = np.maximum(np.cos(a.lo), np.cos(a.hi))
-    r = _out(lo, hi, LIB_ULPS)
-    hi = np.where(_contains_point(a, 0.0, 2 * _PI), 1.0, r.hi)
-    lo = np.where(_contains_point(a, _PI, 2 * _PI), -1.0, r.lo)
-    return _I(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+    return _sinusoid(np.cos, a, 0.0, _PI)
 
 
 def _tan(a: _I) -> _I:
-    r = _monotone(np.tan, a)
-    pole = _contains_point(a, _PI / 2, _PI)
-    return _I(np.where(pole, -_INF, r.lo), np.where(pole, _INF, r.hi))
+    return _in_domain(_monotone(np.tan, a), ~_contains_point(a, _PI / 2, _PI))  # poles
 
 
 def _clip_range(r: _I, lo: float, hi: float) -> _I:
@@ -252,13 +247,13 @@ def _clip_range(r: _I, lo: float, hi: float) -> _I:
 
 def _asin(a: _I) -> _I:
     ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arcsin, _I(np.clip(a.lo, -1, 1), np.clip(a.hi, -1, 1)))
+    r = _monotone(np.arcsin, _clip_range(a, -1.0, 1.0))
     return _in_domain(_clip_range(r, -_up(_PI / 2, 2), _up(_PI / 2, 2)), ok)
 
 
 def _acos(a: _I) -> _I:
     ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arccos, _I(np.clip(a.lo, -1, 1), np.clip(a.hi, -1, 1)), increasing=False)
+    r = _monotone(np.arccos, _clip_range(a, -1.0, 1.0), increasing=False)
     return _in_domain(_clip_range(r, 0.0, _up(_PI, 2)), ok)
 
 
@@ -279,10 +274,8 @@ def _atan2(y: _I, x: _I) -> _I:
 
 
 def _cosh(a: _I) -> _I:
-    m = np.maximum(np.abs(a.lo), np.abs(a.hi))
-    straddle = (a.lo <= 0) & (a.hi >= 0)
-    mn = np.where(straddle, 0.0, np.minimum(np.abs(a.lo), np.abs(a.hi)))
-    r = _out(np.cosh(mn), np.cosh(m), LIB_ULPS)
+    m = _abs(a)
+    r = _out(np.cosh(m.lo), np.cosh(m.hi), LIB_ULPS)
     return _I(np.maximum(r.lo, 1.0), r.hi)
 
 
@@ -334,16 +327,15 @@ def _pow(a: _I, b: _I) -> _I:
         integer = fixed & _is_integer(p)
         even = integer & (np.remainder(p, 2.0) == 0)
         straddle = (a.lo <= 0) & (a.hi >= 0)
-        amax = np.maximum(np.abs(a.lo), np.abs(a.hi))
-        amin = np.where(straddle, 0.0, np.minimum(np.abs(a.lo), np.abs(a.hi)))
-        # integer exponent p
+        m = _abs(a)
+        amin, amax = m.lo, m.hi
+        # integer exponent p (even or odd), defined unless a negative power of an interval with 0
         pos = p > 0
         lo_even = np.where(pos, amin**p, amax**p)
         hi_even = np.where(pos, amax**p, amin**p)
-        ok_even = pos | ~straddle
         lo_odd = np.where(pos, np.power(a.lo, p), np.power(a.hi, p))
         hi_odd = np.where(pos, np.power(a.hi, p), np.power(a.lo, p))
-        ok_odd = pos | ~straddle
+        ok_integer = pos | ~straddle
         zero = integer & (p == 0)
         # real exponent p (base must be >= 0)
         base_ok = a.lo >= 0
@@ -354,9 +346,7 @@ def _pow(a: _I, b: _I) -> _I:
         general_ok = a.lo > 0
         lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
         hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
-        ok = np.where(
-            even, ok_even, np.where(integer, ok_odd, np.where(fixed, base_ok, general_ok))
-        )
+        ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
         r = _out(lo, hi, LIB_ULPS)
         lo = np.where(zero, 1.0, np.where(ok, r.lo, out.lo))
         hi = np.where(zero, 1.0, np.where(ok, r.hi, out.hi))
@@ -447,8 +437,9 @@ class _Evaluator:
         self.text, self.env, self.time, self.n, self.der = text, env, time, n, derivative
         self.variables = tuple(variables)
 
-    def zero(self) -> _I:
-        return _const(0.0, self.n)
+    def zero(self) -> _I | None:
+        """Derivative of a constant (None when no derivative is taken)."""
+        return _const(0.0, self.n) if self.der else None
 
     def jump(self, possible: np.ndarray, d: _I | None) -> _I | None:
         """Derivative where a discontinuity may occur: unbounded there."""
@@ -463,7 +454,7 @@ class _Evaluator:
         return method(node)
 
     def visit_Constant(self, node: ast.Constant) -> _Pair:
-        return _const(float(cast(float, node.value)), self.n), (self.zero() if self.der else None)
+        return _const(float(cast(float, node.value)), self.n), self.zero()
 
     def visit_Name(self, node: ast.Name) -> _Pair:
         if node.id in self.env:
@@ -475,7 +466,7 @@ class _Evaluator:
         if node.id in self.variables:
             raise TypeError(f"expression {self.text!r} needs a value for {node.id!r}")
         if node.id in CONSTANTS:
-            return _const(CONSTANTS[node.id], self.n), (self.zero() if self.der else None)
+            return _const(CONSTANTS[node.id], self.n), self.zero()
         raise IntervalError(f"unknown name {node.id!r} in {self.text!r}")
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> _Pair:
@@ -486,7 +477,7 @@ class _Evaluator:
             return v, d
         if isinstance(node.op, ast.Not):
             r = _not(v)
-            return r, self.jump(~_decided(r), self.zero() if self.der else None)
+            return r, self.jump(~_decided(r), self.zero())
         raise IntervalError(f"operator {type(node.op).__name__} cannot be enclosed")
 
     def visit_BinOp(self, node: ast.BinOp) -> _Pair:
@@ -526,7 +517,7 @@ class _Evaluator:
                 k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
             dm = _sub(da, _mul(_I(k, k), db))
             assert wrap is not None
-            d = _I(np.where(wrap, -_INF, dm.lo), np.where(wrap, _INF, dm.hi))
+            d = cast(_I, self.jump(wrap, dm))
         return v, d
 
     def _dpow(self, a: _I, da: _I, b: _I, db: _I, v: _I) -> _I:
@@ -548,7 +539,7 @@ class _Evaluator:
         out = vals[0]
         for v in vals[1:]:
             out = f(out, v)
-        return out, self.jump(~_decided(out), self.zero() if self.der else None)
+        return out, self.jump(~_decided(out), self.zero())
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
         left, _ = self.visit(node.left)
@@ -559,7 +550,7 @@ class _Evaluator:
             out = c if out is None else _and(out, c)
             left = right
         assert out is not None
-        return out, self.jump(~_decided(out), self.zero() if self.der else None)
+        return out, self.jump(~_decided(out), self.zero())
 
     def visit_IfExp(self, node: ast.IfExp) -> _Pair:
         (c, _), a, b = self.visit(node.test), self.visit(node.body), self.visit(node.orelse)
@@ -652,9 +643,8 @@ class _Evaluator:
         return self._smooth(x, _log(np.log), lambda a, v: _div(_const(1.0, self.n), a))
 
     def call_log10(self, x):
-        ln10 = _I(
-            _down(np.full(self.n, math.log(10.0)), 2), _up(np.full(self.n, math.log(10.0)), 2)
-        )
+        ln10 = np.full(self.n, math.log(10.0))
+        ln10 = _out(ln10, ln10, 2)
         return self._smooth(
             x, _log(np.log10), lambda a, v: _div(_const(1.0, self.n), _mul(a, ln10))
         )
@@ -677,7 +667,7 @@ class _Evaluator:
     def _piecewise_constant(self, x, f: Callable[[_I], _I]) -> _Pair:
         a, _ = x
         v = f(a)
-        return v, self.jump(v.lo != v.hi, self.zero() if self.der else None)
+        return v, self.jump(v.lo != v.hi, self.zero())
 
     def call_sign(self, x):
         return self._piecewise_constant(x, _exact_monotone(np.sign))
@@ -730,13 +720,10 @@ class _Evaluator:
     def call_window(self, x, lo, hi):
         c = _and(_cmp(ast.GtE, x[0], lo[0]), _cmp(ast.LtE, x[0], hi[0]))
         c = _I(c.lo, c.hi)  # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
-        return c, self.jump(~_decided(c), self.zero() if self.der else None)
+        return c, self.jump(~_decided(c), self.zero())
 
     def call_piecewise(self, *args):
-        out = args[-1]
-        for k in range(len(args) - 3, -1, -2):
-            out = self._where(args[k][0], args[k + 1], out)
-        return out
+        return _first_true(self.call_where, args)
 
 
 def _decided(b: _I) -> np.ndarray:
@@ -841,7 +828,6 @@ def _boxes(
     derivative: bool,
     refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
     max_rounds: int,
-    max_boxes: int,
     time: str,
     fixed: Mapping[str, float],
 ) -> Boxes:
@@ -861,7 +847,7 @@ def _boxes(
     while refine is not None and rounds < max_rounds:
         bad = np.asarray(refine(lo, hi), dtype=bool) & (b > a)
         nbad = int(bad.sum())
-        if nbad == 0 or a.size + nbad > max_boxes:
+        if nbad == 0 or a.size + nbad > _MAX_BOXES:
             break
         mid = 0.5 * (a[bad] + b[bad])
         na = np.concatenate([a[bad], mid])
@@ -892,6 +878,15 @@ def _threshold_refiner(upper: float | None, lower: float | None):
     return refine
 
 
+def _enclose_range(
+    text, variables, t_lo, t_hi, n_sub, derivative, upper, lower, max_rounds, time, fixed
+) -> tuple[float, float]:
+    """``(lo, hi)`` over all sub-intervals of :func:`_boxes` for one expression (or its derivative)."""
+    refine = _threshold_refiner(upper, lower)
+    bx = _boxes([text], variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, time, fixed)
+    return float(bx.lo.min()), float(bx.hi.max())
+
+
 def enclose(
     text: str | float,
     variables: Sequence[str],
@@ -912,20 +907,9 @@ def enclose(
     (``lo > lower``) is proved whenever a few bisections suffice. Other variables of the expression
     (e.g. the spacecraft number ``i``) are given as keywords.
     """
-    bx = _boxes(
-        [text],
-        variables,
-        t_lo,
-        t_hi,
-        n_sub,
-        False,
-        _threshold_refiner(upper, lower),
-        max_rounds,
-        1 << 20,
-        time,
-        fixed,
+    return _enclose_range(
+        text, variables, t_lo, t_hi, n_sub, False, upper, lower, max_rounds, time, fixed
     )
-    return float(bx.lo.min()), float(bx.hi.max())
 
 
 def enclose_derivative(
@@ -943,20 +927,9 @@ def enclose_derivative(
 ) -> tuple[float, float]:
     """``(lo, hi)`` enclosing ``df/dt`` over ``[t_lo, t_hi]`` (see :func:`enclose`); ``(-inf, inf)``
     when the expression may jump inside the range."""
-    bx = _boxes(
-        [text],
-        variables,
-        t_lo,
-        t_hi,
-        n_sub,
-        True,
-        _threshold_refiner(upper, lower),
-        max_rounds,
-        1 << 20,
-        time,
-        fixed,
+    return _enclose_range(
+        text, variables, t_lo, t_hi, n_sub, True, upper, lower, max_rounds, time, fixed
     )
-    return float(bx.lo.min()), float(bx.hi.max())
 
 
 def _norm_upper(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -991,7 +964,5 @@ def enclose_norm(
         def refine(lo, hi):
             return _norm_upper(lo, hi) >= upper
 
-    bx = _boxes(
-        texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, 1 << 20, time, fixed
-    )
+    bx = _boxes(texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, time, fixed)
     return float(_norm_upper(bx.lo, bx.hi).max())

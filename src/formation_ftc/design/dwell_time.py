@@ -76,6 +76,15 @@ def _compare(lhs: float, relation: str, rhs: float, tol: float = 1e-12) -> bool:
     raise ValueError(f"unknown relation {relation!r}")
 
 
+def _inequality(
+    name: str, reference: str, lhs: float, relation: str, rhs: float, detail: str = ""
+) -> Inequality:
+    """The :class:`Inequality` ``lhs relation rhs`` with its truth value."""
+    return Inequality(
+        name, reference, lhs, relation, rhs, _compare(lhs, relation, rhs), detail=detail
+    )
+
+
 def variation_norm(S: np.ndarray, kind: str = "frobenius") -> float:
     """Norm of one variation matrix S_ij (n_j x n_i): ``"frobenius"`` (paper) or ``"induced2"`` (E001-04).
 
@@ -533,17 +542,10 @@ def check_epsilons(eps: float, eps1: float, eps2: float, S: float) -> list[Inequ
     Thm 1 S eps1 + eps2 <= eps: 1.1 <= 1 (VIOLATED)
     """
     return [
-        Inequality("eps2 >= 0", "Thm 1", eps2, ">=", 0.0, _compare(eps2, ">=", 0.0)),
-        Inequality("eps2 < eps", "Thm 1", eps2, "<", eps, _compare(eps2, "<", eps)),
-        Inequality("eps1 > 0", "Thm 1", eps1, ">", 0.0, _compare(eps1, ">", 0.0)),
-        Inequality(
-            "S eps1 + eps2 <= eps",
-            "Thm 1",
-            S * eps1 + eps2,
-            "<=",
-            eps,
-            _compare(S * eps1 + eps2, "<=", eps),
-        ),
+        _inequality("eps2 >= 0", "Thm 1", eps2, ">=", 0.0),
+        _inequality("eps2 < eps", "Thm 1", eps2, "<", eps),
+        _inequality("eps1 > 0", "Thm 1", eps1, ">", 0.0),
+        _inequality("S eps1 + eps2 <= eps", "Thm 1", S * eps1 + eps2, "<=", eps),
     ]
 
 
@@ -578,13 +580,8 @@ def check_dwell_time(
     (21) min Delta t >= dwell-time bound: 5 >= 4.37734 (holds)
     """
     bound = dwell_time_bound(eta, S, zeta, D, eps, eps1, tau)
-    return Inequality(
-        "min Delta t >= dwell-time bound",
-        "(21)",
-        float(min_activation),
-        ">=",
-        bound,
-        _compare(float(min_activation), ">=", bound),
+    return _inequality(
+        "min Delta t >= dwell-time bound", "(21)", float(min_activation), ">=", bound
     )
 
 
@@ -611,15 +608,8 @@ def check_new_state(norm: float, eps2: float, zeta: float, D: float, who: str = 
     >>> print(check_new_state(0.3, eps2=0.2, zeta=0.5, D=0.1, who="spacecraft 5"))
     (22) |X*| <= eps2 + zeta D (spacecraft 5): 0.3 <= 0.25 (VIOLATED)
     """
-    bound = new_state_bound(eps2, zeta, D)
-    return Inequality(
-        f"|X*| <= eps2 + zeta D{(' (' + who + ')') if who else ''}",
-        "(22)",
-        float(norm),
-        "<=",
-        bound,
-        _compare(float(norm), "<=", bound),
-    )
+    name = f"|X*| <= eps2 + zeta D{(' (' + who + ')') if who else ''}"
+    return _inequality(name, "(22)", float(norm), "<=", new_state_bound(eps2, zeta, D))
 
 
 def check_initial_state(norm: float, eps: float, S: float, zeta: float, D: float) -> Inequality:
@@ -644,14 +634,7 @@ def check_initial_state(norm: float, eps: float, S: float, zeta: float, D: float
     True
     """
     bound = initial_state_bound(eps, S, zeta, D)
-    return Inequality(
-        "|X(0)| <= eps + (S+1) zeta D",
-        "(24)",
-        float(norm),
-        "<=",
-        bound,
-        _compare(float(norm), "<=", bound),
-    )
+    return _inequality("|X(0)| <= eps + (S+1) zeta D", "(24)", float(norm), "<=", bound)
 
 
 def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequality:
@@ -676,13 +659,11 @@ def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequ
     >>> c.detail
     'dt1 = 10 s, dt2 = 15 s, eta = 0.4, eta1 = 0.2'
     """
-    m = condition_29_margin(eta, eta1, dt1, dt2)
-    return Inequality(
+    return _inequality(
         "(eta/2) dt1 - (eta1/2) dt2 >= 0",
         "(29)",
-        m,
+        condition_29_margin(eta, eta1, dt1, dt2),
         ">=",
         0.0,
-        _compare(m, ">=", 0.0),
         detail=f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}",
     )

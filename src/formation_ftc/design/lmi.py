@@ -91,6 +91,17 @@ def _sym(M):
     return (M + M.T) / 2
 
 
+def _lmi_matrices(A, C, H, P, Y, L2, lam, c, r, bmat):
+    """Matrices of (8), (9), (27) and the disk LMI; ``bmat``: ``np.block`` or ``cvxpy.bmat``."""
+    n, m = A.shape[0], H.shape[1]
+    M8 = P @ A + A.T @ P - Y @ C - C.T @ Y.T  # Gui2022 eq. (8)
+    X = H.T @ P - L2 @ C  # eq. (9)
+    M27 = bmat([[-lam * np.eye(m), X], [X.T, -np.eye(n)]])  # eq. (27)
+    D = P @ A - Y @ C - c * P
+    MD = bmat([[-r * P, D], [D.T, -r * P]])  # D-stability, disk S(c, r)
+    return M8, X, M27, MD
+
+
 def rounding_margin(M) -> float:
     """Bound on the floating-point error of the extreme eigenvalues of a symmetric matrix M.
 
@@ -164,12 +175,8 @@ def ilo_lmi_residuals(
     (-7.0, 0.0, -0.381966, 1.0)
     """
     A, C, H, P, Y, L2 = (np.asarray(x, dtype=float) for x in (A, C, H, P, Y, L2))
-    n, m = A.shape[0], H.shape[1]
-    M8 = _sym(P @ A + A.T @ P - Y @ C - C.T @ Y.T)
-    X = H.T @ P - L2 @ C
-    M27 = np.block([[-lam * np.eye(m), X], [X.T, -np.eye(n)]])
-    D = P @ A - Y @ C - disk_center * P
-    MD = np.block([[-disk_radius * P, D], [D.T, -disk_radius * P]])
+    M8, X, M27, MD = _lmi_matrices(A, C, H, P, Y, L2, lam, disk_center, disk_radius, np.block)
+    M8 = _sym(M8)
     L1 = np.linalg.solve(P, Y)
     poles = np.linalg.eigvals(A - L1 @ C)
     return {
@@ -194,18 +201,14 @@ def _build_problem(A, C, H, lam, c, r, eps, groups):
     P = cp.Variable((n, n), symmetric=True)
     Y = cp.Variable((n, p))
     L2 = cp.Variable((m, p))
+    M8, _, M27, MD = _lmi_matrices(A, C, H, P, Y, L2, lam, c, r, cp.bmat)
     cons = []
     if "lyapunov_8" in groups:
-        M8 = P @ A + A.T @ P - Y @ C - C.T @ Y.T
-        cons.append(_sym(M8) << -eps * np.eye(n))  # Gui2022 eq. (8)
+        cons.append(_sym(M8) << -eps * np.eye(n))
     if "schur_27" in groups:
-        X = H.T @ P - L2 @ C
-        M27 = cp.bmat([[-lam * np.eye(m), X], [X.T, -np.eye(n)]])
-        cons.append(_sym(M27) << -min(eps, lam / 10) * np.eye(n + m))  # eq. (27)
+        cons.append(_sym(M27) << -min(eps, lam / 10) * np.eye(n + m))
     if "disk" in groups:
-        D = P @ A - Y @ C - c * P
-        MD = cp.bmat([[-r * P, D], [D.T, -r * P]])
-        cons.append(_sym(MD) << -eps * np.eye(2 * n))  # D-stability, disk S(c, r)
+        cons.append(_sym(MD) << -eps * np.eye(2 * n))
     if "normalisation" in groups:
         cons.append(P >> np.eye(n))
     else:

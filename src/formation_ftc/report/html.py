@@ -464,7 +464,6 @@ def league_links(
 ) -> list[dict[str, Any]]:
     """League leaderboards to link from the report: the given league directories and every
     ``<out_dir>/*/leaderboard/index.html``; each ``{name, href (relative), ranking}``."""
-    import json
     import os
 
     out_dir = Path(out_dir)

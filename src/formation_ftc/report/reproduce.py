@@ -79,9 +79,7 @@ def to_jsonable(obj: Any) -> Any:
     Non-finite floats become the strings ``"nan"``, ``"inf"``, ``"-inf"`` so the output is strict
     JSON (readable by browsers' ``JSON.parse``).
     """
-    if obj is None or isinstance(obj, bool | str):
-        return obj
-    if isinstance(obj, int):
+    if obj is None or isinstance(obj, str | int):  # bool is an int
         return obj
     if isinstance(obj, float):
         if math.isfinite(obj):
@@ -429,7 +427,6 @@ def reproduce(
         entry: dict[str, Any],
         summary: dict[str, Any],
         breakdown: dict[str, float] | None,
-        report_s: float,
     ) -> None:
         t_report = time.perf_counter()
         summaries[paper] = summary
@@ -438,9 +435,7 @@ def reproduce(
         _write_json(out / paper / "summary.json", {**summary, "paper": paper})
         if breakdown is not None:
             b = dict(breakdown)
-            writing = (
-                report_s + time.perf_counter() - t_report
-            )  # [s], counted in "report" and in "total"
+            writing = time.perf_counter() - t_report  # [s], counted in "report" and in "total"
             b["report"] = round(b.get("report", 0.0) + writing, DIGITS)
             b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
             breakdowns[paper] = b
@@ -467,7 +462,6 @@ def reproduce(
                     entry,
                     _paper_summary(entry, report),
                     prof.breakdown() if prof is not None else None,
-                    0.0,
                 )
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     entries = [done[p] for p in selected]
@@ -710,7 +704,7 @@ def _reproduce_in_workers(
                         traceback.format_exc(),
                     )
                     summary, breakdown = _paper_summary(entry, None), None
-                finished(paper, entry, summary, breakdown, 0.0)
+                finished(paper, entry, summary, breakdown)
                 with lock:
                     state[paper] = (1.0, "")
                     n_done += 1

@@ -48,11 +48,6 @@ def _decimated(ds):
     return ds.isel(time=slice(None, None, max(1, n // _MAX_POINTS))) if n > _MAX_POINTS else ds
 
 
-def _label(var) -> str:
-    units = var.attrs.get("units", "")
-    return f"{var.attrs.get('long_name', var.name)}" + (f" [{units}]" if units else "")
-
-
 def _per_spacecraft(var):
     """(labels, 2-D list of (time,) or (time, k) arrays) with the spacecraft dimension split off."""
     if "spacecraft" in var.dims:
@@ -60,6 +55,12 @@ def _per_spacecraft(var):
             var.sel(spacecraft=s) for s in var["spacecraft"].values
         ]
     return ["all"], [var]
+
+
+def _pairs(a, b):
+    """(label, part of ``a``, part of ``b``) per spacecraft of two variables of the same dims."""
+    (labels, parts_a), (_, parts_b) = _per_spacecraft(a), _per_spacecraft(b)
+    return zip(labels, parts_a, parts_b, strict=True)
 
 
 def _norm_over_rest(v) -> np.ndarray:
@@ -126,13 +127,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             axes[k, 0].plot(t, app.sel(sel).values, "-", label="applied")
             sc = f"spacecraft {int(first['spacecraft'])}, " if first else ""
             axes[k, 0].set_ylabel(f"{sc}{c} [{cmd.attrs.get('units', '')}]")
-        for j, ((lab, vc), (_, va)) in enumerate(
-            zip(
-                zip(*_per_spacecraft(cmd), strict=True),
-                zip(*_per_spacecraft(app), strict=True),
-                strict=True,
-            )
-        ):
+        for j, (lab, vc, va) in enumerate(_pairs(cmd, app)):
             color = f"C{j % 8}"
             axes[-1, 0].plot(t, _norm_over_rest(vc), "--", color=color)
             axes[-1, 0].plot(t, _norm_over_rest(va), "-", color=color, label=lab)
@@ -155,13 +150,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
         fig, axes = new_figure(len(comps), 1, title="Fault (solid) vs its estimate (dashed)")
         for k, c in enumerate(comps):
             sel = {f.dims[-1]: c} if c is not None else {}
-            for j, ((lab, vf), (_, ve)) in enumerate(
-                zip(
-                    zip(*_per_spacecraft(f.sel(sel)), strict=True),
-                    zip(*_per_spacecraft(fh.sel(sel)), strict=True),
-                    strict=True,
-                )
-            ):
+            for j, (lab, vf, ve) in enumerate(_pairs(f.sel(sel), fh.sel(sel))):
                 color = f"C{j % 8}"
                 axes[k, 0].plot(
                     t,

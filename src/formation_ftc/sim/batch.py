@@ -110,9 +110,8 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
             arrs += [arrs[-1]] * (size - len(arrs))
             leaves.append(np.stack(arrs))
             axes.append(0)
-    return jax.tree_util.tree_unflatten(treedef, leaves), jax.tree_util.tree_unflatten(
-        treedef, axes
-    )
+    unflat = jax.tree_util.tree_unflatten
+    return unflat(treedef, leaves), unflat(treedef, axes)
 
 
 def _batched_flags(axes: Any) -> tuple[bool, ...]:
@@ -159,16 +158,25 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
     >>> np.asarray(batched_run(prog, in_axes, size=2)(batch)["y"])
     array([3., 6.])
     """
-    key = (compiled.static_key, _batched_flags(in_axes), int(size))
+    return _kept(
+        compiled,
+        (compiled.static_key, _batched_flags(in_axes), int(size)),
+        "batch",
+        lambda run: jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)),
+    )
+
+
+def _kept(compiled, key: tuple, kind: str, build) -> CachedProgram:
+    """The cached batch program ``key``; on a miss, ``build(compiled.run)`` (the batched function) is
+    jitted with :func:`_fast_compile`'s choice and kept."""
     fn = lru_get(_CACHE, key)
     if fn is None:
-        run = compiled.run
-        batch = jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size))
+        batch = build(compiled.run)
         fast = _fast_compile(compiled)
         fn = lru_put(
             _CACHE,
             key,
-            CachedProgram(xla.jit(batch, fast_compile=fast), "batch", (*key, fast)),
+            CachedProgram(xla.jit(batch, fast_compile=fast), kind, (*key, fast)),
             MAX_KEPT,
         )
     return fn
@@ -297,27 +305,15 @@ def batched_grid_run(
     array([[11., 12., 13.],
            [21., 22., 23.]])
     """
-    key = (
-        compiled.static_key,
-        "grid",
-        _batched_flags(row_axes),
-        _batched_flags(column_axes),
-        int(rows),
-        int(columns),
-    )
-    fn = lru_get(_CACHE, key)
-    if fn is None:
-        run = compiled.run
+
+    def build(run):
         inner = jax.vmap(lambda p: dict(run(p)), in_axes=(column_axes,), axis_size=int(columns))
-        outer = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
-        fast = _fast_compile(compiled)
-        fn = lru_put(
-            _CACHE,
-            key,
-            CachedProgram(xla.jit(outer, fast_compile=fast), "grid", (*key, fast)),
-            MAX_KEPT,
-        )
-    return fn
+        return jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
+
+    flags = (_batched_flags(row_axes), _batched_flags(column_axes))
+    return _kept(
+        compiled, (compiled.static_key, "grid", *flags, int(rows), int(columns)), "grid", build
+    )
 
 
 def clear() -> None:

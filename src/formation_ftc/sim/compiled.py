@@ -14,7 +14,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from formation_ftc.sim.components import structure_key
+from formation_ftc.sim.components import KIND_SLOTS, structure_key
 from formation_ftc.sim.metrics import metrics_dict
 
 __all__ = ["Compiled", "compile_loop", "records_to_dataset"]
@@ -105,9 +105,8 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
             {"long_name": "spacecraft number (1-based)", "units": "1"},
         ),
     }
-    for comp in _components(
-        loop
-    ):  # declared coordinates first (they win over the default axis labels)
+    # declared coordinates first (they win over the default axis labels)
+    for comp in (getattr(loop, slot) for slot in KIND_SLOTS):
         for name, values in comp.coords().items():
             coords.setdefault(name, (name, list(values)))
     data = {}
@@ -134,19 +133,6 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items() if k in used}
     return xr.Dataset(data, coords=coords, attrs=attrs or {})
-
-
-def _components(loop):
-    return [
-        loop.plant,
-        loop.reference,
-        loop.sensors,
-        loop.network,
-        loop.estimator,
-        loop.supervisor,
-        loop.controller,
-        loop.actuator,
-    ]
 
 
 def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:

@@ -161,13 +161,12 @@ def component(cls: type[T]) -> type[T]:
     fields = dataclasses.fields(cls)  # type: ignore[arg-type]  # cls is a dataclass from the line above
     meta = [f.name for f in fields if f.metadata.get("static", False)]
     data = [f.name for f in fields if not f.metadata.get("static", False)]
-    for name in meta:
-        default = next(f.default for f in fields if f.name == name)
-        if default is not dataclasses.MISSING:
+    for f in fields:
+        if f.name in meta and f.default is not dataclasses.MISSING:
             try:
-                hash(default)
+                hash(f.default)
             except TypeError as exc:  # pragma: no cover - a declaration error caught at import
-                raise TypeError(f"{cls.__name__}.{name}: static fields must be hashable") from exc
+                raise TypeError(f"{cls.__name__}.{f.name}: static fields must be hashable") from exc
     jax.tree_util.register_dataclass(cls, data_fields=data, meta_fields=meta)
     return cls
 
@@ -284,7 +283,6 @@ class FlightInputs(NamedTuple):
 # --------------------------------------------------------------------------------------------------
 class _Kind:
     kind: ClassVar[str] = ""
-    #: physical quantity of the component's input/output where it matters ("force", "torque", ...)
 
     def signals(self) -> tuple[Signal, ...]:
         """Signals this component records (declared once)."""

@@ -555,9 +555,8 @@ def diagnose_divergence(
         new = failing if (j == 0 and failing is not None) else jstep(kj, state)
         bad = _nonfinite_leaves(new)
         if admissible is not None:
-            if bool(
-                admissible(new)
-            ):  # inside the admissible set: leaves it does not check may be NaN
+            # inside the admissible set: leaves it does not check may be NaN
+            if bool(admissible(new)):
                 state = new
                 j += 1
                 continue
@@ -581,9 +580,8 @@ def diagnose_divergence(
             info = _info(causes[0] if causes else bad[0], k + j, t + j * dt, spacecraft_axis)
             if causes:
                 return info
-            if (
-                first is None
-            ):  # only accumulators so far: follow the run a few steps to find the cause
+            # only accumulators so far: follow the run a few steps to find the cause
+            if first is None:
                 first, n = info, j + 1 + _FOLLOW_STEPS
         state = new
         j += 1

@@ -339,6 +339,14 @@ class ClosedLoop:
             step=sc,
         )
 
+    def _received(self, t, flight, net_state, sc, exo_network):
+        """``flight`` with the messages the network delivers at ``t`` (as it is without a network)."""
+        if isinstance(self.network, NoNetwork):
+            return flight
+        msg = self.controller.message(t, flight)
+        received = self.network.receive(t, net_state, NetworkInputs(msg, sc.t, exo_network))
+        return flight._replace(received=received)
+
     def _step_context(self, k) -> StepContext:
         """The context of step ``k`` (its time ``t_k = t0 + k dt``, computed here once)."""
         return StepContext(k, self.t0 + k * self.dt, self.dt)
@@ -350,11 +358,7 @@ class ClosedLoop:
         x = z["plant"]
         y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
         flight = self._law_flight(y, est, dec, exo["controller"], ref, sc)
-        received = None
-        if not isinstance(self.network, NoNetwork):
-            msg = self.controller.message(t, flight)
-            received = self.network.receive(t, net_state, NetworkInputs(msg, sc.t, exo["network"]))
-            flight = flight._replace(received=received)
+        flight = self._received(t, flight, net_state, sc, exo["network"])
         if self.controller.sampled:
             u, ctl_out = held
             dc = None
@@ -408,13 +412,7 @@ class ClosedLoop:
         ctl_next = state["controller"]
         if self.controller.sampled:
             flight = self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
-            if not isinstance(self.network, NoNetwork):
-                msg = self.controller.message(sc.t, flight)
-                flight = flight._replace(
-                    received=self.network.receive(
-                        sc.t, net_state, NetworkInputs(msg, sc.t, exo0["network"])
-                    )
-                )
+            flight = self._received(sc.t, flight, net_state, sc, exo0["network"])
             u, ctl_next, ctl_out = self.controller.output(sc.t, state["controller"], flight)
             held = (u, ctl_out)
         return y, est_state, est, sup_state, dec, net_state, held, ctl_next
@@ -496,7 +494,7 @@ class ClosedLoop:
             "controller": None if self.controller.sampled else state["controller"],
             "usage": state["usage"],
         }
-        if self.plant.integration == "exact":
+        if exact:
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
             applied = outputs[APPLIED_SIGNAL]
             x_next = self.plant.exact_step(
@@ -525,9 +523,8 @@ class ClosedLoop:
                 k3,
                 k4,
             )
-            if (
-                self._stage_metrics()
-            ):  # integrals of stage-integrated metrics over the step (RK4 weights)
+            # integrals of stage-integrated metrics over the step (RK4 weights)
+            if self._stage_metrics():
                 v1, v2, v3, v4 = (
                     metric_ops.stage_values(self.metrics, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
@@ -637,9 +634,8 @@ class ClosedLoop:
                     self.metrics, acc, self.t0 + k * self.dt, self.dt, stage_inc
                 )
             outputs = self._sample(state, outputs)
-            if (
-                folding
-            ):  # the sample goes to fold(): the metrics of a block of steps are folded at once
+            # the sample goes to fold(): the metrics of a block of steps are folded at once
+            if folding:
                 return (new, acc), metric_ops.pack_sample(self.metrics, outputs)
             acc = metric_ops.update_accumulators(
                 self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs
@@ -720,17 +716,15 @@ class ClosedLoop:
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
         out = []
-        pos = self.plant.position(x)
-        if pos is not None:
-            out.append(("plant.position", jnp.sqrt(jnp.sum(pos * pos, axis=-1)), self.max_position))
-        vel = self.plant.velocity(x) if hasattr(self.plant, "velocity") else None
-        if vel is not None:
-            out.append(("plant.velocity", jnp.sqrt(jnp.sum(vel * vel, axis=-1)), self.max_velocity))
-        rate = self.plant.angular_rate(x) if hasattr(self.plant, "angular_rate") else None
-        if rate is not None:
-            out.append(
-                ("plant.angular_rate", jnp.sqrt(jnp.sum(rate * rate, axis=-1)), self.max_rate)
-            )
+        vectors = (
+            ("position", self.max_position),
+            ("velocity", self.max_velocity),
+            ("angular_rate", self.max_rate),
+        )
+        for name, bound in vectors:  # Euclidean norm per spacecraft
+            v = getattr(self.plant, name)(x) if hasattr(self.plant, name) else None
+            if v is not None:
+                out.append((f"plant.{name}", jnp.sqrt(jnp.sum(v * v, axis=-1)), bound))
         pitch = self.plant.euler_pitch(x) if hasattr(self.plant, "euler_pitch") else None
         if pitch is not None:
             out.append(("plant.pitch", jnp.abs(pitch), self.max_pitch))
@@ -752,8 +746,6 @@ class ClosedLoop:
 
     def violations(self, carry) -> list[tuple[str, tuple[int, ...], int | None]]:
         """(variable, index, spacecraft) of every bounded quantity outside its bound (numpy side)."""
-        import numpy as np
-
         out = []
         for name, mag, bound in self._bounded(carry[0]["plant"]):
             bad = np.argwhere(np.asarray(mag) > np.asarray(bound))

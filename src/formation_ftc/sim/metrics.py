@@ -56,6 +56,8 @@ from formation_ftc.sim.contract import (  # noqa: E402
 )
 
 _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt in float64)
+#: reduction -> (pairwise extreme, extreme over an axis, starting value)
+_EXTREMES = {"max": (jnp.maximum, jnp.max, -jnp.inf), "min": (jnp.minimum, jnp.min, jnp.inf)}
 
 
 @component
@@ -217,11 +219,7 @@ class _Stack:
                 (len(metrics),) + trail,
             )
 
-        self.start, self.end, self.threshold = (
-            stacked("start"),
-            stacked("end"),
-            stacked("threshold"),
-        )
+        self.start, self.end, self.threshold = map(stacked, ("start", "end", "threshold"))
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         return jnp.stack([m.value(signals) for m in self.metrics])
@@ -361,32 +359,23 @@ def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array])
     for m in metrics:
         shape = jnp.shape(m.value(signals))
         nan = jnp.full(shape, jnp.nan)
-        if m.reduce == "max":
-            accs.append((jnp.full(shape, -jnp.inf), jnp.zeros(shape, bool)))
-        elif m.reduce == "min":
-            accs.append((jnp.full(shape, jnp.inf), jnp.zeros(shape, bool)))
-        elif m.reduce in ("final", "at", "last"):
+        if m.reduce in _EXTREMES:  # (extreme so far, seen)
+            accs.append((jnp.full(shape, _EXTREMES[m.reduce][2]), jnp.zeros(shape, bool)))
+        elif m.reduce in ("final", "at", "last", "first"):
+            # (value, seen); first: (time of the first sample at or above the threshold, found)
             accs.append((nan, jnp.zeros(shape, bool)))
-        elif m.reduce in ("mean", "integral"):
-            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
-        elif m.reduce in STAGE_REDUCTIONS:  # (integral, number of steps counted)
-            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
-        elif m.reduce == "rms":  # (sum of squares, number of samples)
+        elif m.reduce in ("mean", "integral", "rms") or m.reduce in STAGE_REDUCTIONS:
+            # (sum -- of squares for rms, number of samples; stage-integrated: of steps counted)
             accs.append((jnp.zeros(shape), jnp.zeros(shape)))
         elif m.reduce in ("settle", "settle_delay"):
             # (time of the first sample after the last one at or above the threshold, seen, last above)
             accs.append((nan, jnp.zeros(shape, bool), jnp.zeros(shape, bool)))
-        elif m.reduce == "first":  # (time of the first sample at or above the threshold, found)
-            accs.append((nan, jnp.zeros(shape, bool)))
-        elif m.reduce == "block_rms":
-            # (sum over the open block, its samples, sum of the squared means of the closed blocks, closed blocks)
-            z = jnp.zeros(shape)
-            accs.append((z, z, z, z))
-        elif m.reduce == "block_dev_rms":
-            # (shift = first value of the open block, sum and sum of squares of value - shift over the open
-            # block, its samples, sum of squared deviations from the mean over the closed blocks, their samples)
-            z = jnp.zeros(shape)
-            accs.append((z, z, z, z, z, z))
+        elif m.reduce in BLOCK_REDUCTIONS:
+            # block_rms: (sum over the open block, its samples, sum of the squared means of the closed
+            # blocks, closed blocks); block_dev_rms: (shift = first value of the open block, sum and sum
+            # of squares of value - shift over the open block, its samples, sum of squared deviations
+            # from the mean over the closed blocks, their samples)
+            accs.append((jnp.zeros(shape),) * (4 if m.reduce == "block_rms" else 6))
     return tuple(accs)
 
 
@@ -736,27 +725,18 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     def take(x, i):  # x at sample i (clipped), per element
         return jnp.take_along_axis(x, jnp.clip(i, 0, n - 1)[None], axis=0)[0]
 
-    if m.reduce == "max":
-        a, seen = acc
-        return (jnp.maximum(a, jnp.max(jnp.where(inw, v, -jnp.inf), axis=0)), seen | anyw)
-    if m.reduce == "min":
-        a, seen = acc
-        return (jnp.minimum(a, jnp.min(jnp.where(inw, v, jnp.inf), axis=0)), seen | anyw)
+    if m.reduce in _EXTREMES:
+        (a, seen), (pair, over, start) = acc, _EXTREMES[m.reduce]
+        return (pair(a, over(jnp.where(inw, v, start), axis=0)), seen | anyw)
     if m.reduce == "final":
         a, seen = acc
         return (jnp.where(anyw, take(v, last_of(inw)), a), seen | anyw)
     if m.reduce == "at":
         a, seen = acc
         return (jnp.where(anyw & jnp.logical_not(seen), take(v, first_of(inw)), a), seen | anyw)
-    if m.reduce == "mean":
+    if m.reduce in ("mean", "integral", "rms"):
         s, c = acc
-        return (s + jnp.sum(jnp.where(inw, v, 0.0), axis=0), c + count)
-    if m.reduce == "integral":
-        s, c = acc
-        return (s + jnp.sum(jnp.where(inw, v * dt, 0.0), axis=0), c + count)
-    if m.reduce == "rms":
-        s, c = acc
-        return (s + jnp.sum(jnp.where(inw, v * v, 0.0), axis=0), c + count)
+        return (s + jnp.sum(jnp.where(inw, _summand(m.reduce, v, dt), 0.0), axis=0), c + count)
     if m.reduce in BLOCK_REDUCTIONS:
         return _fold_blocks(m, acc, v, inw)
     above = jnp.logical_not(v < m.threshold)
@@ -834,6 +814,11 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     )
 
 
+def _summand(reduce: str, v: jax.Array, dt: float) -> jax.Array:
+    """What a sample adds to the sum of ``mean`` (its value), ``integral`` (a rectangle) or ``rms``."""
+    return v if reduce == "mean" else v * dt if reduce == "integral" else v * v
+
+
 def _in_window(m: Any, t: Any) -> jax.Array:
     """Whether time(s) ``t`` lie in the metric's window (edges inclusive to :data:`_TOL`)."""
     return jnp.logical_and(t >= m.start - _TOL, t <= m.end + _TOL)
@@ -849,12 +834,9 @@ def _update_group(
     inw = _in_window(m, t)
     if gate is not None:
         inw = jnp.logical_and(inw, gate)
-    if m.reduce == "max":
+    if m.reduce in _EXTREMES:
         a, seen = acc
-        return (jnp.where(inw, jnp.maximum(a, v), a), seen | inw)
-    if m.reduce == "min":
-        a, seen = acc
-        return (jnp.where(inw, jnp.minimum(a, v), a), seen | inw)
+        return (jnp.where(inw, _EXTREMES[m.reduce][0](a, v), a), seen | inw)
     if m.reduce == "final":
         a, seen = acc
         return (jnp.where(inw, v, a), seen | inw)
@@ -862,17 +844,11 @@ def _update_group(
         a, seen = acc
         take = jnp.logical_and(inw, jnp.logical_not(seen))
         return (jnp.where(take, v, a), seen | inw)
-    if m.reduce == "mean":
+    if m.reduce in ("mean", "integral", "rms"):  # the horizon sample: no rectangle, not in the rms
         s, n = acc
-        return (s + jnp.where(inw, v, 0.0), n + jnp.where(inw, 1.0, 0.0))
-    if m.reduce == "integral":
-        s, n = acc
-        w = 0.0 if is_final else dt
-        return (s + jnp.where(inw, v * w, 0.0), n + jnp.where(inw, 1.0, 0.0))
-    if m.reduce == "rms":
-        s, n = acc
-        take = jnp.logical_and(inw, not is_final)
-        return (s + jnp.where(take, v * v, 0.0), n + jnp.where(take, 1.0, 0.0))
+        take = jnp.logical_and(inw, not is_final) if m.reduce == "rms" else inw
+        x = _summand(m.reduce, v, 0.0 if is_final else dt)
+        return (s + jnp.where(take, x, 0.0), n + jnp.where(take, 1.0, 0.0))
     if m.reduce in ("settle", "settle_delay"):
         ts, seen, last_above = acc
         above = jnp.logical_not(v < m.threshold)
@@ -964,35 +940,26 @@ def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
         if m.reduce in ("max", "min", "final", "at", "last"):
             a, seen = acc
             out.append(jnp.where(seen, a, jnp.nan))
-        elif m.reduce == "mean":
+        elif m.reduce in ("mean", "rms"):
             s, n = acc
-            out.append(jnp.where(n > 0, s / jnp.maximum(n, 1.0), jnp.nan))
-        elif m.reduce == "integral":
+            seen, mean = n > 0, s / jnp.maximum(n, 1.0)
+            out.append(jnp.where(seen, mean if m.reduce == "mean" else jnp.sqrt(mean), jnp.nan))
+        elif m.reduce in ("integral", "stage_integral"):
             s, n = acc
             out.append(jnp.where(n > 0, s, jnp.nan))
-        elif m.reduce == "settle":
+        elif m.reduce in ("settle", "first"):
             out.append(acc[0])
         elif m.reduce == "settle_delay":
             out.append(acc[0] - m.start)
-        elif m.reduce == "first":
-            out.append(acc[0])
-        elif m.reduce == "rms":
-            s, n = acc
-            out.append(jnp.where(n > 0, jnp.sqrt(s / jnp.maximum(n, 1.0)), jnp.nan))
-        elif m.reduce == "stage_integral":
-            s, n = acc
-            out.append(jnp.where(n > 0, s, jnp.nan))
         elif m.reduce == "stage_root_mean":
             s, n = acc
             out.append(jnp.where(n > 0, jnp.sqrt(s / (m.end - m.start)), jnp.nan))
-        elif m.reduce == "block_rms":
-            _, _, q, nb = acc
-            out.append(jnp.where(nb > 0, jnp.sqrt(q / jnp.maximum(nb, 1.0)), jnp.nan))
-        elif m.reduce == "block_dev_rms":
-            *_, q, nq = acc
-            out.append(
-                jnp.where(nq > 0, jnp.sqrt(jnp.maximum(q, 0.0) / jnp.maximum(nq, 1.0)), jnp.nan)
-            )
+        elif m.reduce in BLOCK_REDUCTIONS:  # (..., sum of squares, closed blocks or their samples)
+            *_, q, n = acc
+            seen = n > 0
+            if m.reduce == "block_dev_rms":  # a sum of squared deviations (rounding may go below 0)
+                q = jnp.maximum(q, 0.0)
+            out.append(jnp.where(seen, jnp.sqrt(q / jnp.maximum(n, 1.0)), jnp.nan))
     return tuple(out)
 
 

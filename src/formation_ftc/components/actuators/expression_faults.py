@@ -9,8 +9,24 @@ from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, compo
 __all__ = ["ExpressionFaultActuator"]
 
 
+class EffectivenessBiasActuator(Actuator):
+    """Applied = Gamma(t) * command + delta(t) per axis from the time signals ``{"gamma", "bias"}`` of
+    the subclass's :meth:`exogenous`; records the effectiveness Gamma(t)."""
+
+    def apply(self, t, command, inputs: ActuatorInputs):
+        return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])
+
+    def signals(self):
+        return (
+            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
+        )
+
+    def outputs(self, t, command, inputs: ActuatorInputs):
+        return {"effectiveness": inputs.exogenous["gamma"]}
+
+
 @component
-class ExpressionFaultActuator(Actuator):
+class ExpressionFaultActuator(EffectivenessBiasActuator):
     """Applied = Gamma(t) * command + delta(t) per axis (loss of effectiveness and additive bias),
     both written as expressions in t [s] and i (1-based spacecraft number)."""
 
@@ -23,14 +39,3 @@ class ExpressionFaultActuator(Actuator):
             "gamma": vector_expression(self.effectiveness, "faults.effectiveness", t, self.count),
             "bias": vector_expression(self.bias, "faults.bias", t, self.count),
         }
-
-    def apply(self, t, command, inputs: ActuatorInputs):
-        return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])
-
-    def signals(self):
-        return (
-            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
-        )
-
-    def outputs(self, t, command, inputs: ActuatorInputs):
-        return {"effectiveness": inputs.exogenous["gamma"]}

@@ -6,15 +6,15 @@ from typing import Any
 
 import jax.numpy as jnp
 
+from formation_ftc.components.actuators.expression_faults import EffectivenessBiasActuator
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.core.faults import actuator_fault
-from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
+from formation_ftc.sim.components import component, static
 
 __all__ = ["StepFaultActuator"]
 
 
 @component
-class StepFaultActuator(Actuator):
+class StepFaultActuator(EffectivenessBiasActuator):
     """Applied = Gamma(t) * command + delta(t) per axis with a step loss of effectiveness::
 
         alpha_ij(t) = alpha_ij  for t >= onset_ij,  1 before                (Li2020 eq. (5))
@@ -35,16 +35,3 @@ class StepFaultActuator(Actuator):
             "gamma": jnp.where(t >= self.onset, self.alpha, 1.0),
             "bias": vector_expression(self.bias, "faults.additive", t, self.count),
         }
-
-    def apply(self, t, command, inputs: ActuatorInputs):
-        return actuator_fault(
-            command, inputs.exogenous["gamma"], inputs.exogenous["bias"]
-        )  # eq. (5)
-
-    def signals(self):
-        return (
-            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
-        )
-
-    def outputs(self, t, command, inputs):
-        return {"effectiveness": inputs.exogenous["gamma"]}

@@ -20,6 +20,10 @@ from formation_ftc.sim.components import Controller, FlightInputs, Signal, compo
 __all__ = ["Li2020AdaptiveController", "composite_error", "consensus"]
 
 VEC = ("spacecraft", "axis")
+#: the recorded e_i2 of the laws on the composite error s_i = e_i2 + k_i e_i1 (eq. (6))
+VELOCITY_ERROR = Signal(
+    "velocity_error", VEC, "m s-1", "measured velocity minus desired velocity e_i2", "LVLH"
+)
 
 
 def composite_error(y, desired: dict, k):
@@ -176,13 +180,7 @@ class Li2020AdaptiveController(Controller):
 
     def signals(self):
         return (
-            Signal(
-                "velocity_error",
-                VEC,
-                "m s-1",
-                "measured velocity minus desired velocity e_i2",
-                "LVLH",
-            ),
+            VELOCITY_ERROR,
             Signal("m_hat", ("spacecraft",), "kg", "mass estimate m_hat_i"),
             Signal("beta_hat", ("spacecraft",), "1", "inverse-effectiveness estimate beta_hat_i"),
             Signal("d_hat", ("spacecraft",), "N", "disturbance-bound estimate d_hat_i"),

@@ -15,6 +15,18 @@ __all__ = ["DesiredPositionLaw", "PdFormationController", "ZeroController"]
 VEC = ("spacecraft", "axis")
 
 
+def _desired_motion(desired_position: tuple[str, str, str], count: int, t) -> dict:
+    """``{"p", "v", "a"}``: the desired LVLH position p^d(t) [m] of the expressions per axis (in t [s]
+    and the 1-based spacecraft number i) and its exact time derivatives v^d [m/s], a^d [m/s^2]
+    (forward-mode autodiff), each (N, 3)."""
+
+    def p(tt):
+        return vector_expression(desired_position, "controller.desired_position", tt, count)
+
+    v = jax.jacfwd(p)
+    return {"p": p(t), "v": v(t), "a": jax.jacfwd(v)(t)}
+
+
 @component
 class ZeroController(Controller):
     """No control (free drift): u = 0 [N]."""
@@ -41,19 +53,8 @@ class DesiredPositionLaw(Controller):
     def sampled(self) -> bool:
         return self.is_sampled
 
-    def _desired(self, t):
-        def p(tt):
-            return vector_expression(
-                self.desired_position, "controller.desired_position", tt, self.count
-            )
-
-        v = jax.jacfwd(p)
-        a = jax.jacfwd(v)
-        return p(t), v(t), a(t)
-
     def exogenous(self, t):
-        p, v, a = self._desired(t)
-        return {"p": p, "v": v, "a": a}
+        return _desired_motion(self.desired_position, self.count, t)
 
     def desired_position_at(self, exogenous):
         return exogenous["p"]

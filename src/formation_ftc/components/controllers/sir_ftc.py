@@ -6,7 +6,7 @@ from typing import Any
 
 from formation_ftc.blocks.controllers.sir_ftc import sir_epsilon, sir_ftc_control, sir_ftc_rate
 from formation_ftc.components.controllers.desired_formation import RotatingFormation
-from formation_ftc.components.controllers.li2020_adaptive import VEC, composite_error
+from formation_ftc.components.controllers.li2020_adaptive import VELOCITY_ERROR, composite_error
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
 
 __all__ = ["SirFtcController"]
@@ -46,12 +46,6 @@ class SirFtcController(Controller):
 
     def signals(self):
         return (
-            Signal(
-                "velocity_error",
-                VEC,
-                "m s-1",
-                "measured velocity minus desired velocity e_i2",
-                "LVLH",
-            ),
+            VELOCITY_ERROR,
             Signal("b_hat", ("spacecraft",), "N", "adaptive gain b_hat_i"),
         )

@@ -7,14 +7,13 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax
 import jax.numpy as jnp
 
 from formation_ftc.blocks.controllers.yang2013_individual import (
     attitude_control,
     translational_control,
 )
-from formation_ftc.components.expressions import vector_expression
+from formation_ftc.components.controllers.pd_formation import _desired_motion
 from formation_ftc.sim.components import Controller, FlightInputs, component, static
 
 __all__ = ["Yang2013TranslationalController", "Yang2013AttitudeController"]
@@ -41,13 +40,7 @@ class Yang2013TranslationalController(Controller):
     desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
-        def p(tt):
-            return vector_expression(
-                self.desired_position, "controller.desired_position", tt, self.count
-            )
-
-        v = jax.jacfwd(p)
-        return {"p": p(t), "v": v(t), "a": jax.jacfwd(v)(t)}
+        return _desired_motion(self.desired_position, self.count, t)
 
     def desired_position_at(self, exogenous):
         return exogenous["p"]

@@ -14,8 +14,9 @@ from typing import Any
 
 import jax.numpy as jnp
 
-from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants.quaternion_rigid_body import QUATERNION_COMPONENTS
+from formation_ftc.components.plants.quaternion_rigid_body import (
+    RigidBodyTorquePlant,
+)
 from formation_ftc.core.dynamics.gravity_gradient import (
     attitude_relative_to_lvlh,
     gravity_gradient_torque_unit,
@@ -27,7 +28,6 @@ from formation_ftc.core.quaternion import quat_kinematics, quat_multiply, rotati
 from formation_ftc.core.vector3 import norm3
 from formation_ftc.sim.components import (
     CompositionError,
-    Plant,
     Signal,
     TruthInputs,
     component,
@@ -72,7 +72,7 @@ def batched_inverse_3x3(J):
 
 
 @component
-class AttitudeTruthPlant(Plant):
+class AttitudeTruthPlant(RigidBodyTorquePlant):
     """N rigid bodies with inertial attitude and body rate, on a circular orbit, with gravity gradient::
 
         J_i omega_i' = -omega_i x J_i omega_i + tau_gg,i + tau_i + iota_i(t)
@@ -106,8 +106,6 @@ class AttitudeTruthPlant(Plant):
     int |tau_cmd| dt [N m s] of the commanded torque.
     """
 
-    quantity = "torque"
-
     inertia: Any  # (N, 3, 3) [kg m^2]
     initial_omega: Any  # (N, 3) [rad/s], relative to state_frame
     initial_quaternion: Any  # (N, 4) [-], vector first, body -> state_frame
@@ -123,21 +121,6 @@ class AttitudeTruthPlant(Plant):
             raise CompositionError(
                 f"AttitudeTruthPlant.state_frame = {self.state_frame!r}: one of {STATE_FRAMES}"
             )
-
-    @property
-    def count(self) -> int:
-        return int(jnp.shape(self.initial_omega)[0])
-
-    def initial_state(self):
-        return {"omega": self.initial_omega, "q": self.initial_quaternion}
-
-    def angular_rate(self, x):
-        return x["omega"]
-
-    def exogenous(self, t):
-        return {
-            "iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)
-        }
 
     def orbit_rate(self):
         """n = sqrt(mu / a^3) [rad/s]."""
@@ -239,9 +222,6 @@ class AttitudeTruthPlant(Plant):
                 "torque_impulse", ("spacecraft",), "N m s", "integral of the commanded torque norm"
             ),
         )
-
-    def coords(self):
-        return {"quaternion_component": QUATERNION_COMPONENTS}
 
     def outputs(self, t, x, inputs):
         omega, q, w_r, q_l = self.inertial_and_lvlh(t, x)

@@ -34,13 +34,6 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
         default=("0", "0", "0")
     )  # expressions in t, i [N]
 
-    @property
-    def count(self) -> int:
-        return int(jnp.shape(self.mass)[0])
-
-    def initial_state(self):
-        return {"q": self.initial_state_lvlh}
-
     def exogenous(self, t):
         return {"d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
 

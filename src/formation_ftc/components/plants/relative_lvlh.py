@@ -41,13 +41,6 @@ class RelativeLvlhPlant(RelativeStatePlant):
     )  # h_i(t), expressions in t, i [N]
     needs_reference: ClassVar[bool] = True
 
-    @property
-    def count(self) -> int:
-        return int(jnp.shape(self.mass)[0])
-
-    def initial_state(self):
-        return {"q": self.initial_state_lvlh}
-
     def exogenous(self, t):
         return {"h": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
 

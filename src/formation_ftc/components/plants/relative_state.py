@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import jax.numpy as jnp
+
 from formation_ftc.sim.components import Plant
 
 __all__ = ["RelativeStatePlant"]
@@ -9,7 +13,18 @@ __all__ = ["RelativeStatePlant"]
 
 class RelativeStatePlant(Plant):
     """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views and the
-    commanded delta-v / control-effort usage integrals (subclasses give the rates)."""
+    commanded delta-v / control-effort usage integrals (subclasses give the rates); the subclasses'
+    fields ``mass`` (N,) [kg] and ``initial_state_lvlh`` (N, 6) [m, m/s] give the count and the
+    initial state."""
+
+    mass: Any  # declared by the subclasses (dataclass fields there)
+
+    @property
+    def count(self) -> int:
+        return int(jnp.shape(self.mass)[0])
+
+    def initial_state(self):
+        return {"q": self.initial_state_lvlh}
 
     def position(self, x):
         return x["q"][:, :3]

@@ -4,10 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax
-import jax.numpy as jnp
-
-from formation_ftc.core.disturbances import gaussian_noise
+from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.core.dynamics.orbital_truth import eci_to_lvlh
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
 
@@ -35,16 +32,7 @@ class LvlhRelativeStateSensors(Sensors):
     velocity_noise_std: Any = 0.0  # [m/s]
     bias: Any = 0.0  # (N, 6) or broadcastable: constant bias [m, m/s]
 
-    def noise(self, key):
-        n = self.count
-        k_p, k_v = jax.random.split(key, 2)
-        return jnp.concatenate(
-            [
-                gaussian_noise(k_p, (n, 3), self.position_noise_std),
-                gaussian_noise(k_v, (n, 3), self.velocity_noise_std),
-            ],
-            axis=-1,
-        )
+    noise = RelativeStateSensors.noise  # the same draw from the step's key
 
     def measure(self, t, x, inputs: SensorInputs):
         q = x["q"] if "q" in x else eci_to_lvlh(x["chief"], x["deputies"])

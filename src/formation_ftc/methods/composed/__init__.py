@@ -291,13 +291,17 @@ class MetricSection(StrictModel):
         return self
 
 
-def _section_errors(where: str, exc: ValidationError) -> ValueError:
-    """One error listing a section's validation errors, each named ``where.field[index]: reason``."""
-    lines = []
-    for err in exc.errors():
-        loc, msg = error_location(err), err["msg"].removeprefix("Value error, ")
-        lines.append(f"{where}.{loc}: {msg}" if loc else f"{where}: {msg}")
-    return ValueError("; ".join(lines))
+def _validated_section(entry: ComponentType, raw: dict[str, Any], where: str) -> Any:
+    """``raw`` (without its ``type`` key) validated by the type's section; one error listing the
+    section's validation errors, each named ``where.field[index]: reason``."""
+    try:
+        return entry.section.model_validate({k: v for k, v in raw.items() if k != "type"})
+    except ValidationError as exc:
+        lines = []
+        for err in exc.errors():
+            loc, msg = error_location(err), err["msg"].removeprefix("Value error, ")
+            lines.append(f"{where}.{loc}: {msg}" if loc else f"{where}: {msg}")
+        raise ValueError("; ".join(lines)) from None
 
 
 class ComposedScenario(ScenarioBase):
@@ -350,11 +354,7 @@ class ComposedScenario(ScenarioBase):
                 raise ValueError(
                     f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(kind_types)})"
                 )
-            body = {k: v for k, v in raw.items() if k != "type"}
-            try:
-                sections[slot] = entry.section.model_validate(body)
-            except ValidationError as exc:
-                raise _section_errors(slot, exc) from None
+            sections[slot] = _validated_section(entry, raw, slot)
         self._sections = sections
         evaluations: list[tuple[str, Any]] = []
         known = sorted(n for (k, n) in _CATALOG if k == "evaluation")
@@ -366,15 +366,7 @@ class ComposedScenario(ScenarioBase):
                     f"evaluations[{j}].type = {name!r} is not an evaluation type "
                     f"(known: {', '.join(known) or 'none registered'})"
                 )
-            try:
-                evaluations.append(
-                    (
-                        str(name),
-                        entry.section.model_validate({k: v for k, v in raw.items() if k != "type"}),
-                    )
-                )
-            except ValidationError as exc:
-                raise _section_errors(f"evaluations[{j}]", exc) from None
+            evaluations.append((str(name), _validated_section(entry, raw, f"evaluations[{j}]")))
         self._evaluation_sections = evaluations
         if isinstance(info.context, dict) and info.context.get("build") is False:
             return self  # fields only (`show`): check, run and campaigns build the loop

@@ -74,9 +74,6 @@ EFFORT_TIME = 100.0
 Vec3 = tuple[float, float, float]
 
 
-_per_spacecraft = per_spacecraft
-
-
 def _plant_layout(ctx: BuildContext, slot: str, name: str) -> tuple[str, int]:
     """('q', 3) for an (N, 6) relative-state plant, ('rv', axes) for a double-integrator plant."""
     plant = ctx.plant
@@ -280,8 +277,8 @@ def law_gains(
     """The law's numbers for ``n`` spacecraft on ``axes`` axes: weights alpha (N,), nominal gains
     (N, axes), estimated gains b_hat (N, axes) (the FDI estimate on the faulty axis) and the 0-based
     faulty spacecraft k (0 when none is reported)."""
-    alpha = _per_spacecraft(sec.alpha, n, "controller.alpha")
-    b_nom = np.tile(_per_spacecraft(sec.b, n, "controller.b")[:, None], (1, axes))
+    alpha = per_spacecraft(sec.alpha, n, "controller.alpha")
+    b_nom = np.tile(per_spacecraft(sec.b, n, "controller.b")[:, None], (1, axes))
     b_hat = b_nom.copy()
     k = 0
     if sec.faulty_spacecraft is not None:
@@ -438,7 +435,7 @@ def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
         NOMINAL_MASS if sec.nominal_mass is None else sec.nominal_mass
     )  # stated, never the plant's
     return force_from_acceleration(
-        law, as_float(_per_spacecraft(mass, n, "controller.nominal_mass"))
+        law, as_float(per_spacecraft(mass, n, "controller.nominal_mass"))
     )
 
 
@@ -592,7 +589,7 @@ def _actuator_gains(sec: ActuatorGainsSection, ctx: BuildContext):
 
     n = ctx.count
     _, axes = _plant_layout(ctx, "actuator", "actuator-gains")
-    gain = _per_spacecraft(sec.gain, n, "actuator.gain")
+    gain = per_spacecraft(sec.gain, n, "actuator.gain")
     if np.any(gain <= 0):
         raise ValueError(f"actuator.gain = {gain.tolist()}: every gain must be > 0")
     b = np.tile(gain[:, None], (1, axes))

@@ -46,6 +46,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.methods.composed import (
     BuildContext,
     InitialStateRows,
+    per_spacecraft,
     register_component_type,
     require_slot,
 )
@@ -95,6 +96,10 @@ SC = ("spacecraft",)
 ACC = "m s-2"
 Vec3 = tuple[float, float, float]
 Vec6 = tuple[float, float, float, float, float, float]
+_ONBOARD_MEAN_MOTION = (
+    "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
+    "required without one)."
+)
 
 
 def _matrix(value, shape, field: str):
@@ -108,17 +113,6 @@ def _matrix(value, shape, field: str):
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{field}: entries must be finite")
     return arr.tolist()
-
-
-def _per_spacecraft(value, n: int, field: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    if not np.all(np.isfinite(arr) & (arr > 0)):
-        raise ValueError(f"{field}: every mass must be finite and > 0 kg")
-    return arr
 
 
 def _on_grid(tau: float, dt: float, field: str) -> int:
@@ -186,9 +180,11 @@ def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
 def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:
     """The flight side's nominal masses [kg]: ``given``, else :data:`NOMINAL_MASS` (100 kg) each; never
     the plant's true masses."""
-    return _per_spacecraft(
-        NOMINAL_MASS if given is None else given, ctx.count, f"{slot}.nominal_mass"
-    )
+    field = f"{slot}.nominal_mass"
+    arr = per_spacecraft(NOMINAL_MASS if given is None else given, ctx.count, field)
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(f"{field}: every mass must be finite and > 0 kg")
+    return arr
 
 
 @functools.lru_cache(maxsize=16)
@@ -303,14 +299,7 @@ class IloSection(StrictModel):
     learning_interval: float = Field(
         gt=0, description="tau: a positive integer multiple of simulation.dt [s]."
     )
-    mean_motion: float | None = Field(
-        None,
-        gt=0,
-        description=(
-            "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
-            "required without one)."
-        ),
-    )
+    mean_motion: float | None = Field(None, gt=0, description=_ONBOARD_MEAN_MOTION)
     nominal_mass: float | list[float] | None = Field(
         None,
         description=(
@@ -503,14 +492,7 @@ class _OutputFeedbackSection(StrictModel):
     care_q_scale: float = Field(
         4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care')."
     )
-    mean_motion: float | None = Field(
-        None,
-        gt=0,
-        description=(
-            "Mean motion n of the on-board CW model [rad/s] (default: sqrt(mu / a^3) of the reference orbit; "
-            "required without one)."
-        ),
-    )
+    mean_motion: float | None = Field(None, gt=0, description=_ONBOARD_MEAN_MOTION)
     nominal_mass: float | list[float] | None = Field(
         None,
         description=(

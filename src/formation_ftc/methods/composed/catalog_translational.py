@@ -32,8 +32,6 @@ Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 
 
-_per_spacecraft = per_spacecraft
-
 #: the PD law's nominal on-board mass when a scenario states none [kg] (``controller.nominal_mass``)
 PD_NOMINAL_MASS = 100.0
 
@@ -441,7 +439,7 @@ def _li2020(sec: Li2020Section, ctx: BuildContext):
     n = ctx.count
 
     def ps(name):
-        return as_float(_per_spacecraft(getattr(sec, name), n, f"controller.{name}"))
+        return as_float(per_spacecraft(getattr(sec, name), n, f"controller.{name}"))
 
     # the printed '-' of eq. (42) belongs to Thm 2, the law over delayed links (E000-04)
     delayed = getattr(ctx.section("network"), "delays", None) is not None
@@ -483,7 +481,7 @@ def _sir_ftc(sec: SirFtcSection, ctx: BuildContext):
     return SirFtcController(
         count=n,
         formation=sec.formation.component(n),
-        k=as_float(_per_spacecraft(sec.k, n, "controller.k")),
+        k=as_float(per_spacecraft(sec.k, n, "controller.k")),
         k0=as_float(sec.k0),
         phi=as_float(sec.phi),
         sigma1=as_float(sec.sigma1),
@@ -523,7 +521,7 @@ def _pd(sec: PdSection, ctx: BuildContext):
         count=n,
         kp=as_float(sec.kp),
         kd=as_float(sec.kd),
-        mass=as_float(_per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
+        mass=as_float(per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
         max_force=as_float(np.inf if sec.max_force is None else sec.max_force),
         desired_position=sec.desired_position,
         is_sampled=sec.mode == "sampled",

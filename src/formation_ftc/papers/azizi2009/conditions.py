@@ -100,7 +100,6 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
     deep-space plant."""
     if scenario.type_of("plant") != DOUBLE_INTEGRATOR:
         return []
-    out: list[Condition] = []
     c = scenario.section("controller")
     law = _chain_law(loop)
     sup = (
@@ -109,7 +108,7 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
     flfr = sup is not None and sup.flfr
     alpha = np.asarray(law.alpha, float)
     n = alpha.size
-    out.append(
+    out = [
         Condition(
             "allocation weights",
             "Azizi2009 eq. (3)",
@@ -119,7 +118,7 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
             basis="exact",
             detail="exact: comparison of the scenario values",
         )
-    )
+    ]
     if c.faulty_spacecraft is None:
         out.append(
             Condition(

@@ -232,36 +232,21 @@ def run_reproduction(
             edge.append(j)
         amin_seed.append(np.nan if a is None else a)
     amin_seed = np.asarray(amin_seed)
+    any_seed = bool(np.any(np.isfinite(amin_seed)))  # a seed met e_s inside the window
 
     progress(0.85, "figures")
-    figs = []
-    eff = []
-    for title, ds in (
-        ("(a) fault-free", ds_ff),
-        ("(b) LLFR, alpha_2 = 1", ds_ll),
-        ("(c) FLFR, alpha_2 = 6", ds_6),
-        ("(d) FLFR, alpha_2 = 10", ds_10),
-    ):
-        eff.append((title, ds["time"].values, ds["effort"].sel(axis="x").values))
+    eff = [
+        (title, ds["time"].values, ds["effort"].sel(axis="x").values)
+        for title, ds in (
+            ("(a) fault-free", ds_ff),
+            ("(b) LLFR, alpha_2 = 1", ds_ll),
+            ("(c) FLFR, alpha_2 = 6", ds_6),
+            ("(d) FLFR, alpha_2 = 10", ds_10),
+        )
+    ]
     with phase("plot"):
         plot_fig2(eff, out_dir / "fig2_effort.png")
-    figs.append(
-        Figure(
-            "fig2_effort.png",
-            "2",
-            "x-axis cumulative input effort: (a) fault-free, (b) LLFR "
-            "alpha_2 = 1, (c) FLFR alpha_2 = 6, (d) FLFR alpha_2 = 10 (E004-06: caption HLFR -> FLFR)",
-        )
-    )
-    with phase("plot"):
         plot_fig3(alpha_grid, d_norm, max_err, e_s, a_min, out_dir / "fig3_alpha2.png")
-    figs.append(
-        Figure(
-            "fig3_alpha2.png",
-            "3",
-            "alpha_2 versus (a) ||D||_2 and (b) simulated max tracking error",
-        )
-    )
     es_grid = np.linspace(0.012, 0.07, 200)
     coeff = design.coefficients
     analytic_curves = {
@@ -274,14 +259,25 @@ def run_reproduction(
         plot_fig4(
             es_grid, analytic_curves, max_err, alpha_grid, out_dir / "fig4_analytic_vs_sim.png", e_s
         )
-    figs.append(
+    figs = [
+        Figure(
+            "fig2_effort.png",
+            "2",
+            "x-axis cumulative input effort: (a) fault-free, (b) LLFR "
+            "alpha_2 = 1, (c) FLFR alpha_2 = 6, (d) FLFR alpha_2 = 10 (E004-06: caption HLFR -> FLFR)",
+        ),
+        Figure(
+            "fig3_alpha2.png",
+            "3",
+            "alpha_2 versus (a) ||D||_2 and (b) simulated max tracking error",
+        ),
         Figure(
             "fig4_analytic_vs_sim.png",
             "4",
             "analytic alpha_2 (eq. (11), pi = 0..0.4, H from A_clp "
             "at alpha_2 = 1) and simulated alpha_2 versus e_s",
-        )
-    )
+        ),
+    ]
 
     # ---------------------------------------------------------------- summary
     t_cmp = min(100.0, horizon)
@@ -331,15 +327,9 @@ def run_reproduction(
             "seeds": int(seeds),
             "noise_sigma_position_m": NOISE_SIGMA,
             "noise_sigma_velocity_m_s": NOISE_SIGMA,
-            "alpha2_min_simulated_min": float(np.nanmin(amin_seed))
-            if np.any(np.isfinite(amin_seed))
-            else None,
-            "alpha2_min_simulated_max": float(np.nanmax(amin_seed))
-            if np.any(np.isfinite(amin_seed))
-            else None,
-            "alpha2_min_simulated_mean": float(np.nanmean(amin_seed))
-            if np.any(np.isfinite(amin_seed))
-            else None,
+            "alpha2_min_simulated_min": float(np.nanmin(amin_seed)) if any_seed else None,
+            "alpha2_min_simulated_max": float(np.nanmax(amin_seed)) if any_seed else None,
+            "alpha2_min_simulated_mean": float(np.nanmean(amin_seed)) if any_seed else None,
             "max_err_llfr_min": float(llfr_seed.min()),
             "max_err_llfr_max": float(llfr_seed.max()),
             "max_err_llfr_std": float(llfr_seed.std()),
@@ -348,14 +338,13 @@ def run_reproduction(
     }
 
     # ---------------------------------------------------------------- comparison rows
-    rows: list[ComparisonRow] = []
     why = (
         "E004-08: nominal b_i, sign of eps, fault onset, labelling and H_i computation are unstated; "
         "our baseline b = 1, b_hat_2 = 0.88"
     )
     nan = float("nan")
     a_min_v = float(a_min) if a_min is not None else nan
-    rows.append(
+    rows: list[ComparisonRow] = [
         ComparisonRow.judged(
             "(a) fault-free max |e_ij| [m]",
             "about 1e-4 m (Sec. V, case (a))",
@@ -363,9 +352,7 @@ def run_reproduction(
             "same order: <= 2e-4 m",
             (("<=", m_ff["max_err"], 2e-4),),
             "dt = 1e-3 ZOH discretisation error, noise off (E004-09)",
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "(b) LLFR-only max |e_ij| [m], alpha_2 = 1",
             "0.072 m (Sec. V, case (b))",
@@ -373,9 +360,7 @@ def run_reproduction(
             "within 10 %",
             (("rel<=", m_ll["max_err"], 0.072, 0.10),),
             why + f" ({100 * _rel(m_ll['max_err'], 0.072):.0f} % off)",
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "simulated min alpha_2 for e_s = 0.03 m (0.1 grid)",
             "5.6 (Sec. V, case (c); Fig. 4)",
@@ -383,8 +368,8 @@ def run_reproduction(
             "within 0.3",
             (("abs<=", a_min_v, 5.6, 0.3),),
             why,
-        )
-    )
+        ),
+    ]
     for p in (0.0, 0.15, 0.2, 0.4):
         pub = PUBLISHED["alpha2_analytic"][p]
         ours = float(a_an[p])
@@ -403,7 +388,11 @@ def run_reproduction(
     vals = np.array([a_an[p] for p in PI_GRID])
     lin = np.polyfit(1 - np.array(PI_GRID), vals, 1)
     lin_res = float(np.max(np.abs(np.polyval(lin, 1 - np.array(PI_GRID)) - vals)))
-    rows.append(
+    cases = ("alpha2_1", "alpha2_6", "alpha2_10")
+    e2 = [E[c][1] for c in cases]
+    others = [[E[c][j] for c in cases] for j in (0, 2, 3)]
+    sg = design.small_gain
+    rows += [
         ComparisonRow.judged(
             "relation: analytic alpha_2 decreases as pi grows",
             "7.6 > 6.0 > 5.4 > 3.4 (Sec. V, case (c))",
@@ -411,9 +400,7 @@ def run_reproduction(
             "strictly decreasing on pi = 0, 0.05, ..., 0.4",
             (("decreasing", vals),),
             f"linear in 1 - pi: max residual {lin_res:.1e}",
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: deterministic alpha_2 (pi = 0) >= simulated minimum (conservative)",
             "7.6 >= 5.6 (Sec. V, case (c); Fig. 4)",
@@ -422,18 +409,14 @@ def run_reproduction(
             ((">=", a_an0, a_min_v),),
             f"H from A_clp at alpha_2 = 1; with the nominal A it is {design.alpha_nominal_H[0.0]:.2f} "
             "(not conservative)",
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: LLFR alone violates e_s",
             "0.072 m > 0.03 m = e_s (Sec. V, case (b))",
             f"{m_ll['max_err']:.4f} > {e_s}",
             "max error > e_s",
             ((">", m_ll["max_err"], e_s),),
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: FLFR with the analytic alpha_2 meets e_s",
             "e_s met by FLFR (Sec. V, case (c); Fig. 4)",
@@ -442,12 +425,7 @@ def run_reproduction(
             "max error <= e_s (analytic alpha_2 from t = 0, and supervised run after the switch)",
             (("<=", m_an["max_err"], e_s), ("<=", m_sv["max_err_after_flfr"], e_s)),
             "the supervised run exceeds e_s briefly before the switch (it is the trigger)",
-        )
-    )
-    cases = ("alpha2_1", "alpha2_6", "alpha2_10")
-    e2 = [E[c][1] for c in cases]
-    others = [[E[c][j] for c in cases] for j in (0, 2, 3)]
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: satellite 2 effort falls, others rise as alpha_2 = 1 -> 6 -> 10",
             "Fig. 2 (b)-(d)",
@@ -457,28 +435,21 @@ def run_reproduction(
             + " < ".join(f"{v:.1f}" for v in others[0]),
             "E_x2 strictly decreasing, E_x1, E_x3, E_x4 strictly increasing",
             (("decreasing", e2),) + tuple(("decreasing", [-v for v in o]) for o in others),
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: max error decreases with alpha_2 (Theorem 2)",
             "Fig. 3(b) and Sec. V, case (c)",
             f"{max_err[0]:.4f} -> {max_err[-1]:.4f}",
             "strictly decreasing on the grid",
             (("decreasing", max_err),),
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "relation: ||D|| decreases with alpha_2 (Lemma 1)",
             "Fig. 3(a) and Sec. V, case (c)",
             f"{d_norm[0]:.4f} -> {d_norm[-1]:.4f}",
             "strictly decreasing",
             (("decreasing", d_norm),),
-        )
-    )
-    sg = design.small_gain
-    rows.append(
+        ),
         ComparisonRow.judged(
             "Theorem 1 small gain: ||Delta|| < B_Delta at alpha_2 = 1",
             "Theorem 1 (condition only, no numbers)",
@@ -490,9 +461,7 @@ def run_reproduction(
             ),
             "E004-05: gamma_1 = sqrt(2); nominal system stable even without FLFR. "
             + sg.certificate,
-        )
-    )
-    rows.append(
+        ),
         ComparisonRow.judged(
             "bound (8) at alpha_2 = 1 vs simulated max error",
             "eq. (8) (bound only, no numbers)",
@@ -500,9 +469,8 @@ def run_reproduction(
             "bound >= simulation (within 1 %)",
             ((">=", design.bound_at_reference, 0.99 * m_ll["max_err"]),),
             "nearly tight there because the reduced model (7) is exact",
-        )
-    )
-
+        ),
+    ]
     notes = [
         "H_i by simulating X' = A_clp X + [0,1,0,-1]^T (f . xdd^d) from zero ICs over 300 s, A_clp at alpha_2 = 1 "
         "and eps = +/- B_eps (larger kept); eq. (11) used literally (disturbance floor not subtracted; "

@@ -133,7 +133,7 @@ def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition
         "exact up to rounding: symmetric eigenvalues recomputed in numpy from the returned matrices clear "
         "the rounding margin 10 n eps ||M|| (solver backward error and the rounding of forming M)"
     )
-    out = [
+    return [
         Condition(
             "(8) observer Lyapunov LMI",
             "Gui2022 Thm 1 eq. (8)",
@@ -234,7 +234,6 @@ def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition
             "damped learning loop that rings after a step fault",
         ),
     ]
-    return out
 
 
 def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition]:

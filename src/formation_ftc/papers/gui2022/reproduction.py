@@ -79,17 +79,6 @@ def run_scenarios(scns: list, timings: dict | None = None, labels: list[str] | N
     return [(F.deputy(ds), metrics) for ds, metrics in runs]
 
 
-def _fmt(x, p=4):
-    return f"{x:.{p}g}"
-
-
-def _row(q, pub_, ours, crit, basis, note="", reference=""):
-    """A comparison row; ``basis`` (clauses, see ComparisonRow) computes the verdict, None = not stated."""
-    if basis is None:
-        return ComparisonRow(q, pub_, ours, crit, "not stated", note, reference)
-    return ComparisonRow.judged(q, pub_, ours, crit, basis, note, reference)
-
-
 #: |q - q_hat| position [m] at 1 s and 2 s after the Figs. 4-5 estimate offset (not printed; reference
 #: values of docs/references.md, recomputed by the numpy loop of numpy_reference.py in the tests)
 OFFSET_ERROR_REFERENCE = {1.0: 0.16, 2.0: 5.5e-4}
@@ -281,21 +270,21 @@ def run_reproduction(
 
     k_equal = bool(np.allclose(K_care_4dp, pub.K_PRINTED, atol=1e-12))
     rows = [
-        _row(
+        ComparisonRow.judged(
             "P1 from CARE (34), Q = 4e-5 I6",
             "P1 printed to 4 decimals (Sec. 5.2)",
             f"max dev {dP:.3g}",
             "<= 5e-5 (E002-05)",
             (("<=", dP, 5e-5),),
         ),
-        _row(
+        ComparisonRow.judged(
             "K = B^T P1 (35)",
             "K printed (Sec. 5.2)",
             f"B^T P1 (4 dp) == K: {k_equal}",
             "equal to 4 dp",
             (("true", k_equal),),
         ),
-        _row(
+        ComparisonRow.judged(
             "L1 from LMIs (8), (27), S(-5,2)",
             "diag 4.5471, off-diag 1.0 / +-0.0030 (L1 printed, Sec. 5.1)",
             f"diag {des.L1[0, 0]:.4f}, off-diag {des.L1[0, 3]:.4f} / {des.L1[3, 4]:+.4f}",
@@ -304,7 +293,7 @@ def run_reproduction(
             "LMIs have many solutions: same kinematic/Coriolis structure, different diagonal; ours is the "
             "min-trace P >= I solution, poles inside S(-5,2) (E002-06)",
         ),
-        _row(
+        ComparisonRow.judged(
             "L2 magnitude",
             "456.27 (L2 printed, Sec. 5.1)",
             f"{des.L2[0, 3]:.4g} (normalised P >= I); x{scale:.4g} rescaled",
@@ -315,7 +304,7 @@ def run_reproduction(
             f"ILO rms err x with normalised L2 = {m_lmi['fault_rms_err_x']:.3g}, rescaled = "
             f"{m_lmis['fault_rms_err_x']:.3g} (printed gains {m_ilo['fault_rms_err_x']:.3g})",
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 3: x step reconstructed",
             "accurate (Fig. 3 and its text)",
             f"|F_hat_x - 0.5| < 0.01 after {m_ilo['fault_settle_time_x']:.3f} s; "
@@ -323,14 +312,14 @@ def run_reproduction(
             "settle <= 0.25 s",
             (("<=", m_ilo["fault_settle_time_x"], 0.25),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 3: z time-varying fault",
             "accurate (Fig. 3 and its text)",
             f"max |F_z - F_hat_z| after 2001 s = {m_ilo['fault_max_err_after_1s_z']:.3g}",
             "< 8e-3",
             (("<", m_ilo["fault_max_err_after_1s_z"], 8e-3),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 3: y axis near zero",
             "converges to a region of zero (Fig. 3 text)",
             f"max |F_hat_y| after 1 s = {m_ilo['fault_max_err_after_1s_y']:.3g}",
@@ -338,7 +327,7 @@ def run_reproduction(
             (("<", m_ilo["fault_max_err_after_1s_y"], 3e-3),),
             "F_hat_y ~ d_y: the ILO reconstructs F + d",
         ),
-        _row(
+        ComparisonRow.judged(
             "Figs. 4-5: estimation error converges",
             "quickly to zero (Figs. 4-5 and their text)",
             f"|e_pos| {e_at[0.0]:.3g} -> {e_at[1.0]:.3g} (1 s) -> {e_at[2.0]:.3g} m (2 s)",
@@ -348,7 +337,7 @@ def run_reproduction(
             "numpy per-step loop (numpy_reference.py) from the same initial offset "
             "(docs/references.md)",
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 6: new ILO more accurate than ILO of [25]",
             "new ILO better under perturbation (Fig. 6 text)",
             f"rms err x: new {m_ilo['fault_rms_err_x']:.3g}, [25] {m_base['fault_rms_err_x']:.3g}; "
@@ -360,21 +349,21 @@ def run_reproduction(
             ),
             "E002-11; see notes",
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 7: LOF2TC converges",
             "converges to a region of zero (Fig. 7 text)",
             f"||e_pos|| < 0.01 m after {m_lof['pos_settle_time_0p01']:.1f} s",
             "settles below 0.01 m within 200 s",
             (("<", m_lof["pos_settle_time_0p01"], 200.0),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 7: LOF2TC unaffected by faults",
             "higher accuracy (Fig. 7 text)",
             f"max ||e_pos|| after 1500 s = {m_lof['pos_max_after_fault']:.3g} m",
             "< 2e-3 m",
             (("<", m_lof["pos_max_after_fault"], 2e-3),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 7: COF2TC x deviation after 1500 s",
             "deviates from zero (Fig. 7 text)",
             f"max |e_x| = {m_cof['ex_max_fault_window']:.4g} m",
@@ -384,21 +373,21 @@ def run_reproduction(
                 ("<=", m_cof["ex_max_fault_window"], 90.0),
             ),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 7: COF2TC z after 2000 s",
             "fluctuation (Fig. 7 text)",
             f"max |e_z| after 2100 s = {m_cof['ez_max_after']:.4g} m",
             "[33, 41] m",
             ((">=", m_cof["ez_max_after"], 33.0), ("<=", m_cof["ez_max_after"], 41.0)),
         ),
-        _row(
+        ComparisonRow.judged(
             "LOF2TC better than COF2TC",
             "better formation maintenance (Sec. 5.2 text)",
             f"rms ||e_pos|| after 1600 s: {m_lof['pos_rms']:.3g} vs {m_cof['pos_rms']:.4g} m",
             "LOF2TC < COF2TC",
             (("<", m_lof["pos_rms"], m_cof["pos_rms"]),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Fig. 10: v estimates h = d + e_F",
             "accurate (Fig. 10 text)",
             f"rms |v - h| after 1600 s = {v_h_rms:.3g} (rms |h| {h_rms:.3g}), both low-pass "
@@ -406,7 +395,7 @@ def run_reproduction(
             "< 0.5 rms |h|",
             (("<", v_h_rms, 0.5 * h_rms),),
         ),
-        _row("pi(t) peak", "", f"{m_lof['pi_max']:.4g}", "-", None),
+        ComparisonRow("pi(t) peak", "", f"{m_lof['pi_max']:.4g}", "-", "not stated"),
     ]
     notes = [
         "Gains: printed L1, L2, K used for every reproduction run; the LMI design is reported "

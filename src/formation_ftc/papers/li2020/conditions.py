@@ -241,20 +241,14 @@ def _delay_conditions(
         ha_up = _worst_bound([vb_all[st.pair] for st in stats])
         value = f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)"
         if wa.rate_max >= 1:
-            holds, basis, detail = (
-                False,
-                "sampled",
-                "sampled: the rate reaches 1 at a step; " + GRID,
-            )
+            holds, basis = False, "sampled"
+            detail = "sampled: the rate reaches 1 at a step; " + GRID
         elif ha_up is not None and ha_up < 1:
             holds, basis, detail = True, "verified", INTERVAL
             value += f"; verified <= {ha_up:.6g}"
         else:
-            holds, basis, detail = (
-                None,
-                "sampled",
-                "sampled (unproven by the interval enclosure): " + GRID,
-            )
+            holds, basis = None, "sampled"
+            detail = "sampled (unproven by the interval enclosure): " + GRID
         out.append(
             Condition(
                 name="delay rate bound (all printed delays)",
@@ -391,7 +385,9 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
         k_positive,
     ]
     d0 = per_spacecraft(ctl.d_hat0, n, "controller.d_hat0")
-    out.append(
+    sigma_a = per_spacecraft(ctl.sigma_a, n, "controller.sigma_a")
+    sign = -1 if (ctl.dhat_sign_literal and law == "thm2") else 1  # as the catalog builds the law
+    out += [
         Condition(
             name="d_hat_i(0) > 0",
             reference="Li2020 eq. (27)",
@@ -400,10 +396,7 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
             holds=bool(np.all(d0 > 0)),
             basis="exact",
             detail="exact: comparison of the scenario values",
-        )
-    )
-    sigma_a = per_spacecraft(ctl.sigma_a, n, "controller.sigma_a")
-    out.append(
+        ),
         Condition(
             name="sigma_i integrable",
             reference="Li2020 eq. (11), (13)-(16)",
@@ -412,10 +405,7 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
             holds=True,
             basis="exact",
             detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
-        )
-    )
-    sign = -1 if (ctl.dhat_sign_literal and law == "thm2") else 1  # as the catalog builds the law
-    out.append(
+        ),
         Condition(
             name="sign of d_hat tanh term",
             reference="Li2020 eq. (24)/(42); E000-04",
@@ -424,8 +414,8 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
             holds=sign > 0,
             basis="exact",
             detail="exact: sign chosen by the scenario",
-        )
-    )
+        ),
+    ]
     if law == "thm2":
         out += _delay_conditions(scenario, C, per_spacecraft(ctl.lam, n, "controller.lam"))
     x_star, r_star = lemma3_constant()

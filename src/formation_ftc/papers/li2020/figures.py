@@ -15,6 +15,8 @@ from formation_ftc.plotting import new_figure, save_figure
 __all__ = ["plot_errors", "plot_mu", "plot_adaptive", "plot_comparison", "plot_scenario"]
 
 ZOOM = 100.0  # s
+#: formation errors of Figs. 6, 10 and 12 and their axis labels
+_MU = (("mu1", r"$\mu_1$ [m]"), ("mu2", r"$\mu_2$ literal [m]"), ("mu2_vc", r"$\mu_{2,vc}$ [m]"))
 
 
 def _label(sc) -> str:
@@ -50,12 +52,7 @@ def plot_mu(ds, path: Path, title: str) -> Path:
     fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
     t = ds.time.values
     zoom = t <= ZOOM
-    names = [
-        ("mu1", r"$\mu_1$ [m]"),
-        ("mu2", r"$\mu_2$ literal [m]"),
-        ("mu2_vc", r"$\mu_{2,vc}$ [m]"),
-    ]
-    for r, (name, lab) in enumerate(names):
+    for r, (name, lab) in enumerate(_MU):
         y = ds[name].values
         axes[r, 0].plot(t[zoom], y[zoom], color="k", label=name)
         axes[r, 1].semilogy(t, np.maximum(y, 1e-12), color="k", label=name)
@@ -99,11 +96,11 @@ def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path
     for k, (label, ds) in enumerate(datasets.items()):
         t = ds.time.values
         zoom = t <= ZOOM
-        for r, name in enumerate(["mu1", "mu2", "mu2_vc"]):
+        for r, (name, _) in enumerate(_MU):
             y = ds[name].values
             axes[r, 0].plot(t[zoom], y[zoom], styles[k % 4], label=label)
             axes[r, 1].semilogy(t, np.maximum(y, 1e-12), styles[k % 4], label=label)
-    for r, lab in enumerate([r"$\mu_1$ [m]", r"$\mu_2$ literal [m]", r"$\mu_{2,vc}$ [m]"]):
+    for r, (_, lab) in enumerate(_MU):
         for c in range(2):
             axes[r, c].set_ylabel(lab)
     for c in range(2):

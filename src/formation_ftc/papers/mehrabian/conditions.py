@@ -120,8 +120,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
     c = s.section("controller")
     K, KP, KI, a, g = c.K, c.K_P, c.K_I, c.alpha, c.gamma
     dq = design_quantities(K, KP, KI, a, g)
-    out: list[Condition] = []
-    out.append(
+    out: list[Condition] = [
         Condition(
             "K-bar > 0 (proportional gain)",
             "Mehrabian (9), E003-03",
@@ -130,9 +129,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             KP > 0,
             basis="exact",
             detail="exact: scalar comparison of the scenario values",
-        )
-    )
-    out.append(
+        ),
         Condition(
             "K-double-bar > 0 (integral gain)",
             "Mehrabian (9), E003-03",
@@ -141,9 +138,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             KI > 0,
             basis="exact",
             detail="exact: scalar comparison of the scenario values",
-        )
-    )
-    out.append(
+        ),
         Condition(
             "K - I/gamma^2 > 0",
             "Mehrabian (9)",
@@ -153,9 +148,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             basis="exact",
             detail="exact: scalar arithmetic on the scenario values (float64; the sign is decided "
             "unless K gamma^2 = 1 to within 1e-16)",
-        )
-    )
-    out.append(
+        ),
         Condition(
             "0 < alpha < 1",
             "Mehrabian (10)",
@@ -164,9 +157,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             0 < a < 1,
             basis="exact",
             detail="exact: scalar comparison of the scenario values",
-        )
-    )
-    out.append(
+        ),
         Condition(
             "(1 - alpha) K-bar^2 - 2 K-double-bar > 0",
             "Mehrabian (11), E003-03",
@@ -176,8 +167,8 @@ def check(s: Any, loop: Any) -> list[Condition]:
             basis="exact",
             detail=f"exact: scalar arithmetic; with the gain letters swapped (K-bar = {KI:g}): {dq.cond11_swapped:.4g} "
             "(E003-03)",
-        )
-    )
+        ),
+    ]
     if c.law == "literal":
         out.append(
             Condition(
@@ -236,7 +227,8 @@ def check(s: Any, loop: Any) -> list[Condition]:
         )
     )
     # derived design quantities next to the printed ones (informational)
-    out.append(
+    dq861 = design_quantities(K, KP, KI, 0.861, g)
+    out += [
         Condition(
             "R_j",
             "Mehrabian (13), E003-02",
@@ -246,10 +238,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             required=False,
             basis="exact",
             detail="informative (exact arithmetic): 17.22 equals K - I/gamma^2 = R_j^-1, not R_j (E003-02)",
-        )
-    )
-    dq861 = design_quantities(K, KP, KI, 0.861, g)
-    out.append(
+        ),
         Condition(
             "sum_n Q_jn",
             "Mehrabian (14), E003-05",
@@ -261,9 +250,7 @@ def check(s: Any, loop: Any) -> list[Condition]:
             required=False,
             basis="exact",
             detail="informative (exact arithmetic): alpha = 0.861 reproduces the printed (truncated) digits (E003-05)",
-        )
-    )
-    out.append(
+        ),
         Condition(
             "Q_j",
             "Mehrabian (15), E003-05",
@@ -273,8 +260,8 @@ def check(s: Any, loop: Any) -> list[Condition]:
             required=False,
             basis="exact",
             detail="exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)",
-        )
-    )
+        ),
+    ]
     # RK4 step against the fastest closed-loop rate (sat boundary layer and coupling)
     mu_min = float(np.min(np.linalg.eigvals(graphs.row_normalized(A)).real))
     damp = max(modal_damping(K, a, g, mu, c.law) for mu in (mu_min, 1.0))

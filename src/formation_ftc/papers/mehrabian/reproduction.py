@@ -84,14 +84,6 @@ def _one_structure(compiled) -> None:
         )
 
 
-def _batch(compiled, seeds):
-    """The case x seed runs (case-major) as one batch: ``(params, in_axes, size)`` for
-    :func:`formation_ftc.sim.batch.batched_run` (leaves shared by every run stay unbatched)."""
-    _one_structure(compiled)
-    runs = [with_seed(c.params, s) for c in compiled for s in seeds]
-    return (*stack_params(runs), len(runs))
-
-
 def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | None = None):
     """Run every (scenario, seed) pair in one vmapped program, laid out as a grid (scenarios x seeds,
     :func:`formation_ftc.sim.batch.stack_params_grid`): a seed's measurement noise is drawn once for
@@ -154,8 +146,10 @@ def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = 
     ov = {**(overrides or {}), "simulation.seed": seed}
     scns = [load_scenario(n, ov) for n in scenario_names]
     compiled = [compile_scenario(s) for s in scns]
-    P, axes, size = _batch(compiled, [seed])
-    out = jax.tree_util.tree_map(np.asarray, batched_run(compiled[0], axes, size)(P))
+    _one_structure(compiled)
+    # one batch of the cases (leaves shared by every run stay unbatched)
+    P, axes = stack_params([with_seed(c.params, seed) for c in compiled])
+    out = jax.tree_util.tree_map(np.asarray, batched_run(compiled[0], axes, len(compiled))(P))
     datasets = []
     for i, (s, c) in enumerate(zip(scns, compiled, strict=True)):
         one = jax.tree_util.tree_map(lambda a, i=i: a[i], out)
@@ -169,21 +163,11 @@ def _stats(v: np.ndarray, unit: str, valid: np.ndarray | None = None) -> dict:
     v = np.asarray(v, dtype=float)
     keep = np.ones(v.shape, bool) if valid is None else np.asarray(valid, bool)
     w = v[keep]
-    if w.size == 0:
-        return dict(
-            mean=None,
-            std=None,
-            min=None,
-            max=None,
-            n=0,
-            n_excluded_diverged=int((~keep).sum()),
-            unit=unit,
-        )
     return dict(
-        mean=float(w.mean()),
-        std=float(w.std(ddof=1)) if w.size > 1 else 0.0,
-        min=float(w.min()),
-        max=float(w.max()),
+        mean=float(w.mean()) if w.size else None,
+        std=float(w.std(ddof=1)) if w.size > 1 else (0.0 if w.size else None),
+        min=float(w.min()) if w.size else None,
+        max=float(w.max()) if w.size else None,
         n=int(w.size),
         n_excluded_diverged=int((~keep).sum()),
         unit=unit,
@@ -204,11 +188,6 @@ DESIGN_REFERENCE: dict[str, Any] = {
     "cond11": 1.584e-3,
     "damping": 0.011111,
 }
-
-
-def _row(quantity, published, ours, criterion, basis, note="", reference="") -> ComparisonRow:
-    """Row whose verdict is computed from ``basis`` (clauses, see ComparisonRow)."""
-    return ComparisonRow.judged(quantity, published, ours, criterion, basis, note, reference)
 
 
 def _mx(v) -> float:
@@ -366,7 +345,7 @@ def run(
 
     finite = div < 0
     rows = [
-        _row(
+        ComparisonRow.judged(
             "sync error RMS, fault window, B/A",
             "B << A: 'the synchronization error is considerably decreased' "
             "(Sec. V text, Fig. 4 vs Fig. 3)",
@@ -374,14 +353,14 @@ def run(
             "B/A < 0.5 for every seed",
             (("<", _mx(sync[B] / sync[A]), 0.5),),
         ),
-        _row(
+        ComparisonRow.judged(
             "tracking error RMS, fault window, B vs A",
             "'attitudes are closer to zero' in Fig. 4 than Fig. 3 (Sec. V text)",
             f"ratio {_ms(track[B] / track[A])}; A {_ms(track[A])} rad, B {_ms(track[B])} rad",
             "B/A < 1 for every seed",
             (("<", _mx(track[B] / track[A]), 1.0),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Case C bounded during the fault window",
             "states bounded (Lemma 4, Fig. 5)",
             f"{int(valid['fault_window'][C].sum())}/{len(seeds)} runs finite through "
@@ -389,7 +368,7 @@ def run(
             "all finite and |theta| < 85 deg over 40-240 s",
             (("true", bool(valid["fault_window"][C].all())), ("<", _mx(abs_pitch_fw[C]), 85.0)),
         ),
-        _row(
+        ComparisonRow.judged(
             "Case C bounded over the whole run",
             "states bounded for t >= 0 (Lemma 4); Fig. 5 shows 300 s",
             f"{int(finite[C].sum())}/{len(seeds)} runs finite over {H:g} s; max |theta| of the finite runs "
@@ -400,35 +379,35 @@ def run(
             "after the fault ends (t > 240 s) the mis-isolated roll compensation with the literal law leaves a "
             "large common-mode oscillation; same amplitude at dt/2, dt/4 (physical, chaotic in detail)",
         ),
-        _row(
+        ComparisonRow.judged(
             "Case C degrades roll",
             "roll synchronisation degraded in Fig. 5 vs Fig. 4 (Sec. V text)",
             f"roll spread C/B {_ms(roll_sp[C] / roll_sp[B])}; C {_ms(roll_sp[C], '.1f')} deg",
             "C/B > 3 for every seed",
             ((">", _mn(roll_sp[C] / roll_sp[B]), 3.0),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Case C degrades yaw as well",
             "yaw degraded 'in addition' in Fig. 5 (Sec. V text)",
             f"max |psi| C/B {_ms(abs_yaw[C] / abs_yaw[B])}; yaw spread C/B {_ms(yaw_sp[C] / yaw_sp[B])}",
             "max |psi| and yaw spread larger in C than B for every seed",
             ((">", _mn(abs_yaw[C] - abs_yaw[B]), 0.0), (">", _mn(yaw_sp[C] - yaw_sp[B]), 0.0)),
         ),
-        _row(
+        ComparisonRow.judged(
             "yaw spread over [45, 240] s, B/A",
             "synchronisation improved in Fig. 4 vs Fig. 3 (Sec. V text)",
             _ms(yaw_sp[B] / yaw_sp[A]),
             "< 0.7 for every seed",
             (("<", _mx(yaw_sp[B] / yaw_sp[A]), 0.7),),
         ),
-        _row(
+        ComparisonRow.judged(
             "max |psi| over [45, 240] s, B/A",
             "attitudes closer to zero in Fig. 4 than Fig. 3 (Sec. V text)",
             _ms(abs_yaw[B] / abs_yaw[A]),
             "< 0.7 for every seed",
             (("<", _mx(abs_yaw[B] / abs_yaw[A]), 0.7),),
         ),
-        _row(
+        ComparisonRow.judged(
             "all runs finite, |theta| < 85 deg",
             "states bounded (Lemma 4; Figs. 3-5)",
             f"{int(finite.sum())}/{finite.size} finite, max |theta| of the finite runs {_mx(abs_pitch[finite]):.1f} deg"
@@ -440,8 +419,12 @@ def run(
     dq = conditions.design_quantities(20.0, 0.16, 0.001, 0.86, 0.6)
     ref = DESIGN_REFERENCE
     closed = "closed form with the printed K = 20, K_P = 0.16, K_I = 0.001, alpha = 0.86, gamma = 0.6 (docs/references.md)"
+    Pmin = min(
+        np.linalg.eigvalsh(conditions.lyapunov_matrix(d * np.eye(3), 20.0, 0.16, 0.001)).min()
+        for d in (10, 20)
+    )
     rows += [
-        _row(
+        ComparisonRow.judged(
             "R_j (13)",
             "17.22 I3 (Sec. V)",
             f"{dq.R:.6f} I3 (inverse {dq.K_minus:.4f})",
@@ -450,7 +433,7 @@ def run(
             "E003-02",
             reference=f"R = {ref['R']}: {closed}",
         ),
-        _row(
+        ComparisonRow.judged(
             "sum_n Q_jn (14)",
             "diag(0.17e-4, 0.44, 17.22) (Sec. V)",
             "diag(" + ", ".join(f"{x:.4g}" for x in dq.sum_Q_jn) + ")",
@@ -462,7 +445,7 @@ def run(
             "E003-05 (alpha = 0.861 gives the printed 17.22)",
             reference=f"diag{tuple(ref['sum_Q_jn'])}: {closed}",
         ),
-        _row(
+        ComparisonRow.judged(
             "Q_j (15)",
             "diag(0.27e-5, 0.031e-3, 2.78) (Sec. V)",
             "diag(" + ", ".join(f"{x:.4g}" for x in dq.Q_j) + ")",
@@ -471,7 +454,7 @@ def run(
             "printed middle entry 0.031e-3 must read 0.031 (E003-05)",
             reference=f"diag{tuple(ref['Q_j'])}: {closed}",
         ),
-        _row(
+        ComparisonRow.judged(
             "condition (11)",
             "holds for the printed gains (Sec. V: gains chosen in view of (9)-(11))",
             f"{dq.cond11:.4g} (swapped letters {dq.cond11_swapped:.3g})",
@@ -480,7 +463,7 @@ def run(
             "E003-03",
             reference=f"{ref['cond11']}: {closed}",
         ),
-        _row(
+        ComparisonRow.judged(
             "literal-law consensus damping",
             "",
             f"{dq.consensus_damping_literal:.4f} N m s",
@@ -492,20 +475,14 @@ def run(
             "E003-01",
             reference=f"{ref['damping']} N m s: {closed}",
         ),
-    ]
-    Pmin = min(
-        np.linalg.eigvalsh(conditions.lyapunov_matrix(d * np.eye(3), 20.0, 0.16, 0.001)).min()
-        for d in (10, 20)
-    )
-    rows.append(
-        _row(
+        ComparisonRow.judged(
             "P_j (21) min eigenvalue",
             "positive definite (eq. (21))",
             f"{Pmin:.4g}",
             "> 0",
             ((">", Pmin, 0.0),),
-        )
-    )
+        ),
+    ]
 
     roll_d = deg(Md["spread_max_roll_assessment_window"])
     summary["diffusive_law_roll_spread_max_45_240_deg"] = {
@@ -513,7 +490,7 @@ def run(
         CASES["C"][0]: _stats(roll_d[1], "deg", divd[1] < 0),
     }
     rows.append(
-        _row(
+        ComparisonRow.judged(
             "diffusive law (E003-01): roll spread C vs A",
             "roll degraded in Fig. 5 (Case C) only with the literal "
             "law (8); the diffusive reading of E003-01 should show none",

@@ -204,8 +204,9 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
         return []
     d = sc.section("supervisor")
     q = design_quantities(sc)
-    out: list[Condition] = []
-    out.append(
+    c = sc.section("controller")
+    rate = dw.translational_decay_rate(c.K1, c.K2)
+    out: list[Condition] = [
         Condition(
             name="S = max|S_ij| (Frobenius, as printed) and induced 2-norm",
             reference="Yang2013 after (20), E001-04",
@@ -215,11 +216,7 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
             required=False,
             basis="informative",
             detail="informative: the two norms of the variation matrices (numpy), shown for E001-04",
-        )
-    )
-    c = sc.section("controller")
-    rate = dw.translational_decay_rate(c.K1, c.K2)
-    out.append(
+        ),
         Condition(
             name="gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0",
             reference="Yang2013 (12), (20)",
@@ -230,9 +227,7 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
             basis="exact",
             detail="underdamped loop: rate = K2/2, so K2 = eta (design.dwell_time.gains_for_decay_rate); "
             + EXACT,
-        )
-    )
-    out.append(
+        ),
         Condition(
             name="attitude-rate loop at least as fast: K3 >= eta/2",
             reference="Yang2013 (13)",
@@ -242,8 +237,8 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
             required=True,
             basis="exact",
             detail=EXACT,
-        )
-    )
+        ),
+    ]
     for f in faults(sc):
         growth = -2.0 * dw.translational_decay_rate(c.K1, f.K2_faulty)
         out.append(
@@ -258,9 +253,8 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
                 detail=EXACT,
             )
         )
-    for ineq in dw.check_epsilons(d.epsilon, d.epsilon1, d.epsilon2, q["S"]):
-        out.append(_cond(ineq))
-    out.append(
+    out += [_cond(ineq) for ineq in dw.check_epsilons(d.epsilon, d.epsilon1, d.epsilon2, q["S"])]
+    out += [
         _cond(
             dw.check_dwell_time(
                 q["min_activation_time"],
@@ -275,11 +269,9 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
             detail=f"bound {q['dwell_time_required']:.1f} s; with S_2: "
             f"{q['dwell_time_required_induced2']:.1f} s; proof-consistent (S+1): "
             f"{q['dwell_time_required_proof_S_plus_1']:.1f} s (E001-07)",
-        )
-    )
-    out.append(
-        _cond(dw.check_initial_state(q["initial_state_norm"], d.epsilon, q["S"], d.zeta, q["D"]))
-    )
+        ),
+        _cond(dw.check_initial_state(q["initial_state_norm"], d.epsilon, q["S"], d.zeta, q["D"])),
+    ]
     for j, m in enumerate(d.modes):
         for ns in m.new_states:
             out.append(

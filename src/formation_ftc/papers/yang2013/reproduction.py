@@ -105,13 +105,6 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
     }
 
 
-def _row(quantity, published, ours, criterion, basis, note="") -> ComparisonRow:
-    """Row whose verdict is computed from ``basis`` (clauses, see ComparisonRow); None = not stated."""
-    if basis is None:
-        return ComparisonRow(quantity, published, ours, criterion, "not stated", note)
-    return ComparisonRow.judged(quantity, published, ours, criterion, basis, note)
-
-
 def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: None) -> PaperReport:
     from formation_ftc.api import check as api_check
     from formation_ftc.papers.yang2013.figures import figure_4, figure_5
@@ -153,17 +146,22 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
         "condition_29_holds",
         "max_input_norm_sc2",
     ]
-    summary = {key: {name: results[name][2][key] for name in SCENARIOS} for key in keys}
+
+    def per_scenario(key: str) -> dict:
+        return {name: results[name][2][key] for name in SCENARIOS}
+
+    summary = {key: per_scenario(key) for key in keys}
     summary["S_frobenius"] = q["S_frobenius"]
     summary["S_induced2"] = q["S_induced2"]
     summary["dwell_time_required_induced2"] = q["dwell_time_required_induced2"]
     summary["x2_growth_ratio"] = n_f["x2_growth_ratio"]
-    for key in ("max_input_norm_sc2_2000_3800", "max_input_norm_sc2_3800_4000"):
-        summary[key] = {name: results[name][2][key] for name in SCENARIOS}
-    summary["state_norm_after_4000"] = {
-        name: results[name][2]["state_norm_after_4000"] for name in SCENARIOS
-    }
-    summary["pre_switch_norms"] = {name: results[name][2]["pre_switch_norms"] for name in SCENARIOS}
+    for key in (
+        "max_input_norm_sc2_2000_3800",
+        "max_input_norm_sc2_3800_4000",
+        "state_norm_after_4000",
+        "pre_switch_norms",
+    ):
+        summary[key] = per_scenario(key)
     summary["supervisor_events"] = n_f["supervisor_events"]
 
     max_all = max(n_h["max_state_norm"], n_f["max_state_norm"])
@@ -173,7 +171,7 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
     cond29 = n_f["condition_29_holds"]
     margin29 = n_f["condition_29_margin"] if n_f["condition_29_margin"] is not None else nan
     rows = [
-        _row(
+        ComparisonRow.judged(
             "S = max|S_ij|",
             "sqrt(5) = 2.2361 (Sec. 4)",
             f"{q['S_frobenius']:.4f} (Frobenius); induced 2-norm {q['S_induced2']:.4f}",
@@ -181,14 +179,14 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
             (("abs<=", q["S_frobenius"], float(np.sqrt(5)), 1e-4),),
             "E001-04: the proof needs the induced 2-norm sqrt(3)",
         ),
-        _row(
+        ComparisonRow.judged(
             "D = |[d_bar, iota_bar]|",
             "0.1 (Sec. 4)",
             f"{q['D']:.4f}",
             "|diff| < 1e-9",
             (("abs<=", q["D"], 0.1, 1e-9),),
         ),
-        _row(
+        ComparisonRow.judged(
             "Delta t = 1000 s satisfies (21)",
             "Delta t = 1000 s chosen from (21)-(22) (Sec. 4)",
             f"bound {q['dwell_time_required']:.1f} s (S_2: {q['dwell_time_required_induced2']:.1f} s)",
@@ -196,7 +194,7 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
             (("<=", q["dwell_time_required"], 1000.0),),
             "the bound itself is not printed (E001-07)",
         ),
-        _row(
+        ComparisonRow.judged(
             "initial |X(0)| satisfies (24)",
             "1.5 (Sec. 4)",
             f"{q['initial_state_norm']:.4f} <= {q['initial_state_bound']:.4f}",
@@ -206,49 +204,49 @@ def run(out_dir: Path, progress: Callable[[float, str], None] = lambda f, m: Non
                 ("<=", q["initial_state_norm"], q["initial_state_bound"]),
             ),
         ),
-        _row(
+        ComparisonRow.judged(
             "joining |x6| satisfies (22)",
             "0.2 <= eps = 0.9 (Sec. 4)",
             f"0.2 <= {q['new_state_bound']:.4f}",
             "(22) holds: 0.2 <= bound",
             (("<=", 0.2, q["new_state_bound"]),),
         ),
-        _row(
+        ComparisonRow.judged(
             "(29) with fault at 3800 s",
             "holds since Delta t1 >= Delta t2 (Sec. 4)",
             f"margin {margin29:.4g}",
             "(29) holds and the faulty spacecraft leaves at the next switch, margin >= 0",
             (("true", bool(cond29)), (">=", margin29, 0.0)),
         ),
-        _row(
+        ComparisonRow.judged(
             "|X_sigma(t)(t)| bounded within the envelope",
             "always bounded within the prescribed region (Sec. 4, Fig. 4)",
             f"sup|X| = {max_all:.4f} <= {q['envelope']:.4f}",
             "sup|X| <= eps + (S+2) zeta D",
             (("<=", max_all, q["envelope"]),),
         ),
-        _row(
+        ComparisonRow.judged(
             "|X(t_k^-)| at the switches",
             "<= eps1 + zeta D (proof of Theorem 1)",
             f"max {pre_max:.4f}",
             f"<= {q['pre_switch_bound']:.2f}",
             (("<=", pre_max, q["pre_switch_bound"]),),
         ),
-        _row(
+        ComparisonRow.judged(
             "|x2| grows on [3800, 4000) s",
             "|x2| increases in [3800, 4000) s (Sec. 4, Fig. 4)",
             f"x {n_f['x2_growth_ratio']:.2f}",
             "ratio >= 2",
             ((">=", n_f["x2_growth_ratio"], 2.0),),
         ),
-        _row(
+        ComparisonRow.judged(
             "|X(4000)| after departure of 2 and arrival of 6",
             "spacecraft 6 joins with state norm 0.2 (Sec. 4)",
             f"{n_f['state_norm_after_4000']:.4f}",
             "0.20 +- 0.05",
             (("abs<=", n_f["state_norm_after_4000"], 0.2, 0.05),),
         ),
-        _row(
+        ComparisonRow.judged(
             "|u_2| grows after the fault",
             "the input magnitude becomes large after 3800 s (Sec. 4, Fig. 5)",
             f"max {n_f['max_input_norm_sc2_2000_3800']:.2f} -> {n_f['max_input_norm_sc2_3800_4000']:.2f} "

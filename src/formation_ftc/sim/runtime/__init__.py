@@ -297,9 +297,8 @@ def configure() -> str | None:
     os.environ[ENV_SWITCH] = "on"
     cache = compilation_cache_dir()
     if cache is not None and private_cache_dir(cache):
-        os.environ["JAX_COMPILATION_CACHE_DIR"] = (
-            cache  # also over one inherited from a parent process
-        )
+        # also over one inherited from a parent process
+        os.environ["JAX_COMPILATION_CACHE_DIR"] = cache
         os.environ.setdefault(
             "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
         )
@@ -319,12 +318,8 @@ def _configure_jax(cache: str | None) -> None:
 
     jax.config.update("jax_compilation_cache_dir", cache)
     if cache is not None:
-        jax.config.update(
-            "jax_persistent_cache_min_compile_time_secs",
-            float(
-                os.environ.get(
-                    "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
-                )
-            ),
+        min_s = os.environ.get(
+            "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
         )
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_s))
     use_unrolled_threefry()

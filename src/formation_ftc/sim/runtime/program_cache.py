@@ -151,9 +151,8 @@ def directory() -> Path | None:
     """
     if not _enabled():
         return None
-    base = getattr(
-        jax.config, "jax_compilation_cache_dir", None
-    )  # a dynamic option: not in the stubs
+    # a dynamic option: not in the stubs
+    base = getattr(jax.config, "jax_compilation_cache_dir", None)
     return Path(base) / "programs" if base else None
 
 
@@ -378,9 +377,8 @@ def _safe_folder(folder: Path) -> bool:
         return False
     try:
         if stat.S_IMODE(os.lstat(folder).st_mode) != 0o700:
-            os.chmod(
-                folder, 0o700
-            )  # ours and private: an entry directory of an earlier version (0755)
+            # ours and private: an entry directory of an earlier version (0755)
+            os.chmod(folder, 0o700)
     except OSError:
         return False
     return True
@@ -450,9 +448,8 @@ def _secret(folder: Path) -> bytes | None:
             if path.exists() or path.is_symlink():
                 path.unlink(missing_ok=True)
             _write_private(path, secrets.token_bytes(_SECRET_LEN), replace=False)
-            secret = _read_private(
-                path, _SECRET_LEN, secret=True
-            )  # ours, or the one another process made first
+            # ours, or the one another process made first
+            secret = _read_private(path, _SECRET_LEN, secret=True)
         if secret is None:
             return None
         _SECRETS[folder] = secret
