@@ -44,6 +44,22 @@ def test_run_divergence_exit_code_keeps_partial(tmp_path, capsys):
     assert "diverged" in capsys.readouterr().err
 
 
+def test_a_failing_divergence_replay_keeps_the_partial_result(tmp_path, capsys, monkeypatch):
+    """The replay that names the diverged variable is a diagnostic: when it fails, the run is still
+    reported (step and time only) and its partial result written, as in campaigns."""
+    import formation_ftc.api as api
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("replay failed")
+
+    monkeypatch.setattr(api, "diagnose_divergence", broken)
+    argv = ["run", "cw-pd-fault", "--out", str(tmp_path), "--set", "simulation.horizon=60"]
+    assert main([*argv, "--set", "controller.kp=1e9"]) == 1
+    assert (tmp_path / "result.nc").exists()
+    err = capsys.readouterr().err
+    assert "diverged" in err and "<state>" in err
+
+
 def test_check_fails_for_unstable_design(capsys):
     # free drift needs no condition; a pd loop with zero damping and gains -> marginal: max Re = 0
     assert (
