@@ -164,12 +164,6 @@ def _info(msg: str) -> None:
         print(msg, file=sys.stderr)
 
 
-def _debug(msg: str) -> None:
-    """Detail shown with --verbose only (stderr)."""
-    if _VERBOSITY > 0:
-        print(msg, file=sys.stderr)
-
-
 # ------------------------------------------------------------------------------------------ --json
 _NUM = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?(?![\w.+-])"
 _UNIT_ATOM = r"(?:kg|rad|deg|Hz|m|s|N|J|W)(?:\^-?\d+)?"

@@ -181,10 +181,8 @@ def print_json(doc: Any) -> None:
 def print_json_error(message: str, code: int) -> None:
     """``{"error": message, "exit_code": code}`` on one line of standard output (``--json``); a stdout
     that cannot be written costs the document, never the exit status."""
-    try:
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # full, closed (None), broken
         print(json.dumps({"error": message, "exit_code": code}), flush=True)
-    except (OSError, ValueError, AttributeError):  # full, closed (None) or broken stdout
-        pass
 
 
 def _stdout_message(exc: OSError) -> str:

@@ -33,9 +33,9 @@ import functools
 import json
 import time
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -108,6 +108,16 @@ def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
     return str(_divergence_info(compiled, out, div))
 
 
+def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str) -> None:
+    """Refuse a kept metric that the method does not return (``returned``: its metric names)."""
+    missing = [m for m in keep if m not in returned]
+    if missing:
+        raise CampaignError(
+            f"campaign.metrics: {missing} not returned by method "
+            f"{method!r} (it returns {sorted(returned)})"
+        )
+
+
 def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any], status: str):
     from formation_ftc.sim.engine import trim_records
 
@@ -171,8 +181,6 @@ def _bound_chunk(
 
     Returns the chunk's *finisher*: the batch has been dispatched (JAX computes asynchronously) and
     the finisher waits for it and assembles the table, so a caller may start the next chunk first."""
-    import dataclasses
-
     from formation_ftc import api
     from formation_ftc.campaign.binding import (
         SEED_PATH,
@@ -218,9 +226,7 @@ def _bound_chunk(
         else:
             # the batch needs no time histories (metrics are computed inside the run): one record at
             # the start and one at the end; trace runs and failed runs are re-run alone with records
-            lean = compile_loop(
-                dataclasses.replace(template.params, record_every=template.params.n_steps)
-            )
+            lean = compile_loop(replace(template.params, record_every=template.params.n_steps))
             _BINDINGS[cache_key] = (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:
@@ -234,7 +240,7 @@ def _bound_chunk(
     # asynchronously) and the Python work below overlaps it; a first chunk is verified first
     pending = engine(batch) if cache_key in _VERIFIED else None
     check = api.compile_scenario(plan.scenario(cols.row(n - 1, plan.base_names)))
-    check_params = dataclasses.replace(check.params, record_every=template.params.record_every)
+    check_params = replace(check.params, record_every=template.params.record_every)
     if not params_close(check_params, take_run(batch, axes, n - 1)):
         _BINDINGS[cache_key] = None  # a field moves another leaf too (or fields interact): per run
         _VERIFIED.discard(cache_key)
@@ -278,8 +284,6 @@ def _finish_bound(
     first,
 ) -> ChunkResult:
     """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
-    import dataclasses
-
     from formation_ftc import api
     from formation_ftc.campaign.binding import take_run
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
@@ -297,12 +301,7 @@ def _finish_bound(
         else:
             metric_cols[m.name] = a
     keep = plan.spec.campaign.metrics
-    missing = [m for m in keep if m not in metric_cols]
-    if missing:
-        raise CampaignError(
-            f"campaign.metrics: {missing} not returned by method "
-            f"{plan.scenario(first).scenario.method!r} (it returns {sorted(names)})"
-        )
+    _require_metrics(keep, names, plan.scenario(first).scenario.method)
     div = np.asarray(out["diverged_step"])[:n]
     failed = div >= 0
     data.update({"status": np.where(failed, "failed", "ok"), "diagnostic": [""] * n})
@@ -321,13 +320,11 @@ def _finish_bound(
         inp = cols.row(j, plan.base_names)
         scn = plan.scenario(inp)
         comp_j = api.compile_scenario(scn)
-        params_j = dataclasses.replace(
-            take_run(batch, axes, j), record_every=comp_j.params.record_every
-        )
+        params_j = replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
         run_out = jax.device_get(_run_alone(params_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(
-                dataclasses.replace(comp_j, params=params_j), run_out, int(run_out["diverged_step"])
+                replace(comp_j, params=params_j), run_out, int(run_out["diverged_step"])
             )
         if inp.run_id in trace_runs:
             traces[inp.run_id] = _trace(plan, comp_j, scn, inp, run_out, str(table.at[j, "status"]))
@@ -390,12 +387,7 @@ def _general_chunk(
         if div < 0:
             with np.errstate(all="ignore"):
                 metrics = {k: float(v) for k, v in comp.metrics(out).items()}
-            missing = [m for m in keep if m not in metrics]
-            if missing:
-                raise CampaignError(
-                    f"campaign.metrics: {missing} not returned by method "
-                    f"{scn.scenario.method!r} (it returns {sorted(metrics)})"
-                )
+            _require_metrics(keep, metrics, scn.scenario.method)
             row.update(status="ok", diagnostic="")
         else:
             metrics = {m: float("nan") for m in keep}
@@ -471,10 +463,8 @@ def make_plan(
             )
         return campaign
     if isinstance(campaign, CampaignSpec):
-        raw = campaign.model_dump(mode="json")
-        spec, base_dir = load_campaign(raw, runs=runs, chunk_size=chunk_size)
-    else:
-        spec, base_dir = load_campaign(campaign, runs=runs, chunk_size=chunk_size)
+        campaign = campaign.model_dump(mode="json")
+    spec, base_dir = load_campaign(campaign, runs=runs, chunk_size=chunk_size)
     return CampaignPlan(spec, base_dir, drop_missing_traces=runs is not None)
 
 

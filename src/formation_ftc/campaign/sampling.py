@@ -55,7 +55,6 @@ from pathlib import Path
 from typing import Any, overload
 
 import numpy as np
-from scipy import stats
 
 from formation_ftc.campaign import streams
 from formation_ftc.campaign.spec import (
@@ -264,17 +263,8 @@ def _same(a: Any, b: Any) -> bool:
 def value_from_unit(sampler: Sampler, u: float) -> Any:
     """The value of ``sampler``'s distribution at quantile ``u`` in [0, 1) (its inverse CDF)."""
     u = min(max(float(u), 0.0), np.nextafter(1.0, 0.0))
-    if isinstance(sampler, Uniform):
-        return float(sampler.low + (sampler.high - sampler.low) * u)
-    if isinstance(sampler, LogUniform):
-        lo, hi = math.log(sampler.low), math.log(sampler.high)
-        return float(math.exp(lo + (hi - lo) * u))
-    if isinstance(sampler, Normal):
-        if sampler.low is None and sampler.high is None:
-            return float(sampler.mean + sampler.std * stats.norm.ppf(u))
-        a = -np.inf if sampler.low is None else (sampler.low - sampler.mean) / sampler.std
-        b = np.inf if sampler.high is None else (sampler.high - sampler.mean) / sampler.std
-        return float(stats.truncnorm.ppf(u, a, b, loc=sampler.mean, scale=sampler.std))
+    if isinstance(sampler, Uniform | LogUniform | Normal):  # their draw maps one uniform double
+        return sampler.from_first_double(np.asarray([u]))[0]
     if isinstance(sampler, Integer):
         return int(
             min(sampler.low + math.floor((sampler.high - sampler.low + 1) * u), sampler.high)

@@ -126,17 +126,19 @@ def _finite(path: str, name: str, v: Any) -> float:
     return float(v)
 
 
+def _need_bounds(s: Any, ok: bool, need: str) -> None:
+    """Raise the error naming ``s``'s field when its ``low``/``high`` bounds fail ``need``."""
+    if not ok:
+        raise CampaignError(f"sample.{s.path}: {need}, got low = {s.low}, high = {s.high}")
+
+
 @dataclass(frozen=True)
 class Uniform(Sampler):
     low: float = 0.0
     high: float = 1.0
 
     def __post_init__(self):
-        if not self.low < self.high:
-            raise CampaignError(
-                f"sample.{self.path}: uniform needs low < high, got low = {self.low}, "
-                f"high = {self.high}"
-            )
+        _need_bounds(self, self.low < self.high, "uniform needs low < high")
 
     def draw(self, rng):
         return float(rng.uniform(self.low, self.high))
@@ -158,11 +160,7 @@ class LogUniform(Sampler):
     high: float = 10.0
 
     def __post_init__(self):
-        if not 0 < self.low < self.high:
-            raise CampaignError(
-                f"sample.{self.path}: loguniform needs 0 < low < high, got low = {self.low}, "
-                f"high = {self.high}"
-            )
+        _need_bounds(self, 0 < self.low < self.high, "loguniform needs 0 < low < high")
 
     def draw(self, rng):
         return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
@@ -192,11 +190,7 @@ class Normal(Sampler):
             raise CampaignError(f"sample.{self.path}: normal needs std > 0, got std = {self.std}")
         lo = -math.inf if self.low is None else self.low
         hi = math.inf if self.high is None else self.high
-        if not lo < hi:
-            raise CampaignError(
-                f"sample.{self.path}: truncated normal needs low < high, got low = {self.low}, "
-                f"high = {self.high}"
-            )
+        _need_bounds(self, lo < hi, "truncated normal needs low < high")
 
     def draw(self, rng):
         return self._from_uniform(np.asarray([rng.uniform()]))[0]
@@ -234,11 +228,7 @@ class Integer(Sampler):
     high: int = 1
 
     def __post_init__(self):
-        if not self.low <= self.high:
-            raise CampaignError(
-                f"sample.{self.path}: integer needs low <= high, got low = {self.low}, "
-                f"high = {self.high}"
-            )
+        _need_bounds(self, self.low <= self.high, "integer needs low <= high")
 
     def draw(self, rng):
         return int(rng.integers(self.low, self.high, endpoint=True))
@@ -250,13 +240,22 @@ class Integer(Sampler):
         return f"integer[{self.low}, {self.high}]"
 
 
-def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
+@dataclass(frozen=True)
+class _Values(Sampler):
+    """A sampler over listed ``values`` (:class:`Choice`, :class:`Grid`)."""
+
+    values: tuple = ()
+
+    def extremes(self):
+        return list(self.values)
+
+    @property
+    def numeric(self) -> bool:
+        return all(isinstance(v, int | float) and not isinstance(v, bool) for v in self.values)
 
 
 @dataclass(frozen=True)
-class Choice(Sampler):
-    values: tuple = ()
+class Choice(_Values):
     weights: tuple | None = None
 
     def draw(self, rng):
@@ -271,31 +270,16 @@ class Choice(Sampler):
         cdf /= cdf[-1]
         return [copy.deepcopy(self.values[int(k)]) for k in cdf.searchsorted(d, side="right")]
 
-    def extremes(self):
-        return list(self.values)
-
-    @property
-    def numeric(self) -> bool:
-        return all(_is_number(v) for v in self.values)
-
     def describe(self):
         return f"choice of {len(self.values)}"
 
 
 @dataclass(frozen=True)
-class Grid(Sampler):
-    values: tuple = ()
+class Grid(_Values):
     kind = "grid"
 
     def draw(self, rng):  # pragma: no cover - grid values are assigned, not drawn
         raise TypeError("grid values are assigned by grid index")
-
-    def extremes(self):
-        return list(self.values)
-
-    @property
-    def numeric(self) -> bool:
-        return all(_is_number(v) for v in self.values)
 
     def describe(self):
         return f"grid of {len(self.values)}"
@@ -351,16 +335,11 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         return Choice(path, tuple(values), w)
 
     dist = spec["dist"]
-    if dist == "uniform":
+    if dist in ("uniform", "loguniform"):
         allowed("dist", "low", "high")
         need("low", "high")
-        return Uniform(path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"]))
-    if dist == "loguniform":
-        allowed("dist", "low", "high")
-        need("low", "high")
-        return LogUniform(
-            path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"])
-        )
+        cls = Uniform if dist == "uniform" else LogUniform
+        return cls(path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"]))
     if dist == "normal":
         allowed("dist", "mean", "std", "low", "high")
         need("mean", "std")
@@ -518,14 +497,10 @@ def _format_error(exc: ValidationError, source: str) -> str:
 
 
 # --------------------------------------------------------------------------------------- loading
-def _builtin_dir():
-    return resources.files("formation_ftc.campaign") / "builtin"
-
-
 def builtin_campaigns() -> dict[str, str]:
     """Name -> TOML text of every built-in campaign."""
     out: dict[str, str] = {}
-    d = _builtin_dir()
+    d = resources.files("formation_ftc.campaign") / "builtin"
     if not d.is_dir():
         return out
     for entry in sorted(d.iterdir(), key=lambda p: p.name):

@@ -201,29 +201,15 @@ def available() -> bool:
 def _self_check() -> bool:
     keys = np.array([0, 1, 2, 7, 1000, 123456, 2**31 + 5, 2**32 - 2])
     for entropy, suffix in ((2026, (1, 0xDEADBEEF)), (2**40 + 3, (1, 0)), (0, ())):
-        ref_words = [
-            np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)).generate_state(8)
-            for k in keys
-        ]
+        seqs = [np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix)) for k in keys]
+        ref_words = [ss.generate_state(8) for ss in seqs]
         if not np.array_equal(seed_states(entropy, keys, suffix, 8), np.array(ref_words)):
             return False
-        ref = [
-            np.random.default_rng(
-                np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix))
-            ).random()
-            for k in keys
-        ]
+        ref = [np.random.default_rng(ss).random() for ss in seqs]
         if not np.array_equal(first_doubles(entropy, keys, suffix), np.array(ref)):
             return False
         ints = [int(g.integers(0, 1000)) for g in generators(entropy, keys, suffix)]
-        ref_i = [
-            int(
-                np.random.default_rng(
-                    np.random.SeedSequence(entropy, spawn_key=(int(k), *suffix))
-                ).integers(0, 1000)
-            )
-            for k in keys
-        ]
+        ref_i = [int(np.random.default_rng(ss).integers(0, 1000)) for ss in seqs]
         if ints != ref_i:
             return False
     ref_s = [

@@ -18,8 +18,8 @@ def _cmd_list(args) -> int:
     rows = []
     for name in builtin_leagues():
         spec = load_league(name)
+        meta = spec.league
         if args.json:
-            meta = spec.league
             rows.append(
                 {
                     "name": name,
@@ -41,10 +41,10 @@ def _cmd_list(args) -> int:
             )
             continue
         methods = ", ".join(m.name for m in spec.methods)
-        print(f"{name}  {spec.league.description}")
+        print(f"{name}  {meta.description}")
         print(
-            f"    methods: {methods}; battery {spec.league.battery}; {spec.league.seeds} seeds per cell "
-            f"({spec.league.quick_seeds} with --quick)"
+            f"    methods: {methods}; battery {meta.battery}; {meta.seeds} seeds per cell "
+            f"({meta.quick_seeds} with --quick)"
         )
     if args.json:
         print_json({"leagues": rows})
@@ -63,10 +63,16 @@ def _cmd_run(args) -> int:
         raise LeagueError("--out: empty path; give the league directory, e.g. --out out/league")
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
     distributed = bool(args.scheduler or args.dask_local)
+
+    def factory():
+        if distributed:
+            return make_executor(
+                workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
+            )
+        return make_executor(workers=1)
+
     if distributed:
-        make_executor(
-            workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
-        )  # checked now
+        factory()  # checked now
     if args.workers is not None and args.workers < 1:
         raise LeagueError(f"--workers must be >= 1, got {args.workers}")
     methods = [m.strip() for m in args.methods.split(",")] if args.methods else None
@@ -82,13 +88,6 @@ def _cmd_run(args) -> int:
             what=what,
         )
 
-    def factory():
-        if distributed:
-            return make_executor(
-                workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
-            )
-        return make_executor(workers=1)
-
     outcome = run_league(
         args.league,
         args.out,
@@ -102,15 +101,12 @@ def _cmd_run(args) -> int:
         budgets=budgets,
     )
     print(f"league done: {outcome}")
-    board = write_leaderboard(args.out, plots=not args.no_plots)
-    _print_ranking(board)
-    print(
-        f"wrote {args.out}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
-    )
+    _print_board(write_leaderboard(args.out, plots=not args.no_plots), args.out)
     return 0
 
 
-def _print_ranking(board) -> None:
+def _print_board(board, directory) -> None:
+    """The ranking of every level, then the files written under ``directory``."""
     metric = board["requirement"]["metric"]
     for level, rows in board["ranking"].items():
         print(f"\n{level}: rank  method  pass-rate  median {metric}")
@@ -120,6 +116,9 @@ def _print_ranking(board) -> None:
                 f"  {r['rank']:>2}  {r['method']:<16} {r['pass_rate']:6.2f}  "
                 f"{'-' if med is None else format(med, '.3g')}"
             )
+    print(
+        f"wrote {directory}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
+    )
 
 
 def _cmd_report(args) -> int:
@@ -149,10 +148,7 @@ def _cmd_report(args) -> int:
             }
         )
         return 0
-    _print_ranking(board)
-    print(
-        f"wrote {args.dir}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
-    )
+    _print_board(board, args.dir)
     return 0
 
 

@@ -303,10 +303,7 @@ def _data_dir() -> Path:
 
 def builtin_leagues() -> dict[str, Path]:
     """Built-in league name -> definition file."""
-    out = {}
-    for p in sorted(_data_dir().glob("league-*.toml")):
-        out[p.stem.removeprefix("league-")] = p
-    return out
+    return {p.stem.removeprefix("league-"): p for p in sorted(_data_dir().glob("league-*.toml"))}
 
 
 def _format(exc: ValidationError, source: str) -> str:

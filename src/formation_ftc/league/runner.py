@@ -17,6 +17,7 @@ run.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
@@ -555,20 +556,16 @@ class _MethodProgress:
     def _close_bar(self) -> None:
         bar, self._bar = self._bar, None
         if bar is not None:
-            try:
+            with contextlib.suppress(OSError, ValueError):
                 bar.stop()  # restores sys.stdout/sys.stderr even when its last refresh fails
-            except (OSError, ValueError):
-                pass
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
         if self._bar is not None:
-            try:
+            with contextlib.suppress(OSError, ValueError):
                 self._poll()
-            except (OSError, ValueError):
-                pass
         self._close_bar()
 
 
@@ -691,11 +688,7 @@ def run_league(
         per_method[name] = seconds
         n_runs += runs
         n_failed += failed
-        if log is not None:
-            try:
-                log(f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
-            except (OSError, ValueError):  # a closed or full stderr must not cost a computed result
-                pass
+        _say(log, f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
 
     chunk_size = min(spec.league.chunk_size, n_seeds)
     watched = [
@@ -732,6 +725,13 @@ def run_league(
                 outcome = run_campaign(campaign, out / name / "campaign", executor=executor)
                 done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
+
+
+def _say(log: Callable[[str], None] | None, line: str) -> None:
+    """``log(line)`` when there is a log; a closed or full stderr must not cost a computed result."""
+    if log is not None:
+        with contextlib.suppress(OSError, ValueError):
+            log(line)
 
 
 def _step_checks(
@@ -773,17 +773,14 @@ def _step_checks(
                 max_halvings=sc.max_halvings,
                 ignore=tuple(m["name"] for m in FDI_METRICS),  # alarm times are on the step grid
             ).as_dict()
-            if log is not None:
-                verdict = "converged" if record["converged"] else "NOT converged, kept"
-                try:
-                    log(
-                        f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
-                        f"(largest score change per halving: "
-                        + ", ".join(f"{c:.2%}" for c in record["changes"])
-                        + ")"
-                    )
-                except (OSError, ValueError):
-                    pass
+            verdict = "converged" if record["converged"] else "NOT converged, kept"
+            _say(
+                log,
+                f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
+                f"(largest score change per halving: "
+                + ", ".join(f"{c:.2%}" for c in record["changes"])
+                + ")",
+            )
         out[name] = record
         dt = float(record["chosen_dt"])
         for j, c in enumerate(mcells):
