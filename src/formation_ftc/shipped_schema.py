@@ -85,7 +85,7 @@ def write_schema_file(path: Path = SCHEMA_FILE) -> Path:
         and Path(str(m.__file__)).resolve().is_relative_to(_ROOT)
     )
     data = {"fingerprint": _fingerprint(sources), "sources": sources, "schema": schema}
-    path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    path.write_text(json.dumps(data, separators=(",", ":")) + "\n", encoding="utf-8")  # compact
     return path
 
 
