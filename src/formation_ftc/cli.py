@@ -324,25 +324,25 @@ def _field_hints(scenario: str, overrides: list[str]) -> str:
 
 def _scenario_schema(raw: dict) -> dict:
     """The JSON Schema of the scenario ``raw``'s method; in a composed scenario each slot table gets
-    the schema of the component type it names, so that its fields have units, comments and hints."""
-    from formation_ftc.registry import get_method
-
+    the schema of the component type it names (its option of ``schema composed``), so that its
+    fields have units, comments and hints."""
     method = str(raw["scenario"]["method"])
-    schema = get_method(method).schema.model_json_schema()
     if method != "composed":
-        return schema
-    from formation_ftc.methods.composed import SLOTS, component_type
+        from formation_ftc.registry import get_method
 
+        return get_method(method).schema.model_json_schema()
+    from formation_ftc.shipped_schema import composed_schema
+
+    schema = composed_schema()
+    properties = dict(schema["properties"])
     for slot, table in raw.items():
-        known = slot in SLOTS and isinstance(table, dict)
-        entry = component_type(slot, str(table.get("type"))) if known else None
-        if entry is not None:
-            sub = entry.section.model_json_schema()
-            schema.setdefault("$defs", {}).update(sub.pop("$defs", {}))
-            type_field = {"const": entry.name, "description": entry.description}
-            sub["properties"] = {"type": type_field, **sub.get("properties", {})}
-            schema["properties"][slot] = sub
-    return schema
+        options = properties.get(slot, {}).get("oneOf") if isinstance(table, dict) else None
+        if options is None:
+            continue
+        name = str(table.get("type"))
+        chosen = [o for o in options if o["properties"]["type"]["const"] == name]
+        properties[slot] = chosen[0] if chosen else {"description": properties[slot]["description"]}
+    return {**schema, "properties": properties}
 
 
 def _load(args, build: bool = True):
