@@ -1,8 +1,8 @@
 """``formation-ftc campaign {list, run, report}``.
 
 The main command line calls :func:`add_cli` with its sub-parsers; this module also runs alone:
-``python -m formation_ftc.campaign.cli run NAME_OR_FILE --out DIR``. ``list`` and ``report`` take
-``--json`` (one JSON document on stdout; schemas in docs/cli.md).
+``python -m formation_ftc.campaign.cli run NAME_OR_FILE --out DIR``. ``list``, ``run`` and ``report``
+take ``--json`` (one JSON document on stdout, progress on stderr; schemas in docs/cli.md).
 """
 
 from __future__ import annotations
@@ -55,6 +55,11 @@ def _capped(requested: int | None, what: str, batch_bytes: int) -> int | None:
 
 
 def _cmd_run(args) -> int:
+    import time
+
+    started = time.perf_counter()  # the wall time and rate count from here, imports included
+    import contextlib
+
     from rich.console import Console
 
     from formation_ftc.campaign.executors import make_executor
@@ -67,20 +72,60 @@ def _cmd_run(args) -> int:
         raise CampaignError(
             "--out: empty path; give the results directory, e.g. --out out/campaign1"
         )
-    plan = make_plan(args.campaign, runs=args.runs, chunk_size=args.chunk_size)
-    budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
-    batch = check_campaign_budgets(plan, budgets)[
-        "batch_memory"
-    ]  # before anything is compiled or written
-    executor = make_executor(
-        workers=_capped(args.workers, "--workers", batch),
-        scheduler=args.scheduler,
-        dask_local=_capped(args.dask_local, "--dask-local", batch),
-        connect_timeout=args.connect_timeout,
-    )
-    outcome = run_campaign(plan, args.out, executor=executor, progress=not args.no_progress)
+    # with --json, standard output carries the one document: anything printed meanwhile goes to stderr
+    with contextlib.redirect_stdout(sys.stderr) if args.json else contextlib.nullcontext():
+        plan = make_plan(args.campaign, runs=args.runs, chunk_size=args.chunk_size)
+        budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
+        # before anything is compiled or written
+        batch = check_campaign_budgets(plan, budgets)["batch_memory"]
+        executor = make_executor(
+            workers=_capped(args.workers, "--workers", batch),
+            scheduler=args.scheduler,
+            dask_local=_capped(args.dask_local, "--dask-local", batch),
+            connect_timeout=args.connect_timeout,
+        )
+        outcome = run_campaign(
+            plan, args.out, executor=executor, progress=not args.no_progress, started=started
+        )
     console.print(f"campaign done ({outcome.executor}): {outcome}", soft_wrap=True, markup=False)
+    if args.json:
+        print_json(_run_document(outcome))
     return 0
+
+
+def _run_document(outcome) -> dict:
+    """The ``campaign run --json`` document (docs/cli.md) of a :class:`CampaignOutcome`."""
+    from pathlib import Path
+
+    out = Path(outcome.out_dir)
+    return {
+        "campaign": outcome.name,
+        "dir": str(out),
+        "executor": outcome.executor,
+        "exit_code": 0,
+        "runs": {
+            "total": outcome.n_planned,
+            "done": outcome.n_runs,
+            "computed": outcome.n_computed,
+            "skipped": outcome.n_kept,
+            "ok": outcome.n_runs - outcome.n_failed,
+            "failed": outcome.n_failed,
+            "diverged": outcome.n_diverged,
+        },
+        "chunks": {
+            "total": outcome.chunks_total,
+            "computed": outcome.chunks_computed,
+            "skipped": outcome.chunks_resumed,
+        },
+        "wall_time": outcome.wall_s,
+        "rate": outcome.rate,
+        "outputs": {
+            "manifest": str(out / "manifest.json"),
+            "chunks": str(out / "chunks"),
+            "traces": sorted(str(p) for p in (out / "traces").glob("run-*.nc")),
+        },
+        "units": {"wall_time": "s", "rate": "s-1"},
+    }
 
 
 def _cmd_report(args) -> int:
@@ -197,6 +242,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     )
     add_budget_options(q, batch="one batch of chunk-size runs", whole="the whole campaign")
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(q)
     q.set_defaults(func=_cmd_run)
 
     q = sub.add_parser(

@@ -20,8 +20,8 @@ assembled from the metric arrays; only failed and traced runs are handled one by
 
 :func:`run_campaign` validates everything first (campaign file, dotted paths, sampler bounds, every
 run's scenario, the metric names, the results directory, the executor's scheduler), then submits the
-unfinished chunks and writes each result atomically as it arrives, with a progress bar (runs done,
-runs/s, ETA). In-process, the work of consecutive chunks overlaps: chunk k+1 is started
+unfinished chunks and writes each result atomically as it arrives, with a progress bar (runs done;
+runs/s and ETA over the whole wall time since the caller's start, compilation included). In-process, the work of consecutive chunks overlaps: chunk k+1 is started
 (:func:`start_chunk`: parameter batch built, program dispatched) before chunk k is finished, and chunk
 k is written by a background writer thread while chunk k+1 computes; the stored numbers are those of
 :func:`run_chunk`.
@@ -78,6 +78,12 @@ class ChunkResult:
 
 @dataclass
 class CampaignOutcome:
+    """What :func:`run_campaign` did: counts over the whole results directory (``n_runs`` of the
+    ``n_planned``, ``n_failed``, ``n_diverged``, ``results``), what this call computed (``n_computed`` runs in ``chunks_computed`` chunks; the others
+    were kept from an earlier run) and the wall time the caller waited (``wall_s`` [s], from
+    ``started``: everything from planning to loading the results). ``rate`` [runs/s] is
+    ``n_computed / wall_s``."""
+
     out_dir: Path
     n_runs: int
     n_failed: int
@@ -87,12 +93,76 @@ class CampaignOutcome:
     wall_s: float
     results: pd.DataFrame
     executor: str = ""
+    name: str = ""
+    n_planned: int = 0
+    n_computed: int = 0
+    n_diverged: int = 0
+    units: dict[str, str] = field(default_factory=dict)  # metric:<name> column -> UDUNITS unit
+
+    @property
+    def n_kept(self) -> int:
+        """Runs kept from an earlier run of the campaign (not computed by this call)."""
+        return self.n_runs - self.n_computed
+
+    @property
+    def rate(self) -> float | None:
+        """Runs computed per second of the whole wall time [1/s]; None when none was computed."""
+        return self.n_computed / self.wall_s if self.n_computed and self.wall_s > 0 else None
+
+    def _rate_text(self) -> str:
+        return "" if self.rate is None else f", {self.rate:.3g} runs/s"
 
     def __str__(self) -> str:
         return (
             f"{self.n_runs} runs ({self.n_runs - self.n_failed} ok, {self.n_failed} failed) in "
             f"{self.out_dir}; {self.chunks_computed} chunk(s) computed, {self.chunks_resumed} kept from "
-            f"an earlier run, {self.wall_s:.1f} s"
+            f"an earlier run, {self.wall_s:.1f} s{self._rate_text()}"
+        )
+
+    def __repr__(self) -> str:
+        return (
+            f"<CampaignOutcome {self.name!r}: {self.n_runs} runs ({self.n_failed} failed), "
+            f"{self.n_computed} computed in {self.wall_s:.1f} s{self._rate_text()}, "
+            f"dir {str(self.out_dir)!r}>"
+        )
+
+    def _repr_html_(self) -> str:
+        """Jupyter: counts, wall time and rate, then each metric's median and 5-95 % range with its
+        unit (formation_ftc.display)."""
+        from formation_ftc.display import card_html, number, quantity
+
+        fields = [
+            ("directory", str(self.out_dir)),
+            (
+                "runs",
+                f"{self.n_runs:,} ({self.n_runs - self.n_failed:,} ok, {self.n_failed:,} failed)",
+            ),
+            ("this call", f"{self.n_computed:,} runs computed, {self.n_kept:,} kept"),
+            ("chunks", f"{self.chunks_computed} computed, {self.chunks_resumed} kept"),
+            ("wall time", f"{number(self.wall_s)} s" + self._rate_text()),
+            ("executor", self.executor),
+        ]
+        rows = []
+        for col in (c for c in self.results.columns if str(c).startswith("metric:")):
+            v = pd.to_numeric(self.results[col], errors="coerce").to_numpy(float)
+            ok = v[np.isfinite(v)]
+            u = self.units.get(col, "")
+            p5, p50, p95 = np.percentile(ok, [5, 50, 95]) if ok.size else (np.nan,) * 3
+            rows.append(
+                [
+                    col[len("metric:") :],
+                    f"{ok.size:,}",
+                    quantity(p50, u),
+                    f"{number(p5)} .. {number(p95)}",
+                    u,
+                ]
+            )
+        return card_html(
+            f"campaign {self.name}",
+            "",
+            fields,
+            ("metric", "finite", "median", "5 .. 95 %", "units") if rows else (),
+            rows,
         )
 
 
@@ -469,7 +539,12 @@ def make_plan(
 
 
 class _Progress:
-    def __init__(self, enabled: bool, total: int, done: int, name: str):
+    """The progress bar of :func:`run_campaign` (on stderr): runs stored, then runs/s, elapsed time and
+    ETA over the whole wall time since ``started`` (a ``time.perf_counter`` value; planning and
+    compilation included), counting only the runs computed since then (not those kept from an earlier
+    run)."""
+
+    def __init__(self, enabled: bool, total: int, done: int, name: str, started: float):
         self.p = None
         if not enabled:
             return
@@ -480,15 +555,32 @@ class _Progress:
             Progress,
             ProgressColumn,
             TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
         )
         from rich.text import Text
 
+        def clock(seconds: float) -> Text:
+            s = int(round(seconds))
+            return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
+
+        def rate(task) -> float:
+            elapsed = time.perf_counter() - started
+            return (task.completed - done) / elapsed if elapsed > 0 else 0.0
+
         class RunsPerSecond(ProgressColumn):
             def render(self, task):
-                speed = task.finished_speed or task.speed
-                return Text("-- runs/s" if speed is None else f"{speed:.2f} runs/s")
+                r = rate(task)
+                return Text(f"{r:.3g} runs/s" if r > 0 else "-- runs/s")
+
+        class Elapsed(ProgressColumn):
+            def render(self, task):
+                return clock(time.perf_counter() - started)
+
+        class TimeLeft(ProgressColumn):
+            def render(self, task):
+                r = rate(task)
+                if task.finished:
+                    return clock(0.0)
+                return clock((task.total - task.completed) / r) if r > 0 else Text("-:--:--")
 
         self.p = Progress(
             TextColumn(f"[bold]{name}"),
@@ -496,9 +588,9 @@ class _Progress:
             MofNCompleteColumn(),
             TextColumn("runs"),
             RunsPerSecond(),
-            TimeElapsedColumn(),
+            Elapsed(),
             TextColumn("ETA"),
-            TimeRemainingColumn(),
+            TimeLeft(),
             console=Console(stderr=True),
         )
         self.p.start()
@@ -521,16 +613,21 @@ def run_campaign(
     chunk_size: int | None = None,
     executor=None,
     progress: bool = False,
+    started: float | None = None,
 ) -> CampaignOutcome:
     """Run (or resume) a campaign into ``out_dir``; returns counts and the results table.
 
     Everything that can be checked is checked before the first run: campaign file, dotted paths,
     sampler bounds, every run's scenario, metric names, the results directory (foreign or corrupt:
     refused) and the executor (an unreachable scheduler is an error).
+
+    ``started`` (a ``time.perf_counter()`` value; default: the call) is when the caller's wait began:
+    the outcome's ``wall_s`` and the progress bar's runs/s and ETA count from it (the command line
+    passes the start of the command, so that they include its planning and budget checks).
     """
     from formation_ftc.campaign.executors import LocalExecutor
 
-    t0 = time.perf_counter()
+    t0 = time.perf_counter() if started is None else started
     plan = make_plan(campaign, runs=runs, chunk_size=chunk_size)
     plan.validate_all()
     if plan.spec.campaign.metrics:
@@ -550,7 +647,7 @@ def run_campaign(
     with executor:
         store.initialize()  # takes the directory's lock (refused while another run writes there)
         bar = _Progress(
-            progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name
+            progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name, t0
         )
         # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
         # at most one write is in flight and a write error stops the campaign at the next chunk
@@ -570,17 +667,23 @@ def run_campaign(
             bar.close()
             store.close()
     results = store.load_results()
-    n_failed = int((results["status"] != "ok").sum()) if len(results) else 0
+    failed = results["status"] != "ok"
+    diagnostic = results.get("diagnostic", pd.Series("", index=results.index)).astype(str)
     return CampaignOutcome(
         Path(out_dir),
         len(results),
-        n_failed,
+        int(failed.sum()),
         plan.n_chunks,
         len(todo),
         len(done_before),
         time.perf_counter() - t0,
         results,
         executor.describe(),
+        name=plan.name,
+        n_planned=plan.n_runs,
+        n_computed=sum(len(c) for c in todo),
+        n_diverged=int((failed & diagnostic.str.startswith("simulation diverged")).sum()),
+        units={c: u for c, u in store.units().items() if c.startswith("metric:")},
     )
 
 
