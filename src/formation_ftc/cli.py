@@ -5,8 +5,8 @@ modules (JAX, SciPy, pandas) are imported by the commands that need them, so --h
 list and completion answer at once. Exit codes: 0 success, 1 a required condition failed, a run
 diverged or stdout could not be written, 2 bad input, 3 unexpected error (formation_ftc.exitcodes).
 
-``--json`` (list, show, check, run, campaign list/report, league list/report) prints one JSON document
-on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
+``--json`` (list, show, check, run, reproduce, campaign list/run/report, league list/report) prints one
+JSON document on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
 docs/cli.md.
 """
 
@@ -82,6 +82,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
             "formation-ftc reproduce li2020 --out out/li2020",
             "formation-ftc reproduce all --out out/reproduction",
             "formation-ftc reproduce li2020 --out out/li2020 --profile",
+            "formation-ftc reproduce yang2013 --out out/yang2013 --json",
         ],
     ),
     "campaign": (
@@ -134,6 +135,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
         [
             "formation-ftc campaign run cw-pd-gains --out out/c --runs 20",
             "formation-ftc campaign run my-campaign.toml --out out/c --dask-local 4",
+            "formation-ftc campaign run cw-pd-gains --out out/c --json",
         ],
     ),
     "campaign report": (
@@ -878,6 +880,7 @@ def _reproduce_stand_in(subparsers) -> argparse.ArgumentParser:
         metavar="DIR",
         help="link this league directory's leaderboard",
     )
+    add_json_option(p)
     return p
 
 

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from formation_ftc import registry
+from formation_ftc.exitcodes import add_json_option
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
@@ -58,6 +59,7 @@ __all__ = [
     "to_jsonable",
     "add_cli",
     "run_cli",
+    "json_document",
 ]
 
 #: Marker file that identifies a directory written by ``formation-ftc reproduce``.
@@ -367,6 +369,7 @@ def reproduce(
     profile: bool = False,
     leagues: list[Path | str] | None = None,
     workers: int | None = None,
+    started: float | None = None,
 ) -> dict[str, Any]:
     """Run the selected paper reproductions into ``out`` and write the report.
 
@@ -386,13 +389,18 @@ def reproduce(
         first. None: one per CPU core, at most one per paper; 1: one after the other in this process
         (always so for injected ``available`` reproductions, which a worker process could not import).
         The numbers do not depend on it: every paper is a deterministic function of its scenarios.
+    started : ``time.perf_counter()`` when the caller's wait began (default: this call); the total
+        wall time counts from it (the command line passes the start of the command).
 
     Returns
     -------
     dict with ``exit_code`` (0 all papers ran, 1 one failed), ``papers`` (``{paper: {status,
-    wall_time_s, error}}``), ``summary`` (what ``summary.json`` holds), ``index`` (path of
-    ``index.html``), ``out`` and, with ``profile``, ``profile`` (``{paper: {phase: seconds}}``).
+    wall_time_s, error}}``), ``reports`` (``{paper: what its report.json holds}``), ``summary`` (what
+    ``summary.json`` holds), ``index`` (path of ``index.html``), ``out``, ``wall_time_s`` (from
+    ``started`` until the report was written [s]) and, with ``profile``, ``profile`` (``{paper:
+    {phase: seconds}}``).
     """
+    t_start = time.perf_counter() if started is None else started
     from formation_ftc.report import html as html_report
 
     if isinstance(papers, str):
@@ -408,7 +416,6 @@ def reproduce(
     out = Path(out)
     previous = prepare_output(out, force)
 
-    t_start = time.perf_counter()
     summaries: dict[str, dict[str, Any]] = {}
     breakdowns: dict[str, dict[str, float]] = {}
     # injected reproductions (tests) run in this process unless workers are asked for explicitly
@@ -466,7 +473,9 @@ def reproduce(
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     entries = [done[p] for p in selected]
     summaries = {p: summaries[p] for p in selected}
-    total = time.perf_counter() - t_start
+    papers_s = (
+        time.perf_counter() - t_start
+    )  # from the start of the wait until the last paper finished
 
     metadata: dict[str, Any] = dict(provenance())
     metadata.update(
@@ -475,7 +484,7 @@ def reproduce(
         status={e["paper"]: e["status"] for e in entries},
         wall_time_s={e["paper"]: e["wall_time_s"] for e in entries},
         seeds={e["paper"]: e["seeds"] for e in entries},
-        total_wall_time_s=round(total, 3),
+        total_wall_time_s=round(papers_s, 3),
         paper_workers=n_workers,
     )
     if n_workers > 1:  # each worker's CPU-client threads (the compiled programs depend on it)
@@ -507,6 +516,7 @@ def reproduce(
     index_s = time.perf_counter() - t_index
 
     failed = [e["paper"] for e in entries if e["status"] != "ok"]
+    total = time.perf_counter() - t_start  # the whole wait, report writing included
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
@@ -525,9 +535,11 @@ def reproduce(
             }
             for e in entries
         },
+        "reports": {e["paper"]: e for e in entries},
         "summary": to_jsonable(summary_doc),
         "index": str(index),
         "out": str(out),
+        "wall_time_s": total,
         **extra,
     }
 
@@ -840,24 +852,121 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
         "DIR/*/leaderboard/ of the report directory are linked anyway)",
     )
+    add_json_option(p)
     p.set_defaults(func=run_cli)
     return p
 
 
 def run_cli(args: argparse.Namespace) -> int:
-    """Handler of ``formation-ftc reproduce``; returns the exit status (0, 1 a paper failed, 2 bad input)."""
+    """Handler of ``formation-ftc reproduce``; returns the exit status (0, 1 a paper failed, 2 bad input).
+
+    With ``--json``: the tables go to stderr with the progress bar, and one JSON document
+    (:func:`json_document`) to stdout at the end."""
+    started = time.perf_counter()
+    as_json = bool(getattr(args, "json", False))
+    console = None
+    if as_json:
+        from rich.console import Console
+
+        console = Console(stderr=True)
     try:
-        result = reproduce(
-            args.paper,
-            args.out,
-            force=args.force,
-            progress=True,
-            include_3d=getattr(args, "include_3d", True),
-            profile=getattr(args, "profile", False),
-            leagues=getattr(args, "league", None),
-            workers=getattr(args, "workers", None),
-        )
+        # with --json, standard output carries the one document: anything printed meanwhile -> stderr
+        with contextlib.redirect_stdout(sys.stderr) if as_json else contextlib.nullcontext():
+            result = reproduce(
+                args.paper,
+                args.out,
+                force=args.force,
+                progress=True,
+                include_3d=getattr(args, "include_3d", True),
+                profile=getattr(args, "profile", False),
+                leagues=getattr(args, "league", None),
+                workers=getattr(args, "workers", None),
+                console=console,
+                started=started,
+            )
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        if as_json:
+            from formation_ftc.exitcodes import print_json_error
+
+            print_json_error(str(exc), 2)
         return 2
+    if as_json:
+        from formation_ftc.exitcodes import print_json
+
+        print_json(json_document(result))
     return int(result["exit_code"])
+
+
+def _stated(text: str) -> dict[str, Any]:
+    """A value of a comparison row as printed (``"9.8 s (Fig. 3)"``) with its number and unit when the
+    text states exactly one outside parenthesised remarks (the parser of ``check --json``)."""
+    from formation_ftc.cli import _quantities  # the one statement parser (check --json uses it too)
+
+    main = _quantities(text)[1] if text else []
+    one = main[0] if len(main) == 1 else None
+    return {
+        "text": text,
+        "value": one["value"] if one else None,
+        "units": one["units"] if one else None,
+    }
+
+
+def _row_json(row: Mapping[str, Any]) -> dict[str, Any]:
+    return {
+        "quantity": row["quantity"],
+        "published": _stated(row["published"]),
+        "reference": _stated(row["reference"]),
+        "ours": _stated(row["ours"]),
+        "criterion": row["criterion"],
+        "verdict": row["verdict"],
+        "basis": [
+            dict(zip(("relation", "lhs", "rhs", "tolerance"), clause, strict=False))
+            for clause in row["basis"]
+        ],
+        "note": row["note"],
+    }
+
+
+def _paper_json(entry: Mapping[str, Any], out: Path) -> dict[str, Any]:
+    from formation_ftc.cli import _condition_json  # the typed form `check --json` prints
+    from formation_ftc.registry import Condition
+
+    paper_dir = out / entry["paper"]
+    last = (entry["error"] or "").strip().splitlines()
+    return {
+        "title": entry["title"],
+        "status": entry["status"],
+        "error": last[-1] if last else None,
+        "verdicts": entry["verdicts"],
+        "rows": [_row_json(r) for r in entry["rows"]],
+        "conditions_summary": entry["checks_summary"],
+        "conditions": [_condition_json(Condition(**c)) for c in entry["checks"]],
+        "warnings": entry["warnings"],
+        "wall_time": entry["wall_time_s"],
+        "outputs": {
+            "dir": str(paper_dir),
+            "report": str(paper_dir / "report.json"),
+            "summary": str(paper_dir / "summary.json"),
+            "figures": [str(paper_dir / f["path"]) for f in entry["figures"] if f["exists"]],
+        },
+    }
+
+
+def json_document(result: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``reproduce --json`` document (docs/cli.md) of what :func:`reproduce` returned."""
+    out = Path(result["out"])
+    papers = {p: _paper_json(e, out) for p, e in result["reports"].items()}
+    return {
+        "papers": papers,
+        "verdicts": {v: sum(p["verdicts"][v] for p in papers.values()) for v in VERDICTS},
+        "failed": [p for p, d in papers.items() if d["status"] != "ok"],
+        "exit_code": result["exit_code"],
+        "wall_time": result["wall_time_s"],
+        "outputs": {
+            "dir": str(out),
+            "index": result["index"],
+            "summary": str(out / "summary.json"),
+        },
+        "units": {"wall_time": "s"},
+    }
