@@ -40,7 +40,67 @@ __all__ = [
     "result_metrics",
     "metric_units",
     "save_result",
+    "Conditions",
+    "Metrics",
 ]
+
+
+class Conditions(list[Condition]):
+    """What :func:`check` returns: a list of :class:`~formation_ftc.registry.Condition` that shows as a
+    table (condition, value, requirement, holds) at a Python prompt and in Jupyter."""
+
+    _COLUMNS = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
+
+    def _card(self) -> dict[str, Any]:
+        from formation_ftc.display import holds_cell
+
+        failed = [c.name for c in self if c.required and c.holds is False]
+        note = f"required condition(s) failing: {', '.join(failed)}" if failed else ""
+        return dict(
+            title=f"Conditions ({len(self)})",
+            columns=self._COLUMNS,
+            rows=[
+                [
+                    c.name,
+                    c.reference,
+                    c.value,
+                    c.requirement,
+                    holds_cell(c.holds, c.unproven),
+                    c.basis,
+                    "yes" if c.required else "info",
+                ]
+                for c in self
+            ],
+            note=note or ("no required condition fails" if self else "no conditions declared"),
+        )
+
+    def __repr__(self) -> str:
+        from formation_ftc.display import card_text
+
+        return card_text(**self._card())
+
+    def _repr_html_(self) -> str:
+        from formation_ftc.display import card_html
+
+        return card_html(**self._card())
+
+
+class Metrics(dict[str, float]):
+    """What :func:`simulate_with_metrics` returns next to the dataset: ``{metric: float}`` (a plain
+    dict to any code) with ``units`` (``{metric: UDUNITS string}``); shows as a table of value and unit
+    in Jupyter."""
+
+    def __init__(
+        self, values: Mapping[str, float] | None = None, units: Mapping[str, str] | None = None
+    ):
+        super().__init__(values or {})
+        self.units: dict[str, str] = dict(units or {})
+
+    def _repr_html_(self) -> str:
+        from formation_ftc.display import card_html, number
+
+        rows = [[k, number(v), self.units.get(k, "")] for k, v in self.items()]
+        return card_html(f"Metrics ({len(self)})", "", (), ("metric", "value", "units"), rows)
 
 
 def load_scenario(
@@ -269,22 +329,23 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergen
 
     Returns
     -------
-    tuple of (xarray.Dataset, dict of str to float)
+    tuple of (xarray.Dataset, Metrics)
         Time histories (``time`` [s], ``spacecraft``, ``axis``, ...) with provenance attributes, and the
-        scalar metrics.
+        scalar metrics (a dict; their units in ``metrics.units``).
 
     Examples
     --------
     >>> from formation_ftc.api import simulate_with_metrics
     >>> ds, metrics = simulate_with_metrics("cw-free-drift")
-    >>> float(ds.time[-1]), sorted(metrics)[:1]
-    (5840.0, ['control_effort_sc1'])
+    >>> float(ds.time[-1]), sorted(metrics)[:1], metrics.units["delta_v_total"]
+    (5840.0, ['control_effort_sc1'], 'm s-1')
     """
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)
     out = jitted_run(compiled)(compiled.params)
-    return finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
+    ds, metrics = finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
+    return ds, Metrics(metrics, metric_units(ds))
 
 
 def simulate(scenario: ScenarioBase | str | Path):
@@ -333,7 +394,7 @@ def result_metrics(ds) -> dict[str, float]:
     return json.loads(ds.attrs.get("metrics_json", "{}"))
 
 
-def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
+def check(scenario: ScenarioBase | str | Path) -> Conditions:
     """Evaluate the stability / design conditions the scenario's method declares.
 
     Parameters
@@ -343,8 +404,9 @@ def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
 
     Returns
     -------
-    list of formation_ftc.registry.Condition
-        One row per condition: name, value, requirement, whether it holds, whether it is required.
+    Conditions
+        A list of :class:`~formation_ftc.registry.Condition`, one per condition: name, value,
+        requirement, whether it holds, whether it is required (shown as a table in Jupyter).
 
     Examples
     --------
@@ -355,7 +417,7 @@ def check(scenario: ScenarioBase | str | Path) -> list[Condition]:
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     method = get_method(scenario.scenario.method)
-    return list(method.check(scenario)) if method.check else []
+    return Conditions(method.check(scenario) if method.check else [])
 
 
 def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str, str]:

@@ -258,3 +258,36 @@ class ScenarioBase(StrictModel):
 
     scenario: ScenarioMeta
     simulation: SimulationSection
+
+    def __repr__(self) -> str:
+        sim = self.simulation
+        return (
+            f"<{type(self).__name__} {self.scenario.name!r}: method {self.scenario.method}, horizon "
+            f"{sim.horizon:g} s, dt {sim.dt:g} s ({sim.n_steps:,} steps), seed {sim.seed}>"
+        )
+
+    def _repr_html_(self) -> str:
+        """Jupyter: name, method, horizon and step, seed, and each section's type (formation_ftc.display)."""
+        from formation_ftc.display import card_html
+
+        meta, sim = self.scenario, self.simulation
+        fields = [("method", meta.method)] + ([("paper", meta.paper)] if meta.paper else [])
+        fields += [
+            ("horizon", f"{sim.horizon:g} s"),
+            ("step", f"{sim.dt:g} s ({sim.n_steps:,} steps, recorded every {sim.record_every})"),
+            ("seed", str(sim.seed)),
+        ]
+
+        def label(v: Any) -> str:  # a section's or list item's component type (or name)
+            d = v if isinstance(v, dict) else v.__dict__ if isinstance(v, BaseModel) else {}
+            return str(d.get("type") or d.get("name") or type(v).__name__)
+
+        rows = []
+        for name in type(self).model_fields:
+            value = getattr(self, name)
+            if name not in ("scenario", "simulation") and value:
+                items = value if isinstance(value, list) else [value]  # metrics, evaluations
+                rows.append([name, ", ".join(label(v) for v in items)])
+        return card_html(
+            f"scenario {meta.name}", meta.description, fields, ["section", "type or names"], rows
+        )
