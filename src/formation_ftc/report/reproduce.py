@@ -192,9 +192,12 @@ def prepare_output(out: Path, force: bool = False) -> bool:
 
 # ----------------------------------------------------------------------------------------- progress
 class _Bar:
-    """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``."""
+    """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``. Its
+    clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
-    def __init__(self, enabled: bool, n_papers: int, console=None) -> None:
+    def __init__(
+        self, enabled: bool, n_papers: int, console=None, started: float | None = None
+    ) -> None:
         self.enabled = enabled and n_papers > 0
         self.n = n_papers
         self._progress = None
@@ -204,16 +207,24 @@ class _Bar:
             from rich.progress import (
                 BarColumn,
                 Progress,
+                ProgressColumn,
                 TaskProgressColumn,
                 TextColumn,
-                TimeElapsedColumn,
             )
+            from rich.text import Text
+
+            t0 = time.perf_counter() if started is None else started
+
+            class Elapsed(ProgressColumn):
+                def render(self, task) -> Text:
+                    s = int(time.perf_counter() - t0)
+                    return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
 
             self._progress = Progress(
                 TextColumn("[bold]reproduce[/]"),
                 BarColumn(),
                 TaskProgressColumn(),
-                TimeElapsedColumn(),
+                Elapsed(),
                 TextColumn("{task.description}"),
                 console=console or Console(stderr=True),
             )
@@ -447,7 +458,7 @@ def reproduce(
             b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
             breakdowns[paper] = b
 
-    with _Bar(progress, len(selected)) as bar:
+    with _Bar(progress, len(selected), started=t_start) as bar:
         if n_workers > 1:
             _reproduce_in_workers(
                 selected, out, n_workers, profile, bar, finished, found, import_failures
