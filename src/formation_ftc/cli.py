@@ -5,8 +5,8 @@ modules (JAX, SciPy, pandas) are imported by the commands that need them, so --h
 list and completion answer at once. Exit codes: 0 success, 1 a required condition failed, a run
 diverged or stdout could not be written, 2 bad input, 3 unexpected error (formation_ftc.exitcodes).
 
-``--json`` (list, show, check, run, reproduce, campaign list/run/report, league list/report) prints one
-JSON document on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
+``--json`` (list, show, check, run, campaign list/report, league list/report) prints one JSON document
+on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
 docs/cli.md.
 """
 
