@@ -484,9 +484,7 @@ def reproduce(
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     entries = [done[p] for p in selected]
     summaries = {p: summaries[p] for p in selected}
-    papers_s = (
-        time.perf_counter() - t_start
-    )  # from the start of the wait until the last paper finished
+    papers_s = time.perf_counter() - t_start  # from the start of the wait to the last paper's end
 
     metadata: dict[str, Any] = dict(provenance())
     metadata.update(
