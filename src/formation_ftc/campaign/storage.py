@@ -33,6 +33,7 @@ Safety against concurrent writers and silent corruption:
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import hashlib
 import io
 import json
@@ -425,7 +426,7 @@ class CampaignStore:
             tdir = self.root / "traces"
             tdir.mkdir(exist_ok=True)
             path = tdir / trace_filename(run_id)
-            atomic_write(path, lambda tmp, ds=ds: write_netcdf(self._cf_trace(ds), tmp))
+            atomic_write(path, functools.partial(write_netcdf, self._cf_trace(ds)))
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
         # metric units come from the runner (``table.attrs["metric_units"]``); inputs: see parquet_units
