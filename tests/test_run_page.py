@@ -30,3 +30,45 @@ def test_run_writes_a_self_contained_page_with_the_standard_figures(tmp_path):
         assert "plotly is not installed" in page
     else:
         assert 'id="trajectory3d"' in page and "plotly.min.js" in refs
+
+
+def _positions():
+    """A tiny result with 3-D positions of two spacecraft (what the 3-D view draws)."""
+    import numpy as np
+    import xarray as xr
+
+    t = np.linspace(0.0, 10.0, 11)
+    pos = np.stack([np.c_[t, 2 * t, -t], np.c_[-t, t, 0 * t]], axis=1)
+    return xr.Dataset(
+        {"position": (("time", "spacecraft", "axis"), pos, {"units": "m", "frame": "LVLH"})},
+        coords={"time": t, "spacecraft": [1, 2], "axis": ["x", "y", "z"]},
+        attrs={"scenario_name": "tiny <run>", "seed": 3},
+    )
+
+
+def test_runs_in_a_tree_share_one_plotly_copy(tmp_path):
+    """Two run pages under a tree that holds plotly's bundle load that one copy (relative link); a
+    page without a 3-D view writes none; a run on its own gets its copy next to the page."""
+    import pytest
+
+    pytest.importorskip("plotly")
+    from plotly.offline import get_plotlyjs
+
+    from formation_ftc.report.run_page import write_run_page
+
+    tree = tmp_path / "tree"
+    tree.mkdir()
+    (tree / "plotly.min.js").write_text(get_plotlyjs(), encoding="utf-8")
+    ds = _positions()
+    for name in ("a", "b"):
+        (tree / "runs" / name).mkdir(parents=True)
+        page = write_run_page(tree / "runs" / name, ds, {"x": 1.0}, []).read_text()
+        assert '<script src="../../plotly.min.js">' in page and 'id="trajectory3d"' in page
+        assert "tiny &lt;run&gt;" in page  # escaped
+    assert sorted(tree.rglob("plotly*.js")) == [tree / "plotly.min.js"]
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    page = write_run_page(alone, ds, {}, [], include_3d=False).read_text()
+    assert "<script src" not in page and not list(alone.rglob("plotly*.js"))
+    page = write_run_page(alone, ds, {}, []).read_text()
+    assert '<script src="plotly.min.js">' in page and (alone / "plotly.min.js").is_file()

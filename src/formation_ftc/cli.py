@@ -463,6 +463,69 @@ def _described_fields(data, schema: dict, is_table) -> list[tuple[str, Any, str]
     return found
 
 
+#: characters of a line of ``show``'s TOML an array is kept within (one line when it fits)
+_TOML_WIDTH = 100
+
+
+def _toml_value(value: Any, indent: str = "", room: int = _TOML_WIDTH) -> str:
+    """TOML text of ``value`` as a person writes it: an array on one line when it fits in ``room``
+    characters (``[1.0, 2.0]``, ``[[1, 0], [0, 1]]``), else one element per line, indented, with
+    numbers as many to a line as fit; scalars and inline tables as tomli_w writes them."""
+    import tomli_w
+
+    if isinstance(value, dict):
+        items = ", ".join(
+            f"{_toml_key(k)} = {_toml_value(v, room=10**9)}" for k, v in value.items()
+        )
+        return "{ " + items + " }" if value else "{}"
+    if not isinstance(value, list):
+        return tomli_w.dumps({"x": value})[len("x = ") : -1]
+    one_line = "[" + ", ".join(_toml_value(v, room=10**9) for v in value) + "]"
+    if len(one_line) <= room or not value:
+        return one_line
+    inner = indent + "    "
+    width = _TOML_WIDTH - len(inner)
+    if all(isinstance(v, int | float) for v in value):  # numbers (and booleans): fill the lines
+        lines = [""]
+        for text in (_toml_value(v) + "," for v in value):
+            if lines[-1] and len(lines[-1]) + 1 + len(text) > width:
+                lines.append(text)
+            else:
+                lines[-1] = f"{lines[-1]} {text}" if lines[-1] else text
+    else:  # strings, arrays, tables: one to a line
+        lines = [_toml_value(v, inner, width - 1) + "," for v in value]
+    return "[\n" + "".join(f"{inner}{line}\n" for line in lines) + indent + "]"
+
+
+def _toml_key(key: str) -> str:
+    import tomli_w
+
+    return tomli_w.dumps({key: 0})[: -len(" = 0\n")]
+
+
+def _readable_toml(text: str) -> str:
+    """``text`` (TOML, as tomli_w writes it: every array one element per line) with every array
+    written by :func:`_toml_value`; tables, keys and values are unchanged."""
+    import tomlkit
+    from tomlkit.items import AoT, Array, Table
+
+    def walk(container) -> None:
+        for key, item in list(container.items()):
+            if isinstance(item, Table):
+                walk(item)
+            elif isinstance(item, AoT):
+                for table in item:
+                    walk(table)
+            elif isinstance(item, Array):
+                head = len(_toml_key(key)) + len(" = ")
+                formatted = _toml_value(item.unwrap(), room=_TOML_WIDTH - head)
+                container[key] = tomlkit.parse(f"x = {formatted}")["x"]
+
+    doc = tomlkit.parse(text)
+    walk(doc)
+    return tomlkit.dumps(doc)
+
+
 def _annotate_toml(text: str, schema: dict) -> str:
     """``text`` (TOML of a scenario) with each field's unit and meaning from ``schema`` as a trailing
     comment (``kp = 2.0  # [N/m] Position gain.``); the values are unchanged."""
@@ -515,7 +578,7 @@ def _cmd_show(args) -> int:
             {"scenario": resolved, "units": _field_units(resolved, _scenario_schema(resolved))}
         )
         return 0
-    text = dump_toml(scenario)
+    text = _readable_toml(dump_toml(scenario))
     if not args.no_comments:
         text = _annotate_toml(text, _scenario_schema(scenario.model_dump(mode="json")))
     print(text, end="")

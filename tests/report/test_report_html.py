@@ -105,18 +105,24 @@ def test_sections_tables_and_embedded_figures(tmp_path):
 
 
 def test_page_is_self_contained(tmp_path):
-    """No resource is loaded from anywhere: every src/href is a data URI or an in-page anchor."""
+    """Nothing is loaded from the network: every src/href is a data URI, an in-page anchor or a file
+    of the report tree (plotly's bundle, when a 3-D view is drawn)."""
     avail = {"alpha": ok_reproduction("alpha", trajectory=True)}
-    _, page = _make(tmp_path, avail, include_3d=rh.plotly_available())
+    out, page = _make(tmp_path, avail, include_3d=rh.plotly_available())
     doc = _parse(page)
     refs = [
         (t, a.get("src") or a.get("href")) for t, a in doc.tags if a.get("src") or a.get("href")
     ]
     assert refs, "expected images and anchors"
     for tag, ref in refs:
-        assert ref.startswith("data:") or ref.startswith("#"), (tag, ref[:80])
+        local = not re.match(r"^[a-z]+:|^//|^/", ref) and (out / ref).resolve().is_file()
+        assert ref.startswith("data:") or ref.startswith("#") or local, (tag, ref[:80])
     assert not doc.find("link") and not doc.find("iframe")
     assert not re.search(r"url\(\s*['\"]?https?:", page.split("</style>")[0])
+
+
+def _plotly_copies(tree: Path) -> list[Path]:
+    return sorted(tree.rglob("plotly*.js"))
 
 
 def test_trajectory_view_with_plotly(tmp_path):
@@ -126,14 +132,33 @@ def test_trajectory_view_with_plotly(tmp_path):
         "alpha": ok_reproduction("alpha", trajectory=True),
         "beta": ok_reproduction("beta", trajectory=True),
     }
-    _, page = _make(tmp_path, avail)
-    assert page.count(get_plotlyjs()) == 1  # plotly inlined once for every view
+    out, page = _make(tmp_path, avail)
+    # one copy of plotly's bundle for the whole report tree, at its root, loaded once by the page
+    assert _plotly_copies(out) == [out / "plotly.min.js"]
+    assert (out / "plotly.min.js").read_text(encoding="utf-8") == get_plotlyjs()
+    assert _parse(page).find("script", src="plotly.min.js") and get_plotlyjs() not in page
     assert page.count("Plotly.newPlot(") == 2
     assert 'id="paper-alpha-traj3d-1"' in page and 'id="paper-beta-traj3d-1"' in page
     assert "alpha formation (LVLH)" in page
-    # no trajectory file -> no plotly bundle at all (keeps pages small)
-    _, page2 = _make(tmp_path / "b", {"alpha": ok_reproduction("alpha")})
-    assert "Plotly.newPlot(" not in page2 and len(page2) < len(get_plotlyjs())
+    # no trajectory file -> no plotly bundle at all (keeps report trees small)
+    out2, page2 = _make(tmp_path / "b", {"alpha": ok_reproduction("alpha")})
+    assert "Plotly.newPlot(" not in page2 and "<script" not in page2
+    assert _plotly_copies(out2) == []
+
+
+def test_a_tree_shares_one_plotly_copy(tmp_path):
+    """A report written inside a tree that already holds this plotly's bundle links that copy; a
+    stale copy of another plotly version is not used."""
+    from plotly.offline import get_plotlyjs
+
+    tree = tmp_path / "tree"
+    tree.mkdir()
+    (tree / "plotly.min.js").write_text(get_plotlyjs(), encoding="utf-8")
+    assert rh.plotly_script(tree / "a" / "b") == "../../plotly.min.js"
+    assert _plotly_copies(tree) == [tree / "plotly.min.js"]
+    (tree / "plotly.min.js").write_text("/* plotly.js v0.0.1 */", encoding="utf-8")
+    assert rh.plotly_script(tree / "a", root=tree) == "../plotly.min.js"
+    assert (tree / "plotly.min.js").read_text(encoding="utf-8") == get_plotlyjs()  # replaced
 
 
 def test_trajectory_view_without_plotly_or_disabled(tmp_path, monkeypatch):

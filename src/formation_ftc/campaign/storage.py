@@ -12,15 +12,15 @@ Layout::
     DIR/report/                       written by ``formation-ftc campaign report``
 
 Every file is written under a temporary name in the same directory and renamed with
-:func:`os.replace` (atomic on POSIX), so a killed campaign leaves only whole chunk files; a chunk
-file exists only once the chunk is finished (its traces are written before it). Resuming keeps every
+:func:`os.replace` (:func:`formation_ftc.atomic.atomic_write`), so a killed campaign leaves only whole
+chunk files; a chunk file exists only once the chunk is finished (its traces are written before it). Resuming keeps every
 finished chunk and computes the others. A directory that is not this campaign's -- another campaign's
 manifest, an unreadable manifest or chunk, files we do not write -- is refused, never overwritten.
 
 Safety against concurrent writers and silent corruption:
 
-* one writer per directory: :meth:`CampaignStore.initialize` takes an exclusive advisory lock
-  (``fcntl.flock``) on ``DIR/.lock`` and writes the holder's host and PID into it; a second
+* one writer per directory: :meth:`CampaignStore.initialize` takes an exclusive lock on ``DIR/.lock``
+  (:class:`filelock.FileLock`: ``flock`` on POSIX) and writes the holder's host and PID into it; a second
   ``campaign run`` on the same directory is refused with that host and PID. The operating system
   releases the lock when its process dies, so the lock of a killed run is taken over by the next one
   (its stale host/PID text is simply overwritten);
@@ -33,7 +33,7 @@ Safety against concurrent writers and silent corruption:
 from __future__ import annotations
 
 import datetime as _dt
-import errno
+import functools
 import hashlib
 import io
 import json
@@ -45,8 +45,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import filelock
 import pandas as pd
 
+from formation_ftc.atomic import atomic_write
 from formation_ftc.campaign.sampling import CampaignPlan
 from formation_ftc.campaign.spec import CampaignError
 from formation_ftc.cf import apply_cf, write_netcdf
@@ -57,17 +59,11 @@ from formation_ftc.provenance import provenance
 #: Parquet I/O: the ``campaign`` extra (``pip install -e '.[campaign]'``)
 pq = require_extra("pyarrow.parquet", "campaign", "campaign and league storage (Parquet files)")
 
-try:  # POSIX advisory locks; other platforms run without a lock
-    import fcntl
-except ImportError:  # pragma: no cover
-    fcntl = None  # type: ignore[assignment]  # the optional-module idiom
-
 __all__ = [
     "CampaignStore",
     "MANIFEST",
     "LOCK",
     "FORMAT",
-    "atomic_write_bytes",
     "chunk_filename",
     "sha256_file",
 ]
@@ -91,34 +87,6 @@ def chunk_filename(chunk_id: int) -> str:
 
 def trace_filename(run_id: int) -> str:
     return f"run-{run_id:06d}.nc"
-
-
-def _tmp_path(path: Path) -> Path:
-    return path.with_name(f".{path.name}.tmp-{os.getpid()}")
-
-
-def _fsync_dir(d: Path) -> None:
-    try:
-        fd = os.open(d, os.O_RDONLY)
-    except OSError:  # pragma: no cover - platform without directory fds
-        return
-    try:
-        os.fsync(fd)
-    except OSError:  # pragma: no cover
-        pass
-    finally:
-        os.close(fd)
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temporary file, fsync, rename)."""
-    tmp = _tmp_path(path)
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    _fsync_dir(path.parent)
 
 
 def sha256_file(path: Path) -> str:
@@ -327,45 +295,36 @@ class CampaignStore:
         self.is_new = False
 
     def _write_manifest(self) -> None:
-        atomic_write_bytes(
-            self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True).encode()
-        )
+        atomic_write(self.root / MANIFEST, json.dumps(self.manifest, indent=2, sort_keys=True))
 
     # ------------------------------------------------------------------------------------ locking
-    _lock_fd: int | None = None
+    _lock: filelock.BaseFileLock | None = None
 
     def acquire_lock(self) -> None:
-        """Exclusive advisory lock on ``DIR/.lock`` (non-blocking); CampaignError naming the holder."""
-        if self._lock_fd is not None or fcntl is None:
+        """Exclusive lock on ``DIR/.lock`` (:mod:`filelock`, non-blocking); CampaignError naming the
+        holder when another process has it."""
+        if self._lock is not None:
             return
+        path = self.root / LOCK
+        lock = filelock.FileLock(path, timeout=0, mode=0o644, thread_local=False)
         try:
             self.root.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self.root / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
+            lock.acquire()
+        except filelock.Timeout:
             raise CampaignError(
-                f"{self.root}: cannot create the lock file {LOCK} ({exc.strerror or exc}); "
-                f"is the directory writable?"
+                f"{self.root}: in use by another campaign run ({_lock_holder_text(path)}); wait for "
+                f"it to finish or stop it, or use another --out"
             ) from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
-            if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                os.close(fd)
+            if not path.is_file():
                 raise CampaignError(
-                    f"{self.root}: the file system refuses advisory locks on {LOCK} "
-                    f"({exc.strerror or exc}); use a results directory on a local disk or on "
-                    f"a file system with locking"
+                    f"{self.root}: cannot create the lock file {LOCK} ({exc.strerror or exc}); "
+                    f"is the directory writable?"
                 ) from None
-            holder = ""
-            try:
-                holder = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
-            except OSError:  # pragma: no cover
-                pass
-            os.close(fd)
-            info = _lock_holder_text(holder)
             raise CampaignError(
-                f"{self.root}: in use by another campaign run ({info}); wait for it to finish "
-                f"or stop it, or use another --out"
+                f"{self.root}: the file system refuses advisory locks on {LOCK} "
+                f"({exc.strerror or exc}); use a results directory on a local disk or on "
+                f"a file system with locking"
             ) from None
         # any text left in the file is a dead holder's (the kernel released its lock): taken over
         text = json.dumps(
@@ -375,19 +334,24 @@ class CampaignStore:
                 "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             }
         )
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, text.encode(), 0)
-        self._lock_fd = fd
+        try:
+            path.write_text(text, encoding="utf-8")  # the same file (inode): the lock stays
+        except OSError as exc:
+            lock.release()
+            raise CampaignError(
+                f"{self.root}: cannot write the lock file {LOCK} ({exc.strerror or exc})"
+            ) from None
+        self._lock = lock
 
     def close(self) -> None:
         """Release the directory lock (idempotent)."""
-        fd, self._lock_fd = self._lock_fd, None
-        if fd is not None:
+        lock, self._lock = self._lock, None
+        if lock is not None:
             try:
-                os.ftruncate(fd, 0)
+                (self.root / LOCK).write_bytes(b"")  # no holder named once released
             except OSError:  # pragma: no cover
                 pass
-            os.close(fd)  # closing the descriptor releases the flock
+            lock.release()
 
     def _remove_temporaries(self) -> None:
         """Remove interrupted atomic writes (only called while holding the lock: no other writer)."""
@@ -462,9 +426,7 @@ class CampaignStore:
             tdir = self.root / "traces"
             tdir.mkdir(exist_ok=True)
             path = tdir / trace_filename(run_id)
-            tmp = _tmp_path(path)
-            write_netcdf(self._cf_trace(ds), tmp)
-            os.replace(tmp, path)
+            atomic_write(path, functools.partial(write_netcdf, self._cf_trace(ds)))
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
         # metric units come from the runner (``table.attrs["metric_units"]``); inputs: see parquet_units
@@ -476,7 +438,7 @@ class CampaignStore:
             data
         ).hexdigest()
         self._write_manifest()
-        atomic_write_bytes(path, data)
+        atomic_write(path, data)
         self._finished.add(chunk_id)
         return path
 
@@ -534,9 +496,10 @@ def _short(path: str | Path) -> str:
     return text if len(text) <= 120 else text[:100] + "..."
 
 
-def _lock_holder_text(holder: str) -> str:
+def _lock_holder_text(path: Path) -> str:
+    """Host, PID and start of the process named in a lock file, or "holder unknown"."""
     try:
-        info = json.loads(holder)
+        info = json.loads(path.read_text(encoding="utf-8", errors="replace")[:4096])
         return f"host {info.get('host')}, PID {info.get('pid')}, since {info.get('since_utc')}"
-    except (ValueError, AttributeError):
+    except (OSError, ValueError, AttributeError):
         return "holder unknown"

@@ -16,7 +16,6 @@ actuator-fault cases that apply to every method, then the median of the requirem
 from __future__ import annotations
 
 import base64
-import html
 import json
 import math
 from pathlib import Path
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
@@ -407,35 +407,47 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------------- page
-def _e(v: Any) -> str:
-    return html.escape(str(v))
-
-
 def _fmt(v: Any) -> str:
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            return "-"
-        return f"{v:.3g}"
-    return _e(v)
+    from formation_ftc.report.templating import fmt
+
+    return fmt(v)
 
 
-def _table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
-    head = "".join(f"<th>{_e(label)}</th>" for _, label in cols)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k, _ in cols) + "</tr>" for r in rows
-    )
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def _img(path: Path) -> str:
+def _img(path: Path) -> dict[str, str]:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f'<figure><img alt="{_e(path.stem)}" src="data:image/png;base64,{data}"></figure>'
+    return {"alt": path.stem, "src": f"data:image/png;base64,{data}"}
 
 
-_STYLE = """body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
-table{border-collapse:collapse;margin:0.5em 0 1.5em;font-size:0.85em}td,th{border:1px solid #ccc;padding:2px 6px;
-text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%}
-pre{background:#f7f7f7;padding:0.6em;overflow-x:auto;font-size:0.8em}"""
+#: scores per per-fault table: each is a median and a p95 column, so that a table of a case fits a
+#: 1,280 px window whatever the league scores (method, runs, diverged, pass rate and 4 x 2 numbers)
+SCORES_PER_TABLE = 4
+
+
+def _per_fault(cells: pd.DataFrame, units: dict[str, str]) -> list[dict[str, Any]]:
+    """The per-fault tables of the page: per (level, case) the rows and the tables they are split into
+    (:data:`SCORES_PER_TABLE` scores each; the first one with runs, diverged and pass rate)."""
+    scores = [s for s in SCORES if f"{s}_median" in cells]
+    groups = [scores[k : k + SCORES_PER_TABLE] for k in range(0, len(scores), SCORES_PER_TABLE)]
+    parts = []
+    for k, group in enumerate(groups or [[]]):
+        counts = [("method", "method")]
+        if k == 0:
+            counts += [("runs", "runs"), ("failed", "diverged"), ("pass_rate", "pass rate")]
+        unit = {s: units.get(f"{s}_median", "") for s in group}
+        parts.append(
+            {
+                "counts": [label for _, label in counts],
+                "scores": [
+                    {"label": f"{s} [{unit[s]}]" if unit[s] not in ("", "1") else s} for s in group
+                ],
+                "columns": [key for key, _ in counts]
+                + [f"{s}_{stat}" for s in group for stat in ("median", "p95")],
+            }
+        )
+    return [
+        {"level": level, "case": case, "rows": g.to_dict("records"), "parts": parts}
+        for (level, case), g in cells.groupby(["level", "case"], sort=False)
+    ]
 
 
 def _tuned_text(result: dict[str, Any] | None) -> str:
@@ -515,94 +527,70 @@ def _page(
     wins: list,
     figures: list[Path],
     fdi: dict[str, Any] | None = None,
+    units: dict[str, str] | None = None,
 ) -> str:
-    metric, limit, units = _requirement(meta)
+    """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
+    columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
+    from formation_ftc.report.templating import render
+
+    metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
-    prov = meta.get("provenance", {})
-    parts = [
-        f"<h1>formation-ftc league: {_e(meta['name'])}</h1>",
-        f"<p>League definition version {_e(meta['version'])} (sha256 {_e(meta['hash'][:16])}), fault battery "
-        f"{_e(meta['battery']['name'])} v{_e(meta['battery']['version'])} "
-        f"(sha256 {_e(str(meta['battery'].get('sha256', ''))[:16])}), {meta['seeds']} seed(s) per cell"
-        f"{' (quick)' if meta.get('quick') else ''}. Requirement: <b>{_e(metric)} &le; {limit:g} {_e(units)}</b>; "
-        "a diverged run fails.</p>",
-        "<h2>Ranking</h2><p>Per actuator level: pass rate over the actuator-fault cases every method ran, "
-        f"then the median {_e(metric)}.</p>",
-    ]
+    ranking_tables = []
     for level, rows in rank.items():
-        parts.append(f"<h3>{_e(level)}</h3>")
-        parts.append(
-            _table(
-                rows,
-                [
-                    ("rank", "rank"),
-                    ("method", "method"),
-                    ("pass_rate", "pass rate"),
-                    (f"{metric}_median", f"median {metric} [{units}]"),
-                    *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
-                    ("failed", "diverged"),
-                    ("runs", "runs"),
-                    *(
-                        [("tuned", "tuned (formation-ftc tune)")]
-                        if rows and "tuned" in rows[0]
-                        else []
-                    ),
-                ],
-            )
-        )
-    parts.append("<h2>Winner per fault</h2>")
-    parts.append(
-        _table(
-            wins,
-            [
-                ("level", "level"),
-                ("case", "fault case"),
-                ("method", "best method"),
-                ("pass_rate", "pass rate"),
-                (f"{metric}_median", f"median {metric} [{units}]"),
-            ],
-        )
-    )
-    if fdi is not None:
-        parts.append("<h2>FDI</h2>")
-        parts.append(f"<p>{_e(_fdi_note(fdi))}</p>")
-        if fdi["rows"]:
-            parts.append(_table(fdi["rows"], list(FDI_COLUMNS)))
-    parts.append("<h2>Per-fault tables</h2>")
-    score_cols = [s for s in SCORES if f"{s}_median" in cells]
-    for (level, case), g in cells.groupby(["level", "case"], sort=False):
-        parts.append(f"<h3>{_e(case)} &mdash; {_e(level)}</h3>")
-        cols = [
+        columns = [
+            ("rank", "rank"),
             ("method", "method"),
-            ("runs", "runs"),
-            ("failed", "diverged"),
             ("pass_rate", "pass rate"),
+            (f"{metric}_median", f"median {metric} [{req_units}]"),
+            *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
+            ("failed", "diverged"),
+            ("runs", "runs"),
+            *([("tuned", "tuned (formation-ftc tune)")] if rows and "tuned" in rows[0] else []),
         ]
-        for s in score_cols:
-            cols += [(f"{s}_median", f"{s} median"), (f"{s}_p95", f"{s} p95")]
-        parts.append(_table(g.to_dict("records"), cols))
-    parts.append("<h2>Figures</h2>")
-    parts += [_img(p) for p in figures]
-    parts.append("<h2>Methods</h2>")
-    parts.append(
-        _table(
-            meta["methods"],
-            [("name", "name"), ("label", "law"), ("reference", "source"), ("gain_rule", "gains")],
-        )
-    )
-    parts.append("<h2>League definition</h2>")
-    parts.append(f"<pre>{_e(meta['definition'])}</pre>")
-    for name, text in meta.get("method_files", {}).items():
-        parts.append(f"<details><summary>{_e(name)}</summary><pre>{_e(text)}</pre></details>")
-    parts.append("<h2>Provenance</h2>")
-    parts.append(
-        _table(
-            [{"key": k, "value": v} for k, v in prov.items()], [("key", "key"), ("value", "value")]
-        )
-    )
-    return (
-        f"<!doctype html><html><head><meta charset='utf-8'><title>league {_e(meta['name'])}</title>"
-        f"<style>{_STYLE}</style></head><body>{''.join(parts)}</body></html>"
+        ranking_tables.append((level, rows, columns))
+    battery = meta["battery"]
+    return render(
+        "league.html.j2",
+        title=f"league {meta['name']}",
+        heading=f"formation-ftc league: {meta['name']}",
+        subtitle="",
+        intro={
+            "version": meta["version"],
+            "hash": str(meta["hash"])[:16],
+            "battery": battery["name"],
+            "battery_version": battery["version"],
+            "battery_hash": str(battery.get("sha256", ""))[:16],
+            "seeds": meta["seeds"],
+            "quick": bool(meta.get("quick")),
+        },
+        metric=metric,
+        limit=limit,
+        units=req_units,
+        ranking=ranking_tables,
+        winners=wins,
+        winner_columns=[
+            ("level", "level"),
+            ("case", "fault case"),
+            ("method", "best method"),
+            ("pass_rate", "pass rate"),
+            (f"{metric}_median", f"median {metric} [{req_units}]"),
+        ],
+        fdi=None
+        if fdi is None
+        else {"note": _fdi_note(fdi), "rows": fdi["rows"], "columns": list(FDI_COLUMNS)},
+        per_fault=_per_fault(cells, units or {}),
+        scores_per_table=SCORES_PER_TABLE,
+        figures=[_img(p) for p in figures],
+        methods=meta["methods"],
+        method_columns=[
+            ("name", "name"),
+            ("label", "law"),
+            ("reference", "source"),
+            ("gain_rule", "gains"),
+        ],
+        definition=meta["definition"],
+        method_files=list(meta.get("method_files", {}).items()),
+        provenance=[{"key": k, "value": v} for k, v in (meta.get("provenance") or {}).items()],
     )
 
 
@@ -739,8 +727,9 @@ def write_leaderboard(
     }
     (out / "leaderboard.json").write_text(json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
-    write_parquet(cells, out / "cells.parquet", _cell_units(cells, run_units))
+    cell_units = _cell_units(cells, run_units)
+    write_parquet(cells, out / "cells.parquet", cell_units)
     write_parquet(runs, out / "runs.parquet", run_units)
-    (out / "index.html").write_text(_page(meta, cells, rank, wins, figures, fdi))
-    (out / "leaderboard.md").write_text(markdown_summary(jsonable(board)))
+    atomic_write(out / "index.html", _page(meta, cells, rank, wins, figures, fdi, cell_units))
+    atomic_write(out / "leaderboard.md", markdown_summary(jsonable(board)))
     return board

@@ -10,8 +10,8 @@ noise. Every cell of a method has the same structure, so one compiled program se
 Everything is checked before the first run (unknown method or fault, a method that cannot drive the
 league plant, metrics, the resource budgets of :mod:`formation_ftc.limits` applied to every method's
 campaign and to their sum, the results directory): a bad league fails with exit code 2 and writes
-nothing. ``league.json`` and the cell files are written atomically (temporary file, then
-:func:`os.replace`), so a killed league resumes: run the same command again and only the missing chunks
+nothing. ``league.json`` and the cell files are written atomically
+(:func:`formation_ftc.atomic.atomic_write`), so a killed league resumes: run the same command again and only the missing chunks
 run.
 """
 
@@ -31,6 +31,8 @@ from typing import Any
 
 import pandas as pd
 
+# one atomic write for the package (league/tuning.py imports it from here under this name)
+from formation_ftc.atomic import atomic_write as _atomic_write_text
 from formation_ftc.league.definition import (
     LeagueError,
     LeagueSpec,
@@ -405,21 +407,6 @@ def _check_out(out: Path, spec: LeagueSpec, digest: str, seeds: int) -> dict[str
             "seeds). Use another --out directory"
         )
     return old
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same directory and :func:`os.replace`:
-    ``path`` holds its old content or the new one, never a part (the temporary file goes on failure)."""
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def _write_inputs(

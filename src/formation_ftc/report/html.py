@@ -1,9 +1,11 @@
-"""Self-contained static HTML page of a reproduction report (``DIR/index.html``).
+"""Static HTML page of a reproduction report (``DIR/index.html``).
 
-The page is rendered from the per-paper ``report.json`` entries (see
+The page is rendered (template ``report/templates/reproduction.html.j2``,
+:mod:`formation_ftc.report.templating`) from the per-paper ``report.json`` entries (see
 :func:`formation_ftc.report.reproduce.paper_entry`) and the files in ``DIR/<paper>/``: no network
 is needed to view it -- figures are embedded as base64 data URIs, the style sheet is inline and,
-when the optional interactive 3-D view is on, plotly's own JavaScript bundle is inlined once.
+when an interactive 3-D view is drawn, the page loads plotly's JavaScript bundle from
+``DIR/plotly.min.js``, one copy for the whole report tree (:func:`plotly_script`).
 
 Per paper: title, citation, short method description, the paper-vs-reproduced comparison table
 (verdicts coloured), the figures with the paper's numbers and captions, the condition-check table,
@@ -23,11 +25,10 @@ says that the interactive view is unavailable and everything else still works.
 from __future__ import annotations
 
 import base64
-import html
 import json
 import math
 import mimetypes
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,8 @@ __all__ = [
     "write_trajectory3d",
     "load_trajectories",
     "plotly_available",
+    "plotly_script",
+    "PLOTLY_JS",
 ]
 
 #: File name a reproduction writes its 3-D trajectory data to (inside its output directory).
@@ -50,54 +53,13 @@ _VERDICT_CLASS = {
     "differs": "verdict-differs",
     "not stated": "verdict-not-stated",
 }
-
-_CSS = """
-:root { --ok:#1e7b34; --okbg:#e3f4e6; --bad:#b3261e; --badbg:#fbe4e2; --na:#5f6368; --nabg:#eef0f2; }
-* { box-sizing: border-box; }
-body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; margin: 0; color: #1f2328;
-       background: #fafbfc; line-height: 1.45; }
-header.top { background: #0b3d62; color: #fff; padding: 18px 32px; }
-header.top h1 { margin: 0 0 4px 0; font-size: 1.5em; }
-header.top p { margin: 0; opacity: .85; }
-main { max-width: 1200px; margin: 0 auto; padding: 16px 32px 48px; }
-section.paper { background: #fff; border: 1px solid #d0d7de; border-radius: 8px; padding: 8px 24px 20px;
-                margin: 24px 0; }
-section.paper.failed { border-color: var(--bad); }
-h2 { margin-top: 16px; } h3 { margin-bottom: 6px; border-bottom: 1px solid #eaeef2; padding-bottom: 2px; }
-.citation { color: #57606a; font-style: italic; }
-table { border-collapse: collapse; width: 100%; margin: 8px 0; font-size: .92em; }
-th, td { border: 1px solid #d0d7de; padding: 4px 8px; text-align: left; vertical-align: top; }
-th { background: #f3f5f7; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; }
-tr.verdict-match td.verdict, tr.holds-yes td.holds, .badge.ok { background: var(--okbg); color: var(--ok); }
-tr.verdict-differs td.verdict, tr.holds-no td.holds, .badge.failed { background: var(--badbg); color: var(--bad); }
-tr.verdict-not-stated td.verdict, tr.holds-na td.holds, tr.holds-unproven td.holds { background: var(--nabg); color: var(--na); }
-td.verdict, td.holds { font-weight: 600; white-space: nowrap; }
-.badge { display: inline-block; padding: 1px 8px; border-radius: 10px; font-weight: 600; font-size: .85em; }
-.figures { display: flex; flex-wrap: wrap; gap: 16px; }
-figure.fig { margin: 0; flex: 1 1 460px; max-width: 100%; border: 1px solid #eaeef2; padding: 8px;
-             background: #fff; }
-figure.fig img { max-width: 100%; height: auto; display: block; margin: 0 auto; }
-figcaption { font-size: .9em; color: #333; margin-top: 4px; }
-.missing, .unavailable { color: var(--na); background: var(--nabg); padding: 6px 10px; border-radius: 4px; }
-.warning { color: #7a4b00; background: #fff4d6; padding: 6px 10px; border-radius: 4px; margin: 4px 0; }
-pre.traceback { background: #1f2328; color: #f6f8fa; padding: 10px; overflow-x: auto; font-size: .85em; }
-.traj3d { width: 100%; height: 520px; }
-dl.meta { display: grid; grid-template-columns: max-content auto; gap: 2px 16px; font-size: .92em; }
-dl.meta dt { font-weight: 600; } dl.meta dd { margin: 0; font-family: ui-monospace, monospace; }
-nav.toc a { margin-right: 14px; }
-footer { color: #57606a; font-size: .85em; }
-"""
+#: File name of plotly's JavaScript bundle, one per report tree (:func:`plotly_script`).
+PLOTLY_JS = "plotly.min.js"
 
 
 # ------------------------------------------------------------------------------------------ helpers
-def _e(value: Any) -> str:
-    return html.escape("" if value is None else str(value), quote=True)
-
-
-def _paragraphs(text: str) -> str:
-    blocks = [b.strip() for b in str(text or "").split("\n\n") if b.strip()]
-    return "\n".join(f"<p>{_e(' '.join(b.split()))}</p>" for b in blocks)
+def _paragraphs(text: str) -> list[str]:
+    return [" ".join(b.split()) for b in str(text or "").split("\n\n") if b.strip()]
 
 
 def _anchor(paper: str) -> str:
@@ -108,7 +70,7 @@ def _fmt_seconds(value: Any) -> str:
     try:
         return f"{float(value):.1f} s"
     except (TypeError, ValueError):
-        return _e(value)
+        return "" if value is None else str(value)
 
 
 def plotly_available() -> bool:
@@ -254,210 +216,6 @@ def _plotly_view(view: dict, div_id: str) -> str:
     )
 
 
-# ------------------------------------------------------------------------------------------ sections
-def _comparison_table(rows: list[dict]) -> str:
-    if not rows:
-        return '<p class="missing">No paper-vs-reproduced rows.</p>'
-    # "paper" holds only what the paper prints (with where); values the paper does not print are in
-    # "reference", with how they were obtained (docs/references.md of the repository)
-    out = [
-        '<table class="comparison"><thead><tr><th>quantity</th><th>paper (where printed)</th>'
-        "<th>reference (how obtained)</th><th>ours</th><th>criterion</th><th>verdict</th><th>note</th>"
-        "</tr></thead><tbody>"
-    ]
-    for r in rows:
-        verdict: Any = r.get("verdict")  # a JSON value
-        cls = _VERDICT_CLASS.get(verdict, "verdict-not-stated")
-        paper = r.get("published") or "not printed"
-        out.append(
-            f'<tr class="{cls}"><td>{_e(r.get("quantity"))}</td><td>{_e(paper)}</td>'
-            f"<td>{_e(r.get('reference') or '')}</td>"
-            f"<td>{_e(r.get('ours'))}</td><td>{_e(r.get('criterion'))}</td>"
-            f'<td class="verdict">{_e(r.get("verdict"))}</td><td>{_e(r.get("note"))}</td></tr>'
-        )
-    out.append("</tbody></table>")
-    return "\n".join(out)
-
-
-def _checks_table(checks: list[dict]) -> str:
-    if not checks:
-        return '<p class="missing">No conditions declared.</p>'
-    out = [
-        '<table class="checks"><thead><tr><th>condition</th><th>reference</th><th>value</th>'
-        "<th>requirement</th><th>holds</th><th>basis</th><th>required</th><th>detail</th></tr></thead><tbody>"
-    ]
-    for c in checks:
-        holds: Any = c.get("holds")  # a JSON value: true, false or null
-        basis = c.get("basis") or ""  # absent in a report.json written before the basis existed
-        if holds is None and basis in ("sampled", "heuristic"):
-            cls, text = "holds-unproven", "unproven"  # no violation found, nothing proved
-        else:
-            cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(
-                holds, ("holds-na", "n/a")
-            )
-        required = "yes" if c.get("required", True) else "info"
-        out.append(
-            f'<tr class="{cls}"><td>{_e(c.get("name"))}</td><td>{_e(c.get("reference"))}</td>'
-            f"<td>{_e(c.get('value'))}</td><td>{_e(c.get('requirement'))}</td>"
-            f'<td class="holds">{text}</td><td class="basis">{_e(basis)}</td><td>{required}</td>'
-            f"<td>{_e(c.get('detail'))}</td></tr>"
-        )
-    out.append("</tbody></table>")
-    return "\n".join(out)
-
-
-def _figures(entry: dict, paper_dir: Path) -> str:
-    figs = entry.get("figures") or []
-    if not figs:
-        return '<p class="missing">No figures.</p>'
-    out = ['<div class="figures">']
-    for f in figs:
-        label = f"Fig. {_e(f.get('number'))}."
-        path = paper_dir / str(f.get("path", ""))
-        if path.is_file():
-            body = (
-                f'<img class="figure-img" src="{_data_uri(path)}" '
-                f'alt="Figure {_e(f.get("number"))}: {_e(f.get("caption"))}">'
-            )
-        else:
-            body = f'<p class="missing">figure file {_e(f.get("path"))} is missing</p>'
-        out.append(
-            f'<figure class="fig" data-figure="{_e(f.get("number"))}">{body}'
-            f"<figcaption><b>{label}</b> {_e(f.get('caption'))}</figcaption></figure>"
-        )
-    out.append("</div>")
-    return "\n".join(out)
-
-
-def _trajectory_block(entry: dict, paper_dir: Path, include_3d: bool, state: dict) -> str:
-    if not entry.get("trajectory3d"):
-        return ""
-    head = "<h3>Interactive 3-D formation trajectory</h3>"
-    if not include_3d:
-        return head + '<p class="unavailable">3-D view left out (--no-3d).</p>'
-    if not plotly_available():
-        return head + (
-            '<p class="unavailable">Interactive 3-D view unavailable: plotly is not installed '
-            "(pip install plotly, then run the report again).</p>"
-        )
-    views, problems = load_trajectories(paper_dir / str(entry["trajectory3d"]))
-    parts = [head] + [f'<p class="warning">{_e(p)}</p>' for p in problems]
-    for k, view in enumerate(views):
-        state["plotly"] = True
-        div_id = f"{_anchor(entry['paper'])}-traj3d-{k + 1}"
-        parts.append(
-            f'<div class="traj3d-wrap" data-view="{_e(view["title"])}">'
-            f"{_plotly_view(view, div_id)}</div>"
-        )
-    return "\n".join(parts)
-
-
-def _section(entry: dict, out_dir: Path, include_3d: bool, state: dict) -> str:
-    paper = str(entry.get("paper"))
-    paper_dir = out_dir / paper
-    status = entry.get("status", "failed")
-    badge = f'<span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span>'
-    parts = [
-        f'<section class="paper {"ok" if status == "ok" else "failed"}" id="{_anchor(paper)}" '
-        f'data-paper="{_e(paper)}" data-status="{_e(status)}">',
-        f"<h2>{_e(entry.get('title') or paper)} {badge}</h2>",
-    ]
-    if entry.get("citation"):
-        parts.append(f'<p class="citation">{_e(entry["citation"])}</p>')
-    parts.append(
-        "<h3>Method</h3>"
-        + (_paragraphs(entry.get("description", "")) or '<p class="missing">No description.</p>')
-    )
-    if status != "ok":
-        parts.append(
-            '<h3>Run failed</h3><p class="warning">This reproduction raised an exception; '
-            "the other papers still ran.</p>"
-            f'<pre class="traceback">{_e(entry.get("error"))}</pre>'
-        )
-    for w in entry.get("warnings") or []:
-        parts.append(f'<p class="warning">{_e(w)}</p>')
-    v = entry.get("verdicts") or {}
-    parts.append(
-        f"<h3>Published vs reproduced</h3><p>{v.get('match', 0)} match, {v.get('differs', 0)} "
-        f"differ, {v.get('not stated', 0)} not stated.</p>"
-    )
-    parts.append(_comparison_table(entry.get("rows") or []))
-    parts.append("<h3>Figures</h3>" + _figures(entry, paper_dir))
-    parts.append(_trajectory_block(entry, paper_dir, include_3d, state))
-    parts.append("<h3>Condition checks</h3>" + _checks_table(entry.get("checks") or []))
-    errata = entry.get("errata") or []
-    parts.append(
-        "<h3>Errata applied</h3>"
-        + (
-            '<ul class="errata">'
-            + "".join(
-                f"<li><code>{_e(e.get('id'))}</code> {_e(e.get('text'))}</li>" for e in errata
-            )
-            + "</ul>"
-            if errata
-            else '<p class="missing">None.</p>'
-        )
-    )
-    notes = entry.get("notes") or []
-    if notes:
-        parts.append(
-            '<h3>Notes</h3><ul class="notes">'
-            + "".join(f"<li>{_e(n)}</li>" for n in notes)
-            + "</ul>"
-        )
-    seeds = ", ".join(str(s) for s in entry.get("seeds") or []) or "none"
-    scenarios = ", ".join(str(s) for s in entry.get("scenarios") or []) or "none"
-    parts.append(
-        '<h3>Run metadata</h3><dl class="meta">'
-        f"<dt>wall time</dt><dd>{_fmt_seconds(entry.get('wall_time_s'))}</dd>"
-        f"<dt>seeds</dt><dd>{_e(seeds)}</dd><dt>scenarios</dt><dd>{_e(scenarios)}</dd>"
-        f"<dt>finished</dt><dd>{_e(entry.get('finished_utc'))}</dd>"
-        f"<dt>output</dt><dd>{_e(paper)}/ (report.json, summary.json, figures)</dd></dl>"
-    )
-    parts.append("</section>")
-    return "\n".join(p for p in parts if p)
-
-
-def _overview(entries: list[dict]) -> str:
-    out = [
-        '<table class="overview"><thead><tr><th>paper</th><th>status</th><th>match</th><th>differs</th>'
-        "<th>not stated</th><th>conditions hold / fail / unproven / n.a.</th><th>figures</th><th>wall time</th>"
-        "</tr></thead><tbody>"
-    ]
-    for e in entries:
-        v, c = e.get("verdicts") or {}, e.get("checks_summary") or {}
-        status = e.get("status", "failed")
-        out.append(
-            f'<tr><td><a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a></td>'
-            f'<td><span class="badge {"ok" if status == "ok" else "failed"}">{_e(status)}</span></td>'
-            f'<td class="num">{v.get("match", 0)}</td><td class="num">{v.get("differs", 0)}</td>'
-            f'<td class="num">{v.get("not stated", 0)}</td>'
-            f'<td class="num">{c.get("hold", 0)} / {c.get("fail", 0)} / {c.get("unproven", 0)} / '
-            f"{c.get('not evaluated', 0)}</td>"
-            f'<td class="num">{len(e.get("figures") or [])}</td>'
-            f'<td class="num">{_fmt_seconds(e.get("wall_time_s"))}</td></tr>'
-        )
-    out.append("</tbody></table>")
-    return "\n".join(out)
-
-
-def _metadata_block(metadata: Mapping[str, Any]) -> str:
-    versions = {k[len("version_") :]: v for k, v in metadata.items() if k.startswith("version_")}
-    other = {
-        k: v
-        for k, v in metadata.items()
-        if not k.startswith("version_") and isinstance(v, str | int | float)
-    }
-    rows = "".join(f"<dt>{_e(k)}</dt><dd>{_e(v)}</dd>" for k, v in other.items())
-    vrows = "".join(f"<tr><td>{_e(k)}</td><td>{_e(v)}</td></tr>" for k, v in versions.items())
-    return (
-        '<section class="run-metadata" id="run-metadata"><h2>Run metadata</h2>'
-        f'<dl class="meta">{rows}</dl><h3>Package versions</h3>'
-        f'<table class="versions"><thead><tr><th>package</th><th>version</th></tr></thead>'
-        f"<tbody>{vrows}</tbody></table></section>"
-    )
-
-
 # ------------------------------------------------------------------------------------------- public
 def league_links(
     out_dir: Path | str, leagues: list[Path | str] | None = None
@@ -493,24 +251,193 @@ def league_links(
     return list(found.values())
 
 
-def _league_block(links: list[dict[str, Any]]) -> str:
-    if not links:
-        return ""
-    items = []
-    for lk in links:
-        tops = "; ".join(
-            f"{_e(level)}: " + ", ".join(_e(r.get("method")) for r in rows[:3])
-            for level, rows in lk["ranking"].items()
+def plotly_script(page_dir: Path | str, root: Path | str | None = None) -> str:
+    """Relative URL of the plotly bundle for a page in ``page_dir``: the nearest ``plotly.min.js`` at or
+    above ``page_dir`` that is this plotly's bundle (one copy serves a whole report tree), else a copy
+    written (atomically) into ``root`` (default ``page_dir``, which must be at or below ``root``)."""
+    import os
+
+    from plotly.offline import get_plotlyjs
+
+    from formation_ftc.atomic import atomic_write
+
+    page_dir = Path(page_dir).absolute()
+    bundle = get_plotlyjs().encode("utf-8")
+    for d in (page_dir, *page_dir.parents):
+        candidate = d / PLOTLY_JS
+        try:
+            if candidate.stat().st_size == len(bundle) and candidate.read_bytes() == bundle:
+                return Path(os.path.relpath(candidate, page_dir)).as_posix()
+        except OSError:  # none there (or unreadable): look further up
+            continue
+    target = Path(root).absolute() if root is not None else page_dir
+    atomic_write(target / PLOTLY_JS, bundle)
+    return Path(os.path.relpath(target / PLOTLY_JS, page_dir)).as_posix()
+
+
+def _rows(entry: dict) -> list[dict[str, Any]]:
+    out = []
+    for r in entry.get("rows") or []:
+        verdict: Any = r.get("verdict")  # a JSON value
+        out.append(
+            {
+                "class": _VERDICT_CLASS.get(verdict, "verdict-not-stated"),
+                "quantity": r.get("quantity"),
+                "paper": r.get("published") or "not printed",
+                "reference": r.get("reference") or "",
+                "ours": r.get("ours"),
+                "criterion": r.get("criterion"),
+                "verdict": verdict,
+                "note": r.get("note"),
+            }
         )
-        items.append(
-            f'<li><a href="{_e(lk["href"])}">league {_e(lk["name"])}</a> ({_e(lk["seeds"])} seeds per '
-            f"cell; top three by pass rate on {_e(lk['metric'])}: {tops})</li>"
+    return out
+
+
+def _checks(entry: dict) -> list[dict[str, Any]]:
+    out = []
+    for c in entry.get("checks") or []:
+        holds: Any = c.get("holds")  # a JSON value: true, false or null
+        basis = c.get("basis") or ""  # absent in a report.json written before the basis existed
+        if holds is None and basis in ("sampled", "heuristic"):
+            cls, text = "holds-unproven", "unproven"  # no violation found, nothing proved
+        else:
+            cls, text = {True: ("holds-yes", "yes"), False: ("holds-no", "NO")}.get(
+                holds, ("holds-na", "n/a")
+            )
+        out.append(
+            {
+                **{k: c.get(k) for k in ("name", "reference", "value", "requirement", "detail")},
+                "class": cls,
+                "holds": text,
+                "basis": basis,
+                "required": "yes" if c.get("required", True) else "info",
+            }
         )
-    return (
-        '<section id="leagues"><h2>FTC league leaderboards</h2><p>Every method on one realistic truth under '
-        "the same fault battery (<code>formation-ftc league</code>):</p><ul>"
-        + "".join(items)
-        + "</ul></section>"
+    return out
+
+
+def _figures(entry: dict, paper_dir: Path) -> list[dict[str, Any]]:
+    out = []
+    for f in entry.get("figures") or []:
+        path = paper_dir / str(f.get("path", ""))
+        out.append(
+            {
+                "number": f.get("number"),
+                "caption": f.get("caption"),
+                "path": f.get("path"),
+                "src": _data_uri(path) if path.is_file() else None,
+            }
+        )
+    return out
+
+
+def _trajectory(entry: dict, paper_dir: Path, include_3d: bool) -> dict[str, Any] | None:
+    """The 3-D block of a paper: None without trajectory data, else a reason it is not drawn or the
+    views (plotly's markup, which loads the page's plotly bundle)."""
+    from markupsafe import Markup
+
+    if not entry.get("trajectory3d"):
+        return None
+    if not include_3d:
+        return {"unavailable": "3-D view left out (--no-3d).", "problems": [], "views": []}
+    if not plotly_available():
+        return {
+            "unavailable": "Interactive 3-D view unavailable: plotly is not installed "
+            "(pip install plotly, then run the report again).",
+            "problems": [],
+            "views": [],
+        }
+    views, problems = load_trajectories(paper_dir / str(entry["trajectory3d"]))
+    drawn = [
+        {
+            "title": view["title"],
+            "html": Markup(_plotly_view(view, f"{_anchor(str(entry['paper']))}-traj3d-{k + 1}")),
+        }
+        for k, view in enumerate(views)
+    ]
+    return {"unavailable": "", "problems": problems, "views": drawn}
+
+
+def _section(entry: dict, out_dir: Path, include_3d: bool) -> dict[str, Any]:
+    paper = str(entry.get("paper"))
+    status = entry.get("status", "failed")
+    v, c = entry.get("verdicts") or {}, entry.get("checks_summary") or {}
+    return {
+        "paper": paper,
+        "anchor": _anchor(paper),
+        "status": status,
+        "ok": "ok" if status == "ok" else "failed",
+        "title": entry.get("title") or paper,
+        "citation": entry.get("citation"),
+        "description": _paragraphs(entry.get("description", "")),
+        "error": entry.get("error"),
+        "warnings": entry.get("warnings") or [],
+        "verdicts": {
+            "match": v.get("match", 0),
+            "differs": v.get("differs", 0),
+            "not_stated": v.get("not stated", 0),
+        },
+        "conditions": [c.get(k, 0) for k in ("hold", "fail", "unproven", "not evaluated")],
+        "rows": _rows(entry),
+        "figures": _figures(entry, out_dir / paper),
+        "trajectory": _trajectory(entry, out_dir / paper, include_3d),
+        "checks": _checks(entry),
+        "errata": entry.get("errata") or [],
+        "notes": entry.get("notes") or [],
+        "seeds": ", ".join(str(s) for s in entry.get("seeds") or []) or "none",
+        "scenarios": ", ".join(str(s) for s in entry.get("scenarios") or []) or "none",
+        "wall_time": _fmt_seconds(entry.get("wall_time_s")),
+        "finished": entry.get("finished_utc"),
+    }
+
+
+def _render(
+    entries: list[dict],
+    out_dir: Path,
+    metadata: Mapping[str, Any],
+    include_3d: bool,
+    title: str,
+    leagues: list[Path | str] | None,
+    plotly_src: Callable[[], str],
+) -> str:
+    """The page's text; ``plotly_src()`` is called only when the page draws a 3-D view."""
+    from formation_ftc.report.templating import render
+
+    sections = [_section(e, out_dir, include_3d) for e in entries]
+    uses_plotly = any(s["trajectory"] and s["trajectory"]["views"] for s in sections)
+    n_failed = sum(1 for e in entries if e.get("status") != "ok")
+    status_line = (
+        f"{len(entries)} paper(s), all ran"
+        if not n_failed
+        else f"{len(entries)} paper(s), {n_failed} failed"
+    )
+    links = [
+        {
+            **lk,
+            "tops": [
+                (level, [r.get("method") for r in rows[:3]])
+                for level, rows in lk["ranking"].items()
+            ],
+        }
+        for lk in league_links(out_dir, leagues)
+    ]
+    return render(
+        "reproduction.html.j2",
+        title=title,
+        subtitle=f"{status_line}; generated {metadata.get('created_utc', '')}; "
+        f"commit {metadata.get('git_commit', 'unknown')}",
+        plotly_src=plotly_src() if uses_plotly else "",
+        sections=sections,
+        leagues=links,
+        metadata=[
+            (k, v)
+            for k, v in metadata.items()
+            if not k.startswith("version_") and isinstance(v, str | int | float)
+        ],
+        versions=[
+            (k[len("version_") :], v) for k, v in metadata.items() if k.startswith("version_")
+        ],
     )
 
 
@@ -526,47 +453,10 @@ def render_index(
     """The complete HTML text of the report page.
 
     ``entries`` are the per-paper ``report.json`` dicts; figure and trajectory files are read from
-    ``out_dir/<paper>/``. The result references no external resource.
+    ``out_dir/<paper>/``. The result references no external resource; a page with a 3-D view loads
+    ``plotly.min.js`` from ``out_dir`` (:func:`write_index` writes it there).
     """
-    out_dir = Path(out_dir)
-    state: dict[str, bool] = {"plotly": False}
-    sections = [_section(e, out_dir, include_3d, state) for e in entries]
-    n_failed = sum(1 for e in entries if e.get("status") != "ok")
-    head_js = ""
-    if state["plotly"]:
-        from plotly.offline import get_plotlyjs
-
-        head_js = f'<script type="text/javascript">{get_plotlyjs()}</script>'
-    toc = " ".join(
-        f'<a href="#{_anchor(str(e.get("paper")))}">{_e(e.get("paper"))}</a>' for e in entries
-    )
-    status_line = (
-        f"{len(entries)} paper(s), all ran"
-        if not n_failed
-        else f"{len(entries)} paper(s), {n_failed} failed"
-    )
-    return "\n".join(
-        [
-            "<!DOCTYPE html>",
-            '<html lang="en"><head><meta charset="utf-8">',
-            '<meta name="viewport" content="width=device-width, initial-scale=1">',
-            f"<title>{_e(title)}</title><style>{_CSS}</style>{head_js}</head><body>",
-            f'<header class="top"><h1>{_e(title)}</h1><p>{_e(status_line)}; generated '
-            f"{_e(metadata.get('created_utc', ''))}; commit {_e(metadata.get('git_commit', 'unknown'))}</p></header>",
-            "<main>",
-            f'<nav class="toc">{toc} <a href="#run-metadata">run metadata</a></nav>',
-            '<section class="overview" id="overview"><h2>Overview</h2>'
-            + _overview(entries)
-            + "</section>",
-            _league_block(league_links(out_dir, leagues)),
-            *sections,
-            _metadata_block(metadata),
-            "<footer><p>Written by <code>formation-ftc reproduce</code>. Per-paper data: "
-            "<code>&lt;paper&gt;/report.json</code>, <code>&lt;paper&gt;/summary.json</code>; merged: "
-            "<code>summary.json</code>.</p></footer>",
-            "</main></body></html>",
-        ]
-    )
+    return _render(entries, Path(out_dir), metadata, include_3d, title, leagues, lambda: PLOTLY_JS)
 
 
 def write_index(
@@ -577,13 +467,18 @@ def write_index(
     include_3d: bool = True,
     leagues: list[Path | str] | None = None,
 ) -> Path:
-    """Render :func:`render_index` into ``out_dir/index.html`` and return its path."""
+    """Render :func:`render_index` into ``out_dir/index.html`` (atomically) and return its path; with a
+    3-D view, plotly's bundle is written once per report tree (:func:`plotly_script`)."""
+    from formation_ftc.atomic import atomic_write
+
     out_dir = Path(out_dir)
-    path = out_dir / "index.html"
-    tmp = path.with_name("index.html.tmp")
-    tmp.write_text(
-        render_index(entries, out_dir, metadata, include_3d=include_3d, leagues=leagues),
-        encoding="utf-8",
+    page = _render(
+        entries,
+        out_dir,
+        metadata,
+        include_3d,
+        "formation-ftc reproduction report",
+        leagues,
+        lambda: plotly_script(out_dir),
     )
-    tmp.replace(path)
-    return path
+    return atomic_write(out_dir / "index.html", page)

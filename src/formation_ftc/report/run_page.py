@@ -12,20 +12,21 @@ Standard figures (each only when the result has the signals it needs):
 * ``run_fault.png``: ``fault`` (or ``fault_acceleration``, whichever has the estimate's units; solid) vs
   ``fault_estimate`` (dashed) per axis.
 
-The page is self-contained: figures are referenced by relative file name, nothing is loaded from the
-network; the 3-D view (plotly, only with the ``interactive`` extra installed) uses a local copy of
-plotly's JavaScript written next to the page.
+The page (template ``report/templates/run.html.j2``) loads nothing from the network: figures are
+referenced by relative file name; the 3-D view (plotly, only with the ``interactive`` extra installed)
+loads the nearest ``plotly.min.js`` at or above the page's directory -- one copy serves a whole tree of
+runs -- and writes one next to the page only when there is none.
 """
 
 from __future__ import annotations
 
-import html
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from formation_ftc.exitcodes import jsonable
 
 __all__ = ["standard_figures", "write_run_page", "ERROR_SIGNALS"]
 
@@ -169,18 +170,23 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     return paths
 
 
-def _trajectory_html(ds, out_dir: Path) -> str:
-    """Interactive 3-D trajectory (plotly, local script) or a note saying why there is none."""
+def _trajectory(ds, out_dir: Path) -> dict[str, Any] | None:
+    """Interactive 3-D trajectory (plotly; the page loads the report tree's one copy of plotly's
+    bundle, :func:`formation_ftc.report.html.plotly_script`), a note saying why there is none, or None
+    when the result has no 3-D positions."""
     if "position" not in ds or _axes_of(ds["position"])[:3] != ["x", "y", "z"]:
-        return ""
+        return None
     try:
         import plotly.graph_objects as go
-        from plotly.offline import get_plotlyjs
     except ImportError:
-        return (
-            '<p class="note">Interactive 3-D trajectory unavailable: plotly is not installed '
-            "(install the <code>interactive</code> extra).</p>"
-        )
+        return {
+            "unavailable": "Interactive 3-D trajectory unavailable: plotly is not installed "
+            "(install the interactive extra: pip install 'formation-ftc[interactive]')."
+        }
+    from markupsafe import Markup
+
+    from formation_ftc.report.html import plotly_script
+
     var = _decimated(ds)["position"]
     fig = go.Figure()
     for lab, v in zip(*_per_spacecraft(var), strict=True):
@@ -196,11 +202,11 @@ def _trajectory_html(ds, out_dir: Path) -> str:
         margin={"l": 0, "r": 0, "t": 30, "b": 0},
         title=f"Trajectory ({var.attrs.get('frame', '')})",
     )
-    (out_dir / "plotly.min.js").write_text(get_plotlyjs(), encoding="utf-8")
-    return (
-        '<h2>Trajectory (interactive)</h2>\n<script src="plotly.min.js"></script>\n'
-        + fig.to_html(full_html=False, include_plotlyjs=False, div_id="trajectory3d")
-    )
+    return {
+        "unavailable": "",
+        "src": plotly_script(out_dir),
+        "html": Markup(fig.to_html(full_html=False, include_plotlyjs=False, div_id="trajectory3d")),
+    }
 
 
 def write_run_page(
@@ -209,41 +215,33 @@ def write_run_page(
     metrics: Mapping[str, Any],
     figures: Sequence[Path | str],
     units: Mapping[str, str] | None = None,
+    *,
+    include_3d: bool = True,
 ) -> Path:
-    """Write ``out_dir/index.html``: title, metrics table (with units), figures, 3-D trajectory."""
+    """Write ``out_dir/index.html``: title, metrics table (with units), figures and, with
+    ``include_3d``, the interactive 3-D trajectory (which loads the nearest ``plotly.min.js`` at or
+    above ``out_dir``, written into ``out_dir`` when there is none)."""
+    from formation_ftc.atomic import atomic_write
+    from formation_ftc.report.templating import render
+
     out_dir = Path(out_dir)
-    e = html.escape
     name = str(ds.attrs.get("scenario_name", ""))
     units = dict(units or {})
-    rows = "".join(
-        f"<tr><td>{e(str(k))}</td><td>{e(f'{v:.6g}' if isinstance(v, float) else str(v))}</td>"
-        f"<td>{e(units.get(k, ''))}</td></tr>"
-        for k, v in metrics.items()
-        if isinstance(v, int | float) and not isinstance(v, bool)
-    )
-    figs = "".join(
-        f'<figure><img src="{e(Path(p).name)}" alt="{e(Path(p).stem)}">'
-        f"<figcaption>{e(Path(p).name)}</figcaption></figure>\n"
-        for p in figures
-    )
     meta = {
         k: ds.attrs.get(k, "") for k in ("method", "seed", "git_commit", "created_utc", "diverged")
     }
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>{e(name)} - formation-ftc run</title>
-<style>body{{font-family:sans-serif;max-width:60em;margin:1em auto;padding:0 1em}}
-img{{max-width:100%}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:2px 6px}}
-.note{{color:#666}}</style></head>
-<body><h1>{e(name)}</h1>
-<p>{e(str(ds.attrs.get("title", "")))}</p>
-<p>Files: <a href="result.nc">result.nc</a> (CF-1.10 NetCDF), <a href="metrics.json">metrics.json</a></p>
-<table>{"".join(f"<tr><th>{e(k)}</th><td>{e(str(v))}</td></tr>" for k, v in meta.items() if v != "")}</table>
-<h2>Metrics</h2><table><tr><th>metric</th><th>value</th><th>units</th></tr>{rows}</table>
-<h2>Figures</h2>
-{figs}{_trajectory_html(ds, out_dir)}
-<script type="application/json" id="run-metadata">{e(json.dumps(meta))}</script>
-</body></html>
-"""
-    path = out_dir / "index.html"
-    path.write_text(page, encoding="utf-8")
-    return path
+    page = render(
+        "run.html.j2",
+        title=f"{name} - formation-ftc run",
+        heading=name,
+        subtitle=str(ds.attrs.get("title", "")),
+        meta={k: jsonable(v) for k, v in meta.items()},
+        metrics=[
+            (str(k), v, units.get(k, ""))
+            for k, v in metrics.items()
+            if isinstance(v, int | float) and not isinstance(v, bool)
+        ],
+        figures=[{"src": Path(p).name, "alt": Path(p).stem} for p in figures],
+        trajectory=_trajectory(ds, out_dir) if include_3d else None,
+    )
+    return atomic_write(out_dir / "index.html", page)
