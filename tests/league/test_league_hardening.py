@@ -588,3 +588,34 @@ def test_league_run_json_is_one_document(reference, capsys):
     assert main(["-q", *argv]) == 0
     captured = capsys.readouterr()
     assert json.loads(captured.out)["runs"] == 28 and "lqr: " not in captured.err
+
+
+def test_league_report_of_a_mistyped_tuning_result_exits_2(tmp_path, reference, capsys):
+    """The tuned column reads DIR/tuned/*.json: a tuning result with a field of the wrong type is named
+    (another program's JSON file there is skipped, as before)."""
+    d = _league_copy(reference, tmp_path)
+    (d / "tuned").mkdir()
+    (d / "tuned" / "notes.json").write_text('{"mine": 1}')
+    result = {
+        "kind": "formation-ftc tuning",
+        "method": "lqr",
+        "level": "limited",
+        "tuned_gains": {"controller.max_position_error": "large"},
+        "paper_gains": {"controller.max_position_error": 1.0},
+        "objective": {"metric": "delta_v_total", "units": "m s-1", "statistic": "mean"},
+        "holdout": {"paper": {"pass_rate": 0.5}, "tuned": {"pass_rate": 1.0}},
+        "optimiser": {"name": "nelder-mead"},
+    }
+    path = d / "tuned" / "lqr--limited.json"
+    path.write_text(json.dumps(result))
+    assert main(["league", "report", str(d), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(
+        f"error: tuning result {path}: field tuned_gains.controller.max_position_error: "
+        "Input should be a valid number"
+    ), err
+    result["tuned_gains"] = {"controller.max_position_error": 2.0}
+    path.write_text(json.dumps(result))
+    assert main(["league", "report", str(d), "--no-plots", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)["leaderboard"]["ranking"]["limited"][0]
+    assert row["tuning"]["gains"] == {"controller.max_position_error": 2.0}

@@ -469,17 +469,10 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
     traces: dict[str, dict[str, Any]] = {}
     for m in meta["methods"]:
         tdir = league_dir / m["name"] / "campaign" / "traces"
-        cdir = league_dir / m["name"] / "cells"
         if not tdir.is_dir():
             continue
-        manifest = json.loads((league_dir / m["name"] / "campaign" / "manifest.json").read_text())
-        runs = int(
-            meta.get("seeds") or manifest.get("runs_per_point", manifest.get("runs", 1))
-        )  # runs per cell
-        plan_bases = manifest.get("plan", {}).get("bases") or manifest.get(
-            "bases"
-        )  # the cells in run order
-        bases = [Path(b).stem for b in plan_bases or sorted(p.name for p in cdir.glob("*.toml"))]
+        runs = int(meta["seeds"])  # runs per cell
+        bases = _expected_cells(league_dir, m["name"]) or []  # the cells in run order
         for p in sorted(tdir.glob("run-*.nc")):
             rid = int(p.stem.split("-")[1])
             g = rid // runs

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict
 
 from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
@@ -1268,13 +1269,19 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
 
 def load_tunings(directory: str | Path) -> dict[tuple[str, str], dict[str, Any]]:
     """The tuning results in ``directory`` (from :func:`write_tuning`) by ``(method, level)``; other
-    files are skipped, a missing directory gives ``{}``.
+    files are skipped, a missing directory gives ``{}``. A result whose fields the leaderboard reads
+    have the wrong type (:class:`_TuningRecord`) is a TuneError (exit code 2) naming the file and
+    the field.
 
     Examples
     --------
     >>> load_tunings("/nonexistent")
     {}
     """
+    from pydantic import ValidationError
+
+    from formation_ftc.league.runner import record_error
+
     out: dict[tuple[str, str], dict[str, Any]] = {}
     if not Path(directory).is_dir():
         return out
@@ -1284,5 +1291,40 @@ def load_tunings(directory: str | Path) -> dict[tuple[str, str], dict[str, Any]]
         except (OSError, ValueError):
             continue
         if isinstance(r, dict) and r.get("kind") == "formation-ftc tuning":
-            out[(str(r.get("method")), str(r.get("level")))] = r
+            try:
+                _TuningRecord.model_validate(r)
+            except ValidationError as exc:
+                raise TuneError(f"tuning result {record_error(p, exc)}") from None
+            out[(r["method"], r["level"])] = r
     return out
+
+
+class _Record(BaseModel):
+    model_config = ConfigDict(strict=True, extra="allow")
+
+
+class _Objective(_Record):
+    metric: str
+    units: str = ""
+    statistic: str = "mean"
+
+
+class _Optimiser(_Record):
+    name: str
+
+
+class _Holdout(_Record):
+    paper: dict[str, float | int | None]
+    tuned: dict[str, float | int | None]
+
+
+class _TuningRecord(_Record):
+    """The fields of a tuning result the leaderboard's tuned column reads (``league report``)."""
+
+    method: str
+    level: str
+    tuned_gains: dict[str, float]
+    paper_gains: dict[str, float]
+    objective: _Objective
+    holdout: _Holdout
+    optimiser: _Optimiser
