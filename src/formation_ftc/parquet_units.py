@@ -40,10 +40,16 @@ def _numeric(field: Any) -> bool:  # a pyarrow.Field
 
 
 def write_parquet(
-    df: pd.DataFrame, where: str | Path | IO[bytes], units: Mapping[str, str], **options: Any
+    df: pd.DataFrame,
+    where: str | Path | IO[bytes],
+    units: Mapping[str, str],
+    *,
+    metadata: Mapping[str, str] | None = None,
+    **options: Any,
 ) -> None:
     """Write ``df`` (without its index) as Parquet with ``units[column]`` on every numeric column
-    (:data:`UNKNOWN` for one not in ``units``); ``options`` go to :func:`pyarrow.parquet.write_table`."""
+    (:data:`UNKNOWN` for one not in ``units``) and ``metadata`` in the file's key-value metadata;
+    ``options`` go to :func:`pyarrow.parquet.write_table`."""
     plain = df.copy(deep=False)
     plain.attrs = {}  # pyarrow would store them in the file ("pandas" metadata); units live in the fields
     table = pa.Table.from_pandas(plain, preserve_index=False)
@@ -53,7 +59,11 @@ def write_parquet(
         else f
         for f in table.schema
     ]
-    pq.write_table(table.cast(pa.schema(fields, metadata=table.schema.metadata)), where, **options)
+    kv = {
+        **(table.schema.metadata or {}),
+        **{k.encode(): v.encode() for k, v in (metadata or {}).items()},
+    }
+    pq.write_table(table.cast(pa.schema(fields, metadata=kv)), where, **options)
 
 
 def read_units(source: Any) -> dict[str, str]:

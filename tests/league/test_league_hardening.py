@@ -412,3 +412,210 @@ def test_league_log_lines_survive_a_closed_or_full_stderr(monkeypatch):
     monkeypatch.undo()
     with pytest.raises(OSError):
         full.close()
+
+
+def test_step_checks_show_progress_from_the_first_second(tmp_path, tiny_league, monkeypatch):
+    """The step checks run before any campaign: their progress line (integration steps, elapsed, ETA)
+    is on the terminal while the first check simulation still runs, and its total grows when a
+    method's step is halved beyond dt/2 (fake simulations: dt, dt/2, dt/4 of the check cell)."""
+    from formation_ftc.league import step_check
+    from formation_ftc.league.definition import load_league
+
+    spec = load_league(tiny_league(tmp_path, methods=("lqr",), step_check={"enabled": True}))
+    cells = runner.plan_cells(spec, ["lqr"])
+    n0 = next(c for c in cells["lqr"] if c.key == "bias--unsaturated").n_steps
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    tty = Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    during: list[str] = []
+
+    def fake_check(name, raw, *, on_simulation, case, level, **_):
+        dt = float(raw["simulation"]["dt"])
+        for d in (dt, dt / 2, dt / 4):
+            on_simulation(d, False)
+            time.sleep(0.6)  # a simulation running
+            during.append(tty.getvalue())
+            on_simulation(d, True)
+        return step_check.StepCheckResult(
+            name, case, level, 0.02, [dt, dt / 2, dt / 4], [{}, {}, {}], [0.1, 0.01], ["x", "x"],
+            converged=True, chosen_dt=dt / 2,
+        )  # fmt: skip
+
+    monkeypatch.setattr(step_check, "check_step", fake_check)
+    lines: list[str] = []
+    records = runner._step_checks(spec, cells, None, lines.append, progress=True)
+    assert lines[0].startswith("step checks: 1 method(s) (lqr)")
+    assert "step checks" in during[0] and f"0/{3 * n0}" in during[0]  # before any simulation ended
+    assert f"{7 * n0}/{7 * n0}" in tty.getvalue()  # n0 + 2 n0 planned, 4 n0 added by the halving
+    assert records["lqr"]["chosen_dt"] == pytest.approx(60.0 / (2 * n0))
+    assert {c.n_steps for c in cells["lqr"]} == {2 * n0}
+
+
+# ------------------------------------------------------------------------ league report: types, gaps
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        (lambda m: m.update(seeds="2"), "field seeds: Input should be a valid integer (got '2')"),
+        (lambda m: m["battery"]["cases"][0].update(kind=1), "field battery.cases.0.kind: Input should be a valid string"),
+        (lambda m: m["methods"][0].update(name="../lqr"), "field methods.0.name: Value error, '../lqr' is not a name"),
+        (lambda m: m.update(quick="no"), "field quick: Input should be a valid boolean"),
+        (lambda m: m.update(levels={"name": "limited"}), "field levels: Input should be a valid list"),
+        (lambda m: m.update(step_check={"lqr": {"chosen_dt": 0}}), "field step_check.lqr.chosen_dt: Input should be greater than 0"),
+        (lambda m: m.update(definition="[league"), "field definition: not a league definition"),
+    ],
+    ids=["seeds-text", "case-kind", "method-path", "quick-text", "levels-object", "step-zero", "definition"],
+)  # fmt: skip
+def test_league_report_of_a_mistyped_league_json_exits_2(tmp_path, reference, capsys, edit, field):
+    _, ref_dir, _ = reference
+    d = tmp_path / "league"
+    d.mkdir()
+    meta = json.loads((ref_dir / LEAGUE_FILE).read_text())
+    edit(meta)
+    (d / LEAGUE_FILE).write_text(json.dumps(meta))
+    assert main(["league", "report", str(d), "--no-plots", "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.startswith(f"error: {d}: {d / LEAGUE_FILE}: {field}"), captured.err
+    assert json.loads(captured.out)["exit_code"] == 2
+    assert not (d / "leaderboard").exists()
+
+
+def _league_copy(reference, tmp_path: Path) -> Path:
+    import shutil
+
+    d = tmp_path / "league"
+    shutil.copytree(reference[1], d)
+    shutil.rmtree(d / "leaderboard", ignore_errors=True)
+    return d
+
+
+def _file_completeness(path: Path) -> dict:
+    import pyarrow.parquet as pq
+
+    return json.loads(pq.read_schema(path).metadata[b"formation_ftc.league.completeness"])
+
+
+def test_a_complete_league_report_says_its_seeds(tmp_path, reference, capsys):
+    d = _league_copy(reference, tmp_path)
+    assert main(["league", "report", str(d), "--no-plots", "--json"]) == 0
+    board = json.loads(capsys.readouterr().out)["leaderboard"]
+    comp = board["completeness"]
+    assert board["complete"] is comp["complete"] is True
+    assert (
+        comp["seeds_per_cell"] == {"min": 2, "max": 2}
+        and comp["runs"] == comp["expected_runs"] == 28
+    )
+    md = (d / "leaderboard" / "leaderboard.md").read_text()
+    page = (d / "leaderboard" / "index.html").read_text()
+    assert "2 seeds per cell;" in md and "2 seeds per cell." in page
+    assert "INCOMPLETE" not in md + page
+    for name in ("cells.parquet", "runs.parquet"):
+        assert _file_completeness(d / "leaderboard" / name) == comp
+
+
+def test_an_incomplete_league_is_reported_as_such_in_every_format(tmp_path, reference, capsys):
+    """A chunk missing (one cell's 2 runs) and a listed method without a directory: every format says
+    the league is incomplete, names the cell and the method, and gives the seeds found per cell
+    (0-2) next to the configured 2."""
+    import pyarrow.parquet as pq
+
+    d = _league_copy(reference, tmp_path)
+    chunk = sorted((d / "lqr" / "campaign" / "chunks").glob("chunk-*.parquet"))[5]
+    keys = {Path(str(s)).stem for s in pq.read_table(chunk).to_pandas()["scenario"]}
+    assert len(keys) == 1  # a chunk never spans two cells
+    case, level = keys.pop().split("--")
+    chunk.unlink()
+    meta = json.loads((d / LEAGUE_FILE).read_text())
+    meta["methods"].append({"name": "sir-ftc"})  # listed, its directory gone
+    (d / LEAGUE_FILE).write_text(json.dumps(meta))
+
+    assert main(["league", "report", str(d), "--no-plots"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("INCOMPLETE league: 26 of 28 planned runs found")
+    assert "methods without results: sir-ftc" in text
+    assert f"lqr {case}/{level} (0 of 2 runs)" in text
+    assert "0-2 seeds per cell (2 configured)" in text
+
+    assert main(["league", "report", str(d), "--no-plots", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.startswith("warning: INCOMPLETE league")
+    board = json.loads(captured.out)["leaderboard"]
+    comp = board["completeness"]
+    assert board["complete"] is False and comp["complete"] is False
+    assert comp["missing_methods"] == comp["cells_unknown"] == ["sir-ftc"]
+    assert comp["incomplete_cells"] == [
+        {"method": "lqr", "case": case, "level": level, "runs": 0, "expected": 2}
+    ]
+    assert comp["seeds_per_cell"] == {"min": 0, "max": 2}
+    runs = pd.read_parquet(d / "leaderboard" / "runs.parquet")
+    assert comp["runs"] == len(runs) == 26 and comp["expected_runs"] == 28
+    assert (case, level) not in {(c["case"], c["level"]) for c in board["cells"]}
+    assert json.loads((d / "leaderboard" / "leaderboard.json").read_text())["completeness"] == comp
+    md = (d / "leaderboard" / "leaderboard.md").read_text()
+    page = (d / "leaderboard" / "index.html").read_text()
+    for doc in (md, page):
+        assert "INCOMPLETE league" in doc and "sir-ftc" in doc and f"{case}/{level}" in doc
+        assert "0-2 seeds per cell (2 configured)" in doc
+    assert md.startswith("**INCOMPLETE league")
+    for name in ("cells.parquet", "runs.parquet"):
+        assert _file_completeness(d / "leaderboard" / name) == comp
+
+
+def test_league_run_json_is_one_document(reference, capsys):
+    """``league run --json`` on a finished league (resumed: nothing left to run): one document on
+    stdout, the leaderboard as ``league report --json`` gives it, the runs and the wall time; with
+    ``-q`` no log line on stderr."""
+    league, d, expected = reference  # (a league directory cannot be moved: its campaigns name it)
+    argv = _run(league, d, "--seeds", "2", "--json")
+    t0 = time.perf_counter()
+    assert main(argv) == 0
+    wall = time.perf_counter() - t0
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)  # one document, nothing else on stdout
+    assert "lqr: " in captured.err  # the log stays on stderr
+    assert set(doc) == {"league", "dir", "leaderboard", "units", "outputs", "runs", "failed", "methods", "wall_time"}  # fmt: skip
+    assert doc["runs"] == len(expected) == 28 and doc["failed"] == 0
+    assert [m["name"] for m in doc["methods"]] == ["lqr"]
+    assert 0 < doc["methods"][0]["wall_time"] <= doc["wall_time"] <= wall
+    assert doc["units"]["wall_time"] == "s" and doc["units"]["pass_rate"] == "1"
+    assert doc["leaderboard"]["complete"] is True
+    assert doc["leaderboard"]["ranking"].keys() == {"unsaturated", "limited"}
+    for path in doc["outputs"].values():
+        assert Path(path).is_file(), path
+    assert main(["-q", *argv]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["runs"] == 28 and "lqr: " not in captured.err
+
+
+def test_league_report_of_a_mistyped_tuning_result_exits_2(tmp_path, reference, capsys):
+    """The tuned column reads DIR/tuned/*.json: a tuning result with a field of the wrong type is named
+    (another program's JSON file there is skipped, as before)."""
+    d = _league_copy(reference, tmp_path)
+    (d / "tuned").mkdir()
+    (d / "tuned" / "notes.json").write_text('{"mine": 1}')
+    result = {
+        "kind": "formation-ftc tuning",
+        "method": "lqr",
+        "level": "limited",
+        "tuned_gains": {"controller.max_position_error": "large"},
+        "paper_gains": {"controller.max_position_error": 1.0},
+        "objective": {"metric": "delta_v_total", "units": "m s-1", "statistic": "mean"},
+        "holdout": {"paper": {"pass_rate": 0.5}, "tuned": {"pass_rate": 1.0}},
+        "optimiser": {"name": "nelder-mead"},
+    }
+    path = d / "tuned" / "lqr--limited.json"
+    path.write_text(json.dumps(result))
+    assert main(["league", "report", str(d), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(
+        f"error: tuning result {path}: field tuned_gains.controller.max_position_error: "
+        "Input should be a valid number"
+    ), err
+    result["tuned_gains"] = {"controller.max_position_error": 2.0}
+    path.write_text(json.dumps(result))
+    assert main(["league", "report", str(d), "--no-plots", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)["leaderboard"]["ranking"]["limited"][0]
+    assert row["tuning"]["gains"] == {"controller.max_position_error": 2.0}

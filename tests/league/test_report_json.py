@@ -34,6 +34,17 @@ def test_league_report_json(tmp_path, monkeypatch, capsys):
         "league": "tiny",
         "seeds": np.int64(2),
         "quick": np.bool_(False),
+        "complete": True,
+        "completeness": {
+            "complete": True,
+            "seeds": 2,
+            "seeds_per_cell": {"min": 2, "max": 2},
+            "runs": 2,
+            "expected_runs": 2,
+            "missing_methods": [],
+            "cells_unknown": [],
+            "incomplete_cells": [],
+        },
         "requirement": {"metric": "rms_shape_error", "max": 5.0, "units": "m"},
         "ranking": {
             "limited": [

@@ -71,7 +71,7 @@ def test_a_check_that_never_agrees_keeps_the_methods_step_and_says_so(tmp_path, 
     rec = runner._step_checks(spec, cells, None, logs.append)["lqr"]
     assert not rec["converged"] and rec["chosen_dt"] == 0.2 and rec["steps"] == [0.2, 0.1]
     assert len(rec["changes"]) == 1 and rec["changes"][0] > 1e-12
-    assert "NOT converged" in logs[0]
+    assert logs[0].startswith("step checks: 1 method(s) (lqr)") and "NOT converged" in logs[1]
     assert {c.raw["simulation"]["dt"] for c in cells["lqr"]} == {0.2}
 
 

@@ -151,7 +151,11 @@ def _assert_parquet_units(path: Path) -> None:
         numeric = pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
         assert (f.name in units) == numeric and (not numeric or units[f.name]), (path.name, f.name)
         assert units.get(f.name) != UNKNOWN or f.name.startswith("input:"), (path.name, f.name)
-    assert set(schema.metadata or {}) <= {b"pandas"}, path.name  # no PANDAS_ATTRS
+    # no PANDAS_ATTRS; the leaderboard's files say whether the league is complete
+    allowed = {b"pandas"} | (
+        {b"formation_ftc.league.completeness"} if "chunk" not in path.name else set()
+    )
+    assert set(schema.metadata or {}) <= allowed, path.name
     assert not json.loads((schema.metadata or {}).get(b"pandas", b"{}")).get("attributes"), (
         path.name
     )

@@ -1,10 +1,11 @@
-"""``formation-ftc league {list, run, report}``; ``list`` and ``report`` take ``--json`` (one JSON
-document on stdout; schemas in docs/cli.md)."""
+"""``formation-ftc league {list, run, report}``; each takes ``--json`` (one JSON document on stdout at
+the end, progress and log lines on stderr; schemas in docs/cli.md)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 
 from formation_ftc.campaign.cli import add_budget_options, add_dask_options
 from formation_ftc.exitcodes import add_json_option, print_json
@@ -51,6 +52,18 @@ def _cmd_list(args) -> int:
     return 0
 
 
+def _quiet(args) -> bool:
+    """``-q``: no progress and no informational lines (results and errors only)."""
+    return int(getattr(args, "verbosity", 0) or 0) < 0
+
+
+def _log(args):
+    """The stderr log of a command (None with ``-q``)."""
+    if _quiet(args):
+        return None
+    return lambda line: print(line, file=sys.stderr, flush=True)  # lossy_stderr (cli.main)
+
+
 def _cmd_run(args) -> int:
     from formation_ftc.campaign.executors import cap_workers, make_executor
     from formation_ftc.league.definition import LeagueError, load_league
@@ -59,6 +72,7 @@ def _cmd_run(args) -> int:
     from formation_ftc.limits import Budgets
     from formation_ftc.sim.runtime import schedulable_cpus
 
+    t0 = time.perf_counter()
     if not str(args.out).strip():
         raise LeagueError("--out: empty path; give the league directory, e.g. --out out/league")
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
@@ -95,18 +109,48 @@ def _cmd_run(args) -> int:
         quick=args.quick,
         methods=methods,
         executor_factory=factory,
-        progress=not args.no_progress,
-        log=lambda line: print(line, file=sys.stderr, flush=True),  # lossy_stderr (cli.main)
+        progress=not (args.no_progress or _quiet(args)),
+        log=_log(args),
         parallel_methods=parallel,
         budgets=budgets,
     )
-    print(f"league done: {outcome}")
-    _print_board(write_leaderboard(args.out, plots=not args.no_plots), args.out)
+    board = write_leaderboard(args.out, plots=not args.no_plots)
+    wall = time.perf_counter() - t0
+    if args.json:
+        doc = _board_doc(args.out, board)
+        print_json(
+            {
+                "league": board["league"],
+                **doc,
+                "runs": outcome.n_runs,
+                "failed": outcome.n_failed,
+                "methods": [
+                    {"name": m, "wall_time": s} for m, s in outcome.per_method.items()
+                ],  # in the order they finished
+                "wall_time": wall,
+                "units": {**doc["units"], "wall_time": "s"},
+            }
+        )
+        return 0
+    print(
+        f"league done: {outcome.n_runs} runs ({outcome.n_failed} failed or diverged) in "
+        f"{outcome.out_dir}, {wall:.1f} s"
+    )
+    _print_board(board, args.out)
     return 0
 
 
 def _print_board(board, directory) -> None:
-    """The ranking of every level, then the files written under ``directory``."""
+    """The ranking of every level, then the files written under ``directory``; an incomplete league
+    says what is missing first."""
+    from formation_ftc.league.report import incomplete_note, seeds_text
+
+    comp = board.get("completeness")
+    note = incomplete_note(comp) if comp else None
+    if note:
+        print(note)
+    if comp:
+        print(f"{board['league']}: {seeds_text(comp)}")
     metric = board["requirement"]["metric"]
     for level, rows in board["ranking"].items():
         print(f"\n{level}: rank  method  pass-rate  median {metric}")
@@ -121,32 +165,37 @@ def _print_board(board, directory) -> None:
     )
 
 
-def _cmd_report(args) -> int:
+def _board_doc(directory, board) -> dict:
+    """The ``--json`` document of ``league report`` (and the leaderboard part of ``league run``'s)."""
     from pathlib import Path
 
-    from formation_ftc.league.report import write_leaderboard
+    from formation_ftc.parquet_units import read_units
+
+    out = Path(directory) / "leaderboard"
+    return {
+        "dir": str(directory),
+        "leaderboard": board,
+        "units": read_units(out / "cells.parquet"),  # of the cells' (and ranking rows') columns
+        "outputs": {
+            "league_json": str(Path(directory) / "league.json"),
+            "index": str(out / "index.html"),
+            "leaderboard_json": str(out / "leaderboard.json"),
+            "leaderboard_md": str(out / "leaderboard.md"),
+            "cells": str(out / "cells.parquet"),
+            "runs": str(out / "runs.parquet"),
+        },
+    }
+
+
+def _cmd_report(args) -> int:
+    from formation_ftc.league.report import incomplete_note, write_leaderboard
 
     board = write_leaderboard(args.dir, plots=not args.no_plots, tuned=args.tuned)
     if args.json:
-        from formation_ftc.parquet_units import read_units
-
-        out = Path(args.dir) / "leaderboard"
-        print_json(
-            {
-                "dir": str(args.dir),
-                "leaderboard": board,
-                "units": read_units(
-                    out / "cells.parquet"
-                ),  # of the cells' (and ranking rows') columns
-                "outputs": {
-                    "index": str(out / "index.html"),
-                    "leaderboard_json": str(out / "leaderboard.json"),
-                    "leaderboard_md": str(out / "leaderboard.md"),
-                    "cells": str(out / "cells.parquet"),
-                    "runs": str(out / "runs.parquet"),
-                },
-            }
-        )
+        note = incomplete_note(board["completeness"])
+        if note and not _quiet(args):
+            print(f"warning: {note}", file=sys.stderr)
+        print_json(_board_doc(args.dir, board))
         return 0
     _print_board(board, args.dir)
     return 0
@@ -187,9 +236,12 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         q, batch="one batch of a method's runs", whole="the whole league, all methods together"
     )
     q.add_argument(
-        "--no-progress", action="store_true", help="no progress bars (one line per method)"
+        "--no-progress",
+        action="store_true",
+        help="no progress bars (one line per step check and per method; -q: none)",
     )
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
+    add_json_option(q)
     q.set_defaults(func=_cmd_run)
     q = sub.add_parser("report", help="(re)write the leaderboard of a league directory")
     q.add_argument("dir", metavar="DIR", help="league directory")

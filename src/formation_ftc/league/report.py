@@ -40,6 +40,9 @@ __all__ = [
     "SCORES",
     "COSTS",
     "tuned_column",
+    "completeness",
+    "seeds_text",
+    "incomplete_note",
 ]
 
 #: the actuator-usage score a league is ranked and plotted against, with its label (first one present)
@@ -281,6 +284,111 @@ def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
     return out
 
 
+def _expected_cells(league_dir: Path, method: str) -> list[str] | None:
+    """The cells (``case--level``) a method's campaign plans, or its cell files; None when neither is
+    there (the method's directory is missing)."""
+    from formation_ftc.campaign.storage import MANIFEST
+
+    try:
+        manifest = json.loads((league_dir / method / "campaign" / MANIFEST).read_text("utf-8"))
+        bases = manifest["plan"]["bases"]
+        if isinstance(bases, list) and all(isinstance(b, str) for b in bases):
+            return [Path(b).stem for b in bases]
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    cdir = league_dir / method / "cells"
+    return sorted(p.stem for p in cdir.glob("*.toml")) if cdir.is_dir() else None
+
+
+def completeness(
+    meta: dict[str, Any], runs: pd.DataFrame, league_dir: str | Path
+) -> dict[str, Any]:
+    """What of the league in ``league_dir`` has finished: every method of ``league.json`` against the
+    cells its campaign plans, each with ``meta["seeds"]`` runs.
+
+    Returns ``{"complete", "seeds" (configured per cell), "seeds_per_cell" ({"min", "max"} of the
+    runs found per planned cell; 0 for a cell without any), "runs", "expected_runs" (over the
+    methods whose cells are known), "missing_methods" (no run at all; ``cells_unknown``: of those,
+    the ones whose directory is missing), "incomplete_cells" (``method``, ``case``, ``level``,
+    ``runs``, ``expected``)}``.
+    """
+    seeds = int(meta["seeds"])
+    counts = (
+        runs.groupby(["method", "case", "level"], sort=False).size().to_dict() if len(runs) else {}
+    )
+    found = {m for m, _, _ in counts}
+    per_cell: list[int] = []
+    short: list[dict[str, Any]] = []
+    missing, unknown = [], []
+    expected = 0
+    for m in (r["name"] for r in meta["methods"]):
+        if m not in found:
+            missing.append(m)
+        keys = _expected_cells(Path(league_dir), m)
+        if keys is None:
+            unknown.append(m)
+            continue
+        for key in keys:
+            case, _, level = key.partition("--")
+            n = int(counts.get((m, case, level), 0))
+            per_cell.append(n)
+            expected += seeds
+            if n < seeds:
+                short.append(
+                    {"method": m, "case": case, "level": level, "runs": n, "expected": seeds}
+                )
+    return {
+        "complete": not missing and not short,
+        "seeds": seeds,
+        "seeds_per_cell": {"min": min(per_cell, default=0), "max": max(per_cell, default=0)},
+        "runs": int(len(runs)),
+        "expected_runs": expected,
+        "missing_methods": missing,
+        "cells_unknown": unknown,
+        "incomplete_cells": short,
+    }
+
+
+def seeds_text(comp: dict[str, Any]) -> str:
+    """The seeds per cell as the leaderboard's header states them: the configured count when the league
+    is complete, else the counts found.
+
+    Examples
+    --------
+    >>> seeds_text({"complete": False, "seeds": 3, "seeds_per_cell": {"min": 2, "max": 3}})
+    '2-3 seeds per cell (3 configured)'
+    """
+    lo, hi = comp["seeds_per_cell"]["min"], comp["seeds_per_cell"]["max"]
+    if comp["complete"]:
+        lo = hi = comp["seeds"]
+    text = f"{lo} seed{'' if lo == 1 else 's'}" if lo == hi else f"{lo}-{hi} seeds"
+    return f"{text} per cell" + ("" if comp["complete"] else f" ({comp['seeds']} configured)")
+
+
+def incomplete_note(comp: dict[str, Any], limit: int = 8) -> str | None:
+    """One paragraph on what is missing (None for a complete league)."""
+    if comp["complete"]:
+        return None
+    parts = [
+        f"INCOMPLETE league: {comp['runs']:,} of {comp['expected_runs']:,} planned runs found"
+        + (" (more for the methods without a directory)" if comp["cells_unknown"] else "")
+    ]
+    if comp["missing_methods"]:
+        parts.append(f"methods without results: {', '.join(comp['missing_methods'])}")
+    short = [c for c in comp["incomplete_cells"] if c["method"] not in comp["missing_methods"]]
+    if short:
+        shown = ", ".join(
+            f"{c['method']} {c['case']}/{c['level']} ({c['runs']} of {c['expected']} runs)"
+            for c in short[:limit]
+        )
+        more = f" and {len(short) - limit} more" if len(short) > limit else ""
+        parts.append(f"cells short of their seeds: {shown}{more}")
+    return "; ".join(parts) + (
+        ". The tables rank what finished; run `formation-ftc league run` on the directory again "
+        "to complete it."
+    )
+
+
 # ---------------------------------------------------------------------------------------------- figures
 def _png(fig, path: Path) -> Path:
     from formation_ftc.plotting import save_figure
@@ -361,17 +469,10 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
     traces: dict[str, dict[str, Any]] = {}
     for m in meta["methods"]:
         tdir = league_dir / m["name"] / "campaign" / "traces"
-        cdir = league_dir / m["name"] / "cells"
         if not tdir.is_dir():
             continue
-        manifest = json.loads((league_dir / m["name"] / "campaign" / "manifest.json").read_text())
-        runs = int(
-            meta.get("seeds") or manifest.get("runs_per_point", manifest.get("runs", 1))
-        )  # runs per cell
-        plan_bases = manifest.get("plan", {}).get("bases") or manifest.get(
-            "bases"
-        )  # the cells in run order
-        bases = [Path(b).stem for b in plan_bases or sorted(p.name for p in cdir.glob("*.toml"))]
+        runs = int(meta["seeds"])  # runs per cell
+        bases = _expected_cells(league_dir, m["name"]) or []  # the cells in run order
         for p in sorted(tdir.glob("run-*.nc")):
             rid = int(p.stem.split("-")[1])
             g = rid // runs
@@ -528,6 +629,8 @@ def _page(
     figures: list[Path],
     fdi: dict[str, Any] | None = None,
     units: dict[str, str] | None = None,
+    seeds: str = "",
+    incomplete: str | None = None,
 ) -> str:
     """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
     columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
@@ -560,9 +663,10 @@ def _page(
             "battery": battery["name"],
             "battery_version": battery["version"],
             "battery_hash": str(battery.get("sha256", ""))[:16],
-            "seeds": meta["seeds"],
+            "seeds": seeds or f"{meta['seeds']} seed(s) per cell",
             "quick": bool(meta.get("quick")),
         },
+        incomplete=incomplete,
         metric=metric,
         limit=limit,
         units=req_units,
@@ -608,11 +712,15 @@ def markdown_summary(board: dict[str, Any]) -> str:
     metric = board["requirement"]["metric"]
     cells = pd.DataFrame(board["cells"])
     cost = _cost(cells) if len(cells) else None
+    comp = board.get("completeness")
+    note = incomplete_note(comp) if comp else None
+    seeds = seeds_text(comp) if comp else f"{board['seeds']} seeds per cell"
     out = [
+        *([f"**{note}**", ""] if note else []),
         f"League `{board['league']}` (definition version {board['version']}), fault battery "
-        f"{board['battery']['name']} (version {board['battery']['version']}), {board['seeds']} seeds per cell; "
+        f"{board['battery']['name']} (version {board['battery']['version']}), {seeds}; "
         f"requirement {metric} <= "
-        f"{board['requirement']['max']:g} {board['requirement']['units']}."
+        f"{board['requirement']['max']:g} {board['requirement']['units']}.",
     ]
     for level, rows in board["ranking"].items():
         cols = [
@@ -703,6 +811,7 @@ def write_leaderboard(
         tuned_column(rank, tuned_dir)
     wins = winners(meta, cells)
     fdi = fdi_table(meta, runs)
+    comp = completeness(meta, runs, league_dir)
     out = league_dir / "leaderboard"
     out.mkdir(parents=True, exist_ok=True)
     figures: list[Path] = []
@@ -716,6 +825,8 @@ def write_leaderboard(
         "hash": meta["hash"],
         "seeds": meta["seeds"],
         "quick": meta.get("quick", False),
+        "complete": comp["complete"],
+        "completeness": comp,
         "battery": meta["battery"],
         "levels": meta["levels"],
         "requirement": {"metric": metric, "max": limit, "units": units},
@@ -725,11 +836,16 @@ def write_leaderboard(
         "cells": cells.to_dict("records"),
         "fdi": fdi,
     }
-    (out / "leaderboard.json").write_text(json.dumps(jsonable(board), indent=1))
+    atomic_write(out / "leaderboard.json", json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
     cell_units = _cell_units(cells, run_units)
-    write_parquet(cells, out / "cells.parquet", cell_units)
-    write_parquet(runs, out / "runs.parquet", run_units)
-    atomic_write(out / "index.html", _page(meta, cells, rank, wins, figures, fdi, cell_units))
+    # the completeness also in the Parquet files' key-value metadata (a file read on its own says it)
+    kv = {"formation_ftc.league.completeness": json.dumps(comp)}
+    write_parquet(cells, out / "cells.parquet", cell_units, metadata=kv)
+    write_parquet(runs, out / "runs.parquet", run_units, metadata=kv)
+    page = _page(
+        meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)
+    )
+    atomic_write(out / "index.html", page)
     atomic_write(out / "leaderboard.md", markdown_summary(jsonable(board)))
     return board

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 # one atomic write for the package (league/tuning.py imports it from here under this name)
 from formation_ftc.atomic import atomic_write as _atomic_write_text
@@ -51,7 +52,11 @@ __all__ = [
     "run_league",
     "load_league_results",
     "LEAGUE_FILE",
+    "LeagueRecord",
+    "StepCheckRecord",
+    "record_error",
     "METHOD_WORKER_BYTES",
+    "Counter",
 ]
 
 LEAGUE_FILE = "league.json"
@@ -324,10 +329,95 @@ def _check_batch_memory(
 
 
 # ------------------------------------------------------------------------------ league directory
+class _Record(BaseModel):
+    """A part of ``league.json``: the types every reader relies on (strict: ``"3"`` is no integer);
+    fields it does not know are kept (a newer writer)."""
+
+    model_config = ConfigDict(strict=True, extra="allow")
+
+
+class _CaseRecord(_Record):
+    name: str
+    kind: str
+
+
+class _BatteryRecord(_Record):
+    name: str
+    version: str | int
+    sha256: str = ""
+    cases: list[_CaseRecord]
+
+
+class _NamedRecord(_Record):
+    name: str
+
+    @field_validator("name")
+    @classmethod
+    def _one_component(cls, v: str) -> str:
+        # a method's name is a directory of the league: one path component
+        if v in ("", ".", "..") or "/" in v or "\\" in v:
+            raise ValueError(f"{v!r} is not a name (one path component)")
+        return v
+
+
+class StepCheckRecord(_Record):
+    """A method's step check as ``league.json`` records it (:class:`~formation_ftc.league.step_check.StepCheckResult`)."""
+
+    chosen_dt: float = Field(gt=0, allow_inf_nan=False)
+    converged: bool = True
+
+
+class LeagueRecord(_Record):
+    """``league.json`` of a league directory, as :func:`run_league` writes it."""
+
+    name: str
+    version: str
+    kind: str = "translational"
+    hash: str
+    seeds: int = Field(ge=1)
+    quick: bool = False
+    definition: str
+    method_files: dict[str, str] = {}
+    battery: _BatteryRecord
+    methods: list[_NamedRecord]
+    levels: list[_NamedRecord]
+    step_check: dict[str, StepCheckRecord] = {}
+    provenance: dict[str, Any] = {}
+
+
+def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> str:
+    """``FILE: field a.b.c: what is wrong (got ...)`` of the first error of ``exc`` (and how many
+    more); ``prefix``: the field that was validated (its path in the file)."""
+    errors = exc.errors()
+    first = errors[0]
+    where = (
+        ".".join(str(p) for p in (*([prefix] if prefix else []), *first["loc"])) or "(top level)"
+    )
+    got = "" if first["type"] == "missing" else f" (got {first.get('input')!r:.60})"
+    more = f"; {len(errors) - 1} more problem(s)" if len(errors) > 1 else ""
+    return f"{path}: field {where}: {first['msg']}{got}{more}"
+
+
+def _check_definition(meta: dict[str, Any]) -> str | None:
+    """What is wrong with the league definition text of ``league.json`` (None: readable)."""
+    import tomllib
+
+    try:
+        league = tomllib.loads(meta["definition"])["league"]
+        req = league["requirement"]
+        ok = isinstance(req["metric"], str) and isinstance(req.get("units", ""), str)
+        for v in (req["max"], league["horizon"]):
+            ok = ok and isinstance(v, int | float) and not isinstance(v, bool)
+    except (ValueError, KeyError, TypeError) as exc:
+        return f"not a league definition ({type(exc).__name__}: {exc})"
+    return None if ok else "league.requirement or league.horizon of the wrong type"
+
+
 def _read_meta(
     path: Path, what: str, advice: str = "restore the file, or give another --out (new or empty)"
 ) -> dict[str, Any]:
-    """``league.json`` as a dict; LeagueError naming ``what`` (e.g. ``--out DIR``) when it is damaged."""
+    """``league.json`` as a dict, its types checked (:class:`LeagueRecord`); LeagueError naming
+    ``what`` (e.g. ``--out DIR``), the file and the field when it is damaged or mistyped."""
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:  # JSONDecodeError, UnicodeDecodeError are ValueErrors
@@ -341,6 +431,13 @@ def _read_meta(
             f"{what}: {LEAGUE_FILE} is not a league description (damaged, or another program's "
             f"file); refusing to use the directory: {advice}"
         )
+    try:
+        LeagueRecord.model_validate(meta)
+    except ValidationError as exc:
+        raise LeagueError(f"{what}: {record_error(path, exc)}; {advice}") from None
+    problem = _check_definition(meta)
+    if problem:
+        raise LeagueError(f"{what}: {path}: field definition: {problem}; {advice}")
     return meta
 
 
@@ -454,35 +551,33 @@ def _stored_runs(chunks: Path, seeds: int, chunk_size: int) -> int:
     return n
 
 
-class _MethodProgress:
-    """One progress line per method (runs done, elapsed, ETA) on a terminal's stderr, read from the chunk
-    files each method's campaign has stored: a thread polls them every ``interval`` s, so it follows
-    methods computed side by side in other processes. A failing stderr (closed, full) turns it off; it
-    never stops the league."""
+class _Bars:
+    """Progress lines (a bar, done/total, elapsed, ETA) on a terminal's stderr, redrawn by a thread every
+    ``interval`` s (so that the elapsed time moves from the first second). ``tasks``: (name, total)
+    of each line; ``unit``: what they count. A failing stderr (closed, full) turns them off; they never
+    stop the work. Subclasses update the counts in :meth:`_poll`."""
 
     def __init__(
         self,
-        methods: list[tuple[str, Path, int]],
-        seeds: int,
-        chunk_size: int,
+        tasks: list[tuple[str, int]],
+        unit: str,
         *,
         enabled: bool = True,
         console: Any = None,
         interval: float = 0.5,
     ):
-        self.methods, self.seeds, self.chunk_size = (
-            methods,
-            seeds,
-            chunk_size,
-        )  # (name, chunks dir, runs)
+        self.unit = unit
         self.enabled, self.console, self.interval = enabled, console, interval
+        self._names = [name for name, _ in tasks]
+        self._totals = dict(tasks)
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
 
-    def __enter__(self) -> _MethodProgress:
-        if not self.enabled or not self.methods:
+    def __enter__(self):
+        if not self.enabled or not self._names:
             return self
         try:
             from rich.console import Console
@@ -498,23 +593,21 @@ class _MethodProgress:
             console = self.console if self.console is not None else Console(stderr=True)
             if not console.is_terminal:
                 return self
-            width = max(len(name) for name, _, _ in self.methods)
+            width = max(len(name) for name in self._names)
             self._bar = Progress(
                 TextColumn(f"[bold]{{task.description:<{width}}}"),
                 BarColumn(),
                 MofNCompleteColumn(),
-                TextColumn("runs"),
+                TextColumn(self.unit),
                 TimeElapsedColumn(),
                 TextColumn("ETA"),
                 TimeRemainingColumn(),
                 console=console,
                 auto_refresh=False,
             )
-            self._tasks = {
-                name: self._bar.add_task(name, total=total) for name, _, total in self.methods
-            }
+            self._tasks = {n: self._bar.add_task(n, total=self._totals[n]) for n in self._names}
             self._bar.start()
-            self._poll()
+            self._refresh()
         except (OSError, ValueError):
             self._close_bar()
             return self
@@ -525,19 +618,21 @@ class _MethodProgress:
         return self
 
     def _poll(self) -> None:
-        for name, chunks, total in self.methods:
-            done = min(total, _stored_runs(chunks, self.seeds, self.chunk_size))
-            self._bar.update(self._tasks[name], completed=done)
-        self._bar.refresh()
+        """Update the counts (called before each redraw)."""
+
+    def _refresh(self) -> None:
+        with self._lock:
+            self._poll()
+            self._bar.refresh()
 
     def _watch(self) -> None:
         while not self._stop.wait(self.interval):
             try:
-                self._poll()
+                self._refresh()
             except (
                 OSError,
                 ValueError,
-            ):  # stderr closed or full: no more progress, the league goes on
+            ):  # stderr closed or full: no more progress, the work goes on
                 return
 
     def _close_bar(self) -> None:
@@ -552,8 +647,58 @@ class _MethodProgress:
             self._thread.join()
         if self._bar is not None:
             with contextlib.suppress(OSError, ValueError):
-                self._poll()
+                self._refresh()
         self._close_bar()
+
+
+class _MethodProgress(_Bars):
+    """One progress line per method (runs done, elapsed, ETA), read from the chunk files each method's
+    campaign has stored: it follows methods computed side by side in other processes."""
+
+    def __init__(
+        self,
+        methods: list[tuple[str, Path, int]],
+        seeds: int,
+        chunk_size: int,
+        *,
+        enabled: bool = True,
+        console: Any = None,
+        interval: float = 0.5,
+    ):
+        super().__init__(
+            [(name, total) for name, _, total in methods],
+            "runs",
+            enabled=enabled,
+            console=console,
+            interval=interval,
+        )
+        self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size
+
+    def _poll(self) -> None:
+        for name, chunks, total in self.methods:
+            done = min(total, _stored_runs(chunks, self.seeds, self.chunk_size))
+            self._bar.update(self._tasks[name], completed=done)
+
+
+class Counter(_Bars):
+    """One progress line counting ``unit`` of a phase (the step checks' integration steps, a tuning's
+    evaluations): :meth:`advance` as they finish, :meth:`expect` when more turn out to be needed.
+    Without a terminal (or disabled) it counts and draws nothing."""
+
+    def __init__(self, label: str, total: int, unit: str, **options: Any):
+        super().__init__([(label, total)], unit, **options)
+        self.label, self.total, self.done = label, total, 0
+
+    def advance(self, n: int = 1) -> None:
+        self.done += n
+
+    def expect(self, n: int) -> None:
+        """``n`` more than the total planned so far."""
+        self.total += n
+
+    def _poll(self) -> None:
+        total = max(self.total, self.done)  # an optimiser may pass its budget
+        self._bar.update(self._tasks[self.label], completed=self.done, total=total)
 
 
 # ----------------------------------------------------------------------------------------------- run
@@ -587,7 +732,8 @@ def run_league(
     in that process; the processes exit when this one dies); otherwise the methods run one after the
     other, each campaign with the executor from ``executor_factory`` (local processes by default, or
     Dask). ``budgets`` (default: :meth:`Budgets.resolve`, the environment's or the defaults) bound the
-    league before anything is written. ``progress``: one line per method on a terminal's stderr.
+    league before anything is written. ``progress``: on a terminal's stderr, a line for the step checks,
+    then one line per method.
     ``log`` gets one line per finished method; an OSError or ValueError it raises (a closed or full
     stderr) is ignored."""
     from formation_ftc.campaign.executors import die_with_parent
@@ -617,7 +763,7 @@ def run_league(
     out = Path(out_dir)
     digest = league_hash(spec)
     old = _check_out(out, spec, digest, n_seeds)
-    step_checks = _step_checks(spec, cells, old, log)
+    step_checks = _step_checks(spec, cells, old, log, progress)
     if step_checks:  # a finer chosen step: the budgets again, on the steps that will run
         check_league_budgets(spec, cells, n_seeds, budgets)
     _check_batch_memory(spec, cells, n_seeds, budgets)
@@ -726,10 +872,13 @@ def _step_checks(
     cells: dict[str, list[Cell]],
     old: dict[str, Any] | None,
     log: Callable[[str], None] | None,
+    progress: bool = False,
 ) -> dict[str, dict[str, Any]]:
     """Run (or, on a resume, reuse) each method's step-convergence check
     (:mod:`formation_ftc.league.step_check`) and give every cell of the method the chosen step.
-    Returns the checks' records for ``league.json`` ({} when the league disables the check)."""
+    Returns the checks' records for ``league.json`` ({} when the league disables the check).
+    ``progress``: a progress line (integration steps simulated, elapsed, ETA) on a terminal's
+    stderr from the first second; its total grows when a method's step has to be halved again."""
     from formation_ftc.league.step_check import check_step
 
     sc = spec.league.step_check
@@ -739,41 +888,69 @@ def _step_checks(
     if level not in {lv.name for lv in spec.levels}:
         raise LeagueError(f"league.step_check.level = {level!r}: not a level of this league")
     done = (old or {}).get("step_check", {})
-    out: dict[str, dict[str, Any]] = {}
+    checks: dict[str, Cell] = {}
     for name, mcells in cells.items():
-        record = done.get(name)
-        if record is None:
-            cell = next((c for c in mcells if (c.case, c.level) == (sc.case, level)), None)
-            if cell is None:
-                raise LeagueError(
-                    f"league.step_check.case = {sc.case!r}: method {name} has no cell "
-                    f"{sc.case}/{level} (give a fault case of the battery that applies to it)"
-                )
-            record = check_step(
-                name,
-                cell.raw,
-                case=sc.case,
-                level=level,
-                onset_field=spec.league.onset.field,
-                onset=spec.league.onset.low,
-                tolerance=sc.tolerance,
-                max_halvings=sc.max_halvings,
-                ignore=tuple(m["name"] for m in FDI_METRICS),  # alarm times are on the step grid
-            ).as_dict()
-            verdict = "converged" if record["converged"] else "NOT converged, kept"
-            _say(
-                log,
-                f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
-                f"(largest score change per halving: "
-                + ", ".join(f"{c:.2%}" for c in record["changes"])
-                + ")",
+        if done.get(name) is not None:
+            continue
+        cell = next((c for c in mcells if (c.case, c.level) == (sc.case, level)), None)
+        if cell is None:
+            raise LeagueError(
+                f"league.step_check.case = {sc.case!r}: method {name} has no cell "
+                f"{sc.case}/{level} (give a fault case of the battery that applies to it)"
             )
-        out[name] = record
-        dt = float(record["chosen_dt"])
-        for j, c in enumerate(mcells):
-            c.raw["simulation"]["dt"] = dt
-            n_steps = int(round(float(c.raw["simulation"]["horizon"]) / dt))
-            mcells[j] = dataclasses.replace(c, n_steps=n_steps)
+        checks[name] = cell
+    if checks:
+        _say(
+            log,
+            f"step checks: {len(checks)} method(s) ({', '.join(checks)}), each at its step and "
+            "half of it (halved again while the scores move by more than "
+            f"{sc.tolerance * 100:g} %)",
+        )
+    # the check flies its cell at dt and dt/2 (3 x the cell's steps), more when it halves again
+    planned = sum(3 * c.n_steps for c in checks.values())
+    out: dict[str, dict[str, Any]] = {}
+    with Counter("step checks", planned, "steps", enabled=progress) as bar:
+        for name, mcells in cells.items():
+            record = done.get(name)
+            if record is None:
+                cell = checks[name]
+                horizon, dt0 = (float(cell.raw["simulation"][k]) for k in ("horizon", "dt"))
+
+                def on_simulation(dt: float, finished: bool, dt0: float = dt0, h: float = horizon):
+                    steps = int(round(h / dt))
+                    if finished:
+                        bar.advance(steps)
+                    elif dt < dt0 / 3:  # finer than dt/2: not in the plan
+                        bar.expect(steps)
+
+                record = check_step(
+                    name,
+                    cell.raw,
+                    case=sc.case,
+                    level=level,
+                    onset_field=spec.league.onset.field,
+                    onset=spec.league.onset.low,
+                    tolerance=sc.tolerance,
+                    max_halvings=sc.max_halvings,
+                    ignore=tuple(
+                        m["name"] for m in FDI_METRICS
+                    ),  # alarm times are on the step grid
+                    on_simulation=on_simulation,
+                ).as_dict()
+                verdict = "converged" if record["converged"] else "NOT converged, kept"
+                _say(
+                    log,
+                    f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
+                    f"(largest score change per halving: "
+                    + ", ".join(f"{c:.2%}" for c in record["changes"])
+                    + ")",
+                )
+            out[name] = record
+            dt = float(record["chosen_dt"])
+            for j, c in enumerate(mcells):
+                c.raw["simulation"]["dt"] = dt
+                n_steps = int(round(float(c.raw["simulation"]["horizon"]) / dt))
+                mcells[j] = dataclasses.replace(c, n_steps=n_steps)
     return out
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -102,6 +103,7 @@ def check_step(
     tolerance: float = 0.02,
     max_halvings: int = 3,
     ignore: tuple[str, ...] = (),
+    on_simulation: Callable[[float, bool], None] | None = None,
 ) -> StepCheckResult:
     """Choose ``method``'s step on the check cell ``raw`` (a full composed scenario, see module doc).
 
@@ -122,6 +124,9 @@ def check_step(
     ignore : tuple of str
         Scores left out of the comparison (e.g. a fault detector's alarm times, which are on the step
         grid by construction: a detection in the fault's first step has a delay of one step).
+    on_simulation : callable, optional
+        Called with ``(dt, False)`` before and ``(dt, True)`` after each simulation of the check
+        (progress).
 
     Returns
     -------
@@ -137,7 +142,11 @@ def check_step(
     def scores(dt: float) -> dict[str, float]:
         cell = copy.deepcopy(base)
         cell["simulation"]["dt"] = dt
+        if on_simulation is not None:
+            on_simulation(dt, False)
         _, metrics = simulate_with_metrics(load_scenario(cell), raise_on_divergence=False)
+        if on_simulation is not None:
+            on_simulation(dt, True)
         return {k: float(v) for k, v in metrics.items() if k not in ignore}
 
     dt = dt0

@@ -18,14 +18,27 @@ TRAIN_START = 10_000
 
 def _cmd_tune(args) -> int:
     import sys
+    import time
 
-    from formation_ftc.league.tuning import TuneError, tune_league_method, write_tuning
+    from formation_ftc.league.tuning import (
+        TuneError,
+        check_tune_out,
+        journal_path,
+        tune_league_method,
+        write_tuning,
+    )
+    from formation_ftc.limits import Budgets
 
+    t0 = time.perf_counter()
     if not str(args.out).strip():
         raise TuneError("--out: empty path; give a directory, e.g. --out out/league/tuned")
+    budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
+    # before anything is computed: where the result goes (and its journal)
+    check_tune_out(args.out, args.method, args.level, force=args.force)
     cases = [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None
     step_checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
-
+    quiet = int(getattr(args, "verbosity", 0) or 0) < 0
+    journal = journal_path(args.out, args.method, args.level)
     result = tune_league_method(
         args.league,
         args.method,
@@ -40,19 +53,27 @@ def _cmd_tune(args) -> int:
         penalty=args.penalty,
         violation_cap=args.violation_cap,
         step_checks=step_checks,
-        log=lambda line: print(line, file=sys.stderr, flush=True),
+        log=None if quiet else (lambda line: print(line, file=sys.stderr, flush=True)),
+        budgets=budgets,
+        journal=journal,
+        force=args.force,
+        progress=not quiet,
     )
     path = write_tuning(result, args.out)
+    journal.unlink(missing_ok=True)  # the result holds every evaluation (optimiser.history)
+    wall = time.perf_counter() - t0
     if getattr(args, "json", False):
         from formation_ftc.exitcodes import print_json
 
-        print_json({"result": str(path), "tuning": result})  # print_json makes it JSON-safe
+        print_json(  # print_json makes it JSON-safe
+            {"result": str(path), "tuning": result, "wall_time": wall, "units": {"wall_time": "s"}}
+        )
         return 0
     obj = result["objective"]["metric"]
     tr, ho = result["train"], result["holdout"]
     print(
         f"{result['method']} @ {result['level']}: {result['optimiser']['name']}, "
-        f"{result['optimiser']['evaluations']} evaluations, {result['optimiser']['seconds']:.1f} s"
+        f"{result['optimiser']['evaluations']} evaluations, {wall:.1f} s"
     )
     for path_, v in result["tuned_gains"].items():
         print(f"  {path_}: {result['paper_gains'][path_]:.6g} -> {v:.6g}")
@@ -67,20 +88,36 @@ def _cmd_tune(args) -> int:
 
 
 def _league_step_checks(directory: str) -> dict[str, Any]:
-    """The step checks recorded in league directory ``directory`` (``league.json``)."""
+    """The step checks recorded in league directory ``directory`` (``league.json``, field
+    ``step_check``: ``{method: record}``, each with a positive ``chosen_dt`` [s]); TuneError naming
+    the file and the field when it is missing, damaged or mistyped."""
     import json
     from pathlib import Path
 
+    from pydantic import TypeAdapter, ValidationError
+
+    from formation_ftc.league.runner import LEAGUE_FILE, StepCheckRecord, record_error
     from formation_ftc.league.tuning import TuneError
 
-    path = Path(directory) / "league.json"
-    try:
-        meta = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
+    what = f"--step-check-from {directory}"
+    path = Path(directory) / LEAGUE_FILE
+    if not path.is_file():
         raise TuneError(
-            f"--step-check-from {directory}: no readable league.json there ({exc})"
-        ) from None
-    return dict(meta.get("step_check") or {})
+            f"{what}: no {path} (give a league directory that `formation-ftc league run` wrote)"
+        )
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or exc
+        raise TuneError(f"{what}: {path} is damaged or unreadable ({reason})") from None
+    if not isinstance(meta, dict):
+        raise TuneError(f"{what}: {path} is not a league description (not a JSON object)")
+    checks = meta.get("step_check", {})
+    try:
+        TypeAdapter(dict[str, StepCheckRecord]).validate_python(checks, strict=True)
+    except ValidationError as exc:
+        raise TuneError(f"{what}: {record_error(path, exc, 'step_check')}") from None
+    return dict(checks)
 
 
 def _fmt(v: Any) -> str:
@@ -98,6 +135,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     >>> p.parse_args(["tune", "lqr", "--out", "o"]).level
     'limited'
     """
+    from formation_ftc.campaign.cli import add_budget_options
     from formation_ftc.exitcodes import add_json_option
 
     p = subparsers.add_parser(
@@ -108,7 +146,12 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--league", default="translational", help="built-in league name or league TOML file"
     )
     p.add_argument("--level", default="limited", help="actuator level (default: limited)")
-    p.add_argument("--out", required=True, help="directory of the result (METHOD--LEVEL.json)")
+    p.add_argument(
+        "--out",
+        required=True,
+        help="directory of the result (METHOD--LEVEL.json; new, empty or of tuning results); a "
+        "killed tuning resumes from its journal there (METHOD--LEVEL.journal.jsonl)",
+    )
     p.add_argument(
         "--cases",
         default=None,
@@ -141,6 +184,15 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         metavar="LEAGUE_DIR",
         default=None,
         help="reuse the step check a league run recorded (default: run it, as `league run` does)",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace this method's result at this level in --out, and discard a journal of another "
+        "tuning there (default: refuse both)",
+    )
+    add_budget_options(
+        p, batch="the training batch", whole="the whole tuning (every evaluation, held-out runs)"
     )
     add_json_option(p)
     p.set_defaults(func=_cmd_tune)

@@ -9,8 +9,11 @@ program, and each evaluation only writes the gains into their leaves.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import json
 import math
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -18,10 +21,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict
 
 from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.tune_cli import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
+from formation_ftc.limits import Budgets
 
 __all__ = [
     "TuneError",
@@ -36,6 +41,11 @@ __all__ = [
     "tune_league_method",
     "write_tuning",
     "load_tunings",
+    "TuneJournal",
+    "evaluate",
+    "journal_path",
+    "check_tune_budgets",
+    "check_tune_out",
 ]
 
 _NM_STEP = 0.15  # initial simplex of Nelder-Mead, as a fraction of each field's (scaled) range
@@ -456,14 +466,18 @@ def minimise(
     max_evaluations: int = 60,
     start: Sequence[float] | None = None,
     tolerance: float = 1e-4,
+    journal: TuneJournal | None = None,
+    on_evaluation: Callable[[], None] | None = None,
 ) -> TuneOutcome:
     """Minimise ``J`` (:func:`penalised_objective`) over the problem's gains within their bounds, from
     ``start`` (default: the scenario's gains), in at most ``max_evaluations`` batch evaluations.
 
     ``optimiser``: scipy's bounded ``"nelder-mead"`` (from a simplex of 15 % of each scaled range) or
     ``"powell"``, or ``"gradient"``: L-BFGS-B with :func:`jax.jacfwd` through the vmapped loop.
-    ``tolerance`` is on the scaled gains (and on J, derivative-free). The LQR oracle in
-    tests/league/test_tuning.py is the example.
+    ``tolerance`` is on the scaled gains (and on J, derivative-free). ``journal``: each evaluation is
+    looked up there first and recorded there once computed (:class:`TuneJournal`: a resumed tuning
+    replays its evaluations, so the optimiser takes the same path); ``on_evaluation`` is called after
+    each one (progress). The LQR oracle in tests/league/test_tuning.py is the example.
     """
     import jax
     import jax.numpy as jnp
@@ -493,6 +507,8 @@ def minimise(
             v,
             {k: float(t) for k, t in terms.items()},
         )
+        if on_evaluation is not None:
+            on_evaluation()
         return v
 
     t0 = time.perf_counter()
@@ -512,9 +528,21 @@ def minimise(
 
         def fun(z):
             ts = time.perf_counter()
-            grad, (v, terms) = vg(jnp.asarray(z), problem.batch)
-            g = np.nan_to_num(np.asarray(grad, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
-            return record(z, v, terms, ts), g
+            key = TuneJournal.key("gradient", z)
+            hit = journal.get(key) if journal is not None else None
+            if hit is None:
+                grad, (v, terms) = vg(jnp.asarray(z), problem.batch)
+                hit = {
+                    "value": float(v),
+                    "terms": {k: float(t) for k, t in terms.items()},
+                    "grad": np.asarray(grad, dtype=np.float64).tolist(),
+                }
+                if journal is not None:
+                    journal.put(key, hit)
+            g = np.nan_to_num(
+                np.asarray(hit["grad"], dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0
+            )
+            return record(z, hit["value"], hit["terms"], ts), g
 
         options: dict[str, Any] = {
             "maxfun": max_evaluations,
@@ -531,7 +559,7 @@ def minimise(
             if z.tobytes() in seen:
                 return seen[z.tobytes()][0]
             ts = time.perf_counter()
-            return record(z, *J(*problem.evaluate(gains(z))), ts)
+            return record(z, *J(*evaluate(problem, gains(z), journal)), ts)
 
         if optimiser == "nelder-mead":
             simplex = [z0]
@@ -608,6 +636,377 @@ def _pass_stats(metrics, bad, requirement, objective: str, idx=slice(None)) -> d
     }
 
 
+# -------------------------------------------------------------------------------------- journal
+JOURNAL_KIND = "formation-ftc tuning journal"
+
+
+class TuneJournal:
+    """The completed evaluations of one tuning problem, so that a killed ``tune`` resumes instead of
+    starting again: ``path`` (``OUT/METHOD--LEVEL.journal.jsonl``) holds one JSON line per completed
+    evaluation (its gains -> every run's scores, or J and its gradient), after a header naming the
+    problem (``problem``: league and its hash, method, level, cases, seeds, optimiser, options) and
+    its sha256 fingerprint. Each line is appended and synced once its evaluation is complete; a kill
+    while a line is written leaves it unfinished at the end, and it is dropped on the next start (the
+    journal is rewritten without it, atomically). A journal of another problem, or a damaged one, is
+    refused (TuneError, exit code 2) unless ``force``, which discards it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "m--l.journal.jsonl"
+    >>> j = TuneJournal(path, {"method": "m"})
+    >>> j.put(TuneJournal.key("train", [0.5]), {"x": 1})
+    >>> TuneJournal(path, {"method": "m"}).get("train 0x1.0000000000000p-1")
+    {'key': 'train 0x1.0000000000000p-1', 'x': 1}
+    >>> TuneJournal(path, {"method": "n"})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    formation_ftc.league.tuning.TuneError: ... the journal of another tuning problem (method: 'm' there, 'n' here); ...
+    """
+
+    def __init__(self, path: str | Path, problem: Mapping[str, Any], *, force: bool = False):
+        self.path = Path(path)
+        self.problem = json.loads(json.dumps(dict(problem), sort_keys=True))
+        text = json.dumps(self.problem, sort_keys=True)
+        self.fingerprint = hashlib.sha256(text.encode()).hexdigest()
+        self.entries: dict[str, dict[str, Any]] = {}
+        if self.path.exists() or self.path.is_symlink():
+            try:
+                self._load()
+            except TuneError:
+                if not force:
+                    raise
+                self.entries = {}
+        self.resumed = len(self.entries)
+        header = {"kind": JOURNAL_KIND, "fingerprint": self.fingerprint, "problem": self.problem}
+        lines = [json.dumps(header), *(json.dumps(e) for e in self.entries.values())]
+        self._io(lambda: _atomic_text(self.path, "\n".join(lines) + "\n"))
+
+    @staticmethod
+    def key(name: str, values: Sequence[float] | np.ndarray) -> str:
+        """The key of an evaluation: its kind and its numbers, exactly (hexadecimal floats)."""
+        return " ".join(
+            [name, *(float(v).hex() for v in np.ravel(np.asarray(values, dtype=float)))]
+        )
+
+    def get(self, key: str) -> dict[str, Any] | None:
+        return self.entries.get(key)
+
+    def put(self, key: str, record: Mapping[str, Any]) -> None:
+        """Record a completed evaluation (appended and synced before this returns)."""
+        entry = {"key": key, **record}
+        line = json.dumps(entry) + "\n"
+
+        def append() -> None:
+            with open(self.path, "a", encoding="utf-8") as f:
+                f.write(line)
+                f.flush()
+                os.fsync(f.fileno())
+
+        self._io(append)
+        self.entries[key] = entry
+
+    def remove(self) -> None:
+        """Delete the journal (its result is written)."""
+        self.path.unlink(missing_ok=True)
+
+    def _io(self, fn: Callable[[], None]) -> None:
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fn()
+        except OSError as exc:
+            raise TuneError(
+                f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there "
+                f"({exc.strerror or exc})"
+            ) from None
+
+    def _load(self) -> None:
+        advice = "give another --out, or --force to discard the journal and start again"
+        try:
+            text = self.path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise TuneError(
+                f"{self.path}: unreadable tuning journal ({getattr(exc, 'strerror', None) or exc}); "
+                f"{advice}"
+            ) from None
+        *lines, tail = text.split("\n")
+        if tail:  # no newline yet: written when the process was killed; kept only when it is whole
+            with contextlib.suppress(ValueError):
+                json.loads(tail)
+                lines.append(tail)
+        try:
+            header = json.loads(lines[0]) if lines else None
+        except ValueError:
+            header = None
+        if not isinstance(header, dict) or header.get("kind") != JOURNAL_KIND:
+            raise TuneError(
+                f"{self.path}: not a tuning journal (damaged, or another file); {advice}"
+            )
+        if header.get("fingerprint") != self.fingerprint:
+            problem = header.get("problem")
+            theirs: dict[str, Any] = problem if isinstance(problem, dict) else {}
+            diff = [
+                f"{k}: {theirs.get(k)!r} there, {self.problem.get(k)!r} here"
+                for k in sorted(set(theirs) | set(self.problem))
+                if theirs.get(k) != self.problem.get(k)
+            ]
+            raise TuneError(
+                f"--out {self.path.parent}: {self.path.name} is the journal of another tuning "
+                f"problem ({'; '.join(diff[:4]) or 'another fingerprint'}); give the options it was "
+                f"started with to resume it, or {advice}"
+            )
+        for n, line in enumerate(lines[1:], start=2):
+            try:
+                entry = json.loads(line)
+            except ValueError:
+                entry = None
+            if not isinstance(entry, dict) or not isinstance(entry.get("key"), str):
+                raise TuneError(f"{self.path}: line {n} is damaged; {advice}")
+            self.entries[entry["key"]] = entry
+
+
+def _atomic_text(path: Path, text: str) -> None:
+    from formation_ftc.league.runner import _atomic_write_text
+
+    _atomic_write_text(path, text)
+
+
+def evaluate(
+    problem: GainProblem,
+    theta: Sequence[float] | np.ndarray,
+    journal: TuneJournal | None = None,
+    name: str = "train",
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:meth:`GainProblem.evaluate` through ``journal``: an evaluation it holds (the set ``name`` at the
+    same gains) is read back, exactly (dtype and shape kept); another one is computed and recorded."""
+    key = TuneJournal.key(name, theta)
+    hit = journal.get(key) if journal is not None else None
+    if hit is not None:
+        metrics = {
+            k: np.asarray(v, dtype=hit["dtypes"][k]).reshape(hit["shapes"][k])
+            for k, v in hit["metrics"].items()
+        }
+        return metrics, np.asarray(hit["diverged"], dtype=bool)
+    metrics, bad = problem.evaluate(theta)
+    if journal is not None:
+        journal.put(
+            key,
+            {
+                "metrics": {k: np.asarray(v).tolist() for k, v in metrics.items()},
+                "dtypes": {k: np.asarray(v).dtype.str for k, v in metrics.items()},
+                "shapes": {k: list(np.shape(v)) for k, v in metrics.items()},
+                "diverged": np.asarray(bad, dtype=bool).tolist(),
+            },
+        )
+    return metrics, bad
+
+
+def journal_path(out_dir: str | Path, method: str, level: str) -> Path:
+    """Where ``tune`` journals the evaluations of ``method`` at ``level`` (next to its result)."""
+    return Path(out_dir) / f"{method}--{level}.journal.jsonl"
+
+
+# -------------------------------------------------------------------------------------- budgets
+def check_tune_budgets(
+    cells: Sequence[Any],
+    *,
+    n_fields: int,
+    train_seeds: int,
+    holdout_seeds: int,
+    max_evaluations: int,
+    optimiser: str,
+    budgets: Budgets,
+    where: str,
+    run_bytes: int | None = None,
+) -> None:
+    """Refuse, before anything runs, a tuning over the budgets campaigns have
+    (:mod:`formation_ftc.limits`): at most :data:`~formation_ftc.campaign.spec.MAX_RUNS` training and
+    held-out seeds per cell, the integration steps of every cell's run, the run-steps of the whole
+    tuning (training runs x evaluations, a gradient evaluation counting 1 + fields forward runs, plus
+    the held-out runs at the paper and the tuned gains) within ``budgets.max_campaign_steps``, and
+    (``run_bytes``: one run's memory) the training batch within ``budgets.max_memory``. The message
+    names the option to lower and the range it allows.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> cells = [SimpleNamespace(n_steps=1000, key="none--limited")]
+    >>> check_tune_budgets(cells, n_fields=2, train_seeds=10**9, holdout_seeds=1, max_evaluations=9,
+    ...     optimiser="nelder-mead", budgets=Budgets(), where="tune m @ limited")
+    Traceback (most recent call last):
+    ...
+    formation_ftc.league.tuning.TuneError: --train-seeds 1,000,000,000: allowed: --train-seeds 1 to 10,000,000 (the runs per cell a campaign allows)
+    """
+    from formation_ftc.campaign.spec import MAX_RUNS
+    from formation_ftc.limits import check_run_steps, format_bytes
+
+    T, H, E, n = int(train_seeds), int(holdout_seeds), int(max_evaluations), int(n_fields)
+    for opt, v in (("--train-seeds", T), ("--holdout-seeds", H)):
+        if not 1 <= v <= MAX_RUNS:
+            raise TuneError(
+                f"{opt} {v:,}: allowed: {opt} 1 to {MAX_RUNS:,} (the runs per cell a campaign allows)"
+            )
+    if E < 2:
+        raise TuneError(f"--max-evaluations {E:,}: allowed: --max-evaluations 2 or more")
+    for c in cells:
+        check_run_steps(c.n_steps, budgets, f"{where}, cell {c.key}")
+    sps = sum(int(c.n_steps) for c in cells)  # one seed of every cell
+    k = 1 + n if optimiser == "gradient" else 1  # forward runs per evaluation
+
+    def per_train_seed(e: int) -> int:
+        # the optimiser's evaluations (scipy may pass its budget by one simplex), then the paper, the
+        # start and the tuned gains
+        return k * (e + n + 1) + 3
+
+    def held(h: int, t: int) -> int:  # paper and tuned gains, in batches padded to the training one
+        return 2 * (h + t - 1)
+
+    def steps(t: int, h: int, e: int) -> int:
+        return sps * (t * per_train_seed(e) + held(h, t))
+
+    budget = budgets.max_campaign_steps
+    if budget is not None and sps and steps(T, H, E) > budget:
+        size = (
+            f"{where} would simulate up to {steps(T, H, E):,} run-steps ({len(cells)} cell(s); "
+            f"{T:,} training seed(s) x {per_train_seed(E):,} evaluations, {H:,} held-out seed(s) "
+            "x 2)"
+        )
+        limit = (
+            f"the budget of {budget:,} run-steps (raise it with --max-campaign-steps / "
+            "FORMATION_FTC_MAX_CAMPAIGN_STEPS)"
+        )
+        room = budget // sps  # seed-runs of every cell
+        e_max = ((room - held(H, T)) // T - 3) // k - n - 1
+        t_max = (room - 2 * H + 2) // (per_train_seed(E) + 2)
+        h_max = (room - per_train_seed(E) * T) // 2 - T + 1
+        if e_max >= 2:
+            raise TuneError(
+                f"--max-evaluations {E:,}: {size}, over {limit}; allowed: --max-evaluations 2 to "
+                f"{e_max:,} with --train-seeds {T:,} and --holdout-seeds {H:,}"
+            )
+        if t_max >= 1:
+            raise TuneError(
+                f"--train-seeds {T:,}: {size}, over {limit}; allowed: --train-seeds 1 to "
+                f"{t_max:,} with --max-evaluations {E:,} and --holdout-seeds {H:,}"
+            )
+        if h_max >= 1:
+            raise TuneError(
+                f"--holdout-seeds {H:,}: {size}, over {limit}; allowed: --holdout-seeds 1 to "
+                f"{h_max:,} with --train-seeds {T:,} and --max-evaluations {E:,}"
+            )
+        raise TuneError(
+            f"{size}, over {limit}; lower --train-seeds, --holdout-seeds and --max-evaluations, "
+            "or tune on fewer --cases"
+        )
+    if run_bytes is not None and budgets.max_memory is not None and cells:
+        per_seed = int(run_bytes) * len(cells) * k
+        if per_seed * T > budgets.max_memory:
+            t_max = budgets.max_memory // per_seed
+            allowed = (
+                f"allowed: --train-seeds 1 to {t_max:,}"
+                if t_max >= 1
+                else "even 1 seed per cell is over it: tune on fewer --cases"
+            )
+            raise TuneError(
+                f"--train-seeds {T:,}: {where}: a training batch of {len(cells) * T:,} runs needs "
+                f"about {format_bytes(per_seed * T)} of memory, over the budget of "
+                f"{format_bytes(budgets.max_memory)}; {allowed}, or raise the budget with "
+                "--max-memory / FORMATION_FTC_MAX_MEMORY"
+            )
+
+
+def _run_bytes(raw: Mapping[str, Any]) -> int:
+    """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only)."""
+    from formation_ftc import api
+    from formation_ftc.limits import run_memory_bytes
+
+    try:
+        return run_memory_bytes(api.compile_scenario(api.load_scenario(dict(raw))))
+    except InputError:
+        raise
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+        raise TuneError(f"tuning: a run cannot be built: {exc}") from None
+
+
+# ------------------------------------------------------------------------------------------ --out
+def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool = False) -> None:
+    """Refuse, before anything is computed, an ``--out`` the result of ``method`` at ``level`` may not
+    go to: a file or a device (or a path under one), an unwritable directory, a campaign directory
+    (or a path inside one), a league directory (its ``tuned/`` subdirectory is the place), a
+    directory holding anything but tuning results and journals, or one that holds this result
+    already (unless ``force``). A file of the result's name that is not a tuning result is never
+    replaced."""
+    from formation_ftc.league.runner import _TMP_RE, LEAGUE_FILE, _campaign_at_or_above
+
+    out = Path(out_dir)
+    what = f"--out {out}"
+    result = f"{method}--{level}.json"
+    try:
+        campaign = _campaign_at_or_above(out)
+        if campaign is not None:
+            where = (
+                "is"
+                if campaign == Path(os.path.realpath(out))
+                else f"is inside {campaign}, which is"
+            )
+            raise TuneError(
+                f"{what}: {where} a campaign directory; give a directory of its own for tuning "
+                "results (new, empty or holding tuning results)"
+            )
+        if not (out.exists() or out.is_symlink()):
+            parent = next(p for p in out.absolute().parents if p.exists() or p.is_symlink())
+            if not parent.is_dir():
+                raise TuneError(f"{what}: {parent} is not a directory; give a directory")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise TuneError(f"{what}: cannot create it ({parent} is not writable)")
+            return
+        if not out.is_dir():
+            kind = (
+                "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+            )
+            raise TuneError(f"{what}: exists and is {kind}; give a directory for tuning results")
+        if not os.access(out, os.W_OK | os.X_OK):
+            raise TuneError(f"{what}: not writable")
+        entries = sorted(e.name for e in out.iterdir())
+        if LEAGUE_FILE in entries:
+            raise TuneError(
+                f"{what}: is a league directory; give its tuned/ subdirectory (--out "
+                f"{out / 'tuned'}), which `league report` reads"
+            )
+        own = journal_path(out, method, level).name  # judged (resumed or refused) by TuneJournal
+        foreign = [
+            e for e in entries if not (e == own or _TMP_RE.match(e) or _is_tuning_file(out / e))
+        ]
+        if foreign:
+            raise TuneError(
+                f"{what}: holds files that are not tuning results (e.g. {foreign[:3]}); refusing to "
+                "write there: give a new or empty directory, or one of tuning results"
+            )
+        if result in entries and not force:
+            raise TuneError(
+                f"{what}: holds a tuning result of {method} at {level} already ({result}); "
+                "--force replaces it, or give another --out"
+            )
+    except OSError as exc:
+        raise TuneError(f"{what}: unusable path ({exc.strerror or exc})") from None
+
+
+def _is_tuning_file(path: Path) -> bool:
+    """A tuning result (``kind`` "formation-ftc tuning") or journal, judged by its content."""
+    if not path.is_file() or path.is_symlink():
+        return False
+    try:
+        with open(path, encoding="utf-8") as f:
+            if path.name.endswith(".journal.jsonl"):
+                return json.loads(f.readline()).get("kind") == JOURNAL_KIND
+            if path.suffix == ".json":
+                return json.load(f).get("kind") == "formation-ftc tuning"
+    except (OSError, ValueError, AttributeError):
+        return False
+    return False
+
+
+# ------------------------------------------------------------------------------------------- tune
 def tune_league_method(
     league,
     method: str,
@@ -624,16 +1023,27 @@ def tune_league_method(
     violation_cap: float = 1.0,
     step_checks: Mapping[str, Any] | None = None,
     log: Callable[[str], None] | None = None,
+    budgets: Budgets | None = None,
+    journal: str | Path | None = None,
+    force: bool = False,
+    progress: bool = False,
 ) -> dict[str, Any]:
     """Tune ``method``'s ``[tune]`` fields at actuator ``level`` of ``league`` (a name, file or
     :class:`~formation_ftc.league.definition.LeagueSpec`); the result as a JSON-able dict (the fields
     of docs/tuning.md). The options are those of ``formation-ftc tune``; ``log`` receives progress
-    lines. The runs fly at the step the league's step check chooses for the method (as ``league
-    run`` does): the check runs here unless ``step_checks`` (a league's ``league.json`` record
-    ``step_check``, ``{method: record}``) holds it. Raises TuneError or LeagueError (exit code 2) naming a bad league, method, level, case,
-    field or option."""
-    from formation_ftc.league.definition import LeagueSpec, load_league, method_tune
-    from formation_ftc.league.runner import _provenance, _step_checks, plan_cells
+    lines, ``progress``: progress lines with ETA on a terminal's stderr (step check, evaluations).
+
+    The runs fly at the step the league's step check chooses for the method (as ``league run``
+    does): the check runs here unless ``step_checks`` (a league's ``league.json`` record
+    ``step_check``, ``{method: record}``) holds it. ``budgets`` (default :meth:`Budgets.resolve`)
+    bound the tuning before anything runs (:func:`check_tune_budgets`). ``journal``: a file where
+    the step check and every evaluation are recorded as they complete (:class:`TuneJournal`); a
+    tuning of the same problem started again replays them and continues, to the same result;
+    ``force`` discards a journal of another problem instead of refusing it. Raises TuneError or
+    LeagueError (exit code 2) naming a bad league, method, level, case, field or option."""
+    import formation_ftc
+    from formation_ftc.league.definition import LeagueSpec, league_hash, load_league, method_tune
+    from formation_ftc.league.runner import Counter, _battery, _provenance, _step_checks, plan_cells
 
     say = log or (lambda _line: None)
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -647,32 +1057,78 @@ def tune_league_method(
     levels = [lv.name for lv in spec.levels]
     if level not in levels:
         raise TuneError(f"--level {level!r}: not a level of league {spec.league.name} ({levels})")
-    if train_seeds < 1 or holdout_seeds < 1:
-        raise TuneError("--train-seeds and --holdout-seeds: at least 1 each")
+    if optimiser not in OPTIMISERS:
+        raise TuneError(f"--optimiser {optimiser!r}: one of {', '.join(OPTIMISERS)}")
     _check_penalty_options(margin, penalty, violation_cap)  # before any run is built
     if train_start < holdout_seeds:
         raise TuneError(
             f"--train-start {train_start}: the training replicates would overlap the held-out ones "
-            f"(0 .. {holdout_seeds - 1})"
+            f"(0 .. {holdout_seeds - 1}); allowed: --train-start {holdout_seeds} or more"
         )
     objective, statistic = tune.objective, tune.statistic
     req = spec.league.requirement
     requirement = (req.metric, float(req.max))
+    fields = [TuneField(p, b.low, b.high, b.log, b.rebuild) for p, b in tune.fields.items()]  # type: ignore[union-attr]  # TuneBounds once validated
+    budgets = budgets if budgets is not None else Budgets.resolve()
     planned = plan_cells(spec, [method])
-    # the step the league flies this method at: its step check (run here, or reused from a league)
-    old = {"step_check": dict(step_checks)} if step_checks else None
-    step_check = _step_checks(spec, planned, old, log).get(method)
-    if step_check is not None:
-        say(f"{method}: flying at dt = {step_check['chosen_dt']:g} s (the league's step check)")
-    cells = [c for c in planned[method] if c.level == level]
-    applying = [c.case for c in cells]
+
+    def chosen() -> list[Any]:
+        return [c for c in planned[method] if c.level == level and (not cases or c.case in cases)]
+
+    applying = [c.case for c in planned[method] if c.level == level]
     unknown = [c for c in cases or () if c not in applying]
     if unknown:
         raise TuneError(
             f"--cases: {unknown} not among the cases of {method} ({', '.join(applying)})"
         )
-    cells = [c for c in cells if not cases or c.case in cases]
-    fields = [TuneField(p, b.low, b.high, b.log, b.rebuild) for p, b in tune.fields.items()]  # type: ignore[union-attr]  # TuneBounds once validated
+    options: dict[str, Any] = {
+        "n_fields": len(fields),
+        "train_seeds": train_seeds,
+        "holdout_seeds": holdout_seeds,
+        "max_evaluations": max_evaluations,
+        "optimiser": optimiser,
+        "budgets": budgets,
+        "where": f"tune {method} @ {level}",
+    }
+    # at the method's own step, before anything runs (the step check included)
+    first = chosen()
+    check_tune_budgets(first, **options, run_bytes=_run_bytes(first[0].raw) if first else None)
+    book = None
+    if journal is not None:
+        problem_key = {
+            "league": spec.league.name,
+            "league_hash": league_hash(spec),
+            "battery_sha256": _battery(spec).sha256,
+            "method": method,
+            "level": level,
+            "cases": [c.case for c in chosen()],
+            "train_seeds": train_seeds,
+            "holdout_seeds": holdout_seeds,
+            "train_start": train_start,
+            "optimiser": optimiser,
+            "max_evaluations": max_evaluations,
+            "margin": margin,
+            "penalty": penalty,
+            "violation_cap": repr(float(violation_cap)),
+            "step_check_from": jsonable((step_checks or {}).get(method)),
+            "version": formation_ftc.__version__,
+        }
+        book = TuneJournal(journal, problem_key, force=force)
+        if book.resumed:
+            say(f"{method} @ {level}: resuming, {book.resumed} completed step(s) in {book.path}")
+    # the step the league flies this method at: its step check (run here, journalled, or reused)
+    done = dict(step_checks or {})
+    if book is not None and method not in done and book.get("step_check") is not None:
+        done[method] = book.get("step_check")["record"]  # type: ignore[index]
+    steps0 = [c.n_steps for c in first]
+    step_check = _step_checks(spec, planned, {"step_check": done}, log, progress).get(method)
+    if step_check is not None:
+        if book is not None and book.get("step_check") is None:
+            book.put("step_check", {"record": step_check})
+        say(f"{method}: flying at dt = {step_check['chosen_dt']:g} s (the league's step check)")
+    cells = chosen()
+    if [c.n_steps for c in cells] != steps0:  # again, at the chosen step
+        check_tune_budgets(cells, **options, run_bytes=_run_bytes(cells[0].raw))
     t0 = time.perf_counter()
     train = list(range(train_start, train_start + train_seeds))
     held = list(range(holdout_seeds))
@@ -683,7 +1139,7 @@ def tune_league_method(
     )
     problem = build_problem(raws, fields)
     paper = problem.initial.copy()
-    m0, bad0 = problem.evaluate(paper)
+    m0, bad0 = evaluate(problem, paper, book)
     f0 = np.asarray(m0[objective], dtype=float)[~bad0]
     f0 = f0[np.isfinite(f0)]
     scale = float(np.mean(f0) if statistic == "mean" else np.median(f0)) if f0.size else 1.0
@@ -697,12 +1153,22 @@ def tune_league_method(
         violation_cap=violation_cap,
         scale=scale,
     )
-    outcome = minimise(problem, J, optimiser=optimiser, max_evaluations=max_evaluations)
+    with Counter(
+        f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
+    ) as bar:
+        outcome = minimise(
+            problem,
+            J,
+            optimiser=optimiser,
+            max_evaluations=max_evaluations,
+            journal=book,
+            on_evaluation=bar.advance,
+        )
     say(
         f"{method}: {optimiser}, {outcome.evaluations} evaluations in {outcome.seconds:.1f} s: "
         f"J {outcome.initial_value:.4g} -> {outcome.value:.4g}"
     )
-    m_tr, bad_tr = problem.evaluate(outcome.gains)
+    m_tr, bad_tr = evaluate(problem, outcome.gains, book)
     # held-out: the league's own first replicates, in batches laid out as the training batch
     h_raws, h_labels = [], []
     for k in range(0, len(held), train_seeds):
@@ -710,7 +1176,10 @@ def tune_league_method(
         h_raws += r
         h_labels += lb
     hold = build_problem(h_raws, fields, like=problem)
-    held_out = {"paper": hold.evaluate(paper), "tuned": hold.evaluate(outcome.gains)}
+    held_out = {
+        "paper": evaluate(hold, paper, book, "holdout"),
+        "tuned": evaluate(hold, outcome.gains, book, "holdout"),
+    }
     case_idx = {
         case: np.asarray([i for i, lb in enumerate(h_labels) if lb["case"] == case])
         for case in dict.fromkeys(lb["case"] for lb in h_labels)
@@ -800,13 +1269,19 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
 
 def load_tunings(directory: str | Path) -> dict[tuple[str, str], dict[str, Any]]:
     """The tuning results in ``directory`` (from :func:`write_tuning`) by ``(method, level)``; other
-    files are skipped, a missing directory gives ``{}``.
+    files are skipped, a missing directory gives ``{}``. A result whose fields the leaderboard reads
+    have the wrong type (:class:`_TuningRecord`) is a TuneError (exit code 2) naming the file and
+    the field.
 
     Examples
     --------
     >>> load_tunings("/nonexistent")
     {}
     """
+    from pydantic import ValidationError
+
+    from formation_ftc.league.runner import record_error
+
     out: dict[tuple[str, str], dict[str, Any]] = {}
     if not Path(directory).is_dir():
         return out
@@ -816,5 +1291,40 @@ def load_tunings(directory: str | Path) -> dict[tuple[str, str], dict[str, Any]]
         except (OSError, ValueError):
             continue
         if isinstance(r, dict) and r.get("kind") == "formation-ftc tuning":
-            out[(str(r.get("method")), str(r.get("level")))] = r
+            try:
+                _TuningRecord.model_validate(r)
+            except ValidationError as exc:
+                raise TuneError(f"tuning result {record_error(p, exc)}") from None
+            out[(r["method"], r["level"])] = r
     return out
+
+
+class _Record(BaseModel):
+    model_config = ConfigDict(strict=True, extra="allow")
+
+
+class _Objective(_Record):
+    metric: str
+    units: str = ""
+    statistic: str = "mean"
+
+
+class _Optimiser(_Record):
+    name: str
+
+
+class _Holdout(_Record):
+    paper: dict[str, float | int | None]
+    tuned: dict[str, float | int | None]
+
+
+class _TuningRecord(_Record):
+    """The fields of a tuning result the leaderboard's tuned column reads (``league report``)."""
+
+    method: str
+    level: str
+    tuned_gains: dict[str, float]
+    paper_gains: dict[str, float]
+    objective: _Objective
+    holdout: _Holdout
+    optimiser: _Optimiser
