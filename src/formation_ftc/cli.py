@@ -735,7 +735,7 @@ def _cmd_run(args) -> int:
     simulation = time.perf_counter() - t0
     figs: list[Path] | None = None
     ds, metrics, diverged = _finish(scenario, compiled, out, console)
-    ds.attrs["wall_time_s"] = simulation
+    ds.attrs["simulation_time_s"] = simulation  # compiling (or loading) and running [s]
     units = metric_units(ds)
     with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written
         save_result(ds, stage, metrics)
