@@ -334,11 +334,8 @@ def test_package_versions_come_from_the_distribution_that_installed_each_import_
         raise metadata.PackageNotFoundError(dist)
 
     monkeypatch.setattr(prov.metadata, "version", version)
-    monkeypatch.setattr(
-        prov.metadata,
-        "packages_distributions",
-        lambda: {"cvxpy": ["cvxpy-base"], "numpy": ["numpy"]},
-    )
+    # read without scanning every installed distribution (0.6-1.9 s of a run)
+    monkeypatch.setattr(prov.metadata, "packages_distributions", None)
     prov.package_versions.cache_clear()
     try:
         fake = prov.package_versions()

@@ -21,7 +21,8 @@ def test_list_show_check_run(tmp_path, capsys):
     assert (
         main(["run", "cw-pd-fault", "--out", str(out_dir), "--set", "simulation.horizon=20"]) == 0
     )
-    assert (out_dir / "result.nc").exists() and (out_dir / "run_position.png").exists()
+    assert (out_dir / "result.nc").exists() and (out_dir / "index.html").exists()
+    assert not list(out_dir.glob("*.png"))  # figures only with --figures or `formation-ftc plot`
     metrics = json.loads((out_dir / "metrics.json").read_text())
     assert metrics["scenario"] == "cw-pd-fault" and "delta_v_total" in metrics
 
@@ -47,12 +48,12 @@ def test_run_divergence_exit_code_keeps_partial(tmp_path, capsys):
 def test_a_failing_divergence_replay_keeps_the_partial_result(tmp_path, capsys, monkeypatch):
     """The replay that names the diverged variable is a diagnostic: when it fails, the run is still
     reported (step and time only) and its partial result written, as in campaigns."""
-    import formation_ftc.api as api
+    import formation_ftc.sim.engine as engine
 
     def broken(*args, **kwargs):
         raise RuntimeError("replay failed")
 
-    monkeypatch.setattr(api, "diagnose_divergence", broken)
+    monkeypatch.setattr(engine, "diagnose_divergence", broken)
     argv = ["run", "cw-pd-fault", "--out", str(tmp_path), "--set", "simulation.horizon=60"]
     assert main([*argv, "--set", "controller.kp=1e9"]) == 1
     assert (tmp_path / "result.nc").exists()

@@ -280,7 +280,7 @@ def test_run_with_hundreds_of_spacecraft_plots_a_subset(tmp_path, capsys):
     raw["simulation"]["horizon"] = 2.0
     path = tmp_path / "many.toml"
     path.write_text(tomli_w.dumps(raw))
-    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    assert main(["run", str(path), "--out", str(tmp_path / "o"), "--figures"]) == 0
     assert "figures show 16 of 300 spacecraft" in capsys.readouterr().err
     with xr.open_dataset(tmp_path / "o" / "result.nc", engine="h5netcdf") as ds:
         assert ds.sizes["spacecraft"] == n  # the data keeps every spacecraft

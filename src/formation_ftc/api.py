@@ -12,22 +12,15 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
-
-import jax
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from formation_ftc.config import loader
 from formation_ftc.config.base import ScenarioBase
-from formation_ftc.provenance import provenance
-from formation_ftc.registry import Compiled, Condition, get_method
-from formation_ftc.sim.engine import (
-    DivergenceInfo,
-    SimulationDiverged,
-    diagnose_divergence,
-    trim_records,
-)
-from formation_ftc.sim.programs import jitted_run
+from formation_ftc.registry import Condition, get_method
+
+if TYPE_CHECKING:  # JAX is imported by the functions that simulate, not with this module
+    from formation_ftc.registry import Compiled
+    from formation_ftc.sim.engine import DivergenceInfo
 
 __all__ = [
     "load_scenario",
@@ -230,6 +223,12 @@ def finish_run(
     >>> ds.sizes["spacecraft"], ds.attrs["diverged"]
     (2, '')
     """
+    import jax
+    import numpy as np
+
+    from formation_ftc.provenance import provenance
+    from formation_ftc.sim.engine import SimulationDiverged, trim_records
+
     out = jax.tree_util.tree_map(np.asarray, dict(out))
     div = int(out["diverged_step"])
     records, n_kept = trim_records(out["records"], div, compiled.record_every)
@@ -260,6 +259,8 @@ def _divergence_info(compiled: Compiled, out: Mapping[str, Any], div: int) -> Di
     """Where and what diverged in the run ``out`` of ``compiled`` (first non-finite step ``div``):
     replayed from the last finite state. A replay that cannot run gives the step and time alone: a
     diagnostic never loses the run (also used by campaigns)."""
+    from formation_ftc.sim.engine import DivergenceInfo, diagnose_divergence
+
     t = compiled.t0 + div * compiled.dt
     try:
         if compiled.make_step is None:
@@ -340,6 +341,8 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergen
     >>> float(ds.time[-1]), sorted(metrics)[:1], metrics.units["delta_v_total"]
     (5840.0, ['control_effort_sc1'], 'm s-1')
     """
+    from formation_ftc.sim.programs import jitted_run
+
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
     compiled = compile_scenario(scenario)

@@ -1,11 +1,12 @@
-"""formation-ftc command line: list, show, check, schema, run, reproduce, campaign, league, completion.
+"""formation-ftc command line: list, show, check, schema, run, plot, reproduce, campaign, league,
+completion.
 
 Thin edge layer over formation_ftc.api; every command works for every registered method. Heavy
 modules (JAX, SciPy, pandas) are imported by the commands that need them, so --help, --version,
 list and completion answer at once. Exit codes: 0 success, 1 a required condition failed, a run
 diverged or stdout could not be written, 2 bad input, 3 unexpected error (formation_ftc.exitcodes).
 
-``--json`` (list, show, check, run, campaign list/report, league list/report) prints one JSON document
+``--json`` (list, show, check, run, plot, campaign list/report, league list/report) prints one JSON document
 on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
 docs/cli.md.
 """
@@ -68,11 +69,24 @@ HELP: dict[str, tuple[str, list[str]]] = {
         ["formation-ftc schema", "formation-ftc schema composed > composed.schema.json"],
     ),
     "run": (
-        "Simulate a scenario and write DIR/result.nc, DIR/metrics.json and the method's figures (PNG).",
+        "Simulate a scenario and write DIR/result.nc, DIR/metrics.json and DIR/index.html; with "
+        "--figures also the standard and the method's figures (PNG), which `formation-ftc plot DIR` "
+        "draws later otherwise. The time printed is the wall time of the whole command; the "
+        "simulation's own time follows it.",
         [
             "formation-ftc run cw-pd-fault --out out/run1",
-            "formation-ftc run cw-pd-fault --out out/run1 --set simulation.horizon=300 --set controller.kp=3",
+            "formation-ftc run cw-pd-fault --out out/run1 --figures --set simulation.horizon=300",
             "formation-ftc run cw-free-drift --out out/run2 --json",
+        ],
+    ),
+    "plot": (
+        "Draw the figures of a saved result from its files alone (no simulation): a run's standard "
+        "and method figures from DIR/result.nc (index.html refreshed), a campaign's report figures, "
+        "a league's leaderboard figures.",
+        [
+            "formation-ftc plot out/run1",
+            "formation-ftc plot out/run1 --format svg",
+            "formation-ftc plot out/campaign1 --json",
         ],
     ),
     "reproduce": (
@@ -158,6 +172,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
 }
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
+_STARTED: float | None = None  # time.perf_counter() when main() began
 
 
 def _info(msg: str) -> None:
@@ -720,16 +735,48 @@ def _moved(path, stage: Path, out_dir: Path) -> Path:
         return Path(path)
 
 
+def _elapsed() -> float:
+    """Wall time since this command began (:func:`main`) [s]."""
+    return time.perf_counter() - (_STARTED if _STARTED is not None else time.perf_counter())
+
+
+def _finish(scenario, compiled, out, console) -> tuple[Any, dict[str, float], dict | None]:
+    """The dataset and metrics of a run, and its divergence (None, or the ``diverged`` object of
+    ``run --json``; the dataset is then the partial result)."""
+    from formation_ftc.api import finish_run, result_metrics
+    from formation_ftc.sim.engine import SimulationDiverged
+
+    try:
+        ds, metrics = finish_run(scenario, compiled, out)
+        return ds, metrics, None
+    except SimulationDiverged as exc:
+        console.print(f"[red]{exc}[/]")
+        info = exc.info
+        return (
+            exc.partial,
+            result_metrics(exc.partial),
+            {
+                "message": str(exc),
+                "time": float(info.time),
+                "step": int(info.step),
+                "variable": str(info.variable),
+                "spacecraft": None if info.spacecraft is None else int(info.spacecraft) + 1,
+                "index": [int(i) for i in info.index],
+                "reason": str(info.reason),
+                "units": {"time": "s"},
+            },
+        )
+
+
 def _cmd_run(args) -> int:
     import jax
     from rich.console import Console
 
-    from formation_ftc.api import compile_scenario, finish_run, save_result
+    from formation_ftc.api import compile_scenario, metric_units, save_result
     from formation_ftc.config.loader import ScenarioError
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
-    from formation_ftc.registry import get_method
-    from formation_ftc.runout import check_out_dir, plot_view, staged_output
-    from formation_ftc.sim.engine import SimulationDiverged
+    from formation_ftc.report.run_page import run_figures, write_run_page
+    from formation_ftc.runout import check_out_dir, staged_output
     from formation_ftc.sim.programs import jitted_run
 
     console = Console(stderr=True, quiet=_VERBOSITY < 0)
@@ -750,46 +797,28 @@ def _cmd_run(args) -> int:
     ):
         out = jitted_run(compiled)(compiled.params)
         jax.block_until_ready(out)
-    wall = time.perf_counter() - t0
-    code = 0
-    diverged = None
-    try:
-        ds, metrics = finish_run(scenario, compiled, out)
-    except SimulationDiverged as exc:
-        console.print(f"[red]{exc}[/]")
-        ds = exc.partial
-        from formation_ftc.api import result_metrics
-
-        metrics = result_metrics(ds)
-        code = 1
-        info = exc.info
-        diverged = {
-            "message": str(exc),
-            "time": float(info.time),
-            "step": int(info.step),
-            "variable": str(info.variable),
-            "spacecraft": None if info.spacecraft is None else int(info.spacecraft) + 1,
-            "index": [int(i) for i in info.index],
-            "reason": str(info.reason),
-            "units": {"time": "s"},
-        }
-    ds.attrs["wall_time_s"] = wall
-    method = get_method(scenario.scenario.method)
+    simulation = time.perf_counter() - t0
+    figs: list[Path] | None = None
+    ds, metrics, diverged = _finish(scenario, compiled, out, console)
+    ds.attrs["simulation_time_s"] = simulation  # compiling (or loading) and running [s]
+    units = metric_units(ds)
     with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written
         save_result(ds, stage, metrics)
-        view, note = plot_view(ds)
-        if note:
-            console.print(note)
-        from formation_ftc.api import metric_units
-        from formation_ftc.report.run_page import standard_figures, write_run_page
-
-        figs = standard_figures(view, stage)
-        figs += method.plot(view, scenario, stage) if method.plot else []
-        units = metric_units(ds)
+        if args.figures:
+            figs, note = run_figures(ds, scenario, stage)
+            if note:
+                console.print(note)
         write_run_page(stage, ds, metrics, figs, units)
+    code = 0 if diverged is None else 1
+    wall = _elapsed()
+    drawn = f", index.html and {len(figs)} figure(s)" if figs is not None else " and index.html"
+    hint = "" if figs is not None else f"; figures: formation-ftc plot {out_dir}"
     console.print(
-        f"wrote {out_dir / 'result.nc'}, {out_dir / 'metrics.json'}, {len(figs)} figure(s) and "
-        f"{out_dir / 'index.html'} in {wall:.2f} s"
+        f"wrote {out_dir}/result.nc, metrics.json{drawn} in {wall:.2f} s (simulation "
+        f"{simulation:.2f} s){hint}",
+        soft_wrap=True,
+        markup=False,
+        highlight=False,
     )
     if args.json:
         print_json(
@@ -806,14 +835,69 @@ def _cmd_run(args) -> int:
                     "result": str(out_dir / "result.nc"),
                     "metrics": str(out_dir / "metrics.json"),
                     "index": str(out_dir / "index.html"),
-                    "figures": [str(_moved(f, stage, out_dir)) for f in figs],
+                    "figures": [str(_moved(f, stage, out_dir)) for f in figs or []],
                 },
                 "n_steps": int(scenario.simulation.n_steps),
                 "wall_time": wall,
-                "units": {"wall_time": "s"},
+                "simulation_time": simulation,
+                "units": {"wall_time": "s", "simulation_time": "s"},
             }
         )
     return code
+
+
+def _cmd_plot(args) -> int:
+    d = Path(args.dir)
+    if (d / "result.nc").is_file():
+        from formation_ftc.report.run_page import redraw_run
+
+        figures, index, warnings = redraw_run(d, args.format)
+        kind: str = "run"
+    elif (d / "manifest.json").is_file():  # formation_ftc.campaign.storage.MANIFEST
+        from formation_ftc.campaign.report import write_report
+        from formation_ftc.plotting import figure_format
+
+        with figure_format(args.format):
+            _, figures = write_report(d, console=None, plots=True)
+        index, warnings, kind = None, [], "campaign"
+    elif (d / "league.json").is_file():  # formation_ftc.league.runner.LEAGUE_FILE
+        from formation_ftc.errors import InputError
+        from formation_ftc.league.report import write_leaderboard
+
+        if args.format != "png":
+            raise InputError(
+                f"--format {args.format}: a league's leaderboard page embeds PNG figures; "
+                "use --format png (the default) for a league directory"
+            )
+        write_leaderboard(d, plots=True)
+        figures = sorted((d / "leaderboard").glob("*.png"))
+        index, warnings, kind = d / "leaderboard" / "index.html", [], "league"
+    else:
+        from formation_ftc.errors import InputError
+
+        what = "does not exist" if not d.exists() else "is not a directory"
+        if d.is_dir():
+            what = "holds none of result.nc (a run), manifest.json (a campaign), league.json (a league)"
+        raise InputError(
+            f"plot {args.dir}: {what}; give the --out directory of a run, campaign or league"
+        )
+    for w in warnings:
+        _info(f"warning: {w}")
+    if args.json:
+        print_json(
+            {
+                "dir": str(d),
+                "kind": kind,
+                "format": args.format,
+                "figures": [str(f) for f in figures],
+                "index": None if index is None else str(index),
+                "warnings": warnings,
+            }
+        )
+    else:
+        where = f" and {index}" if index is not None else ""
+        print(f"wrote {len(figures)} figure(s) of the {kind} in {d}{where}")
+    return 0
 
 
 class _VersionAction(argparse.Action):
@@ -1091,7 +1175,9 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     )
     p.set_defaults(func=_cmd_schema)
 
-    p = sub.add_parser("run", help="simulate a scenario and write result.nc, metrics.json, figures")
+    p = sub.add_parser(
+        "run", help="simulate a scenario and write result.nc, metrics.json, index.html"
+    )
     _scenario_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument(
@@ -1111,8 +1197,27 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         default=None,
         help="integration steps allowed per run (default 1e9; 0 = none)",
     )
+    p.add_argument(
+        "--figures",
+        action="store_true",
+        help="also draw the standard and the method's figures (PNG) and the 3-D view; without it, "
+        "`formation-ftc plot DIR` draws them later from result.nc",
+    )
     add_json_option(p)
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("plot", help="draw the figures of a run, campaign or league directory")
+    p.add_argument(
+        "dir", metavar="DIR", help="the --out directory of a run, a campaign or a league"
+    )
+    p.add_argument(
+        "--format",
+        choices=("png", "svg", "pdf"),
+        default="png",
+        help="file format of the figures (default png; a league's page embeds png only)",
+    )
+    add_json_option(p)
+    p.set_defaults(func=_cmd_plot)
 
     for name, (module, short) in _PLUGGED.items():
         if completion and name in _STAND_INS:
@@ -1140,7 +1245,9 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
 
 
 def main(argv: list[str] | None = None) -> int:
-    global _VERBOSITY
+    global _VERBOSITY, _STARTED
+    _STARTED = time.perf_counter()
+    argv_given = argv
     with lossy_stderr():
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser(_command_of(argv))
@@ -1152,12 +1259,60 @@ def main(argv: list[str] | None = None) -> int:
                 print_json_error(message, int(exc.code or 2))
             raise
         _VERBOSITY = int(getattr(args, "verbosity", 0))
+        if argv_given is None and args.command in _ONE_SHOT:
+            _few_full_collections()
+            if args.command in ("run", "plot"):
+                _without_dask()
         from formation_ftc.exitcodes import run_guarded
         from formation_ftc.sim import runtime
 
         runtime.configure()  # compilation caches and compiler tuning, for this command and its workers
 
-        return run_guarded(args.func, args, verbose=_VERBOSITY > 0)
+        code = run_guarded(args.func, args, verbose=_VERBOSITY > 0)
+        if argv_given is None:  # the process's own command (console script, python -m): it ends now
+            _exit_soon()
+        return code
+
+
+#: commands that compute one thing and end (their process: see :func:`_few_full_collections`)
+_ONE_SHOT = frozenset({"run", "check", "plot"})
+
+
+def _few_full_collections() -> None:
+    """Full garbage collections only after 1000 (not 10) collections of the middle generation: each
+    walks every object left by the imports (JAX, xarray, pydantic: millions), and a ``run`` made five
+    of them, 0.3 s of its 2.8 s (measured on 2 cores), for garbage it mostly does not have. The
+    younger generations are collected as usual. Only for a process whose one short command this is
+    (:data:`_ONE_SHOT`, ``main()`` called without ``argv``)."""
+    import gc
+
+    young, middle, _ = gc.get_threshold()
+    gc.set_threshold(young, middle, 1000)
+
+
+def _without_dask() -> None:
+    """This process runs as if dask were not installed (``None`` in ``sys.modules`` makes its import
+    fail as for a missing package), when neither dask nor xarray is imported yet.
+
+    A run's result and a saved result hold numpy arrays only, yet xarray imports dask, ``dask.array``
+    and ``distributed`` (the ``dask`` extra) while it builds and writes a dataset, to ask whether an
+    array is a dask array and which scheduler writes it: 0.3-0.5 s of a 2.6 s ``run`` on 2 cores. An
+    install without the extra skips that; so does this. Only for the process of a ``run`` or ``plot``
+    command (``main()`` called without ``argv``), which uses no dask."""
+    if not any(name in sys.modules for name in ("xarray", "dask", "distributed")):
+        for name in ("dask", "distributed"):
+            sys.modules[name] = None  # type: ignore[assignment]  # "not installed" to the import system
+
+
+def _exit_soon() -> None:
+    """Let the interpreter's shutdown skip the garbage collector's passes over every object left
+    (JAX's, xarray's, the modules'): they are freed with the process. Those passes took 0.4-0.6 s
+    after a ``run``, time the user waited but no command could print (measured on 2 cores;
+    ``benchmarks/cli.py``). Only for a process whose command this was (``main()`` called without
+    ``argv``), never for a caller that goes on."""
+    import gc
+
+    gc.freeze()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -7,7 +7,10 @@ checks (a campaign worker, ``formation-ftc check``) does not pay its import (abo
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import functools
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -15,7 +18,11 @@ if TYPE_CHECKING:
     import matplotlib.pyplot as plt
     from matplotlib.typing import RcKeyType
 
-__all__ = ["plt", "new_figure", "save_figure", "SPACECRAFT_COLORS"]
+__all__ = ["plt", "new_figure", "save_figure", "figure_format", "FORMATS", "SPACECRAFT_COLORS"]
+
+#: file formats :func:`save_figure` writes (``formation-ftc plot --format``)
+FORMATS = ("png", "svg", "pdf")
+_FORMAT: contextvars.ContextVar[str | None] = contextvars.ContextVar("figure_format", default=None)
 
 SPACECRAFT_COLORS = [
     "#1f77b4",
@@ -83,9 +90,33 @@ def new_figure(
     return fig, axes
 
 
+@contextlib.contextmanager
+def figure_format(fmt: str) -> Iterator[None]:
+    """Within the block, :func:`save_figure` writes ``fmt`` (one of :data:`FORMATS`) in place of PNG:
+    ``a.png`` becomes ``a.svg`` (every figure maker of the package saves through it).
+
+    Parameters
+    ----------
+    fmt : str
+        ``"png"``, ``"svg"`` or ``"pdf"``.
+    """
+    if fmt not in FORMATS:
+        raise ValueError(f"figure format {fmt!r}: expected one of {', '.join(FORMATS)}")
+    token = _FORMAT.set(fmt)
+    try:
+        yield
+    finally:
+        _FORMAT.reset(token)
+
+
 def save_figure(fig, path: str | Path) -> Path:
-    """Save as PNG (tight layout) and close the figure."""
+    """Save (tight layout) and close the figure, in the format of ``path``'s suffix (the figure makers
+    write PNG) or, within :func:`figure_format`, in that format (the suffix replaced). Returns the path
+    written."""
     path = Path(path)
+    fmt = _FORMAT.get()
+    if fmt is not None:
+        path = path.with_suffix(f".{fmt}")
     path.parent.mkdir(parents=True, exist_ok=True)
     pyplot = _pyplot()
     with pyplot.rc_context(_style()):

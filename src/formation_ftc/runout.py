@@ -30,6 +30,7 @@ __all__ = [
     "staged_output",
     "plot_view",
     "is_run_result",
+    "add_to_marker",
 ]
 
 #: file in a run directory listing what the run wrote (so a rerun may replace exactly that)
@@ -152,6 +153,22 @@ def staged_output(out_dir: Path) -> Iterator[Path]:
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise
+
+
+def add_to_marker(d: Path, names: list[str]) -> None:
+    """Add ``names`` (files written into the run directory ``d`` later, by ``formation-ftc plot``) to
+    its marker, so that a later ``run --out d`` may replace them; nothing when ``d`` has no marker."""
+    marker = Path(d) / MARKER
+    try:
+        files = json.loads(marker.read_text(encoding="utf-8")).get("files", [])
+    except (OSError, ValueError, AttributeError):
+        return
+    tmp = marker.with_name(f"{MARKER}.tmp-{os.getpid()}")
+    try:
+        tmp.write_text(json.dumps({"files": sorted({*files, *names})}, indent=1), encoding="utf-8")
+        tmp.replace(marker)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def _swap_into_place(stage: Path, out_dir: Path) -> None:

@@ -64,6 +64,20 @@ def test_campaign_report_json(campaign_dir, capsys):
     assert json.loads(capsys.readouterr().out)["exit_code"] == 2
 
 
+def test_plot_of_a_campaign_directory_draws_its_report_figures(campaign_dir, capsys):
+    """``formation-ftc plot DIR`` of a campaign directory: the figures ``campaign report`` draws (the
+    same names), here as SVG."""
+    capsys.readouterr()
+    assert main(["campaign", "report", str(campaign_dir), "--json"]) == 0
+    pngs = [Path(f) for f in json.loads(capsys.readouterr().out)["outputs"]["figures"]]
+    assert pngs
+    assert main(["plot", str(campaign_dir), "--format", "svg", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["kind"] == "campaign" and doc["index"] is None
+    assert doc["figures"] == [str(p.with_suffix(".svg")) for p in pngs]
+    assert all(p.with_suffix(".svg").read_text().lstrip().startswith("<?xml") for p in pngs)
+
+
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
 def test_campaign_report_into_a_full_stdout(campaign_dir):
     summary = campaign_dir / "report" / "summary.json"

@@ -89,3 +89,29 @@ def test_league_report_json(tmp_path, monkeypatch, capsys):
     monkeypatch.undo()
     assert main(["league", "report", str(tmp_path / "missing"), "--json"]) == 2
     assert json.loads(capsys.readouterr().out)["exit_code"] == 2
+
+
+def test_plot_of_a_league_directory_redraws_its_leaderboard(tmp_path, monkeypatch, capsys):
+    """``formation-ftc plot DIR`` of a league directory (it holds league.json) writes the leaderboard
+    with its figures (the league's report path, replaced here: a league run costs tens of seconds);
+    the page embeds PNG, so another format is refused with exit status 2."""
+    from formation_ftc.league import report
+
+    calls = []
+
+    def fake_write_leaderboard(league_dir, plots=True, tuned=None):
+        calls.append((str(league_dir), plots))
+        out = tmp_path / "leaderboard"
+        out.mkdir(exist_ok=True)
+        (out / "pareto-limited.png").write_bytes(b"\x89PNG")
+        return {}
+
+    monkeypatch.setattr(report, "write_leaderboard", fake_write_leaderboard)
+    (tmp_path / "league.json").write_text("{}")
+    assert main(["plot", str(tmp_path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert calls == [(str(tmp_path), True)] and doc["kind"] == "league"
+    assert doc["figures"] == [str(tmp_path / "leaderboard" / "pareto-limited.png")]
+    assert doc["index"] == str(tmp_path / "leaderboard" / "index.html")
+    assert main(["plot", str(tmp_path), "--format", "svg"]) == 2
+    assert "embeds PNG" in capsys.readouterr().err and len(calls) == 1

@@ -15,13 +15,22 @@ from formation_ftc.exitcodes import add_json_option, print_json
 __all__ = ["add_cli", "main"]
 
 
+def _builtin_texts() -> dict[str, str]:
+    """Name -> TOML text of every built-in campaign, read without importing the campaign model
+    (:func:`formation_ftc.campaign.spec.builtin_campaigns` reads the same files; its module imports
+    pydantic and scipy.stats, which ``campaign list`` does not use)."""
+    from importlib import resources
+
+    d = resources.files("formation_ftc") / "campaign" / "builtin"
+    entries = sorted((e for e in d.iterdir() if e.name.endswith(".toml")), key=lambda e: e.name)
+    return {e.name[:-5]: e.read_text(encoding="utf-8") for e in entries}
+
+
 def _cmd_list(args) -> int:
     import tomllib
 
-    from formation_ftc.campaign.spec import builtin_campaigns
-
     rows = []
-    for name, text in builtin_campaigns().items():
+    for name, text in _builtin_texts().items():
         meta = tomllib.loads(text).get("campaign", {})
         if args.json:
             base = meta.get("base", [])

@@ -1,5 +1,8 @@
-"""The page ``formation-ftc run`` writes next to a result: standard figures drawn from the dataset's
-declared signals, the method's own figures, an optional interactive 3-D trajectory, one ``index.html``.
+"""The page ``formation-ftc run`` writes next to a result (one ``index.html``) and its figures: standard
+figures drawn from the dataset's declared signals, the method's own figures, an optional interactive
+3-D trajectory. ``run`` draws the figures with ``--figures`` only; ``formation-ftc plot DIR``
+(:func:`redraw_run`) draws them later from ``DIR/result.nc`` alone (the scenario is recorded in its
+attributes) and refreshes the page.
 
 Standard figures (each only when the result has the signals it needs):
 
@@ -20,6 +23,8 @@ runs -- and writes one next to the page only when there is none.
 
 from __future__ import annotations
 
+import os
+import shutil
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,7 +33,14 @@ import numpy as np
 
 from formation_ftc.exitcodes import jsonable
 
-__all__ = ["standard_figures", "write_run_page", "ERROR_SIGNALS"]
+__all__ = [
+    "standard_figures",
+    "run_figures",
+    "write_run_page",
+    "redraw_run",
+    "recorded_scenario",
+    "ERROR_SIGNALS",
+]
 
 #: Signal names read as tracking errors (in this order, those present).
 ERROR_SIGNALS = (
@@ -170,6 +182,36 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     return paths
 
 
+def run_figures(ds, scenario, out_dir: Path | str) -> tuple[list[Path], str]:
+    """The standard figures and the method's own figures of a result, written into ``out_dir``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result (:func:`formation_ftc.api.simulate`, or read back from ``result.nc``).
+    scenario : ScenarioBase or None
+        Its scenario (the method's figures need it); None draws the standard figures only.
+    out_dir : Path or str
+        Where the figures go.
+
+    Returns
+    -------
+    tuple of (list of Path, str)
+        The figures written, and a note ("" or which spacecraft the figures show, above
+        :data:`formation_ftc.runout.MAX_PLOT_SPACECRAFT`).
+    """
+    from formation_ftc.runout import plot_view
+
+    view, note = plot_view(ds)
+    figures = standard_figures(view, out_dir)
+    if scenario is not None:
+        from formation_ftc.registry import get_method
+
+        method = get_method(scenario.scenario.method)
+        figures += method.plot(view, scenario, Path(out_dir)) if method.plot else []
+    return figures, note
+
+
 def _trajectory(ds, out_dir: Path) -> dict[str, Any] | None:
     """Interactive 3-D trajectory (plotly; the page loads the report tree's one copy of plotly's
     bundle, :func:`formation_ftc.report.html.plotly_script`), a note saying why there is none, or None
@@ -213,14 +255,17 @@ def write_run_page(
     out_dir: Path | str,
     ds,
     metrics: Mapping[str, Any],
-    figures: Sequence[Path | str],
+    figures: Sequence[Path | str] | None,
     units: Mapping[str, str] | None = None,
     *,
     include_3d: bool = True,
 ) -> Path:
     """Write ``out_dir/index.html``: title, metrics table (with units), figures and, with
     ``include_3d``, the interactive 3-D trajectory (which loads the nearest ``plotly.min.js`` at or
-    above ``out_dir``, written into ``out_dir`` when there is none)."""
+    above ``out_dir``, written into ``out_dir`` when there is none).
+
+    ``figures`` None: none were drawn; the page says how to draw them (``formation-ftc plot``) and has
+    no 3-D trajectory (no plotly copy either)."""
     from formation_ftc.atomic import atomic_write
     from formation_ftc.report.templating import render
 
@@ -241,7 +286,116 @@ def write_run_page(
             for k, v in metrics.items()
             if isinstance(v, int | float) and not isinstance(v, bool)
         ],
-        figures=[{"src": Path(p).name, "alt": Path(p).stem} for p in figures],
-        trajectory=_trajectory(ds, out_dir) if include_3d else None,
+        drawn=figures is not None,
+        figures=[
+            {"src": Path(p).name, "alt": Path(p).stem, "pdf": Path(p).suffix.lower() == ".pdf"}
+            for p in figures or ()
+        ],
+        trajectory=_trajectory(ds, out_dir) if include_3d and figures is not None else None,
     )
     return atomic_write(out_dir / "index.html", page)
+
+
+def recorded_scenario(ds) -> tuple[Any, str]:
+    """The scenario recorded in a result's attributes (``scenario_toml``), validated without building
+    its loop (no JAX); ``(None, why)`` when there is none or it does not validate with this version.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result read back from ``result.nc``.
+
+    Returns
+    -------
+    tuple of (ScenarioBase or None, str)
+        The scenario and "", or None and the reason.
+    """
+    import tomllib
+
+    from formation_ftc.config import loader
+    from formation_ftc.errors import InputError
+
+    text = ds.attrs.get("scenario_toml")
+    if not isinstance(text, str) or not text.strip():
+        return None, "the result records no scenario (attribute scenario_toml)"
+    try:
+        raw = tomllib.loads(text)
+        return loader.validate(raw, "scenario_toml of result.nc", build=False), ""
+    except (tomllib.TOMLDecodeError, InputError) as exc:
+        return None, str(exc)
+
+
+def _open_result(path: Path):
+    """``path`` (a ``result.nc``) read into memory; :class:`~formation_ftc.errors.InputError` when it is
+    not a readable result file."""
+    import xarray as xr
+
+    from formation_ftc.errors import InputError
+
+    try:
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            ds = ds.load()
+    except (OSError, ValueError, TypeError, KeyError) as exc:
+        raise InputError(
+            f"{path}: cannot be read as a result file ({type(exc).__name__}: {exc})"
+        ) from None
+    if "scenario_name" not in ds.attrs:
+        raise InputError(
+            f"{path}: not a formation-ftc result (no scenario_name attribute); `formation-ftc run` "
+            "writes result.nc"
+        )
+    return ds
+
+
+def redraw_run(directory: Path | str, fmt: str = "png") -> tuple[list[Path], Path, list[str]]:
+    """Draw the figures of the run saved in ``directory`` from ``directory/result.nc`` alone (no
+    simulation) and rewrite ``directory/index.html`` with them (``formation-ftc plot DIR``).
+
+    Each file is written under a temporary name in ``directory`` and renamed into place (a reader sees
+    the old file or the new one); the page comes last. When ``directory`` holds the marker of a run
+    (:data:`formation_ftc.runout.MARKER`), the new files are added to it, so a later ``run --out`` may
+    replace them.
+
+    Parameters
+    ----------
+    directory : Path or str
+        A directory holding ``result.nc``.
+    fmt : str
+        ``"png"``, ``"svg"`` or ``"pdf"`` (:data:`formation_ftc.plotting.FORMATS`).
+
+    Returns
+    -------
+    tuple of (list of Path, Path, list of str)
+        The figures written, the page, and warnings (a note on the spacecraft shown; why the
+        method's figures are missing).
+    """
+    from formation_ftc.api import metric_units, result_metrics
+    from formation_ftc.plotting import figure_format
+    from formation_ftc.runout import add_to_marker
+
+    directory = Path(directory)
+    ds = _open_result(directory / "result.nc")
+    scenario, why = recorded_scenario(ds)
+    warnings = (
+        [f"standard figures only: the method's figures need the scenario ({why})"] if why else []
+    )
+    stage = directory / f".plot.tmp-{os.getpid()}"
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir()
+    try:
+        with figure_format(fmt):
+            drawn, note = run_figures(ds, scenario, stage)
+        warnings += [note] if note else []
+        names = sorted(p.name for p in stage.iterdir())
+        for name in names:
+            os.replace(stage / name, directory / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    figures = [directory / p.name for p in drawn]
+    # the page last, written in place (atomically), so that it finds the plotly copy of its own tree
+    page = write_run_page(directory, ds, result_metrics(ds), figures, metric_units(ds))
+    names = sorted(
+        {*names, page.name, *(["plotly.min.js"] if (directory / "plotly.min.js").exists() else [])}
+    )
+    add_to_marker(directory, names)
+    return figures, page, warnings

@@ -2,7 +2,7 @@
 
 Every figure function takes xarray Datasets of the deputy (:func:`deputy` of a result of a
 ``gui2022-*`` scenario) and returns the written PNG path; :func:`plot` is the figure set of
-``formation-ftc run --plot`` for a scenario with ``[scenario] paper = "gui2022"``.
+``formation-ftc run --figures`` (and ``plot``) for a scenario with ``[scenario] paper = "gui2022"``.
 The single deputy is called "deputy" in legends; times in s, positions in m, accelerations in m/s^2.
 """
 
