@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import errno
+import functools
 import hashlib
 import io
 import json
@@ -110,14 +111,29 @@ def _fsync_dir(d: Path) -> None:
         os.close(fd)
 
 
+def _written(path: Path, tmp: Path, write: Callable[[Path], None]) -> None:
+    """``write(tmp)`` then rename ``tmp`` to ``path``; on failure ``tmp`` is removed, and a full disk
+    (``ENOSPC``, ``EDQUOT``: exit status 3, one line) names ``path``."""
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT) and exc.filename is None:
+            raise OSError(exc.errno, exc.strerror, str(path)) from None
+        raise
+
+
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically (temporary file, fsync, rename)."""
-    tmp = _tmp_path(path)
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+
+    _written(path, _tmp_path(path), write)
     _fsync_dir(path.parent)
 
 
@@ -375,8 +391,12 @@ class CampaignStore:
                 "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             }
         )
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, text.encode(), 0)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, text.encode(), 0)
+        except OSError as exc:  # a full disk: exit status 3 naming the lock file
+            os.close(fd)
+            raise OSError(exc.errno, exc.strerror, str(self.root / LOCK)) from None
         self._lock_fd = fd
 
     def close(self) -> None:
@@ -462,9 +482,7 @@ class CampaignStore:
             tdir = self.root / "traces"
             tdir.mkdir(exist_ok=True)
             path = tdir / trace_filename(run_id)
-            tmp = _tmp_path(path)
-            write_netcdf(self._cf_trace(ds), tmp)
-            os.replace(tmp, path)
+            _written(path, _tmp_path(path), functools.partial(write_netcdf, self._cf_trace(ds)))
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
         # metric units come from the runner (``table.attrs["metric_units"]``); inputs: see parquet_units
