@@ -25,11 +25,6 @@ import os
 # cold cache: 323 -> 288 s wall, 1,348 entries, 17 MB). Set before JAX reads its configuration.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
-# The on-disk program cache (formation_ftc.sim.runtime.program_cache) stays on, as for a user: the suite compiles
-# about 350 distinct programs, almost each once, and storing them costs about what the loads save
-# (fresh cache, same host: 7 min 28 s / 820 s user CPU off, 7 min 31 s / 818 s on, 7 min 26 s / 814 s
-# before the cache existed). Tests that count traces or compiles switch it off (fixtures below).
-
 # Under pytest-xdist the workers share the cores: each worker's JAX CPU client gets its share of
 # threads (PJRT_NPROC, read when the client starts), as `formation-ftc reproduce` gives its paper
 # workers. More threads than cores make XLA hand small operations between threads at a CPU cost
@@ -79,7 +74,7 @@ def pytest_runtest_teardown(item, nextitem):
     if rss is not None and rss > RSS_LIMIT_MB:
         from formation_ftc.sim import batch, programs
 
-        programs.clear()  # the process's shared programs hold their executables outside JAX's caches
+        programs.clear()  # the process's shared programs and executables, outside JAX's caches
         batch.clear()
         jax.clear_caches()
         gc.collect()
@@ -99,11 +94,8 @@ jax.monitoring.register_event_duration_secs_listener(_count_run_compiles)
 
 
 @pytest.fixture
-def run_compiles(monkeypatch) -> list[str]:
-    """XLA compiles (persistent-cache loads included) of a closed-loop ``run`` program from here on.
-    The on-disk program cache is off meanwhile: it would serve, without a compile event, a program that
-    another test (or xdist worker) compiled before (it has its own tests, tests/sim/test_program_cache.py)."""
-    monkeypatch.setenv("FORMATION_FTC_PROGRAM_CACHE", "off")
+def run_compiles() -> list[str]:
+    """XLA compiles (persistent-cache loads included) of a closed-loop ``run`` program from here on."""
     _RUN_COMPILES.clear()
     return _RUN_COMPILES
 

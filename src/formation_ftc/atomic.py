@@ -18,6 +18,7 @@ Examples
 
 from __future__ import annotations
 
+import errno
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -66,8 +67,9 @@ def atomic_write(
     Raises
     ------
     OSError
-        When the data cannot be written, synced or renamed (``ENOSPC`` ...): ``path`` is unchanged
-        and no temporary file is left behind.
+        When the data cannot be written, synced or renamed: ``path`` is unchanged and no temporary
+        file is left behind; a full disk (``ENOSPC``, ``EDQUOT``) is reported with ``path`` as its
+        file name.
     """
     path = Path(path)
     tmp = temporary_name(path)
@@ -82,8 +84,11 @@ def atomic_write(
                 f.flush()
                 os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            # a full disk names the target, not the temporary file (exit status 3, one line)
+            raise OSError(exc.errno, exc.strerror, str(path)) from None
         raise
     _fsync_dir(path.parent)
     return path

@@ -41,6 +41,7 @@ __all__ = [
     "apply_cf",
     "cf_problems",
     "clean_attrs",
+    "netcdf_bytes",
     "write_netcdf",
     "MIXED_UNITS_NOTE",
 ]
@@ -237,7 +238,8 @@ def classic_compatible(ds):
 
 
 def fix_text_encoding_attrs(path) -> None:
-    """Rewrite the ``_Encoding`` attributes xarray puts on text variables as ``NC_CHAR`` (h5py)."""
+    """Rewrite the ``_Encoding`` attributes xarray puts on text variables as ``NC_CHAR`` (h5py); ``path``
+    is a file name or a file-like object holding the file."""
     import h5py
 
     with h5py.File(path, "r+") as f:
@@ -249,7 +251,44 @@ def fix_text_encoding_attrs(path) -> None:
                 obj.attrs["_Encoding"] = np.bytes_(value.encode("ascii"))
 
 
+def netcdf_bytes(ds) -> memoryview:
+    """The NetCDF-4 file of ``ds`` (h5netcdf; netCDF4-classic compatible, CF-readable), built in memory.
+
+    HDF5 writes nothing to disk here: on a full disk, HDF5 errors while h5py releases a half-written
+    file have crashed the interpreter (a segmentation fault), so the file is assembled in a
+    ``BytesIO`` and written with plain Python I/O, which raises ``OSError`` like any other write.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset (after :func:`apply_cf`).
+
+    Returns
+    -------
+    memoryview
+        The file's bytes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> from formation_ftc.cf import netcdf_bytes
+    >>> data = netcdf_bytes(xr.Dataset({"x": ("t", np.arange(3.0))}))
+    >>> bytes(data[:8])  # the HDF5 signature
+    b'\\x89HDF\\r\\n\\x1a\\n'
+    """
+    import io
+
+    buf = io.BytesIO()
+    classic_compatible(ds).to_netcdf(buf, engine="h5netcdf")
+    fix_text_encoding_attrs(buf)
+    return buf.getbuffer()
+
+
 def write_netcdf(ds, path) -> None:
-    """Write ``ds`` as a NetCDF-4 file (h5netcdf) that is netCDF4-classic compatible and CF-readable."""
-    classic_compatible(ds).to_netcdf(path, engine="h5netcdf")
-    fix_text_encoding_attrs(path)
+    """Write ``ds`` to ``path`` as a NetCDF-4 file (h5netcdf) that is netCDF4-classic compatible and
+    CF-readable: built in memory (:func:`netcdf_bytes`), then written with plain Python I/O (a full disk
+    raises ``OSError``: ``ENOSPC``)."""
+    data = netcdf_bytes(ds)
+    with open(path, "wb") as f:
+        f.write(data)

@@ -7,7 +7,9 @@
   output path, resource budget): one line ``error: ...`` naming what to change;
 * 3 -- an unexpected error (a bug or an environment failure): one line naming the exception and the
   path of a file holding the full traceback (``$FORMATION_FTC_CRASH_DIR``, else
-  ``~/.cache/formation_ftc``, else the temporary directory);
+  ``~/.cache/formation_ftc``, else the temporary directory); a full disk or quota (``ENOSPC``,
+  ``EDQUOT``) is one line ``error: no space left on PATH ...`` and no traceback file (it would need
+  the space that is missing);
 * 130 -- interrupted (Ctrl-C).
 
 Writing into a pipe whose reader has already exited (``formation-ftc check --json | head``) ends
@@ -214,6 +216,8 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
         if (
             exc is not guard.failure
         ):  # a result file, a socket, a worker's pipe: not standard output
+            if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+                return _no_space(exc, as_json)
             return _unexpected(exc, as_json)
         _quiet_stdout()
         if isinstance(exc, BrokenPipeError):  # the reader left (`| head`): it took what it wanted
@@ -234,6 +238,21 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
         return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the last line of defence: never a raw traceback
         return _unexpected(exc, as_json)
+
+
+def _no_space(exc: OSError, as_json: bool) -> int:
+    """Exit status 3 for a full disk or quota: one line naming the path, no traceback file."""
+    where = exc.filename or "the file system being written"
+    plain = exc.strerror is None or (
+        exc.errno is not None and exc.strerror == os.strerror(exc.errno)
+    )
+    note = "" if plain else f" ({exc.strerror})"
+    message = f"no space left on {where}{note}; free space there or write elsewhere"
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # stderr on the same full disk
+        print(f"error: {message}", file=sys.stderr)
+    if as_json:
+        print_json_error(message, EXIT_UNEXPECTED)
+    return EXIT_UNEXPECTED
 
 
 def _unexpected(exc: Exception, as_json: bool) -> int:

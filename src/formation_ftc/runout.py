@@ -6,6 +6,8 @@
 * :func:`staged_output` -- the result, metrics and figures are written into a temporary sibling
   directory ``.NAME.tmp-PID`` which then replaces ``DIR`` by renames, so ``DIR`` always holds one whole
   run (the new one, or the previous one when anything failed); a marker file lists what a run wrote;
+  on a full disk (:data:`DISK_FULL`) the staging directory is removed and an ``OSError`` naming ``DIR``
+  is raised (exit status 3 with one line, :func:`formation_ftc.exitcodes.run_guarded`);
 * :func:`plot_view` -- above :data:`MAX_PLOT_SPACECRAFT` spacecraft the figures show an evenly spaced
   subset (``result.nc`` keeps every spacecraft).
 """
@@ -13,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import shutil
@@ -24,6 +27,7 @@ from formation_ftc.errors import InputError
 
 __all__ = [
     "OutputError",
+    "DISK_FULL",
     "MARKER",
     "MAX_PLOT_SPACECRAFT",
     "check_out_dir",
@@ -33,6 +37,8 @@ __all__ = [
     "add_to_marker",
 ]
 
+#: ``errno`` values of a write that found no space: the disk is full, or the user's quota is used up
+DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT})
 #: file in a run directory listing what the run wrote (so a rerun may replace exactly that)
 MARKER = ".formation-ftc-run.json"
 #: most spacecraft drawn one line each in the figures of ``run`` [-]
@@ -122,6 +128,8 @@ def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
         probe.mkdir()
         probe.rmdir()
     except OSError as exc:
+        if exc.errno in DISK_FULL:
+            raise _no_space(exc, d) from None
         raise OutputError(
             f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
             f"directory"
@@ -129,10 +137,17 @@ def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     return d
 
 
+def _no_space(exc: OSError, out_dir: Path) -> OSError:
+    """The ``OSError`` of a full disk, naming ``out_dir`` and what it holds now."""
+    kept = "it keeps its earlier result" if out_dir.exists() else "nothing was written"
+    return OSError(exc.errno, kept, str(out_dir))
+
+
 @contextlib.contextmanager
 def staged_output(out_dir: Path) -> Iterator[Path]:
     """Yield a fresh temporary sibling of ``out_dir``; on success it replaces ``out_dir`` (renames),
-    on any exception it is removed and ``out_dir`` is left untouched."""
+    on any exception it is removed and ``out_dir`` is left untouched. A write that finds the disk full
+    (:data:`DISK_FULL`) raises an ``OSError`` whose ``filename`` is ``out_dir``."""
     out_dir = Path(out_dir)
     parent = out_dir.absolute().parent
     try:
@@ -142,6 +157,8 @@ def staged_output(out_dir: Path) -> Iterator[Path]:
             shutil.rmtree(stage)
         stage.mkdir()
     except OSError as exc:
+        if exc.errno in DISK_FULL:
+            raise _no_space(exc, out_dir) from None
         raise OutputError(
             f"--out {out_dir}: cannot create a directory in {parent} ({exc.strerror or exc})"
         ) from None
@@ -150,8 +167,10 @@ def staged_output(out_dir: Path) -> Iterator[Path]:
         files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
         (stage / MARKER).write_text(json.dumps({"files": files}, indent=1), encoding="utf-8")
         _swap_into_place(stage, out_dir)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(stage, ignore_errors=True)
+        if isinstance(exc, OSError) and exc.errno in DISK_FULL:
+            raise _no_space(exc, out_dir) from None
         raise
 
 

@@ -22,9 +22,7 @@ from formation_ftc.sim.runtime import xla
 
 @pytest.fixture
 def traces(monkeypatch):
-    """Number of closed-loop traces from here on (the on-disk program cache off: it would load, without
-    a trace, a program another test compiled before)."""
-    monkeypatch.setenv("FORMATION_FTC_PROGRAM_CACHE", "off")
+    """Number of closed-loop traces from here on."""
     count = [0]
     run = ClosedLoop._run
 

@@ -33,6 +33,7 @@ Safety against concurrent writers and silent corruption:
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import functools
 import hashlib
 import io
@@ -338,6 +339,8 @@ class CampaignStore:
             path.write_text(text, encoding="utf-8")  # the same file (inode): the lock stays
         except OSError as exc:
             lock.release()
+            if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # a full disk: exit status 3, one line
+                raise OSError(exc.errno, exc.strerror, str(path)) from None
             raise CampaignError(
                 f"{self.root}: cannot write the lock file {LOCK} ({exc.strerror or exc})"
             ) from None

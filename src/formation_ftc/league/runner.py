@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import json
 import os
 import re
@@ -528,6 +529,8 @@ def _write_inputs(
                 files[name].append(p)
         return files
     except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # a full disk: exit status 3, one line
+            raise OSError(exc.errno, exc.strerror, str(out)) from None
         raise LeagueError(
             f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
             "directory"

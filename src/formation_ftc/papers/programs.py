@@ -52,7 +52,7 @@ def simulate_batched(
         batch, in_axes = stack_params([compiled[i].params for i in idx])
         fn = batched_run(compiled[idx[0]], in_axes, len(idx))
         t0 = time.perf_counter()
-        exe = fn.executable(batch)
+        exe = fn.lower(batch).compile()
         t1 = time.perf_counter()
         out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(exe(batch)))
         t2 = time.perf_counter()

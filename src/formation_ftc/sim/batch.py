@@ -33,14 +33,13 @@ import numpy as np
 
 from formation_ftc.sim.runtime import xla
 from formation_ftc.sim.runtime.lru import lru_get, lru_put
-from formation_ftc.sim.runtime.program_cache import CachedProgram
 
 __all__ = ["stack_params", "batched_run", "stack_params_grid", "batched_grid_run", "clear"]
 
 #: batch programs kept per process (least recently used dropped first): a campaign reuses one per
 #: structural group and chunk size, and an unbounded cache made a long session hold every executable
 MAX_KEPT = 16
-_CACHE: OrderedDict[Any, CachedProgram] = OrderedDict()
+_CACHE: OrderedDict[Any, Any] = OrderedDict()
 
 
 def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, Any]:
@@ -127,7 +126,7 @@ def _fast_compile(compiled) -> bool:
     return bool(getattr(controller, "batch_fast_compile", False))
 
 
-def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
+def batched_run(compiled, in_axes: Any, size: int) -> Any:
     """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
     Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
@@ -145,7 +144,7 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
 
     Returns
     -------
-    CachedProgram
+    jax.stages.Wrapped
         Called with the batch of :func:`stack_params`; outputs with the run axis first.
 
     Examples
@@ -161,24 +160,17 @@ def batched_run(compiled, in_axes: Any, size: int) -> CachedProgram:
     return _kept(
         compiled,
         (compiled.static_key, _batched_flags(in_axes), int(size)),
-        "batch",
         lambda run: jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)),
     )
 
 
-def _kept(compiled, key: tuple, kind: str, build) -> CachedProgram:
+def _kept(compiled, key: tuple, build) -> Any:
     """The cached batch program ``key``; on a miss, ``build(compiled.run)`` (the batched function) is
     jitted with :func:`_fast_compile`'s choice and kept."""
     fn = lru_get(_CACHE, key)
     if fn is None:
         batch = build(compiled.run)
-        fast = _fast_compile(compiled)
-        fn = lru_put(
-            _CACHE,
-            key,
-            CachedProgram(xla.jit(batch, fast_compile=fast), kind, (*key, fast)),
-            MAX_KEPT,
-        )
+        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=_fast_compile(compiled)), MAX_KEPT)
     return fn
 
 
@@ -270,9 +262,7 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
 
 
-def batched_grid_run(
-    compiled, row_axes: Any, column_axes: Any, rows: int, columns: int
-) -> CachedProgram:
+def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> Any:
     """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
     :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
     only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs.
@@ -288,7 +278,7 @@ def batched_grid_run(
 
     Returns
     -------
-    CachedProgram
+    jax.stages.Wrapped
         Called with the batch of :func:`stack_params_grid`; outputs with the axes ``(rows, columns)``
         first.
 
@@ -311,14 +301,12 @@ def batched_grid_run(
         return jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
 
     flags = (_batched_flags(row_axes), _batched_flags(column_axes))
-    return _kept(
-        compiled, (compiled.static_key, "grid", *flags, int(rows), int(columns)), "grid", build
-    )
+    return _kept(compiled, (compiled.static_key, "grid", *flags, int(rows), int(columns)), build)
 
 
 def clear() -> None:
-    """Forget the cached batch programs and release their executables (held by each
-    :class:`~formation_ftc.sim.runtime.program_cache.CachedProgram`, out of ``jax.clear_caches()``'s reach).
+    """Forget the cached batch programs (their executables go with them once nothing else holds
+    them).
 
     Examples
     --------

@@ -23,22 +23,25 @@ from collections import OrderedDict
 from collections.abc import Hashable
 from typing import Any
 
+import jax
+import numpy as np
+
 from formation_ftc.sim.runtime import xla
 from formation_ftc.sim.runtime.lru import lru_get, lru_put
-from formation_ftc.sim.runtime.program_cache import CachedProgram
 
 __all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
 
 #: at most this many programs (and executables) are kept, least recently used dropped first, so that a
 #: long session (a notebook, a test run) does not hold every executable it ever compiled
 MAX_KEPT = 8
-_PROGRAMS: OrderedDict[Hashable, CachedProgram] = OrderedDict()
+_PROGRAMS: OrderedDict[Hashable, Any] = OrderedDict()
+_EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
 
 
-def jitted_run(compiled) -> CachedProgram:
+def jitted_run(compiled) -> Any:
     """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options`, shared by
-    every compiled scenario with the same ``static_key``: one executable per parameter signature, kept
-    on disk under a key known before tracing (:mod:`formation_ftc.sim.runtime.program_cache`).
+    every compiled scenario with the same ``static_key`` (JAX still retraces if the parameters' shapes
+    or static fields differ).
 
     Parameters
     ----------
@@ -47,7 +50,7 @@ def jitted_run(compiled) -> CachedProgram:
 
     Returns
     -------
-    CachedProgram
+    jax.stages.Wrapped
         Called with ``compiled.params``; returns the run's :data:`~formation_ftc.sim.engine.RunOutput`.
 
     Examples
@@ -76,17 +79,16 @@ def jitted_run(compiled) -> CachedProgram:
         fn = lru_put(
             _PROGRAMS,
             compiled.static_key,
-            CachedProgram(xla.jit(compiled.run), "run", compiled.static_key),
+            xla.jit(compiled.run),
             MAX_KEPT,
         )
     return fn
 
 
 def executable(compiled) -> tuple[Any, float]:
-    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``, or loaded from
-    the program cache, :mod:`formation_ftc.sim.runtime.program_cache`) and the seconds [s] that getting it took
-    here (0.0 when a scenario of the same structure and parameter shapes got it before: the shared
-    program of :func:`jitted_run` keeps it).
+    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``) and the seconds
+    [s] that compiling it took here (0.0 when a scenario of the same structure and parameter shapes
+    compiled it before; the :data:`MAX_KEPT` most recently used executables are kept).
 
     Parameters
     ----------
@@ -98,7 +100,7 @@ def executable(compiled) -> tuple[Any, float]:
     executable : jax.stages.Compiled
         Called with ``compiled.params``.
     seconds : float
-        Time spent getting it [s] (0.0 when it was kept).
+        Time spent compiling it [s] (0.0 when it was kept).
 
     Examples
     --------
@@ -115,20 +117,28 @@ def executable(compiled) -> tuple[Any, float]:
     >>> exe, seconds = executable(c)
     >>> int(exe(c.params)["diverged_step"])
     -1
-    >>> executable(c)[1]  # kept by the shared program: nothing to do the second time
+    >>> executable(c)[1]  # kept: nothing to do the second time
     0.0
     """
-    fn = jitted_run(compiled)
-    if fn.kept(compiled.params):
-        return fn.executable(compiled.params), 0.0
+    leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
+    key = (
+        compiled.static_key,
+        treedef,
+        tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves),
+    )
+    exe = lru_get(_EXECUTABLES, key)
+    if exe is not None:
+        return exe, 0.0
     t0 = time.perf_counter()
-    exe = fn.executable(compiled.params)
+    exe = lru_put(
+        _EXECUTABLES, key, jitted_run(compiled).lower(compiled.params).compile(), MAX_KEPT
+    )
     return exe, time.perf_counter() - t0
 
 
 def clear() -> None:
-    """Forget the shared programs and release their executables (each :class:`CachedProgram` holds its
-    own, which ``jax.clear_caches()`` does not reach; JAX's own caches are untouched). A long-lived
+    """Forget the shared programs and release the executables kept by :func:`executable` (out of
+    ``jax.clear_caches()``'s reach; JAX's own caches are untouched). A long-lived
     process that wants its memory back calls this, :func:`formation_ftc.sim.batch.clear` and
     ``jax.clear_caches()``.
 
@@ -150,3 +160,4 @@ def clear() -> None:
     False
     """
     _PROGRAMS.clear()
+    _EXECUTABLES.clear()

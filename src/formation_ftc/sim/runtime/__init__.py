@@ -1,4 +1,4 @@
-"""The process runtime: compilation caches and compiler tuning, switched on by :func:`configure`.
+"""The process runtime: the compilation cache and compiler tuning, switched on by :func:`configure`.
 
 Importing :mod:`formation_ftc` changes one process-wide setting, the one JAX needs for float64
 (``JAX_ENABLE_X64``, or ``jax_enable_x64`` when JAX is already imported). Everything here is opt-in:
@@ -8,11 +8,8 @@ Importing :mod:`formation_ftc` changes one process-wide setting, the one JAX nee
 
   - JAX's persistent compilation cache in :func:`compilation_cache_dir` (``FORMATION_FTC_JAX_CACHE``,
     default ``~/.cache/formation_ftc/jax``, ``off`` to disable; one subdirectory per CPU-client thread
-    count), used only while it is this user's alone (:func:`private_cache_dir`); programs that took at
-    least ``JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS`` (default :data:`DEFAULT_CACHE_MIN_COMPILE_S`)
-    to compile are kept;
-  - the on-disk program cache beside it (:mod:`.program_cache`: a warm process neither traces nor
-    lowers a closed loop it ran before);
+    count); programs that took at least ``JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS`` (default
+    :data:`DEFAULT_CACHE_MIN_COMPILE_S`) to compile are kept;
   - the unrolled threefry lowering on the CPU (:func:`.xla.use_unrolled_threefry`: same random bits,
     faster noisy steps).
 
@@ -21,6 +18,15 @@ Importing :mod:`formation_ftc` changes one process-wide setting, the one JAX nee
   the same way when they import the package.
 * :mod:`.xla` -- the XLA:CPU compile options of the simulation programs (per compilation, never in the
   process-wide ``XLA_FLAGS``); :mod:`.lru` -- the bounded in-memory caches of programs.
+
+**What protects the cache.** A cache entry is machine code that JAX runs when it loads it, and JAX's
+entries carry no authentication: whoever can write to the cache directory, or swap it or one of its
+parents, chooses the code the process runs and the numbers it prints. So the cache is used only while
+every directory from it up to ``/`` is a real directory owned by this user or root and writable by no
+one else (:func:`unsafe_directory`, after OpenSSH's ``StrictModes``), checked when :func:`configure`
+opens it and again before every compilation that may read or write it (:func:`check_cache`); otherwise
+it is off for the process, with one line on stderr naming the directory and the fix. The directories
+the runtime creates are created 0700 whatever the umask.
 
 Without :func:`configure` a program is compiled in each process (results are the same bits either way).
 This module imports no JAX at import time: the command line answers ``--help`` without it.
@@ -38,9 +44,9 @@ __all__ = [
     "configured",
     "compilation_cache_dir",
     "private_cache_dir",
+    "check_cache",
     "cpu_threads",
     "schedulable_cpus",
-    "owned_and_private",
     "unsafe_directory",
     "ENV_SWITCH",
     "DEFAULT_CACHE_MIN_COMPILE_S",
@@ -161,14 +167,121 @@ def compilation_cache_dir() -> str | None:
     return str(Path(cache) / f"cpu-threads-{cpu_threads()}")
 
 
-_UNSAFE_REPORTED: set[str] = set()
+#: JAX's monitoring event recorded just before it looks a program up in its persistent cache
+_CACHE_READ_EVENT = "/jax/compilation_cache/compile_requests_use_cache"
+#: the cache directory :func:`configure` handed to JAX (resolved, checked), None when there is none
+_GUARDED: str | None = None
+_LISTENING = False
+_REPORTED: set[str] = set()
 
 
-def private_cache_dir(cache: str) -> bool:
-    """Create the compilation cache ``cache`` (new directories mode 0700) and check that it and its parent
-    are real directories owned by this user and writable by nobody else. A cached executable is machine
-    code that JAX runs when it loads it, so a directory that another user could write to is not used
-    (the cache stays off, with one line on stderr).
+def _make_private(path: Path) -> None:
+    """Create the missing directories of ``path``, each with mode 0700 whatever the umask (existing ones
+    are left as they are)."""
+    missing = []
+    p = path
+    while not os.path.lexists(p):
+        missing.append(p)
+        p = p.parent
+    for d in reversed(missing):
+        try:
+            os.mkdir(d, 0o700)
+        except FileExistsError:  # made meanwhile by another process: checked like any other
+            continue
+        os.chmod(d, 0o700)  # mkdir's mode is masked by the umask
+
+
+def _problem(path: str | os.PathLike[str]) -> tuple[Path, str] | None:
+    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why."""
+    uid = os.geteuid()
+    p = Path(path)
+    if not p.is_absolute():
+        return p, "is not an absolute path"
+    below: os.stat_result | None = None  # the directory one level down the path (it passed)
+    for d in (p, *p.parents):
+        try:
+            st = os.lstat(d)
+        except OSError as exc:
+            return d, f"cannot be examined ({exc.strerror or exc})"
+        if stat.S_ISLNK(st.st_mode):
+            return d, "is a symbolic link"
+        if not stat.S_ISDIR(st.st_mode):
+            return d, "is not a directory"
+        if st.st_uid not in (uid, 0):
+            return d, f"is owned by uid {st.st_uid}, neither by you nor by root"
+        sticky_ancestor = (
+            st.st_uid == 0
+            and st.st_mode & stat.S_ISVTX
+            and below is not None
+            and below.st_uid == uid
+        )
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) and not sticky_ancestor:
+            return d, "is writable by its group or by others"
+        below = st
+    return None
+
+
+def unsafe_directory(path: str | os.PathLike[str]) -> str | None:
+    """Why the directory ``path`` (absolute, links resolved) may not hold a compilation cache, or None
+    when it may. As OpenSSH's ``StrictModes`` checks the path of an ``authorized_keys`` file, every
+    directory from ``path`` up to ``/`` must be a real directory (``lstat``: not a symbolic link) owned
+    by this user or by root and writable by nobody else (no group or world write bit). One exception,
+    which OpenSSH does not make: a root-owned sticky directory (``/tmp``, mode 1777) may be an ancestor
+    when the directory right below it on the path is this user's and writable by nobody else -- in a
+    sticky directory only an entry's owner (or root) may rename or remove it, so no one else can swap it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The cache directory, absolute and without symbolic links (``os.path.realpath``).
+
+    Returns
+    -------
+    str or None
+        The offending directory and what is wrong with it, or None.
+
+    Examples
+    --------
+    >>> import os
+    >>> import tempfile
+    >>> from formation_ftc.sim.runtime import unsafe_directory
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     tmp = os.path.realpath(tmp)
+    ...     os.mkdir(os.path.join(tmp, "cache"), 0o700)
+    ...     fine = unsafe_directory(os.path.join(tmp, "cache"))
+    ...     os.chmod(tmp, 0o770)  # the parent: its group could swap the cache directory
+    ...     refused = unsafe_directory(os.path.join(tmp, "cache"))
+    >>> fine, refused == f"{tmp} is writable by its group or by others"
+    (None, True)
+    """
+    found = _problem(path)
+    return None if found is None else f"{found[0]} {found[1]}"
+
+
+def _report(problem: str) -> None:
+    """One line on stderr (once per problem and process): the cache is off, why, and the fix."""
+    if problem in _REPORTED:
+        return
+    _REPORTED.add(problem)
+    chmod = ""
+    if problem.endswith(" is writable by its group or by others"):
+        chmod = f"chmod go-w {problem.removesuffix(' is writable by its group or by others')}, or "
+    try:
+        print(
+            f"formation-ftc: compilation cache off: {problem} (fix: {chmod}set "
+            "FORMATION_FTC_JAX_CACHE to a directory whose every parent is yours or root's and "
+            "writable by no one else, or to off)",
+            file=sys.stderr,
+        )
+    except (OSError, ValueError, AttributeError):  # a closed or full stderr
+        pass
+
+
+def private_cache_dir(cache: str) -> str | None:
+    """Create the compilation cache directory ``cache`` (missing directories mode 0700, whatever the
+    umask), resolve its links once and check the resolved path (:func:`unsafe_directory`). A cached
+    executable is machine code that JAX runs when it loads it, so a directory that anyone else could
+    write to or swap is not used: the cache stays off, with one line on stderr.
 
     Parameters
     ----------
@@ -177,101 +290,104 @@ def private_cache_dir(cache: str) -> bool:
 
     Returns
     -------
-    bool
-        True when the directory may be used.
+    str or None
+        The resolved directory when it may be used, else None.
 
     Examples
     --------
     >>> import os
     >>> import tempfile
     >>> from formation_ftc.sim import runtime
-    >>> with tempfile.TemporaryDirectory() as tmp:  # created 0700, owned by this user
-    ...     ok = runtime.private_cache_dir(os.path.join(tmp, "jax"))
-    ...     mode = oct(os.stat(os.path.join(tmp, "jax")).st_mode & 0o777)
-    >>> ok, mode
-    (True, '0o700')
+    >>> with tempfile.TemporaryDirectory() as tmp:  # created 0700 at every level, owned by this user
+    ...     ok = runtime.private_cache_dir(os.path.join(tmp, "a", "jax")) is not None
+    ...     modes = [oct(os.stat(os.path.join(tmp, *p)).st_mode & 0o777) for p in (["a"], ["a", "jax"])]
+    >>> ok, modes
+    (True, ['0o700', '0o700'])
     """
-    unsafe = unsafe_directory(Path(cache))
-    if unsafe is not None and cache not in _UNSAFE_REPORTED:
-        _UNSAFE_REPORTED.add(cache)
+    existing = Path(os.path.abspath(cache))
+    while not os.path.lexists(existing):
+        existing = existing.parent
+    # nothing is created under a directory that is already refused
+    problem = unsafe_directory(os.path.realpath(existing))
+    if problem is None:
         try:
-            print(
-                f"formation-ftc: compilation cache off: {unsafe} is not a directory owned by this user "
-                "and writable by it alone (set FORMATION_FTC_JAX_CACHE to a directory of your own, or to off)",
-                file=sys.stderr,
-            )
-        except (OSError, ValueError):  # a closed or full stderr
-            pass
-    return unsafe is None
+            _make_private(Path(os.path.abspath(cache)))
+            resolved = os.path.realpath(cache, strict=True)
+        except OSError as exc:
+            problem = f"{cache} cannot be created ({exc.strerror or exc})"
+        else:
+            problem = unsafe_directory(resolved)
+    if problem is not None:
+        _report(problem)
+        return None
+    return resolved
 
 
-def owned_and_private(st: os.stat_result) -> bool:
-    """Whether a file or directory (its ``os.lstat``) is owned by this process's effective user and
-    writable by nobody else (no group or world write bit): what a cache may trust.
-
-    Parameters
-    ----------
-    st : os.stat_result
-        The file's or directory's status (``os.lstat``, ``os.fstat``).
+def check_cache() -> bool:
+    """Check again the cache directory :func:`configure` gave JAX (a few ``lstat`` calls) and switch
+    the cache off for this process when it no longer passes (:func:`unsafe_directory`; one line on
+    stderr). The first call also asks JAX to call this check before every compilation that reads its
+    persistent cache (``jax.monitoring``). :func:`formation_ftc.sim.runtime.xla.jit` calls it whenever it
+    makes a program.
 
     Returns
     -------
     bool
-        True when this user owns it and nobody else may write it.
+        True when a checked cache is in use.
 
     Examples
     --------
-    >>> import os
-    >>> import tempfile
-    >>> from formation_ftc.sim.runtime import owned_and_private
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     mine = owned_and_private(os.lstat(tmp))
-    ...     os.chmod(tmp, 0o777)
-    ...     shared = owned_and_private(os.lstat(tmp))
-    >>> mine, shared
-    (True, False)
+    >>> from formation_ftc.sim import runtime
+    >>> cache = runtime.configure()
+    >>> runtime.check_cache() == (cache is not None)
+    True
     """
-    return st.st_uid == os.geteuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+    global _LISTENING
+    if _GUARDED is None:
+        return False
+    if not _LISTENING:
+        import jax.monitoring
+
+        jax.monitoring.register_event_listener(_before_cache_read)
+        _LISTENING = True
+    problem = unsafe_directory(_GUARDED)
+    if problem is not None:
+        _switch_off(problem)
+        return False
+    return True
 
 
-def unsafe_directory(path: Path) -> Path | str | None:
-    """Create ``path`` (new directories mode 0700) and check it and its parent: real directories (not
-    links) that :func:`owned_and_private` trusts. Returns None when both pass, else the first one that
-    does not (or the error's text when they cannot be created or read).
+def _before_cache_read(event: str, **_: object) -> None:
+    """JAX's event listener: runs the check of :func:`check_cache` before each persistent-cache read."""
+    if event == _CACHE_READ_EVENT and _GUARDED is not None:
+        problem = unsafe_directory(_GUARDED)
+        if problem is not None:
+            _switch_off(problem)
 
-    Parameters
-    ----------
-    path : Path
-        The directory to create and check.
 
-    Returns
-    -------
-    Path, str or None
-        None when ``path`` and its parent may be trusted; else the first directory that may not, or the
-        text of the error that kept them from being created or read.
+def _switch_off(problem: str) -> None:
+    """Stop using the persistent cache in this process and in the processes it starts (one line)."""
+    global _GUARDED
+    _GUARDED = None
+    os.environ["FORMATION_FTC_JAX_CACHE"] = "off"
+    os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
+    if "jax" in sys.modules:
+        _set_jax_cache(None)
+    _report(problem)
 
-    Examples
-    --------
-    >>> import os
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> from formation_ftc.sim.runtime import unsafe_directory
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     fine = unsafe_directory(Path(tmp) / "cache")
-    ...     os.chmod(tmp, 0o777)  # the parent: anyone could swap the cache directory
-    ...     refused = unsafe_directory(Path(tmp) / "cache") == Path(tmp)
-    >>> fine, refused
-    (None, True)
-    """
-    try:
-        path.mkdir(mode=0o700, parents=True, exist_ok=True)
-        for p in (path.parent, path):
-            st = os.lstat(p)
-            if not stat.S_ISDIR(st.st_mode) or not owned_and_private(st):
-                return p
-    except OSError as exc:  # cannot be created or read
-        return str(exc)
-    return None
+
+def _set_jax_cache(cache: str | None) -> None:
+    """Point an imported JAX at ``cache`` (None: no cache). JAX opens its cache once per process and then
+    reads it whatever its configuration says (``jax_compilation_cache_dir = None`` and
+    ``jax_enable_compilation_cache = False`` are consulted only before that, jax 0.10.2,
+    ``jax/_src/compilation_cache.py``): a change is applied by resetting the opened cache as well, so
+    that the next compilation opens the new one, or none."""
+    import jax
+    from jax.experimental.compilation_cache import compilation_cache
+
+    jax.config.update("jax_enable_compilation_cache", cache is not None)
+    jax.config.update("jax_compilation_cache_dir", cache)
+    compilation_cache.reset_cache()
 
 
 def configure() -> str | None:
@@ -281,7 +397,7 @@ def configure() -> str | None:
     Returns
     -------
     str or None
-        The cache directory (see :func:`compilation_cache_dir`), or None.
+        The cache directory (:func:`compilation_cache_dir` with its links resolved), or None.
 
     Examples
     --------
@@ -294,17 +410,21 @@ def configure() -> str | None:
     >>> cache is None or cache.endswith(f"cpu-threads-{runtime.cpu_threads()}")
     True
     """
+    global _GUARDED
     os.environ[ENV_SWITCH] = "on"
-    cache = compilation_cache_dir()
-    if cache is not None and private_cache_dir(cache):
+    wanted = compilation_cache_dir()
+    cache = private_cache_dir(wanted) if wanted is not None else None
+    _GUARDED = cache
+    if cache is not None:
         # also over one inherited from a parent process
         os.environ["JAX_COMPILATION_CACHE_DIR"] = cache
         os.environ.setdefault(
             "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
         )
-    else:  # off, or not private: also when a parent process passed its cache directory down
-        cache = None
+    else:  # off, or refused: also when a parent process passed its cache directory down
         os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
+        if wanted is not None:  # refused (one line): the processes this one starts stay quiet
+            os.environ["FORMATION_FTC_JAX_CACHE"] = "off"
     if "jax" in sys.modules:  # JAX read its configuration already: set it directly
         _configure_jax(cache)
     return cache
@@ -316,10 +436,15 @@ def _configure_jax(cache: str | None) -> None:
 
     from formation_ftc.sim.runtime.xla import use_unrolled_threefry
 
-    jax.config.update("jax_compilation_cache_dir", cache)
+    # (dynamic options: not in the stubs)
+    if getattr(jax.config, "jax_compilation_cache_dir", None) != cache or (
+        cache is not None and not getattr(jax.config, "jax_enable_compilation_cache", True)
+    ):
+        _set_jax_cache(cache)
     if cache is not None:
         min_s = os.environ.get(
             "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
         )
         jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_s))
+        check_cache()
     use_unrolled_threefry()

@@ -125,7 +125,8 @@ def compiler_options(fast_compile: bool = False) -> dict[str, str | bool]:
 
 def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) -> Callable[..., Any]:
     """``jax.jit(fn, **kwargs)`` compiled with :func:`compiler_options` (and, in a process the runtime is
-    configured for, :func:`use_unrolled_threefry` first).
+    configured for, :func:`use_unrolled_threefry` first and the compilation cache checked again,
+    :func:`formation_ftc.sim.runtime.check_cache`). Every simulation program is made here.
 
     Parameters
     ----------
@@ -152,6 +153,7 @@ def jit(fn: Callable[..., Any], *, fast_compile: bool = False, **kwargs: Any) ->
 
     if runtime.configured():
         use_unrolled_threefry()
+        runtime.check_cache()
     opts = compiler_options(fast_compile)
     return jax.jit(fn, compiler_options=opts, **kwargs) if opts else jax.jit(fn, **kwargs)
 
