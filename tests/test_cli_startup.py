@@ -73,7 +73,7 @@ def test_text_commands_import_no_jax(argv):
         (["show", "cw-pd-fault"], ["catalog_translational"]),
         (
             ["show", "compose-lqr-on-cw", "--no-comments"],
-            ["catalog_baselines", "catalog_translational"],
+            ["catalog_translational"],
         ),
     ],
 )

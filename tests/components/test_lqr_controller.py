@@ -17,7 +17,7 @@ import pytest
 import scipy.linalg
 
 import formation_ftc as ftc
-from formation_ftc.components.controllers.lqr_formation import LqrFormationController
+from formation_ftc.components.controllers.lqr import LqrFormationController
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.core.orbit import MU_EARTH
@@ -50,7 +50,7 @@ def _raw(desired, *, mode="continuous", horizon=250.0, dt=0.1, controller=None, 
         "controller": {
             "type": "lqr",
             "semi_major_axis": A_ORBIT,
-            "mass": MASS,  # the law's stated masses, here the true ones
+            "nominal_mass": MASS,  # the law's stated masses, here the true ones
             **BRYSON,
             "desired_position": desired,
             "mode": mode,
@@ -213,8 +213,8 @@ def test_builtin_scenario_reaches_the_steady_offset_of_a_constant_fault():
         ({"max_position_error": 0.0}, {}, "controller.max_position_error"),
         ({"max_acceleration": [1.0, 2.0]}, {}, "controller.max_acceleration"),
         ({"max_velocity_error": -1.0}, {}, "controller.max_velocity_error"),
-        ({"mass": [1.0, 2.0, 3.0]}, {}, "controller.mass"),
-        ({"mass": -5.0}, {}, "controller.mass"),
+        ({"nominal_mass": [1.0, 2.0, 3.0]}, {}, "controller.nominal_mass"),
+        ({"nominal_mass": -5.0}, {}, "controller.nominal_mass"),
         ({"kp": 1.0}, {}, "controller.kp"),
         ({"mode": "hybrid"}, {}, "controller.mode"),
         ({"semi_major_axis": -1.0}, {}, "controller.semi_major_axis"),

@@ -118,7 +118,7 @@ velocity_noise_std = 0.001
 [controller]
 type = "lqr"
 semi_major_axis = 7000e3
-mass = [100.0, 120.0]
+nominal_mass = [100.0, 120.0]
 max_position_error = 1.0
 max_velocity_error = 0.01
 max_acceleration = 2e-3

@@ -33,7 +33,7 @@ initial_position = [[30.0, 0.0, 5.0], [-20.0, 10.0, 0.0]]
 [controller]
 type = "lqr"
 semi_major_axis = 7000e3
-mass = [100.0, 120.0]
+nominal_mass = [100.0, 120.0]
 max_position_error = 10.0
 max_velocity_error = 1.0
 max_acceleration = 1.0

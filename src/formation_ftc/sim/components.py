@@ -296,6 +296,18 @@ class _Kind:
         """Coordinate values of the dimensions this component's signals introduce (e.g. channel names)."""
         return {}
 
+    def provides(self) -> frozenset[str]:
+        """What this part gives the other parts of the loop: names of
+        :data:`~formation_ftc.sim.contract.CAPABILITIES`."""
+        return frozenset()
+
+    def needs(self) -> dict[str, str]:
+        """What this part needs another part of the loop to provide: capability name (of
+        :data:`~formation_ftc.sim.contract.CAPABILITIES`) -> what it uses it for (a verb phrase,
+        e.g. ``"design its gain on the reference orbit"``). Checked by
+        :meth:`~formation_ftc.sim.loop.ClosedLoop.validate`."""
+        return {}
+
     #: True: the time signals are sampled at the step start t_k and held over the step (zero-order
     #: hold, e.g. a fault profile or a disturbance sequence applied through a sample-and-hold); the loop
     #: evaluates :meth:`exogenous` once per step at t_k

@@ -11,12 +11,15 @@ the metric reductions, which ``[[metrics]]`` sections check.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 __all__ = [
     "CompositionError",
+    "Capability",
+    "CAPABILITIES",
+    "capability",
     "as_float",
     "REDUCTIONS",
     "BLOCK_REDUCTIONS",
@@ -62,6 +65,36 @@ class CompositionError(ValueError):
 
 # its public name (tracebacks, doctests, pickles): formation_ftc.sim.components, which re-exports it
 CompositionError.__module__ = "formation_ftc.sim.components"
+
+
+class Capability(NamedTuple):
+    """Something one part of a closed loop gives the others (:data:`CAPABILITIES`)."""
+
+    meaning: str  # what the part provides, as a noun phrase
+    provided_by: str  # which component types provide it (for the error message)
+
+
+#: Everything a component may declare it ``needs`` or ``provides`` (``Component.needs()``,
+#: ``Component.provides()``): one table, so that a declaration names an entry of it and the error of a
+#: loop that lacks it says who would provide it. :meth:`~formation_ftc.sim.loop.ClosedLoop.validate`
+#: checks every need against what the loop's parts provide.
+CAPABILITIES: dict[str, Capability] = {
+    "reference-orbit": Capability(
+        "a reference orbit known on board", 'a [reference] section, e.g. type = "keplerian"'
+    ),
+}
+
+
+def capability(name: str) -> Capability:
+    """The entry of :data:`CAPABILITIES` named ``name`` (a declaration naming none is a bug: KeyError
+    listing the known names)."""
+    try:
+        return CAPABILITIES[name]
+    except KeyError:
+        raise KeyError(
+            f"capability {name!r} is not in formation_ftc.sim.contract.CAPABILITIES "
+            f"(known: {', '.join(sorted(CAPABILITIES))})"
+        ) from None
 
 
 def as_float(x: Any) -> np.ndarray:

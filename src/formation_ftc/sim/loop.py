@@ -10,6 +10,7 @@ components, sizes, step, horizon). :meth:`ClosedLoop.run` is a pure function of 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from typing import Any
 
 import jax
@@ -47,6 +48,7 @@ from formation_ftc.sim.components import (
     static,
     tree_take,
 )
+from formation_ftc.sim.contract import capability
 from formation_ftc.sim.engine import run_fixed_step
 
 __all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL"]
@@ -158,10 +160,13 @@ class ClosedLoop:
         )
 
     # ------------------------------------------------------------------ validation
-    def validate(self) -> ClosedLoop:
+    def validate(self, labels: Mapping[str, str] | None = None) -> ClosedLoop:
         """Check that the components fit together (raises :class:`CompositionError` naming both parts);
         returns the loop. Called by :func:`formation_ftc.sim.compiled.compile_loop` before any
-        computation (not on pytree reconstruction, where leaves may be placeholders)."""
+        computation (not on pytree reconstruction, where leaves may be placeholders).
+
+        ``labels``: slot (or ``evaluations[j]``) -> the type name the scenario gave it, for the
+        messages (default: the component's class name)."""
         for slot, base in KIND_SLOTS.items():
             comp = getattr(self, slot)
             if not isinstance(comp, base):
@@ -200,6 +205,7 @@ class ClosedLoop:
                 f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
                 f"record_every = {self.record_every}"
             )
+        self._check_needs(dict(labels or {}))
         names = [s.name for s in self.signals()]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -215,6 +221,30 @@ class ClosedLoop:
                         f"loop (signals: {', '.join(sorted(recorded))})"
                     )
         return self
+
+    def _parts(self, labels: dict[str, str]) -> list[tuple[str, Any]]:
+        """``(label, component)`` of every slot and evaluation: ``"controller lqr"``."""
+        parts = [(slot, getattr(self, slot)) for slot in KIND_SLOTS]
+        parts += [(f"evaluations[{j}]", ev) for j, ev in enumerate(self.evaluations)]
+        return [(f"{key} {labels.get(key, type(c).__name__)}", c) for key, c in parts]
+
+    def _check_needs(self, labels: dict[str, str]) -> None:
+        """Every capability a part needs is provided by some part of the loop (the one place the
+        compatibility of components is decided; their ``needs()`` / ``provides()``)."""
+        parts = self._parts(labels)
+        provided: dict[str, list[str]] = {}
+        for label, comp in parts:
+            for cap in comp.provides():
+                capability(cap)  # a declaration naming no capability is a bug
+                provided.setdefault(cap, []).append(label)
+        for label, comp in parts:
+            for cap, use in comp.needs().items():
+                entry = capability(cap)
+                if cap not in provided:
+                    raise CompositionError(
+                        f"{label} needs {entry.meaning} to {use}, but no part of this loop "
+                        f"provides it (provided by: {entry.provided_by})"
+                    )
 
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:

@@ -119,22 +119,22 @@ def test_a_missing_type_lists_every_known_type():
     assert {n for (k, n) in CATALOG_INDEX if k == "controller"} <= set(got["known"])
 
 
-def test_component_type_imports_one_catalog():
+def test_component_type_imports_one_home():
     got = _fresh(
         "import json, sys\n"
         "from formation_ftc.methods.composed import component_type\n"
         "entry = component_type('controller', 'lqr')\n"
-        "print(json.dumps([entry.name, sorted(m for m in sys.modules if '.catalog_' in m)]))\n"
+        "print(json.dumps([entry.module, sorted(m for m in sys.modules if '.catalog_' in m)]))\n"
     )
-    assert got == ["lqr", [f"{_PACKAGE}.catalog_baselines"]]
+    assert got == ["formation_ftc.components.controllers.lqr", []]
 
 
 def test_a_stale_index_entry_falls_back_to_every_catalog():
     got = _fresh(
         "import json, sys\n"
         "from formation_ftc.methods.composed import _catalog_index, component_type\n"
-        "_catalog_index.CATALOG_INDEX[('controller', 'lqr')] = "
+        "_catalog_index.CATALOG_INDEX[('controller', 'pd')] = "
         f"'{_PACKAGE}.catalog_delays'\n"
-        "print(json.dumps(component_type('controller', 'lqr').name))\n"
+        "print(json.dumps(component_type('controller', 'pd').name))\n"
     )
-    assert got == "lqr"
+    assert got == "pd"

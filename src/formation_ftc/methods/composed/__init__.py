@@ -30,13 +30,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
-from pydantic import Field, PrivateAttr, ValidationError, ValidationInfo, model_validator
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
-from formation_ftc.config.base import ScenarioBase, StrictModel, error_location
+from formation_ftc.components import _registry
+from formation_ftc.components._registry import (
+    KINDS,
+    SLOTS,
+    BuildContext,
+    ComponentType,
+    InitialStateRows,
+    per_spacecraft,
+    register,
+)
+from formation_ftc.components._registry import validated_section as _validated_section
+from formation_ftc.config.base import ScenarioBase, StrictModel
 from formation_ftc.registry import Condition, Method, register_method, resolve_reference
 from formation_ftc.sim.contract import (
     BLOCK_REDUCTIONS,
@@ -70,48 +80,6 @@ __all__ = [
     "InitialStateRows",
 ]
 
-#: slots a composed scenario may fill (plant and controller are required)
-SLOTS = (
-    "plant",
-    "reference",
-    "sensors",
-    "network",
-    "estimator",
-    "supervisor",
-    "controller",
-    "actuator",
-)
-#: kinds of the catalog: the slots plus ``evaluation`` (a list: ``[[evaluations]]``, truth-side signals
-#: for records and metrics only)
-KINDS = (*SLOTS, "evaluation")
-
-
-@dataclass(frozen=True)
-class BuildContext:
-    """What a component builder may use besides its own section: the scenario, the spacecraft count,
-    the step, the built plant (None while the plant itself is built), ``evaluations``, a list a
-    builder may append :class:`~formation_ftc.sim.components.Evaluation` components to (truth-side
-    signals derived from the records, e.g. a law's own error measure, for records and metrics only),
-    and ``metrics``, a list a builder may append :class:`~formation_ftc.sim.metrics.Metric` s to (a
-    paper's score set declared next to the evaluation that records its signals; they come after the
-    scenario's own ``[[metrics]]``)."""
-
-    scenario: ComposedScenario
-    count: int  # number of spacecraft (from the plant section)
-    dt: float  # step [s]
-    plant: Any = None
-    evaluations: list = field(default_factory=list)
-    metrics: list = field(default_factory=list)
-
-    @property
-    def horizon(self) -> float:
-        """The scenario's horizon [s]."""
-        return float(self.scenario.simulation.horizon)
-
-    def section(self, slot: str) -> Any:
-        """The validated section of another slot (None when the slot is empty)."""
-        return self.scenario.section(slot)
-
 
 def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
     """Refuse to build the ``slot`` component without the ``needed`` slot it reads ``what`` from (a
@@ -123,80 +91,16 @@ def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
         )
 
 
-class InitialStateRows(StrictModel):
-    """A plant section of N spacecraft given by their initial states, one row each (N is the number of
-    ``initial_position`` rows; ``initial_velocity``, when given, has as many). Subclasses restate the
-    two fields with their frame in the description."""
-
-    initial_position: list[tuple[float, float, float]] = Field(
-        description="Initial position per spacecraft [m]."
-    )
-    initial_velocity: list[tuple[float, float, float]] | None = Field(
-        None, description="Initial velocity per spacecraft [m/s] (default 0)."
-    )
-
-    @model_validator(mode="after")
-    def _rows(self):
-        n = len(self.initial_position)
-        if n < 1:
-            raise ValueError("initial_position: at least one spacecraft")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(
-                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
-            )
-        return self
-
-    @property
-    def count(self) -> int:
-        """Number of spacecraft [-]."""
-        return len(self.initial_position)
-
-
-@dataclass(frozen=True)
-class ComponentType:
-    kind: str
-    name: str
-    section: type[StrictModel]
-    build: Callable[[Any, BuildContext], Any]
-    description: str
-
-
-_CATALOG: dict[tuple[str, str], ComponentType] = {}
-
-
-def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
-    """One number or ``n`` numbers -> (n,) float64 (errors name ``field``)."""
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    return arr
-
-
-def register_component_type(
-    kind: str,
-    name: str,
-    section: type[StrictModel],
-    build: Callable[[Any, BuildContext], Any],
-    description: str,
-) -> ComponentType:
-    """Make ``[kind] type = "name"`` available in composed scenarios. ``section`` validates the table
-    (without its ``type`` key); ``build(section, context)`` returns the component."""
-    if kind not in KINDS:
-        raise ValueError(f"unknown slot {kind!r} (kinds: {', '.join(KINDS)})")
-    entry = ComponentType(kind, name, section, build, description)
-    _CATALOG[(kind, name)] = entry
-    return entry
+#: the component types registered so far (homes and catalog modules alike)
+_CATALOG = _registry._TYPES
+register_component_type = register
+_CATALOGS_LOADED = False
 
 
 def component_types(kind: str | None = None) -> dict[tuple[str, str], ComponentType]:
-    """The catalog (optionally one slot's types)."""
+    """The catalog (optionally one slot's types): every home and catalog module imported."""
     _load_catalogs()
-    return {k: v for k, v in _CATALOG.items() if kind is None or k[0] == kind}
-
-
-_CATALOGS_LOADED = False
+    return _registry.component_types(kind)
 
 
 def _load_catalogs() -> None:
@@ -213,10 +117,10 @@ def _load_catalogs() -> None:
 
 
 def _load_catalogs_for(keys: list[tuple[str, str]]) -> None:
-    """Import only the catalog modules that register the ``(kind, name)`` types ``keys`` (from
+    """Import only the homes or catalog modules that register the ``(kind, name)`` types ``keys``
+    (a home from its path, a catalog module from
     :data:`~formation_ftc.methods.composed._catalog_index.CATALOG_INDEX`); every catalog when one is
-    neither in the index nor registered otherwise (a plug-in), or when the index is stale, so that
-    errors list every known type."""
+    in neither (a plug-in's, or a name that is none, so that errors list every known type)."""
     if _CATALOGS_LOADED:
         return
     import importlib
@@ -224,13 +128,13 @@ def _load_catalogs_for(keys: list[tuple[str, str]]) -> None:
     from formation_ftc.methods.composed._catalog_index import CATALOG_INDEX
 
     modules = set()
-    for key in keys:
-        module = CATALOG_INDEX.get(key)
-        if module is None and key not in _CATALOG:
-            _load_catalogs()
-            return
+    for kind, name in keys:
+        module = CATALOG_INDEX.get((kind, name))
         if module is not None:
             modules.add(module)
+        elif _registry.component_type(kind, name) is None:
+            _load_catalogs()
+            return
     for module in sorted(modules):
         importlib.import_module(module)
     if any(key not in _CATALOG for key in keys):  # an index entry naming the wrong module
@@ -238,10 +142,15 @@ def _load_catalogs_for(keys: list[tuple[str, str]]) -> None:
 
 
 def component_type(kind: str, name: str) -> ComponentType | None:
-    """The catalog entry of ``[kind] type = "name"`` (None if there is none), importing only the catalog
-    module that registers it where the index knows it (cheaper than :func:`component_types`)."""
+    """The catalog entry of ``[kind] type = "name"`` (None if there is none), importing only the
+    module that registers it where it is known (cheaper than :func:`component_types`)."""
     _load_catalogs_for([(kind, name)])
     return _CATALOG.get((kind, name))
+
+
+def _known(kind: str) -> list[str]:
+    """The type names of ``kind`` for an error message."""
+    return sorted({*_registry.type_names(kind), *(n for (k, n) in _CATALOG if k == kind)})
 
 
 class MetricSection(StrictModel):
@@ -291,19 +200,6 @@ class MetricSection(StrictModel):
         return self
 
 
-def _validated_section(entry: ComponentType, raw: dict[str, Any], where: str) -> Any:
-    """``raw`` (without its ``type`` key) validated by the type's section; one error listing the
-    section's validation errors, each named ``where.field[index]: reason``."""
-    try:
-        return entry.section.model_validate({k: v for k, v in raw.items() if k != "type"})
-    except ValidationError as exc:
-        lines = []
-        for err in exc.errors():
-            loc, msg = error_location(err), err["msg"].removeprefix("Value error, ")
-            lines.append(f"{where}.{loc}: {msg}" if loc else f"{where}: {msg}")
-        raise ValueError("; ".join(lines)) from None
-
-
 class ComposedScenario(ScenarioBase):
     """A closed loop assembled from catalog components, one table per slot."""
 
@@ -343,7 +239,7 @@ class ComposedScenario(ScenarioBase):
             raw = getattr(self, slot)
             if raw is None:
                 continue
-            kind_types = sorted(n for (k, n) in _CATALOG if k == slot)
+            kind_types = _known(slot)
             name = raw.get("type")
             if name is None:
                 raise ValueError(
@@ -357,7 +253,7 @@ class ComposedScenario(ScenarioBase):
             sections[slot] = _validated_section(entry, raw, slot)
         self._sections = sections
         evaluations: list[tuple[str, Any]] = []
-        known = sorted(n for (k, n) in _CATALOG if k == "evaluation")
+        known = _known("evaluation")
         for j, raw in enumerate(self.evaluations):
             name = raw.get("type")
             entry = _CATALOG.get(("evaluation", str(name)))
@@ -371,13 +267,19 @@ class ComposedScenario(ScenarioBase):
         if isinstance(info.context, dict) and info.context.get("build") is False:
             return self  # fields only (`show`): check, run and campaigns build the loop
         try:
-            make_loop(self).validate()
+            make_loop(self).validate(self.labels())
         except CompositionError as exc:
             raise ValueError(f"components do not fit together: {exc}") from None
         return self
 
     def section(self, slot: str) -> Any:
         return self._sections.get(slot)
+
+    def labels(self) -> dict[str, str]:
+        """Slot (or ``evaluations[j]``) -> the type name this scenario gives it (for messages)."""
+        out = {slot: str(getattr(self, slot)["type"]) for slot in SLOTS if getattr(self, slot)}
+        out |= {f"evaluations[{j}]": str(raw.get("type")) for j, raw in enumerate(self.evaluations)}
+        return out
 
     def type_of(self, slot: str) -> str | None:
         raw = getattr(self, slot)

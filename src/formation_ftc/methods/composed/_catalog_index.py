@@ -30,7 +30,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("evaluation", "attitude-scores"),
     ),
     "catalog_attitude_truth": (("plant", "attitude-truth"),),
-    "catalog_baselines": (("controller", "lqr"),),
     "catalog_chain": (
         ("actuator", "actuator-gains"),
         ("controller", "azizi2009-llfr"),

@@ -1,61 +1,103 @@
-"""Catalog: baseline (non-fault-tolerant) formation laws for composed scenarios.
+"""Controller ``lqr``: LQR formation keeping on the Clohessy-Wiltshire model, the non-fault-tolerant
+baseline a fault-tolerant law should beat.
 
-* ``lqr``: LQR state feedback designed on the Clohessy-Wiltshire model of the section's circular orbit,
-  weights by Bryson's rule (:func:`formation_ftc.design.lqr.cw_lqr`), with the feed-forward that makes
-  the desired state an equilibrium of that model
-  (:class:`~formation_ftc.components.controllers.lqr_formation.LqrFormationController`). No
-  communication, no fault estimate: the reference point a fault-tolerant law should beat. Its knowledge
-  is stated: the design orbit (``semi_major_axis``, ``mu``; default the ``[reference]`` orbit's) and the
-  nominal masses (``mass``, default 100 kg), never the plant's truth.
+The gain is designed before the run on the CW model of the design orbit (its radius ``semi_major_axis``
+and ``mu``; default the ``[reference]`` orbit's, never the plant's), weights by Bryson's rule
+(:func:`formation_ftc.design.lqr.cw_lqr`); the feed-forward makes the desired state an equilibrium of
+that model. The law reads only the measured relative state
+(:class:`~formation_ftc.sim.components.FlightInputs`): no communication, no fault estimate, no
+adaptation; its on-board masses are stated (``nominal_mass``, default 100 kg).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Any, Literal
 
+import jax.numpy as jnp
 from pydantic import Field, field_validator
 
+from formation_ftc.components._registry import (
+    BuildContext,
+    builder_input,
+    per_spacecraft,
+    register,
+)
+from formation_ftc.components.controllers.pd_formation import DesiredPositionLaw
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.constants import MU_EARTH
-from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
+from formation_ftc.core.dynamics.cw import cw_rhs
+from formation_ftc.sim.components import FlightInputs, component
 from formation_ftc.sim.contract import as_float
+
+__all__ = ["LqrFormationController", "LqrSection", "NOMINAL_MASS"]
+
+#: the law's nominal on-board mass when a scenario states none [kg]
+NOMINAL_MASS = 100.0
+
+
+@component
+class LqrFormationController(DesiredPositionLaw):
+    """LQR state feedback with the feed-forward that makes the desired state a CW equilibrium [N]::
+
+        u_i = m_i ( -K (q_i - q_i^d) - (A q_i^d)[3:] + a_i^d )        (1)
+
+    q_i = [p_i, v_i] is the measured LVLH state [m, m/s], q_i^d = [p_i^d(t), v_i^d(t)] the desired one
+    and a_i^d(t) its acceleration (expressions as in
+    :class:`~formation_ftc.components.controllers.pd_formation.DesiredPositionLaw`); A is the CW matrix
+    of the on-board mean motion. On the CW model, (1) gives the error dynamics
+    ``e_dot = (A - B K) e`` with ``e = q - q^d`` (the feed-forward cancels ``A q^d - q_dot^d``).
+
+    ``gain`` K (3, 6) [1/s^2 | 1/s] is designed before the run (e.g. by
+    :func:`formation_ftc.design.lqr.cw_lqr`); a campaign that varies ``mean_motion`` does not redesign it.
+    ``nominal_mass`` (N,) is the on-board mass m_i [kg]; ``mean_motion`` n [rad/s] of the on-board model.
+    """
+
+    gain: Any = None  # (3, 6) K [1/s^2 | 1/s]
+    nominal_mass: Any = 1.0  # (N,) on-board masses [kg]
+    mean_motion: Any = 0.0  # on-board n [rad/s]
+
+    def output(self, t, state, inputs: FlightInputs):
+        y, d = inputs.measurement, inputs.exogenous
+        qd = jnp.concatenate([d["p"], d["v"]], axis=-1)  # (N, 6)
+        # (A q^d)[3:]: the CW accelerations of the desired state with no input
+        drift = cw_rhs(t, qd, jnp.zeros_like(d["a"]), self.mean_motion)[:, 3:]
+        accel = -(y - qd) @ jnp.transpose(self.gain) - drift + d["a"]  # eq. (1) / m_i
+        return self.nominal_mass[:, None] * accel, None, {}
+
 
 Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
-
 _BRYSON = ("max_position_error", "max_velocity_error", "max_acceleration")
-#: the law's nominal on-board mass when a scenario states none [kg] (``controller.mass``)
-NOMINAL_MASS = 100.0
 
 
 class LqrSection(StrictModel):
     """LQR on the CW model: weights by Bryson's rule, Q = diag(1/e_max^2), R = diag(1/a_max^2)."""
 
-    max_position_error: float | Vec3 = Field(
+    max_position_error: float | Vec3 = builder_input(
         description="Bryson's rule: largest acceptable position error [m], one number or one per LVLH axis; > 0."
     )
-    max_velocity_error: float | Vec3 = Field(
+    max_velocity_error: float | Vec3 = builder_input(
         description="Bryson's rule: largest acceptable velocity error [m/s], one number or one per axis; > 0."
     )
-    max_acceleration: float | Vec3 = Field(
+    max_acceleration: float | Vec3 = builder_input(
         description="Bryson's rule: largest acceptable commanded acceleration [m/s^2], one number or one per axis; > 0."
     )
-    semi_major_axis: float | None = Field(
+    semi_major_axis: float | None = builder_input(
         None,
         gt=0,
         description="Radius of the circular orbit the gain is designed on [m] (default: the [reference] "
         "orbit's semi_major_axis, known on board; required without a [reference]; never the "
         "plant's).",
     )
-    mu: float | None = Field(
+    mu: float | None = builder_input(
         None,
         gt=0,
         description="Gravitational parameter of the on-board model [m^3/s^2] "
         "(default: the [reference] orbit's, else Earth's "
         "3.986004418e14; never the plant's).",
     )
-    mass: float | list[float] = Field(
+    nominal_mass: float | list[float] = Field(
         NOMINAL_MASS,
         description="Nominal on-board mass per spacecraft [kg], one or per spacecraft, > 0 (default "
         "100 kg, a stated nominal value: never the plant's true masses).",
@@ -63,7 +105,7 @@ class LqrSection(StrictModel):
     desired_position: Vec3Expr = Field(
         ("0", "0", "0"), description="Desired LVLH position, expressions in t [s], i [m]."
     )
-    mode: Literal["continuous", "sampled"] = Field(
+    mode: Literal["continuous", "sampled"] = builder_input(
         "continuous", description="Every RK stage or held over the step."
     )
 
@@ -75,7 +117,7 @@ class LqrSection(StrictModel):
             raise ValueError("every value must be finite and > 0")
         return value
 
-    @field_validator("mass")
+    @field_validator("nominal_mass")
     @classmethod
     def _masses(cls, value):
         values = value if isinstance(value, list) else [value]
@@ -84,17 +126,16 @@ class LqrSection(StrictModel):
         return value
 
 
-def _from_reference(ctx: BuildContext, name: str):
+def _from_reference(ctx: BuildContext, name: str) -> float | None:
     """A field of the [reference] orbit (known on board), or None; the plant's truth is never read."""
     value = getattr(ctx.section("reference"), name, None)
     return None if value is None else float(value)
 
 
-def _lqr(sec: LqrSection, ctx: BuildContext):
-    from formation_ftc.components.controllers.lqr_formation import LqrFormationController
+def build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
+    """The controller of a validated ``[controller] type = "lqr"`` section."""
     from formation_ftc.design.lqr import cw_lqr
 
-    n_sc = ctx.count
     a = (
         sec.semi_major_axis
         if sec.semi_major_axis is not None
@@ -109,19 +150,21 @@ def _lqr(sec: LqrSection, ctx: BuildContext):
     n = math.sqrt(mu / a**3)  # mean motion of the circular design orbit [rad/s]
     design = cw_lqr(n, sec.max_position_error, sec.max_velocity_error, sec.max_acceleration)
     return LqrFormationController(
-        count=n_sc,
+        count=ctx.count,
         gain=as_float(design.K),
         mean_motion=as_float(n),
-        mass=as_float(per_spacecraft(sec.mass, n_sc, "controller.mass")),
+        nominal_mass=as_float(
+            per_spacecraft(sec.nominal_mass, ctx.count, "controller.nominal_mass")
+        ),
         desired_position=sec.desired_position,
         is_sampled=sec.mode == "sampled",
     )
 
 
-register_component_type(
+register(
     "controller",
     "lqr",
     LqrSection,
-    _lqr,
+    build,
     "LQR baseline designed on Clohessy-Wiltshire (Bryson weights), no fault tolerance",
 )
