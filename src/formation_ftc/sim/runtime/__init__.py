@@ -305,7 +305,9 @@ def configure() -> str | None:
     else:  # off, or not private: also when a parent process passed its cache directory down
         cache = None
         os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
-    if "jax" in sys.modules:  # JAX read its configuration already: set it directly
+    from formation_ftc import _lazy_jax
+
+    if _lazy_jax.loaded():  # JAX read its configuration already: set it directly (a proxy: not yet)
         _configure_jax(cache)
     return cache
 
