@@ -1149,6 +1149,10 @@ def main(argv: list[str] | None = None) -> int:
             _few_full_collections()
             if args.command in ("run", "plot"):
                 _without_dask()
+            if args.command == "check":  # most conditions compute with numpy and scipy
+                from formation_ftc import _lazy_jax
+
+                _lazy_jax.install()
         from formation_ftc.exitcodes import run_guarded
         from formation_ftc.sim import runtime
 

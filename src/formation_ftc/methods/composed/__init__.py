@@ -112,6 +112,20 @@ class BuildContext:
         """The validated section of another slot (None when the slot is empty)."""
         return self.scenario.section(slot)
 
+    def sensed_shapes(self) -> dict[str, tuple[int, ...]] | None:
+        """The shapes of what sensors see of the built plant's initial state (its ``sensed_state``), by
+        name; None without a plant. A plant that declares them (``sensed_shapes()``: the inertial
+        truth, whose initial orbits are JAX computations) is not evaluated: a build that checks a
+        composition computes no orbit."""
+        plant = self.plant
+        if plant is None:
+            return None
+        declared = getattr(plant, "sensed_shapes", None)
+        if declared is not None:
+            return dict(declared())
+        state = plant.sensed_state(plant.initial_state())
+        return {k: np.shape(v) for k, v in state.items()} if isinstance(state, dict) else {}
+
 
 def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
     """Refuse to build the ``slot`` component without the ``needed`` slot it reads ``what`` from (a
@@ -437,7 +451,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
 
-    _load_catalogs()  # builders and conditions may use any catalog type (the loop imports JAX anyway)
+    _load_catalogs()  # builders and conditions may use any catalog type
     plant_entry = _CATALOG[
         ("plant", cast(str, s.type_of("plant")))
     ]  # the plant section is required
