@@ -15,6 +15,7 @@ import pytest
 
 from formation_ftc import cli
 from formation_ftc.cli import main
+from formation_ftc.condition_json import condition_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ["--set", "simulation.horizon=10"]  # cw-free-drift: 10 steps of 1 s
@@ -147,7 +148,7 @@ def test_check_json_typed(capsys):
 def test_condition_statement_quantities(statement, value, units, names):
     from formation_ftc.registry import Condition
 
-    c = cli._condition_json(Condition("c", "ref", statement, "< 0", None, basis="exact"))
+    c = condition_json(Condition("c", "ref", statement, "< 0", None, basis="exact"))
     assert c["value"] == value and c["units"] == units and c["value_text"] == statement
     assert [q["name"] for q in c["quantities"]] == names
 
@@ -156,7 +157,7 @@ def test_requirement_bound():
     from formation_ftc.registry import Condition
 
     def bound(req):
-        return cli._condition_json(Condition("c", "ref", "0", req, None, basis="exact"))["bound"]
+        return condition_json(Condition("c", "ref", "0", req, None, basis="exact"))["bound"]
 
     assert bound("<= 5e-5 (K printed to 4 decimals)") == {
         "relation": "<=",

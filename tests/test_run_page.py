@@ -160,3 +160,23 @@ def test_plot_of_a_directory_without_results_exits_2(kind, tmp_path, capsys):
     assert main(["plot", str(d), "--json"]) == 2
     doc = json.loads(capsys.readouterr().out)
     assert doc["exit_code"] == 2 and str(d) in doc["error"]
+
+
+def test_a_page_without_plotly_says_so(tmp_path, monkeypatch):
+    """Without the ``interactive`` extra the page of a run drawn with figures says why it has no 3-D
+    view (and renders: the template reads no field the note lacks)."""
+    import builtins
+
+    from formation_ftc.report.run_page import write_run_page
+
+    real_import = builtins.__import__
+
+    def no_plotly(name, *args, **kwargs):
+        if name == "plotly" or name.startswith("plotly."):
+            raise ImportError("no plotly here")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_plotly)
+    page = write_run_page(tmp_path, _positions(), {"x": 1.0}, []).read_text()
+    assert "plotly is not installed" in page and "<script src" not in page
+    assert not list(tmp_path.glob("plotly*.js"))

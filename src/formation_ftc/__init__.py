@@ -34,13 +34,20 @@ def _package_version() -> str:
 
 def _configure_jax_environment() -> None:
     """float64 for the JAX this process imports (now or later) -- the one process-wide setting an import
-    makes. The compilation caches and compiler tuning are opt-in (:func:`formation_ftc.sim.runtime.configure`,
+    makes -- and JAX imported on first use where it is not imported yet (``FORMATION_FTC_LAZY_JAX=off``:
+    at once, where a module imports it). The compilation caches and compiler tuning are opt-in (:func:`formation_ftc.sim.runtime.configure`,
     which the command line calls); a process started by a configured one (its environment says so)
     configures itself here."""
     _os.environ["JAX_ENABLE_X64"] = "1"
     if "jax" in _sys.modules:  # JAX came first: its configuration is already read, set it directly
         from formation_ftc import _jax  # noqa: F401
     else:
+        if _os.environ.get("FORMATION_FTC_LAZY_JAX", "").strip().lower() not in {"off", "0", "no"}:
+            # JAX imported on first use (formation_ftc._lazy_jax): validating a scenario and building
+            # its loop, as `show` and most of `check` do, import no JAX
+            from formation_ftc import _lazy_jax
+
+            _lazy_jax.install()
         from formation_ftc.sim import runtime
 
         if runtime.configured():

@@ -6,8 +6,9 @@ modules (JAX, SciPy, pandas) are imported by the commands that need them, so --h
 list and completion answer at once. Exit codes: 0 success, 1 a required condition failed, a run
 diverged or stdout could not be written, 2 bad input, 3 unexpected error (formation_ftc.exitcodes).
 
-``--json`` (list, show, check, run, plot, campaign list/report, league list/report) prints one JSON document
-on stdout with typed values (numbers, booleans, null) and units in separate keys; its schemas are in
+``--json`` (every command that prints results: list, show, check, run, plot, reproduce, campaign
+list/run/report, league list/run/report, tune) prints one JSON document on stdout with typed values
+(numbers, booleans, null) and units in separate keys, progress on stderr; its schemas are in
 docs/cli.md.
 """
 
@@ -172,6 +173,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
 }
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
+_ONE_SHOT_PROCESS = False  # main() runs one command and the process ends (set by main)
 _STARTED: float | None = None  # time.perf_counter() when main() began
 
 
@@ -179,123 +181,6 @@ def _info(msg: str) -> None:
     """Progress/informational line on stderr (suppressed by --quiet)."""
     if _VERBOSITY >= 0:
         print(msg, file=sys.stderr)
-
-
-# ------------------------------------------------------------------------------------------ --json
-_NUM = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?(?![\w.+-])"
-_UNIT_ATOM = r"(?:kg|rad|deg|Hz|m|s|N|J|W)(?:\^-?\d+)?"
-_UNIT = rf"(?:1/)?{_UNIT_ATOM}(?:[ /*]{_UNIT_ATOM})*(?![\w^/])"
-#: one clause of a condition's statement: ``[NAME = ]VALUE [UNITS]`` (VALUE a number, a list of numbers,
-#: True or False; NAME without "=" or ":" and not ending in a relation such as "<=")
-_CLAUSE = re.compile(
-    rf"(?:(?P<name>[^=:]+?)(?<![<>!])\s*[=:]\s*)?"
-    rf"(?P<value>\[\s*{_NUM}(?:\s*,\s*{_NUM})*\s*\]|{_NUM}|True|False)"
-    rf"(?:\s+(?P<units>{_UNIT}))?"
-)
-#: a requirement that is a plain comparison with a number: ``< -2.9e-13 (rounding margin)``
-_BOUND = re.compile(
-    rf"(?P<relation><=|>=|<|>|=)\s*(?P<value>{_NUM})(?:\s+(?P<units>{_UNIT}))?\s*(?:$|[(,;])"
-)
-
-
-def _closing(text: str, start: int) -> int:
-    """Index of the bracket that closes the one at ``start`` (the last index when it is not closed)."""
-    pair = {"(": ")", "[": "]"}[text[start]]
-    depth = 0
-    for k in range(start, len(text)):
-        depth += (text[k] == text[start]) - (text[k] == pair)
-        if depth == 0:
-            return k
-    return len(text) - 1
-
-
-def _clauses(text: str, remark: bool = False) -> list[tuple[str, bool]]:
-    """``text`` cut at top-level ``", "`` and ``"; "`` into ``(clause, in_remark)``: a parenthesised
-    remark after a space gives clauses of its own (after the clause it follows, ``in_remark`` True);
-    brackets of lists, function calls and leading expressions are kept whole."""
-    out: list[tuple[str, bool]] = []
-    cur: list[str] = []
-    remarks: list[tuple[str, bool]] = []
-
-    def close() -> None:
-        if "".join(cur).strip():
-            out.append(("".join(cur).strip(), remark))
-        out.extend(remarks)
-        cur.clear()
-        remarks.clear()
-
-    k = 0
-    while k < len(text):
-        ch = text[k]
-        if ch in "([":
-            end = _closing(text, k)
-            if ch == "(" and k > 0 and text[k - 1] == " ":
-                remarks.extend(_clauses(text[k + 1 : end], remark=True))
-            else:
-                cur.append(text[k : end + 1])
-            k = end + 1
-            continue
-        if ch in ",;" and text[k + 1 : k + 2] in (" ", ""):
-            close()
-        else:
-            cur.append(ch)
-        k += 1
-    close()
-    return out
-
-
-def _value(text: str) -> Any:
-    if text in ("True", "False"):
-        return text == "True"
-    if text.startswith("["):
-        return [float(v) for v in text.strip("[] ").split(",")]
-    return float(text)
-
-
-def _quantities(statement: str) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """The numbers a condition's statement gives (``"max Re(eig) = -0.09989 1/s"`` ->
-    ``[{"name": "max Re(eig)", "value": -0.09989, "units": "1/s"}]``), as printed by its method: every
-    clause ``[NAME = ]NUMBER [UNITS]`` (or a list of numbers, or True/False); other clauses are skipped.
-    Also those of them outside parenthesised remarks."""
-    out, main = [], []
-    for clause, in_remark in _clauses(statement):
-        m = _CLAUSE.fullmatch(clause)
-        if m:
-            out.append({"name": m["name"], "value": _value(m["value"]), "units": m["units"]})
-            if not in_remark:
-                main.append(out[-1])
-    return out, main
-
-
-def _condition_json(c) -> dict[str, Any]:
-    """One condition with typed values (docs/cli.md, ``check --json``)."""
-    d = c.as_dict()
-    quantities, main = _quantities(d["value"])
-    # the statement's value: its one quantity outside remarks ("max eig = -1e-08 (lambda = 1e-08)");
-    # None when it states several side by side ("e_s = 0.03 m, T = 1.07e-05 m") or none
-    single = main[0] if len(main) == 1 else None
-    bound = _BOUND.match(d["requirement"].strip())
-    return {
-        "name": d["name"],
-        "reference": d["reference"],
-        "value": single["value"] if single else None,
-        "units": single["units"] if single else None,
-        "value_text": d["value"],
-        "quantities": quantities,
-        "requirement": d["requirement"],
-        "bound": {
-            "relation": bound["relation"],
-            "value": float(bound["value"]),
-            "units": bound["units"],
-        }
-        if bound
-        else None,
-        "holds": d["holds"],
-        "unproven": bool(c.unproven),
-        "required": d["required"],
-        "basis": d["basis"],
-        "detail": d["detail"],
-    }
 
 
 def _builtin_scenario_names() -> list[str]:
@@ -613,11 +498,13 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
     code = 1 if failed_required else 0
     if as_json:
+        from formation_ftc.condition_json import condition_json
+
         print_json(
             {
                 "scenario": scenario.scenario.name if scenario is not None else None,
                 "method": scenario.scenario.method if scenario is not None else None,
-                "conditions": [_condition_json(c) for c in conds],
+                "conditions": [condition_json(c) for c in conds],
                 "all_required_hold": not failed_required,
                 "required_failed": len(failed_required),
                 "required_unproven": len(unproven_required),
@@ -791,6 +678,8 @@ def _cmd_run(args) -> int:
             raise
         raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
     check_memory(compiled, budgets, args.scenario)
+    if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
+        _import_in_background("xarray", "formation_ftc.provenance")
     t0 = time.perf_counter()
     with console.status(
         f"compiling and running {scenario.scenario.name} ({scenario.simulation.n_steps:,} steps)..."
@@ -1245,7 +1134,7 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
 
 
 def main(argv: list[str] | None = None) -> int:
-    global _VERBOSITY, _STARTED
+    global _VERBOSITY, _STARTED, _ONE_SHOT_PROCESS
     _STARTED = time.perf_counter()
     argv_given = argv
     with lossy_stderr():
@@ -1260,9 +1149,14 @@ def main(argv: list[str] | None = None) -> int:
             raise
         _VERBOSITY = int(getattr(args, "verbosity", 0))
         if argv_given is None and args.command in _ONE_SHOT:
+            _ONE_SHOT_PROCESS = True
             _few_full_collections()
             if args.command in ("run", "plot"):
                 _without_dask()
+            if args.command == "check":  # most conditions compute with numpy and scipy
+                from formation_ftc import _lazy_jax
+
+                _lazy_jax.install()
         from formation_ftc.exitcodes import run_guarded
         from formation_ftc.sim import runtime
 
@@ -1288,6 +1182,23 @@ def _few_full_collections() -> None:
 
     young, middle, _ = gc.get_threshold()
     gc.set_threshold(young, middle, 1000)
+
+
+def _import_in_background(*modules: str) -> None:
+    """Import ``modules`` in a daemon thread, while the main thread waits on XLA (which compiles and
+    runs without holding the GIL): a warm ``run`` of a small scenario then no longer imports xarray and
+    pandas (0.3 s) after its simulation. A failing import fails again, with its message, where the
+    command imports the module itself."""
+    import threading
+
+    def work() -> None:
+        for name in modules:
+            try:
+                __import__(name)
+            except Exception:  # noqa: BLE001 - reported by the command's own import
+                return
+
+    threading.Thread(target=work, name="formation-ftc-imports", daemon=True).start()
 
 
 def _without_dask() -> None:

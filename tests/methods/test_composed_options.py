@@ -118,14 +118,14 @@ def test_divergence_replays_compile_once_per_structure():
             simulate_with_metrics(sc)
         return compile_scenario(sc)
 
-    steps = engine._params_step._cache_size()
+    steps = engine._jitted(engine._params_step)._cache_size()
     diverged(1e6)
-    size = engine._params_replay._cache_size()
+    size = engine._jitted(engine._params_replay)._cache_size()
     assert size >= 1  # the diagnostic went through the compiled replay
     diverged(2e6)  # another run of the same structure: the replay program is reused
-    assert engine._params_replay._cache_size() == size
+    assert engine._jitted(engine._params_replay)._cache_size() == size
     # the replay hands back the first failing state itself: no one-step program is compiled beside it
-    assert engine._params_step._cache_size() == steps
+    assert engine._jitted(engine._params_step)._cache_size() == steps
 
 
 def test_block_metrics_from_a_scenario_file_need_a_block_and_match_numpy():

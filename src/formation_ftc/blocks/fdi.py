@@ -114,8 +114,9 @@ def fdi_params(
     noise_std=0.0,
     routing=None,
     presence_threshold: float = 0.0,
-) -> dict[str, jax.Array]:
-    """Parameter pytree of the FDI (float64 arrays; vmappable).
+) -> dict[str, np.ndarray]:
+    """Parameter pytree of the FDI (float64 numpy arrays, JAX converts them when the run is called;
+    vmappable).
 
     Parameters
     ----------
@@ -135,7 +136,7 @@ def fdi_params(
         a = np.broadcast_to(np.asarray(v, dtype=float), shape).copy()
         if not np.all(np.isfinite(a)):
             raise ValueError(f"fdi.{name} must be finite")
-        return jnp.asarray(a)
+        return a
 
     if routing is None:
         routing = identity_routing(n_agents, n_channels)
@@ -146,14 +147,14 @@ def fdi_params(
         raise ValueError("fdi.noise_std must be >= 0 N m")
     return dict(
         fault_mask=full(fault_mask, "fault_mask"),
-        onset=jnp.asarray(float(onset)),
-        delay=jnp.asarray(float(delay)),
-        detected=jnp.asarray(1.0 if detected else 0.0),
+        onset=np.asarray(float(onset)),
+        delay=np.asarray(float(delay)),
+        detected=np.asarray(1.0 if detected else 0.0),
         scale=full(scale, "scale"),
         bias=full(bias, "bias"),
         noise_std=full(noise_std, "noise_std"),
-        routing=jnp.asarray(routing),
-        presence_threshold=jnp.asarray(float(presence_threshold)),
+        routing=np.asarray(routing),
+        presence_threshold=np.asarray(float(presence_threshold)),
     )
 
 

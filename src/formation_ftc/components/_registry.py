@@ -132,6 +132,20 @@ class BuildContext:
         """The validated section of another slot (None when the slot is empty)."""
         return self.scenario.section(slot)
 
+    def sensed_shapes(self) -> dict[str, tuple[int, ...]] | None:
+        """The shapes of what sensors see of the built plant's initial state (its ``sensed_state``), by
+        name; None without a plant. A plant that declares them (``sensed_shapes()``: the inertial
+        truth, whose initial orbits are JAX computations) is not evaluated: a build that checks a
+        composition computes no orbit."""
+        plant = self.plant
+        if plant is None:
+            return None
+        declared = getattr(plant, "sensed_shapes", None)
+        if declared is not None:
+            return dict(declared())
+        state = plant.sensed_state(plant.initial_state())
+        return {k: np.shape(v) for k, v in state.items()} if isinstance(state, dict) else {}
+
 
 def home_module(kind: str, name: str) -> str:
     """The module that is the home of ``[kind] type = "name"``.

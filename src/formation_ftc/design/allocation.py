@@ -37,6 +37,7 @@ __all__ = [
     "validate_allocation_inputs",
     "chain_matrix",
     "augmented_matrix",
+    "augmented_matrix_np",
     "allocation_matrix",
     "allocate",
     "allocate_augmented",
@@ -151,6 +152,40 @@ def augmented_matrix(alpha, b_hat):
     alpha = jnp.asarray(alpha)
     b_hat = jnp.asarray(b_hat)
     return jnp.concatenate([chain_matrix(b_hat), (alpha / b_hat)[None, :]], axis=0)
+
+
+def augmented_matrix_np(alpha, b_hat) -> np.ndarray:
+    """:func:`augmented_matrix` in numpy, for the design checks (the same numbers: its entries are
+    ``-b_hat_k``, ``b_hat_k`` and one division ``alpha_i / b_hat_i`` each; no JAX needed).
+
+    Parameters
+    ----------
+    alpha : array_like, shape (N,)
+        Allocation weights [-].
+    b_hat : array_like, shape (N,)
+        Estimated actuator gains [-].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, N)
+        J_aug [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.design.allocation import augmented_matrix, augmented_matrix_np
+    >>> a, b = [1.0, 2.0, 1.5, 0.5], [1.0, 0.9, 1.1, 1.2]
+    >>> bool(np.array_equal(augmented_matrix_np(a, b), np.asarray(augmented_matrix(a, b))))
+    True
+    """
+    alpha = np.asarray(alpha)
+    b_hat = np.asarray(b_hat)
+    n = b_hat.shape[-1]
+    rows = np.arange(n - 1)
+    J = np.zeros((n - 1, n), dtype=b_hat.dtype)
+    J[rows, rows] = -b_hat[:-1]
+    J[rows, rows + 1] = b_hat[1:]
+    return np.concatenate([J, (alpha / b_hat)[None, :]], axis=0)
 
 
 def allocation_matrix(alpha, b_hat):
@@ -325,11 +360,11 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
     a0[k] = 0.0
     a1 = alpha.copy()
     a1[k] = 1.0
-    det0 = float(np.linalg.det(np.asarray(augmented_matrix(a0, b_hat))))
-    det1 = float(np.linalg.det(np.asarray(augmented_matrix(a1, b_hat))))
+    det0 = float(np.linalg.det(augmented_matrix_np(a0, b_hat)))
+    det1 = float(np.linalg.det(augmented_matrix_np(a1, b_hat)))
     slope = det1 - det0
     sign = -1.0 if slope < 0 else 1.0
-    M = np.asarray(augmented_matrix(alpha, b_hat))
+    M = augmented_matrix_np(alpha, b_hat)
     C = np.array([_cofactor(M, m, k) for m in range(n)])
     return PerturbationCoefficients(q1=sign * det0, q2=sign * slope, f=-sign * C, sign=sign)
 
@@ -419,4 +454,4 @@ def perturbation_matrix(alpha, b_hat, k: int, eps: float) -> np.ndarray:
     E = np.zeros((n - 1, n))
     E[k - 1, k] = -eps
     E[k, k] = eps
-    return E @ np.linalg.inv(np.asarray(augmented_matrix(alpha, b_hat)))
+    return E @ np.linalg.inv(augmented_matrix_np(alpha, b_hat))

@@ -34,7 +34,6 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
 
 import jax
 import jax.numpy as jnp
@@ -147,7 +146,13 @@ def reduced_model(
     return A, Delta, (np.eye(4) + Delta) @ A
 
 
-@partial(jax.jit, static_argnames=("w_fn", "n_steps", "record_every"))
+@functools.cache
+def _simulate_jit() -> Callable:
+    """:func:`_simulate` jitted, made on first use (not at import: ``check`` imports this module
+    without JAX, :mod:`formation_ftc._lazy_jax`)."""
+    return jax.jit(_simulate, static_argnames=("w_fn", "n_steps", "record_every"))
+
+
 def _simulate(A_clp, b_vec, weights, w_fn, dt, n_steps: int, record_every: int):
     def rhs(t, x):
         return A_clp @ x + b_vec * jnp.dot(weights, jnp.atleast_1d(w_fn(t)))
@@ -231,7 +236,7 @@ def simulate_reduced_model(
         raise ValueError(f"dt = {dt} s must divide horizon = {horizon} s")
     if n_steps % record_every:
         raise ValueError(f"record_every = {record_every} must divide horizon/dt = {n_steps}")
-    xs, peak = _simulate(
+    xs, peak = _simulate_jit()(
         jnp.asarray(A_clp, dtype=jnp.float64),
         jnp.asarray(b_vec, dtype=jnp.float64),
         jnp.asarray(weights, dtype=jnp.float64),

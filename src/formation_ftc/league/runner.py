@@ -34,7 +34,7 @@ import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 # one atomic write for the package (league/tuning.py imports it from here under this name)
-from formation_ftc.atomic import atomic_write as _atomic_write_text
+from formation_ftc.atomic import atomic_write
 from formation_ftc.league.definition import (
     LeagueError,
     LeagueSpec,
@@ -515,7 +515,7 @@ def _write_inputs(
 
     try:
         out.mkdir(parents=True, exist_ok=True)
-        _atomic_write_text(out / LEAGUE_FILE, json.dumps(meta, indent=1, default=str))
+        atomic_write(out / LEAGUE_FILE, json.dumps(meta, indent=1, default=str))
         files: dict[str, list[Path]] = {}
         for name, mcells in cells.items():
             cdir = out / name / "cells"
@@ -525,7 +525,7 @@ def _write_inputs(
                 p = cdir / f"{c.key}.toml"
                 text = tomli_w.dumps(c.raw)  # tomli_w writes tuples as arrays and inf as ``inf``
                 if not p.is_file() or p.read_text(encoding="utf-8") != text:
-                    _atomic_write_text(p, text)
+                    atomic_write(p, text)
                 files[name].append(p)
         return files
     except OSError as exc:

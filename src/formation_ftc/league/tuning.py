@@ -766,9 +766,9 @@ class TuneJournal:
 
 
 def _atomic_text(path: Path, text: str) -> None:
-    from formation_ftc.league.runner import _atomic_write_text
+    from formation_ftc.atomic import atomic_write
 
-    _atomic_write_text(path, text)
+    atomic_write(path, text)
 
 
 def evaluate(
@@ -1255,13 +1255,13 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
     >>> p.name, json.loads(p.read_text())["x"]
     ('m--limited.json', None)
     """
-    from formation_ftc.league.runner import _atomic_write_text
+    from formation_ftc.atomic import atomic_write
 
     out = Path(out_dir)
     path = out / f"{result['method']}--{result['level']}.json"
     try:
         out.mkdir(parents=True, exist_ok=True)
-        _atomic_write_text(path, json.dumps(jsonable(dict(result)), indent=1, allow_nan=False))
+        atomic_write(path, json.dumps(jsonable(dict(result)), indent=1, allow_nan=False))
     except OSError as exc:
         raise TuneError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
     return path

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from formation_ftc import registry
+from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import add_json_option
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
@@ -117,11 +118,7 @@ def to_jsonable(obj: Any) -> Any:
 
 def _write_json(path: Path, data: Any) -> None:
     """Write strict JSON atomically (temporary file then rename)."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(
-        json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
-    tmp.replace(path)
+    atomic_write(path, json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n")
 
 
 # ------------------------------------------------------------------------------------- registry side
@@ -910,7 +907,7 @@ def run_cli(args: argparse.Namespace) -> int:
 def _stated(text: str) -> dict[str, Any]:
     """A value of a comparison row as printed (``"9.8 s (Fig. 3)"``) with its number and unit when the
     text states exactly one outside parenthesised remarks (the parser of ``check --json``)."""
-    from formation_ftc.cli import _quantities  # the one statement parser (check --json uses it too)
+    from formation_ftc.condition_json import quantities as _quantities
 
     main = _quantities(text)[1] if text else []
     one = main[0] if len(main) == 1 else None
@@ -938,7 +935,7 @@ def _row_json(row: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _paper_json(entry: Mapping[str, Any], out: Path) -> dict[str, Any]:
-    from formation_ftc.cli import _condition_json  # the typed form `check --json` prints
+    from formation_ftc.condition_json import condition_json as _condition_json
     from formation_ftc.registry import Condition
 
     paper_dir = out / entry["paper"]

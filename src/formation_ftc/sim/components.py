@@ -49,6 +49,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np  # noqa: F401 - the doctests' np
 
+from formation_ftc import _lazy_jax
+
 # JAX-free names that catalog sections use while validating (re-exported here)
 from formation_ftc.sim.contract import CompositionError
 from formation_ftc.sim.contract import as_float as as_float
@@ -167,7 +169,10 @@ def component(cls: type[T]) -> type[T]:
                 hash(f.default)
             except TypeError as exc:  # pragma: no cover - a declaration error caught at import
                 raise TypeError(f"{cls.__name__}.{f.name}: static fields must be hashable") from exc
-    jax.tree_util.register_dataclass(cls, data_fields=data, meta_fields=meta)
+    # at once, or when a lazy ``jax`` proxy imports JAX (:mod:`formation_ftc._lazy_jax`: ``check``)
+    _lazy_jax.call_when_imported(
+        lambda jax: jax.tree_util.register_dataclass(cls, data_fields=data, meta_fields=meta)
+    )
     return cls
 
 

@@ -26,6 +26,7 @@ orbit of Li2020), and multiply their cost by the batch size.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -430,17 +431,22 @@ def _replay_loop(step, ok, state, k, n):
     )
 
 
-@jax.jit
 def _params_replay(params, state, k, n):
     """:func:`_replay_loop` of a closed loop given as a pytree argument: compiled once per loop
     structure (the parameters are arguments, not constants of a closure), so the diagnostics of many
-    failed runs of one campaign share one program."""
+    failed runs of one campaign share one program (jitted by :func:`_jitted`)."""
     return _replay_loop(params.replay_step(), params.admissible, state, k, n)
 
 
-@jax.jit
 def _params_step(params, k, state):
     return params.replay_step()(k, state)
+
+
+@functools.cache
+def _jitted(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``jax.jit(fn)``, made on first use and kept (not at import: ``check`` imports this module
+    without JAX, :mod:`formation_ftc._lazy_jax`)."""
+    return jax.jit(fn)
 
 
 def _replay(
@@ -449,7 +455,7 @@ def _replay(
     """One compiled replay of up to ``n`` steps: ``(j, last_ok, failing)`` with ``failing`` the first
     state that fails ``ok`` (None when none does in ``n`` steps, then ``j = n``)."""
     if params is not None:
-        j, st, latest, bad = _params_replay(
+        j, st, latest, bad = _jitted(_params_replay)(
             params, state, jnp.asarray(k, jnp.int64), jnp.asarray(n, jnp.int64)
         )
     else:
@@ -544,7 +550,7 @@ def diagnose_divergence(
     if failing is not None:
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
-    jstep = (lambda kk, st: _params_step(params, kk, st)) if use_params else jax.jit(step)
+    jstep = (lambda kk, st: _jitted(_params_step)(params, kk, st)) if use_params else jax.jit(step)
     state = last_finite
     acc: set[int] | None = None
     first: DivergenceInfo | None = None

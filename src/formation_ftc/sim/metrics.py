@@ -18,6 +18,7 @@ the same selections, and the same sums added in another order (they may differ i
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -56,8 +57,9 @@ from formation_ftc.sim.contract import (  # noqa: E402
 )
 
 _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt in float64)
-#: reduction -> (pairwise extreme, extreme over an axis, starting value)
-_EXTREMES = {"max": (jnp.maximum, jnp.max, -jnp.inf), "min": (jnp.minimum, jnp.min, jnp.inf)}
+#: reduction -> (pairwise extreme, extreme over an axis: names in jax.numpy, starting value); names, so
+#: that importing this module uses no JAX (``check``: :mod:`formation_ftc._lazy_jax`)
+_EXTREMES = {"max": ("maximum", "max", -math.inf), "min": ("minimum", "min", math.inf)}
 
 
 @component
@@ -727,7 +729,8 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
 
     if m.reduce in _EXTREMES:
         (a, seen), (pair, over, start) = acc, _EXTREMES[m.reduce]
-        return (pair(a, over(jnp.where(inw, v, start), axis=0)), seen | anyw)
+        extreme = getattr(jnp, over)(jnp.where(inw, v, start), axis=0)
+        return (getattr(jnp, pair)(a, extreme), seen | anyw)
     if m.reduce == "final":
         a, seen = acc
         return (jnp.where(anyw, take(v, last_of(inw)), a), seen | anyw)
@@ -836,7 +839,7 @@ def _update_group(
         inw = jnp.logical_and(inw, gate)
     if m.reduce in _EXTREMES:
         a, seen = acc
-        return (jnp.where(inw, _EXTREMES[m.reduce][0](a, v), a), seen | inw)
+        return (jnp.where(inw, getattr(jnp, _EXTREMES[m.reduce][0])(a, v), a), seen | inw)
     if m.reduce == "final":
         a, seen = acc
         return (jnp.where(inw, v, a), seen | inw)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component
 
@@ -23,7 +24,7 @@ class StepGainActuator(Actuator):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.gain)[0])
+        return int(np.shape(self.gain)[0])
 
     def exogenous(self, t):
         return {"b": jnp.where(t >= self.onset, self.faulty_gain, self.gain)}

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.components.actuators.expression_faults import EffectivenessBiasActuator
 from formation_ftc.components.expressions import vector_expression
@@ -28,7 +29,7 @@ class StepFaultActuator(EffectivenessBiasActuator):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.alpha)[0])
+        return int(np.shape(self.alpha)[0])
 
     def exogenous(self, t):
         return {

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.blocks.controllers.azizi2009_llfr import (
     allocate,
@@ -58,11 +59,11 @@ class ChainLlfrController(Controller):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.b_hat)[0])
+        return int(np.shape(self.b_hat)[0])
 
     @property
     def n_axes(self) -> int:
-        return int(jnp.shape(self.b_hat)[1])
+        return int(np.shape(self.b_hat)[1])
 
     quantity = "acceleration"
 

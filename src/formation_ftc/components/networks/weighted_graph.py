@@ -196,7 +196,7 @@ class GraphNetwork(Network):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.weights)[0])
+        return int(np.shape(self.weights)[0])
 
     def receive(self, t, state, inputs: NetworkInputs):
         C, m = self.weights, inputs.messages
@@ -231,7 +231,7 @@ class DelayedGraphNetwork(Network):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.weights)[0])
+        return int(np.shape(self.weights)[0])
 
     def exogenous(self, t):
         return {"T": delay_vector_function(self.delays, self.edges)(t)}

@@ -6,6 +6,7 @@ import dataclasses
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
@@ -43,7 +44,7 @@ class ZohClohessyWiltshirePlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.initial_state_lvlh)[0])
+        return int(np.shape(self.initial_state_lvlh)[0])
 
     def initial_state(self):
         return {"q": self.initial_state_lvlh}

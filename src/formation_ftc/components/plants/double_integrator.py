@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.components.expressions import spacecraft_numbers
 from formation_ftc.core.dynamics.double_integrator import (
@@ -46,11 +47,11 @@ class DoubleIntegratorPlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.initial_position)[0])
+        return int(np.shape(self.initial_position)[0])
 
     @property
     def n_axes(self) -> int:
-        return int(jnp.shape(self.initial_position)[1])
+        return int(np.shape(self.initial_position)[1])
 
     def initial_state(self):
         return {"r": self.initial_position, "v": self.initial_velocity}

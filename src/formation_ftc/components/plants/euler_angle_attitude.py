@@ -20,6 +20,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.core.disturbances import run_key, step_key
 from formation_ftc.core.dynamics.euler_lagrange import (
@@ -95,7 +96,7 @@ class EulerAngleAttitudePlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.q0_fixed)[0])
+        return int(np.shape(self.q0_fixed)[0])
 
     def prepare(self, dt):
         """Draw the true inertia J = J^ diag(1 + delta), delta ~ U[-spread, spread]^3, and derive the

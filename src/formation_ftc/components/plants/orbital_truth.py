@@ -95,7 +95,7 @@ class InertialFormationPlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.mass)[0])
+        return int(np.shape(self.mass)[0])
 
     def initial_state(self):
         el = jnp.asarray(self.chief_elements)
@@ -152,6 +152,11 @@ class InertialFormationPlant(Plant):
     def relative_state(self, x):
         """(N, 6) LVLH relative state [m, m/s] of the deputies w.r.t. the chief."""
         return eci_to_lvlh(x["chief"], x["deputies"])
+
+    def sensed_shapes(self) -> dict[str, tuple[int, ...]]:
+        """The shapes of :meth:`sensed_state`'s arrays, known without computing the orbits (a build
+        checks them without JAX): ``{"q": (N, 6)}``."""
+        return {"q": (self.count, 6)}
 
     def sensed_state(self, x):
         """What sensors measure: ``{"q": (N, 6)}``, the LVLH relative state (so every relative-state sensor

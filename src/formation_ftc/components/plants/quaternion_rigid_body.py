@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
@@ -25,7 +25,7 @@ class RigidBodyTorquePlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.initial_omega)[0])
+        return int(np.shape(self.initial_omega)[0])
 
     def initial_state(self):
         return {"omega": self.initial_omega, "q": self.initial_quaternion}

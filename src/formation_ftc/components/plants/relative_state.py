@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.sim.components import Plant
 
@@ -21,7 +21,7 @@ class RelativeStatePlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.mass)[0])
+        return int(np.shape(self.mass)[0])
 
     def initial_state(self):
         return {"q": self.initial_state_lvlh}

@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from formation_ftc.blocks.controllers.yang2013_individual import input_norm
 from formation_ftc.components.expressions import vector_expression
@@ -78,7 +79,7 @@ class SwitchedFormationPlant(Plant):
 
     @property
     def count(self) -> int:
-        return int(jnp.shape(self.mass)[0])
+        return int(np.shape(self.mass)[0])
 
     def initial_state(self):
         att = self.attitude.initial_state()

@@ -339,7 +339,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
 
-    _load_catalogs()  # builders and conditions may use any catalog type (the loop imports JAX anyway)
+    _load_catalogs()  # builders and conditions may use any catalog type
     plant_entry = _CATALOG[
         ("plant", cast(str, s.type_of("plant")))
     ]  # the plant section is required

@@ -76,19 +76,16 @@ Vec3 = tuple[float, float, float]
 
 def _plant_layout(ctx: BuildContext, slot: str, name: str) -> tuple[str, int]:
     """('q', 3) for an (N, 6) relative-state plant, ('rv', axes) for a double-integrator plant."""
-    plant = ctx.plant
-    state = (
-        plant.sensed_state(plant.initial_state()) if plant is not None else None
-    )  # what sensors see
+    shapes = ctx.sensed_shapes() or {}  # what sensors see
     plant_name = ctx.scenario.type_of("plant")
-    if isinstance(state, dict) and "q" in state and np.shape(state["q"])[-1] == 6:
+    if shapes.get("q", ())[-1:] == (6,):
         return "q", 3
-    if isinstance(state, dict) and "r" in state and "v" in state:
-        return "rv", int(np.shape(state["r"])[-1])
-    keys = ", ".join(sorted(state)) if isinstance(state, dict) else type(state).__name__
+    if "r" in shapes and "v" in shapes and shapes["r"]:
+        return "rv", int(shapes["r"][-1])
+    keys = ", ".join(sorted(shapes)) or "none"
     raise CompositionError(
         f"{slot} {name} measures relative positions and velocities, but plant {plant_name} "
-        f"({type(plant).__name__}) has no translational state (state: {keys}; needs the "
+        f"({type(ctx.plant).__name__}) has no translational state (state: {keys}; needs the "
         f"(N, 6) relative state 'q' or positions 'r' and velocities 'v')"
     )
 

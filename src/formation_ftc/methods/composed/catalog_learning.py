@@ -149,20 +149,17 @@ def onboard_mean_motion(given: float | None, scenario: Any, slot: str) -> float:
     )
 
 
-def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
-    """The plant's initial (N, 6) relative state; a CompositionError naming both parts without one."""
+def _relative_state(ctx: BuildContext, slot: str) -> None:
+    """A CompositionError naming both parts unless the plant has an (N, 6) relative state that the
+    sensors deliver."""
     plant, name = ctx.plant, ctx.scenario.type_of(slot)
     plant_name = ctx.scenario.type_of("plant")
-    state = (
-        plant.sensed_state(plant.initial_state()) if plant is not None else None
-    )  # what sensors see
-    q = state.get("q") if isinstance(state, dict) else None
-    if (
-        q is None
-        or np.shape(q) != (ctx.count, 6)
-        or getattr(plant, "quantity", "force") not in ("force", "acceleration")
+    shapes = ctx.sensed_shapes() or {}  # what sensors see
+    if shapes.get("q") != (ctx.count, 6) or getattr(plant, "quantity", "force") not in (
+        "force",
+        "acceleration",
     ):
-        keys = ", ".join(sorted(state)) if isinstance(state, dict) else type(state).__name__
+        keys = ", ".join(sorted(shapes)) or "none"
         raise CompositionError(
             f"{slot} {name} works on the (N, 6) relative position/velocity state of a CW model, but plant "
             f"{plant_name} ({type(plant).__name__}, driven by a {getattr(plant, 'quantity', '?')}) has no such state "
@@ -174,7 +171,6 @@ def _relative_state(ctx: BuildContext, slot: str) -> np.ndarray:
             f"{slot} {name} needs the measured (N, 6) relative state (sensors relative-state or lvlh-relative-state), "
             f"but sensors {sensors} deliver something else"
         )
-    return np.asarray(q, dtype=float)
 
 
 def nominal_mass_of(given, ctx: BuildContext, slot: str) -> np.ndarray:

@@ -363,8 +363,6 @@ def _switched_formation(sec: SwitchedFormationSection, ctx: BuildContext):
 
 
 def _switching_supervisor(sec: SwitchingSupervisorSection, ctx: BuildContext):
-    import jax.numpy as jnp
-
     from formation_ftc.components.supervisors.switching_supervisor import SwitchingSupervisor
 
     st = switched_structure(sec, ctx.count, ctx.dt)
@@ -376,12 +374,12 @@ def _switching_supervisor(sec: SwitchingSupervisorSection, ctx: BuildContext):
         table.append(tuple(row))
     return SwitchingSupervisor(
         count=ctx.count,
-        switch_steps=jnp.asarray(st.switch_steps),
+        switch_steps=st.switch_steps,
         active=as_float(st.active),
-        leaves_at_next_switch=jnp.asarray(st.leaves),
+        leaves_at_next_switch=st.leaves,
         eta=as_float(sec.eta),
         eta1=as_float(np.full(ctx.count, sec.eta1)),
-        delay_bound_steps=jnp.asarray(_delay_steps(ctx)),
+        delay_bound_steps=_delay_steps(ctx),
         desired_position=tuple(table),
     )
 

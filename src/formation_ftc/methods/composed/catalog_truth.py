@@ -241,16 +241,14 @@ class LvlhRelativeStateSection(StrictModel):
 
 
 def _lvlh_relative_state(sec: LvlhRelativeStateSection, ctx: BuildContext):
-    from formation_ftc.components.plants.orbital_truth import InertialFormationPlant
     from formation_ftc.components.sensors.lvlh_relative_state import LvlhRelativeStateSensors
 
-    if ctx.plant is not None and not isinstance(ctx.plant, InertialFormationPlant):
-        sensed = ctx.plant.sensed_state(ctx.plant.initial_state())
-        if not (isinstance(sensed, dict) and "q" in sensed and np.shape(sensed["q"])[-1:] == (6,)):
-            raise ValueError(
-                f"sensors lvlh-relative-state measure a relative position and velocity; plant "
-                f"{type(ctx.plant).__name__} has no (N, 6) relative state"
-            )
+    shapes = ctx.sensed_shapes()
+    if shapes is not None and shapes.get("q", ())[-1:] != (6,):
+        raise ValueError(
+            f"sensors lvlh-relative-state measure a relative position and velocity; plant "
+            f"{type(ctx.plant).__name__} has no (N, 6) relative state"
+        )
     n = ctx.count
     bias = np.hstack(
         [

@@ -28,7 +28,7 @@ import numpy as np
 
 from formation_ftc.components.actuators.actuator_gains import StepGainActuator
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
-from formation_ftc.design.allocation import augmented_matrix, perturbation_coefficients
+from formation_ftc.design.allocation import augmented_matrix_np, perturbation_coefficients
 from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
 from formation_ftc.design.small_gain import small_gain_margin
 from formation_ftc.methods.composed import ComposedScenario
@@ -168,7 +168,7 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
         )
         return out
     coeff = perturbation_coefficients(alpha, b_hat, k)
-    det_num = float(np.linalg.det(np.asarray(augmented_matrix(alpha, b_hat))))
+    det_num = float(np.linalg.det(augmented_matrix_np(alpha, b_hat)))
     DET = coeff.det(alpha[k])
     out.append(
         Condition(

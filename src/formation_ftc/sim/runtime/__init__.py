@@ -371,7 +371,9 @@ def _switch_off(problem: str) -> None:
     _GUARDED = None
     os.environ["FORMATION_FTC_JAX_CACHE"] = "off"
     os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
-    if "jax" in sys.modules:
+    from formation_ftc import _lazy_jax
+
+    if _lazy_jax.loaded():  # a proxy (JAX not imported yet) reads the environment when it imports
         _set_jax_cache(None)
     _report(problem)
 
@@ -425,7 +427,9 @@ def configure() -> str | None:
         os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
         if wanted is not None:  # refused (one line): the processes this one starts stay quiet
             os.environ["FORMATION_FTC_JAX_CACHE"] = "off"
-    if "jax" in sys.modules:  # JAX read its configuration already: set it directly
+    from formation_ftc import _lazy_jax
+
+    if _lazy_jax.loaded():  # JAX read its configuration already: set it directly (a proxy: not yet)
         _configure_jax(cache)
     return cache
 
