@@ -28,7 +28,7 @@ CASES = [
         "compose-lqr-on-cw",
         "plant.mass.1",
         ("plant", "mass"),
-        ("controller", "mass"),
+        ("controller", "nominal_mass"),
         120.0,
         id="lqr",
     ),

@@ -196,7 +196,7 @@ KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("controller", "pd"): ("nominal_mass",),
     ("controller", "none"): (),
     ("controller", "lqr"): (
-        "mass",
+        "nominal_mass",
         "mu",
     ),  # semi_major_axis: the [reference]'s, required without one
     ("controller", "azizi2009-llfr"): ("nominal_mass", "b", "b_hat"),
