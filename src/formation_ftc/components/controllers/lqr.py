@@ -17,23 +17,22 @@ from typing import Any, Literal
 import jax.numpy as jnp
 from pydantic import Field, field_validator
 
+from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
     BuildContext,
     builder_input,
     per_spacecraft,
     register,
 )
+from formation_ftc.components._sections import Vec3, Vec3Expr
 from formation_ftc.components.controllers.pd_formation import DesiredPositionLaw
-from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.cw import cw_rhs
 from formation_ftc.sim.components import FlightInputs, component
 from formation_ftc.sim.contract import as_float
 
-__all__ = ["LqrFormationController", "LqrSection", "NOMINAL_MASS"]
-
-#: the law's nominal on-board mass when a scenario states none [kg]
-NOMINAL_MASS = 100.0
+__all__ = ["LqrFormationController", "LqrSection"]
 
 
 @component
@@ -66,8 +65,6 @@ class LqrFormationController(DesiredPositionLaw):
         return self.nominal_mass[:, None] * accel, None, {}
 
 
-Vec3 = tuple[float, float, float]
-Vec3Expr = tuple[ExprText, ExprText, ExprText]
 _BRYSON = ("max_position_error", "max_velocity_error", "max_acceleration")
 
 
