@@ -319,7 +319,7 @@ def test_completion_scripts_without_jax():
         "    with contextlib.redirect_stdout(buf):\n"
         "        assert main(['completion', shell]) == 0\n"
         "    open(sys.argv[1] + '.' + shell, 'w').write(buf.getvalue())\n"
-        "print(sorted(m for m in ('jax', 'scipy', 'pandas', 'pydantic', 'numpy') if m in sys.modules))\n"
+        "print(sorted(m for m in ('jax._src', 'scipy', 'pandas', 'pydantic', 'numpy') if m in sys.modules))\n"
     )
     tmp = Path(os.environ.get("TMPDIR", "/tmp")) / f"formation-ftc-completion-{os.getpid()}"
     try:

@@ -24,7 +24,7 @@ _PROBE = (
     "sys.stdout.flush()\n"
     "catalogs = sorted(m.rsplit('.', 1)[1] for m in sys.modules if '.catalog_' in m)\n"
     "print('\\n@@' + repr(catalogs), flush=True)\n"
-    "print('@@' + repr(sorted(m for m in ('jax', 'jaxlib') if m in sys.modules)), flush=True)\n"
+    "print('@@' + repr(sorted(m for m in ('jax._src', 'jaxlib') if m in sys.modules)), flush=True)\n"
     "print('@@' + repr(code), flush=True)\n"
 )
 
@@ -107,7 +107,7 @@ def _heavy(argv: list[str], heavy: tuple[str, ...]) -> list[str]:
 
 def test_campaign_list_imports_no_jax_scipy_or_pydantic():
     """``campaign list`` reads the built-in campaign files only (issue 45)."""
-    assert _heavy(["campaign", "list", "--json"], ("jax", "scipy", "pydantic", "pandas")) == []
+    assert _heavy(["campaign", "list", "--json"], ("jax._src", "scipy", "pydantic", "pandas")) == []
 
 
 def test_plot_of_a_run_imports_no_jax(tmp_path):
@@ -116,7 +116,7 @@ def test_plot_of_a_run_imports_no_jax(tmp_path):
 
     out = tmp_path / "run"
     save_result(simulate(load_scenario("cw-free-drift", {"simulation.horizon": 10.0})), out)
-    assert _heavy(["plot", str(out), "-q"], ("jax", "jaxlib")) == []
+    assert _heavy(["plot", str(out), "-q"], ("jax._src", "jaxlib")) == []
     assert (out / "run_position.png").is_file()
 
 

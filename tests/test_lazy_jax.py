@@ -9,6 +9,7 @@ without, and compares the documents."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -57,6 +58,10 @@ print(json.dumps({"checks": out, "first_jax": first}))
 """
 
 
+#: the package's own install at import off, so that the scripts install (or not) the proxies themselves
+_EAGER_IMPORT = {**os.environ, "FORMATION_FTC_LAZY_JAX": "off"}
+
+
 def _targets(tmp_path) -> list[tuple[str, str]]:
     """(name, what ``check`` reads) of every built-in scenario and every league method (a file of its
     scenario at the league's first level, no fault): those to stay JAX-free first."""
@@ -77,6 +82,7 @@ def test_check_of_every_scenario_with_and_without_jax(tmp_path):
     procs = {
         mode: subprocess.Popen(
             [sys.executable, "-c", _CHECKS, mode, json.dumps(targets)],
+            env=_EAGER_IMPORT,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
@@ -219,6 +225,7 @@ def test_proxies_import_jax_on_first_use(tmp_path, script):
     )
     out = subprocess.run(
         [sys.executable, "-c", script, str(tmp_path)],
+        env=_EAGER_IMPORT,
         capture_output=True,
         text=True,
         timeout=600,

@@ -150,6 +150,18 @@ class BuildContext:
 def home_module(kind: str, name: str) -> str:
     """The module that is the home of ``[kind] type = "name"``.
 
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    name : str
+        The type name.
+
+    Returns
+    -------
+    str
+        The dotted module name.
+
     Examples
     --------
     >>> home_module("controller", "li2020-adaptive")
@@ -200,6 +212,19 @@ def register(
     ValueError
         An unknown kind, or a built-in module registering a type that is not its own (one home per
         type: the module's path must be :func:`home_module` of ``(kind, name)``).
+
+    Examples
+    --------
+    A plug-in's module registers its types (here a law that commands nothing):
+
+    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.config.base import StrictModel
+    >>> class Idle(StrictModel):
+    ...     pass
+    >>> entry = register("controller", "doc-idle", Idle, lambda s, c: ZeroController(count=c.count), "idle")
+    >>> component_type("controller", "doc-idle") is entry
+    True
+    >>> _ = _TYPES.pop(("controller", "doc-idle"))
     """
     if kind not in KINDS:
         raise ValueError(f"unknown kind {kind!r} (kinds: {', '.join(KINDS)})")
@@ -228,12 +253,40 @@ def _homes(kind: str) -> list[str]:
 
 def type_names(kind: str) -> list[str]:
     """Names of the registered types of ``kind`` (every built-in home imported; plug-ins' types
-    included), e.g. for an error message listing the known ones."""
+    included), e.g. for an error message listing the known ones.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+
+    Returns
+    -------
+    list of str
+        The names, sorted.
+
+    Examples
+    --------
+    >>> "lqr" in type_names("controller")
+    True
+    """
     return sorted(n for (_, n) in component_types(kind))
 
 
 def component_type(kind: str, name: str) -> ComponentType | None:
     """The entry of ``[kind] type = "name"`` (None if there is none), importing its home only.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    name : str
+        The type name; only a name of lower-case words joined by ``-`` names a home.
+
+    Returns
+    -------
+    ComponentType or None
+        The registered entry.
 
     Examples
     --------
@@ -258,7 +311,23 @@ def component_type(kind: str, name: str) -> ComponentType | None:
 
 
 def component_types(kind: str | None = None) -> dict[tuple[str, str], ComponentType]:
-    """Every registered type (of ``kind``), every built-in home imported."""
+    """Every registered type (of ``kind``), every built-in home imported.
+
+    Parameters
+    ----------
+    kind : str, optional
+        One of :data:`KINDS`; None: every kind.
+
+    Returns
+    -------
+    dict
+        ``(kind, name)`` -> :class:`ComponentType`, sorted.
+
+    Examples
+    --------
+    >>> ("controller", "lqr") in component_types("controller")
+    True
+    """
     for k in KINDS if kind is None else (kind,):
         for module in _homes(k):
             importlib.import_module(module)
@@ -267,6 +336,20 @@ def component_types(kind: str | None = None) -> dict[tuple[str, str], ComponentT
 
 def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
     """One number or ``n`` numbers -> (n,) float64 (errors name ``field``).
+
+    Parameters
+    ----------
+    value : float or sequence of float
+        One value for every spacecraft, or one per spacecraft.
+    n : int
+        Number of spacecraft.
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n,).
 
     Examples
     --------
@@ -290,6 +373,18 @@ def builder_input(default: Any = ..., **kwargs: Any) -> Any:
     design weight the gain is computed from, an orbit radius turned into a mean motion): a campaign
     that samples it builds each run afresh. ``pydantic.Field`` arguments otherwise.
 
+    Parameters
+    ----------
+    default : Any, optional
+        The default (none: the field is required).
+    **kwargs
+        Further ``pydantic.Field`` arguments (``description``, ``gt``, ...).
+
+    Returns
+    -------
+    pydantic.fields.FieldInfo
+        The field, marked in its JSON-schema extra.
+
     Examples
     --------
     >>> from formation_ftc.config.base import StrictModel
@@ -304,14 +399,62 @@ def builder_input(default: Any = ..., **kwargs: Any) -> Any:
 
 
 def is_builder_input(info: Any) -> bool:
-    """Whether a pydantic field (``Model.model_fields[name]``) is a :func:`builder_input`."""
+    """Whether a pydantic field (``Model.model_fields[name]``) is a :func:`builder_input`.
+
+    Parameters
+    ----------
+    info : pydantic.fields.FieldInfo
+        The field.
+
+    Returns
+    -------
+    bool
+        True for a builder input.
+
+    Examples
+    --------
+    >>> from formation_ftc.components.controllers.lqr import LqrSection
+    >>> is_builder_input(LqrSection.model_fields["max_acceleration"])
+    True
+    >>> is_builder_input(LqrSection.model_fields["nominal_mass"])
+    False
+    """
     extra = getattr(info, "json_schema_extra", None)
     return isinstance(extra, dict) and bool(extra.get(_BUILDER_INPUT))
 
 
 def validated_section(entry: ComponentType, raw: dict[str, Any], where: str) -> Any:
     """``raw`` (without its ``type`` key) validated by the type's section; one error listing the
-    section's validation errors, each named ``where.field[index]: reason``."""
+    section's validation errors, each named ``where.field[index]: reason``.
+
+    Parameters
+    ----------
+    entry : ComponentType
+        The type.
+    raw : dict
+        The TOML table (its ``type`` key is ignored).
+    where : str
+        The table's name in the scenario (``controller``, ``evaluations[1]``), for the error.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated section.
+
+    Raises
+    ------
+    ValueError
+        Every validation error of the table, each named ``where.field``.
+
+    Examples
+    --------
+    >>> lqr = component_type("controller", "lqr")
+    >>> validated_section(lqr, {"type": "lqr", "max_position_error": 1.0,
+    ...     "max_velocity_error": 0.01, "max_acceleration": -1.0}, "controller")
+    Traceback (most recent call last):
+    ...
+    ValueError: controller.max_acceleration: every value must be finite and > 0
+    """
     try:
         return entry.section.model_validate({k: v for k, v in raw.items() if k != "type"})
     except ValidationError as exc:

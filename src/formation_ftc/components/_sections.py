@@ -22,6 +22,20 @@ def per_axis(value: Any, n: int, field: str) -> np.ndarray:
     """A number, 3 values (per axis, every spacecraft) or N x 3 values -> (N, 3) float64 (errors name
     ``field``).
 
+    Parameters
+    ----------
+    value : float or array_like
+        A number, 3 values or N x 3 values.
+    n : int
+        Number of spacecraft N.
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (N, 3), float64.
+
     Examples
     --------
     >>> per_axis([1.0, 2.0, 3.0], 2, "plant.disturbance").tolist()

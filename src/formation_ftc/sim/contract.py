@@ -86,8 +86,28 @@ CAPABILITIES: dict[str, Capability] = {
 
 
 def capability(name: str) -> Capability:
-    """The entry of :data:`CAPABILITIES` named ``name`` (a declaration naming none is a bug: KeyError
-    listing the known names)."""
+    """The entry of :data:`CAPABILITIES` named ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A capability's name.
+
+    Returns
+    -------
+    Capability
+        Its meaning and who provides it.
+
+    Raises
+    ------
+    KeyError
+        A name that is no capability (a declaration bug), listing the known names.
+
+    Examples
+    --------
+    >>> capability("reference-orbit").meaning
+    'a reference orbit known on board'
+    """
     try:
         return CAPABILITIES[name]
     except KeyError:

@@ -129,7 +129,7 @@ def _from_reference(ctx: BuildContext, name: str) -> float | None:
     return None if value is None else float(value)
 
 
-def build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
+def _build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
     """The controller of a validated ``[controller] type = "lqr"`` section."""
     from formation_ftc.design.lqr import cw_lqr
 
@@ -162,6 +162,6 @@ register(
     "controller",
     "lqr",
     LqrSection,
-    build,
+    _build,
     "LQR baseline designed on Clohessy-Wiltshire (Bryson weights), no fault tolerance",
 )
