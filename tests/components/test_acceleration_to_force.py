@@ -20,8 +20,10 @@ from formation_ftc.components.controllers.acceleration_to_force import (
 )
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
 from formation_ftc.components.controllers.pd_formation import PdFormationController
-from formation_ftc.components.sensors.chain_relative import ChainRelativeSensors
-from formation_ftc.components.sensors.chain_relative_state import ChainRelativeStateSensors
+from formation_ftc.components.sensors.chain_relative import (
+    ChainRelativeSensors,
+    ChainRelativeStateSensors,
+)
 from formation_ftc.sim.batch import stack_params
 from formation_ftc.sim.components import CompositionError, FlightInputs, SensorInputs, as_float
 
@@ -34,7 +36,7 @@ def _law(sampled=True):
         lambda1=as_float(3.0),
         alpha=as_float(np.ones(4)),
         alpha_flfr=as_float(4.7),
-        b_nominal=as_float(np.ones((4, 3))),
+        b=as_float(np.ones((4, 3))),
         b_hat=as_float(np.array([[1, 1, 1], [0.88, 1, 1], [1, 1, 1], [1, 1, 1.0]])),
         side=as_float(200.0),
         omega=as_float(0.1),

@@ -205,5 +205,7 @@ def test_compositions_are_checked(mehrabian_cells):
         load_scenario(raw)
     raw = copy.deepcopy(mehrabian_cells[("none", "unsaturated")])
     raw["actuator"] = {"type": "euler-torque-allocation"}  # the cell keeps its fdi-scores
-    with pytest.raises(ValueError, match="fdi-scores reads the true fault of the fault-battery"):
+    with pytest.raises(
+        ValueError, match=r"fdi-scores needs the true fault of one actuator channel"
+    ):
         load_scenario(raw)

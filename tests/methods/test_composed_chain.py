@@ -149,7 +149,7 @@ def test_flfr_reduces_the_post_fault_error_against_llfr_alone_but_not_below_e_s_
     scn = ftc.load_scenario(NAME, {"simulation.horizon": 100.0, "simulation.record_every": 100})
     loop = make_loop(scn)
     llfr_only = dataclasses.replace(
-        loop, supervisor=dataclasses.replace(loop.supervisor, flfr_enabled=np.asarray(False))
+        loop, supervisor=dataclasses.replace(loop.supervisor, flfr=np.asarray(False))
     )
     batch, axes = stack_params([loop, llfr_only])
     out = jax.device_get(batched_run(compile_loop(loop), axes, 2)(batch))
@@ -177,16 +177,25 @@ _ATTITUDE_PLANT = {
     [
         (
             {"sensors": {"type": "relative-state"}},
-            ("supervisor hierarchical", "sensors relative-state"),
+            ("supervisor hierarchical needs relative positions", 'sensors type = "chain-relative"'),
         ),
-        ({"sensors": None, "supervisor": None}, ("controller azizi2009-llfr", "sensors default")),
+        (
+            {"sensors": None, "supervisor": None},
+            (
+                "controller azizi2009-llfr needs relative positions",
+                'sensors type = "chain-relative"',
+            ),
+        ),
         (
             {"controller": {"type": "pd", "kp": 1.0, "kd": 1.0}},
-            ("supervisor hierarchical", "controller pd"),
+            (
+                "supervisor hierarchical needs a law whose allocation has the modes",
+                "azizi2009-llfr",
+            ),
         ),
         (
             {"plant": _ATTITUDE_PLANT, "reference": None, "supervisor": None, "actuator": None},
-            ("sensors chain-relative", "plant quaternion-rigid-body"),
+            ("controller ChainLlfrController commands a acceleration", "QuaternionRigidBodyPlant"),
         ),
         (
             {
@@ -227,4 +236,4 @@ def test_cli_rejects_the_law_without_chain_sensors_with_exit_2(tmp_path, capsys)
     path.write_text(text)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
-    assert "supervisor hierarchical" in err and "sensors relative-state" in err
+    assert "supervisor hierarchical needs" in err and 'sensors type = "chain-relative"' in err

@@ -1,8 +1,7 @@
 """Physical constants and the numbers that scenario sections validate against, in pure Python/NumPy
 (no JAX): sections import them while ``show`` validates a scenario without building it (issue 37).
 The modules that use them (:mod:`formation_ftc.core.orbit`, :mod:`formation_ftc.core.dynamics.orbital_truth`,
-:mod:`formation_ftc.core.dynamics.euler_lagrange`, :mod:`formation_ftc.components.actuators.fault_battery`)
-re-export them under their old names."""
+:mod:`formation_ftc.core.dynamics.euler_lagrange`) re-export them under their old names."""
 
 from __future__ import annotations
 
@@ -10,7 +9,6 @@ import numpy as np
 
 __all__ = [
     "EXPONENTIAL_ATMOSPHERE",
-    "FAULT_KINDS",
     "MU_EARTH",
     "R_EARTH",
     "SINGULAR_PITCH_LIMIT_RAD",
@@ -54,17 +52,6 @@ EXPONENTIAL_ATMOSPHERE = np.array(
     ]
 ) * np.array([1e3, 1.0, 1e3])  # km -> m for the altitudes and scale heights
 
-
-#: fault kind names; a kind's code (the ``fault_kind`` leaf) is its index in this tuple
-FAULT_KINDS: tuple[str, ...] = (
-    "none",
-    "loss_of_effectiveness",
-    "bias",
-    "stuck",
-    "outage",
-    "intermittent",
-    "degrading",
-)
 
 SINGULAR_PITCH_LIMIT_RAD = float(np.deg2rad(85.0))
 

@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -140,8 +140,9 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
             net_fields = case.network_fields(delayed=delayed) if network else None
             for level in spec.levels:
                 act = case.actuator_fields(saturation=level.saturation, quantity=quantity)
-                raw = _with_fdi_scores(method_scenario(spec, m, level, act, net_fields))
+                raw = method_scenario(spec, m, level, act, net_fields)
                 try:
+                    raw = _with_fdi_scores(raw)
                     n_steps = int(load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
                     raise LeagueError(
@@ -154,17 +155,19 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
 
 
 def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
-    """A cell whose method flies a fault detector (an estimator type the ``fdi-scores`` evaluation
-    scores, :data:`~formation_ftc.methods.composed.catalog_navigation.FDI_ESTIMATORS`) on the league's
-    ``fault-battery`` actuator also gets the league's FDI scores: the ``fdi-scores`` evaluation and
-    :data:`FDI_METRICS` (the league owns the scores; a method file gives none)."""
-    from formation_ftc.methods.composed import component_types
-    from formation_ftc.methods.composed.catalog_navigation import FDI_ESTIMATORS
+    """A cell whose method flies a fault detector that records its alarm (its estimator provides the
+    capability ``fdi-records``, e.g. ``residual-fdi``) on an actuator that records the true fault
+    (``true-actuator-fault``: the league's ``fault-battery``) also gets the league's FDI scores: the
+    ``fdi-scores`` evaluation and :data:`FDI_METRICS` (the league owns the scores; a method file gives
+    none)."""
+    from formation_ftc.api import load_scenario
+    from formation_ftc.methods.composed import ComposedScenario, make_loop
 
-    component_types("estimator")  # every catalog loaded: each fault detector has declared itself
-    est = (raw.get("estimator") or {}).get("type")
-    act = (raw.get("actuator") or {}).get("type")
-    if est not in FDI_ESTIMATORS or act != "fault-battery":
+    loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
+    if not (
+        "fdi-records" in loop.estimator.provides()
+        and "true-actuator-fault" in loop.actuator.provides()
+    ):
         return raw
     raw["evaluations"] = [*raw.get("evaluations", []), {"type": "fdi-scores"}]
     raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in FDI_METRICS)]

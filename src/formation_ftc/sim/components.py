@@ -459,9 +459,6 @@ class Estimator(_Kind):
     #: True: a navigation filter -- its estimate has the layout of the sensors' measurement and the
     #: controller reads it in place of the measurement (and no other estimate)
     navigation: ClassVar[bool] = False
-    #: the entries of the estimate when it is a mapping (e.g. ``("detected", "isolated")`` of a fault
-    #: detector), read by compositions that check what a supervisor or law can use
-    estimate_keys: ClassVar[tuple[str, ...]] = ()
 
     def initial_state(self, measurement0: PyTree) -> PyTree:
         return None

@@ -1,16 +1,19 @@
 """The JAX-free part of the component contract: what a scenario section needs while it is validated.
 
-:class:`CompositionError` and :func:`as_float` are used by the catalog modules
-(``formation_ftc.methods.composed.catalog_*``), which declare their TOML sections at import time and
-build their components only when a loop is made. Keeping these names here (numpy only) lets
-``formation-ftc show`` and ``formation-ftc schema`` load every catalog without importing JAX.
-:mod:`formation_ftc.sim.components` re-exports both, so ``from formation_ftc.sim.components import
-CompositionError, as_float`` keeps working; :mod:`formation_ftc.sim.metrics` re-exports the names of
-the metric reductions, which ``[[metrics]]`` sections check.
+:class:`CompositionError` and :func:`as_float` are used by the component homes
+(``formation_ftc.components.<kind>.<name>``), which declare their TOML sections at import time and
+build their components only when a loop is made; :data:`CAPABILITIES` names what a part may need or
+provide; :class:`Condition` is what a component states for ``formation-ftc check`` (re-exported by
+:mod:`formation_ftc.registry`). Keeping these names here (numpy only) lets ``formation-ftc show`` and
+``formation-ftc schema`` load every home without importing JAX. :mod:`formation_ftc.sim.components`
+re-exports the first two, so ``from formation_ftc.sim.components import CompositionError, as_float``
+keeps working; :mod:`formation_ftc.sim.metrics` re-exports the names of the metric reductions, which
+``[[metrics]]`` sections check.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -20,6 +23,9 @@ __all__ = [
     "Capability",
     "CAPABILITIES",
     "capability",
+    "Condition",
+    "BASES",
+    "CERTIFYING_BASES",
     "as_float",
     "REDUCTIONS",
     "BLOCK_REDUCTIONS",
@@ -82,6 +88,50 @@ CAPABILITIES: dict[str, Capability] = {
     "reference-orbit": Capability(
         "a reference orbit known on board", 'a [reference] section, e.g. type = "keplerian"'
     ),
+    # --- chain, faults, navigation, truth (chain law and HL supervisor, fault battery, link loss,
+    # navigation filter and residual FDI, orbital truth)
+    "translational-state": Capability(
+        "positions and velocities of the spacecraft in what sensors see (the (N, 6) relative state "
+        "q, or positions r and velocities v)",
+        'plant type = "clohessy-wiltshire", "relative-lvlh", "clohessy-wiltshire-zoh", '
+        '"orbital-truth" or "double-integrator"',
+    ),
+    "lvlh-relative-state": Capability(
+        "the (N, 6) LVLH relative state q = [position, velocity] in what sensors see",
+        'plant type = "clohessy-wiltshire", "relative-lvlh", "clohessy-wiltshire-zoh" or '
+        '"orbital-truth"',
+    ),
+    "spacecraft-pairs": Capability(
+        "two or more spacecraft (a chain of relative pairs)", "a plant of two or more spacecraft"
+    ),
+    "stage-evaluation": Capability(
+        "RK4 integration that evaluates the command at every stage",
+        'plant type = "clohessy-wiltshire", "relative-lvlh", "orbital-truth", or '
+        '"double-integrator" with integration = "rk4"',
+    ),
+    "chain-outputs": Capability(
+        "relative positions and velocities on the chain pairs (1, 2), ..., (N-1, N) as the "
+        "measurement",
+        'sensors type = "chain-relative", or "lvlh-relative-state" (the chain outputs formed on '
+        "board from the LVLH relative state)",
+    ),
+    "allocation-modes": Capability(
+        "a law whose allocation has the modes Nominal / LLFR / FLFR",
+        'controller type = "azizi2009-llfr"',
+    ),
+    "fault-alarm": Capability(
+        "an estimate that reports a fault detection (estimate['detected'])",
+        'estimator type = "residual-fdi"',
+    ),
+    "fdi-records": Capability(
+        "a fault detector's latched alarm and isolated channel, recorded as fdi_detected and "
+        "fdi_isolated in the actuator's channels",
+        'estimator type = "residual-fdi" or "attitude-residual-fdi"',
+    ),
+    "true-actuator-fault": Capability(
+        "the true fault of one actuator channel, recorded as fault_active and fault_channel",
+        'actuator type = "fault-battery"',
+    ),
 }
 
 
@@ -115,6 +165,83 @@ def capability(name: str) -> Capability:
             f"capability {name!r} is not in formation_ftc.sim.contract.CAPABILITIES "
             f"(known: {', '.join(sorted(CAPABILITIES))})"
         ) from None
+
+
+#: How a condition's verdict was computed (:attr:`Condition.basis`).
+BASES = ("exact", "verified", "sampled", "heuristic", "informative")
+#: The bases whose computation may certify a condition (``holds=True``).
+CERTIFYING_BASES = ("exact", "verified", "informative")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One theorem / design condition evaluated before (or after) a run.
+
+    ``holds`` is None when the condition cannot be evaluated for this scenario or when the computation
+    could not prove it. ``required`` marks conditions the method's guarantee needs: ``formation-ftc
+    check`` exits with 1 when one fails.
+
+    ``basis`` (keyword, no default: every condition states it) says how the verdict was computed:
+
+    * ``"exact"`` -- exact arithmetic, or floating point with a stated rounding margin;
+    * ``"verified"`` -- a verified bound (interval arithmetic, a certificate re-checked in numpy);
+    * ``"sampled"`` -- evaluated at sample points: a violation found is real, a pass is not a proof;
+    * ``"heuristic"`` -- an estimate that is not a bound;
+    * ``"informative"`` -- a number shown for the reader, not a requirement (``required=False``).
+
+    ``holds=True`` is only allowed with ``exact``, ``verified`` or ``informative``; a sampled or
+    heuristic computation that finds no violation reports ``holds=None`` ("unproven"). ``holds=False``
+    is allowed with any basis.
+    """
+
+    name: str
+    reference: str
+    value: str
+    requirement: str
+    holds: bool | None
+    required: bool = True
+    detail: str = ""
+    basis: str = field(kw_only=True)
+
+    def __post_init__(self) -> None:
+        if self.basis not in BASES:
+            raise ValueError(
+                f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}"
+            )
+        if self.holds is not None and not isinstance(self.holds, bool | np.bool_):
+            raise ValueError(
+                f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}"
+            )
+        if self.basis == "informative" and self.required:
+            raise ValueError(
+                f"condition {self.name!r}: an informative condition cannot be required"
+            )
+        if self.holds is not None and bool(self.holds) and self.basis not in CERTIFYING_BASES:
+            raise ValueError(
+                f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
+                "holds; report holds=None (unproven) when no violation is found"
+            )
+
+    @property
+    def unproven(self) -> bool:
+        """True when the condition was evaluated by sampling or a heuristic and no violation was found."""
+        return self.holds is None and self.basis in ("sampled", "heuristic")
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(
+            name=str(self.name),
+            reference=str(self.reference),
+            value=str(self.value),
+            requirement=str(self.requirement),
+            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
+            required=bool(self.required),
+            detail=str(self.detail),
+            basis=str(self.basis),
+        )
+
+
+# its public name (tracebacks, docs, pickles): formation_ftc.registry, which re-exports it
+Condition.__module__ = "formation_ftc.registry"
 
 
 def as_float(x: Any) -> np.ndarray:

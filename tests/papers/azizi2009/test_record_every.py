@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 from formation_ftc.api import load_scenario as load
-from formation_ftc.blocks.supervisors.hierarchical_supervisor import FLFR
+from formation_ftc.components.supervisors.hierarchical import FLFR
 from formation_ftc.papers.azizi2009.reproduction import run_batch
 from formation_ftc.papers.programs import simulate
 

@@ -1,4 +1,19 @@
-"""The fault-battery actuator: per-axis saturation and one thruster-level fault of a chosen kind.
+"""Actuator ``fault-battery``: per-axis saturation and one thruster-level fault of a chosen kind.
+
+``[actuator] type = "fault-battery"``::
+
+    kind = "loss_of_effectiveness"   # none, loss_of_effectiveness, bias, stuck, outage, intermittent, degrading
+    spacecraft = 2                   # faulty spacecraft, 1-based
+    axis = 0                         # faulty axis 0, 1, 2
+    onset = 1000.0                   # [s]
+    effectiveness = 0.5              # loss_of_effectiveness [-]
+    bias = 0.0                       # bias [N, or N m on a torque plant]
+    period = 60.0                    # intermittent [s]
+    duty = 0.5                       # intermittent on-fraction [-]
+    rate = 0.0                       # degrading [1/s]
+    min_effectiveness = 0.0          # degrading floor [-]
+    saturation = 1.0                 # per-axis limit [N or N m]: one number or one per spacecraft; omit: none
+    euler_allocation = false         # the law commands a 3-2-1 Euler-angle generalised torque
 
 Every quantity that distinguishes one fault case from another -- the kind, the faulty channel
 (spacecraft, axis), the onset, the magnitudes and the saturation limit -- is a numeric array leaf, so
@@ -29,19 +44,44 @@ step on). *Stuck*: the frozen value is the saturated command of the faulty chann
 time ``t_k >= onset`` (stored by :meth:`FaultBatteryActuator.update` after that step); during that
 first step the channel passes its current saturated command (exactly the frozen value for a law sampled
 once per step).
+
+Provides ``true-actuator-fault`` (the ``fault_active`` and ``fault_channel`` records the ``fdi-scores``
+evaluation compares a fault detector with). With ``euler_allocation`` it needs the plant's
+``quaternion-attitude-state`` and provides ``generalised-torque-actuation``.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
+from pydantic import Field, field_validator
 
+from formation_ftc.components._registry import (
+    BuildContext,
+    builder_input,
+    per_spacecraft,
+    register,
+)
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
-from formation_ftc.core.constants import FAULT_KINDS
+from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["FaultBatteryActuator", "FAULT_KINDS", "fault_kind_code"]
+__all__ = ["FaultBatteryActuator", "FaultBatterySection", "FAULT_KINDS", "fault_kind_code"]
+
+#: fault kind names; a kind's code (the ``fault_kind`` leaf) is its index in this tuple
+FAULT_KINDS: tuple[str, ...] = (
+    "none",
+    "loss_of_effectiveness",
+    "bias",
+    "stuck",
+    "outage",
+    "intermittent",
+    "degrading",
+)
 
 _CODE = {name: code for code, name in enumerate(FAULT_KINDS)}
 
@@ -130,6 +170,20 @@ class FaultBatteryActuator(Actuator):
             :, None
         ]
 
+    def needs(self) -> dict[str, str]:
+        if not self.euler_allocation:
+            return {}
+        return {
+            "quaternion-attitude-state": "map the generalised torque to a body torque with its "
+            "quaternion (euler_allocation)"
+        }
+
+    def provides(self) -> frozenset[str]:
+        caps = {"true-actuator-fault"}
+        return frozenset(
+            caps | ({"generalised-torque-actuation"} if self.euler_allocation else set())
+        )
+
     def _body(self, t, command, inputs: ActuatorInputs):
         """The command in the actuator's axes (after the Euler-angle allocation when static-enabled)."""
         if self.euler_allocation:
@@ -212,3 +266,101 @@ class FaultBatteryActuator(Actuator):
             "fault_active": jnp.where(exo["active"], 1.0, 0.0),
             "fault_channel": jnp.where(self._channel() & exo["active"], 1.0, 0.0),
         }
+
+
+class FaultBatterySection(StrictModel):
+    """Per-axis saturation, then one fault of kind ``kind`` on channel (spacecraft, axis) from ``onset``."""
+
+    kind: str = builder_input(
+        "none",
+        description=f"Fault kind: one of {', '.join(FAULT_KINDS)} (the component's fault_kind is its "
+        "index).",
+    )
+    spacecraft: int = Field(1, ge=1, description="Faulty spacecraft (1-based) [-].")
+    axis: int = Field(0, ge=0, le=2, description="Faulty axis 0, 1 or 2 [-].")
+    onset: float = Field(
+        0.0, ge=0.0, description="Fault onset (acts from the first step at or after it) [s]."
+    )
+    effectiveness: float = Field(
+        1.0, ge=0.0, description="Gain of a loss_of_effectiveness fault [-]."
+    )
+    bias: float = Field(
+        0.0, description="Additive output of a bias fault [N, or N m on a torque plant]."
+    )
+    period: float = Field(60.0, gt=0.0, description="Period of an intermittent fault [s].")
+    duty: float = Field(
+        0.5, ge=0.0, le=1.0, description="On-fraction of each intermittent period [-]."
+    )
+    rate: float = Field(
+        0.0, ge=0.0, description="Effectiveness loss rate of a degrading fault [1/s]."
+    )
+    min_effectiveness: float = Field(
+        0.0, ge=0.0, le=1.0, description="Floor of a degrading fault's effectiveness [-]."
+    )
+    saturation: float | list[float] | None = Field(
+        None,
+        description="Per-axis output limit [N or N m], one number or one per spacecraft (omit: unsaturated).",
+    )
+    euler_allocation: bool = Field(
+        False,
+        description="Map a generalised 3-2-1 Euler-angle torque to the body "
+        "torque first (quaternion plants).",
+    )
+
+    @field_validator("kind")
+    @classmethod
+    def _kind(cls, v: str) -> str:
+        if v not in FAULT_KINDS:
+            raise ValueError(
+                f"kind = {v!r} is not a fault kind (allowed: {', '.join(FAULT_KINDS)})"
+            )
+        return v
+
+    @field_validator("saturation")
+    @classmethod
+    def _limits(cls, v):
+        lim = [] if v is None else np.atleast_1d(np.asarray(v, float)).tolist()
+        if any(not (x > 0 and math.isfinite(x)) for x in lim):
+            raise ValueError(
+                f"saturation = {v}: limits must be finite and > 0 [N or N m] (omit it for none)"
+            )
+        return v
+
+
+def _build(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryActuator:
+    """The actuator of a validated ``[actuator] type = "fault-battery"`` section."""
+    n = ctx.count
+    if sec.spacecraft > n:
+        raise ValueError(
+            f"actuator.spacecraft = {sec.spacecraft}: must be in 1..{n} (the plant has {n} "
+            "spacecraft)"
+        )
+    limit = np.inf if sec.saturation is None else sec.saturation
+    sat = per_spacecraft(limit, n, "actuator.saturation")
+    quantity = getattr(ctx.plant, "quantity", "force")
+    return FaultBatteryActuator(
+        count=n,
+        saturation=as_float(sat),
+        fault_kind=as_float(fault_kind_code(sec.kind)),
+        spacecraft=as_float(sec.spacecraft),
+        axis=as_float(sec.axis),
+        onset=as_float(sec.onset),
+        effectiveness=as_float(sec.effectiveness),
+        bias=as_float(sec.bias),
+        period=as_float(sec.period),
+        duty=as_float(sec.duty),
+        rate=as_float(sec.rate),
+        min_effectiveness=as_float(sec.min_effectiveness),
+        euler_allocation=sec.euler_allocation,
+        units="N m" if quantity == "torque" else "N",
+    )
+
+
+register(
+    "actuator",
+    "fault-battery",
+    FaultBatterySection,
+    _build,
+    "per-axis saturation + one fault (loss of effectiveness, bias, stuck, outage, "
+    "intermittent, degrading) on one channel from an onset; kind and numbers are leaves",
+)

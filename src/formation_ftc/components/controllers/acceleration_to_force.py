@@ -72,6 +72,12 @@ class AccelerationToForce(Controller):
     def holds_exogenous(self) -> bool:  # type: ignore[override]
         return bool(self.law.holds_exogenous)
 
+    def needs(self) -> dict[str, str]:
+        return self.law.needs()
+
+    def provides(self) -> frozenset[str]:
+        return self.law.provides()
+
     def exogenous(self, t):
         return self.law.exogenous(t)
 

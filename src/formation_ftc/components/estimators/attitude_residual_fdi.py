@@ -170,6 +170,9 @@ class AttitudeResidualFdi(Estimator):
     smoothing: Any  # () EMA weight 1 - exp(-dt / identification_time) [-]
     command: str = static(default="held")  # "held" or "extrapolated"
 
+    def provides(self) -> frozenset[str]:
+        return frozenset({"fdi-records"})
+
     def signals(self):
         return (
             Signal("fdi_residual", VEC, "N m", "rigid-body residual (applied - commanded)", "body"),

@@ -18,8 +18,6 @@ class ScheduledDiagnosis(Estimator):
     this diagnosis, ``{"diagnosed": (N,) bool}``, never the fault itself. Times are compared with the
     step times t_k, so they should lie on the step grid."""
 
-    estimate_keys = ("diagnosed",)
-
     count: int = static()
     diagnosis_time: Any = float("inf")
 

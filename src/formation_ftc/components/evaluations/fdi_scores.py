@@ -1,12 +1,19 @@
-"""Truth-side scores of a fault detection and isolation component (records and metrics only)."""
+"""Evaluation ``fdi-scores``: truth-side scores of a fault detection and isolation component (records
+and metrics only): detection delay, missed detection, false alarm and isolation against the true fault.
+
+Needs ``fdi-records`` (a fault detector recording its alarm and isolation, e.g. ``residual-fdi``) and
+``true-actuator-fault`` (the ``fault-battery`` actuator's record of the true fault).
+"""
 
 from __future__ import annotations
 
 import jax.numpy as jnp
 
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Evaluation, Signal, component
 
-__all__ = ["FdiScores"]
+__all__ = ["FdiScores", "FdiScoresSection"]
 
 
 @component
@@ -22,6 +29,12 @@ class FdiScores(Evaluation):
       over no-fault runs, their fraction per hour of flight is the false-alarm rate);
     * ``fdi_correct_isolation``: detected, a fault active, and the isolated channel is the faulty one.
     """
+
+    def needs(self) -> dict[str, str]:
+        return {
+            "fdi-records": "compare its alarm with the true fault",
+            "true-actuator-fault": "score the fault detector against it",
+        }
 
     def signals(self):
         return (
@@ -44,3 +57,21 @@ class FdiScores(Evaluation):
             "fdi_false_alarm": jnp.where(detected & ~active, 1.0, 0.0),
             "fdi_correct_isolation": jnp.where(right, 1.0, 0.0),
         }
+
+
+class FdiScoresSection(StrictModel):
+    """Truth-side FDI scores (no fields)."""
+
+
+def _build(sec: FdiScoresSection, ctx: BuildContext) -> FdiScores:
+    """The evaluation of a validated ``[[evaluations]] type = "fdi-scores"`` item."""
+    return FdiScores()
+
+
+register(
+    "evaluation",
+    "fdi-scores",
+    FdiScoresSection,
+    _build,
+    "detection delay, missed detection, false alarm and isolation of an FDI against the true fault",
+)

@@ -70,6 +70,10 @@ class ZohClohessyWiltshirePlant(Plant):
         w = inputs.force + inputs.exogenous["d"]  # held over the step (B = E = H)
         return {"q": matvec(plant.Ad, x["q"]) + matvec(plant.Bd, w)}
 
+    def provides(self) -> frozenset[str]:
+        caps = {"translational-state", "lvlh-relative-state"}  # exact step: no RK stages
+        return frozenset(caps | ({"spacecraft-pairs"} if self.count >= 2 else set()))
+
     def position(self, x):
         return x["q"][:, :3]
 

@@ -26,6 +26,11 @@ class RelativeStatePlant(Plant):
     def initial_state(self):
         return {"q": self.initial_state_lvlh}
 
+    def provides(self) -> frozenset[str]:
+        caps = {"translational-state", "lvlh-relative-state"}
+        caps |= {"stage-evaluation"} if self.integration == "rk4" else set()
+        return frozenset(caps | ({"spacecraft-pairs"} if self.count >= 2 else set()))
+
     def position(self, x):
         return x["q"][:, :3]
 

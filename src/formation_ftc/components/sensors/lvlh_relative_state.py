@@ -1,14 +1,28 @@
-"""Sensors of an inertial truth plant: the deputies' state relative to the chief, in the chief's LVLH frame."""
+"""Sensors ``lvlh-relative-state``: the deputies' state relative to the chief in the chief's LVLH frame,
+with held Gaussian noise and a constant per-axis bias.
+
+Needs the plant's ``lvlh-relative-state`` (the (N, 6) relative state in what sensors see: the
+relative-motion plants, and the inertial truth ``orbital-truth``, whose sensed state is already the
+LVLH relative state). Provides ``chain-outputs``: a chain law or supervisor forms its chain outputs on
+board from this measurement.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+from pydantic import Field
+
+from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import per_axis
 from formation_ftc.components.sensors.relative_state import RelativeStateSensors
+from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import eci_to_lvlh
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["LvlhRelativeStateSensors"]
+__all__ = ["LvlhRelativeStateSensors", "LvlhRelativeStateSection"]
 
 
 @component
@@ -34,6 +48,55 @@ class LvlhRelativeStateSensors(Sensors):
 
     noise = RelativeStateSensors.noise  # the same draw from the step's key
 
+    def needs(self) -> dict[str, str]:
+        return {"lvlh-relative-state": "measure it"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"chain-outputs"})
+
     def measure(self, t, x, inputs: SensorInputs):
         q = x["q"] if "q" in x else eci_to_lvlh(x["chief"], x["deputies"])
         return q + inputs.noise + self.bias
+
+
+class LvlhRelativeStateSection(StrictModel):
+    """Relative state in the truth chief's LVLH frame with held Gaussian noise and a constant bias
+    (``bias`` of the component: position and velocity bias side by side, (N, 6))."""
+
+    position_noise_std: float = Field(0.0, ge=0, description="Std of the position noise [m].")
+    velocity_noise_std: float = Field(0.0, ge=0, description="Std of the velocity noise [m/s].")
+    position_bias: float | list = builder_input(
+        0.0, description="Constant position bias: a number, 3 values (per axis) or N x 3 [m]."
+    )
+    velocity_bias: float | list = builder_input(
+        0.0, description="Constant velocity bias: a number, 3 values or N x 3 [m/s]."
+    )
+
+
+def _build(sec: LvlhRelativeStateSection, ctx: BuildContext) -> LvlhRelativeStateSensors:
+    """The sensors of a validated ``[sensors] type = "lvlh-relative-state"`` section."""
+    n = ctx.count
+    bias = np.hstack(
+        [
+            per_axis(sec.position_bias, n, "sensors.position_bias"),
+            per_axis(sec.velocity_bias, n, "sensors.velocity_bias"),
+        ]
+    )
+    if not np.all(np.isfinite(bias)):
+        raise ValueError("sensors.position_bias / velocity_bias: values must be finite")
+    return LvlhRelativeStateSensors(
+        count=n,
+        position_noise_std=as_float(sec.position_noise_std),
+        velocity_noise_std=as_float(sec.velocity_noise_std),
+        bias=as_float(bias),
+    )
+
+
+register(
+    "sensors",
+    "lvlh-relative-state",
+    LvlhRelativeStateSection,
+    _build,
+    "relative state in the truth chief's LVLH frame with held Gaussian noise and a "
+    "constant per-axis bias",
+)

@@ -30,14 +30,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("evaluation", "attitude-scores"),
     ),
     "catalog_attitude_truth": (("plant", "attitude-truth"),),
-    "catalog_chain": (
-        ("actuator", "actuator-gains"),
-        ("controller", "azizi2009-llfr"),
-        ("evaluation", "chain-errors"),
-        ("plant", "double-integrator"),
-        ("sensors", "chain-relative"),
-        ("supervisor", "hierarchical"),
-    ),
     "catalog_delays": (
         ("controller", "yang2013-relative"),
         ("controller", "yang2013-translational"),
@@ -46,21 +38,12 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("evaluation", "formation-scores"),
         ("evaluation", "li2020-formation-errors"),
     ),
-    "catalog_faults": (
-        ("actuator", "fault-battery"),
-        ("network", "graph-link-loss"),
-    ),
     "catalog_learning": (
         ("controller", "gui2022-cof2tc"),
         ("controller", "gui2022-lof2tc"),
         ("estimator", "iterative-learning-observer"),
         ("evaluation", "gui2022-scores"),
         ("plant", "clohessy-wiltshire-zoh"),
-    ),
-    "catalog_navigation": (
-        ("estimator", "relative-navigation-filter"),
-        ("estimator", "residual-fdi"),
-        ("evaluation", "fdi-scores"),
     ),
     "catalog_switched": (
         ("actuator", "velocity-gain-fault"),
@@ -85,10 +68,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("plant", "relative-lvlh"),
         ("reference", "keplerian"),
         ("sensors", "relative-state"),
-    ),
-    "catalog_truth": (
-        ("plant", "orbital-truth"),
-        ("sensors", "lvlh-relative-state"),
     ),
 }
 

@@ -6,7 +6,7 @@ torque the nominal rigid-body model does not explain over each step, tested per 
 (CUSUM or a fixed threshold, first alarm latched, isolation to the body axis), the fault torque
 identified by a moving average of the residual, and reported to the Euler-angle law
 (``networked-el-hinf``) as the scripted FDI reports: the flag of a generalised channel and u*. The
-``fdi-scores`` evaluation (:mod:`~formation_ftc.methods.composed.catalog_navigation`) scores it against
+``fdi-scores`` evaluation (:mod:`~formation_ftc.components.evaluations.fdi_scores`) scores it against
 the fault-battery actuator's true fault (body axes). Every number is flight knowledge stated in the
 section: the nominal inertia, the reference orbit, the rated torque and the model-error level.
 """
@@ -19,6 +19,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
+from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import (
@@ -32,12 +33,6 @@ from formation_ftc.methods.composed.catalog_attitude import (
     EULER_PLANT,
     EULER_SENSORS,
     NOMINAL_INERTIA,
-)
-from formation_ftc.methods.composed.catalog_navigation import (
-    FDI_ESTIMATORS,
-    FdiDrift,
-    FdiTest,
-    FdiThreshold,
 )
 from formation_ftc.registry import Condition
 from formation_ftc.sim.contract import CompositionError, as_float
@@ -144,7 +139,6 @@ register_component_type(
     "attitude actuator-fault detection, isolation and identification from the rigid-body residual "
     "(body axes, CUSUM or fixed threshold), reported as (flag, u*) to the Euler-angle law",
 )
-FDI_ESTIMATORS.append(ATTITUDE_RESIDUAL_FDI)
 
 
 def _attitude_fdi_conditions(scenario, loop) -> list[Condition]:

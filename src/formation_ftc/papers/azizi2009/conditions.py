@@ -4,7 +4,7 @@ plant; registered by the paper's package, see :mod:`.registration`).
 
 Loop -> numbers: the weights, the LLFR estimate b_hat and the FLFR weight of the law (flight side),
 the true faulty gains of the actuator (truth side), the FLFR design of eqs. (8)-(11)
-(:func:`formation_ftc.methods.composed.catalog_chain.flfr_design`, cached) and ||D||_2 of eq. (6).
+(:func:`formation_ftc.components.controllers.azizi2009_llfr.flfr_design`, cached) and ||D||_2 of eq. (6).
 
 Conditions, all from Azizi & Khorasani 2009:
 
@@ -27,17 +27,17 @@ from __future__ import annotations
 import numpy as np
 
 from formation_ftc.components.actuators.actuator_gains import StepGainActuator
-from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
+from formation_ftc.components.controllers.azizi2009_llfr import (
+    AXES,
+    ChainLlfrController,
+    flfr_design,
+)
+from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
+from formation_ftc.components.supervisors.hierarchical import HierarchicalSupervisor
 from formation_ftc.design.allocation import augmented_matrix_np, perturbation_coefficients
 from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
 from formation_ftc.design.small_gain import small_gain_margin
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.methods.composed.catalog_chain import (
-    AXES,
-    DOUBLE_INTEGRATOR,
-    HL_SUPERVISOR,
-    flfr_design,
-)
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -98,12 +98,14 @@ def d_norms(
 def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
     """The paper's design conditions for a loop of its law (see module docstring); [] off the
     deep-space plant."""
-    if scenario.type_of("plant") != DOUBLE_INTEGRATOR:
+    if not isinstance(loop.plant, DoubleIntegratorPlant):
         return []
     c = scenario.section("controller")
     law = _chain_law(loop)
     sup = (
-        scenario.section("supervisor") if scenario.type_of("supervisor") == HL_SUPERVISOR else None
+        scenario.section("supervisor")
+        if isinstance(loop.supervisor, HierarchicalSupervisor)
+        else None
     )
     flfr = sup is not None and sup.flfr
     alpha = np.asarray(law.alpha, float)

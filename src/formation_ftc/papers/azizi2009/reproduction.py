@@ -28,8 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.api import load_scenario
+from formation_ftc.components.controllers.azizi2009_llfr import flfr_design
 from formation_ftc.methods.composed import ComposedScenario, make_loop
-from formation_ftc.methods.composed.catalog_chain import flfr_design
 from formation_ftc.papers.azizi2009.conditions import conditions, d_norms
 from formation_ftc.papers.azizi2009.figures import plot_fig2, plot_fig3, plot_fig4
 from formation_ftc.papers.azizi2009.published import CITATION, PUBLISHED, TITLE

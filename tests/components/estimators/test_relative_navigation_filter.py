@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from formation_ftc.api import check, load_scenario, simulate_with_metrics
-from formation_ftc.components.estimators.relative_navigation import RelativeNavigationFilter
+from formation_ftc.components.estimators.relative_navigation_filter import RelativeNavigationFilter
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.design.kalman import discrete_model, steady_state_kalman
 from formation_ftc.sim.components import FlightInputs

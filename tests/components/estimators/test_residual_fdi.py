@@ -172,8 +172,11 @@ def test_fdi_scores_need_the_fault_battery(tmp_path):
         'residual = "parity"\ntest = "fixed"\ndrift = 0.5\nthreshold = 5.0\n', ""
     )
     path.write_text(text)
-    with pytest.raises(ValueError, match="fdi-scores compares an FDI"):
+    with pytest.raises(ValueError) as err:
         load_scenario(path)
+    msg = str(err.value)  # the evaluation and the estimator that would provide what it needs
+    assert "fdi-scores needs a fault detector's latched alarm" in msg, msg
+    assert 'estimator type = "residual-fdi"' in msg, msg
 
 
 SATURATING = """

@@ -1,0 +1,335 @@
+"""Estimator ``relative-navigation-filter``: a linear Kalman filter on the measured LVLH relative
+states; the controller flies on its estimate instead of the raw measurement.
+
+The filter uses the on-board Clohessy-Wiltshire model of a stated circular orbit (design in
+:mod:`formation_ftc.design.kalman`). Every number of the filter is flight knowledge and is stated in
+the section: the orbit, the assumed measurement noise and acceleration noise (builder inputs of the
+discrete model ``phi``, ``gamma``, ``qd``, ``r``) and the nominal masses (``nominal_mass``, default
+100 kg). Needs the plant's ``translational-state``. ``formation-ftc check`` states the steady-state
+filter's stability and standard deviations (:func:`navigation_conditions`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+from pydantic import Field, field_validator
+
+from formation_ftc.components._flight_defaults import NOMINAL_MASS
+from formation_ftc.components._registry import (
+    BuildContext,
+    builder_input,
+    per_spacecraft,
+    register,
+)
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.constants import MU_EARTH
+from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+from formation_ftc.sim.contract import Condition, as_float
+
+__all__ = [
+    "RelativeNavigationFilter",
+    "RelativeNavigationSection",
+    "NavigationState",
+    "kalman_update",
+    "kalman_predict",
+    "navigation_conditions",
+    "filter_model",
+]
+
+STATE = ("spacecraft", "component")
+
+
+def kalman_update(x, p, y, r):
+    """Measurement update of a full-state measurement ``y = x + v``, ``v ~ N(0, r)`` (Joseph form).
+
+    Parameters
+    ----------
+    x : array, shape (N, 6)
+        Predicted states (one row per spacecraft) [m, m/s].
+    p : array, shape (6, 6)
+        Their common predicted covariance.
+    y : array, shape (N, 6)
+        Measurements [m, m/s].
+    r : array, shape (6, 6)
+        Measurement-noise covariance.
+
+    Returns
+    -------
+    tuple of array
+        ``x + (y - x) K^T`` and ``(I - K) P (I - K)^T + K r K^T`` with ``K = P (P + r)^-1``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> x, p = kalman_update(jnp.zeros((1, 6)), jnp.eye(6), jnp.ones((1, 6)), jnp.eye(6))
+    >>> float(x[0, 0]), float(p[0, 0])  # equal confidence: halfway, half the variance
+    (0.5, 0.5)
+    """
+    gain = jnp.linalg.solve((p + r).T, p.T).T
+    eye = jnp.eye(p.shape[0])
+    p = (eye - gain) @ p @ (eye - gain).T + gain @ r @ gain.T
+    return x + (y - x) @ gain.T, 0.5 * (p + p.T)
+
+
+def kalman_predict(x, p, accel, phi, gamma, qd):
+    """Time update over one step with the acceleration held.
+
+    Parameters
+    ----------
+    x : array, shape (N, 6)
+        States after the update [m, m/s].
+    p : array, shape (6, 6)
+        Their common covariance.
+    accel : array, shape (N, 3)
+        Acceleration held over the step [m/s^2].
+    phi, gamma, qd : array
+        The discrete model (:func:`formation_ftc.design.kalman.discrete_model`).
+
+    Returns
+    -------
+    tuple of array
+        ``x phi^T + accel gamma^T`` and ``phi P phi^T + qd``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> x, p = kalman_predict(jnp.ones((1, 6)), jnp.eye(6), jnp.zeros((1, 3)), jnp.eye(6),
+    ...                       jnp.zeros((6, 3)), jnp.eye(6))
+    >>> float(x[0, 0]), float(p[0, 0])
+    (1.0, 2.0)
+    """
+    p = phi @ p @ phi.T + qd
+    return x @ phi.T + accel @ gamma.T, 0.5 * (p + p.T)
+
+
+class NavigationState(NamedTuple):
+    x_hat: Any  # (N, 6) estimate [m, m/s]
+    p: Any  # (6, 6) error covariance (one model and one noise for every spacecraft)
+
+
+@component
+class RelativeNavigationFilter(Estimator):
+    """Kalman filter of every spacecraft's relative state ``q = [rho, rho']`` (LVLH) from the sensors'
+    noisy measurement ``y_k = q_k + v_k``, ``v_k ~ N(0, r)``, with the on-board linear model
+    (:func:`formation_ftc.design.kalman.discrete_model`)::
+
+        q_{k+1} = phi q_k + gamma f_k / m_nom + w_k,   w_k ~ N(0, qd)
+
+    driven by the controller's command ``f_k`` [N] held over the step, per unit of the stated nominal
+    mass ``nominal_mass`` (N,) [kg]. At every step: measurement update at t_k (Joseph form), then, after
+    the control step, time update to t_{k+1}. It is a navigation filter (``navigation = True``): the
+    controller reads its estimate in place of the measurement, held over the step. It starts from the
+    first measurement with covariance ``p0``. Records ``navigation_estimate`` (N, 6) and
+    ``navigation_sigma`` (6,), the filter's own standard deviations (flight side: compare with the truth
+    in post-processing).
+    """
+
+    count: int = static()
+    phi: Any  # (6, 6)
+    gamma: Any  # (6, 3) [s^2 ... ] input matrix of the acceleration
+    qd: Any  # (6, 6) process noise per step
+    r: Any  # (6, 6) measurement noise
+    p0: Any  # (6, 6) initial covariance
+    nominal_mass: Any  # (N,) [kg]
+
+    navigation = True
+
+    def needs(self) -> dict[str, str]:
+        return {"translational-state": "estimate the LVLH relative states"}
+
+    def conditions(self, loop) -> list[Condition]:
+        return navigation_conditions(self.phi, self.qd, self.r)
+
+    def signals(self):
+        return (
+            Signal("navigation_estimate", STATE, "m, m s-1", "relative state estimate", "LVLH"),
+            Signal(
+                "navigation_sigma",
+                ("component",),
+                "m, m s-1",
+                "the filter's standard deviation of each state component after the update",
+            ),
+        )
+
+    def initial_state(self, measurement0):
+        return NavigationState(jnp.asarray(measurement0), jnp.asarray(self.p0))
+
+    def update(self, t, state: NavigationState, inputs: FlightInputs):
+        x, p = kalman_update(state.x_hat, state.p, inputs.measurement, self.r)
+        return NavigationState(x, p), x
+
+    def predict(self, t, state: NavigationState, command, dt):
+        accel = command / self.nominal_mass[:, None]
+        return NavigationState(
+            *kalman_predict(state.x_hat, state.p, accel, self.phi, self.gamma, self.qd)
+        )
+
+    def outputs(self, t, state, estimate):
+        return {
+            "navigation_estimate": estimate,
+            "navigation_sigma": jnp.sqrt(jnp.diagonal(state.p)),
+        }
+
+
+def navigation_conditions(phi, qd, r) -> list[Condition]:
+    """The steady-state filter of the model ``(phi, qd, r)``: the stability of its error dynamics (with
+    the Riccati residual) and the steady-state position and velocity standard deviations it promises.
+
+    Parameters
+    ----------
+    phi, qd, r : array_like, shape (6, 6)
+        Transition, process-noise and measurement-noise matrices of the on-board model.
+
+    Returns
+    -------
+    list of Condition
+        The stability condition (required) and the standard deviations (informative).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phi = np.eye(6) + np.diag(np.ones(3), 3)  # a double integrator over 1 s
+    >>> stable, _ = navigation_conditions(phi, 1e-4 * np.eye(6), 1e-2 * np.eye(6))
+    >>> stable.holds
+    True
+    """
+    from formation_ftc.design.kalman import dare_relative_residual, steady_state_kalman
+
+    phi, qd, r = (np.asarray(a, float) for a in (phi, qd, r))
+    P, K = steady_state_kalman(phi, qd, r)
+    residual = dare_relative_residual(P, phi, qd, r)
+    posterior = (np.eye(6) - K) @ P
+    rho = float(np.max(np.abs(np.linalg.eigvals(phi @ (np.eye(6) - K)))))
+    sig = np.sqrt(np.diag(posterior))
+    return [
+        Condition(
+            name="navigation filter: steady-state error dynamics stable",
+            reference="design/kalman.py",
+            value=f"spectral radius of phi (I - K) = {rho:.6f} (Riccati residual {residual:.1e})",
+            requirement="< 1",
+            holds=rho < 1.0 - 1e-9 and residual < 1e-8,
+            required=True,
+            basis="exact",
+            detail=(
+                "exact: eigenvalues of the estimation-error transition of the steady-state filter, "
+                "with the discrete Riccati equation solved to the stated residual"
+            ),
+        ),
+        Condition(
+            name="navigation filter: steady-state standard deviation",
+            reference="design/kalman.py",
+            value=(
+                f"position {np.max(sig[:3]):.3g} m, velocity {np.max(sig[3:]):.3g} m/s "
+                f"(measurement {math.sqrt(r[0, 0]):g} m, {math.sqrt(r[3, 3]):g} m/s)"
+            ),
+            requirement="informative",
+            holds=True,
+            required=False,
+            basis="informative",
+            detail="informative: after the measurement update, from the model the filter states",
+        ),
+    ]
+
+
+class RelativeNavigationSection(StrictModel):
+    """Kalman filter of the LVLH relative states (on-board CW model of a circular orbit)."""
+
+    semi_major_axis: float = builder_input(
+        gt=0, description="Radius of the on-board circular reference orbit [m]."
+    )
+    mu: float = builder_input(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+    position_noise_std: float = builder_input(
+        gt=0, description="Assumed std of the position measurement noise [m]."
+    )
+    velocity_noise_std: float = builder_input(
+        gt=0, description="Assumed std of the velocity measurement noise [m/s]."
+    )
+    acceleration_noise_psd: float = builder_input(
+        1e-10,
+        ge=0,
+        description=(
+            "Spectral density of the unmodelled acceleration per axis [(m/s^2)^2/Hz] (J2, drag, "
+            "model error, faults the filter does not know)."
+        ),
+    )
+    nominal_mass: float | list[float] = Field(
+        NOMINAL_MASS,
+        description="On-board mass per spacecraft that turns the commanded force into acceleration "
+        "[kg], one or per spacecraft, > 0 (default 100 kg, a stated nominal value: never the "
+        "plant's true masses).",
+    )
+
+    @field_validator("nominal_mass")
+    @classmethod
+    def _masses(cls, value):
+        values = value if isinstance(value, list) else [value]
+        if any(not (math.isfinite(m) and m > 0) for m in values):
+            raise ValueError("every mass must be finite and > 0 kg")
+        return value
+
+    def model(self, dt: float):
+        """(discrete model, R) of the filter at step ``dt`` [s]."""
+        from formation_ftc.core.dynamics.cw import cw_matrices
+        from formation_ftc.design.kalman import discrete_model
+
+        n = math.sqrt(self.mu / self.semi_major_axis**3)
+        A, B = cw_matrices(n)
+        model = discrete_model(A, B, B, self.acceleration_noise_psd, dt)
+        R = np.diag([self.position_noise_std**2] * 3 + [self.velocity_noise_std**2] * 3)
+        return model, R
+
+
+def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str, np.ndarray]:
+    """The on-board model's arrays (``phi``, ``gamma``, ``qd``, ``r``, ``nominal_mass``) of a filter
+    section at the scenario's step.
+
+    Parameters
+    ----------
+    sec : RelativeNavigationSection
+        The section (or one that extends it).
+    ctx : BuildContext
+        The build context (step and spacecraft count).
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        The component's model arrays.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> sec = RelativeNavigationSection(semi_major_axis=7e6, position_noise_std=0.1,
+    ...                                 velocity_noise_std=1e-3)
+    >>> arrays = filter_model(sec, SimpleNamespace(dt=1.0, count=2))
+    >>> arrays["phi"].shape, arrays["nominal_mass"].tolist()
+    ((6, 6), [100.0, 100.0])
+    """
+    model, R = sec.model(ctx.dt)
+    mass = per_spacecraft(sec.nominal_mass, ctx.count, "estimator.nominal_mass")
+    return dict(
+        phi=as_float(model.phi),
+        gamma=as_float(model.gamma),
+        qd=as_float(model.qd),
+        r=as_float(R),
+        nominal_mass=as_float(mass),
+    )
+
+
+def _build(sec: RelativeNavigationSection, ctx: BuildContext) -> RelativeNavigationFilter:
+    """The filter of a validated ``[estimator] type = "relative-navigation-filter"`` section."""
+    arrays = filter_model(sec, ctx)
+    return RelativeNavigationFilter(count=ctx.count, p0=arrays["r"], **arrays)
+
+
+register(
+    "estimator",
+    "relative-navigation-filter",
+    RelativeNavigationSection,
+    _build,
+    "Kalman filter of the LVLH relative states; the controller reads its estimate instead of the "
+    "measurement",
+)
