@@ -72,7 +72,7 @@ class ZohClohessyWiltshirePlant(Plant):
 
     def provides(self) -> frozenset[str]:
         caps = {"translational-state", "lvlh-relative-state"}  # exact step: no RK stages
-        return frozenset(caps | ({"spacecraft-pairs"} if self.count >= 2 else set()))
+        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
 
     def position(self, x):
         return x["q"][:, :3]

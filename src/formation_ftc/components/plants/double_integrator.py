@@ -91,7 +91,8 @@ class DoubleIntegratorPlant(Plant):
 
     def provides(self) -> frozenset[str]:
         caps = {"translational-state"} | ({"spacecraft-pairs"} if self.count >= 2 else set())
-        return frozenset(caps | ({"stage-evaluation"} if not self.zoh else set()))
+        caps |= {"stage-evaluation"} if not self.zoh else set()
+        return super().provides() | caps
 
     def position(self, x):
         return x["r"]

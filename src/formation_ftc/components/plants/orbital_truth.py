@@ -184,7 +184,7 @@ class InertialFormationPlant(Plant):
 
     def provides(self) -> frozenset[str]:
         caps = {"translational-state", "lvlh-relative-state", "stage-evaluation"}
-        return frozenset(caps | ({"spacecraft-pairs"} if self.count >= 2 else set()))
+        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
 
     def position(self, x):
         return self.relative_state(x)[:, :3]

@@ -29,7 +29,7 @@ class RelativeStatePlant(Plant):
     def provides(self) -> frozenset[str]:
         caps = {"translational-state", "lvlh-relative-state"}
         caps |= {"stage-evaluation"} if self.integration == "rk4" else set()
-        return frozenset(caps | ({"spacecraft-pairs"} if self.count >= 2 else set()))
+        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
 
     def position(self, x):
         return x["q"][:, :3]
