@@ -583,6 +583,9 @@ class PerfectSensors(Sensors):
     def measure(self, t, x, inputs):
         return x
 
+    def provides(self) -> frozenset[str]:
+        return frozenset({"plant-state-measurement"})
+
 
 @component
 class NoNetwork(Network):

@@ -82,6 +82,42 @@ CAPABILITIES: dict[str, Capability] = {
     "reference-orbit": Capability(
         "a reference orbit known on board", 'a [reference] section, e.g. type = "keplerian"'
     ),
+    # --- attitude (quaternion and Euler-angle plants, their sensors, allocation, laws, FDIs, scores)
+    "quaternion-attitude-state": Capability(
+        "a plant whose state is {omega (N,3), q (N,4)}: body rate and quaternion, vector part first",
+        'plant type = "quaternion-rigid-body" or "attitude-truth"',
+    ),
+    "lvlh-attitude": Capability(
+        "the attitude relative to LVLH, recorded as attitude_lvlh (a plant on an orbit)",
+        'plant type = "attitude-truth"',
+    ),
+    "euler-angle-attitude-state": Capability(
+        "a plant whose state is {q (N,3), w (N,3)}: 3-2-1 Euler angles [theta, phi, psi] and body "
+        "rates, driven by the generalised torque conjugate to the angles",
+        'plant type = "euler-angle-attitude"',
+    ),
+    "plant-state-measurement": Capability(
+        "the plant's state as the measurement", "no [sensors] section (exact, unchanged)"
+    ),
+    "euler-angle-measurement": Capability(
+        "3-2-1 Euler angles and body rates as the measurement, {q (N,3), w (N,3)}",
+        'sensors type = "quaternion-euler" on a quaternion plant ("quaternion-rigid-body", '
+        '"attitude-truth"), or plant type = "euler-angle-attitude" without [sensors]',
+    ),
+    "generalised-torque-actuation": Capability(
+        "an actuator applying the generalised torque conjugate to the 3-2-1 Euler angles to the plant",
+        'actuator type = "euler-torque-allocation", or "fault-battery" with euler_allocation = true, '
+        'or plant type = "euler-angle-attitude" (driven by it)',
+    ),
+    "euler-angle-law": Capability(
+        "a law in 3-2-1 Euler angles commanding the conjugate generalised torque (records its "
+        "tracking and synchronisation errors)",
+        'controller type = "networked-el-hinf"',
+    ),
+    "scripted-actuator-faults": Capability(
+        "additive actuator faults stated in the scenario, in the law's generalised channels",
+        'actuator type = "euler-torque-allocation" with faults',
+    ),
 }
 
 

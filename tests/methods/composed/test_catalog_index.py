@@ -64,21 +64,27 @@ def test_index_names_the_module_that_registers_each_type():
         ("gui2022", "estimator", "iterative-learning-observer", "catalog_learning:ILO"),
         ("gui2022", "controller", "gui2022-lof2tc", "catalog_learning:LOF2TC"),
         ("gui2022", "controller", "gui2022-cof2tc", "catalog_learning:COF2TC"),
-        ("mehrabian", "controller", "networked-el-hinf", "catalog_attitude:EULER_LAW"),
+        ("mehrabian", "controller", "networked-el-hinf", None),
+        ("mehrabian", "estimator", "attitude-residual-fdi", None),
         ("yang2013", "supervisor", "switching", "catalog_switched:SWITCHING_SUPERVISOR"),
     ],
 )
 def test_paper_registrations_name_the_catalog_constants(paper, kind, name, constant):
-    """The papers' registration modules name these types as text (no catalog import at start-up)."""
+    """The papers' registration modules name these types as text (no catalog import at start-up);
+    ``constant`` None: a type with a home (found from its name)."""
     import importlib
 
-    from formation_ftc.methods.composed import _CONDITIONS
+    from formation_ftc.components._registry import home_module
+    from formation_ftc.methods.composed import _CONDITIONS, component_type
     from formation_ftc.registry import load_plugins
 
     load_plugins()
-    module, attr = constant.split(":")
-    assert getattr(importlib.import_module(f"{_PACKAGE}.{module}"), attr) == name
-    assert CATALOG_INDEX[(kind, name)] == f"{_PACKAGE}.{module}"
+    if constant is None:
+        assert component_type(kind, name).module == home_module(kind, name)
+    else:
+        module, attr = constant.split(":")
+        assert getattr(importlib.import_module(f"{_PACKAGE}.{module}"), attr) == name
+        assert CATALOG_INDEX[(kind, name)] == f"{_PACKAGE}.{module}"
     refs = [f for f in _CONDITIONS.get((kind, name), []) if isinstance(f, str)]
     assert any(r.startswith(f"formation_ftc.papers.{paper}.") for r in refs), (kind, name, refs)
 

@@ -130,6 +130,17 @@ class FaultBatteryActuator(Actuator):
             :, None
         ]
 
+    def needs(self) -> dict[str, str]:
+        if not self.euler_allocation:
+            return {}
+        return {
+            "quaternion-attitude-state": "map the generalised torque to a body torque with its "
+            "quaternion (euler_allocation)"
+        }
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"generalised-torque-actuation"} if self.euler_allocation else ())
+
     def _body(self, t, command, inputs: ActuatorInputs):
         """The command in the actuator's axes (after the Euler-angle allocation when static-enabled)."""
         if self.euler_allocation:

@@ -62,14 +62,14 @@ class Yang2013AttitudeController(Controller):
 
         tau_i = -Upsilon_i - J (K3 e_w + e_q + e_w (K4 |e_q|^2 + K5 e_q4^2) / (2 (|e_w|^2 + kappa)))
 
-    with the drift Upsilon_i taken as cancelled (zero). ``inertia`` J (3, 3) [kg m^2]; K3, K4, K5
-    [1/s] and kappa [rad^2/s^2] positive (E001-01).
+    with the drift Upsilon_i taken as cancelled (zero). ``nominal_inertia`` J (3, 3) [kg m^2] (the
+    law's model, stated on board); K3, K4, K5 [1/s] and kappa [rad^2/s^2] positive (E001-01).
     """
 
     quantity = "torque"
 
     count: int = static()
-    inertia: Any = None
+    nominal_inertia: Any = None
     K3: Any = 0.2
     K4: Any = 1.0
     K5: Any = 1.0
@@ -82,7 +82,7 @@ class Yang2013AttitudeController(Controller):
             q[:, 0:3],
             q[:, 3],
             jnp.zeros_like(w),
-            self.inertia,
+            self.nominal_inertia,
             self.K3,
             self.K4,
             self.K5,

@@ -14,22 +14,6 @@ _PACKAGE = "formation_ftc.methods.composed"
 
 #: catalog module (in this package) -> the (kind, name) component types its import registers
 _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
-    "catalog_attitude": (
-        ("actuator", "euler-torque-allocation"),
-        ("controller", "networked-el-hinf"),
-        ("estimator", "scripted-fdi"),
-        ("evaluation", "mehrabian-metrics"),
-        ("plant", "euler-angle-attitude"),
-        ("plant", "quaternion-rigid-body"),
-        ("sensors", "quaternion-euler"),
-    ),
-    "catalog_attitude_fdi": (("estimator", "attitude-residual-fdi"),),
-    "catalog_attitude_laws": (
-        ("controller", "attitude-pd"),
-        ("controller", "yang2013-attitude"),
-        ("evaluation", "attitude-scores"),
-    ),
-    "catalog_attitude_truth": (("plant", "attitude-truth"),),
     "catalog_chain": (
         ("actuator", "actuator-gains"),
         ("controller", "azizi2009-llfr"),

@@ -35,7 +35,6 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.constants import FAULT_KINDS
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.methods.composed.catalog_attitude import _needs_quaternion_plant
 from formation_ftc.methods.composed.catalog_translational import GraphSection, _delayed_graph
 from formation_ftc.sim.contract import as_float
 
@@ -116,8 +115,6 @@ def _fault_battery(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryA
             f"actuator.spacecraft = {sec.spacecraft}: must be in 1..{n} (plant "
             f"{ctx.scenario.type_of('plant')} has {n} spacecraft)"
         )
-    if sec.euler_allocation:
-        _needs_quaternion_plant("actuator", f"{FAULT_BATTERY} with euler_allocation", ctx)
     limit = np.inf if sec.saturation is None else sec.saturation
     sat = per_spacecraft(limit, n, "actuator.saturation")
     quantity = getattr(ctx.plant, "quantity", "force")

@@ -18,11 +18,12 @@ section: the orbit, the assumed measurement noise, the acceleration noise and th
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
+from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.methods.composed import (
@@ -162,17 +163,6 @@ register_conditions("estimator", "relative-navigation-filter", _navigation_condi
 
 
 # ------------------------------------------------------------------------------------------- FDI
-#: the sequential test's three fields, shared by the translational and the attitude residual FDI
-FdiTest = Annotated[
-    Literal["cusum", "fixed"],
-    Field(description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold."),
-]
-FdiDrift = Annotated[
-    float, Field(ge=0, description="CUSUM drift (half the standardised shift to detect) [-].")
-]
-FdiThreshold = Annotated[
-    float, Field(gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-].")
-]
 
 
 class ResidualFdiSection(RelativeNavigationSection):
@@ -244,7 +234,7 @@ class FdiScoresSection(StrictModel):
 
 
 #: estimator types that record ``fdi_detected`` and ``fdi_isolated`` in the actuator's channels
-FDI_ESTIMATORS = ["residual-fdi"]
+FDI_ESTIMATORS = ["residual-fdi", "attitude-residual-fdi"]
 
 
 def _fdi_scores(sec: FdiScoresSection, ctx: BuildContext):

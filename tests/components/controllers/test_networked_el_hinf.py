@@ -1,4 +1,4 @@
-"""Tests of the distributed H-infinity law with adaptive recovery (blocks/controllers/networked_el_hinf).
+"""Controller ``networked-el-hinf``: the distributed H-infinity law with adaptive recovery.
 
 Truths: the exact-model closed-loop identity D s_dot + C s = tau (modified computed torque (6), E003-04),
 the algebraic rewriting of the literal law given in SPEC P3.3, the modal decomposition of the coupling
@@ -7,14 +7,24 @@ the algebraic rewriting of the literal law given in SPEC P3.3, the modal decompo
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
+import typing
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import formation_ftc  # noqa: F401
-from formation_ftc.blocks.controllers import networked_el_hinf as ctl
+import formation_ftc as ftc
+from formation_ftc.components.actuators.euler_torque_allocation import HeldAdditiveFaultActuator
+from formation_ftc.components.controllers import networked_el_hinf as ctl
+from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
+from formation_ftc.components.estimators.scripted_fdi import ScriptedFdi
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics import euler_lagrange as el
+from formation_ftc.methods.composed import make_loop
+from formation_ftc.sim.components import FlightInputs
 
 M = 8
 #: the Mehrabian scenarios' graph: ring 1-2-...-8-1 plus chords 1-5 and 3-7 (E003-10)
@@ -114,3 +124,49 @@ def test_compensation_and_adaptation():
     assert rate[1, 1] == 0.0  # unflagged channel: estimate frozen
     with pytest.raises(ValueError, match="controller.law"):
         ctl.ELHinfConfig(law="other")
+
+
+TRUTH_FIELDS = {"state", "true_state", "fault", "faults", "disturbance", "force", "process_noise"}
+
+
+def _loop(name="mehrabian-identification", **ov):
+    return make_loop(
+        ftc.load_scenario(name, {"simulation.horizon": 1.0, "simulation.record_every": 1, **ov})
+    )
+
+
+def _hints(cls, meth):
+    mod = vars(inspect.getmodule(cls)) | {"FlightInputs": FlightInputs}
+    return typing.get_type_hints(getattr(cls, meth), globalns=mod)
+
+
+def test_controller_and_fdi_cannot_see_the_truth():
+    """Controller and FDI read FlightInputs only (no truth field); with the same flight inputs the
+    command and the FDI report are unchanged when the true fault, the disturbance and the true inertia
+    change, while the applied torque changes."""
+    assert _hints(NetworkedElHinfController, "output")["inputs"] is FlightInputs
+    assert _hints(ScriptedFdi, "update")["inputs"] is FlightInputs
+    assert not TRUTH_FIELDS & set(FlightInputs._fields)
+    # fault active from t = 0 and the FDI reporting from 0 s (no latency)
+    loop = _loop(**{"actuator.faults.0.start": 0.0, "estimator.delay": 0.0})
+    assert isinstance(loop.controller, NetworkedElHinfController) and isinstance(
+        loop.estimator, ScriptedFdi
+    )
+    assert isinstance(loop.actuator, HeldAdditiveFaultActuator)
+    act = dataclasses.replace(
+        loop.actuator, torques=("3*sin(t) - 2",), windows=loop.actuator.windows + 0.0
+    )
+    plant = dataclasses.replace(
+        loop.plant,
+        disturbance_std=loop.plant.disturbance_std * 50.0,
+        inertia_uncertainty=loop.plant.inertia_uncertainty * 0.1,
+    )
+    other = dataclasses.replace(loop, actuator=act, plant=plant)
+    k = jnp.asarray(3, dtype=jnp.int64)
+    state = loop.initial_state()  # same true state (same seed), hence the same measurement
+    step = jax.jit(lambda lp, st: lp.prepared().step(k, st)[1])
+    a, b = step(loop, state), step(other, state)
+    for name in ("command", "fdi_flag", "fdi_estimate", "sliding_variable"):
+        np.testing.assert_array_equal(np.asarray(a[name]), np.asarray(b[name]))
+    assert np.max(np.abs(np.asarray(a["applied"]) - np.asarray(b["applied"]))) > 1.0
+    assert np.asarray(a["fdi_flag"])[0, 2] == 1.0

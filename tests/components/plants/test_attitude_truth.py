@@ -20,7 +20,10 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.components.plants.attitude_truth import AttitudeTruthPlant
+from formation_ftc.components.plants.attitude_truth import (
+    AttitudeTruthPlant,
+    initial_inertial_state,
+)
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.dynamics.gravity_gradient import (
     jacobi_integral,
@@ -43,7 +46,7 @@ def _plant(J, w0, q0, gg=True, u0=0.0, frame="inertial"):
         J = np.broadcast_to(J, (w0.shape[0], 3, 3)).copy()
     return AttitudeTruthPlant(
         inertia=as_float(J),
-        initial_omega=as_float(w0),
+        initial_body_rate=as_float(w0),
         initial_quaternion=as_float(np.atleast_2d(q0)),
         semi_major_axis=as_float(A),
         mu=as_float(MU_EARTH),
@@ -269,8 +272,6 @@ def _raw(**plant):
 
 
 def test_lvlh_initial_frame_converts_to_inertial():
-    from formation_ftc.methods.composed.catalog_attitude_truth import initial_inertial_state
-
     scn = ftc.load_scenario(
         _raw(
             initial_frame="lvlh",
@@ -383,5 +384,10 @@ def test_bad_section_is_rejected_naming_the_field(field, value, needle):
 def test_euler_law_on_attitude_truth_needs_the_euler_sensors():
     raw = _raw()
     del raw["sensors"]
-    with pytest.raises(ScenarioError, match="attitude-truth.*quaternion-euler"):
+    with pytest.raises(
+        ScenarioError,
+        match=r"controller networked-el-hinf needs 3-2-1 Euler angles and body rates.*"
+        r'sensors type = "quaternion-euler" on a quaternion plant \("quaternion-rigid-body", '
+        r'"attitude-truth"\)',
+    ):
         ftc.load_scenario(raw)

@@ -1,6 +1,7 @@
-"""Quaternion PD attitude baseline (composed type ``attitude-pd``) and Yang2013's attitude law as the
-composed type ``yang2013-attitude``: the laws against numpy evaluations of their formulas, a closed
-loop against an independent scipy integration, and rejection of compositions they cannot drive."""
+"""Controller ``attitude-pd`` (quaternion PD attitude baseline) and what both quaternion laws reading
+the plant state (``attitude-pd``, ``yang2013-attitude``) refuse: the law against a numpy evaluation of
+its formula, a closed loop against an independent scipy integration, and rejection of compositions they
+cannot drive."""
 
 from __future__ import annotations
 
@@ -11,8 +12,6 @@ from scipy.integrate import solve_ivp
 
 import formation_ftc as ftc
 from formation_ftc.components.controllers.attitude_pd import AttitudePdController
-from formation_ftc.components.controllers.yang2013_attitude_hold import Yang2013AttitudeHold
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import FlightInputs
 
@@ -112,54 +111,16 @@ def test_pd_closed_loop_single_axis_against_scipy():
     assert abs(theta[-1]) < 0.05 * th0  # and it does converge
 
 
-def test_yang2013_attitude_composed_equals_the_component():
-    """The composed law is Yang2013AttitudeController on the error state (e_w, e_q, e_q4) = (omega,
-    q_v, q4 - 1) (desired identity); evaluated directly on that state it gives the same torque."""
-    loop = make_loop(
-        ftc.load_scenario(_raw({"type": "yang2013-attitude", "inertia": list(INERTIA)}))
-    )
-    hold = loop.controller
-    assert isinstance(hold, Yang2013AttitudeHold)
-    rng = np.random.default_rng(11)
-    q = _unit(rng, 2)
-    q[:, 3] = np.abs(q[:, 3])
-    w = rng.normal(size=(2, 3)) * 0.05
-    tau, _, _ = hold.output(jnp.asarray(3.0), None, _inputs(w, q))
-    paper = Yang2013AttitudeController(
-        count=2, inertia=np.diag(INERTIA), K3=0.2, K4=1.0, K5=1.0, kappa=1e-3
-    )
-    err = np.concatenate([q[:, :3], q[:, 3:] - 1.0], axis=1)
-    direct, _, _ = paper.output(jnp.asarray(3.0), None, _inputs(w, err))
-    np.testing.assert_allclose(np.asarray(tau), np.asarray(direct), rtol=1e-14, atol=1e-16)
-    # and against eq. (13) written out in numpy
-    J = np.diag(INERTIA)
-    for i in range(2):
-        ew, eq, eq4 = w[i], q[i, :3], q[i, 3] - 1.0
-        shaping = (1.0 * eq @ eq + 1.0 * eq4**2) / (2.0 * (ew @ ew + 1e-3))
-        np.testing.assert_allclose(
-            np.asarray(tau)[i], -J @ (0.2 * ew + eq + ew * shaping), rtol=1e-13
-        )
-
-
-def test_yang2013_attitude_holds_lvlh_on_the_truth_and_on_the_rigid_body():
-    """Paper gains bring a 30 deg error to < 1e-3 rad in 120 s on both quaternion plants (the law reads the state)."""
-    for plant in ("attitude-truth", "quaternion-rigid-body"):
-        ds = ftc.simulate(
-            ftc.load_scenario(_raw({"type": "yang2013-attitude"}, plant=plant, horizon=120.0))
-        )
-        q = ds["attitude_lvlh" if plant == "attitude-truth" else "quaternion"].values[-1]
-        angle = 2.0 * np.arctan2(np.linalg.norm(q[:, :3], axis=1), np.abs(q[:, 3]))
-        assert np.all(angle < 1e-3), (plant, angle)
-
-
 @pytest.mark.parametrize(
     "law", [{"type": "attitude-pd", "K_p": 1.0, "K_d": 1.0}, {"type": "yang2013-attitude"}]
 )
 def test_laws_reject_sensors_that_change_the_state_and_translational_plants(law):
+    """Validation refuses the law behind sensors that replace the plant state (naming the law and who
+    would provide the plant state as the measurement), and on a force-driven plant."""
     with pytest.raises(
         Exception,
-        match=f"controller {law['type']} reads the plant's quaternion state.*"
-        "sensors quaternion-euler",
+        match=f"controller {law['type']} needs the plant's state as the measurement to read the "
+        r"plant's body rate and quaternion unchanged.*provided by: no \[sensors\] section",
     ):
         make_loop(ftc.load_scenario(_raw(law, sensors={"type": "quaternion-euler"})))
     raw = {
@@ -174,9 +135,15 @@ def test_laws_reject_sensors_that_change_the_state_and_translational_plants(law)
         "controller": law,
     }
     with pytest.raises(
+        Exception, match="commands a torque, but plant ClohessyWiltshirePlant is driven by a force"
+    ):
+        make_loop(ftc.load_scenario(raw))
+    # a torque-driven plant without a quaternion state: the law names what it needs
+    raw["plant"] = {"type": "euler-angle-attitude", "count": 1}
+    with pytest.raises(
         Exception,
-        match=f"controller {law['type']} converts a quaternion attitude, but plant "
-        "clohessy-wiltshire has none",
+        match=f"controller {law['type']} needs a plant whose state is {{omega \\(N,3\\), q "
+        r"\(N,4\)\}.*provided by: plant type = \"quaternion-rigid-body\" or \"attitude-truth\"",
     ):
         make_loop(ftc.load_scenario(raw))
 

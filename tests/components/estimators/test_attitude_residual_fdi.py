@@ -51,9 +51,9 @@ def _fdi(**kw) -> AttitudeResidualFdi:
     a = dict(
         count=2,
         test="fixed",
-        J_nom=jnp.asarray(np.stack([J, J])),
+        nominal_inertia=jnp.asarray(np.stack([J, J])),
         orbit_rate=jnp.asarray(0.0),
-        limit=jnp.full((2, 1), jnp.inf),
+        torque_limit=jnp.full((2, 1), jnp.inf),
         residual_std=jnp.asarray(1e-3),
         drift=jnp.asarray(0.5),
         threshold=jnp.asarray(100.0),
@@ -97,7 +97,7 @@ def test_extrapolated_command_and_rated_torque():
     """For a law evaluated inside the step the mean command is extrapolated to the step's midpoint,
     1.5 tau_k - 0.5 tau_k-1 (the first step is not tested); a channel whose torque reaches the rated
     0.1 N m at t_k, or by the step's end (2 tau_k - tau_k-1), is not tested over the step."""
-    fdi = _fdi(command="extrapolated", limit=jnp.full((2, 1), 0.1))
+    fdi = _fdi(command="extrapolated", torque_limit=jnp.full((2, 1), 0.1))
     s = fdi.initial_state({"q": jnp.zeros((2, 3)), "w": jnp.zeros((2, 3))})
     # at q = 0 the generalised [theta, phi, psi] torque is the body torque [phi, theta, psi]
     s = fdi.predict(0.0, s, jnp.asarray([[0.02, 0.04, 0.5], [0.0, 0.0, 0.0]]), DT)
@@ -201,9 +201,27 @@ def test_compositions_are_checked(mehrabian_cells):
     raw = copy.deepcopy(mehrabian_cells[("none", "unsaturated")])
     raw["sensors"] = None
     del raw["sensors"]
-    with pytest.raises(ValueError, match="attitude-residual-fdi reads 3-2-1 Euler angles"):
+    with pytest.raises(
+        ValueError,
+        match="estimator attitude-residual-fdi needs 3-2-1 Euler angles and body rates as the "
+        "measurement",
+    ):
         load_scenario(raw)
     raw = copy.deepcopy(mehrabian_cells[("none", "unsaturated")])
     raw["actuator"] = {"type": "euler-torque-allocation"}  # the cell keeps its fdi-scores
     with pytest.raises(ValueError, match="fdi-scores reads the true fault of the fault-battery"):
         load_scenario(raw)
+
+
+@pytest.mark.parametrize(("command", "holds"), [("extrapolated", True), ("held", False)])
+def test_check_states_the_command_model_against_the_law_s_sampling(mehrabian_cells, command, holds):
+    """``check`` states the condition registered for the type: the continuous law's command is
+    modelled by the extrapolation, not by holding it."""
+    from formation_ftc.api import check
+
+    raw = copy.deepcopy(mehrabian_cells[("none", "unsaturated")])
+    raw["estimator"]["command"] = command
+    conds = {c.name: c for c in check(load_scenario(raw))}
+    cond = conds["attitude FDI: command model over each step"]
+    assert cond.holds is holds and not cond.required
+    assert "controller networked-el-hinf is evaluated inside the step" in cond.value

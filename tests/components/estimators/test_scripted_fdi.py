@@ -1,8 +1,9 @@
-"""Tests of the synthetic FDI-imperfection block (formation_ftc.blocks.fdi).
+"""Estimator ``scripted-fdi`` (formation_ftc.components.estimators.scripted_fdi).
 
 Truths: the closed-form FDI estimate of SPEC P3.4 / E003-10 (u* = u_bar(t - 5) - 0.1 on [45, 245] s,
-0 elsewhere), exact routing of isolation errors, the sample statistics of the identification noise, and
-the block conformance rules (float64, jit, vmap batched[i] == single i, determinism under a key).
+0 elsewhere), exact routing of isolation errors, the sample statistics of the identification noise, the
+kernel conformance rules (float64, jit, vmap batched[i] == single i, determinism under a key), the held
+fault and report of a Mehrabian scenario, and the loop's refusal without the actuator's faults.
 """
 
 from __future__ import annotations
@@ -12,14 +13,17 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.fdi import (
+import formation_ftc as ftc
+from formation_ftc.components.estimators.scripted_fdi import (
     FDIModel,
     fdi_output,
     fdi_params,
     identity_routing,
     isolation_routing,
 )
+from formation_ftc.config.loader import ScenarioError
+from formation_ftc.methods.composed import make_loop
+from formation_ftc.sim.components import FlightInputs
 
 M, K, DT = 8, 3, 0.01
 
@@ -130,3 +134,71 @@ def test_bad_configuration_is_rejected():
         fdi_params(M, K, fault_mask=MASK, onset=40.0, routing=identity_routing(M, 2))
     with pytest.raises(ValueError, match="noise_std"):
         fdi_params(M, K, fault_mask=MASK, onset=40.0, noise_std=-0.1)
+
+
+def _loop(name="mehrabian-identification", **ov):
+    return make_loop(
+        ftc.load_scenario(name, {"simulation.horizon": 1.0, "simulation.record_every": 1, **ov})
+    )
+
+
+def test_held_time_signals_and_fault_and_fdi_profiles():
+    """The fault (2) is 0.05 sin(0.02 t_k) + 0.6 on the snapped window, held over the step (the same
+    value at the three stage times); the FDI reports u* = u_bar(t - 5) - 0.1 and the flag from 45 s."""
+    loop = _loop(**{"simulation.horizon": 300.0})
+    assert loop.actuator.holds_exogenous and loop.plant.holds_exogenous
+    for k in (3999, 4000, 12345, 24000, 24001):
+        t_k = k * 0.01
+        table = loop._time_table(jnp.asarray(t_k))
+        f = np.asarray(table["actuator"]["fault"])
+        want = 0.05 * np.sin(0.02 * t_k) + 0.6 if 4000 <= k <= 24000 else 0.0
+        assert f.shape == (3, 8, 3)
+        np.testing.assert_allclose(f[:, 0, 2], want, rtol=1e-15, atol=0)
+        assert np.count_nonzero(f[:, 1:]) == 0 and np.count_nonzero(f[:, 0, :2]) == 0
+        d = np.asarray(table["plant"]["d"])
+        np.testing.assert_array_equal(d[0], d[2])
+        _, rep = loop.estimator.update(
+            jnp.asarray(t_k), None, FlightInputs(*[None] * 6, loop._step_context(jnp.asarray(k)))
+        )
+        flag, est = np.asarray(rep.flag), np.asarray(rep.estimate)
+        on = k >= 4500
+        assert flag[0, 2] == float(on) and flag.sum() == float(on)
+        tw = t_k - 5.0
+        seen = 4000 <= k - 500 <= 24000
+        np.testing.assert_allclose(
+            est[0, 2],
+            (0.05 * np.sin(0.02 * tw) + 0.5) if on and seen else 0.0,
+            rtol=1e-14,
+            atol=1e-15,
+        )
+
+
+def test_a_report_without_faults_to_report_is_refused():
+    """Without an actuator stating faults the scripted report has nothing to report: validation
+    refuses the loop naming the estimator and the actuator that would provide the faults."""
+    raw = {
+        "scenario": {"name": "t", "method": "composed"},
+        "simulation": {"horizon": 1.0, "dt": 0.01},
+        "plant": {
+            "type": "quaternion-rigid-body",
+            "inertia": [20.0, 18.0, 15.0],
+            "initial_attitude_deg": [[10.0, 0.0, 0.0], [0.0, 20.0, 0.0]],
+        },
+        "sensors": {"type": "quaternion-euler"},
+        "controller": {"type": "networked-el-hinf", "edges": [[1, 2]]},
+        "actuator": {"type": "euler-torque-allocation"},
+        "estimator": {"type": "scripted-fdi"},
+    }
+    with pytest.raises(ScenarioError) as err:
+        ftc.load_scenario(raw)
+    msg = str(err.value)
+    assert "estimator scripted-fdi needs additive actuator faults" in msg
+    assert 'actuator type = "euler-torque-allocation" with faults' in msg
+    raw["actuator"]["faults"] = [
+        {"spacecraft": 2, "channel": 1, "torque": "0.5", "start": 0.0, "end": 1.0}
+    ]
+    raw["estimator"]["isolation"] = [
+        {"spacecraft": 1, "channel": 1, "reported_spacecraft": 2, "reported_channel": 1}
+    ]
+    with pytest.raises(ScenarioError, match=r"estimator.isolation\[0\]: spacecraft 1 channel 1"):
+        ftc.load_scenario(raw)

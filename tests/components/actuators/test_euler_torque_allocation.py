@@ -1,15 +1,20 @@
-"""The quaternion -> 3-2-1 Euler sensors and the generalised -> body torque allocation, one call each,
-against numpy truths (elementary rotations, R_bar written out, the power balance)."""
+"""Actuator ``euler-torque-allocation``: the generalised -> body torque map with the held additive
+faults, one call against numpy truths (elementary rotations, R_bar written out, the power balance), and
+the refusal on a plant without a quaternion."""
 
 from __future__ import annotations
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
-from formation_ftc.components.actuators.additive_faults import HeldAdditiveFaultActuator
-from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
-from formation_ftc.components.sensors.quaternion_euler import QuaternionToEulerSensors
-from formation_ftc.sim.components import ActuatorInputs, SensorInputs, as_float
+import formation_ftc as ftc
+from formation_ftc.components.actuators.euler_torque_allocation import (
+    EulerTorqueAllocation,
+    HeldAdditiveFaultActuator,
+)
+from formation_ftc.config.loader import ScenarioError
+from formation_ftc.sim.components import ActuatorInputs, as_float
 
 RNG = np.random.default_rng(11)
 
@@ -41,13 +46,6 @@ def _state(n):
     )
     p *= np.where(RNG.uniform(size=(n, 1)) < 0.5, -1.0, 1.0)  # either sign of the same attitude
     return angles, {"omega": RNG.normal(size=(n, 3)), "q": jnp.asarray(1.0001 * p)}
-
-
-def test_sensors_report_3_2_1_angles_and_body_rates():
-    angles, x = _state(40)
-    y = QuaternionToEulerSensors(count=40).measure(0.0, x, SensorInputs(None, None))
-    np.testing.assert_allclose(np.asarray(y["q"]), angles, atol=1e-12)
-    np.testing.assert_allclose(np.asarray(y["w"]), np.asarray(x["omega"]), atol=0)
 
 
 def test_allocation_maps_command_plus_fault_to_the_body_torque_of_equal_power():
@@ -88,3 +86,37 @@ def test_allocation_maps_command_plus_fault_to_the_body_torque_of_equal_power():
         rtol=1e-10,
         atol=1e-12,
     )
+    # what the allocation needs and provides (the faults it carries: the scripted FDI's report)
+    assert act.needs().keys() == {"quaternion-attitude-state"}
+    assert act.provides() == {"generalised-torque-actuation", "scripted-actuator-faults"}
+    assert bare.provides() == {"generalised-torque-actuation"}
+
+
+def test_allocation_on_a_plant_without_quaternion_is_refused():
+    raw = {
+        "scenario": {"name": "t", "method": "composed"},
+        "simulation": {"horizon": 1.0, "dt": 0.1},
+        "plant": {
+            "type": "clohessy-wiltshire",
+            "semi_major_axis": 7.0e6,
+            "mass": [100.0],
+            "initial_position": [[1.0, 0.0, 0.0]],
+        },
+        "controller": {"type": "pd", "kp": 1.0, "kd": 1.0},
+        "actuator": {"type": "euler-torque-allocation"},
+    }
+    with pytest.raises(ScenarioError) as err:
+        ftc.load_scenario(raw)
+    msg = str(err.value)
+    assert (
+        "actuator euler-torque-allocation needs a plant whose state is {omega (N,3), q (N,4)}"
+        in msg
+    )
+    assert '(provided by: plant type = "quaternion-rigid-body" or "attitude-truth")' in msg
+    raw["actuator"]["faults"] = [
+        {"spacecraft": 2, "channel": 1, "torque": "0.5", "start": 0.0, "end": 1.0}
+    ]
+    with pytest.raises(
+        ScenarioError, match=r"actuator.faults\[0\].spacecraft = 2: the plant has 1"
+    ):
+        ftc.load_scenario(raw)

@@ -132,11 +132,14 @@ def test_rejected_on_a_plant_without_attitude():
     }
     with pytest.raises(
         Exception,
-        match="evaluation attitude-scores scores attitudes and torques, but plant "
-        "clohessy-wiltshire has no quaternion attitude",
+        match=r"evaluations\[0\] attitude-scores needs a plant whose state is \{omega \(N,3\), "
+        r"q \(N,4\)\}.*to score its attitudes and torques.*\(provided by: plant type = "
+        r'"quaternion-rigid-body" or "attitude-truth"\)',
     ):
         make_loop(ftc.load_scenario(raw))
     with pytest.raises(
-        Exception, match="reads the plant's attitude_lvlh, but plant quaternion-rigid-body"
+        Exception,
+        match=r"evaluations\[0\] attitude-scores needs the attitude relative to LVLH.*"
+        r'\(provided by: plant type = "attitude-truth"\)',
     ):
         make_loop(ftc.load_scenario(_raw("lvlh", plant="quaternion-rigid-body")))
