@@ -16,7 +16,7 @@ import pytest
 import formation_ftc as ftc
 from formation_ftc.components.actuators.additive_faults import HeldAdditiveFaultActuator
 from formation_ftc.components.controllers.networked_el_hinf import NetworkedElHinfController
-from formation_ftc.components.controllers.pd_formation import ZeroController
+from formation_ftc.components.controllers.none import ZeroController
 from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
 from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
 from formation_ftc.core.dynamics.euler_lagrange import rigid_body_rhs

@@ -186,11 +186,6 @@ class ClosedLoop:
                     f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
                     f"spacecraft, plant {type(p).__name__} has {p.count}"
                 )
-        if getattr(p, "needs_reference", False) and isinstance(self.reference, NoReference):
-            raise CompositionError(
-                f"plant {type(p).__name__} needs a reference orbit (reference slot), "
-                "but the loop has none"
-            )
         if self.network.delayed and not getattr(c, "uses_messages", False):
             raise CompositionError(
                 f"network {type(self.network).__name__} delays messages, but controller "

@@ -334,7 +334,7 @@ def composed_json_schema() -> dict[str, Any]:
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
     """The composed scenario's closed loop (components built from their sections)."""
-    from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
+    from formation_ftc.components.sensors.relative_state import ExactRelativeStateSensors
     from formation_ftc.sim.components import Plant
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
