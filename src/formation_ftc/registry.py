@@ -20,8 +20,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from pydantic import BaseModel
+
+# a condition is what a method's check and a component's ``conditions(loop)`` return: defined with the
+# component contract (a layer below the components), public here
+from formation_ftc.sim.contract import BASES, CERTIFYING_BASES, Condition
 
 if TYPE_CHECKING:
     from formation_ftc.sim.compiled import Compiled
@@ -63,79 +66,6 @@ def __getattr__(name: str) -> Any:
 
         return Compiled
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-#: How a condition's verdict was computed (:attr:`Condition.basis`).
-BASES = ("exact", "verified", "sampled", "heuristic", "informative")
-#: The bases whose computation may certify a condition (``holds=True``).
-CERTIFYING_BASES = ("exact", "verified", "informative")
-
-
-@dataclass(frozen=True)
-class Condition:
-    """One theorem / design condition evaluated before (or after) a run.
-
-    ``holds`` is None when the condition cannot be evaluated for this scenario or when the computation
-    could not prove it. ``required`` marks conditions the method's guarantee needs: ``formation-ftc
-    check`` exits with 1 when one fails.
-
-    ``basis`` (keyword, no default: every condition states it) says how the verdict was computed:
-
-    * ``"exact"`` -- exact arithmetic, or floating point with a stated rounding margin;
-    * ``"verified"`` -- a verified bound (interval arithmetic, a certificate re-checked in numpy);
-    * ``"sampled"`` -- evaluated at sample points: a violation found is real, a pass is not a proof;
-    * ``"heuristic"`` -- an estimate that is not a bound;
-    * ``"informative"`` -- a number shown for the reader, not a requirement (``required=False``).
-
-    ``holds=True`` is only allowed with ``exact``, ``verified`` or ``informative``; a sampled or
-    heuristic computation that finds no violation reports ``holds=None`` ("unproven"). ``holds=False``
-    is allowed with any basis.
-    """
-
-    name: str
-    reference: str
-    value: str
-    requirement: str
-    holds: bool | None
-    required: bool = True
-    detail: str = ""
-    basis: str = field(kw_only=True)
-
-    def __post_init__(self) -> None:
-        if self.basis not in BASES:
-            raise ValueError(
-                f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}"
-            )
-        if self.holds is not None and not isinstance(self.holds, bool | np.bool_):
-            raise ValueError(
-                f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}"
-            )
-        if self.basis == "informative" and self.required:
-            raise ValueError(
-                f"condition {self.name!r}: an informative condition cannot be required"
-            )
-        if self.holds is not None and bool(self.holds) and self.basis not in CERTIFYING_BASES:
-            raise ValueError(
-                f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
-                "holds; report holds=None (unproven) when no violation is found"
-            )
-
-    @property
-    def unproven(self) -> bool:
-        """True when the condition was evaluated by sampling or a heuristic and no violation was found."""
-        return self.holds is None and self.basis in ("sampled", "heuristic")
-
-    def as_dict(self) -> dict[str, Any]:
-        return dict(
-            name=str(self.name),
-            reference=str(self.reference),
-            value=str(self.value),
-            requirement=str(self.requirement),
-            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
-            required=bool(self.required),
-            detail=str(self.detail),
-            basis=str(self.basis),
-        )
 
 
 @dataclass(frozen=True)

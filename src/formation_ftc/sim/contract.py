@@ -6,11 +6,14 @@ build their components only when a loop is made. Keeping these names here (numpy
 ``formation-ftc show`` and ``formation-ftc schema`` load every catalog without importing JAX.
 :mod:`formation_ftc.sim.components` re-exports both, so ``from formation_ftc.sim.components import
 CompositionError, as_float`` keeps working; :mod:`formation_ftc.sim.metrics` re-exports the names of
-the metric reductions, which ``[[metrics]]`` sections check.
+the metric reductions, which ``[[metrics]]`` sections check. :class:`Condition` (public as
+``formation_ftc.registry.Condition``) is what a method's check and a component's ``conditions(loop)``
+return.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -21,6 +24,9 @@ __all__ = [
     "CAPABILITIES",
     "capability",
     "as_float",
+    "Condition",
+    "BASES",
+    "CERTIFYING_BASES",
     "REDUCTIONS",
     "BLOCK_REDUCTIONS",
     "STAGE_REDUCTIONS",
@@ -118,6 +124,19 @@ CAPABILITIES: dict[str, Capability] = {
         "additive actuator faults stated in the scenario, in the law's generalised channels",
         'actuator type = "euler-torque-allocation" with faults',
     ),
+    # --- translational (CW / relative-LVLH plants, graphs, formation laws, thruster faults, scores)
+    "recorded-positions": Capability(
+        "the spacecraft positions recorded as the signal position (N, 3) [m]",
+        'a translational plant, e.g. type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
+    ),
+    "applied-forces": Capability(
+        "a plant driven by forces [N]",
+        'plant type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
+    ),
+    "true-masses": Capability(
+        "the spacecraft's true masses [kg] (a plant with a mass field)",
+        'plant type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
+    ),
 }
 
 
@@ -175,3 +194,80 @@ def as_float(x: Any) -> np.ndarray:
     dtype('float64')
     """
     return np.asarray(x, dtype=np.float64)
+
+
+#: How a condition's verdict was computed (:attr:`Condition.basis`).
+BASES = ("exact", "verified", "sampled", "heuristic", "informative")
+#: The bases whose computation may certify a condition (``holds=True``).
+CERTIFYING_BASES = ("exact", "verified", "informative")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One theorem / design condition evaluated before (or after) a run.
+
+    ``holds`` is None when the condition cannot be evaluated for this scenario or when the computation
+    could not prove it. ``required`` marks conditions the method's guarantee needs: ``formation-ftc
+    check`` exits with 1 when one fails.
+
+    ``basis`` (keyword, no default: every condition states it) says how the verdict was computed:
+
+    * ``"exact"`` -- exact arithmetic, or floating point with a stated rounding margin;
+    * ``"verified"`` -- a verified bound (interval arithmetic, a certificate re-checked in numpy);
+    * ``"sampled"`` -- evaluated at sample points: a violation found is real, a pass is not a proof;
+    * ``"heuristic"`` -- an estimate that is not a bound;
+    * ``"informative"`` -- a number shown for the reader, not a requirement (``required=False``).
+
+    ``holds=True`` is only allowed with ``exact``, ``verified`` or ``informative``; a sampled or
+    heuristic computation that finds no violation reports ``holds=None`` ("unproven"). ``holds=False``
+    is allowed with any basis.
+    """
+
+    name: str
+    reference: str
+    value: str
+    requirement: str
+    holds: bool | None
+    required: bool = True
+    detail: str = ""
+    basis: str = field(kw_only=True)
+
+    def __post_init__(self) -> None:
+        if self.basis not in BASES:
+            raise ValueError(
+                f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}"
+            )
+        if self.holds is not None and not isinstance(self.holds, bool | np.bool_):
+            raise ValueError(
+                f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}"
+            )
+        if self.basis == "informative" and self.required:
+            raise ValueError(
+                f"condition {self.name!r}: an informative condition cannot be required"
+            )
+        if self.holds is not None and bool(self.holds) and self.basis not in CERTIFYING_BASES:
+            raise ValueError(
+                f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
+                "holds; report holds=None (unproven) when no violation is found"
+            )
+
+    @property
+    def unproven(self) -> bool:
+        """True when the condition was evaluated by sampling or a heuristic and no violation was found."""
+        return self.holds is None and self.basis in ("sampled", "heuristic")
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(
+            name=str(self.name),
+            reference=str(self.reference),
+            value=str(self.value),
+            requirement=str(self.requirement),
+            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
+            required=bool(self.required),
+            detail=str(self.detail),
+            basis=str(self.basis),
+        )
+
+
+# its public name (reprs, docs, pickles): formation_ftc.registry, which re-exports it
+Condition.__module__ = "formation_ftc.registry"

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.components.controllers.pd_formation import ZeroController
+from formation_ftc.components.controllers.none import ZeroController
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
 from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
 from formation_ftc.config.loader import ScenarioError

@@ -109,7 +109,7 @@ print(json.dumps({{"catalogs": catalogs, "error": error, "known": known}}))
 def test_validation_imports_only_the_named_catalogs():
     got = _fresh(_VALIDATE.format(scenario="cw-pd-fault", extra={}))
     assert got["error"] is None
-    assert got["catalogs"] == ["catalog_translational"]
+    assert got["catalogs"] == []  # every type of cw-pd-fault has a home
 
 
 def test_an_unknown_type_lists_every_known_type():
@@ -139,8 +139,8 @@ def test_a_stale_index_entry_falls_back_to_every_catalog():
     got = _fresh(
         "import json, sys\n"
         "from formation_ftc.methods.composed import _catalog_index, component_type\n"
-        "_catalog_index.CATALOG_INDEX[('controller', 'pd')] = "
+        "_catalog_index.CATALOG_INDEX[('controller', 'azizi2009-llfr')] = "
         f"'{_PACKAGE}.catalog_delays'\n"
-        "print(json.dumps(component_type('controller', 'pd').name))\n"
+        "print(json.dumps(component_type('controller', 'azizi2009-llfr').name))\n"
     )
-    assert got == "pd"
+    assert got == "azizi2009-llfr"

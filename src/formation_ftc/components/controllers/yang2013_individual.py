@@ -13,7 +13,7 @@ from formation_ftc.blocks.controllers.yang2013_individual import (
     attitude_control,
     translational_control,
 )
-from formation_ftc.components.controllers.pd_formation import _desired_motion
+from formation_ftc.components.controllers._desired_position import desired_motion
 from formation_ftc.sim.components import Controller, FlightInputs, component, static
 
 __all__ = ["Yang2013TranslationalController", "Yang2013AttitudeController"]
@@ -40,7 +40,7 @@ class Yang2013TranslationalController(Controller):
     desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
-        return _desired_motion(self.desired_position, self.count, t)
+        return desired_motion(self.desired_position, self.count, t)
 
     def desired_position_at(self, exogenous):
         return exogenous["p"]

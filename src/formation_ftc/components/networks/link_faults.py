@@ -10,8 +10,8 @@ For the delayed graph every delay is multiplied by ``delay_scale`` [-] over the 
 ``T_ij(t) -> delay_scale T_ij(t)`` (the history buffer must hold the scaled delays). The onset, the
 mask and the scale are array leaves (a league batches link-loss and link-healthy cases in one
 compiled program); the reading itself is that of
-:class:`~formation_ftc.components.networks.weighted_graph.GraphNetwork` /
-:class:`~formation_ftc.components.networks.weighted_graph.DelayedGraphNetwork`.
+:class:`~formation_ftc.components.networks.graph.GraphNetwork` /
+:class:`~formation_ftc.components.networks.delayed_graph.DelayedGraphNetwork`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ from typing import Any
 
 import jax.numpy as jnp
 
-from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork
+from formation_ftc.components.networks.delayed_graph import DelayedGraphNetwork
+from formation_ftc.components.networks.graph import GraphNetwork
 from formation_ftc.sim.components import NetworkInputs, component
 
 __all__ = ["GraphLinkLossNetwork", "DelayedGraphLinkLossNetwork", "faulty_weights"]
@@ -69,8 +70,8 @@ class GraphLinkLossNetwork(GraphNetwork):
     onset: Any = float("inf")  # [s]
 
     def receive(self, t, state, inputs: NetworkInputs):
-        w = faulty_weights(self.weights, self.lost, self.onset, inputs.t_k)
-        return GraphNetwork.receive(dataclasses.replace(self, weights=w), t, state, inputs)
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
+        return GraphNetwork.receive(dataclasses.replace(self, adjacency=w), t, state, inputs)
 
 
 @component
@@ -84,10 +85,10 @@ class DelayedGraphLinkLossNetwork(DelayedGraphNetwork):
 
     def receive(self, t, state, inputs: NetworkInputs):
         after = inputs.t_k >= self.onset
-        w = faulty_weights(self.weights, self.lost, self.onset, inputs.t_k)
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
         T = inputs.exogenous["T"] * jnp.where(after, self.delay_scale, 1.0)
         return DelayedGraphNetwork.receive(
-            dataclasses.replace(self, weights=w),
+            dataclasses.replace(self, adjacency=w),
             t,
             state,
             inputs._replace(exogenous={**inputs.exogenous, "T": T}),

@@ -26,10 +26,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("controller", "yang2013-relative"),
         ("controller", "yang2013-translational"),
     ),
-    "catalog_evaluations": (
-        ("evaluation", "formation-scores"),
-        ("evaluation", "li2020-formation-errors"),
-    ),
     "catalog_faults": (
         ("actuator", "fault-battery"),
         ("network", "graph-link-loss"),
@@ -54,21 +50,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("plant", "switched-formation"),
         ("sensors", "tracking-error"),
         ("supervisor", "switching"),
-    ),
-    "catalog_translational": (
-        ("actuator", "expression-faults"),
-        ("actuator", "step-faults"),
-        ("actuator", "thruster-bias"),
-        ("controller", "li2020-adaptive"),
-        ("controller", "none"),
-        ("controller", "pd"),
-        ("controller", "sir-ftc"),
-        ("network", "delayed-graph"),
-        ("network", "graph"),
-        ("plant", "clohessy-wiltshire"),
-        ("plant", "relative-lvlh"),
-        ("reference", "keplerian"),
-        ("sensors", "relative-state"),
     ),
     "catalog_truth": (
         ("plant", "orbital-truth"),

@@ -32,10 +32,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
+from formation_ftc.components.networks.delayed_graph import delayed_graph_network
+from formation_ftc.components.networks.graph import GraphSection
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.constants import FAULT_KINDS
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.methods.composed.catalog_translational import GraphSection, _delayed_graph
 from formation_ftc.sim.contract import as_float
 
 if TYPE_CHECKING:
@@ -229,13 +230,13 @@ def _graph_link_loss(sec: GraphLinkLossSection, ctx: BuildContext):
 
     lost, onset = as_float(sec.lost_mask()), as_float(sec.onset)
     if sec.delays is None:
-        return GraphLinkLossNetwork(weights=as_float(sec.adjacency), lost=lost, onset=onset)
-    base = _delayed_graph(sec, ctx)  # type: ignore[arg-type]  # same adjacency / delays / max_delay fields
+        return GraphLinkLossNetwork(adjacency=as_float(sec.adjacency), lost=lost, onset=onset)
+    base = delayed_graph_network(sec, ctx)  # type: ignore[arg-type]  # same adjacency / delays / max_delay fields
     # the history holds the scaled delays too
     scale = sec.delay_scale if sec.max_delay_scale is None else sec.max_delay_scale
     capacity = required_capacity(float(sec.max_delay or 0.0) * max(1.0, scale), ctx.dt) + 1
     return DelayedGraphLinkLossNetwork(
-        weights=base.weights,
+        adjacency=base.adjacency,
         delays=base.delays,
         edges=base.edges,
         capacity=capacity,

@@ -7,10 +7,11 @@ import math
 import numpy as np
 from pydantic import Field, model_validator
 
+from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import per_axis as _per_axis
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
 from formation_ftc.methods.composed import BuildContext, per_spacecraft, register_component_type
-from formation_ftc.methods.composed.catalog_translational import Vec3, Vec3Expr, _per_axis
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["OrbitalTruthSection", "LvlhRelativeStateSection"]

@@ -1,12 +1,13 @@
-"""Weighted directed communication graphs, instantaneous or with time-varying delays.
+"""Network ``delayed-graph``: exchange over a weighted directed graph with time-varying delays T_ij(t)
+(Li2020 Thm 2).
 
-Both networks deliver to spacecraft i the in-weight and the weighted sum of the messages it receives::
+The network delivers to spacecraft i the in-weight and the weighted sum of the delayed messages::
 
     received_i = {"in_weight": sum_j c_ij,  "weighted_sum": sum_j c_ij m_j(t - T_ij(t))}
 
-(``T_ij = 0`` for :class:`GraphNetwork`), so that a controller forms the Laplacian consensus term
-``sum_j c_ij (s_i - s_j(t - T_ij)) = in_weight_i s_i - weighted_sum_i`` (Li2020 eqs. (24) / (42)).
-``c_ij > 0``: i receives from j (row i = receiver). Messages have shape (N, d).
+so that a controller forms ``sum_j c_ij (s_i - s_j(t - T_ij)) = in_weight_i s_i - weighted_sum_i``
+(Li2020 eq. (42)); ``T_ij = 0`` delivers what ``graph``
+(:class:`~formation_ftc.components.networks.graph.GraphNetwork`) delivers.
 """
 
 from __future__ import annotations
@@ -18,42 +19,25 @@ from typing import Any, ClassVar
 import jax
 import jax.numpy as jnp
 import numpy as np
+from pydantic import Field
 
+from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components.networks.graph import GraphSection, graph_edges
+from formation_ftc.config.base import ExprText
 from formation_ftc.core.expressions import compile_expression
-from formation_ftc.core.history import history_init, history_push, history_read
+from formation_ftc.core.graph import validate_adjacency
+from formation_ftc.core.history import history_init, history_push, history_read, required_capacity
 from formation_ftc.sim.components import Network, NetworkInputs, component, static
+from formation_ftc.sim.contract import as_float
 
 __all__ = [
-    "GraphNetwork",
     "DelayedGraphNetwork",
+    "DelayedGraphSection",
     "DelayStats",
     "delay_statistics",
     "delay_vector_function",
-    "graph_edges",
+    "delayed_graph_network",
 ]
-
-
-def graph_edges(weights) -> tuple[tuple[int, int], ...]:
-    """Used links (i, j) (0-based receiver, sender) of a weight matrix, row-major order.
-
-    Parameters
-    ----------
-    weights : array_like, shape (N, N)
-        Link weights c_ij, row i = receiver [-]; a link is used where c_ij > 0.
-
-    Returns
-    -------
-    tuple of tuple of int
-        ``(i, j)`` pairs.
-
-    Examples
-    --------
-    >>> from formation_ftc.components.networks.weighted_graph import graph_edges
-    >>> graph_edges([[0.0, 1.0, 0.0], [0.5, 0.0, 2.0], [0.0, 0.0, 0.0]])
-    ((0, 1), (1, 0), (1, 2))
-    """
-    w = np.asarray(weights, dtype=float)
-    return tuple((int(i), int(j)) for i, j in zip(*np.nonzero(w > 0), strict=True))
 
 
 @lru_cache(maxsize=256)
@@ -85,7 +69,7 @@ def delay_vector_function(texts: tuple[tuple[str, ...], ...], pairs: tuple[tuple
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.networks.weighted_graph import delay_vector_function
+    >>> from formation_ftc.components.networks.delayed_graph import delay_vector_function
     >>> texts = (("0", "0.1 + 0.01 * t"), ("0.2 * i", "0"))
     >>> T = delay_vector_function(texts, ((0, 1), (1, 0)))
     >>> np.asarray(T(2.0)).round(12)
@@ -151,7 +135,7 @@ def delay_statistics(
 
     Examples
     --------
-    >>> from formation_ftc.components.networks.weighted_graph import delay_statistics
+    >>> from formation_ftc.components.networks.delayed_graph import delay_statistics
     >>> st = delay_statistics((("0", "1 + 0.5*t"), ("2 - 0.1*t", "0")), 10.0, 0.5)
     >>> [(s.name, s.value_min, s.value_max, round(s.rate_max, 12)) for s in st]
     [('T12', 1.0, 6.0, 0.5), ('T21', 1.0, 2.0, -0.1)]
@@ -189,24 +173,6 @@ def delay_statistics(
 
 
 @component
-class GraphNetwork(Network):
-    """Instantaneous exchange over a weighted directed graph ``weights`` (N, N) [-]."""
-
-    weights: Any  # (N, N) c_ij, row i = receiver
-
-    @property
-    def count(self) -> int:
-        return int(np.shape(self.weights)[0])
-
-    def receive(self, t, state, inputs: NetworkInputs):
-        C, m = self.weights, inputs.messages
-        # sum_j c_ij m_j as N broadcast multiply-adds (elementwise, fuses with its consumers; a
-        # dot_general is a separate XLA kernel with a transpose around it under vmap)
-        weighted = sum(C[:, j, None] * m[..., j, None, :] for j in range(self.count))
-        return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}
-
-
-@component
 class DelayedGraphNetwork(Network):
     """Exchange over a weighted directed graph with time-varying delays T_ij(t) [s] (Li2020 Thm 2).
 
@@ -219,7 +185,7 @@ class DelayedGraphNetwork(Network):
     and ``capacity >= ceil(max T / dt) + 2``. The per-link reads are dense one-hot selections (faster
     than gathers and scatters on XLA:CPU)."""
 
-    weights: Any  # (N, N) c_ij, row i = receiver
+    adjacency: Any  # (N, N) c_ij, row i = receiver
     delays: tuple[tuple[str, ...], ...] = static()  # T_ij(t) expressions in t, i, j [s] (N x N)
     edges: tuple[tuple[int, int], ...] = static()  # used links (i, j), see graph_edges
     capacity: int = static()  # ring-buffer length [samples]
@@ -231,7 +197,7 @@ class DelayedGraphNetwork(Network):
 
     @property
     def count(self) -> int:
-        return int(np.shape(self.weights)[0])
+        return int(np.shape(self.adjacency)[0])
 
     def exogenous(self, t):
         return {"T": delay_vector_function(self.delays, self.edges)(t)}
@@ -246,7 +212,7 @@ class DelayedGraphNetwork(Network):
         rows, _, sender_onehot, receiver_onehot = _link_selections(
             self.edges, self.count
         )  # (E, N), (N, E)
-        C = self.weights
+        C = self.adjacency
         T = inputs.exogenous["T"]
         elapsed = t - inputs.t_k
         # steps before the newest sample m(t_k) (read clamps at 0: the newest sample)
@@ -270,3 +236,96 @@ class DelayedGraphNetwork(Network):
         c_e = jnp.sum(C[rows] * sender_onehot, axis=1)  # (E,) link weights c_{i_e j_e}
         weighted = receiver_onehot @ (c_e[:, None] * m_j)  # (N, d), eq. (42)
         return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}
+
+
+class DelayedGraphSection(GraphSection):
+    """The weighted directed graph of ``graph`` with a delay expression per link; ``max_delay`` sizes
+    the history buffer (the builder turns it into the network's ``capacity``)."""
+
+    delays: list[list[ExprText]] = Field(
+        description="T_ij(t) per link, expressions in t, i (receiver), j (sender) [s] (N x N, row i = "
+        "receiver; the diagonal and unused links are not read); >= 0 on the used links."
+    )
+    max_delay: float = builder_input(
+        gt=0, description="Largest delay on any used link [s] (sizes the history buffer)."
+    )
+
+
+def delayed_graph_network(sec: DelayedGraphSection, ctx: BuildContext) -> DelayedGraphNetwork:
+    """The network of a validated ``delayed-graph`` section (also the delayed base of other graph
+    networks: any section with ``adjacency``, ``delays`` and ``max_delay``).
+
+    The delays of the used links, sampled at every step of the horizon, must stay in [0, max_delay]
+    (the history holds max_delay seconds); when they also stay >= dt the reads never need the message
+    sent within the step, and that blend is left out (``short_delays``).
+
+    Parameters
+    ----------
+    sec : DelayedGraphSection
+        The validated section.
+    ctx : BuildContext
+        The spacecraft count, the step and the horizon.
+
+    Returns
+    -------
+    DelayedGraphNetwork
+        The network.
+
+    Raises
+    ------
+    ValueError
+        ``network.delays`` not N x N, or a used link's delay outside [0, max_delay] on the step grid.
+
+    Examples
+    --------
+    Spacecraft 1 hears spacecraft 2 with a constant 0.25 s delay (dt = 0.1 s, a 1 s horizon):
+
+    >>> from types import SimpleNamespace
+    >>> from formation_ftc.components._registry import BuildContext
+    >>> ctx = BuildContext(SimpleNamespace(simulation=SimpleNamespace(horizon=1.0)), count=2, dt=0.1)
+    >>> sec = DelayedGraphSection(adjacency=[[0.0, 1.0], [0.0, 0.0]], delays=[["0", "0.25"], ["0", "0"]],
+    ...                           max_delay=0.5)
+    >>> net = delayed_graph_network(sec, ctx)
+    >>> net.edges, net.short_delays  # the delay never drops below dt: no blend with the message sent now
+    (((0, 1),), False)
+    >>> delayed_graph_network(sec.model_copy(update={"delays": [["0", "0.25 + t"], ["0", "0"]]}), ctx)
+    Traceback (most recent call last):
+    ...
+    ValueError: network.delays[0][1] (T12, link 2 -> 1): T = 1.25 s at t = 1 s exceeds network.max_delay = 0.5 s (the history holds max_delay seconds)
+    """
+    n = len(validate_adjacency(sec.adjacency, ctx.count))
+    if len(sec.delays) != n or any(len(r) != n for r in sec.delays):
+        raise ValueError(f"network.delays: must be {n} x {n} like network.adjacency")
+    edges = graph_edges(sec.adjacency)
+    texts = tuple(tuple(str(x) for x in r) for r in sec.delays)
+    stats = {st.pair: st for st in delay_statistics(texts, ctx.horizon, ctx.dt)}
+    for i, j in edges:
+        st = stats[(i, j)]
+        where = f"network.delays[{i}][{j}] ({st.name}, link {j + 1} -> {i + 1})"
+        if st.value_min < 0:
+            raise ValueError(
+                f"{where}: delay goes negative at t = {st.t_first_negative:.6g} s (minimum "
+                f"T = {st.value_min:.6g} s at t = {st.t_min:.6g} s; delays must be >= 0 s)"
+            )
+        if st.value_max > sec.max_delay:
+            raise ValueError(
+                f"{where}: T = {st.value_max:.6g} s at t = {st.t_max:.6g} s exceeds "
+                f"network.max_delay = {sec.max_delay:g} s (the history holds max_delay seconds)"
+            )
+    return DelayedGraphNetwork(
+        adjacency=as_float(sec.adjacency),
+        delays=texts,
+        edges=edges,
+        capacity=required_capacity(sec.max_delay, ctx.dt) + 1,
+        dt=ctx.dt,
+        short_delays=any(stats[e].value_min < ctx.dt for e in edges),
+    )
+
+
+register(
+    "network",
+    "delayed-graph",
+    DelayedGraphSection,
+    delayed_graph_network,
+    "weighted directed graph with time-varying delays (history buffer, interpolation)",
+)
