@@ -69,12 +69,9 @@ def test_text_commands_import_no_jax(argv):
 @pytest.mark.parametrize(
     ("argv", "catalogs"),
     [
-        (["show", "cw-pd-fault", "--no-comments"], ["catalog_translational"]),
-        (["show", "cw-pd-fault"], ["catalog_translational"]),
-        (
-            ["show", "compose-lqr-on-cw", "--no-comments"],
-            ["catalog_translational"],
-        ),
+        (["show", "cw-pd-fault", "--no-comments"], []),
+        (["show", "cw-pd-fault"], []),
+        (["show", "compose-lqr-on-cw", "--no-comments"], []),
     ],
 )
 def test_show_imports_only_the_catalogs_it_names(argv, catalogs):

@@ -166,7 +166,7 @@ def test_campaign_outcome_card():
 def test_result_dataset_variables_carry_units_and_long_names():
     """xarray draws the run dataset itself: its variables must carry units and long_name (cf.apply_cf)."""
     from formation_ftc.cf import apply_cf, cf_problems
-    from formation_ftc.components.controllers.pd_formation import ZeroController
+    from formation_ftc.components.controllers.none import ZeroController
     from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     from formation_ftc.sim.compiled import records_to_dataset
     from formation_ftc.sim.loop import ClosedLoop

@@ -44,7 +44,7 @@ def test_write_schema_file_round_trip(tmp_path):
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
     data = json.loads(target.read_text(encoding="utf-8"))
-    assert "methods/composed/catalog_translational.py" in data["sources"]
+    assert "components/controllers/pd.py" in data["sources"]
     assert "config/base.py" in data["sources"]
     assert shipped.shipped_schema(target) == composed_json_schema()
 

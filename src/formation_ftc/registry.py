@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+# a condition is what a method's check and a component's ``conditions(loop)`` return: defined with the
+# component contract (a layer below the components), public here
 from formation_ftc.sim.contract import BASES, CERTIFYING_BASES, Condition
 
 if TYPE_CHECKING:

@@ -46,7 +46,7 @@ def _leaf_key(loop, n: int) -> str:
             {"controller.nominal_mass": 110.0},
             "controller.nominal_mass",
             110.0,
-            ".controller.mass",  # declared: PdSection.leaf_paths
+            ".controller.nominal_mass",
             [0, 1, 2, 3],
             id="per-spacecraft",
         ),
@@ -60,12 +60,12 @@ def _leaf_key(loop, n: int) -> str:
             [0],
             id="wrapped",
         ),
-        pytest.param(  # the section's mu is the component's adapt_mu (Li2020Section.leaf_paths)
+        pytest.param(  # the d_hat adaptation gain mu_i (the on-board gravitational parameter: orbit_mu)
             "compose-li2020-on-cw",
             {},
             "controller.mu",
             1.0,
-            ".controller.adapt_mu",
+            ".controller.mu",
             [0, 1, 2, 3],
             id="declared",
         ),

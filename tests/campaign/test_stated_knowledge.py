@@ -22,7 +22,12 @@ from .conftest import TINY
 CASES = [
     # base scenario, sampled true-mass field, (plant leaf, flight leaf) holding it / the stated value
     pytest.param(
-        "cw-pd-fault", "plant.mass.0", ("plant", "mass"), ("controller", "mass"), 100.0, id="cw-pd"
+        "cw-pd-fault",
+        "plant.mass.0",
+        ("plant", "mass"),
+        ("controller", "nominal_mass"),
+        100.0,
+        id="cw-pd",
     ),
     pytest.param(
         "compose-lqr-on-cw",

@@ -19,7 +19,7 @@ from formation_ftc.components.controllers.acceleration_to_force import (
     force_from_acceleration,
 )
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
-from formation_ftc.components.controllers.pd_formation import PdFormationController
+from formation_ftc.components.controllers.pd import PdFormationController
 from formation_ftc.components.sensors.chain_relative import (
     ChainRelativeSensors,
     ChainRelativeStateSensors,
@@ -107,7 +107,11 @@ def test_adapter_output_takes_flight_inputs_only_and_is_a_pytree():
 
 def test_adapter_keeps_a_position_objective_and_rejects_other_quantities():
     pd = PdFormationController(
-        count=4, kp=as_float(1.0), kd=as_float(1.0), mass=as_float(MASS), max_force=as_float(np.inf)
+        count=4,
+        kp=as_float(1.0),
+        kd=as_float(1.0),
+        nominal_mass=as_float(MASS),
+        max_force=as_float(np.inf),
     )
     with pytest.raises(CompositionError, match="PdFormationController commands a force"):
         force_from_acceleration(pd, as_float(MASS))

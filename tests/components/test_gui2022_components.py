@@ -12,9 +12,9 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.components.actuators.thruster_bias import ThrusterBiasFaultActuator
+from formation_ftc.components.controllers.none import FreeDrift
 from formation_ftc.components.controllers.output_feedback import (
     ConventionalOutputFeedbackController,
-    FreeDrift,
     LearningOutputFeedbackController,
 )
 from formation_ftc.components.estimators.iterative_learning_observer import (

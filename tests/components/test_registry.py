@@ -106,7 +106,7 @@ import jax.numpy as jnp
 from pydantic import Field
 
 from formation_ftc.components._registry import register
-from formation_ftc.components.controllers.pd_formation import DesiredPositionLaw
+from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import component
 from formation_ftc.sim.contract import as_float

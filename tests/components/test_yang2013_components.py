@@ -21,10 +21,8 @@ from formation_ftc.components.controllers.yang2013_individual import (
     Yang2013TranslationalController,
 )
 from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
-from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
 from formation_ftc.components.sensors.relative_state import RelativeStateSensors
 from formation_ftc.components.supervisors.switching_supervisor import SwitchDecision
-from formation_ftc.core.dynamics.attitude_quaternion import attitude_rhs
 from formation_ftc.sim.components import ActuatorInputs, CompositionError, FlightInputs, TruthInputs
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -136,40 +134,6 @@ def test_translational_law_by_hand_and_on_a_cw_plant():
     # the residual CW drift the law does not cancel (2 n v, 3 n^2 x: < 4e-6 m/s^2 per m) leaves a
     # small steady offset; the law settles within 1 m of the target
     np.testing.assert_allclose(pos, [[10, 20, 0]] * 2, atol=1.0)
-
-
-def test_attitude_law_and_quaternion_plant_against_independent_formulas():
-    J = jnp.diag(jnp.array([20.0, 25.0, 30.0]))
-    law = Yang2013AttitudeController(
-        count=1,
-        inertia=J,
-        K3=jnp.asarray(0.2),
-        K4=jnp.asarray(1.0),
-        K5=jnp.asarray(2.0),
-        kappa=jnp.asarray(1e-3),
-    )
-    w = jnp.array([[0.01, -0.02, 0.03]])
-    q = jnp.array([[0.1, 0.2, -0.1, 0.9]])
-    tau, _, _ = law.output(
-        0.0, None, FlightInputs({"omega": w, "q": q}, None, None, None, None, None, None)
-    )
-    s = (np.sum(q[0, :3] ** 2) + 2.0 * q[0, 3] ** 2) / (2 * (np.sum(w[0] ** 2) + 1e-3))
-    np.testing.assert_allclose(
-        tau[0], -np.asarray(J) @ (0.2 * w[0] + q[0, :3] + w[0] * s), rtol=1e-14
-    )
-    # the plant with the gyroscopic term is eq. (4) of the core model (no gravity gradient)
-    plant = QuaternionRigidBodyPlant(
-        inertia=J, initial_omega=w, initial_quaternion=q, disturbance_torque=("0.1", "0", "-0.2")
-    )
-    torque = jnp.array([[0.3, -0.1, 0.05]])
-    d = plant.derivative(
-        0.0, plant.initial_state(), TruthInputs(torque, plant.exogenous(0.0), None, None)
-    )
-    ref = attitude_rhs(
-        0.0, jnp.concatenate([w, q], -1)[0], J, torque[0], jnp.array([0.1, 0.0, -0.2])
-    )
-    np.testing.assert_allclose(np.concatenate([d["omega"][0], d["q"][0]]), ref, rtol=1e-14)
-    assert plant.quantity == "torque" and law.quantity == "torque"
 
 
 def test_compositions_that_cannot_work_are_rejected():

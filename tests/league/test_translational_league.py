@@ -234,27 +234,6 @@ def test_ranking_and_winners_follow_pass_rate_then_median():
     assert wins == {"none": "b", "bias": "a"}  # tie on pass rate broken by the median
 
 
-def test_formation_scores_against_numpy(tmp_path):
-    from formation_ftc.components.evaluations.formation_scores import FormationScores, shape_error
-
-    rng = np.random.default_rng(3)
-    rho, d = rng.normal(size=(4, 3)) * 100, rng.normal(size=(4, 3)) * 100
-    ref = max(
-        np.linalg.norm((rho[i] - rho[j]) - (d[i] - d[j])) for i in range(4) for j in range(i + 1, 4)
-    )
-    assert float(shape_error(rho, d)) == pytest.approx(ref, rel=1e-14)
-    assert float(shape_error(rho + 57.0, d)) == pytest.approx(
-        ref, rel=1e-12
-    )  # blind to a common translation
-    f = rng.normal(size=(4, 3))
-    m = np.array([100.0, 120.0, 115.0, 108.0])
-    out = FormationScores(desired=d, mass=m).outputs({"position": rho, "applied": f})
-    np.testing.assert_allclose(out["slot_error"], np.linalg.norm(rho - d, axis=1), rtol=1e-14)
-    np.testing.assert_allclose(
-        out["applied_acceleration"], np.linalg.norm(f, axis=1) / m, rtol=1e-14
-    )
-
-
 @pytest.mark.parametrize(
     "edit, message",
     [

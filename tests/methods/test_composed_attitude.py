@@ -182,12 +182,12 @@ def test_composition_equals_the_law_on_the_euler_angle_plant():
     w0 = np.asarray(raw["plant"]["initial_body_rate"])
     euler_plant = EulerAngleAttitudePlant(
         seed=jnp.asarray(3, jnp.uint32),
-        random_initial=as_float(0.0),
+        random_initial_attitude=as_float(0.0),
         q0_range=as_float([0.0, 1.0]),
         q0_fixed=as_float(q0),
         qdot0=as_float(np.einsum("kij,kj->ki", _rbar_numpy(q0), w0)),
-        J_nominal=as_float(np.tile([20.0, 18.0, 15.0], (3, 1))),
-        inertia_spread=as_float(0.0),
+        inertia=as_float(np.tile([20.0, 18.0, 15.0], (3, 1))),
+        inertia_uncertainty=as_float(0.0),
         disturbance_std=as_float(0.0),
         step=0.01,
     )
@@ -241,29 +241,35 @@ EL_LAW = {
             {"plant": CW, "sensors": None, "actuator": None, "controller": EL_LAW},
             ("NetworkedElHinfController", "ClohessyWiltshirePlant", "torque", "force"),
         ),
+        # the Euler-angle law on the quaternion plant without the conversions: validation names the
+        # law, what it needs and who provides it
         (
-            {"plant": CW, "sensors": None, "actuator": None},
-            ("networked-el-hinf", "clohessy-wiltshire", "attitude law"),
+            {"sensors": None},
+            (
+                "controller networked-el-hinf needs 3-2-1 Euler angles",
+                'sensors type = "quaternion-euler" on a quaternion plant ("quaternion-rigid-body"',
+            ),
         ),
-        # the Euler-angle law on the quaternion plant without the conversions
-        ({"sensors": None}, ("networked-el-hinf", "quaternion-rigid-body", "quaternion-euler")),
         (
             {"actuator": None},
-            ("networked-el-hinf", "quaternion-rigid-body", "euler-torque-allocation"),
+            (
+                "controller networked-el-hinf needs an actuator applying the generalised torque",
+                'actuator type = "euler-torque-allocation"',
+            ),
         ),
         # the conversions on a plant that has no quaternion
         (
             {"plant": CW, "controller": {"type": "pd", "kp": 1.0, "kd": 1.0}, "actuator": None},
-            ("quaternion-euler", "clohessy-wiltshire"),
+            ("sensors quaternion-euler needs a plant whose state is", '"quaternion-rigid-body"'),
         ),
         (
             {"controller": {"type": "networked-el-hinf", "edges": [[1, 2], [2, 4]]}},
-            ("controller.edges", "3 spacecraft"),
+            ("controller.edges[1] = [2, 4]", "3 spacecraft"),
         ),
         ({"controller": {"type": "networked-el-hinf", "edges": [[1, 2]]}}, ("not connected",)),
         (
             {"estimator": {"type": "scripted-fdi"}},
-            ("scripted-fdi", "euler-torque-allocation", "no faults"),
+            ("estimator scripted-fdi needs additive actuator faults", "euler-torque-allocation"),
         ),
         (
             {

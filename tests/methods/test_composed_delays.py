@@ -13,7 +13,8 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.cli import main
-from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, graph_edges
+from formation_ftc.components.networks.delayed_graph import DelayedGraphNetwork
+from formation_ftc.components.networks.graph import graph_edges
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.history import history_init, history_push
 from formation_ftc.sim.components import NetworkInputs, as_float
@@ -123,7 +124,7 @@ def test_delayed_graph_reads_interpolate_toward_the_message_sent_now():
     """Delays shorter than the elapsed part of the step: linear between m(t_k) and the message m(t)."""
     C = [[0.0, 1.0], [0.0, 0.0]]
     net = DelayedGraphNetwork(
-        weights=as_float(C),
+        adjacency=as_float(C),
         delays=(("0", "0.1"), ("0", "0")),
         edges=graph_edges(C),
         capacity=4,

@@ -21,7 +21,7 @@ Truth and flight: a composed ``[reference]`` is the reference orbit, a mission d
 board, so it is not perturbed; a plant's own orbit fields (a CW plant's ``semi_major_axis`` or
 ``mean_motion``) are truth. Two estimators are scripted
 reports of the true faults by design (their model *is* an FDI outcome as a function of the fault):
-:class:`~formation_ftc.components.estimators.fdi_imperfections.ScriptedFdi` and
+:class:`~formation_ftc.components.estimators.scripted_fdi.ScriptedFdi` and
 :class:`~formation_ftc.components.estimators.scheduled_diagnosis.ScheduledDiagnosis`; they are exempt
 from the fault perturbations only (see ``FAULT_ORACLES``).
 """
@@ -203,7 +203,7 @@ KNOWLEDGE: dict[tuple[str, str], tuple[str, ...]] = {
     ("controller", "yang2013-translational"): ("nominal_mass",),
     ("controller", "yang2013-relative"): ("nominal_mass",),
     ("controller", "networked-el-hinf"): ("nominal_inertia",),
-    ("controller", "yang2013-attitude"): ("inertia",),
+    ("controller", "yang2013-attitude"): ("nominal_inertia",),
     ("controller", "attitude-pd"): (),
     ("controller", "li2020-adaptive"): ("m_hat0", "orbit_mu"),
     ("controller", "sir-ftc"): ("b_hat0",),

@@ -7,7 +7,7 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.cli import main
-from formation_ftc.methods.composed.catalog_translational import rk4_amplification
+from formation_ftc.components.plants.clohessy_wiltshire import rk4_amplification
 
 STIFF = {
     "controller.kd": 3000.0,

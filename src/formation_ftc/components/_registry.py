@@ -217,7 +217,7 @@ def register(
     --------
     A plug-in's module registers its types (here a law that commands nothing):
 
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.config.base import StrictModel
     >>> class Idle(StrictModel):
     ...     pass

@@ -8,7 +8,15 @@ import numpy as np
 
 from formation_ftc.config.base import ExprText
 
-__all__ = ["Vec3", "Vec3Expr", "Quat", "per_axis"]
+__all__ = [
+    "Vec3",
+    "Vec3Expr",
+    "Quat",
+    "per_axis",
+    "expression_text",
+    "check_unit_quaternions",
+    "quaternion_rows",
+]
 
 #: three numbers, one per LVLH or body axis
 Vec3 = tuple[float, float, float]
@@ -48,4 +56,95 @@ def per_axis(value: Any, n: int, field: str) -> np.ndarray:
         return np.broadcast_to(arr, (n, 3)).copy()
     if arr.shape != (n, 3):
         raise ValueError(f"{field}: shape {arr.shape}, expected a number, 3 values or {n} x 3")
+    return arr
+
+
+def expression_text(v: Vec3Expr) -> tuple[str, str, str]:
+    """Three expressions of a section as the plain strings a component keeps (static fields).
+
+    Parameters
+    ----------
+    v : Vec3Expr
+        Three expressions in t [s] and i.
+
+    Returns
+    -------
+    tuple of str
+        The expressions' text.
+
+    Examples
+    --------
+    >>> expression_text(("0", "0.1*t", "i"))
+    ('0', '0.1*t', 'i')
+    """
+    a, b, c = v
+    return str(a), str(b), str(c)
+
+
+def check_unit_quaternions(value: Quat | list[Quat] | None) -> Quat | list[Quat] | None:
+    """``value`` (one quaternion, a list of them, or None) if every quaternion has unit norm
+    (to 1e-6); a ValueError naming the first that has not (a section validator's check).
+
+    Parameters
+    ----------
+    value : Quat or list of Quat or None
+        Quaternions [q1, q2, q3, q4], vector first [-].
+
+    Returns
+    -------
+    Quat or list of Quat or None
+        ``value`` unchanged.
+
+    Examples
+    --------
+    >>> check_unit_quaternions([(0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.6, 0.8)])
+    [(0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.6, 0.8)]
+    >>> check_unit_quaternions((0.0, 0.0, 0.0, 2.0))
+    Traceback (most recent call last):
+    ...
+    ValueError: quaternion 0: norm 2, a unit quaternion [q1, q2, q3, q4] is needed
+    """
+    if value is None:
+        return value
+    rows = [value] if isinstance(value, tuple) else value
+    for k, p in enumerate(rows):
+        norm = float(np.linalg.norm(p))
+        if not abs(norm - 1.0) <= 1e-6:
+            raise ValueError(
+                f"quaternion {k}: norm {norm:.9g}, a unit quaternion [q1, q2, q3, q4] is needed"
+            )
+    return value
+
+
+def quaternion_rows(rows: Quat | list[Quat] | None, n: int, field: str) -> np.ndarray:
+    """One quaternion for every spacecraft, or ``n`` of them, -> (n, 4) float64 (None: the
+    identity, vector first); errors name ``field``.
+
+    Parameters
+    ----------
+    rows : Quat or list of Quat or None
+        Quaternions [q1, q2, q3, q4] [-].
+    n : int
+        Number of spacecraft.
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n, 4).
+
+    Examples
+    --------
+    >>> quaternion_rows(None, 2, "controller.desired_quaternion").tolist()
+    [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]]
+    """
+    if rows is None:
+        return np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    arr = np.asarray(rows, dtype=float)
+    arr = np.tile(arr, (n, 1)) if arr.ndim == 1 else arr
+    if arr.shape != (n, 4):
+        raise ValueError(
+            f"{field}: {arr.shape[0]} quaternions for {n} spacecraft (give one or {n})"
+        )
     return arr

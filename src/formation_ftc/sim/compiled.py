@@ -81,7 +81,7 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     >>> from formation_ftc.sim.loop import ClosedLoop
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
@@ -176,7 +176,7 @@ def compile_loop(loop, dataset_attrs: dict | None = None) -> Compiled:
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     >>> from formation_ftc.sim.loop import ClosedLoop
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),

@@ -326,14 +326,23 @@ class Plant(_Kind):
 
     kind: ClassVar[str] = "plant"
     quantity: ClassVar[str] = "force"
-    #: True when the dynamics need the reference slot's values (e.g. relative motion about an orbit)
-    needs_reference: ClassVar[bool] = False
     #: "rk4": continuous dynamics; "exact": the plant provides an exact discrete step (LTI, ZOH)
     integration: ClassVar[str] = "rk4"
 
     @property
     def count(self) -> int:  # pragma: no cover - every plant overrides
         raise NotImplementedError
+
+    def provides(self) -> frozenset[str]:
+        """What every plant gives the loop by its own declarations: ``applied-forces`` when it is
+        driven by a force, ``recorded-positions`` when it records ``position``, ``true-masses`` when it
+        has a ``mass`` field. A plant that provides more adds to ``super().provides()``."""
+        caps = {"applied-forces"} if self.quantity == "force" else set()
+        if any(s.name == "position" for s in self.signals()):
+            caps.add("recorded-positions")
+        if getattr(self, "mass", None) is not None:
+            caps.add("true-masses")
+        return frozenset(caps)
 
     def initial_state(self) -> PyTree:  # pragma: no cover
         raise NotImplementedError
@@ -579,6 +588,9 @@ class PerfectSensors(Sensors):
 
     def measure(self, t, x, inputs):
         return x
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"plant-state-measurement"})
 
 
 @component

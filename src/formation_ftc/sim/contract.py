@@ -23,10 +23,10 @@ __all__ = [
     "Capability",
     "CAPABILITIES",
     "capability",
+    "as_float",
     "Condition",
     "BASES",
     "CERTIFYING_BASES",
-    "as_float",
     "REDUCTIONS",
     "BLOCK_REDUCTIONS",
     "STAGE_REDUCTIONS",
@@ -87,6 +87,55 @@ class Capability(NamedTuple):
 CAPABILITIES: dict[str, Capability] = {
     "reference-orbit": Capability(
         "a reference orbit known on board", 'a [reference] section, e.g. type = "keplerian"'
+    ),
+    # --- attitude (quaternion and Euler-angle plants, their sensors, allocation, laws, FDIs, scores)
+    "quaternion-attitude-state": Capability(
+        "a plant whose state is {omega (N,3), q (N,4)}: body rate and quaternion, vector part first",
+        'plant type = "quaternion-rigid-body" or "attitude-truth"',
+    ),
+    "lvlh-attitude": Capability(
+        "the attitude relative to LVLH, recorded as attitude_lvlh (a plant on an orbit)",
+        'plant type = "attitude-truth"',
+    ),
+    "euler-angle-attitude-state": Capability(
+        "a plant whose state is {q (N,3), w (N,3)}: 3-2-1 Euler angles [theta, phi, psi] and body "
+        "rates, driven by the generalised torque conjugate to the angles",
+        'plant type = "euler-angle-attitude"',
+    ),
+    "plant-state-measurement": Capability(
+        "the plant's state as the measurement", "no [sensors] section (exact, unchanged)"
+    ),
+    "euler-angle-measurement": Capability(
+        "3-2-1 Euler angles and body rates as the measurement, {q (N,3), w (N,3)}",
+        'sensors type = "quaternion-euler" on a quaternion plant ("quaternion-rigid-body", '
+        '"attitude-truth"), or plant type = "euler-angle-attitude" without [sensors]',
+    ),
+    "generalised-torque-actuation": Capability(
+        "an actuator applying the generalised torque conjugate to the 3-2-1 Euler angles to the plant",
+        'actuator type = "euler-torque-allocation", or "fault-battery" with euler_allocation = true, '
+        'or plant type = "euler-angle-attitude" (driven by it)',
+    ),
+    "euler-angle-law": Capability(
+        "a law in 3-2-1 Euler angles commanding the conjugate generalised torque (records its "
+        "tracking and synchronisation errors)",
+        'controller type = "networked-el-hinf"',
+    ),
+    "scripted-actuator-faults": Capability(
+        "additive actuator faults stated in the scenario, in the law's generalised channels",
+        'actuator type = "euler-torque-allocation" with faults',
+    ),
+    # --- translational (CW / relative-LVLH plants, graphs, formation laws, thruster faults, scores)
+    "recorded-positions": Capability(
+        "the spacecraft positions recorded as the signal position (N, 3) [m]",
+        'a translational plant, e.g. type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
+    ),
+    "applied-forces": Capability(
+        "a plant driven by forces [N]",
+        'plant type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
+    ),
+    "true-masses": Capability(
+        "the spacecraft's true masses [kg] (a plant with a mass field)",
+        'plant type = "clohessy-wiltshire", "relative-lvlh" or "orbital-truth"',
     ),
     # --- chain, faults, navigation, truth (chain law and HL supervisor, fault battery, link loss,
     # navigation filter and residual FDI, orbital truth)
@@ -167,6 +216,30 @@ def capability(name: str) -> Capability:
         ) from None
 
 
+def as_float(x: Any) -> np.ndarray:
+    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called).
+
+    Parameters
+    ----------
+    x : array_like
+        Numbers (any SI unit; unchanged).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x`` as float64.
+
+    Examples
+    --------
+    >>> from formation_ftc.sim.components import as_float
+    >>> as_float([1, 2])
+    array([1., 2.])
+    >>> as_float(3).dtype
+    dtype('float64')
+    """
+    return np.asarray(x, dtype=np.float64)
+
+
 #: How a condition's verdict was computed (:attr:`Condition.basis`).
 BASES = ("exact", "verified", "sampled", "heuristic", "informative")
 #: The bases whose computation may certify a condition (``holds=True``).
@@ -240,29 +313,5 @@ class Condition:
         )
 
 
-# its public name (tracebacks, docs, pickles): formation_ftc.registry, which re-exports it
+# its public name (reprs, docs, pickles): formation_ftc.registry, which re-exports it
 Condition.__module__ = "formation_ftc.registry"
-
-
-def as_float(x: Any) -> np.ndarray:
-    """float64 array leaf (a numpy array: cheap to build; JAX converts it when the run is called).
-
-    Parameters
-    ----------
-    x : array_like
-        Numbers (any SI unit; unchanged).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``x`` as float64.
-
-    Examples
-    --------
-    >>> from formation_ftc.sim.components import as_float
-    >>> as_float([1, 2])
-    array([1., 2.])
-    >>> as_float(3).dtype
-    dtype('float64')
-    """
-    return np.asarray(x, dtype=np.float64)

@@ -186,11 +186,6 @@ class ClosedLoop:
                     f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
                     f"spacecraft, plant {type(p).__name__} has {p.count}"
                 )
-        if getattr(p, "needs_reference", False) and isinstance(self.reference, NoReference):
-            raise CompositionError(
-                f"plant {type(p).__name__} needs a reference orbit (reference slot), "
-                "but the loop has none"
-            )
         if self.network.delayed and not getattr(c, "uses_messages", False):
             raise CompositionError(
                 f"network {type(self.network).__name__} delays messages, but controller "
@@ -222,11 +217,16 @@ class ClosedLoop:
                     )
         return self
 
+    def _slots(self) -> list[tuple[str, Any]]:
+        return [(slot, getattr(self, slot)) for slot in KIND_SLOTS]
+
     def _parts(self, labels: dict[str, str]) -> list[tuple[str, Any]]:
         """``(label, component)`` of every slot and evaluation: ``"controller lqr"``."""
-        parts = [(slot, getattr(self, slot)) for slot in KIND_SLOTS]
-        parts += [(f"evaluations[{j}]", ev) for j, ev in enumerate(self.evaluations)]
-        return [(f"{key} {labels.get(key, type(c).__name__)}", c) for key, c in parts]
+        out = [(f"{slot} {labels.get(slot, type(c).__name__)}", c) for slot, c in self._slots()]
+        for k, ev in enumerate(self.evaluations):  # a label names the scenario's table or its adder
+            key = f"evaluations[{k}]"
+            out.append((labels.get(key, f"{key} {type(ev).__name__}"), ev))
+        return out
 
     def _check_needs(self, labels: dict[str, str]) -> None:
         """Every capability a part needs is provided by some part of the loop (the one place the

@@ -58,7 +58,7 @@ def jitted_run(compiled) -> Any:
     Free drift for 20 s from 100 m radial (compiles the loop once, about a second):
 
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     >>> from formation_ftc.sim.loop import ClosedLoop
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
@@ -105,7 +105,7 @@ def executable(compiled) -> tuple[Any, float]:
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     >>> from formation_ftc.sim.loop import ClosedLoop
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
@@ -145,7 +145,7 @@ def clear() -> None:
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.pd_formation import ZeroController
+    >>> from formation_ftc.components.controllers.none import ZeroController
     >>> from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
     >>> from formation_ftc.sim.loop import ClosedLoop
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),

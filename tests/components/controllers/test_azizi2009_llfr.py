@@ -15,7 +15,7 @@ import pytest
 
 from formation_ftc.api import load_scenario
 from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
-from formation_ftc.components.controllers.pd_formation import PdFormationController
+from formation_ftc.components.controllers.pd import PdFormationController
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import CompositionError, FlightInputs
 
@@ -127,7 +127,9 @@ def test_chain_outputs_formed_on_board_from_the_relative_state_equal_the_measure
 
 def test_force_law_is_rejected_on_the_acceleration_plant():
     loop = _loop()
-    pd = PdFormationController(count=4, kp=jnp.asarray(1.0), kd=jnp.asarray(1.0), mass=jnp.ones(4))
+    pd = PdFormationController(
+        count=4, kp=jnp.asarray(1.0), kd=jnp.asarray(1.0), nominal_mass=jnp.ones(4)
+    )
     with pytest.raises(CompositionError, match="force"):
         dataclasses.replace(loop, controller=pd).validate()
 

@@ -8,14 +8,11 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
+from formation_ftc.components.networks.delayed_graph import DelayedGraphNetwork
+from formation_ftc.components.networks.graph import GraphNetwork, graph_edges
 from formation_ftc.components.networks.graph_link_loss import (
     DelayedGraphLinkLossNetwork,
     GraphLinkLossNetwork,
-)
-from formation_ftc.components.networks.weighted_graph import (
-    DelayedGraphNetwork,
-    GraphNetwork,
-    graph_edges,
 )
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.history import history_init, history_push, required_capacity
@@ -30,8 +27,8 @@ MSG = np.arange(12.0).reshape(4, 3) + 1.0
 
 
 def test_link_loss_delivers_zero_weight_after_onset_and_unchanged_before():
-    net = GraphLinkLossNetwork(weights=C, lost=LOST, onset=np.asarray(50.0))
-    healthy = GraphNetwork(weights=C)
+    net = GraphLinkLossNetwork(adjacency=C, lost=LOST, onset=np.asarray(50.0))
+    healthy = GraphNetwork(adjacency=C)
     for t_k in (0.0, 49.0):
         got = net.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
         want = healthy.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
@@ -49,7 +46,7 @@ def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
     delays = tuple(tuple("2" for _ in range(4)) for _ in range(4))
     edges = graph_edges(C)
     cap = required_capacity(3 * T, dt) + 1
-    base = dict(weights=C, delays=delays, edges=edges, capacity=cap, dt=dt)
+    base = dict(adjacency=C, delays=delays, edges=edges, capacity=cap, dt=dt)
     net = DelayedGraphLinkLossNetwork(
         **base, lost=LOST, onset=np.asarray(20.0), delay_scale=np.asarray(3.0)
     )

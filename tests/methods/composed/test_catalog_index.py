@@ -64,7 +64,8 @@ def test_index_names_the_module_that_registers_each_type():
         ("gui2022", "estimator", "iterative-learning-observer", "catalog_learning:ILO"),
         ("gui2022", "controller", "gui2022-lof2tc", "catalog_learning:LOF2TC"),
         ("gui2022", "controller", "gui2022-cof2tc", "catalog_learning:COF2TC"),
-        ("mehrabian", "controller", "networked-el-hinf", "catalog_attitude:EULER_LAW"),
+        ("mehrabian", "controller", "networked-el-hinf", None),
+        ("mehrabian", "estimator", "attitude-residual-fdi", None),
         ("yang2013", "supervisor", "switching", "catalog_switched:SWITCHING_SUPERVISOR"),
     ],
 )
@@ -108,7 +109,7 @@ print(json.dumps({{"catalogs": catalogs, "error": error, "known": known}}))
 def test_validation_imports_only_the_named_catalogs():
     got = _fresh(_VALIDATE.format(scenario="cw-pd-fault", extra={}))
     assert got["error"] is None
-    assert got["catalogs"] == ["catalog_translational"]
+    assert got["catalogs"] == []  # every type of cw-pd-fault has a home
 
 
 def test_an_unknown_type_lists_every_known_type():
@@ -138,8 +139,8 @@ def test_a_stale_index_entry_falls_back_to_every_catalog():
     got = _fresh(
         "import json, sys\n"
         "from formation_ftc.methods.composed import _catalog_index, component_type\n"
-        "_catalog_index.CATALOG_INDEX[('controller', 'pd')] = "
+        "_catalog_index.CATALOG_INDEX[('controller', 'azizi2009-llfr')] = "
         f"'{_PACKAGE}.catalog_delays'\n"
-        "print(json.dumps(component_type('controller', 'pd').name))\n"
+        "print(json.dumps(component_type('controller', 'azizi2009-llfr').name))\n"
     )
-    assert got == "pd"
+    assert got == "azizi2009-llfr"

@@ -13,7 +13,7 @@ import jax
 import numpy as np
 import pytest
 
-from formation_ftc.components.evaluations.formation_errors import max_over_window
+from formation_ftc.components.evaluations.li2020_formation_errors import max_over_window
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.methods.composed import build
 

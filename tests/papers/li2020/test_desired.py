@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.components.evaluations.formation_errors import (
+from formation_ftc.components.evaluations.li2020_formation_errors import (
     mu1,
     mu2_literal,
     mu2_virtual_centre,
@@ -31,7 +31,7 @@ def _formation(scn):
         f.chi,
         f.rotation,
         f.growth,
-        f.centre,
+        f.centre_offset,
     )
 
 

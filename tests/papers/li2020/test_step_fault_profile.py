@@ -57,7 +57,7 @@ def test_step_profile_shares_one_program_across_values():
     a = compile_scenario(ftc.load_scenario("li2020-thm1", _step()))
     b = compile_scenario(ftc.load_scenario("li2020-thm1", _step([[0.9] * 3] * 4, [[1.0] * 3] * 4)))
     assert a.static_key == b.static_key
-    assert not np.array_equal(a.params.actuator.alpha, b.params.actuator.alpha)
+    assert not np.array_equal(a.params.actuator.effectiveness, b.params.actuator.effectiveness)
 
 
 @pytest.mark.parametrize(

@@ -15,7 +15,7 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc.api import compile_scenario, simulate_with_metrics
-from formation_ftc.blocks.controllers.networked_el_hinf import synchronisation_torque
+from formation_ftc.components.controllers.networked_el_hinf import synchronisation_torque
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics.euler_lagrange import inertia_matrix
 from formation_ftc.papers.mehrabian.reproduction import with_seed

@@ -1,28 +1,18 @@
-"""Actuator chain on the truth side: faults (and saturation) between command and applied output."""
+"""Actuator ``expression-faults``: loss of effectiveness and additive bias per axis, both written as
+expressions (truth side)."""
 
 from __future__ import annotations
 
+from pydantic import Field
+
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components._sections import Vec3Expr
+from formation_ftc.components.actuators._effectiveness_bias import EffectivenessBiasActuator
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.core.faults import actuator_fault
-from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
+from formation_ftc.config.base import StrictModel
+from formation_ftc.sim.components import component, static
 
-__all__ = ["ExpressionFaultActuator"]
-
-
-class EffectivenessBiasActuator(Actuator):
-    """Applied = Gamma(t) * command + delta(t) per axis from the time signals ``{"gamma", "bias"}`` of
-    the subclass's :meth:`exogenous`; records the effectiveness Gamma(t)."""
-
-    def apply(self, t, command, inputs: ActuatorInputs):
-        return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])
-
-    def signals(self):
-        return (
-            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
-        )
-
-    def outputs(self, t, command, inputs: ActuatorInputs):
-        return {"effectiveness": inputs.exogenous["gamma"]}
+__all__ = ["ExpressionFaultActuator", "ExpressionFaultSection"]
 
 
 @component
@@ -39,3 +29,28 @@ class ExpressionFaultActuator(EffectivenessBiasActuator):
             "gamma": vector_expression(self.effectiveness, "faults.effectiveness", t, self.count),
             "bias": vector_expression(self.bias, "faults.bias", t, self.count),
         }
+
+
+class ExpressionFaultSection(StrictModel):
+    """Gamma(t) and delta(t) per axis, expressions in t [s] and i."""
+
+    effectiveness: Vec3Expr = Field(
+        ("1", "1", "1"), description="Gamma(t) per axis, expressions in t, i [-]."
+    )
+    bias: Vec3Expr = Field(
+        ("0", "0", "0"), description="Additive fault per axis, expressions in t, i [N]."
+    )
+
+
+def _build(sec: ExpressionFaultSection, ctx: BuildContext) -> ExpressionFaultActuator:
+    """The actuator of a validated ``[actuator] type = "expression-faults"`` section."""
+    return ExpressionFaultActuator(count=ctx.count, effectiveness=sec.effectiveness, bias=sec.bias)
+
+
+register(
+    "actuator",
+    "expression-faults",
+    ExpressionFaultSection,
+    _build,
+    "loss of effectiveness and additive bias written as expressions",
+)

@@ -146,7 +146,7 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     --------
     >>> import numpy as np
     >>> from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
-    >>> from formation_ftc.components.controllers.output_feedback import FreeDrift
+    >>> from formation_ftc.components.controllers.none import FreeDrift
     >>> ctrl = force_from_acceleration(FreeDrift(count=2), np.array([100.0, 120.0]))
     >>> type(ctrl).__name__, ctrl.quantity, ctrl.count
     ('AccelerationToForce', 'force', 2)

@@ -1,9 +1,11 @@
-"""Quaternion PD attitude law: the non-fault-tolerant attitude baseline.
+"""Controller ``attitude-pd``: the quaternion PD attitude law, the non-fault-tolerant attitude baseline,
+towards a fixed desired attitude in the plant's state frame.
 
 Reads only :class:`~formation_ftc.sim.components.FlightInputs`: the measured attitude state
 ``{"omega": (N, 3), "q": (N, 4)}`` of a quaternion plant (body rate [rad/s] and body -> reference
-quaternion, vector first, in the plant's ``state_frame``). No communication, no fault estimate, no
-adaptation; any torque limit is the actuator's.
+quaternion, vector first, in the plant's ``state_frame``) -- the plant state itself, measured without
+``[sensors]`` (the capabilities ``quaternion-attitude-state`` and ``plant-state-measurement``). No
+communication, no fault estimate, no adaptation; any torque limit is the actuator's.
 """
 
 from __future__ import annotations
@@ -11,11 +13,23 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
+from pydantic import Field, model_validator
 
+from formation_ftc.components._registry import BuildContext, per_spacecraft, register
+from formation_ftc.components._sections import Quat, check_unit_quaternions, quaternion_rows
+from formation_ftc.config.base import StrictModel
 from formation_ftc.core.quaternion import quat_conjugate, quat_multiply
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["AttitudePdController", "error_quaternion"]
+__all__ = ["AttitudePdController", "AttitudePdSection", "error_quaternion", "QUATERNION_LAW_NEEDS"]
+
+#: what a quaternion attitude law reading the raw plant state needs from the loop
+QUATERNION_LAW_NEEDS = {
+    "quaternion-attitude-state": "hold its attitude (it reads the body rate and quaternion)",
+    "plant-state-measurement": "read the plant's body rate and quaternion unchanged",
+}
 
 
 def error_quaternion(q, q_desired):
@@ -99,3 +113,55 @@ class AttitudePdController(Controller):
                 "body",
             ),
         )
+
+    def needs(self) -> dict[str, str]:
+        return dict(QUATERNION_LAW_NEEDS)
+
+
+class AttitudePdSection(StrictModel):
+    """tau = -K_p sign(q_e4) q_e,v - K_d omega, q_e = q_d^* (x) q, in the plant's state frame."""
+
+    K_p: float | list[float] = Field(
+        description="Attitude gain K_p [N m] per unit error-quaternion vector (small-"
+        "angle stiffness K_p / 2 [N m/rad]), one or per spacecraft, > 0."
+    )
+    K_d: float | list[float] = Field(
+        description="Rate gain K_d [N m s], one or per spacecraft, > 0."
+    )
+    desired_quaternion: Quat | list[Quat] | None = Field(
+        None,
+        description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
+        "first) or one per spacecraft [-] (default identity: aligned with the state frame).",
+    )
+
+    @model_validator(mode="after")
+    def _unit(self):
+        check_unit_quaternions(self.desired_quaternion)
+        return self
+
+
+def _build(sec: AttitudePdSection, ctx: BuildContext) -> AttitudePdController:
+    """The controller of a validated ``[controller] type = "attitude-pd"`` section."""
+    n = ctx.count
+    kp = per_spacecraft(sec.K_p, n, "controller.K_p")
+    kd = per_spacecraft(sec.K_d, n, "controller.K_d")
+    if np.any(~(kp > 0)) or np.any(~(kd > 0)):
+        raise ValueError(f"controller.K_p = {list(kp)}, K_d = {list(kd)}: every gain must be > 0")
+    return AttitudePdController(
+        count=n,
+        K_p=as_float(kp),
+        K_d=as_float(kd),
+        desired_quaternion=as_float(
+            quaternion_rows(sec.desired_quaternion, n, "controller.desired_quaternion")
+        ),
+    )
+
+
+register(
+    "controller",
+    "attitude-pd",
+    AttitudePdSection,
+    _build,
+    "quaternion PD attitude baseline towards a fixed attitude in the plant's state frame, "
+    "no fault tolerance",
+)

@@ -25,7 +25,7 @@ from formation_ftc.components._registry import (
     register,
 )
 from formation_ftc.components._sections import Vec3, Vec3Expr
-from formation_ftc.components.controllers.pd_formation import DesiredPositionLaw
+from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.cw import cw_rhs
@@ -43,7 +43,7 @@ class LqrFormationController(DesiredPositionLaw):
 
     q_i = [p_i, v_i] is the measured LVLH state [m, m/s], q_i^d = [p_i^d(t), v_i^d(t)] the desired one
     and a_i^d(t) its acceleration (expressions as in
-    :class:`~formation_ftc.components.controllers.pd_formation.DesiredPositionLaw`); A is the CW matrix
+    :class:`~formation_ftc.components.controllers._desired_position.DesiredPositionLaw`); A is the CW matrix
     of the on-board mean motion. On the CW model, (1) gives the error dynamics
     ``e_dot = (A - B K) e`` with ``e = q - q^d`` (the feed-forward cancels ``A q^d - q_dot^d``).
 

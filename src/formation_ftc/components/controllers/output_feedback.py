@@ -19,23 +19,10 @@ __all__ = [
     "NominalOrbitTracking",
     "LearningOutputFeedbackController",
     "ConventionalOutputFeedbackController",
-    "FreeDrift",
 ]
 
 STATE = ("spacecraft", "component")
 VEC = ("spacecraft", "axis")
-
-
-@component
-class FreeDrift(Controller):
-    """No control: u = 0 [m/s^2] (acceleration commands)."""
-
-    quantity = "acceleration"
-
-    count: int = static()
-
-    def output(self, t, state, inputs: FlightInputs):
-        return jnp.zeros((self.count, 3)), None, {}
 
 
 @component

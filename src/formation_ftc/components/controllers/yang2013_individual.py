@@ -13,7 +13,7 @@ from formation_ftc.blocks.controllers.yang2013_individual import (
     attitude_control,
     translational_control,
 )
-from formation_ftc.components.controllers.pd_formation import _desired_motion
+from formation_ftc.components.controllers._desired_position import desired_motion
 from formation_ftc.sim.components import Controller, FlightInputs, component, static
 
 __all__ = ["Yang2013TranslationalController", "Yang2013AttitudeController"]
@@ -40,7 +40,7 @@ class Yang2013TranslationalController(Controller):
     desired_position: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
-        return _desired_motion(self.desired_position, self.count, t)
+        return desired_motion(self.desired_position, self.count, t)
 
     def desired_position_at(self, exogenous):
         return exogenous["p"]
@@ -62,14 +62,14 @@ class Yang2013AttitudeController(Controller):
 
         tau_i = -Upsilon_i - J (K3 e_w + e_q + e_w (K4 |e_q|^2 + K5 e_q4^2) / (2 (|e_w|^2 + kappa)))
 
-    with the drift Upsilon_i taken as cancelled (zero). ``inertia`` J (3, 3) [kg m^2]; K3, K4, K5
-    [1/s] and kappa [rad^2/s^2] positive (E001-01).
+    with the drift Upsilon_i taken as cancelled (zero). ``nominal_inertia`` J (3, 3) [kg m^2] (the
+    law's model, stated on board); K3, K4, K5 [1/s] and kappa [rad^2/s^2] positive (E001-01).
     """
 
     quantity = "torque"
 
     count: int = static()
-    inertia: Any = None
+    nominal_inertia: Any = None
     K3: Any = 0.2
     K4: Any = 1.0
     K5: Any = 1.0
@@ -82,7 +82,7 @@ class Yang2013AttitudeController(Controller):
             q[:, 0:3],
             q[:, 3],
             jnp.zeros_like(w),
-            self.inertia,
+            self.nominal_inertia,
             self.K3,
             self.K4,
             self.K5,

@@ -1,30 +1,55 @@
-"""Attitude fault detection, isolation and identification from the rigid-body (Euler-Lagrange) residual,
-feeding the reconfiguration of the networked Euler-Lagrange law (:mod:`formation_ftc.components.
-controllers.networked_el_hinf`) with detected -- not scripted, not true -- information.
+"""Estimator ``attitude-residual-fdi``: attitude fault detection, isolation and identification from the
+rigid-body (Euler-Lagrange) residual, feeding the reconfiguration of the networked Euler-Lagrange law
+(:mod:`formation_ftc.components.controllers.networked_el_hinf`) with detected -- not scripted, not
+true -- information.
 
 The residual is the body torque the model does not explain over one step: what the body torques
 applied minus what was commanded. It lives in body axes, where the actuator's faults act (after the
 Euler-angle allocation). Its test and first-alarm latch are those of the translational residual FDI
 (:func:`~formation_ftc.components.estimators.residual_fdi.sequential_test`,
 :func:`~formation_ftc.components.estimators.residual_fdi.latch_first_alarm`).
+
+It reports to the Euler-angle law as the scripted FDI does: the flag of a generalised channel and u*.
+The ``fdi-scores`` evaluation scores it against the fault-battery actuator's true fault (body axes).
+Every number is flight knowledge stated in the section: the nominal inertia, the reference orbit, the
+rated torque and the model-error level. Needs the capabilities ``euler-angle-measurement`` (3-2-1
+Euler angles and body rates) and ``euler-angle-law`` (a law commanding the generalised torque).
+The check of the command model against the law's sampling is a condition registered by the Mehrabian
+package (:mod:`formation_ftc.papers.mehrabian.conditions`).
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+import math
+from typing import Any, Literal, NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
+from pydantic import Field, field_validator
 
+from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
+from formation_ftc.components._registry import (
+    BuildContext,
+    builder_input,
+    per_spacecraft,
+    register,
+)
+from formation_ftc.components._sections import Vec3
+from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.components.estimators.residual_fdi import latch_first_alarm, sequential_test
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
 from formation_ftc.core.euler_quaternion import dcm_from_euler_zyx
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+from formation_ftc.sim.contract import as_float
 
 __all__ = [
     "AttitudeResidualFdi",
     "AttitudeFdiState",
     "AttitudeFdiEstimate",
     "rigid_body_residual",
+    "AttitudeResidualFdiSection",
 ]
 
 VEC = ("spacecraft", "axis")
@@ -49,7 +74,7 @@ class AttitudeFdiState(NamedTuple):
 
 class AttitudeFdiEstimate(NamedTuple):
     """What the FDI hands on: ``flag`` and ``estimate`` (u*) as the law reads them (the fields of
-    :class:`~formation_ftc.blocks.fdi.FDIOutput`, in the law's generalised channels), and the detection
+    :class:`~formation_ftc.components.estimators.scripted_fdi.FDIOutput`, in the law's generalised channels), and the detection
     in body axes."""
 
     flag: Any  # (N, 3) 1.0 on the generalised channel to reconfigure [-]
@@ -134,12 +159,12 @@ class AttitudeResidualFdi(Estimator):
     ``1.5 tau_k - 0.5 tau_k-1`` (``"extrapolated"``: a law evaluated inside the step, as
     ``networked-el-hinf`` is; the linear extrapolation to the step's midpoint removes the first-order
     error of holding a varying command; the first step is not tested). A channel whose nominal torque
-    reaches the rated per-axis limit ``limit`` at t_k, or by the step's end (extrapolated), is not
+    reaches the rated per-axis limit ``torque_limit`` at t_k, or by the step's end (extrapolated), is not
     tested over that step: a limit may cut its torque, which the residual cannot tell from a fault
     (whether the actuator has one is not flight knowledge here; a league level sets it).
 
     Residual (:func:`rigid_body_residual`) at t_k+1 from the samples at t_k and t_k+1, nominal inertia
-    ``J_nom``, standardised by the stated model-error level ``residual_std`` [N m]: ``z = r /
+    ``nominal_inertia``, standardised by the stated model-error level ``residual_std`` [N m]: ``z = r /
     residual_std``; then the test per (spacecraft, body axis) -- ``cusum`` or ``fixed`` as in
     :class:`~formation_ftc.components.estimators.residual_fdi.ResidualFdi` -- and the first alarm
     latched, isolating the body axis with the largest statistic.
@@ -161,9 +186,9 @@ class AttitudeResidualFdi(Estimator):
 
     count: int = static()
     test: str = static()
-    J_nom: Any  # (N, 3, 3) nominal inertia [kg m^2]
+    nominal_inertia: Any  # (N, 3, 3) nominal inertia [kg m^2]
     orbit_rate: Any  # () rotation rate of the reference frame [rad/s]
-    limit: Any  # (N, 1) rated per-axis torque: not tested at or above it [N m] (inf: none)
+    torque_limit: Any  # (N, 1) rated per-axis torque: not tested at or above it [N m] (inf: none)
     residual_std: Any  # () [N m]
     drift: Any  # CUSUM drift [-]
     threshold: Any  # alarm threshold [-]
@@ -234,7 +259,7 @@ class AttitudeResidualFdi(Estimator):
             q,
             w,
             state.tau_prev,
-            self.J_nom,
+            self.nominal_inertia,
             inputs.step.dt,
             self.orbit_rate,
         )
@@ -272,7 +297,7 @@ class AttitudeResidualFdi(Estimator):
         if self.command == "extrapolated":  # mean over the step of a linearly varying command
             mean, end = 1.5 * tau - 0.5 * state.tau_last, 2.0 * tau - state.tau_last
             valid = state.commanded  # from the second command on (the first step is not tested)
-        below = (jnp.abs(tau) < self.limit) & (jnp.abs(end) < self.limit)
+        below = (jnp.abs(tau) < self.torque_limit) & (jnp.abs(end) < self.torque_limit)
         return state._replace(
             tau_prev=mean, tau_last=tau, commanded=jnp.asarray(True), valid=valid, tested=below
         )
@@ -286,3 +311,103 @@ class AttitudeResidualFdi(Estimator):
             "fdi_flag": estimate.flag,
             "fdi_estimate": estimate.estimate,
         }
+
+    def needs(self) -> dict[str, str]:
+        return {
+            "euler-angle-measurement": "form the rigid-body residual",
+            "euler-angle-law": "map the law's command to the nominal body torque and report in its "
+            "channels",
+        }
+
+
+class AttitudeResidualFdiSection(StrictModel):
+    """Actuator-fault detection, isolation and identification of an Euler-angle attitude law from the
+    rigid-body residual (body axes), reported in the law's generalised channels (flag, u*)."""
+
+    nominal_inertia: Vec3 = Field(
+        MEHRABIAN_NOMINAL_INERTIA,
+        description="Principal inertia of the residual's model, known on board [kg m^2] (default 20, "
+        "18, 15 kg m^2, the Euler-angle law's default model; a stated value: never the plant's "
+        "true inertia).",
+    )
+    semi_major_axis: float | None = builder_input(
+        None,
+        gt=0,
+        description="Radius of the circular orbit whose LVLH frame the measured attitude and rates are "
+        "relative to [m] (adds the frame's rotation and the gravity-gradient torque to the model); "
+        "omit for an inertial reference.",
+    )
+    mu: float = builder_input(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+    torque_limit: float | list[float] | None = Field(
+        None,
+        description="Rated per-axis body torque [N m], one or per spacecraft: a channel whose nominal "
+        "torque reaches it (or would by the step's end) is not tested that step -- a limit may cut "
+        "its torque, which the residual cannot tell from a fault; omit for none.",
+    )
+    residual_std: float = Field(
+        gt=0,
+        description="Model-error level that standardises the residual, z = r / residual_std [N m] "
+        "(discretisation, the command's variation inside the step, inertia error, unmodelled torques).",
+    )
+    command: Literal["held", "extrapolated"] = Field(
+        "extrapolated",
+        description="Mean command over a step: held (a sampled law) or extrapolated to the step's "
+        "midpoint, 1.5 tau_k - 0.5 tau_k-1 (a law evaluated inside the step, as networked-el-hinf).",
+    )
+    test: FdiTest = "cusum"
+    drift: FdiDrift = 0.5
+    threshold: FdiThreshold = 20.0
+    identification_time: float = builder_input(
+        2.0,
+        gt=0,
+        description="Time constant of the moving average of the residual that identifies the fault's "
+        "magnitude [s].",
+    )
+
+    @field_validator("nominal_inertia")
+    @classmethod
+    def _inertia(cls, value):
+        if any(not x > 0 for x in value):
+            raise ValueError(f"{list(value)}, each must be > 0 kg m^2")
+        return value
+
+    @field_validator("torque_limit")
+    @classmethod
+    def _limit(cls, value):
+        values = value if isinstance(value, list) else [value]
+        if value is not None and any(not x > 0 for x in values):
+            raise ValueError(f"{values} N m, every one must be > 0")
+        return value
+
+
+def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidualFdi:
+    """The estimator of a validated ``[estimator] type = "attitude-residual-fdi"`` section."""
+    n = 0.0 if sec.semi_major_axis is None else math.sqrt(sec.mu / sec.semi_major_axis**3)
+    m = ctx.count
+    if sec.torque_limit is None:
+        limit = np.full((m, 1), np.inf)
+    else:
+        limit = per_spacecraft(sec.torque_limit, m, "estimator.torque_limit")[:, None]
+    J = np.diag(np.asarray(sec.nominal_inertia, dtype=float))
+    return AttitudeResidualFdi(
+        count=m,
+        test=sec.test,
+        command=sec.command,
+        nominal_inertia=as_float(np.stack([J] * m)),
+        orbit_rate=as_float(n),
+        torque_limit=as_float(limit),
+        residual_std=as_float(sec.residual_std),
+        drift=as_float(sec.drift),
+        threshold=as_float(sec.threshold),
+        smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
+    )
+
+
+register(
+    "estimator",
+    "attitude-residual-fdi",
+    AttitudeResidualFdiSection,
+    _build,
+    "attitude actuator-fault detection, isolation and identification from the rigid-body residual "
+    "(body axes, CUSUM or fixed threshold), reported as (flag, u*) to the Euler-angle law",
+)

@@ -1,8 +1,12 @@
-"""Scores of an attitude formation that every attitude law is judged by alike (truth side).
+"""Evaluation ``attitude-scores``: scores of an attitude formation that every attitude law is judged by
+alike (truth side): attitude error against a common desired attitude, pairwise synchronisation error
+and applied torque.
 
 The desired attitude is the evaluator's own (N, 4) leaf, not the law's, so laws that state their
 objective differently (Euler angles, quaternions, a synchronisation target) are scored against the
 same attitude. Angles are rotation angles of relative quaternions, independent of any Euler sequence.
+Needs the capability ``quaternion-attitude-state`` (and ``lvlh-attitude`` for a desired attitude in
+LVLH).
 """
 
 from __future__ import annotations
@@ -11,11 +15,16 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
+from pydantic import Field, model_validator
 
+from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import Quat, check_unit_quaternions, quaternion_rows
+from formation_ftc.config.base import StrictModel
 from formation_ftc.core.quaternion import quat_conjugate, quat_multiply
 from formation_ftc.sim.components import Evaluation, Signal, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["AttitudeScores", "rotation_angle", "relative_angle"]
+__all__ = ["AttitudeScores", "AttitudeScoresSection", "rotation_angle", "relative_angle"]
 
 
 def rotation_angle(q):
@@ -118,3 +127,52 @@ class AttitudeScores(Evaluation):
             "attitude_synchronisation_error": sync,
             "torque": jnp.linalg.norm(signals["applied"], axis=-1),
         }
+
+    def needs(self) -> dict[str, str]:
+        out = {"quaternion-attitude-state": "score its attitudes and torques"}
+        if self.attitude_signal == "attitude_lvlh":
+            out["lvlh-attitude"] = "score the attitudes against a desired attitude in LVLH"
+        return out
+
+
+class AttitudeScoresSection(StrictModel):
+    """Attitude error, pairwise synchronisation error and applied torque against a common attitude."""
+
+    desired_quaternion: Quat | list[Quat] | None = Field(
+        None,
+        description="Desired attitude body -> `frame`, one unit quaternion [q1, q2, q3, q4] (vector first) "
+        "or one per spacecraft [-] (default identity).",
+    )
+    frame: str = builder_input(
+        "state",
+        description="Frame of desired_quaternion: 'inertial', 'lvlh' or 'state' (the "
+        "plant's state_frame).",
+    )
+
+    @model_validator(mode="after")
+    def _unit(self):
+        check_unit_quaternions(self.desired_quaternion)
+        return self
+
+
+def _build(sec: AttitudeScoresSection, ctx: BuildContext) -> AttitudeScores:
+    """The evaluation of a validated ``[[evaluations]] type = "attitude-scores"`` section."""
+    frame = sec.frame
+    if (
+        frame == "state"
+    ):  # the frame of the plant's attitude state (a plant that does not say: inertial)
+        frame = str(getattr(ctx.section("plant"), "state_frame", "inertial"))
+    signal = {"inertial": "quaternion", "lvlh": "attitude_lvlh"}.get(frame)
+    if signal is None:
+        raise ValueError(f"evaluations.frame = {sec.frame!r}: one of 'inertial', 'lvlh', 'state'")
+    q = quaternion_rows(sec.desired_quaternion, ctx.count, "evaluations.desired_quaternion")
+    return AttitudeScores(desired_quaternion=as_float(q), attitude_signal=signal)
+
+
+register(
+    "evaluation",
+    "attitude-scores",
+    AttitudeScoresSection,
+    _build,
+    "attitude error against a common attitude, pairwise synchronisation error, applied torque",
+)

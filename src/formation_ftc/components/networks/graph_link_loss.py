@@ -16,8 +16,8 @@ For the delayed graph every delay is multiplied by ``delay_scale`` [-] over the 
 ``T_ij(t) -> delay_scale T_ij(t)`` (the history buffer must hold the scaled delays). The onset, the
 mask and the scale are array leaves (a league batches link-loss and link-healthy cases in one
 compiled program); the reading itself is that of
-:class:`~formation_ftc.components.networks.weighted_graph.GraphNetwork` /
-:class:`~formation_ftc.components.networks.weighted_graph.DelayedGraphNetwork`.
+:class:`~formation_ftc.components.networks.graph.GraphNetwork` /
+:class:`~formation_ftc.components.networks.delayed_graph.DelayedGraphNetwork`.
 """
 
 from __future__ import annotations
@@ -30,9 +30,12 @@ import numpy as np
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components.networks.weighted_graph import DelayedGraphNetwork, GraphNetwork
+from formation_ftc.components.networks.delayed_graph import (
+    DelayedGraphNetwork,
+    delayed_graph_network,
+)
+from formation_ftc.components.networks.graph import GraphNetwork, GraphSection
 from formation_ftc.config.base import ExprText
-from formation_ftc.methods.composed.catalog_translational import GraphSection, _delayed_graph
 from formation_ftc.sim.components import NetworkInputs, component
 from formation_ftc.sim.contract import as_float
 
@@ -86,8 +89,8 @@ class GraphLinkLossNetwork(GraphNetwork):
     onset: Any = float("inf")  # [s]
 
     def receive(self, t, state, inputs: NetworkInputs):
-        w = faulty_weights(self.weights, self.lost, self.onset, inputs.t_k)
-        return GraphNetwork.receive(dataclasses.replace(self, weights=w), t, state, inputs)
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
+        return GraphNetwork.receive(dataclasses.replace(self, adjacency=w), t, state, inputs)
 
 
 @component
@@ -101,10 +104,10 @@ class DelayedGraphLinkLossNetwork(DelayedGraphNetwork):
 
     def receive(self, t, state, inputs: NetworkInputs):
         after = inputs.t_k >= self.onset
-        w = faulty_weights(self.weights, self.lost, self.onset, inputs.t_k)
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
         T = inputs.exogenous["T"] * jnp.where(after, self.delay_scale, 1.0)
         return DelayedGraphNetwork.receive(
-            dataclasses.replace(self, weights=w),
+            dataclasses.replace(self, adjacency=w),
             t,
             state,
             inputs._replace(exogenous={**inputs.exogenous, "T": T}),
@@ -192,13 +195,13 @@ def _build(
 
     lost, onset = as_float(sec.lost_mask()), as_float(sec.onset)
     if sec.delays is None:
-        return GraphLinkLossNetwork(weights=as_float(sec.adjacency), lost=lost, onset=onset)
-    base = _delayed_graph(sec, ctx)  # type: ignore[arg-type]  # same adjacency / delays / max_delay fields
+        return GraphLinkLossNetwork(adjacency=as_float(sec.adjacency), lost=lost, onset=onset)
+    base = delayed_graph_network(sec, ctx)  # type: ignore[arg-type]  # same adjacency / delays / max_delay fields
     # the history holds the scaled delays too
     scale = sec.delay_scale if sec.max_delay_scale is None else sec.max_delay_scale
     capacity = required_capacity(float(sec.max_delay or 0.0) * max(1.0, scale), ctx.dt) + 1
     return DelayedGraphLinkLossNetwork(
-        weights=base.weights,
+        adjacency=base.adjacency,
         delays=base.delays,
         edges=base.edges,
         capacity=capacity,

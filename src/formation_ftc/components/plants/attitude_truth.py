@@ -1,22 +1,34 @@
-"""Attitude truth: quaternion rigid bodies on a circular orbit with the gravity-gradient torque.
+"""Plant ``attitude-truth``: quaternion rigid bodies on a circular orbit with the gravity-gradient
+torque.
 
 Frames and conventions are those of :mod:`formation_ftc.core.dynamics.gravity_gradient`: the attitude
 quaternion ``q = [q_v, q4]`` (vector first) maps body to *inertial* components, the orbit is circular
 in the inertial x-y plane, LVLH is x radial / y along-track / z orbit normal. The state layout and the
 quaternion convention are those of
-:class:`~formation_ftc.components.plants.quaternion_rigid_body.QuaternionRigidBodyPlant`, so the same
-sensors, actuators and attitude laws drive either plant.
+:class:`~formation_ftc.components.plants.quaternion_rigid_body.QuaternionRigidBodyPlant` (the capability
+``quaternion-attitude-state``), so the same sensors (``quaternion-euler``), allocations
+(``euler-torque-allocation``), FDIs and attitude laws drive either plant. ``state_frame = "lvlh"`` puts
+the attitude and body rate relative to LVLH in the state, so those components -- and a law's desired
+attitude -- then work relative to LVLH (LVLH pointing). The plant also records the attitude relative
+to LVLH (the capability ``lvlh-attitude``).
 """
 
 from __future__ import annotations
 
-from typing import Any
+import math
+from typing import Any, Literal
 
 import jax.numpy as jnp
+import numpy as np
+from pydantic import Field, model_validator
 
-from formation_ftc.components.plants.quaternion_rigid_body import (
+from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import Vec3, expression_text
+from formation_ftc.components.plants._rigid_body import (
+    RigidBodyAttitudeSection,
     RigidBodyTorquePlant,
 )
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.gravity_gradient import (
     attitude_relative_to_lvlh,
     gravity_gradient_torque_unit,
@@ -33,8 +45,16 @@ from formation_ftc.sim.components import (
     component,
     static,
 )
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["AttitudeTruthPlant", "batched_inverse_3x3", "STATE_FRAMES"]
+__all__ = [
+    "AttitudeTruthPlant",
+    "AttitudeTruthSection",
+    "batched_inverse_3x3",
+    "initial_state_in",
+    "initial_inertial_state",
+    "STATE_FRAMES",
+]
 
 #: frames the plant can integrate the attitude in
 STATE_FRAMES = ("inertial", "lvlh")
@@ -107,7 +127,7 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
     """
 
     inertia: Any  # (N, 3, 3) [kg m^2]
-    initial_omega: Any  # (N, 3) [rad/s], relative to state_frame
+    initial_body_rate: Any  # (N, 3) [rad/s], relative to state_frame
     initial_quaternion: Any  # (N, 4) [-], vector first, body -> state_frame
     semi_major_axis: Any  # () circular orbit radius [m]
     mu: Any  # () [m^3/s^2]
@@ -121,6 +141,9 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
             raise CompositionError(
                 f"AttitudeTruthPlant.state_frame = {self.state_frame!r}: one of {STATE_FRAMES}"
             )
+
+    def provides(self) -> frozenset[str]:
+        return super().provides() | {"lvlh-attitude"}
 
     def orbit_rate(self):
         """n = sqrt(mu / a^3) [rad/s]."""
@@ -237,3 +260,215 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
             "angular_velocity_lvlh": w_r,
             "gravity_gradient_torque": gg,
         }
+
+
+EARTH_RADIUS = 6_378_137.0  # equatorial radius [m] (WGS 84), lower bound of the orbit radius
+
+Mat3 = tuple[Vec3, Vec3, Vec3]
+
+
+class AttitudeTruthSection(RigidBodyAttitudeSection):
+    """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
+
+    inertia: Vec3 = Field(
+        description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
+        "spacecraft unless inertia_matrices is given (an attitude law's model is "
+        "stated in its own section)."
+    )
+    inertia_matrices: list[Mat3] | None = builder_input(
+        None,
+        description="Full inertia matrix per spacecraft (one 3x3 row list each, or a single one for all) "
+        "[kg m^2]: symmetric, positive definite, satisfying the triangle inequalities; "
+        "overrides `inertia` in the truth.",
+    )
+    semi_major_axis: float = Field(
+        7.0e6,
+        ge=EARTH_RADIUS,
+        le=1.0e9,
+        description="Radius of the circular orbit [m] (>= the Earth's equatorial radius).",
+    )
+    mu: float = Field(MU_EARTH, gt=0.0, description="Gravitational parameter [m^3/s^2].")
+    initial_argument_of_latitude_deg: float = builder_input(
+        0.0,
+        ge=-360.0,
+        le=360.0,
+        description="Argument of latitude u0 of the spacecraft at t = 0 [deg].",
+    )
+    gravity_gradient: bool = Field(True, description="Apply the gravity-gradient torque.")
+    state_frame: Literal["inertial", "lvlh"] = Field(
+        "inertial",
+        description="Frame of the attitude the plant integrates and its sensors measure: 'inertial', or "
+        "'lvlh' (attitude and body rate relative to LVLH: an attitude law then holds LVLH "
+        "pointing, its desired attitude 0 being LVLH alignment).",
+    )
+    initial_frame: Literal["inertial", "lvlh"] = builder_input(
+        "inertial",
+        description="Frame of the initial attitude and body rate: 'inertial', or 'lvlh' (attitude "
+        "relative to LVLH at t = 0, body rate relative to LVLH; converted to inertial).",
+    )
+    initial_body_rate: list[Vec3] | None = Field(
+        None,
+        description="Initial body angular velocity per spacecraft, body axes [rad/s] (default 0 in "
+        "initial_frame).",
+    )
+
+    @model_validator(mode="after")
+    def _check(self):
+        n = self.count
+        if self.inertia_matrices is not None:
+            if len(self.inertia_matrices) not in (1, n):
+                raise ValueError(
+                    f"inertia_matrices: {len(self.inertia_matrices)} matrices for {n} spacecraft "
+                    f"(give one or {n})"
+                )
+            for k, m in enumerate(self.inertia_matrices):
+                _check_inertia(np.asarray(m, dtype=float), f"inertia_matrices[{k}]")
+        return self
+
+    def orbit_rate(self) -> float:
+        """n = sqrt(mu / a^3) [rad/s]."""
+        return math.sqrt(self.mu / self.semi_major_axis**3)
+
+    def quaternions(self) -> np.ndarray:
+        """(N, 4) initial body -> ``state_frame`` quaternions."""
+        return initial_state_in(self, self.state_frame)[1]
+
+    def inertia_tensor(self) -> np.ndarray:
+        """(N, 3, 3) inertia of every spacecraft [kg m^2]."""
+        n = self.count
+        if self.inertia_matrices is None:
+            return np.broadcast_to(np.diag(np.asarray(self.inertia, float)), (n, 3, 3)).copy()
+        mats = np.asarray(self.inertia_matrices, dtype=float)
+        return np.broadcast_to(mats, (n, 3, 3)).copy()
+
+
+def _check_inertia(m: np.ndarray, field: str) -> None:
+    if m.shape != (3, 3) or not np.all(np.isfinite(m)):
+        raise ValueError(f"{field}: a finite 3x3 matrix is needed [kg m^2]")
+    if not np.allclose(m, m.T, rtol=1e-9, atol=1e-12 * float(np.abs(m).max())):
+        raise ValueError(f"{field}: not symmetric")
+    eig = np.linalg.eigvalsh(m)
+    if not eig[0] > 0:
+        raise ValueError(
+            f"{field}: not positive definite (smallest principal inertia {eig[0]:.6g} kg m^2)"
+        )
+    if eig[0] + eig[1] < eig[2] * (1.0 - 1e-12):
+        raise ValueError(
+            f"{field}: principal inertias {eig[0]:.6g}, {eig[1]:.6g}, {eig[2]:.6g} kg m^2 violate "
+            "the triangle inequality J1 + J2 >= J3 of a rigid body"
+        )
+
+
+def _rz_quaternion(u: float) -> np.ndarray:
+    return np.array([0.0, 0.0, math.sin(0.5 * u), math.cos(0.5 * u)])
+
+
+def _quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    pv, p4 = p[..., :3], p[..., 3:]
+    qv, q4 = q[..., :3], q[..., 3:]
+    return np.concatenate(
+        [p4 * qv + q4 * pv + np.cross(pv, qv), p4 * q4 - np.sum(pv * qv, -1, keepdims=True)], -1
+    )
+
+
+def _orbit_normal_in_body(q: np.ndarray) -> np.ndarray:
+    """Third row of C(q) (the reference frame's z axis in body axes), (N, 3)."""
+    qv, q4 = q[:, :3], q[:, 3]
+    return np.stack(
+        [
+            2 * (qv[:, 0] * qv[:, 2] - q4 * qv[:, 1]),
+            2 * (qv[:, 1] * qv[:, 2] + q4 * qv[:, 0]),
+            q4**2 - qv[:, 0] ** 2 - qv[:, 1] ** 2 + qv[:, 2] ** 2,
+        ],
+        axis=-1,
+    )
+
+
+def initial_state_in(sec: AttitudeTruthSection, frame: str) -> tuple[np.ndarray, np.ndarray]:
+    """The initial state relative to ``frame`` from the section's initial attitude and rate given in
+    ``initial_frame``.
+
+    LVLH -> inertial: ``q = q_z(u0) (x) q_L``, ``omega = w_r + n o_b``; inertial -> LVLH:
+    ``q_L = q_z(u0)^* (x) q``, ``w_r = omega - n o_b``, with o_b the orbit normal in body axes (the
+    orbit normal is the z axis of both frames).
+
+    Parameters
+    ----------
+    sec : AttitudeTruthSection
+        A validated section.
+    frame : {"inertial", "lvlh"}
+        The frame of the result.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(omega (N, 3) [rad/s], q (N, 4) [-])`` at t = 0 relative to ``frame``.
+
+    Examples
+    --------
+    Aligned with LVLH at u0 = 90 deg: turned 90 deg about the orbit normal from the inertial frame.
+
+    >>> sec = AttitudeTruthSection(inertia=(10.0, 20.0, 25.0), initial_quaternion=[(0, 0, 0, 1)],
+    ...                            initial_frame="lvlh", initial_argument_of_latitude_deg=90.0)
+    >>> w, q = initial_state_in(sec, "inertial")
+    >>> np.round(q, 6).tolist()
+    [[0.0, 0.0, 0.707107, 0.707107]]
+    """
+    q = sec.given_quaternions()
+    w = sec.body_rates()
+    if sec.initial_frame == frame:
+        return w, q
+    u0 = math.radians(sec.initial_argument_of_latitude_deg)
+    sign = 1.0 if frame == "inertial" else -1.0  # lvlh -> inertial, or back
+    q_new = _quat_mul(np.broadcast_to(_rz_quaternion(sign * u0), q.shape), q)
+    w_new = w + sign * sec.orbit_rate() * _orbit_normal_in_body(q)
+    return w_new, q_new
+
+
+def initial_inertial_state(sec: AttitudeTruthSection) -> tuple[np.ndarray, np.ndarray]:
+    """``(omega (N, 3) [rad/s], q (N, 4))`` at t = 0 relative to the inertial frame
+    (:func:`initial_state_in`).
+
+    Parameters
+    ----------
+    sec : AttitudeTruthSection
+        A validated section.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Inertial body rates and body -> inertial quaternions.
+
+    Examples
+    --------
+    >>> sec = AttitudeTruthSection(inertia=(10.0, 20.0, 25.0), initial_quaternion=[(0, 0, 0, 1)])
+    >>> [x.tolist() for x in initial_inertial_state(sec)]
+    [[[0.0, 0.0, 0.0]], [[0.0, 0.0, 0.0, 1.0]]]
+    """
+    return initial_state_in(sec, "inertial")
+
+
+def _build(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTruthPlant:
+    """The plant of a validated ``[plant] type = "attitude-truth"`` section."""
+    w0, q0 = initial_state_in(sec, sec.state_frame)
+    return AttitudeTruthPlant(
+        inertia=as_float(sec.inertia_tensor()),
+        initial_body_rate=as_float(w0),
+        initial_quaternion=as_float(q0),
+        semi_major_axis=as_float(sec.semi_major_axis),
+        mu=as_float(sec.mu),
+        initial_argument_of_latitude=as_float(math.radians(sec.initial_argument_of_latitude_deg)),
+        disturbance_torque=expression_text(sec.disturbance_torque),
+        gravity_gradient=sec.gravity_gradient,
+        state_frame=sec.state_frame,
+    )
+
+
+register(
+    "plant",
+    "attitude-truth",
+    AttitudeTruthSection,
+    _build,
+    "rigid-body attitudes (inertial quaternion) on a circular orbit with the gravity-gradient "
+    "torque, driven by body torques",
+)

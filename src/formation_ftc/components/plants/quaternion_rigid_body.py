@@ -1,45 +1,35 @@
-"""Rigid-body attitude of every spacecraft with quaternion kinematics (Yang2013 eqs. (4), (5))."""
+"""Plant ``quaternion-rigid-body``: rigid-body attitude of every spacecraft with quaternion kinematics
+(Yang2013 eqs. (4), (5)), driven by body torques.
+
+State ``{"omega": (N, 3), "q": (N, 4)}`` (body rate and quaternion, vector part first: the capability
+``quaternion-attitude-state``), one principal inertia for every spacecraft. :func:`quaternion_plant`
+is the one builder of the component (also the attitude part of the ``switched-formation`` plant).
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
+from pydantic import Field
 
-from formation_ftc.components.expressions import vector_expression
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components._sections import Vec3, Vec3Expr, expression_text
+from formation_ftc.components.plants._rigid_body import (
+    QUATERNION_COMPONENTS,
+    RigidBodyAttitudeSection,
+    RigidBodyTorquePlant,
+)
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import Signal, TruthInputs, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["QuaternionRigidBodyPlant", "QUATERNION_COMPONENTS"]
-
-QUATERNION_COMPONENTS = ["q1", "q2", "q3", "q4"]
-
-
-class RigidBodyTorquePlant(Plant):
-    """Rigid bodies in the state ``{"omega": (N, 3), "q": (N, 4)}`` from the fields ``initial_omega``,
-    ``initial_quaternion``, driven by a torque plus the disturbance torque expressions
-    ``disturbance_torque`` iota(t) [N m] (the state layout both quaternion attitude plants share)."""
-
-    quantity = "torque"
-    initial_omega: Any  # declared by the subclasses (dataclass fields there)
-
-    @property
-    def count(self) -> int:
-        return int(np.shape(self.initial_omega)[0])
-
-    def initial_state(self):
-        return {"omega": self.initial_omega, "q": self.initial_quaternion}
-
-    def angular_rate(self, x):
-        return x["omega"]
-
-    def exogenous(self, t):
-        return {
-            "iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count)
-        }
-
-    def coords(self):
-        return {"quaternion_component": QUATERNION_COMPONENTS}
+__all__ = [
+    "QuaternionRigidBodyPlant",
+    "QuaternionPlantSection",
+    "QUATERNION_COMPONENTS",
+    "quaternion_plant",
+]
 
 
 @component
@@ -57,7 +47,7 @@ class QuaternionRigidBodyPlant(RigidBodyTorquePlant):
     """
 
     inertia: Any  # (3, 3) [kg m^2]
-    initial_omega: Any  # (N, 3) [rad/s]
+    initial_body_rate: Any  # (N, 3) [rad/s]
     initial_quaternion: Any  # (N, 4) [-], vector first
     disturbance_torque: tuple[str, str, str] = static(default=("0", "0", "0"))  # iota(t) [N m]
     gyroscopic: bool = static(default=True)
@@ -92,3 +82,66 @@ class QuaternionRigidBodyPlant(RigidBodyTorquePlant):
 
     def outputs(self, t, x, inputs):
         return {"angular_velocity": x["omega"], "quaternion": x["q"]}
+
+
+class QuaternionPlantSection(RigidBodyAttitudeSection):
+    """N rigid bodies with quaternion kinematics (one principal inertia for every spacecraft)."""
+
+    gyroscopic: bool = Field(
+        True, description="Include -omega x J omega (false: the error-level form)."
+    )
+
+
+def quaternion_plant(
+    inertia: Vec3, omega0, q0, disturbance_torque: Vec3Expr, gyroscopic: bool
+) -> QuaternionRigidBodyPlant:
+    """Rigid bodies of one principal inertia.
+
+    Parameters
+    ----------
+    inertia : Vec3
+        Principal inertia diag(J) [kg m^2].
+    omega0 : array_like, shape (N, 3)
+        Initial body rates [rad/s].
+    q0 : array_like, shape (N, 4)
+        Initial unit quaternions, vector first [-].
+    disturbance_torque : Vec3Expr
+        Disturbance torque iota(t), expressions in t [s], i [N m].
+    gyroscopic : bool
+        Include -omega x J omega.
+
+    Returns
+    -------
+    QuaternionRigidBodyPlant
+        The plant (the one builder: also the attitude part of the ``switched-formation`` plant).
+
+    Examples
+    --------
+    >>> p = quaternion_plant((20.0, 25.0, 30.0), np.zeros((2, 3)), np.tile([0, 0, 0, 1.0], (2, 1)),
+    ...                      ("0", "0", "0"), gyroscopic=True)
+    >>> p.count, p.inertia.diagonal().tolist()
+    (2, [20.0, 25.0, 30.0])
+    """
+    return QuaternionRigidBodyPlant(
+        inertia=as_float(np.diag(inertia)),
+        initial_body_rate=as_float(omega0),
+        initial_quaternion=as_float(q0),
+        disturbance_torque=expression_text(disturbance_torque),
+        gyroscopic=gyroscopic,
+    )
+
+
+def _build(sec: QuaternionPlantSection, ctx: BuildContext) -> QuaternionRigidBodyPlant:
+    """The plant of a validated ``[plant] type = "quaternion-rigid-body"`` section."""
+    return quaternion_plant(
+        sec.inertia, sec.body_rates(), sec.quaternions(), sec.disturbance_torque, sec.gyroscopic
+    )
+
+
+register(
+    "plant",
+    "quaternion-rigid-body",
+    QuaternionPlantSection,
+    _build,
+    "rigid-body attitudes with quaternion kinematics, driven by body torques (Yang2013 (4))",
+)

@@ -1,18 +1,23 @@
-"""Nonlinear relative translational motion about an elliptic Keplerian reference, in its LVLH frame."""
+"""Plant ``relative-lvlh``: nonlinear relative translational motion about an elliptic Keplerian
+reference orbit (the ``[reference]``), in its LVLH frame (Li2020 eqs. (1)-(4))."""
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import jax.numpy as jnp
+from pydantic import Field
 
+from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants.relative_state import RelativeStatePlant
+from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
+from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
 from formation_ftc.core.vector3 import norm3, sq_norm3
-from formation_ftc.sim.components import CompositionError, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import Signal, TruthInputs, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["RelativeLvlhPlant"]
+__all__ = ["RelativeLvlhPlant", "RelativeLvlhSection"]
 
 VEC = ("spacecraft", "axis")
 
@@ -29,7 +34,8 @@ class RelativeLvlhPlant(RelativeStatePlant):
 
     with the applied force F_i [N] (after the actuator's faults), the disturbance expressions h_i(t)
     [N] and the reference-orbit values r_c, theta_dot, theta_ddot of a
-    :class:`~formation_ftc.components.references.keplerian.KeplerianReference` (required).
+    :class:`~formation_ftc.components.references.keplerian.KeplerianReference` (required:
+    :meth:`needs`).
     Usage integrals: the commanded delta-v int ||u_i|| / m_i dt [m/s] and effort int ||u_i||^2 dt [N^2 s].
     """
 
@@ -39,18 +45,12 @@ class RelativeLvlhPlant(RelativeStatePlant):
     disturbance_force: tuple[str, str, str] = static(
         default=("0", "0", "0")
     )  # h_i(t), expressions in t, i [N]
-    needs_reference: ClassVar[bool] = True
 
     def exogenous(self, t):
         return {"h": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
 
     def derivative(self, t, x, inputs: TruthInputs):
         ref = inputs.reference
-        if ref is None:
-            raise CompositionError(
-                "plant RelativeLvlhPlant needs a reference orbit (reference slot "
-                "KeplerianReference), got none"
-            )
         q = x["q"]
         rho, v = q[:, :3], q[:, 3:]
         acc_nat = natural_acceleration_from_rates(
@@ -77,3 +77,31 @@ class RelativeLvlhPlant(RelativeStatePlant):
             "velocity": x["q"][:, 3:],
             "true_anomaly": inputs.reference["theta"],
         }
+
+    def needs(self) -> dict[str, str]:
+        return {"reference-orbit": "integrate the relative motion about it (eqs. (1)-(4))"}
+
+
+class RelativeLvlhSection(PointMassSection):
+    """Point masses on the nonlinear relative dynamics about the ``[reference]`` orbit."""
+
+    mu: float = Field(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
+
+
+def _build(sec: RelativeLvlhSection, ctx: BuildContext) -> RelativeLvlhPlant:
+    """The plant of a validated ``[plant] type = "relative-lvlh"`` section."""
+    return RelativeLvlhPlant(
+        mass=as_float(sec.mass),
+        initial_state_lvlh=as_float(sec.q0()),
+        mu=as_float(sec.mu),
+        disturbance_force=sec.disturbance_force,
+    )
+
+
+register(
+    "plant",
+    "relative-lvlh",
+    RelativeLvlhSection,
+    _build,
+    "nonlinear relative motion about an elliptic reference orbit (needs [reference])",
+)

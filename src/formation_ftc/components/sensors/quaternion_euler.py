@@ -1,4 +1,4 @@
-"""Attitude sensors that report a quaternion rigid body's attitude as 3-2-1 Euler angles.
+"""Sensors ``quaternion-euler``: a quaternion rigid body's attitude reported as 3-2-1 Euler angles.
 
 A law written in Euler angles (an Euler-Lagrange attitude law such as
 :class:`~formation_ftc.components.controllers.networked_el_hinf.NetworkedElHinfController`) reads
@@ -14,14 +14,19 @@ i.e. ``C = Rz(psi) Ry(theta) Rx(phi)`` (Z-Y-X / 3-2-1 sequence, see
 law forms the Euler-angle rates ``q_dot = R_bar(q) omega`` itself. Limits: singular at
 theta = +-90 deg (gimbal lock); phi and psi are principal values in (-pi, pi], so an attitude that
 crosses +-180 deg in roll or yaw jumps by 2 pi in the measurement (the sensors keep no state to unwrap).
+
+Needs the capability ``quaternion-attitude-state`` (a quaternion plant) and provides
+``euler-angle-measurement``.
 """
 
 from __future__ import annotations
 
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.config.base import StrictModel
 from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
 
-__all__ = ["QuaternionToEulerSensors"]
+__all__ = ["QuaternionToEulerSensors", "QuaternionEulerSection"]
 
 
 @component
@@ -36,3 +41,27 @@ class QuaternionToEulerSensors(Sensors):
 
     def measure(self, t, x, inputs: SensorInputs):
         return {"q": euler_zyx_from_quaternion(x["q"]), "w": x["omega"]}
+
+    def needs(self) -> dict[str, str]:
+        return {"quaternion-attitude-state": "convert its quaternion to 3-2-1 Euler angles"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"euler-angle-measurement"})
+
+
+class QuaternionEulerSection(StrictModel):
+    """Exact measurement; no fields."""
+
+
+def _build(sec: QuaternionEulerSection, ctx: BuildContext) -> QuaternionToEulerSensors:
+    """The sensors of a ``[sensors] type = "quaternion-euler"`` section."""
+    return QuaternionToEulerSensors(count=ctx.count)
+
+
+register(
+    "sensors",
+    "quaternion-euler",
+    QuaternionEulerSection,
+    _build,
+    "attitude as 3-2-1 Euler angles [theta, phi, psi] and body rates, from a quaternion plant",
+)

@@ -226,6 +226,7 @@ class ComposedScenario(ScenarioBase):
     )
     _sections: dict[str, Any] = PrivateAttr(default_factory=dict)
     _evaluation_sections: list[tuple[str, Any]] = PrivateAttr(default_factory=list)
+    _evaluation_labels: list[str] = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
     def _compose(self, info: ValidationInfo) -> ComposedScenario:
@@ -276,9 +277,10 @@ class ComposedScenario(ScenarioBase):
         return self._sections.get(slot)
 
     def labels(self) -> dict[str, str]:
-        """Slot (or ``evaluations[j]``) -> the type name this scenario gives it (for messages)."""
+        """Slot -> the type name this scenario gives it, and ``evaluations[k]`` (the loop's k-th
+        evaluation) -> which type added it, once the loop is built (for messages)."""
         out = {slot: str(getattr(self, slot)["type"]) for slot in SLOTS if getattr(self, slot)}
-        out |= {f"evaluations[{j}]": str(raw.get("type")) for j, raw in enumerate(self.evaluations)}
+        out |= {f"evaluations[{k}]": label for k, label in enumerate(self._evaluation_labels)}
         return out
 
     def type_of(self, slot: str) -> str | None:
@@ -334,7 +336,7 @@ def composed_json_schema() -> dict[str, Any]:
 
 def make_loop(s: ComposedScenario) -> ClosedLoop:
     """The composed scenario's closed loop (components built from their sections)."""
-    from formation_ftc.components.sensors.exact_relative_state import ExactRelativeStateSensors
+    from formation_ftc.components.sensors.relative_state import ExactRelativeStateSensors
     from formation_ftc.sim.components import Plant
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
@@ -351,15 +353,22 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     ctx = BuildContext(
         scenario=s, count=parts["plant"].count, dt=float(s.simulation.dt), plant=parts["plant"]
     )
+    # what each evaluation of the loop is called in messages: the type that added it
+    added_by: list[str] = []
     for slot in SLOTS[1:]:
         name = s.type_of(slot)
         if name is None:
             continue
         parts[slot] = _CATALOG[(slot, name)].build(s.section(slot), ctx)
-    for name, section in s._evaluation_sections:  # after every slot: they may read any signal
+        added_by += [f"{slot} {name}'s evaluation"] * (len(ctx.evaluations) - len(added_by))
+    for j, (name, section) in enumerate(
+        s._evaluation_sections
+    ):  # after every slot: they read signals
         ev = _CATALOG[("evaluation", name)].build(section, ctx)
         if ev is not None:  # None: the type only declares metrics (ctx.metrics)
             ctx.evaluations.append(ev)
+        added_by += [f"evaluations[{j}] {name}"] * (len(ctx.evaluations) - len(added_by))
+    s._evaluation_labels = added_by
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)

@@ -14,29 +14,9 @@ _PACKAGE = "formation_ftc.methods.composed"
 
 #: catalog module (in this package) -> the (kind, name) component types its import registers
 _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
-    "catalog_attitude": (
-        ("actuator", "euler-torque-allocation"),
-        ("controller", "networked-el-hinf"),
-        ("estimator", "scripted-fdi"),
-        ("evaluation", "mehrabian-metrics"),
-        ("plant", "euler-angle-attitude"),
-        ("plant", "quaternion-rigid-body"),
-        ("sensors", "quaternion-euler"),
-    ),
-    "catalog_attitude_fdi": (("estimator", "attitude-residual-fdi"),),
-    "catalog_attitude_laws": (
-        ("controller", "attitude-pd"),
-        ("controller", "yang2013-attitude"),
-        ("evaluation", "attitude-scores"),
-    ),
-    "catalog_attitude_truth": (("plant", "attitude-truth"),),
     "catalog_delays": (
         ("controller", "yang2013-relative"),
         ("controller", "yang2013-translational"),
-    ),
-    "catalog_evaluations": (
-        ("evaluation", "formation-scores"),
-        ("evaluation", "li2020-formation-errors"),
     ),
     "catalog_learning": (
         ("controller", "gui2022-cof2tc"),
@@ -53,21 +33,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("plant", "switched-formation"),
         ("sensors", "tracking-error"),
         ("supervisor", "switching"),
-    ),
-    "catalog_translational": (
-        ("actuator", "expression-faults"),
-        ("actuator", "step-faults"),
-        ("actuator", "thruster-bias"),
-        ("controller", "li2020-adaptive"),
-        ("controller", "none"),
-        ("controller", "pd"),
-        ("controller", "sir-ftc"),
-        ("network", "delayed-graph"),
-        ("network", "graph"),
-        ("plant", "clohessy-wiltshire"),
-        ("plant", "relative-lvlh"),
-        ("reference", "keplerian"),
-        ("sensors", "relative-state"),
     ),
 }
 

@@ -28,16 +28,14 @@ from typing import Literal, NamedTuple
 import numpy as np
 from pydantic import Field, PositiveFloat, field_validator, model_validator
 
+from formation_ftc.components._flight_defaults import NOMINAL_INERTIA
+from formation_ftc.components.controllers.yang2013_attitude import yang2013_attitude_law
+from formation_ftc.components.plants.quaternion_rigid_body import quaternion_plant
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.methods.composed import (
     BuildContext,
     per_spacecraft,
     register_component_type,
-)
-from formation_ftc.methods.composed.catalog_attitude import quaternion_plant
-from formation_ftc.methods.composed.catalog_attitude_laws import (
-    NOMINAL_INERTIA,
-    yang2013_attitude_law,
 )
 from formation_ftc.methods.composed.catalog_delays import NOMINAL_MASS, translational_law
 from formation_ftc.sim.contract import CompositionError, as_float

@@ -8,7 +8,7 @@
 * delay conditions (Thm 2): T_ij(t) >= 0 for every printed pair and dT_ij/dt < 1 (eq. (46)). They are
   *verified* over the continuous horizon by interval arithmetic (:mod:`formation_ftc.core.interval`:
   enclosures of T and dT/dt); the values shown are sampled at every simulation step
-  (:func:`~formation_ftc.components.networks.weighted_graph.delay_statistics`, ``jax.jacfwd`` for the
+  (:func:`~formation_ftc.components.networks.delayed_graph.delay_statistics`, ``jax.jacfwd`` for the
   rate), and when the enclosure is inconclusive the condition falls back to that sample (basis
   "sampled": a violation found is real, a pass is unproven). That every used delay stays in
   [0, max_delay] is checked when the network is built (the history holds max_delay seconds);
@@ -29,7 +29,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from formation_ftc.components.networks.weighted_graph import DelayStats, delay_statistics
+from formation_ftc.components.networks.delayed_graph import DelayStats, delay_statistics
 from formation_ftc.core.graph import balance_report, is_strongly_connected
 from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
 from formation_ftc.methods.composed import ComposedScenario, per_spacecraft

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_ftc.components.evaluations.li2020_formation_errors import E000_04_WINDOW
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.methods.composed.catalog_evaluations import E000_04_WINDOW
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from formation_ftc.methods.composed.catalog_attitude import metric_windows
+from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
 from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
 
 __all__ = ["plot_attitudes", "plot_fault_estimate", "plot_seed_spread", "plot_scenario"]

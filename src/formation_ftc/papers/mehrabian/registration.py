@@ -1,5 +1,6 @@
-"""Registers reproduction ``mehrabian``, the theorem conditions of the ``networked-el-hinf`` law and the
-figures of scenarios with ``[scenario] paper = "mehrabian"``."""
+"""Registers reproduction ``mehrabian``, the theorem conditions of the ``networked-el-hinf`` law, the
+command-model condition of the ``attitude-residual-fdi`` that reports to it and the figures of
+scenarios with ``[scenario] paper = "mehrabian"``."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ _HERE = (
     "formation_ftc.papers.mehrabian"  # its modules import JAX: referenced, imported on first use
 )
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="mehrabian")
-# type names as text, not the catalog's constants: importing a catalog module costs start-up time
-# (tests/methods/composed/test_catalog_index.py checks they match)
+# type names as text: importing a home costs start-up time (tests/methods/composed/test_catalog_index.py
+# checks they are registered types)
 register_conditions("controller", "networked-el-hinf", f"{_HERE}.conditions:check")
+register_conditions("estimator", "attitude-residual-fdi", f"{_HERE}.conditions:fdi_check")
 register_paper_figures("mehrabian", f"{_HERE}.figures:plot_scenario")

@@ -20,9 +20,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
-from formation_ftc.components.estimators.fdi_imperfections import ScriptedFdi
+from formation_ftc.components.estimators.scripted_fdi import ScriptedFdi
+from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
 from formation_ftc.methods.composed import make_loop
-from formation_ftc.methods.composed.catalog_attitude import metric_windows
 from formation_ftc.papers.mehrabian import conditions
 from formation_ftc.papers.mehrabian.figures import (
     plot_attitudes,

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from pydantic import Field
 
-from formation_ftc.components.controllers.pd_formation import PdFormationController
+from formation_ftc.components.controllers.pd import PdFormationController
 from formation_ftc.config.base import StrictModel
 from formation_ftc.methods.composed import BuildContext, register_component_type
 from formation_ftc.sim.components import FlightInputs, as_float, component
@@ -45,7 +45,7 @@ def build_smooth_pd(sec: SmoothPdSection, ctx: BuildContext) -> SmoothSaturation
         count=ctx.count,
         kp=as_float(sec.kp),
         kd=as_float(sec.kd),
-        mass=as_float(np.full(ctx.count, sec.nominal_mass)),
+        nominal_mass=as_float(np.full(ctx.count, sec.nominal_mass)),
         max_force=as_float(sec.max_force),
         desired_position=tuple(sec.desired_position),
     )

@@ -1,0 +1,93 @@
+"""Shared part of the point-mass plants whose state is the (N, 6) LVLH relative state
+``q = [position, velocity]`` (``clohessy-wiltshire``, ``relative-lvlh``): the base class and the
+section fields of their spacecraft."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from formation_ftc.components._registry import builder_input
+from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.config.base import StrictModel
+from formation_ftc.sim.components import Plant
+
+__all__ = ["RelativeStatePlant", "PointMassSection"]
+
+
+class RelativeStatePlant(Plant):
+    """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views and the
+    commanded delta-v / control-effort usage integrals (subclasses give the rates); the subclasses'
+    fields ``mass`` (N,) [kg] and ``initial_state_lvlh`` (N, 6) [m, m/s] give the count and the
+    initial state."""
+
+    mass: Any  # declared by the subclasses (dataclass fields there)
+
+    @property
+    def count(self) -> int:
+        return int(np.shape(self.mass)[0])
+
+    def initial_state(self):
+        return {"q": self.initial_state_lvlh}
+
+    def provides(self) -> frozenset[str]:
+        caps = {"translational-state", "lvlh-relative-state"}
+        caps |= {"stage-evaluation"} if self.integration == "rk4" else set()
+        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
+
+    def position(self, x):
+        return x["q"][:, :3]
+
+    def velocity(self, x):
+        return x["q"][:, 3:]
+
+    def usage_names(self):
+        return ("delta_v", "control_effort")
+
+
+class PointMassSection(StrictModel):
+    """N point-mass spacecraft: true masses, initial LVLH states (the builder stacks them into the
+    plant's ``initial_state_lvlh``) and a disturbance force."""
+
+    mass: list[float] = Field(description="True mass of each spacecraft [kg], > 0.")
+    initial_position: list[Vec3] = builder_input(
+        description="Initial LVLH position per spacecraft [m]."
+    )
+    initial_velocity: list[Vec3] | None = builder_input(
+        None, description="Initial LVLH velocity per spacecraft [m/s] (default 0)."
+    )
+    disturbance_force: Vec3Expr = Field(
+        ("0", "0", "0"), description="External force per axis, expressions in t [s], i [N]."
+    )
+
+    @model_validator(mode="after")
+    def _sizes(self):
+        n = len(self.mass)
+        if n < 1 or any(not (m > 0 and math.isfinite(m)) for m in self.mass):
+            raise ValueError("mass: at least one spacecraft, every mass finite and > 0 kg")
+        if len(self.initial_position) != n:
+            raise ValueError(
+                f"initial_position: {len(self.initial_position)} rows for {n} spacecraft"
+            )
+        if self.initial_velocity is not None and len(self.initial_velocity) != n:
+            raise ValueError(
+                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
+            )
+        return self
+
+    @property
+    def count(self) -> int:
+        """Number of spacecraft N [-]."""
+        return len(self.mass)
+
+    def q0(self) -> np.ndarray:
+        """The (N, 6) initial relative states [m, m/s]."""
+        v0 = (
+            np.zeros((self.count, 3))
+            if self.initial_velocity is None
+            else np.asarray(self.initial_velocity)
+        )
+        return np.hstack([np.asarray(self.initial_position, float), v0])
