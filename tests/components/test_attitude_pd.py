@@ -10,9 +10,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import formation_ftc as ftc
+from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 from formation_ftc.components.controllers.attitude_pd import AttitudePdController
 from formation_ftc.components.controllers.yang2013_attitude_hold import Yang2013AttitudeHold
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import FlightInputs
 
@@ -126,7 +126,7 @@ def test_yang2013_attitude_composed_equals_the_component():
     w = rng.normal(size=(2, 3)) * 0.05
     tau, _, _ = hold.output(jnp.asarray(3.0), None, _inputs(w, q))
     paper = Yang2013AttitudeController(
-        count=2, inertia=np.diag(INERTIA), K3=0.2, K4=1.0, K5=1.0, kappa=1e-3
+        count=2, nominal_inertia=np.diag(INERTIA), K3=0.2, K4=1.0, K5=1.0, kappa=1e-3
     )
     err = np.concatenate([q[:, :3], q[:, 3:] - 1.0], axis=1)
     direct, _, _ = paper.output(jnp.asarray(3.0), None, _inputs(w, err))

@@ -61,24 +61,29 @@ def test_index_names_the_module_that_registers_each_type():
     ("paper", "kind", "name", "constant"),
     [
         ("azizi2009", "controller", "azizi2009-llfr", "catalog_chain:CHAIN_LAW"),
-        ("gui2022", "estimator", "iterative-learning-observer", "catalog_learning:ILO"),
-        ("gui2022", "controller", "gui2022-lof2tc", "catalog_learning:LOF2TC"),
-        ("gui2022", "controller", "gui2022-cof2tc", "catalog_learning:COF2TC"),
+        ("gui2022", "estimator", "iterative-learning-observer", None),
+        ("gui2022", "controller", "gui2022-lof2tc", None),
+        ("gui2022", "controller", "gui2022-cof2tc", None),
         ("mehrabian", "controller", "networked-el-hinf", "catalog_attitude:EULER_LAW"),
-        ("yang2013", "supervisor", "switching", "catalog_switched:SWITCHING_SUPERVISOR"),
+        ("yang2013", "supervisor", "switching", None),
     ],
 )
 def test_paper_registrations_name_the_catalog_constants(paper, kind, name, constant):
-    """The papers' registration modules name these types as text (no catalog import at start-up)."""
+    """The papers' registration modules name these types as text (no catalog import at start-up);
+    ``constant`` None: a type with a home (found from its name)."""
     import importlib
 
-    from formation_ftc.methods.composed import _CONDITIONS
+    from formation_ftc.components._registry import home_module
+    from formation_ftc.methods.composed import _CONDITIONS, component_type
     from formation_ftc.registry import load_plugins
 
     load_plugins()
-    module, attr = constant.split(":")
-    assert getattr(importlib.import_module(f"{_PACKAGE}.{module}"), attr) == name
-    assert CATALOG_INDEX[(kind, name)] == f"{_PACKAGE}.{module}"
+    if constant is None:
+        assert component_type(kind, name).module == home_module(kind, name)
+    else:
+        module, attr = constant.split(":")
+        assert getattr(importlib.import_module(f"{_PACKAGE}.{module}"), attr) == name
+        assert CATALOG_INDEX[(kind, name)] == f"{_PACKAGE}.{module}"
     refs = [f for f in _CONDITIONS.get((kind, name), []) if isinstance(f, str)]
     assert any(r.startswith(f"formation_ftc.papers.{paper}.") for r in refs), (kind, name, refs)
 
@@ -134,7 +139,7 @@ def test_a_stale_index_entry_falls_back_to_every_catalog():
         "import json, sys\n"
         "from formation_ftc.methods.composed import _catalog_index, component_type\n"
         "_catalog_index.CATALOG_INDEX[('controller', 'pd')] = "
-        f"'{_PACKAGE}.catalog_delays'\n"
+        f"'{_PACKAGE}.catalog_chain'\n"
         "print(json.dumps(component_type('controller', 'pd').name))\n"
     )
     assert got == "pd"

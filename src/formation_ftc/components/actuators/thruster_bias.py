@@ -53,3 +53,6 @@ class ThrusterBiasFaultActuator(Actuator):
 
     def outputs(self, t, command, inputs):
         return {"fault": inputs.exogenous["F"]}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"thruster-bias-faults"})

@@ -1,6 +1,6 @@
 """Yang2013's attitude law (13) holding a fixed attitude of a quaternion plant.
 
-:class:`~formation_ftc.components.controllers.yang2013_individual.Yang2013AttitudeController` reads the
+:class:`~formation_ftc.components.controllers._yang2013.Yang2013AttitudeController` reads the
 error state ``(e_w, e_q, e_q4)`` of Yang2013 (7), zero at the desired attitude. This component forms that
 error state from a quaternion plant's measured state and hands it to the law unchanged.
 """
@@ -11,8 +11,8 @@ from typing import Any
 
 import jax.numpy as jnp
 
+from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 from formation_ftc.components.controllers.attitude_pd import error_quaternion
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.sim.components import Controller, FlightInputs, component
 
 __all__ = ["Yang2013AttitudeHold", "yang2013_error_state"]

@@ -18,3 +18,6 @@ class ExactRelativeStateSensors(Sensors):
 
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"]
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"relative-state-measurement"})

@@ -37,3 +37,6 @@ class LvlhRelativeStateSensors(Sensors):
     def measure(self, t, x, inputs: SensorInputs):
         q = x["q"] if "q" in x else eci_to_lvlh(x["chief"], x["deputies"])
         return q + inputs.noise + self.bias
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"relative-state-measurement"})

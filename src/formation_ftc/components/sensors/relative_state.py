@@ -36,3 +36,6 @@ class RelativeStateSensors(Sensors):
 
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"] + inputs.noise
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"relative-state-measurement"})

@@ -38,10 +38,6 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("sensors", "chain-relative"),
         ("supervisor", "hierarchical"),
     ),
-    "catalog_delays": (
-        ("controller", "yang2013-relative"),
-        ("controller", "yang2013-translational"),
-    ),
     "catalog_evaluations": (
         ("evaluation", "formation-scores"),
         ("evaluation", "li2020-formation-errors"),
@@ -50,26 +46,10 @@ _BY_MODULE: dict[str, tuple[tuple[str, str], ...]] = {
         ("actuator", "fault-battery"),
         ("network", "graph-link-loss"),
     ),
-    "catalog_learning": (
-        ("controller", "gui2022-cof2tc"),
-        ("controller", "gui2022-lof2tc"),
-        ("estimator", "iterative-learning-observer"),
-        ("evaluation", "gui2022-scores"),
-        ("plant", "clohessy-wiltshire-zoh"),
-    ),
     "catalog_navigation": (
         ("estimator", "relative-navigation-filter"),
         ("estimator", "residual-fdi"),
         ("evaluation", "fdi-scores"),
-    ),
-    "catalog_switched": (
-        ("actuator", "velocity-gain-fault"),
-        ("controller", "yang2013-force-torque"),
-        ("estimator", "scheduled-diagnosis"),
-        ("evaluation", "switch-norms"),
-        ("plant", "switched-formation"),
-        ("sensors", "tracking-error"),
-        ("supervisor", "switching"),
     ),
     "catalog_translational": (
         ("actuator", "expression-faults"),

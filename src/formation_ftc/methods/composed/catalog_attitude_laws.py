@@ -1,7 +1,7 @@
 """Catalog: quaternion attitude laws and attitude scores for composed scenarios.
 
 * ``controller.type = "yang2013-attitude"`` -- Yang2013's attitude law (13)
-  (:class:`~formation_ftc.components.controllers.yang2013_individual.Yang2013AttitudeController`) with
+  (:class:`~formation_ftc.components.controllers._yang2013.Yang2013AttitudeController`) with
   the gains of the ``yang2013`` scenarios as defaults (K3 = 0.2, K4 = K5 = 1 [1/s], kappa = 1e-3
   [rad^2/s^2]), fed the error state (e_w, e_q, e_q4) of a fixed desired attitude in the plant's
   ``state_frame`` (inertial hold, or LVLH hold with ``state_frame = "lvlh"``) by
@@ -32,7 +32,7 @@ from formation_ftc.methods.composed.catalog_attitude import (
 from formation_ftc.sim.contract import CompositionError, as_float
 
 if TYPE_CHECKING:
-    from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
+    from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 
 __all__ = [
     "YANG2013_ATTITUDE",
@@ -137,11 +137,11 @@ def yang2013_attitude_law(
 ) -> Yang2013AttitudeController:
     """Yang2013's law (13) with the stated principal inertia [kg m^2], gains K3, K4, K5 [1/s] and
     kappa [rad^2/s^2] (the one builder of the law: the catalog's Yang2013 controller types use it)."""
-    from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
+    from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 
     return Yang2013AttitudeController(
         count=ctx.count,
-        inertia=as_float(_inertia(inertia)),
+        nominal_inertia=as_float(_inertia(inertia)),
         K3=as_float(K3),
         K4=as_float(K4),
         K5=as_float(K5),

@@ -15,7 +15,7 @@ How the parts fit a plant they were not written for:
   pairs from the plant's state: the (N, 6) relative state ``"q"`` of the relative-motion plants
   (Clohessy-Wiltshire, nonlinear LVLH) or the ``"r"``/``"v"`` states of a double-integrator plant.
 * ``controller.type = "azizi2009-llfr"`` commands accelerations u_i [m/s^2]. On a force-driven
-  plant it is wrapped in :class:`~formation_ftc.components.controllers.acceleration_to_force.AccelerationToForce`:
+  plant it is wrapped in :class:`~formation_ftc.components.controllers._acceleration_to_force.AccelerationToForce`:
   ``f_i = m_i^nom u_i`` with the flight side's nominal masses ``controller.nominal_mass`` [kg]
   (default 100 kg, a stated nominal value: never the plant's true masses). The law models each spacecraft
   as a double integrator ``x_i'' = b_i u_i`` (deep space): any other dynamics of the plant (orbital
@@ -380,7 +380,7 @@ def _chain_sensors(ctx: BuildContext, slot: str) -> bool:
 
 
 def _chain_llfr(sec: ChainLlfrSection, ctx: BuildContext):
-    from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    from formation_ftc.components.controllers._acceleration_to_force import force_from_acceleration
     from formation_ftc.components.controllers.azizi2009_llfr import ChainLlfrController
     from formation_ftc.design.allocation import validate_allocation_inputs
 

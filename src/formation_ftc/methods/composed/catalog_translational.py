@@ -552,7 +552,7 @@ class NoControlSection(StrictModel):
 
 
 def _no_control(sec: NoControlSection, ctx: BuildContext):
-    from formation_ftc.components.controllers.output_feedback import FreeDrift
+    from formation_ftc.components.controllers._output_feedback import FreeDrift
     from formation_ftc.components.controllers.pd_formation import ZeroController
 
     if ctx.plant.quantity == "acceleration":  # u = 0 [m/s^2] (e.g. Gui2022's observer runs)
