@@ -41,7 +41,7 @@ CASES = [
         "compose-li2020-delays-on-yang2013",
         "plant.mass.2",
         ("plant", "mass"),
-        ("controller", "law", "mass"),
+        ("controller", "law", "nominal_mass"),
         150.0,
         id="yang2013-law",
     ),

@@ -1,5 +1,5 @@
 """Composition: Li2020 Thm 2's time-varying delays on Yang2013's translational formation law
-(``compose-li2020-delays-on-yang2013``: catalog_delays, NeighbourRelativeController, DelayedGraphNetwork)."""
+(``compose-li2020-delays-on-yang2013``: yang2013-relative, NeighbourRelativeController, DelayedGraphNetwork)."""
 
 from __future__ import annotations
 

@@ -196,6 +196,9 @@ ILO = {
     "learning_interval": 0.001,
     "mean_motion": 0.001,
 }
+#: the ILO with given gains (no LMI design) and an attitude law a quaternion plant can fly
+ILO_PRINTED = {**ILO, "gains": "printed", "L1": np.eye(6).tolist(), "L2": np.zeros((3, 6)).tolist()}
+ATTITUDE_LAW = {"type": "attitude-pd", "K_p": 1.0, "K_d": 1.0}
 
 
 @pytest.mark.parametrize(
@@ -203,11 +206,14 @@ ILO = {
     [
         (
             {},
-            ("gui2022-cof2tc", "quaternion-rigid-body", "torque"),
+            ("ConventionalOutputFeedbackController", "QuaternionRigidBodyPlant", "torque"),
         ),  # a CW law on rigid-body attitudes
-        (
-            {"estimator": ILO},
-            ("iterative-learning-observer", "quaternion-rigid-body", "QuaternionRigidBodyPlant"),
+        (  # the ILO on rigid-body attitudes (under an attitude law): no relative state to observe
+            {"estimator": ILO_PRINTED, "controller": ATTITUDE_LAW},
+            (
+                "estimator iterative-learning-observer needs the measured (N, 6) relative position",
+                'sensors type = "relative-state"',
+            ),
         ),
         (
             {
@@ -257,24 +263,21 @@ inertia = [20.0, 18.0, 15.0]
 initial_quaternion = [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]]
 [estimator]
 type = "iterative-learning-observer"
-gains = "lmi"
+L1 = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0],
+      [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
+L2 = [[0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
 Q1 = [0.99, 0.99, 0.99]
 Q2 = 0.999
 gamma = 3.231e-3
 learning_interval = 0.001
 mean_motion = 0.001
 [controller]
-type = "gui2022-lof2tc"
-gains = "care"
-mean_motion = 0.001
-G1 = 0.999
-G2 = 0.9999
-G3 = [0.999, 0.999, 0.999]
-G4 = -0.9999
-learning_interval = 0.001
-desired_state = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]
+type = "attitude-pd"
+K_p = 1.0
+K_d = 1.0
 """)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
-    assert "iterative-learning-observer" in err and "QuaternionRigidBodyPlant" in err
+    assert "estimator iterative-learning-observer needs the measured (N, 6)" in err
+    assert '"relative-state"' in err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

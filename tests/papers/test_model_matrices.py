@@ -3,7 +3,7 @@
 Truths are derived by hand in the comments (not computed with the package):
 
 * yang2013: the slot variation maps P[j] of the built-in mode sequence (S_ij of the scenario placed on
-  the spacecraft slots, kept in methods/composed/catalog_switched.py), the leave flags, and the translational error
+  the spacecraft slots, kept in components/supervisors/switching.py), the leave flags, and the translational error
   dynamics (2) at a hand-picked state (now in core);
 * azizi2009: the rotating-square desired state, now in core (positions on the circumscribed circle,
   v = omega x r, a = -omega^2 r) and the desired relative accelerations of the chain pairs.
@@ -13,11 +13,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc import api
+from formation_ftc.components.supervisors.switching import switched_structure
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.core.polygon_formation import relative_acceleration_fn
 from formation_ftc.core.polygon_formation import rotating_polygon as desired_state
-from formation_ftc.methods.composed.catalog_switched import switched_structure
 
 
 def test_yang2013_slot_variation_maps_of_the_builtin_sequence():

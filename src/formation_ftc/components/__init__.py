@@ -1,7 +1,8 @@
 """Concrete components of the closed loop (the contract is :mod:`formation_ftc.sim.components`).
 
-Each module holds the components of one kind; each component is a thin, typed wrapper around the pure
-equations in :mod:`formation_ftc.core` and :mod:`formation_ftc.blocks` (the equation numbers sit
-there), so a law written for one paper runs on any plant that provides what it needs. Layer: below
-``config``/``campaign``/``papers``, above ``sim``.
+Every component type has one home, ``components/<kind>/<name>.py``: its equations (pure functions of
+arrays, with the paper's equation numbers), its ``@component`` class, its TOML section, its builder and
+its registration; shared dynamics live in :mod:`formation_ftc.core`. A component declares what it
+provides and needs (:mod:`formation_ftc.sim.contract`), so a law written for one paper runs on any plant
+that provides what it needs. Layer: below ``config``/``campaign``/``papers``, above ``sim``.
 """

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,8 @@ __all__ = [
     "expression_text",
     "check_unit_quaternions",
     "quaternion_rows",
+    "onboard_mean_motion",
+    "nominal_masses",
 ]
 
 #: three numbers, one per LVLH or body axis
@@ -147,4 +150,71 @@ def quaternion_rows(rows: Quat | list[Quat] | None, n: int, field: str) -> np.nd
         raise ValueError(
             f"{field}: {arr.shape[0]} quaternions for {n} spacecraft (give one or {n})"
         )
+    return arr
+
+
+def onboard_mean_motion(given: float | None, reference: Any) -> float | None:
+    """The mean motion of an on-board circular-orbit (CW) model [rad/s]: ``given``, else
+    sqrt(mu / a^3) of the ``[reference]`` section ``reference`` (an orbit known on board); None
+    without either (never the plant's orbit: that is truth).
+
+    Parameters
+    ----------
+    given : float or None
+        The section's stated mean motion [rad/s].
+    reference : pydantic model or None
+        The scenario's ``[reference]`` section (its ``semi_major_axis`` [m] and ``mu`` [m^3/s^2]).
+
+    Returns
+    -------
+    float or None
+        The mean motion [rad/s].
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> round(onboard_mean_motion(None, SimpleNamespace(semi_major_axis=7000e3, mu=3.986004418e14)), 9)
+    0.001078008
+    >>> onboard_mean_motion(None, None) is None
+    True
+    """
+    if given is not None:
+        return float(given)
+    if reference is not None and hasattr(reference, "semi_major_axis"):
+        return math.sqrt(reference.mu / reference.semi_major_axis**3)
+    return None
+
+
+def nominal_masses(value: Any, default: float, n: int, field: str) -> np.ndarray:
+    """Stated on-board masses [kg] (one or ``n``; None: ``default`` each) -> (n,), each finite and
+    > 0 (errors name ``field``).
+
+    Parameters
+    ----------
+    value : float, sequence of float or None
+        The stated masses [kg].
+    default : float
+        The documented nominal mass when none is stated [kg].
+    n : int
+        Number of spacecraft.
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n,) [kg].
+
+    Examples
+    --------
+    >>> nominal_masses(None, 100.0, 2, "controller.nominal_mass").tolist()
+    [100.0, 100.0]
+    """
+    arr = np.asarray(default if value is None else value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(f"{field}: every mass must be finite and > 0 kg")
     return arr

@@ -460,6 +460,10 @@ class Network(_Kind):
     def push(self, state: PyTree, messages: PyTree) -> PyTree:
         return state
 
+    def provides(self) -> frozenset[str]:
+        """Every network delivers messages between spacecraft (``NoNetwork`` none)."""
+        return frozenset({"inter-spacecraft-messages"})
+
 
 class Estimator(_Kind):
     """Observer / FDI: discrete update once per step from flight inputs."""
@@ -596,6 +600,9 @@ class PerfectSensors(Sensors):
 @component
 class NoNetwork(Network):
     """No communication."""
+
+    def provides(self) -> frozenset[str]:
+        return frozenset()
 
 
 @component

@@ -181,6 +181,46 @@ CAPABILITIES: dict[str, Capability] = {
         "the true fault of one actuator channel, recorded as fault_active and fault_channel",
         'actuator type = "fault-battery"',
     ),
+    # --- learning, delays, switched (Gui2022's ILO and laws, Yang2013's translational and switched types)
+    "relative-state-measurement": Capability(
+        "the measured (N, 6) relative position and velocity y = [p, v] of every spacecraft",
+        'no [sensors] on a translational plant (exact), or sensors type = "relative-state" or '
+        '"lvlh-relative-state"',
+    ),
+    "thruster-fault-estimate": Capability(
+        "an estimate F_hat (N, 3) of the thruster faults per unit mass (the estimate's fault)",
+        'estimator type = "iterative-learning-observer"',
+    ),
+    "thruster-bias-faults": Capability(
+        "thruster faults F(t) with onsets stated in the scenario, recorded as the signal fault",
+        'actuator type = "thruster-bias"',
+    ),
+    "perturbation-signal": Capability(
+        "the space perturbation d(t) of the plant recorded as the signal disturbance [m/s^2]",
+        'plant type = "clohessy-wiltshire-zoh"',
+    ),
+    "inter-spacecraft-messages": Capability(
+        "a network delivering the messages of the spacecraft each one references",
+        'a [network] section, e.g. type = "graph" or "delayed-graph"',
+    ),
+    "switching-plan": Capability(
+        "the prescribed mode sequence of a switched formation (switch times, members, state "
+        "variation (10))",
+        'supervisor type = "switching"',
+    ),
+    "error-state": Capability(
+        "a plant whose state is the error state x_i = [e_R, e_V, e_omega, e_q, e_q4] (7) of every "
+        "spacecraft, {x (N, 13)}",
+        'plant type = "switched-formation"',
+    ),
+    "error-state-measurement": Capability(
+        "the measured error state {translation (N, 6), omega (N, 3), q (N, 4)} of Yang2013 (7)",
+        'sensors type = "tracking-error"',
+    ),
+    "velocity-gain-law": Capability(
+        "a law (12) whose velocity gain K2 and stated mass M_i a controller fault corrupts",
+        'controller type = "yang2013-force-torque"',
+    ),
 }
 
 

@@ -8,8 +8,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import formation_ftc as ftc
+from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 from formation_ftc.components.controllers.yang2013_attitude import Yang2013AttitudeHold
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import FlightInputs
 

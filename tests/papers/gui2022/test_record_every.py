@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.methods.composed.catalog_learning import lowpass_steps
+from formation_ftc.components.evaluations.gui2022_scores import lowpass_steps
 from formation_ftc.papers.gui2022.reproduction import run_scenario
 
 DT = 1e-3  # [s]

@@ -12,13 +12,11 @@ import numpy as np
 import pytest
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.controllers.yang2013_individual import (
-    attitude_control,
-    input_norm,
-    translational_control,
-)
-from formation_ftc.blocks.supervisors.switching_supervisor import RECONFIGURE, TOLERATE_BY_SWITCHING
-from formation_ftc.components.supervisors.switching_supervisor import (
+from formation_ftc.components.controllers._yang2013 import attitude_control, translational_control
+from formation_ftc.components.plants.switched_formation import input_norm
+from formation_ftc.components.supervisors.switching import (
+    RECONFIGURE,
+    TOLERATE_BY_SWITCHING,
     SwitchingSupervisor,
     decision_events,
 )

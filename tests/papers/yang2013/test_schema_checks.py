@@ -108,7 +108,12 @@ def test_theorems_are_not_applicable_to_another_law():
     sc = ftc.load_scenario("yang2013-healthy")
     # S (informative), eta, K3, four epsilon inequalities, (21), (24), (22), |d_i|, |iota_i|
     assert len(yang_conditions(sc)) == 12
-    assert yang_conditions(sc.model_copy(update={"controller": {"type": "pd"}})) == []
+    other = sc.model_copy()  # the same scenario with another law's section (a pd law)
+    other._sections = {
+        **sc._sections,
+        "controller": ftc.load_scenario("cw-pd-fault").section("controller"),
+    }
+    assert yang_conditions(other) == []
 
 
 def test_compositions_that_cannot_work_are_rejected():
@@ -116,7 +121,13 @@ def test_compositions_that_cannot_work_are_rejected():
 
     raw = loader.read_raw("yang2013-healthy")[0]
     without = {k: v for k, v in raw.items() if k not in ("supervisor", "evaluations")}
-    with pytest.raises(ScenarioError, match=r"reads the mode sequence of a \[supervisor\]"):
+    with pytest.raises(
+        ScenarioError,
+        match=r'plant switched-formation needs the prescribed mode sequence .*"switching"',
+    ):
         ftc.load_scenario(without)
-    with pytest.raises(ScenarioError, match=r"acts on the error state .* sensors tracking-error"):
+    with pytest.raises(
+        ScenarioError,
+        match=r'controller yang2013-force-torque needs the measured error state .*"tracking-error"',
+    ):
         ftc.load_scenario(dict(raw, sensors={"type": "relative-state"}))

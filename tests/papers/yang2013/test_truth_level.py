@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.blocks.controllers.yang2013_individual import (
+from formation_ftc.components.controllers._yang2013 import (
     translational_control,
     translational_drift,
 )

@@ -69,6 +69,9 @@ class ThrusterBiasFaultActuator(Actuator):
             return {}
         return {"true-masses": "scale its per-unit-mass values (per_unit_mass)"}
 
+    def provides(self) -> frozenset[str]:
+        return frozenset({"thruster-bias-faults"})
+
 
 class ThrusterBiasSection(StrictModel):
     """F(t) = [t >= onset] (magnitude + amplitude sin(omega t + phase) + decay_amplitude exp(-decay_rate (t - decay_origin))).

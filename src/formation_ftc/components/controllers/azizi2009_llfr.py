@@ -19,7 +19,7 @@ How the law fits a plant it was not written for:
 * it models each spacecraft as a double integrator ``x_i'' = b_i u_i`` (deep space): any other
   dynamics of the plant (orbital relative motion, disturbances) act on it as unmodelled accelerations;
 * it commands accelerations u_i [m/s^2]. On a force-driven plant it is wrapped in
-  :class:`~formation_ftc.components.controllers.acceleration_to_force.AccelerationToForce`:
+  :class:`~formation_ftc.components.controllers._acceleration_to_force.AccelerationToForce`:
   ``f_i = m_i^nom u_i`` with the flight side's ``nominal_mass`` [kg] (default 100 kg, a stated nominal
   value: never the plant's true masses);
 * the desired formation is the law's own: a regular N-gon of side ``side`` [m] rotating at ``omega``
@@ -522,7 +522,7 @@ def _alpha_flfr(sec: ChainLlfrSection, ctx: BuildContext, alpha: np.ndarray, k: 
 def _build(sec: ChainLlfrSection, ctx: BuildContext) -> Controller:
     """The controller of a validated ``[controller] type = "azizi2009-llfr"`` section: the law, times
     the nominal masses on a force-driven plant."""
-    from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    from formation_ftc.components.controllers._acceleration_to_force import force_from_acceleration
     from formation_ftc.components.evaluations.chain_errors import ChainTrackingError
     from formation_ftc.design.allocation import validate_allocation_inputs
 

@@ -1,7 +1,7 @@
 """Controller ``yang2013-attitude``: Yang2013's attitude law (13) holding a fixed attitude of a
 quaternion plant.
 
-:class:`~formation_ftc.components.controllers.yang2013_individual.Yang2013AttitudeController` reads the
+:class:`~formation_ftc.components.controllers._yang2013.Yang2013AttitudeController` reads the
 error state ``(e_w, e_q, e_q4)`` of Yang2013 (7), zero at the desired attitude. This component forms that
 error state from a quaternion plant's measured state and hands it to the law unchanged. The gains of
 the ``yang2013`` scenarios are the defaults (K3 = 0.2, K4 = K5 = 1 [1/s], kappa = 1e-3 [rad^2/s^2]);
@@ -26,8 +26,8 @@ from formation_ftc.components._sections import (
     check_unit_quaternions,
     quaternion_rows,
 )
+from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
 from formation_ftc.components.controllers.attitude_pd import QUATERNION_LAW_NEEDS, error_quaternion
-from formation_ftc.components.controllers.yang2013_individual import Yang2013AttitudeController
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Controller, FlightInputs, component
 from formation_ftc.sim.contract import as_float

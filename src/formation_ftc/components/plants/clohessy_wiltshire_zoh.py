@@ -1,4 +1,6 @@
-"""Clohessy-Wiltshire deputies driven by accelerations, stepped exactly (zero-order hold)."""
+"""Plant ``clohessy-wiltshire-zoh``: Gui2022's plant (its (1)-(3)), linear Clohessy-Wiltshire deputies
+driven by accelerations, stepped exactly (zero-order hold), with the space perturbation d(t) of its
+ref. [12] (recorded: the capability ``perturbation-signal`` that ``gui2022-scores`` reads)."""
 
 from __future__ import annotations
 
@@ -7,13 +9,22 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
+from pydantic import Field
 
+from formation_ftc.components._registry import (
+    BuildContext,
+    InitialStateRows,
+    builder_input,
+    register,
+)
+from formation_ftc.components._sections import Vec3
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["ZohClohessyWiltshirePlant", "STATE_COMPONENTS"]
+__all__ = ["ZohClohessyWiltshirePlant", "ZohCwPlantSection", "STATE_COMPONENTS"]
 
 #: names of the six entries of a relative state q = [position, velocity]
 STATE_COMPONENTS = ("x", "y", "z", "vx", "vy", "vz")
@@ -71,7 +82,7 @@ class ZohClohessyWiltshirePlant(Plant):
         return {"q": matvec(plant.Ad, x["q"]) + matvec(plant.Bd, w)}
 
     def provides(self) -> frozenset[str]:
-        caps = {"translational-state", "lvlh-relative-state"}  # exact step: no RK stages
+        caps = {"translational-state", "lvlh-relative-state", "perturbation-signal"}  # exact step
         return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
 
     def position(self, x):
@@ -97,3 +108,43 @@ class ZohClohessyWiltshirePlant(Plant):
 
     def outputs(self, t, x, inputs):
         return {"state": x["q"], "disturbance": inputs.exogenous["d"]}
+
+
+class ZohCwPlantSection(InitialStateRows):
+    """Deputies on linear CW dynamics driven by accelerations, stepped exactly (Gui2022 (1)-(3))."""
+
+    mean_motion: float = Field(
+        gt=0, description="Mean motion n of the chief's circular orbit [rad/s] (truth)."
+    )
+    initial_position: list[Vec3] = builder_input(
+        description="Initial LVLH position per spacecraft [m]."
+    )
+    initial_velocity: list[Vec3] | None = builder_input(
+        None, description="Initial LVLH velocity per spacecraft [m/s] (default 0)."
+    )
+    disturbance_amplitude: float = Field(
+        0.0,
+        ge=0,
+        description=(
+            "A0 of d(t) = A0 [1 - 1.5 sin nt, 0.5 sin 2nt, sin nt] (Gui2022's ref. [12]) [m/s^2]; 0: none."
+        ),
+    )
+
+
+def _build(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
+    """The plant of a validated ``[plant] type = "clohessy-wiltshire-zoh"`` section."""
+    v0 = np.zeros((sec.count, 3)) if sec.initial_velocity is None else sec.initial_velocity
+    return ZohClohessyWiltshirePlant(
+        mean_motion=as_float(sec.mean_motion),
+        initial_state_lvlh=as_float(np.hstack([np.asarray(sec.initial_position, float), v0])),
+        disturbance_amplitude=as_float(sec.disturbance_amplitude),
+    )
+
+
+register(
+    "plant",
+    "clohessy-wiltshire-zoh",
+    ZohCwPlantSection,
+    _build,
+    "linear CW deputies driven by accelerations, exact ZOH step, Gui2022's perturbation d(t)",
+)

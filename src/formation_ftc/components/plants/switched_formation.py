@@ -1,19 +1,25 @@
-"""A formation of N_max spacecraft slots whose members change at prescribed switches (Yang2013).
+"""Plant ``switched-formation``: N_max spacecraft slots whose members change at prescribed switches
+(Yang2013's state-varying switched formation at the closed-loop error level).
 
-Truth side of the state-varying switched formation: every slot holds the 13-dimensional error state
-(7) ``x_i = [e_R, e_V, e_omega, e_q, e_q4]`` of one spacecraft (desired minus actual, in its body
-frame F_i). The closed-loop error dynamics (2), (5) are exact for any orbit once the laws (12)-(13)
-cancel the known drift terms Phi_i, Upsilon_i (Yang2013 E001-02), so the drift is zero on both sides:
-the translational part is :func:`formation_ftc.core.dynamics.tracking_error.translational_error_rates`
-and the attitude part a :class:`~formation_ftc.components.plants.quaternion_rigid_body.QuaternionRigidBodyPlant`
-without gyroscopic term.
+Truth side of the switched formation: every slot holds the 13-dimensional error state (7)
+``x_i = [e_R, e_V, e_omega, e_q, e_q4]`` of one spacecraft (desired minus actual, in its body frame
+F_i). The closed-loop error dynamics (2), (5) are exact for any orbit once the laws (12)-(13) cancel
+the known drift terms Phi_i, Upsilon_i (Yang2013 E001-02), so the drift is zero on both sides: the
+translational part is :func:`formation_ftc.core.dynamics.tracking_error.translational_error_rates`
+and the attitude part the rigid body of
+:func:`formation_ftc.core.dynamics.attitude_quaternion.rigid_body_quaternion_rates` without
+gyroscopic term.
 
-Membership is a decision of the supervisor (:class:`~formation_ftc.components.supervisors.switching_supervisor.SwitchDecision`):
+Membership is a decision of the supervisor (:class:`~formation_ftc.components.supervisors.switching.SwitchDecision`):
 slots outside the formation are frozen (their rates are masked), and at the end of a step after which
 a new mode starts the state jumps by the variation model (10), ``X <- (P_j (x) I_13) X + X*_j``, with
 ``P_j`` the mode's variation matrix S_ij placed on the slots and ``X*_j`` the new states of the
 spacecraft that join. The state before the jump (its per-spacecraft norms) is kept, so the norms at
 the left limit t_k^- of every switch are recorded and enter the every-step metrics.
+
+The plan (switch times, members, variation, new states) is the ``[supervisor]``'s mode sequence: the
+plant needs the capability ``switching-plan`` (``supervisor type = "switching"``) and provides
+``error-state``.
 """
 
 from __future__ import annotations
@@ -22,14 +28,25 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
+from pydantic import Field, PositiveFloat
 
-from formation_ftc.blocks.controllers.yang2013_individual import input_norm
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
+from formation_ftc.components._sections import Vec3, Vec3Expr
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants.quaternion_rigid_body import QuaternionRigidBodyPlant
+from formation_ftc.config.base import StrictModel
+from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["SwitchedFormationPlant", "ERROR_COMPONENTS", "STATE_DIM"]
+__all__ = [
+    "SwitchedFormationPlant",
+    "SwitchedFormationSection",
+    "ErrorState",
+    "ERROR_COMPONENTS",
+    "STATE_DIM",
+    "input_norm",
+]
 
 ERROR_COMPONENTS = [
     "e_R_x",
@@ -49,6 +66,30 @@ ERROR_COMPONENTS = [
 STATE_DIM = 13  # x_i = [e_R, e_V, e_w, e_q, e_q4] (7)
 
 
+def input_norm(f, tau):
+    """``|u_i| = |[f; tau]|`` of (7) (N and N m combined, as in the paper's Fig. 5).
+
+    Parameters
+    ----------
+    f : array_like, shape (..., 3)
+        Force [N].
+    tau : array_like, shape (..., 3)
+        Torque [N m].
+
+    Returns
+    -------
+    jax.Array
+        |u_i|, shape (...,).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> float(input_norm(np.array([3.0, 0, 0]), np.array([0, 4.0, 0])))
+    5.0
+    """
+    return jnp.sqrt(jnp.sum(f * f, axis=-1) + jnp.sum(tau * tau, axis=-1))
+
+
 def _active(decision, count: int):
     """Membership mask (N,) of the decision in force (every slot when there is no supervisor)."""
     active = getattr(decision, "active", None)
@@ -60,21 +101,25 @@ class SwitchedFormationPlant(Plant):
     """Error-level 6-DOF closed-loop plant of N_max spacecraft slots driven by a wrench [f, tau] (N, 6)
     [N, N m] (see module docstring).
 
-    ``mass`` (N,) [kg]; ``attitude`` the attitude part (its inertia [kg m^2], initial e_omega, (e_q,
-    e_q4) and disturbance torque iota(t) [N m]); ``initial_translation`` (N, 6) [e_R, e_V] [m, m/s];
-    ``variation`` (n_modes, N, N) slot maps P_j of (10) (P_0 unused); ``new_states`` (n_modes, N, 13)
-    X*_j; ``disturbance_force`` d_i(t) [N] (expressions in t [s] and i); ``rotation_coupling``: keep the
+    ``mass`` (N,) [kg]; ``inertia`` J (3, 3) [kg m^2] of every spacecraft; ``initial_rate_error``
+    (N, 3) e_omega [rad/s] and ``initial_quaternion_error`` (N, 4) (e_q, e_q4) [-];
+    ``initial_translation`` (N, 6) [e_R, e_V] [m, m/s]; ``variation`` (n_modes, N, N) slot maps P_j of
+    (10) (P_0 unused); ``new_states`` (n_modes, N, 13) X*_j; ``disturbance_force`` d_i(t) [N] and
+    ``disturbance_torque`` iota_i(t) [N m] (expressions in t [s] and i); ``rotation_coupling``: keep the
     norm-preserving omega_i x e terms of (2) with omega_i = -e_omega (reference at rest).
     """
 
     quantity = "wrench"
 
     mass: Any
-    attitude: QuaternionRigidBodyPlant
+    inertia: Any
+    initial_rate_error: Any
+    initial_quaternion_error: Any
     initial_translation: Any
     variation: Any
     new_states: Any
     disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
+    disturbance_torque: tuple[str, str, str] = static(default=("0", "0", "0"))
     rotation_coupling: bool = static(default=True)
 
     @property
@@ -82,14 +127,16 @@ class SwitchedFormationPlant(Plant):
         return int(np.shape(self.mass)[0])
 
     def initial_state(self):
-        att = self.attitude.initial_state()
-        x0 = jnp.concatenate([self.initial_translation, att["omega"], att["q"]], axis=-1)
+        x0 = jnp.concatenate(
+            [self.initial_translation, self.initial_rate_error, self.initial_quaternion_error],
+            axis=-1,
+        )
         return {"x": x0, "left_norm": jnp.linalg.norm(x0, axis=-1)}
 
     def exogenous(self, t):
         return {
             "d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count),
-            "attitude": self.attitude.exogenous(t),
+            "iota": vector_expression(self.disturbance_torque, "disturbance.torque", t, self.count),
         }
 
     def derivative(self, t, x, inputs: TruthInputs):
@@ -105,10 +152,10 @@ class SwitchedFormationPlant(Plant):
         de_R, de_V = translational_error_rates(
             e_R, e_V, zero, f, inputs.exogenous["d"], self.mass[:, None], omega
         )  # Yang2013 eq. (2)
-        att = self.attitude.rates(
-            {"omega": e_w, "q": e_q}, tau + inputs.exogenous["attitude"]["iota"]
-        )  # Yang2013 eq. (5)
-        dx = jnp.concatenate([de_R, de_V, att["omega"], att["q"]], axis=-1)
+        dw, dq = rigid_body_quaternion_rates(
+            e_w, e_q, tau + inputs.exogenous["iota"], self.inertia, gyroscopic=False
+        )  # Yang2013 eq. (5): no gyroscopic term (part of the drift Upsilon the law (13) cancels)
+        dx = jnp.concatenate([de_R, de_V, dw, dq], axis=-1)
         return {
             "x": dx * _active(inputs.decision, self.count)[:, None],
             "left_norm": jnp.zeros(self.count),
@@ -170,6 +217,12 @@ class SwitchedFormationPlant(Plant):
     def coords(self):
         return {"component": ERROR_COMPONENTS}
 
+    def needs(self) -> dict[str, str]:
+        return {"switching-plan": "execute membership and the state variation (10) at its switches"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"error-state"})
+
     def outputs(self, t, x, inputs):
         X = x["x"]
         active = _active(inputs.decision, self.count)
@@ -187,3 +240,108 @@ class SwitchedFormationPlant(Plant):
             "input_norm": input_norm(inputs.force[:, :3], inputs.force[:, 3:]) * active,
             "relative_position": (desired - X[:, 0:3]) * active[:, None],
         }
+
+
+# ------------------------------------------------------------------------------------------ section
+PositiveVec3 = tuple[PositiveFloat, PositiveFloat, PositiveFloat]
+
+
+class ErrorState(StrictModel):
+    """Error state x_i of one spacecraft (7): desired minus actual, in the body frame F_i."""
+
+    spacecraft: int = Field(ge=1, description="Spacecraft number (1 = main spacecraft) [-].")
+    e_R: Vec3 = Field((0.0, 0.0, 0.0), description="Relative position error e_R [m].")
+    e_V: Vec3 = Field((0.0, 0.0, 0.0), description="Relative velocity error e_V [m/s].")
+    e_omega: Vec3 = Field((0.0, 0.0, 0.0), description="Angular velocity error e_omega [rad/s].")
+    e_q: Vec3 = Field((0.0, 0.0, 0.0), description="Quaternion vector error e_q [-].")
+    e_q4: float = Field(0.0, description="Quaternion scalar error e_q4 [-] (E001-03: start at 0).")
+
+    def vector(self) -> np.ndarray:
+        """The 13-vector x_i."""
+        return np.array([*self.e_R, *self.e_V, *self.e_omega, *self.e_q, self.e_q4], dtype=float)
+
+
+class SwitchedFormationSection(StrictModel):
+    """Truth of the switched formation: slots, masses, inertia, disturbances, initial error states."""
+
+    count: int = builder_input(
+        ge=1, le=64, description="Number of spacecraft slots N_max (numbered 1..count) [-]."
+    )
+    mass: float = Field(
+        150.0,
+        gt=0,
+        description="True mass M_i of every spacecraft [kg] (the laws use their stated "
+        "controller.nominal_mass).",
+    )
+    inertia: PositiveVec3 = Field(
+        (25.0, 25.0, 25.0),
+        description="True principal inertia diag(J_i) of every spacecraft [kg m^2] (the laws use "
+        "their stated controller.nominal_inertia).",
+    )
+    rotation_coupling: bool = Field(
+        True,
+        description="Keep the norm-preserving omega_i x e terms of (2) with omega_i = -e_omega "
+        "(reference at rest); false drops them (the terms preserve the error norm).",
+    )
+    disturbance_force: Vec3Expr = Field(
+        ("0", "0", "0"),
+        description="Disturbance force d_i(t) per axis; expressions in t [s] and i [N].",
+    )
+    disturbance_torque: Vec3Expr = Field(
+        ("0", "0", "0"),
+        description="Disturbance torque iota_i(t) per axis; expressions in t [s] and i [N m].",
+    )
+    initial_state: list[ErrorState] = builder_input(
+        description="x_i(0) of the first mode's members (the other slots start at 0)."
+    )
+
+
+def _build(sec: SwitchedFormationSection, ctx: BuildContext) -> SwitchedFormationPlant:
+    """The plant of a validated ``[plant] type = "switched-formation"`` section: the plan is the
+    ``[supervisor]``'s mode sequence (without one: a single mode, and the loop is refused for the
+    missing ``switching-plan``)."""
+    from formation_ftc.components.supervisors.switching import (
+        SwitchingSupervisorSection,
+        switched_structure,
+    )
+
+    plan = ctx.section("supervisor")
+    x0 = np.zeros((sec.count, STATE_DIM))
+    for init in sec.initial_state:
+        x0[init.spacecraft - 1] = init.vector()
+    if isinstance(plan, SwitchingSupervisorSection):
+        st = switched_structure(plan, sec.count, ctx.dt)
+        first = sorted(s.spacecraft for s in sec.initial_state)
+        if first != sorted(x for x in plan.modes[0].members if x > 0):
+            raise ValueError(
+                f"plant.initial_state must give exactly the members of supervisor.modes[0] "
+                f"{plan.modes[0].members}, got spacecraft {first}"
+            )
+        variation, new_states = st.P, st.xstar
+    else:  # a placeholder of one mode: validation names the missing plan
+        variation = np.eye(sec.count)[None]
+        new_states = np.zeros((1, sec.count, STATE_DIM))
+    px, py, pz = sec.disturbance_force
+    tx, ty, tz = sec.disturbance_torque
+    return SwitchedFormationPlant(
+        mass=as_float(per_spacecraft(sec.mass, sec.count, "plant.mass")),
+        inertia=as_float(np.diag(sec.inertia)),
+        initial_rate_error=as_float(x0[:, 6:9]),
+        initial_quaternion_error=as_float(x0[:, 9:13]),
+        initial_translation=as_float(x0[:, 0:6]),
+        variation=as_float(variation),
+        new_states=as_float(new_states),
+        disturbance_force=(str(px), str(py), str(pz)),
+        disturbance_torque=(str(tx), str(ty), str(tz)),
+        rotation_coupling=sec.rotation_coupling,
+    )
+
+
+register(
+    "plant",
+    "switched-formation",
+    SwitchedFormationSection,
+    _build,
+    "Yang2013 error dynamics (2), (5) of N_max slots, membership and state variation (10) at the "
+    "plan's switches",
+)

@@ -52,7 +52,7 @@ class LvlhRelativeStateSensors(Sensors):
         return {"lvlh-relative-state": "measure it"}
 
     def provides(self) -> frozenset[str]:
-        return frozenset({"chain-outputs"})
+        return frozenset({"chain-outputs", "relative-state-measurement"})
 
     def measure(self, t, x, inputs: SensorInputs):
         q = x["q"] if "q" in x else eci_to_lvlh(x["chief"], x["deputies"])

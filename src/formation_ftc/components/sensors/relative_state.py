@@ -42,6 +42,9 @@ class RelativeStateSensors(Sensors):
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"] + inputs.noise
 
+    def provides(self) -> frozenset[str]:
+        return frozenset({"relative-state-measurement"})
+
 
 @component
 class ExactRelativeStateSensors(Sensors):
@@ -56,6 +59,9 @@ class ExactRelativeStateSensors(Sensors):
 
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"]
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"relative-state-measurement"})
 
 
 class RelativeStateSection(StrictModel):

@@ -1,11 +1,15 @@
-"""Sensors of an error-level formation: each spacecraft's deviation from its desired relative state and
-its attitude error."""
+"""Sensors ``tracking-error``: each spacecraft's deviation from its desired relative state and its
+attitude error, read from the error state of the ``switched-formation`` plant (the capability
+``error-state``); they provide the measured error state the Yang2013 laws act on
+(``error-state-measurement``)."""
 
 from __future__ import annotations
 
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
 
-__all__ = ["TrackingErrorSensors"]
+__all__ = ["TrackingErrorSensors", "TrackingErrorSection"]
 
 
 @component
@@ -25,3 +29,21 @@ class TrackingErrorSensors(Sensors):
     def measure(self, t, x, inputs: SensorInputs):
         X = x["x"]
         return {"translation": -X[:, 0:6], "omega": X[:, 6:9], "q": X[:, 9:13]}
+
+    def needs(self) -> dict[str, str]:
+        return {"error-state": "measure it"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"error-state-measurement"})
+
+
+class TrackingErrorSection(StrictModel):
+    """Exact measurement of the error state; no fields."""
+
+
+def _build(sec: TrackingErrorSection, ctx: BuildContext) -> TrackingErrorSensors:
+    """The sensors of a validated ``[sensors] type = "tracking-error"`` section."""
+    return TrackingErrorSensors(count=ctx.count)
+
+
+register("sensors", "tracking-error", TrackingErrorSection, _build, "exact error state")

@@ -91,66 +91,14 @@ def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
         )
 
 
-#: the component types registered so far (homes and catalog modules alike)
-_CATALOG = _registry._TYPES
 register_component_type = register
-_CATALOGS_LOADED = False
-
-
-def component_types(kind: str | None = None) -> dict[tuple[str, str], ComponentType]:
-    """The catalog (optionally one slot's types): every home and catalog module imported."""
-    _load_catalogs()
-    return _registry.component_types(kind)
-
-
-def _load_catalogs() -> None:
-    global _CATALOGS_LOADED
-    if _CATALOGS_LOADED:
-        return
-    _CATALOGS_LOADED = True
-    import importlib
-    import pkgutil
-
-    for mod in pkgutil.iter_modules(__path__):
-        if mod.name.startswith("catalog_"):
-            importlib.import_module(f"{__name__}.{mod.name}")
-
-
-def _load_catalogs_for(keys: list[tuple[str, str]]) -> None:
-    """Import only the homes or catalog modules that register the ``(kind, name)`` types ``keys``
-    (a home from its path, a catalog module from
-    :data:`~formation_ftc.methods.composed._catalog_index.CATALOG_INDEX`); every catalog when one is
-    in neither (a plug-in's, or a name that is none, so that errors list every known type)."""
-    if _CATALOGS_LOADED:
-        return
-    import importlib
-
-    from formation_ftc.methods.composed._catalog_index import CATALOG_INDEX
-
-    modules = set()
-    for kind, name in keys:
-        module = CATALOG_INDEX.get((kind, name))
-        if module is not None:
-            modules.add(module)
-        elif _registry.component_type(kind, name) is None:
-            _load_catalogs()
-            return
-    for module in sorted(modules):
-        importlib.import_module(module)
-    if any(key not in _CATALOG for key in keys):  # an index entry naming the wrong module
-        _load_catalogs()
-
-
-def component_type(kind: str, name: str) -> ComponentType | None:
-    """The catalog entry of ``[kind] type = "name"`` (None if there is none), importing only the
-    module that registers it where it is known (cheaper than :func:`component_types`)."""
-    _load_catalogs_for([(kind, name)])
-    return _CATALOG.get((kind, name))
+component_types = _registry.component_types
+component_type = _registry.component_type
 
 
 def _known(kind: str) -> list[str]:
     """The type names of ``kind`` for an error message."""
-    return sorted({*_registry.type_names(kind), *(n for (k, n) in _CATALOG if k == kind)})
+    return _registry.type_names(kind)
 
 
 class MetricSection(StrictModel):
@@ -230,38 +178,32 @@ class ComposedScenario(ScenarioBase):
 
     @model_validator(mode="after")
     def _compose(self, info: ValidationInfo) -> ComposedScenario:
-        # only the catalog modules of the named types (a missing type loads all, for the message)
-        tables = {slot: getattr(self, slot) for slot in SLOTS}
-        named = [(slot, raw.get("type")) for slot, raw in tables.items() if raw is not None]
-        named += [("evaluation", raw.get("type")) for raw in self.evaluations]
-        _load_catalogs_for([(kind, str(name)) for kind, name in named])
+        # only the homes of the named types are imported (every home of a slot for a message)
         sections: dict[str, Any] = {}
         for slot in SLOTS:
             raw = getattr(self, slot)
             if raw is None:
                 continue
-            kind_types = _known(slot)
             name = raw.get("type")
             if name is None:
                 raise ValueError(
-                    f"{slot}.type is required (one of: {', '.join(kind_types) or 'none registered'})"
+                    f"{slot}.type is required (one of: {', '.join(_known(slot)) or 'none registered'})"
                 )
-            entry = _CATALOG.get((slot, str(name)))
+            entry = component_type(slot, str(name))
             if entry is None:
                 raise ValueError(
-                    f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(kind_types)})"
+                    f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(_known(slot))})"
                 )
             sections[slot] = _validated_section(entry, raw, slot)
         self._sections = sections
         evaluations: list[tuple[str, Any]] = []
-        known = _known("evaluation")
         for j, raw in enumerate(self.evaluations):
             name = raw.get("type")
-            entry = _CATALOG.get(("evaluation", str(name)))
+            entry = component_type("evaluation", str(name))
             if entry is None:
                 raise ValueError(
                     f"evaluations[{j}].type = {name!r} is not an evaluation type "
-                    f"(known: {', '.join(known) or 'none registered'})"
+                    f"(known: {', '.join(_known('evaluation')) or 'none registered'})"
                 )
             evaluations.append((str(name), _validated_section(entry, raw, f"evaluations[{j}]")))
         self._evaluation_sections = evaluations
@@ -341,10 +283,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import Metric
 
-    _load_catalogs()  # builders and conditions may use any catalog type
-    plant_entry = _CATALOG[
-        ("plant", cast(str, s.type_of("plant")))
-    ]  # the plant section is required
+    plant_entry = cast(ComponentType, component_type("plant", cast(str, s.type_of("plant"))))
     plant_section = s.section("plant")
     count = getattr(plant_section, "count", None)  # else one mass per spacecraft
     count = int(len(getattr(plant_section, "mass", []) or []) if count is None else count)
@@ -359,12 +298,12 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
         name = s.type_of(slot)
         if name is None:
             continue
-        parts[slot] = _CATALOG[(slot, name)].build(s.section(slot), ctx)
+        parts[slot] = cast(ComponentType, component_type(slot, name)).build(s.section(slot), ctx)
         added_by += [f"{slot} {name}'s evaluation"] * (len(ctx.evaluations) - len(added_by))
     for j, (name, section) in enumerate(
         s._evaluation_sections
     ):  # after every slot: they read signals
-        ev = _CATALOG[("evaluation", name)].build(section, ctx)
+        ev = cast(ComponentType, component_type("evaluation", name)).build(section, ctx)
         if ev is not None:  # None: the type only declares metrics (ctx.metrics)
             ctx.evaluations.append(ev)
         added_by += [f"evaluations[{j}] {name}"] * (len(ctx.evaluations) - len(added_by))

@@ -13,18 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from formation_ftc.blocks.observers.iterative_learning_observer import learning_steps
+from formation_ftc.components._sections import onboard_mean_motion
+from formation_ftc.components.controllers._output_feedback import care_solution
+from formation_ftc.components.controllers.gui2022_lof2tc import Lof2tcSection
+from formation_ftc.components.estimators.iterative_learning_observer import learning_steps
+from formation_ftc.components.plants.clohessy_wiltshire_zoh import ZohCwPlantSection
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.design.lmi import ilo_lmi_residuals
 from formation_ftc.design.riccati import care_residual
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.methods.composed.catalog_learning import (
-    LOF2TC,
-    ZOH_CW,
-    care_solution,
-    onboard_mean_motion,
-)
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
@@ -100,14 +98,22 @@ def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[floa
     )
 
 
+def _onboard_mean_motion(given: float | None, s: ComposedScenario) -> float:
+    """The on-board CW model's mean motion [rad/s] (a loop without one is refused before any check)."""
+    n = onboard_mean_motion(given, s.section("reference"))
+    if n is None:  # pragma: no cover - validation refuses the loop first
+        raise ValueError("no on-board mean motion: state mean_motion or add a [reference] orbit")
+    return n
+
+
 def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
     """Theorem 1 for the ILO of a composed scenario on the ``clohessy-wiltshire-zoh`` plant: (8), (9),
     (27), P > 0, pole region, (10), Q2, (11), discrete learning loop (on the on-board CW model);
     none on another plant (outside the theorem)."""
-    if s.type_of("plant") != ZOH_CW:
+    if not isinstance(s.section("plant"), ZohCwPlantSection):
         return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
     o = s.section("estimator")
-    n, dt = onboard_mean_motion(o.mean_motion, s, "estimator"), s.simulation.dt
+    n, dt = _onboard_mean_motion(o.mean_motion, s), s.simulation.dt
     A, B = cw_matrices(n)
     C, H = np.eye(6), B
     L1, L2 = o.gains_at(n)
@@ -240,10 +246,10 @@ def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Conditi
     """Theorem 2 for a Gui2022 law of a composed scenario on the ``clohessy-wiltshire-zoh`` plant:
     (34), (35) and the closed loop A - B K C (LOF2TC and COF2TC); (36), (37), G2, G4 and
     2 Sigma_min >= 1 (LOF2TC's learning laws only); none on another plant (outside the theorem)."""
-    if s.type_of("plant") != ZOH_CW:
+    if not isinstance(s.section("plant"), ZohCwPlantSection):
         return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
     c = s.section("controller")
-    n = onboard_mean_motion(c.mean_motion, s, "controller")
+    n = _onboard_mean_motion(c.mean_motion, s)
     A, B = cw_matrices(n)
     care = care_solution(n, c.care_q_scale)
     K = np.asarray(c.K, float) if c.gains == "printed" else care.K
@@ -279,7 +285,7 @@ def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Conditi
             detail="exact: entry-wise difference",
         ),
     ]
-    if s.type_of("controller") == LOF2TC:
+    if isinstance(c, Lof2tcSection):
         out += _learning_law_conditions(c)
     out.append(
         Condition(

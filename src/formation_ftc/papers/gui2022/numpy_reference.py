@@ -14,16 +14,24 @@ import math
 import numpy as np
 import scipy.linalg
 
+from formation_ftc.components._sections import onboard_mean_motion
+from formation_ftc.components.controllers._output_feedback import (
+    OutputFeedbackSection,
+    care_solution,
+)
+from formation_ftc.components.controllers.gui2022_lof2tc import Lof2tcSection
 from formation_ftc.core.dynamics.cw import cw_matrices, cw_state_transition
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.methods.composed.catalog_learning import (
-    COF2TC,
-    LOF2TC,
-    care_solution,
-    onboard_mean_motion,
-)
 
 __all__ = ["simulate_numpy"]
+
+
+def _mean_motion(given: float | None, reference) -> float:
+    """The on-board CW model's mean motion [rad/s] (stated, or the [reference] orbit's)."""
+    n = onboard_mean_motion(given, reference)
+    if n is None:
+        raise ValueError("no on-board mean motion: state mean_motion or add a [reference] orbit")
+    return n
 
 
 def _axes(value) -> np.ndarray:
@@ -37,14 +45,15 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
     dt = s.simulation.dt
     N = s.simulation.n_steps if n_steps is None else n_steps
     p, o, c, f = (s.section(slot) for slot in ("plant", "estimator", "controller", "actuator"))
-    law = s.type_of("controller")
+    tracks, learns = isinstance(c, OutputFeedbackSection), isinstance(c, Lof2tcSection)
+    ref = s.section("reference")
     n = p.mean_motion  # truth [rad/s]
     A, B = cw_matrices(n)
     M = np.zeros((9, 9))
     M[:6, :6], M[:6, 6:] = A, B
     E = scipy.linalg.expm(M * dt)
     Ad, Bd = E[:6, :6], E[:6, 6:]
-    n_o = onboard_mean_motion(o.mean_motion, s, "estimator")
+    n_o = _mean_motion(o.mean_motion, ref)
     A_o, B_o = cw_matrices(n_o)
     L1, L2 = o.gains_at(n_o)
     Q1, Q2, gam = np.asarray(o.Q1), o.Q2, (o.gamma if o.sign_term else 0.0)
@@ -56,14 +65,14 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
     v0 = [0.0] * 3 if p.initial_velocity is None else p.initial_velocity[0]
     q = np.concatenate([p.initial_position[0], v0]).astype(float)
     qh = np.asarray(o.initial_estimate, float).reshape(-1, 6)[0].copy()
-    if law in (LOF2TC, COF2TC):
-        n_c = onboard_mean_motion(c.mean_motion, s, "controller")
+    if tracks:
+        n_c = _mean_motion(c.mean_motion, ref)
         K = np.asarray(c.K, float) if c.gains == "printed" else care_solution(n_c, c.care_q_scale).K
         q00 = np.asarray(c.desired_state[0], float)
-    m_c = round(c.learning_interval / dt) if law == LOF2TC else 1
+    m_c = round(c.learning_interval / dt) if learns else 1
     F_hist = [np.zeros(3)] * m_o  # F_hat_{k-m} ... F_hat_{k-1}
-    pi_hist = [c.pi_initial if law == LOF2TC else 1.0] * m_c
-    v_hist = [np.asarray(c.v_initial if law == LOF2TC else (0.0,) * 3, float)] * m_c
+    pi_hist = [c.pi_initial if learns else 1.0] * m_c
+    v_hist = [np.asarray(c.v_initial if learns else (0.0,) * 3, float)] * m_c
     out: dict[str, np.ndarray] = {k: np.zeros((N, 3)) for k in ("F", "F_hat", "u", "d", "v")}
     out["pi"] = np.zeros(N)
     out["q"] = np.zeros((N + 1, 6))
@@ -86,12 +95,12 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
         ey = y - qh
         F_hat = Q1 * F_hist[0] + Q2 * (L2 @ ey)  # (5)
         pi, v = 1.0, np.zeros(3)
-        if law not in (LOF2TC, COF2TC):
+        if not tracks:
             u = np.zeros(3)
         else:
             e = cw_state_transition(n_c, t) @ q00 - y
             Ke = K @ e
-            if law == LOF2TC:
+            if learns:
                 pi = c.G1 * pi_hist[0] + c.G2 * float(Ke @ Ke)  # (31)
                 v = np.asarray(c.G3) * v_hist[0] + c.G4 * Ke  # (32)
                 u = pi * Ke - v - F_hat  # (30), B+E = B+H = I3

@@ -21,14 +21,11 @@ import jax
 import numpy as np
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario
+from formation_ftc.components.controllers._output_feedback import care_solution
+from formation_ftc.components.estimators.iterative_learning_observer import ilo_lmi_design
+from formation_ftc.components.evaluations.gui2022_scores import ESTIMATE_ERROR_AT, LOWPASS_WINDOW
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.methods.composed import ComposedScenario, make_loop
-from formation_ftc.methods.composed.catalog_learning import (
-    ESTIMATE_ERROR_AT,
-    LOWPASS_WINDOW,
-    care_solution,
-    ilo_lmi_design,
-)
 from formation_ftc.papers.gui2022 import figures as F
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.papers.gui2022.conditions import controller_conditions, observer_conditions

@@ -1,7 +1,7 @@
 """Theorem 1 / Theorem 2 conditions of a switched formation (Yang2013 (21), (22), (24), (29)).
 
 For a composed scenario with plant ``switched-formation``, controller ``yang2013-force-torque`` and
-supervisor ``switching`` (:mod:`formation_ftc.methods.composed.catalog_switched`):
+supervisor ``switching`` (:mod:`formation_ftc.components.supervisors.switching`):
 :func:`design_quantities` computes D, S (Frobenius as printed and induced 2-norm, E001-04), the
 dwell-time bounds, the envelope and the initial/new-state bounds; :func:`conditions` (registered for
 the switching supervisor: ``formation-ftc check`` states them) turns them into
@@ -15,16 +15,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from formation_ftc.components.actuators.velocity_gain_fault import VelocityFault
+from formation_ftc.components.controllers.yang2013_force_torque import Yang2013ForceTorqueSection
+from formation_ftc.components.plants.switched_formation import SwitchedFormationSection
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.core.interval import IntervalError, enclose_norm
 from formation_ftc.design import dwell_time as dw
 from formation_ftc.design.dwell_time import Inequality
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.methods.composed.catalog_switched import (
-    SWITCHED_PLANT,
-    YANG2013_FORCE_TORQUE,
-    VelocityFault,
-)
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -200,7 +198,10 @@ def _cond(ineq: Inequality, required: bool = True, detail: str = "") -> Conditio
 def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Condition]:
     """Conditions of Theorems 1-2 of a switched formation under the laws (12)-(13) (none for other
     compositions: the theorems do not apply); a failing required one names the violated inequality."""
-    if (sc.type_of("plant"), sc.type_of("controller")) != (SWITCHED_PLANT, YANG2013_FORCE_TORQUE):
+    if not (
+        isinstance(sc.section("plant"), SwitchedFormationSection)
+        and isinstance(sc.section("controller"), Yang2013ForceTorqueSection)
+    ):
         return []
     d = sc.section("supervisor")
     q = design_quantities(sc)

@@ -5,7 +5,7 @@ dt = 0.05 s), writes ``fig4_state_norm.png`` and ``fig5_input_norm_sc2.png`` and
 :class:`formation_ftc.registry.PaperReport`. Summary keys (each a dict scenario -> value):
 ``max_state_norm``, ``state_norm_bound`` (eps + (S+2) zeta D), ``dwell_time_required`` ((21)),
 ``condition_29_holds`` (None without a fault), ``max_input_norm_sc2`` (on [0, 4000) s). The scenarios
-are composed (:mod:`formation_ftc.methods.composed.catalog_switched`) and run through the API.
+are composed (:mod:`formation_ftc.components.supervisors.switching`) and run through the API.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def run_scenario(name_or_scenario, overrides=None):
 def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
     """Quantities the report compares, measured on one run (every-step metrics; ``metrics`` defaults to
     those stored in ``ds``)."""
-    from formation_ftc.components.supervisors.switching_supervisor import decision_events
+    from formation_ftc.components.supervisors.switching import decision_events
     from formation_ftc.papers.yang2013.conditions import design_quantities, fault_conditions
 
     modes = sc.section("supervisor").modes

@@ -1,18 +1,68 @@
-"""AccelerationModelEstimator (force command -> the model's acceleration) and the PerUnitMass evaluation,
-against numpy formulas written out here."""
+"""The iterative learning observer (``iterative-learning-observer``) reads flight inputs only; its force
+loop (AccelerationModelEstimator: the force command per unit nominal mass) and the PerUnitMass
+evaluation against numpy formulas written out here."""
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
+import typing
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from formation_ftc.components.estimators.acceleration_model import AccelerationModelEstimator
+import formation_ftc as ftc
+from formation_ftc.components.estimators._acceleration_model import AccelerationModelEstimator
 from formation_ftc.components.estimators.iterative_learning_observer import (
     IterativeLearningObserver,
 )
-from formation_ftc.components.evaluations.per_unit_mass import PerUnitMass
+from formation_ftc.components.evaluations._per_unit_mass import PerUnitMass
+from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.components import CompositionError, FlightInputs
+
+
+def _loop(name):
+    return make_loop(
+        ftc.load_scenario(name, {"simulation.horizon": 0.01, "simulation.record_every": 1})
+    )
+
+
+def _with_other_truth(loop):
+    """The same loop with every truth-side leaf changed: disturbance, fault profile and onsets."""
+    act = loop.actuator
+    act2 = dataclasses.replace(
+        act,
+        onset=jnp.zeros_like(act.onset),
+        magnitude=act.magnitude + 0.3,
+        amplitude=act.amplitude + 0.1,
+        omega=act.omega + 1.0,
+    )
+    plant2 = dataclasses.replace(
+        loop.plant, disturbance_amplitude=loop.plant.disturbance_amplitude * 7 + 1e-3
+    )
+    return dataclasses.replace(loop, plant=plant2, actuator=act2)
+
+
+def test_ilo_reads_flight_inputs_only():
+    loop = _loop("gui2022-lof2tc")
+    est = loop.estimator
+    assert isinstance(est, IterativeLearningObserver)
+    assert typing.get_type_hints(type(est).update)["inputs"] is FlightInputs
+    assert list(inspect.signature(type(est).predict).parameters) == [
+        "self",
+        "t",
+        "state",
+        "command",
+        "dt",
+    ]
+    other = _with_other_truth(loop)
+    y = jnp.asarray(np.random.default_rng(2).normal(size=(1, 6)))
+    flight = FlightInputs(y, None, None, None, None, None, None)
+    s_a, e_a = est.update(0.0, est.initial_state(y), flight)
+    s_b, e_b = other.estimator.update(0.0, other.estimator.initial_state(y), flight)
+    jax.tree_util.tree_map(np.testing.assert_array_equal, (s_a, e_a), (s_b, e_b))
 
 
 def _ilo(n_sc: int, rng) -> IterativeLearningObserver:

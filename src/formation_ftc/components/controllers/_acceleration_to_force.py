@@ -35,9 +35,10 @@ class AccelerationToForce(Controller):
     ``nominal_mass`` (N,) [kg] is what the flight side knows about the spacecraft masses (a design
     number on board, not the plant's true mass): with a true mass m_i the plant receives the
     acceleration (m_i^nom / m_i) u_i, i.e. a mass error acts like an actuator-gain error the law does
-    not know. Everything else (sampling, states, messages, time signals, recorded signals, conditions)
-    is the wrapped law's; the law's own command is recorded as ``acceleration_command``.
-    Use :func:`force_from_acceleration` to build one (it keeps the law's position objective, if any).
+    not know. Everything else (sampling, states, messages, time signals, recorded signals, conditions,
+    what it needs and provides) is the wrapped law's; the law's own command is recorded as
+    ``acceleration_command``. Use :func:`force_from_acceleration` to build one (it keeps the law's
+    position objective, if any).
     """
 
     law: Controller
@@ -145,7 +146,7 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     Examples
     --------
     >>> import numpy as np
-    >>> from formation_ftc.components.controllers.acceleration_to_force import force_from_acceleration
+    >>> from formation_ftc.components.controllers._acceleration_to_force import force_from_acceleration
     >>> from formation_ftc.components.controllers.none import FreeDrift
     >>> ctrl = force_from_acceleration(FreeDrift(count=2), np.array([100.0, 120.0]))
     >>> type(ctrl).__name__, ctrl.quantity, ctrl.count

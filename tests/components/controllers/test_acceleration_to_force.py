@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from formation_ftc.components.controllers.acceleration_to_force import (
+from formation_ftc.components.controllers._acceleration_to_force import (
     AccelerationToForce,
     TrackingAccelerationToForce,
     force_from_acceleration,

@@ -1,12 +1,24 @@
-"""A 6-DOF law made of a translational (force) law and an attitude (torque) law."""
+"""Controller ``yang2013-force-torque``: Yang2013's laws (12) and (13) side by side, a wrench on the
+error state of the switched formation (``switched-formation`` plant, ``tracking-error`` sensors).
+
+The equations and the two laws are in :mod:`formation_ftc.components.controllers._yang2013`; the laws'
+on-board mass and inertia are stated (``nominal_mass``, default 150 kg; ``nominal_inertia``, default
+diag(25, 25, 25) kg m^2). Needs the measured error state (the capability ``error-state-measurement``);
+provides the velocity gain K2 a ``velocity-gain-fault`` actuator corrupts (``velocity-gain-law``).
+"""
 
 from __future__ import annotations
 
 import jax.numpy as jnp
+from pydantic import Field, PositiveFloat
 
+from formation_ftc.components._flight_defaults import NOMINAL_INERTIA, YANG2013_NOMINAL_MASS
+from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components.controllers._yang2013 import attitude_law, translational_law
+from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import CompositionError, Controller, FlightInputs, component
 
-__all__ = ["ForceTorqueController", "WRENCH_COMPONENTS"]
+__all__ = ["ForceTorqueController", "WRENCH_COMPONENTS", "Yang2013ForceTorqueSection"]
 
 WRENCH_COMPONENTS = ["f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z"]
 
@@ -86,3 +98,54 @@ class ForceTorqueController(Controller):
             **self.torque_law.coords(),
             "wrench_component": WRENCH_COMPONENTS,
         }
+
+    def needs(self) -> dict[str, str]:
+        return {"error-state-measurement": "evaluate (12)-(13) on the measured error state"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({"velocity-gain-law"})
+
+
+PositiveVec3 = tuple[PositiveFloat, PositiveFloat, PositiveFloat]
+
+
+class Yang2013ForceTorqueSection(StrictModel):
+    """Gains of (12)-(13); positive (E001-01); the laws' stated on-board mass and inertia."""
+
+    K1: float = Field(0.005, gt=0, description="Position gain offset K1 (e_R gain K1+1) [1/s^2].")
+    K2: float = Field(0.01, gt=0, description="Velocity gain K2 [1/s].")
+    K3: float = Field(0.2, gt=0, description="Angular-rate gain K3 [1/s].")
+    K4: float = Field(1.0, gt=0, description="Quaternion-vector shaping gain K4 [1/s].")
+    K5: float = Field(1.0, gt=0, description="Quaternion-scalar shaping gain K5 [1/s].")
+    kappa: float = Field(1e-3, gt=0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
+    nominal_mass: float = Field(
+        YANG2013_NOMINAL_MASS,
+        gt=0,
+        description="Mass M_i the translational law (12) knows on board [kg] (default 150 kg, a "
+        "stated nominal value: never the plant's true mass). Also the mass of the faulty law's "
+        "K2 -> K2f term.",
+    )
+    nominal_inertia: PositiveVec3 = Field(
+        NOMINAL_INERTIA,
+        description="Principal inertia diag(J_i) the attitude law (13) knows on board [kg m^2], each "
+        "> 0 (default 25, 25, 25 kg m^2, a stated nominal value: never the plant's true inertia).",
+    )
+
+
+def _build(sec: Yang2013ForceTorqueSection, ctx: BuildContext) -> ForceTorqueController:
+    """The controller of a validated ``[controller] type = "yang2013-force-torque"`` section."""
+    return ForceTorqueController(
+        force_law=translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2),  # eq. (12)
+        torque_law=attitude_law(
+            ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa
+        ),  # (13)
+    )
+
+
+register(
+    "controller",
+    "yang2013-force-torque",
+    Yang2013ForceTorqueSection,
+    _build,
+    "Yang2013 laws (12)-(13) side by side: wrench on the error state",
+)

@@ -1,4 +1,5 @@
-"""An estimator whose internal model is driven by accelerations, in a loop whose command is a force."""
+"""An estimator whose internal model is driven by accelerations, in a loop whose command is a force
+(what it needs and provides is the inner estimator's)."""
 
 from __future__ import annotations
 
@@ -78,3 +79,9 @@ class AccelerationModelEstimator(Estimator):
     def conditions(self, loop) -> list:
         conds = getattr(self.inner, "conditions", None)
         return list(conds(loop)) if callable(conds) else []
+
+    def needs(self) -> dict[str, str]:
+        return self.inner.needs()
+
+    def provides(self) -> frozenset[str]:
+        return self.inner.provides()

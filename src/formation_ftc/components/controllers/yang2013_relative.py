@@ -1,5 +1,5 @@
-"""A translational law that keeps each spacecraft's position relative to the spacecraft it references
-through the network (received, possibly delayed, formation errors) instead of its absolute slot.
+"""Controller ``yang2013-relative``: Yang2013's law (12) (``yang2013-translational``) made relative to
+the spacecraft each one references over the (delayed) network, instead of its absolute slot.
 
 Every spacecraft j transmits its formation error (the measured relative state minus its own desired
 state, both in the plant's frame)::
@@ -17,7 +17,8 @@ The wrapped law then regulates the error relative to them: it is evaluated on th
 to the referenced spacecraft's (delayed) actual position (Yang2013's followers keep their position
 relative to the main spacecraft), with ``beta_i = 0`` it tracks its own slot and ignores what it
 receives (Yang2013's main spacecraft). With an instantaneous network (or zero delays) and every
-``beta_i = 0`` the wrapper is the wrapped law exactly.
+``beta_i = 0`` the wrapper is the wrapped law exactly. The loop needs a ``[network]`` (the capability
+``inter-spacecraft-messages``).
 """
 
 from __future__ import annotations
@@ -26,7 +27,13 @@ from typing import Any, ClassVar
 
 import jax
 import jax.numpy as jnp
+from pydantic import Field, field_validator
 
+from formation_ftc.components._registry import BuildContext, per_spacecraft, register
+from formation_ftc.components.controllers._yang2013 import translational_law
+from formation_ftc.components.controllers.yang2013_translational import (
+    Yang2013TranslationalSection,
+)
 from formation_ftc.sim.components import (
     CompositionError,
     Controller,
@@ -34,8 +41,9 @@ from formation_ftc.sim.components import (
     Signal,
     component,
 )
+from formation_ftc.sim.contract import as_float
 
-__all__ = ["NeighbourRelativeController"]
+__all__ = ["NeighbourRelativeController", "Yang2013RelativeSection"]
 
 VEC = ("spacecraft", "axis")
 
@@ -138,3 +146,45 @@ class NeighbourRelativeController(Controller):
 
     def coords(self):
         return self.law.coords()
+
+    def needs(self) -> dict[str, str]:
+        return {
+            "inter-spacecraft-messages": "receive the formation errors of the spacecraft it references"
+        }
+
+
+class Yang2013RelativeSection(Yang2013TranslationalSection):
+    """Yang2013 eq. (12) keeping each spacecraft's offset relative to the (delayed) formation errors
+    received from the spacecraft it references."""
+
+    coupling: float | list[float] = Field(
+        1.0,
+        description="beta_i [-] in [0, 1] (one or per spacecraft): weight of the referenced spacecraft's "
+        "received formation error; 1 keeps the offset relative to them, 0 tracks the own slot.",
+    )
+
+    @field_validator("coupling")
+    @classmethod
+    def _coupling(cls, value):
+        values = value if isinstance(value, list) else [value]
+        if any(not (0.0 <= v <= 1.0) for v in values):
+            raise ValueError(f"every beta_i must lie in [0, 1], got {values}")
+        return value
+
+
+def _build(sec: Yang2013RelativeSection, ctx: BuildContext) -> NeighbourRelativeController:
+    """The controller of a validated ``[controller] type = "yang2013-relative"`` section."""
+    return NeighbourRelativeController(
+        law=translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2, sec.desired_position),
+        coupling=as_float(per_spacecraft(sec.coupling, ctx.count, "controller.coupling")),
+    )
+
+
+register(
+    "controller",
+    "yang2013-relative",
+    Yang2013RelativeSection,
+    _build,
+    "Yang2013 law (12) keeping each spacecraft's offset relative to the (delayed) formation "
+    "errors received from the spacecraft it references",
+)

@@ -1,1 +1,0 @@
-"""Controllers (flight side): pure functions of measured/received signals and controller states."""

@@ -1,1 +1,0 @@
-"""Observers (flight side): state / fault estimators driven by measurements and the commanded input."""

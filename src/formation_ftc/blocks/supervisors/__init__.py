@@ -1,1 +1,0 @@
-"""Supervisors (L1 blocks): discrete-event mode machines (mode, guards, dwell timers, logged decisions)."""
