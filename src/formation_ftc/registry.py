@@ -335,20 +335,10 @@ PLUGIN_ERRORS: dict[str, str] = {}
 
 def plugin_modules() -> list[str]:
     """Modules to import: every ``formation_ftc.plugins`` entry point's value (a module name), built-in
-    ones first. When the installed metadata predates the entry points (an old editable install), the
-    built-in modules are found by walking ``formation_ftc.papers`` instead."""
+    ones first (the package declares its methods and papers as entry points in ``pyproject.toml``)."""
     from importlib.metadata import entry_points
 
     names = [ep.value.split(":")[0] for ep in entry_points(group=PLUGIN_GROUP)]
-    if "formation_ftc.methods" not in names:
-        import pkgutil
-
-        papers = importlib.import_module("formation_ftc.papers")  # the built-in paper packages
-        names = (
-            ["formation_ftc.methods"]
-            + [f"formation_ftc.papers.{m.name}" for m in pkgutil.iter_modules(papers.__path__)]
-            + names
-        )
     own = [n for n in names if n.startswith("formation_ftc.")]
     return list(dict.fromkeys(own + [n for n in names if not n.startswith("formation_ftc.")]))
 

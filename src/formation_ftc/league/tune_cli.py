@@ -6,14 +6,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["add_cli", "OPTIMISERS", "DEFAULT_OPTIMISER", "TRAIN_START"]
+__all__ = ["add_cli"]
 
-#: optimisers of :func:`formation_ftc.league.tuning.minimise`
-OPTIMISERS = ("nelder-mead", "powell", "gradient")
-#: the default: derivative-free (docs/tuning.md: measured against the gradient on the league)
-DEFAULT_OPTIMISER = "nelder-mead"
-#: training replicates start here by default (beyond the league's own seeds, which are held out)
-TRAIN_START = 10_000
+from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
 
 
 def _cmd_tune(args) -> int:

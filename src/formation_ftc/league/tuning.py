@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict
 
 from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
-from formation_ftc.league.tune_cli import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
+from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
 from formation_ftc.limits import Budgets
 
 __all__ = [
