@@ -157,7 +157,11 @@ def test_a_law_missing_an_input_it_needs_is_refused_naming_both_parts(name, drop
     raw["metrics"] = [m for m in raw.get("metrics", []) if m["signal"] not in ("fault_error",)]
     with pytest.raises(ScenarioError) as err:
         load_scenario(raw)
-    assert slot_type in str(err.value) and f"no [{drop}]" in str(err.value)
+    # the part that needs it, and who would provide it (ClosedLoop.validate's message)
+    assert slot_type in str(err.value) and "no part of this loop provides it" in str(err.value)
+    assert {"reference": "[reference] section", "estimator": 'estimator type = "'}[drop] in str(
+        err.value
+    )
 
 
 def test_cof2tc_compensation_without_an_estimator_is_refused():
@@ -171,7 +175,9 @@ def test_cof2tc_compensation_without_an_estimator_is_refused():
     }
     raw["controller"] = {**law, "type": "gui2022-cof2tc", "fault_compensation": True}
     with pytest.raises(
-        ScenarioError, match=r"controller gui2022-cof2tc reads \(with fault_compensation = true\)"
+        ScenarioError,
+        match=r"controller gui2022-cof2tc needs .* \(fault_compensation = true\), but no part of "
+        r"this loop provides it \(provided by: estimator type = \"iterative-learning-observer\"\)",
     ):
         load_scenario(raw)
     raw["controller"]["fault_compensation"] = False  # the plain baseline needs no estimate
