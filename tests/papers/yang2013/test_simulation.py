@@ -17,10 +17,23 @@ import pytest
 import formation_ftc as ftc
 from formation_ftc import api
 from formation_ftc.config import loader
-from formation_ftc.papers.yang2013.reproduction import run_scenario, run_scenarios, scenario_numbers
+from formation_ftc.papers.programs import simulate_batched
+from formation_ftc.papers.yang2013.reproduction import scenario_numbers
 from formation_ftc.sim.batch import batched_run, stack_params
 from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.metrics import metrics_dict
+
+
+def run_scenarios(names_or_scenarios, overrides=None) -> list[tuple]:
+    """``[(scenario, dataset, metrics)]``, one batch per structure, as the reproduction runs them."""
+    scs = [
+        s if not isinstance(s, str) else ftc.load_scenario(s, overrides) for s in names_or_scenarios
+    ]
+    return [(sc, ds, m) for sc, (ds, m) in zip(scs, simulate_batched(scs), strict=True)]
+
+
+def run_scenario(name_or_scenario, overrides=None):
+    return run_scenarios([name_or_scenario], overrides)[0]
 
 
 @pytest.fixture(scope="module")

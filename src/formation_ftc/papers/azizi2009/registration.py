@@ -10,8 +10,8 @@ from formation_ftc.registry import register_reproduction
 _HERE = (
     "formation_ftc.papers.azizi2009"  # its modules import JAX: referenced, imported on first use
 )
-# type names as text, not the catalog's constants: importing a catalog module costs start-up time
-# (tests/methods/composed/test_catalog_index.py checks they match)
+# type names as text: importing a home imports JAX, which start-up commands avoid
+# (tests/papers/test_registrations.py checks each names a registered type)
 register_conditions("controller", "azizi2009-llfr", f"{_HERE}.conditions:conditions")
 register_paper_figures("azizi2009", f"{_HERE}.figures:plot_run")
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="azizi2009")

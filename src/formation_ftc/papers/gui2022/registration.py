@@ -7,8 +7,8 @@ from formation_ftc.methods.composed import register_conditions, register_paper_f
 from formation_ftc.registry import register_reproduction
 
 _HERE = "formation_ftc.papers.gui2022"  # its modules import JAX: referenced, imported on first use
-# type names as text, not the catalog's constants: importing a catalog module costs start-up time
-# (tests/methods/composed/test_catalog_index.py checks they match)
+# type names as text: importing a home imports JAX, which start-up commands avoid
+# (tests/papers/test_registrations.py checks each names a registered type)
 register_conditions(
     "estimator", "iterative-learning-observer", f"{_HERE}.conditions:observer_conditions"
 )

@@ -11,8 +11,8 @@ _HERE = (
     "formation_ftc.papers.mehrabian"  # its modules import JAX: referenced, imported on first use
 )
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="mehrabian")
-# type names as text: importing a home costs start-up time (tests/methods/composed/test_catalog_index.py
-# checks they are registered types)
+# type names as text: importing a home imports JAX, which start-up commands avoid
+# (tests/papers/test_registrations.py checks each names a registered type)
 register_conditions("controller", "networked-el-hinf", f"{_HERE}.conditions:check")
 register_conditions("estimator", "attitude-residual-fdi", f"{_HERE}.conditions:fdi_check")
 register_paper_figures("mehrabian", f"{_HERE}.figures:plot_scenario")

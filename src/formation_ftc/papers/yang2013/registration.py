@@ -8,7 +8,7 @@ from formation_ftc.registry import register_reproduction
 
 _HERE = "formation_ftc.papers.yang2013"  # its modules import JAX: referenced, imported on first use
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="yang2013")
-# type names as text, not the catalog's constants: importing a catalog module costs start-up time
-# (tests/methods/composed/test_catalog_index.py checks they match)
+# type names as text: importing a home imports JAX, which start-up commands avoid
+# (tests/papers/test_registrations.py checks each names a registered type)
 register_conditions("supervisor", "switching", f"{_HERE}.conditions:conditions")
 register_paper_figures("yang2013", f"{_HERE}.figures:plot_scenario")

@@ -1,0 +1,166 @@
+"""A paper's reproduction declared as data: ``papers/<paper>/study.toml`` names its runs, its figures,
+its comparison rows, its notes and its summary; the paper's ``quantities`` function computes the numbers
+they read. :func:`study` turns the two into the :class:`~formation_ftc.registry.Reproduction` that
+``formation-ftc reproduce`` runs.
+
+The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` or ``{name[key]}``, the
+:meth:`str.format` syntax):
+
+``[reproduction]``
+    ``paper``, ``title``, ``citation``, ``description``; ``runs`` (scenario names, or tables
+    ``{name, scenario, set}``: scenario ``scenario`` with the dotted overrides ``set``, run as ``name``);
+    ``batch`` (true: runs of one structure as one vmapped batch); ``check`` (scenario names whose
+    conditions are reported); ``summary`` (quantity names copied into the report's summary);
+    ``seeds``; ``notes`` (texts); ``errata`` (tables ``{id, text}``).
+``[[figures]]``
+    ``file``, ``number``, ``caption``, ``draw`` (a function of the paper's ``figures`` module) and
+    ``args`` (quantity names passed before the output path) and optional ``when`` (a quantity: the
+    figure is drawn only when it is true).
+``[[rows]]``
+    ``quantity``, ``published`` (never filled), ``ours``, ``criterion``, ``note``, ``reference`` and ``basis``: the
+    verdict's clauses ``[relation, lhs, rhs, tol]`` whose strings name quantities (a row without a
+    basis is "not stated"); optional ``when`` as for figures.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
+from formation_ftc.report.profile import phase
+
+__all__ = ["Run", "study", "run_study", "load_runs"]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One simulated run of a study: its validated scenario, its dataset and its in-run metrics."""
+
+    scenario: Any
+    dataset: Any
+    metrics: dict[str, float]
+
+
+def _text(template: str, q: dict[str, Any], where: str) -> str:
+    try:
+        return template.format(**q)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ValueError(f"{where}: {template!r} cannot be filled ({exc!r})") from None
+
+
+def _value(x: Any, q: dict[str, Any], where: str) -> Any:
+    if not isinstance(x, str):
+        return x
+    if x not in q:
+        raise ValueError(f"{where}: no quantity {x!r} (known: {', '.join(sorted(q))})")
+    return q[x]
+
+
+def load_runs(spec: dict, overrides: dict | None = None) -> dict[str, Run]:
+    """Load and simulate the ``runs`` of a study's ``[reproduction]`` table (``overrides``: dotted path
+    -> value applied to every run, e.g. a shorter horizon in tests), in order."""
+    from formation_ftc.api import load_scenario
+    from formation_ftc.papers.programs import simulate, simulate_batched
+
+    scenarios = {}
+    for entry in spec["runs"]:
+        entry = {"name": entry} if isinstance(entry, str) else entry
+        sets = {**(overrides or {}), **entry.get("set", {})}
+        if "scenario" in entry:
+            sets["scenario.name"] = entry["name"]
+        scenarios[entry["name"]] = load_scenario(entry.get("scenario", entry["name"]), sets)
+    scs = list(scenarios.values())
+    with phase("run"):
+        out = simulate_batched(scs) if spec.get("batch", False) else [simulate(s) for s in scs]
+    return {name: Run(s, ds, m) for (name, s), (ds, m) in zip(scenarios.items(), out, strict=True)}
+
+
+def run_study(
+    paper: str,
+    quantities: Callable[[dict[str, Run]], dict[str, Any]],
+    out_dir: Path,
+    progress: Callable[[float, str], None] = lambda f, m: None,
+    overrides: dict | None = None,
+    data: dict | None = None,
+) -> PaperReport:
+    """Run ``paper``'s study: its runs, ``quantities(runs)``, its figures into ``out_dir`` and its rows
+    (``data``: the study's tables; default ``papers/<paper>/study.toml``)."""
+    from formation_ftc.api import check
+
+    data = _read(paper) if data is None else data
+    spec = data["reproduction"]
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    progress(0.0, "simulating " + ", ".join(_names(spec)))
+    runs = load_runs(spec, overrides)
+    q = {**quantities(runs), "runs": runs}
+    progress(0.8, "figures")
+    figures = []
+    with phase("plot"):
+        for f in data.get("figures", []):
+            draw = importlib.import_module(f"formation_ftc.papers.{paper}.figures")
+            if "when" in f and not _value(f["when"], q, f"figure {f['file']}"):
+                continue
+            args = [_value(a, q, f"figure {f['file']}") for a in f.get("args", [])]
+            getattr(draw, f["draw"])(*args, out_dir / f["file"])
+            figures.append(Figure(f["file"], str(f["number"]), f["caption"]))
+    rows = []
+    for r in data.get("rows", []):
+        where = f"row {r['quantity']!r}"
+        if "when" in r and not _value(r["when"], q, where):
+            continue
+        text = {
+            k: _text(r.get(k, ""), q, where) for k in ("ours", "criterion", "note", "reference")
+        }
+        common = (r["quantity"], r["published"], text["ours"], text["criterion"])
+        if "basis" in r:
+            basis = tuple((c[0], *(_value(x, q, where) for x in c[1:])) for c in r["basis"])
+            rows.append(ComparisonRow.judged(*common, basis, text["note"], text["reference"]))
+        else:
+            rows.append(ComparisonRow(*common, "not stated", text["note"], text["reference"]))
+    checks = [c for name in spec.get("check", []) for c in check(runs[name].scenario)]
+    progress(1.0, "done")
+    return PaperReport(
+        paper=paper,
+        summary={k: q[k] for k in spec.get("summary", [])},
+        rows=rows,
+        figures=figures,
+        checks=checks,
+        scenarios=list(q.get("scenarios", _names(spec))),
+        seeds=list(q.get("seeds", spec.get("seeds", [0]))),
+        notes=[_text(n, q, "note") for n in spec.get("notes", [])],
+        wall_time_s=time.perf_counter() - t_start,
+    )
+
+
+def _names(spec: dict) -> list[str]:
+    return [e if isinstance(e, str) else e["name"] for e in spec["runs"]]
+
+
+def _read(paper: str) -> dict:
+    text = resources.files(f"formation_ftc.papers.{paper}").joinpath("study.toml").read_text()
+    return tomllib.loads(text)
+
+
+def study(paper: str, quantities: Callable[[dict[str, Run]], dict[str, Any]]) -> Reproduction:
+    """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
+    numbers ``quantities`` computes from the runs."""
+    spec = _read(paper)["reproduction"]
+    return Reproduction(
+        paper=paper,
+        title=spec["title"],
+        citation=spec["citation"],
+        description=spec["description"],
+        errata=[(e["id"], e["text"]) for e in spec.get("errata", [])],
+        run=lambda out_dir, progress=lambda f, m: None, overrides=None: run_study(
+            paper, quantities, out_dir, progress, overrides
+        ),
+    )
