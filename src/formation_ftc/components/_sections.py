@@ -6,8 +6,9 @@ import math
 from typing import Any
 
 import numpy as np
+from pydantic import Field
 
-from formation_ftc.config.base import ExprText
+from formation_ftc.config.base import ExprText, StrictModel
 
 __all__ = [
     "Vec3",
@@ -19,6 +20,8 @@ __all__ = [
     "quaternion_rows",
     "onboard_mean_motion",
     "nominal_masses",
+    "STATE_DIM",
+    "ErrorState",
 ]
 
 #: three numbers, one per LVLH or body axis
@@ -218,3 +221,22 @@ def nominal_masses(value: Any, default: float, n: int, field: str) -> np.ndarray
     if not np.all(np.isfinite(arr) & (arr > 0)):
         raise ValueError(f"{field}: every mass must be finite and > 0 kg")
     return arr
+
+
+#: length of Yang2013's error state x_i = [e_R, e_V, e_w, e_q, e_q4] (7) of one spacecraft
+STATE_DIM = 13
+
+
+class ErrorState(StrictModel):
+    """Error state x_i of one spacecraft (7): desired minus actual, in the body frame F_i."""
+
+    spacecraft: int = Field(ge=1, description="Spacecraft number (1 = main spacecraft) [-].")
+    e_R: Vec3 = Field((0.0, 0.0, 0.0), description="Relative position error e_R [m].")
+    e_V: Vec3 = Field((0.0, 0.0, 0.0), description="Relative velocity error e_V [m/s].")
+    e_omega: Vec3 = Field((0.0, 0.0, 0.0), description="Angular velocity error e_omega [rad/s].")
+    e_q: Vec3 = Field((0.0, 0.0, 0.0), description="Quaternion vector error e_q [-].")
+    e_q4: float = Field(0.0, description="Quaternion scalar error e_q4 [-] (E001-03: start at 0).")
+
+    def vector(self) -> np.ndarray:
+        """The 13-vector x_i."""
+        return np.array([*self.e_R, *self.e_V, *self.e_omega, *self.e_q, self.e_q4], dtype=float)

@@ -154,13 +154,17 @@ def study(paper: str, quantities: Callable[[dict[str, Run]], dict[str, Any]]) ->
     """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
     numbers ``quantities`` computes from the runs."""
     spec = _read(paper)["reproduction"]
+
+    def run(
+        out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None
+    ) -> PaperReport:
+        return run_study(paper, quantities, out_dir, progress, overrides)
+
     return Reproduction(
         paper=paper,
         title=spec["title"],
         citation=spec["citation"],
         description=spec["description"],
         errata=[(e["id"], e["text"]) for e in spec.get("errata", [])],
-        run=lambda out_dir, progress=lambda f, m: None, overrides=None: run_study(
-            paper, quantities, out_dir, progress, overrides
-        ),
+        run=run,
     )

@@ -9,7 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.api import load_scenario
-from formation_ftc.components.evaluations.chain_errors import ChainTrackingError, ThresholdFlag
+from formation_ftc.components.evaluations.chain_errors import ChainTrackingError
+from formation_ftc.components.supervisors.hierarchical import ThresholdFlag
 from formation_ftc.config import loader
 from formation_ftc.methods.composed import make_loop
 

@@ -9,20 +9,18 @@ paper's metric set, ``metrics = "azizi2009"``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Literal, TypedDict
-
-import jax.numpy as jnp
+from typing import TYPE_CHECKING, Literal, TypedDict
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.polygon_formation import chain_difference
-from formation_ftc.sim.components import Evaluation, Signal, component, static
+from formation_ftc.sim.components import Evaluation, Signal, component
 from formation_ftc.sim.contract import as_float
 
 if TYPE_CHECKING:
     from formation_ftc.sim.metrics import Metric
 
-__all__ = ["ChainTrackingError", "ThresholdFlag", "ChainErrorsSection", "EFFORT_TIME"]
+__all__ = ["ChainTrackingError", "ChainErrorsSection", "EFFORT_TIME"]
 
 #: time of the ``effort_x_100s_sc*`` metrics of the Azizi2009 set (Fig. 2 compares the efforts there) [s]
 EFFORT_TIME = 100.0
@@ -51,22 +49,6 @@ class ChainTrackingError(Evaluation):
             "tracking_error": chain_difference(signals["position"])
             - chain_difference(signals["desired_position"])
         }
-
-
-@component
-class ThresholdFlag(Evaluation):
-    """``name = source >= threshold`` (a boolean signal, e.g. a metric gate)."""
-
-    name: str = static()
-    source: str = static()
-    long_name: str = static(default="")
-    threshold: Any = 0.0
-
-    def signals(self):
-        return (Signal(self.name, (), "1", self.long_name or f"{self.source} >= threshold"),)
-
-    def outputs(self, signals):
-        return {self.name: jnp.logical_not(jnp.asarray(signals[self.source]) < self.threshold)}
 
 
 class ChainErrorsSection(StrictModel):

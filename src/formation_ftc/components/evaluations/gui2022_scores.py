@@ -278,11 +278,11 @@ def _build(sec: ScoresSection, ctx: BuildContext) -> Gui2022Scores:
     with LOF2TC, v - h; the paper's metric set goes to ``ctx.metrics`` (the law's metrics after what
     the ``[controller]`` section says it is; the fault onsets are the ``[actuator]``'s, 0 without
     them: the loop is then refused for the missing ``thruster-bias-faults``)."""
-    from formation_ftc.components.controllers._output_feedback import OutputFeedbackSection
-    from formation_ftc.components.controllers.gui2022_lof2tc import Lof2tcSection
-
     law = ctx.section("controller")
-    tracks, learns = isinstance(law, OutputFeedbackSection), isinstance(law, Lof2tcSection)
+    # by the fields the law states: a nominal orbit it tracks (the Gui2022 output-feedback laws) and a
+    # learning interval (LOF2TC)
+    tracks = hasattr(law, "desired_state") and hasattr(law, "care_q_scale")
+    learns = tracks and hasattr(law, "learning_interval")
     onsets = np.asarray(getattr(ctx.section("actuator"), "onset", 0.0), dtype=float)
     onset_s = np.broadcast_to(onsets, (ctx.count, 3)).min(axis=0)  # earliest per axis [s]
     ctx.metrics.extend(_scores_metrics(sec, ctx, onset_s, tracks, learns))

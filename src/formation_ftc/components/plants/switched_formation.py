@@ -31,7 +31,7 @@ import numpy as np
 from pydantic import Field, PositiveFloat
 
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
@@ -63,7 +63,6 @@ ERROR_COMPONENTS = [
     "e_q_3",
     "e_q_4",
 ]
-STATE_DIM = 13  # x_i = [e_R, e_V, e_w, e_q, e_q4] (7)
 
 
 def input_norm(f, tau):
@@ -244,21 +243,6 @@ class SwitchedFormationPlant(Plant):
 
 # ------------------------------------------------------------------------------------------ section
 PositiveVec3 = tuple[PositiveFloat, PositiveFloat, PositiveFloat]
-
-
-class ErrorState(StrictModel):
-    """Error state x_i of one spacecraft (7): desired minus actual, in the body frame F_i."""
-
-    spacecraft: int = Field(ge=1, description="Spacecraft number (1 = main spacecraft) [-].")
-    e_R: Vec3 = Field((0.0, 0.0, 0.0), description="Relative position error e_R [m].")
-    e_V: Vec3 = Field((0.0, 0.0, 0.0), description="Relative velocity error e_V [m/s].")
-    e_omega: Vec3 = Field((0.0, 0.0, 0.0), description="Angular velocity error e_omega [rad/s].")
-    e_q: Vec3 = Field((0.0, 0.0, 0.0), description="Quaternion vector error e_q [-].")
-    e_q4: float = Field(0.0, description="Quaternion scalar error e_q4 [-] (E001-03: start at 0).")
-
-    def vector(self) -> np.ndarray:
-        """The 13-vector x_i."""
-        return np.array([*self.e_R, *self.e_V, *self.e_omega, *self.e_q, self.e_q4], dtype=float)
 
 
 class SwitchedFormationSection(StrictModel):

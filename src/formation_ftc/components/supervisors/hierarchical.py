@@ -39,6 +39,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.sim.components import (
     CompositionError,
+    Evaluation,
     FlightInputs,
     Signal,
     Supervisor,
@@ -57,6 +58,7 @@ __all__ = [
     "transition",
     "HierarchicalSupervisor",
     "HierarchicalSection",
+    "ThresholdFlag",
     "FAULT_INFORMATION",
     "NEVER",
 ]
@@ -326,6 +328,22 @@ class HierarchicalSection(StrictModel):
     )
 
 
+@component
+class ThresholdFlag(Evaluation):
+    """``name = source >= threshold`` (a boolean signal, e.g. a metric gate)."""
+
+    name: str = static()
+    source: str = static()
+    long_name: str = static(default="")
+    threshold: Any = 0.0
+
+    def signals(self):
+        return (Signal(self.name, (), "1", self.long_name or f"{self.source} >= threshold"),)
+
+    def outputs(self, signals):
+        return {self.name: jnp.logical_not(jnp.asarray(signals[self.source]) < self.threshold)}
+
+
 def _steps(time: float, dt: float) -> int:
     return int(round(time / dt))
 
@@ -334,8 +352,6 @@ def _build(sec: HierarchicalSection, ctx: BuildContext) -> HierarchicalSuperviso
     """The supervisor of a validated ``[supervisor] type = "hierarchical"`` section. The desired
     polygon and the faulty spacecraft are the law's (its ``[controller]`` section); a law without them
     gives a placeholder (validation refuses it: it provides no ``allocation-modes``)."""
-    from formation_ftc.components.evaluations.chain_errors import ThresholdFlag
-
     _, axes = chain_layout(ctx)
     estimated = sec.fault_information == "estimator"
     c = ctx.section("controller")

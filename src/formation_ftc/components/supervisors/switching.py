@@ -39,8 +39,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Vec3Expr
-from formation_ftc.components.plants.switched_formation import STATE_DIM, ErrorState
+from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.sim.components import FlightInputs, Signal, Supervisor, component, static
@@ -631,13 +630,10 @@ def switched_structure(sec: SwitchingSupervisorSection, count: int, dt: float) -
 
 
 def _delay_steps(ctx: BuildContext) -> np.ndarray:
-    """(N,) a-priori bound of the diagnosis delay [steps]: a ``scheduled-diagnosis`` estimator's
-    ``delay`` (0 without one)."""
-    from formation_ftc.components.estimators.scheduled_diagnosis import ScheduledDiagnosisSection
-
-    diagnosis = ctx.section("estimator")
-    known = isinstance(diagnosis, ScheduledDiagnosisSection)
-    return np.full(ctx.count, round(diagnosis.delay / ctx.dt) if known else 0)
+    """(N,) a-priori bound of the diagnosis delay [steps]: the ``[estimator]``'s stated ``delay`` [s]
+    (a ``scheduled-diagnosis``'s; 0 without one)."""
+    delay = getattr(ctx.section("estimator"), "delay", None)
+    return np.full(ctx.count, round(delay / ctx.dt) if isinstance(delay, int | float) else 0)
 
 
 def _build(sec: SwitchingSupervisorSection, ctx: BuildContext) -> SwitchingSupervisor:
