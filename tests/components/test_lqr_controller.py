@@ -228,7 +228,7 @@ def test_builtin_scenario_reaches_the_steady_offset_of_a_constant_fault():
                     "max_delay": 1.0,
                 }
             },
-            "LqrFormationController",
+            "network delayed-graph delays messages, but controller lqr exchanges none",
         ),
     ],
 )

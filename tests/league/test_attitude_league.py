@@ -120,7 +120,7 @@ def test_attitude_law_on_the_translational_truth_is_rejected(tmp_path):
     with pytest.raises(
         LeagueError,
         match="(?s)method attitude-pd cannot run cell none/unsaturated of league "
-        "translational: .*controller AttitudePdController commands a torque, "
-        "but plant InertialFormationPlant is driven by a force",
+        "translational: .*controller attitude-pd commands a torque, "
+        "but plant orbital-truth is driven by a force",
     ):
         plan_cells(spec, ["attitude-pd"])

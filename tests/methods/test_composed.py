@@ -93,7 +93,7 @@ def _raw(**slots):
                     "max_delay": 1.0,
                 }
             },
-            "PdFormationController",
+            "controller pd exchanges none",
         ),
         (
             {"network": {"type": "graph", "adjacency": [[0, 1, 0], [1, 0, 0], [0, 0, 0]]}},
@@ -146,4 +146,4 @@ max_delay = 1.0
 """)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
-    assert "DelayedGraphNetwork" in err and "PdFormationController" in err
+    assert "network delayed-graph" in err and "controller pd" in err

@@ -239,7 +239,7 @@ EL_LAW = {
         # an attitude law on a translational plant: the quantities differ
         (
             {"plant": CW, "sensors": None, "actuator": None, "controller": EL_LAW},
-            ("NetworkedElHinfController", "ClohessyWiltshirePlant", "torque", "force"),
+            ("controller networked-el-hinf", "plant clohessy-wiltshire", "torque", "force"),
         ),
         # the Euler-angle law on the quaternion plant without the conversions: validation names the
         # law, what it needs and who provides it
@@ -332,6 +332,8 @@ nominal_inertia = [20.0, 18.0, 15.0]
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert (
-        "NetworkedElHinfController" in err and "ClohessyWiltshirePlant" in err and "torque" in err
+        "controller networked-el-hinf" in err
+        and "plant clohessy-wiltshire" in err
+        and "torque" in err
     )
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -195,7 +195,7 @@ _ATTITUDE_PLANT = {
         ),
         (
             {"plant": _ATTITUDE_PLANT, "reference": None, "supervisor": None, "actuator": None},
-            ("controller ChainLlfrController commands a acceleration", "QuaternionRigidBodyPlant"),
+            ("controller azizi2009-llfr commands an acceleration", "plant quaternion-rigid-body"),
         ),
         (
             {

@@ -147,7 +147,7 @@ def test_delayed_graph_reads_interpolate_toward_the_message_sent_now():
         (
             {"type": "yang2013-translational"},
             True,
-            ("DelayedGraphNetwork", "Yang2013TranslationalController"),
+            ("network delayed-graph", "controller yang2013-translational"),
         ),
         ({"type": "yang2013-relative"}, False, ("yang2013-relative", "[network]")),
         ({"type": "yang2013-relative", "coupling": 1.5}, True, ("coupling", "[0, 1]")),
@@ -175,4 +175,4 @@ def test_cli_rejects_the_delayed_network_with_the_message_free_law_exit_2(tmp_pa
     path.write_text(text)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
-    assert "DelayedGraphNetwork" in err and "Yang2013TranslationalController" in err
+    assert "network delayed-graph" in err and "controller yang2013-translational" in err

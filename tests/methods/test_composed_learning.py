@@ -206,7 +206,7 @@ ATTITUDE_LAW = {"type": "attitude-pd", "K_p": 1.0, "K_d": 1.0}
     [
         (
             {},
-            ("ConventionalOutputFeedbackController", "QuaternionRigidBodyPlant", "torque"),
+            ("controller gui2022-cof2tc", "plant quaternion-rigid-body", "torque"),
         ),  # a CW law on rigid-body attitudes
         (  # the ILO on rigid-body attitudes (under an attitude law): no relative state to observe
             {"estimator": ILO_PRINTED, "controller": ATTITUDE_LAW},

@@ -174,22 +174,26 @@ class ClosedLoop:
                     f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}"
                 )
         p, c = self.plant, self.controller
+        names = {
+            slot: (labels or {}).get(slot, type(comp).__name__) for slot, comp in self._slots()
+        }
         if getattr(c, "quantity", "force") != getattr(p, "quantity", "force"):
             raise CompositionError(
-                f"controller {type(c).__name__} commands a {c.quantity}, but plant {type(p).__name__} "
-                f"is driven by a {p.quantity}: a {c.quantity} law cannot drive this plant"
+                f"controller {names['controller']} commands {_a(c.quantity)}, but plant "
+                f"{names['plant']} is driven by {_a(p.quantity)}: {_a(c.quantity)} law cannot drive "
+                "this plant"
             )
         for slot in ("controller", "network", "estimator", "supervisor", "sensors", "actuator"):
             n = getattr(getattr(self, slot), "count", None)
             if n is not None and n != p.count:
                 raise CompositionError(
-                    f"{slot} {type(getattr(self, slot)).__name__} is set up for {n} "
-                    f"spacecraft, plant {type(p).__name__} has {p.count}"
+                    f"{slot} {names[slot]} is set up for {n} spacecraft, plant {names['plant']} has "
+                    f"{p.count}"
                 )
         if self.network.delayed and not getattr(c, "uses_messages", False):
             raise CompositionError(
-                f"network {type(self.network).__name__} delays messages, but controller "
-                f"{type(c).__name__} exchanges none (it has no history to read delayed values from)"
+                f"network {names['network']} delays messages, but controller "
+                f"{names['controller']} exchanges none (it has no history to read delayed values from)"
             )
         if self.n_steps % self.record_every:
             raise CompositionError(
@@ -809,3 +813,8 @@ def _vector_dim(quantity: str) -> str:
 
 def _unit(quantity: str) -> str:
     return {"force": "N", "torque": "N m", "acceleration": "m s-2"}.get(quantity, "1")
+
+
+def _a(word: str) -> str:
+    """``word`` with its indefinite article ("a force", "an acceleration")."""
+    return f"{'an' if word[:1] in 'aeiou' else 'a'} {word}"
