@@ -1,7 +1,7 @@
 """Campaigns write sampled fields into the parameter leaves their paths name (campaign.binding).
 
 A field binds when its path names one leaf of the template loop (``slot.field`` ->
-``loop.<slot>.<field>``, one level into a wrapped component, a section's declared ``leaf_paths``)
+``loop.<slot>.<field>``, or one level into a wrapped component: no section renames a field)
 and that leaf holds the field's value; a derived leaf (an orbit radius turned into a mean motion, a
 design weight turned into a gain) is not bound and the runs are built one by one, with the same
 results."""
@@ -73,7 +73,7 @@ def _leaf_key(loop, n: int) -> str:
 )
 def test_fields_bind_to_the_leaf_their_path_names(base, overrides, path, value, leaf, elements):
     scn, loop = _template(base, **overrides)
-    bindings = bind_fields(loop, scn, {path: value})
+    bindings = bind_fields(loop, {path: value})
     assert bindings is not None
     b = bindings[path]
     assert _leaf_key(loop, b.leaf) == leaf and b.index.tolist() == elements
@@ -99,7 +99,7 @@ def test_fields_bind_to_the_leaf_their_path_names(base, overrides, path, value, 
 )
 def test_fields_without_a_leaf_holding_their_value_are_not_bound(base, values):
     scn, loop = _template(base)
-    assert bind_fields(loop, scn, values) is None
+    assert bind_fields(loop, values) is None
 
 
 def _campaign(sample: dict, runs: int = 3) -> dict:

@@ -84,7 +84,7 @@ def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(
     # the runner's fast path: the sampled field written into the leaf its path names, per run
     scenario = plan.scenario(inputs[0])
     template = api.compile_scenario(scenario).params
-    bindings = bind_fields(template, scenario, {field: inputs[0].values[field]})
+    bindings = bind_fields(template, {field: inputs[0].values[field]})
     assert bindings is not None, f"{field} should bind to its parameter leaf"
     batch, axes = apply_bindings(template, bindings, {field: sampled}, len(runs))
     index = int(field.rsplit(".", 1)[1]) if field[-1].isdigit() else 0

@@ -8,6 +8,7 @@ import dataclasses
 import jax
 import numpy as np
 import pytest
+from cachetools import LRUCache
 
 from formation_ftc import api
 from formation_ftc.sim import batch as batch_module
@@ -18,7 +19,7 @@ from formation_ftc.sim.programs import jitted_run
 def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
     """The per-process cache of batch programs is bounded (least recently used dropped first), and a
     cached program is returned unchanged on a second call."""
-    monkeypatch.setattr(batch_module, "MAX_KEPT", 2)
+    monkeypatch.setattr(batch_module, "_CACHE", LRUCache(maxsize=2))
     batch_module.clear()
 
     def program(key):

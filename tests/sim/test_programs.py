@@ -13,6 +13,7 @@ from __future__ import annotations
 import jax
 import numpy as np
 import pytest
+from cachetools import LRUCache
 
 from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
 from formation_ftc.sim import programs
@@ -68,7 +69,8 @@ def test_another_structure_is_traced_and_the_oldest_program_dropped(
         "cw-pd-fault", {"simulation.horizon": 30.0}
     )  # more steps: another structure
     assert compile_scenario(a).static_key != compile_scenario(longer).static_key
-    monkeypatch.setattr(programs, "MAX_KEPT", 1)
+    monkeypatch.setattr(programs, "_PROGRAMS", LRUCache(maxsize=1))
+    monkeypatch.setattr(programs, "_EXECUTABLES", LRUCache(maxsize=1))
     programs.clear()
     simulate_with_metrics(a)
     simulate_with_metrics(longer)
@@ -92,7 +94,8 @@ def test_executable_is_shared_and_lru_bounded(cw_gain_pair, monkeypatch):
     out = exe_b(c_b.params)
     ref = jax.jit(c_b.run)(c_b.params)
     np.testing.assert_array_equal(np.asarray(out["metrics"][0]), np.asarray(ref["metrics"][0]))
-    monkeypatch.setattr(programs, "MAX_KEPT", 1)
+    monkeypatch.setattr(programs, "_PROGRAMS", LRUCache(maxsize=1))
+    monkeypatch.setattr(programs, "_EXECUTABLES", LRUCache(maxsize=1))
     programs.clear()
     programs.executable(c_a)
     programs.executable(c_long)  # the least recently used (c_a's) is dropped

@@ -5,9 +5,8 @@ The runs of one structural group share one template build (a
 path names:
 
 * ``slot.field`` is ``loop.<slot>.<field>``: the attribute ``field`` of the slot's component, or
-  of a component it wraps one level down (``AccelerationToForce.law``); exactly one match. A
-  section whose field is named otherwise in its component declares it once, next to the field:
-  ``leaf_paths: ClassVar = {"mu": "adapt_mu"}``;
+  of a component it wraps one level down (``AccelerationToForce.law``); exactly one match (a section's
+  field names are its component's field names: the TOML path is the pytree path);
 * ``slot.field.k`` (``.k.l``) is one element of that leaf; ``slot.field`` as one number fills
   every element (a per-spacecraft field); ``simulation.seed`` is the loop's ``seed``; the other
   ``simulation.*`` fields are structural.
@@ -56,9 +55,7 @@ def _leaf_keys(loop) -> dict[str, int]:
     return {jax.tree_util.keystr(kp): n for n, (kp, _) in enumerate(flat)}
 
 
-def _leaf_of(
-    path: str, keys: Mapping[str, int], scenario: Any
-) -> tuple[int, tuple[int, ...]] | None:
+def _leaf_of(path: str, keys: Mapping[str, int]) -> tuple[int, tuple[int, ...]] | None:
     """(leaf position, element indices) named by a campaign path, or None when it names no leaf."""
     if path == SEED_PATH:
         return (keys[".seed"], ()) if ".seed" in keys else None
@@ -66,28 +63,22 @@ def _leaf_of(
     name, *idx = rest.split(".")
     if slot == "simulation" or not name or not all(i.lstrip("-").isdigit() for i in idx):
         return None
-    section_of = getattr(scenario, "section", None)
-    section = section_of(slot) if callable(section_of) else None
-    attr = getattr(section, "leaf_paths", {}).get(name, name)
     # the slot's component itself, or a component it wraps one level down: exactly one match
-    own, wrapped = f".{slot}.{attr}", re.compile(rf"\.{re.escape(slot)}\.\w+\.{re.escape(attr)}")
+    own, wrapped = f".{slot}.{name}", re.compile(rf"\.{re.escape(slot)}\.\w+\.{re.escape(name)}")
     found = [n for k, n in keys.items() if k == own or wrapped.fullmatch(k)]
     if len(found) != 1:
         return None
     return found[0], tuple(int(i) for i in idx)
 
 
-def bind_fields(loop, scenario: Any, values: Mapping[str, float]) -> dict[str, FieldBinding] | None:
-    """Bindings of every field of ``values`` in the template ``loop`` built from ``scenario`` with
-    those values, or None when a field names no leaf whose elements hold its value (the group is then
+def bind_fields(loop, values: Mapping[str, float]) -> dict[str, FieldBinding] | None:
+    """Bindings of every field of ``values`` in the template ``loop`` built with those values, or None when a field names no leaf whose elements hold its value (the group is then
     built per run), or two fields write the same element.
 
     Parameters
     ----------
     loop : ClosedLoop
         The template's compiled parameters.
-    scenario : ScenarioBase
-        The validated template scenario (a section may declare ``leaf_paths``).
     values : Mapping[str, float]
         Dotted path -> the template's value of each sampled field (``simulation.seed`` included).
 
@@ -101,7 +92,7 @@ def bind_fields(loop, scenario: Any, values: Mapping[str, float]) -> dict[str, F
     out: dict[str, FieldBinding] = {}
     seen: set[tuple[int, int]] = set()
     for path, v in values.items():
-        where = _leaf_of(path, keys, scenario)
+        where = _leaf_of(path, keys)
         if where is None:
             return None
         n, idx = where

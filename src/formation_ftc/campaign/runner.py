@@ -290,7 +290,7 @@ def _bound_chunk(
         bindings = None
         if isinstance(template.params, ClosedLoop):
             values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
-            bindings = bind_fields(template.params, scenario, values0)
+            bindings = bind_fields(template.params, values0)
         if bindings is None:
             _BINDINGS[cache_key] = None
         else:

@@ -281,7 +281,7 @@ def build_problem(
     for f, v0 in zip(fields, initial, strict=True):
         if f.rebuild:
             continue
-        bound = bind_fields(template, scenarios[0], {f.path: v0})
+        bound = bind_fields(template, {f.path: v0})
         if not bound:
             raise TuneError(
                 f"tune field {f.path!r}: not a numeric leaf of the built loop (its builder derives "

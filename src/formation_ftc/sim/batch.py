@@ -24,7 +24,6 @@ the runs against runs alone and that the draws carry the row count only).
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Sequence
 from typing import Any
 
@@ -32,14 +31,14 @@ import jax
 import numpy as np
 
 from formation_ftc.sim.runtime import xla
-from formation_ftc.sim.runtime.lru import lru_get, lru_put
+from formation_ftc.sim.runtime.lru import LRUCache, kept
 
 __all__ = ["stack_params", "batched_run", "stack_params_grid", "batched_grid_run", "clear"]
 
 #: batch programs kept per process (least recently used dropped first): a campaign reuses one per
 #: structural group and chunk size, and an unbounded cache made a long session hold every executable
 MAX_KEPT = 16
-_CACHE: OrderedDict[Any, Any] = OrderedDict()
+_CACHE: LRUCache = LRUCache(maxsize=MAX_KEPT)
 
 
 def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, Any]:
@@ -167,11 +166,9 @@ def batched_run(compiled, in_axes: Any, size: int) -> Any:
 def _kept(compiled, key: tuple, build) -> Any:
     """The cached batch program ``key``; on a miss, ``build(compiled.run)`` (the batched function) is
     jitted with :func:`_fast_compile`'s choice and kept."""
-    fn = lru_get(_CACHE, key)
-    if fn is None:
-        batch = build(compiled.run)
-        fn = lru_put(_CACHE, key, xla.jit(batch, fast_compile=_fast_compile(compiled)), MAX_KEPT)
-    return fn
+    return kept(
+        _CACHE, key, lambda: xla.jit(build(compiled.run), fast_compile=_fast_compile(compiled))
+    )
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

@@ -205,8 +205,8 @@ class ClosedLoop:
                 f"record_every = {self.record_every}"
             )
         self._check_needs(dict(labels or {}))
-        names = [s.name for s in self.signals()]
-        dup = sorted({n for n in names if names.count(n) > 1})
+        recorded_names = [s.name for s in self.signals()]
+        dup = sorted({n for n in recorded_names if recorded_names.count(n) > 1})
         if dup:
             raise CompositionError(
                 f"two components record a signal with the same name: {', '.join(dup)}"

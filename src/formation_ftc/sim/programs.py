@@ -19,23 +19,21 @@ ever compiled (:mod:`formation_ftc.sim.runtime.lru`).
 from __future__ import annotations
 
 import time
-from collections import OrderedDict
-from collections.abc import Hashable
 from typing import Any
 
 import jax
 import numpy as np
 
 from formation_ftc.sim.runtime import xla
-from formation_ftc.sim.runtime.lru import lru_get, lru_put
+from formation_ftc.sim.runtime.lru import LRUCache, kept
 
 __all__ = ["jitted_run", "executable", "clear", "MAX_KEPT"]
 
 #: at most this many programs (and executables) are kept, least recently used dropped first, so that a
 #: long session (a notebook, a test run) does not hold every executable it ever compiled
 MAX_KEPT = 8
-_PROGRAMS: OrderedDict[Hashable, Any] = OrderedDict()
-_EXECUTABLES: OrderedDict[Hashable, Any] = OrderedDict()
+_PROGRAMS: LRUCache = LRUCache(maxsize=MAX_KEPT)
+_EXECUTABLES: LRUCache = LRUCache(maxsize=MAX_KEPT)
 
 
 def jitted_run(compiled) -> Any:
@@ -74,15 +72,7 @@ def jitted_run(compiled) -> Any:
     >>> np.round(np.asarray(out["records"]["position"])[:, 0, 0], 3)  # radial position [m]
     array([100.   , 100.015, 100.06 ])
     """
-    fn = lru_get(_PROGRAMS, compiled.static_key)
-    if fn is None:
-        fn = lru_put(
-            _PROGRAMS,
-            compiled.static_key,
-            xla.jit(compiled.run),
-            MAX_KEPT,
-        )
-    return fn
+    return kept(_PROGRAMS, compiled.static_key, lambda: xla.jit(compiled.run))
 
 
 def executable(compiled) -> tuple[Any, float]:
@@ -126,14 +116,15 @@ def executable(compiled) -> tuple[Any, float]:
         treedef,
         tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves),
     )
-    exe = lru_get(_EXECUTABLES, key)
-    if exe is not None:
-        return exe, 0.0
     t0 = time.perf_counter()
-    exe = lru_put(
-        _EXECUTABLES, key, jitted_run(compiled).lower(compiled.params).compile(), MAX_KEPT
-    )
-    return exe, time.perf_counter() - t0
+    built = []
+
+    def build():
+        built.append(True)
+        return jitted_run(compiled).lower(compiled.params).compile()
+
+    exe = kept(_EXECUTABLES, key, build)
+    return exe, time.perf_counter() - t0 if built else 0.0
 
 
 def clear() -> None:

@@ -73,22 +73,11 @@ __all__ = [
     "SLOTS",
     "KINDS",
     "per_spacecraft",
-    "require_slot",
     "register_paper_figures",
     "register_conditions",
     "composed_json_schema",
     "InitialStateRows",
 ]
-
-
-def require_slot(ctx: BuildContext, slot: str, needed: str, what: str) -> None:
-    """Refuse to build the ``slot`` component without the ``needed`` slot it reads ``what`` from (a
-    component would otherwise silently drop that input): a CompositionError naming both parts."""
-    if ctx.scenario.type_of(needed) is None:
-        raise CompositionError(
-            f"{slot} {ctx.scenario.type_of(slot)} reads {what} from the [{needed}] section, "
-            f"but the loop has no [{needed}]: add one"
-        )
 
 
 register_component_type = register
