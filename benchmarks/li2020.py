@@ -238,8 +238,8 @@ def jax_closed_loop(
 
     import jax
 
+    from formation_ftc.api import load_scenario as load_li2020
     from formation_ftc.methods.composed import build
-    from formation_ftc.papers.li2020.reproduction import load_li2020
     from formation_ftc.sim import loop as loop_module
 
     ov = dict(overrides or {})

@@ -64,3 +64,28 @@ def test_a_name_the_quantities_do_not_hold_is_a_clear_error(no_runs, tmp_path):
     data = {**DATA, "rows": [{**DATA["rows"][0], "ours": "{z:.2f}"}]}
     with pytest.raises(ValueError, match=r"row 'x small': '\{z:.2f\}' cannot be filled"):
         _study.run_study("demo", _quantities, tmp_path, data=data)
+
+
+def test_a_row_for_each_item_and_a_basis_held_by_a_quantity(no_runs, tmp_path):
+    rows = [
+        {
+            "quantity": "{name}: small",
+            "published": "Fig. {fig}",
+            "ours": "{value:.1f}",
+            "criterion": "< {limit}",
+            "basis": "clauses",
+            "for_each": "items",
+        }
+    ]
+
+    def quantities(runs):
+        items = [
+            {"name": n, "fig": f, "value": v, "clauses": (("<", v, 2.0),)}
+            for n, f, v in (("a", 4, 1.0), ("b", 5, 3.0))
+        ]
+        return {"items": items, "limit": 2.0}
+
+    data = {"reproduction": {"runs": ["a"]}, "rows": rows}
+    report = _study.run_study("demo", quantities, tmp_path, data=data)
+    got = [(r.quantity, r.published, r.ours, r.verdict) for r in report.rows]
+    assert got == [("a: small", "Fig. 4", "1.0", "match"), ("b: small", "Fig. 5", "3.0", "differs")]

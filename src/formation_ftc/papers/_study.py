@@ -10,16 +10,20 @@ The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` 
     ``paper``, ``title``, ``citation``, ``description``; ``runs`` (scenario names, or tables
     ``{name, scenario, set}``: scenario ``scenario`` with the dotted overrides ``set``, run as ``name``);
     ``batch`` (true: runs of one structure as one vmapped batch); ``check`` (scenario names whose
-    conditions are reported); ``summary`` (quantity names copied into the report's summary);
+    conditions are reported, unless the quantities hold ``checks``); ``summary`` (quantity names copied into the report's summary);
     ``seeds``; ``notes`` (texts); ``errata`` (tables ``{id, text}``).
 ``[[figures]]``
-    ``file``, ``number``, ``caption``, ``draw`` (a function of the paper's ``figures`` module) and
-    ``args`` (quantity names passed before the output path) and optional ``when`` (a quantity: the
-    figure is drawn only when it is true).
+    ``file``, ``number``, ``caption``, ``draw`` (a function of the paper's ``figures`` module),
+    ``args`` (passed before the output path: quantity names, ``"dataset:RUN"`` for a run's dataset,
+    or tables of those), ``kwargs`` (literal keyword arguments),
+    optional ``when`` (a quantity: the figure is drawn only when it is true) and ``listed = false`` (drawn,
+    not listed among the report's figures, e.g. an interactive view).
 ``[[rows]]``
     ``quantity``, ``published`` (never filled), ``ours``, ``criterion``, ``note``, ``reference`` and ``basis``: the
-    verdict's clauses ``[relation, lhs, rhs, tol]`` whose strings name quantities (a row without a
-    basis is "not stated"); optional ``when`` as for figures.
+    verdict's clauses ``[relation, lhs, rhs, tol]`` whose strings name quantities, or the name of a
+    quantity holding the clauses (a row without a basis is "not stated"); optional ``when`` as for
+    figures; ``for_each``: a quantity holding a list of tables, one row per table, its keys added to the
+    quantities of that row (and then ``quantity`` and ``published`` are filled too).
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ from typing import Any
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 
-__all__ = ["Run", "study", "run_study", "load_runs"]
+__all__ = ["Run", "study", "run_study", "load_runs", "read_study"]
 
 
 @dataclass(frozen=True)
@@ -56,8 +60,14 @@ def _text(template: str, q: dict[str, Any], where: str) -> str:
 
 
 def _value(x: Any, q: dict[str, Any], where: str) -> Any:
+    """A clause's or an argument's value: a quantity's (a string names it), ``"dataset:RUN"`` the
+    dataset of run RUN, a table with its values resolved so, or the literal itself."""
+    if isinstance(x, dict):
+        return {k: _value(v, q, where) for k, v in x.items()}
     if not isinstance(x, str):
         return x
+    if x.startswith("dataset:") and x[8:] in q["runs"]:
+        return q["runs"][x[8:]].dataset
     if x not in q:
         raise ValueError(f"{where}: no quantity {x!r} (known: {', '.join(sorted(q))})")
     return q[x]
@@ -94,14 +104,14 @@ def run_study(
     (``data``: the study's tables; default ``papers/<paper>/study.toml``)."""
     from formation_ftc.api import check
 
-    data = _read(paper) if data is None else data
+    data = read_study(paper) if data is None else data
     spec = data["reproduction"]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
     progress(0.0, "simulating " + ", ".join(_names(spec)))
     runs = load_runs(spec, overrides)
-    q = {**quantities(runs), "runs": runs}
+    q = {**spec.get("constants", {}), **quantities(runs), "runs": runs}
     progress(0.8, "figures")
     figures = []
     with phase("plot"):
@@ -110,23 +120,15 @@ def run_study(
             if "when" in f and not _value(f["when"], q, f"figure {f['file']}"):
                 continue
             args = [_value(a, q, f"figure {f['file']}") for a in f.get("args", [])]
-            getattr(draw, f["draw"])(*args, out_dir / f["file"])
-            figures.append(Figure(f["file"], str(f["number"]), f["caption"]))
+            getattr(draw, f["draw"])(*args, out_dir / f["file"], **f.get("kwargs", {}))
+            if f.get("listed", True):
+                figures.append(Figure(f["file"], str(f["number"]), f["caption"]))
     rows = []
     for r in data.get("rows", []):
-        where = f"row {r['quantity']!r}"
-        if "when" in r and not _value(r["when"], q, where):
-            continue
-        text = {
-            k: _text(r.get(k, ""), q, where) for k in ("ours", "criterion", "note", "reference")
-        }
-        common = (r["quantity"], r["published"], text["ours"], text["criterion"])
-        if "basis" in r:
-            basis = tuple((c[0], *(_value(x, q, where) for x in c[1:])) for c in r["basis"])
-            rows.append(ComparisonRow.judged(*common, basis, text["note"], text["reference"]))
-        else:
-            rows.append(ComparisonRow(*common, "not stated", text["note"], text["reference"]))
-    checks = [c for name in spec.get("check", []) for c in check(runs[name].scenario)]
+        items = _value(r["for_each"], q, f"row {r['quantity']!r}") if "for_each" in r else [None]
+        for item in items:
+            rows += _row(r, q if item is None else {**q, **item}, filled=item is not None)
+    checks = q.get("checks") or [c for n in spec.get("check", []) for c in check(runs[n].scenario)]
     progress(1.0, "done")
     return PaperReport(
         paper=paper,
@@ -141,11 +143,27 @@ def run_study(
     )
 
 
+def _row(r: dict, q: dict[str, Any], filled: bool) -> list[ComparisonRow]:
+    """The comparison row of the table ``r`` (none when its ``when`` is false)."""
+    where = f"row {r['quantity']!r}"
+    if "when" in r and not _value(r["when"], q, where):
+        return []
+    keys = ("quantity", "published") * filled + ("ours", "criterion", "note", "reference")
+    text = {**r, **{k: _text(r.get(k, ""), q, where) for k in keys}}
+    common = (text["quantity"], text["published"], text["ours"], text["criterion"])
+    if "basis" not in r:
+        return [ComparisonRow(*common, "not stated", text["note"], text["reference"])]
+    clauses = _value(r["basis"], q, where) if isinstance(r["basis"], str) else r["basis"]
+    basis = tuple((c[0], *(_value(x, q, where) for x in c[1:])) for c in clauses)
+    return [ComparisonRow.judged(*common, basis, text["note"], text["reference"])]
+
+
 def _names(spec: dict) -> list[str]:
     return [e if isinstance(e, str) else e["name"] for e in spec["runs"]]
 
 
-def _read(paper: str) -> dict:
+def read_study(paper: str) -> dict:
+    """The tables of ``papers/<paper>/study.toml``."""
     text = resources.files(f"formation_ftc.papers.{paper}").joinpath("study.toml").read_text()
     return tomllib.loads(text)
 
@@ -153,7 +171,7 @@ def _read(paper: str) -> dict:
 def study(paper: str, quantities: Callable[[dict[str, Run]], dict[str, Any]]) -> Reproduction:
     """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
     numbers ``quantities`` computes from the runs."""
-    spec = _read(paper)["reproduction"]
+    spec = read_study(paper)["reproduction"]
 
     def run(
         out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None

@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.papers.li2020.reproduction import load_li2020, simulate_li2020
+from formation_ftc.api import load_scenario as load_li2020
+from formation_ftc.papers.programs import simulate as simulate_li2020
 
 
 @pytest.fixture(scope="session")

@@ -26,7 +26,9 @@ import numpy as np
 import pytest
 
 import formation_ftc  # noqa: F401  (x64)
-from formation_ftc.papers.li2020.reproduction import adaptive_drift, load_li2020, simulate_li2020
+from formation_ftc.api import load_scenario as load_li2020
+from formation_ftc.papers.li2020.reproduction import adaptive_drift
+from formation_ftc.papers.programs import simulate as simulate_li2020
 
 HORIZON = 60.0  # [s]
 #: metrics that must be present (windowed ones included), so that an empty comparison cannot pass

@@ -9,12 +9,12 @@ import json
 import numpy as np
 
 from formation_ftc.config import loader
-from formation_ftc.papers.li2020.reproduction import SCENARIOS, SUMMARY_KEYS, run_reproduction
+from formation_ftc.papers.li2020.reproduction import REPRODUCTION, SCENARIOS, SUMMARY_KEYS
 from formation_ftc.registry import get_method
 
 
 def test_reproduction_short_horizon(tmp_path, recheck_verdicts):
-    rep = run_reproduction(tmp_path, overrides={"simulation.horizon": 40.0})
+    rep = REPRODUCTION.run(tmp_path, overrides={"simulation.horizon": 40.0})
     recheck_verdicts(rep.rows)  # every verdict follows from its stated criterion
     assert set(rep.summary) == set(SCENARIOS)
     for name in SCENARIOS:

@@ -159,3 +159,15 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
             ds, out_dir / f"{name}_adaptive.png", f"{name}: adaptive parameters ({ctrl})"
         ),
     ]
+
+
+def trajectories_3d(ds, path: Path) -> Path:
+    """Interactive 3-D view of the LVLH trajectories of ``ds`` (``trajectories_3d.html`` beside ``path``)."""
+    from formation_ftc.report.html import write_trajectory3d
+
+    positions = {
+        f"spacecraft {int(sc)}": ds.position.sel(spacecraft=sc).values
+        for sc in ds.spacecraft.values
+    }
+    title = "Li2020 Thm 2: LVLH trajectories (x radial, y along-track, z normal)"
+    return write_trajectory3d(path.parent, positions, title=title, append=False)

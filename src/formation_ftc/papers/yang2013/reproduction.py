@@ -94,8 +94,6 @@ def quantities(runs: dict[str, Run]) -> dict:
         "u_before": n_f["max_input_norm_sc2_2000_3800"],
         "u_after": n_f["max_input_norm_sc2_3800_4000"],
         "u_ratio": n_f["max_input_norm_sc2_3800_4000"] / n_f["max_input_norm_sc2_2000_3800"],
-        "dataset_healthy": runs["yang2013-healthy"].dataset,
-        "dataset_fault": runs["yang2013-controller-fault"].dataset,
     }
 
 
