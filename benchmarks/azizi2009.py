@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     import numpy as np
 
     from formation_ftc.api import compile_scenario, load_scenario
-    from formation_ftc.papers.azizi2009.reproduction import run_batch
+    from formation_ftc.papers.azizi2009.alpha2_study import run_batch
 
     sc = load_scenario(
         "azizi2009-llfr",

@@ -36,7 +36,11 @@ from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params,
 
 def _azizi(horizon: float):
     from formation_ftc.methods.composed import make_loop
-    from formation_ftc.papers.azizi2009.reproduction import NOISE_SIGMA, SEEDS, _variant
+    from formation_ftc.papers._study import read_study
+    from formation_ftc.papers.azizi2009.alpha2_study import _variant
+
+    _c = read_study("azizi2009")["reproduction"]["constants"]
+    NOISE_SIGMA, SEEDS = _c["noise_sigma"], _c["seeds"]
     from formation_ftc.sim.compiled import compile_loop
 
     sc = load_scenario(

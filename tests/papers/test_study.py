@@ -40,7 +40,7 @@ def no_runs(monkeypatch):
     monkeypatch.setattr(_study, "load_runs", lambda spec, overrides=None: {"a": None})
 
 
-def _quantities(runs):
+def _quantities(runs, constants):
     assert set(runs) == {"a"}
     return {"x": 1.5, "limit": 2.0, "y": {"k": "text"}, "never": False}
 
@@ -78,7 +78,7 @@ def test_a_row_for_each_item_and_a_basis_held_by_a_quantity(no_runs, tmp_path):
         }
     ]
 
-    def quantities(runs):
+    def quantities(runs, constants):
         items = [
             {"name": n, "fig": f, "value": v, "clauses": (("<", v, 2.0),)}
             for n, f, v in (("a", 4, 1.0), ("b", 5, 3.0))

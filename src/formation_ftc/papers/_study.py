@@ -10,8 +10,11 @@ The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` 
     ``paper``, ``title``, ``citation``, ``description``; ``runs`` (scenario names, or tables
     ``{name, scenario, set}``: scenario ``scenario`` with the dotted overrides ``set``, run as ``name``);
     ``batch`` (true: runs of one structure as one vmapped batch); ``check`` (scenario names whose
-    conditions are reported, unless the quantities hold ``checks``); ``summary`` (quantity names copied into the report's summary);
-    ``seeds``; ``notes`` (texts); ``errata`` (tables ``{id, text}``).
+    conditions are reported, unless the quantities hold ``checks``); ``summary`` (quantity names, or
+    ``{key = TEXT, value = NAME}``, copied into the report's summary); ``seeds``; ``notes`` (texts; one
+    that fills to nothing is left out); ``errata`` (tables ``{id, text}``); ``constants`` (named values
+    the quantities, texts and clauses use, e.g. reference values with their sources in comments, or
+    the size of a sweep, which a caller may override).
 ``[[figures]]``
     ``file``, ``number``, ``caption``, ``draw`` (a function of the paper's ``figures`` module),
     ``args`` (passed before the output path: quantity names, ``"dataset:RUN"`` for a run's dataset,
@@ -94,14 +97,16 @@ def load_runs(spec: dict, overrides: dict | None = None) -> dict[str, Run]:
 
 def run_study(
     paper: str,
-    quantities: Callable[[dict[str, Run]], dict[str, Any]],
+    quantities: Callable[[dict[str, Run], dict[str, Any]], dict[str, Any]],
     out_dir: Path,
     progress: Callable[[float, str], None] = lambda f, m: None,
     overrides: dict | None = None,
     data: dict | None = None,
 ) -> PaperReport:
-    """Run ``paper``'s study: its runs, ``quantities(runs)``, its figures into ``out_dir`` and its rows
-    (``data``: the study's tables; default ``papers/<paper>/study.toml``)."""
+    """Run ``paper``'s study: its runs, ``quantities(runs, constants)``, its figures into ``out_dir``
+    and its rows (``data``: the study's tables; default ``papers/<paper>/study.toml``). ``overrides``:
+    dotted paths -> values for every run's scenario (e.g. a shorter horizon in tests), and names of
+    ``constants`` -> values (e.g. fewer seeds)."""
     from formation_ftc.api import check
 
     data = read_study(paper) if data is None else data
@@ -110,8 +115,10 @@ def run_study(
     out_dir.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
     progress(0.0, "simulating " + ", ".join(_names(spec)))
-    runs = load_runs(spec, overrides)
-    q = {**spec.get("constants", {}), **quantities(runs), "runs": runs}
+    over = overrides or {}
+    constants = {**spec.get("constants", {}), **{k: v for k, v in over.items() if "." not in k}}
+    runs = load_runs(spec, {k: v for k, v in over.items() if "." in k})
+    q = {**constants, **quantities(runs, constants), "runs": runs}
     progress(0.8, "figures")
     figures = []
     with phase("plot"):
@@ -132,13 +139,13 @@ def run_study(
     progress(1.0, "done")
     return PaperReport(
         paper=paper,
-        summary={k: q[k] for k in spec.get("summary", [])},
+        summary=dict(_summary_item(k, q) for k in spec.get("summary", [])),
         rows=rows,
         figures=figures,
         checks=checks,
         scenarios=list(q.get("scenarios", _names(spec))),
         seeds=list(q.get("seeds", spec.get("seeds", [0]))),
-        notes=[_text(n, q, "note") for n in spec.get("notes", [])],
+        notes=[t for n in spec.get("notes", []) if (t := _text(n, q, "note"))],
         wall_time_s=time.perf_counter() - t_start,
     )
 
@@ -158,6 +165,13 @@ def _row(r: dict, q: dict[str, Any], filled: bool) -> list[ComparisonRow]:
     return [ComparisonRow.judged(*common, basis, text["note"], text["reference"])]
 
 
+def _summary_item(entry: str | dict, q: dict[str, Any]) -> tuple[str, Any]:
+    """``(key, value)`` of a summary entry: a quantity's name, or ``{key = TEXT, value = NAME}``."""
+    if isinstance(entry, str):
+        return entry, _value(entry, q, "summary")
+    return _text(entry["key"], q, "summary"), _value(entry["value"], q, "summary")
+
+
 def _names(spec: dict) -> list[str]:
     return [e if isinstance(e, str) else e["name"] for e in spec["runs"]]
 
@@ -168,7 +182,9 @@ def read_study(paper: str) -> dict:
     return tomllib.loads(text)
 
 
-def study(paper: str, quantities: Callable[[dict[str, Run]], dict[str, Any]]) -> Reproduction:
+def study(
+    paper: str, quantities: Callable[[dict[str, Run], dict[str, Any]], dict[str, Any]]
+) -> Reproduction:
     """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
     numbers ``quantities`` computes from the runs."""
     spec = read_study(paper)["reproduction"]

@@ -15,8 +15,8 @@ from formation_ftc.core.polygon_formation import relative_acceleration_fn, rotat
 from formation_ftc.design.allocation import perturbation_coefficients
 from formation_ftc.design.flfr import reduced_model, simulate_reduced_model
 from formation_ftc.methods.composed import make_loop
+from formation_ftc.papers.azizi2009.alpha2_study import run_batch
 from formation_ftc.papers.azizi2009.conditions import d_norms
-from formation_ftc.papers.azizi2009.reproduction import run_batch
 from formation_ftc.papers.programs import simulate
 from formation_ftc.registry import get_method
 

@@ -6,11 +6,8 @@ figures 2-4 as PNG files. The full study (300 s, 0.1 grid, 20 seeds) is run by
 import numpy as np
 import pytest
 
-from formation_ftc.papers.azizi2009.reproduction import (
-    REPRODUCTION,
-    alpha_min_on_grid,
-    run_reproduction,
-)
+from formation_ftc.papers.azizi2009.alpha2_study import alpha_min_on_grid
+from formation_ftc.papers.azizi2009.reproduction import REPRODUCTION
 
 KEYS = [
     "max_err_fault_free",
@@ -32,7 +29,8 @@ def test_alpha_min_on_grid():
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("azizi2009")
-    return run_reproduction(out, horizon=20.0, sweep_step=1.0, seeds=2), out
+    reduced = {"simulation.horizon": 20.0, "sweep_step": 1.0, "seeds": 2}
+    return REPRODUCTION.run(out, overrides=reduced), out
 
 
 def test_summary_keys_and_values(report):

@@ -26,7 +26,7 @@ import pytest
 
 from formation_ftc.api import load_scenario as load
 from formation_ftc.components.supervisors.hierarchical import FLFR
-from formation_ftc.papers.azizi2009.reproduction import run_batch
+from formation_ftc.papers.azizi2009.alpha2_study import run_batch
 from formation_ftc.papers.programs import simulate
 
 DT = 1e-3  # [s]

@@ -43,7 +43,7 @@ def adaptive_drift(metrics: dict[str, float], names=("m_hat", "beta_hat", "d_hat
     return out
 
 
-def quantities(runs: dict[str, Run]) -> dict:
+def quantities(runs: dict[str, Run], constants: dict) -> dict:
     """The numbers ``study.toml`` reads."""
     from formation_ftc.api import load_scenario
     from formation_ftc.core.graph import balance_report

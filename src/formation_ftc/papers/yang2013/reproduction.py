@@ -73,7 +73,7 @@ def scenario_numbers(sc, ds, metrics: dict | None = None) -> dict:
     }
 
 
-def quantities(runs: dict[str, Run]) -> dict:
+def quantities(runs: dict[str, Run], constants: dict) -> dict:
     """The numbers ``study.toml`` reads, from the healthy and the faulty run."""
     n = {k: scenario_numbers(r.scenario, r.dataset, r.metrics) for k, r in runs.items()}
     n_h, n_f = n["yang2013-healthy"], n["yang2013-controller-fault"]
