@@ -94,9 +94,12 @@ def test_li2020_mu1_initial_from_printed_data():
 
 def test_gui2022_offset_estimation_error():
     from formation_ftc.api import load_scenario
+    from formation_ftc.papers._study import read_study
     from formation_ftc.papers.gui2022 import published as pub
     from formation_ftc.papers.gui2022.numpy_reference import simulate_numpy
-    from formation_ftc.papers.gui2022.reproduction import OFFSET_ERROR_REFERENCE
+
+    ref = read_study("gui2022")["reproduction"]["constants"]["offset_error_reference"]
+    OFFSET_ERROR_REFERENCE = {float(t): v for t, v in ref.items()}
 
     s = load_scenario("gui2022-ilo", {"estimator.initial_estimate": list(pub.ESTIMATE_OFFSET)})
     dt = s.simulation.dt

@@ -37,7 +37,7 @@ DATA = {
 
 @pytest.fixture
 def no_runs(monkeypatch):
-    monkeypatch.setattr(_study, "load_runs", lambda spec, overrides=None: {"a": None})
+    monkeypatch.setattr(_study, "load_runs", lambda spec, overrides=None, values=None: {"a": None})
 
 
 def _quantities(runs, constants):

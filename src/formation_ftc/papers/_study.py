@@ -53,6 +53,8 @@ class Run:
     scenario: Any
     dataset: Any
     metrics: dict[str, float]
+    compile_s: float = 0.0  # compiling its program here [s] (0 when the process had it)
+    run_s: float = 0.0  # running it (its batch) [s]
 
 
 def _text(template: str, q: dict[str, Any], where: str) -> str:
@@ -76,23 +78,60 @@ def _value(x: Any, q: dict[str, Any], where: str) -> Any:
     return q[x]
 
 
-def load_runs(spec: dict, overrides: dict | None = None) -> dict[str, Run]:
-    """Load and simulate the ``runs`` of a study's ``[reproduction]`` table (``overrides``: dotted path
-    -> value applied to every run, e.g. a shorter horizon in tests), in order."""
+def load_runs(
+    spec: dict, overrides: dict | None = None, values: dict | None = None
+) -> dict[str, Run]:
+    """Load and simulate the ``runs`` of a study's ``[reproduction]`` table: ``overrides`` (dotted path
+    -> value) apply to every run (e.g. a shorter horizon in tests); a ``set`` value ``"$name"`` is
+    ``values[name]``. Runs with the same ``batch`` label (every run with ``batch = true`` on the
+    table) run as vmapped batches, one per compiled structure; the others one by one, each timed."""
     from formation_ftc.api import load_scenario
-    from formation_ftc.papers.programs import simulate, simulate_batched
+    from formation_ftc.papers.programs import simulate_batched
 
-    scenarios = {}
+    def value(v: Any) -> Any:
+        return (values or {})[v[1:]] if isinstance(v, str) and v.startswith("$") else v
+
+    scenarios: dict[str, Any] = {}
+    groups: dict[str, list[tuple[str, bool]]] = {}
     for entry in spec["runs"]:
         entry = {"name": entry} if isinstance(entry, str) else entry
-        sets = {**(overrides or {}), **entry.get("set", {})}
+        sets = {**(overrides or {}), **{k: value(v) for k, v in entry.get("set", {}).items()}}
         if "scenario" in entry:
             sets["scenario.name"] = entry["name"]
         scenarios[entry["name"]] = load_scenario(entry.get("scenario", entry["name"]), sets)
-    scs = list(scenarios.values())
+        label = entry.get("batch", "" if spec.get("batch", False) else None)
+        groups.setdefault(entry["name"] if label is None else f"batch {label}", []).append(
+            (entry["name"], label is not None)
+        )
+    runs: dict[str, Run] = {}
     with phase("run"):
-        out = simulate_batched(scs) if spec.get("batch", False) else [simulate(s) for s in scs]
-    return {name: Run(s, ds, m) for (name, s), (ds, m) in zip(scenarios.items(), out, strict=True)}
+        for members in groups.values():
+            names = [n for n, _ in members]
+            if members[0][1]:
+                times: list = []
+                out = simulate_batched([scenarios[n] for n in names], None, times)
+                runs |= {
+                    n: Run(scenarios[n], *o, *t) for n, o, t in zip(names, out, times, strict=True)
+                }
+            else:
+                runs[names[0]] = _single(scenarios[names[0]])
+    return {name: runs[name] for name in scenarios}
+
+
+def _single(scenario: Any) -> Run:
+    """One run through the process's shared executable of its structure, its times measured."""
+    import jax
+
+    from formation_ftc.api import compile_scenario, finish_run
+    from formation_ftc.papers.programs import executable
+
+    compiled = compile_scenario(scenario)
+    exe, compile_s = executable(compiled)
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(exe(compiled.params))
+    run_s = time.perf_counter() - t0
+    ds, metrics = finish_run(scenario, compiled, out)
+    return Run(scenario, ds, metrics, compile_s, run_s)
 
 
 def run_study(
@@ -102,11 +141,13 @@ def run_study(
     progress: Callable[[float, str], None] = lambda f, m: None,
     overrides: dict | None = None,
     data: dict | None = None,
+    prepare: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> PaperReport:
     """Run ``paper``'s study: its runs, ``quantities(runs, constants)``, its figures into ``out_dir``
     and its rows (``data``: the study's tables; default ``papers/<paper>/study.toml``). ``overrides``:
     dotted paths -> values for every run's scenario (e.g. a shorter horizon in tests), and names of
-    ``constants`` -> values (e.g. fewer seeds)."""
+    ``constants`` -> values (e.g. fewer seeds). ``prepare(constants)`` computes values before the
+    runs (e.g. a design whose gain a run states), added to the constants."""
     from formation_ftc.api import check
 
     data = read_study(paper) if data is None else data
@@ -117,7 +158,8 @@ def run_study(
     progress(0.0, "simulating " + ", ".join(_names(spec)))
     over = overrides or {}
     constants = {**spec.get("constants", {}), **{k: v for k, v in over.items() if "." not in k}}
-    runs = load_runs(spec, {k: v for k, v in over.items() if "." in k})
+    constants |= prepare(constants) if prepare is not None else {}
+    runs = load_runs(spec, {k: v for k, v in over.items() if "." in k}, constants)
     q = {**constants, **quantities(runs, constants), "runs": runs}
     progress(0.8, "figures")
     figures = []
@@ -183,7 +225,9 @@ def read_study(paper: str) -> dict:
 
 
 def study(
-    paper: str, quantities: Callable[[dict[str, Run], dict[str, Any]], dict[str, Any]]
+    paper: str,
+    quantities: Callable[[dict[str, Run], dict[str, Any]], dict[str, Any]],
+    prepare: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> Reproduction:
     """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
     numbers ``quantities`` computes from the runs."""
@@ -192,7 +236,7 @@ def study(
     def run(
         out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None
     ) -> PaperReport:
-        return run_study(paper, quantities, out_dir, progress, overrides)
+        return run_study(paper, quantities, out_dir, progress, overrides, prepare=prepare)
 
     return Reproduction(
         paper=paper,

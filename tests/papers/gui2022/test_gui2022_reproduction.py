@@ -5,12 +5,12 @@ import json
 import pytest
 
 from formation_ftc.cli import main
-from formation_ftc.papers.gui2022.reproduction import run_reproduction
+from formation_ftc.papers.gui2022.reproduction import REPRODUCTION
 
 
 @pytest.mark.slow
 def test_full_reproduction(tmp_path, recheck_verdicts):
-    rep = run_reproduction(tmp_path)
+    rep = REPRODUCTION.run(tmp_path)
     recheck_verdicts(rep.rows)  # every verdict follows from its stated criterion
     s = rep.summary
     for key in (

@@ -189,3 +189,16 @@ def plot(ds, scenario, out_dir) -> list[Path]:
         axes[-1, 0].set_xlabel("time [s]")
         paths.append(save_figure(fig, out_dir / "tracking_error.png"))
     return paths
+
+
+def trajectory_3d(ds_lof, ds_cof, path: Path) -> Path:
+    """Interactive 3-D view of Fig. 9 (the nominal configuration and both deputies) beside ``path``."""
+    from formation_ftc.report.html import write_trajectory3d
+
+    curves = {
+        "nominal configuration q0": ds_lof.desired_state.values[:, :3],
+        "deputy, LOF2TC": ds_lof.state.values[:, :3],
+        "deputy, COF2TC": ds_cof.state.values[:, :3],
+    }
+    title = "Gui2022 Fig. 9: relative trajectory in LVLH (interactive)"
+    return write_trajectory3d(path.parent, curves, title=title, append=False)
