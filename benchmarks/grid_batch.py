@@ -63,7 +63,7 @@ def _azizi(horizon: float):
 
 
 def _mehrabian(scale: float):
-    from formation_ftc.papers.mehrabian.reproduction import CASES, SEEDS, with_seed
+    from formation_ftc.papers.mehrabian.seed_study import CASES, SEEDS, with_seed
 
     names = [CASES[c][0] for c in "ABC"]
     base = load_scenario(names[0])

@@ -11,7 +11,8 @@ The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` 
     ``{name, scenario, set}``: scenario ``scenario`` with the dotted overrides ``set``, run as ``name``);
     ``batch`` (true: runs of one structure as one vmapped batch); ``check`` (scenario names whose
     conditions are reported, unless the quantities hold ``checks``); ``summary`` (quantity names, or
-    ``{key = TEXT, value = NAME}``, copied into the report's summary); ``seeds``; ``notes`` (texts; one
+    ``{key = TEXT, value = NAME}``, copied into the report's summary, or the name of a quantity
+    holding the whole summary); ``seeds``; ``notes`` (texts; one
     that fills to nothing is left out); ``errata`` (tables ``{id, text}``); ``constants`` (named values
     the quantities, texts and clauses use, e.g. reference values with their sources in comments, or
     the size of a sweep, which a caller may override).
@@ -20,7 +21,8 @@ The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` 
     ``args`` (passed before the output path: quantity names, ``"dataset:RUN"`` for a run's dataset,
     or tables of those), ``kwargs`` (literal keyword arguments),
     optional ``when`` (a quantity: the figure is drawn only when it is true) and ``listed = false`` (drawn,
-    not listed among the report's figures, e.g. an interactive view).
+    not listed among the report's figures, e.g. an interactive view); ``kwargs`` may instead name a
+    quantity holding them, and the caption may name quantities.
 ``[[rows]]``
     ``quantity``, ``published`` (never filled), ``ours``, ``criterion``, ``note``, ``reference`` and ``basis``: the
     verdict's clauses ``[relation, lhs, rhs, tol]`` whose strings name quantities, or the name of a
@@ -146,8 +148,9 @@ def run_study(
     """Run ``paper``'s study: its runs, ``quantities(runs, constants)``, its figures into ``out_dir``
     and its rows (``data``: the study's tables; default ``papers/<paper>/study.toml``). ``overrides``:
     dotted paths -> values for every run's scenario (e.g. a shorter horizon in tests), and names of
-    ``constants`` -> values (e.g. fewer seeds). ``prepare(constants)`` computes values before the
-    runs (e.g. a design whose gain a run states), added to the constants."""
+    ``constants`` -> values (e.g. fewer seeds); the scenario overrides are also the constant
+    ``overrides`` (for runs the quantities make themselves). ``prepare(constants)`` computes values
+    before the runs (e.g. a design whose gain a run states), added to the constants."""
     from formation_ftc.api import check
 
     data = read_study(paper) if data is None else data
@@ -159,7 +162,8 @@ def run_study(
     over = overrides or {}
     constants = {**spec.get("constants", {}), **{k: v for k, v in over.items() if "." not in k}}
     constants |= prepare(constants) if prepare is not None else {}
-    runs = load_runs(spec, {k: v for k, v in over.items() if "." in k}, constants)
+    constants["overrides"] = {k: v for k, v in over.items() if "." in k}
+    runs = load_runs(spec, constants["overrides"], constants)
     q = {**constants, **quantities(runs, constants), "runs": runs}
     progress(0.8, "figures")
     figures = []
@@ -169,9 +173,12 @@ def run_study(
             if "when" in f and not _value(f["when"], q, f"figure {f['file']}"):
                 continue
             args = [_value(a, q, f"figure {f['file']}") for a in f.get("args", [])]
-            getattr(draw, f["draw"])(*args, out_dir / f["file"], **f.get("kwargs", {}))
+            kwargs = f.get("kwargs", {})
+            kwargs = _value(kwargs, q, f"figure {f['file']}") if isinstance(kwargs, str) else kwargs
+            getattr(draw, f["draw"])(*args, out_dir / f["file"], **kwargs)
             if f.get("listed", True):
-                figures.append(Figure(f["file"], str(f["number"]), f["caption"]))
+                caption = _text(f["caption"], q, f"figure {f['file']}")
+                figures.append(Figure(f["file"], str(f["number"]), caption))
     rows = []
     for r in data.get("rows", []):
         items = _value(r["for_each"], q, f"row {r['quantity']!r}") if "for_each" in r else [None]
@@ -181,7 +188,7 @@ def run_study(
     progress(1.0, "done")
     return PaperReport(
         paper=paper,
-        summary=dict(_summary_item(k, q) for k in spec.get("summary", [])),
+        summary=_summary(spec.get("summary", []), q),
         rows=rows,
         figures=figures,
         checks=checks,
@@ -205,6 +212,13 @@ def _row(r: dict, q: dict[str, Any], filled: bool) -> list[ComparisonRow]:
     clauses = _value(r["basis"], q, where) if isinstance(r["basis"], str) else r["basis"]
     basis = tuple((c[0], *(_value(x, q, where) for x in c[1:])) for c in clauses)
     return [ComparisonRow.judged(*common, basis, text["note"], text["reference"])]
+
+
+def _summary(entries: str | list, q: dict[str, Any]) -> dict[str, Any]:
+    """The report's summary: the quantity named ``entries``, or one item per entry."""
+    if isinstance(entries, str):
+        return dict(_value(entries, q, "summary"))
+    return dict(_summary_item(k, q) for k in entries)
 
 
 def _summary_item(entry: str | dict, q: dict[str, Any]) -> tuple[str, Any]:

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.papers.mehrabian.reproduction import run_batch
+from formation_ftc.papers.mehrabian.seed_study import run_batch
 from formation_ftc.papers.programs import simulate
 
 DT = 0.01  # [s]

@@ -8,15 +8,16 @@ import json
 import numpy as np
 import pytest
 
-from formation_ftc.papers.mehrabian.reproduction import CASES, run, run_batch
+from formation_ftc.papers.mehrabian.reproduction import CASES, REPRODUCTION
+from formation_ftc.papers.mehrabian.seed_study import run_batch
 from formation_ftc.registry import get_reproduction
 from formation_ftc.report.reproduce import to_jsonable
 
 
 def test_reproduction_structure_on_short_run(tmp_path, recheck_verdicts):
     rep = get_reproduction("mehrabian")
-    assert rep.run is run
-    report = run(tmp_path, seeds=[1, 2], overrides={"simulation.horizon": 60.0})
+    assert rep is REPRODUCTION
+    report = REPRODUCTION.run(tmp_path, overrides={"simulation.horizon": 60.0, "seeds": [1, 2]})
     recheck_verdicts(report.rows)  # every verdict follows from its stated criterion
     for fig in report.figures:
         assert (tmp_path / fig.path).stat().st_size > 10_000

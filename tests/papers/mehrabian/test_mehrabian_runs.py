@@ -18,7 +18,7 @@ from formation_ftc.api import compile_scenario, simulate_with_metrics
 from formation_ftc.components.controllers.networked_el_hinf import synchronisation_torque
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics.euler_lagrange import inertia_matrix
-from formation_ftc.papers.mehrabian.reproduction import with_seed
+from formation_ftc.papers.mehrabian.seed_study import with_seed
 from formation_ftc.sim.batch import batched_run, stack_params
 
 
