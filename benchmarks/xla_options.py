@@ -31,13 +31,15 @@ from formation_ftc.sim.runtime import xla  # noqa: E402
 
 
 def _mehrabian(scale: float):
-    from formation_ftc.papers.mehrabian.reproduction import CASES, _batch
+    from formation_ftc.papers.mehrabian.seed_study import CASES, with_seed
+    from formation_ftc.sim.batch import stack_params
 
     names = [CASES[c][0] for c in "ABC"]
     ov = {"simulation.horizon": 20.0 * scale}
     n = load_scenario(names[0], ov).simulation.n_steps
     comp = [compile_scenario(load_scenario(x, {**ov, "simulation.record_every": n})) for x in names]
-    params, axes, size = _batch(comp, list(range(1, 21)))
+    params, axes = stack_params([with_seed(c.params, s) for c in comp for s in range(1, 21)])
+    size = 3 * 20
     run = comp[0].run
     fn = jax.vmap(lambda p: dict(run(p)), in_axes=(axes,), axis_size=size)
     fast = bool(getattr(comp[0].params.controller, "batch_fast_compile", False))
