@@ -189,7 +189,6 @@ def test_composition_equals_the_law_on_the_euler_angle_plant():
         inertia=as_float(np.tile([20.0, 18.0, 15.0], (3, 1))),
         inertia_uncertainty=as_float(0.0),
         disturbance_std=as_float(0.0),
-        step=0.01,
     )
     ref = dataclasses.replace(
         loop, plant=euler_plant, sensors=PerfectSensors(), actuator=loop.actuator.inner

@@ -17,7 +17,7 @@ from formation_ftc.components.networks.delayed_graph import DelayedGraphNetwork
 from formation_ftc.components.networks.graph import graph_edges
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.history import history_init, history_push
-from formation_ftc.sim.components import NetworkInputs, as_float
+from formation_ftc.sim.components import NetworkInputs, StepContext, as_float
 
 NAME = "compose-li2020-delays-on-yang2013"
 SHORT = {"simulation.horizon": 40.0, "simulation.record_every": 1}
@@ -128,7 +128,6 @@ def test_delayed_graph_reads_interpolate_toward_the_message_sent_now():
         delays=(("0", "0.1"), ("0", "0")),
         edges=graph_edges(C),
         capacity=4,
-        dt=0.1,
     )
     h = history_push(
         history_init(jnp.array([[0.0], [1.0]]), 4), jnp.array([[0.0], [2.0]])
@@ -136,7 +135,9 @@ def test_delayed_graph_reads_interpolate_toward_the_message_sent_now():
     now = jnp.array([[0.0], [6.0]])  # m_2(t) = 6 at t = t_k + 0.08
     for T, want in ((0.0, 6.0), (0.02, 5.0), (0.08, 2.0), (0.13, 1.5)):
         got = net.receive(
-            jnp.asarray(1.08), h, NetworkInputs(now, jnp.asarray(1.0), {"T": jnp.array([T])})
+            jnp.asarray(1.08),
+            h,
+            NetworkInputs(now, StepContext(10, jnp.asarray(1.0), 0.1), {"T": jnp.array([T])}),
         )
         np.testing.assert_allclose(float(got["weighted_sum"][0, 0]), want, rtol=1e-12)
 

@@ -252,14 +252,6 @@ class SensorInputs(NamedTuple):
     reference: PyTree
 
 
-class NetworkInputs(NamedTuple):
-    """Messages sent now, the current step's start time and the network's time-only signals."""
-
-    messages: PyTree
-    t_k: jax.Array
-    exogenous: PyTree
-
-
 class StepContext(NamedTuple):
     """The control step in progress, given to the flight side with its inputs: step index ``k``
     (int64), its time ``t = t0 + k dt`` [s] and the control step ``dt`` [s]. A component that counts
@@ -268,6 +260,16 @@ class StepContext(NamedTuple):
     k: jax.Array
     t: jax.Array
     dt: float
+
+
+class NetworkInputs(NamedTuple):
+    """Messages sent now, the control step in progress (its index, start time ``step.t`` [s] and
+    ``step.dt`` [s]: a network that keeps a history samples it at the loop's step, never its own) and
+    the network's time-only signals."""
+
+    messages: PyTree
+    step: StepContext
+    exogenous: PyTree
 
 
 class FlightInputs(NamedTuple):
@@ -315,8 +317,14 @@ class _Kind:
 
     #: True: the time signals are sampled at the step start t_k and held over the step (zero-order
     #: hold, e.g. a fault profile or a disturbance sequence applied through a sample-and-hold); the loop
-    #: evaluates :meth:`exogenous` once per step at t_k
+    #: evaluates :meth:`held_exogenous` once per step
     holds_exogenous: ClassVar[bool] = False
+
+    def held_exogenous(self, step: StepContext) -> PyTree:
+        """The time-only signals held over the control step ``step`` (parts with ``holds_exogenous``):
+        :meth:`exogenous` at its start ``step.t``; a part that draws a value per step reads the step
+        index ``step.k`` (the loop's), never recovers it from a time."""
+        return self.exogenous(step.t)
 
 
 class Plant(_Kind):

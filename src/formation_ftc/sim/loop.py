@@ -324,10 +324,12 @@ class ClosedLoop:
 
         table = jax.vmap(at)(ts, tf)
         n = ts.shape[0]
+        # the first step's table is asked for without its index: k = 0 there
+        step = StepContext(jnp.asarray(0 if k is None else k, dtype=jnp.int64), t_k, dt)
         for s in held:  # sampled at t_k, held over the step (zero-order hold)
             table[s] = jax.tree_util.tree_map(
                 lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
-                _held(k, getattr(self, s).exogenous(t_k)),
+                _held(k, getattr(self, s).held_exogenous(step)),
             )
         return table
 
@@ -378,7 +380,7 @@ class ClosedLoop:
         if isinstance(self.network, NoNetwork):
             return flight
         msg = self.controller.message(t, flight)
-        received = self.network.receive(t, net_state, NetworkInputs(msg, sc.t, exo_network))
+        received = self.network.receive(t, net_state, NetworkInputs(msg, sc, exo_network))
         return flight._replace(received=received)
 
     def _step_context(self, k) -> StepContext:

@@ -14,7 +14,7 @@ from formation_ftc.components.actuators.euler_torque_allocation import (
     HeldAdditiveFaultActuator,
 )
 from formation_ftc.config.loader import ScenarioError
-from formation_ftc.sim.components import ActuatorInputs, as_float
+from formation_ftc.sim.components import ActuatorInputs, StepContext, as_float
 
 RNG = np.random.default_rng(11)
 
@@ -57,13 +57,14 @@ def test_allocation_maps_command_plus_fault_to_the_body_torque_of_equal_power():
         torques=("0.7",),
         spacecraft=(2,),
         channels=(1,),
-        step=0.1,
     )
     act = EulerTorqueAllocation(inner=inner)
     assert act.holds_exogenous and act.count == n
     assert {s.name for s in act.signals()} == {"fault", "generalised_applied", "attitude"}
     u = RNG.normal(size=(n, 3))
-    inputs = ActuatorInputs(act.exogenous(jnp.asarray(1.0)), None, None, x)
+    inputs = ActuatorInputs(
+        act.held_exogenous(StepContext(jnp.asarray(10), jnp.asarray(1.0), 0.1)), None, None, x
+    )
     tau_body = np.asarray(act.apply(1.0, jnp.asarray(u), inputs))
     gen = u.copy()
     gen[2, 1] += 0.7  # the fault acts in spacecraft 3's roll channel before the map

@@ -27,7 +27,7 @@ from formation_ftc.components.controllers.li2020_adaptive import (
 from formation_ftc.components.networks.graph import GraphNetwork
 from formation_ftc.config import loader
 from formation_ftc.methods.composed import make_loop
-from formation_ftc.sim.components import FlightInputs, NetworkInputs
+from formation_ftc.sim.components import FlightInputs, NetworkInputs, StepContext
 
 TRUTH_FIELDS = {"state", "true_state", "fault", "faults", "disturbance", "force", "process_noise"}
 
@@ -42,7 +42,10 @@ def test_control_law_matches_per_agent_formula():
     m_hat, beta, d_hat = rng.uniform(90, 110, N), rng.uniform(1, 10, N), rng.uniform(0.1, 5, N)
     sig, lam = 0.7, 20.0
     cons = consensus(
-        GraphNetwork(adjacency=jnp.asarray(C)).receive(0.0, None, NetworkInputs(s, 0.0, None)), s
+        GraphNetwork(adjacency=jnp.asarray(C)).receive(
+            0.0, None, NetworkInputs(s, StepContext(0, 0.0, 0.1), None)
+        ),
+        s,
     )
     f, xi = li2020_control(s, Y, cons, m_hat, beta, d_hat, sig, lam)
     bd, md, dd = li2020_adaptation_rates(s, Y, xi, d_hat, sig, 0.1, 1.0, 1.0, 0.01)

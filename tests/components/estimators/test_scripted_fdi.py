@@ -149,7 +149,7 @@ def test_held_time_signals_and_fault_and_fdi_profiles():
     assert loop.actuator.holds_exogenous and loop.plant.holds_exogenous
     for k in (3999, 4000, 12345, 24000, 24001):
         t_k = k * 0.01
-        table = loop._time_table(jnp.asarray(t_k))
+        table = loop._time_table(jnp.asarray(t_k), k=jnp.asarray(k))
         f = np.asarray(table["actuator"]["fault"])
         want = 0.05 * np.sin(0.02 * t_k) + 0.6 if 4000 <= k <= 24000 else 0.0
         assert f.shape == (3, 8, 3)

@@ -12,7 +12,7 @@ from formation_ftc.components.controllers.li2020_adaptive import consensus
 from formation_ftc.components.networks.delayed_graph import DelayedGraphNetwork
 from formation_ftc.components.networks.graph import GraphNetwork, graph_edges
 from formation_ftc.core.history import history_init, history_push
-from formation_ftc.sim.components import NetworkInputs
+from formation_ftc.sim.components import NetworkInputs, StepContext
 
 rng = np.random.default_rng(3)
 
@@ -24,16 +24,19 @@ def test_delayed_consensus_reduces_to_undelayed():
     C = rng.uniform(0, 1, (4, 4)) * (1 - np.eye(4))
     delays = tuple(tuple("0.5 + 0.1*i + 0.01*j" for _ in range(4)) for _ in range(4))
     net = DelayedGraphNetwork(
-        adjacency=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=80, dt=0.01
+        adjacency=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=80
     )
     hist = history_init(jnp.asarray(s), 80)
     for _ in range(5):
         hist = history_push(hist, jnp.asarray(s))
     t = 0.043
     exo = net.exogenous(t)
-    got = consensus(net.receive(t, hist, NetworkInputs(s, 0.04, exo)), s)
+    got = consensus(net.receive(t, hist, NetworkInputs(s, StepContext(4, 0.04, 0.01), exo)), s)
     want = consensus(
-        GraphNetwork(adjacency=jnp.asarray(C)).receive(t, None, NetworkInputs(s, 0.04, None)), s
+        GraphNetwork(adjacency=jnp.asarray(C)).receive(
+            t, None, NetworkInputs(s, StepContext(4, 0.04, 0.01), None)
+        ),
+        s,
     )
     assert np.allclose(got, want, atol=1e-14)
 
@@ -44,7 +47,7 @@ def test_delayed_network_reads_interpolated_past():
     C = np.array([[0, 0.5, 0.2], [0.3, 0, 0], [0, 0.7, 0]])
     delays = (("0", "0.25", "0.3 + 0.1*sin(t)"), ("0.15", "0", "0"), ("0", "0.2 + 0.01*t", "0"))
     net = DelayedGraphNetwork(
-        adjacency=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=8, dt=dt
+        adjacency=jnp.asarray(C), delays=delays, edges=graph_edges(C), capacity=8
     )
     samples = [rng.normal(size=(N, 2)) for _ in range(6)]  # m(t_0) .. m(t_5), t_k = k dt
     hist = history_init(jnp.asarray(samples[0]), 8)
@@ -60,7 +63,7 @@ def test_delayed_network_reads_interpolated_past():
 
     T = {(0, 1): 0.25, (0, 2): 0.3 + 0.1 * np.sin(t), (1, 0): 0.15, (2, 1): 0.2 + 0.01 * t}
     now = NetworkInputs(
-        jnp.asarray(rng.normal(size=(N, 2))), t_k, net.exogenous(t)
+        jnp.asarray(rng.normal(size=(N, 2))), StepContext(5, t_k, dt), net.exogenous(t)
     )  # every T > t - t_k
     for network in (net, dataclasses.replace(net, short_delays=False)):
         got = network.receive(t, hist, now)

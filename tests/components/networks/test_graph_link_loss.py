@@ -16,7 +16,7 @@ from formation_ftc.components.networks.graph_link_loss import (
 )
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.history import history_init, history_push, required_capacity
-from formation_ftc.sim.components import NetworkInputs
+from formation_ftc.sim.components import NetworkInputs, StepContext
 
 C = np.array(
     [[0.0, 0.0, 0.5, 0.0], [0.6, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.4], [0.6, 0.0, 0.0, 0.0]]
@@ -26,15 +26,20 @@ LOST[2, 3] = 1.0  # 3 <- 4
 MSG = np.arange(12.0).reshape(4, 3) + 1.0
 
 
+def _step(t, dt=1.0):
+    """The step context of the step starting at ``t`` [s] (unit steps)."""
+    return StepContext(round(float(t) / dt), jnp.asarray(t), dt)
+
+
 def test_link_loss_delivers_zero_weight_after_onset_and_unchanged_before():
     net = GraphLinkLossNetwork(adjacency=C, lost=LOST, onset=np.asarray(50.0))
     healthy = GraphNetwork(adjacency=C)
     for t_k in (0.0, 49.0):
-        got = net.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
-        want = healthy.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(t_k), None))
+        got = net.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), _step(t_k), None))
+        want = healthy.receive(t_k, None, NetworkInputs(jnp.asarray(MSG), _step(t_k), None))
         for key in ("in_weight", "weighted_sum"):
             np.testing.assert_array_equal(np.asarray(got[key]), np.asarray(want[key]))
-    got = net.receive(50.0, None, NetworkInputs(jnp.asarray(MSG), jnp.asarray(50.0), None))
+    got = net.receive(50.0, None, NetworkInputs(jnp.asarray(MSG), _step(50.0), None))
     c = C * (1.0 - LOST)  # numpy: receiver 3 now hears only spacecraft 2
     np.testing.assert_allclose(np.asarray(got["in_weight"]), c.sum(axis=1))
     np.testing.assert_allclose(np.asarray(got["weighted_sum"]), c @ MSG, rtol=1e-15)
@@ -46,7 +51,7 @@ def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
     delays = tuple(tuple("2" for _ in range(4)) for _ in range(4))
     edges = graph_edges(C)
     cap = required_capacity(3 * T, dt) + 1
-    base = dict(adjacency=C, delays=delays, edges=edges, capacity=cap, dt=dt)
+    base = dict(adjacency=C, delays=delays, edges=edges, capacity=cap)
     net = DelayedGraphLinkLossNetwork(
         **base, lost=LOST, onset=np.asarray(20.0), delay_scale=np.asarray(3.0)
     )
@@ -56,7 +61,7 @@ def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
     for k in range(1, 31):
         state = history_push(state, jnp.asarray((k + 1.0) * MSG))
     t = 30.0
-    ins = NetworkInputs(jnp.asarray(31.0 * MSG), jnp.asarray(t), net.exogenous(jnp.asarray(t)))
+    ins = NetworkInputs(jnp.asarray(31.0 * MSG), _step(t), net.exogenous(jnp.asarray(t)))
     got = net.receive(t, state, ins)
     # after the onset: weights without 3 <- 4 and messages 3 T = 6 s old: m(24) = 25 MSG
     c = C * (1.0 - LOST)
@@ -67,7 +72,7 @@ def test_delayed_link_loss_drops_the_link_and_scales_the_delays():
     state15 = history_init(jnp.asarray(MSG), cap)
     for k in range(1, 16):
         state15 = history_push(state15, jnp.asarray((k + 1.0) * MSG))
-    ins = NetworkInputs(jnp.asarray(16.0 * MSG), jnp.asarray(t), net.exogenous(jnp.asarray(t)))
+    ins = NetworkInputs(jnp.asarray(16.0 * MSG), _step(t), net.exogenous(jnp.asarray(t)))
     got, want = net.receive(t, state15, ins), healthy.receive(t, state15, ins)
     np.testing.assert_array_equal(np.asarray(got["weighted_sum"]), np.asarray(want["weighted_sum"]))
     np.testing.assert_allclose(np.asarray(want["weighted_sum"]), C @ (14.0 * MSG), rtol=1e-12)

@@ -9,7 +9,7 @@ import numpy as np
 import formation_ftc as ftc
 from formation_ftc.core.dynamics.euler_lagrange import rigid_body_rhs
 from formation_ftc.methods.composed import make_loop
-from formation_ftc.sim.components import TruthInputs
+from formation_ftc.sim.components import StepContext, TruthInputs
 
 
 def _loop(name="mehrabian-identification", **ov):
@@ -31,13 +31,16 @@ def test_plant_equals_the_rigid_body_model():
     rng = np.random.default_rng(1)
     x = {"q": x["q"], "w": jnp.asarray(rng.normal(size=(8, 3)) * 0.01)}
     u = jnp.asarray(rng.normal(size=(8, 3)))
-    exo = plant.exogenous(jnp.asarray(0.25))
+    exo = plant.held_exogenous(StepContext(jnp.asarray(25), jnp.asarray(0.25), 0.01))
     dx = plant.derivative(0.25, x, TruthInputs(u, exo, None, None))
     q_dot, w_dot = rigid_body_rhs(x["q"], x["w"], u + exo["d"], jnp.asarray(J), jnp.linalg.inv(J))
     np.testing.assert_allclose(np.asarray(dx["q"]), np.asarray(q_dot), rtol=1e-14)
     np.testing.assert_allclose(np.asarray(dx["w"]), np.asarray(w_dot), rtol=1e-12, atol=1e-18)
     # the disturbance of step 25 is a fresh N(0, 0.001) sample, different from step 26's
-    d25, d26 = (np.asarray(plant.exogenous(jnp.asarray(k * 0.01))["d"]) for k in (25, 26))
+    d25, d26 = (
+        np.asarray(plant.held_exogenous(StepContext(jnp.asarray(k), k * 0.01, 0.01))["d"])
+        for k in (25, 26)
+    )
     assert not np.allclose(d25, d26) and 0.005 < d25.std() < 0.08
 
 

@@ -44,6 +44,7 @@ from formation_ftc.sim.components import (
     ActuatorInputs,
     IdealActuator,
     Signal,
+    StepContext,
     component,
     static,
 )
@@ -70,8 +71,8 @@ class HeldAdditiveFaultActuator(Actuator):
     and i (the 1-based spacecraft number), between a start and an end time snapped to the step grid
     (both inclusive), from :func:`~formation_ftc.core.fault_profiles.windowed_additive_faults`; the
     profile is evaluated at t_k and held over the step (truth side). Leaves: ``windows`` (n_faults, 2)
-    [s]. Static: fault expressions, 0-based spacecraft and channels, ``step`` (the step grid [s]) and
-    ``t0``."""
+    [s]. Static: fault expressions, 0-based spacecraft and channels. The step grid is the loop's (its
+    step context), not a copy of its own."""
 
     quantity = "torque"
     holds_exogenous = True
@@ -81,18 +82,15 @@ class HeldAdditiveFaultActuator(Actuator):
     torques: tuple[str, ...] = static(default=())
     spacecraft: tuple[int, ...] = static(default=())
     channels: tuple[int, ...] = static(default=())
-    step: float = static(default=1.0)
-    t0: float = static(default=0.0)
     n_channels: int = static(default=3)
 
-    def exogenous(self, t):
-        k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
+    def held_exogenous(self, step: StepContext):
         if not self.torques:
             return {"fault": jnp.zeros((self.count, self.n_channels))}
         return {
             "fault": windowed_additive_faults(
-                k,
-                self.step,
+                step.k,
+                step.dt,
                 self.windows,
                 self.torques,
                 self.spacecraft,
@@ -136,6 +134,9 @@ class EulerTorqueAllocation(Actuator):
 
     def exogenous(self, t):
         return self.inner.exogenous(t)
+
+    def held_exogenous(self, step):
+        return self.inner.held_exogenous(step)
 
     def initial_state(self):
         return self.inner.initial_state()
@@ -274,7 +275,6 @@ def _build(sec: EulerAllocationSection, ctx: BuildContext) -> Actuator:
         torques=profile.torques,
         spacecraft=profile.spacecraft,
         channels=profile.channels,
-        step=ctx.dt,
     )
     if "euler-angle-attitude-state" in ctx.plant.provides():  # driven by the generalised torque
         return held

@@ -82,6 +82,9 @@ class AccelerationToForce(Controller):
     def exogenous(self, t):
         return self.law.exogenous(t)
 
+    def held_exogenous(self, step):
+        return self.law.held_exogenous(step)
+
     def initial_state(self):
         return self.law.initial_state()
 

@@ -56,6 +56,9 @@ class AccelerationModelEstimator(Estimator):
     def exogenous(self, t):
         return self.inner.exogenous(t)
 
+    def held_exogenous(self, step):
+        return self.inner.held_exogenous(step)
+
     def initial_state(self, measurement0):
         return self.inner.initial_state(measurement0)
 

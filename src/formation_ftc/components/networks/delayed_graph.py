@@ -189,7 +189,6 @@ class DelayedGraphNetwork(Network):
     delays: tuple[tuple[str, ...], ...] = static()  # T_ij(t) expressions in t, i, j [s] (N x N)
     edges: tuple[tuple[int, int], ...] = static()  # used links (i, j), see graph_edges
     capacity: int = static()  # ring-buffer length [samples]
-    dt: float = static()  # sample spacing of the history = the loop's step [s]
     #: False when every used link's delay is known to stay >= dt (e.g. validated by the scenario): the
     #: reads then never need the message sent now, and that per-stage selection is left out
     short_delays: bool = static(default=True)
@@ -214,9 +213,10 @@ class DelayedGraphNetwork(Network):
         )  # (E, N), (N, E)
         C = self.adjacency
         T = inputs.exogenous["T"]
-        elapsed = t - inputs.t_k
-        # steps before the newest sample m(t_k) (read clamps at 0: the newest sample)
-        lag = (T - elapsed) / self.dt
+        elapsed = t - inputs.step.t
+        # steps before the newest sample m(t_k) (read clamps at 0: the newest sample); the history
+        # is sampled at the loop's step
+        lag = (T - elapsed) / inputs.step.dt
         rows_all = history_read(
             state, lag
         )  # (E, N, d): every sender's message at each link's delayed time
@@ -317,7 +317,6 @@ def delayed_graph_network(sec: DelayedGraphSection, ctx: BuildContext) -> Delaye
         delays=texts,
         edges=edges,
         capacity=required_capacity(sec.max_delay, ctx.dt) + 1,
-        dt=ctx.dt,
         short_delays=any(stats[e].value_min < ctx.dt for e in edges),
     )
 

@@ -89,7 +89,7 @@ class GraphLinkLossNetwork(GraphNetwork):
     onset: Any = float("inf")  # [s]
 
     def receive(self, t, state, inputs: NetworkInputs):
-        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.step.t)
         return GraphNetwork.receive(dataclasses.replace(self, adjacency=w), t, state, inputs)
 
 
@@ -103,8 +103,8 @@ class DelayedGraphLinkLossNetwork(DelayedGraphNetwork):
     delay_scale: Any = 1.0  # [-]
 
     def receive(self, t, state, inputs: NetworkInputs):
-        after = inputs.t_k >= self.onset
-        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.t_k)
+        after = inputs.step.t >= self.onset
+        w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.step.t)
         T = inputs.exogenous["T"] * jnp.where(after, self.delay_scale, 1.0)
         return DelayedGraphNetwork.receive(
             dataclasses.replace(self, adjacency=w),
@@ -205,7 +205,6 @@ def _build(
         delays=base.delays,
         edges=base.edges,
         capacity=capacity,
-        dt=base.dt,
         lost=lost,
         onset=onset,
         delay_scale=as_float(sec.delay_scale),

@@ -40,7 +40,13 @@ from formation_ftc.core.dynamics.euler_lagrange import (
     euler_rates_from_body_rates,
     rigid_body_rhs,
 )
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import (
+    Plant,
+    Signal,
+    StepContext,
+    TruthInputs,
+    component,
+)
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["EulerAngleAttitudePlant", "EulerAnglePlantSection", "seed_streams", "AXES"]
@@ -84,8 +90,9 @@ class EulerAngleAttitudePlant(Plant):
     Leaves: ``seed`` (uint32), ``random_initial_attitude`` (1: draw the initial angles from
     ``U[q0_range]``, 0: use ``q0_fixed``), ``q0_range`` (2,) [rad], ``q0_fixed`` (m, 3) [rad], ``qdot0``
     (m, 3) initial Euler-angle rates [rad/s], ``inertia`` (m, 3) principal inertias J^ about which the
-    true ones are drawn [kg m^2], ``inertia_uncertainty`` [-], ``disturbance_std`` [N m]. Static: ``step`` -- the sampling period of the held disturbance [s] (the
-    loop's step). ``J``, ``J_inv`` are filled by :meth:`prepare` (once per run).
+    true ones are drawn [kg m^2], ``inertia_uncertainty`` [-], ``disturbance_std`` [N m]. The held
+    disturbance is drawn for the loop's step index (its step context), so it has no step of its own.
+    ``J``, ``J_inv`` are filled by :meth:`prepare` (once per run).
     """
 
     quantity = "torque"
@@ -99,8 +106,6 @@ class EulerAngleAttitudePlant(Plant):
     inertia: Any
     inertia_uncertainty: Any
     disturbance_std: Any
-    step: float = static()
-    t0: float = static(default=0.0)
     # set by prepare (empty until then: no leaves): (m, 3, 3) true inertia [kg m^2], its inverse and
     # the root key of the disturbance stream
     J: Any = ()
@@ -143,14 +148,13 @@ class EulerAngleAttitudePlant(Plant):
     def euler_pitch(self, x):
         return x["q"][..., 0]  # theta, the middle angle of the 3-2-1 sequence (AXES[0])
 
-    def exogenous(self, t):
-        """d_k ~ N(0, std^2 I) for the step starting at t = t_k, held over it [N m]."""
+    def held_exogenous(self, step: StepContext):
+        """d_k ~ N(0, std^2 I) for the loop's step k, held over it [N m]."""
         # the disturbance stream's root key (prepare computes it once per run)
         k_d = seed_streams(self.seed)[2] if isinstance(self.noise_key, tuple) else self.noise_key
-        k = jnp.round((t - self.t0) / self.step).astype(jnp.int64)
         return {
             "d": self.disturbance_std
-            * jax.random.normal(step_key(k_d, k), (self.count, 3), dtype=jnp.float64)
+            * jax.random.normal(step_key(k_d, step.k), (self.count, 3), dtype=jnp.float64)
         }
 
     def derivative(self, t, x, inputs: TruthInputs):
@@ -278,7 +282,6 @@ def _build(sec: EulerAnglePlantSection, ctx: BuildContext) -> EulerAngleAttitude
         inertia=as_float(np.tile(np.asarray(sec.inertia), (m, 1))),
         inertia_uncertainty=as_float(sec.inertia_uncertainty),
         disturbance_std=as_float(np.sqrt(sec.disturbance_variance)),
-        step=ctx.dt,
     )
 
 
