@@ -228,7 +228,7 @@ def _scenario_schema(raw: dict) -> dict:
     """The JSON Schema of the scenario ``raw``'s method; in a composed scenario each slot table gets
     the schema of the component type it names (its option of ``schema composed``), so that its
     fields have units, comments and hints."""
-    method = str(raw["scenario"]["method"])
+    method = str(raw["scenario"].get("method", "composed"))
     if method != "composed":
         from formation_ftc.registry import get_method
 
@@ -311,10 +311,10 @@ def _cmd_list(args) -> int:
         rows.append(
             {
                 "name": name,
-                "method": str(meta.get("method", "")),
+                "method": str(meta.get("method", "composed")),
                 "paper": meta.get("paper"),
                 "description": str(meta.get("description", "")),
-                "composed": meta.get("method") == "composed",
+                "composed": meta.get("method", "composed") == "composed",
             }
         )
     if args.json:

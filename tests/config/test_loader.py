@@ -46,10 +46,17 @@ def test_unknown_scenario_lists_builtins(tmp_path):
     bad.write_text("[scenario\nname=1")
     with pytest.raises(ScenarioError, match="invalid TOML"):
         ftc.load_scenario(bad)
-    nometh = tmp_path / "nometh.toml"
+    nometh = tmp_path / "nometh.toml"  # no method: the composed schema, which needs the slots
     nometh.write_text("[scenario]\nname='x'\n")
-    with pytest.raises(ScenarioError, match="scenario.method is required"):
+    with pytest.raises(ScenarioError, match="field simulation: Field required"):
         ftc.load_scenario(nometh)
+    noscn = tmp_path / "noscn.toml"
+    noscn.write_text("[simulation]\nhorizon = 1.0\n")
+    with pytest.raises(ScenarioError, match=r"a \[scenario\] table is required"):
+        ftc.load_scenario(noscn)
+    raw = ftc.config.loader.read_raw("cw-pd-fault")[0]
+    del raw["scenario"]["method"]  # the method line is optional
+    assert ftc.load_scenario(raw).scenario.method == "composed"
 
 
 def test_overrides_and_round_trip(tmp_path):

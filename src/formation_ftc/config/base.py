@@ -1,7 +1,8 @@
 """Typed scenario configuration (pydantic v2): the sections every scenario has.
 
-A scenario file is TOML. Its ``[scenario]`` table names the ``method`` (a registered method such as
-``"composed"``); that method's schema (a subclass of :class:`ScenarioBase`) validates the whole file.
+A scenario file is TOML. Its ``[scenario]`` table may name the ``method`` (default ``"composed"``, the
+components of the file's slot tables); that method's schema (a subclass of :class:`ScenarioBase`)
+validates the whole file.
 Unknown fields are rejected (``extra="forbid"``), every numeric field carries its unit in its
 description, and cross-field rules (the step divides the horizon, matrix sizes match the number of
 spacecraft) are model validators whose messages name the field.
@@ -174,7 +175,9 @@ ExprText = Annotated[str, expression_validator(("t", "i"))]
 class ScenarioMeta(StrictModel):
     name: str = Field(description="Scenario name (built-in scenarios use paper-prefixed names).")
     method: str = Field(
-        description="Registered method that simulates this scenario, e.g. 'composed'."
+        "composed",
+        description="Method that simulates this scenario: 'composed' (the default, so the line may be "
+        "left out) or one a plug-in registers.",
     )
     description: str = Field("", description="One-line description shown by `formation-ftc list`.")
     paper: str | None = Field(

@@ -311,7 +311,8 @@ def _format_validation_error(exc: ValidationError, source: str) -> str:
 
 
 def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool = True):
-    """Validate ``raw`` with the schema of the method named in ``[scenario].method``.
+    """Validate ``raw`` with the schema of the method named in ``[scenario].method`` (default
+    ``"composed"``).
 
     ``build=False`` checks every field of every section (the same checks and messages) but does not
     assemble the method's loop to check that its parts fit (``formation-ftc show``): no JAX is
@@ -319,12 +320,13 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool 
     from formation_ftc.registry import get_method
 
     meta = raw.get("scenario") if isinstance(raw, Mapping) else None
-    if not isinstance(meta, Mapping) or "method" not in meta:
+    if not isinstance(meta, Mapping):
         raise ScenarioError(
-            f"{source}: field scenario.method is required (the method that simulates it)"
+            f"{source}: a [scenario] table is required (its name; optionally method, description, "
+            "paper)"
         )
     try:
-        method = get_method(str(meta["method"]))
+        method = get_method(str(meta.get("method", "composed")))
     except KeyError as exc:
         raise ScenarioError(f"{source}: field scenario.method: {exc.args[0]}") from None
     if _nesting_depth(raw) > MAX_NESTING:
