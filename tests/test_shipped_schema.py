@@ -34,6 +34,16 @@ def test_a_changed_source_falls_back_to_generation(tmp_path):
     assert shipped.shipped_schema(tmp_path / "missing.json") is None
 
 
+def test_a_new_home_makes_the_shipped_schema_stale(monkeypatch):
+    """A home added to components/<kind>/ adds a type before anything imports it: the shipped schema
+    is no longer used (and the test above says to refresh it)."""
+    assert shipped.shipped_schema() is not None
+    assert "components/controllers/lqr.py" in shipped._home_files()
+    homes = shipped._home_files() + ["components/controllers/a_new_law.py"]
+    monkeypatch.setattr(shipped, "_home_files", lambda: homes)
+    assert shipped.shipped_schema() is None
+
+
 def test_write_schema_file_round_trip(tmp_path):
     # in a fresh interpreter, as the refresh command runs: its sources are what generation imports
     target = tmp_path / "composed.schema.json"

@@ -25,12 +25,22 @@ SCHEMA_FILE = Path(__file__).with_name("composed.schema.json")
 _ROOT = Path(__file__).resolve().parent  # the package directory: sources are relative to it
 
 
+def _home_files() -> list[str]:
+    """The component homes present in the package, ``components/<kind>/<name>.py``: a new one adds a
+    type to the schema before anything imports it."""
+    return sorted(
+        p.relative_to(_ROOT).as_posix() for p in (_ROOT / "components").glob("*/[!_]*.py")
+    )
+
+
 def _fingerprint(sources: list[str]) -> str:
-    """SHA-256 over the relative path and bytes of each source file (raises OSError if one is gone)."""
+    """SHA-256 over the relative path and bytes of each source file and over the list of component
+    homes present (raises OSError if a source is gone)."""
     digest = hashlib.sha256()
     for rel in sources:
         digest.update(rel.encode())
         digest.update((_ROOT / rel).read_bytes())
+    digest.update("\n".join(_home_files()).encode())
     return digest.hexdigest()
 
 
