@@ -281,7 +281,8 @@ def translational_law(
 def attitude_law(
     ctx: BuildContext, nominal_inertia: Vec3, K3: float, K4: float, K5: float, kappa: float
 ) -> Yang2013AttitudeController:
-    """Yang2013's law (13) (the one builder of the law).
+    """Yang2013's law (13) (the one builder of the law: ``yang2013-attitude`` and
+    ``yang2013-force-torque`` use it).
 
     Parameters
     ----------

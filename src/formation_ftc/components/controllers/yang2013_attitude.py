@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
-import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._flight_defaults import NOMINAL_INERTIA
@@ -26,7 +25,10 @@ from formation_ftc.components._sections import (
     check_unit_quaternions,
     quaternion_rows,
 )
-from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController
+from formation_ftc.components.controllers._yang2013 import (
+    Yang2013AttitudeController,
+    attitude_law,
+)
 from formation_ftc.components.controllers.attitude_pd import QUATERNION_LAW_NEEDS, error_quaternion
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Controller, FlightInputs, component
@@ -36,7 +38,6 @@ __all__ = [
     "Yang2013AttitudeHold",
     "Yang2013AttitudeSection",
     "yang2013_error_state",
-    "yang2013_attitude_law",
 ]
 
 
@@ -139,48 +140,9 @@ class Yang2013AttitudeSection(StrictModel):
         return self
 
 
-def yang2013_attitude_law(
-    ctx: BuildContext, nominal_inertia: Vec3, K3: float, K4: float, K5: float, kappa: float
-) -> Yang2013AttitudeController:
-    """Yang2013's law (13) (the one builder of the law: ``yang2013-attitude`` and
-    ``yang2013-force-torque`` use it).
-
-    Parameters
-    ----------
-    ctx : BuildContext
-        The build's context (the spacecraft count).
-    nominal_inertia : Vec3
-        The law's stated principal inertia [kg m^2] (never the plant's).
-    K3, K4, K5 : float
-        Gains [1/s].
-    kappa : float
-        Smoothing constant [rad^2/s^2].
-
-    Returns
-    -------
-    Yang2013AttitudeController
-        The law.
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace
-    >>> law = yang2013_attitude_law(SimpleNamespace(count=2), (20.0, 25.0, 30.0), 0.2, 1.0, 1.0, 1e-3)
-    >>> law.nominal_inertia.diagonal().tolist(), law.count
-    ([20.0, 25.0, 30.0], 2)
-    """
-    return Yang2013AttitudeController(
-        count=ctx.count,
-        nominal_inertia=as_float(np.diag(np.asarray(nominal_inertia, dtype=float))),
-        K3=as_float(K3),
-        K4=as_float(K4),
-        K5=as_float(K5),
-        kappa=as_float(kappa),
-    )
-
-
 def _build(sec: Yang2013AttitudeSection, ctx: BuildContext) -> Yang2013AttitudeHold:
     """The controller of a validated ``[controller] type = "yang2013-attitude"`` section."""
-    law = yang2013_attitude_law(ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa)
+    law = attitude_law(ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa)
     q_d = quaternion_rows(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
     return Yang2013AttitudeHold(law=law, desired_quaternion=as_float(q_d))
 
