@@ -72,8 +72,9 @@ def _leaf_of(path: str, keys: Mapping[str, int]) -> tuple[int, tuple[int, ...]] 
 
 
 def bind_fields(loop, values: Mapping[str, float]) -> dict[str, FieldBinding] | None:
-    """Bindings of every field of ``values`` in the template ``loop`` built with those values, or None when a field names no leaf whose elements hold its value (the group is then
-    built per run), or two fields write the same element.
+    """Bindings of every field of ``values`` in the template ``loop`` built with those values, or
+    None when a field names no leaf whose elements hold its value (the group is then built per run),
+    or two fields write the same element.
 
     Parameters
     ----------
