@@ -8,7 +8,9 @@ import json
 
 import numpy as np
 
+from formation_ftc.components.evaluations.li2020_formation_errors import E000_04_WINDOW
 from formation_ftc.config import loader
+from formation_ftc.papers._study import read_study
 from formation_ftc.papers.li2020.reproduction import REPRODUCTION, SCENARIOS, SUMMARY_KEYS
 from formation_ftc.registry import get_method
 
@@ -31,6 +33,11 @@ def test_reproduction_short_horizon(tmp_path, recheck_verdicts):
     # shortened horizon: the 30 s reference values are comparable and must match
     assert verdicts["li2020-thm1: mu1_at_30s"] == "match"
     assert any(c.name == "communication graph balanced" and c.holds is False for c in rep.checks)
+    assert (tmp_path / "trajectory3d.json").is_file()  # the interactive view (an unlisted figure)
+    # the E000-04 run covers the window of its metric mu1_max_50_300s
+    runs = read_study("li2020")["reproduction"]["runs"]
+    literal = next(r for r in runs if isinstance(r, dict) and r["name"].endswith("literal-sign"))
+    assert literal["set"]["simulation.horizon"] == E000_04_WINDOW[1]
 
 
 def test_builtin_scenarios_validate_and_plot(load, simulate, tmp_path):

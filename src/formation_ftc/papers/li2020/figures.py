@@ -162,7 +162,8 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
 
 
 def trajectories_3d(ds, path: Path) -> Path:
-    """Interactive 3-D view of the LVLH trajectories of ``ds`` (``trajectories_3d.html`` beside ``path``)."""
+    """Interactive 3-D view of the LVLH trajectories of ``ds``: ``trajectory3d.json`` (the file the
+    report page reads) in the directory of ``path``, replaced."""
     from formation_ftc.report.html import write_trajectory3d
 
     positions = {
