@@ -86,8 +86,8 @@ def plot_fig4(
     analytic: Mapping[float, np.ndarray],
     sim_err: np.ndarray,
     sim_alpha: np.ndarray,
-    path: Path,
     e_s: float,
+    path: Path,
 ) -> Path:
     """Analytic alpha_2(e_s) of eq. (11) for each pi, and the simulated alpha_2 vs max error."""
     fig, axes = new_figure(
