@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     import jax
     import numpy as np
 
-    from formation_ftc.api import compile_scenario, load_scenario
+    from formation_ftc.api import build_loop, load_scenario
     from formation_ftc.papers.azizi2009.alpha2_study import run_batch
 
     sc = load_scenario(
@@ -57,12 +57,12 @@ def main(argv: list[str] | None = None) -> int:
         f"{first:.2f} s, then wall {w:.2f} s, CPU {c:.2f} s, {steps / w:.3g} run-steps/s"
     )
     for name in ("azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"):
-        c_ = compile_scenario(load_scenario(name, {"simulation.horizon": args.horizon}))
-        f = jax.jit(c_.run).lower(c_.params).compile()
+        c_ = build_loop(load_scenario(name, {"simulation.horizon": args.horizon}))
+        f = jax.jit(type(c_).run).lower(c_).compile()
         ts = []
         for _ in range(args.repeats):
             t0 = time.perf_counter()
-            jax.block_until_ready(f(c_.params))
+            jax.block_until_ready(f(c_))
             ts.append(time.perf_counter() - t0)
         print(f"{name}: {statistics.median(ts):.2f} s per run after compilation")
     return 0

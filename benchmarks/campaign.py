@@ -68,7 +68,7 @@ def overhead(
             template, bindings = entries[0]
             values = {p: cols.values[p] for p in bindings if p != "simulation.seed"}
             values["simulation.seed"] = cols.seed
-            batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
+            batch, axes = apply_bindings(template, bindings, values, plan.chunk_size)
             batches.append((template, axes, batch))
         for template, axes, batch in batches[:1]:
             jax.block_until_ready(batched_run(template, axes, plan.chunk_size)(batch))
@@ -185,15 +185,15 @@ def main(argv: list[str] | None = None) -> int:
     n_sc = len(masses)
 
     # -- single run: jit once, then the median of --repeats timed runs
-    compiled = api.compile_scenario(scenario)
-    single = jax.jit(compiled.run)
+    compiled = api.build_loop(scenario)
+    single = jax.jit(type(compiled).run)
     t0 = time.perf_counter()
-    jax.block_until_ready(single(compiled.params))
+    jax.block_until_ready(single(compiled))
     t_compile_single = time.perf_counter() - t0
     times = []
     for _ in range(args.repeats):
         t0 = time.perf_counter()
-        jax.block_until_ready(single(compiled.params))
+        jax.block_until_ready(single(compiled))
         times.append(time.perf_counter() - t0)
     t_single = statistics.median(times)
     single_rate = n_steps / t_single

@@ -32,17 +32,17 @@ DEFAULT_CASES = (
 _CHILD = """
 import hashlib, json, resource, sys, time
 import jax, numpy as np
-from formation_ftc.api import compile_scenario, load_scenario
+from formation_ftc.api import build_loop, load_scenario
 from formation_ftc.sim.runtime import xla
 name, horizon, repeats = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
-c = compile_scenario(load_scenario(name, {"simulation.horizon": horizon}))
-run = xla.jit(c.run).lower(c.params).compile()
-out = jax.block_until_ready(run(c.params))
+c = build_loop(load_scenario(name, {"simulation.horizon": horizon}))
+run = xla.jit(type(c).run).lower(c).compile()
+out = jax.block_until_ready(run(c))
 best_wall, best_cpu = float("inf"), float("inf")
 for _ in range(repeats):
     r0 = resource.getrusage(resource.RUSAGE_SELF)
     t0 = time.perf_counter()
-    out = jax.block_until_ready(run(c.params))
+    out = jax.block_until_ready(run(c))
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_SELF)
     best_wall = min(best_wall, wall)

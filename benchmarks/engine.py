@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
 import formation_ftc as ftc  # noqa: E402
-from formation_ftc.api import compile_scenario  # noqa: E402
+from formation_ftc.api import build_loop  # noqa: E402
 from formation_ftc.sim.batch import stack_params  # noqa: E402
 
 
@@ -80,14 +80,14 @@ def main() -> None:
 
     # --- JAX single run -------------------------------------------------------------------------
     scn = ftc.load_scenario("li2020-thm1", {"simulation.horizon": args.horizon})
-    comp = compile_scenario(scn)
+    comp = build_loop(scn)
     n = scn.simulation.n_steps
-    run = jax.jit(comp.run)
+    run = jax.jit(type(comp).run)
     t0 = time.perf_counter()
-    lowered = run.lower(comp.params)
+    lowered = run.lower(comp)
     compiled = lowered.compile()
     t_compile = time.perf_counter() - t0
-    t_run = _median_time(lambda: jax.block_until_ready(compiled(comp.params)))
+    t_run = _median_time(lambda: jax.block_until_ready(compiled(comp)))
     jax_step = t_run / n
 
     # --- numpy RK4 loop ---------------------------------------------------------------------------
@@ -114,10 +114,10 @@ def main() -> None:
     bscn = ftc.load_scenario(
         "li2020-thm1", {"simulation.horizon": args.batch_horizon, "simulation.record_every": 100}
     )
-    bcomp = compile_scenario(bscn)
+    bcomp = build_loop(bscn)
     bn = bscn.simulation.n_steps
     rng = np.random.default_rng(0)
-    loop = bcomp.params  # the ClosedLoop pytree
+    loop = bcomp  # the ClosedLoop pytree
     masses = loop.plant.mass * rng.uniform(0.9, 1.1, size=(args.batch,) + np.shape(loop.plant.mass))
     # the runs differ by their true masses
     runs = [
@@ -125,7 +125,7 @@ def main() -> None:
     ]
 
     def time_batch(batch, axes):
-        vrun = jax.jit(jax.vmap(bcomp.run, in_axes=(axes,)))
+        vrun = jax.jit(jax.vmap(type(bcomp).run, in_axes=(axes,)))
         t0 = time.perf_counter()
         vcompiled = vrun.lower(batch).compile()
         t_comp = time.perf_counter() - t0

@@ -29,7 +29,7 @@ os.environ.setdefault("FORMATION_FTC_JAX_CACHE", "off")  # every compile measure
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
+from formation_ftc.api import build_loop, load_scenario  # noqa: E402
 from formation_ftc.sim import batch as batch_programs  # noqa: E402
 from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid  # noqa: E402
 
@@ -41,7 +41,6 @@ def _azizi(horizon: float):
 
     _c = read_study("azizi2009")["reproduction"]["constants"]
     NOISE_SIGMA, SEEDS = _c["noise_sigma"], _c["seeds"]
-    from formation_ftc.sim.compiled import compile_loop
 
     sc = load_scenario(
         "azizi2009-llfr",
@@ -59,7 +58,7 @@ def _azizi(horizon: float):
         [_variant(loop, {"alpha": [1.0, w, 1.0, 1.0], "seed": s}) for w in weights]
         for s in range(SEEDS)
     ]
-    return compile_loop(loop), grid
+    return loop.validate(), grid
 
 
 def _mehrabian(scale: float):
@@ -69,8 +68,8 @@ def _mehrabian(scale: float):
     base = load_scenario(names[0])
     n = max(1, round(scale * base.simulation.n_steps))
     ov = {"simulation.horizon": n * base.simulation.dt, "simulation.record_every": n}
-    compiled = [compile_scenario(load_scenario(name, ov)) for name in names]
-    return compiled[0], [[with_seed(c.params, s) for s in SEEDS] for c in compiled]
+    compiled = [build_loop(load_scenario(name, ov)) for name in names]
+    return compiled[0], [[with_seed(c, s) for s in SEEDS] for c in compiled]
 
 
 def _time(fn, args) -> tuple[float, float, object]:

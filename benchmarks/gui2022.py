@@ -32,21 +32,21 @@ def main(argv: list[str] | None = None) -> int:
     import jax
 
     import formation_ftc as ftc
-    from formation_ftc.api import compile_scenario
+    from formation_ftc.api import build_loop
     from formation_ftc.papers.gui2022.numpy_reference import simulate_numpy
 
     jax.config.update("jax_compilation_cache_dir", None)  # measure real compile times
 
     def time_jax(name, horizon, unroll):
         scn = ftc.load_scenario(name, {"simulation.horizon": horizon, "simulation.unroll": unroll})
-        c = compile_scenario(scn)
+        c = build_loop(scn)
         t0 = time.perf_counter()
-        f = jax.jit(c.run).lower(c.params).compile()
+        f = jax.jit(type(c).run).lower(c).compile()
         tc = time.perf_counter() - t0
         ts, cpu = [], []
         for _ in range(args.repeats):
             t0, p0 = time.perf_counter(), time.process_time()
-            jax.block_until_ready(f(c.params))
+            jax.block_until_ready(f(c))
             ts.append(time.perf_counter() - t0)
             cpu.append(time.process_time() - p0)
         return tc, statistics.median(ts), scn.simulation.n_steps, min(cpu)

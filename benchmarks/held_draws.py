@@ -32,7 +32,7 @@ os.environ.setdefault("FORMATION_FTC_JAX_CACHE", "off")  # every compile measure
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
+from formation_ftc.api import build_loop, load_scenario  # noqa: E402
 from formation_ftc.sim import loop  # noqa: E402
 from formation_ftc.sim.runtime import xla  # noqa: E402
 
@@ -42,10 +42,10 @@ from xla_options import _mehrabian  # noqa: E402  (the Mehrabian seed-study batc
 
 def _single(name: str, horizon: float, overrides: dict | None = None):
     def make(scale: float):
-        c = compile_scenario(
+        c = build_loop(
             load_scenario(name, {**(overrides or {}), "simulation.horizon": horizon * scale})
         )
-        return f"{name} (single run)", c.run, c.params, c.params.n_steps, False
+        return f"{name} (single run)", type(c).run, c, c.n_steps, False
 
     return make
 

@@ -249,7 +249,7 @@ def jax_closed_loop(
     compiled = build(scn)
     n = scn.simulation.n_steps
     if check_finite:
-        return jax.jit(compiled.run), compiled.params, n
+        return jax.jit(type(compiled).run), compiled, n
     engine_run = loop_module.run_fixed_step
 
     def run(p):  # traced once, at the first call: the loop's run with the check switched off
@@ -259,7 +259,7 @@ def jax_closed_loop(
         finally:
             loop_module.run_fixed_step = engine_run
 
-    return jax.jit(run), compiled.params, n
+    return jax.jit(run), compiled, n
 
 
 def jax_full_run_time(

@@ -34,7 +34,7 @@ os.environ.setdefault("FORMATION_FTC_JAX_CACHE", "off")  # every compile measure
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
+from formation_ftc.api import build_loop, load_scenario  # noqa: E402
 from formation_ftc.sim.batch import stack_params  # noqa: E402
 from formation_ftc.sim.metrics import metrics_dict  # noqa: E402
 
@@ -106,15 +106,13 @@ def main() -> None:
     )
     for name, block, runs in cases:
         ov = {"simulation.horizon": args.horizon}
-        loop = compile_scenario(load_scenario(name, ov)).params
+        loop = build_loop(load_scenario(name, ov))
         n = loop.n_steps
         if (
             runs > 1
         ):  # a sweep of the second actuator's weight alpha_2 from 1 to 10, as the reproduction's
             loops = [
-                compile_scenario(
-                    load_scenario(name, {**ov, "controller.alpha": [1.0, a, 1.0, 1.0]})
-                ).params
+                build_loop(load_scenario(name, {**ov, "controller.alpha": [1.0, a, 1.0, 1.0]}))
                 for a in np.linspace(1.0, 10.0, runs)
             ]
             batch, axes = stack_params([dataclasses.replace(p, metric_block=1) for p in loops])

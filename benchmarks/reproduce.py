@@ -6,7 +6,7 @@ the compile time of every built-in scenario as ``formation-ftc run`` compiles it
    process (interpreter start and imports included), each paper's wall time and its phase breakdown
    (compile / run / post / plot / report, see ``formation_ftc.report.profile``), and the process's CPU
    time (user + sys; on a shared machine a steadier figure than the wall time) with the load average.
-2. For every built-in scenario at its default horizon: ``jax.jit(compiled.run).lower(params).compile()``
+2. For every built-in scenario at its default horizon: ``jax.jit(type(compiled).run).lower(params).compile()``
    (tracing, lowering and XLA compile; the persistent cache off and JAX's in-memory caches cleared
    before each scenario, so every number is a cold compile), in one fresh process: wall and process
    CPU time (XLA's compile threads included). The slowest (wall) is printed last.
@@ -45,16 +45,16 @@ PHASES = ("compile", "run", "post", "plot", "report")
 _COMPILE_SCRIPT = r"""
 import json, sys, time
 import jax
-from formation_ftc.api import compile_scenario, list_scenarios, load_scenario
+from formation_ftc.api import build_loop, list_scenarios, load_scenario
 from formation_ftc.sim.runtime import xla
 names = sorted(list_scenarios())
 out, cpu = {}, {}
 for name in names:
     jax.clear_caches()
     try:
-        c = compile_scenario(load_scenario(name))
+        c = build_loop(load_scenario(name))
         t0, c0 = time.perf_counter(), time.process_time()
-        xla.jit(c.run).lower(c.params).compile()  # as `formation-ftc run` compiles it (its XLA options)
+        xla.jit(type(c).run).lower(c).compile()  # as `formation-ftc run` compiles it (its XLA options)
         out[name] = time.perf_counter() - t0
         cpu[name] = time.process_time() - c0
     except Exception as exc:  # a scenario that cannot compile is reported, not fatal
@@ -66,7 +66,7 @@ for name in names:
 _RERUN_SCRIPT = r"""
 import json, time
 import jax
-from formation_ftc.api import compile_scenario, finish_run, load_scenario, simulate_with_metrics
+from formation_ftc.api import build_loop, finish_run, load_scenario, simulate_with_metrics
 from formation_ftc.sim.runtime import xla
 for name in ("li2020-thm1", "yang2013-healthy", "gui2022-lof2tc", "mehrabian-isolation", "azizi2009-llfr"):
     scn = load_scenario(name)
@@ -79,8 +79,8 @@ for name in ("li2020-thm1", "yang2013-healthy", "gui2022-lof2tc", "mehrabian-iso
     fresh = []
     for _ in range(2):  # the plain reference: a new jax.jit per call, persistent cache warm
         t0 = time.perf_counter()
-        c = compile_scenario(scn)
-        finish_run(scn, c, jax.block_until_ready(xla.jit(c.run)(c.params)))
+        c = build_loop(scn)
+        finish_run(scn, c, jax.block_until_ready(xla.jit(type(c).run)(c)))
         fresh.append(time.perf_counter() - t0)
     print(json.dumps({name: {"first_s": t[1] - t[0], "again_s": min(t[2] - t[1], t[3] - t[2]),
                              "fresh_jit_s": min(fresh)}}), flush=True)

@@ -26,7 +26,7 @@ os.environ.setdefault("FORMATION_FTC_JAX_CACHE", "off")  # every compile measure
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from formation_ftc.api import compile_scenario, load_scenario  # noqa: E402
+from formation_ftc.api import build_loop, load_scenario  # noqa: E402
 from formation_ftc.sim.runtime import xla  # noqa: E402
 
 
@@ -37,19 +37,19 @@ def _mehrabian(scale: float):
     names = [CASES[c][0] for c in "ABC"]
     ov = {"simulation.horizon": 20.0 * scale}
     n = load_scenario(names[0], ov).simulation.n_steps
-    comp = [compile_scenario(load_scenario(x, {**ov, "simulation.record_every": n})) for x in names]
-    params, axes = stack_params([with_seed(c.params, s) for c in comp for s in range(1, 21)])
+    comp = [build_loop(load_scenario(x, {**ov, "simulation.record_every": n})) for x in names]
+    params, axes = stack_params([with_seed(c, s) for c in comp for s in range(1, 21)])
     size = 3 * 20
-    run = comp[0].run
+    run = type(comp[0]).run
     fn = jax.vmap(lambda p: dict(run(p)), in_axes=(axes,), axis_size=size)
-    fast = bool(getattr(comp[0].params.controller, "batch_fast_compile", False))
+    fast = bool(getattr(comp[0].controller, "batch_fast_compile", False))
     return "mehrabian seed study (60 runs x 8 spacecraft)", fn, params, size * n, fast
 
 
 def _single(name: str, horizon: float):
     def make(scale: float):
-        c = compile_scenario(load_scenario(name, {"simulation.horizon": horizon * scale}))
-        return f"{name} (single run)", c.run, c.params, c.params.n_steps, False
+        c = build_loop(load_scenario(name, {"simulation.horizon": horizon * scale}))
+        return f"{name} (single run)", type(c).run, c, c.n_steps, False
 
     return make
 

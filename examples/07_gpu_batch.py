@@ -1,9 +1,9 @@
 # %% [markdown]
 # # A batch of runs on the GPU (or the CPU)
 #
-# A compiled scenario is a pure function `params -> outputs`. `sim.batch.stack_params` stacks the
-# parameters that differ between runs (here the PD gains and the noise seed) and keeps the shared ones
-# once; `sim.batch.batched_run` is the jitted `vmap` of the run. The same code runs on a GPU when JAX
+# A scenario builds a closed loop whose run is a pure function of the loop. `sim.batch.stack_params`
+# stacks the leaves that differ between runs (here the PD gains and the noise seed) and keeps the
+# shared ones once; `sim.batch.batched_run` is the jitted `vmap` of the run. The same code runs on a GPU when JAX
 # sees one (`pip install -e '.[gpu]'` in the clone); otherwise on the CPU, as in this page's build.
 
 # %%
@@ -14,23 +14,22 @@ import numpy as np
 from _common import size
 
 import formation_ftc as ftc
-from formation_ftc.api import compile_scenario
+from formation_ftc.api import build_loop
 from formation_ftc.sim.batch import batched_run, stack_params
 
 print("JAX devices:", jax.devices())
 n_runs = size(1024, 16)
 rng = np.random.default_rng(0)
 kps = rng.uniform(1.0, 4.0, n_runs)
-params = []
+loops = []
 for k, kp in enumerate(kps):
     scn = ftc.load_scenario(
         "cw-pd-fault",
         overrides={"simulation.horizon": 200.0, "controller.kp": float(kp), "simulation.seed": k},
     )
-    compiled = compile_scenario(scn)
-    params.append(compiled.params)
-batch, in_axes = stack_params(params)
-run = batched_run(compiled, in_axes, n_runs)
+    loops.append(build_loop(scn))
+batch, in_axes = stack_params(loops)
+run = batched_run(loops[0], in_axes, n_runs)
 
 # %%
 t0 = time.perf_counter()
@@ -50,7 +49,7 @@ print(
 
 # %%
 per_run = [
-    compiled.metrics(jax.tree_util.tree_map(lambda a, r=r: np.asarray(a[r]), out))
+    loops[r].metric_values(jax.tree_util.tree_map(lambda a, r=r: np.asarray(a[r]), out))
     for r in range(n_runs)
 ]
 errs = np.array([m["final_position_error_mean"] for m in per_run])

@@ -168,8 +168,8 @@ def test_result_dataset_variables_carry_units_and_long_names():
     from formation_ftc.cf import apply_cf, cf_problems
     from formation_ftc.components.controllers.none import ZeroController
     from formation_ftc.components.plants.clohessy_wiltshire import ClohessyWiltshirePlant
-    from formation_ftc.sim.compiled import records_to_dataset
     from formation_ftc.sim.loop import ClosedLoop
+    from formation_ftc.sim.records import records_to_dataset
 
     plant = ClohessyWiltshirePlant(
         mean_motion=np.float64(1e-3),

@@ -19,8 +19,8 @@ from formation_ftc.config.base import ScenarioBase
 from formation_ftc.registry import Condition, get_method
 
 if TYPE_CHECKING:  # JAX is imported by the functions that simulate, not with this module
-    from formation_ftc.registry import Compiled
     from formation_ftc.sim.engine import DivergenceInfo
+    from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
     "load_scenario",
@@ -28,7 +28,7 @@ __all__ = [
     "simulate",
     "simulate_with_metrics",
     "check",
-    "compile_scenario",
+    "build_loop",
     "finish_run",
     "result_metrics",
     "metric_units",
@@ -166,9 +166,10 @@ def list_scenarios() -> dict[str, str]:
     return out
 
 
-def compile_scenario(scenario: ScenarioBase) -> Compiled:
-    """The method's compiled form of a scenario (no JAX compilation happens yet). Its loop carries the
-    scenario's step, horizon, seed and admissible set (:meth:`~formation_ftc.sim.loop.ClosedLoop.from_simulation`).
+def build_loop(scenario: ScenarioBase) -> ClosedLoop:
+    """The scenario's closed loop, its components checked against each other (no JAX compilation
+    happens yet). It carries the scenario's step, horizon, seed and admissible set
+    (:meth:`~formation_ftc.sim.loop.ClosedLoop.from_simulation`); ``loop.run()`` is the pure run.
 
     Parameters
     ----------
@@ -177,22 +178,27 @@ def compile_scenario(scenario: ScenarioBase) -> Compiled:
 
     Returns
     -------
-    formation_ftc.registry.Compiled
-        The closed loop as parameters (``params``, every number a leaf) and its run function, step
-        ``dt`` [s] and record interval.
+    formation_ftc.sim.loop.ClosedLoop
+        Every number a leaf (gains, masses, faults, seed), every structural choice static (components,
+        step ``dt`` [s], number of steps, record interval).
+
+    Raises
+    ------
+    CompositionError
+        Components that cannot work together (from :meth:`~formation_ftc.sim.loop.ClosedLoop.validate`).
 
     Examples
     --------
-    >>> from formation_ftc.api import compile_scenario, load_scenario
-    >>> compiled = compile_scenario(load_scenario("cw-pd-fault"))
-    >>> compiled.dt, compiled.params.n_steps
+    >>> from formation_ftc.api import build_loop, load_scenario
+    >>> loop = build_loop(load_scenario("cw-pd-fault"))
+    >>> loop.dt, loop.n_steps
     (0.1, 6000)
     """
     return get_method(scenario.scenario.method).build(scenario)
 
 
 def finish_run(
-    scenario: ScenarioBase, compiled: Compiled, out: dict, raise_on_divergence: bool = True
+    scenario: ScenarioBase, loop: ClosedLoop, out: dict, raise_on_divergence: bool = True
 ):
     """numpy RunOutput -> (Dataset with provenance, metrics); raises SimulationDiverged with .partial.
 
@@ -200,8 +206,8 @@ def finish_run(
     ----------
     scenario : ScenarioBase
         The scenario that was run (recorded in the dataset's attributes).
-    compiled : formation_ftc.registry.Compiled
-        Its compiled form (:func:`compile_scenario`).
+    loop : formation_ftc.sim.loop.ClosedLoop
+        Its loop (:func:`build_loop`).
     out : dict
         What the compiled run returned (records, metrics, final state, ``diverged_step``).
     raise_on_divergence : bool, optional
@@ -215,11 +221,11 @@ def finish_run(
 
     Examples
     --------
-    >>> from formation_ftc.api import compile_scenario, finish_run, load_scenario
+    >>> from formation_ftc.api import build_loop, finish_run, load_scenario
     >>> from formation_ftc.sim.programs import jitted_run
     >>> scn = load_scenario("cw-free-drift", {"simulation.horizon": 10.0})
-    >>> compiled = compile_scenario(scn)
-    >>> ds, metrics = finish_run(scn, compiled, jitted_run(compiled)(compiled.params))
+    >>> loop = build_loop(scn)
+    >>> ds, metrics = finish_run(scn, loop, jitted_run(loop)(loop))
     >>> ds.sizes["spacecraft"], ds.attrs["diverged"]
     (2, '')
     """
@@ -231,10 +237,10 @@ def finish_run(
 
     out = jax.tree_util.tree_map(np.asarray, dict(out))
     div = int(out["diverged_step"])
-    records, n_kept = trim_records(out["records"], div, compiled.record_every)
+    records, n_kept = trim_records(out["records"], div, loop.record_every)
     out["records"] = records
-    ds = compiled.to_dataset(out, n_kept)
-    metrics = {k: float(v) for k, v in compiled.metrics(out).items()}
+    ds = loop.dataset(out, n_kept)
+    metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
     ds.attrs.update(provenance())
     ds.attrs.update(
         scenario_name=scenario.scenario.name,
@@ -242,12 +248,12 @@ def finish_run(
         scenario_toml=loader.dump_toml(scenario),
         seed=int(scenario.simulation.seed),
         metrics_json=json.dumps(metrics),
-        metric_units_json=json.dumps(_metric_units(compiled, metrics)),
+        metric_units_json=json.dumps(_metric_units(loop, metrics)),
         diverged="",
     )
     _apply_cf(ds, scenario)
     if div >= 0:
-        info = _divergence_info(compiled, out, div)
+        info = _divergence_info(loop, out, div)
         ds.attrs["diverged"] = str(info)
         ds.attrs["history"] += f"\n{ds.attrs['created_utc']} diverged: {info}"
         if raise_on_divergence:
@@ -255,28 +261,25 @@ def finish_run(
     return ds, metrics
 
 
-def _divergence_info(compiled: Compiled, out: Mapping[str, Any], div: int) -> DivergenceInfo:
-    """Where and what diverged in the run ``out`` of ``compiled`` (first non-finite step ``div``):
+def _divergence_info(loop: ClosedLoop, out: Mapping[str, Any], div: int) -> DivergenceInfo:
+    """Where and what diverged in the run ``out`` of ``loop`` (first non-finite step ``div``):
     replayed from the last finite state. A replay that cannot run gives the step and time alone: a
     diagnostic never loses the run (also used by campaigns)."""
     from formation_ftc.sim.engine import DivergenceInfo, diagnose_divergence
 
-    t = compiled.t0 + div * compiled.dt
+    t = loop.t0 + div * loop.dt
     try:
-        if compiled.make_step is None:
-            raise RuntimeError("no make_step")
-        p = compiled.params
         return diagnose_divergence(
-            compiled.make_step(p),
+            loop.replay_step(),
             out["last_finite"],
             div,
             t,
-            compiled.spacecraft_axis,
-            max_steps=compiled.record_every,
-            dt=compiled.dt,
-            admissible=getattr(p, "admissible", None),
-            violations=getattr(p, "violations", None),
-            params=p,
+            loop.spacecraft_axis,
+            max_steps=loop.record_every,
+            dt=loop.dt,
+            admissible=loop.admissible,
+            violations=loop.violations,
+            params=loop,
         )
     except Exception:  # noqa: BLE001 - the run and its partial results matter more
         return DivergenceInfo(div, t, "<state>", None, ())
@@ -345,9 +348,9 @@ def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergen
 
     if not isinstance(scenario, ScenarioBase):
         scenario = load_scenario(scenario)
-    compiled = compile_scenario(scenario)
-    out = jitted_run(compiled)(compiled.params)
-    ds, metrics = finish_run(scenario, compiled, out, raise_on_divergence=raise_on_divergence)
+    loop = build_loop(scenario)
+    out = jitted_run(loop)(loop)
+    ds, metrics = finish_run(scenario, loop, out, raise_on_divergence=raise_on_divergence)
     return ds, Metrics(metrics, metric_units(ds))
 
 
@@ -423,11 +426,11 @@ def check(scenario: ScenarioBase | str | Path) -> Conditions:
     return Conditions(method.check(scenario) if method.check else [])
 
 
-def _metric_units(compiled: Compiled, metrics: Mapping[str, float]) -> dict[str, str]:
+def _metric_units(loop: ClosedLoop, metrics: Mapping[str, float]) -> dict[str, str]:
     """UDUNITS unit of each metric the loop declares (``"1"`` for dimensionless or undeclared)."""
     declared = {}
-    count = int(getattr(compiled.params, "count", 0) or 0)
-    for m in getattr(compiled.params, "metrics", ()) or ():
+    count = loop.count
+    for m in loop.metrics:
         units = str(getattr(m, "units", "") or "1")
         declared[m.name] = units
         if (

@@ -118,7 +118,7 @@ def apply_cf(
     Parameters
     ----------
     ds : xarray.Dataset
-        A result as ``compiled.to_dataset`` builds it (declared signals with units, long_name, frame).
+        A result as ``ClosedLoop.dataset`` builds it (declared signals with units, long_name, frame).
     scenario_name, method, description : str
         Used in the ``title`` global attribute.
     references : str

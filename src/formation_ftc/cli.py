@@ -627,14 +627,14 @@ def _elapsed() -> float:
     return time.perf_counter() - (_STARTED if _STARTED is not None else time.perf_counter())
 
 
-def _finish(scenario, compiled, out, console) -> tuple[Any, dict[str, float], dict | None]:
+def _finish(scenario, loop, out, console) -> tuple[Any, dict[str, float], dict | None]:
     """The dataset and metrics of a run, and its divergence (None, or the ``diverged`` object of
     ``run --json``; the dataset is then the partial result)."""
     from formation_ftc.api import finish_run, result_metrics
     from formation_ftc.sim.engine import SimulationDiverged
 
     try:
-        ds, metrics = finish_run(scenario, compiled, out)
+        ds, metrics = finish_run(scenario, loop, out)
         return ds, metrics, None
     except SimulationDiverged as exc:
         console.print(f"[red]{exc}[/]")
@@ -659,7 +659,7 @@ def _cmd_run(args) -> int:
     import jax
     from rich.console import Console
 
-    from formation_ftc.api import compile_scenario, metric_units, save_result
+    from formation_ftc.api import build_loop, metric_units, save_result
     from formation_ftc.config.loader import ScenarioError
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.report.run_page import run_figures, write_run_page
@@ -672,23 +672,23 @@ def _cmd_run(args) -> int:
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
     check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
     try:
-        compiled = compile_scenario(scenario)
+        loop = build_loop(scenario)
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         if isinstance(exc, ScenarioError):
             raise
         raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
-    check_memory(compiled, budgets, args.scenario)
+    check_memory(loop, budgets, args.scenario)
     if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
         _import_in_background("xarray", "formation_ftc.provenance")
     t0 = time.perf_counter()
     with console.status(
         f"compiling and running {scenario.scenario.name} ({scenario.simulation.n_steps:,} steps)..."
     ):
-        out = jitted_run(compiled)(compiled.params)
+        out = jitted_run(loop)(loop)
         jax.block_until_ready(out)
     simulation = time.perf_counter() - t0
     figs: list[Path] | None = None
-    ds, metrics, diverged = _finish(scenario, compiled, out, console)
+    ds, metrics, diverged = _finish(scenario, loop, out, console)
     ds.attrs["simulation_time_s"] = simulation  # compiling (or loading) and running [s]
     units = metric_units(ds)
     with staged_output(out_dir) as stage:  # replaces out_dir only once everything is written

@@ -204,20 +204,20 @@ def _tree_bytes(tree: Any) -> int:
     return total
 
 
-def run_memory_bytes(compiled: Any) -> int:
-    """Estimated peak memory of one run of ``compiled`` [bytes] (shapes only, nothing computed)."""
+def run_memory_bytes(loop: Any) -> int:
+    """Estimated peak memory of one run of ``loop`` [bytes] (shapes only, nothing computed)."""
     import jax
 
-    shapes = jax.eval_shape(compiled.run, compiled.params)
+    shapes = jax.eval_shape(type(loop).run, loop)
     out = dict(shapes)
     records = _tree_bytes(out.get("records"))
     state = _tree_bytes(out.get("final"))
-    return 2 * records + 4 * state + _tree_bytes(compiled.params)
+    return 2 * records + 4 * state + _tree_bytes(loop)
 
 
-def check_memory(compiled: Any, budgets: Budgets, where: str = "scenario", batch: int = 1) -> int:
-    """Refuse when ``batch`` runs of ``compiled`` need more than ``budgets.max_memory``; the estimate."""
-    need = run_memory_bytes(compiled) * batch
+def check_memory(loop: Any, budgets: Budgets, where: str = "scenario", batch: int = 1) -> int:
+    """Refuse when ``batch`` runs of ``loop`` need more than ``budgets.max_memory``; the estimate."""
+    need = run_memory_bytes(loop) * batch
     if budgets.max_memory is not None and need > budgets.max_memory:
         what = f"a batch of {batch} runs" if batch > 1 else "one run"
         fix = "lower campaign.chunk_size (--chunk-size), " if batch > 1 else ""
@@ -256,12 +256,12 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
     batch = 0
     for base, r in first_of_base.items():
         try:
-            compiled = api.compile_scenario(plan.scenario(plan.run_inputs(r)))
+            loop = api.build_loop(plan.scenario(plan.run_inputs(r)))
         except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
             if isinstance(exc, InputError):
                 raise
             raise InputError(
                 f"{where}: base scenario {base!r} (run {r}) cannot be compiled: {exc}"
             ) from None
-        batch = max(batch, check_memory(compiled, budgets, where, batch=int(plan.chunk_size)))
+        batch = max(batch, check_memory(loop, budgets, where, batch=int(plan.chunk_size)))
     return {"run_steps": steps, "campaign_steps": total, "batch_memory": batch}

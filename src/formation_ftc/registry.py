@@ -1,6 +1,6 @@
 """The method / reproduction registry and the contracts that plug a paper into the toolkit.
 
-A **method** turns a validated scenario into a compiled, pure JAX run (:class:`Compiled`); the generic
+A **method** turns a validated scenario into a :class:`~formation_ftc.sim.loop.ClosedLoop`; the generic
 :func:`formation_ftc.simulate`, the ``run``/``check`` commands and Monte Carlo campaigns all go through
 it. A **reproduction** runs a paper's study and returns a :class:`PaperReport` (figures, published vs
 reproduced rows, condition checks) that ``formation-ftc reproduce`` and the HTML report consume.
@@ -27,11 +27,10 @@ from pydantic import BaseModel
 from formation_ftc.sim.contract import BASES, CERTIFYING_BASES, Condition
 
 if TYPE_CHECKING:
-    from formation_ftc.sim.compiled import Compiled
+    from formation_ftc.sim.loop import ClosedLoop
 
 
 __all__ = [
-    "Compiled",
     "Method",
     "Condition",
     "BASES",
@@ -58,21 +57,11 @@ __all__ = [
 PyTree = Any
 
 
-def __getattr__(name: str) -> Any:
-    """``Compiled`` (re-exported from :mod:`formation_ftc.sim.compiled`) is imported when first read:
-    that module imports JAX, and the registry is read by commands that never compile (``show``)."""
-    if name == "Compiled":
-        from formation_ftc.sim.compiled import Compiled
-
-        return Compiled
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 @dataclass(frozen=True)
 class Method:
     name: str
     schema: type[BaseModel]
-    build: Callable[[Any], Compiled]
+    build: Callable[[Any], ClosedLoop]
     description: str = ""
     check: Callable[[Any], list[Condition]] | None = None
     plot: Callable[[Any, Any, Path], list[Path]] | None = (

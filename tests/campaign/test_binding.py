@@ -28,7 +28,7 @@ def _template(base: str, **overrides):
     scn = api.load_scenario(
         base, {"simulation.horizon": 2 * sim.record_every * sim.dt, **overrides}
     )
-    return scn, api.compile_scenario(scn).params
+    return scn, api.build_loop(scn)
 
 
 def _leaf_key(loop, n: int) -> str:

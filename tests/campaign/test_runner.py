@@ -170,7 +170,7 @@ def _raw_of(out):
 
 
 def test_random_structural_choice_splits_a_chunk_by_static_key(tmp_path, tiny):
-    """A random choice of a structural field (controller.mode changes Compiled.static_key) mixes two
+    """A random choice of a structural field (controller.mode changes ClosedLoop.static_key) mixes two
     programs in one chunk: each group is its own vmap batch; every run still equals its single run."""
     raw = tiny(runs=4, chunk_size=4, metrics=["delta_v_total"])
     raw["sample"] = {

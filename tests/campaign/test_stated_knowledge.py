@@ -83,7 +83,7 @@ def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(
 
     # the runner's fast path: the sampled field written into the leaf its path names, per run
     scenario = plan.scenario(inputs[0])
-    template = api.compile_scenario(scenario).params
+    template = api.build_loop(scenario)
     bindings = bind_fields(template, {field: inputs[0].values[field]})
     assert bindings is not None, f"{field} should bind to its parameter leaf"
     batch, axes = apply_bindings(template, bindings, {field: sampled}, len(runs))
@@ -97,7 +97,7 @@ def test_sampled_true_mass_leaves_the_nominal_mass_unchanged(
     assert nominal[index] == stated
     # the slow path agrees: every run built from its own validated scenario
     for r, inp in zip(runs, inputs, strict=True):
-        loop = api.compile_scenario(plan.scenario(inp)).params
+        loop = api.build_loop(plan.scenario(inp))
         np.testing.assert_array_equal(np.asarray(_leaf(loop, flight_leaf)), nominal)
         assert np.asarray(_leaf(loop, plant_leaf))[index] == sampled[r]
         np.testing.assert_array_equal(

@@ -361,6 +361,6 @@ def test_gui2022_league_gain_is_the_printed_one_on_the_league_orbit(method):
         ]
     )
     cell = next(c for c in plan_cells(load_league("translational"))[method] if c.case == "none")
-    law = api.compile_scenario(api.load_scenario(cell.raw)).params.controller.law  # f = m_nom u
+    law = api.build_loop(api.load_scenario(cell.raw)).controller.law  # f = m_nom u
     K = np.asarray(law.K)
     assert np.max(np.abs(K - printed)) < 1e-4

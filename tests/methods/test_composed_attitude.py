@@ -15,7 +15,6 @@ from formation_ftc.cli import main
 from formation_ftc.components.plants.euler_angle_attitude import EulerAngleAttitudePlant
 from formation_ftc.config.loader import ScenarioError
 from formation_ftc.methods.composed import make_loop
-from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.components import PerfectSensors, as_float
 
 NAME = "compose-mehrabian-on-yang2013"
@@ -193,9 +192,9 @@ def test_composition_equals_the_law_on_the_euler_angle_plant():
     ref = dataclasses.replace(
         loop, plant=euler_plant, sensors=PerfectSensors(), actuator=loop.actuator.inner
     )
-    c = compile_loop(ref)
-    out = jax.jit(c.run)(c.params)
-    b = c.to_dataset(out, int(np.shape(out["records"]["command"])[0]))
+    c = ref.validate()
+    out = jax.jit(type(c).run)(c)
+    b = c.dataset(out, int(np.shape(out["records"]["command"])[0]))
     assert np.abs(b.tracking_error.values).max() > 0.1 and np.abs(b.fault.values).max() == 0.5
     for var in ("tracking_error", "command", "synchronisation_error", "fault_estimate_adaptive"):
         np.testing.assert_allclose(a[var].values, b[var].values, rtol=0, atol=1e-9, err_msg=var)

@@ -19,7 +19,6 @@ from formation_ftc.config.loader import ScenarioError
 from formation_ftc.core.polygon_formation import rotating_polygon
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.sim.batch import batched_run, stack_params
-from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.metrics import metrics_dict
 
 NAME = "compose-azizi2009-on-li2020"
@@ -152,7 +151,7 @@ def test_flfr_reduces_the_post_fault_error_against_llfr_alone_but_not_below_e_s_
         loop, supervisor=dataclasses.replace(loop.supervisor, flfr=np.asarray(False))
     )
     batch, axes = stack_params([loop, llfr_only])
-    out = jax.device_get(batched_run(compile_loop(loop), axes, 2)(batch))
+    out = jax.device_get(batched_run(loop, axes, 2)(batch))
     assert np.all(np.asarray(out["diverged_step"]) < 0)
     flfr, llfr = (
         metrics_dict(loop.metrics, [np.asarray(v)[b] for v in out["metrics"]]) for b in range(2)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.api import compile_scenario, simulate_with_metrics
+from formation_ftc.api import build_loop, simulate_with_metrics
 from formation_ftc.core.dynamics.cw import cw_free_motion
 from formation_ftc.methods.composed import make_loop
 from formation_ftc.scenarios import __path__ as SCENARIOS
@@ -116,7 +116,7 @@ def test_divergence_replays_compile_once_per_structure():
         sc = ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 60.0, "controller.kp": kp})
         with pytest.raises(Exception, match="diverged"):
             simulate_with_metrics(sc)
-        return compile_scenario(sc)
+        return build_loop(sc)
 
     steps = engine._jitted(engine._params_step)._cache_size()
     diverged(1e6)

@@ -174,7 +174,7 @@ SOURCES = sorted(api.list_scenarios()) + _league_keys() + list(SYNTHETIC)
 
 
 def build(raw: dict, overrides: dict | None = None) -> ClosedLoop:
-    loop = api.compile_scenario(api.load_scenario(copy.deepcopy(raw), overrides=overrides)).params
+    loop = api.build_loop(api.load_scenario(copy.deepcopy(raw), overrides=overrides))
     assert isinstance(loop, ClosedLoop)
     return loop
 
@@ -596,13 +596,13 @@ def test_declared_signals_equal_the_recorded_outputs(key):
     compilation) are exactly the declared signals with their dims, and the dataset built from them holds
     each with its dims and units."""
     scn = _short(source_raw(key))
-    compiled = api.compile_scenario(scn)
-    loop = compiled.params
+    compiled = api.build_loop(scn)
+    loop = compiled
     shapes = jax.eval_shape(lambda p: dict(p.run()), loop)
     _check_records(loop, dict(shapes["records"]))
     n_rec = loop.n_steps // loop.record_every + 1
     zeros = {k: np.zeros(v.shape, v.dtype) for k, v in dict(shapes["records"]).items()}
-    _check_dataset(loop, compiled.to_dataset({"records": zeros}, n_rec), cf=False)
+    _check_dataset(loop, compiled.dataset({"records": zeros}, n_rec), cf=False)
 
 
 #: run end to end (``simulate_with_metrics``, one compiled program each): CF units of mixed vectors
@@ -614,7 +614,7 @@ RUN_END_TO_END = ("cw-free-drift", "gui2022-ilo")
 def test_short_run_dataset_holds_the_declared_signals(key):
     scn = _short(source_raw(key))
     ds, metrics = api.simulate_with_metrics(scn, raise_on_divergence=False)
-    loop = api.compile_scenario(scn).params
+    loop = api.build_loop(scn)
     assert not ds.attrs["diverged"]
     _check_dataset(loop, ds, cf=True)
     assert set(metrics) >= {m.name for m in loop.metrics if m.spacecraft != "each"}
@@ -642,6 +642,6 @@ def test_toml_round_trip(key):
     again = api.load_scenario(scn)
     dumped = api.load_scenario(tomllib.loads(loader.dump_toml(scn)))
     for other in (again, dumped):
-        rebuilt = api.compile_scenario(other).params
+        rebuilt = api.build_loop(other)
         assert structure_key(rebuilt) == structure_key(loop)
         assert not differing_leaves(rebuilt, loop)

@@ -143,11 +143,11 @@ def test_every_builder_takes_the_admissible_set_from_the_simulation_section(name
     """The loop of every built-in scenario -- through the API and through its method's own builder,
     which the paper reproductions call directly -- carries ``[simulation]``'s admissible set
     (:meth:`ClosedLoop.from_simulation`), not the loop's defaults."""
-    from formation_ftc.api import compile_scenario
+    from formation_ftc.api import build_loop
     from formation_ftc.registry import get_method
 
     scn = ftc.load_scenario(name, _LIMITS)
-    loops = [compile_scenario(scn).params, get_method(scn.scenario.method).build(scn).params]
+    loops = [build_loop(scn), get_method(scn.scenario.method).build(scn)]
     for loop in loops:
         got = [
             float(loop.max_position),

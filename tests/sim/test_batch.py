@@ -13,6 +13,7 @@ from cachetools import LRUCache
 from formation_ftc import api
 from formation_ftc.sim import batch as batch_module
 from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
+from formation_ftc.sim.components import component, static
 from formation_ftc.sim.programs import jitted_run
 
 
@@ -22,12 +23,18 @@ def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
     monkeypatch.setattr(batch_module, "_CACHE", LRUCache(maxsize=2))
     batch_module.clear()
 
-    def program(key):
-        return type(
-            "Compiled", (), {"static_key": key, "run": staticmethod(lambda p: {"y": 2.0 * p["x"]})}
-        )()
+    @component
+    class Doubler:
+        x: object
+        static_key: str = static(default="a")
 
-    axes = {"x": 0}
+        def run(self):
+            return {"y": 2.0 * self.x}
+
+    def program(key):
+        return Doubler(x=np.zeros(3), static_key=key)
+
+    axes = Doubler(x=0, static_key="a")
     a = batched_run(program("a"), axes, 3)
     assert batched_run(program("a"), axes, 3) is a  # cached
     b = batched_run(program("b"), axes, 3)
@@ -35,7 +42,7 @@ def test_batch_program_cache_keeps_the_most_recently_used(monkeypatch):
     batched_run(program("c"), axes, 3)  # evicts b
     assert batched_run(program("a"), axes, 3) is a
     assert batched_run(program("b"), axes, 3) is not b  # rebuilt
-    np.testing.assert_array_equal(a({"x": np.arange(3.0)})["y"], [0.0, 2.0, 4.0])
+    np.testing.assert_array_equal(a(Doubler(x=np.arange(3.0)))["y"], [0.0, 2.0, 4.0])
     batch_module.clear()
 
 
@@ -84,12 +91,10 @@ def li2020_runs():
     scn = api.load_scenario(
         "li2020-thm1", {"simulation.horizon": 2.0, "simulation.record_every": 50}
     )
-    c = api.compile_scenario(scn)
+    c = api.build_loop(scn)
     masses = (1.0, 1.07, 0.93)
     params = [
-        dataclasses.replace(
-            c.params, plant=dataclasses.replace(c.params.plant, mass=c.params.plant.mass * m)
-        )
+        dataclasses.replace(c, plant=dataclasses.replace(c.plant, mass=c.plant.mass * m))
         for m in masses
     ]
     return c, params
@@ -103,8 +108,8 @@ def test_shared_batch_equals_single_and_fully_stacked_runs(li2020_runs):
     assert axes.plant.mass == 0 and axes.reference.semi_latus_rectum is None
     assert axes.controller.formation.offsets is None
     shared = batched_run(c, axes, len(params))(batch)
-    full = jax.jit(jax.vmap(c.run))(jax.tree_util.tree_map(lambda *x: np.stack(x), *params))
-    single = jax.jit(c.run)
+    full = jax.jit(jax.vmap(type(c).run))(jax.tree_util.tree_map(lambda *x: np.stack(x), *params))
+    single = jax.jit(type(c).run)
     for k, p in enumerate(params):
         ref = np.asarray(single(p)["final"]["plant"]["q"])[:, :3]  # positions
         np.testing.assert_allclose(
@@ -132,7 +137,7 @@ def test_run_independent_work_is_not_batched(li2020_runs):
     c, params = li2020_runs
     B = 7
     batch, axes = stack_params(params + [params[-1]] * (B - len(params)))
-    jaxpr = jax.make_jaxpr(jax.vmap(c.run, in_axes=(axes,)))(batch).jaxpr
+    jaxpr = jax.make_jaxpr(jax.vmap(type(c).run, in_axes=(axes,)))(batch).jaxpr
     trig = _jaxpr_ops(jaxpr, {"sin", "cos"}, [], loops_only=True)
     assert trig, "expected the orbit/formation trigonometry in the program"
     batched = [(n, s) for n, s in trig if B in s]
@@ -187,22 +192,22 @@ def test_grid_batch_equals_single_runs_and_draws_each_rows_noise_once():
         ]
         for r in range(R)
     ]
-    compiled = [[api.compile_scenario(s) for s in row] for row in scns]
+    compiled = [[api.build_loop(s) for s in row] for row in scns]
     c0 = compiled[0][0]
-    batch, row_axes, col_axes = stack_params_grid([[c.params for c in row] for row in compiled])
+    batch, row_axes, col_axes = stack_params_grid([[c for c in row] for row in compiled])
     assert row_axes.seed == 0 and col_axes.seed is None  # the seed is a row leaf
     out = jax.device_get(batched_grid_run(c0, row_axes, col_axes, R, C)(batch))
     assert np.shape(out["metrics"][0])[:2] == (R, C)
     for r in range(R):
         for c in range(C):
             alone = jax.device_get(
-                jitted_run(compiled[r][c])(compiled[r][c].params)
+                jitted_run(compiled[r][c])(compiled[r][c])
             )  # one program, unbatched
             for k, (a, b) in enumerate(zip(out["metrics"], alone["metrics"], strict=True)):
                 np.testing.assert_allclose(
                     np.asarray(a)[r, c], b, rtol=1e-12, atol=1e-300, err_msg=f"({r},{c}) {k}"
                 )
-    inner = jax.vmap(c0.run, in_axes=(col_axes,), axis_size=C)
+    inner = jax.vmap(type(c0).run, in_axes=(col_axes,), axis_size=C)
     jaxpr = jax.make_jaxpr(jax.vmap(inner, in_axes=(row_axes,), axis_size=R))(batch).jaxpr
     draws = _jaxpr_ops(jaxpr, {"random_bits", "erf_inv"}, [], loops_only=True)
     assert draws, "expected random draws in the step"

@@ -136,24 +136,24 @@ def test_simulate_raises_with_partial_results():
 
 
 def test_vmap_batch_equals_single_runs():
-    from formation_ftc.api import compile_scenario
+    from formation_ftc.api import build_loop
 
     scn = ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 50.0})
-    comp = compile_scenario(scn)
+    comp = build_loop(scn)
     seeds = jnp.array([1, 2, 3], dtype=jnp.uint32)
     kps = jnp.array([1.0, 2.0, 3.0])
-    batch = jax.tree_util.tree_map(lambda a: jnp.stack([a] * 3), comp.params)
+    batch = jax.tree_util.tree_map(lambda a: jnp.stack([a] * 3), comp)
     batch = dataclasses.replace(
         batch, seed=seeds, controller=dataclasses.replace(batch.controller, kp=kps)
     )
-    outs = jax.jit(jax.vmap(comp.run))(batch)
+    outs = jax.jit(jax.vmap(type(comp).run))(batch)
     for r in range(3):
         single = dataclasses.replace(
-            comp.params,
+            comp,
             seed=seeds[r],
-            controller=dataclasses.replace(comp.params.controller, kp=kps[r]),
+            controller=dataclasses.replace(comp.controller, kp=kps[r]),
         )
-        o = jax.jit(comp.run)(single)
+        o = jax.jit(type(comp).run)(single)
         np.testing.assert_allclose(
             outs["records"]["position"][r], o["records"]["position"], rtol=1e-12, atol=1e-12
         )

@@ -206,7 +206,7 @@ def test_closed_loop_metrics_folded_per_block_equal_the_per_step_fold():
     from formation_ftc import api
 
     scenario = api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 2.0})
-    params = api.compile_scenario(scenario).params
+    params = api.build_loop(scenario)
     assert params._metric_block() == 1  # a short run: the automatic choice folds at every step
     blocked = dataclasses.replace(params, metric_block=50)
     assert blocked._metric_block() == 50
@@ -232,13 +232,11 @@ def test_automatic_metric_block_folds_long_runs_with_many_metrics():
     from formation_ftc import api
     from formation_ftc.sim.components import CompositionError
 
-    lof2tc = api.compile_scenario(
-        api.load_scenario("gui2022-lof2tc")
-    ).params  # 42 metrics, 3e6 steps
+    lof2tc = api.build_loop(api.load_scenario("gui2022-lof2tc"))  # 42 metrics, 3e6 steps
     assert lof2tc.record_every == 100 and lof2tc._metric_block() == 50
-    azizi = api.compile_scenario(api.load_scenario("azizi2009-llfr")).params  # 7 metrics
+    azizi = api.build_loop(api.load_scenario("azizi2009-llfr"))  # 7 metrics
     assert azizi._metric_block() == 1
-    li2020 = api.compile_scenario(api.load_scenario("li2020-thm1")).params  # records every 10 steps
+    li2020 = api.build_loop(api.load_scenario("li2020-thm1"))  # records every 10 steps
     assert li2020.record_every == 10 and li2020._metric_block() == 1
     assert dataclasses.replace(li2020, metric_block=5)._metric_block() == 5
     with pytest.raises(
@@ -254,21 +252,16 @@ def test_folded_metrics_in_a_vmapped_batch_equal_the_batch_folded_per_step():
     # run alone, so the reference is the same batch), the same metrics
     from formation_ftc import api
     from formation_ftc.sim.batch import batched_run, stack_params
-    from formation_ftc.sim.compiled import compile_loop
 
     overrides = ({}, {"estimator.initial_estimate": [1.0, -1.0, 0.5, 0.01, -0.01, 0.005]})
     loops = [
-        api.compile_scenario(
-            api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 1.0, **ov})
-        ).params
+        api.build_loop(api.load_scenario("gui2022-lof2tc", {"simulation.horizon": 1.0, **ov}))
         for ov in overrides
     ]
     outs = {}
     for block in (1, 20):
         batch, axes = stack_params([dataclasses.replace(p, metric_block=block) for p in loops])
-        outs[block] = batched_run(
-            compile_loop(dataclasses.replace(loops[0], metric_block=block)), axes, 2
-        )(batch)
+        outs[block] = batched_run(dataclasses.replace(loops[0], metric_block=block), axes, 2)(batch)
     for name, rec in outs[1]["records"].items():
         np.testing.assert_array_equal(
             np.asarray(outs[20]["records"][name]), np.asarray(rec), err_msg=name

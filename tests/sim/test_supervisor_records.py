@@ -17,7 +17,6 @@ import numpy as np
 
 import formation_ftc  # noqa: F401  (x64)
 from formation_ftc.components.plants.double_integrator import DoubleIntegratorPlant
-from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.components import (
     Controller,
     FlightInputs,
@@ -99,10 +98,10 @@ def _loop(record_every: int) -> ClosedLoop:
 
 def _run(record_every: int):
     """(records as a Dataset, metrics) of one run."""
-    compiled = compile_loop(_loop(record_every))
-    out = jax.tree_util.tree_map(np.asarray, compiled.run(compiled.params))
+    compiled = _loop(record_every).validate()
+    out = jax.tree_util.tree_map(np.asarray, compiled.run())
     assert int(out["diverged_step"]) == -1
-    return compiled.to_dataset(out, N_STEPS // record_every + 1), compiled.metrics(out)
+    return compiled.dataset(out, N_STEPS // record_every + 1), compiled.metric_values(out)
 
 
 def test_recorded_mode_is_the_decision_in_force():

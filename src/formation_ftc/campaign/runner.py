@@ -7,14 +7,14 @@ sampled values written into the parameter arrays of one template build
 (:mod:`formation_ftc.campaign.binding`), the batch run without time histories and the result table
 assembled from the metric arrays; only failed and traced runs are handled one by one. Otherwise:
 
-1. build each run's scenario (base + overrides + grid/sampled values + run seed), compile it with the
-   method (:func:`formation_ftc.api.compile_scenario`);
-2. group the runs by ``Compiled.static_key`` (one group per chunk unless a random ``choice`` changes
-   the structure), stack the ``params`` leaves that differ between the runs (the others are shared,
-   ``in_axes=None``, see :func:`formation_ftc.sim.batch.stack_params`) and call ``jax.jit(jax.vmap(compiled.run))`` -- one jitted
+1. build each run's scenario (base + overrides + grid/sampled values + run seed) and its loop
+   (:func:`formation_ftc.api.build_loop`);
+2. group the runs by ``ClosedLoop.static_key`` (one group per chunk unless a random ``choice`` changes
+   the structure), stack the leaves that differ between the runs (the others are shared,
+   ``in_axes=None``, see :func:`formation_ftc.sim.batch.stack_params`) and call ``jax.jit(jax.vmap(ClosedLoop.run))`` -- one jitted
    function per static key and set of batched leaves, reused by every chunk, the batch padded to
    ``chunk_size`` so the last chunk does not recompile;
-3. per run, ``Compiled.metrics`` on its slice; a run whose state became non-finite
+3. per run, ``ClosedLoop.metric_values`` on its slice; a run whose state became non-finite
    (``diverged_step >= 0``) is recorded ``status = "failed"`` with the engine's diagnostic
    (variable, spacecraft, time), its metrics NaN, and the campaign goes on.
 
@@ -32,7 +32,6 @@ from __future__ import annotations
 import functools
 import json
 import time
-import warnings
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -172,10 +171,10 @@ def _value_cell(v: Any, numeric: bool) -> Any:
     return v if isinstance(v, str) else json.dumps(v)
 
 
-def _diagnostic(compiled, out: Mapping[str, Any], div: int) -> str:
+def _diagnostic(loop, out: Mapping[str, Any], div: int) -> str:
     from formation_ftc.api import _divergence_info
 
-    return str(_divergence_info(compiled, out, div))
+    return str(_divergence_info(loop, out, div))
 
 
 def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str) -> None:
@@ -188,12 +187,12 @@ def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str
         )
 
 
-def _trace(plan: CampaignPlan, compiled, scenario, inputs, out: Mapping[str, Any], status: str):
+def _trace(plan: CampaignPlan, loop, scenario, inputs, out: Mapping[str, Any], status: str):
     from formation_ftc.sim.engine import trim_records
 
     tr = plan.spec.traces
-    records, n_kept = trim_records(out["records"], int(out["diverged_step"]), compiled.record_every)
-    ds = compiled.to_dataset(dict(out, records=records), n_kept)
+    records, n_kept = trim_records(out["records"], int(out["diverged_step"]), loop.record_every)
+    ds = loop.dataset(dict(out, records=records), n_kept)
     if tr.variables:
         missing = [v for v in tr.variables if v not in ds.data_vars]
         if missing:
@@ -229,7 +228,7 @@ def _run_alone(loop):
     return _run_alone_program()(loop)
 
 
-#: per-process cache: (plan hash, group key) -> (template Compiled, bindings) or None (not bindable)
+#: per-process cache: (plan hash, group key) -> (template loop, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
 _VERIFIED: set[Any] = set()
@@ -247,7 +246,7 @@ def _bound_chunk(
     """The fast path: one build per structural group, sampled values written into the leaves their
     paths name (:mod:`formation_ftc.campaign.binding`), metrics read as arrays from the batched run and
     the result table assembled from columns (no per-run Python objects except for failed and traced
-    runs). None when the method's parameters are not a ClosedLoop or a field cannot be bound.
+    runs). None when a field cannot be bound.
 
     Returns the chunk's *finisher*: the batch has been dispatched (JAX computes asynchronously) and
     the finisher waits for it and assembles the table, so a caller may start the next chunk first."""
@@ -259,8 +258,6 @@ def _bound_chunk(
         params_close,
         take_run,
     )
-    from formation_ftc.sim.compiled import compile_loop
-    from formation_ftc.sim.loop import ClosedLoop
 
     n = len(cols)
     bindable = [
@@ -286,31 +283,26 @@ def _bound_chunk(
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
         scenario = plan.scenario(first)
-        template = api.compile_scenario(scenario)
-        bindings = None
-        if isinstance(template.params, ClosedLoop):
-            values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
-            bindings = bind_fields(template.params, values0)
-        if bindings is None:
-            _BINDINGS[cache_key] = None
-        else:
-            # the batch needs no time histories (metrics are computed inside the run): one record at
-            # the start and one at the end; trace runs and failed runs are re-run alone with records
-            lean = compile_loop(replace(template.params, record_every=template.params.n_steps))
-            _BINDINGS[cache_key] = (lean, bindings)
+        template = api.build_loop(scenario)
+        values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
+        bindings = bind_fields(template, values0)
+        # the batch needs no time histories (metrics are computed inside the run): one record at the
+        # start and one at the end; trace runs and failed runs are re-run alone with records
+        lean = replace(template, record_every=template.n_steps)
+        _BINDINGS[cache_key] = None if bindings is None else (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:
         return None
     template, bindings = entry
     values = {p: np.asarray(cols.values[p], dtype=np.float64) for p in bindable}
     values[SEED_PATH] = cols.seed.astype(np.float64)
-    batch, axes = apply_bindings(template.params, bindings, values, plan.chunk_size)
+    batch, axes = apply_bindings(template, bindings, values, plan.chunk_size)
     engine = batched_run(template, axes, plan.chunk_size)
     # a group whose binding was verified before in this process starts computing now (JAX dispatches
     # asynchronously) and the Python work below overlaps it; a first chunk is verified first
     pending = engine(batch) if cache_key in _VERIFIED else None
-    check = api.compile_scenario(plan.scenario(cols.row(n - 1, plan.base_names)))
-    check_params = replace(check.params, record_every=template.params.record_every)
+    check = api.build_loop(plan.scenario(cols.row(n - 1, plan.base_names)))
+    check_params = replace(check, record_every=template.record_every)
     if not params_close(check_params, take_run(batch, axes, n - 1)):
         _BINDINGS[cache_key] = None  # a field moves another leaf too (or fields interact): per run
         _VERIFIED.discard(cache_key)
@@ -360,7 +352,7 @@ def _finish_bound(
 
     n = len(cols)
     out = jax.device_get(pending)
-    loop = template.params
+    loop = template
     names = loop_metric_names(loop.metrics, loop.count)
     metric_cols: dict[str, np.ndarray] = {}
     for m, arr in zip(loop.metrics, out["metrics"], strict=True):
@@ -389,15 +381,12 @@ def _finish_bound(
         # re-run alone with the scenario's records (and the replay that names a divergence)
         inp = cols.row(j, plan.base_names)
         scn = plan.scenario(inp)
-        comp_j = api.compile_scenario(scn)
-        params_j = replace(take_run(batch, axes, j), record_every=comp_j.params.record_every)
-        run_out = jax.device_get(_run_alone(params_j))
+        loop_j = replace(take_run(batch, axes, j), record_every=api.build_loop(scn).record_every)
+        run_out = jax.device_get(_run_alone(loop_j))
         if failed[j]:
-            table.at[j, "diagnostic"] = _diagnostic(
-                replace(comp_j, params=params_j), run_out, int(run_out["diverged_step"])
-            )
+            table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
         if inp.run_id in trace_runs:
-            traces[inp.run_id] = _trace(plan, comp_j, scn, inp, run_out, str(table.at[j, "status"]))
+            traces[inp.run_id] = _trace(plan, loop_j, scn, inp, run_out, str(table.at[j, "status"]))
     table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
@@ -426,25 +415,26 @@ def start_chunk(plan: CampaignPlan, chunk: Chunk) -> Callable[[], ChunkResult]:
 def _general_chunk(
     plan: CampaignPlan, chunk: Chunk, cols: RunColumns, t_start: float
 ) -> ChunkResult:
-    """Per-run builds grouped by structure (the path of methods that are not component loops)."""
+    """Per-run builds grouped by structure (a chunk whose structure varies, or a field that cannot be
+    bound)."""
     from formation_ftc import api
 
     inputs = cols.rows(plan.base_names)
     scenarios = [plan.scenario(i) for i in inputs]
-    compiled = [api.compile_scenario(s) for s in scenarios]
+    loops = [api.build_loop(s) for s in scenarios]
     groups: dict[Any, list[int]] = {}
-    for k, c in enumerate(compiled):
+    for k, c in enumerate(loops):
         groups.setdefault(c.static_key, []).append(k)
-    outs: list[Any] = [None] * len(compiled)
+    outs: list[Any] = [None] * len(loops)
     for idxs in groups.values():
-        stacked, axes = stack_params([compiled[k].params for k in idxs], plan.chunk_size)
-        batch = jax.device_get(batched_run(compiled[idxs[0]], axes, plan.chunk_size)(stacked))
+        stacked, axes = stack_params([loops[k] for k in idxs], plan.chunk_size)
+        batch = jax.device_get(batched_run(loops[idxs[0]], axes, plan.chunk_size)(stacked))
         for pos, k in enumerate(idxs):
             outs[k] = jax.tree_util.tree_map(lambda a, pos=pos: np.asarray(a[pos]), batch)
     keep = plan.spec.campaign.metrics
     numeric = plan.input_columns()
     rows, traces = [], {}
-    for inp, scn, comp, out in zip(inputs, scenarios, compiled, outs, strict=True):
+    for inp, scn, comp, out in zip(inputs, scenarios, loops, outs, strict=True):
         div = int(out["diverged_step"])
         row: dict[str, Any] = dict(
             run_id=inp.run_id,
@@ -456,7 +446,7 @@ def _general_chunk(
         )
         if div < 0:
             with np.errstate(all="ignore"):
-                metrics = {k: float(v) for k, v in comp.metrics(out).items()}
+                metrics = {k: float(v) for k, v in comp.metric_values(out).items()}
             _require_metrics(keep, metrics, scn.scenario.method)
             row.update(status="ok", diagnostic="")
         else:
@@ -473,9 +463,7 @@ def _general_chunk(
     for col in table.columns:
         if col.startswith("metric:"):
             table[col] = table[col].astype("float64")
-    table.attrs["metric_units"] = _metric_units(
-        getattr(compiled[0].params, "metrics", ()), getattr(compiled[0].params, "count", 0)
-    )
+    table.attrs["metric_units"] = _metric_units(loops[0].metrics, loops[0].count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
 
@@ -492,11 +480,8 @@ def _metric_units(metrics, count: int) -> dict[str, str]:
 
 
 def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
-    """Metric names each base scenario's method returns, found without running anything (a closed
-    loop declares them; other methods: ``jax.eval_shape`` of the run, then ``metrics`` on zeros).
-    Empty list when it cannot tell."""
+    """Metric names each base scenario's loop declares (found without running anything)."""
     from formation_ftc import api
-    from formation_ftc.sim.loop import ClosedLoop
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     out: dict[str, list[str]] = {}
@@ -504,18 +489,8 @@ def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
         g = 0
         if len(plan.base_names) > 1:
             g = int(np.ravel_multi_index([b] + [0] * len(plan.grid_samplers), plan.grid_shape))
-        compiled = api.compile_scenario(plan.scenario(plan.run_inputs(g * plan.runs)))
-        if isinstance(compiled.params, ClosedLoop):  # declared metrics: their names need no tracing
-            out[name] = loop_metric_names(compiled.params.metrics, compiled.params.count)
-            continue
-        try:
-            shapes = jax.eval_shape(lambda p, c=compiled: dict(c.run(p)), compiled.params)
-            zeros = jax.tree_util.tree_map(lambda s: np.zeros(s.shape, s.dtype), shapes)
-            with np.errstate(all="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                out[name] = list(compiled.metrics(zeros))
-        except Exception:  # noqa: BLE001 - metrics that cannot take zeros: checked on the first chunk
-            out[name] = []
+        loop = api.build_loop(plan.scenario(plan.run_inputs(g * plan.runs)))
+        out[name] = loop_metric_names(loop.metrics, loop.count)
     return out
 
 

@@ -318,7 +318,7 @@ def _check_batch_memory(
         if not mcells:
             continue
         try:
-            need = run_memory_bytes(api.compile_scenario(api.load_scenario(mcells[0].raw))) * batch
+            need = run_memory_bytes(api.build_loop(api.load_scenario(mcells[0].raw))) * batch
         except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
             raise LeagueError(
                 f"league {spec.league.name}: method {method} cannot be compiled: {exc}"

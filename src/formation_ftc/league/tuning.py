@@ -104,7 +104,7 @@ class GainProblem:
     initial: np.ndarray
     metric_names: tuple[str, ...]
     size: int
-    _compiled: Any
+    _loop: Any
     _chunks: list[tuple[Any, Any, int]]  # (batch, in_axes, real runs)
     _slots: list[tuple[int, np.ndarray] | None]  # (leaf position, flat indices); None: rebuilt
     _raws: list[list[Mapping[str, Any]]] | None = None  # each chunk's scenarios (rebuilt fields)
@@ -143,7 +143,7 @@ class GainProblem:
                 "gradient; use evaluate() (optimisers nelder-mead, powell)"
             )
         params = self._write(self.batch if batch is None else batch, theta, traced=True)
-        run = jax.vmap(self._compiled.run, in_axes=(self._chunks[0][1],), axis_size=self.size)
+        run = jax.vmap(type(self._loop).run, in_axes=(self._chunks[0][1],), axis_size=self.size)
         out = run(params)
         return dict(zip(self.metric_names, out["metrics"], strict=True)), out["diverged_step"] >= 0
 
@@ -160,7 +160,7 @@ class GainProblem:
         for k, (batch, in_axes, n) in enumerate(self._chunks):
             if self._raws is not None:
                 batch = self._rebuilt(self._raws[k], theta, in_axes)
-            fn = batched_run(self._compiled, in_axes, self.size)
+            fn = batched_run(self._loop, in_axes, self.size)
             out = jax.device_get(fn(self._write(batch, theta)))
             parts.append([np.asarray(v)[:n] for v in out["metrics"]])
             bads.append(np.asarray(out["diverged_step"])[:n] >= 0)
@@ -171,12 +171,12 @@ class GainProblem:
         """The batch of ``raws`` built with the rebuilt fields at ``theta``, laid out as ``in_axes``."""
         values = {f.path: float(v) for f, v in zip(self.fields, theta, strict=True) if f.rebuild}
         _, built = _build_runs(raws, values)
-        if built[0].static_key != self._compiled.static_key:
+        if built[0].static_key != self._loop.static_key:
             raise TuneError(
                 f"tune fields {sorted(values)} at {values}: the loop's structure changes (another "
                 "compiled program); only numeric inputs can be tuned"
             )
-        batch, axes = _stack_like([c.params for c in built], in_axes, self.size)
+        batch, axes = _stack_like(built, in_axes, self.size)
         if axes is not in_axes:
             raise TuneError(f"tune fields {sorted(values)}: the rebuilt runs differ in layout")
         return batch
@@ -185,21 +185,21 @@ class GainProblem:
 def _build_runs(
     raws: Sequence[Mapping[str, Any]], values: Mapping[str, float] | None = None
 ) -> tuple[list[Any], list[Any]]:
-    """The scenarios of ``raws`` (with the dotted ``values`` set) and their compiled loops, which must
+    """The scenarios of ``raws`` (with the dotted ``values`` set) and their loops, which must
     share one structure; a run that does not build is a TuneError."""
     from formation_ftc import api
     from formation_ftc.config.loader import apply_overrides
 
     try:
         scenarios = [api.load_scenario(apply_overrides(dict(r), dict(values or {}))) for r in raws]
-        compiled = [api.compile_scenario(s) for s in scenarios]
+        loops = [api.build_loop(s) for s in scenarios]
     except InputError:
         raise
     except (ValueError, TypeError) as exc:
         raise TuneError(f"tuning: a run cannot be built: {exc}") from None
-    if any(c.static_key != compiled[0].static_key for c in compiled[1:]):
+    if any(c.static_key != loops[0].static_key for c in loops[1:]):
         raise TuneError("tuning: the runs do not share one structure (one compiled program)")
-    return scenarios, compiled
+    return scenarios, loops
 
 
 def _stack_like(params: Sequence[Any], in_axes: Any, size: int) -> tuple[Any, Any]:
@@ -272,9 +272,9 @@ def build_problem(
         initial.append(float(v0))
     if like is not None and [f.rebuild for f in fields] != [f.rebuild for f in like.fields]:
         raise TuneError("tuning: the held-out fields are not the training ones")
-    scenarios, compiled = _build_runs(raws)
-    key = compiled[0].static_key
-    template = compiled[0].params
+    scenarios, loops = _build_runs(raws)
+    template = loops[0]
+    key = template.static_key
     if not getattr(template, "metrics", ()):
         raise TuneError("tuning: the scenario computes no metrics (nothing to minimise)")
     bindings = {}
@@ -292,13 +292,13 @@ def build_problem(
     if like is None:
         _check_bindings(raws[0], fields, initial, template, key, bindings)
         size = len(raws)
-        chunks = [(*stack_params([c.params for c in compiled]), size)]
+        chunks = [(*stack_params(loops), size)]
         raw_chunks = [list(raws)]
     else:
-        if like._compiled.static_key != key:
+        if like._loop.static_key != key:
             raise TuneError("tuning: these runs do not have the structure of the training runs")
         size, in_axes = like.size, like._chunks[0][1]
-        parts = [[c.params for c in compiled[s : s + size]] for s in range(0, len(compiled), size)]
+        parts = [loops[s : s + size] for s in range(0, len(loops), size)]
         chunks = [(*_stack_like(p, in_axes, size), len(p)) for p in parts]
         raw_chunks = [list(raws[s : s + size]) for s in range(0, len(raws), size)]
     treedef = jax.tree_util.tree_structure(template)
@@ -315,7 +315,7 @@ def build_problem(
         initial=np.asarray(initial, dtype=np.float64),
         metric_names=tuple(m.name for m in template.metrics),
         size=size,
-        _compiled=compiled[0],
+        _loop=template,
         _chunks=chunks,
         _slots=[
             None if f.rebuild else (bindings[f.path].leaf, np.asarray(bindings[f.path].index))
@@ -336,7 +336,7 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
         z0 = f.to_unit(v0)
         v1 = float(f.from_unit(0.5 * z0 + 0.37 if abs(z0 - 0.74) > 1e-3 else 0.3))  # inside
         try:
-            c = api.compile_scenario(api.load_scenario(apply_overrides(dict(raw), {f.path: v1})))
+            c = api.build_loop(api.load_scenario(apply_overrides(dict(raw), {f.path: v1})))
         except (InputError, ValueError, TypeError) as exc:
             raise TuneError(
                 f"tune field {f.path!r}: the scenario does not build with {f.path} = {v1:g}, "
@@ -348,7 +348,7 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
                 "only numeric gains can be tuned"
             )
         if f.rebuild:
-            if params_close(template, c.params):
+            if params_close(template, c):
                 raise TuneError(
                     f"tune field {f.path!r}: another value changes nothing in the built loop (the "
                     "builder does not use it in this scenario)"
@@ -356,7 +356,7 @@ def _check_bindings(raw, fields, initial, template, key, bindings) -> None:
             continue
         one = {f.path: bindings[f.path]}
         batch, axes = apply_bindings(template, one, {f.path: np.asarray([v1])}, 1)
-        if not params_close(take_run(batch, axes, 0), c.params):
+        if not params_close(take_run(batch, axes, 0), c):
             raise TuneError(
                 f"tune field {f.path!r}: not a numeric leaf of the built loop -- another value also "
                 "moves parameters derived from it (the builder scales or converts it); tune the "
@@ -921,7 +921,7 @@ def _run_bytes(raw: Mapping[str, Any]) -> int:
     from formation_ftc.limits import run_memory_bytes
 
     try:
-        return run_memory_bytes(api.compile_scenario(api.load_scenario(dict(raw))))
+        return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
     except InputError:
         raise
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:

@@ -124,15 +124,15 @@ def _single(scenario: Any) -> Run:
     """One run through the process's shared executable of its structure, its times measured."""
     import jax
 
-    from formation_ftc.api import compile_scenario, finish_run
+    from formation_ftc.api import build_loop, finish_run
     from formation_ftc.papers.programs import executable
 
-    compiled = compile_scenario(scenario)
-    exe, compile_s = executable(compiled)
+    loop = build_loop(scenario)
+    exe, compile_s = executable(loop)
     t0 = time.perf_counter()
-    out = jax.block_until_ready(exe(compiled.params))
+    out = jax.block_until_ready(exe(loop))
     run_s = time.perf_counter() - t0
-    ds, metrics = finish_run(scenario, compiled, out)
+    ds, metrics = finish_run(scenario, loop, out)
     return Run(scenario, ds, metrics, compile_s, run_s)
 
 

@@ -27,30 +27,30 @@ def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str,
 
 
 def simulate_batched(
-    scenarios: list, compiled: list | None = None, timings: list | None = None
+    scenarios: list, loops: list | None = None, timings: list | None = None
 ) -> list[tuple[Any, dict[str, float]]]:
     """Run scenarios as one ``jax.vmap`` batch per compiled structure (same ``static_key``: only numbers
     differ; :func:`formation_ftc.sim.batch.batched_run`) and return ``[(xarray.Dataset, {metric: float})]``
     in order, as :func:`simulate` returns them one by one (a divergence raises, as there).
 
-    ``compiled``: the scenarios' :class:`~formation_ftc.registry.Compiled` (default: compiled here).
+    ``loops``: the scenarios' loops (default: built here, :func:`formation_ftc.api.build_loop`).
     ``timings``: a list that receives ``(compile_s, run_s)`` of each run's batch [s], in order."""
     import time
 
     import numpy as np
 
-    from formation_ftc.api import compile_scenario, finish_run
+    from formation_ftc.api import build_loop, finish_run
     from formation_ftc.sim.batch import batched_run, stack_params
 
-    compiled = [compile_scenario(s) for s in scenarios] if compiled is None else compiled
+    loops = [build_loop(s) for s in scenarios] if loops is None else loops
     groups: dict[Hashable, list[int]] = {}
-    for i, c in enumerate(compiled):
+    for i, c in enumerate(loops):
         groups.setdefault(c.static_key, []).append(i)
-    results: list[Any] = [None] * len(compiled)
-    times: list[Any] = [None] * len(compiled)
+    results: list[Any] = [None] * len(loops)
+    times: list[Any] = [None] * len(loops)
     for idx in groups.values():
-        batch, in_axes = stack_params([compiled[i].params for i in idx])
-        fn = batched_run(compiled[idx[0]], in_axes, len(idx))
+        batch, in_axes = stack_params([loops[i] for i in idx])
+        fn = batched_run(loops[idx[0]], in_axes, len(idx))
         t0 = time.perf_counter()
         exe = fn.lower(batch).compile()
         t1 = time.perf_counter()
@@ -58,7 +58,7 @@ def simulate_batched(
         t2 = time.perf_counter()
         for j, i in enumerate(idx):
             results[i] = finish_run(
-                scenarios[i], compiled[i], jax.tree_util.tree_map(lambda a, j=j: a[j], out)
+                scenarios[i], loops[i], jax.tree_util.tree_map(lambda a, j=j: a[j], out)
             )
             times[i] = (t1 - t0, t2 - t1)
     if timings is not None:

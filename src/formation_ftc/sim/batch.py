@@ -119,23 +119,26 @@ def _batched_flags(axes: Any) -> tuple[bool, ...]:
     )
 
 
-def _fast_compile(compiled) -> bool:
+def _fast_compile(loop) -> bool:
     """Whether a ClosedLoop's controller asks for XLA's fast-compile preset in batches."""
-    controller = getattr(getattr(compiled, "params", None), "controller", None)
-    return bool(getattr(controller, "batch_fast_compile", False))
+    return bool(getattr(getattr(loop, "controller", None), "batch_fast_compile", False))
 
 
-def batched_run(compiled, in_axes: Any, size: int) -> Any:
-    """``jax.jit(jax.vmap(compiled.run))`` for a batch of ``size`` runs with ``in_axes`` from
+def _one_run(p: Any) -> Any:
+    return dict(p.run())
+
+
+def batched_run(loop, in_axes: Any, size: int) -> Any:
+    """``jax.jit(jax.vmap(ClosedLoop.run))`` for a batch of ``size`` runs with ``in_axes`` from
     :func:`stack_params`; every output has the run axis first (shared results are broadcast).
-    Cached per ``(compiled.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
+    Cached per ``(loop.static_key, batched leaves, size)``, the :data:`MAX_KEPT` most recently used.
     Compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options` (the fast-compile preset when the loop's
     controller sets ``batch_fast_compile``).
 
     Parameters
     ----------
-    compiled : Compiled
-        A compiled scenario (anything with ``static_key`` and ``run``).
+    loop : ClosedLoop
+        One run of the batch (any pytree with ``static_key`` and a ``run()`` method).
     in_axes : pytree
         From :func:`stack_params`.
     size : int
@@ -148,27 +151,32 @@ def batched_run(compiled, in_axes: Any, size: int) -> Any:
 
     Examples
     --------
-    >>> import types
     >>> import numpy as np
     >>> from formation_ftc.sim.batch import batched_run, stack_params
-    >>> prog = types.SimpleNamespace(static_key="doc-batched-run", run=lambda p: {"y": p["mass"] * p["gain"]})
-    >>> batch, in_axes = stack_params([{"gain": 1.0, "mass": 3.0}, {"gain": 2.0, "mass": 3.0}])
-    >>> np.asarray(batched_run(prog, in_axes, size=2)(batch)["y"])
+    >>> from formation_ftc.sim.components import component
+    >>> @component
+    ... class Product:
+    ...     gain: object
+    ...     mass: object
+    ...     static_key = "doc-batched-run"
+    ...     def run(self):
+    ...         return {"y": self.mass * self.gain}
+    >>> runs = [Product(gain=1.0, mass=3.0), Product(gain=2.0, mass=3.0)]
+    >>> batch, in_axes = stack_params(runs)
+    >>> np.asarray(batched_run(runs[0], in_axes, size=2)(batch)["y"])
     array([3., 6.])
     """
     return _kept(
-        compiled,
-        (compiled.static_key, _batched_flags(in_axes), int(size)),
-        lambda run: jax.vmap(lambda p: dict(run(p)), in_axes=(in_axes,), axis_size=int(size)),
+        loop,
+        (loop.static_key, _batched_flags(in_axes), int(size)),
+        jax.vmap(_one_run, in_axes=(in_axes,), axis_size=int(size)),
     )
 
 
-def _kept(compiled, key: tuple, build) -> Any:
-    """The cached batch program ``key``; on a miss, ``build(compiled.run)`` (the batched function) is
-    jitted with :func:`_fast_compile`'s choice and kept."""
-    return kept(
-        _CACHE, key, lambda: xla.jit(build(compiled.run), fast_compile=_fast_compile(compiled))
-    )
+def _kept(loop, key: tuple, batched: Any) -> Any:
+    """The cached batch program ``key``; on a miss, ``batched`` (the batched run) is jitted with
+    :func:`_fast_compile`'s choice and kept."""
+    return kept(_CACHE, key, lambda: xla.jit(batched, fast_compile=_fast_compile(loop)))
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -259,15 +267,15 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
 
 
-def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, columns: int) -> Any:
-    """``jax.jit(jax.vmap(jax.vmap(compiled.run)))`` for a ``rows x columns`` grid of runs batched by
+def batched_grid_run(loop, row_axes: Any, column_axes: Any, rows: int, columns: int) -> Any:
+    """``jax.jit(jax.vmap(jax.vmap(ClosedLoop.run)))`` for a ``rows x columns`` grid of runs batched by
     :func:`stack_params_grid`; every output has the run axes ``(rows, columns)`` first. Work that depends
     only on a row's leaves is done once per row. Cached with :func:`batched_run`'s programs.
 
     Parameters
     ----------
-    compiled : Compiled
-        A compiled scenario (anything with ``static_key`` and ``run``).
+    loop : ClosedLoop
+        One run of the grid (any pytree with ``static_key`` and a ``run()`` method).
     row_axes, column_axes : pytree
         From :func:`stack_params_grid`.
     rows, columns : int
@@ -281,24 +289,29 @@ def batched_grid_run(compiled, row_axes: Any, column_axes: Any, rows: int, colum
 
     Examples
     --------
-    >>> import types
     >>> import numpy as np
     >>> from formation_ftc.sim.batch import batched_grid_run, stack_params_grid
-    >>> prog = types.SimpleNamespace(static_key="doc-batched-grid-run",
-    ...                              run=lambda p: {"y": p["gain"] + p["offset"]})
-    >>> grid = [[{"offset": x, "gain": g} for g in (1.0, 2.0, 3.0)] for x in (10.0, 20.0)]
+    >>> from formation_ftc.sim.components import component
+    >>> @component
+    ... class Sum:
+    ...     offset: object
+    ...     gain: object
+    ...     static_key = "doc-batched-grid-run"
+    ...     def run(self):
+    ...         return {"y": self.gain + self.offset}
+    >>> grid = [[Sum(offset=x, gain=g) for g in (1.0, 2.0, 3.0)] for x in (10.0, 20.0)]
     >>> batch, row_axes, column_axes = stack_params_grid(grid)
-    >>> np.asarray(batched_grid_run(prog, row_axes, column_axes, rows=2, columns=3)(batch)["y"])
+    >>> np.asarray(batched_grid_run(grid[0][0], row_axes, column_axes, rows=2, columns=3)(batch)["y"])
     array([[11., 12., 13.],
            [21., 22., 23.]])
     """
-
-    def build(run):
-        inner = jax.vmap(lambda p: dict(run(p)), in_axes=(column_axes,), axis_size=int(columns))
-        return jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
-
+    inner = jax.vmap(_one_run, in_axes=(column_axes,), axis_size=int(columns))
     flags = (_batched_flags(row_axes), _batched_flags(column_axes))
-    return _kept(compiled, (compiled.static_key, "grid", *flags, int(rows), int(columns)), build)
+    return _kept(
+        loop,
+        (loop.static_key, "grid", *flags, int(rows), int(columns)),
+        jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows)),
+    )
 
 
 def clear() -> None:

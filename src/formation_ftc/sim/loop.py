@@ -46,6 +46,7 @@ from formation_ftc.sim.components import (
     TruthInputs,
     component,
     static,
+    structure_key,
     tree_take,
 )
 from formation_ftc.sim.contract import capability
@@ -162,7 +163,7 @@ class ClosedLoop:
     # ------------------------------------------------------------------ validation
     def validate(self, labels: Mapping[str, str] | None = None) -> ClosedLoop:
         """Check that the components fit together (raises :class:`CompositionError` naming both parts);
-        returns the loop. Called by :func:`formation_ftc.sim.compiled.compile_loop` before any
+        returns the loop. Called by :func:`formation_ftc.api.build_loop` before any
         computation (not on pytree reconstruction, where leaves may be placeholders).
 
         ``labels``: slot (or ``evaluations[j]``) -> the type name the scenario gave it, for the
@@ -794,6 +795,38 @@ class ClosedLoop:
                     )
                 )
         return out
+
+    # ------------------------------------------------------------------ results (numpy side)
+    @property
+    def static_key(self) -> Any:
+        """Compile key: two loops with equal keys share one compiled program and can be batched
+        (:func:`~.components.structure_key`: tree definition, static fields, leaf shapes and dtypes)."""
+        return structure_key(self)
+
+    def dataset(self, out: Mapping[str, Any], n_records: int, attrs: dict | None = None) -> Any:
+        """``xarray.Dataset`` of the first ``n_records`` records of a run's output ``out``: every
+        declared signal with its dims, units, long_name and frame; time [s] from ``t0``."""
+        from formation_ftc.sim.records import records_to_dataset
+
+        return records_to_dataset(self, out["records"], n_records, attrs)
+
+    def metric_values(self, out: Mapping[str, Any]) -> dict[str, float]:
+        """``{name: value}`` of the metrics a run folded (``out["metrics"]``), per spacecraft where a
+        metric is (``name[k]``)."""
+        return metric_ops.metrics_dict(self.metrics, out["metrics"])
+
+    def spacecraft_axis(self, name: str) -> int | None:
+        """Axis of the spacecraft dimension of the carry leaf ``name`` (as diagnostics print it:
+        ``"0.plant.q"``), or None (no such leaf, or one not per spacecraft)."""
+        from formation_ftc.sim.records import _leaf_by_name
+
+        leaf = _leaf_by_name(self, name)
+        if leaf is None:
+            return None
+        shape, n = np.shape(leaf), self.count
+        if "values" in name.split(".") and len(shape) >= 2 and shape[1] == n:  # history rings
+            return 1
+        return 0 if len(shape) >= 1 and shape[0] == n else None
 
     def replay_step(self):
         """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""

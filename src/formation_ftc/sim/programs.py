@@ -1,8 +1,8 @@
 """One compiled program per structure, shared by every run of a process.
 
-A scenario compiles to a :class:`~formation_ftc.sim.compiled.Compiled` whose ``static_key`` names its
+A scenario builds a :class:`~formation_ftc.sim.loop.ClosedLoop` whose ``static_key`` names its
 structure (components, static fields, leaf shapes); its numbers -- gains, masses, fault data, initial
-states, seeds -- are leaves of the parameters. Two scenarios with equal keys therefore run the same
+states, seeds -- are its leaves. Two scenarios with equal keys therefore run the same
 program. :func:`jitted_run` keeps one ``jax.jit`` of ``run`` per key, so the second run of a structure
 in a process -- the same scenario again, or another gain, fault or seed -- is neither traced, lowered
 nor compiled again (JAX's in-memory caches hang off the ``jax.jit`` object); a fresh ``jax.jit`` per
@@ -36,20 +36,26 @@ _PROGRAMS: LRUCache = LRUCache(maxsize=MAX_KEPT)
 _EXECUTABLES: LRUCache = LRUCache(maxsize=MAX_KEPT)
 
 
-def jitted_run(compiled) -> Any:
-    """``jax.jit(compiled.run)`` compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options`, shared by
-    every compiled scenario with the same ``static_key`` (JAX still retraces if the parameters' shapes
-    or static fields differ).
+def _run(loop: Any) -> Any:
+    """``loop.run()``: the function every shared program jits."""
+    return loop.run()
+
+
+def jitted_run(loop) -> Any:
+    """``jax.jit(ClosedLoop.run)`` compiled with :func:`formation_ftc.sim.runtime.xla.compiler_options`,
+    shared by every loop with the same ``static_key`` (JAX still retraces if the leaves' shapes or
+    static fields differ).
 
     Parameters
     ----------
-    compiled : Compiled
-        A compiled scenario.
+    loop : ClosedLoop
+        A loop (:func:`formation_ftc.api.build_loop`).
 
     Returns
     -------
     jax.stages.Wrapped
-        Called with ``compiled.params``; returns the run's :data:`~formation_ftc.sim.engine.RunOutput`.
+        Called with the loop (or another of its structure); returns the run's
+        :data:`~formation_ftc.sim.engine.RunOutput`.
 
     Examples
     --------
@@ -62,33 +68,31 @@ def jitted_run(compiled) -> Any:
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
     ...                                initial_state_lvlh=np.array([[100.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
     >>> loop = ClosedLoop(plant=plant, controller=ZeroController(count=1), dt=10.0, n_steps=2)
-    >>> from formation_ftc.sim.compiled import compile_loop
     >>> from formation_ftc.sim.programs import jitted_run
-    >>> c = compile_loop(loop)
-    >>> fn = jitted_run(c)
-    >>> fn is jitted_run(compile_loop(loop))  # shared by every loop of this structure
+    >>> fn = jitted_run(loop)
+    >>> fn is jitted_run(loop.validate())  # shared by every loop of this structure
     True
-    >>> out = fn(c.params)
+    >>> out = fn(loop)
     >>> np.round(np.asarray(out["records"]["position"])[:, 0, 0], 3)  # radial position [m]
     array([100.   , 100.015, 100.06 ])
     """
-    return kept(_PROGRAMS, compiled.static_key, lambda: xla.jit(compiled.run))
+    return kept(_PROGRAMS, loop.static_key, lambda: xla.jit(_run))
 
 
-def executable(compiled) -> tuple[Any, float]:
-    """Ahead-of-time compiled ``compiled.run`` (``jax.jit(...).lower(params).compile()``) and the seconds
+def executable(loop) -> tuple[Any, float]:
+    """Ahead-of-time compiled ``ClosedLoop.run`` (``jax.jit(...).lower(loop).compile()``) and the seconds
     [s] that compiling it took here (0.0 when a scenario of the same structure and parameter shapes
     compiled it before; the :data:`MAX_KEPT` most recently used executables are kept).
 
     Parameters
     ----------
-    compiled : Compiled
-        A compiled scenario.
+    loop : ClosedLoop
+        A loop (:func:`formation_ftc.api.build_loop`).
 
     Returns
     -------
     executable : jax.stages.Compiled
-        Called with ``compiled.params``.
+        Called with the loop (or another of its structure and leaf shapes).
     seconds : float
         Time spent compiling it [s] (0.0 when it was kept).
 
@@ -101,18 +105,16 @@ def executable(compiled) -> tuple[Any, float]:
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
     ...                                initial_state_lvlh=np.array([[100.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
     >>> loop = ClosedLoop(plant=plant, controller=ZeroController(count=1), dt=10.0, n_steps=2)
-    >>> from formation_ftc.sim.compiled import compile_loop
     >>> from formation_ftc.sim.programs import executable
-    >>> c = compile_loop(loop)
-    >>> exe, seconds = executable(c)
-    >>> int(exe(c.params)["diverged_step"])
+    >>> exe, seconds = executable(loop)
+    >>> int(exe(loop)["diverged_step"])
     -1
-    >>> executable(c)[1]  # kept: nothing to do the second time
+    >>> executable(loop)[1]  # kept: nothing to do the second time
     0.0
     """
-    leaves, treedef = jax.tree_util.tree_flatten(compiled.params)
+    leaves, treedef = jax.tree_util.tree_flatten(loop)
     key = (
-        compiled.static_key,
+        loop.static_key,
         treedef,
         tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves),
     )
@@ -121,7 +123,7 @@ def executable(compiled) -> tuple[Any, float]:
 
     def build():
         built.append(True)
-        return jitted_run(compiled).lower(compiled.params).compile()
+        return jitted_run(loop).lower(loop).compile()
 
     exe = kept(_EXECUTABLES, key, build)
     return exe, time.perf_counter() - t0 if built else 0.0
@@ -142,12 +144,10 @@ def clear() -> None:
     >>> plant = ClohessyWiltshirePlant(mean_motion=np.float64(1e-3), mass=np.array([10.0]),
     ...                                initial_state_lvlh=np.array([[100.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
     >>> loop = ClosedLoop(plant=plant, controller=ZeroController(count=1), dt=10.0, n_steps=2)
-    >>> from formation_ftc.sim.compiled import compile_loop
     >>> from formation_ftc.sim.programs import clear, jitted_run
-    >>> c = compile_loop(loop)
-    >>> fn = jitted_run(c)
+    >>> fn = jitted_run(loop)
     >>> clear()
-    >>> jitted_run(c) is fn  # a new program (compiled again on its first call)
+    >>> jitted_run(loop) is fn  # a new program (compiled again on its first call)
     False
     """
     _PROGRAMS.clear()

@@ -35,7 +35,7 @@ SHORT = {
 
 def _loop(**ov):
     scn = ftc.load_scenario("yang2013-controller-fault", {**SHORT, **ov})
-    return api.compile_scenario(scn).params
+    return api.build_loop(scn)
 
 
 @pytest.mark.parametrize(

@@ -26,7 +26,7 @@ SHORT = {
 
 def _loop(**ov):
     scn = ftc.load_scenario("yang2013-controller-fault", {**SHORT, **ov})
-    return api.compile_scenario(scn).params
+    return api.build_loop(scn)
 
 
 def _state_and_decision():

@@ -14,7 +14,7 @@ import pytest
 
 import formation_ftc as ftc
 from formation_ftc import api
-from formation_ftc.api import compile_scenario, finish_run
+from formation_ftc.api import build_loop, finish_run
 from formation_ftc.core.dynamics.cw import cw_closed_form, cw_free_motion, cw_matrices
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.papers.gui2022.figures import deputy
@@ -200,18 +200,18 @@ def test_batched_equals_single_runs():
     scn = ftc.load_scenario(
         "gui2022-lof2tc", {"simulation.horizon": 0.5, "simulation.record_every": 50}
     )
-    c = compile_scenario(scn)
+    c = build_loop(scn)
     loops = [
         dataclasses.replace(
-            c.params,
-            plant=dataclasses.replace(c.params.plant, disturbance_amplitude=jnp.asarray(a)),
+            c,
+            plant=dataclasses.replace(c.plant, disturbance_amplitude=jnp.asarray(a)),
         )
         for a in (1.2e-3, 5e-3)
     ]
     batch, axes = stack_params(loops)
     outb = batched_run(c, axes, 2)(batch)
     for i, loop in enumerate(loops):
-        single = jax.jit(c.run)(loop)
+        single = jax.jit(type(c).run)(loop)
         np.testing.assert_allclose(
             np.asarray(outb["records"]["fault_estimate"][i]),
             np.asarray(single["records"]["fault_estimate"]),
@@ -222,7 +222,7 @@ def test_batched_equals_single_runs():
         outb["records"]["fault_estimate"][0], outb["records"]["fault_estimate"][1]
     )
     assert outb["records"]["state"].dtype == jnp.float64
-    ds, m = finish_run(scn, c, jax.jit(c.run)(c.params))
+    ds, m = finish_run(scn, c, jax.jit(type(c).run)(c))
     assert set(ds.fault_estimate.dims) == {"time", "spacecraft", "axis"}
 
 

@@ -37,7 +37,7 @@ def sir_full(load, simulate):
 def _final(load, name, n_steps, **ov):
     scn = load(name, {"simulation.horizon": n_steps * 0.01, "simulation.record_every": 1, **ov})
     c = build(scn)
-    return jax.jit(c.run)(c.params)
+    return jax.jit(type(c).run)(c)
 
 
 @pytest.mark.parametrize(
@@ -78,7 +78,7 @@ def test_converges_as_dt_shrinks(load):
             {"simulation.horizon": 20.0, "simulation.dt": dt, "simulation.record_every": 1},
         )
         c = build(scn)
-        fin = jax.jit(c.run)(c.params)["final"]
+        fin = jax.jit(type(c).run)(c)["final"]
         finals.append(
             (np.asarray(fin["plant"]["q"])[:, :3], np.asarray(fin["controller"]["beta_hat"]))
         )
@@ -208,15 +208,15 @@ def test_batched_run_equals_single_runs(load):
     runs (same XLA program up to batching; 1e-9 m)."""
     scn = load("li2020-thm2-delays", {"simulation.horizon": 5.0})
     c = build(scn)
-    p1 = c.params
+    p1 = c
     p2 = dataclasses.replace(
         p1,
         plant=dataclasses.replace(p1.plant, mass=p1.plant.mass * 1.1),
         controller=dataclasses.replace(p1.controller, lam=p1.controller.lam * 0.8),
     )
     batched = jax.tree_util.tree_map(lambda a, b: np.stack([a, b]), p1, p2)
-    out_b = jax.jit(jax.vmap(c.run))(batched)
-    run = jax.jit(c.run)
+    out_b = jax.jit(jax.vmap(type(c).run))(batched)
+    run = jax.jit(type(c).run)
     q_b = np.asarray(out_b["final"]["plant"]["q"])
     for k, p in enumerate((p1, p2)):
         single = run(p)["final"]["plant"]["q"]

@@ -52,12 +52,12 @@ def test_step_profile_equals_expression_profile(scenario, atol):
 
 
 def test_step_profile_shares_one_program_across_values():
-    from formation_ftc.api import compile_scenario
+    from formation_ftc.api import build_loop
 
-    a = compile_scenario(ftc.load_scenario("li2020-thm1", _step()))
-    b = compile_scenario(ftc.load_scenario("li2020-thm1", _step([[0.9] * 3] * 4, [[1.0] * 3] * 4)))
+    a = build_loop(ftc.load_scenario("li2020-thm1", _step()))
+    b = build_loop(ftc.load_scenario("li2020-thm1", _step([[0.9] * 3] * 4, [[1.0] * 3] * 4)))
     assert a.static_key == b.static_key
-    assert not np.array_equal(a.params.actuator.effectiveness, b.params.actuator.effectiveness)
+    assert not np.array_equal(a.actuator.effectiveness, b.actuator.effectiveness)
 
 
 @pytest.mark.parametrize(

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import formation_ftc as ftc
-from formation_ftc.api import compile_scenario, simulate_with_metrics
+from formation_ftc.api import build_loop, simulate_with_metrics
 from formation_ftc.components.controllers.networked_el_hinf import synchronisation_torque
 from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics.euler_lagrange import inertia_matrix
@@ -145,8 +145,8 @@ def test_converges_as_dt_shrinks():
                 "evaluations.0.assessment_window": [10.0, 25.0],
             },
         )
-        c = compile_scenario(s)
-        finals[dt] = np.asarray(jax.jit(c.run)(c.params)["final"]["plant"]["q"])
+        c = build_loop(s)
+        finals[dt] = np.asarray(jax.jit(type(c).run)(c)["final"]["plant"]["q"])
     e1 = np.abs(finals[0.02] - finals[0.005]).max()
     e2 = np.abs(finals[0.01] - finals[0.005]).max()
     assert e2 < e1 and e2 < 1e-4
@@ -156,14 +156,14 @@ def test_seeds_batched_equals_single_and_draws():
     s = ftc.load_scenario(
         "mehrabian-isolation", {"simulation.horizon": 2.0, "simulation.record_every": 200}
     )
-    c = compile_scenario(s)
+    c = build_loop(s)
     seeds = [1, 2, 7]
-    P, axes = stack_params([with_seed(c.params, sd) for sd in seeds])
+    P, axes = stack_params([with_seed(c, sd) for sd in seeds])
     batched = batched_run(c, axes, len(seeds))(P)
-    single = jax.jit(c.run)
+    single = jax.jit(type(c).run)
     q0, finals = [], []
     for i, seed in enumerate(seeds):
-        one = single(with_seed(c.params, seed))
+        one = single(with_seed(c, seed))
         # batched[i] == single run i (to the last bits: shared leaves compile to another program)
         np.testing.assert_allclose(
             np.asarray(batched["final"]["plant"]["q"][i]),
@@ -173,7 +173,7 @@ def test_seeds_batched_equals_single_and_draws():
         )
         q0.append(np.asarray(one["records"]["attitude"][0]))
         finals.append(np.asarray(one["final"]["plant"]["q"]))
-    again = single(with_seed(c.params, 1))  # deterministic in the seed
+    again = single(with_seed(c, 1))  # deterministic in the seed
     np.testing.assert_array_equal(np.asarray(again["final"]["plant"]["q"]), finals[0])
     q0 = np.rad2deg(np.stack(q0))
     assert q0.min() >= 0.0 and q0.max() <= 60.0 and q0.std() > 10.0

@@ -20,7 +20,6 @@ from formation_ftc.config import loader
 from formation_ftc.papers.programs import simulate_batched
 from formation_ftc.papers.yang2013.reproduction import scenario_numbers
 from formation_ftc.sim.batch import batched_run, stack_params
-from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.metrics import metrics_dict
 
 
@@ -146,7 +145,7 @@ def make_loop(overrides: dict, windows: list | None = None):
     raw = loader.read_raw("yang2013-controller-fault")[0]
     if windows is not None:
         raw["evaluations"] = [{"type": "switch-norms", "input_windows": windows}]
-    return api.compile_scenario(ftc.load_scenario(raw, overrides)).params
+    return api.build_loop(ftc.load_scenario(raw, overrides))
 
 
 def test_batched_params_equal_single_runs():
@@ -155,7 +154,7 @@ def test_batched_params_equal_single_runs():
     K2f = np.array(act.K2_faulty)
     K2f[1] = -0.05
     loop2 = dataclasses.replace(loop, actuator=dataclasses.replace(act, K2_faulty=K2f))
-    c = compile_loop(loop)
+    c = loop.validate()
     batch, in_axes = stack_params([loop, loop2])
     outb = batched_run(c, in_axes, 2)(batch)
     run = jax.jit(lambda p: p.run())

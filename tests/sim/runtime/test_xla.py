@@ -19,7 +19,7 @@ import jax
 import numpy as np
 import pytest
 
-from formation_ftc.api import compile_scenario, load_scenario
+from formation_ftc.api import build_loop, load_scenario
 from formation_ftc.sim import batch as batch_mod
 from formation_ftc.sim.runtime import xla
 
@@ -45,9 +45,9 @@ def test_unknown_option_is_dropped_not_fatal(monkeypatch):
 
 
 def test_options_leave_the_arithmetic_alone():
-    c = compile_scenario(load_scenario("cw-free-drift"))
-    ours = jax.device_get(xla.jit(c.run)(c.params))
-    plain = jax.device_get(jax.jit(c.run)(c.params))
+    c = build_loop(load_scenario("cw-free-drift"))
+    ours = jax.device_get(xla.jit(type(c).run)(c))
+    plain = jax.device_get(jax.jit(type(c).run)(c))
     for a, b in zip(
         jax.tree_util.tree_leaves(ours["final"]),
         jax.tree_util.tree_leaves(plain["final"]),
@@ -86,10 +86,10 @@ def test_elementwise_functions_give_the_same_bits_with_the_options():
 
 @pytest.mark.parametrize("fast", [False, True])
 def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fast):
-    c = compile_scenario(
+    c = build_loop(
         load_scenario("cw-free-drift", {"simulation.horizon": 584.0, "simulation.record_every": 1})
     )
-    monkeypatch.setattr(type(c.params.controller), "batch_fast_compile", fast, raising=False)
+    monkeypatch.setattr(type(c.controller), "batch_fast_compile", fast, raising=False)
     seen = []
     real = xla.jit
 
@@ -99,7 +99,7 @@ def test_batched_programs_ask_for_the_preset_of_their_controller(monkeypatch, fa
 
     monkeypatch.setattr(xla, "jit", spy)
     batch_mod.clear()
-    runs = [dataclasses.replace(c.params, seed=np.uint32(s)) for s in (1, 2)]
+    runs = [dataclasses.replace(c, seed=np.uint32(s)) for s in (1, 2)]
     P, axes = batch_mod.stack_params(runs)
     out = batch_mod.batched_run(c, axes, 2)(P)
     batch_mod.clear()

@@ -58,7 +58,6 @@ from formation_ftc.sim.contract import (
 
 # the loop and its components import JAX: only make_loop, build and check import them
 if TYPE_CHECKING:
-    from formation_ftc.sim.compiled import Compiled
     from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = [
@@ -325,11 +324,9 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     )
 
 
-def build(s: ComposedScenario) -> Compiled:
-    """Compile a composed scenario."""
-    from formation_ftc.sim.compiled import compile_loop
-
-    return compile_loop(make_loop(s))
+def build(s: ComposedScenario) -> ClosedLoop:
+    """The composed scenario's loop, its components checked against each other."""
+    return make_loop(s).validate(s.labels())
 
 
 #: conditions of component types: (kind, name) -> [fn(scenario, loop) -> [Condition]]

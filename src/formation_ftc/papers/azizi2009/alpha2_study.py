@@ -17,7 +17,6 @@ from formation_ftc.methods.composed import ComposedScenario, make_loop
 from formation_ftc.papers.azizi2009.conditions import d_norms
 from formation_ftc.report.profile import phase
 from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
-from formation_ftc.sim.compiled import compile_loop
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import metrics_dict
 
@@ -91,14 +90,13 @@ def run_batch(
     if len(sizes) != 1:
         raise ValueError(f"all variations need the same batch size, got {sizes}")
     (size,) = sizes
-    loop = make_loop(sc)
-    compiled = compile_loop(loop)
+    loop = make_loop(sc).validate()
     loops = [
         _variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)
     ]
     if grid is None:
         batch, axes = stack_params(loops)
-        out = jax.device_get(batched_run(compiled, axes, size)(batch))
+        out = jax.device_get(batched_run(loop, axes, size)(batch))
     else:
         rows, cols = (int(g) for g in grid)
         if rows < 1 or cols < 1 or rows * cols != size:
@@ -106,7 +104,7 @@ def run_batch(
         batch, row_axes, col_axes = stack_params_grid(
             [loops[r * cols : (r + 1) * cols] for r in range(rows)]
         )
-        out = jax.device_get(batched_grid_run(compiled, row_axes, col_axes, rows, cols)(batch))
+        out = jax.device_get(batched_grid_run(loop, row_axes, col_axes, rows, cols)(batch))
         out = jax.tree_util.tree_map(lambda a: np.reshape(a, (size,) + np.shape(a)[2:]), out)
     res = []
     for b, lp in enumerate(loops):

@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.api import compile_scenario, finish_run, load_scenario
+from formation_ftc.api import build_loop, finish_run, load_scenario
 from formation_ftc.components.estimators.scripted_fdi import ScriptedFdi
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
 from formation_ftc.report.profile import phase
@@ -63,8 +63,8 @@ def with_seed(loop: ClosedLoop, seed: int) -> ClosedLoop:
     return dataclasses.replace(loop, plant=plant, estimator=est, seed=sd)
 
 
-def _one_structure(compiled) -> None:
-    if len({c.static_key for c in compiled}) != 1:
+def _one_structure(loops) -> None:
+    if len({c.static_key for c in loops}) != 1:
         raise RuntimeError(
             "the Mehrabian cases must share one compiled program (static keys differ)"
         )
@@ -80,15 +80,11 @@ def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | Non
     scns = [load_scenario(n, ov) for n in scenario_names]
     n_steps = scns[0].simulation.n_steps
     scns = [load_scenario(n, {**ov, "simulation.record_every": n_steps}) for n in scenario_names]
-    compiled = [compile_scenario(s) for s in scns]
-    _one_structure(compiled)
-    P, row_axes, col_axes = stack_params_grid(
-        [[with_seed(c.params, s) for s in seeds] for c in compiled]
-    )
-    out = batched_grid_run(compiled[0], row_axes, col_axes, len(compiled), len(seeds))(P)
-    mets = {
-        m.name: np.array(v) for m, v in zip(compiled[0].params.metrics, out["metrics"], strict=True)
-    }
+    loops = [build_loop(s) for s in scns]
+    _one_structure(loops)
+    P, row_axes, col_axes = stack_params_grid([[with_seed(c, s) for s in seeds] for c in loops])
+    out = batched_grid_run(loops[0], row_axes, col_axes, len(loops), len(seeds))(P)
+    mets = {m.name: np.array(v) for m, v in zip(loops[0].metrics, out["metrics"], strict=True)}
     div = np.array(out["diverged_step"])
     # one record per run: a run that left its admissible set reports its block's first step (0) and no
     # metric; replay it alone for the exact step and its metrics up to the last record before it
@@ -117,10 +113,9 @@ def _replay_diverged(
     s = load_scenario(
         name, {**overrides, "simulation.seed": seed, "simulation.record_every": every}
     )
-    c = compile_scenario(s)
-    c = dataclasses.replace(c, params=with_seed(c.params, seed))
-    out = jax.tree_util.tree_map(np.asarray, jitted_run(c)(c.params))
-    mets = c.metrics(out)
+    c = with_seed(build_loop(s), seed)
+    out = jax.tree_util.tree_map(np.asarray, jitted_run(c)(c))
+    mets = c.metric_values(out)
     try:
         finish_run(s, c, out)
     except SimulationDiverged as err:
@@ -131,13 +126,13 @@ def _replay_diverged(
 def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = None):
     ov = {**(overrides or {}), "simulation.seed": seed}
     scns = [load_scenario(n, ov) for n in scenario_names]
-    compiled = [compile_scenario(s) for s in scns]
-    _one_structure(compiled)
+    loops = [build_loop(s) for s in scns]
+    _one_structure(loops)
     # one batch of the cases (leaves shared by every run stay unbatched)
-    P, axes = stack_params([with_seed(c.params, seed) for c in compiled])
-    out = jax.tree_util.tree_map(np.asarray, batched_run(compiled[0], axes, len(compiled))(P))
+    P, axes = stack_params([with_seed(c, seed) for c in loops])
+    out = jax.tree_util.tree_map(np.asarray, batched_run(loops[0], axes, len(loops))(P))
     datasets = []
-    for i, (s, c) in enumerate(zip(scns, compiled, strict=True)):
+    for i, (s, c) in enumerate(zip(scns, loops, strict=True)):
         one = jax.tree_util.tree_map(lambda a, i=i: a[i], out)
         ds, _ = finish_run(s, c, one, raise_on_divergence=False)
         datasets.append(ds)
