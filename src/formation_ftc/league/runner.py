@@ -77,6 +77,23 @@ FDI_METRICS: tuple[dict[str, Any], ...] = (
     {"name": "fdi_fault_time", "signal": "fault_active", "reduce": "first", "threshold": 0.5,
      "units": "s"},
 )  # fmt: skip
+#: the identification scores the league adds to a method whose estimator identifies faults
+#: (identification-scores evaluation, docs/league.md)
+IDENTIFICATION_METRICS: tuple[dict[str, Any], ...] = (
+    # |identified - true| effectiveness of the faulty channel at the horizon (NaN: not identified) [-]
+    {"name": "id_effectiveness_error", "signal": "id_effectiveness_error", "reduce": "last"},
+    # time after the onset the identified effectiveness was not within 10 % of the true one [s]
+    {"name": "id_time_outside_10pct", "signal": "id_pending", "reduce": "integral", "units": "s"},
+    # 1: a healthy channel identified outside 1 +- 0.1
+    {"name": "id_false_identification", "signal": "id_false", "reduce": "max"},
+)  # fmt: skip
+#: what the league records of an HL supervisor's formation-level recovery (hierarchical supervisor)
+FLFR_METRICS: tuple[dict[str, Any], ...] = (
+    # longest time spent in FLFR [s] (0: FLFR never engaged)
+    {"name": "flfr_time", "signal": "time_in_flfr", "reduce": "max", "units": "s"},
+)
+#: ... and on which spacecraft, where the law takes it from the FDI's isolation at run time
+FLFR_SPACECRAFT_METRIC = {"name": "flfr_spacecraft", "signal": "flfr_spacecraft", "reduce": "last"}
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -171,6 +188,14 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
         return raw
     raw["evaluations"] = [*raw.get("evaluations", []), {"type": "fdi-scores"}]
     raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in FDI_METRICS)]
+    if "fault-identification" in loop.estimator.provides():
+        raw["evaluations"].append({"type": "identification-scores"})
+        raw["metrics"] += [dict(m) for m in IDENTIFICATION_METRICS]
+    recorded = {sig.name for sig in loop.signals()}
+    if "time_in_flfr" in recorded:
+        raw["metrics"] += [dict(m) for m in FLFR_METRICS]
+    if "flfr_spacecraft" in recorded:
+        raw["metrics"].append(dict(FLFR_SPACECRAFT_METRIC))
     return raw
 
 
@@ -938,9 +963,11 @@ def _step_checks(
                     onset=spec.league.onset.low,
                     tolerance=sc.tolerance,
                     max_halvings=sc.max_halvings,
+                    # alarm times are on the step grid; identification errors are small estimation
+                    # errors (1e-4 against 3e-4 is no convergence verdict on the physics)
                     ignore=tuple(
-                        m["name"] for m in FDI_METRICS
-                    ),  # alarm times are on the step grid
+                        m["name"] for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS)
+                    ),
                     on_simulation=on_simulation,
                 ).as_dict()
                 verdict = "converged" if record["converged"] else "NOT converged, kept"

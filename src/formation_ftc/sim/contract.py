@@ -172,6 +172,11 @@ CAPABILITIES: dict[str, Capability] = {
         "an estimate that reports a fault detection (estimate['detected'])",
         'estimator type = "residual-fdi"',
     ),
+    "fault-identification": Capability(
+        "an estimate of each actuator channel's effectiveness with its standard deviation and whether it "
+        "is identified (estimate['effectiveness'], ['effectiveness_std'], ['identified'])",
+        'estimator type = "residual-fdi" with identification = "rls"',
+    ),
     "fdi-records": Capability(
         "a fault detector's latched alarm and isolated channel, recorded as fdi_detected and "
         "fdi_isolated in the actuator's channels",

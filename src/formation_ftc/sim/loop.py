@@ -52,12 +52,15 @@ from formation_ftc.sim.components import (
 from formation_ftc.sim.contract import capability
 from formation_ftc.sim.engine import run_fixed_step
 
-__all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL"]
+__all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL", "NAVIGATION_ESTIMATE"]
 
 #: fraction of dt subtracted from the last RK stage time for truth-side time signals (faults,
 #: disturbances): a fault onset on the step grid acts from the next step on, never inside an RK step
 LEFT_LIMIT = 1e-9
 COMMAND_SIGNAL = "command"
+#: key of an estimate (a mapping) that the controller reads in place of the sensors' measurement: an
+#: estimator that detects faults and also navigates (``residual-fdi`` with ``fly_on_filter = true``)
+NAVIGATION_ESTIMATE = "navigation"
 POSITION_ERROR_SIGNAL = "position_error"
 APPLIED_SIGNAL = "applied"
 #: key under which :meth:`ClosedLoop.step` hands the stage-integrated metric increments to the run
@@ -360,9 +363,13 @@ class ClosedLoop:
     def _law_flight(self, y, est, decision, exo, ref, sc):
         """The controller's flight inputs: the sensors' measurement ``y`` and the estimate, or, where
         the estimator is a navigation filter (``navigation = True``), its state estimate in place of the
-        measurement (held over the step: the navigation solution at the control rate)."""
+        measurement (held over the step: the navigation solution at the control rate); an estimate
+        with a :data:`NAVIGATION_ESTIMATE` entry (an FDI that also navigates) gives that entry in place
+        of the measurement and the whole estimate besides."""
         if self.estimator.navigation:
             return self._flight(est, None, None, decision, exo, ref, sc)
+        if isinstance(est, Mapping) and NAVIGATION_ESTIMATE in est:  # it navigates as well
+            return self._flight(est[NAVIGATION_ESTIMATE], None, est, decision, exo, ref, sc)
         return self._flight(y, None, est, decision, exo, ref, sc)
 
     def _flight(self, y, received, est, decision, exo, ref, sc):

@@ -132,6 +132,38 @@ def test_intermittent_on_off_pattern():
         )
 
 
+@pytest.mark.parametrize(
+    ("kind", "departure"),
+    [
+        ("loss_of_effectiveness", ONSET),  # departs at the onset
+        ("degrading", ONSET),
+        (
+            "intermittent",
+            ONSET + 3.0,
+        ),  # the first on phase is nominal: departs at its first off phase
+    ],
+)
+def test_the_fault_in_the_scores_starts_at_the_first_departure_from_nominal(kind, departure):
+    """fault_active and fault_channel (what fdi-scores compares a detector with) rise when the actuator
+    first departs from nominal: at the onset, but for an intermittent fault (on 3 s, off 3 s here) at
+    its first off phase -- and they stay up through the later on phases."""
+    act = _actuator(kind)
+    for t in (ONSET - 1.0, ONSET, departure - 0.1, departure, departure + 3.5, departure + 50.0):
+        _, out = _apply(act, t)
+        up = t >= departure
+        assert float(out["fault_active"]) == (1.0 if up else 0.0), (kind, t)
+        channel = np.asarray(out["fault_channel"])
+        assert channel[SC - 1, AX] == (1.0 if up else 0.0) and channel.sum() == (1.0 if up else 0.0)
+
+
+def test_an_always_on_intermittent_fault_never_departs():
+    act = _actuator("intermittent", duty=1.0)
+    for t in (ONSET, ONSET + 100.0):
+        y, out = _apply(act, t)
+        assert float(out["fault_active"]) == 0.0
+        np.testing.assert_array_equal(y, _clipped())
+
+
 def test_degrading_ramp_and_floor():
     act = _actuator("degrading")  # g = max(0.4, 1 - 0.01 (t - 10)): floor reached at t = 70 s
     c = _clipped()[SC - 1, AX]

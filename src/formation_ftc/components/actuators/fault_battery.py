@@ -46,7 +46,11 @@ first step the channel passes its current saturated command (exactly the frozen 
 once per step).
 
 Provides ``true-actuator-fault`` (the ``fault_active`` and ``fault_channel`` records the ``fdi-scores``
-evaluation compares a fault detector with). With ``euler_allocation`` it needs the plant's
+evaluation compares a fault detector with). They start when the actuator first departs from nominal,
+which is the onset for every kind but *intermittent*: its first ``duty * period`` after the onset is
+an on phase (the thruster works), so its fault starts at the first off phase (never for ``duty = 1``).
+A detection delay is then the time the thruster was not nominal before the alarm, and an alarm in that
+first on phase is a false alarm. With ``euler_allocation`` it needs the plant's
 ``quaternion-attitude-state`` and provides ``generalised-torque-actuation``.
 """
 
@@ -136,7 +140,8 @@ class FaultBatteryActuator(Actuator):
 
     Records ``effectiveness`` (N, 3) the true gain g [-] (0 on a stuck or outage channel),
     ``saturated`` (N,) 1 when any axis of the spacecraft's command is at or beyond its limit,
-    ``fault_active`` () 1 from the onset on (0 throughout for kind none).
+    ``fault_active`` () 1 from the fault's first departure from nominal on (the onset; an intermittent
+    fault's first off phase; 0 throughout for kind none).
     """
 
     count: int = static()
@@ -195,6 +200,12 @@ class FaultBatteryActuator(Actuator):
         active = (tau >= 0.0) & ~self._is("none")
         phase = jnp.mod(jnp.maximum(tau, 0.0), self.period)
         on = phase < self.duty * self.period
+        # the first departure from nominal: the onset, or an intermittent fault's first off phase
+        first_off = jnp.where(
+            self._is("intermittent"),
+            jnp.where(self.duty < 1.0, self.duty * self.period, jnp.inf),
+            0.0,
+        )
         g = jnp.where(self._is("loss_of_effectiveness"), self.effectiveness, 1.0)
         g = jnp.where(self._is("stuck") | self._is("outage"), 0.0, g)
         g = jnp.where(self._is("intermittent"), jnp.where(on, 1.0, 0.0), g)
@@ -207,7 +218,7 @@ class FaultBatteryActuator(Actuator):
             "gain": jnp.where(on_channel, g, 1.0),  # (N, 3)
             "bias": jnp.where(on_channel, b, 0.0),  # (N, 3)
             "stuck": on_channel & self._is("stuck"),  # (N, 3)
-            "active": active,
+            "departed": active & (tau >= first_off),  # the fault in the scores (module docstring)
         }
 
     def initial_state(self):
@@ -247,12 +258,18 @@ class FaultBatteryActuator(Actuator):
                 "1",
                 "1 when any axis command is at its saturation limit",
             ),
-            Signal("fault_active", (), "1", "1 from the actuator fault onset on"),
+            Signal(
+                "fault_active",
+                (),
+                "1",
+                "1 from the fault's first departure from nominal on (the onset; for an intermittent "
+                "fault its first off phase)",
+            ),
             Signal(
                 "fault_channel",
                 ("spacecraft", "axis"),
                 "1",
-                "1 on the faulty (spacecraft, axis) channel from the onset on",
+                "1 on the faulty (spacecraft, axis) channel from the fault's first departure on",
             ),
         )
 
@@ -263,8 +280,8 @@ class FaultBatteryActuator(Actuator):
         return {
             "effectiveness": exo["gain"],
             "saturated": jnp.where(at_limit, 1.0, 0.0),
-            "fault_active": jnp.where(exo["active"], 1.0, 0.0),
-            "fault_channel": jnp.where(self._channel() & exo["active"], 1.0, 0.0),
+            "fault_active": jnp.where(exo["departed"], 1.0, 0.0),
+            "fault_channel": jnp.where(self._channel() & exo["departed"], 1.0, 0.0),
         }
 
 

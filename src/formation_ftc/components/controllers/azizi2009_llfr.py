@@ -109,7 +109,11 @@ def relative_output_law(e, e_dot, xdd_desired, lambda0, lambda1) -> jax.Array:
     return xdd_desired - lambda1 * e_dot - lambda0 * e
 
 
-def mode_allocation_matrices(alpha, alpha_flfr, k: int, b_nominal, b_hat) -> jax.Array:
+#: smallest identified effectiveness the allocation uses (an outage identifies as about 0) [-]
+EFFECTIVENESS_MIN = 0.05
+
+
+def mode_allocation_matrices(alpha, alpha_flfr, k: int | jax.Array, b_nominal, b_hat) -> jax.Array:
     """Allocation matrices of the modes Nominal, LLFR, FLFR (eq. (3)).
 
     Parameters
@@ -189,7 +193,11 @@ class ChainLlfrController(Controller):
     integer mode: 0 Nominal, 1 LLFR, 2 FLFR) selects the allocation: Nominal (alpha, b), LLFR
     (alpha, b_hat), FLFR (alpha with alpha_k = ``alpha_flfr`` for satellite ``fault_index``, b_hat).
     Without a supervisor (no decision) the LLFR allocation is used. The three matrices per axis are
-    computed once per run (controller state). Desired formation: regular polygon of side ``side``
+    computed once per run (controller state). With ``fault_estimate = "estimator"`` they are computed at
+    every step from the estimator's fault identification instead: once the FDI has isolated a channel and
+    identified its effectiveness, LLFR and FLFR allocate with ``b_hat = b * effectiveness`` on that
+    channel (clipped to [:data:`EFFECTIVENESS_MIN`, 1]; the stated ``b_hat`` elsewhere) and FLFR raises the
+    weight of the isolated spacecraft (``fault_index`` until an isolation). Desired formation: regular polygon of side ``side``
     [m] rotating at ``omega`` [rad/s] (:func:`formation_ftc.core.polygon_formation.rotating_polygon`).
     ``is_sampled``: u computed at t_k and held over the step; otherwise re-evaluated at every RK stage.
     Command u [m/s^2 per unit actuator gain].
@@ -204,6 +212,7 @@ class ChainLlfrController(Controller):
     side: Any  # [m]
     omega: Any  # [rad/s]
     fault_index: int = static(default=0)  # 0-based satellite whose weight FLFR raises
+    fault_estimate: str = static(default="stated")  # "stated" or "estimator" (docstring)
     is_sampled: bool = static(default=True)
     frame: str = static(default="inertial")  # frame of the desired formation's axes (records only)
 
@@ -223,6 +232,11 @@ class ChainLlfrController(Controller):
 
     def needs(self) -> dict[str, str]:
         out = {"chain-outputs": "read the relative outputs it controls"}
+        if self.fault_estimate == "estimator":
+            out["fault-identification"] = (
+                "allocate with the identified effectiveness of the isolated channel "
+                "(controller.fault_estimate = 'estimator')"
+            )
         if not self.is_sampled:
             out["stage-evaluation"] = (
                 "re-evaluate its continuous command at the RK stages (sampling = 'continuous'; "
@@ -264,12 +278,30 @@ class ChainLlfrController(Controller):
             e, e_dot, chain_difference(ad), self.lambda0, self.lambda1
         )  # Sec. II
         mode = LLFR if inputs.decision is None else inputs.decision
-        u = allocate(state["allocation"][mode], p)  # eq. (3)
+        allocation, extra = state["allocation"], {}
+        if self.fault_estimate == "estimator":
+            allocation, k = self.identified_allocation(inputs.estimate)
+            extra = {"flfr_spacecraft": (k + 1).astype(jnp.float64)}
+        u = allocate(allocation[mode], p)  # eq. (3)
         if self.sampled:
             nxt = state
         else:  # the matrices are constant: zero derivative
             nxt = {"allocation": jnp.zeros_like(state["allocation"])}
-        return u, nxt, {"desired_position": rd}
+        return u, nxt, {"desired_position": rd, **extra}
+
+    def identified_allocation(self, estimate) -> tuple[jax.Array, jax.Array]:
+        """The three allocation matrices (eq. (3)) with the fault the estimator identified: ``b_hat`` of
+        the isolated channel its identified effectiveness times ``b``, FLFR's raised weight on the
+        isolated spacecraft (:meth:`output` with ``fault_estimate = "estimator"``); and that spacecraft's
+        0-based index (``fault_index`` before an isolation)."""
+        na = self.n_axes
+        isolated = jnp.asarray(estimate["isolated"])[:, :na] & jnp.asarray(estimate["detected"])
+        use = isolated & jnp.asarray(estimate["identified"])[:, :na]
+        eff = jnp.clip(jnp.asarray(estimate["effectiveness"])[:, :na], EFFECTIVENESS_MIN, 1.0)
+        b_hat = jnp.where(use, self.b * eff, self.b_hat)
+        spacecraft = jnp.any(isolated, axis=1)
+        k = jnp.where(jnp.any(spacecraft), jnp.argmax(spacecraft), self.fault_index)
+        return mode_allocation_matrices(self.alpha, self.alpha_flfr, k, self.b, b_hat), k
 
     def signals(self):
         return (
@@ -280,6 +312,17 @@ class ChainLlfrController(Controller):
                 "desired position of the rotating formation",
                 self.frame,
             ),
+        ) + (
+            (
+                Signal(
+                    "flfr_spacecraft",
+                    (),
+                    "1",
+                    "spacecraft (1-based) whose weight FLFR raises: the one the FDI isolated",
+                ),
+            )
+            if self.fault_estimate == "estimator"
+            else ()
         )
 
     def coords(self):
@@ -323,6 +366,14 @@ class ChainLlfrSection(StrictModel):
     )
     b_hat: float = Field(
         1.0, gt=0, description="FDI estimate of the faulty actuator's gain (LLFR) [-]."
+    )
+    fault_estimate: Literal["stated", "estimator"] = Field(
+        "stated",
+        description="Where the fault the allocation uses comes from: 'stated' -- faulty_spacecraft, "
+        "faulty_axis and b_hat above (scripted fault information); 'estimator' -- at run time, the "
+        "channel the [estimator] isolated and its identified effectiveness (needs an estimator "
+        "providing fault-identification, e.g. residual-fdi with identification = 'rls'); FLFR then "
+        "raises alpha_flfr on the isolated spacecraft [-].",
     )
     nominal_mass: float | list[float] | None = builder_input(
         None,
@@ -541,6 +592,7 @@ def _build(sec: ChainLlfrSection, ctx: BuildContext) -> Controller:
         side=as_float(sec.side),
         omega=as_float(sec.omega),
         fault_index=k,
+        fault_estimate=sec.fault_estimate,
         is_sampled=sec.sampling == "zoh",
         frame="LVLH" if layout == "q" else "inertial",
     )

@@ -106,6 +106,18 @@ def kalman_predict(x, p, accel, phi, gamma, qd):
     return x @ phi.T + accel @ gamma.T, 0.5 * (p + p.T)
 
 
+#: what a filter that navigates records (``relative-navigation-filter``, ``residual-fdi`` navigating)
+NAVIGATION_SIGNALS = (
+    Signal("navigation_estimate", STATE, "m, m s-1", "relative state estimate", "LVLH"),
+    Signal(
+        "navigation_sigma",
+        ("component",),
+        "m, m s-1",
+        "the filter's standard deviation of each state component after the update",
+    ),
+)
+
+
 class NavigationState(NamedTuple):
     x_hat: Any  # (N, 6) estimate [m, m/s]
     p: Any  # (6, 6) error covariance (one model and one noise for every spacecraft)
@@ -145,15 +157,7 @@ class RelativeNavigationFilter(Estimator):
         return navigation_conditions(self.phi, self.qd, self.r)
 
     def signals(self):
-        return (
-            Signal("navigation_estimate", STATE, "m, m s-1", "relative state estimate", "LVLH"),
-            Signal(
-                "navigation_sigma",
-                ("component",),
-                "m, m s-1",
-                "the filter's standard deviation of each state component after the update",
-            ),
-        )
+        return NAVIGATION_SIGNALS
 
     def initial_state(self, measurement0):
         return NavigationState(jnp.asarray(measurement0), jnp.asarray(self.p0))

@@ -7,8 +7,9 @@ Its on-board model is that of ``relative-navigation-filter`` (the same section f
 of ``phi``, ``gamma``, ``qd``, ``r``, and ``nominal_mass``). Needs the plant's ``translational-state``;
 provides ``fault-alarm`` (its estimate reports ``detected``: the ``hierarchical`` supervisor can switch
 on it) and ``fdi-records`` (``fdi_detected``, ``fdi_isolated``: what ``fdi-scores`` compares with the
-true fault). ``formation-ftc check`` states the residual model's assumption about the command and the
-stability of the navigation model.
+true fault). With ``identification = "rls"`` it also identifies each channel's effectiveness and bias
+(:func:`identify_channels`) and provides ``fault-identification``. ``formation-ftc check`` states the
+residual model's assumption about the command and the stability of the navigation model.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pydantic import Field, model_validator
 from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.components.estimators.relative_navigation_filter import (
+    NAVIGATION_SIGNALS,
     RelativeNavigationSection,
     filter_model,
     kalman_predict,
@@ -39,12 +41,16 @@ __all__ = [
     "TESTS",
     "sequential_test",
     "latch_first_alarm",
+    "identify_channels",
+    "IDENTIFICATIONS",
 ]
 
 #: residual generators: the Kalman filter's innovation, or the one-step parity relation
 RESIDUALS = ("kalman", "parity")
 #: tests on the standardised residual of each (spacecraft, axis) channel
 TESTS = ("cusum", "fixed")
+#: fault identification: none, or recursive least squares with exponential forgetting per channel
+IDENTIFICATIONS = ("off", "rls")
 VEC = ("spacecraft", "axis")
 
 
@@ -129,6 +135,73 @@ def latch_first_alarm(stat, alarm, detected, isolated):
     return detected | alarm, jnp.where(first, top, isolated), first
 
 
+def identify_channels(theta, cov, residual, accel, gain, noise_var, forgetting):
+    """One step of recursive least squares with exponential forgetting on every actuator channel.
+
+    The velocity part of the one-step parity residual of channel (i, j) is, for an actuator that
+    delivers ``effectiveness * a + bias`` instead of the commanded acceleration ``a``::
+
+        e_ij = g_j ((effectiveness_ij - 1) a_ij + bias_ij) + v_ij,     v_ij ~ N(0, noise_var_j)
+
+    with ``g_j = gamma[3 + j, j]`` (about dt: the velocity a held acceleration adds over a step). With
+    ``theta = [effectiveness - 1, bias]`` and the regressor ``phi = g [a, 1]``, the update is the
+    Kalman filter of a parameter that drifts as the forgetting factor lambda allows (Ljung & Soderstrom,
+    *Theory and Practice of Recursive Identification*, 1983, ch. 2)::
+
+        P- = P / lambda,   K = P- phi / (noise_var + phi' P- phi),
+        theta <- theta + K (e - phi' theta),   P <- (I - K phi') P-
+
+    so ``P`` is the covariance of ``theta``; the memory is about ``1 / (1 - lambda)`` steps. The bias
+    term also absorbs the on-board model's slowly varying error (a CW model on a J2 orbit). A command
+    that stays constant makes ``a`` and ``1`` collinear: ``P`` then stays large along the unexcited
+    direction, which is how an unidentifiable channel shows (``effectiveness_std``).
+
+    Parameters
+    ----------
+    theta : array_like, shape (N, 3, 2)
+        ``[effectiveness - 1, bias]`` per channel before this step ([-], [m/s^2]).
+    cov : array_like, shape (N, 3, 2, 2)
+        Their covariance.
+    residual : array_like, shape (N, 3)
+        Velocity part of the parity residual [m/s].
+    accel : array_like, shape (N, 3)
+        Acceleration commanded over the step the residual spans [m/s^2].
+    gain : array_like, shape (3,)
+        ``g_j`` [s].
+    noise_var : array_like, shape (3,)
+        Variance of the residual's velocity components [(m/s)^2].
+    forgetting : float
+        lambda, 0 < lambda <= 1 [-].
+
+    Returns
+    -------
+    tuple
+        ``(theta, cov)`` after this step.
+
+    Examples
+    --------
+    A channel at half effectiveness, commanded a varying acceleration, noise-free:
+
+    >>> import numpy as np
+    >>> theta, cov = np.zeros((1, 1, 2)), np.eye(2)[None, None] * np.array([1.0, 1e-4])[:, None]
+    >>> for k in range(50):
+    ...     a = np.array([[1e-3 * (1 + (k % 2))]])
+    ...     e = 0.1 * (0.5 - 1.0) * a
+    ...     theta, cov = identify_channels(theta, cov, e, a, np.array([0.1]), np.array([1e-12]), 1.0)
+    >>> round(float(1 + theta[0, 0, 0]), 4)
+    0.5
+    """
+    phi = gain[None, :, None] * jnp.stack([accel, jnp.ones_like(accel)], axis=-1)  # (N, 3, 2)
+    prior = cov / forgetting
+    p_phi = jnp.einsum("ncab,ncb->nca", prior, phi)
+    s = noise_var[None, :] + jnp.einsum("nca,nca->nc", phi, p_phi)
+    k = p_phi / s[..., None]
+    innovation = residual - jnp.einsum("nca,nca->nc", phi, theta)
+    theta = theta + k * innovation[..., None]
+    cov = prior - jnp.einsum("nca,ncb->ncab", k, p_phi)
+    return theta, 0.5 * (cov + jnp.swapaxes(cov, -1, -2))
+
+
 class FdiState(NamedTuple):
     x_hat: Any  # (N, 6) predicted state (Kalman residual)
     p: Any  # (6, 6) predicted covariance (Kalman residual)
@@ -140,6 +213,8 @@ class FdiState(NamedTuple):
     g_neg: Any  # (N, 3) CUSUM statistic of a negative shift [-]
     detected: Any  # () latched alarm
     isolated: Any  # (N, 3) latched one-hot faulty channel
+    theta: Any = None  # (N, 3, 2) [effectiveness - 1, bias] per channel (identification = "rls")
+    theta_cov: Any = None  # (N, 3, 2, 2) their covariance
 
 
 @component
@@ -170,6 +245,27 @@ class ResidualFdi(Estimator):
 
     Estimate (what a supervisor or a law may read): ``{"detected": (), "isolated": (N, 3),
     "statistic": (N, 3)}``. Records ``fdi_statistic``, ``fdi_detected`` and ``fdi_isolated``.
+
+    Navigation (``fly_on_filter = True``, Kalman residual only): the estimate also carries the filter's
+    state after the measurement update, ``"navigation"`` (N, 6), which the controller reads in place of
+    the measurement: the loop flies on filtered navigation and is watched by the FDI at once. Records
+    ``navigation_estimate`` and ``navigation_sigma`` as ``relative-navigation-filter`` does. With
+    identification, the filter predicts the isolated channel with its identified effectiveness and
+    bias, so that after a fault the navigation follows the faulty thruster instead of the model of a
+    healthy one.
+
+    Identification (``identification = "rls"``): every channel's effectiveness and bias by recursive
+    least squares with forgetting on the parity residual's velocity part (:func:`identify_channels`;
+    whatever ``residual`` the detection uses), from the prior effectiveness 1 +- 1 and bias 0 +-
+    ``bias_prior_std``; the channel isolated at the first alarm starts again from that prior (its
+    estimate is then the faulty actuator's, not an average with its healthy past). A channel is
+    *identified* when the standard deviation of its effectiveness has
+    fallen to ``identification_std``; before that its effectiveness is reported as NaN, not as a number
+    (a channel whose command never varied cannot be identified). Adds ``"effectiveness"``,
+    ``"effectiveness_std"``, ``"bias"`` (acceleration [m/s^2]) and ``"identified"`` (N, 3) to the
+    estimate and records ``fdi_effectiveness`` (NaN where not identified) and
+    ``fdi_effectiveness_std``. The residual model assumes a command held over the step, and channels
+    the ``skip`` rule leaves untested are not updated either.
     """
 
     count: int = static()
@@ -185,11 +281,18 @@ class ResidualFdi(Estimator):
     threshold: Any  # alarm threshold [-]
     force_limit: Any = float("inf")  # rated thrust per axis [N]
     at_limit: str = static(default="skip")  # "skip" or "clip" at force_limit (docstring)
+    identification: str = static(default="off")  # "off" or "rls" (docstring)
+    fly_on_filter: bool = static(default=False)  # the law flies on the Kalman estimate (docstring)
+    forgetting: Any = 1.0  # RLS forgetting factor lambda [-]
+    identification_std: Any = 0.05  # effectiveness std at which a channel counts as identified [-]
+    bias_prior_std: Any = 1e-3  # prior standard deviation of a channel's bias [m/s^2]
 
     def needs(self) -> dict[str, str]:
         return {"translational-state": "form its residuals of the LVLH relative states"}
 
     def provides(self) -> frozenset[str]:
+        if self.identification == "rls":
+            return frozenset({"fault-alarm", "fdi-records", "fault-identification"})
         return frozenset({"fault-alarm", "fdi-records"})
 
     def conditions(self, loop) -> list[Condition]:
@@ -217,15 +320,40 @@ class ResidualFdi(Estimator):
 
     def signals(self):
         return (
-            Signal(
-                "fdi_statistic",
-                VEC,
-                "1",
-                "test statistic per spacecraft and axis (CUSUM max(g+, g-), or |z|)",
-                "LVLH",
-            ),
-            Signal("fdi_detected", (), "1", "1 from the first alarm on (latched)"),
-            Signal("fdi_isolated", VEC, "1", "one-hot channel isolated at the first alarm", "LVLH"),
+            (
+                Signal(
+                    "fdi_statistic",
+                    VEC,
+                    "1",
+                    "test statistic per spacecraft and axis (CUSUM max(g+, g-), or |z|)",
+                    "LVLH",
+                ),
+                Signal("fdi_detected", (), "1", "1 from the first alarm on (latched)"),
+                Signal(
+                    "fdi_isolated", VEC, "1", "one-hot channel isolated at the first alarm", "LVLH"
+                ),
+            )
+            + (
+                (
+                    Signal(
+                        "fdi_effectiveness",
+                        VEC,
+                        "1",
+                        "identified actuator effectiveness per channel (NaN: not identified)",
+                        "LVLH",
+                    ),
+                    Signal(
+                        "fdi_effectiveness_std",
+                        VEC,
+                        "1",
+                        "standard deviation of the identified effectiveness",
+                        "LVLH",
+                    ),
+                )
+                if self.identification == "rls"
+                else ()
+            )
+            + (NAVIGATION_SIGNALS if self.fly_on_filter else ())
         )
 
     def initial_state(self, measurement0):
@@ -242,6 +370,11 @@ class ResidualFdi(Estimator):
             g_neg=zeros,
             detected=jnp.asarray(False),
             isolated=jnp.zeros((n, 3), dtype=bool),
+            **(
+                dict(zip(("theta", "theta_cov"), self._prior(), strict=True))
+                if self.identification == "rls"
+                else {}
+            ),
         )
 
     def _residual(self, state: FdiState, y):
@@ -259,7 +392,7 @@ class ResidualFdi(Estimator):
         g_pos, g_neg, stat, alarm = sequential_test(
             self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
         )
-        detected, isolated, _ = latch_first_alarm(stat, alarm, state.detected, state.isolated)
+        detected, isolated, first = latch_first_alarm(stat, alarm, state.detected, state.isolated)
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":  # the filter's measurement update
             x_hat, p = kalman_update(x_hat, p, y, self.r)
@@ -275,7 +408,52 @@ class ResidualFdi(Estimator):
             detected=detected,
             isolated=isolated,
         )
-        return new, {"detected": new.detected, "isolated": isolated, "statistic": stat}
+        estimate = {"detected": new.detected, "isolated": isolated, "statistic": stat}
+        if self.fly_on_filter:  # the law reads the filtered state in place of the measurement
+            estimate["navigation"] = x_hat
+        if self.identification == "rls":
+            new, identified = self._identify(state, new, y, valid, first & isolated)
+            estimate |= identified
+        return new, estimate
+
+    def _prior(self):
+        """Prior of every channel's ``[effectiveness - 1, bias]``: 0 +- (1, ``bias_prior_std``)."""
+        n = self.count
+        cov = jnp.diag(jnp.stack([jnp.ones(()), self.bias_prior_std**2]))
+        return jnp.zeros((n, 3, 2)), jnp.broadcast_to(cov, (n, 3, 2, 2))
+
+    def _identify(self, state: FdiState, new: FdiState, y, valid, restart):
+        """RLS of every channel's effectiveness and bias on the parity residual (``identify_channels``);
+        the channel isolated at the first alarm (``restart``) starts again from the prior, so that its
+        estimate is that of the faulty actuator, not an average with its healthy past."""
+        parity = y - state.y_prev @ self.phi.T - state.a_prev @ self.gamma.T
+        cov_v = jnp.diagonal(self.parity_cov)[3:]
+        theta0, cov0 = self._prior()
+        theta_in = jnp.where(restart[..., None], theta0, state.theta)
+        cov_in = jnp.where(restart[..., None, None], cov0, state.theta_cov)
+        theta, cov = identify_channels(
+            theta_in,
+            cov_in,
+            parity[:, 3:],
+            state.a_prev,
+            jnp.diagonal(self.gamma[3:, :]),
+            cov_v,
+            self.forgetting,
+        )
+        use = (valid & state.tested)[..., None]
+        theta = jnp.where(use, theta, theta_in)
+        cov = jnp.where(use[..., None], cov, cov_in)
+        # forgetting without excitation inflates P past the prior (windup): no information is left
+        # there, so the channel's covariance goes back to the prior
+        cov = jnp.where((cov[..., 0, 0] > cov0[..., 0, 0])[..., None, None], cov0, cov)
+        std = jnp.sqrt(jnp.maximum(cov[..., 0, 0], 0.0))
+        identified = std <= self.identification_std
+        return new._replace(theta=theta, theta_cov=cov), {
+            "effectiveness": 1.0 + theta[..., 0],
+            "effectiveness_std": std,
+            "bias": theta[..., 1],
+            "identified": identified,
+        }
 
     def predict(self, t, state: FdiState, command, dt):
         if self.at_limit == "clip":  # the force a healthy rated thruster applies; all tested
@@ -287,15 +465,37 @@ class ResidualFdi(Estimator):
         accel = force / self.nominal_mass[:, None]
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":
-            x_hat, p = kalman_predict(x_hat, p, accel, self.phi, self.gamma, self.qd)
+            x_hat, p = kalman_predict(
+                x_hat, p, self._modelled(state, accel), self.phi, self.gamma, self.qd
+            )
         return state._replace(x_hat=x_hat, p=p, a_prev=accel, tested=tested)
 
+    def _modelled(self, state: FdiState, accel):
+        """The acceleration the filter predicts with: the command, and, with identification, on the
+        channel isolated at the alarm the identified actuator ``(1 + theta_0) a + theta_1`` (the
+        posterior mean: shrunk toward the command while the estimate is uncertain), so that the
+        navigation a law flies on follows the faulty thruster."""
+        if self.identification != "rls":
+            return accel
+        faulty = state.detected & state.isolated
+        identified = accel * (1.0 + state.theta[..., 0]) + state.theta[..., 1]
+        return jnp.where(faulty, identified, accel)
+
     def outputs(self, t, state, estimate):
-        return {
+        out = {
             "fdi_statistic": estimate["statistic"],
             "fdi_detected": jnp.where(estimate["detected"], 1.0, 0.0),
             "fdi_isolated": jnp.where(estimate["isolated"], 1.0, 0.0),
         }
+        if self.fly_on_filter:
+            out["navigation_estimate"] = estimate["navigation"]
+            out["navigation_sigma"] = jnp.sqrt(jnp.diagonal(state.p))
+        if self.identification == "rls":
+            out["fdi_effectiveness"] = jnp.where(
+                estimate["identified"], estimate["effectiveness"], jnp.nan
+            )
+            out["fdi_effectiveness_std"] = estimate["effectiveness_std"]
+        return out
 
 
 class ResidualFdiSection(RelativeNavigationSection):
@@ -327,6 +527,45 @@ class ResidualFdiSection(RelativeNavigationSection):
         ),
     )
 
+    fly_on_filter: bool = Field(
+        False,
+        description="The law flies on the FDI's Kalman estimate (the filtered relative state) in place "
+        "of the raw measurement, while the FDI watches the same filter's innovations (residual = "
+        "'kalman' only) [-].",
+    )
+    identification: Literal["off", "rls"] = Field(
+        "off",
+        description="Fault identification: off, or each channel's effectiveness and bias by recursive "
+        "least squares with exponential forgetting on the parity residual (provides "
+        "fault-identification).",
+    )
+    forgetting: float = Field(
+        0.9995,
+        gt=0,
+        le=1,
+        description="RLS forgetting factor lambda; the memory is about 1 / (1 - lambda) steps [-].",
+    )
+    identification_std: float = Field(
+        0.05,
+        gt=0,
+        description="Standard deviation of a channel's effectiveness estimate at or below which the "
+        "channel counts as identified (before: reported as NaN) [-].",
+    )
+    bias_prior_std: float = Field(
+        1e-3,
+        gt=0,
+        description="Prior standard deviation of a channel's bias acceleration [m/s^2].",
+    )
+
+    @model_validator(mode="after")
+    def _navigation_needs_the_filter(self):
+        if self.fly_on_filter and self.residual != "kalman":
+            raise ValueError(
+                'fly_on_filter = true: the law flies on the Kalman estimate; give residual = "kalman" '
+                "(the parity residual keeps no state estimate)"
+            )
+        return self
+
     @model_validator(mode="after")
     def _clip_needs_a_limit(self):
         if self.at_limit == "clip" and not math.isfinite(self.force_limit):
@@ -348,6 +587,11 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
         threshold=as_float(sec.threshold),
         force_limit=as_float(sec.force_limit),
         at_limit=sec.at_limit,
+        identification=sec.identification,
+        fly_on_filter=sec.fly_on_filter,
+        forgetting=as_float(sec.forgetting),
+        identification_std=as_float(sec.identification_std),
+        bias_prior_std=as_float(sec.bias_prior_std),
         **a,
     )
 

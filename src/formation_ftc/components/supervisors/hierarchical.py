@@ -359,6 +359,7 @@ def _build(sec: HierarchicalSection, ctx: BuildContext) -> HierarchicalSuperviso
     n, dt = ctx.count, ctx.dt
     never = ctx.scenario.simulation.n_steps + 1
     known = faulty is not None
+    identified = getattr(c, "fault_estimate", "stated") == "estimator"  # FLFR on the isolated one
     if sec.flfr and faulty is not None and not 1 < faulty < n:
         raise ValueError(
             f"supervisor.flfr needs an interior faulty spacecraft (2..{n - 1}) on the chain; "
@@ -383,7 +384,7 @@ def _build(sec: HierarchicalSection, ctx: BuildContext) -> HierarchicalSuperviso
         ),
         confirm_steps=np.asarray(_steps(sec.confirm_time, dt), np.int64),
         monitor_start=np.asarray(_steps(sec.monitor_start, dt), np.int64),
-        flfr=np.asarray(bool(sec.flfr and known)),
+        flfr=np.asarray(bool(sec.flfr and (known or identified))),
         fault_information=sec.fault_information,
     )
 
