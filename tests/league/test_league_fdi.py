@@ -150,8 +150,9 @@ def test_tiny_league_fdi_table_matches_the_runs(tmp_path, tiny_league):
             # the evaluation's own false-alarm flag agrees (no fault: any alarm is false)
             assert r["false_alarms"] == int(g["metric:fdi_false_alarm"].sum())
             continue
-        if case == "intermittent":  # on 30 s first: its first off phase is past the 10 s horizon, so
-            # the thruster never departs from nominal (no fault in the scores; any alarm is false)
+        if case == "intermittent":
+            # on 30 s first: its first off phase is past the 10 s horizon, so the thruster never
+            # departs from nominal (no fault in the scores; any alarm is false)
             assert np.isnan(fault).all() and r["fault_runs"] == 0
             assert r["false_alarms"] == int(np.isfinite(alarm).sum())
             continue
