@@ -35,12 +35,15 @@ TRUE = [[1, 1, 1], [0.5, 1, 1]]
         ([[1, 1, 1], [NAN, 1, 1]], True, NAN, 1.0, 0.0),
         # a healthy channel identified at 0.85: a false identification
         ([[0.85, 1, 1], [0.5, 1, 1]], True, 0.0, 0.0, 1.0),
+        # an outage (true 0) identified at 0.005: within the absolute 0.01
+        ([[1, 1, 1], [0.005, 1, 1]], True, 0.005, 0.0, 0.0),
         # before the onset: nothing pending, no error; a channel at 0.5 is a false identification
         ([[1, 1, 1], [0.5, 1, 1]], False, NAN, 0.0, 1.0),
     ],
 )
 def test_scores_of_hand_made_samples(identified, active, error, pending, false):
-    out = IdentificationScores().outputs(_signals(identified, TRUE, CHANNEL, active))
+    true = [[1, 1, 1], [0.0, 1, 1]] if identified[1][0] == 0.005 else TRUE
+    out = IdentificationScores().outputs(_signals(identified, true, CHANNEL, active))
     np.testing.assert_allclose(float(out["id_effectiveness_error"]), error, atol=1e-12)
     assert float(out["id_pending"]) == pending
     assert float(out["id_false"]) == false

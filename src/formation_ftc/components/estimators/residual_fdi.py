@@ -18,9 +18,10 @@ import math
 from typing import Any, Literal, NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.components.estimators.relative_navigation_filter import (
     NAVIGATION_SIGNALS,
@@ -42,6 +43,7 @@ __all__ = [
     "sequential_test",
     "latch_first_alarm",
     "identify_channels",
+    "window_model",
     "IDENTIFICATIONS",
 ]
 
@@ -135,18 +137,19 @@ def latch_first_alarm(stat, alarm, detected, isolated):
     return detected | alarm, jnp.where(first, top, isolated), first
 
 
-def identify_channels(theta, cov, residual, accel, gain, noise_var, forgetting):
+def identify_channels(theta, cov, residual, regressor, noise_var, forgetting):
     """One step of recursive least squares with exponential forgetting on every actuator channel.
 
-    The velocity part of the one-step parity residual of channel (i, j) is, for an actuator that
+    The velocity part of the parity residual of channel (i, j) over a window is, for an actuator that
     delivers ``effectiveness * a + bias`` instead of the commanded acceleration ``a``::
 
-        e_ij = g_j ((effectiveness_ij - 1) a_ij + bias_ij) + v_ij,     v_ij ~ N(0, noise_var_j)
+        e_ij = phi_ij' [effectiveness_ij - 1, bias_ij] + v_ij,     v_ij ~ N(0, noise_var_j)
 
-    with ``g_j = gamma[3 + j, j]`` (about dt: the velocity a held acceleration adds over a step). With
-    ``theta = [effectiveness - 1, bias]`` and the regressor ``phi = g [a, 1]``, the update is the
-    Kalman filter of a parameter that drifts as the forgetting factor lambda allows (Ljung & Soderstrom,
-    *Theory and Practice of Recursive Identification*, 1983, ch. 2)::
+    with the regressor ``phi_ij = [s_ij, c_j]``: ``s_ij`` the velocity the commands of the window add
+    along j (for one step, ``gamma[3 + j, j] a_ij``, about ``dt a``), ``c_j`` the velocity a unit
+    acceleration held over the window adds. With ``theta = [effectiveness - 1, bias]`` the update is
+    the Kalman filter of a parameter that drifts as the forgetting factor lambda allows (Ljung &
+    Soderstrom, *Theory and Practice of Recursive Identification*, 1983, ch. 2)::
 
         P- = P / lambda,   K = P- phi / (noise_var + phi' P- phi),
         theta <- theta + K (e - phi' theta),   P <- (I - K phi') P-
@@ -164,10 +167,8 @@ def identify_channels(theta, cov, residual, accel, gain, noise_var, forgetting):
         Their covariance.
     residual : array_like, shape (N, 3)
         Velocity part of the parity residual [m/s].
-    accel : array_like, shape (N, 3)
-        Acceleration commanded over the step the residual spans [m/s^2].
-    gain : array_like, shape (3,)
-        ``g_j`` [s].
+    regressor : array_like, shape (N, 3, 2)
+        ``phi_ij = [s_ij, c_j]`` [m/s, s].
     noise_var : array_like, shape (3,)
         Variance of the residual's velocity components [(m/s)^2].
     forgetting : float
@@ -187,11 +188,12 @@ def identify_channels(theta, cov, residual, accel, gain, noise_var, forgetting):
     >>> for k in range(50):
     ...     a = np.array([[1e-3 * (1 + (k % 2))]])
     ...     e = 0.1 * (0.5 - 1.0) * a
-    ...     theta, cov = identify_channels(theta, cov, e, a, np.array([0.1]), np.array([1e-12]), 1.0)
+    ...     phi = 0.1 * np.stack([a, np.ones_like(a)], axis=-1)
+    ...     theta, cov = identify_channels(theta, cov, e, phi, np.array([1e-12]), 1.0)
     >>> round(float(1 + theta[0, 0, 0]), 4)
     0.5
     """
-    phi = gain[None, :, None] * jnp.stack([accel, jnp.ones_like(accel)], axis=-1)  # (N, 3, 2)
+    phi = regressor
     prior = cov / forgetting
     p_phi = jnp.einsum("ncab,ncb->nca", prior, phi)
     s = noise_var[None, :] + jnp.einsum("nca,nca->nc", phi, p_phi)
@@ -215,6 +217,10 @@ class FdiState(NamedTuple):
     isolated: Any  # (N, 3) latched one-hot faulty channel
     theta: Any = None  # (N, 3, 2) [effectiveness - 1, bias] per channel (identification = "rls")
     theta_cov: Any = None  # (N, 3, 2, 2) their covariance
+    win_pred: Any = None  # (N, 6) the window's start measurement propagated with the commands
+    win_reg: Any = None  # (N, 3, 6) the state each channel's commands of the window moved
+    win_tested: Any = None  # (N, 3) every step of the window tested the channel
+    win_steps: Any = None  # () steps the window spans so far
 
 
 @component
@@ -286,6 +292,9 @@ class ResidualFdi(Estimator):
     forgetting: Any = 1.0  # RLS forgetting factor lambda [-]
     identification_std: Any = 0.05  # effectiveness std at which a channel counts as identified [-]
     bias_prior_std: Any = 1e-3  # prior standard deviation of a channel's bias [m/s^2]
+    window_bias_gain: Any = None  # (3,) velocity a unit acceleration held over the window adds [s]
+    window_noise: Any = None  # (3,) variance of the window residual's velocity components [(m/s)^2]
+    window: int = static(default=1)  # steps of the identification window
 
     def needs(self) -> dict[str, str]:
         return {"translational-state": "form its residuals of the LVLH relative states"}
@@ -371,11 +380,24 @@ class ResidualFdi(Estimator):
             detected=jnp.asarray(False),
             isolated=jnp.zeros((n, 3), dtype=bool),
             **(
-                dict(zip(("theta", "theta_cov"), self._prior(), strict=True))
+                dict(
+                    zip(("theta", "theta_cov"), self._prior(), strict=True),
+                    **self._window_start(jnp.asarray(measurement0)),
+                    win_steps=jnp.asarray(0),
+                )
                 if self.identification == "rls"
                 else {}
             ),
         )
+
+    def _window_start(self, y) -> dict[str, Any]:
+        """An identification window that starts at the measurement ``y``."""
+        n = self.count
+        return {
+            "win_pred": y,
+            "win_reg": jnp.zeros((n, 3, 6)),
+            "win_tested": jnp.ones((n, 3), dtype=bool),
+        }
 
     def _residual(self, state: FdiState, y):
         """(residual (N, 6), its covariance (6, 6), valid)."""
@@ -423,24 +445,28 @@ class ResidualFdi(Estimator):
         return jnp.zeros((n, 3, 2)), jnp.broadcast_to(cov, (n, 3, 2, 2))
 
     def _identify(self, state: FdiState, new: FdiState, y, valid, restart):
-        """RLS of every channel's effectiveness and bias on the parity residual (``identify_channels``);
-        the channel isolated at the first alarm (``restart``) starts again from the prior, so that its
-        estimate is that of the faulty actuator, not an average with its healthy past."""
-        parity = y - state.y_prev @ self.phi.T - state.a_prev @ self.gamma.T
-        cov_v = jnp.diagonal(self.parity_cov)[3:]
+        """RLS of every channel's effectiveness and bias (``identify_channels``) on the parity residual
+        of each completed window of ``window`` steps: the measurement now against the window's start
+        measurement propagated with the commands. The channel isolated at the first alarm
+        (``restart``) starts again from the prior, so that its estimate is that of the faulty
+        actuator, not an average with its healthy past; the window starts again there too."""
+        complete = state.win_steps == self.window
+        parity = y - state.win_pred
+        own = jnp.arange(3)
+        regressor = jnp.stack(
+            [
+                state.win_reg[:, own, 3 + own],
+                jnp.broadcast_to(self.window_bias_gain, (self.count, 3)),
+            ],
+            axis=-1,
+        )
         theta0, cov0 = self._prior()
         theta_in = jnp.where(restart[..., None], theta0, state.theta)
         cov_in = jnp.where(restart[..., None, None], cov0, state.theta_cov)
         theta, cov = identify_channels(
-            theta_in,
-            cov_in,
-            parity[:, 3:],
-            state.a_prev,
-            jnp.diagonal(self.gamma[3:, :]),
-            cov_v,
-            self.forgetting,
+            theta_in, cov_in, parity[:, 3:], regressor, self.window_noise, self.forgetting
         )
-        use = (valid & state.tested)[..., None]
+        use = (valid & complete & state.win_tested)[..., None]
         theta = jnp.where(use, theta, theta_in)
         cov = jnp.where(use[..., None], cov, cov_in)
         # forgetting without excitation inflates P past the prior (windup): no information is left
@@ -448,7 +474,12 @@ class ResidualFdi(Estimator):
         cov = jnp.where((cov[..., 0, 0] > cov0[..., 0, 0])[..., None, None], cov0, cov)
         std = jnp.sqrt(jnp.maximum(cov[..., 0, 0], 0.0))
         identified = std <= self.identification_std
-        return new._replace(theta=theta, theta_cov=cov), {
+        again = complete | ~valid | jnp.any(restart)  # a new window from this measurement
+        window = {
+            k: jnp.where(again, v, getattr(state, k)) for k, v in self._window_start(y).items()
+        }
+        steps = jnp.where(again, 0, state.win_steps)
+        return new._replace(theta=theta, theta_cov=cov, win_steps=steps, **window), {
             "effectiveness": 1.0 + theta[..., 0],
             "effectiveness_std": std,
             "bias": theta[..., 1],
@@ -468,7 +499,16 @@ class ResidualFdi(Estimator):
             x_hat, p = kalman_predict(
                 x_hat, p, self._modelled(state, accel), self.phi, self.gamma, self.qd
             )
-        return state._replace(x_hat=x_hat, p=p, a_prev=accel, tested=tested)
+        state = state._replace(x_hat=x_hat, p=p, a_prev=accel, tested=tested)
+        if self.identification == "rls":  # the identification window, with the commanded accel
+            state = state._replace(
+                win_pred=state.win_pred @ self.phi.T + accel @ self.gamma.T,
+                win_reg=state.win_reg @ self.phi.T
+                + accel[..., None] * jnp.swapaxes(self.gamma, 0, 1)[None],
+                win_tested=state.win_tested & tested,
+                win_steps=state.win_steps + 1,
+            )
+        return state
 
     def _modelled(self, state: FdiState, accel):
         """The acceleration the filter predicts with: the command, and, with identification, on the
@@ -556,6 +596,14 @@ class ResidualFdiSection(RelativeNavigationSection):
         gt=0,
         description="Prior standard deviation of a channel's bias acceleration [m/s^2].",
     )
+    identification_window: float | None = builder_input(
+        None,
+        gt=0,
+        description="Span of the parity residual the identification regresses [s] (rounded to whole "
+        "steps; default one step). Over m steps the fault's velocity grows m-fold while the "
+        "measurement noise at the window's ends does not: a longer window identifies a small "
+        "command's fault sooner, as long as the on-board model holds over it.",
+    )
 
     @model_validator(mode="after")
     def _navigation_needs_the_filter(self):
@@ -575,9 +623,37 @@ class ResidualFdiSection(RelativeNavigationSection):
         return self
 
 
+def window_model(phi, gamma, qd, r, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """The velocity a unit acceleration held over ``steps`` steps adds per axis [s], and the variance of
+    the window parity residual's velocity components ``r + phi^m r phi^m' + sum_i<m phi^i qd phi^i'``
+    [(m/s)^2], of the on-board model ``(phi, gamma, qd, r)`` (:class:`ResidualFdi`'s identification).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phi = np.eye(6); phi[:3, 3:] = np.eye(3)  # a double integrator at dt = 1 s
+    >>> gamma = np.vstack([0.5 * np.eye(3), np.eye(3)])
+    >>> gain, noise = window_model(phi, gamma, np.zeros((6, 6)), np.eye(6) * 1e-6, 10)
+    >>> gain.tolist(), noise.tolist()
+    ([10.0, 10.0, 10.0], [2e-06, 2e-06, 2e-06])
+    """
+    phi, gamma, qd, r = (np.asarray(x, dtype=float) for x in (phi, gamma, qd, r))
+    power, held, noise = np.eye(6), np.zeros((6, 3)), np.asarray(r, dtype=float).copy()
+    for _ in range(steps):
+        held += power @ gamma
+        noise += power @ qd @ power.T
+        power = phi @ power
+    noise += power @ r @ power.T
+    return np.diagonal(held[3:, :]).copy(), np.diagonal(noise)[3:].copy()
+
+
 def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
     """The FDI of a validated ``[estimator] type = "residual-fdi"`` section."""
     a = filter_model(sec, ctx)
+    steps = 1
+    if sec.identification_window is not None:
+        steps = max(1, int(round(sec.identification_window / ctx.dt)))
+    gain, noise = window_model(a["phi"], a["gamma"], a["qd"], a["r"], steps)
     return ResidualFdi(
         count=ctx.count,
         residual=sec.residual,
@@ -592,6 +668,9 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
         forgetting=as_float(sec.forgetting),
         identification_std=as_float(sec.identification_std),
         bias_prior_std=as_float(sec.bias_prior_std),
+        window_bias_gain=as_float(gain),
+        window_noise=as_float(noise),
+        window=steps,
         **a,
     )
 

@@ -15,10 +15,18 @@ from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Evaluation, Signal, component
 
-__all__ = ["IdentificationScores", "IdentificationScoresSection", "WITHIN", "HEALTHY_BAND"]
+__all__ = [
+    "IdentificationScores",
+    "IdentificationScoresSection",
+    "WITHIN",
+    "WITHIN_ABSOLUTE",
+    "HEALTHY_BAND",
+]
 
-#: relative error of the identified effectiveness that counts as identified (10 %)
+#: relative error of the identified effectiveness that counts as identified (10 %) ...
 WITHIN = 0.1
+#: ... or this absolute error, for a true effectiveness at or near 0 (an outage) [-]
+WITHIN_ABSOLUTE = 0.01
 #: an identified healthy channel outside 1 +- this is a false identification
 HEALTHY_BAND = 0.1
 
@@ -33,7 +41,8 @@ class IdentificationScores(Evaluation):
       the fault is active and the channel is identified, NaN otherwise (its last finite value is the
       identification error at the end of the run);
     * ``id_pending`` (1 or 0): the fault is active and its channel's identified effectiveness is not
-      within :data:`WITHIN` (10 %) of the true one (not identified counts as not within) -- its time
+      within :data:`WITHIN` (10 %) of the true one, nor within :data:`WITHIN_ABSOLUTE` (0.01) of it
+      (an outage's true effectiveness is 0; not identified counts as not within) -- its time
       integral is the time the identification was off by more than 10 % after the onset (the time to
       identify within 10 % when it stays there once reached);
     * ``id_false`` (1 or 0): a channel that is not faulty (or any channel while no fault is active) is
@@ -69,7 +78,8 @@ class IdentificationScores(Evaluation):
         on_fault = jnp.where(faulty, error, jnp.inf)
         err = jnp.min(on_fault)  # the faulty channel's error (inf: none, or not identified)
         known = jnp.isfinite(err)
-        within = known & (err <= WITHIN * jnp.max(jnp.where(faulty, jnp.abs(true), 0.0)))
+        scale = jnp.max(jnp.where(faulty, jnp.abs(true), 0.0))
+        within = known & (err <= jnp.maximum(WITHIN * scale, WITHIN_ABSOLUTE))
         healthy_off = ~faulty & (jnp.abs(identified - 1.0) > HEALTHY_BAND)  # NaN compares False
         return {
             "id_effectiveness_error": jnp.where(known, err, jnp.nan),
