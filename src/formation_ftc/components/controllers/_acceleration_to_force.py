@@ -1,4 +1,6 @@
-"""An acceleration law flying a force-driven plant: the command scaled by each spacecraft's nominal mass."""
+"""A law wrapped by another component of its slot (:class:`WrappedLaw`: everything passes through to it),
+and the first such wrapper: an acceleration law flying a force-driven plant, the command scaled by each
+spacecraft's nominal mass."""
 
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ from formation_ftc.sim.components import (
 )
 
 __all__ = [
+    "WrappedLaw",
     "AccelerationToForce",
     "TrackingAccelerationToForce",
     "force_from_acceleration",
@@ -26,37 +29,13 @@ ACCELERATION_COMMAND_SIGNAL = "acceleration_command"
 
 
 @component
-class AccelerationToForce(Controller):
-    """A law that commands accelerations u_i [m/s^2] (``quantity = "acceleration"``, e.g. a
-    deep-space double-integrator law) turned into the force command a force-driven plant needs::
-
-        f_i = m_i^nom u_i                                                              [N]
-
-    ``nominal_mass`` (N,) [kg] is what the flight side knows about the spacecraft masses (a design
-    number on board, not the plant's true mass): with a true mass m_i the plant receives the
-    acceleration (m_i^nom / m_i) u_i, i.e. a mass error acts like an actuator-gain error the law does
-    not know. Everything else (sampling, states, messages, time signals, recorded signals, conditions,
-    what it needs and provides) is the wrapped law's; the law's own command is recorded as
-    ``acceleration_command``. Use :func:`force_from_acceleration` to build one (it keeps the law's
-    position objective, if any).
-    """
+class WrappedLaw(Controller):
+    """A controller that wraps the law ``law``: its structure (sampling, states, messages, time signals,
+    recorded signals, coordinates, conditions, what it needs and provides) is the law's; a wrapper
+    overrides :meth:`output` (and what it adds)."""
 
     law: Controller
-    nominal_mass: Any  # (N,) [kg]
 
-    quantity = "force"
-
-    def __post_init__(self) -> None:
-        law = self.law
-        if not isinstance(law, Controller):
-            return  # pytree reconstruction with placeholders
-        if law.quantity != "acceleration":
-            raise CompositionError(
-                f"AccelerationToForce scales an acceleration command by the nominal mass, but "
-                f"controller {type(law).__name__} commands a {law.quantity}"
-            )
-
-    # the wrapped law's structure
     @property
     def sampled(self) -> bool:
         return self.law.sampled
@@ -92,6 +71,50 @@ class AccelerationToForce(Controller):
         return self.law.message(t, inputs)
 
     def output(self, t, state, inputs: FlightInputs):
+        return self.law.output(t, state, inputs)
+
+    def signals(self):
+        return tuple(self.law.signals())
+
+    def coords(self):
+        return self.law.coords()
+
+    def conditions(self, loop) -> list:
+        conds = getattr(self.law, "conditions", None)
+        return list(conds(loop)) if callable(conds) else []
+
+
+@component
+class AccelerationToForce(WrappedLaw):
+    """A law that commands accelerations u_i [m/s^2] (``quantity = "acceleration"``, e.g. a
+    deep-space double-integrator law) turned into the force command a force-driven plant needs::
+
+        f_i = m_i^nom u_i                                                              [N]
+
+    ``nominal_mass`` (N,) [kg] is what the flight side knows about the spacecraft masses (a design
+    number on board, not the plant's true mass): with a true mass m_i the plant receives the
+    acceleration (m_i^nom / m_i) u_i, i.e. a mass error acts like an actuator-gain error the law does
+    not know. Everything else (sampling, states, messages, time signals, recorded signals, conditions,
+    what it needs and provides) is the wrapped law's; the law's own command is recorded as
+    ``acceleration_command``. Use :func:`force_from_acceleration` to build one (it keeps the law's
+    position objective, if any).
+    """
+
+    nominal_mass: Any  # (N,) [kg]
+
+    quantity = "force"
+
+    def __post_init__(self) -> None:
+        law = self.law
+        if not isinstance(law, Controller):
+            return  # pytree reconstruction with placeholders
+        if law.quantity != "acceleration":
+            raise CompositionError(
+                f"AccelerationToForce scales an acceleration command by the nominal mass, but "
+                f"controller {type(law).__name__} commands a {law.quantity}"
+            )
+
+    def output(self, t, state, inputs: FlightInputs):
         u, nxt, out = self.law.output(t, state, inputs)
         force = self.nominal_mass[:, None] * u  # f_i = m_i^nom u_i
         return force, nxt, {**out, ACCELERATION_COMMAND_SIGNAL: u}
@@ -105,13 +128,6 @@ class AccelerationToForce(Controller):
                 "acceleration commanded by the law (before the nominal-mass scaling)",
             ),
         )
-
-    def coords(self):
-        return self.law.coords()
-
-    def conditions(self, loop) -> list:
-        conds = getattr(self.law, "conditions", None)
-        return list(conds(loop)) if callable(conds) else []
 
 
 @component

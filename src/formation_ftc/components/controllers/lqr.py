@@ -29,7 +29,7 @@ from formation_ftc.components.controllers._desired_position import DesiredPositi
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.cw import cw_rhs
-from formation_ftc.sim.components import FlightInputs, component
+from formation_ftc.sim.components import Controller, FlightInputs, component
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["LqrFormationController", "LqrSection"]
@@ -105,6 +105,17 @@ class LqrSection(StrictModel):
     mode: Literal["continuous", "sampled"] = builder_input(
         "continuous", description="Every RK stage or held over the step."
     )
+    fault_estimate: Literal["none", "estimator"] = builder_input(
+        "none",
+        description="'estimator': the command is reallocated with the [estimator]'s fault "
+        "identification (divided by the identified effectiveness of the isolated channel, up to "
+        "force_limit; needs residual-fdi with identification = 'rls'); 'none': the plain LQR [-].",
+    )
+    force_limit: float = builder_input(
+        math.inf,
+        gt=0,
+        description="Rated thrust per axis the reallocation respects [N] (flight knowledge; inf: none).",
+    )
 
     @field_validator(*_BRYSON)
     @classmethod
@@ -129,7 +140,7 @@ def _from_reference(ctx: BuildContext, name: str) -> float | None:
     return None if value is None else float(value)
 
 
-def _build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
+def _build(sec: LqrSection, ctx: BuildContext) -> Controller:
     """The controller of a validated ``[controller] type = "lqr"`` section."""
     from formation_ftc.design.lqr import cw_lqr
 
@@ -146,7 +157,7 @@ def _build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
     mu = sec.mu if sec.mu is not None else _from_reference(ctx, "mu") or MU_EARTH
     n = math.sqrt(mu / a**3)  # mean motion of the circular design orbit [rad/s]
     design = cw_lqr(n, sec.max_position_error, sec.max_velocity_error, sec.max_acceleration)
-    return LqrFormationController(
+    law = LqrFormationController(
         count=ctx.count,
         gain=as_float(design.K),
         mean_motion=as_float(n),
@@ -156,6 +167,11 @@ def _build(sec: LqrSection, ctx: BuildContext) -> LqrFormationController:
         desired_position=sec.desired_position,
         is_sampled=sec.mode == "sampled",
     )
+    if sec.fault_estimate == "estimator":
+        from formation_ftc.components.controllers._reconfiguring import reconfigured
+
+        return reconfigured(law, sec.force_limit)
+    return law
 
 
 register(

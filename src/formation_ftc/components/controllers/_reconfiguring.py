@@ -1,0 +1,123 @@
+"""A force law behind a reconfiguring allocation: the force commanded of a thruster channel that the
+estimator isolated and identified is divided by its identified effectiveness, up to the rated thrust
+(Zhang & Jiang, *Bibliographical review on reconfigurable fault-tolerant control systems*, 2008: control
+reallocation with the effectiveness an FDI estimates)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+
+from formation_ftc.components.controllers._acceleration_to_force import WrappedLaw
+from formation_ftc.sim.components import (
+    CompositionError,
+    Controller,
+    FlightInputs,
+    Signal,
+    component,
+)
+
+__all__ = [
+    "ReconfiguringAllocator",
+    "TrackingReconfiguringAllocator",
+    "reconfigured",
+    "EFFECTIVENESS_MIN",
+]
+
+#: the wrapped law's command, recorded next to the loop's ``command`` (the reallocated force)
+LAW_COMMAND_SIGNAL = "law_command"
+#: smallest identified effectiveness the allocation divides by (an outage identifies as about 0) [-]
+EFFECTIVENESS_MIN = 0.05
+
+
+@component
+class ReconfiguringAllocator(WrappedLaw):
+    """The force law ``law`` with its command reallocated with the estimator's fault identification::
+
+        f_ij = clip(u_ij / effectiveness_ij, -force_limit, force_limit)   on the channel the FDI isolated
+                                                                           and identified
+        f_ij = u_ij                                                        elsewhere, and before that
+
+    with the identified effectiveness clipped to [:data:`EFFECTIVENESS_MIN`, 1] (a channel identified
+    above 1 gets its command unchanged). Each spacecraft has one thruster channel per axis, so the
+    force the law asks of a weakened channel can only be asked of that channel: a loss of effectiveness
+    is compensated up to the rated thrust ``force_limit`` [N] (flight knowledge; inf: none), an outage
+    cannot be (its effectiveness is at the floor and its command at the rating). Records the law's own
+    command as ``law_command``. Needs ``fault-identification``.
+    """
+
+    force_limit: Any  # () rated thrust per axis [N]
+
+    quantity = "force"
+
+    def __post_init__(self) -> None:
+        law = self.law
+        if isinstance(law, Controller) and law.quantity != "force":
+            raise CompositionError(
+                f"ReconfiguringAllocator reallocates a force command, but controller "
+                f"{type(law).__name__} commands a {law.quantity}"
+            )
+
+    def needs(self) -> dict[str, str]:
+        return {
+            **self.law.needs(),
+            "fault-identification": "reallocate the command with the identified effectiveness",
+        }
+
+    def output(self, t, state, inputs: FlightInputs):
+        u, nxt, out = self.law.output(t, state, inputs)
+        est = inputs.estimate
+        use = jnp.asarray(est["detected"]) & est["isolated"] & est["identified"]
+        eff = jnp.clip(est["effectiveness"], EFFECTIVENESS_MIN, 1.0)
+        force = jnp.where(use, jnp.clip(u / eff, -self.force_limit, self.force_limit), u)
+        return force, nxt, {**out, LAW_COMMAND_SIGNAL: u}
+
+    def signals(self):
+        return tuple(self.law.signals()) + (
+            Signal(
+                LAW_COMMAND_SIGNAL,
+                ("spacecraft", "axis"),
+                "N",
+                "force commanded by the law (before the reallocation)",
+            ),
+        )
+
+
+@component
+class TrackingReconfiguringAllocator(ReconfiguringAllocator):
+    """:class:`ReconfiguringAllocator` for a law with a position objective (``position_error``)."""
+
+    def desired_position_at(self, exogenous):
+        return self.law.desired_position_at(exogenous)
+
+
+def reconfigured(law: Controller, force_limit: float) -> ReconfiguringAllocator:
+    """``law`` (a force law) behind a :class:`ReconfiguringAllocator` with the rated thrust
+    ``force_limit`` [N] (inf: none); its position objective, if it declares one, is kept.
+
+    Parameters
+    ----------
+    law : Controller
+        A law with ``quantity = "force"``.
+    force_limit : float
+        Rated thrust per axis [N], > 0.
+
+    Returns
+    -------
+    ReconfiguringAllocator
+        A :class:`TrackingReconfiguringAllocator` when ``law`` declares a desired position.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.none import FreeDrift
+    >>> from formation_ftc.components.controllers._acceleration_to_force import force_from_acceleration
+    >>> ctrl = reconfigured(force_from_acceleration(FreeDrift(count=2), np.array([1.0, 1.0])), 0.2)
+    >>> type(ctrl).__name__, ctrl.quantity, sorted(ctrl.needs())
+    ('ReconfiguringAllocator', 'force', ['fault-identification'])
+    """
+    tracks = type(law).desired_position_at is not Controller.desired_position_at
+    cls = TrackingReconfiguringAllocator if tracks else ReconfiguringAllocator
+    return cls(law=law, force_limit=np.float64(force_limit))
