@@ -510,7 +510,16 @@ def test_a_complete_league_report_says_its_seeds(tmp_path, reference, capsys):
     page = (d / "leaderboard" / "index.html").read_text()
     assert "2 seeds per cell;" in md and "2 seeds per cell." in page
     assert "INCOMPLETE" not in md + page
-    for name in ("cells.parquet", "runs.parquet"):
+    # one method: rank 1 with its 95 % interval over the 2 seeds, no comparison
+    for rows in board["ranking"].values():
+        (r,) = rows
+        assert r["rank_display"] == "1" and r["tied"] is False and r["seeds"] == 2
+        assert r["pass_rate_low"] <= r["pass_rate"] <= r["pass_rate_high"]
+        assert (
+            f"| 1 | lqr | {r['pass_rate']:.3f} [{r['pass_rate_low']:.2f}, "
+            f"{r['pass_rate_high']:.2f}] |" in md
+        )
+    for name in ("cells.parquet", "runs.parquet", "ranking.parquet"):
         assert _file_completeness(d / "leaderboard" / name) == comp
 
 
@@ -558,7 +567,7 @@ def test_an_incomplete_league_is_reported_as_such_in_every_format(tmp_path, refe
         assert "INCOMPLETE league" in doc and "sir-ftc" in doc and f"{case}/{level}" in doc
         assert "0-2 seeds per cell (2 configured)" in doc
     assert md.startswith("**INCOMPLETE league")
-    for name in ("cells.parquet", "runs.parquet"):
+    for name in ("cells.parquet", "runs.parquet", "ranking.parquet"):
         assert _file_completeness(d / "leaderboard" / name) == comp
 
 

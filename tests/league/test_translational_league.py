@@ -99,6 +99,7 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
         "leaderboard.md",
         "cells.parquet",
         "runs.parquet",
+        "ranking.parquet",
         "pareto-limited.png",
         "trajectories.png",
     ):
@@ -122,13 +123,39 @@ def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_leag
     for table in [
         lb / "cells.parquet",
         lb / "runs.parquet",
+        lb / "ranking.parquet",
         *sorted(out.glob("*/campaign/chunks/*.parquet")),
     ]:
         _assert_parquet_units(table)
     cell_units = read_units(lb / "cells.parquet")
     assert cell_units["pass_rate"] == "1" and cell_units["delta_v_total_median"] == "m s-1"
     assert read_units(lb / "runs.parquet")["metric:delta_v_total"] == "m s-1"
+    # the ranking's confidence (issue 48) in every format: the 95 % interval of the pass rate, the
+    # comparison of the two methods on their paired seeds, the rank shown ("1=" for a tie)
+    doc = json.loads((lb / "leaderboard.json").read_text())
+    ranked = pd.read_parquet(lb / "ranking.parquet")
+    assert read_units(lb / "ranking.parquet")["pass_rate_low"] == "1"
+    assert read_units(lb / "ranking.parquet")["rms_shape_error_median_high"] == "m"
+    md = (lb / "leaderboard.md").read_text()
     html = (lb / "index.html").read_text()
+    for level, rows in doc["ranking"].items():
+        top, second = rows
+        assert top["pass_rate_low"] <= top["pass_rate"] <= top["pass_rate_high"]
+        assert top["rank_display"] in ("1", "1=") and top["test"] is None
+        assert second["test"] in ("mcnemar", "wilcoxon") and 0 < second["pairs"] <= top["runs"]
+        assert second["rank_display"] == ("2" if second["separated"] else "1=")
+        assert second["p_adjusted"] == pytest.approx(second["p_value"])  # one comparison
+        shown = (
+            f"| {top['rank_display']} | {top['method']} | {top['pass_rate']:.3f} "
+            f"[{top['pass_rate_low']:.2f}, {top['pass_rate_high']:.2f}] |"
+        )
+        assert shown in md, (shown, md)
+        mine = ranked[ranked.level == level].set_index("method")
+        assert mine.loc[second["method"], "rank_display"] == second["rank_display"]
+        assert mine.loc[top["method"], "pass_rate_high"] == pytest.approx(top["pass_rate_high"])
+    assert "Intervals: 95 %" in md and "random seed 48" in md and "Holm" in md
+    assert "Intervals: 95 %" in html and "pass rate [95 % CI]" in html
+    assert doc["ranking_method"].startswith("Intervals: 95 %")
     assert "data:image/png;base64," in html and "Ranking" in html and "sir-ftc" in html
     assert "<script src=" not in html  # self-contained
     # resume: a second run computes nothing and returns the same table
@@ -155,6 +182,8 @@ def _assert_parquet_units(path: Path) -> None:
     allowed = {b"pandas"} | (
         {b"formation_ftc.league.completeness"} if "chunk" not in path.name else set()
     )
+    if path.name == "ranking.parquet":  # the sentence on the intervals and tests
+        allowed.add(b"formation_ftc.league.ranking_method")
     assert set(schema.metadata or {}) <= allowed, path.name
     assert not json.loads((schema.metadata or {}).get(b"pandas", b"{}")).get("attributes"), (
         path.name

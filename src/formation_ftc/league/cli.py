@@ -143,7 +143,7 @@ def _cmd_run(args) -> int:
 def _print_board(board, directory) -> None:
     """The ranking of every level, then the files written under ``directory``; an incomplete league
     says what is missing first."""
-    from formation_ftc.league.report import incomplete_note, seeds_text
+    from formation_ftc.league.report import _display_rows, incomplete_note, seeds_text
 
     comp = board.get("completeness")
     note = incomplete_note(comp) if comp else None
@@ -153,15 +153,17 @@ def _print_board(board, directory) -> None:
         print(f"{board['league']}: {seeds_text(comp)}")
     metric = board["requirement"]["metric"]
     for level, rows in board["ranking"].items():
-        print(f"\n{level}: rank  method  pass-rate  median {metric}")
-        for r in rows:
-            med = r.get(f"{metric}_median")
+        print(f"\n{level}: rank  method  pass-rate [95 % CI]  median {metric} [95 % CI]")
+        for r in _display_rows(rows, metric):
             print(
-                f"  {r['rank']:>2}  {r['method']:<16} {r['pass_rate']:6.2f}  "
-                f"{'-' if med is None else format(med, '.3g')}"
+                f"  {r['rank_text']:>3}  {r['method']:<16} {r['pass_rate_text']:<20} "
+                f"{r['median_text']}"
             )
+    if board.get("ranking_method"):
+        print(f"\n{board['ranking_method']}")
     print(
-        f"wrote {directory}/leaderboard/index.html, leaderboard.json, cells.parquet and runs.parquet"
+        f"wrote {directory}/leaderboard/index.html, leaderboard.json, leaderboard.md, "
+        "cells.parquet, runs.parquet and ranking.parquet"
     )
 
 
@@ -183,6 +185,7 @@ def _board_doc(directory, board) -> dict:
             "leaderboard_md": str(out / "leaderboard.md"),
             "cells": str(out / "cells.parquet"),
             "runs": str(out / "runs.parquet"),
+            "ranking": str(out / "ranking.parquet"),
         },
     }
 

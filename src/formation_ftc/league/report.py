@@ -5,12 +5,16 @@
 * ``DIR/leaderboard/leaderboard.json`` -- definition, provenance, per-cell statistics, ranking, winners;
 * ``DIR/leaderboard/cells.parquet`` -- one row per (method, level, case) cell;
 * ``DIR/leaderboard/runs.parquet`` -- one row per run (every score, seed, status, diagnostic);
-  both Parquet files carry the units of every numeric column (:mod:`formation_ftc.parquet_units`);
+* ``DIR/leaderboard/ranking.parquet`` -- one row per (level, method) of the ranking, with its
+  confidence (:func:`rank_confidence`);
+  the Parquet files carry the units of every numeric column (:mod:`formation_ftc.parquet_units`);
 * ``DIR/leaderboard/index.html`` -- the self-contained leaderboard page (figures embedded).
 
 Statistics: medians and 95th percentiles over the runs that finished (a diverged run has no score), the
 pass rate over every run (a diverged run fails). Ranking, per actuator level: pass rate over the
-actuator-fault cases that apply to every method, then the median of the requirement metric.
+actuator-fault cases that apply to every method, then the median of the requirement metric; every
+ranking row has 95 % intervals and the comparison with the row above on the paired seeds, and methods
+that are not separated share a rank (:mod:`formation_ftc.league.statistics`).
 """
 
 from __future__ import annotations
@@ -34,6 +38,10 @@ __all__ = [
     "fdi_table",
     "FDI_COLUMNS",
     "ranking",
+    "rank_confidence",
+    "ranking_frame",
+    "seed_column",
+    "CONFIDENCE_KEYS",
     "winners",
     "write_leaderboard",
     "markdown_summary",
@@ -225,8 +233,15 @@ def _common_cases(cells: pd.DataFrame) -> list[str]:
     return [c for c in dict.fromkeys(cells["case"]) if c in common]
 
 
-def ranking(meta: dict[str, Any], cells: pd.DataFrame) -> dict[str, list[dict[str, Any]]]:
-    """Per level: methods by pass rate over the common cases, then by the median requirement metric."""
+def ranking(
+    meta: dict[str, Any], cells: pd.DataFrame, runs: pd.DataFrame | None = None
+) -> dict[str, list[dict[str, Any]]]:
+    """Per level: methods by pass rate over the common cases, then by the median requirement metric.
+
+    Without ``runs`` the rank is the position. With the league's ``runs`` (one row per run,
+    :func:`~formation_ftc.league.runner.load_league_results`), every row also gets its confidence
+    (:func:`rank_confidence`): intervals, the comparison with the row above and shared ranks for
+    methods that are not separated; the order is the same."""
     metric, _, _ = _requirement(meta)
     common = _common_cases(cells)
     cost = _cost(cells)
@@ -249,8 +264,156 @@ def ranking(meta: dict[str, Any], cells: pd.DataFrame) -> dict[str, list[dict[st
         rows.sort(key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))
         for k, r in enumerate(rows, start=1):
             r["rank"] = k
+            r["tied"] = False
+            r["rank_display"] = str(k)
         out[str(level)] = rows
+    if runs is not None:
+        rank_confidence(meta, runs, out, common)
     return out
+
+
+def seed_column(runs: pd.DataFrame) -> str:
+    """The column of the runs that identifies the paired seed: ``replicate`` (replicate j has the same
+    initial errors, fault onset and noise in every cell and for every method), else ``seed``.
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        One row per run.
+
+    Returns
+    -------
+    str
+        The column name.
+
+    Examples
+    --------
+    >>> seed_column(pd.DataFrame({"seed": [7], "replicate": [0]}))
+    'replicate'
+    """
+    for name in ("replicate", "seed"):
+        if name in runs:
+            return name
+    raise KeyError("the runs have neither a replicate nor a seed column")
+
+
+#: the keys :func:`rank_confidence` adds to every ranking row (the comparison ones are None on the
+#: first row of a level)
+CONFIDENCE_KEYS = (
+    "rank",
+    "tied",
+    "rank_display",
+    "pass_rate_low",
+    "pass_rate_high",
+    "pass_rate_interval",
+    "seeds",
+    "test",
+    "statistic",
+    "p_value",
+    "p_adjusted",
+    "separated",
+    "pairs",
+    "only_above_passed",
+    "only_this_passed",
+)
+
+
+def rank_confidence(
+    meta: dict[str, Any],
+    runs: pd.DataFrame,
+    rank: dict[str, list[dict[str, Any]]],
+    cases: list[str] | None = None,
+) -> None:
+    """Give every row of ``rank`` (from :func:`ranking`, changed in place) its confidence, from the runs
+    of its method and level on ``cases`` (default: the cases every method ran), paired by (case, seed)
+    (:func:`seed_column`); :mod:`formation_ftc.league.statistics` computes every number:
+
+    * ``pass_rate_low``, ``pass_rate_high`` (the 95 % interval; ``pass_rate_interval``: "cluster
+      bootstrap" over seeds, or "wilson" when every seed has the same pass fraction; ``seeds``);
+    * ``<metric>_median_low``, ``<metric>_median_high`` (bootstrap over seeds of the median over
+      cases of the per-case medians of the requirement metric);
+    * for every row but the first, the comparison with the row above on their paired runs: ``test``
+      ("mcnemar" or "wilcoxon"), ``statistic``, ``p_value``, ``p_adjusted`` (Holm over the level's
+      adjacent comparisons), ``separated`` (adjusted p < 0.05), ``pairs``, ``only_above_passed`` and
+      ``only_this_passed`` (the discordant pairs);
+    * ``rank`` (shared by a tie group: consecutive methods not separated), ``tied``, ``rank_display``
+      ("3=" for a tie).
+    """
+    from formation_ftc.league import statistics as st
+
+    metric, limit, _ = _requirement(meta)
+    seed = seed_column(runs)
+    if cases is None:
+        cases = _common_cases(runs[["method", "case"]].drop_duplicates())
+    col = f"metric:{metric}"
+    sel = runs[runs["case"].isin(cases)]
+    frame = pd.DataFrame(
+        {
+            "method": sel["method"].astype(str),
+            "level": sel["level"].astype(str),
+            "case": sel["case"].astype(str),
+            "seed": sel[seed],
+            "passed": _passed(sel, metric, limit).to_numpy(dtype=bool),
+            "value": np.where(
+                sel["status"] == "ok",
+                sel[col].to_numpy(dtype=float) if col in sel else np.nan,
+                np.nan,
+            ),
+        }
+    )
+    groups = {key: g for key, g in frame.groupby(["method", "level"], sort=False)}
+    empty = frame.iloc[:0]
+    for level, rows in rank.items():
+        if not rows:
+            continue
+        per = [groups.get((str(r["method"]), str(level)), empty) for r in rows]
+        for r, g in zip(rows, per, strict=True):
+            ci = st.pass_rate_interval(g["passed"].to_numpy(), g["seed"].to_numpy())
+            r["pass_rate_low"], r["pass_rate_high"] = ci["low"], ci["high"]
+            r["pass_rate_interval"], r["seeds"] = ci["method"], ci["seeds"]
+            lo = hi = math.nan
+            if len(g):
+                matrix = g.pivot_table(
+                    index="seed", columns="case", values="value", aggfunc="median", dropna=False
+                )
+                lo, hi = st.median_interval(matrix.to_numpy(dtype=float))
+            r[f"{metric}_median_low"], r[f"{metric}_median_high"] = lo, hi
+        tests = []
+        for above, this in zip(per, per[1:], strict=False):
+            pair = above.merge(this, on=["case", "seed"], suffixes=("_a", "_b"))
+            tests.append(
+                st.paired_comparison(
+                    pair["passed_a"].to_numpy(),
+                    pair["passed_b"].to_numpy(),
+                    pair["value_a"].to_numpy(),
+                    pair["value_b"].to_numpy(),
+                )
+            )
+        adjusted = st.holm([t["p_value"] for t in tests])
+        separated = [bool(p < st.ALPHA) for p in adjusted]
+        rows[0].update(
+            test=None,
+            statistic=None,
+            p_value=None,
+            p_adjusted=None,
+            separated=None,
+            pairs=None,
+            only_above_passed=None,
+            only_this_passed=None,
+        )
+        for r, t, p, sep in zip(rows[1:], tests, adjusted, separated, strict=True):
+            r.update(
+                test=t["test"],
+                statistic=t["statistic"],
+                p_value=t["p_value"],
+                p_adjusted=float(p),
+                separated=sep,
+                pairs=t["pairs"],
+                only_above_passed=t["a_only"],
+                only_this_passed=t["b_only"],
+            )
+        for r, tie in zip(rows, st.tie_groups(separated), strict=True):
+            r.update(tie)
 
 
 def _nanmedian(v) -> float:
@@ -639,18 +802,23 @@ def _page(
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
     ranking_tables = []
+    confidence = _has_confidence(rank)
     for level, rows in rank.items():
         columns = [
-            ("rank", "rank"),
+            ("rank_text", "rank"),
             ("method", "method"),
-            ("pass_rate", "pass rate"),
-            (f"{metric}_median", f"median {metric} [{req_units}]"),
+            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
+            (
+                "median_text",
+                f"median {metric} [{req_units}]" + (" [95 % CI]" if confidence else ""),
+            ),
             *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
+            *([("versus_text", "vs. row above: Holm p (test)")] if confidence else []),
             ("failed", "diverged"),
             ("runs", "runs"),
             *([("tuned", "tuned (formation-ftc tune)")] if rows and "tuned" in rows[0] else []),
         ]
-        ranking_tables.append((level, rows, columns))
+        ranking_tables.append((level, _display_rows(rows, metric), columns))
     battery = meta["battery"]
     return render(
         "league.html.j2",
@@ -671,6 +839,7 @@ def _page(
         limit=limit,
         units=req_units,
         ranking=ranking_tables,
+        ranking_note=_ranking_note() if confidence else None,
         winners=wins,
         winner_columns=[
             ("level", "level"),
@@ -698,6 +867,132 @@ def _page(
     )
 
 
+def _interval_text(v: Any, low: Any, high: Any, fixed: bool = False) -> str:
+    """``0.700 [0.62, 0.77]`` (``fixed``: a fraction, 3 and 2 decimals) or ``1.23 [1.1, 1.4]`` (3
+    significant digits); the value alone when there is no interval, "-" for no value.
+
+    Examples
+    --------
+    >>> _interval_text(0.7, 0.6213, 0.7712, fixed=True), _interval_text(1.234, 1.1, None)
+    ('0.700 [0.62, 0.77]', '1.23')
+    """
+
+    def ok(x: Any) -> bool:
+        return isinstance(x, int | float) and math.isfinite(x)
+
+    if not ok(v):
+        return "-"
+    text = f"{v:.3f}" if fixed else _fmt(float(v))
+    if not (ok(low) and ok(high)):
+        return text
+    if fixed:
+        return f"{text} [{low:.2f}, {high:.2f}]"
+    return f"{text} [{_fmt(float(low))}, {_fmt(float(high))}]"
+
+
+def _versus_text(r: dict[str, Any]) -> str:
+    """The comparison of a ranking row with the row above: ``p 0.012 (McNemar)`` (Holm-adjusted)."""
+    p = r.get("p_adjusted")
+    if not isinstance(p, int | float) or not math.isfinite(p):
+        return "-"
+    name = {"mcnemar": "McNemar", "wilcoxon": "Wilcoxon"}.get(
+        str(r.get("test")), str(r.get("test"))
+    )
+    return f"{'<0.001' if p < 0.001 else format(p, '.3f')} ({name})"
+
+
+def _display_rows(rows: list[dict[str, Any]], metric: str) -> list[dict[str, Any]]:
+    """Ranking rows with their text cells: ``rank_text`` ("3="), ``pass_rate_text`` and
+    ``median_text`` (value and 95 % interval), ``versus_text`` (adjusted p of the comparison with the
+    row above, and its test)."""
+    out = []
+    for r in rows:
+        out.append(
+            {
+                **r,
+                "rank_text": str(r.get("rank_display", r.get("rank"))),
+                "pass_rate_text": _interval_text(
+                    r.get("pass_rate"), r.get("pass_rate_low"), r.get("pass_rate_high"), fixed=True
+                ),
+                "median_text": _interval_text(
+                    r.get(f"{metric}_median"),
+                    r.get(f"{metric}_median_low"),
+                    r.get(f"{metric}_median_high"),
+                ),
+                "versus_text": _versus_text(r),
+            }
+        )
+    return out
+
+
+def _has_confidence(rank: dict[str, list[dict[str, Any]]]) -> bool:
+    return any("pass_rate_low" in r for rows in rank.values() for r in rows)
+
+
+def ranking_frame(rank: dict[str, list[dict[str, Any]]]) -> pd.DataFrame:
+    """The ranking of every level as one table (``level`` first, then the rows' scalar columns; the
+    nested ``tuning`` summary left out), as ``leaderboard/ranking.parquet`` stores it.
+
+    Parameters
+    ----------
+    rank : dict
+        From :func:`ranking`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (level, method).
+
+    Examples
+    --------
+    >>> ranking_frame({"limited": [{"method": "lqr", "rank": 1, "tuning": None}]}).columns.tolist()
+    ['level', 'rank', 'method']
+    """
+    records = [
+        {"level": str(level), **{k: v for k, v in r.items() if k != "tuning"}}
+        for level, rows in rank.items()
+        for r in rows
+    ]
+    frame = pd.DataFrame(records)
+    first = [c for c in ("level", "rank", "rank_display", "tied", "method") if c in frame]
+    frame = frame[first + [c for c in frame.columns if c not in first]]
+    # the comparison columns are null on a level's first row: nullable integers and booleans
+    for col in ("pairs", "only_above_passed", "only_this_passed"):
+        if col in frame:
+            frame[col] = frame[col].astype("Int64")
+    if "separated" in frame:
+        frame["separated"] = frame["separated"].astype("boolean")
+    return frame
+
+
+def _ranking_units(frame: pd.DataFrame, metric: str, run_units: dict[str, str]) -> dict[str, str]:
+    """Ranking columns: counts, rates, statistics and p-values dimensionless; a median and its
+    interval bounds in the score's unit."""
+    units: dict[str, str] = {}
+    for col in frame.columns:
+        name = str(col)
+        score = next(
+            (
+                name[: -len(x)]
+                for x in ("_median_low", "_median_high", "_median")
+                if name.endswith(x)
+            ),
+            None,
+        )
+        if score is None:
+            units[name] = "1"
+        elif f"metric:{score}" in run_units:
+            units[name] = run_units[f"metric:{score}"]
+    return units
+
+
+def _ranking_note() -> str:
+    """The sentence under the ranking tables: confidence level, methods, bootstrap seed."""
+    from formation_ftc.league.statistics import method_note
+
+    return method_note()
+
+
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
@@ -722,19 +1017,24 @@ def markdown_summary(board: dict[str, Any]) -> str:
         f"requirement {metric} <= "
         f"{board['requirement']['max']:g} {board['requirement']['units']}.",
     ]
+    confidence = _has_confidence(board["ranking"])
     for level, rows in board["ranking"].items():
         cols = [
-            ("rank", "rank"),
+            ("rank_text", "rank"),
             ("method", "method"),
-            ("pass_rate", "pass rate"),
-            (f"{metric}_median", f"median {metric}"),
+            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
+            ("median_text", f"median {metric}" + (" [95 % CI]" if confidence else "")),
         ]
         if cost:
             cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
+        if confidence:
+            cols.append(("versus_text", "vs. row above: Holm p (test)"))
         cols += [("failed", "diverged"), ("runs", "runs")]
         if rows and "tuned" in rows[0]:
             cols.append(("tuned", "tuned"))
-        out += ["", f"**{level}**", "", _md_table(rows, cols)]
+        out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
+    if confidence:
+        out += ["", _ranking_note()]
     best: dict[tuple[str, str], dict[str, Any]] = {}
     for r in board["cells"]:
         key = (r["case"], r["level"])
@@ -805,7 +1105,7 @@ def write_leaderboard(
     league_dir = Path(league_dir)
     meta, runs = load_league_results(league_dir)
     cells = cell_table(meta, runs)
-    rank = ranking(meta, cells)
+    rank = ranking(meta, cells, runs)
     tuned_dir = Path(tuned) if tuned is not None else league_dir / "tuned"
     if tuned is not None or tuned_dir.is_dir():
         tuned_column(rank, tuned_dir)
@@ -832,6 +1132,7 @@ def write_leaderboard(
         "requirement": {"metric": metric, "max": limit, "units": units},
         "provenance": meta.get("provenance"),
         "ranking": rank,
+        "ranking_method": _ranking_note(),
         "winners": wins,
         "cells": cells.to_dict("records"),
         "fdi": fdi,
@@ -843,6 +1144,13 @@ def write_leaderboard(
     kv = {"formation_ftc.league.completeness": json.dumps(comp)}
     write_parquet(cells, out / "cells.parquet", cell_units, metadata=kv)
     write_parquet(runs, out / "runs.parquet", run_units, metadata=kv)
+    frame = ranking_frame(rank)
+    write_parquet(
+        frame,
+        out / "ranking.parquet",
+        _ranking_units(frame, metric, run_units),
+        metadata={**kv, "formation_ftc.league.ranking_method": _ranking_note()},
+    )
     page = _page(
         meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)
     )
