@@ -37,6 +37,10 @@ __all__ = [
     "cell_table",
     "fdi_table",
     "FDI_COLUMNS",
+    "IDENTIFICATION_COLUMNS",
+    "identification_rows",
+    "IDENTIFICATION_TABLE",
+    "IDENTIFICATION_NOTE",
     "ranking",
     "rank_confidence",
     "ranking_frame",
@@ -133,6 +137,31 @@ FDI_COLUMNS = (
     ("false_alarms_per_hour", "false alarms per hour"),
     ("correct_isolation_rate", "correct isolation rate"),
 )
+#: the columns a method whose FDI identifies adds (identification-scores: league.runner.IDENTIFICATION_METRICS)
+IDENTIFICATION_COLUMNS = (
+    ("median_identification_error", "median effectiveness error (identified runs)"),
+    ("identified_runs", "identified runs"),
+    ("median_time_outside_10pct", "median time outside 10 % [s]"),
+    ("false_identifications", "false identifications"),
+)
+
+
+def identification_rows(fdi: dict[str, Any]) -> list[dict[str, Any]]:
+    """The FDI rows of methods whose FDI identifies faults (they carry :data:`IDENTIFICATION_COLUMNS`),
+    for the identification table (a table of its own: the FDI table stays within a 1,280 px page)."""
+    return [r for r in fdi["rows"] if "identified_runs" in r]
+
+
+#: the identification table's columns
+IDENTIFICATION_TABLE = (*FDI_COLUMNS[:4], *IDENTIFICATION_COLUMNS)
+#: what the identification table says
+IDENTIFICATION_NOTE = (
+    "Over the runs with a fault: the median of |identified - true| effectiveness of the faulty "
+    "channel at the horizon over the runs where it was identified (their number in 'identified runs'), "
+    "the median time after the fault's first departure from nominal during which the identified "
+    "effectiveness was not within 10 % (or 0.01) of the true one (not identified counts as not "
+    "within), and the runs in which a healthy channel was identified outside 1 +- 0.1."
+)
 
 
 def _horizon(meta: dict[str, Any]) -> float:
@@ -187,6 +216,19 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
         n_fault = int(faulted.sum())
         delay = _col(ok, "fdi_detection_delay")[detected]
         isolation = _col(ok, "fdi_correct_isolation")[detected]
+        ident = {}
+        if np.isfinite(_col(ok, "id_time_outside_10pct")).any():  # its FDI identifies
+            err = _col(ok, "id_effectiveness_error")[faulted]
+            err = err[np.isfinite(err)]
+            outside = _col(ok, "id_time_outside_10pct")[faulted]
+            ident = {
+                "median_identification_error": float(np.median(err)) if err.size else math.nan,
+                "identified_runs": int(err.size),
+                "median_time_outside_10pct": float(np.median(outside))
+                if outside.size
+                else math.nan,
+                "false_identifications": int(np.nansum(_col(ok, "id_false_identification"))),
+            }
         rows.append(
             {
                 "method": str(method),
@@ -204,6 +246,7 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
                 "false_alarms_per_hour": float(early.sum() / hours) if hours > 0 else math.nan,
                 "fault_free_hours": hours,
                 "correct_isolation_rate": float(np.mean(isolation)) if isolation.size else math.nan,
+                **ident,
             }
         )
     return {
@@ -840,6 +883,7 @@ def _page(
         units=req_units,
         ranking=ranking_tables,
         ranking_note=_ranking_note() if confidence else None,
+        identification_note=IDENTIFICATION_NOTE,
         winners=wins,
         winner_columns=[
             ("level", "level"),
@@ -850,7 +894,13 @@ def _page(
         ],
         fdi=None
         if fdi is None
-        else {"note": _fdi_note(fdi), "rows": fdi["rows"], "columns": list(FDI_COLUMNS)},
+        else {
+            "note": _fdi_note(fdi),
+            "rows": fdi["rows"],
+            "columns": list(FDI_COLUMNS),
+            "identification": identification_rows(fdi),
+            "identification_columns": list(IDENTIFICATION_TABLE),
+        },
         per_fault=_per_fault(cells, units or {}),
         scores_per_table=SCORES_PER_TABLE,
         figures=[_img(p) for p in figures],
@@ -1069,6 +1119,10 @@ def markdown_summary(board: dict[str, Any]) -> str:
         if fdi["rows"]:
             shown = [{k: "-" if v is None else v for k, v in r.items()} for r in fdi["rows"]]
             out += ["", _md_table(shown, list(FDI_COLUMNS))]
+        ident = identification_rows(fdi)
+        if ident:
+            out += ["", "**Fault identification**", "", IDENTIFICATION_NOTE, ""]
+            out += [_md_table(ident, list(IDENTIFICATION_TABLE))]
     return "\n".join(out) + "\n"
 
 
