@@ -628,6 +628,21 @@ def window_model(phi, gamma, qd, r, steps: int) -> tuple[np.ndarray, np.ndarray]
     the window parity residual's velocity components ``r + phi^m r phi^m' + sum_i<m phi^i qd phi^i'``
     [(m/s)^2], of the on-board model ``(phi, gamma, qd, r)`` (:class:`ResidualFdi`'s identification).
 
+    Parameters
+    ----------
+    phi, gamma : array_like, shape (6, 6), (6, 3)
+        The one-step transition and input matrices of the relative state [SI].
+    qd, r : array_like, shape (6, 6)
+        Process noise per step and measurement noise covariances [SI].
+    steps : int
+        Steps m of the window, >= 1.
+
+    Returns
+    -------
+    tuple of numpy.ndarray, shape (3,)
+        The velocity gain of a held unit acceleration per axis [s] and the residual's velocity
+        variance per axis [(m/s)^2].
+
     Examples
     --------
     >>> import numpy as np
