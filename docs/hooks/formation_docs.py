@@ -252,7 +252,9 @@ def scenario_reference() -> dict[str, str]:
     by_method: dict[str, list[tuple[str, str]]] = {}
     for name, text in builtin_scenarios().items():
         meta = tomllib.loads(text)["scenario"]
-        by_method.setdefault(meta["method"], []).append((name, meta.get("description", "")))
+        by_method.setdefault(meta.get("method", "composed"), []).append(
+            (name, meta.get("description", ""))
+        )
     pages = {}
     index = [
         "# Scenario file reference",
@@ -334,7 +336,7 @@ def papers_page() -> str:
 
     scen: dict[str, list[str]] = {}
     for name, text in builtin_scenarios().items():
-        scen.setdefault(tomllib.loads(text)["scenario"]["method"], []).append(name)
+        scen.setdefault(tomllib.loads(text)["scenario"].get("method", "composed"), []).append(name)
     lines = [
         "# The papers",
         "",
