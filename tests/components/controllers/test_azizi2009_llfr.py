@@ -110,6 +110,39 @@ def test_controller_law_against_hand_formula():
     assert abs(np.sum(np.array([1.0, 4.0, 2.0]) * u / b)) < 1e-12
 
 
+@pytest.mark.parametrize(("mode", "weighted"), [(1, None), (2, 2)])
+def test_identified_allocation_meets_the_constraints_with_the_identified_gain(mode, weighted):
+    """fault_estimate = "estimator": once the FDI has isolated (spacecraft 3, x) and identified its
+    effectiveness 0.6, LLFR (and FLFR) allocate with b_hat_3 = b_3 0.6 -- checked by eq. (3)'s
+    constraint J(b_hat) u = p and its optimality condition sum alpha_i u_i / b_hat_i = 0 (E004-02),
+    with FLFR's alpha_flfr on the isolated spacecraft 3 (not on the stated fault_index 2)."""
+    c = _law(fault_estimate="estimator")
+    rd, _, _ = c.desired(0.0)
+    e, ed = np.array([0.1, -0.2]), np.array([0.01, 0.03])
+    y = {"position": (rd[1:] - rd[:-1]) + e[:, None], "velocity": jnp.asarray(ed[:, None])}
+    iso = np.zeros((3, 3), dtype=bool)
+    iso[2, 0] = True
+    eff = np.ones((3, 3))
+    eff[2, 0] = 0.6
+    est = {
+        "detected": np.asarray(True),
+        "isolated": iso,
+        "identified": np.ones((3, 3), dtype=bool),
+        "effectiveness": eff,
+    }
+    inputs = FlightInputs(y, None, est, jnp.asarray(mode), None, None, None)
+    u, _, out = c.output(0.0, c.initial_state(), inputs)
+    u = np.asarray(u)[:, 0]
+    b_hat = np.array([1.0, 0.8, 0.6])  # stated b_hat elsewhere, b * 0.6 on the identified channel
+    alpha = np.array([1.0, 4.0, 9.0 if weighted == 2 else 2.0])
+    p = -3.0 * ed - 2.0 * e
+    np.testing.assert_allclose(
+        [b_hat[1] * u[1] - b_hat[0] * u[0], b_hat[2] * u[2] - b_hat[1] * u[1]], p, rtol=1e-12
+    )
+    assert abs(np.sum(alpha * u / b_hat)) < 1e-12
+    assert float(out["flfr_spacecraft"]) == 3.0
+
+
 def test_chain_outputs_formed_on_board_from_the_relative_state_equal_the_measured_ones():
     """Given the (N, 6) relative state instead of the chain measurement, the law forms
     y_ij = q_{i+1} - q_i on its axes (numpy) and commands the same."""

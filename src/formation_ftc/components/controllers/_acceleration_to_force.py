@@ -21,6 +21,7 @@ __all__ = [
     "AccelerationToForce",
     "TrackingAccelerationToForce",
     "force_from_acceleration",
+    "wrapper_for",
     "ACCELERATION_COMMAND_SIGNAL",
 ]
 
@@ -182,6 +183,31 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
             f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
             f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)"
         )
-    tracks = type(law).desired_position_at is not Controller.desired_position_at
-    cls = TrackingAccelerationToForce if tracks else AccelerationToForce
+    cls = wrapper_for(law, AccelerationToForce, TrackingAccelerationToForce)
     return cls(law=law, nominal_mass=nominal_mass)
+
+
+def wrapper_for(law: Controller, plain: type, tracking: type) -> type:
+    """``tracking`` (a wrapper that passes the law's position objective on) when ``law`` declares a
+    desired position, else ``plain``.
+
+    Parameters
+    ----------
+    law : Controller
+        The law to wrap.
+    plain, tracking : type
+        The wrapper classes without and with ``desired_position_at``.
+
+    Returns
+    -------
+    type
+        The wrapper class for ``law``.
+
+    Examples
+    --------
+    >>> from formation_ftc.components.controllers.none import FreeDrift
+    >>> wrapper_for(FreeDrift(count=1), AccelerationToForce, TrackingAccelerationToForce).__name__
+    'AccelerationToForce'
+    """
+    tracks = type(law).desired_position_at is not Controller.desired_position_at
+    return tracking if tracks else plain

@@ -10,7 +10,8 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
-from formation_ftc.components.controllers._acceleration_to_force import WrappedLaw
+from formation_ftc.components.controllers._acceleration_to_force import WrappedLaw, wrapper_for
+from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
 from formation_ftc.sim.components import (
     CompositionError,
     Controller,
@@ -19,17 +20,10 @@ from formation_ftc.sim.components import (
     component,
 )
 
-__all__ = [
-    "ReconfiguringAllocator",
-    "TrackingReconfiguringAllocator",
-    "reconfigured",
-    "EFFECTIVENESS_MIN",
-]
+__all__ = ["ReconfiguringAllocator", "TrackingReconfiguringAllocator", "reconfigured"]
 
 #: the wrapped law's command, recorded next to the loop's ``command`` (the reallocated force)
 LAW_COMMAND_SIGNAL = "law_command"
-#: smallest identified effectiveness the allocation divides by (an outage identifies as about 0) [-]
-EFFECTIVENESS_MIN = 0.05
 
 
 @component
@@ -40,7 +34,8 @@ class ReconfiguringAllocator(WrappedLaw):
                                                                            and identified
         f_ij = u_ij                                                        elsewhere, and before that
 
-    with the identified effectiveness clipped to [:data:`EFFECTIVENESS_MIN`, 1] (a channel identified
+    with the identified effectiveness clipped to [0.05, 1]
+    (:func:`~formation_ftc.components.estimators.residual_fdi.isolated_effectiveness`) (a channel identified
     above 1 gets its command unchanged). Each spacecraft has one thruster channel per axis, so the
     force the law asks of a weakened channel can only be asked of that channel: a loss of effectiveness
     is compensated up to the rated thrust ``force_limit`` [N] (flight knowledge; inf: none), an outage
@@ -68,9 +63,7 @@ class ReconfiguringAllocator(WrappedLaw):
 
     def output(self, t, state, inputs: FlightInputs):
         u, nxt, out = self.law.output(t, state, inputs)
-        est = inputs.estimate
-        use = jnp.asarray(est["detected"]) & est["isolated"] & est["identified"]
-        eff = jnp.clip(est["effectiveness"], EFFECTIVENESS_MIN, 1.0)
+        use, eff = isolated_effectiveness(inputs.estimate)
         force = jnp.where(use, jnp.clip(u / eff, -self.force_limit, self.force_limit), u)
         return force, nxt, {**out, LAW_COMMAND_SIGNAL: u}
 
@@ -118,6 +111,5 @@ def reconfigured(law: Controller, force_limit: float) -> ReconfiguringAllocator:
     >>> type(ctrl).__name__, ctrl.quantity, sorted(ctrl.needs())
     ('ReconfiguringAllocator', 'force', ['fault-identification'])
     """
-    tracks = type(law).desired_position_at is not Controller.desired_position_at
-    cls = TrackingReconfiguringAllocator if tracks else ReconfiguringAllocator
+    cls = wrapper_for(law, ReconfiguringAllocator, TrackingReconfiguringAllocator)
     return cls(law=law, force_limit=np.float64(force_limit))

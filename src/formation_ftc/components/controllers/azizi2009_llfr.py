@@ -53,8 +53,9 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
 from formation_ftc.components.sensors.chain_relative import chain_layout
-from formation_ftc.components.supervisors.hierarchical import LLFR
+from formation_ftc.components.supervisors.hierarchical import FLFR, LLFR, NOMINAL
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.design.allocation import allocation_matrix
@@ -107,10 +108,6 @@ def relative_output_law(e, e_dot, xdd_desired, lambda0, lambda1) -> jax.Array:
     [-0.23]
     """
     return xdd_desired - lambda1 * e_dot - lambda0 * e
-
-
-#: smallest identified effectiveness the allocation uses (an outage identifies as about 0) [-]
-EFFECTIVENESS_MIN = 0.05
 
 
 def mode_allocation_matrices(alpha, alpha_flfr, k: int | jax.Array, b_nominal, b_hat) -> jax.Array:
@@ -196,7 +193,7 @@ class ChainLlfrController(Controller):
     computed once per run (controller state). With ``fault_estimate = "estimator"`` they are computed at
     every step from the estimator's fault identification instead: once the FDI has isolated a channel and
     identified its effectiveness, LLFR and FLFR allocate with ``b_hat = b * effectiveness`` on that
-    channel (clipped to [:data:`EFFECTIVENESS_MIN`, 1]; the stated ``b_hat`` elsewhere) and FLFR raises the
+    channel (clipped to [0.05, 1]: :func:`~formation_ftc.components.estimators.residual_fdi.isolated_effectiveness`; the stated ``b_hat`` elsewhere) and FLFR raises the
     weight of the isolated spacecraft (``fault_index`` until an isolation). Desired formation: regular polygon of side ``side``
     [m] rotating at ``omega`` [rad/s] (:func:`formation_ftc.core.polygon_formation.rotating_polygon`).
     ``is_sampled``: u computed at t_k and held over the step; otherwise re-evaluated at every RK stage.
@@ -278,30 +275,35 @@ class ChainLlfrController(Controller):
             e, e_dot, chain_difference(ad), self.lambda0, self.lambda1
         )  # Sec. II
         mode = LLFR if inputs.decision is None else inputs.decision
-        allocation, extra = state["allocation"], {}
+        extra = {}
         if self.fault_estimate == "estimator":
-            allocation, k = self.identified_allocation(inputs.estimate)
+            matrix, k = self.identified_allocation(inputs.estimate, mode)
             extra = {"flfr_spacecraft": (k + 1).astype(jnp.float64)}
-        u = allocate(allocation[mode], p)  # eq. (3)
+        else:
+            matrix = state["allocation"][mode]
+        u = allocate(matrix, p)  # eq. (3)
         if self.sampled:
             nxt = state
         else:  # the matrices are constant: zero derivative
             nxt = {"allocation": jnp.zeros_like(state["allocation"])}
         return u, nxt, {"desired_position": rd, **extra}
 
-    def identified_allocation(self, estimate) -> tuple[jax.Array, jax.Array]:
-        """The three allocation matrices (eq. (3)) with the fault the estimator identified: ``b_hat`` of
-        the isolated channel its identified effectiveness times ``b``, FLFR's raised weight on the
-        isolated spacecraft (:meth:`output` with ``fault_estimate = "estimator"``); and that spacecraft's
-        0-based index (``fault_index`` before an isolation)."""
+    def identified_allocation(self, estimate, mode) -> tuple[jax.Array, jax.Array]:
+        """The allocation matrix (eq. (3)) of ``mode`` with the fault the estimator identified: ``b_hat``
+        of the isolated channel its identified effectiveness times ``b`` (LLFR, FLFR), FLFR's raised
+        weight on the isolated spacecraft (:meth:`output` with ``fault_estimate = "estimator"``; one
+        matrix per step, that of the mode in force); and that spacecraft's 0-based index
+        (``fault_index`` before an isolation)."""
         na = self.n_axes
+        use, eff = isolated_effectiveness(estimate)
+        b_hat = jnp.where(use[:, :na], self.b * eff[:, :na], self.b_hat)
         isolated = jnp.asarray(estimate["isolated"])[:, :na] & jnp.asarray(estimate["detected"])
-        use = isolated & jnp.asarray(estimate["identified"])[:, :na]
-        eff = jnp.clip(jnp.asarray(estimate["effectiveness"])[:, :na], EFFECTIVENESS_MIN, 1.0)
-        b_hat = jnp.where(use, self.b * eff, self.b_hat)
         spacecraft = jnp.any(isolated, axis=1)
         k = jnp.where(jnp.any(spacecraft), jnp.argmax(spacecraft), self.fault_index)
-        return mode_allocation_matrices(self.alpha, self.alpha_flfr, k, self.b, b_hat), k
+        alpha = jnp.asarray(self.alpha)
+        alpha = jnp.where(mode == FLFR, alpha.at[k].set(self.alpha_flfr), alpha)
+        b = jnp.where(mode == NOMINAL, jnp.asarray(self.b), b_hat)
+        return jax.vmap(lambda col: allocation_matrix(alpha, col), in_axes=1)(b), k
 
     def signals(self):
         return (

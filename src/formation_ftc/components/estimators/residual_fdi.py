@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from typing import Any, Literal, NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, model_validator
@@ -44,15 +45,16 @@ __all__ = [
     "latch_first_alarm",
     "identify_channels",
     "window_model",
-    "IDENTIFICATIONS",
+    "isolated_effectiveness",
+    "EFFECTIVENESS_MIN",
 ]
 
 #: residual generators: the Kalman filter's innovation, or the one-step parity relation
 RESIDUALS = ("kalman", "parity")
 #: tests on the standardised residual of each (spacecraft, axis) channel
 TESTS = ("cusum", "fixed")
-#: fault identification: none, or recursive least squares with exponential forgetting per channel
-IDENTIFICATIONS = ("off", "rls")
+#: smallest identified effectiveness a reconfiguration uses (an outage identifies as about 0) [-]
+EFFECTIVENESS_MIN = 0.05
 VEC = ("spacecraft", "axis")
 
 
@@ -202,6 +204,36 @@ def identify_channels(theta, cov, residual, regressor, noise_var, forgetting):
     theta = theta + k * innovation[..., None]
     cov = prior - jnp.einsum("nca,ncb->ncab", k, p_phi)
     return theta, 0.5 * (cov + jnp.swapaxes(cov, -1, -2))
+
+
+def isolated_effectiveness(estimate) -> tuple[jax.Array, jax.Array]:
+    """What a reconfiguration may use of an identifying FDI's estimate: ``(use, effectiveness)``, both
+    (N, 3) -- ``use`` true on the channel isolated at the alarm once it is identified, and the
+    identified effectiveness clipped to [:data:`EFFECTIVENESS_MIN`, 1] (a channel identified above 1 is
+    taken as healthy).
+
+    Parameters
+    ----------
+    estimate : mapping
+        The estimate of :class:`ResidualFdi` with ``identification = "rls"`` (``detected``,
+        ``isolated``, ``identified``, ``effectiveness``).
+
+    Returns
+    -------
+    tuple of jax.Array
+        ``(use, effectiveness)`` [-].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> est = {"detected": np.asarray(True), "isolated": np.array([[False, True, False]]),
+    ...        "identified": np.ones((1, 3), bool), "effectiveness": np.array([[0.8, 0.01, 1.2]])}
+    >>> use, eff = isolated_effectiveness(est)
+    >>> np.asarray(use).tolist(), np.asarray(eff).tolist()
+    ([[False, True, False]], [[0.8, 0.05, 1.0]])
+    """
+    use = jnp.asarray(estimate["detected"]) & estimate["isolated"] & estimate["identified"]
+    return use, jnp.clip(estimate["effectiveness"], EFFECTIVENESS_MIN, 1.0)
 
 
 class FdiState(NamedTuple):
