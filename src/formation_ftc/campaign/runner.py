@@ -346,7 +346,6 @@ def _finish_bound(
     first,
 ) -> ChunkResult:
     """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
-    from formation_ftc import api
     from formation_ftc.campaign.binding import take_run
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
@@ -381,7 +380,8 @@ def _finish_bound(
         # re-run alone with the scenario's records (and the replay that names a divergence)
         inp = cols.row(j, plan.base_names)
         scn = plan.scenario(inp)
-        loop_j = replace(take_run(batch, axes, j), record_every=api.build_loop(scn).record_every)
+        # the scenario's recording interval (structural: the batch ran with one record at each end)
+        loop_j = replace(take_run(batch, axes, j), record_every=int(scn.simulation.record_every))
         run_out = jax.device_get(_run_alone(loop_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
