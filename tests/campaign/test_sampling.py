@@ -44,6 +44,23 @@ def test_subset_is_independent_of_campaign_size_and_chunking(tiny):
             )
 
 
+def test_a_later_block_of_replicates_runs_those_replicates(tiny):
+    """first_replicate = s: replicate j is replicate s + j of the whole stream (seed, samples and the
+    replicate column), per run and per column; a quasi-Monte Carlo design refuses it."""
+    whole, block = make_plan(tiny(runs=9)), make_plan(tiny(runs=4, first_replicate=5))
+    for g in range(2):
+        for j in range(4):
+            x, y = whole.run_inputs(g * 9 + 5 + j), block.run_inputs(g * 4 + j)
+            assert (x.seed, x.values, x.replicate) == (y.seed, y.values, y.replicate)
+    cols = block.run_columns(list(range(block.n_runs)))
+    assert cols.replicate.tolist() == [5, 6, 7, 8] * 2
+    assert cols.seed.tolist() == [
+        whole.run_inputs(g * 9 + j).seed for g in (0, 1) for j in range(5, 9)
+    ]
+    with pytest.raises(Exception, match="first_replicate"):
+        make_plan(tiny(runs=4, first_replicate=5, sampling="sobol"))
+
+
 def test_paired_common_random_numbers_and_unpaired(tiny):
     p = make_plan(tiny(runs=4))
     a, b = p.run_inputs(1), p.run_inputs(4 + 1)  # replicate 1 at kd = 10 and kd = 30

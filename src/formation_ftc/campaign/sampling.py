@@ -5,7 +5,9 @@ Run ids, grid points and replicates
 With G grid points (the Cartesian product of the base-scenario list and every ``{grid = [...]}``
 field, in file order, the last axis varying fastest) and ``runs`` replicates per point, run id
 ``r = g * runs + j`` (``g`` the grid index, ``j`` the replicate). Chunks never straddle grid points,
-so a chunk is homogeneous in every swept value.
+so a chunk is homogeneous in every swept value. ``[campaign] first_replicate = s`` makes replicate ``j``
+the ``s + j``-th of the stream (paired random sampling): a campaign of replicates ``s .. s + runs - 1``
+runs exactly those runs of a campaign with ``s + runs`` replicates (a later block, in its own directory).
 
 Seeds and samples
 -----------------
@@ -514,6 +516,7 @@ class CampaignPlan:
         self.runs = meta.runs
         self.chunk_size = meta.chunk_size
         self.paired = meta.paired
+        self.first_replicate = meta.first_replicate
         self.sampling = meta.sampling
         self._design: np.ndarray | None = None  # quasi-Monte Carlo rows, built on first use
         self.base_names = spec.bases
@@ -621,6 +624,7 @@ class CampaignPlan:
         if not 0 <= run_id < self.n_runs:
             raise CampaignError(f"run id {run_id} does not exist (0..{self.n_runs - 1})")
         g, j = divmod(int(run_id), self.runs)
+        j += self.first_replicate
         key = j if self.paired else int(run_id)
         b, values = self.grid_point(g)
         if self.sampling == "random":
@@ -641,6 +645,7 @@ class CampaignPlan:
             bad = int(ids[(ids < 0) | (ids >= self.n_runs)][0])
             raise CampaignError(f"run id {bad} does not exist (0..{self.n_runs - 1})")
         g, j = np.divmod(ids, self.runs)
+        j = j + self.first_replicate
         keys = j if self.paired else ids
         points = {int(x): self.grid_point(int(x)) for x in np.unique(g)}
         values: dict[str, list[Any]] = {}

@@ -392,6 +392,14 @@ class CampaignMeta(StrictModel):
         0, ge=0, description="Campaign seed; run seeds and samples derive from it [-]."
     )
     chunk_size: int = Field(32, ge=1, le=100_000, description="Runs per vmap batch [-].")
+    first_replicate: int = Field(
+        0,
+        ge=0,
+        le=MAX_RUNS,
+        description="Replicate j of this campaign is replicate first_replicate + j of the seed's "
+        "stream: a later block of the same replicates in another directory (paired random "
+        "sampling only) [-].",
+    )
     metrics: list[str] = Field(default_factory=list, description="Metrics to keep (empty: all).")
     paired: bool = Field(
         True,
@@ -404,6 +412,15 @@ class CampaignMeta(StrictModel):
         "draws), 'sobol' (scrambled Sobol' quasi-Monte Carlo points) or 'lhs' (Latin hypercube); see "
         "formation_ftc.campaign.sampling.",
     )
+
+    @model_validator(mode="after")
+    def _block(self):
+        if self.first_replicate and not (self.paired and self.sampling == "random"):
+            raise ValueError(
+                "campaign.first_replicate: a later block of replicates needs paired = true and "
+                'sampling = "random" (a quasi-Monte Carlo design is one block)'
+            )
+        return self
 
     @field_validator("base")
     @classmethod

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from formation_ftc.campaign.cli import add_budget_options, add_dask_options
 from formation_ftc.exitcodes import add_json_option, print_json
@@ -102,18 +103,20 @@ def _cmd_run(args) -> int:
             what=what,
         )
 
-    outcome = run_league(
-        args.league,
-        args.out,
-        seeds=args.seeds,
-        quick=args.quick,
-        methods=methods,
-        executor_factory=factory,
-        progress=not (args.no_progress or _quiet(args)),
-        log=_log(args),
-        parallel_methods=parallel,
-        budgets=budgets,
-    )
+    options = {
+        "methods": methods,
+        "executor_factory": factory,
+        "progress": not (args.no_progress or _quiet(args)),
+        "log": _log(args),
+        "parallel_methods": parallel,
+        "budgets": budgets,
+    }
+    if args.until_resolved:
+        return _until_resolved(args, options, t0)
+    for flag in ("block", "max_seeds", "margin", "power"):
+        if getattr(args, flag) is not None:
+            raise LeagueError(f"--{flag.replace('_', '-')}: only with --until-resolved")
+    outcome = run_league(args.league, args.out, seeds=args.seeds, quick=args.quick, **options)
     board = write_leaderboard(args.out, plots=not args.no_plots)
     wall = time.perf_counter() - t0
     if args.json:
@@ -136,6 +139,46 @@ def _cmd_run(args) -> int:
         f"league done: {outcome.n_runs} runs ({outcome.n_failed} failed or diverged) in "
         f"{outcome.out_dir}, {wall:.1f} s"
     )
+    _print_board(board, args.out)
+    return 0
+
+
+def _until_resolved(args, options: dict, t0: float) -> int:
+    """``league run --until-resolved``: blocks of seeds until the ranking is resolved (or the budget
+    is spent), then the leaderboard of every seed run."""
+    from formation_ftc.league.definition import LeagueError
+    from formation_ftc.league.report import resolution_text, write_leaderboard
+    from formation_ftc.league.resolution import RESOLUTION_FILE, run_until_resolved
+
+    if args.seeds is not None or args.quick:
+        raise LeagueError(
+            "--until-resolved: the seeds come in blocks (--block, --max-seeds); leave out "
+            "--seeds and --quick"
+        )
+    record = run_until_resolved(
+        args.league,
+        args.out,
+        block=args.block,
+        max_seeds=args.max_seeds,
+        margin=0.1 if args.margin is None else args.margin,
+        power=0.8 if args.power is None else args.power,
+        **options,
+    )
+    board = write_leaderboard(args.out, plots=not args.no_plots)
+    if args.json:
+        doc = _board_doc(args.out, board)
+        doc["outputs"]["resolution"] = str(Path(args.out) / RESOLUTION_FILE)
+        print_json(
+            {
+                "league": board["league"],
+                **doc,
+                "resolution": record,
+                "wall_time": time.perf_counter() - t0,
+                "units": {**doc["units"], "wall_time": "s"},
+            }
+        )
+        return 0
+    print(resolution_text(record))
     _print_board(board, args.out)
     return 0
 
@@ -227,6 +270,33 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)"
     )
     q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
+    q.add_argument(
+        "--until-resolved",
+        action="store_true",
+        help="run blocks of seeds until every adjacent pair of the ranking is separated or tied "
+        "(writes DIR/resolution.json)",
+    )
+    q.add_argument(
+        "--block", type=int, default=None, help="seeds per block (default: the quick seed count)"
+    )
+    q.add_argument(
+        "--max-seeds",
+        type=int,
+        default=None,
+        help="most seeds per cell with --until-resolved (default: the league's seed count)",
+    )
+    q.add_argument(
+        "--margin",
+        type=float,
+        default=None,
+        help="pass-rate difference a tie excludes (default 0.1)",
+    )
+    q.add_argument(
+        "--power",
+        type=float,
+        default=None,
+        help="power at which a pair not separated is a tie (default 0.8)",
+    )
     q.add_argument(
         "--workers",
         type=int,

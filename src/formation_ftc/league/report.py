@@ -20,6 +20,7 @@ that are not separated share a rank (:mod:`formation_ftc.league.statistics`).
 from __future__ import annotations
 
 import base64
+import contextlib
 import json
 import math
 from pathlib import Path
@@ -42,6 +43,7 @@ __all__ = [
     "IDENTIFICATION_TABLE",
     "IDENTIFICATION_NOTE",
     "ranking",
+    "resolution_text",
     "rank_confidence",
     "ranking_frame",
     "seed_column",
@@ -1085,6 +1087,8 @@ def markdown_summary(board: dict[str, Any]) -> str:
         out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
     if confidence:
         out += ["", _ranking_note()]
+    if board.get("resolution"):
+        out += ["", resolution_text(board["resolution"]) + "."]
     best: dict[tuple[str, str], dict[str, Any]] = {}
     for r in board["cells"]:
         key = (r["case"], r["level"])
@@ -1124,6 +1128,26 @@ def markdown_summary(board: dict[str, Any]) -> str:
             out += ["", "**Fault identification**", "", IDENTIFICATION_NOTE, ""]
             out += [_md_table(ident, list(IDENTIFICATION_TABLE))]
     return "\n".join(out) + "\n"
+
+
+def resolution_text(record: dict[str, Any]) -> str:
+    """What ``--until-resolved`` did, in one paragraph (also under the league's Markdown board)."""
+    why = {
+        "resolved": "every adjacent pair separated or tied",
+        "budget": "budget spent, pairs still open",
+    }[record["stopped"]]
+    counts: dict[str, int] = {}
+    for v in (v for vs in record["blocks"][-1]["verdicts"].values() for v in vs):
+        key = "separated on the metric" if v.get("by") == "metric" else v["verdict"]
+        counts[key] = counts.get(key, 0) + 1
+    pairs = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
+    return (
+        f"until resolved: stopped at {record['seeds']} seeds per cell ({why}: {pairs}); "
+        f"{record['runs']} runs against {record['fixed_runs']} for the league's fixed "
+        f"{record['fixed_seeds']} seeds ({record['saved_runs']} saved); blocks of {record['block']} "
+        f"seeds, a tie excludes a pass-rate difference of {record['margin']:g} at power "
+        f"{record['power']:g}"
+    )
 
 
 def _run_units(league_dir: Path, meta: dict[str, Any]) -> dict[str, str]:
@@ -1191,6 +1215,10 @@ def write_leaderboard(
         "cells": cells.to_dict("records"),
         "fdi": fdi,
     }
+    resolution = league_dir / "resolution.json"
+    if resolution.is_file() and meta.get("blocks"):
+        with contextlib.suppress(OSError, ValueError):  # damaged: the board without it
+            board["resolution"] = json.loads(resolution.read_text(encoding="utf-8"))
     atomic_write(out / "leaderboard.json", json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
     cell_units = _cell_units(cells, run_units)

@@ -217,6 +217,7 @@ def _campaign(
     seeds: int,
     traced: list[int],
     networked: bool,
+    first_seed: int = 0,
 ) -> dict:
     ie = spec.league.initial_error
     sample: dict[str, Any] = {}
@@ -260,6 +261,7 @@ def _campaign(
             "base": [str(p) for p in cell_files],
             # a chunk never spans two cells: no larger than the seeds (no padded runs)
             "runs": seeds,
+            "first_replicate": first_seed,
             "seed": spec.league.seed,
             "chunk_size": min(spec.league.chunk_size, seeds),
             "paired": True,
@@ -412,6 +414,18 @@ class LeagueRecord(_Record):
     levels: list[_NamedRecord]
     step_check: dict[str, StepCheckRecord] = {}
     provenance: dict[str, Any] = {}
+    #: a league run in blocks of seeds: [first seed, seeds] of each (``seeds`` is their sum)
+    blocks: list[list[int]] = []
+
+    @field_validator("blocks")
+    @classmethod
+    def _contiguous(cls, v: list[list[int]]) -> list[list[int]]:
+        if any(len(b) != 2 for b in v):
+            raise ValueError(f"{v!r}: each block is [first seed, seeds]")
+        ends = [0] + [a + n for a, n in v]
+        if any(a != e or n < 1 for (a, n), e in zip(v, ends, strict=False)):
+            raise ValueError(f"{v!r}: blocks of seeds must follow each other from seed 0")
+        return v
 
 
 def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> str:
@@ -487,10 +501,14 @@ def _campaign_at_or_above(path: Path) -> Path | None:
     return None
 
 
-def _check_out(out: Path, spec: LeagueSpec, digest: str, seeds: int) -> dict[str, Any] | None:
+def _check_out(
+    out: Path, spec: LeagueSpec, digest: str, seeds: int, first_seed: int | None = None
+) -> dict[str, Any] | None:
     """Refuse, before anything is written, an ``--out`` this league may not use: a file or a device, a
     path inside (or equal to) a campaign directory, a directory that is neither empty nor this league
-    (same definition and seeds: resumed). Returns the ``league.json`` found there, or None."""
+    (same definition and seeds: resumed). A block of seeds (``first_seed`` not None) extends a league
+    run in blocks when it starts where the league's seeds end or is one of its blocks (resumed).
+    Returns the ``league.json`` found there, or None."""
     what = f"--out {out}"
     try:
         campaign = _campaign_at_or_above(out)
@@ -522,11 +540,27 @@ def _check_out(out: Path, spec: LeagueSpec, digest: str, seeds: int) -> dict[str
                     f"{what}: is not empty and holds no {LEAGUE_FILE} (e.g. {stray[:3]}): not a "
                     "league directory; refusing to write there. Give a new or empty directory"
                 )
+            if first_seed:  # None or 0: a new league
+                raise LeagueError(
+                    f"{what}: holds no league; a block of seeds from {first_seed} extends a league "
+                    "directory that holds the seeds before it"
+                )
             return None
     except OSError as exc:
         raise LeagueError(f"{what}: unusable path ({exc.strerror or exc})") from None
     old = _read_meta(out / LEAGUE_FILE, what)
-    if old.get("hash") != digest or old.get("seeds") != seeds:
+    blocks = old.get("blocks") or []
+    if first_seed is None:
+        fits = not blocks and old.get("seeds") == seeds
+    else:
+        fits = bool(blocks) and (old.get("seeds") == first_seed or [first_seed, seeds] in blocks)
+    if blocks and first_seed is None and old.get("hash") == digest:
+        raise LeagueError(
+            f"{out}: holds league {old.get('name')!r} run in blocks of seeds "
+            f"({old.get('seeds')} seeds so far): resume it with `league run --until-resolved`, or "
+            f"write its leaderboard with `league report {out}`"
+        )
+    if old.get("hash") != digest or not fits:
         raise LeagueError(
             f"{out}: holds league {old.get('name')!r} (definition {str(old.get('hash'))[:12]}, "
             f"{old.get('seeds')} seeds); this is {spec.league.name!r} ({digest[:12]}, {seeds} "
@@ -755,9 +789,16 @@ def run_league(
     log: Callable[[str], None] | None = None,
     parallel_methods: int = 1,
     budgets: Budgets | None = None,
+    first_seed: int | None = None,
 ) -> LeagueOutcome:
     """Run (or resume) ``league`` into ``out_dir``: ``DIR/league.json`` (definition, battery, seeds,
     provenance) and one campaign directory per method (``DIR/<method>/campaign``).
+
+    ``first_seed`` (None: a league of ``seeds`` seeds) runs the block of seeds ``first_seed ..
+    first_seed + seeds - 1`` (replicates of the same streams: the runs a league of more seeds has) and
+    adds it to the league in ``out_dir``: the first block in ``DIR/<method>/campaign``, a later one in
+    ``DIR/<method>/campaign-from-<first_seed>``; ``league.json`` lists the blocks and counts their seeds
+    (:func:`formation_ftc.league.resolution.run_until_resolved`).
 
     ``parallel_methods`` > 1: that many methods run side by side, one process each (each method's chunks
     in that process; the processes exit when this one dies); otherwise the methods run one after the
@@ -793,7 +834,8 @@ def run_league(
     check_league_budgets(spec, cells, n_seeds, budgets)
     out = Path(out_dir)
     digest = league_hash(spec)
-    old = _check_out(out, spec, digest, n_seeds)
+    old = _check_out(out, spec, digest, n_seeds, first_seed)
+    start = first_seed or 0
     step_checks = _step_checks(spec, cells, old, log, progress)
     if step_checks:  # a finer chosen step: the budgets again, on the steps that will run
         check_league_budgets(spec, cells, n_seeds, budgets)
@@ -810,6 +852,7 @@ def run_league(
         "hash": digest,
         "seeds": n_seeds,
         "quick": quick,
+        **_blocks(old, start, n_seeds, first_seed is not None),
         "definition_file": spec.source.name,
         "definition": spec.source.read_text(),
         "method_files": {
@@ -830,7 +873,12 @@ def run_league(
     files = _write_inputs(out, meta, cells)
     jobs = []
     for name, mcells in cells.items():
-        traced = _traced_runs(mcells, n_seeds, spec.league.trace_seed, spec.league.trace_cases)
+        trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
+        traced = (
+            _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
+            if 0 <= trace_seed < n_seeds
+            else []
+        )
         jobs.append(
             (
                 name,
@@ -841,6 +889,7 @@ def run_league(
                     n_seeds,
                     traced,
                     _network_kind(spec, spec.method(name))[0],
+                    start,
                 ),
             )
         )
@@ -855,8 +904,9 @@ def run_league(
         _say(log, f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
 
     chunk_size = min(spec.league.chunk_size, n_seeds)
+    folder = campaign_folder(start)
     watched = [
-        (name, out / name / "campaign" / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
+        (name, out / name / folder / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
     ]
     with _MethodProgress(watched, n_seeds, chunk_size, enabled=progress):
         if parallel_methods > 1 and len(jobs) > 1:
@@ -873,7 +923,7 @@ def run_league(
                 initargs=(os.getpid(),),
             ) as pool:
                 futures = {
-                    pool.submit(_run_method_campaign, campaign, str(out / name / "campaign")): name
+                    pool.submit(_run_method_campaign, campaign, str(out / name / folder)): name
                     for name, campaign in jobs
                 }
                 try:
@@ -886,9 +936,25 @@ def run_league(
             for name, campaign in jobs:
                 t_m = time.perf_counter()
                 executor = executor_factory() if executor_factory is not None else None
-                outcome = run_campaign(campaign, out / name / "campaign", executor=executor)
+                outcome = run_campaign(campaign, out / name / folder, executor=executor)
                 done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
     return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
+
+
+def campaign_folder(first_seed: int) -> str:
+    """A method's campaign directory (under ``DIR/<method>/``) of the block of seeds from
+    ``first_seed``: ``campaign`` for the first, ``campaign-from-000020`` for one from seed 20."""
+    return "campaign" if not first_seed else f"campaign-from-{first_seed:06d}"
+
+
+def _blocks(old: dict[str, Any] | None, start: int, seeds: int, blocked: bool) -> dict[str, Any]:
+    """``league.json``'s ``seeds`` and ``blocks`` ([first seed, seeds] of each block) after a block of
+    ``seeds`` from ``start`` (``blocked``), or ``{}`` for a league run in one piece."""
+    if not blocked:
+        return {}
+    blocks = [b for b in (old or {}).get("blocks", []) if b != [start, seeds]] + [[start, seeds]]
+    blocks.sort()
+    return {"seeds": sum(n for _, n in blocks), "blocks": blocks}
 
 
 def _say(log: Callable[[str], None] | None, line: str) -> None:
@@ -1026,12 +1092,16 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
     kinds = {c["name"]: c["kind"] for c in meta["battery"]["cases"]}
     frames = []
     for m in meta["methods"]:
-        cdir = out / m["name"] / "campaign"
-        if not cdir.is_dir():
+        blocks = [campaign_folder(first) for first, _ in meta.get("blocks", [[0, 0]])]
+        parts = [
+            CampaignStore.read(out / m["name"] / b).load_results()
+            for b in blocks
+            if (out / m["name"] / b).is_dir()
+        ]
+        parts = [p for p in parts if len(p)]
+        if not parts:
             continue
-        df = CampaignStore.read(cdir).load_results()
-        if not len(df):
-            continue
+        df = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
         keys = df["scenario"].map(lambda s: Path(str(s)).stem)
         df = df.assign(
             method=m["name"], case=keys.str.split("--").str[0], level=keys.str.split("--").str[1]
