@@ -280,7 +280,25 @@ def test_tune_command_end_to_end_and_tuned_column(tmp_path, tiny_league, capsys)
     assert result["J"]["tuned"] <= result["J"]["paper"]
     assert result["holdout"]["paper"]["runs"] == 2 and result["holdout"]["replicates"] == [0, 1]
     assert result["train"]["replicates"] == [10_000, 10_000]
-    assert "yang2013 @ limited" in capsys.readouterr().out
+    # fresh replicates: neither the league's (0 .. 99) nor the training's (10,000)
+    fresh = result["fresh"]
+    assert fresh["replicates"] == [10_001, 10_002] and fresh["tuned"]["runs"] == 2
+    for block in (result["train"], result["holdout"], fresh):
+        for s in (block["paper"], block["tuned"]):  # every mean says what it covers
+            assert s["finished"] + s["left_out"] == s["runs"]
+            assert s["finished"] >= s["runs"] - s["diverged"] - s["left_out"]
+    printed = capsys.readouterr().out
+    assert "yang2013 @ limited" in printed and "fresh: pass rate" in printed
+    # given gains: no training, the same held-out paper runs, the gains not given keep the paper's
+    out2 = tmp_path / "given"
+    assert main([*argv, "--gains", "controller.K1=0.004", "--out", str(out2)]) == 0
+    given = json.loads((out2 / "yang2013--limited.json").read_text())
+    assert given["given_gains"] and given["train"] is None and given["J"] is None
+    assert given["tuned_gains"] == {"controller.K1": 0.004, "controller.K2": 0.01}
+    assert given["holdout"]["paper"] == result["holdout"]["paper"]
+    assert given["fresh"]["paper"] == result["fresh"]["paper"]
+    for bad in ("controller.K1", "controller.nope=1", "controller.K1=x"):
+        assert main([*argv, "--gains", bad, "--out", str(tmp_path / "bad")]) == 2, bad
     rank = {
         "limited": [{"method": "yang2013"}, {"method": "lqr"}],
         "unsaturated": [{"method": "yang2013"}],
@@ -288,6 +306,7 @@ def test_tune_command_end_to_end_and_tuned_column(tmp_path, tiny_league, capsys)
     assert tuned_column(rank, out) == 1
     text = rank["limited"][0]["tuned"]
     assert text.startswith("K1 ") and "held-out pass rate" in text and "(paper" in text
+    assert "fresh-seed pass rate" in text
     assert rank["limited"][1]["tuned"] == "not tuned"
     assert rank["unsaturated"][0]["tuned"] == "not tuned"  # tuned at another level
     # a method without a [tune] table: exit code 2, named

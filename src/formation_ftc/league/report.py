@@ -775,11 +775,18 @@ def _tuned_text(result: dict[str, Any] | None) -> str:
         f"{str(k).rpartition('.')[2]} {_fmt(v)}" for k, v in result.get("tuned_gains", {}).items()
     )
     stat = obj.get("statistic", "mean")
+    fresh = result.get("fresh") or {}
+    fresh_text = (
+        f"; fresh-seed pass rate {_fmt(fresh['tuned'].get('pass_rate'))} (paper "
+        f"{_fmt(fresh['paper'].get('pass_rate'))}, {fresh['tuned'].get('runs', '?')} runs)"
+        if fresh
+        else ""
+    )
     return (
         f"{gains}; {stat} {name} {_fmt(tuned.get(f'{name}_{stat}'))} {units} "
         f"(paper {_fmt(paper.get(f'{name}_{stat}'))}); held-out pass rate "
         f"{_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
-        f"{tuned.get('runs', '?')} runs)"
+        f"{tuned.get('runs', '?')} runs){fresh_text}"
     )
 
 
@@ -822,6 +829,7 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
                     "paper_gains": res.get("paper_gains"),
                     "objective": res.get("objective", {}).get("metric"),
                     "holdout": {k: res.get("holdout", {}).get(k) for k in ("paper", "tuned")},
+                    "fresh": {k: (res.get("fresh") or {}).get(k) for k in ("paper", "tuned")},
                     "optimiser": res.get("optimiser", {}).get("name"),
                 }
             )

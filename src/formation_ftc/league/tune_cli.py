@@ -34,6 +34,7 @@ def _cmd_tune(args) -> int:
     step_checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
     quiet = int(getattr(args, "verbosity", 0) or 0) < 0
     journal = journal_path(args.out, args.method, args.level)
+    gains = _gains(args.gains) if args.gains is not None else None
     result = tune_league_method(
         args.league,
         args.method,
@@ -41,7 +42,9 @@ def _cmd_tune(args) -> int:
         cases=cases,
         train_seeds=args.train_seeds,
         holdout_seeds=args.holdout_seeds,
+        fresh_seeds=args.fresh_seeds,
         train_start=args.train_start,
+        gains=gains,
         optimiser=args.optimiser,
         max_evaluations=args.max_evaluations,
         margin=args.margin,
@@ -65,18 +68,25 @@ def _cmd_tune(args) -> int:
         )
         return 0
     obj = result["objective"]["metric"]
-    tr, ho = result["train"], result["holdout"]
+    blocks = (
+        ("training", result["train"]),
+        ("held-out", result["holdout"]),
+        ("fresh", result["fresh"]),
+    )
     print(
         f"{result['method']} @ {result['level']}: {result['optimiser']['name']}, "
         f"{result['optimiser']['evaluations']} evaluations, {wall:.1f} s"
     )
     for path_, v in result["tuned_gains"].items():
         print(f"  {path_}: {result['paper_gains'][path_]:.6g} -> {v:.6g}")
-    for name, s in (("training", tr), ("held-out", ho)):
+    for name, s in blocks:
+        if s is None:
+            continue
         print(
             f"  {name}: pass rate {s['paper']['pass_rate']:.2f} -> {s['tuned']['pass_rate']:.2f}, "
             f"mean {obj} {_fmt(s['paper'][f'{obj}_mean'])} -> {_fmt(s['tuned'][f'{obj}_mean'])} "
-            f"{result['objective']['units']}"
+            f"{result['objective']['units']} (over {s['paper']['finished']} -> "
+            f"{s['tuned']['finished']} of {s['tuned']['runs']} runs: the diverged left out)"
         )
     print(f"wrote {path}")
     return 0
@@ -113,6 +123,25 @@ def _league_step_checks(directory: str) -> dict[str, Any]:
     except ValidationError as exc:
         raise TuneError(f"{what}: {record_error(path, exc, 'step_check')}") from None
     return dict(checks)
+
+
+def _gains(text: str) -> dict[str, float]:
+    """``--gains "controller.k=0.02,controller.lam=35"`` as {path: value}; TuneError naming the item."""
+    from formation_ftc.league.tuning import TuneError
+
+    out: dict[str, float] = {}
+    for item in (t.strip() for t in text.split(",")):
+        path, eq, value = item.partition("=")
+        try:
+            v = float(value)
+        except ValueError:
+            v = float("nan")
+        if not eq or not path.strip() or v != v or abs(v) == float("inf"):
+            raise TuneError(
+                f"--gains: {item!r} is not FIELD=NUMBER (e.g. --gains controller.k=0.02,controller.lam=35)"
+            )
+        out[path.strip()] = v
+    return out
 
 
 def _fmt(v: Any) -> str:
@@ -154,6 +183,20 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--train-seeds", type=int, default=8, help="training replicates per cell")
     p.add_argument("--holdout-seeds", type=int, default=16, help="held-out replicates per cell")
+    p.add_argument(
+        "--fresh-seeds",
+        type=int,
+        default=None,
+        help="replicates per cell neither the league nor the training uses (default: as many as "
+        "--holdout-seeds; 0: none)",
+    )
+    p.add_argument(
+        "--gains",
+        default=None,
+        metavar="FIELD=VALUE,...",
+        help="evaluate these gains against the paper's (held-out and fresh replicates), with no "
+        "training",
+    )
     p.add_argument(
         "--train-start",
         type=int,

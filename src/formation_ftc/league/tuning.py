@@ -633,6 +633,9 @@ def _pass_stats(metrics, bad, requirement, objective: str, idx=slice(None)) -> d
         f"{objective}_mean": float(np.mean(f[fin])) if fin.any() else None,
         f"{objective}_median": float(np.median(f[fin])) if fin.any() else None,
         f"{requirement[0]}_median": float(np.median(m[ok])) if ok.any() else None,
+        # what the mean and the medians cover: the finished runs (a diverged run has no score)
+        "finished": int(np.sum(fin)),
+        "left_out": int(m.size - np.sum(fin)),
     }
 
 
@@ -1015,7 +1018,9 @@ def tune_league_method(
     cases: Sequence[str] | None = None,
     train_seeds: int = 8,
     holdout_seeds: int = 16,
+    fresh_seeds: int | None = None,
     train_start: int = TRAIN_START,
+    gains: Mapping[str, float] | None = None,
     optimiser: str = DEFAULT_OPTIMISER,
     max_evaluations: int = 60,
     margin: float = 0.1,
@@ -1040,7 +1045,13 @@ def tune_league_method(
     the step check and every evaluation are recorded as they complete (:class:`TuneJournal`); a
     tuning of the same problem started again replays them and continues, to the same result;
     ``force`` discards a journal of another problem instead of refusing it. Raises TuneError or
-    LeagueError (exit code 2) naming a bad league, method, level, case, field or option."""
+    LeagueError (exit code 2) naming a bad league, method, level, case, field or option.
+
+    Held out are the league's replicates 0 .. ``holdout_seeds`` - 1 (the leaderboard's own first
+    seeds); ``fresh_seeds`` (default: as many) more are replicates neither the league nor the training
+    uses (from ``max(league seeds, train_start + train_seeds)``): the result's ``fresh`` block.
+    ``gains`` (field path -> value; fields not given keep the paper's): evaluate those gains against
+    the paper's on the held-out and fresh replicates, with no training and no optimiser."""
     import formation_ftc
     from formation_ftc.league.definition import LeagueSpec, league_hash, load_league, method_tune
     from formation_ftc.league.runner import Counter, _battery, _provenance, _step_checks, plan_cells
@@ -1060,6 +1071,9 @@ def tune_league_method(
     if optimiser not in OPTIMISERS:
         raise TuneError(f"--optimiser {optimiser!r}: one of {', '.join(OPTIMISERS)}")
     _check_penalty_options(margin, penalty, violation_cap)  # before any run is built
+    fresh_seeds = holdout_seeds if fresh_seeds is None else fresh_seeds
+    if fresh_seeds < 0:
+        raise TuneError(f"--fresh-seeds {fresh_seeds}: 0 (none) or more")
     if train_start < holdout_seeds:
         raise TuneError(
             f"--train-start {train_start}: the training replicates would overlap the held-out ones "
@@ -1069,6 +1083,12 @@ def tune_league_method(
     req = spec.league.requirement
     requirement = (req.metric, float(req.max))
     fields = [TuneField(p, b.low, b.high, b.log, b.rebuild) for p, b in tune.fields.items()]  # type: ignore[union-attr]  # TuneBounds once validated
+    unknown_gains = sorted(set(gains or {}) - {f.path for f in fields})
+    if unknown_gains:
+        raise TuneError(
+            f"--gains: {unknown_gains} not among the [tune] fields of {method} "
+            f"({', '.join(f.path for f in fields)})"
+        )
     budgets = budgets if budgets is not None else Budgets.resolve()
     planned = plan_cells(spec, [method])
 
@@ -1105,6 +1125,8 @@ def tune_league_method(
             "train_seeds": train_seeds,
             "holdout_seeds": holdout_seeds,
             "train_start": train_start,
+            "fresh_seeds": fresh_seeds,
+            "gains": {k: repr(float(v)) for k, v in (gains or {}).items()} or None,
             "optimiser": optimiser,
             "max_evaluations": max_evaluations,
             "margin": margin,
@@ -1132,61 +1154,97 @@ def tune_league_method(
     t0 = time.perf_counter()
     train = list(range(train_start, train_start + train_seeds))
     held = list(range(holdout_seeds))
-    raws, _ = replicate_raws(spec, method, cells, train)
-    say(
-        f"{method} @ {level}: {len(raws)} training runs ({len(cells)} cells x {train_seeds} "
-        f"seeds), fields {', '.join(f.path for f in fields)}"
-    )
+    fresh_start = max(spec.league.seeds, train_start + train_seeds)
+    fresh = list(range(fresh_start, fresh_start + fresh_seeds))
+    if gains is None:
+        raws, _ = replicate_raws(spec, method, cells, train)
+        say(
+            f"{method} @ {level}: {len(raws)} training runs ({len(cells)} cells x {train_seeds} "
+            f"seeds), fields {', '.join(f.path for f in fields)}"
+        )
+    else:  # no training: the runs of the first held-out batch set the batch layout
+        raws, _ = replicate_raws(spec, method, cells, held[:train_seeds])
+        say(f"{method} @ {level}: evaluating the given gains (no training)")
     problem = build_problem(raws, fields)
     paper = problem.initial.copy()
-    m0, bad0 = evaluate(problem, paper, book)
-    f0 = np.asarray(m0[objective], dtype=float)[~bad0]
-    f0 = f0[np.isfinite(f0)]
-    scale = float(np.mean(f0) if statistic == "mean" else np.median(f0)) if f0.size else 1.0
-    scale = scale if math.isfinite(scale) and scale > 0 else 1.0
-    J = penalised_objective(
-        objective,
-        statistic=statistic,
-        requirement=requirement,
-        margin=margin,
-        penalty=penalty,
-        violation_cap=violation_cap,
-        scale=scale,
-    )
-    with Counter(
-        f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
-    ) as bar:
-        outcome = minimise(
-            problem,
-            J,
-            optimiser=optimiser,
-            max_evaluations=max_evaluations,
-            journal=book,
-            on_evaluation=bar.advance,
+    if gains is None:
+        m0, bad0 = evaluate(problem, paper, book)
+        f0 = np.asarray(m0[objective], dtype=float)[~bad0]
+        f0 = f0[np.isfinite(f0)]
+        scale = float(np.mean(f0) if statistic == "mean" else np.median(f0)) if f0.size else 1.0
+        scale = scale if math.isfinite(scale) and scale > 0 else 1.0
+        J = penalised_objective(
+            objective,
+            statistic=statistic,
+            requirement=requirement,
+            margin=margin,
+            penalty=penalty,
+            violation_cap=violation_cap,
+            scale=scale,
         )
-    say(
-        f"{method}: {optimiser}, {outcome.evaluations} evaluations in {outcome.seconds:.1f} s: "
-        f"J {outcome.initial_value:.4g} -> {outcome.value:.4g}"
-    )
-    m_tr, bad_tr = evaluate(problem, outcome.gains, book)
-    # held-out: the league's own first replicates, in batches laid out as the training batch
-    h_raws, h_labels = [], []
-    for k in range(0, len(held), train_seeds):
-        r, lb = replicate_raws(spec, method, cells, held[k : k + train_seeds])
-        h_raws += r
-        h_labels += lb
-    hold = build_problem(h_raws, fields, like=problem)
-    held_out = {
-        "paper": evaluate(hold, paper, book, "holdout"),
-        "tuned": evaluate(hold, outcome.gains, book, "holdout"),
-    }
-    case_idx = {
-        case: np.asarray([i for i, lb in enumerate(h_labels) if lb["case"] == case])
-        for case in dict.fromkeys(lb["case"] for lb in h_labels)
-    }
+        with Counter(
+            f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
+        ) as bar:
+            outcome = minimise(
+                problem,
+                J,
+                optimiser=optimiser,
+                max_evaluations=max_evaluations,
+                journal=book,
+                on_evaluation=bar.advance,
+            )
+        say(
+            f"{method}: {optimiser}, {outcome.evaluations} evaluations in {outcome.seconds:.1f} s: "
+            f"J {outcome.initial_value:.4g} -> {outcome.value:.4g}"
+        )
+        tuned = np.asarray(outcome.gains, dtype=float)
+        m_tr, bad_tr = evaluate(problem, tuned, book)
+    else:
+        scale = math.nan
+        tuned = np.array(
+            [float((gains or {}).get(f.path, v)) for f, v in zip(fields, paper, strict=True)]
+        )
 
-    def by_case(m, bad):
-        return {c: _pass_stats(m, bad, requirement, objective, i) for c, i in case_idx.items()}
+    def replicates(seeds: list[int], name: str):
+        """Paper and tuned gains on ``seeds`` (batches laid out as the training batch), with the
+        labels of the runs."""
+        h_raws, h_labels = [], []
+        for k in range(0, len(seeds), train_seeds):
+            r, lb = replicate_raws(spec, method, cells, seeds[k : k + train_seeds])
+            h_raws += r
+            h_labels += lb
+        hold = build_problem(h_raws, fields, like=problem)
+        runs = {
+            "paper": evaluate(hold, paper, book, name),
+            "tuned": evaluate(hold, tuned, book, name),
+        }
+        return runs, h_labels
+
+    def block(seeds: list[int], name: str, what: str) -> dict[str, Any]:
+        """Pass statistics of the paper and tuned gains on ``seeds``, over all and per case."""
+        runs, labels = replicates(seeds, name)
+        cases = {
+            case: np.asarray([i for i, lb in enumerate(labels) if lb["case"] == case])
+            for case in dict.fromkeys(lb["case"] for lb in labels)
+        }
+        return {
+            "replicates": [seeds[0], seeds[-1]],
+            "seeds_per_cell": len(seeds),
+            "what": what,
+            **{k: _pass_stats(*mb, requirement, objective) for k, mb in runs.items()},
+            "per_case": {
+                k: {c: _pass_stats(*mb, requirement, objective, i) for c, i in cases.items()}
+                for k, mb in runs.items()
+            },
+        }
+
+    holdout = block(held, "holdout", "the league's own first replicates")
+    fresh_block = (
+        block(fresh, "fresh", "replicates neither the league nor the training uses")
+        if fresh
+        else None
+    )
+    given = gains is not None
 
     return {
         "kind": "formation-ftc tuning",
@@ -1202,7 +1260,8 @@ def tune_league_method(
             for f in fields
         ],
         "paper_gains": {f.path: float(v) for f, v in zip(fields, paper, strict=True)},
-        "tuned_gains": {f.path: float(v) for f, v in zip(fields, outcome.gains, strict=True)},
+        "tuned_gains": {f.path: float(v) for f, v in zip(fields, tuned, strict=True)},
+        "given_gains": given,
         "objective": {
             "metric": objective,
             "statistic": statistic,
@@ -1218,20 +1277,20 @@ def tune_league_method(
             ),
         },
         "requirement": {"metric": requirement[0], "max": requirement[1], "units": req.units},
-        "J": {"paper": outcome.initial_value, "tuned": outcome.value},
-        "train": {
+        "J": None if given else {"paper": outcome.initial_value, "tuned": outcome.value},
+        "train": None
+        if given
+        else {
             "replicates": [train[0], train[-1]],
             "seeds_per_cell": train_seeds,
             "paper": _pass_stats(m0, bad0, requirement, objective),
             "tuned": _pass_stats(m_tr, bad_tr, requirement, objective),
         },
-        "holdout": {
-            "replicates": [held[0], held[-1]],
-            "seeds_per_cell": holdout_seeds,
-            **{k: _pass_stats(*mb, requirement, objective) for k, mb in held_out.items()},
-            "per_case": {k: by_case(*mb) for k, mb in held_out.items()},
-        },
-        "optimiser": {
+        "holdout": holdout,
+        "fresh": fresh_block,
+        "optimiser": {"name": "none (given gains)", "evaluations": 0}
+        if given
+        else {
             "name": optimiser,
             "evaluations": outcome.evaluations,
             "max_evaluations": max_evaluations,
@@ -1316,6 +1375,7 @@ class _Optimiser(_Record):
 class _Holdout(_Record):
     paper: dict[str, float | int | None]
     tuned: dict[str, float | int | None]
+    seeds_per_cell: int | None = None
 
 
 class _TuningRecord(_Record):
@@ -1327,4 +1387,5 @@ class _TuningRecord(_Record):
     paper_gains: dict[str, float]
     objective: _Objective
     holdout: _Holdout
+    fresh: _Holdout | None = None
     optimiser: _Optimiser
