@@ -1231,10 +1231,10 @@ def tune_league_method(
             "replicates": [seeds[0], seeds[-1]],
             "seeds_per_cell": len(seeds),
             "what": what,
-            **{k: _pass_stats(*mb, requirement, objective) for k, mb in runs.items()},
+            **{k: _pass_stats(m, bad, requirement, objective) for k, (m, bad) in runs.items()},
             "per_case": {
-                k: {c: _pass_stats(*mb, requirement, objective, i) for c, i in cases.items()}
-                for k, mb in runs.items()
+                k: {c: _pass_stats(m, bad, requirement, objective, i) for c, i in cases.items()}
+                for k, (m, bad) in runs.items()
             },
         }
 
