@@ -29,7 +29,7 @@ import math
 import tomllib
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
@@ -173,6 +173,18 @@ class Level(StrictModel):
         description="Per-axis limit of every actuator [N or N m]; leave it out for no limit.",
     )
     note: str = Field("", description="Why this limit (shown in the report).")
+    navigation: Literal["raw", "filtered"] = Field(
+        "raw",
+        description="What every law flies on at this level: 'raw' (the sensors' measurement) or "
+        "'filtered' (the league's [navigation_filter]; a method's residual FDI navigates instead, "
+        "with fly_on_filter).",
+    )
+    method_fields_from: str = Field(
+        "",
+        description="The level whose [levels.<name>] fields of the method files apply here (e.g. "
+        "'limited' for 'limited-filtered': the same thrusters, the same flight knowledge); default: "
+        "this level's own name.",
+    )
 
 
 class MethodEntry(StrictModel):
@@ -259,6 +271,11 @@ class LeagueSpec(StrictModel):
         min_length=1, description="Scores computed inside every run."
     )
     methods: list[MethodEntry] = Field(min_length=1, description="The methods ranked.")
+    navigation_filter: dict[str, Any] | None = Field(
+        None,
+        description="The navigation filter of the 'filtered' levels (an [estimator] table, e.g. type "
+        "= 'relative-navigation-filter' with the noise stated for the league's truth).",
+    )
     _source: Path | None = None
 
     @field_validator("levels")
@@ -280,6 +297,19 @@ class LeagueSpec(StrictModel):
             raise ValueError(
                 f"league.requirement.metric = {self.league.requirement.metric!r} is not one of the "
                 f"league's metrics ({', '.join(metric_names)})"
+            )
+        names = [lv.name for lv in self.levels]
+        for lv in self.levels:
+            if lv.method_fields_from and lv.method_fields_from not in names:
+                raise ValueError(
+                    f"levels.{lv.name}.method_fields_from = {lv.method_fields_from!r}: not a level "
+                    f"of the league ({', '.join(names)})"
+                )
+        filtered = [lv.name for lv in self.levels if lv.navigation == "filtered"]
+        if filtered and self.navigation_filter is None:
+            raise ValueError(
+                f"levels {filtered}: navigation = 'filtered' needs the league's [navigation_filter] "
+                "table (the filter every law flies on there)"
             )
         return self
 
@@ -500,7 +530,8 @@ def method_scenario(
     for slot in METHOD_SLOTS:
         if slot in own:
             raw[slot] = copy.deepcopy(own[slot])
-    for fpath, value in own.get("levels", {}).get(level.name, {}).items():  # the level's knowledge
+    known = own.get("levels", {}).get(level.method_fields_from or level.name, {})
+    for fpath, value in known.items():  # the level's knowledge
         slot, _, name = fpath.partition(".")
         raw[slot][name] = copy.deepcopy(value)
     actuator = copy.deepcopy(spec.actuator)
@@ -515,9 +546,38 @@ def method_scenario(
                 f"method {method.name} has no network: a communication fault does not apply"
             )
         raw["network"].update(copy.deepcopy(network_fields))
+    if level.navigation == "filtered":
+        _fly_filtered(spec, method, raw)
     raw["evaluations"] = copy.deepcopy(spec.evaluations)
     raw["metrics"] = copy.deepcopy(spec.metrics)
     return raw
+
+
+def flies_filtered(spec: LeagueSpec, method: MethodEntry) -> bool:
+    """Whether ``method`` can fly on the league's navigation filter: it has no estimator (the filter
+    becomes its estimator) or a residual FDI with a Kalman residual (which then navigates:
+    ``fly_on_filter``). A method with another estimator of its own (an observer) does not."""
+    est = _method_raw(spec, method).get("estimator")
+    return est is None or (est.get("type") == "residual-fdi" and est.get("residual") == "kalman")
+
+
+def _fly_filtered(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any]) -> None:
+    """A filtered level's cell: the law flies on the league's navigation filter (a method without an
+    estimator; the controller's stated ``nominal_mass`` is the filter's) or on its own residual FDI's
+    Kalman filter (``fly_on_filter``)."""
+    if not flies_filtered(spec, method):
+        raise LeagueError(
+            f"method {method.name} has an estimator of its own: it cannot fly on the league's "
+            "navigation filter (a filtered level does not apply to it)"
+        )
+    if "estimator" in raw:
+        raw["estimator"]["fly_on_filter"] = True
+        return
+    est = copy.deepcopy(spec.navigation_filter or {})
+    mass = raw.get("controller", {}).get("nominal_mass")
+    if mass is not None and "nominal_mass" not in est:
+        est["nominal_mass"] = copy.deepcopy(mass)
+    raw["estimator"] = est
 
 
 def _jsonable(obj: Any) -> Any:

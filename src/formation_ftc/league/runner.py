@@ -39,6 +39,7 @@ from formation_ftc.league.definition import (
     LeagueError,
     LeagueSpec,
     MethodEntry,
+    flies_filtered,
     league_hash,
     load_league,
     method_scenario,
@@ -79,6 +80,17 @@ FDI_METRICS: tuple[dict[str, Any], ...] = (
 )  # fmt: skip
 #: the identification scores the league adds to a method whose estimator identifies faults
 #: (identification-scores evaluation, docs/league.md)
+#: the consistency of the navigation filter a law flies on (a filtered level, or a navigating FDI):
+#: NEES and NIS of 6 states against their 95 % chi-square band (``navigation-consistency``)
+NAVIGATION_METRICS: tuple[dict[str, Any], ...] = (
+    # mean NEES over the run and the spacecraft (6 for a consistent filter) [-]
+    {"name": "mean_nees", "signal": "nees", "reduce": "mean", "spacecraft": "mean"},
+    # fraction of the samples whose NEES lies in the 95 % band (0.95 for a consistent filter) [-]
+    {"name": "nees_in_band", "signal": "nees_in_band", "reduce": "mean", "spacecraft": "mean"},
+    # the same of the filter's own normalised innovation squared [-]
+    {"name": "nis_in_band", "signal": "nis_in_band", "reduce": "mean", "spacecraft": "mean"},
+)
+
 IDENTIFICATION_METRICS: tuple[dict[str, Any], ...] = (
     # |identified - true| effectiveness of the faulty channel at the horizon (NaN: not identified) [-]
     {"name": "id_effectiveness_error", "signal": "id_effectiveness_error", "reduce": "last"},
@@ -156,6 +168,8 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 continue
             net_fields = case.network_fields(delayed=delayed) if network else None
             for level in spec.levels:
+                if level.navigation == "filtered" and not flies_filtered(spec, m):
+                    continue  # an estimator of its own: it flies on that (stated in the report)
                 act = case.actuator_fields(saturation=level.saturation, quantity=quantity)
                 raw = method_scenario(spec, m, level, act, net_fields)
                 try:
@@ -181,6 +195,11 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
     from formation_ftc.methods.composed import ComposedScenario, make_loop
 
     loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
+    if "navigation-records" in loop.estimator.provides() and "lvlh-relative-state" in (
+        loop.plant.provides()
+    ):
+        raw["evaluations"] = [*raw.get("evaluations", []), {"type": "navigation-consistency"}]
+        raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in NAVIGATION_METRICS)]
     if not (
         "fdi-records" in loop.estimator.provides()
         and "true-actuator-fault" in loop.actuator.provides()

@@ -172,6 +172,12 @@ CAPABILITIES: dict[str, Capability] = {
         "an estimate that reports a fault detection (estimate['detected'])",
         'estimator type = "residual-fdi"',
     ),
+    "navigation-records": Capability(
+        "the law flies on this estimator's navigation filter, which records its estimate, error "
+        "covariance and normalised innovation squared (navigation_estimate, navigation_covariance, "
+        "navigation_nis)",
+        'estimator type = "relative-navigation-filter", or "residual-fdi" with fly_on_filter = true',
+    ),
     "fault-identification": Capability(
         "an estimate of each actuator channel's effectiveness with its standard deviation and whether it "
         "is identified (estimate['effectiveness'], ['effectiveness_std'], ['identified'])",

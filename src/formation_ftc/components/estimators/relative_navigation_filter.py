@@ -38,7 +38,13 @@ __all__ = [
     "kalman_predict",
     "navigation_conditions",
     "filter_model",
+    "innovation_nis",
+    "NAVIGATION_RECORDS",
 ]
+
+#: the capability of an estimator whose law flies on its filter and that records the filter's estimate,
+#: covariance and normalised innovation squared (the ``navigation-consistency`` evaluation scores them)
+NAVIGATION_RECORDS = "navigation-records"
 
 STATE = ("spacecraft", "component")
 
@@ -73,6 +79,30 @@ def kalman_update(x, p, y, r):
     eye = jnp.eye(p.shape[0])
     p = (eye - gain) @ p @ (eye - gain).T + gain @ r @ gain.T
     return x + (y - x) @ gain.T, 0.5 * (p + p.T)
+
+
+def innovation_nis(innovation, s):
+    """Normalised innovation squared of every spacecraft: ``e_i^T S^-1 e_i`` [-] (chi-square with 6
+    degrees of freedom for a consistent filter).
+
+    Parameters
+    ----------
+    innovation : array, shape (N, 6)
+        Measurement minus predicted state [m, m/s].
+    s : array, shape (6, 6)
+        Its covariance ``P_pred + R``.
+
+    Returns
+    -------
+    array, shape (N,)
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> float(innovation_nis(jnp.ones((1, 6)), 2.0 * jnp.eye(6))[0])
+    3.0
+    """
+    return jnp.einsum("ni,ni->n", innovation, jnp.linalg.solve(s, innovation.T).T)
 
 
 def kalman_predict(x, p, accel, phi, gamma, qd):
@@ -115,12 +145,25 @@ NAVIGATION_SIGNALS = (
         "m, m s-1",
         "the filter's standard deviation of each state component after the update",
     ),
+    Signal(
+        "navigation_covariance",
+        ("component", "component_2"),
+        "m2, m2 s-1, m2 s-2",
+        "the filter's error covariance after the update (one for every spacecraft)",
+    ),
+    Signal(
+        "navigation_nis",
+        ("spacecraft",),
+        "1",
+        "normalised innovation squared of the update (chi-square, 6 degrees of freedom)",
+    ),
 )
 
 
 class NavigationState(NamedTuple):
     x_hat: Any  # (N, 6) estimate [m, m/s]
     p: Any  # (6, 6) error covariance (one model and one noise for every spacecraft)
+    nis: Any  # (N,) normalised innovation squared of the last update [-]
 
 
 @component
@@ -131,8 +174,9 @@ class RelativeNavigationFilter(Estimator):
 
         q_{k+1} = phi q_k + gamma f_k / m_nom + w_k,   w_k ~ N(0, qd)
 
-    driven by the controller's command ``f_k`` [N] held over the step, per unit of the stated nominal
-    mass ``nominal_mass`` (N,) [kg]. At every step: measurement update at t_k (Joseph form), then, after
+    driven by the controller's command ``f_k`` [N] held over the step, clipped to the stated rated
+    thrust ``force_limit`` per axis (what a healthy rated thruster applies; inf: no limit), per unit of
+    the stated nominal mass ``nominal_mass`` (N,) [kg]. At every step: measurement update at t_k (Joseph form), then, after
     the control step, time update to t_{k+1}. It is a navigation filter (``navigation = True``): the
     controller reads its estimate in place of the measurement, held over the step. It starts from the
     first measurement with covariance ``p0``. Records ``navigation_estimate`` (N, 6) and
@@ -147,11 +191,15 @@ class RelativeNavigationFilter(Estimator):
     r: Any  # (6, 6) measurement noise
     p0: Any  # (6, 6) initial covariance
     nominal_mass: Any  # (N,) [kg]
+    force_limit: Any = float("inf")  # rated thrust per axis [N]
 
     navigation = True
 
     def needs(self) -> dict[str, str]:
         return {"translational-state": "estimate the LVLH relative states"}
+
+    def provides(self) -> frozenset[str]:
+        return frozenset({NAVIGATION_RECORDS})
 
     def conditions(self, loop) -> list[Condition]:
         return navigation_conditions(self.phi, self.qd, self.r)
@@ -160,22 +208,27 @@ class RelativeNavigationFilter(Estimator):
         return NAVIGATION_SIGNALS
 
     def initial_state(self, measurement0):
-        return NavigationState(jnp.asarray(measurement0), jnp.asarray(self.p0))
+        y = jnp.asarray(measurement0)
+        return NavigationState(y, jnp.asarray(self.p0), jnp.zeros(y.shape[0]))
 
     def update(self, t, state: NavigationState, inputs: FlightInputs):
-        x, p = kalman_update(state.x_hat, state.p, inputs.measurement, self.r)
-        return NavigationState(x, p), x
+        y = inputs.measurement
+        nis = innovation_nis(y - state.x_hat, state.p + self.r)
+        x, p = kalman_update(state.x_hat, state.p, y, self.r)
+        return NavigationState(x, p, nis), x
 
     def predict(self, t, state: NavigationState, command, dt):
-        accel = command / self.nominal_mass[:, None]
-        return NavigationState(
-            *kalman_predict(state.x_hat, state.p, accel, self.phi, self.gamma, self.qd)
-        )
+        force = jnp.clip(command, -self.force_limit, self.force_limit)
+        accel = force / self.nominal_mass[:, None]
+        x, p = kalman_predict(state.x_hat, state.p, accel, self.phi, self.gamma, self.qd)
+        return NavigationState(x, p, state.nis)
 
     def outputs(self, t, state, estimate):
         return {
             "navigation_estimate": estimate,
             "navigation_sigma": jnp.sqrt(jnp.diagonal(state.p)),
+            "navigation_covariance": state.p,
+            "navigation_nis": state.nis,
         }
 
 
@@ -260,6 +313,12 @@ class RelativeNavigationSection(StrictModel):
             "model error, faults the filter does not know)."
         ),
     )
+    force_limit: float = Field(
+        math.inf,
+        gt=0,
+        description="Rated thrust per axis [N] (flight knowledge): the filter predicts with the "
+        "command clipped to it, the force a healthy rated thruster applies; inf: no limit.",
+    )
     nominal_mass: float | list[float] = Field(
         NOMINAL_MASS,
         description="On-board mass per spacecraft that turns the commanded force into acceleration "
@@ -326,7 +385,9 @@ def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str,
 def _build(sec: RelativeNavigationSection, ctx: BuildContext) -> RelativeNavigationFilter:
     """The filter of a validated ``[estimator] type = "relative-navigation-filter"`` section."""
     arrays = filter_model(sec, ctx)
-    return RelativeNavigationFilter(count=ctx.count, p0=arrays["r"], **arrays)
+    return RelativeNavigationFilter(
+        count=ctx.count, p0=arrays["r"], force_limit=as_float(sec.force_limit), **arrays
+    )
 
 
 register(

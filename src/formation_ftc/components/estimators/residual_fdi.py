@@ -25,9 +25,11 @@ from pydantic import Field, model_validator
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
 from formation_ftc.components.estimators.relative_navigation_filter import (
+    NAVIGATION_RECORDS,
     NAVIGATION_SIGNALS,
     RelativeNavigationSection,
     filter_model,
+    innovation_nis,
     kalman_predict,
     kalman_update,
     navigation_conditions,
@@ -332,9 +334,10 @@ class ResidualFdi(Estimator):
         return {"translational-state": "form its residuals of the LVLH relative states"}
 
     def provides(self) -> frozenset[str]:
-        if self.identification == "rls":
-            return frozenset({"fault-alarm", "fdi-records", "fault-identification"})
-        return frozenset({"fault-alarm", "fdi-records"})
+        out = {"fault-alarm", "fdi-records"}
+        out |= {"fault-identification"} if self.identification == "rls" else set()
+        out |= {NAVIGATION_RECORDS} if self.fly_on_filter else set()
+        return frozenset(out)
 
     def conditions(self, loop) -> list[Condition]:
         """The residual model's assumption about the command, and the navigation model's stability."""
@@ -465,6 +468,7 @@ class ResidualFdi(Estimator):
         estimate = {"detected": new.detected, "isolated": isolated, "statistic": stat}
         if self.fly_on_filter:  # the law reads the filtered state in place of the measurement
             estimate["navigation"] = x_hat
+            estimate["nis"] = innovation_nis(e, S)
         if self.identification == "rls":
             new, identified = self._identify(state, new, y, valid, first & isolated)
             estimate |= identified
@@ -562,6 +566,8 @@ class ResidualFdi(Estimator):
         if self.fly_on_filter:
             out["navigation_estimate"] = estimate["navigation"]
             out["navigation_sigma"] = jnp.sqrt(jnp.diagonal(state.p))
+            out["navigation_covariance"] = state.p
+            out["navigation_nis"] = estimate["nis"]
         if self.identification == "rls":
             out["fdi_effectiveness"] = jnp.where(
                 estimate["identified"], estimate["effectiveness"], jnp.nan

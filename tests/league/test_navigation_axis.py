@@ -1,0 +1,95 @@
+"""The translational league's navigation axis: at the filtered level every law flies on a navigation
+filter (the league's, or its own residual FDI's Kalman filter), gets the level's flight knowledge of
+the same thrusters, and is scored for consistency (NEES, NIS); a method with an observer of its own
+does not fly there; bad definitions are refused naming the field."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+import tomli_w
+
+from formation_ftc.league.definition import LeagueError, load_league
+from formation_ftc.league.runner import NAVIGATION_METRICS, plan_cells, run_league
+
+
+@pytest.fixture(scope="module")
+def cells():
+    return plan_cells(load_league("translational"))
+
+
+def test_every_method_but_the_observer_flies_filtered(cells):
+    spec = load_league("translational")
+    level = next(lv for lv in spec.levels if lv.navigation == "filtered")
+    assert level.saturation == 0.2 and level.method_fields_from == "limited"
+    for name, cs in cells.items():
+        filtered = [c for c in cs if c.level == level.name]
+        if name == "gui2022-lof2tc":  # its iterative learning observer is its estimator
+            assert not filtered
+            continue
+        assert filtered, name
+        est = filtered[0].raw["estimator"]
+        limited = next(c for c in cs if c.level == "limited" and c.case == filtered[0].case)
+        if est["type"] == "residual-fdi":  # its own Kalman filter navigates
+            assert est["fly_on_filter"] is True and est["residual"] == "kalman"
+            # the same flight knowledge of the 0.2 N thrusters as at the limited level
+            assert {k: v for k, v in est.items() if k != "fly_on_filter"} == limited.raw[
+                "estimator"
+            ]
+        else:
+            assert est == spec.navigation_filter
+            assert "estimator" not in limited.raw
+        assert filtered[0].raw["actuator"] == limited.raw["actuator"]
+        assert "navigation-consistency" in [e["type"] for e in filtered[0].raw["evaluations"]]
+        assert {m["name"] for m in NAVIGATION_METRICS} <= {
+            m["name"] for m in filtered[0].raw["metrics"]
+        }
+        assert "navigation-consistency" not in [e["type"] for e in limited.raw["evaluations"]]
+
+
+def test_tiny_league_scores_the_filter(tmp_path, tiny_league):
+    path = tiny_league(tmp_path, methods=("lqr",), filtered=True)
+    out = tmp_path / "out"
+    run_league(path, out, seeds=1, methods=["lqr"])
+    from formation_ftc.league.report import write_leaderboard
+
+    board = write_leaderboard(out, plots=False)
+    assert "limited-filtered" in board["ranking"]
+    runs = pd.read_parquet(out / "leaderboard" / "runs.parquet")
+    filt = runs[runs.level == "limited-filtered"]
+    assert len(filt) and (filt.status == "ok").all()
+    for name in ("mean_nees", "nees_in_band", "nis_in_band"):
+        v = filt[f"metric:{name}"].to_numpy(dtype=float)
+        assert np.isfinite(v).all() and (v >= 0).all(), name
+    assert ((filt["metric:nis_in_band"] >= 0) & (filt["metric:nis_in_band"] <= 1)).all()
+    assert runs[runs.level == "limited"]["metric:mean_nees"].isna().all()
+
+
+def _write(tmp_path, edit) -> str:
+    from formation_ftc.league.definition import builtin_leagues
+
+    src = builtin_leagues()["translational"]
+    raw = tomllib.loads(src.read_text())
+    edit(raw)
+    (tmp_path / "translational").mkdir(exist_ok=True)
+    for m in raw["methods"]:
+        (tmp_path / m["scenario"]).write_text((src.parent / m["scenario"]).read_text())
+    path = tmp_path / "l.toml"
+    path.write_text(tomli_w.dumps(raw))
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda raw: raw.pop("navigation_filter"), r"navigation_filter"),
+        (lambda raw: raw["levels"][2].update(method_fields_from="fast"), r"method_fields_from"),
+        (lambda raw: raw["levels"][2].update(navigation="kalman"), r"navigation"),
+    ],
+)
+def test_bad_navigation_definitions_are_named(tmp_path, edit, message):
+    with pytest.raises(LeagueError, match=message):
+        load_league(_write(tmp_path, edit))
