@@ -140,6 +140,15 @@ HELP: dict[str, tuple[str, list[str]]] = {
             "formation-ftc tune li2020-thm1 --cases none,loe-50 --train-seeds 4 --out out/league/tuned",
         ],
     ),
+    "falsify": (
+        "Search the fault (kind, channel, onset, magnitude), the initial errors and the noise seed of a "
+        "league method for a run that violates the requirement (CMA-ES or random sampling); write it as "
+        "a scenario that `formation-ftc run` replays (docs/falsification.md).",
+        [
+            "formation-ftc falsify lqr --league translational --level limited --out out/falsify",
+            "formation-ftc falsify azizi2009 --level unsaturated --optimizer random --out out/falsify",
+        ],
+    ),
     "campaign list": (
         "List the built-in campaigns (name, then description).",
         ["formation-ftc campaign list", "formation-ftc campaign list --json"],
@@ -872,6 +881,10 @@ _PLUGGED = {
     "tune": (
         "formation_ftc.league.tune_cli",
         "choose a league method's gains for a level, reported on held-out seeds",
+    ),
+    "falsify": (
+        "formation_ftc.league.falsify_cli",
+        "search a league method's faults, initial errors and noise for a violating run",
     ),
 }
 

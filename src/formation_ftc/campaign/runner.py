@@ -287,8 +287,10 @@ def _bound_chunk(
         values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
         bindings = bind_fields(template, values0)
         # the batch needs no time histories (metrics are computed inside the run): one record at the
-        # start and one at the end; trace runs and failed runs are re-run alone with records
-        lean = replace(template, record_every=template.n_steps)
+        # start and one at the end; trace runs and failed runs are re-run alone with records. An STL
+        # requirement is evaluated on the records inside the run: it keeps the scenario's interval
+        stl = any(m.formula is not None for m in template.metrics)
+        lean = template if stl else replace(template, record_every=template.n_steps)
         _BINDINGS[cache_key] = None if bindings is None else (lean, bindings)
     entry = _BINDINGS[cache_key]
     if entry is None:

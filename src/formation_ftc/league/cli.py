@@ -37,6 +37,8 @@ def _cmd_list(args) -> int:
                         "metric": meta.requirement.metric,
                         "max": meta.requirement.max,
                         "units": meta.requirement.units,
+                        "stl": meta.requirement.stl,
+                        "verdict": meta.requirement.verdict,
                     },
                     "units": {"horizon": "s"},
                 }

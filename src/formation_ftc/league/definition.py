@@ -58,12 +58,56 @@ class LeagueError(InputError):
     """A league definition that cannot run (exit code 2); the message names the entry."""
 
 
+#: the metric an STL requirement adds to every run: the robustness of its negation, ``-rho(phi)`` [units
+#: of the atoms], so that a run passes when it is <= 0 (``rho(phi) >= 0``) and lower is better
+STL_VIOLATION = "stl_violation"
+
+
 class Requirement(StrictModel):
     metric: str = Field(
         description="Metric the requirement is stated on (one of the league's metrics)."
     )
     max: float = Field(gt=0, description="Largest value that passes [metric units].")
     units: str = Field("1", description="Units of `max` (UDUNITS).")
+    stl: str | None = Field(
+        None,
+        description="The requirement as a signal temporal logic formula over recorded signals "
+        "(docs/requirements.md), e.g. 'F[0,300](G(shape_error <= 1))': every run records "
+        "stl_violation, minus its robustness.",
+    )
+    verdict: Literal["metric", "stl"] = Field(
+        "metric",
+        description="What passes a run: 'metric' (metric <= max) or 'stl' (robustness >= 0).",
+    )
+
+    @model_validator(mode="after")
+    def _stl(self):
+        if self.stl is not None:
+            from formation_ftc.sim.stl import parse
+
+            parse(self.stl)  # StlError (a ValueError) names the position
+        elif self.verdict == "stl":
+            raise ValueError("league.requirement.verdict = 'stl' needs league.requirement.stl")
+        return self
+
+
+def requirement_of(league: dict[str, Any]) -> tuple[str, float, str]:
+    """``(metric, max, units)`` that pass a run of the ``[league]`` table ``league`` (a dict read from
+    a definition): the stated metric and its bound, or, with ``verdict = "stl"``,
+    (:data:`STL_VIOLATION`, 0, the units).
+
+    Examples
+    --------
+    >>> requirement_of({"requirement": {"metric": "e", "max": 1.0, "units": "m"}})
+    ('e', 1.0, 'm')
+    >>> requirement_of({"requirement": {"metric": "e", "max": 1.0, "units": "m", "stl": "G(e <= 1)",
+    ...                                 "verdict": "stl"}})
+    ('stl_violation', 0.0, 'm')
+    """
+    req = league["requirement"]
+    if req.get("verdict", "metric") == "stl":
+        return STL_VIOLATION, 0.0, str(req.get("units", ""))
+    return str(req["metric"]), float(req["max"]), str(req.get("units", ""))
 
 
 class InitialError(StrictModel):
@@ -292,6 +336,16 @@ class LeagueSpec(StrictModel):
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"methods: duplicate method names {dup}")
+        req = self.league.requirement
+        if req.stl is not None and STL_VIOLATION not in [m.get("name") for m in self.metrics]:
+            self.metrics.append(
+                {
+                    "name": STL_VIOLATION,
+                    "reduce": "stl",
+                    "formula": f"not ({req.stl})",
+                    "units": req.units,
+                }
+            )
         metric_names = [str(m.get("name")) for m in self.metrics]
         if self.league.requirement.metric not in metric_names:
             raise ValueError(

@@ -82,15 +82,19 @@ SCORES = (
     "rms_attitude_error",
     "max_attitude_error",
     "control_impulse",
+    "stl_violation",  # an STL requirement's -robustness (league.definition.STL_VIOLATION)
+    "mean_nees",  # the navigation filter's consistency (league.runner.NAVIGATION_METRICS)
+    "nees_in_band",
+    "nis_in_band",
 )
 
 
 def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
     import tomllib
 
-    league = tomllib.loads(meta["definition"])["league"]
-    req = league["requirement"]
-    return str(req["metric"]), float(req["max"]), str(req.get("units", ""))
+    from formation_ftc.league.definition import requirement_of
+
+    return requirement_of(tomllib.loads(meta["definition"])["league"])
 
 
 def _passed(df: pd.DataFrame, metric: str, limit: float) -> pd.Series:

@@ -36,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 # one atomic write for the package (league/tuning.py imports it from here under this name)
 from formation_ftc.atomic import atomic_write
 from formation_ftc.league.definition import (
+    STL_VIOLATION,
     LeagueError,
     LeagueSpec,
     MethodEntry,
@@ -1049,9 +1050,20 @@ def _step_checks(
                     tolerance=sc.tolerance,
                     max_halvings=sc.max_halvings,
                     # alarm times are on the step grid; identification errors are small estimation
-                    # errors (1e-4 against 3e-4 is no convergence verdict on the physics)
-                    ignore=tuple(
-                        m["name"] for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS)
+                    # errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
+                    # robustness is a margin (its relative change is meaningless near 0; the signals
+                    # it reads are checked as scores); a filter's consistency is a noise statistic
+                    ignore=(
+                        *(
+                            m["name"]
+                            for m in (
+                                *FDI_METRICS,
+                                *IDENTIFICATION_METRICS,
+                                *FLFR_METRICS,
+                                *NAVIGATION_METRICS,
+                            )
+                        ),
+                        STL_VIOLATION,
                     ),
                     on_simulation=on_simulation,
                 ).as_dict()

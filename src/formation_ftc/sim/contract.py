@@ -35,6 +35,8 @@ __all__ = [
 
 #: time reductions: name -> meaning
 REDUCTIONS = {
+    "stl": "robustness of the signal temporal logic formula `formula` on the recorded samples "
+    "(formation_ftc.sim.stl; >= 0: it holds) [units of its atoms]",
     "max": "maximum over the window",
     "min": "minimum over the window",
     "final": "last value in the window",

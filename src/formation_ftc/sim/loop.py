@@ -217,6 +217,16 @@ class ClosedLoop:
             )
         recorded = {sig.name for sig in self.signals()}
         for m in self.metrics:
+            if m.formula is not None:  # an STL requirement: the signals its atoms read
+                from formation_ftc.sim.stl import parse, signals_of
+
+                missing = sorted(signals_of(parse(m.formula)) - recorded)
+                if missing:
+                    raise CompositionError(
+                        f"metric {m.name!r}: the formula reads {', '.join(map(repr, missing))}, "
+                        f"not recorded signals of this loop (signals: {', '.join(sorted(recorded))})"
+                    )
+                continue
             for what, name in (("signal", m.signal), ("gate", m.gate)):
                 if name is not None and name not in recorded:
                     raise CompositionError(
@@ -552,7 +562,7 @@ class ClosedLoop:
             if self._stage_metrics():  # rectangle rule over the step
                 stage_inc = tuple(
                     None if v is None else dt * v
-                    for v in metric_ops.stage_values(self.metrics, stage_signals(outputs))
+                    for v in metric_ops.stage_values(self._streamed, stage_signals(outputs))
                 )
         else:
             k1, outputs = self._evaluate(t_k, z, ctx(0))
@@ -570,7 +580,7 @@ class ClosedLoop:
             # integrals of stage-integrated metrics over the step (RK4 weights)
             if self._stage_metrics():
                 v1, v2, v3, v4 = (
-                    metric_ops.stage_values(self.metrics, stage_signals(o))
+                    metric_ops.stage_values(self._streamed, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
                 )
                 stage_inc = tuple(
@@ -607,12 +617,12 @@ class ClosedLoop:
         """True when a stage-integrated metric reads a signal of an evaluation."""
         names = {sig.name for ev in self.evaluations for sig in ev.signals()}
         return any(
-            m.reduce in metric_ops.STAGE_REDUCTIONS and m.signal in names for m in self.metrics
+            m.reduce in metric_ops.STAGE_REDUCTIONS and m.signal in names for m in self._streamed
         )
 
     def _stage_metrics(self) -> bool:
         """True when a metric is integrated at the integrator's stages (:data:`~.metrics.STAGE_REDUCTIONS`)."""
-        return any(m.reduce in metric_ops.STAGE_REDUCTIONS for m in self.metrics)
+        return any(m.reduce in metric_ops.STAGE_REDUCTIONS for m in self._streamed)
 
     def observe(self, k, state: dict) -> dict:
         """Signals at t_k from the state at t_k: what :meth:`step` computes from t_k -- the same
@@ -663,7 +673,7 @@ class ClosedLoop:
         # single ``observe`` in the loop computes the signals at t0)
         shapes = jax.eval_shape(self.observe, jnp.asarray(0, dtype=jnp.int64), state0)
         acc0 = metric_ops.init_accumulators(
-            self.metrics, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+            self._streamed, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
         )
 
         metric_block = self._metric_block()
@@ -675,25 +685,25 @@ class ClosedLoop:
             stage_inc = outputs.pop(STAGE_INCREMENTS, None)
             if stage_inc is not None:
                 acc = metric_ops.update_stage_accumulators(
-                    self.metrics, acc, self.t0 + k * self.dt, self.dt, stage_inc
+                    self._streamed, acc, self.t0 + k * self.dt, self.dt, stage_inc
                 )
             outputs = self._sample(state, outputs)
             # the sample goes to fold(): the metrics of a block of steps are folded at once
             if folding:
-                return (new, acc), metric_ops.pack_sample(self.metrics, outputs)
+                return (new, acc), metric_ops.pack_sample(self._streamed, outputs)
             acc = metric_ops.update_accumulators(
-                self.metrics, acc, self.t0 + k * self.dt, self.dt, outputs
+                self._streamed, acc, self.t0 + k * self.dt, self.dt, outputs
             )
             return new, acc
 
         def fold(k, carry, samples):
             return carry[0], metric_ops.fold_block(
-                self.metrics,
+                self._streamed,
                 carry[1],
                 k,
                 self.t0,
                 self.dt,
-                metric_ops.unpack_samples(self.metrics, shapes, samples),
+                metric_ops.unpack_samples(self._streamed, shapes, samples),
             )
 
         def observe(k, carry):
@@ -717,7 +727,7 @@ class ClosedLoop:
         # start of the failing record block (the returned snapshot), with no horizon sample
         sig_n = jax.tree_util.tree_map(lambda r: r[-1], out["records"])
         acc_n = metric_ops.update_accumulators(
-            self.metrics, acc, self.t0 + self.n_steps * self.dt, self.dt, sig_n, is_final=True
+            self._streamed, acc, self.t0 + self.n_steps * self.dt, self.dt, sig_n, is_final=True
         )
         reached = out["diverged_step"] < 0
         acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
@@ -726,7 +736,28 @@ class ClosedLoop:
             final=state_n,
             diverged_step=out["diverged_step"],
             last_finite=out["last_finite"],
-            metrics=metric_ops.finalize(self.metrics, acc),
+            metrics=self._with_requirements(metric_ops.finalize(self._streamed, acc), out),
+        )
+
+    @property
+    def _streamed(self) -> tuple:
+        """The metrics folded step by step (every metric but the STL requirements)."""
+        return tuple(m for m in self.metrics if m.formula is None)
+
+    def _with_requirements(self, streamed: Any, out: dict) -> tuple:
+        """The values of every metric in order: the folded ones, and the robustness of each STL
+        requirement (:mod:`formation_ftc.sim.stl`) on the run's records, computed here, inside the
+        compiled run (a campaign keeps the number, not the records). A run that diverged has NaN
+        records after its failure, hence a NaN robustness: it does not pass."""
+        from formation_ftc.sim.stl import parse, robustness
+
+        folded = iter(streamed)
+        step = self.dt * self.record_every
+        return tuple(
+            next(folded)
+            if m.formula is None
+            else robustness(parse(m.formula), out["records"], step)
+            for m in self.metrics
         )
 
     def _metric_block(self) -> int:
@@ -739,7 +770,7 @@ class ClosedLoop:
         metrics' small kernels out of every step, but its vectorised reductions make the program larger
         (longer to compile) and, under ``vmap``, where a step's kernels already serve the whole batch,
         cost more than they save; ``benchmarks/metric_fold.py`` measures both."""
-        if not metric_ops.block_signals(self.metrics):
+        if not metric_ops.block_signals(self._streamed):
             return 1
         if self.metric_block:
             return self.metric_block
@@ -748,7 +779,7 @@ class ClosedLoop:
             for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1)
             if self.record_every % d == 0
         )
-        many = sum(metric_ops.reads_steps(m) for m in self.metrics)
+        many = sum(metric_ops.reads_steps(m) for m in self._streamed)
         if (
             many >= METRIC_FOLD_MIN_METRICS
             and block >= METRIC_FOLD_MIN_BLOCK

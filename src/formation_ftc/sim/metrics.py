@@ -81,6 +81,9 @@ class Metric:
     gate : name of a signal; when given, only the samples at which it is > 0 (true) count, so the
         window may open on an event (e.g. a mode switch). Not for the stage-integrated reductions.
     block : number of steps of a block of :data:`BLOCK_REDUCTIONS` (>= 1; a static structure choice).
+    formula : the signal temporal logic formula of ``reduce = "stl"`` (:mod:`formation_ftc.sim.stl`),
+        evaluated on the run's records by :meth:`~formation_ftc.sim.loop.ClosedLoop.run` (``signal``
+        unused).
     """
 
     name: str = static()
@@ -97,8 +100,18 @@ class Metric:
     component: int | None = static(default=None)
     gate: str | None = static(default=None)
     block: int = static(default=0)
+    formula: str | None = static(default=None)
 
     def __post_init__(self) -> None:
+        if (self.reduce == "stl") != (self.formula is not None):
+            raise ValueError(
+                f"metric {self.name!r}: reduce 'stl' and a formula go together "
+                f"(reduce {self.reduce!r}, formula {self.formula!r})"
+            )
+        if self.formula is not None:
+            from formation_ftc.sim.stl import parse
+
+            parse(self.formula)  # StlError naming the position
         if self.norm_ord not in ("2", "inf"):
             raise ValueError(
                 f"metric {self.name!r}: norm_ord must be '2' or 'inf', got {self.norm_ord!r}"

@@ -95,7 +95,9 @@ class MetricSection(StrictModel):
     name: str = Field(
         description="Metric name (per-spacecraft metrics get _sc1, _sc2, ... appended)."
     )
-    signal: str = Field(description="Name of a recorded signal of the composed loop.")
+    signal: str = Field(
+        "", description="Name of a recorded signal of the composed loop (not with reduce = 'stl')."
+    )
     reduce: str = Field("max", description=f"Time reduction: one of {', '.join(REDUCTIONS)}.")
     norm: bool = Field(False, description="Euclidean norm over the signal's last axis first.")
     spacecraft: str = Field(
@@ -119,11 +121,26 @@ class MetricSection(StrictModel):
             "Block length of the 'block_rms' / 'block_dev_rms' reductions [steps] (>= 1 for those; 0 otherwise)."
         ),
     )
+    formula: str | None = Field(
+        None,
+        description="Signal temporal logic formula of reduce = 'stl', e.g. "
+        "'F[0,300](G(shape_error <= 1))' (docs/requirements.md); the metric is its robustness.",
+    )
 
     @model_validator(mode="after")
     def _known(self):
         if self.reduce not in REDUCTIONS:
             raise ValueError(f"reduce = {self.reduce!r}: must be one of {', '.join(REDUCTIONS)}")
+        if self.reduce == "stl":
+            if self.formula is None:
+                raise ValueError("formula: reduce = 'stl' needs an STL formula")
+            from formation_ftc.sim.stl import parse
+
+            parse(self.formula)  # StlError (a ValueError) names the position
+        elif self.formula is not None:
+            raise ValueError(f"formula: only with reduce = 'stl' (reduce is {self.reduce!r})")
+        elif not self.signal:
+            raise ValueError("signal: required (the recorded signal the metric reduces)")
         if self.reduce in BLOCK_REDUCTIONS and self.block < 1:
             raise ValueError(
                 f"block = {self.block}: reduce = {self.reduce!r} needs a block of >= 1 steps "
@@ -314,6 +331,7 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
                 norm_ord=m.norm_ord,
                 gate=m.gate,
                 block=m.block,
+                formula=m.formula,
             )
             for m in s.metrics
         ),
