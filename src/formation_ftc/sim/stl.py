@@ -183,8 +183,18 @@ class _Parser:
 
 
 def parse(text: str) -> Any:
-    """The syntax tree of an STL formula (:class:`Atom`, :class:`Unary`, :class:`Binary`,
-    :class:`Temporal`); :class:`StlError` naming the position of what does not parse.
+    """The syntax tree of an STL formula; :class:`StlError` naming the position of what does not
+    parse.
+
+    Parameters
+    ----------
+    text : str
+        The formula (grammar in the module docstring).
+
+    Returns
+    -------
+    Atom, Unary, Binary or Temporal
+        Its syntax tree.
 
     Examples
     --------
@@ -206,6 +216,16 @@ def parse(text: str) -> Any:
 
 def signals_of(tree: Any) -> set[str]:
     """The signals a formula's atoms read.
+
+    Parameters
+    ----------
+    tree : Atom, Unary, Binary or Temporal
+        A formula from :func:`parse`.
+
+    Returns
+    -------
+    set of str
+        The signal names.
 
     Examples
     --------
@@ -275,9 +295,21 @@ def _rho(tree: Any, signals: dict[str, Any], step: float):
 
 
 def robustness(tree: Any, signals: dict[str, Any], step: float):
-    """Robustness at the first sample of the formula ``tree`` (from :func:`parse`) over ``signals``
-    (name -> array with the sample axis first, samples ``step`` seconds apart) [units of the atoms];
-    pure JAX (jittable, vmappable).
+    """Robustness of a formula at the first sample; pure JAX (jittable, vmappable).
+
+    Parameters
+    ----------
+    tree : Atom, Unary, Binary or Temporal
+        A formula from :func:`parse`.
+    signals : dict of str to array
+        Recorded signals, the sample axis first (more axes: the worst component counts).
+    step : float
+        Time between samples [s].
+
+    Returns
+    -------
+    jax.Array
+        The robustness [units of the atoms]: >= 0 when the formula holds.
 
     Examples
     --------

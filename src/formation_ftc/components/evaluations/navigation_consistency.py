@@ -32,6 +32,18 @@ STATES = 6
 def chi2_band(confidence: float, dof: int = STATES) -> tuple[float, float]:
     """The two-sided chi-square band that holds ``confidence`` of a consistent filter's NEES or NIS.
 
+    Parameters
+    ----------
+    confidence : float
+        Probability inside the band, in (0, 1) [-].
+    dof : int
+        Degrees of freedom (the filter's states) [-].
+
+    Returns
+    -------
+    tuple of float
+        The band's lower and upper edges [-].
+
     Examples
     --------
     >>> lo, hi = chi2_band(0.95)
