@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.league.definition import STL_VIOLATION, LeagueError, LeagueSpec, load_league
 
 __all__ = ["COORDINATES", "FALSIFIABLE_KINDS", "candidate_raw", "falsify", "FalsifyResult"]
@@ -53,15 +54,8 @@ COORDINATES = (
     "initial_error",
     "noise",
 )
-#: actuator fault kinds the search draws (the battery's names)
-FALSIFIABLE_KINDS = (
-    "loss_of_effectiveness",
-    "bias",
-    "stuck",
-    "outage",
-    "intermittent",
-    "degrading",
-)
+#: actuator fault kinds the search draws: every kind of the fault-battery actuator but "none"
+FALSIFIABLE_KINDS = FAULT_KINDS[1:]
 SEEDS = 2**31
 
 

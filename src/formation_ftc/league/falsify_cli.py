@@ -102,15 +102,12 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     200
     """
     from formation_ftc.exitcodes import add_json_option
+    from formation_ftc.league.tune_cli import add_method_arguments
 
     p = subparsers.add_parser(
         "falsify", help="search a league method for a run that violates the requirement"
     )
-    p.add_argument("method", metavar="METHOD", help="league method")
-    p.add_argument(
-        "--league", default="translational", help="built-in league name or league TOML file"
-    )
-    p.add_argument("--level", default="limited", help="actuator level (default: limited)")
+    add_method_arguments(p, "league method")
     p.add_argument(
         "--out", required=True, help="directory of the result and the falsifying scenario"
     )
@@ -119,12 +116,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the optimiser (default 0)")
     p.add_argument(
         "--optimizer", choices=("cma", "random"), default="cma", help="CMA-ES or uniform sampling"
-    )
-    p.add_argument(
-        "--step-check-from",
-        metavar="LEAGUE_DIR",
-        default=None,
-        help="reuse the step check a league run recorded (default: run it, as `league run` does)",
     )
     add_json_option(p)
     p.set_defaults(func=_cmd_falsify)

@@ -144,6 +144,22 @@ def _gains(text: str) -> dict[str, float]:
     return out
 
 
+def add_method_arguments(p: argparse.ArgumentParser, method_help: str) -> None:
+    """The arguments naming one league method and level (``tune`` and ``falsify``): METHOD,
+    ``--league``, ``--level`` and ``--step-check-from``."""
+    p.add_argument("method", metavar="METHOD", help=method_help)
+    p.add_argument(
+        "--league", default="translational", help="built-in league name or league TOML file"
+    )
+    p.add_argument("--level", default="limited", help="actuator level (default: limited)")
+    p.add_argument(
+        "--step-check-from",
+        metavar="LEAGUE_DIR",
+        default=None,
+        help="reuse the step check a league run recorded (default: run it, as `league run` does)",
+    )
+
+
 def _fmt(v: Any) -> str:
     return "-" if v is None else format(v, ".4g")
 
@@ -165,11 +181,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "tune", help="choose a league method's gains (its [tune] fields) and report them held out"
     )
-    p.add_argument("method", metavar="METHOD", help="league method with a [tune] table")
-    p.add_argument(
-        "--league", default="translational", help="built-in league name or league TOML file"
-    )
-    p.add_argument("--level", default="limited", help="actuator level (default: limited)")
+    add_method_arguments(p, "league method with a [tune] table")
     p.add_argument(
         "--out",
         required=True,
@@ -216,12 +228,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         type=float,
         default=1.0,
         help="largest relative violation one run counts (inf: no cap)",
-    )
-    p.add_argument(
-        "--step-check-from",
-        metavar="LEAGUE_DIR",
-        default=None,
-        help="reuse the step check a league run recorded (default: run it, as `league run` does)",
     )
     p.add_argument(
         "--force",
