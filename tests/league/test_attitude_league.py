@@ -35,7 +35,7 @@ def cells(spec):
 def test_definition_loads(spec):
     assert "attitude" in builtin_leagues()
     assert spec.league.kind == "attitude"
-    assert [m.name for m in spec.methods] == ["mehrabian", "yang2013", "pd"]
+    assert [m.name for m in spec.methods] == ["mehrabian", "mehrabian-active", "yang2013", "pd"]
     assert spec.truth["type"] == "attitude-truth" and spec.truth["state_frame"] == "lvlh"
     assert [lv.saturation for lv in spec.levels] == [None, 0.1]
     assert spec.league.requirement.metric == "rms_attitude_error"
@@ -43,7 +43,7 @@ def test_definition_loads(spec):
 
 def test_every_cell_validates_with_the_battery_and_level(spec, cells):
     battery = load_battery(spec.league.battery)
-    assert set(cells) == {"mehrabian", "yang2013", "pd"}
+    assert set(cells) == {"mehrabian", "mehrabian-active", "yang2013", "pd"}
     for name, mcells in cells.items():
         # no method has a [network]: the communication cases do not apply, the actuator cases all do
         assert sorted({c.case for c in mcells}) == sorted(ACTUATOR_CASES), name
@@ -56,10 +56,11 @@ def test_every_cell_validates_with_the_battery_and_level(spec, cells):
                 c.case == "bias"
             ):  # torque magnitudes of the battery: 0.5 N m, or half the 0.1 N m limit
                 assert act["bias"] == pytest.approx(0.05 if c.level == "limited" else 0.5)
-            assert act.get("euler_allocation", False) is (name == "mehrabian")
+            assert act.get("euler_allocation", False) is name.startswith("mehrabian")
             assert c.raw["plant"] == spec.truth and c.raw["simulation"]["horizon"] == 300.0
             # the league scores a method's fault detector (mehrabian's) with fdi-scores too
             fdi = ["fdi-scores"] if name == "mehrabian" else []
+            fdi = ["fdi-scores", "identification-scores"] if name == "mehrabian-active" else fdi
             assert [e["type"] for e in c.raw["evaluations"]] == ["attitude-scores", *fdi]
     mehrabian = cells["mehrabian"][0].raw
     assert mehrabian["sensors"]["type"] == "quaternion-euler"

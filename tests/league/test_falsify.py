@@ -77,3 +77,38 @@ def test_bad_input_is_refused(tmp_path, tiny_league, capsys, extra, message):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
     assert main(["falsify", "nope", "--league", str(league), "--out", str(tmp_path / "o")]) == 2
+
+
+def test_kind_and_min_magnitude_bracket_the_breaking_severity(tmp_path, tiny_league, capsys):
+    """``--kind`` restricts the search; ``--min-magnitude`` brackets each kind's smallest breaking
+    severity at its worst run: the bracket's ends are samples of the opposite verdicts, and a sample
+    replayed alone (a single compiled run, not the batch) has the same robustness, bit for bit."""
+    from formation_ftc.league.falsify import _raw_of, _with_severity
+
+    league = tiny_league(tmp_path, methods=("lqr",))
+    out = tmp_path / "m"
+    argv = ["falsify", "lqr", "--league", str(league), "--level", "limited", "--out", str(out)]
+    extra = ["--kind", "loss_of_effectiveness,stuck", "--min-magnitude", "--rounds", "2"]
+    assert main([*argv, "--budget", "4", "--population", "4", "--optimizer", "random", *extra]) == 0
+    assert "loss_of_effectiveness: lost effectiveness" in capsys.readouterr().out
+    rec = json.loads(next(out.glob("*.json")).read_text())
+    assert set(rec["kinds"]) <= {"loss_of_effectiveness", "stuck"}
+    by_kind = {m["kind"]: m for m in rec["min_magnitude"]}
+    assert set(by_kind) == {"loss_of_effectiveness", "stuck"}
+    assert by_kind["stuck"]["severity"] is None  # no magnitude
+    loe = by_kind["loss_of_effectiveness"]
+    samples = dict(map(tuple, loe["samples"]))
+    assert 4 <= loe["runs"] == len(samples) <= 8
+    if loe["largest_holding"] is not None:
+        assert samples[loe["largest_holding"]] >= 0
+    if loe["smallest_violating"] is not None:
+        assert samples[loe["smallest_violating"]] < 0
+    s, rho = next(iter(samples.items()))
+    spec = load_league(league)
+    cells = {c.fault_kind: c for c in plan_cells(spec, ["lqr"])["lqr"] if c.level == "limited"}
+    fault = rec["worst_by_kind"]["loss_of_effectiveness"]["fault"]  # drawn by this seed's search
+    raw = _with_severity(_raw_of(spec, cells, fault), fault, s)
+    _, metrics = api.simulate_with_metrics(api.load_scenario(raw), raise_on_divergence=False)
+    assert -metrics["stl_violation"] == rho
+    assert main([*argv, "--kind", "nope"]) == 2
+    assert "--kind 'nope'" in capsys.readouterr().err

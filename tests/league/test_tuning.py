@@ -236,7 +236,7 @@ def test_builtin_tune_tables_validate():
     assert all(t is not None for t in tables.values())  # every translational method is tunable
     attitude = load_league("attitude")
     tuned = {m.name for m in attitude.methods if method_tune(attitude, m) is not None}
-    assert tuned == {"mehrabian", "pd", "yang2013"}
+    assert tuned == {"mehrabian", "mehrabian-active", "pd", "yang2013"}
 
 
 def test_replicates_are_paired_and_drawn_as_the_league_draws_them(tmp_path, tiny_league):

@@ -21,7 +21,17 @@ The robustness of a run is that of the league's STL requirement when it states o
 compiled program each, padded to the population size), so the search compiles a handful of programs,
 not one per run. The optimiser is CMA-ES (``cma``, bounded to the cube) or uniform random sampling
 (the baseline of the ARCH-COMP falsification competition); both stop at the first violation
-(robustness < 0) or at the run budget, and report the runs to it.
+(robustness < 0) or at the run budget, and report the runs to it. ``kinds`` restricts the search to
+some fault kinds (one kind: a search per kind, without the relaxed categorical coordinate).
+
+The smallest magnitude that breaks the law (:func:`min_magnitudes`): per fault kind, at the kind's
+lowest-robustness run of the search (its channel, onset and seeds; a seeded random one for a kind the
+search did not draw), the fault's severity ``s`` in [0, 1] (:data:`SEVERITY`: the lost effectiveness
+``1 - effectiveness``, the bias as a fraction of the level's limit with the sign found, the off-fraction
+``1 - duty`` of an intermittent fault, the depth ``1 - min_effectiveness`` of a degrading one) is
+bracketed by a section search: a population of severities evenly spaced over the bracket, one vmapped
+batch each round, the bracket narrowed to the interval where the robustness first turns negative. It
+assumes the robustness falls as the severity grows, and says so where the samples contradict it.
 """
 
 from __future__ import annotations
@@ -37,7 +47,15 @@ import numpy as np
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.league.definition import STL_VIOLATION, LeagueError, LeagueSpec, load_league
 
-__all__ = ["COORDINATES", "FALSIFIABLE_KINDS", "candidate_raw", "falsify", "FalsifyResult"]
+__all__ = [
+    "COORDINATES",
+    "FALSIFIABLE_KINDS",
+    "SEVERITY",
+    "candidate_raw",
+    "falsify",
+    "FalsifyResult",
+    "min_magnitudes",
+]
 
 #: the cube's coordinates, in order
 COORDINATES = (
@@ -57,6 +75,13 @@ COORDINATES = (
 #: actuator fault kinds the search draws: every kind of the fault-battery actuator but "none"
 FALSIFIABLE_KINDS = FAULT_KINDS[1:]
 SEEDS = 2**31
+#: the severity s in [0, 1] of a fault kind with a magnitude: (what s is, the actuator field it sets)
+SEVERITY = {
+    "loss_of_effectiveness": ("lost effectiveness 1 - effectiveness", "effectiveness"),
+    "bias": ("bias as a fraction of the level's per-axis limit (1 N unsaturated)", "bias"),
+    "intermittent": ("off-fraction 1 - duty of each period", "duty"),
+    "degrading": ("depth 1 - min_effectiveness", "min_effectiveness"),
+}
 
 
 def _pick(u: float, n: int) -> int:
@@ -69,6 +94,39 @@ def _mix(lo: float, hi: float, u: float, log: bool = False) -> float:
     return float(lo + u * (hi - lo))
 
 
+def _bias_limit(actuator: dict[str, Any]) -> float:
+    """The largest bias searched: the level's per-axis limit, or the battery's 1 N unsaturated."""
+    limit = actuator.get("saturation")
+    return float(limit) if limit is not None else 1.0
+
+
+def _with_severity(raw: dict[str, Any], fault: dict[str, Any], s: float) -> dict[str, Any]:
+    """``raw`` (a candidate of kind ``fault["kind"]``) with the fault's severity set to ``s``."""
+    raw = copy.deepcopy(raw)
+    act, kind = raw["actuator"], fault["kind"]
+    if kind == "bias":
+        act["bias"] = math.copysign(s * _bias_limit(act), fault.get("bias", 1.0) or 1.0)
+    else:
+        act[SEVERITY[kind][1]] = 1.0 - s
+    return raw
+
+
+def _raw_of(spec: LeagueSpec, cells: dict[str, Any], fault: dict[str, Any]) -> dict[str, Any]:
+    """The scenario of a drawn ``fault`` (kind, channel, onset, magnitudes, seeds) on its kind's cell."""
+    if spec.league.onset.field != "actuator.onset":
+        raise LeagueError(
+            f"league.onset.field = {spec.league.onset.field!r}: falsify needs actuator.onset"
+        )
+    raw = copy.deepcopy(cells[fault["kind"]].raw)
+    raw["actuator"].update(
+        {k: v for k, v in fault.items() if k not in ("kind", "initial_error_seed", "noise_seed")}
+    )
+    field = str(spec.league.initial_error.seed_field).removeprefix("plant.")
+    raw["plant"][field] = fault["initial_error_seed"]
+    raw["simulation"]["seed"] = fault["noise_seed"]
+    return raw
+
+
 def candidate_raw(
     spec: LeagueSpec, cells: dict[str, Any], level: str, u: np.ndarray
 ) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -78,8 +136,7 @@ def candidate_raw(
     x = dict(zip(COORDINATES, u, strict=True))
     kinds = [k for k in FALSIFIABLE_KINDS if k in cells]
     kind = kinds[_pick(x["kind"], len(kinds))]
-    raw = copy.deepcopy(cells[kind].raw)
-    act = raw["actuator"]
+    act = cells[kind].raw["actuator"]
     n = len(spec.truth.get("mass", [])) or len(spec.truth.get("initial_attitude_deg", [])) or 4
     on = spec.league.onset
     fault: dict[str, Any] = {
@@ -88,8 +145,7 @@ def candidate_raw(
         "axis": _pick(x["axis"], 3),
         "onset": _mix(on.low, on.high, x["onset"]),
     }
-    limit = act.get("saturation")
-    bias = float(limit) if limit is not None else 1.0  # the level's limit, or the battery's 1 N
+    bias = _bias_limit(act)
     if kind == "loss_of_effectiveness":
         fault["effectiveness"] = _mix(0.0, 1.0, x["effectiveness"])
     elif kind == "bias":
@@ -100,19 +156,9 @@ def candidate_raw(
     elif kind == "degrading":
         fault["rate"] = _mix(1e-4, 1e-2, x["rate"], log=True)
         fault["min_effectiveness"] = _mix(0.0, 1.0, x["min_effectiveness"])
-    act.update({k: v for k, v in fault.items() if k != "kind"})
-    seeds = {
-        "initial_error_seed": _pick(x["initial_error"], SEEDS),
-        "noise_seed": _pick(x["noise"], SEEDS),
-    }
-    field = str(spec.league.initial_error.seed_field).removeprefix("plant.")
-    raw["plant"][field] = seeds["initial_error_seed"]
-    raw["simulation"]["seed"] = seeds["noise_seed"]
-    if spec.league.onset.field != "actuator.onset":
-        raise LeagueError(
-            f"league.onset.field = {spec.league.onset.field!r}: falsify needs actuator.onset"
-        )
-    return raw, {**fault, **seeds}
+    fault["initial_error_seed"] = _pick(x["initial_error"], SEEDS)
+    fault["noise_seed"] = _pick(x["noise"], SEEDS)
+    return _raw_of(spec, cells, fault), fault
 
 
 def _robustness(spec: LeagueSpec, metrics: dict[str, float], diverged: bool) -> float:
@@ -127,12 +173,18 @@ def _robustness(spec: LeagueSpec, metrics: dict[str, float], diverged: bool) -> 
 def _evaluate(spec, cells, level, points: np.ndarray, size: int) -> list[tuple[float, dict, dict]]:
     """(robustness, fault, raw) of every point, in order: one vmapped batch per fault kind, padded to
     ``size`` runs (the same compiled program for every population)."""
+    return _run_candidates(spec, [candidate_raw(spec, cells, level, p) for p in points], size)
+
+
+def _run_candidates(
+    spec, built: list[tuple[dict, dict]], size: int
+) -> list[tuple[float, dict, dict]]:
+    """(robustness, fault, raw) of every (raw, fault), batched by fault kind (padded to ``size``)."""
     import jax
 
     from formation_ftc import api
     from formation_ftc.sim.batch import batched_run, stack_params
 
-    built = [candidate_raw(spec, cells, level, p) for p in points]
     out: list[Any] = [None] * len(built)
     groups: dict[str, list[int]] = {}
     for i, (_, fault) in enumerate(built):
@@ -153,7 +205,9 @@ def _evaluate(spec, cells, level, points: np.ndarray, size: int) -> list[tuple[f
 class FalsifyResult:
     """What a search found: ``found`` (a violation), ``runs`` (evaluated), ``runs_to_violation``
     (None when none was found), the ``best`` robustness, its ``fault`` and scenario ``raw``, and the
-    ``history`` of (runs, best robustness) after every population."""
+    ``history`` of (runs, best robustness) after every population; ``worst`` the lowest robustness
+    per fault kind drawn (robustness, fault); ``magnitudes`` the smallest breaking magnitude per kind
+    (:func:`min_magnitudes`) when asked for."""
 
     method: str
     level: str
@@ -168,6 +222,8 @@ class FalsifyResult:
     raw: dict[str, Any]
     history: list[tuple[int, float]]
     seconds: float
+    worst: dict[str, tuple[float, dict[str, Any]]]
+    magnitudes: list[dict[str, Any]] | None = None
 
 
 def falsify(
@@ -180,11 +236,16 @@ def falsify(
     optimizer: str = "cma",
     population: int = 8,
     step_checks: dict[str, Any] | None = None,
+    kinds: list[str] | None = None,
+    min_magnitude: bool = False,
+    rounds: int = 3,
 ) -> FalsifyResult:
     """Search ``method`` at ``level`` of ``league`` for a run that violates the requirement, with at
     most ``budget`` runs (``population`` per batch), by CMA-ES from a random point (step 0.3) or
     uniform random sampling; ``seed`` seeds the optimiser. ``step_checks`` (a league's ``league.json``
-    record): fly the method at the step its league check chose (default: run the check)."""
+    record): fly the method at the step its league check chose (default: run the check). ``kinds``:
+    search only these fault kinds. ``min_magnitude``: then bracket each kind's smallest breaking
+    severity in ``rounds`` section rounds (:func:`min_magnitudes`; its runs are not in ``runs``)."""
     from formation_ftc.league.runner import _step_checks, plan_cells
 
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -208,6 +269,12 @@ def falsify(
     cells = {c.fault_kind: c for c in planned[method] if c.level == level}
     if not any(k in cells for k in FALSIFIABLE_KINDS):
         raise LeagueError(f"method {method} has no actuator-fault cell at level {level}")
+    if kinds:
+        allowed = [k for k in FALSIFIABLE_KINDS if k in cells]
+        wrong = [k for k in kinds if k not in allowed]
+        if wrong:
+            raise LeagueError(f"--kind {wrong[0]!r}: one of {', '.join(allowed)}")
+        cells = {k: c for k, c in cells.items() if k in kinds}
     rng = np.random.default_rng(seed)
     es = None
     if optimizer == "cma":
@@ -224,6 +291,7 @@ def falsify(
     runs, first = 0, None
     best: tuple[float, dict[str, Any], dict[str, Any]] = (math.inf, {}, {})
     history: list[tuple[int, float]] = []
+    worst: dict[str, tuple[float, dict[str, Any]]] = {}
     while runs < budget and first is None:
         n = min(population, budget - runs)
         if es is not None:
@@ -234,6 +302,8 @@ def falsify(
         for k, (rho, fault, raw) in enumerate(results):
             if rho < best[0] or not best[1]:
                 best = (rho, fault, raw)
+            if fault["kind"] not in worst or rho < worst[fault["kind"]][0]:
+                worst[fault["kind"]] = (rho, fault)
             if rho < 0 and first is None:
                 first = runs + k + 1
         runs += n
@@ -255,4 +325,87 @@ def falsify(
         raw=best[2],
         history=history,
         seconds=time.perf_counter() - t0,
+        worst=worst,
+        magnitudes=(
+            min_magnitudes(spec, cells, level, worst, population, rounds, seed)
+            if min_magnitude
+            else None
+        ),
     )
+
+
+def min_magnitudes(
+    spec: LeagueSpec,
+    cells: dict[str, Any],
+    level: str,
+    worst: dict[str, tuple[float, dict[str, Any]]],
+    population: int = 8,
+    rounds: int = 3,
+    seed: int = 0,
+) -> list[dict[str, Any]]:
+    """The smallest severity (:data:`SEVERITY`) of each fault kind of ``cells`` that breaks the law, at
+    the kind's worst run in ``worst`` (kind -> (robustness, fault)); a kind not in ``worst`` at a seeded
+    random run of it. Per kind a dict: ``kind``, ``severity`` (what it is), ``largest_holding`` and
+    ``smallest_violating`` (the bracket; None where no sampled severity held / broke), ``resolution``,
+    ``monotone`` (the samples' robustness never rose back above 0 past a violation), ``at`` (the
+    fault's channel, onset and seeds), ``runs`` and the ``samples`` (severity, robustness). A kind
+    without a magnitude (stuck, outage) gets its worst run's robustness only."""
+    rng = np.random.default_rng(seed)
+    out: list[dict[str, Any]] = []
+    for kind in (k for k in FALSIFIABLE_KINDS if k in cells):
+        if kind in worst:
+            rho, fault = worst[kind]
+            raw = _raw_of(spec, cells, fault)
+        else:  # a seeded random run of this kind
+            raw, fault = candidate_raw(
+                spec, {kind: cells[kind]}, level, rng.random(len(COORDINATES))
+            )
+            rho = math.nan
+        at = {
+            k: fault[k] for k in ("spacecraft", "axis", "onset", "initial_error_seed", "noise_seed")
+        }
+        if kind not in SEVERITY:
+            out.append({"kind": kind, "severity": None, "at": at, "robustness": rho, "runs": 0})
+            continue
+        a, b = 0.0, 1.0  # the bracket searched
+        lo: float | None = None  # the result: largest holding, smallest violating severity
+        hi: float | None = None
+        samples: list[tuple[float, float]] = []
+        for r in range(rounds):
+            # the first round includes the ends; later ones the interior of the bracket
+            grid = (
+                np.linspace(a, b, population) if r == 0 else np.linspace(a, b, population + 2)[1:-1]
+            )
+            res = _run_candidates(
+                spec, [(_with_severity(raw, fault, float(x)), fault) for x in grid], population
+            )
+            samples += [(float(x), rb) for x, (rb, _, _) in zip(grid, res, strict=True)]
+            ordered = sorted(samples)
+            broke = [x for x, rb in ordered if rb < 0]
+            if not broke:
+                lo, hi = ordered[-1][0], None
+                break
+            first_bad = broke[0]
+            held = [x for x, rb in ordered if rb >= 0 and x < first_bad]
+            if not held:
+                lo, hi = None, first_bad
+                break
+            a, b = held[-1], first_bad
+            lo, hi = a, b
+        ordered = sorted(samples)
+        bad_at = [x for x, rb in ordered if rb < 0]
+        monotone = not bad_at or all(rb < 0 for x, rb in ordered if x >= bad_at[0])
+        out.append(
+            {
+                "kind": kind,
+                "severity": SEVERITY[kind][0],
+                "largest_holding": lo,
+                "smallest_violating": hi,
+                "resolution": None if lo is None or hi is None else hi - lo,
+                "monotone": monotone,
+                "at": at,
+                "runs": len(samples),
+                "samples": ordered,
+            }
+        )
+    return out

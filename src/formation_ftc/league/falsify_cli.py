@@ -38,6 +38,9 @@ def _cmd_falsify(args) -> int:
         optimizer=args.optimizer,
         population=args.population,
         step_checks=checks,
+        kinds=[k for k in (args.kind or "").split(",") if k] or None,
+        min_magnitude=args.min_magnitude,
+        rounds=args.rounds,
     )
     stem = f"{args.method}--{args.level}--{args.optimizer}-{args.seed}"
     try:
@@ -65,6 +68,12 @@ def _cmd_falsify(args) -> int:
             "robustness": res.best if math.isfinite(res.best) else None,
             "diverged": res.best == -math.inf,
             "fault": res.fault,
+            "kinds": sorted({*res.worst}),
+            "worst_by_kind": {
+                k: {"robustness": rb if math.isfinite(rb) else None, "fault": f}
+                for k, (rb, f) in res.worst.items()
+            },
+            "min_magnitude": res.magnitudes,
             "scenario": str(scenario),
             "history": res.history,
             "seconds": res.seconds,
@@ -87,6 +96,20 @@ def _cmd_falsify(args) -> int:
         f"robustness {res.best:.4g}: {res.fault}",
         file=sys.stdout,
     )
+    for m in res.magnitudes or ():
+        if m["severity"] is None:
+            print(f"  {m['kind']}: no magnitude; robustness {m['robustness']:.4g} at its worst run")
+            continue
+        lo, hi = m["largest_holding"], m["smallest_violating"]
+        bracket = (
+            f"holds up to {lo:.3g}"
+            if hi is None
+            else f"breaks with no fault (at {hi:.3g})"
+            if lo is None
+            else f"breaks between {lo:.3g} and {hi:.3g}"
+        )
+        shape = "" if m["monotone"] else " (robustness not monotone in the samples)"
+        print(f"  {m['kind']}: {m['severity']} {bracket}{shape}, at {m['at']}")
     print(f"wrote {scenario} (replay: formation-ftc run {scenario}) and {result}")
     return 0
 
@@ -116,6 +139,18 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the optimiser (default 0)")
     p.add_argument(
         "--optimizer", choices=("cma", "random"), default="cma", help="CMA-ES or uniform sampling"
+    )
+    p.add_argument(
+        "--kind",
+        help="comma-separated fault kinds to search (default every actuator kind of the battery)",
+    )
+    p.add_argument(
+        "--min-magnitude",
+        action="store_true",
+        help="then the smallest breaking severity of each kind, at its worst run found",
+    )
+    p.add_argument(
+        "--rounds", type=int, default=3, help="section rounds of --min-magnitude (default 3)"
     )
     add_json_option(p)
     p.set_defaults(func=_cmd_falsify)

@@ -30,6 +30,8 @@ Fault compensation on the channels the FDI flags (18)-(19), (26) [E003-06: (26) 
     u^_dot_{p,j}   = sigma_{p,j} s_{p,j} - e_{p,j} (u^_{p,j} - u*_{p,j}(t))
 
 Unflagged channels have Gamma = 0 and a frozen estimate (u^ = 0 before the FDI activates).
+A stated excitation (:func:`excitation`, ``excitation_amplitude`` > 0; default none) may be added to
+the command, so that an identifying FDI can identify each channel's effectiveness on a settled hold.
 Everything is pure jax.numpy over arrays (m, k); the neighbour average uses the row-normalised
 adjacency ``avg = D_deg^-1 A`` (the 1/|N_j| of (8)).
 
@@ -92,6 +94,7 @@ __all__ = [
     "adaptation_rate",
     "control",
     "modal_damping",
+    "excitation",
 ]
 
 
@@ -326,6 +329,40 @@ def control(q, qdot, z, u_hat, flag, e, e_dot, e_ddot, J_hat, p, cfg: ELHinfConf
     return ELHinfOutput(u=u, s=err.s, q_tilde=err.q_tilde, tau_sync=tau_sync, gamma_comp=gamma_comp)
 
 
+def excitation(t, amplitude, period):
+    """A stated persistent excitation of the three generalised channels [N m]::
+
+        d_p(t) = amplitude sin(2 pi t / period + 2 pi p / 3),     p = 0, 1, 2
+
+    (phases a third of a period apart: the channels are excited at every instant, never all at their
+    peak). It makes a loss of effectiveness on a settled hold, whose torque is almost zero, observable
+    to an identifying FDI.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    amplitude : float
+        Amplitude [N m].
+    period : float
+        Period [s].
+
+    Returns
+    -------
+    jax.Array, shape (3,)
+        The torque added to every spacecraft's command [N m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.components.controllers.networked_el_hinf import excitation
+    >>> np.round(np.asarray(excitation(0.0, 0.01, 10.0)), 5).tolist()
+    [0.0, 0.00866, -0.00866]
+    """
+    phase = 2.0 * jnp.pi * (t / period + jnp.arange(3) / 3.0)
+    return amplitude * jnp.sin(phase)
+
+
 def modal_damping(K, alpha, gamma, mu, law: str = "literal"):
     """Damping of the s-dynamics ``D s_dot = tau`` (exact model, no fault) along an eigenvector of the
     row-normalised adjacency with eigenvalue ``mu`` in [-1, 1] (mu = 1: consensus direction) [N m s].
@@ -401,6 +438,9 @@ class NetworkedElHinfController(Controller):
     compensation: Literal["sat", "sign", "certainty_equivalence"] = static(default="sat")
     desired_attitude: tuple[str, str, str] = static(default=("0", "0", "0"))
     links: tuple[tuple[int, int], ...] = static(default=())
+    excited: bool = static(default=False)  # a stated excitation is added to the command
+    excitation_amplitude: Any = 0.0  # [N m] per generalised channel
+    excitation_period: Any = 10.0  # [s]
 
     def __post_init__(self) -> None:
         ELHinfConfig(self.law, self.compensation)  # validates the static choices
@@ -455,11 +495,14 @@ class NetworkedElHinfController(Controller):
             "fault_estimate_adaptive": state["u_hat"],
             "tracking_error": qt,
         }
+        u = ctl.u
+        if self.excited:  # the stated test signal: part of the command every model on board knows
+            u = u + excitation(t, self.excitation_amplitude, self.excitation_period)
         if self.links:
             j = jnp.asarray([a for a, _ in self.links])
             n = jnp.asarray([b for _, b in self.links])
             outputs["synchronisation_error"] = qt[j] - qt[n]
-        return ctl.u, {"z": qt, "u_hat": u_hat_dot}, outputs
+        return u, {"z": qt, "u_hat": u_hat_dot}, outputs
 
     def signals(self):
         sig = (
@@ -523,6 +566,14 @@ class NetworkedElHinfSection(StrictModel):
         ("0", "0", "0"),
         description="Desired [theta, phi, psi] per spacecraft, expressions in t [s], i [rad].",
     )
+    excitation_amplitude: float = Field(
+        0.0,
+        ge=0.0,
+        description="Amplitude of a stated sinusoidal excitation added to every generalised channel "
+        "[N m] (phases a third of a period apart; 0: none). It lets an identifying FDI see a loss "
+        "of effectiveness on a settled hold.",
+    )
+    excitation_period: float = Field(10.0, gt=0.0, description="Period of the excitation [s].")
 
     @model_validator(mode="after")
     def _check(self):
@@ -578,6 +629,9 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
         compensation=sec.compensation,
         desired_attitude=expression_text(sec.desired_attitude),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)),
+        excited=sec.excitation_amplitude > 0,
+        excitation_amplitude=as_float(sec.excitation_amplitude),
+        excitation_period=as_float(sec.excitation_period),
     )
 
 

@@ -7,7 +7,14 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-__all__ = ["FdiTest", "FdiDrift", "FdiThreshold"]
+__all__ = [
+    "FdiTest",
+    "FdiDrift",
+    "FdiThreshold",
+    "FdiIdentification",
+    "FdiForgetting",
+    "FdiIdentificationStd",
+]
 
 FdiTest = Annotated[
     Literal["cusum", "fixed"],
@@ -18,4 +25,27 @@ FdiDrift = Annotated[
 ]
 FdiThreshold = Annotated[
     float, Field(gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-].")
+]
+FdiIdentification = Annotated[
+    Literal["off", "rls"],
+    Field(
+        description="Fault identification: off, or each channel's effectiveness and bias by recursive "
+        "least squares with exponential forgetting on the residual (provides fault-identification)."
+    ),
+]
+FdiForgetting = Annotated[
+    float,
+    Field(
+        gt=0,
+        le=1,
+        description="RLS forgetting factor lambda; the memory is about 1 / (1 - lambda) steps [-].",
+    ),
+]
+FdiIdentificationStd = Annotated[
+    float,
+    Field(
+        gt=0,
+        description="Standard deviation of a channel's effectiveness estimate at or below which the "
+        "channel counts as identified (before: reported as NaN) [-].",
+    ),
 ]

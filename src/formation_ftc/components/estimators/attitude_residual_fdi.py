@@ -35,8 +35,19 @@ from formation_ftc.components._registry import (
     register,
 )
 from formation_ftc.components._sections import Vec3
-from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
-from formation_ftc.components.estimators.residual_fdi import latch_first_alarm, sequential_test
+from formation_ftc.components.estimators._fdi import (
+    FdiDrift,
+    FdiForgetting,
+    FdiIdentification,
+    FdiIdentificationStd,
+    FdiTest,
+    FdiThreshold,
+)
+from formation_ftc.components.estimators.residual_fdi import (
+    identify_channels,
+    latch_first_alarm,
+    sequential_test,
+)
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
@@ -70,6 +81,8 @@ class AttitudeFdiState(NamedTuple):
     detected: Any  # () latched alarm
     isolated: Any  # (N, 3) latched one-hot faulty (spacecraft, body axis)
     flag: Any  # (N, 3) latched one-hot generalised channel (spacecraft, Euler angle) of the law
+    theta: Any = None  # (N, 3, 2) [effectiveness - 1, bias [N m]] per body channel (identification)
+    theta_cov: Any = None  # (N, 3, 2, 2) their covariance
 
 
 class AttitudeFdiEstimate(NamedTuple):
@@ -84,6 +97,9 @@ class AttitudeFdiEstimate(NamedTuple):
     statistic: Any  # (N, 3) test statistic [-]
     residual: Any  # (N, 3) residual, body axes [N m]
     identified: Any  # (N, 3) moving average of the residual, body axes [N m]
+    effectiveness: Any = None  # (N, 3) identified effectiveness, body axes (identification "rls")
+    effectiveness_std: Any = None  # (N, 3) its standard deviation
+    known: Any = None  # (N, 3) the effectiveness is identified (std <= identification_std)
 
 
 def _omega(q, w, n):
@@ -179,9 +195,35 @@ class AttitudeResidualFdi(Estimator):
                      body x -> phi (roll), y -> theta (pitch), z -> psi (yaw))
         u*_{i,p}   = flag_{i,p} (W(q)^T (isolated * f_hat))_{i,p}       [N m]
 
+    With ``identification = "rls"`` each body channel's effectiveness and bias are identified from the
+    same residual, which after a fault is ``f = (effectiveness - 1) tau + bias`` for the step's mean
+    nominal torque ``tau``: recursive least squares with forgetting (the translational FDI's
+    :func:`~formation_ftc.components.estimators.residual_fdi.identify_channels`) on the regressor
+    ``[tau, 1]`` with noise standard deviation ``identification_noise_std`` (default ``residual_std``),
+    over the tested steps; the effectiveness may also drift as a random walk (``effectiveness_walk``
+    [1/sqrt(s)]; the bias has none: a walk of the bias as large as the excitation's effect would hide
+    the effectiveness), which bounds how certain the estimate gets
+    after a rich acquisition so that a later fault is followed within seconds, not after forgetting
+    has worn that certainty off. A channel counts as
+    identified once its effectiveness's standard deviation is at most ``identification_std``; a channel
+    whose torque never varies is not (a held torque and a bias cannot be told apart): NaN is recorded
+    there, no number. A loss of effectiveness on a settled hold changes the torque by almost nothing,
+    below any mean-shift test; an identified effectiveness below ``1 - effectiveness_alarm`` by two of
+    its standard deviations raises the alarm too (one-sided: the faults it is for lose effectiveness;
+    the estimate's error is not white -- the model error over a smooth acquisition trades against the
+    bias -- so the margin; the channel isolated is that with the largest of the CUSUM statistic over its
+    threshold and ``(1 - effectiveness - 2 std) / effectiveness_alarm``), so that the reconfiguration engages on
+    it with u* from the moving average as above (the fault torque measured; a u* modelled as
+    ``(effectiveness - 1) tau`` from the law's own command closes an algebraic loop through the
+    compensation that diverges for an effectiveness near 0, a stuck or failed wheel). The isolated
+    channel's estimate starts again from the prior at the alarm. On a hold the channel must be
+    excited to be identified: the law's stated excitation (``networked-el-hinf``
+    ``excitation_amplitude``) is part of the command the residual's model knows.
+
     Records ``fdi_residual``, ``fdi_statistic``, ``fdi_detected``, ``fdi_isolated`` (body axes: what
     ``fdi-scores`` compares with the fault-battery's ``fault_channel``), ``fdi_flag`` and
-    ``fdi_estimate`` (the law's channels, as the scripted FDI records them).
+    ``fdi_estimate`` (the law's channels, as the scripted FDI records them); with identification
+    ``fdi_effectiveness`` (NaN: not identified) and ``fdi_effectiveness_std`` (body axes).
     """
 
     count: int = static()
@@ -194,9 +236,17 @@ class AttitudeResidualFdi(Estimator):
     threshold: Any  # alarm threshold [-]
     smoothing: Any  # () EMA weight 1 - exp(-dt / identification_time) [-]
     command: str = static(default="held")  # "held" or "extrapolated"
+    identification: str = static(default="off")  # "off" or "rls"
+    forgetting: Any = 1.0  # RLS forgetting factor lambda [-]
+    identification_std: Any = 0.05  # effectiveness std at which a channel counts as identified [-]
+    bias_prior_std: Any = 0.01  # prior standard deviation of a channel's bias torque [N m]
+    identification_noise: Any = 1e-3  # () residual noise the identification assumes [N m]
+    walk: Any = 0.0  # (2, 2) random-walk covariance of [effectiveness - 1, bias] per step (bias: 0)
+    effectiveness_alarm: Any = math.inf  # loss of effectiveness (less 2 std) that alarms [-]
 
     def provides(self) -> frozenset[str]:
-        return frozenset({"fdi-records"})
+        rls = self.identification == "rls"
+        return frozenset({"fdi-records"} | ({"fault-identification"} if rls else set()))
 
     def signals(self):
         return (
@@ -214,6 +264,25 @@ class AttitudeResidualFdi(Estimator):
             ),
             Signal("fdi_flag", VEC, "1", "generalised channel reported faulty (reconfigure)"),
             Signal("fdi_estimate", VEC, "N m", "identified fault u* as a generalised torque"),
+        ) + (
+            (
+                Signal(
+                    "fdi_effectiveness",
+                    VEC,
+                    "1",
+                    "identified actuator effectiveness per body axis (NaN: not identified)",
+                    "body",
+                ),
+                Signal(
+                    "fdi_effectiveness_std",
+                    VEC,
+                    "1",
+                    "standard deviation of the identified effectiveness",
+                    "body",
+                ),
+            )
+            if self.identification == "rls"
+            else ()
         )
 
     def initial_state(self, measurement0):
@@ -234,9 +303,39 @@ class AttitudeResidualFdi(Estimator):
             detected=jnp.asarray(False),
             isolated=off,
             flag=off,
+            **(
+                dict(zip(("theta", "theta_cov"), self._prior(), strict=True))
+                if self.identification == "rls"
+                else {}
+            ),
         )
 
-    def _estimate(self, state: AttitudeFdiState, q, stat) -> AttitudeFdiEstimate:
+    def _prior(self):
+        """Prior of every channel's ``[effectiveness - 1, bias]``: 0 +- (1, ``bias_prior_std``)."""
+        cov = jnp.diag(jnp.stack([jnp.ones(()), self.bias_prior_std**2]))
+        return jnp.zeros((self.count, 3, 2)), jnp.broadcast_to(cov, (self.count, 3, 2, 2))
+
+    def _identify(self, state: AttitudeFdiState, r, tested):
+        """One RLS step of every tested channel on the regressor ``[tau, 1]``; returns ``(theta, cov,
+        effectiveness, std, identified)``."""
+        regressor = jnp.stack([state.tau_prev, jnp.ones_like(state.tau_prev)], axis=-1)
+        noise_var = jnp.broadcast_to(self.identification_noise**2, (3,))
+        walked = state.theta_cov + self.walk  # the parameters' random walk over the step
+        theta, cov = identify_channels(
+            state.theta, walked, r, regressor, noise_var, self.forgetting
+        )
+        theta = jnp.where(tested[..., None], theta, state.theta)
+        cov = jnp.where(tested[..., None, None], cov, walked)
+        # no windup: the effectiveness's variance is capped at its prior, by a congruence that keeps
+        # what the steps told of the bias (restarting the whole covariance would discard it, and a
+        # channel just restarted learns its bias first)
+        scale = jnp.sqrt(jnp.minimum(1.0, 1.0 / cov[..., 0, 0]))  # prior variance of e - 1: 1
+        d = jnp.stack([scale, jnp.ones_like(scale)], axis=-1)
+        cov = cov * d[..., :, None] * d[..., None, :]
+        std = jnp.sqrt(jnp.maximum(cov[..., 0, 0], 0.0))
+        return theta, cov, 1.0 + theta[..., 0], std, std <= self.identification_std
+
+    def _estimate(self, state: AttitudeFdiState, q, stat, ident=None) -> AttitudeFdiEstimate:
         W = rbar_inv(q)  # omega = W q_dot; u_bar = W^T f
         body = jnp.where(state.isolated, state.f_hat, 0.0)
         u_star = jnp.einsum("nkp,nk->np", W, body)
@@ -249,6 +348,11 @@ class AttitudeResidualFdi(Estimator):
             statistic=stat,
             residual=state.residual,
             identified=state.f_hat,
+            **(
+                dict(zip(("effectiveness", "effectiveness_std", "known"), ident, strict=True))
+                if ident is not None
+                else {}
+            ),
         )
 
     def update(self, t, state: AttitudeFdiState, inputs: FlightInputs):
@@ -270,7 +374,28 @@ class AttitudeResidualFdi(Estimator):
         g_pos, g_neg, stat, alarm = sequential_test(
             self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
         )
-        detected, isolated, first = latch_first_alarm(stat, alarm, state.detected, state.isolated)
+        ident, identification = None, {}
+        if self.identification == "rls":
+            theta, cov, eff, std, known = self._identify(state, r, tested)
+            # an identified effectiveness below 1 - effectiveness_alarm by two standard deviations
+            # alarms too; isolation by the larger of the normalised statistics
+            loss = 1.0 - eff - 2.0 * std
+            id_score = jnp.where(known, loss / self.effectiveness_alarm, 0.0)
+            score = jnp.maximum(stat / self.threshold, id_score)
+            detected, isolated, first = latch_first_alarm(
+                score, alarm | jnp.any(id_score > 1.0), state.detected, state.isolated
+            )
+            restart = first & isolated  # the isolated channel starts again from the prior
+            theta0, cov0 = self._prior()
+            theta = jnp.where(restart[..., None], theta0, theta)
+            cov = jnp.where(restart[..., None, None], cov0, cov)
+            known = known & ~restart
+            identification = {"theta": theta, "theta_cov": cov}
+            ident = (eff, std, known)
+        else:
+            detected, isolated, first = latch_first_alarm(
+                stat, alarm, state.detected, state.isolated
+            )
         # the law's channel of the isolated body axis at this attitude (W^T e_k: row k of W)
         weight = jnp.einsum("nk,nkp->np", jnp.where(isolated, 1.0, 0.0), jnp.abs(rbar_inv(q)))
         top = (weight == jnp.max(weight, axis=1, keepdims=True)) & (weight > 0.0)
@@ -288,8 +413,9 @@ class AttitudeResidualFdi(Estimator):
             detected=detected,
             isolated=isolated,
             flag=flag,
+            **identification,
         )
-        return new, self._estimate(new, q, stat)
+        return new, self._estimate(new, q, stat, ident)
 
     def predict(self, t, state: AttitudeFdiState, command, dt):
         tau = generalized_to_body_torque(state.q_prev, command)  # R_bar(q_k)^T tau_gen
@@ -310,7 +436,14 @@ class AttitudeResidualFdi(Estimator):
             "fdi_isolated": jnp.where(estimate.isolated, 1.0, 0.0),
             "fdi_flag": estimate.flag,
             "fdi_estimate": estimate.estimate,
-        }
+        } | (
+            {
+                "fdi_effectiveness": jnp.where(estimate.known, estimate.effectiveness, jnp.nan),
+                "fdi_effectiveness_std": estimate.effectiveness_std,
+            }
+            if self.identification == "rls"
+            else {}
+        )
 
     def needs(self) -> dict[str, str]:
         return {
@@ -357,6 +490,38 @@ class AttitudeResidualFdiSection(StrictModel):
     test: FdiTest = "cusum"
     drift: FdiDrift = 0.5
     threshold: FdiThreshold = 20.0
+    identification: FdiIdentification = "off"
+    forgetting: FdiForgetting = 0.999
+    identification_std: FdiIdentificationStd = 0.05
+    bias_prior_std: float = Field(
+        0.01,
+        gt=0,
+        description="Prior standard deviation of a channel's bias torque [N m]. A channel's first "
+        "steps pin its bias before the command's variation tells the effectiveness: a prior far "
+        "above the model-error level lets forgetting inflate the effectiveness's variance past its "
+        "prior, which restarts it (no windup) before it is ever identified.",
+    )
+    identification_noise_std: float | None = Field(
+        None,
+        gt=0,
+        description="Residual noise the identification assumes [N m] (default residual_std, which "
+        "bounds the acquisition's model error for the alarm test; a settled hold's residual is "
+        "smaller, and a smaller excitation is identified as fast against it).",
+    )
+    effectiveness_walk: float = Field(
+        0.0,
+        ge=0,
+        description="Random walk of the effectiveness [1/sqrt(s)]: process noise of the "
+        "identification, so that a fault after a rich acquisition is followed at once; 0: none "
+        "(forgetting alone).",
+    )
+    effectiveness_alarm: float = Field(
+        0.1,
+        gt=0,
+        description="An identified effectiveness below 1 - effectiveness_alarm by two of its standard "
+        "deviations raises the alarm (identification = 'rls'; a loss of effectiveness the "
+        "residual's mean-shift test cannot see) [-].",
+    )
     identification_time: float = builder_input(
         2.0,
         gt=0,
@@ -400,6 +565,13 @@ def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidu
         drift=as_float(sec.drift),
         threshold=as_float(sec.threshold),
         smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
+        identification=sec.identification,
+        forgetting=as_float(sec.forgetting),
+        identification_std=as_float(sec.identification_std),
+        bias_prior_std=as_float(sec.bias_prior_std),
+        identification_noise=as_float(sec.identification_noise_std or sec.residual_std),
+        walk=as_float(np.diag([sec.effectiveness_walk**2 * ctx.dt, 0.0])),
+        effectiveness_alarm=as_float(sec.effectiveness_alarm),
     )
 
 

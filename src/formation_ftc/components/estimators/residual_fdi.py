@@ -23,7 +23,14 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components.estimators._fdi import FdiDrift, FdiTest, FdiThreshold
+from formation_ftc.components.estimators._fdi import (
+    FdiDrift,
+    FdiForgetting,
+    FdiIdentification,
+    FdiIdentificationStd,
+    FdiTest,
+    FdiThreshold,
+)
 from formation_ftc.components.estimators.relative_navigation_filter import (
     NAVIGATION_RECORDS,
     NAVIGATION_SIGNALS,
@@ -611,24 +618,9 @@ class ResidualFdiSection(RelativeNavigationSection):
         "of the raw measurement, while the FDI watches the same filter's innovations (residual = "
         "'kalman' only) [-].",
     )
-    identification: Literal["off", "rls"] = Field(
-        "off",
-        description="Fault identification: off, or each channel's effectiveness and bias by recursive "
-        "least squares with exponential forgetting on the parity residual (provides "
-        "fault-identification).",
-    )
-    forgetting: float = Field(
-        0.9995,
-        gt=0,
-        le=1,
-        description="RLS forgetting factor lambda; the memory is about 1 / (1 - lambda) steps [-].",
-    )
-    identification_std: float = Field(
-        0.05,
-        gt=0,
-        description="Standard deviation of a channel's effectiveness estimate at or below which the "
-        "channel counts as identified (before: reported as NaN) [-].",
-    )
+    identification: FdiIdentification = "off"
+    forgetting: FdiForgetting = 0.9995
+    identification_std: FdiIdentificationStd = 0.05
     bias_prior_std: float = Field(
         1e-3,
         gt=0,
