@@ -31,6 +31,7 @@ NEEDS_JAX = {
     "compose-mehrabian-on-attitude-truth": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
     "compose-mehrabian-on-yang2013": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
     "league:attitude:mehrabian": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
+    "league:attitude:mehrabian-active": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
     "league:attitude:yang2013": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
     "league:attitude:pd": "initial attitude Euler -> quaternion (jitted, JAX's trig)",
     "yang2013-healthy": "the disturbance expressions sampled with JAX (disturbance_peaks)",
