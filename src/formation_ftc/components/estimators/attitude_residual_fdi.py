@@ -46,6 +46,7 @@ from formation_ftc.components.estimators._fdi import (
 from formation_ftc.components.estimators.residual_fdi import (
     identify_channels,
     latch_first_alarm,
+    rls_prior,
     sequential_test,
 )
 from formation_ftc.config.base import StrictModel
@@ -311,9 +312,7 @@ class AttitudeResidualFdi(Estimator):
         )
 
     def _prior(self):
-        """Prior of every channel's ``[effectiveness - 1, bias]``: 0 +- (1, ``bias_prior_std``)."""
-        cov = jnp.diag(jnp.stack([jnp.ones(()), self.bias_prior_std**2]))
-        return jnp.zeros((self.count, 3, 2)), jnp.broadcast_to(cov, (self.count, 3, 2, 2))
+        return rls_prior(self.count, self.bias_prior_std)
 
     def _identify(self, state: AttitudeFdiState, r, tested):
         """One RLS step of every tested channel on the regressor ``[tau, 1]``; returns ``(theta, cov,
@@ -496,10 +495,8 @@ class AttitudeResidualFdiSection(StrictModel):
     bias_prior_std: float = Field(
         0.01,
         gt=0,
-        description="Prior standard deviation of a channel's bias torque [N m]. A channel's first "
-        "steps pin its bias before the command's variation tells the effectiveness: a prior far "
-        "above the model-error level lets forgetting inflate the effectiveness's variance past its "
-        "prior, which restarts it (no windup) before it is ever identified.",
+        description="Prior standard deviation of a channel's bias torque [N m] (a channel's first "
+        "steps pin its bias before the command's variation tells the effectiveness).",
     )
     identification_noise_std: float | None = Field(
         None,

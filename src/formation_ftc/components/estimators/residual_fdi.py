@@ -53,6 +53,7 @@ __all__ = [
     "sequential_test",
     "latch_first_alarm",
     "identify_channels",
+    "rls_prior",
     "window_model",
     "isolated_effectiveness",
     "EFFECTIVENESS_MIN",
@@ -213,6 +214,32 @@ def identify_channels(theta, cov, residual, regressor, noise_var, forgetting):
     theta = theta + k * innovation[..., None]
     cov = prior - jnp.einsum("nca,ncb->ncab", k, p_phi)
     return theta, 0.5 * (cov + jnp.swapaxes(cov, -1, -2))
+
+
+def rls_prior(count: int, bias_prior_std) -> tuple[jax.Array, jax.Array]:
+    """Prior of every channel's ``theta = [effectiveness - 1, bias]`` for :func:`identify_channels`:
+    0 +- (1, ``bias_prior_std``), uncorrelated.
+
+    Parameters
+    ----------
+    count : int
+        Spacecraft N (3 channels each).
+    bias_prior_std : float
+        Prior standard deviation of a channel's bias (its units: m/s^2 or N m).
+
+    Returns
+    -------
+    tuple of jax.Array
+        ``(theta, cov)``, shapes (N, 3, 2) and (N, 3, 2, 2).
+
+    Examples
+    --------
+    >>> theta, cov = rls_prior(1, 0.1)
+    >>> theta.shape, cov[0, 0].tolist()
+    ((1, 3, 2), [[1.0, 0.0], [0.0, 0.010000000000000002]])
+    """
+    cov = jnp.diag(jnp.stack([jnp.ones(()), jnp.asarray(bias_prior_std) ** 2]))
+    return jnp.zeros((count, 3, 2)), jnp.broadcast_to(cov, (count, 3, 2, 2))
 
 
 def isolated_effectiveness(estimate) -> tuple[jax.Array, jax.Array]:
@@ -482,10 +509,7 @@ class ResidualFdi(Estimator):
         return new, estimate
 
     def _prior(self):
-        """Prior of every channel's ``[effectiveness - 1, bias]``: 0 +- (1, ``bias_prior_std``)."""
-        n = self.count
-        cov = jnp.diag(jnp.stack([jnp.ones(()), self.bias_prior_std**2]))
-        return jnp.zeros((n, 3, 2)), jnp.broadcast_to(cov, (n, 3, 2, 2))
+        return rls_prior(self.count, self.bias_prior_std)
 
     def _identify(self, state: FdiState, new: FdiState, y, valid, restart):
         """RLS of every channel's effectiveness and bias (``identify_channels``) on the parity residual
