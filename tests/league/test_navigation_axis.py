@@ -1,7 +1,7 @@
 """The translational league's navigation axis: at the filtered level every law flies on a navigation
-filter (the league's, or its own residual FDI's Kalman filter), gets the level's flight knowledge of
-the same thrusters, and is scored for consistency (NEES, NIS); a method with an observer of its own
-does not fly there; bad definitions are refused naming the field."""
+filter (the league's, or its own residual FDI's Kalman filter; an observer reads the league's filter
+too), gets the level's flight knowledge of the same thrusters, and is scored for consistency (NEES,
+NIS); bad definitions are refused naming the field."""
 
 from __future__ import annotations
 
@@ -27,13 +27,14 @@ def test_every_method_but_the_observer_flies_filtered(cells):
     assert level.saturation == 0.2 and level.method_fields_from == "limited"
     for name, cs in cells.items():
         filtered = [c for c in cs if c.level == level.name]
-        if name == "gui2022-lof2tc":  # its iterative learning observer is its estimator
-            assert not filtered
-            continue
         assert filtered, name
         est = filtered[0].raw["estimator"]
         limited = next(c for c in cs if c.level == "limited" and c.case == filtered[0].case)
-        if est["type"] == "residual-fdi":  # its own Kalman filter navigates
+        if est["type"] == "iterative-learning-observer":  # the observer reads the league's filter
+            nav = {k: v for k, v in spec.navigation_filter.items() if k != "type"}
+            assert est["navigation"] == nav
+            assert {k: v for k, v in est.items() if k != "navigation"} == limited.raw["estimator"]
+        elif est["type"] == "residual-fdi":  # its own Kalman filter navigates
             assert est["fly_on_filter"] is True and est["residual"] == "kalman"
             # the same flight knowledge of the 0.2 N thrusters as at the limited level
             assert {k: v for k, v in est.items() if k != "fly_on_filter"} == limited.raw[
@@ -48,6 +49,28 @@ def test_every_method_but_the_observer_flies_filtered(cells):
             m["name"] for m in filtered[0].raw["metrics"]
         }
         assert "navigation-consistency" not in [e["type"] for e in limited.raw["evaluations"]]
+
+
+def test_the_observer_and_the_law_read_the_filter(cells):
+    # gui2022-lof2tc's filtered cell: its ILO reads the league filter's estimate (e_y = x_hat - q_hat)
+    # and its law tracks with it (e_y = q0 - x_hat): the identities of the chain, on recorded signals
+    from formation_ftc.api import load_scenario, simulate
+
+    cell = next(
+        c for c in cells["gui2022-lof2tc"] if c.level == "limited-filtered" and c.case == "none"
+    )
+    ds = simulate(
+        load_scenario(cell.raw, {"simulation.horizon": 4.0, "simulation.record_every": 1})
+    )
+    x_hat = ds["navigation_estimate"].values
+    np.testing.assert_allclose(
+        ds["estimation_error"].values, x_hat - ds["estimate"].values, rtol=0, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        ds["tracking_error"].values, ds["desired_state"].values - x_hat, rtol=0, atol=1e-12
+    )
+    noise = ds["navigation_estimate"].values[:, :, :3] - ds["position"].values
+    assert np.abs(noise).max() < 1.0  # the filter follows the truth (0.1 m sensors)
 
 
 def test_tiny_league_scores_the_filter(tmp_path, tiny_league):
@@ -80,6 +103,14 @@ def _write(tmp_path, edit) -> str:
     path = tmp_path / "l.toml"
     path.write_text(tomli_w.dumps(raw))
     return str(path)
+
+
+def test_an_observer_needs_the_relative_navigation_filter(tmp_path):
+    def edit(raw):
+        raw["navigation_filter"]["type"] = "scripted-fdi"
+
+    with pytest.raises(LeagueError, match="gui2022-lof2tc: its estimator runs on a relative-nav"):
+        plan_cells(load_league(_write(tmp_path, edit)), methods=["gui2022-lof2tc"])
 
 
 @pytest.mark.parametrize(

@@ -221,7 +221,7 @@ class Level(StrictModel):
         "raw",
         description="What every law flies on at this level: 'raw' (the sensors' measurement) or "
         "'filtered' (the league's [navigation_filter]; a method's residual FDI navigates instead, "
-        "with fly_on_filter).",
+        "with fly_on_filter; an observer reads the filter's estimate too).",
     )
     method_fields_from: str = Field(
         "",
@@ -609,25 +609,47 @@ def method_scenario(
 
 def flies_filtered(spec: LeagueSpec, method: MethodEntry) -> bool:
     """Whether ``method`` can fly on the league's navigation filter: it has no estimator (the filter
-    becomes its estimator) or a residual FDI with a Kalman residual (which then navigates:
-    ``fly_on_filter``). A method with another estimator of its own (an observer) does not."""
+    becomes its estimator), a residual FDI with a Kalman residual (which then navigates:
+    ``fly_on_filter``) or an estimator that runs on a filter (a ``navigation`` table, e.g. the
+    iterative learning observer). Any other estimator of its own does not."""
     est = _method_raw(spec, method).get("estimator")
-    return est is None or (est.get("type") == "residual-fdi" and est.get("residual") == "kalman")
+    return (
+        est is None
+        or (est.get("type") == "residual-fdi" and est.get("residual") == "kalman")
+        or _runs_on_filter(est)
+    )
+
+
+def _runs_on_filter(est: dict[str, Any]) -> bool:
+    """Whether the estimator table's type takes a ``navigation`` filter table."""
+    from formation_ftc.components._registry import component_type
+
+    entry = component_type("estimator", str(est.get("type")))
+    return entry is not None and "navigation" in entry.section.model_fields
 
 
 def _fly_filtered(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any]) -> None:
     """A filtered level's cell: the law flies on the league's navigation filter (a method without an
-    estimator; the controller's stated ``nominal_mass`` is the filter's) or on its own residual FDI's
-    Kalman filter (``fly_on_filter``)."""
+    estimator; the controller's stated ``nominal_mass`` is the filter's), on its own residual FDI's
+    Kalman filter (``fly_on_filter``) or on the league's filter that its observer also reads (the
+    estimator's ``navigation`` table)."""
     if not flies_filtered(spec, method):
         raise LeagueError(
             f"method {method.name} has an estimator of its own: it cannot fly on the league's "
             "navigation filter (a filtered level does not apply to it)"
         )
+    est = copy.deepcopy(spec.navigation_filter or {})
+    if "estimator" in raw and _runs_on_filter(raw["estimator"]):
+        if est.pop("type", None) != "relative-navigation-filter":
+            raise LeagueError(
+                f"method {method.name}: its estimator runs on a relative-navigation-filter; the "
+                "league's [navigation_filter] is another type"
+            )
+        raw["estimator"]["navigation"] = est  # the observer's masses where the filter states none
+        return
     if "estimator" in raw:
         raw["estimator"]["fly_on_filter"] = True
         return
-    est = copy.deepcopy(spec.navigation_filter or {})
     mass = raw.get("controller", {}).get("nominal_mass")
     if mass is not None and "nominal_mass" not in est:
         est["nominal_mass"] = copy.deepcopy(mass)

@@ -129,3 +129,9 @@ def test_per_unit_mass_divides_each_spacecraft_by_its_mass():
     np.testing.assert_allclose(
         np.asarray(out), np.stack([f[i] / m[i] for i in range(4)]), rtol=1e-15
     )
+
+
+def test_a_navigation_filter_needs_a_force_driven_plant():
+    nav = {"semi_major_axis": 7000e3, "position_noise_std": 0.1, "velocity_noise_std": 1e-3}
+    with pytest.raises(ValueError, match="estimator.navigation: .* driven by acceleration"):
+        ftc.load_scenario("gui2022-lof2tc", {"estimator.navigation": nav})

@@ -12,14 +12,19 @@ from __future__ import annotations
 import math
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from formation_ftc.api import check, load_scenario, simulate_with_metrics
-from formation_ftc.components.estimators.relative_navigation_filter import RelativeNavigationFilter
+from formation_ftc.components.estimators.relative_navigation_filter import (
+    FilteredEstimator,
+    RelativeNavigationFilter,
+)
 from formation_ftc.core.dynamics.cw import cw_matrices
 from formation_ftc.design.kalman import discrete_model, steady_state_kalman
-from formation_ftc.sim.components import FlightInputs
+from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+from formation_ftc.sim.loop import NAVIGATION_ESTIMATE
 
 N_LEO = math.sqrt(3.986004418e14 / 7000e3**3)
 DT = 0.5
@@ -92,6 +97,62 @@ def test_component_equals_a_textbook_filter_and_its_errors_match_the_riccati_ste
     P, K = steady_state_kalman(model.phi, model.qd, R)
     posterior = (np.eye(6) - K) @ P
     np.testing.assert_allclose(err.std(axis=0), np.sqrt(np.diag(posterior)), rtol=0.15)
+
+
+@component
+class _Spy(Estimator):
+    """An estimator that returns the measurement it is given and keeps the last command."""
+
+    count: int = static(default=2)
+
+    def initial_state(self, measurement0):
+        return jnp.zeros((2, 3))
+
+    def update(self, t, state, inputs):
+        return state, {"seen": inputs.measurement, "command": state}
+
+    def predict(self, t, state, command, dt):
+        return command
+
+    def outputs(self, t, state, estimate):
+        return {"seen": estimate["seen"]}
+
+    def signals(self):
+        return (Signal("seen", ("spacecraft", "component"), "m, m s-1", "what the spy read"),)
+
+    def needs(self):
+        return {"relative-state-measurement": "spy on it"}
+
+    def provides(self):
+        return frozenset({"spy"})
+
+
+def test_an_estimator_on_the_filter_reads_the_textbook_estimate():
+    # the chain's filter is the textbook filter (oracle: _numpy_filter), and the estimator behind it
+    # reads that estimate, never the raw measurement; both time updates get the command
+    model, mass = _model(), np.array([100.0, 120.0])
+    _, ys, fs = _truth(model, 60, np.random.default_rng(5), mass)
+    nav = RelativeNavigationFilter(
+        count=2, phi=model.phi, gamma=model.gamma, qd=model.qd, r=R, p0=R, nominal_mass=mass
+    )
+    chain = FilteredEstimator(navigation_filter=nav, inner=_Spy())
+    state = chain.initial_state(ys[0])
+    got = []
+    for k in range(len(ys)):
+        state, est = chain.update(
+            0.0, state, FlightInputs(ys[k], None, None, None, None, None, None)
+        )
+        np.testing.assert_array_equal(est["seen"], est[NAVIGATION_ESTIMATE])
+        got.append(np.asarray(est[NAVIGATION_ESTIMATE]))
+        state = chain.predict(0.0, state, jnp.asarray(fs[k]), DT)
+        np.testing.assert_array_equal(state["inner"], fs[k])
+    ref, _ = _numpy_filter(model, ys, fs, mass)
+    np.testing.assert_allclose(np.array(got), ref, rtol=1e-10, atol=1e-12)
+    out = chain.outputs(0.0, state, est)
+    assert {"navigation_estimate", "navigation_covariance", "navigation_nis", "seen"} <= set(out)
+    assert chain.provides() == {"spy", "navigation-records"}
+    assert set(chain.needs()) == {"relative-state-measurement", "translational-state"}
+    assert [s.name for s in chain.signals()][-1] == "seen"
 
 
 SCENARIO = """

@@ -61,6 +61,10 @@ from formation_ftc.components._registry import (
     register,
 )
 from formation_ftc.components._sections import Vec3, nominal_masses, onboard_mean_motion
+from formation_ftc.components.estimators.relative_navigation_filter import (
+    RelativeNavigationSection,
+    filtered,
+)
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.dynamics.cw import cw_matrices_jax
@@ -543,6 +547,15 @@ class IloSection(StrictModel):
         ),
     )
 
+    navigation: RelativeNavigationSection | None = builder_input(
+        None,
+        description=(
+            "A relative-navigation-filter table: the observer reads the filter's estimate in place "
+            "of the raw measurement and the law flies on it (its nominal_mass defaults to the "
+            "observer's masses). None: both read the raw measurement."
+        ),
+    )
+
     @model_validator(mode="before")
     @classmethod
     def _offset_moved(cls, data):
@@ -663,26 +676,27 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
     stated = sec.nominal_mass
     if stated is None:
         stated = getattr(ctx.section("controller"), "nominal_mass", None)
-    est: Estimator = (
-        AccelerationModelEstimator(
-            inner=ilo,
-            nominal_mass=as_float(
-                nominal_masses(stated, NOMINAL_MASS, N, "estimator.nominal_mass")
-            ),
+    mass = nominal_masses(stated, NOMINAL_MASS, N, "estimator.nominal_mass")
+    if sec.navigation is not None and not force_loop:
+        raise ValueError(
+            "estimator.navigation: the navigation filter predicts with a force command per unit "
+            f"nominal mass; this plant is driven by {ctx.plant.quantity} (give a force-driven plant "
+            "or no navigation table)"
         )
-        if force_loop
-        else ilo
+    est: Estimator = (
+        AccelerationModelEstimator(inner=ilo, nominal_mass=as_float(mass)) if force_loop else ilo
     )
+    est = filtered(est, sec.navigation, ctx, mass)
     if "thruster-bias-faults" in _actuator_provides(ctx):  # F recorded as the signal fault
         fault = "fault"
         if force_loop:
-            mass = getattr(ctx.section("plant"), "mass", None)
-            if mass is not None:
+            true_mass = getattr(ctx.section("plant"), "mass", None)
+            if true_mass is not None:
                 ctx.evaluations.append(
                     PerUnitMass(
                         "fault_acceleration",
                         "fault",
-                        mass=as_float(mass),
+                        mass=as_float(true_mass),
                         dims=VEC,
                         long_name="true thruster fault per unit true mass F_i / m_i",
                         frame="LVLH",

@@ -40,6 +40,8 @@ __all__ = [
     "filter_model",
     "innovation_nis",
     "NAVIGATION_RECORDS",
+    "FilteredEstimator",
+    "filtered",
 ]
 
 #: the capability of an estimator whose law flies on its filter and that records the filter's estimate,
@@ -230,6 +232,103 @@ class RelativeNavigationFilter(Estimator):
             "navigation_covariance": state.p,
             "navigation_nis": state.nis,
         }
+
+
+@component
+class FilteredEstimator(Estimator):
+    """Another estimator (``inner``, e.g. the iterative learning observer) run on this filter's
+    estimate in place of the raw measurement, while the law flies on the same estimate: at t_k the
+    filter's measurement update, then ``inner``'s update with ``y_k := x_hat_k``; after the control
+    step both time updates with the command. The estimate is ``inner``'s (a mapping) with the filter's
+    under :data:`~formation_ftc.sim.loop.NAVIGATION_ESTIMATE` (the loop gives the law that entry in
+    place of the measurement); both record their signals. Needs and provides what both do."""
+
+    navigation_filter: RelativeNavigationFilter
+    inner: Estimator
+
+    @property
+    def count(self) -> int | None:
+        return getattr(self.inner, "count", None)
+
+    def initial_state(self, measurement0):
+        return {
+            "navigation": self.navigation_filter.initial_state(measurement0),
+            "inner": self.inner.initial_state(measurement0),
+        }
+
+    def update(self, t, state, inputs: FlightInputs):
+        from formation_ftc.sim.loop import NAVIGATION_ESTIMATE
+
+        nav, x_hat = self.navigation_filter.update(t, state["navigation"], inputs)
+        inner, est = self.inner.update(t, state["inner"], inputs._replace(measurement=x_hat))
+        return {"navigation": nav, "inner": inner}, {**est, NAVIGATION_ESTIMATE: x_hat}
+
+    def predict(self, t, state, command, dt):
+        return {
+            "navigation": self.navigation_filter.predict(t, state["navigation"], command, dt),
+            "inner": self.inner.predict(t, state["inner"], command, dt),
+        }
+
+    def signals(self):
+        return self.navigation_filter.signals() + self.inner.signals()
+
+    def outputs(self, t, state, estimate):
+        from formation_ftc.sim.loop import NAVIGATION_ESTIMATE
+
+        nav = self.navigation_filter.outputs(t, state["navigation"], estimate[NAVIGATION_ESTIMATE])
+        return nav | self.inner.outputs(t, state["inner"], estimate)
+
+    def coords(self):
+        return self.inner.coords()
+
+    def conditions(self, loop) -> list[Condition]:
+        conds = getattr(self.inner, "conditions", None)
+        return self.navigation_filter.conditions(loop) + (
+            list(conds(loop)) if callable(conds) else []
+        )
+
+    def needs(self) -> dict[str, str]:
+        return self.inner.needs() | self.navigation_filter.needs()
+
+    def provides(self) -> frozenset[str]:
+        return self.inner.provides() | self.navigation_filter.provides()
+
+
+def filtered(
+    inner: Estimator, sec: RelativeNavigationSection | None, ctx: BuildContext, mass: Any
+) -> Estimator:
+    """``inner`` as it is (``sec`` None), else run on the filter of ``sec`` (:class:`FilteredEstimator`).
+
+    Parameters
+    ----------
+    inner : Estimator
+        The estimator that reads the filter's estimate as its measurement.
+    sec : RelativeNavigationSection or None
+        The filter's section (an estimator's ``navigation`` table), or None.
+    ctx : BuildContext
+        The build's context (step and spacecraft count).
+    mass : array_like
+        The flight masses [kg] the filter uses where its section states none (those of ``inner``).
+
+    Returns
+    -------
+    Estimator
+        ``inner`` or the chain.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> sec = RelativeNavigationSection(semi_major_axis=7e6, position_noise_std=0.1,
+    ...                                 velocity_noise_std=1e-3)
+    >>> chain = filtered(Estimator(), sec, SimpleNamespace(dt=1.0, count=2), [100.0, 120.0])
+    >>> chain.navigation_filter.nominal_mass.tolist(), sorted(chain.provides())
+    ([100.0, 120.0], ['navigation-records'])
+    """
+    if sec is None:
+        return inner
+    if "nominal_mass" not in sec.model_fields_set:
+        sec = sec.model_copy(update={"nominal_mass": np.asarray(mass, float).tolist()})
+    return FilteredEstimator(navigation_filter=_build(sec, ctx), inner=inner)
 
 
 def navigation_conditions(phi, qd, r) -> list[Condition]:
