@@ -10,6 +10,10 @@ includes loads from the persistent cache) and the persistent-cache loads themsel
 * each compile phase in seconds, its count and its share of the summed test time;
 * the programs (``fun_name``) that took the most XLA compile time, with their count -- ``jit(run)`` is
   a closed-loop scenario, ``jit(<lambda>)`` mostly a batched (``vmap``) program;
+* the closed-loop programs (``jit(_run)``) grouped by structure, by structure whatever the number of
+  steps, and by structure whatever the number of steps and the record interval: the XLA compile
+  seconds beyond one program per group are what a program shared across horizons (and record
+  intervals) would save in each worker;
 * the test files with the most summed test time, and how much of it was compile.
 
 What it does not see: work in subprocesses a test starts (the command-line and multi-process campaign
@@ -56,6 +60,33 @@ PLUGIN = textwrap.dedent('''
 
     jax.monitoring.register_event_duration_secs_listener(_listen)
 
+    # closed-loop programs (``formation_ftc.sim.programs.jitted_run``): the structure they compile, with
+    # and without their number of steps and record interval, so the report can say how much compile a
+    # program shared across horizons would save
+    STRUCTURE = [None]
+    LOOP_COMPILES = []
+
+    def _loop_listen(event, duration, **kw):
+        if event.endswith("backend_compile_duration") and kw.get("fun_name") == "jit(_run)":
+            if STRUCTURE[0] is not None:
+                LOOP_COMPILES.append(STRUCTURE[0] + [duration])
+
+    jax.monitoring.register_event_duration_secs_listener(_loop_listen)
+
+    def pytest_configure(config):
+        import dataclasses
+        from formation_ftc.sim import programs
+        original = programs.jitted_run
+
+        def jitted_run(loop):
+            every = loop.record_every
+            keys = [repr(dataclasses.replace(loop, **kw).static_key) for kw in (
+                {}, {"n_steps": every}, {"n_steps": 1, "record_every": 1, "metric_block": 0})]
+            STRUCTURE[0] = keys
+            return original(loop)
+
+        programs.jitted_run = jitted_run
+
     def pytest_runtest_logstart(nodeid, location):
         CURRENT[0] = nodeid
 
@@ -69,8 +100,11 @@ PLUGIN = textwrap.dedent('''
         path = os.path.join(os.environ["FTC_TEST_PROFILE_DIR"], f"{worker}.json")
         with open(path, "w") as f:
             json.dump({"phases": PHASES, "programs": PROGRAMS, "per_test": PER_TEST,
-                       "durations": DURATIONS}, f)
+                       "durations": DURATIONS, "loop_compiles": LOOP_COMPILES}, f)
 ''')
+
+#: the groupings of closed-loop programs the report compares (the plugin's three keys, in order)
+SHARING = ("same structure", "any number of steps", "any number of steps and record interval")
 
 PHASE_NAMES = {
     "jaxpr_trace_duration": "trace",
@@ -85,8 +119,20 @@ def _merge(out_dir: Path) -> dict:
     programs: dict = collections.defaultdict(lambda: [0, 0.0])
     files: dict = collections.defaultdict(lambda: [0.0, 0.0, 0])  # test time, compile time, tests
     total = 0.0
+    # per grouping of the closed-loop programs (exact structure; without the number of steps; without
+    # it and the record interval): [programs, compile s, distinct groups, compile s beyond one per group]
+    sharing = {name: [0, 0.0, 0, 0.0] for name in SHARING}
     for path in out_dir.glob("*.json"):
         data = json.loads(path.read_text())
+        compiles = data.get("loop_compiles", [])
+        for j, name in enumerate(SHARING):  # per worker: each worker compiles its own programs
+            groups: dict = collections.defaultdict(list)
+            for row in compiles:
+                groups[row[j]].append(row[-1])
+            sharing[name][0] += len(compiles)
+            sharing[name][1] += sum(row[-1] for row in compiles)
+            sharing[name][2] += len(groups)
+            sharing[name][3] += sum(sum(v) - max(v) for v in groups.values())
         for k, (n, s) in data["phases"].items():
             phases[k][0] += n
             phases[k][1] += s
@@ -113,6 +159,7 @@ def _merge(out_dir: Path) -> dict:
         "programs": dict(programs),
         "files": dict(files),
         "test_seconds": total,
+        "sharing": sharing,
     }
 
 
@@ -172,6 +219,12 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n{'program (XLA compile)':40s} {'seconds':>9s} {'count':>7s} {'mean':>7s}")
     for name, (n, s) in sorted(merged["programs"].items(), key=lambda kv: -kv[1][1])[: args.top]:
         print(f"{name[:40]:40s} {s:9.1f} {n:7d} {s / max(n, 1):7.2f}")
+    print(
+        f"\n{'closed-loop programs grouped by':42s} {'compiles':>8s} {'seconds':>8s} "
+        f"{'groups':>7s} {'s beyond one per group':>23s}"
+    )
+    for name, (n, s, g, extra) in merged["sharing"].items():
+        print(f"{name:42s} {n:8d} {s:8.1f} {g:7d} {extra:23.1f}")
     print(f"\n{'test file':60s} {'tests':>6s} {'test s':>8s} {'compile s':>10s}")
     for name, (s, c, n) in sorted(merged["files"].items(), key=lambda kv: -kv[1][0])[: args.top]:
         print(f"{name[:60]:60s} {n:6d} {s:8.1f} {c:10.1f}")
