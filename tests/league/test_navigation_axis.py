@@ -31,8 +31,7 @@ def test_every_method_but_the_observer_flies_filtered(cells):
         est = filtered[0].raw["estimator"]
         limited = next(c for c in cs if c.level == "limited" and c.case == filtered[0].case)
         if est["type"] == "iterative-learning-observer":  # the observer reads the league's filter
-            nav = {k: v for k, v in spec.navigation_filter.items() if k != "type"}
-            assert est["navigation"] == nav
+            assert est["navigation"] == spec.navigation_filter
             assert {k: v for k, v in est.items() if k != "navigation"} == limited.raw["estimator"]
         elif est["type"] == "residual-fdi":  # its own Kalman filter navigates
             assert est["fly_on_filter"] is True and est["residual"] == "kalman"
@@ -73,6 +72,19 @@ def test_the_observer_and_the_law_read_the_filter(cells):
     assert np.abs(noise).max() < 1.0  # the filter follows the truth (0.1 m sensors)
 
 
+def test_the_observers_filter_names_its_own_fields(cells):
+    import copy
+
+    from formation_ftc.api import load_scenario
+
+    raw = copy.deepcopy(
+        next(c for c in cells["gui2022-lof2tc"] if c.level == "limited-filtered").raw
+    )
+    raw["estimator"]["navigation"]["nominal_mass"] = [100.0]
+    with pytest.raises(ValueError, match="estimator.navigation.nominal_mass: 1 values for 4"):
+        load_scenario(raw)
+
+
 def test_tiny_league_scores_the_filter(tmp_path, tiny_league):
     path = tiny_league(tmp_path, methods=("lqr",), filtered=True)
     out = tmp_path / "out"
@@ -109,7 +121,9 @@ def test_an_observer_needs_the_relative_navigation_filter(tmp_path):
     def edit(raw):
         raw["navigation_filter"]["type"] = "scripted-fdi"
 
-    with pytest.raises(LeagueError, match="gui2022-lof2tc: its estimator runs on a relative-nav"):
+    with pytest.raises(
+        LeagueError, match="(?s)gui2022-lof2tc cannot run .* on a relative-navigation-f"
+    ):
         plan_cells(load_league(_write(tmp_path, edit)), methods=["gui2022-lof2tc"])
 
 

@@ -640,11 +640,6 @@ def _fly_filtered(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any]) ->
         )
     est = copy.deepcopy(spec.navigation_filter or {})
     if "estimator" in raw and _runs_on_filter(raw["estimator"]):
-        if est.pop("type", None) != "relative-navigation-filter":
-            raise LeagueError(
-                f"method {method.name}: its estimator runs on a relative-navigation-filter; the "
-                "league's [navigation_filter] is another type"
-            )
         raw["estimator"]["navigation"] = est  # the observer's masses where the filter states none
         return
     if "estimator" in raw:

@@ -556,6 +556,17 @@ class IloSection(StrictModel):
         ),
     )
 
+    @field_validator("navigation", mode="before")
+    @classmethod
+    def _navigation_type(cls, v):
+        if isinstance(v, dict) and "type" in v:  # the table as it stands on its own, with its type
+            if v["type"] != "relative-navigation-filter":
+                raise ValueError(
+                    f"type = {v['type']!r}: the observer runs on a relative-navigation-filter"
+                )
+            v = {k: x for k, x in v.items() if k != "type"}
+        return v
+
     @model_validator(mode="before")
     @classmethod
     def _offset_moved(cls, data):

@@ -250,6 +250,16 @@ class FilteredEstimator(Estimator):
     def count(self) -> int | None:
         return getattr(self.inner, "count", None)
 
+    @property
+    def holds_exogenous(self) -> bool:  # type: ignore[override]
+        return bool(self.inner.holds_exogenous)
+
+    def exogenous(self, t):
+        return self.inner.exogenous(t)
+
+    def held_exogenous(self, step):
+        return self.inner.held_exogenous(step)
+
     def initial_state(self, measurement0):
         return {
             "navigation": self.navigation_filter.initial_state(measurement0),
@@ -328,7 +338,9 @@ def filtered(
         return inner
     if "nominal_mass" not in sec.model_fields_set:
         sec = sec.model_copy(update={"nominal_mass": np.asarray(mass, float).tolist()})
-    return FilteredEstimator(navigation_filter=_build(sec, ctx), inner=inner)
+    return FilteredEstimator(
+        navigation_filter=_build(sec, ctx, "estimator.navigation"), inner=inner
+    )
 
 
 def navigation_conditions(phi, qd, r) -> list[Condition]:
@@ -445,7 +457,9 @@ class RelativeNavigationSection(StrictModel):
         return model, R
 
 
-def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str, np.ndarray]:
+def filter_model(
+    sec: RelativeNavigationSection, ctx: BuildContext, where: str = "estimator"
+) -> dict[str, np.ndarray]:
     """The on-board model's arrays (``phi``, ``gamma``, ``qd``, ``r``, ``nominal_mass``) of a filter
     section at the scenario's step.
 
@@ -455,6 +469,8 @@ def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str,
         The section (or one that extends it).
     ctx : BuildContext
         The build context (step and spacecraft count).
+    where : str, optional
+        The section's dotted name, for the errors.
 
     Returns
     -------
@@ -471,7 +487,7 @@ def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str,
     ((6, 6), [100.0, 100.0])
     """
     model, R = sec.model(ctx.dt)
-    mass = per_spacecraft(sec.nominal_mass, ctx.count, "estimator.nominal_mass")
+    mass = per_spacecraft(sec.nominal_mass, ctx.count, f"{where}.nominal_mass")
     return dict(
         phi=as_float(model.phi),
         gamma=as_float(model.gamma),
@@ -481,9 +497,12 @@ def filter_model(sec: RelativeNavigationSection, ctx: BuildContext) -> dict[str,
     )
 
 
-def _build(sec: RelativeNavigationSection, ctx: BuildContext) -> RelativeNavigationFilter:
-    """The filter of a validated ``[estimator] type = "relative-navigation-filter"`` section."""
-    arrays = filter_model(sec, ctx)
+def _build(
+    sec: RelativeNavigationSection, ctx: BuildContext, where: str = "estimator"
+) -> RelativeNavigationFilter:
+    """The filter of a validated ``[estimator] type = "relative-navigation-filter"`` section (or of
+    the table ``where``)."""
+    arrays = filter_model(sec, ctx, where)
     return RelativeNavigationFilter(
         count=ctx.count, p0=arrays["r"], force_limit=as_float(sec.force_limit), **arrays
     )
