@@ -9,11 +9,32 @@ import numpy as np
 
 from formation_ftc.sim.components import CompositionError, Estimator, FlightInputs, component
 
-__all__ = ["AccelerationModelEstimator"]
+__all__ = ["AccelerationModelEstimator", "WrapsInner"]
+
+
+class WrapsInner(Estimator):
+    """An estimator built around another one (its field ``inner``), passing through unchanged the
+    spacecraft count and the inner estimator's time signals."""
+
+    inner: Estimator
+
+    @property
+    def count(self) -> int | None:
+        return getattr(self.inner, "count", None)
+
+    @property
+    def holds_exogenous(self) -> bool:  # type: ignore[override]
+        return bool(self.inner.holds_exogenous)
+
+    def exogenous(self, t):
+        return self.inner.exogenous(t)
+
+    def held_exogenous(self, step):
+        return self.inner.held_exogenous(step)
 
 
 @component
-class AccelerationModelEstimator(Estimator):
+class AccelerationModelEstimator(WrapsInner):
     """Runs ``inner`` (an estimator whose model takes the command as an acceleration [m/s^2], e.g. the
     iterative learning observer's CW model ``q_hat' = A q_hat + B u + ...``) in a loop whose controller
     commands forces [N] (a force-driven plant). The time update receives the command per unit of the
@@ -44,20 +65,6 @@ class AccelerationModelEstimator(Estimator):
                 f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
                 f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)"
             )
-
-    @property
-    def count(self) -> int | None:
-        return getattr(self.inner, "count", None)
-
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return bool(self.inner.holds_exogenous)
-
-    def exogenous(self, t):
-        return self.inner.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.inner.held_exogenous(step)
 
     def initial_state(self, measurement0):
         return self.inner.initial_state(measurement0)

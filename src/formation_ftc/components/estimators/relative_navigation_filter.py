@@ -25,6 +25,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components.estimators._acceleration_model import WrapsInner
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
@@ -235,7 +236,7 @@ class RelativeNavigationFilter(Estimator):
 
 
 @component
-class FilteredEstimator(Estimator):
+class FilteredEstimator(WrapsInner):
     """Another estimator (``inner``, e.g. the iterative learning observer) run on this filter's
     estimate in place of the raw measurement, while the law flies on the same estimate: at t_k the
     filter's measurement update, then ``inner``'s update with ``y_k := x_hat_k``; after the control
@@ -245,20 +246,6 @@ class FilteredEstimator(Estimator):
 
     navigation_filter: RelativeNavigationFilter
     inner: Estimator
-
-    @property
-    def count(self) -> int | None:
-        return getattr(self.inner, "count", None)
-
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return bool(self.inner.holds_exogenous)
-
-    def exogenous(self, t):
-        return self.inner.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.inner.held_exogenous(step)
 
     def initial_state(self, measurement0):
         return {
