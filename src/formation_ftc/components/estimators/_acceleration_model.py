@@ -14,7 +14,7 @@ __all__ = ["AccelerationModelEstimator", "WrapsInner"]
 
 class WrapsInner(Estimator):
     """An estimator built around another one (its field ``inner``), passing through unchanged the
-    spacecraft count and the inner estimator's time signals."""
+    spacecraft count, the inner estimator's time signals, coordinates and conditions."""
 
     inner: Estimator
 
@@ -31,6 +31,13 @@ class WrapsInner(Estimator):
 
     def held_exogenous(self, step):
         return self.inner.held_exogenous(step)
+
+    def coords(self):
+        return self.inner.coords()
+
+    def conditions(self, loop) -> list:
+        conds = getattr(self.inner, "conditions", None)
+        return list(conds(loop)) if callable(conds) else []
 
 
 @component
@@ -82,13 +89,6 @@ class AccelerationModelEstimator(WrapsInner):
 
     def outputs(self, t, state, estimate):
         return self.inner.outputs(t, state, estimate)
-
-    def coords(self):
-        return self.inner.coords()
-
-    def conditions(self, loop) -> list:
-        conds = getattr(self.inner, "conditions", None)
-        return list(conds(loop)) if callable(conds) else []
 
     def needs(self) -> dict[str, str]:
         return self.inner.needs()

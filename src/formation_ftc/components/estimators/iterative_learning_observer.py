@@ -688,12 +688,6 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
     if stated is None:
         stated = getattr(ctx.section("controller"), "nominal_mass", None)
     mass = nominal_masses(stated, NOMINAL_MASS, N, "estimator.nominal_mass")
-    if sec.navigation is not None and not force_loop:
-        raise ValueError(
-            "estimator.navigation: the navigation filter predicts with a force command per unit "
-            f"nominal mass; this plant is driven by {ctx.plant.quantity} (give a force-driven plant "
-            "or no navigation table)"
-        )
     est: Estimator = (
         AccelerationModelEstimator(inner=ilo, nominal_mass=as_float(mass)) if force_loop else ilo
     )

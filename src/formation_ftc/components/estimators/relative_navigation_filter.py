@@ -275,14 +275,8 @@ class FilteredEstimator(WrapsInner):
         nav = self.navigation_filter.outputs(t, state["navigation"], estimate[NAVIGATION_ESTIMATE])
         return nav | self.inner.outputs(t, state["inner"], estimate)
 
-    def coords(self):
-        return self.inner.coords()
-
     def conditions(self, loop) -> list[Condition]:
-        conds = getattr(self.inner, "conditions", None)
-        return self.navigation_filter.conditions(loop) + (
-            list(conds(loop)) if callable(conds) else []
-        )
+        return self.navigation_filter.conditions(loop) + super().conditions(loop)
 
     def needs(self) -> dict[str, str]:
         return self.inner.needs() | self.navigation_filter.needs()
@@ -303,7 +297,7 @@ def filtered(
     sec : RelativeNavigationSection or None
         The filter's section (an estimator's ``navigation`` table), or None.
     ctx : BuildContext
-        The build's context (step and spacecraft count).
+        The build's context (step, spacecraft count and the plant, which must be force-driven).
     mass : array_like
         The flight masses [kg] the filter uses where its section states none (those of ``inner``).
 
@@ -317,12 +311,19 @@ def filtered(
     >>> from types import SimpleNamespace
     >>> sec = RelativeNavigationSection(semi_major_axis=7e6, position_noise_std=0.1,
     ...                                 velocity_noise_std=1e-3)
-    >>> chain = filtered(Estimator(), sec, SimpleNamespace(dt=1.0, count=2), [100.0, 120.0])
+    >>> ctx = SimpleNamespace(dt=1.0, count=2, plant=SimpleNamespace(quantity="force"))
+    >>> chain = filtered(Estimator(), sec, ctx, [100.0, 120.0])
     >>> chain.navigation_filter.nominal_mass.tolist(), sorted(chain.provides())
     ([100.0, 120.0], ['navigation-records'])
     """
     if sec is None:
         return inner
+    if ctx.plant.quantity != "force":
+        raise ValueError(
+            "estimator.navigation: the navigation filter predicts with a force command per unit "
+            f"nominal mass; this plant is driven by {ctx.plant.quantity} (give a force-driven plant "
+            "or no navigation table)"
+        )
     if "nominal_mass" not in sec.model_fields_set:
         sec = sec.model_copy(update={"nominal_mass": np.asarray(mass, float).tolist()})
     return FilteredEstimator(
