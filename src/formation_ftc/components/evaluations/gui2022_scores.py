@@ -12,7 +12,7 @@ and the plant's perturbation (``perturbation-signal``, plant ``clohessy-wiltshir
 
 from __future__ import annotations
 
-from typing import Any
+from functools import partial
 
 import numpy as np
 
@@ -118,90 +118,67 @@ def _scores_metrics(
     last = (n_steps - 0.5) * dt  # window end that excludes the horizon sample
     onset = [ks(t) for t in onset_s]
     k_rms = [k + ks(sec.fault_rms_delay) for k in onset]
+    worst = partial(Metric, spacecraft="max")  # the worst spacecraft
+    accel = partial(worst, units=ACC)
+    # low-pass (boxcar of lowpass_steps) RMS per axis
+    lowpass = partial(accel, reduce="block_rms", end=last, block=lowpass_steps(dt))
     out = []
     for i, ax in enumerate("xyz"):
-        err: dict[str, Any] = dict(
-            signal="fault_error", component=i, norm=True, spacecraft="max", units=ACC, end=last
-        )
+        err = partial(accel, signal="fault_error", component=i, norm=True, end=last)
         out += [
-            Metric(f"fault_rms_err_{ax}", reduce="rms", start=at(k_rms[i]), **err),
-            Metric(
+            err(f"fault_rms_err_{ax}", reduce="rms", start=at(k_rms[i])),
+            err(
                 f"fault_settle_time_{ax}",
                 reduce="settle_delay",
                 start=at(onset[i]),
                 threshold=sec.settle_threshold,
-                **{**err, "units": "s"},
+                units="s",
             ),
-            Metric(
-                f"fault_max_err_after_1s_{ax}", reduce="max", start=at(onset[i] + ks(1.0)), **err
-            ),
-            Metric(
-                f"final_fault_err_{ax}",
-                "fault_error",
-                reduce="final",
-                component=i,
-                spacecraft="max",
-                units=ACC,
-            ),
+            err(f"fault_max_err_after_1s_{ax}", reduce="max", start=at(onset[i] + ks(1.0))),
+            accel(f"final_fault_err_{ax}", "fault_error", reduce="final", component=i),
         ]
-    for c, name in enumerate(("x", "y", "z", "vx", "vy", "vz")):
-        out.append(
-            Metric(
-                f"sign_mean_{name}",
-                "estimation_error_sign",
-                reduce="mean",
-                component=c,
-                spacecraft="mean",
-                start=at(k_rms[c % 3]),
-                end=last,
-            )
-        )
-    out.append(
+    out += [
         Metric(
+            f"sign_mean_{name}",
+            "estimation_error_sign",
+            reduce="mean",
+            component=c,
+            spacecraft="mean",
+            start=at(k_rms[c % 3]),
+            end=last,
+        )
+        for c, name in enumerate(("x", "y", "z", "vx", "vy", "vz"))
+    ]
+    out.append(
+        worst(
             "estimate_max_err_after_start",
             "estimation_error",
             reduce="max",
             norm=True,
-            spacecraft="max",
             units="1",
             start=at(ks(sec.estimate_start)),
             end=(ks(sec.estimate_end) - 0.5) * dt,
         )
     )
-    # low-pass (boxcar of lowpass_steps) RMS of F - F_hat per axis over the fault_rms window, and the RMS
-    # of F_hat about its boxcar mean (the chatter) from fault_rms_delay to the x fault onset
-    box = lowpass_steps(dt)
+    # F - F_hat over the fault_rms window, and the RMS of F_hat about its boxcar mean (the chatter) from
+    # fault_rms_delay to the x fault onset
     for i, ax in enumerate("xyz"):
         out += [
-            Metric(
-                f"fault_lowpass_rms_err_{ax}",
-                "fault_error",
-                reduce="block_rms",
-                component=i,
-                spacecraft="max",
-                units=ACC,
-                start=at(k_rms[i]),
-                end=last,
-                block=box,
-            ),
-            Metric(
+            lowpass(f"fault_lowpass_rms_err_{ax}", "fault_error", component=i, start=at(k_rms[i])),
+            lowpass(
                 f"fault_estimate_chatter_rms_{ax}",
                 "fault_estimate",
                 reduce="block_dev_rms",
                 component=i,
-                spacecraft="max",
-                units=ACC,
                 start=at(ks(sec.fault_rms_delay)),
                 end=(onset[0] - 0.5) * dt,
-                block=box,
             ),
         ]
     out += [
-        Metric(
+        worst(
             f"estimate_pos_err_at_{tq:g}s",
             "estimation_position_error",
             reduce="at",
-            spacecraft="max",
             units="m",
             start=at(ks(tq)),
         )
@@ -210,63 +187,27 @@ def _scores_metrics(
     ]
     if not tracks:
         return out
-    pos: dict[str, Any] = dict(signal="position_tracking_error", spacecraft="max", units="m")
+    pos = partial(worst, signal="position_tracking_error", units="m")
+    axis = partial(worst, signal="tracking_error", reduce="max", norm=True, units="m")
     out += [
-        Metric("pos_rms", reduce="rms", start=at(ks(sec.position_rms_start)), end=last, **pos),
-        Metric("pos_max_after_fault", reduce="max", start=at(onset[0]), end=last, **pos),
-        Metric(
-            "ex_max_fault_window",
-            "tracking_error",
-            reduce="max",
-            component=0,
-            norm=True,
-            spacecraft="max",
-            units="m",
-            start=at(onset[0]),
-            end=(onset[2] - 0.5) * dt,
-        ),
-        Metric(
-            "ez_max_after",
-            "tracking_error",
-            reduce="max",
-            component=2,
-            norm=True,
-            spacecraft="max",
-            units="m",
-            start=at(ks(sec.z_amplitude_start)),
-            end=last,
-        ),
-        Metric(
-            "pos_settle_time_0p01",
-            reduce="settle",
-            threshold=0.01,
-            end=last,
-            **{**pos, "units": "s"},
-        ),
-        Metric("final_pos_err", reduce="final", **pos),
-        Metric(
-            "final_vel_err",
-            "velocity_tracking_error",
-            reduce="final",
-            spacecraft="max",
-            units="m s-1",
-        ),
+        pos("pos_rms", reduce="rms", start=at(ks(sec.position_rms_start)), end=last),
+        pos("pos_max_after_fault", reduce="max", start=at(onset[0]), end=last),
+        axis("ex_max_fault_window", component=0, start=at(onset[0]), end=(onset[2] - 0.5) * dt),
+        axis("ez_max_after", component=2, start=at(ks(sec.z_amplitude_start)), end=last),
+        pos("pos_settle_time_0p01", reduce="settle", threshold=0.01, end=last, units="s"),
+        pos("final_pos_err", reduce="final"),
+        worst("final_vel_err", "velocity_tracking_error", reduce="final", units="m s-1"),
     ]
     if learns:
-        out.append(Metric("pi_max", "learning_gain", reduce="max", spacecraft="max", end=last))
+        out.append(worst("pi_max", "learning_gain", reduce="max", end=last))
         # Fig. 10: low-pass RMS per axis of v - h and of h = d + F - F_hat from position_rms_start
         for i, ax in enumerate("xyz"):
             out += [
-                Metric(
+                lowpass(
                     f"{sig}_lowpass_rms_{ax}",
                     sig,
-                    reduce="block_rms",
                     component=i,
-                    spacecraft="max",
-                    units=ACC,
                     start=at(ks(sec.position_rms_start)),
-                    end=last,
-                    block=box,
                 )
                 for sig in ("compensation_error", "synthesized_disturbance")
             ]
