@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from formation_ftc.config.base import ExprText, StrictModel
 
@@ -14,6 +14,10 @@ __all__ = [
     "Vec3",
     "Vec3Expr",
     "Quat",
+    "UnitQuaternions",
+    "positive_values",
+    "Masses",
+    "Inertia",
     "per_axis",
     "expression_text",
     "check_unit_quaternions",
@@ -30,6 +34,50 @@ Vec3 = tuple[float, float, float]
 Vec3Expr = tuple[ExprText, ExprText, ExprText]
 #: a unit quaternion, vector part first
 Quat = tuple[float, float, float, float]
+
+
+def positive_values(what: str = "value", unit: str = "") -> AfterValidator:
+    """A field check: every number of the value (one, a list or a tuple of them; None passes) is finite
+    and > 0, else ``every <what> must be finite and > 0<unit>`` (the section error names the field).
+
+    Parameters
+    ----------
+    what : str
+        What one number is, for the error.
+    unit : str
+        Its unit, for the error (with a leading space).
+
+    Returns
+    -------
+    pydantic.AfterValidator
+        For ``Annotated[<type>, positive_values(...)]``.
+
+    Examples
+    --------
+    >>> from typing import Annotated
+    >>> from pydantic import TypeAdapter
+    >>> masses = TypeAdapter(Annotated[float | list[float], positive_values("mass", " kg")])
+    >>> masses.validate_python([100.0, 120.0])
+    [100.0, 120.0]
+    >>> masses.validate_python([100.0, 0.0])
+    Traceback (most recent call last):
+    ...
+    pydantic_core._pydantic_core.ValidationError: 1 validation error for ...
+    """
+
+    def check(value: Any) -> Any:
+        values = value if isinstance(value, list | tuple) else [value]
+        if value is not None and any(not (math.isfinite(v) and v > 0) for v in values):
+            raise ValueError(f"every {what} must be finite and > 0{unit}")
+        return value
+
+    return AfterValidator(check)
+
+
+#: stated (on-board) masses [kg]: one for every spacecraft or one per spacecraft, each finite and > 0
+Masses = Annotated[float | list[float], positive_values("mass", " kg")]
+#: principal inertias [kg m^2], each finite and > 0
+Inertia = Annotated[Vec3, positive_values("principal inertia", " kg m^2")]
 
 
 def per_axis(value: Any, n: int, field: str) -> np.ndarray:
@@ -120,6 +168,10 @@ def check_unit_quaternions(value: Quat | list[Quat] | None) -> Quat | list[Quat]
                 f"quaternion {k}: norm {norm:.9g}, a unit quaternion [q1, q2, q3, q4] is needed"
             )
     return value
+
+
+#: one unit quaternion (vector first), one per spacecraft, or None
+UnitQuaternions = Annotated[Quat | list[Quat] | None, AfterValidator(check_unit_quaternions)]
 
 
 def quaternion_rows(rows: Quat | list[Quat] | None, n: int, field: str) -> np.ndarray:

@@ -14,10 +14,10 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, per_spacecraft, register
-from formation_ftc.components._sections import Quat, check_unit_quaternions, quaternion_rows
+from formation_ftc.components._sections import UnitQuaternions, quaternion_rows
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.quaternion import quat_conjugate, quat_multiply
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
@@ -128,16 +128,11 @@ class AttitudePdSection(StrictModel):
     K_d: float | list[float] = Field(
         description="Rate gain K_d [N m s], one or per spacecraft, > 0."
     )
-    desired_quaternion: Quat | list[Quat] | None = Field(
+    desired_quaternion: UnitQuaternions = Field(
         None,
         description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
         "first) or one per spacecraft [-] (default identity: aligned with the state frame).",
     )
-
-    @model_validator(mode="after")
-    def _unit(self):
-        check_unit_quaternions(self.desired_quaternion)
-        return self
 
 
 def _build(sec: AttitudePdSection, ctx: BuildContext) -> AttitudePdController:

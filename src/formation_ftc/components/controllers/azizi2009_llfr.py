@@ -37,14 +37,13 @@ evaluation) unless the scenario lists them.
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
@@ -53,6 +52,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components._sections import Masses, positive_values
 from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
 from formation_ftc.components.sensors.chain_relative import chain_layout
 from formation_ftc.components.supervisors.hierarchical import FLFR, LLFR, NOMINAL
@@ -344,7 +344,7 @@ class ChainLlfrSection(StrictModel):
     omega: float = Field(
         description="Rotation rate of the desired polygon about the frame's third axis [rad/s]."
     )
-    alpha: float | list[float] = Field(
+    alpha: Annotated[float | list[float], positive_values()] = Field(
         1.0, description="LLFR cost weights alpha_i of eq. (3), > 0 [-]."
     )
     alpha_flfr: float | None = Field(
@@ -354,7 +354,7 @@ class ChainLlfrSection(StrictModel):
         "fields below when a hierarchical supervisor may switch to FLFR -- 4 spacecraft, spacecraft "
         "2 faulty -- otherwise its LLFR weight, i.e. FLFR changes nothing).",
     )
-    b: float | list[float] = Field(
+    b: Annotated[float | list[float], positive_values()] = Field(
         1.0, description="Nominal actuator gains b_i the law allocates with (every axis) [-]."
     )
     faulty_spacecraft: int | None = builder_input(
@@ -377,7 +377,7 @@ class ChainLlfrSection(StrictModel):
         "providing fault-identification, e.g. residual-fdi with identification = 'rls'); FLFR then "
         "raises alpha_flfr on the isolated spacecraft [-].",
     )
-    nominal_mass: float | list[float] | None = builder_input(
+    nominal_mass: Masses | None = builder_input(
         None,
         description="Masses the flight side scales the acceleration command with on a force-driven plant "
         "[kg] (the force adapter's nominal_mass; default 100 kg each, a stated nominal value: never the "
@@ -411,14 +411,6 @@ class ChainLlfrSection(StrictModel):
     alpha_reference: float = builder_input(
         1.0, gt=0, description="alpha_k at which the FLFR design evaluates A_clp for H_i [-]."
     )
-
-    @model_validator(mode="after")
-    def _values(self):
-        for name in ("alpha", "b", "nominal_mass"):
-            v = getattr(self, name)
-            if v is not None and any(not (x > 0 and math.isfinite(x)) for x in np.atleast_1d(v)):
-                raise ValueError(f"{name} = {v}: every value must be finite and > 0")
-        return self
 
 
 # ------------------------------------------------------------------------------------------ design

@@ -12,10 +12,10 @@ adaptation; its on-board masses are stated (``nominal_mass``, default 100 kg).
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import jax.numpy as jnp
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
@@ -24,7 +24,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import Masses, Vec3, Vec3Expr, positive_values
 from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -65,19 +65,20 @@ class LqrFormationController(DesiredPositionLaw):
         return self.nominal_mass[:, None] * accel, None, {}
 
 
-_BRYSON = ("max_position_error", "max_velocity_error", "max_acceleration")
+#: a limit of Bryson's rule: one number or one per axis, each finite and > 0
+_Limit = Annotated[float | Vec3, positive_values()]
 
 
 class LqrSection(StrictModel):
     """LQR on the CW model: weights by Bryson's rule, Q = diag(1/e_max^2), R = diag(1/a_max^2)."""
 
-    max_position_error: float | Vec3 = builder_input(
+    max_position_error: _Limit = builder_input(
         description="Bryson's rule: largest acceptable position error [m], one number or one per LVLH axis; > 0."
     )
-    max_velocity_error: float | Vec3 = builder_input(
+    max_velocity_error: _Limit = builder_input(
         description="Bryson's rule: largest acceptable velocity error [m/s], one number or one per axis; > 0."
     )
-    max_acceleration: float | Vec3 = builder_input(
+    max_acceleration: _Limit = builder_input(
         description="Bryson's rule: largest acceptable commanded acceleration [m/s^2], one number or one per axis; > 0."
     )
     semi_major_axis: float | None = builder_input(
@@ -94,7 +95,7 @@ class LqrSection(StrictModel):
         "(default: the [reference] orbit's, else Earth's "
         "3.986004418e14; never the plant's).",
     )
-    nominal_mass: float | list[float] = Field(
+    nominal_mass: Masses = Field(
         NOMINAL_MASS,
         description="Nominal on-board mass per spacecraft [kg], one or per spacecraft, > 0 (default "
         "100 kg, a stated nominal value: never the plant's true masses).",
@@ -116,22 +117,6 @@ class LqrSection(StrictModel):
         gt=0,
         description="Rated thrust per axis the reallocation respects [N] (flight knowledge; inf: none).",
     )
-
-    @field_validator(*_BRYSON)
-    @classmethod
-    def _positive(cls, value):
-        values = value if isinstance(value, tuple) else (value,)
-        if any(not (math.isfinite(v) and v > 0) for v in values):
-            raise ValueError("every value must be finite and > 0")
-        return value
-
-    @field_validator("nominal_mass")
-    @classmethod
-    def _masses(cls, value):
-        values = value if isinstance(value, list) else [value]
-        if any(not (math.isfinite(m) and m > 0) for m in values):
-            raise ValueError("every mass must be finite and > 0 kg")
-        return value
 
 
 def _from_reference(ctx: BuildContext, name: str) -> float | None:

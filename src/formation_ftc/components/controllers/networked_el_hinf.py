@@ -71,7 +71,7 @@ from pydantic import Field, model_validator
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Vec3, Vec3Expr, expression_text
+from formation_ftc.components._sections import Inertia, Vec3Expr, expression_text
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core import graph as graphs
@@ -555,7 +555,7 @@ class NetworkedElHinfSection(StrictModel):
     sigma: float = Field(0.5, gt=0.0, description="Adaptation gain sigma I_3 [N m / rad].")
     e_gain: float = Field(1.0, gt=0.0, description="Estimate pull towards the FDI estimate [1/s].")
     boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s].")
-    nominal_inertia: Vec3 = Field(
+    nominal_inertia: Inertia = Field(
         MEHRABIAN_NOMINAL_INERTIA,
         description="Principal inertia of the law's model, known on "
         "board [kg m^2] (default 20, 18, 15 kg m^2, "
@@ -584,10 +584,6 @@ class NetworkedElHinfSection(StrictModel):
                 raise ValueError(
                     f"edges[{k}] = [{a}, {b}]: 1-based spacecraft numbers, no self-loops"
                 )
-        if any(not x > 0 for x in self.nominal_inertia):
-            raise ValueError(
-                f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2"
-            )
         return self
 
 

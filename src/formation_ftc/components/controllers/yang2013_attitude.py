@@ -15,14 +15,13 @@ from __future__ import annotations
 from typing import Any
 
 import jax.numpy as jnp
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.components._sections import (
-    Quat,
-    Vec3,
-    check_unit_quaternions,
+    Inertia,
+    UnitQuaternions,
     quaternion_rows,
 )
 from formation_ftc.components.controllers._yang2013 import (
@@ -118,26 +117,17 @@ class Yang2013AttitudeSection(StrictModel):
     K4: float = Field(1.0, gt=0.0, description="Quaternion-vector shaping gain K4 [1/s].")
     K5: float = Field(1.0, gt=0.0, description="Quaternion-scalar shaping gain K5 [1/s].")
     kappa: float = Field(1e-3, gt=0.0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
-    nominal_inertia: Vec3 = Field(
+    nominal_inertia: Inertia = Field(
         NOMINAL_INERTIA,
         description="Principal inertia of the law's model, known on board "
         "[kg m^2] (default 25, 25, 25 kg m^2, Yang2013's spacecraft, a "
         "stated value: never the plant's true inertia).",
     )
-    desired_quaternion: Quat | list[Quat] | None = Field(
+    desired_quaternion: UnitQuaternions = Field(
         None,
         description="Desired attitude, body -> state frame, one unit quaternion [q1, q2, q3, q4] (vector "
         "first) or one per spacecraft [-] (default identity: aligned with the state frame).",
     )
-
-    @model_validator(mode="after")
-    def _check(self):
-        if any(not x > 0 for x in self.nominal_inertia):
-            raise ValueError(
-                f"nominal_inertia = {self.nominal_inertia}: every entry must be > 0 kg m^2"
-            )
-        check_unit_quaternions(self.desired_quaternion)
-        return self
 
 
 def _build(sec: Yang2013AttitudeSection, ctx: BuildContext) -> Yang2013AttitudeHold:

@@ -9,13 +9,11 @@ masses are stated (``nominal_mass``, default 150 kg, Yang2013's spacecraft).
 
 from __future__ import annotations
 
-import math
-
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import YANG2013_NOMINAL_MASS
 from formation_ftc.components._registry import BuildContext, register
-from formation_ftc.components._sections import Vec3Expr
+from formation_ftc.components._sections import Masses, Vec3Expr
 from formation_ftc.components.controllers._yang2013 import (
     Yang2013TranslationalController,
     translational_law,
@@ -33,7 +31,7 @@ class Yang2013TranslationalSection(StrictModel):
         0.005, gt=0, description="Position gain offset K1 (e_R gain K1 + 1) [1/s^2], > 0."
     )
     K2: float = Field(0.01, gt=0, description="Velocity gain K2 [1/s], > 0.")
-    nominal_mass: float | list[float] = Field(
+    nominal_mass: Masses = Field(
         YANG2013_NOMINAL_MASS,
         description="Mass M_i used by the law [kg] (one or per spacecraft; default 150 kg, Yang2013's "
         "spacecraft, a stated nominal value: never the plant's true masses).",
@@ -41,14 +39,6 @@ class Yang2013TranslationalSection(StrictModel):
     desired_position: Vec3Expr = Field(
         ("0", "0", "0"), description="Desired position p^d per axis, expressions in t [s], i [m]."
     )
-
-    @field_validator("nominal_mass")
-    @classmethod
-    def _masses(cls, value):
-        values = value if isinstance(value, list) else [value]
-        if any(not (v > 0 and math.isfinite(v)) for v in values):
-            raise ValueError("every mass must be finite and > 0 kg")
-        return value
 
 
 def _build(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2013TranslationalController:

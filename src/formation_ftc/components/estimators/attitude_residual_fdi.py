@@ -34,7 +34,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Inertia
 from formation_ftc.components.estimators._fdi import (
     FdiDrift,
     FdiForgetting,
@@ -456,7 +456,7 @@ class AttitudeResidualFdiSection(StrictModel):
     """Actuator-fault detection, isolation and identification of an Euler-angle attitude law from the
     rigid-body residual (body axes), reported in the law's generalised channels (flag, u*)."""
 
-    nominal_inertia: Vec3 = Field(
+    nominal_inertia: Inertia = Field(
         MEHRABIAN_NOMINAL_INERTIA,
         description="Principal inertia of the residual's model, known on board [kg m^2] (default 20, "
         "18, 15 kg m^2, the Euler-angle law's default model; a stated value: never the plant's "
@@ -525,13 +525,6 @@ class AttitudeResidualFdiSection(StrictModel):
         description="Time constant of the moving average of the residual that identifies the fault's "
         "magnitude [s].",
     )
-
-    @field_validator("nominal_inertia")
-    @classmethod
-    def _inertia(cls, value):
-        if any(not x > 0 for x in value):
-            raise ValueError(f"{list(value)}, each must be > 0 kg m^2")
-        return value
 
     @field_validator("torque_limit")
     @classmethod

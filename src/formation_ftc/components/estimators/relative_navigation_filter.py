@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
@@ -25,6 +25,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components._sections import Masses
 from formation_ftc.components.estimators._acceleration_model import WrapsInner
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -418,20 +419,12 @@ class RelativeNavigationSection(StrictModel):
         description="Rated thrust per axis [N] (flight knowledge): the filter predicts with the "
         "command clipped to it, the force a healthy rated thruster applies; inf: no limit.",
     )
-    nominal_mass: float | list[float] = Field(
+    nominal_mass: Masses = Field(
         NOMINAL_MASS,
         description="On-board mass per spacecraft that turns the commanded force into acceleration "
         "[kg], one or per spacecraft, > 0 (default 100 kg, a stated nominal value: never the "
         "plant's true masses).",
     )
-
-    @field_validator("nominal_mass")
-    @classmethod
-    def _masses(cls, value):
-        values = value if isinstance(value, list) else [value]
-        if any(not (math.isfinite(m) and m > 0) for m in values):
-            raise ValueError("every mass must be finite and > 0 kg")
-        return value
 
     def model(self, dt: float):
         """(discrete model, R) of the filter at step ``dt`` [s]."""

@@ -15,10 +15,10 @@ from typing import Any
 
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Quat, check_unit_quaternions, quaternion_rows
+from formation_ftc.components._sections import UnitQuaternions, quaternion_rows
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.quaternion import quat_conjugate, quat_multiply
 from formation_ftc.sim.components import Evaluation, Signal, component, static
@@ -138,7 +138,7 @@ class AttitudeScores(Evaluation):
 class AttitudeScoresSection(StrictModel):
     """Attitude error, pairwise synchronisation error and applied torque against a common attitude."""
 
-    desired_quaternion: Quat | list[Quat] | None = Field(
+    desired_quaternion: UnitQuaternions = Field(
         None,
         description="Desired attitude body -> `frame`, one unit quaternion [q1, q2, q3, q4] (vector first) "
         "or one per spacecraft [-] (default identity).",
@@ -148,11 +148,6 @@ class AttitudeScoresSection(StrictModel):
         description="Frame of desired_quaternion: 'inertial', 'lvlh' or 'state' (the "
         "plant's state_frame).",
     )
-
-    @model_validator(mode="after")
-    def _unit(self):
-        check_unit_quaternions(self.desired_quaternion)
-        return self
 
 
 def _build(sec: AttitudeScoresSection, ctx: BuildContext) -> AttitudeScores:

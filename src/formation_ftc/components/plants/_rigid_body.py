@@ -6,14 +6,19 @@ capability ``quaternion-attitude-state``) and the section fields of the initial 
 from __future__ import annotations
 
 import functools
-import math
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import AfterValidator, Field, model_validator
 
 from formation_ftc.components._registry import builder_input
-from formation_ftc.components._sections import Quat, Vec3, Vec3Expr
+from formation_ftc.components._sections import (
+    Inertia,
+    Quat,
+    Vec3,
+    Vec3Expr,
+    check_unit_quaternions,
+)
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Plant
@@ -82,7 +87,7 @@ class RigidBodyAttitudeSection(StrictModel):
     """Fields shared by the rigid-body attitude plants: principal inertia, initial attitude (Euler
     angles or quaternions), initial body rate and disturbance torque, with their checks."""
 
-    inertia: Vec3 = Field(
+    inertia: Inertia = Field(
         description="Principal inertia diag(J) of every spacecraft [kg m^2], each > 0."
     )
     initial_attitude_deg: list[Vec3] | None = builder_input(
@@ -90,9 +95,11 @@ class RigidBodyAttitudeSection(StrictModel):
         description="Initial 3-2-1 Euler angles [theta (pitch), phi (roll), psi (yaw)] per spacecraft "
         "[deg] (converted to quaternions; give this or initial_quaternion).",
     )
-    initial_quaternion: list[Quat] | None = Field(
-        None,
-        description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].",
+    initial_quaternion: Annotated[list[Quat] | None, AfterValidator(check_unit_quaternions)] = (
+        Field(
+            None,
+            description="Initial unit quaternion [q1, q2, q3, q4] (vector first) per spacecraft [-].",
+        )
     )
     initial_body_rate: list[Vec3] | None = Field(
         None,
@@ -105,22 +112,10 @@ class RigidBodyAttitudeSection(StrictModel):
 
     @model_validator(mode="after")
     def _initial_attitude(self):
-        for k, x in enumerate(self.inertia):
-            if not (x > 0 and math.isfinite(x)):
-                raise ValueError(
-                    f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2"
-                )
         if (self.initial_attitude_deg is None) == (self.initial_quaternion is None):
             raise ValueError(
                 "give exactly one of initial_attitude_deg [deg] and initial_quaternion [-]"
             )
-        if self.initial_quaternion is not None:
-            for k, p in enumerate(self.initial_quaternion):
-                norm = float(np.linalg.norm(p))
-                if not abs(norm - 1.0) <= 1e-6:
-                    raise ValueError(
-                        f"initial_quaternion[{k}]: norm {norm:.9g}, a unit quaternion is needed"
-                    )
         n = self.count
         if n < 1:
             raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")

@@ -23,7 +23,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Vec3, expression_text
+from formation_ftc.components._sections import Inertia, Vec3, expression_text
 from formation_ftc.components.plants._rigid_body import (
     RigidBodyAttitudeSection,
     RigidBodyTorquePlant,
@@ -270,7 +270,7 @@ Mat3 = tuple[Vec3, Vec3, Vec3]
 class AttitudeTruthSection(RigidBodyAttitudeSection):
     """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
 
-    inertia: Vec3 = Field(
+    inertia: Inertia = Field(
         description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
         "spacecraft unless inertia_matrices is given (an attitude law's model is "
         "stated in its own section)."

@@ -22,7 +22,6 @@ mapping: the plant provides the capabilities ``euler-angle-attitude-state``,
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import jax
@@ -31,7 +30,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Inertia, Vec3
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
 from formation_ftc.core.disturbances import run_key, step_key
@@ -194,7 +193,7 @@ class EulerAnglePlantSection(StrictModel):
     (E003-10)."""
 
     count: int = builder_input(8, ge=1, le=64, description="Number m of spacecraft [-].")
-    inertia: Vec3 = Field(
+    inertia: Inertia = Field(
         (20.0, 18.0, 15.0),
         description="Principal inertia diag(...) about which every spacecraft's true inertia is drawn "
         "[kg m^2], each > 0 (default 20, 18, 15 kg m^2, our choice E003-10; an attitude law's "
@@ -233,11 +232,6 @@ class EulerAnglePlantSection(StrictModel):
 
     @model_validator(mode="after")
     def _check(self):
-        for k, x in enumerate(self.inertia):
-            if not (x > 0 and math.isfinite(x)):
-                raise ValueError(
-                    f"inertia[{k}] = {x}: principal inertias must be finite and > 0 kg m^2"
-                )
         lo, hi = self.initial_attitude_range_deg
         if not lo <= hi:
             raise ValueError(
