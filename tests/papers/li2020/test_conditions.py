@@ -158,7 +158,7 @@ def test_bad_adjacency_rejected(load, C, words):
 
 
 def test_other_validation_messages(load):
-    with pytest.raises(ScenarioError, match="k must be > 0"):
+    with pytest.raises(ScenarioError, match="controller.k: every value must be finite and > 0"):
         load("li2020-thm1", {"controller.k": -0.2})
     with pytest.raises(ScenarioError, match="network.delays"):
         load("li2020-thm1", {"network.type": "delayed-graph"})

@@ -56,8 +56,7 @@ first on phase is a false alarm. With ``euler_allocation`` it needs the plant's
 
 from __future__ import annotations
 
-import math
-from typing import Any
+from typing import Annotated, Any
 
 import jax.numpy as jnp
 import numpy as np
@@ -69,6 +68,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components._sections import positive_values
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
@@ -314,9 +314,11 @@ class FaultBatterySection(StrictModel):
     min_effectiveness: float = Field(
         0.0, ge=0.0, le=1.0, description="Floor of a degrading fault's effectiveness [-]."
     )
-    saturation: float | list[float] | None = Field(
-        None,
-        description="Per-axis output limit [N or N m], one number or one per spacecraft (omit: unsaturated).",
+    saturation: Annotated[float | list[float] | None, positive_values("limit", " N or N m")] = (
+        Field(
+            None,
+            description="Per-axis output limit [N or N m], one number or one per spacecraft (omit: unsaturated).",
+        )
     )
     euler_allocation: bool = Field(
         False,
@@ -330,16 +332,6 @@ class FaultBatterySection(StrictModel):
         if v not in FAULT_KINDS:
             raise ValueError(
                 f"kind = {v!r} is not a fault kind (allowed: {', '.join(FAULT_KINDS)})"
-            )
-        return v
-
-    @field_validator("saturation")
-    @classmethod
-    def _limits(cls, v):
-        lim = [] if v is None else np.atleast_1d(np.asarray(v, float)).tolist()
-        if any(not (x > 0 and math.isfinite(x)) for x in lim):
-            raise ValueError(
-                f"saturation = {v}: limits must be finite and > 0 [N or N m] (omit it for none)"
             )
         return v
 

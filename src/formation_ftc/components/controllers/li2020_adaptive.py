@@ -27,10 +27,10 @@ eq. (16) integrates from t0): ``1/(a (t + t0)^2)``.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import jax.numpy as jnp
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
@@ -39,6 +39,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
+from formation_ftc.components._sections import positive_values
 from formation_ftc.components.controllers._formation import FormationSection, RotatingFormation
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -394,6 +395,10 @@ class Li2020AdaptiveController(Controller):
         return {"reference-orbit": "form the natural acceleration of its regressor Y_i (eq. (8))"}
 
 
+#: a per-spacecraft gain or initial estimate: one number or N, each finite and > 0
+_Positive = Annotated[float | list[float], positive_values()]
+
+
 class Li2020Section(StrictModel):
     """Li2020 adaptive FTC: Thm 1 (eqs. (23)-(27)) over a ``graph`` network, Thm 2 (eqs. (41)-(45))
     over a ``delayed-graph``. Per-spacecraft fields take one number or N."""
@@ -402,7 +407,7 @@ class Li2020Section(StrictModel):
     #: ``li2020-formation-errors`` evaluation (final values and values at 0.9 T)
     adaptive_parameters: ClassVar[dict[str, str]] = ADAPTIVE_PARAMETERS
     formation: FormationSection
-    k: float | list[float] = Field(
+    k: _Positive = Field(
         0.2, description="k_i of s_i = e_i2 + k_i e_i1 (eq. (6)) [1/s], > 0 (Lemma 2)."
     )
     lam: float | list[float] = Field(
@@ -426,7 +431,7 @@ class Li2020Section(StrictModel):
         description="upsilon_i, d_hat leakage gain [1/(N s)] per unit sigma (not in the paper: our "
         "choice, E000-12).",
     )
-    m_hat0: float | list[float] = Field(
+    m_hat0: _Positive = Field(
         NOMINAL_MASS,
         description="m_hat_i(0), initial mass estimate [kg], > 0 (default 100 kg, a stated nominal "
         "value).",
@@ -434,10 +439,10 @@ class Li2020Section(StrictModel):
     beta_hat0: float | list[float] = Field(
         1.0, description="beta_hat_i(0), initial inverse-effectiveness estimate [-]."
     )
-    d_hat0: float | list[float] = Field(
+    d_hat0: _Positive = Field(
         0.001, description="d_hat_i(0), initial disturbance-bound estimate [N], > 0 (eq. (27))."
     )
-    sigma_a: float | list[float] = Field(
+    sigma_a: _Positive = Field(
         0.001,
         description="a_i of sigma_i(t) [1/s] (exponential) or [1/s^2] (inverse square), > 0.",
     )
@@ -455,14 +460,6 @@ class Li2020Section(StrictModel):
         description="Use the printed sign of the d_hat tanh term (+ in eq. (24), Thm 1; - in eq. (42), "
         "Thm 2, i.e. over a delayed network) instead of + in both (E000-04).",
     )
-
-    @field_validator("k", "m_hat0", "d_hat0", "sigma_a")
-    @classmethod
-    def _positive(cls, v, info):
-        vals = v if isinstance(v, list) else [v]
-        if any(not x > 0 for x in vals):
-            raise ValueError(f"{info.field_name} must be > 0, got {v}")
-        return v
 
 
 #: per-spacecraft fields of the section (one number or N)
