@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 from pydantic import Field, ValidationError, model_validator
 
+from formation_ftc.components._sections import check_rows, per_spacecraft
 from formation_ftc.config.base import StrictModel, error_location
 
 __all__ = [
@@ -334,36 +335,6 @@ def component_types(kind: str | None = None) -> dict[tuple[str, str], ComponentT
     return {key: v for key, v in sorted(_TYPES.items()) if kind is None or key[0] == kind}
 
 
-def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
-    """One number or ``n`` numbers -> (n,) float64 (errors name ``field``).
-
-    Parameters
-    ----------
-    value : float or sequence of float
-        One value for every spacecraft, or one per spacecraft.
-    n : int
-        Number of spacecraft.
-    field : str
-        The field's dotted name, for the error.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (n,).
-
-    Examples
-    --------
-    >>> per_spacecraft(2.0, 3, "controller.kp")
-    array([2., 2., 2.])
-    """
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
-    return arr
-
-
 #: key of a field's JSON-schema extra that marks it as a builder input
 _BUILDER_INPUT = "builder_input"
 
@@ -482,10 +453,7 @@ class InitialStateRows(StrictModel):
         n = len(self.initial_position)
         if n < 1:
             raise ValueError("initial_position: at least one spacecraft")
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(
-                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
-            )
+        check_rows(self, ["initial_velocity"], n)
         return self
 
     @property

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 import numpy as np
@@ -19,11 +20,14 @@ __all__ = [
     "Masses",
     "Inertia",
     "per_axis",
+    "per_spacecraft",
     "expression_text",
     "check_unit_quaternions",
     "quaternion_rows",
     "onboard_mean_motion",
     "nominal_masses",
+    "check_rows",
+    "initial_states",
     "STATE_DIM",
     "ErrorState",
 ]
@@ -78,6 +82,36 @@ def positive_values(what: str = "value", unit: str = "") -> AfterValidator:
 Masses = Annotated[float | list[float], positive_values("mass", " kg")]
 #: principal inertias [kg m^2], each finite and > 0
 Inertia = Annotated[Vec3, positive_values("principal inertia", " kg m^2")]
+
+
+def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:
+    """One number or ``n`` numbers -> (n,) float64 (errors name ``field``).
+
+    Parameters
+    ----------
+    value : float or sequence of float
+        One value for every spacecraft, or one per spacecraft.
+    n : int
+        Number of spacecraft.
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n,).
+
+    Examples
+    --------
+    >>> per_spacecraft(2.0, 3, "controller.kp")
+    array([2., 2., 2.])
+    """
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    return arr
 
 
 def per_axis(value: Any, n: int, field: str) -> np.ndarray:
@@ -265,14 +299,64 @@ def nominal_masses(value: Any, default: float, n: int, field: str) -> np.ndarray
     >>> nominal_masses(None, 100.0, 2, "controller.nominal_mass").tolist()
     [100.0, 100.0]
     """
-    arr = np.asarray(default if value is None else value, dtype=float)
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ValueError(f"{field}: {arr.size} values for {n} spacecraft (give one number or {n})")
+    arr = per_spacecraft(default if value is None else value, n, field)
     if not np.all(np.isfinite(arr) & (arr > 0)):
         raise ValueError(f"{field}: every mass must be finite and > 0 kg")
     return arr
+
+
+def check_rows(section: Any, names: Sequence[str], n: int) -> None:
+    """A ValueError naming the first of the fields ``names`` of ``section`` that is given (not None)
+    without one row per spacecraft (a section validator's check).
+
+    Parameters
+    ----------
+    section : pydantic.BaseModel
+        The section.
+    names : sequence of str
+        Its per-spacecraft fields.
+    n : int
+        Number of spacecraft.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> check_rows(SimpleNamespace(initial_velocity=None), ["initial_velocity"], 2)
+    >>> check_rows(SimpleNamespace(initial_position=[(0.0, 0.0, 0.0)]), ["initial_position"], 2)
+    Traceback (most recent call last):
+    ...
+    ValueError: initial_position: 1 rows for 2 spacecraft
+    """
+    for name in names:
+        rows = getattr(section, name)
+        if rows is not None and len(rows) != n:
+            raise ValueError(f"{name}: {len(rows)} rows for {n} spacecraft")
+
+
+def initial_states(position: Any, velocity: Any) -> np.ndarray:
+    """Initial states ``[r, v]`` (N, 6) from one position row per spacecraft and as many velocity rows
+    (None: at rest).
+
+    Parameters
+    ----------
+    position : array_like, shape (N, 3)
+        Initial positions [m].
+    velocity : array_like, shape (N, 3), or None
+        Initial velocities [m/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (N, 6), float64 [m, m/s].
+
+    Examples
+    --------
+    >>> initial_states([(1.0, 2.0, 3.0)], None).tolist()
+    [[1.0, 2.0, 3.0, 0.0, 0.0, 0.0]]
+    """
+    r = np.asarray(position, dtype=float)
+    v = np.zeros_like(r) if velocity is None else np.asarray(velocity, dtype=float)
+    return np.hstack([r, v])
 
 
 #: length of Yang2013's error state x_i = [e_R, e_V, e_w, e_q, e_q4] (7) of one spacecraft

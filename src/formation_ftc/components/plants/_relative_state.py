@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import builder_input
-from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import Vec3, Vec3Expr, check_rows, initial_states
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Plant
 
@@ -68,14 +68,7 @@ class PointMassSection(StrictModel):
         n = len(self.mass)
         if n < 1 or any(not (m > 0 and math.isfinite(m)) for m in self.mass):
             raise ValueError("mass: at least one spacecraft, every mass finite and > 0 kg")
-        if len(self.initial_position) != n:
-            raise ValueError(
-                f"initial_position: {len(self.initial_position)} rows for {n} spacecraft"
-            )
-        if self.initial_velocity is not None and len(self.initial_velocity) != n:
-            raise ValueError(
-                f"initial_velocity: {len(self.initial_velocity)} rows for {n} spacecraft"
-            )
+        check_rows(self, ["initial_position", "initial_velocity"], n)
         return self
 
     @property
@@ -85,9 +78,4 @@ class PointMassSection(StrictModel):
 
     def q0(self) -> np.ndarray:
         """The (N, 6) initial relative states [m, m/s]."""
-        v0 = (
-            np.zeros((self.count, 3))
-            if self.initial_velocity is None
-            else np.asarray(self.initial_velocity)
-        )
-        return np.hstack([np.asarray(self.initial_position, float), v0])
+        return initial_states(self.initial_position, self.initial_velocity)

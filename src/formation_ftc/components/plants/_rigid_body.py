@@ -17,6 +17,7 @@ from formation_ftc.components._sections import (
     Quat,
     Vec3,
     Vec3Expr,
+    check_rows,
     check_unit_quaternions,
 )
 from formation_ftc.components.expressions import vector_expression
@@ -119,10 +120,7 @@ class RigidBodyAttitudeSection(StrictModel):
         n = self.count
         if n < 1:
             raise ValueError("initial_attitude_deg / initial_quaternion: at least one spacecraft")
-        if self.initial_body_rate is not None and len(self.initial_body_rate) != n:
-            raise ValueError(
-                f"initial_body_rate: {len(self.initial_body_rate)} rows for {n} spacecraft"
-            )
+        check_rows(self, ["initial_body_rate"], n)
         return self
 
     @property

@@ -17,7 +17,7 @@ from formation_ftc.components._registry import (
     builder_input,
     register,
 )
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Vec3, initial_states
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
@@ -133,10 +133,9 @@ class ZohCwPlantSection(InitialStateRows):
 
 def _build(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
     """The plant of a validated ``[plant] type = "clohessy-wiltshire-zoh"`` section."""
-    v0 = np.zeros((sec.count, 3)) if sec.initial_velocity is None else sec.initial_velocity
     return ZohClohessyWiltshirePlant(
         mean_motion=as_float(sec.mean_motion),
-        initial_state_lvlh=as_float(np.hstack([np.asarray(sec.initial_position, float), v0])),
+        initial_state_lvlh=as_float(initial_states(sec.initial_position, sec.initial_velocity)),
         disturbance_amplitude=as_float(sec.disturbance_amplitude),
     )
 

@@ -30,7 +30,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Inertia, Vec3
+from formation_ftc.components._sections import Inertia, Vec3, check_rows
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
 from formation_ftc.core.disturbances import run_key, step_key
@@ -253,10 +253,7 @@ class EulerAnglePlantSection(StrictModel):
                 np.deg2rad(np.asarray(self.initial_attitude_deg, dtype=float)),
                 field="initial_attitude_deg",
             )
-        for name in ("initial_attitude_deg", "initial_rate_deg_s"):
-            rows = getattr(self, name)
-            if rows is not None and len(rows) != self.count:
-                raise ValueError(f"{name}: {len(rows)} rows for {self.count} spacecraft")
+        check_rows(self, ["initial_attitude_deg", "initial_rate_deg_s"], self.count)
         return self
 
 

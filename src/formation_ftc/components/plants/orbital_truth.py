@@ -25,7 +25,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import Vec3, Vec3Expr, check_rows, initial_states
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import (
@@ -343,10 +343,7 @@ class OrbitalTruthSection(StrictModel):
             raise ValueError(
                 "initial_velocity: not used with initial_roe (the elements fix the velocity)"
             )
-        for name in ("initial_position", "initial_velocity", "initial_roe"):
-            rows = getattr(self, name)
-            if rows is not None and len(rows) != n:
-                raise ValueError(f"{name}: {len(rows)} rows for {n} spacecraft")
+        check_rows(self, ["initial_position", "initial_velocity", "initial_roe"], n)
         if (
             self.initial_roe is not None
             and any(r[5] != 0 for r in self.initial_roe)
@@ -381,12 +378,7 @@ class OrbitalTruthSection(StrictModel):
     def q0(self) -> np.ndarray:
         if self.initial_position is None:
             return np.zeros((self.count, 6))
-        v0 = (
-            np.zeros((self.count, 3))
-            if self.initial_velocity is None
-            else np.asarray(self.initial_velocity)
-        )
-        return np.hstack([np.asarray(self.initial_position, float), v0])
+        return initial_states(self.initial_position, self.initial_velocity)
 
     def density_table(self) -> np.ndarray:
         if self.density_base is None:
