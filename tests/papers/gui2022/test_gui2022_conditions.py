@@ -57,7 +57,7 @@ def test_tau_not_multiple_of_dt_rejected():
 def test_field_validation_messages():
     with pytest.raises(ScenarioError, match=r"estimator.Q1: Q1\[1\] = 1.5"):
         ftc.load_scenario("gui2022-ilo", {"estimator.Q1": [0.99, 1.5, 0.99]})
-    with pytest.raises(ScenarioError, match="estimator.L2: L2: expected a 3x6"):
+    with pytest.raises(ScenarioError, match="estimator.L2: expected a 3x6"):
         ftc.load_scenario("gui2022-ilo", {"estimator.L2": [[1.0] * 6] * 2})
     with pytest.raises(ScenarioError, match="controller.type = 'pid' is not a controller type"):
         ftc.load_scenario("gui2022-ilo", {"controller.type": "pid"})

@@ -29,15 +29,15 @@ from typing import Any, Literal
 
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, model_validator
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import BuildContext, builder_input
 from formation_ftc.components._sections import nominal_masses, onboard_mean_motion
 from formation_ftc.components.estimators.iterative_learning_observer import (
     ONBOARD_MEAN_MOTION,
+    Gain3x6,
     Vec6,
-    _matrix,
 )
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_free_motion
@@ -174,9 +174,7 @@ class OutputFeedbackSection(StrictModel):
             "K: 'printed' as given, or 'care' = B^T P1 from the CARE (34) at the on-board mean motion."
         ),
     )
-    K: list[list[float]] | None = Field(
-        None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed')."
-    )
+    K: Gain3x6 = Field(None, description="Gain K (3x6) [1/s^2, 1/s] (gains = 'printed').")
     care_q_scale: float = builder_input(
         4e-5, gt=0, description="Q = care_q_scale I6 of the CARE (34) [-] (gains = 'care')."
     )
@@ -189,11 +187,6 @@ class OutputFeedbackSection(StrictModel):
             "acceleration-driven plant)."
         ),
     )
-
-    @field_validator("K")
-    @classmethod
-    def _k(cls, v):
-        return _matrix(v, (3, 6), "K")
 
     @model_validator(mode="after")
     def _printed_given(self):

@@ -46,12 +46,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import AfterValidator, Field, field_validator, model_validator
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import (
@@ -435,17 +435,28 @@ class IterativeLearningObserver(Estimator):
 
 
 # -------------------------------------------------------------------------------------- section
-def _matrix(value, shape, field: str):
-    if value is None:
-        return None
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != shape:
-        raise ValueError(
-            f"{field}: expected a {shape[0]}x{shape[1]} matrix (list of rows), got shape {arr.shape}"
-        )
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: entries must be finite")
-    return arr.tolist()
+def _matrix(rows: int, columns: int) -> AfterValidator:
+    """The check of a gain field: None or a finite ``rows`` x ``columns`` matrix given as a list of
+    rows."""
+
+    def check(value):
+        if value is None:
+            return None
+        arr = np.asarray(value, dtype=float)
+        if arr.shape != (rows, columns):
+            raise ValueError(
+                f"expected a {rows}x{columns} matrix (list of rows), got shape {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ValueError("entries must be finite")
+        return arr.tolist()
+
+    return AfterValidator(check)
+
+
+#: gains L1 (6 x 6) and K, L2 (3 x 6), each optional
+Gain6x6 = Annotated[list[list[float]] | None, _matrix(6, 6)]
+Gain3x6 = Annotated[list[list[float]] | None, _matrix(3, 6)]
 
 
 @functools.lru_cache(maxsize=16)
@@ -491,12 +502,8 @@ class IloSection(StrictModel):
             "'printed': L1, L2 as given; 'lmi': solve (8), (27) and the pole-region LMI at the on-board mean motion."
         ),
     )
-    L1: list[list[float]] | None = Field(
-        None, description="Observer gain L1 (6x6) [1/s] (gains = 'printed')."
-    )
-    L2: list[list[float]] | None = Field(
-        None, description="Learning gain L2 (3x6) [1/s] (gains = 'printed')."
-    )
+    L1: Gain6x6 = Field(None, description="Observer gain L1 (6x6) [1/s] (gains = 'printed').")
+    L2: Gain3x6 = Field(None, description="Learning gain L2 (3x6) [1/s] (gains = 'printed').")
     lmi_lambda: float = builder_input(1e-8, gt=0, description="lambda of (27) [-] (gains = 'lmi').")
     disk_center: float = builder_input(
         -5.0, lt=0, description="Centre c of the pole region S(c, r) [1/s] (gains = 'lmi')."
@@ -576,16 +583,6 @@ class IloSection(StrictModel):
                 "q_hat(0) [m, m/s] (the flight side never reads the true initial state)"
             )
         return data
-
-    @field_validator("L1")
-    @classmethod
-    def _l1(cls, v):
-        return _matrix(v, (6, 6), "L1")
-
-    @field_validator("L2")
-    @classmethod
-    def _l2(cls, v):
-        return _matrix(v, (3, 6), "L2")
 
     @field_validator("Q1")
     @classmethod
