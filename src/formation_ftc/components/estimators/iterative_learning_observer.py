@@ -574,16 +574,6 @@ class IloSection(StrictModel):
             v = {k: x for k, x in v.items() if k != "type"}
         return v
 
-    @model_validator(mode="before")
-    @classmethod
-    def _offset_moved(cls, data):
-        if isinstance(data, dict) and "estimate_offset" in data:
-            raise ValueError(
-                "estimate_offset (q_hat(0) - y(0)) was replaced by initial_estimate, the observer's own "
-                "q_hat(0) [m, m/s] (the flight side never reads the true initial state)"
-            )
-        return data
-
     @field_validator("Q1")
     @classmethod
     def _q1(cls, v):
