@@ -21,11 +21,11 @@ package (:mod:`formation_ftc.papers.mehrabian.conditions`).
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, NamedTuple
+from typing import Annotated, Any, Literal, NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
 from formation_ftc.components._registry import (
@@ -34,7 +34,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Inertia
+from formation_ftc.components._sections import Inertia, positive_values
 from formation_ftc.components.estimators._fdi import (
     FdiDrift,
     FdiForgetting,
@@ -470,7 +470,7 @@ class AttitudeResidualFdiSection(StrictModel):
         "omit for an inertial reference.",
     )
     mu: float = builder_input(MU_EARTH, gt=0, description="Gravitational parameter [m^3/s^2].")
-    torque_limit: float | list[float] | None = Field(
+    torque_limit: Annotated[float | list[float] | None, positive_values("limit", " N m")] = Field(
         None,
         description="Rated per-axis body torque [N m], one or per spacecraft: a channel whose nominal "
         "torque reaches it (or would by the step's end) is not tested that step -- a limit may cut "
@@ -525,14 +525,6 @@ class AttitudeResidualFdiSection(StrictModel):
         description="Time constant of the moving average of the residual that identifies the fault's "
         "magnitude [s].",
     )
-
-    @field_validator("torque_limit")
-    @classmethod
-    def _limit(cls, value):
-        values = value if isinstance(value, list) else [value]
-        if value is not None and any(not x > 0 for x in values):
-            raise ValueError(f"{values} N m, every one must be > 0")
-        return value
 
 
 def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidualFdi:
