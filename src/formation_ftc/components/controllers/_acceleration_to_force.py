@@ -4,7 +4,7 @@ spacecraft's nominal mass."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -33,9 +33,15 @@ ACCELERATION_COMMAND_SIGNAL = "acceleration_command"
 class WrappedLaw(Controller):
     """A controller that wraps the law ``law``: its structure (sampling, states, messages, time signals,
     recorded signals, coordinates, conditions, what it needs and provides) is the law's; a wrapper
-    overrides :meth:`output` (and what it adds)."""
+    that changes the command states :meth:`command` and ``recorded_command``, the signal (name, units,
+    long name) under which the law's own command is recorded next to the loop's."""
 
     law: Controller
+    recorded_command: ClassVar[tuple[str, str, str] | None] = None
+
+    def command(self, u, inputs: FlightInputs):
+        """The wrapper's command from the law's command ``u`` (unchanged here)."""
+        return u
 
     @property
     def sampled(self) -> bool:
@@ -72,10 +78,15 @@ class WrappedLaw(Controller):
         return self.law.message(t, inputs)
 
     def output(self, t, state, inputs: FlightInputs):
-        return self.law.output(t, state, inputs)
+        u, nxt, out = self.law.output(t, state, inputs)
+        if self.recorded_command is None:
+            return u, nxt, out
+        return self.command(u, inputs), nxt, {**out, self.recorded_command[0]: u}
 
     def signals(self):
-        return tuple(self.law.signals())
+        own = self.recorded_command
+        extra = () if own is None else (Signal(own[0], ("spacecraft", "axis"), *own[1:]),)
+        return tuple(self.law.signals()) + extra
 
     def coords(self):
         return self.law.coords()
@@ -104,6 +115,11 @@ class AccelerationToForce(WrappedLaw):
     nominal_mass: Any  # (N,) [kg]
 
     quantity = "force"
+    recorded_command = (
+        ACCELERATION_COMMAND_SIGNAL,
+        "m s-2",
+        "acceleration commanded by the law (before the nominal-mass scaling)",
+    )
 
     def __post_init__(self) -> None:
         law = self.law
@@ -115,20 +131,8 @@ class AccelerationToForce(WrappedLaw):
                 f"controller {type(law).__name__} commands a {law.quantity}"
             )
 
-    def output(self, t, state, inputs: FlightInputs):
-        u, nxt, out = self.law.output(t, state, inputs)
-        force = self.nominal_mass[:, None] * u  # f_i = m_i^nom u_i
-        return force, nxt, {**out, ACCELERATION_COMMAND_SIGNAL: u}
-
-    def signals(self):
-        return tuple(self.law.signals()) + (
-            Signal(
-                ACCELERATION_COMMAND_SIGNAL,
-                ("spacecraft", "axis"),
-                "m s-2",
-                "acceleration commanded by the law (before the nominal-mass scaling)",
-            ),
-        )
+    def command(self, u, inputs: FlightInputs):
+        return self.nominal_mass[:, None] * u  # f_i = m_i^nom u_i
 
 
 @component

@@ -16,7 +16,6 @@ from formation_ftc.sim.components import (
     CompositionError,
     Controller,
     FlightInputs,
-    Signal,
     component,
 )
 
@@ -46,6 +45,11 @@ class ReconfiguringAllocator(WrappedLaw):
     force_limit: Any  # () rated thrust per axis [N]
 
     quantity = "force"
+    recorded_command = (
+        LAW_COMMAND_SIGNAL,
+        "N",
+        "force commanded by the law (before the reallocation)",
+    )
 
     def __post_init__(self) -> None:
         law = self.law
@@ -61,21 +65,9 @@ class ReconfiguringAllocator(WrappedLaw):
             "fault-identification": "reallocate the command with the identified effectiveness",
         }
 
-    def output(self, t, state, inputs: FlightInputs):
-        u, nxt, out = self.law.output(t, state, inputs)
+    def command(self, u, inputs: FlightInputs):
         use, eff = isolated_effectiveness(inputs.estimate)
-        force = jnp.where(use, jnp.clip(u / eff, -self.force_limit, self.force_limit), u)
-        return force, nxt, {**out, LAW_COMMAND_SIGNAL: u}
-
-    def signals(self):
-        return tuple(self.law.signals()) + (
-            Signal(
-                LAW_COMMAND_SIGNAL,
-                ("spacecraft", "axis"),
-                "N",
-                "force commanded by the law (before the reallocation)",
-            ),
-        )
+        return jnp.where(use, jnp.clip(u / eff, -self.force_limit, self.force_limit), u)
 
 
 @component
