@@ -660,16 +660,12 @@ class ResidualFdiSection(RelativeNavigationSection):
     )
 
     @model_validator(mode="after")
-    def _navigation_needs_the_filter(self):
+    def _combinations(self):
         if self.fly_on_filter and self.residual != "kalman":
             raise ValueError(
                 'fly_on_filter = true: the law flies on the Kalman estimate; give residual = "kalman" '
                 "(the parity residual keeps no state estimate)"
             )
-        return self
-
-    @model_validator(mode="after")
-    def _clip_needs_a_limit(self):
         if self.at_limit == "clip" and not math.isfinite(self.force_limit):
             raise ValueError(
                 'at_limit = "clip": give the rated thrust force_limit [N] (finite, > 0) to clip at'

@@ -12,12 +12,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components._sections import per_axis
-from formation_ftc.components.sensors.relative_state import RelativeStateSensors
-from formation_ftc.config.base import StrictModel
+from formation_ftc.components.sensors.relative_state import (
+    RelativeStateSection,
+    RelativeStateSensors,
+)
 from formation_ftc.core.dynamics.orbital_truth import eci_to_lvlh
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
 from formation_ftc.sim.contract import as_float
@@ -59,12 +60,10 @@ class LvlhRelativeStateSensors(Sensors):
         return q + inputs.noise + self.bias
 
 
-class LvlhRelativeStateSection(StrictModel):
+class LvlhRelativeStateSection(RelativeStateSection):
     """Relative state in the truth chief's LVLH frame with held Gaussian noise and a constant bias
     (``bias`` of the component: position and velocity bias side by side, (N, 6))."""
 
-    position_noise_std: float = Field(0.0, ge=0, description="Std of the position noise [m].")
-    velocity_noise_std: float = Field(0.0, ge=0, description="Std of the velocity noise [m/s].")
     position_bias: float | list = builder_input(
         0.0, description="Constant position bias: a number, 3 values (per axis) or N x 3 [m]."
     )
