@@ -878,15 +878,6 @@ def _threshold_refiner(upper: float | None, lower: float | None):
     return refine
 
 
-def _enclose_range(
-    text, variables, t_lo, t_hi, n_sub, derivative, upper, lower, max_rounds, time, fixed
-) -> tuple[float, float]:
-    """``(lo, hi)`` over all sub-intervals of :func:`_boxes` for one expression (or its derivative)."""
-    refine = _threshold_refiner(upper, lower)
-    bx = _boxes([text], variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, time, fixed)
-    return float(bx.lo.min()), float(bx.hi.max())
-
-
 def enclose(
     text: str | float,
     variables: Sequence[str],
@@ -898,18 +889,20 @@ def enclose(
     lower: float | None = None,
     max_rounds: int = 8,
     time: str = "t",
+    derivative: bool = False,
     **fixed: float,
 ) -> tuple[float, float]:
-    """``(lo, hi)`` with ``lo <= f(t) <= hi`` for every ``t`` in ``[t_lo, t_hi]``.
+    """``(lo, hi)`` with ``lo <= f(t) <= hi`` for every ``t`` in ``[t_lo, t_hi]`` (with ``derivative``:
+    enclosing ``df/dt``, :func:`enclose_derivative`).
 
     With ``upper`` (``lower``) the sub-intervals whose enclosure reaches the threshold without
     certainly exceeding it are bisected (at most ``max_rounds`` times), so that ``hi < upper``
     (``lo > lower``) is proved whenever a few bisections suffice. Other variables of the expression
     (e.g. the spacecraft number ``i``) are given as keywords.
     """
-    return _enclose_range(
-        text, variables, t_lo, t_hi, n_sub, False, upper, lower, max_rounds, time, fixed
-    )
+    refine = _threshold_refiner(upper, lower)
+    bx = _boxes([text], variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, time, fixed)
+    return float(bx.lo.min()), float(bx.hi.max())
 
 
 def enclose_derivative(
@@ -918,18 +911,11 @@ def enclose_derivative(
     t_lo: float,
     t_hi: float,
     n_sub: int = 4096,
-    *,
-    upper: float | None = None,
-    lower: float | None = None,
-    max_rounds: int = 8,
-    time: str = "t",
-    **fixed: float,
+    **options,
 ) -> tuple[float, float]:
-    """``(lo, hi)`` enclosing ``df/dt`` over ``[t_lo, t_hi]`` (see :func:`enclose`); ``(-inf, inf)``
-    when the expression may jump inside the range."""
-    return _enclose_range(
-        text, variables, t_lo, t_hi, n_sub, True, upper, lower, max_rounds, time, fixed
-    )
+    """``(lo, hi)`` enclosing ``df/dt`` over ``[t_lo, t_hi]`` (the options of :func:`enclose`);
+    ``(-inf, inf)`` when the expression may jump inside the range."""
+    return enclose(text, variables, t_lo, t_hi, n_sub, derivative=True, **options)
 
 
 def _norm_upper(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
