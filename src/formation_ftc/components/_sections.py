@@ -40,9 +40,10 @@ Vec3Expr = tuple[ExprText, ExprText, ExprText]
 Quat = tuple[float, float, float, float]
 
 
-def positive_values(what: str = "value", unit: str = "") -> AfterValidator:
+def positive_values(what: str = "value", unit: str = "", zero: bool = False) -> AfterValidator:
     """A field check: every number of the value (one, a list or a tuple of them; None passes) is finite
-    and > 0, else ``every <what> must be finite and > 0<unit>`` (the section error names the field).
+    and > 0 (``zero``: >= 0), else ``every <what> must be finite and > 0<unit>`` (the section error
+    names the field).
 
     Parameters
     ----------
@@ -50,6 +51,8 @@ def positive_values(what: str = "value", unit: str = "") -> AfterValidator:
         What one number is, for the error.
     unit : str
         Its unit, for the error (with a leading space).
+    zero : bool
+        Accept 0 as well.
 
     Returns
     -------
@@ -69,10 +72,14 @@ def positive_values(what: str = "value", unit: str = "") -> AfterValidator:
     pydantic_core._pydantic_core.ValidationError: 1 validation error for ...
     """
 
+    bound = ">= 0" if zero else "> 0"
+
     def check(value: Any) -> Any:
         values = value if isinstance(value, list | tuple) else [value]
-        if value is not None and any(not (math.isfinite(v) and v > 0) for v in values):
-            raise ValueError(f"every {what} must be finite and > 0{unit}")
+        if value is not None and any(
+            not (math.isfinite(v) and (v > 0 or zero and v == 0)) for v in values
+        ):
+            raise ValueError(f"every {what} must be finite and {bound}{unit}")
         return value
 
     return AfterValidator(check)

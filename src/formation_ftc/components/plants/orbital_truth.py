@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
+from typing import Annotated, Any
 
 import jax
 import jax.numpy as jnp
@@ -25,7 +25,13 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Vec3, Vec3Expr, check_rows, initial_states
+from formation_ftc.components._sections import (
+    Vec3,
+    Vec3Expr,
+    check_rows,
+    initial_states,
+    positive_values,
+)
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import (
@@ -270,7 +276,7 @@ class OrbitalTruthSection(StrictModel):
     srp: bool = Field(
         False, description="Include cannonball solar radiation pressure (fixed Sun, no eclipse)."
     )
-    ballistic_coefficient: float | list[float] = Field(
+    ballistic_coefficient: Annotated[float | list[float], positive_values(unit=" m^2/kg")] = Field(
         0.02,
         description="B = C_D A / m of each spacecraft [m^2/kg], > 0 (one number or one per spacecraft).",
     )
@@ -279,9 +285,11 @@ class OrbitalTruthSection(StrictModel):
         gt=0,
         description="B of the virtual chief [m^2/kg] (default: mean of the spacecraft's).",
     )
-    srp_coefficient: float | list[float] = Field(
-        0.015,
-        description="C_R A / m of each spacecraft [m^2/kg], >= 0 (one number or one per spacecraft).",
+    srp_coefficient: Annotated[float | list[float], positive_values(unit=" m^2/kg", zero=True)] = (
+        Field(
+            0.015,
+            description="C_R A / m of each spacecraft [m^2/kg], >= 0 (one number or one per spacecraft).",
+        )
     )
     chief_srp_coefficient: float | None = Field(
         None,
@@ -360,15 +368,6 @@ class OrbitalTruthSection(StrictModel):
             )
         if not np.linalg.norm(self.sun_direction) > 0:
             raise ValueError("sun_direction: must be a non-zero vector")
-        for name, lower_ok in (
-            ("ballistic_coefficient", lambda b: b > 0),
-            ("srp_coefficient", lambda b: b >= 0),
-        ):
-            vals = np.atleast_1d(np.asarray(getattr(self, name), float))
-            if not all(lower_ok(b) and math.isfinite(b) for b in vals):
-                raise ValueError(
-                    f"{name}: every value must be finite and {'> 0' if name[0] == 'b' else '>= 0'} m^2/kg"
-                )
         return self
 
     @property
