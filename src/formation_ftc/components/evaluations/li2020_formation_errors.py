@@ -18,6 +18,7 @@ Li2020 run, every one accumulated at every step inside the run; :func:`settle_ti
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import partial
 from typing import TYPE_CHECKING
 
 import jax.numpy as jnp
@@ -299,34 +300,21 @@ def li2020_metrics(horizon: float, adaptive: Mapping[str, str]) -> tuple[Metric,
         for tq in MU1_AT
         if tq <= T + 1e-9
     ]
+    each = partial(Metric, spacecraft="each")  # one per spacecraft
     m += [
-        Metric("delta_v", "delta_v", "last", spacecraft="each", units="m s-1"),
-        Metric(
-            "position_error_final",
-            "position_error",
-            "last",
-            norm=True,
-            spacecraft="each",
-            units="m",
-        ),
-        Metric(
-            "velocity_error_final",
-            "velocity_error",
-            "last",
-            norm=True,
-            spacecraft="each",
-            units="m s-1",
-        ),
+        each("delta_v", "delta_v", "last", units="m s-1"),
+        each("position_error_final", "position_error", "last", norm=True, units="m"),
+        each("velocity_error_final", "velocity_error", "last", norm=True, units="m s-1"),
     ]
     lo, hi = E000_04_WINDOW
     if T >= hi - 1e-9:
         m.append(
             Metric("mu1_max_50_300s", "mu1", "max", units="m", start=as_float(lo), end=as_float(hi))
         )
-    m += [Metric(f"{n}_final", n, "last", spacecraft="each", units=u) for n, u in adaptive.items()]
+    m += [each(f"{n}_final", n, "last", units=u) for n, u in adaptive.items()]
     # value at the step t = 0.9 T (the adaptive parameters' drift over the last 10 % of the horizon)
     m += [
-        Metric(f"{n}_at_90pct", n, "at", spacecraft="each", units=u, start=as_float(0.9 * T))
+        each(f"{n}_at_90pct", n, "at", units=u, start=as_float(0.9 * T))
         for n, u in adaptive.items()
     ]
     return tuple(m)
