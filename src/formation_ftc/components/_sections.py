@@ -28,6 +28,7 @@ __all__ = [
     "nominal_masses",
     "check_rows",
     "initial_states",
+    "grid_steps",
     "STATE_DIM",
     "ErrorState",
 ]
@@ -338,6 +339,39 @@ def check_rows(section: Any, names: Sequence[str], n: int) -> None:
         rows = getattr(section, name)
         if rows is not None and len(rows) != n:
             raise ValueError(f"{name}: {len(rows)} rows for {n} spacecraft")
+
+
+def grid_steps(time: float, dt: float, field: str) -> int:
+    """The step count of ``time`` [s], a multiple of the step ``dt`` [s] (to 1e-9 relative); a
+    ValueError naming ``field`` otherwise.
+
+    Parameters
+    ----------
+    time : float
+        A time on the step grid [s].
+    dt : float
+        The step [s].
+    field : str
+        The field's dotted name, for the error.
+
+    Returns
+    -------
+    int
+        ``time / dt``.
+
+    Examples
+    --------
+    >>> grid_steps(10.0, 0.5, "supervisor.modes[1].start")
+    20
+    >>> grid_steps(10.2, 0.5, "supervisor.modes[1].start")
+    Traceback (most recent call last):
+    ...
+    ValueError: supervisor.modes[1].start = 10.2 s is not a multiple of simulation.dt = 0.5 s
+    """
+    k = time / dt
+    if abs(k - round(k)) > 1e-9 * max(1.0, k):
+        raise ValueError(f"{field} = {time} s is not a multiple of simulation.dt = {dt} s")
+    return round(k)
 
 
 def initial_states(position: Any, velocity: Any) -> np.ndarray:

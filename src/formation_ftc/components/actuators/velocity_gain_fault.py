@@ -15,6 +15,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
+from formation_ftc.components._sections import grid_steps
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
 from formation_ftc.sim.contract import as_float
@@ -102,11 +103,6 @@ class VelocityGainFaultSection(StrictModel):
     )
 
 
-def _on_grid(value: float, dt: float) -> bool:
-    k = value / dt
-    return abs(k - round(k)) <= 1e-9 * max(1.0, k)
-
-
 def _fault_steps(ctx: BuildContext) -> dict[int, tuple[int, float]]:
     """Slot -> (onset step, K2f) of the ``[actuator]``'s velocity-gain faults (none for another
     actuator), checked against the slots and the step grid.
@@ -130,12 +126,8 @@ def _fault_steps(ctx: BuildContext) -> dict[int, tuple[int, float]]:
             raise ValueError(
                 f"actuator.faults: spacecraft {f.spacecraft} exceeds plant.count = {ctx.count}"
             )
-        if not _on_grid(f.onset, ctx.dt):
-            raise ValueError(
-                f"actuator.faults: onset = {f.onset} s is not a multiple of simulation.dt = "
-                f"{ctx.dt} s"
-            )
-        out[f.spacecraft - 1] = (round(f.onset / ctx.dt), f.K2_faulty)
+        k_f = grid_steps(f.onset, ctx.dt, "actuator.faults: onset")
+        out[f.spacecraft - 1] = (k_f, f.K2_faulty)
     return out
 
 

@@ -39,7 +39,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr
+from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr, grid_steps
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.sim.components import FlightInputs, Signal, Supervisor, component, static
@@ -385,11 +385,6 @@ def decision_events(
 
 
 # -------------------------------------------------------------------------------------- section
-def _on_grid(value: float, dt: float) -> bool:
-    k = value / dt
-    return abs(k - round(k)) <= 1e-9 * max(1.0, k)
-
-
 class DesiredPosition(StrictModel):
     spacecraft: int = Field(ge=1, description="Spacecraft number [-].")
     position: Vec3Expr = Field(
@@ -600,12 +595,10 @@ def switched_structure(sec: SwitchingSupervisorSection, count: int, dt: float) -
                 f"supervisor.modes[{j}].members: spacecraft {max(m.members)} exceeds plant.count "
                 f"= {count}"
             )
-        if not _on_grid(m.start, dt):
-            raise ValueError(
-                f"supervisor.modes[{j}].start = {m.start} s is not a multiple of simulation.dt = "
-                f"{dt} s"
-            )
-    switch_steps = np.array([round(m.start / dt) for m in modes], dtype=np.int64)
+    switch_steps = np.array(
+        [grid_steps(m.start, dt, f"supervisor.modes[{j}].start") for j, m in enumerate(modes)],
+        dtype=np.int64,
+    )
     active = np.zeros((n_modes, count), dtype=bool)
     for j, m in enumerate(modes):
         active[j, [s - 1 for s in m.members if s > 0]] = True
