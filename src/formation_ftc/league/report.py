@@ -365,6 +365,8 @@ CONFIDENCE_KEYS = (
     "only_above_passed",
     "only_this_passed",
 )
+#: the keys of the comparison with the row above (None on a level's first row)
+_COMPARISON_KEYS = CONFIDENCE_KEYS[7:]
 
 
 def rank_confidence(
@@ -440,27 +442,11 @@ def rank_confidence(
             )
         adjusted = st.holm([t["p_value"] for t in tests])
         separated = [bool(p < st.ALPHA) for p in adjusted]
-        rows[0].update(
-            test=None,
-            statistic=None,
-            p_value=None,
-            p_adjusted=None,
-            separated=None,
-            pairs=None,
-            only_above_passed=None,
-            only_this_passed=None,
-        )
+        rows[0].update(dict.fromkeys(_COMPARISON_KEYS))
         for r, t, p, sep in zip(rows[1:], tests, adjusted, separated, strict=True):
-            r.update(
-                test=t["test"],
-                statistic=t["statistic"],
-                p_value=t["p_value"],
-                p_adjusted=float(p),
-                separated=sep,
-                pairs=t["pairs"],
-                only_above_passed=t["a_only"],
-                only_this_passed=t["b_only"],
-            )
+            t = t | {"p_adjusted": float(p), "separated": sep}
+            t |= {"only_above_passed": t["a_only"], "only_this_passed": t["b_only"]}
+            r.update({k: t[k] for k in _COMPARISON_KEYS})
         for r, tie in zip(rows, st.tie_groups(separated), strict=True):
             r.update(tie)
 
@@ -478,12 +464,15 @@ def _nan_last(v: float | None) -> float:
 
 def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
     """Per (level, case): the method with the highest pass rate, ties broken by the median metric."""
-    metric, _, _ = _requirement(meta)
+    return _winners(cells, _requirement(meta)[0])
+
+
+def _winners(cells: pd.DataFrame, metric: str) -> list[dict[str, Any]]:
     out = []
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
-        best = sorted(
+        best = min(
             g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"]))
-        )[0]
+        )
         out.append(
             {
                 "level": level,
@@ -652,22 +641,10 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
 
 def _pareto_front(pts: np.ndarray) -> list[int]:
     """Indices of the points no other point beats on both accuracy (col 0) and delta-v (col 1)."""
-    idx = []
-    for i, (a, d) in enumerate(pts):
-        if not (math.isfinite(a) and math.isfinite(d)):
-            continue
-        dominated = any(
-            j != i
-            and math.isfinite(pts[j][0])
-            and math.isfinite(pts[j][1])
-            and pts[j][0] <= a
-            and pts[j][1] <= d
-            and (pts[j][0] < a or pts[j][1] < d)
-            for j in range(len(pts))
-        )
-        if not dominated:
-            idx.append(i)
-    return idx
+    finite = np.flatnonzero(np.isfinite(pts).all(axis=1))
+    p = pts[finite, None, :], pts[None, finite, :]  # (beater, beaten)
+    dominated = ((p[0] <= p[1]).all(axis=2) & (p[0] < p[1]).any(axis=2)).any(axis=0)
+    return [int(i) for i in finite[~dominated]]
 
 
 def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
@@ -1101,15 +1078,7 @@ def markdown_summary(board: dict[str, Any]) -> str:
         out += ["", _ranking_note()]
     if board.get("resolution"):
         out += ["", resolution_text(board["resolution"]) + "."]
-    best: dict[tuple[str, str], dict[str, Any]] = {}
-    for r in board["cells"]:
-        key = (r["case"], r["level"])
-        cur = best.get(key)
-        if cur is None or (r["pass_rate"], -_nan_last(r.get(f"{metric}_median", math.nan))) > (
-            cur["pass_rate"],
-            -_nan_last(cur.get(f"{metric}_median", math.nan)),
-        ):
-            best[key] = r
+    best = {(w["case"], w["level"]): w for w in (_winners(cells, metric) if len(cells) else [])}
     levels = list(board["ranking"])
     rows = []
     for case in dict.fromkeys(r["case"] for r in board["cells"]):

@@ -33,8 +33,8 @@ from typing import Any, cast
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-# one atomic write for the package (league/tuning.py imports it from here under this name)
 from formation_ftc.atomic import atomic_write
+from formation_ftc.errors import InputError
 from formation_ftc.league.definition import (
     STL_VIOLATION,
     LeagueError,
@@ -357,19 +357,14 @@ def _check_batch_memory(
     (first cell of each method, shapes only: every cell of a method has the same structure)."""
     if budgets.max_memory is None:
         return
-    from formation_ftc import api
-    from formation_ftc.limits import format_bytes, run_memory_bytes
+    from formation_ftc.limits import format_bytes
 
     batch = min(spec.league.chunk_size, seeds)
     for method, mcells in cells.items():
         if not mcells:
             continue
-        try:
-            need = run_memory_bytes(api.build_loop(api.load_scenario(mcells[0].raw))) * batch
-        except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-            raise LeagueError(
-                f"league {spec.league.name}: method {method} cannot be compiled: {exc}"
-            ) from None
+        where = f"league {spec.league.name}: method {method} cannot be compiled"
+        need = run_bytes(mcells[0].raw, LeagueError, where) * batch
         if need > budgets.max_memory:
             raise LeagueError(
                 f"league {spec.league.name}, method {method}: a batch of {batch} runs needs about "
@@ -377,6 +372,20 @@ def _check_batch_memory(
                 f"{format_bytes(budgets.max_memory)}; lower league.chunk_size in the league file, "
                 "or raise the budget with --max-memory / FORMATION_FTC_MAX_MEMORY"
             )
+
+
+def run_bytes(raw: dict[str, Any], error: type[InputError], where: str) -> int:
+    """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only); a run that
+    cannot be built raises ``error`` (``where: reason``)."""
+    from formation_ftc import api
+    from formation_ftc.limits import run_memory_bytes
+
+    try:
+        return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
+    except InputError:
+        raise
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+        raise error(f"{where}: {exc}") from None
 
 
 # ------------------------------------------------------------------------------ league directory
@@ -521,6 +530,26 @@ def _campaign_at_or_above(path: Path) -> Path | None:
     return None
 
 
+def _check_target(
+    out: Path, what: str, error: type[InputError], in_campaign: str, not_dir: str
+) -> bool:
+    """Refuse (``error``) an ``--out`` that is a campaign directory or lies inside one (``in_campaign``:
+    the advice), or exists and is not a directory (``not_dir``); whether it exists. An unusable path
+    raises OSError."""
+    campaign = _campaign_at_or_above(out)
+    if campaign is not None:
+        where = (
+            "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
+        )
+        raise error(f"{what}: {where} a campaign directory; {in_campaign}")
+    if not (out.exists() or out.is_symlink()):
+        return False
+    if not out.is_dir():
+        kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+        raise error(f"{what}: exists and is {kind}; {not_dir}")
+    return True
+
+
 def _check_out(
     out: Path, spec: LeagueSpec, digest: str, seeds: int, first_seed: int | None = None
 ) -> dict[str, Any] | None:
@@ -531,27 +560,15 @@ def _check_out(
     Returns the ``league.json`` found there, or None."""
     what = f"--out {out}"
     try:
-        campaign = _campaign_at_or_above(out)
-        if campaign is not None:
-            where = (
-                "is"
-                if campaign == Path(os.path.realpath(out))
-                else f"is inside {campaign}, which is"
-            )
-            raise LeagueError(
-                f"{what}: {where} a campaign directory; a league writes one campaign per method in "
-                "its own directory: give another --out (new or empty)"
-            )
-        if not (out.exists() or out.is_symlink()):
+        if not _check_target(
+            out,
+            what,
+            LeagueError,
+            "a league writes one campaign per method in its own directory: give another --out "
+            "(new or empty)",
+            "give a directory (new or empty, or this league's to resume it)",
+        ):
             return None
-        if not out.is_dir():
-            kind = (
-                "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
-            )
-            raise LeagueError(
-                f"{what}: exists and is {kind}; give a directory (new or empty, or this league's "
-                "to resume it)"
-            )
         entries = [e.name for e in out.iterdir()]
         if LEAGUE_FILE not in entries:
             stray = sorted(e for e in entries if not _TMP_RE.match(e))
@@ -741,22 +758,9 @@ class _MethodProgress(_Bars):
     campaign has stored: it follows methods computed side by side in other processes."""
 
     def __init__(
-        self,
-        methods: list[tuple[str, Path, int]],
-        seeds: int,
-        chunk_size: int,
-        *,
-        enabled: bool = True,
-        console: Any = None,
-        interval: float = 0.5,
+        self, methods: list[tuple[str, Path, int]], seeds: int, chunk_size: int, **options: Any
     ):
-        super().__init__(
-            [(name, total) for name, _, total in methods],
-            "runs",
-            enabled=enabled,
-            console=console,
-            interval=interval,
-        )
+        super().__init__([(name, total) for name, _, total in methods], "runs", **options)
         self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size
 
     def _poll(self) -> None:
