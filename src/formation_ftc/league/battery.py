@@ -35,6 +35,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.config.base import StrictModel
 from formation_ftc.errors import InputError
+from formation_ftc.league.definition import _format
 
 __all__ = [
     "Battery",
@@ -295,14 +296,6 @@ def builtin_batteries() -> dict[str, Path]:
     return {p.stem.removeprefix("battery-"): p for p in sorted(_data_dir().glob("battery-*.toml"))}
 
 
-def _errors(exc: ValidationError, where: str) -> str:
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(f"{where}.{loc}: {err.get('msg')}" if loc else f"{where}: {err.get('msg')}")
-    return "; ".join(lines)
-
-
 def load_battery(name: str | Path = "v1") -> Battery:
     """The built-in battery ``name`` (``league/data/battery-NAME.toml``) or a battery TOML file.
 
@@ -325,7 +318,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     try:
         model = _BatteryModel.model_validate(raw)
     except ValidationError as exc:
-        raise BatteryError(_errors(exc, str(path))) from None
+        raise BatteryError(_format(exc, str(path), ".", "; ")) from None
     unknown_defaults = sorted(
         set(model.defaults) - set(_CaseModel.model_fields)
         | ({"name", "kind"} & set(model.defaults))
@@ -343,7 +336,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:
-            raise BatteryError(_errors(exc, where)) from None
+            raise BatteryError(_format(exc, where, ".", "; ")) from None
     if str(name) in known and model.battery.name != str(name):
         raise BatteryError(
             f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})"
@@ -356,20 +349,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     max_scale = max([1.0, *scales])
     cases = tuple(
         BatteryCase(
-            name=c.name,
-            kind=c.kind,
-            description=c.description,
-            spacecraft=c.spacecraft,
-            axis=c.axis,
-            onset=c.onset,
-            effectiveness=c.effectiveness,
-            bias_fraction=c.bias_fraction,
-            bias_force=c.bias_force,
-            bias_torque=c.bias_torque,
-            period=c.period,
-            duty=c.duty,
-            rate=c.rate,
-            min_effectiveness=c.min_effectiveness,
+            **c.model_dump(exclude={"lost_links", "delay_scale"}),
             lost_links=tuple((int(i), int(j)) for i, j in (c.lost_links or [])),
             delay_scale=1.0 if c.delay_scale is None else c.delay_scale,
             max_delay_scale=max_scale,

@@ -390,12 +390,16 @@ def builtin_leagues() -> dict[str, Path]:
     return {p.stem.removeprefix("league-"): p for p in sorted(_data_dir().glob("league-*.toml"))}
 
 
-def _format(exc: ValidationError, source: str) -> str:
+def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n") -> str:
+    """Every error of ``exc``: ``SOURCE: a.b: message`` (``dot`` between the source and the field's
+    path), joined by ``sep``."""
     lines = []
     for err in exc.errors():
         loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(f"{source}: {loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}")
-    return "\n".join(lines)
+        lines.append(
+            f"{source}{dot}{loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}"
+        )
+    return sep.join(lines)
 
 
 def load_league(name_or_path: str | Path) -> LeagueSpec:

@@ -838,20 +838,8 @@ def _page(
     ranking_tables = []
     confidence = _has_confidence(rank)
     for level, rows in rank.items():
-        columns = [
-            ("rank_text", "rank"),
-            ("method", "method"),
-            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
-            (
-                "median_text",
-                f"median {metric} [{req_units}]" + (" [95 % CI]" if confidence else ""),
-            ),
-            *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
-            *([("versus_text", "vs. row above: Holm p (test)")] if confidence else []),
-            ("failed", "diverged"),
-            ("runs", "runs"),
-            *([("tuned", "tuned (formation-ftc tune)")] if rows and "tuned" in rows[0] else []),
-        ]
+        median = f"median {metric} [{req_units}]"
+        columns = _ranking_columns(rows, median, cost, confidence, "tuned (formation-ftc tune)")
         ranking_tables.append((level, _display_rows(rows, metric), columns))
     battery = meta["battery"]
     return render(
@@ -906,6 +894,29 @@ def _page(
         method_files=list(meta.get("method_files", {}).items()),
         provenance=[{"key": k, "value": v} for k, v in (meta.get("provenance") or {}).items()],
     )
+
+
+def _ranking_columns(
+    rows: list[dict[str, Any]],
+    median: str,
+    cost: tuple[str, str] | None,
+    confidence: bool,
+    tuned: str,
+) -> list[tuple[str, str]]:
+    """The (key, label) columns of a level's ranking table (page and Markdown): ``median`` labels the
+    requirement metric's median, ``tuned`` the tuned column (when the rows have one)."""
+    ci = " [95 % CI]" if confidence else ""
+    return [
+        ("rank_text", "rank"),
+        ("method", "method"),
+        ("pass_rate_text", f"pass rate{ci}"),
+        ("median_text", f"{median}{ci}"),
+        *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
+        *([("versus_text", "vs. row above: Holm p (test)")] if confidence else []),
+        ("failed", "diverged"),
+        ("runs", "runs"),
+        *([("tuned", tuned)] if rows and "tuned" in rows[0] else []),
+    ]
 
 
 def _interval_text(v: Any, low: Any, high: Any, fixed: bool = False) -> str:
@@ -1060,19 +1071,7 @@ def markdown_summary(board: dict[str, Any]) -> str:
     ]
     confidence = _has_confidence(board["ranking"])
     for level, rows in board["ranking"].items():
-        cols = [
-            ("rank_text", "rank"),
-            ("method", "method"),
-            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
-            ("median_text", f"median {metric}" + (" [95 % CI]" if confidence else "")),
-        ]
-        if cost:
-            cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
-        if confidence:
-            cols.append(("versus_text", "vs. row above: Holm p (test)"))
-        cols += [("failed", "diverged"), ("runs", "runs")]
-        if rows and "tuned" in rows[0]:
-            cols.append(("tuned", "tuned"))
+        cols = _ranking_columns(rows, f"median {metric}", cost, confidence, "tuned")
         out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
     if confidence:
         out += ["", _ranking_note()]
