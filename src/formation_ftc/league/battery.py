@@ -26,7 +26,6 @@ import math
 import tomllib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.config.base import StrictModel
 from formation_ftc.errors import InputError
-from formation_ftc.league.definition import _format
+from formation_ftc.league.definition import _format, builtin_files
 
 __all__ = [
     "Battery",
@@ -287,13 +286,9 @@ class Battery:
         return f"{self.name} v{self.version} sha256:{self.sha256[:12]}"
 
 
-def _data_dir() -> Path:
-    return Path(str(resources.files("formation_ftc.league") / "data"))
-
-
 def builtin_batteries() -> dict[str, Path]:
     """Built-in battery name -> file."""
-    return {p.stem.removeprefix("battery-"): p for p in sorted(_data_dir().glob("battery-*.toml"))}
+    return builtin_files("battery")
 
 
 def load_battery(name: str | Path = "v1") -> Battery:

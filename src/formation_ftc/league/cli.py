@@ -33,13 +33,7 @@ def _cmd_list(args) -> int:
                     "seeds": meta.seeds,
                     "quick_seeds": meta.quick_seeds,
                     "horizon": meta.horizon,
-                    "requirement": {
-                        "metric": meta.requirement.metric,
-                        "max": meta.requirement.max,
-                        "units": meta.requirement.units,
-                        "stl": meta.requirement.stl,
-                        "verdict": meta.requirement.verdict,
-                    },
+                    "requirement": meta.requirement.model_dump(),  # metric, max, units, stl, verdict
                     "units": {"horizon": "s"},
                 }
             )

@@ -381,13 +381,15 @@ class LeagueSpec(StrictModel):
         )
 
 
-def _data_dir() -> Path:
-    return Path(str(resources.files("formation_ftc.league") / "data"))
+def builtin_files(prefix: str) -> dict[str, Path]:
+    """The package's data files ``league/data/PREFIX-NAME.toml`` by NAME."""
+    data = Path(str(resources.files("formation_ftc.league") / "data"))
+    return {p.stem.removeprefix(f"{prefix}-"): p for p in sorted(data.glob(f"{prefix}-*.toml"))}
 
 
 def builtin_leagues() -> dict[str, Path]:
     """Built-in league name -> definition file."""
-    return {p.stem.removeprefix("league-"): p for p in sorted(_data_dir().glob("league-*.toml"))}
+    return builtin_files("league")
 
 
 def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n") -> str:
