@@ -267,15 +267,10 @@ class TuneSection(StrictModel):
         description="Dotted field (e.g. 'controller.k') -> [low, high] or {low, high, log}.",
     )
     objective: str = Field("delta_v_total", description="League metric minimised.")
-    statistic: str = Field("mean", description="'mean' or 'median' over the training runs.")
+    statistic: Literal["mean", "median"] = Field(
+        "mean", description="'mean' or 'median' over the training runs."
+    )
     note: str = Field("", description="Why these fields and bounds.")
-
-    @field_validator("statistic")
-    @classmethod
-    def _statistic(cls, v):
-        if v not in ("mean", "median"):
-            raise ValueError(f"statistic = {v!r}: 'mean' or 'median'")
-        return v
 
     @field_validator("fields")
     @classmethod

@@ -107,6 +107,17 @@ FLFR_METRICS: tuple[dict[str, Any], ...] = (
 )
 #: ... and on which spacecraft, where the law takes it from the FDI's isolation at run time
 FLFR_SPACECRAFT_METRIC = {"name": "flfr_spacecraft", "signal": "flfr_spacecraft", "reduce": "last"}
+#: the scores the step check leaves out: alarm times are on the step grid; identification errors are
+#: small estimation errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
+#: robustness is a margin (its relative change is meaningless near 0; the signals it reads are
+#: checked as scores); a filter's consistency is a noise statistic
+_NOT_STEP_CHECKED = (
+    *(
+        m["name"]
+        for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
+    ),
+    STL_VIOLATION,
+)
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -196,26 +207,25 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
     from formation_ftc.methods.composed import ComposedScenario, make_loop
 
     loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
-    if "navigation-records" in loop.estimator.provides() and "lvlh-relative-state" in (
-        loop.plant.provides()
-    ):
-        raw["evaluations"] = [*raw.get("evaluations", []), {"type": "navigation-consistency"}]
-        raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in NAVIGATION_METRICS)]
-    if not (
-        "fdi-records" in loop.estimator.provides()
-        and "true-actuator-fault" in loop.actuator.provides()
-    ):
+
+    def add(evaluation: str | None, metrics: tuple[dict[str, Any], ...]) -> None:
+        if evaluation is not None:
+            raw["evaluations"] = [*raw.get("evaluations", []), {"type": evaluation}]
+        raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in metrics)]
+
+    estimator = loop.estimator.provides()
+    if "navigation-records" in estimator and "lvlh-relative-state" in loop.plant.provides():
+        add("navigation-consistency", NAVIGATION_METRICS)
+    if not ("fdi-records" in estimator and "true-actuator-fault" in loop.actuator.provides()):
         return raw
-    raw["evaluations"] = [*raw.get("evaluations", []), {"type": "fdi-scores"}]
-    raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in FDI_METRICS)]
-    if "fault-identification" in loop.estimator.provides():
-        raw["evaluations"].append({"type": "identification-scores"})
-        raw["metrics"] += [dict(m) for m in IDENTIFICATION_METRICS]
+    add("fdi-scores", FDI_METRICS)
+    if "fault-identification" in estimator:
+        add("identification-scores", IDENTIFICATION_METRICS)
     recorded = {sig.name for sig in loop.signals()}
     if "time_in_flfr" in recorded:
-        raw["metrics"] += [dict(m) for m in FLFR_METRICS]
+        add(None, FLFR_METRICS)
     if "flfr_spacecraft" in recorded:
-        raw["metrics"].append(dict(FLFR_SPACECRAFT_METRIC))
+        add(None, (FLFR_SPACECRAFT_METRIC,))
     return raw
 
 
@@ -236,7 +246,6 @@ def _campaign(
     cell_files: list[Path],
     seeds: int,
     traced: list[int],
-    networked: bool,
     first_seed: int = 0,
 ) -> dict:
     ie = spec.league.initial_error
@@ -270,6 +279,7 @@ def _campaign(
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
+    networked = _network_kind(spec, spec.method(method))[0]
     for path in (on.field, "network.onset") if networked else (on.field,):
         if on.high > on.low:
             sample[path] = {"dist": "uniform", "low": on.low, "high": on.high}
@@ -844,8 +854,7 @@ def run_league(
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
     for name, mcells in cells.items():
-        networked = _network_kind(spec, spec.method(name))[0]
-        sampled = _campaign(spec, name, [], 1, [], networked)
+        sampled = _campaign(spec, name, [], 1, [])
         for path in [*sampled["sample"], *sampled["overrides"]]:
             for c in mcells:
                 if not _has_path(c.raw, path):
@@ -903,20 +912,7 @@ def run_league(
             if 0 <= trace_seed < n_seeds
             else []
         )
-        jobs.append(
-            (
-                name,
-                _campaign(
-                    spec,
-                    name,
-                    files[name],
-                    n_seeds,
-                    traced,
-                    _network_kind(spec, spec.method(name))[0],
-                    start,
-                ),
-            )
-        )
+        jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced, start)))
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
 
@@ -1053,22 +1049,7 @@ def _step_checks(
                     onset=spec.league.onset.low,
                     tolerance=sc.tolerance,
                     max_halvings=sc.max_halvings,
-                    # alarm times are on the step grid; identification errors are small estimation
-                    # errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
-                    # robustness is a margin (its relative change is meaningless near 0; the signals
-                    # it reads are checked as scores); a filter's consistency is a noise statistic
-                    ignore=(
-                        *(
-                            m["name"]
-                            for m in (
-                                *FDI_METRICS,
-                                *IDENTIFICATION_METRICS,
-                                *FLFR_METRICS,
-                                *NAVIGATION_METRICS,
-                            )
-                        ),
-                        STL_VIOLATION,
-                    ),
+                    ignore=_NOT_STEP_CHECKED,
                     on_simulation=on_simulation,
                 ).as_dict()
                 verdict = "converged" if record["converged"] else "NOT converged, kept"

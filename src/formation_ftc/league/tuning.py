@@ -10,6 +10,7 @@ program, and each evaluation only writes the gains into their leaves.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import math
@@ -607,9 +608,9 @@ def replicate_raws(spec, method: str, cells, replicates: Sequence[int]):
     from formation_ftc.campaign.sampling import draw_value, run_seed
     from formation_ftc.campaign.spec import parse_sampler
     from formation_ftc.config.loader import apply_overrides
-    from formation_ftc.league.runner import _campaign, _network_kind
+    from formation_ftc.league.runner import _campaign
 
-    camp = _campaign(spec, method, [], 1, [], _network_kind(spec, spec.method(method))[0])
+    camp = _campaign(spec, method, [], 1, [])
     seed = int(spec.league.seed)
     samplers = [parse_sampler(p, s) for p, s in camp["sample"].items()]
     draws = {
@@ -1235,10 +1236,7 @@ def tune_league_method(
         "cases": [c.case for c in cells],
         "dt": float(cells[0].raw["simulation"]["dt"]) if cells else None,
         "step_check": step_check,
-        "fields": [
-            {"path": f.path, "low": f.low, "high": f.high, "log": f.log, "rebuild": f.rebuild}
-            for f in fields
-        ],
+        "fields": [dataclasses.asdict(f) for f in fields],  # path, low, high, log, rebuild
         "paper_gains": {f.path: float(v) for f, v in zip(fields, paper, strict=True)},
         "tuned_gains": {f.path: float(v) for f, v in zip(fields, tuned, strict=True)},
         "given_gains": given,
