@@ -97,10 +97,13 @@ def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
     return requirement_of(tomllib.loads(meta["definition"])["league"])
 
 
-def _passed(df: pd.DataFrame, metric: str, limit: float) -> pd.Series:
-    col = f"metric:{metric}"
-    vals = df[col] if col in df else pd.Series(np.nan, index=df.index)
-    return (df["status"] == "ok") & (vals <= limit)
+def _col(g: pd.DataFrame, name: str) -> np.ndarray:
+    col = f"metric:{name}"
+    return g[col].to_numpy(dtype=float) if col in g else np.full(len(g), np.nan)
+
+
+def _passed(df: pd.DataFrame, metric: str, limit: float) -> np.ndarray:
+    return (df["status"] == "ok").to_numpy() & (_col(df, metric) <= limit)
 
 
 def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
@@ -174,11 +177,6 @@ def _horizon(meta: dict[str, Any]) -> float:
     import tomllib
 
     return float(tomllib.loads(meta["definition"])["league"]["horizon"])
-
-
-def _col(g: pd.DataFrame, name: str) -> np.ndarray:
-    col = f"metric:{name}"
-    return g[col].to_numpy(dtype=float) if col in g else np.full(len(g), np.nan)
 
 
 def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
@@ -396,7 +394,6 @@ def rank_confidence(
     seed = seed_column(runs)
     if cases is None:
         cases = _common_cases(runs[["method", "case"]].drop_duplicates())
-    col = f"metric:{metric}"
     sel = runs[runs["case"].isin(cases)]
     frame = pd.DataFrame(
         {
@@ -404,12 +401,8 @@ def rank_confidence(
             "level": sel["level"].astype(str),
             "case": sel["case"].astype(str),
             "seed": sel[seed],
-            "passed": _passed(sel, metric, limit).to_numpy(dtype=bool),
-            "value": np.where(
-                sel["status"] == "ok",
-                sel[col].to_numpy(dtype=float) if col in sel else np.nan,
-                np.nan,
-            ),
+            "passed": _passed(sel, metric, limit),
+            "value": np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
         }
     )
     groups = {key: g for key, g in frame.groupby(["method", "level"], sort=False)}

@@ -567,12 +567,9 @@ def minimise(
             return record(z, *J(*evaluate(problem, gains(z), journal)), ts)
 
         if optimiser == "nelder-mead":
-            simplex = [z0]
-            for i in range(len(fields)):
-                simplex.append(z0.copy())
-                simplex[-1][i] += _NM_STEP if z0[i] + _NM_STEP <= 1.0 else -_NM_STEP
+            step = np.where(z0 + _NM_STEP <= 1.0, _NM_STEP, -_NM_STEP)  # inward at the top end
             tols: dict[str, Any] = {
-                "initial_simplex": np.asarray(simplex),
+                "initial_simplex": np.vstack([z0, z0 + np.diag(step)]),
                 "xatol": tolerance,
                 "fatol": tolerance,
             }
