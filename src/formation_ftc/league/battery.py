@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.config.base import StrictModel
@@ -132,28 +132,17 @@ class _BatteryModel(StrictModel):
     cases: list[dict[str, Any]] = Field(min_length=1, description="The fault cases.")
 
 
-@dataclass(frozen=True)
-class BatteryCase:
-    """One fault case of a battery (fields as in the battery file; None: not given)."""
+class BatteryCase(_CaseModel):
+    """One fault case of a battery, validated (fields as in the battery file; a magnitude None: not
+    given); its communication fields filled in (no lost link, ``delay_scale`` 1 by default)."""
 
-    name: str
-    kind: str
-    description: str
-    spacecraft: int
-    axis: int
-    onset: float  # [s]
-    effectiveness: float | None  # [-]
-    bias_fraction: float | None  # [-]
-    bias_force: float | None  # [N]
-    bias_torque: float | None  # [N m]
-    period: float | None  # [s]
-    duty: float | None  # [-]
-    rate: float | None  # [1/s]
-    min_effectiveness: float | None  # [-]
-    lost_links: tuple[tuple[int, int], ...]
-    delay_scale: float  # [-]
+    model_config = ConfigDict(frozen=True)
+
+    # frozen: a tuple where the file's model takes a list
+    lost_links: tuple[tuple[int, int], ...] = Field((), description="Links (i, j) lost.")  # type: ignore[assignment]
+    delay_scale: float = Field(1.0, gt=0.0, description="Delay multiplier after the onset [-].")
     #: the largest delay_scale of the battery (sizes a delayed network's history alike for every case)
-    max_delay_scale: float = 1.0
+    max_delay_scale: float = Field(1.0, description="Largest delay_scale of the battery [-].")
 
     @property
     def communication(self) -> bool:
