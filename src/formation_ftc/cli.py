@@ -192,15 +192,6 @@ def _info(msg: str) -> None:
         print(msg, file=sys.stderr)
 
 
-def _builtin_scenario_names() -> list[str]:
-    from importlib import resources
-
-    d = resources.files("formation_ftc") / "scenarios"
-    return [
-        n[:-5] for n in sorted(e.name for e in d.iterdir()) if n.endswith(".toml")
-    ]  # loader's order
-
-
 def _check_scenario_name(name: str) -> None:
     """Bad input with a "did you mean" when ``name`` is neither a file nor a built-in scenario."""
     from formation_ftc.config.loader import ScenarioError
@@ -211,7 +202,7 @@ def _check_scenario_name(name: str) -> None:
             return
     except (OSError, ValueError):  # a path text the system refuses: the loader reports it
         return
-    names = _builtin_scenario_names()
+    names = _resource_names("scenarios")
     if name not in names:
         raise ScenarioError(
             f"unknown scenario {name!r}: not a file and not a built-in scenario"
@@ -313,7 +304,7 @@ def _cmd_list(args) -> int:
 
     d = resources.files("formation_ftc") / "scenarios"
     rows = []
-    for name in _builtin_scenario_names():
+    for name in _resource_names("scenarios"):
         meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get(
             "scenario", {}
         )
@@ -521,22 +512,14 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             }
         )
         return code
+    rows = [
+        [*map(str, (c.name, c.reference, c.value, c.requirement)), _holds_text(c), str(c.basis)]
+        + ["yes" if c.required else "info"]
+        for c in conds
+    ]
     if not sys.stdout.isatty():
-        rows = [cols]
-        rows += [
-            (
-                str(c.name),
-                str(c.reference),
-                str(c.value),
-                str(c.requirement),
-                _holds_text(c),
-                str(c.basis),
-                "yes" if c.required else "info",
-            )
-            for c in conds
-        ]
-        widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
-        for r in rows if conds else []:
+        widths = [max(len(r[k]) for r in [cols, *rows]) for k in range(len(cols))]
+        for r in [cols, *rows] if conds else []:
             print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
     else:
         from rich.console import Console
@@ -545,21 +528,9 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
         table = Table(title="Conditions")
         for col in cols:
             table.add_column(col)
-        for c in conds:
-            mark = {
-                "yes": "[green]yes[/]",
-                "NO": "[red]NO[/]",
-                "unproven": "[yellow]unproven[/]",
-            }.get(_holds_text(c), "n/a")
-            table.add_row(
-                c.name,
-                c.reference,
-                c.value,
-                c.requirement,
-                mark,
-                c.basis,
-                "yes" if c.required else "info",
-            )
+        marks = {"yes": "[green]yes[/]", "NO": "[red]NO[/]", "unproven": "[yellow]unproven[/]"}
+        for r in rows:
+            table.add_row(*r[:4], marks.get(r[4], "n/a"), *r[5:])
         Console().print(table)
     for c in conds:
         if c.detail and (c.holds is False or (c.required and c.holds is None)):
@@ -571,7 +542,7 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             f"{len(unproven_required)} required condition(s) unproven (not evaluated, or sampled / heuristic "
             "with no violation found)"
         )
-    return 1 if failed_required else 0
+    return code
 
 
 def _cmd_check(args) -> int:
@@ -987,7 +958,7 @@ def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
     files) for the positionals that take them, directories for --out and DIR arguments."""
     import shtab
 
-    scenarios = _names_completer("scenario", _builtin_scenario_names(), files=True)
+    scenarios = _names_completer("scenario", _resource_names("scenarios"), files=True)
     by_command = {
         "reproduce": {"paper": _names_completer("paper", [*_paper_names(), "all"], files=False)},
         "campaign run": {

@@ -48,7 +48,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 from scipy import stats
 
-from formation_ftc.config.base import StrictModel, error_location
+from formation_ftc.config.base import StrictModel, validation_message
 from formation_ftc.errors import InputError
 
 __all__ = [
@@ -500,30 +500,12 @@ class CampaignSpec(StrictModel):
         return list(b) if isinstance(b, list) else [b]
 
 
-def _format_error(exc: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid campaign ({exc.error_count()} error(s))"]
-    for err in exc.errors():
-        loc = error_location(err) or "<root>"
-        msg = err["msg"]
-        if msg.startswith("Value error, "):
-            msg = msg[len("Value error, ") :]
-        if err["type"] == "extra_forbidden":
-            msg = "unknown field"
-        lines.append(f"  field {loc}: {msg}" if loc != "<root>" else f"  {msg}")
-    return "\n".join(lines)
-
-
 # --------------------------------------------------------------------------------------- loading
 def builtin_campaigns() -> dict[str, str]:
     """Name -> TOML text of every built-in campaign."""
-    out: dict[str, str] = {}
-    d = resources.files("formation_ftc.campaign") / "builtin"
-    if not d.is_dir():
-        return out
-    for entry in sorted(d.iterdir(), key=lambda p: p.name):
-        if entry.name.endswith(".toml"):
-            out[entry.name[:-5]] = entry.read_text(encoding="utf-8")
-    return out
+    from formation_ftc.config.loader import builtin_tomls
+
+    return builtin_tomls(resources.files("formation_ftc.campaign") / "builtin")
 
 
 def load_campaign(
@@ -566,7 +548,9 @@ def load_campaign(
     try:
         spec = CampaignSpec.model_validate(raw)
     except ValidationError as exc:
-        raise CampaignError(_format_error(exc, source)) from None
+        raise CampaignError(
+            validation_message(exc, f"{source}: invalid campaign", "unknown field", root="")
+        ) from None
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         raise CampaignError(f"{source}: {exc}") from None
     return spec, base_dir

@@ -24,6 +24,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    ValidationError,
     ValidationInfo,
     field_validator,
     model_validator,
@@ -42,6 +43,7 @@ __all__ = [
     "expression_validator",
     "MAX_SEED",
     "error_location",
+    "validation_message",
 ]
 
 #: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
@@ -103,6 +105,22 @@ def error_location(err: ErrorDetails) -> str:
     error names one: ``faults[0].bias``, ``magnitude[1][2]``."""
     loc = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"]).lstrip(".")
     return loc + str(err.get("ctx", {}).get("index", ""))
+
+
+def validation_message(exc: ValidationError, head: str, unknown: str, root: str = "<root>") -> str:
+    """A pydantic error as lines for the user: ``head (N error(s))``, then ``  field LOC: message``
+    per error (``unknown`` for an unknown field; an error without location is at ``root``, or has no
+    ``field`` part when ``root`` is "")."""
+    lines = [f"{head} ({exc.error_count()} error(s))"]
+    for err in exc.errors():
+        loc = error_location(err) or root
+        msg = (
+            unknown
+            if err["type"] == "extra_forbidden"
+            else err["msg"].removeprefix("Value error, ")
+        )
+        lines.append(f"  field {loc}: {msg}" if loc else f"  {msg}")
+    return "\n".join(lines)
 
 
 class StrictModel(BaseModel):

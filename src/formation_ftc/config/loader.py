@@ -17,18 +17,20 @@ import copy
 import tomllib
 from collections.abc import Iterable, Mapping
 from importlib import resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any
 
 import tomli_w
 from pydantic import ValidationError
 
-from formation_ftc.config.base import error_location
+from formation_ftc.config.base import validation_message
 from formation_ftc.errors import InputError
 
 __all__ = [
     "ScenarioError",
     "builtin_scenarios",
+    "builtin_tomls",
     "read_raw",
     "set_dotted",
     "get_dotted",
@@ -54,17 +56,18 @@ class ScenarioError(InputError):
     """A scenario that cannot be read or does not validate. The message names file and field."""
 
 
-def _builtin_dir():
-    return resources.files("formation_ftc") / "scenarios"
-
-
 def builtin_scenarios() -> dict[str, str]:
     """Name -> TOML text of every built-in scenario."""
-    out = {}
-    for entry in sorted(_builtin_dir().iterdir(), key=lambda p: p.name):
-        if entry.name.endswith(".toml"):
-            out[entry.name[:-5]] = entry.read_text(encoding="utf-8")
-    return out
+    return builtin_tomls(resources.files("formation_ftc") / "scenarios")
+
+
+def builtin_tomls(folder: Traversable) -> dict[str, str]:
+    """Name (file name without ``.toml``) -> text of every ``*.toml`` file of a package ``folder``, in
+    name order ({} when the folder does not exist)."""
+    if not folder.is_dir():
+        return {}
+    entries = sorted(folder.iterdir(), key=lambda p: p.name)
+    return {e.name[:-5]: e.read_text(encoding="utf-8") for e in entries if e.name.endswith(".toml")}
 
 
 def _nesting_depth(obj: Any) -> int:
@@ -297,19 +300,6 @@ def apply_overrides(
     return out
 
 
-def _format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid scenario ({exc.error_count()} error(s))"]
-    for err in exc.errors():
-        loc = error_location(err) or "<root>"
-        msg = err["msg"]
-        if msg.startswith("Value error, "):
-            msg = msg[len("Value error, ") :]
-        if err["type"] == "extra_forbidden":
-            msg = "unknown field (not part of this method's scenario schema)"
-        lines.append(f"  field {loc}: {msg}")
-    return "\n".join(lines)
-
-
 def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool = True):
     """Validate ``raw`` with the schema of the method named in ``[scenario].method`` (default
     ``"composed"``).
@@ -334,7 +324,13 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool 
     try:
         return method.schema.model_validate(dict(raw), context=None if build else {"build": False})
     except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source)) from None
+        raise ScenarioError(
+            validation_message(
+                exc,
+                f"{source}: invalid scenario",
+                "unknown field (not part of this method's scenario schema)",
+            )
+        ) from None
     except (
         ValueError,
         TypeError,
