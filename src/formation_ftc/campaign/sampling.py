@@ -74,6 +74,7 @@ from formation_ftc.campaign.spec import (
     spec_hash,
 )
 from formation_ftc.config import loader
+from formation_ftc.config.base import field_info
 
 __all__ = [
     "RunInputs",
@@ -364,16 +365,7 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
         callable(section) and section(parts[0]) is not None
     ):  # a composed slot: its component's section
         model, parts = type(section(parts[0])), parts[1:]
-    info = None
-    for part in parts:
-        if part.isdigit():
-            continue
-        fields = getattr(model, "model_fields", None)
-        if not fields or part not in fields:
-            return []
-        info = fields[part]
-        ann = info.annotation
-        model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
+    info = field_info(model, ".".join(parts))
     if info is None:
         return []
     ops = (

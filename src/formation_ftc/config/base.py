@@ -44,6 +44,7 @@ __all__ = [
     "MAX_SEED",
     "error_location",
     "validation_message",
+    "field_info",
 ]
 
 #: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
@@ -121,6 +122,21 @@ def validation_message(exc: ValidationError, head: str, unknown: str, root: str 
         )
         lines.append(f"  field {loc}: {msg}" if loc else f"  {msg}")
     return "\n".join(lines)
+
+
+def field_info(model: Any, path: str) -> FieldInfo | None:
+    """The field of the pydantic ``model`` that the dotted ``path`` names (list indices skipped; a
+    field whose type is, or is a union with, a model is entered), or None when it names none."""
+    info = None
+    for part in path.split("."):
+        if part.isdigit():
+            continue
+        fields = getattr(model, "model_fields", None)
+        if not fields or part not in fields:
+            return None
+        info, ann = fields[part], fields[part].annotation
+        model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
+    return info
 
 
 class StrictModel(BaseModel):
