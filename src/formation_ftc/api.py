@@ -42,28 +42,15 @@ class Conditions(list[Condition]):
     """What :func:`check` returns: a list of :class:`~formation_ftc.registry.Condition` that shows as a
     table (condition, value, requirement, holds) at a Python prompt and in Jupyter."""
 
-    _COLUMNS = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
-
     def _card(self) -> dict[str, Any]:
-        from formation_ftc.display import holds_cell
+        from formation_ftc.display import CONDITION_COLUMNS, condition_row
 
         failed = [c.name for c in self if c.required and c.holds is False]
         note = f"required condition(s) failing: {', '.join(failed)}" if failed else ""
         return dict(
             title=f"Conditions ({len(self)})",
-            columns=self._COLUMNS,
-            rows=[
-                [
-                    c.name,
-                    c.reference,
-                    c.value,
-                    c.requirement,
-                    holds_cell(c.holds, c.unproven),
-                    c.basis,
-                    "yes" if c.required else "info",
-                ]
-                for c in self
-            ],
+            columns=CONDITION_COLUMNS,
+            rows=[condition_row(c) for c in self],
             note=note or ("no required condition fails" if self else "no conditions declared"),
         )
 

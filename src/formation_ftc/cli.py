@@ -485,17 +485,9 @@ def _cmd_show(args) -> int:
     return 0
 
 
-def _holds_text(c) -> str:
-    """yes / NO / unproven (sampled or heuristic, no violation found) / n/a (not evaluated)."""
-    if c.holds is None:
-        return "unproven" if c.basis in ("sampled", "heuristic") else "n/a"
-    return "yes" if c.holds else "NO"
-
-
 def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     failed_required = [c for c in conds if c.required and c.holds is False]
     unproven_required = [c for c in conds if c.required and c.holds is None]
-    cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
     code = 1 if failed_required else 0
     if as_json:
         from formation_ftc.condition_json import condition_json
@@ -512,26 +504,23 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             }
         )
         return code
-    rows = [
-        [*map(str, (c.name, c.reference, c.value, c.requirement)), _holds_text(c), str(c.basis)]
-        + ["yes" if c.required else "info"]
-        for c in conds
-    ]
+    from formation_ftc.display import CONDITION_COLUMNS, condition_row
+
+    rows = [[v if isinstance(v, str) else v[0] for v in condition_row(c)] for c in conds]
     if not sys.stdout.isatty():
-        widths = [max(len(r[k]) for r in [cols, *rows]) for k in range(len(cols))]
-        for r in [cols, *rows] if conds else []:
+        table = [CONDITION_COLUMNS, *rows]
+        widths = [max(len(r[k]) for r in table) for k in range(len(CONDITION_COLUMNS))]
+        for r in table if conds else []:
             print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
     else:
         from rich.console import Console
         from rich.table import Table
 
-        table = Table(title="Conditions")
-        for col in cols:
-            table.add_column(col)
+        rich_table = Table(*CONDITION_COLUMNS, title="Conditions")
         marks = {"yes": "[green]yes[/]", "NO": "[red]NO[/]", "unproven": "[yellow]unproven[/]"}
         for r in rows:
-            table.add_row(*r[:4], marks.get(r[4], "n/a"), *r[5:])
-        Console().print(table)
+            rich_table.add_row(*r[:4], marks.get(r[4], "n/a"), *r[5:])
+        Console().print(rich_table)
     for c in conds:
         if c.detail and (c.holds is False or (c.required and c.holds is None)):
             print(f"- {c.name}: {c.detail}")
