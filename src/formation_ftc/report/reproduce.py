@@ -331,8 +331,13 @@ def paper_entry(
 def _paper_summary(entry: dict, report: PaperReport | None) -> dict[str, Any]:
     if entry["status"] == "ok" and report is not None:
         return dict(report.summary)
-    last = (entry["error"] or "").strip().splitlines()
-    return {"status": "failed", "error": last[-1] if last else "failed"}
+    return {"status": "failed", "error": _last_line(entry["error"]) or "failed"}
+
+
+def _last_line(text: str | None) -> str | None:
+    """The last line of an error text (a traceback's exception line), None when it has none."""
+    lines = (text or "").strip().splitlines()
+    return lines[-1] if lines else None
 
 
 def _run_one(
@@ -770,37 +775,22 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
     from rich.table import Table
 
     console = console or Console()
-    table = Table(title="formation-ftc reproduce: wall time per paper")
-    columns: list[tuple[str, dict[str, Any]]] = [
-        ("paper", {}),
-        ("status", {}),
-        (escape("wall time [s]"), {"justify": "right"}),
-        ("match", {"justify": "right"}),
-        ("differs", {"justify": "right"}),
-        ("not stated", {"justify": "right"}),
-        ("conditions hold/fail", {"justify": "right"}),
-    ]
-    for col, kw in columns:
-        table.add_column(col, **kw)
+    table = Table("paper", "status", title="formation-ftc reproduce: wall time per paper")
+    for col in (escape("wall time [s]"), *VERDICTS, "conditions hold/fail"):
+        table.add_column(col, justify="right")
     for e in entries:
         status = "[green]ok[/]" if e["status"] == "ok" else "[red]FAILED[/]"
         v, c = e["verdicts"], e["checks_summary"]
+        counts = [str(v[k]) for k in VERDICTS]
         table.add_row(
-            e["paper"],
-            status,
-            f"{e['wall_time_s']:.1f}",
-            str(v["match"]),
-            str(v["differs"]),
-            str(v["not stated"]),
-            f"{c['hold']}/{c['fail']}",
+            e["paper"], status, f"{e['wall_time_s']:.1f}", *counts, f"{c['hold']}/{c['fail']}"
         )
     table.add_row("total", "", f"{total:.1f}", "", "", "", "", end_section=True)
     console.print(table)
     for e in entries:
         if e["status"] != "ok":
-            last = (e["error"] or "").strip().splitlines()
             console.print(
-                f"[red]{e['paper']} failed:[/] {last[-1] if last else ''} "
+                f"[red]{e['paper']} failed:[/] {_last_line(e['error']) or ''} "
                 f"(traceback in {e['paper']}/report.json)",
                 highlight=False,
             )
@@ -939,11 +929,10 @@ def _paper_json(entry: Mapping[str, Any], out: Path) -> dict[str, Any]:
     from formation_ftc.registry import Condition
 
     paper_dir = out / entry["paper"]
-    last = (entry["error"] or "").strip().splitlines()
     return {
         "title": entry["title"],
         "status": entry["status"],
-        "error": last[-1] if last else None,
+        "error": _last_line(entry["error"]),
         "verdicts": entry["verdicts"],
         "rows": [_row_json(r) for r in entry["rows"]],
         "conditions_summary": entry["checks_summary"],
