@@ -335,32 +335,32 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         return Choice(path, tuple(values), w)
 
     dist = spec["dist"]
-    if dist in ("uniform", "loguniform"):
-        allowed("dist", "low", "high")
-        need("low", "high")
-        cls = Uniform if dist == "uniform" else LogUniform
-        return cls(path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"]))
-    if dist == "normal":
-        allowed("dist", "mean", "std", "low", "high")
-        need("mean", "std")
-        lo = _finite(path, "low", spec["low"]) if "low" in spec else None
-        hi = _finite(path, "high", spec["high"]) if "high" in spec else None
-        return Normal(
-            path, _finite(path, "mean", spec["mean"]), _finite(path, "std", spec["std"]), lo, hi
+    if dist not in _DISTS:
+        raise CampaignError(
+            f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
+            f"(or grid = [...], choice = [...])"
         )
-    if dist == "integer":
-        allowed("dist", "low", "high")
-        need("low", "high")
-        for n in ("low", "high"):
+    cls, params, n_required = _DISTS[dist]
+    allowed("dist", *params)
+    need(*params[:n_required])
+    if cls is Integer:
+        for n in params:
             if isinstance(spec[n], bool) or not isinstance(spec[n], int):
                 raise CampaignError(
                     f"sample.{path}: integer {n} must be an integer, got {spec[n]!r}"
                 )
         return Integer(path, int(spec["low"]), int(spec["high"]))
-    raise CampaignError(
-        f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
-        f"(or grid = [...], choice = [...])"
-    )
+    values = {n: _finite(path, n, spec[n]) for n in ("low", "high", "mean", "std") if n in spec}
+    return cls(path, *(values.get(n) for n in params))
+
+
+#: dist -> (sampler, its parameters in the order it takes them, how many of them are required)
+_DISTS: dict[str, tuple[type[Sampler], tuple[str, ...], int]] = {
+    "uniform": (Uniform, ("low", "high"), 2),
+    "loguniform": (LogUniform, ("low", "high"), 2),
+    "normal": (Normal, ("mean", "std", "low", "high"), 2),
+    "integer": (Integer, ("low", "high"), 2),
+}
 
 
 def _flatten(table: Mapping[str, Any], prefix: str = "", stop=lambda v: False) -> dict[str, Any]:
