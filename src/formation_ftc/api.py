@@ -228,6 +228,7 @@ def finish_run(
     out["records"] = records
     ds = loop.dataset(out, n_kept)
     metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
+    units = _metric_units(loop.metrics, loop.count)
     ds.attrs.update(provenance())
     ds.attrs.update(
         scenario_name=scenario.scenario.name,
@@ -235,7 +236,7 @@ def finish_run(
         scenario_toml=loader.dump_toml(scenario),
         seed=int(scenario.simulation.seed),
         metrics_json=json.dumps(metrics),
-        metric_units_json=json.dumps(_metric_units(loop, metrics)),
+        metric_units_json=json.dumps({k: units.get(k, "1") for k in metrics}),
         diverged="",
     )
     _apply_cf(ds, scenario)
@@ -413,18 +414,19 @@ def check(scenario: ScenarioBase | str | Path) -> Conditions:
     return Conditions(method.check(scenario) if method.check else [])
 
 
-def _metric_units(loop: ClosedLoop, metrics: Mapping[str, float]) -> dict[str, str]:
-    """UDUNITS unit of each metric the loop declares (``"1"`` for dimensionless or undeclared)."""
-    declared = {}
-    count = loop.count
-    for m in loop.metrics:
+def _metric_units(declared: Iterable[Any], count: int) -> dict[str, str]:
+    """UDUNITS unit of each metric the loop's ``declared`` metrics return (``"1"`` for dimensionless),
+    those declared per spacecraft by name: ``name_sc1``, ..., ``name_sc{count}``."""
+    out = {}
+    for m in declared or ():
         units = str(getattr(m, "units", "") or "1")
-        declared[m.name] = units
-        if (
-            getattr(m, "spacecraft", None) == "each"
-        ):  # expanded per spacecraft: name_sc1, name_sc2, ...
-            declared.update({f"{m.name}_sc{i + 1}": units for i in range(count)})
-    return {k: declared.get(k, "1") for k in metrics}
+        each = getattr(m, "spacecraft", None) == "each"
+        out.update(
+            dict.fromkeys(
+                [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name], units
+            )
+        )
+    return out
 
 
 def metric_units(ds) -> dict[str, str]:

@@ -471,14 +471,9 @@ def _general_chunk(
 
 def _metric_units(metrics, count: int) -> dict[str, str]:
     """``metric:<name>`` column -> UDUNITS unit of the declared metric (per-spacecraft names expanded)."""
-    out = {}
-    for m in metrics or ():
-        units = str(getattr(m, "units", "") or "1")
-        names = (
-            [f"{m.name}_sc{i + 1}" for i in range(count)] if m.spacecraft == "each" else [m.name]
-        )
-        out.update({f"metric:{n}": units for n in names})
-    return out
+    from formation_ftc.api import _metric_units as units
+
+    return {f"metric:{n}": u for n, u in units(metrics, count).items()}
 
 
 def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
