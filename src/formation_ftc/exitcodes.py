@@ -38,7 +38,7 @@ import tempfile
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 __all__ = [
     "EXIT_OK",
@@ -102,15 +102,31 @@ def _quiet_stdout() -> None:
         pass
 
 
-class _GuardedStdout:
+class _Wrapped:
+    """A text stream that delegates to ``stream`` what it does not define itself (encoding, fileno,
+    buffer, ...; none while ``stream`` is None)."""
+
+    def __init__(self, stream: Any):
+        self.stream = stream
+
+    def write(self, text: str) -> int:  # pragma: no cover - every wrapper defines it
+        raise NotImplementedError
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.stream, name)
+
+
+class _GuardedStdout(_Wrapped):
     """``sys.stdout`` while a command runs: remembers the first write or flush that failed (``failure``)
     and re-raises it, so that :func:`run_guarded` can tell a failure of standard output itself from an
     ``OSError`` of anything else (a result file, a socket). A closed descriptor (``>&-``: Python's
     ``sys.stdout`` is None) fails like one on the first write."""
 
-    def __init__(self, stream: Any):
-        self.stream = stream
-        self.failure: OSError | None = None
+    failure: OSError | None = None
 
     def _failed(self, exc: OSError) -> OSError:
         if self.failure is None:
@@ -128,10 +144,6 @@ class _GuardedStdout:
         except OSError as exc:
             raise self._failed(exc) from None
 
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
-
     def flush(self) -> None:
         if self.stream is None:
             return
@@ -142,11 +154,6 @@ class _GuardedStdout:
 
     def isatty(self) -> bool:
         return False if self.stream is None else bool(self.stream.isatty())
-
-    def __getattr__(self, name: str) -> Any:  # encoding, fileno, buffer, ... of the stream
-        if self.stream is None:
-            raise AttributeError(name)
-        return getattr(self.stream, name)
 
 
 def add_json_option(parser: argparse.ArgumentParser) -> None:
@@ -267,11 +274,8 @@ def _unexpected(exc: Exception, as_json: bool) -> int:
     return EXIT_UNEXPECTED
 
 
-class _LossyStream:
+class _LossyStream(_Wrapped):
     """``stream`` whose failed writes and flushes are dropped (a closed or full stderr)."""
-
-    def __init__(self, stream: TextIO):
-        self.stream = stream
 
     def write(self, text: str) -> int:
         try:
@@ -279,16 +283,9 @@ class _LossyStream:
         except (OSError, ValueError):
             return len(text)
 
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
-
     def flush(self) -> None:
         with contextlib.suppress(OSError, ValueError):
             self.stream.flush()
-
-    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno, ... of the stream
-        return getattr(self.stream, name)
 
 
 @contextlib.contextmanager

@@ -51,7 +51,7 @@ import pandas as pd
 
 from formation_ftc.atomic import atomic_write
 from formation_ftc.campaign.sampling import CampaignPlan
-from formation_ftc.campaign.spec import CampaignError
+from formation_ftc.campaign.spec import CampaignError, _flatten
 from formation_ftc.cf import apply_cf, write_netcdf
 from formation_ftc.errors import require_extra
 from formation_ftc.parquet_units import read_units, write_parquet
@@ -107,15 +107,6 @@ def _package_version() -> str:
     from formation_ftc import __version__
 
     return __version__
-
-
-def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
-    if isinstance(d, dict):
-        out: dict[str, Any] = {}
-        for k, v in d.items():
-            out.update(_flat(v, f"{prefix}.{k}" if prefix else str(k)))
-        return out
-    return {prefix: d}
 
 
 class CampaignStore:
@@ -248,7 +239,9 @@ class CampaignStore:
 
     @staticmethod
     def _difference(root: Path, manifest: dict[str, Any], plan: CampaignPlan) -> str:
-        old, new = _flat(manifest.get("spec", {})), _flat(plan.spec.model_dump(mode="json"))
+        spec = manifest.get("spec", {})
+        old = _flatten(spec) if isinstance(spec, dict) else {"": spec}
+        new = _flatten(plan.spec.model_dump(mode="json"))
         diffs = [
             f"{k}: {old.get(k, '<absent>')!r} there, {new.get(k, '<absent>')!r} here"
             for k in sorted(set(old) | set(new))
