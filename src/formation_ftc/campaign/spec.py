@@ -522,23 +522,15 @@ def load_campaign(
     if isinstance(name_or_path, Mapping):
         raw, source = copy.deepcopy(dict(name_or_path)), "<dict>"
     else:
-        from formation_ftc.config.loader import parse_toml, path_exists, read_text_file, short_text
+        from formation_ftc.config.loader import read_named_toml
 
         if isinstance(name_or_path, str) and (not name_or_path.strip() or "\x00" in name_or_path):
             raise CampaignError(f"invalid campaign name or path {name_or_path!r}")
-        p = Path(name_or_path)
-        if p.suffix == ".toml" or path_exists(p, "campaign", CampaignError):
-            text = read_text_file(p, "campaign", CampaignError)
-            source, base_dir = str(p), p.resolve().parent
-        else:
-            builtin = builtin_campaigns()
-            if str(name_or_path) not in builtin:
-                raise CampaignError(
-                    f"unknown campaign {short_text(name_or_path)}: not a file and not a built-in "
-                    f"campaign (built-in: {', '.join(builtin) or 'none'})"
-                )
-            text, source = builtin[str(name_or_path)], f"<built-in campaign {name_or_path}>"
-        raw = parse_toml(text, source, CampaignError)
+        raw, source = read_named_toml(
+            name_or_path, "campaign", builtin_campaigns, "built-in campaign", error=CampaignError
+        )
+        if source == str(Path(name_or_path)):  # a file: its base scenarios may be relative to it
+            base_dir = Path(name_or_path).resolve().parent
     meta = raw.get("campaign")
     if isinstance(meta, dict):
         if runs is not None:

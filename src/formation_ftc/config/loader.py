@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
@@ -32,6 +32,7 @@ __all__ = [
     "builtin_scenarios",
     "builtin_tomls",
     "read_raw",
+    "read_named_toml",
     "set_dotted",
     "get_dotted",
     "parse_override",
@@ -165,18 +166,34 @@ def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
     """Parse a built-in scenario (by name) or a TOML file (by path)."""
     if isinstance(name_or_path, str) and (not name_or_path or "\x00" in name_or_path):
         raise ScenarioError(f"invalid scenario name or path {name_or_path!r}")
+    return read_named_toml(
+        name_or_path, "scenario", builtin_scenarios, "built-in", "; see `formation-ftc list`"
+    )
+
+
+def read_named_toml(
+    name_or_path: str | Path,
+    kind: str,
+    builtin: Callable[[], Mapping[str, str]],
+    label: str,
+    hint: str = "",
+    error: type[InputError] = ScenarioError,
+) -> tuple[dict[str, Any], str]:
+    """``(dict, source)`` of the TOML file ``name_or_path`` (a ``.toml`` name or an existing path), else
+    of the built-in ``kind`` of that name (``builtin()``: name -> text; source ``<LABEL NAME>``); every
+    failure raises ``error`` naming the file (``hint`` ends the message of an unknown name)."""
     p = Path(name_or_path)
-    if p.suffix == ".toml" or path_exists(p):
-        text, source = read_text_file(p), str(p)
+    if p.suffix == ".toml" or path_exists(p, kind, error):
+        text, source = read_text_file(p, kind, error), str(p)
     else:
-        builtin = builtin_scenarios()
-        if str(name_or_path) not in builtin:
-            raise ScenarioError(
-                f"unknown scenario {short_text(name_or_path)}: not a file and not a built-in scenario "
-                f"(built-in: {', '.join(builtin) or 'none'}; see `formation-ftc list`)"
+        texts = builtin()
+        if str(name_or_path) not in texts:
+            raise error(
+                f"unknown {kind} {short_text(name_or_path)}: not a file and not a built-in {kind} "
+                f"(built-in: {', '.join(texts) or 'none'}{hint})"
             )
-        text, source = builtin[str(name_or_path)], f"<built-in {name_or_path}>"
-    return parse_toml(text, source), source
+        text, source = texts[str(name_or_path)], f"<{label} {name_or_path}>"
+    return parse_toml(text, source, error), source
 
 
 def get_dotted(raw: Mapping[str, Any], path: str) -> Any:
