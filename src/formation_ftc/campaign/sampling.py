@@ -50,7 +50,6 @@ from __future__ import annotations
 import copy
 import json
 import math
-import operator
 import zlib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -74,7 +73,7 @@ from formation_ftc.campaign.spec import (
     spec_hash,
 )
 from formation_ftc.config import loader
-from formation_ftc.config.base import field_info
+from formation_ftc.config.base import field_bounds, field_info
 
 __all__ = [
     "RunInputs",
@@ -348,11 +347,10 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
 
 
 def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[Any, str, Any]]:
-    """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
+    """Numeric bounds (``(bound, relation, test)``, :func:`~formation_ftc.config.base.field_bounds`)
+    the method's schema declares for the field at ``path`` (list
     elements inherit the bounds of their list's field items when declared there). A composed
     ``scenario`` (the validated base) gives each slot's section, whose model declares them."""
-    import annotated_types as at
-
     from formation_ftc.registry import get_method
 
     try:
@@ -368,19 +366,7 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
     info = field_info(model, ".".join(parts))
     if info is None:
         return []
-    ops = (
-        (at.Gt, "gt", ">", operator.gt),
-        (at.Ge, "ge", ">=", operator.ge),
-        (at.Lt, "lt", "<", operator.lt),
-        (at.Le, "le", "<=", operator.le),
-    )
-    return [  # (bound, operator, test); bounds are comparable values
-        (b, op, lambda v, f=f, b=b: f(v, b))
-        for m in info.metadata
-        for kind, name, op, f in ops
-        if isinstance(m, kind)
-        for b in (getattr(m, name),)
-    ]
+    return field_bounds(info)
 
 
 def _describe_dump(node: Any) -> str:
@@ -425,8 +411,8 @@ class _Validation:
             for b, sel in sels.items():
                 if not sel.size:
                     continue
-                for i, (_, _, ok) in enumerate(self.bounds[path, b]):
-                    bad = sel[np.flatnonzero(~np.asarray(ok(vals[sel]), dtype=bool))]
+                for i, (bound, _, test) in enumerate(self.bounds[path, b]):
+                    bad = sel[np.flatnonzero(~np.asarray(test(vals[sel], bound), dtype=bool))]
                     if bad.size:
                         first = [int(cols.run_id[bad[0]]), vals[bad[0]], 0]
                         self.violations.setdefault((path, b, i), first)[2] += bad.size

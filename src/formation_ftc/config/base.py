@@ -15,8 +15,10 @@ bounded to the 32-bit seeds the random generators take.
 from __future__ import annotations
 
 import math
+import operator
 import types
 import typing
+from collections.abc import Callable
 from typing import Annotated, Any
 
 from pydantic import (
@@ -45,6 +47,7 @@ __all__ = [
     "error_location",
     "validation_message",
     "field_info",
+    "field_bounds",
 ]
 
 #: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
@@ -90,15 +93,29 @@ def _find_bad_number(value: Any, *, booleans: bool, non_finite: bool) -> tuple[s
     return None
 
 
-def _allowed_range(field: FieldInfo) -> str:
-    """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
-    bounds = [
-        f"{op} {getattr(c, name)}"
+#: pydantic's numeric bounds: (constraint attribute, relation as printed, the relation's test)
+_BOUNDS = (
+    ("gt", ">", operator.gt),
+    ("ge", ">=", operator.ge),
+    ("lt", "<", operator.lt),
+    ("le", "<=", operator.le),
+)
+
+
+def field_bounds(field: FieldInfo) -> list[tuple[Any, str, Callable[[Any, Any], Any]]]:
+    """``(bound, relation, test)`` of every numeric bound ``field`` declares (``Field(gt=0)`` ->
+    ``(0, ">", operator.gt)``; ``test(value, bound)`` is whether a value respects it)."""
+    return [
+        (getattr(c, name), op, test)
         for c in field.metadata
-        for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
+        for name, op, test in _BOUNDS
         if getattr(c, name, None) is not None
     ]
-    return ", ".join(["a finite number", *bounds])
+
+
+def _allowed_range(field: FieldInfo) -> str:
+    """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
+    return ", ".join(["a finite number", *(f"{op} {b}" for b, op, _ in field_bounds(field))])
 
 
 def error_location(err: ErrorDetails) -> str:
