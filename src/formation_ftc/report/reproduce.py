@@ -654,87 +654,67 @@ def _reproduce_in_workers(
     import_failures: Mapping[str, str],
 ) -> None:
     """Run the papers in a spawn process pool, the longest first; progress messages come back
-    through a queue; a worker that dies takes only its paper down (recorded as failed)."""
+    through a queue, read between waits for the papers; a worker that dies takes only its paper down
+    (recorded as failed)."""
     import multiprocessing
     import queue as queue_module
-    import threading
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     ctx = multiprocessing.get_context("spawn")
     manager = ctx.Manager()
     messages = manager.Queue()
-    state: dict[str, tuple[float, str]] = {}
-    n_done = 0
-    lock = threading.Lock()
-    stop = threading.Event()
-
-    def show() -> None:
-        with lock:
-            running = {p: v for p, v in state.items() if v[0] < 1.0}
-            text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
-            bar.update(
-                n_done + sum(f for f, _ in running.values()),
-                f"{n_done}/{len(selected)} done  {text}",
-            )
-
-    def drain() -> None:
-        while not stop.is_set():
-            try:
-                paper, fraction, message = messages.get(timeout=0.2)
-            except (queue_module.Empty, EOFError, OSError):
-                continue
-            with lock:
-                if paper in state and state[paper][0] < 1.0:
-                    f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
-                    state[paper] = (f, message)
-            show()
-
-    reader = threading.Thread(target=drain, name="reproduce-progress", daemon=True)
-    reader.start()
     order = sorted(selected, key=lambda p: -PAPER_COST.get(p, 100.0))
+    running = dict.fromkeys(order, (0.0, ""))  # paper -> (fraction done, message), while it runs
     t0 = {p: time.perf_counter() for p in selected}
     try:
         with (
             _threads_for_workers(n_workers),
             ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool,
         ):
-            futures = {}
-            for paper in order:
-                futures[
-                    pool.submit(
-                        _paper_in_worker,
-                        _shippable(found.get(paper)),
-                        paper,
-                        str(out / paper),
-                        profile,
-                        import_failures.get(paper),
-                        messages,
-                    )
-                ] = paper
-                with lock:
-                    state[paper] = (0.0, "")
-            for fut in as_completed(futures):
-                paper = futures[fut]
-                try:
-                    entry, summary, breakdown = fut.result()
-                except Exception:  # the worker died (killed, out of memory): this paper failed
-                    entry = paper_entry(
-                        None,
-                        paper,
-                        out / paper,
-                        None,
-                        time.perf_counter() - t0[paper],
-                        traceback.format_exc(),
-                    )
-                    summary, breakdown = _paper_summary(entry, None), None
-                finished(paper, entry, summary, breakdown)
-                with lock:
-                    state[paper] = (1.0, "")
-                    n_done += 1
-                show()
+            futures = {
+                pool.submit(
+                    _paper_in_worker,
+                    _shippable(found.get(paper)),
+                    paper,
+                    str(out / paper),
+                    profile,
+                    import_failures.get(paper),
+                    messages,
+                ): paper
+                for paper in order
+            }
+            pending = set(futures)
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                with contextlib.suppress(queue_module.Empty, EOFError, OSError):
+                    while True:
+                        paper, fraction, message = messages.get_nowait()
+                        if paper in running:
+                            f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
+                            running[paper] = (f, message)
+                for fut in done:
+                    paper = futures[fut]
+                    try:
+                        entry, summary, breakdown = fut.result()
+                    except Exception:  # the worker died (killed, out of memory): this paper failed
+                        entry = paper_entry(
+                            None,
+                            paper,
+                            out / paper,
+                            None,
+                            time.perf_counter() - t0[paper],
+                            traceback.format_exc(),
+                        )
+                        summary, breakdown = _paper_summary(entry, None), None
+                    finished(paper, entry, summary, breakdown)
+                    del running[paper]
+                n_done = len(selected) - len(running)
+                text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
+                bar.update(
+                    n_done + sum(f for f, _ in running.values()),
+                    f"{n_done}/{len(selected)} done  {text}",
+                )
     finally:
-        stop.set()
-        reader.join(timeout=2.0)
         manager.shutdown()
 
 
