@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 from typing import Any, NoReturn
 
+from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import add_json_option, lossy_stderr, print_json, print_json_error
 
 __all__ = ["main", "build_parser", "completion_parser", "lossy_stderr", "print_json"]
@@ -325,11 +326,9 @@ def _cmd_list(args) -> int:
     groups: dict[str, list[dict]] = {}
     for r in rows:
         groups.setdefault(r["paper"] or "", []).append(r)
-    first = True
-    for paper in sorted(p for p in groups if p) + ([""] if "" in groups else []):
-        if not first:
+    for k, paper in enumerate(sorted(p for p in groups if p) + ([""] if "" in groups else [])):
+        if k:
             print()
-        first = False
         print(f"{paper}:" if paper else "Other scenarios (compositions across papers, examples):")
         for r in groups[paper]:
             print(f"  {r['name']:<{width}}  {r['description']}")
@@ -567,8 +566,6 @@ def _cmd_schema(args) -> int:
                 print(f"{name:<{width}}  {m.description}")
             return 0
         if args.method not in registered:
-            from formation_ftc.errors import InputError
-
             raise InputError(
                 f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
                 f"registered: {', '.join(sorted(registered))}"
@@ -719,7 +716,6 @@ def _cmd_plot(args) -> int:
             _, figures = write_report(d, console=None, plots=True)
         index, warnings, kind = None, [], "campaign"
     elif (d / "league.json").is_file():  # formation_ftc.league.runner.LEAGUE_FILE
-        from formation_ftc.errors import InputError
         from formation_ftc.league.report import write_leaderboard
 
         if args.format != "png":
@@ -731,8 +727,6 @@ def _cmd_plot(args) -> int:
         figures = sorted((d / "leaderboard").glob("*.png"))
         index, warnings, kind = d / "leaderboard" / "index.html", [], "league"
     else:
-        from formation_ftc.errors import InputError
-
         what = "does not exist" if not d.exists() else "is not a directory"
         if d.is_dir():
             what = "holds none of result.nc (a run), manifest.json (a campaign), league.json (a league)"

@@ -40,6 +40,8 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+from formation_ftc.errors import InputError
+
 __all__ = [
     "EXIT_OK",
     "EXIT_FAILED",
@@ -203,8 +205,6 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
     """Call ``fn(args)`` and map every exception to an exit status (see the module docstring);
     ``verbose`` also prints the traceback of a bad-input error. With ``args.json`` true, an exit
     status 2, 3 or 130 also prints ``{"error": ..., "exit_code": N}`` on standard output."""
-    from formation_ftc.errors import InputError
-
     as_json = bool(getattr(args, "json", False))
     original = sys.stdout
     guard = _GuardedStdout(original)

@@ -224,10 +224,6 @@ def _run_alone_program() -> Callable:
     return xla.jit(_closed_loop_run)
 
 
-def _run_alone(loop):
-    return _run_alone_program()(loop)
-
-
 #: per-process cache: (plan hash, group key) -> (template loop, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
@@ -384,7 +380,7 @@ def _finish_bound(
         scn = plan.scenario(inp)
         # the scenario's recording interval (structural: the batch ran with one record at each end)
         loop_j = replace(take_run(batch, axes, j), record_every=int(scn.simulation.record_every))
-        run_out = jax.device_get(_run_alone(loop_j))
+        run_out = jax.device_get(_run_alone_program()(loop_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
         if inp.run_id in trace_runs:
