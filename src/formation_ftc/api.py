@@ -484,17 +484,13 @@ def save_result(
     ...     sorted(p.name for p in paths.values())
     ['metrics.json', 'result.nc']
     """
-    import os
-
+    from formation_ftc.atomic import temporary_name
     from formation_ftc.cf import write_netcdf
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
-    tmp_nc, tmp_mj = (
-        out_dir / f".result.nc.tmp-{os.getpid()}",
-        out_dir / f".metrics.json.tmp-{os.getpid()}",
-    )
+    tmp_nc, tmp_mj = temporary_name(nc), temporary_name(mj)
     m: dict[str, Any] = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
     units = metric_units(ds)

@@ -107,7 +107,7 @@ def test_run_columns_equal_run_inputs(tiny, fields):
     plan = make_plan(tiny(runs=7, **fields))
     ids = [13, 0, 6, 7, 2, 9, 8]
     ref = [_inputs_by_hand(plan, r) for r in ids]
-    assert [plan.run_inputs(r) for r in ids] == ref
+    assert [plan.run_inputs(r) for r in ids] == ref and plan.run_inputs_many(ids) == ref
     cols = plan.run_columns(ids)
     assert cols.seed.tolist() == [i.seed for i in ref] and cols.run_id.tolist() == ids
     assert cols.rows(plan.base_names) == ref

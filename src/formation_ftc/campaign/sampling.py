@@ -585,6 +585,10 @@ class CampaignPlan:
         """The inputs of run ``run_id`` (see :meth:`run_columns`)."""
         return self.run_columns([run_id]).row(0, self.base_names)
 
+    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
+        """:meth:`run_inputs` of many runs (see :meth:`run_columns`)."""
+        return self.run_columns(run_ids).rows(self.base_names)
+
     def run_columns(self, run_ids: list[int] | np.ndarray) -> RunColumns:
         """The inputs of many runs as columns, derived per field for all runs at once: vectorised seeds
         and draws (the numbers of :func:`run_seed` and :func:`draw_value`), grid values looked up per
