@@ -48,11 +48,7 @@ TRAJECTORY_FILE = "trajectory3d.json"
 #: Points kept per spacecraft in the interactive view (evenly decimated, last point kept).
 MAX_POINTS_3D = 2000
 
-_VERDICT_CLASS = {
-    "match": "verdict-match",
-    "differs": "verdict-differs",
-    "not stated": "verdict-not-stated",
-}
+_VERDICT_CLASS = {v: "verdict-" + v.replace(" ", "-") for v in ("match", "differs", "not stated")}
 #: File name of plotly's JavaScript bundle, one per report tree (:func:`plotly_script`).
 PLOTLY_JS = "plotly.min.js"
 
