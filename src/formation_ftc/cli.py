@@ -997,6 +997,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     sub-command, a command whose module imports JAX (``reproduce``) from a stand-in with the same
     arguments (:func:`completion_parser`).
     """
+    from formation_ftc.campaign.cli import add_budget_options
+
     parser = _Parser(prog="formation-ftc")
     parser.add_argument("--version", action=_VersionAction)
     _add_verbosity(parser, top=True)
@@ -1041,18 +1043,7 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         action="store_true",
         help="replace DIR even when it is not empty and not an earlier run's result",
     )
-    p.add_argument(
-        "--max-memory",
-        metavar="SIZE",
-        default=None,
-        help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
-    )
-    p.add_argument(
-        "--max-run-steps",
-        metavar="N",
-        default=None,
-        help="integration steps allowed per run (default 1e9; 0 = none)",
-    )
+    add_budget_options(p, batch="the run")
     p.add_argument(
         "--figures",
         action="store_true",
