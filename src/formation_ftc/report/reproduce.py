@@ -429,7 +429,6 @@ def reproduce(
     out = Path(out)
     previous = prepare_output(out, force)
 
-    summaries: dict[str, dict[str, Any]] = {}
     breakdowns: dict[str, dict[str, float]] = {}
     # injected reproductions (tests) run in this process unless workers are asked for explicitly
     n_workers = (
@@ -440,7 +439,7 @@ def reproduce(
         if previous and paper_dir.is_dir():
             shutil.rmtree(paper_dir)  # stale figures of an earlier report
         paper_dir.mkdir(parents=True, exist_ok=True)
-    done: dict[str, dict[str, Any]] = {}
+    done: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}  # paper -> (entry, summary)
 
     def finished(
         paper: str,
@@ -449,8 +448,7 @@ def reproduce(
         breakdown: dict[str, float] | None,
     ) -> None:
         t_report = time.perf_counter()
-        summaries[paper] = summary
-        done[paper] = entry
+        done[paper] = entry, summary
         _write_json(out / paper / "report.json", entry)
         _write_json(out / paper / "summary.json", {**summary, "paper": paper})
         if breakdown is not None:
@@ -484,8 +482,8 @@ def reproduce(
                     prof.breakdown() if prof is not None else None,
                 )
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
-    entries = [done[p] for p in selected]
-    summaries = {p: summaries[p] for p in selected}
+    entries = [done[p][0] for p in selected]
+    summaries = {p: done[p][1] for p in selected}
     papers_s = time.perf_counter() - t_start  # from the start of the wait to the last paper's end
 
     metadata: dict[str, Any] = dict(provenance())
@@ -531,12 +529,7 @@ def reproduce(
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
-    extra = (
-        {"profile": {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}}
-        if profile
-        else {}
-    )
-    return {
+    result = {
         "exit_code": 1 if failed else 0,
         "papers": {
             e["paper"]: {
@@ -551,8 +544,10 @@ def reproduce(
         "index": str(index),
         "out": str(out),
         "wall_time_s": total,
-        **extra,
     }
+    if profile:
+        result["profile"] = {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}
+    return result
 
 
 #: Relative cost of each built-in reproduction: wall seconds of a cold plus a warm compilation-cache
