@@ -166,12 +166,9 @@ def _tree_bytes(tree: Any) -> int:
     import numpy as np
 
     total = 0
-    for x in jax.tree_util.tree_leaves(tree):
-        shape = getattr(x, "shape", None)
-        if shape is None:
-            shape = np.shape(x)
+    for x in jax.tree_util.tree_leaves(tree):  # arrays, shape structures and Python scalars
         dtype = getattr(x, "dtype", None) or np.asarray(x).dtype
-        total += int(np.prod(shape, dtype=np.float64)) * np.dtype(dtype).itemsize
+        total += int(np.prod(np.shape(x), dtype=np.float64)) * np.dtype(dtype).itemsize
     return total
 
 
