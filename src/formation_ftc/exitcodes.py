@@ -92,16 +92,10 @@ def save_traceback(exc: BaseException) -> Path | None:
 
 def _quiet_stdout() -> None:
     """After a failed write: point stdout at /dev/null so the interpreter's final flush is silent."""
-    try:
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # stdout without a descriptor
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
-    except (
-        OSError,
-        ValueError,
-        AttributeError,
-    ):  # pragma: no cover - stdout without a file descriptor
-        pass
 
 
 class _Wrapped:

@@ -32,6 +32,7 @@ Safety against concurrent writers and silent corruption:
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import errno
 import functools
@@ -340,10 +341,8 @@ class CampaignStore:
         """Release the directory lock (idempotent)."""
         lock, self._lock = self._lock, None
         if lock is not None:
-            try:
+            with contextlib.suppress(OSError):
                 (self.root / LOCK).write_bytes(b"")  # no holder named once released
-            except OSError:  # pragma: no cover
-                pass
             lock.release()
 
     def _remove_temporaries(self) -> None:

@@ -109,10 +109,8 @@ def to_jsonable(obj: Any) -> Any:
             return to_jsonable({"real": arr.real.tolist(), "imag": arr.imag.tolist()})
         return to_jsonable(arr.astype(str).tolist())
     if hasattr(obj, "item"):  # other scalar types exposing .item()
-        try:
+        with contextlib.suppress(Exception):
             return to_jsonable(obj.item())
-        except Exception:
-            pass
     return str(obj)
 
 
