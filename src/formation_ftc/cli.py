@@ -896,9 +896,7 @@ def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> lis
     without importing the modules that use them."""
     from importlib import resources
 
-    d = resources.files("formation_ftc")
-    for part in folder.split("/"):
-        d = d / part
+    d = resources.files("formation_ftc") / folder
     try:
         names = sorted(e.name for e in d.iterdir())
     except (OSError, FileNotFoundError):  # pragma: no cover - a damaged installation
