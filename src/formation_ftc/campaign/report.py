@@ -45,12 +45,8 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         for p, q in zip(PERCENTILES, np.percentile(finite, PERCENTILES), strict=True):
             out[f"p{p}"] = float(q)
     else:
-        out.update(
-            {
-                k: float("nan")
-                for k in ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
-            }
-        )
+        stats = ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
+        out.update(dict.fromkeys(stats, float("nan")))
     return out
 
 

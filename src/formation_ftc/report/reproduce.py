@@ -253,19 +253,13 @@ class _Bar:
 # ------------------------------------------------------------------------------------------ entries
 def _counts(rows: list[dict], checks: list[dict]) -> tuple[dict[str, int], dict[str, int]]:
     verdicts = {v: sum(1 for r in rows if r.get("verdict") == v) for v in VERDICTS}
+    open_ = [c for c in checks if c.get("holds") is None]  # neither shown to hold nor to fail
+    unproven = sum(1 for c in open_ if c.get("basis") in ("sampled", "heuristic"))
     checks_summary = {
         "hold": sum(1 for c in checks if c.get("holds") is True),
         "fail": sum(1 for c in checks if c.get("holds") is False),
-        "unproven": sum(
-            1
-            for c in checks
-            if c.get("holds") is None and c.get("basis") in ("sampled", "heuristic")
-        ),
-        "not evaluated": sum(
-            1
-            for c in checks
-            if c.get("holds") is None and c.get("basis") not in ("sampled", "heuristic")
-        ),
+        "unproven": unproven,
+        "not evaluated": len(open_) - unproven,
         "required_failed": sum(
             1 for c in checks if c.get("holds") is False and c.get("required", True)
         ),
