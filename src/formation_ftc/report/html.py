@@ -369,11 +369,7 @@ def _section(entry: dict, out_dir: Path, include_3d: bool) -> dict[str, Any]:
         "description": _paragraphs(entry.get("description", "")),
         "error": entry.get("error"),
         "warnings": entry.get("warnings") or [],
-        "verdicts": {
-            "match": v.get("match", 0),
-            "differs": v.get("differs", 0),
-            "not_stated": v.get("not stated", 0),
-        },
+        "verdicts": {k.replace(" ", "_"): v.get(k, 0) for k in _VERDICT_CLASS},
         "conditions": [c.get(k, 0) for k in ("hold", "fail", "unproven", "not evaluated")],
         "rows": _rows(entry),
         "figures": _figures(entry, out_dir / paper),
