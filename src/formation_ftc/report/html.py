@@ -272,22 +272,15 @@ def plotly_script(page_dir: Path | str, root: Path | str | None = None) -> str:
 
 
 def _rows(entry: dict) -> list[dict[str, Any]]:
-    out = []
-    for r in entry.get("rows") or []:
-        verdict: Any = r.get("verdict")  # a JSON value
-        out.append(
-            {
-                "class": _VERDICT_CLASS.get(verdict, "verdict-not-stated"),
-                "quantity": r.get("quantity"),
-                "paper": r.get("published") or "not printed",
-                "reference": r.get("reference") or "",
-                "ours": r.get("ours"),
-                "criterion": r.get("criterion"),
-                "verdict": verdict,
-                "note": r.get("note"),
-            }
-        )
-    return out
+    return [
+        {
+            **{k: r.get(k) for k in ("quantity", "ours", "criterion", "verdict", "note")},
+            "class": _VERDICT_CLASS.get(r.get("verdict"), "verdict-not-stated"),  # type: ignore[arg-type]  # a JSON value
+            "paper": r.get("published") or "not printed",
+            "reference": r.get("reference") or "",
+        }
+        for r in entry.get("rows") or []
+    ]
 
 
 def _checks(entry: dict) -> list[dict[str, Any]]:
@@ -317,14 +310,8 @@ def _figures(entry: dict, paper_dir: Path) -> list[dict[str, Any]]:
     out = []
     for f in entry.get("figures") or []:
         path = paper_dir / str(f.get("path", ""))
-        out.append(
-            {
-                "number": f.get("number"),
-                "caption": f.get("caption"),
-                "path": f.get("path"),
-                "src": _data_uri(path) if path.is_file() else None,
-            }
-        )
+        src = _data_uri(path) if path.is_file() else None
+        out.append({**{k: f.get(k) for k in ("number", "caption", "path")}, "src": src})
     return out
 
 
