@@ -524,12 +524,7 @@ def reproduce(
     result = {
         "exit_code": 1 if failed else 0,
         "papers": {
-            e["paper"]: {
-                "status": e["status"],
-                "wall_time_s": e["wall_time_s"],
-                "error": e["error"],
-            }
-            for e in entries
+            e["paper"]: {k: e[k] for k in ("status", "wall_time_s", "error")} for e in entries
         },
         "reports": {e["paper"]: e for e in entries},
         "summary": to_jsonable(summary_doc),
