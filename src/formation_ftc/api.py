@@ -42,28 +42,15 @@ class Conditions(list[Condition]):
     """What :func:`check` returns: a list of :class:`~formation_ftc.registry.Condition` that shows as a
     table (condition, value, requirement, holds) at a Python prompt and in Jupyter."""
 
-    _COLUMNS = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
-
     def _card(self) -> dict[str, Any]:
-        from formation_ftc.display import holds_cell
+        from formation_ftc.display import CONDITION_COLUMNS, condition_row
 
         failed = [c.name for c in self if c.required and c.holds is False]
         note = f"required condition(s) failing: {', '.join(failed)}" if failed else ""
         return dict(
             title=f"Conditions ({len(self)})",
-            columns=self._COLUMNS,
-            rows=[
-                [
-                    c.name,
-                    c.reference,
-                    c.value,
-                    c.requirement,
-                    holds_cell(c.holds, c.unproven),
-                    c.basis,
-                    "yes" if c.required else "info",
-                ]
-                for c in self
-            ],
+            columns=CONDITION_COLUMNS,
+            rows=[condition_row(c) for c in self],
             note=note or ("no required condition fails" if self else "no conditions declared"),
         )
 
@@ -241,6 +228,7 @@ def finish_run(
     out["records"] = records
     ds = loop.dataset(out, n_kept)
     metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
+    units = _metric_units(loop.metrics, loop.count)
     ds.attrs.update(provenance())
     ds.attrs.update(
         scenario_name=scenario.scenario.name,
@@ -248,7 +236,7 @@ def finish_run(
         scenario_toml=loader.dump_toml(scenario),
         seed=int(scenario.simulation.seed),
         metrics_json=json.dumps(metrics),
-        metric_units_json=json.dumps(_metric_units(loop, metrics)),
+        metric_units_json=json.dumps({k: units.get(k, "1") for k in metrics}),
         diverged="",
     )
     _apply_cf(ds, scenario)
@@ -426,18 +414,19 @@ def check(scenario: ScenarioBase | str | Path) -> Conditions:
     return Conditions(method.check(scenario) if method.check else [])
 
 
-def _metric_units(loop: ClosedLoop, metrics: Mapping[str, float]) -> dict[str, str]:
-    """UDUNITS unit of each metric the loop declares (``"1"`` for dimensionless or undeclared)."""
-    declared = {}
-    count = loop.count
-    for m in loop.metrics:
+def _metric_units(declared: Iterable[Any], count: int) -> dict[str, str]:
+    """UDUNITS unit of each metric the loop's ``declared`` metrics return (``"1"`` for dimensionless),
+    those declared per spacecraft by name: ``name_sc1``, ..., ``name_sc{count}``."""
+    out = {}
+    for m in declared or ():
         units = str(getattr(m, "units", "") or "1")
-        declared[m.name] = units
-        if (
-            getattr(m, "spacecraft", None) == "each"
-        ):  # expanded per spacecraft: name_sc1, name_sc2, ...
-            declared.update({f"{m.name}_sc{i + 1}": units for i in range(count)})
-    return {k: declared.get(k, "1") for k in metrics}
+        each = getattr(m, "spacecraft", None) == "each"
+        out.update(
+            dict.fromkeys(
+                [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name], units
+            )
+        )
+    return out
 
 
 def metric_units(ds) -> dict[str, str]:
@@ -495,17 +484,13 @@ def save_result(
     ...     sorted(p.name for p in paths.values())
     ['metrics.json', 'result.nc']
     """
-    import os
-
+    from formation_ftc.atomic import temporary_name
     from formation_ftc.cf import write_netcdf
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     nc, mj = out_dir / "result.nc", out_dir / "metrics.json"
-    tmp_nc, tmp_mj = (
-        out_dir / f".result.nc.tmp-{os.getpid()}",
-        out_dir / f".metrics.json.tmp-{os.getpid()}",
-    )
+    tmp_nc, tmp_mj = temporary_name(nc), temporary_name(mj)
     m: dict[str, Any] = dict(metrics if metrics is not None else result_metrics(ds))
     m["scenario"] = ds.attrs.get("scenario_name", "")
     units = metric_units(ds)

@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 from typing import Any, NoReturn
 
+from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import add_json_option, lossy_stderr, print_json, print_json_error
 
 __all__ = ["main", "build_parser", "completion_parser", "lossy_stderr", "print_json"]
@@ -192,15 +193,6 @@ def _info(msg: str) -> None:
         print(msg, file=sys.stderr)
 
 
-def _builtin_scenario_names() -> list[str]:
-    from importlib import resources
-
-    d = resources.files("formation_ftc") / "scenarios"
-    return [
-        n[:-5] for n in sorted(e.name for e in d.iterdir()) if n.endswith(".toml")
-    ]  # loader's order
-
-
 def _check_scenario_name(name: str) -> None:
     """Bad input with a "did you mean" when ``name`` is neither a file nor a built-in scenario."""
     from formation_ftc.config.loader import ScenarioError
@@ -211,7 +203,7 @@ def _check_scenario_name(name: str) -> None:
             return
     except (OSError, ValueError):  # a path text the system refuses: the loader reports it
         return
-    names = _builtin_scenario_names()
+    names = _resource_names("scenarios")
     if name not in names:
         raise ScenarioError(
             f"unknown scenario {name!r}: not a file and not a built-in scenario"
@@ -313,7 +305,7 @@ def _cmd_list(args) -> int:
 
     d = resources.files("formation_ftc") / "scenarios"
     rows = []
-    for name in _builtin_scenario_names():
+    for name in _resource_names("scenarios"):
         meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get(
             "scenario", {}
         )
@@ -334,11 +326,9 @@ def _cmd_list(args) -> int:
     groups: dict[str, list[dict]] = {}
     for r in rows:
         groups.setdefault(r["paper"] or "", []).append(r)
-    first = True
-    for paper in sorted(p for p in groups if p) + ([""] if "" in groups else []):
-        if not first:
+    for k, paper in enumerate(sorted(p for p in groups if p) + ([""] if "" in groups else [])):
+        if k:
             print()
-        first = False
         print(f"{paper}:" if paper else "Other scenarios (compositions across papers, examples):")
         for r in groups[paper]:
             print(f"  {r['name']:<{width}}  {r['description']}")
@@ -494,17 +484,9 @@ def _cmd_show(args) -> int:
     return 0
 
 
-def _holds_text(c) -> str:
-    """yes / NO / unproven (sampled or heuristic, no violation found) / n/a (not evaluated)."""
-    if c.holds is None:
-        return "unproven" if c.basis in ("sampled", "heuristic") else "n/a"
-    return "yes" if c.holds else "NO"
-
-
 def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     failed_required = [c for c in conds if c.required and c.holds is False]
     unproven_required = [c for c in conds if c.required and c.holds is None]
-    cols = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
     code = 1 if failed_required else 0
     if as_json:
         from formation_ftc.condition_json import condition_json
@@ -521,46 +503,23 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             }
         )
         return code
+    from formation_ftc.display import CONDITION_COLUMNS, condition_row
+
+    rows = [[v if isinstance(v, str) else v[0] for v in condition_row(c)] for c in conds]
     if not sys.stdout.isatty():
-        rows = [cols]
-        rows += [
-            (
-                str(c.name),
-                str(c.reference),
-                str(c.value),
-                str(c.requirement),
-                _holds_text(c),
-                str(c.basis),
-                "yes" if c.required else "info",
-            )
-            for c in conds
-        ]
-        widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
-        for r in rows if conds else []:
+        table = [CONDITION_COLUMNS, *rows]
+        widths = [max(len(r[k]) for r in table) for k in range(len(CONDITION_COLUMNS))]
+        for r in table if conds else []:
             print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
     else:
         from rich.console import Console
         from rich.table import Table
 
-        table = Table(title="Conditions")
-        for col in cols:
-            table.add_column(col)
-        for c in conds:
-            mark = {
-                "yes": "[green]yes[/]",
-                "NO": "[red]NO[/]",
-                "unproven": "[yellow]unproven[/]",
-            }.get(_holds_text(c), "n/a")
-            table.add_row(
-                c.name,
-                c.reference,
-                c.value,
-                c.requirement,
-                mark,
-                c.basis,
-                "yes" if c.required else "info",
-            )
-        Console().print(table)
+        rich_table = Table(*CONDITION_COLUMNS, title="Conditions")
+        marks = {"yes": "[green]yes[/]", "NO": "[red]NO[/]", "unproven": "[yellow]unproven[/]"}
+        for r in rows:
+            rich_table.add_row(*r[:4], marks.get(r[4], "n/a"), *r[5:])
+        Console().print(rich_table)
     for c in conds:
         if c.detail and (c.holds is False or (c.required and c.holds is None)):
             print(f"- {c.name}: {c.detail}")
@@ -571,7 +530,7 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             f"{len(unproven_required)} required condition(s) unproven (not evaluated, or sampled / heuristic "
             "with no violation found)"
         )
-    return 1 if failed_required else 0
+    return code
 
 
 def _cmd_check(args) -> int:
@@ -607,8 +566,6 @@ def _cmd_schema(args) -> int:
                 print(f"{name:<{width}}  {m.description}")
             return 0
         if args.method not in registered:
-            from formation_ftc.errors import InputError
-
             raise InputError(
                 f"unknown method {args.method!r}{did_you_mean(args.method, registered)}; "
                 f"registered: {', '.join(sorted(registered))}"
@@ -759,7 +716,6 @@ def _cmd_plot(args) -> int:
             _, figures = write_report(d, console=None, plots=True)
         index, warnings, kind = None, [], "campaign"
     elif (d / "league.json").is_file():  # formation_ftc.league.runner.LEAGUE_FILE
-        from formation_ftc.errors import InputError
         from formation_ftc.league.report import write_leaderboard
 
         if args.format != "png":
@@ -771,8 +727,6 @@ def _cmd_plot(args) -> int:
         figures = sorted((d / "leaderboard").glob("*.png"))
         index, warnings, kind = d / "leaderboard" / "index.html", [], "league"
     else:
-        from formation_ftc.errors import InputError
-
         what = "does not exist" if not d.exists() else "is not a directory"
         if d.is_dir():
             what = "holds none of result.nc (a run), manifest.json (a campaign), league.json (a league)"
@@ -942,9 +896,7 @@ def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> lis
     without importing the modules that use them."""
     from importlib import resources
 
-    d = resources.files("formation_ftc")
-    for part in folder.split("/"):
-        d = d / part
+    d = resources.files("formation_ftc") / folder
     try:
         names = sorted(e.name for e in d.iterdir())
     except (OSError, FileNotFoundError):  # pragma: no cover - a damaged installation
@@ -987,7 +939,7 @@ def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
     files) for the positionals that take them, directories for --out and DIR arguments."""
     import shtab
 
-    scenarios = _names_completer("scenario", _builtin_scenario_names(), files=True)
+    scenarios = _names_completer("scenario", _resource_names("scenarios"), files=True)
     by_command = {
         "reproduce": {"paper": _names_completer("paper", [*_paper_names(), "all"], files=False)},
         "campaign run": {
@@ -1043,6 +995,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     sub-command, a command whose module imports JAX (``reproduce``) from a stand-in with the same
     arguments (:func:`completion_parser`).
     """
+    from formation_ftc.campaign.cli import add_budget_options
+
     parser = _Parser(prog="formation-ftc")
     parser.add_argument("--version", action=_VersionAction)
     _add_verbosity(parser, top=True)
@@ -1087,18 +1041,7 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         action="store_true",
         help="replace DIR even when it is not empty and not an earlier run's result",
     )
-    p.add_argument(
-        "--max-memory",
-        metavar="SIZE",
-        default=None,
-        help="memory budget of the run, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
-    )
-    p.add_argument(
-        "--max-run-steps",
-        metavar="N",
-        default=None,
-        help="integration steps allowed per run (default 1e9; 0 = none)",
-    )
+    add_budget_options(p, batch="the run")
     p.add_argument(
         "--figures",
         action="store_true",

@@ -20,7 +20,16 @@ import math
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-__all__ = ["Cell", "card_html", "card_text", "number", "quantity", "holds_cell"]
+__all__ = [
+    "Cell",
+    "card_html",
+    "card_text",
+    "number",
+    "quantity",
+    "holds_cell",
+    "condition_row",
+    "CONDITION_COLUMNS",
+]
 
 #: a table cell: its text, or ``(text, CSS colour)``
 Cell = str | tuple[str, str]
@@ -76,6 +85,16 @@ def holds_cell(holds: bool | None, unproven: bool = False) -> tuple[str, str]:
     if holds is None:
         return ("unproven", "#a60") if unproven else ("n/a", "")
     return ("yes", "#070") if holds else ("NO", "#b00")
+
+
+#: the columns of a table of conditions (:func:`condition_row`)
+CONDITION_COLUMNS = ("condition", "reference", "value", "requirement", "holds", "basis", "required")
+
+
+def condition_row(c: Any) -> list[Cell]:
+    """The row of a :class:`~formation_ftc.registry.Condition` in a table of :data:`CONDITION_COLUMNS`."""
+    head = [str(c.name), str(c.reference), str(c.value), str(c.requirement)]
+    return [*head, holds_cell(c.holds, c.unproven), str(c.basis), "yes" if c.required else "info"]
 
 
 def _cells(row: Sequence[Cell]) -> list[tuple[str, str]]:

@@ -38,7 +38,9 @@ import tempfile
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
+
+from formation_ftc.errors import InputError
 
 __all__ = [
     "EXIT_OK",
@@ -90,27 +92,37 @@ def save_traceback(exc: BaseException) -> Path | None:
 
 def _quiet_stdout() -> None:
     """After a failed write: point stdout at /dev/null so the interpreter's final flush is silent."""
-    try:
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # stdout without a descriptor
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
-    except (
-        OSError,
-        ValueError,
-        AttributeError,
-    ):  # pragma: no cover - stdout without a file descriptor
-        pass
 
 
-class _GuardedStdout:
+class _Wrapped:
+    """A text stream that delegates to ``stream`` what it does not define itself (encoding, fileno,
+    buffer, ...; none while ``stream`` is None)."""
+
+    def __init__(self, stream: Any):
+        self.stream = stream
+
+    def write(self, text: str) -> int:  # pragma: no cover - every wrapper defines it
+        raise NotImplementedError
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.stream, name)
+
+
+class _GuardedStdout(_Wrapped):
     """``sys.stdout`` while a command runs: remembers the first write or flush that failed (``failure``)
     and re-raises it, so that :func:`run_guarded` can tell a failure of standard output itself from an
     ``OSError`` of anything else (a result file, a socket). A closed descriptor (``>&-``: Python's
     ``sys.stdout`` is None) fails like one on the first write."""
 
-    def __init__(self, stream: Any):
-        self.stream = stream
-        self.failure: OSError | None = None
+    failure: OSError | None = None
 
     def _failed(self, exc: OSError) -> OSError:
         if self.failure is None:
@@ -128,10 +140,6 @@ class _GuardedStdout:
         except OSError as exc:
             raise self._failed(exc) from None
 
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
-
     def flush(self) -> None:
         if self.stream is None:
             return
@@ -142,11 +150,6 @@ class _GuardedStdout:
 
     def isatty(self) -> bool:
         return False if self.stream is None else bool(self.stream.isatty())
-
-    def __getattr__(self, name: str) -> Any:  # encoding, fileno, buffer, ... of the stream
-        if self.stream is None:
-            raise AttributeError(name)
-        return getattr(self.stream, name)
 
 
 def add_json_option(parser: argparse.ArgumentParser) -> None:
@@ -196,8 +199,6 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
     """Call ``fn(args)`` and map every exception to an exit status (see the module docstring);
     ``verbose`` also prints the traceback of a bad-input error. With ``args.json`` true, an exit
     status 2, 3 or 130 also prints ``{"error": ..., "exit_code": N}`` on standard output."""
-    from formation_ftc.errors import InputError
-
     as_json = bool(getattr(args, "json", False))
     original = sys.stdout
     guard = _GuardedStdout(original)
@@ -267,11 +268,8 @@ def _unexpected(exc: Exception, as_json: bool) -> int:
     return EXIT_UNEXPECTED
 
 
-class _LossyStream:
+class _LossyStream(_Wrapped):
     """``stream`` whose failed writes and flushes are dropped (a closed or full stderr)."""
-
-    def __init__(self, stream: TextIO):
-        self.stream = stream
 
     def write(self, text: str) -> int:
         try:
@@ -279,16 +277,9 @@ class _LossyStream:
         except (OSError, ValueError):
             return len(text)
 
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
-
     def flush(self) -> None:
         with contextlib.suppress(OSError, ValueError):
             self.stream.flush()
-
-    def __getattr__(self, name: str) -> Any:  # encoding, isatty, fileno, ... of the stream
-        return getattr(self.stream, name)
 
 
 @contextlib.contextmanager

@@ -47,22 +47,10 @@ __all__ = [
 DEFAULT_MAX_RUN_STEPS = 1_000_000_000
 DEFAULT_MAX_CAMPAIGN_STEPS = 100_000_000_000
 _DEFAULT_MAX_MEMORY = 8 * 2**30
-_UNITS = {
-    "": 1,
-    "b": 1,
-    "k": 10**3,
-    "kb": 10**3,
-    "m": 10**6,
-    "mb": 10**6,
-    "g": 10**9,
-    "gb": 10**9,
-    "t": 10**12,
-    "tb": 10**12,
-    "kib": 2**10,
-    "mib": 2**20,
-    "gib": 2**30,
-    "tib": 2**40,
-}
+#: size suffixes (lower case) -> bytes: SI prefixes (k, kb = 1000 B) and binary ones (kib = 1024 B)
+_UNITS = {"": 1, "b": 1}
+for _k, _p in enumerate("kmgt", start=1):
+    _UNITS.update({_p: 1000**_k, f"{_p}b": 1000**_k, f"{_p}ib": 1024**_k})
 
 
 def _physical_memory() -> int | None:
@@ -133,37 +121,20 @@ class Budgets:
     def resolve(
         cls, max_memory: Any = None, max_run_steps: Any = None, max_campaign_steps: Any = None
     ) -> Budgets:
-        env = os.environ
 
-        def pick(flag, var, parse, default, what):
+        def pick(flag, option, parse, default):
+            """``--option`` when given, else ``$FORMATION_FTC_OPTION`` when set, else ``default``."""
+            var = "FORMATION_FTC_" + option.upper().replace("-", "_")
             if flag is not None:
-                return parse(flag, what)
-            if env.get(var, "").strip():
-                return parse(env[var], var)
+                return parse(flag, f"--{option}")
+            if os.environ.get(var, "").strip():
+                return parse(os.environ[var], var)
             return default
 
         return cls(
-            max_memory=pick(
-                max_memory,
-                "FORMATION_FTC_MAX_MEMORY",
-                parse_bytes,
-                default_max_memory(),
-                "--max-memory",
-            ),
-            max_run_steps=pick(
-                max_run_steps,
-                "FORMATION_FTC_MAX_RUN_STEPS",
-                parse_count,
-                DEFAULT_MAX_RUN_STEPS,
-                "--max-run-steps",
-            ),
-            max_campaign_steps=pick(
-                max_campaign_steps,
-                "FORMATION_FTC_MAX_CAMPAIGN_STEPS",
-                parse_count,
-                DEFAULT_MAX_CAMPAIGN_STEPS,
-                "--max-campaign-steps",
-            ),
+            pick(max_memory, "max-memory", parse_bytes, default_max_memory()),
+            pick(max_run_steps, "max-run-steps", parse_count, DEFAULT_MAX_RUN_STEPS),
+            pick(max_campaign_steps, "max-campaign-steps", parse_count, DEFAULT_MAX_CAMPAIGN_STEPS),
         )
 
 
@@ -195,12 +166,9 @@ def _tree_bytes(tree: Any) -> int:
     import numpy as np
 
     total = 0
-    for x in jax.tree_util.tree_leaves(tree):
-        shape = getattr(x, "shape", None)
-        if shape is None:
-            shape = np.shape(x)
+    for x in jax.tree_util.tree_leaves(tree):  # arrays, shape structures and Python scalars
         dtype = getattr(x, "dtype", None) or np.asarray(x).dtype
-        total += int(np.prod(shape, dtype=np.float64)) * np.dtype(dtype).itemsize
+        total += int(np.prod(np.shape(x), dtype=np.float64)) * np.dtype(dtype).itemsize
     return total
 
 

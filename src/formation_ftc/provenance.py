@@ -21,26 +21,12 @@ def utc_now() -> str:
 #: the distributions that install that import name, tried in this order (``cvxpy`` comes from ``cvxpy``
 #: or from ``cvxpy-base``). A fixed list read with :func:`importlib.metadata.version`: scanning every
 #: installed distribution (``packages_distributions()``) cost 0.6-1.9 s of each run.
+_PACKAGES = (
+    "formation-ftc jax jaxlib numpy scipy xarray pydantic cvxpy networkx matplotlib dask h5netcdf h5py "
+    "pyarrow pandas clarabel control rich plotly"
+).split()
 _DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
-    "formation-ftc": ("formation-ftc",),
-    "jax": ("jax",),
-    "jaxlib": ("jaxlib",),
-    "numpy": ("numpy",),
-    "scipy": ("scipy",),
-    "xarray": ("xarray",),
-    "pydantic": ("pydantic",),
-    "cvxpy": ("cvxpy", "cvxpy-base"),
-    "networkx": ("networkx",),
-    "matplotlib": ("matplotlib",),
-    "dask": ("dask",),
-    "h5netcdf": ("h5netcdf",),
-    "h5py": ("h5py",),
-    "pyarrow": ("pyarrow",),
-    "pandas": ("pandas",),
-    "clarabel": ("clarabel",),
-    "control": ("control",),
-    "rich": ("rich",),
-    "plotly": ("plotly",),
+    name: ("cvxpy", "cvxpy-base") if name == "cvxpy" else (name,) for name in _PACKAGES
 }
 
 
@@ -71,23 +57,15 @@ def package_versions() -> dict[str, str]:
 def git_commit() -> str:
     """HEAD commit of the checkout the package runs from ('+dirty' when modified), else 'unknown'."""
     here = Path(__file__).resolve().parent
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["git", *args], cwd=here, capture_output=True, text=True, timeout=5)
+
     try:
-        sha = subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=here,
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=here,
-            capture_output=True,
-            text=True,
-            timeout=5,
-        ).stdout.strip()
-        return sha + ("+dirty" if dirty else "")
+        sha = git("rev-parse", "HEAD")
+        sha.check_returncode()
+        dirty = git("status", "--porcelain", "--untracked-files=no").stdout.strip()
+        return sha.stdout.strip() + ("+dirty" if dirty else "")
     except Exception:
         return "unknown"
 

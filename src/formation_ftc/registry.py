@@ -14,6 +14,7 @@ its own the same way (see ``docs/extending.md``). A plug-in that fails to import
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -181,16 +182,7 @@ class ComparisonRow:
         return self.published
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(
-            quantity=self.quantity,
-            published=self.published,
-            ours=self.ours,
-            criterion=self.criterion,
-            verdict=self.verdict,
-            note=self.note,
-            reference=self.reference,
-            basis=[list(c) for c in self.basis],
-        )
+        return {**dataclasses.asdict(self), "basis": [list(c) for c in self.basis]}
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from formation_ftc.atomic import atomic_write
 from formation_ftc.errors import InputError
 
 __all__ = [
@@ -182,12 +183,7 @@ def add_to_marker(d: Path, names: list[str]) -> None:
         files = json.loads(marker.read_text(encoding="utf-8")).get("files", [])
     except (OSError, ValueError, AttributeError):
         return
-    tmp = marker.with_name(f"{MARKER}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(json.dumps({"files": sorted({*files, *names})}, indent=1), encoding="utf-8")
-        tmp.replace(marker)
-    finally:
-        tmp.unlink(missing_ok=True)
+    atomic_write(marker, json.dumps({"files": sorted({*files, *names})}, indent=1))
 
 
 def _swap_into_place(stage: Path, out_dir: Path) -> None:

@@ -72,7 +72,7 @@ def test_every_cell_validates_with_the_battery_and_level(spec, cells):
 
 
 def test_campaign_samples_the_initial_attitude_and_the_onset(spec, cells, tmp_path):
-    camp = _campaign(spec, "pd", [tmp_path / "a.toml"], 10, [0], networked=False)
+    camp = _campaign(spec, "pd", [tmp_path / "a.toml"], 10, [0])
     sample = camp["sample"]
     keys = {f"plant.initial_attitude_deg.{i}.{k}" for i in range(4) for k in range(3)}
     assert keys <= set(sample) and all(

@@ -131,7 +131,7 @@ def test_a_later_block_holds_the_replicates_of_a_longer_league(tmp_path, tiny_le
     assert meta["blocks"] == [[0, 2], [2, 2]] and meta["seeds"] == 4
     assert (out / "lqr" / "campaign-from-000002").is_dir()
     files = sorted((out / "lqr" / "cells").glob("*.toml"))
-    whole = make_plan(_campaign(load_league(path), "lqr", files, 4, [], False))
+    whole = make_plan(_campaign(load_league(path), "lqr", files, 4, []))
     assert sorted(set(runs["replicate"])) == [0, 1, 2, 3]
     for _, r in runs.iterrows():
         g = whole.base_names.index(str(r["scenario"]))

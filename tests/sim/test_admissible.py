@@ -91,11 +91,11 @@ def test_body_rate_bound_is_part_of_the_admissible_set_and_overridable():
         ftc.simulate(scn)
     assert err.value.info.variable.startswith("plant.angular_rate")
     assert 1.0 < err.value.info.time < 4.0
-    # the default bound (100 rad/s) lets the same run finish
+    # the default bound (100 rad/s) lets the same run finish (the bound is a leaf: the same program)
     ftc.simulate(
         ftc.load_scenario(
             "compose-mehrabian-on-yang2013",
-            {"simulation.horizon": 2.0, "plant.disturbance_torque": ["5.0", "0", "0"]},
+            {"simulation.horizon": 10.0, "plant.disturbance_torque": ["5.0", "0", "0"]},
         )
     )
 
@@ -103,9 +103,17 @@ def test_body_rate_bound_is_part_of_the_admissible_set_and_overridable():
 def test_euler_pitch_bound_names_the_singular_angle():
     """Mehrabian's plant holds 3-2-1 Euler angles (singular at pitch +-pi/2): its initial pitches lie in
     [0, 60] deg, so a 0.3 rad bound is left at once and the diagnostic names the pitch."""
-    scn = ftc.load_scenario(
-        "mehrabian-identification", {"simulation.horizon": 1.0, "simulation.max_pitch": 0.3}
-    )
+    # the overrides of tests/papers/mehrabian/test_mehrabian_runs.py's short case (the bound is a leaf:
+    # the two tests share one compiled program)
+    short_case = {
+        "actuator.faults.0.start": 10.0,
+        "actuator.faults.0.end": 40.0,
+        "simulation.horizon": 60.0,
+        "simulation.record_every": 1,
+        "evaluations.0.fault_window": [10.0, 40.0],
+        "evaluations.0.assessment_window": [15.0, 40.0],
+    }
+    scn = ftc.load_scenario("mehrabian-identification", {**short_case, "simulation.max_pitch": 0.3})
     with pytest.raises(ftc.SimulationDiverged) as err:
         ftc.simulate(scn)
     assert err.value.info.variable.startswith("plant.pitch")

@@ -172,9 +172,12 @@ def _cmd_report(args) -> int:
     return 0
 
 
-def add_budget_options(parser: argparse.ArgumentParser, *, batch: str, whole: str) -> None:
-    """``--max-memory``, ``--max-run-steps`` and ``--max-campaign-steps`` (formation_ftc.limits), for
-    ``campaign run`` and ``league run``: ``batch`` and ``whole`` say what the first and last one bound."""
+def add_budget_options(
+    parser: argparse.ArgumentParser, *, batch: str, whole: str | None = None
+) -> None:
+    """``--max-memory``, ``--max-run-steps`` and, with ``whole``, ``--max-campaign-steps``
+    (formation_ftc.limits), for ``run``, ``campaign run`` and ``league run``: ``batch`` and ``whole``
+    say what the first and last one bound."""
     parser.add_argument(
         "--max-memory",
         metavar="SIZE",
@@ -187,12 +190,13 @@ def add_budget_options(parser: argparse.ArgumentParser, *, batch: str, whole: st
         default=None,
         help="integration steps allowed per run (default 1e9; 0 = none)",
     )
-    parser.add_argument(
-        "--max-campaign-steps",
-        metavar="N",
-        default=None,
-        help=f"run-steps allowed in {whole} (default 1e11; 0 = none)",
-    )
+    if whole is not None:
+        parser.add_argument(
+            "--max-campaign-steps",
+            metavar="N",
+            default=None,
+            help=f"run-steps allowed in {whole} (default 1e11; 0 = none)",
+        )
 
 
 def add_dask_options(parser: argparse.ArgumentParser) -> None:

@@ -30,6 +30,7 @@ requested number of worker processes to the schedulable cores and the available 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ctypes
 import logging
 import multiprocessing
@@ -84,13 +85,13 @@ def auto_workers(run_steps: int, n_chunks: int, cores: int | None = None) -> int
 def available_memory() -> int | None:
     """Memory available to new processes [bytes]: ``MemAvailable`` of ``/proc/meminfo`` (Linux), else
     the free physical pages; None when unknown."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
+    with (
+        contextlib.suppress(OSError, ValueError, IndexError),
+        open("/proc/meminfo", encoding="ascii") as f,
+    ):
+        for line in f:
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
     try:
         return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
@@ -118,14 +119,12 @@ def cap_workers(requested: int, *, per_worker_bytes: int, what: str) -> int:
                 f"{format_bytes(per_worker_bytes)} per worker"
             )
         )
-        try:
+        with contextlib.suppress(OSError, ValueError):  # a closed or full stderr: no warning
             print(
                 f"warning: {what}: {requested} worker processes asked for, using {n} ({cores} schedulable CPU "
                 f"core(s){room})",
                 file=sys.stderr,
             )
-        except (OSError, ValueError):  # a closed or full stderr costs the warning, nothing else
-            pass
     return n
 
 
@@ -136,11 +135,9 @@ def die_with_parent(parent_pid: int, poll_s: float = 1.0) -> None:
     (a reparented worker has lost its parent) every ``poll_s`` seconds.
     """
     if sys.platform.startswith("linux"):
-        try:
+        with contextlib.suppress(OSError, AttributeError):  # no libc prctl: the watch thread only
             libc = ctypes.CDLL(None, use_errno=True)
             libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
-        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
-            pass
     if os.getppid() != parent_pid:  # the parent died before this line: do not start at all
         os._exit(1)
 

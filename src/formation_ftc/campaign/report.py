@@ -45,12 +45,8 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         for p, q in zip(PERCENTILES, np.percentile(finite, PERCENTILES), strict=True):
             out[f"p{p}"] = float(q)
     else:
-        out.update(
-            {
-                k: float("nan")
-                for k in ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
-            }
-        )
+        stats = ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
+        out.update(dict.fromkeys(stats, float("nan")))
     return out
 
 
@@ -132,23 +128,11 @@ def _table_rows(summary: dict[str, Any]) -> pd.DataFrame:
 def field_unit(manifest: dict[str, Any], path: str) -> str:
     """Unit of a scenario field from its schema description ('... [m]') or '' when unknown."""
     try:
+        from formation_ftc.config.base import field_info
         from formation_ftc.registry import get_method
 
-        method = get_method(manifest["plan"]["methods"][0])
-        model: Any = method.schema
-        desc = ""
-        for part in path.split("."):
-            if part.isdigit():
-                continue
-            fields = getattr(model, "model_fields", None)
-            if not fields or part not in fields:
-                return ""
-            info = fields[part]
-            desc = info.description or ""
-            ann = info.annotation
-            model = next(
-                (a for a in getattr(ann, "__args__", (ann,)) if hasattr(a, "model_fields")), ann
-            )
+        info = field_info(get_method(manifest["plan"]["methods"][0]).schema, path)
+        desc = (info.description or "") if info is not None else ""
         m = re.findall(r"\[([^\]]+)\]", desc)
         return m[-1] if m else ""
     except Exception:  # noqa: BLE001 - a label is cosmetic

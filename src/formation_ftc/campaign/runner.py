@@ -224,10 +224,6 @@ def _run_alone_program() -> Callable:
     return xla.jit(_closed_loop_run)
 
 
-def _run_alone(loop):
-    return _run_alone_program()(loop)
-
-
 #: per-process cache: (plan hash, group key) -> (template loop, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
@@ -384,7 +380,7 @@ def _finish_bound(
         scn = plan.scenario(inp)
         # the scenario's recording interval (structural: the batch ran with one record at each end)
         loop_j = replace(take_run(batch, axes, j), record_every=int(scn.simulation.record_every))
-        run_out = jax.device_get(_run_alone(loop_j))
+        run_out = jax.device_get(_run_alone_program()(loop_j))
         if failed[j]:
             table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
         if inp.run_id in trace_runs:
@@ -471,14 +467,9 @@ def _general_chunk(
 
 def _metric_units(metrics, count: int) -> dict[str, str]:
     """``metric:<name>`` column -> UDUNITS unit of the declared metric (per-spacecraft names expanded)."""
-    out = {}
-    for m in metrics or ():
-        units = str(getattr(m, "units", "") or "1")
-        names = (
-            [f"{m.name}_sc{i + 1}" for i in range(count)] if m.spacecraft == "each" else [m.name]
-        )
-        out.update({f"metric:{n}": units for n in names})
-    return out
+    from formation_ftc.api import _metric_units as units
+
+    return {f"metric:{n}": u for n, u in units(metrics, count).items()}
 
 
 def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:

@@ -73,6 +73,7 @@ from formation_ftc.campaign.spec import (
     spec_hash,
 )
 from formation_ftc.config import loader
+from formation_ftc.config.base import field_bounds, field_info
 
 __all__ = [
     "RunInputs",
@@ -86,7 +87,6 @@ __all__ = [
     "draw_values",
     "value_from_unit",
     "qmc_design",
-    "path_exists",
 ]
 
 _QMC_SPAWN = 2**32 - 1  # spawn-key entry no run key reaches (run ids are below 2**32 - 1)
@@ -176,22 +176,7 @@ class RunColumns:
         )
 
     def rows(self, base_names: list[str]) -> list[RunInputs]:
-        ids, gs, js, seeds, bases = (
-            a.tolist() for a in (self.run_id, self.grid_index, self.replicate, self.seed, self.base)
-        )
-        paths = list(self.values)
-        cols = [self.values[p] for p in paths]
-        plain = [
-            all(isinstance(v, int | float | str | bool) or v is None for v in col) for col in cols
-        ]
-        out = []
-        for k in range(len(ids)):
-            vals = {
-                p: c[k] if pl else copy.deepcopy(c[k])
-                for p, c, pl in zip(paths, cols, plain, strict=True)
-            }
-            out.append(RunInputs(ids[k], gs[k], js[k], seeds[k], base_names[bases[k]], vals))
-        return out
+        return [self.row(k, base_names) for k in range(len(self))]
 
 
 def run_seed(campaign_seed: int, key: int) -> int:
@@ -345,10 +330,6 @@ def _walk(tree: Any, path: str) -> tuple[bool, Any, str]:
     return True, node, path
 
 
-def path_exists(dump: Mapping[str, Any], path: str) -> bool:
-    return _walk(dump, path)[0]
-
-
 def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> None:
     """Copy from the validated ``dump`` the part of ``path`` missing in ``raw`` (defaults, list rows),
     so that :func:`loader.set_dotted` can set it in place."""
@@ -366,11 +347,10 @@ def _materialize(raw: dict[str, Any], dump: Mapping[str, Any], path: str) -> Non
 
 
 def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[Any, str, Any]]:
-    """Numeric bounds (gt/ge/lt/le) the method's schema declares for the field at ``path`` (list
+    """Numeric bounds (``(bound, relation, test)``, :func:`~formation_ftc.config.base.field_bounds`)
+    the method's schema declares for the field at ``path`` (list
     elements inherit the bounds of their list's field items when declared there). A composed
     ``scenario`` (the validated base) gives each slot's section, whose model declares them."""
-    import annotated_types as at
-
     from formation_ftc.registry import get_method
 
     try:
@@ -383,29 +363,10 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
         callable(section) and section(parts[0]) is not None
     ):  # a composed slot: its component's section
         model, parts = type(section(parts[0])), parts[1:]
-    info = None
-    for part in parts:
-        if part.isdigit():
-            continue
-        fields = getattr(model, "model_fields", None)
-        if not fields or part not in fields:
-            return []
-        info = fields[part]
-        ann = info.annotation
-        model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
+    info = field_info(model, ".".join(parts))
     if info is None:
         return []
-    out: list[tuple[Any, str, Any]] = []  # (bound, operator, test); bounds are comparable values
-    for m in info.metadata:
-        if isinstance(m, at.Gt):
-            out.append((m.gt, ">", lambda v, b=m.gt: v > b))
-        elif isinstance(m, at.Ge):
-            out.append((m.ge, ">=", lambda v, b=m.ge: v >= b))
-        elif isinstance(m, at.Lt):
-            out.append((m.lt, "<", lambda v, b=m.lt: v < b))
-        elif isinstance(m, at.Le):
-            out.append((m.le, "<=", lambda v, b=m.le: v <= b))
-    return out
+    return field_bounds(info)
 
 
 def _describe_dump(node: Any) -> str:
@@ -450,8 +411,8 @@ class _Validation:
             for b, sel in sels.items():
                 if not sel.size:
                     continue
-                for i, (_, _, ok) in enumerate(self.bounds[path, b]):
-                    bad = sel[np.flatnonzero(~np.asarray(ok(vals[sel]), dtype=bool))]
+                for i, (bound, _, test) in enumerate(self.bounds[path, b]):
+                    bad = sel[np.flatnonzero(~np.asarray(test(vals[sel], bound), dtype=bool))]
                     if bad.size:
                         first = [int(cols.run_id[bad[0]]), vals[bad[0]], 0]
                         self.violations.setdefault((path, b, i), first)[2] += bad.size
@@ -621,25 +582,17 @@ class CampaignPlan:
         }
 
     def run_inputs(self, run_id: int) -> RunInputs:
-        if not 0 <= run_id < self.n_runs:
-            raise CampaignError(f"run id {run_id} does not exist (0..{self.n_runs - 1})")
-        g, j = divmod(int(run_id), self.runs)
-        j += self.first_replicate
-        key = j if self.paired else int(run_id)
-        b, values = self.grid_point(g)
-        if self.sampling == "random":
-            for s in self.random_samplers:
-                values[s.path] = draw_value(s, self.seed, key)
-        elif self.random_samplers:
-            u = self.design()[key]
-            for m, s in enumerate(self.random_samplers):
-                values[s.path] = value_from_unit(s, u[m])
-        ordered = {s.path: values[s.path] for s in self.samplers}
-        return RunInputs(int(run_id), g, j, run_seed(self.seed, key), self.base_names[b], ordered)
+        """The inputs of run ``run_id`` (see :meth:`run_columns`)."""
+        return self.run_columns([run_id]).row(0, self.base_names)
+
+    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
+        """:meth:`run_inputs` of many runs (see :meth:`run_columns`)."""
+        return self.run_columns(run_ids).rows(self.base_names)
 
     def run_columns(self, run_ids: list[int] | np.ndarray) -> RunColumns:
-        """The inputs of many runs as columns (the values of :meth:`run_inputs`, derived per field for
-        all runs at once: vectorised seeds and draws, grid values looked up per grid point)."""
+        """The inputs of many runs as columns, derived per field for all runs at once: vectorised seeds
+        and draws (the numbers of :func:`run_seed` and :func:`draw_value`), grid values looked up per
+        grid point."""
         ids = np.asarray(run_ids, dtype=np.int64).reshape(-1)
         if ids.size and (ids.min() < 0 or ids.max() >= self.n_runs):
             bad = int(ids[(ids < 0) | (ids >= self.n_runs)][0])
@@ -675,10 +628,6 @@ class CampaignPlan:
             base,
             ordered,
         )
-
-    def run_inputs_many(self, run_ids: list[int]) -> list[RunInputs]:
-        """:meth:`run_inputs` of many runs (same values; see :meth:`run_columns`)."""
-        return self.run_columns(run_ids).rows(self.base_names)
 
     def _design_rows(self) -> int:
         """Rows of the quasi-Monte Carlo design: one per sampling key."""

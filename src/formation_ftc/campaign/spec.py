@@ -48,7 +48,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 from scipy import stats
 
-from formation_ftc.config.base import StrictModel, error_location
+from formation_ftc.config.base import StrictModel, validation_message
 from formation_ftc.errors import InputError
 
 __all__ = [
@@ -335,32 +335,32 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         return Choice(path, tuple(values), w)
 
     dist = spec["dist"]
-    if dist in ("uniform", "loguniform"):
-        allowed("dist", "low", "high")
-        need("low", "high")
-        cls = Uniform if dist == "uniform" else LogUniform
-        return cls(path, _finite(path, "low", spec["low"]), _finite(path, "high", spec["high"]))
-    if dist == "normal":
-        allowed("dist", "mean", "std", "low", "high")
-        need("mean", "std")
-        lo = _finite(path, "low", spec["low"]) if "low" in spec else None
-        hi = _finite(path, "high", spec["high"]) if "high" in spec else None
-        return Normal(
-            path, _finite(path, "mean", spec["mean"]), _finite(path, "std", spec["std"]), lo, hi
+    if dist not in _DISTS:
+        raise CampaignError(
+            f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
+            f"(or grid = [...], choice = [...])"
         )
-    if dist == "integer":
-        allowed("dist", "low", "high")
-        need("low", "high")
-        for n in ("low", "high"):
+    cls, params, n_required = _DISTS[dist]
+    allowed("dist", *params)
+    need(*params[:n_required])
+    if cls is Integer:
+        for n in params:
             if isinstance(spec[n], bool) or not isinstance(spec[n], int):
                 raise CampaignError(
                     f"sample.{path}: integer {n} must be an integer, got {spec[n]!r}"
                 )
         return Integer(path, int(spec["low"]), int(spec["high"]))
-    raise CampaignError(
-        f"sample.{path}: unknown dist {dist!r}; use uniform, normal, loguniform or integer "
-        f"(or grid = [...], choice = [...])"
-    )
+    values = {n: _finite(path, n, spec[n]) for n in ("low", "high", "mean", "std") if n in spec}
+    return cls(path, *(values.get(n) for n in params))
+
+
+#: dist -> (sampler, its parameters in the order it takes them, how many of them are required)
+_DISTS: dict[str, tuple[type[Sampler], tuple[str, ...], int]] = {
+    "uniform": (Uniform, ("low", "high"), 2),
+    "loguniform": (LogUniform, ("low", "high"), 2),
+    "normal": (Normal, ("mean", "std", "low", "high"), 2),
+    "integer": (Integer, ("low", "high"), 2),
+}
 
 
 def _flatten(table: Mapping[str, Any], prefix: str = "", stop=lambda v: False) -> dict[str, Any]:
@@ -500,30 +500,12 @@ class CampaignSpec(StrictModel):
         return list(b) if isinstance(b, list) else [b]
 
 
-def _format_error(exc: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid campaign ({exc.error_count()} error(s))"]
-    for err in exc.errors():
-        loc = error_location(err) or "<root>"
-        msg = err["msg"]
-        if msg.startswith("Value error, "):
-            msg = msg[len("Value error, ") :]
-        if err["type"] == "extra_forbidden":
-            msg = "unknown field"
-        lines.append(f"  field {loc}: {msg}" if loc != "<root>" else f"  {msg}")
-    return "\n".join(lines)
-
-
 # --------------------------------------------------------------------------------------- loading
 def builtin_campaigns() -> dict[str, str]:
     """Name -> TOML text of every built-in campaign."""
-    out: dict[str, str] = {}
-    d = resources.files("formation_ftc.campaign") / "builtin"
-    if not d.is_dir():
-        return out
-    for entry in sorted(d.iterdir(), key=lambda p: p.name):
-        if entry.name.endswith(".toml"):
-            out[entry.name[:-5]] = entry.read_text(encoding="utf-8")
-    return out
+    from formation_ftc.config.loader import builtin_tomls
+
+    return builtin_tomls(resources.files("formation_ftc.campaign") / "builtin")
 
 
 def load_campaign(
@@ -540,23 +522,15 @@ def load_campaign(
     if isinstance(name_or_path, Mapping):
         raw, source = copy.deepcopy(dict(name_or_path)), "<dict>"
     else:
-        from formation_ftc.config.loader import parse_toml, path_exists, read_text_file, short_text
+        from formation_ftc.config.loader import read_named_toml
 
         if isinstance(name_or_path, str) and (not name_or_path.strip() or "\x00" in name_or_path):
             raise CampaignError(f"invalid campaign name or path {name_or_path!r}")
-        p = Path(name_or_path)
-        if p.suffix == ".toml" or path_exists(p, "campaign", CampaignError):
-            text = read_text_file(p, "campaign", CampaignError)
-            source, base_dir = str(p), p.resolve().parent
-        else:
-            builtin = builtin_campaigns()
-            if str(name_or_path) not in builtin:
-                raise CampaignError(
-                    f"unknown campaign {short_text(name_or_path)}: not a file and not a built-in "
-                    f"campaign (built-in: {', '.join(builtin) or 'none'})"
-                )
-            text, source = builtin[str(name_or_path)], f"<built-in campaign {name_or_path}>"
-        raw = parse_toml(text, source, CampaignError)
+        raw, source = read_named_toml(
+            name_or_path, "campaign", builtin_campaigns, "built-in campaign", error=CampaignError
+        )
+        if source == str(Path(name_or_path)):  # a file: its base scenarios may be relative to it
+            base_dir = Path(name_or_path).resolve().parent
     meta = raw.get("campaign")
     if isinstance(meta, dict):
         if runs is not None:
@@ -566,7 +540,9 @@ def load_campaign(
     try:
         spec = CampaignSpec.model_validate(raw)
     except ValidationError as exc:
-        raise CampaignError(_format_error(exc, source)) from None
+        raise CampaignError(
+            validation_message(exc, f"{source}: invalid campaign", "unknown field", root="")
+        ) from None
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         raise CampaignError(f"{source}: {exc}") from None
     return spec, base_dir

@@ -32,6 +32,7 @@ Safety against concurrent writers and silent corruption:
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import errno
 import functools
@@ -51,7 +52,7 @@ import pandas as pd
 
 from formation_ftc.atomic import atomic_write
 from formation_ftc.campaign.sampling import CampaignPlan
-from formation_ftc.campaign.spec import CampaignError
+from formation_ftc.campaign.spec import CampaignError, _flatten
 from formation_ftc.cf import apply_cf, write_netcdf
 from formation_ftc.errors import require_extra
 from formation_ftc.parquet_units import read_units, write_parquet
@@ -92,11 +93,8 @@ def trace_filename(run_id: int) -> str:
 
 def sha256_file(path: Path) -> str:
     """Hex SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
     with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _warn(msg: str) -> None:
@@ -107,15 +105,6 @@ def _package_version() -> str:
     from formation_ftc import __version__
 
     return __version__
-
-
-def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
-    if isinstance(d, dict):
-        out: dict[str, Any] = {}
-        for k, v in d.items():
-            out.update(_flat(v, f"{prefix}.{k}" if prefix else str(k)))
-        return out
-    return {prefix: d}
 
 
 class CampaignStore:
@@ -248,7 +237,9 @@ class CampaignStore:
 
     @staticmethod
     def _difference(root: Path, manifest: dict[str, Any], plan: CampaignPlan) -> str:
-        old, new = _flat(manifest.get("spec", {})), _flat(plan.spec.model_dump(mode="json"))
+        spec = manifest.get("spec", {})
+        old = _flatten(spec) if isinstance(spec, dict) else {"": spec}
+        new = _flatten(plan.spec.model_dump(mode="json"))
         diffs = [
             f"{k}: {old.get(k, '<absent>')!r} there, {new.get(k, '<absent>')!r} here"
             for k in sorted(set(old) | set(new))
@@ -350,10 +341,8 @@ class CampaignStore:
         """Release the directory lock (idempotent)."""
         lock, self._lock = self._lock, None
         if lock is not None:
-            try:
+            with contextlib.suppress(OSError):
                 (self.root / LOCK).write_bytes(b"")  # no holder named once released
-            except OSError:  # pragma: no cover
-                pass
             lock.release()
 
     def _remove_temporaries(self) -> None:

@@ -15,8 +15,10 @@ bounded to the 32-bit seeds the random generators take.
 from __future__ import annotations
 
 import math
+import operator
 import types
 import typing
+from collections.abc import Callable
 from typing import Annotated, Any
 
 from pydantic import (
@@ -24,6 +26,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    ValidationError,
     ValidationInfo,
     field_validator,
     model_validator,
@@ -42,6 +45,9 @@ __all__ = [
     "expression_validator",
     "MAX_SEED",
     "error_location",
+    "validation_message",
+    "field_info",
+    "field_bounds",
 ]
 
 #: largest run seed [-]: seeds are stored as unsigned 32-bit integers for the random generators
@@ -87,15 +93,29 @@ def _find_bad_number(value: Any, *, booleans: bool, non_finite: bool) -> tuple[s
     return None
 
 
-def _allowed_range(field: FieldInfo) -> str:
-    """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
-    bounds = [
-        f"{op} {getattr(c, name)}"
+#: pydantic's numeric bounds: (constraint attribute, relation as printed, the relation's test)
+_BOUNDS = (
+    ("gt", ">", operator.gt),
+    ("ge", ">=", operator.ge),
+    ("lt", "<", operator.lt),
+    ("le", "<=", operator.le),
+)
+
+
+def field_bounds(field: FieldInfo) -> list[tuple[Any, str, Callable[[Any, Any], Any]]]:
+    """``(bound, relation, test)`` of every numeric bound ``field`` declares (``Field(gt=0)`` ->
+    ``(0, ">", operator.gt)``; ``test(value, bound)`` is whether a value respects it)."""
+    return [
+        (getattr(c, name), op, test)
         for c in field.metadata
-        for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
+        for name, op, test in _BOUNDS
         if getattr(c, name, None) is not None
     ]
-    return ", ".join(["a finite number", *bounds])
+
+
+def _allowed_range(field: FieldInfo) -> str:
+    """The range a field's numbers must lie in, for messages: ``a finite number > 0``."""
+    return ", ".join(["a finite number", *(f"{op} {b}" for b, op, _ in field_bounds(field))])
 
 
 def error_location(err: ErrorDetails) -> str:
@@ -103,6 +123,37 @@ def error_location(err: ErrorDetails) -> str:
     error names one: ``faults[0].bias``, ``magnitude[1][2]``."""
     loc = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"]).lstrip(".")
     return loc + str(err.get("ctx", {}).get("index", ""))
+
+
+def validation_message(exc: ValidationError, head: str, unknown: str, root: str = "<root>") -> str:
+    """A pydantic error as lines for the user: ``head (N error(s))``, then ``  field LOC: message``
+    per error (``unknown`` for an unknown field; an error without location is at ``root``, or has no
+    ``field`` part when ``root`` is "")."""
+    lines = [f"{head} ({exc.error_count()} error(s))"]
+    for err in exc.errors():
+        loc = error_location(err) or root
+        msg = (
+            unknown
+            if err["type"] == "extra_forbidden"
+            else err["msg"].removeprefix("Value error, ")
+        )
+        lines.append(f"  field {loc}: {msg}" if loc else f"  {msg}")
+    return "\n".join(lines)
+
+
+def field_info(model: Any, path: str) -> FieldInfo | None:
+    """The field of the pydantic ``model`` that the dotted ``path`` names (list indices skipped; a
+    field whose type is, or is a union with, a model is entered), or None when it names none."""
+    info = None
+    for part in path.split("."):
+        if part.isdigit():
+            continue
+        fields = getattr(model, "model_fields", None)
+        if not fields or part not in fields:
+            return None
+        info, ann = fields[part], fields[part].annotation
+        model = next((a for a in getattr(ann, "__args__", ()) if hasattr(a, "model_fields")), ann)
+    return info
 
 
 class StrictModel(BaseModel):

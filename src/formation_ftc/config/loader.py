@@ -15,21 +15,24 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from importlib import resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any
 
 import tomli_w
 from pydantic import ValidationError
 
-from formation_ftc.config.base import error_location
+from formation_ftc.config.base import validation_message
 from formation_ftc.errors import InputError
 
 __all__ = [
     "ScenarioError",
     "builtin_scenarios",
+    "builtin_tomls",
     "read_raw",
+    "read_named_toml",
     "set_dotted",
     "get_dotted",
     "parse_override",
@@ -54,17 +57,18 @@ class ScenarioError(InputError):
     """A scenario that cannot be read or does not validate. The message names file and field."""
 
 
-def _builtin_dir():
-    return resources.files("formation_ftc") / "scenarios"
-
-
 def builtin_scenarios() -> dict[str, str]:
     """Name -> TOML text of every built-in scenario."""
-    out = {}
-    for entry in sorted(_builtin_dir().iterdir(), key=lambda p: p.name):
-        if entry.name.endswith(".toml"):
-            out[entry.name[:-5]] = entry.read_text(encoding="utf-8")
-    return out
+    return builtin_tomls(resources.files("formation_ftc") / "scenarios")
+
+
+def builtin_tomls(folder: Traversable) -> dict[str, str]:
+    """Name (file name without ``.toml``) -> text of every ``*.toml`` file of a package ``folder``, in
+    name order ({} when the folder does not exist)."""
+    if not folder.is_dir():
+        return {}
+    entries = sorted(folder.iterdir(), key=lambda p: p.name)
+    return {e.name[:-5]: e.read_text(encoding="utf-8") for e in entries if e.name.endswith(".toml")}
 
 
 def _nesting_depth(obj: Any) -> int:
@@ -162,18 +166,34 @@ def read_raw(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
     """Parse a built-in scenario (by name) or a TOML file (by path)."""
     if isinstance(name_or_path, str) and (not name_or_path or "\x00" in name_or_path):
         raise ScenarioError(f"invalid scenario name or path {name_or_path!r}")
+    return read_named_toml(
+        name_or_path, "scenario", builtin_scenarios, "built-in", "; see `formation-ftc list`"
+    )
+
+
+def read_named_toml(
+    name_or_path: str | Path,
+    kind: str,
+    builtin: Callable[[], Mapping[str, str]],
+    label: str,
+    hint: str = "",
+    error: type[InputError] = ScenarioError,
+) -> tuple[dict[str, Any], str]:
+    """``(dict, source)`` of the TOML file ``name_or_path`` (a ``.toml`` name or an existing path), else
+    of the built-in ``kind`` of that name (``builtin()``: name -> text; source ``<LABEL NAME>``); every
+    failure raises ``error`` naming the file (``hint`` ends the message of an unknown name)."""
     p = Path(name_or_path)
-    if p.suffix == ".toml" or path_exists(p):
-        text, source = read_text_file(p), str(p)
+    if p.suffix == ".toml" or path_exists(p, kind, error):
+        text, source = read_text_file(p, kind, error), str(p)
     else:
-        builtin = builtin_scenarios()
-        if str(name_or_path) not in builtin:
-            raise ScenarioError(
-                f"unknown scenario {short_text(name_or_path)}: not a file and not a built-in scenario "
-                f"(built-in: {', '.join(builtin) or 'none'}; see `formation-ftc list`)"
+        texts = builtin()
+        if str(name_or_path) not in texts:
+            raise error(
+                f"unknown {kind} {short_text(name_or_path)}: not a file and not a built-in {kind} "
+                f"(built-in: {', '.join(texts) or 'none'}{hint})"
             )
-        text, source = builtin[str(name_or_path)], f"<built-in {name_or_path}>"
-    return parse_toml(text, source), source
+        text, source = texts[str(name_or_path)], f"<{label} {name_or_path}>"
+    return parse_toml(text, source, error), source
 
 
 def get_dotted(raw: Mapping[str, Any], path: str) -> Any:
@@ -297,19 +317,6 @@ def apply_overrides(
     return out
 
 
-def _format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid scenario ({exc.error_count()} error(s))"]
-    for err in exc.errors():
-        loc = error_location(err) or "<root>"
-        msg = err["msg"]
-        if msg.startswith("Value error, "):
-            msg = msg[len("Value error, ") :]
-        if err["type"] == "extra_forbidden":
-            msg = "unknown field (not part of this method's scenario schema)"
-        lines.append(f"  field {loc}: {msg}")
-    return "\n".join(lines)
-
-
 def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool = True):
     """Validate ``raw`` with the schema of the method named in ``[scenario].method`` (default
     ``"composed"``).
@@ -334,7 +341,13 @@ def validate(raw: Mapping[str, Any], source: str = "<scenario>", *, build: bool 
     try:
         return method.schema.model_validate(dict(raw), context=None if build else {"build": False})
     except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source)) from None
+        raise ScenarioError(
+            validation_message(
+                exc,
+                f"{source}: invalid scenario",
+                "unknown field (not part of this method's scenario schema)",
+            )
+        ) from None
     except (
         ValueError,
         TypeError,

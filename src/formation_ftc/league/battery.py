@@ -26,15 +26,15 @@ import math
 import tomllib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
 from formation_ftc.config.base import StrictModel
 from formation_ftc.errors import InputError
+from formation_ftc.league.definition import _format, builtin_files
 
 __all__ = [
     "Battery",
@@ -132,28 +132,17 @@ class _BatteryModel(StrictModel):
     cases: list[dict[str, Any]] = Field(min_length=1, description="The fault cases.")
 
 
-@dataclass(frozen=True)
-class BatteryCase:
-    """One fault case of a battery (fields as in the battery file; None: not given)."""
+class BatteryCase(_CaseModel):
+    """One fault case of a battery, validated (fields as in the battery file; a magnitude None: not
+    given); its communication fields filled in (no lost link, ``delay_scale`` 1 by default)."""
 
-    name: str
-    kind: str
-    description: str
-    spacecraft: int
-    axis: int
-    onset: float  # [s]
-    effectiveness: float | None  # [-]
-    bias_fraction: float | None  # [-]
-    bias_force: float | None  # [N]
-    bias_torque: float | None  # [N m]
-    period: float | None  # [s]
-    duty: float | None  # [-]
-    rate: float | None  # [1/s]
-    min_effectiveness: float | None  # [-]
-    lost_links: tuple[tuple[int, int], ...]
-    delay_scale: float  # [-]
+    model_config = ConfigDict(frozen=True)
+
+    # frozen: a tuple where the file's model takes a list
+    lost_links: tuple[tuple[int, int], ...] = Field((), description="Links (i, j) lost.")  # type: ignore[assignment]
+    delay_scale: float = Field(1.0, gt=0.0, description="Delay multiplier after the onset [-].")
     #: the largest delay_scale of the battery (sizes a delayed network's history alike for every case)
-    max_delay_scale: float = 1.0
+    max_delay_scale: float = Field(1.0, description="Largest delay_scale of the battery [-].")
 
     @property
     def communication(self) -> bool:
@@ -286,21 +275,9 @@ class Battery:
         return f"{self.name} v{self.version} sha256:{self.sha256[:12]}"
 
 
-def _data_dir() -> Path:
-    return Path(str(resources.files("formation_ftc.league") / "data"))
-
-
 def builtin_batteries() -> dict[str, Path]:
     """Built-in battery name -> file."""
-    return {p.stem.removeprefix("battery-"): p for p in sorted(_data_dir().glob("battery-*.toml"))}
-
-
-def _errors(exc: ValidationError, where: str) -> str:
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(f"{where}.{loc}: {err.get('msg')}" if loc else f"{where}: {err.get('msg')}")
-    return "; ".join(lines)
+    return builtin_files("battery")
 
 
 def load_battery(name: str | Path = "v1") -> Battery:
@@ -325,7 +302,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     try:
         model = _BatteryModel.model_validate(raw)
     except ValidationError as exc:
-        raise BatteryError(_errors(exc, str(path))) from None
+        raise BatteryError(_format(exc, str(path), ".", "; ")) from None
     unknown_defaults = sorted(
         set(model.defaults) - set(_CaseModel.model_fields)
         | ({"name", "kind"} & set(model.defaults))
@@ -343,7 +320,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:
-            raise BatteryError(_errors(exc, where)) from None
+            raise BatteryError(_format(exc, where, ".", "; ")) from None
     if str(name) in known and model.battery.name != str(name):
         raise BatteryError(
             f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})"
@@ -356,20 +333,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     max_scale = max([1.0, *scales])
     cases = tuple(
         BatteryCase(
-            name=c.name,
-            kind=c.kind,
-            description=c.description,
-            spacecraft=c.spacecraft,
-            axis=c.axis,
-            onset=c.onset,
-            effectiveness=c.effectiveness,
-            bias_fraction=c.bias_fraction,
-            bias_force=c.bias_force,
-            bias_torque=c.bias_torque,
-            period=c.period,
-            duty=c.duty,
-            rate=c.rate,
-            min_effectiveness=c.min_effectiveness,
+            **c.model_dump(exclude={"lost_links", "delay_scale"}),
             lost_links=tuple((int(i), int(j)) for i, j in (c.lost_links or [])),
             delay_scale=1.0 if c.delay_scale is None else c.delay_scale,
             max_delay_scale=max_scale,

@@ -33,13 +33,7 @@ def _cmd_list(args) -> int:
                     "seeds": meta.seeds,
                     "quick_seeds": meta.quick_seeds,
                     "horizon": meta.horizon,
-                    "requirement": {
-                        "metric": meta.requirement.metric,
-                        "max": meta.requirement.max,
-                        "units": meta.requirement.units,
-                        "stl": meta.requirement.stl,
-                        "verdict": meta.requirement.verdict,
-                    },
+                    "requirement": meta.requirement.model_dump(),  # metric, max, units, stl, verdict
                     "units": {"horizon": "s"},
                 }
             )
@@ -70,7 +64,6 @@ def _log(args):
 def _cmd_run(args) -> int:
     from formation_ftc.campaign.executors import cap_workers, make_executor
     from formation_ftc.league.definition import LeagueError, load_league
-    from formation_ftc.league.report import write_leaderboard
     from formation_ftc.league.runner import METHOD_WORKER_BYTES, run_league
     from formation_ftc.limits import Budgets
     from formation_ftc.sim.runtime import schedulable_cpus
@@ -119,28 +112,32 @@ def _cmd_run(args) -> int:
         if getattr(args, flag) is not None:
             raise LeagueError(f"--{flag.replace('_', '-')}: only with --until-resolved")
     outcome = run_league(args.league, args.out, seeds=args.seeds, quick=args.quick, **options)
+    methods = [{"name": m, "wall_time": s} for m, s in outcome.per_method.items()]  # as finished
+    return _finish(
+        args,
+        t0,
+        {"runs": outcome.n_runs, "failed": outcome.n_failed, "methods": methods},
+        lambda wall: (
+            f"league done: {outcome.n_runs} runs ({outcome.n_failed} failed or diverged) "
+            f"in {outcome.out_dir}, {wall:.1f} s"
+        ),
+    )
+
+
+def _finish(args, t0: float, extra: dict, text, outputs: dict | None = None) -> int:
+    """Write the leaderboard of a league run, then print its ``--json`` document (the board, ``extra``,
+    the wall time; ``outputs``: more files) or ``text(wall time)`` and the board."""
+    from formation_ftc.league.report import write_leaderboard
+
     board = write_leaderboard(args.out, plots=not args.no_plots)
     wall = time.perf_counter() - t0
     if args.json:
         doc = _board_doc(args.out, board)
-        print_json(
-            {
-                "league": board["league"],
-                **doc,
-                "runs": outcome.n_runs,
-                "failed": outcome.n_failed,
-                "methods": [
-                    {"name": m, "wall_time": s} for m, s in outcome.per_method.items()
-                ],  # in the order they finished
-                "wall_time": wall,
-                "units": {**doc["units"], "wall_time": "s"},
-            }
-        )
+        doc["outputs"].update(outputs or {})
+        units = {**doc["units"], "wall_time": "s"}
+        print_json({"league": board["league"], **doc, **extra, "wall_time": wall, "units": units})
         return 0
-    print(
-        f"league done: {outcome.n_runs} runs ({outcome.n_failed} failed or diverged) in "
-        f"{outcome.out_dir}, {wall:.1f} s"
-    )
+    print(text(wall))
     _print_board(board, args.out)
     return 0
 
@@ -149,7 +146,7 @@ def _until_resolved(args, options: dict, t0: float) -> int:
     """``league run --until-resolved``: blocks of seeds until the ranking is resolved (or the budget
     is spent), then the leaderboard of every seed run."""
     from formation_ftc.league.definition import LeagueError
-    from formation_ftc.league.report import resolution_text, write_leaderboard
+    from formation_ftc.league.report import resolution_text
     from formation_ftc.league.resolution import RESOLUTION_FILE, run_until_resolved
 
     if args.seeds is not None or args.quick:
@@ -166,23 +163,8 @@ def _until_resolved(args, options: dict, t0: float) -> int:
         power=0.8 if args.power is None else args.power,
         **options,
     )
-    board = write_leaderboard(args.out, plots=not args.no_plots)
-    if args.json:
-        doc = _board_doc(args.out, board)
-        doc["outputs"]["resolution"] = str(Path(args.out) / RESOLUTION_FILE)
-        print_json(
-            {
-                "league": board["league"],
-                **doc,
-                "resolution": record,
-                "wall_time": time.perf_counter() - t0,
-                "units": {**doc["units"], "wall_time": "s"},
-            }
-        )
-        return 0
-    print(resolution_text(record))
-    _print_board(board, args.out)
-    return 0
+    resolution = {"resolution": str(Path(args.out) / RESOLUTION_FILE)}
+    return _finish(args, t0, {"resolution": record}, lambda _: resolution_text(record), resolution)
 
 
 def _print_board(board, directory) -> None:

@@ -267,15 +267,10 @@ class TuneSection(StrictModel):
         description="Dotted field (e.g. 'controller.k') -> [low, high] or {low, high, log}.",
     )
     objective: str = Field("delta_v_total", description="League metric minimised.")
-    statistic: str = Field("mean", description="'mean' or 'median' over the training runs.")
+    statistic: Literal["mean", "median"] = Field(
+        "mean", description="'mean' or 'median' over the training runs."
+    )
     note: str = Field("", description="Why these fields and bounds.")
-
-    @field_validator("statistic")
-    @classmethod
-    def _statistic(cls, v):
-        if v not in ("mean", "median"):
-            raise ValueError(f"statistic = {v!r}: 'mean' or 'median'")
-        return v
 
     @field_validator("fields")
     @classmethod
@@ -381,21 +376,27 @@ class LeagueSpec(StrictModel):
         )
 
 
-def _data_dir() -> Path:
-    return Path(str(resources.files("formation_ftc.league") / "data"))
+def builtin_files(prefix: str) -> dict[str, Path]:
+    """The package's data files ``league/data/PREFIX-NAME.toml`` by NAME."""
+    data = Path(str(resources.files("formation_ftc.league") / "data"))
+    return {p.stem.removeprefix(f"{prefix}-"): p for p in sorted(data.glob(f"{prefix}-*.toml"))}
 
 
 def builtin_leagues() -> dict[str, Path]:
     """Built-in league name -> definition file."""
-    return {p.stem.removeprefix("league-"): p for p in sorted(_data_dir().glob("league-*.toml"))}
+    return builtin_files("league")
 
 
-def _format(exc: ValidationError, source: str) -> str:
+def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n") -> str:
+    """Every error of ``exc``: ``SOURCE: a.b: message`` (``dot`` between the source and the field's
+    path), joined by ``sep``."""
     lines = []
     for err in exc.errors():
         loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(f"{source}: {loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}")
-    return "\n".join(lines)
+        lines.append(
+            f"{source}{dot}{loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}"
+        )
+    return sep.join(lines)
 
 
 def load_league(name_or_path: str | Path) -> LeagueSpec:

@@ -170,12 +170,6 @@ def _robustness(spec: LeagueSpec, metrics: dict[str, float], diverged: bool) -> 
     return float(spec.league.requirement.max) - float(metrics[spec.league.requirement.metric])
 
 
-def _evaluate(spec, cells, level, points: np.ndarray, size: int) -> list[tuple[float, dict, dict]]:
-    """(robustness, fault, raw) of every point, in order: one vmapped batch per fault kind, padded to
-    ``size`` runs (the same compiled program for every population)."""
-    return _run_candidates(spec, [candidate_raw(spec, cells, level, p) for p in points], size)
-
-
 def _run_candidates(
     spec, built: list[tuple[dict, dict]], size: int
 ) -> list[tuple[float, dict, dict]]:
@@ -298,7 +292,9 @@ def falsify(
             points = np.asarray(es.ask(), dtype=float)
         else:
             points = rng.random((population, len(COORDINATES)))
-        results = _evaluate(spec, cells, level, points[:n], population)
+        # one vmapped batch per fault kind, padded to the population (one program per kind)
+        built = [candidate_raw(spec, cells, level, p) for p in points[:n]]
+        results = _run_candidates(spec, built, population)
         for k, (rho, fault, raw) in enumerate(results):
             if rho < best[0] or not best[1]:
                 best = (rho, fault, raw)

@@ -97,10 +97,13 @@ def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
     return requirement_of(tomllib.loads(meta["definition"])["league"])
 
 
-def _passed(df: pd.DataFrame, metric: str, limit: float) -> pd.Series:
-    col = f"metric:{metric}"
-    vals = df[col] if col in df else pd.Series(np.nan, index=df.index)
-    return (df["status"] == "ok") & (vals <= limit)
+def _col(g: pd.DataFrame, name: str) -> np.ndarray:
+    col = f"metric:{name}"
+    return g[col].to_numpy(dtype=float) if col in g else np.full(len(g), np.nan)
+
+
+def _passed(df: pd.DataFrame, metric: str, limit: float) -> np.ndarray:
+    return (df["status"] == "ok").to_numpy() & (_col(df, metric) <= limit)
 
 
 def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
@@ -174,11 +177,6 @@ def _horizon(meta: dict[str, Any]) -> float:
     import tomllib
 
     return float(tomllib.loads(meta["definition"])["league"]["horizon"])
-
-
-def _col(g: pd.DataFrame, name: str) -> np.ndarray:
-    col = f"metric:{name}"
-    return g[col].to_numpy(dtype=float) if col in g else np.full(len(g), np.nan)
 
 
 def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
@@ -365,6 +363,8 @@ CONFIDENCE_KEYS = (
     "only_above_passed",
     "only_this_passed",
 )
+#: the keys of the comparison with the row above (None on a level's first row)
+_COMPARISON_KEYS = CONFIDENCE_KEYS[7:]
 
 
 def rank_confidence(
@@ -394,7 +394,6 @@ def rank_confidence(
     seed = seed_column(runs)
     if cases is None:
         cases = _common_cases(runs[["method", "case"]].drop_duplicates())
-    col = f"metric:{metric}"
     sel = runs[runs["case"].isin(cases)]
     frame = pd.DataFrame(
         {
@@ -402,12 +401,8 @@ def rank_confidence(
             "level": sel["level"].astype(str),
             "case": sel["case"].astype(str),
             "seed": sel[seed],
-            "passed": _passed(sel, metric, limit).to_numpy(dtype=bool),
-            "value": np.where(
-                sel["status"] == "ok",
-                sel[col].to_numpy(dtype=float) if col in sel else np.nan,
-                np.nan,
-            ),
+            "passed": _passed(sel, metric, limit),
+            "value": np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
         }
     )
     groups = {key: g for key, g in frame.groupby(["method", "level"], sort=False)}
@@ -440,27 +435,11 @@ def rank_confidence(
             )
         adjusted = st.holm([t["p_value"] for t in tests])
         separated = [bool(p < st.ALPHA) for p in adjusted]
-        rows[0].update(
-            test=None,
-            statistic=None,
-            p_value=None,
-            p_adjusted=None,
-            separated=None,
-            pairs=None,
-            only_above_passed=None,
-            only_this_passed=None,
-        )
+        rows[0].update(dict.fromkeys(_COMPARISON_KEYS))
         for r, t, p, sep in zip(rows[1:], tests, adjusted, separated, strict=True):
-            r.update(
-                test=t["test"],
-                statistic=t["statistic"],
-                p_value=t["p_value"],
-                p_adjusted=float(p),
-                separated=sep,
-                pairs=t["pairs"],
-                only_above_passed=t["a_only"],
-                only_this_passed=t["b_only"],
-            )
+            t = t | {"p_adjusted": float(p), "separated": sep}
+            t |= {"only_above_passed": t["a_only"], "only_this_passed": t["b_only"]}
+            r.update({k: t[k] for k in _COMPARISON_KEYS})
         for r, tie in zip(rows, st.tie_groups(separated), strict=True):
             r.update(tie)
 
@@ -478,12 +457,15 @@ def _nan_last(v: float | None) -> float:
 
 def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
     """Per (level, case): the method with the highest pass rate, ties broken by the median metric."""
-    metric, _, _ = _requirement(meta)
+    return _winners(cells, _requirement(meta)[0])
+
+
+def _winners(cells: pd.DataFrame, metric: str) -> list[dict[str, Any]]:
     out = []
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
-        best = sorted(
+        best = min(
             g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"]))
-        )[0]
+        )
         out.append(
             {
                 "level": level,
@@ -652,22 +634,10 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
 
 def _pareto_front(pts: np.ndarray) -> list[int]:
     """Indices of the points no other point beats on both accuracy (col 0) and delta-v (col 1)."""
-    idx = []
-    for i, (a, d) in enumerate(pts):
-        if not (math.isfinite(a) and math.isfinite(d)):
-            continue
-        dominated = any(
-            j != i
-            and math.isfinite(pts[j][0])
-            and math.isfinite(pts[j][1])
-            and pts[j][0] <= a
-            and pts[j][1] <= d
-            and (pts[j][0] < a or pts[j][1] < d)
-            for j in range(len(pts))
-        )
-        if not dominated:
-            idx.append(i)
-    return idx
+    finite = np.flatnonzero(np.isfinite(pts).all(axis=1))
+    p = pts[finite, None, :], pts[None, finite, :]  # (beater, beaten)
+    dominated = ((p[0] <= p[1]).all(axis=2) & (p[0] < p[1]).any(axis=2)).any(axis=0)
+    return [int(i) for i in finite[~dominated]]
 
 
 def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
@@ -861,20 +831,8 @@ def _page(
     ranking_tables = []
     confidence = _has_confidence(rank)
     for level, rows in rank.items():
-        columns = [
-            ("rank_text", "rank"),
-            ("method", "method"),
-            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
-            (
-                "median_text",
-                f"median {metric} [{req_units}]" + (" [95 % CI]" if confidence else ""),
-            ),
-            *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
-            *([("versus_text", "vs. row above: Holm p (test)")] if confidence else []),
-            ("failed", "diverged"),
-            ("runs", "runs"),
-            *([("tuned", "tuned (formation-ftc tune)")] if rows and "tuned" in rows[0] else []),
-        ]
+        median = f"median {metric} [{req_units}]"
+        columns = _ranking_columns(rows, median, cost, confidence, "tuned (formation-ftc tune)")
         ranking_tables.append((level, _display_rows(rows, metric), columns))
     battery = meta["battery"]
     return render(
@@ -929,6 +887,29 @@ def _page(
         method_files=list(meta.get("method_files", {}).items()),
         provenance=[{"key": k, "value": v} for k, v in (meta.get("provenance") or {}).items()],
     )
+
+
+def _ranking_columns(
+    rows: list[dict[str, Any]],
+    median: str,
+    cost: tuple[str, str] | None,
+    confidence: bool,
+    tuned: str,
+) -> list[tuple[str, str]]:
+    """The (key, label) columns of a level's ranking table (page and Markdown): ``median`` labels the
+    requirement metric's median, ``tuned`` the tuned column (when the rows have one)."""
+    ci = " [95 % CI]" if confidence else ""
+    return [
+        ("rank_text", "rank"),
+        ("method", "method"),
+        ("pass_rate_text", f"pass rate{ci}"),
+        ("median_text", f"{median}{ci}"),
+        *([(f"{cost[0]}_median", f"median {cost[1]}")] if cost else []),
+        *([("versus_text", "vs. row above: Holm p (test)")] if confidence else []),
+        ("failed", "diverged"),
+        ("runs", "runs"),
+        *([("tuned", tuned)] if rows and "tuned" in rows[0] else []),
+    ]
 
 
 def _interval_text(v: Any, low: Any, high: Any, fixed: bool = False) -> str:
@@ -1083,33 +1064,13 @@ def markdown_summary(board: dict[str, Any]) -> str:
     ]
     confidence = _has_confidence(board["ranking"])
     for level, rows in board["ranking"].items():
-        cols = [
-            ("rank_text", "rank"),
-            ("method", "method"),
-            ("pass_rate_text", "pass rate [95 % CI]" if confidence else "pass rate"),
-            ("median_text", f"median {metric}" + (" [95 % CI]" if confidence else "")),
-        ]
-        if cost:
-            cols.append((f"{cost[0]}_median", f"median {cost[1]}"))
-        if confidence:
-            cols.append(("versus_text", "vs. row above: Holm p (test)"))
-        cols += [("failed", "diverged"), ("runs", "runs")]
-        if rows and "tuned" in rows[0]:
-            cols.append(("tuned", "tuned"))
+        cols = _ranking_columns(rows, f"median {metric}", cost, confidence, "tuned")
         out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
     if confidence:
         out += ["", _ranking_note()]
     if board.get("resolution"):
         out += ["", resolution_text(board["resolution"]) + "."]
-    best: dict[tuple[str, str], dict[str, Any]] = {}
-    for r in board["cells"]:
-        key = (r["case"], r["level"])
-        cur = best.get(key)
-        if cur is None or (r["pass_rate"], -_nan_last(r.get(f"{metric}_median", math.nan))) > (
-            cur["pass_rate"],
-            -_nan_last(cur.get(f"{metric}_median", math.nan)),
-        ):
-            best[key] = r
+    best = {(w["case"], w["level"]): w for w in (_winners(cells, metric) if len(cells) else [])}
     levels = list(board["ranking"])
     rows = []
     for case in dict.fromkeys(r["case"] for r in board["cells"]):

@@ -33,8 +33,8 @@ from typing import Any, cast
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-# one atomic write for the package (league/tuning.py imports it from here under this name)
 from formation_ftc.atomic import atomic_write
+from formation_ftc.errors import InputError
 from formation_ftc.league.definition import (
     STL_VIOLATION,
     LeagueError,
@@ -107,6 +107,17 @@ FLFR_METRICS: tuple[dict[str, Any], ...] = (
 )
 #: ... and on which spacecraft, where the law takes it from the FDI's isolation at run time
 FLFR_SPACECRAFT_METRIC = {"name": "flfr_spacecraft", "signal": "flfr_spacecraft", "reduce": "last"}
+#: the scores the step check leaves out: alarm times are on the step grid; identification errors are
+#: small estimation errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
+#: robustness is a margin (its relative change is meaningless near 0; the signals it reads are
+#: checked as scores); a filter's consistency is a noise statistic
+_NOT_STEP_CHECKED = (
+    *(
+        m["name"]
+        for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
+    ),
+    STL_VIOLATION,
+)
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -196,26 +207,25 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
     from formation_ftc.methods.composed import ComposedScenario, make_loop
 
     loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
-    if "navigation-records" in loop.estimator.provides() and "lvlh-relative-state" in (
-        loop.plant.provides()
-    ):
-        raw["evaluations"] = [*raw.get("evaluations", []), {"type": "navigation-consistency"}]
-        raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in NAVIGATION_METRICS)]
-    if not (
-        "fdi-records" in loop.estimator.provides()
-        and "true-actuator-fault" in loop.actuator.provides()
-    ):
+
+    def add(evaluation: str | None, metrics: tuple[dict[str, Any], ...]) -> None:
+        if evaluation is not None:
+            raw["evaluations"] = [*raw.get("evaluations", []), {"type": evaluation}]
+        raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in metrics)]
+
+    estimator = loop.estimator.provides()
+    if "navigation-records" in estimator and "lvlh-relative-state" in loop.plant.provides():
+        add("navigation-consistency", NAVIGATION_METRICS)
+    if not ("fdi-records" in estimator and "true-actuator-fault" in loop.actuator.provides()):
         return raw
-    raw["evaluations"] = [*raw.get("evaluations", []), {"type": "fdi-scores"}]
-    raw["metrics"] = [*raw.get("metrics", []), *(dict(m) for m in FDI_METRICS)]
-    if "fault-identification" in loop.estimator.provides():
-        raw["evaluations"].append({"type": "identification-scores"})
-        raw["metrics"] += [dict(m) for m in IDENTIFICATION_METRICS]
+    add("fdi-scores", FDI_METRICS)
+    if "fault-identification" in estimator:
+        add("identification-scores", IDENTIFICATION_METRICS)
     recorded = {sig.name for sig in loop.signals()}
     if "time_in_flfr" in recorded:
-        raw["metrics"] += [dict(m) for m in FLFR_METRICS]
+        add(None, FLFR_METRICS)
     if "flfr_spacecraft" in recorded:
-        raw["metrics"].append(dict(FLFR_SPACECRAFT_METRIC))
+        add(None, (FLFR_SPACECRAFT_METRIC,))
     return raw
 
 
@@ -236,7 +246,6 @@ def _campaign(
     cell_files: list[Path],
     seeds: int,
     traced: list[int],
-    networked: bool,
     first_seed: int = 0,
 ) -> dict:
     ie = spec.league.initial_error
@@ -270,6 +279,7 @@ def _campaign(
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
+    networked = _network_kind(spec, spec.method(method))[0]
     for path in (on.field, "network.onset") if networked else (on.field,):
         if on.high > on.low:
             sample[path] = {"dist": "uniform", "low": on.low, "high": on.high}
@@ -357,19 +367,14 @@ def _check_batch_memory(
     (first cell of each method, shapes only: every cell of a method has the same structure)."""
     if budgets.max_memory is None:
         return
-    from formation_ftc import api
-    from formation_ftc.limits import format_bytes, run_memory_bytes
+    from formation_ftc.limits import format_bytes
 
     batch = min(spec.league.chunk_size, seeds)
     for method, mcells in cells.items():
         if not mcells:
             continue
-        try:
-            need = run_memory_bytes(api.build_loop(api.load_scenario(mcells[0].raw))) * batch
-        except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-            raise LeagueError(
-                f"league {spec.league.name}: method {method} cannot be compiled: {exc}"
-            ) from None
+        where = f"league {spec.league.name}: method {method} cannot be compiled"
+        need = run_bytes(mcells[0].raw, LeagueError, where) * batch
         if need > budgets.max_memory:
             raise LeagueError(
                 f"league {spec.league.name}, method {method}: a batch of {batch} runs needs about "
@@ -377,6 +382,20 @@ def _check_batch_memory(
                 f"{format_bytes(budgets.max_memory)}; lower league.chunk_size in the league file, "
                 "or raise the budget with --max-memory / FORMATION_FTC_MAX_MEMORY"
             )
+
+
+def run_bytes(raw: dict[str, Any], error: type[InputError], where: str) -> int:
+    """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only); a run that
+    cannot be built raises ``error`` (``where: reason``)."""
+    from formation_ftc import api
+    from formation_ftc.limits import run_memory_bytes
+
+    try:
+        return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
+    except InputError:
+        raise
+    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
+        raise error(f"{where}: {exc}") from None
 
 
 # ------------------------------------------------------------------------------ league directory
@@ -521,6 +540,26 @@ def _campaign_at_or_above(path: Path) -> Path | None:
     return None
 
 
+def _check_target(
+    out: Path, what: str, error: type[InputError], in_campaign: str, not_dir: str
+) -> bool:
+    """Refuse (``error``) an ``--out`` that is a campaign directory or lies inside one (``in_campaign``:
+    the advice), or exists and is not a directory (``not_dir``); whether it exists. An unusable path
+    raises OSError."""
+    campaign = _campaign_at_or_above(out)
+    if campaign is not None:
+        where = (
+            "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
+        )
+        raise error(f"{what}: {where} a campaign directory; {in_campaign}")
+    if not (out.exists() or out.is_symlink()):
+        return False
+    if not out.is_dir():
+        kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+        raise error(f"{what}: exists and is {kind}; {not_dir}")
+    return True
+
+
 def _check_out(
     out: Path, spec: LeagueSpec, digest: str, seeds: int, first_seed: int | None = None
 ) -> dict[str, Any] | None:
@@ -531,27 +570,15 @@ def _check_out(
     Returns the ``league.json`` found there, or None."""
     what = f"--out {out}"
     try:
-        campaign = _campaign_at_or_above(out)
-        if campaign is not None:
-            where = (
-                "is"
-                if campaign == Path(os.path.realpath(out))
-                else f"is inside {campaign}, which is"
-            )
-            raise LeagueError(
-                f"{what}: {where} a campaign directory; a league writes one campaign per method in "
-                "its own directory: give another --out (new or empty)"
-            )
-        if not (out.exists() or out.is_symlink()):
+        if not _check_target(
+            out,
+            what,
+            LeagueError,
+            "a league writes one campaign per method in its own directory: give another --out "
+            "(new or empty)",
+            "give a directory (new or empty, or this league's to resume it)",
+        ):
             return None
-        if not out.is_dir():
-            kind = (
-                "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
-            )
-            raise LeagueError(
-                f"{what}: exists and is {kind}; give a directory (new or empty, or this league's "
-                "to resume it)"
-            )
         entries = [e.name for e in out.iterdir()]
         if LEAGUE_FILE not in entries:
             stray = sorted(e for e in entries if not _TMP_RE.match(e))
@@ -741,22 +768,9 @@ class _MethodProgress(_Bars):
     campaign has stored: it follows methods computed side by side in other processes."""
 
     def __init__(
-        self,
-        methods: list[tuple[str, Path, int]],
-        seeds: int,
-        chunk_size: int,
-        *,
-        enabled: bool = True,
-        console: Any = None,
-        interval: float = 0.5,
+        self, methods: list[tuple[str, Path, int]], seeds: int, chunk_size: int, **options: Any
     ):
-        super().__init__(
-            [(name, total) for name, _, total in methods],
-            "runs",
-            enabled=enabled,
-            console=console,
-            interval=interval,
-        )
+        super().__init__([(name, total) for name, _, total in methods], "runs", **options)
         self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size
 
     def _poll(self) -> None:
@@ -840,8 +854,7 @@ def run_league(
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
     for name, mcells in cells.items():
-        networked = _network_kind(spec, spec.method(name))[0]
-        sampled = _campaign(spec, name, [], 1, [], networked)
+        sampled = _campaign(spec, name, [], 1, [])
         for path in [*sampled["sample"], *sampled["overrides"]]:
             for c in mcells:
                 if not _has_path(c.raw, path):
@@ -899,20 +912,7 @@ def run_league(
             if 0 <= trace_seed < n_seeds
             else []
         )
-        jobs.append(
-            (
-                name,
-                _campaign(
-                    spec,
-                    name,
-                    files[name],
-                    n_seeds,
-                    traced,
-                    _network_kind(spec, spec.method(name))[0],
-                    start,
-                ),
-            )
-        )
+        jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced, start)))
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
 
@@ -1049,22 +1049,7 @@ def _step_checks(
                     onset=spec.league.onset.low,
                     tolerance=sc.tolerance,
                     max_halvings=sc.max_halvings,
-                    # alarm times are on the step grid; identification errors are small estimation
-                    # errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
-                    # robustness is a margin (its relative change is meaningless near 0; the signals
-                    # it reads are checked as scores); a filter's consistency is a noise statistic
-                    ignore=(
-                        *(
-                            m["name"]
-                            for m in (
-                                *FDI_METRICS,
-                                *IDENTIFICATION_METRICS,
-                                *FLFR_METRICS,
-                                *NAVIGATION_METRICS,
-                            )
-                        ),
-                        STL_VIOLATION,
-                    ),
+                    ignore=_NOT_STEP_CHECKED,
                     on_simulation=on_simulation,
                 ).as_dict()
                 verdict = "converged" if record["converged"] else "NOT converged, kept"

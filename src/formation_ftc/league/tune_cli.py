@@ -12,9 +12,9 @@ from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, T
 
 
 def _cmd_tune(args) -> int:
-    import sys
     import time
 
+    from formation_ftc.league.cli import _log, _quiet
     from formation_ftc.league.tuning import (
         TuneError,
         check_tune_out,
@@ -32,7 +32,6 @@ def _cmd_tune(args) -> int:
     check_tune_out(args.out, args.method, args.level, force=args.force)
     cases = [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None
     step_checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
-    quiet = int(getattr(args, "verbosity", 0) or 0) < 0
     journal = journal_path(args.out, args.method, args.level)
     gains = _gains(args.gains) if args.gains is not None else None
     result = tune_league_method(
@@ -51,11 +50,11 @@ def _cmd_tune(args) -> int:
         penalty=args.penalty,
         violation_cap=args.violation_cap,
         step_checks=step_checks,
-        log=None if quiet else (lambda line: print(line, file=sys.stderr, flush=True)),
+        log=_log(args),
         budgets=budgets,
         journal=journal,
         force=args.force,
-        progress=not quiet,
+        progress=not _quiet(args),
     )
     path = write_tuning(result, args.out)
     journal.unlink(missing_ok=True)  # the result holds every evaluation (optimiser.history)

@@ -10,6 +10,7 @@ program, and each evaluation only writes the gains into their leaves.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import math
@@ -23,6 +24,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
+from formation_ftc.atomic import atomic_write
 from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
@@ -49,6 +51,9 @@ __all__ = [
 ]
 
 _NM_STEP = 0.15  # initial simplex of Nelder-Mead, as a fraction of each field's (scaled) range
+
+
+_UNBUILT = "tuning: a run cannot be built"
 
 
 class TuneError(InputError):
@@ -196,7 +201,7 @@ def _build_runs(
     except InputError:
         raise
     except (ValueError, TypeError) as exc:
-        raise TuneError(f"tuning: a run cannot be built: {exc}") from None
+        raise TuneError(f"{_UNBUILT}: {exc}") from None
     if any(c.static_key != loops[0].static_key for c in loops[1:]):
         raise TuneError("tuning: the runs do not share one structure (one compiled program)")
     return scenarios, loops
@@ -562,12 +567,9 @@ def minimise(
             return record(z, *J(*evaluate(problem, gains(z), journal)), ts)
 
         if optimiser == "nelder-mead":
-            simplex = [z0]
-            for i in range(len(fields)):
-                simplex.append(z0.copy())
-                simplex[-1][i] += _NM_STEP if z0[i] + _NM_STEP <= 1.0 else -_NM_STEP
+            step = np.where(z0 + _NM_STEP <= 1.0, _NM_STEP, -_NM_STEP)  # inward at the top end
             tols: dict[str, Any] = {
-                "initial_simplex": np.asarray(simplex),
+                "initial_simplex": np.vstack([z0, z0 + np.diag(step)]),
                 "xatol": tolerance,
                 "fatol": tolerance,
             }
@@ -603,9 +605,9 @@ def replicate_raws(spec, method: str, cells, replicates: Sequence[int]):
     from formation_ftc.campaign.sampling import draw_value, run_seed
     from formation_ftc.campaign.spec import parse_sampler
     from formation_ftc.config.loader import apply_overrides
-    from formation_ftc.league.runner import _campaign, _network_kind
+    from formation_ftc.league.runner import _campaign
 
-    camp = _campaign(spec, method, [], 1, [], _network_kind(spec, spec.method(method))[0])
+    camp = _campaign(spec, method, [], 1, [])
     seed = int(spec.league.seed)
     samplers = [parse_sampler(p, s) for p, s in camp["sample"].items()]
     draws = {
@@ -683,7 +685,7 @@ class TuneJournal:
         self.resumed = len(self.entries)
         header = {"kind": JOURNAL_KIND, "fingerprint": self.fingerprint, "problem": self.problem}
         lines = [json.dumps(header), *(json.dumps(e) for e in self.entries.values())]
-        self._io(lambda: _atomic_text(self.path, "\n".join(lines) + "\n"))
+        self._io(lambda: atomic_write(self.path, "\n".join(lines) + "\n"))
 
     @staticmethod
     def key(name: str, values: Sequence[float] | np.ndarray) -> str:
@@ -713,7 +715,7 @@ class TuneJournal:
         """Delete the journal (its result is written)."""
         self.path.unlink(missing_ok=True)
 
-    def _io(self, fn: Callable[[], None]) -> None:
+    def _io(self, fn: Callable[[], object]) -> None:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fn()
@@ -766,12 +768,6 @@ class TuneJournal:
             if not isinstance(entry, dict) or not isinstance(entry.get("key"), str):
                 raise TuneError(f"{self.path}: line {n} is damaged; {advice}")
             self.entries[entry["key"]] = entry
-
-
-def _atomic_text(path: Path, text: str) -> None:
-    from formation_ftc.atomic import atomic_write
-
-    atomic_write(path, text)
 
 
 def evaluate(
@@ -882,21 +878,17 @@ def check_tune_budgets(
         e_max = ((room - held(H, T)) // T - 3) // k - n - 1
         t_max = (room - 2 * H + 2) // (per_train_seed(E) + 2)
         h_max = (room - per_train_seed(E) * T) // 2 - T + 1
-        if e_max >= 2:
-            raise TuneError(
-                f"--max-evaluations {E:,}: {size}, over {limit}; allowed: --max-evaluations 2 to "
-                f"{e_max:,} with --train-seeds {T:,} and --holdout-seeds {H:,}"
-            )
-        if t_max >= 1:
-            raise TuneError(
-                f"--train-seeds {T:,}: {size}, over {limit}; allowed: --train-seeds 1 to "
-                f"{t_max:,} with --max-evaluations {E:,} and --holdout-seeds {H:,}"
-            )
-        if h_max >= 1:
-            raise TuneError(
-                f"--holdout-seeds {H:,}: {size}, over {limit}; allowed: --holdout-seeds 1 to "
-                f"{h_max:,} with --train-seeds {T:,} and --max-evaluations {E:,}"
-            )
+        # the first option that alone can bring the tuning within the budget
+        for opt, value, low, high, others in (
+            ("--max-evaluations", E, 2, e_max, f"--train-seeds {T:,} and --holdout-seeds {H:,}"),
+            ("--train-seeds", T, 1, t_max, f"--max-evaluations {E:,} and --holdout-seeds {H:,}"),
+            ("--holdout-seeds", H, 1, h_max, f"--train-seeds {T:,} and --max-evaluations {E:,}"),
+        ):
+            if high >= low:
+                raise TuneError(
+                    f"{opt} {value:,}: {size}, over {limit}; allowed: {opt} {low} to {high:,} "
+                    f"with {others}"
+                )
         raise TuneError(
             f"{size}, over {limit}; lower --train-seeds, --holdout-seeds and --max-evaluations, "
             "or tune on fewer --cases"
@@ -918,19 +910,6 @@ def check_tune_budgets(
             )
 
 
-def _run_bytes(raw: Mapping[str, Any]) -> int:
-    """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only)."""
-    from formation_ftc import api
-    from formation_ftc.limits import run_memory_bytes
-
-    try:
-        return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
-    except InputError:
-        raise
-    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-        raise TuneError(f"tuning: a run cannot be built: {exc}") from None
-
-
 # ------------------------------------------------------------------------------------------ --out
 def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool = False) -> None:
     """Refuse, before anything is computed, an ``--out`` the result of ``method`` at ``level`` may not
@@ -939,35 +918,25 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
     directory holding anything but tuning results and journals, or one that holds this result
     already (unless ``force``). A file of the result's name that is not a tuning result is never
     replaced."""
-    from formation_ftc.league.runner import _TMP_RE, LEAGUE_FILE, _campaign_at_or_above
+    from formation_ftc.league.runner import _TMP_RE, LEAGUE_FILE, _check_target
 
     out = Path(out_dir)
     what = f"--out {out}"
     result = f"{method}--{level}.json"
     try:
-        campaign = _campaign_at_or_above(out)
-        if campaign is not None:
-            where = (
-                "is"
-                if campaign == Path(os.path.realpath(out))
-                else f"is inside {campaign}, which is"
-            )
-            raise TuneError(
-                f"{what}: {where} a campaign directory; give a directory of its own for tuning "
-                "results (new, empty or holding tuning results)"
-            )
-        if not (out.exists() or out.is_symlink()):
+        if not _check_target(
+            out,
+            what,
+            TuneError,
+            "give a directory of its own for tuning results (new, empty or holding tuning results)",
+            "give a directory for tuning results",
+        ):
             parent = next(p for p in out.absolute().parents if p.exists() or p.is_symlink())
             if not parent.is_dir():
                 raise TuneError(f"{what}: {parent} is not a directory; give a directory")
             if not os.access(parent, os.W_OK | os.X_OK):
                 raise TuneError(f"{what}: cannot create it ({parent} is not writable)")
             return
-        if not out.is_dir():
-            kind = (
-                "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
-            )
-            raise TuneError(f"{what}: exists and is {kind}; give a directory for tuning results")
         if not os.access(out, os.W_OK | os.X_OK):
             raise TuneError(f"{what}: not writable")
         entries = sorted(e.name for e in out.iterdir())
@@ -1054,7 +1023,14 @@ def tune_league_method(
     the paper's on the held-out and fresh replicates, with no training and no optimiser."""
     import formation_ftc
     from formation_ftc.league.definition import LeagueSpec, league_hash, load_league, method_tune
-    from formation_ftc.league.runner import Counter, _battery, _provenance, _step_checks, plan_cells
+    from formation_ftc.league.runner import (
+        Counter,
+        _battery,
+        _provenance,
+        _step_checks,
+        plan_cells,
+        run_bytes,
+    )
 
     say = log or (lambda _line: None)
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -1112,7 +1088,9 @@ def tune_league_method(
     }
     # at the method's own step, before anything runs (the step check included)
     first = chosen()
-    check_tune_budgets(first, **options, run_bytes=_run_bytes(first[0].raw) if first else None)
+    check_tune_budgets(
+        first, **options, run_bytes=run_bytes(first[0].raw, TuneError, _UNBUILT) if first else None
+    )
     book = None
     if journal is not None:
         problem_key = {
@@ -1150,7 +1128,7 @@ def tune_league_method(
         say(f"{method}: flying at dt = {step_check['chosen_dt']:g} s (the league's step check)")
     cells = chosen()
     if [c.n_steps for c in cells] != steps0:  # again, at the chosen step
-        check_tune_budgets(cells, **options, run_bytes=_run_bytes(cells[0].raw))
+        check_tune_budgets(cells, **options, run_bytes=run_bytes(cells[0].raw, TuneError, _UNBUILT))
     t0 = time.perf_counter()
     train = list(range(train_start, train_start + train_seeds))
     held = list(range(holdout_seeds))
@@ -1255,10 +1233,7 @@ def tune_league_method(
         "cases": [c.case for c in cells],
         "dt": float(cells[0].raw["simulation"]["dt"]) if cells else None,
         "step_check": step_check,
-        "fields": [
-            {"path": f.path, "low": f.low, "high": f.high, "log": f.log, "rebuild": f.rebuild}
-            for f in fields
-        ],
+        "fields": [dataclasses.asdict(f) for f in fields],  # path, low, high, log, rebuild
         "paper_gains": {f.path: float(v) for f, v in zip(fields, paper, strict=True)},
         "tuned_gains": {f.path: float(v) for f, v in zip(fields, tuned, strict=True)},
         "given_gains": given,
@@ -1314,8 +1289,6 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
     >>> p.name, json.loads(p.read_text())["x"]
     ('m--limited.json', None)
     """
-    from formation_ftc.atomic import atomic_write
-
     out = Path(out_dir)
     path = out / f"{result['method']}--{result['level']}.json"
     try:

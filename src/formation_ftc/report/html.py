@@ -48,11 +48,7 @@ TRAJECTORY_FILE = "trajectory3d.json"
 #: Points kept per spacecraft in the interactive view (evenly decimated, last point kept).
 MAX_POINTS_3D = 2000
 
-_VERDICT_CLASS = {
-    "match": "verdict-match",
-    "differs": "verdict-differs",
-    "not stated": "verdict-not-stated",
-}
+_VERDICT_CLASS = {v: "verdict-" + v.replace(" ", "-") for v in ("match", "differs", "not stated")}
 #: File name of plotly's JavaScript bundle, one per report tree (:func:`plotly_script`).
 PLOTLY_JS = "plotly.min.js"
 
@@ -276,22 +272,15 @@ def plotly_script(page_dir: Path | str, root: Path | str | None = None) -> str:
 
 
 def _rows(entry: dict) -> list[dict[str, Any]]:
-    out = []
-    for r in entry.get("rows") or []:
-        verdict: Any = r.get("verdict")  # a JSON value
-        out.append(
-            {
-                "class": _VERDICT_CLASS.get(verdict, "verdict-not-stated"),
-                "quantity": r.get("quantity"),
-                "paper": r.get("published") or "not printed",
-                "reference": r.get("reference") or "",
-                "ours": r.get("ours"),
-                "criterion": r.get("criterion"),
-                "verdict": verdict,
-                "note": r.get("note"),
-            }
-        )
-    return out
+    return [
+        {
+            **{k: r.get(k) for k in ("quantity", "ours", "criterion", "verdict", "note")},
+            "class": _VERDICT_CLASS.get(r.get("verdict"), "verdict-not-stated"),  # type: ignore[arg-type]  # a JSON value
+            "paper": r.get("published") or "not printed",
+            "reference": r.get("reference") or "",
+        }
+        for r in entry.get("rows") or []
+    ]
 
 
 def _checks(entry: dict) -> list[dict[str, Any]]:
@@ -321,14 +310,8 @@ def _figures(entry: dict, paper_dir: Path) -> list[dict[str, Any]]:
     out = []
     for f in entry.get("figures") or []:
         path = paper_dir / str(f.get("path", ""))
-        out.append(
-            {
-                "number": f.get("number"),
-                "caption": f.get("caption"),
-                "path": f.get("path"),
-                "src": _data_uri(path) if path.is_file() else None,
-            }
-        )
+        src = _data_uri(path) if path.is_file() else None
+        out.append({**{k: f.get(k) for k in ("number", "caption", "path")}, "src": src})
     return out
 
 
@@ -373,11 +356,7 @@ def _section(entry: dict, out_dir: Path, include_3d: bool) -> dict[str, Any]:
         "description": _paragraphs(entry.get("description", "")),
         "error": entry.get("error"),
         "warnings": entry.get("warnings") or [],
-        "verdicts": {
-            "match": v.get("match", 0),
-            "differs": v.get("differs", 0),
-            "not_stated": v.get("not stated", 0),
-        },
+        "verdicts": {k.replace(" ", "_"): v.get(k, 0) for k in _VERDICT_CLASS},
         "conditions": [c.get(k, 0) for k in ("hold", "fail", "unproven", "not evaluated")],
         "rows": _rows(entry),
         "figures": _figures(entry, out_dir / paper),

@@ -88,7 +88,6 @@ class Profiler:
     compile_spans: list[tuple[float, float]] = field(default_factory=list)
     start: float = 0.0
     end: float = 0.0
-    added: dict[str, float] = field(default_factory=dict)
     _stack: list[list] = field(default_factory=list)
     _previous: Profiler | None = None
 
@@ -121,13 +120,9 @@ class Profiler:
         if self._stack:
             self._stack[-1][1] = now  # resume the enclosing phase
 
-    def add(self, name: str, seconds: float) -> None:
-        """Add ``seconds`` [s] measured outside the profiled block (e.g. writing the report) to ``name``."""
-        self.added[name] = self.added.get(name, 0.0) + float(seconds)
-
     def breakdown(self) -> dict[str, float]:
-        """``{phase: seconds}`` for :data:`PHASES` plus ``"total"`` (the profiled wall time plus added
-        segments); compile is the merged JAX compile spans inside the profiled interval."""
+        """``{phase: seconds}`` for :data:`PHASES` plus ``"total"`` (the profiled wall time); compile is
+        the merged JAX compile spans inside the profiled interval."""
         end = self.end or time.time()
         merged = _merge(
             [
@@ -146,9 +141,7 @@ class Profiler:
             inside += net
         wall = end - self.start
         out["post"] += max(0.0, wall - compile_s - inside)
-        for name, seconds in self.added.items():
-            out[name] = out.get(name, 0.0) + seconds
-        out["total"] = wall + sum(self.added.values())
+        out["total"] = wall
         return {k: round(v, DIGITS) for k, v in out.items()}
 
 

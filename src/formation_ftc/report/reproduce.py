@@ -109,10 +109,8 @@ def to_jsonable(obj: Any) -> Any:
             return to_jsonable({"real": arr.real.tolist(), "imag": arr.imag.tolist()})
         return to_jsonable(arr.astype(str).tolist())
     if hasattr(obj, "item"):  # other scalar types exposing .item()
-        try:
+        with contextlib.suppress(Exception):
             return to_jsonable(obj.item())
-        except Exception:
-            pass
     return str(obj)
 
 
@@ -255,19 +253,13 @@ class _Bar:
 # ------------------------------------------------------------------------------------------ entries
 def _counts(rows: list[dict], checks: list[dict]) -> tuple[dict[str, int], dict[str, int]]:
     verdicts = {v: sum(1 for r in rows if r.get("verdict") == v) for v in VERDICTS}
+    open_ = [c for c in checks if c.get("holds") is None]  # neither shown to hold nor to fail
+    unproven = sum(1 for c in open_ if c.get("basis") in ("sampled", "heuristic"))
     checks_summary = {
         "hold": sum(1 for c in checks if c.get("holds") is True),
         "fail": sum(1 for c in checks if c.get("holds") is False),
-        "unproven": sum(
-            1
-            for c in checks
-            if c.get("holds") is None and c.get("basis") in ("sampled", "heuristic")
-        ),
-        "not evaluated": sum(
-            1
-            for c in checks
-            if c.get("holds") is None and c.get("basis") not in ("sampled", "heuristic")
-        ),
+        "unproven": unproven,
+        "not evaluated": len(open_) - unproven,
         "required_failed": sum(
             1 for c in checks if c.get("holds") is False and c.get("required", True)
         ),
@@ -331,8 +323,13 @@ def paper_entry(
 def _paper_summary(entry: dict, report: PaperReport | None) -> dict[str, Any]:
     if entry["status"] == "ok" and report is not None:
         return dict(report.summary)
-    last = (entry["error"] or "").strip().splitlines()
-    return {"status": "failed", "error": last[-1] if last else "failed"}
+    return {"status": "failed", "error": _last_line(entry["error"]) or "failed"}
+
+
+def _last_line(text: str | None) -> str | None:
+    """The last line of an error text (a traceback's exception line), None when it has none."""
+    lines = (text or "").strip().splitlines()
+    return lines[-1] if lines else None
 
 
 def _run_one(
@@ -424,7 +421,6 @@ def reproduce(
     out = Path(out)
     previous = prepare_output(out, force)
 
-    summaries: dict[str, dict[str, Any]] = {}
     breakdowns: dict[str, dict[str, float]] = {}
     # injected reproductions (tests) run in this process unless workers are asked for explicitly
     n_workers = (
@@ -435,7 +431,7 @@ def reproduce(
         if previous and paper_dir.is_dir():
             shutil.rmtree(paper_dir)  # stale figures of an earlier report
         paper_dir.mkdir(parents=True, exist_ok=True)
-    done: dict[str, dict[str, Any]] = {}
+    done: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}  # paper -> (entry, summary)
 
     def finished(
         paper: str,
@@ -444,8 +440,7 @@ def reproduce(
         breakdown: dict[str, float] | None,
     ) -> None:
         t_report = time.perf_counter()
-        summaries[paper] = summary
-        done[paper] = entry
+        done[paper] = entry, summary
         _write_json(out / paper / "report.json", entry)
         _write_json(out / paper / "summary.json", {**summary, "paper": paper})
         if breakdown is not None:
@@ -479,8 +474,8 @@ def reproduce(
                     prof.breakdown() if prof is not None else None,
                 )
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
-    entries = [done[p] for p in selected]
-    summaries = {p: summaries[p] for p in selected}
+    entries = [done[p][0] for p in selected]
+    summaries = {p: done[p][1] for p in selected}
     papers_s = time.perf_counter() - t_start  # from the start of the wait to the last paper's end
 
     metadata: dict[str, Any] = dict(provenance())
@@ -526,28 +521,20 @@ def reproduce(
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
-    extra = (
-        {"profile": {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}}
-        if profile
-        else {}
-    )
-    return {
+    result = {
         "exit_code": 1 if failed else 0,
         "papers": {
-            e["paper"]: {
-                "status": e["status"],
-                "wall_time_s": e["wall_time_s"],
-                "error": e["error"],
-            }
-            for e in entries
+            e["paper"]: {k: e[k] for k in ("status", "wall_time_s", "error")} for e in entries
         },
         "reports": {e["paper"]: e for e in entries},
         "summary": to_jsonable(summary_doc),
         "index": str(index),
         "out": str(out),
         "wall_time_s": total,
-        **extra,
     }
+    if profile:
+        result["profile"] = {**breakdowns, "index.html": {"report": round(index_s, DIGITS)}}
+    return result
 
 
 #: Relative cost of each built-in reproduction: wall seconds of a cold plus a warm compilation-cache
@@ -649,87 +636,67 @@ def _reproduce_in_workers(
     import_failures: Mapping[str, str],
 ) -> None:
     """Run the papers in a spawn process pool, the longest first; progress messages come back
-    through a queue; a worker that dies takes only its paper down (recorded as failed)."""
+    through a queue, read between waits for the papers; a worker that dies takes only its paper down
+    (recorded as failed)."""
     import multiprocessing
     import queue as queue_module
-    import threading
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     ctx = multiprocessing.get_context("spawn")
     manager = ctx.Manager()
     messages = manager.Queue()
-    state: dict[str, tuple[float, str]] = {}
-    n_done = 0
-    lock = threading.Lock()
-    stop = threading.Event()
-
-    def show() -> None:
-        with lock:
-            running = {p: v for p, v in state.items() if v[0] < 1.0}
-            text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
-            bar.update(
-                n_done + sum(f for f, _ in running.values()),
-                f"{n_done}/{len(selected)} done  {text}",
-            )
-
-    def drain() -> None:
-        while not stop.is_set():
-            try:
-                paper, fraction, message = messages.get(timeout=0.2)
-            except (queue_module.Empty, EOFError, OSError):
-                continue
-            with lock:
-                if paper in state and state[paper][0] < 1.0:
-                    f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
-                    state[paper] = (f, message)
-            show()
-
-    reader = threading.Thread(target=drain, name="reproduce-progress", daemon=True)
-    reader.start()
     order = sorted(selected, key=lambda p: -PAPER_COST.get(p, 100.0))
+    running = dict.fromkeys(order, (0.0, ""))  # paper -> (fraction done, message), while it runs
     t0 = {p: time.perf_counter() for p in selected}
     try:
         with (
             _threads_for_workers(n_workers),
             ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool,
         ):
-            futures = {}
-            for paper in order:
-                futures[
-                    pool.submit(
-                        _paper_in_worker,
-                        _shippable(found.get(paper)),
-                        paper,
-                        str(out / paper),
-                        profile,
-                        import_failures.get(paper),
-                        messages,
-                    )
-                ] = paper
-                with lock:
-                    state[paper] = (0.0, "")
-            for fut in as_completed(futures):
-                paper = futures[fut]
-                try:
-                    entry, summary, breakdown = fut.result()
-                except Exception:  # the worker died (killed, out of memory): this paper failed
-                    entry = paper_entry(
-                        None,
-                        paper,
-                        out / paper,
-                        None,
-                        time.perf_counter() - t0[paper],
-                        traceback.format_exc(),
-                    )
-                    summary, breakdown = _paper_summary(entry, None), None
-                finished(paper, entry, summary, breakdown)
-                with lock:
-                    state[paper] = (1.0, "")
-                    n_done += 1
-                show()
+            futures = {
+                pool.submit(
+                    _paper_in_worker,
+                    _shippable(found.get(paper)),
+                    paper,
+                    str(out / paper),
+                    profile,
+                    import_failures.get(paper),
+                    messages,
+                ): paper
+                for paper in order
+            }
+            pending = set(futures)
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                with contextlib.suppress(queue_module.Empty, EOFError, OSError):
+                    while True:
+                        paper, fraction, message = messages.get_nowait()
+                        if paper in running:
+                            f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
+                            running[paper] = (f, message)
+                for fut in done:
+                    paper = futures[fut]
+                    try:
+                        entry, summary, breakdown = fut.result()
+                    except Exception:  # the worker died (killed, out of memory): this paper failed
+                        entry = paper_entry(
+                            None,
+                            paper,
+                            out / paper,
+                            None,
+                            time.perf_counter() - t0[paper],
+                            traceback.format_exc(),
+                        )
+                        summary, breakdown = _paper_summary(entry, None), None
+                    finished(paper, entry, summary, breakdown)
+                    del running[paper]
+                n_done = len(selected) - len(running)
+                text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
+                bar.update(
+                    n_done + sum(f for f, _ in running.values()),
+                    f"{n_done}/{len(selected)} done  {text}",
+                )
     finally:
-        stop.set()
-        reader.join(timeout=2.0)
         manager.shutdown()
 
 
@@ -770,37 +737,22 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
     from rich.table import Table
 
     console = console or Console()
-    table = Table(title="formation-ftc reproduce: wall time per paper")
-    columns: list[tuple[str, dict[str, Any]]] = [
-        ("paper", {}),
-        ("status", {}),
-        (escape("wall time [s]"), {"justify": "right"}),
-        ("match", {"justify": "right"}),
-        ("differs", {"justify": "right"}),
-        ("not stated", {"justify": "right"}),
-        ("conditions hold/fail", {"justify": "right"}),
-    ]
-    for col, kw in columns:
-        table.add_column(col, **kw)
+    table = Table("paper", "status", title="formation-ftc reproduce: wall time per paper")
+    for col in (escape("wall time [s]"), *VERDICTS, "conditions hold/fail"):
+        table.add_column(col, justify="right")
     for e in entries:
         status = "[green]ok[/]" if e["status"] == "ok" else "[red]FAILED[/]"
         v, c = e["verdicts"], e["checks_summary"]
+        counts = [str(v[k]) for k in VERDICTS]
         table.add_row(
-            e["paper"],
-            status,
-            f"{e['wall_time_s']:.1f}",
-            str(v["match"]),
-            str(v["differs"]),
-            str(v["not stated"]),
-            f"{c['hold']}/{c['fail']}",
+            e["paper"], status, f"{e['wall_time_s']:.1f}", *counts, f"{c['hold']}/{c['fail']}"
         )
     table.add_row("total", "", f"{total:.1f}", "", "", "", "", end_section=True)
     console.print(table)
     for e in entries:
         if e["status"] != "ok":
-            last = (e["error"] or "").strip().splitlines()
             console.print(
-                f"[red]{e['paper']} failed:[/] {last[-1] if last else ''} "
+                f"[red]{e['paper']} failed:[/] {_last_line(e['error']) or ''} "
                 f"(traceback in {e['paper']}/report.json)",
                 highlight=False,
             )
@@ -939,11 +891,10 @@ def _paper_json(entry: Mapping[str, Any], out: Path) -> dict[str, Any]:
     from formation_ftc.registry import Condition
 
     paper_dir = out / entry["paper"]
-    last = (entry["error"] or "").strip().splitlines()
     return {
         "title": entry["title"],
         "status": entry["status"],
-        "error": last[-1] if last else None,
+        "error": _last_line(entry["error"]),
         "verdicts": entry["verdicts"],
         "rows": [_row_json(r) for r in entry["rows"]],
         "conditions_summary": entry["checks_summary"],

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 
 __all__ = [
@@ -313,7 +314,6 @@ def recorded_scenario(ds) -> tuple[Any, str]:
     import tomllib
 
     from formation_ftc.config import loader
-    from formation_ftc.errors import InputError
 
     text = ds.attrs.get("scenario_toml")
     if not isinstance(text, str) or not text.strip():
@@ -329,8 +329,6 @@ def _open_result(path: Path):
     """``path`` (a ``result.nc``) read into memory; :class:`~formation_ftc.errors.InputError` when it is
     not a readable result file."""
     import xarray as xr
-
-    from formation_ftc.errors import InputError
 
     try:
         with xr.open_dataset(path, engine="h5netcdf") as ds:
