@@ -100,27 +100,6 @@ def test_body_rate_bound_is_part_of_the_admissible_set_and_overridable():
     )
 
 
-def test_euler_pitch_bound_names_the_singular_angle():
-    """Mehrabian's plant holds 3-2-1 Euler angles (singular at pitch +-pi/2): its initial pitches lie in
-    [0, 60] deg, so a 0.3 rad bound is left at once and the diagnostic names the pitch."""
-    # the overrides of tests/papers/mehrabian/test_mehrabian_runs.py's short case (the bound is a leaf:
-    # the two tests share one compiled program)
-    short_case = {
-        "actuator.faults.0.start": 10.0,
-        "actuator.faults.0.end": 40.0,
-        "simulation.horizon": 60.0,
-        "simulation.record_every": 1,
-        "evaluations.0.fault_window": [10.0, 40.0],
-        "evaluations.0.assessment_window": [15.0, 40.0],
-    }
-    scn = ftc.load_scenario("mehrabian-identification", {**short_case, "simulation.max_pitch": 0.3})
-    with pytest.raises(ftc.SimulationDiverged) as err:
-        ftc.simulate(scn)
-    assert err.value.info.variable.startswith("plant.pitch")
-    with pytest.raises(ValueError, match="max_pitch"):
-        ftc.load_scenario("mehrabian-identification", {"simulation.max_pitch": 1.6})
-
-
 def test_metrics_of_a_diverged_run_stop_at_the_failing_block():
     """A run that leaves its admissible set keeps the metrics accumulated up to the start of the failing
     record block (the state it returns) and takes no horizon sample: with a record every step, the

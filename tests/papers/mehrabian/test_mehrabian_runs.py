@@ -62,20 +62,21 @@ def test_energy_balance_of_the_exact_model_loop():
     assert np.max(np.abs(change - work)) < 1e-4 * np.max(np.abs(change))
 
 
+#: case 3 with the fault moved to [10, 40] s, 60 s, every step recorded; metric windows inside
+SHORT_CASE_B = {
+    "actuator.faults.0.start": 10.0,
+    "actuator.faults.0.end": 40.0,
+    "simulation.horizon": 60.0,
+    "simulation.record_every": 1,
+    "evaluations.0.fault_window": [10.0, 40.0],
+    "evaluations.0.assessment_window": [15.0, 40.0],
+}
+
+
 @pytest.fixture(scope="module")
 def short_case_b():
-    """Case 3 with the fault moved to [10, 40] s, 60 s, every step recorded; metric windows inside."""
-    s = ftc.load_scenario(
-        "mehrabian-identification",
-        {
-            "actuator.faults.0.start": 10.0,
-            "actuator.faults.0.end": 40.0,
-            "simulation.horizon": 60.0,
-            "simulation.record_every": 1,
-            "evaluations.0.fault_window": [10.0, 40.0],
-            "evaluations.0.assessment_window": [15.0, 40.0],
-        },
-    )
+    """Case 3 on :data:`SHORT_CASE_B`."""
+    s = ftc.load_scenario("mehrabian-identification", SHORT_CASE_B)
     ds, metrics = simulate_with_metrics(s)
     return s, ds, metrics
 
@@ -241,3 +242,17 @@ def test_wrong_spacecraft_isolation_reconfigures_the_healthy_one():
     np.testing.assert_allclose(
         ds.fdi_estimate.values[-1, 1, 2], 0.05 * np.sin(0.02 * 15.0) + 0.5, atol=1e-12
     )
+
+
+def test_euler_pitch_bound_names_the_singular_angle():
+    """Mehrabian's plant holds 3-2-1 Euler angles (singular at pitch +-pi/2): its initial pitches lie in
+    [0, 60] deg, so a 0.3 rad bound is left at once and the diagnostic names the pitch."""
+    # on the short case's program (the bound is a leaf)
+    scn = ftc.load_scenario(
+        "mehrabian-identification", {**SHORT_CASE_B, "simulation.max_pitch": 0.3}
+    )
+    with pytest.raises(ftc.SimulationDiverged) as err:
+        ftc.simulate(scn)
+    assert err.value.info.variable.startswith("plant.pitch")
+    with pytest.raises(ValueError, match="max_pitch"):
+        ftc.load_scenario("mehrabian-identification", {"simulation.max_pitch": 1.6})
