@@ -297,7 +297,7 @@ EL_LAW = {
                     "initial_quaternion": [[0, 0, 0, 1]] * 3,
                 }
             },
-            ("plant", "inertia[1]"),
+            ("plant.inertia", "[1] = "),
         ),
     ],
 )

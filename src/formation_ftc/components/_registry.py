@@ -424,7 +424,7 @@ def validated_section(entry: ComponentType, raw: dict[str, Any], where: str) -> 
     ...     "max_velocity_error": 0.01, "max_acceleration": -1.0}, "controller")
     Traceback (most recent call last):
     ...
-    ValueError: controller.max_acceleration: every value must be finite and > 0
+    ValueError: controller.max_acceleration: every value must be finite and > 0 (got -1.0)
     """
     try:
         return entry.section.model_validate({k: v for k, v in raw.items() if k != "type"})

@@ -76,11 +76,18 @@ def positive_values(what: str = "value", unit: str = "", zero: bool = False) -> 
     bound = ">= 0" if zero else "> 0"
 
     def check(value: Any) -> Any:
-        values = value if isinstance(value, list | tuple) else [value]
-        if value is not None and any(
-            not (math.isfinite(v) and (v > 0 or zero and v == 0)) for v in values
-        ):
-            raise ValueError(f"every {what} must be finite and {bound}{unit}")
+        if value is None:
+            return value
+        listed = isinstance(value, list | tuple)
+        bad = [
+            f"[{i}] = {v!r}" if listed else repr(v)
+            for i, v in enumerate(value if listed else [value])
+            if not (math.isfinite(v) and (v > 0 or zero and v == 0))
+        ]
+        if bad:
+            raise ValueError(
+                f"every {what} must be finite and {bound}{unit} (got {', '.join(bad)})"
+            )
         return value
 
     return AfterValidator(check)

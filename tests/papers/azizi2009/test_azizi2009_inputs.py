@@ -12,8 +12,14 @@ from formation_ftc.config.loader import ScenarioError
 @pytest.mark.parametrize(
     "override,match",
     [
-        ({"controller.alpha": [1.0, 0.0, 1.0, 1.0]}, "controller: alpha .* > 0"),
-        ({"controller.alpha": [1.0, -3.0, 1.0, 1.0]}, "controller: alpha .* > 0"),
+        (
+            {"controller.alpha": [1.0, 0.0, 1.0, 1.0]},
+            r"controller.alpha: .* > 0 \(got \[1\] = 0.0\)",
+        ),
+        (
+            {"controller.alpha": [1.0, -3.0, 1.0, 1.0]},
+            r"controller.alpha: .* > 0 \(got \[1\] = -3.0\)",
+        ),
         ({"controller.b_hat": 0.0}, "controller.b_hat"),
         ({"controller.violation_probability": 1.0}, "controller.violation_probability"),
         ({"controller.violation_probability": -0.1}, "controller.violation_probability"),
