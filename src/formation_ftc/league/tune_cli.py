@@ -12,51 +12,33 @@ from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, T
 
 
 def _cmd_tune(args) -> int:
+    import inspect
     import time
 
+    from formation_ftc.league import tuning
     from formation_ftc.league.cli import _log, _quiet
-    from formation_ftc.league.tuning import (
-        TuneError,
-        check_tune_out,
-        journal_path,
-        tune_league_method,
-        write_tuning,
-    )
     from formation_ftc.limits import Budgets
 
     t0 = time.perf_counter()
     if not str(args.out).strip():
-        raise TuneError("--out: empty path; give a directory, e.g. --out out/league/tuned")
+        raise tuning.TuneError("--out: empty path; give a directory, e.g. --out out/league/tuned")
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
     # before anything is computed: where the result goes (and its journal)
-    check_tune_out(args.out, args.method, args.level, force=args.force)
-    cases = [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None
-    step_checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
-    journal = journal_path(args.out, args.method, args.level)
-    gains = _gains(args.gains) if args.gains is not None else None
-    result = tune_league_method(
-        args.league,
-        args.method,
-        args.level,
-        cases=cases,
-        train_seeds=args.train_seeds,
-        holdout_seeds=args.holdout_seeds,
-        fresh_seeds=args.fresh_seeds,
-        train_start=args.train_start,
-        gains=gains,
-        optimiser=args.optimiser,
-        max_evaluations=args.max_evaluations,
-        margin=args.margin,
-        penalty=args.penalty,
-        violation_cap=args.violation_cap,
-        step_checks=step_checks,
-        log=_log(args),
-        budgets=budgets,
-        journal=journal,
-        force=args.force,
-        progress=not _quiet(args),
-    )
-    path = write_tuning(result, args.out)
+    tuning.check_tune_out(args.out, args.method, args.level, force=args.force)
+    journal = tuning.journal_path(args.out, args.method, args.level)
+    options = {
+        **vars(args),  # those named as tune_league_method's arguments pass as they are
+        "cases": [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None,
+        "step_checks": _league_step_checks(args.step_check_from) if args.step_check_from else None,
+        "gains": _gains(args.gains) if args.gains is not None else None,
+        "log": _log(args),
+        "budgets": budgets,
+        "journal": journal,
+        "progress": not _quiet(args),
+    }
+    parameters = inspect.signature(tuning.tune_league_method).parameters
+    result = tuning.tune_league_method(**{k: v for k, v in options.items() if k in parameters})
+    path = tuning.write_tuning(result, args.out)
     journal.unlink(missing_ok=True)  # the result holds every evaluation (optimiser.history)
     wall = time.perf_counter() - t0
     if getattr(args, "json", False):
@@ -67,19 +49,14 @@ def _cmd_tune(args) -> int:
         )
         return 0
     obj = result["objective"]["metric"]
-    blocks = (
-        ("training", result["train"]),
-        ("held-out", result["holdout"]),
-        ("fresh", result["fresh"]),
-    )
     print(
         f"{result['method']} @ {result['level']}: {result['optimiser']['name']}, "
         f"{result['optimiser']['evaluations']} evaluations, {wall:.1f} s"
     )
     for path_, v in result["tuned_gains"].items():
         print(f"  {path_}: {result['paper_gains'][path_]:.6g} -> {v:.6g}")
-    for name, s in blocks:
-        if s is None:
+    for name, key in (("training", "train"), ("held-out", "holdout"), ("fresh", "fresh")):
+        if (s := result[key]) is None:
             continue
         print(
             f"  {name}: pass rate {s['paper']['pass_rate']:.2f} -> {s['tuned']['pass_rate']:.2f}, "
