@@ -16,7 +16,7 @@ import json
 import math
 import os
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -81,9 +81,8 @@ class TuneField:
             raise TuneError(f"tune field {self.path!r}: log scale needs low > 0, got {lo:g}")
 
     def _ends(self) -> tuple[float, float]:
-        if self.log:
-            return math.log(self.low), math.log(self.high)
-        return float(self.low), float(self.high)
+        scale = math.log if self.log else float
+        return scale(self.low), scale(self.high)
 
     def to_unit(self, value: float) -> float:
         """The field value mapped to [0, 1]."""
@@ -175,7 +174,7 @@ class GainProblem:
     def _rebuilt(self, raws, theta, in_axes) -> Any:
         """The batch of ``raws`` built with the rebuilt fields at ``theta``, laid out as ``in_axes``."""
         values = {f.path: float(v) for f, v in zip(self.fields, theta, strict=True) if f.rebuild}
-        _, built = _build_runs(raws, values)
+        built = _build_runs(raws, values)
         if built[0].static_key != self._loop.static_key:
             raise TuneError(
                 f"tune fields {sorted(values)} at {values}: the loop's structure changes (another "
@@ -187,16 +186,14 @@ class GainProblem:
         return batch
 
 
-def _build_runs(
-    raws: Sequence[Mapping[str, Any]], values: Mapping[str, float] | None = None
-) -> tuple[list[Any], list[Any]]:
-    """The scenarios of ``raws`` (with the dotted ``values`` set) and their loops, which must
-    share one structure; a run that does not build is a TuneError."""
+def _build_runs(raws: Sequence[Mapping[str, Any]], values: Mapping[str, float] = {}) -> list[Any]:
+    """The loops of ``raws`` (with the dotted ``values`` set), which must share one structure; a run
+    that does not build is a TuneError."""
     from formation_ftc import api
     from formation_ftc.config.loader import apply_overrides
 
     try:
-        scenarios = [api.load_scenario(apply_overrides(dict(r), dict(values or {}))) for r in raws]
+        scenarios = [api.load_scenario(apply_overrides(dict(r), dict(values))) for r in raws]
         loops = [api.build_loop(s) for s in scenarios]
     except InputError:
         raise
@@ -204,7 +201,7 @@ def _build_runs(
         raise TuneError(f"{_UNBUILT}: {exc}") from None
     if any(c.static_key != loops[0].static_key for c in loops[1:]):
         raise TuneError("tuning: the runs do not share one structure (one compiled program)")
-    return scenarios, loops
+    return loops
 
 
 def _stack_like(params: Sequence[Any], in_axes: Any, size: int) -> tuple[Any, Any]:
@@ -277,7 +274,7 @@ def build_problem(
         initial.append(float(v0))
     if like is not None and [f.rebuild for f in fields] != [f.rebuild for f in like.fields]:
         raise TuneError("tuning: the held-out fields are not the training ones")
-    scenarios, loops = _build_runs(raws)
+    loops = _build_runs(raws)
     template = loops[0]
     key = template.static_key
     if not getattr(template, "metrics", ()):
@@ -298,21 +295,18 @@ def build_problem(
         _check_bindings(raws[0], fields, initial, template, key, bindings)
         size = len(raws)
         chunks = [(*stack_params(loops), size)]
-        raw_chunks = [list(raws)]
     else:
         if like._loop.static_key != key:
             raise TuneError("tuning: these runs do not have the structure of the training runs")
         size, in_axes = like.size, like._chunks[0][1]
         parts = [loops[s : s + size] for s in range(0, len(loops), size)]
         chunks = [(*_stack_like(p, in_axes, size), len(p)) for p in parts]
-        raw_chunks = [list(raws[s : s + size]) for s in range(0, len(raws), size)]
+    chunked_raws = [list(raws[s : s + size]) for s in range(0, len(raws), size)]
     treedef = jax.tree_util.tree_structure(template)
-    for f in fields:
-        if f.rebuild:
-            continue
-        if any(treedef.flatten_up_to(ax)[bindings[f.path].leaf] is not None for _, ax, _ in chunks):  # type: ignore[attr-defined]
+    for path, b in bindings.items():
+        if any(treedef.flatten_up_to(ax)[b.leaf] is not None for _, ax, _ in chunks):  # type: ignore[attr-defined]
             raise TuneError(
-                f"tune field {f.path!r}: its leaf differs between the runs (another field or a "
+                f"tune field {path!r}: its leaf differs between the runs (another field or a "
                 "sampled value shares it)"
             )
     return GainProblem(
@@ -326,7 +320,7 @@ def build_problem(
             None if f.rebuild else (bindings[f.path].leaf, np.asarray(bindings[f.path].index))
             for f in fields
         ],
-        _raws=raw_chunks if any(f.rebuild for f in fields) else None,
+        _raws=chunked_raws if any(f.rebuild for f in fields) else None,
     )
 
 
@@ -522,41 +516,34 @@ def minimise(
             raise TuneError("optimiser 'gradient': the training runs must be one batch")
 
         def value(z, batch):
-            v, terms = J(
-                *problem.outputs(
-                    jnp.stack([f.from_unit(z[i]) for i, f in enumerate(fields)]), batch
-                )
-            )
+            theta = jnp.stack([f.from_unit(z[i]) for i, f in enumerate(fields)])
+            v, terms = J(*problem.outputs(theta, batch))
             return v, (v, terms)
 
         vg = jax.jit(jax.jacfwd(value, has_aux=True))
 
+        def gradient(z) -> dict[str, Any]:
+            grad, (v, terms) = vg(jnp.asarray(z), problem.batch)
+            return {
+                "value": float(v),
+                "terms": {k: float(t) for k, t in terms.items()},
+                "grad": np.asarray(grad, dtype=np.float64).tolist(),
+            }
+
         def fun(z):
             ts = time.perf_counter()
-            key = TuneJournal.key("gradient", z)
-            hit = journal.get(key) if journal is not None else None
-            if hit is None:
-                grad, (v, terms) = vg(jnp.asarray(z), problem.batch)
-                hit = {
-                    "value": float(v),
-                    "terms": {k: float(t) for k, t in terms.items()},
-                    "grad": np.asarray(grad, dtype=np.float64).tolist(),
-                }
-                if journal is not None:
-                    journal.put(key, hit)
+            hit = _journalled(journal, TuneJournal.key("gradient", z), lambda: gradient(z))
             g = np.nan_to_num(
                 np.asarray(hit["grad"], dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0
             )
             return record(z, hit["value"], hit["terms"], ts), g
 
+        method = "L-BFGS-B"
         options: dict[str, Any] = {
             "maxfun": max_evaluations,
             "maxiter": max_evaluations,
             "gtol": tolerance,
         }
-        res = optimize.minimize(
-            fun, z0, jac=True, method="L-BFGS-B", bounds=bounds, options=options
-        )
     else:
 
         def fun(z):
@@ -566,18 +553,14 @@ def minimise(
             ts = time.perf_counter()
             return record(z, *J(*evaluate(problem, gains(z), journal)), ts)
 
-        if optimiser == "nelder-mead":
-            step = np.where(z0 + _NM_STEP <= 1.0, _NM_STEP, -_NM_STEP)  # inward at the top end
-            tols: dict[str, Any] = {
-                "initial_simplex": np.vstack([z0, z0 + np.diag(step)]),
-                "xatol": tolerance,
-                "fatol": tolerance,
-            }
-        else:
-            tols = {"xtol": tolerance, "ftol": tolerance}
         method = "Nelder-Mead" if optimiser == "nelder-mead" else "Powell"
-        options = {"maxfev": max_evaluations, **tols}
-        res = optimize.minimize(fun, z0, method=method, bounds=bounds, options=options)
+        options = {"maxfev": max_evaluations, "xtol": tolerance, "ftol": tolerance}
+        if optimiser == "nelder-mead":  # the same tolerances under scipy's names, and the simplex
+            step = np.where(z0 + _NM_STEP <= 1.0, _NM_STEP, -_NM_STEP)  # inward at the top end
+            options = {"maxfev": max_evaluations, "xatol": tolerance, "fatol": tolerance}
+            options["initial_simplex"] = np.vstack([z0, z0 + np.diag(step)])
+    jac = optimiser == "gradient"  # L-BFGS-B: fun returns J and its gradient
+    res = optimize.minimize(fun, z0, jac=jac, method=method, bounds=bounds, options=options)
     seconds = time.perf_counter() - t0
     if z0.tobytes() not in seen:
         fun(z0)
@@ -685,7 +668,8 @@ class TuneJournal:
         self.resumed = len(self.entries)
         header = {"kind": JOURNAL_KIND, "fingerprint": self.fingerprint, "problem": self.problem}
         lines = [json.dumps(header), *(json.dumps(e) for e in self.entries.values())]
-        self._io(lambda: atomic_write(self.path, "\n".join(lines) + "\n"))
+        with self._io():
+            atomic_write(self.path, "\n".join(lines) + "\n")
 
     @staticmethod
     def key(name: str, values: Sequence[float] | np.ndarray) -> str:
@@ -700,25 +684,18 @@ class TuneJournal:
     def put(self, key: str, record: Mapping[str, Any]) -> None:
         """Record a completed evaluation (appended and synced before this returns)."""
         entry = {"key": key, **record}
-        line = json.dumps(entry) + "\n"
-
-        def append() -> None:
-            with open(self.path, "a", encoding="utf-8") as f:
-                f.write(line)
-                f.flush()
-                os.fsync(f.fileno())
-
-        self._io(append)
+        with self._io(), open(self.path, "a", encoding="utf-8") as f:
+            f.write(json.dumps(entry) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
         self.entries[key] = entry
 
-    def remove(self) -> None:
-        """Delete the journal (its result is written)."""
-        self.path.unlink(missing_ok=True)
-
-    def _io(self, fn: Callable[[], object]) -> None:
+    @contextlib.contextmanager
+    def _io(self) -> Iterator[None]:
+        """Writing the journal: its directory made, an OSError a TuneError naming it."""
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            fn()
+            yield
         except OSError as exc:
             raise TuneError(
                 f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there "
@@ -778,26 +755,36 @@ def evaluate(
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """:meth:`GainProblem.evaluate` through ``journal``: an evaluation it holds (the set ``name`` at the
     same gains) is read back, exactly (dtype and shape kept); another one is computed and recorded."""
-    key = TuneJournal.key(name, theta)
-    hit = journal.get(key) if journal is not None else None
-    if hit is not None:
-        metrics = {
-            k: np.asarray(v, dtype=hit["dtypes"][k]).reshape(hit["shapes"][k])
-            for k, v in hit["metrics"].items()
+
+    def compute() -> dict[str, Any]:
+        metrics, bad = problem.evaluate(theta)
+        return {
+            "metrics": {k: np.asarray(v).tolist() for k, v in metrics.items()},
+            "dtypes": {k: np.asarray(v).dtype.str for k, v in metrics.items()},
+            "shapes": {k: list(np.shape(v)) for k, v in metrics.items()},
+            "diverged": np.asarray(bad, dtype=bool).tolist(),
         }
-        return metrics, np.asarray(hit["diverged"], dtype=bool)
-    metrics, bad = problem.evaluate(theta)
-    if journal is not None:
-        journal.put(
-            key,
-            {
-                "metrics": {k: np.asarray(v).tolist() for k, v in metrics.items()},
-                "dtypes": {k: np.asarray(v).dtype.str for k, v in metrics.items()},
-                "shapes": {k: list(np.shape(v)) for k, v in metrics.items()},
-                "diverged": np.asarray(bad, dtype=bool).tolist(),
-            },
-        )
-    return metrics, bad
+
+    # computed or read back, the runs' numbers come from the record (a float's list form is exact)
+    hit = _journalled(journal, TuneJournal.key(name, theta), compute)
+    metrics = {
+        k: np.asarray(v, dtype=hit["dtypes"][k]).reshape(hit["shapes"][k])
+        for k, v in hit["metrics"].items()
+    }
+    return metrics, np.asarray(hit["diverged"], dtype=bool)
+
+
+def _journalled(
+    journal: TuneJournal | None, key: str, compute: Callable[[], dict[str, Any]]
+) -> dict[str, Any]:
+    """The record ``key`` of ``journal``; where it holds none (or there is no journal), the record
+    ``compute()`` returns, journalled."""
+    hit = journal.get(key) if journal is not None else None
+    if hit is None:
+        hit = compute()
+        if journal is not None:
+            journal.put(key, hit)
+    return hit
 
 
 def journal_path(out_dir: str | Path, method: str, level: str) -> Path:
@@ -852,32 +839,26 @@ def check_tune_budgets(
     sps = sum(int(c.n_steps) for c in cells)  # one seed of every cell
     k = 1 + n if optimiser == "gradient" else 1  # forward runs per evaluation
 
-    def per_train_seed(e: int) -> int:
-        # the optimiser's evaluations (scipy may pass its budget by one simplex), then the paper, the
-        # start and the tuned gains
-        return k * (e + n + 1) + 3
-
-    def held(h: int, t: int) -> int:  # paper and tuned gains, in batches padded to the training one
-        return 2 * (h + t - 1)
-
-    def steps(t: int, h: int, e: int) -> int:
-        return sps * (t * per_train_seed(e) + held(h, t))
-
+    # per training seed: the optimiser's evaluations (scipy may pass its budget by one simplex), then
+    # the paper, the start and the tuned gains; held out: the paper and tuned gains, in batches padded
+    # to the training one
+    per_train = k * (E + n + 1) + 3
+    held = 2 * (H + T - 1)
+    total = sps * (T * per_train + held)
     budget = budgets.max_campaign_steps
-    if budget is not None and sps and steps(T, H, E) > budget:
+    if budget is not None and sps and total > budget:
         size = (
-            f"{where} would simulate up to {steps(T, H, E):,} run-steps ({len(cells)} cell(s); "
-            f"{T:,} training seed(s) x {per_train_seed(E):,} evaluations, {H:,} held-out seed(s) "
-            "x 2)"
+            f"{where} would simulate up to {total:,} run-steps ({len(cells)} cell(s); "
+            f"{T:,} training seed(s) x {per_train:,} evaluations, {H:,} held-out seed(s) x 2)"
         )
         limit = (
             f"the budget of {budget:,} run-steps (raise it with --max-campaign-steps / "
             "FORMATION_FTC_MAX_CAMPAIGN_STEPS)"
         )
         room = budget // sps  # seed-runs of every cell
-        e_max = ((room - held(H, T)) // T - 3) // k - n - 1
-        t_max = (room - 2 * H + 2) // (per_train_seed(E) + 2)
-        h_max = (room - per_train_seed(E) * T) // 2 - T + 1
+        e_max = ((room - held) // T - 3) // k - n - 1
+        t_max = (room - 2 * H + 2) // (per_train + 2)
+        h_max = (room - per_train * T) // 2 - T + 1
         # the first option that alone can bring the tuning within the budget
         for opt, value, low, high, others in (
             ("--max-evaluations", E, 2, e_max, f"--train-seeds {T:,} and --holdout-seeds {H:,}"),
@@ -1021,16 +1002,9 @@ def tune_league_method(
     uses (from ``max(league seeds, train_start + train_seeds)``): the result's ``fresh`` block.
     ``gains`` (field path -> value; fields not given keep the paper's): evaluate those gains against
     the paper's on the held-out and fresh replicates, with no training and no optimiser."""
-    import formation_ftc
+    from formation_ftc import __version__
+    from formation_ftc.league import runner
     from formation_ftc.league.definition import LeagueSpec, league_hash, load_league, method_tune
-    from formation_ftc.league.runner import (
-        Counter,
-        _battery,
-        _provenance,
-        _step_checks,
-        plan_cells,
-        run_bytes,
-    )
 
     say = log or (lambda _line: None)
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -1066,10 +1040,23 @@ def tune_league_method(
             f"({', '.join(f.path for f in fields)})"
         )
     budgets = budgets if budgets is not None else Budgets.resolve()
-    planned = plan_cells(spec, [method])
+    planned = runner.plan_cells(spec, [method])
 
     def chosen() -> list[Any]:
         return [c for c in planned[method] if c.level == level and (not cases or c.case in cases)]
+
+    def check_budgets(cells: list[Any]) -> None:
+        check_tune_budgets(
+            cells,
+            n_fields=len(fields),
+            train_seeds=train_seeds,
+            holdout_seeds=holdout_seeds,
+            max_evaluations=max_evaluations,
+            optimiser=optimiser,
+            budgets=budgets,
+            where=f"tune {method} @ {level}",
+            run_bytes=runner.run_bytes(cells[0].raw, TuneError, _UNBUILT) if cells else None,
+        )
 
     applying = [c.case for c in planned[method] if c.level == level]
     unknown = [c for c in cases or () if c not in applying]
@@ -1077,29 +1064,17 @@ def tune_league_method(
         raise TuneError(
             f"--cases: {unknown} not among the cases of {method} ({', '.join(applying)})"
         )
-    options: dict[str, Any] = {
-        "n_fields": len(fields),
-        "train_seeds": train_seeds,
-        "holdout_seeds": holdout_seeds,
-        "max_evaluations": max_evaluations,
-        "optimiser": optimiser,
-        "budgets": budgets,
-        "where": f"tune {method} @ {level}",
-    }
-    # at the method's own step, before anything runs (the step check included)
     first = chosen()
-    check_tune_budgets(
-        first, **options, run_bytes=run_bytes(first[0].raw, TuneError, _UNBUILT) if first else None
-    )
+    check_budgets(first)  # at the method's own step, before anything runs (the step check included)
     book = None
     if journal is not None:
         problem_key = {
             "league": spec.league.name,
             "league_hash": league_hash(spec),
-            "battery_sha256": _battery(spec).sha256,
+            "battery_sha256": runner._battery(spec).sha256,
             "method": method,
             "level": level,
-            "cases": [c.case for c in chosen()],
+            "cases": [c.case for c in first],
             "train_seeds": train_seeds,
             "holdout_seeds": holdout_seeds,
             "train_start": train_start,
@@ -1111,37 +1086,37 @@ def tune_league_method(
             "penalty": penalty,
             "violation_cap": repr(float(violation_cap)),
             "step_check_from": jsonable((step_checks or {}).get(method)),
-            "version": formation_ftc.__version__,
+            "version": __version__,
         }
         book = TuneJournal(journal, problem_key, force=force)
         if book.resumed:
             say(f"{method} @ {level}: resuming, {book.resumed} completed step(s) in {book.path}")
     # the step the league flies this method at: its step check (run here, journalled, or reused)
     done = dict(step_checks or {})
-    if book is not None and method not in done and book.get("step_check") is not None:
-        done[method] = book.get("step_check")["record"]  # type: ignore[index]
-    steps0 = [c.n_steps for c in first]
-    step_check = _step_checks(spec, planned, {"step_check": done}, log, progress).get(method)
+    journalled = book.get("step_check") if book is not None else None
+    if journalled is not None and method not in done:
+        done[method] = journalled["record"]
+    step_check = runner._step_checks(spec, planned, {"step_check": done}, log, progress).get(method)
     if step_check is not None:
-        if book is not None and book.get("step_check") is None:
+        if book is not None and journalled is None:
             book.put("step_check", {"record": step_check})
         say(f"{method}: flying at dt = {step_check['chosen_dt']:g} s (the league's step check)")
     cells = chosen()
-    if [c.n_steps for c in cells] != steps0:  # again, at the chosen step
-        check_tune_budgets(cells, **options, run_bytes=run_bytes(cells[0].raw, TuneError, _UNBUILT))
+    if [c.n_steps for c in cells] != [c.n_steps for c in first]:  # again, at the chosen step
+        check_budgets(cells)
     t0 = time.perf_counter()
     train = list(range(train_start, train_start + train_seeds))
     held = list(range(holdout_seeds))
     fresh_start = max(spec.league.seeds, train_start + train_seeds)
     fresh = list(range(fresh_start, fresh_start + fresh_seeds))
+    # the training runs; with given gains, the first held-out ones (they set the batch layout)
+    raws, _ = replicate_raws(spec, method, cells, train if gains is None else held[:train_seeds])
     if gains is None:
-        raws, _ = replicate_raws(spec, method, cells, train)
         say(
             f"{method} @ {level}: {len(raws)} training runs ({len(cells)} cells x {train_seeds} "
             f"seeds), fields {', '.join(f.path for f in fields)}"
         )
-    else:  # no training: the runs of the first held-out batch set the batch layout
-        raws, _ = replicate_raws(spec, method, cells, held[:train_seeds])
+    else:
         say(f"{method} @ {level}: evaluating the given gains (no training)")
     problem = build_problem(raws, fields)
     paper = problem.initial.copy()
@@ -1160,7 +1135,7 @@ def tune_league_method(
             violation_cap=violation_cap,
             scale=scale,
         )
-        with Counter(
+        with runner.Counter(
             f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
         ) as bar:
             outcome = minimise(
@@ -1179,28 +1154,18 @@ def tune_league_method(
         m_tr, bad_tr = evaluate(problem, tuned, book)
     else:
         scale = math.nan
-        tuned = np.array(
-            [float((gains or {}).get(f.path, v)) for f, v in zip(fields, paper, strict=True)]
-        )
+        tuned = np.array([float(gains.get(f.path, v)) for f, v in zip(fields, paper, strict=True)])
 
-    def replicates(seeds: list[int], name: str):
-        """Paper and tuned gains on ``seeds`` (batches laid out as the training batch), with the
-        labels of the runs."""
-        h_raws, h_labels = [], []
+    def block(seeds: list[int], name: str, what: str) -> dict[str, Any]:
+        """Pass statistics of the paper and tuned gains on ``seeds`` (batches laid out as the training
+        batch), over all and per case."""
+        h_raws, labels = [], []
         for k in range(0, len(seeds), train_seeds):
             r, lb = replicate_raws(spec, method, cells, seeds[k : k + train_seeds])
             h_raws += r
-            h_labels += lb
+            labels += lb
         hold = build_problem(h_raws, fields, like=problem)
-        runs = {
-            "paper": evaluate(hold, paper, book, name),
-            "tuned": evaluate(hold, tuned, book, name),
-        }
-        return runs, h_labels
-
-    def block(seeds: list[int], name: str, what: str) -> dict[str, Any]:
-        """Pass statistics of the paper and tuned gains on ``seeds``, over all and per case."""
-        runs, labels = replicates(seeds, name)
+        runs = {k: evaluate(hold, g, book, name) for k, g in (("paper", paper), ("tuned", tuned))}
         cases = {
             case: np.asarray([i for i, lb in enumerate(labels) if lb["case"] == case])
             for case in dict.fromkeys(lb["case"] for lb in labels)
@@ -1216,14 +1181,7 @@ def tune_league_method(
             },
         }
 
-    holdout = block(held, "holdout", "the league's own first replicates")
-    fresh_block = (
-        block(fresh, "fresh", "replicates neither the league nor the training uses")
-        if fresh
-        else None
-    )
     given = gains is not None
-
     return {
         "kind": "formation-ftc tuning",
         "league": spec.league.name,
@@ -1261,8 +1219,10 @@ def tune_league_method(
             "paper": _pass_stats(m0, bad0, requirement, objective),
             "tuned": _pass_stats(m_tr, bad_tr, requirement, objective),
         },
-        "holdout": holdout,
-        "fresh": fresh_block,
+        "holdout": block(held, "holdout", "the league's own first replicates"),
+        "fresh": block(fresh, "fresh", "replicates neither the league nor the training uses")
+        if fresh
+        else None,
         "optimiser": {"name": "none (given gains)", "evaluations": 0}
         if given
         else {
@@ -1275,7 +1235,7 @@ def tune_league_method(
             "history": [{"gains": g, "J": v} for g, v in outcome.history],
         },
         "seconds": time.perf_counter() - t0,
-        "provenance": _provenance(),
+        "provenance": runner._provenance(),
     }
 
 
@@ -1315,8 +1275,6 @@ def load_tunings(directory: str | Path) -> dict[tuple[str, str], dict[str, Any]]
     from formation_ftc.league.runner import record_error
 
     out: dict[tuple[str, str], dict[str, Any]] = {}
-    if not Path(directory).is_dir():
-        return out
     for p in sorted(Path(directory).glob("*.json")):
         try:
             r = json.loads(p.read_text(encoding="utf-8"))
