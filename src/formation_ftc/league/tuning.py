@@ -146,9 +146,8 @@ class GainProblem:
                 f"{rebuilt} are rebuilt at each evaluation (rebuild = true): no traced form, so no "
                 "gradient; use evaluate() (optimisers nelder-mead, powell)"
             )
-        params = self._write(self.batch if batch is None else batch, theta, traced=True)
         run = jax.vmap(type(self._loop).run, in_axes=(self._chunks[0][1],), axis_size=self.size)
-        out = run(params)
+        out = run(self._write(self.batch if batch is None else batch, theta, traced=True))
         return dict(zip(self.metric_names, out["metrics"], strict=True)), out["diverged_step"] >= 0
 
     def evaluate(
@@ -422,8 +421,7 @@ def penalised_objective(
             m = jnp.asarray(metrics[requirement[0]])
             bad_m = bad | ~jnp.isfinite(m)
             m_ok = jnp.where(bad_m, 0.0, m)
-            limit = (1.0 - margin) * requirement[1]
-            excess = jnp.clip(m_ok / limit - 1.0, 0.0, violation_cap)
+            excess = jnp.clip(m_ok / ((1.0 - margin) * requirement[1]) - 1.0, 0.0, violation_cap)
             viol = jnp.where(bad_m, bad_run_penalty, excess)
             fail = bad_f | bad_m | (m_ok > requirement[1])
         viol = jnp.where(bad_f, bad_run_penalty, viol)
