@@ -131,7 +131,6 @@ def add_method_arguments(p: argparse.ArgumentParser, method_help: str) -> None:
     p.add_argument(
         "--step-check-from",
         metavar="LEAGUE_DIR",
-        default=None,
         help="reuse the step check a league run recorded (default: run it, as `league run` does)",
     )
 
@@ -164,23 +163,17 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         help="directory of the result (METHOD--LEVEL.json; new, empty or of tuning results); a "
         "killed tuning resumes from its journal there (METHOD--LEVEL.journal.jsonl)",
     )
-    p.add_argument(
-        "--cases",
-        default=None,
-        help="comma-separated fault cases (default: every one that applies)",
-    )
+    p.add_argument("--cases", help="comma-separated fault cases (default: every one that applies)")
     p.add_argument("--train-seeds", type=int, default=8, help="training replicates per cell")
     p.add_argument("--holdout-seeds", type=int, default=16, help="held-out replicates per cell")
     p.add_argument(
         "--fresh-seeds",
         type=int,
-        default=None,
         help="replicates per cell neither the league nor the training uses (default: as many as "
         "--holdout-seeds; 0: none)",
     )
     p.add_argument(
         "--gains",
-        default=None,
         metavar="FIELD=VALUE,...",
         help="evaluate these gains against the paper's (held-out and fresh replicates), with no "
         "training",
