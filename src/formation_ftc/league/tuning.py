@@ -508,6 +508,7 @@ def minimise(
             on_evaluation()
         return v
 
+    options: dict[str, Any]  # scipy's, of the optimiser's method
     t0 = time.perf_counter()
     if optimiser == "gradient":
         if len(problem._chunks) != 1:
@@ -537,11 +538,7 @@ def minimise(
             return record(z, hit["value"], hit["terms"], ts), g
 
         method = "L-BFGS-B"
-        options: dict[str, Any] = {
-            "maxfun": max_evaluations,
-            "maxiter": max_evaluations,
-            "gtol": tolerance,
-        }
+        options = dict(maxfun=max_evaluations, maxiter=max_evaluations, gtol=tolerance)
     else:
 
         def fun(z):
