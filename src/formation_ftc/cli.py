@@ -755,6 +755,12 @@ def _cmd_plot(args) -> int:
 class _VersionAction(argparse.Action):
     """``--version``: reads the package metadata only when asked (not for every command)."""
 
+    def __init__(
+        self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None
+    ):
+        help = help or "show the version and exit"
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
     def __call__(self, parser, namespace, values, option_string=None):
         import formation_ftc
 
@@ -781,12 +787,6 @@ def _add_verbosity(p: argparse.ArgumentParser, top: bool = False) -> None:
         )
 
 
-def _epilog(key: str) -> str:
-    examples = HELP.get(key, ("", []))[1]
-    lines = ["examples:", *(f"  {e}" for e in examples)] if examples else []
-    return "\n".join(lines + ([""] if lines else []) + [EXIT_CODES])
-
-
 def _parsers(parser: argparse.ArgumentParser, key: str = ""):
     """``(command path, parser)`` of ``parser`` ("") and of every sub-command ("league run"), each
     parser before its sub-commands."""
@@ -804,9 +804,9 @@ def _decorate(parser: argparse.ArgumentParser) -> None:
         if key:
             _add_verbosity(p)
         p.formatter_class = argparse.RawDescriptionHelpFormatter
-        if key in HELP:
-            p.description = HELP[key][0]
-        p.epilog = _epilog(key)
+        p.description, examples = HELP.get(key, (p.description, []))
+        lines = ["examples:", *(f"  {e}" for e in examples), ""] if examples else []
+        p.epilog = "\n".join([*lines, EXIT_CODES])
 
 
 #: commands whose parsers live in other modules: name -> (formation_ftc.MODULE with add_cli,
@@ -968,14 +968,7 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     from formation_ftc.campaign.cli import add_budget_options
 
     parser = _Parser(prog="formation-ftc")
-    parser.add_argument(
-        "--version",
-        action=_VersionAction,
-        nargs=0,
-        dest=argparse.SUPPRESS,
-        default=argparse.SUPPRESS,
-        help="show the version and exit",
-    )
+    parser.add_argument("--version", action=_VersionAction)
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

@@ -302,8 +302,7 @@ def falsify(
         runs += n
         history.append((runs, best[0]))
         if es is not None and n == population:
-            finite = [r if math.isfinite(r) else -1e9 for r, _, _ in results]
-            es.tell(list(points), finite)
+            es.tell(list(points), [r if math.isfinite(r) else -1e9 for r, _, _ in results])
     return FalsifyResult(
         method=method,
         level=level,

@@ -81,11 +81,9 @@ def _cmd_falsify(args) -> int:
     if args.json:
         print_json({**record, "result": str(result), "wall_time": time.perf_counter() - t0})
         return 0
-    verdict = (
-        f"violation after {res.runs_to_violation} runs"
-        if res.found
-        else f"no violation in {res.runs} runs"
-    )
+    verdict = f"no violation in {res.runs} runs"
+    if res.found:
+        verdict = f"violation after {res.runs_to_violation} runs"
     print(
         f"{res.method} @ {res.level}, {res.optimizer} (seed {res.seed}): {verdict}; lowest "
         f"robustness {res.best:.4g}: {res.fault}"
@@ -95,13 +93,12 @@ def _cmd_falsify(args) -> int:
             print(f"  {m['kind']}: no magnitude; robustness {m['robustness']:.4g} at its worst run")
             continue
         lo, hi = m["largest_holding"], m["smallest_violating"]
-        bracket = (
-            f"holds up to {lo:.3g}"
-            if hi is None
-            else f"breaks with no fault (at {hi:.3g})"
-            if lo is None
-            else f"breaks between {lo:.3g} and {hi:.3g}"
-        )
+        if hi is None:
+            bracket = f"holds up to {lo:.3g}"
+        elif lo is None:
+            bracket = f"breaks with no fault (at {hi:.3g})"
+        else:
+            bracket = f"breaks between {lo:.3g} and {hi:.3g}"
         shape = "" if m["monotone"] else " (robustness not monotone in the samples)"
         print(f"  {m['kind']}: {m['severity']} {bracket}{shape}, at {m['at']}")
     print(f"wrote {scenario} (replay: formation-ftc run {scenario}) and {result}")
