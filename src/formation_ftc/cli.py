@@ -15,6 +15,7 @@ docs/cli.md.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import sys
@@ -187,12 +188,6 @@ _ONE_SHOT_PROCESS = False  # main() runs one command and the process ends (set b
 _STARTED: float | None = None  # time.perf_counter() when main() began
 
 
-def _info(msg: str) -> None:
-    """Progress/informational line on stderr (suppressed by --quiet)."""
-    if _VERBOSITY >= 0:
-        print(msg, file=sys.stderr)
-
-
 def _check_scenario_name(name: str) -> None:
     """Bad input with a "did you mean" when ``name`` is neither a file nor a built-in scenario."""
     from formation_ftc.config.loader import ScenarioError
@@ -285,6 +280,13 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _command(sub, name: str, func, short: str) -> argparse.ArgumentParser:
+    """The sub-command ``name`` (one-line help ``short``) run by ``func``."""
+    p = sub.add_parser(name, help=short)
+    p.set_defaults(func=func)
+    return p
+
+
 def _scenario_table(text: str) -> str:
     """Only the ``[scenario]`` table of a scenario file (``list`` needs its description; parsing the
     whole files of every scenario would cost most of the command's time)."""
@@ -306,16 +308,16 @@ def _cmd_list(args) -> int:
     d = resources.files("formation_ftc") / "scenarios"
     rows = []
     for name in _resource_names("scenarios"):
-        meta = tomllib.loads(_scenario_table((d / f"{name}.toml").read_text(encoding="utf-8"))).get(
-            "scenario", {}
-        )
+        text = (d / f"{name}.toml").read_text(encoding="utf-8")
+        meta = tomllib.loads(_scenario_table(text)).get("scenario", {})
+        method = meta.get("method", "composed")
         rows.append(
             {
                 "name": name,
-                "method": str(meta.get("method", "composed")),
+                "method": str(method),
                 "paper": meta.get("paper"),
                 "description": str(meta.get("description", "")),
-                "composed": meta.get("method", "composed") == "composed",
+                "composed": method == "composed",
             }
         )
     if args.json:
@@ -326,7 +328,7 @@ def _cmd_list(args) -> int:
     groups: dict[str, list[dict]] = {}
     for r in rows:
         groups.setdefault(r["paper"] or "", []).append(r)
-    for k, paper in enumerate(sorted(p for p in groups if p) + ([""] if "" in groups else [])):
+    for k, paper in enumerate(sorted(groups, key=lambda p: (not p, p))):
         if k:
             print()
         print(f"{paper}:" if paper else "Other scenarios (compositions across papers, examples):")
@@ -370,6 +372,8 @@ def _toml_value(value: Any, indent: str = "", room: int = _TOML_WIDTH) -> str:
     """TOML text of ``value`` as a person writes it: an array on one line when it fits in ``room``
     characters (``[1.0, 2.0]``, ``[[1, 0], [0, 1]]``), else one element per line, indented, with
     numbers as many to a line as fit; scalars and inline tables as tomli_w writes them."""
+    import textwrap
+
     import tomli_w
 
     if isinstance(value, dict):
@@ -385,12 +389,8 @@ def _toml_value(value: Any, indent: str = "", room: int = _TOML_WIDTH) -> str:
     inner = indent + "    "
     width = _TOML_WIDTH - len(inner)
     if all(isinstance(v, int | float) for v in value):  # numbers (and booleans): fill the lines
-        lines = [""]
-        for text in (_toml_value(v) + "," for v in value):
-            if lines[-1] and len(lines[-1]) + 1 + len(text) > width:
-                lines.append(text)
-            else:
-                lines[-1] = f"{lines[-1]} {text}" if lines[-1] else text
+        words = " ".join(_toml_value(v) + "," for v in value)
+        lines = textwrap.wrap(words, width, break_long_words=False, break_on_hyphens=False)
     else:  # strings, arrays, tables: one to a line
         lines = [_toml_value(v, inner, width - 1) + "," for v in value]
     return "[\n" + "".join(f"{inner}{line}\n" for line in lines) + indent + "]"
@@ -733,8 +733,8 @@ def _cmd_plot(args) -> int:
         raise InputError(
             f"plot {args.dir}: {what}; give the --out directory of a run, campaign or league"
         )
-    for w in warnings:
-        _info(f"warning: {w}")
+    for w in warnings if _VERBOSITY >= 0 else []:  # -q: no informational lines
+        print(f"warning: {w}", file=sys.stderr)
     if args.json:
         print_json(
             {
@@ -758,13 +758,8 @@ class _VersionAction(argparse.Action):
     def __init__(
         self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None
     ):
-        super().__init__(
-            option_strings,
-            dest=dest,
-            default=default,
-            nargs=0,
-            help=help or "show the version and exit",
-        )
+        help = help or "show the version and exit"
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
         import formation_ftc
@@ -775,69 +770,57 @@ class _VersionAction(argparse.Action):
 
 def _add_verbosity(p: argparse.ArgumentParser, top: bool = False) -> None:
     g = p.add_mutually_exclusive_group()
-    default = (
-        0 if top else argparse.SUPPRESS
-    )  # a sub-command's flag must not reset the top-level one
-    g.add_argument(
-        "-q",
-        "--quiet",
-        dest="verbosity",
-        action="store_const",
-        const=-1,
-        default=default,
-        help="print only results and errors (no progress or informational lines)",
-    )
-    g.add_argument(
-        "-v",
-        "--verbose",
-        dest="verbosity",
-        action="store_const",
-        const=1,
-        default=default,
-        help="more detail (timings, full tracebacks on errors)",
-    )
+    # a sub-command's flag must not reset the top-level one
+    default = 0 if top else argparse.SUPPRESS
+    for flag, const, text in (
+        ("quiet", -1, "print only results and errors (no progress or informational lines)"),
+        ("verbose", 1, "more detail (timings, full tracebacks on errors)"),
+    ):
+        g.add_argument(
+            f"-{flag[0]}",
+            f"--{flag}",
+            dest="verbosity",
+            action="store_const",
+            const=const,
+            default=default,
+            help=text,
+        )
 
 
-def _epilog(key: str) -> str:
-    examples = HELP.get(key, ("", []))[1]
-    lines = ["examples:", *(f"  {e}" for e in examples)] if examples else []
-    return "\n".join(lines + ([""] if lines else []) + [EXIT_CODES])
-
-
-def _decorate(parser: argparse.ArgumentParser, key: str) -> None:
-    """Plain-text help with examples and exit codes, and -q/-v, on ``parser`` and every sub-command."""
-    parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    if key in HELP:
-        parser.description = HELP[key][0]
-    parser.epilog = _epilog(key)
+def _parsers(parser: argparse.ArgumentParser, key: str = ""):
+    """``(command path, parser)`` of ``parser`` ("") and of every sub-command ("league run"), each
+    parser before its sub-commands."""
+    yield key, parser
     for action in parser._actions:  # noqa: SLF001 - argparse keeps sub-parsers here
         if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
             for name, sub in action.choices.items():
-                sub_key = f"{key} {name}".strip()
-                _add_verbosity(sub)
-                _decorate(sub, sub_key)
+                yield from _parsers(sub, f"{key} {name}".strip())
 
 
-#: commands whose parsers live in other modules: name -> (module with add_cli, one-line help)
+def _decorate(parser: argparse.ArgumentParser) -> None:
+    """Plain-text help with examples and exit codes on ``parser`` and every sub-command, and -q/-v
+    on every sub-command."""
+    for key, p in _parsers(parser):
+        if key:
+            _add_verbosity(p)
+        p.formatter_class = argparse.RawDescriptionHelpFormatter
+        p.description, examples = HELP.get(key, (p.description, []))
+        lines = ["examples:", *(f"  {e}" for e in examples), ""] if examples else []
+        p.epilog = "\n".join([*lines, EXIT_CODES])
+
+
+#: commands whose parsers live in other modules: name -> (formation_ftc.MODULE with add_cli,
+#: one-line help)
 _PLUGGED = {
-    "reproduce": (
-        "formation_ftc.report.reproduce",
-        "reproduce the papers' studies and write an HTML report",
-    ),
-    "campaign": (
-        "formation_ftc.campaign.cli",
-        "Monte Carlo campaigns: list, run (resumable), report",
-    ),
-    "league": (
-        "formation_ftc.league.cli",
-        "FTC league: every method on one realistic formation, same faults",
-    ),
+    "reproduce": ("report.reproduce", "reproduce the papers' studies and write an HTML report"),
+    "campaign": ("campaign.cli", "Monte Carlo campaigns: list, run (resumable), report"),
+    "league": ("league.cli", "FTC league: every method on one realistic formation, same faults"),
     "tune": (
-        "formation_ftc.league.tune_cli",
+        "league.tune_cli",
         "choose a league method's gains for a level, reported on held-out seeds",
     ),
     "falsify": (
-        "formation_ftc.league.falsify_cli",
+        "league.falsify_cli",
         "search a league method's faults, initial errors and noise for a violating run",
     ),
 }
@@ -872,23 +855,16 @@ def _reproduce_stand_in(subparsers) -> argparse.ArgumentParser:
         "--no-3d", dest="include_3d", action="store_false", help="no interactive 3-D views"
     )
     p.add_argument("--profile", action="store_true", help="time each paper's phases")
-    p.add_argument(
-        "--workers", type=int, default=None, metavar="N", help="papers computed side by side"
-    )
+    p.add_argument("--workers", type=int, metavar="N", help="papers computed side by side")
     p.add_argument(
         "--league",
         action="append",
         type=Path,
-        default=None,
         metavar="DIR",
         help="link this league directory's leaderboard",
     )
     add_json_option(p)
     return p
-
-
-#: plugged commands whose module is too heavy for the completion script: name -> stand-in
-_STAND_INS = {"reproduce": _reproduce_stand_in}
 
 
 def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> list[str]:
@@ -950,12 +926,8 @@ def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
         },
     }
 
-    def walk(p: argparse.ArgumentParser, key: str) -> None:
+    for key, p in _parsers(parser):
         for action in p._actions:  # noqa: SLF001 - argparse keeps them here
-            if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
-                for name, sub in action.choices.items():
-                    walk(sub, f"{key} {name}".strip())
-                continue
             hint = by_command.get(key, {}).get(action.dest)
             if hint is None and action.dest == "scenario":
                 hint = scenarios
@@ -963,8 +935,6 @@ def _add_completion_hints(parser: argparse.ArgumentParser) -> None:
                 hint = shtab.DIRECTORY
             if hint is not None:
                 action.complete = hint  # type: ignore[attr-defined]  # read by shtab
-
-    walk(parser, "")
 
 
 def completion_parser() -> argparse.ArgumentParser:
@@ -1002,11 +972,9 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("list", help="list the built-in scenarios")
-    add_json_option(p)
-    p.set_defaults(func=_cmd_list)
+    add_json_option(_command(sub, "list", _cmd_list, "list the built-in scenarios"))
 
-    p = sub.add_parser("show", help="print the resolved TOML of a scenario")
+    p = _command(sub, "show", _cmd_show, "print the resolved TOML of a scenario")
     _scenario_args(p)
     p.add_argument(
         "--no-comments",
@@ -1014,25 +982,21 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="bare TOML (default: each field's unit and meaning as a comment)",
     )
     add_json_option(p)
-    p.set_defaults(func=_cmd_show)
 
-    p = sub.add_parser("check", help="evaluate the scenario's stability/design conditions")
+    p = _command(sub, "check", _cmd_check, "evaluate the scenario's stability/design conditions")
     _scenario_args(p)
     add_json_option(p)
-    p.set_defaults(func=_cmd_check)
 
-    p = sub.add_parser("schema", help="print the JSON Schema of a method's scenario file")
+    p = _command(sub, "schema", _cmd_schema, "print the JSON Schema of a method's scenario file")
     p.add_argument(
         "method",
         metavar="METHOD",
         nargs="?",
-        default=None,
         help="method name (the [scenario].method of a scenario file); omit to list them",
     )
-    p.set_defaults(func=_cmd_schema)
 
-    p = sub.add_parser(
-        "run", help="simulate a scenario and write result.nc, metrics.json, index.html"
+    p = _command(
+        sub, "run", _cmd_run, "simulate a scenario and write result.nc, metrics.json, index.html"
     )
     _scenario_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
@@ -1049,9 +1013,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         "`formation-ftc plot DIR` draws them later from result.nc",
     )
     add_json_option(p)
-    p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("plot", help="draw the figures of a run, campaign or league directory")
+    p = _command(sub, "plot", _cmd_plot, "draw the figures of a run, campaign or league directory")
     p.add_argument(
         "dir", metavar="DIR", help="the --out directory of a run, a campaign or a league"
     )
@@ -1062,11 +1025,10 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="file format of the figures (default png; a league's page embeds png only)",
     )
     add_json_option(p)
-    p.set_defaults(func=_cmd_plot)
 
     for name, (module, short) in _PLUGGED.items():
-        if completion and name in _STAND_INS:
-            _STAND_INS[name](sub)
+        if completion and name == "reproduce":  # its module imports JAX
+            _reproduce_stand_in(sub)
             continue
         if command not in ("", name):
             sub.add_parser(name, help=short, add_help=False).add_argument(
@@ -1074,18 +1036,19 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
             )
             continue
         try:
-            mod = __import__(module, fromlist=["add_cli"])
+            mod = importlib.import_module(f"formation_ftc.{module}")
         except ImportError as exc:  # pragma: no cover - only while a part is missing
-            print(f"warning: {module} unavailable: {exc}", file=sys.stderr)
+            print(f"warning: formation_ftc.{module} unavailable: {exc}", file=sys.stderr)
             continue
         mod.add_cli(sub)
 
-    p = sub.add_parser("completion", help="print the shell completion script (bash, zsh, tcsh)")
+    p = _command(
+        sub, "completion", _cmd_completion, "print the shell completion script (bash, zsh, tcsh)"
+    )
     p.add_argument(
         "shell", choices=_SHELLS, metavar="SHELL", help=f"the shell: {', '.join(_SHELLS)}"
     )
-    p.set_defaults(func=_cmd_completion)
-    _decorate(parser, "")
+    _decorate(parser)
     return parser
 
 

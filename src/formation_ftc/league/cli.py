@@ -7,6 +7,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from formation_ftc.campaign.cli import add_budget_options, add_dask_options
 from formation_ftc.exitcodes import add_json_option, print_json
@@ -17,35 +18,34 @@ __all__ = ["add_cli"]
 def _cmd_list(args) -> int:
     from formation_ftc.league.definition import builtin_leagues, load_league
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for name in builtin_leagues():
         spec = load_league(name)
         meta = spec.league
-        if args.json:
-            rows.append(
-                {
-                    "name": name,
-                    "description": meta.description,
-                    "kind": meta.kind,
-                    "methods": [m.name for m in spec.methods],
-                    "levels": [lv.name for lv in spec.levels],
-                    "battery": meta.battery,
-                    "seeds": meta.seeds,
-                    "quick_seeds": meta.quick_seeds,
-                    "horizon": meta.horizon,
-                    "requirement": meta.requirement.model_dump(),  # metric, max, units, stl, verdict
-                    "units": {"horizon": "s"},
-                }
-            )
-            continue
-        methods = ", ".join(m.name for m in spec.methods)
-        print(f"{name}  {meta.description}")
-        print(
-            f"    methods: {methods}; battery {meta.battery}; {meta.seeds} seeds per cell "
-            f"({meta.quick_seeds} with --quick)"
+        rows.append(
+            {
+                "name": name,
+                "description": meta.description,
+                "kind": meta.kind,
+                "methods": [m.name for m in spec.methods],
+                "levels": [lv.name for lv in spec.levels],
+                "battery": meta.battery,
+                "seeds": meta.seeds,
+                "quick_seeds": meta.quick_seeds,
+                "horizon": meta.horizon,
+                "requirement": meta.requirement.model_dump(),  # metric, max, units, stl, verdict
+                "units": {"horizon": "s"},
+            }
         )
     if args.json:
         print_json({"leagues": rows})
+        return 0
+    for r in rows:
+        print(f"{r['name']}  {r['description']}")
+        print(
+            f"    methods: {', '.join(r['methods'])}; battery {r['battery']}; {r['seeds']} seeds "
+            f"per cell ({r['quick_seeds']} with --quick)"
+        )
     return 0
 
 
@@ -55,10 +55,8 @@ def _quiet(args) -> bool:
 
 
 def _log(args):
-    """The stderr log of a command (None with ``-q``)."""
-    if _quiet(args):
-        return None
-    return lambda line: print(line, file=sys.stderr, flush=True)  # lossy_stderr (cli.main)
+    """The stderr log of a command (None with ``-q``; cli.main makes stderr lossy)."""
+    return None if _quiet(args) else lambda line: print(line, file=sys.stderr, flush=True)
 
 
 def _cmd_run(args) -> int:
@@ -196,8 +194,6 @@ def _print_board(board, directory) -> None:
 
 def _board_doc(directory, board) -> dict:
     """The ``--json`` document of ``league report`` (and the leaderboard part of ``league run``'s)."""
-    from pathlib import Path
-
     from formation_ftc.parquet_units import read_units
 
     out = Path(directory) / "leaderboard"
@@ -247,44 +243,30 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument(
         "--out", required=True, help="league directory (resumed when it holds this league)"
     )
-    q.add_argument(
-        "--seeds", type=int, default=None, help="Monte Carlo seeds per cell (overrides the file)"
-    )
+    q.add_argument("--seeds", type=int, help="Monte Carlo seeds per cell (overrides the file)")
     q.add_argument(
         "--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)"
     )
-    q.add_argument("--methods", default=None, help="comma-separated subset of the league's methods")
+    q.add_argument("--methods", help="comma-separated subset of the league's methods")
     q.add_argument(
         "--until-resolved",
         action="store_true",
         help="run blocks of seeds until every adjacent pair of the ranking is separated or tied "
         "(writes DIR/resolution.json)",
     )
-    q.add_argument(
-        "--block", type=int, default=None, help="seeds per block (default: the quick seed count)"
-    )
+    q.add_argument("--block", type=int, help="seeds per block (default: the quick seed count)")
     q.add_argument(
         "--max-seeds",
         type=int,
-        default=None,
         help="most seeds per cell with --until-resolved (default: the league's seed count)",
     )
+    q.add_argument("--margin", type=float, help="pass-rate difference a tie excludes (default 0.1)")
     q.add_argument(
-        "--margin",
-        type=float,
-        default=None,
-        help="pass-rate difference a tie excludes (default 0.1)",
-    )
-    q.add_argument(
-        "--power",
-        type=float,
-        default=None,
-        help="power at which a pair not separated is a tie (default 0.8)",
+        "--power", type=float, help="power at which a pair not separated is a tie (default 0.8)"
     )
     q.add_argument(
         "--workers",
         type=int,
-        default=None,
         help="methods run side by side, one process each (default: one per CPU core; at most one per core "
         "and per 1.2 GB of available memory; 1: in-process)",
     )
@@ -305,7 +287,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument("--no-plots", action="store_true", help="leaderboard without figures")
     q.add_argument(
         "--tuned",
-        default=None,
         metavar="TUNED_DIR",
         help="directory of `formation-ftc tune` results for the ranking's tuned column "
         "(default: DIR/tuned when it exists)",

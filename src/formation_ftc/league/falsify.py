@@ -146,16 +146,14 @@ def candidate_raw(
         "onset": _mix(on.low, on.high, x["onset"]),
     }
     bias = _bias_limit(act)
-    if kind == "loss_of_effectiveness":
-        fault["effectiveness"] = _mix(0.0, 1.0, x["effectiveness"])
-    elif kind == "bias":
-        fault["bias"] = _mix(-bias, bias, x["bias"])
-    elif kind == "intermittent":
-        fault["period"] = _mix(10.0, 200.0, x["period"])
-        fault["duty"] = _mix(0.1, 0.9, x["duty"])
-    elif kind == "degrading":
-        fault["rate"] = _mix(1e-4, 1e-2, x["rate"], log=True)
-        fault["min_effectiveness"] = _mix(0.0, 1.0, x["min_effectiveness"])
+    ranges = {  # each kind's magnitudes: field -> (low, high); the rate is drawn on a log scale
+        "loss_of_effectiveness": {"effectiveness": (0.0, 1.0)},
+        "bias": {"bias": (-bias, bias)},
+        "intermittent": {"period": (10.0, 200.0), "duty": (0.1, 0.9)},
+        "degrading": {"rate": (1e-4, 1e-2), "min_effectiveness": (0.0, 1.0)},
+    }
+    for field, (low, high) in ranges.get(kind, {}).items():
+        fault[field] = _mix(low, high, x[field], log=field == "rate")
     fault["initial_error_seed"] = _pick(x["initial_error"], SEEDS)
     fault["noise_seed"] = _pick(x["noise"], SEEDS)
     return _raw_of(spec, cells, fault), fault
@@ -261,14 +259,13 @@ def falsify(
     planned = plan_cells(spec, [method])
     _step_checks(spec, planned, {"step_check": dict(step_checks or {})}, None)
     cells = {c.fault_kind: c for c in planned[method] if c.level == level}
-    if not any(k in cells for k in FALSIFIABLE_KINDS):
+    allowed = [k for k in FALSIFIABLE_KINDS if k in cells]
+    if not allowed:
         raise LeagueError(f"method {method} has no actuator-fault cell at level {level}")
-    if kinds:
-        allowed = [k for k in FALSIFIABLE_KINDS if k in cells]
-        wrong = [k for k in kinds if k not in allowed]
-        if wrong:
-            raise LeagueError(f"--kind {wrong[0]!r}: one of {', '.join(allowed)}")
-        cells = {k: c for k, c in cells.items() if k in kinds}
+    wrong = [k for k in kinds or () if k not in allowed]
+    if wrong:
+        raise LeagueError(f"--kind {wrong[0]!r}: one of {', '.join(allowed)}")
+    cells = {k: cells[k] for k in kinds or allowed}  # the cells searched
     rng = np.random.default_rng(seed)
     es = None
     if optimizer == "cma":
@@ -305,8 +302,7 @@ def falsify(
         runs += n
         history.append((runs, best[0]))
         if es is not None and n == population:
-            finite = [r if math.isfinite(r) else -1e9 for r, _, _ in results]
-            es.tell(list(points), finite)
+            es.tell(list(points), [r if math.isfinite(r) else -1e9 for r, _, _ in results])
     return FalsifyResult(
         method=method,
         level=level,
@@ -366,7 +362,8 @@ def min_magnitudes(
         a, b = 0.0, 1.0  # the bracket searched
         lo: float | None = None  # the result: largest holding, smallest violating severity
         hi: float | None = None
-        samples: list[tuple[float, float]] = []
+        samples: list[tuple[float, float]] = []  # (severity, robustness), by severity
+        broke: list[float] = []  # the severities that break the law
         for r in range(rounds):
             # the first round includes the ends; later ones the interior of the bracket
             grid = (
@@ -376,21 +373,15 @@ def min_magnitudes(
                 spec, [(_with_severity(raw, fault, float(x)), fault) for x in grid], population
             )
             samples += [(float(x), rb) for x, (rb, _, _) in zip(grid, res, strict=True)]
-            ordered = sorted(samples)
-            broke = [x for x, rb in ordered if rb < 0]
-            if not broke:
-                lo, hi = ordered[-1][0], None
+            samples.sort()
+            broke = [x for x, rb in samples if rb < 0]
+            hi = broke[0] if broke else None
+            held = [x for x, rb in samples if hi is None or (rb >= 0 and x < hi)]
+            lo = held[-1] if held else None
+            if lo is None or hi is None:
                 break
-            first_bad = broke[0]
-            held = [x for x, rb in ordered if rb >= 0 and x < first_bad]
-            if not held:
-                lo, hi = None, first_bad
-                break
-            a, b = held[-1], first_bad
-            lo, hi = a, b
-        ordered = sorted(samples)
-        bad_at = [x for x, rb in ordered if rb < 0]
-        monotone = not bad_at or all(rb < 0 for x, rb in ordered if x >= bad_at[0])
+            a, b = lo, hi
+        monotone = not broke or all(rb < 0 for x, rb in samples if x >= broke[0])
         out.append(
             {
                 "kind": kind,
@@ -401,7 +392,7 @@ def min_magnitudes(
                 "monotone": monotone,
                 "at": at,
                 "runs": len(samples),
-                "samples": ordered,
+                "samples": samples,
             }
         )
     return out

@@ -13,7 +13,6 @@ __all__ = ["add_cli"]
 
 def _cmd_falsify(args) -> int:
     import math
-    import sys
 
     import tomli_w
 
@@ -46,13 +45,10 @@ def _cmd_falsify(args) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
         scenario = out / f"{stem}.toml"
-        raw = dict(res.raw)
-        raw["scenario"] = {
-            **raw.get("scenario", {}),
-            "name": f"falsify-{args.method}-{args.level}",
-            "description": f"the lowest-robustness run found by formation-ftc falsify ({res.fault})",
-        }
-        atomic_write(scenario, tomli_w.dumps(raw))
+        name = f"falsify-{args.method}-{args.level}"
+        description = f"the lowest-robustness run found by formation-ftc falsify ({res.fault})"
+        scenario_table = {**res.raw.get("scenario", {}), "name": name, "description": description}
+        atomic_write(scenario, tomli_w.dumps({**res.raw, "scenario": scenario_table}))
         record = {
             "kind": "formation-ftc falsification",
             "league": args.league,
@@ -65,13 +61,12 @@ def _cmd_falsify(args) -> int:
             "found": res.found,
             "runs": res.runs,
             "runs_to_violation": res.runs_to_violation,
-            "robustness": res.best if math.isfinite(res.best) else None,
+            "robustness": res.best,  # None when not finite (jsonable, below)
             "diverged": res.best == -math.inf,
             "fault": res.fault,
             "kinds": sorted({*res.worst}),
             "worst_by_kind": {
-                k: {"robustness": rb if math.isfinite(rb) else None, "fault": f}
-                for k, (rb, f) in res.worst.items()
+                k: {"robustness": rb, "fault": f} for k, (rb, f) in res.worst.items()
             },
             "min_magnitude": res.magnitudes,
             "scenario": str(scenario),
@@ -86,28 +81,24 @@ def _cmd_falsify(args) -> int:
     if args.json:
         print_json({**record, "result": str(result), "wall_time": time.perf_counter() - t0})
         return 0
-    verdict = (
-        f"violation after {res.runs_to_violation} runs"
-        if res.found
-        else f"no violation in {res.runs} runs"
-    )
+    verdict = f"no violation in {res.runs} runs"
+    if res.found:
+        verdict = f"violation after {res.runs_to_violation} runs"
     print(
         f"{res.method} @ {res.level}, {res.optimizer} (seed {res.seed}): {verdict}; lowest "
-        f"robustness {res.best:.4g}: {res.fault}",
-        file=sys.stdout,
+        f"robustness {res.best:.4g}: {res.fault}"
     )
     for m in res.magnitudes or ():
         if m["severity"] is None:
             print(f"  {m['kind']}: no magnitude; robustness {m['robustness']:.4g} at its worst run")
             continue
         lo, hi = m["largest_holding"], m["smallest_violating"]
-        bracket = (
-            f"holds up to {lo:.3g}"
-            if hi is None
-            else f"breaks with no fault (at {hi:.3g})"
-            if lo is None
-            else f"breaks between {lo:.3g} and {hi:.3g}"
-        )
+        if hi is None:
+            bracket = f"holds up to {lo:.3g}"
+        elif lo is None:
+            bracket = f"breaks with no fault (at {hi:.3g})"
+        else:
+            bracket = f"breaks between {lo:.3g} and {hi:.3g}"
         shape = "" if m["monotone"] else " (robustness not monotone in the samples)"
         print(f"  {m['kind']}: {m['severity']} {bracket}{shape}, at {m['at']}")
     print(f"wrote {scenario} (replay: formation-ftc run {scenario}) and {result}")

@@ -144,8 +144,7 @@ def run_until_resolved(
         "blocks": [],
     }
     t0 = time.perf_counter()
-    first = 0
-    while True:
+    for first in range(0, max_seeds - block + 1, block):  # every block that fits in max_seeds
         tb = time.perf_counter()
         outcome = run_league(spec, out, seeds=block, first_seed=first, log=log, **run_options)
         meta, runs = load_league_results(out)
@@ -165,18 +164,17 @@ def run_until_resolved(
         )
         if log is not None:
             log(f"{seeds} seeds: {n_open} adjacent pair(s) open")
-        stop = "resolved" if n_open == 0 else "budget" if seeds + block > max_seeds else None
-        if stop is not None:
-            fixed_runs = int(round(len(runs) / seeds * spec.league.seeds))
-            record.update(
-                stopped=stop,
-                seeds=seeds,
-                runs=int(len(runs)),
-                fixed_runs=fixed_runs,
-                saved_runs=fixed_runs - int(len(runs)),
-                wall_time=time.perf_counter() - t0,
-                units={"wall_time": "s", "margin": "1", "power": "1"},
-            )
-            atomic_write(out / RESOLUTION_FILE, json.dumps(record, indent=1))
-            return record
-        first = seeds
+        if n_open == 0:
+            break
+    fixed_runs = int(round(len(runs) / seeds * spec.league.seeds))
+    record.update(
+        stopped="budget" if n_open else "resolved",  # budget: the next block would pass max_seeds
+        seeds=seeds,
+        runs=int(len(runs)),
+        fixed_runs=fixed_runs,
+        saved_runs=fixed_runs - int(len(runs)),
+        wall_time=time.perf_counter() - t0,
+        units={"wall_time": "s", "margin": "1", "power": "1"},
+    )
+    atomic_write(out / RESOLUTION_FILE, json.dumps(record, indent=1))
+    return record
