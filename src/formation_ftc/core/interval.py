@@ -426,20 +426,16 @@ _BINARY: dict[type, Callable[[_I, _I], _I]] = {
 _Pair = tuple[_I, "_I | None"]
 
 
+@dataclass(frozen=True)
 class _Evaluator:
     """Walk the (already validated) syntax tree with interval (and optionally dual) arithmetic."""
 
-    def __init__(
-        self,
-        text: str,
-        env: Mapping[str, _I],
-        time: str | None,
-        n: int,
-        derivative: bool,
-        variables: Sequence[str] = (),
-    ):
-        self.text, self.env, self.time, self.n, self.der = text, env, time, n, derivative
-        self.variables = tuple(variables)
+    text: str
+    env: Mapping[str, _I]
+    time: str | None
+    n: int
+    der: bool  # derivatives too (forward mode)
+    variables: Sequence[str] = ()
 
     def zero(self) -> _I | None:
         """Derivative of a constant (None when no derivative is taken)."""
@@ -462,11 +458,8 @@ class _Evaluator:
 
     def visit_Name(self, node: ast.Name) -> _Pair:
         if node.id in self.env:
-            v = self.env[node.id]
-            d = None
-            if self.der:
-                d = _const(1.0 if node.id == self.time else 0.0, self.n)
-            return v, d
+            d = _const(1.0 if node.id == self.time else 0.0, self.n) if self.der else None
+            return self.env[node.id], d
         if node.id in self.variables:
             raise TypeError(f"expression {self.text!r} needs a value for {node.id!r}")
         if node.id in CONSTANTS:
@@ -611,22 +604,13 @@ class _Evaluator:
     def _extreme(self, args, lower: bool) -> _Pair:
         out = args[0]
         for b in args[1:]:
-            a = out
-            if lower:
-                first, second = a[0].hi <= b[0].lo, b[0].hi <= a[0].lo  # min is certainly a / b
-                v = _minimum(a[0], b[0])
+            (av, ad), (bv, bd) = out, b
+            if lower:  # where the min is certainly a / b
+                first, second, v = av.hi <= bv.lo, bv.hi <= av.lo, _minimum(av, bv)
             else:
-                first, second = a[0].lo >= b[0].hi, b[0].lo >= a[0].hi
-                v = _maximum(a[0], b[0])
-            d = None
-            if self.der:
-                assert a[1] is not None and b[1] is not None
-                h = _hull(a[1], b[1])
-                d = _I(
-                    np.where(first, a[1].lo, np.where(second, b[1].lo, h.lo)),
-                    np.where(first, a[1].hi, np.where(second, b[1].hi, h.hi)),
-                )
-            out = (v, d)
+                first, second, v = av.lo >= bv.hi, bv.lo >= av.hi, _maximum(av, bv)
+            # the derivative of the one that is certainly the extreme, else both
+            out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
         return out
 
     def call_min(self, *args):
