@@ -303,13 +303,6 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
                 f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}"
             )
 
-    def need(*names):
-        missing = [n for n in names if n not in spec]
-        if missing:
-            raise CampaignError(
-                f"sample.{path}: {spec.get('dist', '')} distribution needs {', '.join(missing)}"
-            )
-
     if "grid" in spec or "choice" in spec:
         key = "grid" if "grid" in spec else "choice"
         allowed(key) if key == "grid" else allowed("choice", "weights")
@@ -339,7 +332,9 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         )
     cls, params, n_required = _DISTS[dist]
     allowed("dist", *params)
-    need(*params[:n_required])
+    missing = [n for n in params[:n_required] if n not in spec]
+    if missing:
+        raise CampaignError(f"sample.{path}: {dist} distribution needs {', '.join(missing)}")
     if cls is Integer:
         for n in params:
             if isinstance(spec[n], bool) or not isinstance(spec[n], int):

@@ -190,9 +190,7 @@ class _Bar:
     """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``. Its
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
-    def __init__(
-        self, enabled: bool, n_papers: int, console=None, started: float | None = None
-    ) -> None:
+    def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
         self.enabled = enabled and n_papers > 0
         self.n = n_papers
         self._progress = None
@@ -479,13 +477,12 @@ def reproduce(
             "compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
             "reads) from jax.monitoring time spans; run/plot: marked blocks without "
             "compile; post: the rest of the paper's wall time; report: JSON files"
-            + (
+        )
+        if n_workers > 1:
+            metadata["profile_method"] += (
                 f"; papers ran side by side in {n_workers} worker processes, so the "
                 "papers' times add up to more than the total wall time"
-                if n_workers > 1
-                else ""
             )
-        )
         metadata["profile"] = breakdowns
         for p, b in breakdowns.items():
             metadata[f"profile_{p}"] = format_breakdown(b)
@@ -648,11 +645,9 @@ def _reproduce_in_workers(
                     finished(paper, entry, summary, breakdown)
                     del running[paper]
                 n_done = len(selected) - len(running)
+                fraction = n_done + sum(f for f, _ in running.values())
                 text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
-                bar.update(
-                    n_done + sum(f for f, _ in running.values()),
-                    f"{n_done}/{len(selected)} done  {text}",
-                )
+                bar.update(fraction, f"{n_done}/{len(selected)} done  {text}")
     finally:
         manager.shutdown()
 
@@ -819,12 +814,8 @@ def _stated(text: str) -> dict[str, Any]:
     from formation_ftc.condition_json import quantities as _quantities
 
     main = _quantities(text)[1] if text else []
-    one = main[0] if len(main) == 1 else None
-    return {
-        "text": text,
-        "value": one["value"] if one else None,
-        "units": one["units"] if one else None,
-    }
+    one = main[0] if len(main) == 1 else {"value": None, "units": None}
+    return {"text": text, "value": one["value"], "units": one["units"]}
 
 
 def _row_json(row: Mapping[str, Any]) -> dict[str, Any]:
