@@ -548,7 +548,8 @@ class _Evaluator:
         if not self.der:
             return v, None
         assert a[1] is not None and b[1] is not None
-        return v, self.jump(~_decided_truth(c), _select(c, a[1], b[1]))
+        t, f = _truth(c)  # the branch is known where the condition is
+        return v, self.jump(~(t | f), _select(c, a[1], b[1]))
 
     def visit_Call(self, node: ast.Call) -> _Pair:
         name = node.func.id if isinstance(node.func, ast.Name) else ""
@@ -678,11 +679,6 @@ _PIECEWISE_CONSTANT: dict[str, Callable[[_I], _I]] = {
 def _decided(b: _I) -> np.ndarray:
     """A 0/1 interval whose value is known (not [0, 1])."""
     return b.lo == b.hi
-
-
-def _decided_truth(c: _I) -> np.ndarray:
-    t, f = _truth(c)
-    return t | f
 
 
 # --------------------------------------------------------------------------------------------------

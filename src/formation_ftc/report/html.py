@@ -208,7 +208,8 @@ def league_links(
     out_dir: Path | str, leagues: list[Path | str] | None = None
 ) -> list[dict[str, Any]]:
     """League leaderboards to link from the report: the given league directories and every
-    ``<out_dir>/*/leaderboard/index.html``; each ``{name, href (relative), ranking}``."""
+    ``<out_dir>/*/leaderboard/index.html``; each ``{name, seeds, href (relative), ranking, metric,
+    tops}`` (``tops``: ``(level, first three methods)`` pairs)."""
     import os
 
     out_dir = Path(out_dir)
@@ -235,6 +236,10 @@ def league_links(
             "ranking": board.get("ranking", {}),
             "metric": board.get("requirement", {}).get("metric", ""),
         }
+        found[key]["tops"] = [  # the first three methods of every level
+            (level, [r.get("method") for r in rows[:3]])
+            for level, rows in found[key]["ranking"].items()
+        ]
     return list(found.values())
 
 
@@ -377,16 +382,6 @@ def _render(
     uses_plotly = any(s["trajectory"] and s["trajectory"]["views"] for s in sections)
     n_failed = sum(1 for e in entries if e.get("status") != "ok")
     status_line = f"{len(entries)} paper(s), " + (f"{n_failed} failed" if n_failed else "all ran")
-    links = [
-        {
-            **lk,
-            "tops": [
-                (level, [r.get("method") for r in rows[:3]])
-                for level, rows in lk["ranking"].items()
-            ],
-        }
-        for lk in league_links(out_dir, leagues)
-    ]
     return render(
         "reproduction.html.j2",
         title=title,
@@ -394,7 +389,7 @@ def _render(
         f"commit {metadata.get('git_commit', 'unknown')}",
         plotly_src=plotly_src() if uses_plotly else "",
         sections=sections,
-        leagues=links,
+        leagues=league_links(out_dir, leagues),
         metadata=[
             (k, v)
             for k, v in metadata.items()

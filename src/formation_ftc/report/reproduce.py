@@ -748,7 +748,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument(
         "--workers",
         type=int,
-        default=None,
         metavar="N",
         help="papers computed side by side in N worker processes (default: one per CPU core, at "
         "most one per paper; 1: one after the other in this process); same numbers either way",
@@ -757,7 +756,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--league",
         action="append",
         type=Path,
-        default=None,
         metavar="DIR",
         help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
         "DIR/*/leaderboard/ of the report directory are linked anyway)",
