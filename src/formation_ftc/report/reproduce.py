@@ -35,7 +35,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from formation_ftc import registry
 from formation_ftc.atomic import atomic_write
@@ -44,9 +44,6 @@ from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
 from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus
-
-if TYPE_CHECKING:
-    from rich.progress import TaskID
 
 __all__ = [
     "MARKER_NAME",
@@ -191,11 +188,9 @@ class _Bar:
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
     def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
-        self.enabled = enabled and n_papers > 0
         self.n = n_papers
         self._progress = None
-        self._task: TaskID | None = None
-        if self.enabled:
+        if enabled and n_papers > 0:
             from rich import progress as rp
             from rich.console import Console
             from rich.text import Text
@@ -215,11 +210,11 @@ class _Bar:
                 rp.TextColumn("{task.description}"),
                 console=console or Console(stderr=True),
             )
+            self._task = self._progress.add_task("", total=float(n_papers))
 
     def __enter__(self) -> _Bar:
         if self._progress is not None:
             self._progress.start()
-            self._task = self._progress.add_task("", total=float(self.n))
         return self
 
     def __exit__(self, *exc) -> None:
@@ -227,7 +222,7 @@ class _Bar:
             self._progress.stop()
 
     def update(self, completed: float, description: str) -> None:
-        if self._progress is not None and self._task is not None:
+        if self._progress is not None:
             self._progress.update(self._task, completed=completed, description=description)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
