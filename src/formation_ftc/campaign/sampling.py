@@ -257,11 +257,7 @@ def value_from_unit(sampler: Sampler, u: float) -> Any:
             min(sampler.low + math.floor((sampler.high - sampler.low + 1) * u), sampler.high)
         )
     if isinstance(sampler, Choice):
-        w = (
-            np.ones(len(sampler.values))
-            if sampler.weights is None
-            else np.asarray(sampler.weights, float)
-        )
+        w = np.asarray(sampler.weights or [1.0] * len(sampler.values), float)
         edges = np.cumsum(w) / np.sum(w)
         k = min(int(np.searchsorted(edges, u, side="right")), len(sampler.values) - 1)
         return copy.deepcopy(sampler.values[k])
@@ -359,9 +355,8 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
         return []
     parts = path.split(".")
     section = getattr(scenario, "section", None)
-    if (
-        callable(section) and section(parts[0]) is not None
-    ):  # a composed slot: its component's section
+    if callable(section) and section(parts[0]) is not None:
+        # a composed slot: its component's section
         model, parts = type(section(parts[0])), parts[1:]
     info = field_info(model, ".".join(parts))
     if info is None:
@@ -395,9 +390,8 @@ class _Validation:
             for p in self.numeric
             for b in self.bases
         }
-        self.violations: dict[
-            tuple[str, int, int], list[Any]
-        ] = {}  # -> [run id, value, runs in all]
+        # (path, base, bound) -> [run id, value, runs in all]
+        self.violations: dict[tuple[str, int, int], list[Any]] = {}
         self.non_finite: dict[tuple[str, int], tuple[int, Any]] = {}  # -> (run id, value)
         self.lowest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
         self.highest: dict[tuple[str, int], tuple[float, RunInputs]] = {}
@@ -481,16 +475,12 @@ class CampaignPlan:
         self.sampling = meta.sampling
         self._design: np.ndarray | None = None  # quasi-Monte Carlo rows, built on first use
         self.base_names = spec.bases
-        self.base_raws: list[dict[str, Any]] = []
-        self.base_scenarios: list[Any] = []  # validated (with the campaign's overrides)
-        self.methods: list[str] = []
-        dumps: list[dict[str, Any]] = []
-        for name in self.base_names:
-            raw, dump, method, scenario = self._load_base(name, base_dir)
-            self.base_raws.append(raw)
-            self.base_scenarios.append(scenario)
-            dumps.append(dump)
-            self.methods.append(method)
+        loaded = [self._load_base(name, base_dir) for name in self.base_names]
+        self.base_raws: list[dict[str, Any]] = [raw for raw, _ in loaded]
+        # validated (with the campaign's overrides)
+        self.base_scenarios: list[Any] = [s for _, s in loaded]
+        self.methods: list[str] = [s.scenario.method for s in self.base_scenarios]
+        dumps = [s.model_dump(mode="json") for s in self.base_scenarios]
         self.samplers = spec.samplers()
         self.grid_samplers = [s for s in self.samplers if isinstance(s, Grid)]  # kind "grid"
         self.random_samplers = [s for s in self.samplers if s.kind != "grid"]
@@ -518,9 +508,8 @@ class CampaignPlan:
         self.n_chunks = self.n_grid * self.chunks_per_point
         self._check_design_size()
         bad = [r for r in spec.traces.runs if r >= self.n_runs]
-        if (
-            bad and drop_missing_traces
-        ):  # --runs made the campaign smaller: keep the traces that exist
+        if bad and drop_missing_traces:
+            # --runs made the campaign smaller: keep the traces that exist
             kept = [r for r in spec.traces.runs if r < self.n_runs]
             spec = spec.model_copy(update={"traces": spec.traces.model_copy(update={"runs": kept})})
             self.spec = spec
@@ -532,15 +521,12 @@ class CampaignPlan:
         self._check_extremes()
 
     # ------------------------------------------------------------------------------ base scenarios
-    def _load_base(self, name: str, base_dir: Path | None):
-        candidate = Path(name)
-        if (
-            base_dir is not None
-            and not candidate.is_absolute()
-            and (base_dir / candidate).is_file()
-        ):
-            candidate = base_dir / candidate
-            raw, source = loader.read_raw(candidate)
+    def _load_base(self, name: str, base_dir: Path | None) -> tuple[dict[str, Any], Any]:
+        """(raw, validated scenario) of a base, with the campaign's overrides; a relative path is
+        looked up next to the campaign file first."""
+        local = None if base_dir is None or Path(name).is_absolute() else base_dir / name
+        if local is not None and local.is_file():
+            raw, source = loader.read_raw(local)
         else:
             try:
                 raw, source = loader.read_raw(name)
@@ -551,8 +537,7 @@ class CampaignPlan:
             scenario = loader.validate(raw, f"{source} with the campaign's [overrides]")
         except loader.ScenarioError as exc:
             raise CampaignError(f"campaign.base {name!r}: {exc}") from None
-        dump = scenario.model_dump(mode="json")
-        return raw, dump, scenario.scenario.method, scenario
+        return raw, scenario
 
     def _check_extremes(self) -> None:
         """Every bound of every sampler must validate on every base, before any run."""
@@ -717,16 +702,10 @@ class CampaignPlan:
     # ------------------------------------------------------------------------------------ chunks
     def chunks(self, done: set[int] | frozenset[int] = frozenset()) -> ChunkList:
         """Every chunk in id order, except those in ``done`` (made on access, see :class:`ChunkList`)."""
-        ids = range(self.n_chunks)
         if not done:
-            return ChunkList(self, ids)
-        return ChunkList(
-            self,
-            np.setdiff1d(
-                np.arange(self.n_chunks, dtype=np.int64),
-                np.fromiter(done, dtype=np.int64, count=len(done)),
-            ),
-        )
+            return ChunkList(self, range(self.n_chunks))
+        finished = np.fromiter(done, dtype=np.int64, count=len(done))
+        return ChunkList(self, np.setdiff1d(np.arange(self.n_chunks, dtype=np.int64), finished))
 
     def chunk(self, chunk_id: int) -> Chunk:
         g, c = divmod(int(chunk_id), self.chunks_per_point)

@@ -90,9 +90,7 @@ class Sampler:
 
     kind = "random"  # "random" (drawn per run) or "grid" (swept)
 
-    def draw(
-        self, rng: np.random.Generator
-    ) -> Any:  # pragma: no cover - every sampler overrides it
+    def draw(self, rng: np.random.Generator) -> Any:  # pragma: no cover - always overridden
         """One value drawn with ``rng`` (subclasses define the distribution)."""
         return NotImplemented
 
@@ -167,9 +165,8 @@ class LogUniform(Sampler):
 
     def from_first_double(self, d):
         lo, hi = math.log(self.low), math.log(self.high)
-        return [
-            math.exp(x) for x in (lo + (hi - lo) * d).tolist()
-        ]  # math.exp: the same libm as draw
+        # math.exp: the same libm as draw
+        return [math.exp(x) for x in (lo + (hi - lo) * d).tolist()]
 
     def extremes(self):
         return [self.low, self.high]
@@ -306,13 +303,6 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
                 f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}"
             )
 
-    def need(*names):
-        missing = [n for n in names if n not in spec]
-        if missing:
-            raise CampaignError(
-                f"sample.{path}: {spec.get('dist', '')} distribution needs {', '.join(missing)}"
-            )
-
     if "grid" in spec or "choice" in spec:
         key = "grid" if "grid" in spec else "choice"
         allowed(key) if key == "grid" else allowed("choice", "weights")
@@ -342,7 +332,9 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         )
     cls, params, n_required = _DISTS[dist]
     allowed("dist", *params)
-    need(*params[:n_required])
+    missing = [n for n in params[:n_required] if n not in spec]
+    if missing:
+        raise CampaignError(f"sample.{path}: {dist} distribution needs {', '.join(missing)}")
     if cls is Integer:
         for n in params:
             if isinstance(spec[n], bool) or not isinstance(spec[n], int):
@@ -556,9 +548,8 @@ def spec_hash(spec: CampaignSpec, base_raws: list[dict[str, Any]]) -> str:
     """SHA-256 of the campaign spec and the *content* of its base scenarios (not their names only)."""
     h = hashlib.sha256()
     dump = spec.model_dump(mode="json")
-    if (
-        dump["campaign"].get("sampling") == "random"
-    ):  # the default: same hash as before the option existed
+    if dump["campaign"].get("sampling") == "random":
+        # the default: same hash as before the option existed
         del dump["campaign"]["sampling"]
     h.update(_canonical(dump).encode())
     for raw in base_raws:

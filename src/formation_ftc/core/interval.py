@@ -42,7 +42,7 @@ import ast
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, reduce
 from typing import cast
 
 import numpy as np
@@ -112,10 +112,6 @@ def _up(x, ulps: int = 1):
 
 def _out(lo, hi, ulps: int = 1) -> _I:
     return _clean(_down(lo, ulps), _up(hi, ulps))
-
-
-def _full(n: int) -> _I:
-    return _I(np.full(n, -_INF), np.full(n, _INF))
 
 
 def _const(v: float, n: int) -> _I:
@@ -319,9 +315,7 @@ def _is_integer(x) -> np.ndarray:
 
 
 def _pow(a: _I, b: _I) -> _I:
-    n = a.lo.size
     with np.errstate(all="ignore"):
-        out = _full(n)
         fixed = b.lo == b.hi
         p = np.where(fixed, b.lo, 0.0)
         integer = fixed & _is_integer(p)
@@ -348,8 +342,8 @@ def _pow(a: _I, b: _I) -> _I:
         hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
         ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
         r = _out(lo, hi, LIB_ULPS)
-        lo = np.where(zero, 1.0, np.where(ok, r.lo, out.lo))
-        hi = np.where(zero, 1.0, np.where(ok, r.hi, out.hi))
+        lo = np.where(zero, 1.0, np.where(ok, r.lo, -_INF))  # nothing known outside the domain
+        hi = np.where(zero, 1.0, np.where(ok, r.hi, _INF))
         lo = np.where(even & ok, np.maximum(lo, 0.0), lo)
     return _clean(lo, hi)
 
@@ -415,6 +409,16 @@ def _not(a: _I) -> _I:
     return _bool(f, t)
 
 
+#: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`)
+_BINARY: dict[type, Callable[[_I, _I], _I]] = {
+    ast.Add: _add,
+    ast.Sub: _sub,
+    ast.Mult: _mul,
+    ast.Div: _div,
+    ast.Pow: _pow,
+}
+
+
 # --------------------------------------------------------------------------------------------------
 # the evaluator: (value, derivative) pairs over the parsed tree
 
@@ -422,20 +426,16 @@ def _not(a: _I) -> _I:
 _Pair = tuple[_I, "_I | None"]
 
 
+@dataclass(frozen=True)
 class _Evaluator:
     """Walk the (already validated) syntax tree with interval (and optionally dual) arithmetic."""
 
-    def __init__(
-        self,
-        text: str,
-        env: Mapping[str, _I],
-        time: str | None,
-        n: int,
-        derivative: bool,
-        variables: Sequence[str] = (),
-    ):
-        self.text, self.env, self.time, self.n, self.der = text, env, time, n, derivative
-        self.variables = tuple(variables)
+    text: str
+    env: Mapping[str, _I]
+    time: str | None
+    n: int
+    der: bool  # derivatives too (forward mode)
+    variables: Sequence[str] = ()
 
     def zero(self) -> _I | None:
         """Derivative of a constant (None when no derivative is taken)."""
@@ -458,11 +458,8 @@ class _Evaluator:
 
     def visit_Name(self, node: ast.Name) -> _Pair:
         if node.id in self.env:
-            v = self.env[node.id]
-            d = None
-            if self.der:
-                d = _const(1.0 if node.id == self.time else 0.0, self.n)
-            return v, d
+            d = _const(1.0 if node.id == self.time else 0.0, self.n) if self.der else None
+            return self.env[node.id], d
         if node.id in self.variables:
             raise TypeError(f"expression {self.text!r} needs a value for {node.id!r}")
         if node.id in CONSTANTS:
@@ -484,18 +481,10 @@ class _Evaluator:
         (a, da), (b, db) = self.visit(node.left), self.visit(node.right)
         op = type(node.op)
         wrap: np.ndarray | None = None
-        if op is ast.Add:
-            v = _add(a, b)
-        elif op is ast.Sub:
-            v = _sub(a, b)
-        elif op is ast.Mult:
-            v = _mul(a, b)
-        elif op is ast.Div:
-            v = _div(a, b)
-        elif op is ast.Pow:
-            v = _pow(a, b)
-        elif op is ast.Mod:
+        if op is ast.Mod:
             v, wrap = _mod(a, b)
+        elif op in _BINARY:
+            v = _BINARY[op](a, b)
         else:
             raise IntervalError(f"operator {op.__name__} cannot be enclosed")
         if not self.der:
@@ -536,9 +525,7 @@ class _Evaluator:
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
         f = _and if isinstance(node.op, ast.And) else _or
-        out = vals[0]
-        for v in vals[1:]:
-            out = f(out, v)
+        out = reduce(f, vals)
         return out, self.jump(~_decided(out), self.zero())
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
@@ -561,19 +548,24 @@ class _Evaluator:
         if not self.der:
             return v, None
         assert a[1] is not None and b[1] is not None
-        return v, self.jump(~_decided_truth(c), _select(c, a[1], b[1]))
+        t, f = _truth(c)  # the branch is known where the condition is
+        return v, self.jump(~(t | f), _select(c, a[1], b[1]))
 
     def visit_Call(self, node: ast.Call) -> _Pair:
         name = node.func.id if isinstance(node.func, ast.Name) else ""
         if name not in FUNCTIONS:
             raise IntervalError(f"function {name!r} in {self.text!r} cannot be enclosed")
         args = [self.visit(a) for a in node.args]
+        if name in _SMOOTH:
+            return self._smooth(args[0], *_SMOOTH[name])
+        if name in _PIECEWISE_CONSTANT:
+            return self._piecewise_constant(args[0], _PIECEWISE_CONSTANT[name])
         handler = getattr(self, f"call_{name}", None)
         if handler is None:  # pragma: no cover - every whitelisted function has a handler (tested)
             raise IntervalError(f"function {name!r} in {self.text!r} cannot be enclosed")
         return handler(*args)
 
-    # smooth unary functions: value and derivative factor f'(a)
+    # smooth unary functions (:data:`_SMOOTH`): value and derivative factor f'(a)
     def _smooth(self, arg: _Pair, f: Callable[[_I], _I], fprime: Callable[[_I, _I], _I]) -> _Pair:
         a, da = arg
         v = f(a)
@@ -581,34 +573,6 @@ class _Evaluator:
             return v, None
         assert da is not None
         return v, _mul(fprime(a, v), da)
-
-    def call_sin(self, x):
-        return self._smooth(x, _sin, lambda a, v: _cos(a))
-
-    def call_cos(self, x):
-        return self._smooth(x, _cos, lambda a, v: _neg(_sin(a)))
-
-    def call_tan(self, x):
-        return self._smooth(x, _tan, lambda a, v: _add(_const(1.0, self.n), _sqr(v)))
-
-    def call_asin(self, x):
-        return self._smooth(
-            x,
-            _asin,
-            lambda a, v: _div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a)))),
-        )
-
-    def call_acos(self, x):
-        return self._smooth(
-            x,
-            _acos,
-            lambda a, v: _neg(_div(_const(1.0, self.n), _sqrt(_sub(_const(1.0, self.n), _sqr(a))))),
-        )
-
-    def call_atan(self, x):
-        return self._smooth(
-            x, _atan, lambda a, v: _div(_const(1.0, self.n), _add(_const(1.0, self.n), _sqr(a)))
-        )
 
     def call_atan2(self, y, x):
         (yv, dy), (xv, dx) = y, x
@@ -620,37 +584,6 @@ class _Evaluator:
         d = _div(_sub(_mul(xv, dy), _mul(yv, dx)), _add(_sqr(xv), _sqr(yv)))
         on_cut = ~((xv.lo > 0) | (yv.lo > 0) | (yv.hi < 0))
         return v, self.jump(on_cut, d)
-
-    def call_sinh(self, x):
-        return self._smooth(x, lambda a: _monotone(np.sinh, a), lambda a, v: _cosh(a))
-
-    def call_cosh(self, x):
-        return self._smooth(x, _cosh, lambda a, v: _monotone(np.sinh, a))
-
-    def call_tanh(self, x):
-        return self._smooth(
-            x,
-            lambda a: _clip_range(_monotone(np.tanh, a), -1.0, 1.0),
-            lambda a, v: _sub(_const(1.0, self.n), _sqr(v)),
-        )
-
-    def call_exp(self, x):
-        return self._smooth(
-            x, lambda a: _clip_range(_monotone(np.exp, a), 0.0, _INF), lambda a, v: v
-        )
-
-    def call_log(self, x):
-        return self._smooth(x, _log(np.log), lambda a, v: _div(_const(1.0, self.n), a))
-
-    def call_log10(self, x):
-        ln10 = np.full(self.n, math.log(10.0))
-        ln10 = _out(ln10, ln10, 2)
-        return self._smooth(
-            x, _log(np.log10), lambda a, v: _div(_const(1.0, self.n), _mul(a, ln10))
-        )
-
-    def call_sqrt(self, x):
-        return self._smooth(x, _sqrt, lambda a, v: _div(_const(0.5, self.n), v))
 
     def call_abs(self, x):
         a, da = x
@@ -669,39 +602,16 @@ class _Evaluator:
         v = f(a)
         return v, self.jump(v.lo != v.hi, self.zero())
 
-    def call_sign(self, x):
-        return self._piecewise_constant(x, _exact_monotone(np.sign))
-
-    def call_floor(self, x):
-        return self._piecewise_constant(x, _exact_monotone(np.floor))
-
-    def call_ceil(self, x):
-        return self._piecewise_constant(x, _exact_monotone(np.ceil))
-
-    def call_step(self, x):
-        return self._piecewise_constant(
-            x, lambda a: _I(np.where(a.lo >= 0, 1.0, 0.0), np.where(a.hi >= 0, 1.0, 0.0))
-        )
-
     def _extreme(self, args, lower: bool) -> _Pair:
         out = args[0]
         for b in args[1:]:
-            a = out
-            if lower:
-                first, second = a[0].hi <= b[0].lo, b[0].hi <= a[0].lo  # min is certainly a / b
-                v = _minimum(a[0], b[0])
+            (av, ad), (bv, bd) = out, b
+            if lower:  # where the min is certainly a / b
+                first, second, v = av.hi <= bv.lo, bv.hi <= av.lo, _minimum(av, bv)
             else:
-                first, second = a[0].lo >= b[0].hi, b[0].lo >= a[0].hi
-                v = _maximum(a[0], b[0])
-            d = None
-            if self.der:
-                assert a[1] is not None and b[1] is not None
-                h = _hull(a[1], b[1])
-                d = _I(
-                    np.where(first, a[1].lo, np.where(second, b[1].lo, h.lo)),
-                    np.where(first, a[1].hi, np.where(second, b[1].hi, h.hi)),
-                )
-            out = (v, d)
+                first, second, v = av.lo >= bv.hi, bv.lo >= av.hi, _maximum(av, bv)
+            # the derivative of the one that is certainly the extreme, else both
+            out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
         return out
 
     def call_min(self, *args):
@@ -726,14 +636,49 @@ class _Evaluator:
         return _first_true(self.call_where, args)
 
 
+def _one(a: _I) -> _I:
+    """The constant 1 on every sub-interval of ``a``."""
+    return _const(1.0, a.lo.size)
+
+
+def _ln10(a: _I) -> _I:
+    """log(10) rounded outward, on every sub-interval of ``a``."""
+    c = _const(math.log(10.0), a.lo.size)
+    return _out(c.lo, c.hi, 2)
+
+
+#: smooth unary functions: name -> (enclosure of f(a), enclosure of f'(a) given a and v = f(a))
+_SMOOTH: dict[str, tuple[Callable[[_I], _I], Callable[[_I, _I], _I]]] = {
+    "sin": (_sin, lambda a, v: _cos(a)),
+    "cos": (_cos, lambda a, v: _neg(_sin(a))),
+    "tan": (_tan, lambda a, v: _add(_one(a), _sqr(v))),
+    "asin": (_asin, lambda a, v: _div(_one(a), _sqrt(_sub(_one(a), _sqr(a))))),
+    "acos": (_acos, lambda a, v: _neg(_div(_one(a), _sqrt(_sub(_one(a), _sqr(a)))))),
+    "atan": (_atan, lambda a, v: _div(_one(a), _add(_one(a), _sqr(a)))),
+    "sinh": (lambda a: _monotone(np.sinh, a), lambda a, v: _cosh(a)),
+    "cosh": (_cosh, lambda a, v: _monotone(np.sinh, a)),
+    "tanh": (
+        lambda a: _clip_range(_monotone(np.tanh, a), -1.0, 1.0),
+        lambda a, v: _sub(_one(a), _sqr(v)),
+    ),
+    "exp": (lambda a: _clip_range(_monotone(np.exp, a), 0.0, _INF), lambda a, v: v),
+    "log": (_log(np.log), lambda a, v: _div(_one(a), a)),
+    "log10": (_log(np.log10), lambda a, v: _div(_one(a), _mul(a, _ln10(a)))),
+    "sqrt": (_sqrt, lambda a, v: _div(_const(0.5, a.lo.size), v)),
+}
+
+#: piecewise-constant functions (a jump wherever the value may change): name -> enclosure
+_PIECEWISE_CONSTANT: dict[str, Callable[[_I], _I]] = {
+    "sign": _exact_monotone(np.sign),
+    "floor": _exact_monotone(np.floor),
+    "ceil": _exact_monotone(np.ceil),
+    "step": lambda a: _I(np.where(a.lo >= 0, 1.0, 0.0), np.where(a.hi >= 0, 1.0, 0.0)),
+}
+
+
 def _decided(b: _I) -> np.ndarray:
     """A 0/1 interval whose value is known (not [0, 1])."""
     return b.lo == b.hi
-
-
-def _decided_truth(c: _I) -> np.ndarray:
-    t, f = _truth(c)
-    return t | f
 
 
 # --------------------------------------------------------------------------------------------------
@@ -742,9 +687,7 @@ def _decided_truth(c: _I) -> np.ndarray:
 
 @lru_cache(maxsize=1024)
 def _parse(text: str | float | int, variables: tuple[str, ...]) -> ast.AST:
-    compile_expression(
-        text, tuple(variables)
-    )  # the whitelist, the size limits and constant folding
+    compile_expression(text, variables)  # the whitelist, the size limits and constant folding
     if isinstance(text, int | float):
         return ast.Constant(value=float(text))
     return ast.parse(text.strip(), mode="eval").body
@@ -775,18 +718,6 @@ def evaluate(
     (lo, hi) : arrays with ``lo[k] <= f(t) <= hi[k]`` for every t in sub-interval k (``-inf``/``inf``
         where nothing is known).
     """
-    return _evaluate(text, variables, t_lo, t_hi, derivative, time, fixed)
-
-
-def _evaluate(
-    text: str | float | int,
-    variables: Sequence[str],
-    t_lo,
-    t_hi,
-    derivative: bool,
-    time: str,
-    fixed: Mapping[str, float],
-) -> tuple[np.ndarray, np.ndarray]:
     tree = _parse(text, tuple(variables))
     a = np.atleast_1d(np.asarray(t_lo, dtype=float))
     b = np.atleast_1d(np.asarray(t_hi, dtype=float))
@@ -839,7 +770,9 @@ def _boxes(
     a, b = edges[:-1].copy(), edges[1:].copy()
 
     def ev(a, b):
-        out = [_evaluate(tx, variables, a, b, derivative, time, fixed) for tx in texts]
+        out = [
+            evaluate(tx, variables, a, b, derivative=derivative, time=time, **fixed) for tx in texts
+        ]
         return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
 
     lo, hi = ev(a, b)
@@ -944,11 +877,6 @@ def enclose_norm(
     Per sub-interval the norm is bounded from the component enclosures (``sqrt(sum max|f_m|^2)``,
     rounded up); with ``upper`` the sub-intervals whose bound reaches it are bisected.
     """
-    refine = None
-    if upper is not None:
-
-        def refine(lo, hi):
-            return _norm_upper(lo, hi) >= upper
-
+    refine = None if upper is None else (lambda lo, hi: _norm_upper(lo, hi) >= upper)
     bx = _boxes(texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, time, fixed)
     return float(_norm_upper(bx.lo, bx.hi).max())

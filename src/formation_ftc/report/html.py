@@ -29,6 +29,7 @@ import json
 import math
 import mimetypes
 from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -127,6 +128,15 @@ def write_trajectory3d(
     return path
 
 
+def _is_point(p: Any) -> bool:
+    """``[x, y, z]`` of finite numbers."""
+    return (
+        isinstance(p, list | tuple)
+        and len(p) == 3
+        and all(isinstance(c, int | float) and math.isfinite(c) for c in p)
+    )
+
+
 def load_trajectories(path: Path) -> tuple[list[dict], list[str]]:
     """Read a ``trajectory3d.json``; returns ``(valid views, problems)`` (bad entries are skipped)."""
     problems: list[str] = []
@@ -146,17 +156,7 @@ def load_trajectories(path: Path) -> tuple[list[dict], list[str]]:
             continue
         tracks = {}
         for name, pts in view["spacecraft"].items():
-            ok = (
-                isinstance(pts, list)
-                and pts
-                and all(
-                    isinstance(p, list | tuple)
-                    and len(p) == 3
-                    and all(isinstance(c, int | float) and math.isfinite(c) for c in p)
-                    for p in pts
-                )
-            )
-            if ok:
+            if isinstance(pts, list) and pts and all(map(_is_point, pts)):
                 tracks[str(name)] = _decimate([list(map(float, p)) for p in pts], MAX_POINTS_3D)
             else:
                 problems.append(
@@ -186,17 +186,8 @@ def _plotly_view(view: dict, div_id: str) -> str:
         fig.add_trace(
             go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", name=name, line=dict(color=color, width=4))
         )
-        fig.add_trace(
-            go.Scatter3d(
-                x=[xs[-1]],
-                y=[ys[-1]],
-                z=[zs[-1]],
-                mode="markers",
-                name=f"{name} (final)",
-                marker=dict(color=color, size=4),
-                showlegend=False,
-            )
-        )
+        final = dict(x=[xs[-1]], y=[ys[-1]], z=[zs[-1]], name=f"{name} (final)", showlegend=False)
+        fig.add_trace(go.Scatter3d(mode="markers", marker=dict(color=color, size=4), **final))
     ax = view["axis_labels"]
     fig.update_layout(
         title=view["title"],
@@ -217,7 +208,8 @@ def league_links(
     out_dir: Path | str, leagues: list[Path | str] | None = None
 ) -> list[dict[str, Any]]:
     """League leaderboards to link from the report: the given league directories and every
-    ``<out_dir>/*/leaderboard/index.html``; each ``{name, href (relative), ranking}``."""
+    ``<out_dir>/*/leaderboard/index.html``; each ``{name, seeds, href (relative), ranking, metric,
+    tops}`` (``tops``: ``(level, first three methods)`` pairs)."""
     import os
 
     out_dir = Path(out_dir)
@@ -244,6 +236,10 @@ def league_links(
             "ranking": board.get("ranking", {}),
             "metric": board.get("requirement", {}).get("metric", ""),
         }
+        found[key]["tops"] = [  # the first three methods of every level
+            (level, [r.get("method") for r in rows[:3]])
+            for level, rows in found[key]["ranking"].items()
+        ]
     return list(found.values())
 
 
@@ -322,15 +318,14 @@ def _trajectory(entry: dict, paper_dir: Path, include_3d: bool) -> dict[str, Any
 
     if not entry.get("trajectory3d"):
         return None
-    if not include_3d:
-        return {"unavailable": "3-D view left out (--no-3d).", "problems": [], "views": []}
-    if not plotly_available():
-        return {
-            "unavailable": "Interactive 3-D view unavailable: plotly is not installed "
-            "(pip install plotly, then run the report again).",
-            "problems": [],
-            "views": [],
-        }
+    if not include_3d or not plotly_available():
+        why = (
+            "3-D view left out (--no-3d)."
+            if not include_3d
+            else "Interactive 3-D view unavailable: plotly is not installed "
+            "(pip install plotly, then run the report again)."
+        )
+        return {"unavailable": why, "problems": [], "views": []}
     views, problems = load_trajectories(paper_dir / str(entry["trajectory3d"]))
     drawn = [
         {
@@ -386,21 +381,7 @@ def _render(
     sections = [_section(e, out_dir, include_3d) for e in entries]
     uses_plotly = any(s["trajectory"] and s["trajectory"]["views"] for s in sections)
     n_failed = sum(1 for e in entries if e.get("status") != "ok")
-    status_line = (
-        f"{len(entries)} paper(s), all ran"
-        if not n_failed
-        else f"{len(entries)} paper(s), {n_failed} failed"
-    )
-    links = [
-        {
-            **lk,
-            "tops": [
-                (level, [r.get("method") for r in rows[:3]])
-                for level, rows in lk["ranking"].items()
-            ],
-        }
-        for lk in league_links(out_dir, leagues)
-    ]
+    status_line = f"{len(entries)} paper(s), " + (f"{n_failed} failed" if n_failed else "all ran")
     return render(
         "reproduction.html.j2",
         title=title,
@@ -408,7 +389,7 @@ def _render(
         f"commit {metadata.get('git_commit', 'unknown')}",
         plotly_src=plotly_src() if uses_plotly else "",
         sections=sections,
-        leagues=links,
+        leagues=league_links(out_dir, leagues),
         metadata=[
             (k, v)
             for k, v in metadata.items()
@@ -451,13 +432,7 @@ def write_index(
     from formation_ftc.atomic import atomic_write
 
     out_dir = Path(out_dir)
-    page = _render(
-        entries,
-        out_dir,
-        metadata,
-        include_3d,
-        "formation-ftc reproduction report",
-        leagues,
-        lambda: plotly_script(out_dir),
-    )
+    title = "formation-ftc reproduction report"
+    plotly_src = partial(plotly_script, out_dir)  # called only for a page with a 3-D view
+    page = _render(entries, out_dir, metadata, include_3d, title, leagues, plotly_src)
     return atomic_write(out_dir / "index.html", page)

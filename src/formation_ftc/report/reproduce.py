@@ -35,7 +35,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from formation_ftc import registry
 from formation_ftc.atomic import atomic_write
@@ -44,9 +44,6 @@ from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
 from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus
-
-if TYPE_CHECKING:
-    from rich.progress import TaskID
 
 __all__ = [
     "MARKER_NAME",
@@ -190,44 +187,34 @@ class _Bar:
     """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``. Its
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
-    def __init__(
-        self, enabled: bool, n_papers: int, console=None, started: float | None = None
-    ) -> None:
-        self.enabled = enabled and n_papers > 0
+    def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
         self.n = n_papers
         self._progress = None
-        self._task: TaskID | None = None
-        if self.enabled:
+        if enabled and n_papers > 0:
+            from rich import progress as rp
             from rich.console import Console
-            from rich.progress import (
-                BarColumn,
-                Progress,
-                ProgressColumn,
-                TaskProgressColumn,
-                TextColumn,
-            )
             from rich.text import Text
 
             t0 = time.perf_counter() if started is None else started
 
-            class Elapsed(ProgressColumn):
+            class Elapsed(rp.ProgressColumn):
                 def render(self, task) -> Text:
                     s = int(time.perf_counter() - t0)
                     return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
 
-            self._progress = Progress(
-                TextColumn("[bold]reproduce[/]"),
-                BarColumn(),
-                TaskProgressColumn(),
+            self._progress = rp.Progress(
+                rp.TextColumn("[bold]reproduce[/]"),
+                rp.BarColumn(),
+                rp.TaskProgressColumn(),
                 Elapsed(),
-                TextColumn("{task.description}"),
+                rp.TextColumn("{task.description}"),
                 console=console or Console(stderr=True),
             )
+            self._task = self._progress.add_task("", total=float(n_papers))
 
     def __enter__(self) -> _Bar:
         if self._progress is not None:
             self._progress.start()
-            self._task = self._progress.add_task("", total=float(self.n))
         return self
 
     def __exit__(self, *exc) -> None:
@@ -235,7 +222,7 @@ class _Bar:
             self._progress.stop()
 
     def update(self, completed: float, description: str) -> None:
-        if self._progress is not None and self._task is not None:
+        if self._progress is not None:
             self._progress.update(self._task, completed=completed, description=description)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
@@ -338,8 +325,10 @@ def _run_one(
     paper_dir: Path,
     progress: Callable[[float, str], None],
     import_error: str | None,
-    profiler: Profiler | None = None,
-) -> tuple[dict[str, Any], PaperReport | None]:
+    profile: bool,
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
+    """One paper: (report.json entry, summary, phase breakdown or None)."""
+    profiler = Profiler() if profile else None
     t0 = time.perf_counter()
     report: PaperReport | None = None
     error = import_error
@@ -358,7 +347,9 @@ def _run_one(
     wall = time.perf_counter() - t0
     if report is not None:
         report.wall_time_s = wall
-    return paper_entry(rep, paper, paper_dir, report, wall, error), report
+    entry = paper_entry(rep, paper, paper_dir, report, wall, error)
+    breakdown = profiler.breakdown() if profiler is not None else None
+    return entry, to_jsonable(_paper_summary(entry, report)), breakdown
 
 
 # ------------------------------------------------------------------------------------------- driver
@@ -433,12 +424,7 @@ def reproduce(
         paper_dir.mkdir(parents=True, exist_ok=True)
     done: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}  # paper -> (entry, summary)
 
-    def finished(
-        paper: str,
-        entry: dict[str, Any],
-        summary: dict[str, Any],
-        breakdown: dict[str, float] | None,
-    ) -> None:
+    def finished(paper: str, entry: dict, summary: dict, breakdown: dict | None) -> None:
         t_report = time.perf_counter()
         done[paper] = entry, summary
         _write_json(out / paper / "report.json", entry)
@@ -458,21 +444,11 @@ def reproduce(
         else:
             for i, paper in enumerate(selected):
                 bar.update(i, f"{paper} ({i + 1}/{len(selected)})")
-                prof = Profiler() if profile else None
-                entry, report = _run_one(
-                    found.get(paper),
-                    paper,
-                    out / paper,
-                    bar.callback(i, paper),
-                    import_failures.get(paper),
-                    prof,
+                rep, error = found.get(paper), import_failures.get(paper)
+                entry, summary, breakdown = _run_one(
+                    rep, paper, out / paper, bar.callback(i, paper), error, profile
                 )
-                finished(
-                    paper,
-                    entry,
-                    _paper_summary(entry, report),
-                    prof.breakdown() if prof is not None else None,
-                )
+                finished(paper, entry, summary, breakdown)
                 bar.update(i + 1, f"{paper} {entry['status']} in {entry['wall_time_s']:.1f} s")
     entries = [done[p][0] for p in selected]
     summaries = {p: done[p][1] for p in selected}
@@ -496,33 +472,29 @@ def reproduce(
             "compile: JAX trace + MLIR lowering + XLA compile (incl. persistent-cache "
             "reads) from jax.monitoring time spans; run/plot: marked blocks without "
             "compile; post: the rest of the paper's wall time; report: JSON files"
-            + (
+        )
+        if n_workers > 1:
+            metadata["profile_method"] += (
                 f"; papers ran side by side in {n_workers} worker processes, so the "
                 "papers' times add up to more than the total wall time"
-                if n_workers > 1
-                else ""
             )
-        )
         metadata["profile"] = breakdowns
         for p, b in breakdowns.items():
             metadata[f"profile_{p}"] = format_breakdown(b)
-    if single:
-        paper = selected[0]
-        summary_doc = {**summaries[paper], "paper": paper, "metadata": metadata}
-    else:
-        summary_doc = {**summaries, "metadata": metadata}
+    summary_doc: dict[str, Any] = {**summaries, "metadata": metadata}
+    if single:  # one paper: its summary at the top level
+        summary_doc = {**summaries[selected[0]], "paper": selected[0], "metadata": metadata}
     t_index = time.perf_counter()
     _write_json(out / "summary.json", summary_doc)
     index = html_report.write_index(out, entries, metadata, include_3d=include_3d, leagues=leagues)
     index_s = time.perf_counter() - t_index
 
-    failed = [e["paper"] for e in entries if e["status"] != "ok"]
     total = time.perf_counter() - t_start  # the whole wait, report writing included
     _print_table(entries, total, index, console)
     if profile:
         _print_profile(breakdowns, index_s, console)
     result = {
-        "exit_code": 1 if failed else 0,
+        "exit_code": 1 if any(e["status"] != "ok" for e in entries) else 0,
         "papers": {
             e["paper"]: {k: e[k] for k in ("status", "wall_time_s", "error")} for e in entries
         },
@@ -584,34 +556,25 @@ def _paper_in_worker(
     rep: Reproduction | None,
     paper: str,
     paper_dir: str,
-    profile: bool,
     import_error: str | None,
+    profile: bool,
     messages,
 ) -> tuple[dict[str, Any], dict[str, Any], dict[str, float] | None]:
     """One paper in a worker process: (report.json entry, summary, phase breakdown or None).
     ``rep`` None: looked up by name in the worker's registry."""
     found: Mapping[str, Reproduction]
     failures: Mapping[str, str]
-    if rep is not None:
-        found, failures = {paper: rep}, {}
-    else:
-        found, failures = available_reproductions()
+    found, failures = ({paper: rep}, {}) if rep is not None else available_reproductions()
 
     def progress(fraction: float = 0.0, message: str = "") -> None:
         with contextlib.suppress(Exception):  # progress is cosmetic; never fail a paper on it
             messages.put((paper, float(fraction), str(message)))
 
-    prof = Profiler() if profile else None
     rep = found.get(paper)
     error = import_error or failures.get(paper)
     if rep is None and error is None:
         error = f"no reproduction named {paper!r} in this worker process (available: {', '.join(found)})"
-    entry, report = _run_one(rep, paper, Path(paper_dir), progress, error, prof)
-    return (
-        entry,
-        to_jsonable(_paper_summary(entry, report)),
-        prof.breakdown() if prof is not None else None,
-    )
+    return _run_one(rep, paper, Path(paper_dir), progress, error, profile)
 
 
 def _shippable(rep: Reproduction | None) -> Reproduction | None:
@@ -653,18 +616,10 @@ def _reproduce_in_workers(
             _threads_for_workers(n_workers),
             ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool,
         ):
-            futures = {
-                pool.submit(
-                    _paper_in_worker,
-                    _shippable(found.get(paper)),
-                    paper,
-                    str(out / paper),
-                    profile,
-                    import_failures.get(paper),
-                    messages,
-                ): paper
-                for paper in order
-            }
+            futures = {}
+            for p in order:
+                args = (_shippable(found.get(p)), p, str(out / p), import_failures.get(p))
+                futures[pool.submit(_paper_in_worker, *args, profile, messages)] = p
             pending = set(futures)
             while pending:
                 done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
@@ -679,23 +634,15 @@ def _reproduce_in_workers(
                     try:
                         entry, summary, breakdown = fut.result()
                     except Exception:  # the worker died (killed, out of memory): this paper failed
-                        entry = paper_entry(
-                            None,
-                            paper,
-                            out / paper,
-                            None,
-                            time.perf_counter() - t0[paper],
-                            traceback.format_exc(),
-                        )
+                        wall, error = time.perf_counter() - t0[paper], traceback.format_exc()
+                        entry = paper_entry(None, paper, out / paper, None, wall, error)
                         summary, breakdown = _paper_summary(entry, None), None
                     finished(paper, entry, summary, breakdown)
                     del running[paper]
                 n_done = len(selected) - len(running)
+                fraction = n_done + sum(f for f, _ in running.values())
                 text = " | ".join(f"{p} {m}".strip() for p, (_, m) in running.items())
-                bar.update(
-                    n_done + sum(f for f, _ in running.values()),
-                    f"{n_done}/{len(selected)} done  {text}",
-                )
+                bar.update(fraction, f"{n_done}/{len(selected)} done  {text}")
     finally:
         manager.shutdown()
 
@@ -796,7 +743,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p.add_argument(
         "--workers",
         type=int,
-        default=None,
         metavar="N",
         help="papers computed side by side in N worker processes (default: one per CPU core, at "
         "most one per paper; 1: one after the other in this process); same numbers either way",
@@ -805,7 +751,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--league",
         action="append",
         type=Path,
-        default=None,
         metavar="DIR",
         help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
         "DIR/*/leaderboard/ of the report directory are linked anyway)",
@@ -862,20 +807,14 @@ def _stated(text: str) -> dict[str, Any]:
     from formation_ftc.condition_json import quantities as _quantities
 
     main = _quantities(text)[1] if text else []
-    one = main[0] if len(main) == 1 else None
-    return {
-        "text": text,
-        "value": one["value"] if one else None,
-        "units": one["units"] if one else None,
-    }
+    one = main[0] if len(main) == 1 else {"value": None, "units": None}
+    return {"text": text, "value": one["value"], "units": one["units"]}
 
 
 def _row_json(row: Mapping[str, Any]) -> dict[str, Any]:
     return {
         "quantity": row["quantity"],
-        "published": _stated(row["published"]),
-        "reference": _stated(row["reference"]),
-        "ours": _stated(row["ours"]),
+        **{k: _stated(row[k]) for k in ("published", "reference", "ours")},
         "criterion": row["criterion"],
         "verdict": row["verdict"],
         "basis": [

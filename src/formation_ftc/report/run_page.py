@@ -87,9 +87,23 @@ def _axes_of(var) -> list:
     return list(var[last[0]].values) if len(last) == 1 else []
 
 
+def _curve(v) -> np.ndarray:
+    """A per-spacecraft part as one line: its values, or their norm over the remaining dimensions."""
+    return _norm_over_rest(v) if v.ndim > 1 else v.values
+
+
+def _save(fig, axes, path: Path) -> Path:
+    """The first panel's legend and the last panel's time axis, then the file."""
+    from formation_ftc.plotting import save_figure
+
+    axes[0, 0].legend(loc="best")
+    axes[-1, 0].set_xlabel("time [s]")
+    return save_figure(fig, path)
+
+
 def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     """Write the standard figures of a result into ``out_dir``; returns their paths (time in s)."""
-    from formation_ftc.plotting import new_figure, save_figure
+    from formation_ftc.plotting import new_figure
 
     out_dir = Path(out_dir)
     ds = _decimated(ds)
@@ -97,21 +111,16 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
     if t is None:
         return []
     paths = []
-    if "position" in ds and len(_axes_of(ds["position"])) >= 1:
+    if "position" in ds and _axes_of(ds["position"]):
         var = ds["position"]
         comps = _axes_of(var)
-        fig, axes = new_figure(
-            len(comps),
-            1,
-            title=f"Positions ({var.attrs.get('frame', '')} frame)".replace(" ( frame)", ""),
-        )
+        title = f"Positions ({var.attrs.get('frame', '')} frame)".replace(" ( frame)", "")
+        fig, axes = new_figure(len(comps), 1, title=title)
         for k, c in enumerate(comps):
             for lab, v in zip(*_per_spacecraft(var), strict=True):
                 axes[k, 0].plot(t, v.sel({var.dims[-1]: c}).values, label=lab)
             axes[k, 0].set_ylabel(f"{c} [{var.attrs.get('units', '')}]")
-        axes[0, 0].legend(loc="best")
-        axes[-1, 0].set_xlabel("time [s]")
-        paths.append(save_figure(fig, out_dir / "run_position.png"))
+        paths.append(_save(fig, axes, out_dir / "run_position.png"))
     errors = [
         n
         for n in ERROR_SIGNALS  # a stacked vector of mixed units has no meaningful norm
@@ -125,9 +134,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
                 axes[k, 0].plot(t, _norm_over_rest(v), label=lab)
             axes[k, 0].set_ylabel(f"|{name}| [{var.attrs.get('units', '')}]")
             axes[k, 0].set_title(var.attrs.get("long_name", name))
-        axes[0, 0].legend(loc="best")
-        axes[-1, 0].set_xlabel("time [s]")
-        paths.append(save_figure(fig, out_dir / "run_tracking_error.png"))
+        paths.append(_save(fig, axes, out_dir / "run_tracking_error.png"))
     if "command" in ds and "applied" in ds and ds["command"].dims == ds["applied"].dims:
         cmd, app = ds["command"], ds["applied"]
         comps = _axes_of(cmd)
@@ -146,10 +153,8 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             axes[-1, 0].plot(t, _norm_over_rest(vc), "--", color=color)
             axes[-1, 0].plot(t, _norm_over_rest(va), "-", color=color, label=lab)
         axes[-1, 0].set_ylabel(f"norm [{cmd.attrs.get('units', '')}]")
-        axes[0, 0].legend(loc="best")
         axes[-1, 0].legend(loc="best")
-        axes[-1, 0].set_xlabel("time [s]")
-        paths.append(save_figure(fig, out_dir / "run_control.png"))
+        paths.append(_save(fig, axes, out_dir / "run_control.png"))
     truth = [
         n
         for n in ("fault", "fault_acceleration")
@@ -166,20 +171,10 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             sel = {f.dims[-1]: c} if c is not None else {}
             for j, (lab, vf, ve) in enumerate(_pairs(f.sel(sel), fh.sel(sel))):
                 color = f"C{j % 8}"
-                axes[k, 0].plot(
-                    t,
-                    _norm_over_rest(vf) if vf.ndim > 1 else vf.values,
-                    "-",
-                    color=color,
-                    label=lab,
-                )
-                axes[k, 0].plot(
-                    t, _norm_over_rest(ve) if ve.ndim > 1 else ve.values, "--", color=color
-                )
+                axes[k, 0].plot(t, _curve(vf), "-", color=color, label=lab)
+                axes[k, 0].plot(t, _curve(ve), "--", color=color)
             axes[k, 0].set_ylabel(f"{'' if c is None else c} [{f.attrs.get('units', '')}]")
-        axes[0, 0].legend(loc="best")
-        axes[-1, 0].set_xlabel("time [s]")
-        paths.append(save_figure(fig, out_dir / "run_fault.png"))
+        paths.append(_save(fig, axes, out_dir / "run_fault.png"))
     return paths
 
 
@@ -237,11 +232,7 @@ def _trajectory(ds, out_dir: Path) -> dict[str, Any] | None:
         fig.add_trace(go.Scatter3d(x=a[:, 0], y=a[:, 1], z=a[:, 2], mode="lines", name=lab))
     units = var.attrs.get("units", "m")
     fig.update_layout(
-        scene={
-            "xaxis_title": f"x [{units}]",
-            "yaxis_title": f"y [{units}]",
-            "zaxis_title": f"z [{units}]",
-        },
+        scene={f"{a}axis_title": f"{a} [{units}]" for a in "xyz"},
         margin={"l": 0, "r": 0, "t": 30, "b": 0},
         title=f"Trajectory ({var.attrs.get('frame', '')})",
     )
