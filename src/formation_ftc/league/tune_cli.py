@@ -12,7 +12,6 @@ from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, T
 
 
 def _cmd_tune(args) -> int:
-    import inspect
     import time
 
     from formation_ftc.league import tuning
@@ -26,18 +25,28 @@ def _cmd_tune(args) -> int:
     # before anything is computed: where the result goes (and its journal)
     tuning.check_tune_out(args.out, args.method, args.level, force=args.force)
     journal = tuning.journal_path(args.out, args.method, args.level)
-    options = {
-        **vars(args),  # those named as tune_league_method's arguments pass as they are
-        "cases": [c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None,
-        "step_checks": _league_step_checks(args.step_check_from) if args.step_check_from else None,
-        "gains": _gains(args.gains) if args.gains is not None else None,
-        "log": _log(args),
-        "budgets": budgets,
-        "journal": journal,
-        "progress": not _quiet(args),
-    }
-    parameters = inspect.signature(tuning.tune_league_method).parameters
-    result = tuning.tune_league_method(**{k: v for k, v in options.items() if k in parameters})
+    result = tuning.tune_league_method(
+        args.league,
+        args.method,
+        args.level,
+        cases=[c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None,
+        train_seeds=args.train_seeds,
+        holdout_seeds=args.holdout_seeds,
+        fresh_seeds=args.fresh_seeds,
+        train_start=args.train_start,
+        gains=_gains(args.gains) if args.gains is not None else None,
+        optimiser=args.optimiser,
+        max_evaluations=args.max_evaluations,
+        margin=args.margin,
+        penalty=args.penalty,
+        violation_cap=args.violation_cap,
+        step_checks=_league_step_checks(args.step_check_from) if args.step_check_from else None,
+        log=_log(args),
+        budgets=budgets,
+        journal=journal,
+        force=args.force,
+        progress=not _quiet(args),
+    )
     path = tuning.write_tuning(result, args.out)
     journal.unlink(missing_ok=True)  # the result holds every evaluation (optimiser.history)
     wall = time.perf_counter() - t0
