@@ -23,6 +23,8 @@ import base64
 import contextlib
 import json
 import math
+import re
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +33,7 @@ import pandas as pd
 
 from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import jsonable
+from formation_ftc.league.definition import requirement_of
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
 
@@ -64,10 +67,7 @@ COSTS = (("delta_v_total", "total delta-v [m/s]"), ("control_impulse", "control 
 
 
 def _cost(cells: pd.DataFrame) -> tuple[str, str] | None:
-    for name, label in COSTS:
-        if f"{name}_median" in cells:
-            return name, label
-    return None
+    return next(((name, label) for name, label in COSTS if f"{name}_median" in cells), None)
 
 
 #: scores shown in the tables (when the league computes them)
@@ -89,12 +89,13 @@ SCORES = (
 )
 
 
+def _league(meta: dict[str, Any]) -> dict[str, Any]:
+    """The ``[league]`` table of the definition that ``league.json`` records."""
+    return tomllib.loads(meta["definition"])["league"]
+
+
 def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
-    import tomllib
-
-    from formation_ftc.league.definition import requirement_of
-
-    return requirement_of(tomllib.loads(meta["definition"])["league"])
+    return requirement_of(_league(meta))
 
 
 def _col(g: pd.DataFrame, name: str) -> np.ndarray:
@@ -123,11 +124,10 @@ def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
             "pass_rate": float(g["passed"].mean()),
         }
         for s in SCORES:
-            col = f"metric:{s}"
-            if col in g:
-                v = ok[col].to_numpy(dtype=float)
+            if f"metric:{s}" in g:
+                v = _col(ok, s)
                 v = v[np.isfinite(v)]
-                row[f"{s}_median"] = float(np.median(v)) if v.size else math.nan
+                row[f"{s}_median"] = _median(v)
                 row[f"{s}_p95"] = float(np.percentile(v, 95)) if v.size else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
@@ -173,12 +173,6 @@ IDENTIFICATION_NOTE = (
 )
 
 
-def _horizon(meta: dict[str, Any]) -> float:
-    import tomllib
-
-    return float(tomllib.loads(meta["definition"])["league"]["horizon"])
-
-
 def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     """The fault detection scores of the methods that fly a fault detector (their runs have the
     league's FDI metrics, :data:`formation_ftc.league.runner.FDI_METRICS`), one row per (method,
@@ -198,7 +192,7 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     Returns ``{"methods": [...], "without_fdi": [...], "rows": [...]}``; counts are ints, rates and
     times floats (NaN where undefined).
     """
-    horizon = _horizon(meta)
+    horizon = float(_league(meta)["horizon"])
     methods = list(dict.fromkeys(runs["method"])) if len(runs) else []
     with_fdi = [
         m
@@ -226,11 +220,9 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
             err = err[np.isfinite(err)]
             outside = _col(ok, "id_time_outside_10pct")[faulted]
             ident = {
-                "median_identification_error": float(np.median(err)) if err.size else math.nan,
+                "median_identification_error": _median(err),
                 "identified_runs": int(err.size),
-                "median_time_outside_10pct": float(np.median(outside))
-                if outside.size
-                else math.nan,
+                "median_time_outside_10pct": _median(outside),
                 "false_identifications": int(np.nansum(_col(ok, "id_false_identification"))),
             }
         rows.append(
@@ -310,9 +302,7 @@ def ranking(
             rows.append(row)
         rows.sort(key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))
         for k, r in enumerate(rows, start=1):
-            r["rank"] = k
-            r["tied"] = False
-            r["rank_display"] = str(k)
+            r.update(rank=k, tied=False, rank_display=str(k))
         out[str(level)] = rows
     if runs is not None:
         rank_confidence(meta, runs, out, common)
@@ -444,10 +434,14 @@ def rank_confidence(
             r.update(tie)
 
 
+def _median(v: np.ndarray) -> float:
+    """The median of ``v`` (NaN when it is empty)."""
+    return float(np.median(v)) if v.size else math.nan
+
+
 def _nanmedian(v) -> float:
     a = np.asarray(v, dtype=float)
-    a = a[np.isfinite(a)]
-    return float(np.median(a)) if a.size else math.nan
+    return _median(a[np.isfinite(a)])
 
 
 def _nan_last(v: float | None) -> float:
@@ -461,20 +455,13 @@ def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
 
 
 def _winners(cells: pd.DataFrame, metric: str) -> list[dict[str, Any]]:
+    shown = ("method", "pass_rate", f"{metric}_median")
     out = []
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
         best = min(
             g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"]))
         )
-        out.append(
-            {
-                "level": level,
-                "case": case,
-                "method": best["method"],
-                "pass_rate": best["pass_rate"],
-                f"{metric}_median": best[f"{metric}_median"],
-            }
-        )
+        out.append({"level": level, "case": case, **{k: best[k] for k in shown}})
     return out
 
 
@@ -584,14 +571,8 @@ def incomplete_note(comp: dict[str, Any], limit: int = 8) -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------- figures
-def _png(fig, path: Path) -> Path:
-    from formation_ftc.plotting import save_figure
-
-    return save_figure(fig, path)
-
-
 def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
-    from formation_ftc.plotting import new_figure
+    from formation_ftc.plotting import new_figure, save_figure
 
     metric, limit, units = _requirement(meta)
     cost = _cost(cells)
@@ -601,13 +582,8 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
     paths = []
     for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
         agg = g.groupby("method", sort=False)[[f"{metric}_median", f"{cost[0]}_median"]].median()
-        fig, axes = new_figure(
-            1,
-            1,
-            width=6.4,
-            height=4.2,
-            title=f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)",
-        )
+        title = f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)"
+        fig, axes = new_figure(1, 1, width=6.4, height=4.2, title=title)
         ax = axes[0, 0]
         pts = agg.to_numpy(dtype=float)
         for name, (acc, dv) in zip(agg.index, pts, strict=True):
@@ -621,14 +597,12 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
         ax.axhline(limit, color="tab:red", lw=0.8, label=f"requirement {limit:g} {units}")
         ax.set_xlabel(f"{cost[1]}, median")
         ax.set_ylabel(f"{metric}, median [{units}]")
-        acc = pts[:, 0][np.isfinite(pts[:, 0])]
-        if acc.size and acc.min() > 0 and acc.max() / acc.min() > 100:
-            ax.set_yscale("log")
-        dv = pts[:, 1][np.isfinite(pts[:, 1])]
-        if dv.size and dv.min() > 0 and dv.max() / dv.min() > 100:
-            ax.set_xscale("log")
+        for k, set_scale in ((0, ax.set_yscale), (1, ax.set_xscale)):  # accuracy, actuator usage
+            v = pts[:, k][np.isfinite(pts[:, k])]
+            if v.size and v.min() > 0 and v.max() / v.min() > 100:
+                set_scale("log")
         ax.legend(loc="best", fontsize=7)
-        paths.append(_png(fig, out / f"pareto-{level}.png"))
+        paths.append(save_figure(fig, out / f"pareto-{level}.png"))
     return paths
 
 
@@ -644,7 +618,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
     """Each method's score signal against time for the traced seed, one panel per fault case."""
     import xarray as xr
 
-    from formation_ftc.plotting import new_figure
+    from formation_ftc.plotting import new_figure, save_figure
 
     metric, limit, units = _requirement(meta)
     signal = "shape_error" if meta.get("kind", "translational") != "attitude" else "attitude_error"
@@ -656,8 +630,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         runs = int(meta["seeds"])  # runs per cell
         bases = _expected_cells(league_dir, m["name"]) or []  # the cells in run order
         for p in sorted(tdir.glob("run-*.nc")):
-            rid = int(p.stem.split("-")[1])
-            g = rid // runs
+            g = int(p.stem.split("-")[1]) // runs  # the cell of run-ID
             if g >= len(bases):
                 continue
             case = bases[g].split("--")[0]
@@ -666,17 +639,11 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
                     v = ds[signal].values
                     v = v if v.ndim == 1 else np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
                     traces.setdefault(case, {})[m["name"]] = (ds["time"].values, v)
-    paths: list[Path] = []
     cases = list(traces)
     if not cases:
-        return paths
-    fig, axes = new_figure(
-        len(cases),
-        1,
-        width=7.0,
-        height=1.0 + 2.0 * len(cases),
-        title=f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level",
-    )
+        return []
+    title = f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level"
+    fig, axes = new_figure(len(cases), 1, width=7.0, height=1.0 + 2.0 * len(cases), title=title)
     for ax, case in zip(axes[:, 0], cases, strict=True):
         for name, (t, v) in traces[case].items():
             ax.plot(t, np.maximum(v, 1e-6), lw=0.8, label=name)
@@ -685,8 +652,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         ax.set_ylabel(f"{case} [{units}]", fontsize=7)
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].legend(loc="upper right", fontsize=6, ncol=2)
-    paths.append(_png(fig, out / "trajectories.png"))
-    return paths
+    return [save_figure(fig, out / "trajectories.png")]
 
 
 # ---------------------------------------------------------------------------------------------- page
@@ -828,10 +794,10 @@ def _page(
 
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
+    median = f"median {metric} [{req_units}]"
     ranking_tables = []
     confidence = _has_confidence(rank)
     for level, rows in rank.items():
-        median = f"median {metric} [{req_units}]"
         columns = _ranking_columns(rows, median, cost, confidence, "tuned (formation-ftc tune)")
         ranking_tables.append((level, _display_rows(rows, metric), columns))
     battery = meta["battery"]
@@ -862,7 +828,7 @@ def _page(
             ("case", "fault case"),
             ("method", "best method"),
             ("pass_rate", "pass rate"),
-            (f"{metric}_median", f"median {metric} [{req_units}]"),
+            (f"{metric}_median", median),
         ],
         fdi=None
         if fdi is None
@@ -940,9 +906,8 @@ def _versus_text(r: dict[str, Any]) -> str:
     p = r.get("p_adjusted")
     if not isinstance(p, int | float) or not math.isfinite(p):
         return "-"
-    name = {"mcnemar": "McNemar", "wilcoxon": "Wilcoxon"}.get(
-        str(r.get("test")), str(r.get("test"))
-    )
+    test = str(r.get("test"))
+    name = {"mcnemar": "McNemar", "wilcoxon": "Wilcoxon"}.get(test, test)
     return f"{'<0.001' if p < 0.001 else format(p, '.3f')} ({name})"
 
 
@@ -950,24 +915,21 @@ def _display_rows(rows: list[dict[str, Any]], metric: str) -> list[dict[str, Any
     """Ranking rows with their text cells: ``rank_text`` ("3="), ``pass_rate_text`` and
     ``median_text`` (value and 95 % interval), ``versus_text`` (adjusted p of the comparison with the
     row above, and its test)."""
-    out = []
-    for r in rows:
-        out.append(
-            {
-                **r,
-                "rank_text": str(r.get("rank_display", r.get("rank"))),
-                "pass_rate_text": _interval_text(
-                    r.get("pass_rate"), r.get("pass_rate_low"), r.get("pass_rate_high"), fixed=True
-                ),
-                "median_text": _interval_text(
-                    r.get(f"{metric}_median"),
-                    r.get(f"{metric}_median_low"),
-                    r.get(f"{metric}_median_high"),
-                ),
-                "versus_text": _versus_text(r),
-            }
-        )
-    return out
+    median = f"{metric}_median"
+    return [
+        {
+            **r,
+            "rank_text": str(r.get("rank_display", r.get("rank"))),
+            "pass_rate_text": _interval_text(
+                r.get("pass_rate"), r.get("pass_rate_low"), r.get("pass_rate_high"), fixed=True
+            ),
+            "median_text": _interval_text(
+                r.get(median), r.get(f"{median}_low"), r.get(f"{median}_high")
+            ),
+            "versus_text": _versus_text(r),
+        }
+        for r in rows
+    ]
 
 
 def _has_confidence(rank: dict[str, list[dict[str, Any]]]) -> bool:
@@ -1002,32 +964,21 @@ def ranking_frame(rank: dict[str, list[dict[str, Any]]]) -> pd.DataFrame:
     first = [c for c in ("level", "rank", "rank_display", "tied", "method") if c in frame]
     frame = frame[first + [c for c in frame.columns if c not in first]]
     # the comparison columns are null on a level's first row: nullable integers and booleans
-    for col in ("pairs", "only_above_passed", "only_this_passed"):
-        if col in frame:
-            frame[col] = frame[col].astype("Int64")
-    if "separated" in frame:
-        frame["separated"] = frame["separated"].astype("boolean")
-    return frame
+    nullable = {"pairs": "Int64", "only_above_passed": "Int64", "only_this_passed": "Int64"}
+    nullable["separated"] = "boolean"
+    return frame.astype({c: t for c, t in nullable.items() if c in frame})
 
 
-def _ranking_units(frame: pd.DataFrame, metric: str, run_units: dict[str, str]) -> dict[str, str]:
+def _ranking_units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
     """Ranking columns: counts, rates, statistics and p-values dimensionless; a median and its
     interval bounds in the score's unit."""
     units: dict[str, str] = {}
-    for col in frame.columns:
-        name = str(col)
-        score = next(
-            (
-                name[: -len(x)]
-                for x in ("_median_low", "_median_high", "_median")
-                if name.endswith(x)
-            ),
-            None,
-        )
+    for name in map(str, frame.columns):
+        score = re.fullmatch(r"(.+)_median(_low|_high)?", name)
         if score is None:
             units[name] = "1"
-        elif f"metric:{score}" in run_units:
-            units[name] = run_units[f"metric:{score}"]
+        elif f"metric:{score[1]}" in run_units:
+            units[name] = run_units[f"metric:{score[1]}"]
     return units
 
 
@@ -1072,18 +1023,10 @@ def markdown_summary(board: dict[str, Any]) -> str:
         out += ["", resolution_text(board["resolution"]) + "."]
     best = {(w["case"], w["level"]): w for w in (_winners(cells, metric) if len(cells) else [])}
     levels = list(board["ranking"])
-    rows = []
-    for case in dict.fromkeys(r["case"] for r in board["cells"]):
-        row = {"case": case}
-        for lv in levels:
-            b = best.get((case, lv))
-            if b is None:
-                row[lv] = "-"
-            elif b["pass_rate"] > 0:
-                row[lv] = f"{b['method']} ({b['pass_rate']:.2f})"
-            else:
-                row[lv] = f"none passes (lowest median: {b['method']})"
-        rows.append(row)
+    rows = [
+        {"case": case, **{lv: _best_text(best.get((case, lv))) for lv in levels}}
+        for case in dict.fromkeys(r["case"] for r in board["cells"])
+    ]
     out += [
         "",
         "Best method per fault case (pass rate):",
@@ -1094,13 +1037,21 @@ def markdown_summary(board: dict[str, Any]) -> str:
     if fdi is not None:
         out += ["", "**FDI**", "", _fdi_note(fdi)]
         if fdi["rows"]:
-            shown = [{k: "-" if v is None else v for k, v in r.items()} for r in fdi["rows"]]
-            out += ["", _md_table(shown, list(FDI_COLUMNS))]
+            out += ["", _md_table(fdi["rows"], list(FDI_COLUMNS))]  # None (not a number): "-"
         ident = identification_rows(fdi)
         if ident:
             out += ["", "**Fault identification**", "", IDENTIFICATION_NOTE, ""]
             out += [_md_table(ident, list(IDENTIFICATION_TABLE))]
     return "\n".join(out) + "\n"
+
+
+def _best_text(best: dict[str, Any] | None) -> str:
+    """A cell of the Markdown table of the best method per fault case: the winner and its pass rate."""
+    if best is None:
+        return "-"
+    if best["pass_rate"] > 0:
+        return f"{best['method']} ({best['pass_rate']:.2f})"
+    return f"none passes (lowest median: {best['method']})"
 
 
 def resolution_text(record: dict[str, Any]) -> str:
@@ -1165,10 +1116,7 @@ def write_leaderboard(
     comp = completeness(meta, runs, league_dir)
     out = league_dir / "leaderboard"
     out.mkdir(parents=True, exist_ok=True)
-    figures: list[Path] = []
-    if plots:
-        figures += _pareto(meta, cells, out)
-        figures += _trajectories(meta, league_dir, out)
+    figures = [*_pareto(meta, cells, out), *_trajectories(meta, league_dir, out)] if plots else []
     metric, limit, units = _requirement(meta)
     board = {
         "league": meta["name"],
@@ -1203,7 +1151,7 @@ def write_leaderboard(
     write_parquet(
         frame,
         out / "ranking.parquet",
-        _ranking_units(frame, metric, run_units),
+        _ranking_units(frame, run_units),
         metadata={**kv, "formation_ftc.league.ranking_method": _ranking_note()},
     )
     page = _page(
