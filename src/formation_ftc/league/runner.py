@@ -680,8 +680,7 @@ class _Bars:
     ):
         self.unit = unit
         self.enabled, self.console, self.interval = enabled, console, interval
-        self._names = [name for name, _ in tasks]
-        self._totals = dict(tasks)
+        self._totals = dict(tasks)  # name -> total of each line, in order
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
@@ -689,35 +688,28 @@ class _Bars:
         self._lock = threading.Lock()
 
     def __enter__(self):
-        if not self.enabled or not self._names:
+        if not self.enabled or not self._totals:
             return self
         try:
+            from rich import progress as rp
             from rich.console import Console
-            from rich.progress import (
-                BarColumn,
-                MofNCompleteColumn,
-                Progress,
-                TextColumn,
-                TimeElapsedColumn,
-                TimeRemainingColumn,
-            )
 
             console = self.console if self.console is not None else Console(stderr=True)
             if not console.is_terminal:
                 return self
-            width = max(len(name) for name in self._names)
-            self._bar = Progress(
-                TextColumn(f"[bold]{{task.description:<{width}}}"),
-                BarColumn(),
-                MofNCompleteColumn(),
-                TextColumn(self.unit),
-                TimeElapsedColumn(),
-                TextColumn("ETA"),
-                TimeRemainingColumn(),
+            width = max(len(name) for name in self._totals)
+            self._bar = rp.Progress(
+                rp.TextColumn(f"[bold]{{task.description:<{width}}}"),
+                rp.BarColumn(),
+                rp.MofNCompleteColumn(),
+                rp.TextColumn(self.unit),
+                rp.TimeElapsedColumn(),
+                rp.TextColumn("ETA"),
+                rp.TimeRemainingColumn(),
                 console=console,
                 auto_refresh=False,
             )
-            self._tasks = {n: self._bar.add_task(n, total=self._totals[n]) for n in self._names}
+            self._tasks = {n: self._bar.add_task(n, total=t) for n, t in self._totals.items()}
             self._bar.start()
             self._refresh()
         except (OSError, ValueError):
@@ -738,14 +730,10 @@ class _Bars:
             self._bar.refresh()
 
     def _watch(self) -> None:
-        while not self._stop.wait(self.interval):
-            try:
+        # stderr closed or full: no more progress, the work goes on
+        with contextlib.suppress(OSError, ValueError):
+            while not self._stop.wait(self.interval):
                 self._refresh()
-            except (
-                OSError,
-                ValueError,
-            ):  # stderr closed or full: no more progress, the work goes on
-                return
 
     def _close_bar(self) -> None:
         bar, self._bar = self._bar, None
@@ -904,14 +892,10 @@ def run_league(
         "provenance": _provenance(),
     }
     files = _write_inputs(out, meta, cells)
+    trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
     jobs = []
     for name, mcells in cells.items():
-        trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
-        traced = (
-            _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
-            if 0 <= trace_seed < n_seeds
-            else []
-        )
+        traced = _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
         jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced, start)))
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
@@ -1083,12 +1067,11 @@ def _has_path(raw: dict, path: str) -> bool:
 
 def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int, cases: list[str]) -> list[int]:
     """Run ids whose time histories are kept: the trace seed of the trace cases at the first level
-    (each kept history is one more run, re-run alone with its records)."""
-    j = min(trace_seed, seeds - 1)
+    (each kept history is one more run, re-run alone with its records); none when the trace seed
+    is not one of the ``seeds`` (another block of seeds keeps them)."""
     first_level = cells[0].level if cells else ""
-    return [
-        g * seeds + j for g, c in enumerate(cells) if c.level == first_level and c.case in cases
-    ]
+    traced = [g for g, c in enumerate(cells) if c.level == first_level and c.case in cases]
+    return [g * seeds + trace_seed for g in traced] if 0 <= trace_seed < seeds else []
 
 
 def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFrame]:
