@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
@@ -185,11 +186,7 @@ class BatteryCase(_CaseModel):
             )
         limits = None
         if saturation is not None:
-            sat = (
-                [float(saturation)]
-                if isinstance(saturation, int | float)
-                else [float(x) for x in saturation]
-            )
+            sat = [float(x) for x in np.atleast_1d(saturation)]
             if all(math.isfinite(x) for x in sat):
                 limits = sat
             elif any(math.isfinite(x) for x in sat):
@@ -303,14 +300,12 @@ def load_battery(name: str | Path = "v1") -> Battery:
         model = _BatteryModel.model_validate(raw)
     except ValidationError as exc:
         raise BatteryError(_format(exc, str(path), ".", "; ")) from None
-    unknown_defaults = sorted(
-        set(model.defaults) - set(_CaseModel.model_fields)
-        | ({"name", "kind"} & set(model.defaults))
-    )
+    inherited = [f for f in _CaseModel.model_fields if f not in ("name", "kind")]
+    unknown_defaults = sorted(set(model.defaults) - set(inherited))
     if unknown_defaults:
         raise BatteryError(
             f"{path}: defaults: {', '.join(unknown_defaults)} cannot be defaults "
-            f"(case fields: {', '.join(f for f in _CaseModel.model_fields if f not in ('name', 'kind'))})"
+            f"(case fields: {', '.join(inherited)})"
         )
     parsed = []
     for k, body in enumerate(model.cases):
@@ -329,8 +324,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise BatteryError(f"{path}: duplicate case names {', '.join(dup)}")
-    scales = [c.delay_scale for c in parsed if c.delay_scale is not None]
-    max_scale = max([1.0, *scales])
+    max_scale = max([1.0, *(c.delay_scale for c in parsed if c.delay_scale is not None)])
     cases = tuple(
         BatteryCase(
             **c.model_dump(exclude={"lost_links", "delay_scale"}),

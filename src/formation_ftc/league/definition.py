@@ -582,19 +582,13 @@ def method_scenario(
     }
     if spec.sensors is not None:
         raw["sensors"] = copy.deepcopy(spec.sensors)
-    for slot in METHOD_SLOTS:
-        if slot in own:
-            raw[slot] = copy.deepcopy(own[slot])
+    raw |= copy.deepcopy({slot: own[slot] for slot in METHOD_SLOTS if slot in own})
     known = own.get("levels", {}).get(level.method_fields_from or level.name, {})
     for fpath, value in known.items():  # the level's knowledge
         slot, _, name = fpath.partition(".")
         raw[slot][name] = copy.deepcopy(value)
-    actuator = copy.deepcopy(spec.actuator)
-    actuator.update(
-        copy.deepcopy(own.get("actuator", {}))
-    )  # structural options of the method (allocation)
-    actuator.update(copy.deepcopy(actuator_fields))
-    raw["actuator"] = actuator
+    # the league's actuator, the method's structural options (allocation), the level and fault case
+    raw["actuator"] = copy.deepcopy({**spec.actuator, **own.get("actuator", {}), **actuator_fields})
     if network_fields:
         if "network" not in raw:
             raise LeagueError(
