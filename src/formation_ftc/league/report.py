@@ -194,19 +194,15 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     """
     horizon = float(_league(meta)["horizon"])
     methods = list(dict.fromkeys(runs["method"])) if len(runs) else []
-    with_fdi = [
-        m
-        for m in methods
-        if np.isfinite(_col(runs[runs["method"] == m], "fdi_detection_delay")).any()
-    ]
+    scored = np.isfinite(_col(runs, "fdi_detection_delay"))
+    with_fdi = [m for m in methods if scored[(runs["method"] == m).to_numpy()].any()]
     rows = []
     for (method, level, case), g in runs[runs["method"].isin(with_fdi)].groupby(
         ["method", "level", "case"], sort=False
     ):
         ok = g[g["status"] == "ok"]
         alarm, fault = _col(ok, "fdi_alarm_time"), _col(ok, "fdi_fault_time")
-        faulted = np.isfinite(fault)
-        alarmed = np.isfinite(alarm)
+        faulted, alarmed = np.isfinite(fault), np.isfinite(alarm)
         early = alarmed & (~faulted | (alarm < fault))
         detected = faulted & alarmed & (alarm >= fault)
         exposure = np.minimum(np.where(alarmed, alarm, np.inf), np.where(faulted, fault, horizon))
@@ -415,14 +411,8 @@ def rank_confidence(
         tests = []
         for above, this in zip(per, per[1:], strict=False):
             pair = above.merge(this, on=["case", "seed"], suffixes=("_a", "_b"))
-            tests.append(
-                st.paired_comparison(
-                    pair["passed_a"].to_numpy(),
-                    pair["passed_b"].to_numpy(),
-                    pair["value_a"].to_numpy(),
-                    pair["value_b"].to_numpy(),
-                )
-            )
+            paired = (pair[c].to_numpy() for c in ("passed_a", "passed_b", "value_a", "value_b"))
+            tests.append(st.paired_comparison(*paired))
         adjusted = st.holm([t["p_value"] for t in tests])
         separated = [bool(p < st.ALPHA) for p in adjusted]
         rows[0].update(dict.fromkeys(_COMPARISON_KEYS))
@@ -497,14 +487,13 @@ def completeness(
     counts = (
         runs.groupby(["method", "case", "level"], sort=False).size().to_dict() if len(runs) else {}
     )
+    names = [r["name"] for r in meta["methods"]]
     found = {m for m, _, _ in counts}
+    missing = [m for m in names if m not in found]
     per_cell: list[int] = []
     short: list[dict[str, Any]] = []
-    missing, unknown = [], []
-    expected = 0
-    for m in (r["name"] for r in meta["methods"]):
-        if m not in found:
-            missing.append(m)
+    unknown = []
+    for m in names:
         keys = _expected_cells(Path(league_dir), m)
         if keys is None:
             unknown.append(m)
@@ -513,7 +502,6 @@ def completeness(
             case, _, level = key.partition("--")
             n = int(counts.get((m, case, level), 0))
             per_cell.append(n)
-            expected += seeds
             if n < seeds:
                 short.append(
                     {"method": m, "case": case, "level": level, "runs": n, "expected": seeds}
@@ -523,7 +511,7 @@ def completeness(
         "seeds": seeds,
         "seeds_per_cell": {"min": min(per_cell, default=0), "max": max(per_cell, default=0)},
         "runs": int(len(runs)),
-        "expected_runs": expected,
+        "expected_runs": seeds * len(per_cell),
         "missing_methods": missing,
         "cells_unknown": unknown,
         "incomplete_cells": short,
@@ -761,10 +749,9 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
         for r in rows:
             res = results.get((str(r["method"]), str(level)))
             r["tuned"] = _tuned_text(res)
-            r["tuning"] = (
-                None
-                if res is None
-                else {
+            r["tuning"] = None
+            if res is not None:
+                r["tuning"] = {
                     "gains": res.get("tuned_gains"),
                     "paper_gains": res.get("paper_gains"),
                     "objective": res.get("objective", {}).get("metric"),
@@ -772,8 +759,7 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
                     "fresh": {k: (res.get("fresh") or {}).get(k) for k in ("paper", "tuned")},
                     "optimiser": res.get("optimiser", {}).get("name"),
                 }
-            )
-            n += res is not None
+                n += 1
     return n
 
 
