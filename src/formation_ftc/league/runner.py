@@ -235,9 +235,7 @@ def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
 
     assert spec.source is not None
     net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
-    if net is None:
-        return False, False
-    return True, net.get("delays") is not None
+    return net is not None, net is not None and net.get("delays") is not None
 
 
 def _campaign(
@@ -271,11 +269,8 @@ def _campaign(
         if ie.std and ie.std > 0:
             for i, row in enumerate(nominal):
                 for k, v in enumerate(row):
-                    sample[f"{truth_field}.{i}.{k}"] = {
-                        "dist": "normal",
-                        "mean": float(v),
-                        "std": ie.std,
-                    }
+                    normal = {"dist": "normal", "mean": float(v), "std": ie.std}
+                    sample[f"{truth_field}.{i}.{k}"] = normal
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
@@ -472,9 +467,7 @@ def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> st
     more); ``prefix``: the field that was validated (its path in the file)."""
     errors = exc.errors()
     first = errors[0]
-    where = (
-        ".".join(str(p) for p in (*([prefix] if prefix else []), *first["loc"])) or "(top level)"
-    )
+    where = ".".join(map(str, ([prefix] if prefix else []) + [*first["loc"]])) or "(top level)"
     got = "" if first["type"] == "missing" else f" (got {first.get('input')!r:.60})"
     more = f"; {len(errors) - 1} more problem(s)" if len(errors) > 1 else ""
     return f"{path}: field {where}: {first['msg']}{got}{more}"
@@ -655,12 +648,8 @@ def _stored_runs(chunks: Path, seeds: int, chunk_size: int) -> int:
         names = os.listdir(chunks)
     except OSError:
         return 0
-    n = 0
-    for name in names:
-        m = _CHUNK_RE.match(name)
-        if m:
-            n += min(chunk_size, seeds - (int(m.group(1)) % per_cell) * chunk_size)
-    return n
+    ids = [int(m[1]) for m in map(_CHUNK_RE.match, names) if m]
+    return sum(min(chunk_size, seeds - (i % per_cell) * chunk_size) for i in ids)
 
 
 class _Bars:
@@ -863,9 +852,8 @@ def run_league(
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
     assert spec.source is not None
-    listed = set(cells) | {
-        m.get("name") for m in (old or {}).get("methods", []) if isinstance(m, dict)
-    }
+    # ``old`` is a validated LeagueRecord: every method entry has a name
+    listed = set(cells) | {m["name"] for m in (old or {}).get("methods", [])}
     meta = {
         "name": spec.league.name,
         "version": spec.league.version,
@@ -919,10 +907,9 @@ def run_league(
             import concurrent.futures
             import multiprocessing
 
-            ctx = multiprocessing.get_context("spawn")
             with concurrent.futures.ProcessPoolExecutor(
                 max_workers=min(parallel_methods, len(jobs)),
-                mp_context=ctx,
+                mp_context=multiprocessing.get_context("spawn"),
                 initializer=die_with_parent,
                 initargs=(os.getpid(),),
             ) as pool:
@@ -1037,12 +1024,11 @@ def _step_checks(
                     on_simulation=on_simulation,
                 ).as_dict()
                 verdict = "converged" if record["converged"] else "NOT converged, kept"
+                changes = ", ".join(f"{c:.2%}" for c in record["changes"])
                 _say(
                     log,
                     f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
-                    f"(largest score change per halving: "
-                    + ", ".join(f"{c:.2%}" for c in record["changes"])
-                    + ")",
+                    f"(largest score change per halving: {changes})",
                 )
             out[name] = record
             dt = float(record["chosen_dt"])
