@@ -200,9 +200,8 @@ class BatteryCase(_CaseModel):
                 bias = float(self.bias_fraction) * lim  # type: ignore[arg-type]  # required for bias
             else:
                 bias = float(self.bias_force if quantity == "force" else self.bias_torque)  # type: ignore[arg-type]
-        kind = "none" if self.communication else self.kind
         out: dict[str, Any] = {
-            "kind": kind,
+            "kind": "none" if self.communication else self.kind,
             "spacecraft": self.spacecraft,
             "axis": self.axis,
             "onset": float(self.onset if onset is None else onset),
@@ -334,11 +333,5 @@ def load_battery(name: str | Path = "v1") -> Battery:
         )
         for c in parsed
     )
-    return Battery(
-        name=model.battery.name,
-        version=model.battery.version,
-        description=model.battery.description,
-        sha256=hashlib.sha256(data).hexdigest(),
-        source=path.resolve(),
-        cases=cases,
-    )
+    sha256 = hashlib.sha256(data).hexdigest()
+    return Battery(**model.battery.model_dump(), sha256=sha256, source=path.resolve(), cases=cases)

@@ -390,13 +390,10 @@ def builtin_leagues() -> dict[str, Path]:
 def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n") -> str:
     """Every error of ``exc``: ``SOURCE: a.b: message`` (``dot`` between the source and the field's
     path), joined by ``sep``."""
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(
-            f"{source}{dot}{loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}"
-        )
-    return sep.join(lines)
+    errors = [(".".join(map(str, err.get("loc", ()))), err.get("msg")) for err in exc.errors()]
+    return sep.join(
+        f"{source}{dot}{loc}: {msg}" if loc else f"{source}: {msg}" for loc, msg in errors
+    )
 
 
 def load_league(name_or_path: str | Path) -> LeagueSpec:
@@ -544,11 +541,8 @@ def method_tune(spec: LeagueSpec, method: MethodEntry) -> TuneSection | None:
     >>> sorted(method_tune(spec, spec.method("yang2013")).fields)
     ['controller.K1', 'controller.K2']
     """
-    raw = _method_raw(spec, method)
-    if "tune" not in raw:
-        return None
-    assert spec.source is not None
-    return _check_tune(spec, method, raw, spec.source.parent / method.scenario)
+    raw = _method_raw(spec, method)  # its [tune] table checked (_check_tune)
+    return TuneSection.model_validate(raw["tune"]) if "tune" in raw else None
 
 
 def method_scenario(
@@ -563,7 +557,6 @@ def method_scenario(
     slots (and time step) on top and its ``[levels.<level>]`` fields for this level (flight knowledge
     of the level, e.g. a thrust rating); ``network_fields`` turn the method's network into a link-fault one."""
     own = _method_raw(spec, method)
-    meta = own.get("scenario", {})
     sim = dict(own.get("simulation", {}))
     unknown_sim = sorted(set(sim) - {"dt", "record_every", "unroll"})
     if unknown_sim:
@@ -575,7 +568,7 @@ def method_scenario(
         "scenario": {
             "name": f"league-{spec.league.name}-{method.name}",
             "method": "composed",
-            "description": meta.get("description", method.label or method.name),
+            "description": own.get("scenario", {}).get("description", method.label or method.name),
         },
         "simulation": {"horizon": spec.league.horizon, **sim},
         "plant": copy.deepcopy(spec.truth),
@@ -636,30 +629,21 @@ def _fly_filtered(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any]) ->
     est = copy.deepcopy(spec.navigation_filter or {})
     if "estimator" in raw and _runs_on_filter(raw["estimator"]):
         raw["estimator"]["navigation"] = est  # the observer's masses where the filter states none
-        return
-    if "estimator" in raw:
+    elif "estimator" in raw:
         raw["estimator"]["fly_on_filter"] = True
-        return
-    mass = raw.get("controller", {}).get("nominal_mass")
-    if mass is not None and "nominal_mass" not in est:
-        est["nominal_mass"] = copy.deepcopy(mass)
-    raw["estimator"] = est
-
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return repr(obj)
-    if isinstance(obj, dict):
-        return {k: _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_jsonable(v) for v in obj]
-    return obj
+    else:
+        mass = raw.get("controller", {}).get("nominal_mass")
+        if mass is not None and "nominal_mass" not in est:
+            est["nominal_mass"] = copy.deepcopy(mass)
+        raw["estimator"] = est
 
 
 def league_hash(spec: LeagueSpec) -> str:
     """sha256 of the definition and of every method file (what the results directory is bound to)."""
+    from formation_ftc.report.reproduce import to_jsonable  # non-finite floats as "inf", "nan"
+
     assert spec.source is not None
-    h = hashlib.sha256(json.dumps(_jsonable(spec.model_dump()), sort_keys=True).encode())
+    h = hashlib.sha256(json.dumps(to_jsonable(spec.model_dump()), sort_keys=True).encode())
     for m in spec.methods:
         h.update((spec.source.parent / m.scenario).read_bytes())
     return h.hexdigest()
