@@ -153,11 +153,7 @@ class BatteryCase(_CaseModel):
     def applies_to(self, *, network: bool, delayed: bool = False) -> bool:
         """Whether the case means something for a method with (``network``) or without a network and a
         ``delayed`` one or not: communication cases need a network, ``larger_delays`` a delayed one."""
-        if self.kind == "link_loss":
-            return network
-        if self.kind == "larger_delays":
-            return network and delayed
-        return True
+        return {"link_loss": network, "larger_delays": network and delayed}.get(self.kind, True)
 
     def actuator_fields(
         self,

@@ -381,15 +381,14 @@ def rank_confidence(
     if cases is None:
         cases = _common_cases(runs[["method", "case"]].drop_duplicates())
     sel = runs[runs["case"].isin(cases)]
-    frame = pd.DataFrame(
-        {
-            "method": sel["method"].astype(str),
-            "level": sel["level"].astype(str),
-            "case": sel["case"].astype(str),
-            "seed": sel[seed],
-            "passed": _passed(sel, metric, limit),
-            "value": np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
-        }
+    frame = (
+        sel[["method", "level", "case"]]
+        .astype(str)
+        .assign(
+            seed=sel[seed],
+            passed=_passed(sel, metric, limit),
+            value=np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
+        )
     )
     groups = {key: g for key, g in frame.groupby(["method", "level"], sort=False)}
     empty = frame.iloc[:0]
