@@ -33,9 +33,11 @@ import pandas as pd
 
 from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import jsonable
+from formation_ftc.league import statistics as st
 from formation_ftc.league.definition import requirement_of
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
+from formation_ftc.report.templating import fmt, render
 
 __all__ = [
     "cell_table",
@@ -374,8 +376,6 @@ def rank_confidence(
     * ``rank`` (shared by a tie group: consecutive methods not separated), ``tied``, ``rank_display``
       ("3=" for a tie).
     """
-    from formation_ftc.league import statistics as st
-
     metric, limit, _ = _requirement(meta)
     seed = seed_column(runs)
     if cases is None:
@@ -643,12 +643,6 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------------- page
-def _fmt(v: Any) -> str:
-    from formation_ftc.report.templating import fmt
-
-    return fmt(v)
-
-
 def _img(path: Path) -> dict[str, str]:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     return {"alt": path.stem, "src": f"data:image/png;base64,{data}"}
@@ -775,8 +769,6 @@ def _page(
 ) -> str:
     """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
     columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
-    from formation_ftc.report.templating import render
-
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
     median = f"median {metric} [{req_units}]"
@@ -805,7 +797,7 @@ def _page(
         limit=limit,
         units=req_units,
         ranking=ranking_tables,
-        ranking_note=_ranking_note() if confidence else None,
+        ranking_note=st.method_note() if confidence else None,
         identification_note=IDENTIFICATION_NOTE,
         winners=wins,
         winner_columns=[
@@ -878,12 +870,12 @@ def _interval_text(v: Any, low: Any, high: Any, fixed: bool = False) -> str:
 
     if not ok(v):
         return "-"
-    text = f"{v:.3f}" if fixed else _fmt(float(v))
+    text = f"{v:.3f}" if fixed else fmt(float(v))
     if not (ok(low) and ok(high)):
         return text
     if fixed:
         return f"{text} [{low:.2f}, {high:.2f}]"
-    return f"{text} [{_fmt(float(low))}, {_fmt(float(high))}]"
+    return f"{text} [{fmt(float(low))}, {fmt(float(high))}]"
 
 
 def _versus_text(r: dict[str, Any]) -> str:
@@ -967,18 +959,11 @@ def _ranking_units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, 
     return units
 
 
-def _ranking_note() -> str:
-    """The sentence under the ranking tables: confidence level, methods, bootstrap seed."""
-    from formation_ftc.league.statistics import method_note
-
-    return method_note()
-
-
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
     body = [
-        "| " + " | ".join(_fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows
+        "| " + " | ".join(fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows
     ]
     return "\n".join([head, sep, *body])
 
@@ -1003,7 +988,7 @@ def markdown_summary(board: dict[str, Any]) -> str:
         cols = _ranking_columns(rows, f"median {metric}", cost, confidence, "tuned")
         out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
     if confidence:
-        out += ["", _ranking_note()]
+        out += ["", st.method_note()]
     if board.get("resolution"):
         out += ["", resolution_text(board["resolution"]) + "."]
     best = {(w["case"], w["level"]): w for w in (_winners(cells, metric) if len(cells) else [])}
@@ -1116,7 +1101,7 @@ def write_leaderboard(
         "requirement": {"metric": metric, "max": limit, "units": units},
         "provenance": meta.get("provenance"),
         "ranking": rank,
-        "ranking_method": _ranking_note(),
+        "ranking_method": st.method_note(),
         "winners": wins,
         "cells": cells.to_dict("records"),
         "fdi": fdi,
@@ -1137,7 +1122,7 @@ def write_leaderboard(
         frame,
         out / "ranking.parquet",
         _ranking_units(frame, run_units),
-        metadata={**kv, "formation_ftc.league.ranking_method": _ranking_note()},
+        metadata={**kv, "formation_ftc.league.ranking_method": st.method_note()},
     )
     page = _page(
         meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)
