@@ -33,6 +33,7 @@ from typing import Any, cast
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from formation_ftc import api
 from formation_ftc.atomic import atomic_write
 from formation_ftc.errors import InputError
 from formation_ftc.league.definition import (
@@ -45,7 +46,7 @@ from formation_ftc.league.definition import (
     load_league,
     method_scenario,
 )
-from formation_ftc.limits import Budgets
+from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
 
 __all__ = [
     "Cell",
@@ -166,8 +167,6 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
     A case applies to a method when it means something for it (a communication fault needs a network,
     larger delays a delayed one). Every cell of a networked method uses the link-fault network (with no
     lost link outside the communication cases), so all its cells share one compiled program."""
-    from formation_ftc.api import load_scenario
-
     battery = _battery(spec)
     chosen = [spec.method(m) for m in methods] if methods else spec.methods
     quantity = "torque" if spec.league.kind == "attitude" else "force"
@@ -186,7 +185,7 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 raw = method_scenario(spec, m, level, act, net_fields)
                 try:
                     raw = _with_fdi_scores(raw)
-                    n_steps = int(load_scenario(raw).simulation.n_steps)
+                    n_steps = int(api.load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
                     raise LeagueError(
                         f"method {m.name} cannot run cell {case.name}/{level.name} of league "
@@ -203,10 +202,9 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
     (``true-actuator-fault``: the league's ``fault-battery``) also gets the league's FDI scores: the
     ``fdi-scores`` evaluation and :data:`FDI_METRICS` (the league owns the scores; a method file gives
     none)."""
-    from formation_ftc.api import load_scenario
     from formation_ftc.methods.composed import ComposedScenario, make_loop
 
-    loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
+    loop = make_loop(cast(ComposedScenario, api.load_scenario(raw, build=False)))
 
     def add(evaluation: str | None, metrics: tuple[dict[str, Any], ...]) -> None:
         if evaluation is not None:
@@ -317,7 +315,6 @@ def check_league_budgets(
     cells' steps) and of their sum, within ``budgets.max_campaign_steps``. The message names ``--seeds``
     and the range it allows."""
     from formation_ftc.campaign.spec import MAX_RUNS
-    from formation_ftc.limits import check_run_steps
 
     name = spec.league.name
     for method, mcells in cells.items():
@@ -362,8 +359,6 @@ def _check_batch_memory(
     (first cell of each method, shapes only: every cell of a method has the same structure)."""
     if budgets.max_memory is None:
         return
-    from formation_ftc.limits import format_bytes
-
     batch = min(spec.league.chunk_size, seeds)
     for method, mcells in cells.items():
         if not mcells:
@@ -382,9 +377,6 @@ def _check_batch_memory(
 def run_bytes(raw: dict[str, Any], error: type[InputError], where: str) -> int:
     """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only); a run that
     cannot be built raises ``error`` (``where: reason``)."""
-    from formation_ftc import api
-    from formation_ftc.limits import run_memory_bytes
-
     try:
         return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
     except InputError:
