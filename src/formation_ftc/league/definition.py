@@ -476,10 +476,8 @@ def _check_levels(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], pa
                 )
 
 
-def _check_tune(
-    spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path
-) -> TuneSection:
-    """The method file's ``[tune]`` table validated: every field a number of the method's own section
+def _check_tune(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path) -> None:
+    """The method file's ``[tune]`` table checked: every field a number of the method's own section
     within its bounds, the objective a league metric (whether a field is a leaf of the built loop is
     checked when tuning, :func:`formation_ftc.league.tuning.build_problem`)."""
     where = f"method {method.name}: {path.name}: tune"
@@ -511,7 +509,6 @@ def _check_tune(
             f"{where}.objective = {tune.objective!r}: not a metric of league {spec.league.name} "
             f"({', '.join(metrics)})"
         )
-    return tune
 
 
 def method_tune(spec: LeagueSpec, method: MethodEntry) -> TuneSection | None:

@@ -263,6 +263,18 @@ def _fdi_note(fdi: dict[str, Any]) -> str:
     )
 
 
+def _fdi_tables(fdi: dict[str, Any]) -> dict[str, Any]:
+    """The FDI section of the page and of the Markdown board, from :func:`fdi_table`: its note, the
+    FDI table and the identification table (rows and (key, label) columns of each)."""
+    return {
+        "note": _fdi_note(fdi),
+        "rows": fdi["rows"],
+        "columns": list(FDI_COLUMNS),
+        "identification": identification_rows(fdi),
+        "identification_columns": list(IDENTIFICATION_TABLE),
+    }
+
+
 def _common_cases(cells: pd.DataFrame) -> list[str]:
     """Cases every method was run on (the communication cases apply to networked methods only)."""
     per_method = cells.groupby("method")["case"].apply(set)
@@ -807,15 +819,7 @@ def _page(
             ("pass_rate", "pass rate"),
             (f"{metric}_median", median),
         ],
-        fdi=None
-        if fdi is None
-        else {
-            "note": _fdi_note(fdi),
-            "rows": fdi["rows"],
-            "columns": list(FDI_COLUMNS),
-            "identification": identification_rows(fdi),
-            "identification_columns": list(IDENTIFICATION_TABLE),
-        },
+        fdi=None if fdi is None else _fdi_tables(fdi),
         per_fault=_per_fault(cells, units or {}),
         scores_per_table=SCORES_PER_TABLE,
         figures=[_img(p) for p in figures],
@@ -970,7 +974,8 @@ def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
 
 def markdown_summary(board: dict[str, Any]) -> str:
     """The ranking per level and the best method per fault case as Markdown tables (for a README)."""
-    metric = board["requirement"]["metric"]
+    req = board["requirement"]
+    metric = req["metric"]
     cells = pd.DataFrame(board["cells"])
     cost = _cost(cells) if len(cells) else None
     comp = board.get("completeness")
@@ -980,8 +985,7 @@ def markdown_summary(board: dict[str, Any]) -> str:
         *([f"**{note}**", ""] if note else []),
         f"League `{board['league']}` (definition version {board['version']}), fault battery "
         f"{board['battery']['name']} (version {board['battery']['version']}), {seeds}; "
-        f"requirement {metric} <= "
-        f"{board['requirement']['max']:g} {board['requirement']['units']}.",
+        f"requirement {metric} <= {req['max']:g} {req['units']}.",
     ]
     confidence = _has_confidence(board["ranking"])
     for level, rows in board["ranking"].items():
@@ -1003,15 +1007,14 @@ def markdown_summary(board: dict[str, Any]) -> str:
         "",
         _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]]),
     ]
-    fdi = board.get("fdi")
-    if fdi is not None:
-        out += ["", "**FDI**", "", _fdi_note(fdi)]
+    if board.get("fdi") is not None:
+        fdi = _fdi_tables(board["fdi"])
+        out += ["", "**FDI**", "", fdi["note"]]
         if fdi["rows"]:
-            out += ["", _md_table(fdi["rows"], list(FDI_COLUMNS))]  # None (not a number): "-"
-        ident = identification_rows(fdi)
-        if ident:
+            out += ["", _md_table(fdi["rows"], fdi["columns"])]  # None (not a number): "-"
+        if fdi["identification"]:
             out += ["", "**Fault identification**", "", IDENTIFICATION_NOTE, ""]
-            out += [_md_table(ident, list(IDENTIFICATION_TABLE))]
+            out += [_md_table(fdi["identification"], fdi["identification_columns"])]
     return "\n".join(out) + "\n"
 
 
