@@ -278,14 +278,12 @@ def load_battery(name: str | Path = "v1") -> Battery:
     Raises :class:`BatteryError` naming the battery, the case and the field for an unknown name, a file
     that is not TOML, an unknown field or kind, a missing magnitude or duplicate case names."""
     known = builtin_batteries()
-    path = known.get(str(name))
-    if path is None:
-        path = Path(name)
-        if path.suffix != ".toml" or not path.is_file():
-            raise BatteryError(
-                f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
-                "or give a battery .toml file)"
-            )
+    path = known.get(str(name)) or Path(name)
+    if path.suffix != ".toml" or not path.is_file():  # a built-in battery's file is one
+        raise BatteryError(
+            f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
+            "or give a battery .toml file)"
+        )
     data = path.read_bytes()
     try:
         raw = tomllib.loads(data.decode("utf-8"))
@@ -304,9 +302,8 @@ def load_battery(name: str | Path = "v1") -> Battery:
         )
     parsed = []
     for k, body in enumerate(model.cases):
-        where = f"{path}: cases[{k}]" + (
-            f" ({body['name']})" if isinstance(body.get("name"), str) else ""
-        )
+        named = f" ({body['name']})" if isinstance(body.get("name"), str) else ""
+        where = f"{path}: cases[{k}]{named}"
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:

@@ -396,23 +396,25 @@ def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n")
     )
 
 
+def _toml(path: Path, where: str = "") -> dict[str, Any]:
+    """The TOML file ``path`` as a dict; LeagueError ``WHERE PATH: not valid TOML: ...`` when it is not."""
+    try:
+        return tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise LeagueError(f"{where}{path}: not valid TOML: {exc}") from None
+
+
 def load_league(name_or_path: str | Path) -> LeagueSpec:
     """A built-in league by name, or a league TOML file; every field validated (errors name it)."""
     known = builtin_leagues()
-    path = known.get(str(name_or_path))
-    if path is None:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise LeagueError(
-                f"league {str(name_or_path)!r}: neither a built-in league "
-                f"({', '.join(known) or 'none'}) nor a file"
-            )
+    path = known.get(str(name_or_path)) or Path(name_or_path)
+    if not path.is_file():
+        raise LeagueError(
+            f"league {str(name_or_path)!r}: neither a built-in league "
+            f"({', '.join(known) or 'none'}) nor a file"
+        )
     try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise LeagueError(f"{path}: not valid TOML: {exc}") from None
-    try:
-        spec = LeagueSpec.model_validate(raw)
+        spec = LeagueSpec.model_validate(_toml(path))
     except ValidationError as exc:
         raise LeagueError(_format(exc, str(path))) from None
     spec._source = path.resolve()
@@ -428,10 +430,7 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
 def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
     assert spec.source is not None
     path = spec.source.parent / method.scenario
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise LeagueError(f"method {method.name}: {path}: not valid TOML: {exc}") from None
+    raw = _toml(path, f"method {method.name}: ")
     allowed = {"scenario", "simulation", "actuator", "tune", "levels", *METHOD_SLOTS}
     extra = sorted(set(raw) - allowed)
     if extra:

@@ -199,9 +199,8 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     scored = np.isfinite(_col(runs, "fdi_detection_delay"))
     with_fdi = [m for m in methods if scored[(runs["method"] == m).to_numpy()].any()]
     rows = []
-    for (method, level, case), g in runs[runs["method"].isin(with_fdi)].groupby(
-        ["method", "level", "case"], sort=False
-    ):
+    fdi_runs = runs[runs["method"].isin(with_fdi)]
+    for (method, level, case), g in fdi_runs.groupby(["method", "level", "case"], sort=False):
         ok = g[g["status"] == "ok"]
         alarm, fault = _col(ok, "fdi_alarm_time"), _col(ok, "fdi_fault_time")
         faulted, alarmed = np.isfinite(fault), np.isfinite(alarm)
@@ -471,13 +470,11 @@ def _expected_cells(league_dir: Path, method: str) -> list[str] | None:
     there (the method's directory is missing)."""
     from formation_ftc.campaign.storage import MANIFEST
 
-    try:
+    with contextlib.suppress(OSError, ValueError, KeyError, TypeError):  # then the cell files
         manifest = json.loads((league_dir / method / "campaign" / MANIFEST).read_text("utf-8"))
         bases = manifest["plan"]["bases"]
         if isinstance(bases, list) and all(isinstance(b, str) for b in bases):
             return [Path(b).stem for b in bases]
-    except (OSError, ValueError, KeyError, TypeError):
-        pass
     cdir = league_dir / method / "cells"
     return sorted(p.stem for p in cdir.glob("*.toml")) if cdir.is_dir() else None
 

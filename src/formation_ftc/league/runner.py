@@ -25,6 +25,7 @@ import os
 import re
 import threading
 import time
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -112,13 +113,8 @@ FLFR_SPACECRAFT_METRIC = {"name": "flfr_spacecraft", "signal": "flfr_spacecraft"
 #: small estimation errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
 #: robustness is a margin (its relative change is meaningless near 0; the signals it reads are
 #: checked as scores); a filter's consistency is a noise statistic
-_NOT_STEP_CHECKED = (
-    *(
-        m["name"]
-        for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
-    ),
-    STL_VIOLATION,
-)
+_UNCHECKED = (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
+_NOT_STEP_CHECKED = (*(m["name"] for m in _UNCHECKED), STL_VIOLATION)
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -229,8 +225,6 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
 
 def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
     """(has a network, the network has delays) of a method's own file."""
-    import tomllib
-
     assert spec.source is not None
     net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
     return net is not None, net is not None and net.get("delays") is not None
@@ -467,8 +461,6 @@ def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> st
 
 def _check_definition(meta: dict[str, Any]) -> str | None:
     """What is wrong with the league definition text of ``league.json`` (None: readable)."""
-    import tomllib
-
     try:
         league = tomllib.loads(meta["definition"])["league"]
         req = league["requirement"]
@@ -515,13 +507,10 @@ def _campaign_at_or_above(path: Path) -> Path | None:
 
     real = Path(os.path.realpath(path))
     for d in (real, *real.parents):
-        try:
-            if (d / MANIFEST).is_file() and json.loads((d / MANIFEST).read_text("utf-8")).get(
-                "format"
-            ) == FORMAT:
+        marker = d / MANIFEST
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # unreadable: not a campaign
+            if marker.is_file() and json.loads(marker.read_text("utf-8")).get("format") == FORMAT:
                 return d
-        except (OSError, ValueError, AttributeError):
-            continue
     return None
 
 
@@ -816,9 +805,8 @@ def run_league(
 
     t0 = time.perf_counter()
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
-    n_seeds = int(
-        seeds if seeds is not None else (spec.league.quick_seeds if quick else spec.league.seeds)
-    )
+    default_seeds = spec.league.quick_seeds if quick else spec.league.seeds
+    n_seeds = int(seeds if seeds is not None else default_seeds)
     if n_seeds < 1:
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
@@ -1079,10 +1067,8 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
         if not parts:
             continue
         df = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
-        keys = df["scenario"].map(lambda s: Path(str(s)).stem)
-        df = df.assign(
-            method=m["name"], case=keys.str.split("--").str[0], level=keys.str.split("--").str[1]
-        )
+        keys = df["scenario"].map(lambda s: Path(str(s)).stem).str.split("--")  # case--level
+        df = df.assign(method=m["name"], case=keys.str[0], level=keys.str[1])
         df["fault_kind"] = df["case"].map(kinds)
         frames.append(df)
     if not frames:
