@@ -302,12 +302,11 @@ def load_battery(name: str | Path = "v1") -> Battery:
         )
     parsed = []
     for k, body in enumerate(model.cases):
-        named = f" ({body['name']})" if isinstance(body.get("name"), str) else ""
-        where = f"{path}: cases[{k}]{named}"
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:
-            raise BatteryError(_format(exc, where, ".", "; ")) from None
+            named = f" ({body['name']})" if isinstance(body.get("name"), str) else ""
+            raise BatteryError(_format(exc, f"{path}: cases[{k}]{named}", ".", "; ")) from None
     if str(name) in known and model.battery.name != str(name):
         raise BatteryError(
             f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})"

@@ -275,7 +275,6 @@ class TuneSection(StrictModel):
     @field_validator("fields")
     @classmethod
     def _bounds(cls, v):
-        out = {}
         for path, b in v.items():
             slot, _, name = path.partition(".")
             if slot not in METHOD_SLOTS or not name or "." in name:
@@ -291,8 +290,8 @@ class TuneSection(StrictModel):
                 raise ValueError(f"{path}: bounds [{b.low:g}, {b.high:g}] need low < high, finite")
             if b.log and b.low <= 0:
                 raise ValueError(f"{path}: a log scale needs low > 0, got {b.low:g}")
-            out[path] = b
-        return out
+            v[path] = b  # a [low, high] list as its bounds (same key: the dict keeps its order)
+        return v
 
 
 class LeagueSpec(StrictModel):

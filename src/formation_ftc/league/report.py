@@ -492,9 +492,8 @@ def completeness(
     ``runs``, ``expected``)}``.
     """
     seeds = int(meta["seeds"])
-    counts = (
-        runs.groupby(["method", "case", "level"], sort=False).size().to_dict() if len(runs) else {}
-    )
+    cell = ["method", "case", "level"]
+    counts = runs.groupby(cell, sort=False).size().to_dict() if len(runs) else {}
     names = [r["name"] for r in meta["methods"]]
     found = {m for m, _, _ in counts}
     missing = [m for m in names if m not in found]
@@ -574,9 +573,8 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
     cost = _cost(cells)
     if cost is None:
         return []
-    common = _common_cases(cells)
     paths = []
-    for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
+    for level, g in cells[cells["case"].isin(_common_cases(cells))].groupby("level", sort=False):
         agg = g.groupby("method", sort=False)[[f"{metric}_median", f"{cost[0]}_median"]].median()
         title = f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)"
         fig, axes = new_figure(1, 1, width=6.4, height=4.2, title=title)

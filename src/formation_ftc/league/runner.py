@@ -655,7 +655,6 @@ class _Bars:
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
 
     def __enter__(self):
         if not self.enabled or not self._totals:
@@ -695,9 +694,9 @@ class _Bars:
         """Update the counts (called before each redraw)."""
 
     def _refresh(self) -> None:
-        with self._lock:
-            self._poll()
-            self._bar.refresh()
+        # never concurrent: the first redraw comes before the thread starts, the last after it ends
+        self._poll()
+        self._bar.refresh()
 
     def _watch(self) -> None:
         # stderr closed or full: no more progress, the work goes on
@@ -875,12 +874,11 @@ def run_league(
         n_failed += failed
         _say(log, f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
 
-    chunk_size = min(spec.league.chunk_size, n_seeds)
     folder = campaign_folder(start)
     watched = [
         (name, out / name / folder / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
     ]
-    with _MethodProgress(watched, n_seeds, chunk_size, enabled=progress):
+    with _MethodProgress(watched, n_seeds, min(spec.league.chunk_size, n_seeds), enabled=progress):
         if parallel_methods > 1 and len(jobs) > 1:
             # one process per method (each compiles its program once and runs its chunks in-process):
             # the methods' campaigns are independent directories, so they run side by side
