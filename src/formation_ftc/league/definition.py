@@ -332,13 +332,9 @@ class LeagueSpec(StrictModel):
             raise ValueError(f"methods: duplicate method names {dup}")
         req = self.league.requirement
         if req.stl is not None and STL_VIOLATION not in [m.get("name") for m in self.metrics]:
+            violation = f"not ({req.stl})"
             self.metrics.append(
-                {
-                    "name": STL_VIOLATION,
-                    "reduce": "stl",
-                    "formula": f"not ({req.stl})",
-                    "units": req.units,
-                }
+                {"name": STL_VIOLATION, "reduce": "stl", "formula": violation, "units": req.units}
             )
         metric_names = [str(m.get("name")) for m in self.metrics]
         if self.league.requirement.metric not in metric_names:

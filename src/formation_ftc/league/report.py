@@ -510,9 +510,7 @@ def completeness(
             n = int(counts.get((m, case, level), 0))
             per_cell.append(n)
             if n < seeds:
-                short.append(
-                    {"method": m, "case": case, "level": level, "runs": n, "expected": seeds}
-                )
+                short.append(dict(method=m, case=case, level=level, runs=n, expected=seeds))
     return {
         "complete": not missing and not short,
         "seeds": seeds,
@@ -545,10 +543,9 @@ def incomplete_note(comp: dict[str, Any], limit: int = 8) -> str | None:
     """One paragraph on what is missing (None for a complete league)."""
     if comp["complete"]:
         return None
-    parts = [
-        f"INCOMPLETE league: {comp['runs']:,} of {comp['expected_runs']:,} planned runs found"
-        + (" (more for the methods without a directory)" if comp["cells_unknown"] else "")
-    ]
+    found = f"{comp['runs']:,} of {comp['expected_runs']:,} planned runs found"
+    unknown = " (more for the methods without a directory)" if comp["cells_unknown"] else ""
+    parts = [f"INCOMPLETE league: {found}{unknown}"]
     if comp["missing_methods"]:
         parts.append(f"methods without results: {', '.join(comp['missing_methods'])}")
     short = [c for c in comp["incomplete_cells"] if c["method"] not in comp["missing_methods"]]
@@ -996,12 +993,8 @@ def markdown_summary(board: dict[str, Any]) -> str:
         {"case": case, **{lv: _best_text(best.get((case, lv))) for lv in levels}}
         for case in dict.fromkeys(r["case"] for r in board["cells"])
     ]
-    out += [
-        "",
-        "Best method per fault case (pass rate):",
-        "",
-        _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]]),
-    ]
+    columns = [("case", "fault case"), *[(lv, lv) for lv in levels]]
+    out += ["", "Best method per fault case (pass rate):", "", _md_table(rows, columns)]
     if board.get("fdi") is not None:
         fdi = _fdi_tables(board["fdi"])
         out += ["", "**FDI**", "", fdi["note"]]

@@ -451,11 +451,10 @@ class LeagueRecord(_Record):
 def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> str:
     """``FILE: field a.b.c: what is wrong (got ...)`` of the first error of ``exc`` (and how many
     more); ``prefix``: the field that was validated (its path in the file)."""
-    errors = exc.errors()
-    first = errors[0]
+    first, *others = exc.errors()
     where = ".".join(map(str, ([prefix] if prefix else []) + [*first["loc"]])) or "(top level)"
     got = "" if first["type"] == "missing" else f" (got {first.get('input')!r:.60})"
-    more = f"; {len(errors) - 1} more problem(s)" if len(errors) > 1 else ""
+    more = f"; {len(others)} more problem(s)" if others else ""
     return f"{path}: field {where}: {first['msg']}{got}{more}"
 
 
@@ -522,9 +521,8 @@ def _check_target(
     raises OSError."""
     campaign = _campaign_at_or_above(out)
     if campaign is not None:
-        where = (
-            "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
-        )
+        inside = campaign != Path(os.path.realpath(out))
+        where = f"is inside {campaign}, which is" if inside else "is"
         raise error(f"{what}: {where} a campaign directory; {in_campaign}")
     if not (out.exists() or out.is_symlink()):
         return False
@@ -648,8 +646,7 @@ class _Bars:
         console: Any = None,
         interval: float = 0.5,
     ):
-        self.unit = unit
-        self.enabled, self.console, self.interval = enabled, console, interval
+        self.unit, self.enabled, self.console, self.interval = unit, enabled, console, interval
         self._totals = dict(tasks)  # name -> total of each line, in order
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
@@ -1054,13 +1051,10 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
     )
     kinds = {c["name"]: c["kind"] for c in meta["battery"]["cases"]}
     frames = []
+    blocks = [campaign_folder(first) for first, _ in meta.get("blocks", [[0, 0]])]
     for m in meta["methods"]:
-        blocks = [campaign_folder(first) for first, _ in meta.get("blocks", [[0, 0]])]
-        parts = [
-            CampaignStore.read(out / m["name"] / b).load_results()
-            for b in blocks
-            if (out / m["name"] / b).is_dir()
-        ]
+        mdir = out / m["name"]
+        parts = [CampaignStore.read(mdir / b).load_results() for b in blocks if (mdir / b).is_dir()]
         parts = [p for p in parts if len(p)]
         if not parts:
             continue
