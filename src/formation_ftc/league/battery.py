@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pydantic import ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from formation_ftc.components.actuators.fault_battery import FAULT_KINDS
@@ -152,11 +153,7 @@ class BatteryCase(_CaseModel):
     def applies_to(self, *, network: bool, delayed: bool = False) -> bool:
         """Whether the case means something for a method with (``network``) or without a network and a
         ``delayed`` one or not: communication cases need a network, ``larger_delays`` a delayed one."""
-        if self.kind == "link_loss":
-            return network
-        if self.kind == "larger_delays":
-            return network and delayed
-        return True
+        return {"link_loss": network, "larger_delays": network and delayed}.get(self.kind, True)
 
     def actuator_fields(
         self,
@@ -185,11 +182,7 @@ class BatteryCase(_CaseModel):
             )
         limits = None
         if saturation is not None:
-            sat = (
-                [float(saturation)]
-                if isinstance(saturation, int | float)
-                else [float(x) for x in saturation]
-            )
+            sat = [float(x) for x in np.atleast_1d(saturation)]
             if all(math.isfinite(x) for x in sat):
                 limits = sat
             elif any(math.isfinite(x) for x in sat):
@@ -203,9 +196,8 @@ class BatteryCase(_CaseModel):
                 bias = float(self.bias_fraction) * lim  # type: ignore[arg-type]  # required for bias
             else:
                 bias = float(self.bias_force if quantity == "force" else self.bias_torque)  # type: ignore[arg-type]
-        kind = "none" if self.communication else self.kind
         out: dict[str, Any] = {
-            "kind": kind,
+            "kind": "none" if self.communication else self.kind,
             "spacecraft": self.spacecraft,
             "axis": self.axis,
             "onset": float(self.onset if onset is None else onset),
@@ -286,14 +278,12 @@ def load_battery(name: str | Path = "v1") -> Battery:
     Raises :class:`BatteryError` naming the battery, the case and the field for an unknown name, a file
     that is not TOML, an unknown field or kind, a missing magnitude or duplicate case names."""
     known = builtin_batteries()
-    path = known.get(str(name))
-    if path is None:
-        path = Path(name)
-        if path.suffix != ".toml" or not path.is_file():
-            raise BatteryError(
-                f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
-                "or give a battery .toml file)"
-            )
+    path = known.get(str(name)) or Path(name)
+    if path.suffix != ".toml" or not path.is_file():  # a built-in battery's file is one
+        raise BatteryError(
+            f"unknown fault battery {str(name)!r} (known: {', '.join(known) or 'none'}; "
+            "or give a battery .toml file)"
+        )
     data = path.read_bytes()
     try:
         raw = tomllib.loads(data.decode("utf-8"))
@@ -303,24 +293,20 @@ def load_battery(name: str | Path = "v1") -> Battery:
         model = _BatteryModel.model_validate(raw)
     except ValidationError as exc:
         raise BatteryError(_format(exc, str(path), ".", "; ")) from None
-    unknown_defaults = sorted(
-        set(model.defaults) - set(_CaseModel.model_fields)
-        | ({"name", "kind"} & set(model.defaults))
-    )
+    inherited = [f for f in _CaseModel.model_fields if f not in ("name", "kind")]
+    unknown_defaults = sorted(set(model.defaults) - set(inherited))
     if unknown_defaults:
         raise BatteryError(
             f"{path}: defaults: {', '.join(unknown_defaults)} cannot be defaults "
-            f"(case fields: {', '.join(f for f in _CaseModel.model_fields if f not in ('name', 'kind'))})"
+            f"(case fields: {', '.join(inherited)})"
         )
     parsed = []
     for k, body in enumerate(model.cases):
-        where = f"{path}: cases[{k}]" + (
-            f" ({body['name']})" if isinstance(body.get("name"), str) else ""
-        )
         try:
             parsed.append(_CaseModel.model_validate({**model.defaults, **body}))
         except ValidationError as exc:
-            raise BatteryError(_format(exc, where, ".", "; ")) from None
+            named = f" ({body['name']})" if isinstance(body.get("name"), str) else ""
+            raise BatteryError(_format(exc, f"{path}: cases[{k}]{named}", ".", "; ")) from None
     if str(name) in known and model.battery.name != str(name):
         raise BatteryError(
             f"{path}: battery.name = {model.battery.name!r} differs from the file name ({name!r})"
@@ -329,8 +315,7 @@ def load_battery(name: str | Path = "v1") -> Battery:
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise BatteryError(f"{path}: duplicate case names {', '.join(dup)}")
-    scales = [c.delay_scale for c in parsed if c.delay_scale is not None]
-    max_scale = max([1.0, *scales])
+    max_scale = max([1.0, *(c.delay_scale for c in parsed if c.delay_scale is not None)])
     cases = tuple(
         BatteryCase(
             **c.model_dump(exclude={"lost_links", "delay_scale"}),
@@ -340,11 +325,5 @@ def load_battery(name: str | Path = "v1") -> Battery:
         )
         for c in parsed
     )
-    return Battery(
-        name=model.battery.name,
-        version=model.battery.version,
-        description=model.battery.description,
-        sha256=hashlib.sha256(data).hexdigest(),
-        source=path.resolve(),
-        cases=cases,
-    )
+    sha256 = hashlib.sha256(data).hexdigest()
+    return Battery(**model.battery.model_dump(), sha256=sha256, source=path.resolve(), cases=cases)

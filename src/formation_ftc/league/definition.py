@@ -275,7 +275,6 @@ class TuneSection(StrictModel):
     @field_validator("fields")
     @classmethod
     def _bounds(cls, v):
-        out = {}
         for path, b in v.items():
             slot, _, name = path.partition(".")
             if slot not in METHOD_SLOTS or not name or "." in name:
@@ -291,8 +290,8 @@ class TuneSection(StrictModel):
                 raise ValueError(f"{path}: bounds [{b.low:g}, {b.high:g}] need low < high, finite")
             if b.log and b.low <= 0:
                 raise ValueError(f"{path}: a log scale needs low > 0, got {b.low:g}")
-            out[path] = b
-        return out
+            v[path] = b  # a [low, high] list as its bounds (same key: the dict keeps its order)
+        return v
 
 
 class LeagueSpec(StrictModel):
@@ -333,13 +332,9 @@ class LeagueSpec(StrictModel):
             raise ValueError(f"methods: duplicate method names {dup}")
         req = self.league.requirement
         if req.stl is not None and STL_VIOLATION not in [m.get("name") for m in self.metrics]:
+            violation = f"not ({req.stl})"
             self.metrics.append(
-                {
-                    "name": STL_VIOLATION,
-                    "reduce": "stl",
-                    "formula": f"not ({req.stl})",
-                    "units": req.units,
-                }
+                {"name": STL_VIOLATION, "reduce": "stl", "formula": violation, "units": req.units}
             )
         metric_names = [str(m.get("name")) for m in self.metrics]
         if self.league.requirement.metric not in metric_names:
@@ -390,32 +385,31 @@ def builtin_leagues() -> dict[str, Path]:
 def _format(exc: ValidationError, source: str, dot: str = ": ", sep: str = "\n") -> str:
     """Every error of ``exc``: ``SOURCE: a.b: message`` (``dot`` between the source and the field's
     path), joined by ``sep``."""
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ()))
-        lines.append(
-            f"{source}{dot}{loc}: {err.get('msg')}" if loc else f"{source}: {err.get('msg')}"
-        )
-    return sep.join(lines)
+    errors = [(".".join(map(str, err.get("loc", ()))), err.get("msg")) for err in exc.errors()]
+    return sep.join(
+        f"{source}{dot}{loc}: {msg}" if loc else f"{source}: {msg}" for loc, msg in errors
+    )
+
+
+def _toml(path: Path, where: str = "") -> dict[str, Any]:
+    """The TOML file ``path`` as a dict; LeagueError ``WHERE PATH: not valid TOML: ...`` when it is not."""
+    try:
+        return tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise LeagueError(f"{where}{path}: not valid TOML: {exc}") from None
 
 
 def load_league(name_or_path: str | Path) -> LeagueSpec:
     """A built-in league by name, or a league TOML file; every field validated (errors name it)."""
     known = builtin_leagues()
-    path = known.get(str(name_or_path))
-    if path is None:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise LeagueError(
-                f"league {str(name_or_path)!r}: neither a built-in league "
-                f"({', '.join(known) or 'none'}) nor a file"
-            )
+    path = known.get(str(name_or_path)) or Path(name_or_path)
+    if not path.is_file():
+        raise LeagueError(
+            f"league {str(name_or_path)!r}: neither a built-in league "
+            f"({', '.join(known) or 'none'}) nor a file"
+        )
     try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise LeagueError(f"{path}: not valid TOML: {exc}") from None
-    try:
-        spec = LeagueSpec.model_validate(raw)
+        spec = LeagueSpec.model_validate(_toml(path))
     except ValidationError as exc:
         raise LeagueError(_format(exc, str(path))) from None
     spec._source = path.resolve()
@@ -431,10 +425,7 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
 def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
     assert spec.source is not None
     path = spec.source.parent / method.scenario
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise LeagueError(f"method {method.name}: {path}: not valid TOML: {exc}") from None
+    raw = _toml(path, f"method {method.name}: ")
     allowed = {"scenario", "simulation", "actuator", "tune", "levels", *METHOD_SLOTS}
     extra = sorted(set(raw) - allowed)
     if extra:
@@ -479,10 +470,8 @@ def _check_levels(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], pa
                 )
 
 
-def _check_tune(
-    spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path
-) -> TuneSection:
-    """The method file's ``[tune]`` table validated: every field a number of the method's own section
+def _check_tune(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any], path: Path) -> None:
+    """The method file's ``[tune]`` table checked: every field a number of the method's own section
     within its bounds, the objective a league metric (whether a field is a leaf of the built loop is
     checked when tuning, :func:`formation_ftc.league.tuning.build_problem`)."""
     where = f"method {method.name}: {path.name}: tune"
@@ -514,7 +503,6 @@ def _check_tune(
             f"{where}.objective = {tune.objective!r}: not a metric of league {spec.league.name} "
             f"({', '.join(metrics)})"
         )
-    return tune
 
 
 def method_tune(spec: LeagueSpec, method: MethodEntry) -> TuneSection | None:
@@ -544,11 +532,8 @@ def method_tune(spec: LeagueSpec, method: MethodEntry) -> TuneSection | None:
     >>> sorted(method_tune(spec, spec.method("yang2013")).fields)
     ['controller.K1', 'controller.K2']
     """
-    raw = _method_raw(spec, method)
-    if "tune" not in raw:
-        return None
-    assert spec.source is not None
-    return _check_tune(spec, method, raw, spec.source.parent / method.scenario)
+    raw = _method_raw(spec, method)  # its [tune] table checked (_check_tune)
+    return TuneSection.model_validate(raw["tune"]) if "tune" in raw else None
 
 
 def method_scenario(
@@ -563,7 +548,6 @@ def method_scenario(
     slots (and time step) on top and its ``[levels.<level>]`` fields for this level (flight knowledge
     of the level, e.g. a thrust rating); ``network_fields`` turn the method's network into a link-fault one."""
     own = _method_raw(spec, method)
-    meta = own.get("scenario", {})
     sim = dict(own.get("simulation", {}))
     unknown_sim = sorted(set(sim) - {"dt", "record_every", "unroll"})
     if unknown_sim:
@@ -575,26 +559,20 @@ def method_scenario(
         "scenario": {
             "name": f"league-{spec.league.name}-{method.name}",
             "method": "composed",
-            "description": meta.get("description", method.label or method.name),
+            "description": own.get("scenario", {}).get("description", method.label or method.name),
         },
         "simulation": {"horizon": spec.league.horizon, **sim},
         "plant": copy.deepcopy(spec.truth),
     }
     if spec.sensors is not None:
         raw["sensors"] = copy.deepcopy(spec.sensors)
-    for slot in METHOD_SLOTS:
-        if slot in own:
-            raw[slot] = copy.deepcopy(own[slot])
+    raw |= copy.deepcopy({slot: own[slot] for slot in METHOD_SLOTS if slot in own})
     known = own.get("levels", {}).get(level.method_fields_from or level.name, {})
     for fpath, value in known.items():  # the level's knowledge
         slot, _, name = fpath.partition(".")
         raw[slot][name] = copy.deepcopy(value)
-    actuator = copy.deepcopy(spec.actuator)
-    actuator.update(
-        copy.deepcopy(own.get("actuator", {}))
-    )  # structural options of the method (allocation)
-    actuator.update(copy.deepcopy(actuator_fields))
-    raw["actuator"] = actuator
+    # the league's actuator, the method's structural options (allocation), the level and fault case
+    raw["actuator"] = copy.deepcopy({**spec.actuator, **own.get("actuator", {}), **actuator_fields})
     if network_fields:
         if "network" not in raw:
             raise LeagueError(
@@ -642,30 +620,21 @@ def _fly_filtered(spec: LeagueSpec, method: MethodEntry, raw: dict[str, Any]) ->
     est = copy.deepcopy(spec.navigation_filter or {})
     if "estimator" in raw and _runs_on_filter(raw["estimator"]):
         raw["estimator"]["navigation"] = est  # the observer's masses where the filter states none
-        return
-    if "estimator" in raw:
+    elif "estimator" in raw:
         raw["estimator"]["fly_on_filter"] = True
-        return
-    mass = raw.get("controller", {}).get("nominal_mass")
-    if mass is not None and "nominal_mass" not in est:
-        est["nominal_mass"] = copy.deepcopy(mass)
-    raw["estimator"] = est
-
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return repr(obj)
-    if isinstance(obj, dict):
-        return {k: _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_jsonable(v) for v in obj]
-    return obj
+    else:
+        mass = raw.get("controller", {}).get("nominal_mass")
+        if mass is not None and "nominal_mass" not in est:
+            est["nominal_mass"] = copy.deepcopy(mass)
+        raw["estimator"] = est
 
 
 def league_hash(spec: LeagueSpec) -> str:
     """sha256 of the definition and of every method file (what the results directory is bound to)."""
+    from formation_ftc.report.reproduce import to_jsonable  # non-finite floats as "inf", "nan"
+
     assert spec.source is not None
-    h = hashlib.sha256(json.dumps(_jsonable(spec.model_dump()), sort_keys=True).encode())
+    h = hashlib.sha256(json.dumps(to_jsonable(spec.model_dump()), sort_keys=True).encode())
     for m in spec.methods:
         h.update((spec.source.parent / m.scenario).read_bytes())
     return h.hexdigest()

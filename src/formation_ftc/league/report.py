@@ -23,6 +23,8 @@ import base64
 import contextlib
 import json
 import math
+import re
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -31,8 +33,11 @@ import pandas as pd
 
 from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import jsonable
+from formation_ftc.league import statistics as st
+from formation_ftc.league.definition import requirement_of
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
+from formation_ftc.report.templating import fmt, render
 
 __all__ = [
     "cell_table",
@@ -64,10 +69,7 @@ COSTS = (("delta_v_total", "total delta-v [m/s]"), ("control_impulse", "control 
 
 
 def _cost(cells: pd.DataFrame) -> tuple[str, str] | None:
-    for name, label in COSTS:
-        if f"{name}_median" in cells:
-            return name, label
-    return None
+    return next(((name, label) for name, label in COSTS if f"{name}_median" in cells), None)
 
 
 #: scores shown in the tables (when the league computes them)
@@ -89,12 +91,13 @@ SCORES = (
 )
 
 
+def _league(meta: dict[str, Any]) -> dict[str, Any]:
+    """The ``[league]`` table of the definition that ``league.json`` records."""
+    return tomllib.loads(meta["definition"])["league"]
+
+
 def _requirement(meta: dict[str, Any]) -> tuple[str, float, str]:
-    import tomllib
-
-    from formation_ftc.league.definition import requirement_of
-
-    return requirement_of(tomllib.loads(meta["definition"])["league"])
+    return requirement_of(_league(meta))
 
 
 def _col(g: pd.DataFrame, name: str) -> np.ndarray:
@@ -123,11 +126,10 @@ def cell_table(meta: dict[str, Any], runs: pd.DataFrame) -> pd.DataFrame:
             "pass_rate": float(g["passed"].mean()),
         }
         for s in SCORES:
-            col = f"metric:{s}"
-            if col in g:
-                v = ok[col].to_numpy(dtype=float)
+            if f"metric:{s}" in g:
+                v = _col(ok, s)
                 v = v[np.isfinite(v)]
-                row[f"{s}_median"] = float(np.median(v)) if v.size else math.nan
+                row[f"{s}_median"] = _median(v)
                 row[f"{s}_p95"] = float(np.percentile(v, 95)) if v.size else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
@@ -173,12 +175,6 @@ IDENTIFICATION_NOTE = (
 )
 
 
-def _horizon(meta: dict[str, Any]) -> float:
-    import tomllib
-
-    return float(tomllib.loads(meta["definition"])["league"]["horizon"])
-
-
 def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     """The fault detection scores of the methods that fly a fault detector (their runs have the
     league's FDI metrics, :data:`formation_ftc.league.runner.FDI_METRICS`), one row per (method,
@@ -198,21 +194,16 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
     Returns ``{"methods": [...], "without_fdi": [...], "rows": [...]}``; counts are ints, rates and
     times floats (NaN where undefined).
     """
-    horizon = _horizon(meta)
+    horizon = float(_league(meta)["horizon"])
     methods = list(dict.fromkeys(runs["method"])) if len(runs) else []
-    with_fdi = [
-        m
-        for m in methods
-        if np.isfinite(_col(runs[runs["method"] == m], "fdi_detection_delay")).any()
-    ]
+    scored = np.isfinite(_col(runs, "fdi_detection_delay"))
+    with_fdi = [m for m in methods if scored[(runs["method"] == m).to_numpy()].any()]
     rows = []
-    for (method, level, case), g in runs[runs["method"].isin(with_fdi)].groupby(
-        ["method", "level", "case"], sort=False
-    ):
+    fdi_runs = runs[runs["method"].isin(with_fdi)]
+    for (method, level, case), g in fdi_runs.groupby(["method", "level", "case"], sort=False):
         ok = g[g["status"] == "ok"]
         alarm, fault = _col(ok, "fdi_alarm_time"), _col(ok, "fdi_fault_time")
-        faulted = np.isfinite(fault)
-        alarmed = np.isfinite(alarm)
+        faulted, alarmed = np.isfinite(fault), np.isfinite(alarm)
         early = alarmed & (~faulted | (alarm < fault))
         detected = faulted & alarmed & (alarm >= fault)
         exposure = np.minimum(np.where(alarmed, alarm, np.inf), np.where(faulted, fault, horizon))
@@ -226,11 +217,9 @@ def fdi_table(meta: dict[str, Any], runs: pd.DataFrame) -> dict[str, Any]:
             err = err[np.isfinite(err)]
             outside = _col(ok, "id_time_outside_10pct")[faulted]
             ident = {
-                "median_identification_error": float(np.median(err)) if err.size else math.nan,
+                "median_identification_error": _median(err),
                 "identified_runs": int(err.size),
-                "median_time_outside_10pct": float(np.median(outside))
-                if outside.size
-                else math.nan,
+                "median_time_outside_10pct": _median(outside),
                 "false_identifications": int(np.nansum(_col(ok, "id_false_identification"))),
             }
         rows.append(
@@ -273,6 +262,18 @@ def _fdi_note(fdi: dict[str, Any]) -> str:
     )
 
 
+def _fdi_tables(fdi: dict[str, Any]) -> dict[str, Any]:
+    """The FDI section of the page and of the Markdown board, from :func:`fdi_table`: its note, the
+    FDI table and the identification table (rows and (key, label) columns of each)."""
+    return {
+        "note": _fdi_note(fdi),
+        "rows": fdi["rows"],
+        "columns": list(FDI_COLUMNS),
+        "identification": identification_rows(fdi),
+        "identification_columns": list(IDENTIFICATION_TABLE),
+    }
+
+
 def _common_cases(cells: pd.DataFrame) -> list[str]:
     """Cases every method was run on (the communication cases apply to networked methods only)."""
     per_method = cells.groupby("method")["case"].apply(set)
@@ -310,9 +311,7 @@ def ranking(
             rows.append(row)
         rows.sort(key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"])))
         for k, r in enumerate(rows, start=1):
-            r["rank"] = k
-            r["tied"] = False
-            r["rank_display"] = str(k)
+            r.update(rank=k, tied=False, rank_display=str(k))
         out[str(level)] = rows
     if runs is not None:
         rank_confidence(meta, runs, out, common)
@@ -388,22 +387,19 @@ def rank_confidence(
     * ``rank`` (shared by a tie group: consecutive methods not separated), ``tied``, ``rank_display``
       ("3=" for a tie).
     """
-    from formation_ftc.league import statistics as st
-
     metric, limit, _ = _requirement(meta)
     seed = seed_column(runs)
     if cases is None:
         cases = _common_cases(runs[["method", "case"]].drop_duplicates())
     sel = runs[runs["case"].isin(cases)]
-    frame = pd.DataFrame(
-        {
-            "method": sel["method"].astype(str),
-            "level": sel["level"].astype(str),
-            "case": sel["case"].astype(str),
-            "seed": sel[seed],
-            "passed": _passed(sel, metric, limit),
-            "value": np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
-        }
+    frame = (
+        sel[["method", "level", "case"]]
+        .astype(str)
+        .assign(
+            seed=sel[seed],
+            passed=_passed(sel, metric, limit),
+            value=np.where(sel["status"] == "ok", _col(sel, metric), np.nan),
+        )
     )
     groups = {key: g for key, g in frame.groupby(["method", "level"], sort=False)}
     empty = frame.iloc[:0]
@@ -425,14 +421,8 @@ def rank_confidence(
         tests = []
         for above, this in zip(per, per[1:], strict=False):
             pair = above.merge(this, on=["case", "seed"], suffixes=("_a", "_b"))
-            tests.append(
-                st.paired_comparison(
-                    pair["passed_a"].to_numpy(),
-                    pair["passed_b"].to_numpy(),
-                    pair["value_a"].to_numpy(),
-                    pair["value_b"].to_numpy(),
-                )
-            )
+            paired = (pair[c].to_numpy() for c in ("passed_a", "passed_b", "value_a", "value_b"))
+            tests.append(st.paired_comparison(*paired))
         adjusted = st.holm([t["p_value"] for t in tests])
         separated = [bool(p < st.ALPHA) for p in adjusted]
         rows[0].update(dict.fromkeys(_COMPARISON_KEYS))
@@ -444,10 +434,14 @@ def rank_confidence(
             r.update(tie)
 
 
+def _median(v: np.ndarray) -> float:
+    """The median of ``v`` (NaN when it is empty)."""
+    return float(np.median(v)) if v.size else math.nan
+
+
 def _nanmedian(v) -> float:
     a = np.asarray(v, dtype=float)
-    a = a[np.isfinite(a)]
-    return float(np.median(a)) if a.size else math.nan
+    return _median(a[np.isfinite(a)])
 
 
 def _nan_last(v: float | None) -> float:
@@ -461,20 +455,13 @@ def winners(meta: dict[str, Any], cells: pd.DataFrame) -> list[dict[str, Any]]:
 
 
 def _winners(cells: pd.DataFrame, metric: str) -> list[dict[str, Any]]:
+    shown = ("method", "pass_rate", f"{metric}_median")
     out = []
     for (level, case), g in cells.groupby(["level", "case"], sort=False):
         best = min(
             g.to_dict("records"), key=lambda r: (-r["pass_rate"], _nan_last(r[f"{metric}_median"]))
         )
-        out.append(
-            {
-                "level": level,
-                "case": case,
-                "method": best["method"],
-                "pass_rate": best["pass_rate"],
-                f"{metric}_median": best[f"{metric}_median"],
-            }
-        )
+        out.append({"level": level, "case": case, **{k: best[k] for k in shown}})
     return out
 
 
@@ -483,13 +470,11 @@ def _expected_cells(league_dir: Path, method: str) -> list[str] | None:
     there (the method's directory is missing)."""
     from formation_ftc.campaign.storage import MANIFEST
 
-    try:
+    with contextlib.suppress(OSError, ValueError, KeyError, TypeError):  # then the cell files
         manifest = json.loads((league_dir / method / "campaign" / MANIFEST).read_text("utf-8"))
         bases = manifest["plan"]["bases"]
         if isinstance(bases, list) and all(isinstance(b, str) for b in bases):
             return [Path(b).stem for b in bases]
-    except (OSError, ValueError, KeyError, TypeError):
-        pass
     cdir = league_dir / method / "cells"
     return sorted(p.stem for p in cdir.glob("*.toml")) if cdir.is_dir() else None
 
@@ -507,17 +492,15 @@ def completeness(
     ``runs``, ``expected``)}``.
     """
     seeds = int(meta["seeds"])
-    counts = (
-        runs.groupby(["method", "case", "level"], sort=False).size().to_dict() if len(runs) else {}
-    )
+    cell = ["method", "case", "level"]
+    counts = runs.groupby(cell, sort=False).size().to_dict() if len(runs) else {}
+    names = [r["name"] for r in meta["methods"]]
     found = {m for m, _, _ in counts}
+    missing = [m for m in names if m not in found]
     per_cell: list[int] = []
     short: list[dict[str, Any]] = []
-    missing, unknown = [], []
-    expected = 0
-    for m in (r["name"] for r in meta["methods"]):
-        if m not in found:
-            missing.append(m)
+    unknown = []
+    for m in names:
         keys = _expected_cells(Path(league_dir), m)
         if keys is None:
             unknown.append(m)
@@ -526,17 +509,14 @@ def completeness(
             case, _, level = key.partition("--")
             n = int(counts.get((m, case, level), 0))
             per_cell.append(n)
-            expected += seeds
             if n < seeds:
-                short.append(
-                    {"method": m, "case": case, "level": level, "runs": n, "expected": seeds}
-                )
+                short.append(dict(method=m, case=case, level=level, runs=n, expected=seeds))
     return {
         "complete": not missing and not short,
         "seeds": seeds,
         "seeds_per_cell": {"min": min(per_cell, default=0), "max": max(per_cell, default=0)},
         "runs": int(len(runs)),
-        "expected_runs": expected,
+        "expected_runs": seeds * len(per_cell),
         "missing_methods": missing,
         "cells_unknown": unknown,
         "incomplete_cells": short,
@@ -563,10 +543,9 @@ def incomplete_note(comp: dict[str, Any], limit: int = 8) -> str | None:
     """One paragraph on what is missing (None for a complete league)."""
     if comp["complete"]:
         return None
-    parts = [
-        f"INCOMPLETE league: {comp['runs']:,} of {comp['expected_runs']:,} planned runs found"
-        + (" (more for the methods without a directory)" if comp["cells_unknown"] else "")
-    ]
+    found = f"{comp['runs']:,} of {comp['expected_runs']:,} planned runs found"
+    unknown = " (more for the methods without a directory)" if comp["cells_unknown"] else ""
+    parts = [f"INCOMPLETE league: {found}{unknown}"]
     if comp["missing_methods"]:
         parts.append(f"methods without results: {', '.join(comp['missing_methods'])}")
     short = [c for c in comp["incomplete_cells"] if c["method"] not in comp["missing_methods"]]
@@ -584,30 +563,18 @@ def incomplete_note(comp: dict[str, Any], limit: int = 8) -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------- figures
-def _png(fig, path: Path) -> Path:
-    from formation_ftc.plotting import save_figure
-
-    return save_figure(fig, path)
-
-
 def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
-    from formation_ftc.plotting import new_figure
+    from formation_ftc.plotting import new_figure, save_figure
 
     metric, limit, units = _requirement(meta)
     cost = _cost(cells)
     if cost is None:
         return []
-    common = _common_cases(cells)
     paths = []
-    for level, g in cells[cells["case"].isin(common)].groupby("level", sort=False):
+    for level, g in cells[cells["case"].isin(_common_cases(cells))].groupby("level", sort=False):
         agg = g.groupby("method", sort=False)[[f"{metric}_median", f"{cost[0]}_median"]].median()
-        fig, axes = new_figure(
-            1,
-            1,
-            width=6.4,
-            height=4.2,
-            title=f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)",
-        )
+        title = f"{meta['name']} league, {level}: {cost[0]} vs accuracy (median over cases)"
+        fig, axes = new_figure(1, 1, width=6.4, height=4.2, title=title)
         ax = axes[0, 0]
         pts = agg.to_numpy(dtype=float)
         for name, (acc, dv) in zip(agg.index, pts, strict=True):
@@ -621,14 +588,12 @@ def _pareto(meta, cells: pd.DataFrame, out: Path) -> list[Path]:
         ax.axhline(limit, color="tab:red", lw=0.8, label=f"requirement {limit:g} {units}")
         ax.set_xlabel(f"{cost[1]}, median")
         ax.set_ylabel(f"{metric}, median [{units}]")
-        acc = pts[:, 0][np.isfinite(pts[:, 0])]
-        if acc.size and acc.min() > 0 and acc.max() / acc.min() > 100:
-            ax.set_yscale("log")
-        dv = pts[:, 1][np.isfinite(pts[:, 1])]
-        if dv.size and dv.min() > 0 and dv.max() / dv.min() > 100:
-            ax.set_xscale("log")
+        for k, set_scale in ((0, ax.set_yscale), (1, ax.set_xscale)):  # accuracy, actuator usage
+            v = pts[:, k][np.isfinite(pts[:, k])]
+            if v.size and v.min() > 0 and v.max() / v.min() > 100:
+                set_scale("log")
         ax.legend(loc="best", fontsize=7)
-        paths.append(_png(fig, out / f"pareto-{level}.png"))
+        paths.append(save_figure(fig, out / f"pareto-{level}.png"))
     return paths
 
 
@@ -644,7 +609,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
     """Each method's score signal against time for the traced seed, one panel per fault case."""
     import xarray as xr
 
-    from formation_ftc.plotting import new_figure
+    from formation_ftc.plotting import new_figure, save_figure
 
     metric, limit, units = _requirement(meta)
     signal = "shape_error" if meta.get("kind", "translational") != "attitude" else "attitude_error"
@@ -656,8 +621,7 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         runs = int(meta["seeds"])  # runs per cell
         bases = _expected_cells(league_dir, m["name"]) or []  # the cells in run order
         for p in sorted(tdir.glob("run-*.nc")):
-            rid = int(p.stem.split("-")[1])
-            g = rid // runs
+            g = int(p.stem.split("-")[1]) // runs  # the cell of run-ID
             if g >= len(bases):
                 continue
             case = bases[g].split("--")[0]
@@ -666,17 +630,11 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
                     v = ds[signal].values
                     v = v if v.ndim == 1 else np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
                     traces.setdefault(case, {})[m["name"]] = (ds["time"].values, v)
-    paths: list[Path] = []
     cases = list(traces)
     if not cases:
-        return paths
-    fig, axes = new_figure(
-        len(cases),
-        1,
-        width=7.0,
-        height=1.0 + 2.0 * len(cases),
-        title=f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level",
-    )
+        return []
+    title = f"{signal} of every method, seed {meta.get('trace_seed', 0)}, first level"
+    fig, axes = new_figure(len(cases), 1, width=7.0, height=1.0 + 2.0 * len(cases), title=title)
     for ax, case in zip(axes[:, 0], cases, strict=True):
         for name, (t, v) in traces[case].items():
             ax.plot(t, np.maximum(v, 1e-6), lw=0.8, label=name)
@@ -685,17 +643,10 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
         ax.set_ylabel(f"{case} [{units}]", fontsize=7)
     axes[-1, 0].set_xlabel("time [s]")
     axes[0, 0].legend(loc="upper right", fontsize=6, ncol=2)
-    paths.append(_png(fig, out / "trajectories.png"))
-    return paths
+    return [save_figure(fig, out / "trajectories.png")]
 
 
 # ---------------------------------------------------------------------------------------------- page
-def _fmt(v: Any) -> str:
-    from formation_ftc.report.templating import fmt
-
-    return fmt(v)
-
-
 def _img(path: Path) -> dict[str, str]:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     return {"alt": path.stem, "src": f"data:image/png;base64,{data}"}
@@ -795,10 +746,9 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
         for r in rows:
             res = results.get((str(r["method"]), str(level)))
             r["tuned"] = _tuned_text(res)
-            r["tuning"] = (
-                None
-                if res is None
-                else {
+            r["tuning"] = None
+            if res is not None:
+                r["tuning"] = {
                     "gains": res.get("tuned_gains"),
                     "paper_gains": res.get("paper_gains"),
                     "objective": res.get("objective", {}).get("metric"),
@@ -806,8 +756,7 @@ def tuned_column(rank: dict[str, list[dict[str, Any]]], tuned_dir: str | Path) -
                     "fresh": {k: (res.get("fresh") or {}).get(k) for k in ("paper", "tuned")},
                     "optimiser": res.get("optimiser", {}).get("name"),
                 }
-            )
-            n += res is not None
+                n += 1
     return n
 
 
@@ -824,14 +773,12 @@ def _page(
 ) -> str:
     """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
     columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
-    from formation_ftc.report.templating import render
-
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
+    median = f"median {metric} [{req_units}]"
     ranking_tables = []
     confidence = _has_confidence(rank)
     for level, rows in rank.items():
-        median = f"median {metric} [{req_units}]"
         columns = _ranking_columns(rows, median, cost, confidence, "tuned (formation-ftc tune)")
         ranking_tables.append((level, _display_rows(rows, metric), columns))
     battery = meta["battery"]
@@ -854,7 +801,7 @@ def _page(
         limit=limit,
         units=req_units,
         ranking=ranking_tables,
-        ranking_note=_ranking_note() if confidence else None,
+        ranking_note=st.method_note() if confidence else None,
         identification_note=IDENTIFICATION_NOTE,
         winners=wins,
         winner_columns=[
@@ -862,17 +809,9 @@ def _page(
             ("case", "fault case"),
             ("method", "best method"),
             ("pass_rate", "pass rate"),
-            (f"{metric}_median", f"median {metric} [{req_units}]"),
+            (f"{metric}_median", median),
         ],
-        fdi=None
-        if fdi is None
-        else {
-            "note": _fdi_note(fdi),
-            "rows": fdi["rows"],
-            "columns": list(FDI_COLUMNS),
-            "identification": identification_rows(fdi),
-            "identification_columns": list(IDENTIFICATION_TABLE),
-        },
+        fdi=None if fdi is None else _fdi_tables(fdi),
         per_fault=_per_fault(cells, units or {}),
         scores_per_table=SCORES_PER_TABLE,
         figures=[_img(p) for p in figures],
@@ -927,12 +866,12 @@ def _interval_text(v: Any, low: Any, high: Any, fixed: bool = False) -> str:
 
     if not ok(v):
         return "-"
-    text = f"{v:.3f}" if fixed else _fmt(float(v))
+    text = f"{v:.3f}" if fixed else fmt(float(v))
     if not (ok(low) and ok(high)):
         return text
     if fixed:
         return f"{text} [{low:.2f}, {high:.2f}]"
-    return f"{text} [{_fmt(float(low))}, {_fmt(float(high))}]"
+    return f"{text} [{fmt(float(low))}, {fmt(float(high))}]"
 
 
 def _versus_text(r: dict[str, Any]) -> str:
@@ -940,9 +879,8 @@ def _versus_text(r: dict[str, Any]) -> str:
     p = r.get("p_adjusted")
     if not isinstance(p, int | float) or not math.isfinite(p):
         return "-"
-    name = {"mcnemar": "McNemar", "wilcoxon": "Wilcoxon"}.get(
-        str(r.get("test")), str(r.get("test"))
-    )
+    test = str(r.get("test"))
+    name = {"mcnemar": "McNemar", "wilcoxon": "Wilcoxon"}.get(test, test)
     return f"{'<0.001' if p < 0.001 else format(p, '.3f')} ({name})"
 
 
@@ -950,24 +888,21 @@ def _display_rows(rows: list[dict[str, Any]], metric: str) -> list[dict[str, Any
     """Ranking rows with their text cells: ``rank_text`` ("3="), ``pass_rate_text`` and
     ``median_text`` (value and 95 % interval), ``versus_text`` (adjusted p of the comparison with the
     row above, and its test)."""
-    out = []
-    for r in rows:
-        out.append(
-            {
-                **r,
-                "rank_text": str(r.get("rank_display", r.get("rank"))),
-                "pass_rate_text": _interval_text(
-                    r.get("pass_rate"), r.get("pass_rate_low"), r.get("pass_rate_high"), fixed=True
-                ),
-                "median_text": _interval_text(
-                    r.get(f"{metric}_median"),
-                    r.get(f"{metric}_median_low"),
-                    r.get(f"{metric}_median_high"),
-                ),
-                "versus_text": _versus_text(r),
-            }
-        )
-    return out
+    median = f"{metric}_median"
+    return [
+        {
+            **r,
+            "rank_text": str(r.get("rank_display", r.get("rank"))),
+            "pass_rate_text": _interval_text(
+                r.get("pass_rate"), r.get("pass_rate_low"), r.get("pass_rate_high"), fixed=True
+            ),
+            "median_text": _interval_text(
+                r.get(median), r.get(f"{median}_low"), r.get(f"{median}_high")
+            ),
+            "versus_text": _versus_text(r),
+        }
+        for r in rows
+    ]
 
 
 def _has_confidence(rank: dict[str, list[dict[str, Any]]]) -> bool:
@@ -1002,54 +937,37 @@ def ranking_frame(rank: dict[str, list[dict[str, Any]]]) -> pd.DataFrame:
     first = [c for c in ("level", "rank", "rank_display", "tied", "method") if c in frame]
     frame = frame[first + [c for c in frame.columns if c not in first]]
     # the comparison columns are null on a level's first row: nullable integers and booleans
-    for col in ("pairs", "only_above_passed", "only_this_passed"):
-        if col in frame:
-            frame[col] = frame[col].astype("Int64")
-    if "separated" in frame:
-        frame["separated"] = frame["separated"].astype("boolean")
-    return frame
+    nullable = {"pairs": "Int64", "only_above_passed": "Int64", "only_this_passed": "Int64"}
+    nullable["separated"] = "boolean"
+    return frame.astype({c: t for c, t in nullable.items() if c in frame})
 
 
-def _ranking_units(frame: pd.DataFrame, metric: str, run_units: dict[str, str]) -> dict[str, str]:
+def _ranking_units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
     """Ranking columns: counts, rates, statistics and p-values dimensionless; a median and its
     interval bounds in the score's unit."""
     units: dict[str, str] = {}
-    for col in frame.columns:
-        name = str(col)
-        score = next(
-            (
-                name[: -len(x)]
-                for x in ("_median_low", "_median_high", "_median")
-                if name.endswith(x)
-            ),
-            None,
-        )
+    for name in map(str, frame.columns):
+        score = re.fullmatch(r"(.+)_median(_low|_high)?", name)
         if score is None:
             units[name] = "1"
-        elif f"metric:{score}" in run_units:
-            units[name] = run_units[f"metric:{score}"]
+        elif f"metric:{score[1]}" in run_units:
+            units[name] = run_units[f"metric:{score[1]}"]
     return units
-
-
-def _ranking_note() -> str:
-    """The sentence under the ranking tables: confidence level, methods, bootstrap seed."""
-    from formation_ftc.league.statistics import method_note
-
-    return method_note()
 
 
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
     body = [
-        "| " + " | ".join(_fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows
+        "| " + " | ".join(fmt(r.get(k)).replace("|", "/") for k, _ in cols) + " |" for r in rows
     ]
     return "\n".join([head, sep, *body])
 
 
 def markdown_summary(board: dict[str, Any]) -> str:
     """The ranking per level and the best method per fault case as Markdown tables (for a README)."""
-    metric = board["requirement"]["metric"]
+    req = board["requirement"]
+    metric = req["metric"]
     cells = pd.DataFrame(board["cells"])
     cost = _cost(cells) if len(cells) else None
     comp = board.get("completeness")
@@ -1059,48 +977,42 @@ def markdown_summary(board: dict[str, Any]) -> str:
         *([f"**{note}**", ""] if note else []),
         f"League `{board['league']}` (definition version {board['version']}), fault battery "
         f"{board['battery']['name']} (version {board['battery']['version']}), {seeds}; "
-        f"requirement {metric} <= "
-        f"{board['requirement']['max']:g} {board['requirement']['units']}.",
+        f"requirement {metric} <= {req['max']:g} {req['units']}.",
     ]
     confidence = _has_confidence(board["ranking"])
     for level, rows in board["ranking"].items():
         cols = _ranking_columns(rows, f"median {metric}", cost, confidence, "tuned")
         out += ["", f"**{level}**", "", _md_table(_display_rows(rows, metric), cols)]
     if confidence:
-        out += ["", _ranking_note()]
+        out += ["", st.method_note()]
     if board.get("resolution"):
         out += ["", resolution_text(board["resolution"]) + "."]
     best = {(w["case"], w["level"]): w for w in (_winners(cells, metric) if len(cells) else [])}
     levels = list(board["ranking"])
-    rows = []
-    for case in dict.fromkeys(r["case"] for r in board["cells"]):
-        row = {"case": case}
-        for lv in levels:
-            b = best.get((case, lv))
-            if b is None:
-                row[lv] = "-"
-            elif b["pass_rate"] > 0:
-                row[lv] = f"{b['method']} ({b['pass_rate']:.2f})"
-            else:
-                row[lv] = f"none passes (lowest median: {b['method']})"
-        rows.append(row)
-    out += [
-        "",
-        "Best method per fault case (pass rate):",
-        "",
-        _md_table(rows, [("case", "fault case"), *[(lv, lv) for lv in levels]]),
+    rows = [
+        {"case": case, **{lv: _best_text(best.get((case, lv))) for lv in levels}}
+        for case in dict.fromkeys(r["case"] for r in board["cells"])
     ]
-    fdi = board.get("fdi")
-    if fdi is not None:
-        out += ["", "**FDI**", "", _fdi_note(fdi)]
+    columns = [("case", "fault case"), *[(lv, lv) for lv in levels]]
+    out += ["", "Best method per fault case (pass rate):", "", _md_table(rows, columns)]
+    if board.get("fdi") is not None:
+        fdi = _fdi_tables(board["fdi"])
+        out += ["", "**FDI**", "", fdi["note"]]
         if fdi["rows"]:
-            shown = [{k: "-" if v is None else v for k, v in r.items()} for r in fdi["rows"]]
-            out += ["", _md_table(shown, list(FDI_COLUMNS))]
-        ident = identification_rows(fdi)
-        if ident:
+            out += ["", _md_table(fdi["rows"], fdi["columns"])]  # None (not a number): "-"
+        if fdi["identification"]:
             out += ["", "**Fault identification**", "", IDENTIFICATION_NOTE, ""]
-            out += [_md_table(ident, list(IDENTIFICATION_TABLE))]
+            out += [_md_table(fdi["identification"], fdi["identification_columns"])]
     return "\n".join(out) + "\n"
+
+
+def _best_text(best: dict[str, Any] | None) -> str:
+    """A cell of the Markdown table of the best method per fault case: the winner and its pass rate."""
+    if best is None:
+        return "-"
+    if best["pass_rate"] > 0:
+        return f"{best['method']} ({best['pass_rate']:.2f})"
+    return f"none passes (lowest median: {best['method']})"
 
 
 def resolution_text(record: dict[str, Any]) -> str:
@@ -1165,10 +1077,7 @@ def write_leaderboard(
     comp = completeness(meta, runs, league_dir)
     out = league_dir / "leaderboard"
     out.mkdir(parents=True, exist_ok=True)
-    figures: list[Path] = []
-    if plots:
-        figures += _pareto(meta, cells, out)
-        figures += _trajectories(meta, league_dir, out)
+    figures = [*_pareto(meta, cells, out), *_trajectories(meta, league_dir, out)] if plots else []
     metric, limit, units = _requirement(meta)
     board = {
         "league": meta["name"],
@@ -1183,7 +1092,7 @@ def write_leaderboard(
         "requirement": {"metric": metric, "max": limit, "units": units},
         "provenance": meta.get("provenance"),
         "ranking": rank,
-        "ranking_method": _ranking_note(),
+        "ranking_method": st.method_note(),
         "winners": wins,
         "cells": cells.to_dict("records"),
         "fdi": fdi,
@@ -1203,8 +1112,8 @@ def write_leaderboard(
     write_parquet(
         frame,
         out / "ranking.parquet",
-        _ranking_units(frame, metric, run_units),
-        metadata={**kv, "formation_ftc.league.ranking_method": _ranking_note()},
+        _ranking_units(frame, run_units),
+        metadata={**kv, "formation_ftc.league.ranking_method": st.method_note()},
     )
     page = _page(
         meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)

@@ -25,6 +25,7 @@ import os
 import re
 import threading
 import time
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,7 @@ from typing import Any, cast
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from formation_ftc import api
 from formation_ftc.atomic import atomic_write
 from formation_ftc.errors import InputError
 from formation_ftc.league.definition import (
@@ -45,7 +47,7 @@ from formation_ftc.league.definition import (
     load_league,
     method_scenario,
 )
-from formation_ftc.limits import Budgets
+from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
 
 __all__ = [
     "Cell",
@@ -111,13 +113,8 @@ FLFR_SPACECRAFT_METRIC = {"name": "flfr_spacecraft", "signal": "flfr_spacecraft"
 #: small estimation errors (1e-4 against 3e-4 is no convergence verdict on the physics); an STL
 #: robustness is a margin (its relative change is meaningless near 0; the signals it reads are
 #: checked as scores); a filter's consistency is a noise statistic
-_NOT_STEP_CHECKED = (
-    *(
-        m["name"]
-        for m in (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
-    ),
-    STL_VIOLATION,
-)
+_UNCHECKED = (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_METRICS)
+_NOT_STEP_CHECKED = (*(m["name"] for m in _UNCHECKED), STL_VIOLATION)
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
 #: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
@@ -166,8 +163,6 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
     A case applies to a method when it means something for it (a communication fault needs a network,
     larger delays a delayed one). Every cell of a networked method uses the link-fault network (with no
     lost link outside the communication cases), so all its cells share one compiled program."""
-    from formation_ftc.api import load_scenario
-
     battery = _battery(spec)
     chosen = [spec.method(m) for m in methods] if methods else spec.methods
     quantity = "torque" if spec.league.kind == "attitude" else "force"
@@ -186,7 +181,7 @@ def plan_cells(spec: LeagueSpec, methods: list[str] | None = None) -> dict[str, 
                 raw = method_scenario(spec, m, level, act, net_fields)
                 try:
                     raw = _with_fdi_scores(raw)
-                    n_steps = int(load_scenario(raw).simulation.n_steps)
+                    n_steps = int(api.load_scenario(raw).simulation.n_steps)
                 except Exception as exc:  # noqa: BLE001 - any invalid cell: name it, exit code 2
                     raise LeagueError(
                         f"method {m.name} cannot run cell {case.name}/{level.name} of league "
@@ -203,10 +198,9 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
     (``true-actuator-fault``: the league's ``fault-battery``) also gets the league's FDI scores: the
     ``fdi-scores`` evaluation and :data:`FDI_METRICS` (the league owns the scores; a method file gives
     none)."""
-    from formation_ftc.api import load_scenario
     from formation_ftc.methods.composed import ComposedScenario, make_loop
 
-    loop = make_loop(cast(ComposedScenario, load_scenario(raw, build=False)))
+    loop = make_loop(cast(ComposedScenario, api.load_scenario(raw, build=False)))
 
     def add(evaluation: str | None, metrics: tuple[dict[str, Any], ...]) -> None:
         if evaluation is not None:
@@ -231,13 +225,9 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
 
 def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
     """(has a network, the network has delays) of a method's own file."""
-    import tomllib
-
     assert spec.source is not None
     net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
-    if net is None:
-        return False, False
-    return True, net.get("delays") is not None
+    return net is not None, net is not None and net.get("delays") is not None
 
 
 def _campaign(
@@ -271,11 +261,8 @@ def _campaign(
         if ie.std and ie.std > 0:
             for i, row in enumerate(nominal):
                 for k, v in enumerate(row):
-                    sample[f"{truth_field}.{i}.{k}"] = {
-                        "dist": "normal",
-                        "mean": float(v),
-                        "std": ie.std,
-                    }
+                    normal = {"dist": "normal", "mean": float(v), "std": ie.std}
+                    sample[f"{truth_field}.{i}.{k}"] = normal
     overrides: dict[str, Any] = {}
     on = spec.league.onset
     # the actuator fault's onset, and the communication fault's where the method has a network
@@ -322,7 +309,6 @@ def check_league_budgets(
     cells' steps) and of their sum, within ``budgets.max_campaign_steps``. The message names ``--seeds``
     and the range it allows."""
     from formation_ftc.campaign.spec import MAX_RUNS
-    from formation_ftc.limits import check_run_steps
 
     name = spec.league.name
     for method, mcells in cells.items():
@@ -367,8 +353,6 @@ def _check_batch_memory(
     (first cell of each method, shapes only: every cell of a method has the same structure)."""
     if budgets.max_memory is None:
         return
-    from formation_ftc.limits import format_bytes
-
     batch = min(spec.league.chunk_size, seeds)
     for method, mcells in cells.items():
         if not mcells:
@@ -387,9 +371,6 @@ def _check_batch_memory(
 def run_bytes(raw: dict[str, Any], error: type[InputError], where: str) -> int:
     """Estimated memory of one run of the full scenario ``raw`` [bytes] (shapes only); a run that
     cannot be built raises ``error`` (``where: reason``)."""
-    from formation_ftc import api
-    from formation_ftc.limits import run_memory_bytes
-
     try:
         return run_memory_bytes(api.build_loop(api.load_scenario(dict(raw))))
     except InputError:
@@ -470,20 +451,15 @@ class LeagueRecord(_Record):
 def record_error(path: Path | str, exc: ValidationError, prefix: str = "") -> str:
     """``FILE: field a.b.c: what is wrong (got ...)`` of the first error of ``exc`` (and how many
     more); ``prefix``: the field that was validated (its path in the file)."""
-    errors = exc.errors()
-    first = errors[0]
-    where = (
-        ".".join(str(p) for p in (*([prefix] if prefix else []), *first["loc"])) or "(top level)"
-    )
+    first, *others = exc.errors()
+    where = ".".join(map(str, ([prefix] if prefix else []) + [*first["loc"]])) or "(top level)"
     got = "" if first["type"] == "missing" else f" (got {first.get('input')!r:.60})"
-    more = f"; {len(errors) - 1} more problem(s)" if len(errors) > 1 else ""
+    more = f"; {len(others)} more problem(s)" if others else ""
     return f"{path}: field {where}: {first['msg']}{got}{more}"
 
 
 def _check_definition(meta: dict[str, Any]) -> str | None:
     """What is wrong with the league definition text of ``league.json`` (None: readable)."""
-    import tomllib
-
     try:
         league = tomllib.loads(meta["definition"])["league"]
         req = league["requirement"]
@@ -530,13 +506,10 @@ def _campaign_at_or_above(path: Path) -> Path | None:
 
     real = Path(os.path.realpath(path))
     for d in (real, *real.parents):
-        try:
-            if (d / MANIFEST).is_file() and json.loads((d / MANIFEST).read_text("utf-8")).get(
-                "format"
-            ) == FORMAT:
+        marker = d / MANIFEST
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # unreadable: not a campaign
+            if marker.is_file() and json.loads(marker.read_text("utf-8")).get("format") == FORMAT:
                 return d
-        except (OSError, ValueError, AttributeError):
-            continue
     return None
 
 
@@ -548,9 +521,8 @@ def _check_target(
     raises OSError."""
     campaign = _campaign_at_or_above(out)
     if campaign is not None:
-        where = (
-            "is" if campaign == Path(os.path.realpath(out)) else f"is inside {campaign}, which is"
-        )
+        inside = campaign != Path(os.path.realpath(out))
+        where = f"is inside {campaign}, which is" if inside else "is"
         raise error(f"{what}: {where} a campaign directory; {in_campaign}")
     if not (out.exists() or out.is_symlink()):
         return False
@@ -655,12 +627,8 @@ def _stored_runs(chunks: Path, seeds: int, chunk_size: int) -> int:
         names = os.listdir(chunks)
     except OSError:
         return 0
-    n = 0
-    for name in names:
-        m = _CHUNK_RE.match(name)
-        if m:
-            n += min(chunk_size, seeds - (int(m.group(1)) % per_cell) * chunk_size)
-    return n
+    ids = [int(m[1]) for m in map(_CHUNK_RE.match, names) if m]
+    return sum(min(chunk_size, seeds - (i % per_cell) * chunk_size) for i in ids)
 
 
 class _Bars:
@@ -678,46 +646,36 @@ class _Bars:
         console: Any = None,
         interval: float = 0.5,
     ):
-        self.unit = unit
-        self.enabled, self.console, self.interval = enabled, console, interval
-        self._names = [name for name, _ in tasks]
-        self._totals = dict(tasks)
+        self.unit, self.enabled, self.console, self.interval = unit, enabled, console, interval
+        self._totals = dict(tasks)  # name -> total of each line, in order
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
 
     def __enter__(self):
-        if not self.enabled or not self._names:
+        if not self.enabled or not self._totals:
             return self
         try:
+            from rich import progress as rp
             from rich.console import Console
-            from rich.progress import (
-                BarColumn,
-                MofNCompleteColumn,
-                Progress,
-                TextColumn,
-                TimeElapsedColumn,
-                TimeRemainingColumn,
-            )
 
             console = self.console if self.console is not None else Console(stderr=True)
             if not console.is_terminal:
                 return self
-            width = max(len(name) for name in self._names)
-            self._bar = Progress(
-                TextColumn(f"[bold]{{task.description:<{width}}}"),
-                BarColumn(),
-                MofNCompleteColumn(),
-                TextColumn(self.unit),
-                TimeElapsedColumn(),
-                TextColumn("ETA"),
-                TimeRemainingColumn(),
+            width = max(len(name) for name in self._totals)
+            self._bar = rp.Progress(
+                rp.TextColumn(f"[bold]{{task.description:<{width}}}"),
+                rp.BarColumn(),
+                rp.MofNCompleteColumn(),
+                rp.TextColumn(self.unit),
+                rp.TimeElapsedColumn(),
+                rp.TextColumn("ETA"),
+                rp.TimeRemainingColumn(),
                 console=console,
                 auto_refresh=False,
             )
-            self._tasks = {n: self._bar.add_task(n, total=self._totals[n]) for n in self._names}
+            self._tasks = {n: self._bar.add_task(n, total=t) for n, t in self._totals.items()}
             self._bar.start()
             self._refresh()
         except (OSError, ValueError):
@@ -733,19 +691,15 @@ class _Bars:
         """Update the counts (called before each redraw)."""
 
     def _refresh(self) -> None:
-        with self._lock:
-            self._poll()
-            self._bar.refresh()
+        # never concurrent: the first redraw comes before the thread starts, the last after it ends
+        self._poll()
+        self._bar.refresh()
 
     def _watch(self) -> None:
-        while not self._stop.wait(self.interval):
-            try:
+        # stderr closed or full: no more progress, the work goes on
+        with contextlib.suppress(OSError, ValueError):
+            while not self._stop.wait(self.interval):
                 self._refresh()
-            except (
-                OSError,
-                ValueError,
-            ):  # stderr closed or full: no more progress, the work goes on
-                return
 
     def _close_bar(self) -> None:
         bar, self._bar = self._bar, None
@@ -847,9 +801,8 @@ def run_league(
 
     t0 = time.perf_counter()
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
-    n_seeds = int(
-        seeds if seeds is not None else (spec.league.quick_seeds if quick else spec.league.seeds)
-    )
+    default_seeds = spec.league.quick_seeds if quick else spec.league.seeds
+    n_seeds = int(seeds if seeds is not None else default_seeds)
     if n_seeds < 1:
         raise LeagueError(f"--seeds = {n_seeds}: at least 1 seed per cell")
     cells = plan_cells(spec, methods)  # everything validated before anything is written
@@ -875,9 +828,8 @@ def run_league(
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
     assert spec.source is not None
-    listed = set(cells) | {
-        m.get("name") for m in (old or {}).get("methods", []) if isinstance(m, dict)
-    }
+    # ``old`` is a validated LeagueRecord: every method entry has a name
+    listed = set(cells) | {m["name"] for m in (old or {}).get("methods", [])}
     meta = {
         "name": spec.league.name,
         "version": spec.league.version,
@@ -904,14 +856,10 @@ def run_league(
         "provenance": _provenance(),
     }
     files = _write_inputs(out, meta, cells)
+    trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
     jobs = []
     for name, mcells in cells.items():
-        trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
-        traced = (
-            _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
-            if 0 <= trace_seed < n_seeds
-            else []
-        )
+        traced = _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
         jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced, start)))
     per_method: dict[str, float] = {}
     n_runs = n_failed = 0
@@ -923,22 +871,20 @@ def run_league(
         n_failed += failed
         _say(log, f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
 
-    chunk_size = min(spec.league.chunk_size, n_seeds)
     folder = campaign_folder(start)
     watched = [
         (name, out / name / folder / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
     ]
-    with _MethodProgress(watched, n_seeds, chunk_size, enabled=progress):
+    with _MethodProgress(watched, n_seeds, min(spec.league.chunk_size, n_seeds), enabled=progress):
         if parallel_methods > 1 and len(jobs) > 1:
             # one process per method (each compiles its program once and runs its chunks in-process):
             # the methods' campaigns are independent directories, so they run side by side
             import concurrent.futures
             import multiprocessing
 
-            ctx = multiprocessing.get_context("spawn")
             with concurrent.futures.ProcessPoolExecutor(
                 max_workers=min(parallel_methods, len(jobs)),
-                mp_context=ctx,
+                mp_context=multiprocessing.get_context("spawn"),
                 initializer=die_with_parent,
                 initargs=(os.getpid(),),
             ) as pool:
@@ -1053,12 +999,11 @@ def _step_checks(
                     on_simulation=on_simulation,
                 ).as_dict()
                 verdict = "converged" if record["converged"] else "NOT converged, kept"
+                changes = ", ".join(f"{c:.2%}" for c in record["changes"])
                 _say(
                     log,
                     f"{name}: step check {verdict} at dt = {record['chosen_dt']:g} s "
-                    f"(largest score change per halving: "
-                    + ", ".join(f"{c:.2%}" for c in record["changes"])
-                    + ")",
+                    f"(largest score change per halving: {changes})",
                 )
             out[name] = record
             dt = float(record["chosen_dt"])
@@ -1083,12 +1028,11 @@ def _has_path(raw: dict, path: str) -> bool:
 
 def _traced_runs(cells: list[Cell], seeds: int, trace_seed: int, cases: list[str]) -> list[int]:
     """Run ids whose time histories are kept: the trace seed of the trace cases at the first level
-    (each kept history is one more run, re-run alone with its records)."""
-    j = min(trace_seed, seeds - 1)
+    (each kept history is one more run, re-run alone with its records); none when the trace seed
+    is not one of the ``seeds`` (another block of seeds keeps them)."""
     first_level = cells[0].level if cells else ""
-    return [
-        g * seeds + j for g, c in enumerate(cells) if c.level == first_level and c.case in cases
-    ]
+    traced = [g for g, c in enumerate(cells) if c.level == first_level and c.case in cases]
+    return [g * seeds + trace_seed for g in traced] if 0 <= trace_seed < seeds else []
 
 
 def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFrame]:
@@ -1107,21 +1051,16 @@ def load_league_results(out_dir: str | Path) -> tuple[dict[str, Any], pd.DataFra
     )
     kinds = {c["name"]: c["kind"] for c in meta["battery"]["cases"]}
     frames = []
+    blocks = [campaign_folder(first) for first, _ in meta.get("blocks", [[0, 0]])]
     for m in meta["methods"]:
-        blocks = [campaign_folder(first) for first, _ in meta.get("blocks", [[0, 0]])]
-        parts = [
-            CampaignStore.read(out / m["name"] / b).load_results()
-            for b in blocks
-            if (out / m["name"] / b).is_dir()
-        ]
+        mdir = out / m["name"]
+        parts = [CampaignStore.read(mdir / b).load_results() for b in blocks if (mdir / b).is_dir()]
         parts = [p for p in parts if len(p)]
         if not parts:
             continue
         df = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
-        keys = df["scenario"].map(lambda s: Path(str(s)).stem)
-        df = df.assign(
-            method=m["name"], case=keys.str.split("--").str[0], level=keys.str.split("--").str[1]
-        )
+        keys = df["scenario"].map(lambda s: Path(str(s)).stem).str.split("--")  # case--level
+        df = df.assign(method=m["name"], case=keys.str[0], level=keys.str[1])
         df["fault_kind"] = df["case"].map(kinds)
         frames.append(df)
     if not frames:
