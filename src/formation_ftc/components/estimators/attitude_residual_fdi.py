@@ -6,8 +6,8 @@ true -- information.
 The residual is the body torque the model does not explain over one step: what the body torques
 applied minus what was commanded. It lives in body axes, where the actuator's faults act (after the
 Euler-angle allocation). Its test and first-alarm latch are those of the translational residual FDI
-(:func:`~formation_ftc.components.estimators.residual_fdi.sequential_test`,
-:func:`~formation_ftc.components.estimators.residual_fdi.latch_first_alarm`).
+(:func:`~formation_ftc.components.estimators._fdi.sequential_test`,
+:func:`~formation_ftc.components.estimators._fdi.latch_first_alarm`).
 
 It reports to the Euler-angle law as the scripted FDI does: the flag of a generalised channel and u*.
 The ``fdi-scores`` evaluation scores it against the fault-battery actuator's true fault (body axes).
@@ -36,14 +36,17 @@ from formation_ftc.components._registry import (
 )
 from formation_ftc.components._sections import Inertia, positive_values
 from formation_ftc.components.estimators._fdi import (
+    VEC,
     FdiDrift,
     FdiForgetting,
     FdiIdentification,
     FdiIdentificationStd,
     FdiTest,
     FdiThreshold,
-)
-from formation_ftc.components.estimators.residual_fdi import (
+    detection_outputs,
+    detection_signals,
+    identification_outputs,
+    identification_signals,
     identify_channels,
     latch_first_alarm,
     rls_prior,
@@ -63,8 +66,6 @@ __all__ = [
     "rigid_body_residual",
     "AttitudeResidualFdiSection",
 ]
-
-VEC = ("spacecraft", "axis")
 
 
 class AttitudeFdiState(NamedTuple):
@@ -199,7 +200,7 @@ class AttitudeResidualFdi(Estimator):
     With ``identification = "rls"`` each body channel's effectiveness and bias are identified from the
     same residual, which after a fault is ``f = (effectiveness - 1) tau + bias`` for the step's mean
     nominal torque ``tau``: recursive least squares with forgetting (the translational FDI's
-    :func:`~formation_ftc.components.estimators.residual_fdi.identify_channels`) on the regressor
+    :func:`~formation_ftc.components.estimators._fdi.identify_channels`) on the regressor
     ``[tau, 1]`` with noise standard deviation ``identification_noise_std`` (default ``residual_std``),
     over the tested steps; the effectiveness may also drift as a random walk (``effectiveness_walk``
     [1/sqrt(s)]; the bias has none: a walk of the bias as large as the excitation's effect would hide
@@ -252,38 +253,10 @@ class AttitudeResidualFdi(Estimator):
     def signals(self):
         return (
             Signal("fdi_residual", VEC, "N m", "rigid-body residual (applied - commanded)", "body"),
-            Signal(
-                "fdi_statistic",
-                VEC,
-                "1",
-                "test statistic per spacecraft and body axis (CUSUM max(g+, g-), or |z|)",
-                "body",
-            ),
-            Signal("fdi_detected", (), "1", "1 from the first alarm on (latched)"),
-            Signal(
-                "fdi_isolated", VEC, "1", "one-hot body axis isolated at the first alarm", "body"
-            ),
+            *detection_signals("body", "body axis", "body axis"),
             Signal("fdi_flag", VEC, "1", "generalised channel reported faulty (reconfigure)"),
             Signal("fdi_estimate", VEC, "N m", "identified fault u* as a generalised torque"),
-        ) + (
-            (
-                Signal(
-                    "fdi_effectiveness",
-                    VEC,
-                    "1",
-                    "identified actuator effectiveness per body axis (NaN: not identified)",
-                    "body",
-                ),
-                Signal(
-                    "fdi_effectiveness_std",
-                    VEC,
-                    "1",
-                    "standard deviation of the identified effectiveness",
-                    "body",
-                ),
-            )
-            if self.identification == "rls"
-            else ()
+            *(identification_signals("body", "body axis") if self.identification == "rls" else ()),
         )
 
     def initial_state(self, measurement0):
@@ -430,16 +403,13 @@ class AttitudeResidualFdi(Estimator):
     def outputs(self, t, state, estimate: AttitudeFdiEstimate):
         return {
             "fdi_residual": estimate.residual,
-            "fdi_statistic": estimate.statistic,
-            "fdi_detected": jnp.where(estimate.detected, 1.0, 0.0),
-            "fdi_isolated": jnp.where(estimate.isolated, 1.0, 0.0),
+            **detection_outputs(estimate.statistic, estimate.detected, estimate.isolated),
             "fdi_flag": estimate.flag,
             "fdi_estimate": estimate.estimate,
         } | (
-            {
-                "fdi_effectiveness": jnp.where(estimate.known, estimate.effectiveness, jnp.nan),
-                "fdi_effectiveness_std": estimate.effectiveness_std,
-            }
+            identification_outputs(
+                estimate.known, estimate.effectiveness, estimate.effectiveness_std
+            )
             if self.identification == "rls"
             else {}
         )

@@ -30,6 +30,14 @@ from formation_ftc.components.estimators._fdi import (
     FdiIdentificationStd,
     FdiTest,
     FdiThreshold,
+    detection_outputs,
+    detection_signals,
+    identification_outputs,
+    identification_signals,
+    identify_channels,
+    latch_first_alarm,
+    rls_prior,
+    sequential_test,
 )
 from formation_ftc.components.estimators.relative_navigation_filter import (
     NAVIGATION_RECORDS,
@@ -41,15 +49,13 @@ from formation_ftc.components.estimators.relative_navigation_filter import (
     kalman_update,
     navigation_conditions,
 )
-from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+from formation_ftc.sim.components import Estimator, FlightInputs, component, static
 from formation_ftc.sim.contract import Condition, as_float
 
 __all__ = [
     "ResidualFdi",
     "ResidualFdiSection",
     "FdiState",
-    "RESIDUALS",
-    "TESTS",
     "sequential_test",
     "latch_first_alarm",
     "identify_channels",
@@ -59,187 +65,8 @@ __all__ = [
     "EFFECTIVENESS_MIN",
 ]
 
-#: residual generators: the Kalman filter's innovation, or the one-step parity relation
-RESIDUALS = ("kalman", "parity")
-#: tests on the standardised residual of each (spacecraft, axis) channel
-TESTS = ("cusum", "fixed")
 #: smallest identified effectiveness a reconfiguration uses (an outage identifies as about 0) [-]
 EFFECTIVENESS_MIN = 0.05
-VEC = ("spacecraft", "axis")
-
-
-def sequential_test(test: str, g_pos, g_neg, z, drift, threshold):
-    """One step of the test on standardised residuals ``z`` of every channel.
-
-    ``cusum``: Page's two-sided CUSUM ``g+ = max(0, g+ + z - drift)``, ``g- = max(0, g- - z - drift)``,
-    statistic ``max(g+, g-)``; ``fixed``: statistic ``|z|`` (``g+``, ``g-`` returned unchanged).
-
-    Parameters
-    ----------
-    test : str
-        ``"cusum"`` or ``"fixed"`` (:data:`TESTS`).
-    g_pos, g_neg : array_like
-        CUSUM statistics of a positive / negative shift before this step, shape of ``z`` [-].
-    z : array_like
-        Standardised residual of every channel [-].
-    drift : float
-        CUSUM drift [-].
-    threshold : float
-        Alarm threshold on the statistic [-].
-
-    Returns
-    -------
-    tuple
-        ``(g_pos, g_neg, statistic, alarm)``: the updated statistics, the test statistic per channel
-        and ``alarm`` () true when any statistic exceeds ``threshold``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from formation_ftc.components.estimators.residual_fdi import sequential_test
-    >>> g = np.zeros(2)
-    >>> g_pos, g_neg, stat, alarm = sequential_test("cusum", g, g, np.array([3.0, -1.0]), 0.5, 2.0)
-    >>> stat.tolist(), bool(alarm)
-    ([2.5, 0.5], True)
-    """
-    if test == "cusum":
-        g_pos = jnp.maximum(0.0, g_pos + z - drift)
-        g_neg = jnp.maximum(0.0, g_neg - z - drift)
-        stat = jnp.maximum(g_pos, g_neg)
-    else:
-        stat = jnp.abs(z)
-    return g_pos, g_neg, stat, jnp.any(stat > threshold)
-
-
-def latch_first_alarm(stat, alarm, detected, isolated):
-    """Latches the first alarm and isolates the channel with the largest statistic at that step.
-
-    Parameters
-    ----------
-    stat : array_like
-        Test statistic of every channel at this step [-].
-    alarm : array_like, shape ()
-        An alarm at this step.
-    detected : array_like, shape ()
-        The latched alarm before this step.
-    isolated : array_like
-        The latched one-hot channel before this step (shape of ``stat``, bool).
-
-    Returns
-    -------
-    tuple
-        ``(detected, isolated, first)``: the latched alarm, the one-hot channel of the largest
-        statistic at the first alarm (held afterwards) and ``first`` () true at the first alarm's step.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from formation_ftc.components.estimators.residual_fdi import latch_first_alarm
-    >>> none = np.zeros((2, 3), dtype=bool)
-    >>> stat = np.array([[0.0, 5.0, 1.0], [2.0, 0.0, 0.0]])
-    >>> det, iso, first = latch_first_alarm(stat, np.array(True), np.array(False), none)
-    >>> bool(det), bool(first), np.argwhere(iso).tolist()
-    (True, True, [[0, 1]])
-    >>> det, iso, first = latch_first_alarm(stat[::-1], np.array(True), det, iso)
-    >>> bool(first), np.argwhere(iso).tolist()
-    (False, [[0, 1]])
-    """
-    first = alarm & ~detected
-    top = jnp.arange(stat.size).reshape(stat.shape) == jnp.argmax(stat)
-    return detected | alarm, jnp.where(first, top, isolated), first
-
-
-def identify_channels(theta, cov, residual, regressor, noise_var, forgetting):
-    """One step of recursive least squares with exponential forgetting on every actuator channel.
-
-    The velocity part of the parity residual of channel (i, j) over a window is, for an actuator that
-    delivers ``effectiveness * a + bias`` instead of the commanded acceleration ``a``::
-
-        e_ij = phi_ij' [effectiveness_ij - 1, bias_ij] + v_ij,     v_ij ~ N(0, noise_var_j)
-
-    with the regressor ``phi_ij = [s_ij, c_j]``: ``s_ij`` the velocity the commands of the window add
-    along j (for one step, ``gamma[3 + j, j] a_ij``, about ``dt a``), ``c_j`` the velocity a unit
-    acceleration held over the window adds. With ``theta = [effectiveness - 1, bias]`` the update is
-    the Kalman filter of a parameter that drifts as the forgetting factor lambda allows (Ljung &
-    Soderstrom, *Theory and Practice of Recursive Identification*, 1983, ch. 2)::
-
-        P- = P / lambda,   K = P- phi / (noise_var + phi' P- phi),
-        theta <- theta + K (e - phi' theta),   P <- (I - K phi') P-
-
-    so ``P`` is the covariance of ``theta``; the memory is about ``1 / (1 - lambda)`` steps. The bias
-    term also absorbs the on-board model's slowly varying error (a CW model on a J2 orbit). A command
-    that stays constant makes ``a`` and ``1`` collinear: ``P`` then stays large along the unexcited
-    direction, which is how an unidentifiable channel shows (``effectiveness_std``).
-
-    Parameters
-    ----------
-    theta : array_like, shape (N, 3, 2)
-        ``[effectiveness - 1, bias]`` per channel before this step ([-], [m/s^2]).
-    cov : array_like, shape (N, 3, 2, 2)
-        Their covariance.
-    residual : array_like, shape (N, 3)
-        Velocity part of the parity residual [m/s].
-    regressor : array_like, shape (N, 3, 2)
-        ``phi_ij = [s_ij, c_j]`` [m/s, s].
-    noise_var : array_like, shape (3,)
-        Variance of the residual's velocity components [(m/s)^2].
-    forgetting : float
-        lambda, 0 < lambda <= 1 [-].
-
-    Returns
-    -------
-    tuple
-        ``(theta, cov)`` after this step.
-
-    Examples
-    --------
-    A channel at half effectiveness, commanded a varying acceleration, noise-free:
-
-    >>> import numpy as np
-    >>> theta, cov = np.zeros((1, 1, 2)), np.eye(2)[None, None] * np.array([1.0, 1e-4])[:, None]
-    >>> for k in range(50):
-    ...     a = np.array([[1e-3 * (1 + (k % 2))]])
-    ...     e = 0.1 * (0.5 - 1.0) * a
-    ...     phi = 0.1 * np.stack([a, np.ones_like(a)], axis=-1)
-    ...     theta, cov = identify_channels(theta, cov, e, phi, np.array([1e-12]), 1.0)
-    >>> round(float(1 + theta[0, 0, 0]), 4)
-    0.5
-    """
-    phi = regressor
-    prior = cov / forgetting
-    p_phi = jnp.einsum("ncab,ncb->nca", prior, phi)
-    s = noise_var[None, :] + jnp.einsum("nca,nca->nc", phi, p_phi)
-    k = p_phi / s[..., None]
-    innovation = residual - jnp.einsum("nca,nca->nc", phi, theta)
-    theta = theta + k * innovation[..., None]
-    cov = prior - jnp.einsum("nca,ncb->ncab", k, p_phi)
-    return theta, 0.5 * (cov + jnp.swapaxes(cov, -1, -2))
-
-
-def rls_prior(count: int, bias_prior_std) -> tuple[jax.Array, jax.Array]:
-    """Prior of every channel's ``theta = [effectiveness - 1, bias]`` for :func:`identify_channels`:
-    0 +- (1, ``bias_prior_std``), uncorrelated.
-
-    Parameters
-    ----------
-    count : int
-        Spacecraft N (3 channels each).
-    bias_prior_std : float
-        Prior standard deviation of a channel's bias (its units: m/s^2 or N m).
-
-    Returns
-    -------
-    tuple of jax.Array
-        ``(theta, cov)``, shapes (N, 3, 2) and (N, 3, 2, 2).
-
-    Examples
-    --------
-    >>> theta, cov = rls_prior(1, 0.1)
-    >>> theta.shape, cov[0, 0].tolist()
-    ((1, 3, 2), [[1.0, 0.0], [0.0, 0.010000000000000002]])
-    """
-    cov = jnp.diag(jnp.stack([jnp.ones(()), jnp.asarray(bias_prior_std) ** 2]))
-    return jnp.zeros((count, 3, 2)), jnp.broadcast_to(cov, (count, 3, 2, 2))
 
 
 def isolated_effectiveness(estimate) -> tuple[jax.Array, jax.Array]:
@@ -397,40 +224,10 @@ class ResidualFdi(Estimator):
         ]
 
     def signals(self):
+        rls = self.identification == "rls"
         return (
-            (
-                Signal(
-                    "fdi_statistic",
-                    VEC,
-                    "1",
-                    "test statistic per spacecraft and axis (CUSUM max(g+, g-), or |z|)",
-                    "LVLH",
-                ),
-                Signal("fdi_detected", (), "1", "1 from the first alarm on (latched)"),
-                Signal(
-                    "fdi_isolated", VEC, "1", "one-hot channel isolated at the first alarm", "LVLH"
-                ),
-            )
-            + (
-                (
-                    Signal(
-                        "fdi_effectiveness",
-                        VEC,
-                        "1",
-                        "identified actuator effectiveness per channel (NaN: not identified)",
-                        "LVLH",
-                    ),
-                    Signal(
-                        "fdi_effectiveness_std",
-                        VEC,
-                        "1",
-                        "standard deviation of the identified effectiveness",
-                        "LVLH",
-                    ),
-                )
-                if self.identification == "rls"
-                else ()
-            )
+            detection_signals("LVLH", "axis", "channel")
+            + (identification_signals("LVLH", "channel") if rls else ())
             + (NAVIGATION_SIGNALS if self.fly_on_filter else ())
         )
 
@@ -461,11 +258,10 @@ class ResidualFdi(Estimator):
 
     def _window_start(self, y) -> dict[str, Any]:
         """An identification window that starts at the measurement ``y``."""
-        n = self.count
         return {
             "win_pred": y,
-            "win_reg": jnp.zeros((n, 3, 6)),
-            "win_tested": jnp.ones((n, 3), dtype=bool),
+            "win_reg": jnp.zeros((self.count, 3, 6)),
+            "win_tested": jnp.ones((self.count, 3), dtype=bool),
         }
 
     def _residual(self, state: FdiState, y):
@@ -487,13 +283,11 @@ class ResidualFdi(Estimator):
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":  # the filter's measurement update
             x_hat, p = kalman_update(x_hat, p, y, self.r)
-        new = FdiState(
+        new = state._replace(
             x_hat=x_hat,
             p=p,
             y_prev=y,
-            a_prev=state.a_prev,
             started=jnp.asarray(True),
-            tested=state.tested,
             g_pos=g_pos,
             g_neg=g_neg,
             detected=detected,
@@ -589,21 +383,16 @@ class ResidualFdi(Estimator):
         return jnp.where(faulty, identified, accel)
 
     def outputs(self, t, state, estimate):
-        out = {
-            "fdi_statistic": estimate["statistic"],
-            "fdi_detected": jnp.where(estimate["detected"], 1.0, 0.0),
-            "fdi_isolated": jnp.where(estimate["isolated"], 1.0, 0.0),
-        }
+        out = detection_outputs(estimate["statistic"], estimate["detected"], estimate["isolated"])
         if self.fly_on_filter:
             out["navigation_estimate"] = estimate["navigation"]
             out["navigation_sigma"] = jnp.sqrt(jnp.diagonal(state.p))
             out["navigation_covariance"] = state.p
             out["navigation_nis"] = estimate["nis"]
         if self.identification == "rls":
-            out["fdi_effectiveness"] = jnp.where(
-                estimate["identified"], estimate["effectiveness"], jnp.nan
+            out |= identification_outputs(
+                estimate["identified"], estimate["effectiveness"], estimate["effectiveness_std"]
             )
-            out["fdi_effectiveness_std"] = estimate["effectiveness_std"]
         return out
 
 
@@ -715,9 +504,8 @@ def window_model(phi, gamma, qd, r, steps: int) -> tuple[np.ndarray, np.ndarray]
 def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
     """The FDI of a validated ``[estimator] type = "residual-fdi"`` section."""
     a = filter_model(sec, ctx)
-    steps = 1
-    if sec.identification_window is not None:
-        steps = max(1, int(round(sec.identification_window / ctx.dt)))
+    window = sec.identification_window
+    steps = 1 if window is None else max(1, int(round(window / ctx.dt)))
     gain, noise = window_model(a["phi"], a["gamma"], a["qd"], a["r"], steps)
     return ResidualFdi(
         count=ctx.count,

@@ -45,6 +45,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components.actuators.euler_torque_allocation import FaultProfile
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.disturbances import run_key, step_key
 from formation_ftc.core.fault_profiles import windowed_additive_faults
@@ -426,18 +427,14 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
     the loop refuses (it needs ``scripted-actuator-faults``)."""
     m, nch = ctx.count, 3
     describe = getattr(ctx.section("actuator"), "fault_profile", None)
-    profile = describe(m) if callable(describe) else None
-    torques: tuple[str, ...] = ()
-    spacecraft: tuple[int, ...] = ()
-    channels: tuple[int, ...] = ()
-    windows, mask, onset = np.zeros((0, 2)), np.zeros((m, nch)), 0.0
-    if profile is not None and profile.torques:  # else a placeholder: validation names the need
-        torques, spacecraft, channels = profile.torques, profile.spacecraft, profile.channels
-        windows, mask, onset = profile.windows, profile.mask, profile.onset
-    faulty = set(zip(spacecraft, channels, strict=True))
+    if callable(describe):
+        profile = describe(m)
+    else:  # a report of none, a placeholder: validation names the need
+        profile = FaultProfile((), (), (), np.zeros((0, 2)), np.zeros((m, nch)), 0.0)
+    faulty = set(zip(profile.spacecraft, profile.channels, strict=True))
     moves: dict[tuple[int, int], tuple[int, int]] = {}
     for k, e in enumerate(sec.isolation):
-        if (e.spacecraft - 1, e.channel - 1) not in faulty and torques:
+        if (e.spacecraft - 1, e.channel - 1) not in faulty and profile.torques:
             raise ValueError(
                 f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault"
             )
@@ -450,8 +447,8 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
     params: dict[str, Any] = fdi_params(
         m,
         nch,
-        fault_mask=mask,
-        onset=onset,
+        fault_mask=profile.mask,
+        onset=profile.onset,
         delay=sec.delay,
         detected=sec.detected,
         scale=sec.scale,
@@ -462,10 +459,10 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
     return ScriptedFdi(
         count=m,
         seed=np.asarray(ctx.scenario.simulation.seed, dtype=np.uint32),
-        windows=as_float(windows),
-        torques=torques,
-        spacecraft=spacecraft,
-        channels=channels,
+        windows=as_float(profile.windows),
+        torques=profile.torques,
+        spacecraft=profile.spacecraft,
+        channels=profile.channels,
         **params,
     )
 
