@@ -426,9 +426,7 @@ class CampaignStore:
         write_parquet(table, buf, units, write_page_checksum=True)
         data = buf.getvalue()
         # the checksum is recorded first: a chunk file never exists without one
-        self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(
-            data
-        ).hexdigest()
+        self.manifest["chunk_sha256"][str(chunk_id)] = hashlib.sha256(data).hexdigest()
         self._write_manifest()
         atomic_write(path, data)
         self._finished.add(chunk_id)
