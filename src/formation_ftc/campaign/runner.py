@@ -143,15 +143,8 @@ class CampaignOutcome:
             ok = v[np.isfinite(v)]
             u = self.units.get(col, "")
             p5, p50, p95 = np.percentile(ok, [5, 50, 95]) if ok.size else (np.nan,) * 3
-            rows.append(
-                [
-                    col[len("metric:") :],
-                    f"{ok.size:,}",
-                    quantity(p50, u),
-                    f"{number(p5)} .. {number(p95)}",
-                    u,
-                ]
-            )
+            spread = f"{number(p5)} .. {number(p95)}"
+            rows.append([col.removeprefix("metric:"), f"{ok.size:,}", quantity(p50, u), spread, u])
         return card_html(
             f"campaign {self.name}",
             "",
@@ -291,8 +284,7 @@ def _bound_chunk(
     first = cols.row(0, plan.base_names)
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
-        scenario = plan.scenario(first)
-        template = api.build_loop(scenario)
+        template = api.build_loop(plan.scenario(first))
         values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
         bindings = bind_fields(template, values0)
         # the batch needs no time histories (metrics are computed inside the run): one record at the
