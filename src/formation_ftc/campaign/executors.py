@@ -32,6 +32,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import ctypes
+import functools
 import logging
 import multiprocessing
 import os
@@ -104,21 +105,18 @@ def cap_workers(requested: int, *, per_worker_bytes: int, what: str) -> int:
     Lowering it prints one warning line on stderr naming ``what`` (e.g. ``"--workers"``)."""
     cores = schedulable_cpus()
     memory = available_memory()
-    by_memory = (
-        max(1, memory // per_worker_bytes) if memory is not None and per_worker_bytes > 0 else None
-    )
-    n = max(1, min(requested, cores, by_memory if by_memory is not None else requested))
+    n = max(1, min(requested, cores))
+    if memory is not None and per_worker_bytes > 0:
+        n = max(1, min(n, memory // per_worker_bytes))
     if n < requested:
         from formation_ftc.limits import format_bytes
 
-        room = (
-            ""
-            if memory is None
-            else (
+        room = ""
+        if memory is not None:
+            room = (
                 f", {format_bytes(memory)} of memory available at about "
                 f"{format_bytes(per_worker_bytes)} per worker"
             )
-        )
         with contextlib.suppress(OSError, ValueError):  # a closed or full stderr: no warning
             print(
                 f"warning: {what}: {requested} worker processes asked for, using {n} ({cores} schedulable CPU "
@@ -199,25 +197,23 @@ class LocalExecutor:
         In-process with ``start`` (``start(plan, chunk)`` returns the call that finishes the chunk, as
         :func:`formation_ftc.campaign.runner.start_chunk` does): chunk k+1 is started before chunk k is
         finished, so one chunk's Python work overlaps the other's computation; results are the same."""
-        if self._pool is None:
-            if start is None:
-                for c in chunks:
-                    yield fn(plan, c)
-                return
-            finish = start(plan, chunks[0]) if chunks else None
-            for nxt in chunks[1:]:
-                assert finish is not None
-                try:
-                    following = start(plan, nxt)
-                except BaseException:
+        if self._pool is not None:
+            yield from _results([self._pool.submit(fn, plan, c) for c in chunks], as_completed)
+            return
+        start = start or (lambda plan, c: functools.partial(fn, plan, c))
+        finish: Callable[[], Any] | None = None  # of the chunk started last
+        for c in chunks:
+            try:
+                following = start(plan, c)
+            except BaseException:
+                if finish is not None:
                     yield finish()  # the chunk already computed is stored before the error propagates
-                    raise
-                yield finish()
-                finish = following
+                raise
             if finish is not None:
                 yield finish()
-            return
-        yield from _results([self._pool.submit(fn, plan, c) for c in chunks], as_completed)
+            finish = following
+        if finish is not None:
+            yield finish()
 
     def describe(self) -> str:
         return (

@@ -70,10 +70,6 @@ class ChunkResult:
     def n_runs(self) -> int:
         return len(self.table)
 
-    @property
-    def n_failed(self) -> int:
-        return int((self.table["status"] != "ok").sum())
-
 
 @dataclass
 class CampaignOutcome:
@@ -147,15 +143,8 @@ class CampaignOutcome:
             ok = v[np.isfinite(v)]
             u = self.units.get(col, "")
             p5, p50, p95 = np.percentile(ok, [5, 50, 95]) if ok.size else (np.nan,) * 3
-            rows.append(
-                [
-                    col[len("metric:") :],
-                    f"{ok.size:,}",
-                    quantity(p50, u),
-                    f"{number(p5)} .. {number(p95)}",
-                    u,
-                ]
-            )
+            spread = f"{number(p5)} .. {number(p95)}"
+            rows.append([col.removeprefix("metric:"), f"{ok.size:,}", quantity(p50, u), spread, u])
         return card_html(
             f"campaign {self.name}",
             "",
@@ -165,10 +154,28 @@ class CampaignOutcome:
         )
 
 
-def _value_cell(v: Any, numeric: bool) -> Any:
-    if numeric:
-        return float(v)
-    return v if isinstance(v, str) else json.dumps(v)
+def _columns(plan: CampaignPlan, chunk: Chunk, cols: RunColumns) -> dict[str, Any]:
+    """A chunk's result columns before its outcomes: bookkeeping, then ``status`` and ``diagnostic``
+    (placeholders, set by the caller), then one ``input:<path>`` column per sampled field (a number,
+    else the text or its JSON)."""
+    n = len(cols)
+    data: dict[str, Any] = {
+        "run_id": cols.run_id.astype(np.int64),
+        "chunk_id": np.full(n, chunk.chunk_id, dtype=np.int64),
+        "grid_index": cols.grid_index.astype(np.int64),
+        "replicate": cols.replicate.astype(np.int64),
+        "seed": cols.seed.astype(np.int64),
+        "scenario": [plan.base_names[b] for b in cols.base.tolist()],
+        "status": None,
+        "diagnostic": None,
+    }
+    numeric = plan.input_columns()
+    for path, vals in cols.values.items():
+        if numeric[f"input:{path}"]:
+            data[f"input:{path}"] = np.asarray(vals, dtype=np.float64)
+        else:
+            data[f"input:{path}"] = [v if isinstance(v, str) else json.dumps(v) for v in vals]
+    return data
 
 
 def _diagnostic(loop, out: Mapping[str, Any], div: int) -> str:
@@ -265,11 +272,10 @@ def _bound_chunk(
     structural = [p for p in cols.values if p not in bindable]  # grid values (constant) and choices
 
     def group_key(k: int) -> str:
-        return (
-            base_names[k]
-            + "|"
-            + json.dumps({p: cols.values[p][k] for p in structural}, sort_keys=True, default=str)
+        structure = json.dumps(
+            {p: cols.values[p][k] for p in structural}, sort_keys=True, default=str
         )
+        return f"{base_names[k]}|{structure}"
 
     gkey = group_key(0)
     varying = [p for p in structural if any(v != cols.values[p][0] for v in cols.values[p])]
@@ -278,8 +284,7 @@ def _bound_chunk(
     first = cols.row(0, plan.base_names)
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
-        scenario = plan.scenario(first)
-        template = api.build_loop(scenario)
+        template = api.build_loop(plan.scenario(first))
         values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
         bindings = bind_fields(template, values0)
         # the batch needs no time histories (metrics are computed inside the run): one record at the
@@ -308,26 +313,8 @@ def _bound_chunk(
     _VERIFIED.add(cache_key)
     if pending is None:
         pending = engine(batch)
-    data: dict[str, Any] = {
-        "run_id": cols.run_id.astype(np.int64),
-        "chunk_id": np.full(n, chunk.chunk_id, dtype=np.int64),
-        "grid_index": cols.grid_index.astype(np.int64),
-        "replicate": cols.replicate.astype(np.int64),
-        "seed": cols.seed.astype(np.int64),
-        "scenario": base_names,
-    }
-    numeric = plan.input_columns()
-    inputs: dict[str, Any] = {}
-    for path, vals in cols.values.items():
-        if numeric[f"input:{path}"]:
-            inputs[f"input:{path}"] = np.asarray(vals, dtype=np.float64)
-        elif path not in varying:
-            inputs[f"input:{path}"] = [_value_cell(vals[0], False)] * n
-        else:
-            inputs[f"input:{path}"] = [_value_cell(v, False) for v in vals]
-    return lambda: _finish_bound(
-        plan, chunk, cols, t_start, template, batch, axes, pending, data, inputs, first
-    )
+    data = _columns(plan, chunk, cols)
+    return lambda: _finish_bound(plan, chunk, cols, t_start, template, batch, axes, pending, data)
 
 
 def _finish_bound(
@@ -340,8 +327,6 @@ def _finish_bound(
     axes,
     pending,
     data: dict[str, Any],
-    inputs: dict[str, Any],
-    first,
 ) -> ChunkResult:
     """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
     from formation_ftc.campaign.binding import take_run
@@ -349,32 +334,20 @@ def _finish_bound(
 
     n = len(cols)
     out = jax.device_get(pending)
-    loop = template
-    names = loop_metric_names(loop.metrics, loop.count)
-    metric_cols: dict[str, np.ndarray] = {}
-    for m, arr in zip(loop.metrics, out["metrics"], strict=True):
-        a = np.asarray(arr, dtype=np.float64)[:n]
-        if m.spacecraft == "each":
-            for i in range(a.shape[1]):
-                metric_cols[f"{m.name}_sc{i + 1}"] = a[:, i]
-        else:
-            metric_cols[m.name] = a
+    names = loop_metric_names(template.metrics, template.count)
+    # one column per name: a per-spacecraft metric's (runs, spacecraft) array gives one per spacecraft
+    columns = [c for a in out["metrics"] for c in np.asarray(a, np.float64)[:n].reshape(n, -1).T]
+    metric_cols = dict(zip(names, columns, strict=True))
     keep = plan.spec.campaign.metrics
-    _require_metrics(keep, names, plan.scenario(first).scenario.method)
-    div = np.asarray(out["diverged_step"])[:n]
-    failed = div >= 0
-    data.update({"status": np.where(failed, "failed", "ok"), "diagnostic": [""] * n})
-    data.update(inputs)
+    _require_metrics(keep, names, plan.scenario(cols.row(0, plan.base_names)).scenario.method)
+    failed = np.asarray(out["diverged_step"])[:n] >= 0
+    data.update(status=np.where(failed, "failed", "ok"), diagnostic=[""] * n)
     for name in keep or names:
         data[f"metric:{name}"] = np.where(failed, np.nan, metric_cols[name]).astype("float64")
     table = pd.DataFrame(data)
     traces = {}
     trace_runs = set(plan.spec.traces.runs)
-    rerun = np.flatnonzero(
-        failed
-        | np.isin(cols.run_id, np.fromiter(trace_runs, dtype=np.int64, count=len(trace_runs)))
-    )
-    for j in rerun.tolist():
+    for j in np.flatnonzero(failed | np.isin(cols.run_id, list(trace_runs))).tolist():
         # re-run alone with the scenario's records (and the replay that names a divergence)
         inp = cols.row(j, plan.base_names)
         scn = plan.scenario(inp)
@@ -385,7 +358,7 @@ def _finish_bound(
             table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
         if inp.run_id in trace_runs:
             traces[inp.run_id] = _trace(plan, loop_j, scn, inp, run_out, str(table.at[j, "status"]))
-    table.attrs["metric_units"] = _metric_units(loop.metrics, loop.count)
+    table.attrs["metric_units"] = _metric_units(template.metrics, template.count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
 
@@ -430,37 +403,24 @@ def _general_chunk(
         for pos, k in enumerate(idxs):
             outs[k] = jax.tree_util.tree_map(lambda a, pos=pos: np.asarray(a[pos]), batch)
     keep = plan.spec.campaign.metrics
-    numeric = plan.input_columns()
-    rows, traces = [], {}
+    data = _columns(plan, chunk, cols)
+    status, diagnostic, metrics, traces = [], [], [], {}
     for inp, scn, comp, out in zip(inputs, scenarios, loops, outs, strict=True):
         div = int(out["diverged_step"])
-        row: dict[str, Any] = dict(
-            run_id=inp.run_id,
-            chunk_id=chunk.chunk_id,
-            grid_index=inp.grid_index,
-            replicate=inp.replicate,
-            seed=inp.seed,
-            scenario=inp.base,
-        )
         if div < 0:
             with np.errstate(all="ignore"):
-                metrics = {k: float(v) for k, v in comp.metric_values(out).items()}
-            _require_metrics(keep, metrics, scn.scenario.method)
-            row.update(status="ok", diagnostic="")
+                metrics.append({k: float(v) for k, v in comp.metric_values(out).items()})
+            _require_metrics(keep, metrics[-1], scn.scenario.method)
         else:
-            metrics = {m: float("nan") for m in keep}
-            row.update(status="failed", diagnostic=_diagnostic(comp, out, div))
-        for path, v in inp.values.items():
-            row[f"input:{path}"] = _value_cell(v, numeric[f"input:{path}"])
-        for name in keep or metrics:
-            row[f"metric:{name}"] = metrics.get(name, float("nan"))
-        rows.append(row)
+            metrics.append({})  # NaN metrics
+        status.append("ok" if div < 0 else "failed")
+        diagnostic.append("" if div < 0 else _diagnostic(comp, out, div))
         if inp.run_id in plan.spec.traces.runs:
-            traces[inp.run_id] = _trace(plan, comp, scn, inp, out, row["status"])
-    table = pd.DataFrame(rows)
-    for col in table.columns:
-        if col.startswith("metric:"):
-            table[col] = table[col].astype("float64")
+            traces[inp.run_id] = _trace(plan, comp, scn, inp, out, status[-1])
+    data.update(status=status, diagnostic=diagnostic)
+    for name in keep or dict.fromkeys(k for m in metrics for k in m):
+        data[f"metric:{name}"] = np.array([m.get(name, np.nan) for m in metrics], dtype=np.float64)
+    table = pd.DataFrame(data)
     table.attrs["metric_units"] = _metric_units(loops[0].metrics, loops[0].count)
     return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
@@ -618,20 +578,18 @@ def run_campaign(
             progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name, t0
         )
         # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
-        # at most one write is in flight and a write error stops the campaign at the next chunk
-        writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer")
+        # at most one write is in flight and a write error stops the campaign at the next chunk. Leaving
+        # the writer (on an error too) waits for a write under way: a finished chunk is never lost
         writing: Future | None = None
         try:
-            for res in _map_in_windows(executor, plan, todo):
+            with ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer") as writer:
+                for res in _map_in_windows(executor, plan, todo):
+                    if writing is not None:
+                        bar.advance(writing.result())
+                    writing = writer.submit(_store_chunk, store, res)
                 if writing is not None:
                     bar.advance(writing.result())
-                writing = writer.submit(_store_chunk, store, res)
-            if writing is not None:
-                bar.advance(writing.result())
         finally:
-            writer.shutdown(
-                wait=True
-            )  # a write under way completes: a finished chunk is never lost
             bar.close()
             store.close()
     results = store.load_results()

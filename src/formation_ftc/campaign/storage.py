@@ -87,10 +87,6 @@ def chunk_filename(chunk_id: int) -> str:
     return f"chunk-{chunk_id:06d}.parquet"
 
 
-def trace_filename(run_id: int) -> str:
-    return f"run-{run_id:06d}.nc"
-
-
 def sha256_file(path: Path) -> str:
     """Hex SHA-256 of a file's bytes."""
     with open(path, "rb") as f:
@@ -111,10 +107,10 @@ class CampaignStore:
     """Open with :meth:`prepare` (checks, writes nothing) then :meth:`initialize` (writes the manifest
     of a new campaign); :meth:`read` opens a store for reporting."""
 
-    def __init__(self, root: Path, manifest: dict[str, Any], finished: set[int], is_new: bool):
+    def __init__(self, root: Path, manifest: dict[str, Any], is_new: bool = False):
         self.root = Path(root)
         self.manifest = manifest
-        self._finished = set(finished)
+        self._finished: set[int] = set()  # chunks verified or written by this store
         self.is_new = is_new
 
     # ------------------------------------------------------------------------------------ opening
@@ -210,7 +206,7 @@ class CampaignStore:
         if root.exists() and not root.is_dir():
             raise CampaignError(f"{root}: exists and is not a directory")
         if not root.exists() or not any(e.name != LOCK for e in root.iterdir()):
-            return cls(root, cls.manifest_for(plan), set(), True)
+            return cls(root, cls.manifest_for(plan), is_new=True)
         if not (root / MANIFEST).exists():
             raise CampaignError(
                 f"{root}: not empty and has no {MANIFEST}: not a campaign directory; "
@@ -225,13 +221,13 @@ class CampaignStore:
                 f"{_package_version()}; resume with the same version or use a new directory"
             )
         finished = cls._scan(root, int(manifest["n_chunks"]))
-        store = cls(root, manifest, set(), False)
+        store = cls(root, manifest)
         for cid in sorted(finished):
             problem = store.verify_chunk(cid)
             if problem:  # reported and recomputed, never used
                 _warn(f"{problem}; chunk {cid} will be recomputed")
                 continue
-            cls._check_chunk(root, cid, plan.chunk(cid).run_ids)
+            store._check_chunk(cid, plan.chunk(cid).run_ids)
             store._finished.add(cid)
         return store
 
@@ -252,9 +248,8 @@ class CampaignStore:
             f"results; use another --out directory"
         )
 
-    @staticmethod
-    def _check_chunk(root: Path, chunk_id: int, expected_runs: list[int]) -> None:
-        path = root / "chunks" / chunk_filename(chunk_id)
+    def _check_chunk(self, chunk_id: int, expected_runs: list[int]) -> None:
+        path = self.chunk_path(chunk_id)
         try:
             ids = pq.read_table(path, columns=["run_id"]).column("run_id").to_pylist()
         except Exception as exc:  # noqa: BLE001 - any read failure means a corrupt file
@@ -383,7 +378,7 @@ class CampaignStore:
             raise CampaignError(f"{root}: no {MANIFEST}; not a campaign directory")
         manifest = cls._read_manifest(root)
         finished = cls._scan(root, int(manifest["n_chunks"]))
-        store = cls(root, manifest, set(), False)
+        store = cls(root, manifest)
         bad = []
         for cid in sorted(finished):
             if str(cid) not in manifest["chunk_sha256"]:
@@ -415,10 +410,9 @@ class CampaignStore:
         if chunk_id in self._finished:
             raise CampaignError(f"chunk {chunk_id} is already stored in {self.root}")
         for run_id, ds in sorted((traces or {}).items()):
-            tdir = self.root / "traces"
-            tdir.mkdir(exist_ok=True)
-            path = tdir / trace_filename(run_id)
-            atomic_write(path, functools.partial(write_netcdf, self._cf_trace(ds)))
+            (self.root / "traces").mkdir(exist_ok=True)
+            trace = functools.partial(write_netcdf, self._cf_trace(ds))
+            atomic_write(self.root / "traces" / f"run-{run_id:06d}.nc", trace)
         path = self.chunk_path(chunk_id)
         buf = io.BytesIO()
         # metric units come from the runner (``table.attrs["metric_units"]``); inputs: see parquet_units
@@ -426,9 +420,7 @@ class CampaignStore:
         write_parquet(table, buf, units, write_page_checksum=True)
         data = buf.getvalue()
         # the checksum is recorded first: a chunk file never exists without one
-        self.manifest.setdefault("chunk_sha256", {})[str(chunk_id)] = hashlib.sha256(
-            data
-        ).hexdigest()
+        self.manifest["chunk_sha256"][str(chunk_id)] = hashlib.sha256(data).hexdigest()
         self._write_manifest()
         atomic_write(path, data)
         self._finished.add(chunk_id)

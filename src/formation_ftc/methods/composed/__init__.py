@@ -84,9 +84,24 @@ component_types = _registry.component_types
 component_type = _registry.component_type
 
 
-def _known(kind: str) -> list[str]:
-    """The type names of ``kind`` for an error message."""
-    return _registry.type_names(kind)
+def _known(kind: str) -> str:
+    """The type names of ``kind`` for an error message (imports every home of the kind's types)."""
+    return ", ".join(_registry.type_names(kind)) or "none registered"
+
+
+def _section(kind: str, raw: dict[str, Any], where: str) -> Any:
+    """``raw`` validated as the section of its ``type`` of component ``kind`` (messages name ``where``:
+    the slot, or ``evaluations[j]``)."""
+    name = raw.get("type")
+    if name is None and kind in SLOTS:
+        raise ValueError(f"{where}.type is required (one of: {_known(kind)})")
+    entry = component_type(kind, str(name))
+    if entry is None:
+        article = "an" if kind == "evaluation" else "a"
+        raise ValueError(
+            f"{where}.type = {name!r} is not {article} {kind} type (known: {_known(kind)})"
+        )
+    return _validated_section(entry, raw, where)
 
 
 class MetricSection(StrictModel):
@@ -184,34 +199,15 @@ class ComposedScenario(ScenarioBase):
     @model_validator(mode="after")
     def _compose(self, info: ValidationInfo) -> ComposedScenario:
         # only the homes of the named types are imported (every home of a slot for a message)
-        sections: dict[str, Any] = {}
-        for slot in SLOTS:
-            raw = getattr(self, slot)
-            if raw is None:
-                continue
-            name = raw.get("type")
-            if name is None:
-                raise ValueError(
-                    f"{slot}.type is required (one of: {', '.join(_known(slot)) or 'none registered'})"
-                )
-            entry = component_type(slot, str(name))
-            if entry is None:
-                raise ValueError(
-                    f"{slot}.type = {name!r} is not a {slot} type (known: {', '.join(_known(slot))})"
-                )
-            sections[slot] = _validated_section(entry, raw, slot)
-        self._sections = sections
-        evaluations: list[tuple[str, Any]] = []
-        for j, raw in enumerate(self.evaluations):
-            name = raw.get("type")
-            entry = component_type("evaluation", str(name))
-            if entry is None:
-                raise ValueError(
-                    f"evaluations[{j}].type = {name!r} is not an evaluation type "
-                    f"(known: {', '.join(_known('evaluation')) or 'none registered'})"
-                )
-            evaluations.append((str(name), _validated_section(entry, raw, f"evaluations[{j}]")))
-        self._evaluation_sections = evaluations
+        self._sections = {
+            slot: _section(slot, getattr(self, slot), slot)
+            for slot in SLOTS
+            if getattr(self, slot) is not None
+        }
+        self._evaluation_sections = [
+            (str(raw.get("type")), _section("evaluation", raw, f"evaluations[{j}]"))
+            for j, raw in enumerate(self.evaluations)
+        ]
         if isinstance(info.context, dict) and info.context.get("build") is False:
             return self  # fields only (`show`): check, run and campaigns build the loop
         try:
@@ -305,9 +301,8 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
             continue
         parts[slot] = cast(ComponentType, component_type(slot, name)).build(s.section(slot), ctx)
         added_by += [f"{slot} {name}'s evaluation"] * (len(ctx.evaluations) - len(added_by))
-    for j, (name, section) in enumerate(
-        s._evaluation_sections
-    ):  # after every slot: they read signals
+    # evaluations after every slot: they read its signals
+    for j, (name, section) in enumerate(s._evaluation_sections):
         ev = cast(ComponentType, component_type("evaluation", name)).build(section, ctx)
         if ev is not None:  # None: the type only declares metrics (ctx.metrics)
             ctx.evaluations.append(ev)
@@ -316,22 +311,16 @@ def make_loop(s: ComposedScenario) -> ClosedLoop:
     if "sensors" not in parts and type(parts["plant"]).position is not Plant.position:
         # translational plants: the flight side measures the exact (N, 6) relative state by default
         parts["sensors"] = ExactRelativeStateSensors(count=ctx.count)
+    # a metric section's fields are the Metric's, its window and threshold as traced floats
     metrics = (
         *(
             Metric(
-                m.name,
-                m.signal,
-                m.reduce,
-                norm=m.norm,
-                spacecraft=m.spacecraft,
-                units=m.units,
-                start=as_float(m.start),
-                end=as_float(math.inf if m.end is None else m.end),
-                threshold=as_float(m.threshold),
-                norm_ord=m.norm_ord,
-                gate=m.gate,
-                block=m.block,
-                formula=m.formula,
+                **{
+                    **dict(m),
+                    "start": as_float(m.start),
+                    "end": as_float(math.inf if m.end is None else m.end),
+                    "threshold": as_float(m.threshold),
+                }
             )
             for m in s.metrics
         ),
