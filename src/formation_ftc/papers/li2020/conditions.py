@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
+from itertools import permutations
 
 import numpy as np
 
@@ -136,15 +137,11 @@ def delay_bounds(
     d = _texts(scenario)
     if d is None:
         return {}
-    n = len(d)
     horizon = float(scenario.simulation.horizon)
-    out = {}
-    for i in range(n):
-        for j in range(n):
-            if i != j:
-                lo, hi = _delay_bound(str(d[i][j]), i, j, horizon, float(rate_target))
-                out[(i, j)] = DelayBounds((i, j), lo, hi)
-    return out
+    return {
+        (i, j): DelayBounds((i, j), *_delay_bound(d[i][j], i, j, horizon, float(rate_target)))
+        for i, j in permutations(range(len(d)), 2)  # the off-diagonal pairs, row by row
+    }
 
 
 def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
@@ -153,9 +150,7 @@ def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
     with np.errstate(divide="ignore"):
         q = np.where(s > 0, 2.0 * lam / np.where(s > 0, s, 1.0), np.inf)
     qmin = float(np.min(q)) if q.size else math.inf
-    if not qmin > 0:
-        return 1.0
-    return 1.0 if math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
+    return 1.0 if not qmin > 0 or math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
 
 
 def _fmt(v) -> str:

@@ -96,10 +96,10 @@ PRINTED_RESOLUTION = {"sum_Q_jn": (1e-6, 0.01, 0.01), "Q_j": (1e-7, 1e-6, 0.01)}
 
 def matches_printed(values, printed, resolution) -> list[bool]:
     """Per entry: ``value`` truncated to the printed resolution equals the printed number."""
-    out = []
-    for v, p, r in zip(values, printed, resolution, strict=True):
-        out.append(bool(abs(np.trunc(v / r + 1e-9) * r - p) < 1e-3 * r))
-    return out
+    return [
+        bool(abs(np.trunc(v / r + 1e-9) * r - p) < 1e-3 * r)
+        for v, p, r in zip(values, printed, resolution, strict=True)
+    ]
 
 
 #: Reference of the gain conditions (9).
