@@ -31,7 +31,6 @@ from formation_ftc.sim.loop import ClosedLoop
 __all__ = [
     "implied_lyapunov",
     "learning_loop_radius",
-    "learning_loop_eigenvalues",
     "learning_loop_matrix",
     "d_max",
     "observer_conditions",
@@ -63,7 +62,7 @@ def learning_loop_matrix(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray
 
     ``e_{k+1} = (I + dt (A - L1) - dt Q2 H L2) e_k - dt H Q1 F_{k-m}``, ``F_k = Q1 F_{k-m} + Q2 L2 e_k``
     with C = I6, H = [0; I3]; the state holds e_k and F_{k-1}, ..., F_{k-m}. Returns the
-    one-step matrix (its eigenvalues: :func:`learning_loop_eigenvalues`).
+    one-step matrix (its spectral radius: :func:`learning_loop_radius`).
     """
     A, L1, L2 = (np.asarray(x, float) for x in (A, L1, L2))
     Q1 = np.diag(np.asarray(Q1, float))
@@ -80,23 +79,15 @@ def learning_loop_matrix(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray
     return M
 
 
-def learning_loop_eigenvalues(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray:
-    """Eigenvalues of :func:`learning_loop_matrix` (all |z| < 1 means stable)."""
-    return np.linalg.eigvals(learning_loop_matrix(A, L1, L2, Q1, Q2, dt, m))
-
-
 def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[float, float, float]:
     """(spectral radius, modulus and frequency [Hz] of the oscillatory learning-loop pair) (E002-12)."""
-    z = learning_loop_eigenvalues(A, L1, L2, Q1, Q2, dt, m)
+    z = np.linalg.eigvals(learning_loop_matrix(A, L1, L2, Q1, Q2, dt, m))  # all |z| < 1: stable
     osc = z[np.abs(z.imag) > 1e-9]
+    radius = float(np.max(np.abs(z)))
     if osc.size == 0:
-        return float(np.max(np.abs(z))), float("nan"), 0.0
+        return radius, float("nan"), 0.0
     k = int(np.argmax(np.abs(osc)))
-    return (
-        float(np.max(np.abs(z))),
-        float(np.abs(osc[k])),
-        float(abs(np.angle(osc[k])) / (2 * np.pi * dt)),
-    )
+    return radius, float(np.abs(osc[k])), float(abs(np.angle(osc[k])) / (2 * np.pi * dt))
 
 
 def _onboard_mean_motion(given: float | None, s: ComposedScenario) -> float:
