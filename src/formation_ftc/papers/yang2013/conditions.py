@@ -172,17 +172,15 @@ VERIFIED = (
 EXACT = "exact: closed-form scalar inequality on the scenario values (tolerance 1e-12 on <= / >=)"
 
 
-def _cond(ineq: Inequality, required: bool = True, detail: str = "") -> Condition:
+def _cond(ineq: Inequality, detail: str = "") -> Condition:
     text = detail or ineq.detail
-    return Condition(
-        name=ineq.name,
-        reference=f"Yang2013 {ineq.reference}",
-        value=f"{ineq.lhs:.6g}",
-        requirement=f"{ineq.relation} {ineq.rhs:.6g}",
-        holds=bool(ineq.holds),
-        required=required,
-        basis="exact",
-        detail=f"{text}; {EXACT}" if text else EXACT,
+    return exact(
+        ineq.name,
+        f"Yang2013 {ineq.reference}",
+        f"{ineq.lhs:.6g}",
+        f"{ineq.relation} {ineq.rhs:.6g}",
+        bool(ineq.holds),
+        f"{text}; {EXACT}" if text else EXACT,
     )
 
 
