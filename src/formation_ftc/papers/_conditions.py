@@ -9,6 +9,11 @@ from typing import Any
 from formation_ftc.registry import Condition
 
 
+def fmt_list(values: Any) -> str:
+    """``values`` as ``[a, b, ...]``, each to 4 significant digits."""
+    return "[" + ", ".join(f"{x:.4g}" for x in values) + "]"
+
+
 def exact(
     name: str,
     reference: str,

@@ -34,7 +34,7 @@ from formation_ftc.components.networks.delayed_graph import DelayStats, delay_st
 from formation_ftc.core.graph import balance_report, is_strongly_connected
 from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
 from formation_ftc.methods.composed import ComposedScenario, per_spacecraft
-from formation_ftc.papers._conditions import exact, sampled_or_verified
+from formation_ftc.papers._conditions import exact, fmt_list, sampled_or_verified
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -153,16 +153,10 @@ def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
     return 1.0 if not qmin > 0 or math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
 
 
-def _fmt(v) -> str:
-    return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
-
-
 def _worst_bound(bounds: list[DelayBounds]) -> float | None:
     """max rate_hi over the pairs, None if one is missing (no verified bound)."""
     his = [b.rate_hi for b in bounds]
-    if any(h is None for h in his):
-        return None
-    return max((float(h) for h in his if h is not None), default=0.0)
+    return None if None in his else max((float(h) for h in his if h is not None), default=0.0)
 
 
 def _delay_conditions(
@@ -239,15 +233,15 @@ def _delay_conditions(
             sampled_or_verified(
                 "lambda_i > (rho - 1)/2 sum_j c_ij",
                 "Li2020 eq. (47)",
-                f"rho = {rho:.4f}; rhs = {_fmt((rho - 1.0) / 2.0 * rows)}; lambda = {_fmt(lam)}; "
-                f"margin = {_fmt(margin)}",
+                f"rho = {rho:.4f}; rhs = {fmt_list((rho - 1.0) / 2.0 * rows)}; lambda = {fmt_list(lam)}; "
+                f"margin = {fmt_list(margin)}",
                 "margin > 0 with rho (1 - h) >= 1",
                 None
                 if np.all(margin > 0)
                 else "sampled: the margin fails already at the sampled h (the true h is at least "
                 "as large); " + GRID,
                 (
-                    f"; with the verified h <= {h_up:.6g}: margin >= {_fmt(margin_at(h_up))}",
+                    f"; with the verified h <= {h_up:.6g}: margin >= {fmt_list(margin_at(h_up))}",
                     f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is "
                     + INTERVAL,
                 )
@@ -284,7 +278,7 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
     ctl = scenario.section("controller")
     n = scenario.section("plant").count
     k = per_spacecraft(ctl.k, n, "controller.k")
-    k_positive = exact("k_i > 0", "Li2020 Lemma 2", _fmt(k), "> 0", bool(np.all(k > 0)), VALUES)
+    k_positive = exact("k_i > 0", "Li2020 Lemma 2", fmt_list(k), "> 0", bool(np.all(k > 0)), VALUES)
     if law == "sir-ftc":
         gains = f"k0 = {ctl.k0}, Phi = {ctl.phi}"
         positive = ctl.k0 > 0 and ctl.phi > 0
@@ -323,11 +317,13 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
             required=False,
         ),
         k_positive,
-        exact("d_hat_i(0) > 0", "Li2020 eq. (27)", _fmt(d0), "> 0", bool(np.all(d0 > 0)), VALUES),
+        exact(
+            "d_hat_i(0) > 0", "Li2020 eq. (27)", fmt_list(d0), "> 0", bool(np.all(d0 > 0)), VALUES
+        ),
         exact(
             "sigma_i integrable",
             "Li2020 eq. (11), (13)-(16)",
-            f"{ctl.sigma_form}, a = {_fmt(sigma_a)}",
+            f"{ctl.sigma_form}, a = {fmt_list(sigma_a)}",
             "int_0^inf sigma < inf",
             True,
             "exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",

@@ -19,7 +19,7 @@ import numpy as np
 from formation_ftc.components.controllers.networked_el_hinf import modal_damping
 from formation_ftc.core import graph as graphs
 from formation_ftc.design.lmi import rounding_margin
-from formation_ftc.papers._conditions import exact
+from formation_ftc.papers._conditions import exact, fmt_list
 from formation_ftc.registry import Condition
 
 __all__ = [
@@ -107,10 +107,6 @@ REF_9 = "Mehrabian (9), E003-03"
 #: Details of the exact scalar conditions.
 SCALAR = "exact: scalar comparison of the scenario values"
 ARITHMETIC = "exact: scalar arithmetic on the scenario values"
-
-
-def _fmt3(v) -> str:
-    return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
 
 
 def check(s: Any, loop: Any) -> list[Condition]:
@@ -224,8 +220,8 @@ def check(s: Any, loop: Any) -> list[Condition]:
         exact(
             "sum_n Q_jn",
             "Mehrabian (14), E003-05",
-            f"diag {_fmt3(dq.sum_Q_jn)} (alpha = {a:g}); {_fmt3(dq861.sum_Q_jn)} (alpha = 0.861)",
-            f"paper prints diag {_fmt3(PRINTED['sum_Q_jn'])}",
+            f"diag {fmt_list(dq.sum_Q_jn)} (alpha = {a:g}); {fmt_list(dq861.sum_Q_jn)} (alpha = 0.861)",
+            f"paper prints diag {fmt_list(PRINTED['sum_Q_jn'])}",
             all(
                 matches_printed(dq861.sum_Q_jn, PRINTED["sum_Q_jn"], PRINTED_RESOLUTION["sum_Q_jn"])
             ),
@@ -236,8 +232,8 @@ def check(s: Any, loop: Any) -> list[Condition]:
         exact(
             "Q_j",
             "Mehrabian (15), E003-05",
-            f"diag {_fmt3(dq.Q_j)} (alpha = {a:g}); {_fmt3(dq861.Q_j)} (alpha = 0.861)",
-            f"paper prints diag {_fmt3(PRINTED['Q_j'])}; > 0 needed",
+            f"diag {fmt_list(dq.Q_j)} (alpha = {a:g}); {fmt_list(dq861.Q_j)} (alpha = 0.861)",
+            f"paper prints diag {fmt_list(PRINTED['Q_j'])}; > 0 needed",
             bool(min(dq.Q_j) > 0),
             "exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)",
             required=False,
