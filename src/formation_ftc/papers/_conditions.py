@@ -1,6 +1,6 @@
 """Builders of the condition rows the papers' ``conditions`` modules return
 (:class:`~formation_ftc.registry.Condition`): an exact comparison, and a condition sampled for a
-violation that a verified bound may prove."""
+violation that a verified bound may prove; and the list format their values share."""
 
 from __future__ import annotations
 
