@@ -23,6 +23,7 @@ from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.design.lmi import ilo_lmi_residuals
 from formation_ftc.design.riccati import care_residual
 from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.papers._conditions import exact
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
@@ -30,7 +31,6 @@ from formation_ftc.sim.loop import ClosedLoop
 __all__ = [
     "implied_lyapunov",
     "learning_loop_radius",
-    "learning_loop_eigenvalues",
     "learning_loop_matrix",
     "d_max",
     "observer_conditions",
@@ -62,7 +62,7 @@ def learning_loop_matrix(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray
 
     ``e_{k+1} = (I + dt (A - L1) - dt Q2 H L2) e_k - dt H Q1 F_{k-m}``, ``F_k = Q1 F_{k-m} + Q2 L2 e_k``
     with C = I6, H = [0; I3]; the state holds e_k and F_{k-1}, ..., F_{k-m}. Returns the
-    one-step matrix (its eigenvalues: :func:`learning_loop_eigenvalues`).
+    one-step matrix (its spectral radius: :func:`learning_loop_radius`).
     """
     A, L1, L2 = (np.asarray(x, float) for x in (A, L1, L2))
     Q1 = np.diag(np.asarray(Q1, float))
@@ -79,23 +79,15 @@ def learning_loop_matrix(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray
     return M
 
 
-def learning_loop_eigenvalues(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> np.ndarray:
-    """Eigenvalues of :func:`learning_loop_matrix` (all |z| < 1 means stable)."""
-    return np.linalg.eigvals(learning_loop_matrix(A, L1, L2, Q1, Q2, dt, m))
-
-
 def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[float, float, float]:
     """(spectral radius, modulus and frequency [Hz] of the oscillatory learning-loop pair) (E002-12)."""
-    z = learning_loop_eigenvalues(A, L1, L2, Q1, Q2, dt, m)
+    z = np.linalg.eigvals(learning_loop_matrix(A, L1, L2, Q1, Q2, dt, m))  # all |z| < 1: stable
     osc = z[np.abs(z.imag) > 1e-9]
+    radius = float(np.max(np.abs(z)))
     if osc.size == 0:
-        return float(np.max(np.abs(z))), float("nan"), 0.0
+        return radius, float("nan"), 0.0
     k = int(np.argmax(np.abs(osc)))
-    return (
-        float(np.max(np.abs(z))),
-        float(np.abs(osc[k])),
-        float(abs(np.angle(osc[k])) / (2 * np.pi * dt)),
-    )
+    return radius, float(np.abs(osc[k])), float(abs(np.angle(osc[k])) / (2 * np.pi * dt))
 
 
 def _onboard_mean_motion(given: float | None, s: ComposedScenario) -> float:
@@ -140,55 +132,47 @@ def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition
         "the rounding margin 10 n eps ||M|| (solver backward error and the rounding of forming M)"
     )
     return [
-        Condition(
+        exact(
             "(8) observer Lyapunov LMI",
             "Gui2022 Thm 1 eq. (8)",
             f"max eig = {r['max_eig_8']:.4g}",
             f"< -{r['tol_8']:.2g} (rounding margin)",
             r["max_eig_8"] < -r["tol_8"],
-            basis="exact",
             detail=f"{src}; {ver}",
         ),
-        Condition(
+        exact(
             "(9) H^T P = L2 C",
             "Gui2022 Thm 1 eq. (9)",
             f"max|H^T P - L2 C| = {r['max_abs_9']:.3g}",
             "= 0 (relaxed by (27))",
             None if o.gains == "lmi" else r["max_abs_9"] <= 1e-12,
             required=False,
-            basis="exact",
             detail="exact up to rounding (max entry <= 1e-12): P is built from L2 entry by entry; "
-            + (
-                "not evaluated for LMI gains: (27) is what the design enforces"
-                if o.gains == "lmi"
-                else "(27) is what the design enforces"
-            ),
+            + ("not evaluated for LMI gains: " if o.gains == "lmi" else "")
+            + "(27) is what the design enforces",
         ),
-        Condition(
+        exact(
             "(27) Schur relaxation of (9)",
             "Gui2022 Remark 1 eq. (27)",
             f"max eig = {r['max_eig_27']:.4g} (lambda = {o.lmi_lambda:g})",
             f"< -{r['tol_27']:.2g} (rounding margin)",
             r["max_eig_27"] < -r["tol_27"],
-            basis="exact",
             detail=ver,
         ),
-        Condition(
+        exact(
             "P > 0",
             "Gui2022 Thm 1",
             f"min eig P = {r['min_eig_P']:.4g}",
             f"> {r['tol_P']:.2g} (rounding margin)",
             r["min_eig_P"] > r["tol_P"],
-            basis="exact",
             detail=ver,
         ),
-        Condition(
+        exact(
             f"poles of A - L1 C in {region}",
             "Gui2022 Sec. 5.1, ref. [29]",
             f"eig = {np.round(np.sort_complex(poles), 4).tolist()}; max |lambda - c| = {r['max_pole_distance']:.4g}",
             f"< {o.disk_radius:g}",
             bool(r["max_pole_distance"] < o.disk_radius - pole_tol or disk_verified),
-            basis="exact",
             detail=(
                 f"exact up to rounding: the disk LMI [[-r P, P A - Y C - c P], [*, -r P]] < 0 with P > 0 holds beyond "
                 f"its rounding margin (max eig {r['max_eig_disk']:.4g} < -{r['tol_disk']:.2g})"
@@ -198,43 +182,39 @@ def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition
                 f"verified, rounding margin {r['tol_disk']:.2g})"
             ),
         ),
-        Condition(
+        exact(
             "(10) (eta + gamma1) Q1^2 - I <= 0",
             "Gui2022 Thm 1 eq. (10)",
             f"max = {c10:.4g} (bound on sigma: {1 / np.sqrt(eta + o.gamma1):.6f})",
             "<= 0",
             c10 <= 0,
-            basis="exact",
             detail="exact: scalar arithmetic in float64 (rounding ~1e-16); E002-04: the printed Q1 = 0.99 sits "
             "close to the boundary",
         ),
-        Condition(
+        exact(
             "Q2 = 1/(beta eta)",
             "Gui2022 design step (1)",
             f"Q2 = {o.Q2:g}, 1/(beta eta) = {1 / (o.beta * eta):.6f}",
             "relative difference <= 1e-3",
             abs(o.Q2 * o.beta * eta - 1) <= 1e-3,
             required=False,
-            basis="exact",
             detail="exact: scalar arithmetic",
         ),
         _condition_11(s, o.gamma, o.sign_term, n),
-        Condition(
+        exact(
             "mu > 0",
             "E002-02 (proof needs delta = min(lambda_min, beta mu) > 0)",
             f"mu = {o.mu:g}",
             "> 0",
             o.mu > 0,
-            basis="exact",
             detail="exact: scalar comparison",
         ),
-        Condition(
+        exact(
             "discrete learning loop stable",
             "E002-12 (tau = m dt, forward Euler, gamma = 0)",
             f"spectral radius = {rho:.6f}; learning-loop pair |z| = {rho_osc:.5f} at {f_osc:.1f} Hz",
             f"< 1 - {rho_tol:.2g} (rounding margin)",
             bool(rho < 1 - rho_tol),
-            basis="exact",
             detail=f"exact up to rounding: eigenvalues of the one-step map (LAPACK; Bauer-Fike margin "
             f"{rho_tol:.2g}); radius = slow observer pole (position channel); the oscillatory pair is the lightly "
             "damped learning loop that rings after a step fault",
@@ -264,38 +244,35 @@ def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Conditi
     ev = np.linalg.eigvals(A - B @ K)
     ev_tol = eigenvalue_margin(A - B @ K)
     out = [
-        Condition(
+        exact(
             "(34) CARE P1 A + A^T P1 - P1 B B^T P1 = -Q",
             "Gui2022 Thm 2 eq. (34), E002-05",
             f"residual = {res:.3g} (Q = {c.care_q_scale:g} I6)",
             "<= 1e-12",
             bool(res + res_err <= 1e-12),
-            basis="exact",
             detail=f"exact up to rounding: residual of the returned P1 recomputed in numpy, plus the bound "
             f"{res_err:.2g} on its float64 evaluation error; max |P1 - P1_printed| = "
             f"{dP:.3g} (<= 5e-5 reproduces the printed P1)",
         ),
-        Condition(
+        exact(
             "(35) K C = B^T P1",
             "Gui2022 Thm 2 eq. (35)",
             f"max |K - B^T P1| = {dK:.3g}",
             "<= 5e-5 (K printed to 4 decimals)",
             dK <= 5e-5,
-            basis="exact",
             detail="exact: entry-wise difference",
         ),
     ]
     if isinstance(c, Lof2tcSection):
         out += _learning_law_conditions(c)
     out.append(
-        Condition(
+        exact(
             "A - B K C Hurwitz (pi = 1)",
             "closed loop (33) with pi = 1",
             f"max Re eig = {ev.real.max():.4g} 1/s",
             f"< -{ev_tol:.2g} (rounding margin)",
             bool(ev.real.max() < -ev_tol),
             required=False,
-            basis="exact",
             detail=f"exact up to rounding: eigenvalues of A - B K (LAPACK; Bauer-Fike margin {ev_tol:.2g} 1/s)",
         )
     )
@@ -308,42 +285,38 @@ def _learning_law_conditions(c) -> list[Condition]:
     G3 = np.diag(c.G3)
     c37 = float(np.max(np.linalg.eigvalsh((1 + c.mu1 + c.gamma2) * G3.T @ G3 - np.eye(3))))
     return [
-        Condition(
+        exact(
             "(36) (1 + mu1 + gamma3) G1^2 - 1 < 0",
             "Gui2022 Thm 2 eq. (36)",
             f"{c36:.4g}",
             "< 0",
             c36 < 0,
-            basis="exact",
             detail="exact: scalar arithmetic",
         ),
-        Condition(
+        exact(
             "(37) (1 + mu1 + gamma2) G3^T G3 - I < 0",
             "Gui2022 Thm 2 eq. (37)",
             f"max eig = {c37:.4g}",
             "< 0",
             c37 < 0,
-            basis="exact",
             detail="exact: diagonal matrix, eigenvalues are its entries",
         ),
-        Condition(
+        exact(
             "G2 = 1/(l (1 + mu1))",
             "Gui2022 Thm 2, E002-08",
             f"G2 = {c.G2:g}, formula {1 / (c.l * (1 + c.mu1)):.6f}",
             "relative difference <= 1e-3",
             abs(c.G2 * c.l * (1 + c.mu1) - 1) <= 1e-3,
             required=False,
-            basis="exact",
             detail="exact: scalar arithmetic",
         ),
-        Condition(
+        exact(
             "G4 = -1/(beta1 (1 + mu1))",
             "Gui2022 Thm 2, E002-08",
             f"G4 = {c.G4:g}, formula {-1 / (c.beta1 * (1 + c.mu1)):.6f}",
             "relative difference <= 1e-3",
             abs(-c.G4 * c.beta1 * (1 + c.mu1) - 1) <= 1e-3,
             required=False,
-            basis="exact",
             detail="exact: scalar arithmetic",
         ),
         Condition(

@@ -24,8 +24,9 @@ theorems: no condition.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
+from itertools import permutations
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from formation_ftc.components.networks.delayed_graph import DelayStats, delay_st
 from formation_ftc.core.graph import balance_report, is_strongly_connected
 from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
 from formation_ftc.methods.composed import ComposedScenario, per_spacecraft
+from formation_ftc.papers._conditions import exact, fmt_list, sampled_or_verified
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -92,6 +94,8 @@ INTERVAL = (
     "verified by interval arithmetic over the continuous horizon (outward-rounded enclosures of T and "
     "dT/dt on 4,096 sub-intervals, bisected where inconclusive); values shown are sampled at every step"
 )
+#: How the conditions on the scenario's numbers are decided.
+VALUES = "exact: comparison of the scenario values"
 
 
 @dataclass(frozen=True)
@@ -133,15 +137,11 @@ def delay_bounds(
     d = _texts(scenario)
     if d is None:
         return {}
-    n = len(d)
     horizon = float(scenario.simulation.horizon)
-    out = {}
-    for i in range(n):
-        for j in range(n):
-            if i != j:
-                lo, hi = _delay_bound(str(d[i][j]), i, j, horizon, float(rate_target))
-                out[(i, j)] = DelayBounds((i, j), lo, hi)
-    return out
+    return {
+        (i, j): DelayBounds((i, j), *_delay_bound(d[i][j], i, j, horizon, float(rate_target)))
+        for i, j in permutations(range(len(d)), 2)  # the off-diagonal pairs, row by row
+    }
 
 
 def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
@@ -150,117 +150,75 @@ def _rate_target(lam: np.ndarray, C: np.ndarray) -> float:
     with np.errstate(divide="ignore"):
         q = np.where(s > 0, 2.0 * lam / np.where(s > 0, s, 1.0), np.inf)
     qmin = float(np.min(q)) if q.size else math.inf
-    if not qmin > 0:
-        return 1.0
-    return 1.0 if math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
-
-
-def _fmt(v) -> str:
-    return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+    return 1.0 if not qmin > 0 or math.isinf(qmin) else min(1.0, qmin / (1.0 + qmin))
 
 
 def _worst_bound(bounds: list[DelayBounds]) -> float | None:
     """max rate_hi over the pairs, None if one is missing (no verified bound)."""
     his = [b.rate_hi for b in bounds]
-    if any(h is None for h in his):
-        return None
-    return max((float(h) for h in his if h is not None), default=0.0)
+    return None if None in his else max((float(h) for h in his if h is not None), default=0.0)
 
 
 def _delay_conditions(
     scenario: ComposedScenario, C: np.ndarray, lam: np.ndarray
 ) -> list[Condition]:
     """Delay conditions of Theorem 2: verified by interval arithmetic, else sampled (see module doc)."""
-    out: list[Condition] = []
     stats = delay_stats(scenario)
-    used = C > 0
-    used_stats = [st for st in stats if used[st.pair]]
+    used_stats = [st for st in stats if C[st.pair] > 0]
     target = _rate_target(lam, C)
     vb_used = delay_bounds(scenario, rate_target=target * (1 - 1e-9) if target < 1 else 1.0)
     vb_all = delay_bounds(scenario)
     # T >= 0 on every printed pair
-    neg = [st for st in stats if st.value_min < 0]
+    neg = [f"sampled: {st.name} < 0 at t = {st.t_min:.6g} s" for st in stats if st.value_min < 0]
     lows = [vb_all[st.pair].value_lo for st in stats]
-    proved = all(v is not None and v >= 0 for v in lows)
     lo_all = min((v for v in lows if v is not None), default=math.inf)
-    value = ", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats)
-    if neg:
-        holds, basis = False, "sampled"
-        detail = "; ".join(
-            [f"sampled: {st.name} < 0 at t = {st.t_min:.6g} s" for st in neg] + [GRID]
+    out = [
+        sampled_or_verified(
+            "delays non-negative",
+            "Li2020 Sec. III-B",
+            ", ".join(f"min {st.name} = {st.value_min:.4g} s" for st in used_stats),
+            ">= 0 on every pair",
+            "; ".join([*neg, GRID]) if neg else None,
+            (f"; verified T >= {lo_all:.4g} s on every pair", INTERVAL)
+            if all(v is not None and v >= 0 for v in lows)
+            else None,
+            "sampled (unproven; the interval enclosure reaches below 0): " + GRID,
         )
-    elif proved:
-        holds, basis = True, "verified"
-        value += f"; verified T >= {lo_all:.4g} s on every pair"
-        detail = INTERVAL
-    else:
-        holds, basis = None, "sampled"
-        detail = "sampled (unproven; the interval enclosure reaches below 0): " + GRID
-    out.append(
-        Condition(
-            name="delays non-negative",
-            reference="Li2020 Sec. III-B",
-            value=value,
-            requirement=">= 0 on every pair",
-            holds=holds,
-            basis=basis,
-            detail=detail,
-        )
-    )
+    ]
     # dT/dt <= h < 1 on the used edges (eq. (46))
     worst = max(used_stats, key=lambda st: st.rate_max) if used_stats else None
     h = worst.rate_max if worst else 0.0
     h_up = _worst_bound([vb_used[st.pair] for st in used_stats])
-    if worst is None:
-        value = "no edges"
-    else:
-        value = f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); " + ", ".join(
-            f"{st.name}: {st.rate_max:.4f}" for st in used_stats
-        )
-    if h >= 1:
-        holds, basis, detail = False, "sampled", "sampled: the rate reaches 1 at a step; " + GRID
-    elif h_up is not None and h_up < 1:
-        holds, basis, detail = True, "verified", INTERVAL
-        value += f"; verified h <= {h_up:.6g}"
-    else:
-        holds, basis = None, "sampled"
-        detail = f"sampled (unproven; the rate enclosure reaches {h_up}): " + GRID
+    h_proved = h_up is not None and h_up < 1
     out.append(
-        Condition(
-            name="delay rate bound (used edges)",
-            reference="Li2020 eq. (46); E000-15",
-            value=value,
-            requirement="h_ij < 1",
-            holds=holds,
-            basis=basis,
-            detail=detail,
+        sampled_or_verified(
+            "delay rate bound (used edges)",
+            "Li2020 eq. (46); E000-15",
+            "no edges"
+            if worst is None
+            else f"max dT/dt = {h:.4f} ({worst.name} at t = {worst.t_rate_max:.4g} s); "
+            + ", ".join(f"{st.name}: {st.rate_max:.4f}" for st in used_stats),
+            "h_ij < 1",
+            "sampled: the rate reaches 1 at a step; " + GRID if h >= 1 else None,
+            (f"; verified h <= {h_up:.6g}", INTERVAL) if h_proved else None,
+            f"sampled (unproven; the rate enclosure reaches {h_up}): " + GRID,
         )
     )
     if stats:
         wa = max(stats, key=lambda st: st.rate_max)
         ha_up = _worst_bound([vb_all[st.pair] for st in stats])
-        value = f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)"
-        if wa.rate_max >= 1:
-            holds, basis = False, "sampled"
-            detail = "sampled: the rate reaches 1 at a step; " + GRID
-        elif ha_up is not None and ha_up < 1:
-            holds, basis, detail = True, "verified", INTERVAL
-            value += f"; verified <= {ha_up:.6g}"
-        else:
-            holds, basis = None, "sampled"
-            detail = "sampled (unproven by the interval enclosure): " + GRID
-        out.append(
-            Condition(
-                name="delay rate bound (all printed delays)",
-                reference="Li2020 Sec. IV-A; E000-15",
-                value=value,
-                requirement="< 1",
-                holds=holds,
-                required=False,
-                basis=basis,
-                detail="not required (unused delays do not enter the closed loop); " + detail,
-            )
+        row = sampled_or_verified(
+            "delay rate bound (all printed delays)",
+            "Li2020 Sec. IV-A; E000-15",
+            f"max dT/dt = {wa.rate_max:.4f} ({wa.name} at t = {wa.t_rate_max:.4g} s)",
+            "< 1",
+            "sampled: the rate reaches 1 at a step; " + GRID if wa.rate_max >= 1 else None,
+            (f"; verified <= {ha_up:.6g}", INTERVAL) if ha_up is not None and ha_up < 1 else None,
+            "sampled (unproven by the interval enclosure): " + GRID,
+            required=False,
         )
+        unused = "not required (unused delays do not enter the closed loop); "
+        out.append(replace(row, detail=unused + row.detail))
     if h < 1:
         rows = C.sum(axis=1)
 
@@ -270,36 +228,26 @@ def _delay_conditions(
 
         margin = margin_at(h)
         rho = 1.0 / (1.0 - h)
-        value = (
-            f"rho = {rho:.4f}; rhs = {_fmt((rho - 1.0) / 2.0 * rows)}; lambda = {_fmt(lam)}; "
-            f"margin = {_fmt(margin)}"
-        )
         slack = 1e-12 * max(1.0, float(np.max(np.abs(lam))))  # rounding of rho and the products
-        if not bool(np.all(margin > 0)):
-            holds, basis = False, "sampled"
-            detail = (
-                "sampled: the margin fails already at the sampled h (the true h is at least as large); "
-                + GRID
-            )
-        elif h_up is not None and h_up < 1 and bool(np.all(margin_at(h_up) > slack)):
-            holds, basis = True, "verified"
-            value += f"; with the verified h <= {h_up:.6g}: margin >= {_fmt(margin_at(h_up))}"
-            detail = (
-                f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is "
-                + INTERVAL
-            )
-        else:
-            holds, basis = None, "sampled"
-            detail = "sampled (unproven): arithmetic with the sampled h; h is " + GRID
         out.append(
-            Condition(
-                name="lambda_i > (rho - 1)/2 sum_j c_ij",
-                reference="Li2020 eq. (47)",
-                value=value,
-                requirement="margin > 0 with rho (1 - h) >= 1",
-                holds=holds,
-                basis=basis,
-                detail=detail,
+            sampled_or_verified(
+                "lambda_i > (rho - 1)/2 sum_j c_ij",
+                "Li2020 eq. (47)",
+                f"rho = {rho:.4f}; rhs = {fmt_list((rho - 1.0) / 2.0 * rows)}; lambda = {fmt_list(lam)}; "
+                f"margin = {fmt_list(margin)}",
+                "margin > 0 with rho (1 - h) >= 1",
+                None
+                if np.all(margin > 0)
+                else "sampled: the margin fails already at the sampled h (the true h is at least "
+                "as large); " + GRID,
+                (
+                    f"; with the verified h <= {h_up:.6g}: margin >= {fmt_list(margin_at(h_up))}",
+                    f"verified: margin > {slack:.1e} (rounding) with the verified bound on h; h is "
+                    + INTERVAL,
+                )
+                if h_up is not None and h_up < 1 and np.all(margin_at(h_up) > slack)
+                else None,
+                "sampled (unproven): arithmetic with the sampled h; h is " + GRID,
             )
         )
     return out
@@ -330,90 +278,63 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
     ctl = scenario.section("controller")
     n = scenario.section("plant").count
     k = per_spacecraft(ctl.k, n, "controller.k")
-    k_positive = Condition(
-        name="k_i > 0",
-        reference="Li2020 Lemma 2",
-        value=_fmt(k),
-        requirement="> 0",
-        holds=bool(np.all(k > 0)),
-        basis="exact",
-        detail="exact: comparison of the scenario values",
-    )
+    k_positive = exact("k_i > 0", "Li2020 Lemma 2", fmt_list(k), "> 0", bool(np.all(k > 0)), VALUES)
     if law == "sir-ftc":
+        gains = f"k0 = {ctl.k0}, Phi = {ctl.phi}"
+        positive = ctl.k0 > 0 and ctl.phi > 0
         return [
             k_positive,
-            Condition(
-                name="SIR-FTC gains positive",
-                reference="Li2020 Sec. IV-D",
-                value=f"k0 = {ctl.k0}, Phi = {ctl.phi}",
-                requirement="> 0",
-                holds=ctl.k0 > 0 and ctl.phi > 0,
-                basis="exact",
-                detail="exact: comparison of the scenario values",
-            ),
+            exact("SIR-FTC gains positive", "Li2020 Sec. IV-D", gains, "> 0", positive, VALUES),
         ]
     C = np.asarray(scenario.section("network").adjacency, dtype=float)
     thm = "Theorem 1" if law == "thm1" else "Theorem 2"
     br, sc = balance_report(C, tol=1e-12), is_strongly_connected(C)
-    out = [
-        Condition(
-            name="communication graph balanced",
-            reference=f"Li2020 {thm}, Sec. II-C; E000-07",
-            value=str(br),
-            requirement="row sums = column sums",
-            holds=br.balanced,
-            required=True,
-            basis="exact",
-            detail="exact: row/column sums (tolerance 1e-12)"
-            + (
-                ""
-                if br.balanced
-                else "; the theorems assume a "
-                "balanced graph; the printed C is not balanced (the closed loop still converges in simulation)"
-            ),
-        ),
-        Condition(
-            name="communication graph strongly connected",
-            reference="Li2020 Sec. IV-A, Fig. 3",
-            value=str(sc),
-            requirement="True",
-            holds=sc,
-            required=False,
-            basis="exact",
-            detail="exact: reachability on the adjacency pattern",
-        ),
-        k_positive,
-    ]
     d0 = per_spacecraft(ctl.d_hat0, n, "controller.d_hat0")
     sigma_a = per_spacecraft(ctl.sigma_a, n, "controller.sigma_a")
     sign = -1 if (ctl.dhat_sign_literal and law == "thm2") else 1  # as the catalog builds the law
-    out += [
-        Condition(
-            name="d_hat_i(0) > 0",
-            reference="Li2020 eq. (27)",
-            value=_fmt(d0),
-            requirement="> 0",
-            holds=bool(np.all(d0 > 0)),
-            basis="exact",
-            detail="exact: comparison of the scenario values",
+    out = [
+        exact(
+            "communication graph balanced",
+            f"Li2020 {thm}, Sec. II-C; E000-07",
+            str(br),
+            "row sums = column sums",
+            br.balanced,
+            "exact: row/column sums (tolerance 1e-12)"
+            + (
+                ""
+                if br.balanced
+                else "; the theorems assume a balanced graph; the printed C is not balanced (the "
+                "closed loop still converges in simulation)"
+            ),
         ),
-        Condition(
-            name="sigma_i integrable",
-            reference="Li2020 eq. (11), (13)-(16)",
-            value=f"{ctl.sigma_form}, a = {_fmt(sigma_a)}",
-            requirement="int_0^inf sigma < inf",
-            holds=True,
-            basis="exact",
-            detail="exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
+        exact(
+            "communication graph strongly connected",
+            "Li2020 Sec. IV-A, Fig. 3",
+            str(sc),
+            "True",
+            sc,
+            "exact: reachability on the adjacency pattern",
+            required=False,
         ),
-        Condition(
-            name="sign of d_hat tanh term",
-            reference="Li2020 eq. (24)/(42); E000-04",
-            value=f"{sign:+d}",
-            requirement="+1 (proof steps (34)-(36))",
-            holds=sign > 0,
-            basis="exact",
-            detail="exact: sign chosen by the scenario",
+        k_positive,
+        exact(
+            "d_hat_i(0) > 0", "Li2020 eq. (27)", fmt_list(d0), "> 0", bool(np.all(d0 > 0)), VALUES
+        ),
+        exact(
+            "sigma_i integrable",
+            "Li2020 eq. (11), (13)-(16)",
+            f"{ctl.sigma_form}, a = {fmt_list(sigma_a)}",
+            "int_0^inf sigma < inf",
+            True,
+            "exact: closed-form integrals: exp(-a t): 1/a; 1/(a (t+t0)^2): 1/(a t0)",
+        ),
+        exact(
+            "sign of d_hat tanh term",
+            "Li2020 eq. (24)/(42); E000-04",
+            f"{sign:+d}",
+            "+1 (proof steps (34)-(36))",
+            sign > 0,
+            "exact: sign chosen by the scenario",
         ),
     ]
     if law == "thm2":
@@ -421,11 +342,11 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
     x_star, r_star = lemma3_constant()
     out.append(
         Condition(
-            name="Lemma 3 constant r*",
-            reference="Li2020 eq. (22)",
-            value=f"x* = {x_star:.6f}, r* = {r_star:.6f}",
-            requirement="informative",
-            holds=True,
+            "Lemma 3 constant r*",
+            "Li2020 eq. (22)",
+            f"x* = {x_star:.6f}, r* = {r_star:.6f}",
+            "informative",
+            True,
             required=False,
             basis="informative",
             detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",

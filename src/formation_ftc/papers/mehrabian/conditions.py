@@ -19,6 +19,7 @@ import numpy as np
 from formation_ftc.components.controllers.networked_el_hinf import modal_damping
 from formation_ftc.core import graph as graphs
 from formation_ftc.design.lmi import rounding_margin
+from formation_ftc.papers._conditions import exact, fmt_list
 from formation_ftc.registry import Condition
 
 __all__ = [
@@ -95,14 +96,17 @@ PRINTED_RESOLUTION = {"sum_Q_jn": (1e-6, 0.01, 0.01), "Q_j": (1e-7, 1e-6, 0.01)}
 
 def matches_printed(values, printed, resolution) -> list[bool]:
     """Per entry: ``value`` truncated to the printed resolution equals the printed number."""
-    out = []
-    for v, p, r in zip(values, printed, resolution, strict=True):
-        out.append(bool(abs(np.trunc(v / r + 1e-9) * r - p) < 1e-3 * r))
-    return out
+    return [
+        bool(abs(np.trunc(v / r + 1e-9) * r - p) < 1e-3 * r)
+        for v, p, r in zip(values, printed, resolution, strict=True)
+    ]
 
 
-def _fmt3(v) -> str:
-    return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+#: Reference of the gain conditions (9).
+REF_9 = "Mehrabian (9), E003-03"
+#: Details of the exact scalar conditions.
+SCALAR = "exact: scalar comparison of the scenario values"
+ARITHMETIC = "exact: scalar arithmetic on the scenario values"
 
 
 def check(s: Any, loop: Any) -> list[Condition]:
@@ -123,146 +127,116 @@ def check(s: Any, loop: Any) -> list[Condition]:
     c = s.section("controller")
     K, KP, KI, a, g = c.K, c.K_P, c.K_I, c.alpha, c.gamma
     dq = design_quantities(K, KP, KI, a, g)
-    out: list[Condition] = [
-        Condition(
-            "K-bar > 0 (proportional gain)",
-            "Mehrabian (9), E003-03",
-            f"K_P = {KP:.4g}",
-            "> 0",
-            KP > 0,
-            basis="exact",
-            detail="exact: scalar comparison of the scenario values",
-        ),
-        Condition(
-            "K-double-bar > 0 (integral gain)",
-            "Mehrabian (9), E003-03",
-            f"K_I = {KI:.4g}",
-            "> 0",
-            KI > 0,
-            basis="exact",
-            detail="exact: scalar comparison of the scenario values",
-        ),
-        Condition(
+    out = [
+        exact("K-bar > 0 (proportional gain)", REF_9, f"K_P = {KP:.4g}", "> 0", KP > 0, SCALAR),
+        exact("K-double-bar > 0 (integral gain)", REF_9, f"K_I = {KI:.4g}", "> 0", KI > 0, SCALAR),
+        exact(
             "K - I/gamma^2 > 0",
             "Mehrabian (9)",
             f"{K:.4g} - 1/{g:.4g}^2 = {dq.K_minus:.6g}",
             "> 0",
             dq.K_minus > 0,
-            basis="exact",
-            detail="exact: scalar arithmetic on the scenario values (float64; the sign is decided "
+            "exact: scalar arithmetic on the scenario values (float64; the sign is decided "
             "unless K gamma^2 = 1 to within 1e-16)",
         ),
-        Condition(
+        exact(
             "0 < alpha < 1",
             "Mehrabian (10)",
             f"alpha = {a:.4g}",
             "0 < alpha < 1",
             0 < a < 1,
-            basis="exact",
-            detail="exact: scalar comparison of the scenario values",
+            SCALAR,
         ),
-        Condition(
+        exact(
             "(1 - alpha) K-bar^2 - 2 K-double-bar > 0",
             "Mehrabian (11), E003-03",
             f"(1 - {a:.4g}) {KP:.4g}^2 - 2 {KI:.4g} = {dq.cond11:.6g}",
             "> 0",
             dq.cond11 > 0,
-            basis="exact",
-            detail=f"exact: scalar arithmetic; with the gain letters swapped (K-bar = {KI:g}): {dq.cond11_swapped:.4g} "
-            "(E003-03)",
+            f"exact: scalar arithmetic; with the gain letters swapped (K-bar = {KI:g}): "
+            f"{dq.cond11_swapped:.4g} (E003-03)",
         ),
     ]
     if c.law == "literal":
         out.append(
-            Condition(
+            exact(
                 "consensus-mode damping of the literal law",
                 "Mehrabian (8) first line, E003-01",
                 f"1/2[(1 - alpha) K - 1/gamma^2] = {dq.consensus_damping_literal:.6g} N m s",
                 f"> 0 (alpha < 1 - 1/(K gamma^2) = {dq.alpha_limit:.6g})",
                 dq.consensus_damping_literal > 0,
-                basis="exact",
-                detail="exact: scalar arithmetic on the scenario values",
+                ARITHMETIC,
             )
         )
     else:
         out.append(
-            Condition(
+            exact(
                 "consensus-mode damping of the diffusive law",
                 "E003-01 alternative",
                 f"1/2 (K - 1/gamma^2) = {0.5 * dq.K_minus:.6g} N m s",
                 "> 0",
                 dq.K_minus > 0,
-                basis="exact",
-                detail="exact: scalar arithmetic on the scenario values",
+                ARITHMETIC,
             )
         )
     Jn = np.diag(c.nominal_inertia)  # the law's model J^ (stated on board)
     Ps = [lyapunov_matrix(D, K, KP, KI) for D in (Jn, 10 * np.eye(3), 20 * np.eye(3))]
     eigs = [np.linalg.eigvalsh(P).min() for P in Ps]
     tol = max(rounding_margin(P) for P in Ps)
-    out.append(
-        Condition(
+    m = loop.plant.count
+    A = graphs.adjacency(m, [(a - 1, b - 1) for a, b in c.edges], directed=False)
+    lam = np.sort(np.linalg.eigvalsh(graphs.laplacian(A)))
+    # derived design quantities next to the printed ones (informational)
+    dq861 = design_quantities(K, KP, KI, 0.861, g)
+    out += [
+        exact(
             "P_j positive definite",
             "Mehrabian (21) (reconstructed)",
             f"min eig = {eigs[0]:.4g} (D = J^), {eigs[1]:.4g} (D = 10 I), {eigs[2]:.4g} (D = 20 I)",
             "> 0 (iff K_P > K_I for scalar gains)",
             bool(min(eigs) > tol),
-            required=False,
-            basis="exact",
-            detail=f"exact up to rounding: symmetric eigenvalues (numpy) clear the rounding margin {tol:.2g} "
+            f"exact up to rounding: symmetric eigenvalues (numpy) clear the rounding margin {tol:.2g} "
             "(10 n eps ||P||)",
-        )
-    )
-    m = loop.plant.count
-    A = graphs.adjacency(m, [(a - 1, b - 1) for a, b in c.edges], directed=False)
-    L = graphs.laplacian(A)
-    lam = np.sort(np.linalg.eigvalsh(L))
-    out.append(
-        Condition(
+            required=False,
+        ),
+        exact(
             "communication graph connected",
             "Mehrabian Sec. II-B",
             f"lambda_2(L) = {lam[1]:.4g}",
             "> 1e-9 (rounding margin)",
             bool(lam[1] > 1e-9),
-            basis="exact",
-            detail="exact up to rounding: symmetric eigenvalues of the Laplacian (numpy, error "
+            "exact up to rounding: symmetric eigenvalues of the Laplacian (numpy, error "
             "<= 10 n eps ||L||, far below the 1e-9 margin)",
-        )
-    )
-    # derived design quantities next to the printed ones (informational)
-    dq861 = design_quantities(K, KP, KI, 0.861, g)
-    out += [
-        Condition(
+        ),
+        exact(
             "R_j",
             "Mehrabian (13), E003-02",
             f"{dq.R:.6g} I3 (its inverse K - I/gamma^2 = {dq.K_minus:.6g})",
             f"paper prints {PRINTED['R']} I3, which is R_j^-1",
             abs(dq.K_minus - PRINTED["R"]) < 5e-3,
+            "informative (exact arithmetic): 17.22 equals K - I/gamma^2 = R_j^-1, not R_j (E003-02)",
             required=False,
-            basis="exact",
-            detail="informative (exact arithmetic): 17.22 equals K - I/gamma^2 = R_j^-1, not R_j (E003-02)",
         ),
-        Condition(
+        exact(
             "sum_n Q_jn",
             "Mehrabian (14), E003-05",
-            f"diag {_fmt3(dq.sum_Q_jn)} (alpha = {a:g}); {_fmt3(dq861.sum_Q_jn)} (alpha = 0.861)",
-            f"paper prints diag {_fmt3(PRINTED['sum_Q_jn'])}",
+            f"diag {fmt_list(dq.sum_Q_jn)} (alpha = {a:g}); {fmt_list(dq861.sum_Q_jn)} (alpha = 0.861)",
+            f"paper prints diag {fmt_list(PRINTED['sum_Q_jn'])}",
             all(
                 matches_printed(dq861.sum_Q_jn, PRINTED["sum_Q_jn"], PRINTED_RESOLUTION["sum_Q_jn"])
             ),
+            "informative (exact arithmetic): alpha = 0.861 reproduces the printed (truncated) "
+            "digits (E003-05)",
             required=False,
-            basis="exact",
-            detail="informative (exact arithmetic): alpha = 0.861 reproduces the printed (truncated) digits (E003-05)",
         ),
-        Condition(
+        exact(
             "Q_j",
             "Mehrabian (15), E003-05",
-            f"diag {_fmt3(dq.Q_j)} (alpha = {a:g}); {_fmt3(dq861.Q_j)} (alpha = 0.861)",
-            f"paper prints diag {_fmt3(PRINTED['Q_j'])}; > 0 needed",
+            f"diag {fmt_list(dq.Q_j)} (alpha = {a:g}); {fmt_list(dq861.Q_j)} (alpha = 0.861)",
+            f"paper prints diag {fmt_list(PRINTED['Q_j'])}; > 0 needed",
             bool(min(dq.Q_j) > 0),
+            "exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)",
             required=False,
-            basis="exact",
-            detail="exact: scalar arithmetic; the printed middle entry 0.031e-3 must read 0.031 (E003-05)",
         ),
     ]
     # RK4 step against the fastest closed-loop rate (sat boundary layer and coupling)

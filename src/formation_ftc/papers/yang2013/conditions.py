@@ -23,6 +23,7 @@ from formation_ftc.core.interval import IntervalError, enclose_norm
 from formation_ftc.design import dwell_time as dw
 from formation_ftc.design.dwell_time import Inequality
 from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.papers._conditions import exact, sampled_or_verified
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -51,6 +52,12 @@ def design_quantities(sc: ComposedScenario) -> dict[str, float]:
     D = dw.disturbance_bound(d.force_bound, d.torque_bound)
     x0 = np.linalg.norm(np.stack([s.vector() for s in sc.section("plant").initial_state]))
     act = d.activation_times()
+
+    def dwell(S: float, **options: float) -> float:
+        return dw.dwell_time_bound(
+            d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time, **options
+        )
+
     return {
         "D": D,
         "S": S,
@@ -58,18 +65,10 @@ def design_quantities(sc: ComposedScenario) -> dict[str, float]:
         "S_induced2": S_2,
         "envelope": dw.state_envelope(d.epsilon, S, d.zeta, D),
         "pre_switch_bound": dw.pre_switch_bound(d.epsilon1, d.zeta, D),
-        "dwell_time_required": dw.dwell_time_bound(
-            d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
-        ),
-        "dwell_time_required_frobenius": dw.dwell_time_bound(
-            d.eta, S_fro, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
-        ),
-        "dwell_time_required_induced2": dw.dwell_time_bound(
-            d.eta, S_2, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time
-        ),
-        "dwell_time_required_proof_S_plus_1": dw.dwell_time_bound(
-            d.eta, S, d.zeta, D, d.epsilon, d.epsilon1, d.dwell_time, s_offset=1.0
-        ),
+        "dwell_time_required": dwell(S),
+        "dwell_time_required_frobenius": dwell(S_fro),
+        "dwell_time_required_induced2": dwell(S_2),
+        "dwell_time_required_proof_S_plus_1": dwell(S, s_offset=1.0),
         "min_activation_time": min(act) if act else float("inf"),
         "initial_state_norm": float(x0),
         "initial_state_bound": dw.initial_state_bound(d.epsilon, S, d.zeta, D),
@@ -141,28 +140,20 @@ def disturbance_bounds(
     """
     out: list[float | None] = []
     plant, d = sc.section("plant"), sc.section("supervisor")
+    horizon = float(sc.simulation.horizon)
     for texts, bound in (
         (plant.disturbance_force, d.force_bound),
         (plant.disturbance_torque, d.torque_bound),
     ):
-        worst = 0.0
+        components, upper = [str(tx) for tx in texts], float(bound) * (1 + tol)
         try:
-            for i in range(1, plant.count + 1):
-                worst = max(
-                    worst,
-                    enclose_norm(
-                        [str(tx) for tx in texts],
-                        ("t", "i"),
-                        0.0,
-                        float(sc.simulation.horizon),
-                        upper=float(bound) * (1 + tol),
-                        i=float(i),
-                    ),
-                )
+            norms = [
+                enclose_norm(components, ("t", "i"), 0.0, horizon, upper=upper, i=float(i))
+                for i in range(1, plant.count + 1)
+            ]
+            out.append(max(norms, default=0.0))
         except IntervalError:
             out.append(None)
-            continue
-        out.append(worst)
     return out[0], out[1]
 
 
@@ -181,17 +172,15 @@ VERIFIED = (
 EXACT = "exact: closed-form scalar inequality on the scenario values (tolerance 1e-12 on <= / >=)"
 
 
-def _cond(ineq: Inequality, required: bool = True, detail: str = "") -> Condition:
+def _cond(ineq: Inequality, detail: str = "") -> Condition:
     text = detail or ineq.detail
-    return Condition(
-        name=ineq.name,
-        reference=f"Yang2013 {ineq.reference}",
-        value=f"{ineq.lhs:.6g}",
-        requirement=f"{ineq.relation} {ineq.rhs:.6g}",
-        holds=bool(ineq.holds),
-        required=required,
-        basis="exact",
-        detail=f"{text}; {EXACT}" if text else EXACT,
+    return exact(
+        ineq.name,
+        f"Yang2013 {ineq.reference}",
+        f"{ineq.lhs:.6g}",
+        f"{ineq.relation} {ineq.rhs:.6g}",
+        bool(ineq.holds),
+        f"{text}; {EXACT}" if text else EXACT,
     )
 
 
@@ -209,64 +198,52 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
     rate = dw.translational_decay_rate(c.K1, c.K2)
     out: list[Condition] = [
         Condition(
-            name="S = max|S_ij| (Frobenius, as printed) and induced 2-norm",
-            reference="Yang2013 after (20), E001-04",
-            value=f"S_F = {q['S_frobenius']:.4f}, S_2 = {q['S_induced2']:.4f}; D = {q['D']:.4g}",
-            requirement=f"using {d.variation_norm}",
-            holds=None,
+            "S = max|S_ij| (Frobenius, as printed) and induced 2-norm",
+            "Yang2013 after (20), E001-04",
+            f"S_F = {q['S_frobenius']:.4f}, S_2 = {q['S_induced2']:.4f}; D = {q['D']:.4g}",
+            f"using {d.variation_norm}",
+            None,
             required=False,
             basis="informative",
             detail="informative: the two norms of the variation matrices (numpy), shown for E001-04",
         ),
-        Condition(
-            name="gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0",
-            reference="Yang2013 (12), (20)",
-            value=f"{2 * rate:.6g} 1/s (K1 = {c.K1:g}, K2 = {c.K2:g})",
-            requirement=f">= eta = {d.eta:g}",
-            holds=bool(2 * rate >= d.eta * (1 - 1e-9)),
-            required=True,
-            basis="exact",
-            detail="underdamped loop: rate = K2/2, so K2 = eta (design.dwell_time.gains_for_decay_rate); "
+        exact(
+            "gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0",
+            "Yang2013 (12), (20)",
+            f"{2 * rate:.6g} 1/s (K1 = {c.K1:g}, K2 = {c.K2:g})",
+            f">= eta = {d.eta:g}",
+            bool(2 * rate >= d.eta * (1 - 1e-9)),
+            "underdamped loop: rate = K2/2, so K2 = eta (design.dwell_time.gains_for_decay_rate); "
             + EXACT,
         ),
-        Condition(
-            name="attitude-rate loop at least as fast: K3 >= eta/2",
-            reference="Yang2013 (13)",
-            value=f"{c.K3:g}",
-            requirement=f">= {d.eta / 2:g}",
-            holds=bool(c.K3 >= d.eta / 2),
-            required=True,
-            basis="exact",
-            detail=EXACT,
+        exact(
+            "attitude-rate loop at least as fast: K3 >= eta/2",
+            "Yang2013 (13)",
+            f"{c.K3:g}",
+            f">= {d.eta / 2:g}",
+            bool(c.K3 >= d.eta / 2),
+            EXACT,
         ),
     ]
     for f in faults(sc):
         growth = -2.0 * dw.translational_decay_rate(c.K1, f.K2_faulty)
         out.append(
-            Condition(
-                name=f"eta1 bounds the faulty growth of spacecraft {f.spacecraft}",
-                reference="Yang2013 (28)",
-                value=f"{growth:.6g} 1/s (K2f = {f.K2_faulty:g})",
-                requirement=f"<= eta1 = {d.eta1:g}",
-                holds=bool(growth <= d.eta1 * (1 + 1e-9)),
-                required=True,
-                basis="exact",
-                detail=EXACT,
+            exact(
+                f"eta1 bounds the faulty growth of spacecraft {f.spacecraft}",
+                "Yang2013 (28)",
+                f"{growth:.6g} 1/s (K2f = {f.K2_faulty:g})",
+                f"<= eta1 = {d.eta1:g}",
+                bool(growth <= d.eta1 * (1 + 1e-9)),
+                EXACT,
             )
         )
     out += [_cond(ineq) for ineq in dw.check_epsilons(d.epsilon, d.epsilon1, d.epsilon2, q["S"])]
+    dwell = dw.check_dwell_time(
+        q["min_activation_time"], d.eta, q["S"], d.zeta, q["D"], d.epsilon, d.epsilon1, d.dwell_time
+    )
     out += [
         _cond(
-            dw.check_dwell_time(
-                q["min_activation_time"],
-                d.eta,
-                q["S"],
-                d.zeta,
-                q["D"],
-                d.epsilon,
-                d.epsilon1,
-                d.dwell_time,
-            ),
+            dwell,
             detail=f"bound {q['dwell_time_required']:.1f} s; with S_2: "
             f"{q['dwell_time_required_induced2']:.1f} s; proof-consistent (S+1): "
             f"{q['dwell_time_required_proof_S_plus_1']:.1f} s (E001-07)",
@@ -275,17 +252,9 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
     ]
     for j, m in enumerate(d.modes):
         for ns in m.new_states:
-            out.append(
-                _cond(
-                    dw.check_new_state(
-                        float(np.linalg.norm(ns.vector())),
-                        d.epsilon2,
-                        d.zeta,
-                        q["D"],
-                        who=f"spacecraft {ns.spacecraft} joining mode {j + 1}",
-                    )
-                )
-            )
+            who = f"spacecraft {ns.spacecraft} joining mode {j + 1}"
+            norm = float(np.linalg.norm(ns.vector()))
+            out.append(_cond(dw.check_new_state(norm, d.epsilon2, d.zeta, q["D"], who=who)))
     d_peak, i_peak = disturbance_peaks(sc)
     d_up, i_up = disturbance_bounds(sc)
     for name, ref, peak, up, bound in (
@@ -293,43 +262,29 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
         ("|iota_i(t)| <= iota_bar", "Yang2013 (4)", i_peak, i_up, d.torque_bound),
     ):
         limit = bound * (1 + 1e-9)
-        value = f"{peak:.4g} (sampled peak)"
-        if peak > limit:
-            holds, basis, detail = False, "sampled", SAMPLED
-        elif up is not None and up <= limit:
-            holds, basis, detail = True, "verified", VERIFIED
-            value += f"; verified bound {up:.8g}"
-        else:
-            holds, basis = None, "sampled"
-            detail = (
-                "the interval bound could not prove it"
-                + (f" (reached {up:.6g})" if up is not None else "")
-                + "; "
-                + SAMPLED
-            )
+        reached = f" (reached {up:.6g})" if up is not None else ""
         out.append(
-            Condition(
-                name=name,
-                reference=ref,
-                value=value,
-                requirement=f"<= {bound:g}",
-                holds=holds,
-                required=True,
-                basis=basis,
-                detail=detail,
+            sampled_or_verified(
+                name,
+                ref,
+                f"{peak:.4g} (sampled peak)",
+                f"<= {bound:g}",
+                SAMPLED if peak > limit else None,
+                (f"; verified bound {up:.8g}", VERIFIED)
+                if up is not None and up <= limit
+                else None,
+                f"the interval bound could not prove it{reached}; {SAMPLED}",
             )
         )
     for scn, ineq, leaves in fault_conditions(sc):
         out.append(
-            Condition(
-                name=f"spacecraft {scn} leaves at the next switch (Case 1/2)",
-                reference="Yang2013 Thm 2",
-                value=str(leaves),
-                requirement="True",
-                holds=leaves,
-                required=True,
-                basis="exact",
-                detail="exact: structural zero pattern of the variation matrix",
+            exact(
+                f"spacecraft {scn} leaves at the next switch (Case 1/2)",
+                "Yang2013 Thm 2",
+                str(leaves),
+                "True",
+                leaves,
+                "exact: structural zero pattern of the variation matrix",
             )
         )
         out.append(_cond(ineq, detail=f"spacecraft {scn}: {ineq.detail}"))
