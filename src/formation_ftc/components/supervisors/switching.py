@@ -281,16 +281,12 @@ class SwitchingSupervisor(Supervisor):
 
     def signals(self):
         sc = ("spacecraft",)
+        codes = ", ".join(f"{code} {name}" for code, name in DECISION_NAMES.items())
         return (
             Signal("mode", (), "1", "active mode sigma(t) (1-based)"),
             Signal("active", sc, "1", "spacecraft in the formation (1) or not (0)"),
             Signal("desired_position", VEC, "m", "desired relative position R~^d", "F_i"),
-            Signal(
-                "supervisor_decision",
-                sc,
-                "1",
-                "supervisor decision: 0 none, 1 tolerate by switching, 2 request controller reconfiguration",
-            ),
+            Signal("supervisor_decision", sc, "1", f"supervisor decision: {codes}"),
             Signal(
                 "supervisor_decision_time", sc, "s", "time of the supervisor decision (NaN: none)"
             ),
