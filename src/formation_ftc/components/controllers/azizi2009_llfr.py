@@ -46,12 +46,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Masses, positive_values
 from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
 from formation_ftc.components.sensors.chain_relative import chain_layout
@@ -139,9 +134,8 @@ def mode_allocation_matrices(alpha, alpha_flfr, k: int | jax.Array, b_nominal, b
     alpha = jnp.asarray(alpha)
     alpha_f = alpha.at[k].set(alpha_flfr)
     alphas = jnp.stack([alpha, alpha, alpha_f])
-    b_hats = jnp.stack(
-        [jnp.asarray(b_nominal), jnp.asarray(b_hat), jnp.asarray(b_hat)]
-    )  # (3, N, axes)
+    # (3, N, axes)
+    b_hats = jnp.stack([jnp.asarray(b_nominal), jnp.asarray(b_hat), jnp.asarray(b_hat)])
     return jax.vmap(lambda a, bh: jax.vmap(lambda bcol: allocation_matrix(a, bcol), in_axes=1)(bh))(
         alphas, b_hats
     )
@@ -271,9 +265,8 @@ class ChainLlfrController(Controller):
         y = self.chain_outputs(inputs.measurement)
         e = y["position"] - chain_difference(rd)
         e_dot = y["velocity"] - chain_difference(vd)
-        p = relative_output_law(
-            e, e_dot, chain_difference(ad), self.lambda0, self.lambda1
-        )  # Sec. II
+        # Sec. II
+        p = relative_output_law(e, e_dot, chain_difference(ad), self.lambda0, self.lambda1)
         mode = LLFR if inputs.decision is None else inputs.decision
         extra = {}
         if self.fault_estimate == "estimator":
@@ -282,10 +275,8 @@ class ChainLlfrController(Controller):
         else:
             matrix = state["allocation"][mode]
         u = allocate(matrix, p)  # eq. (3)
-        if self.sampled:
-            nxt = state
-        else:  # the matrices are constant: zero derivative
-            nxt = {"allocation": jnp.zeros_like(state["allocation"])}
+        # continuous: the matrices are constant, zero derivative
+        nxt = state if self.sampled else {"allocation": jnp.zeros_like(state["allocation"])}
         return u, nxt, {"desired_position": rd, **extra}
 
     def identified_allocation(self, estimate, mode) -> tuple[jax.Array, jax.Array]:
@@ -306,26 +297,12 @@ class ChainLlfrController(Controller):
         return jax.vmap(lambda col: allocation_matrix(alpha, col), in_axes=1)(b), k
 
     def signals(self):
-        return (
-            Signal(
-                "desired_position",
-                VEC,
-                "m",
-                "desired position of the rotating formation",
-                self.frame,
-            ),
-        ) + (
-            (
-                Signal(
-                    "flfr_spacecraft",
-                    (),
-                    "1",
-                    "spacecraft (1-based) whose weight FLFR raises: the one the FDI isolated",
-                ),
-            )
-            if self.fault_estimate == "estimator"
-            else ()
-        )
+        desired = "desired position of the rotating formation"
+        sig = (Signal("desired_position", VEC, "m", desired, self.frame),)
+        if self.fault_estimate == "estimator":
+            isolated = "spacecraft (1-based) whose weight FLFR raises: the one the FDI isolated"
+            sig += (Signal("flfr_spacecraft", (), "1", isolated),)
+        return sig
 
     def coords(self):
         return {"pair": [f"{j + 1}-{j + 2}" for j in range(self.count - 1)]}
@@ -466,19 +443,6 @@ def law_gains(
     return alpha, b_nom, b_hat, k
 
 
-@functools.lru_cache(maxsize=32)
-def _design_cached(key: tuple) -> FlfrDesign:
-    from formation_ftc.core.polygon_formation import relative_acceleration_fn
-    from formation_ftc.design.flfr import design_flfr
-
-    alpha, b_hat, k, b_eps, lam0, lam1, e_s, pis, n, side, omega, axis, dt, b_ext, a_ref = key
-    w_fn = relative_acceleration_fn(n, side, omega, axis)
-    return design_flfr(
-        np.asarray(alpha), np.asarray(b_hat), k, b_eps, lam0, lam1, e_s, pis, w_fn,
-        DESIGN_HORIZON, dt, b_ext, a_ref,
-    )  # fmt: skip
-
-
 def flfr_design(
     sec: ChainLlfrSection, n: int, e_s: float, pis: tuple[float, ...] | None = None
 ) -> FlfrDesign:
@@ -517,27 +481,24 @@ def flfr_design(
     """
     if sec.faulty_spacecraft is None:
         raise ValueError("the FLFR design needs controller.faulty_spacecraft")
+    pis = (sec.violation_probability,) if pis is None else pis
+    return _design_cached(sec.model_dump_json(), n, float(e_s), tuple(float(p) for p in pis))
+
+
+@functools.lru_cache(maxsize=32)
+def _design_cached(section: str, n: int, e_s: float, pis: tuple[float, ...]) -> FlfrDesign:
+    """:func:`flfr_design` of the section given as its JSON text (a hashable cache key)."""
+    from formation_ftc.core.polygon_formation import relative_acceleration_fn
+    from formation_ftc.design.flfr import design_flfr
+
+    sec = ChainLlfrSection.model_validate_json(section)
     axis = AXES.index(sec.faulty_axis)
     alpha, _, b_hat, k = law_gains(sec, n, axis + 1)
-    pis = (sec.violation_probability,) if pis is None else pis
-    key = (
-        tuple(float(a) for a in alpha),
-        tuple(float(b) for b in b_hat[:, axis]),
-        k,
-        float(sec.b_eps),
-        float(sec.lambda0),
-        float(sec.lambda1),
-        float(e_s),
-        tuple(float(p) for p in pis),
-        n,
-        float(sec.side),
-        float(sec.omega),
-        axis,
-        float(sec.design_dt),
-        float(sec.disturbance_bound),
-        float(sec.alpha_reference),
-    )
-    return _design_cached(key)
+    w_fn = relative_acceleration_fn(n, sec.side, sec.omega, axis)
+    return design_flfr(
+        alpha, b_hat[:, axis], k, sec.b_eps, sec.lambda0, sec.lambda1, e_s, pis, w_fn,
+        DESIGN_HORIZON, sec.design_dt, sec.disturbance_bound, sec.alpha_reference,
+    )  # fmt: skip
 
 
 def _alpha_flfr(sec: ChainLlfrSection, ctx: BuildContext, alpha: np.ndarray, k: int) -> float:

@@ -209,9 +209,8 @@ def synchronisation_torque(s, avg, K, alpha, gamma, law: str = "literal"):
     if law == "literal":
         return own + 0.5 * a * K * s_avg  # (8) first line, E003-01
     if law == "diffusive":
-        return own - 0.5 * a * K * (
-            avg.sum(axis=1, keepdims=True) * s - s_avg
-        )  # E003-01 alternative
+        # E003-01 alternative
+        return own - 0.5 * a * K * (avg.sum(axis=1, keepdims=True) * s - s_avg)
     raise ValueError(f"unknown law {law!r}; valid: {LAWS}")
 
 
@@ -464,31 +463,14 @@ class NetworkedElHinfController(Controller):
             flag = u_star = jnp.zeros((self.count, 3))
         else:
             flag, u_star = inputs.estimate.flag, inputs.estimate.estimate
-        p = {
-            "K": self.K,
-            "K_P": self.K_P,
-            "K_I": self.K_I,
-            "alpha": self.alpha,
-            "gamma": self.gamma,
-            "phi_b": self.boundary_layer,
-            "avg": self.avg,
-        }
+        p = {k: getattr(self, k) for k in ("K", "K_P", "K_I", "alpha", "gamma", "avg")}
+        p["phi_b"] = self.boundary_layer
+        J, cfg = self.nominal_inertia, ELHinfConfig(self.law, self.compensation)
         ctl = control(
-            q,
-            qdot,
-            state["z"],
-            state["u_hat"],
-            flag,
-            d["e"],
-            d["e_dot"],
-            d["e_ddot"],
-            self.nominal_inertia,
-            p,
-            ELHinfConfig(self.law, self.compensation),
+            q, qdot, state["z"], state["u_hat"], flag, d["e"], d["e_dot"], d["e_ddot"], J, p, cfg
         )  # (6) + (8) + (18)
-        u_hat_dot = adaptation_rate(
-            ctl.s, state["u_hat"], u_star, flag, self.sigma, self.e_gain
-        )  # (19)
+        # (19)
+        u_hat_dot = adaptation_rate(ctl.s, state["u_hat"], u_star, flag, self.sigma, self.e_gain)
         qt = ctl.q_tilde
         outputs = {
             "sliding_variable": ctl.s,
@@ -499,8 +481,7 @@ class NetworkedElHinfController(Controller):
         if self.excited:  # the stated test signal: part of the command every model on board knows
             u = u + excitation(t, self.excitation_amplitude, self.excitation_period)
         if self.links:
-            j = jnp.asarray([a for a, _ in self.links])
-            n = jnp.asarray([b for _, b in self.links])
+            j, n = jnp.asarray(self.links).T
             outputs["synchronisation_error"] = qt[j] - qt[n]
         return u, {"z": qt, "u_hat": u_hat_dot}, outputs
 

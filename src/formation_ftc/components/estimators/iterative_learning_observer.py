@@ -54,12 +54,7 @@ import numpy as np
 from pydantic import AfterValidator, Field, field_validator, model_validator
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    component_type,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, component_type, register
 from formation_ftc.components._sections import Vec3, nominal_masses, onboard_mean_motion
 from formation_ftc.components.estimators.relative_navigation_filter import (
     RelativeNavigationSection,
@@ -325,9 +320,8 @@ class IterativeLearningObserver(Estimator):
     fault_prehistory: Any = 0.0  # F_hat(t), t < 0, (N, 3) [m/s^2]
     learning_steps: int = static(default=1)  # m = tau / dt
     sign_term: bool = static(default=True)
-    mean_steps: int = static(
-        default=1
-    )  # steps averaged by fault_estimate_mean (the record interval)
+    #: steps averaged by fault_estimate_mean (the record interval)
+    mean_steps: int = static(default=1)
     #: built without a mean motion (none stated, no [reference] orbit): a placeholder the loop refuses
     mean_motion_missing: bool = static(default=False)
 
@@ -367,19 +361,9 @@ class IterativeLearningObserver(Estimator):
 
     def predict(self, t, state, command, dt):
         A, B = cw_matrices_jax(self.mean_motion)
-        q_hat = ilo_propagate(
-            state["q_hat"],
-            command,
-            state["F_hat"],
-            state["e_y"],
-            A,
-            B,
-            B,
-            self.L1,
-            self.gamma,
-            dt,
-            self.sign_term,
-        )  # (5), H = B
+        q, F, e = state["q_hat"], state["F_hat"], state["e_y"]
+        # (5), H = B
+        q_hat = ilo_propagate(q, command, F, e, A, B, B, self.L1, self.gamma, dt, self.sign_term)
         return {**state, "q_hat": q_hat}
 
     def _estimate(self, state):
@@ -642,10 +626,8 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
 
     m = learning_interval_steps(sec.learning_interval, ctx.dt, "estimator.learning_interval")
     n = onboard_mean_motion(sec.mean_motion, ctx.section("reference"))
-    if n is None:  # a placeholder without a design: validation names the missing orbit
-        L1, L2 = np.zeros((6, 6)), np.zeros((3, 6))
-    else:
-        L1, L2 = sec.gains_at(n)
+    # without a mean motion: a placeholder without a design (validation names the missing orbit)
+    L1, L2 = (np.zeros((6, 6)), np.zeros((3, 6))) if n is None else sec.gains_at(n)
     N = ctx.count
     q_hat0 = np.asarray(sec.initial_estimate, dtype=float)
     if q_hat0.ndim == 1:
@@ -681,20 +663,19 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
     est = filtered(est, sec.navigation, ctx, mass)
     if "thruster-bias-faults" in _actuator_provides(ctx):  # F recorded as the signal fault
         fault = "fault"
-        if force_loop:
-            true_mass = getattr(ctx.section("plant"), "mass", None)
-            if true_mass is not None:
-                ctx.evaluations.append(
-                    PerUnitMass(
-                        "fault_acceleration",
-                        "fault",
-                        mass=as_float(true_mass),
-                        dims=VEC,
-                        long_name="true thruster fault per unit true mass F_i / m_i",
-                        frame="LVLH",
-                    )
+        true_mass = getattr(ctx.section("plant"), "mass", None)
+        if force_loop and true_mass is not None:
+            ctx.evaluations.append(
+                PerUnitMass(
+                    "fault_acceleration",
+                    "fault",
+                    mass=as_float(true_mass),
+                    dims=VEC,
+                    long_name="true thruster fault per unit true mass F_i / m_i",
+                    frame="LVLH",
                 )
-                fault = "fault_acceleration"
+            )
+            fault = "fault_acceleration"
         ctx.evaluations.append(
             SignalSum(
                 "fault_error",

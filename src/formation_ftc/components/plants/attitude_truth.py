@@ -28,7 +28,7 @@ from formation_ftc.components.plants._rigid_body import (
     RigidBodyAttitudeSection,
     RigidBodyTorquePlant,
 )
-from formation_ftc.core.constants import MU_EARTH
+from formation_ftc.core.constants import MU_EARTH, R_EARTH
 from formation_ftc.core.dynamics.gravity_gradient import (
     attitude_relative_to_lvlh,
     gravity_gradient_torque_unit,
@@ -38,13 +38,7 @@ from formation_ftc.core.dynamics.gravity_gradient import (
 )
 from formation_ftc.core.quaternion import quat_kinematics, quat_multiply, rotation_matrix
 from formation_ftc.core.vector3 import norm3
-from formation_ftc.sim.components import (
-    CompositionError,
-    Signal,
-    TruthInputs,
-    component,
-    static,
-)
+from formation_ftc.sim.components import CompositionError, Signal, TruthInputs, component, static
 from formation_ftc.sim.contract import as_float
 
 __all__ = [
@@ -179,14 +173,10 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
         total = -jnp.cross(omega, jnp.einsum("nij,nj->ni", J, omega)) + torque
         if self.gravity_gradient:
             total = total + self.gravity_gradient_torque(t, q)
-        omega_dot = jnp.einsum(
-            "nij,nj->ni", batched_inverse_3x3(J), total
-        )  # J w' = -w x J w + tau_gg + tau + iota
-        if self._lvlh():
-            return {
-                "omega": omega_dot + n * jnp.cross(w, o_b),
-                "q": quat_kinematics(q, w),
-            }  # w_r' = w' + n w_r x o_b
+        # J w' = -w x J w + tau_gg + tau + iota
+        omega_dot = jnp.einsum("nij,nj->ni", batched_inverse_3x3(J), total)
+        if self._lvlh():  # w_r' = w' + n w_r x o_b
+            return {"omega": omega_dot + n * jnp.cross(w, o_b), "q": quat_kinematics(q, w)}
         return {"omega": omega_dot, "q": quat_kinematics(q, omega)}
 
     def inertial_and_lvlh(self, t, x):
@@ -262,8 +252,6 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
         }
 
 
-EARTH_RADIUS = 6_378_137.0  # equatorial radius [m] (WGS 84), lower bound of the orbit radius
-
 Mat3 = tuple[Vec3, Vec3, Vec3]
 
 
@@ -283,7 +271,7 @@ class AttitudeTruthSection(RigidBodyAttitudeSection):
     )
     semi_major_axis: float = Field(
         7.0e6,
-        ge=EARTH_RADIUS,
+        ge=R_EARTH,
         le=1.0e9,
         description="Radius of the circular orbit [m] (>= the Earth's equatorial radius).",
     )
@@ -335,11 +323,11 @@ class AttitudeTruthSection(RigidBodyAttitudeSection):
 
     def inertia_tensor(self) -> np.ndarray:
         """(N, 3, 3) inertia of every spacecraft [kg m^2]."""
-        n = self.count
-        if self.inertia_matrices is None:
-            return np.broadcast_to(np.diag(np.asarray(self.inertia, float)), (n, 3, 3)).copy()
-        mats = np.asarray(self.inertia_matrices, dtype=float)
-        return np.broadcast_to(mats, (n, 3, 3)).copy()
+        given = self.inertia_matrices
+        mats = (
+            np.diag(np.asarray(self.inertia, float)) if given is None else np.asarray(given, float)
+        )
+        return np.broadcast_to(mats, (self.count, 3, 3)).copy()
 
 
 def _check_inertia(m: np.ndarray, field: str) -> None:
@@ -357,10 +345,6 @@ def _check_inertia(m: np.ndarray, field: str) -> None:
             f"{field}: principal inertias {eig[0]:.6g}, {eig[1]:.6g}, {eig[2]:.6g} kg m^2 violate "
             "the triangle inequality J1 + J2 >= J3 of a rigid body"
         )
-
-
-def _rz_quaternion(u: float) -> np.ndarray:
-    return np.array([0.0, 0.0, math.sin(0.5 * u), math.cos(0.5 * u)])
 
 
 def _quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -420,7 +404,9 @@ def initial_state_in(sec: AttitudeTruthSection, frame: str) -> tuple[np.ndarray,
         return w, q
     u0 = math.radians(sec.initial_argument_of_latitude_deg)
     sign = 1.0 if frame == "inertial" else -1.0  # lvlh -> inertial, or back
-    q_new = _quat_mul(np.broadcast_to(_rz_quaternion(sign * u0), q.shape), q)
+    u = sign * u0
+    rz = np.array([0.0, 0.0, math.sin(0.5 * u), math.cos(0.5 * u)])  # q_z(u)
+    q_new = _quat_mul(np.broadcast_to(rz, q.shape), q)
     w_new = w + sign * sec.orbit_rate() * _orbit_normal_in_body(q)
     return w_new, q_new
 

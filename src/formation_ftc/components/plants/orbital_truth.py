@@ -19,12 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, model_validator
 
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import (
     Vec3,
     Vec3Expr,
@@ -56,6 +51,8 @@ __all__ = ["InertialFormationPlant", "OrbitalTruthSection"]
 
 VEC = ("spacecraft", "axis")
 _SUN_X = np.array([1.0, 0.0, 0.0])
+#: the section's fields of the chief's classical elements, in the order of ``chief_elements``
+CHIEF_ELEMENTS = "semi_major_axis eccentricity inclination raan arg_perigee true_anomaly".split()
 
 
 @component
@@ -94,12 +91,10 @@ class InertialFormationPlant(Plant):
     chief_ballistic_coefficient: Any  # () C_D A / m of the virtual chief [m^2/kg]
     srp_coefficient: Any  # (N,) C_R A / m [m^2/kg]
     chief_srp_coefficient: Any  # () [m^2/kg]
-    sun_direction: Any = dataclasses.field(
-        default_factory=lambda: _SUN_X.copy()
-    )  # (3,) ECI direction towards the Sun [-]
-    density_table: Any = dataclasses.field(
-        default_factory=EXPONENTIAL_ATMOSPHERE.copy
-    )  # (K, 3) [h_0 m, rho_0 kg/m^3, H m]
+    #: (3,) ECI direction towards the Sun [-]
+    sun_direction: Any = dataclasses.field(default_factory=lambda: _SUN_X.copy())
+    #: (K, 3) [h_0 m, rho_0 kg/m^3, H m]
+    density_table: Any = dataclasses.field(default_factory=EXPONENTIAL_ATMOSPHERE.copy)
     mu: Any = MU_EARTH  # [m^3/s^2]
     j2_coefficient: Any = J2_EARTH  # [-]
     earth_radius: Any = R_EARTH  # [m]
@@ -127,11 +122,9 @@ class InertialFormationPlant(Plant):
         chief = elements_to_eci(el[0], el[1], el[2], el[3], el[4], el[5], self.mu)
         if self.initial_roe is not None:
             deputies = elements_to_eci(*roe_to_elements(tuple(el), self.initial_roe), self.mu)
-            return {"chief": chief, "deputies": deputies}
-        return {
-            "chief": chief,
-            "deputies": lvlh_to_eci(chief, self.initial_state_lvlh + self.dispersion()),
-        }
+        else:
+            deputies = lvlh_to_eci(chief, self.initial_state_lvlh + self.dispersion())
+        return {"chief": chief, "deputies": deputies}
 
     def dispersion(self):
         """(N, 6) LVLH initial-state dispersion [m, m/s]: standard normal draws from ``dispersion_seed``
@@ -336,27 +329,23 @@ class OrbitalTruthSection(StrictModel):
         n = len(self.mass)
         if n < 1 or any(not (m > 0 and math.isfinite(m)) for m in self.mass):
             raise ValueError("mass: at least one spacecraft, every mass finite and > 0 kg")
-        if (self.initial_position is None) == (self.initial_roe is None):
+        roe = self.initial_roe
+        if (self.initial_position is None) == (roe is None):
             raise ValueError(
                 "initial_position: give either initial_position (LVLH offsets) or initial_roe"
             )
-        if self.initial_roe is not None and (
-            self.initial_position_std > 0 or self.initial_velocity_std > 0
-        ):
+        if roe is not None and (self.initial_position_std > 0 or self.initial_velocity_std > 0):
             raise ValueError(
                 "initial_position_std / initial_velocity_std: a dispersion applies to LVLH initial "
                 "conditions (initial_position), not to initial_roe"
             )
-        if self.initial_roe is not None and self.initial_velocity is not None:
+        if roe is not None and self.initial_velocity is not None:
             raise ValueError(
                 "initial_velocity: not used with initial_roe (the elements fix the velocity)"
             )
         check_rows(self, ["initial_position", "initial_velocity", "initial_roe"], n)
-        if (
-            self.initial_roe is not None
-            and any(r[5] != 0 for r in self.initial_roe)
-            and abs(math.sin(self.inclination)) < 1e-6
-        ):
+        equatorial = abs(math.sin(self.inclination)) < 1e-6
+        if roe is not None and any(r[5] != 0 for r in roe) and equatorial:
             raise ValueError(
                 "initial_roe: diy != 0 needs an inclined chief (sin(inclination) = 0 here)"
             )
@@ -392,28 +381,15 @@ def _build(sec: OrbitalTruthSection, ctx: BuildContext) -> InertialFormationPlan
     n = sec.count
     b = per_spacecraft(sec.ballistic_coefficient, n, "plant.ballistic_coefficient")
     c = per_spacecraft(sec.srp_coefficient, n, "plant.srp_coefficient")
-    b_c = (
-        float(np.mean(b))
-        if sec.chief_ballistic_coefficient is None
-        else sec.chief_ballistic_coefficient
-    )
-    c_c = float(np.mean(c)) if sec.chief_srp_coefficient is None else sec.chief_srp_coefficient
-    elements = [
-        sec.semi_major_axis,
-        sec.eccentricity,
-        sec.inclination,
-        sec.raan,
-        sec.arg_perigee,
-        sec.true_anomaly,
-    ]
+    b_c, c_c = sec.chief_ballistic_coefficient, sec.chief_srp_coefficient  # default: the means
     return InertialFormationPlant(
         mass=as_float(sec.mass),
-        chief_elements=as_float(elements),
+        chief_elements=as_float([getattr(sec, name) for name in CHIEF_ELEMENTS]),
         initial_state_lvlh=as_float(sec.q0()),
         ballistic_coefficient=as_float(b),
-        chief_ballistic_coefficient=as_float(b_c),
+        chief_ballistic_coefficient=as_float(np.mean(b) if b_c is None else b_c),
         srp_coefficient=as_float(c),
-        chief_srp_coefficient=as_float(c_c),
+        chief_srp_coefficient=as_float(np.mean(c) if c_c is None else c_c),
         sun_direction=as_float(sec.sun_direction),
         density_table=as_float(sec.density_table()),
         mu=as_float(sec.mu),

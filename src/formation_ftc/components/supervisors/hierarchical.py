@@ -97,13 +97,7 @@ def initial_state() -> HlState:
     True
     """
     z = jnp.asarray(0, jnp.int64)
-    return HlState(
-        mode=jnp.asarray(NOMINAL, jnp.int64),
-        violations=z,
-        mode_changes=z,
-        flfr_steps=z,
-        time_in_flfr=jnp.asarray(0.0),
-    )
+    return HlState(jnp.asarray(NOMINAL, jnp.int64), z, z, z, time_in_flfr=jnp.asarray(0.0))
 
 
 def transition(
@@ -165,13 +159,7 @@ def transition(
     mode2 = jnp.where(to_flfr, FLFR, mode1)
     changes = state.mode_changes + (mode2 != mode).astype(jnp.int64)
     flfr_steps = jnp.where(mode2 == FLFR, state.flfr_steps + 1, 0)
-    return HlState(
-        mode=mode2,
-        violations=violations,
-        mode_changes=changes,
-        flfr_steps=flfr_steps,
-        time_in_flfr=flfr_steps * dt,
-    )
+    return HlState(mode2, violations, changes, flfr_steps, time_in_flfr=flfr_steps * dt)
 
 
 # ------------------------------------------------------------------------------------------ component
@@ -230,19 +218,12 @@ class HierarchicalSupervisor(Supervisor):
         return initial_state()
 
     def update(self, t, state, inputs: FlightInputs):
-        k = inputs.step.k
+        k, dt = inputs.step.k, inputs.step.dt
         rd, _, _ = rotating_polygon(t, self.count, self.n_axes, self.side, self.omega)
         e = self._chain_position(inputs.measurement) - chain_difference(rd)
+        e_max, k_est = jnp.max(jnp.abs(e)), self._k_estimated(k, inputs.estimate)
         new = transition(
-            state,
-            k,
-            jnp.max(jnp.abs(e)),
-            self._k_estimated(k, inputs.estimate),
-            self.e_s,
-            self.confirm_steps,
-            self.monitor_start,
-            self.flfr,
-            inputs.step.dt,
+            state, k, e_max, k_est, self.e_s, self.confirm_steps, self.monitor_start, self.flfr, dt
         )
         return new, new.mode
 
@@ -272,17 +253,12 @@ class HierarchicalSupervisor(Supervisor):
         return jnp.where(detected, k, NEVER)
 
     def signals(self):
+        modes = ", ".join(f"{j} = {m}" for j, m in enumerate(MODE_NAMES))
+        in_flfr = "time spent in FLFR (the switch step counts as one step)"
         return (
-            Signal(
-                "mode",
-                (),
-                "1",
-                "HL supervisor mode: " + ", ".join(f"{j} = {m}" for j, m in enumerate(MODE_NAMES)),
-            ),
+            Signal("mode", (), "1", f"HL supervisor mode: {modes}"),
             Signal("mode_changes", (), "1", "number of mode changes so far"),
-            Signal(
-                "time_in_flfr", (), "s", "time spent in FLFR (the switch step counts as one step)"
-            ),
+            Signal("time_in_flfr", (), "s", in_flfr),
         )
 
     def outputs(self, t, state, decision):

@@ -62,6 +62,8 @@ __all__ = [
 ]
 
 
+VEC = ("spacecraft", "axis")
+
 # ------------------------------------------------------------------------------------- equations
 NO_DECISION = 0
 TOLERATE_BY_SWITCHING = 1
@@ -185,9 +187,8 @@ class SwitchDecision(NamedTuple):
     """The supervisor's decision in force over one step."""
 
     mode: jax.Array  # index of the mode in force (0-based)
-    next_mode: (
-        jax.Array
-    )  # index of the mode in force from the end of the step (a switch if != mode)
+    #: index of the mode in force from the end of the step (a switch if != mode)
+    next_mode: jax.Array
     active: jax.Array  # (N,) 1 for the spacecraft of the mode, 0 for the others
     reconfigure: jax.Array  # (N,) bool: controller reconfiguration requested (decision 2)
     desired_position: jax.Array  # (N, 3) desired relative positions R~^d(t) of the mode [m]
@@ -280,22 +281,12 @@ class SwitchingSupervisor(Supervisor):
 
     def signals(self):
         sc = ("spacecraft",)
+        codes = ", ".join(f"{code} {name}" for code, name in DECISION_NAMES.items())
         return (
             Signal("mode", (), "1", "active mode sigma(t) (1-based)"),
             Signal("active", sc, "1", "spacecraft in the formation (1) or not (0)"),
-            Signal(
-                "desired_position",
-                ("spacecraft", "axis"),
-                "m",
-                "desired relative position R~^d",
-                "F_i",
-            ),
-            Signal(
-                "supervisor_decision",
-                sc,
-                "1",
-                "supervisor decision: 0 none, 1 tolerate by switching, 2 request controller reconfiguration",
-            ),
+            Signal("desired_position", VEC, "m", "desired relative position R~^d", "F_i"),
+            Signal("supervisor_decision", sc, "1", f"supervisor decision: {codes}"),
             Signal(
                 "supervisor_decision_time", sc, "s", "time of the supervisor decision (NaN: none)"
             ),
@@ -496,7 +487,7 @@ class SwitchingSupervisorSection(StrictModel):
                 f"modes[{j}].new_states has {n_new} states but the mode has only "
                 f"{len(m.members)} members"
             )
-        S = np.eye(len(prev)) if m.variation is None else np.asarray(m.variation, dtype=float)
+        S = self.variation(j)
         if m.variation is None and list(m.members[:n_rows]) != list(prev):
             raise ValueError(
                 f"modes[{j}].variation is required: members {m.members} differ from the "
@@ -525,14 +516,14 @@ class SwitchingSupervisorSection(StrictModel):
                 f"{m.members[n_rows:]} in order"
             )
 
+    def variation(self, j: int) -> np.ndarray:
+        """S_ij of the switch mode j-1 -> j (the identity when omitted)."""
+        given = self.modes[j].variation
+        return np.eye(len(self.modes[j - 1].members)) if given is None else np.asarray(given, float)
+
     def variation_matrices(self) -> list[np.ndarray]:
         """S_ij for every switch (mode j-1 -> j), j = 1..n_modes-1."""
-        return [
-            np.eye(len(self.modes[j - 1].members))
-            if self.modes[j].variation is None
-            else np.asarray(self.modes[j].variation, dtype=float)
-            for j in range(1, len(self.modes))
-        ]
+        return [self.variation(j) for j in range(1, len(self.modes))]
 
     def switch_times(self) -> list[float]:
         """t_k: the start of every mode [s]."""
@@ -589,19 +580,18 @@ def switched_structure(sec: SwitchingSupervisorSection, count: int, dt: float) -
     """
     modes = sec.modes
     n_modes = len(modes)
+    active = np.zeros((n_modes, count), dtype=bool)
     for j, m in enumerate(modes):
         if max(m.members) > count:
             raise ValueError(
                 f"supervisor.modes[{j}].members: spacecraft {max(m.members)} exceeds plant.count "
                 f"= {count}"
             )
+        active[j, [s - 1 for s in m.members if s > 0]] = True
     switch_steps = np.array(
         [grid_steps(m.start, dt, f"supervisor.modes[{j}].start") for j, m in enumerate(modes)],
         dtype=np.int64,
     )
-    active = np.zeros((n_modes, count), dtype=bool)
-    for j, m in enumerate(modes):
-        active[j, [s - 1 for s in m.members if s > 0]] = True
     P = np.zeros((n_modes, count, count))
     P[0] = np.eye(count)
     xstar = np.zeros((n_modes, count, STATE_DIM))
