@@ -50,7 +50,7 @@ from formation_ftc.sim.components import (
     tree_take,
 )
 from formation_ftc.sim.contract import capability
-from formation_ftc.sim.engine import run_fixed_step
+from formation_ftc.sim.engine import _all_finite, run_fixed_step
 
 __all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL", "NAVIGATION_ESTIMATE"]
 
@@ -99,9 +99,9 @@ def _once(k, values):
     )
 
 
-def _held(k, values):
-    """:func:`_once` when the step index ``k`` is known, else ``values`` as they are."""
-    return values if k is None else _once(k, values)
+def _rk4_increment(dt, a, b, c, d):
+    """The RK4 increment over a step ``dt`` from the stage slopes (or integrands) ``a .. d``."""
+    return (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
 
 
 @component
@@ -215,7 +215,7 @@ class ClosedLoop:
             raise CompositionError(
                 f"two components record a signal with the same name: {', '.join(dup)}"
             )
-        recorded = {sig.name for sig in self.signals()}
+        recorded = set(recorded_names)
         for m in self.metrics:
             if m.formula is not None:  # an STL requirement: the signals its atoms read
                 from formation_ftc.sim.stl import parse, signals_of
@@ -291,14 +291,12 @@ class ClosedLoop:
                     "LVLH",
                 ),
             )
+        # slot order, the loop's own signals just before the actuator's
+        flight = tuple(
+            sig for slot, c in self._slots() if slot != "actuator" for sig in c.signals()
+        )
         return (
-            tuple(self.plant.signals())
-            + tuple(self.reference.signals())
-            + tuple(self.sensors.signals())
-            + tuple(self.network.signals())
-            + tuple(self.estimator.signals())
-            + tuple(self.supervisor.signals())
-            + tuple(self.controller.signals())
+            flight
             + own
             + tuple(self.actuator.signals())
             + tuple(sig for ev in self.evaluations for sig in ev.signals())
@@ -340,10 +338,11 @@ class ClosedLoop:
         n = ts.shape[0]
         # the first step's table is asked for without its index: k = 0 there
         step = StepContext(jnp.asarray(0 if k is None else k, dtype=jnp.int64), t_k, dt)
-        for s in held:  # sampled at t_k, held over the step (zero-order hold)
+        for s in held:  # sampled at t_k, held over the step (zero-order hold), computed once with k
+            values = getattr(self, s).held_exogenous(step)
             table[s] = jax.tree_util.tree_map(
                 lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
-                _held(k, getattr(self, s).held_exogenous(step)),
+                values if k is None else _once(k, values),
             )
         return table
 
@@ -377,21 +376,14 @@ class ClosedLoop:
         with a :data:`NAVIGATION_ESTIMATE` entry (an FDI that also navigates) gives that entry in place
         of the measurement and the whole estimate besides."""
         if self.estimator.navigation:
-            return self._flight(est, None, None, decision, exo, ref, sc)
+            return self._flight(est, None, decision, exo, ref, sc)
         if isinstance(est, Mapping) and NAVIGATION_ESTIMATE in est:  # it navigates as well
-            return self._flight(est[NAVIGATION_ESTIMATE], None, est, decision, exo, ref, sc)
-        return self._flight(y, None, est, decision, exo, ref, sc)
+            return self._flight(est[NAVIGATION_ESTIMATE], est, decision, exo, ref, sc)
+        return self._flight(y, est, decision, exo, ref, sc)
 
-    def _flight(self, y, received, est, decision, exo, ref, sc):
-        return FlightInputs(
-            measurement=y,
-            received=received,
-            estimate=est,
-            decision=decision,
-            exogenous=exo,
-            reference=ref,
-            step=sc,
-        )
+    def _flight(self, y, est, decision, exo, ref, sc):
+        """Flight inputs with nothing received yet (:meth:`_received` adds the network's messages)."""
+        return FlightInputs(y, None, est, decision, exo, ref, sc)
 
     def _received(self, t, flight, net_state, sc, exo_network):
         """``flight`` with the messages the network delivers at ``t`` (as it is without a network)."""
@@ -434,18 +426,6 @@ class ClosedLoop:
         outputs[APPLIED_SIGNAL] = applied
         return deriv, outputs
 
-    def _discrete(self, sc, state, y, exo0, ref0):
-        """Steps (3)-(4) at t_k: estimator and supervisor updates."""
-        est_state, est = self.estimator.update(
-            sc.t, state["estimator"], self._flight(y, None, None, None, exo0["estimator"], ref0, sc)
-        )
-        sup_state, dec = self.supervisor.update(
-            sc.t,
-            state["supervisor"],
-            self._flight(y, None, est, None, exo0["supervisor"], ref0, sc),
-        )
-        return est_state, est, sup_state, dec
-
     def _start(self, sc: StepContext, state: dict, exo0, ref0, s_noise):
         """Steps (1)-(5) at t_k, shared by :meth:`step` and :meth:`observe`: the measurement, the
         estimator and supervisor updates, the message of t_k pushed into the network history and the
@@ -453,7 +433,13 @@ class ClosedLoop:
         y = self.sensors.measure(
             sc.t, self.plant.sensed_state(state["plant"]), SensorInputs(s_noise, ref0)
         )
-        est_state, est, sup_state, dec = self._discrete(sc, state, y, exo0, ref0)
+        # (3)-(4) the estimator and supervisor updates
+        est_state, est = self.estimator.update(
+            sc.t, state["estimator"], self._flight(y, None, None, exo0["estimator"], ref0, sc)
+        )
+        sup_state, dec = self.supervisor.update(
+            sc.t, state["supervisor"], self._flight(y, est, None, exo0["supervisor"], ref0, sc)
+        )
         est = _once(sc.k, est)  # an estimate (a noisy FDI report, ...) is held over the step
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):
@@ -488,15 +474,14 @@ class ClosedLoop:
             actuator=self.actuator.initial_state(),
             usage={name: jnp.zeros(self.plant.usage_shape()) for name in self.plant.usage_names()},
         )
+        state["network"] = None
         if not isinstance(self.network, NoNetwork):
             exo0 = tree_take(self._time_table(t0, first_only=True), 0)
             sc0 = self._step_context(jnp.asarray(0, dtype=jnp.int64))
             msg0 = self.controller.message(
-                t0, self._flight(y0, None, None, None, exo0["controller"], ref0, sc0)
+                t0, self._flight(y0, None, None, exo0["controller"], ref0, sc0)
             )
             state["network"] = self.network.initial_state(msg0)
-        else:
-            state["network"] = None
         return state
 
     def step(self, k, state: dict) -> tuple[dict, dict]:
@@ -529,19 +514,10 @@ class ClosedLoop:
         def stage_signals(o: dict) -> dict:
             return o if held_signals is None else self._evaluated({**o, **held_signals})
 
+        held_over_step = (s_noise, p_noise, est, dec, net_state, sc, held, state["actuator"])
+
         def ctx(j):
-            return (
-                exos[j],
-                refs[j],
-                s_noise,
-                p_noise,
-                est,
-                dec,
-                net_state,
-                sc,
-                held,
-                state["actuator"],
-            )
+            return (exos[j], refs[j], *held_over_step)
 
         z = {
             "plant": x,
@@ -554,11 +530,9 @@ class ClosedLoop:
             x_next = self.plant.exact_step(
                 t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt
             )
-            z_next = {
-                "plant": x_next,
-                "controller": None,
-                "usage": _axpy(dt, deriv["usage"], z["usage"]),
-            }
+            z_next = dict(
+                plant=x_next, controller=None, usage=_axpy(dt, deriv["usage"], z["usage"])
+            )
             if self._stage_metrics():  # rectangle rule over the step
                 stage_inc = tuple(
                     None if v is None else dt * v
@@ -570,22 +544,17 @@ class ClosedLoop:
             k3, o3 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
             k4, o4 = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
             z_next = jax.tree_util.tree_map(
-                lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d),
-                z,
-                k1,
-                k2,
-                k3,
-                k4,
+                lambda xi, *slopes: xi + _rk4_increment(dt, *slopes), z, k1, k2, k3, k4
             )
             # integrals of stage-integrated metrics over the step (RK4 weights)
             if self._stage_metrics():
-                v1, v2, v3, v4 = (
+                values = [
                     metric_ops.stage_values(self._streamed, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
-                )
+                ]
                 stage_inc = tuple(
-                    None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
-                    for a, b, c, d in zip(v1, v2, v3, v4, strict=True)
+                    None if a is None else _rk4_increment(dt, a, b, c, d)
+                    for a, b, c, d in zip(*values, strict=True)
                 )
         act_state = self.actuator.update(
             t_k,
@@ -706,12 +675,9 @@ class ClosedLoop:
                 metric_ops.unpack_samples(self._streamed, shapes, samples),
             )
 
-        def observe(k, carry):
-            return self.observe(k, carry[0])
-
         out = run_fixed_step(
             step,
-            observe,
+            lambda k, carry: self.observe(k, carry[0]),
             (state0, acc0),
             self.n_steps,
             self.record_every,
@@ -808,8 +774,6 @@ class ClosedLoop:
     def admissible(self, carry) -> jax.Array:
         """True while the checked state (plant, controller, estimator) is finite and every bounded
         truth quantity is within its bound."""
-        from formation_ftc.sim.engine import _all_finite
-
         c = carry[0]
         ok = _all_finite((c["plant"], c["controller"], c["estimator"]))
         for _, mag, bound in self._bounded(carry[0]["plant"]):
@@ -821,18 +785,15 @@ class ClosedLoop:
 
     def violations(self, carry) -> list[tuple[str, tuple[int, ...], int | None]]:
         """(variable, index, spacecraft) of every bounded quantity outside its bound (numpy side)."""
-        out = []
-        for name, mag, bound in self._bounded(carry[0]["plant"]):
-            bad = np.argwhere(np.asarray(mag) > np.asarray(bound))
-            for idx in bad:
-                out.append(
-                    (
-                        f"{name} (|.| > {float(np.asarray(bound)):g})",
-                        tuple(int(i) for i in idx),
-                        int(idx[0]) if len(idx) else None,
-                    )
-                )
-        return out
+        return [
+            (
+                f"{name} (|.| > {float(np.asarray(bound)):g})",
+                tuple(map(int, idx)),
+                int(idx[0]) if len(idx) else None,
+            )
+            for name, mag, bound in self._bounded(carry[0]["plant"])
+            for idx in np.argwhere(np.asarray(mag) > np.asarray(bound))
+        ]
 
     # ------------------------------------------------------------------ results (numpy side)
     @property
