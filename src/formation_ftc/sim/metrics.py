@@ -176,10 +176,8 @@ class Metric:
             v = v * v
         elif self.norm and self.norm_ord == "inf":
             v = jnp.max(jnp.abs(v), axis=-1)
-        elif self.norm:
+        elif self.norm:  # Euclidean, not squared (the squared norm is the sum above)
             v = jnp.sqrt(jnp.sum(v * v, axis=-1))
-            if self.square:
-                v = v * v
         if self.spacecraft in _SPACECRAFT:
             v = _SPACECRAFT[self.spacecraft](v)
         each = self.spacecraft == "each"
@@ -393,7 +391,12 @@ def update_accumulators(
     >>> [round(float(v), 6) for v in finalize(ms, accs)]
     [3.0, 2.0, 0.6]
     """
-    return _apply(metrics, accs, t, dt, sample_values(metrics, signals, is_final), is_final)
+    return _each_group(
+        metrics,
+        accs,
+        sample_values(metrics, signals, is_final),
+        lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final),
+    )
 
 
 def reads_steps(m: Metric) -> bool:
@@ -558,34 +561,20 @@ def sample_values(
     >>> [(np.asarray(v), gate) for v, gate in slot]  # one (values, gate) per group
     [(array([2.]), None), (array([2.]), None)]
     """
-    out: list[Any] = []
-    for _, groups in _classes(metrics):
-        if not isinstance(groups[0][1], _Stack):
-            out.append(None)
-            continue
-        vals: list[Any] = []
-        for _, g in groups:
-            if g.reduce == "last" and not is_final:
-                vals.append(None)
-                continue
-            gate = None if g.gate is None else jnp.asarray(signals[g.gate]) > 0
-            vals.append((g.value(signals), gate))
-        out.append(tuple(vals))
-    return tuple(out)
-
-
-def _apply(
-    metrics: Sequence[Metric],
-    accs: tuple,
-    t: jax.Array | float,
-    dt: float,
-    values: tuple,
-    is_final: bool = False,
-) -> tuple:
-    """Fold one sample's :func:`sample_values` (taken at time ``t``) into the accumulators."""
-    return _each_group(
-        metrics, accs, values, lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final)
+    return tuple(
+        tuple(_group_sample(g, signals, is_final) for _, g in groups)
+        if isinstance(groups[0][1], _Stack)
+        else None
+        for _, groups in _classes(metrics)
     )
+
+
+def _group_sample(g: _Stack, signals: Mapping[str, jax.Array], is_final: bool) -> Any:
+    """A group's ``(values, gate)`` of one sample (None for ``last`` before the horizon)."""
+    if g.reduce == "last" and not is_final:
+        return None
+    gate = None if g.gate is None else jnp.asarray(signals[g.gate]) > 0
+    return g.value(signals), gate
 
 
 def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -> tuple:
@@ -995,15 +984,15 @@ def update_stage_accumulators(
     >>> round(float(finalize(ms, accs)[0]), 6)
     1.8
     """
-    out = []
-    for m, acc, inc in zip(metrics, accs, increments, strict=True):
+
+    def update(m, acc, inc):
         if m.reduce not in STAGE_REDUCTIONS:
-            out.append(acc)
-            continue
+            return acc
         s, n = acc
         inw = jnp.logical_and(t_k >= m.start - _TOL, t_k + dt <= m.end + _TOL)
-        out.append((jnp.where(inw, s + inc, s), n + jnp.where(inw, 1.0, 0.0)))
-    return tuple(out)
+        return jnp.where(inw, s + inc, s), n + jnp.where(inw, 1.0, 0.0)
+
+    return tuple(update(*args) for args in zip(metrics, accs, increments, strict=True))
 
 
 def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, float]:
@@ -1031,9 +1020,6 @@ def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, 
     res: dict[str, float] = {}
     for m, v in zip(metrics, values, strict=True):
         arr = np.asarray(v, dtype=float)
-        if m.spacecraft == "each":
-            for i, x in enumerate(arr.reshape(-1)):
-                res[f"{m.name}_sc{i + 1}"] = float(x)
-        else:
-            res[m.name] = float(arr)
+        each = arr.reshape(-1) if m.spacecraft == "each" else [arr]
+        res.update(zip(metric_names([m], len(each)), map(float, each), strict=True))
     return res
