@@ -255,11 +255,10 @@ def run_fixed_step(
         k = k + record_every
         return (k, new, div, frozen), rec
 
-    k0 = jnp.asarray(0, dtype=jnp.int64)
-    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64), state0 if check_finite else None)
+    k0, div0 = jnp.asarray(0, dtype=jnp.int64), jnp.asarray(-1, dtype=jnp.int64)
+    carry0 = (k0, state0, div0, state0 if check_finite else None)
     (_, final, div, frozen), records = jax.lax.scan(outer, carry0, None, length=n_records + 1)
-    if check_finite:
-        final = frozen
+    final = frozen if check_finite else final
     return dict(records=records, final=final, diverged_step=div, last_finite=final)
 
 

@@ -266,41 +266,20 @@ class ClosedLoop:
 
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:
-        """Every recorded signal of the loop, in slot order."""
-        own: tuple[Signal, ...] = (
-            Signal(
-                COMMAND_SIGNAL,
-                ("spacecraft", _vector_dim(self.controller.quantity)),
-                _unit(self.controller.quantity),
-                f"commanded {self.controller.quantity}",
-            ),
-            Signal(
-                APPLIED_SIGNAL,
-                ("spacecraft", _vector_dim(self.plant.quantity)),
-                _unit(self.plant.quantity),
-                f"applied {self.plant.quantity} (after actuator faults)",
-            ),
-        )
+        """Every recorded signal of the loop, in slot order (the loop's own signals -- command, applied
+        command, position error -- just before the actuator's, the evaluations' last)."""
+        q_c, q_p = self.controller.quantity, self.plant.quantity  # commanded, applied quantity
+        applied = f"applied {q_p} (after actuator faults)"
+        own = [
+            Signal(COMMAND_SIGNAL, _dims(q_c), _unit(q_c), f"commanded {q_c}"),
+            Signal(APPLIED_SIGNAL, _dims(q_p), _unit(q_p), applied),
+        ]
         if self._tracks_position():
-            own += (
-                Signal(
-                    POSITION_ERROR_SIGNAL,
-                    ("spacecraft", "axis"),
-                    "m",
-                    "true position minus desired position",
-                    "LVLH",
-                ),
-            )
-        # slot order, the loop's own signals just before the actuator's
-        flight = tuple(
-            sig for slot, c in self._slots() if slot != "actuator" for sig in c.signals()
-        )
-        return (
-            flight
-            + own
-            + tuple(self.actuator.signals())
-            + tuple(sig for ev in self.evaluations for sig in ev.signals())
-        )
+            error = "true position minus desired position"
+            own.append(Signal(POSITION_ERROR_SIGNAL, ("spacecraft", "axis"), "m", error, "LVLH"))
+        before = (sig for slot, c in self._slots() if slot != "actuator" for sig in c.signals())
+        evaluated = (sig for ev in self.evaluations for sig in ev.signals())
+        return (*before, *own, *self.actuator.signals(), *evaluated)
 
     @property
     def count(self) -> int:
@@ -359,14 +338,9 @@ class ClosedLoop:
     def _noise(self, k):
         key = step_key(run_key(self.seed), k)
         if self.sensors.splits_step_key:  # the sensors split the step key into their own streams
-            return _once(
-                k,
-                (
-                    self.sensors.noise(key),
-                    self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM)),
-                ),
-            )
-        k_sensor, k_plant = jax.random.split(key, 2)
+            k_sensor, k_plant = key, jax.random.fold_in(key, _PLANT_STREAM)
+        else:
+            k_sensor, k_plant = jax.random.split(key, 2)
         return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
     def _law_flight(self, y, est, decision, exo, ref, sc):
@@ -830,19 +804,13 @@ class ClosedLoop:
     def replay_step(self):
         """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""
         loop = self.prepared()
-
-        def step(k, carry):
-            state, acc = carry
-            new, _ = loop.step(k, state)
-            return new, acc
-
-        return step
+        return lambda k, carry: (loop.step(k, carry[0])[0], carry[1])  # (new state, accumulators)
 
 
-def _vector_dim(quantity: str) -> str:
-    """Dimension of a command vector: ``axis`` (x, y, z), or ``wrench_component`` for a force-torque
-    wrench [f; tau] (6 components)."""
-    return "wrench_component" if quantity == "wrench" else "axis"
+def _dims(quantity: str) -> tuple[str, str]:
+    """Dimensions of a command: per spacecraft, a vector of ``axis`` (x, y, z), or of
+    ``wrench_component`` for a force-torque wrench [f; tau] (6 components)."""
+    return ("spacecraft", "wrench_component" if quantity == "wrench" else "axis")
 
 
 def _unit(quantity: str) -> str:
