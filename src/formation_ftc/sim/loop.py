@@ -480,13 +480,9 @@ class ClosedLoop:
         # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
         # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
         # (computed once per step, and only when such a metric exists)
+        reads_held = self._stage_reads_evaluations()
         held_signals = (
-            {
-                **self.estimator.outputs(t_k, est_state, est),
-                **self.supervisor.outputs(t_k, sup_state, dec),
-            }
-            if self._stage_reads_evaluations()
-            else None
+            self._held_outputs(t_k, est_state, est, sup_state, dec) if reads_held else None
         )
 
         def stage_signals(o: dict) -> dict:
@@ -534,16 +530,11 @@ class ClosedLoop:
                     None if a is None else _rk4_increment(dt, a, b, c, d)
                     for a, b, c, d in zip(*values, strict=True)
                 )
-        act_state = self.actuator.update(
-            t_k,
-            state["actuator"],
-            outputs[COMMAND_SIGNAL],
-            ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x),
-        )
+        act_in = ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x)
+        act_state = self.actuator.update(t_k, state["actuator"], outputs[COMMAND_SIGNAL], act_in)
         # discrete change of the truth state at t_{k+1} commanded by the decision in force (default none)
         z_next = dict(z_next, plant=self.plant.jump(t_k + dt, z_next["plant"], dec))
-        outputs.update(self.estimator.outputs(t_k, est_state, est))
-        outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
+        outputs.update(self._held_outputs(t_k, est_state, est, sup_state, dec))
         # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
         est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
         new = dict(
@@ -559,6 +550,11 @@ class ClosedLoop:
         if self._stage_metrics():
             outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
+
+    def _held_outputs(self, t_k, est_state, est, sup_state, dec) -> dict:
+        """The estimator's and the supervisor's signals at t_k (held over the step)."""
+        est_out = self.estimator.outputs(t_k, est_state, est)
+        return {**est_out, **self.supervisor.outputs(t_k, sup_state, dec)}
 
     def _stage_reads_evaluations(self) -> bool:
         """True when a stage-integrated metric reads a signal of an evaluation."""
@@ -586,8 +582,7 @@ class ClosedLoop:
         z = {"plant": state["plant"], "controller": state["controller"], "usage": state["usage"]}
         ctx = (exo, ref, s_noise, p_noise, est, dec, net_state, sc, held, state["actuator"])
         _, outputs = self._evaluate(sc.t, z, ctx)
-        outputs.update(self.estimator.outputs(sc.t, est_state, est))
-        outputs.update(self.supervisor.outputs(sc.t, sup_state, dec))
+        outputs.update(self._held_outputs(sc.t, est_state, est, sup_state, dec))
         return self._sample(state, outputs)
 
     def _sample(self, state: dict, outputs: dict) -> dict:
