@@ -183,9 +183,8 @@ class ClosedLoop:
                     f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}"
                 )
         p, c = self.plant, self.controller
-        names = {
-            slot: (labels or {}).get(slot, type(comp).__name__) for slot, comp in self._slots()
-        }
+        labels = dict(labels or {})
+        names = {slot: labels.get(slot, type(comp).__name__) for slot, comp in self._slots()}
         if getattr(c, "quantity", "force") != getattr(p, "quantity", "force"):
             raise CompositionError(
                 f"controller {names['controller']} commands {_a(c.quantity)}, but plant "
@@ -213,7 +212,7 @@ class ClosedLoop:
                 f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
                 f"record_every = {self.record_every}"
             )
-        self._check_needs(dict(labels or {}))
+        self._check_needs(labels)
         recorded_names = [s.name for s in self.signals()]
         dup = sorted({n for n in recorded_names if recorded_names.count(n) > 1})
         if dup:
@@ -719,13 +718,8 @@ class ClosedLoop:
             if self.record_every % d == 0
         )
         many = sum(metric_ops.reads_steps(m) for m in self._streamed)
-        if (
-            many >= METRIC_FOLD_MIN_METRICS
-            and block >= METRIC_FOLD_MIN_BLOCK
-            and self.n_steps >= METRIC_FOLD_MIN_STEPS
-        ):
-            return block
-        return 1
+        long_run = self.n_steps >= METRIC_FOLD_MIN_STEPS and block >= METRIC_FOLD_MIN_BLOCK
+        return block if long_run and many >= METRIC_FOLD_MIN_METRICS else 1
 
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
