@@ -88,28 +88,33 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     size = len(params) if size is None else int(size)
     if size < len(params):
         raise ValueError(f"stack_params: size = {size} < number of runs {len(params)}")
-    flat = [jax.tree_util.tree_flatten(p) for p in params]
-    treedef: Any = flat[0][1]  # jax's PyTreeDef is not resolvable from its stubs
-    for k, (_, td) in enumerate(flat[1:], start=1):
-        if td != treedef:
-            raise ValueError(
-                f"stack_params: run {k} has a different parameter structure than run 0"
-            )
+    flat, treedef = _flattened("stack_params", {str(k): p for k, p in enumerate(params)})
     leaves: list[np.ndarray] = []
     axes: list[int | None] = []
-    for vals in zip(*(f[0] for f in flat), strict=True):
+    for vals in zip(*flat, strict=True):
         arrs = [np.asarray(v) for v in vals]
-        first = arrs[0]
-        shared = all(_same(a, first) for a in arrs[1:])
-        if shared:
-            leaves.append(first)
+        if all(_same(a, arrs[0]) for a in arrs[1:]):
+            leaves.append(arrs[0])
             axes.append(None)
-        else:
-            arrs += [arrs[-1]] * (size - len(arrs))
-            leaves.append(np.stack(arrs))
+        else:  # padded with the last run
+            leaves.append(np.stack(arrs + [arrs[-1]] * (size - len(arrs))))
             axes.append(0)
     unflat = jax.tree_util.tree_unflatten
     return unflat(treedef, leaves), unflat(treedef, axes)
+
+
+def _flattened(fn: str, runs: dict[str, Any]) -> tuple[list[list[Any]], Any]:
+    """The leaves of every run (keyed by its label in the messages of ``fn``) and their common tree
+    definition; ValueError naming the first run of another structure."""
+    flat = [jax.tree_util.tree_flatten(p) for p in runs.values()]
+    treedef: Any = flat[0][1]  # jax's PyTreeDef is not resolvable from its stubs
+    first = next(iter(runs))
+    for label, (_, td) in zip(runs, flat, strict=True):
+        if td != treedef:
+            raise ValueError(
+                f"{fn}: run {label} has a different parameter structure than run {first}"
+            )
+    return [leaves for leaves, _ in flat], treedef
 
 
 def _batched_flags(axes: Any) -> tuple[bool, ...]:
@@ -117,11 +122,6 @@ def _batched_flags(axes: Any) -> tuple[bool, ...]:
     return tuple(
         a is not None for a in jax.tree_util.tree_leaves(axes, is_leaf=lambda a: a is None)
     )
-
-
-def _fast_compile(loop) -> bool:
-    """Whether a ClosedLoop's controller asks for XLA's fast-compile preset in batches."""
-    return bool(getattr(getattr(loop, "controller", None), "batch_fast_compile", False))
 
 
 def _one_run(p: Any) -> Any:
@@ -174,9 +174,10 @@ def batched_run(loop, in_axes: Any, size: int) -> Any:
 
 
 def _kept(loop, key: tuple, batched: Any) -> Any:
-    """The cached batch program ``key``; on a miss, ``batched`` (the batched run) is jitted with
-    :func:`_fast_compile`'s choice and kept."""
-    return kept(_CACHE, key, lambda: xla.jit(batched, fast_compile=_fast_compile(loop)))
+    """The cached batch program ``key``; on a miss, ``batched`` (the batched run) is jitted -- with
+    XLA's fast-compile preset when the loop's controller asks for it in batches -- and kept."""
+    fast = bool(getattr(getattr(loop, "controller", None), "batch_fast_compile", False))
+    return kept(_CACHE, key, lambda: xla.jit(batched, fast_compile=fast))
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -233,20 +234,17 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     for r, row in enumerate(rows):
         if len(row) != n_cols:
             raise ValueError(f"stack_params_grid: row {r} has {len(row)} runs, row 0 has {n_cols}")
-    flat = [[jax.tree_util.tree_flatten(p) for p in row] for row in rows]
-    treedef: Any = flat[0][0][1]
-    for r, row in enumerate(flat):
-        for c, (_, td) in enumerate(row):
-            if td != treedef:
-                raise ValueError(
-                    f"stack_params_grid: run ({r}, {c}) has a different parameter structure "
-                    "than run (0, 0)"
-                )
+    flat, treedef = _flattened(
+        "stack_params_grid",
+        {f"({r}, {c})": p for r, row in enumerate(rows) for c, p in enumerate(row)},
+    )
     leaves: list[np.ndarray] = []
     row_axes: list[int | None] = []
     col_axes: list[int | None] = []
-    for j in range(len(flat[0][0][0])):
-        grid = [[np.asarray(row[c][0][j]) for c in range(n_cols)] for row in flat]
+    for j in range(len(flat[0])):  # the runs are flattened row by row
+        grid = [
+            [np.asarray(flat[r * n_cols + c][j]) for c in range(n_cols)] for r in range(len(rows))
+        ]
         first = grid[0][0]
         along_rows = all(_same(a, g[0]) for g in grid for a in g)  # every row constant
         down_cols = all(

@@ -255,11 +255,10 @@ def run_fixed_step(
         k = k + record_every
         return (k, new, div, frozen), rec
 
-    k0 = jnp.asarray(0, dtype=jnp.int64)
-    carry0 = (k0, state0, jnp.asarray(-1, dtype=jnp.int64), state0 if check_finite else None)
+    k0, div0 = jnp.asarray(0, dtype=jnp.int64), jnp.asarray(-1, dtype=jnp.int64)
+    carry0 = (k0, state0, div0, state0 if check_finite else None)
     (_, final, div, frozen), records = jax.lax.scan(outer, carry0, None, length=n_records + 1)
-    if check_finite:
-        final = frozen
+    final = frozen if check_finite else final
     return dict(records=records, final=final, diverged_step=div, last_finite=final)
 
 
@@ -327,15 +326,7 @@ class SimulationDiverged(RuntimeError):
 
 def _path_name(path) -> str:
     """'x.rho' for a pytree path of dict keys, attribute names (named tuples) and list indices."""
-    parts = []
-    for entry in path:
-        for attr in ("key", "name", "idx"):
-            if hasattr(entry, attr):
-                parts.append(str(getattr(entry, attr)))
-                break
-        else:  # pragma: no cover - unknown key type
-            parts.append(str(entry))
-    return ".".join(parts)
+    return jax.tree_util.keystr(tuple(path), simple=True, separator=".")
 
 
 def _nonfinite_leaves(tree) -> list[tuple[Any, np.ndarray, tuple[int, ...]]]:
@@ -403,11 +394,9 @@ def _accumulators(step, k, state) -> set[int]:
     n_state = n_in - 1  # input 0 is k
     if len(deps) != n_state:
         return set()
-    acc = set()
-    for i in range(n_state):
-        if not any(i + 1 in deps[o] for o in range(n_state) if o != i):
-            acc.add(i)
-    return acc
+    return {
+        i for i in range(n_state) if not any(i + 1 in deps[o] for o in range(n_state) if o != i)
+    }
 
 
 def _replay_loop(step, ok, state, k, n):
@@ -551,30 +540,25 @@ def diagnose_divergence(
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
     jstep = (lambda kk, st: _jitted(_params_step)(params, kk, st)) if use_params else jax.jit(step)
-    state = last_finite
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
-    n = max_steps
-    j = 0
+    state, n, j = last_finite, max_steps, 0
     while j < n:
         kj = jnp.asarray(k + j, dtype=jnp.int64)
         new = failing if (j == 0 and failing is not None) else jstep(kj, state)
-        bad = _nonfinite_leaves(new)
-        if admissible is not None:
-            # inside the admissible set: leaves it does not check may be NaN
-            if bool(admissible(new)):
-                state = new
-                j += 1
-                continue
+        # inside the admissible set (when given), leaves it does not check may be NaN
+        inside = admissible is not None and bool(admissible(new))
+        bad = [] if inside else _nonfinite_leaves(new)
+        if admissible is not None and not inside:
             checked = getattr(admissible, "checked_prefixes", None)
             if checked:
                 bad = [b for b in bad if _path_name(b[0]).startswith(tuple(checked))]
-        if not bad and admissible is not None:
-            found = violations(new) if violations is not None else []
-            name, index, sc = found[0] if found else ("<admissible set>", (), None)
-            return DivergenceInfo(
-                int(k + j), float(t + j * dt), name, sc, index, reason="left its admissible set"
-            )
+            if not bad:
+                found = violations(new) if violations is not None else []
+                name, index, sc = found[0] if found else ("<admissible set>", (), None)
+                return DivergenceInfo(
+                    int(k + j), float(t + j * dt), name, sc, index, reason="left its admissible set"
+                )
         if bad:
             if acc is None:
                 try:
@@ -591,6 +575,4 @@ def diagnose_divergence(
                 first, n = info, j + 1 + _FOLLOW_STEPS
         state = new
         j += 1
-    if first is not None:
-        return first
-    return DivergenceInfo(int(k), float(t), "<unknown>", None, ())
+    return first if first is not None else DivergenceInfo(int(k), float(t), "<unknown>", None, ())

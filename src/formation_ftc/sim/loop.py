@@ -50,7 +50,7 @@ from formation_ftc.sim.components import (
     tree_take,
 )
 from formation_ftc.sim.contract import capability
-from formation_ftc.sim.engine import run_fixed_step
+from formation_ftc.sim.engine import _all_finite, run_fixed_step
 
 __all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL", "NAVIGATION_ESTIMATE"]
 
@@ -102,6 +102,11 @@ def _once(k, values):
 def _held(k, values):
     """:func:`_once` when the step index ``k`` is known, else ``values`` as they are."""
     return values if k is None else _once(k, values)
+
+
+def _rk4_increment(dt, a, b, c, d):
+    """The RK4 increment over a step ``dt`` from the stage slopes (or integrands) ``a .. d``."""
+    return (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
 
 
 @component
@@ -178,9 +183,8 @@ class ClosedLoop:
                     f"slot '{slot}' needs a {base.__name__}, got {type(comp).__name__}"
                 )
         p, c = self.plant, self.controller
-        names = {
-            slot: (labels or {}).get(slot, type(comp).__name__) for slot, comp in self._slots()
-        }
+        labels = dict(labels or {})
+        names = {slot: labels.get(slot, type(comp).__name__) for slot, comp in self._slots()}
         if getattr(c, "quantity", "force") != getattr(p, "quantity", "force"):
             raise CompositionError(
                 f"controller {names['controller']} commands {_a(c.quantity)}, but plant "
@@ -208,14 +212,14 @@ class ClosedLoop:
                 f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
                 f"record_every = {self.record_every}"
             )
-        self._check_needs(dict(labels or {}))
+        self._check_needs(labels)
         recorded_names = [s.name for s in self.signals()]
         dup = sorted({n for n in recorded_names if recorded_names.count(n) > 1})
         if dup:
             raise CompositionError(
                 f"two components record a signal with the same name: {', '.join(dup)}"
             )
-        recorded = {sig.name for sig in self.signals()}
+        recorded = set(recorded_names)
         for m in self.metrics:
             if m.formula is not None:  # an STL requirement: the signals its atoms read
                 from formation_ftc.sim.stl import parse, signals_of
@@ -266,43 +270,20 @@ class ClosedLoop:
 
     # ------------------------------------------------------------------ declarations
     def signals(self) -> tuple[Signal, ...]:
-        """Every recorded signal of the loop, in slot order."""
-        own: tuple[Signal, ...] = (
-            Signal(
-                COMMAND_SIGNAL,
-                ("spacecraft", _vector_dim(self.controller.quantity)),
-                _unit(self.controller.quantity),
-                f"commanded {self.controller.quantity}",
-            ),
-            Signal(
-                APPLIED_SIGNAL,
-                ("spacecraft", _vector_dim(self.plant.quantity)),
-                _unit(self.plant.quantity),
-                f"applied {self.plant.quantity} (after actuator faults)",
-            ),
-        )
+        """Every recorded signal of the loop, in slot order (the loop's own signals -- command, applied
+        command, position error -- just before the actuator's, the evaluations' last)."""
+        q_c, q_p = self.controller.quantity, self.plant.quantity  # commanded, applied quantity
+        applied = f"applied {q_p} (after actuator faults)"
+        own = [
+            Signal(COMMAND_SIGNAL, _dims(q_c), _unit(q_c), f"commanded {q_c}"),
+            Signal(APPLIED_SIGNAL, _dims(q_p), _unit(q_p), applied),
+        ]
         if self._tracks_position():
-            own += (
-                Signal(
-                    POSITION_ERROR_SIGNAL,
-                    ("spacecraft", "axis"),
-                    "m",
-                    "true position minus desired position",
-                    "LVLH",
-                ),
-            )
-        return (
-            tuple(self.plant.signals())
-            + tuple(self.reference.signals())
-            + tuple(self.sensors.signals())
-            + tuple(self.network.signals())
-            + tuple(self.estimator.signals())
-            + tuple(self.supervisor.signals())
-            + tuple(self.controller.signals())
-            + own
-            + tuple(self.actuator.signals())
-            + tuple(sig for ev in self.evaluations for sig in ev.signals())
-        )
+            error = "true position minus desired position"
+            own.append(Signal(POSITION_ERROR_SIGNAL, ("spacecraft", "axis"), "m", error, "LVLH"))
+        before = (sig for slot, c in self._slots() if slot != "actuator" for sig in c.signals())
+        evaluated = (sig for ev in self.evaluations for sig in ev.signals())
+        return (*before, *own, *self.actuator.signals(), *evaluated)
 
     @property
     def count(self) -> int:
@@ -360,14 +341,9 @@ class ClosedLoop:
     def _noise(self, k):
         key = step_key(run_key(self.seed), k)
         if self.sensors.splits_step_key:  # the sensors split the step key into their own streams
-            return _once(
-                k,
-                (
-                    self.sensors.noise(key),
-                    self.plant.process_noise(jax.random.fold_in(key, _PLANT_STREAM)),
-                ),
-            )
-        k_sensor, k_plant = jax.random.split(key, 2)
+            k_sensor, k_plant = key, jax.random.fold_in(key, _PLANT_STREAM)
+        else:
+            k_sensor, k_plant = jax.random.split(key, 2)
         return _once(k, (self.sensors.noise(k_sensor), self.plant.process_noise(k_plant)))
 
     def _law_flight(self, y, est, decision, exo, ref, sc):
@@ -377,21 +353,14 @@ class ClosedLoop:
         with a :data:`NAVIGATION_ESTIMATE` entry (an FDI that also navigates) gives that entry in place
         of the measurement and the whole estimate besides."""
         if self.estimator.navigation:
-            return self._flight(est, None, None, decision, exo, ref, sc)
+            return self._flight(est, None, decision, exo, ref, sc)
         if isinstance(est, Mapping) and NAVIGATION_ESTIMATE in est:  # it navigates as well
-            return self._flight(est[NAVIGATION_ESTIMATE], None, est, decision, exo, ref, sc)
-        return self._flight(y, None, est, decision, exo, ref, sc)
+            return self._flight(est[NAVIGATION_ESTIMATE], est, decision, exo, ref, sc)
+        return self._flight(y, est, decision, exo, ref, sc)
 
-    def _flight(self, y, received, est, decision, exo, ref, sc):
-        return FlightInputs(
-            measurement=y,
-            received=received,
-            estimate=est,
-            decision=decision,
-            exogenous=exo,
-            reference=ref,
-            step=sc,
-        )
+    def _flight(self, y, est, decision, exo, ref, sc):
+        """Flight inputs with nothing received yet (:meth:`_received` adds the network's messages)."""
+        return FlightInputs(y, None, est, decision, exo, ref, sc)
 
     def _received(self, t, flight, net_state, sc, exo_network):
         """``flight`` with the messages the network delivers at ``t`` (as it is without a network)."""
@@ -434,18 +403,6 @@ class ClosedLoop:
         outputs[APPLIED_SIGNAL] = applied
         return deriv, outputs
 
-    def _discrete(self, sc, state, y, exo0, ref0):
-        """Steps (3)-(4) at t_k: estimator and supervisor updates."""
-        est_state, est = self.estimator.update(
-            sc.t, state["estimator"], self._flight(y, None, None, None, exo0["estimator"], ref0, sc)
-        )
-        sup_state, dec = self.supervisor.update(
-            sc.t,
-            state["supervisor"],
-            self._flight(y, None, est, None, exo0["supervisor"], ref0, sc),
-        )
-        return est_state, est, sup_state, dec
-
     def _start(self, sc: StepContext, state: dict, exo0, ref0, s_noise):
         """Steps (1)-(5) at t_k, shared by :meth:`step` and :meth:`observe`: the measurement, the
         estimator and supervisor updates, the message of t_k pushed into the network history and the
@@ -453,7 +410,13 @@ class ClosedLoop:
         y = self.sensors.measure(
             sc.t, self.plant.sensed_state(state["plant"]), SensorInputs(s_noise, ref0)
         )
-        est_state, est, sup_state, dec = self._discrete(sc, state, y, exo0, ref0)
+        # (3)-(4) the estimator and supervisor updates
+        est_state, est = self.estimator.update(
+            sc.t, state["estimator"], self._flight(y, None, None, exo0["estimator"], ref0, sc)
+        )
+        sup_state, dec = self.supervisor.update(
+            sc.t, state["supervisor"], self._flight(y, est, None, exo0["supervisor"], ref0, sc)
+        )
         est = _once(sc.k, est)  # an estimate (a noisy FDI report, ...) is held over the step
         net_state = state["network"]
         if not isinstance(self.network, NoNetwork):
@@ -488,15 +451,14 @@ class ClosedLoop:
             actuator=self.actuator.initial_state(),
             usage={name: jnp.zeros(self.plant.usage_shape()) for name in self.plant.usage_names()},
         )
+        state["network"] = None
         if not isinstance(self.network, NoNetwork):
             exo0 = tree_take(self._time_table(t0, first_only=True), 0)
             sc0 = self._step_context(jnp.asarray(0, dtype=jnp.int64))
             msg0 = self.controller.message(
-                t0, self._flight(y0, None, None, None, exo0["controller"], ref0, sc0)
+                t0, self._flight(y0, None, None, exo0["controller"], ref0, sc0)
             )
             state["network"] = self.network.initial_state(msg0)
-        else:
-            state["network"] = None
         return state
 
     def step(self, k, state: dict) -> tuple[dict, dict]:
@@ -517,31 +479,18 @@ class ClosedLoop:
         # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
         # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
         # (computed once per step, and only when such a metric exists)
+        reads_held = self._stage_reads_evaluations()
         held_signals = (
-            {
-                **self.estimator.outputs(t_k, est_state, est),
-                **self.supervisor.outputs(t_k, sup_state, dec),
-            }
-            if self._stage_reads_evaluations()
-            else None
+            self._held_outputs(t_k, est_state, est, sup_state, dec) if reads_held else None
         )
 
         def stage_signals(o: dict) -> dict:
             return o if held_signals is None else self._evaluated({**o, **held_signals})
 
+        held_over_step = (s_noise, p_noise, est, dec, net_state, sc, held, state["actuator"])
+
         def ctx(j):
-            return (
-                exos[j],
-                refs[j],
-                s_noise,
-                p_noise,
-                est,
-                dec,
-                net_state,
-                sc,
-                held,
-                state["actuator"],
-            )
+            return (exos[j], refs[j], *held_over_step)
 
         z = {
             "plant": x,
@@ -554,11 +503,9 @@ class ClosedLoop:
             x_next = self.plant.exact_step(
                 t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt
             )
-            z_next = {
-                "plant": x_next,
-                "controller": None,
-                "usage": _axpy(dt, deriv["usage"], z["usage"]),
-            }
+            z_next = dict(
+                plant=x_next, controller=None, usage=_axpy(dt, deriv["usage"], z["usage"])
+            )
             if self._stage_metrics():  # rectangle rule over the step
                 stage_inc = tuple(
                     None if v is None else dt * v
@@ -570,33 +517,23 @@ class ClosedLoop:
             k3, o3 = self._evaluate(t_k + 0.5 * dt, _axpy(0.5 * dt, k2, z), ctx(2))
             k4, o4 = self._evaluate(t_k + dt, _axpy(dt, k3, z), ctx(3))
             z_next = jax.tree_util.tree_map(
-                lambda xi, a, b, c, d: xi + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d),
-                z,
-                k1,
-                k2,
-                k3,
-                k4,
+                lambda xi, *slopes: xi + _rk4_increment(dt, *slopes), z, k1, k2, k3, k4
             )
             # integrals of stage-integrated metrics over the step (RK4 weights)
             if self._stage_metrics():
-                v1, v2, v3, v4 = (
+                values = [
                     metric_ops.stage_values(self._streamed, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
-                )
+                ]
                 stage_inc = tuple(
-                    None if a is None else (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
-                    for a, b, c, d in zip(v1, v2, v3, v4, strict=True)
+                    None if a is None else _rk4_increment(dt, a, b, c, d)
+                    for a, b, c, d in zip(*values, strict=True)
                 )
-        act_state = self.actuator.update(
-            t_k,
-            state["actuator"],
-            outputs[COMMAND_SIGNAL],
-            ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x),
-        )
+        act_in = ActuatorInputs(exos[0]["actuator"], state["actuator"], dec, x)
+        act_state = self.actuator.update(t_k, state["actuator"], outputs[COMMAND_SIGNAL], act_in)
         # discrete change of the truth state at t_{k+1} commanded by the decision in force (default none)
         z_next = dict(z_next, plant=self.plant.jump(t_k + dt, z_next["plant"], dec))
-        outputs.update(self.estimator.outputs(t_k, est_state, est))
-        outputs.update(self.supervisor.outputs(t_k, sup_state, dec))
+        outputs.update(self._held_outputs(t_k, est_state, est, sup_state, dec))
         # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
         est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
         new = dict(
@@ -612,6 +549,11 @@ class ClosedLoop:
         if self._stage_metrics():
             outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
+
+    def _held_outputs(self, t_k, est_state, est, sup_state, dec) -> dict:
+        """The estimator's and the supervisor's signals at t_k (held over the step)."""
+        est_out = self.estimator.outputs(t_k, est_state, est)
+        return {**est_out, **self.supervisor.outputs(t_k, sup_state, dec)}
 
     def _stage_reads_evaluations(self) -> bool:
         """True when a stage-integrated metric reads a signal of an evaluation."""
@@ -639,8 +581,7 @@ class ClosedLoop:
         z = {"plant": state["plant"], "controller": state["controller"], "usage": state["usage"]}
         ctx = (exo, ref, s_noise, p_noise, est, dec, net_state, sc, held, state["actuator"])
         _, outputs = self._evaluate(sc.t, z, ctx)
-        outputs.update(self.estimator.outputs(sc.t, est_state, est))
-        outputs.update(self.supervisor.outputs(sc.t, sup_state, dec))
+        outputs.update(self._held_outputs(sc.t, est_state, est, sup_state, dec))
         return self._sample(state, outputs)
 
     def _sample(self, state: dict, outputs: dict) -> dict:
@@ -706,12 +647,9 @@ class ClosedLoop:
                 metric_ops.unpack_samples(self._streamed, shapes, samples),
             )
 
-        def observe(k, carry):
-            return self.observe(k, carry[0])
-
         out = run_fixed_step(
             step,
-            observe,
+            lambda k, carry: self.observe(k, carry[0]),
             (state0, acc0),
             self.n_steps,
             self.record_every,
@@ -780,13 +718,8 @@ class ClosedLoop:
             if self.record_every % d == 0
         )
         many = sum(metric_ops.reads_steps(m) for m in self._streamed)
-        if (
-            many >= METRIC_FOLD_MIN_METRICS
-            and block >= METRIC_FOLD_MIN_BLOCK
-            and self.n_steps >= METRIC_FOLD_MIN_STEPS
-        ):
-            return block
-        return 1
+        long_run = self.n_steps >= METRIC_FOLD_MIN_STEPS and block >= METRIC_FOLD_MIN_BLOCK
+        return block if long_run and many >= METRIC_FOLD_MIN_METRICS else 1
 
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
@@ -808,8 +741,6 @@ class ClosedLoop:
     def admissible(self, carry) -> jax.Array:
         """True while the checked state (plant, controller, estimator) is finite and every bounded
         truth quantity is within its bound."""
-        from formation_ftc.sim.engine import _all_finite
-
         c = carry[0]
         ok = _all_finite((c["plant"], c["controller"], c["estimator"]))
         for _, mag, bound in self._bounded(carry[0]["plant"]):
@@ -821,18 +752,15 @@ class ClosedLoop:
 
     def violations(self, carry) -> list[tuple[str, tuple[int, ...], int | None]]:
         """(variable, index, spacecraft) of every bounded quantity outside its bound (numpy side)."""
-        out = []
-        for name, mag, bound in self._bounded(carry[0]["plant"]):
-            bad = np.argwhere(np.asarray(mag) > np.asarray(bound))
-            for idx in bad:
-                out.append(
-                    (
-                        f"{name} (|.| > {float(np.asarray(bound)):g})",
-                        tuple(int(i) for i in idx),
-                        int(idx[0]) if len(idx) else None,
-                    )
-                )
-        return out
+        return [
+            (
+                f"{name} (|.| > {float(np.asarray(bound)):g})",
+                tuple(map(int, idx)),
+                int(idx[0]) if len(idx) else None,
+            )
+            for name, mag, bound in self._bounded(carry[0]["plant"])
+            for idx in np.argwhere(np.asarray(mag) > np.asarray(bound))
+        ]
 
     # ------------------------------------------------------------------ results (numpy side)
     @property
@@ -869,19 +797,13 @@ class ClosedLoop:
     def replay_step(self):
         """``step(k, carry)`` over the run's carry (for divergence diagnostics)."""
         loop = self.prepared()
-
-        def step(k, carry):
-            state, acc = carry
-            new, _ = loop.step(k, state)
-            return new, acc
-
-        return step
+        return lambda k, carry: (loop.step(k, carry[0])[0], carry[1])  # (new state, accumulators)
 
 
-def _vector_dim(quantity: str) -> str:
-    """Dimension of a command vector: ``axis`` (x, y, z), or ``wrench_component`` for a force-torque
-    wrench [f; tau] (6 components)."""
-    return "wrench_component" if quantity == "wrench" else "axis"
+def _dims(quantity: str) -> tuple[str, str]:
+    """Dimensions of a command: per spacecraft, a vector of ``axis`` (x, y, z), or of
+    ``wrench_component`` for a force-torque wrench [f; tau] (6 components)."""
+    return ("spacecraft", "wrench_component" if quantity == "wrench" else "axis")
 
 
 def _unit(quantity: str) -> str:

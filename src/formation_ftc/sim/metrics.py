@@ -17,7 +17,6 @@ the same selections, and the same sums added in another order (they may differ i
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -60,6 +59,31 @@ _TOL = 1e-9  # window edges are inclusive to this many seconds (times are k*dt i
 #: reduction -> (pairwise extreme, extreme over an axis: names in jax.numpy, starting value); names, so
 #: that importing this module uses no JAX (``check``: :mod:`formation_ftc._lazy_jax`)
 _EXTREMES = {"max": ("maximum", "max", -math.inf), "min": ("minimum", "min", math.inf)}
+#: reduction -> starting value of each part of its accumulator tuple (``False``: a boolean part)
+_START: dict[str, tuple] = {
+    # (extreme so far, seen)
+    "max": (-math.inf, False),
+    "min": (math.inf, False),
+    # (value, seen); first: (time of the first sample at or above the threshold, found)
+    **dict.fromkeys(("final", "at", "last", "first"), (math.nan, False)),
+    # (sum -- of squares for rms, number of samples; stage-integrated: of steps counted)
+    **dict.fromkeys(("mean", "integral", "rms", *STAGE_REDUCTIONS), (0.0, 0.0)),
+    # (time of the first sample after the last one at or above the threshold, seen, last above)
+    **dict.fromkeys(("settle", "settle_delay"), (math.nan, False, False)),
+    # block_rms: (sum over the open block, its samples, sum of the squared means of the closed blocks,
+    # closed blocks); block_dev_rms: (shift = first value of the open block, sum and sum of squares of
+    # value - shift over the open block, its samples, sum of squared deviations from the mean over the
+    # closed blocks, their samples)
+    "block_rms": (0.0,) * 4,
+    "block_dev_rms": (0.0,) * 6,
+}
+#: spacecraft reduction -> how it combines the spacecraft axis (axis 0)
+_SPACECRAFT = {
+    "max": lambda v: jnp.max(v, axis=0),
+    "mean": lambda v: jnp.mean(v, axis=0),
+    "sum": lambda v: jnp.sum(v, axis=0),
+    "range": lambda v: jnp.max(v, axis=0) - jnp.min(v, axis=0),
+}
 
 
 @component
@@ -152,28 +176,16 @@ class Metric:
             v = v * v
         elif self.norm and self.norm_ord == "inf":
             v = jnp.max(jnp.abs(v), axis=-1)
-        elif self.norm:
+        elif self.norm:  # Euclidean, not squared (the squared norm is the sum above)
             v = jnp.sqrt(jnp.sum(v * v, axis=-1))
-            if self.square:
-                v = v * v
-        if self.spacecraft == "max":
-            v = jnp.max(v, axis=0)
-        elif self.spacecraft == "mean":
-            v = jnp.mean(v, axis=0)
-        elif self.spacecraft == "sum":
-            v = jnp.sum(v, axis=0)
-        elif self.spacecraft == "range":
-            v = jnp.max(v, axis=0) - jnp.min(v, axis=0)
-        if self.spacecraft == "each":
-            if v.ndim != 1:
-                raise ValueError(
-                    f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
-                    "expected (spacecraft,)"
-                )
-        elif v.ndim != 0:
+        if self.spacecraft in _SPACECRAFT:
+            v = _SPACECRAFT[self.spacecraft](v)
+        each = self.spacecraft == "each"
+        if v.ndim != int(each):
+            expected = "(spacecraft,)" if each else "a scalar (set norm / spacecraft)"
             raise ValueError(
                 f"metric {self.name!r}: signal {self.signal!r} reduces to shape {v.shape}, "
-                "expected a scalar (set norm / spacecraft)"
+                f"expected {expected}"
             )
         return v
 
@@ -220,12 +232,8 @@ class _Stack:
     def __init__(self, metrics: Sequence[Metric]):
         m0 = metrics[0]
         self.metrics = tuple(metrics)
-        self.reduce, self.spacecraft, self.gate, self.block = (
-            m0.reduce,
-            m0.spacecraft,
-            m0.gate,
-            m0.block,
-        )
+        self.reduce, self.spacecraft = m0.reduce, m0.spacecraft
+        self.gate, self.block = m0.gate, m0.block
         trail = (1,) if m0.spacecraft == "each" else ()
 
         def stacked(name):
@@ -240,50 +248,34 @@ class _Stack:
         return jnp.stack([m.value(signals) for m in self.metrics])
 
 
-def _groups(metrics: Sequence[Metric]) -> list[list[int]]:
-    """Indices of the metrics accumulated together (stage-integrated metrics stay alone), in order of
-    their first member."""
-    groups: dict[Any, list[int]] = {}
+def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int], Any]]]]:
+    """(carry slot, its groups): the metrics of one time reduction, spacecraft mode, gate and block are
+    accumulated together (a :class:`_Stack`, in order of their first member), and the groups of one
+    value shape (scalar, or one value per spacecraft) share one float64 array in the scan carry -- the
+    accumulator blocks of the groups side by side along axis 1 -- written by one fused kernel per step;
+    a stage-integrated metric stays alone, with its own entry. A group is ``(member indices, the
+    _Stack or stage-integrated metric that accumulates them)``."""
+    members: dict[Any, list[int]] = {}
     for i, m in enumerate(metrics):
         key = (
             ("alone", i)
             if m.reduce in STAGE_REDUCTIONS
             else (m.reduce, m.spacecraft == "each", m.gate, m.block)
         )
-        groups.setdefault(key, []).append(i)
-    return list(groups.values())
-
-
-def _grouped(metrics: Sequence[Metric]) -> list[tuple[list[int], Any]]:
-    """(member indices, the metric or :class:`_Stack` that accumulates them)."""
-    return [
-        (
-            idx,
-            metrics[idx[0]]
-            if metrics[idx[0]].reduce in STAGE_REDUCTIONS
-            else _Stack([metrics[i] for i in idx]),
-        )
-        for idx in _groups(metrics)
-    ]
-
-
-class _Probe:
-    """A scalar stand-in metric of one reduction (to read the layout of its accumulator)."""
-
-    def __init__(self, reduce: str):
-        self.reduce = reduce
-        self.block = 1
-
-    def value(self, signals):
-        return jnp.zeros(())
-
-
-@functools.cache
-def _boolean_parts(reduce: str) -> tuple[bool, ...]:
-    """Which parts of a reduction's accumulator tuple are booleans."""
-    return tuple(
-        bool(jnp.asarray(a).dtype == jnp.bool_) for a in _init_accumulators([_Probe(reduce)], {})[0]
-    )
+        members.setdefault(key, []).append(i)
+    out: list[tuple[int, list[tuple[list[int], Any]]]] = []
+    shared: dict[bool, int] = {}
+    for idx in members.values():
+        m = metrics[idx[0]]
+        if m.reduce in STAGE_REDUCTIONS:
+            out.append((idx[0], [(idx, m)]))
+            continue
+        each = m.spacecraft == "each"
+        if each not in shared:
+            shared[each] = len(out)
+            out.append((idx[0], []))
+        out[shared[each]][1].append((idx, _Stack([metrics[i] for i in idx])))
+    return out
 
 
 def _pack(parts: tuple, rows: int) -> jax.Array:
@@ -293,39 +285,27 @@ def _pack(parts: tuple, rows: int) -> jax.Array:
     return jnp.stack(arrs)
 
 
-def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int], Any]]]]:
-    """(carry slot, its groups): the groups of one value shape (scalar, or one value per spacecraft) share
-    one float64 array in the scan carry -- the accumulator blocks of the groups side by side along axis
-    1 -- written by one fused kernel per step; a stage-integrated metric keeps its own entry."""
-    out: list[tuple[int, list[tuple[list[int], Any]]]] = []
-    shared: dict[bool, int] = {}
-    for idx, g in _grouped(metrics):
-        if not isinstance(g, _Stack):
-            out.append((idx[0], [(idx, g)]))
-            continue
-        key = g.spacecraft == "each"
-        if key not in shared:
-            shared[key] = len(out)
-            out.append((idx[0], []))
-        out[shared[key]][1].append((idx, g))
-    return out
-
-
 def _rows(groups) -> int:
-    return max(len(_boolean_parts(g.reduce)) for _, g in groups)
+    return max(len(_START[g.reduce]) for _, g in groups)
 
 
 def _blocks(groups, packed: jax.Array) -> list[tuple]:
     """The accumulator tuple of each group from the shared array."""
     out, col = [], 0
     for idx, g in groups:
-        out.append(_unpack(g.reduce, packed[: len(_boolean_parts(g.reduce)), col : col + len(idx)]))
+        rows = packed[: len(_START[g.reduce]), col : col + len(idx)]
+        out.append(
+            tuple(rows[j] != 0 if x is False else rows[j] for j, x in enumerate(_START[g.reduce]))
+        )
         col += len(idx)
     return out
 
 
-def _unpack(reduce: str, packed: jax.Array) -> tuple:
-    return tuple(packed[j] != 0 if b else packed[j] for j, b in enumerate(_boolean_parts(reduce)))
+def _initial(m: Any, signals: Mapping[str, jax.Array]) -> tuple:
+    """The accumulator tuple of a group (or stage-integrated metric) before any sample (of its value's
+    shape, taken from the signals at t0)."""
+    shape = jnp.shape(m.value(signals))
+    return tuple(jnp.full(shape, x, dtype=type(x)) for x in _START[m.reduce])
 
 
 def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
@@ -360,37 +340,10 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
     accs: list[Any] = [()] * len(metrics)
     for slot, groups in _classes(metrics):
         if not isinstance(groups[0][1], _Stack):
-            accs[slot] = _init_accumulators([groups[0][1]], signals)[0]
+            accs[slot] = _initial(groups[0][1], signals)
             continue
         rows = _rows(groups)
-        accs[slot] = jnp.concatenate(
-            [_pack(_init_accumulators([g], signals)[0], rows) for _, g in groups], axis=1
-        )
-    return tuple(accs)
-
-
-def _init_accumulators(metrics: Sequence[Any], signals: Mapping[str, jax.Array]) -> tuple:
-    accs: list[tuple[jax.Array, ...]] = []
-    for m in metrics:
-        shape = jnp.shape(m.value(signals))
-        nan = jnp.full(shape, jnp.nan)
-        if m.reduce in _EXTREMES:  # (extreme so far, seen)
-            accs.append((jnp.full(shape, _EXTREMES[m.reduce][2]), jnp.zeros(shape, bool)))
-        elif m.reduce in ("final", "at", "last", "first"):
-            # (value, seen); first: (time of the first sample at or above the threshold, found)
-            accs.append((nan, jnp.zeros(shape, bool)))
-        elif m.reduce in ("mean", "integral", "rms") or m.reduce in STAGE_REDUCTIONS:
-            # (sum -- of squares for rms, number of samples; stage-integrated: of steps counted)
-            accs.append((jnp.zeros(shape), jnp.zeros(shape)))
-        elif m.reduce in ("settle", "settle_delay"):
-            # (time of the first sample after the last one at or above the threshold, seen, last above)
-            accs.append((nan, jnp.zeros(shape, bool), jnp.zeros(shape, bool)))
-        elif m.reduce in BLOCK_REDUCTIONS:
-            # block_rms: (sum over the open block, its samples, sum of the squared means of the closed
-            # blocks, closed blocks); block_dev_rms: (shift = first value of the open block, sum and sum
-            # of squares of value - shift over the open block, its samples, sum of squared deviations
-            # from the mean over the closed blocks, their samples)
-            accs.append((jnp.zeros(shape),) * (4 if m.reduce == "block_rms" else 6))
+        accs[slot] = jnp.concatenate([_pack(_initial(g, signals), rows) for _, g in groups], axis=1)
     return tuple(accs)
 
 
@@ -438,7 +391,12 @@ def update_accumulators(
     >>> [round(float(v), 6) for v in finalize(ms, accs)]
     [3.0, 2.0, 0.6]
     """
-    return _apply(metrics, accs, t, dt, sample_values(metrics, signals, is_final), is_final)
+    return _each_group(
+        metrics,
+        accs,
+        sample_values(metrics, signals, is_final),
+        lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final),
+    )
 
 
 def reads_steps(m: Metric) -> bool:
@@ -486,14 +444,11 @@ def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
     >>> block_signals(ms)
     ('e', 'f', 'mode')
     """
-    names: dict[str, None] = {}
-    for m in metrics:
-        if not reads_steps(m):
-            continue
-        names[m.signal] = None
-        if m.gate is not None:
-            names[m.gate] = None
-    return tuple(names)
+    return tuple(
+        dict.fromkeys(
+            n for m in metrics if reads_steps(m) for n in (m.signal, m.gate) if n is not None
+        )
+    )
 
 
 def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> jax.Array:
@@ -606,34 +561,20 @@ def sample_values(
     >>> [(np.asarray(v), gate) for v, gate in slot]  # one (values, gate) per group
     [(array([2.]), None), (array([2.]), None)]
     """
-    out: list[Any] = []
-    for _, groups in _classes(metrics):
-        if not isinstance(groups[0][1], _Stack):
-            out.append(None)
-            continue
-        vals: list[Any] = []
-        for _, g in groups:
-            if g.reduce == "last" and not is_final:
-                vals.append(None)
-                continue
-            gate = None if g.gate is None else jnp.asarray(signals[g.gate]) > 0
-            vals.append((g.value(signals), gate))
-        out.append(tuple(vals))
-    return tuple(out)
-
-
-def _apply(
-    metrics: Sequence[Metric],
-    accs: tuple,
-    t: jax.Array | float,
-    dt: float,
-    values: tuple,
-    is_final: bool = False,
-) -> tuple:
-    """Fold one sample's :func:`sample_values` (taken at time ``t``) into the accumulators."""
-    return _each_group(
-        metrics, accs, values, lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final)
+    return tuple(
+        tuple(_group_sample(g, signals, is_final) for _, g in groups)
+        if isinstance(groups[0][1], _Stack)
+        else None
+        for _, groups in _classes(metrics)
     )
+
+
+def _group_sample(g: _Stack, signals: Mapping[str, jax.Array], is_final: bool) -> Any:
+    """A group's ``(values, gate)`` of one sample (None for ``last`` before the horizon)."""
+    if g.reduce == "last" and not is_final:
+        return None
+    gate = None if g.gate is None else jnp.asarray(signals[g.gate]) > 0
+    return g.value(signals), gate
 
 
 def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -> tuple:
@@ -941,42 +882,39 @@ def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:
     out: list[Any] = [None] * len(metrics)
     for slot, groups in _classes(metrics):
         if not isinstance(groups[0][1], _Stack):
-            out[slot] = _finalize([groups[0][1]], (accs[slot],))[0]
+            out[slot] = _final_value(groups[0][1], accs[slot])
             continue
         for (idx, g), acc in zip(groups, _blocks(groups, accs[slot]), strict=True):
-            values = _finalize([g], (acc,))[0]
+            values = _final_value(g, acc)
             for j, i in enumerate(idx):
                 out[i] = values[j]
     return tuple(out)
 
 
-def _finalize(metrics: Sequence[Any], accs: tuple) -> tuple:
-    out = []
-    for m, acc in zip(metrics, accs, strict=True):
-        if m.reduce in ("max", "min", "final", "at", "last"):
-            a, seen = acc
-            out.append(jnp.where(seen, a, jnp.nan))
-        elif m.reduce in ("mean", "rms"):
-            s, n = acc
-            seen, mean = n > 0, s / jnp.maximum(n, 1.0)
-            out.append(jnp.where(seen, mean if m.reduce == "mean" else jnp.sqrt(mean), jnp.nan))
-        elif m.reduce in ("integral", "stage_integral"):
-            s, n = acc
-            out.append(jnp.where(n > 0, s, jnp.nan))
-        elif m.reduce in ("settle", "first"):
-            out.append(acc[0])
-        elif m.reduce == "settle_delay":
-            out.append(acc[0] - m.start)
-        elif m.reduce == "stage_root_mean":
-            s, n = acc
-            out.append(jnp.where(n > 0, jnp.sqrt(s / (m.end - m.start)), jnp.nan))
-        elif m.reduce in BLOCK_REDUCTIONS:  # (..., sum of squares, closed blocks or their samples)
-            *_, q, n = acc
-            seen = n > 0
-            if m.reduce == "block_dev_rms":  # a sum of squared deviations (rounding may go below 0)
-                q = jnp.maximum(q, 0.0)
-            out.append(jnp.where(seen, jnp.sqrt(q / jnp.maximum(n, 1.0)), jnp.nan))
-    return tuple(out)
+def _final_value(m: Any, acc: tuple) -> jax.Array:
+    """The value of a group (or stage-integrated metric) from its accumulator tuple."""
+    if m.reduce in ("max", "min", "final", "at", "last"):
+        a, seen = acc
+        return jnp.where(seen, a, jnp.nan)
+    if m.reduce in ("mean", "rms"):
+        s, n = acc
+        seen, mean = n > 0, s / jnp.maximum(n, 1.0)
+        return jnp.where(seen, mean if m.reduce == "mean" else jnp.sqrt(mean), jnp.nan)
+    if m.reduce in ("integral", "stage_integral"):
+        s, n = acc
+        return jnp.where(n > 0, s, jnp.nan)
+    if m.reduce in ("settle", "first"):
+        return acc[0]
+    if m.reduce == "settle_delay":
+        return acc[0] - m.start
+    if m.reduce == "stage_root_mean":
+        s, n = acc
+        return jnp.where(n > 0, jnp.sqrt(s / (m.end - m.start)), jnp.nan)
+    # the block reductions: (..., sum of squares, closed blocks or their samples)
+    *_, q, n = acc
+    if m.reduce == "block_dev_rms":  # a sum of squared deviations (rounding may go below 0)
+        q = jnp.maximum(q, 0.0)
+    return jnp.where(n > 0, jnp.sqrt(q / jnp.maximum(n, 1.0)), jnp.nan)
 
 
 def stage_values(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> tuple:
@@ -1046,15 +984,15 @@ def update_stage_accumulators(
     >>> round(float(finalize(ms, accs)[0]), 6)
     1.8
     """
-    out = []
-    for m, acc, inc in zip(metrics, accs, increments, strict=True):
+
+    def update(m, acc, inc):
         if m.reduce not in STAGE_REDUCTIONS:
-            out.append(acc)
-            continue
+            return acc
         s, n = acc
         inw = jnp.logical_and(t_k >= m.start - _TOL, t_k + dt <= m.end + _TOL)
-        out.append((jnp.where(inw, s + inc, s), n + jnp.where(inw, 1.0, 0.0)))
-    return tuple(out)
+        return jnp.where(inw, s + inc, s), n + jnp.where(inw, 1.0, 0.0)
+
+    return tuple(update(*args) for args in zip(metrics, accs, increments, strict=True))
 
 
 def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, float]:
@@ -1082,9 +1020,6 @@ def metrics_dict(metrics: Sequence[Metric], values: Sequence[Any]) -> dict[str, 
     res: dict[str, float] = {}
     for m, v in zip(metrics, values, strict=True):
         arr = np.asarray(v, dtype=float)
-        if m.spacecraft == "each":
-            for i, x in enumerate(arr.reshape(-1)):
-                res[f"{m.name}_sc{i + 1}"] = float(x)
-        else:
-            res[m.name] = float(arr)
+        each = arr.reshape(-1) if m.spacecraft == "each" else [arr]
+        res.update(zip(metric_names([m], len(each)), map(float, each), strict=True))
     return res

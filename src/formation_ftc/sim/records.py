@@ -121,7 +121,4 @@ def _leaf_by_name(loop, name: str):
 
     state = jax.eval_shape(lambda p: (p.initial_state(), None), loop)
     flat, _ = jax.tree_util.tree_flatten_with_path(state)
-    for path, leaf in flat:
-        if _path_name(path) == name:
-            return leaf
-    return None
+    return next((leaf for path, leaf in flat if _path_name(path) == name), None)
