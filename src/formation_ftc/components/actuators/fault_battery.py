@@ -62,12 +62,7 @@ import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, field_validator
 
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import positive_values
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
 from formation_ftc.config.base import StrictModel
@@ -171,9 +166,8 @@ class FaultBatteryActuator(Actuator):
 
     def _limit(self) -> jnp.ndarray:
         """(N, 1) per-axis limit [N or N m]."""
-        return jnp.broadcast_to(jnp.asarray(self.saturation, dtype=jnp.float64), (self.count,))[
-            :, None
-        ]
+        limit = jnp.broadcast_to(jnp.asarray(self.saturation, dtype=jnp.float64), (self.count,))
+        return limit[:, None]
 
     def needs(self) -> dict[str, str]:
         if not self.euler_allocation:
@@ -184,10 +178,8 @@ class FaultBatteryActuator(Actuator):
         }
 
     def provides(self) -> frozenset[str]:
-        caps = {"true-actuator-fault"}
-        return frozenset(
-            caps | ({"generalised-torque-actuation"} if self.euler_allocation else set())
-        )
+        euler = {"generalised-torque-actuation"} if self.euler_allocation else set()
+        return frozenset({"true-actuator-fault"} | euler)
 
     def _body(self, t, command, inputs: ActuatorInputs):
         """The command in the actuator's axes (after the Euler-angle allocation when static-enabled)."""
@@ -233,9 +225,8 @@ class FaultBatteryActuator(Actuator):
         exo = inputs.exogenous
         y = exo["gain"] * u + exo["bias"]
         state = inputs.state
-        if (
-            state is None
-        ):  # a caller without the actuator state: the channel passes its saturated command
+        # a caller without the actuator state: the channel passes its saturated command
+        if state is None:
             return jnp.where(exo["stuck"], u, y)
         return jnp.where(exo["stuck"], jnp.where(state["frozen"], state["value"], u), y)
 
@@ -347,19 +338,14 @@ def _build(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryActuator:
     limit = np.inf if sec.saturation is None else sec.saturation
     sat = per_spacecraft(limit, n, "actuator.saturation")
     quantity = getattr(ctx.plant, "quantity", "force")
+    leaves = ("onset", "effectiveness", "bias", "period", "duty", "rate", "min_effectiveness")
     return FaultBatteryActuator(
         count=n,
         saturation=as_float(sat),
         fault_kind=as_float(fault_kind_code(sec.kind)),
         spacecraft=as_float(sec.spacecraft),
         axis=as_float(sec.axis),
-        onset=as_float(sec.onset),
-        effectiveness=as_float(sec.effectiveness),
-        bias=as_float(sec.bias),
-        period=as_float(sec.period),
-        duty=as_float(sec.duty),
-        rate=as_float(sec.rate),
-        min_effectiveness=as_float(sec.min_effectiveness),
+        **{name: as_float(getattr(sec, name)) for name in leaves},
         euler_allocation=sec.euler_allocation,
         units="N m" if quantity == "torque" else "N",
     )
