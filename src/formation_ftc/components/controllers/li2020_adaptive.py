@@ -33,12 +33,7 @@ import jax.numpy as jnp
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import positive_values
 from formation_ftc.components.controllers._formation import FormationSection, RotatingFormation
 from formation_ftc.config.base import StrictModel
@@ -211,6 +206,12 @@ def li2020_adaptation_rates(s, Y, xi, d_hat, sigma, gamma, eta, mu, upsilon):
 VEC = ("spacecraft", "axis")
 #: the adaptive parameters of the law (recorded signals) -> their units
 ADAPTIVE_PARAMETERS = {"m_hat": "kg", "beta_hat": "1", "d_hat": "N"}
+#: what each adaptive parameter estimates (the recorded signals' long names)
+_ESTIMATES = {
+    "m_hat": "mass estimate m_hat_i",
+    "beta_hat": "inverse-effectiveness estimate beta_hat_i",
+    "d_hat": "disturbance-bound estimate d_hat_i",
+}
 #: the recorded e_i2 of the laws on the composite error s_i = e_i2 + k_i e_i1 (eq. (6))
 VELOCITY_ERROR = Signal(
     "velocity_error", VEC, "m s-1", "measured velocity minus desired velocity e_i2", "LVLH"
@@ -318,9 +319,8 @@ class Li2020AdaptiveController(Controller):
     sigma_t0: Any = 1.0  # t0 of the inverse-square sigma [s]
     d_sign: Any = 1.0  # +1 corrected (E000-04), -1 literal eq. (42)
     orbit_mu: Any = MU_EARTH  # gravitational parameter of the on-board model [m^3/s^2]
-    sigma_form: str = static(
-        default="exponential"
-    )  # "exponential" (eq. (13)) or "inverse_square" (eq. (14))
+    #: "exponential" (eq. (13)) or "inverse_square" (eq. (14))
+    sigma_form: str = static(default="exponential")
     uses_messages: ClassVar[bool] = True
 
     def initial_state(self):
@@ -365,29 +365,15 @@ class Li2020AdaptiveController(Controller):
         beta_dot, m_dot, d_dot = li2020_adaptation_rates(
             s, Y, xi, state["d_hat"], d["sigma"], self.gamma, self.eta, self.mu, self.upsilon
         )  # (25)-(27)
-        outputs = {
-            "velocity_error": e2,
-            "m_hat": state["m_hat"],
-            "beta_hat": state["beta_hat"],
-            "d_hat": state["d_hat"],
-        }
+        outputs = {"velocity_error": e2, **{name: state[name] for name in ADAPTIVE_PARAMETERS}}
         return f, {"m_hat": m_dot, "beta_hat": beta_dot, "d_hat": d_dot}, outputs
 
     def signals(self):
         return (
             VELOCITY_ERROR,
-            Signal("m_hat", ("spacecraft",), ADAPTIVE_PARAMETERS["m_hat"], "mass estimate m_hat_i"),
-            Signal(
-                "beta_hat",
-                ("spacecraft",),
-                ADAPTIVE_PARAMETERS["beta_hat"],
-                "inverse-effectiveness estimate beta_hat_i",
-            ),
-            Signal(
-                "d_hat",
-                ("spacecraft",),
-                ADAPTIVE_PARAMETERS["d_hat"],
-                "disturbance-bound estimate d_hat_i",
+            *(
+                Signal(name, ("spacecraft",), unit, _ESTIMATES[name])
+                for name, unit in ADAPTIVE_PARAMETERS.items()
             ),
         )
 
@@ -463,18 +449,8 @@ class Li2020Section(StrictModel):
 
 
 #: per-spacecraft fields of the section (one number or N)
-_PER_SPACECRAFT = (
-    "k",
-    "lam",
-    "gamma",
-    "eta",
-    "mu",
-    "upsilon",
-    "m_hat0",
-    "beta_hat0",
-    "d_hat0",
-    "sigma_a",
-)
+_PER_SPACECRAFT: tuple[str, ...] = ("k", "lam", "gamma", "eta", "mu", "upsilon")
+_PER_SPACECRAFT += ("m_hat0", "beta_hat0", "d_hat0", "sigma_a")
 
 
 def _build(sec: Li2020Section, ctx: BuildContext) -> Li2020AdaptiveController:
