@@ -39,13 +39,7 @@ from formation_ftc.core.dynamics.euler_lagrange import (
     euler_rates_from_body_rates,
     rigid_body_rhs,
 )
-from formation_ftc.sim.components import (
-    Plant,
-    Signal,
-    StepContext,
-    TruthInputs,
-    component,
-)
+from formation_ftc.sim.components import Plant, Signal, StepContext, TruthInputs, component
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["EulerAngleAttitudePlant", "EulerAnglePlantSection", "seed_streams", "AXES"]

@@ -31,7 +31,7 @@ import numpy as np
 from pydantic import Field, PositiveFloat
 
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr
+from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr, expression_text
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
@@ -49,19 +49,8 @@ __all__ = [
 ]
 
 ERROR_COMPONENTS = [
-    "e_R_x",
-    "e_R_y",
-    "e_R_z",
-    "e_V_x",
-    "e_V_y",
-    "e_V_z",
-    "e_w_x",
-    "e_w_y",
-    "e_w_z",
-    "e_q_1",
-    "e_q_2",
-    "e_q_3",
-    "e_q_4",
+    *(f"e_{part}_{axis}" for part in ("R", "V", "w") for axis in "xyz"),
+    *(f"e_q_{k}" for k in "1234"),
 ]
 
 
@@ -142,12 +131,9 @@ class SwitchedFormationPlant(Plant):
         X = x["x"]
         e_R, e_V, e_w, e_q = X[:, 0:3], X[:, 3:6], X[:, 6:9], X[:, 9:13]
         f, tau = inputs.force[:, :3], inputs.force[:, 3:]
-        zero = jnp.zeros_like(
-            e_R
-        )  # drift Phi_i, Upsilon_i: cancelled exactly by (12)-(13) (E001-02)
-        omega = (
-            -e_w if self.rotation_coupling else None
-        )  # omega_i = -e_omega with the reference at rest
+        # drift Phi_i, Upsilon_i: cancelled exactly by (12)-(13) (E001-02)
+        zero = jnp.zeros_like(e_R)
+        omega = -e_w if self.rotation_coupling else None  # omega_i = -e_omega, reference at rest
         de_R, de_V = translational_error_rates(
             e_R, e_V, zero, f, inputs.exogenous["d"], self.mass[:, None], omega
         )  # Yang2013 eq. (2)
@@ -167,9 +153,8 @@ class SwitchedFormationPlant(Plant):
         if mode is None:
             return {"x": X, "left_norm": left}
         nxt = decision.next_mode
-        switched = (
-            jnp.einsum("ab,bc->ac", self.variation[nxt], X) + self.new_states[nxt]
-        )  # Yang2013 eq. (10)
+        # Yang2013 eq. (10)
+        switched = jnp.einsum("ab,bc->ac", self.variation[nxt], X) + self.new_states[nxt]
         return {"x": jnp.where(nxt != mode, switched, X), "left_norm": left}
 
     def signals(self):
@@ -305,8 +290,6 @@ def _build(sec: SwitchedFormationSection, ctx: BuildContext) -> SwitchedFormatio
     else:  # a placeholder of one mode: validation names the missing plan
         variation = np.eye(sec.count)[None]
         new_states = np.zeros((1, sec.count, STATE_DIM))
-    px, py, pz = sec.disturbance_force
-    tx, ty, tz = sec.disturbance_torque
     return SwitchedFormationPlant(
         mass=as_float(per_spacecraft(sec.mass, sec.count, "plant.mass")),
         inertia=as_float(np.diag(sec.inertia)),
@@ -315,8 +298,8 @@ def _build(sec: SwitchedFormationSection, ctx: BuildContext) -> SwitchedFormatio
         initial_translation=as_float(x0[:, 0:6]),
         variation=as_float(variation),
         new_states=as_float(new_states),
-        disturbance_force=(str(px), str(py), str(pz)),
-        disturbance_torque=(str(tx), str(ty), str(tz)),
+        disturbance_force=expression_text(sec.disturbance_force),
+        disturbance_torque=expression_text(sec.disturbance_torque),
         rotation_coupling=sec.rotation_coupling,
     )
 
