@@ -79,9 +79,8 @@ class NominalOrbitTracking(Controller):
 
     def exogenous(self, t):
         if self.hold_desired:
-            return {
-                "q0": self.desired_state + 0.0 * t
-            }  # fixed slots (same shape and dtype as (28))
+            # fixed slots (same shape and dtype as (28))
+            return {"q0": self.desired_state + 0.0 * t}
         return {"q0": cw_free_motion(self.mean_motion, self.desired_state, t)}  # (28)
 
     def desired_position_at(self, exogenous):
@@ -260,26 +259,16 @@ def _on_plant(law: Controller, sec: OutputFeedbackSection, ctx: BuildContext) ->
     from formation_ftc.components.evaluations._signal_arithmetic import PartNorm
 
     ctx.evaluations.extend(
-        [
-            PartNorm(
-                "position_tracking_error",
-                "tracking_error",
-                0,
-                3,
-                dims=SC,
-                units="m",
-                long_name="||position part of e_y = q0 - y||",
-            ),
-            PartNorm(
-                "velocity_tracking_error",
-                "tracking_error",
-                3,
-                6,
-                dims=SC,
-                units="m s-1",
-                long_name="||velocity part of e_y = q0 - y||",
-            ),
-        ]
+        PartNorm(
+            f"{part}_tracking_error",
+            "tracking_error",
+            lo,
+            hi,
+            dims=SC,
+            units=units,
+            long_name=f"||{part} part of e_y = q0 - y||",
+        )
+        for part, lo, hi, units in (("position", 0, 3, "m"), ("velocity", 3, 6, "m s-1"))
     )
     if ctx.plant.quantity == "force":
         masses = nominal_masses(

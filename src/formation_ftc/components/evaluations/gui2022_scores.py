@@ -21,13 +21,7 @@ from formation_ftc.components.evaluations._signal_arithmetic import PartNorm, Si
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import component
 
-__all__ = [
-    "Gui2022Scores",
-    "ScoresSection",
-    "lowpass_steps",
-    "LOWPASS_WINDOW",
-    "ESTIMATE_ERROR_AT",
-]
+__all__ = ["Gui2022Scores", "ScoresSection", "lowpass_steps", "LOWPASS_WINDOW", "ESTIMATE_ERROR_AT"]
 
 #: boxcar of the low-pass metrics [s]: F - F_hat (and v - h) averaged over consecutive blocks of this
 #: length before the RMS (``block_rms``); the deviation of F_hat from its block mean measures the
@@ -116,6 +110,7 @@ def _scores_metrics(
         return float(k * dt)
 
     last = (n_steps - 0.5) * dt  # window end that excludes the horizon sample
+    position_start = at(ks(sec.position_rms_start))
     onset = [ks(t) for t in onset_s]
     k_rms = [k + ks(sec.fault_rms_delay) for k in onset]
     worst = partial(Metric, spacecraft="max")  # the worst spacecraft
@@ -190,7 +185,7 @@ def _scores_metrics(
     pos = partial(worst, signal="position_tracking_error", units="m")
     axis = partial(worst, signal="tracking_error", reduce="max", norm=True, units="m")
     out += [
-        pos("pos_rms", reduce="rms", start=at(ks(sec.position_rms_start)), end=last),
+        pos("pos_rms", reduce="rms", start=position_start, end=last),
         pos("pos_max_after_fault", reduce="max", start=at(onset[0]), end=last),
         axis("ex_max_fault_window", component=0, start=at(onset[0]), end=(onset[2] - 0.5) * dt),
         axis("ez_max_after", component=2, start=at(ks(sec.z_amplitude_start)), end=last),
@@ -203,12 +198,7 @@ def _scores_metrics(
         # Fig. 10: low-pass RMS per axis of v - h and of h = d + F - F_hat from position_rms_start
         for i, ax in enumerate("xyz"):
             out += [
-                lowpass(
-                    f"{sig}_lowpass_rms_{ax}",
-                    sig,
-                    component=i,
-                    start=at(ks(sec.position_rms_start)),
-                )
+                lowpass(f"{sig}_lowpass_rms_{ax}", sig, component=i, start=position_start)
                 for sig in ("compensation_error", "synthesized_disturbance")
             ]
     return out
@@ -228,21 +218,13 @@ def _build(sec: ScoresSection, ctx: BuildContext) -> Gui2022Scores:
     onset_s = np.broadcast_to(onsets, (ctx.count, 3)).min(axis=0)  # earliest per axis [s]
     ctx.metrics.extend(_scores_metrics(sec, ctx, onset_s, tracks, learns))
     h = (("+", "disturbance"), ("+", "fault"))
+    h_mean = "h = d + F - mean(F_hat) over the record interval"
     ctx.evaluations.extend(
-        [
-            SignalSum(
-                "synthesized_disturbance",
-                (*h, ("-", "fault_estimate")),
-                units=ACC,
-                long_name="h = d + e_F (33)",
-            ),
-            SignalSum(
-                "synthesized_disturbance_mean",
-                (*h, ("-", "fault_estimate_mean")),
-                units=ACC,
-                long_name="h = d + F - mean(F_hat) over the record interval",
-            ),
-        ]
+        SignalSum(name, (*h, ("-", estimate)), units=ACC, long_name=long_name)
+        for name, estimate, long_name in (
+            ("synthesized_disturbance", "fault_estimate", "h = d + e_F (33)"),
+            ("synthesized_disturbance_mean", "fault_estimate_mean", h_mean),
+        )
     )
     if learns:
         ctx.evaluations.append(
