@@ -146,9 +146,8 @@ class EulerTorqueAllocation(Actuator):
 
     def apply(self, t, command, inputs: ActuatorInputs):
         q = euler_zyx_from_quaternion(inputs.plant_state["q"])
-        return body_torque_from_generalised(
-            q, self._generalised(t, command, inputs)
-        )  # tau_b = R_bar^T tau_gen
+        # tau_b = R_bar^T tau_gen
+        return body_torque_from_generalised(q, self._generalised(t, command, inputs))
 
     def update(self, t, state, command, inputs: ActuatorInputs):
         return self.inner.update(t, state, command, inputs)

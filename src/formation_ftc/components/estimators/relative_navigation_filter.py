@@ -19,12 +19,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Masses
 from formation_ftc.components.estimators._acceleration_model import WrapsInner
 from formation_ftc.config.base import StrictModel

@@ -208,31 +208,25 @@ class DelayedGraphNetwork(Network):
         return history_push(state, messages)
 
     def receive(self, t, state, inputs: NetworkInputs):
-        rows, _, sender_onehot, receiver_onehot = _link_selections(
-            self.edges, self.count
-        )  # (E, N), (N, E)
+        # the one-hot link selections of the senders (E, N) and of the receivers (N, E)
+        rows, _, sender_onehot, receiver_onehot = _link_selections(self.edges, self.count)
         C = self.adjacency
         T = inputs.exogenous["T"]
         elapsed = t - inputs.step.t
         # steps before the newest sample m(t_k) (read clamps at 0: the newest sample); the history
         # is sampled at the loop's step
         lag = (T - elapsed) / inputs.step.dt
-        rows_all = history_read(
-            state, lag
-        )  # (E, N, d): every sender's message at each link's delayed time
+        # (E, N, d): every sender's message at each link's delayed time
+        rows_all = history_read(state, lag)
         m_j = jnp.einsum("en,enk->ek", sender_onehot, rows_all)  # (E, d): m_{j_e}(t - T_e)
-        if not self.short_delays:
-            return self._combine(C, rows, sender_onehot, receiver_onehot, m_j)
-        # T < t - t_k: between m(t_k) and the message sent now, weight w = (t - T - t_k) / (t - t_k)
-        # (w = 1 exactly for T = 0); links with T >= t - t_k keep the stored value unchanged
-        recent = T < elapsed
-        w = jnp.where(recent, (elapsed - T) / jnp.where(recent, elapsed, 1.0), 0.0)[:, None]
-        m_now = jnp.einsum("en,nk->ek", sender_onehot, inputs.messages)  # (E, d): m_{j_e}(t)
-        m_j = jnp.where(recent[:, None], (1.0 - w) * m_j + w * m_now, m_j)
-        return self._combine(C, rows, sender_onehot, receiver_onehot, m_j)
-
-    @staticmethod
-    def _combine(C, rows, sender_onehot, receiver_onehot, m_j):
+        if self.short_delays:
+            # T < t - t_k: between m(t_k) and the message sent now, weight
+            # w = (t - T - t_k) / (t - t_k) (w = 1 exactly for T = 0); links with T >= t - t_k keep
+            # the stored value unchanged
+            recent = T < elapsed
+            w = jnp.where(recent, (elapsed - T) / jnp.where(recent, elapsed, 1.0), 0.0)[:, None]
+            m_now = jnp.einsum("en,nk->ek", sender_onehot, inputs.messages)  # (E, d): m_{j_e}(t)
+            m_j = jnp.where(recent[:, None], (1.0 - w) * m_j + w * m_now, m_j)
         c_e = jnp.sum(C[rows] * sender_onehot, axis=1)  # (E,) link weights c_{i_e j_e}
         weighted = receiver_onehot @ (c_e[:, None] * m_j)  # (N, d), eq. (42)
         return {"in_weight": jnp.sum(C, axis=1), "weighted_sum": weighted}
