@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import ast
 import math
+import operator
 from collections.abc import Callable, Sequence
-from functools import lru_cache
+from functools import lru_cache, reduce
 from typing import Any, NoReturn, cast
 
 import numpy as np
@@ -91,11 +92,6 @@ class _LazyJaxNumpy:
 jnp: Any = _LazyJaxNumpy()
 
 
-def _jnp(name: str) -> Callable:
-    """``jax.numpy.<name>``, looked up when called (so that the tables below import no JAX)."""
-    return lambda *args: getattr(jnp, name)(*args)
-
-
 def _first_true(where: Callable, args):
     """``piecewise(c1, v1, c2, v2, ..., default)``: the value of the first true condition."""
     out = args[-1]
@@ -104,65 +100,66 @@ def _first_true(where: Callable, args):
     return out
 
 
-def _piecewise(*args):
-    if len(args) < 3 or len(args) % 2 == 0:
-        raise TypeError("piecewise needs pairs (condition, value) followed by a default value")
-    return _first_true(jnp.where, args)
+def _function_table(xp: Any) -> dict[str, Callable]:
+    """The whitelisted functions over the array module ``xp``: :mod:`jax.numpy` for the compiled
+    expression, :mod:`numpy` (float64) to fold constant sub-expressions at validation. Each name is
+    looked up in ``xp`` when called, so that building the table imports no JAX."""
+
+    def lookup(name: str) -> Callable:
+        return lambda *args: getattr(xp, name)(*args)
+
+    same_name = "sin cos tan sinh cosh tanh exp log log10 sqrt abs sign floor ceil clip where"
+    table = {name: lookup(name) for name in same_name.split()}
+    table.update(
+        asin=lookup("arcsin"),
+        acos=lookup("arccos"),
+        atan=lookup("arctan"),
+        atan2=lookup("arctan2"),
+        min=lambda *a: reduce(xp.minimum, a),
+        max=lambda *a: reduce(xp.maximum, a),
+        step=lambda x: xp.where(x >= 0, 1.0, 0.0),
+        window=lambda x, lo, hi: xp.where((x >= lo) & (x <= hi), 1.0, 0.0),
+        piecewise=lambda *a: _first_true(xp.where, a),
+    )
+    return table
 
 
+#: (min args, max args) of the functions that do not take exactly one argument
+_ARITY: dict[str, tuple[int, int | None]] = {
+    "atan2": (2, 2),
+    "min": (2, None),
+    "max": (2, None),
+    "clip": (3, 3),
+    "where": (3, 3),
+    "window": (3, 3),
+    "piecewise": (3, None),
+}
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, int | None]]] = {
     # name: (function, (min args, max args))
-    "sin": (_jnp("sin"), (1, 1)),
-    "cos": (_jnp("cos"), (1, 1)),
-    "tan": (_jnp("tan"), (1, 1)),
-    "asin": (_jnp("arcsin"), (1, 1)),
-    "acos": (_jnp("arccos"), (1, 1)),
-    "atan": (_jnp("arctan"), (1, 1)),
-    "atan2": (_jnp("arctan2"), (2, 2)),
-    "sinh": (_jnp("sinh"), (1, 1)),
-    "cosh": (_jnp("cosh"), (1, 1)),
-    "tanh": (_jnp("tanh"), (1, 1)),
-    "exp": (_jnp("exp"), (1, 1)),
-    "log": (_jnp("log"), (1, 1)),
-    "log10": (_jnp("log10"), (1, 1)),
-    "sqrt": (_jnp("sqrt"), (1, 1)),
-    "abs": (_jnp("abs"), (1, 1)),
-    "sign": (_jnp("sign"), (1, 1)),
-    "floor": (_jnp("floor"), (1, 1)),
-    "ceil": (_jnp("ceil"), (1, 1)),
-    "min": (lambda *a: _reduce(_jnp("minimum"), a), (2, None)),
-    "max": (lambda *a: _reduce(_jnp("maximum"), a), (2, None)),
-    "clip": (_jnp("clip"), (3, 3)),
-    "where": (_jnp("where"), (3, 3)),
-    "step": (lambda x: jnp.where(x >= 0, 1.0, 0.0), (1, 1)),
-    "window": (lambda x, lo, hi: jnp.where((x >= lo) & (x <= hi), 1.0, 0.0), (3, 3)),
-    "piecewise": (_piecewise, (3, None)),
+    name: (fn, _ARITY.get(name, (1, 1)))
+    for name, fn in _function_table(jnp).items()
 }
 CONSTANTS = {"pi": math.pi, "e": math.e}
+#: numpy float64 twins of FUNCTIONS, used to fold constant sub-expressions at validation
+_NP_FUNCTIONS = _function_table(np)
 
-
-def _reduce(op, args):
-    out = args[0]
-    for a in args[1:]:
-        out = op(out, a)
-    return out
-
-
+#: operator -> (Python operator, traced by JAX; its numpy float64 twin for constant folding)
 _BINOPS = {
-    ast.Add: lambda a, b: a + b,
-    ast.Sub: lambda a, b: a - b,
-    ast.Mult: lambda a, b: a * b,
-    ast.Div: lambda a, b: a / b,
-    ast.Pow: lambda a, b: a**b,
-    ast.Mod: lambda a, b: a % b,
+    ast.Add: (operator.add, np.add),
+    ast.Sub: (operator.sub, np.subtract),
+    ast.Mult: (operator.mul, np.multiply),
+    ast.Div: (operator.truediv, np.true_divide),
+    ast.Pow: (operator.pow, np.power),
+    ast.Mod: (operator.mod, np.remainder),
 }
+#: comparison -> name of its function in jax.numpy and numpy
 _CMPOPS = {
-    ast.Lt: _jnp("less"),
-    ast.LtE: _jnp("less_equal"),
-    ast.Gt: _jnp("greater"),
-    ast.GtE: _jnp("greater_equal"),
-    ast.Eq: _jnp("equal"),
-    ast.NotEq: _jnp("not_equal"),
+    ast.Lt: "less",
+    ast.LtE: "less_equal",
+    ast.Gt: "greater",
+    ast.GtE: "greater_equal",
+    ast.Eq: "equal",
+    ast.NotEq: "not_equal",
 }
 
 Env = dict
@@ -280,52 +277,6 @@ def _check_size(root: ast.AST, text: str, field: str) -> None:
         stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
 
 
-#: numpy float64 twins of FUNCTIONS, used to fold constant sub-expressions at validation
-_NP_FUNCTIONS: dict[str, Callable] = {
-    "sin": np.sin,
-    "cos": np.cos,
-    "tan": np.tan,
-    "asin": np.arcsin,
-    "acos": np.arccos,
-    "atan": np.arctan,
-    "atan2": np.arctan2,
-    "sinh": np.sinh,
-    "cosh": np.cosh,
-    "tanh": np.tanh,
-    "exp": np.exp,
-    "log": np.log,
-    "log10": np.log10,
-    "sqrt": np.sqrt,
-    "abs": np.abs,
-    "sign": np.sign,
-    "floor": np.floor,
-    "ceil": np.ceil,
-    "min": lambda *a: _reduce(np.minimum, a),
-    "max": lambda *a: _reduce(np.maximum, a),
-    "clip": np.clip,
-    "where": np.where,
-    "step": lambda x: np.where(x >= 0, 1.0, 0.0),
-    "window": lambda x, lo, hi: np.where((x >= lo) & (x <= hi), 1.0, 0.0),
-    "piecewise": lambda *a: _first_true(np.where, a),
-}
-_NP_BINOPS = {
-    ast.Add: np.add,
-    ast.Sub: np.subtract,
-    ast.Mult: np.multiply,
-    ast.Div: np.true_divide,
-    ast.Pow: np.power,
-    ast.Mod: np.remainder,
-}
-_NP_CMPOPS = {
-    ast.Lt: np.less,
-    ast.LtE: np.less_equal,
-    ast.Gt: np.greater,
-    ast.GtE: np.greater_equal,
-    ast.Eq: np.equal,
-    ast.NotEq: np.not_equal,
-}
-
-
 class _Folder:
     """Evaluate every constant sub-expression in numpy float64 with floating-point errors raised.
 
@@ -368,49 +319,33 @@ class _Folder:
             return np.float64(cast(float, node.value))  # the compiler admitted only int | float
         if isinstance(node, ast.Name):
             return np.float64(CONSTANTS[node.id]) if node.id not in self.c.variables else None
-        if isinstance(node, ast.BinOp):
-            a, b = self._fold(node.left), self._fold(node.right)
-            if b is not None and isinstance(node.op, ast.Div | ast.Mod) and b == 0:
+        # the operands, in source order (the operators themselves are not expressions)
+        operands = node.args if isinstance(node, ast.Call) else ast.iter_child_nodes(node)
+        vals = [self._fold(a) for a in operands if isinstance(a, ast.expr)]
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div | ast.Mod):
+            if vals[1] is not None and vals[1] == 0:
                 op = "division" if isinstance(node.op, ast.Div) else "modulo"
                 self.c.fail(node.right, f"{op} by a constant zero")
-            if a is None or b is None:
-                return None
-            return self._apply(node, _NP_BINOPS[type(node.op)], np.float64(a), np.float64(b))
+        if any(v is None for v in vals):
+            return None
+        if isinstance(node, ast.BinOp):
+            a, b = np.float64(vals[0]), np.float64(vals[1])
+            return self._apply(node, _BINOPS[type(node.op)][1], a, b)
         if isinstance(node, ast.UnaryOp):
-            x = self._fold(node.operand)
-            if x is None:
-                return None
             if isinstance(node.op, ast.USub):
-                return self._apply(node, np.negative, x)
-            if isinstance(node.op, ast.Not):
-                return np.logical_not(x)
-            return x
+                return self._apply(node, np.negative, vals[0])
+            return np.logical_not(vals[0]) if isinstance(node.op, ast.Not) else vals[0]
         if isinstance(node, ast.BoolOp):
-            vals = [self._fold(v) for v in node.values]
-            if any(v is None for v in vals):
-                return None
-            return _reduce(np.logical_and if isinstance(node.op, ast.And) else np.logical_or, vals)
+            return reduce(np.logical_and if isinstance(node.op, ast.And) else np.logical_or, vals)
         if isinstance(node, ast.Compare):
-            vals = [self._fold(node.left)] + [self._fold(c) for c in node.comparators]
-            if any(v is None for v in vals):
-                return None
             out = np.bool_(True)
             for cmp, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True):
-                out = np.logical_and(out, _NP_CMPOPS[type(cmp)](a, b))
+                out = np.logical_and(out, getattr(np, _CMPOPS[type(cmp)])(a, b))
             return out
         if isinstance(node, ast.IfExp):
-            c, a, b = self._fold(node.test), self._fold(node.body), self._fold(node.orelse)
-            if c is None or a is None or b is None:
-                return None
-            return np.where(c, a, b)
-        if isinstance(node, ast.Call):
-            args = [self._fold(a) for a in node.args]
-            if any(a is None for a in args):
-                return None
-            return self._apply(
-                node, _NP_FUNCTIONS[cast(ast.Name, node.func).id], *args
-            )  # compiler: a Name
-        return None  # pragma: no cover - the compiler rejected every other node
+            return np.where(*vals)
+        # a call (the compiler rejected every other node; its function is a plain name)
+        return self._apply(node, _NP_FUNCTIONS[cast(ast.Name, cast(ast.Call, node).func).id], *vals)
 
 
 class _Compiler:
@@ -453,9 +388,9 @@ class _Compiler:
         self.fail(node, f"unknown name {name!r}{hint}; allowed names: {', '.join(allowed)}")
 
     def visit_BinOp(self, node: ast.BinOp):
-        op = _BINOPS.get(type(node.op))
-        if op is None:
+        if type(node.op) not in _BINOPS:
             self.fail(node, f"operator {type(node.op).__name__} is not allowed")
+        op = _BINOPS[type(node.op)][0]
         a, b = self.visit(node.left), self.visit(node.right)
         return lambda env: op(a(env), b(env))
 
@@ -471,26 +406,23 @@ class _Compiler:
 
     def visit_BoolOp(self, node: ast.BoolOp):
         parts = [self.visit(v) for v in node.values]
-        op = _jnp("logical_and") if isinstance(node.op, ast.And) else _jnp("logical_or")
-        return lambda env: _reduce(op, [p(env) for p in parts])
+        op = "logical_and" if isinstance(node.op, ast.And) else "logical_or"
+        return lambda env: reduce(getattr(jnp, op), [p(env) for p in parts])
 
     def visit_Compare(self, node: ast.Compare):
         left = self.visit(node.left)
         rights = [self.visit(c) for c in node.comparators]
-        ops = []
         for o in node.ops:
             if type(o) not in _CMPOPS:
                 self.fail(node, f"comparison {type(o).__name__} is not allowed")
-            ops.append(_CMPOPS[type(o)])
+        ops = [_CMPOPS[type(o)] for o in node.ops]
 
         def fn(env):
-            out, a = None, left(env)
-            for op, r in zip(ops, rights, strict=True):
-                b = r(env)
-                c = op(a, b)
-                out = c if out is None else jnp.logical_and(out, c)
-                a = b
-            return out
+            vals = [left(env)] + [r(env) for r in rights]
+            tests = [
+                getattr(jnp, op)(a, b) for op, a, b in zip(ops, vals[:-1], vals[1:], strict=True)
+            ]
+            return reduce(jnp.logical_and, tests)
 
         return fn
 
