@@ -181,20 +181,17 @@ def add_budget_options(
     parser.add_argument(
         "--max-memory",
         metavar="SIZE",
-        default=None,
         help=f"memory budget of {batch}, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
     )
     parser.add_argument(
         "--max-run-steps",
         metavar="N",
-        default=None,
         help="integration steps allowed per run (default 1e9; 0 = none)",
     )
     if whole is not None:
         parser.add_argument(
             "--max-campaign-steps",
             metavar="N",
-            default=None,
             help=f"run-steps allowed in {whole} (default 1e11; 0 = none)",
         )
 
@@ -202,14 +199,11 @@ def add_budget_options(
 def add_dask_options(parser: argparse.ArgumentParser) -> None:
     """The Dask executor options shared by ``campaign run`` and ``league run`` (mutually exclusive)."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument(
-        "--scheduler", metavar="ADDR", default=None, help="Dask scheduler tcp://HOST:PORT"
-    )
+    g.add_argument("--scheduler", metavar="ADDR", help="Dask scheduler tcp://HOST:PORT")
     g.add_argument(
         "--dask-local",
         metavar="N",
         type=int,
-        default=None,
         help="start a Dask LocalCluster with N worker processes",
     )
 
@@ -232,16 +226,11 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q.add_argument(
         "--out", required=True, help="results directory (resumed when it holds this campaign)"
     )
-    q.add_argument(
-        "--runs", type=int, default=None, help="runs per grid point (overrides the file)"
-    )
-    q.add_argument(
-        "--chunk-size", type=int, default=None, help="runs per vmap batch (overrides the file)"
-    )
+    q.add_argument("--runs", type=int, help="runs per grid point (overrides the file)")
+    q.add_argument("--chunk-size", type=int, help="runs per vmap batch (overrides the file)")
     q.add_argument(
         "--workers",
         type=int,
-        default=None,
         help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
         "one per chunk), in-process for campaigns under 10 million run-steps",
     )
@@ -250,7 +239,6 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
         "--connect-timeout",
         metavar="S",
         type=float,
-        default=None,
         help="seconds allowed for the Dask scheduler handshake (default 30)",
     )
     add_budget_options(q, batch="one batch of chunk-size runs", whole="the whole campaign")

@@ -29,7 +29,6 @@ k is written by a background writer thread while chunk k+1 computes; the stored 
 
 from __future__ import annotations
 
-import functools
 import json
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
@@ -46,7 +45,7 @@ from formation_ftc.campaign.sampling import CampaignPlan, Chunk, ChunkList, RunC
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
 from formation_ftc.sim.batch import batched_run, stack_params
-from formation_ftc.sim.runtime import xla
+from formation_ftc.sim.programs import jitted_run
 
 __all__ = [
     "ChunkResult",
@@ -219,18 +218,6 @@ def _trace(plan: CampaignPlan, loop, scenario, inputs, out: Mapping[str, Any], s
     return ds
 
 
-def _closed_loop_run(loop):
-    return loop.run()
-
-
-@functools.cache
-def _run_alone_program() -> Callable:
-    """One closed-loop run with its records, jitted once (on first use: building it picks the backend's
-    compile options): the loop is an argument (a pytree), so every failed or traced run of one structure
-    reuses one compiled program instead of tracing a new closure per run."""
-    return xla.jit(_closed_loop_run)
-
-
 #: per-process cache: (plan hash, group key) -> (template loop, bindings) or None (not bindable)
 _BINDINGS: dict[Any, Any] = {}
 #: cache keys of _BINDINGS whose bound parameters matched a per-run build in this process
@@ -252,7 +239,8 @@ def _bound_chunk(
     runs). None when a field cannot be bound.
 
     Returns the chunk's *finisher*: the batch has been dispatched (JAX computes asynchronously) and
-    the finisher waits for it and assembles the table, so a caller may start the next chunk first."""
+    the finisher waits for it, reads the metrics, assembles the table and re-runs the failed and
+    traced runs, so a caller may start the next chunk first."""
     from formation_ftc import api
     from formation_ftc.campaign.binding import (
         SEED_PATH,
@@ -261,6 +249,7 @@ def _bound_chunk(
         params_close,
         take_run,
     )
+    from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     n = len(cols)
     bindable = [
@@ -314,52 +303,45 @@ def _bound_chunk(
     if pending is None:
         pending = engine(batch)
     data = _columns(plan, chunk, cols)
-    return lambda: _finish_bound(plan, chunk, cols, t_start, template, batch, axes, pending, data)
 
+    def finish() -> ChunkResult:
+        out = jax.device_get(pending)
+        names = loop_metric_names(template.metrics, template.count)
+        # one column per name: a per-spacecraft metric's (runs, spacecraft) array gives one per spacecraft
+        columns = [
+            c for a in out["metrics"] for c in np.asarray(a, np.float64)[:n].reshape(n, -1).T
+        ]
+        metric_cols = dict(zip(names, columns, strict=True))
+        keep = plan.spec.campaign.metrics
+        _require_metrics(keep, names, plan.scenario(cols.row(0, plan.base_names)).scenario.method)
+        failed = np.asarray(out["diverged_step"])[:n] >= 0
+        data.update(status=np.where(failed, "failed", "ok"), diagnostic=[""] * n)
+        for name in keep or names:
+            data[f"metric:{name}"] = np.where(failed, np.nan, metric_cols[name]).astype("float64")
+        table = pd.DataFrame(data)
+        traces = {}
+        trace_runs = set(plan.spec.traces.runs)
+        for j in np.flatnonzero(failed | np.isin(cols.run_id, list(trace_runs))).tolist():
+            # re-run alone with the scenario's records (and the replay that names a divergence)
+            inp = cols.row(j, plan.base_names)
+            scn = plan.scenario(inp)
+            # the scenario's recording interval (structural: the batch ran with one record at each end)
+            loop_j = replace(
+                take_run(batch, axes, j), record_every=int(scn.simulation.record_every)
+            )
+            run_out = jax.device_get(jitted_run(loop_j)(loop_j))
+            if failed[j]:
+                table.at[j, "diagnostic"] = _diagnostic(
+                    loop_j, run_out, int(run_out["diverged_step"])
+                )
+            if inp.run_id in trace_runs:
+                traces[inp.run_id] = _trace(
+                    plan, loop_j, scn, inp, run_out, str(table.at[j, "status"])
+                )
+        table.attrs["metric_units"] = _metric_units(template.metrics, template.count)
+        return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
 
-def _finish_bound(
-    plan: CampaignPlan,
-    chunk: Chunk,
-    cols: RunColumns,
-    t_start: float,
-    template,
-    batch,
-    axes,
-    pending,
-    data: dict[str, Any],
-) -> ChunkResult:
-    """Second half of :func:`_bound_chunk`: wait for the batch, then metrics, table, re-runs."""
-    from formation_ftc.campaign.binding import take_run
-    from formation_ftc.sim.metrics import metric_names as loop_metric_names
-
-    n = len(cols)
-    out = jax.device_get(pending)
-    names = loop_metric_names(template.metrics, template.count)
-    # one column per name: a per-spacecraft metric's (runs, spacecraft) array gives one per spacecraft
-    columns = [c for a in out["metrics"] for c in np.asarray(a, np.float64)[:n].reshape(n, -1).T]
-    metric_cols = dict(zip(names, columns, strict=True))
-    keep = plan.spec.campaign.metrics
-    _require_metrics(keep, names, plan.scenario(cols.row(0, plan.base_names)).scenario.method)
-    failed = np.asarray(out["diverged_step"])[:n] >= 0
-    data.update(status=np.where(failed, "failed", "ok"), diagnostic=[""] * n)
-    for name in keep or names:
-        data[f"metric:{name}"] = np.where(failed, np.nan, metric_cols[name]).astype("float64")
-    table = pd.DataFrame(data)
-    traces = {}
-    trace_runs = set(plan.spec.traces.runs)
-    for j in np.flatnonzero(failed | np.isin(cols.run_id, list(trace_runs))).tolist():
-        # re-run alone with the scenario's records (and the replay that names a divergence)
-        inp = cols.row(j, plan.base_names)
-        scn = plan.scenario(inp)
-        # the scenario's recording interval (structural: the batch ran with one record at each end)
-        loop_j = replace(take_run(batch, axes, j), record_every=int(scn.simulation.record_every))
-        run_out = jax.device_get(_run_alone_program()(loop_j))
-        if failed[j]:
-            table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out, int(run_out["diverged_step"]))
-        if inp.run_id in trace_runs:
-            traces[inp.run_id] = _trace(plan, loop_j, scn, inp, run_out, str(table.at[j, "status"]))
-    table.attrs["metric_units"] = _metric_units(template.metrics, template.count)
-    return ChunkResult(chunk.chunk_id, table, traces, time.perf_counter() - t_start)
+    return finish
 
 
 def run_chunk(plan: CampaignPlan, chunk: Chunk) -> ChunkResult:
