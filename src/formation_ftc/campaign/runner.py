@@ -29,6 +29,7 @@ k is written by a background writer thread while chunk k+1 computes; the stored 
 
 from __future__ import annotations
 
+import functools
 import json
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
@@ -448,71 +449,58 @@ def make_plan(
     return CampaignPlan(spec, base_dir, drop_missing_traces=runs is not None)
 
 
-class _Progress:
-    """The progress bar of :func:`run_campaign` (on stderr): runs stored, then runs/s, elapsed time and
-    ETA over the whole wall time since ``started`` (a ``time.perf_counter`` value; planning and
-    compilation included), counting only the runs computed since then (not those kept from an earlier
-    run)."""
+def _progress_bar(enabled: bool, total: int, done: int, name: str, started: float):
+    """The progress bar of :func:`run_campaign` (on stderr; a no-op when not ``enabled``), started:
+    runs stored, then runs/s, elapsed time and ETA over the whole wall time since ``started`` (a
+    ``time.perf_counter`` value; planning and compilation included), counting only the runs computed
+    since then (not those kept from an earlier run). Its one task is advanced by the runs stored."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn
+    from rich.text import Text
 
-    def __init__(self, enabled: bool, total: int, done: int, name: str, started: float):
-        self.p = None
-        if not enabled:
-            return
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            ProgressColumn,
-            TextColumn,
-        )
-        from rich.text import Text
+    def clock(seconds: float) -> str:
+        s = int(round(seconds))
+        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
-        def clock(seconds: float) -> Text:
-            s = int(round(seconds))
-            return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
+    def rate(task) -> float:
+        elapsed = time.perf_counter() - started
+        return (task.completed - done) / elapsed if elapsed > 0 else 0.0
 
-        def rate(task) -> float:
-            elapsed = time.perf_counter() - started
-            return (task.completed - done) / elapsed if elapsed > 0 else 0.0
+    def rate_text(task) -> str:
+        r = rate(task)
+        return f"{r:.3g} runs/s" if r > 0 else "-- runs/s"
 
-        class RunsPerSecond(ProgressColumn):
-            def render(self, task):
-                r = rate(task)
-                return Text(f"{r:.3g} runs/s" if r > 0 else "-- runs/s")
+    def time_left(task) -> str:
+        r = rate(task)
+        if task.finished:
+            return clock(0.0)
+        return clock((task.total - task.completed) / r) if r > 0 else "-:--:--"
 
-        class Elapsed(ProgressColumn):
-            def render(self, task):
-                return clock(time.perf_counter() - started)
+    class Column(ProgressColumn):
+        """A column whose text is ``text(task)``."""
 
-        class TimeLeft(ProgressColumn):
-            def render(self, task):
-                r = rate(task)
-                if task.finished:
-                    return clock(0.0)
-                return clock((task.total - task.completed) / r) if r > 0 else Text("-:--:--")
+        def __init__(self, text: Callable[[Any], str]):
+            super().__init__()
+            self.text = text
 
-        self.p = Progress(
-            TextColumn(f"[bold]{name}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("runs"),
-            RunsPerSecond(),
-            Elapsed(),
-            TextColumn("ETA"),
-            TimeLeft(),
-            console=Console(stderr=True),
-        )
-        self.p.start()
-        self.task = self.p.add_task(name, total=total, completed=done)
+        def render(self, task):
+            return Text(self.text(task))
 
-    def advance(self, n: int) -> None:
-        if self.p is not None:
-            self.p.update(self.task, advance=n)
-
-    def close(self) -> None:
-        if self.p is not None:
-            self.p.stop()
+    bar = Progress(
+        TextColumn(f"[bold]{name}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("runs"),
+        Column(rate_text),
+        Column(lambda task: clock(time.perf_counter() - started)),
+        TextColumn("ETA"),
+        Column(time_left),
+        console=Console(stderr=True),
+        disable=not enabled,
+    )
+    bar.start()
+    bar.add_task(name, total=total, completed=done)
+    return bar
 
 
 def run_campaign(
@@ -556,9 +544,10 @@ def run_campaign(
         executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
         store.initialize()  # takes the directory's lock (refused while another run writes there)
-        bar = _Progress(
+        bar = _progress_bar(
             progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name, t0
         )
+        advance = functools.partial(bar.advance, bar.task_ids[0])
         # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
         # at most one write is in flight and a write error stops the campaign at the next chunk. Leaving
         # the writer (on an error too) waits for a write under way: a finished chunk is never lost
@@ -567,12 +556,12 @@ def run_campaign(
             with ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer") as writer:
                 for res in _map_in_windows(executor, plan, todo):
                     if writing is not None:
-                        bar.advance(writing.result())
+                        advance(writing.result())
                     writing = writer.submit(_store_chunk, store, res)
                 if writing is not None:
-                    bar.advance(writing.result())
+                    advance(writing.result())
         finally:
-            bar.close()
+            bar.stop()
             store.close()
     results = store.load_results()
     failed = results["status"] != "ok"

@@ -308,19 +308,14 @@ def _walk(tree: Any, path: str) -> tuple[bool, Any, str]:
     node = tree
     done: list[str] = []
     for part in path.split("."):
-        if isinstance(node, Mapping):
-            if part not in node:
+        try:
+            if isinstance(node, Mapping):
+                node = node[part]
+            elif isinstance(node, list | tuple):
+                node = node[int(part)]
+            else:
                 return False, node, ".".join(done)
-            node = node[part]
-        elif isinstance(node, list | tuple):
-            try:
-                k = int(part)
-            except ValueError:
-                return False, node, ".".join(done)
-            if not -len(node) <= k < len(node):
-                return False, node, ".".join(done)
-            node = node[k]
-        else:
+        except (KeyError, ValueError, IndexError):
             return False, node, ".".join(done)
         done.append(part)
     return True, node, path
@@ -604,15 +599,8 @@ class CampaignPlan:
             design = self.design()
             for m, s in enumerate(self.random_samplers):
                 values[s.path] = [value_from_unit(s, u) for u in design[keys, m].tolist()]
-        ordered = {s.path: values[s.path] for s in self.samplers}
-        return RunColumns(
-            ids,
-            g,
-            j,
-            run_seeds(self.seed, keys) if ids.size else np.zeros(0, np.int64),
-            base,
-            ordered,
-        )
+        seeds = run_seeds(self.seed, keys) if ids.size else np.zeros(0, np.int64)
+        return RunColumns(ids, g, j, seeds, base, {s.path: values[s.path] for s in self.samplers})
 
     def _design_rows(self) -> int:
         """Rows of the quasi-Monte Carlo design: one per sampling key."""
