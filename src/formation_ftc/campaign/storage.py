@@ -93,10 +93,6 @@ def sha256_file(path: Path) -> str:
         return hashlib.file_digest(f, "sha256").hexdigest()
 
 
-def _warn(msg: str) -> None:
-    print(f"warning: {msg}", file=sys.stderr)
-
-
 def _package_version() -> str:
     from formation_ftc import __version__
 
@@ -225,7 +221,7 @@ class CampaignStore:
         for cid in sorted(finished):
             problem = store.verify_chunk(cid)
             if problem:  # reported and recomputed, never used
-                _warn(f"{problem}; chunk {cid} will be recomputed")
+                print(f"warning: {problem}; chunk {cid} will be recomputed", file=sys.stderr)
                 continue
             store._check_chunk(cid, plan.chunk(cid).run_ids)
             store._finished.add(cid)

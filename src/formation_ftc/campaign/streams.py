@@ -24,6 +24,7 @@ its seeding would make the callers fall back to the per-run objects rather than 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Sequence
 
 import numpy as np
@@ -48,13 +49,7 @@ def _int_words(n: int) -> list[int]:
     """NumPy's ``_int_to_uint32_array``: little-endian 32-bit words of a non-negative integer."""
     if n < 0:
         raise ValueError("entropy and spawn keys must be non-negative")
-    if n == 0:
-        return [0]
-    out = []
-    while n > 0:
-        out.append(n & _M32)
-        n >>= 32
-    return out
+    return [(n >> shift) & _M32 for shift in range(0, max(n.bit_length(), 1), 32)]
 
 
 def _hashmix(value: np.ndarray, hc: list[int]) -> np.ndarray:
@@ -184,18 +179,13 @@ def generators(
         yield gen
 
 
-_CHECKED: bool | None = None
-
-
+@functools.cache
 def available() -> bool:
     """True when this module reproduces the installed NumPy (checked once per process on a few keys)."""
-    global _CHECKED
-    if _CHECKED is None:
-        try:
-            _CHECKED = _self_check()
-        except Exception:  # noqa: BLE001 - any surprise: the callers use NumPy's objects
-            _CHECKED = False
-    return _CHECKED
+    try:
+        return _self_check()
+    except Exception:  # noqa: BLE001 - any surprise: the callers use NumPy's objects
+        return False
 
 
 def _self_check() -> bool:

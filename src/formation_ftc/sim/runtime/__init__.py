@@ -34,6 +34,7 @@ This module imports no JAX at import time: the command line answers ``--help`` w
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import sys
@@ -266,15 +267,13 @@ def _report(problem: str) -> None:
     chmod = ""
     if problem.endswith(" is writable by its group or by others"):
         chmod = f"chmod go-w {problem.removesuffix(' is writable by its group or by others')}, or "
-    try:
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # a closed or full stderr
         print(
             f"formation-ftc: compilation cache off: {problem} (fix: {chmod}set "
             "FORMATION_FTC_JAX_CACHE to a directory whose every parent is yours or root's and "
             "writable by no one else, or to off)",
             file=sys.stderr,
         )
-    except (OSError, ValueError, AttributeError):  # a closed or full stderr
-        pass
 
 
 def private_cache_dir(cache: str) -> str | None:
@@ -350,19 +349,21 @@ def check_cache() -> bool:
 
         jax.monitoring.register_event_listener(_before_cache_read)
         _LISTENING = True
-    problem = unsafe_directory(_GUARDED)
+    return _guard()
+
+
+def _guard() -> bool:
+    """Whether the guarded cache directory still passes :func:`unsafe_directory`; else switch it off."""
+    problem = None if _GUARDED is None else unsafe_directory(_GUARDED)
     if problem is not None:
         _switch_off(problem)
-        return False
-    return True
+    return _GUARDED is not None
 
 
 def _before_cache_read(event: str, **_: object) -> None:
     """JAX's event listener: runs the check of :func:`check_cache` before each persistent-cache read."""
-    if event == _CACHE_READ_EVENT and _GUARDED is not None:
-        problem = unsafe_directory(_GUARDED)
-        if problem is not None:
-            _switch_off(problem)
+    if event == _CACHE_READ_EVENT:
+        _guard()
 
 
 def _switch_off(problem: str) -> None:
