@@ -20,23 +20,16 @@ from typing import TYPE_CHECKING
 
 # loaded on first use, so that ``formation-ftc --help`` does not import SciPy, pandas or JAX
 _LAZY = {
-    "DaskExecutor": "executors",
-    "LocalExecutor": "executors",
-    "make_executor": "executors",
-    "summarize": "report",
-    "write_report": "report",
-    "CampaignOutcome": "runner",
-    "make_plan": "runner",
-    "run_campaign": "runner",
-    "run_chunk": "runner",
-    "CampaignPlan": "sampling",
-    "Chunk": "sampling",
-    "RunInputs": "sampling",
-    "CampaignError": "spec",
-    "CampaignSpec": "spec",
-    "builtin_campaigns": "spec",
-    "load_campaign": "spec",
-    "CampaignStore": "storage",
+    name: sub
+    for sub, names in {
+        "executors": ("DaskExecutor", "LocalExecutor", "make_executor"),
+        "report": ("summarize", "write_report"),
+        "runner": ("CampaignOutcome", "make_plan", "run_campaign", "run_chunk"),
+        "sampling": ("CampaignPlan", "Chunk", "RunInputs"),
+        "spec": ("CampaignError", "CampaignSpec", "builtin_campaigns", "load_campaign"),
+        "storage": ("CampaignStore",),
+    }.items()
+    for name in names
 }
 
 if TYPE_CHECKING:  # pragma: no cover
