@@ -216,11 +216,9 @@ class LocalExecutor:
             yield finish()
 
     def describe(self) -> str:
-        return (
-            "local (in-process)"
-            if self.workers == 1
-            else f"local process pool ({self.workers} workers)"
-        )
+        if self.workers == 1:
+            return "local (in-process)"
+        return f"local process pool ({self.workers} workers)"
 
 
 def parse_scheduler_address(address: str) -> tuple[str, int]:
@@ -385,11 +383,9 @@ class DaskExecutor:
         yield from _results(futures, dask_as_completed)
 
     def describe(self) -> str:
-        return (
-            f"dask ({self.scheduler})"
-            if self.scheduler
-            else f"dask LocalCluster ({self.n_local} workers)"
-        )
+        if self.scheduler:
+            return f"dask ({self.scheduler})"
+        return f"dask LocalCluster ({self.n_local} workers)"
 
 
 def make_executor(

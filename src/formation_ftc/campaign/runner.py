@@ -178,10 +178,11 @@ def _columns(plan: CampaignPlan, chunk: Chunk, cols: RunColumns) -> dict[str, An
     return data
 
 
-def _diagnostic(loop, out: Mapping[str, Any], div: int) -> str:
+def _diagnostic(loop, out: Mapping[str, Any]) -> str:
+    """What the engine says about the divergence of a failed run (variable, spacecraft, time)."""
     from formation_ftc.api import _divergence_info
 
-    return str(_divergence_info(loop, out, div))
+    return str(_divergence_info(loop, out, int(out["diverged_step"])))
 
 
 def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str) -> None:
@@ -332,9 +333,7 @@ def _bound_chunk(
             )
             run_out = jax.device_get(jitted_run(loop_j)(loop_j))
             if failed[j]:
-                table.at[j, "diagnostic"] = _diagnostic(
-                    loop_j, run_out, int(run_out["diverged_step"])
-                )
+                table.at[j, "diagnostic"] = _diagnostic(loop_j, run_out)
             if inp.run_id in trace_runs:
                 traces[inp.run_id] = _trace(
                     plan, loop_j, scn, inp, run_out, str(table.at[j, "status"])
@@ -397,7 +396,7 @@ def _general_chunk(
         else:
             metrics.append({})  # NaN metrics
         status.append("ok" if div < 0 else "failed")
-        diagnostic.append("" if div < 0 else _diagnostic(comp, out, div))
+        diagnostic.append("" if div < 0 else _diagnostic(comp, out))
         if inp.run_id in plan.spec.traces.runs:
             traces[inp.run_id] = _trace(plan, comp, scn, inp, out, status[-1])
     data.update(status=status, diagnostic=diagnostic)
