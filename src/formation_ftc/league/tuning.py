@@ -500,10 +500,8 @@ def minimise(
         if not compile_s:
             compile_s.append(time.perf_counter() - since)
         history.append((gains(z), v))
-        seen[np.asarray(z, dtype=np.float64).tobytes()] = (
-            v,
-            {k: float(t) for k, t in terms.items()},
-        )
+        key = np.asarray(z, dtype=np.float64).tobytes()
+        seen[key] = (v, {k: float(t) for k, t in terms.items()})
         if on_evaluation is not None:
             on_evaluation()
         return v
@@ -532,10 +530,8 @@ def minimise(
         def fun(z):
             ts = time.perf_counter()
             hit = _journalled(journal, TuneJournal.key("gradient", z), lambda: gradient(z))
-            g = np.nan_to_num(
-                np.asarray(hit["grad"], dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0
-            )
-            return record(z, hit["value"], hit["terms"], ts), g
+            g = np.asarray(hit["grad"], dtype=np.float64)
+            return record(z, hit["value"], hit["terms"], ts), np.where(np.isfinite(g), g, 0.0)
 
         method = "L-BFGS-B"
         options = dict(maxfun=max_evaluations, maxiter=max_evaluations, gtol=tolerance)
@@ -1015,7 +1011,9 @@ def tune_league_method(
         raise TuneError(f"--level {level!r}: not a level of league {spec.league.name} ({levels})")
     if optimiser not in OPTIMISERS:
         raise TuneError(f"--optimiser {optimiser!r}: one of {', '.join(OPTIMISERS)}")
-    _check_penalty_options(margin, penalty, violation_cap)  # before any run is built
+    # the requirement penalty's options (in the order of the result's objective block)
+    penalty_options = {"penalty": penalty, "violation_cap": violation_cap, "margin": margin}
+    _check_penalty_options(**penalty_options)  # before any run is built
     fresh_seeds = holdout_seeds if fresh_seeds is None else fresh_seeds
     if fresh_seeds < 0:
         raise TuneError(f"--fresh-seeds {fresh_seeds}: 0 (none) or more")
@@ -1077,8 +1075,7 @@ def tune_league_method(
             "gains": {k: repr(float(v)) for k, v in (gains or {}).items()} or None,
             "optimiser": optimiser,
             "max_evaluations": max_evaluations,
-            "margin": margin,
-            "penalty": penalty,
+            **penalty_options,
             "violation_cap": repr(float(violation_cap)),
             "step_check_from": jsonable((step_checks or {}).get(method)),
             "version": __version__,
@@ -1122,13 +1119,7 @@ def tune_league_method(
         scale = float(np.mean(f0) if statistic == "mean" else np.median(f0)) if f0.size else 1.0
         scale = scale if math.isfinite(scale) and scale > 0 else 1.0
         J = penalised_objective(
-            objective,
-            statistic=statistic,
-            requirement=requirement,
-            margin=margin,
-            penalty=penalty,
-            violation_cap=violation_cap,
-            scale=scale,
+            objective, statistic=statistic, requirement=requirement, scale=scale, **penalty_options
         )
         with runner.Counter(
             f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
@@ -1197,9 +1188,7 @@ def tune_league_method(
                 (str(m.get("units", "1")) for m in spec.metrics if m.get("name") == objective), "1"
             ),
             "scale": scale,
-            "penalty": penalty,
-            "violation_cap": violation_cap,
-            "margin": margin,
+            **penalty_options,
             "form": (
                 "J = S(f)/f0 + penalty * mean(min(max(0, m / ((1 - margin) max) - 1), violation_cap))"
             ),
