@@ -1152,10 +1152,7 @@ def tune_league_method(
             labels += lb
         hold = build_problem(h_raws, fields, like=problem)
         runs = {k: evaluate(hold, g, book, name) for k, g in (("paper", paper), ("tuned", tuned))}
-        cases = {
-            case: np.asarray([i for i, lb in enumerate(labels) if lb["case"] == case])
-            for case in dict.fromkeys(lb["case"] for lb in labels)
-        }
+        cases = {c.case: np.flatnonzero([lb["case"] == c.case for lb in labels]) for c in cells}
         return {
             "replicates": [seeds[0], seeds[-1]],
             "seeds_per_cell": len(seeds),
