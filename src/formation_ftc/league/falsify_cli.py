@@ -25,6 +25,7 @@ def _cmd_falsify(args) -> int:
     from formation_ftc.league.definition import LeagueError
     from formation_ftc.league.falsify import falsify
     from formation_ftc.league.tune_cli import _league_step_checks
+    from formation_ftc.league.tuning import _oserror_as
     from formation_ftc.provenance import provenance
 
     t0 = time.perf_counter()
@@ -38,7 +39,7 @@ def _cmd_falsify(args) -> int:
         **{name: getattr(args, name) for name in _PASSED},
     )
     stem = f"{args.method}--{args.level}--{args.optimizer}-{args.seed}"
-    try:
+    with _oserror_as(LeagueError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         scenario = out / f"{stem}.toml"
         name = f"falsify-{args.method}-{args.level}"
@@ -66,8 +67,6 @@ def _cmd_falsify(args) -> int:
         }
         result = out / f"{stem}.json"
         atomic_write(result, json.dumps(jsonable(record), indent=1))
-    except OSError as exc:
-        raise LeagueError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
     if args.json:
         print_json({**record, "result": str(result), "wall_time": time.perf_counter() - t0})
         return 0

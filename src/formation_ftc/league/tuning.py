@@ -60,6 +60,15 @@ class TuneError(InputError):
     """A tuning that cannot run (exit code 2); the message names the field or option."""
 
 
+@contextlib.contextmanager
+def _oserror_as(error: type[InputError], message: str) -> Iterator[None]:
+    """An OSError inside raised as ``error`` (exit code 2): ``message`` and the system's reason."""
+    try:
+        yield
+    except OSError as exc:
+        raise error(f"{message} ({exc.strerror or exc})") from None
+
+
 @dataclass(frozen=True)
 class TuneField:
     """A tunable field ``slot.name`` and its bounds ``low < high`` [field units]; ``log``: searched in
@@ -665,9 +674,7 @@ class TuneJournal:
     @staticmethod
     def key(name: str, values: Sequence[float] | np.ndarray) -> str:
         """The key of an evaluation: its kind and its numbers, exactly (hexadecimal floats)."""
-        return " ".join(
-            [name, *(float(v).hex() for v in np.ravel(np.asarray(values, dtype=float)))]
-        )
+        return " ".join([name, *map(float.hex, np.ravel(np.asarray(values, dtype=float)))])
 
     def get(self, key: str) -> dict[str, Any] | None:
         return self.entries.get(key)
@@ -684,14 +691,10 @@ class TuneJournal:
     @contextlib.contextmanager
     def _io(self) -> Iterator[None]:
         """Writing the journal: its directory made, an OSError a TuneError naming it."""
-        try:
+        where = f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there"
+        with _oserror_as(TuneError, where):
             self.path.parent.mkdir(parents=True, exist_ok=True)
             yield
-        except OSError as exc:
-            raise TuneError(
-                f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there "
-                f"({exc.strerror or exc})"
-            ) from None
 
     def _load(self) -> None:
         advice = "give another --out, or --force to discard the journal and start again"
@@ -895,7 +898,7 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
     out = Path(out_dir)
     what = f"--out {out}"
     result = f"{method}--{level}.json"
-    try:
+    with _oserror_as(TuneError, f"{what}: unusable path"):
         if not _check_target(
             out,
             what,
@@ -931,8 +934,6 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
                 f"{what}: holds a tuning result of {method} at {level} already ({result}); "
                 "--force replaces it, or give another --out"
             )
-    except OSError as exc:
-        raise TuneError(f"{what}: unusable path ({exc.strerror or exc})") from None
 
 
 def _is_tuning_file(path: Path) -> bool:
@@ -1051,12 +1052,10 @@ def tune_league_method(
             run_bytes=runner.run_bytes(cells[0].raw, TuneError, _UNBUILT) if cells else None,
         )
 
-    applying = [c.case for c in planned[method] if c.level == level]
-    unknown = [c for c in cases or () if c not in applying]
+    known = [c.case for c in planned[method] if c.level == level]
+    unknown = [c for c in cases or () if c not in known]
     if unknown:
-        raise TuneError(
-            f"--cases: {unknown} not among the cases of {method} ({', '.join(applying)})"
-        )
+        raise TuneError(f"--cases: {unknown} not among the cases of {method} ({', '.join(known)})")
     first = chosen()
     check_budgets(first)  # at the method's own step, before anything runs (the step check included)
     book = None
@@ -1232,11 +1231,9 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
     """
     out = Path(out_dir)
     path = out / f"{result['method']}--{result['level']}.json"
-    try:
+    with _oserror_as(TuneError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         atomic_write(path, json.dumps(jsonable(dict(result)), indent=1, allow_nan=False))
-    except OSError as exc:
-        raise TuneError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
     return path
 
 
