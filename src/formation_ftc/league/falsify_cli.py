@@ -32,9 +32,8 @@ def _cmd_falsify(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise LeagueError(f"--out {out}: exists and is not a directory")
-    checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
     res = falsify(
-        step_checks=checks,
+        step_checks=_league_step_checks(args.step_check_from) if args.step_check_from else None,
         kinds=[k for k in (args.kind or "").split(",") if k] or None,
         **{name: getattr(args, name) for name in _PASSED},
     )

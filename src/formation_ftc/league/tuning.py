@@ -719,8 +719,7 @@ class TuneJournal:
                 f"{self.path}: not a tuning journal (damaged, or another file); {advice}"
             )
         if header.get("fingerprint") != self.fingerprint:
-            problem = header.get("problem")
-            theirs: dict[str, Any] = problem if isinstance(problem, dict) else {}
+            theirs = header["problem"] if isinstance(header.get("problem"), dict) else {}
             diff = [
                 f"{k}: {theirs.get(k)!r} there, {self.problem.get(k)!r} here"
                 for k in sorted(set(theirs) | set(self.problem))
@@ -944,11 +943,9 @@ def _is_tuning_file(path: Path) -> bool:
         with open(path, encoding="utf-8") as f:
             if path.name.endswith(".journal.jsonl"):
                 return json.loads(f.readline()).get("kind") == JOURNAL_KIND
-            if path.suffix == ".json":
-                return json.load(f).get("kind") == "formation-ftc tuning"
+            return path.suffix == ".json" and json.load(f).get("kind") == "formation-ftc tuning"
     except (OSError, ValueError, AttributeError):
         return False
-    return False
 
 
 # ------------------------------------------------------------------------------------------- tune
