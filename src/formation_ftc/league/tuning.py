@@ -871,11 +871,9 @@ def check_tune_budgets(
         per_seed = int(run_bytes) * len(cells) * k
         if per_seed * T > budgets.max_memory:
             t_max = budgets.max_memory // per_seed
-            allowed = (
-                f"allowed: --train-seeds 1 to {t_max:,}"
-                if t_max >= 1
-                else "even 1 seed per cell is over it: tune on fewer --cases"
-            )
+            allowed = f"allowed: --train-seeds 1 to {t_max:,}"
+            if t_max < 1:
+                allowed = "even 1 seed per cell is over it: tune on fewer --cases"
             raise TuneError(
                 f"--train-seeds {T:,}: {where}: a training batch of {len(cells) * T:,} runs needs "
                 f"about {format_bytes(per_seed * T)} of memory, over the budget of "
