@@ -7,8 +7,12 @@ import argparse
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 __all__ = ["add_cli"]
+
+#: options of ``falsify`` passed to :func:`~formation_ftc.league.falsify.falsify` as they are
+_PASSED = "league method level budget seed optimizer population min_magnitude rounds".split()
 
 
 def _cmd_falsify(args) -> int:
@@ -21,28 +25,20 @@ def _cmd_falsify(args) -> int:
     from formation_ftc.league.definition import LeagueError
     from formation_ftc.league.falsify import falsify
     from formation_ftc.league.tune_cli import _league_step_checks
+    from formation_ftc.league.tuning import _oserror_as
     from formation_ftc.provenance import provenance
 
     t0 = time.perf_counter()
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise LeagueError(f"--out {out}: exists and is not a directory")
-    checks = _league_step_checks(args.step_check_from) if args.step_check_from else None
     res = falsify(
-        args.league,
-        args.method,
-        args.level,
-        budget=args.budget,
-        seed=args.seed,
-        optimizer=args.optimizer,
-        population=args.population,
-        step_checks=checks,
+        step_checks=_league_step_checks(args.step_check_from) if args.step_check_from else None,
         kinds=[k for k in (args.kind or "").split(",") if k] or None,
-        min_magnitude=args.min_magnitude,
-        rounds=args.rounds,
+        **{name: getattr(args, name) for name in _PASSED},
     )
     stem = f"{args.method}--{args.level}--{args.optimizer}-{args.seed}"
-    try:
+    with _oserror_as(LeagueError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         scenario = out / f"{stem}.toml"
         name = f"falsify-{args.method}-{args.level}"
@@ -52,15 +48,9 @@ def _cmd_falsify(args) -> int:
         record = {
             "kind": "formation-ftc falsification",
             "league": args.league,
-            "method": res.method,
-            "level": res.level,
-            "optimizer": res.optimizer,
-            "seed": res.seed,
-            "budget": res.budget,
+            **{k: getattr(res, k) for k in ("method", "level", "optimizer", "seed", "budget")},
             "population": args.population,
-            "found": res.found,
-            "runs": res.runs,
-            "runs_to_violation": res.runs_to_violation,
+            **{k: getattr(res, k) for k in ("found", "runs", "runs_to_violation")},
             "robustness": res.best,  # None when not finite (jsonable, below)
             "diverged": res.best == -math.inf,
             "fault": res.fault,
@@ -76,8 +66,6 @@ def _cmd_falsify(args) -> int:
         }
         result = out / f"{stem}.json"
         atomic_write(result, json.dumps(jsonable(record), indent=1))
-    except OSError as exc:
-        raise LeagueError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
     if args.json:
         print_json({**record, "result": str(result), "wall_time": time.perf_counter() - t0})
         return 0
@@ -105,6 +93,26 @@ def _cmd_falsify(args) -> int:
     return 0
 
 
+#: the options of ``falsify`` after the method's (``add_method_arguments``): flag -> their keywords
+_OPTIONS: dict[str, dict[str, Any]] = {
+    "--out": dict(required=True, help="directory of the result and the falsifying scenario"),
+    "--budget": dict(type=int, default=200, help="most runs (default 200)"),
+    "--population": dict(type=int, default=8, help="runs per batch (default 8)"),
+    "--seed": dict(type=int, default=0, help="seed of the optimiser (default 0)"),
+    "--optimizer": dict(
+        choices=("cma", "random"), default="cma", help="CMA-ES or uniform sampling"
+    ),
+    "--kind": dict(
+        help="comma-separated fault kinds to search (default every actuator kind of the battery)"
+    ),
+    "--min-magnitude": dict(
+        action="store_true",
+        help="then the smallest breaking severity of each kind, at its worst run found",
+    ),
+    "--rounds": dict(type=int, default=3, help="section rounds of --min-magnitude (default 3)"),
+}
+
+
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``falsify`` command to ``subparsers``; returns its parser.
 
@@ -121,28 +129,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "falsify", help="search a league method for a run that violates the requirement"
     )
-    add_method_arguments(p, "league method")
-    p.add_argument(
-        "--out", required=True, help="directory of the result and the falsifying scenario"
-    )
-    p.add_argument("--budget", type=int, default=200, help="most runs (default 200)")
-    p.add_argument("--population", type=int, default=8, help="runs per batch (default 8)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the optimiser (default 0)")
-    p.add_argument(
-        "--optimizer", choices=("cma", "random"), default="cma", help="CMA-ES or uniform sampling"
-    )
-    p.add_argument(
-        "--kind",
-        help="comma-separated fault kinds to search (default every actuator kind of the battery)",
-    )
-    p.add_argument(
-        "--min-magnitude",
-        action="store_true",
-        help="then the smallest breaking severity of each kind, at its worst run found",
-    )
-    p.add_argument(
-        "--rounds", type=int, default=3, help="section rounds of --min-magnitude (default 3)"
-    )
+    add_method_arguments(p, "league method", _OPTIONS)
     add_json_option(p)
     p.set_defaults(func=_cmd_falsify)
     return p

@@ -10,6 +10,12 @@ __all__ = ["add_cli"]
 
 from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
 
+#: options of ``tune`` passed to :func:`~formation_ftc.league.tuning.tune_league_method` as they are
+_PASSED = (
+    "league method level train_seeds holdout_seeds fresh_seeds train_start optimiser "
+    "max_evaluations margin penalty violation_cap force"
+).split()
+
 
 def _cmd_tune(args) -> int:
     import time
@@ -26,26 +32,14 @@ def _cmd_tune(args) -> int:
     tuning.check_tune_out(args.out, args.method, args.level, force=args.force)
     journal = tuning.journal_path(args.out, args.method, args.level)
     result = tuning.tune_league_method(
-        args.league,
-        args.method,
-        args.level,
         cases=[c.strip() for c in args.cases.split(",") if c.strip()] if args.cases else None,
-        train_seeds=args.train_seeds,
-        holdout_seeds=args.holdout_seeds,
-        fresh_seeds=args.fresh_seeds,
-        train_start=args.train_start,
         gains=_gains(args.gains) if args.gains is not None else None,
-        optimiser=args.optimiser,
-        max_evaluations=args.max_evaluations,
-        margin=args.margin,
-        penalty=args.penalty,
-        violation_cap=args.violation_cap,
         step_checks=_league_step_checks(args.step_check_from) if args.step_check_from else None,
         log=_log(args),
         budgets=budgets,
         journal=journal,
-        force=args.force,
         progress=not _quiet(args),
+        **{name: getattr(args, name) for name in _PASSED},
     )
     path = tuning.write_tuning(result, args.out)
     journal.unlink(missing_ok=True)  # the result holds every evaluation (optimiser.history)
@@ -129,9 +123,12 @@ def _gains(text: str) -> dict[str, float]:
     return out
 
 
-def add_method_arguments(p: argparse.ArgumentParser, method_help: str) -> None:
-    """The arguments naming one league method and level (``tune`` and ``falsify``): METHOD,
-    ``--league``, ``--level`` and ``--step-check-from``."""
+def add_method_arguments(
+    p: argparse.ArgumentParser, method_help: str, options: dict[str, dict[str, Any]]
+) -> None:
+    """The arguments of ``tune`` and ``falsify``: those naming one league method and level (METHOD,
+    ``--league``, ``--level`` and ``--step-check-from``), then the command's ``options`` (flag -> the
+    keywords of ``add_argument``)."""
     p.add_argument("method", metavar="METHOD", help=method_help)
     p.add_argument(
         "--league", default="translational", help="built-in league name or league TOML file"
@@ -142,10 +139,52 @@ def add_method_arguments(p: argparse.ArgumentParser, method_help: str) -> None:
         metavar="LEAGUE_DIR",
         help="reuse the step check a league run recorded (default: run it, as `league run` does)",
     )
+    for flag, keywords in options.items():
+        p.add_argument(flag, **keywords)
 
 
 def _fmt(v: Any) -> str:
     return "-" if v is None else format(v, ".4g")
+
+
+#: the options of ``tune`` after the method's (:func:`add_method_arguments`): flag -> their keywords
+_OPTIONS: dict[str, dict[str, Any]] = {
+    "--out": dict(
+        required=True,
+        help="directory of the result (METHOD--LEVEL.json; new, empty or of tuning results); a "
+        "killed tuning resumes from its journal there (METHOD--LEVEL.journal.jsonl)",
+    ),
+    "--cases": dict(help="comma-separated fault cases (default: every one that applies)"),
+    "--train-seeds": dict(type=int, default=8, help="training replicates per cell"),
+    "--holdout-seeds": dict(type=int, default=16, help="held-out replicates per cell"),
+    "--fresh-seeds": dict(
+        type=int,
+        help="replicates per cell neither the league nor the training uses (default: as many as "
+        "--holdout-seeds; 0: none)",
+    ),
+    "--gains": dict(
+        metavar="FIELD=VALUE,...",
+        help="evaluate these gains against the paper's (held-out and fresh replicates), with no "
+        "training",
+    ),
+    "--train-start": dict(
+        type=int,
+        default=TRAIN_START,
+        help="first training replicate (held out: the league's replicates 0 .. N-1)",
+    ),
+    "--optimiser": dict(choices=OPTIMISERS, default=DEFAULT_OPTIMISER, help="optimiser"),
+    "--max-evaluations": dict(type=int, default=60, help="batch evaluations of the training set"),
+    "--margin": dict(type=float, default=0.1, help="requirement tightening on training runs [-]"),
+    "--penalty": dict(type=float, default=100.0, help="weight of the requirement penalty"),
+    "--violation-cap": dict(
+        type=float, default=1.0, help="largest relative violation one run counts (inf: no cap)"
+    ),
+    "--force": dict(
+        action="store_true",
+        help="replace this method's result at this level in --out, and discard a journal of another "
+        "tuning there (default: refuse both)",
+    ),
+}
 
 
 def add_cli(subparsers) -> argparse.ArgumentParser:
@@ -165,54 +204,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "tune", help="choose a league method's gains (its [tune] fields) and report them held out"
     )
-    add_method_arguments(p, "league method with a [tune] table")
-    p.add_argument(
-        "--out",
-        required=True,
-        help="directory of the result (METHOD--LEVEL.json; new, empty or of tuning results); a "
-        "killed tuning resumes from its journal there (METHOD--LEVEL.journal.jsonl)",
-    )
-    p.add_argument("--cases", help="comma-separated fault cases (default: every one that applies)")
-    p.add_argument("--train-seeds", type=int, default=8, help="training replicates per cell")
-    p.add_argument("--holdout-seeds", type=int, default=16, help="held-out replicates per cell")
-    p.add_argument(
-        "--fresh-seeds",
-        type=int,
-        help="replicates per cell neither the league nor the training uses (default: as many as "
-        "--holdout-seeds; 0: none)",
-    )
-    p.add_argument(
-        "--gains",
-        metavar="FIELD=VALUE,...",
-        help="evaluate these gains against the paper's (held-out and fresh replicates), with no "
-        "training",
-    )
-    p.add_argument(
-        "--train-start",
-        type=int,
-        default=TRAIN_START,
-        help="first training replicate (held out: the league's replicates 0 .. N-1)",
-    )
-    p.add_argument("--optimiser", choices=OPTIMISERS, default=DEFAULT_OPTIMISER, help="optimiser")
-    p.add_argument(
-        "--max-evaluations", type=int, default=60, help="batch evaluations of the training set"
-    )
-    p.add_argument(
-        "--margin", type=float, default=0.1, help="requirement tightening on training runs [-]"
-    )
-    p.add_argument("--penalty", type=float, default=100.0, help="weight of the requirement penalty")
-    p.add_argument(
-        "--violation-cap",
-        type=float,
-        default=1.0,
-        help="largest relative violation one run counts (inf: no cap)",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="replace this method's result at this level in --out, and discard a journal of another "
-        "tuning there (default: refuse both)",
-    )
+    add_method_arguments(p, "league method with a [tune] table", _OPTIONS)
     add_budget_options(
         p, batch="the training batch", whole="the whole tuning (every evaluation, held-out runs)"
     )

@@ -60,6 +60,15 @@ class TuneError(InputError):
     """A tuning that cannot run (exit code 2); the message names the field or option."""
 
 
+@contextlib.contextmanager
+def _oserror_as(error: type[InputError], message: str) -> Iterator[None]:
+    """An OSError inside raised as ``error`` (exit code 2): ``message`` and the system's reason."""
+    try:
+        yield
+    except OSError as exc:
+        raise error(f"{message} ({exc.strerror or exc})") from None
+
+
 @dataclass(frozen=True)
 class TuneField:
     """A tunable field ``slot.name`` and its bounds ``low < high`` [field units]; ``log``: searched in
@@ -500,10 +509,8 @@ def minimise(
         if not compile_s:
             compile_s.append(time.perf_counter() - since)
         history.append((gains(z), v))
-        seen[np.asarray(z, dtype=np.float64).tobytes()] = (
-            v,
-            {k: float(t) for k, t in terms.items()},
-        )
+        key = np.asarray(z, dtype=np.float64).tobytes()
+        seen[key] = (v, {k: float(t) for k, t in terms.items()})
         if on_evaluation is not None:
             on_evaluation()
         return v
@@ -532,10 +539,8 @@ def minimise(
         def fun(z):
             ts = time.perf_counter()
             hit = _journalled(journal, TuneJournal.key("gradient", z), lambda: gradient(z))
-            g = np.nan_to_num(
-                np.asarray(hit["grad"], dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0
-            )
-            return record(z, hit["value"], hit["terms"], ts), g
+            g = np.asarray(hit["grad"], dtype=np.float64)
+            return record(z, hit["value"], hit["terms"], ts), np.where(np.isfinite(g), g, 0.0)
 
         method = "L-BFGS-B"
         options = dict(maxfun=max_evaluations, maxiter=max_evaluations, gtol=tolerance)
@@ -669,9 +674,7 @@ class TuneJournal:
     @staticmethod
     def key(name: str, values: Sequence[float] | np.ndarray) -> str:
         """The key of an evaluation: its kind and its numbers, exactly (hexadecimal floats)."""
-        return " ".join(
-            [name, *(float(v).hex() for v in np.ravel(np.asarray(values, dtype=float)))]
-        )
+        return " ".join([name, *map(float.hex, np.ravel(np.asarray(values, dtype=float)))])
 
     def get(self, key: str) -> dict[str, Any] | None:
         return self.entries.get(key)
@@ -688,14 +691,10 @@ class TuneJournal:
     @contextlib.contextmanager
     def _io(self) -> Iterator[None]:
         """Writing the journal: its directory made, an OSError a TuneError naming it."""
-        try:
+        where = f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there"
+        with _oserror_as(TuneError, where):
             self.path.parent.mkdir(parents=True, exist_ok=True)
             yield
-        except OSError as exc:
-            raise TuneError(
-                f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there "
-                f"({exc.strerror or exc})"
-            ) from None
 
     def _load(self) -> None:
         advice = "give another --out, or --force to discard the journal and start again"
@@ -720,8 +719,7 @@ class TuneJournal:
                 f"{self.path}: not a tuning journal (damaged, or another file); {advice}"
             )
         if header.get("fingerprint") != self.fingerprint:
-            problem = header.get("problem")
-            theirs: dict[str, Any] = problem if isinstance(problem, dict) else {}
+            theirs = header["problem"] if isinstance(header.get("problem"), dict) else {}
             diff = [
                 f"{k}: {theirs.get(k)!r} there, {self.problem.get(k)!r} here"
                 for k in sorted(set(theirs) | set(self.problem))
@@ -873,11 +871,9 @@ def check_tune_budgets(
         per_seed = int(run_bytes) * len(cells) * k
         if per_seed * T > budgets.max_memory:
             t_max = budgets.max_memory // per_seed
-            allowed = (
-                f"allowed: --train-seeds 1 to {t_max:,}"
-                if t_max >= 1
-                else "even 1 seed per cell is over it: tune on fewer --cases"
-            )
+            allowed = f"allowed: --train-seeds 1 to {t_max:,}"
+            if t_max < 1:
+                allowed = "even 1 seed per cell is over it: tune on fewer --cases"
             raise TuneError(
                 f"--train-seeds {T:,}: {where}: a training batch of {len(cells) * T:,} runs needs "
                 f"about {format_bytes(per_seed * T)} of memory, over the budget of "
@@ -899,7 +895,7 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
     out = Path(out_dir)
     what = f"--out {out}"
     result = f"{method}--{level}.json"
-    try:
+    with _oserror_as(TuneError, f"{what}: unusable path"):
         if not _check_target(
             out,
             what,
@@ -935,8 +931,6 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
                 f"{what}: holds a tuning result of {method} at {level} already ({result}); "
                 "--force replaces it, or give another --out"
             )
-    except OSError as exc:
-        raise TuneError(f"{what}: unusable path ({exc.strerror or exc})") from None
 
 
 def _is_tuning_file(path: Path) -> bool:
@@ -947,11 +941,9 @@ def _is_tuning_file(path: Path) -> bool:
         with open(path, encoding="utf-8") as f:
             if path.name.endswith(".journal.jsonl"):
                 return json.loads(f.readline()).get("kind") == JOURNAL_KIND
-            if path.suffix == ".json":
-                return json.load(f).get("kind") == "formation-ftc tuning"
+            return path.suffix == ".json" and json.load(f).get("kind") == "formation-ftc tuning"
     except (OSError, ValueError, AttributeError):
         return False
-    return False
 
 
 # ------------------------------------------------------------------------------------------- tune
@@ -1015,7 +1007,9 @@ def tune_league_method(
         raise TuneError(f"--level {level!r}: not a level of league {spec.league.name} ({levels})")
     if optimiser not in OPTIMISERS:
         raise TuneError(f"--optimiser {optimiser!r}: one of {', '.join(OPTIMISERS)}")
-    _check_penalty_options(margin, penalty, violation_cap)  # before any run is built
+    # the requirement penalty's options (in the order of the result's objective block)
+    penalty_options = {"penalty": penalty, "violation_cap": violation_cap, "margin": margin}
+    _check_penalty_options(**penalty_options)  # before any run is built
     fresh_seeds = holdout_seeds if fresh_seeds is None else fresh_seeds
     if fresh_seeds < 0:
         raise TuneError(f"--fresh-seeds {fresh_seeds}: 0 (none) or more")
@@ -1053,12 +1047,10 @@ def tune_league_method(
             run_bytes=runner.run_bytes(cells[0].raw, TuneError, _UNBUILT) if cells else None,
         )
 
-    applying = [c.case for c in planned[method] if c.level == level]
-    unknown = [c for c in cases or () if c not in applying]
+    known = [c.case for c in planned[method] if c.level == level]
+    unknown = [c for c in cases or () if c not in known]
     if unknown:
-        raise TuneError(
-            f"--cases: {unknown} not among the cases of {method} ({', '.join(applying)})"
-        )
+        raise TuneError(f"--cases: {unknown} not among the cases of {method} ({', '.join(known)})")
     first = chosen()
     check_budgets(first)  # at the method's own step, before anything runs (the step check included)
     book = None
@@ -1077,8 +1069,7 @@ def tune_league_method(
             "gains": {k: repr(float(v)) for k, v in (gains or {}).items()} or None,
             "optimiser": optimiser,
             "max_evaluations": max_evaluations,
-            "margin": margin,
-            "penalty": penalty,
+            **penalty_options,
             "violation_cap": repr(float(violation_cap)),
             "step_check_from": jsonable((step_checks or {}).get(method)),
             "version": __version__,
@@ -1122,13 +1113,7 @@ def tune_league_method(
         scale = float(np.mean(f0) if statistic == "mean" else np.median(f0)) if f0.size else 1.0
         scale = scale if math.isfinite(scale) and scale > 0 else 1.0
         J = penalised_objective(
-            objective,
-            statistic=statistic,
-            requirement=requirement,
-            margin=margin,
-            penalty=penalty,
-            violation_cap=violation_cap,
-            scale=scale,
+            objective, statistic=statistic, requirement=requirement, scale=scale, **penalty_options
         )
         with runner.Counter(
             f"tune {method} @ {level}", max_evaluations, "evaluations", enabled=progress
@@ -1161,10 +1146,7 @@ def tune_league_method(
             labels += lb
         hold = build_problem(h_raws, fields, like=problem)
         runs = {k: evaluate(hold, g, book, name) for k, g in (("paper", paper), ("tuned", tuned))}
-        cases = {
-            case: np.asarray([i for i, lb in enumerate(labels) if lb["case"] == case])
-            for case in dict.fromkeys(lb["case"] for lb in labels)
-        }
+        cases = {c.case: np.flatnonzero([lb["case"] == c.case for lb in labels]) for c in cells}
         return {
             "replicates": [seeds[0], seeds[-1]],
             "seeds_per_cell": len(seeds),
@@ -1197,9 +1179,7 @@ def tune_league_method(
                 (str(m.get("units", "1")) for m in spec.metrics if m.get("name") == objective), "1"
             ),
             "scale": scale,
-            "penalty": penalty,
-            "violation_cap": violation_cap,
-            "margin": margin,
+            **penalty_options,
             "form": (
                 "J = S(f)/f0 + penalty * mean(min(max(0, m / ((1 - margin) max) - 1), violation_cap))"
             ),
@@ -1246,11 +1226,9 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
     """
     out = Path(out_dir)
     path = out / f"{result['method']}--{result['level']}.json"
-    try:
+    with _oserror_as(TuneError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         atomic_write(path, json.dumps(jsonable(dict(result)), indent=1, allow_nan=False))
-    except OSError as exc:
-        raise TuneError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
     return path
 
 
