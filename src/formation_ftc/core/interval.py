@@ -301,14 +301,6 @@ def _exact_monotone(f: Callable) -> Callable[[_I], _I]:
     return lambda a: _I(f(a.lo), f(a.hi))
 
 
-def _minimum(a: _I, b: _I) -> _I:
-    return _I(np.minimum(a.lo, b.lo), np.minimum(a.hi, b.hi), a.boolean and b.boolean)
-
-
-def _maximum(a: _I, b: _I) -> _I:
-    return _I(np.maximum(a.lo, b.lo), np.maximum(a.hi, b.hi), a.boolean and b.boolean)
-
-
 def _is_integer(x) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     return np.isfinite(x) & (x == np.round(x)) & (np.abs(x) < 2.0**53)
@@ -375,14 +367,12 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
 
 
 def _cmp(op: type, a: _I, b: _I) -> _I:
+    if op in (ast.Gt, ast.GtE):  # a > b is b < a
+        return _cmp(ast.Lt if op is ast.Gt else ast.LtE, b, a)
     if op is ast.Lt:
         return _bool(a.hi < b.lo, a.lo >= b.hi)
     if op is ast.LtE:
         return _bool(a.hi <= b.lo, a.lo > b.hi)
-    if op is ast.Gt:
-        return _bool(a.lo > b.hi, a.hi <= b.lo)
-    if op is ast.GtE:
-        return _bool(a.lo >= b.hi, a.hi < b.lo)
     point = (a.lo == a.hi) & (b.lo == b.hi) & (a.lo == b.lo)
     apart = (a.hi < b.lo) | (b.hi < a.lo)
     if op is ast.Eq:
@@ -393,20 +383,17 @@ def _cmp(op: type, a: _I, b: _I) -> _I:
 
 
 def _and(a: _I, b: _I) -> _I:
-    ta, fa = _truth(a)
-    tb, fb = _truth(b)
+    (ta, fa), (tb, fb) = _truth(a), _truth(b)
     return _bool(ta & tb, fa | fb)
 
 
 def _or(a: _I, b: _I) -> _I:
-    ta, fa = _truth(a)
-    tb, fb = _truth(b)
-    return _bool(ta | tb, fa & fb)
+    return _not(_and(_not(a), _not(b)))  # De Morgan: exact on three-valued truth
 
 
 def _not(a: _I) -> _I:
-    t, f = _truth(a)
-    return _bool(f, t)
+    true, false = _truth(a)
+    return _bool(false, true)
 
 
 #: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`)
@@ -447,6 +434,11 @@ class _Evaluator:
             return None
         return _I(np.where(possible, -_INF, d.lo), np.where(possible, _INF, d.hi))
 
+    def switching(self, v: _I) -> _Pair:
+        """A piecewise-constant value (a truth value, ``floor``, ...): derivative 0, unbounded where
+        the value may switch inside a sub-interval."""
+        return v, self.jump(~_decided(v), self.zero())
+
     def visit(self, node: ast.AST) -> _Pair:
         method = getattr(self, f"visit_{type(node).__name__}", None)
         if method is None:
@@ -473,8 +465,7 @@ class _Evaluator:
         if isinstance(node.op, ast.UAdd):
             return v, d
         if isinstance(node.op, ast.Not):
-            r = _not(v)
-            return r, self.jump(~_decided(r), self.zero())
+            return self.switching(_not(v))
         raise IntervalError(f"operator {type(node.op).__name__} cannot be enclosed")
 
     def visit_BinOp(self, node: ast.BinOp) -> _Pair:
@@ -524,9 +515,7 @@ class _Evaluator:
 
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
-        f = _and if isinstance(node.op, ast.And) else _or
-        out = reduce(f, vals)
-        return out, self.jump(~_decided(out), self.zero())
+        return self.switching(reduce(_and if isinstance(node.op, ast.And) else _or, vals))
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
         left, _ = self.visit(node.left)
@@ -537,7 +526,7 @@ class _Evaluator:
             out = c if out is None else _and(out, c)
             left = right
         assert out is not None
-        return out, self.jump(~_decided(out), self.zero())
+        return self.switching(out)
 
     def visit_IfExp(self, node: ast.IfExp) -> _Pair:
         (c, _), a, b = self.visit(node.test), self.visit(node.body), self.visit(node.orelse)
@@ -559,7 +548,7 @@ class _Evaluator:
         if name in _SMOOTH:
             return self._smooth(args[0], *_SMOOTH[name])
         if name in _PIECEWISE_CONSTANT:
-            return self._piecewise_constant(args[0], _PIECEWISE_CONSTANT[name])
+            return self.switching(_PIECEWISE_CONSTANT[name](args[0][0]))
         handler = getattr(self, f"call_{name}", None)
         if handler is None:  # pragma: no cover - every whitelisted function has a handler (tested)
             raise IntervalError(f"function {name!r} in {self.text!r} cannot be enclosed")
@@ -597,19 +586,15 @@ class _Evaluator:
         hi = np.where(pos, da.hi, np.where(neg, -da.lo, both.hi))
         return v, _I(lo, hi)
 
-    def _piecewise_constant(self, x, f: Callable[[_I], _I]) -> _Pair:
-        a, _ = x
-        v = f(a)
-        return v, self.jump(v.lo != v.hi, self.zero())
-
     def _extreme(self, args, lower: bool) -> _Pair:
         out = args[0]
         for b in args[1:]:
             (av, ad), (bv, bd) = out, b
             if lower:  # where the min is certainly a / b
-                first, second, v = av.hi <= bv.lo, bv.hi <= av.lo, _minimum(av, bv)
+                first, second, pick = av.hi <= bv.lo, bv.hi <= av.lo, np.minimum
             else:
-                first, second, v = av.lo >= bv.hi, bv.lo >= av.hi, _maximum(av, bv)
+                first, second, pick = av.lo >= bv.hi, bv.lo >= av.hi, np.maximum
+            v = _I(pick(av.lo, bv.lo), pick(av.hi, bv.hi), av.boolean and bv.boolean)
             # the derivative of the one that is certainly the extreme, else both
             out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
         return out
@@ -629,8 +614,9 @@ class _Evaluator:
 
     def call_window(self, x, lo, hi):
         c = _and(_cmp(ast.GtE, x[0], lo[0]), _cmp(ast.LtE, x[0], hi[0]))
-        c = _I(c.lo, c.hi)  # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
-        return c, self.jump(~_decided(c), self.zero())
+        return self.switching(
+            _I(c.lo, c.hi)
+        )  # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
 
     def call_piecewise(self, *args):
         return _first_true(self.call_where, args)
