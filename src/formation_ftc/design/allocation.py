@@ -178,13 +178,11 @@ def augmented_matrix_np(alpha, b_hat) -> np.ndarray:
     >>> bool(np.array_equal(augmented_matrix_np(a, b), np.asarray(augmented_matrix(a, b))))
     True
     """
-    alpha = np.asarray(alpha)
-    b_hat = np.asarray(b_hat)
+    alpha, b_hat = np.asarray(alpha), np.asarray(b_hat)
     n = b_hat.shape[-1]
-    rows = np.arange(n - 1)
-    J = np.zeros((n - 1, n), dtype=b_hat.dtype)
-    J[rows, rows] = -b_hat[:-1]
-    J[rows, rows + 1] = b_hat[1:]
+    J = -b_hat[:-1, None] * np.eye(n - 1, n) + b_hat[1:, None] * np.eye(
+        n - 1, n, 1
+    )  # exact: x*1, x*0
     return np.concatenate([J, (alpha / b_hat)[None, :]], axis=0)
 
 

@@ -202,17 +202,10 @@ def _build_problem(A, C, H, lam, c, r, eps, groups):
     Y = cp.Variable((n, p))
     L2 = cp.Variable((m, p))
     M8, _, M27, MD = _lmi_matrices(A, C, H, P, Y, L2, lam, c, r, cp.bmat)
-    cons = []
-    if "lyapunov_8" in groups:
-        cons.append(_sym(M8) << -eps * np.eye(n))
-    if "schur_27" in groups:
-        cons.append(_sym(M27) << -min(eps, lam / 10) * np.eye(n + m))
-    if "disk" in groups:
-        cons.append(_sym(MD) << -eps * np.eye(2 * n))
-    if "normalisation" in groups:
-        cons.append(P >> np.eye(n))
-    else:
-        cons.append(P >> eps * np.eye(n))
+    # group -> (M, margin) of the strict LMI M < 0 imposed as M <= -margin I
+    lmis = {"lyapunov_8": (M8, eps), "schur_27": (M27, min(eps, lam / 10)), "disk": (MD, eps)}
+    cons = [_sym(M) << -e * np.eye(M.shape[0]) for g, (M, e) in lmis.items() if g in groups]
+    cons.append(P >> (np.eye(n) if "normalisation" in groups else eps * np.eye(n)))
     prob = cp.Problem(cp.Minimize(cp.trace(P)), cons)
     return prob, P, Y, L2
 
