@@ -39,6 +39,7 @@ sampling and say so (basis "sampled" of :class:`formation_ftc.registry.Condition
 from __future__ import annotations
 
 import ast
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -396,13 +397,29 @@ def _not(a: _I) -> _I:
     return _bool(false, true)
 
 
-#: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`)
-_BINARY: dict[type, Callable[[_I, _I], _I]] = {
-    ast.Add: _add,
-    ast.Sub: _sub,
-    ast.Mult: _mul,
-    ast.Div: _div,
-    ast.Pow: _pow,
+def _dpow(a: _I, da: _I, b: _I, db: _I, v: _I) -> _I:
+    """Derivative of ``v = a ** b``."""
+    fixed = b.lo == b.hi
+    if np.all(fixed) and np.all(db.lo == 0) and np.all(db.hi == 0):
+        # d(a^p) = p a^(p-1) a'
+        p = b.lo
+        pm1 = _pow(a, _I(p - 1.0, p - 1.0))
+        dd = _mul(_mul(_I(p, p), pm1), da)
+        zero = p == 0
+        return _I(np.where(zero, 0.0, dd.lo), np.where(zero, 0.0, dd.hi))
+    # d(a^b) = a^b (b' log a + b a'/a), a > 0
+    la = _log(np.log)(a)
+    return _mul(v, _add(_mul(db, la), _mul(b, _div(da, a))))
+
+
+#: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`): enclosure of
+#: ``a op b`` and of its derivative given ``(a, a', b, b', v = a op b)``
+_BINARY: dict[type, tuple[Callable[[_I, _I], _I], Callable[..., _I]]] = {
+    ast.Add: (_add, lambda a, da, b, db, v: _add(da, db)),
+    ast.Sub: (_sub, lambda a, da, b, db, v: _sub(da, db)),
+    ast.Mult: (_mul, lambda a, da, b, db, v: _add(_mul(da, b), _mul(a, db))),
+    ast.Div: (_div, lambda a, da, b, db, v: _div(_sub(da, _mul(v, db)), b)),  # (a' - (a/b) b') / b
+    ast.Pow: (_pow, _dpow),
 }
 
 
@@ -471,47 +488,20 @@ class _Evaluator:
     def visit_BinOp(self, node: ast.BinOp) -> _Pair:
         (a, da), (b, db) = self.visit(node.left), self.visit(node.right)
         op = type(node.op)
-        wrap: np.ndarray | None = None
         if op is ast.Mod:
             v, wrap = _mod(a, b)
-        elif op in _BINARY:
-            v = _BINARY[op](a, b)
-        else:
-            raise IntervalError(f"operator {op.__name__} cannot be enclosed")
-        if not self.der:
-            return v, None
-        assert da is not None and db is not None
-        if op is ast.Add:
-            d = _add(da, db)
-        elif op is ast.Sub:
-            d = _sub(da, db)
-        elif op is ast.Mult:
-            d = _add(_mul(da, b), _mul(a, db))
-        elif op is ast.Div:
-            d = _div(_sub(da, _mul(v, db)), b)  # (a' - (a/b) b') / b
-        elif op is ast.Pow:
-            d = self._dpow(a, da, b, db, v)
-        else:
+            if not self.der:
+                return v, None
+            assert da is not None and db is not None
             # d(a % b) = a' - floor(a/b) b' away from a wrap (a jump); b' = 0 for a constant period
             with np.errstate(all="ignore"):
                 k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
-            dm = _sub(da, _mul(_I(k, k), db))
-            assert wrap is not None
-            d = cast(_I, self.jump(wrap, dm))
-        return v, d
-
-    def _dpow(self, a: _I, da: _I, b: _I, db: _I, v: _I) -> _I:
-        fixed = b.lo == b.hi
-        if np.all(fixed) and np.all(db.lo == 0) and np.all(db.hi == 0):
-            # d(a^p) = p a^(p-1) a'
-            p = b.lo
-            pm1 = _pow(a, _I(p - 1.0, p - 1.0))
-            dd = _mul(_mul(_I(p, p), pm1), da)
-            zero = p == 0
-            return _I(np.where(zero, 0.0, dd.lo), np.where(zero, 0.0, dd.hi))
-        # d(a^b) = a^b (b' log a + b a'/a), a > 0
-        la = _log(np.log)(a)
-        return _mul(v, _add(_mul(db, la), _mul(b, _div(da, a))))
+            return v, self.jump(wrap, _sub(da, _mul(_I(k, k), db)))
+        if op not in _BINARY:
+            raise IntervalError(f"operator {op.__name__} cannot be enclosed")
+        value, derivative = _BINARY[op]
+        v = value(a, b)
+        return v, (derivative(a, da, b, db, v) if self.der else None)
 
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
@@ -586,7 +576,7 @@ class _Evaluator:
         hi = np.where(pos, da.hi, np.where(neg, -da.lo, both.hi))
         return v, _I(lo, hi)
 
-    def _extreme(self, args, lower: bool) -> _Pair:
+    def _extreme(self, *args, lower: bool) -> _Pair:
         out = args[0]
         for b in args[1:]:
             (av, ad), (bv, bd) = out, b
@@ -599,24 +589,20 @@ class _Evaluator:
             out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
         return out
 
-    def call_min(self, *args):
-        return self._extreme(args, lower=True)
-
-    def call_max(self, *args):
-        return self._extreme(args, lower=False)
+    call_min = functools.partialmethod(_extreme, lower=True)
+    call_max = functools.partialmethod(_extreme, lower=False)
 
     def call_clip(self, x, lo, hi):
         # numpy / jax: minimum(maximum(x, lo), hi)
-        return self._extreme([self._extreme([x, lo], lower=False), hi], lower=True)
+        return self._extreme(self._extreme(x, lo, lower=False), hi, lower=True)
 
     def call_where(self, c, a, b):
         return self._where(c[0], a, b)
 
     def call_window(self, x, lo, hi):
         c = _and(_cmp(ast.GtE, x[0], lo[0]), _cmp(ast.LtE, x[0], hi[0]))
-        return self.switching(
-            _I(c.lo, c.hi)
-        )  # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
+        # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
+        return self.switching(_I(c.lo, c.hi))
 
     def call_piecewise(self, *args):
         return _first_true(self.call_where, args)
