@@ -66,15 +66,8 @@ __all__ = [
 
 def dcm_from_euler_zyx(q):
     """``C = Rz(psi) Ry(theta) Rx(phi)`` (body to reference) [-], q = [theta, phi, psi] (..., 3) [rad]."""
-    th, ph, ps = q[..., 0], q[..., 1], q[..., 2]
-    ct, st, cp, sp, cs, ss = (
-        jnp.cos(th),
-        jnp.sin(th),
-        jnp.cos(ph),
-        jnp.sin(ph),
-        jnp.cos(ps),
-        jnp.sin(ps),
-    )
+    ct, cp, cs = jnp.cos(q[..., 0]), jnp.cos(q[..., 1]), jnp.cos(q[..., 2])  # theta, phi, psi
+    st, sp, ss = jnp.sin(q[..., 0]), jnp.sin(q[..., 1]), jnp.sin(q[..., 2])
     return jnp.stack(
         [
             jnp.stack([cs * ct, cs * st * sp - ss * cp, cs * st * cp + ss * sp], -1),
