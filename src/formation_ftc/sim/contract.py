@@ -13,7 +13,7 @@ keeps working; :mod:`formation_ftc.sim.metrics` re-exports the names of the metr
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -354,16 +354,12 @@ class Condition:
         return self.holds is None and self.basis in ("sampled", "heuristic")
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(
-            name=str(self.name),
-            reference=str(self.reference),
-            value=str(self.value),
-            requirement=str(self.requirement),
-            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
-            required=bool(self.required),
-            detail=str(self.detail),
-            basis=str(self.basis),
+        out: dict[str, Any] = {f.name: str(getattr(self, f.name)) for f in fields(self)}
+        # the two non-text fields in their places (numpy bools too)
+        out.update(
+            holds=None if self.holds is None else bool(self.holds), required=bool(self.required)
         )
+        return out
 
 
 # its public name (reprs, docs, pickles): formation_ftc.registry, which re-exports it
