@@ -79,8 +79,7 @@ def validate_allocation_inputs(
     ...
     ValueError: b_hat must be finite and > 0 (estimated actuator gains; 0 is a dead actuator and makes J_aug of eq. (3) undefined), got [1.0, 0.0]
     """
-    a = np.asarray(alpha, dtype=float)
-    b = np.asarray(b_hat, dtype=float)
+    a, b = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     if a.shape != b.shape:
         raise ValueError(f"{name_alpha} has shape {a.shape} but {name_b} has shape {b.shape}")
     if a.shape[-1] < 2:
@@ -149,8 +148,7 @@ def augmented_matrix(alpha, b_hat):
            [ 0., -1.,  2.],
            [ 1.,  1.,  2.]])
     """
-    alpha = jnp.asarray(alpha)
-    b_hat = jnp.asarray(b_hat)
+    alpha, b_hat = jnp.asarray(alpha), jnp.asarray(b_hat)
     return jnp.concatenate([chain_matrix(b_hat), (alpha / b_hat)[None, :]], axis=0)
 
 
@@ -346,8 +344,7 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
     >>> bool(np.isclose(c.q1, ref["q1"]) and np.isclose(c.q2, ref["q2"]))
     True
     """
-    alpha = np.asarray(alpha, dtype=float)
-    b_hat = np.asarray(b_hat, dtype=float)
+    alpha, b_hat = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     validate_allocation_inputs(alpha, b_hat)
     n = alpha.size
     if not 0 < k < n - 1:
@@ -446,8 +443,7 @@ def perturbation_matrix(alpha, b_hat, k: int, eps: float) -> np.ndarray:
     >>> bool(np.allclose(D[0], d) and np.allclose(D[1], -d))
     True
     """
-    alpha = np.asarray(alpha, dtype=float)
-    b_hat = np.asarray(b_hat, dtype=float)
+    alpha, b_hat = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     n = alpha.size
     E = np.zeros((n - 1, n))
     E[k - 1, k] = -eps

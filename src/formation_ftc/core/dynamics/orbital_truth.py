@@ -47,6 +47,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
+from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
     "MU_EARTH",
@@ -138,8 +139,7 @@ def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
 
     ``table`` (K, 3) rows [h_0 [m], rho_0 [kg/m^3], H [m]] sorted by h_0; the band is the last row with
     h_0 <= h (the first row below its base altitude)."""
-    table = jnp.asarray(table)
-    h = jnp.asarray(altitude)
+    table, h = jnp.asarray(table), jnp.asarray(altitude)
     idx = jnp.clip(jnp.searchsorted(table[:, 0], h, side="right") - 1, 0, table.shape[0] - 1)
     row = table[idx]
     return row[..., 1] * jnp.exp(-(h - row[..., 0]) / row[..., 2])
@@ -207,7 +207,7 @@ def _rot(angle, axis: int):
     c, s = jnp.cos(angle), jnp.sin(angle)
     z, o = jnp.zeros_like(c), jnp.ones_like(c)
     rows = [[c, -s, z], [s, c, z], [z, z, o]] if axis == 2 else [[o, z, z], [z, c, -s], [z, s, c]]
-    return jnp.stack([jnp.stack(row, -1) for row in rows], -2)
+    return matrix3(rows)
 
 
 def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):

@@ -107,8 +107,7 @@ def lvlh_from_inertial(r_chief, v_chief, r_deputy, v_deputy):
     rotating frame: v_rel = R (v_d - v_c - omega x (r_d - r_c)), omega = h / |r|^2.
     Shapes (..., 3); returns (rho [m], v [m/s]).
     """
-    r_chief = jnp.asarray(r_chief)
-    v_chief = jnp.asarray(v_chief)
+    r_chief, v_chief = jnp.asarray(r_chief), jnp.asarray(v_chief)
     h = jnp.cross(r_chief, v_chief)
     ex = r_chief / jnp.linalg.norm(r_chief, axis=-1, keepdims=True)
     ez = h / jnp.linalg.norm(h, axis=-1, keepdims=True)
