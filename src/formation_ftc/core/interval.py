@@ -578,12 +578,13 @@ class _Evaluator:
 
     def _extreme(self, *args, lower: bool) -> _Pair:
         out = args[0]
+        pick: Callable[..., np.ndarray] = np.minimum if lower else np.maximum
         for b in args[1:]:
             (av, ad), (bv, bd) = out, b
             if lower:  # where the min is certainly a / b
-                first, second, pick = av.hi <= bv.lo, bv.hi <= av.lo, np.minimum
+                first, second = av.hi <= bv.lo, bv.hi <= av.lo
             else:
-                first, second, pick = av.lo >= bv.hi, bv.lo >= av.hi, np.maximum
+                first, second = av.lo >= bv.hi, bv.lo >= av.hi
             v = _I(pick(av.lo, bv.lo), pick(av.hi, bv.hi), av.boolean and bv.boolean)
             # the derivative of the one that is certainly the extreme, else both
             out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
