@@ -692,9 +692,7 @@ def evaluate(
         where nothing is known).
     """
     tree = _parse(text, tuple(variables))
-    a = np.atleast_1d(np.asarray(t_lo, dtype=float))
-    b = np.atleast_1d(np.asarray(t_hi, dtype=float))
-    a, b = np.broadcast_arrays(a, b)
+    a, b = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)) for x in (t_lo, t_hi)))
     if np.any(a > b) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ValueError("sub-intervals need finite ends with t_lo <= t_hi")
     n = a.size
