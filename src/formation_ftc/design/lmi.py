@@ -303,17 +303,18 @@ def design_ilo_gains(
     if A.shape != (n, n) or C.shape[1] != n or H.shape[0] != n:
         raise ValueError(f"inconsistent shapes A{A.shape}, C{C.shape}, H{H.shape}")
     all_groups = ("lyapunov_8", "schur_27", "disk", "normalisation")
-    prob, P, Y, L2 = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, all_groups)
-    status, used = _solve(prob, solver)
+
+    def attempt(groups):  # ((status, solver), (P, Y, L2)) of the problem of these groups
+        prob, *variables = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, groups)
+        return _solve(prob, solver), variables
+
+    (status, used), (P, Y, L2) = attempt(all_groups)
     region = f"S({disk_center:g}, {disk_radius:g})"
     if status not in ("optimal", "optimal_inaccurate"):
-        culprits = []
-        for g in all_groups:
-            sub = tuple(x for x in all_groups if x != g)
-            prob_g = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, sub)[0]
-            st, _ = _solve(prob_g, solver)
-            if st in ("optimal", "optimal_inaccurate"):
-                culprits.append(g)
+        # the groups whose removal alone makes the problem feasible
+        without = [tuple(x for x in all_groups if x != g) for g in all_groups]
+        solved = [attempt(groups)[0][0] in ("optimal", "optimal_inaccurate") for groups in without]
+        culprits = [g for g, ok in zip(all_groups, solved, strict=True) if ok]
         names = (
             "; ".join(CONSTRAINT_NAMES[g].replace("S(c, r)", region) for g in culprits)
             or "no single constraint (the combination of (8), (27) and the disk region is infeasible)"
@@ -325,8 +326,7 @@ def design_ilo_gains(
             status=status,
             solver=used,
         )
-    Pv, Yv, L2v = np.asarray(P.value), np.asarray(Y.value), np.asarray(L2.value)
-    Pv = _sym(Pv)
+    Pv, Yv, L2v = _sym(np.asarray(P.value)), np.asarray(Y.value), np.asarray(L2.value)
     res = ilo_lmi_residuals(A, C, H, Pv, Yv, L2v, lam, disk_center, disk_radius)
     bad = [
         k

@@ -204,13 +204,8 @@ def metric_names(metrics: Sequence[Metric], count: int) -> list[str]:
     >>> metric_names(ms, count=2)
     ['peak_sc1', 'peak_sc2', 't_settle']
     """
-    out = []
-    for m in metrics:
-        if m.spacecraft == "each":
-            out += [f"{m.name}_sc{i + 1}" for i in range(count)]
-        else:
-            out.append(m.name)
-    return out
+    each = [f"_sc{i + 1}" for i in range(count)]  # the suffixes of a per-spacecraft metric
+    return [m.name + sfx for m in metrics for sfx in (each if m.spacecraft == "each" else [""])]
 
 
 class _Stack:
