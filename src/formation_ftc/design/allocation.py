@@ -351,13 +351,13 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
         raise ValueError(
             f"faulty satellite index k = {k} (0-based) must be interior: 0 < k < {n - 1}"
         )
-    a0 = alpha.copy()
-    a0[k] = 0.0
-    a1 = alpha.copy()
-    a1[k] = 1.0
-    det0 = float(np.linalg.det(augmented_matrix_np(a0, b_hat)))
-    det1 = float(np.linalg.det(augmented_matrix_np(a1, b_hat)))
-    slope = det1 - det0
+
+    def det_at(alpha_k: float) -> float:  # det J_aug with alpha_k in place of alpha[k]
+        a = np.where(np.arange(n) == k, alpha_k, alpha)
+        return float(np.linalg.det(augmented_matrix_np(a, b_hat)))
+
+    det0 = det_at(0.0)
+    slope = det_at(1.0) - det0
     sign = -1.0 if slope < 0 else 1.0
     M = augmented_matrix_np(alpha, b_hat)
     C = np.array([_cofactor(M, m, k) for m in range(n)])
