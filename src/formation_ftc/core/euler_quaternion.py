@@ -51,6 +51,7 @@ from formation_ftc.core.quaternion import (
     quat_normalize,
     rotation_matrix,
 )
+from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
     "dcm_from_euler_zyx",
@@ -66,22 +67,14 @@ __all__ = [
 
 def dcm_from_euler_zyx(q):
     """``C = Rz(psi) Ry(theta) Rx(phi)`` (body to reference) [-], q = [theta, phi, psi] (..., 3) [rad]."""
-    th, ph, ps = q[..., 0], q[..., 1], q[..., 2]
-    ct, st, cp, sp, cs, ss = (
-        jnp.cos(th),
-        jnp.sin(th),
-        jnp.cos(ph),
-        jnp.sin(ph),
-        jnp.cos(ps),
-        jnp.sin(ps),
-    )
-    return jnp.stack(
+    ct, cp, cs = jnp.cos(q[..., 0]), jnp.cos(q[..., 1]), jnp.cos(q[..., 2])  # theta, phi, psi
+    st, sp, ss = jnp.sin(q[..., 0]), jnp.sin(q[..., 1]), jnp.sin(q[..., 2])
+    return matrix3(
         [
-            jnp.stack([cs * ct, cs * st * sp - ss * cp, cs * st * cp + ss * sp], -1),
-            jnp.stack([ss * ct, ss * st * sp + cs * cp, ss * st * cp - cs * sp], -1),
-            jnp.stack([-st, ct * sp, ct * cp], -1),
-        ],
-        -2,
+            [cs * ct, cs * st * sp - ss * cp, cs * st * cp + ss * sp],
+            [ss * ct, ss * st * sp + cs * cp, ss * st * cp - cs * sp],
+            [-st, ct * sp, ct * cp],
+        ]
     )
 
 

@@ -105,8 +105,7 @@ def zoh_discretize(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact ZOH discretisation: returns (Ad, Bd) with Ad = e^{A dt}, Bd = int_0^dt e^{A s} ds B."""
     import scipy.linalg  # on first use: 0.15 s of every simulating command's start otherwise
 
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
+    A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
     n, m = A.shape[0], B.shape[1]
     M = np.zeros((n + m, n + m))
     M[:n, :n] = A

@@ -39,6 +39,7 @@ sampling and say so (basis "sampled" of :class:`formation_ftc.registry.Condition
 from __future__ import annotations
 
 import ast
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -301,14 +302,6 @@ def _exact_monotone(f: Callable) -> Callable[[_I], _I]:
     return lambda a: _I(f(a.lo), f(a.hi))
 
 
-def _minimum(a: _I, b: _I) -> _I:
-    return _I(np.minimum(a.lo, b.lo), np.minimum(a.hi, b.hi), a.boolean and b.boolean)
-
-
-def _maximum(a: _I, b: _I) -> _I:
-    return _I(np.maximum(a.lo, b.lo), np.maximum(a.hi, b.hi), a.boolean and b.boolean)
-
-
 def _is_integer(x) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     return np.isfinite(x) & (x == np.round(x)) & (np.abs(x) < 2.0**53)
@@ -375,14 +368,12 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
 
 
 def _cmp(op: type, a: _I, b: _I) -> _I:
+    if op in (ast.Gt, ast.GtE):  # a > b is b < a
+        return _cmp(ast.Lt if op is ast.Gt else ast.LtE, b, a)
     if op is ast.Lt:
         return _bool(a.hi < b.lo, a.lo >= b.hi)
     if op is ast.LtE:
         return _bool(a.hi <= b.lo, a.lo > b.hi)
-    if op is ast.Gt:
-        return _bool(a.lo > b.hi, a.hi <= b.lo)
-    if op is ast.GtE:
-        return _bool(a.lo >= b.hi, a.hi < b.lo)
     point = (a.lo == a.hi) & (b.lo == b.hi) & (a.lo == b.lo)
     apart = (a.hi < b.lo) | (b.hi < a.lo)
     if op is ast.Eq:
@@ -393,29 +384,42 @@ def _cmp(op: type, a: _I, b: _I) -> _I:
 
 
 def _and(a: _I, b: _I) -> _I:
-    ta, fa = _truth(a)
-    tb, fb = _truth(b)
+    (ta, fa), (tb, fb) = _truth(a), _truth(b)
     return _bool(ta & tb, fa | fb)
 
 
 def _or(a: _I, b: _I) -> _I:
-    ta, fa = _truth(a)
-    tb, fb = _truth(b)
-    return _bool(ta | tb, fa & fb)
+    return _not(_and(_not(a), _not(b)))  # De Morgan: exact on three-valued truth
 
 
 def _not(a: _I) -> _I:
-    t, f = _truth(a)
-    return _bool(f, t)
+    true, false = _truth(a)
+    return _bool(false, true)
 
 
-#: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`)
-_BINARY: dict[type, Callable[[_I, _I], _I]] = {
-    ast.Add: _add,
-    ast.Sub: _sub,
-    ast.Mult: _mul,
-    ast.Div: _div,
-    ast.Pow: _pow,
+def _dpow(a: _I, da: _I, b: _I, db: _I, v: _I) -> _I:
+    """Derivative of ``v = a ** b``."""
+    fixed = b.lo == b.hi
+    if np.all(fixed) and np.all(db.lo == 0) and np.all(db.hi == 0):
+        # d(a^p) = p a^(p-1) a'
+        p = b.lo
+        pm1 = _pow(a, _I(p - 1.0, p - 1.0))
+        dd = _mul(_mul(_I(p, p), pm1), da)
+        zero = p == 0
+        return _I(np.where(zero, 0.0, dd.lo), np.where(zero, 0.0, dd.hi))
+    # d(a^b) = a^b (b' log a + b a'/a), a > 0
+    la = _log(np.log)(a)
+    return _mul(v, _add(_mul(db, la), _mul(b, _div(da, a))))
+
+
+#: arithmetic operators but ``%`` (which also reports its wraps, :func:`_mod`): enclosure of
+#: ``a op b`` and of its derivative given ``(a, a', b, b', v = a op b)``
+_BINARY: dict[type, tuple[Callable[[_I, _I], _I], Callable[..., _I]]] = {
+    ast.Add: (_add, lambda a, da, b, db, v: _add(da, db)),
+    ast.Sub: (_sub, lambda a, da, b, db, v: _sub(da, db)),
+    ast.Mult: (_mul, lambda a, da, b, db, v: _add(_mul(da, b), _mul(a, db))),
+    ast.Div: (_div, lambda a, da, b, db, v: _div(_sub(da, _mul(v, db)), b)),  # (a' - (a/b) b') / b
+    ast.Pow: (_pow, _dpow),
 }
 
 
@@ -447,6 +451,11 @@ class _Evaluator:
             return None
         return _I(np.where(possible, -_INF, d.lo), np.where(possible, _INF, d.hi))
 
+    def switching(self, v: _I) -> _Pair:
+        """A piecewise-constant value (a truth value, ``floor``, ...): derivative 0, unbounded where
+        the value may switch inside a sub-interval."""
+        return v, self.jump(~_decided(v), self.zero())
+
     def visit(self, node: ast.AST) -> _Pair:
         method = getattr(self, f"visit_{type(node).__name__}", None)
         if method is None:
@@ -473,60 +482,30 @@ class _Evaluator:
         if isinstance(node.op, ast.UAdd):
             return v, d
         if isinstance(node.op, ast.Not):
-            r = _not(v)
-            return r, self.jump(~_decided(r), self.zero())
+            return self.switching(_not(v))
         raise IntervalError(f"operator {type(node.op).__name__} cannot be enclosed")
 
     def visit_BinOp(self, node: ast.BinOp) -> _Pair:
         (a, da), (b, db) = self.visit(node.left), self.visit(node.right)
         op = type(node.op)
-        wrap: np.ndarray | None = None
         if op is ast.Mod:
             v, wrap = _mod(a, b)
-        elif op in _BINARY:
-            v = _BINARY[op](a, b)
-        else:
-            raise IntervalError(f"operator {op.__name__} cannot be enclosed")
-        if not self.der:
-            return v, None
-        assert da is not None and db is not None
-        if op is ast.Add:
-            d = _add(da, db)
-        elif op is ast.Sub:
-            d = _sub(da, db)
-        elif op is ast.Mult:
-            d = _add(_mul(da, b), _mul(a, db))
-        elif op is ast.Div:
-            d = _div(_sub(da, _mul(v, db)), b)  # (a' - (a/b) b') / b
-        elif op is ast.Pow:
-            d = self._dpow(a, da, b, db, v)
-        else:
+            if not self.der:
+                return v, None
+            assert da is not None and db is not None
             # d(a % b) = a' - floor(a/b) b' away from a wrap (a jump); b' = 0 for a constant period
             with np.errstate(all="ignore"):
                 k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
-            dm = _sub(da, _mul(_I(k, k), db))
-            assert wrap is not None
-            d = cast(_I, self.jump(wrap, dm))
-        return v, d
-
-    def _dpow(self, a: _I, da: _I, b: _I, db: _I, v: _I) -> _I:
-        fixed = b.lo == b.hi
-        if np.all(fixed) and np.all(db.lo == 0) and np.all(db.hi == 0):
-            # d(a^p) = p a^(p-1) a'
-            p = b.lo
-            pm1 = _pow(a, _I(p - 1.0, p - 1.0))
-            dd = _mul(_mul(_I(p, p), pm1), da)
-            zero = p == 0
-            return _I(np.where(zero, 0.0, dd.lo), np.where(zero, 0.0, dd.hi))
-        # d(a^b) = a^b (b' log a + b a'/a), a > 0
-        la = _log(np.log)(a)
-        return _mul(v, _add(_mul(db, la), _mul(b, _div(da, a))))
+            return v, self.jump(wrap, _sub(da, _mul(_I(k, k), db)))
+        if op not in _BINARY:
+            raise IntervalError(f"operator {op.__name__} cannot be enclosed")
+        value, derivative = _BINARY[op]
+        v = value(a, b)
+        return v, (derivative(a, da, b, db, v) if self.der else None)
 
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
-        f = _and if isinstance(node.op, ast.And) else _or
-        out = reduce(f, vals)
-        return out, self.jump(~_decided(out), self.zero())
+        return self.switching(reduce(_and if isinstance(node.op, ast.And) else _or, vals))
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
         left, _ = self.visit(node.left)
@@ -537,7 +516,7 @@ class _Evaluator:
             out = c if out is None else _and(out, c)
             left = right
         assert out is not None
-        return out, self.jump(~_decided(out), self.zero())
+        return self.switching(out)
 
     def visit_IfExp(self, node: ast.IfExp) -> _Pair:
         (c, _), a, b = self.visit(node.test), self.visit(node.body), self.visit(node.orelse)
@@ -559,7 +538,7 @@ class _Evaluator:
         if name in _SMOOTH:
             return self._smooth(args[0], *_SMOOTH[name])
         if name in _PIECEWISE_CONSTANT:
-            return self._piecewise_constant(args[0], _PIECEWISE_CONSTANT[name])
+            return self.switching(_PIECEWISE_CONSTANT[name](args[0][0]))
         handler = getattr(self, f"call_{name}", None)
         if handler is None:  # pragma: no cover - every whitelisted function has a handler (tested)
             raise IntervalError(f"function {name!r} in {self.text!r} cannot be enclosed")
@@ -597,40 +576,34 @@ class _Evaluator:
         hi = np.where(pos, da.hi, np.where(neg, -da.lo, both.hi))
         return v, _I(lo, hi)
 
-    def _piecewise_constant(self, x, f: Callable[[_I], _I]) -> _Pair:
-        a, _ = x
-        v = f(a)
-        return v, self.jump(v.lo != v.hi, self.zero())
-
-    def _extreme(self, args, lower: bool) -> _Pair:
+    def _extreme(self, *args, lower: bool) -> _Pair:
         out = args[0]
+        pick: Callable[..., np.ndarray] = np.minimum if lower else np.maximum
         for b in args[1:]:
             (av, ad), (bv, bd) = out, b
             if lower:  # where the min is certainly a / b
-                first, second, v = av.hi <= bv.lo, bv.hi <= av.lo, _minimum(av, bv)
+                first, second = av.hi <= bv.lo, bv.hi <= av.lo
             else:
-                first, second, v = av.lo >= bv.hi, bv.lo >= av.hi, _maximum(av, bv)
+                first, second = av.lo >= bv.hi, bv.lo >= av.hi
+            v = _I(pick(av.lo, bv.lo), pick(av.hi, bv.hi), av.boolean and bv.boolean)
             # the derivative of the one that is certainly the extreme, else both
             out = (v, _select(_bool(first, second), ad, bd) if self.der else None)
         return out
 
-    def call_min(self, *args):
-        return self._extreme(args, lower=True)
-
-    def call_max(self, *args):
-        return self._extreme(args, lower=False)
+    call_min = functools.partialmethod(_extreme, lower=True)
+    call_max = functools.partialmethod(_extreme, lower=False)
 
     def call_clip(self, x, lo, hi):
         # numpy / jax: minimum(maximum(x, lo), hi)
-        return self._extreme([self._extreme([x, lo], lower=False), hi], lower=True)
+        return self._extreme(self._extreme(x, lo, lower=False), hi, lower=True)
 
     def call_where(self, c, a, b):
         return self._where(c[0], a, b)
 
     def call_window(self, x, lo, hi):
         c = _and(_cmp(ast.GtE, x[0], lo[0]), _cmp(ast.LtE, x[0], hi[0]))
-        c = _I(c.lo, c.hi)  # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
-        return c, self.jump(~_decided(c), self.zero())
+        # a float 0/1 (jnp.where(..., 1.0, 0.0)), not a truth value
+        return self.switching(_I(c.lo, c.hi))
 
     def call_piecewise(self, *args):
         return _first_true(self.call_where, args)
@@ -719,9 +692,7 @@ def evaluate(
         where nothing is known).
     """
     tree = _parse(text, tuple(variables))
-    a = np.atleast_1d(np.asarray(t_lo, dtype=float))
-    b = np.atleast_1d(np.asarray(t_hi, dtype=float))
-    a, b = np.broadcast_arrays(a, b)
+    a, b = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float)) for x in (t_lo, t_hi)))
     if np.any(a > b) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ValueError("sub-intervals need finite ends with t_lo <= t_hi")
     n = a.size

@@ -25,14 +25,13 @@ def rotating_polygon(t, n: int, n_axes: int, side, omega) -> tuple[jax.Array, ja
     radius = side / (2.0 * jnp.sin(jnp.pi / n))
     phase = omega * t + jnp.pi / 4 + i * (2.0 * jnp.pi / n)
     c, s = jnp.cos(phase), jnp.sin(phase)
-    pos = jnp.stack([radius * c, radius * s, jnp.zeros_like(c)], axis=-1)[:, :n_axes]
-    vel = jnp.stack([-radius * omega * s, radius * omega * c, jnp.zeros_like(c)], axis=-1)[
-        :, :n_axes
-    ]
-    acc = jnp.stack([-radius * omega**2 * c, -radius * omega**2 * s, jnp.zeros_like(c)], axis=-1)[
-        :, :n_axes
-    ]
-    return pos, vel, acc
+
+    def in_plane(x, y):  # (n, n_axes) with the z component 0
+        return jnp.stack([x, y, jnp.zeros_like(c)], axis=-1)[:, :n_axes]
+
+    pos = in_plane(radius * c, radius * s)
+    vel = in_plane(-radius * omega * s, radius * omega * c)
+    return pos, vel, in_plane(-radius * omega**2 * c, -radius * omega**2 * s)
 
 
 def chain_difference(x: jax.Array) -> jax.Array:

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from formation_ftc.core.vector3 import matrix3
+
 __all__ = [
     "skew",
     "quat_multiply",
@@ -39,20 +41,12 @@ def skew(a):
     a = jnp.asarray(a)
     z = jnp.zeros_like(a[..., 0])
     a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2]
-    return jnp.stack(
-        [
-            jnp.stack([z, -a3, a2], axis=-1),
-            jnp.stack([a3, z, -a1], axis=-1),
-            jnp.stack([-a2, a1, z], axis=-1),
-        ],
-        axis=-2,
-    )
+    return matrix3([[z, -a3, a2], [a3, z, -a1], [-a2, a1, z]])
 
 
 def quat_multiply(p, q):
     """Hamilton product ``p (x) q`` of vector-first, scalar-last quaternions, shape (..., 4)."""
-    p = jnp.asarray(p)
-    q = jnp.asarray(q)
+    p, q = jnp.asarray(p), jnp.asarray(q)
     pv, p4 = p[..., :3], p[..., 3:4]
     qv, q4 = q[..., :3], q[..., 3:4]
     vec = p4 * qv + q4 * pv + jnp.cross(pv, qv)
@@ -89,8 +83,7 @@ def quat_kinematics(q, omega):
     -------
     (..., 4) ``[1/2 (q4 omega - omega x q_v), -1/2 omega^T q_v]``  # Yang2013 eq. (4)
     """
-    q = jnp.asarray(q)
-    omega = jnp.asarray(omega)
+    q, omega = jnp.asarray(q), jnp.asarray(omega)
     qv, q4 = q[..., :3], q[..., 3:4]
     vec = 0.5 * (q4 * omega - jnp.cross(omega, qv))
     sca = -0.5 * jnp.sum(omega * qv, axis=-1, keepdims=True)
@@ -126,8 +119,7 @@ def rotate_vector(q, v):
 
 def quat_from_axis_angle(axis, angle):
     """Unit quaternion ``[sin(angle/2) axis/|axis|, cos(angle/2)]`` (angle in rad)."""
-    axis = jnp.asarray(axis)
-    angle = jnp.asarray(angle)
+    axis, angle = jnp.asarray(axis), jnp.asarray(angle)
     n = axis / jnp.linalg.norm(axis, axis=-1, keepdims=True)
     half = 0.5 * angle[..., None]
     return jnp.concatenate([jnp.sin(half) * n, jnp.cos(half)], axis=-1)

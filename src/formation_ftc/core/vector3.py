@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-__all__ = ["dot3", "norm3", "sq_norm3"]
+__all__ = ["dot3", "norm3", "sq_norm3", "matrix3"]
 
 
 def dot3(a, b):
@@ -29,3 +29,9 @@ def sq_norm3(a):
 def norm3(a):
     """Euclidean norm ||a|| over the last axis (length 3)."""
     return jnp.sqrt(sq_norm3(a))
+
+
+def matrix3(rows):
+    """Stacked 3x3 matrices (..., 3, 3) from three rows of three (...) arrays each (entry [i][j] of
+    ``rows`` becomes element (i, j))."""
+    return jnp.stack([jnp.stack(row, -1) for row in rows], -2)

@@ -79,8 +79,7 @@ def validate_allocation_inputs(
     ...
     ValueError: b_hat must be finite and > 0 (estimated actuator gains; 0 is a dead actuator and makes J_aug of eq. (3) undefined), got [1.0, 0.0]
     """
-    a = np.asarray(alpha, dtype=float)
-    b = np.asarray(b_hat, dtype=float)
+    a, b = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     if a.shape != b.shape:
         raise ValueError(f"{name_alpha} has shape {a.shape} but {name_b} has shape {b.shape}")
     if a.shape[-1] < 2:
@@ -149,8 +148,7 @@ def augmented_matrix(alpha, b_hat):
            [ 0., -1.,  2.],
            [ 1.,  1.,  2.]])
     """
-    alpha = jnp.asarray(alpha)
-    b_hat = jnp.asarray(b_hat)
+    alpha, b_hat = jnp.asarray(alpha), jnp.asarray(b_hat)
     return jnp.concatenate([chain_matrix(b_hat), (alpha / b_hat)[None, :]], axis=0)
 
 
@@ -178,13 +176,11 @@ def augmented_matrix_np(alpha, b_hat) -> np.ndarray:
     >>> bool(np.array_equal(augmented_matrix_np(a, b), np.asarray(augmented_matrix(a, b))))
     True
     """
-    alpha = np.asarray(alpha)
-    b_hat = np.asarray(b_hat)
+    alpha, b_hat = np.asarray(alpha), np.asarray(b_hat)
     n = b_hat.shape[-1]
-    rows = np.arange(n - 1)
-    J = np.zeros((n - 1, n), dtype=b_hat.dtype)
-    J[rows, rows] = -b_hat[:-1]
-    J[rows, rows + 1] = b_hat[1:]
+    J = -b_hat[:-1, None] * np.eye(n - 1, n) + b_hat[1:, None] * np.eye(
+        n - 1, n, 1
+    )  # exact: x*1, x*0
     return np.concatenate([J, (alpha / b_hat)[None, :]], axis=0)
 
 
@@ -348,21 +344,20 @@ def perturbation_coefficients(alpha, b_hat, k: int) -> PerturbationCoefficients:
     >>> bool(np.isclose(c.q1, ref["q1"]) and np.isclose(c.q2, ref["q2"]))
     True
     """
-    alpha = np.asarray(alpha, dtype=float)
-    b_hat = np.asarray(b_hat, dtype=float)
+    alpha, b_hat = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     validate_allocation_inputs(alpha, b_hat)
     n = alpha.size
     if not 0 < k < n - 1:
         raise ValueError(
             f"faulty satellite index k = {k} (0-based) must be interior: 0 < k < {n - 1}"
         )
-    a0 = alpha.copy()
-    a0[k] = 0.0
-    a1 = alpha.copy()
-    a1[k] = 1.0
-    det0 = float(np.linalg.det(augmented_matrix_np(a0, b_hat)))
-    det1 = float(np.linalg.det(augmented_matrix_np(a1, b_hat)))
-    slope = det1 - det0
+
+    def det_at(alpha_k: float) -> float:  # det J_aug with alpha_k in place of alpha[k]
+        a = np.where(np.arange(n) == k, alpha_k, alpha)
+        return float(np.linalg.det(augmented_matrix_np(a, b_hat)))
+
+    det0 = det_at(0.0)
+    slope = det_at(1.0) - det0
     sign = -1.0 if slope < 0 else 1.0
     M = augmented_matrix_np(alpha, b_hat)
     C = np.array([_cofactor(M, m, k) for m in range(n)])
@@ -448,8 +443,7 @@ def perturbation_matrix(alpha, b_hat, k: int, eps: float) -> np.ndarray:
     >>> bool(np.allclose(D[0], d) and np.allclose(D[1], -d))
     True
     """
-    alpha = np.asarray(alpha, dtype=float)
-    b_hat = np.asarray(b_hat, dtype=float)
+    alpha, b_hat = np.asarray(alpha, dtype=float), np.asarray(b_hat, dtype=float)
     n = alpha.size
     E = np.zeros((n - 1, n))
     E[k - 1, k] = -eps

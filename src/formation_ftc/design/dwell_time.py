@@ -64,25 +64,21 @@ class Inequality:
         )
 
 
-def _compare(lhs: float, relation: str, rhs: float, tol: float = 1e-12) -> bool:
-    if relation == "<=":
-        return lhs <= rhs + tol
-    if relation == ">=":
-        return lhs >= rhs - tol
-    if relation == "<":
-        return lhs < rhs
-    if relation == ">":
-        return lhs > rhs
-    raise ValueError(f"unknown relation {relation!r}")
+#: relation -> its test of ``lhs`` against ``rhs`` (the non-strict ones to a tolerance of 1e-12)
+_RELATIONS = {
+    "<=": lambda lhs, rhs: lhs <= rhs + 1e-12,
+    ">=": lambda lhs, rhs: lhs >= rhs - 1e-12,
+    "<": lambda lhs, rhs: lhs < rhs,
+    ">": lambda lhs, rhs: lhs > rhs,
+}
 
 
 def _inequality(
     name: str, reference: str, lhs: float, relation: str, rhs: float, detail: str = ""
 ) -> Inequality:
     """The :class:`Inequality` ``lhs relation rhs`` with its truth value."""
-    return Inequality(
-        name, reference, lhs, relation, rhs, _compare(lhs, relation, rhs), detail=detail
-    )
+    holds = _RELATIONS[relation](lhs, rhs)
+    return Inequality(name, reference, lhs, relation, rhs, holds, detail=detail)
 
 
 def variation_norm(S: np.ndarray, kind: str = "frobenius") -> float:
@@ -659,11 +655,6 @@ def check_condition_29(eta: float, eta1: float, dt1: float, dt2: float) -> Inequ
     >>> c.detail
     'dt1 = 10 s, dt2 = 15 s, eta = 0.4, eta1 = 0.2'
     """
-    return _inequality(
-        "(eta/2) dt1 - (eta1/2) dt2 >= 0",
-        "(29)",
-        condition_29_margin(eta, eta1, dt1, dt2),
-        ">=",
-        0.0,
-        detail=f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}",
-    )
+    margin = condition_29_margin(eta, eta1, dt1, dt2)
+    detail = f"dt1 = {dt1:.6g} s, dt2 = {dt2:.6g} s, eta = {eta:g}, eta1 = {eta1:g}"
+    return _inequality("(eta/2) dt1 - (eta1/2) dt2 >= 0", "(29)", margin, ">=", 0.0, detail)

@@ -346,12 +346,10 @@ def disturbance_floor(A_clp, b_ext: float) -> np.ndarray:
         raise ValueError(f"b_ext (disturbance bound) must be >= 0 m/s^2, got {b_ext}")
     A_clp = np.asarray(A_clp, dtype=float)
     B = INPUT_DIRECTION[:, None]
-    out = np.empty(4)
-    for i in range(4):
-        C = np.zeros((1, 4))
-        C[0, i] = 1.0
-        out[i] = hinf_norm(A_clp, B, C).value * b_ext if b_ext > 0 else 0.0
-    return out
+    if not b_ext > 0:
+        return np.zeros(4)
+    rows = np.eye(4)  # C = rows[i : i + 1]: the output X_i
+    return np.array([hinf_norm(A_clp, B, rows[i : i + 1]).value * b_ext for i in range(4)])
 
 
 def validate_violation_probability(pi: float) -> float:
@@ -587,8 +585,7 @@ def design_flfr(
     alpha = np.asarray(alpha, dtype=float)
     coeff = perturbation_coefficients(alpha, b_hat, k)
     f = coeff.f[: len(coeff.f) - 1]  # f_N multiplies the 0 entry of [p; 0]
-    n = alpha.size
-    if n != 4 or k != 1:
+    if alpha.size != 4 or k != 1:
         raise ValueError(
             "the reduced model (7) is implemented for N = 4 and faulty satellite 2 (k = 1)"
         )
@@ -606,33 +603,30 @@ def design_flfr(
     _, Delta_ref, _ = reduced_model(lam0, lam1, (d_ref[0], d_ref[1]))
     floor = float(np.max(disturbance_floor(best_clp, b_ext)[[0, 2]])) if b_ext > 0 else 0.0
     bound_ref = b_eps * best / coeff.det(alpha_ref)
-    alpha_k = float(alpha[k])
-    out: dict[float, float | None] = {}
-    out_nom: dict[float, float | None] = {}
+    pis = [validate_violation_probability(p) for p in pis]
+    fl = floor if subtract_floor else 0.0
+
+    def alphas(H: float) -> dict[float, float | None]:
+        """pi -> alpha_k of (11) for the supremum H (None when e_s is at or below the floor)."""
+        if e_s <= floor:
+            return dict.fromkeys(pis)
+        return {p: alpha_probabilistic(b_eps, H, coeff.q1, coeff.q2, e_s, p, fl) for p in pis}
+
     if e_s <= floor:
         verdict = "infeasible"
         msg = (
             f"infeasible: e_s = {e_s:.6g} m is not above the disturbance floor T = {floor:.6g} m "
             f"(sup_omega |G_14 - G_12| B_ext with B_ext = {b_ext:.3g} m/s^2); no alpha_{k + 1} can meet it"
         )
-        for p in pis:
-            validate_violation_probability(p)
-            out[float(p)] = None
-            out_nom[float(p)] = None
+    elif bound_ref <= e_s:
+        verdict = "llfr-sufficient"
+        msg = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m <= e_s = {e_s} m: FLFR not needed"
     else:
-        fl = floor if subtract_floor else 0.0
-        for p in pis:
-            out[float(p)] = alpha_probabilistic(b_eps, best, coeff.q1, coeff.q2, e_s, p, fl)
-            out_nom[float(p)] = alpha_probabilistic(b_eps, H_nom, coeff.q1, coeff.q2, e_s, p, fl)
-        if bound_ref <= e_s:
-            verdict = "llfr-sufficient"
-            msg = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m <= e_s = {e_s} m: FLFR not needed"
-        else:
-            verdict = "feasible"
-            msg = (
-                f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
-                f"FLFR raises alpha_{k + 1} from {alpha_k:g}"
-            )
+        verdict = "feasible"
+        msg = (
+            f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
+            f"FLFR raises alpha_{k + 1} from {float(alpha[k]):g}"
+        )
     return FlfrDesign(
         verdict=verdict,
         message=msg,
@@ -641,8 +635,8 @@ def design_flfr(
         H_nominal=H_nom,
         H_eps_sign=best_sign,
         floor=floor,
-        alpha=out,
-        alpha_nominal_H=out_nom,
+        alpha=alphas(best),
+        alpha_nominal_H=alphas(H_nom),
         bound_at_reference=bound_ref,
         delta_norm_reference=float(np.linalg.norm(Delta_ref, 2)),
         small_gain=small_gain_margin(A),

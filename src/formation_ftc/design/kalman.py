@@ -63,8 +63,7 @@ def discrete_model(A, B, G, q: float, dt: float) -> DiscreteModel:
     >>> np.allclose(m.qd, 2.0 * np.array([[0.5**3 / 3, 0.5**2 / 2], [0.5**2 / 2, 0.5]]))
     True
     """
-    A = np.asarray(A, dtype=float)
-    G = np.asarray(G, dtype=float)
+    A, G = np.asarray(A, dtype=float), np.asarray(G, dtype=float)
     if not (dt > 0 and np.isfinite(dt)) or not (q >= 0 and np.isfinite(q)):
         raise ValueError(f"discrete_model: dt = {dt} s must be > 0 and q = {q} >= 0")
     phi, gamma = zoh_discretize(A, B, dt)

@@ -202,17 +202,10 @@ def _build_problem(A, C, H, lam, c, r, eps, groups):
     Y = cp.Variable((n, p))
     L2 = cp.Variable((m, p))
     M8, _, M27, MD = _lmi_matrices(A, C, H, P, Y, L2, lam, c, r, cp.bmat)
-    cons = []
-    if "lyapunov_8" in groups:
-        cons.append(_sym(M8) << -eps * np.eye(n))
-    if "schur_27" in groups:
-        cons.append(_sym(M27) << -min(eps, lam / 10) * np.eye(n + m))
-    if "disk" in groups:
-        cons.append(_sym(MD) << -eps * np.eye(2 * n))
-    if "normalisation" in groups:
-        cons.append(P >> np.eye(n))
-    else:
-        cons.append(P >> eps * np.eye(n))
+    # group -> (M, margin) of the strict LMI M < 0 imposed as M <= -margin I
+    lmis = {"lyapunov_8": (M8, eps), "schur_27": (M27, min(eps, lam / 10)), "disk": (MD, eps)}
+    cons = [_sym(M) << -e * np.eye(M.shape[0]) for g, (M, e) in lmis.items() if g in groups]
+    cons.append(P >> (np.eye(n) if "normalisation" in groups else eps * np.eye(n)))
     prob = cp.Problem(cp.Minimize(cp.trace(P)), cons)
     return prob, P, Y, L2
 
@@ -310,17 +303,18 @@ def design_ilo_gains(
     if A.shape != (n, n) or C.shape[1] != n or H.shape[0] != n:
         raise ValueError(f"inconsistent shapes A{A.shape}, C{C.shape}, H{H.shape}")
     all_groups = ("lyapunov_8", "schur_27", "disk", "normalisation")
-    prob, P, Y, L2 = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, all_groups)
-    status, used = _solve(prob, solver)
+
+    def attempt(groups):  # ((status, solver), (P, Y, L2)) of the problem of these groups
+        prob, *variables = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, groups)
+        return _solve(prob, solver), variables
+
+    (status, used), (P, Y, L2) = attempt(all_groups)
     region = f"S({disk_center:g}, {disk_radius:g})"
     if status not in ("optimal", "optimal_inaccurate"):
-        culprits = []
-        for g in all_groups:
-            sub = tuple(x for x in all_groups if x != g)
-            prob_g = _build_problem(A, C, H, lam, disk_center, disk_radius, eps, sub)[0]
-            st, _ = _solve(prob_g, solver)
-            if st in ("optimal", "optimal_inaccurate"):
-                culprits.append(g)
+        # the groups whose removal alone makes the problem feasible
+        without = [tuple(x for x in all_groups if x != g) for g in all_groups]
+        solved = [attempt(groups)[0][0] in ("optimal", "optimal_inaccurate") for groups in without]
+        culprits = [g for g, ok in zip(all_groups, solved, strict=True) if ok]
         names = (
             "; ".join(CONSTRAINT_NAMES[g].replace("S(c, r)", region) for g in culprits)
             or "no single constraint (the combination of (8), (27) and the disk region is infeasible)"
@@ -332,8 +326,7 @@ def design_ilo_gains(
             status=status,
             solver=used,
         )
-    Pv, Yv, L2v = np.asarray(P.value), np.asarray(Y.value), np.asarray(L2.value)
-    Pv = _sym(Pv)
+    Pv, Yv, L2v = _sym(np.asarray(P.value)), np.asarray(Y.value), np.asarray(L2.value)
     res = ilo_lmi_residuals(A, C, H, Pv, Yv, L2v, lam, disk_center, disk_radius)
     bad = [
         k

@@ -79,14 +79,9 @@ def sigma_max_response(A, B, C, D, omega) -> np.ndarray:
     >>> np.round(sigma_max_response([[-1.0]], [[1.0]], [[1.0]], [[0.0]], [0.0, 1.0]), 6)
     array([1.      , 0.707107])
     """
-    A = np.asarray(A, dtype=complex)
-    B = np.asarray(B, dtype=complex)
-    C = np.asarray(C, dtype=complex)
-    D = np.asarray(D, dtype=complex)
+    A, B, C, D = (np.asarray(x, dtype=complex) for x in (A, B, C, D))
     w = np.atleast_1d(np.asarray(omega, dtype=float))
-    n = A.shape[0]
-    eye = np.eye(n)
-    M = 1j * w[:, None, None] * eye[None] - A[None]
+    M = 1j * w[:, None, None] * np.eye(A.shape[0])[None] - A[None]
     G = C[None] @ np.linalg.solve(M, np.broadcast_to(B, (w.size,) + B.shape)) + D[None]
     return np.linalg.svd(G, compute_uv=False)[:, 0]
 
@@ -339,11 +334,7 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
     """
     A, B, C = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, C))
     n = A.shape[0]
-    D = (
-        np.zeros((C.shape[0], B.shape[1]))
-        if D is None
-        else np.atleast_2d(np.asarray(D, dtype=float))
-    )
+    D = np.zeros((C.shape[0], B.shape[1])) if D is None else np.atleast_2d(np.asarray(D, float))
     if (
         A.shape != (n, n)
         or B.shape[0] != n
@@ -358,17 +349,12 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
         return HinfNorm(sd, sd, math.inf, sd, True, "exact: G = D (no state reaches the output)")
     eig = np.linalg.eigvals(A)
     if np.any(eig.real >= 0):
-        bad = eig[eig.real >= 0]
-        return HinfNorm(
-            math.inf,
-            math.inf,
-            math.nan,
-            math.inf,
-            True,
-            "eigenvalues of A",
-            reason=f"A is not Hurwitz (eigenvalue(s) {np.round(bad, 6).tolist()} with Re >= 0): "
-            "the system is not internally stable and its L2 gain is unbounded",
+        bad = np.round(eig[eig.real >= 0], 6).tolist()
+        reason = (
+            f"A is not Hurwitz (eigenvalue(s) {bad} with Re >= 0): the system is not internally "
+            "stable and its L2 gain is unbounded"
         )
+        return HinfNorm(math.inf, math.inf, math.nan, math.inf, True, "eigenvalues of A", reason)
     As, Bs, Cs, w0 = _scaled(A, B, C)
     try:
         import control
@@ -393,15 +379,8 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
         ok, detail = kyp_certificate(As, Bs, Cs, D, g)
         if ok:
             return HinfNorm(float(g), gl, wp * w0, est, True, method)
-    return HinfNorm(
-        math.inf,
-        gl,
-        wp * w0,
-        est,
-        False,
-        method,
-        reason=f"no bound up to {max(tries):.6g} could be certified ({detail})",
-    )
+    reason = f"no bound up to {max(tries):.6g} could be certified ({detail})"
+    return HinfNorm(math.inf, gl, wp * w0, est, False, method, reason)
 
 
 @dataclass(frozen=True)

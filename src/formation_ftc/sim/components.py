@@ -573,16 +573,10 @@ class Actuator(_Kind):
         return {}
 
 
-#: slot name -> required base class
+#: slot name (the base's ``kind``) -> required base class, in slot order
 KIND_SLOTS: dict[str, type] = {
-    "plant": Plant,
-    "reference": Reference,
-    "sensors": Sensors,
-    "network": Network,
-    "estimator": Estimator,
-    "supervisor": Supervisor,
-    "controller": Controller,
-    "actuator": Actuator,
+    base.kind: base
+    for base in (Plant, Reference, Sensors, Network, Estimator, Supervisor, Controller, Actuator)
 }
 
 

@@ -13,8 +13,8 @@ keeps working; :mod:`formation_ftc.sim.metrics` re-exports the names of the metr
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from dataclasses import dataclass, field, fields
+from typing import Any, NamedTuple, NoReturn
 
 import numpy as np
 
@@ -330,22 +330,19 @@ class Condition:
     basis: str = field(kw_only=True)
 
     def __post_init__(self) -> None:
+        def fail(problem: str) -> NoReturn:
+            raise ValueError(f"condition {self.name!r}: {problem}")
+
         if self.basis not in BASES:
-            raise ValueError(
-                f"condition {self.name!r}: basis {self.basis!r} is not one of {', '.join(BASES)}"
-            )
+            fail(f"basis {self.basis!r} is not one of {', '.join(BASES)}")
         if self.holds is not None and not isinstance(self.holds, bool | np.bool_):
-            raise ValueError(
-                f"condition {self.name!r}: holds must be True, False or None, got {self.holds!r}"
-            )
+            fail(f"holds must be True, False or None, got {self.holds!r}")
         if self.basis == "informative" and self.required:
-            raise ValueError(
-                f"condition {self.name!r}: an informative condition cannot be required"
-            )
+            fail("an informative condition cannot be required")
         if self.holds is not None and bool(self.holds) and self.basis not in CERTIFYING_BASES:
-            raise ValueError(
-                f"condition {self.name!r}: a {self.basis} computation cannot prove that it "
-                "holds; report holds=None (unproven) when no violation is found"
+            fail(
+                f"a {self.basis} computation cannot prove that it holds; report holds=None "
+                "(unproven) when no violation is found"
             )
 
     @property
@@ -354,16 +351,12 @@ class Condition:
         return self.holds is None and self.basis in ("sampled", "heuristic")
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(
-            name=str(self.name),
-            reference=str(self.reference),
-            value=str(self.value),
-            requirement=str(self.requirement),
-            holds=None if self.holds is None else bool(self.holds),  # numpy bools too
-            required=bool(self.required),
-            detail=str(self.detail),
-            basis=str(self.basis),
+        out: dict[str, Any] = {f.name: str(getattr(self, f.name)) for f in fields(self)}
+        # the two non-text fields in their places (numpy bools too)
+        out.update(
+            holds=None if self.holds is None else bool(self.holds), required=bool(self.required)
         )
+        return out
 
 
 # its public name (reprs, docs, pickles): formation_ftc.registry, which re-exports it

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 import jax
 import jax.numpy as jnp
@@ -127,39 +127,30 @@ class Metric:
     formula: str | None = static(default=None)
 
     def __post_init__(self) -> None:
+        def fail(problem: str) -> NoReturn:
+            raise ValueError(f"metric {self.name!r}: {problem}")
+
         if (self.reduce == "stl") != (self.formula is not None):
-            raise ValueError(
-                f"metric {self.name!r}: reduce 'stl' and a formula go together "
-                f"(reduce {self.reduce!r}, formula {self.formula!r})"
+            fail(
+                f"reduce 'stl' and a formula go together (reduce {self.reduce!r}, formula "
+                f"{self.formula!r})"
             )
         if self.formula is not None:
             from formation_ftc.sim.stl import parse
 
             parse(self.formula)  # StlError naming the position
         if self.norm_ord not in ("2", "inf"):
-            raise ValueError(
-                f"metric {self.name!r}: norm_ord must be '2' or 'inf', got {self.norm_ord!r}"
-            )
+            fail(f"norm_ord must be '2' or 'inf', got {self.norm_ord!r}")
         if self.reduce not in REDUCTIONS:
-            raise ValueError(
-                f"metric {self.name!r}: reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}"
-            )
+            fail(f"reduce must be one of {sorted(REDUCTIONS)}, got {self.reduce!r}")
         if self.spacecraft not in SPACECRAFT_REDUCTIONS:
-            raise ValueError(
-                f"metric {self.name!r}: spacecraft must be one of {SPACECRAFT_REDUCTIONS}, "
-                f"got {self.spacecraft!r}"
-            )
+            fail(f"spacecraft must be one of {SPACECRAFT_REDUCTIONS}, got {self.spacecraft!r}")
         if self.gate is not None and self.reduce in STAGE_REDUCTIONS:
-            raise ValueError(
-                f"metric {self.name!r}: a gate is not supported by the stage-integrated "
-                f"reduction {self.reduce!r}"
-            )
+            fail(f"a gate is not supported by the stage-integrated reduction {self.reduce!r}")
         if self.reduce in BLOCK_REDUCTIONS and not (
             isinstance(self.block, int) and self.block >= 1
         ):
-            raise ValueError(
-                f"metric {self.name!r}: reduce {self.reduce!r} needs block >= 1 steps, got {self.block!r}"
-            )
+            fail(f"reduce {self.reduce!r} needs block >= 1 steps, got {self.block!r}")
 
     def value(self, signals: Mapping[str, jax.Array]) -> jax.Array:
         """The instantaneous value (scalar, or (N,) for ``"each"``)."""
@@ -213,13 +204,8 @@ def metric_names(metrics: Sequence[Metric], count: int) -> list[str]:
     >>> metric_names(ms, count=2)
     ['peak_sc1', 'peak_sc2', 't_settle']
     """
-    out = []
-    for m in metrics:
-        if m.spacecraft == "each":
-            out += [f"{m.name}_sc{i + 1}" for i in range(count)]
-        else:
-            out.append(m.name)
-    return out
+    each = [f"_sc{i + 1}" for i in range(count)]  # the suffixes of a per-spacecraft metric
+    return [m.name + sfx for m in metrics for sfx in (each if m.spacecraft == "each" else [""])]
 
 
 class _Stack:

@@ -125,17 +125,17 @@ class _Parser:
         return left
 
     def disj(self) -> Any:
-        left = self.conj()
-        while self.peek() in ("or", "|"):
-            self.take()
-            left = Binary("or", left, self.conj())
-        return left
+        return self.chain("or", "|", self.conj)
 
     def conj(self) -> Any:
-        left = self.unary()
-        while self.peek() in ("and", "&"):
+        return self.chain("and", "&", self.unary)
+
+    def chain(self, op: str, symbol: str, operand) -> Any:
+        """``operand (op operand)*``, left associative (``symbol``: the operator's other spelling)."""
+        left = operand()
+        while self.peek() in (op, symbol):
             self.take()
-            left = Binary("and", left, self.unary())
+            left = Binary(op, left, operand())
         return left
 
     def number(self) -> float:

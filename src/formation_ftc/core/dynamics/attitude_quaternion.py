@@ -32,8 +32,7 @@ __all__ = [
 
 def gravity_gradient_torque(R_body, J, mu: float = MU_EARTH):
     """``tau_g = 3 mu / |R|^5 R x (J R)`` [N m]; R_body (..., 3) [m], J (3, 3) [kg m^2]."""
-    R_body = jnp.asarray(R_body)
-    J = jnp.asarray(J)
+    R_body, J = jnp.asarray(R_body), jnp.asarray(J)
     r = jnp.linalg.norm(R_body, axis=-1, keepdims=True)
     JR = jnp.einsum("ij,...j->...i", J, R_body)
     return 3.0 * mu / r**5 * jnp.cross(R_body, JR)
@@ -51,8 +50,7 @@ def attitude_rhs(t, state, J, torque=None, disturbance=None, R_body=None, mu: fl
     R_body : (..., 3) position from the Earth's centre in body axes [m]; None = no gravity gradient
     mu : gravitational parameter [m^3/s^2]
     """
-    state = jnp.asarray(state)
-    J = jnp.asarray(J)
+    state, J = jnp.asarray(state), jnp.asarray(J)
     omega, q = state[..., :3], state[..., 3:]
     Jw = jnp.einsum("ij,...j->...i", J, omega)
     total = -jnp.cross(omega, Jw)

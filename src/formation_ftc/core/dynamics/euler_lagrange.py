@@ -34,6 +34,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from formation_ftc.core.constants import SINGULAR_PITCH_LIMIT_RAD, check_away_from_singularity
+from formation_ftc.core.quaternion import skew  # S(x) y = x x y, re-exported
+from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
     "SINGULAR_PITCH_LIMIT_RAD",
@@ -70,34 +72,13 @@ def _mtv(M, v):
     return jnp.sum(M * v[..., :, None], axis=-2)
 
 
-def skew(x):
-    """Cross-product matrix S(x) with S(x) y = x x y; x (..., 3) -> (..., 3, 3)."""
-    x1, x2, x3 = x[..., 0], x[..., 1], x[..., 2]
-    z = jnp.zeros_like(x1)
-    return jnp.stack(
-        [
-            jnp.stack([z, -x3, x2], -1),
-            jnp.stack([x3, z, -x1], -1),
-            jnp.stack([-x2, x1, z], -1),
-        ],
-        -2,
-    )
-
-
 def rbar(q):
     """R_bar(q) [-] (..., 3, 3): q_dot = R_bar omega (Mehrabian (27) with rows swapped, E003-08)."""
     th, ph = q[..., 0], q[..., 1]
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     tt = st / ct
     z, o = jnp.zeros_like(th), jnp.ones_like(th)
-    return jnp.stack(
-        [
-            jnp.stack([z, cp, -sp], -1),
-            jnp.stack([o, sp * tt, cp * tt], -1),
-            jnp.stack([z, sp / ct, cp / ct], -1),
-        ],
-        -2,
-    )
+    return matrix3([[z, cp, -sp], [o, sp * tt, cp * tt], [z, sp / ct, cp / ct]])
 
 
 def rbar_inv(q):
@@ -105,14 +86,7 @@ def rbar_inv(q):
     th, ph = q[..., 0], q[..., 1]
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     z, o = jnp.zeros_like(th), jnp.ones_like(th)
-    return jnp.stack(
-        [
-            jnp.stack([z, o, -st], -1),
-            jnp.stack([cp, z, sp * ct], -1),
-            jnp.stack([-sp, z, cp * ct], -1),
-        ],
-        -2,
-    )
+    return matrix3([[z, o, -st], [cp, z, sp * ct], [-sp, z, cp * ct]])
 
 
 def rbar_inv_dot(q, qdot):
@@ -121,13 +95,12 @@ def rbar_inv_dot(q, qdot):
     thd, phd = qdot[..., 0], qdot[..., 1]
     ct, st, cp, sp = jnp.cos(th), jnp.sin(th), jnp.cos(ph), jnp.sin(ph)
     z = jnp.zeros_like(th)
-    return jnp.stack(
+    return matrix3(
         [
-            jnp.stack([z, z, -ct * thd], -1),
-            jnp.stack([-sp * phd, z, cp * ct * phd - sp * st * thd], -1),
-            jnp.stack([-cp * phd, z, -sp * ct * phd - cp * st * thd], -1),
-        ],
-        -2,
+            [z, z, -ct * thd],
+            [-sp * phd, z, cp * ct * phd - sp * st * thd],
+            [-cp * phd, z, -sp * ct * phd - cp * st * thd],
+        ]
     )
 
 

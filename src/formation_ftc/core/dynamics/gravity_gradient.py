@@ -52,6 +52,7 @@ from formation_ftc.core.quaternion import (
     quat_multiply,
     rotation_matrix,
 )
+from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
     "orbit_rate",
@@ -92,9 +93,7 @@ def lvlh_to_inertial(u):
     u = jnp.asarray(u)
     c, s = jnp.cos(u), jnp.sin(u)
     z, o = jnp.zeros_like(u), jnp.ones_like(u)
-    return jnp.stack(
-        [jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2
-    )
+    return matrix3([[c, -s, z], [s, c, z], [z, z, o]])
 
 
 def quaternion_lvlh_to_inertial(u):

@@ -47,6 +47,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
+from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
     "MU_EARTH",
@@ -84,6 +85,16 @@ SOLAR_PRESSURE = 1361.0 / 299792458.0  # N/m^2, TSI 1361 W/m^2 (Kopp & Lean 2011
 
 def _norm(v):
     return jnp.sqrt(jnp.sum(v * v, axis=-1, keepdims=True))
+
+
+def _wrap(x):
+    """``x`` wrapped to [-pi, pi) [rad]."""
+    return jnp.remainder(x + jnp.pi, 2 * jnp.pi) - jnp.pi
+
+
+def _rotate(R, x):
+    """``R @ x`` over stacked (..., 3, 3) matrices and (..., 3) vectors."""
+    return jnp.einsum("...ij,...j->...i", R, x)
 
 
 # --------------------------------------------------------------------------------------- forces
@@ -128,8 +139,7 @@ def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
 
     ``table`` (K, 3) rows [h_0 [m], rho_0 [kg/m^3], H [m]] sorted by h_0; the band is the last row with
     h_0 <= h (the first row below its base altitude)."""
-    table = jnp.asarray(table)
-    h = jnp.asarray(altitude)
+    table, h = jnp.asarray(table), jnp.asarray(altitude)
     idx = jnp.clip(jnp.searchsorted(table[:, 0], h, side="right") - 1, 0, table.shape[0] - 1)
     row = table[idx]
     return row[..., 1] * jnp.exp(-(h - row[..., 0]) / row[..., 2])
@@ -192,20 +202,12 @@ def perturbed_acceleration(
 
 
 # ----------------------------------------------------------------------------------- elements
-def _rot3(angle):
+def _rot(angle, axis: int):
+    """Rotation by ``angle`` [rad] about the coordinate axis ``axis`` (0: x, 2: z), (..., 3, 3)."""
     c, s = jnp.cos(angle), jnp.sin(angle)
     z, o = jnp.zeros_like(c), jnp.ones_like(c)
-    return jnp.stack(
-        [jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2
-    )
-
-
-def _rot1(angle):
-    c, s = jnp.cos(angle), jnp.sin(angle)
-    z, o = jnp.zeros_like(c), jnp.ones_like(c)
-    return jnp.stack(
-        [jnp.stack([o, z, z], -1), jnp.stack([z, c, -s], -1), jnp.stack([z, s, c], -1)], -2
-    )
+    rows = [[c, -s, z], [s, c, z], [z, z, o]] if axis == 2 else [[o, z, z], [z, c, -s], [z, s, c]]
+    return matrix3(rows)
 
 
 def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
@@ -223,10 +225,8 @@ def elements_to_eci(a, e, i, raan, argp, nu, mu=MU_EARTH):
     r_pf = jnp.stack([r * jnp.cos(nu), r * jnp.sin(nu), jnp.zeros_like(r)], -1)  # perifocal frame
     k = jnp.sqrt(mu / p)
     v_pf = jnp.stack([-k * jnp.sin(nu), k * (e + jnp.cos(nu)), jnp.zeros_like(r)], -1)
-    Q = _rot3(raan) @ _rot1(i) @ _rot3(argp)  # perifocal -> ECI
-    return jnp.concatenate(
-        [jnp.einsum("...ij,...j->...i", Q, r_pf), jnp.einsum("...ij,...j->...i", Q, v_pf)], -1
-    )
+    Q = _rot(raan, 2) @ _rot(i, 0) @ _rot(argp, 2)  # perifocal -> ECI
+    return jnp.concatenate([_rotate(Q, r_pf), _rotate(Q, v_pf)], -1)
 
 
 def eci_to_elements(state, mu=MU_EARTH):
@@ -269,7 +269,7 @@ def true_to_mean_anomaly(nu, e):
     """Mean anomaly M [rad] from the true anomaly ``nu`` [rad] (eccentric anomaly, Kepler's equation);
     whole revolutions of ``nu`` are kept."""
     nu = jnp.asarray(nu)
-    nu_w = jnp.remainder(nu + jnp.pi, 2 * jnp.pi) - jnp.pi
+    nu_w = _wrap(nu)
     E = 2.0 * jnp.arctan2(
         jnp.sqrt(1.0 - e) * jnp.sin(nu_w / 2), jnp.sqrt(1.0 + e) * jnp.cos(nu_w / 2)
     )
@@ -281,7 +281,7 @@ def mean_to_true_anomaly(M, e, iterations: int = 40):
     (a fixed number of iterations, traceable; quadratic convergence for 0 <= e < 0.9 from the start
     E = M + e sin M, or pi for e > 0.8)."""
     M = jnp.asarray(M)
-    Mr = jnp.remainder(M + jnp.pi, 2 * jnp.pi) - jnp.pi
+    Mr = _wrap(M)
     E = jnp.where(e < 0.8, Mr + e * jnp.sin(Mr), jnp.pi * jnp.sign(Mr))
     for _ in range(iterations):
         E = E - (E - e * jnp.sin(E) - Mr) / (1.0 - e * jnp.cos(E))
@@ -321,12 +321,8 @@ def elements_to_roe(chief, deputy):
     ``chief`` (both (a, e, i, RAAN, argp, nu)); angle differences wrapped to (-pi, pi]."""
     a, e, i, raan, argp, nu = (jnp.asarray(c) for c in chief)
     ad, ed, id_, raand, argpd, nud = (jnp.asarray(c) for c in deputy)
-
-    def wrap(x):
-        return jnp.remainder(x + jnp.pi, 2 * jnp.pi) - jnp.pi
-
-    d_raan = wrap(raand - raan)
-    du = wrap(argpd + true_to_mean_anomaly(nud, ed) - argp - true_to_mean_anomaly(nu, e))
+    d_raan = _wrap(raand - raan)
+    du = _wrap(argpd + true_to_mean_anomaly(nud, ed) - argp - true_to_mean_anomaly(nu, e))
     return jnp.stack(
         [
             ad / a - 1.0,
@@ -358,30 +354,31 @@ def lvlh_angular_velocity(r_chief, v_chief):
     return jnp.cross(r_chief, v_chief) / jnp.sum(r_chief**2, axis=-1, keepdims=True)
 
 
+def _chief_frame(chief):
+    """The chief's position, velocity, rotation ECI -> LVLH and LVLH angular velocity."""
+    chief = jnp.asarray(chief)
+    rc, vc = chief[..., :3], chief[..., 3:]
+    return rc, vc, lvlh_rotation(rc, vc), lvlh_angular_velocity(rc, vc)
+
+
 def eci_to_lvlh(chief, deputy):
     """Relative state of ``deputy`` (..., 6) in the LVLH frame of ``chief`` (6,) or (..., 6) [m, m/s]::
 
         rho = R (r_d - r_c),   rho_dot = R (v_d - v_c - omega x (r_d - r_c))     (rotating frame)
 
     Returns (..., 6) ``[rho, rho_dot]``."""
-    chief, deputy = jnp.asarray(chief), jnp.asarray(deputy)
-    rc, vc = chief[..., :3], chief[..., 3:]
-    R = lvlh_rotation(rc, vc)
-    w = lvlh_angular_velocity(rc, vc)
+    deputy = jnp.asarray(deputy)
+    rc, vc, R, w = _chief_frame(chief)
     dr = deputy[..., :3] - rc
     dv = deputy[..., 3:] - vc - jnp.cross(jnp.broadcast_to(w, dr.shape), dr)
-    return jnp.concatenate(
-        [jnp.einsum("...ij,...j->...i", R, dr), jnp.einsum("...ij,...j->...i", R, dv)], -1
-    )
+    return jnp.concatenate([_rotate(R, dr), _rotate(R, dv)], -1)
 
 
 def lvlh_to_eci(chief, relative):
     """Inverse of :func:`eci_to_lvlh`: deputy ECI state (..., 6) from the chief (6,) and LVLH offsets
     ``relative`` (..., 6) [m, m/s]: r_d = r_c + R^T rho, v_d = v_c + R^T rho_dot + omega x (R^T rho)."""
-    chief, relative = jnp.asarray(chief), jnp.asarray(relative)
-    rc, vc = chief[..., :3], chief[..., 3:]
-    R = lvlh_rotation(rc, vc)
-    w = lvlh_angular_velocity(rc, vc)
+    relative = jnp.asarray(relative)
+    rc, vc, R, w = _chief_frame(chief)
     dr = jnp.einsum("...ji,...j->...i", R, relative[..., :3])
     dv = jnp.einsum("...ji,...j->...i", R, relative[..., 3:]) + jnp.cross(
         jnp.broadcast_to(w, dr.shape), dr

@@ -80,9 +80,8 @@ def natural_acceleration_from_rates(rho, v, r_c, theta_dot, theta_ddot, mu):
     vx, vy = v[..., 0], v[..., 1]
     r_i = jnp.sqrt((r_c + x) ** 2 + y**2 + z**2)  # E000-03
     g = mu / r_i**3
-    ax = (
-        2.0 * thd * vy + thd**2 * x + thdd * y - g * x - mu * r_c / r_i**3 + mu / r_c**2
-    )  # eqs. (2)-(4)
+    # eqs. (2)-(4)
+    ax = 2.0 * thd * vy + thd**2 * x + thdd * y - g * x - mu * r_c / r_i**3 + mu / r_c**2
     ay = -2.0 * thd * vx - thdd * x + thd**2 * y - g * y
     az = -g * z
     return jnp.stack([ax, ay, az], axis=-1)
@@ -108,8 +107,7 @@ def lvlh_from_inertial(r_chief, v_chief, r_deputy, v_deputy):
     rotating frame: v_rel = R (v_d - v_c - omega x (r_d - r_c)), omega = h / |r|^2.
     Shapes (..., 3); returns (rho [m], v [m/s]).
     """
-    r_chief = jnp.asarray(r_chief)
-    v_chief = jnp.asarray(v_chief)
+    r_chief, v_chief = jnp.asarray(r_chief), jnp.asarray(v_chief)
     h = jnp.cross(r_chief, v_chief)
     ex = r_chief / jnp.linalg.norm(r_chief, axis=-1, keepdims=True)
     ez = h / jnp.linalg.norm(h, axis=-1, keepdims=True)
