@@ -132,27 +132,12 @@ def pass_rate_interval(
         from statsmodels.stats.proportion import proportion_confint
 
         low, high = proportion_confint(estimate * n, n, alpha=1 - confidence, method="wilson")
-        return {  # (statsmodels' upper bound at 1 is 1 - 2e-16: the bounds hold the estimate)
-            "estimate": estimate,
-            "low": min(float(low), estimate),
-            "high": max(float(high), estimate),
-            "method": "wilson",
-            "seeds": n,
-        }
-    low, high = _bootstrap(
-        fraction,
-        lambda x, axis=-1: np.mean(x, axis=axis),
-        confidence,
-        n_resamples,
-        random_state,
-    )
-    return {
-        "estimate": estimate,
-        "low": low,
-        "high": high,
-        "method": "cluster bootstrap",
-        "seeds": n,
-    }
+        # (statsmodels' upper bound at 1 is 1 - 2e-16: the bounds hold the estimate)
+        low, high, method = min(float(low), estimate), max(float(high), estimate), "wilson"
+    else:
+        low, high = _bootstrap(fraction, np.mean, confidence, n_resamples, random_state)
+        method = "cluster bootstrap"
+    return {"estimate": estimate, "low": low, "high": high, "method": method, "seeds": n}
 
 
 def median_interval(
@@ -204,9 +189,7 @@ def median_interval(
         v = v[np.isfinite(v)]
         if v.size < 2:
             return math.nan, math.nan
-        return _bootstrap(
-            v, lambda x, axis=-1: np.median(x, axis=axis), confidence, n_resamples, random_state
-        )
+        return _bootstrap(v, np.median, confidence, n_resamples, random_state)
     if v.ndim != 2:
         raise ValueError(f"values of shape {v.shape}: 1-D, or 2-D (seeds x cases)")
     v = v[np.isfinite(v).any(axis=1)]
