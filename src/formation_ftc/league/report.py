@@ -25,6 +25,7 @@ import json
 import math
 import re
 import tomllib
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +45,6 @@ __all__ = [
     "fdi_table",
     "FDI_COLUMNS",
     "IDENTIFICATION_COLUMNS",
-    "identification_rows",
     "IDENTIFICATION_TABLE",
     "IDENTIFICATION_NOTE",
     "ranking",
@@ -52,7 +52,6 @@ __all__ = [
     "rank_confidence",
     "ranking_frame",
     "seed_column",
-    "CONFIDENCE_KEYS",
     "winners",
     "write_leaderboard",
     "markdown_summary",
@@ -155,12 +154,6 @@ IDENTIFICATION_COLUMNS = (
     ("median_time_outside_10pct", "median time outside 10 % [s]"),
     ("false_identifications", "false identifications"),
 )
-
-
-def identification_rows(fdi: dict[str, Any]) -> list[dict[str, Any]]:
-    """The FDI rows of methods whose FDI identifies faults (they carry :data:`IDENTIFICATION_COLUMNS`),
-    for the identification table (a table of its own: the FDI table stays within a 1,280 px page)."""
-    return [r for r in fdi["rows"] if "identified_runs" in r]
 
 
 #: the identification table's columns
@@ -269,7 +262,8 @@ def _fdi_tables(fdi: dict[str, Any]) -> dict[str, Any]:
         "note": _fdi_note(fdi),
         "rows": fdi["rows"],
         "columns": list(FDI_COLUMNS),
-        "identification": identification_rows(fdi),
+        # methods whose FDI identifies faults (a table of its own: the FDI table stays within 1,280 px)
+        "identification": [r for r in fdi["rows"] if "identified_runs" in r],
         "identification_columns": list(IDENTIFICATION_TABLE),
     }
 
@@ -343,16 +337,9 @@ def seed_column(runs: pd.DataFrame) -> str:
     raise KeyError("the runs have neither a replicate nor a seed column")
 
 
-#: the keys :func:`rank_confidence` adds to every ranking row (the comparison ones are None on the
-#: first row of a level)
-CONFIDENCE_KEYS = (
-    "rank",
-    "tied",
-    "rank_display",
-    "pass_rate_low",
-    "pass_rate_high",
-    "pass_rate_interval",
-    "seeds",
+#: the keys of the comparison with the row above that :func:`rank_confidence` adds to every ranking
+#: row (None on a level's first row)
+_COMPARISON_KEYS = (
     "test",
     "statistic",
     "p_value",
@@ -362,8 +349,6 @@ CONFIDENCE_KEYS = (
     "only_above_passed",
     "only_this_passed",
 )
-#: the keys of the comparison with the row above (None on a level's first row)
-_COMPARISON_KEYS = CONFIDENCE_KEYS[7:]
 
 
 def rank_confidence(
@@ -692,26 +677,25 @@ def _tuned_text(result: dict[str, Any] | None) -> str:
     def _fmt(v: Any) -> str:
         return f"{v:.3g}" if isinstance(v, int | float) and math.isfinite(v) else "-"
 
+    def pass_rate(runs: dict[str, Any]) -> str:  # of the tuned and the paper gains on some runs
+        tuned, paper = runs.get("tuned", {}), runs.get("paper", {})
+        return (
+            f"pass rate {_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
+            f"{tuned.get('runs', '?')} runs)"
+        )
+
     obj = result.get("objective", {})
     name, units = obj.get("metric", "objective"), obj.get("units", "")
+    score = f"{name}_{obj.get('statistic', 'mean')}"
     ho = result.get("holdout", {})
-    paper, tuned = ho.get("paper", {}), ho.get("tuned", {})
     gains = ", ".join(
         f"{str(k).rpartition('.')[2]} {_fmt(v)}" for k, v in result.get("tuned_gains", {}).items()
     )
-    stat = obj.get("statistic", "mean")
-    fresh = result.get("fresh") or {}
-    fresh_text = (
-        f"; fresh-seed pass rate {_fmt(fresh['tuned'].get('pass_rate'))} (paper "
-        f"{_fmt(fresh['paper'].get('pass_rate'))}, {fresh['tuned'].get('runs', '?')} runs)"
-        if fresh
-        else ""
-    )
+    fresh = result.get("fresh")
     return (
-        f"{gains}; {stat} {name} {_fmt(tuned.get(f'{name}_{stat}'))} {units} "
-        f"(paper {_fmt(paper.get(f'{name}_{stat}'))}); held-out pass rate "
-        f"{_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
-        f"{tuned.get('runs', '?')} runs){fresh_text}"
+        f"{gains}; {obj.get('statistic', 'mean')} {name} {_fmt(ho.get('tuned', {}).get(score))} "
+        f"{units} (paper {_fmt(ho.get('paper', {}).get(score))}); held-out {pass_rate(ho)}"
+        + (f"; fresh-seed {pass_rate(fresh)}" if fresh else "")
     )
 
 
@@ -772,7 +756,7 @@ def _page(
     incomplete: str | None = None,
 ) -> str:
     """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
-    columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
+    columns (:func:`_units`), shown in the per-fault tables' headers."""
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
     median = f"median {metric} [{req_units}]"
@@ -942,19 +926,6 @@ def ranking_frame(rank: dict[str, list[dict[str, Any]]]) -> pd.DataFrame:
     return frame.astype({c: t for c, t in nullable.items() if c in frame})
 
 
-def _ranking_units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
-    """Ranking columns: counts, rates, statistics and p-values dimensionless; a median and its
-    interval bounds in the score's unit."""
-    units: dict[str, str] = {}
-    for name in map(str, frame.columns):
-        score = re.fullmatch(r"(.+)_median(_low|_high)?", name)
-        if score is None:
-            units[name] = "1"
-        elif f"metric:{score[1]}" in run_units:
-            units[name] = run_units[f"metric:{score[1]}"]
-    return units
-
-
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
@@ -1021,10 +992,10 @@ def resolution_text(record: dict[str, Any]) -> str:
         "resolved": "every adjacent pair separated or tied",
         "budget": "budget spent, pairs still open",
     }[record["stopped"]]
-    counts: dict[str, int] = {}
-    for v in (v for vs in record["blocks"][-1]["verdicts"].values() for v in vs):
-        key = "separated on the metric" if v.get("by") == "metric" else v["verdict"]
-        counts[key] = counts.get(key, 0) + 1
+    verdicts = (v for vs in record["blocks"][-1]["verdicts"].values() for v in vs)
+    counts = Counter(
+        "separated on the metric" if v.get("by") == "metric" else v["verdict"] for v in verdicts
+    )
     pairs = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
     return (
         f"until resolved: stopped at {record['seeds']} seeds per cell ({why}: {pairs}); "
@@ -1047,13 +1018,16 @@ def _run_units(league_dir: Path, meta: dict[str, Any]) -> dict[str, str]:
     return units
 
 
-def _cell_units(cells: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
-    """Cell statistics: counts and pass rate dimensionless, a score's median and p95 in its unit."""
-    units = {"runs": "1", "failed": "1", "pass_rate": "1"}
-    for col in cells.columns:
-        score, _, stat = str(col).rpartition("_")
-        if stat in ("median", "p95") and f"metric:{score}" in run_units:
-            units[col] = run_units[f"metric:{score}"]
+def _units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
+    """Units of a cell or ranking column: a score's median, p95 and interval bounds in the score's
+    unit; counts, rates, statistics and p-values dimensionless."""
+    units: dict[str, str] = {}
+    for name in map(str, frame.columns):
+        score = re.fullmatch(r"(.+)_(median|p95)(_low|_high)?", name)
+        if score is None:
+            units[name] = "1"
+        elif f"metric:{score[1]}" in run_units:
+            units[name] = run_units[f"metric:{score[1]}"]
     return units
 
 
@@ -1103,7 +1077,7 @@ def write_leaderboard(
             board["resolution"] = json.loads(resolution.read_text(encoding="utf-8"))
     atomic_write(out / "leaderboard.json", json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
-    cell_units = _cell_units(cells, run_units)
+    cell_units = _units(cells, run_units)
     # the completeness also in the Parquet files' key-value metadata (a file read on its own says it)
     kv = {"formation_ftc.league.completeness": json.dumps(comp)}
     write_parquet(cells, out / "cells.parquet", cell_units, metadata=kv)
@@ -1112,7 +1086,7 @@ def write_leaderboard(
     write_parquet(
         frame,
         out / "ranking.parquet",
-        _ranking_units(frame, run_units),
+        _units(frame, run_units),
         metadata={**kv, "formation_ftc.league.ranking_method": st.method_note()},
     )
     page = _page(

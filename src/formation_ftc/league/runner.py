@@ -901,7 +901,7 @@ def run_league(
         else:  # without a factory: each campaign's automatic local pool
             for name, job in jobs.items():
                 done(name, _run_method_campaign(*job, executor_factory or LocalExecutor))
-    runs, failed = (sum(r[k] for r in finished.values()) for k in (0, 1))
+    runs, failed = sum(r[0] for r in finished.values()), sum(r[1] for r in finished.values())
     per_method = {name: r[2] for name, r in finished.items()}  # in the order they finished
     return LeagueOutcome(out, runs, failed, time.perf_counter() - t0, per_method)
 

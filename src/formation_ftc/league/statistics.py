@@ -206,10 +206,7 @@ def median_interval(
 
 
 def paired_comparison(
-    passed_a: np.ndarray,
-    passed_b: np.ndarray,
-    metric_a: np.ndarray,
-    metric_b: np.ndarray,
+    passed_a: np.ndarray, passed_b: np.ndarray, metric_a: np.ndarray, metric_b: np.ndarray
 ) -> dict[str, Any]:
     """Compare two methods on their paired runs (same case, same seed; element k of every array is
     pair k).
@@ -328,11 +325,7 @@ def mcnemar_power(pairs: int, discordant: float, difference: float, alpha: float
     c = binom.ppf(alpha / 2, d, 0.5).astype(int)
     c = np.where(2 * binom.cdf(c, d, 0.5) <= alpha, c, c - 1)
     q = (psi + difference) / (2 * psi)
-    reject = np.where(
-        c >= 0,
-        binom.cdf(c, d, q) + binom.sf(np.maximum(d - c - 1, c), d, q),
-        0.0,
-    )
+    reject = np.where(c >= 0, binom.cdf(c, d, q) + binom.sf(np.maximum(d - c - 1, c), d, q), 0.0)
     return float(np.clip(np.sum(binom.pmf(d, pairs, psi) * reject), 0.0, 1.0))
 
 
