@@ -203,9 +203,8 @@ class LeagueMeta(StrictModel):
     )
     trace_cases: list[str] = Field(
         ["none", "loe-50"],
-        description=(
-            "Fault cases whose time histories (trace seed, first level) are kept for the report's plot."
-        ),
+        description="Fault cases whose time histories (trace seed, first level) are kept for the "
+        "report's plot.",
     )
 
 
@@ -251,11 +250,9 @@ class TuneBounds(StrictModel):
     log: bool = Field(False, description="Search the field on a logarithmic scale (low > 0).")
     rebuild: bool = Field(
         False,
-        description=(
-            "The field is an input of its builder, not a leaf of the loop (e.g. Bryson's maxima, "
-            "from which the LQR builder derives its Riccati gain): the runs are built again at "
-            "every evaluation (derivative-free optimisers only; slower)."
-        ),
+        description="The field is an input of its builder, not a leaf of the loop (e.g. Bryson's "
+        "maxima, from which the LQR builder derives its Riccati gain): the runs are built again at "
+        "every evaluation (derivative-free optimisers only; slower).",
     )
 
 

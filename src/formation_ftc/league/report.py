@@ -19,7 +19,6 @@ that are not separated share a rank (:mod:`formation_ftc.league.statistics`).
 
 from __future__ import annotations
 
-import base64
 import contextlib
 import json
 import math
@@ -38,6 +37,7 @@ from formation_ftc.league import statistics as st
 from formation_ftc.league.definition import requirement_of
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
+from formation_ftc.report.html import _data_uri
 from formation_ftc.report.templating import fmt, render
 
 __all__ = [
@@ -632,11 +632,6 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------------- page
-def _img(path: Path) -> dict[str, str]:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return {"alt": path.stem, "src": f"data:image/png;base64,{data}"}
-
-
 #: scores per per-fault table: each is a median and a p95 column, so that a table of a case fits a
 #: 1,280 px window whatever the league scores (method, runs, diverged, pass rate and 4 x 2 numbers)
 SCORES_PER_TABLE = 4
@@ -798,7 +793,7 @@ def _page(
         fdi=None if fdi is None else _fdi_tables(fdi),
         per_fault=_per_fault(cells, units or {}),
         scores_per_table=SCORES_PER_TABLE,
-        figures=[_img(p) for p in figures],
+        figures=[{"alt": p.stem, "src": _data_uri(p)} for p in figures],  # embedded PNG files
         methods=meta["methods"],
         method_columns=[
             ("name", "name"),

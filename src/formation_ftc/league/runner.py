@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
 import functools
 import json
 import os
@@ -49,6 +48,7 @@ from formation_ftc.league.definition import (
     method_scenario,
 )
 from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
+from formation_ftc.runout import DISK_FULL
 
 __all__ = [
     "Cell",
@@ -611,7 +611,7 @@ def _write_inputs(
                 files[name].append(p)
         return files
     except OSError as exc:
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # a full disk: exit status 3, one line
+        if exc.errno in DISK_FULL:  # a full disk: exit status 3, one line
             raise OSError(exc.errno, exc.strerror, str(out)) from None
         raise LeagueError(
             f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
