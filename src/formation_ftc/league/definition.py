@@ -355,7 +355,9 @@ class LeagueSpec(StrictModel):
         return self
 
     @property
-    def source(self) -> Path | None:
+    def source(self) -> Path:
+        """The definition file (:func:`load_league` sets it)."""
+        assert self._source is not None
         return self._source
 
     def method(self, name: str) -> MethodEntry:
@@ -420,7 +422,6 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
 
 
 def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
-    assert spec.source is not None
     path = spec.source.parent / method.scenario
     raw = _toml(path, f"method {method.name}: ")
     allowed = {"scenario", "simulation", "actuator", "tune", "levels", *METHOD_SLOTS}
@@ -630,7 +631,6 @@ def league_hash(spec: LeagueSpec) -> str:
     """sha256 of the definition and of every method file (what the results directory is bound to)."""
     from formation_ftc.report.reproduce import to_jsonable  # non-finite floats as "inf", "nan"
 
-    assert spec.source is not None
     h = hashlib.sha256(json.dumps(to_jsonable(spec.model_dump()), sort_keys=True).encode())
     for m in spec.methods:
         h.update((spec.source.parent / m.scenario).read_bytes())

@@ -1078,12 +1078,8 @@ def write_leaderboard(
     write_parquet(cells, out / "cells.parquet", cell_units, metadata=kv)
     write_parquet(runs, out / "runs.parquet", run_units, metadata=kv)
     frame = ranking_frame(rank)
-    write_parquet(
-        frame,
-        out / "ranking.parquet",
-        _units(frame, run_units),
-        metadata={**kv, "formation_ftc.league.ranking_method": st.method_note()},
-    )
+    method = {"formation_ftc.league.ranking_method": st.method_note()}
+    write_parquet(frame, out / "ranking.parquet", _units(frame, run_units), metadata=kv | method)
     page = _page(
         meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)
     )

@@ -226,7 +226,6 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
 
 def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
     """(has a network, the network has delays) of a method's own file."""
-    assert spec.source is not None
     net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
     return net is not None, net is not None and net.get("delays") is not None
 
@@ -829,7 +828,6 @@ def run_league(
         check_league_budgets(spec, cells, n_seeds, budgets)
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
-    assert spec.source is not None
     # ``old`` is a validated LeagueRecord: every method entry has a name
     listed = set(cells) | {m["name"] for m in (old or {}).get("methods", [])}
     meta = {
