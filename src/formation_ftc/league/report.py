@@ -642,18 +642,17 @@ def _per_fault(cells: pd.DataFrame, units: dict[str, str]) -> list[dict[str, Any
     (:data:`SCORES_PER_TABLE` scores each; the first one with runs, diverged and pass rate)."""
     scores = [s for s in SCORES if f"{s}_median" in cells]
     groups = [scores[k : k + SCORES_PER_TABLE] for k in range(0, len(scores), SCORES_PER_TABLE)]
+    unit = {s: units.get(f"{s}_median", "") for s in scores}
+    heading = {s: f"{s} [{unit[s]}]" if unit[s] not in ("", "1") else s for s in scores}
     parts = []
     for k, group in enumerate(groups or [[]]):
         counts = [("method", "method")]
         if k == 0:
             counts += [("runs", "runs"), ("failed", "diverged"), ("pass_rate", "pass rate")]
-        unit = {s: units.get(f"{s}_median", "") for s in group}
         parts.append(
             {
                 "counts": [label for _, label in counts],
-                "scores": [
-                    {"label": f"{s} [{unit[s]}]" if unit[s] not in ("", "1") else s} for s in group
-                ],
+                "scores": [{"label": heading[s]} for s in group],
                 "columns": [key for key, _ in counts]
                 + [f"{s}_{stat}" for s in group for stat in ("median", "p95")],
             }

@@ -651,7 +651,9 @@ class _Bars:
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._thread = threading.Thread(
+            target=self._watch, name="formation-ftc-league-progress", daemon=True
+        )
 
     def __enter__(self):
         if not self.enabled or not self._totals:
@@ -681,9 +683,6 @@ class _Bars:
         except (OSError, ValueError):
             self._close_bar()
             return self
-        self._thread = threading.Thread(
-            target=self._watch, name="formation-ftc-league-progress", daemon=True
-        )
         self._thread.start()
         return self
 
@@ -709,7 +708,7 @@ class _Bars:
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
-        if self._thread is not None:
+        if self._thread.ident is not None:  # started
             self._thread.join()
         if self._bar is not None:
             with contextlib.suppress(OSError, ValueError):
