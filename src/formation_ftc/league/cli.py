@@ -22,6 +22,8 @@ def _cmd_list(args) -> int:
     for name in builtin_leagues():
         spec = load_league(name)
         meta = spec.league
+        # in the file's order; the requirement: metric, max, units, stl, verdict
+        listed = {"battery", "seeds", "quick_seeds", "horizon", "requirement"}
         rows.append(
             {
                 "name": name,
@@ -29,11 +31,7 @@ def _cmd_list(args) -> int:
                 "kind": meta.kind,
                 "methods": [m.name for m in spec.methods],
                 "levels": [lv.name for lv in spec.levels],
-                "battery": meta.battery,
-                "seeds": meta.seeds,
-                "quick_seeds": meta.quick_seeds,
-                "horizon": meta.horizon,
-                "requirement": meta.requirement.model_dump(),  # metric, max, units, stl, verdict
+                **meta.model_dump(include=listed),
                 "units": {"horizon": "s"},
             }
         )

@@ -203,9 +203,8 @@ class LeagueMeta(StrictModel):
     )
     trace_cases: list[str] = Field(
         ["none", "loe-50"],
-        description=(
-            "Fault cases whose time histories (trace seed, first level) are kept for the report's plot."
-        ),
+        description="Fault cases whose time histories (trace seed, first level) are kept for the "
+        "report's plot.",
     )
 
 
@@ -251,11 +250,9 @@ class TuneBounds(StrictModel):
     log: bool = Field(False, description="Search the field on a logarithmic scale (low > 0).")
     rebuild: bool = Field(
         False,
-        description=(
-            "The field is an input of its builder, not a leaf of the loop (e.g. Bryson's maxima, "
-            "from which the LQR builder derives its Riccati gain): the runs are built again at "
-            "every evaluation (derivative-free optimisers only; slower)."
-        ),
+        description="The field is an input of its builder, not a leaf of the loop (e.g. Bryson's "
+        "maxima, from which the LQR builder derives its Riccati gain): the runs are built again at "
+        "every evaluation (derivative-free optimisers only; slower).",
     )
 
 
@@ -358,7 +355,9 @@ class LeagueSpec(StrictModel):
         return self
 
     @property
-    def source(self) -> Path | None:
+    def source(self) -> Path:
+        """The definition file (:func:`load_league` sets it)."""
+        assert self._source is not None
         return self._source
 
     def method(self, name: str) -> MethodEntry:
@@ -423,7 +422,6 @@ def load_league(name_or_path: str | Path) -> LeagueSpec:
 
 
 def _method_raw(spec: LeagueSpec, method: MethodEntry) -> dict[str, Any]:
-    assert spec.source is not None
     path = spec.source.parent / method.scenario
     raw = _toml(path, f"method {method.name}: ")
     allowed = {"scenario", "simulation", "actuator", "tune", "levels", *METHOD_SLOTS}
@@ -633,7 +631,6 @@ def league_hash(spec: LeagueSpec) -> str:
     """sha256 of the definition and of every method file (what the results directory is bound to)."""
     from formation_ftc.report.reproduce import to_jsonable  # non-finite floats as "inf", "nan"
 
-    assert spec.source is not None
     h = hashlib.sha256(json.dumps(to_jsonable(spec.model_dump()), sort_keys=True).encode())
     for m in spec.methods:
         h.update((spec.source.parent / m.scenario).read_bytes())

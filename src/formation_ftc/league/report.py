@@ -19,12 +19,12 @@ that are not separated share a rank (:mod:`formation_ftc.league.statistics`).
 
 from __future__ import annotations
 
-import base64
 import contextlib
 import json
 import math
 import re
 import tomllib
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,7 @@ from formation_ftc.league import statistics as st
 from formation_ftc.league.definition import requirement_of
 from formation_ftc.league.runner import load_league_results
 from formation_ftc.parquet_units import write_parquet
+from formation_ftc.report.html import _data_uri
 from formation_ftc.report.templating import fmt, render
 
 __all__ = [
@@ -44,7 +45,6 @@ __all__ = [
     "fdi_table",
     "FDI_COLUMNS",
     "IDENTIFICATION_COLUMNS",
-    "identification_rows",
     "IDENTIFICATION_TABLE",
     "IDENTIFICATION_NOTE",
     "ranking",
@@ -52,7 +52,6 @@ __all__ = [
     "rank_confidence",
     "ranking_frame",
     "seed_column",
-    "CONFIDENCE_KEYS",
     "winners",
     "write_leaderboard",
     "markdown_summary",
@@ -155,12 +154,6 @@ IDENTIFICATION_COLUMNS = (
     ("median_time_outside_10pct", "median time outside 10 % [s]"),
     ("false_identifications", "false identifications"),
 )
-
-
-def identification_rows(fdi: dict[str, Any]) -> list[dict[str, Any]]:
-    """The FDI rows of methods whose FDI identifies faults (they carry :data:`IDENTIFICATION_COLUMNS`),
-    for the identification table (a table of its own: the FDI table stays within a 1,280 px page)."""
-    return [r for r in fdi["rows"] if "identified_runs" in r]
 
 
 #: the identification table's columns
@@ -269,7 +262,8 @@ def _fdi_tables(fdi: dict[str, Any]) -> dict[str, Any]:
         "note": _fdi_note(fdi),
         "rows": fdi["rows"],
         "columns": list(FDI_COLUMNS),
-        "identification": identification_rows(fdi),
+        # methods whose FDI identifies faults (a table of its own: the FDI table stays within 1,280 px)
+        "identification": [r for r in fdi["rows"] if "identified_runs" in r],
         "identification_columns": list(IDENTIFICATION_TABLE),
     }
 
@@ -343,16 +337,9 @@ def seed_column(runs: pd.DataFrame) -> str:
     raise KeyError("the runs have neither a replicate nor a seed column")
 
 
-#: the keys :func:`rank_confidence` adds to every ranking row (the comparison ones are None on the
-#: first row of a level)
-CONFIDENCE_KEYS = (
-    "rank",
-    "tied",
-    "rank_display",
-    "pass_rate_low",
-    "pass_rate_high",
-    "pass_rate_interval",
-    "seeds",
+#: the keys of the comparison with the row above that :func:`rank_confidence` adds to every ranking
+#: row (None on a level's first row)
+_COMPARISON_KEYS = (
     "test",
     "statistic",
     "p_value",
@@ -362,8 +349,6 @@ CONFIDENCE_KEYS = (
     "only_above_passed",
     "only_this_passed",
 )
-#: the keys of the comparison with the row above (None on a level's first row)
-_COMPARISON_KEYS = CONFIDENCE_KEYS[7:]
 
 
 def rank_confidence(
@@ -647,11 +632,6 @@ def _trajectories(meta, league_dir: Path, out: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------------- page
-def _img(path: Path) -> dict[str, str]:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return {"alt": path.stem, "src": f"data:image/png;base64,{data}"}
-
-
 #: scores per per-fault table: each is a median and a p95 column, so that a table of a case fits a
 #: 1,280 px window whatever the league scores (method, runs, diverged, pass rate and 4 x 2 numbers)
 SCORES_PER_TABLE = 4
@@ -662,18 +642,17 @@ def _per_fault(cells: pd.DataFrame, units: dict[str, str]) -> list[dict[str, Any
     (:data:`SCORES_PER_TABLE` scores each; the first one with runs, diverged and pass rate)."""
     scores = [s for s in SCORES if f"{s}_median" in cells]
     groups = [scores[k : k + SCORES_PER_TABLE] for k in range(0, len(scores), SCORES_PER_TABLE)]
+    unit = {s: units.get(f"{s}_median", "") for s in scores}
+    heading = {s: f"{s} [{unit[s]}]" if unit[s] not in ("", "1") else s for s in scores}
     parts = []
     for k, group in enumerate(groups or [[]]):
         counts = [("method", "method")]
         if k == 0:
             counts += [("runs", "runs"), ("failed", "diverged"), ("pass_rate", "pass rate")]
-        unit = {s: units.get(f"{s}_median", "") for s in group}
         parts.append(
             {
                 "counts": [label for _, label in counts],
-                "scores": [
-                    {"label": f"{s} [{unit[s]}]" if unit[s] not in ("", "1") else s} for s in group
-                ],
+                "scores": [{"label": heading[s]} for s in group],
                 "columns": [key for key, _ in counts]
                 + [f"{s}_{stat}" for s in group for stat in ("median", "p95")],
             }
@@ -692,26 +671,25 @@ def _tuned_text(result: dict[str, Any] | None) -> str:
     def _fmt(v: Any) -> str:
         return f"{v:.3g}" if isinstance(v, int | float) and math.isfinite(v) else "-"
 
+    def pass_rate(runs: dict[str, Any]) -> str:  # of the tuned and the paper gains on some runs
+        tuned, paper = runs.get("tuned", {}), runs.get("paper", {})
+        return (
+            f"pass rate {_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
+            f"{tuned.get('runs', '?')} runs)"
+        )
+
     obj = result.get("objective", {})
     name, units = obj.get("metric", "objective"), obj.get("units", "")
+    score = f"{name}_{obj.get('statistic', 'mean')}"
     ho = result.get("holdout", {})
-    paper, tuned = ho.get("paper", {}), ho.get("tuned", {})
     gains = ", ".join(
         f"{str(k).rpartition('.')[2]} {_fmt(v)}" for k, v in result.get("tuned_gains", {}).items()
     )
-    stat = obj.get("statistic", "mean")
-    fresh = result.get("fresh") or {}
-    fresh_text = (
-        f"; fresh-seed pass rate {_fmt(fresh['tuned'].get('pass_rate'))} (paper "
-        f"{_fmt(fresh['paper'].get('pass_rate'))}, {fresh['tuned'].get('runs', '?')} runs)"
-        if fresh
-        else ""
-    )
+    fresh = result.get("fresh")
     return (
-        f"{gains}; {stat} {name} {_fmt(tuned.get(f'{name}_{stat}'))} {units} "
-        f"(paper {_fmt(paper.get(f'{name}_{stat}'))}); held-out pass rate "
-        f"{_fmt(tuned.get('pass_rate'))} (paper {_fmt(paper.get('pass_rate'))}, "
-        f"{tuned.get('runs', '?')} runs){fresh_text}"
+        f"{gains}; {obj.get('statistic', 'mean')} {name} {_fmt(ho.get('tuned', {}).get(score))} "
+        f"{units} (paper {_fmt(ho.get('paper', {}).get(score))}); held-out {pass_rate(ho)}"
+        + (f"; fresh-seed {pass_rate(fresh)}" if fresh else "")
     )
 
 
@@ -772,7 +750,7 @@ def _page(
     incomplete: str | None = None,
 ) -> str:
     """The leaderboard page (template ``report/templates/league.html.j2``); ``units``: of the cell
-    columns (:func:`_cell_units`), shown in the per-fault tables' headers."""
+    columns (:func:`_units`), shown in the per-fault tables' headers."""
     metric, limit, req_units = _requirement(meta)
     cost = _cost(cells)
     median = f"median {metric} [{req_units}]"
@@ -814,7 +792,7 @@ def _page(
         fdi=None if fdi is None else _fdi_tables(fdi),
         per_fault=_per_fault(cells, units or {}),
         scores_per_table=SCORES_PER_TABLE,
-        figures=[_img(p) for p in figures],
+        figures=[{"alt": p.stem, "src": _data_uri(p)} for p in figures],  # embedded PNG files
         methods=meta["methods"],
         method_columns=[
             ("name", "name"),
@@ -942,19 +920,6 @@ def ranking_frame(rank: dict[str, list[dict[str, Any]]]) -> pd.DataFrame:
     return frame.astype({c: t for c, t in nullable.items() if c in frame})
 
 
-def _ranking_units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
-    """Ranking columns: counts, rates, statistics and p-values dimensionless; a median and its
-    interval bounds in the score's unit."""
-    units: dict[str, str] = {}
-    for name in map(str, frame.columns):
-        score = re.fullmatch(r"(.+)_median(_low|_high)?", name)
-        if score is None:
-            units[name] = "1"
-        elif f"metric:{score[1]}" in run_units:
-            units[name] = run_units[f"metric:{score[1]}"]
-    return units
-
-
 def _md_table(rows: list[dict[str, Any]], cols: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(label for _, label in cols) + " |"
     sep = "|" + "|".join("---" for _ in cols) + "|"
@@ -1021,10 +986,10 @@ def resolution_text(record: dict[str, Any]) -> str:
         "resolved": "every adjacent pair separated or tied",
         "budget": "budget spent, pairs still open",
     }[record["stopped"]]
-    counts: dict[str, int] = {}
-    for v in (v for vs in record["blocks"][-1]["verdicts"].values() for v in vs):
-        key = "separated on the metric" if v.get("by") == "metric" else v["verdict"]
-        counts[key] = counts.get(key, 0) + 1
+    verdicts = (v for vs in record["blocks"][-1]["verdicts"].values() for v in vs)
+    counts = Counter(
+        "separated on the metric" if v.get("by") == "metric" else v["verdict"] for v in verdicts
+    )
     pairs = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
     return (
         f"until resolved: stopped at {record['seeds']} seeds per cell ({why}: {pairs}); "
@@ -1047,13 +1012,16 @@ def _run_units(league_dir: Path, meta: dict[str, Any]) -> dict[str, str]:
     return units
 
 
-def _cell_units(cells: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
-    """Cell statistics: counts and pass rate dimensionless, a score's median and p95 in its unit."""
-    units = {"runs": "1", "failed": "1", "pass_rate": "1"}
-    for col in cells.columns:
-        score, _, stat = str(col).rpartition("_")
-        if stat in ("median", "p95") and f"metric:{score}" in run_units:
-            units[col] = run_units[f"metric:{score}"]
+def _units(frame: pd.DataFrame, run_units: dict[str, str]) -> dict[str, str]:
+    """Units of a cell or ranking column: a score's median, p95 and interval bounds in the score's
+    unit; counts, rates, statistics and p-values dimensionless."""
+    units: dict[str, str] = {}
+    for name in map(str, frame.columns):
+        score = re.fullmatch(r"(.+)_(median|p95)(_low|_high)?", name)
+        if score is None:
+            units[name] = "1"
+        elif f"metric:{score[1]}" in run_units:
+            units[name] = run_units[f"metric:{score[1]}"]
     return units
 
 
@@ -1103,18 +1071,14 @@ def write_leaderboard(
             board["resolution"] = json.loads(resolution.read_text(encoding="utf-8"))
     atomic_write(out / "leaderboard.json", json.dumps(jsonable(board), indent=1))
     run_units = _run_units(league_dir, meta)
-    cell_units = _cell_units(cells, run_units)
+    cell_units = _units(cells, run_units)
     # the completeness also in the Parquet files' key-value metadata (a file read on its own says it)
     kv = {"formation_ftc.league.completeness": json.dumps(comp)}
     write_parquet(cells, out / "cells.parquet", cell_units, metadata=kv)
     write_parquet(runs, out / "runs.parquet", run_units, metadata=kv)
     frame = ranking_frame(rank)
-    write_parquet(
-        frame,
-        out / "ranking.parquet",
-        _ranking_units(frame, run_units),
-        metadata={**kv, "formation_ftc.league.ranking_method": st.method_note()},
-    )
+    method = {"formation_ftc.league.ranking_method": st.method_note()}
+    write_parquet(frame, out / "ranking.parquet", _units(frame, run_units), metadata=kv | method)
     page = _page(
         meta, cells, rank, wins, figures, fdi, cell_units, seeds_text(comp), incomplete_note(comp)
     )

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
+import functools
 import json
 import os
 import re
@@ -48,6 +48,7 @@ from formation_ftc.league.definition import (
     method_scenario,
 )
 from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
+from formation_ftc.runout import DISK_FULL
 
 __all__ = [
     "Cell",
@@ -225,7 +226,6 @@ def _with_fdi_scores(raw: dict[str, Any]) -> dict[str, Any]:
 
 def _network_kind(spec: LeagueSpec, m: MethodEntry) -> tuple[bool, bool]:
     """(has a network, the network has delays) of a method's own file."""
-    assert spec.source is not None
     net = tomllib.loads((spec.source.parent / m.scenario).read_text()).get("network")
     return net is not None, net is not None and net.get("delays") is not None
 
@@ -610,7 +610,7 @@ def _write_inputs(
                 files[name].append(p)
         return files
     except OSError as exc:
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # a full disk: exit status 3, one line
+        if exc.errno in DISK_FULL:  # a full disk: exit status 3, one line
             raise OSError(exc.errno, exc.strerror, str(out)) from None
         raise LeagueError(
             f"--out {out}: cannot write the league there ({exc.strerror or exc}); give a writable "
@@ -651,7 +651,9 @@ class _Bars:
         self._bar: Any = None
         self._tasks: dict[str, Any] = {}
         self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._thread = threading.Thread(
+            target=self._watch, name="formation-ftc-league-progress", daemon=True
+        )
 
     def __enter__(self):
         if not self.enabled or not self._totals:
@@ -681,9 +683,6 @@ class _Bars:
         except (OSError, ValueError):
             self._close_bar()
             return self
-        self._thread = threading.Thread(
-            target=self._watch, name="formation-ftc-league-progress", daemon=True
-        )
         self._thread.start()
         return self
 
@@ -709,7 +708,7 @@ class _Bars:
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
-        if self._thread is not None:
+        if self._thread.ident is not None:  # started
             self._thread.join()
         if self._bar is not None:
             with contextlib.suppress(OSError, ValueError):
@@ -755,13 +754,15 @@ class Counter(_Bars):
 
 
 # ----------------------------------------------------------------------------------------------- run
-def _run_method_campaign(campaign: dict, out_dir: str) -> tuple[int, int, float]:
-    """One method's campaign in this process (a worker of :func:`run_league`): (runs, failed, seconds)."""
-    from formation_ftc.campaign.executors import LocalExecutor
+def _run_method_campaign(
+    campaign: dict, out_dir: str, executor_factory: Callable
+) -> tuple[int, int, float]:
+    """One method's campaign with the executor ``executor_factory()`` makes (in this process, or in a
+    worker of :func:`run_league`): (runs, failed, seconds)."""
     from formation_ftc.campaign.runner import run_campaign
 
     t0 = time.perf_counter()
-    outcome = run_campaign(campaign, out_dir, executor=LocalExecutor(workers=1))
+    outcome = run_campaign(campaign, out_dir, executor=executor_factory())
     return outcome.n_runs, outcome.n_failed, time.perf_counter() - t0
 
 
@@ -796,8 +797,7 @@ def run_league(
     then one line per method.
     ``log`` gets one line per finished method; an OSError or ValueError it raises (a closed or full
     stderr) is ignored."""
-    from formation_ftc.campaign.executors import die_with_parent
-    from formation_ftc.campaign.runner import run_campaign
+    from formation_ftc.campaign.executors import LocalExecutor, die_with_parent
 
     t0 = time.perf_counter()
     spec = league if isinstance(league, LeagueSpec) else load_league(league)
@@ -827,7 +827,6 @@ def run_league(
         check_league_budgets(spec, cells, n_seeds, budgets)
     _check_batch_memory(spec, cells, n_seeds, budgets)
     battery = _battery(spec)
-    assert spec.source is not None
     # ``old`` is a validated LeagueRecord: every method entry has a name
     listed = set(cells) | {m["name"] for m in (old or {}).get("methods", [])}
     meta = {
@@ -857,23 +856,20 @@ def run_league(
     }
     files = _write_inputs(out, meta, cells)
     trace_seed = spec.league.trace_seed - start  # the trace seed's block keeps its traces
-    jobs = []
+    folder = campaign_folder(start)
+    jobs = {}  # method -> (its campaign, its campaign directory)
     for name, mcells in cells.items():
         traced = _traced_runs(mcells, n_seeds, trace_seed, spec.league.trace_cases)
-        jobs.append((name, _campaign(spec, name, files[name], n_seeds, traced, start)))
-    per_method: dict[str, float] = {}
-    n_runs = n_failed = 0
+        campaign = _campaign(spec, name, files[name], n_seeds, traced, start)
+        jobs[name] = (campaign, str(out / name / folder))
+    finished: dict[str, tuple[int, int, float]] = {}  # method -> (runs, failed, seconds)
 
-    def done(name: str, runs: int, failed: int, seconds: float) -> None:
-        nonlocal n_runs, n_failed
-        per_method[name] = seconds
-        n_runs += runs
-        n_failed += failed
+    def done(name: str, result: tuple[int, int, float]) -> None:
+        finished[name] = runs, failed, seconds = result
         _say(log, f"{name}: {runs} runs, {failed} failed, {seconds:.1f} s")
 
-    folder = campaign_folder(start)
     watched = [
-        (name, out / name / folder / "chunks", n_seeds * len(cells[name])) for name, _ in jobs
+        (name, Path(d, "chunks"), n_seeds * len(cells[name])) for name, (_, d) in jobs.items()
     ]
     with _MethodProgress(watched, n_seeds, min(spec.league.chunk_size, n_seeds), enabled=progress):
         if parallel_methods > 1 and len(jobs) > 1:
@@ -888,23 +884,23 @@ def run_league(
                 initializer=die_with_parent,
                 initargs=(os.getpid(),),
             ) as pool:
+                in_worker = functools.partial(LocalExecutor, workers=1)
                 futures = {
-                    pool.submit(_run_method_campaign, campaign, str(out / name / folder)): name
-                    for name, campaign in jobs
+                    pool.submit(_run_method_campaign, *job, in_worker): name
+                    for name, job in jobs.items()
                 }
                 try:
                     for fut in concurrent.futures.as_completed(futures):
-                        done(futures[fut], *fut.result())
+                        done(futures[fut], fut.result())
                 finally:
                     for fut in futures:
                         fut.cancel()  # methods not started yet; the running ones finish their chunk
-        else:
-            for name, campaign in jobs:
-                t_m = time.perf_counter()
-                executor = executor_factory() if executor_factory is not None else None
-                outcome = run_campaign(campaign, out / name / folder, executor=executor)
-                done(name, outcome.n_runs, outcome.n_failed, time.perf_counter() - t_m)
-    return LeagueOutcome(out, n_runs, n_failed, time.perf_counter() - t0, per_method)
+        else:  # without a factory: each campaign's automatic local pool
+            for name, job in jobs.items():
+                done(name, _run_method_campaign(*job, executor_factory or LocalExecutor))
+    runs, failed = sum(r[0] for r in finished.values()), sum(r[1] for r in finished.values())
+    per_method = {name: r[2] for name, r in finished.items()}  # in the order they finished
+    return LeagueOutcome(out, runs, failed, time.perf_counter() - t0, per_method)
 
 
 def campaign_folder(first_seed: int) -> str:

@@ -132,27 +132,12 @@ def pass_rate_interval(
         from statsmodels.stats.proportion import proportion_confint
 
         low, high = proportion_confint(estimate * n, n, alpha=1 - confidence, method="wilson")
-        return {  # (statsmodels' upper bound at 1 is 1 - 2e-16: the bounds hold the estimate)
-            "estimate": estimate,
-            "low": min(float(low), estimate),
-            "high": max(float(high), estimate),
-            "method": "wilson",
-            "seeds": n,
-        }
-    low, high = _bootstrap(
-        fraction,
-        lambda x, axis=-1: np.mean(x, axis=axis),
-        confidence,
-        n_resamples,
-        random_state,
-    )
-    return {
-        "estimate": estimate,
-        "low": low,
-        "high": high,
-        "method": "cluster bootstrap",
-        "seeds": n,
-    }
+        # (statsmodels' upper bound at 1 is 1 - 2e-16: the bounds hold the estimate)
+        low, high, method = min(float(low), estimate), max(float(high), estimate), "wilson"
+    else:
+        low, high = _bootstrap(fraction, np.mean, confidence, n_resamples, random_state)
+        method = "cluster bootstrap"
+    return {"estimate": estimate, "low": low, "high": high, "method": method, "seeds": n}
 
 
 def median_interval(
@@ -204,9 +189,7 @@ def median_interval(
         v = v[np.isfinite(v)]
         if v.size < 2:
             return math.nan, math.nan
-        return _bootstrap(
-            v, lambda x, axis=-1: np.median(x, axis=axis), confidence, n_resamples, random_state
-        )
+        return _bootstrap(v, np.median, confidence, n_resamples, random_state)
     if v.ndim != 2:
         raise ValueError(f"values of shape {v.shape}: 1-D, or 2-D (seeds x cases)")
     v = v[np.isfinite(v).any(axis=1)]
@@ -223,10 +206,7 @@ def median_interval(
 
 
 def paired_comparison(
-    passed_a: np.ndarray,
-    passed_b: np.ndarray,
-    metric_a: np.ndarray,
-    metric_b: np.ndarray,
+    passed_a: np.ndarray, passed_b: np.ndarray, metric_a: np.ndarray, metric_b: np.ndarray
 ) -> dict[str, Any]:
     """Compare two methods on their paired runs (same case, same seed; element k of every array is
     pair k).
@@ -345,11 +325,7 @@ def mcnemar_power(pairs: int, discordant: float, difference: float, alpha: float
     c = binom.ppf(alpha / 2, d, 0.5).astype(int)
     c = np.where(2 * binom.cdf(c, d, 0.5) <= alpha, c, c - 1)
     q = (psi + difference) / (2 * psi)
-    reject = np.where(
-        c >= 0,
-        binom.cdf(c, d, q) + binom.sf(np.maximum(d - c - 1, c), d, q),
-        0.0,
-    )
+    reject = np.where(c >= 0, binom.cdf(c, d, q) + binom.sf(np.maximum(d - c - 1, c), d, q), 0.0)
     return float(np.clip(np.sum(binom.pmf(d, pairs, psi) * reject), 0.0, 1.0))
 
 

@@ -136,31 +136,26 @@ def check_step(
     from formation_ftc.api import load_scenario, simulate_with_metrics
 
     base = quiet_cell(raw, onset_field, onset)
-    dt0 = float(base["simulation"]["dt"])
-    result = StepCheckResult(method, case, level, tolerance, [], [], chosen_dt=dt0)
+    notify = on_simulation or (lambda dt, finished: None)
 
     def scores(dt: float) -> dict[str, float]:
         cell = copy.deepcopy(base)
         cell["simulation"]["dt"] = dt
-        if on_simulation is not None:
-            on_simulation(dt, False)
+        notify(dt, False)
         _, metrics = simulate_with_metrics(load_scenario(cell), raise_on_divergence=False)
-        if on_simulation is not None:
-            on_simulation(dt, True)
+        notify(dt, True)
         return {k: float(v) for k, v in metrics.items() if k not in ignore}
 
-    dt = dt0
-    result.steps.append(dt)
-    result.scores.append(scores(dt))
+    dt = float(base["simulation"]["dt"])
+    result = StepCheckResult(method, case, level, tolerance, [dt], [scores(dt)], chosen_dt=dt)
     for _ in range(max_halvings + 1):
-        finer = dt / 2.0
-        result.steps.append(finer)
-        result.scores.append(scores(finer))
+        dt = result.steps[-1]
+        result.steps.append(dt / 2.0)
+        result.scores.append(scores(dt / 2.0))
         change, name = scores_agree(result.scores[-2], result.scores[-1], tolerance)
         result.changes.append(change)
         result.worst.append(name)
         if change <= tolerance:
             result.converged, result.chosen_dt = True, dt
             break
-        dt = finer
     return result
