@@ -45,7 +45,7 @@ from typing import Any
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 
-__all__ = ["Run", "study", "run_study", "load_runs", "read_study"]
+__all__ = ["Run", "study", "run_study", "load_runs", "read_study", "finish_figure"]
 
 
 @dataclass(frozen=True)
@@ -230,6 +230,18 @@ def _summary_item(entry: str | dict, q: dict[str, Any]) -> tuple[str, Any]:
 
 def _names(spec: dict) -> list[str]:
     return [e if isinstance(e, str) else e["name"] for e in spec["runs"]]
+
+
+def finish_figure(fig, axes, path: Path, xlabel: str = "time [s]", **legend: Any) -> Path:
+    """Save a figure of panels over time: ``xlabel`` under the bottom row, and the top left panel's
+    legend drawn with the keyword arguments ``legend`` (no legend without them)."""
+    from formation_ftc.plotting import save_figure
+
+    for ax in axes[-1]:
+        ax.set_xlabel(xlabel)
+    if legend:
+        axes[0, 0].legend(**legend)
+    return save_figure(fig, path)
 
 
 def read_study(paper: str) -> dict:

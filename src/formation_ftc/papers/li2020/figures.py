@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.papers._study import finish_figure
+from formation_ftc.plotting import new_figure
 
 __all__ = ["plot_errors", "plot_mu", "plot_adaptive", "plot_comparison", "plot_scenario"]
 
@@ -41,10 +42,7 @@ def plot_errors(ds, path: Path, variable: str, title: str, unit: str) -> Path:
             ax.set_ylabel(f"${sym},{ax_name}$ [{unit}]")
             if c == 1:
                 ax.set_yscale("symlog", linthresh=1e-2 if unit == "m" else 1e-3)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best", ncol=2)
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="best", ncol=2)
 
 
 def plot_mu(ds, path: Path, title: str) -> Path:
@@ -58,9 +56,7 @@ def plot_mu(ds, path: Path, title: str) -> Path:
         axes[r, 1].semilogy(t, np.maximum(y, 1e-12), color="k", label=name)
         for c in range(2):
             axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path)
 
 
 def plot_adaptive(ds, path: Path, title: str) -> Path:
@@ -83,10 +79,7 @@ def plot_adaptive(ds, path: Path, title: str) -> Path:
             for sc in ds.spacecraft.values:
                 axes[r, c].plot(t[mask], ds[name].sel(spacecraft=sc).values[mask], label=_label(sc))
             axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best", ncol=2)
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="best", ncol=2)
 
 
 def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path:
@@ -103,10 +96,7 @@ def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path
     for r, (_, lab) in enumerate(_MU):
         for c in range(2):
             axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best")
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="best")
 
 
 def plot_scenario(ds, scenario, out_dir) -> list[Path]:
@@ -138,19 +128,12 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
         "sir-ftc": "SIR-FTC",
     }.get(str(law_of(scenario)), str(scenario.type_of("controller")))
     return [
-        plot_errors(
-            ds,
-            out_dir / f"{name}_position_error.png",
-            "position_error",
-            f"{name}: position tracking errors ({ctrl})",
-            "m",
-        ),
-        plot_errors(
-            ds,
-            out_dir / f"{name}_velocity_error.png",
-            "velocity_error",
-            f"{name}: velocity tracking errors ({ctrl})",
-            "m/s",
+        *(
+            plot_errors(ds, out_dir / f"{name}_{v}.png", v, f"{name}: {what} ({ctrl})", unit)
+            for v, what, unit in (
+                ("position_error", "position tracking errors", "m"),
+                ("velocity_error", "velocity tracking errors", "m/s"),
+            )
         ),
         plot_mu(
             ds, out_dir / f"{name}_mu.png", f"{name}: formation tracking / keeping errors ({ctrl})"

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
-from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
+from formation_ftc.papers._study import finish_figure
+from formation_ftc.plotting import new_figure, save_figure
 
 __all__ = ["plot_attitudes", "plot_fault_estimate", "plot_seed_spread", "plot_scenario"]
 
@@ -22,21 +23,14 @@ def plot_attitudes(ds, path: Path, title: str, window: tuple[float, float] | Non
     q = np.rad2deg(ds.attitude.values)
     for p in range(3):
         ax = axes[p, 0]
-        for j in range(q.shape[1]):
-            ax.plot(
-                t,
-                q[:, j, p],
-                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-                linestyle="-." if j == 0 else "-",
-                linewidth=1.6 if j == 0 else 1.0,
-                label=f"spacecraft {int(ds.spacecraft.values[j])}",
-            )
+        for j, sc in enumerate(ds.spacecraft.values):  # colours: the axes' spacecraft cycle
+            first = j == 0
+            style = dict(linestyle="-." if first else "-", linewidth=1.6 if first else 1.0)
+            ax.plot(t, q[:, j, p], **style, label=f"spacecraft {int(sc)}")
         if window is not None:
             ax.axvspan(*window, color="0.9", zorder=0)
         ax.set_ylabel(_LABELS[p])
-    axes[-1, 0].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="upper right", ncol=4, fontsize=7)
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="upper right", ncol=4, fontsize=7)
 
 
 def plot_fault_estimate(
@@ -66,8 +60,7 @@ def plot_fault_estimate(
         color="#d62728",
         label=rf"adaptive estimate $\hat u_{{{spacecraft},{channel}}}$ (19)",
     )
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("generalised force [N m]")
+    ax.set(xlabel="time [s]", ylabel="generalised force [N m]")
     ax.legend(loc="best")
     return save_figure(fig, path)
 

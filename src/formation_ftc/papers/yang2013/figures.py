@@ -51,18 +51,16 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     _switch_lines(ax, ds)
     ax.set_ylabel("|X| [-]")
     ax.legend(loc="upper right")
-    ax = axes[1, 0]
     act = ds["active"].values.astype(bool)
-    _semilogy_active(ax, t, ds, "spacecraft_norm", act)
-    _switch_lines(ax, ds)
-    ax.set_ylabel("|x_i| [-]")
-    ax.legend(loc="upper right", ncol=3)
-    ax = axes[2, 0]
-    _semilogy_active(ax, t, ds, "input_norm", act)
-    _switch_lines(ax, ds)
-    ax.set_ylabel("|u_i| [N, N m]")
+    for ax, variable, ylabel in (
+        (axes[1, 0], "spacecraft_norm", "|x_i| [-]"),
+        (axes[2, 0], "input_norm", "|u_i| [N, N m]"),
+    ):
+        _semilogy_active(ax, t, ds, variable, act)
+        _switch_lines(ax, ds)
+        ax.set_ylabel(ylabel)
+        ax.legend(loc="upper right", ncol=3)
     ax.set_xlabel("time t [s]")
-    ax.legend(loc="upper right", ncol=3)
     return [save_figure(fig, out_dir / f"{scenario.scenario.name}.png")]
 
 
@@ -103,8 +101,7 @@ def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path
     act = ds_fault["active"].values.astype(bool)
     _semilogy_active(ax, t, ds_fault, "spacecraft_norm", act)
     _switch_lines(ax, ds_fault)
-    ax.set_ylabel("|x_i| (fault scenario) [-]")
-    ax.set_xlabel("time t [s]")
+    ax.set(ylabel="|x_i| (fault scenario) [-]", xlabel="time t [s]")
     ax.legend(loc="lower left", ncol=3)
     return save_figure(fig, path)
 
@@ -130,7 +127,6 @@ def figure_5(ds_healthy, ds_fault, path: Path, t_end: float = 4000.0) -> Path:
             label=label,
         )
     ax.axvline(3800.0, color="0.5", lw=0.8, ls=":")
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("|u_2| = |[f_2; tau_2]| [N, N m]")
+    ax.set(xlabel="time t [s]", ylabel="|u_2| = |[f_2; tau_2]| [N, N m]")
     ax.legend(loc="upper right")
     return save_figure(fig, path)
