@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from formation_ftc.papers._study import finish_figure
 from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.report.run_page import finish_figure
 
 __all__ = [
     "deputy",

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
-from formation_ftc.papers._study import finish_figure
 from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.report.run_page import finish_figure
 
 __all__ = ["plot_attitudes", "plot_fault_estimate", "plot_seed_spread", "plot_scenario"]
 
