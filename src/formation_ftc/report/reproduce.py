@@ -441,8 +441,8 @@ def reproduce(
         if breakdown is not None:
             b = dict(breakdown)
             writing = time.perf_counter() - t_report  # [s], counted in "report" and in "total"
-            b["report"] = round(b.get("report", 0.0) + writing, DIGITS)
-            b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
+            for k in ("report", "total"):
+                b[k] = round(b.get(k, 0.0) + writing, DIGITS)
             breakdowns[paper] = b
 
     with _Bar(progress, len(selected), started=t_start) as bar:
@@ -463,16 +463,14 @@ def reproduce(
     summaries = {p: done[p][1] for p in selected}
     papers_s = time.perf_counter() - t_start  # from the start of the wait to the last paper's end
 
-    metadata: dict[str, Any] = dict(provenance())
-    metadata.update(
-        command="formation-ftc reproduce " + " ".join(papers),
-        papers=selected,
-        status={e["paper"]: e["status"] for e in entries},
-        wall_time_s={e["paper"]: e["wall_time_s"] for e in entries},
-        seeds={e["paper"]: e["seeds"] for e in entries},
-        total_wall_time_s=round(papers_s, 3),
-        paper_workers=n_workers,
-    )
+    metadata: dict[str, Any] = {
+        **provenance(),
+        "command": "formation-ftc reproduce " + " ".join(papers),
+        "papers": selected,
+        **{k: {e["paper"]: e[k] for e in entries} for k in ("status", "wall_time_s", "seeds")},
+        "total_wall_time_s": round(papers_s, 3),
+        "paper_workers": n_workers,
+    }
     if n_workers > 1:  # each worker's CPU-client threads (the compiled programs depend on it)
         metadata["paper_worker_cpu_threads"] = _worker_threads(n_workers)
     breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
