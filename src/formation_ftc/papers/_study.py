@@ -45,7 +45,7 @@ from typing import Any
 from formation_ftc.registry import ComparisonRow, Figure, PaperReport, Reproduction
 from formation_ftc.report.profile import phase
 
-__all__ = ["Run", "study", "run_study", "load_runs", "read_study", "finish_figure"]
+__all__ = ["Run", "study", "run_study", "load_runs", "read_study"]
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ def load_runs(
             names = [n for n, _ in members]
             if members[0][1]:
                 times: list = []
-                out = simulate_batched([scenarios[n] for n in names], None, times)
+                out = simulate_batched([scenarios[n] for n in names], times)
                 runs |= {
                     n: Run(scenarios[n], *o, *t) for n, o, t in zip(names, out, times, strict=True)
                 }
@@ -215,33 +215,16 @@ def _row(r: dict, q: dict[str, Any], filled: bool) -> list[ComparisonRow]:
 
 
 def _summary(entries: str | list, q: dict[str, Any]) -> dict[str, Any]:
-    """The report's summary: the quantity named ``entries``, or one item per entry."""
+    """The report's summary: the quantity named ``entries``, or one item per entry: a quantity's name
+    (its key too), or ``{key = TEXT, value = NAME}``."""
     if isinstance(entries, str):
         return dict(_value(entries, q, "summary"))
-    return dict(_summary_item(k, q) for k in entries)
-
-
-def _summary_item(entry: str | dict, q: dict[str, Any]) -> tuple[str, Any]:
-    """``(key, value)`` of a summary entry: a quantity's name, or ``{key = TEXT, value = NAME}``."""
-    if isinstance(entry, str):
-        return entry, _value(entry, q, "summary")
-    return _text(entry["key"], q, "summary"), _value(entry["value"], q, "summary")
+    items = ({"key": e, "value": e} if isinstance(e, str) else e for e in entries)
+    return {_text(e["key"], q, "summary"): _value(e["value"], q, "summary") for e in items}
 
 
 def _names(spec: dict) -> list[str]:
     return [e if isinstance(e, str) else e["name"] for e in spec["runs"]]
-
-
-def finish_figure(fig, axes, path: Path, xlabel: str = "time [s]", **legend: Any) -> Path:
-    """Save a figure of panels over time: ``xlabel`` under the bottom row, and the top left panel's
-    legend drawn with the keyword arguments ``legend`` (no legend without them)."""
-    from formation_ftc.plotting import save_figure
-
-    for ax in axes[-1]:
-        ax.set_xlabel(xlabel)
-    if legend:
-        axes[0, 0].legend(**legend)
-    return save_figure(fig, path)
 
 
 def read_study(paper: str) -> dict:

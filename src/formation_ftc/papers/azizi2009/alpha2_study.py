@@ -55,15 +55,10 @@ VARIABLE = {
 def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
     for name, value in values.items():
         slot, field = VARIABLE[name]
-        old = getattr(loop, field) if slot is None else getattr(getattr(loop, slot), field)
-        new = jnp.asarray(value, dtype=jnp.result_type(old))
-        change: dict[str, Any] = {field: new}
-        if slot is None:
-            loop = dataclasses.replace(loop, **change)
-        else:
-            loop = dataclasses.replace(
-                loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)}
-            )
+        owner: Any = loop if slot is None else getattr(loop, slot)
+        new = jnp.asarray(value, dtype=jnp.result_type(getattr(owner, field)))
+        changed = dataclasses.replace(owner, **{field: new})
+        loop = changed if slot is None else dataclasses.replace(loop, **{slot: changed})
     return loop
 
 

@@ -160,19 +160,17 @@ def _ms(v: np.ndarray, fmt: str = ".3g") -> str:
     return f"{v.mean():{fmt}} +- {v.std(ddof=1) if v.size > 1 else 0.0:{fmt}} (min {v.min():{fmt}}, max {v.max():{fmt}})"
 
 
-def _mx(v) -> float:
-    """max of an array over the runs that have a value (a run that diverged has NaN in-run metrics);
-    NaN when none has: no seed qualifies, so the clause fails."""
+def _mx(v, extreme=np.max) -> float:
+    """max (``extreme``) of an array over the runs that have a value (a run that diverged has NaN
+    in-run metrics); NaN when none has: no seed qualifies, so the clause fails."""
     v = np.asarray(v, dtype=float)
     v = v[~np.isnan(v)]
-    return float(v.max()) if v.size else float("nan")
+    return float(extreme(v)) if v.size else float("nan")
 
 
 def _mn(v) -> float:
     """min of an array over the runs that have a value (NaN when none has)."""
-    v = np.asarray(v, dtype=float)
-    v = v[~np.isnan(v)]
-    return float(v.min()) if v.size else float("nan")
+    return _mx(v, np.min)
 
 
 def case_study(seeds: list[int], overrides: dict | None = None) -> dict[str, Any]:
