@@ -63,9 +63,7 @@ def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
 
 
 def run_batch(
-    sc: ComposedScenario,
-    variations: Mapping[str, np.ndarray],
-    grid: tuple[int, int] | None = None,
+    sc: ComposedScenario, variations: Mapping[str, np.ndarray], grid: tuple[int, int] | None = None
 ) -> list[dict[str, float]]:
     """Metrics of len(batch) runs of ``sc`` (a scenario of the paper's law on the double-integrator
     plant) that differ only in the given leaves (see :data:`VARIABLE`: ``alpha`` (B, N),
@@ -146,11 +144,7 @@ def alpha2_study(
     SS = np.repeat(np.arange(seeds), per_seed.size)
     with phase("run"):
         # a grid, seeds x weights: each seed's noise is drawn once for its row of weights
-        res_s = run_batch(
-            _llfr(noisy),
-            {"alpha": SA, "seed": SS},
-            (seeds, per_seed.size),
-        )
+        res_s = run_batch(_llfr(noisy), {"alpha": SA, "seed": SS}, (seeds, per_seed.size))
     me_s = np.array([r["max_err"] for r in res_s]).reshape(seeds, per_seed.size)
     amin_seed = np.array([alpha_min_on_grid(win, me_s[j, 1:], e_s) or np.nan for j in range(seeds)])
     edge = [j for j in range(seeds) if not amin_seed[j] > win[0] + 1e-9]

@@ -40,12 +40,9 @@ def fig3_fault_reconstruction(ds, path: Path) -> Path:
     t = ds.time.values
     for k, a in enumerate(AX):
         ax = axes[k, 0]
+        estimate = ds.fault_estimate_mean.sel(axis=a)
         ax.plot(t, ds.fault.sel(axis=a), "k--", label=f"true fault F_{a}")
-        ax.plot(
-            t,
-            ds.fault_estimate_mean.sel(axis=a),
-            label=f"reconstructed F_hat_{a} (record-interval mean)",
-        )
+        ax.plot(t, estimate, label=f"reconstructed F_hat_{a} (record-interval mean)")
         ax.set_ylabel(f"F_{a} [m/s^2]")
     return finish_figure(fig, axes, path, loc="upper left")
 
@@ -147,14 +144,10 @@ def fig10_synthesized_disturbance(ds_lof, path: Path) -> Path:
     t = ds_lof.time.values
     for k, a in enumerate(AX):
         ax = axes[k, 0]
-        ax.plot(
-            t,
-            ds_lof.synthesized_disturbance_mean.sel(axis=a),
-            "k--",
-            label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)",
-        )
+        h_a = ds_lof.synthesized_disturbance_mean.sel(axis=a)
+        ax.plot(t, h_a, "k--", label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)")
         ax.plot(t, ds_lof.compensation.sel(axis=a), label=f"v_{a} (32)")
-        h = ds_lof.synthesized_disturbance_mean.sel(axis=a).values[t > 50]
+        h = h_a.values[t > 50]
         lim = 1.5 * np.max(np.abs(h)) if h.size else 1e-2
         ax.set(ylim=(-lim, lim), ylabel=f"h_{a}, v_{a} [m/s^2]")
     return finish_figure(fig, axes, path, loc="upper left")

@@ -38,14 +38,7 @@ from formation_ftc.papers._conditions import exact, fmt_list, informative, sampl
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = [
-    "DelayBounds",
-    "delay_stats",
-    "delay_bounds",
-    "law_of",
-    "lemma3_constant",
-    "check",
-]
+__all__ = ["DelayBounds", "delay_stats", "delay_bounds", "law_of", "lemma3_constant", "check"]
 
 #: network type -> theorem of the ``li2020-adaptive`` law over it
 THEOREMS = {"graph": "thm1", "delayed-graph": "thm2"}

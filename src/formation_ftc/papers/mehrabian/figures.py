@@ -40,26 +40,15 @@ def plot_fault_estimate(
     fig, axes = new_figure(1, 1, width=6.4, height=3.2, title=title or None)
     ax = axes[0, 0]
     t = ds.time.values
-    ax.plot(
-        t,
-        ds.fault.values[:, spacecraft - 1, channel - 1],
-        color="#1f77b4",
-        label=rf"fault $\bar u_{{{spacecraft},{channel}}}$ (spacecraft {spacecraft})",
-    )
-    ax.plot(
-        t,
-        ds.fdi_estimate.values[:, spacecraft - 1, channel - 1],
-        "--",
-        color="#2ca02c",
-        label=rf"FDI estimate $\bar u^*_{{{spacecraft},{channel}}}$",
-    )
-    ax.plot(
-        t,
-        ds.fault_estimate_adaptive.values[:, spacecraft - 1, channel - 1],
-        ":",
-        color="#d62728",
-        label=rf"adaptive estimate $\hat u_{{{spacecraft},{channel}}}$ (19)",
-    )
+    sub = f"{spacecraft},{channel}"  # the subscript
+    for variable, style, color, label in (
+        ("fault", "-", "#1f77b4", rf"fault $\bar u_{{{sub}}}$ (spacecraft {spacecraft})"),
+        ("fdi_estimate", "--", "#2ca02c", rf"FDI estimate $\bar u^*_{{{sub}}}$"),
+        ("fault_estimate_adaptive", ":", "#d62728", rf"adaptive estimate $\hat u_{{{sub}}}$ (19)"),
+    ):
+        ax.plot(
+            t, ds[variable].values[:, spacecraft - 1, channel - 1], style, color=color, label=label
+        )
     ax.set(xlabel="time [s]", ylabel="generalised force [N m]")
     ax.legend(loc="best")
     return save_figure(fig, path)
