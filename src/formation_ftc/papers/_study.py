@@ -94,7 +94,7 @@ def load_runs(
         return (values or {})[v[1:]] if isinstance(v, str) and v.startswith("$") else v
 
     scenarios: dict[str, Any] = {}
-    groups: dict[str, list[tuple[str, bool]]] = {}
+    groups: dict[tuple[bool, str], list[str]] = {}  # (batched, its label or the run) -> runs
     for entry in spec["runs"]:
         entry = {"name": entry} if isinstance(entry, str) else entry
         sets = {**(overrides or {}), **{k: value(v) for k, v in entry.get("set", {}).items()}}
@@ -102,14 +102,12 @@ def load_runs(
             sets["scenario.name"] = entry["name"]
         scenarios[entry["name"]] = load_scenario(entry.get("scenario", entry["name"]), sets)
         label = entry.get("batch", "" if spec.get("batch", False) else None)
-        groups.setdefault(entry["name"] if label is None else f"batch {label}", []).append(
-            (entry["name"], label is not None)
-        )
+        key = (False, entry["name"]) if label is None else (True, label)
+        groups.setdefault(key, []).append(entry["name"])
     runs: dict[str, Run] = {}
     with phase("run"):
-        for members in groups.values():
-            names = [n for n, _ in members]
-            if members[0][1]:
+        for (batched, _), names in groups.items():
+            if batched:
                 times: list = []
                 out = simulate_batched([scenarios[n] for n in names], times)
                 runs |= {

@@ -192,41 +192,37 @@ class _Bar:
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
     def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
+        from rich import progress as rp
+        from rich.text import Text
+
         self.n = n_papers
-        self._progress = None
-        if enabled and n_papers > 0:
-            from rich import progress as rp
-            from rich.text import Text
+        t0 = time.perf_counter() if started is None else started
 
-            t0 = time.perf_counter() if started is None else started
+        class Elapsed(rp.ProgressColumn):
+            def render(self, task) -> Text:
+                s = int(time.perf_counter() - t0)
+                return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
 
-            class Elapsed(rp.ProgressColumn):
-                def render(self, task) -> Text:
-                    s = int(time.perf_counter() - t0)
-                    return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
-
-            self._progress = rp.Progress(
-                rp.TextColumn("[bold]reproduce[/]"),
-                rp.BarColumn(),
-                rp.TaskProgressColumn(),
-                Elapsed(),
-                rp.TextColumn("{task.description}"),
-                console=console or Console(stderr=True),
-            )
-            self._task = self._progress.add_task("", total=float(n_papers))
+        self._progress = rp.Progress(
+            rp.TextColumn("[bold]reproduce[/]"),
+            rp.BarColumn(),
+            rp.TaskProgressColumn(),
+            Elapsed(),
+            rp.TextColumn("{task.description}"),
+            console=console or Console(stderr=True),
+            disable=not (enabled and n_papers > 0),  # a disabled bar shows nothing
+        )
+        self._task = self._progress.add_task("", total=float(n_papers))
 
     def __enter__(self) -> _Bar:
-        if self._progress is not None:
-            self._progress.start()
+        self._progress.start()
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._progress is not None:
-            self._progress.stop()
+        self._progress.stop()
 
     def update(self, completed: float, description: str) -> None:
-        if self._progress is not None:
-            self._progress.update(self._task, completed=completed, description=description)
+        self._progress.update(self._task, completed=completed, description=description)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
         def progress(fraction: float = 0.0, message: str = "") -> None:
