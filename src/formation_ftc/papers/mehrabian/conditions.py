@@ -83,10 +83,7 @@ def lyapunov_matrix(D: np.ndarray, K: float, K_P: float, K_I: float) -> np.ndarr
     I = np.eye(n)
     V = np.hstack([K_I * I, K_P * I, I])
     P = V.T @ D @ V
-    P[:n, :n] += K_I * K_P * K * I
-    P[:n, n : 2 * n] += K_I * K * I
-    P[n : 2 * n, :n] += K_I * K * I
-    P[n : 2 * n, n : 2 * n] += K_P * K * I
+    P[: 2 * n, : 2 * n] += np.kron([[K_I * K_P * K, K_I * K], [K_I * K, K_P * K]], I)
     return P
 
 

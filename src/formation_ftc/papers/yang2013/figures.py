@@ -41,13 +41,9 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     fig, axes = new_figure(3, 1, width=7.0, height=7.5, title=f"{scenario.scenario.name}")
     ax = axes[0, 0]
     ax.plot(t, ds["state_norm"].values, color="k", label="|X_sigma(t)(t)|")
-    ax.axhline(q["envelope"], color="r", ls="--", label=f"eps + (S+2) zeta D = {q['envelope']:.3f}")
-    ax.axhline(
-        q["pre_switch_bound"],
-        color="0.4",
-        ls="-.",
-        label=f"eps1 + zeta D = {q['pre_switch_bound']:.2f}",
-    )
+    envelope, pre = q["envelope"], q["pre_switch_bound"]
+    ax.axhline(envelope, color="r", ls="--", label=f"eps + (S+2) zeta D = {envelope:.3f}")
+    ax.axhline(pre, color="0.4", ls="-.", label=f"eps1 + zeta D = {pre:.2f}")
     _switch_lines(ax, ds)
     ax.set_ylabel("|X| [-]")
     ax.legend(loc="upper right")
@@ -112,20 +108,13 @@ def figure_5(ds_healthy, ds_fault, path: Path, t_end: float = 4000.0) -> Path:
         1, 1, width=7.0, height=3.4, title="Yang2013 Fig. 5: trajectories of |u_2(t)|"
     )
     ax = axes[0, 0]
-    for ds, style, color, label in (
-        (ds_fault, "-", "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
-        (ds_healthy, "-", "#1f77b4", "spacecraft 2, healthy"),
+    for ds, color, label in (
+        (ds_fault, "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
+        (ds_healthy, "#1f77b4", "spacecraft 2, healthy"),
     ):
         t = ds["time"].values
-        keep = t < t_end
-        ax.semilogy(
-            t[keep],
-            ds["input_norm"].sel(spacecraft=2).values[keep],
-            ls=style,
-            color=color,
-            lw=0.8,
-            label=label,
-        )
+        u2, keep = ds["input_norm"].sel(spacecraft=2).values, t < t_end
+        ax.semilogy(t[keep], u2[keep], color=color, lw=0.8, label=label)
     ax.axvline(3800.0, color="0.5", lw=0.8, ls=":")
     ax.set(xlabel="time t [s]", ylabel="|u_2| = |[f_2; tau_2]| [N, N m]")
     ax.legend(loc="upper right")
