@@ -286,20 +286,17 @@ def fdi_check(s: Any, loop: Any) -> list[Condition]:
     sampled = bool(loop.controller.sampled)
     fits = sampled == (sec.command == "held")
     return [
-        Condition(
-            name="attitude FDI: command model over each step",
-            reference="docs/concepts/navigation-and-fdi.md",
-            value=f"command = {sec.command}; controller {s.labels()['controller']} "
+        exact(
+            "attitude FDI: command model over each step",
+            "docs/concepts/navigation-and-fdi.md",
+            f"command = {sec.command}; controller {s.labels()['controller']} "
             + ("is sampled" if sampled else "is evaluated inside the step"),
-            requirement="held for a sampled law, extrapolated for a law evaluated inside the step",
-            holds=fits,
+            "held for a sampled law, extrapolated for a law evaluated inside the step",
+            fits,
+            "exact: held is the exact mean of a sampled command; for a law evaluated at every "
+            "integrator stage the extrapolation 1.5 tau_k - 0.5 tau_k-1 removes the first-order "
+            "error (attitude league, Mehrabian, 0.05 s: largest |r| without fault 2.3e-4 N m, "
+            "against 8e-3 N m with the command held)",
             required=False,
-            basis="exact",
-            detail=(
-                "exact: held is the exact mean of a sampled command; for a law evaluated at every "
-                "integrator stage the extrapolation 1.5 tau_k - 0.5 tau_k-1 removes the first-order "
-                "error (attitude league, Mehrabian, 0.05 s: largest |r| without fault 2.3e-4 N m, "
-                "against 8e-3 N m with the command held)"
-            ),
         )
     ]
