@@ -1,6 +1,6 @@
 """Builders of the condition rows the papers' ``conditions`` modules return
-(:class:`~formation_ftc.registry.Condition`): an exact comparison, and a condition sampled for a
-violation that a verified bound may prove; and the list format their values share."""
+(:class:`~formation_ftc.registry.Condition`): an exact comparison, an informative row, and a condition
+sampled for a violation that a verified bound may prove; and the list format their values share."""
 
 from __future__ import annotations
 
@@ -26,6 +26,13 @@ def exact(
     """A condition decided by exact arithmetic (basis "exact"); ``holds`` as computed (None: not
     evaluated)."""
     return Condition(name, reference, value, requirement, holds, required, detail, basis="exact")
+
+
+def informative(
+    name: str, reference: str, value: str, requirement: str, holds: Any, detail: str
+) -> Condition:
+    """A condition shown for information only (basis "informative", not required)."""
+    return Condition(name, reference, value, requirement, holds, False, detail, basis="informative")
 
 
 def sampled_or_verified(

@@ -94,7 +94,7 @@ def load_runs(
         return (values or {})[v[1:]] if isinstance(v, str) and v.startswith("$") else v
 
     scenarios: dict[str, Any] = {}
-    groups: dict[str, list[tuple[str, bool]]] = {}
+    groups: dict[tuple[bool, str], list[str]] = {}  # (batched, its label or the run) -> runs
     for entry in spec["runs"]:
         entry = {"name": entry} if isinstance(entry, str) else entry
         sets = {**(overrides or {}), **{k: value(v) for k, v in entry.get("set", {}).items()}}
@@ -102,16 +102,14 @@ def load_runs(
             sets["scenario.name"] = entry["name"]
         scenarios[entry["name"]] = load_scenario(entry.get("scenario", entry["name"]), sets)
         label = entry.get("batch", "" if spec.get("batch", False) else None)
-        groups.setdefault(entry["name"] if label is None else f"batch {label}", []).append(
-            (entry["name"], label is not None)
-        )
+        key = (False, entry["name"]) if label is None else (True, label)
+        groups.setdefault(key, []).append(entry["name"])
     runs: dict[str, Run] = {}
     with phase("run"):
-        for members in groups.values():
-            names = [n for n, _ in members]
-            if members[0][1]:
+        for (batched, _), names in groups.items():
+            if batched:
                 times: list = []
-                out = simulate_batched([scenarios[n] for n in names], None, times)
+                out = simulate_batched([scenarios[n] for n in names], times)
                 runs |= {
                     n: Run(scenarios[n], *o, *t) for n, o, t in zip(names, out, times, strict=True)
                 }
@@ -215,17 +213,12 @@ def _row(r: dict, q: dict[str, Any], filled: bool) -> list[ComparisonRow]:
 
 
 def _summary(entries: str | list, q: dict[str, Any]) -> dict[str, Any]:
-    """The report's summary: the quantity named ``entries``, or one item per entry."""
+    """The report's summary: the quantity named ``entries``, or one item per entry: a quantity's name
+    (its key too), or ``{key = TEXT, value = NAME}``."""
     if isinstance(entries, str):
         return dict(_value(entries, q, "summary"))
-    return dict(_summary_item(k, q) for k in entries)
-
-
-def _summary_item(entry: str | dict, q: dict[str, Any]) -> tuple[str, Any]:
-    """``(key, value)`` of a summary entry: a quantity's name, or ``{key = TEXT, value = NAME}``."""
-    if isinstance(entry, str):
-        return entry, _value(entry, q, "summary")
-    return _text(entry["key"], q, "summary"), _value(entry["value"], q, "summary")
+    items = ({"key": e, "value": e} if isinstance(e, str) else e for e in entries)
+    return {_text(e["key"], q, "summary"): _value(e["value"], q, "summary") for e in items}
 
 
 def _names(spec: dict) -> list[str]:

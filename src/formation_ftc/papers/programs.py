@@ -27,13 +27,12 @@ def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str,
 
 
 def simulate_batched(
-    scenarios: list, loops: list | None = None, timings: list | None = None
+    scenarios: list, timings: list | None = None
 ) -> list[tuple[Any, dict[str, float]]]:
     """Run scenarios as one ``jax.vmap`` batch per compiled structure (same ``static_key``: only numbers
     differ; :func:`formation_ftc.sim.batch.batched_run`) and return ``[(xarray.Dataset, {metric: float})]``
     in order, as :func:`simulate` returns them one by one (a divergence raises, as there).
 
-    ``loops``: the scenarios' loops (default: built here, :func:`formation_ftc.api.build_loop`).
     ``timings``: a list that receives ``(compile_s, run_s)`` of each run's batch [s], in order."""
     import time
 
@@ -42,7 +41,7 @@ def simulate_batched(
     from formation_ftc.api import build_loop, finish_run
     from formation_ftc.sim.batch import batched_run, stack_params
 
-    loops = [build_loop(s) for s in scenarios] if loops is None else loops
+    loops = [build_loop(s) for s in scenarios]
     groups: dict[Hashable, list[int]] = {}
     for i, c in enumerate(loops):
         groups.setdefault(c.static_key, []).append(i)

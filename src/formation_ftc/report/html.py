@@ -220,26 +220,25 @@ def league_links(
     for d in dirs:
         page = d / "leaderboard" / "index.html"
         board_path = d / "leaderboard" / "leaderboard.json"
-        if not page.is_file() or not board_path.is_file():
-            continue
         key = str(page.resolve())
-        if key in found:
+        if key in found or not (page.is_file() and board_path.is_file()):
             continue
         try:
             board = json.loads(board_path.read_text())
         except (OSError, ValueError):
             continue
+        ranking = board.get("ranking", {})
         found[key] = {
             "name": board.get("league", d.name),
             "seeds": board.get("seeds"),
             "href": os.path.relpath(page, out_dir),
-            "ranking": board.get("ranking", {}),
+            "ranking": ranking,
             "metric": board.get("requirement", {}).get("metric", ""),
+            # the first three methods of every level
+            "tops": [
+                (level, [r.get("method") for r in rows[:3]]) for level, rows in ranking.items()
+            ],
         }
-        found[key]["tops"] = [  # the first three methods of every level
-            (level, [r.get("method") for r in rows[:3]])
-            for level, rows in found[key]["ranking"].items()
-        ]
     return list(found.values())
 
 

@@ -37,12 +37,11 @@ def provenance() -> dict[str, str]:
     ``jax_cpu_threads`` (the CPU client's thread count, which XLA's compilation depends on; see
     ``formation_ftc.sim.runtime.compilation_cache_dir``), ``created_utc``.
     """
-    out = _base.provenance()
-    out.update(
-        python_executable=sys.executable,
-        machine=platform.machine(),
-        cpu_count=str(os.cpu_count() or "unknown"),
-        jax_backend=_jax_backend(),
-        jax_cpu_threads=str(_cpu_threads()),
-    )
-    return out
+    return {
+        **_base.provenance(),
+        "python_executable": sys.executable,
+        "machine": platform.machine(),
+        "cpu_count": str(os.cpu_count() or "unknown"),
+        "jax_backend": _jax_backend(),
+        "jax_cpu_threads": str(_cpu_threads()),
+    }

@@ -37,9 +37,13 @@ from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
 from formation_ftc import registry
 from formation_ftc.atomic import atomic_write
-from formation_ftc.exitcodes import add_json_option
+from formation_ftc.exitcodes import add_json_option, print_json, print_json_error
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
@@ -188,53 +192,53 @@ class _Bar:
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
     def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
+        from rich import progress as rp
+        from rich.text import Text
+
         self.n = n_papers
-        self._progress = None
-        if enabled and n_papers > 0:
-            from rich import progress as rp
-            from rich.console import Console
-            from rich.text import Text
+        t0 = time.perf_counter() if started is None else started
 
-            t0 = time.perf_counter() if started is None else started
+        class Elapsed(rp.ProgressColumn):
+            def render(self, task) -> Text:
+                s = int(time.perf_counter() - t0)
+                return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
 
-            class Elapsed(rp.ProgressColumn):
-                def render(self, task) -> Text:
-                    s = int(time.perf_counter() - t0)
-                    return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
-
-            self._progress = rp.Progress(
-                rp.TextColumn("[bold]reproduce[/]"),
-                rp.BarColumn(),
-                rp.TaskProgressColumn(),
-                Elapsed(),
-                rp.TextColumn("{task.description}"),
-                console=console or Console(stderr=True),
-            )
-            self._task = self._progress.add_task("", total=float(n_papers))
+        self._progress = rp.Progress(
+            rp.TextColumn("[bold]reproduce[/]"),
+            rp.BarColumn(),
+            rp.TaskProgressColumn(),
+            Elapsed(),
+            rp.TextColumn("{task.description}"),
+            console=console or Console(stderr=True),
+            disable=not (enabled and n_papers > 0),  # a disabled bar shows nothing
+        )
+        self._task = self._progress.add_task("", total=float(n_papers))
 
     def __enter__(self) -> _Bar:
-        if self._progress is not None:
-            self._progress.start()
+        self._progress.start()
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._progress is not None:
-            self._progress.stop()
+        self._progress.stop()
 
     def update(self, completed: float, description: str) -> None:
-        if self._progress is not None:
-            self._progress.update(self._task, completed=completed, description=description)
+        self._progress.update(self._task, completed=completed, description=description)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
         def progress(fraction: float = 0.0, message: str = "") -> None:
-            try:
-                f = float(fraction)
-            except (TypeError, ValueError):
-                f = 0.0
-            f = min(max(f, 0.0), 1.0) if math.isfinite(f) else 0.0
+            f = _fraction(fraction, 1.0)
             self.update(index + f, f"{paper} ({index + 1}/{self.n}) {message}".rstrip())
 
         return progress
+
+
+def _fraction(value: Any, top: float) -> float:
+    """A reported progress fraction clamped to [0, ``top``]; 0 for a non-number or a non-finite one."""
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        return 0.0
+    return min(max(f, 0.0), top) if math.isfinite(f) else 0.0
 
 
 # ------------------------------------------------------------------------------------------ entries
@@ -263,21 +267,24 @@ def paper_entry(
     error: str | None = None,
 ) -> dict[str, Any]:
     """The ``report.json`` content of one paper (also what :mod:`formation_ftc.report.html` renders)."""
-    rows = [r.as_dict() for r in report.rows] if report else []
-    checks = [c.as_dict() for c in report.checks] if report else []
-    warnings: list[str] = []
-    figures = []
-    for fig in report.figures if report else []:
-        exists = (paper_dir / fig.path).is_file()
-        if not exists:
-            warnings.append(f"figure {fig.number}: file {fig.path} was not written")
-        figures.append(
-            dict(path=str(fig.path), number=str(fig.number), caption=fig.caption, exists=exists)
+    rep = report or PaperReport(paper, {})  # a failed paper reports nothing
+    rows, checks = [r.as_dict() for r in rep.rows], [c.as_dict() for c in rep.checks]
+    figures = [
+        dict(
+            path=str(f.path),
+            number=str(f.number),
+            caption=f.caption,
+            exists=(paper_dir / f.path).is_file(),
         )
-    if report is not None and report.paper != paper:
-        warnings.append(
-            f"the reproduction returned a report for {report.paper!r}, expected {paper!r}"
-        )
+        for f in rep.figures
+    ]
+    warnings = [
+        f"figure {f['number']}: file {f['path']} was not written"
+        for f in figures
+        if not f["exists"]
+    ]
+    if rep.paper != paper:
+        warnings.append(f"the reproduction returned a report for {rep.paper!r}, expected {paper!r}")
     verdicts, checks_summary = _counts(rows, checks)
     traj = paper_dir / "trajectory3d.json"
     return {
@@ -399,12 +406,10 @@ def reproduce(
     t_start = time.perf_counter() if started is None else started
     from formation_ftc.report import html as html_report
 
-    if isinstance(papers, str):
-        papers = [papers]
-    if available is None:
-        found, import_failures = available_reproductions()
-    else:
-        found, import_failures = dict(available), {}
+    papers = [papers] if isinstance(papers, str) else papers
+    found, import_failures = (
+        available_reproductions() if available is None else (dict(available), {})
+    )
     order = {p: k for k, p in enumerate(registry.PAPER_MODULES)}  # display order of the built-ins
     valid = list(found) + sorted(import_failures, key=lambda p: (order.get(p, len(order)), p))
     selected = select_papers(papers, valid)
@@ -432,8 +437,8 @@ def reproduce(
         if breakdown is not None:
             b = dict(breakdown)
             writing = time.perf_counter() - t_report  # [s], counted in "report" and in "total"
-            b["report"] = round(b.get("report", 0.0) + writing, DIGITS)
-            b["total"] = round(b.get("total", 0.0) + writing, DIGITS)
+            for k in ("report", "total"):
+                b[k] = round(b.get(k, 0.0) + writing, DIGITS)
             breakdowns[paper] = b
 
     with _Bar(progress, len(selected), started=t_start) as bar:
@@ -454,16 +459,14 @@ def reproduce(
     summaries = {p: done[p][1] for p in selected}
     papers_s = time.perf_counter() - t_start  # from the start of the wait to the last paper's end
 
-    metadata: dict[str, Any] = dict(provenance())
-    metadata.update(
-        command="formation-ftc reproduce " + " ".join(papers),
-        papers=selected,
-        status={e["paper"]: e["status"] for e in entries},
-        wall_time_s={e["paper"]: e["wall_time_s"] for e in entries},
-        seeds={e["paper"]: e["seeds"] for e in entries},
-        total_wall_time_s=round(papers_s, 3),
-        paper_workers=n_workers,
-    )
+    metadata: dict[str, Any] = {
+        **provenance(),
+        "command": "formation-ftc reproduce " + " ".join(papers),
+        "papers": selected,
+        **{k: {e["paper"]: e[k] for e in entries} for k in ("status", "wall_time_s", "seeds")},
+        "total_wall_time_s": round(papers_s, 3),
+        "paper_workers": n_workers,
+    }
     if n_workers > 1:  # each worker's CPU-client threads (the compiled programs depend on it)
         metadata["paper_worker_cpu_threads"] = _worker_threads(n_workers)
     breakdowns = {p: breakdowns[p] for p in selected if p in breakdowns}
@@ -627,8 +630,7 @@ def _reproduce_in_workers(
                     while True:
                         paper, fraction, message = messages.get_nowait()
                         if paper in running:
-                            f = min(max(fraction, 0.0), 0.999) if math.isfinite(fraction) else 0.0
-                            running[paper] = (f, message)
+                            running[paper] = (_fraction(fraction, 0.999), message)
                 for fut in done:
                     paper = futures[fut]
                     try:
@@ -651,24 +653,18 @@ def _print_profile(
     breakdowns: Mapping[str, Mapping[str, float]], index_s: float, console=None
 ) -> None:
     """The ``--profile`` table: seconds per phase (rows: papers, then the index page and the total)."""
-    from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
-
     console = console or Console()
     table = Table(title="formation-ftc reproduce --profile: wall time per phase [s]")
     table.add_column("paper")
-    for ph in (*PHASES, "total"):
+    columns = (*PHASES, "total")
+    for ph in columns:
         table.add_column(escape(ph), justify="right")
-    sums = dict.fromkeys((*PHASES, "total"), 0.0)
     for paper, b in breakdowns.items():
-        table.add_row(paper, *(f"{b.get(ph, 0.0):.2f}" for ph in (*PHASES, "total")))
-        for ph in sums:
-            sums[ph] += b.get(ph, 0.0)
+        table.add_row(paper, *(f"{b.get(ph, 0.0):.2f}" for ph in columns))
     table.add_row("index.html", *("" for _ in PHASES[:-1]), f"{index_s:.2f}", f"{index_s:.2f}")
-    sums["report"] += index_s
-    sums["total"] += index_s
-    table.add_row("total", *(f"{sums[ph]:.2f}" for ph in (*PHASES, "total")), end_section=True)
+    index = {"report": index_s, "total": index_s}  # the page's writing, after the papers
+    sums = [sum(b.get(ph, 0.0) for b in breakdowns.values()) + index.get(ph, 0.0) for ph in columns]
+    table.add_row("total", *(f"{s:.2f}" for s in sums), end_section=True)
     console.print(table)
     console.print(
         "compile = JAX tracing + lowering + XLA compile (jax.monitoring time spans, persistent-cache "
@@ -679,10 +675,6 @@ def _print_profile(
 
 
 def _print_table(entries: list[dict], total: float, index: Path, console=None) -> None:
-    from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
-
     console = console or Console()
     table = Table("paper", "status", title="formation-ftc reproduce: wall time per paper")
     for col in (escape("wall time [s]"), *VERDICTS, "conditions hold/fail"):
@@ -767,11 +759,7 @@ def run_cli(args: argparse.Namespace) -> int:
     (:func:`json_document`) to stdout at the end."""
     started = time.perf_counter()
     as_json = bool(getattr(args, "json", False))
-    console = None
-    if as_json:
-        from rich.console import Console
-
-        console = Console(stderr=True)
+    console = Console(stderr=True) if as_json else None
     try:
         # with --json, standard output carries the one document: anything printed meanwhile -> stderr
         with contextlib.redirect_stdout(sys.stderr) if as_json else contextlib.nullcontext():
@@ -790,13 +778,9 @@ def run_cli(args: argparse.Namespace) -> int:
     except ReproduceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         if as_json:
-            from formation_ftc.exitcodes import print_json_error
-
             print_json_error(str(exc), 2)
         return 2
     if as_json:
-        from formation_ftc.exitcodes import print_json
-
         print_json(json_document(result))
     return int(result["exit_code"])
 

@@ -35,6 +35,7 @@ from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 
 __all__ = [
+    "finish_figure",
     "standard_figures",
     "run_figures",
     "write_run_page",
@@ -92,12 +93,36 @@ def _curve(v) -> np.ndarray:
     return _norm_over_rest(v) if v.ndim > 1 else v.values
 
 
-def _save(fig, axes, path: Path) -> Path:
-    """The first panel's legend and the last panel's time axis, then the file."""
+def finish_figure(fig, axes, path: Path | str, xlabel: str = "time [s]", **legend: Any) -> Path:
+    """Save a figure of panels over time (the run page's and the papers' figures).
+
+    Parameters
+    ----------
+    fig, axes : matplotlib Figure and its 2-D array of axes (:func:`formation_ftc.plotting.new_figure`).
+    path : file to write (:func:`formation_ftc.plotting.save_figure`).
+    xlabel : label of every bottom panel's x axis.
+    **legend : keyword arguments of the top left panel's legend (no legend without them).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from formation_ftc.plotting import new_figure
+    >>> fig, axes = new_figure(2, 1)
+    >>> _ = axes[0, 0].plot([0.0, 1.0], [0.0, 1.0], label="x")
+    >>> finish_figure(fig, axes, Path(tempfile.mkdtemp()) / "x.png", loc="best").name
+    'x.png'
+    """
     from formation_ftc.plotting import save_figure
 
-    axes[0, 0].legend(loc="best")
-    axes[-1, 0].set_xlabel("time [s]")
+    if legend:
+        axes[0, 0].legend(**legend)
+    for ax in axes[-1]:
+        ax.set_xlabel(xlabel)
     return save_figure(fig, path)
 
 
@@ -120,7 +145,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             for lab, v in zip(*_per_spacecraft(var), strict=True):
                 axes[k, 0].plot(t, v.sel({var.dims[-1]: c}).values, label=lab)
             axes[k, 0].set_ylabel(f"{c} [{var.attrs.get('units', '')}]")
-        paths.append(_save(fig, axes, out_dir / "run_position.png"))
+        paths.append(finish_figure(fig, axes, out_dir / "run_position.png", loc="best"))
     errors = [
         n
         for n in ERROR_SIGNALS  # a stacked vector of mixed units has no meaningful norm
@@ -134,7 +159,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
                 axes[k, 0].plot(t, _norm_over_rest(v), label=lab)
             axes[k, 0].set_ylabel(f"|{name}| [{var.attrs.get('units', '')}]")
             axes[k, 0].set_title(var.attrs.get("long_name", name))
-        paths.append(_save(fig, axes, out_dir / "run_tracking_error.png"))
+        paths.append(finish_figure(fig, axes, out_dir / "run_tracking_error.png", loc="best"))
     if "command" in ds and "applied" in ds and ds["command"].dims == ds["applied"].dims:
         cmd, app = ds["command"], ds["applied"]
         comps = _axes_of(cmd)
@@ -154,7 +179,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
             axes[-1, 0].plot(t, _norm_over_rest(va), "-", color=color, label=lab)
         axes[-1, 0].set_ylabel(f"norm [{cmd.attrs.get('units', '')}]")
         axes[-1, 0].legend(loc="best")
-        paths.append(_save(fig, axes, out_dir / "run_control.png"))
+        paths.append(finish_figure(fig, axes, out_dir / "run_control.png", loc="best"))
     truth = [
         n
         for n in ("fault", "fault_acceleration")
@@ -174,7 +199,7 @@ def standard_figures(ds, out_dir: Path | str) -> list[Path]:
                 axes[k, 0].plot(t, _curve(vf), "-", color=color, label=lab)
                 axes[k, 0].plot(t, _curve(ve), "--", color=color)
             axes[k, 0].set_ylabel(f"{'' if c is None else c} [{f.attrs.get('units', '')}]")
-        paths.append(_save(fig, axes, out_dir / "run_fault.png"))
+        paths.append(finish_figure(fig, axes, out_dir / "run_fault.png", loc="best"))
     return paths
 
 

@@ -55,22 +55,15 @@ VARIABLE = {
 def _variant(loop: ClosedLoop, values: Mapping[str, Any]) -> ClosedLoop:
     for name, value in values.items():
         slot, field = VARIABLE[name]
-        old = getattr(loop, field) if slot is None else getattr(getattr(loop, slot), field)
-        new = jnp.asarray(value, dtype=jnp.result_type(old))
-        change: dict[str, Any] = {field: new}
-        if slot is None:
-            loop = dataclasses.replace(loop, **change)
-        else:
-            loop = dataclasses.replace(
-                loop, **{slot: dataclasses.replace(getattr(loop, slot), **change)}
-            )
+        owner: Any = loop if slot is None else getattr(loop, slot)
+        new = jnp.asarray(value, dtype=jnp.result_type(getattr(owner, field)))
+        changed = dataclasses.replace(owner, **{field: new})
+        loop = changed if slot is None else dataclasses.replace(loop, **{slot: changed})
     return loop
 
 
 def run_batch(
-    sc: ComposedScenario,
-    variations: Mapping[str, np.ndarray],
-    grid: tuple[int, int] | None = None,
+    sc: ComposedScenario, variations: Mapping[str, np.ndarray], grid: tuple[int, int] | None = None
 ) -> list[dict[str, float]]:
     """Metrics of len(batch) runs of ``sc`` (a scenario of the paper's law on the double-integrator
     plant) that differ only in the given leaves (see :data:`VARIABLE`: ``alpha`` (B, N),
@@ -151,11 +144,7 @@ def alpha2_study(
     SS = np.repeat(np.arange(seeds), per_seed.size)
     with phase("run"):
         # a grid, seeds x weights: each seed's noise is drawn once for its row of weights
-        res_s = run_batch(
-            _llfr(noisy),
-            {"alpha": SA, "seed": SS},
-            (seeds, per_seed.size),
-        )
+        res_s = run_batch(_llfr(noisy), {"alpha": SA, "seed": SS}, (seeds, per_seed.size))
     me_s = np.array([r["max_err"] for r in res_s]).reshape(seeds, per_seed.size)
     amin_seed = np.array([alpha_min_on_grid(win, me_s[j, 1:], e_s) or np.nan for j in range(seeds)])
     edge = [j for j in range(seeds) if not amin_seed[j] > win[0] + 1e-9]

@@ -38,7 +38,7 @@ from formation_ftc.design.allocation import augmented_matrix_np, perturbation_co
 from formation_ftc.design.flfr import error_dynamics_matrix, reduced_model
 from formation_ftc.design.small_gain import small_gain_margin
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.papers._conditions import exact
+from formation_ftc.papers._conditions import exact, informative
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -154,15 +154,13 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
         )
     if not 0 < k < n - 1:
         out.append(
-            Condition(
+            informative(
                 "interior faulty satellite",
                 "Azizi2009 eq. (6)-(7)",
                 f"satellite {k + 1}",
                 f"2..{n - 1} for the reduced model (7)",
                 None,
-                required=False,
-                basis="informative",
-                detail="informative: the reduced model (7) and its conditions need an interior "
+                "informative: the reduced model (7) and its conditions need an interior "
                 "satellite; not evaluated",
             )
         )

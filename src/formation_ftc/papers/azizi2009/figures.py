@@ -15,6 +15,8 @@ import numpy as np
 
 from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
 
+# the axes cycle through SPACECRAFT_COLORS: the j-th line of an axes is spacecraft j's colour
+
 __all__ = ["plot_fig2", "plot_fig3", "plot_fig4", "plot_run"]
 
 
@@ -33,15 +35,8 @@ def plot_fig2(
     for ax, (title, t, E) in zip(axes.flat, efforts, strict=True):
         sel = t <= t_max + 1e-9
         for j in range(E.shape[1]):
-            ax.plot(
-                t[sel],
-                E[sel, j],
-                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-                label=f"satellite {j + 1}",
-            )
-        ax.set_title(title)
-        ax.set_xlabel("time t [s]")
-        ax.set_ylabel("E_xi [m^2 s^-3]")
+            ax.plot(t[sel], E[sel, j], label=f"satellite {j + 1}")
+        ax.set(title=title, xlabel="time t [s]", ylabel="E_xi [m^2 s^-3]")
         ax.legend(loc="upper left")
     return save_figure(fig, path)
 
@@ -65,17 +60,14 @@ def plot_fig3(
     )
     ax = axes[0, 0]
     ax.plot(d_norm, alpha2, color=SPACECRAFT_COLORS[1], label="formation (satellite 2 weighted)")
-    ax.set_xlabel("||D||_2 [-]")
-    ax.set_ylabel("alpha_2 [-]")
-    ax.set_title("(a) alpha_2 vs ||D||")
+    ax.set(xlabel="||D||_2 [-]", ylabel="alpha_2 [-]", title="(a) alpha_2 vs ||D||")
     ax.legend()
     ax = axes[0, 1]
     ax.plot(max_err, alpha2, color=SPACECRAFT_COLORS[0], label="simulated max |e_ij| (formation)")
     ax.axvline(e_s, color="k", ls="--", lw=0.8, label=f"e_s = {e_s} m")
     if alpha_min is not None:
         ax.axhline(alpha_min, color="0.4", ls=":", lw=0.8, label=f"min alpha_2 = {alpha_min:.1f}")
-    ax.set_xlabel("max tracking error [m]")
-    ax.set_ylabel("alpha_2 [-]")
+    ax.set(xlabel="max tracking error [m]", ylabel="alpha_2 [-]")
     ax.set_title("(b) alpha_2 vs max tracking error")
     ax.legend()
     return save_figure(fig, path)
@@ -106,8 +98,7 @@ def plot_fig4(
         )
     ax.plot(sim_err, sim_alpha, "k-", lw=2.0, label="simulation (4 satellites)")
     ax.axvline(e_s, color="0.5", ls="--", lw=0.8, label=f"e_s = {e_s} m")
-    ax.set_xlabel("error specification e_s / max tracking error [m]")
-    ax.set_ylabel("alpha_2 [-]")
+    ax.set(xlabel="error specification e_s / max tracking error [m]", ylabel="alpha_2 [-]")
     ax.set_ylim(0, 12)
     ax.legend(fontsize=6, ncol=2)
     return save_figure(fig, path)
@@ -120,13 +111,9 @@ def plot_run(ds, scenario, out_dir: Path) -> list[Path]:
     e_s = scenario.section("supervisor").e_s
     fig, axes = new_figure(3, 1, width=7.0, height=7.0, title=f"{scenario.scenario.name}: x axis")
     ax = axes[0, 0]
-    for j, pair in enumerate(ds["pair"].values):
-        ax.plot(
-            t,
-            ds["tracking_error"].sel(axis="x", pair=pair).values,
-            label=f"e_{pair.replace('-', '')}",
-            color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-        )
+    for pair in ds["pair"].values:
+        e = ds["tracking_error"].sel(axis="x", pair=pair).values
+        ax.plot(t, e, label=f"e_{pair.replace('-', '')}")
     ax.axhline(e_s, color="k", ls="--", lw=0.8, label="+/- e_s")
     ax.axhline(-e_s, color="k", ls="--", lw=0.8)
     ax.set_ylabel("tracking error [m]")
@@ -137,14 +124,8 @@ def plot_run(ds, scenario, out_dir: Path) -> list[Path]:
     ax.set_ylabel("mode")
     ax.legend()
     ax = axes[2, 0]
-    for j, scn in enumerate(ds["spacecraft"].values):
-        ax.plot(
-            t,
-            ds["effort"].sel(axis="x", spacecraft=scn).values,
-            label=f"satellite {scn}",
-            color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-        )
-    ax.set_ylabel("E_xi [m^2 s^-3]")
-    ax.set_xlabel("time t [s]")
+    for scn in ds["spacecraft"].values:
+        ax.plot(t, ds["effort"].sel(axis="x", spacecraft=scn).values, label=f"satellite {scn}")
+    ax.set(ylabel="E_xi [m^2 s^-3]", xlabel="time t [s]")
     ax.legend(ncol=4)
     return [save_figure(fig, Path(out_dir) / f"{scenario.scenario.name}.png")]

@@ -42,9 +42,8 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     a0 = q["alpha2_analytic_pi_0"]
     with phase("run"):
         over = {**hz, "plant.axes": 1, "controller.alpha": [1.0, a0, 1.0, 1.0]}
-        q["max_err_analytic_alpha2_pi_0"] = simulate(load_scenario("azizi2009-llfr", over))[1][
-            "max_err"
-        ]
+        _, analytic = simulate(load_scenario("azizi2009-llfr", over))
+    q["max_err_analytic_alpha2_pi_0"] = analytic["max_err"]
     st = alpha2_study(hz, e_s, c["sweep_step"], c["seeds"], c["seed_window"], c["noise_sigma"])
     q |= {k: st[k] for k in ("alpha_grid", "d_norm", "a_min", "a_interp", "seed_spread")}
     q |= {"alpha2_min_simulated": st["a_min"], "alpha2_min_simulated_interpolated": st["a_interp"]}

@@ -23,7 +23,7 @@ from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.design.lmi import ilo_lmi_residuals
 from formation_ftc.design.riccati import care_residual
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.papers._conditions import exact
+from formation_ftc.papers._conditions import exact, informative
 from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
@@ -90,8 +90,9 @@ def learning_loop_radius(A, L1, L2, Q1, Q2, dt: float, m: int = 1) -> tuple[floa
     return radius, float(np.abs(osc[k])), float(abs(np.angle(osc[k])) / (2 * np.pi * dt))
 
 
-def _onboard_mean_motion(given: float | None, s: ComposedScenario) -> float:
-    """The on-board CW model's mean motion [rad/s] (a loop without one is refused before any check)."""
+def onboard_n(given: float | None, s: ComposedScenario) -> float:
+    """The on-board CW model's mean motion [rad/s]: ``given``, or the [reference] orbit's (a loop
+    without one is refused before any check)."""
     n = onboard_mean_motion(given, s.section("reference"))
     if n is None:  # pragma: no cover - validation refuses the loop first
         raise ValueError("no on-board mean motion: state mean_motion or add a [reference] orbit")
@@ -105,7 +106,7 @@ def observer_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Condition
     if not isinstance(s.section("plant"), ZohCwPlantSection):
         return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
     o = s.section("estimator")
-    n, dt = _onboard_mean_motion(o.mean_motion, s), s.simulation.dt
+    n, dt = onboard_n(o.mean_motion, s), s.simulation.dt
     A, B = cw_matrices(n)
     C, H = np.eye(6), B
     L1, L2 = o.gains_at(n)
@@ -229,7 +230,7 @@ def controller_conditions(s: ComposedScenario, loop: ClosedLoop) -> list[Conditi
     if not isinstance(s.section("plant"), ZohCwPlantSection):
         return []  # outside the theorem: proved for the CW model (1)-(3), accelerations
     c = s.section("controller")
-    n = _onboard_mean_motion(c.mean_motion, s)
+    n = onboard_n(c.mean_motion, s)
     A, B = cw_matrices(n)
     care = care_solution(n, c.care_q_scale)
     K = np.asarray(c.K, float) if c.gains == "printed" else care.K
@@ -319,15 +320,13 @@ def _learning_law_conditions(c) -> list[Condition]:
             required=False,
             detail="exact: scalar arithmetic",
         ),
-        Condition(
+        informative(
             "2 Sigma_min >= 1",
             "Gui2022 proof of Thm 2, E002-08",
             f"pi(-tau) = {c.pi_initial:g}",
             "Sigma never defined: untestable",
             None,
-            required=False,
-            basis="informative",
-            detail="informative: pi(-tau) = 1 chosen so that pi >= 1/2 initially",
+            "informative: pi(-tau) = 1 chosen so that pi >= 1/2 initially",
         ),
     ]
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.report.run_page import finish_figure
 
 __all__ = [
     "deputy",
@@ -39,16 +40,11 @@ def fig3_fault_reconstruction(ds, path: Path) -> Path:
     t = ds.time.values
     for k, a in enumerate(AX):
         ax = axes[k, 0]
+        estimate = ds.fault_estimate_mean.sel(axis=a)
         ax.plot(t, ds.fault.sel(axis=a), "k--", label=f"true fault F_{a}")
-        ax.plot(
-            t,
-            ds.fault_estimate_mean.sel(axis=a),
-            label=f"reconstructed F_hat_{a} (record-interval mean)",
-        )
+        ax.plot(t, estimate, label=f"reconstructed F_hat_{a} (record-interval mean)")
         ax.set_ylabel(f"F_{a} [m/s^2]")
-    axes[0, 0].legend(loc="upper left")
-    axes[-1, 0].set_xlabel("time [s]")
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="upper left")
 
 
 def fig45_estimation_errors(ds_offset, ds_full, path: Path, velocity: bool) -> Path:
@@ -71,9 +67,7 @@ def fig45_estimation_errors(ds_offset, ds_full, path: Path, velocity: bool) -> P
     ):
         for c in comps:
             ax.plot(ds.time, ds.estimation_error.sel(component=c), label=f"e_{c}")
-        ax.set_title(ttl)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel(f"{what} error [{unit}]")
+        ax.set(title=ttl, xlabel="time [s]", ylabel=f"{what} error [{unit}]")
         ax.legend(loc="best")
     return save_figure(fig, path)
 
@@ -100,9 +94,7 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
     axes[1, 0].plot(
         t[sel], ds_new.disturbance.sel(axis="x")[sel], "k--", lw=0.8, label="perturbation d_x"
     )
-    axes[1, 0].set_ylim(-6e-3, 6e-3)
-    axes[1, 0].set_ylabel("error [m/s^2]")
-    axes[1, 0].set_xlabel("time [s]")
+    axes[1, 0].set(ylim=(-6e-3, 6e-3), ylabel="error [m/s^2]", xlabel="time [s]")
     axes[1, 0].legend(loc="lower left")
     return save_figure(fig, path)
 
@@ -124,9 +116,7 @@ def fig78_tracking_errors(ds_lof, ds_cof, path: Path, velocity: bool) -> Path:
         ax.plot(ds_lof.time, ds_lof.tracking_error.sel(component=c), label="LOF2TC (30)-(32)")
         ax.set_ylabel(f"e_{c} [{unit}]")
         ax.set_yscale("symlog", linthresh=1e-3 if not velocity else 1e-4)
-    axes[0, 0].legend(loc="upper right")
-    axes[-1, 0].set_xlabel("time [s]")
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="upper right")
 
 
 def fig9_trajectory(ds_lof, ds_cof, path: Path) -> Path:
@@ -140,9 +130,7 @@ def fig9_trajectory(ds_lof, ds_cof, path: Path) -> Path:
     for ds, lab in ((ds_lof, "deputy, LOF2TC"), (ds_cof, "deputy, COF2TC")):
         q = ds.state.values
         ax.plot(q[:, 0], q[:, 1], q[:, 2], label=lab)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
+    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
     ax.set_title("Fig. 9: 3-D formation configuration maintenance")
     ax.legend(loc="upper left")
     return save_figure(fig, path)
@@ -156,20 +144,13 @@ def fig10_synthesized_disturbance(ds_lof, path: Path) -> Path:
     t = ds_lof.time.values
     for k, a in enumerate(AX):
         ax = axes[k, 0]
-        ax.plot(
-            t,
-            ds_lof.synthesized_disturbance_mean.sel(axis=a),
-            "k--",
-            label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)",
-        )
+        h_a = ds_lof.synthesized_disturbance_mean.sel(axis=a)
+        ax.plot(t, h_a, "k--", label=f"h_{a} = d_{a} + e_F{a} (record-interval mean)")
         ax.plot(t, ds_lof.compensation.sel(axis=a), label=f"v_{a} (32)")
-        h = ds_lof.synthesized_disturbance_mean.sel(axis=a).values[t > 50]
+        h = h_a.values[t > 50]
         lim = 1.5 * np.max(np.abs(h)) if h.size else 1e-2
-        ax.set_ylim(-lim, lim)
-        ax.set_ylabel(f"h_{a}, v_{a} [m/s^2]")
-    axes[0, 0].legend(loc="upper left")
-    axes[-1, 0].set_xlabel("time [s]")
-    return save_figure(fig, path)
+        ax.set(ylim=(-lim, lim), ylabel=f"h_{a}, v_{a} [m/s^2]")
+    return finish_figure(fig, axes, path, loc="upper left")
 
 
 def plot(ds, scenario, out_dir) -> list[Path]:
@@ -186,8 +167,7 @@ def plot(ds, scenario, out_dir) -> list[Path]:
             axes[k, 0].plot(ds.time, ds.tracking_error.sel(component=c), label=f"e_{c}")
             axes[k, 0].set_ylabel(f"e_{c} [m]")
             axes[k, 0].set_yscale("symlog", linthresh=1e-3)
-        axes[-1, 0].set_xlabel("time [s]")
-        paths.append(save_figure(fig, out_dir / "tracking_error.png"))
+        paths.append(finish_figure(fig, axes, out_dir / "tracking_error.png"))
     return paths
 
 

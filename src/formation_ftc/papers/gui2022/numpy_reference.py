@@ -14,7 +14,6 @@ import math
 import numpy as np
 import scipy.linalg
 
-from formation_ftc.components._sections import onboard_mean_motion
 from formation_ftc.components.controllers._output_feedback import (
     OutputFeedbackSection,
     care_solution,
@@ -22,16 +21,9 @@ from formation_ftc.components.controllers._output_feedback import (
 from formation_ftc.components.controllers.gui2022_lof2tc import Lof2tcSection
 from formation_ftc.core.dynamics.cw import cw_matrices, cw_state_transition
 from formation_ftc.methods.composed import ComposedScenario
+from formation_ftc.papers.gui2022.conditions import onboard_n
 
 __all__ = ["simulate_numpy"]
-
-
-def _mean_motion(given: float | None, reference) -> float:
-    """The on-board CW model's mean motion [rad/s] (stated, or the [reference] orbit's)."""
-    n = onboard_mean_motion(given, reference)
-    if n is None:
-        raise ValueError("no on-board mean motion: state mean_motion or add a [reference] orbit")
-    return n
 
 
 def _axes(value) -> np.ndarray:
@@ -46,14 +38,13 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
     N = s.simulation.n_steps if n_steps is None else n_steps
     p, o, c, f = (s.section(slot) for slot in ("plant", "estimator", "controller", "actuator"))
     tracks, learns = isinstance(c, OutputFeedbackSection), isinstance(c, Lof2tcSection)
-    ref = s.section("reference")
     n = p.mean_motion  # truth [rad/s]
     A, B = cw_matrices(n)
     M = np.zeros((9, 9))
     M[:6, :6], M[:6, 6:] = A, B
     E = scipy.linalg.expm(M * dt)
     Ad, Bd = E[:6, :6], E[:6, 6:]
-    n_o = _mean_motion(o.mean_motion, ref)
+    n_o = onboard_n(o.mean_motion, s)
     A_o, B_o = cw_matrices(n_o)
     L1, L2 = o.gains_at(n_o)
     Q1, Q2, gam = np.asarray(o.Q1), o.Q2, (o.gamma if o.sign_term else 0.0)
@@ -66,7 +57,7 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
     q = np.concatenate([p.initial_position[0], v0]).astype(float)
     qh = np.asarray(o.initial_estimate, float).reshape(-1, 6)[0].copy()
     if tracks:
-        n_c = _mean_motion(c.mean_motion, ref)
+        n_c = onboard_n(c.mean_motion, s)
         K = np.asarray(c.K, float) if c.gains == "printed" else care_solution(n_c, c.care_q_scale).K
         q00 = np.asarray(c.desired_state[0], float)
     m_c = round(c.learning_interval / dt) if learns else 1
@@ -74,9 +65,7 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
     pi_hist = [c.pi_initial if learns else 1.0] * m_c
     v_hist = [np.asarray(c.v_initial if learns else (0.0,) * 3, float)] * m_c
     out: dict[str, np.ndarray] = {k: np.zeros((N, 3)) for k in ("F", "F_hat", "u", "d", "v")}
-    out["pi"] = np.zeros(N)
-    out["q"] = np.zeros((N + 1, 6))
-    out["q_hat"] = np.zeros((N + 1, 6))
+    out |= {"pi": np.zeros(N), "q": np.zeros((N + 1, 6)), "q_hat": np.zeros((N + 1, 6))}
     out["q"][0], out["q_hat"][0] = q, qh
     for k in range(N):
         t = k * dt
@@ -111,13 +100,7 @@ def simulate_numpy(s: ComposedScenario, n_steps: int | None = None) -> dict[str,
         F_hist = F_hist[1:] + [F_hat]
         pi_hist = pi_hist[1:] + [pi]
         v_hist = v_hist[1:] + [v]
-        out["F"][k], out["F_hat"][k], out["u"][k], out["d"][k], out["v"][k], out["pi"][k] = (
-            F,
-            F_hat,
-            u,
-            d,
-            v,
-            pi,
-        )
+        for key, value in dict(F=F, F_hat=F_hat, u=u, d=d, v=v, pi=pi).items():
+            out[key][k] = value
         out["q"][k + 1], out["q_hat"][k + 1] = q, qh
     return out

@@ -34,18 +34,11 @@ from formation_ftc.components.networks.delayed_graph import DelayStats, delay_st
 from formation_ftc.core.graph import balance_report, is_strongly_connected
 from formation_ftc.core.interval import IntervalError, enclose, enclose_derivative
 from formation_ftc.methods.composed import ComposedScenario, per_spacecraft
-from formation_ftc.papers._conditions import exact, fmt_list, sampled_or_verified
+from formation_ftc.papers._conditions import exact, fmt_list, informative, sampled_or_verified
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = [
-    "DelayBounds",
-    "delay_stats",
-    "delay_bounds",
-    "law_of",
-    "lemma3_constant",
-    "check",
-]
+__all__ = ["DelayBounds", "delay_stats", "delay_bounds", "law_of", "lemma3_constant", "check"]
 
 #: network type -> theorem of the ``li2020-adaptive`` law over it
 THEOREMS = {"graph": "thm1", "delayed-graph": "thm2"}
@@ -341,15 +334,13 @@ def check(scenario: ComposedScenario, loop: ClosedLoop | None = None) -> list[Co
         out += _delay_conditions(scenario, C, per_spacecraft(ctl.lam, n, "controller.lam"))
     x_star, r_star = lemma3_constant()
     out.append(
-        Condition(
+        informative(
             "Lemma 3 constant r*",
             "Li2020 eq. (22)",
             f"x* = {x_star:.6f}, r* = {r_star:.6f}",
             "informative",
             True,
-            required=False,
-            basis="informative",
-            detail="informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",
+            "informative: root of e^{-2x} + 1 - 2x = 0 (brentq, xtol 1e-15)",
         )
     )
     return out

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.plotting import new_figure
+from formation_ftc.report.run_page import finish_figure
 
 __all__ = ["plot_errors", "plot_mu", "plot_adaptive", "plot_comparison", "plot_scenario"]
 
@@ -23,44 +24,40 @@ def _label(sc) -> str:
     return f"spacecraft {int(sc)}"
 
 
+def _zoom_and_full(row, t, y, ylabel: str, *fmt: str, log: bool = False, **style) -> None:
+    """One time history on a row of two panels labelled ``ylabel``: its first ZOOM s (left) and the
+    whole horizon (right; ``log``: on a log scale, floored at 1e-12)."""
+    zoom = t <= ZOOM
+    row[0].plot(t[zoom], y[zoom], *fmt, **style)
+    if log:
+        row[1].semilogy(t, np.maximum(y, 1e-12), *fmt, **style)
+    else:
+        row[1].plot(t, y, *fmt, **style)
+    for ax in row:
+        ax.set_ylabel(ylabel)
+
+
 def plot_errors(ds, path: Path, variable: str, title: str, unit: str) -> Path:
     """Components of e_i1 or e_i2 (rows x, y, z; columns zoom / full horizon)."""
     fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
-    t = ds.time.values
-    zoom = t <= ZOOM
     sym = "e_{i1}" if variable == "position_error" else "e_{i2}"
     for r, ax_name in enumerate(["x", "y", "z"]):
-        for c, mask in enumerate([zoom, slice(None)]):
-            ax = axes[r, c]
-            for sc in ds.spacecraft.values:
-                ax.plot(
-                    t[mask],
-                    ds[variable].sel(spacecraft=sc, axis=ax_name).values[mask],
-                    label=_label(sc),
-                )
-            ax.set_ylabel(f"${sym},{ax_name}$ [{unit}]")
-            if c == 1:
-                ax.set_yscale("symlog", linthresh=1e-2 if unit == "m" else 1e-3)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best", ncol=2)
-    return save_figure(fig, path)
+        for sc in ds.spacecraft.values:
+            y = ds[variable].sel(spacecraft=sc, axis=ax_name).values
+            lab = f"${sym},{ax_name}$ [{unit}]"
+            _zoom_and_full(axes[r], ds.time.values, y, lab, label=_label(sc))
+        axes[r, 1].set_yscale("symlog", linthresh=1e-2 if unit == "m" else 1e-3)
+    return finish_figure(fig, axes, path, loc="best", ncol=2)
 
 
 def plot_mu(ds, path: Path, title: str) -> Path:
     """mu1, mu2 (literal, E000-08) and mu2_vc (virtual centre)."""
     fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
-    t = ds.time.values
-    zoom = t <= ZOOM
     for r, (name, lab) in enumerate(_MU):
-        y = ds[name].values
-        axes[r, 0].plot(t[zoom], y[zoom], color="k", label=name)
-        axes[r, 1].semilogy(t, np.maximum(y, 1e-12), color="k", label=name)
-        for c in range(2):
-            axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    return save_figure(fig, path)
+        _zoom_and_full(
+            axes[r], ds.time.values, ds[name].values, lab, color="k", label=name, log=True
+        )
+    return finish_figure(fig, axes, path)
 
 
 def plot_adaptive(ds, path: Path, title: str) -> Path:
@@ -76,17 +73,11 @@ def plot_adaptive(ds, path: Path, title: str) -> Path:
         if n in ds
     ]
     fig, axes = new_figure(len(names), 2, width=10.0, sharex=False, title=title)
-    t = ds.time.values
-    zoom = t <= ZOOM
     for r, (name, lab) in enumerate(names):
-        for c, mask in enumerate([zoom, slice(None)]):
-            for sc in ds.spacecraft.values:
-                axes[r, c].plot(t[mask], ds[name].sel(spacecraft=sc).values[mask], label=_label(sc))
-            axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best", ncol=2)
-    return save_figure(fig, path)
+        for sc in ds.spacecraft.values:
+            y = ds[name].sel(spacecraft=sc).values
+            _zoom_and_full(axes[r], ds.time.values, y, lab, label=_label(sc))
+    return finish_figure(fig, axes, path, loc="best", ncol=2)
 
 
 def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path:
@@ -94,19 +85,10 @@ def plot_comparison(datasets: dict[str, object], path: Path, title: str) -> Path
     fig, axes = new_figure(3, 2, width=10.0, sharex=False, title=title)
     styles = ["-", "--", ":", "-."]
     for k, (label, ds) in enumerate(datasets.items()):
-        t = ds.time.values
-        zoom = t <= ZOOM
-        for r, (name, _) in enumerate(_MU):
+        for r, (name, lab) in enumerate(_MU):
             y = ds[name].values
-            axes[r, 0].plot(t[zoom], y[zoom], styles[k % 4], label=label)
-            axes[r, 1].semilogy(t, np.maximum(y, 1e-12), styles[k % 4], label=label)
-    for r, (_, lab) in enumerate(_MU):
-        for c in range(2):
-            axes[r, c].set_ylabel(lab)
-    for c in range(2):
-        axes[-1, c].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="best")
-    return save_figure(fig, path)
+            _zoom_and_full(axes[r], ds.time.values, y, lab, styles[k % 4], label=label, log=True)
+    return finish_figure(fig, axes, path, loc="best")
 
 
 def plot_scenario(ds, scenario, out_dir) -> list[Path]:
@@ -138,19 +120,12 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
         "sir-ftc": "SIR-FTC",
     }.get(str(law_of(scenario)), str(scenario.type_of("controller")))
     return [
-        plot_errors(
-            ds,
-            out_dir / f"{name}_position_error.png",
-            "position_error",
-            f"{name}: position tracking errors ({ctrl})",
-            "m",
-        ),
-        plot_errors(
-            ds,
-            out_dir / f"{name}_velocity_error.png",
-            "velocity_error",
-            f"{name}: velocity tracking errors ({ctrl})",
-            "m/s",
+        *(
+            plot_errors(ds, out_dir / f"{name}_{v}.png", v, f"{name}: {what} ({ctrl})", unit)
+            for v, what, unit in (
+                ("position_error", "position tracking errors", "m"),
+                ("velocity_error", "velocity tracking errors", "m/s"),
+            )
         ),
         plot_mu(
             ds, out_dir / f"{name}_mu.png", f"{name}: formation tracking / keeping errors ({ctrl})"

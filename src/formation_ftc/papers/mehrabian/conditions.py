@@ -83,10 +83,7 @@ def lyapunov_matrix(D: np.ndarray, K: float, K_P: float, K_I: float) -> np.ndarr
     I = np.eye(n)
     V = np.hstack([K_I * I, K_P * I, I])
     P = V.T @ D @ V
-    P[:n, :n] += K_I * K_P * K * I
-    P[:n, n : 2 * n] += K_I * K * I
-    P[n : 2 * n, :n] += K_I * K * I
-    P[n : 2 * n, n : 2 * n] += K_P * K * I
+    P[: 2 * n, : 2 * n] += np.kron([[K_I * K_P * K, K_I * K], [K_I * K, K_P * K]], I)
     return P
 
 
@@ -289,20 +286,17 @@ def fdi_check(s: Any, loop: Any) -> list[Condition]:
     sampled = bool(loop.controller.sampled)
     fits = sampled == (sec.command == "held")
     return [
-        Condition(
-            name="attitude FDI: command model over each step",
-            reference="docs/concepts/navigation-and-fdi.md",
-            value=f"command = {sec.command}; controller {s.labels()['controller']} "
+        exact(
+            "attitude FDI: command model over each step",
+            "docs/concepts/navigation-and-fdi.md",
+            f"command = {sec.command}; controller {s.labels()['controller']} "
             + ("is sampled" if sampled else "is evaluated inside the step"),
-            requirement="held for a sampled law, extrapolated for a law evaluated inside the step",
-            holds=fits,
+            "held for a sampled law, extrapolated for a law evaluated inside the step",
+            fits,
+            "exact: held is the exact mean of a sampled command; for a law evaluated at every "
+            "integrator stage the extrapolation 1.5 tau_k - 0.5 tau_k-1 removes the first-order "
+            "error (attitude league, Mehrabian, 0.05 s: largest |r| without fault 2.3e-4 N m, "
+            "against 8e-3 N m with the command held)",
             required=False,
-            basis="exact",
-            detail=(
-                "exact: held is the exact mean of a sampled command; for a law evaluated at every "
-                "integrator stage the extrapolation 1.5 tau_k - 0.5 tau_k-1 removes the first-order "
-                "error (attitude league, Mehrabian, 0.05 s: largest |r| without fault 2.3e-4 N m, "
-                "against 8e-3 N m with the command held)"
-            ),
         )
     ]

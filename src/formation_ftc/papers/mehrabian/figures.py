@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
-from formation_ftc.plotting import SPACECRAFT_COLORS, new_figure, save_figure
+from formation_ftc.plotting import new_figure, save_figure
+from formation_ftc.report.run_page import finish_figure
 
 __all__ = ["plot_attitudes", "plot_fault_estimate", "plot_seed_spread", "plot_scenario"]
 
@@ -22,21 +23,14 @@ def plot_attitudes(ds, path: Path, title: str, window: tuple[float, float] | Non
     q = np.rad2deg(ds.attitude.values)
     for p in range(3):
         ax = axes[p, 0]
-        for j in range(q.shape[1]):
-            ax.plot(
-                t,
-                q[:, j, p],
-                color=SPACECRAFT_COLORS[j % len(SPACECRAFT_COLORS)],
-                linestyle="-." if j == 0 else "-",
-                linewidth=1.6 if j == 0 else 1.0,
-                label=f"spacecraft {int(ds.spacecraft.values[j])}",
-            )
+        for j, sc in enumerate(ds.spacecraft.values):  # colours: the axes' spacecraft cycle
+            first = j == 0
+            style = dict(linestyle="-." if first else "-", linewidth=1.6 if first else 1.0)
+            ax.plot(t, q[:, j, p], **style, label=f"spacecraft {int(sc)}")
         if window is not None:
             ax.axvspan(*window, color="0.9", zorder=0)
         ax.set_ylabel(_LABELS[p])
-    axes[-1, 0].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="upper right", ncol=4, fontsize=7)
-    return save_figure(fig, path)
+    return finish_figure(fig, axes, path, loc="upper right", ncol=4, fontsize=7)
 
 
 def plot_fault_estimate(
@@ -46,28 +40,16 @@ def plot_fault_estimate(
     fig, axes = new_figure(1, 1, width=6.4, height=3.2, title=title or None)
     ax = axes[0, 0]
     t = ds.time.values
-    ax.plot(
-        t,
-        ds.fault.values[:, spacecraft - 1, channel - 1],
-        color="#1f77b4",
-        label=rf"fault $\bar u_{{{spacecraft},{channel}}}$ (spacecraft {spacecraft})",
-    )
-    ax.plot(
-        t,
-        ds.fdi_estimate.values[:, spacecraft - 1, channel - 1],
-        "--",
-        color="#2ca02c",
-        label=rf"FDI estimate $\bar u^*_{{{spacecraft},{channel}}}$",
-    )
-    ax.plot(
-        t,
-        ds.fault_estimate_adaptive.values[:, spacecraft - 1, channel - 1],
-        ":",
-        color="#d62728",
-        label=rf"adaptive estimate $\hat u_{{{spacecraft},{channel}}}$ (19)",
-    )
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("generalised force [N m]")
+    sub = f"{spacecraft},{channel}"  # the subscript
+    for variable, style, color, label in (
+        ("fault", "-", "#1f77b4", rf"fault $\bar u_{{{sub}}}$ (spacecraft {spacecraft})"),
+        ("fdi_estimate", "--", "#2ca02c", rf"FDI estimate $\bar u^*_{{{sub}}}$"),
+        ("fault_estimate_adaptive", ":", "#d62728", rf"adaptive estimate $\hat u_{{{sub}}}$ (19)"),
+    ):
+        ax.plot(
+            t, ds[variable].values[:, spacecraft - 1, channel - 1], style, color=color, label=label
+        )
+    ax.set(xlabel="time [s]", ylabel="generalised force [N m]")
     ax.legend(loc="best")
     return save_figure(fig, path)
 

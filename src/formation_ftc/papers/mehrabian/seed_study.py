@@ -160,19 +160,17 @@ def _ms(v: np.ndarray, fmt: str = ".3g") -> str:
     return f"{v.mean():{fmt}} +- {v.std(ddof=1) if v.size > 1 else 0.0:{fmt}} (min {v.min():{fmt}}, max {v.max():{fmt}})"
 
 
-def _mx(v) -> float:
-    """max of an array over the runs that have a value (a run that diverged has NaN in-run metrics);
-    NaN when none has: no seed qualifies, so the clause fails."""
+def _mx(v, extreme=np.max) -> float:
+    """max (``extreme``) of an array over the runs that have a value (a run that diverged has NaN
+    in-run metrics); NaN when none has: no seed qualifies, so the clause fails."""
     v = np.asarray(v, dtype=float)
     v = v[~np.isnan(v)]
-    return float(v.max()) if v.size else float("nan")
+    return float(extreme(v)) if v.size else float("nan")
 
 
 def _mn(v) -> float:
     """min of an array over the runs that have a value (NaN when none has)."""
-    v = np.asarray(v, dtype=float)
-    v = v[~np.isnan(v)]
-    return float(v.min()) if v.size else float("nan")
+    return _mx(v, np.min)
 
 
 def case_study(seeds: list[int], overrides: dict | None = None) -> dict[str, Any]:
@@ -212,18 +210,14 @@ def case_study(seeds: list[int], overrides: dict | None = None) -> dict[str, Any
         ):
             for w in ("fault_window", "run"):
                 entry[f"{key}_{w}"] = _stats(M[f"{key}_{w}"][i], unit, valid[w][i])
-        for key, src in (
-            ("yaw_spread_max_45_240_deg", "spread_max_yaw_assessment_window"),
-            ("roll_spread_max_45_240_deg", "spread_max_roll_assessment_window"),
-            ("abs_yaw_max_45_240_deg", "abs_max_yaw_assessment_window"),
+        for key, angle, w in (  # summary key, in-run metric over window w [rad]
+            ("yaw_spread_max_45_240_deg", "spread_max_yaw", "assessment_window"),
+            ("roll_spread_max_45_240_deg", "spread_max_roll", "assessment_window"),
+            ("abs_yaw_max_45_240_deg", "abs_max_yaw", "assessment_window"),
+            ("abs_pitch_max_fault_window_deg", "abs_max_pitch", "fault_window"),
+            ("abs_pitch_max_run_deg", "abs_max_pitch", "run"),
         ):
-            entry[key] = _stats(deg(M[src][i]), "deg", valid["assessment_window"][i])
-        entry["abs_pitch_max_fault_window_deg"] = _stats(
-            deg(M["abs_max_pitch_fault_window"][i]), "deg", valid["fault_window"][i]
-        )
-        entry["abs_pitch_max_run_deg"] = _stats(
-            deg(M["abs_max_pitch_run"][i]), "deg", valid["run"][i]
-        )
+            entry[key] = _stats(deg(M[f"{angle}_{w}"][i]), "deg", valid[w][i])
         entry["diverged_runs"] = [
             {"seed": int(seeds[k]), "time_s": float(div[i, k] * dt)}
             for k in np.flatnonzero(div[i] >= 0)
@@ -231,8 +225,7 @@ def case_study(seeds: list[int], overrides: dict | None = None) -> dict[str, Any
         summary[names[i]] = entry
     roll_d = deg(Md["spread_max_roll_assessment_window"])
     summary["diffusive_law_roll_spread_max_45_240_deg"] = {
-        CASES["A"][0]: _stats(roll_d[0], "deg", divd[0] < 0),
-        CASES["C"][0]: _stats(roll_d[1], "deg", divd[1] < 0),
+        CASES[c][0]: _stats(roll_d[j], "deg", divd[j] < 0) for j, c in enumerate("AC")
     }
     return dict(
         M=M, div=div, Md=Md, divd=divd, scenarios=scns, datasets=datasets, windows=windows

@@ -23,7 +23,7 @@ from formation_ftc.core.interval import IntervalError, enclose_norm
 from formation_ftc.design import dwell_time as dw
 from formation_ftc.design.dwell_time import Inequality
 from formation_ftc.methods.composed import ComposedScenario
-from formation_ftc.papers._conditions import exact, sampled_or_verified
+from formation_ftc.papers._conditions import exact, informative, sampled_or_verified
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
@@ -197,15 +197,13 @@ def conditions(sc: ComposedScenario, loop: ClosedLoop | None = None) -> list[Con
     c = sc.section("controller")
     rate = dw.translational_decay_rate(c.K1, c.K2)
     out: list[Condition] = [
-        Condition(
+        informative(
             "S = max|S_ij| (Frobenius, as printed) and induced 2-norm",
             "Yang2013 after (20), E001-04",
             f"S_F = {q['S_frobenius']:.4f}, S_2 = {q['S_induced2']:.4f}; D = {q['D']:.4g}",
             f"using {d.variation_norm}",
             None,
-            required=False,
-            basis="informative",
-            detail="informative: the two norms of the variation matrices (numpy), shown for E001-04",
+            "informative: the two norms of the variation matrices (numpy), shown for E001-04",
         ),
         exact(
             "gains realise eta: 2 x decay rate of e'' + K2 e' + (K1+1) e = 0",

@@ -41,28 +41,22 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     fig, axes = new_figure(3, 1, width=7.0, height=7.5, title=f"{scenario.scenario.name}")
     ax = axes[0, 0]
     ax.plot(t, ds["state_norm"].values, color="k", label="|X_sigma(t)(t)|")
-    ax.axhline(q["envelope"], color="r", ls="--", label=f"eps + (S+2) zeta D = {q['envelope']:.3f}")
-    ax.axhline(
-        q["pre_switch_bound"],
-        color="0.4",
-        ls="-.",
-        label=f"eps1 + zeta D = {q['pre_switch_bound']:.2f}",
-    )
+    envelope, pre = q["envelope"], q["pre_switch_bound"]
+    ax.axhline(envelope, color="r", ls="--", label=f"eps + (S+2) zeta D = {envelope:.3f}")
+    ax.axhline(pre, color="0.4", ls="-.", label=f"eps1 + zeta D = {pre:.2f}")
     _switch_lines(ax, ds)
     ax.set_ylabel("|X| [-]")
     ax.legend(loc="upper right")
-    ax = axes[1, 0]
     act = ds["active"].values.astype(bool)
-    _semilogy_active(ax, t, ds, "spacecraft_norm", act)
-    _switch_lines(ax, ds)
-    ax.set_ylabel("|x_i| [-]")
-    ax.legend(loc="upper right", ncol=3)
-    ax = axes[2, 0]
-    _semilogy_active(ax, t, ds, "input_norm", act)
-    _switch_lines(ax, ds)
-    ax.set_ylabel("|u_i| [N, N m]")
+    for ax, variable, ylabel in (
+        (axes[1, 0], "spacecraft_norm", "|x_i| [-]"),
+        (axes[2, 0], "input_norm", "|u_i| [N, N m]"),
+    ):
+        _semilogy_active(ax, t, ds, variable, act)
+        _switch_lines(ax, ds)
+        ax.set_ylabel(ylabel)
+        ax.legend(loc="upper right", ncol=3)
     ax.set_xlabel("time t [s]")
-    ax.legend(loc="upper right", ncol=3)
     return [save_figure(fig, out_dir / f"{scenario.scenario.name}.png")]
 
 
@@ -103,8 +97,7 @@ def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path
     act = ds_fault["active"].values.astype(bool)
     _semilogy_active(ax, t, ds_fault, "spacecraft_norm", act)
     _switch_lines(ax, ds_fault)
-    ax.set_ylabel("|x_i| (fault scenario) [-]")
-    ax.set_xlabel("time t [s]")
+    ax.set(ylabel="|x_i| (fault scenario) [-]", xlabel="time t [s]")
     ax.legend(loc="lower left", ncol=3)
     return save_figure(fig, path)
 
@@ -115,22 +108,14 @@ def figure_5(ds_healthy, ds_fault, path: Path, t_end: float = 4000.0) -> Path:
         1, 1, width=7.0, height=3.4, title="Yang2013 Fig. 5: trajectories of |u_2(t)|"
     )
     ax = axes[0, 0]
-    for ds, style, color, label in (
-        (ds_fault, "-", "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
-        (ds_healthy, "-", "#1f77b4", "spacecraft 2, healthy"),
+    for ds, color, label in (
+        (ds_fault, "#d62728", "spacecraft 2, K2 -> K2f at 3800 s"),
+        (ds_healthy, "#1f77b4", "spacecraft 2, healthy"),
     ):
         t = ds["time"].values
-        keep = t < t_end
-        ax.semilogy(
-            t[keep],
-            ds["input_norm"].sel(spacecraft=2).values[keep],
-            ls=style,
-            color=color,
-            lw=0.8,
-            label=label,
-        )
+        u2, keep = ds["input_norm"].sel(spacecraft=2).values, t < t_end
+        ax.semilogy(t[keep], u2[keep], color=color, lw=0.8, label=label)
     ax.axvline(3800.0, color="0.5", lw=0.8, ls=":")
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("|u_2| = |[f_2; tau_2]| [N, N m]")
+    ax.set(xlabel="time t [s]", ylabel="|u_2| = |[f_2; tau_2]| [N, N m]")
     ax.legend(loc="upper right")
     return save_figure(fig, path)
