@@ -71,7 +71,7 @@ from pydantic import Field, model_validator
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Inertia, Vec3Expr, expression_text
+from formation_ftc.components._sections import Inertia, Vec3Expr, expression_text, section_floats
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core import graph as graphs
@@ -599,7 +599,7 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
         e_gain=as_float(sec.e_gain * ones),
         alpha=as_float(sec.alpha * np.ones(m)),
         gamma=as_float(sec.gamma * np.ones(m)),
-        boundary_layer=as_float(sec.boundary_layer),
+        **section_floats(sec, "boundary_layer", "excitation_amplitude", "excitation_period"),
         avg=as_float(graphs.row_normalized(A)),
         nominal_inertia=as_float(np.stack([np.diag(J)] * m)),
         law=sec.law,
@@ -607,8 +607,6 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
         desired_attitude=expression_text(sec.desired_attitude),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)),
         excited=sec.excitation_amplitude > 0,
-        excitation_amplitude=as_float(sec.excitation_amplitude),
-        excitation_period=as_float(sec.excitation_period),
     )
 
 

@@ -34,7 +34,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Inertia, positive_values
+from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
     VEC,
     FdiDrift,
@@ -513,17 +513,12 @@ def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidu
         nominal_inertia=as_float(np.stack([J] * m)),
         orbit_rate=as_float(n),
         torque_limit=as_float(limit),
-        residual_std=as_float(sec.residual_std),
-        drift=as_float(sec.drift),
-        threshold=as_float(sec.threshold),
+        **section_floats(sec, "residual_std", "drift", "threshold", "forgetting"),
+        **section_floats(sec, "identification_std", "bias_prior_std", "effectiveness_alarm"),
         smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
         identification=sec.identification,
-        forgetting=as_float(sec.forgetting),
-        identification_std=as_float(sec.identification_std),
-        bias_prior_std=as_float(sec.bias_prior_std),
         identification_noise=as_float(sec.identification_noise_std or sec.residual_std),
         walk=as_float(np.diag([sec.effectiveness_walk**2 * ctx.dt, 0.0])),
-        effectiveness_alarm=as_float(sec.effectiveness_alarm),
     )
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.components.estimators._fdi import (
     FdiDrift,
     FdiForgetting,
@@ -512,15 +513,11 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
         residual=sec.residual,
         test=sec.test,
         parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
-        drift=as_float(sec.drift),
-        threshold=as_float(sec.threshold),
-        force_limit=as_float(sec.force_limit),
+        **section_floats(sec, "drift", "threshold", "force_limit", "forgetting"),
+        **section_floats(sec, "identification_std", "bias_prior_std"),
         at_limit=sec.at_limit,
         identification=sec.identification,
         fly_on_filter=sec.fly_on_filter,
-        forgetting=as_float(sec.forgetting),
-        identification_std=as_float(sec.identification_std),
-        bias_prior_std=as_float(sec.bias_prior_std),
         window_bias_gain=as_float(gain),
         window_noise=as_float(noise),
         window=steps,

@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
 from formation_ftc.core.constants import MU_EARTH
@@ -200,10 +201,8 @@ class CwPlantSection(PointMassSection):
 def _build(sec: CwPlantSection, ctx: BuildContext) -> ClohessyWiltshirePlant:
     """The plant of a validated ``[plant] type = "clohessy-wiltshire"`` section."""
     return ClohessyWiltshirePlant(
-        mean_motion=as_float(sec.mean_motion),
-        mass=as_float(sec.mass),
+        **section_floats(sec, "mean_motion", "mass", "process_noise_std"),
         initial_state_lvlh=as_float(sec.q0()),
-        process_noise_std=as_float(sec.process_noise_std),
         disturbance_force=sec.disturbance_force,
     )
 

@@ -17,7 +17,7 @@ from formation_ftc.components._registry import (
     builder_input,
     register,
 )
-from formation_ftc.components._sections import Vec3, initial_states
+from formation_ftc.components._sections import Vec3, initial_states, section_floats
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
@@ -134,9 +134,8 @@ class ZohCwPlantSection(InitialStateRows):
 def _build(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
     """The plant of a validated ``[plant] type = "clohessy-wiltshire-zoh"`` section."""
     return ZohClohessyWiltshirePlant(
-        mean_motion=as_float(sec.mean_motion),
+        **section_floats(sec, "mean_motion", "disturbance_amplitude"),
         initial_state_lvlh=as_float(initial_states(sec.initial_position, sec.initial_velocity)),
-        disturbance_amplitude=as_float(sec.disturbance_amplitude),
     )
 
 
