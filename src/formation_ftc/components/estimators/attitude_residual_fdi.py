@@ -508,15 +508,13 @@ def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidu
     J = np.diag(np.asarray(sec.nominal_inertia, dtype=float))
     return AttitudeResidualFdi(
         count=m,
-        test=sec.test,
-        command=sec.command,
+        **sec.model_dump(include={"test", "command", "identification"}),
         nominal_inertia=as_float(np.stack([J] * m)),
         orbit_rate=as_float(n),
         torque_limit=as_float(limit),
         **section_floats(sec, "residual_std", "drift", "threshold", "forgetting"),
         **section_floats(sec, "identification_std", "bias_prior_std", "effectiveness_alarm"),
         smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
-        identification=sec.identification,
         identification_noise=as_float(sec.identification_noise_std or sec.residual_std),
         walk=as_float(np.diag([sec.effectiveness_walk**2 * ctx.dt, 0.0])),
     )

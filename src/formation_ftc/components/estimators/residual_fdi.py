@@ -510,14 +510,11 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
     gain, noise = window_model(a["phi"], a["gamma"], a["qd"], a["r"], steps)
     return ResidualFdi(
         count=ctx.count,
-        residual=sec.residual,
-        test=sec.test,
+        **sec.model_dump(include={"residual", "test", "at_limit", "fly_on_filter"}),
         parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
         **section_floats(sec, "drift", "threshold", "force_limit", "forgetting"),
         **section_floats(sec, "identification_std", "bias_prior_std"),
-        at_limit=sec.at_limit,
         identification=sec.identification,
-        fly_on_filter=sec.fly_on_filter,
         window_bias_gain=as_float(gain),
         window_noise=as_float(noise),
         window=steps,

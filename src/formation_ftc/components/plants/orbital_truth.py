@@ -396,10 +396,7 @@ def _build(sec: OrbitalTruthSection, ctx: BuildContext) -> InertialFormationPlan
         if sec.initial_roe is None
         else as_float(np.asarray(sec.initial_roe) / sec.semi_major_axis),
         initial_dispersion=as_float([sec.initial_position_std, sec.initial_velocity_std]),
-        j2=sec.j2,
-        drag=sec.drag,
-        srp=sec.srp,
-        disturbance_force=sec.disturbance_force,
+        **sec.model_dump(include={"j2", "drag", "srp", "disturbance_force"}),
     )
 
 
