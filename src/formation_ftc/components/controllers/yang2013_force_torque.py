@@ -135,10 +135,8 @@ class Yang2013ForceTorqueSection(StrictModel):
 def _build(sec: Yang2013ForceTorqueSection, ctx: BuildContext) -> ForceTorqueController:
     """The controller of a validated ``[controller] type = "yang2013-force-torque"`` section."""
     return ForceTorqueController(
-        force_law=translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2),  # eq. (12)
-        torque_law=attitude_law(
-            ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa
-        ),  # (13)
+        force_law=translational_law(ctx, sec),  # eq. (12)
+        torque_law=attitude_law(ctx, sec),  # (13)
     )
 
 
