@@ -338,13 +338,12 @@ def _build(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryActuator:
     limit = np.inf if sec.saturation is None else sec.saturation
     sat = per_spacecraft(limit, n, "actuator.saturation")
     quantity = getattr(ctx.plant, "quantity", "force")
-    leaves = ("onset", "effectiveness", "bias", "period", "duty", "rate", "min_effectiveness")
     return FaultBatteryActuator(
         count=n,
         saturation=as_float(sat),
         fault_kind=as_float(fault_kind_code(sec.kind)),
-        **section_floats(sec, "spacecraft", "axis"),
-        **{name: as_float(getattr(sec, name)) for name in leaves},
+        **section_floats(sec, "spacecraft", "axis", "onset", "effectiveness", "bias", "period"),
+        **section_floats(sec, "duty", "rate", "min_effectiveness"),
         euler_allocation=sec.euler_allocation,
         units="N m" if quantity == "torque" else "N",
     )

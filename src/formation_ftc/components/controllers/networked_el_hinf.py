@@ -592,13 +592,9 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
     pj, pn = np.nonzero(np.triu(A > 0, 1))
     return NetworkedElHinfController(
         count=m,
-        K=as_float(sec.K * ones),
-        K_P=as_float(sec.K_P * ones),
-        K_I=as_float(sec.K_I * ones),
-        sigma=as_float(sec.sigma * ones),
-        e_gain=as_float(sec.e_gain * ones),
-        alpha=as_float(sec.alpha * np.ones(m)),
-        gamma=as_float(sec.gamma * np.ones(m)),
+        # gains per spacecraft and channel (N, 3), weights per spacecraft (N,)
+        **{k: as_float(getattr(sec, k) * ones) for k in ("K", "K_P", "K_I", "sigma", "e_gain")},
+        **{k: as_float(getattr(sec, k) * np.ones(m)) for k in ("alpha", "gamma")},
         **section_floats(sec, "boundary_layer", "excitation_amplitude", "excitation_period"),
         avg=as_float(graphs.row_normalized(A)),
         nominal_inertia=as_float(np.stack([np.diag(J)] * m)),
