@@ -37,12 +37,8 @@ from formation_ftc.components._registry import (
 from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
     VEC,
-    FdiDrift,
     FdiForgetting,
-    FdiIdentification,
-    FdiIdentificationStd,
-    FdiTest,
-    FdiThreshold,
+    FdiTestSection,
     detection_outputs,
     detection_signals,
     identification_outputs,
@@ -52,7 +48,6 @@ from formation_ftc.components.estimators._fdi import (
     rls_prior,
     sequential_test,
 )
-from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
 from formation_ftc.core.euler_quaternion import dcm_from_euler_zyx
@@ -422,7 +417,7 @@ class AttitudeResidualFdi(Estimator):
         }
 
 
-class AttitudeResidualFdiSection(StrictModel):
+class AttitudeResidualFdiSection(FdiTestSection):
     """Actuator-fault detection, isolation and identification of an Euler-angle attitude law from the
     rigid-body residual (body axes), reported in the law's generalised channels (flag, u*)."""
 
@@ -456,12 +451,7 @@ class AttitudeResidualFdiSection(StrictModel):
         description="Mean command over a step: held (a sampled law) or extrapolated to the step's "
         "midpoint, 1.5 tau_k - 0.5 tau_k-1 (a law evaluated inside the step, as networked-el-hinf).",
     )
-    test: FdiTest = "cusum"
-    drift: FdiDrift = 0.5
-    threshold: FdiThreshold = 20.0
-    identification: FdiIdentification = "off"
     forgetting: FdiForgetting = 0.999
-    identification_std: FdiIdentificationStd = 0.05
     bias_prior_std: float = Field(
         0.01,
         gt=0,

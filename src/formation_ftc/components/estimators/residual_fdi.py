@@ -25,12 +25,8 @@ from pydantic import Field, model_validator
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components._sections import section_floats
 from formation_ftc.components.estimators._fdi import (
-    FdiDrift,
     FdiForgetting,
-    FdiIdentification,
-    FdiIdentificationStd,
-    FdiTest,
-    FdiThreshold,
+    FdiTestSection,
     detection_outputs,
     detection_signals,
     identification_outputs,
@@ -397,16 +393,13 @@ class ResidualFdi(Estimator):
         return out
 
 
-class ResidualFdiSection(RelativeNavigationSection):
+class ResidualFdiSection(RelativeNavigationSection, FdiTestSection):
     """Thruster-fault detection and isolation from the relative-state residuals."""
 
     residual: Literal["kalman", "parity"] = Field(
         "kalman",
         description="Residual generator: the Kalman innovation or the one-step parity relation.",
     )
-    test: FdiTest = "cusum"
-    drift: FdiDrift = 0.5
-    threshold: FdiThreshold = 20.0
     force_limit: float = Field(
         math.inf,
         gt=0,
@@ -432,9 +425,7 @@ class ResidualFdiSection(RelativeNavigationSection):
         "of the raw measurement, while the FDI watches the same filter's innovations (residual = "
         "'kalman' only) [-].",
     )
-    identification: FdiIdentification = "off"
     forgetting: FdiForgetting = 0.9995
-    identification_std: FdiIdentificationStd = 0.05
     bias_prior_std: float = Field(
         1e-3,
         gt=0,
