@@ -100,7 +100,7 @@ Masses = Annotated[float | list[float], positive_values("mass", " kg")]
 Inertia = Annotated[Vec3, positive_values("principal inertia", " kg m^2")]
 
 
-def section_floats(section: Any, *names: str) -> dict[str, np.ndarray]:
+def section_floats(section: Any, *names: str) -> dict[str, Any]:
     """The fields ``names`` of ``section`` as float64 arrays, keyed by name: the keyword arguments of a
     component whose leaves of those names are the section's numbers unchanged.
 

@@ -435,7 +435,7 @@ class RelativeNavigationSection(StrictModel):
 
 def filter_model(
     sec: RelativeNavigationSection, ctx: BuildContext, where: str = "estimator"
-) -> dict[str, np.ndarray]:
+) -> dict[str, Any]:
     """The on-board model's arrays (``phi``, ``gamma``, ``qd``, ``r``, ``nominal_mass``) of a filter
     section at the scenario's step.
 
