@@ -190,9 +190,8 @@ class Yang2013TranslationalController(Controller):
         y, d = inputs.measurement, inputs.exogenous
         e_R = d["p"] - y[:, 0:3]
         e_V = d["v"] - y[:, 3:6]
-        f = translational_control(
-            e_R, e_V, d["a"], self.nominal_mass[:, None], self.K1, self.K2
-        )  # eq. (12)
+        # eq. (12)
+        f = translational_control(e_R, e_V, d["a"], self.nominal_mass[:, None], self.K1, self.K2)
         return f, None, {}
 
 

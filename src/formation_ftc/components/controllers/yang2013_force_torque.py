@@ -47,12 +47,7 @@ class ForceTorqueController(Controller):
                 f"ForceTorqueController needs a force law and a torque law, got "
                 f"{type(f).__name__} ({f.quantity}) and {type(t).__name__} ({t.quantity})"
             )
-        if (
-            f.sampled
-            or t.sampled
-            or getattr(f, "uses_messages", False)
-            or getattr(t, "uses_messages", False)
-        ):
+        if any(law.sampled or getattr(law, "uses_messages", False) for law in (f, t)):
             raise CompositionError(
                 f"ForceTorqueController combines continuous laws without messages; "
                 f"{type(f).__name__} / {type(t).__name__} are sampled or exchange messages"

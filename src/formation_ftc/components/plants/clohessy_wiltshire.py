@@ -62,9 +62,8 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     process_noise_std: Any = 0.0  # [N]
-    disturbance_force: tuple[str, str, str] = static(
-        default=("0", "0", "0")
-    )  # expressions in t, i [N]
+    #: expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
         return {"d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
@@ -121,9 +120,8 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
         else:
             eigs, margins = [], []
             for i, m in enumerate(np.asarray(self.mass)):
-                with np.errstate(
-                    over="raise"
-                ):  # a subnormal mass: FloatingPointError, not inf gains
+                # a subnormal mass: FloatingPointError, not inf gains
+                with np.errstate(over="raise"):
                     K = gain / m
                 M = A - B @ K  # closed loop of the linear CW model
                 ev = np.linalg.eigvals(M)

@@ -68,9 +68,8 @@ class ZohClohessyWiltshirePlant(Plant):
     def exogenous(self, t):
         nt = self.mean_motion * t
         s, c = jnp.sin(nt), jnp.cos(nt)
-        d = self.disturbance_amplitude * jnp.stack(
-            [1.0 - 1.5 * s, s * c, s]
-        )  # 0.5 sin 2nt = sin nt cos nt
+        # 0.5 sin 2nt = sin nt cos nt
+        d = self.disturbance_amplitude * jnp.stack([1.0 - 1.5 * s, s * c, s])
         return {"d": jnp.broadcast_to(d, (self.count, 3))}
 
     def derivative(self, t, x, inputs: TruthInputs):
