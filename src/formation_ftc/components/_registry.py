@@ -73,18 +73,8 @@ SLOTS = (
 #: kinds of the catalog: the slots plus ``evaluation`` (a list: ``[[evaluations]]``, truth-side signals
 #: for records and metrics only)
 KINDS = (*SLOTS, "evaluation")
-#: kind -> the subpackage of :mod:`formation_ftc.components` holding its homes
-KIND_PACKAGES = {
-    "plant": "plants",
-    "reference": "references",
-    "sensors": "sensors",
-    "network": "networks",
-    "estimator": "estimators",
-    "supervisor": "supervisors",
-    "controller": "controllers",
-    "actuator": "actuators",
-    "evaluation": "evaluations",
-}
+#: kind -> the subpackage of :mod:`formation_ftc.components` holding its homes (the kind's plural)
+KIND_PACKAGES = {kind: kind.removesuffix("s") + "s" for kind in KINDS}
 _ROOT = "formation_ftc.components"
 
 

@@ -21,6 +21,7 @@ __all__ = [
     "Inertia",
     "per_axis",
     "per_spacecraft",
+    "section_floats",
     "expression_text",
     "check_unit_quaternions",
     "quaternion_rows",
@@ -97,6 +98,31 @@ def positive_values(what: str = "value", unit: str = "", zero: bool = False) -> 
 Masses = Annotated[float | list[float], positive_values("mass", " kg")]
 #: principal inertias [kg m^2], each finite and > 0
 Inertia = Annotated[Vec3, positive_values("principal inertia", " kg m^2")]
+
+
+def section_floats(section: Any, *names: str) -> dict[str, Any]:
+    """The fields ``names`` of ``section`` as float64 arrays, keyed by name: the keyword arguments of a
+    component whose leaves of those names are the section's numbers unchanged.
+
+    Parameters
+    ----------
+    section : pydantic.BaseModel
+        The validated section.
+    *names : str
+        Its numeric fields.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``{name: float64 array of section.name}``.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> section_floats(SimpleNamespace(kp=2, kd=[1, 3]), "kp", "kd")
+    {'kp': array(2.), 'kd': array([1., 3.])}
+    """
+    return {name: np.asarray(getattr(section, name), dtype=np.float64) for name in names}
 
 
 def per_spacecraft(value: Any, n: int, field: str) -> np.ndarray:

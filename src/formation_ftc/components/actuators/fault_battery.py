@@ -63,7 +63,7 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import positive_values
+from formation_ftc.components._sections import positive_values, section_floats
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
@@ -338,14 +338,12 @@ def _build(sec: FaultBatterySection, ctx: BuildContext) -> FaultBatteryActuator:
     limit = np.inf if sec.saturation is None else sec.saturation
     sat = per_spacecraft(limit, n, "actuator.saturation")
     quantity = getattr(ctx.plant, "quantity", "force")
-    leaves = ("onset", "effectiveness", "bias", "period", "duty", "rate", "min_effectiveness")
     return FaultBatteryActuator(
         count=n,
         saturation=as_float(sat),
         fault_kind=as_float(fault_kind_code(sec.kind)),
-        spacecraft=as_float(sec.spacecraft),
-        axis=as_float(sec.axis),
-        **{name: as_float(getattr(sec, name)) for name in leaves},
+        **section_floats(sec, "spacecraft", "axis", "onset", "effectiveness", "bias", "period"),
+        **section_floats(sec, "duty", "rate", "min_effectiveness"),
         euler_allocation=sec.euler_allocation,
         units="N m" if quantity == "torque" else "N",
     )

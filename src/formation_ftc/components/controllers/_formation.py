@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import builder_input
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Vec3, section_floats
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.rotating_formation import desired_trajectory
 from formation_ftc.sim.components import component
@@ -90,7 +90,5 @@ class FormationSection(StrictModel):
         return RotatingFormation(
             offsets=as_float(offsets),
             chi=as_float(chi),
-            rotation=as_float(self.rotation),
-            growth=as_float(self.growth),
-            centre_offset=as_float(self.centre_offset),
+            **section_floats(self, "rotation", "growth", "centre_offset"),
         )

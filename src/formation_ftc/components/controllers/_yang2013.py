@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from formation_ftc.components._registry import BuildContext, per_spacecraft
-from formation_ftc.components._sections import Vec3, Vec3Expr
+from formation_ftc.components._sections import expression_text, section_floats
 from formation_ftc.components.controllers._desired_position import desired_motion
 from formation_ftc.core.dynamics.two_body import gravity_acceleration
 from formation_ftc.core.orbit import MU_EARTH
@@ -190,9 +190,8 @@ class Yang2013TranslationalController(Controller):
         y, d = inputs.measurement, inputs.exogenous
         e_R = d["p"] - y[:, 0:3]
         e_V = d["v"] - y[:, 3:6]
-        f = translational_control(
-            e_R, e_V, d["a"], self.nominal_mass[:, None], self.K1, self.K2
-        )  # eq. (12)
+        # eq. (12)
+        f = translational_control(e_R, e_V, d["a"], self.nominal_mass[:, None], self.K1, self.K2)
         return f, None, {}
 
 
@@ -233,27 +232,19 @@ class Yang2013AttitudeController(Controller):
 
 
 # -------------------------------------------------------------------------------------- builders
-def translational_law(
-    ctx: BuildContext,
-    nominal_mass: float | list[float],
-    K1: float,
-    K2: float,
-    desired_position: Vec3Expr = ("0", "0", "0"),
-) -> Yang2013TranslationalController:
-    """Yang2013's law (12) (the one builder of the law).
+def translational_law(ctx: BuildContext, sec: Any) -> Yang2013TranslationalController:
+    """Yang2013's law (12) of a section's ``nominal_mass``, ``K1``, ``K2`` and (if it has one)
+    ``desired_position`` (the one builder of the law).
 
     Parameters
     ----------
     ctx : BuildContext
         The build's context (the spacecraft count).
-    nominal_mass : float or list of float
-        The law's stated masses M_i [kg], one or per spacecraft (never the plant's).
-    K1 : float
-        Position gain offset [1/s^2] (the e_R gain is K1 + 1).
-    K2 : float
-        Velocity gain [1/s].
-    desired_position : tuple of str, optional
-        Desired position p^d per axis, expressions in t [s] and i [m].
+    sec : pydantic.BaseModel
+        The section: ``nominal_mass`` (float or list of float: the law's stated masses M_i [kg], one
+        or per spacecraft, never the plant's), ``K1`` (position gain offset [1/s^2]; the e_R gain is
+        K1 + 1), ``K2`` (velocity gain [1/s]) and optionally ``desired_position`` (desired position
+        p^d per axis, expressions in t [s] and i [m]; default 0).
 
     Returns
     -------
@@ -263,37 +254,32 @@ def translational_law(
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> law = translational_law(SimpleNamespace(count=2), 150.0, 0.005, 0.01)
+    >>> sec = SimpleNamespace(nominal_mass=150.0, K1=0.005, K2=0.01)
+    >>> law = translational_law(SimpleNamespace(count=2), sec)
     >>> law.nominal_mass.tolist(), law.count
     ([150.0, 150.0], 2)
     """
     n = ctx.count
-    px, py, pz = desired_position
     return Yang2013TranslationalController(
         count=n,
-        nominal_mass=as_float(per_spacecraft(nominal_mass, n, "controller.nominal_mass")),
-        K1=as_float(K1),
-        K2=as_float(K2),
-        desired_position=(str(px), str(py), str(pz)),
+        nominal_mass=as_float(per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
+        **section_floats(sec, "K1", "K2"),
+        desired_position=expression_text(getattr(sec, "desired_position", ("0", "0", "0"))),
     )
 
 
-def attitude_law(
-    ctx: BuildContext, nominal_inertia: Vec3, K3: float, K4: float, K5: float, kappa: float
-) -> Yang2013AttitudeController:
-    """Yang2013's law (13) (the one builder of the law: ``yang2013-attitude`` and
-    ``yang2013-force-torque`` use it).
+def attitude_law(ctx: BuildContext, sec: Any) -> Yang2013AttitudeController:
+    """Yang2013's law (13) of a section's ``nominal_inertia``, ``K3``, ``K4``, ``K5`` and ``kappa`` (the
+    one builder of the law: ``yang2013-attitude`` and ``yang2013-force-torque`` use it).
 
     Parameters
     ----------
     ctx : BuildContext
         The build's context (the spacecraft count).
-    nominal_inertia : Vec3
-        The law's stated principal inertia [kg m^2] (never the plant's).
-    K3, K4, K5 : float
-        Gains [1/s].
-    kappa : float
-        Smoothing constant [rad^2/s^2].
+    sec : pydantic.BaseModel
+        The section: ``nominal_inertia`` (Vec3: the law's stated principal inertia [kg m^2], never the
+        plant's), the gains ``K3``, ``K4``, ``K5`` [1/s] and the smoothing constant ``kappa``
+        [rad^2/s^2].
 
     Returns
     -------
@@ -303,15 +289,13 @@ def attitude_law(
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> law = attitude_law(SimpleNamespace(count=2), (20.0, 25.0, 30.0), 0.2, 1.0, 1.0, 1e-3)
+    >>> sec = SimpleNamespace(nominal_inertia=(20.0, 25.0, 30.0), K3=0.2, K4=1.0, K5=1.0, kappa=1e-3)
+    >>> law = attitude_law(SimpleNamespace(count=2), sec)
     >>> law.nominal_inertia.diagonal().tolist(), law.count
     ([20.0, 25.0, 30.0], 2)
     """
     return Yang2013AttitudeController(
         count=ctx.count,
-        nominal_inertia=as_float(np.diag(np.asarray(nominal_inertia, dtype=float))),
-        K3=as_float(K3),
-        K4=as_float(K4),
-        K5=as_float(K5),
-        kappa=as_float(kappa),
+        nominal_inertia=as_float(np.diag(np.asarray(sec.nominal_inertia, dtype=float))),
+        **section_floats(sec, "K3", "K4", "K5", "kappa"),
     )

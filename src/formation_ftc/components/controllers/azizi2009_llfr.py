@@ -47,7 +47,7 @@ from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import Masses, positive_values
+from formation_ftc.components._sections import Masses, positive_values, section_floats
 from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
 from formation_ftc.components.sensors.chain_relative import chain_layout
 from formation_ftc.components.supervisors.hierarchical import FLFR, LLFR, NOMINAL
@@ -538,14 +538,11 @@ def _build(sec: ChainLlfrSection, ctx: BuildContext) -> Controller:
     for a in range(axes):
         validate_allocation_inputs(alpha, b_hat[:, a], "controller.alpha", "controller.b_hat")
     law = ChainLlfrController(
-        lambda0=as_float(sec.lambda0),
-        lambda1=as_float(sec.lambda1),
+        **section_floats(sec, "lambda0", "lambda1", "side", "omega"),
         alpha=as_float(alpha),
         alpha_flfr=as_float(_alpha_flfr(sec, ctx, alpha, k)),
         b=as_float(b_nom),
         b_hat=as_float(b_hat),
-        side=as_float(sec.side),
-        omega=as_float(sec.omega),
         fault_index=k,
         fault_estimate=sec.fault_estimate,
         is_sampled=sec.sampling == "zoh",

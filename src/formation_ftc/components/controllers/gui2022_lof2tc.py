@@ -33,7 +33,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Vec3, section_floats
 from formation_ftc.components.controllers._output_feedback import (
     VEC,
     NominalOrbitTracking,
@@ -201,10 +201,7 @@ def _build(sec: Lof2tcSection, ctx: BuildContext) -> Controller:
     N = ctx.count
     law = LearningOutputFeedbackController(
         **common,
-        G1=as_float(sec.G1),
-        G2=as_float(sec.G2),
-        G3=as_float(sec.G3),
-        G4=as_float(sec.G4),
+        **section_floats(sec, "G1", "G2", "G3", "G4"),
         BpE=common["BpH"],
         pi_initial=as_float(np.full(N, sec.pi_initial)),
         v_initial=as_float(np.broadcast_to(np.asarray(sec.v_initial, float), (N, 3)).copy()),

@@ -34,7 +34,7 @@ from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import positive_values
+from formation_ftc.components._sections import positive_values, section_floats
 from formation_ftc.components.controllers._formation import FormationSection, RotatingFormation
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -466,9 +466,8 @@ def _build(sec: Li2020Section, ctx: BuildContext) -> Li2020AdaptiveController:
         count=n,
         formation=sec.formation.component(n),
         **per,
-        sigma_t0=as_float(sec.sigma_t0),
+        **section_floats(sec, "sigma_t0", "orbit_mu"),
         d_sign=as_float(-1.0 if sec.dhat_sign_literal and delayed else 1.0),
-        orbit_mu=as_float(sec.orbit_mu),
         sigma_form=sec.sigma_form,
     )
 

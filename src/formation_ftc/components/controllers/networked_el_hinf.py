@@ -71,7 +71,7 @@ from pydantic import Field, model_validator
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Inertia, Vec3Expr, expression_text
+from formation_ftc.components._sections import Inertia, Vec3Expr, expression_text, section_floats
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core import graph as graphs
@@ -592,14 +592,10 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
     pj, pn = np.nonzero(np.triu(A > 0, 1))
     return NetworkedElHinfController(
         count=m,
-        K=as_float(sec.K * ones),
-        K_P=as_float(sec.K_P * ones),
-        K_I=as_float(sec.K_I * ones),
-        sigma=as_float(sec.sigma * ones),
-        e_gain=as_float(sec.e_gain * ones),
-        alpha=as_float(sec.alpha * np.ones(m)),
-        gamma=as_float(sec.gamma * np.ones(m)),
-        boundary_layer=as_float(sec.boundary_layer),
+        # gains per spacecraft and channel (N, 3), weights per spacecraft (N,)
+        **{k: as_float(getattr(sec, k) * ones) for k in ("K", "K_P", "K_I", "sigma", "e_gain")},
+        **{k: as_float(getattr(sec, k) * np.ones(m)) for k in ("alpha", "gamma")},
+        **section_floats(sec, "boundary_layer", "excitation_amplitude", "excitation_period"),
         avg=as_float(graphs.row_normalized(A)),
         nominal_inertia=as_float(np.stack([np.diag(J)] * m)),
         law=sec.law,
@@ -607,8 +603,6 @@ def _build(sec: NetworkedElHinfSection, ctx: BuildContext) -> NetworkedElHinfCon
         desired_attitude=expression_text(sec.desired_attitude),
         links=tuple((int(a), int(b)) for a, b in zip(pj, pn, strict=True)),
         excited=sec.excitation_amplitude > 0,
-        excitation_amplitude=as_float(sec.excitation_amplitude),
-        excitation_period=as_float(sec.excitation_period),
     )
 
 

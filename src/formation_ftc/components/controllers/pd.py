@@ -16,7 +16,7 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Vec3Expr
+from formation_ftc.components._sections import Vec3Expr, section_floats
 from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import FlightInputs, component
@@ -90,8 +90,7 @@ def _build(sec: PdSection, ctx: BuildContext) -> PdFormationController:
     n = ctx.count
     return PdFormationController(
         count=n,
-        kp=as_float(sec.kp),
-        kd=as_float(sec.kd),
+        **section_floats(sec, "kp", "kd"),
         nominal_mass=as_float(per_spacecraft(sec.nominal_mass, n, "controller.nominal_mass")),
         max_force=as_float(np.inf if sec.max_force is None else sec.max_force),
         desired_position=sec.desired_position,

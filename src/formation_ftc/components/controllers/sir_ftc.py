@@ -21,6 +21,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, per_spacecraft, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.components.controllers._formation import FormationSection, RotatingFormation
 from formation_ftc.components.controllers.li2020_adaptive import VELOCITY_ERROR, composite_error
 from formation_ftc.config.base import StrictModel
@@ -191,11 +192,7 @@ def _build(sec: SirFtcSection, ctx: BuildContext) -> SirFtcController:
         count=n,
         formation=sec.formation.component(n),
         k=as_float(per_spacecraft(sec.k, n, "controller.k")),
-        k0=as_float(sec.k0),
-        phi=as_float(sec.phi),
-        sigma1=as_float(sec.sigma1),
-        sigma2=as_float(sec.sigma2),
-        mu_s=as_float(sec.mu_s),
+        **section_floats(sec, "k0", "phi", "sigma1", "sigma2", "mu_s"),
         b_hat0=as_float(np.full(n, sec.b_hat0)),
     )
 

@@ -132,7 +132,7 @@ class Yang2013AttitudeSection(StrictModel):
 
 def _build(sec: Yang2013AttitudeSection, ctx: BuildContext) -> Yang2013AttitudeHold:
     """The controller of a validated ``[controller] type = "yang2013-attitude"`` section."""
-    law = attitude_law(ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa)
+    law = attitude_law(ctx, sec)
     q_d = quaternion_rows(sec.desired_quaternion, ctx.count, "controller.desired_quaternion")
     return Yang2013AttitudeHold(law=law, desired_quaternion=as_float(q_d))
 

@@ -47,12 +47,7 @@ class ForceTorqueController(Controller):
                 f"ForceTorqueController needs a force law and a torque law, got "
                 f"{type(f).__name__} ({f.quantity}) and {type(t).__name__} ({t.quantity})"
             )
-        if (
-            f.sampled
-            or t.sampled
-            or getattr(f, "uses_messages", False)
-            or getattr(t, "uses_messages", False)
-        ):
+        if any(law.sampled or getattr(law, "uses_messages", False) for law in (f, t)):
             raise CompositionError(
                 f"ForceTorqueController combines continuous laws without messages; "
                 f"{type(f).__name__} / {type(t).__name__} are sampled or exchange messages"
@@ -135,10 +130,8 @@ class Yang2013ForceTorqueSection(StrictModel):
 def _build(sec: Yang2013ForceTorqueSection, ctx: BuildContext) -> ForceTorqueController:
     """The controller of a validated ``[controller] type = "yang2013-force-torque"`` section."""
     return ForceTorqueController(
-        force_law=translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2),  # eq. (12)
-        torque_law=attitude_law(
-            ctx, sec.nominal_inertia, sec.K3, sec.K4, sec.K5, sec.kappa
-        ),  # (13)
+        force_law=translational_law(ctx, sec),  # eq. (12)
+        torque_law=attitude_law(ctx, sec),  # (13)
     )
 
 

@@ -175,7 +175,7 @@ class Yang2013RelativeSection(Yang2013TranslationalSection):
 def _build(sec: Yang2013RelativeSection, ctx: BuildContext) -> NeighbourRelativeController:
     """The controller of a validated ``[controller] type = "yang2013-relative"`` section."""
     return NeighbourRelativeController(
-        law=translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2, sec.desired_position),
+        law=translational_law(ctx, sec),
         coupling=as_float(per_spacecraft(sec.coupling, ctx.count, "controller.coupling")),
     )
 

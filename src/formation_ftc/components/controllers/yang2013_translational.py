@@ -43,7 +43,7 @@ class Yang2013TranslationalSection(StrictModel):
 
 def _build(sec: Yang2013TranslationalSection, ctx: BuildContext) -> Yang2013TranslationalController:
     """The controller of a validated ``[controller] type = "yang2013-translational"`` section."""
-    return translational_law(ctx, sec.nominal_mass, sec.K1, sec.K2, sec.desired_position)
+    return translational_law(ctx, sec)
 
 
 register(

@@ -80,9 +80,8 @@ class AccelerationModelEstimator(WrapsInner):
         return self.inner.update(t, state, inputs)
 
     def predict(self, t, state, command, dt):
-        return self.inner.predict(
-            t, state, command / self.nominal_mass[:, None], dt
-        )  # u_i = f_i / m_i^nom
+        # u_i = f_i / m_i^nom
+        return self.inner.predict(t, state, command / self.nominal_mass[:, None], dt)
 
     def signals(self):
         return self.inner.signals()

@@ -11,15 +11,12 @@ import jax
 import jax.numpy as jnp
 from pydantic import Field
 
+from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Signal
 
 __all__ = [
-    "FdiTest",
-    "FdiDrift",
-    "FdiThreshold",
-    "FdiIdentification",
     "FdiForgetting",
-    "FdiIdentificationStd",
+    "FdiTestSection",
     "sequential_test",
     "latch_first_alarm",
     "identify_channels",
@@ -32,23 +29,6 @@ __all__ = [
 
 VEC = ("spacecraft", "axis")
 
-FdiTest = Annotated[
-    Literal["cusum", "fixed"],
-    Field(description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold."),
-]
-FdiDrift = Annotated[
-    float, Field(ge=0, description="CUSUM drift (half the standardised shift to detect) [-].")
-]
-FdiThreshold = Annotated[
-    float, Field(gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-].")
-]
-FdiIdentification = Annotated[
-    Literal["off", "rls"],
-    Field(
-        description="Fault identification: off, or each channel's effectiveness and bias by recursive "
-        "least squares with exponential forgetting on the residual (provides fault-identification)."
-    ),
-]
 FdiForgetting = Annotated[
     float,
     Field(
@@ -57,14 +37,33 @@ FdiForgetting = Annotated[
         description="RLS forgetting factor lambda; the memory is about 1 / (1 - lambda) steps [-].",
     ),
 ]
-FdiIdentificationStd = Annotated[
-    float,
-    Field(
+
+
+class FdiTestSection(StrictModel):
+    """The section fields both residual FDIs state alike: the sequential test per (spacecraft, axis)
+    and the identification."""
+
+    test: Literal["cusum", "fixed"] = Field(
+        "cusum",
+        description="Test per (spacecraft, axis): Page's two-sided CUSUM or |z| > threshold.",
+    )
+    drift: float = Field(
+        0.5, ge=0, description="CUSUM drift (half the standardised shift to detect) [-]."
+    )
+    threshold: float = Field(
+        20.0, gt=0, description="Alarm threshold on the statistic (CUSUM g, or |z|) [-]."
+    )
+    identification: Literal["off", "rls"] = Field(
+        "off",
+        description="Fault identification: off, or each channel's effectiveness and bias by recursive "
+        "least squares with exponential forgetting on the residual (provides fault-identification).",
+    )
+    identification_std: float = Field(
+        0.05,
         gt=0,
         description="Standard deviation of a channel's effectiveness estimate at or below which the "
         "channel counts as identified (before: reported as NaN) [-].",
-    ),
-]
+    )
 
 
 def sequential_test(test: str, g_pos, g_neg, z, drift, threshold):

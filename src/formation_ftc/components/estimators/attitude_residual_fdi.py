@@ -34,15 +34,11 @@ from formation_ftc.components._registry import (
     per_spacecraft,
     register,
 )
-from formation_ftc.components._sections import Inertia, positive_values
+from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
     VEC,
-    FdiDrift,
     FdiForgetting,
-    FdiIdentification,
-    FdiIdentificationStd,
-    FdiTest,
-    FdiThreshold,
+    FdiTestSection,
     detection_outputs,
     detection_signals,
     identification_outputs,
@@ -52,7 +48,6 @@ from formation_ftc.components.estimators._fdi import (
     rls_prior,
     sequential_test,
 )
-from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
 from formation_ftc.core.euler_quaternion import dcm_from_euler_zyx
@@ -422,7 +417,7 @@ class AttitudeResidualFdi(Estimator):
         }
 
 
-class AttitudeResidualFdiSection(StrictModel):
+class AttitudeResidualFdiSection(FdiTestSection):
     """Actuator-fault detection, isolation and identification of an Euler-angle attitude law from the
     rigid-body residual (body axes), reported in the law's generalised channels (flag, u*)."""
 
@@ -456,12 +451,7 @@ class AttitudeResidualFdiSection(StrictModel):
         description="Mean command over a step: held (a sampled law) or extrapolated to the step's "
         "midpoint, 1.5 tau_k - 0.5 tau_k-1 (a law evaluated inside the step, as networked-el-hinf).",
     )
-    test: FdiTest = "cusum"
-    drift: FdiDrift = 0.5
-    threshold: FdiThreshold = 20.0
-    identification: FdiIdentification = "off"
     forgetting: FdiForgetting = 0.999
-    identification_std: FdiIdentificationStd = 0.05
     bias_prior_std: float = Field(
         0.01,
         gt=0,
@@ -508,22 +498,15 @@ def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidu
     J = np.diag(np.asarray(sec.nominal_inertia, dtype=float))
     return AttitudeResidualFdi(
         count=m,
-        test=sec.test,
-        command=sec.command,
+        **sec.model_dump(include={"test", "command", "identification"}),
         nominal_inertia=as_float(np.stack([J] * m)),
         orbit_rate=as_float(n),
         torque_limit=as_float(limit),
-        residual_std=as_float(sec.residual_std),
-        drift=as_float(sec.drift),
-        threshold=as_float(sec.threshold),
+        **section_floats(sec, "residual_std", "drift", "threshold", "forgetting"),
+        **section_floats(sec, "identification_std", "bias_prior_std", "effectiveness_alarm"),
         smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
-        identification=sec.identification,
-        forgetting=as_float(sec.forgetting),
-        identification_std=as_float(sec.identification_std),
-        bias_prior_std=as_float(sec.bias_prior_std),
         identification_noise=as_float(sec.identification_noise_std or sec.residual_std),
         walk=as_float(np.diag([sec.effectiveness_walk**2 * ctx.dt, 0.0])),
-        effectiveness_alarm=as_float(sec.effectiveness_alarm),
     )
 
 

@@ -20,7 +20,7 @@ from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
-from formation_ftc.components._sections import Masses
+from formation_ftc.components._sections import Masses, section_floats
 from formation_ftc.components.estimators._acceleration_model import WrapsInner
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
@@ -435,7 +435,7 @@ class RelativeNavigationSection(StrictModel):
 
 def filter_model(
     sec: RelativeNavigationSection, ctx: BuildContext, where: str = "estimator"
-) -> dict[str, np.ndarray]:
+) -> dict[str, Any]:
     """The on-board model's arrays (``phi``, ``gamma``, ``qd``, ``r``, ``nominal_mass``) of a filter
     section at the scenario's step.
 
@@ -465,9 +465,7 @@ def filter_model(
     model, R = sec.model(ctx.dt)
     mass = per_spacecraft(sec.nominal_mass, ctx.count, f"{where}.nominal_mass")
     return dict(
-        phi=as_float(model.phi),
-        gamma=as_float(model.gamma),
-        qd=as_float(model.qd),
+        **section_floats(model, "phi", "gamma", "qd"),
         r=as_float(R),
         nominal_mass=as_float(mass),
     )

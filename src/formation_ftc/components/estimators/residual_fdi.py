@@ -23,13 +23,10 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.components.estimators._fdi import (
-    FdiDrift,
     FdiForgetting,
-    FdiIdentification,
-    FdiIdentificationStd,
-    FdiTest,
-    FdiThreshold,
+    FdiTestSection,
     detection_outputs,
     detection_signals,
     identification_outputs,
@@ -396,16 +393,13 @@ class ResidualFdi(Estimator):
         return out
 
 
-class ResidualFdiSection(RelativeNavigationSection):
+class ResidualFdiSection(RelativeNavigationSection, FdiTestSection):
     """Thruster-fault detection and isolation from the relative-state residuals."""
 
     residual: Literal["kalman", "parity"] = Field(
         "kalman",
         description="Residual generator: the Kalman innovation or the one-step parity relation.",
     )
-    test: FdiTest = "cusum"
-    drift: FdiDrift = 0.5
-    threshold: FdiThreshold = 20.0
     force_limit: float = Field(
         math.inf,
         gt=0,
@@ -431,9 +425,7 @@ class ResidualFdiSection(RelativeNavigationSection):
         "of the raw measurement, while the FDI watches the same filter's innovations (residual = "
         "'kalman' only) [-].",
     )
-    identification: FdiIdentification = "off"
     forgetting: FdiForgetting = 0.9995
-    identification_std: FdiIdentificationStd = 0.05
     bias_prior_std: float = Field(
         1e-3,
         gt=0,
@@ -509,18 +501,11 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
     gain, noise = window_model(a["phi"], a["gamma"], a["qd"], a["r"], steps)
     return ResidualFdi(
         count=ctx.count,
-        residual=sec.residual,
-        test=sec.test,
+        **sec.model_dump(include={"residual", "test", "at_limit", "fly_on_filter"}),
         parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
-        drift=as_float(sec.drift),
-        threshold=as_float(sec.threshold),
-        force_limit=as_float(sec.force_limit),
-        at_limit=sec.at_limit,
+        **section_floats(sec, "drift", "threshold", "force_limit", "forgetting"),
+        **section_floats(sec, "identification_std", "bias_prior_std"),
         identification=sec.identification,
-        fly_on_filter=sec.fly_on_filter,
-        forgetting=as_float(sec.forgetting),
-        identification_std=as_float(sec.identification_std),
-        bias_prior_std=as_float(sec.bias_prior_std),
         window_bias_gain=as_float(gain),
         window_noise=as_float(noise),
         window=steps,

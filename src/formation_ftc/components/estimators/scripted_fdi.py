@@ -449,11 +449,7 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
         nch,
         fault_mask=profile.mask,
         onset=profile.onset,
-        delay=sec.delay,
-        detected=sec.detected,
-        scale=sec.scale,
-        bias=sec.bias,
-        noise_std=sec.noise_std,
+        **sec.model_dump(include={"delay", "detected", "scale", "bias", "noise_std"}),
         routing=isolation_routing(m, nch, moves),
     )
     return ScriptedFdi(

@@ -153,9 +153,8 @@ class AttitudeScoresSection(StrictModel):
 def _build(sec: AttitudeScoresSection, ctx: BuildContext) -> AttitudeScores:
     """The evaluation of a validated ``[[evaluations]] type = "attitude-scores"`` section."""
     frame = sec.frame
-    if (
-        frame == "state"
-    ):  # the frame of the plant's attitude state (a plant that does not say: inertial)
+    # "state": the frame of the plant's attitude state (a plant that does not say: inertial)
+    if frame == "state":
         frame = str(getattr(ctx.section("plant"), "state_frame", "inertial"))
     signal = {"inertial": "quaternion", "lvlh": "attitude_lvlh"}.get(frame)
     if signal is None:

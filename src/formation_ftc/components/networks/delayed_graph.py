@@ -102,7 +102,6 @@ class DelayStats:
     rate_max: float  # max dT/dt [-]
     t_rate_max: float  # [s]
     t_first_negative: float = float("nan")  # first grid time with T < 0 [s]
-    t_first_rate_violation: float = float("nan")  # first grid time with dT/dt >= 1 [s]
     t_max: float = float("nan")  # time of max T [s]
 
     @property
@@ -155,7 +154,7 @@ def delay_statistics(
     for k, pair in enumerate(pairs):
         v, r = vals[:, k], rates[:, k]
         kmin, kmax, kr = int(np.argmin(v)), int(np.argmax(v)), int(np.argmax(r))
-        neg, fast = np.flatnonzero(v < 0), np.flatnonzero(r >= 1)
+        neg = np.flatnonzero(v < 0)
         out.append(
             DelayStats(
                 pair,
@@ -165,7 +164,6 @@ def delay_statistics(
                 float(r[kr]),
                 float(tg[kr]),
                 float(tg[neg[0]]) if neg.size else float("nan"),
-                float(tg[fast[0]]) if fast.size else float("nan"),
                 float(tg[kmax]),
             )
         )

@@ -23,7 +23,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import Inertia, Vec3, expression_text
+from formation_ftc.components._sections import Inertia, Vec3, expression_text, section_floats
 from formation_ftc.components.plants._rigid_body import (
     RigidBodyAttitudeSection,
     RigidBodyTorquePlant,
@@ -441,8 +441,7 @@ def _build(sec: AttitudeTruthSection, ctx: BuildContext) -> AttitudeTruthPlant:
         inertia=as_float(sec.inertia_tensor()),
         initial_body_rate=as_float(w0),
         initial_quaternion=as_float(q0),
-        semi_major_axis=as_float(sec.semi_major_axis),
-        mu=as_float(sec.mu),
+        **section_floats(sec, "semi_major_axis", "mu"),
         initial_argument_of_latitude=as_float(math.radians(sec.initial_argument_of_latitude_deg)),
         disturbance_torque=expression_text(sec.disturbance_torque),
         gravity_gradient=sec.gravity_gradient,

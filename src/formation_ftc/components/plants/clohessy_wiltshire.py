@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
 from formation_ftc.core.constants import MU_EARTH
@@ -61,9 +62,8 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     process_noise_std: Any = 0.0  # [N]
-    disturbance_force: tuple[str, str, str] = static(
-        default=("0", "0", "0")
-    )  # expressions in t, i [N]
+    #: expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
         return {"d": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}
@@ -120,9 +120,8 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
         else:
             eigs, margins = [], []
             for i, m in enumerate(np.asarray(self.mass)):
-                with np.errstate(
-                    over="raise"
-                ):  # a subnormal mass: FloatingPointError, not inf gains
+                # a subnormal mass: FloatingPointError, not inf gains
+                with np.errstate(over="raise"):
                     K = gain / m
                 M = A - B @ K  # closed loop of the linear CW model
                 ev = np.linalg.eigvals(M)
@@ -200,10 +199,8 @@ class CwPlantSection(PointMassSection):
 def _build(sec: CwPlantSection, ctx: BuildContext) -> ClohessyWiltshirePlant:
     """The plant of a validated ``[plant] type = "clohessy-wiltshire"`` section."""
     return ClohessyWiltshirePlant(
-        mean_motion=as_float(sec.mean_motion),
-        mass=as_float(sec.mass),
+        **section_floats(sec, "mean_motion", "mass", "process_noise_std"),
         initial_state_lvlh=as_float(sec.q0()),
-        process_noise_std=as_float(sec.process_noise_std),
         disturbance_force=sec.disturbance_force,
     )
 

@@ -17,7 +17,7 @@ from formation_ftc.components._registry import (
     builder_input,
     register,
 )
-from formation_ftc.components._sections import Vec3, initial_states
+from formation_ftc.components._sections import Vec3, initial_states, section_floats
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
@@ -68,9 +68,8 @@ class ZohClohessyWiltshirePlant(Plant):
     def exogenous(self, t):
         nt = self.mean_motion * t
         s, c = jnp.sin(nt), jnp.cos(nt)
-        d = self.disturbance_amplitude * jnp.stack(
-            [1.0 - 1.5 * s, s * c, s]
-        )  # 0.5 sin 2nt = sin nt cos nt
+        # 0.5 sin 2nt = sin nt cos nt
+        d = self.disturbance_amplitude * jnp.stack([1.0 - 1.5 * s, s * c, s])
         return {"d": jnp.broadcast_to(d, (self.count, 3))}
 
     def derivative(self, t, x, inputs: TruthInputs):
@@ -134,9 +133,8 @@ class ZohCwPlantSection(InitialStateRows):
 def _build(sec: ZohCwPlantSection, ctx: BuildContext) -> ZohClohessyWiltshirePlant:
     """The plant of a validated ``[plant] type = "clohessy-wiltshire-zoh"`` section."""
     return ZohClohessyWiltshirePlant(
-        mean_motion=as_float(sec.mean_motion),
+        **section_floats(sec, "mean_motion", "disturbance_amplitude"),
         initial_state_lvlh=as_float(initial_states(sec.initial_position, sec.initial_velocity)),
-        disturbance_amplitude=as_float(sec.disturbance_amplitude),
     )
 
 

@@ -26,6 +26,7 @@ from formation_ftc.components._sections import (
     check_rows,
     initial_states,
     positive_values,
+    section_floats,
 )
 from formation_ftc.components.expressions import vector_expression
 from formation_ftc.config.base import StrictModel
@@ -383,25 +384,19 @@ def _build(sec: OrbitalTruthSection, ctx: BuildContext) -> InertialFormationPlan
     c = per_spacecraft(sec.srp_coefficient, n, "plant.srp_coefficient")
     b_c, c_c = sec.chief_ballistic_coefficient, sec.chief_srp_coefficient  # default: the means
     return InertialFormationPlant(
-        mass=as_float(sec.mass),
+        **section_floats(sec, "mass", "sun_direction", "mu", "dispersion_seed"),
         chief_elements=as_float([getattr(sec, name) for name in CHIEF_ELEMENTS]),
         initial_state_lvlh=as_float(sec.q0()),
         ballistic_coefficient=as_float(b),
         chief_ballistic_coefficient=as_float(np.mean(b) if b_c is None else b_c),
         srp_coefficient=as_float(c),
         chief_srp_coefficient=as_float(np.mean(c) if c_c is None else c_c),
-        sun_direction=as_float(sec.sun_direction),
         density_table=as_float(sec.density_table()),
-        mu=as_float(sec.mu),
         initial_roe=None
         if sec.initial_roe is None
         else as_float(np.asarray(sec.initial_roe) / sec.semi_major_axis),
         initial_dispersion=as_float([sec.initial_position_std, sec.initial_velocity_std]),
-        dispersion_seed=as_float(sec.dispersion_seed),
-        j2=sec.j2,
-        drag=sec.drag,
-        srp=sec.srp,
-        disturbance_force=sec.disturbance_force,
+        **sec.model_dump(include={"j2", "drag", "srp", "disturbance_force"}),
     )
 
 

@@ -42,9 +42,8 @@ class RelativeLvlhPlant(RelativeStatePlant):
     mass: Any  # (N,) [kg]
     initial_state_lvlh: Any  # (N, 6) [m, m/s]
     mu: Any  # gravitational parameter [m^3/s^2]
-    disturbance_force: tuple[str, str, str] = static(
-        default=("0", "0", "0")
-    )  # h_i(t), expressions in t, i [N]
+    #: h_i(t), expressions in t, i [N]
+    disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
 
     def exogenous(self, t):
         return {"h": vector_expression(self.disturbance_force, "disturbance.force", t, self.count)}

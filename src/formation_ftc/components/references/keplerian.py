@@ -8,6 +8,7 @@ from typing import Any
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import reference_rates
@@ -63,9 +64,7 @@ def _build(sec: KeplerianSection, ctx: BuildContext) -> KeplerianReference:
     p = sec.semi_major_axis * (1.0 - sec.eccentricity**2)
     return KeplerianReference(
         semi_latus_rectum=as_float(p),
-        eccentricity=as_float(sec.eccentricity),
-        mu=as_float(sec.mu),
-        true_anomaly0=as_float(sec.true_anomaly0),
+        **section_floats(sec, "eccentricity", "mu", "true_anomaly0"),
     )
 
 

@@ -16,11 +16,11 @@ import jax
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.disturbances import gaussian_noise
 from formation_ftc.core.polygon_formation import chain_difference
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
-from formation_ftc.sim.contract import as_float
 
 __all__ = [
     "ChainRelativeSensors",
@@ -149,8 +149,7 @@ def _build(sec: ChainRelativeSection, ctx: BuildContext) -> ChainRelativeSensors
     return cls(
         count=ctx.count,
         n_axes=axes,
-        position_noise_std=as_float(sec.position_noise_std),
-        velocity_noise_std=as_float(sec.velocity_noise_std),
+        **section_floats(sec, "position_noise_std", "velocity_noise_std"),
         noisy=noisy,
     )
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import per_axis
+from formation_ftc.components._sections import per_axis, section_floats
 from formation_ftc.components.sensors.relative_state import (
     RelativeStateSection,
     RelativeStateSensors,
@@ -85,8 +85,7 @@ def _build(sec: LvlhRelativeStateSection, ctx: BuildContext) -> LvlhRelativeStat
         raise ValueError("sensors.position_bias / velocity_bias: values must be finite")
     return LvlhRelativeStateSensors(
         count=n,
-        position_noise_std=as_float(sec.position_noise_std),
-        velocity_noise_std=as_float(sec.velocity_noise_std),
+        **section_floats(sec, "position_noise_std", "velocity_noise_std"),
         bias=as_float(bias),
     )
 

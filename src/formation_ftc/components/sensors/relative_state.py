@@ -10,10 +10,10 @@ import jax.numpy as jnp
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, register
+from formation_ftc.components._sections import section_floats
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.disturbances import gaussian_noise
 from formation_ftc.sim.components import SensorInputs, Sensors, component, static
-from formation_ftc.sim.contract import as_float
 
 __all__ = ["RelativeStateSensors", "ExactRelativeStateSensors", "RelativeStateSection"]
 
@@ -79,8 +79,7 @@ def _build(
         return ExactRelativeStateSensors(count=ctx.count)
     return RelativeStateSensors(
         count=ctx.count,
-        position_noise_std=as_float(sec.position_noise_std),
-        velocity_noise_std=as_float(sec.velocity_noise_std),
+        **section_floats(sec, "position_noise_std", "velocity_noise_std"),
     )
 
 
