@@ -289,16 +289,10 @@ def _command(sub, name: str, func, short: str) -> argparse.ArgumentParser:
 
 def _scenario_table(text: str) -> str:
     """Only the ``[scenario]`` table of a scenario file (``list`` needs its description; parsing the
-    whole files of every scenario would cost most of the command's time)."""
-    lines = text.splitlines()
-    try:
-        start = next(k for k, ln in enumerate(lines) if ln.strip() == "[scenario]")
-    except StopIteration:
-        return text  # unusual layout: parse everything
-    end = next(
-        (k for k in range(start + 1, len(lines)) if lines[k].lstrip().startswith("[")), len(lines)
-    )
-    return "\n".join(lines[start:end])
+    whole files of every scenario would cost most of the command's time): from its header line to
+    the next line that starts a table."""
+    table = re.search(r"^[ \t]*\[scenario\][ \t]*$.*?(?=^[ \t]*\[|\Z)", text, re.M | re.S)
+    return text if table is None else table.group()  # unusual layout: parse everything
 
 
 def _cmd_list(args) -> int:
@@ -503,14 +497,12 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             }
         )
         return code
-    from formation_ftc.display import CONDITION_COLUMNS, condition_row
+    from formation_ftc.display import CONDITION_COLUMNS, condition_row, text_table
 
     rows = [[v if isinstance(v, str) else v[0] for v in condition_row(c)] for c in conds]
     if not sys.stdout.isatty():
-        table = [CONDITION_COLUMNS, *rows]
-        widths = [max(len(r[k]) for r in table) for k in range(len(CONDITION_COLUMNS))]
-        for r in table if conds else []:
-            print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
+        for line in text_table(CONDITION_COLUMNS, rows) if conds else []:
+            print(line)
     else:
         from rich.console import Console
         from rich.table import Table
@@ -533,20 +525,27 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     return code
 
 
-def _cmd_check(args) -> int:
-    from formation_ftc.api import check
+def _as_scenario_error(fn, scenario, args, failed: str) -> Any:
+    """``fn(scenario)``; a ValueError, TypeError, ArithmeticError or RecursionError it raises becomes a
+    ScenarioError (bad input, exit status 2): ``args.scenario``, then ``failed`` formatted with
+    ``exc`` and ``kind`` (its class name)."""
     from formation_ftc.config.loader import ScenarioError
 
-    scenario = _load(args)
     try:
-        conds = check(scenario)
+        return fn(scenario)
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         if isinstance(exc, ScenarioError):
             raise
-        raise ScenarioError(
-            f"{args.scenario}: the conditions cannot be evaluated for these values "
-            f"({type(exc).__name__}: {exc})"
-        ) from None
+        reason = failed.format(exc=exc, kind=type(exc).__name__)
+        raise ScenarioError(f"{args.scenario}: {reason}") from None
+
+
+def _cmd_check(args) -> int:
+    from formation_ftc.api import check
+
+    scenario = _load(args)
+    failed = "the conditions cannot be evaluated for these values ({kind}: {exc})"
+    conds = _as_scenario_error(check, scenario, args, failed)
     return _print_conditions(conds, args.json, scenario)
 
 
@@ -626,7 +625,6 @@ def _cmd_run(args) -> int:
     from rich.console import Console
 
     from formation_ftc.api import build_loop, metric_units, save_result
-    from formation_ftc.config.loader import ScenarioError
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.report.run_page import run_figures, write_run_page
     from formation_ftc.runout import check_out_dir, staged_output
@@ -637,12 +635,8 @@ def _cmd_run(args) -> int:
     scenario = _load(args)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
     check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
-    try:
-        loop = build_loop(scenario)
-    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-        if isinstance(exc, ScenarioError):
-            raise
-        raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
+    failed = "the scenario cannot be compiled: {exc}"
+    loop = _as_scenario_error(build_loop, scenario, args, failed)
     check_memory(loop, budgets, args.scenario)
     if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
         _import_in_background("xarray", "formation_ftc.provenance")
