@@ -146,11 +146,10 @@ def list_scenarios() -> dict[str, str]:
     """
     import tomllib
 
-    out = {}
-    for name, text in loader.builtin_scenarios().items():
-        meta = tomllib.loads(text).get("scenario", {})
-        out[name] = str(meta.get("description", ""))
-    return out
+    return {
+        name: str(tomllib.loads(text).get("scenario", {}).get("description", ""))
+        for name, text in loader.builtin_scenarios().items()
+    }
 
 
 def build_loop(scenario: ScenarioBase) -> ClosedLoop:
@@ -298,9 +297,7 @@ def _apply_cf(ds, scenario: ScenarioBase) -> None:
         description=scenario.scenario.description,
         references=_references(scenario),
         created_utc=str(ds.attrs.get("created_utc", "")),
-        version=str(
-            ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))
-        ),
+        version=str(ds.attrs.get("version_formation-ftc", "")),
     )
 
 
@@ -419,13 +416,9 @@ def _metric_units(declared: Iterable[Any], count: int) -> dict[str, str]:
     those declared per spacecraft by name: ``name_sc1``, ..., ``name_sc{count}``."""
     out = {}
     for m in declared or ():
-        units = str(getattr(m, "units", "") or "1")
         each = getattr(m, "spacecraft", None) == "each"
-        out.update(
-            dict.fromkeys(
-                [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name], units
-            )
-        )
+        names = [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name]
+        out.update(dict.fromkeys(names, str(getattr(m, "units", "") or "1")))
     return out
 
 
