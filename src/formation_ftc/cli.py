@@ -264,7 +264,14 @@ def _load(args, build: bool = True):
         raise ScenarioError(f"{exc}{hints}") from None
 
 
-def _scenario_args(p: argparse.ArgumentParser) -> None:
+def _command(sub, name: str, func, short: str, scenario: bool = False) -> argparse.ArgumentParser:
+    """The sub-command ``name`` (one-line help ``short``) run by ``func``; with ``scenario``, its
+    SCENARIO argument and ``--set`` overrides. (``--json`` and -q/-v come last, from
+    :func:`_decorate`.)"""
+    p = sub.add_parser(name, help=short)
+    p.set_defaults(func=func)
+    if not scenario:
+        return p
     p.add_argument(
         "scenario",
         metavar="SCENARIO",
@@ -278,12 +285,6 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
         metavar="PATH=VALUE",
         help="override a field, e.g. --set simulation.horizon=100 (repeatable)",
     )
-
-
-def _command(sub, name: str, func, short: str) -> argparse.ArgumentParser:
-    """The sub-command ``name`` (one-line help ``short``) run by ``func``."""
-    p = sub.add_parser(name, help=short)
-    p.set_defaults(func=func)
     return p
 
 
@@ -791,10 +792,16 @@ def _parsers(parser: argparse.ArgumentParser, key: str = ""):
                 yield from _parsers(sub, f"{key} {name}".strip())
 
 
+#: the commands of this module that print results: their --json comes after their other options
+_JSON_HERE = frozenset({"list", "show", "check", "run", "plot"})
+
+
 def _decorate(parser: argparse.ArgumentParser) -> None:
-    """Plain-text help with examples and exit codes on ``parser`` and every sub-command, and -q/-v
-    on every sub-command."""
+    """Plain-text help with examples and exit codes on ``parser`` and every sub-command, ``--json`` on
+    :data:`_JSON_HERE` and -q/-v on every sub-command."""
     for key, p in _parsers(parser):
+        if key in _JSON_HERE:
+            add_json_option(p)
         if key:
             _add_verbosity(p)
         p.formatter_class = argparse.RawDescriptionHelpFormatter
@@ -966,20 +973,15 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    add_json_option(_command(sub, "list", _cmd_list, "list the built-in scenarios"))
-
-    p = _command(sub, "show", _cmd_show, "print the resolved TOML of a scenario")
-    _scenario_args(p)
+    _command(sub, "list", _cmd_list, "list the built-in scenarios")
+    p = _command(sub, "show", _cmd_show, "print the resolved TOML of a scenario", scenario=True)
     p.add_argument(
         "--no-comments",
         action="store_true",
         help="bare TOML (default: each field's unit and meaning as a comment)",
     )
-    add_json_option(p)
-
-    p = _command(sub, "check", _cmd_check, "evaluate the scenario's stability/design conditions")
-    _scenario_args(p)
-    add_json_option(p)
+    short = "evaluate the scenario's stability/design conditions"
+    _command(sub, "check", _cmd_check, short, scenario=True)
 
     p = _command(sub, "schema", _cmd_schema, "print the JSON Schema of a method's scenario file")
     p.add_argument(
@@ -989,10 +991,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="method name (the [scenario].method of a scenario file); omit to list them",
     )
 
-    p = _command(
-        sub, "run", _cmd_run, "simulate a scenario and write result.nc, metrics.json, index.html"
-    )
-    _scenario_args(p)
+    short = "simulate a scenario and write result.nc, metrics.json, index.html"
+    p = _command(sub, "run", _cmd_run, short, scenario=True)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument(
         "--force",
@@ -1006,7 +1006,6 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="also draw the standard and the method's figures (PNG) and the 3-D view; without it, "
         "`formation-ftc plot DIR` draws them later from result.nc",
     )
-    add_json_option(p)
 
     p = _command(sub, "plot", _cmd_plot, "draw the figures of a run, campaign or league directory")
     p.add_argument(
@@ -1018,7 +1017,6 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         default="png",
         help="file format of the figures (default png; a league's page embeds png only)",
     )
-    add_json_option(p)
 
     for name, (module, short) in _PLUGGED.items():
         if completion and name == "reproduce":  # its module imports JAX
