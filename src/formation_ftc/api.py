@@ -223,8 +223,7 @@ def finish_run(
 
     out = jax.tree_util.tree_map(np.asarray, dict(out))
     div = int(out["diverged_step"])
-    records, n_kept = trim_records(out["records"], div, loop.record_every)
-    out["records"] = records
+    out["records"], n_kept = trim_records(out["records"], div, loop.record_every)
     ds = loop.dataset(out, n_kept)
     metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
     units = _metric_units(loop.metrics, loop.count)

@@ -126,12 +126,9 @@ class _GuardedStdout(_Wrapped):
             self.failure = exc
         return exc
 
-    def _closed(self) -> OSError:
-        return self._failed(OSError(errno.EBADF, "standard output is closed"))
-
     def write(self, text: str) -> int:
         if self.stream is None:
-            raise self._closed()
+            raise self._failed(OSError(errno.EBADF, "standard output is closed"))
         try:
             return self.stream.write(text)
         except OSError as exc:

@@ -330,10 +330,5 @@ def load_plugins() -> None:
 
 
 def _plugin_error_hint() -> str:
-    if not PLUGIN_ERRORS:
-        return ""
-    return (
-        " (plug-ins that failed to import: "
-        + ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
-        + ")"
-    )
+    failed = ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
+    return f" (plug-ins that failed to import: {failed})" if failed else ""
