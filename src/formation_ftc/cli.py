@@ -185,7 +185,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
 _ONE_SHOT_PROCESS = False  # main() runs one command and the process ends (set by main)
-_STARTED: float | None = None  # time.perf_counter() when main() began
+_STARTED = 0.0  # time.perf_counter() when main() began
 
 
 def _check_scenario_name(name: str) -> None:
@@ -588,11 +588,6 @@ def _moved(path, stage: Path, out_dir: Path) -> Path:
         return Path(path)
 
 
-def _elapsed() -> float:
-    """Wall time since this command began (:func:`main`) [s]."""
-    return time.perf_counter() - (_STARTED if _STARTED is not None else time.perf_counter())
-
-
 def _finish(scenario, loop, out, console) -> tuple[Any, dict[str, float], dict | None]:
     """The dataset and metrics of a run, and its divergence (None, or the ``diverged`` object of
     ``run --json``; the dataset is then the partial result)."""
@@ -660,7 +655,7 @@ def _cmd_run(args) -> int:
                 console.print(note)
         write_run_page(stage, ds, metrics, figs, units)
     code = 0 if diverged is None else 1
-    wall = _elapsed()
+    wall = time.perf_counter() - _STARTED  # since this command began (main) [s]
     drawn = f", index.html and {len(figs)} figure(s)" if figs is not None else " and index.html"
     hint = "" if figs is not None else f"; figures: formation-ftc plot {out_dir}"
     console.print(

@@ -145,19 +145,6 @@ def check_run_steps(n_steps: int, budgets: Budgets, where: str = "scenario") -> 
         )
 
 
-def check_campaign_steps(
-    run_steps: int, n_runs: int, budgets: Budgets, where: str = "campaign"
-) -> None:
-    """Refuse a campaign of more than ``budgets.max_campaign_steps`` run-steps in total."""
-    if budgets.max_campaign_steps is not None and run_steps > budgets.max_campaign_steps:
-        raise ResourceLimitError(
-            f"{where}: {n_runs:,} runs, {run_steps:.3g} run-steps in total exceed the budget of "
-            f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
-            f"simulation.horizon, or raise the budget with --max-campaign-steps / "
-            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS"
-        )
-
-
 def _tree_bytes(tree: Any) -> int:
     import jax
     import numpy as np
@@ -216,7 +203,13 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
         steps = max(steps, n)
         first_of_base.setdefault(inputs.base, r)
     total = steps * int(plan.n_runs)
-    check_campaign_steps(total, int(plan.n_runs), budgets, where)
+    if budgets.max_campaign_steps is not None and total > budgets.max_campaign_steps:
+        raise ResourceLimitError(
+            f"{where}: {int(plan.n_runs):,} runs, {total:.3g} run-steps in total exceed the budget of "
+            f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
+            f"simulation.horizon, or raise the budget with --max-campaign-steps / "
+            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS"
+        )
     batch = 0
     for base, r in first_of_base.items():
         try:
