@@ -61,7 +61,8 @@ _real: dict[str, ModuleType] = {}
 _ready = False
 #: guards the buffers below (never held while importing or calling out)
 _buffer_lock = threading.Lock()
-_pending_config: list[tuple[str, Any]] = []
+#: what to apply to the real ``jax`` once imported: the configuration updates first, then the calls
+_pending_config: list[Callable[[ModuleType], Any]] = []
 _pending_calls: list[Callable[[ModuleType], Any]] = []
 _flushed = False  # the buffers are applied: a new item is applied at once
 
@@ -76,15 +77,14 @@ def _import_real() -> ModuleType:
     return _real["jax"]
 
 
-def _next_buffered() -> tuple[str, Any] | None:
-    """The next buffered item to apply (a ``("config", (name, value))`` or ``("call", fn)`` pair), or
-    None once both buffers are empty (from then on :data:`_flushed`)."""
+def _next_buffered() -> Callable[[ModuleType], Any] | None:
+    """The next buffered function to apply to the real ``jax`` (configuration updates before calls),
+    or None once both buffers are empty (from then on :data:`_flushed`)."""
     global _flushed
     with _buffer_lock:
-        if _pending_config:
-            return "config", _pending_config.pop(0)
-        if _pending_calls:
-            return "call", _pending_calls.pop(0)
+        for pending in (_pending_config, _pending_calls):
+            if pending:
+                return pending.pop(0)
         _flushed = True
         return None
 
@@ -104,12 +104,8 @@ class _RealImport(importlib.abc.Loader):
         jax = importlib.import_module("jax")
         _real["jax.numpy"] = importlib.import_module("jax.numpy")
         _real["jax"] = jax
-        while (item := _next_buffered()) is not None:
-            kind, what = item
-            if kind == "config":
-                jax.config.update(*what)
-            else:
-                what(jax)
+        while (apply := _next_buffered()) is not None:
+            apply(jax)
         _ready = True
         if _FINDER in sys.meta_path:
             sys.meta_path.remove(_FINDER)
@@ -192,7 +188,7 @@ class _Config:
     def update(self, name: str, value: Any) -> None:
         with _buffer_lock:
             if not _flushed:
-                _pending_config.append((name, value))
+                _pending_config.append(lambda jax: jax.config.update(name, value))
                 return
         _import_real().config.update(name, value)
 

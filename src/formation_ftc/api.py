@@ -146,11 +146,10 @@ def list_scenarios() -> dict[str, str]:
     """
     import tomllib
 
-    out = {}
-    for name, text in loader.builtin_scenarios().items():
-        meta = tomllib.loads(text).get("scenario", {})
-        out[name] = str(meta.get("description", ""))
-    return out
+    return {
+        name: str(tomllib.loads(text).get("scenario", {}).get("description", ""))
+        for name, text in loader.builtin_scenarios().items()
+    }
 
 
 def build_loop(scenario: ScenarioBase) -> ClosedLoop:
@@ -224,8 +223,7 @@ def finish_run(
 
     out = jax.tree_util.tree_map(np.asarray, dict(out))
     div = int(out["diverged_step"])
-    records, n_kept = trim_records(out["records"], div, loop.record_every)
-    out["records"] = records
+    out["records"], n_kept = trim_records(out["records"], div, loop.record_every)
     ds = loop.dataset(out, n_kept)
     metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
     units = _metric_units(loop.metrics, loop.count)
@@ -298,9 +296,7 @@ def _apply_cf(ds, scenario: ScenarioBase) -> None:
         description=scenario.scenario.description,
         references=_references(scenario),
         created_utc=str(ds.attrs.get("created_utc", "")),
-        version=str(
-            ds.attrs.get("version_formation-ftc", ds.attrs.get("version_formation_ftc", ""))
-        ),
+        version=str(ds.attrs.get("version_formation-ftc", "")),
     )
 
 
@@ -419,13 +415,9 @@ def _metric_units(declared: Iterable[Any], count: int) -> dict[str, str]:
     those declared per spacecraft by name: ``name_sc1``, ..., ``name_sc{count}``."""
     out = {}
     for m in declared or ():
-        units = str(getattr(m, "units", "") or "1")
         each = getattr(m, "spacecraft", None) == "each"
-        out.update(
-            dict.fromkeys(
-                [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name], units
-            )
-        )
+        names = [f"{m.name}_sc{i + 1}" for i in range(count)] if each else [m.name]
+        out.update(dict.fromkeys(names, str(getattr(m, "units", "") or "1")))
     return out
 
 

@@ -47,10 +47,7 @@ def _fsync_dir(directory: Path) -> None:
 
 
 def atomic_write(
-    path: Path | str,
-    data: bytes | str | Callable[[Path], object],
-    *,
-    encoding: str = "utf-8",
+    path: Path | str, data: bytes | str | Callable[[Path], object], *, encoding: str = "utf-8"
 ) -> Path:
     """Replace ``path`` with ``data`` atomically; returns ``path``.
 

@@ -185,7 +185,7 @@ HELP: dict[str, tuple[str, list[str]]] = {
 
 _VERBOSITY = 0  # -1 quiet, 0 normal, 1 verbose (set by main)
 _ONE_SHOT_PROCESS = False  # main() runs one command and the process ends (set by main)
-_STARTED: float | None = None  # time.perf_counter() when main() began
+_STARTED = 0.0  # time.perf_counter() when main() began
 
 
 def _check_scenario_name(name: str) -> None:
@@ -264,7 +264,14 @@ def _load(args, build: bool = True):
         raise ScenarioError(f"{exc}{hints}") from None
 
 
-def _scenario_args(p: argparse.ArgumentParser) -> None:
+def _command(sub, name: str, func, short: str, scenario: bool = False) -> argparse.ArgumentParser:
+    """The sub-command ``name`` (one-line help ``short``) run by ``func``; with ``scenario``, its
+    SCENARIO argument and ``--set`` overrides. (``--json`` and -q/-v come last, from
+    :func:`_decorate`.)"""
+    p = sub.add_parser(name, help=short)
+    p.set_defaults(func=func)
+    if not scenario:
+        return p
     p.add_argument(
         "scenario",
         metavar="SCENARIO",
@@ -278,27 +285,15 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
         metavar="PATH=VALUE",
         help="override a field, e.g. --set simulation.horizon=100 (repeatable)",
     )
-
-
-def _command(sub, name: str, func, short: str) -> argparse.ArgumentParser:
-    """The sub-command ``name`` (one-line help ``short``) run by ``func``."""
-    p = sub.add_parser(name, help=short)
-    p.set_defaults(func=func)
     return p
 
 
 def _scenario_table(text: str) -> str:
     """Only the ``[scenario]`` table of a scenario file (``list`` needs its description; parsing the
-    whole files of every scenario would cost most of the command's time)."""
-    lines = text.splitlines()
-    try:
-        start = next(k for k, ln in enumerate(lines) if ln.strip() == "[scenario]")
-    except StopIteration:
-        return text  # unusual layout: parse everything
-    end = next(
-        (k for k in range(start + 1, len(lines)) if lines[k].lstrip().startswith("[")), len(lines)
-    )
-    return "\n".join(lines[start:end])
+    whole files of every scenario would cost most of the command's time): from its header line to
+    the next line that starts a table."""
+    table = re.search(r"^[ \t]*\[scenario\][ \t]*$.*?(?=^[ \t]*\[|\Z)", text, re.M | re.S)
+    return text if table is None else table.group()  # unusual layout: parse everything
 
 
 def _cmd_list(args) -> int:
@@ -503,14 +498,12 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
             }
         )
         return code
-    from formation_ftc.display import CONDITION_COLUMNS, condition_row
+    from formation_ftc.display import CONDITION_COLUMNS, condition_row, text_table
 
     rows = [[v if isinstance(v, str) else v[0] for v in condition_row(c)] for c in conds]
     if not sys.stdout.isatty():
-        table = [CONDITION_COLUMNS, *rows]
-        widths = [max(len(r[k]) for r in table) for k in range(len(CONDITION_COLUMNS))]
-        for r in table if conds else []:
-            print("  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip())
+        for line in text_table(CONDITION_COLUMNS, rows) if conds else []:
+            print(line)
     else:
         from rich.console import Console
         from rich.table import Table
@@ -533,20 +526,27 @@ def _print_conditions(conds, as_json: bool, scenario=None) -> int:
     return code
 
 
-def _cmd_check(args) -> int:
-    from formation_ftc.api import check
+def _as_scenario_error(fn, scenario, args, failed: str) -> Any:
+    """``fn(scenario)``; a ValueError, TypeError, ArithmeticError or RecursionError it raises becomes a
+    ScenarioError (bad input, exit status 2): ``args.scenario``, then ``failed`` formatted with
+    ``exc`` and ``kind`` (its class name)."""
     from formation_ftc.config.loader import ScenarioError
 
-    scenario = _load(args)
     try:
-        conds = check(scenario)
+        return fn(scenario)
     except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
         if isinstance(exc, ScenarioError):
             raise
-        raise ScenarioError(
-            f"{args.scenario}: the conditions cannot be evaluated for these values "
-            f"({type(exc).__name__}: {exc})"
-        ) from None
+        reason = failed.format(exc=exc, kind=type(exc).__name__)
+        raise ScenarioError(f"{args.scenario}: {reason}") from None
+
+
+def _cmd_check(args) -> int:
+    from formation_ftc.api import check
+
+    scenario = _load(args)
+    failed = "the conditions cannot be evaluated for these values ({kind}: {exc})"
+    conds = _as_scenario_error(check, scenario, args, failed)
     return _print_conditions(conds, args.json, scenario)
 
 
@@ -588,11 +588,6 @@ def _moved(path, stage: Path, out_dir: Path) -> Path:
         return Path(path)
 
 
-def _elapsed() -> float:
-    """Wall time since this command began (:func:`main`) [s]."""
-    return time.perf_counter() - (_STARTED if _STARTED is not None else time.perf_counter())
-
-
 def _finish(scenario, loop, out, console) -> tuple[Any, dict[str, float], dict | None]:
     """The dataset and metrics of a run, and its divergence (None, or the ``diverged`` object of
     ``run --json``; the dataset is then the partial result)."""
@@ -626,7 +621,6 @@ def _cmd_run(args) -> int:
     from rich.console import Console
 
     from formation_ftc.api import build_loop, metric_units, save_result
-    from formation_ftc.config.loader import ScenarioError
     from formation_ftc.limits import Budgets, check_memory, check_run_steps
     from formation_ftc.report.run_page import run_figures, write_run_page
     from formation_ftc.runout import check_out_dir, staged_output
@@ -637,12 +631,8 @@ def _cmd_run(args) -> int:
     scenario = _load(args)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
     check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
-    try:
-        loop = build_loop(scenario)
-    except (ValueError, TypeError, ArithmeticError, RecursionError) as exc:
-        if isinstance(exc, ScenarioError):
-            raise
-        raise ScenarioError(f"{args.scenario}: the scenario cannot be compiled: {exc}") from None
+    failed = "the scenario cannot be compiled: {exc}"
+    loop = _as_scenario_error(build_loop, scenario, args, failed)
     check_memory(loop, budgets, args.scenario)
     if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
         _import_in_background("xarray", "formation_ftc.provenance")
@@ -665,7 +655,7 @@ def _cmd_run(args) -> int:
                 console.print(note)
         write_run_page(stage, ds, metrics, figs, units)
     code = 0 if diverged is None else 1
-    wall = _elapsed()
+    wall = time.perf_counter() - _STARTED  # since this command began (main) [s]
     drawn = f", index.html and {len(figs)} figure(s)" if figs is not None else " and index.html"
     hint = "" if figs is not None else f"; figures: formation-ftc plot {out_dir}"
     console.print(
@@ -797,10 +787,16 @@ def _parsers(parser: argparse.ArgumentParser, key: str = ""):
                 yield from _parsers(sub, f"{key} {name}".strip())
 
 
+#: the commands of this module that print results: their --json comes after their other options
+_JSON_HERE = frozenset({"list", "show", "check", "run", "plot"})
+
+
 def _decorate(parser: argparse.ArgumentParser) -> None:
-    """Plain-text help with examples and exit codes on ``parser`` and every sub-command, and -q/-v
-    on every sub-command."""
+    """Plain-text help with examples and exit codes on ``parser`` and every sub-command, ``--json`` on
+    :data:`_JSON_HERE` and -q/-v on every sub-command."""
     for key, p in _parsers(parser):
+        if key in _JSON_HERE:
+            add_json_option(p)
         if key:
             _add_verbosity(p)
         p.formatter_class = argparse.RawDescriptionHelpFormatter
@@ -972,20 +968,15 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     _add_verbosity(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    add_json_option(_command(sub, "list", _cmd_list, "list the built-in scenarios"))
-
-    p = _command(sub, "show", _cmd_show, "print the resolved TOML of a scenario")
-    _scenario_args(p)
+    _command(sub, "list", _cmd_list, "list the built-in scenarios")
+    p = _command(sub, "show", _cmd_show, "print the resolved TOML of a scenario", scenario=True)
     p.add_argument(
         "--no-comments",
         action="store_true",
         help="bare TOML (default: each field's unit and meaning as a comment)",
     )
-    add_json_option(p)
-
-    p = _command(sub, "check", _cmd_check, "evaluate the scenario's stability/design conditions")
-    _scenario_args(p)
-    add_json_option(p)
+    short = "evaluate the scenario's stability/design conditions"
+    _command(sub, "check", _cmd_check, short, scenario=True)
 
     p = _command(sub, "schema", _cmd_schema, "print the JSON Schema of a method's scenario file")
     p.add_argument(
@@ -995,10 +986,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="method name (the [scenario].method of a scenario file); omit to list them",
     )
 
-    p = _command(
-        sub, "run", _cmd_run, "simulate a scenario and write result.nc, metrics.json, index.html"
-    )
-    _scenario_args(p)
+    short = "simulate a scenario and write result.nc, metrics.json, index.html"
+    p = _command(sub, "run", _cmd_run, short, scenario=True)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument(
         "--force",
@@ -1012,7 +1001,6 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         help="also draw the standard and the method's figures (PNG) and the 3-D view; without it, "
         "`formation-ftc plot DIR` draws them later from result.nc",
     )
-    add_json_option(p)
 
     p = _command(sub, "plot", _cmd_plot, "draw the figures of a run, campaign or league directory")
     p.add_argument(
@@ -1024,7 +1012,6 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
         default="png",
         help="file format of the figures (default png; a league's page embeds png only)",
     )
-    add_json_option(p)
 
     for name, (module, short) in _PLUGGED.items():
         if completion and name == "reproduce":  # its module imports JAX

@@ -101,7 +101,8 @@ def condition_json(c) -> dict[str, Any]:
     # the statement's value: its one quantity outside remarks ("max eig = -1e-08 (lambda = 1e-08)");
     # None when it states several side by side ("e_s = 0.03 m, T = 1.07e-05 m") or none
     single = main[0] if len(main) == 1 else None
-    bound = _BOUND.match(d["requirement"].strip())
+    m = _BOUND.match(d["requirement"].strip())
+    bound = m and {"relation": m["relation"], "value": float(m["value"]), "units": m["units"]}
     return {
         "name": d["name"],
         "reference": d["reference"],
@@ -110,13 +111,7 @@ def condition_json(c) -> dict[str, Any]:
         "value_text": d["value"],
         "quantities": found,
         "requirement": d["requirement"],
-        "bound": {
-            "relation": bound["relation"],
-            "value": float(bound["value"]),
-            "units": bound["units"],
-        }
-        if bound
-        else None,
+        "bound": bound,
         "holds": d["holds"],
         "unproven": bool(c.unproven),
         "required": d["required"],

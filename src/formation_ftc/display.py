@@ -24,6 +24,7 @@ __all__ = [
     "Cell",
     "card_html",
     "card_text",
+    "text_table",
     "number",
     "quantity",
     "holds_cell",
@@ -183,12 +184,26 @@ def card_text(
     lines = [title]
     lines += [f"  {label}: {value}" for label, value in fields]
     if columns:
-        table = [list(columns)] + [[t for t, _ in _cells(r)] for r in rows]
-        widths = [max(len(r[k]) for r in table) for k in range(len(columns))]
-        lines += [
-            "  " + "  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip()
-            for r in table
-        ]
+        lines += text_table(columns, rows, indent="  ")
     if note:
         lines.append(f"  {note}")
     return "\n".join(lines)
+
+
+def text_table(
+    columns: Sequence[str], rows: Iterable[Sequence[Cell]], indent: str = ""
+) -> list[str]:
+    """The lines of a plain-text table: the ``columns`` headings, then ``rows`` (colours dropped), each
+    column as wide as its widest cell, two spaces between columns, every line after ``indent``.
+
+    Examples
+    --------
+    >>> text_table(["metric", "value"], [["dv", ("0.1", "#070")]])
+    ['metric  value', 'dv      0.1']
+    """
+    table = [list(columns)] + [[t for t, _ in _cells(r)] for r in rows]
+    widths = [max(len(r[k]) for r in table) for k in range(len(columns))]
+    return [
+        indent + "  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip()
+        for r in table
+    ]

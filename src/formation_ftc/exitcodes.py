@@ -26,6 +26,7 @@ never costs a result or changes the exit status.
 
 from __future__ import annotations
 
+import abc
 import argparse
 import contextlib
 import datetime as _dt
@@ -36,7 +37,7 @@ import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -60,12 +61,12 @@ EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_UNEXPECTED, EXIT_INTERRUPTED = 0, 1, 2, 3
 
 
 def _crash_dirs() -> list[Path]:
-    dirs = []
-    if os.environ.get("FORMATION_FTC_CRASH_DIR"):
-        dirs.append(Path(os.environ["FORMATION_FTC_CRASH_DIR"]))
-    dirs.append(Path.home() / ".cache" / "formation_ftc")
-    dirs.append(Path(tempfile.gettempdir()))
-    return dirs
+    chosen = os.environ.get("FORMATION_FTC_CRASH_DIR")
+    return [
+        *([Path(chosen)] if chosen else []),
+        Path.home() / ".cache" / "formation_ftc",
+        Path(tempfile.gettempdir()),
+    ]
 
 
 def save_traceback(exc: BaseException) -> Path | None:
@@ -98,19 +99,15 @@ def _quiet_stdout() -> None:
         os.close(devnull)
 
 
-class _Wrapped:
+class _Wrapped(abc.ABC):
     """A text stream that delegates to ``stream`` what it does not define itself (encoding, fileno,
     buffer, ...; none while ``stream`` is None)."""
 
     def __init__(self, stream: Any):
         self.stream = stream
 
-    def write(self, text: str) -> int:  # pragma: no cover - every wrapper defines it
-        raise NotImplementedError
-
-    def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
+    @abc.abstractmethod
+    def write(self, text: str) -> int: ...
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.stream, name)
@@ -129,12 +126,9 @@ class _GuardedStdout(_Wrapped):
             self.failure = exc
         return exc
 
-    def _closed(self) -> OSError:
-        return self._failed(OSError(errno.EBADF, "standard output is closed"))
-
     def write(self, text: str) -> int:
         if self.stream is None:
-            raise self._closed()
+            raise self._failed(OSError(errno.EBADF, "standard output is closed"))
         try:
             return self.stream.write(text)
         except OSError as exc:
@@ -214,9 +208,8 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
             raise guard.failure
         return code
     except OSError as exc:
-        if (
-            exc is not guard.failure
-        ):  # a result file, a socket, a worker's pipe: not standard output
+        # a result file, a socket, a worker's pipe: not standard output
+        if exc is not guard.failure:
             if exc.errno in (errno.ENOSPC, errno.EDQUOT):
                 return _no_space(exc, as_json)
             return _unexpected(exc, as_json)
@@ -228,15 +221,9 @@ def run_guarded(fn: Callable[[Any], int | None], args: Any, verbose: bool = Fals
     except InputError as exc:
         if verbose:
             traceback.print_exc()
-        print(f"error: {exc}", file=sys.stderr)
-        if as_json:
-            print_json_error(str(exc), EXIT_INPUT)
-        return EXIT_INPUT
+        return _failed(str(exc), EXIT_INPUT, as_json, "error: ")
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        if as_json:
-            print_json_error("interrupted", EXIT_INTERRUPTED)
-        return EXIT_INTERRUPTED
+        return _failed("interrupted", EXIT_INTERRUPTED, as_json)
     except Exception as exc:  # noqa: BLE001 - the last line of defence: never a raw traceback
         return _unexpected(exc, as_json)
 
@@ -249,11 +236,7 @@ def _no_space(exc: OSError, as_json: bool) -> int:
     )
     note = "" if plain else f" ({exc.strerror})"
     message = f"no space left on {where}{note}; free space there or write elsewhere"
-    with contextlib.suppress(OSError, ValueError, AttributeError):  # stderr on the same full disk
-        print(f"error: {message}", file=sys.stderr)
-    if as_json:
-        print_json_error(message, EXIT_UNEXPECTED)
-    return EXIT_UNEXPECTED
+    return _failed(message, EXIT_UNEXPECTED, as_json, "error: ")
 
 
 def _unexpected(exc: Exception, as_json: bool) -> int:
@@ -262,10 +245,17 @@ def _unexpected(exc: Exception, as_json: bool) -> int:
     where = f"traceback saved to {path}" if path else "the traceback could not be saved"
     first = str(exc).splitlines()[0][:300] if str(exc) else ""
     message = f"internal error: {type(exc).__name__}: {first} ({where}; please report it)"
-    print(message, file=sys.stderr)
+    return _failed(message, EXIT_UNEXPECTED, as_json)
+
+
+def _failed(message: str, code: int, as_json: bool, prefix: str = "") -> int:
+    """Exit status ``code``: ``prefix + message`` on stderr (a stderr that cannot be written, e.g. on
+    the same full disk, costs the line only), and with ``as_json`` the JSON error document."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        print(prefix + message, file=sys.stderr)
     if as_json:
-        print_json_error(message, EXIT_UNEXPECTED)
-    return EXIT_UNEXPECTED
+        print_json_error(message, code)
+    return code
 
 
 class _LossyStream(_Wrapped):

@@ -47,6 +47,8 @@ __all__ = [
 DEFAULT_MAX_RUN_STEPS = 1_000_000_000
 DEFAULT_MAX_CAMPAIGN_STEPS = 100_000_000_000
 _DEFAULT_MAX_MEMORY = 8 * 2**30
+#: what a budget option or variable may say for "no budget" (as 0 does)
+_NO_BUDGET = ("none", "off", "unlimited")
 #: size suffixes (lower case) -> bytes: SI prefixes (k, kb = 1000 B) and binary ones (kib = 1024 B)
 _UNITS = {"": 1, "b": 1}
 for _k, _p in enumerate("kmgt", start=1):
@@ -68,14 +70,12 @@ def default_max_memory() -> int:
 
 def parse_bytes(text: str | int | float | None, what: str = "--max-memory") -> int | None:
     """``"8GB"``, ``"512MiB"``, ``"1e9"`` -> bytes; ``0``/``"none"`` -> None (no budget)."""
-    if text is None:
+    if text is None or str(text).strip().lower() in _NO_BUDGET:
         return None
     if isinstance(text, int | float) and not isinstance(text, bool):
         value, unit = float(text), ""
     else:
         m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([a-zA-Z]*)\s*", str(text))
-        if str(text).strip().lower() in ("none", "off", "unlimited"):
-            return None
         if not m or m.group(2).lower() not in _UNITS:
             raise ResourceLimitError(
                 f"{what}: expected a size such as 8GB, 512MiB or 2e9 (bytes), got {text!r}"
@@ -83,15 +83,12 @@ def parse_bytes(text: str | int | float | None, what: str = "--max-memory") -> i
         value, unit = float(m.group(1)), m.group(2).lower()
     if not math.isfinite(value) or value < 0:
         raise ResourceLimitError(f"{what}: expected a finite size >= 0, got {text!r}")
-    n = int(value * _UNITS[unit])
-    return n or None
+    return int(value * _UNITS[unit]) or None
 
 
 def parse_count(text: str | int | float | None, what: str) -> int | None:
     """``"1e9"``/``"1000000"`` -> int; ``0``/``"none"`` -> None (no budget)."""
-    if text is None:
-        return None
-    if str(text).strip().lower() in ("none", "off", "unlimited"):
+    if text is None or str(text).strip().lower() in _NO_BUDGET:
         return None
     try:
         value = float(text)
@@ -148,19 +145,6 @@ def check_run_steps(n_steps: int, budgets: Budgets, where: str = "scenario") -> 
         )
 
 
-def check_campaign_steps(
-    run_steps: int, n_runs: int, budgets: Budgets, where: str = "campaign"
-) -> None:
-    """Refuse a campaign of more than ``budgets.max_campaign_steps`` run-steps in total."""
-    if budgets.max_campaign_steps is not None and run_steps > budgets.max_campaign_steps:
-        raise ResourceLimitError(
-            f"{where}: {n_runs:,} runs, {run_steps:.3g} run-steps in total exceed the budget of "
-            f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
-            f"simulation.horizon, or raise the budget with --max-campaign-steps / "
-            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS"
-        )
-
-
 def _tree_bytes(tree: Any) -> int:
     import jax
     import numpy as np
@@ -176,11 +160,10 @@ def run_memory_bytes(loop: Any) -> int:
     """Estimated peak memory of one run of ``loop`` [bytes] (shapes only, nothing computed)."""
     import jax
 
-    shapes = jax.eval_shape(type(loop).run, loop)
-    out = dict(shapes)
-    records = _tree_bytes(out.get("records"))
-    state = _tree_bytes(out.get("final"))
-    return 2 * records + 4 * state + _tree_bytes(loop)
+    out = dict(jax.eval_shape(type(loop).run, loop))
+    return (
+        2 * _tree_bytes(out.get("records")) + 4 * _tree_bytes(out.get("final")) + _tree_bytes(loop)
+    )
 
 
 def check_memory(loop: Any, budgets: Budgets, where: str = "scenario", batch: int = 1) -> int:
@@ -220,7 +203,13 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
         steps = max(steps, n)
         first_of_base.setdefault(inputs.base, r)
     total = steps * int(plan.n_runs)
-    check_campaign_steps(total, int(plan.n_runs), budgets, where)
+    if budgets.max_campaign_steps is not None and total > budgets.max_campaign_steps:
+        raise ResourceLimitError(
+            f"{where}: {int(plan.n_runs):,} runs, {total:.3g} run-steps in total exceed the budget of "
+            f"{budgets.max_campaign_steps:.3g}; lower campaign.runs (--runs), the grid sizes or "
+            f"simulation.horizon, or raise the budget with --max-campaign-steps / "
+            f"FORMATION_FTC_MAX_CAMPAIGN_STEPS"
+        )
     batch = 0
     for base, r in first_of_base.items():
         try:

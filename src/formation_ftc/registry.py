@@ -55,8 +55,6 @@ __all__ = [
     "plugin_modules",
 ]
 
-PyTree = Any
-
 
 @dataclass(frozen=True)
 class Method:
@@ -65,9 +63,8 @@ class Method:
     build: Callable[[Any], ClosedLoop]
     description: str = ""
     check: Callable[[Any], list[Condition]] | None = None
-    plot: Callable[[Any, Any, Path], list[Path]] | None = (
-        None  # (dataset, scenario, out_dir) -> PNGs
-    )
+    # (dataset, scenario, out_dir) -> PNGs
+    plot: Callable[[Any, Any, Path], list[Path]] | None = None
 
 
 #: Relations a verdict basis may use: name -> (arity, predicate on (lhs, rhs, tol)).
@@ -165,16 +162,8 @@ class ComparisonRow:
     ) -> ComparisonRow:
         """Row whose verdict is computed from ``basis`` ("match" when every clause holds)."""
         basis = tuple(tuple(_plain(x) for x in c) for c in basis)
-        return cls(
-            quantity,
-            published,
-            ours,
-            criterion,
-            "match" if basis_holds(basis) else "differs",
-            note,
-            reference,
-            basis,
-        )
+        verdict = "match" if basis_holds(basis) else "differs"
+        return cls(quantity, published, ours, criterion, verdict, note, reference, basis)
 
     @property
     def paper(self) -> str:
@@ -219,9 +208,8 @@ class Reproduction:
 
 
 _METHODS: dict[str, Method] = {}
-_REPRODUCTIONS: dict[
-    str, Reproduction | str
-] = {}  # a str: "module:attribute", see resolve_reference
+# a str: "module:attribute", see resolve_reference
+_REPRODUCTIONS: dict[str, Reproduction | str] = {}
 
 #: Display order of the built-in papers in the report (loading is by entry point, not by this list).
 PAPER_MODULES = ["li2020", "yang2013", "gui2022", "mehrabian", "azizi2009"]
@@ -262,12 +250,11 @@ def resolve_reference(ref: Any) -> Any:
 def register_reproduction(rep: Reproduction | str, paper: str | None = None) -> Reproduction | str:
     """Register a reproduction, or by a ``"module:attribute"`` reference (give ``paper``), imported
     when it is looked up."""
-    if isinstance(rep, str):
-        if paper is None:
-            raise ValueError(f"register_reproduction({rep!r}): a reference needs its paper")
-        _REPRODUCTIONS[paper] = rep
-    else:
-        _REPRODUCTIONS[rep.paper] = rep
+    if not isinstance(rep, str):
+        paper = rep.paper
+    elif paper is None:
+        raise ValueError(f"register_reproduction({rep!r}): a reference needs its paper")
+    _REPRODUCTIONS[paper] = rep
     return rep
 
 
@@ -298,9 +285,8 @@ def reproductions() -> dict[str, Reproduction]:
         try:
             _resolved_reproduction(paper)
         except Exception:  # noqa: BLE001 - recorded and reported on lookup
-            PLUGIN_ERRORS[rep.partition(":")[0] if isinstance(rep, str) else paper] = (
-                traceback.format_exc()
-            )
+            module = rep.partition(":")[0] if isinstance(rep, str) else paper
+            PLUGIN_ERRORS[module] = traceback.format_exc()
             del _REPRODUCTIONS[paper]
     order = {p: k for k, p in enumerate(PAPER_MODULES)}
     return {
@@ -344,10 +330,5 @@ def load_plugins() -> None:
 
 
 def _plugin_error_hint() -> str:
-    if not PLUGIN_ERRORS:
-        return ""
-    return (
-        " (plug-ins that failed to import: "
-        + ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
-        + ")"
-    )
+    failed = ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
+    return f" (plug-ins that failed to import: {failed})" if failed else ""

@@ -30,9 +30,7 @@ def close_matches(
 def did_you_mean(word: str, candidates: Iterable[str]) -> str:
     """``" (did you mean 'x' or 'y'?)"`` or ``""`` when nothing is close."""
     found = close_matches(word, candidates)
-    if not found:
-        return ""
-    return " (did you mean " + " or ".join(repr(f) for f in found) + "?)"
+    return f" (did you mean {' or '.join(map(repr, found))}?)" if found else ""
 
 
 @dataclass(frozen=True)
@@ -97,8 +95,7 @@ def unknown_fields(
         if isinstance(value, Mapping):
             subs = [s for sub in allowed[key] for s in _resolve(sub, root)]
             if subs:
-                merged = {"anyOf": subs}
-                out.extend(unknown_fields(value, merged, root, prefix=f"{path}."))
+                out.extend(unknown_fields(value, {"anyOf": subs}, root, prefix=f"{path}."))
     return out
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 import operator
-import types
 import typing
 from collections.abc import Callable
 from typing import Annotated, Any
@@ -63,10 +62,9 @@ def _allows_bool(annotation: Any) -> bool:
     origin = typing.get_origin(annotation)
     if origin is Annotated:
         return _allows_bool(typing.get_args(annotation)[0])
+    # unions and containers (every generic alias has an origin)
     args = typing.get_args(annotation)
-    if origin in (typing.Union, types.UnionType) or origin is not None:
-        return any(_allows_bool(a) for a in args if a is not Ellipsis)
-    return False
+    return origin is not None and any(_allows_bool(a) for a in args if a is not Ellipsis)
 
 
 def _mentions_float(annotation: Any) -> bool:
@@ -259,16 +257,12 @@ class SimulationSection(StrictModel):
     max_velocity: float = Field(
         1.0e4,
         gt=0,
-        description=(
-            "Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s]."
-        ),
+        description="Admissible set: a run whose spacecraft velocity exceeds this magnitude has diverged [m/s].",
     )
     max_rate: float = Field(
         100.0,
         gt=0,
-        description=(
-            "Admissible set: a run whose spacecraft body rate exceeds this magnitude has diverged [rad/s]."
-        ),
+        description="Admissible set: a run whose spacecraft body rate exceeds this magnitude has diverged [rad/s].",
     )
     max_pitch: float = Field(
         1.5607963267948966,
