@@ -33,6 +33,7 @@ The file's tables (every text may name quantities as ``{name}``, ``{name:.4f}`` 
 
 from __future__ import annotations
 
+import functools
 import importlib
 import time
 import tomllib
@@ -239,12 +240,8 @@ def study(
     """The :class:`~formation_ftc.registry.Reproduction` of ``papers/<paper>/study.toml`` whose
     numbers ``quantities`` computes from the runs."""
     spec = read_study(paper)["reproduction"]
-
-    def run(
-        out_dir: Path, progress=lambda f, m: None, overrides: dict | None = None
-    ) -> PaperReport:
-        return run_study(paper, quantities, out_dir, progress, overrides, prepare=prepare)
-
+    # run(out_dir, progress, overrides): the study's run with the paper's own arguments bound
+    run = functools.partial(run_study, paper, quantities, prepare=prepare)
     return Reproduction(
         paper=paper,
         title=spec["title"],

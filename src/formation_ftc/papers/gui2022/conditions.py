@@ -49,10 +49,7 @@ def d_max(A0: float, n: float, samples: int = 200_001) -> float:
 def implied_lyapunov(L1, L2) -> tuple[np.ndarray, np.ndarray]:
     """(P, Y) implied by printed gains via (9) with P11 = I3 (E002-06)."""
     L1, L2 = np.asarray(L1, float), np.asarray(L2, float)
-    P = np.zeros((6, 6))
-    P[:3, :3] = np.eye(3)
-    P[3:, :] = L2
-    P[:3, 3:] = L2[:, :3].T
+    P = np.vstack([np.hstack([np.eye(3), L2[:, :3].T]), L2])
     P = (P + P.T) / 2
     return P, P @ L1
 

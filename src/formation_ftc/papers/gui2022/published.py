@@ -19,15 +19,7 @@ __all__ = [
     "Q0_INITIAL",
     "CARE_Q_SCALE",
     "ESTIMATE_OFFSET",
-    "CITATION",
-    "TITLE",
 ]
-
-TITLE = "Reconfigurable fault-tolerant control for spacecraft formation flying based on iterative learning algorithms"
-CITATION = (
-    "Gui, H., Jia, Q., Li, X., Cheng, Y. (2022). Reconfigurable Fault-Tolerant Control for Spacecraft "
-    "Formation Flying Based on Iterative Learning Algorithms. Applied Sciences 12."
-)
 
 N_MEAN_MOTION = 0.0015  # [rad/s], section 5
 A0 = 1.2e-3  # perturbation amplitude [m/s^2] (printed "N", per unit mass: E002-03)

@@ -7,9 +7,8 @@ from __future__ import annotations
 from formation_ftc.methods.composed import register_conditions, register_paper_figures
 from formation_ftc.registry import register_reproduction
 
-_HERE = (
-    "formation_ftc.papers.mehrabian"  # its modules import JAX: referenced, imported on first use
-)
+# its modules import JAX: referenced, imported on first use
+_HERE = "formation_ftc.papers.mehrabian"
 register_reproduction(f"{_HERE}.reproduction:REPRODUCTION", paper="mehrabian")
 # type names as text: importing a home imports JAX, which start-up commands avoid
 # (tests/papers/test_registrations.py checks each names a registered type)

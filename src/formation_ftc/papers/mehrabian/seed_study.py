@@ -63,11 +63,16 @@ def with_seed(loop: ClosedLoop, seed: int) -> ClosedLoop:
     return dataclasses.replace(loop, plant=plant, estimator=est, seed=sd)
 
 
-def _one_structure(loops) -> None:
+def _case_loops(scenario_names: list[str], overrides: dict) -> tuple[list, list[ClosedLoop]]:
+    """The scenarios ``scenario_names`` with ``overrides`` and their loops, which must share one
+    compiled program."""
+    scns = [load_scenario(n, overrides) for n in scenario_names]
+    loops = [build_loop(s) for s in scns]
     if len({c.static_key for c in loops}) != 1:
         raise RuntimeError(
             "the Mehrabian cases must share one compiled program (static keys differ)"
         )
+    return scns, loops
 
 
 def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | None = None):
@@ -77,11 +82,8 @@ def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | Non
     for bit equal). Returns (metrics dict of arrays shaped (n_scenarios, n_seeds), diverged steps
     (n_scenarios, n_seeds))."""
     ov = dict(overrides or {})
-    scns = [load_scenario(n, ov) for n in scenario_names]
-    n_steps = scns[0].simulation.n_steps
-    scns = [load_scenario(n, {**ov, "simulation.record_every": n_steps}) for n in scenario_names]
-    loops = [build_loop(s) for s in scns]
-    _one_structure(loops)
+    n_steps = load_scenario(scenario_names[0], ov).simulation.n_steps
+    _, loops = _case_loops(scenario_names, {**ov, "simulation.record_every": n_steps})
     P, row_axes, col_axes = stack_params_grid([[with_seed(c, s) for s in seeds] for c in loops])
     out = batched_grid_run(loops[0], row_axes, col_axes, len(loops), len(seeds))(P)
     mets = {m.name: np.array(v) for m, v in zip(loops[0].metrics, out["metrics"], strict=True)}
@@ -124,10 +126,7 @@ def _replay_diverged(
 
 
 def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = None):
-    ov = {**(overrides or {}), "simulation.seed": seed}
-    scns = [load_scenario(n, ov) for n in scenario_names]
-    loops = [build_loop(s) for s in scns]
-    _one_structure(loops)
+    scns, loops = _case_loops(scenario_names, {**(overrides or {}), "simulation.seed": seed})
     # one batch of the cases (leaves shared by every run stay unbatched)
     P, axes = stack_params([with_seed(c, seed) for c in loops])
     out = jax.tree_util.tree_map(np.asarray, batched_run(loops[0], axes, len(loops))(P))
