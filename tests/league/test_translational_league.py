@@ -80,7 +80,7 @@ def test_every_method_gets_the_same_truth_faults_and_scores():
 
 
 def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_league):
-    path = tiny_league(tmp_path)
+    path = tiny_league(tmp_path, traced=True)
     out = tmp_path / "out"
     outcome = run_league(path, out, seeds=2)
     spec = load_league(path)
@@ -374,7 +374,8 @@ def test_gui2022_league_gain_is_the_printed_one_on_the_league_orbit(method):
             [0, 0, 0.0063, 0, 0, 0.1126],
         ]
     )
-    cell = next(c for c in plan_cells(load_league("translational"))[method] if c.case == "none")
+    cells = plan_cells(load_league("translational"), [method])[method]  # that method's cells alone
+    cell = next(c for c in cells if c.case == "none")
     law = api.build_loop(api.load_scenario(cell.raw)).controller.law  # f = m_nom u
     K = np.asarray(law.K)
     assert np.max(np.abs(K - printed)) < 1e-4
