@@ -73,30 +73,40 @@ def test_importing_the_package_changes_only_float64(tmp_path):
     assert got["threefry_unrolled"] is False  # JAX's own lowering registry untouched
 
 
-def test_configure_sets_the_cache_and_tuning_and_is_inherited(tmp_path):
-    got = _probe(tmp_path)
+@pytest.fixture(scope="module")
+def configured(tmp_path_factory) -> tuple:
+    """(its temporary directory, the probe) of a process configured with the package's defaults, read by
+    several tests: one interpreter start for all of them."""
+    tmp = tmp_path_factory.mktemp("configured")
+    return tmp, _probe(tmp)
+
+
+def test_configure_sets_the_cache_and_tuning_and_is_inherited(configured):
+    base, got = configured
     assert got["x64"] is True and got["dir"] is not None and got["threefry_unrolled"] is True
     assert runtime.ENV_SWITCH in got["env_changed"]
     # a process started by a configured one configures itself on import
-    child = _probe(tmp_path, configure=False, **{runtime.ENV_SWITCH: "on"})
+    child = _probe(base, configure=False, **{runtime.ENV_SWITCH: "on"})
     assert child["dir"] == got["dir"] and child["threefry_unrolled"] is True
 
 
 @pytest.mark.parametrize("override, expected", [(None, 0.2), ("0", 0.0), ("1.5", 1.5)])
 def test_cache_threshold_defaults_to_a_fifth_of_a_second_and_follows_jax_variable(
-    tmp_path, override, expected
+    tmp_path, configured, override, expected
 ):
-    extra = {} if override is None else {"JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": override}
-    got = _probe(tmp_path, **extra)
+    if override is None:  # the package's default: the shared probe
+        got = configured[1]
+    else:
+        got = _probe(tmp_path, JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=override)
     assert got["x64"] is True
     assert got["min"] == expected
 
 
-def test_cache_directory_is_keyed_by_the_cpu_client_thread_count(tmp_path):
+def test_cache_directory_is_keyed_by_the_cpu_client_thread_count(tmp_path, configured):
     """XLA's compiled program depends on the thread count and JAX's cache key does not record it."""
     cores = len(os.sched_getaffinity(0))
-    default = _probe(tmp_path)
-    assert default["dir"] == str(tmp_path / "cache" / f"cpu-threads-{cores}") and default[
+    base, default = configured
+    assert default["dir"] == str(base / "cache" / f"cpu-threads-{cores}") and default[
         "threads"
     ] == str(cores)
     for n in ("1", "3"):

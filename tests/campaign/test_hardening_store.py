@@ -150,6 +150,7 @@ def _flip_metric_byte(path: Path, value: float) -> None:
 
 def test_flipped_byte_in_a_metric_is_detected_and_recomputed(tmp_path, tiny, capsys):
     raw = tiny()
+    raw["traces"]["runs"] = []  # no traced runs: a program of their own, and no metric in them
     out = tmp_path / "c"
     first = run_campaign(raw, out).results
     chunk = out / "chunks" / "chunk-000001.parquet"

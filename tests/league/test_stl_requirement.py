@@ -21,7 +21,7 @@ FORMULA = "F[0,20](G(shape_error <= 1))"
 
 
 def _league(tmp_path, tiny_league, **requirement):
-    path = tiny_league(tmp_path, methods=("lqr",))
+    path = tiny_league(tmp_path, methods=("lqr",), traced=True)
     raw = tomllib.loads(path.read_text())
     raw["league"]["requirement"].update(requirement)
     for k in [k for k, v in requirement.items() if v is None]:

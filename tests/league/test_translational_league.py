@@ -4,8 +4,6 @@ leaderboard, resume, and the rejections of bad league files (exit code 2 from th
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
@@ -14,6 +12,7 @@ import pandas as pd
 import pytest
 import tomli_w
 
+from formation_ftc.cli import main
 from formation_ftc.league.battery import load_battery
 from formation_ftc.league.definition import (
     LeagueError,
@@ -81,7 +80,7 @@ def test_every_method_gets_the_same_truth_faults_and_scores():
 
 
 def test_tiny_league_runs_resumes_and_writes_the_leaderboard(tmp_path, tiny_league):
-    path = tiny_league(tmp_path)
+    path = tiny_league(tmp_path, traced=True)
     out = tmp_path / "out"
     outcome = run_league(path, out, seeds=2)
     spec = load_league(path)
@@ -323,31 +322,15 @@ def test_a_method_that_cannot_drive_the_league_plant_is_rejected(tmp_path, tiny_
         plan_cells(load_league(path))
 
 
-def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path):
-    r = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "formation_ftc",
-            "league",
-            "run",
-            "translational",
-            "--out",
-            str(tmp_path / "o"),
-            "--methods",
-            "nope",
-            "--seeds",
-            "1",
-        ],
-        capture_output=True,
-        text=True,
-    )
-    assert r.returncode == 2, r.stderr
-    assert "nope" in r.stderr and "li2020-thm1" in r.stderr
-    r = subprocess.run(
-        [sys.executable, "-m", "formation_ftc", "league", "list"], capture_output=True, text=True
-    )
-    assert r.returncode == 0 and "translational" in r.stdout
+def test_cli_rejects_unknown_method_with_exit_code_2(tmp_path, capsys):
+    # in-process (the command line's exit status is main's return value; `python -m formation_ftc`
+    # itself is tests/test_cli_conventions.py's)
+    argv = ["league", "run", "translational", "--out", str(tmp_path / "o"), "--methods", "nope"]
+    assert main([*argv, "--seeds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "nope" in err and "li2020-thm1" in err
+    assert main(["league", "list"]) == 0
+    assert "translational" in capsys.readouterr().out
 
 
 def test_a_method_states_flight_knowledge_per_level_and_nothing_else(tmp_path, tiny_league):
@@ -391,7 +374,8 @@ def test_gui2022_league_gain_is_the_printed_one_on_the_league_orbit(method):
             [0, 0, 0.0063, 0, 0, 0.1126],
         ]
     )
-    cell = next(c for c in plan_cells(load_league("translational"))[method] if c.case == "none")
+    cells = plan_cells(load_league("translational"), [method])[method]  # that method's cells alone
+    cell = next(c for c in cells if c.case == "none")
     law = api.build_loop(api.load_scenario(cell.raw)).controller.law  # f = m_nom u
     K = np.asarray(law.K)
     assert np.max(np.abs(K - printed)) < 1e-4
