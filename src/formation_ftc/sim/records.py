@@ -1,14 +1,13 @@
-"""A run's records as an ``xarray.Dataset``, and the leaves of a run's carry by the names diagnostics print.
+"""A run's records as an ``xarray.Dataset``.
 
-:meth:`formation_ftc.sim.loop.ClosedLoop.dataset` and :meth:`~formation_ftc.sim.loop.ClosedLoop.spacecraft_axis`
-use these; they live apart from the loop because they import xarray and pandas (numpy side only).
+:meth:`formation_ftc.sim.loop.ClosedLoop.dataset` uses it; it lives apart from the loop because it
+imports xarray and pandas (numpy side only).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import jax
 import numpy as np
 
 from formation_ftc.sim.components import KIND_SLOTS
@@ -113,12 +112,3 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         coords=xr.Coordinates(variables, indexes),
         attrs=attrs or {},
     )
-
-
-def _leaf_by_name(loop, name: str):
-    """Leaf of the run's carry named ``name`` (as the divergence diagnostic prints it), or None."""
-    from formation_ftc.sim.engine import _path_name
-
-    state = jax.eval_shape(lambda p: (p.initial_state(), None), loop)
-    flat, _ = jax.tree_util.tree_flatten_with_path(state)
-    return next((leaf for path, leaf in flat if _path_name(path) == name), None)
