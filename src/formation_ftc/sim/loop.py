@@ -99,6 +99,11 @@ def _once(k, values):
     )
 
 
+def _held(k, values):
+    """:func:`_once` when the step index ``k`` is known, else ``values`` as they are."""
+    return values if k is None else _once(k, values)
+
+
 def _rk4_increment(dt, a, b, c, d):
     """The RK4 increment over a step ``dt`` from the stage slopes (or integrands) ``a .. d``."""
     return (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d)
@@ -313,10 +318,9 @@ class ClosedLoop:
         # the first step's table is asked for without its index: k = 0 there
         step = StepContext(jnp.asarray(0 if k is None else k, dtype=jnp.int64), t_k, dt)
         for s in held_slots:  # sampled at t_k, held over the step (zero-order hold)
-            held = getattr(self, s).held_exogenous(step)
             table[s] = jax.tree_util.tree_map(
                 lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
-                _once(k, held) if k is not None else held,
+                _held(k, getattr(self, s).held_exogenous(step)),
             )
         return table
 
