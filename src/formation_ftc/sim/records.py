@@ -87,13 +87,10 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         if sig.frame:
             meta["frame"] = sig.frame
         data[sig.name] = (dims, arr, meta)
-        for d, n in zip(dims, arr.shape, strict=True):
-            if d == "axis" and "axis" not in coords:
-                coords["axis"] = (
-                    "axis",
-                    ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
-                    {"long_name": "vector component"},
-                )
+        if "axis" in dims and "axis" not in coords:  # labelled by the first signal that has it
+            n = arr.shape[dims.index("axis")]
+            labels = ["x", "y", "z"][:n] if n <= 3 else list(range(n))
+            coords["axis"] = ("axis", labels, {"long_name": "vector component"})
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items() if k in used}
     # numpy variables and pandas indexes, which xarray takes as they are: from anything else it
