@@ -88,33 +88,10 @@ def stack_params(params: Sequence[Any], size: int | None = None) -> tuple[Any, A
     size = len(params) if size is None else int(size)
     if size < len(params):
         raise ValueError(f"stack_params: size = {size} < number of runs {len(params)}")
-    flat, treedef = _flattened("stack_params", {str(k): p for k, p in enumerate(params)})
-    leaves: list[np.ndarray] = []
-    axes: list[int | None] = []
-    for vals in zip(*flat, strict=True):
-        arrs = [np.asarray(v) for v in vals]
-        if all(_same(a, arrs[0]) for a in arrs[1:]):
-            leaves.append(arrs[0])
-            axes.append(None)
-        else:  # padded with the last run
-            leaves.append(np.stack(arrs + [arrs[-1]] * (size - len(arrs))))
-            axes.append(0)
-    unflat = jax.tree_util.tree_unflatten
-    return unflat(treedef, leaves), unflat(treedef, axes)
-
-
-def _flattened(fn: str, runs: dict[str, Any]) -> tuple[list[list[Any]], Any]:
-    """The leaves of every run (keyed by its label in the messages of ``fn``) and their common tree
-    definition; ValueError naming the first run of another structure."""
-    flat = [jax.tree_util.tree_flatten(p) for p in runs.values()]
-    treedef: Any = flat[0][1]  # jax's PyTreeDef is not resolvable from its stubs
-    first = next(iter(runs))
-    for label, (_, td) in zip(runs, flat, strict=True):
-        if td != treedef:
-            raise ValueError(
-                f"{fn}: run {label} has a different parameter structure than run {first}"
-            )
-    return [leaves for leaves, _ in flat], treedef
+    # one row of runs, padded with the last run: a leaf that differs is stacked down the "columns"
+    padded = [*params, *[params[-1]] * (size - len(params))]
+    batch, _, in_axes = _stack_grid("stack_params", [padded], lambda r, c: str(c))
+    return batch, in_axes
 
 
 def _batched_flags(axes: Any) -> tuple[bool, ...]:
@@ -234,10 +211,22 @@ def stack_params_grid(params: Sequence[Sequence[Any]]) -> tuple[Any, Any, Any]:
     for r, row in enumerate(rows):
         if len(row) != n_cols:
             raise ValueError(f"stack_params_grid: row {r} has {len(row)} runs, row 0 has {n_cols}")
-    flat, treedef = _flattened(
-        "stack_params_grid",
-        {f"({r}, {c})": p for r, row in enumerate(rows) for c, p in enumerate(row)},
-    )
+    return _stack_grid("stack_params_grid", rows, lambda r, c: f"({r}, {c})")
+
+
+def _stack_grid(fn: str, rows: list, label) -> tuple[Any, Any, Any]:
+    """:func:`stack_params_grid` of ``rows`` (equally long, not empty): ValueError naming the first run
+    of another structure by ``label(r, c)`` in the messages of ``fn``."""
+    runs = {label(r, c): p for r, row in enumerate(rows) for c, p in enumerate(row)}
+    flat_defs = [jax.tree_util.tree_flatten(p) for p in runs.values()]
+    treedef: Any = flat_defs[0][1]  # jax's PyTreeDef is not resolvable from its stubs
+    for name, (_, td) in zip(runs, flat_defs, strict=True):
+        if td != treedef:
+            raise ValueError(
+                f"{fn}: run {name} has a different parameter structure than run {label(0, 0)}"
+            )
+    flat = [leaves for leaves, _ in flat_defs]
+    n_cols = len(rows[0])
     leaves: list[np.ndarray] = []
     row_axes: list[int | None] = []
     col_axes: list[int | None] = []

@@ -50,7 +50,7 @@ from formation_ftc.sim.components import (
     tree_take,
 )
 from formation_ftc.sim.contract import capability
-from formation_ftc.sim.engine import _all_finite, run_fixed_step
+from formation_ftc.sim.engine import _all_finite, _path_name, run_fixed_step
 
 __all__ = ["ClosedLoop", "LEFT_LIMIT", "COMMAND_SIGNAL", "APPLIED_SIGNAL", "NAVIGATION_ESTIMATE"]
 
@@ -212,7 +212,7 @@ class ClosedLoop:
                 f"metric_block = {self.metric_block} must be 0 (automatic) or a divisor of "
                 f"record_every = {self.record_every}"
             )
-        self._check_needs(labels)
+        self._check_needs(names, labels)
         recorded_names = [s.name for s in self.signals()]
         dup = sorted({n for n in recorded_names if recorded_names.count(n) > 1})
         if dup:
@@ -242,23 +242,19 @@ class ClosedLoop:
     def _slots(self) -> list[tuple[str, Any]]:
         return [(slot, getattr(self, slot)) for slot in KIND_SLOTS]
 
-    def _parts(self, labels: dict[str, str]) -> list[tuple[str, Any]]:
-        """``(label, component)`` of every slot and evaluation: ``"controller lqr"``."""
-        out = [(f"{slot} {labels.get(slot, type(c).__name__)}", c) for slot, c in self._slots()]
+    def _check_needs(self, names: dict[str, str], labels: dict[str, str]) -> None:
+        """Every capability a part needs is provided by some part of the loop (the one place the
+        compatibility of components is decided; their ``needs()`` / ``provides()``). A part is named
+        by its slot and type (``"controller lqr"``) or, an evaluation, by its label."""
+        parts = [(f"{slot} {names[slot]}", c) for slot, c in self._slots()]
         for k, ev in enumerate(self.evaluations):  # a label names the scenario's table or its adder
             key = f"evaluations[{k}]"
-            out.append((labels.get(key, f"{key} {type(ev).__name__}"), ev))
-        return out
-
-    def _check_needs(self, labels: dict[str, str]) -> None:
-        """Every capability a part needs is provided by some part of the loop (the one place the
-        compatibility of components is decided; their ``needs()`` / ``provides()``)."""
-        parts = self._parts(labels)
-        provided: dict[str, list[str]] = {}
-        for label, comp in parts:
+            parts.append((labels.get(key, f"{key} {type(ev).__name__}"), ev))
+        provided: set[str] = set()
+        for _, comp in parts:
             for cap in comp.provides():
                 capability(cap)  # a declaration naming no capability is a bug
-                provided.setdefault(cap, []).append(label)
+                provided.add(cap)
         for label, comp in parts:
             for cap, use in comp.needs().items():
                 entry = capability(cap)
@@ -308,20 +304,20 @@ class ClosedLoop:
 
         slots = ("plant", "actuator", "controller", "network", "estimator", "supervisor")
         truth = ("plant", "actuator")
-        held = [s for s in slots if getattr(self, s).holds_exogenous]
+        held_slots = [s for s in slots if getattr(self, s).holds_exogenous]
 
         def at(t_flight, t_truth):
             return {
                 s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
                 for s in slots
-                if s not in held
+                if s not in held_slots
             }
 
         table = jax.vmap(at)(ts, tf)
         n = ts.shape[0]
         # the first step's table is asked for without its index: k = 0 there
         step = StepContext(jnp.asarray(0 if k is None else k, dtype=jnp.int64), t_k, dt)
-        for s in held:  # sampled at t_k, held over the step (zero-order hold)
+        for s in held_slots:  # sampled at t_k, held over the step (zero-order hold)
             table[s] = jax.tree_util.tree_map(
                 lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)),
                 _held(k, getattr(self, s).held_exogenous(step)),
@@ -586,8 +582,7 @@ class ClosedLoop:
 
     def _sample(self, state: dict, outputs: dict) -> dict:
         """The step's ``outputs`` at t_k with the usage integrals at t_k and every evaluation's signals."""
-        for name, v in state["usage"].items():
-            outputs[name] = v
+        outputs.update(state["usage"])
         return self._evaluated(outputs)
 
     def _evaluated(self, outputs: dict) -> dict:
@@ -784,9 +779,9 @@ class ClosedLoop:
     def spacecraft_axis(self, name: str) -> int | None:
         """Axis of the spacecraft dimension of the carry leaf ``name`` (as diagnostics print it:
         ``"0.plant.q"``), or None (no such leaf, or one not per spacecraft)."""
-        from formation_ftc.sim.records import _leaf_by_name
-
-        leaf = _leaf_by_name(self, name)
+        state = jax.eval_shape(lambda p: (p.initial_state(), None), self)
+        flat, _ = jax.tree_util.tree_flatten_with_path(state)
+        leaf = next((leaf for path, leaf in flat if _path_name(path) == name), None)
         if leaf is None:
             return None
         shape, n = np.shape(leaf), self.count

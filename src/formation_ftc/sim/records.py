@@ -1,14 +1,13 @@
-"""A run's records as an ``xarray.Dataset``, and the leaves of a run's carry by the names diagnostics print.
+"""A run's records as an ``xarray.Dataset``.
 
-:meth:`formation_ftc.sim.loop.ClosedLoop.dataset` and :meth:`~formation_ftc.sim.loop.ClosedLoop.spacecraft_axis`
-use these; they live apart from the loop because they import xarray and pandas (numpy side only).
+:meth:`formation_ftc.sim.loop.ClosedLoop.dataset` uses it; it lives apart from the loop because it
+imports xarray and pandas (numpy side only).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import jax
 import numpy as np
 
 from formation_ftc.sim.components import KIND_SLOTS
@@ -88,13 +87,10 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         if sig.frame:
             meta["frame"] = sig.frame
         data[sig.name] = (dims, arr, meta)
-        for d, n in zip(dims, arr.shape, strict=True):
-            if d == "axis" and "axis" not in coords:
-                coords["axis"] = (
-                    "axis",
-                    ["x", "y", "z"][:n] if n <= 3 else list(range(n)),
-                    {"long_name": "vector component"},
-                )
+        if "axis" in dims and "axis" not in coords:  # labelled by the first signal that has it
+            n = arr.shape[dims.index("axis")]
+            labels = ["x", "y", "z"][:n] if n <= 3 else list(range(n))
+            coords["axis"] = ("axis", labels, {"long_name": "vector component"})
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items() if k in used}
     # numpy variables and pandas indexes, which xarray takes as they are: from anything else it
@@ -113,12 +109,3 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         coords=xr.Coordinates(variables, indexes),
         attrs=attrs or {},
     )
-
-
-def _leaf_by_name(loop, name: str):
-    """Leaf of the run's carry named ``name`` (as the divergence diagnostic prints it), or None."""
-    from formation_ftc.sim.engine import _path_name
-
-    state = jax.eval_shape(lambda p: (p.initial_state(), None), loop)
-    flat, _ = jax.tree_util.tree_flatten_with_path(state)
-    return next((leaf for path, leaf in flat if _path_name(path) == name), None)
