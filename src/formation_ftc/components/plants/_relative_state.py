@@ -1,6 +1,6 @@
-"""Shared part of the point-mass plants whose state is the (N, 6) LVLH relative state
-``q = [position, velocity]`` (``clohessy-wiltshire``, ``relative-lvlh``): the base class and the
-section fields of their spacecraft."""
+"""Shared part of the point-mass plants whose state is, or is seen by sensors as, the (N, 6) LVLH
+relative state ``q = [position, velocity]`` (``clohessy-wiltshire``, ``clohessy-wiltshire-zoh``,
+``relative-lvlh``, ``orbital-truth``): the base class and the section fields of their spacecraft."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from pydantic import Field, model_validator
 from formation_ftc.components._registry import builder_input
 from formation_ftc.components._sections import Vec3, Vec3Expr, check_rows, initial_states
 from formation_ftc.config.base import StrictModel
+from formation_ftc.core.vector3 import norm3, sq_norm3
 from formation_ftc.sim.components import Plant
 
 __all__ = ["RelativeStatePlant", "PointMassSection"]
@@ -20,15 +21,17 @@ __all__ = ["RelativeStatePlant", "PointMassSection"]
 
 class RelativeStatePlant(Plant):
     """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views and the
-    commanded delta-v / control-effort usage integrals (subclasses give the rates); the subclasses'
-    fields ``mass`` (N,) [kg] and ``initial_state_lvlh`` (N, 6) [m, m/s] give the count and the
-    initial state."""
+    commanded delta-v int ||u_i|| / m_i dt [m/s] / control-effort int ||u_i||^2 dt [N^2 s] usage
+    integrals; the subclasses' fields ``initial_state_lvlh`` (N, 6) [m, m/s] and ``mass`` (N,) [kg]
+    give the count, the initial state and the delta-v."""
 
-    mass: Any  # declared by the subclasses (dataclass fields there)
+    # declared by the subclasses (dataclass fields there; the ZOH CW plant has no mass)
+    initial_state_lvlh: Any
+    mass: Any
 
     @property
     def count(self) -> int:
-        return int(np.shape(self.mass)[0])
+        return int(np.shape(self.initial_state_lvlh)[0])
 
     def initial_state(self):
         return {"q": self.initial_state_lvlh}
@@ -46,6 +49,9 @@ class RelativeStatePlant(Plant):
 
     def usage_names(self):
         return ("delta_v", "control_effort")
+
+    def usage_rates(self, t, x, command):
+        return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
 
 
 class PointMassSection(StrictModel):

@@ -65,23 +65,14 @@ class RigidBodyTorquePlant(Plant):
 # by operation they compiled about 50 small programs (1.4-1.5 s) the first time a process loaded such a
 # scenario.
 @functools.cache
-def _quaternion_from_euler():
-    """The jitted ZYX Euler -> quaternion map (compiled on first use: JAX is imported by builds only)."""
+def _jitted(name: str):
+    """The jitted map ``name`` of :mod:`formation_ftc.core.euler_quaternion` (ZYX Euler <-> quaternion),
+    compiled on first use (JAX is imported by builds only)."""
     import jax
 
-    from formation_ftc.core.euler_quaternion import quaternion_from_euler_zyx
+    from formation_ftc.core import euler_quaternion
 
-    return jax.jit(quaternion_from_euler_zyx)
-
-
-@functools.cache
-def _euler_from_quaternion():
-    """The jitted quaternion -> ZYX Euler map (compiled on first use)."""
-    import jax
-
-    from formation_ftc.core.euler_quaternion import euler_zyx_from_quaternion
-
-    return jax.jit(euler_zyx_from_quaternion)
+    return jax.jit(getattr(euler_quaternion, name))
 
 
 class RigidBodyAttitudeSection(StrictModel):
@@ -126,12 +117,7 @@ class RigidBodyAttitudeSection(StrictModel):
     @property
     def count(self) -> int:
         """Number of spacecraft N [-]."""
-        rows = (
-            self.initial_attitude_deg
-            if self.initial_attitude_deg is not None
-            else self.initial_quaternion
-        )
-        return len(rows or [])
+        return len(self.initial_attitude_deg or self.initial_quaternion or [])
 
     def body_rates(self) -> np.ndarray:
         """(N, 3) initial body rates as given [rad/s] (default 0)."""
@@ -145,7 +131,9 @@ class RigidBodyAttitudeSection(StrictModel):
             p = np.asarray(self.initial_quaternion, dtype=float)
             return p / np.linalg.norm(p, axis=-1, keepdims=True)
         return np.asarray(
-            _quaternion_from_euler()(np.deg2rad(np.asarray(self.initial_attitude_deg, float)))
+            _jitted("quaternion_from_euler_zyx")(
+                np.deg2rad(np.asarray(self.initial_attitude_deg, float))
+            )
         )
 
     def quaternions(self) -> np.ndarray:
@@ -154,4 +142,4 @@ class RigidBodyAttitudeSection(StrictModel):
 
     def euler_angles(self) -> np.ndarray:
         """(N, 3) initial 3-2-1 Euler angles [rad] of the plant's state."""
-        return np.asarray(_euler_from_quaternion()(self.quaternions()))
+        return np.asarray(_jitted("euler_zyx_from_quaternion")(self.quaternions()))

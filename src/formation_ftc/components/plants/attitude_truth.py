@@ -29,6 +29,7 @@ from formation_ftc.components.plants._rigid_body import (
     RigidBodyTorquePlant,
 )
 from formation_ftc.core.constants import MU_EARTH, R_EARTH
+from formation_ftc.core.dynamics.attitude_quaternion import inverse_3x3
 from formation_ftc.core.dynamics.gravity_gradient import (
     attitude_relative_to_lvlh,
     gravity_gradient_torque_unit,
@@ -44,7 +45,6 @@ from formation_ftc.sim.contract import as_float
 __all__ = [
     "AttitudeTruthPlant",
     "AttitudeTruthSection",
-    "batched_inverse_3x3",
     "initial_state_in",
     "initial_inertial_state",
     "STATE_FRAMES",
@@ -54,35 +54,6 @@ __all__ = [
 STATE_FRAMES = ("inertial", "lvlh")
 
 VEC = ("spacecraft", "axis")
-
-
-def batched_inverse_3x3(J):
-    """Inverse of every (..., 3, 3) matrix by its adjugate (plain arithmetic that XLA fuses).
-
-    Parameters
-    ----------
-    J : array_like, shape (..., 3, 3)
-        Invertible matrices, e.g. inertias [kg m^2].
-
-    Returns
-    -------
-    jax.Array, shape (..., 3, 3)
-        The inverses (e.g. [1/(kg m^2)]).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from formation_ftc.components.plants.attitude_truth import batched_inverse_3x3
-    >>> J = np.array([np.diag([10.0, 20.0, 40.0]), [[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 1.0]]])
-    >>> bool(np.allclose(batched_inverse_3x3(J), np.linalg.inv(J)))
-    True
-    >>> np.asarray(batched_inverse_3x3(J))[0].diagonal()
-    array([0.1  , 0.05 , 0.025])
-    """
-    a, b, c = J[..., 0, :], J[..., 1, :], J[..., 2, :]
-    cols = jnp.stack([jnp.cross(b, c), jnp.cross(c, a), jnp.cross(a, b)], axis=-1)
-    det = jnp.sum(a * jnp.cross(b, c), axis=-1)
-    return cols / det[..., None, None]
 
 
 @component
@@ -174,7 +145,7 @@ class AttitudeTruthPlant(RigidBodyTorquePlant):
         if self.gravity_gradient:
             total = total + self.gravity_gradient_torque(t, q)
         # J w' = -w x J w + tau_gg + tau + iota
-        omega_dot = jnp.einsum("nij,nj->ni", batched_inverse_3x3(J), total)
+        omega_dot = jnp.einsum("nij,nj->ni", inverse_3x3(J), total)
         if self._lvlh():  # w_r' = w' + n w_r x o_b
             return {"omega": omega_dot + n * jnp.cross(w, o_b), "q": quat_kinematics(q, w)}
         return {"omega": omega_dot, "q": quat_kinematics(q, omega)}

@@ -113,21 +113,19 @@ class ClohessyWiltshirePlant(RelativeStatePlant):
             One stability condition per spacecraft (with a gain) and the RK4 step condition.
         """
         A, B = cw_matrices(self.mean_motion)
-        out = []
-        if gain is None:
-            eigs = [np.linalg.eigvals(A)]
-            margins = [np.full(A.shape[0], eigenvalue_margin(A))]
-        else:
-            eigs, margins = [], []
-            for i, m in enumerate(np.asarray(self.mass)):
-                # a subnormal mass: FloatingPointError, not inf gains
-                with np.errstate(over="raise"):
-                    K = gain / m
-                M = A - B @ K  # closed loop of the linear CW model
-                ev = np.linalg.eigvals(M)
-                tol = eigenvalue_margin(M)
-                eigs.append(ev)
-                margins.append(np.full(ev.shape, tol))
+        loops = [A]  # no control: the modes of A alone
+        if gain is not None:
+            # a subnormal mass: FloatingPointError, not inf gains
+            with np.errstate(over="raise"):
+                gains = [gain / m for m in np.asarray(self.mass)]
+            loops = [A - B @ K for K in gains]  # closed loops of the linear CW model
+        out, eigs, margins = [], [], []
+        for i, M in enumerate(loops):
+            ev = np.linalg.eigvals(M)
+            tol = eigenvalue_margin(M)
+            eigs.append(ev)
+            margins.append(np.full(ev.shape, tol))
+            if gain is not None:
                 out.append(
                     Condition(
                         name=f"closed-loop stable, spacecraft {i + 1}",

@@ -8,7 +8,6 @@ import dataclasses
 from typing import Any
 
 import jax.numpy as jnp
-import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import (
@@ -18,10 +17,11 @@ from formation_ftc.components._registry import (
     register,
 )
 from formation_ftc.components._sections import Vec3, initial_states, section_floats
+from formation_ftc.components.plants._relative_state import RelativeStatePlant
 from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component
+from formation_ftc.sim.components import Signal, TruthInputs, component
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["ZohClohessyWiltshirePlant", "ZohCwPlantSection", "STATE_COMPONENTS"]
@@ -31,7 +31,7 @@ STATE_COMPONENTS = ("x", "y", "z", "vx", "vy", "vz")
 
 
 @component
-class ZohClohessyWiltshirePlant(Plant):
+class ZohClohessyWiltshirePlant(RelativeStatePlant):
     """N deputies on linear CW dynamics (Gui2022 (1)-(3)) driven by accelerations::
 
         q_dot = A(n) q + B (a + d(t)),   q_{k+1} = Ad q_k + Bd (a_k + d(t_k))      (exact ZOH)
@@ -52,13 +52,6 @@ class ZohClohessyWiltshirePlant(Plant):
     # set by prepare() (empty until then: no leaves): Ad (6, 6) [-], Bd (6, 3) [s]
     Ad: Any = ()
     Bd: Any = ()
-
-    @property
-    def count(self) -> int:
-        return int(np.shape(self.initial_state_lvlh)[0])
-
-    def initial_state(self):
-        return {"q": self.initial_state_lvlh}
 
     def prepare(self, dt: float) -> ZohClohessyWiltshirePlant:
         A, B = cw_matrices_jax(self.mean_motion)
@@ -81,14 +74,13 @@ class ZohClohessyWiltshirePlant(Plant):
         return {"q": matvec(plant.Ad, x["q"]) + matvec(plant.Bd, w)}
 
     def provides(self) -> frozenset[str]:
-        caps = {"translational-state", "lvlh-relative-state", "perturbation-signal"}  # exact step
-        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
+        return super().provides() | {"perturbation-signal"}  # exact step: no stage evaluation
 
-    def position(self, x):
-        return x["q"][:, :3]
+    def usage_names(self):  # no usage integrals (no masses)
+        return ()
 
-    def velocity(self, x):
-        return x["q"][:, 3:]
+    def usage_rates(self, t, x, command):
+        return {}
 
     def signals(self):
         return (

@@ -20,7 +20,7 @@ from formation_ftc.components._registry import (
     builder_input,
     register,
 )
-from formation_ftc.components._sections import Vec3
+from formation_ftc.components._sections import Vec3, initial_states
 from formation_ftc.components.expressions import spacecraft_numbers
 from formation_ftc.config.base import ExprText
 from formation_ftc.core.dynamics.double_integrator import (
@@ -153,15 +153,10 @@ class DoubleIntegratorSection(InitialStateRows):
 
 def _build(sec: DoubleIntegratorSection, ctx: BuildContext) -> DoubleIntegratorPlant:
     """The plant of a validated ``[plant] type = "double-integrator"`` section."""
-    r0 = np.asarray(sec.initial_position, float)[:, : sec.axes]
-    v0 = (
-        np.zeros_like(r0)
-        if sec.initial_velocity is None
-        else np.asarray(sec.initial_velocity, float)[:, : sec.axes]
-    )
+    q0 = initial_states(sec.initial_position, sec.initial_velocity)  # (N, 6): x, y, z, vx, vy, vz
     return DoubleIntegratorPlant(
-        initial_position=as_float(r0),
-        initial_velocity=as_float(v0),
+        initial_position=as_float(q0[:, : sec.axes]),
+        initial_velocity=as_float(q0[:, 3 : 3 + sec.axes]),
         disturbance_acceleration=str(sec.disturbance_acceleration),
         zoh=sec.integration == "exact",
     )

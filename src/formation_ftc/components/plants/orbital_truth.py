@@ -29,6 +29,7 @@ from formation_ftc.components._sections import (
     section_floats,
 )
 from formation_ftc.components.expressions import vector_expression
+from formation_ftc.components.plants._relative_state import RelativeStatePlant
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import (
     EXPONENTIAL_ATMOSPHERE,
@@ -44,8 +45,7 @@ from formation_ftc.core.dynamics.orbital_truth import (
     perturbed_acceleration,
     roe_to_elements,
 )
-from formation_ftc.core.vector3 import norm3, sq_norm3
-from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
+from formation_ftc.sim.components import Signal, TruthInputs, component, static
 from formation_ftc.sim.contract import as_float
 
 __all__ = ["InertialFormationPlant", "OrbitalTruthSection"]
@@ -57,7 +57,7 @@ CHIEF_ELEMENTS = "semi_major_axis eccentricity inclination raan arg_perigee true
 
 
 @component
-class InertialFormationPlant(Plant):
+class InertialFormationPlant(RelativeStatePlant):
     """N point-mass spacecraft and a virtual chief propagated in the Earth-centred inertial frame.
 
     State ``{"chief": (6,), "deputies": (N, 6)}``: ECI position [m] and velocity [m/s]. Every body
@@ -113,10 +113,6 @@ class InertialFormationPlant(Plant):
     drag: bool = static(default=False)
     srp: bool = static(default=False)
     disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))  # h_i(t) LVLH [N]
-
-    @property
-    def count(self) -> int:
-        return int(np.shape(self.mass)[0])
 
     def initial_state(self):
         el = jnp.asarray(self.chief_elements)
@@ -182,21 +178,11 @@ class InertialFormationPlant(Plant):
         and every law built for the relative-state plants works on the inertial truth)."""
         return {"q": self.relative_state(x)}
 
-    def provides(self) -> frozenset[str]:
-        caps = {"translational-state", "lvlh-relative-state", "stage-evaluation"}
-        return super().provides() | caps | ({"spacecraft-pairs"} if self.count >= 2 else set())
-
     def position(self, x):
         return self.relative_state(x)[:, :3]
 
     def velocity(self, x):
         return self.relative_state(x)[:, 3:]
-
-    def usage_names(self):
-        return ("delta_v", "control_effort")
-
-    def usage_rates(self, t, x, command):
-        return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
 
     def signals(self):
         return (

@@ -2,8 +2,7 @@
 (Yang2013 eqs. (4), (5)), driven by body torques.
 
 State ``{"omega": (N, 3), "q": (N, 4)}`` (body rate and quaternion, vector part first: the capability
-``quaternion-attitude-state``), one principal inertia for every spacecraft. :func:`quaternion_plant`
-is the one builder of the component (also the attitude part of the ``switched-formation`` plant).
+``quaternion-attitude-state``), one principal inertia for every spacecraft.
 """
 
 from __future__ import annotations
@@ -14,7 +13,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, register
-from formation_ftc.components._sections import Vec3, Vec3Expr, expression_text
+from formation_ftc.components._sections import expression_text
 from formation_ftc.components.plants._rigid_body import (
     QUATERNION_COMPONENTS,
     RigidBodyAttitudeSection,
@@ -28,7 +27,6 @@ __all__ = [
     "QuaternionRigidBodyPlant",
     "QuaternionPlantSection",
     "QUATERNION_COMPONENTS",
-    "quaternion_plant",
 ]
 
 
@@ -92,49 +90,14 @@ class QuaternionPlantSection(RigidBodyAttitudeSection):
     )
 
 
-def quaternion_plant(
-    inertia: Vec3, omega0, q0, disturbance_torque: Vec3Expr, gyroscopic: bool
-) -> QuaternionRigidBodyPlant:
-    """Rigid bodies of one principal inertia.
-
-    Parameters
-    ----------
-    inertia : Vec3
-        Principal inertia diag(J) [kg m^2].
-    omega0 : array_like, shape (N, 3)
-        Initial body rates [rad/s].
-    q0 : array_like, shape (N, 4)
-        Initial unit quaternions, vector first [-].
-    disturbance_torque : Vec3Expr
-        Disturbance torque iota(t), expressions in t [s], i [N m].
-    gyroscopic : bool
-        Include -omega x J omega.
-
-    Returns
-    -------
-    QuaternionRigidBodyPlant
-        The plant (the one builder: also the attitude part of the ``switched-formation`` plant).
-
-    Examples
-    --------
-    >>> p = quaternion_plant((20.0, 25.0, 30.0), np.zeros((2, 3)), np.tile([0, 0, 0, 1.0], (2, 1)),
-    ...                      ("0", "0", "0"), gyroscopic=True)
-    >>> p.count, p.inertia.diagonal().tolist()
-    (2, [20.0, 25.0, 30.0])
-    """
-    return QuaternionRigidBodyPlant(
-        inertia=as_float(np.diag(inertia)),
-        initial_body_rate=as_float(omega0),
-        initial_quaternion=as_float(q0),
-        disturbance_torque=expression_text(disturbance_torque),
-        gyroscopic=gyroscopic,
-    )
-
-
 def _build(sec: QuaternionPlantSection, ctx: BuildContext) -> QuaternionRigidBodyPlant:
     """The plant of a validated ``[plant] type = "quaternion-rigid-body"`` section."""
-    return quaternion_plant(
-        sec.inertia, sec.body_rates(), sec.quaternions(), sec.disturbance_torque, sec.gyroscopic
+    return QuaternionRigidBodyPlant(
+        inertia=as_float(np.diag(sec.inertia)),
+        initial_body_rate=as_float(sec.body_rates()),
+        initial_quaternion=as_float(sec.quaternions()),
+        disturbance_torque=expression_text(sec.disturbance_torque),
+        gyroscopic=sec.gyroscopic,
     )
 
 

@@ -13,7 +13,6 @@ from formation_ftc.components.expressions import vector_expression
 from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
-from formation_ftc.core.vector3 import norm3, sq_norm3
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
 from formation_ftc.sim.contract import as_float
 
@@ -36,7 +35,6 @@ class RelativeLvlhPlant(RelativeStatePlant):
     [N] and the reference-orbit values r_c, theta_dot, theta_ddot of a
     :class:`~formation_ftc.components.references.keplerian.KeplerianReference` (required:
     :meth:`needs`).
-    Usage integrals: the commanded delta-v int ||u_i|| / m_i dt [m/s] and effort int ||u_i||^2 dt [N^2 s].
     """
 
     mass: Any  # (N,) [kg]
@@ -57,9 +55,6 @@ class RelativeLvlhPlant(RelativeStatePlant):
         )  # eqs. (2)-(4) / m_i
         acc = acc_nat + (inputs.exogenous["h"] + inputs.force) / self.mass[:, None]  # eq. (1)
         return {"q": jnp.concatenate([v, acc], axis=-1)}
-
-    def usage_rates(self, t, x, command):
-        return {"delta_v": norm3(command) / self.mass, "control_effort": sq_norm3(command)}
 
     def signals(self):
         return (

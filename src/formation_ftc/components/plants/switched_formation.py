@@ -89,9 +89,8 @@ class SwitchedFormationPlant(Plant):
     """Error-level 6-DOF closed-loop plant of N_max spacecraft slots driven by a wrench [f, tau] (N, 6)
     [N, N m] (see module docstring).
 
-    ``mass`` (N,) [kg]; ``inertia`` J (3, 3) [kg m^2] of every spacecraft; ``initial_rate_error``
-    (N, 3) e_omega [rad/s] and ``initial_quaternion_error`` (N, 4) (e_q, e_q4) [-];
-    ``initial_translation`` (N, 6) [e_R, e_V] [m, m/s]; ``variation`` (n_modes, N, N) slot maps P_j of
+    ``mass`` (N,) [kg]; ``inertia`` J (3, 3) [kg m^2] of every spacecraft; ``initial_error``
+    (N, 13) x_i(0) = [e_R, e_V, e_omega, e_q, e_q4] [m, m/s, rad/s, -]; ``variation`` (n_modes, N, N) slot maps P_j of
     (10) (P_0 unused); ``new_states`` (n_modes, N, 13) X*_j; ``disturbance_force`` d_i(t) [N] and
     ``disturbance_torque`` iota_i(t) [N m] (expressions in t [s] and i); ``rotation_coupling``: keep the
     norm-preserving omega_i x e terms of (2) with omega_i = -e_omega (reference at rest).
@@ -101,9 +100,7 @@ class SwitchedFormationPlant(Plant):
 
     mass: Any
     inertia: Any
-    initial_rate_error: Any
-    initial_quaternion_error: Any
-    initial_translation: Any
+    initial_error: Any
     variation: Any
     new_states: Any
     disturbance_force: tuple[str, str, str] = static(default=("0", "0", "0"))
@@ -115,11 +112,7 @@ class SwitchedFormationPlant(Plant):
         return int(np.shape(self.mass)[0])
 
     def initial_state(self):
-        x0 = jnp.concatenate(
-            [self.initial_translation, self.initial_rate_error, self.initial_quaternion_error],
-            axis=-1,
-        )
-        return {"x": x0, "left_norm": jnp.linalg.norm(x0, axis=-1)}
+        return {"x": self.initial_error, "left_norm": jnp.linalg.norm(self.initial_error, axis=-1)}
 
     def exogenous(self, t):
         return {
@@ -293,9 +286,7 @@ def _build(sec: SwitchedFormationSection, ctx: BuildContext) -> SwitchedFormatio
     return SwitchedFormationPlant(
         mass=as_float(per_spacecraft(sec.mass, sec.count, "plant.mass")),
         inertia=as_float(np.diag(sec.inertia)),
-        initial_rate_error=as_float(x0[:, 6:9]),
-        initial_quaternion_error=as_float(x0[:, 9:13]),
-        initial_translation=as_float(x0[:, 0:6]),
+        initial_error=as_float(x0),
         variation=as_float(variation),
         new_states=as_float(new_states),
         disturbance_force=expression_text(sec.disturbance_force),

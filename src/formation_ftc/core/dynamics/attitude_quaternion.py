@@ -65,12 +65,34 @@ def attitude_rhs(t, state, J, torque=None, disturbance=None, R_body=None, mu: fl
 
 
 def inverse_3x3(J):
-    """Inverse of a 3x3 matrix by its adjugate, ``adj(J) / det(J)`` (rows of the adjugate transpose are
-    the cross products of J's rows): plain arithmetic that XLA fuses, no LAPACK call inside a loop."""
-    J = jnp.asarray(J)
-    a, b, c = J[0], J[1], J[2]
+    """Inverse of every (..., 3, 3) matrix by its adjugate, ``adj(J) / det(J)`` (rows of the adjugate
+    transpose are the cross products of J's rows): plain arithmetic that XLA fuses, no LAPACK call
+    inside a loop.
+
+    Parameters
+    ----------
+    J : array_like, shape (..., 3, 3)
+        Invertible matrices, e.g. inertias [kg m^2].
+
+    Returns
+    -------
+    jax.Array, shape (..., 3, 3)
+        The inverses (e.g. [1/(kg m^2)]).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from formation_ftc.core.dynamics.attitude_quaternion import inverse_3x3
+    >>> J = np.array([np.diag([10.0, 20.0, 40.0]), [[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 1.0]]])
+    >>> bool(np.allclose(inverse_3x3(J), np.linalg.inv(J)))
+    True
+    >>> np.asarray(inverse_3x3(J))[0].diagonal()
+    array([0.1  , 0.05 , 0.025])
+    """
+    a, b, c = J[..., 0, :], J[..., 1, :], J[..., 2, :]
     cols = jnp.stack([jnp.cross(b, c), jnp.cross(c, a), jnp.cross(a, b)], axis=-1)
-    return cols / jnp.dot(a, jnp.cross(b, c))
+    det = jnp.sum(a * jnp.cross(b, c), axis=-1)
+    return cols / det[..., None, None]
 
 
 def rigid_body_quaternion_rates(omega, q, torque, J, gyroscopic: bool = True):

@@ -47,6 +47,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from formation_ftc.core.constants import EXPONENTIAL_ATMOSPHERE, MU_EARTH, R_EARTH
+from formation_ftc.core.dynamics.two_body import gravity_acceleration, specific_energy
 from formation_ftc.core.vector3 import matrix3
 
 __all__ = [
@@ -56,7 +57,6 @@ __all__ = [
     "OMEGA_EARTH",
     "SOLAR_PRESSURE",
     "EXPONENTIAL_ATMOSPHERE",
-    "two_body_acceleration",
     "j2_acceleration",
     "j2_potential",
     "specific_energy_j2",
@@ -98,12 +98,6 @@ def _rotate(R, x):
 
 
 # --------------------------------------------------------------------------------------- forces
-def two_body_acceleration(r, mu=MU_EARTH):
-    """Point-mass gravity -mu r / |r|^3 [m/s^2] (eq. (1)); ``r`` (..., 3) [m]."""
-    r = jnp.asarray(r)
-    return -mu * r / _norm(r) ** 3
-
-
 def j2_acceleration(r, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
     """Acceleration of the J2 zonal harmonic [m/s^2] (eq. (2)); ``r`` (..., 3) ECI [m]."""
     r = jnp.asarray(r)
@@ -126,12 +120,7 @@ def specific_energy_j2(state, mu=MU_EARTH, j2=J2_EARTH, r_earth=R_EARTH):
     """Total specific energy |v|^2/2 - mu/|r| + U_J2 [J/kg] of ``state`` (..., 6) [m, m/s]; conserved by
     two-body + J2 motion (the J2 field is axisymmetric about the ECI z axis, hence time-invariant)."""
     state = jnp.asarray(state)
-    r, v = state[..., :3], state[..., 3:]
-    return (
-        0.5 * jnp.sum(v * v, axis=-1)
-        - mu / jnp.linalg.norm(r, axis=-1)
-        + j2_potential(r, mu, j2, r_earth)
-    )
+    return specific_energy(state, mu) + j2_potential(state[..., :3], mu, j2, r_earth)
 
 
 def atmospheric_density(altitude, table=EXPONENTIAL_ATMOSPHERE):
@@ -189,9 +178,10 @@ def perturbed_acceleration(
     sun_direction=(1.0, 0.0, 0.0),
     pressure=SOLAR_PRESSURE,
 ):
-    """Natural acceleration (1) + optional (2)-(4) [m/s^2]; a term is off when its parameter is None
+    """Natural acceleration (1) (:func:`~formation_ftc.core.dynamics.two_body.gravity_acceleration`)
+    + optional (2)-(4) [m/s^2]; a term is off when its parameter is None
     (``j2``, ``ballistic``, ``srp_coefficient``). Shapes as in the individual terms."""
-    a = two_body_acceleration(r, mu)
+    a = gravity_acceleration(r, mu)  # eq. (1)
     if j2 is not None:
         a = a + j2_acceleration(r, mu, j2, r_earth)
     if ballistic is not None:
