@@ -135,10 +135,15 @@ def test_simulate_raises_with_partial_results():
     assert err.partial.attrs["diverged"]
 
 
+#: the 30 s cw-pd-fault run: one structure, so one program, for the single runs of the tests below
+CW_30S = {"simulation.horizon": 30.0}
+
+
 def test_vmap_batch_equals_single_runs():
     from formation_ftc.api import build_loop
+    from formation_ftc.sim.programs import jitted_run
 
-    scn = ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 50.0})
+    scn = ftc.load_scenario("cw-pd-fault", CW_30S)
     comp = build_loop(scn)
     seeds = jnp.array([1, 2, 3], dtype=jnp.uint32)
     kps = jnp.array([1.0, 2.0, 3.0])
@@ -153,7 +158,7 @@ def test_vmap_batch_equals_single_runs():
             seed=seeds[r],
             controller=dataclasses.replace(comp.controller, kp=kps[r]),
         )
-        o = jax.jit(type(comp).run)(single)
+        o = jitted_run(comp)(single)  # the program ftc.simulate runs this structure with
         np.testing.assert_allclose(
             outs["records"]["position"][r], o["records"]["position"], rtol=1e-12, atol=1e-12
         )
@@ -161,11 +166,9 @@ def test_vmap_batch_equals_single_runs():
 
 
 def test_same_seed_same_numbers_different_seed_differs():
-    a = ftc.simulate(ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 30.0}))
-    b = ftc.simulate(ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 30.0}))
-    c = ftc.simulate(
-        ftc.load_scenario("cw-pd-fault", {"simulation.horizon": 30.0, "simulation.seed": 9})
-    )
+    a = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_30S))
+    b = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_30S))
+    c = ftc.simulate(ftc.load_scenario("cw-pd-fault", {**CW_30S, "simulation.seed": 9}))
     np.testing.assert_array_equal(a.position.values, b.position.values)
     assert not np.array_equal(a.position.values, c.position.values)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import jax
 import numpy as np
 import pytest
 
@@ -296,6 +297,8 @@ def test_a_constant_command_leaves_the_effectiveness_unidentified():
     the same number of samples of a varying command pins it down."""
     from formation_ftc.components.estimators.residual_fdi import identify_channels
 
+    # one program for the 4,000 steps, not 4,000 dispatches of each of its operations
+    identify = jax.jit(identify_channels)
     gain, noise_var = np.array([0.5, 0.5, 0.5]), np.full(3, 1e-6)
     prior = np.broadcast_to(np.diag([1.0, 1e-4]), (1, 3, 2, 2))
     stds = {}
@@ -304,7 +307,7 @@ def test_a_constant_command_leaves_the_effectiveness_unidentified():
         for k in range(2000):
             a = np.full((1, 3), accel(k))
             phi = gain[None, :, None] * np.stack([a, np.ones_like(a)], axis=-1)
-            theta, cov = identify_channels(theta, cov, 0.5 * -0.5 * a, phi, noise_var, 1.0)
+            theta, cov = identify(theta, cov, 0.5 * -0.5 * a, phi, noise_var, 1.0)
         stds[name] = float(np.sqrt(np.asarray(cov)[0, 0, 0, 0]))
     assert stds["constant"] > 0.05  # not identified at the default identification_std
     assert stds["varying"] < 0.03  # 1e-3 / (0.5 * 2e-3 * sqrt(2000)) = 0.022
@@ -398,13 +401,19 @@ def test_window_identification_of_an_exact_trajectory(window_s):
     x[:, :3] = [[300.0, -200.0, 50.0], [-150.0, 250.0, -80.0]]
     state = fdi.initial_state(x.copy())
     mass = np.asarray(fdi.nominal_mass)[:, None]
+
+    @jax.jit  # one program for the 200 steps, not 200 x its operations
+    def step(k, state, x, force):
+        t = k * DT
+        sc = StepContext(k=k, t=t, dt=DT)
+        state, est = fdi.update(t, state, FlightInputs(x, None, None, None, None, None, sc))
+        return fdi.predict(t, state, force, DT), est
+
     for k in range(200):
-        sc = StepContext(k=np.asarray(k), t=np.asarray(k * DT), dt=DT)
-        state, est = fdi.update(k * DT, state, FlightInputs(x, None, None, None, None, None, sc))
         force = rng.normal(0.0, 0.5, (2, 3))
         applied = force.copy()
         applied[1, 1] *= 0.5
-        state = fdi.predict(k * DT, state, force, DT)
+        state, est = step(np.asarray(k), state, x, force)
         x = x @ np.asarray(fdi.phi).T + (applied / mass) @ np.asarray(fdi.gamma).T
     eff = np.asarray(est["effectiveness"])
     assert bool(np.asarray(est["identified"]).all())

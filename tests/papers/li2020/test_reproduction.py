@@ -14,9 +14,12 @@ from formation_ftc.papers._study import read_study
 from formation_ftc.papers.li2020.reproduction import REPRODUCTION, SCENARIOS, SUMMARY_KEYS
 from formation_ftc.registry import get_method
 
+#: the shortened reproduction's horizon [s]; the plot test runs SIR-FTC on it too (the same program)
+SHORT = {"simulation.horizon": 40.0}
+
 
 def test_reproduction_short_horizon(tmp_path, recheck_verdicts):
-    rep = REPRODUCTION.run(tmp_path, overrides={"simulation.horizon": 40.0})
+    rep = REPRODUCTION.run(tmp_path, overrides=SHORT)
     recheck_verdicts(rep.rows)  # every verdict follows from its stated criterion
     assert set(rep.summary) == set(SCENARIOS)
     for name in SCENARIOS:
@@ -47,7 +50,7 @@ def test_builtin_scenarios_validate_and_plot(load, simulate, tmp_path):
         scn = load(n)
         assert scn.simulation.horizon == 3000.0 and scn.simulation.dt == 0.01
         assert scn.scenario.name == n and scn.scenario.method == "composed"
-    scn = load("li2020-sirftc", {"simulation.horizon": 5.0})
+    scn = load("li2020-sirftc", SHORT)
     ds, m = simulate(scn)
     paths = get_method("composed").plot(ds, scn, tmp_path)  # the paper's figure set
     assert len(paths) == 4 and all(p.exists() for p in paths)

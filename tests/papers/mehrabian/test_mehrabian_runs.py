@@ -20,6 +20,7 @@ from formation_ftc.core import graph as graphs
 from formation_ftc.core.dynamics.euler_lagrange import inertia_matrix
 from formation_ftc.papers.mehrabian.seed_study import with_seed
 from formation_ftc.sim.batch import batched_run, stack_params
+from formation_ftc.sim.programs import jitted_run
 
 
 def test_energy_balance_of_the_exact_model_loop():
@@ -153,15 +154,17 @@ def test_converges_as_dt_shrinks():
     assert e2 < e1 and e2 < 1e-4
 
 
+#: case 2 on 20 s recorded every 1 s: the structure of the isolation tests below, one program for them
+ISOLATION_SHORT = {"simulation.horizon": 20.0, "simulation.record_every": 100}
+
+
 def test_seeds_batched_equals_single_and_draws():
-    s = ftc.load_scenario(
-        "mehrabian-isolation", {"simulation.horizon": 2.0, "simulation.record_every": 200}
-    )
+    s = ftc.load_scenario("mehrabian-isolation", ISOLATION_SHORT)
     c = build_loop(s)
     seeds = [1, 2, 7]
     P, axes = stack_params([with_seed(c, sd) for sd in seeds])
     batched = batched_run(c, axes, len(seeds))(P)
-    single = jax.jit(type(c).run)
+    single = jitted_run(c)  # the program simulate_with_metrics runs this structure with
     q0, finals = [], []
     for i, seed in enumerate(seeds):
         one = single(with_seed(c, seed))
@@ -229,8 +232,7 @@ def test_wrong_spacecraft_isolation_reconfigures_the_healthy_one():
             "estimator.isolation.0.reported_spacecraft": 2,
             "estimator.isolation.0.reported_channel": 3,
             "actuator.faults.0.start": 5.0,
-            "simulation.horizon": 20.0,
-            "simulation.record_every": 100,
+            **ISOLATION_SHORT,
         },
     )
     ds, _ = simulate_with_metrics(s)
