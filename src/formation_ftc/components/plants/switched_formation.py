@@ -112,7 +112,8 @@ class SwitchedFormationPlant(Plant):
         return int(np.shape(self.mass)[0])
 
     def initial_state(self):
-        return {"x": self.initial_error, "left_norm": jnp.linalg.norm(self.initial_error, axis=-1)}
+        x0 = jnp.asarray(self.initial_error)
+        return {"x": x0, "left_norm": jnp.linalg.norm(x0, axis=-1)}
 
     def exogenous(self, t):
         return {
