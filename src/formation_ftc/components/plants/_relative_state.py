@@ -16,18 +16,14 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.vector3 import norm3, sq_norm3
 from formation_ftc.sim.components import Plant
 
-__all__ = ["RelativeStatePlant", "PointMassSection"]
+__all__ = ["RelativeStatePlant", "PointMassUsage", "PointMassSection"]
 
 
 class RelativeStatePlant(Plant):
-    """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views and the
-    commanded delta-v int ||u_i|| / m_i dt [m/s] / control-effort int ||u_i||^2 dt [N^2 s] usage
-    integrals; the subclasses' fields ``initial_state_lvlh`` (N, 6) [m, m/s] and ``mass`` (N,) [kg]
-    give the count, the initial state and the delta-v."""
+    """Plant with state ``{"q": (N, 6)}`` in LVLH [m, m/s]: position and velocity views; the
+    subclasses' field ``initial_state_lvlh`` (N, 6) [m, m/s] gives the count and the initial state."""
 
-    # declared by the subclasses (dataclass fields there; the ZOH CW plant has no mass)
-    initial_state_lvlh: Any
-    mass: Any
+    initial_state_lvlh: Any  # declared by the subclasses (a dataclass field there)
 
     @property
     def count(self) -> int:
@@ -46,6 +42,13 @@ class RelativeStatePlant(Plant):
 
     def velocity(self, x):
         return x["q"][:, 3:]
+
+
+class PointMassUsage:
+    """Usage integrals of a plant with masses (listed before the plant base): the commanded delta-v
+    int ||u_i|| / m_i dt [m/s] and control effort int ||u_i||^2 dt [N^2 s]; ``mass`` (N,) [kg]."""
+
+    mass: Any  # declared by the plant (a dataclass field there)
 
     def usage_names(self):
         return ("delta_v", "control_effort")

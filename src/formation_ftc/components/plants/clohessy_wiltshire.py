@@ -14,7 +14,11 @@ from pydantic import Field, model_validator
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components._sections import section_floats
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
+from formation_ftc.components.plants._relative_state import (
+    PointMassSection,
+    PointMassUsage,
+    RelativeStatePlant,
+)
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.disturbances import gaussian_noise
 from formation_ftc.core.dynamics.cw import cw_matrices, cw_rhs
@@ -50,7 +54,7 @@ def rk4_amplification(z: np.ndarray) -> np.ndarray:
 
 
 @component
-class ClohessyWiltshirePlant(RelativeStatePlant):
+class ClohessyWiltshirePlant(PointMassUsage, RelativeStatePlant):
     """N point-mass deputies on linear Clohessy-Wiltshire dynamics about a circular reference orbit.
 
     State ``{"q": (N, 6)}``, q = [x, y, z, vx, vy, vz] in LVLH (x radial, y along-track, z orbit normal)

@@ -76,12 +76,6 @@ class ZohClohessyWiltshirePlant(RelativeStatePlant):
     def provides(self) -> frozenset[str]:
         return super().provides() | {"perturbation-signal"}  # exact step: no stage evaluation
 
-    def usage_names(self):  # no usage integrals (no masses)
-        return ()
-
-    def usage_rates(self, t, x, command):
-        return {}
-
     def signals(self):
         return (
             Signal(

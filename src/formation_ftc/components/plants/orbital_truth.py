@@ -29,7 +29,7 @@ from formation_ftc.components._sections import (
     section_floats,
 )
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants._relative_state import RelativeStatePlant
+from formation_ftc.components.plants._relative_state import PointMassUsage, RelativeStatePlant
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.orbital_truth import (
     EXPONENTIAL_ATMOSPHERE,
@@ -57,7 +57,7 @@ CHIEF_ELEMENTS = "semi_major_axis eccentricity inclination raan arg_perigee true
 
 
 @component
-class InertialFormationPlant(RelativeStatePlant):
+class InertialFormationPlant(PointMassUsage, RelativeStatePlant):
     """N point-mass spacecraft and a virtual chief propagated in the Earth-centred inertial frame.
 
     State ``{"chief": (6,), "deputies": (N, 6)}``: ECI position [m] and velocity [m/s]. Every body

@@ -10,7 +10,11 @@ from pydantic import Field
 
 from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.components.expressions import vector_expression
-from formation_ftc.components.plants._relative_state import PointMassSection, RelativeStatePlant
+from formation_ftc.components.plants._relative_state import (
+    PointMassSection,
+    PointMassUsage,
+    RelativeStatePlant,
+)
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
@@ -22,7 +26,7 @@ VEC = ("spacecraft", "axis")
 
 
 @component
-class RelativeLvlhPlant(RelativeStatePlant):
+class RelativeLvlhPlant(PointMassUsage, RelativeStatePlant):
     """N point-mass spacecraft on the nonlinear relative dynamics of Li2020 eqs. (1)-(4).
 
     State ``{"q": (N, 6)}``, q = [x, y, z, vx, vy, vz] in LVLH (x radial, y along-track, z orbit normal)
