@@ -29,7 +29,6 @@ k is written by a background writer thread while chunk k+1 computes; the stored 
 
 from __future__ import annotations
 
-import functools
 import json
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
@@ -45,6 +44,7 @@ import pandas as pd
 from formation_ftc.campaign.sampling import CampaignPlan, Chunk, ChunkList, RunColumns, all_numbers
 from formation_ftc.campaign.spec import CampaignError, CampaignSpec, load_campaign
 from formation_ftc.campaign.storage import CampaignStore
+from formation_ftc.progress import _Bars, _clock, _since
 from formation_ftc.sim.batch import batched_run, stack_params
 from formation_ftc.sim.programs import jitted_run
 
@@ -448,18 +448,11 @@ def make_plan(
     return CampaignPlan(spec, base_dir, drop_missing_traces=runs is not None)
 
 
-def _progress_bar(enabled: bool, total: int, done: int, name: str, started: float):
-    """The progress bar of :func:`run_campaign` (on stderr; a no-op when not ``enabled``), started:
-    runs stored, then runs/s, elapsed time and ETA over the whole wall time since ``started`` (a
+def _progress_bar(enabled: bool, total: int, done: int, name: str, started: float) -> _Bars:
+    """The progress bar of :func:`run_campaign` (on stderr; a no-op when not ``enabled``): runs stored,
+    then runs/s, elapsed time and ETA over the whole wall time since ``started`` (a
     ``time.perf_counter`` value; planning and compilation included), counting only the runs computed
-    since then (not those kept from an earlier run). Its one task is advanced by the runs stored."""
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn
-    from rich.text import Text
-
-    def clock(seconds: float) -> str:
-        s = int(round(seconds))
-        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+    since then (not those kept from an earlier run). Its one line is advanced by the runs stored."""
 
     def rate(task) -> float:
         elapsed = time.perf_counter() - started
@@ -471,35 +464,11 @@ def _progress_bar(enabled: bool, total: int, done: int, name: str, started: floa
 
     def time_left(task) -> str:
         r = rate(task)
-        if task.finished:
-            return clock(0.0)
-        return clock((task.total - task.completed) / r) if r > 0 else "-:--:--"
+        left = (task.total - task.completed) / r if r > 0 else None
+        return _clock(0.0 if task.finished else left)
 
-    class Column(ProgressColumn):
-        """A column whose text is ``text(task)``."""
-
-        def __init__(self, text: Callable[[Any], str]):
-            super().__init__()
-            self.text = text
-
-        def render(self, task):
-            return Text(self.text(task))
-
-    bar = Progress(
-        TextColumn(f"[bold]{name}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("runs"),
-        Column(rate_text),
-        Column(lambda task: clock(time.perf_counter() - started)),
-        TextColumn("ETA"),
-        Column(time_left),
-        console=Console(stderr=True),
-        disable=not enabled,
-    )
-    bar.start()
-    bar.add_task(name, total=total, completed=done)
-    return bar
+    tasks = {name: {"total": total, "completed": done}}
+    return _Bars(tasks, "runs", rate_text, _since(started), "ETA", time_left, enabled=enabled)
 
 
 def run_campaign(
@@ -543,24 +512,23 @@ def run_campaign(
         executor.prepare(_run_steps(plan, todo), len(todo))
     with executor:
         store.initialize()  # takes the directory's lock (refused while another run writes there)
-        bar = _progress_bar(
-            progress, plan.n_runs, sum(len(plan.chunk(c)) for c in done_before), plan.name, t0
-        )
-        advance = functools.partial(bar.advance, bar.task_ids[0])
+        n_done = sum(len(plan.chunk(c)) for c in done_before)
         # chunk k is written (Parquet, checksum, fsync) by one writer thread while chunk k+1 computes;
         # at most one write is in flight and a write error stops the campaign at the next chunk. Leaving
         # the writer (on an error too) waits for a write under way: a finished chunk is never lost
         writing: Future | None = None
         try:
-            with ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer") as writer:
+            with (
+                _progress_bar(progress, plan.n_runs, n_done, plan.name, t0) as bar,
+                ThreadPoolExecutor(max_workers=1, thread_name_prefix="campaign-writer") as writer,
+            ):
                 for res in _map_in_windows(executor, plan, todo):
                     if writing is not None:
-                        advance(writing.result())
+                        bar.update_line(plan.name, advance=writing.result())
                     writing = writer.submit(_store_chunk, store, res)
                 if writing is not None:
-                    advance(writing.result())
+                    bar.update_line(plan.name, advance=writing.result())
         finally:
-            bar.stop()
             store.close()
     results = store.load_results()
     failed = results["status"] != "ok"

@@ -23,7 +23,6 @@ import functools
 import json
 import os
 import re
-import threading
 import time
 import tomllib
 from collections.abc import Callable
@@ -48,6 +47,7 @@ from formation_ftc.league.definition import (
     method_scenario,
 )
 from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
+from formation_ftc.progress import _Bars, _clock
 from formation_ftc.runout import DISK_FULL
 
 __all__ = [
@@ -631,114 +631,39 @@ def _stored_runs(chunks: Path, seeds: int, chunk_size: int) -> int:
     return sum(min(chunk_size, seeds - (i % per_cell) * chunk_size) for i in ids)
 
 
-class _Bars:
-    """Progress lines (a bar, done/total, elapsed, ETA) on a terminal's stderr, redrawn by a thread every
-    ``interval`` s (so that the elapsed time moves from the first second). ``tasks``: (name, total)
-    of each line; ``unit``: what they count. A failing stderr (closed, full) turns them off; they never
-    stop the work. Subclasses update the counts in :meth:`_poll`."""
-
-    def __init__(
-        self,
-        tasks: list[tuple[str, int]],
-        unit: str,
-        *,
-        enabled: bool = True,
-        console: Any = None,
-        interval: float = 0.5,
-    ):
-        self.unit, self.enabled, self.console, self.interval = unit, enabled, console, interval
-        self._totals = dict(tasks)  # name -> total of each line, in order
-        self._bar: Any = None
-        self._tasks: dict[str, Any] = {}
-        self._stop = threading.Event()
-        self._thread = threading.Thread(
-            target=self._watch, name="formation-ftc-league-progress", daemon=True
-        )
-
-    def __enter__(self):
-        if not self.enabled or not self._totals:
-            return self
-        try:
-            from rich import progress as rp
-            from rich.console import Console
-
-            console = self.console if self.console is not None else Console(stderr=True)
-            if not console.is_terminal:
-                return self
-            width = max(len(name) for name in self._totals)
-            self._bar = rp.Progress(
-                rp.TextColumn(f"[bold]{{task.description:<{width}}}"),
-                rp.BarColumn(),
-                rp.MofNCompleteColumn(),
-                rp.TextColumn(self.unit),
-                rp.TimeElapsedColumn(),
-                rp.TextColumn("ETA"),
-                rp.TimeRemainingColumn(),
-                console=console,
-                auto_refresh=False,
-            )
-            self._tasks = {n: self._bar.add_task(n, total=t) for n, t in self._totals.items()}
-            self._bar.start()
-            self._refresh()
-        except (OSError, ValueError):
-            self._close_bar()
-            return self
-        self._thread.start()
-        return self
-
-    def _poll(self) -> None:
-        """Update the counts (called before each redraw)."""
-
-    def _refresh(self) -> None:
-        # never concurrent: the first redraw comes before the thread starts, the last after it ends
-        self._poll()
-        self._bar.refresh()
-
-    def _watch(self) -> None:
-        # stderr closed or full: no more progress, the work goes on
-        with contextlib.suppress(OSError, ValueError):
-            while not self._stop.wait(self.interval):
-                self._refresh()
-
-    def _close_bar(self) -> None:
-        bar, self._bar = self._bar, None
-        if bar is not None:
-            with contextlib.suppress(OSError, ValueError):
-                bar.stop()  # restores sys.stdout/sys.stderr even when its last refresh fails
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        if self._thread.ident is not None:  # started
-            self._thread.join()
-        if self._bar is not None:
-            with contextlib.suppress(OSError, ValueError):
-                self._refresh()
-        self._close_bar()
+#: a league line's clocks: elapsed (stopped when the line is done) and ETA
+_CLOCKS = (
+    lambda t: f"[progress.elapsed]{_clock(t.finished_time if t.finished else t.elapsed)}",
+    "ETA",
+    lambda t: f"[progress.remaining]{_clock(t.time_remaining)}",
+)
 
 
 class _MethodProgress(_Bars):
-    """One progress line per method (runs done, elapsed, ETA), read from the chunk files each method's
-    campaign has stored: it follows methods computed side by side in other processes."""
+    """One progress line per method (runs done, elapsed, ETA) on a terminal's stderr, read from the
+    chunk files each method's campaign has stored: it follows methods computed side by side in other
+    processes."""
 
     def __init__(
         self, methods: list[tuple[str, Path, int]], seeds: int, chunk_size: int, **options: Any
     ):
-        super().__init__([(name, total) for name, _, total in methods], "runs", **options)
+        tasks = {name: {"total": total} for name, _, total in methods}
+        super().__init__(tasks, "runs", *_CLOCKS, terminal_only=True, **options)
         self.methods, self.seeds, self.chunk_size = methods, seeds, chunk_size
 
     def _poll(self) -> None:
         for name, chunks, total in self.methods:
             done = min(total, _stored_runs(chunks, self.seeds, self.chunk_size))
-            self._bar.update(self._tasks[name], completed=done)
+            self.update_line(name, completed=done)
 
 
 class Counter(_Bars):
     """One progress line counting ``unit`` of a phase (the step checks' integration steps, a tuning's
-    evaluations): :meth:`advance` as they finish, :meth:`expect` when more turn out to be needed.
-    Without a terminal (or disabled) it counts and draws nothing."""
+    evaluations) on a terminal's stderr: :meth:`advance` as they finish, :meth:`expect` when more turn
+    out to be needed. Without a terminal (or disabled) it counts and draws nothing."""
 
     def __init__(self, label: str, total: int, unit: str, **options: Any):
-        super().__init__([(label, total)], unit, **options)
+        super().__init__({label: {"total": total}}, unit, *_CLOCKS, terminal_only=True, **options)
         self.label, self.total, self.done = label, total, 0
 
     def advance(self, n: int = 1) -> None:
@@ -750,7 +675,7 @@ class Counter(_Bars):
 
     def _poll(self) -> None:
         total = max(self.total, self.done)  # an optimiser may pass its budget
-        self._bar.update(self._tasks[self.label], completed=self.done, total=total)
+        self.update_line(self.label, completed=self.done, total=total)
 
 
 # ----------------------------------------------------------------------------------------------- run

@@ -44,6 +44,7 @@ from rich.table import Table
 from formation_ftc import registry
 from formation_ftc.atomic import atomic_write
 from formation_ftc.exitcodes import add_json_option, print_json, print_json_error
+from formation_ftc.progress import _Bars, _since
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
@@ -187,42 +188,23 @@ def prepare_output(out: Path, force: bool = False) -> bool:
 
 
 # ----------------------------------------------------------------------------------------- progress
-class _Bar:
-    """One rich progress bar over all papers; ``callback(i, paper)`` is the papers' ``progress``. Its
+class _Bar(_Bars):
+    """One progress line over all papers; ``callback(i, paper)`` is the papers' ``progress``. Its
     clock counts from ``started`` (``time.perf_counter()``; default: now), as the total does."""
 
     def __init__(self, enabled: bool, n_papers: int, console=None, started: float | None = None):
-        from rich import progress as rp
-        from rich.text import Text
-
-        self.n = n_papers
-        t0 = time.perf_counter() if started is None else started
-
-        class Elapsed(rp.ProgressColumn):
-            def render(self, task) -> Text:
-                s = int(time.perf_counter() - t0)
-                return Text(f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}")
-
-        self._progress = rp.Progress(
-            rp.TextColumn("[bold]reproduce[/]"),
-            rp.BarColumn(),
-            rp.TaskProgressColumn(),
-            Elapsed(),
-            rp.TextColumn("{task.description}"),
-            console=console or Console(stderr=True),
-            disable=not (enabled and n_papers > 0),  # a disabled bar shows nothing
+        super().__init__(
+            {"reproduce": {"total": float(n_papers), "message": ""}},
+            _since(started),
+            "{task.fields[message]}",
+            percent=True,
+            enabled=enabled and n_papers > 0,  # a disabled bar shows nothing
+            console=console,
         )
-        self._task = self._progress.add_task("", total=float(n_papers))
+        self.n = n_papers
 
-    def __enter__(self) -> _Bar:
-        self._progress.start()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self._progress.stop()
-
-    def update(self, completed: float, description: str) -> None:
-        self._progress.update(self._task, completed=completed, description=description)
+    def update(self, completed: float, message: str) -> None:
+        self.update_line("reproduce", completed=completed, message=message)
 
     def callback(self, index: int, paper: str) -> Callable[[float, str], None]:
         def progress(fraction: float = 0.0, message: str = "") -> None:
