@@ -74,10 +74,9 @@ class _Bars:
             disable=not (enabled and tasks and (console.is_terminal or not terminal_only)),
         )
         self._ids = {name: self._progress.add_task(name, **t) for name, t in tasks.items()}
-        self.interval = interval
         self._stop = threading.Event()
         self._thread = threading.Thread(
-            target=self._watch, name="formation-ftc-progress", daemon=True
+            target=self._watch, args=(interval,), name="formation-ftc-progress", daemon=True
         )
 
     def __enter__(self):
@@ -103,10 +102,10 @@ class _Bars:
         self._poll()
         self._progress.refresh()
 
-    def _watch(self) -> None:
+    def _watch(self, interval: float) -> None:
         # stderr closed or full: no more progress, the work goes on
         with contextlib.suppress(OSError, ValueError):
-            while not self._stop.wait(self.interval):
+            while not self._stop.wait(interval):
                 self._refresh()
 
     def __exit__(self, *exc: object) -> None:
