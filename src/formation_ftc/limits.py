@@ -197,8 +197,7 @@ def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None
     first_of_base: dict[str, int] = {}
     for r in sorted(set(probe)):
         inputs = plan.run_inputs(r)
-        scenario = plan.scenario(inputs)
-        n = int(scenario.simulation.n_steps)
+        n = int(plan.scenario(inputs).simulation.n_steps)
         check_run_steps(n, budgets, f"{where}, run {r}")
         steps = max(steps, n)
         first_of_base.setdefault(inputs.base, r)

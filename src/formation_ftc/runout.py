@@ -18,6 +18,7 @@ import contextlib
 import errno
 import json
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
@@ -36,6 +37,9 @@ __all__ = [
     "plot_view",
     "is_run_result",
     "add_to_marker",
+    "TMP_RE",
+    "oserror_as",
+    "existing_dir",
 ]
 
 #: ``errno`` values of a write that found no space: the disk is full, or the user's quota is used up
@@ -44,6 +48,8 @@ DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT})
 MARKER = ".formation-ftc-run.json"
 #: most spacecraft drawn one line each in the figures of ``run`` [-]
 MAX_PLOT_SPACECRAFT = 16
+#: a temporary file of an atomic write (``.NAME.tmp-PID``, :func:`formation_ftc.atomic.temporary_name`)
+TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
 
 
 def _plot_limit() -> int:
@@ -81,61 +87,83 @@ def is_run_result(d: Path) -> bool:
     )
 
 
+@contextlib.contextmanager
+def oserror_as(error: type[InputError], message: str, catch: Any = OSError) -> Iterator[None]:
+    """An OSError (or what ``catch``, exception classes, names) inside raised as ``error`` (exit code
+    2): ``message`` and the system's reason; an ``error`` passes as it is.
+
+    Examples
+    --------
+    >>> with oserror_as(OutputError, "--out x: unusable path"):
+    ...     open("/nonexistent-dir/x")
+    Traceback (most recent call last):
+    ...
+    formation_ftc.runout.OutputError: --out x: unusable path (No such file or directory)
+    """
+    try:
+        yield
+    except catch as exc:
+        if isinstance(exc, error):
+            raise
+        raise error(f"{message} ({getattr(exc, 'strerror', None) or exc})") from None
+
+
+def existing_dir(out: Path, what: str, error: type[InputError], advice: str) -> bool:
+    """Whether ``out`` exists; one that is not a directory (a file, a device, a socket, a broken link)
+    is refused with ``error``: ``what: exists and is a file; advice``.
+
+    Examples
+    --------
+    >>> existing_dir(Path("/nonexistent-dir"), "--out x", OutputError, "give a directory")
+    False
+    """
+    if not (out.exists() or out.is_symlink()):
+        return False
+    if not out.is_dir():
+        kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
+        raise error(f"{what}: exists and is {kind}; {advice}")
+    return True
+
+
 def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
     """Validate ``--out`` before any computation; returns the path. Raises :class:`OutputError`."""
-    try:
-        return _check_out_dir(out, force)
-    except (OSError, ValueError) as exc:
-        if isinstance(exc, OutputError):
-            raise
-        from formation_ftc.config.loader import short_text
+    from formation_ftc.config.loader import short_text
 
-        reason = getattr(exc, "strerror", None) or str(exc)
-        raise OutputError(f"--out {short_text(os.fspath(out))}: unusable path ({reason})") from None
-
-
-def _check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
-    _plot_limit()  # a bad FORMATION_FTC_MAX_PLOT_SPACECRAFT is reported before the run, not after
     text = os.fspath(out)
-    if not text.strip():
-        raise OutputError("--out: empty path; give the output directory, e.g. --out out/run1")
-    if "\x00" in text:
-        raise OutputError(f"--out {text!r}: NUL character in the path")
-    d = Path(text)
-    if d.is_symlink() and d.is_dir():
-        d = d.resolve()  # write where the link points; the link itself stays
-    if d.exists() or d.is_symlink():
-        if not d.is_dir():
-            kind = "a file" if d.is_file() else "not a directory (a device, socket or broken link)"
-            raise OutputError(f"--out {text}: exists and is {kind}; give a directory")
+    with oserror_as(OutputError, f"--out {short_text(text)}: unusable path", (OSError, ValueError)):
+        _plot_limit()  # a bad FORMATION_FTC_MAX_PLOT_SPACECRAFT is reported before the run, not after
+        if not text.strip():
+            raise OutputError("--out: empty path; give the output directory, e.g. --out out/run1")
+        if "\x00" in text:
+            raise OutputError(f"--out {text!r}: NUL character in the path")
+        d = Path(text)
+        if d.is_symlink() and d.is_dir():
+            d = d.resolve()  # write where the link points; the link itself stays
+        if existing_dir(d, f"--out {text}", OutputError, "give a directory"):
+            with oserror_as(OutputError, f"--out {text}: cannot be read"):
+                entries = list(d.iterdir())
+            if entries and not force and not is_run_result(d):
+                raise OutputError(
+                    f"--out {text}: is not empty and is not the result of an earlier `formation-ftc "
+                    f"run` (it holds e.g. {sorted(e.name for e in entries)[:3]}); use another "
+                    f"directory, or --force to replace its content"
+                )
+        # the nearest existing ancestor must be a writable directory (the staging sibling goes there)
+        anc = next(p for p in d.absolute().parents if p.exists())
+        if not anc.is_dir():
+            raise OutputError(f"--out {text}: {anc} is not a directory")
+        probe = anc / f".formation-ftc-probe-{os.getpid()}"
         try:
-            entries = list(d.iterdir())
+            probe.mkdir()
+            probe.rmdir()
         except OSError as exc:
-            raise OutputError(f"--out {text}: cannot be read ({exc.strerror or exc})") from None
-        if entries and not force and not is_run_result(d):
+            if exc.errno in DISK_FULL:
+                raise _no_space(exc, d) from None
             raise OutputError(
-                f"--out {text}: is not empty and is not the result of an earlier `formation-ftc "
-                f"run` (it holds e.g. {sorted(e.name for e in entries)[:3]}); use another "
-                f"directory, or --force to replace its content"
-            )
-    # the nearest existing ancestor must be a writable directory (the staging sibling is created there)
-    anc = d.absolute().parent
-    while not anc.exists():
-        anc = anc.parent
-    if not anc.is_dir():
-        raise OutputError(f"--out {text}: {anc} is not a directory")
-    probe = anc / f".formation-ftc-probe-{os.getpid()}"
-    try:
-        probe.mkdir()
-        probe.rmdir()
-    except OSError as exc:
-        if exc.errno in DISK_FULL:
-            raise _no_space(exc, d) from None
-        raise OutputError(
-            f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
-            f"directory"
-        ) from None
-    return d
+                f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
+                f"directory"
+            ) from None
+        return d
 
 
 def _no_space(exc: OSError, out_dir: Path) -> OSError:

@@ -57,6 +57,7 @@ from formation_ftc.cf import apply_cf, write_netcdf
 from formation_ftc.errors import require_extra
 from formation_ftc.parquet_units import read_units, write_parquet
 from formation_ftc.provenance import provenance
+from formation_ftc.runout import TMP_RE, oserror_as
 
 #: Parquet I/O: the ``campaign`` extra (``pip install -e '.[campaign]'``)
 pq = require_extra("pyarrow.parquet", "campaign", "campaign and league storage (Parquet files)")
@@ -76,7 +77,6 @@ FORMAT_VERSION = 2
 LOCK = ".lock"
 _CHUNK_RE = re.compile(r"^chunk-(\d{6,})\.parquet$")
 _TRACE_RE = re.compile(r"^run-(\d{6,})\.nc$")
-_TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
 _TOP_LEVEL = {MANIFEST, LOCK, "chunks", "traces", "report"}
 _ROOT_TMP_RE = re.compile(r"^\.manifest\.json\.tmp-\d+$")
 #: integer bookkeeping columns of a chunk (identifiers, indices, seeds): dimensionless
@@ -175,7 +175,7 @@ class CampaignStore:
             if not d.is_dir():
                 raise CampaignError(f"{d}: expected a directory; refusing to use {root}")
             for f in d.iterdir():
-                if _TMP_RE.match(f.name) and f.is_file():
+                if TMP_RE.match(f.name) and f.is_file():
                     continue  # a write in progress or interrupted: never counted; only the lock holder removes it
                 m = pattern.match(f.name)
                 if not m or not f.is_file():
@@ -342,7 +342,7 @@ class CampaignStore:
             d = self.root / sub
             if d.is_dir():
                 for f in d.iterdir():
-                    if _TMP_RE.match(f.name) and f.is_file():
+                    if TMP_RE.match(f.name) and f.is_file():
                         f.unlink(missing_ok=True)
         for f in self.root.iterdir():
             if _ROOT_TMP_RE.match(f.name):
@@ -461,14 +461,8 @@ class CampaignStore:
 
 def _opened(open_: Callable[[Path], CampaignStore], root: str | Path, what: str) -> CampaignStore:
     """``open_(Path(root))``, an OSError or ValueError (not a CampaignError) as "unusable ``what``"."""
-    try:
+    with oserror_as(CampaignError, f"{_short(root)}: unusable {what}", (OSError, ValueError)):
         return open_(Path(root))
-    except (OSError, ValueError) as exc:
-        if isinstance(exc, CampaignError):
-            raise
-        raise CampaignError(
-            f"{_short(root)}: unusable {what} ({getattr(exc, 'strerror', None) or exc})"
-        ) from None
 
 
 def _short(path: str | Path) -> str:

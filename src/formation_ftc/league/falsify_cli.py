@@ -25,8 +25,8 @@ def _cmd_falsify(args) -> int:
     from formation_ftc.league.definition import LeagueError
     from formation_ftc.league.falsify import falsify
     from formation_ftc.league.tune_cli import _league_step_checks
-    from formation_ftc.league.tuning import _oserror_as
     from formation_ftc.provenance import provenance
+    from formation_ftc.runout import oserror_as
 
     t0 = time.perf_counter()
     out = Path(args.out)
@@ -38,7 +38,7 @@ def _cmd_falsify(args) -> int:
         **{name: getattr(args, name) for name in _PASSED},
     )
     stem = f"{args.method}--{args.level}--{args.optimizer}-{args.seed}"
-    with _oserror_as(LeagueError, f"--out {out}: cannot write there"):
+    with oserror_as(LeagueError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         scenario = out / f"{stem}.toml"
         name = f"falsify-{args.method}-{args.level}"

@@ -48,7 +48,7 @@ from formation_ftc.league.definition import (
 )
 from formation_ftc.limits import Budgets, check_run_steps, format_bytes, run_memory_bytes
 from formation_ftc.progress import _Bars, _clock
-from formation_ftc.runout import DISK_FULL
+from formation_ftc.runout import DISK_FULL, TMP_RE, existing_dir, oserror_as
 
 __all__ = [
     "Cell",
@@ -118,8 +118,6 @@ _UNCHECKED = (*FDI_METRICS, *IDENTIFICATION_METRICS, *FLFR_METRICS, *NAVIGATION_
 _NOT_STEP_CHECKED = (*(m["name"] for m in _UNCHECKED), STL_VIOLATION)
 #: memory of one method process of ``league run --workers N`` (JAX, its programs, one batch) [bytes]
 METHOD_WORKER_BYTES = 1_200_000_000
-#: a temporary file of an atomic write (``.NAME.tmp-PID``, as the campaign store names them)
-_TMP_RE = re.compile(r"^\..+\.tmp-\d+$")
 _CHUNK_RE = re.compile(r"^chunk-(\d{6,})\.parquet$")
 
 
@@ -524,12 +522,7 @@ def _check_target(
         inside = campaign != Path(os.path.realpath(out))
         where = f"is inside {campaign}, which is" if inside else "is"
         raise error(f"{what}: {where} a campaign directory; {in_campaign}")
-    if not (out.exists() or out.is_symlink()):
-        return False
-    if not out.is_dir():
-        kind = "a file" if out.is_file() else "not a directory (a device, socket or broken link)"
-        raise error(f"{what}: exists and is {kind}; {not_dir}")
-    return True
+    return existing_dir(out, what, error, not_dir)
 
 
 def _check_out(
@@ -541,7 +534,7 @@ def _check_out(
     run in blocks when it starts where the league's seeds end or is one of its blocks (resumed).
     Returns the ``league.json`` found there, or None."""
     what = f"--out {out}"
-    try:
+    with oserror_as(LeagueError, f"{what}: unusable path"):
         if not _check_target(
             out,
             what,
@@ -553,7 +546,7 @@ def _check_out(
             return None
         entries = [e.name for e in out.iterdir()]
         if LEAGUE_FILE not in entries:
-            stray = sorted(e for e in entries if not _TMP_RE.match(e))
+            stray = sorted(e for e in entries if not TMP_RE.match(e))
             if stray:
                 raise LeagueError(
                     f"{what}: is not empty and holds no {LEAGUE_FILE} (e.g. {stray[:3]}): not a "
@@ -565,8 +558,6 @@ def _check_out(
                     "directory that holds the seeds before it"
                 )
             return None
-    except OSError as exc:
-        raise LeagueError(f"{what}: unusable path ({exc.strerror or exc})") from None
     old = _read_meta(out / LEAGUE_FILE, what)
     blocks = old.get("blocks") or []
     if first_seed is None:

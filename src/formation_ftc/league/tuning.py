@@ -29,6 +29,7 @@ from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 from formation_ftc.league.tuning_options import DEFAULT_OPTIMISER, OPTIMISERS, TRAIN_START
 from formation_ftc.limits import Budgets
+from formation_ftc.runout import TMP_RE, oserror_as
 
 __all__ = [
     "TuneError",
@@ -58,15 +59,6 @@ _UNBUILT = "tuning: a run cannot be built"
 
 class TuneError(InputError):
     """A tuning that cannot run (exit code 2); the message names the field or option."""
-
-
-@contextlib.contextmanager
-def _oserror_as(error: type[InputError], message: str) -> Iterator[None]:
-    """An OSError inside raised as ``error`` (exit code 2): ``message`` and the system's reason."""
-    try:
-        yield
-    except OSError as exc:
-        raise error(f"{message} ({exc.strerror or exc})") from None
 
 
 @dataclass(frozen=True)
@@ -692,7 +684,7 @@ class TuneJournal:
     def _io(self) -> Iterator[None]:
         """Writing the journal: its directory made, an OSError a TuneError naming it."""
         where = f"--out {self.path.parent}: cannot write the tuning journal {self.path.name} there"
-        with _oserror_as(TuneError, where):
+        with oserror_as(TuneError, where):
             self.path.parent.mkdir(parents=True, exist_ok=True)
             yield
 
@@ -890,12 +882,12 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
     directory holding anything but tuning results and journals, or one that holds this result
     already (unless ``force``). A file of the result's name that is not a tuning result is never
     replaced."""
-    from formation_ftc.league.runner import _TMP_RE, LEAGUE_FILE, _check_target
+    from formation_ftc.league.runner import LEAGUE_FILE, _check_target
 
     out = Path(out_dir)
     what = f"--out {out}"
     result = f"{method}--{level}.json"
-    with _oserror_as(TuneError, f"{what}: unusable path"):
+    with oserror_as(TuneError, f"{what}: unusable path"):
         if not _check_target(
             out,
             what,
@@ -919,7 +911,7 @@ def check_tune_out(out_dir: str | Path, method: str, level: str, *, force: bool 
             )
         own = journal_path(out, method, level).name  # judged (resumed or refused) by TuneJournal
         foreign = [
-            e for e in entries if not (e == own or _TMP_RE.match(e) or _is_tuning_file(out / e))
+            e for e in entries if not (e == own or TMP_RE.match(e) or _is_tuning_file(out / e))
         ]
         if foreign:
             raise TuneError(
@@ -1226,7 +1218,7 @@ def write_tuning(result: Mapping[str, Any], out_dir: str | Path) -> Path:
     """
     out = Path(out_dir)
     path = out / f"{result['method']}--{result['level']}.json"
-    with _oserror_as(TuneError, f"--out {out}: cannot write there"):
+    with oserror_as(TuneError, f"--out {out}: cannot write there"):
         out.mkdir(parents=True, exist_ok=True)
         atomic_write(path, json.dumps(jsonable(dict(result)), indent=1, allow_nan=False))
     return path
