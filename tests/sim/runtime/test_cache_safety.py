@@ -113,6 +113,23 @@ def test_a_sticky_directory_counts_only_as_root_owned_ancestor_of_a_private_dire
     assert unsafe_directory(mine) == f"{sticky} is writable by its group or by others"
 
 
+def test_a_new_cache_directory_is_created_in_a_root_owned_sticky_directory(base, capsys):
+    """FORMATION_FTC_JAX_CACHE=/tmp/my-cache when /tmp/my-cache does not exist yet: the cache is made
+    there (mode 0700) and used; a sticky directory that is not root's stays refused."""
+    sticky = base / "sticky"
+    sticky.mkdir()
+    os.chmod(sticky, 0o1777)
+    got = private_cache_dir(str(sticky / "my-cache" / "jax"))
+    if os.geteuid() != 0:  # sticky, but owned by a user who is not root: nothing is created
+        assert got is None and not any(sticky.iterdir())
+        assert f"{sticky} is writable by its group or by others" in capsys.readouterr().err
+        return
+    assert got == str(sticky / "my-cache" / "jax")
+    assert [stat.S_IMODE(os.stat(d).st_mode) for d in (sticky / "my-cache", got)] == [0o700, 0o700]
+    assert capsys.readouterr().err == ""
+    assert private_cache_dir(str(sticky)) is None  # the sticky directory itself is not a cache
+
+
 def test_nothing_is_created_under_a_refused_directory(base, capsys):
     shared = base / "shared"
     shared.mkdir(mode=0o775)

@@ -192,13 +192,16 @@ def _make_private(path: Path) -> None:
         os.chmod(d, 0o700)  # mkdir's mode is masked by the umask
 
 
-def _problem(path: str | os.PathLike[str]) -> tuple[Path, str] | None:
-    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why."""
+def _problem(path: str | os.PathLike[str], creating: bool = False) -> tuple[Path, str] | None:
+    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why. ``creating``:
+    ``path`` is where this user is about to create a private directory (mode 0700), so it may itself
+    be a root-owned sticky directory such as ``/tmp``."""
     uid = os.geteuid()
     p = Path(path)
     if not p.is_absolute():
         return p, "is not an absolute path"
-    below: os.stat_result | None = None  # the directory one level down the path (it passed)
+    # owner of the directory one level down the path (it passed); creating: the one about to be made
+    below: int | None = uid if creating else None
     for d in (p, *p.parents):
         try:
             st = os.lstat(d)
@@ -210,15 +213,10 @@ def _problem(path: str | os.PathLike[str]) -> tuple[Path, str] | None:
             return d, "is not a directory"
         if st.st_uid not in (uid, 0):
             return d, f"is owned by uid {st.st_uid}, neither by you nor by root"
-        sticky_ancestor = (
-            st.st_uid == 0
-            and st.st_mode & stat.S_ISVTX
-            and below is not None
-            and below.st_uid == uid
-        )
+        sticky_ancestor = st.st_uid == 0 and st.st_mode & stat.S_ISVTX and below == uid
         if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) and not sticky_ancestor:
             return d, "is writable by its group or by others"
-        below = st
+        below = st.st_uid
     return None
 
 
@@ -306,8 +304,11 @@ def private_cache_dir(cache: str) -> str | None:
     existing = Path(os.path.abspath(cache))
     while not os.path.lexists(existing):
         existing = existing.parent
-    # nothing is created under a directory that is already refused
-    problem = unsafe_directory(os.path.realpath(existing))
+    # nothing is created under a directory that is already refused (a root-owned sticky directory such
+    # as /tmp is not: only this user may rename or remove what it creates there, and the created
+    # directory is checked again below)
+    found = _problem(os.path.realpath(existing), creating=existing != Path(os.path.abspath(cache)))
+    problem = None if found is None else f"{found[0]} {found[1]}"
     if problem is None:
         try:
             _make_private(Path(os.path.abspath(cache)))
