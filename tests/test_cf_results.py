@@ -195,7 +195,7 @@ def test_campaign_store_opens_with_pandas_and_pyarrow_dataset_with_metric_units(
             "chunk_size": 2,
             "metrics": ["max_position_error", "delta_v_total"],
         },
-        "overrides": {"simulation.horizon": 2.0},
+        "overrides": {"simulation.horizon": 20.0},
         "sample": {"controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0}},
         "traces": {"runs": [1]},
     }

@@ -15,7 +15,7 @@ import xarray as xr
 from formation_ftc.cli import main
 
 SCN = "cw-pd-fault"
-SHORT = ["--set", "simulation.horizon=2"]
+SHORT = ["--set", "simulation.horizon=20"]  # 200 steps: the program of the other short runs
 
 
 def _expr(text: str) -> list[str]:
@@ -168,10 +168,10 @@ def test_run_refuses_foreign_directory_without_force_and_replaces_its_own_result
     out = tmp_path / "run"
     assert main(["run", SCN, *SHORT, "--out", str(out)]) == 0
     assert (
-        main(["run", SCN, "--set", "simulation.horizon=3", "--out", str(out)]) == 0
+        main(["run", SCN, "--set", "simulation.horizon=60", "--out", str(out)]) == 0
     )  # its own: replaced
     with xr.open_dataset(out / "result.nc", engine="h5netcdf") as ds:
-        assert float(ds["time"][-1]) == pytest.approx(3.0)
+        assert float(ds["time"][-1]) == pytest.approx(60.0)
     assert not [
         p for p in tmp_path.iterdir() if p.name.startswith(".")
     ]  # no staging directory left
@@ -194,7 +194,7 @@ def test_failure_while_writing_leaves_the_previous_run_whole(tmp_path, capsys, m
 
     monkeypatch.setattr(api, "save_result", fails_after_the_netcdf)
     monkeypatch.setenv("FORMATION_FTC_CRASH_DIR", str(tmp_path / "crash"))
-    assert main(["run", SCN, "--set", "simulation.horizon=3", "--out", str(out)]) == 3
+    assert main(["run", SCN, "--set", "simulation.horizon=60", "--out", str(out)]) == 3
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # the previous run, whole
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
@@ -202,7 +202,7 @@ def test_failure_while_writing_leaves_the_previous_run_whole(tmp_path, capsys, m
 def test_save_result_never_pairs_a_new_result_with_old_metrics(tmp_path, monkeypatch):
     from formation_ftc.api import load_scenario, save_result, simulate
 
-    ds = simulate(load_scenario(SCN, {"simulation.horizon": 2.0}))
+    ds = simulate(load_scenario(SCN, {"simulation.horizon": 20.0}))
     save_result(ds, tmp_path, {"a": 1.0})
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     ds2 = ds.copy()
@@ -448,7 +448,7 @@ def test_a_full_stderr_costs_no_campaign_chunk_nor_error_status(tmp_path, monkey
     spec = tmp_path / "c.toml"
     spec.write_text(
         '[campaign]\nname = "full"\nbase = "cw-pd-fault"\nruns = 2\nchunk_size = 2\n'
-        '[overrides]\n"simulation.horizon" = 2.0\n'
+        '[overrides]\n"simulation.horizon" = 20.0\n'
         '[sample]\n"controller.kp" = {dist = "uniform", low = 1.0, high = 3.0}\n'
     )
     store = runner._store_chunk

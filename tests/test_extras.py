@@ -64,7 +64,7 @@ def test_without_the_extras_a_scenario_still_runs_and_checks(tmp_path):
         "--out",
         str(tmp_path / "r"),
         "--set",
-        "simulation.horizon=10",
+        "simulation.horizon=20",  # the 200 steps of the other short cw-pd-fault runs
     )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "result.nc").is_file()

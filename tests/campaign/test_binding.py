@@ -105,7 +105,7 @@ def test_fields_without_a_leaf_holding_their_value_are_not_bound(base, values):
 def _campaign(sample: dict, runs: int = 3) -> dict:
     raw = copy.deepcopy(TINY)
     raw["campaign"].update(runs=runs, chunk_size=runs, seed=5)
-    raw["overrides"] = {"simulation.horizon": 5.0}
+    raw["overrides"] = {"simulation.horizon": 20.0}  # the 200 steps of the other tiny campaigns
     raw["sample"] = sample
     raw["traces"] = {"runs": [], "every": 1}
     return raw

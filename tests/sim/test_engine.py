@@ -135,15 +135,16 @@ def test_simulate_raises_with_partial_results():
     assert err.partial.attrs["diverged"]
 
 
-#: the 30 s cw-pd-fault run: one structure, so one program, for the single runs of the tests below
-CW_30S = {"simulation.horizon": 30.0}
+#: the 20 s cw-pd-fault run: one structure, so one program, for the single runs of the tests below
+#: (the 200 steps of the other short cw-pd-fault runs)
+CW_20S = {"simulation.horizon": 20.0}
 
 
 def test_vmap_batch_equals_single_runs():
     from formation_ftc.api import build_loop
     from formation_ftc.sim.programs import jitted_run
 
-    scn = ftc.load_scenario("cw-pd-fault", CW_30S)
+    scn = ftc.load_scenario("cw-pd-fault", CW_20S)
     comp = build_loop(scn)
     seeds = jnp.array([1, 2, 3], dtype=jnp.uint32)
     kps = jnp.array([1.0, 2.0, 3.0])
@@ -166,9 +167,9 @@ def test_vmap_batch_equals_single_runs():
 
 
 def test_same_seed_same_numbers_different_seed_differs():
-    a = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_30S))
-    b = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_30S))
-    c = ftc.simulate(ftc.load_scenario("cw-pd-fault", {**CW_30S, "simulation.seed": 9}))
+    a = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_20S))
+    b = ftc.simulate(ftc.load_scenario("cw-pd-fault", CW_20S))
+    c = ftc.simulate(ftc.load_scenario("cw-pd-fault", {**CW_20S, "simulation.seed": 9}))
     np.testing.assert_array_equal(a.position.values, b.position.values)
     assert not np.array_equal(a.position.values, c.position.values)
 

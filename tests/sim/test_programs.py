@@ -73,7 +73,7 @@ def test_another_structure_is_traced_and_the_oldest_program_dropped(
 ):
     a, _ = cw_gain_pair
     longer = load_scenario(
-        "cw-pd-fault", {"simulation.horizon": 30.0}
+        "cw-pd-fault", {"simulation.horizon": 60.0}
     )  # more steps: another structure
     assert build_loop(a).static_key != build_loop(longer).static_key
     monkeypatch.setattr(programs, "_PROGRAMS", LRUCache(maxsize=1))
@@ -94,7 +94,7 @@ def test_executable_is_shared_and_lru_bounded(cw_gain_pair, monkeypatch):
     exe_a, t_a = programs.executable(c_a)
     exe_b, t_b = programs.executable(c_b)
     assert exe_a is exe_b and t_a > 0.0 and t_b == 0.0
-    c_long = build_loop(load_scenario("cw-pd-fault", {"simulation.horizon": 30.0}))
+    c_long = build_loop(load_scenario("cw-pd-fault", {"simulation.horizon": 60.0}))
     exe_long, t_long = programs.executable(c_long)  # more steps: another program
     assert exe_long is not exe_a and t_long > 0.0
     out = exe_b(c_b)

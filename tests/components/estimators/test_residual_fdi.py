@@ -147,8 +147,15 @@ def test_cusum_detects_at_the_closed_form_step_and_isolates(tmp_path):
 
 @pytest.mark.parametrize("residual", ["kalman", "parity"])
 def test_noisy_navigation_no_false_alarm_then_a_correct_detection(tmp_path, residual):
+    # both runs 300 s: one program (the fault kind and its bias are values, not the structure)
     _, quiet = _run(
-        tmp_path, sensors=NOISY, kind="none", residual=residual, test="cusum", threshold=20.0
+        tmp_path,
+        horizon=300.0,
+        sensors=NOISY,
+        kind="none",
+        residual=residual,
+        test="cusum",
+        threshold=20.0,
     )
     assert quiet["false_alarm"] == 0.0 and quiet["missed"] == 0.0
     # 0.5 N: the one-step parity residual sees dt b / m against sqrt(2) x 1 mm/s of noise, 1.5 sigma

@@ -220,8 +220,7 @@ def test_biased_sensors_in_a_closed_loop_shift_the_command_by_the_pd_gain():
         TRUTH,
         {"type": "lvlh-relative-state", "position_noise_std": 0.5, "velocity_noise_std": 1e-3},
     )
-    for r in (raw, raw0, raw_noisy):
-        r["simulation"]["horizon"] = 60.0
+    # the 600 s of _loop: the program of the inertial-truth closed-loop test above
     ds, ds0, ds_n = (ftc.simulate(ftc.load_scenario(r)) for r in (raw, raw0, raw_noisy))
     kp, kd = raw["controller"]["kp"], raw["controller"]["kd"]
     np.testing.assert_allclose(

@@ -14,8 +14,10 @@ from formation_ftc.papers._study import read_study
 from formation_ftc.papers.li2020.reproduction import REPRODUCTION, SCENARIOS, SUMMARY_KEYS
 from formation_ftc.registry import get_method
 
-#: the shortened reproduction's horizon [s]; the plot test runs SIR-FTC on it too (the same program)
-SHORT = {"simulation.horizon": 40.0}
+#: the shortened reproduction's horizon [s] and record interval: those of test_record_every.py's
+#: decimated runs (60 s, every 20 steps), so that both share the compiled programs; the plot test runs
+#: SIR-FTC on it too (the same program)
+SHORT = {"simulation.horizon": 60.0, "simulation.record_every": 20}
 
 
 def test_reproduction_short_horizon(tmp_path, recheck_verdicts):
