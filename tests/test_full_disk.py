@@ -142,33 +142,13 @@ def test_run_on_a_full_disk_exits_3_and_keeps_the_earlier_result(
 
 
 #: the tiny campaign of tests/campaign/conftest.py (TINY): its compiled programs are shared
-TINY_CAMPAIGN = {
-    "campaign": {
-        "name": "tiny",
-        "base": "cw-pd-fault",
-        "runs": 3,
-        "seed": 11,
-        "chunk_size": 2,
-        "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"],
-    },
-    "overrides": {"simulation.horizon": 20.0},
-    "sample": {
-        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-        "controller.kd": {"grid": [10.0, 30.0]},
-        "plant.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
-    },
-    "traces": {"runs": [0, 4], "every": 2},
-}
+TINY_CAMPAIGN = Path(__file__).parent / "campaign" / "tiny-campaign.toml"
 
 
-def test_campaign_on_a_full_disk_exits_3_with_one_line(small_disk, tmp_path, capfd):
-    import tomli_w
-
-    spec = tmp_path / "tiny.toml"  # off the small disk
-    spec.write_text(tomli_w.dumps(TINY_CAMPAIGN))
+def test_campaign_on_a_full_disk_exits_3_with_one_line(small_disk, capfd):
     out = small_disk / "c"
     _fill(small_disk, 16)  # room for the manifest (2 KB), not for a trace file (28 KB)
-    code, err = _main(capfd, "-q", "campaign", "run", str(spec), "--out", str(out))
+    code, err = _main(capfd, "-q", "campaign", "run", str(TINY_CAMPAIGN), "--out", str(out))
     assert code == 3
     errors = [
         ln for ln in err if "error" in ln.lower() or "Traceback" in ln

@@ -3,29 +3,15 @@
 from __future__ import annotations
 
 import copy
+import tomllib
 from pathlib import Path
 
 import pytest
 import tomli_w
 
 #: A 2 x 3 campaign on the lead's cw-pd-fault scenario cut to 20 s (200 RK4 steps of 0.1 s).
-TINY = {
-    "campaign": {
-        "name": "tiny",
-        "base": "cw-pd-fault",
-        "runs": 3,
-        "seed": 11,
-        "chunk_size": 2,
-        "metrics": ["max_position_error", "final_position_error_mean", "delta_v_total"],
-    },
-    "overrides": {"simulation.horizon": 20.0},
-    "sample": {
-        "controller.kp": {"dist": "uniform", "low": 1.0, "high": 3.0},
-        "controller.kd": {"grid": [10.0, 30.0]},
-        "plant.mass.0": {"dist": "normal", "mean": 100.0, "std": 5.0, "low": 80.0},
-    },
-    "traces": {"runs": [0, 4], "every": 2},
-}
+TINY_FILE = Path(__file__).with_name("tiny-campaign.toml")
+TINY = tomllib.loads(TINY_FILE.read_text())
 
 
 def _tiny(**campaign) -> dict:
