@@ -80,6 +80,8 @@ class ClohessyWiltshirePlant(PointMassUsage, RelativeStatePlant):
         return {"q": cw_rhs(t, x["q"], f / self.mass[:, None], self.mean_motion)}
 
     def usage_rates(self, t, x, command):
+        # PointMassUsage's rates with jnp's norm and sum, not norm3/sq_norm3: the other reduction order
+        # moves compose-li2020-on-cw's metrics in the last bits, and the reproduction numbers stay
         return {
             "delta_v": jnp.linalg.norm(command, axis=-1) / self.mass,
             "control_effort": jnp.sum(command**2, axis=-1),

@@ -193,9 +193,7 @@ def _make_private(path: Path) -> None:
 
 
 def _problem(path: str | os.PathLike[str], creating: bool = False) -> tuple[Path, str] | None:
-    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why. ``creating``:
-    ``path`` is where this user is about to create a private directory (mode 0700), so it may itself
-    be a root-owned sticky directory such as ``/tmp``."""
+    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why."""
     uid = os.geteuid()
     p = Path(path)
     if not p.is_absolute():
@@ -220,7 +218,7 @@ def _problem(path: str | os.PathLike[str], creating: bool = False) -> tuple[Path
     return None
 
 
-def unsafe_directory(path: str | os.PathLike[str]) -> str | None:
+def unsafe_directory(path: str | os.PathLike[str], creating: bool = False) -> str | None:
     """Why the directory ``path`` (absolute, links resolved) may not hold a compilation cache, or None
     when it may. As OpenSSH's ``StrictModes`` checks the path of an ``authorized_keys`` file, every
     directory from ``path`` up to ``/`` must be a real directory (``lstat``: not a symbolic link) owned
@@ -233,6 +231,9 @@ def unsafe_directory(path: str | os.PathLike[str]) -> str | None:
     ----------
     path : str or os.PathLike
         The cache directory, absolute and without symbolic links (``os.path.realpath``).
+    creating : bool, optional
+        ``path`` is the directory in which this user is about to create the cache (mode 0700), so it
+        may itself be a root-owned sticky directory such as ``/tmp``.
 
     Returns
     -------
@@ -253,7 +254,7 @@ def unsafe_directory(path: str | os.PathLike[str]) -> str | None:
     >>> fine, refused == f"{tmp} is writable by its group or by others"
     (None, True)
     """
-    found = _problem(path)
+    found = _problem(path, creating)
     return None if found is None else f"{found[0]} {found[1]}"
 
 
@@ -307,8 +308,9 @@ def private_cache_dir(cache: str) -> str | None:
     # nothing is created under a directory that is already refused (a root-owned sticky directory such
     # as /tmp is not: only this user may rename or remove what it creates there, and the created
     # directory is checked again below)
-    found = _problem(os.path.realpath(existing), creating=existing != Path(os.path.abspath(cache)))
-    problem = None if found is None else f"{found[0]} {found[1]}"
+    problem = unsafe_directory(
+        os.path.realpath(existing), creating=existing != Path(os.path.abspath(cache))
+    )
     if problem is None:
         try:
             _make_private(Path(os.path.abspath(cache)))
