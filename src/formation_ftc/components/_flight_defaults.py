@@ -16,12 +16,7 @@ perturbing the truth leaves every flight component unchanged).
 
 from __future__ import annotations
 
-__all__ = [
-    "NOMINAL_MASS",
-    "YANG2013_NOMINAL_MASS",
-    "NOMINAL_INERTIA",
-    "MEHRABIAN_NOMINAL_INERTIA",
-]
+__all__ = ["NOMINAL_MASS", "YANG2013_NOMINAL_MASS", "NOMINAL_INERTIA", "MEHRABIAN_NOMINAL_INERTIA"]
 
 #: on-board mass of a translational law that states none [kg]
 NOMINAL_MASS = 100.0

@@ -14,12 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 from pydantic import Field
 
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components.sensors.chain_relative import chain_layout
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component

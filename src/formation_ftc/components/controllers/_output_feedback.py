@@ -44,11 +44,7 @@ from formation_ftc.core.dynamics.cw import cw_free_motion
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
 from formation_ftc.sim.contract import as_float
 
-__all__ = [
-    "NominalOrbitTracking",
-    "OutputFeedbackSection",
-    "care_solution",
-]
+__all__ = ["NominalOrbitTracking", "OutputFeedbackSection", "care_solution"]
 
 STATE = ("spacecraft", "component")
 VEC = ("spacecraft", "axis")

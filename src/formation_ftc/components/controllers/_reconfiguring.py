@@ -12,12 +12,7 @@ import numpy as np
 
 from formation_ftc.components.controllers._acceleration_to_force import WrappedLaw, wrapper_for
 from formation_ftc.components.estimators.residual_fdi import isolated_effectiveness
-from formation_ftc.sim.components import (
-    CompositionError,
-    Controller,
-    FlightInputs,
-    component,
-)
+from formation_ftc.sim.components import CompositionError, Controller, FlightInputs, component
 
 __all__ = ["ReconfiguringAllocator", "TrackingReconfiguringAllocator", "reconfigured"]
 

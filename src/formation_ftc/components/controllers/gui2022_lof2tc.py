@@ -41,9 +41,7 @@ from formation_ftc.components.controllers._output_feedback import (
     _on_plant,
     _output_feedback_fields,
 )
-from formation_ftc.components.estimators.iterative_learning_observer import (
-    learning_interval_steps,
-)
+from formation_ftc.components.estimators.iterative_learning_observer import learning_interval_steps
 from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static

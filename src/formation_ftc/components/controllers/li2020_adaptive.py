@@ -429,8 +429,7 @@ class Li2020Section(StrictModel):
         0.001, description="d_hat_i(0), initial disturbance-bound estimate [N], > 0 (eq. (27))."
     )
     sigma_a: _Positive = Field(
-        0.001,
-        description="a_i of sigma_i(t) [1/s] (exponential) or [1/s^2] (inverse square), > 0.",
+        0.001, description="a_i of sigma_i(t) [1/s] (exponential) or [1/s^2] (inverse square), > 0."
     )
     sigma_form: Literal["exponential", "inverse_square"] = Field(
         "exponential",

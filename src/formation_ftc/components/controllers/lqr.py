@@ -18,12 +18,7 @@ import jax.numpy as jnp
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Masses, Vec3, Vec3Expr, positive_values
 from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel

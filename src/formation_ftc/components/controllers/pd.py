@@ -10,12 +10,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_MASS
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Vec3Expr, section_floats
 from formation_ftc.components.controllers._desired_position import DesiredPositionLaw
 from formation_ftc.config.base import StrictModel

@@ -19,25 +19,14 @@ from pydantic import Field
 
 from formation_ftc.components._flight_defaults import NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, register
-from formation_ftc.components._sections import (
-    Inertia,
-    UnitQuaternions,
-    quaternion_rows,
-)
-from formation_ftc.components.controllers._yang2013 import (
-    Yang2013AttitudeController,
-    attitude_law,
-)
+from formation_ftc.components._sections import Inertia, UnitQuaternions, quaternion_rows
+from formation_ftc.components.controllers._yang2013 import Yang2013AttitudeController, attitude_law
 from formation_ftc.components.controllers.attitude_pd import QUATERNION_LAW_NEEDS, error_quaternion
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Controller, FlightInputs, component
 from formation_ftc.sim.contract import as_float
 
-__all__ = [
-    "Yang2013AttitudeHold",
-    "Yang2013AttitudeSection",
-    "yang2013_error_state",
-]
+__all__ = ["Yang2013AttitudeHold", "Yang2013AttitudeSection", "yang2013_error_state"]
 
 
 def yang2013_error_state(omega, q, q_desired):

@@ -31,9 +31,7 @@ from pydantic import Field, field_validator
 
 from formation_ftc.components._registry import BuildContext, per_spacecraft, register
 from formation_ftc.components.controllers._yang2013 import translational_law
-from formation_ftc.components.controllers.yang2013_translational import (
-    Yang2013TranslationalSection,
-)
+from formation_ftc.components.controllers.yang2013_translational import Yang2013TranslationalSection
 from formation_ftc.sim.components import (
     CompositionError,
     Controller,

@@ -23,11 +23,7 @@ from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternio
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
 from formation_ftc.sim.contract import as_float
 
-__all__ = [
-    "QuaternionRigidBodyPlant",
-    "QuaternionPlantSection",
-    "QUATERNION_COMPONENTS",
-]
+__all__ = ["QuaternionRigidBodyPlant", "QuaternionPlantSection", "QUATERNION_COMPONENTS"]
 
 
 @component

@@ -78,8 +78,7 @@ def _build(
     if sec.position_noise_std == 0 and sec.velocity_noise_std == 0:
         return ExactRelativeStateSensors(count=ctx.count)
     return RelativeStateSensors(
-        count=ctx.count,
-        **section_floats(sec, "position_noise_std", "velocity_noise_std"),
+        count=ctx.count, **section_floats(sec, "position_noise_std", "velocity_noise_std")
     )
 
 
