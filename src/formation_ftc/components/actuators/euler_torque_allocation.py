@@ -87,17 +87,9 @@ class HeldAdditiveFaultActuator(Actuator):
     def held_exogenous(self, step: StepContext):
         if not self.torques:
             return {"fault": jnp.zeros((self.count, self.n_channels))}
+        where = self.spacecraft, self.channels, self.count, self.n_channels
         return {
-            "fault": windowed_additive_faults(
-                step.k,
-                step.dt,
-                self.windows,
-                self.torques,
-                self.spacecraft,
-                self.channels,
-                self.count,
-                self.n_channels,
-            )
+            "fault": windowed_additive_faults(step.k, step.dt, self.windows, self.torques, *where)
         }
 
     def apply(self, t, command, inputs: ActuatorInputs):

@@ -132,25 +132,12 @@ class LearningOutputFeedbackController(NominalOrbitTracking):
     def output(self, t, state, inputs: FlightInputs):
         m = self.learning_steps
         q0, e_y, F_hat = self.tracking(inputs)
-        u, pi, v = lof2tc_law(
-            e_y,
-            F_hat,
-            delay_read(state["pi"], m),
-            delay_read(state["v"], m),
-            self.K,
-            self.G1,
-            self.G2,
-            self.G3,
-            self.G4,
-            self.BpE,
-            self.BpH,
-        )  # (30)-(32)
+        past = delay_read(state["pi"], m), delay_read(state["v"], m)
+        gains = self.K, self.G1, self.G2, self.G3, self.G4, self.BpE, self.BpH
+        u, pi, v = lof2tc_law(e_y, F_hat, *past, *gains)  # (30)-(32)
         nxt = {"pi": delay_push(state["pi"], pi, m), "v": delay_push(state["v"], v, m)}
-        return (
-            u,
-            nxt,
-            {"desired_state": q0, "tracking_error": e_y, "learning_gain": pi, "compensation": v},
-        )
+        out = {"desired_state": q0, "tracking_error": e_y, "learning_gain": pi, "compensation": v}
+        return u, nxt, out
 
     def signals(self):
         return super().signals() + (

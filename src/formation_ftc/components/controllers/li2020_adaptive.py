@@ -351,19 +351,12 @@ class Li2020AdaptiveController(Controller):
             )
         Y = acc_nat + self.k[:, None] * (y[:, 3:] - d["v_d"]) - d["a_d"]  # eq. (8)
         cons = consensus(inputs.received, s)  # eq. (24) / (42)
+        m_hat, beta_hat, d_hat = state["m_hat"], state["beta_hat"], state["d_hat"]
         f, xi = li2020_control(
-            s,
-            Y,
-            cons,
-            state["m_hat"],
-            state["beta_hat"],
-            state["d_hat"],
-            d["sigma"],
-            self.lam,
-            self.d_sign,
+            s, Y, cons, m_hat, beta_hat, d_hat, d["sigma"], self.lam, self.d_sign
         )  # eqs. (23)-(24) / (41)-(42)
         beta_dot, m_dot, d_dot = li2020_adaptation_rates(
-            s, Y, xi, state["d_hat"], d["sigma"], self.gamma, self.eta, self.mu, self.upsilon
+            s, Y, xi, d_hat, d["sigma"], self.gamma, self.eta, self.mu, self.upsilon
         )  # (25)-(27)
         outputs = {"velocity_error": e2, **{name: state[name] for name in ADAPTIVE_PARAMETERS}}
         return f, {"m_hat": m_dot, "beta_hat": beta_dot, "d_hat": d_dot}, outputs

@@ -101,19 +101,15 @@ class NeighbourRelativeController(Controller):
     def referenced_error(self, received) -> jax.Array:
         """eps_bar_i (N, 6) [m, m/s]: weighted mean of the received formation errors (0 without links)."""
         w = received["in_weight"]
-        has = w > 0
-        return jnp.where(
-            has[:, None], received["weighted_sum"] / jnp.where(has, w, 1.0)[:, None], 0.0
-        )
+        has = (w > 0)[:, None]
+        return jnp.where(has, received["weighted_sum"] / jnp.where(has, w[:, None], 1.0), 0.0)
 
     def output(self, t, state, inputs: FlightInputs):
         eps_bar = self.referenced_error(inputs.received)
         shifted = inputs.measurement - self.coupling[:, None] * eps_bar
-        u, d, out = self.law.output(
-            t,
-            state,
-            inputs._replace(measurement=shifted, received=None, exogenous=inputs.exogenous["law"]),
-        )
+        law_exo = inputs.exogenous["law"]
+        law_inputs = inputs._replace(measurement=shifted, received=None, exogenous=law_exo)
+        u, d, out = self.law.output(t, state, law_inputs)
         out = dict(out)
         # what the law regulates: own formation error minus beta_i times the referenced one [m]
         out["relative_formation_error"] = (

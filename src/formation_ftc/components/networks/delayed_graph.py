@@ -155,18 +155,11 @@ def delay_statistics(
         v, r = vals[:, k], rates[:, k]
         kmin, kmax, kr = int(np.argmin(v)), int(np.argmax(v)), int(np.argmax(r))
         neg = np.flatnonzero(v < 0)
-        out.append(
-            DelayStats(
-                pair,
-                float(tg[kmin]),
-                float(v[kmin]),
-                float(v[kmax]),
-                float(r[kr]),
-                float(tg[kr]),
-                float(tg[neg[0]]) if neg.size else float("nan"),
-                float(tg[kmax]),
-            )
+        first_negative = float(tg[neg[0]]) if neg.size else float("nan")
+        t_min, lo, hi, rate, t_rate = (
+            float(a) for a in (tg[kmin], v[kmin], v[kmax], r[kr], tg[kr])
         )
+        out.append(DelayStats(pair, t_min, lo, hi, rate, t_rate, first_negative, float(tg[kmax])))
     return tuple(out)
 
 

@@ -106,12 +106,8 @@ class DelayedGraphLinkLossNetwork(DelayedGraphNetwork):
         after = inputs.step.t >= self.onset
         w = faulty_weights(self.adjacency, self.lost, self.onset, inputs.step.t)
         T = inputs.exogenous["T"] * jnp.where(after, self.delay_scale, 1.0)
-        return DelayedGraphNetwork.receive(
-            dataclasses.replace(self, adjacency=w),
-            t,
-            state,
-            inputs._replace(exogenous={**inputs.exogenous, "T": T}),
-        )
+        faulty, exogenous = dataclasses.replace(self, adjacency=w), {**inputs.exogenous, "T": T}
+        return DelayedGraphNetwork.receive(faulty, t, state, inputs._replace(exogenous=exogenous))
 
 
 class GraphLinkLossSection(GraphSection):

@@ -145,10 +145,8 @@ class EulerAngleAttitudePlant(Plant):
         """d_k ~ N(0, std^2 I) for the loop's step k, held over it [N m]."""
         # the disturbance stream's root key (prepare computes it once per run)
         k_d = seed_streams(self.seed)[2] if isinstance(self.noise_key, tuple) else self.noise_key
-        return {
-            "d": self.disturbance_std
-            * jax.random.normal(step_key(k_d, step.k), (self.count, 3), dtype=jnp.float64)
-        }
+        z = jax.random.normal(step_key(k_d, step.k), (self.count, 3), dtype=jnp.float64)
+        return {"d": self.disturbance_std * z}
 
     def derivative(self, t, x, inputs: TruthInputs):
         # (1), (27): J w_dot = -w x J w + R_bar^T (u + d)

@@ -135,10 +135,8 @@ class SwitchedFormationPlant(Plant):
             e_w, e_q, tau + inputs.exogenous["iota"], self.inertia, gyroscopic=False
         )  # Yang2013 eq. (5): no gyroscopic term (part of the drift Upsilon the law (13) cancels)
         dx = jnp.concatenate([de_R, de_V, dw, dq], axis=-1)
-        return {
-            "x": dx * _active(inputs.decision, self.count)[:, None],
-            "left_norm": jnp.zeros(self.count),
-        }
+        active = _active(inputs.decision, self.count)[:, None]
+        return {"x": dx * active, "left_norm": jnp.zeros(self.count)}
 
     def jump(self, t, x, decision):
         X = x["x"]

@@ -75,12 +75,8 @@ class LvlhRelativeStateSection(RelativeStateSection):
 def _build(sec: LvlhRelativeStateSection, ctx: BuildContext) -> LvlhRelativeStateSensors:
     """The sensors of a validated ``[sensors] type = "lvlh-relative-state"`` section."""
     n = ctx.count
-    bias = np.hstack(
-        [
-            per_axis(sec.position_bias, n, "sensors.position_bias"),
-            per_axis(sec.velocity_bias, n, "sensors.velocity_bias"),
-        ]
-    )
+    position_bias = per_axis(sec.position_bias, n, "sensors.position_bias")
+    bias = np.hstack([position_bias, per_axis(sec.velocity_bias, n, "sensors.velocity_bias")])
     if not np.all(np.isfinite(bias)):
         raise ValueError("sensors.position_bias / velocity_bias: values must be finite")
     return LvlhRelativeStateSensors(

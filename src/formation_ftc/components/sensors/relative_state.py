@@ -29,15 +29,10 @@ class RelativeStateSensors(Sensors):
     velocity_noise_std: Any = 0.0  # [m/s]
 
     def noise(self, key):
-        n = self.count
         k_p, k_v = jax.random.split(key, 2)
-        return jnp.concatenate(
-            [
-                gaussian_noise(k_p, (n, 3), self.position_noise_std),
-                gaussian_noise(k_v, (n, 3), self.velocity_noise_std),
-            ],
-            axis=-1,
-        )
+        position = gaussian_noise(k_p, (self.count, 3), self.position_noise_std)
+        velocity = gaussian_noise(k_v, (self.count, 3), self.velocity_noise_std)
+        return jnp.concatenate([position, velocity], axis=-1)
 
     def measure(self, t, x, inputs: SensorInputs):
         return x["q"] + inputs.noise
