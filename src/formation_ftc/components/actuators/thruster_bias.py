@@ -91,6 +91,12 @@ class ThrusterBiasSection(StrictModel):
     )
 
 
+#: the profile's fields, per spacecraft and axis, and those of them that are forces (per unit mass:
+#: times each spacecraft's mass)
+_PROFILE = "onset magnitude amplitude omega phase decay_amplitude decay_rate decay_origin".split()
+_FORCES = ("magnitude", "amplitude", "decay_amplitude")
+
+
 def _build(sec: ThrusterBiasSection, ctx: BuildContext) -> ThrusterBiasFaultActuator:
     """The actuator of a validated ``[actuator] type = "thruster-bias"`` section (with
     ``per_unit_mass`` and a plant without masses: unscaled, and the loop is refused by its
@@ -101,20 +107,13 @@ def _build(sec: ThrusterBiasSection, ctx: BuildContext) -> ThrusterBiasFaultActu
     if sec.per_unit_mass and mass is not None:
         scale = np.asarray(mass, float)[:, None]
 
-    def ax(name, scaled=False):
+    def ax(name):
         v = per_axis(getattr(sec, name), n, f"actuator.{name}")
-        return as_float(v * scale if scaled else v)
+        return as_float(v * scale if name in _FORCES else v)
 
     return ThrusterBiasFaultActuator(
         count=n,
-        onset=ax("onset"),
-        magnitude=ax("magnitude", True),
-        amplitude=ax("amplitude", True),
-        omega=ax("omega"),
-        phase=ax("phase"),
-        decay_amplitude=ax("decay_amplitude", True),
-        decay_rate=ax("decay_rate"),
-        decay_origin=ax("decay_origin"),
+        **{name: ax(name) for name in _PROFILE},
         units="m s-2" if ctx.plant.quantity == "acceleration" else "N",
         per_unit_mass=sec.per_unit_mass,
     )

@@ -254,18 +254,10 @@ def _on_plant(law: Controller, sec: OutputFeedbackSection, ctx: BuildContext) ->
     from formation_ftc.components.controllers._acceleration_to_force import force_from_acceleration
     from formation_ftc.components.evaluations._signal_arithmetic import PartNorm
 
-    ctx.evaluations.extend(
-        PartNorm(
-            f"{part}_tracking_error",
-            "tracking_error",
-            lo,
-            hi,
-            dims=SC,
-            units=units,
-            long_name=f"||{part} part of e_y = q0 - y||",
-        )
-        for part, lo, hi, units in (("position", 0, 3, "m"), ("velocity", 3, 6, "m s-1"))
-    )
+    for part, lo, hi, units in (("position", 0, 3, "m"), ("velocity", 3, 6, "m s-1")):
+        name, long_name = f"{part}_tracking_error", f"||{part} part of e_y = q0 - y||"
+        norm = PartNorm(name, "tracking_error", lo, hi, dims=SC, units=units, long_name=long_name)
+        ctx.evaluations.append(norm)
     if ctx.plant.quantity == "force":
         masses = nominal_masses(
             sec.nominal_mass, NOMINAL_MASS, ctx.count, "controller.nominal_mass"

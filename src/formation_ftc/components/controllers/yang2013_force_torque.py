@@ -66,18 +66,11 @@ class ForceTorqueController(Controller):
     def output(self, t, state, inputs: FlightInputs):
         m = inputs.measurement
         state = state or {"force": None, "torque": None}
-        f, df, of = self.force_law.output(
-            t,
-            state["force"],
-            inputs._replace(measurement=m["translation"], exogenous=inputs.exogenous["force"]),
-        )
-        tau, dt_, ot = self.torque_law.output(
-            t,
-            state["torque"],
-            inputs._replace(
-                measurement={"omega": m["omega"], "q": m["q"]}, exogenous=inputs.exogenous["torque"]
-            ),
-        )
+        exo, attitude = inputs.exogenous, {"omega": m["omega"], "q": m["q"]}
+        force_in = inputs._replace(measurement=m["translation"], exogenous=exo["force"])
+        torque_in = inputs._replace(measurement=attitude, exogenous=exo["torque"])
+        f, df, of = self.force_law.output(t, state["force"], force_in)
+        tau, dt_, ot = self.torque_law.output(t, state["torque"], torque_in)
         u = jnp.concatenate([f, tau], axis=-1)
         active = getattr(inputs.decision, "active", None)
         if active is not None:

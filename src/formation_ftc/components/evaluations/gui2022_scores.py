@@ -132,16 +132,9 @@ def _scores_metrics(
             err(f"fault_max_err_after_1s_{ax}", reduce="max", start=at(onset[i] + ks(1.0))),
             accel(f"final_fault_err_{ax}", "fault_error", reduce="final", component=i),
         ]
+    sign = partial(Metric, signal="estimation_error_sign", reduce="mean", spacecraft="mean")
     out += [
-        Metric(
-            f"sign_mean_{name}",
-            "estimation_error_sign",
-            reduce="mean",
-            component=c,
-            spacecraft="mean",
-            start=at(k_rms[c % 3]),
-            end=last,
-        )
+        sign(f"sign_mean_{name}", component=c, start=at(k_rms[c % 3]), end=last)
         for c, name in enumerate(("x", "y", "z", "vx", "vy", "vz"))
     ]
     out.append(
@@ -169,14 +162,9 @@ def _scores_metrics(
                 end=(onset[0] - 0.5) * dt,
             ),
         ]
+    estimate_at = partial(worst, signal="estimation_position_error", reduce="at", units="m")
     out += [
-        worst(
-            f"estimate_pos_err_at_{tq:g}s",
-            "estimation_position_error",
-            reduce="at",
-            units="m",
-            start=at(ks(tq)),
-        )
+        estimate_at(f"estimate_pos_err_at_{tq:g}s", start=at(ks(tq)))
         for tq in ESTIMATE_ERROR_AT
         if ks(tq) <= n_steps
     ]
@@ -227,22 +215,13 @@ def _build(sec: ScoresSection, ctx: BuildContext) -> Gui2022Scores:
         )
     )
     if learns:
+        v_minus_h = (("+", "compensation"), ("-", "synthesized_disturbance"))
+        long_name = "v - h, h = d + e_F (33)"
         ctx.evaluations.append(
-            SignalSum(
-                "compensation_error",
-                (("+", "compensation"), ("-", "synthesized_disturbance")),
-                units=ACC,
-                long_name="v - h, h = d + e_F (33)",
-            )
+            SignalSum("compensation_error", v_minus_h, units=ACC, long_name=long_name)
         )
-    return Gui2022Scores(
-        "estimation_position_error",
-        "estimation_error",
-        0,
-        3,
-        units="m",
-        long_name="||q - q_hat position part|| of the ILO",
-    )
+    name, long_name = "estimation_position_error", "||q - q_hat position part|| of the ILO"
+    return Gui2022Scores(name, "estimation_error", 0, 3, units="m", long_name=long_name)
 
 
 register(

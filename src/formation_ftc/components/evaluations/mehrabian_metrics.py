@@ -136,22 +136,14 @@ def _build(sec: MehrabianMetricsSection, ctx: BuildContext) -> MehrabianMetrics:
         ("control_rms", "command", "stage_root_mean", "stage", rms, "mean", "N m"),
         ("sync_err_max", "synchronisation_error", "max", "sample", _Opts(norm=True), "max", "rad"),
         ("track_err_max", "tracking_error", "max", "sample", _Opts(norm=True), "max", "rad"),
-        *(
-            (f"spread_max_{ax}", "attitude", "max", "sample", _Opts(component=p), "range", "rad")
-            for p, ax in enumerate(AXES)
-        ),
-        *(
-            (
-                f"abs_max_{ax}",
-                "attitude",
-                "max",
-                "sample",
-                _Opts(component=p, norm=True),
-                "max",
-                "rad",
-            )
-            for p, ax in enumerate(AXES)
-        ),
+    ]
+    table += [
+        (f"spread_max_{ax}", "attitude", "max", "sample", _Opts(component=p), "range", "rad")
+        for p, ax in enumerate(AXES)
+    ]
+    table += [
+        (f"abs_max_{ax}", "attitude", "max", "sample", _Opts(component=p, norm=True), "max", "rad")
+        for p, ax in enumerate(AXES)
     ]
     for w, (a, b) in clipped_windows(sec, ctx.horizon).items():
         if b - a <= 0:  # window after the horizon (shortened run): no metrics

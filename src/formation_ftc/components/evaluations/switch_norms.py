@@ -6,6 +6,8 @@ on stated windows, and the supervisor's decisions. Metrics only: the signals are
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
@@ -54,6 +56,7 @@ def _build(sec: SwitchNormsSection, ctx: BuildContext) -> SwitchNorms:
         else np.zeros(1, dtype=np.int64)
     )
     n_steps = ctx.scenario.simulation.n_steps
+    each = partial(Metric, spacecraft="each", units="1")  # one metric per spacecraft
     ctx.metrics.extend(
         [
             Metric("max_state_norm", "state_norm_peak", reduce="max", units="1"),
@@ -61,19 +64,10 @@ def _build(sec: SwitchNormsSection, ctx: BuildContext) -> SwitchNorms:
         ]
     )
     windows = [("max_input_norm", 0.0, n_steps * ctx.dt)]  # [0, horizon), then the stated ones
-    for name, a, b in windows + [
-        (f"max_input_norm_{a:g}_{b:g}", a, b) for a, b in sec.input_windows
-    ]:
-        ctx.metrics.append(  # every step of [a, b): the window ends half a step before b
-            Metric(
-                name,
-                "input_norm",
-                "max",
-                spacecraft="each",
-                units="1",
-                start=as_float(a),
-                end=as_float(b - 0.5 * ctx.dt),
-            )
+    windows += [(f"max_input_norm_{a:g}_{b:g}", a, b) for a, b in sec.input_windows]
+    for name, a, b in windows:  # every step of [a, b): the window ends half a step before b
+        ctx.metrics.append(
+            each(name, "input_norm", "max", start=as_float(a), end=as_float(b - 0.5 * ctx.dt))
         )
     for j in range(1, len(switch_steps)):
         if switch_steps[j] > n_steps:  # never reached (short runs)
@@ -83,14 +77,7 @@ def _build(sec: SwitchNormsSection, ctx: BuildContext) -> SwitchNorms:
             [
                 Metric(f"pre_switch_norm_{j + 1}", "state_norm_left", "at", units="1", start=t),
                 Metric(f"post_switch_norm_{j + 1}", "state_norm", "at", units="1", start=t),
-                Metric(
-                    f"pre_switch_sc_norm_{j + 1}",
-                    "spacecraft_norm_left",
-                    "at",
-                    spacecraft="each",
-                    units="1",
-                    start=t,
-                ),
+                each(f"pre_switch_sc_norm_{j + 1}", "spacecraft_norm_left", "at", start=t),
             ]
         )
     # decision codes (0 none, 1 tolerate by switching, 2 reconfigure); times, modes and (29) margins

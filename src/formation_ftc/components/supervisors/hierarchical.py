@@ -341,14 +341,9 @@ def _build(sec: HierarchicalSection, ctx: BuildContext) -> HierarchicalSuperviso
             f"supervisor.flfr needs an interior faulty spacecraft (2..{n - 1}) on the chain; "
             f"controller.faulty_spacecraft = {faulty}"
         )
-    ctx.evaluations.append(
-        ThresholdFlag(
-            name="flfr_settled",
-            source="time_in_flfr",
-            threshold=as_float((_steps(sec.settle_time, dt) + 0.5) * dt),
-            long_name="FLFR active for longer than supervisor.settle_time",
-        )
-    )
+    settled = as_float((_steps(sec.settle_time, dt) + 0.5) * dt)
+    long_name = "FLFR active for longer than supervisor.settle_time"
+    ctx.evaluations.append(ThresholdFlag("flfr_settled", "time_in_flfr", long_name, settled))
     return HierarchicalSupervisor(
         count=n,
         n_axes=axes,
