@@ -66,14 +66,8 @@ class VelocityGainFaultActuator(Actuator):
         return command + jnp.concatenate([delta, jnp.zeros_like(command[:, 3:])], axis=-1)
 
     def signals(self):
-        return (
-            Signal(
-                "controller_faulty",
-                ("spacecraft",),
-                "1",
-                "true controller fault in effect (1) or not (0), truth side",
-            ),
-        )
+        in_effect = "true controller fault in effect (1) or not (0), truth side"
+        return (Signal("controller_faulty", ("spacecraft",), "1", in_effect),)
 
     def outputs(self, t, command, inputs: ActuatorInputs):
         return {"controller_faulty": self._faulty(inputs).astype(jnp.float64)}

@@ -104,15 +104,9 @@ class AttitudePdController(Controller):
         return tau, None, {"attitude_error_quaternion": qe}
 
     def signals(self):
-        return (
-            Signal(
-                "attitude_error_quaternion",
-                ("spacecraft", "quaternion_component"),
-                "1",
-                "attitude error quaternion q_d^* (x) q (vector part first)",
-                "body",
-            ),
-        )
+        dims = ("spacecraft", "quaternion_component")
+        q_e = "attitude error quaternion q_d^* (x) q (vector part first)"
+        return (Signal("attitude_error_quaternion", dims, "1", q_e, "body"),)
 
     def needs(self) -> dict[str, str]:
         return dict(QUATERNION_LAW_NEEDS)

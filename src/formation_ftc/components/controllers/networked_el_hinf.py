@@ -492,14 +492,8 @@ class NetworkedElHinfController(Controller):
             Signal("tracking_error", VEC, "rad", "tracking error q - e (measured)"),
         )
         if self.links:
-            sig += (
-                Signal(
-                    "synchronisation_error",
-                    ("link", "axis"),
-                    "rad",
-                    "tracking-error difference q~_j - q~_n over each undirected link",
-                ),
-            )
+            per_link = "tracking-error difference q~_j - q~_n over each undirected link"
+            sig += (Signal("synchronisation_error", ("link", "axis"), "rad", per_link),)
         return sig
 
     def coords(self):

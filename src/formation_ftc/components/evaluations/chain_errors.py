@@ -35,14 +35,8 @@ class ChainTrackingError(Evaluation):
     from the plant's ``position`` and the controller's ``desired_position`` signals (N, axes)."""
 
     def signals(self):
-        return (
-            Signal(
-                "tracking_error",
-                ("pair", "axis"),
-                "m",
-                "true relative tracking error e_ij = (x_j - x_i) - (x_j^d - x_i^d)",
-            ),
-        )
+        e_ij = "true relative tracking error e_ij = (x_j - x_i) - (x_j^d - x_i^d)"
+        return (Signal("tracking_error", ("pair", "axis"), "m", e_ij),)
 
     def outputs(self, signals):
         return {
