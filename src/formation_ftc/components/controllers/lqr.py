@@ -86,9 +86,8 @@ class LqrSection(StrictModel):
     mu: float | None = builder_input(
         None,
         gt=0,
-        description="Gravitational parameter of the on-board model [m^3/s^2] "
-        "(default: the [reference] orbit's, else Earth's "
-        "3.986004418e14; never the plant's).",
+        description="Gravitational parameter of the on-board model [m^3/s^2] (default: the "
+        "[reference] orbit's, else Earth's 3.986004418e14; never the plant's).",
     )
     nominal_mass: Masses = Field(
         NOMINAL_MASS,
@@ -124,11 +123,9 @@ def _build(sec: LqrSection, ctx: BuildContext) -> Controller:
     """The controller of a validated ``[controller] type = "lqr"`` section."""
     from formation_ftc.design.lqr import cw_lqr
 
-    a = (
-        sec.semi_major_axis
-        if sec.semi_major_axis is not None
-        else _from_reference(ctx, "semi_major_axis")
-    )
+    a = sec.semi_major_axis
+    if a is None:
+        a = _from_reference(ctx, "semi_major_axis")
     if a is None:
         raise ValueError(
             "controller.semi_major_axis: required (the loop has no [reference] orbit to take the design "

@@ -532,10 +532,8 @@ class NetworkedElHinfSection(StrictModel):
     boundary_layer: float = Field(0.01, gt=0.0, description="Width phi_b of sat(s/phi_b) [rad/s].")
     nominal_inertia: Inertia = Field(
         MEHRABIAN_NOMINAL_INERTIA,
-        description="Principal inertia of the law's model, known on "
-        "board [kg m^2] (default 20, 18, 15 kg m^2, "
-        "Mehrabian's nominal J^, a stated value: never the "
-        "plant's true inertia).",
+        description="Principal inertia of the law's model, known on board [kg m^2] (default 20, 18, "
+        "15 kg m^2, Mehrabian's nominal J^, a stated value: never the plant's true inertia).",
     )
     desired_attitude: Vec3Expr = Field(
         ("0", "0", "0"),

@@ -108,9 +108,8 @@ class Yang2013AttitudeSection(StrictModel):
     kappa: float = Field(1e-3, gt=0.0, description="Smoothing constant kappa of (13) [rad^2/s^2].")
     nominal_inertia: Inertia = Field(
         NOMINAL_INERTIA,
-        description="Principal inertia of the law's model, known on board "
-        "[kg m^2] (default 25, 25, 25 kg m^2, Yang2013's spacecraft, a "
-        "stated value: never the plant's true inertia).",
+        description="Principal inertia of the law's model, known on board [kg m^2] (default 25, 25, "
+        "25 kg m^2, Yang2013's spacecraft, a stated value: never the plant's true inertia).",
     )
     desired_quaternion: UnitQuaternions = Field(
         None,

@@ -230,9 +230,8 @@ class AttitudeTruthSection(RigidBodyAttitudeSection):
     """Rigid bodies on a circular orbit with the gravity-gradient torque (inertial attitude)."""
 
     inertia: Inertia = Field(
-        description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every "
-        "spacecraft unless inertia_matrices is given (an attitude law's model is "
-        "stated in its own section)."
+        description="Principal inertia diag(J) [kg m^2], each > 0: the truth of every spacecraft "
+        "unless inertia_matrices is given (an attitude law's model is stated in its own section)."
     )
     inertia_matrices: list[Mat3] | None = builder_input(
         None,
