@@ -75,17 +75,10 @@ def _azizi2009_metrics(ctx: BuildContext) -> list[Metric]:
     from formation_ftc.sim.metrics import Metric
 
     worst: _MetricOptions = {"norm": True, "norm_ord": "inf", "spacecraft": "max", "units": "m"}
+    along_x: _MetricOptions = {"norm": True, "component": 0, "spacecraft": "max", "units": "m"}
     out = [
         Metric("max_err", "tracking_error", reduce="max", **worst),
-        Metric(
-            "max_err_x",
-            "tracking_error",
-            reduce="max",
-            norm=True,
-            component=0,
-            spacecraft="max",
-            units="m",
-        ),
+        Metric("max_err_x", "tracking_error", reduce="max", **along_x),
     ]
     if any(sig.name == "flfr_settled" for ev in ctx.evaluations for sig in ev.signals()):
         out += [
