@@ -434,16 +434,14 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
     faulty = set(zip(profile.spacecraft, profile.channels, strict=True))
     moves: dict[tuple[int, int], tuple[int, int]] = {}
     for k, e in enumerate(sec.isolation):
-        if (e.spacecraft - 1, e.channel - 1) not in faulty and profile.torques:
+        true = (e.spacecraft - 1, e.channel - 1)  # 0-based
+        if true not in faulty and profile.torques:
             raise ValueError(
                 f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault"
             )
         if max(e.spacecraft, e.reported_spacecraft) > m:
             raise ValueError(f"estimator.isolation[{k}]: spacecraft numbers must be in 1..{m}")
-        moves[(e.spacecraft - 1, e.channel - 1)] = (
-            e.reported_spacecraft - 1,
-            e.reported_channel - 1,
-        )
+        moves[true] = (e.reported_spacecraft - 1, e.reported_channel - 1)
     params: dict[str, Any] = fdi_params(
         m,
         nch,
