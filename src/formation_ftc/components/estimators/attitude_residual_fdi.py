@@ -28,12 +28,7 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
     VEC,
@@ -370,18 +365,13 @@ class AttitudeResidualFdi(FdiEstimator):
         )
 
     def outputs(self, t, state, estimate: AttitudeFdiEstimate):
-        return {
-            "fdi_residual": estimate.residual,
-            **detection_outputs(estimate.statistic, estimate.detected, estimate.isolated),
-            "fdi_flag": estimate.flag,
-            "fdi_estimate": estimate.estimate,
-        } | (
-            identification_outputs(
-                estimate.known, estimate.effectiveness, estimate.effectiveness_std
-            )
-            if self.identification == "rls"
-            else {}
-        )
+        out = {"fdi_residual": estimate.residual}
+        out |= detection_outputs(estimate.statistic, estimate.detected, estimate.isolated)
+        out |= {"fdi_flag": estimate.flag, "fdi_estimate": estimate.estimate}
+        if self.identification == "rls":
+            ident = (estimate.known, estimate.effectiveness, estimate.effectiveness_std)
+            out |= identification_outputs(*ident)
+        return out
 
     def needs(self) -> dict[str, str]:
         return {

@@ -292,14 +292,9 @@ class ResidualFdi(FdiEstimator):
         actuator, not an average with its healthy past; the window starts again there too."""
         complete = state.win_steps == self.window
         parity = y - state.win_pred
-        own = jnp.arange(3)
-        regressor = jnp.stack(
-            [
-                state.win_reg[:, own, 3 + own],
-                jnp.broadcast_to(self.window_bias_gain, (self.count, 3)),
-            ],
-            axis=-1,
-        )
+        own = jnp.arange(3)  # each channel's own velocity component
+        held = jnp.broadcast_to(self.window_bias_gain, (self.count, 3))
+        regressor = jnp.stack([state.win_reg[:, own, 3 + own], held], axis=-1)
         theta_in, cov_in = self._restart(state.theta, state.theta_cov, restart)
         theta, cov = identify_channels(
             theta_in, cov_in, parity[:, 3:], regressor, self.window_noise, self.forgetting

@@ -362,17 +362,10 @@ class ScriptedFdi(Estimator):
         return {name: getattr(self, name) for name in PARAMS}
 
     def _model(self, dt: float) -> FDIModel:
+        profile = (self.windows, self.torques, self.spacecraft, self.channels)
+
         def fault_fn(k):
-            return windowed_additive_faults(
-                k,
-                dt,
-                self.windows,
-                self.torques,
-                self.spacecraft,
-                self.channels,
-                self.count,
-                self.n_channels,
-            )
+            return windowed_additive_faults(k, dt, *profile, self.count, self.n_channels)
 
         return FDIModel(self.count, self.n_channels, fault_fn, dt)
 
