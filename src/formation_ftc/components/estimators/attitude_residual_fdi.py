@@ -299,15 +299,9 @@ class AttitudeResidualFdi(FdiEstimator):
 
     def update(self, t, state: AttitudeFdiState, inputs: FlightInputs):
         q, w = inputs.measurement["q"], inputs.measurement["w"]
+        J, n = self.nominal_inertia, self.orbit_rate
         r = rigid_body_residual(
-            state.q_prev,
-            state.w_prev,
-            q,
-            w,
-            state.tau_prev,
-            self.nominal_inertia,
-            inputs.step.dt,
-            self.orbit_rate,
+            state.q_prev, state.w_prev, q, w, state.tau_prev, J, inputs.step.dt, n
         )
         r = jnp.where(state.valid, r, 0.0)
         # a channel at its rated limit is not tested over the step
