@@ -5,18 +5,20 @@ arrays); and the recorded FDI signals."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import jax
 import jax.numpy as jnp
 from pydantic import Field
 
+from formation_ftc.components._sections import section_floats
 from formation_ftc.config.base import StrictModel
-from formation_ftc.sim.components import Signal
+from formation_ftc.sim.components import Estimator, Signal
 
 __all__ = [
     "FdiForgetting",
     "FdiTestSection",
+    "FdiEstimator",
     "sequential_test",
     "latch_first_alarm",
     "identify_channels",
@@ -64,6 +66,54 @@ class FdiTestSection(StrictModel):
         description="Standard deviation of a channel's effectiveness estimate at or below which the "
         "channel counts as identified (before: reported as NaN) [-].",
     )
+
+    def fdi_fields(self) -> dict[str, Any]:
+        """The fields of an :class:`FdiEstimator` this section (with its ``forgetting`` and
+        ``bias_prior_std``) states."""
+        return dict(
+            **self.model_dump(include={"test", "identification"}),
+            **section_floats(self, "drift", "threshold", "forgetting"),
+            **section_floats(self, "identification_std", "bias_prior_std"),
+        )
+
+
+class FdiEstimator(Estimator):
+    """What the residual FDI components share: the test statistics and first-alarm latch of their
+    state, the test step, the RLS prior and its restart, and what they provide. A subclass states
+    the fields below (and ``forgetting``, ``identification_std``)."""
+
+    count: int
+    test: str  # "cusum" or "fixed"
+    drift: Any  # CUSUM drift [-]
+    threshold: Any  # alarm threshold [-]
+    identification: str  # "off" or "rls"
+    bias_prior_std: Any  # prior standard deviation of a channel's bias
+
+    def provides(self) -> frozenset[str]:
+        rls = self.identification == "rls"
+        return frozenset({"fdi-records"} | ({"fault-identification"} if rls else set()))
+
+    def _test_state(self) -> dict[str, Any]:
+        """The initial statistics and latch, and with identification the RLS prior."""
+        zeros = jnp.zeros((self.count, 3))
+        state = {"g_pos": zeros, "g_neg": zeros, "detected": jnp.asarray(False)}
+        state["isolated"] = jnp.zeros((self.count, 3), dtype=bool)
+        if self.identification == "rls":
+            state["theta"], state["theta_cov"] = self._prior()
+        return state
+
+    def _test(self, state, z):
+        """:func:`sequential_test` of ``z`` from the statistics of ``state``."""
+        return sequential_test(self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold)
+
+    def _prior(self):
+        return rls_prior(self.count, self.bias_prior_std)
+
+    def _restart(self, theta, cov, restart):
+        """``(theta, cov)`` with the channels ``restart`` back at the prior."""
+        theta0, cov0 = self._prior()
+        theta = jnp.where(restart[..., None], theta0, theta)
+        return theta, jnp.where(restart[..., None, None], cov0, cov)
 
 
 def sequential_test(test: str, g_pos, g_neg, z, drift, threshold):

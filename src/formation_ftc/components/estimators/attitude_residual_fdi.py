@@ -28,15 +28,11 @@ import numpy as np
 from pydantic import Field
 
 from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
-from formation_ftc.components._registry import (
-    BuildContext,
-    builder_input,
-    per_spacecraft,
-    register,
-)
+from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
     VEC,
+    FdiEstimator,
     FdiForgetting,
     FdiTestSection,
     detection_outputs,
@@ -45,13 +41,11 @@ from formation_ftc.components.estimators._fdi import (
     identification_signals,
     identify_channels,
     latch_first_alarm,
-    rls_prior,
-    sequential_test,
 )
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
 from formation_ftc.core.euler_quaternion import dcm_from_euler_zyx
-from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
+from formation_ftc.sim.components import FlightInputs, Signal, component, static
 from formation_ftc.sim.contract import as_float
 
 __all__ = [
@@ -161,7 +155,7 @@ def rigid_body_residual(q0, w0, q1, w1, tau, J, dt, n=0.0):
 
 
 @component
-class AttitudeResidualFdi(Estimator):
+class AttitudeResidualFdi(FdiEstimator):
     """Detects, isolates and identifies an actuator fault (spacecraft i, body axis k) of Euler-angle
     attitude laws from the rigid-body residual, and reports it in the law's generalised channels.
 
@@ -241,10 +235,6 @@ class AttitudeResidualFdi(Estimator):
     walk: Any = 0.0  # (2, 2) random-walk covariance of [effectiveness - 1, bias] per step (bias: 0)
     effectiveness_alarm: Any = math.inf  # loss of effectiveness (less 2 std) that alarms [-]
 
-    def provides(self) -> frozenset[str]:
-        rls = self.identification == "rls"
-        return frozenset({"fdi-records"} | ({"fault-identification"} if rls else set()))
-
     def signals(self):
         return (
             Signal("fdi_residual", VEC, "N m", "rigid-body residual (applied - commanded)", "body"),
@@ -265,22 +255,11 @@ class AttitudeResidualFdi(Estimator):
             commanded=jnp.asarray(False),
             valid=jnp.asarray(False),
             tested=off,
-            g_pos=zeros,
-            g_neg=zeros,
             f_hat=zeros,
             residual=zeros,
-            detected=jnp.asarray(False),
-            isolated=off,
             flag=off,
-            **(
-                dict(zip(("theta", "theta_cov"), self._prior(), strict=True))
-                if self.identification == "rls"
-                else {}
-            ),
+            **self._test_state(),
         )
-
-    def _prior(self):
-        return rls_prior(self.count, self.bias_prior_std)
 
     def _identify(self, state: AttitudeFdiState, r, tested):
         """One RLS step of every tested channel on the regressor ``[tau, 1]``; returns ``(theta, cov,
@@ -302,7 +281,7 @@ class AttitudeResidualFdi(Estimator):
         std = jnp.sqrt(jnp.maximum(cov[..., 0, 0], 0.0))
         return theta, cov, 1.0 + theta[..., 0], std, std <= self.identification_std
 
-    def _estimate(self, state: AttitudeFdiState, q, stat, ident=None) -> AttitudeFdiEstimate:
+    def _estimate(self, state: AttitudeFdiState, q, stat, ident) -> AttitudeFdiEstimate:
         W = rbar_inv(q)  # omega = W q_dot; u_bar = W^T f
         body = jnp.where(state.isolated, state.f_hat, 0.0)
         u_star = jnp.einsum("nkp,nk->np", W, body)
@@ -315,61 +294,45 @@ class AttitudeResidualFdi(Estimator):
             statistic=stat,
             residual=state.residual,
             identified=state.f_hat,
-            **(
-                dict(zip(("effectiveness", "effectiveness_std", "known"), ident, strict=True))
-                if ident is not None
-                else {}
-            ),
+            **ident,
         )
 
     def update(self, t, state: AttitudeFdiState, inputs: FlightInputs):
         q, w = inputs.measurement["q"], inputs.measurement["w"]
+        J, n = self.nominal_inertia, self.orbit_rate
         r = rigid_body_residual(
-            state.q_prev,
-            state.w_prev,
-            q,
-            w,
-            state.tau_prev,
-            self.nominal_inertia,
-            inputs.step.dt,
-            self.orbit_rate,
+            state.q_prev, state.w_prev, q, w, state.tau_prev, J, inputs.step.dt, n
         )
-        valid = state.valid
-        r = jnp.where(valid, r, 0.0)
-        tested = valid & state.tested  # a channel at its rated limit is not tested over the step
+        r = jnp.where(state.valid, r, 0.0)
+        # a channel at its rated limit is not tested over the step
+        tested = state.valid & state.tested
         z = jnp.where(tested, r / self.residual_std, 0.0)
-        g_pos, g_neg, stat, alarm = sequential_test(
-            self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
-        )
-        ident, identification = None, {}
-        if self.identification == "rls":
+        g_pos, g_neg, stat, alarm = self._test(state, z)
+        rls, score = self.identification == "rls", stat
+        if rls:
             theta, cov, eff, std, known = self._identify(state, r, tested)
             # an identified effectiveness below 1 - effectiveness_alarm by two standard deviations
             # alarms too; isolation by the larger of the normalised statistics
             loss = 1.0 - eff - 2.0 * std
             id_score = jnp.where(known, loss / self.effectiveness_alarm, 0.0)
             score = jnp.maximum(stat / self.threshold, id_score)
-            detected, isolated, first = latch_first_alarm(
-                score, alarm | jnp.any(id_score > 1.0), state.detected, state.isolated
-            )
+            alarm = alarm | jnp.any(id_score > 1.0)
+        detected, isolated, first = latch_first_alarm(score, alarm, state.detected, state.isolated)
+        ident, identification = {}, {}
+        if rls:
             restart = first & isolated  # the isolated channel starts again from the prior
-            theta0, cov0 = self._prior()
-            theta = jnp.where(restart[..., None], theta0, theta)
-            cov = jnp.where(restart[..., None, None], cov0, cov)
-            known = known & ~restart
+            theta, cov = self._restart(theta, cov, restart)
             identification = {"theta": theta, "theta_cov": cov}
-            ident = (eff, std, known)
-        else:
-            detected, isolated, first = latch_first_alarm(
-                stat, alarm, state.detected, state.isolated
-            )
+            ident = {"effectiveness": eff, "effectiveness_std": std, "known": known & ~restart}
         # the law's channel of the isolated body axis at this attitude (W^T e_k: row k of W)
         weight = jnp.einsum("nk,nkp->np", jnp.where(isolated, 1.0, 0.0), jnp.abs(rbar_inv(q)))
         top = (weight == jnp.max(weight, axis=1, keepdims=True)) & (weight > 0.0)
         flag = jnp.where(first, top, state.flag)
         # identification on every step: after a fault the law's command on the faulty channel may stay
         # above the rated torque (the untested region) while the fault goes on
-        f_hat = jnp.where(valid, state.f_hat + self.smoothing * (r - state.f_hat), state.f_hat)
+        f_hat = jnp.where(
+            state.valid, state.f_hat + self.smoothing * (r - state.f_hat), state.f_hat
+        )
         new = state._replace(
             q_prev=q,
             w_prev=w,
@@ -396,18 +359,13 @@ class AttitudeResidualFdi(Estimator):
         )
 
     def outputs(self, t, state, estimate: AttitudeFdiEstimate):
-        return {
-            "fdi_residual": estimate.residual,
-            **detection_outputs(estimate.statistic, estimate.detected, estimate.isolated),
-            "fdi_flag": estimate.flag,
-            "fdi_estimate": estimate.estimate,
-        } | (
-            identification_outputs(
-                estimate.known, estimate.effectiveness, estimate.effectiveness_std
-            )
-            if self.identification == "rls"
-            else {}
-        )
+        out = {"fdi_residual": estimate.residual}
+        out |= detection_outputs(estimate.statistic, estimate.detected, estimate.isolated)
+        out |= {"fdi_flag": estimate.flag, "fdi_estimate": estimate.estimate}
+        if self.identification == "rls":
+            ident = (estimate.known, estimate.effectiveness, estimate.effectiveness_std)
+            out |= identification_outputs(*ident)
+        return out
 
     def needs(self) -> dict[str, str]:
         return {
@@ -491,19 +449,16 @@ def _build(sec: AttitudeResidualFdiSection, ctx: BuildContext) -> AttitudeResidu
     """The estimator of a validated ``[estimator] type = "attitude-residual-fdi"`` section."""
     n = 0.0 if sec.semi_major_axis is None else math.sqrt(sec.mu / sec.semi_major_axis**3)
     m = ctx.count
-    if sec.torque_limit is None:
-        limit = np.full((m, 1), np.inf)
-    else:
-        limit = per_spacecraft(sec.torque_limit, m, "estimator.torque_limit")[:, None]
+    limit = np.inf if sec.torque_limit is None else sec.torque_limit
     J = np.diag(np.asarray(sec.nominal_inertia, dtype=float))
     return AttitudeResidualFdi(
         count=m,
-        **sec.model_dump(include={"test", "command", "identification"}),
+        command=sec.command,
+        **sec.fdi_fields(),
         nominal_inertia=as_float(np.stack([J] * m)),
         orbit_rate=as_float(n),
-        torque_limit=as_float(limit),
-        **section_floats(sec, "residual_std", "drift", "threshold", "forgetting"),
-        **section_floats(sec, "identification_std", "bias_prior_std", "effectiveness_alarm"),
+        torque_limit=per_spacecraft(limit, m, "estimator.torque_limit")[:, None],
+        **section_floats(sec, "residual_std", "effectiveness_alarm"),
         smoothing=as_float(1.0 - math.exp(-ctx.dt / sec.identification_time)),
         identification_noise=as_float(sec.identification_noise_std or sec.residual_std),
         walk=as_float(np.diag([sec.effectiveness_walk**2 * ctx.dt, 0.0])),

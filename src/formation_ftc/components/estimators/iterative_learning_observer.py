@@ -73,7 +73,6 @@ __all__ = [
     "ilo_propagate",
     "learning_steps",
     "learning_interval_steps",
-    "LearningIntervalError",
     "IterativeLearningObserver",
     "IloSection",
     "ilo_lmi_design",
@@ -90,10 +89,6 @@ ONBOARD_MEAN_MOTION = (
 
 
 # ------------------------------------------------------------------------------------- equations
-class LearningIntervalError(ValueError):
-    """tau is not a positive integer multiple of the step."""
-
-
 def learning_steps(tau: float, dt: float, field: str = "learning_interval") -> int:
     """``tau / dt`` as an integer >= 1 (learning laws with t - tau need tau to be an integer number of
     steps).
@@ -114,8 +109,8 @@ def learning_steps(tau: float, dt: float, field: str = "learning_interval") -> i
 
     Raises
     ------
-    LearningIntervalError
-        tau is not a positive integer multiple of dt.
+    ValueError
+        tau is not a positive integer multiple of dt (naming ``field``).
 
     Examples
     --------
@@ -123,10 +118,10 @@ def learning_steps(tau: float, dt: float, field: str = "learning_interval") -> i
     4
     """
     if not (tau > 0 and dt > 0):
-        raise LearningIntervalError(f"{field} = {tau} s and simulation.dt = {dt} s must be > 0")
+        raise ValueError(f"{field} = {tau} s and simulation.dt = {dt} s must be > 0")
     m = round(tau / dt)
     if m < 1 or abs(m * dt - tau) > 1e-9 * max(tau, dt):
-        raise LearningIntervalError(
+        raise ValueError(
             f"{field} = {tau:g} s is not an integer multiple of simulation.dt = {dt:g} s "
             f"(tau/dt = {tau / dt:.6g}); the learning law reads F_hat(t - tau) from the step grid, so "
             f"tau must be k*dt with an integer k >= 1"
@@ -256,32 +251,8 @@ def ilo_propagate(
     return q_hat + dt * qh_dot
 
 
-def learning_interval_steps(tau: float, dt: float, field: str) -> int:
-    """:func:`learning_steps` with a plain ValueError naming ``field`` (a section's own value).
-
-    Parameters
-    ----------
-    tau : float
-        Learning interval [s].
-    dt : float
-        Step [s].
-    field : str
-        The field's dotted name, for the error.
-
-    Returns
-    -------
-    int
-        m = tau / dt.
-
-    Examples
-    --------
-    >>> learning_interval_steps(0.003, 0.001, "estimator.learning_interval")
-    3
-    """
-    try:
-        return learning_steps(tau, dt, field)
-    except LearningIntervalError as exc:
-        raise ValueError(str(exc)) from None
+#: :func:`learning_steps` under the name the learning laws' builders use (a section's own field)
+learning_interval_steps = learning_steps
 
 
 # ------------------------------------------------------------------------------------ component
@@ -624,7 +595,7 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
     from formation_ftc.components.evaluations._per_unit_mass import PerUnitMass
     from formation_ftc.components.evaluations._signal_arithmetic import SignalSum
 
-    m = learning_interval_steps(sec.learning_interval, ctx.dt, "estimator.learning_interval")
+    m = learning_steps(sec.learning_interval, ctx.dt, "estimator.learning_interval")
     n = onboard_mean_motion(sec.mean_motion, ctx.section("reference"))
     # without a mean motion: a placeholder without a design (validation names the missing orbit)
     L1, L2 = (np.zeros((6, 6)), np.zeros((3, 6))) if n is None else sec.gains_at(n)
@@ -653,9 +624,8 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
     )
     force_loop = ctx.plant.quantity == "force"
     # the masses that turned the law's acceleration into the force: the ILO's own, else the law's
-    stated = sec.nominal_mass
-    if stated is None:
-        stated = getattr(ctx.section("controller"), "nominal_mass", None)
+    law_mass = getattr(ctx.section("controller"), "nominal_mass", None)
+    stated = law_mass if sec.nominal_mass is None else sec.nominal_mass
     mass = nominal_masses(stated, NOMINAL_MASS, N, "estimator.nominal_mass")
     est: Estimator = (
         AccelerationModelEstimator(inner=ilo, nominal_mass=as_float(mass)) if force_loop else ilo

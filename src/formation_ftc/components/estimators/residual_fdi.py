@@ -23,8 +23,8 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from formation_ftc.components._registry import BuildContext, builder_input, register
-from formation_ftc.components._sections import section_floats
 from formation_ftc.components.estimators._fdi import (
+    FdiEstimator,
     FdiForgetting,
     FdiTestSection,
     detection_outputs,
@@ -46,7 +46,7 @@ from formation_ftc.components.estimators.relative_navigation_filter import (
     kalman_update,
     navigation_conditions,
 )
-from formation_ftc.sim.components import Estimator, FlightInputs, component, static
+from formation_ftc.sim.components import FlightInputs, component, static
 from formation_ftc.sim.contract import Condition, as_float
 
 __all__ = [
@@ -116,7 +116,7 @@ class FdiState(NamedTuple):
 
 
 @component
-class ResidualFdi(Estimator):
+class ResidualFdi(FdiEstimator):
     """Detects and isolates a thruster fault (spacecraft i, axis j) from the velocity residuals.
 
     Residual ``e_k`` of the measured relative state ``y_k = q_k + v_k`` (N, 6), ``v_k ~ N(0, r)``, with
@@ -192,10 +192,8 @@ class ResidualFdi(Estimator):
         return {"translational-state": "form its residuals of the LVLH relative states"}
 
     def provides(self) -> frozenset[str]:
-        out = {"fault-alarm", "fdi-records"}
-        out |= {"fault-identification"} if self.identification == "rls" else set()
-        out |= {NAVIGATION_RECORDS} if self.fly_on_filter else set()
-        return frozenset(out)
+        navigation = {NAVIGATION_RECORDS} if self.fly_on_filter else set()
+        return super().provides() | {"fault-alarm"} | navigation
 
     def conditions(self, loop) -> list[Condition]:
         """The residual model's assumption about the command, and the navigation model's stability."""
@@ -229,28 +227,17 @@ class ResidualFdi(Estimator):
         )
 
     def initial_state(self, measurement0):
-        n = self.count
-        zeros = jnp.zeros((n, 3))
+        y = jnp.asarray(measurement0)
+        rls = self.identification == "rls"
         return FdiState(
-            x_hat=jnp.asarray(measurement0),
+            x_hat=y,
             p=jnp.asarray(self.r),
-            y_prev=jnp.asarray(measurement0),
-            a_prev=zeros,
+            y_prev=y,
+            a_prev=jnp.zeros((self.count, 3)),
             started=jnp.asarray(False),
-            tested=jnp.ones((n, 3), dtype=bool),
-            g_pos=zeros,
-            g_neg=zeros,
-            detected=jnp.asarray(False),
-            isolated=jnp.zeros((n, 3), dtype=bool),
-            **(
-                dict(
-                    zip(("theta", "theta_cov"), self._prior(), strict=True),
-                    **self._window_start(jnp.asarray(measurement0)),
-                    win_steps=jnp.asarray(0),
-                )
-                if self.identification == "rls"
-                else {}
-            ),
+            tested=jnp.ones((self.count, 3), dtype=bool),
+            **self._test_state(),
+            **(dict(**self._window_start(y), win_steps=jnp.asarray(0)) if rls else {}),
         )
 
     def _window_start(self, y) -> dict[str, Any]:
@@ -273,9 +260,7 @@ class ResidualFdi(Estimator):
         e, S, valid = self._residual(state, y)
         z = e[:, 3:] / jnp.sqrt(jnp.diagonal(S)[3:])  # standardised velocity residual (N, 3)
         z = jnp.where(valid & state.tested, z, 0.0)
-        g_pos, g_neg, stat, alarm = sequential_test(
-            self.test, state.g_pos, state.g_neg, z, self.drift, self.threshold
-        )
+        g_pos, g_neg, stat, alarm = self._test(state, z)
         detected, isolated, first = latch_first_alarm(stat, alarm, state.detected, state.isolated)
         x_hat, p = state.x_hat, state.p
         if self.residual == "kalman":  # the filter's measurement update
@@ -299,9 +284,6 @@ class ResidualFdi(Estimator):
             estimate |= identified
         return new, estimate
 
-    def _prior(self):
-        return rls_prior(self.count, self.bias_prior_std)
-
     def _identify(self, state: FdiState, new: FdiState, y, valid, restart):
         """RLS of every channel's effectiveness and bias (``identify_channels``) on the parity residual
         of each completed window of ``window`` steps: the measurement now against the window's start
@@ -310,17 +292,10 @@ class ResidualFdi(Estimator):
         actuator, not an average with its healthy past; the window starts again there too."""
         complete = state.win_steps == self.window
         parity = y - state.win_pred
-        own = jnp.arange(3)
-        regressor = jnp.stack(
-            [
-                state.win_reg[:, own, 3 + own],
-                jnp.broadcast_to(self.window_bias_gain, (self.count, 3)),
-            ],
-            axis=-1,
-        )
-        theta0, cov0 = self._prior()
-        theta_in = jnp.where(restart[..., None], theta0, state.theta)
-        cov_in = jnp.where(restart[..., None, None], cov0, state.theta_cov)
+        own = jnp.arange(3)  # each channel's own velocity component
+        held = jnp.broadcast_to(self.window_bias_gain, (self.count, 3))
+        regressor = jnp.stack([state.win_reg[:, own, 3 + own], held], axis=-1)
+        theta_in, cov_in = self._restart(state.theta, state.theta_cov, restart)
         theta, cov = identify_channels(
             theta_in, cov_in, parity[:, 3:], regressor, self.window_noise, self.forgetting
         )
@@ -329,6 +304,7 @@ class ResidualFdi(Estimator):
         cov = jnp.where(use[..., None], cov, cov_in)
         # forgetting without excitation inflates P past the prior (windup): no information is left
         # there, so the channel's covariance goes back to the prior
+        cov0 = self._prior()[1]
         cov = jnp.where((cov[..., 0, 0] > cov0[..., 0, 0])[..., None, None], cov0, cov)
         std = jnp.sqrt(jnp.maximum(cov[..., 0, 0], 0.0))
         identified = std <= self.identification_std
@@ -501,11 +477,10 @@ def _build(sec: ResidualFdiSection, ctx: BuildContext) -> ResidualFdi:
     gain, noise = window_model(a["phi"], a["gamma"], a["qd"], a["r"], steps)
     return ResidualFdi(
         count=ctx.count,
-        **sec.model_dump(include={"residual", "test", "at_limit", "fly_on_filter"}),
+        **sec.model_dump(include={"residual", "at_limit", "fly_on_filter"}),
+        **sec.fdi_fields(),
         parity_cov=as_float(a["r"] + a["phi"] @ a["r"] @ a["phi"].T + a["qd"]),
-        **section_floats(sec, "drift", "threshold", "force_limit", "forgetting"),
-        **section_floats(sec, "identification_std", "bias_prior_std"),
-        identification=sec.identification,
+        force_limit=as_float(sec.force_limit),
         window_bias_gain=as_float(gain),
         window_noise=as_float(noise),
         window=steps,

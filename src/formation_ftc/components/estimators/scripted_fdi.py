@@ -362,17 +362,10 @@ class ScriptedFdi(Estimator):
         return {name: getattr(self, name) for name in PARAMS}
 
     def _model(self, dt: float) -> FDIModel:
+        profile = (self.windows, self.torques, self.spacecraft, self.channels)
+
         def fault_fn(k):
-            return windowed_additive_faults(
-                k,
-                dt,
-                self.windows,
-                self.torques,
-                self.spacecraft,
-                self.channels,
-                self.count,
-                self.n_channels,
-            )
+            return windowed_additive_faults(k, dt, *profile, self.count, self.n_channels)
 
         return FDIModel(self.count, self.n_channels, fault_fn, dt)
 
@@ -434,16 +427,14 @@ def _build(sec: ScriptedFdiSection, ctx: BuildContext) -> ScriptedFdi:
     faulty = set(zip(profile.spacecraft, profile.channels, strict=True))
     moves: dict[tuple[int, int], tuple[int, int]] = {}
     for k, e in enumerate(sec.isolation):
-        if (e.spacecraft - 1, e.channel - 1) not in faulty and profile.torques:
+        true = (e.spacecraft - 1, e.channel - 1)  # 0-based
+        if true not in faulty and profile.torques:
             raise ValueError(
                 f"estimator.isolation[{k}]: spacecraft {e.spacecraft} channel {e.channel} has no fault"
             )
         if max(e.spacecraft, e.reported_spacecraft) > m:
             raise ValueError(f"estimator.isolation[{k}]: spacecraft numbers must be in 1..{m}")
-        moves[(e.spacecraft - 1, e.channel - 1)] = (
-            e.reported_spacecraft - 1,
-            e.reported_channel - 1,
-        )
+        moves[true] = (e.reported_spacecraft - 1, e.reported_channel - 1)
     params: dict[str, Any] = fdi_params(
         m,
         nch,
