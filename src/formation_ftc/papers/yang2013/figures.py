@@ -62,14 +62,8 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
 
 def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path) -> Path:
     """Fig. 4: trajectories of |X_sigma(t)(t)| (healthy and spacecraft-2 controller fault)."""
-    fig, axes = new_figure(
-        2,
-        1,
-        width=7.0,
-        height=6.0,
-        sharex=True,
-        title="Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|",
-    )
+    title = "Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|"
+    fig, axes = new_figure(2, 1, width=7.0, height=6.0, sharex=True, title=title)
     ax = axes[0, 0]
     ax.plot(ds_healthy["time"], ds_healthy["state_norm"], color="#1f77b4", label="healthy")
     ax.plot(
