@@ -156,13 +156,9 @@ def load_trajectories(path: Path) -> tuple[list[dict], list[str]]:
                 )
         if tracks:
             labels = view.get("axis_labels") or ["x [m]", "y [m]", "z [m]"]
-            views.append(
-                {
-                    "title": str(view.get("title", "Formation trajectory")),
-                    "axis_labels": [str(a) for a in list(labels)[:3]],
-                    "spacecraft": tracks,
-                }
-            )
+            labels = [str(a) for a in list(labels)[:3]]
+            title = str(view.get("title", "Formation trajectory"))
+            views.append({"title": title, "axis_labels": labels, "spacecraft": tracks})
     return views, problems
 
 

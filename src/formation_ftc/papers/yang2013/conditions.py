@@ -112,12 +112,8 @@ def disturbance_peaks(sc: ComposedScenario, n_samples: int = 20001) -> tuple[flo
     for texts in (plant.disturbance_force, plant.disturbance_torque):
         worst = 0.0
         for i in range(1, plant.count + 1):
-            comps = [
-                np.broadcast_to(
-                    np.asarray(compile_expression(tx, ("t", "i"))(t=t, i=float(i))), t.shape
-                )
-                for tx in texts
-            ]
+            values = [compile_expression(tx, ("t", "i"))(t=t, i=float(i)) for tx in texts]
+            comps = [np.broadcast_to(np.asarray(v), t.shape) for v in values]
             worst = max(worst, float(np.max(np.linalg.norm(np.stack(comps), axis=0))))
         peaks.append(worst)
     return peaks[0], peaks[1]
