@@ -65,12 +65,8 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
     t = ds_new.time.values
     axes[0, 0].plot(t, ds_new.fault.sel(axis="x"), "k--", label="true F_x")
     axes[0, 0].plot(t, ds_new.fault_estimate_mean.sel(axis="x"), label="new ILO (with gamma sgn)")
-    axes[0, 0].plot(
-        ds_base.time,
-        ds_base.fault_estimate_mean.sel(axis="x"),
-        ":",
-        label="ILO of [25] (gamma = 0)",
-    )
+    base = ds_base.fault_estimate_mean.sel(axis="x")
+    axes[0, 0].plot(ds_base.time, base, ":", label="ILO of [25] (gamma = 0)")
     axes[0, 0].set_ylabel("F_x [m/s^2]")
     axes[0, 0].legend(loc="upper left")
     sel = t >= 1400
