@@ -33,16 +33,8 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-__all__ = [
-    "TRAJECTORY_FILE",
-    "render_index",
-    "write_index",
-    "write_trajectory3d",
-    "load_trajectories",
-    "plotly_available",
-    "plotly_script",
-    "PLOTLY_JS",
-]
+__all__ = ["TRAJECTORY_FILE", "render_index", "write_index", "write_trajectory3d"]
+__all__ += ["load_trajectories", "plotly_available", "plotly_script", "PLOTLY_JS"]
 
 #: File name a reproduction writes its 3-D trajectory data to (inside its output directory).
 TRAJECTORY_FILE = "trajectory3d.json"
@@ -164,13 +156,9 @@ def load_trajectories(path: Path) -> tuple[list[dict], list[str]]:
                 )
         if tracks:
             labels = view.get("axis_labels") or ["x [m]", "y [m]", "z [m]"]
-            views.append(
-                {
-                    "title": str(view.get("title", "Formation trajectory")),
-                    "axis_labels": [str(a) for a in list(labels)[:3]],
-                    "spacecraft": tracks,
-                }
-            )
+            labels = [str(a) for a in list(labels)[:3]]
+            title = str(view.get("title", "Formation trajectory"))
+            views.append({"title": title, "axis_labels": labels, "spacecraft": tracks})
     return views, problems
 
 

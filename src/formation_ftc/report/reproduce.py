@@ -50,20 +50,9 @@ from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
 from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus
 
-__all__ = [
-    "MARKER_NAME",
-    "REPORT_SCHEMA",
-    "ReproduceError",
-    "available_reproductions",
-    "select_papers",
-    "prepare_output",
-    "reproduce",
-    "paper_entry",
-    "to_jsonable",
-    "add_cli",
-    "run_cli",
-    "json_document",
-]
+__all__ = ["MARKER_NAME", "REPORT_SCHEMA", "ReproduceError", "available_reproductions"]
+__all__ += ["select_papers", "prepare_output", "reproduce", "paper_entry", "to_jsonable", "add_cli"]
+__all__ += ["run_cli", "json_document"]
 
 #: Marker file that identifies a directory written by ``formation-ftc reproduce``.
 MARKER_NAME = ".formation-ftc-report"
@@ -276,8 +265,7 @@ def paper_entry(
         "citation": reproduction.citation if reproduction else "",
         "description": reproduction.description if reproduction else "",
         "errata": [
-            {"id": str(e[0]), "text": str(e[1])}
-            for e in (reproduction.errata if reproduction else [])
+            {"id": str(e[0]), "text": str(e[1])} for e in getattr(reproduction, "errata", [])
         ],
         "status": "ok" if error is None else "failed",
         "error": error,
@@ -287,9 +275,9 @@ def paper_entry(
         "checks": checks,
         "checks_summary": checks_summary,
         "figures": figures,
-        "scenarios": list(report.scenarios) if report else [],
-        "seeds": list(report.seeds) if report else [],
-        "notes": list(report.notes) if report else [],
+        "scenarios": list(rep.scenarios),
+        "seeds": list(rep.seeds),
+        "notes": list(rep.notes),
         "warnings": warnings,
         "trajectory3d": traj.name if traj.is_file() else None,
         "finished_utc": utc_now(),

@@ -20,14 +20,8 @@ from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params,
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import metrics_dict
 
-__all__ = [
-    "run_batch",
-    "VARIABLE",
-    "PI_GRID",
-    "alpha_min_on_grid",
-    "alpha2_study",
-    "design_numbers",
-]
+__all__ = ["run_batch", "VARIABLE", "PI_GRID", "alpha_min_on_grid", "alpha2_study"]
+__all__ += ["design_numbers"]
 
 PI_GRID = tuple(round(0.05 * j, 2) for j in range(9))
 

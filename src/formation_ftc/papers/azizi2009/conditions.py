@@ -103,11 +103,8 @@ def conditions(scenario: ComposedScenario, loop: ClosedLoop) -> list[Condition]:
         return []
     c = scenario.section("controller")
     law = _chain_law(loop)
-    sup = (
-        scenario.section("supervisor")
-        if isinstance(loop.supervisor, HierarchicalSupervisor)
-        else None
-    )
+    hierarchical = isinstance(loop.supervisor, HierarchicalSupervisor)
+    sup = scenario.section("supervisor") if hierarchical else None
     flfr = sup is not None and sup.flfr
     alpha = np.asarray(law.alpha, float)
     n = alpha.size

@@ -24,14 +24,8 @@ def plot_fig2(
     efforts: Sequence[tuple[str, np.ndarray, np.ndarray]], path: Path, t_max: float = 100.0
 ) -> Path:
     """``efforts``: four (title, time [s], E (T, N)) tuples; plotted up to ``t_max`` [s]."""
-    fig, axes = new_figure(
-        2,
-        2,
-        width=8.0,
-        height=5.6,
-        sharex=False,
-        title="Fig. 2: x-axis cumulative input effort E_xi(t)",
-    )
+    title = "Fig. 2: x-axis cumulative input effort E_xi(t)"
+    fig, axes = new_figure(2, 2, width=8.0, height=5.6, sharex=False, title=title)
     for ax, (title, t, E) in zip(axes.flat, efforts, strict=True):
         sel = t <= t_max + 1e-9
         for j in range(E.shape[1]):
@@ -50,14 +44,8 @@ def plot_fig3(
     path: Path,
 ) -> Path:
     """alpha_2 versus ||D||_2 (a) and versus the simulated max |e_ij| (b)."""
-    fig, axes = new_figure(
-        1,
-        2,
-        width=8.0,
-        height=3.4,
-        sharex=False,
-        title="Fig. 3: FLFR weight alpha_2 (satellite 2 faulty, LLFR b_hat_2 = 0.88)",
-    )
+    title = "Fig. 3: FLFR weight alpha_2 (satellite 2 faulty, LLFR b_hat_2 = 0.88)"
+    fig, axes = new_figure(1, 2, width=8.0, height=3.4, sharex=False, title=title)
     ax = axes[0, 0]
     ax.plot(d_norm, alpha2, color=SPACECRAFT_COLORS[1], label="formation (satellite 2 weighted)")
     ax.set(xlabel="||D||_2 [-]", ylabel="alpha_2 [-]", title="(a) alpha_2 vs ||D||")
@@ -89,12 +77,9 @@ def plot_fig4(
     cmap = __import__("matplotlib").colormaps["viridis"]
     pis = sorted(analytic)
     for j, p in enumerate(pis):
+        color = cmap(j / max(1, len(pis) - 1))
         ax.plot(
-            e_s_grid,
-            analytic[p],
-            color=cmap(j / max(1, len(pis) - 1)),
-            lw=1.0,
-            label=f"analytic eq. (11), pi = {p:.2f}",
+            e_s_grid, analytic[p], color=color, lw=1.0, label=f"analytic eq. (11), pi = {p:.2f}"
         )
     ax.plot(sim_err, sim_alpha, "k-", lw=2.0, label="simulation (4 satellites)")
     ax.axvline(e_s, color="0.5", ls="--", lw=0.8, label=f"e_s = {e_s} m")

@@ -75,11 +75,8 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     x_effort = {k: (ds[k]["time"].values, ds[k]["effort"].sel(axis="x").values) for k in _EFFORT}
     q["efforts"] = [(title, *x_effort[k]) for title, k in _FIG2.items()]
     edge, win = st["seed_edge"], st["window"]
-    q["edge_note"] = (
-        f"seeds {edge}: minimum alpha_2 at/below the window edge {win[0]} (window too narrow)"
-        if edge
-        else ""
-    )
+    narrow = f"seeds {edge}: minimum alpha_2 at/below the window edge {win[0]} (window too narrow)"
+    q["edge_note"] = narrow if edge else ""
     q["scenarios"] = ["azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"]
     q["seeds"] = sorted({0, *range(int(c["seeds"]))})
     sc = cast(ComposedScenario, load_scenario("azizi2009-flfr"))

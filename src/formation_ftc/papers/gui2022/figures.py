@@ -15,18 +15,12 @@ import numpy as np
 from formation_ftc.plotting import new_figure, save_figure
 from formation_ftc.report.run_page import finish_figure
 
-__all__ = [
-    "deputy",
-    "fig3_fault_reconstruction",
-    "fig45_estimation_errors",
-    "fig6_ilo_comparison",
-    "fig78_tracking_errors",
-    "fig9_trajectory",
-    "fig10_synthesized_disturbance",
-    "plot",
-]
+__all__ = ["deputy", "fig3_fault_reconstruction", "fig45_estimation_errors", "fig6_ilo_comparison"]
+__all__ += ["fig78_tracking_errors", "fig9_trajectory", "fig10_synthesized_disturbance", "plot"]
 
 AX = ["x", "y", "z"]
+#: velocity (True) or position (False) -> the state components and their unit
+_COMPONENTS = {False: (AX, "m"), True: (["vx", "vy", "vz"], "m/s")}
 
 
 def deputy(ds):
@@ -49,18 +43,11 @@ def fig3_fault_reconstruction(ds, path: Path) -> Path:
 
 def fig45_estimation_errors(ds_offset, ds_full, path: Path, velocity: bool) -> Path:
     """Figs. 4 (position) / 5 (velocity): estimation error q - q_hat; left q_hat(0) offset, right full run."""
-    comps = ["vx", "vy", "vz"] if velocity else ["x", "y", "z"]
-    unit = "m/s" if velocity else "m"
+    comps, unit = _COMPONENTS[velocity]
     what = "velocity" if velocity else "position"
     num = 5 if velocity else 4
-    fig, axes = new_figure(
-        1,
-        2,
-        width=9.0,
-        height=3.4,
-        sharex=False,
-        title=f"Fig. {num}: {what} estimation error of the ILO (deputy)",
-    )
+    title = f"Fig. {num}: {what} estimation error of the ILO (deputy)"
+    fig, axes = new_figure(1, 2, width=9.0, height=3.4, sharex=False, title=title)
     for ax, ds, ttl in (
         (axes[0, 0], ds_offset, "q_hat(0) = q(0) + offset"),
         (axes[0, 1], ds_full, "q_hat(0) = q(0), faults at 1500 s / 2000 s"),
@@ -78,12 +65,8 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
     t = ds_new.time.values
     axes[0, 0].plot(t, ds_new.fault.sel(axis="x"), "k--", label="true F_x")
     axes[0, 0].plot(t, ds_new.fault_estimate_mean.sel(axis="x"), label="new ILO (with gamma sgn)")
-    axes[0, 0].plot(
-        ds_base.time,
-        ds_base.fault_estimate_mean.sel(axis="x"),
-        ":",
-        label="ILO of [25] (gamma = 0)",
-    )
+    base = ds_base.fault_estimate_mean.sel(axis="x")
+    axes[0, 0].plot(ds_base.time, base, ":", label="ILO of [25] (gamma = 0)")
     axes[0, 0].set_ylabel("F_x [m/s^2]")
     axes[0, 0].legend(loc="upper left")
     sel = t >= 1400
@@ -101,22 +84,23 @@ def fig6_ilo_comparison(ds_new, ds_base, path: Path) -> Path:
 
 def fig78_tracking_errors(ds_lof, ds_cof, path: Path, velocity: bool) -> Path:
     """Figs. 7 (position) / 8 (velocity): tracking error e_q = q0 - q, LOF2TC vs COF2TC."""
-    comps = ["vx", "vy", "vz"] if velocity else ["x", "y", "z"]
-    unit = "m/s" if velocity else "m"
-    num = 8 if velocity else 7
-    fig, axes = new_figure(
-        3,
-        1,
-        title=f"Fig. {num}: relative {'velocity' if velocity else 'position'} "
-        "tracking error (deputy)",
-    )
+    what = "velocity" if velocity else "position"
+    title = f"Fig. {8 if velocity else 7}: relative {what} tracking error (deputy)"
+    curves = ((ds_cof, "COF2TC (u = K e_y)"), (ds_lof, "LOF2TC (30)-(32)"))
+    return _tracking_errors(title, curves, velocity, path, loc="upper right")
+
+
+def _tracking_errors(title: str, curves, velocity: bool, path: Path, **legend) -> Path:
+    """Tracking error e_q per component (rows, symlog scale) of each ``(dataset, label)`` of
+    ``curves`` (label None: ``e_<component>``); ``legend`` as in :func:`finish_figure`."""
+    comps, unit = _COMPONENTS[velocity]
+    fig, axes = new_figure(3, 1, title=title)
     for k, c in enumerate(comps):
-        ax = axes[k, 0]
-        ax.plot(ds_cof.time, ds_cof.tracking_error.sel(component=c), label="COF2TC (u = K e_y)")
-        ax.plot(ds_lof.time, ds_lof.tracking_error.sel(component=c), label="LOF2TC (30)-(32)")
-        ax.set_ylabel(f"e_{c} [{unit}]")
-        ax.set_yscale("symlog", linthresh=1e-3 if not velocity else 1e-4)
-    return finish_figure(fig, axes, path, loc="upper right")
+        for ds, label in curves:
+            axes[k, 0].plot(ds.time, ds.tracking_error.sel(component=c), label=label or f"e_{c}")
+        axes[k, 0].set_ylabel(f"e_{c} [{unit}]")
+        axes[k, 0].set_yscale("symlog", linthresh=1e-4 if velocity else 1e-3)
+    return finish_figure(fig, axes, path, **legend)
 
 
 def fig9_trajectory(ds_lof, ds_cof, path: Path) -> Path:
@@ -160,14 +144,8 @@ def plot(ds, scenario, out_dir) -> list[Path]:
     ds = deputy(ds)
     paths = [fig3_fault_reconstruction(ds, out_dir / "fault_reconstruction.png")]
     if "tracking_error" in ds:
-        fig, axes = new_figure(
-            3, 1, title=f"{scenario.scenario.name}: position tracking error (deputy)"
-        )
-        for k, c in enumerate(["x", "y", "z"]):
-            axes[k, 0].plot(ds.time, ds.tracking_error.sel(component=c), label=f"e_{c}")
-            axes[k, 0].set_ylabel(f"e_{c} [m]")
-            axes[k, 0].set_yscale("symlog", linthresh=1e-3)
-        paths.append(finish_figure(fig, axes, out_dir / "tracking_error.png"))
+        title = f"{scenario.scenario.name}: position tracking error (deputy)"
+        paths.append(_tracking_errors(title, [(ds, None)], False, out_dir / "tracking_error.png"))
     return paths
 
 

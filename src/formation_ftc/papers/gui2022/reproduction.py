@@ -51,20 +51,17 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     q |= {f"{k}:{name}": value for k, v in m.items() for name, value in v.items()}
     des, n = constants["lmi_design"], pub.N_MEAN_MOTION
     e_at = {tt: m["off"][f"estimate_pos_err_at_{tt:g}s"] for tt in ESTIMATE_ERROR_AT}
-    # Fig. 10, low-pass RMS of |v - h| and |h|: the block means of each axis combine exactly
-    v_h_rms = float(
-        np.sqrt(sum(m["lof"][f"compensation_error_lowpass_rms_{a}"] ** 2 for a in "xyz"))
-    )
-    h_rms = float(
-        np.sqrt(sum(m["lof"][f"synthesized_disturbance_lowpass_rms_{a}"] ** 2 for a in "xyz"))
-    )
+
+    def lowpass_rms(name: str) -> float:
+        """Fig. 10's low-pass RMS of a 3-vector: the block means of each axis combine exactly."""
+        return float(np.sqrt(sum(m["lof"][f"{name}_lowpass_rms_{a}"] ** 2 for a in "xyz")))
+
+    v_h_rms, h_rms = lowpass_rms("compensation_error"), lowpass_rms("synthesized_disturbance")
     A, B = cw_matrices(n)
     care = care_solution(n, pub.CARE_Q_SCALE)
     ref = constants["offset_error_reference"]
-    q |= {
-        "dP": float(np.max(np.abs(care.P - pub.P1_PRINTED))),
-        "care_residual": float(care.residual),
-    }
+    q["dP"] = float(np.max(np.abs(care.P - pub.P1_PRINTED)))
+    q["care_residual"] = float(care.residual)
     q |= {"k_equal": bool(np.allclose(np.round(B.T @ care.P, 4), pub.K_PRINTED, atol=1e-12))}
     q |= {"L1_00": float(des.L1[0, 0]), "L1_03": des.L1[0, 3], "L1_34": des.L1[3, 4]}
     q |= {"L2_03": float(des.L2[0, 3]), "lmi_solver": des.solver, "lowpass_window": LOWPASS_WINDOW}

@@ -18,6 +18,11 @@ __all__ = ["plot_errors", "plot_mu", "plot_adaptive", "plot_comparison", "plot_s
 ZOOM = 100.0  # s
 #: formation errors of Figs. 6, 10 and 12 and their axis labels
 _MU = (("mu1", r"$\mu_1$ [m]"), ("mu2", r"$\mu_2$ literal [m]"), ("mu2_vc", r"$\mu_{2,vc}$ [m]"))
+#: adaptive parameters of Figs. 7 and 11 (those a law has) and their axis labels
+_ADAPTIVE = (("m_hat", r"$\hat m_i$ [kg]"), ("beta_hat", r"$\hat\beta_i$ [-]"))
+_ADAPTIVE += (("d_hat", r"$\hat d_i$ [N]"), ("b_hat", r"$\hat b_i$ [N]"))
+#: the law of a scenario -> its name in the figures' titles
+_LAWS = {"thm1": "Thm 1, eqs. (23)-(27)", "thm2": "Thm 2, eqs. (41)-(45)", "sir-ftc": "SIR-FTC"}
 
 
 def _label(sc) -> str:
@@ -62,16 +67,7 @@ def plot_mu(ds, path: Path, title: str) -> Path:
 
 def plot_adaptive(ds, path: Path, title: str) -> Path:
     """m_hat, beta_hat, d_hat (Thm 1/2) or b_hat (SIR-FTC) per spacecraft."""
-    names = [
-        (n, u)
-        for n, u in (
-            ("m_hat", r"$\hat m_i$ [kg]"),
-            ("beta_hat", r"$\hat\beta_i$ [-]"),
-            ("d_hat", r"$\hat d_i$ [N]"),
-            ("b_hat", r"$\hat b_i$ [N]"),
-        )
-        if n in ds
-    ]
+    names = [(n, u) for n, u in _ADAPTIVE if n in ds]
     fig, axes = new_figure(len(names), 2, width=10.0, sharex=False, title=title)
     for r, (name, lab) in enumerate(names):
         for sc in ds.spacecraft.values:
@@ -114,11 +110,7 @@ def plot_scenario(ds, scenario, out_dir) -> list[Path]:
 
     out_dir = Path(out_dir)
     name = scenario.scenario.name
-    ctrl = {
-        "thm1": "Thm 1, eqs. (23)-(27)",
-        "thm2": "Thm 2, eqs. (41)-(45)",
-        "sir-ftc": "SIR-FTC",
-    }.get(str(law_of(scenario)), str(scenario.type_of("controller")))
+    ctrl = _LAWS.get(str(law_of(scenario)), str(scenario.type_of("controller")))
     return [
         *(
             plot_errors(ds, out_dir / f"{name}_{v}.png", v, f"{name}: {what} ({ctrl})", unit)

@@ -63,13 +63,8 @@ def plot_seed_spread(values: dict[str, np.ndarray], path: Path, ylabel: str, tit
     ax.boxplot(data)
     ax.set_xticks(range(1, len(names) + 1), names)
     for k, d in enumerate(data):
-        ax.plot(
-            np.full(d.shape, k + 1.0) + np.linspace(-0.12, 0.12, d.size),
-            d,
-            ".",
-            color="0.3",
-            markersize=4,
-        )
+        x = np.full(d.shape, k + 1.0) + np.linspace(-0.12, 0.12, d.size)  # the seeds side by side
+        ax.plot(x, d, ".", color="0.3", markersize=4)
     ax.set_ylabel(ylabel)
     return save_figure(fig, path)
 
@@ -96,26 +91,13 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
     out_dir = Path(out_dir)
     name = scenario.scenario.name
     windows = metric_windows(scenario)
+    window = None if windows is None else windows["fault_window"]
     paths = []
     if "attitude" in ds:
-        paths.append(
-            plot_attitudes(
-                ds,
-                out_dir / "attitudes.png",
-                f"{name}: Euler angles",
-                None if windows is None else windows["fault_window"],
-            )
-        )
+        paths.append(plot_attitudes(ds, out_dir / "attitudes.png", f"{name}: Euler angles", window))
     faults = getattr(scenario.section("actuator"), "faults", None)
     if faults and all(v in ds for v in ("fault", "fdi_estimate", "fault_estimate_adaptive")):
-        f = faults[0]
-        paths.append(
-            plot_fault_estimate(
-                ds,
-                out_dir / "fault_estimate.png",
-                f.spacecraft,
-                f.channel,
-                f"{name}: fault and estimates",
-            )
-        )
+        f, title = faults[0], f"{name}: fault and estimates"
+        path = out_dir / "fault_estimate.png"
+        paths.append(plot_fault_estimate(ds, path, f.spacecraft, f.channel, title))
     return paths

@@ -49,32 +49,22 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     q["seed_spread_labels"] = {"ylabel": "sync error RMS, 40-240 s [rad]", "title": f"Synchronisation error over {len(seeds)} seeds"}  # fmt: skip
     q |= {"sync_ratio": _ms(sync[B] / sync[A]), "sync_A": _ms(sync[A]), "sync_B": _ms(sync[B])}
     q |= {"sync_ratio_max": _mx(sync[B] / sync[A]), "track_ratio_max": _mx(track[B] / track[A])}
-    q |= {
-        "track_ratio": _ms(track[B] / track[A]),
-        "track_A": _ms(track[A]),
-        "track_B": _ms(track[B]),
-    }
+    q |= {"track_ratio": _ms(track[B] / track[A]), "track_A": _ms(track[A])}
+    q["track_B"] = _ms(track[B])
     q |= {"c_fw_finite": int(valid["fault_window"][C].sum()), "c_fw_all": bool(valid["fault_window"][C].all())}  # fmt: skip
     q |= {"fault_window_end": st["ends"]["fault_window"], "c_fw_theta": _mx(pitch_fw[C])}
     q["c_fw_theta_finite"] = _mx(pitch_fw[C][valid["fault_window"][C]])
-    q |= {
-        "c_finite": int(finite[C].sum()),
-        "c_all": bool(finite[C].all()),
-        "c_theta": _mx(pitch[C]),
-    }
+    q |= {"c_finite": int(finite[C].sum()), "c_all": bool(finite[C].all())}
+    q["c_theta"] = _mx(pitch[C])
     q |= {"horizon": scns[0].simulation.horizon, "c_theta_finite": _mx(pitch[C][finite[C]])}
     q |= {"c_diverged": diverged([C]), "all_diverged": diverged([A, B, C])}
     q |= {"roll_ratio": _ms(roll_sp[C] / roll_sp[B]), "roll_C": _ms(roll_sp[C], ".1f")}
-    q |= {
-        "roll_ratio_min": _mn(roll_sp[C] / roll_sp[B]),
-        "abs_yaw_CB": _ms(abs_yaw[C] / abs_yaw[B]),
-    }
+    q["roll_ratio_min"] = _mn(roll_sp[C] / roll_sp[B])
+    q["abs_yaw_CB"] = _ms(abs_yaw[C] / abs_yaw[B])
     q |= {"yaw_spread_CB": _ms(yaw_sp[C] / yaw_sp[B]), "abs_yaw_CB_min_diff": _mn(abs_yaw[C] - abs_yaw[B])}  # fmt: skip
     q |= {"yaw_spread_CB_min_diff": _mn(yaw_sp[C] - yaw_sp[B]), "yaw_spread_BA": _ms(yaw_sp[B] / yaw_sp[A])}  # fmt: skip
-    q |= {
-        "yaw_spread_BA_max": _mx(yaw_sp[B] / yaw_sp[A]),
-        "abs_yaw_BA": _ms(abs_yaw[B] / abs_yaw[A]),
-    }
+    q["yaw_spread_BA_max"] = _mx(yaw_sp[B] / yaw_sp[A])
+    q["abs_yaw_BA"] = _ms(abs_yaw[B] / abs_yaw[A])
     q |= {"abs_yaw_BA_max": _mx(abs_yaw[B] / abs_yaw[A]), "n_finite": int(finite.sum())}
     q |= {"n_runs": finite.size, "all_finite": bool(finite.all()), "theta_all": _mx(pitch)}
     q["theta_finite"] = _mx(pitch[finite])

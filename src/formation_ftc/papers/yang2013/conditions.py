@@ -27,14 +27,8 @@ from formation_ftc.papers._conditions import exact, informative, sampled_or_veri
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = [
-    "design_quantities",
-    "faults",
-    "fault_conditions",
-    "conditions",
-    "disturbance_peaks",
-    "disturbance_bounds",
-]
+__all__ = ["design_quantities", "faults", "fault_conditions", "conditions", "disturbance_peaks"]
+__all__ += ["disturbance_bounds"]
 
 
 def faults(sc: ComposedScenario) -> list[VelocityFault]:
@@ -118,12 +112,8 @@ def disturbance_peaks(sc: ComposedScenario, n_samples: int = 20001) -> tuple[flo
     for texts in (plant.disturbance_force, plant.disturbance_torque):
         worst = 0.0
         for i in range(1, plant.count + 1):
-            comps = [
-                np.broadcast_to(
-                    np.asarray(compile_expression(tx, ("t", "i"))(t=t, i=float(i))), t.shape
-                )
-                for tx in texts
-            ]
+            values = [compile_expression(tx, ("t", "i"))(t=t, i=float(i)) for tx in texts]
+            comps = [np.broadcast_to(np.asarray(v), t.shape) for v in values]
             worst = max(worst, float(np.max(np.linalg.norm(np.stack(comps), axis=0))))
         peaks.append(worst)
     return peaks[0], peaks[1]

@@ -62,33 +62,17 @@ def plot_scenario(ds, scenario, out_dir: Path) -> list[Path]:
 
 def figure_4(ds_healthy, ds_fault, envelope: float, pre_bound: float, path: Path) -> Path:
     """Fig. 4: trajectories of |X_sigma(t)(t)| (healthy and spacecraft-2 controller fault)."""
-    fig, axes = new_figure(
-        2,
-        1,
-        width=7.0,
-        height=6.0,
-        sharex=True,
-        title="Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|",
-    )
+    title = "Yang2013 Fig. 4: trajectories of |X_sigma(t)(t)|"
+    fig, axes = new_figure(2, 1, width=7.0, height=6.0, sharex=True, title=title)
     ax = axes[0, 0]
     ax.plot(ds_healthy["time"], ds_healthy["state_norm"], color="#1f77b4", label="healthy")
-    ax.plot(
-        ds_fault["time"],
-        ds_fault["state_norm"],
-        color="#d62728",
-        ls="--",
-        label="spacecraft 2 controller fault at 3800 s",
-    )
+    fault = "spacecraft 2 controller fault at 3800 s"
+    ax.plot(ds_fault["time"], ds_fault["state_norm"], color="#d62728", ls="--", label=fault)
     ax.axhline(
         envelope, color="k", ls="--", lw=0.9, label=f"envelope eps + (S+2) zeta D = {envelope:.3f}"
     )
-    ax.axhline(
-        pre_bound,
-        color="0.5",
-        ls="-.",
-        lw=0.9,
-        label=f"switch bound eps1 + zeta D = {pre_bound:.2f}",
-    )
+    switch_bound = f"switch bound eps1 + zeta D = {pre_bound:.2f}"
+    ax.axhline(pre_bound, color="0.5", ls="-.", lw=0.9, label=switch_bound)
     _switch_lines(ax, ds_healthy)
     ax.set_ylabel("|X_sigma(t)(t)| [-]")
     ax.legend(loc="upper right")
