@@ -205,12 +205,9 @@ class LocalExecutor:
         for c in chunks:
             try:
                 following = start(plan, c)
-            except BaseException:
+            finally:  # on an error too: the chunk already computed is stored before it propagates
                 if finish is not None:
-                    yield finish()  # the chunk already computed is stored before the error propagates
-                raise
-            if finish is not None:
-                yield finish()
+                    yield finish()
             finish = following
         if finish is not None:
             yield finish()

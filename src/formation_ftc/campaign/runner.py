@@ -244,13 +244,7 @@ def _bound_chunk(
     the finisher waits for it, reads the metrics, assembles the table and re-runs the failed and
     traced runs, so a caller may start the next chunk first."""
     from formation_ftc import api
-    from formation_ftc.campaign.binding import (
-        SEED_PATH,
-        apply_bindings,
-        bind_fields,
-        params_close,
-        take_run,
-    )
+    from formation_ftc.campaign import binding
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     n = len(cols)
@@ -276,8 +270,8 @@ def _bound_chunk(
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
         template = api.build_loop(plan.scenario(first))
-        values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
-        bindings = bind_fields(template, values0)
+        values0 = {**{p: first.values[p] for p in bindable}, binding.SEED_PATH: first.seed}
+        bindings = binding.bind_fields(template, values0)
         # the batch needs no time histories (metrics are computed inside the run): one record at the
         # start and one at the end; trace runs and failed runs are re-run alone with records. An STL
         # requirement is evaluated on the records inside the run: it keeps the scenario's interval
@@ -289,15 +283,15 @@ def _bound_chunk(
         return None
     template, bindings = entry
     values = {p: np.asarray(cols.values[p], dtype=np.float64) for p in bindable}
-    values[SEED_PATH] = cols.seed.astype(np.float64)
-    batch, axes = apply_bindings(template, bindings, values, plan.chunk_size)
+    values[binding.SEED_PATH] = cols.seed.astype(np.float64)
+    batch, axes = binding.apply_bindings(template, bindings, values, plan.chunk_size)
     engine = batched_run(template, axes, plan.chunk_size)
     # a group whose binding was verified before in this process starts computing now (JAX dispatches
     # asynchronously) and the Python work below overlaps it; a first chunk is verified first
     pending = engine(batch) if cache_key in _VERIFIED else None
     check = api.build_loop(plan.scenario(cols.row(n - 1, plan.base_names)))
     check_params = replace(check, record_every=template.record_every)
-    if not params_close(check_params, take_run(batch, axes, n - 1)):
+    if not binding.params_close(check_params, binding.take_run(batch, axes, n - 1)):
         _BINDINGS[cache_key] = None  # a field moves another leaf too (or fields interact): per run
         _VERIFIED.discard(cache_key)
         return None  # (a speculative batch in flight is dropped)
@@ -329,7 +323,7 @@ def _bound_chunk(
             scn = plan.scenario(inp)
             # the scenario's recording interval (structural: the batch ran with one record at each end)
             loop_j = replace(
-                take_run(batch, axes, j), record_every=int(scn.simulation.record_every)
+                binding.take_run(batch, axes, j), record_every=int(scn.simulation.record_every)
             )
             run_out = jax.device_get(jitted_run(loop_j)(loop_j))
             if failed[j]:

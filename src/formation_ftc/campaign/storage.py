@@ -99,6 +99,10 @@ def _package_version() -> str:
     return __version__
 
 
+def _utc_now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+
+
 class CampaignStore:
     """Open with :meth:`prepare` (checks, writes nothing) then :meth:`initialize` (writes the manifest
     of a new campaign); :meth:`read` opens a store for reporting."""
@@ -118,7 +122,7 @@ class CampaignStore:
             campaign=plan.name,
             spec_hash=plan.hash,
             package_version=_package_version(),
-            created_utc=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            created_utc=_utc_now(),
             spec=plan.spec.model_dump(mode="json"),
             plan=plan.summary(),
             input_columns=plan.input_columns(),
@@ -310,13 +314,7 @@ class CampaignStore:
                 f"a file system with locking"
             ) from None
         # any text left in the file is a dead holder's (the kernel released its lock): taken over
-        text = json.dumps(
-            {
-                "host": socket.gethostname(),
-                "pid": os.getpid(),
-                "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-            }
-        )
+        text = json.dumps(dict(host=socket.gethostname(), pid=os.getpid(), since_utc=_utc_now()))
         try:
             path.write_text(text, encoding="utf-8")  # the same file (inode): the lock stays
         except OSError as exc:
