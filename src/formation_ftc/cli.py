@@ -631,8 +631,7 @@ def _cmd_run(args) -> int:
     scenario = _load(args)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
     check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
-    failed = "the scenario cannot be compiled: {exc}"
-    loop = _as_scenario_error(build_loop, scenario, args, failed)
+    loop = _as_scenario_error(build_loop, scenario, args, "the scenario cannot be compiled: {exc}")
     check_memory(loop, budgets, args.scenario)
     if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
         _import_in_background("xarray", "formation_ftc.provenance")

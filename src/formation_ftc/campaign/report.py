@@ -35,6 +35,9 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         "n_runs": int(n_runs),
         "failure_rate": float(1 - finite.size / n_runs) if n_runs else float("nan"),
     }
+    out.update(
+        dict.fromkeys(("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES)), np.nan)
+    )
     if finite.size:
         out.update(
             mean=float(finite.mean()),
@@ -44,9 +47,6 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         )
         for p, q in zip(PERCENTILES, np.percentile(finite, PERCENTILES), strict=True):
             out[f"p{p}"] = float(q)
-    else:
-        stats = ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
-        out.update(dict.fromkeys(stats, float("nan")))
     return out
 
 
@@ -207,11 +207,9 @@ def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path)
             len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: {field} sweep"
         )
         for ax, m in zip(axes[:, 0], metrics, strict=False):
-            med = [groups[v]["metrics"][m]["p50"] for v in values]
-            lo = [groups[v]["metrics"][m]["p5"] for v in values]
-            hi = [groups[v]["metrics"][m]["p95"] for v in values]
-            ax.fill_between(xs, lo, hi, alpha=0.25, label="5-95 %")
-            ax.plot(xs, med, "o-", label="median")
+            q = {p: [groups[v]["metrics"][m][p] for v in values] for p in ("p5", "p50", "p95")}
+            ax.fill_between(xs, q["p5"], q["p95"], alpha=0.25, label="5-95 %")
+            ax.plot(xs, q["p50"], "o-", label="median")
             ax.set_ylabel(m)
         axes[-1, 0].set_xlabel(xlabel)
         if not isinstance(xs[0], float):

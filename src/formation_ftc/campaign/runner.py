@@ -415,9 +415,7 @@ def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
 
     out: dict[str, list[str]] = {}
     for b, name in enumerate(plan.base_names):
-        g = 0
-        if len(plan.base_names) > 1:
-            g = int(np.ravel_multi_index([b] + [0] * len(plan.grid_samplers), plan.grid_shape))
+        g = b * (plan.n_grid // len(plan.base_names))  # base b, first value of every grid field
         loop = api.build_loop(plan.scenario(plan.run_inputs(g * plan.runs)))
         out[name] = loop_metric_names(loop.metrics, loop.count)
     return out
