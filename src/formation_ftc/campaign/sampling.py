@@ -160,12 +160,7 @@ class RunColumns:
 
     def row(self, k: int, base_names: list[str]) -> RunInputs:
         """Run ``k`` (position in the columns) as :class:`RunInputs` (grid values copied per run)."""
-        vals = {
-            p: v[k]
-            if isinstance(v[k], int | float | str | bool) or v[k] is None
-            else copy.deepcopy(v[k])
-            for p, v in self.values.items()
-        }
+        vals = {p: copy.deepcopy(v[k]) for p, v in self.values.items()}  # scalars: the same object
         return RunInputs(
             int(self.run_id[k]),
             int(self.grid_index[k]),

@@ -290,8 +290,7 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
             f"{{grid = [...]}} or {{choice = [...]}}, got {spec!r}"
         )
     keys = set(spec)
-    present = keys & _SAMPLER_KEYS
-    if len(present) != 1:
+    if len(keys & _SAMPLER_KEYS) != 1:
         raise CampaignError(
             f"sample.{path}: give exactly one of dist, grid, choice (got {sorted(keys)})"
         )
