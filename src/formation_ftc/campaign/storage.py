@@ -161,10 +161,10 @@ class CampaignStore:
                 )
         return manifest
 
-    @staticmethod
-    def _scan(root: Path, n_chunks: int) -> set[int]:
-        """Check the directory holds only our files; return the chunk ids present (stale temporary
-        files of a killed run are removed)."""
+    def _scan(self) -> list[int]:
+        """Check the directory holds only our files; return the chunk ids present, in order (temporary
+        files are left to :meth:`_remove_temporaries`)."""
+        root, n_chunks = self.root, int(self.manifest["n_chunks"])
         for entry in root.iterdir():
             if entry.name not in _TOP_LEVEL and not _ROOT_TMP_RE.match(entry.name):
                 raise CampaignError(
@@ -194,7 +194,7 @@ class CampaignStore:
                             f"({n_chunks} chunks); refusing to use {root}"
                         )
                     chunk_ids.add(cid)
-        return chunk_ids
+        return sorted(chunk_ids)
 
     @classmethod
     def prepare(cls, root: str | Path, plan: CampaignPlan) -> CampaignStore:
@@ -220,11 +220,9 @@ class CampaignStore:
                 f"{root}: written by formation-ftc {manifest.get('package_version')}, this is "
                 f"{_package_version()}; resume with the same version or use a new directory"
             )
-        finished = cls._scan(root, int(manifest["n_chunks"]))
         store = cls(root, manifest)
-        for cid in sorted(finished):
-            problem = store.verify_chunk(cid)
-            if problem:  # reported and recomputed, never used
+        for cid in store._scan():
+            if problem := store.verify_chunk(cid):  # reported and recomputed, never used
                 print(f"warning: {problem}; chunk {cid} will be recomputed", file=sys.stderr)
                 continue
             store._check_chunk(cid, plan.chunk(cid).run_ids)
@@ -371,14 +369,12 @@ class CampaignStore:
         if not (root / MANIFEST).is_file():
             raise CampaignError(f"{root}: no {MANIFEST}; not a campaign directory")
         manifest = cls._read_manifest(root)
-        finished = cls._scan(root, int(manifest["n_chunks"]))
         store = cls(root, manifest)
         bad = []
-        for cid in sorted(finished):
+        for cid in store._scan():
             if str(cid) not in manifest["chunk_sha256"]:
                 continue  # being written right now (its checksum comes first): not finished yet
-            problem = store.verify_chunk(cid)
-            if problem:
+            if problem := store.verify_chunk(cid):
                 bad.append(problem)
             else:
                 store._finished.add(cid)
