@@ -187,8 +187,7 @@ def _diagnostic(loop, out: Mapping[str, Any]) -> str:
 
 def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str) -> None:
     """Refuse a kept metric that the method does not return (``returned``: its metric names)."""
-    missing = [m for m in keep if m not in returned]
-    if missing:
+    if missing := [m for m in keep if m not in returned]:
         raise CampaignError(
             f"campaign.metrics: {missing} not returned by method "
             f"{method!r} (it returns {sorted(returned)})"
@@ -202,8 +201,7 @@ def _trace(plan: CampaignPlan, loop, scenario, inputs, out: Mapping[str, Any], s
     records, n_kept = trim_records(out["records"], int(out["diverged_step"]), loop.record_every)
     ds = loop.dataset(dict(out, records=records), n_kept)
     if tr.variables:
-        missing = [v for v in tr.variables if v not in ds.data_vars]
-        if missing:
+        if missing := [v for v in tr.variables if v not in ds.data_vars]:
             raise CampaignError(
                 f"traces.variables: {missing} not in the dataset (has {list(ds.data_vars)})"
             )
@@ -490,8 +488,7 @@ def run_campaign(
     plan.validate_all()
     if plan.spec.campaign.metrics:
         for base, names in metric_names(plan).items():
-            missing = [m for m in plan.spec.campaign.metrics if names and m not in names]
-            if missing:
+            if missing := [m for m in plan.spec.campaign.metrics if names and m not in names]:
                 raise CampaignError(
                     f"campaign.metrics: {missing} not returned for base scenario {base!r} "
                     f"(available: {', '.join(names)})"

@@ -349,9 +349,7 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
         # a composed slot: its component's section
         model, parts = type(section(parts[0])), parts[1:]
     info = field_info(model, ".".join(parts))
-    if info is None:
-        return []
-    return field_bounds(info)
+    return [] if info is None else field_bounds(info)
 
 
 def _describe_dump(node: Any) -> str:

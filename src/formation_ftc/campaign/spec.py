@@ -296,8 +296,7 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         )
 
     def allowed(*names):
-        extra = keys - set(names)
-        if extra:
+        if extra := keys - set(names):
             raise CampaignError(
                 f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}"
             )
@@ -331,8 +330,7 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         )
     cls, params, n_required = _DISTS[dist]
     allowed("dist", *params)
-    missing = [n for n in params[:n_required] if n not in spec]
-    if missing:
+    if missing := [n for n in params[:n_required] if n not in spec]:
         raise CampaignError(f"sample.{path}: {dist} distribution needs {', '.join(missing)}")
     if cls is Integer:
         for n in params:
