@@ -218,6 +218,7 @@ def finish_run(
     import jax
     import numpy as np
 
+    from formation_ftc.cf import apply_cf
     from formation_ftc.provenance import provenance
     from formation_ftc.sim.engine import SimulationDiverged, trim_records
 
@@ -227,8 +228,8 @@ def finish_run(
     ds = loop.dataset(out, n_kept)
     metrics = {k: float(v) for k, v in loop.metric_values(out).items()}
     units = _metric_units(loop.metrics, loop.count)
-    ds.attrs.update(provenance())
     ds.attrs.update(
+        provenance(),
         scenario_name=scenario.scenario.name,
         method=scenario.scenario.method,
         scenario_toml=loader.dump_toml(scenario),
@@ -237,7 +238,16 @@ def finish_run(
         metric_units_json=json.dumps({k: units.get(k, "1") for k in metrics}),
         diverged="",
     )
-    _apply_cf(ds, scenario)
+    # CF-1.10 global attributes and per-variable metadata (formation_ftc.cf)
+    apply_cf(
+        ds,
+        scenario_name=scenario.scenario.name,
+        method=scenario.scenario.method,
+        description=scenario.scenario.description,
+        references=_references(scenario),
+        created_utc=str(ds.attrs.get("created_utc", "")),
+        version=str(ds.attrs.get("version_formation-ftc", "")),
+    )
     if div >= 0:
         info = _divergence_info(loop, out, div)
         ds.attrs["diverged"] = str(info)
@@ -283,21 +293,6 @@ def _references(scenario: ScenarioBase) -> str:
         if rep is not None and rep.citation and rep.citation not in refs:
             refs.append(rep.citation)
     return "\n".join(refs)
-
-
-def _apply_cf(ds, scenario: ScenarioBase) -> None:
-    """CF-1.10 global attributes and per-variable metadata on a result (see ``formation_ftc.cf``)."""
-    from formation_ftc.cf import apply_cf
-
-    apply_cf(
-        ds,
-        scenario_name=scenario.scenario.name,
-        method=scenario.scenario.method,
-        description=scenario.scenario.description,
-        references=_references(scenario),
-        created_utc=str(ds.attrs.get("created_utc", "")),
-        version=str(ds.attrs.get("version_formation-ftc", "")),
-    )
 
 
 def simulate_with_metrics(scenario: ScenarioBase | str | Path, raise_on_divergence: bool = True):

@@ -479,17 +479,22 @@ def _cmd_show(args) -> int:
     return 0
 
 
-def _print_conditions(conds, as_json: bool, scenario=None) -> int:
+def _cmd_check(args) -> int:
+    from formation_ftc.api import check
+
+    scenario = _load(args)
+    failed = "the conditions cannot be evaluated for these values ({kind}: {exc})"
+    conds = _as_scenario_error(check, scenario, args, failed)
     failed_required = [c for c in conds if c.required and c.holds is False]
     unproven_required = [c for c in conds if c.required and c.holds is None]
     code = 1 if failed_required else 0
-    if as_json:
+    if args.json:
         from formation_ftc.condition_json import condition_json
 
         print_json(
             {
-                "scenario": scenario.scenario.name if scenario is not None else None,
-                "method": scenario.scenario.method if scenario is not None else None,
+                "scenario": scenario.scenario.name,
+                "method": scenario.scenario.method,
                 "conditions": [condition_json(c) for c in conds],
                 "all_required_hold": not failed_required,
                 "required_failed": len(failed_required),
@@ -539,15 +544,6 @@ def _as_scenario_error(fn, scenario, args, failed: str) -> Any:
             raise
         reason = failed.format(exc=exc, kind=type(exc).__name__)
         raise ScenarioError(f"{args.scenario}: {reason}") from None
-
-
-def _cmd_check(args) -> int:
-    from formation_ftc.api import check
-
-    scenario = _load(args)
-    failed = "the conditions cannot be evaluated for these values ({kind}: {exc})"
-    conds = _as_scenario_error(check, scenario, args, failed)
-    return _print_conditions(conds, args.json, scenario)
 
 
 def _cmd_schema(args) -> int:
@@ -631,8 +627,7 @@ def _cmd_run(args) -> int:
     scenario = _load(args)
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps)
     check_run_steps(scenario.simulation.n_steps, budgets, args.scenario)
-    failed = "the scenario cannot be compiled: {exc}"
-    loop = _as_scenario_error(build_loop, scenario, args, failed)
+    loop = _as_scenario_error(build_loop, scenario, args, "the scenario cannot be compiled: {exc}")
     check_memory(loop, budgets, args.scenario)
     if _ONE_SHOT_PROCESS:  # what writing the result needs, imported while XLA runs without the GIL
         _import_in_background("xarray", "formation_ftc.provenance")

@@ -181,17 +181,16 @@ def check_memory(loop: Any, budgets: Budgets, where: str = "scenario", batch: in
     return need
 
 
-def check_campaign_budgets(plan: Any, budgets: Budgets, where: str | None = None) -> dict[str, int]:
+def check_campaign_budgets(plan: Any, budgets: Budgets) -> dict[str, int]:
     """Refuse a campaign over budget before anything runs: run-steps per run and in total, and the
     memory of one vmapped batch of ``chunk_size`` runs (first run of each base scenario, compiled but
     not run). Returns the estimates (``run_steps``, ``campaign_steps``, ``batch_memory`` [bytes])."""
     from formation_ftc import api
 
-    where = where or f"campaign {plan.name!r}"
-    runs_per_point = int(plan.runs)
-    n_points = max(1, plan.n_runs // max(1, runs_per_point))
-    probe = [g * runs_per_point for g in range(min(n_points, 256))]
-    if any(str(s.path).startswith("simulation.") for s in getattr(plan, "samplers", []) or []):
+    where = f"campaign {plan.name!r}"
+    # the first run of each grid point
+    probe = [g * plan.runs for g in range(min(plan.n_grid, 256))]
+    if any(s.path.startswith("simulation.") for s in plan.samplers):
         probe += list(range(min(plan.n_runs, 16)))  # sampled horizon/step: look at a few runs too
     steps = 0
     first_of_base: dict[str, int] = {}

@@ -225,10 +225,7 @@ def register_method(method: Method) -> Method:
 def get_method(name: str) -> Method:
     load_plugins()
     if name not in _METHODS:
-        raise KeyError(
-            f"unknown method {name!r}; registered: {', '.join(sorted(_METHODS))}"
-            + _plugin_error_hint()
-        )
+        raise _unknown(f"method {name!r}; registered: {', '.join(sorted(_METHODS))}")
     return _METHODS[name]
 
 
@@ -268,10 +265,7 @@ def _resolved_reproduction(paper: str) -> Reproduction:
 def get_reproduction(paper: str) -> Reproduction:
     load_plugins()
     if paper not in _REPRODUCTIONS:
-        raise KeyError(
-            f"unknown paper {paper!r}; valid: {', '.join(reproductions())}, all"
-            + _plugin_error_hint()
-        )
+        raise _unknown(f"paper {paper!r}; valid: {', '.join(reproductions())}, all")
     return _resolved_reproduction(paper)
 
 
@@ -329,6 +323,9 @@ def load_plugins() -> None:
             PLUGIN_ERRORS[module] = traceback.format_exc()
 
 
-def _plugin_error_hint() -> str:
+def _unknown(what: str) -> KeyError:
+    """The KeyError of a lookup of an unknown ``what``, naming the plug-ins that failed to import."""
     failed = ", ".join(f"{m}: {tb.strip().splitlines()[-1]}" for m, tb in PLUGIN_ERRORS.items())
-    return f" (plug-ins that failed to import: {failed})" if failed else ""
+    return KeyError(
+        f"unknown {what}" + (f" (plug-ins that failed to import: {failed})" if failed else "")
+    )

@@ -104,10 +104,10 @@ def bind_fields(loop, values: Mapping[str, float]) -> dict[str, FieldBinding] | 
             return None
         if index.size == 0 or not np.all(leaf.ravel()[index] == v):
             return None  # a derived leaf (or another element layout): not the field's value
-        for i in index.tolist():
-            if (n, i) in seen:
-                return None
-            seen.add((n, i))
+        elements = {(n, i) for i in index.tolist()}
+        if elements & seen:
+            return None  # two fields write the same element
+        seen |= elements
         out[path] = FieldBinding(path, n, index)
     return out
 
@@ -152,14 +152,12 @@ def params_close(a, b) -> bool:
     """Same structure and every leaf equal to 1e-12 relative (exact for integers)."""
     la, ta = _leaves(a)
     lb, tb = _leaves(b)
-    if ta != tb:
-        return False
-    for x, y in zip(la, lb, strict=True):
-        if x.shape != y.shape:
-            return False
-        if x.dtype.kind in "fc":
-            if not np.allclose(x, y, rtol=_RTOL, atol=0.0, equal_nan=True):
-                return False
-        elif not np.array_equal(x, y):
-            return False
-    return True
+    return ta == tb and all(
+        x.shape == y.shape
+        and (
+            np.allclose(x, y, rtol=_RTOL, atol=0.0, equal_nan=True)
+            if x.dtype.kind in "fc"
+            else np.array_equal(x, y)
+        )
+        for x, y in zip(la, lb, strict=True)
+    )

@@ -205,12 +205,9 @@ class LocalExecutor:
         for c in chunks:
             try:
                 following = start(plan, c)
-            except BaseException:
+            finally:  # on an error too: the chunk already computed is stored before it propagates
                 if finish is not None:
-                    yield finish()  # the chunk already computed is stored before the error propagates
-                raise
-            if finish is not None:
-                yield finish()
+                    yield finish()
             finish = following
         if finish is not None:
             yield finish()
@@ -370,14 +367,9 @@ class DaskExecutor:
             return
         assert self.client is not None, "DaskExecutor.map outside its with block"
         plan_future = self.client.scatter(plan, broadcast=True)
+        prefix, pid = f"campaign-{plan.hash[:10]}-chunk", os.getpid()
         futures = [
-            self.client.submit(
-                fn,
-                plan_future,
-                c,
-                pure=False,
-                key=f"campaign-{plan.hash[:10]}-chunk-{c.chunk_id}-{os.getpid()}",
-            )
+            self.client.submit(fn, plan_future, c, pure=False, key=f"{prefix}-{c.chunk_id}-{pid}")
             for c in chunks
         ]
         yield from _results(futures, dask_as_completed)

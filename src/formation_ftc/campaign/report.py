@@ -35,6 +35,9 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         "n_runs": int(n_runs),
         "failure_rate": float(1 - finite.size / n_runs) if n_runs else float("nan"),
     }
+    out.update(
+        dict.fromkeys(("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES)), np.nan)
+    )
     if finite.size:
         out.update(
             mean=float(finite.mean()),
@@ -44,9 +47,6 @@ def _stats(values: pd.Series, n_runs: int) -> dict[str, Any]:
         )
         for p, q in zip(PERCENTILES, np.percentile(finite, PERCENTILES), strict=True):
             out[f"p{p}"] = float(q)
-    else:
-        stats = ("mean", "std", "min", "max", *(f"p{p}" for p in PERCENTILES))
-        out.update(dict.fromkeys(stats, float("nan")))
     return out
 
 
@@ -140,7 +140,7 @@ def field_unit(manifest: dict[str, Any], path: str) -> str:
 
 
 def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) -> list[Path]:
-    from formation_ftc.plotting import new_figure, save_figure
+    from formation_ftc.plotting import new_figure
 
     paths: list[Path] = []
     metrics = _metric_columns(df)[:_MAX_METRICS_PER_FIGURE]
@@ -153,7 +153,6 @@ def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) 
         if col not in df.columns or not numeric.get(col, False):
             continue
         path = col.removeprefix("input:")
-        unit = field_unit(manifest, path)
         fig, axes = new_figure(
             len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: sensitivity to {path}"
         )
@@ -178,16 +177,12 @@ def _sensitivity_figures(df: pd.DataFrame, manifest: dict[str, Any], out: Path) 
                     label=f"failed ({len(bad)})",
                 )
             ax.set_ylabel(m.removeprefix("metric:"))
-        axes[-1, 0].set_xlabel(f"{path} [{unit}]" if unit else path)
-        axes[0, 0].legend(loc="best")
-        paths.append(
-            save_figure(fig, out / f"sensitivity_{re.sub(r'[^A-Za-z0-9_.-]', '_', path)}.png")
-        )
+        paths.append(_save(fig, axes, _axis_label(manifest, path), out / "sensitivity", path))
     return paths
 
 
 def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path) -> list[Path]:
-    from formation_ftc.plotting import new_figure, save_figure
+    from formation_ftc.plotting import new_figure
 
     paths = []
     for field, groups in summary["by_swept_value"].items():
@@ -198,27 +193,37 @@ def _swept_figures(summary: dict[str, Any], manifest: dict[str, Any], out: Path)
         if not metrics:
             continue
         try:
-            xs = [float(v) for v in values]
-            unit = field_unit(manifest, field)
-            xlabel = f"{field} [{unit}]" if unit else field
+            xs, xlabel = [float(v) for v in values], _axis_label(manifest, field)
         except ValueError:
             xs, xlabel = list(range(len(values))), field
         fig, axes = new_figure(
             len(metrics), 1, sharex=True, title=f"{manifest.get('campaign')}: {field} sweep"
         )
         for ax, m in zip(axes[:, 0], metrics, strict=False):
-            med = [groups[v]["metrics"][m]["p50"] for v in values]
-            lo = [groups[v]["metrics"][m]["p5"] for v in values]
-            hi = [groups[v]["metrics"][m]["p95"] for v in values]
-            ax.fill_between(xs, lo, hi, alpha=0.25, label="5-95 %")
-            ax.plot(xs, med, "o-", label="median")
+            q = {p: [groups[v]["metrics"][m][p] for v in values] for p in ("p5", "p50", "p95")}
+            ax.fill_between(xs, q["p5"], q["p95"], alpha=0.25, label="5-95 %")
+            ax.plot(xs, q["p50"], "o-", label="median")
             ax.set_ylabel(m)
-        axes[-1, 0].set_xlabel(xlabel)
         if not isinstance(xs[0], float):
             axes[-1, 0].set_xticks(xs, values, rotation=20)
-        axes[0, 0].legend(loc="best")
-        paths.append(save_figure(fig, out / f"sweep_{re.sub(r'[^A-Za-z0-9_.-]', '_', field)}.png"))
+        paths.append(_save(fig, axes, xlabel, out / "sweep", field))
     return paths
+
+
+def _axis_label(manifest: dict[str, Any], path: str) -> str:
+    """``path [unit]`` (:func:`field_unit`), or ``path`` when its unit is unknown."""
+    unit = field_unit(manifest, path)
+    return f"{path} [{unit}]" if unit else path
+
+
+def _save(fig, axes, xlabel: str, prefix: Path, name: str) -> Path:
+    """Label the bottom x axis, show the legend and save ``fig`` as ``PREFIX_NAME.png`` (``name`` made
+    safe for a file name)."""
+    from formation_ftc.plotting import save_figure
+
+    axes[-1, 0].set_xlabel(xlabel)
+    axes[0, 0].legend(loc="best")
+    return save_figure(fig, Path(f"{prefix}_{re.sub(r'[^A-Za-z0-9_.-]', '_', name)}.png"))
 
 
 def write_report(

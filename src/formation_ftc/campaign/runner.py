@@ -187,8 +187,7 @@ def _diagnostic(loop, out: Mapping[str, Any]) -> str:
 
 def _require_metrics(keep: Sequence[str], returned: Collection[str], method: str) -> None:
     """Refuse a kept metric that the method does not return (``returned``: its metric names)."""
-    missing = [m for m in keep if m not in returned]
-    if missing:
+    if missing := [m for m in keep if m not in returned]:
         raise CampaignError(
             f"campaign.metrics: {missing} not returned by method "
             f"{method!r} (it returns {sorted(returned)})"
@@ -202,8 +201,7 @@ def _trace(plan: CampaignPlan, loop, scenario, inputs, out: Mapping[str, Any], s
     records, n_kept = trim_records(out["records"], int(out["diverged_step"]), loop.record_every)
     ds = loop.dataset(dict(out, records=records), n_kept)
     if tr.variables:
-        missing = [v for v in tr.variables if v not in ds.data_vars]
-        if missing:
+        if missing := [v for v in tr.variables if v not in ds.data_vars]:
             raise CampaignError(
                 f"traces.variables: {missing} not in the dataset (has {list(ds.data_vars)})"
             )
@@ -244,13 +242,7 @@ def _bound_chunk(
     the finisher waits for it, reads the metrics, assembles the table and re-runs the failed and
     traced runs, so a caller may start the next chunk first."""
     from formation_ftc import api
-    from formation_ftc.campaign.binding import (
-        SEED_PATH,
-        apply_bindings,
-        bind_fields,
-        params_close,
-        take_run,
-    )
+    from formation_ftc.campaign import binding
     from formation_ftc.sim.metrics import metric_names as loop_metric_names
 
     n = len(cols)
@@ -276,8 +268,8 @@ def _bound_chunk(
     cache_key = (plan.hash, gkey)
     if cache_key not in _BINDINGS:
         template = api.build_loop(plan.scenario(first))
-        values0 = {**{p: first.values[p] for p in bindable}, SEED_PATH: first.seed}
-        bindings = bind_fields(template, values0)
+        values0 = {**{p: first.values[p] for p in bindable}, binding.SEED_PATH: first.seed}
+        bindings = binding.bind_fields(template, values0)
         # the batch needs no time histories (metrics are computed inside the run): one record at the
         # start and one at the end; trace runs and failed runs are re-run alone with records. An STL
         # requirement is evaluated on the records inside the run: it keeps the scenario's interval
@@ -289,15 +281,15 @@ def _bound_chunk(
         return None
     template, bindings = entry
     values = {p: np.asarray(cols.values[p], dtype=np.float64) for p in bindable}
-    values[SEED_PATH] = cols.seed.astype(np.float64)
-    batch, axes = apply_bindings(template, bindings, values, plan.chunk_size)
+    values[binding.SEED_PATH] = cols.seed.astype(np.float64)
+    batch, axes = binding.apply_bindings(template, bindings, values, plan.chunk_size)
     engine = batched_run(template, axes, plan.chunk_size)
     # a group whose binding was verified before in this process starts computing now (JAX dispatches
     # asynchronously) and the Python work below overlaps it; a first chunk is verified first
     pending = engine(batch) if cache_key in _VERIFIED else None
     check = api.build_loop(plan.scenario(cols.row(n - 1, plan.base_names)))
     check_params = replace(check, record_every=template.record_every)
-    if not params_close(check_params, take_run(batch, axes, n - 1)):
+    if not binding.params_close(check_params, binding.take_run(batch, axes, n - 1)):
         _BINDINGS[cache_key] = None  # a field moves another leaf too (or fields interact): per run
         _VERIFIED.discard(cache_key)
         return None  # (a speculative batch in flight is dropped)
@@ -329,7 +321,7 @@ def _bound_chunk(
             scn = plan.scenario(inp)
             # the scenario's recording interval (structural: the batch ran with one record at each end)
             loop_j = replace(
-                take_run(batch, axes, j), record_every=int(scn.simulation.record_every)
+                binding.take_run(batch, axes, j), record_every=int(scn.simulation.record_every)
             )
             run_out = jax.device_get(jitted_run(loop_j)(loop_j))
             if failed[j]:
@@ -421,9 +413,7 @@ def metric_names(plan: CampaignPlan) -> dict[str, list[str]]:
 
     out: dict[str, list[str]] = {}
     for b, name in enumerate(plan.base_names):
-        g = 0
-        if len(plan.base_names) > 1:
-            g = int(np.ravel_multi_index([b] + [0] * len(plan.grid_samplers), plan.grid_shape))
+        g = b * (plan.n_grid // len(plan.base_names))  # base b, first value of every grid field
         loop = api.build_loop(plan.scenario(plan.run_inputs(g * plan.runs)))
         out[name] = loop_metric_names(loop.metrics, loop.count)
     return out
@@ -498,8 +488,7 @@ def run_campaign(
     plan.validate_all()
     if plan.spec.campaign.metrics:
         for base, names in metric_names(plan).items():
-            missing = [m for m in plan.spec.campaign.metrics if names and m not in names]
-            if missing:
+            if missing := [m for m in plan.spec.campaign.metrics if names and m not in names]:
                 raise CampaignError(
                     f"campaign.metrics: {missing} not returned for base scenario {base!r} "
                     f"(available: {', '.join(names)})"

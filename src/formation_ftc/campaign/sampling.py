@@ -160,12 +160,7 @@ class RunColumns:
 
     def row(self, k: int, base_names: list[str]) -> RunInputs:
         """Run ``k`` (position in the columns) as :class:`RunInputs` (grid values copied per run)."""
-        vals = {
-            p: v[k]
-            if isinstance(v[k], int | float | str | bool) or v[k] is None
-            else copy.deepcopy(v[k])
-            for p, v in self.values.items()
-        }
+        vals = {p: copy.deepcopy(v[k]) for p, v in self.values.items()}  # scalars: the same object
         return RunInputs(
             int(self.run_id[k]),
             int(self.grid_index[k]),
@@ -354,9 +349,7 @@ def _schema_bounds(method: str, path: str, scenario: Any = None) -> list[tuple[A
         # a composed slot: its component's section
         model, parts = type(section(parts[0])), parts[1:]
     info = field_info(model, ".".join(parts))
-    if info is None:
-        return []
-    return field_bounds(info)
+    return [] if info is None else field_bounds(info)
 
 
 def _describe_dump(node: Any) -> str:

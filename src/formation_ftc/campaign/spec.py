@@ -290,15 +290,13 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
             f"{{grid = [...]}} or {{choice = [...]}}, got {spec!r}"
         )
     keys = set(spec)
-    present = keys & _SAMPLER_KEYS
-    if len(present) != 1:
+    if len(keys & _SAMPLER_KEYS) != 1:
         raise CampaignError(
             f"sample.{path}: give exactly one of dist, grid, choice (got {sorted(keys)})"
         )
 
     def allowed(*names):
-        extra = keys - set(names)
-        if extra:
+        if extra := keys - set(names):
             raise CampaignError(
                 f"sample.{path}: unknown key(s) {sorted(extra)}; allowed: {list(names)}"
             )
@@ -332,8 +330,7 @@ def parse_sampler(path: str, spec: Mapping[str, Any]) -> Sampler:
         )
     cls, params, n_required = _DISTS[dist]
     allowed("dist", *params)
-    missing = [n for n in params[:n_required] if n not in spec]
-    if missing:
+    if missing := [n for n in params[:n_required] if n not in spec]:
         raise CampaignError(f"sample.{path}: {dist} distribution needs {', '.join(missing)}")
     if cls is Integer:
         for n in params:

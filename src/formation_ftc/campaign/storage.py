@@ -99,6 +99,10 @@ def _package_version() -> str:
     return __version__
 
 
+def _utc_now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+
+
 class CampaignStore:
     """Open with :meth:`prepare` (checks, writes nothing) then :meth:`initialize` (writes the manifest
     of a new campaign); :meth:`read` opens a store for reporting."""
@@ -118,7 +122,7 @@ class CampaignStore:
             campaign=plan.name,
             spec_hash=plan.hash,
             package_version=_package_version(),
-            created_utc=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            created_utc=_utc_now(),
             spec=plan.spec.model_dump(mode="json"),
             plan=plan.summary(),
             input_columns=plan.input_columns(),
@@ -157,10 +161,10 @@ class CampaignStore:
                 )
         return manifest
 
-    @staticmethod
-    def _scan(root: Path, n_chunks: int) -> set[int]:
-        """Check the directory holds only our files; return the chunk ids present (stale temporary
-        files of a killed run are removed)."""
+    def _scan(self) -> list[int]:
+        """Check the directory holds only our files; return the chunk ids present, in order (temporary
+        files are left to :meth:`_remove_temporaries`)."""
+        root, n_chunks = self.root, int(self.manifest["n_chunks"])
         for entry in root.iterdir():
             if entry.name not in _TOP_LEVEL and not _ROOT_TMP_RE.match(entry.name):
                 raise CampaignError(
@@ -190,7 +194,7 @@ class CampaignStore:
                             f"({n_chunks} chunks); refusing to use {root}"
                         )
                     chunk_ids.add(cid)
-        return chunk_ids
+        return sorted(chunk_ids)
 
     @classmethod
     def prepare(cls, root: str | Path, plan: CampaignPlan) -> CampaignStore:
@@ -216,11 +220,9 @@ class CampaignStore:
                 f"{root}: written by formation-ftc {manifest.get('package_version')}, this is "
                 f"{_package_version()}; resume with the same version or use a new directory"
             )
-        finished = cls._scan(root, int(manifest["n_chunks"]))
         store = cls(root, manifest)
-        for cid in sorted(finished):
-            problem = store.verify_chunk(cid)
-            if problem:  # reported and recomputed, never used
+        for cid in store._scan():
+            if problem := store.verify_chunk(cid):  # reported and recomputed, never used
                 print(f"warning: {problem}; chunk {cid} will be recomputed", file=sys.stderr)
                 continue
             store._check_chunk(cid, plan.chunk(cid).run_ids)
@@ -310,13 +312,7 @@ class CampaignStore:
                 f"a file system with locking"
             ) from None
         # any text left in the file is a dead holder's (the kernel released its lock): taken over
-        text = json.dumps(
-            {
-                "host": socket.gethostname(),
-                "pid": os.getpid(),
-                "since_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-            }
-        )
+        text = json.dumps(dict(host=socket.gethostname(), pid=os.getpid(), since_utc=_utc_now()))
         try:
             path.write_text(text, encoding="utf-8")  # the same file (inode): the lock stays
         except OSError as exc:
@@ -373,14 +369,12 @@ class CampaignStore:
         if not (root / MANIFEST).is_file():
             raise CampaignError(f"{root}: no {MANIFEST}; not a campaign directory")
         manifest = cls._read_manifest(root)
-        finished = cls._scan(root, int(manifest["n_chunks"]))
         store = cls(root, manifest)
         bad = []
-        for cid in sorted(finished):
+        for cid in store._scan():
             if str(cid) not in manifest["chunk_sha256"]:
                 continue  # being written right now (its checksum comes first): not finished yet
-            problem = store.verify_chunk(cid)
-            if problem:
+            if problem := store.verify_chunk(cid):
                 bad.append(problem)
             else:
                 store._finished.add(cid)

@@ -129,10 +129,8 @@ def pcg64_states(words: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     """State of ``PCG64(seed_sequence)`` right after seeding, from ``generate_state(8, uint32)``
     words ``(n, 8)``: (state high, state low, increment high, increment low) uint64 arrays."""
     w = words.astype(np.uint64)
-    u64 = [
-        w[:, 2 * k] | (w[:, 2 * k + 1] << _U64(32)) for k in range(4)
-    ]  # generate_state(4, uint64)
-    s_hi, s_lo, i_hi, i_lo = u64
+    # generate_state(4, uint64)
+    s_hi, s_lo, i_hi, i_lo = (w[:, 2 * k] | (w[:, 2 * k + 1] << _U64(32)) for k in range(4))
     inc_hi = (i_hi << _U64(1)) | (i_lo >> _U64(63))
     inc_lo = (i_lo << _U64(1)) | _U64(1)
     zero = np.zeros_like(s_hi)
@@ -203,10 +201,7 @@ def _self_check() -> bool:
         if ints != ref_i:
             return False
     ref_s = [
-        int(
-            np.random.SeedSequence(5, spawn_key=(int(k), 0)).generate_state(1, dtype=np.uint32)[0]
-            >> 1
-        )
+        int(np.random.SeedSequence(5, spawn_key=(int(k), 0)).generate_state(1)[0]) >> 1
         for k in keys
     ]
     return run_seeds(5, keys).tolist() == ref_s
