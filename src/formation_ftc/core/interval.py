@@ -44,7 +44,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache, reduce
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -308,36 +308,35 @@ def _is_integer(x) -> np.ndarray:
 
 
 def _pow(a: _I, b: _I) -> _I:
-    with np.errstate(all="ignore"):
-        fixed = b.lo == b.hi
-        p = np.where(fixed, b.lo, 0.0)
-        integer = fixed & _is_integer(p)
-        even = integer & (np.remainder(p, 2.0) == 0)
-        straddle = (a.lo <= 0) & (a.hi >= 0)
-        m = _abs(a)
-        amin, amax = m.lo, m.hi
-        # integer exponent p (even or odd), defined unless a negative power of an interval with 0
-        pos = p > 0
-        lo_even = np.where(pos, amin**p, amax**p)
-        hi_even = np.where(pos, amax**p, amin**p)
-        lo_odd = np.where(pos, np.power(a.lo, p), np.power(a.hi, p))
-        hi_odd = np.where(pos, np.power(a.hi, p), np.power(a.lo, p))
-        ok_integer = pos | ~straddle
-        zero = integer & (p == 0)
-        # real exponent p (base must be >= 0)
-        base_ok = a.lo >= 0
-        lo_real = np.where(pos, np.power(np.maximum(a.lo, 0), p), np.power(np.maximum(a.hi, 0), p))
-        hi_real = np.where(pos, np.power(np.maximum(a.hi, 0), p), np.power(np.maximum(a.lo, 0), p))
-        # general exponent interval: base > 0, corners of exp(b log a)
-        glo, ghi = _corners(np.power, a, b)
-        general_ok = a.lo > 0
-        lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
-        hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
-        ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
-        r = _out(lo, hi, LIB_ULPS)
-        lo = np.where(zero, 1.0, np.where(ok, r.lo, -_INF))  # nothing known outside the domain
-        hi = np.where(zero, 1.0, np.where(ok, r.hi, _INF))
-        lo = np.where(even & ok, np.maximum(lo, 0.0), lo)
+    fixed = b.lo == b.hi
+    p = np.where(fixed, b.lo, 0.0)
+    integer = fixed & _is_integer(p)
+    even = integer & (np.remainder(p, 2.0) == 0)
+    straddle = (a.lo <= 0) & (a.hi >= 0)
+    m = _abs(a)
+    amin, amax = m.lo, m.hi
+    # integer exponent p (even or odd), defined unless a negative power of an interval with 0
+    pos = p > 0
+    lo_even = np.where(pos, amin**p, amax**p)
+    hi_even = np.where(pos, amax**p, amin**p)
+    lo_odd = np.where(pos, np.power(a.lo, p), np.power(a.hi, p))
+    hi_odd = np.where(pos, np.power(a.hi, p), np.power(a.lo, p))
+    ok_integer = pos | ~straddle
+    zero = integer & (p == 0)
+    # real exponent p (base must be >= 0)
+    base_ok = a.lo >= 0
+    lo_real = np.where(pos, np.power(np.maximum(a.lo, 0), p), np.power(np.maximum(a.hi, 0), p))
+    hi_real = np.where(pos, np.power(np.maximum(a.hi, 0), p), np.power(np.maximum(a.lo, 0), p))
+    # general exponent interval: base > 0, corners of exp(b log a)
+    glo, ghi = _corners(np.power, a, b)
+    general_ok = a.lo > 0
+    lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
+    hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
+    ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
+    r = _out(lo, hi, LIB_ULPS)
+    lo = np.where(zero, 1.0, np.where(ok, r.lo, -_INF))  # nothing known outside the domain
+    hi = np.where(zero, 1.0, np.where(ok, r.hi, _INF))
+    lo = np.where(even & ok, np.maximum(lo, 0.0), lo)
     return _clean(lo, hi)
 
 
@@ -345,25 +344,24 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
     """numpy's remainder (sign of the divisor); also returns where a wrap (jump) may occur."""
     fixed = b.lo == b.hi
     d = b.lo
-    with np.errstate(all="ignore"):
-        k_lo, k_hi = np.floor(a.lo / d), np.floor(a.hi / d)
-        big = np.maximum(np.maximum(np.abs(a.lo), np.abs(a.hi)), np.abs(d))
-        slack = 8 * _EPS * big
-        r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
-        # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
-        lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
-        same = (
-            fixed
-            & (d != 0)
-            & (k_lo == k_hi)
-            & np.isfinite(k_lo)
-            & (np.minimum(r_lo, r_hi) > lo_end + slack)
-            & (np.maximum(r_lo, r_hi) < hi_end - slack)
-        )
-        tight = _I(np.minimum(r_lo, r_hi) - slack, np.maximum(r_lo, r_hi) + slack)
-        pos, neg = b.lo > 0, b.hi < 0
-        lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
-        hi = np.where(same, tight.hi, np.where(pos, b.hi, np.where(neg, 0.0, _INF)))
+    k_lo, k_hi = np.floor(a.lo / d), np.floor(a.hi / d)
+    big = np.maximum(np.maximum(np.abs(a.lo), np.abs(a.hi)), np.abs(d))
+    slack = 8 * _EPS * big
+    r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
+    # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
+    lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
+    same = (
+        fixed
+        & (d != 0)
+        & (k_lo == k_hi)
+        & np.isfinite(k_lo)
+        & (np.minimum(r_lo, r_hi) > lo_end + slack)
+        & (np.maximum(r_lo, r_hi) < hi_end - slack)
+    )
+    tight = _I(np.minimum(r_lo, r_hi) - slack, np.maximum(r_lo, r_hi) + slack)
+    pos, neg = b.lo > 0, b.hi < 0
+    lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
+    hi = np.where(same, tight.hi, np.where(pos, b.hi, np.where(neg, 0.0, _INF)))
     return _clean(lo, hi), ~same
 
 
@@ -427,7 +425,8 @@ _BINARY: dict[type, tuple[Callable[[_I, _I], _I], Callable[..., _I]]] = {
 # the evaluator: (value, derivative) pairs over the parsed tree
 
 
-_Pair = tuple[_I, "_I | None"]
+#: (value, derivative): the derivative is an _I, or None when no derivative is taken
+_Pair = tuple[_I, Any]
 
 
 @dataclass(frozen=True)
@@ -450,6 +449,10 @@ class _Evaluator:
         if d is None:
             return None
         return _I(np.where(possible, -_INF, d.lo), np.where(possible, _INF, d.hi))
+
+    def pair(self, v: _I, derivative: Callable[[], _I | None]) -> _Pair:
+        """``(v, derivative())``, the derivative computed only when derivatives are taken."""
+        return v, (derivative() if self.der else None)
 
     def switching(self, v: _I) -> _Pair:
         """A piecewise-constant value (a truth value, ``floor``, ...): derivative 0, unbounded where
@@ -490,18 +493,14 @@ class _Evaluator:
         op = type(node.op)
         if op is ast.Mod:
             v, wrap = _mod(a, b)
-            if not self.der:
-                return v, None
-            assert da is not None and db is not None
             # d(a % b) = a' - floor(a/b) b' away from a wrap (a jump); b' = 0 for a constant period
-            with np.errstate(all="ignore"):
-                k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
-            return v, self.jump(wrap, _sub(da, _mul(_I(k, k), db)))
+            k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
+            return self.pair(v, lambda: self.jump(wrap, _sub(da, _mul(_I(k, k), db))))
         if op not in _BINARY:
             raise IntervalError(f"operator {op.__name__} cannot be enclosed")
         value, derivative = _BINARY[op]
         v = value(a, b)
-        return v, (derivative(a, da, b, db, v) if self.der else None)
+        return self.pair(v, lambda: derivative(a, da, b, db, v))
 
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
@@ -523,12 +522,10 @@ class _Evaluator:
         return self._where(c, a, b)
 
     def _where(self, c: _I, a: _Pair, b: _Pair) -> _Pair:
-        v = _select(c, a[0], b[0])
-        if not self.der:
-            return v, None
-        assert a[1] is not None and b[1] is not None
         t, f = _truth(c)  # the branch is known where the condition is
-        return v, self.jump(~(t | f), _select(c, a[1], b[1]))
+        return self.pair(
+            _select(c, a[0], b[0]), lambda: self.jump(~(t | f), _select(c, a[1], b[1]))
+        )
 
     def visit_Call(self, node: ast.Call) -> _Pair:
         name = node.func.id if isinstance(node.func, ast.Name) else ""
@@ -548,33 +545,26 @@ class _Evaluator:
     def _smooth(self, arg: _Pair, f: Callable[[_I], _I], fprime: Callable[[_I, _I], _I]) -> _Pair:
         a, da = arg
         v = f(a)
-        if not self.der:
-            return v, None
-        assert da is not None
-        return v, _mul(fprime(a, v), da)
+        return self.pair(v, lambda: _mul(fprime(a, v), da))
 
     def call_atan2(self, y, x):
         (yv, dy), (xv, dx) = y, x
-        v = _atan2(yv, xv)
         if not self.der:
-            return v, None
-        assert dy is not None and dx is not None
+            return _atan2(yv, xv), None
         # d atan2(y, x) = (x y' - y x') / (x^2 + y^2); the branch cut is a jump
         d = _div(_sub(_mul(xv, dy), _mul(yv, dx)), _add(_sqr(xv), _sqr(yv)))
         on_cut = ~((xv.lo > 0) | (yv.lo > 0) | (yv.hi < 0))
-        return v, self.jump(on_cut, d)
+        return _atan2(yv, xv), self.jump(on_cut, d)
 
     def call_abs(self, x):
         a, da = x
-        v = _abs(a)
         if not self.der:
-            return v, None
-        assert da is not None
+            return _abs(a), None
         pos, neg = a.lo > 0, a.hi < 0
         both = _hull(da, _neg(da))  # at the kink: either one-sided derivative
         lo = np.where(pos, da.lo, np.where(neg, -da.hi, both.lo))
         hi = np.where(pos, da.hi, np.where(neg, -da.lo, both.hi))
-        return v, _I(lo, hi)
+        return _abs(a), _I(lo, hi)
 
     def _extreme(self, *args, lower: bool) -> _Pair:
         out = args[0]
@@ -702,7 +692,7 @@ def evaluate(
             env[name] = _I(a.ravel().copy(), b.ravel().copy())
         elif name in fixed:
             env[name] = _const(float(fixed[name]), n)
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"):  # the whole walk: inf / NaN ends are handled, not warned about
         val, der = _Evaluator(str(text), env, time, n, derivative, variables).visit(tree)
     r = der if derivative else val
     assert r is not None
