@@ -299,17 +299,10 @@ class _Folder:
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             reason = str(exc).replace("encountered in ", "in ")
             self.c.fail(node, f"constant {token!r} is not a finite float64 ({reason})")
-        except (
-            OverflowError,
-            ZeroDivisionError,
-            ValueError,
-        ) as exc:  # pragma: no cover - numpy raises FPE
+        except (OverflowError, ZeroDivisionError, ValueError) as exc:  # pragma: no cover
+            # numpy raises FloatingPointError (above) instead
             self.c.fail(node, f"constant cannot be evaluated ({exc})")
-        if (
-            np.ndim(out) == 0
-            and np.issubdtype(np.asarray(out).dtype, np.floating)
-            and not np.isfinite(out)
-        ):
+        if np.ndim(out) == 0 and not np.isfinite(out):  # a truth value is always finite
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             self.c.fail(node, f"constant {token!r} is not finite ({out})")
         return out
