@@ -469,9 +469,8 @@ class _Evaluator:
         return _const(float(cast(float, node.value)), self.n), self.zero()
 
     def visit_Name(self, node: ast.Name) -> _Pair:
-        if node.id in self.env:
-            d = _const(1.0 if node.id == self.time else 0.0, self.n) if self.der else None
-            return self.env[node.id], d
+        if node.id in self.env:  # derivative 1 for the time, 0 for a fixed variable
+            return self.pair(self.env[node.id], lambda: _const(float(node.id == self.time), self.n))
         if node.id in self.variables:
             raise TypeError(f"expression {self.text!r} needs a value for {node.id!r}")
         if node.id in CONSTANTS:
@@ -507,15 +506,11 @@ class _Evaluator:
         return self.switching(reduce(_and if isinstance(node.op, ast.And) else _or, vals))
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
-        left, _ = self.visit(node.left)
-        out: _I | None = None
-        for op, comp in zip(node.ops, node.comparators, strict=True):
-            right, _ = self.visit(comp)
-            c = _cmp(type(op), left, right)
-            out = c if out is None else _and(out, c)
-            left = right
-        assert out is not None
-        return self.switching(out)
+        vals = [self.visit(v)[0] for v in (node.left, *node.comparators)]
+        tests = [
+            _cmp(type(op), a, b) for op, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True)
+        ]
+        return self.switching(reduce(_and, tests))  # a < b < c is a < b and b < c
 
     def visit_IfExp(self, node: ast.IfExp) -> _Pair:
         (c, _), a, b = self.visit(node.test), self.visit(node.body), self.visit(node.orelse)
