@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import jax
 import jax.numpy as jnp
 import numpy as np
+import scipy.linalg
 
 from formation_ftc.core.integrators import rk4_step
 from formation_ftc.design.allocation import PerturbationCoefficients, perturbation_coefficients
@@ -100,10 +101,7 @@ def error_dynamics_matrix(lam0: float, lam1: float) -> np.ndarray:
             f"lambda0 and lambda1 must be > 0 (Hurwitz s^2 + l1 s + l0), got {lam0}, {lam1}"
         )
     blk = np.array([[0.0, 1.0], [-lam0, -lam1]])
-    A = np.zeros((4, 4))
-    A[:2, :2] = blk
-    A[2:, 2:] = blk
-    return A
+    return scipy.linalg.block_diag(blk, blk)
 
 
 def reduced_model(
@@ -344,11 +342,10 @@ def disturbance_floor(A_clp, b_ext: float) -> np.ndarray:
     """
     if b_ext < 0:
         raise ValueError(f"b_ext (disturbance bound) must be >= 0 m/s^2, got {b_ext}")
-    A_clp = np.asarray(A_clp, dtype=float)
-    B = INPUT_DIRECTION[:, None]
     if not b_ext > 0:
         return np.zeros(4)
     rows = np.eye(4)  # C = rows[i : i + 1]: the output X_i
+    B = INPUT_DIRECTION[:, None]
     return np.array([hinf_norm(A_clp, B, rows[i : i + 1]).value * b_ext for i in range(4)])
 
 
