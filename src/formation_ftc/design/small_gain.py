@@ -231,8 +231,7 @@ def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
     for e_rel in (1e-6, 1e-8, 1e-10, 1e-12):
         Q = CC + e_rel * base * np.eye(n)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with warnings.catch_warnings(action="ignore"):
                 X = scipy.linalg.solve_continuous_are(A, B, Q, -R, s=C.T @ D)
         except (np.linalg.LinAlgError, ValueError) as exc:
             last = f"Riccati solve failed ({str(exc)[:60]})"
@@ -358,13 +357,9 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
     try:
         import control
 
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            est = float(
-                control.norm(
-                    control.ss(As, Bs, Cs, D), "inf", tol=min(rtol / 10, 1e-8), print_warning=False
-                )
-            )
+        with warnings.catch_warnings(action="ignore"):
+            scaled = control.ss(As, Bs, Cs, D)
+            est = float(control.norm(scaled, "inf", tol=min(rtol / 10, 1e-8), print_warning=False))
     except Exception:  # noqa: BLE001 - any estimator failure leaves the certificate to decide
         est = math.nan
     gl, wp = _lower_bound(As, Bs, Cs, D, sd, rtol)
