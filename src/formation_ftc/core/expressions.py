@@ -64,13 +64,11 @@ class ExpressionError(InputError):
 
     def __init__(self, message: str, expression: str = "", field: str = "", col: int | None = None):
         where = f"{field}: " if field else ""
-        caret = ""
         shown = expression
         if len(expression) > 120:  # keep the message readable; the caret only within what is shown
             shown = expression[:100] + "..."
             col = col if col is not None and col < 100 else None
-        if shown and col is not None:
-            caret = f"\n    {shown}\n    {' ' * col}^"
+        caret = f"\n    {shown}\n    {' ' * col}^" if shown and col is not None else ""
         super().__init__(f"{where}{message} in expression {shown!r}{caret}")
         self.field = field
         self.expression = expression
@@ -403,15 +401,14 @@ class _Compiler:
         return lambda env: reduce(getattr(jnp, op), [p(env) for p in parts])
 
     def visit_Compare(self, node: ast.Compare):
-        left = self.visit(node.left)
-        rights = [self.visit(c) for c in node.comparators]
+        parts = [self.visit(v) for v in (node.left, *node.comparators)]
         for o in node.ops:
             if type(o) not in _CMPOPS:
                 self.fail(node, f"comparison {type(o).__name__} is not allowed")
         ops = [_CMPOPS[type(o)] for o in node.ops]
 
         def fn(env):
-            vals = [left(env)] + [r(env) for r in rights]
+            vals = [p(env) for p in parts]
             tests = [
                 getattr(jnp, op)(a, b) for op, a, b in zip(ops, vals[:-1], vals[1:], strict=True)
             ]

@@ -262,8 +262,7 @@ def _atan2(y: _I, x: _I) -> _I:
     # atan2 is continuous off the cut {x <= 0, y = 0}; there it is monotone in each argument for a fixed
     # other one, so its extremes over a box lie at the corners
     off_cut = (x.lo > 0) | (y.lo > 0) | (y.hi < 0)
-    lo, hi = _corners(np.arctan2, y, x)
-    r = _out(lo, hi, LIB_ULPS)
+    r = _out(*_corners(np.arctan2, y, x), LIB_ULPS)
     bound = float(_up(_PI, 2))
     lo = np.where(off_cut, np.maximum(r.lo, -bound), -bound)
     hi = np.where(off_cut, np.minimum(r.hi, bound), bound)
@@ -271,8 +270,7 @@ def _atan2(y: _I, x: _I) -> _I:
 
 
 def _cosh(a: _I) -> _I:
-    m = _abs(a)
-    r = _out(np.cosh(m.lo), np.cosh(m.hi), LIB_ULPS)
+    r = _monotone(np.cosh, _abs(a))  # cosh is increasing in |a|
     return _I(np.maximum(r.lo, 1.0), r.hi)
 
 
