@@ -92,9 +92,7 @@ class _I:
 
 def _clean(lo, hi) -> _I:
     """NaN ends (inf - inf, 0 * inf, ...) become the whole line: nothing is known there."""
-    lo = np.where(np.isnan(lo), -_INF, lo)
-    hi = np.where(np.isnan(hi), _INF, hi)
-    return _I(lo, hi)
+    return _I(np.where(np.isnan(lo), -_INF, lo), np.where(np.isnan(hi), _INF, hi))
 
 
 def _down(x, ulps: int = 1):
@@ -134,9 +132,7 @@ def _select(c: _I, a: _I, b: _I) -> _I:
 
 def _truth(c: _I) -> tuple[np.ndarray, np.ndarray]:
     """(certainly true, certainly false) of a value used as a condition (nonzero is true)."""
-    true = (c.lo > 0) | (c.hi < 0)
-    false = (c.lo == 0) & (c.hi == 0)
-    return true, false
+    return (c.lo > 0) | (c.hi < 0), (c.lo == 0) & (c.hi == 0)
 
 
 def _bool(true, false) -> _I:
@@ -218,9 +214,8 @@ def _contains_point(a: _I, offset: float, period: float) -> np.ndarray:
 def _sinusoid(f: Callable, a: _I, top: float, bottom: float) -> _I:
     """sin or cos: the values at the ends, and 1 / -1 where a maximum ``top`` / minimum ``bottom``
     (+ k 2 pi) may lie inside."""
-    lo = np.minimum(f(a.lo), f(a.hi))
-    hi = np.maximum(f(a.lo), f(a.hi))
-    r = _out(lo, hi, LIB_ULPS)
+    f_lo, f_hi = f(a.lo), f(a.hi)
+    r = _out(np.minimum(f_lo, f_hi), np.maximum(f_lo, f_hi), LIB_ULPS)
     hi = np.where(_contains_point(a, top, 2 * _PI), 1.0, r.hi)
     lo = np.where(_contains_point(a, bottom, 2 * _PI), -1.0, r.lo)
     return _I(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
@@ -348,15 +343,10 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
     r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
     # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
     lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
-    same = (
-        fixed
-        & (d != 0)
-        & (k_lo == k_hi)
-        & np.isfinite(k_lo)
-        & (np.minimum(r_lo, r_hi) > lo_end + slack)
-        & (np.maximum(r_lo, r_hi) < hi_end - slack)
-    )
-    tight = _I(np.minimum(r_lo, r_hi) - slack, np.maximum(r_lo, r_hi) + slack)
+    r_min, r_max = np.minimum(r_lo, r_hi), np.maximum(r_lo, r_hi)
+    clear = (r_min > lo_end + slack) & (r_max < hi_end - slack)
+    same = fixed & (d != 0) & (k_lo == k_hi) & np.isfinite(k_lo) & clear
+    tight = _I(r_min - slack, r_max + slack)
     pos, neg = b.lo > 0, b.hi < 0
     lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
     hi = np.where(same, tight.hi, np.where(pos, b.hi, np.where(neg, 0.0, _INF)))
@@ -688,7 +678,6 @@ def evaluate(
     with np.errstate(all="ignore"):  # the whole walk: inf / NaN ends are handled, not warned about
         val, der = _Evaluator(str(text), env, time, n, derivative, variables).visit(tree)
     r = der if derivative else val
-    assert r is not None
     return r.lo.reshape(a.shape), r.hi.reshape(a.shape)
 
 

@@ -609,6 +609,7 @@ def design_flfr(
             return dict.fromkeys(pis)
         return {p: alpha_probabilistic(b_eps, H, coeff.q1, coeff.q2, e_s, p, fl) for p in pis}
 
+    bound_text = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m"
     if e_s <= floor:
         verdict = "infeasible"
         msg = (
@@ -617,13 +618,10 @@ def design_flfr(
         )
     elif bound_ref <= e_s:
         verdict = "llfr-sufficient"
-        msg = f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m <= e_s = {e_s} m: FLFR not needed"
+        msg = f"{bound_text} <= e_s = {e_s} m: FLFR not needed"
     else:
         verdict = "feasible"
-        msg = (
-            f"bound (8) at alpha_{k + 1} = {alpha_ref} is {bound_ref:.4g} m > e_s = {e_s} m; "
-            f"FLFR raises alpha_{k + 1} from {float(alpha[k]):g}"
-        )
+        msg = f"{bound_text} > e_s = {e_s} m; FLFR raises alpha_{k + 1} from {float(alpha[k]):g}"
     return FlfrDesign(
         verdict=verdict,
         message=msg,
