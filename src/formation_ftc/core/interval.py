@@ -669,12 +669,9 @@ def evaluate(
     if np.any(a > b) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ValueError("sub-intervals need finite ends with t_lo <= t_hi")
     n = a.size
-    env: dict[str, _I] = {}
-    for name in variables:
-        if name == time:
-            env[name] = _I(a.ravel().copy(), b.ravel().copy())
-        elif name in fixed:
-            env[name] = _const(float(fixed[name]), n)
+    env = {name: _const(float(v), n) for name, v in fixed.items() if name in variables}
+    if time in variables:  # the interval variable (also when ``fixed`` names it)
+        env[time] = _I(a.ravel().copy(), b.ravel().copy())
     with np.errstate(all="ignore"):  # the whole walk: inf / NaN ends are handled, not warned about
         val, der = _Evaluator(str(text), env, time, n, derivative, variables).visit(tree)
     r = der if derivative else val
@@ -693,31 +690,22 @@ class Boxes:
     rounds: int
 
 
-def _boxes(
-    texts: Sequence[str | float],
-    variables: Sequence[str],
-    t_lo: float,
-    t_hi: float,
-    n_sub: int,
-    derivative: bool,
-    refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
-    max_rounds: int,
-    time: str,
-    fixed: Mapping[str, float],
-) -> Boxes:
+def _stacked(texts: Sequence[str | float], variables: Sequence[str], a, b, **options):
+    """The enclosures (lo, hi) of every expression on the sub-intervals [a, b], one row per expression
+    (``options``: those of :func:`evaluate`)."""
+    out = [evaluate(tx, variables, a, b, **options) for tx in texts]
+    return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
+
+def _boxes(ev: Callable, t_lo: float, t_hi: float, n_sub: int, refine, max_rounds: int) -> Boxes:
+    """``n_sub`` sub-intervals of [t_lo, t_hi] and the enclosures ``ev(a, b)`` on them; those that
+    ``refine(lo, hi)`` (None: none) marks are bisected, at most ``max_rounds`` times."""
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi < t_lo:
         raise ValueError(f"need a finite range t_lo <= t_hi, got [{t_lo}, {t_hi}]")
     if n_sub < 1:
         raise ValueError("n_sub must be >= 1")
     edges = np.linspace(float(t_lo), float(t_hi), int(n_sub) + 1)  # ends exactly t_lo and t_hi
     a, b = edges[:-1].copy(), edges[1:].copy()
-
-    def ev(a, b):
-        out = [
-            evaluate(tx, variables, a, b, derivative=derivative, time=time, **fixed) for tx in texts
-        ]
-        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
-
     lo, hi = ev(a, b)
     rounds = 0
     while refine is not None and rounds < max_rounds:
@@ -777,7 +765,8 @@ def enclose(
     (e.g. the spacecraft number ``i``) are given as keywords.
     """
     refine = _threshold_refiner(upper, lower)
-    bx = _boxes([text], variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, time, fixed)
+    ev = functools.partial(_stacked, [text], variables, derivative=derivative, time=time, **fixed)
+    bx = _boxes(ev, t_lo, t_hi, n_sub, refine, max_rounds)
     return float(bx.lo.min()), float(bx.hi.max())
 
 
@@ -821,5 +810,6 @@ def enclose_norm(
     rounded up); with ``upper`` the sub-intervals whose bound reaches it are bisected.
     """
     refine = None if upper is None else (lambda lo, hi: _norm_upper(lo, hi) >= upper)
-    bx = _boxes(texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, time, fixed)
+    ev = functools.partial(_stacked, texts, variables, time=time, **fixed)
+    bx = _boxes(ev, t_lo, t_hi, n_sub, refine, max_rounds)
     return float(_norm_upper(bx.lo, bx.hi).max())

@@ -104,8 +104,7 @@ def steady_state_kalman(phi, qd, R) -> tuple[np.ndarray, np.ndarray]:
     True
     """
     phi, qd, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (phi, qd, R))
-    n = phi.shape[0]
-    P = scipy.linalg.solve_discrete_are(phi.T, np.eye(n), qd, R)
+    P = scipy.linalg.solve_discrete_are(phi.T, np.eye(len(phi)), qd, R)
     K = P @ np.linalg.inv(P + R)
     return P, K
 
