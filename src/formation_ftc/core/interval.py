@@ -237,16 +237,18 @@ def _clip_range(r: _I, lo: float, hi: float) -> _I:
     return _I(np.clip(r.lo, lo, hi), np.clip(r.hi, lo, hi))
 
 
-def _asin(a: _I) -> _I:
-    ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arcsin, _clip_range(a, -1.0, 1.0))
-    return _in_domain(_clip_range(r, -_up(_PI / 2, 2), _up(_PI / 2, 2)), ok)
+def _arc(f: Callable, lo: float, hi: float, increasing: bool) -> Callable[[_I], _I]:
+    """asin / acos: monotone on [-1, 1] with values in [lo, hi]; nothing known beyond [-1, 1]."""
+
+    def g(a: _I) -> _I:
+        r = _monotone(f, _clip_range(a, -1.0, 1.0), increasing)
+        return _in_domain(_clip_range(r, lo, hi), (a.lo >= -1) & (a.hi <= 1))
+
+    return g
 
 
-def _acos(a: _I) -> _I:
-    ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arccos, _clip_range(a, -1.0, 1.0), increasing=False)
-    return _in_domain(_clip_range(r, 0.0, _up(_PI, 2)), ok)
+_asin = _arc(np.arcsin, -_up(_PI / 2, 2), _up(_PI / 2, 2), increasing=True)
+_acos = _arc(np.arccos, 0.0, _up(_PI, 2), increasing=False)
 
 
 def _atan(a: _I) -> _I:

@@ -234,15 +234,8 @@ def simulate_reduced_model(
         raise ValueError(f"dt = {dt} s must divide horizon = {horizon} s")
     if n_steps % record_every:
         raise ValueError(f"record_every = {record_every} must divide horizon/dt = {n_steps}")
-    xs, peak = _simulate_jit()(
-        jnp.asarray(A_clp, dtype=jnp.float64),
-        jnp.asarray(b_vec, dtype=jnp.float64),
-        jnp.asarray(weights, dtype=jnp.float64),
-        w_fn,
-        jnp.asarray(dt, jnp.float64),
-        n_steps,
-        record_every,
-    )
+    A, b, w, h = (jnp.asarray(x, dtype=jnp.float64) for x in (A_clp, b_vec, weights, dt))
+    xs, peak = _simulate_jit()(A, b, w, w_fn, h, n_steps, record_every)
     return np.asarray(xs), np.asarray(peak)
 
 
