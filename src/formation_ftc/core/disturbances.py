@@ -11,12 +11,9 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from formation_ftc.core.timefunctions import sinusoid as sinusoidal  # bias + A sin(omega t + phase)
+
 __all__ = ["sinusoidal", "gaussian_noise", "step_key", "run_key"]
-
-
-def sinusoidal(t, amplitude, omega, phase=0.0, bias=0.0):
-    """bias + amplitude * sin(omega * t + phase) (broadcast over channels)."""
-    return bias + amplitude * jnp.sin(omega * t + phase)
 
 
 def run_key(seed: int) -> jax.Array:

@@ -64,13 +64,11 @@ class ExpressionError(InputError):
 
     def __init__(self, message: str, expression: str = "", field: str = "", col: int | None = None):
         where = f"{field}: " if field else ""
-        caret = ""
         shown = expression
         if len(expression) > 120:  # keep the message readable; the caret only within what is shown
             shown = expression[:100] + "..."
             col = col if col is not None and col < 100 else None
-        if shown and col is not None:
-            caret = f"\n    {shown}\n    {' ' * col}^"
+        caret = f"\n    {shown}\n    {' ' * col}^" if shown and col is not None else ""
         super().__init__(f"{where}{message} in expression {shown!r}{caret}")
         self.field = field
         self.expression = expression
@@ -299,17 +297,10 @@ class _Folder:
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             reason = str(exc).replace("encountered in ", "in ")
             self.c.fail(node, f"constant {token!r} is not a finite float64 ({reason})")
-        except (
-            OverflowError,
-            ZeroDivisionError,
-            ValueError,
-        ) as exc:  # pragma: no cover - numpy raises FPE
+        except (OverflowError, ZeroDivisionError, ValueError) as exc:  # pragma: no cover
+            # numpy raises FloatingPointError (above) instead
             self.c.fail(node, f"constant cannot be evaluated ({exc})")
-        if (
-            np.ndim(out) == 0
-            and np.issubdtype(np.asarray(out).dtype, np.floating)
-            and not np.isfinite(out)
-        ):
+        if np.ndim(out) == 0 and not np.isfinite(out):  # a truth value is always finite
             token = ast.get_source_segment(self.c.text, node) or type(node).__name__
             self.c.fail(node, f"constant {token!r} is not finite ({out})")
         return out
@@ -410,15 +401,14 @@ class _Compiler:
         return lambda env: reduce(getattr(jnp, op), [p(env) for p in parts])
 
     def visit_Compare(self, node: ast.Compare):
-        left = self.visit(node.left)
-        rights = [self.visit(c) for c in node.comparators]
+        parts = [self.visit(v) for v in (node.left, *node.comparators)]
         for o in node.ops:
             if type(o) not in _CMPOPS:
                 self.fail(node, f"comparison {type(o).__name__} is not allowed")
         ops = [_CMPOPS[type(o)] for o in node.ops]
 
         def fn(env):
-            vals = [left(env)] + [r(env) for r in rights]
+            vals = [p(env) for p in parts]
             tests = [
                 getattr(jnp, op)(a, b) for op, a, b in zip(ops, vals[:-1], vals[1:], strict=True)
             ]

@@ -45,11 +45,8 @@ def _rk4_combine(x, dt, k1, k2, k3, k4):
 
 def rk4_step(rhs: Callable[..., PyTree], t, x: PyTree, dt, *args) -> PyTree:
     """One RK4 step of ``dx/dt = rhs(t, x, *args)`` from ``t`` to ``t + dt``."""
-    k1 = rhs(t, x, *args)
-    k2 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k1, x), *args)
-    k3 = rhs(t + 0.5 * dt, _axpy(0.5 * dt, k2, x), *args)
-    k4 = rhs(t + dt, _axpy(dt, k3, x), *args)
-    return _rk4_combine(x, dt, k1, k2, k3, k4)
+    # :func:`rk4_step_staged` with no stage input (the same operations)
+    return rk4_step_staged(lambda s, y, _, *a: rhs(s, y, *a), t, x, dt, (None,) * 4, *args)
 
 
 def rk4_step_staged(rhs: Callable[..., PyTree], t, x: PyTree, dt, stage_inputs, *args) -> PyTree:
@@ -107,16 +104,12 @@ def zoh_discretize(A, B, dt: float) -> tuple[np.ndarray, np.ndarray]:
 
     A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
     n, m = A.shape[0], B.shape[1]
-    M = np.zeros((n + m, n + m))
-    M[:n, :n] = A
-    M[:n, n:] = B
-    E = scipy.linalg.expm(M * dt)
+    E = scipy.linalg.expm(np.block([[A, B], [np.zeros((m, n + m))]]) * dt)
     return E[:n, :n], E[:n, n:]
 
 
 def zoh_discretize_jax(A, B, dt: float) -> tuple[jax.Array, jax.Array]:
     """:func:`zoh_discretize` in JAX: (Ad, Bd) from expm of [[A, B], [0, 0]] dt (Van Loan)."""
     n, m = A.shape[0], B.shape[1]
-    M = jnp.zeros((n + m, n + m)).at[:n, :n].set(A).at[:n, n:].set(B)
-    E = jax.scipy.linalg.expm(M * dt)
+    E = jax.scipy.linalg.expm(jnp.block([[A, B], [jnp.zeros((m, n + m))]]) * dt)
     return E[:n, :n], E[:n, n:]

@@ -44,7 +44,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache, reduce
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -92,9 +92,7 @@ class _I:
 
 def _clean(lo, hi) -> _I:
     """NaN ends (inf - inf, 0 * inf, ...) become the whole line: nothing is known there."""
-    lo = np.where(np.isnan(lo), -_INF, lo)
-    hi = np.where(np.isnan(hi), _INF, hi)
-    return _I(lo, hi)
+    return _I(np.where(np.isnan(lo), -_INF, lo), np.where(np.isnan(hi), _INF, hi))
 
 
 def _down(x, ulps: int = 1):
@@ -134,9 +132,7 @@ def _select(c: _I, a: _I, b: _I) -> _I:
 
 def _truth(c: _I) -> tuple[np.ndarray, np.ndarray]:
     """(certainly true, certainly false) of a value used as a condition (nonzero is true)."""
-    true = (c.lo > 0) | (c.hi < 0)
-    false = (c.lo == 0) & (c.hi == 0)
-    return true, false
+    return (c.lo > 0) | (c.hi < 0), (c.lo == 0) & (c.hi == 0)
 
 
 def _bool(true, false) -> _I:
@@ -218,9 +214,8 @@ def _contains_point(a: _I, offset: float, period: float) -> np.ndarray:
 def _sinusoid(f: Callable, a: _I, top: float, bottom: float) -> _I:
     """sin or cos: the values at the ends, and 1 / -1 where a maximum ``top`` / minimum ``bottom``
     (+ k 2 pi) may lie inside."""
-    lo = np.minimum(f(a.lo), f(a.hi))
-    hi = np.maximum(f(a.lo), f(a.hi))
-    r = _out(lo, hi, LIB_ULPS)
+    f_lo, f_hi = f(a.lo), f(a.hi)
+    r = _out(np.minimum(f_lo, f_hi), np.maximum(f_lo, f_hi), LIB_ULPS)
     hi = np.where(_contains_point(a, top, 2 * _PI), 1.0, r.hi)
     lo = np.where(_contains_point(a, bottom, 2 * _PI), -1.0, r.lo)
     return _I(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
@@ -242,16 +237,18 @@ def _clip_range(r: _I, lo: float, hi: float) -> _I:
     return _I(np.clip(r.lo, lo, hi), np.clip(r.hi, lo, hi))
 
 
-def _asin(a: _I) -> _I:
-    ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arcsin, _clip_range(a, -1.0, 1.0))
-    return _in_domain(_clip_range(r, -_up(_PI / 2, 2), _up(_PI / 2, 2)), ok)
+def _arc(f: Callable, lo: float, hi: float, increasing: bool) -> Callable[[_I], _I]:
+    """asin / acos: monotone on [-1, 1] with values in [lo, hi]; nothing known beyond [-1, 1]."""
+
+    def g(a: _I) -> _I:
+        r = _monotone(f, _clip_range(a, -1.0, 1.0), increasing)
+        return _in_domain(_clip_range(r, lo, hi), (a.lo >= -1) & (a.hi <= 1))
+
+    return g
 
 
-def _acos(a: _I) -> _I:
-    ok = (a.lo >= -1) & (a.hi <= 1)
-    r = _monotone(np.arccos, _clip_range(a, -1.0, 1.0), increasing=False)
-    return _in_domain(_clip_range(r, 0.0, _up(_PI, 2)), ok)
+_asin = _arc(np.arcsin, -_up(_PI / 2, 2), _up(_PI / 2, 2), increasing=True)
+_acos = _arc(np.arccos, 0.0, _up(_PI, 2), increasing=False)
 
 
 def _atan(a: _I) -> _I:
@@ -262,8 +259,7 @@ def _atan2(y: _I, x: _I) -> _I:
     # atan2 is continuous off the cut {x <= 0, y = 0}; there it is monotone in each argument for a fixed
     # other one, so its extremes over a box lie at the corners
     off_cut = (x.lo > 0) | (y.lo > 0) | (y.hi < 0)
-    lo, hi = _corners(np.arctan2, y, x)
-    r = _out(lo, hi, LIB_ULPS)
+    r = _out(*_corners(np.arctan2, y, x), LIB_ULPS)
     bound = float(_up(_PI, 2))
     lo = np.where(off_cut, np.maximum(r.lo, -bound), -bound)
     hi = np.where(off_cut, np.minimum(r.hi, bound), bound)
@@ -271,8 +267,7 @@ def _atan2(y: _I, x: _I) -> _I:
 
 
 def _cosh(a: _I) -> _I:
-    m = _abs(a)
-    r = _out(np.cosh(m.lo), np.cosh(m.hi), LIB_ULPS)
+    r = _monotone(np.cosh, _abs(a))  # cosh is increasing in |a|
     return _I(np.maximum(r.lo, 1.0), r.hi)
 
 
@@ -308,36 +303,35 @@ def _is_integer(x) -> np.ndarray:
 
 
 def _pow(a: _I, b: _I) -> _I:
-    with np.errstate(all="ignore"):
-        fixed = b.lo == b.hi
-        p = np.where(fixed, b.lo, 0.0)
-        integer = fixed & _is_integer(p)
-        even = integer & (np.remainder(p, 2.0) == 0)
-        straddle = (a.lo <= 0) & (a.hi >= 0)
-        m = _abs(a)
-        amin, amax = m.lo, m.hi
-        # integer exponent p (even or odd), defined unless a negative power of an interval with 0
-        pos = p > 0
-        lo_even = np.where(pos, amin**p, amax**p)
-        hi_even = np.where(pos, amax**p, amin**p)
-        lo_odd = np.where(pos, np.power(a.lo, p), np.power(a.hi, p))
-        hi_odd = np.where(pos, np.power(a.hi, p), np.power(a.lo, p))
-        ok_integer = pos | ~straddle
-        zero = integer & (p == 0)
-        # real exponent p (base must be >= 0)
-        base_ok = a.lo >= 0
-        lo_real = np.where(pos, np.power(np.maximum(a.lo, 0), p), np.power(np.maximum(a.hi, 0), p))
-        hi_real = np.where(pos, np.power(np.maximum(a.hi, 0), p), np.power(np.maximum(a.lo, 0), p))
-        # general exponent interval: base > 0, corners of exp(b log a)
-        glo, ghi = _corners(np.power, a, b)
-        general_ok = a.lo > 0
-        lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
-        hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
-        ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
-        r = _out(lo, hi, LIB_ULPS)
-        lo = np.where(zero, 1.0, np.where(ok, r.lo, -_INF))  # nothing known outside the domain
-        hi = np.where(zero, 1.0, np.where(ok, r.hi, _INF))
-        lo = np.where(even & ok, np.maximum(lo, 0.0), lo)
+    fixed = b.lo == b.hi
+    p = np.where(fixed, b.lo, 0.0)
+    integer = fixed & _is_integer(p)
+    even = integer & (np.remainder(p, 2.0) == 0)
+    straddle = (a.lo <= 0) & (a.hi >= 0)
+    m = _abs(a)
+    amin, amax = m.lo, m.hi
+    # integer exponent p (even or odd), defined unless a negative power of an interval with 0
+    pos = p > 0
+    lo_even = np.where(pos, amin**p, amax**p)
+    hi_even = np.where(pos, amax**p, amin**p)
+    lo_odd = np.where(pos, np.power(a.lo, p), np.power(a.hi, p))
+    hi_odd = np.where(pos, np.power(a.hi, p), np.power(a.lo, p))
+    ok_integer = pos | ~straddle
+    zero = integer & (p == 0)
+    # real exponent p (base must be >= 0)
+    base_ok = a.lo >= 0
+    lo_real = np.where(pos, np.power(np.maximum(a.lo, 0), p), np.power(np.maximum(a.hi, 0), p))
+    hi_real = np.where(pos, np.power(np.maximum(a.hi, 0), p), np.power(np.maximum(a.lo, 0), p))
+    # general exponent interval: base > 0, corners of exp(b log a)
+    glo, ghi = _corners(np.power, a, b)
+    general_ok = a.lo > 0
+    lo = np.where(even, lo_even, np.where(integer, lo_odd, np.where(fixed, lo_real, glo)))
+    hi = np.where(even, hi_even, np.where(integer, hi_odd, np.where(fixed, hi_real, ghi)))
+    ok = np.where(integer, ok_integer, np.where(fixed, base_ok, general_ok))
+    r = _out(lo, hi, LIB_ULPS)
+    lo = np.where(zero, 1.0, np.where(ok, r.lo, -_INF))  # nothing known outside the domain
+    hi = np.where(zero, 1.0, np.where(ok, r.hi, _INF))
+    lo = np.where(even & ok, np.maximum(lo, 0.0), lo)
     return _clean(lo, hi)
 
 
@@ -345,25 +339,19 @@ def _mod(a: _I, b: _I) -> tuple[_I, np.ndarray]:
     """numpy's remainder (sign of the divisor); also returns where a wrap (jump) may occur."""
     fixed = b.lo == b.hi
     d = b.lo
-    with np.errstate(all="ignore"):
-        k_lo, k_hi = np.floor(a.lo / d), np.floor(a.hi / d)
-        big = np.maximum(np.maximum(np.abs(a.lo), np.abs(a.hi)), np.abs(d))
-        slack = 8 * _EPS * big
-        r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
-        # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
-        lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
-        same = (
-            fixed
-            & (d != 0)
-            & (k_lo == k_hi)
-            & np.isfinite(k_lo)
-            & (np.minimum(r_lo, r_hi) > lo_end + slack)
-            & (np.maximum(r_lo, r_hi) < hi_end - slack)
-        )
-        tight = _I(np.minimum(r_lo, r_hi) - slack, np.maximum(r_lo, r_hi) + slack)
-        pos, neg = b.lo > 0, b.hi < 0
-        lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
-        hi = np.where(same, tight.hi, np.where(pos, b.hi, np.where(neg, 0.0, _INF)))
+    k_lo, k_hi = np.floor(a.lo / d), np.floor(a.hi / d)
+    big = np.maximum(np.maximum(np.abs(a.lo), np.abs(a.hi)), np.abs(d))
+    slack = 8 * _EPS * big
+    r_lo, r_hi = a.lo - k_lo * d, a.hi - k_lo * d
+    # one period, and the remainders clear of both ends by the rounding slack (d > 0 or d < 0)
+    lo_end, hi_end = np.minimum(0.0, d), np.maximum(0.0, d)
+    r_min, r_max = np.minimum(r_lo, r_hi), np.maximum(r_lo, r_hi)
+    clear = (r_min > lo_end + slack) & (r_max < hi_end - slack)
+    same = fixed & (d != 0) & (k_lo == k_hi) & np.isfinite(k_lo) & clear
+    tight = _I(r_min - slack, r_max + slack)
+    pos, neg = b.lo > 0, b.hi < 0
+    lo = np.where(same, tight.lo, np.where(pos, 0.0, np.where(neg, b.lo, -_INF)))
+    hi = np.where(same, tight.hi, np.where(pos, b.hi, np.where(neg, 0.0, _INF)))
     return _clean(lo, hi), ~same
 
 
@@ -427,7 +415,8 @@ _BINARY: dict[type, tuple[Callable[[_I, _I], _I], Callable[..., _I]]] = {
 # the evaluator: (value, derivative) pairs over the parsed tree
 
 
-_Pair = tuple[_I, "_I | None"]
+#: (value, derivative): the derivative is an _I, or None when no derivative is taken
+_Pair = tuple[_I, Any]
 
 
 @dataclass(frozen=True)
@@ -451,6 +440,10 @@ class _Evaluator:
             return None
         return _I(np.where(possible, -_INF, d.lo), np.where(possible, _INF, d.hi))
 
+    def pair(self, v: _I, derivative: Callable[[], _I | None]) -> _Pair:
+        """``(v, derivative())``, the derivative computed only when derivatives are taken."""
+        return v, (derivative() if self.der else None)
+
     def switching(self, v: _I) -> _Pair:
         """A piecewise-constant value (a truth value, ``floor``, ...): derivative 0, unbounded where
         the value may switch inside a sub-interval."""
@@ -466,9 +459,8 @@ class _Evaluator:
         return _const(float(cast(float, node.value)), self.n), self.zero()
 
     def visit_Name(self, node: ast.Name) -> _Pair:
-        if node.id in self.env:
-            d = _const(1.0 if node.id == self.time else 0.0, self.n) if self.der else None
-            return self.env[node.id], d
+        if node.id in self.env:  # derivative 1 for the time, 0 for a fixed variable
+            return self.pair(self.env[node.id], lambda: _const(float(node.id == self.time), self.n))
         if node.id in self.variables:
             raise TypeError(f"expression {self.text!r} needs a value for {node.id!r}")
         if node.id in CONSTANTS:
@@ -490,45 +482,35 @@ class _Evaluator:
         op = type(node.op)
         if op is ast.Mod:
             v, wrap = _mod(a, b)
-            if not self.der:
-                return v, None
-            assert da is not None and db is not None
             # d(a % b) = a' - floor(a/b) b' away from a wrap (a jump); b' = 0 for a constant period
-            with np.errstate(all="ignore"):
-                k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
-            return v, self.jump(wrap, _sub(da, _mul(_I(k, k), db)))
+            k = np.floor(a.lo / np.where(b.lo != 0, b.lo, 1.0))
+            return self.pair(v, lambda: self.jump(wrap, _sub(da, _mul(_I(k, k), db))))
         if op not in _BINARY:
             raise IntervalError(f"operator {op.__name__} cannot be enclosed")
         value, derivative = _BINARY[op]
         v = value(a, b)
-        return v, (derivative(a, da, b, db, v) if self.der else None)
+        return self.pair(v, lambda: derivative(a, da, b, db, v))
 
     def visit_BoolOp(self, node: ast.BoolOp) -> _Pair:
         vals = [self.visit(v)[0] for v in node.values]
         return self.switching(reduce(_and if isinstance(node.op, ast.And) else _or, vals))
 
     def visit_Compare(self, node: ast.Compare) -> _Pair:
-        left, _ = self.visit(node.left)
-        out: _I | None = None
-        for op, comp in zip(node.ops, node.comparators, strict=True):
-            right, _ = self.visit(comp)
-            c = _cmp(type(op), left, right)
-            out = c if out is None else _and(out, c)
-            left = right
-        assert out is not None
-        return self.switching(out)
+        vals = [self.visit(v)[0] for v in (node.left, *node.comparators)]
+        tests = [
+            _cmp(type(op), a, b) for op, a, b in zip(node.ops, vals[:-1], vals[1:], strict=True)
+        ]
+        return self.switching(reduce(_and, tests))  # a < b < c is a < b and b < c
 
     def visit_IfExp(self, node: ast.IfExp) -> _Pair:
         (c, _), a, b = self.visit(node.test), self.visit(node.body), self.visit(node.orelse)
         return self._where(c, a, b)
 
     def _where(self, c: _I, a: _Pair, b: _Pair) -> _Pair:
-        v = _select(c, a[0], b[0])
-        if not self.der:
-            return v, None
-        assert a[1] is not None and b[1] is not None
         t, f = _truth(c)  # the branch is known where the condition is
-        return v, self.jump(~(t | f), _select(c, a[1], b[1]))
+        return self.pair(
+            _select(c, a[0], b[0]), lambda: self.jump(~(t | f), _select(c, a[1], b[1]))
+        )
 
     def visit_Call(self, node: ast.Call) -> _Pair:
         name = node.func.id if isinstance(node.func, ast.Name) else ""
@@ -548,33 +530,26 @@ class _Evaluator:
     def _smooth(self, arg: _Pair, f: Callable[[_I], _I], fprime: Callable[[_I, _I], _I]) -> _Pair:
         a, da = arg
         v = f(a)
-        if not self.der:
-            return v, None
-        assert da is not None
-        return v, _mul(fprime(a, v), da)
+        return self.pair(v, lambda: _mul(fprime(a, v), da))
 
     def call_atan2(self, y, x):
         (yv, dy), (xv, dx) = y, x
-        v = _atan2(yv, xv)
         if not self.der:
-            return v, None
-        assert dy is not None and dx is not None
+            return _atan2(yv, xv), None
         # d atan2(y, x) = (x y' - y x') / (x^2 + y^2); the branch cut is a jump
         d = _div(_sub(_mul(xv, dy), _mul(yv, dx)), _add(_sqr(xv), _sqr(yv)))
         on_cut = ~((xv.lo > 0) | (yv.lo > 0) | (yv.hi < 0))
-        return v, self.jump(on_cut, d)
+        return _atan2(yv, xv), self.jump(on_cut, d)
 
     def call_abs(self, x):
         a, da = x
-        v = _abs(a)
         if not self.der:
-            return v, None
-        assert da is not None
+            return _abs(a), None
         pos, neg = a.lo > 0, a.hi < 0
         both = _hull(da, _neg(da))  # at the kink: either one-sided derivative
         lo = np.where(pos, da.lo, np.where(neg, -da.hi, both.lo))
         hi = np.where(pos, da.hi, np.where(neg, -da.lo, both.hi))
-        return v, _I(lo, hi)
+        return _abs(a), _I(lo, hi)
 
     def _extreme(self, *args, lower: bool) -> _Pair:
         out = args[0]
@@ -696,16 +671,12 @@ def evaluate(
     if np.any(a > b) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ValueError("sub-intervals need finite ends with t_lo <= t_hi")
     n = a.size
-    env: dict[str, _I] = {}
-    for name in variables:
-        if name == time:
-            env[name] = _I(a.ravel().copy(), b.ravel().copy())
-        elif name in fixed:
-            env[name] = _const(float(fixed[name]), n)
-    with np.errstate(all="ignore"):
+    env = {name: _const(float(v), n) for name, v in fixed.items() if name in variables}
+    if time in variables:  # the interval variable (also when ``fixed`` names it)
+        env[time] = _I(a.ravel().copy(), b.ravel().copy())
+    with np.errstate(all="ignore"):  # the whole walk: inf / NaN ends are handled, not warned about
         val, der = _Evaluator(str(text), env, time, n, derivative, variables).visit(tree)
     r = der if derivative else val
-    assert r is not None
     return r.lo.reshape(a.shape), r.hi.reshape(a.shape)
 
 
@@ -721,31 +692,22 @@ class Boxes:
     rounds: int
 
 
-def _boxes(
-    texts: Sequence[str | float],
-    variables: Sequence[str],
-    t_lo: float,
-    t_hi: float,
-    n_sub: int,
-    derivative: bool,
-    refine: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
-    max_rounds: int,
-    time: str,
-    fixed: Mapping[str, float],
-) -> Boxes:
+def _stacked(texts: Sequence[str | float], variables: Sequence[str], a, b, **options):
+    """The enclosures (lo, hi) of every expression on the sub-intervals [a, b], one row per expression
+    (``options``: those of :func:`evaluate`)."""
+    out = [evaluate(tx, variables, a, b, **options) for tx in texts]
+    return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
+
+
+def _boxes(ev: Callable, t_lo: float, t_hi: float, n_sub: int, refine, max_rounds: int) -> Boxes:
+    """``n_sub`` sub-intervals of [t_lo, t_hi] and the enclosures ``ev(a, b)`` on them; those that
+    ``refine(lo, hi)`` (None: none) marks are bisected, at most ``max_rounds`` times."""
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi < t_lo:
         raise ValueError(f"need a finite range t_lo <= t_hi, got [{t_lo}, {t_hi}]")
     if n_sub < 1:
         raise ValueError("n_sub must be >= 1")
     edges = np.linspace(float(t_lo), float(t_hi), int(n_sub) + 1)  # ends exactly t_lo and t_hi
     a, b = edges[:-1].copy(), edges[1:].copy()
-
-    def ev(a, b):
-        out = [
-            evaluate(tx, variables, a, b, derivative=derivative, time=time, **fixed) for tx in texts
-        ]
-        return np.stack([o[0] for o in out]), np.stack([o[1] for o in out])
-
     lo, hi = ev(a, b)
     rounds = 0
     while refine is not None and rounds < max_rounds:
@@ -805,7 +767,8 @@ def enclose(
     (e.g. the spacecraft number ``i``) are given as keywords.
     """
     refine = _threshold_refiner(upper, lower)
-    bx = _boxes([text], variables, t_lo, t_hi, n_sub, derivative, refine, max_rounds, time, fixed)
+    ev = functools.partial(_stacked, [text], variables, derivative=derivative, time=time, **fixed)
+    bx = _boxes(ev, t_lo, t_hi, n_sub, refine, max_rounds)
     return float(bx.lo.min()), float(bx.hi.max())
 
 
@@ -849,5 +812,6 @@ def enclose_norm(
     rounded up); with ``upper`` the sub-intervals whose bound reaches it are bisected.
     """
     refine = None if upper is None else (lambda lo, hi: _norm_upper(lo, hi) >= upper)
-    bx = _boxes(texts, variables, t_lo, t_hi, n_sub, False, refine, max_rounds, time, fixed)
+    ev = functools.partial(_stacked, texts, variables, time=time, **fixed)
+    bx = _boxes(ev, t_lo, t_hi, n_sub, refine, max_rounds)
     return float(_norm_upper(bx.lo, bx.hi).max())

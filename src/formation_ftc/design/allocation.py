@@ -116,12 +116,20 @@ def chain_matrix(b_hat):
     array([[-1.,  2.,  0.],
            [ 0., -2.,  3.]])
     """
-    b_hat = jnp.asarray(b_hat)
+    return _chain(jnp, jnp.asarray(b_hat))
+
+
+def _chain(xp, b_hat):
+    """J of eq. (2) in the array module ``xp`` (jax.numpy or numpy); exact, every entry is
+    ``x * 1 + y * 0``."""
     n = b_hat.shape[-1]
-    rows = jnp.arange(n - 1)
-    J = jnp.zeros((n - 1, n), dtype=b_hat.dtype)
-    J = J.at[rows, rows].set(-b_hat[:-1])
-    return J.at[rows, rows + 1].set(b_hat[1:])
+    return -b_hat[:-1, None] * xp.eye(n - 1, n) + b_hat[1:, None] * xp.eye(n - 1, n, 1)
+
+
+def _augmented(xp, alpha, b_hat):
+    """J_aug of eq. (3) in the array module ``xp``: J with the row ``alpha_i / b_hat_i`` appended."""
+    alpha, b_hat = xp.asarray(alpha), xp.asarray(b_hat)
+    return xp.concatenate([_chain(xp, b_hat), (alpha / b_hat)[None, :]], axis=0)
 
 
 def augmented_matrix(alpha, b_hat):
@@ -148,8 +156,7 @@ def augmented_matrix(alpha, b_hat):
            [ 0., -1.,  2.],
            [ 1.,  1.,  2.]])
     """
-    alpha, b_hat = jnp.asarray(alpha), jnp.asarray(b_hat)
-    return jnp.concatenate([chain_matrix(b_hat), (alpha / b_hat)[None, :]], axis=0)
+    return _augmented(jnp, alpha, b_hat)
 
 
 def augmented_matrix_np(alpha, b_hat) -> np.ndarray:
@@ -176,12 +183,7 @@ def augmented_matrix_np(alpha, b_hat) -> np.ndarray:
     >>> bool(np.array_equal(augmented_matrix_np(a, b), np.asarray(augmented_matrix(a, b))))
     True
     """
-    alpha, b_hat = np.asarray(alpha), np.asarray(b_hat)
-    n = b_hat.shape[-1]
-    J = -b_hat[:-1, None] * np.eye(n - 1, n) + b_hat[1:, None] * np.eye(
-        n - 1, n, 1
-    )  # exact: x*1, x*0
-    return np.concatenate([J, (alpha / b_hat)[None, :]], axis=0)
+    return _augmented(np, alpha, b_hat)
 
 
 def allocation_matrix(alpha, b_hat):

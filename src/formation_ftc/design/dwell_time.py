@@ -110,11 +110,9 @@ def variation_norm(S: np.ndarray, kind: str = "frobenius") -> float:
     (2.236068, 2.0)
     """
     S = np.atleast_2d(np.asarray(S, dtype=float))
-    if kind == "frobenius":
-        return float(np.linalg.norm(S, "fro"))
-    if kind == "induced2":
-        return float(np.linalg.norm(S, 2))
-    raise ValueError(f"variation norm kind must be 'frobenius' or 'induced2', got {kind!r}")
+    if kind not in ("frobenius", "induced2"):
+        raise ValueError(f"variation norm kind must be 'frobenius' or 'induced2', got {kind!r}")
+    return float(np.linalg.norm(S, "fro" if kind == "frobenius" else 2))
 
 
 def max_variation_norm(matrices: Sequence[np.ndarray], kind: str = "frobenius") -> float:

@@ -69,10 +69,7 @@ def discrete_model(A, B, G, q: float, dt: float) -> DiscreteModel:
     phi, gamma = zoh_discretize(A, B, dt)
     n = A.shape[0]
     # Van Loan: expm([[-A, G q G^T], [0, A^T]] dt) = [[., Phi^-1 Qd], [0, Phi^T]]
-    M = np.zeros((2 * n, 2 * n))
-    M[:n, :n] = -A
-    M[:n, n:] = q * G @ G.T
-    M[n:, n:] = A.T
+    M = np.block([[-A, q * G @ G.T], [np.zeros((n, n)), A.T]])
     E = scipy.linalg.expm(M * dt)
     qd = E[n:, n:].T @ E[:n, n:]
     return DiscreteModel(phi, gamma, 0.5 * (qd + qd.T))
@@ -107,8 +104,7 @@ def steady_state_kalman(phi, qd, R) -> tuple[np.ndarray, np.ndarray]:
     True
     """
     phi, qd, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (phi, qd, R))
-    n = phi.shape[0]
-    P = scipy.linalg.solve_discrete_are(phi.T, np.eye(n), qd, R)
+    P = scipy.linalg.solve_discrete_are(phi.T, np.eye(len(phi)), qd, R)
     K = P @ np.linalg.inv(P + R)
     return P, K
 

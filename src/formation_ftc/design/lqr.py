@@ -176,16 +176,8 @@ def lqr(A, B, Q, R) -> LqrDesign:
     """
     A, B, Q, R = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (A, B, Q, R))
     sol = solve_care(A, B, Q, R)
-    return LqrDesign(
-        K=sol.K,
-        P=sol.P,
-        Q=Q,
-        R=R,
-        A=A,
-        B=B,
-        relative_residual=care_relative_residual(sol.P, A, B, Q, R),
-        closed_loop_eigenvalues=sol.closed_loop_eigenvalues,
-    )
+    residual = care_relative_residual(sol.P, A, B, Q, R)
+    return LqrDesign(sol.K, sol.P, Q, R, A, B, residual, sol.closed_loop_eigenvalues)
 
 
 def cw_lqr(

@@ -126,9 +126,4 @@ def solve_care(A, B, Q, R) -> CareSolution:
         raise ValueError(f"CARE has no stabilising solution: {exc}") from None
     P = (P + P.T) / 2
     K = np.linalg.solve(R, B.T @ P)
-    return CareSolution(
-        P=P,
-        K=K,
-        residual=care_residual(P, A, B, Q, R),
-        closed_loop_eigenvalues=np.linalg.eigvals(A - B @ K),
-    )
+    return CareSolution(P, K, care_residual(P, A, B, Q, R), np.linalg.eigvals(A - B @ K))

@@ -174,6 +174,14 @@ def _scaled(A, B, C):
     return As, Bs * c, Cs / c, w0
 
 
+def _kyp_matrix(A, B, C, D, X, g2: float) -> np.ndarray:
+    """``[[A^T X + X A + C^T C, X B + C^T D], [*, D^T D + g2 I]]``: the bounded-real matrix M(X) for
+    ``g2 = -gamma^2``; of the element-wise ``|.|`` of every factor and ``g2 = gamma^2``, the matrix whose
+    norm bounds the rounding error of forming M."""
+    XB = X @ B + C.T @ D
+    return np.block([[A.T @ X + X @ A + C.T @ C, XB], [XB.T, D.T @ D + g2 * np.eye(B.shape[1])]])
+
+
 def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
     """Bounded-real certificate of ``||G||_inf < gamma`` for G = (A, B, C, D), checked in numpy.
 
@@ -217,37 +225,27 @@ def kyp_certificate(A, B, C, D, gamma: float) -> tuple[bool, str]:
     R = gamma**2 * np.eye(m) - D.T @ D
     if np.linalg.eigvalsh(R).min() <= 0:
         return False, f"gamma = {gamma:.6g} <= sigma_max(D)"
-    S = C.T @ D
     CC = C.T @ C
     base = max(float(np.linalg.norm(CC, 2)), float(np.linalg.norm(A, 2)) * 1e-8, 1e-300)
     last = "Riccati solve failed"
     for e_rel in (1e-6, 1e-8, 1e-10, 1e-12):
         Q = CC + e_rel * base * np.eye(n)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                X = scipy.linalg.solve_continuous_are(A, B, Q, -R, s=S)
+            with warnings.catch_warnings(action="ignore"):
+                X = scipy.linalg.solve_continuous_are(A, B, Q, -R, s=C.T @ D)
         except (np.linalg.LinAlgError, ValueError) as exc:
             last = f"Riccati solve failed ({str(exc)[:60]})"
             continue
         X = (X + X.T) / 2
         if not np.all(np.isfinite(X)):
             continue
-        XB = X @ B + S
-        M = np.block([[A.T @ X + X @ A + CC, XB], [XB.T, D.T @ D - gamma**2 * np.eye(m)]])
-        aA, aB, aC, aD, aX = (np.abs(x) for x in (A, B, C, D, X))
-        Mabs = np.block(
-            [
-                [aA.T @ aX + aX @ aA + aC.T @ aC, aX @ aB + aC.T @ aD],
-                [(aX @ aB + aC.T @ aD).T, aD.T @ aD + gamma**2 * np.eye(m)],
-            ]
-        )
+        M = _kyp_matrix(A, B, C, D, X, -(gamma**2))
+        Mabs = _kyp_matrix(np.abs(A), np.abs(B), np.abs(C), np.abs(D), np.abs(X), gamma**2)
         k = n + m
         margin = (k + 2) * _EPS * np.linalg.norm(Mabs, 2) + 10 * k * _EPS * np.linalg.norm(M, 2)
         lmax = float(np.linalg.eigvalsh(M).max())
         xmin = float(np.linalg.eigvalsh(X).min())
-        x_margin = 10 * n * _EPS * np.linalg.norm(X, 2)
-        if lmax < -margin and xmin > x_margin:
+        if lmax < -margin and xmin > 10 * n * _EPS * np.linalg.norm(X, 2):
             return True, (
                 f"KYP: lambda_max(M) = {lmax:.3g} < -{margin:.2g} (rounding bound), "
                 f"lambda_min(X) = {xmin:.3g} > 0"
@@ -359,13 +357,9 @@ def hinf_norm(A, B, C, D=None, rtol: float = 1e-6) -> HinfNorm:
     try:
         import control
 
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            est = float(
-                control.norm(
-                    control.ss(As, Bs, Cs, D), "inf", tol=min(rtol / 10, 1e-8), print_warning=False
-                )
-            )
+        with warnings.catch_warnings(action="ignore"):
+            scaled = control.ss(As, Bs, Cs, D)
+            est = float(control.norm(scaled, "inf", tol=min(rtol / 10, 1e-8), print_warning=False))
     except Exception:  # noqa: BLE001 - any estimator failure leaves the certificate to decide
         est = math.nan
     gl, wp = _lower_bound(As, Bs, Cs, D, sd, rtol)
@@ -433,8 +427,7 @@ def small_gain_margin(A) -> SmallGainResult:
     >>> r.holds(0.5), r.holds(0.8)
     (True, False)
     """
-    A = np.asarray(A, dtype=float)
-    n = A.shape[0]
+    n = np.shape(A)[0]
     res = hinf_norm(A, np.eye(n), A, np.zeros((n, n)))
     b_delta = 1.0 / res.value if res.value > 0 else math.inf
     return SmallGainResult(gamma1=res.value, omega_peak=res.omega_peak, b_delta=b_delta, norm=res)
