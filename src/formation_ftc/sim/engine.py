@@ -520,9 +520,8 @@ def diagnose_divergence(
     >>> print(diagnose_divergence(step, last, k=5, t=0.5, dt=0.1))
     simulation diverged at t = 0.5 s (step 5): spacecraft 2, variable 'q' index [1, 1] became non-finite
     """
-    use_params = (
-        params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
-    )
+    if not (hasattr(params, "replay_step") and hasattr(params, "admissible")):
+        params = None  # no closed loop: the replays are compiled for this call
 
     def ok(st):
         # ``admissible`` (when given) is the whole test, finiteness of the checked state included
@@ -533,13 +532,11 @@ def diagnose_divergence(
     # program is compiled only to follow the run past that state (accumulators only) or when the
     # replay does not fail.
     max_steps = max(1, max_steps)
-    j0, state0, failing = _replay(
-        step, last_finite, k, max_steps, ok, params if use_params else None
-    )
+    j0, state0, failing = _replay(step, last_finite, k, max_steps, ok, params)
     if failing is not None:
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
-    jstep = (lambda kk, st: _jitted(_params_step)(params, kk, st)) if use_params else jax.jit(step)
+    jstep = jax.jit(step) if params is None else functools.partial(_jitted(_params_step), params)
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
     state, n, j = last_finite, max_steps, 0

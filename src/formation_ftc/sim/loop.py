@@ -390,10 +390,9 @@ class ClosedLoop:
         deriv = {"plant": dx, "controller": dc, "usage": self.plant.usage_rates(t, x, u)}
         outputs = dict(self.plant.outputs(t, x, truth))
         outputs.update(self.actuator.outputs(t, u, act_in))
-        if self._tracks_position():
-            outputs[POSITION_ERROR_SIGNAL] = self.plant.position(
-                x
-            ) - self.controller.desired_position_at(exo["controller"])
+        if self._tracks_position():  # true minus desired position
+            r, r_d = self.plant.position(x), self.controller.desired_position_at(exo["controller"])
+            outputs[POSITION_ERROR_SIGNAL] = r - r_d
         outputs.update(ctl_out)
         outputs[COMMAND_SIGNAL] = u
         outputs[APPLIED_SIGNAL] = applied
@@ -475,10 +474,9 @@ class ClosedLoop:
         # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
         # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
         # (computed once per step, and only when such a metric exists)
-        reads_held = self._stage_reads_evaluations()
-        held_signals = (
-            self._held_outputs(t_k, est_state, est, sup_state, dec) if reads_held else None
-        )
+        held_signals = None
+        if self._stage_reads_evaluations():
+            held_signals = self._held_outputs(t_k, est_state, est, sup_state, dec)
 
         def stage_signals(o: dict) -> dict:
             return o if held_signals is None else self._evaluated({**o, **held_signals})
@@ -495,10 +493,8 @@ class ClosedLoop:
         }
         if exact:
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
-            applied = outputs[APPLIED_SIGNAL]
-            x_next = self.plant.exact_step(
-                t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt
-            )
+            truth = TruthInputs(outputs[APPLIED_SIGNAL], exos[0]["plant"], refs[0], p_noise, dec)
+            x_next = self.plant.exact_step(t_k, x, truth, dt)
             z_next = dict(
                 plant=x_next, controller=None, usage=_axpy(dt, deriv["usage"], z["usage"])
             )
@@ -633,13 +629,9 @@ class ClosedLoop:
             return new, acc
 
         def fold(k, carry, samples):
+            samples = metric_ops.unpack_samples(self._streamed, shapes, samples)
             return carry[0], metric_ops.fold_block(
-                self._streamed,
-                carry[1],
-                k,
-                self.t0,
-                self.dt,
-                metric_ops.unpack_samples(self._streamed, shapes, samples),
+                self._streamed, carry[1], k, self.t0, self.dt, samples
             )
 
         out = run_fixed_step(
@@ -664,13 +656,9 @@ class ClosedLoop:
         )
         reached = out["diverged_step"] < 0
         acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
-        return dict(
-            records=out["records"],
-            final=state_n,
-            diverged_step=out["diverged_step"],
-            last_finite=out["last_finite"],
-            metrics=self._with_requirements(metric_ops.finalize(self._streamed, acc), out),
-        )
+        metrics = self._with_requirements(metric_ops.finalize(self._streamed, acc), out)
+        # records, diverged_step and last_finite (the carry, accumulators included) as they are
+        return dict(out, final=state_n, metrics=metrics)
 
     @property
     def _streamed(self) -> tuple:

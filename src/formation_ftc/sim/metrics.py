@@ -18,7 +18,7 @@ the same selections, and the same sums added in another order (they may differ i
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NoReturn
 
 import jax
@@ -271,8 +271,12 @@ def _pack(parts: tuple, rows: int) -> jax.Array:
     return jnp.stack(arrs)
 
 
-def _rows(groups) -> int:
-    return max(len(_START[g.reduce]) for _, g in groups)
+def _packed(groups, parts: Iterable[tuple]) -> jax.Array:
+    """The accumulator tuples ``parts`` of a class's groups as its one shared array (see :func:`_classes`);
+    each part is packed as it comes (``parts`` may be a generator: each group's operations stay
+    together in the traced program)."""
+    rows = max(len(_START[g.reduce]) for _, g in groups)
+    return jnp.concatenate([_pack(p, rows) for p in parts], axis=1)
 
 
 def _blocks(groups, packed: jax.Array) -> list[tuple]:
@@ -325,11 +329,8 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
     """
     accs: list[Any] = [()] * len(metrics)
     for slot, groups in _classes(metrics):
-        if not isinstance(groups[0][1], _Stack):
-            accs[slot] = _initial(groups[0][1], signals)
-            continue
-        rows = _rows(groups)
-        accs[slot] = jnp.concatenate([_pack(_initial(g, signals), rows) for _, g in groups], axis=1)
+        inits = (_initial(g, signals) for _, g in groups)
+        accs[slot] = _packed(groups, inits) if isinstance(groups[0][1], _Stack) else next(inits)
     return tuple(accs)
 
 
@@ -377,12 +378,11 @@ def update_accumulators(
     >>> [round(float(v), 6) for v in finalize(ms, accs)]
     [3.0, 2.0, 0.6]
     """
-    return _each_group(
-        metrics,
-        accs,
-        sample_values(metrics, signals, is_final),
-        lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final),
-    )
+
+    def update(g, acc, v):
+        return _update_group(g, acc, t, dt, v, is_final)
+
+    return _each_group(metrics, accs, sample_values(metrics, signals, is_final), update)
 
 
 def reads_steps(m: Metric) -> bool:
@@ -569,14 +569,9 @@ def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -
     entries are left to :func:`update_stage_accumulators`."""
     out = list(accs)
     for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
-        if not isinstance(groups[0][1], _Stack):
-            continue
-        rows = _rows(groups)
-        new = [
-            _pack(update(g, acc, v), rows)
-            for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)
-        ]
-        out[slot] = jnp.concatenate(new, axis=1)
+        if isinstance(groups[0][1], _Stack):
+            parts = zip(groups, _blocks(groups, accs[slot]), vals, strict=True)
+            out[slot] = _packed(groups, (update(g, acc, v) for (_, g), acc, v in parts))
     return tuple(out)
 
 
@@ -633,12 +628,11 @@ def fold_block(
     n = jax.tree_util.tree_leaves(samples)[0].shape[0]
     values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
     times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
-    return _each_group(
-        metrics,
-        accs,
-        values,
-        lambda g, acc, v: acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v),
-    )
+
+    def fold(g, acc, v):
+        return acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v)
+
+    return _each_group(metrics, accs, values, fold)
 
 
 def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -> tuple:
@@ -664,19 +658,16 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     def last_of(mask):  # index of the last true sample (-1 when none)
         return jnp.max(jnp.where(mask, idx, -1), axis=0)
 
-    def take(x, i):  # x at sample i (clipped), per element
-        return jnp.take_along_axis(x, jnp.clip(i, 0, n - 1)[None], axis=0)[0]
-
     if m.reduce in _EXTREMES:
         (a, seen), (pair, over, start) = acc, _EXTREMES[m.reduce]
         extreme = getattr(jnp, over)(jnp.where(inw, v, start), axis=0)
         return (getattr(jnp, pair)(a, extreme), seen | anyw)
     if m.reduce == "final":
         a, seen = acc
-        return (jnp.where(anyw, take(v, last_of(inw)), a), seen | anyw)
+        return (jnp.where(anyw, _at(v, last_of(inw)), a), seen | anyw)
     if m.reduce == "at":
         a, seen = acc
-        return (jnp.where(anyw & jnp.logical_not(seen), take(v, first_of(inw)), a), seen | anyw)
+        return (jnp.where(anyw & jnp.logical_not(seen), _at(v, first_of(inw)), a), seen | anyw)
     if m.reduce in ("mean", "integral", "rms"):
         s, c = acc
         return (s + jnp.sum(jnp.where(inw, _summand(m.reduce, v, dt), 0.0), axis=0), c + count)
@@ -687,7 +678,7 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
         ts, found = acc
         hits = inw & above
         hit = jnp.any(hits, axis=0) & jnp.logical_not(found)
-        return (jnp.where(hit, take(t, first_of(hits)), ts), found | hit)
+        return (jnp.where(hit, _at(t, first_of(hits)), ts), found | hit)
     # settle / settle_delay: after the block, the settle time is the time of the first in-window sample
     # following the last one at or above the threshold (NaN when that is the block's last in-window
     # sample); without one in the block, the first in-window sample's time when the run was above
@@ -695,13 +686,13 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     ts, seen, last_above = acc
     j_above = last_of(inw & above)
     after = first_of(inw & (idx > j_above))
-    ts_above = jnp.where(after < n, take(t, after), jnp.nan)
-    ts_below = jnp.where(last_above | jnp.logical_not(seen), take(t, first_of(inw)), ts)
+    ts_above = jnp.where(after < n, _at(t, after), jnp.nan)
+    ts_below = jnp.where(last_above | jnp.logical_not(seen), _at(t, first_of(inw)), ts)
     ts_new = jnp.where(j_above >= 0, ts_above, ts_below)
     return (
         jnp.where(anyw, ts_new, ts),
         seen | anyw,
-        jnp.where(anyw, take(above, last_of(inw)), last_above),
+        jnp.where(anyw, _at(above, last_of(inw)), last_above),
     )
 
 
@@ -724,16 +715,13 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     done = b[:, 0] < closed[None]  # segment closed by this fold
     rem = (filled - closed * size).astype(jnp.float64)  # samples of the new open block
 
-    def pick(x, i):  # x[i] over the segment axis, per element
-        return jnp.take_along_axis(x, jnp.clip(i, 0, nseg - 1)[None], axis=0)[0]
-
     if m.reduce == "block_rms":
         s, _, q, nb = acc
         sums = jnp.sum(jnp.where(member, v[None], 0.0), axis=1)
         sums = sums.at[0].add(s)
         mean = sums / size
         q = q + jnp.sum(jnp.where(done, mean * mean, 0.0), axis=0)
-        return (pick(sums, closed), rem, q, nb + closed.astype(jnp.float64))
+        return (_at(sums, closed), rem, q, nb + closed.astype(jnp.float64))
     # block_dev_rms: each block's values shifted by its first value (the open block keeps its shift)
     shift0, s1, s2, _, q, nq = acc
     first_j = jnp.argmax(member, axis=1)  # first sample of each segment (0 when it has none)
@@ -745,16 +733,21 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     dev = sum2 - sum1 * sum1 / size
     q = q + jnp.sum(jnp.where(done, dev, 0.0), axis=0)
     shift = jnp.where(
-        rem > 0, pick(shifts, closed), jnp.where(total > 0, pick(shifts, closed - 1), shift0)
+        rem > 0, _at(shifts, closed), jnp.where(total > 0, _at(shifts, closed - 1), shift0)
     )
     return (
         shift,
-        pick(sum1, closed),
-        pick(sum2, closed),
+        _at(sum1, closed),
+        _at(sum2, closed),
         rem,
         q,
         nq + (closed * size).astype(jnp.float64),
     )
+
+
+def _at(x: jax.Array, i: jax.Array) -> jax.Array:
+    """``x[i]`` along axis 0 (``i`` clipped to its length), per element of the other axes."""
+    return jnp.take_along_axis(x, jnp.clip(i, 0, x.shape[0] - 1)[None], axis=0)[0]
 
 
 def _summand(reduce: str, v: jax.Array, dt: float) -> jax.Array:
@@ -833,9 +826,7 @@ def _update_group(
             q + jnp.where(full, dev, 0.0),
             nq + jnp.where(full, n, 0.0),
         )
-    raise AssertionError(
-        f"unhandled reduction {m.reduce!r}"
-    )  # pragma: no cover - REDUCTIONS is checked
+    raise AssertionError(f"unhandled reduction {m.reduce!r}")  # pragma: no cover - checked
 
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:

@@ -82,9 +82,7 @@ _TOKEN = re.compile(
 
 def _tokens(text: str) -> list[tuple[str, str, int]]:
     out, pos = [], 0
-    while pos < len(text):
-        if text[pos:].strip() == "":
-            break
+    while text[pos:].strip():  # up to trailing whitespace
         m = _TOKEN.match(text, pos)
         if m is None or m.end() == pos:
             at = len(text) - len(text[pos:].lstrip())
