@@ -499,7 +499,7 @@ class ClosedLoop:
                 plant=x_next, controller=None, usage=_axpy(dt, deriv["usage"], z["usage"])
             )
             if self._stage_metrics():  # rectangle rule over the step
-                stage_inc = tuple(
+                outputs[STAGE_INCREMENTS] = tuple(
                     None if v is None else dt * v
                     for v in metric_ops.stage_values(self._streamed, stage_signals(outputs))
                 )
@@ -517,7 +517,7 @@ class ClosedLoop:
                     metric_ops.stage_values(self._streamed, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
                 ]
-                stage_inc = tuple(
+                outputs[STAGE_INCREMENTS] = tuple(
                     None if a is None else _rk4_increment(dt, a, b, c, d)
                     for a, b, c, d in zip(*values, strict=True)
                 )
@@ -538,8 +538,6 @@ class ClosedLoop:
             usage=z_next["usage"],
             network=net_state,
         )
-        if self._stage_metrics():
-            outputs[STAGE_INCREMENTS] = stage_inc
         return new, outputs
 
     def _held_outputs(self, t_k, est_state, est, sup_state, dec) -> dict:
@@ -695,11 +693,8 @@ class ClosedLoop:
             return 1
         if self.metric_block:
             return self.metric_block
-        block = max(
-            d
-            for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1)
-            if self.record_every % d == 0
-        )
+        every = self.record_every
+        block = max(d for d in range(1, min(every, METRIC_BLOCK_MAX) + 1) if every % d == 0)
         many = sum(metric_ops.reads_steps(m) for m in self._streamed)
         long_run = self.n_steps >= METRIC_FOLD_MIN_STEPS and block >= METRIC_FOLD_MIN_BLOCK
         return block if long_run and many >= METRIC_FOLD_MIN_METRICS else 1

@@ -243,12 +243,8 @@ def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int],
     _Stack or stage-integrated metric that accumulates them)``."""
     members: dict[Any, list[int]] = {}
     for i, m in enumerate(metrics):
-        key = (
-            ("alone", i)
-            if m.reduce in STAGE_REDUCTIONS
-            else (m.reduce, m.spacecraft == "each", m.gate, m.block)
-        )
-        members.setdefault(key, []).append(i)
+        alone = i if m.reduce in STAGE_REDUCTIONS else None  # a stage-integrated metric: its own
+        members.setdefault((m.reduce, m.spacecraft == "each", m.gate, m.block, alone), []).append(i)
     out: list[tuple[int, list[tuple[list[int], Any]]]] = []
     shared: dict[bool, int] = {}
     for idx in members.values():
@@ -735,14 +731,8 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     shift = jnp.where(
         rem > 0, _at(shifts, closed), jnp.where(total > 0, _at(shifts, closed - 1), shift0)
     )
-    return (
-        shift,
-        _at(sum1, closed),
-        _at(sum2, closed),
-        rem,
-        q,
-        nq + (closed * size).astype(jnp.float64),
-    )
+    open_sums = [_at(x, closed) for x in (sum1, sum2)]  # of the new open block
+    return (shift, *open_sums, rem, q, nq + (closed * size).astype(jnp.float64))
 
 
 def _at(x: jax.Array, i: jax.Array) -> jax.Array:
@@ -803,12 +793,8 @@ def _update_group(
         s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block  # the block closes: fold its mean in, open the next one
         mean = s / m.block
-        return (
-            jnp.where(full, 0.0, s),
-            jnp.where(full, 0.0, n),
-            q + jnp.where(full, mean * mean, 0.0),
-            nb + jnp.where(full, 1.0, 0.0),
-        )
+        cleared = [jnp.where(full, 0.0, a) for a in (s, n)]  # a closed block's sums start again
+        return (*cleared, q + jnp.where(full, mean * mean, 0.0), nb + jnp.where(full, 1.0, 0.0))
     if m.reduce == "block_dev_rms":
         # shifted sums (shift = the block's first value): no cancellation when the mean is large
         shift, s1, s2, n, q, nq = acc
@@ -818,14 +804,8 @@ def _update_group(
         s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block
         dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
-        return (
-            shift,
-            jnp.where(full, 0.0, s1),
-            jnp.where(full, 0.0, s2),
-            jnp.where(full, 0.0, n),
-            q + jnp.where(full, dev, 0.0),
-            nq + jnp.where(full, n, 0.0),
-        )
+        cleared = [jnp.where(full, 0.0, a) for a in (s1, s2, n)]  # as block_rms
+        return (shift, *cleared, q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0))
     raise AssertionError(f"unhandled reduction {m.reduce!r}")  # pragma: no cover - checked
 
 
