@@ -143,11 +143,8 @@ def batched_run(loop, in_axes: Any, size: int) -> Any:
     >>> np.asarray(batched_run(runs[0], in_axes, size=2)(batch)["y"])
     array([3., 6.])
     """
-    return _kept(
-        loop,
-        (loop.static_key, _batched_flags(in_axes), int(size)),
-        jax.vmap(_one_run, in_axes=(in_axes,), axis_size=int(size)),
-    )
+    batched = jax.vmap(_one_run, in_axes=(in_axes,), axis_size=int(size))
+    return _kept(loop, (loop.static_key, _batched_flags(in_axes), int(size)), batched)
 
 
 def _kept(loop, key: tuple, batched: Any) -> Any:
@@ -283,12 +280,9 @@ def batched_grid_run(loop, row_axes: Any, column_axes: Any, rows: int, columns: 
            [21., 22., 23.]])
     """
     inner = jax.vmap(_one_run, in_axes=(column_axes,), axis_size=int(columns))
+    batched = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
     flags = (_batched_flags(row_axes), _batched_flags(column_axes))
-    return _kept(
-        loop,
-        (loop.static_key, "grid", *flags, int(rows), int(columns)),
-        jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows)),
-    )
+    return _kept(loop, (loop.static_key, "grid", *flags, int(rows), int(columns)), batched)
 
 
 def clear() -> None:

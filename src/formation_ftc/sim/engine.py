@@ -252,8 +252,7 @@ def run_fixed_step(
             # running state itself is never selected, so under ``vmap`` leaves that do not depend on
             # the batched parameters (reference orbit, desired trajectory, ...) stay unbatched
             frozen = jax.tree_util.tree_map(lambda f, n: jnp.where(div >= 0, f, n), frozen, new)
-        k = k + record_every
-        return (k, new, div, frozen), rec
+        return (k + record_every, new, div, frozen), rec
 
     k0, div0 = jnp.asarray(0, dtype=jnp.int64), jnp.asarray(-1, dtype=jnp.int64)
     carry0 = (k0, state0, div0, state0 if check_finite else None)

@@ -305,12 +305,11 @@ class ClosedLoop:
         slots = ("plant", "actuator", "controller", "network", "estimator", "supervisor")
         truth = ("plant", "actuator")
         held_slots = [s for s in slots if getattr(self, s).holds_exogenous]
+        live = [s for s in slots if s not in held_slots]  # evaluated at every stage time
 
         def at(t_flight, t_truth):
             return {
-                s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
-                for s in slots
-                if s not in held_slots
+                s: getattr(self, s).exogenous(t_truth if s in truth else t_flight) for s in live
             }
 
         table = jax.vmap(at)(ts, tf)
@@ -702,12 +701,8 @@ class ClosedLoop:
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
         out = []
-        vectors = (
-            ("position", self.max_position),
-            ("velocity", self.max_velocity),
-            ("angular_rate", self.max_rate),
-        )
-        for name, bound in vectors:  # Euclidean norm per spacecraft
+        bounds = (self.max_position, self.max_velocity, self.max_rate)  # of a Euclidean norm
+        for name, bound in zip(("position", "velocity", "angular_rate"), bounds, strict=True):
             v = getattr(self.plant, name)(x) if hasattr(self.plant, name) else None
             if v is not None:
                 out.append((f"plant.{name}", jnp.sqrt(jnp.sum(v * v, axis=-1)), bound))

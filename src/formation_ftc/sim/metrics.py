@@ -218,8 +218,7 @@ class _Stack:
     def __init__(self, metrics: Sequence[Metric]):
         m0 = metrics[0]
         self.metrics = tuple(metrics)
-        self.reduce, self.spacecraft = m0.reduce, m0.spacecraft
-        self.gate, self.block = m0.gate, m0.block
+        self.reduce, self.gate, self.block = m0.reduce, m0.gate, m0.block
         trail = (1,) if m0.spacecraft == "each" else ()
 
         def stacked(name):
@@ -426,11 +425,8 @@ def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
     >>> block_signals(ms)
     ('e', 'f', 'mode')
     """
-    return tuple(
-        dict.fromkeys(
-            n for m in metrics if reads_steps(m) for n in (m.signal, m.gate) if n is not None
-        )
-    )
+    names = (n for m in metrics if reads_steps(m) for n in (m.signal, m.gate) if n is not None)
+    return tuple(dict.fromkeys(names))  # in order of first use, each once
 
 
 def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> jax.Array:
