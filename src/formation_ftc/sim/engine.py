@@ -209,12 +209,10 @@ def run_fixed_step(
         k, state = carry
         return (k + 1, step(k, state)), None
 
+    # the state after a record block ([0][1]: the state of a scan's final carry (k, state))
     def block(k, state):
         if fold is None:
-            (k, state), _ = jax.lax.scan(
-                inner, (k, state), None, length=record_every, unroll=unroll
-            )
-            return state
+            return jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)[0][1]
 
         def emitting(carry, _):
             k, state = carry
@@ -230,8 +228,7 @@ def run_fixed_step(
 
         if fold_every == record_every:
             return folded((k, state), None)[0][1]
-        (k, state), _ = jax.lax.scan(folded, (k, state), None, length=record_every // fold_every)
-        return state
+        return jax.lax.scan(folded, (k, state), None, length=record_every // fold_every)[0][1]
 
     def outer(carry, _):
         k, state, div, frozen = carry
@@ -366,8 +363,7 @@ def _propagate(jaxpr, in_deps: list[frozenset]) -> list[frozenset]:
             if len(inner.invars) == len(ins) and len(inner.outvars) == len(eqn.outvars):
                 outs = _propagate(inner, ins)
         if outs is None:
-            everything = frozenset().union(*ins) if ins else frozenset()
-            outs = [everything] * len(eqn.outvars)
+            outs = [frozenset().union(*ins)] * len(eqn.outvars)  # everything
         for v, d in zip(eqn.outvars, outs, strict=True):
             env[v] = d
     return [_var_deps(env, v) for v in jaxpr.outvars]

@@ -250,11 +250,9 @@ class ClosedLoop:
         for k, ev in enumerate(self.evaluations):  # a label names the scenario's table or its adder
             key = f"evaluations[{k}]"
             parts.append((labels.get(key, f"{key} {type(ev).__name__}"), ev))
-        provided: set[str] = set()
-        for _, comp in parts:
-            for cap in comp.provides():
-                capability(cap)  # a declaration naming no capability is a bug
-                provided.add(cap)
+        provided = dict.fromkeys(cap for _, comp in parts for cap in comp.provides())
+        for cap in provided:
+            capability(cap)  # a declaration naming no capability is a bug
         for label, comp in parts:
             for cap, use in comp.needs().items():
                 entry = capability(cap)
@@ -377,9 +375,8 @@ class ClosedLoop:
         y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
         flight = self._law_flight(y, est, dec, exo["controller"], ref, sc)
         flight = self._received(t, flight, net_state, sc, exo["network"])
-        if self.controller.sampled:
-            u, ctl_out = held
-            dc = None
+        if self.controller.sampled:  # the command held over the step, no state derivative
+            (u, ctl_out), dc = held, None
         else:
             u, dc, ctl_out = self.controller.output(t, z["controller"], flight)
         act_in = ActuatorInputs(exo["actuator"], act_state, dec, x)
@@ -419,8 +416,7 @@ class ClosedLoop:
                 sc.t, self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
             )
             net_state = self.network.push(net_state, msg_k)
-        held = None
-        ctl_next = state["controller"]
+        held, ctl_next = None, state["controller"]
         if self.controller.sampled:
             flight = self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
             flight = self._received(sc.t, flight, net_state, sc, exo0["network"])
@@ -485,11 +481,9 @@ class ClosedLoop:
         def ctx(j):
             return (exos[j], refs[j], *held_over_step)
 
-        z = {
-            "plant": x,
-            "controller": None if self.controller.sampled else state["controller"],
-            "usage": state["usage"],
-        }
+        # the state integrated over the step (a sampled controller's is not: it is held)
+        ctl = None if self.controller.sampled else state["controller"]
+        z = {"plant": x, "controller": ctl, "usage": state["usage"]}
         if exact:
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
             truth = TruthInputs(outputs[APPLIED_SIGNAL], exos[0]["plant"], refs[0], p_noise, dec)
@@ -527,16 +521,11 @@ class ClosedLoop:
         outputs.update(self._held_outputs(t_k, est_state, est, sup_state, dec))
         # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
         est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
-        new = dict(
-            plant=z_next["plant"],
-            reference=r_next,
-            controller=ctl_next if self.controller.sampled else z_next["controller"],
-            estimator=est_state,
-            supervisor=sup_state,
-            actuator=act_state,
-            usage=z_next["usage"],
-            network=net_state,
-        )
+        # the state at t_{k+1}: the integrated parts (plant, continuous controller, usage) and the rest
+        new = dict(z_next, reference=r_next, estimator=est_state, supervisor=sup_state)
+        new.update(actuator=act_state, network=net_state)
+        if self.controller.sampled:  # its next state from the update at t_k
+            new["controller"] = ctl_next
         return new, outputs
 
     def _held_outputs(self, t_k, est_state, est, sup_state, dec) -> dict:

@@ -405,8 +405,7 @@ def configure() -> str | None:
     global _GUARDED
     os.environ[ENV_SWITCH] = "on"
     wanted = compilation_cache_dir()
-    cache = private_cache_dir(wanted) if wanted is not None else None
-    _GUARDED = cache
+    _GUARDED = cache = private_cache_dir(wanted) if wanted is not None else None
     if cache is not None:
         # also over one inherited from a parent process
         os.environ["JAX_COMPILATION_CACHE_DIR"] = cache
