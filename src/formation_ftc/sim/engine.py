@@ -433,9 +433,7 @@ def _jitted(fn: Callable[..., Any]) -> Callable[..., Any]:
     return jax.jit(fn)
 
 
-def _replay(
-    step, state, k: int, n: int, ok, params: Any = None
-) -> tuple[int, PyTree, PyTree | None]:
+def _replay(step, state, k: int, n: int, ok, params: Any) -> tuple[int, PyTree, PyTree | None]:
     """One compiled replay of up to ``n`` steps: ``(j, last_ok, failing)`` with ``failing`` the first
     state that fails ``ok`` (None when none does in ``n`` steps, then ``j = n``)."""
     if params is not None:
@@ -518,9 +516,8 @@ def diagnose_divergence(
     if not (hasattr(params, "replay_step") and hasattr(params, "admissible")):
         params = None  # no closed loop: the replays are compiled for this call
 
-    def ok(st):
-        # ``admissible`` (when given) is the whole test, finiteness of the checked state included
-        return _all_finite(st) if admissible is None else admissible(st)
+    # ``admissible`` (when given) is the whole test, finiteness of the checked state included
+    ok = _all_finite if admissible is None else admissible
 
     # Date it exactly first: one compiled replay of the block (of one step when ``max_steps`` is 1). It
     # also returns the first failing state, so the usual diagnosis compiles nothing else; a step

@@ -278,10 +278,9 @@ def _blocks(groups, packed: jax.Array) -> list[tuple]:
     """The accumulator tuple of each group from the shared array."""
     out, col = [], 0
     for idx, g in groups:
-        rows = packed[: len(_START[g.reduce]), col : col + len(idx)]
-        out.append(
-            tuple(rows[j] != 0 if x is False else rows[j] for j, x in enumerate(_START[g.reduce]))
-        )
+        start = _START[g.reduce]  # False marks a boolean part
+        rows = packed[: len(start), col : col + len(idx)]
+        out.append(tuple(rows[j] != 0 if x is False else rows[j] for j, x in enumerate(start)))
         col += len(idx)
     return out
 
