@@ -143,11 +143,8 @@ def batched_run(loop, in_axes: Any, size: int) -> Any:
     >>> np.asarray(batched_run(runs[0], in_axes, size=2)(batch)["y"])
     array([3., 6.])
     """
-    return _kept(
-        loop,
-        (loop.static_key, _batched_flags(in_axes), int(size)),
-        jax.vmap(_one_run, in_axes=(in_axes,), axis_size=int(size)),
-    )
+    batched = jax.vmap(_one_run, in_axes=(in_axes,), axis_size=int(size))
+    return _kept(loop, (loop.static_key, _batched_flags(in_axes), int(size)), batched)
 
 
 def _kept(loop, key: tuple, batched: Any) -> Any:
@@ -225,31 +222,21 @@ def _stack_grid(fn: str, rows: list, label) -> tuple[Any, Any, Any]:
             raise ValueError(
                 f"{fn}: run {name} has a different parameter structure than run {label(0, 0)}"
             )
-    flat = [leaves for leaves, _ in flat_defs]
-    n_cols = len(rows[0])
-    leaves: list[np.ndarray] = []
-    row_axes: list[int | None] = []
-    col_axes: list[int | None] = []
-    for j in range(len(flat[0])):  # the runs are flattened row by row
-        grid = [
-            [np.asarray(flat[r * n_cols + c][j]) for c in range(n_cols)] for r in range(len(rows))
-        ]
-        first = grid[0][0]
+    cols = len(rows[0])
+    stored: list[tuple[np.ndarray, int | None, int | None]] = []  # (leaf, row axis, column axis)
+    for runs_j in zip(*(leaves for leaves, _ in flat_defs), strict=True):  # leaf j of every run
+        grid = [list(map(np.asarray, runs_j[i : i + cols])) for i in range(0, len(runs_j), cols)]
         along_rows = all(_same(a, g[0]) for g in grid for a in g)  # every row constant
-        down_cols = all(
-            _same(grid[r][c], grid[0][c]) for r in range(len(grid)) for c in range(n_cols)
-        )
+        down_cols = all(_same(a, b) for g in grid for a, b in zip(g, grid[0], strict=True))
         if along_rows and down_cols:
-            leaf, ra, ca = first, None, None
+            stored.append((grid[0][0], None, None))
         elif along_rows:  # one value per row
-            leaf, ra, ca = np.stack([g[0] for g in grid]), 0, None
+            stored.append((np.stack([g[0] for g in grid]), 0, None))
         elif down_cols:  # one value per column
-            leaf, ra, ca = np.stack(grid[0]), None, 0
+            stored.append((np.stack(grid[0]), None, 0))
         else:
-            leaf, ra, ca = np.stack([np.stack(g) for g in grid]), 0, 0
-        leaves.append(leaf)
-        row_axes.append(ra)
-        col_axes.append(ca)
+            stored.append((np.stack([np.stack(g) for g in grid]), 0, 0))
+    leaves, row_axes, col_axes = ([s[i] for s in stored] for i in range(3))
     unflat = jax.tree_util.tree_unflatten
     return unflat(treedef, leaves), unflat(treedef, row_axes), unflat(treedef, col_axes)
 
@@ -293,12 +280,9 @@ def batched_grid_run(loop, row_axes: Any, column_axes: Any, rows: int, columns: 
            [21., 22., 23.]])
     """
     inner = jax.vmap(_one_run, in_axes=(column_axes,), axis_size=int(columns))
+    batched = jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows))
     flags = (_batched_flags(row_axes), _batched_flags(column_axes))
-    return _kept(
-        loop,
-        (loop.static_key, "grid", *flags, int(rows), int(columns)),
-        jax.vmap(inner, in_axes=(row_axes,), axis_size=int(rows)),
-    )
+    return _kept(loop, (loop.static_key, "grid", *flags, int(rows), int(columns)), batched)
 
 
 def clear() -> None:

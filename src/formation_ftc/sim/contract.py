@@ -353,9 +353,8 @@ class Condition:
     def as_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {f.name: str(getattr(self, f.name)) for f in fields(self)}
         # the two non-text fields in their places (numpy bools too)
-        out.update(
-            holds=None if self.holds is None else bool(self.holds), required=bool(self.required)
-        )
+        out["holds"] = None if self.holds is None else bool(self.holds)
+        out["required"] = bool(self.required)
         return out
 
 

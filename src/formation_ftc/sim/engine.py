@@ -209,12 +209,10 @@ def run_fixed_step(
         k, state = carry
         return (k + 1, step(k, state)), None
 
+    # the state after a record block ([0][1]: the state of a scan's final carry (k, state))
     def block(k, state):
         if fold is None:
-            (k, state), _ = jax.lax.scan(
-                inner, (k, state), None, length=record_every, unroll=unroll
-            )
-            return state
+            return jax.lax.scan(inner, (k, state), None, length=record_every, unroll=unroll)[0][1]
 
         def emitting(carry, _):
             k, state = carry
@@ -230,8 +228,7 @@ def run_fixed_step(
 
         if fold_every == record_every:
             return folded((k, state), None)[0][1]
-        (k, state), _ = jax.lax.scan(folded, (k, state), None, length=record_every // fold_every)
-        return state
+        return jax.lax.scan(folded, (k, state), None, length=record_every // fold_every)[0][1]
 
     def outer(carry, _):
         k, state, div, frozen = carry
@@ -252,8 +249,7 @@ def run_fixed_step(
             # running state itself is never selected, so under ``vmap`` leaves that do not depend on
             # the batched parameters (reference orbit, desired trajectory, ...) stay unbatched
             frozen = jax.tree_util.tree_map(lambda f, n: jnp.where(div >= 0, f, n), frozen, new)
-        k = k + record_every
-        return (k, new, div, frozen), rec
+        return (k + record_every, new, div, frozen), rec
 
     k0, div0 = jnp.asarray(0, dtype=jnp.int64), jnp.asarray(-1, dtype=jnp.int64)
     carry0 = (k0, state0, div0, state0 if check_finite else None)
@@ -367,8 +363,7 @@ def _propagate(jaxpr, in_deps: list[frozenset]) -> list[frozenset]:
             if len(inner.invars) == len(ins) and len(inner.outvars) == len(eqn.outvars):
                 outs = _propagate(inner, ins)
         if outs is None:
-            everything = frozenset().union(*ins) if ins else frozenset()
-            outs = [everything] * len(eqn.outvars)
+            outs = [frozenset().union(*ins)] * len(eqn.outvars)  # everything
         for v, d in zip(eqn.outvars, outs, strict=True):
             env[v] = d
     return [_var_deps(env, v) for v in jaxpr.outvars]
@@ -438,9 +433,7 @@ def _jitted(fn: Callable[..., Any]) -> Callable[..., Any]:
     return jax.jit(fn)
 
 
-def _replay(
-    step, state, k: int, n: int, ok, params: Any = None
-) -> tuple[int, PyTree, PyTree | None]:
+def _replay(step, state, k: int, n: int, ok, params: Any) -> tuple[int, PyTree, PyTree | None]:
     """One compiled replay of up to ``n`` steps: ``(j, last_ok, failing)`` with ``failing`` the first
     state that fails ``ok`` (None when none does in ``n`` steps, then ``j = n``)."""
     if params is not None:
@@ -520,26 +513,22 @@ def diagnose_divergence(
     >>> print(diagnose_divergence(step, last, k=5, t=0.5, dt=0.1))
     simulation diverged at t = 0.5 s (step 5): spacecraft 2, variable 'q' index [1, 1] became non-finite
     """
-    use_params = (
-        params is not None and hasattr(params, "replay_step") and hasattr(params, "admissible")
-    )
+    if not (hasattr(params, "replay_step") and hasattr(params, "admissible")):
+        params = None  # no closed loop: the replays are compiled for this call
 
-    def ok(st):
-        # ``admissible`` (when given) is the whole test, finiteness of the checked state included
-        return _all_finite(st) if admissible is None else admissible(st)
+    # ``admissible`` (when given) is the whole test, finiteness of the checked state included
+    ok = _all_finite if admissible is None else admissible
 
     # Date it exactly first: one compiled replay of the block (of one step when ``max_steps`` is 1). It
     # also returns the first failing state, so the usual diagnosis compiles nothing else; a step
     # program is compiled only to follow the run past that state (accumulators only) or when the
     # replay does not fail.
     max_steps = max(1, max_steps)
-    j0, state0, failing = _replay(
-        step, last_finite, k, max_steps, ok, params if use_params else None
-    )
+    j0, state0, failing = _replay(step, last_finite, k, max_steps, ok, params)
     if failing is not None:
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
-    jstep = (lambda kk, st: _jitted(_params_step)(params, kk, st)) if use_params else jax.jit(step)
+    jstep = jax.jit(step) if params is None else functools.partial(_jitted(_params_step), params)
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
     state, n, j = last_finite, max_steps, 0

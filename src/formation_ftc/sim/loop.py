@@ -250,11 +250,9 @@ class ClosedLoop:
         for k, ev in enumerate(self.evaluations):  # a label names the scenario's table or its adder
             key = f"evaluations[{k}]"
             parts.append((labels.get(key, f"{key} {type(ev).__name__}"), ev))
-        provided: set[str] = set()
-        for _, comp in parts:
-            for cap in comp.provides():
-                capability(cap)  # a declaration naming no capability is a bug
-                provided.add(cap)
+        provided = dict.fromkeys(cap for _, comp in parts for cap in comp.provides())
+        for cap in provided:
+            capability(cap)  # a declaration naming no capability is a bug
         for label, comp in parts:
             for cap, use in comp.needs().items():
                 entry = capability(cap)
@@ -305,12 +303,11 @@ class ClosedLoop:
         slots = ("plant", "actuator", "controller", "network", "estimator", "supervisor")
         truth = ("plant", "actuator")
         held_slots = [s for s in slots if getattr(self, s).holds_exogenous]
+        live = [s for s in slots if s not in held_slots]  # evaluated at every stage time
 
         def at(t_flight, t_truth):
             return {
-                s: getattr(self, s).exogenous(t_truth if s in truth else t_flight)
-                for s in slots
-                if s not in held_slots
+                s: getattr(self, s).exogenous(t_truth if s in truth else t_flight) for s in live
             }
 
         table = jax.vmap(at)(ts, tf)
@@ -378,9 +375,8 @@ class ClosedLoop:
         y = self.sensors.measure(t, self.plant.sensed_state(x), SensorInputs(s_noise, ref))
         flight = self._law_flight(y, est, dec, exo["controller"], ref, sc)
         flight = self._received(t, flight, net_state, sc, exo["network"])
-        if self.controller.sampled:
-            u, ctl_out = held
-            dc = None
+        if self.controller.sampled:  # the command held over the step, no state derivative
+            (u, ctl_out), dc = held, None
         else:
             u, dc, ctl_out = self.controller.output(t, z["controller"], flight)
         act_in = ActuatorInputs(exo["actuator"], act_state, dec, x)
@@ -390,10 +386,9 @@ class ClosedLoop:
         deriv = {"plant": dx, "controller": dc, "usage": self.plant.usage_rates(t, x, u)}
         outputs = dict(self.plant.outputs(t, x, truth))
         outputs.update(self.actuator.outputs(t, u, act_in))
-        if self._tracks_position():
-            outputs[POSITION_ERROR_SIGNAL] = self.plant.position(
-                x
-            ) - self.controller.desired_position_at(exo["controller"])
+        if self._tracks_position():  # true minus desired position
+            r, r_d = self.plant.position(x), self.controller.desired_position_at(exo["controller"])
+            outputs[POSITION_ERROR_SIGNAL] = r - r_d
         outputs.update(ctl_out)
         outputs[COMMAND_SIGNAL] = u
         outputs[APPLIED_SIGNAL] = applied
@@ -421,8 +416,7 @@ class ClosedLoop:
                 sc.t, self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
             )
             net_state = self.network.push(net_state, msg_k)
-        held = None
-        ctl_next = state["controller"]
+        held, ctl_next = None, state["controller"]
         if self.controller.sampled:
             flight = self._law_flight(y, est, dec, exo0["controller"], ref0, sc)
             flight = self._received(sc.t, flight, net_state, sc, exo0["network"])
@@ -475,10 +469,9 @@ class ClosedLoop:
         # a stage-integrated metric may read an evaluation's signal (e.g. the applied force per unit
         # mass): the evaluations see each stage's outputs and the step's held FDI / supervisor signals
         # (computed once per step, and only when such a metric exists)
-        reads_held = self._stage_reads_evaluations()
-        held_signals = (
-            self._held_outputs(t_k, est_state, est, sup_state, dec) if reads_held else None
-        )
+        held_signals = None
+        if self._stage_reads_evaluations():
+            held_signals = self._held_outputs(t_k, est_state, est, sup_state, dec)
 
         def stage_signals(o: dict) -> dict:
             return o if held_signals is None else self._evaluated({**o, **held_signals})
@@ -488,22 +481,18 @@ class ClosedLoop:
         def ctx(j):
             return (exos[j], refs[j], *held_over_step)
 
-        z = {
-            "plant": x,
-            "controller": None if self.controller.sampled else state["controller"],
-            "usage": state["usage"],
-        }
+        # the state integrated over the step (a sampled controller's is not: it is held)
+        ctl = None if self.controller.sampled else state["controller"]
+        z = {"plant": x, "controller": ctl, "usage": state["usage"]}
         if exact:
             deriv, outputs = self._evaluate(t_k, z, ctx(0))
-            applied = outputs[APPLIED_SIGNAL]
-            x_next = self.plant.exact_step(
-                t_k, x, TruthInputs(applied, exos[0]["plant"], refs[0], p_noise, dec), dt
-            )
+            truth = TruthInputs(outputs[APPLIED_SIGNAL], exos[0]["plant"], refs[0], p_noise, dec)
+            x_next = self.plant.exact_step(t_k, x, truth, dt)
             z_next = dict(
                 plant=x_next, controller=None, usage=_axpy(dt, deriv["usage"], z["usage"])
             )
             if self._stage_metrics():  # rectangle rule over the step
-                stage_inc = tuple(
+                outputs[STAGE_INCREMENTS] = tuple(
                     None if v is None else dt * v
                     for v in metric_ops.stage_values(self._streamed, stage_signals(outputs))
                 )
@@ -521,7 +510,7 @@ class ClosedLoop:
                     metric_ops.stage_values(self._streamed, stage_signals(o))
                     for o in (outputs, o2, o3, o4)
                 ]
-                stage_inc = tuple(
+                outputs[STAGE_INCREMENTS] = tuple(
                     None if a is None else _rk4_increment(dt, a, b, c, d)
                     for a, b, c, d in zip(*values, strict=True)
                 )
@@ -532,18 +521,11 @@ class ClosedLoop:
         outputs.update(self._held_outputs(t_k, est_state, est, sup_state, dec))
         # (7) the estimator's time update over [t_k, t_k + dt] with the command held over the step
         est_state = self.estimator.predict(t_k, est_state, outputs[COMMAND_SIGNAL], dt)
-        new = dict(
-            plant=z_next["plant"],
-            reference=r_next,
-            controller=ctl_next if self.controller.sampled else z_next["controller"],
-            estimator=est_state,
-            supervisor=sup_state,
-            actuator=act_state,
-            usage=z_next["usage"],
-            network=net_state,
-        )
-        if self._stage_metrics():
-            outputs[STAGE_INCREMENTS] = stage_inc
+        # the state at t_{k+1}: the integrated parts (plant, continuous controller, usage) and the rest
+        new = dict(z_next, reference=r_next, estimator=est_state, supervisor=sup_state)
+        new.update(actuator=act_state, network=net_state)
+        if self.controller.sampled:  # its next state from the update at t_k
+            new["controller"] = ctl_next
         return new, outputs
 
     def _held_outputs(self, t_k, est_state, est, sup_state, dec) -> dict:
@@ -633,13 +615,9 @@ class ClosedLoop:
             return new, acc
 
         def fold(k, carry, samples):
+            samples = metric_ops.unpack_samples(self._streamed, shapes, samples)
             return carry[0], metric_ops.fold_block(
-                self._streamed,
-                carry[1],
-                k,
-                self.t0,
-                self.dt,
-                metric_ops.unpack_samples(self._streamed, shapes, samples),
+                self._streamed, carry[1], k, self.t0, self.dt, samples
             )
 
         out = run_fixed_step(
@@ -664,13 +642,9 @@ class ClosedLoop:
         )
         reached = out["diverged_step"] < 0
         acc = jax.tree_util.tree_map(lambda a_n, a: jnp.where(reached, a_n, a), acc_n, acc)
-        return dict(
-            records=out["records"],
-            final=state_n,
-            diverged_step=out["diverged_step"],
-            last_finite=out["last_finite"],
-            metrics=self._with_requirements(metric_ops.finalize(self._streamed, acc), out),
-        )
+        metrics = self._with_requirements(metric_ops.finalize(self._streamed, acc), out)
+        # records, diverged_step and last_finite (the carry, accumulators included) as they are
+        return dict(out, final=state_n, metrics=metrics)
 
     @property
     def _streamed(self) -> tuple:
@@ -707,11 +681,8 @@ class ClosedLoop:
             return 1
         if self.metric_block:
             return self.metric_block
-        block = max(
-            d
-            for d in range(1, min(self.record_every, METRIC_BLOCK_MAX) + 1)
-            if self.record_every % d == 0
-        )
+        every = self.record_every
+        block = max(d for d in range(1, min(every, METRIC_BLOCK_MAX) + 1) if every % d == 0)
         many = sum(metric_ops.reads_steps(m) for m in self._streamed)
         long_run = self.n_steps >= METRIC_FOLD_MIN_STEPS and block >= METRIC_FOLD_MIN_BLOCK
         return block if long_run and many >= METRIC_FOLD_MIN_METRICS else 1
@@ -719,12 +690,8 @@ class ClosedLoop:
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
         out = []
-        vectors = (
-            ("position", self.max_position),
-            ("velocity", self.max_velocity),
-            ("angular_rate", self.max_rate),
-        )
-        for name, bound in vectors:  # Euclidean norm per spacecraft
+        bounds = (self.max_position, self.max_velocity, self.max_rate)  # of a Euclidean norm
+        for name, bound in zip(("position", "velocity", "angular_rate"), bounds, strict=True):
             v = getattr(self.plant, name)(x) if hasattr(self.plant, name) else None
             if v is not None:
                 out.append((f"plant.{name}", jnp.sqrt(jnp.sum(v * v, axis=-1)), bound))

@@ -18,7 +18,7 @@ the same selections, and the same sums added in another order (they may differ i
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NoReturn
 
 import jax
@@ -218,8 +218,7 @@ class _Stack:
     def __init__(self, metrics: Sequence[Metric]):
         m0 = metrics[0]
         self.metrics = tuple(metrics)
-        self.reduce, self.spacecraft = m0.reduce, m0.spacecraft
-        self.gate, self.block = m0.gate, m0.block
+        self.reduce, self.gate, self.block = m0.reduce, m0.gate, m0.block
         trail = (1,) if m0.spacecraft == "each" else ()
 
         def stacked(name):
@@ -243,12 +242,8 @@ def _classes(metrics: Sequence[Metric]) -> list[tuple[int, list[tuple[list[int],
     _Stack or stage-integrated metric that accumulates them)``."""
     members: dict[Any, list[int]] = {}
     for i, m in enumerate(metrics):
-        key = (
-            ("alone", i)
-            if m.reduce in STAGE_REDUCTIONS
-            else (m.reduce, m.spacecraft == "each", m.gate, m.block)
-        )
-        members.setdefault(key, []).append(i)
+        alone = i if m.reduce in STAGE_REDUCTIONS else None  # a stage-integrated metric: its own
+        members.setdefault((m.reduce, m.spacecraft == "each", m.gate, m.block, alone), []).append(i)
     out: list[tuple[int, list[tuple[list[int], Any]]]] = []
     shared: dict[bool, int] = {}
     for idx in members.values():
@@ -271,18 +266,21 @@ def _pack(parts: tuple, rows: int) -> jax.Array:
     return jnp.stack(arrs)
 
 
-def _rows(groups) -> int:
-    return max(len(_START[g.reduce]) for _, g in groups)
+def _packed(groups, parts: Iterable[tuple]) -> jax.Array:
+    """The accumulator tuples ``parts`` of a class's groups as its one shared array (see :func:`_classes`);
+    each part is packed as it comes (``parts`` may be a generator: each group's operations stay
+    together in the traced program)."""
+    rows = max(len(_START[g.reduce]) for _, g in groups)
+    return jnp.concatenate([_pack(p, rows) for p in parts], axis=1)
 
 
 def _blocks(groups, packed: jax.Array) -> list[tuple]:
     """The accumulator tuple of each group from the shared array."""
     out, col = [], 0
     for idx, g in groups:
-        rows = packed[: len(_START[g.reduce]), col : col + len(idx)]
-        out.append(
-            tuple(rows[j] != 0 if x is False else rows[j] for j, x in enumerate(_START[g.reduce]))
-        )
+        start = _START[g.reduce]  # False marks a boolean part
+        rows = packed[: len(start), col : col + len(idx)]
+        out.append(tuple(rows[j] != 0 if x is False else rows[j] for j, x in enumerate(start)))
         col += len(idx)
     return out
 
@@ -325,11 +323,8 @@ def init_accumulators(metrics: Sequence[Metric], signals: Mapping[str, jax.Array
     """
     accs: list[Any] = [()] * len(metrics)
     for slot, groups in _classes(metrics):
-        if not isinstance(groups[0][1], _Stack):
-            accs[slot] = _initial(groups[0][1], signals)
-            continue
-        rows = _rows(groups)
-        accs[slot] = jnp.concatenate([_pack(_initial(g, signals), rows) for _, g in groups], axis=1)
+        inits = (_initial(g, signals) for _, g in groups)
+        accs[slot] = _packed(groups, inits) if isinstance(groups[0][1], _Stack) else next(inits)
     return tuple(accs)
 
 
@@ -377,12 +372,11 @@ def update_accumulators(
     >>> [round(float(v), 6) for v in finalize(ms, accs)]
     [3.0, 2.0, 0.6]
     """
-    return _each_group(
-        metrics,
-        accs,
-        sample_values(metrics, signals, is_final),
-        lambda g, acc, v: _update_group(g, acc, t, dt, v, is_final),
-    )
+
+    def update(g, acc, v):
+        return _update_group(g, acc, t, dt, v, is_final)
+
+    return _each_group(metrics, accs, sample_values(metrics, signals, is_final), update)
 
 
 def reads_steps(m: Metric) -> bool:
@@ -430,11 +424,8 @@ def block_signals(metrics: Sequence[Metric]) -> tuple[str, ...]:
     >>> block_signals(ms)
     ('e', 'f', 'mode')
     """
-    return tuple(
-        dict.fromkeys(
-            n for m in metrics if reads_steps(m) for n in (m.signal, m.gate) if n is not None
-        )
-    )
+    names = (n for m in metrics if reads_steps(m) for n in (m.signal, m.gate) if n is not None)
+    return tuple(dict.fromkeys(names))  # in order of first use, each once
 
 
 def pack_sample(metrics: Sequence[Metric], signals: Mapping[str, jax.Array]) -> jax.Array:
@@ -569,14 +560,9 @@ def _each_group(metrics: Sequence[Metric], accs: tuple, values: tuple, update) -
     entries are left to :func:`update_stage_accumulators`."""
     out = list(accs)
     for (slot, groups), vals in zip(_classes(metrics), values, strict=True):
-        if not isinstance(groups[0][1], _Stack):
-            continue
-        rows = _rows(groups)
-        new = [
-            _pack(update(g, acc, v), rows)
-            for (_, g), acc, v in zip(groups, _blocks(groups, accs[slot]), vals, strict=True)
-        ]
-        out[slot] = jnp.concatenate(new, axis=1)
+        if isinstance(groups[0][1], _Stack):
+            parts = zip(groups, _blocks(groups, accs[slot]), vals, strict=True)
+            out[slot] = _packed(groups, (update(g, acc, v) for (_, g), acc, v in parts))
     return tuple(out)
 
 
@@ -633,12 +619,11 @@ def fold_block(
     n = jax.tree_util.tree_leaves(samples)[0].shape[0]
     values = jax.vmap(lambda s: sample_values(metrics, s))(samples)
     times = t0 + (k0 + jnp.arange(n, dtype=jnp.int64)) * dt
-    return _each_group(
-        metrics,
-        accs,
-        values,
-        lambda g, acc, v: acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v),
-    )
+
+    def fold(g, acc, v):
+        return acc if g.reduce == "last" else _fold_group(g, acc, times, dt, v)
+
+    return _each_group(metrics, accs, values, fold)
 
 
 def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -> tuple:
@@ -664,19 +649,16 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     def last_of(mask):  # index of the last true sample (-1 when none)
         return jnp.max(jnp.where(mask, idx, -1), axis=0)
 
-    def take(x, i):  # x at sample i (clipped), per element
-        return jnp.take_along_axis(x, jnp.clip(i, 0, n - 1)[None], axis=0)[0]
-
     if m.reduce in _EXTREMES:
         (a, seen), (pair, over, start) = acc, _EXTREMES[m.reduce]
         extreme = getattr(jnp, over)(jnp.where(inw, v, start), axis=0)
         return (getattr(jnp, pair)(a, extreme), seen | anyw)
     if m.reduce == "final":
         a, seen = acc
-        return (jnp.where(anyw, take(v, last_of(inw)), a), seen | anyw)
+        return (jnp.where(anyw, _at(v, last_of(inw)), a), seen | anyw)
     if m.reduce == "at":
         a, seen = acc
-        return (jnp.where(anyw & jnp.logical_not(seen), take(v, first_of(inw)), a), seen | anyw)
+        return (jnp.where(anyw & jnp.logical_not(seen), _at(v, first_of(inw)), a), seen | anyw)
     if m.reduce in ("mean", "integral", "rms"):
         s, c = acc
         return (s + jnp.sum(jnp.where(inw, _summand(m.reduce, v, dt), 0.0), axis=0), c + count)
@@ -687,7 +669,7 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
         ts, found = acc
         hits = inw & above
         hit = jnp.any(hits, axis=0) & jnp.logical_not(found)
-        return (jnp.where(hit, take(t, first_of(hits)), ts), found | hit)
+        return (jnp.where(hit, _at(t, first_of(hits)), ts), found | hit)
     # settle / settle_delay: after the block, the settle time is the time of the first in-window sample
     # following the last one at or above the threshold (NaN when that is the block's last in-window
     # sample); without one in the block, the first in-window sample's time when the run was above
@@ -695,13 +677,13 @@ def _fold_group(m: Any, acc: tuple, times: jax.Array, dt: float, value: tuple) -
     ts, seen, last_above = acc
     j_above = last_of(inw & above)
     after = first_of(inw & (idx > j_above))
-    ts_above = jnp.where(after < n, take(t, after), jnp.nan)
-    ts_below = jnp.where(last_above | jnp.logical_not(seen), take(t, first_of(inw)), ts)
+    ts_above = jnp.where(after < n, _at(t, after), jnp.nan)
+    ts_below = jnp.where(last_above | jnp.logical_not(seen), _at(t, first_of(inw)), ts)
     ts_new = jnp.where(j_above >= 0, ts_above, ts_below)
     return (
         jnp.where(anyw, ts_new, ts),
         seen | anyw,
-        jnp.where(anyw, take(above, last_of(inw)), last_above),
+        jnp.where(anyw, _at(above, last_of(inw)), last_above),
     )
 
 
@@ -724,16 +706,13 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     done = b[:, 0] < closed[None]  # segment closed by this fold
     rem = (filled - closed * size).astype(jnp.float64)  # samples of the new open block
 
-    def pick(x, i):  # x[i] over the segment axis, per element
-        return jnp.take_along_axis(x, jnp.clip(i, 0, nseg - 1)[None], axis=0)[0]
-
     if m.reduce == "block_rms":
         s, _, q, nb = acc
         sums = jnp.sum(jnp.where(member, v[None], 0.0), axis=1)
         sums = sums.at[0].add(s)
         mean = sums / size
         q = q + jnp.sum(jnp.where(done, mean * mean, 0.0), axis=0)
-        return (pick(sums, closed), rem, q, nb + closed.astype(jnp.float64))
+        return (_at(sums, closed), rem, q, nb + closed.astype(jnp.float64))
     # block_dev_rms: each block's values shifted by its first value (the open block keeps its shift)
     shift0, s1, s2, _, q, nq = acc
     first_j = jnp.argmax(member, axis=1)  # first sample of each segment (0 when it has none)
@@ -745,16 +724,15 @@ def _fold_blocks(m: Any, acc: tuple, v: jax.Array, inw: jax.Array) -> tuple:
     dev = sum2 - sum1 * sum1 / size
     q = q + jnp.sum(jnp.where(done, dev, 0.0), axis=0)
     shift = jnp.where(
-        rem > 0, pick(shifts, closed), jnp.where(total > 0, pick(shifts, closed - 1), shift0)
+        rem > 0, _at(shifts, closed), jnp.where(total > 0, _at(shifts, closed - 1), shift0)
     )
-    return (
-        shift,
-        pick(sum1, closed),
-        pick(sum2, closed),
-        rem,
-        q,
-        nq + (closed * size).astype(jnp.float64),
-    )
+    open_sums = [_at(x, closed) for x in (sum1, sum2)]  # of the new open block
+    return (shift, *open_sums, rem, q, nq + (closed * size).astype(jnp.float64))
+
+
+def _at(x: jax.Array, i: jax.Array) -> jax.Array:
+    """``x[i]`` along axis 0 (``i`` clipped to its length), per element of the other axes."""
+    return jnp.take_along_axis(x, jnp.clip(i, 0, x.shape[0] - 1)[None], axis=0)[0]
 
 
 def _summand(reduce: str, v: jax.Array, dt: float) -> jax.Array:
@@ -810,12 +788,8 @@ def _update_group(
         s, n = s + jnp.where(take, v, 0.0), n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block  # the block closes: fold its mean in, open the next one
         mean = s / m.block
-        return (
-            jnp.where(full, 0.0, s),
-            jnp.where(full, 0.0, n),
-            q + jnp.where(full, mean * mean, 0.0),
-            nb + jnp.where(full, 1.0, 0.0),
-        )
+        cleared = [jnp.where(full, 0.0, a) for a in (s, n)]  # a closed block's sums start again
+        return (*cleared, q + jnp.where(full, mean * mean, 0.0), nb + jnp.where(full, 1.0, 0.0))
     if m.reduce == "block_dev_rms":
         # shifted sums (shift = the block's first value): no cancellation when the mean is large
         shift, s1, s2, n, q, nq = acc
@@ -825,17 +799,9 @@ def _update_group(
         s1, s2, n = s1 + d, s2 + d * d, n + jnp.where(take, 1.0, 0.0)
         full = n >= m.block
         dev = s2 - s1 * s1 / m.block  # sum over the block of (v - block mean)^2
-        return (
-            shift,
-            jnp.where(full, 0.0, s1),
-            jnp.where(full, 0.0, s2),
-            jnp.where(full, 0.0, n),
-            q + jnp.where(full, dev, 0.0),
-            nq + jnp.where(full, n, 0.0),
-        )
-    raise AssertionError(
-        f"unhandled reduction {m.reduce!r}"
-    )  # pragma: no cover - REDUCTIONS is checked
+        cleared = [jnp.where(full, 0.0, a) for a in (s1, s2, n)]  # as block_rms
+        return (shift, *cleared, q + jnp.where(full, dev, 0.0), nq + jnp.where(full, n, 0.0))
+    raise AssertionError(f"unhandled reduction {m.reduce!r}")  # pragma: no cover - checked
 
 
 def finalize(metrics: Sequence[Metric], accs: tuple) -> tuple:

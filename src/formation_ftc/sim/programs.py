@@ -113,11 +113,8 @@ def executable(loop) -> tuple[Any, float]:
     0.0
     """
     leaves, treedef = jax.tree_util.tree_flatten(loop)
-    key = (
-        loop.static_key,
-        treedef,
-        tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves),
-    )
+    kinds = tuple((type(x).__name__, np.shape(x), str(getattr(x, "dtype", ""))) for x in leaves)
+    key = (loop.static_key, treedef, kinds)  # kinds: each leaf's type, shape and dtype
     t0 = time.perf_counter()
     built = []
 

@@ -74,9 +74,7 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         for name, values in comp.coords().items():
             coords.setdefault(name, (name, list(values)))
     data = {}
-    for sig in loop.signals():
-        if sig.name not in records:
-            continue
+    for sig in (s for s in loop.signals() if s.name in records):
         arr = np.asarray(records[sig.name])[:n_records]
         dims = ("time",) + tuple(sig.dims)
         if arr.ndim != len(dims):
@@ -86,12 +84,12 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         meta = {"units": sig.units, "long_name": sig.long_name}
         if sig.frame:
             meta["frame"] = sig.frame
-        data[sig.name] = (dims, arr, meta)
+        data[sig.name] = xr.Variable(dims, arr, meta, fastpath=True)
         if "axis" in dims and "axis" not in coords:  # labelled by the first signal that has it
             n = arr.shape[dims.index("axis")]
             labels = ["x", "y", "z"][:n] if n <= 3 else list(range(n))
             coords["axis"] = ("axis", labels, {"long_name": "vector component"})
-    used = {d for v in data.values() for d in v[0]}
+    used = {d for v in data.values() for d in v.dims}
     coords = {k: v for k, v in coords.items() if k in used}
     # numpy variables and pandas indexes, which xarray takes as they are: from anything else it
     # first asks whether it is a dask array, which imports dask when dask is installed (0.2 s)
@@ -104,8 +102,4 @@ def records_to_dataset(loop, records: dict, n_records: int, attrs: dict | None =
         indexes[name] = index
         var = xr.Variable(dims, arr, meta[0] if meta else None, fastpath=True)
         variables.update(index.create_variables({name: var}))
-    return xr.Dataset(
-        {k: xr.Variable(d, np.asarray(v), m, fastpath=True) for k, (d, v, m) in data.items()},
-        coords=xr.Coordinates(variables, indexes),
-        attrs=attrs or {},
-    )
+    return xr.Dataset(data, coords=xr.Coordinates(variables, indexes), attrs=attrs or {})

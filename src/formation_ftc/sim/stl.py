@@ -82,9 +82,7 @@ _TOKEN = re.compile(
 
 def _tokens(text: str) -> list[tuple[str, str, int]]:
     out, pos = [], 0
-    while pos < len(text):
-        if text[pos:].strip() == "":
-            break
+    while text[pos:].strip():  # up to trailing whitespace
         m = _TOKEN.match(text, pos)
         if m is None or m.end() == pos:
             at = len(text) - len(text[pos:].lstrip())
@@ -101,8 +99,10 @@ class _Parser:
         self.toks = _tokens(text)
         self.i = 0
 
-    def error(self, what: str) -> StlError:
-        pos = self.toks[self.i][2] if self.i < len(self.toks) else len(self.text)
+    def error(self, what: str, back: int = 0) -> StlError:
+        """The error at the next token (``back = 1``: at the one just taken), or at the end."""
+        i = self.i - back
+        pos = self.toks[i][2] if i < len(self.toks) else len(self.text)
         return StlError(f"STL formula {self.text!r}: {what} at position {pos}")
 
     def peek(self) -> str | None:
@@ -141,8 +141,7 @@ class _Parser:
     def number(self) -> float:
         kind, text, _ = self.take()
         if kind != "num":
-            self.i -= 1
-            raise self.error(f"expected a number, found {text!r}")
+            raise self.error(f"expected a number, found {text!r}", back=1)
         return math.inf if text == "inf" else float(text)
 
     def unary(self) -> Any:
@@ -170,15 +169,13 @@ class _Parser:
             return inner
         kind, name, _ = self.take()
         if kind != "name" or name in ("and", "or", "not", "G", "F"):
-            self.i -= 1
-            raise self.error(f"expected a signal, '(', 'not', 'G' or 'F', found {name!r}")
+            raise self.error(f"expected a signal, '(', 'not', 'G' or 'F', found {name!r}", back=1)
         if self.peek() not in ("<=", "<", ">=", ">"):
             raise self.error(f"expected a comparison (<=, <, >=, >) after signal {name!r}")
         op = self.take()[1]
         value = self.number()
         if not math.isfinite(value):
-            self.i -= 1
-            raise self.error("a comparison needs a finite number")
+            raise self.error("a comparison needs a finite number", back=1)
         return Atom(name, "<=" if op in ("<=", "<") else ">=", value)
 
 

@@ -179,43 +179,12 @@ _REPORTED: set[str] = set()
 def _make_private(path: Path) -> None:
     """Create the missing directories of ``path``, each with mode 0700 whatever the umask (existing ones
     are left as they are)."""
-    missing = []
-    p = path
-    while not os.path.lexists(p):
-        missing.append(p)
-        p = p.parent
-    for d in reversed(missing):
-        try:
-            os.mkdir(d, 0o700)
-        except FileExistsError:  # made meanwhile by another process: checked like any other
-            continue
-        os.chmod(d, 0o700)  # mkdir's mode is masked by the umask
-
-
-def _problem(path: str | os.PathLike[str], creating: bool = False) -> tuple[Path, str] | None:
-    """The first directory on ``path`` that :func:`unsafe_directory` refuses, and why."""
-    uid = os.geteuid()
-    p = Path(path)
-    if not p.is_absolute():
-        return p, "is not an absolute path"
-    # owner of the directory one level down the path (it passed); creating: the one about to be made
-    below: int | None = uid if creating else None
-    for d in (p, *p.parents):
-        try:
-            st = os.lstat(d)
-        except OSError as exc:
-            return d, f"cannot be examined ({exc.strerror or exc})"
-        if stat.S_ISLNK(st.st_mode):
-            return d, "is a symbolic link"
-        if not stat.S_ISDIR(st.st_mode):
-            return d, "is not a directory"
-        if st.st_uid not in (uid, 0):
-            return d, f"is owned by uid {st.st_uid}, neither by you nor by root"
-        sticky_ancestor = st.st_uid == 0 and st.st_mode & stat.S_ISVTX and below == uid
-        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) and not sticky_ancestor:
-            return d, "is writable by its group or by others"
-        below = st.st_uid
-    return None
+    for d in reversed((path, *path.parents)):
+        if not os.path.lexists(d):
+            # made meanwhile by another process: left alone, and checked like any other
+            with contextlib.suppress(FileExistsError):
+                os.mkdir(d, 0o700)
+                os.chmod(d, 0o700)  # mkdir's mode is masked by the umask
 
 
 def unsafe_directory(path: str | os.PathLike[str], creating: bool = False) -> str | None:
@@ -254,8 +223,28 @@ def unsafe_directory(path: str | os.PathLike[str], creating: bool = False) -> st
     >>> fine, refused == f"{tmp} is writable by its group or by others"
     (None, True)
     """
-    found = _problem(path, creating)
-    return None if found is None else f"{found[0]} {found[1]}"
+    uid = os.geteuid()
+    p = Path(path)
+    if not p.is_absolute():
+        return f"{p} is not an absolute path"
+    # owner of the directory one level down the path (it passed); creating: the one about to be made
+    below: int | None = uid if creating else None
+    for d in (p, *p.parents):
+        try:
+            st = os.lstat(d)
+        except OSError as exc:
+            return f"{d} cannot be examined ({exc.strerror or exc})"
+        if stat.S_ISLNK(st.st_mode):
+            return f"{d} is a symbolic link"
+        if not stat.S_ISDIR(st.st_mode):
+            return f"{d} is not a directory"
+        if st.st_uid not in (uid, 0):
+            return f"{d} is owned by uid {st.st_uid}, neither by you nor by root"
+        sticky_ancestor = st.st_uid == 0 and st.st_mode & stat.S_ISVTX and below == uid
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) and not sticky_ancestor:
+            return f"{d} is writable by its group or by others"
+        below = st.st_uid
+    return None
 
 
 def _report(problem: str) -> None:
@@ -302,18 +291,15 @@ def private_cache_dir(cache: str) -> str | None:
     >>> ok, modes
     (True, ['0o700', '0o700'])
     """
-    existing = Path(os.path.abspath(cache))
-    while not os.path.lexists(existing):
-        existing = existing.parent
+    target = Path(os.path.abspath(cache))
+    existing = next(d for d in (target, *target.parents) if os.path.lexists(d))
     # nothing is created under a directory that is already refused (a root-owned sticky directory such
     # as /tmp is not: only this user may rename or remove what it creates there, and the created
     # directory is checked again below)
-    problem = unsafe_directory(
-        os.path.realpath(existing), creating=existing != Path(os.path.abspath(cache))
-    )
+    problem = unsafe_directory(os.path.realpath(existing), creating=existing != target)
     if problem is None:
         try:
-            _make_private(Path(os.path.abspath(cache)))
+            _make_private(target)
             resolved = os.path.realpath(cache, strict=True)
         except OSError as exc:
             problem = f"{cache} cannot be created ({exc.strerror or exc})"
@@ -419,8 +405,7 @@ def configure() -> str | None:
     global _GUARDED
     os.environ[ENV_SWITCH] = "on"
     wanted = compilation_cache_dir()
-    cache = private_cache_dir(wanted) if wanted is not None else None
-    _GUARDED = cache
+    _GUARDED = cache = private_cache_dir(wanted) if wanted is not None else None
     if cache is not None:
         # also over one inherited from a parent process
         os.environ["JAX_COMPILATION_CACHE_DIR"] = cache
@@ -450,9 +435,7 @@ def _configure_jax(cache: str | None) -> None:
     ):
         _set_jax_cache(cache)
     if cache is not None:
-        min_s = os.environ.get(
-            "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", DEFAULT_CACHE_MIN_COMPILE_S
-        )
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_s))
+        min_s = float(os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"])  # set by configure
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", min_s)
         check_cache()
     use_unrolled_threefry()
