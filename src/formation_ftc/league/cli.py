@@ -4,6 +4,7 @@ the end, progress and log lines on stderr; schemas in docs/cli.md)."""
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 import time
 from pathlib import Path
@@ -69,14 +70,8 @@ def _cmd_run(args) -> int:
         raise LeagueError("--out: empty path; give the league directory, e.g. --out out/league")
     budgets = Budgets.resolve(args.max_memory, args.max_run_steps, args.max_campaign_steps)
     distributed = bool(args.scheduler or args.dask_local)
-
-    def factory():
-        if distributed:
-            return make_executor(
-                workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local
-            )
-        return make_executor(workers=1)
-
+    dask = dict(scheduler=args.scheduler, dask_local=args.dask_local) if distributed else {}
+    factory = functools.partial(make_executor, workers=args.workers if distributed else 1, **dask)
     if distributed:
         factory()  # checked now
     if args.workers is not None and args.workers < 1:
@@ -225,6 +220,34 @@ def _cmd_report(args) -> int:
     return 0
 
 
+#: the arguments of ``league run`` before the Dask and budget options: name or flag -> the keywords
+#: of ``add_argument``
+_RUN_OPTIONS: dict[str, dict[str, Any]] = {
+    "league": dict(metavar="NAME_OR_FILE", help="built-in league name or league TOML file"),
+    "--out": dict(required=True, help="league directory (resumed when it holds this league)"),
+    "--seeds": dict(type=int, help="Monte Carlo seeds per cell (overrides the file)"),
+    "--quick": dict(action="store_true", help="the league's quick seed count (e.g. 10 per cell)"),
+    "--methods": dict(help="comma-separated subset of the league's methods"),
+    "--until-resolved": dict(
+        action="store_true",
+        help="run blocks of seeds until every adjacent pair of the ranking is separated or tied "
+        "(writes DIR/resolution.json)",
+    ),
+    "--block": dict(type=int, help="seeds per block (default: the quick seed count)"),
+    "--max-seeds": dict(
+        type=int,
+        help="most seeds per cell with --until-resolved (default: the league's seed count)",
+    ),
+    "--margin": dict(type=float, help="pass-rate difference a tie excludes (default 0.1)"),
+    "--power": dict(type=float, help="power at which a pair not separated is a tie (default 0.8)"),
+    "--workers": dict(
+        type=int,
+        help="methods run side by side, one process each (default: one per CPU core; at most one per core "
+        "and per 1.2 GB of available memory; 1: in-process)",
+    ),
+}
+
+
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``league`` command (``list``, ``run``, ``report``) to ``subparsers``."""
     p = subparsers.add_parser(
@@ -235,39 +258,8 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     add_json_option(q)
     q.set_defaults(func=_cmd_list)
     q = sub.add_parser("run", help="run or resume a league and write its leaderboard")
-    q.add_argument(
-        "league", metavar="NAME_OR_FILE", help="built-in league name or league TOML file"
-    )
-    q.add_argument(
-        "--out", required=True, help="league directory (resumed when it holds this league)"
-    )
-    q.add_argument("--seeds", type=int, help="Monte Carlo seeds per cell (overrides the file)")
-    q.add_argument(
-        "--quick", action="store_true", help="the league's quick seed count (e.g. 10 per cell)"
-    )
-    q.add_argument("--methods", help="comma-separated subset of the league's methods")
-    q.add_argument(
-        "--until-resolved",
-        action="store_true",
-        help="run blocks of seeds until every adjacent pair of the ranking is separated or tied "
-        "(writes DIR/resolution.json)",
-    )
-    q.add_argument("--block", type=int, help="seeds per block (default: the quick seed count)")
-    q.add_argument(
-        "--max-seeds",
-        type=int,
-        help="most seeds per cell with --until-resolved (default: the league's seed count)",
-    )
-    q.add_argument("--margin", type=float, help="pass-rate difference a tie excludes (default 0.1)")
-    q.add_argument(
-        "--power", type=float, help="power at which a pair not separated is a tie (default 0.8)"
-    )
-    q.add_argument(
-        "--workers",
-        type=int,
-        help="methods run side by side, one process each (default: one per CPU core; at most one per core "
-        "and per 1.2 GB of available memory; 1: in-process)",
-    )
+    for flag, keywords in _RUN_OPTIONS.items():
+        q.add_argument(flag, **keywords)
     add_dask_options(q)
     add_budget_options(
         q, batch="one batch of a method's runs", whole="the whole league, all methods together"

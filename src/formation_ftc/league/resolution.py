@@ -70,15 +70,11 @@ def pair_verdicts(
             pairs = int(min(above["runs"], this["runs"]))
             disc = (int(this["only_above_passed"]) + int(this["only_this_passed"])) / max(pairs, 1)
             pw = st.mcnemar_power(pairs, disc, margin, st.ALPHA / m)
-            by = None
-            if this["separated"] and this["test"] == "mcnemar":
-                verdict, by = "separated", "pass rate"
-            elif pw < power:
-                verdict = "open"
-            elif this["separated"]:
-                verdict, by = "separated", "metric"
+            mcnemar = this["test"] == "mcnemar"  # else Wilcoxon: the pass rates are equal
+            if this["separated"] and (mcnemar or pw >= power):
+                verdict, by = "separated", "pass rate" if mcnemar else "metric"
             else:
-                verdict = "tied"
+                verdict, by = "open" if pw < power else "tied", None
             verdicts.append(
                 {
                     "above": above["method"],

@@ -256,27 +256,19 @@ def paired_comparison(
         from statsmodels.stats.contingency_tables import mcnemar
 
         table = np.array([[np.sum(pa & pb), a_only], [b_only, np.sum(~pa & ~pb)]])
-        res = mcnemar(table, exact=True)
-        return {
-            "test": "mcnemar",
-            "statistic": float(res.statistic),
-            "p_value": float(res.pvalue),
-        } | out
-    both = np.isfinite(ma) & np.isfinite(mb)
-    d = ma[both] - mb[both]
-    out["pairs"] = int(both.sum())
-    if d.size < 1 or np.all(d == 0):
-        return {"test": "wilcoxon", "statistic": math.nan, "p_value": 1.0} | out
-    from scipy.stats import wilcoxon
+        test, res = "mcnemar", mcnemar(table, exact=True)
+    else:
+        both = np.isfinite(ma) & np.isfinite(mb)
+        d = ma[both] - mb[both]
+        out["pairs"] = int(both.sum())
+        if d.size < 1 or np.all(d == 0):
+            return {"test": "wilcoxon", "statistic": math.nan, "p_value": 1.0} | out
+        from scipy.stats import wilcoxon
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # small samples, ties: normal approximation
-        res = wilcoxon(d)
-    return {
-        "test": "wilcoxon",
-        "statistic": float(res.statistic),
-        "p_value": float(res.pvalue),
-    } | out
+        with warnings.catch_warnings():  # small samples, ties: normal approximation
+            warnings.simplefilter("ignore", UserWarning)
+            test, res = "wilcoxon", wilcoxon(d)
+    return {"test": test, "statistic": float(res.statistic), "p_value": float(res.pvalue)} | out
 
 
 def mcnemar_power(pairs: int, discordant: float, difference: float, alpha: float) -> float:

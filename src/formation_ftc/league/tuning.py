@@ -702,10 +702,9 @@ class TuneJournal:
             with contextlib.suppress(ValueError):
                 json.loads(tail)
                 lines.append(tail)
-        try:
+        header = None
+        with contextlib.suppress(ValueError):
             header = json.loads(lines[0]) if lines else None
-        except ValueError:
-            header = None
         if not isinstance(header, dict) or header.get("kind") != JOURNAL_KIND:
             raise TuneError(
                 f"{self.path}: not a tuning journal (damaged, or another file); {advice}"
@@ -723,10 +722,9 @@ class TuneJournal:
                 f"started with to resume it, or {advice}"
             )
         for n, line in enumerate(lines[1:], start=2):
-            try:
+            entry = None
+            with contextlib.suppress(ValueError):
                 entry = json.loads(line)
-            except ValueError:
-                entry = None
             if not isinstance(entry, dict) or not isinstance(entry.get("key"), str):
                 raise TuneError(f"{self.path}: line {n} is damaged; {advice}")
             self.entries[entry["key"]] = entry
