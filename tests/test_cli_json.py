@@ -385,8 +385,8 @@ def test_bash_completion_completes_commands_options_and_scenarios(tmp_path, caps
     assert lines[3] == "cw-pd-gains"
 
 
-def test_completion_stand_in_matches_reproduce():
-    """The completion script takes `reproduce`'s arguments from a stand-in (its module imports JAX): the
+def test_completion_matches_reproduce():
+    """The completion script builds `reproduce`'s arguments without its module (which imports JAX): the
     same script as from the real parser."""
     import shtab
 

@@ -833,31 +833,6 @@ class _Parser(argparse.ArgumentParser):
 _SHELLS = ("bash", "zsh", "tcsh")
 
 
-def _reproduce_stand_in(subparsers) -> argparse.ArgumentParser:
-    """The arguments of ``reproduce`` (report.reproduce.add_cli) for the completion script, whose module
-    imports JAX; tests/test_cli_json.py checks that both give the same completion."""
-    p = subparsers.add_parser("reproduce", help=_PLUGGED["reproduce"][1])
-    p.add_argument("paper", nargs="+", metavar="PAPER", help="paper name or 'all'")
-    p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
-    p.add_argument(
-        "--force", action="store_true", help="write into an existing non-empty directory"
-    )
-    p.add_argument(
-        "--no-3d", dest="include_3d", action="store_false", help="no interactive 3-D views"
-    )
-    p.add_argument("--profile", action="store_true", help="time each paper's phases")
-    p.add_argument("--workers", type=int, metavar="N", help="papers computed side by side")
-    p.add_argument(
-        "--league",
-        action="append",
-        type=Path,
-        metavar="DIR",
-        help="link this league directory's leaderboard",
-    )
-    add_json_option(p)
-    return p
-
-
 def _resource_names(folder: str, prefix: str = "", suffix: str = ".toml") -> list[str]:
     """Names of the package's files ``folder/PREFIX*SUFFIX`` (without prefix and suffix), found
     without importing the modules that use them."""
@@ -953,10 +928,10 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     ``command`` = "" (default) builds every sub-command; a command name (or None: no command) builds
     the modules of that command only (the others get a placeholder with their one-line help), so
     that ``--help``, ``--version`` and ``list`` import no JAX, SciPy or pandas. ``completion``: every
-    sub-command, a command whose module imports JAX (``reproduce``) from a stand-in with the same
-    arguments (:func:`completion_parser`).
+    sub-command, a command whose module imports JAX (``reproduce``) with its arguments but not its
+    handler (:func:`completion_parser`).
     """
-    from formation_ftc.campaign.cli import add_budget_options
+    from formation_ftc.cli_options import add_budget_options, add_reproduce_parser
 
     parser = _Parser(prog="formation-ftc")
     parser.add_argument("--version", action=_VersionAction)
@@ -1009,8 +984,8 @@ def build_parser(command: str | None = "", *, completion: bool = False) -> argpa
     )
 
     for name, (module, short) in _PLUGGED.items():
-        if completion and name == "reproduce":  # its module imports JAX
-            _reproduce_stand_in(sub)
+        if completion and name == "reproduce":  # its module imports JAX: its arguments alone
+            add_reproduce_parser(sub, _paper_names())
             continue
         if command not in ("", name):
             sub.add_parser(name, help=short, add_help=False).add_argument(

@@ -153,17 +153,22 @@ def check_out_dir(out: str | os.PathLike, force: bool = False) -> Path:
         if not anc.is_dir():
             raise OutputError(f"--out {text}: {anc} is not a directory")
         probe = anc / f".formation-ftc-probe-{os.getpid()}"
-        try:
+        with _creating(d, f"--out {text}: cannot write in {anc}", "; choose a writable directory"):
             probe.mkdir()
             probe.rmdir()
-        except OSError as exc:
-            if exc.errno in DISK_FULL:
-                raise _no_space(exc, d) from None
-            raise OutputError(
-                f"--out {text}: cannot write in {anc} ({exc.strerror or exc}); choose a writable "
-                f"directory"
-            ) from None
         return d
+
+
+@contextlib.contextmanager
+def _creating(out_dir: Path, message: str, advice: str = "") -> Iterator[None]:
+    """An OSError inside raised as the one of a full disk naming ``out_dir`` (:func:`_no_space`), or else
+    as an :class:`OutputError`: ``message``, the system's reason in parentheses, ``advice``."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno in DISK_FULL:
+            raise _no_space(exc, out_dir) from None
+        raise OutputError(f"{message} ({exc.strerror or exc}){advice}") from None
 
 
 def _no_space(exc: OSError, out_dir: Path) -> OSError:
@@ -179,18 +184,12 @@ def staged_output(out_dir: Path) -> Iterator[Path]:
     (:data:`DISK_FULL`) raises an ``OSError`` whose ``filename`` is ``out_dir``."""
     out_dir = Path(out_dir)
     parent = out_dir.absolute().parent
-    try:
+    stage = parent / f".{out_dir.name}.tmp-{os.getpid()}"
+    with _creating(out_dir, f"--out {out_dir}: cannot create a directory in {parent}"):
         parent.mkdir(parents=True, exist_ok=True)
-        stage = parent / f".{out_dir.name}.tmp-{os.getpid()}"
         if stage.exists():
             shutil.rmtree(stage)
         stage.mkdir()
-    except OSError as exc:
-        if exc.errno in DISK_FULL:
-            raise _no_space(exc, out_dir) from None
-        raise OutputError(
-            f"--out {out_dir}: cannot create a directory in {parent} ({exc.strerror or exc})"
-        ) from None
     try:
         yield stage
         files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())

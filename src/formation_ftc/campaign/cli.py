@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from formation_ftc.cli_options import add_budget_options, add_executor_options
 from formation_ftc.exitcodes import add_json_option, print_json
 
 __all__ = ["add_cli", "main"]
@@ -172,34 +173,6 @@ def _cmd_report(args) -> int:
     return 0
 
 
-def add_budget_options(
-    parser: argparse.ArgumentParser, *, batch: str, whole: str | None = None
-) -> None:
-    """``--max-memory``, ``--max-run-steps`` and, with ``whole``, ``--max-campaign-steps``
-    (formation_ftc.limits), for ``run``, ``campaign run`` and ``league run``: ``batch`` and ``whole``
-    say what the first and last one bound."""
-    options = {  # flag: help
-        "--max-memory": f"memory budget of {batch}, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
-        "--max-run-steps": "integration steps allowed per run (default 1e9; 0 = none)",
-        "--max-campaign-steps": f"run-steps allowed in {whole} (default 1e11; 0 = none)",
-    }
-    for flag, text in options.items():
-        if whole is not None or flag != "--max-campaign-steps":
-            parser.add_argument(flag, metavar="SIZE" if flag == "--max-memory" else "N", help=text)
-
-
-def add_dask_options(parser: argparse.ArgumentParser) -> None:
-    """The Dask executor options shared by ``campaign run`` and ``league run`` (mutually exclusive)."""
-    g = parser.add_mutually_exclusive_group()
-    g.add_argument("--scheduler", metavar="ADDR", help="Dask scheduler tcp://HOST:PORT")
-    g.add_argument(
-        "--dask-local",
-        metavar="N",
-        type=int,
-        help="start a Dask LocalCluster with N worker processes",
-    )
-
-
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``campaign`` command (with ``list``, ``run``, ``report``) to ``subparsers``."""
     p = subparsers.add_parser(
@@ -220,18 +193,11 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     )
     q.add_argument("--runs", type=int, help="runs per grid point (overrides the file)")
     q.add_argument("--chunk-size", type=int, help="runs per vmap batch (overrides the file)")
-    q.add_argument(
-        "--workers",
-        type=int,
-        help="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
+    add_executor_options(
+        q,
+        workers="local worker processes (spawn); 1 = in-process; default: one per CPU core (at most "
         "one per chunk), in-process for campaigns under 10 million run-steps",
-    )
-    add_dask_options(q)
-    q.add_argument(
-        "--connect-timeout",
-        metavar="S",
-        type=float,
-        help="seconds allowed for the Dask scheduler handshake (default 30)",
+        connect_timeout=True,
     )
     add_budget_options(q, batch="one batch of chunk-size runs", whole="the whole campaign")
     q.add_argument("--no-progress", action="store_true", help="no progress bar")

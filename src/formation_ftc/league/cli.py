@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from formation_ftc.campaign.cli import add_budget_options, add_dask_options
+from formation_ftc.cli_options import add_budget_options, add_executor_options
 from formation_ftc.exitcodes import add_json_option, print_json
 
 __all__ = ["add_cli"]
@@ -220,7 +220,7 @@ def _cmd_report(args) -> int:
     return 0
 
 
-#: the arguments of ``league run`` before the Dask and budget options: name or flag -> the keywords
+#: the arguments of ``league run`` before the executor and budget options: name or flag -> the keywords
 #: of ``add_argument``
 _RUN_OPTIONS: dict[str, dict[str, Any]] = {
     "league": dict(metavar="NAME_OR_FILE", help="built-in league name or league TOML file"),
@@ -240,11 +240,6 @@ _RUN_OPTIONS: dict[str, dict[str, Any]] = {
     ),
     "--margin": dict(type=float, help="pass-rate difference a tie excludes (default 0.1)"),
     "--power": dict(type=float, help="power at which a pair not separated is a tie (default 0.8)"),
-    "--workers": dict(
-        type=int,
-        help="methods run side by side, one process each (default: one per CPU core; at most one per core "
-        "and per 1.2 GB of available memory; 1: in-process)",
-    ),
 }
 
 
@@ -260,7 +255,11 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     q = sub.add_parser("run", help="run or resume a league and write its leaderboard")
     for flag, keywords in _RUN_OPTIONS.items():
         q.add_argument(flag, **keywords)
-    add_dask_options(q)
+    add_executor_options(
+        q,
+        workers="methods run side by side, one process each (default: one per CPU core; at most one "
+        "per core and per 1.2 GB of available memory; 1: in-process)",
+    )
     add_budget_options(
         q, batch="one batch of a method's runs", whole="the whole league, all methods together"
     )

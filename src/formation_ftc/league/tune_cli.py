@@ -198,7 +198,7 @@ def add_cli(subparsers) -> argparse.ArgumentParser:
     >>> p.parse_args(["tune", "lqr", "--out", "o"]).level
     'limited'
     """
-    from formation_ftc.campaign.cli import add_budget_options
+    from formation_ftc.cli_options import add_budget_options
     from formation_ftc.exitcodes import add_json_option
 
     p = subparsers.add_parser(

@@ -43,7 +43,7 @@ from rich.table import Table
 
 from formation_ftc import registry
 from formation_ftc.atomic import atomic_write
-from formation_ftc.exitcodes import add_json_option, print_json, print_json_error
+from formation_ftc.exitcodes import print_json, print_json_error
 from formation_ftc.progress import _Bars, _since
 from formation_ftc.registry import PaperReport, Reproduction
 from formation_ftc.report.metadata import provenance, utc_now
@@ -672,52 +672,12 @@ def _print_table(entries: list[dict], total: float, index: Path, console=None) -
 def add_cli(subparsers) -> argparse.ArgumentParser:
     """Add the ``reproduce`` subcommand to an ``argparse`` subparsers object (handler in ``func``).
 
-    The completion script (``formation-ftc completion``) must not import this module (JAX): it takes
-    these arguments from ``formation_ftc.cli._reproduce_stand_in``, which tests/test_cli_json.py keeps
-    in step with this function (same options, nargs, metavars).
+    Its arguments come from :func:`formation_ftc.cli_options.add_reproduce_parser`, which the completion
+    script (``formation-ftc completion``) uses without importing this module (JAX).
     """
-    valid = ", ".join(registry.PAPER_MODULES)
-    p = subparsers.add_parser(
-        "reproduce",
-        help="reproduce the papers' studies and write an HTML report",
-        description="Run the paper reproductions and write DIR/index.html, DIR/summary.json and one "
-        "folder per paper. Exit status: 0 all ran, 1 a paper failed, 2 bad input.",
-    )
-    p.add_argument("paper", nargs="+", metavar="PAPER", help=f"paper name ({valid}) or 'all'")
-    p.add_argument("--out", required=True, type=Path, metavar="DIR", help="report directory")
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="write into an existing non-empty directory that is not a previous report",
-    )
-    p.add_argument(
-        "--no-3d",
-        dest="include_3d",
-        action="store_false",
-        help="leave out the interactive 3-D trajectory views (smaller page)",
-    )
-    p.add_argument(
-        "--profile",
-        action="store_true",
-        help="time each paper's compile / run / post-processing / plotting / report phases, print "
-        "them as a table and store them in the report's run metadata",
-    )
-    p.add_argument(
-        "--workers",
-        type=int,
-        metavar="N",
-        help="papers computed side by side in N worker processes (default: one per CPU core, at "
-        "most one per paper; 1: one after the other in this process); same numbers either way",
-    )
-    p.add_argument(
-        "--league",
-        action="append",
-        type=Path,
-        metavar="DIR",
-        help="link this league directory's leaderboard from the report (repeatable; leaderboards in "
-        "DIR/*/leaderboard/ of the report directory are linked anyway)",
-    )
-    add_json_option(p)
+    from formation_ftc.cli_options import add_reproduce_parser
+
+    p = add_reproduce_parser(subparsers, registry.PAPER_MODULES)
     p.set_defaults(func=run_cli)
     return p
 
