@@ -3,7 +3,8 @@
 :func:`simulate` runs one scenario through the process's shared program of its structure
 (:func:`formation_ftc.sim.programs.jitted_run`, re-exported here with :func:`executable` and
 :func:`clear`): the second scenario of a structure calls the program the first one compiled.
-:func:`simulate_batched` runs scenarios of one structure as one ``jax.vmap`` batch.
+:func:`simulate_batched` runs scenarios of one structure as one ``jax.vmap`` batch;
+:func:`run_loops` runs closed loops of one structure as one batch or grid and returns their outputs.
 """
 
 from __future__ import annotations
@@ -12,10 +13,12 @@ from collections.abc import Hashable
 from typing import Any
 
 import jax
+import numpy as np
 
+from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
 from formation_ftc.sim.programs import clear, executable, jitted_run
 
-__all__ = ["simulate", "simulate_batched", "jitted_run", "executable", "clear"]
+__all__ = ["simulate", "simulate_batched", "run_loops", "jitted_run", "executable", "clear"]
 
 
 def simulate(scenario, raise_on_divergence: bool = True) -> tuple[Any, dict[str, float]]:
@@ -36,10 +39,7 @@ def simulate_batched(
     ``timings``: a list that receives ``(compile_s, run_s)`` of each run's batch [s], in order."""
     import time
 
-    import numpy as np
-
     from formation_ftc.api import build_loop, finish_run
-    from formation_ftc.sim.batch import batched_run, stack_params
 
     loops = [build_loop(s) for s in scenarios]
     groups: dict[Hashable, list[int]] = {}
@@ -63,3 +63,22 @@ def simulate_batched(
     if timings is not None:
         timings.extend(times)
     return results
+
+
+def run_loops(loops: list, columns: int | None = None) -> Any:
+    """The outputs of closed loops of one structure run as one compiled, vmapped program
+    (:mod:`formation_ftc.sim.batch`; leaves shared by every run stay unbatched), as NumPy arrays with
+    the run axis first.
+
+    ``columns``: the loops, row by row, are the cells of a grid ``columns`` wide, batched by two nested
+    maps (:func:`formation_ftc.sim.batch.stack_params_grid`): a leaf that changes only from row to row
+    -- a seed per row -- is batched once per row, and so is the work that depends on it alone; the
+    outputs then have the axes ``(rows, columns)`` first."""
+    if columns is None:
+        batch, axes = stack_params(loops)
+        run = batched_run(loops[0], axes, len(loops))
+    else:
+        rows = [loops[i : i + columns] for i in range(0, len(loops), columns)]
+        batch, row_axes, col_axes = stack_params_grid(rows)
+        run = batched_grid_run(loops[0], row_axes, col_axes, len(rows), columns)
+    return jax.tree_util.tree_map(np.asarray, run(batch))

@@ -15,8 +15,8 @@ import numpy as np
 from formation_ftc.api import load_scenario
 from formation_ftc.methods.composed import ComposedScenario, make_loop
 from formation_ftc.papers.azizi2009.conditions import d_norms
+from formation_ftc.papers.programs import run_loops
 from formation_ftc.report.profile import phase
-from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import metrics_dict
 
@@ -62,13 +62,13 @@ def run_batch(
     """Metrics of len(batch) runs of ``sc`` (a scenario of the paper's law on the double-integrator
     plant) that differ only in the given leaves (see :data:`VARIABLE`: ``alpha`` (B, N),
     ``alpha_flfr`` (B,), ``seed`` (B,)), run as one compiled, vmapped program through
-    :mod:`formation_ftc.sim.batch` (leaves shared by every run stay unbatched). Each run's metrics also
-    carry ``D_norm_llfr`` / ``D_norm_flfr``: ||D||_2 of eq. (6) from its weights (true eps).
+    :func:`formation_ftc.papers.programs.run_loops` (leaves shared by every run stay unbatched). Each
+    run's metrics also carry ``D_norm_llfr`` / ``D_norm_flfr``: ||D||_2 of eq. (6) from its weights
+    (true eps).
 
     ``grid = (rows, columns)``: run b is cell ``(b // columns, b % columns)`` of a grid (B = rows x
-    columns), batched by two nested maps (:func:`formation_ftc.sim.batch.stack_params_grid`): a leaf
-    that changes only from row to row -- a seed per row -- is batched once per row, and so is the work
-    that depends on it alone (the noise draws). Same metrics, in the same order.
+    columns), batched by two nested maps (:func:`formation_ftc.papers.programs.run_loops`): a seed per
+    row is batched once per row, and so are the noise draws. Same metrics, in the same order.
     Raises ``RuntimeError`` naming a run that diverged."""
     unknown = set(variations) - set(VARIABLE)
     if unknown:
@@ -82,16 +82,12 @@ def run_batch(
         _variant(loop, {k: np.asarray(v)[b] for k, v in variations.items()}) for b in range(size)
     ]
     if grid is None:
-        batch, axes = stack_params(loops)
-        out = jax.device_get(batched_run(loop, axes, size)(batch))
+        out = run_loops(loops)
     else:
         rows, cols = (int(g) for g in grid)
         if rows < 1 or cols < 1 or rows * cols != size:
             raise ValueError(f"grid = {grid}: rows x columns must equal the batch size {size}")
-        batch, row_axes, col_axes = stack_params_grid(
-            [loops[r * cols : (r + 1) * cols] for r in range(rows)]
-        )
-        out = jax.device_get(batched_grid_run(loop, row_axes, col_axes, rows, cols)(batch))
+        out = run_loops(loops, cols)
         out = jax.tree_util.tree_map(lambda a: np.reshape(a, (size,) + np.shape(a)[2:]), out)
     res = []
     for b, lp in enumerate(loops):

@@ -8,7 +8,7 @@ analytic alpha_2 from t = 0, and the alpha_2 sweep and the seed spread
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +28,7 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     """The numbers ``study.toml`` reads (``constants``: e_s, the sweep step, the seed spread's size,
     the published values)."""
     from formation_ftc.api import load_scenario
-    from formation_ftc.methods.composed import ComposedScenario, make_loop
+    from formation_ftc.methods.composed import make_loop
     from formation_ftc.papers.azizi2009.conditions import conditions
     from formation_ftc.papers.programs import simulate
     from formation_ftc.report.profile import phase
@@ -49,8 +49,8 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     q |= {"alpha2_min_simulated": st["a_min"], "alpha2_min_simulated_interpolated": st["a_interp"]}
     q |= {"max_err_fault_free": m["fault-free"]["max_err"], "max_err_llfr": m["llfr"]["max_err"]}
     q |= {"supervisor_t_flfr": m["flfr"]["t_flfr"]}
-    supervised: Any = make_loop(sc_sv).controller
-    q["supervisor_alpha2"] = float(np.asarray(supervised.alpha_flfr))
+    loop_sv: Any = make_loop(sc_sv)  # the supervised run's loop: its FLFR weight, the conditions
+    q["supervisor_alpha2"] = float(np.asarray(loop_sv.controller.alpha_flfr))
     q["supervisor_max_err_after_settle"] = m["flfr"]["max_err_after_flfr"]
     q |= {"supervisor_max_err": m["flfr"]["max_err"], "sweep_max_err": st["max_err"]}
     q |= {"max_err_at_10": st["max_err"][-1], "d_norm_at_10": st["d_norm"][-1]}
@@ -79,8 +79,7 @@ def quantities(runs: dict[str, Run], constants: dict) -> dict:
     q["edge_note"] = narrow if edge else ""
     q["scenarios"] = ["azizi2009-fault-free", "azizi2009-llfr", "azizi2009-flfr"]
     q["seeds"] = sorted({0, *range(int(c["seeds"]))})
-    sc = cast(ComposedScenario, load_scenario("azizi2009-flfr"))
-    return q | {"checks": conditions(sc, make_loop(sc))}
+    return q | {"checks": conditions(sc_sv, loop_sv)}
 
 
 REPRODUCTION = study("azizi2009", quantities)

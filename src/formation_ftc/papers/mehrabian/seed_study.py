@@ -16,8 +16,8 @@ import numpy as np
 from formation_ftc.api import build_loop, finish_run, load_scenario
 from formation_ftc.components.estimators.scripted_fdi import ScriptedFdi
 from formation_ftc.components.evaluations.mehrabian_metrics import metric_windows
+from formation_ftc.papers.programs import jitted_run, run_loops
 from formation_ftc.report.profile import phase
-from formation_ftc.sim.batch import batched_grid_run, batched_run, stack_params, stack_params_grid
 from formation_ftc.sim.loop import ClosedLoop
 
 __all__ = ["CASES", "SEEDS", "FIGURE_SEED", "with_seed", "run_batch", "case_study"]
@@ -77,15 +77,14 @@ def _case_loops(scenario_names: list[str], overrides: dict) -> tuple[list, list[
 
 def run_batch(scenario_names: list[str], seeds: list[int], overrides: dict | None = None):
     """Run every (scenario, seed) pair in one vmapped program, laid out as a grid (scenarios x seeds,
-    :func:`formation_ftc.sim.batch.stack_params_grid`): a seed's measurement noise is drawn once for
+    :func:`formation_ftc.papers.programs.run_loops`): a seed's measurement noise is drawn once for
     all scenarios (measured on the 3 x 20 study: run 11.4 -> 8.5 s against one flat batch, metrics bit
     for bit equal). Returns (metrics dict of arrays shaped (n_scenarios, n_seeds), diverged steps
     (n_scenarios, n_seeds))."""
     ov = dict(overrides or {})
     n_steps = load_scenario(scenario_names[0], ov).simulation.n_steps
     _, loops = _case_loops(scenario_names, {**ov, "simulation.record_every": n_steps})
-    P, row_axes, col_axes = stack_params_grid([[with_seed(c, s) for s in seeds] for c in loops])
-    out = batched_grid_run(loops[0], row_axes, col_axes, len(loops), len(seeds))(P)
+    out = run_loops([with_seed(c, s) for c in loops for s in seeds], len(seeds))
     mets = {m.name: np.array(v) for m, v in zip(loops[0].metrics, out["metrics"], strict=True)}
     div = np.array(out["diverged_step"])
     # one record per run: a run that left its admissible set reports its block's first step (0) and no
@@ -108,7 +107,6 @@ def _replay_diverged(
     a record every :data:`REPLAY_RECORD_EVERY` steps: the engine dates the exit exactly (replaying the
     failing record block) and freezes the metrics at the last record before it (within 1 s at
     dt = 0.01 s), so the windows that end before the exit are complete."""
-    from formation_ftc.papers.programs import jitted_run
     from formation_ftc.sim.engine import SimulationDiverged
 
     every = math.gcd(n_steps, REPLAY_RECORD_EVERY)
@@ -128,8 +126,7 @@ def _replay_diverged(
 def _figure_runs(scenario_names: list[str], seed: int, overrides: dict | None = None):
     scns, loops = _case_loops(scenario_names, {**(overrides or {}), "simulation.seed": seed})
     # one batch of the cases (leaves shared by every run stay unbatched)
-    P, axes = stack_params([with_seed(c, seed) for c in loops])
-    out = jax.tree_util.tree_map(np.asarray, batched_run(loops[0], axes, len(loops))(P))
+    out = run_loops([with_seed(c, seed) for c in loops])
     datasets = []
     for i, (s, c) in enumerate(zip(scns, loops, strict=True)):
         one = jax.tree_util.tree_map(lambda a, i=i: a[i], out)
