@@ -48,7 +48,7 @@ from formation_ftc.sim.components import (
     component,
     static,
 )
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "EulerTorqueAllocation",
@@ -57,8 +57,6 @@ __all__ = [
     "FaultEntry",
     "FaultProfile",
 ]
-
-VEC = ("spacecraft", "axis")
 
 
 @component

@@ -8,6 +8,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from formation_ftc.components._sections import check_nominal_masses
 from formation_ftc.sim.components import (
     CompositionError,
     Controller,
@@ -15,6 +16,7 @@ from formation_ftc.sim.components import (
     Signal,
     component,
 )
+from formation_ftc.sim.contract import VEC
 
 __all__ = [
     "WrappedLaw",
@@ -85,7 +87,7 @@ class WrappedLaw(Controller):
 
     def signals(self):
         own = self.recorded_command
-        extra = () if own is None else (Signal(own[0], ("spacecraft", "axis"), *own[1:]),)
+        extra = () if own is None else (Signal(own[0], VEC, *own[1:]),)
         return tuple(self.law.signals()) + extra
 
     def coords(self):
@@ -182,11 +184,9 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     """
     m = np.asarray(nominal_mass, dtype=float)
     n = int(law.count)  # type: ignore[attr-defined]  # every translational law has a count
-    if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):
-        raise CompositionError(
-            f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
-            f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)"
-        )
+    check_nominal_masses(
+        m, n, "AccelerationToForce", f"controller {type(law).__name__}", f"need {n}, each > 0"
+    )
     cls = wrapper_for(law, AccelerationToForce, TrackingAccelerationToForce)
     return cls(law=law, nominal_mass=nominal_mass)
 

@@ -42,12 +42,10 @@ from formation_ftc.components.estimators.iterative_learning_observer import (
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_free_motion
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import STATE, as_float
 
 __all__ = ["NominalOrbitTracking", "OutputFeedbackSection", "care_solution"]
 
-STATE = ("spacecraft", "component")
-VEC = ("spacecraft", "axis")
 SC = ("spacecraft",)
 
 

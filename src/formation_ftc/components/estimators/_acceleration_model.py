@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from formation_ftc.sim.components import CompositionError, Estimator, FlightInputs, component
+from formation_ftc.components._sections import check_nominal_masses
+from formation_ftc.sim.components import Estimator, FlightInputs, component
 
 __all__ = ["AccelerationModelEstimator", "WrapsInner"]
 
@@ -62,16 +63,13 @@ class AccelerationModelEstimator(WrapsInner):
         m = self.nominal_mass
         if not isinstance(self.inner, Estimator) or not isinstance(m, np.ndarray):
             return  # pytree reconstruction with placeholders
-        n = getattr(self.inner, "count", None)
-        if (
-            m.ndim != 1
-            or (n is not None and m.shape != (n,))
-            or not np.all(np.isfinite(m) & (m > 0))
-        ):
-            raise CompositionError(
-                f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
-                f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)"
-            )
+        check_nominal_masses(
+            m,
+            getattr(self.inner, "count", None),
+            "AccelerationModelEstimator",
+            f"estimator {type(self.inner).__name__}",
+            "need one finite mass > 0 each",
+        )
 
     def initial_state(self, measurement0):
         return self.inner.initial_state(measurement0)
