@@ -46,8 +46,6 @@ from formation_ftc.sim.contract import STATE, as_float
 
 __all__ = ["NominalOrbitTracking", "OutputFeedbackSection", "care_solution"]
 
-SC = ("spacecraft",)
-
 
 @component
 class NominalOrbitTracking(Controller):
@@ -254,7 +252,7 @@ def _on_plant(law: Controller, sec: OutputFeedbackSection, ctx: BuildContext) ->
 
     for part, lo, hi, units in (("position", 0, 3, "m"), ("velocity", 3, 6, "m s-1")):
         name, long_name = f"{part}_tracking_error", f"||{part} part of e_y = q0 - y||"
-        norm = PartNorm(name, "tracking_error", lo, hi, dims=SC, units=units, long_name=long_name)
+        norm = PartNorm(name, "tracking_error", lo, hi, units=units, long_name=long_name)
         ctx.evaluations.append(norm)
     if ctx.plant.quantity == "force":
         masses = nominal_masses(

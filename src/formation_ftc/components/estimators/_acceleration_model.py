@@ -7,38 +7,18 @@ from typing import Any
 
 import numpy as np
 
+from formation_ftc.components._pass_through import PassThrough
 from formation_ftc.components._sections import check_nominal_masses
 from formation_ftc.sim.components import Estimator, FlightInputs, component
 
 __all__ = ["AccelerationModelEstimator", "WrapsInner"]
 
 
-class WrapsInner(Estimator):
+class WrapsInner(PassThrough, Estimator):  # type: ignore[override]  # a property holds_exogenous
     """An estimator built around another one (its field ``inner``), passing through unchanged the
     spacecraft count, the inner estimator's time signals, coordinates and conditions."""
 
     inner: Estimator
-
-    @property
-    def count(self) -> int | None:
-        return getattr(self.inner, "count", None)
-
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return bool(self.inner.holds_exogenous)
-
-    def exogenous(self, t):
-        return self.inner.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.inner.held_exogenous(step)
-
-    def coords(self):
-        return self.inner.coords()
-
-    def conditions(self, loop) -> list:
-        conds = getattr(self.inner, "conditions", None)
-        return list(conds(loop)) if callable(conds) else []
 
 
 @component

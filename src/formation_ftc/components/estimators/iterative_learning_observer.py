@@ -638,7 +638,6 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
                     "fault_acceleration",
                     "fault",
                     mass=as_float(true_mass),
-                    dims=VEC,
                     long_name="true thruster fault per unit true mass F_i / m_i",
                     frame="LVLH",
                 )
@@ -648,7 +647,6 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
             SignalSum(
                 "fault_error",
                 (("+", fault), ("-", "fault_estimate")),
-                dims=VEC,
                 units="m s-2",
                 long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
                 frame="LVLH",
