@@ -10,6 +10,7 @@ import numpy as np
 from pydantic import AfterValidator, Field
 
 from formation_ftc.config.base import ExprText, StrictModel
+from formation_ftc.sim.contract import CompositionError
 
 __all__ = [
     "Vec3",
@@ -344,6 +345,37 @@ def nominal_masses(value: Any, default: float, n: int, field: str) -> np.ndarray
     if not np.all(np.isfinite(arr) & (arr > 0)):
         raise ValueError(f"{field}: every mass must be finite and > 0 kg")
     return arr
+
+
+def check_nominal_masses(
+    mass: np.ndarray, n: int | None, wrapper: str, part: str, need: str
+) -> None:
+    """A CompositionError unless ``mass`` holds one finite mass > 0 [kg] per spacecraft of ``part``
+    (the check of a wrapper that converts between a force and an acceleration with the nominal masses).
+
+    Parameters
+    ----------
+    mass : numpy.ndarray
+        The nominal masses [kg].
+    n : int or None
+        Number of spacecraft of the wrapped part (None: any one-dimensional array).
+    wrapper, part, need : str
+        The wrapper's class name, the wrapped part (``"controller Name"``) and what is needed, for the
+        error.
+
+    Examples
+    --------
+    >>> check_nominal_masses(np.array([100.0, 120.0]), 2, "W", "controller C", "need 2, each > 0")
+    >>> check_nominal_masses(np.array([100.0]), 2, "W", "controller C", "need 2, each > 0")
+    Traceback (most recent call last):
+    ...
+    formation_ftc.sim.components.CompositionError: W: nominal masses [100.0] kg for controller C of 2 spacecraft (need 2, each > 0)
+    """
+    shape_ok = mass.ndim == 1 and (n is None or mass.shape == (n,))
+    if not shape_ok or not np.all(np.isfinite(mass) & (mass > 0)):
+        raise CompositionError(
+            f"{wrapper}: nominal masses {mass.tolist()} kg for {part} of {n} spacecraft ({need})"
+        )
 
 
 def check_rows(section: Any, names: Sequence[str], n: int) -> None:

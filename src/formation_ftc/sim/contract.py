@@ -65,6 +65,9 @@ BLOCK_REDUCTIONS = ("block_rms", "block_dev_rms")
 STAGE_REDUCTIONS = ("stage_integral", "stage_root_mean")
 #: how spacecraft are combined before the time reduction
 SPACECRAFT_REDUCTIONS = ("each", "max", "mean", "sum", "none", "range")
+#: dims of a recorded per-spacecraft 3-vector and of a per-spacecraft state (:class:`Signal` dims)
+VEC = ("spacecraft", "axis")
+STATE = ("spacecraft", "component")
 
 
 class CompositionError(ValueError):

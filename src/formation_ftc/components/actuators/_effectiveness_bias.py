@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from formation_ftc.core.faults import actuator_fault
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal
+from formation_ftc.sim.contract import VEC
 
 __all__ = ["EffectivenessBiasActuator"]
 
@@ -17,9 +18,7 @@ class EffectivenessBiasActuator(Actuator):
         return actuator_fault(command, inputs.exogenous["gamma"], inputs.exogenous["bias"])
 
     def signals(self):
-        return (
-            Signal("effectiveness", ("spacecraft", "axis"), "1", "actuator effectiveness Gamma(t)"),
-        )
+        return (Signal("effectiveness", VEC, "1", "actuator effectiveness Gamma(t)"),)
 
     def outputs(self, t, command, inputs: ActuatorInputs):
         return {"effectiveness": inputs.exogenous["gamma"]}

@@ -18,7 +18,7 @@ from formation_ftc.components._registry import BuildContext, builder_input, per_
 from formation_ftc.components.sensors.chain_relative import chain_layout
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["StepGainActuator", "ActuatorGainsSection"]
 
@@ -49,7 +49,7 @@ class StepGainActuator(Actuator):
         return inputs.exogenous["b"] * command  # Azizi2009 Sec. II: b_i u_i
 
     def signals(self):
-        return (Signal("actuator_gain", ("spacecraft", "axis"), "1", "true actuator gain b_i(t)"),)
+        return (Signal("actuator_gain", VEC, "1", "true actuator gain b_i(t)"),)
 
     def outputs(self, t, command, inputs):
         return {"actuator_gain": inputs.exogenous["b"]}

@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from pydantic import Field, model_validator
 
+from formation_ftc.components._pass_through import PassThrough
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.config.base import ExprText, StrictModel
 from formation_ftc.core.euler_quaternion import (
@@ -48,7 +49,7 @@ from formation_ftc.sim.components import (
     component,
     static,
 )
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "EulerTorqueAllocation",
@@ -57,8 +58,6 @@ __all__ = [
     "FaultEntry",
     "FaultProfile",
 ]
-
-VEC = ("spacecraft", "axis")
 
 
 @component
@@ -106,7 +105,7 @@ class HeldAdditiveFaultActuator(Actuator):
 
 
 @component
-class EulerTorqueAllocation(Actuator):
+class EulerTorqueAllocation(PassThrough, Actuator):  # type: ignore[override]  # a property holds_exogenous
     """``applied = R_bar(q)^T inner.apply(command)`` [N m, body axes] with q the true 3-2-1 Euler
     angles of the plant's quaternion (module docstring). ``inner`` is the actuator chain acting in the
     law's generalised channels (default: ideal). Records the generalised torque after ``inner``
@@ -115,20 +114,6 @@ class EulerTorqueAllocation(Actuator):
     quantity = "torque"
 
     inner: Actuator = dataclasses.field(default_factory=IdealActuator)
-
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return self.inner.holds_exogenous
-
-    @property
-    def count(self) -> int | None:
-        return getattr(self.inner, "count", None)
-
-    def exogenous(self, t):
-        return self.inner.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.inner.held_exogenous(step)
 
     def initial_state(self):
         return self.inner.initial_state()
@@ -160,9 +145,6 @@ class EulerTorqueAllocation(Actuator):
                 "body to reference Z-Y-X",
             ),
         )
-
-    def coords(self):
-        return self.inner.coords()
 
     def outputs(self, t, command, inputs: ActuatorInputs):
         out = dict(self.inner.outputs(t, command, inputs))

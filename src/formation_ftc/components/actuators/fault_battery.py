@@ -67,7 +67,7 @@ from formation_ftc.components._sections import positive_values, section_floats
 from formation_ftc.components.actuators.euler_torque_allocation import EulerTorqueAllocation
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["FaultBatteryActuator", "FaultBatterySection", "FAULT_KINDS", "fault_kind_code"]
 
@@ -239,7 +239,7 @@ class FaultBatteryActuator(Actuator):
         return (
             Signal(
                 "effectiveness",
-                ("spacecraft", "axis"),
+                VEC,
                 "1",
                 "true actuator effectiveness g (after saturation; 0 on a stuck or outage channel)",
             ),
@@ -258,7 +258,7 @@ class FaultBatteryActuator(Actuator):
             ),
             Signal(
                 "fault_channel",
-                ("spacecraft", "axis"),
+                VEC,
                 "1",
                 "1 on the faulty (spacecraft, axis) channel from the fault's first departure on",
             ),

@@ -13,7 +13,7 @@ from formation_ftc.components._registry import BuildContext, register
 from formation_ftc.components._sections import per_axis
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Actuator, ActuatorInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["ThrusterBiasFaultActuator", "ThrusterBiasSection"]
 
@@ -57,9 +57,7 @@ class ThrusterBiasFaultActuator(Actuator):
         return command + inputs.exogenous["F"]
 
     def signals(self):
-        return (
-            Signal("fault", ("spacecraft", "axis"), self.units, "thruster bias fault F (true)"),
-        )
+        return (Signal("fault", VEC, self.units, "thruster bias fault F (true)"),)
 
     def outputs(self, t, command, inputs):
         return {"fault": inputs.exogenous["F"]}

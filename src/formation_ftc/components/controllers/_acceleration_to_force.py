@@ -8,6 +8,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from formation_ftc.components._pass_through import PassThrough
+from formation_ftc.components._sections import check_nominal_masses
 from formation_ftc.sim.components import (
     CompositionError,
     Controller,
@@ -15,6 +17,7 @@ from formation_ftc.sim.components import (
     Signal,
     component,
 )
+from formation_ftc.sim.contract import VEC
 
 __all__ = [
     "WrappedLaw",
@@ -30,7 +33,7 @@ ACCELERATION_COMMAND_SIGNAL = "acceleration_command"
 
 
 @component
-class WrappedLaw(Controller):
+class WrappedLaw(PassThrough, Controller):  # type: ignore[override]  # a property holds_exogenous
     """A controller that wraps the law ``law``: its structure (sampling, states, messages, time signals,
     recorded signals, coordinates, conditions, what it needs and provides) is the law's; a wrapper
     that changes the command states :meth:`command` and ``recorded_command``, the signal (name, units,
@@ -38,6 +41,7 @@ class WrappedLaw(Controller):
 
     law: Controller
     recorded_command: ClassVar[tuple[str, str, str] | None] = None
+    wrapped_field = "law"
 
     def command(self, u, inputs: FlightInputs):
         """The wrapper's command from the law's command ``u`` (unchanged here)."""
@@ -55,21 +59,11 @@ class WrappedLaw(Controller):
     def uses_messages(self) -> bool:
         return bool(getattr(self.law, "uses_messages", False))
 
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return bool(self.law.holds_exogenous)
-
     def needs(self) -> dict[str, str]:
         return self.law.needs()
 
     def provides(self) -> frozenset[str]:
         return self.law.provides()
-
-    def exogenous(self, t):
-        return self.law.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.law.held_exogenous(step)
 
     def initial_state(self):
         return self.law.initial_state()
@@ -85,15 +79,8 @@ class WrappedLaw(Controller):
 
     def signals(self):
         own = self.recorded_command
-        extra = () if own is None else (Signal(own[0], ("spacecraft", "axis"), *own[1:]),)
+        extra = () if own is None else (Signal(own[0], VEC, *own[1:]),)
         return tuple(self.law.signals()) + extra
-
-    def coords(self):
-        return self.law.coords()
-
-    def conditions(self, loop) -> list:
-        conds = getattr(self.law, "conditions", None)
-        return list(conds(loop)) if callable(conds) else []
 
 
 @component
@@ -182,11 +169,9 @@ def force_from_acceleration(law: Controller, nominal_mass: Any) -> AccelerationT
     """
     m = np.asarray(nominal_mass, dtype=float)
     n = int(law.count)  # type: ignore[attr-defined]  # every translational law has a count
-    if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):
-        raise CompositionError(
-            f"AccelerationToForce: nominal masses {m.tolist()} kg for controller "
-            f"{type(law).__name__} of {n} spacecraft (need {n}, each > 0)"
-        )
+    check_nominal_masses(
+        m, n, "AccelerationToForce", f"controller {type(law).__name__}", f"need {n}, each > 0"
+    )
     cls = wrapper_for(law, AccelerationToForce, TrackingAccelerationToForce)
     return cls(law=law, nominal_mass=nominal_mass)
 

@@ -42,13 +42,9 @@ from formation_ftc.components.estimators.iterative_learning_observer import (
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.cw import cw_free_motion
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import STATE, as_float
 
 __all__ = ["NominalOrbitTracking", "OutputFeedbackSection", "care_solution"]
-
-STATE = ("spacecraft", "component")
-VEC = ("spacecraft", "axis")
-SC = ("spacecraft",)
 
 
 @component
@@ -256,7 +252,7 @@ def _on_plant(law: Controller, sec: OutputFeedbackSection, ctx: BuildContext) ->
 
     for part, lo, hi, units in (("position", 0, 3, "m"), ("velocity", 3, 6, "m s-1")):
         name, long_name = f"{part}_tracking_error", f"||{part} part of e_y = q0 - y||"
-        norm = PartNorm(name, "tracking_error", lo, hi, dims=SC, units=units, long_name=long_name)
+        norm = PartNorm(name, "tracking_error", lo, hi, units=units, long_name=long_name)
         ctx.evaluations.append(norm)
     if ctx.plant.quantity == "force":
         masses = nominal_masses(

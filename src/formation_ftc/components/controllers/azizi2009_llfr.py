@@ -55,7 +55,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.polygon_formation import chain_difference, rotating_polygon
 from formation_ftc.design.allocation import allocation_matrix
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 if TYPE_CHECKING:
     from formation_ftc.design.flfr import FlfrDesign
@@ -72,7 +72,6 @@ __all__ = [
     "DESIGN_HORIZON",
 ]
 
-VEC = ("spacecraft", "axis")
 AXES = ("x", "y", "z")
 #: horizon of the simulated supremum H_i of the FLFR design (several rotation periods) [s]
 DESIGN_HORIZON = 300.0

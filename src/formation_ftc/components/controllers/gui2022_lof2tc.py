@@ -35,7 +35,6 @@ from pydantic import Field
 from formation_ftc.components._registry import BuildContext, builder_input, register
 from formation_ftc.components._sections import Vec3, section_floats
 from formation_ftc.components.controllers._output_feedback import (
-    VEC,
     NominalOrbitTracking,
     OutputFeedbackSection,
     _on_plant,
@@ -45,7 +44,7 @@ from formation_ftc.components.estimators.iterative_learning_observer import lear
 from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["lof2tc_law", "LearningOutputFeedbackController", "Lof2tcSection"]
 

@@ -40,7 +40,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "Li2020AdaptiveController",
@@ -203,7 +203,6 @@ def li2020_adaptation_rates(s, Y, xi, d_hat, sigma, gamma, eta, mu, upsilon):
     return beta_dot, m_dot, d_dot
 
 
-VEC = ("spacecraft", "axis")
 #: the adaptive parameters of the law (recorded signals) -> their units
 ADAPTIVE_PARAMETERS = {"m_hat": "kg", "beta_hat": "1", "d_hat": "N"}
 #: what each adaptive parameter estimates (the recorded signals' long names)

@@ -78,7 +78,7 @@ from formation_ftc.core import graph as graphs
 from formation_ftc.core.constants import check_away_from_singularity
 from formation_ftc.core.dynamics.euler_lagrange import el_forces, euler_rates_from_body_rates
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "NetworkedElHinfController",
@@ -400,9 +400,6 @@ def modal_damping(K, alpha, gamma, mu, law: str = "literal"):
     if law == "diffusive":
         return base + 0.5 * alpha * K * (1.0 - mu)
     raise ValueError(f"unknown law {law!r}; valid: {LAWS}")
-
-
-VEC = ("spacecraft", "axis")
 
 
 @component

@@ -39,11 +39,9 @@ from formation_ftc.sim.components import (
     Signal,
     component,
 )
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["NeighbourRelativeController", "Yang2013RelativeSection"]
-
-VEC = ("spacecraft", "axis")
 
 
 @component

@@ -7,37 +7,18 @@ from typing import Any
 
 import numpy as np
 
-from formation_ftc.sim.components import CompositionError, Estimator, FlightInputs, component
+from formation_ftc.components._pass_through import PassThrough
+from formation_ftc.components._sections import check_nominal_masses
+from formation_ftc.sim.components import Estimator, FlightInputs, component
 
 __all__ = ["AccelerationModelEstimator", "WrapsInner"]
 
 
-class WrapsInner(Estimator):
+class WrapsInner(PassThrough, Estimator):  # type: ignore[override]  # a property holds_exogenous
     """An estimator built around another one (its field ``inner``), passing through unchanged the
     spacecraft count, the inner estimator's time signals, coordinates and conditions."""
 
     inner: Estimator
-
-    @property
-    def count(self) -> int | None:
-        return getattr(self.inner, "count", None)
-
-    @property
-    def holds_exogenous(self) -> bool:  # type: ignore[override]
-        return bool(self.inner.holds_exogenous)
-
-    def exogenous(self, t):
-        return self.inner.exogenous(t)
-
-    def held_exogenous(self, step):
-        return self.inner.held_exogenous(step)
-
-    def coords(self):
-        return self.inner.coords()
-
-    def conditions(self, loop) -> list:
-        conds = getattr(self.inner, "conditions", None)
-        return list(conds(loop)) if callable(conds) else []
 
 
 @component
@@ -62,16 +43,13 @@ class AccelerationModelEstimator(WrapsInner):
         m = self.nominal_mass
         if not isinstance(self.inner, Estimator) or not isinstance(m, np.ndarray):
             return  # pytree reconstruction with placeholders
-        n = getattr(self.inner, "count", None)
-        if (
-            m.ndim != 1
-            or (n is not None and m.shape != (n,))
-            or not np.all(np.isfinite(m) & (m > 0))
-        ):
-            raise CompositionError(
-                f"AccelerationModelEstimator: nominal masses {m.tolist()} kg for estimator "
-                f"{type(self.inner).__name__} of {n} spacecraft (need one finite mass > 0 each)"
-            )
+        check_nominal_masses(
+            m,
+            getattr(self.inner, "count", None),
+            "AccelerationModelEstimator",
+            f"estimator {type(self.inner).__name__}",
+            "need one finite mass > 0 each",
+        )
 
     def initial_state(self, measurement0):
         return self.inner.initial_state(measurement0)

@@ -14,6 +14,7 @@ from pydantic import Field
 from formation_ftc.components._sections import section_floats
 from formation_ftc.config.base import StrictModel
 from formation_ftc.sim.components import Estimator, Signal
+from formation_ftc.sim.contract import VEC
 
 __all__ = [
     "FdiForgetting",
@@ -29,7 +30,6 @@ __all__ = [
     "identification_outputs",
 ]
 
-VEC = ("spacecraft", "axis")
 
 FdiForgetting = Annotated[
     float,

@@ -31,7 +31,6 @@ from formation_ftc.components._flight_defaults import MEHRABIAN_NOMINAL_INERTIA
 from formation_ftc.components._registry import BuildContext, builder_input, per_spacecraft, register
 from formation_ftc.components._sections import Inertia, positive_values, section_floats
 from formation_ftc.components.estimators._fdi import (
-    VEC,
     FdiEstimator,
     FdiForgetting,
     FdiTestSection,
@@ -46,7 +45,7 @@ from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.euler_lagrange import generalized_to_body_torque, rbar_inv
 from formation_ftc.core.euler_quaternion import dcm_from_euler_zyx
 from formation_ftc.sim.components import FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "AttitudeResidualFdi",

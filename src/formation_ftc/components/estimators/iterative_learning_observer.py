@@ -65,7 +65,7 @@ from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.dynamics.cw import cw_matrices_jax
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import STATE, VEC, as_float
 
 __all__ = [
     "ilo_learning_update",
@@ -78,8 +78,6 @@ __all__ = [
     "ilo_lmi_design",
 ]
 
-STATE = ("spacecraft", "component")
-VEC = ("spacecraft", "axis")
 Vec6 = tuple[float, float, float, float, float, float]
 #: description of the on-board mean motion (the ILO's and the Gui2022 laws' sections)
 ONBOARD_MEAN_MOTION = (
@@ -640,7 +638,6 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
                     "fault_acceleration",
                     "fault",
                     mass=as_float(true_mass),
-                    dims=VEC,
                     long_name="true thruster fault per unit true mass F_i / m_i",
                     frame="LVLH",
                 )
@@ -650,7 +647,6 @@ def _build(sec: IloSection, ctx: BuildContext) -> Estimator:
             SignalSum(
                 "fault_error",
                 (("+", fault), ("-", "fault_estimate")),
-                dims=VEC,
                 units="m s-2",
                 long_name="e_F = F - F_hat (F_hat also holds the model mismatch)",
                 frame="LVLH",

@@ -25,7 +25,7 @@ from formation_ftc.components.estimators._acceleration_model import WrapsInner
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import Condition, as_float
+from formation_ftc.sim.contract import STATE, Condition, as_float
 
 __all__ = [
     "RelativeNavigationFilter",
@@ -44,8 +44,6 @@ __all__ = [
 #: the capability of an estimator whose law flies on its filter and that records the filter's estimate,
 #: covariance and normalised innovation squared (the ``navigation-consistency`` evaluation scores them)
 NAVIGATION_RECORDS = "navigation-records"
-
-STATE = ("spacecraft", "component")
 
 
 def kalman_update(x, p, y, r):

@@ -50,7 +50,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.disturbances import run_key, step_key
 from formation_ftc.core.fault_profiles import windowed_additive_faults
 from formation_ftc.sim.components import Estimator, FlightInputs, Signal, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "ScriptedFdi",
@@ -65,7 +65,6 @@ __all__ = [
     "fdi_noise_key",
 ]
 
-VEC = ("spacecraft", "axis")
 #: the fields of :func:`fdi_params`, in the order of the component's leaves
 PARAMS = (
     "bias",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from formation_ftc.sim.components import Evaluation, Signal, component, static
+from formation_ftc.sim.contract import VEC
 
 __all__ = ["PerUnitMass"]
 
@@ -18,7 +19,7 @@ class PerUnitMass(Evaluation):
     name: str = static()
     signal: str = static()
     mass: Any = 1.0  # (N,) [kg]
-    dims: tuple[str, ...] = static(default=("spacecraft", "axis"))
+    dims: tuple[str, ...] = static(default=VEC)
     units: str = static(default="m s-2")
     long_name: str = static(default="")
     frame: str | None = static(default=None)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from formation_ftc.sim.components import Evaluation, Signal, component, static
+from formation_ftc.sim.contract import VEC
 
 __all__ = ["SignalSum", "PartNorm"]
 
@@ -20,7 +21,7 @@ class SignalSum(Evaluation):
 
     name: str = static()
     terms: tuple[tuple[str, str], ...] = static()
-    dims: tuple[str, ...] = static(default=("spacecraft", "axis"))
+    dims: tuple[str, ...] = static(default=VEC)
     units: str = static(default="1")
     long_name: str = static(default="")
     frame: str | None = static(default=None)

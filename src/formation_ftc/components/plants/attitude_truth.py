@@ -40,7 +40,7 @@ from formation_ftc.core.dynamics.gravity_gradient import (
 from formation_ftc.core.quaternion import quat_kinematics, quat_multiply, rotation_matrix
 from formation_ftc.core.vector3 import norm3
 from formation_ftc.sim.components import CompositionError, Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "AttitudeTruthPlant",
@@ -52,8 +52,6 @@ __all__ = [
 
 #: frames the plant can integrate the attitude in
 STATE_FRAMES = ("inertial", "lvlh")
-
-VEC = ("spacecraft", "axis")
 
 
 @component

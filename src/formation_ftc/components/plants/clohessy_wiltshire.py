@@ -24,11 +24,9 @@ from formation_ftc.core.disturbances import gaussian_noise
 from formation_ftc.core.dynamics.cw import cw_matrices, cw_rhs
 from formation_ftc.core.rounding import eigenvalue_margin
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import Condition, as_float
+from formation_ftc.sim.contract import VEC, Condition, as_float
 
 __all__ = ["ClohessyWiltshirePlant", "CwPlantSection", "rk4_amplification"]
-
-VEC = ("spacecraft", "axis")
 
 
 def rk4_amplification(z: np.ndarray) -> np.ndarray:

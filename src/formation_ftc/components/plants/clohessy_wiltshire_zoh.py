@@ -22,7 +22,7 @@ from formation_ftc.core.dynamics.cw import cw_matrices_jax, cw_rhs
 from formation_ftc.core.integrators import zoh_discretize_jax
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Signal, TruthInputs, component
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import STATE, VEC, as_float
 
 __all__ = ["ZohClohessyWiltshirePlant", "ZohCwPlantSection", "STATE_COMPONENTS"]
 
@@ -80,12 +80,12 @@ class ZohClohessyWiltshirePlant(RelativeStatePlant):
         return (
             Signal(
                 "state",
-                ("spacecraft", "component"),
+                STATE,
                 "m, m s-1",
                 "relative state q (positions [m], velocities [m s-1])",
                 "LVLH",
             ),
-            Signal("disturbance", ("spacecraft", "axis"), "m s-2", "space perturbation d", "LVLH"),
+            Signal("disturbance", VEC, "m s-2", "space perturbation d", "LVLH"),
         )
 
     def coords(self):

@@ -29,11 +29,9 @@ from formation_ftc.core.dynamics.double_integrator import (
 )
 from formation_ftc.core.expressions import compile_expression
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["DoubleIntegratorPlant", "DoubleIntegratorSection"]
-
-VEC = ("spacecraft", "axis")
 
 
 @component

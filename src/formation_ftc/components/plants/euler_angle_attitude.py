@@ -40,11 +40,10 @@ from formation_ftc.core.dynamics.euler_lagrange import (
     rigid_body_rhs,
 )
 from formation_ftc.sim.components import Plant, Signal, StepContext, TruthInputs, component
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["EulerAngleAttitudePlant", "EulerAnglePlantSection", "seed_streams", "AXES"]
 
-VEC = ("spacecraft", "axis")
 #: names of the Euler angles, in the order of the state's last axis
 AXES = ("pitch", "roll", "yaw")
 

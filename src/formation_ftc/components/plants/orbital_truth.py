@@ -46,11 +46,10 @@ from formation_ftc.core.dynamics.orbital_truth import (
     roe_to_elements,
 )
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["InertialFormationPlant", "OrbitalTruthSection"]
 
-VEC = ("spacecraft", "axis")
 _SUN_X = np.array([1.0, 0.0, 0.0])
 #: the section's fields of the chief's classical elements, in the order of ``chief_elements``
 CHIEF_ELEMENTS = "semi_major_axis eccentricity inclination raan arg_perigee true_anomaly".split()

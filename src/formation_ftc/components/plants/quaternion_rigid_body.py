@@ -21,7 +21,7 @@ from formation_ftc.components.plants._rigid_body import (
 )
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["QuaternionRigidBodyPlant", "QuaternionPlantSection", "QUATERNION_COMPONENTS"]
 
@@ -60,7 +60,7 @@ class QuaternionRigidBodyPlant(RigidBodyTorquePlant):
         return (
             Signal(
                 "angular_velocity",
-                ("spacecraft", "axis"),
+                VEC,
                 "rad s-1",
                 "body angular velocity",
                 "body",

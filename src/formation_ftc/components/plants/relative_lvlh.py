@@ -18,11 +18,9 @@ from formation_ftc.components.plants._relative_state import (
 from formation_ftc.core.constants import MU_EARTH
 from formation_ftc.core.dynamics.relative_lvlh import natural_acceleration_from_rates
 from formation_ftc.sim.components import Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = ["RelativeLvlhPlant", "RelativeLvlhSection"]
-
-VEC = ("spacecraft", "axis")
 
 
 @component

@@ -37,7 +37,7 @@ from formation_ftc.config.base import StrictModel
 from formation_ftc.core.dynamics.attitude_quaternion import rigid_body_quaternion_rates
 from formation_ftc.core.dynamics.tracking_error import translational_error_rates
 from formation_ftc.sim.components import Plant, Signal, TruthInputs, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import STATE, VEC, as_float
 
 __all__ = [
     "SwitchedFormationPlant",
@@ -154,7 +154,7 @@ class SwitchedFormationPlant(Plant):
         return (
             Signal(
                 "error_state",
-                ("spacecraft", "component"),
+                STATE,
                 "1",
                 "error state x_i (7), desired minus actual (m, m s-1, rad s-1, 1 by component)",
                 "F_i",
@@ -183,7 +183,7 @@ class SwitchedFormationPlant(Plant):
             ),
             Signal(
                 "relative_position",
-                ("spacecraft", "axis"),
+                VEC,
                 "m",
                 "relative position R~ = R~^d - e_R (0 outside the formation)",
                 "F_i",

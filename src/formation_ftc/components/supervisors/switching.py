@@ -43,7 +43,7 @@ from formation_ftc.components._sections import STATE_DIM, ErrorState, Vec3Expr, 
 from formation_ftc.config.base import StrictModel
 from formation_ftc.core.expressions import compile_vector_expression
 from formation_ftc.sim.components import FlightInputs, Signal, Supervisor, component, static
-from formation_ftc.sim.contract import as_float
+from formation_ftc.sim.contract import VEC, as_float
 
 __all__ = [
     "NO_DECISION",
@@ -61,8 +61,6 @@ __all__ = [
     "switched_structure",
 ]
 
-
-VEC = ("spacecraft", "axis")
 
 # ------------------------------------------------------------------------------------- equations
 NO_DECISION = 0
