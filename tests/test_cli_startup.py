@@ -120,10 +120,15 @@ def test_plot_of_a_run_imports_no_jax(tmp_path):
 def test_a_run_process_reports_its_wall_time_and_imports_no_dask(tmp_path):
     """The process of ``formation-ftc run`` (``main()`` without arguments): the wall time it reports
     is the process's, less the interpreter's start and exit (issue 45: within 10 % in
-    ``benchmarks/cli.py``; here within 1 s, as the test machine may be loaded), the simulation's
-    part is less, and xarray imported no dask, installed or not (the result has numpy arrays only)."""
+    ``benchmarks/cli.py``; here within 1 s plus what starting the interpreter and importing the
+    command line takes at the moment, measured just before: the test machine may be loaded), the
+    simulation's part is less, and xarray imported no dask, installed or not (the result has numpy
+    arrays only)."""
     import time
 
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import formation_ftc.cli"], check=True, timeout=600)
+    start_up = time.perf_counter() - t0  # interpreter start, import and exit under today's load [s]
     code = (
         "import sys\n"
         "from formation_ftc.cli import main\n"
@@ -143,7 +148,11 @@ def test_a_run_process_reports_its_wall_time_and_imports_no_dask(tmp_path):
     reported = json.loads("\n".join(doc))
     assert eval(imported[2:]) == []  # noqa: S307 - our own probe's repr
     assert (
-        0 < reported["simulation_time"] < reported["wall_time"] <= wall < reported["wall_time"] + 1
+        0
+        < reported["simulation_time"]
+        < reported["wall_time"]
+        <= wall
+        < reported["wall_time"] + 1 + start_up
     )
 
 
