@@ -19,14 +19,22 @@ def add_budget_options(
     """``--max-memory``, ``--max-run-steps`` and, with ``whole``, ``--max-campaign-steps``
     (formation_ftc.limits), for ``run``, ``campaign run``, ``league run`` and ``tune``: ``batch`` and
     ``whole`` say what the first and last one bound."""
-    options = {  # flag: help
-        "--max-memory": f"memory budget of {batch}, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
-        "--max-run-steps": "integration steps allowed per run (default 1e9; 0 = none)",
-        "--max-campaign-steps": f"run-steps allowed in {whole} (default 1e11; 0 = none)",
-    }
-    for flag, text in options.items():
-        if whole is not None or flag != "--max-campaign-steps":
-            parser.add_argument(flag, metavar="SIZE" if flag == "--max-memory" else "N", help=text)
+    parser.add_argument(
+        "--max-memory",
+        metavar="SIZE",
+        help=f"memory budget of {batch}, e.g. 32GB (default 8 GiB or half the RAM; 0 = none)",
+    )
+    parser.add_argument(
+        "--max-run-steps",
+        metavar="N",
+        help="integration steps allowed per run (default 1e9; 0 = none)",
+    )
+    if whole is not None:
+        parser.add_argument(
+            "--max-campaign-steps",
+            metavar="N",
+            help=f"run-steps allowed in {whole} (default 1e11; 0 = none)",
+        )
 
 
 def add_executor_options(

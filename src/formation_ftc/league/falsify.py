@@ -58,9 +58,19 @@ __all__ = [
 ]
 
 #: the cube's coordinates, in order
-COORDINATES = tuple(
-    "kind spacecraft axis onset effectiveness bias period duty rate min_effectiveness "
-    "initial_error noise".split()
+COORDINATES = (
+    "kind",
+    "spacecraft",
+    "axis",
+    "onset",
+    "effectiveness",
+    "bias",
+    "period",
+    "duty",
+    "rate",
+    "min_effectiveness",
+    "initial_error",
+    "noise",
 )
 #: actuator fault kinds the search draws: every kind of the fault-battery actuator but "none"
 FALSIFIABLE_KINDS = FAULT_KINDS[1:]

@@ -71,13 +71,22 @@ def _cost(cells: pd.DataFrame) -> tuple[str, str] | None:
     return next(((name, label) for name, label in COSTS if f"{name}_median" in cells), None)
 
 
-#: scores shown in the tables (when the league computes them); stl_violation: an STL requirement's
-#: -robustness (league.definition.STL_VIOLATION); mean_nees, nees_in_band, nis_in_band: the navigation
-#: filter's consistency (league.runner.NAVIGATION_METRICS)
-SCORES = tuple(
-    "rms_shape_error max_shape_error rms_slot_error settle_time delta_v_total peak_thrust "
-    "saturated_fraction rms_attitude_error max_attitude_error control_impulse stl_violation "
-    "mean_nees nees_in_band nis_in_band".split()
+#: scores shown in the tables (when the league computes them)
+SCORES = (
+    "rms_shape_error",
+    "max_shape_error",
+    "rms_slot_error",
+    "settle_time",
+    "delta_v_total",
+    "peak_thrust",
+    "saturated_fraction",
+    "rms_attitude_error",
+    "max_attitude_error",
+    "control_impulse",
+    "stl_violation",  # an STL requirement's -robustness (league.definition.STL_VIOLATION)
+    "mean_nees",  # the navigation filter's consistency (league.runner.NAVIGATION_METRICS)
+    "nees_in_band",
+    "nis_in_band",
 )
 
 
@@ -330,8 +339,15 @@ def seed_column(runs: pd.DataFrame) -> str:
 
 #: the keys of the comparison with the row above that :func:`rank_confidence` adds to every ranking
 #: row (None on a level's first row)
-_COMPARISON_KEYS = tuple(
-    "test statistic p_value p_adjusted separated pairs only_above_passed only_this_passed".split()
+_COMPARISON_KEYS = (
+    "test",
+    "statistic",
+    "p_value",
+    "p_adjusted",
+    "separated",
+    "pairs",
+    "only_above_passed",
+    "only_this_passed",
 )
 
 

@@ -27,5 +27,14 @@ from formation_ftc.report.reproduce import (
 # ``formation_ftc.report.reproduce`` stays the submodule (the CLI calls
 # ``formation_ftc.report.reproduce.add_cli``); the driver is ``formation_ftc.report.reproduce.reproduce``.
 
-__all__ = ["MARKER_NAME", "ReproduceError", "add_cli", "provenance", "render_index", "run_cli"]
-__all__ += ["to_jsonable", "write_index", "write_trajectory3d"]
+__all__ = [
+    "MARKER_NAME",
+    "ReproduceError",
+    "add_cli",
+    "provenance",
+    "render_index",
+    "run_cli",
+    "to_jsonable",
+    "write_index",
+    "write_trajectory3d",
+]

@@ -33,8 +33,16 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-__all__ = ["TRAJECTORY_FILE", "render_index", "write_index", "write_trajectory3d"]
-__all__ += ["load_trajectories", "plotly_available", "plotly_script", "PLOTLY_JS"]
+__all__ = [
+    "TRAJECTORY_FILE",
+    "render_index",
+    "write_index",
+    "write_trajectory3d",
+    "load_trajectories",
+    "plotly_available",
+    "plotly_script",
+    "PLOTLY_JS",
+]
 
 #: File name a reproduction writes its 3-D trajectory data to (inside its output directory).
 TRAJECTORY_FILE = "trajectory3d.json"

@@ -50,9 +50,20 @@ from formation_ftc.report.metadata import provenance, utc_now
 from formation_ftc.report.profile import DIGITS, PHASES, Profiler, format_breakdown
 from formation_ftc.sim.runtime import schedulable_cpus as _schedulable_cpus
 
-__all__ = ["MARKER_NAME", "REPORT_SCHEMA", "ReproduceError", "available_reproductions"]
-__all__ += ["select_papers", "prepare_output", "reproduce", "paper_entry", "to_jsonable", "add_cli"]
-__all__ += ["run_cli", "json_document"]
+__all__ = [
+    "MARKER_NAME",
+    "REPORT_SCHEMA",
+    "ReproduceError",
+    "available_reproductions",
+    "select_papers",
+    "prepare_output",
+    "reproduce",
+    "paper_entry",
+    "to_jsonable",
+    "add_cli",
+    "run_cli",
+    "json_document",
+]
 
 #: Marker file that identifies a directory written by ``formation-ftc reproduce``.
 MARKER_NAME = ".formation-ftc-report"

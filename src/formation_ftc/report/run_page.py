@@ -34,8 +34,15 @@ import numpy as np
 from formation_ftc.errors import InputError
 from formation_ftc.exitcodes import jsonable
 
-__all__ = ["finish_figure", "standard_figures", "run_figures", "write_run_page", "redraw_run"]
-__all__ += ["recorded_scenario", "ERROR_SIGNALS"]
+__all__ = [
+    "finish_figure",
+    "standard_figures",
+    "run_figures",
+    "write_run_page",
+    "redraw_run",
+    "recorded_scenario",
+    "ERROR_SIGNALS",
+]
 
 #: Signal names read as tracking errors (in this order, those present).
 ERROR_SIGNALS: tuple[str, ...] = ("position_error", "position_tracking_error", "tracking_error")

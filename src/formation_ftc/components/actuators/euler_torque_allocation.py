@@ -86,9 +86,17 @@ class HeldAdditiveFaultActuator(Actuator):
     def held_exogenous(self, step: StepContext):
         if not self.torques:
             return {"fault": jnp.zeros((self.count, self.n_channels))}
-        where = self.spacecraft, self.channels, self.count, self.n_channels
         return {
-            "fault": windowed_additive_faults(step.k, step.dt, self.windows, self.torques, *where)
+            "fault": windowed_additive_faults(
+                step.k,
+                step.dt,
+                self.windows,
+                self.torques,
+                self.spacecraft,
+                self.channels,
+                self.count,
+                self.n_channels,
+            )
         }
 
     def apply(self, t, command, inputs: ActuatorInputs):

@@ -91,7 +91,16 @@ class ThrusterBiasSection(StrictModel):
 
 #: the profile's fields, per spacecraft and axis, and those of them that are forces (per unit mass:
 #: times each spacecraft's mass)
-_PROFILE = "onset magnitude amplitude omega phase decay_amplitude decay_rate decay_origin".split()
+_PROFILE = (
+    "onset",
+    "magnitude",
+    "amplitude",
+    "omega",
+    "phase",
+    "decay_amplitude",
+    "decay_rate",
+    "decay_origin",
+)
 _FORCES = ("magnitude", "amplitude", "decay_amplitude")
 
 

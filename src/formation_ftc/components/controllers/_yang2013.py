@@ -217,10 +217,19 @@ class Yang2013AttitudeController(Controller):
 
     def output(self, t, state, inputs: FlightInputs):
         w, q = inputs.measurement["omega"], inputs.measurement["q"]
-        gains = self.K3, self.K4, self.K5, self.kappa
         drift = jnp.zeros_like(w)  # Upsilon_i taken as cancelled
         # Yang2013 eq. (13)
-        tau = attitude_control(w, q[:, 0:3], q[:, 3], drift, self.nominal_inertia, *gains)
+        tau = attitude_control(
+            w,
+            q[:, 0:3],
+            q[:, 3],
+            drift,
+            self.nominal_inertia,
+            self.K3,
+            self.K4,
+            self.K5,
+            self.kappa,
+        )
         return tau, None, {}
 
 

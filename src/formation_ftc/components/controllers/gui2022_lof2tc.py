@@ -40,7 +40,7 @@ from formation_ftc.components.controllers._output_feedback import (
     _on_plant,
     _output_feedback_fields,
 )
-from formation_ftc.components.estimators.iterative_learning_observer import learning_interval_steps
+from formation_ftc.components.estimators.iterative_learning_observer import learning_steps
 from formation_ftc.core.delay_line import delay_init, delay_push, delay_read
 from formation_ftc.core.linear import matvec
 from formation_ftc.sim.components import Controller, FlightInputs, Signal, component, static
@@ -131,9 +131,20 @@ class LearningOutputFeedbackController(NominalOrbitTracking):
     def output(self, t, state, inputs: FlightInputs):
         m = self.learning_steps
         q0, e_y, F_hat = self.tracking(inputs)
-        past = delay_read(state["pi"], m), delay_read(state["v"], m)
-        gains = self.K, self.G1, self.G2, self.G3, self.G4, self.BpE, self.BpH
-        u, pi, v = lof2tc_law(e_y, F_hat, *past, *gains)  # (30)-(32)
+        pi_past, v_past = delay_read(state["pi"], m), delay_read(state["v"], m)  # at k - m
+        u, pi, v = lof2tc_law(
+            e_y,
+            F_hat,
+            pi_past,
+            v_past,
+            self.K,
+            self.G1,
+            self.G2,
+            self.G3,
+            self.G4,
+            self.BpE,
+            self.BpH,
+        )  # (30)-(32)
         nxt = {"pi": delay_push(state["pi"], pi, m), "v": delay_push(state["v"], v, m)}
         out = {"desired_state": q0, "tracking_error": e_y, "learning_gain": pi, "compensation": v}
         return u, nxt, out
@@ -189,7 +200,7 @@ def _build(sec: Lof2tcSection, ctx: BuildContext) -> Controller:
         BpE=common["BpH"],
         pi_initial=as_float(np.full(N, sec.pi_initial)),
         v_initial=as_float(np.broadcast_to(np.asarray(sec.v_initial, float), (N, 3)).copy()),
-        learning_steps=learning_interval_steps(
+        learning_steps=learning_steps(
             sec.learning_interval, ctx.dt, "controller.learning_interval"
         ),
     )

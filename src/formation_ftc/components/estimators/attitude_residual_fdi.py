@@ -362,8 +362,9 @@ class AttitudeResidualFdi(FdiEstimator):
         out |= detection_outputs(estimate.statistic, estimate.detected, estimate.isolated)
         out |= {"fdi_flag": estimate.flag, "fdi_estimate": estimate.estimate}
         if self.identification == "rls":
-            ident = (estimate.known, estimate.effectiveness, estimate.effectiveness_std)
-            out |= identification_outputs(*ident)
+            out |= identification_outputs(
+                estimate.known, estimate.effectiveness, estimate.effectiveness_std
+            )
         return out
 
     def needs(self) -> dict[str, str]:

@@ -72,7 +72,6 @@ __all__ = [
     "ilo_correction",
     "ilo_propagate",
     "learning_steps",
-    "learning_interval_steps",
     "IterativeLearningObserver",
     "IloSection",
     "ilo_lmi_design",
@@ -247,10 +246,6 @@ def ilo_propagate(
         + ilo_correction(e_y, L1, gamma, sign_term)
     )  # (5), observer
     return q_hat + dt * qh_dot
-
-
-#: :func:`learning_steps` under the name the learning laws' builders use (a section's own field)
-learning_interval_steps = learning_steps
 
 
 # ------------------------------------------------------------------------------------ component

@@ -20,8 +20,14 @@ from formation_ftc.report.profile import phase
 from formation_ftc.sim.loop import ClosedLoop
 from formation_ftc.sim.metrics import metrics_dict
 
-__all__ = ["run_batch", "VARIABLE", "PI_GRID", "alpha_min_on_grid", "alpha2_study"]
-__all__ += ["design_numbers"]
+__all__ = [
+    "run_batch",
+    "VARIABLE",
+    "PI_GRID",
+    "alpha_min_on_grid",
+    "alpha2_study",
+    "design_numbers",
+]
 
 PI_GRID = tuple(round(0.05 * j, 2) for j in range(9))
 

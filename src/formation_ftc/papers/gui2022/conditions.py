@@ -28,8 +28,14 @@ from formation_ftc.papers.gui2022 import published as pub
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = ["implied_lyapunov", "learning_loop_radius", "learning_loop_matrix", "d_max"]
-__all__ += ["observer_conditions", "controller_conditions"]
+__all__ = [
+    "implied_lyapunov",
+    "learning_loop_radius",
+    "learning_loop_matrix",
+    "d_max",
+    "observer_conditions",
+    "controller_conditions",
+]
 
 
 def d_max(A0: float, n: float, samples: int = 200_001) -> float:

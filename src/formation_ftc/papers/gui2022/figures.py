@@ -15,8 +15,16 @@ import numpy as np
 from formation_ftc.plotting import new_figure, save_figure
 from formation_ftc.report.run_page import finish_figure
 
-__all__ = ["deputy", "fig3_fault_reconstruction", "fig45_estimation_errors", "fig6_ilo_comparison"]
-__all__ += ["fig78_tracking_errors", "fig9_trajectory", "fig10_synthesized_disturbance", "plot"]
+__all__ = [
+    "deputy",
+    "fig3_fault_reconstruction",
+    "fig45_estimation_errors",
+    "fig6_ilo_comparison",
+    "fig78_tracking_errors",
+    "fig9_trajectory",
+    "fig10_synthesized_disturbance",
+    "plot",
+]
 
 AX = ["x", "y", "z"]
 #: velocity (True) or position (False) -> the state components and their unit

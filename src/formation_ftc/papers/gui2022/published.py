@@ -6,9 +6,20 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["N_MEAN_MOTION", "A0", "L1_PRINTED", "L2_PRINTED", "P1_PRINTED", "K_PRINTED"]
-__all__ += ["Q1_PRINTED", "Q2_PRINTED", "GAMMA_PRINTED", "Q0_INITIAL", "CARE_Q_SCALE"]
-__all__ += ["ESTIMATE_OFFSET"]
+__all__ = [
+    "N_MEAN_MOTION",
+    "A0",
+    "L1_PRINTED",
+    "L2_PRINTED",
+    "P1_PRINTED",
+    "K_PRINTED",
+    "Q1_PRINTED",
+    "Q2_PRINTED",
+    "GAMMA_PRINTED",
+    "Q0_INITIAL",
+    "CARE_Q_SCALE",
+    "ESTIMATE_OFFSET",
+]
 
 N_MEAN_MOTION = 0.0015  # [rad/s], section 5
 A0 = 1.2e-3  # perturbation amplitude [m/s^2] (printed "N", per unit mass: E002-03)

@@ -12,8 +12,15 @@ import numpy as np
 from formation_ftc.papers._study import Run, read_study, study
 from formation_ftc.report.profile import phase
 
-__all__ = ["REPRODUCTION", "REFERENCE_RUN", "MU1_INITIAL"]
-__all__ += ["SUMMARY_KEYS", "SCENARIOS", "adaptive_drift", "quantities"]
+__all__ = [
+    "REPRODUCTION",
+    "REFERENCE_RUN",
+    "MU1_INITIAL",
+    "SUMMARY_KEYS",
+    "SCENARIOS",
+    "adaptive_drift",
+    "quantities",
+]
 
 SUMMARY_KEYS = (
     "mu1_final",

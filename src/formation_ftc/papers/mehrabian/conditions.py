@@ -22,8 +22,16 @@ from formation_ftc.design.lmi import rounding_margin
 from formation_ftc.papers._conditions import exact, fmt_list
 from formation_ftc.registry import Condition
 
-__all__ = ["PRINTED", "PRINTED_RESOLUTION", "matches_printed", "DesignQuantities"]
-__all__ += ["design_quantities", "lyapunov_matrix", "check", "fdi_check"]
+__all__ = [
+    "PRINTED",
+    "PRINTED_RESOLUTION",
+    "matches_printed",
+    "DesignQuantities",
+    "design_quantities",
+    "lyapunov_matrix",
+    "check",
+    "fdi_check",
+]
 
 #: Values printed in Sec. V (per channel; the paper repeats each three times).
 PRINTED: dict[str, Any] = {  # a number or a diagonal (3 numbers) per quantity

@@ -27,8 +27,14 @@ from formation_ftc.papers._conditions import exact, informative, sampled_or_veri
 from formation_ftc.registry import Condition
 from formation_ftc.sim.loop import ClosedLoop
 
-__all__ = ["design_quantities", "faults", "fault_conditions", "conditions", "disturbance_peaks"]
-__all__ += ["disturbance_bounds"]
+__all__ = [
+    "design_quantities",
+    "faults",
+    "fault_conditions",
+    "conditions",
+    "disturbance_peaks",
+    "disturbance_bounds",
+]
 
 
 def faults(sc: ComposedScenario) -> list[VelocityFault]:
