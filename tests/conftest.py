@@ -33,6 +33,42 @@ _XDIST_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
 if _XDIST_WORKERS > 1:
     os.environ.setdefault("PJRT_NPROC", str(max(1, len(os.sched_getaffinity(0)) // _XDIST_WORKERS)))
 
+
+def _use_package_xla_options() -> None:
+    """Give the run's other programs the package's XLA:CPU options, through ``XLA_FLAGS``.
+
+    The package compiles its simulation programs with its own options (:mod:`formation_ftc.sim.runtime.xla`:
+    XLA's MLIR fusion emitters and YNNPACK fusions off, per compilation). A test's eager operations and its
+    own jitted functions -- thousands of small programs in a run -- get XLA's defaults, where every fusion
+    goes through the MLIR pipeline. Here they get the package's options too, process-wide (read when the
+    CPU client starts; inherited by the xdist workers and by the processes tests start), once a child
+    process has shown that this jaxlib knows them: XLA aborts on an unknown flag. Elementwise functions give
+    the same bits with either emitter (tests/sim/runtime/test_xla.py); the package's own programs are
+    compiled as without it. Fresh-cache ``make test``, back to back on the 2-core machine: 1,244 -> 1,088
+    user CPU-s.
+    """
+    import subprocess
+    import sys
+
+    from formation_ftc.sim.runtime.xla import DEFAULT_OPTIONS
+
+    flags = " ".join(
+        f"--{name}={str(value).lower() if isinstance(value, bool) else value}"
+        for name, value in DEFAULT_OPTIONS.items()
+    )
+    current = os.environ.get("XLA_FLAGS", "")
+    if flags in current or os.environ.get("FORMATION_FTC_TEST_XLA_FLAGS") == "unknown":
+        return
+    env = {**os.environ, "XLA_FLAGS": f"{current} {flags}".strip()}
+    probe = [sys.executable, "-c", "import jax.numpy as jnp; jnp.zeros(2).block_until_ready()"]
+    if subprocess.run(probe, env=env, capture_output=True).returncode == 0:
+        os.environ["XLA_FLAGS"] = env["XLA_FLAGS"]
+    else:  # not this jaxlib's flags: the workers need not probe again
+        os.environ["FORMATION_FTC_TEST_XLA_FLAGS"] = "unknown"
+
+
+_use_package_xla_options()
+
 import jax  # noqa: E402
 import jax.monitoring  # noqa: E402
 import pytest  # noqa: E402
