@@ -44,9 +44,9 @@ def _use_package_xla_options() -> None:
     CPU client starts; inherited by the xdist workers and by the processes tests start), once a child
     process has shown that this jaxlib knows them: XLA aborts on an unknown flag. Elementwise functions give
     the same bits with either emitter (tests/sim/runtime/test_xla.py). The package's simulation programs
-    (``sim.runtime.xla.jit``) are compiled as without it; the few package functions jitted with JAX's
-    defaults (build-time attitude conversions, the FLFR design simulation, the divergence replay, tuning's
-    Jacobian) get the options here. Every built-in scenario's metrics and ``reproduce all``'s numbers are
+    (``sim.runtime.xla.jit``, the divergence replay and the build-time attitude conversions included) are
+    compiled as without it; the two package functions jitted with JAX's defaults (the FLFR design
+    simulation, below ``sim`` in the layers, and tuning's Jacobian) get the options here. Every built-in scenario's metrics and ``reproduce all``'s numbers are
     the same bits with and without the flags (2026-12-06). Fresh-cache ``make test``, back to back on the
     2-core machine: 1,244 -> 1,088 user CPU-s.
     """

@@ -35,6 +35,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from formation_ftc.sim.runtime import xla
+
 __all__ = [
     "RunOutput",
     "run_fixed_step",
@@ -428,9 +430,9 @@ def _params_step(params, k, state):
 
 @functools.cache
 def _jitted(fn: Callable[..., Any]) -> Callable[..., Any]:
-    """``jax.jit(fn)``, made on first use and kept (not at import: ``check`` imports this module
-    without JAX, :mod:`formation_ftc._lazy_jax`)."""
-    return jax.jit(fn)
+    """``fn`` jitted as the run it replays is (:func:`formation_ftc.sim.runtime.xla.jit`), made on first
+    use and kept (not at import: ``check`` imports this module without JAX, :mod:`formation_ftc._lazy_jax`)."""
+    return xla.jit(fn)
 
 
 def _replay(step, state, k: int, n: int, ok, params: Any) -> tuple[int, PyTree, PyTree | None]:
@@ -441,7 +443,7 @@ def _replay(step, state, k: int, n: int, ok, params: Any) -> tuple[int, PyTree, 
             params, state, jnp.asarray(k, jnp.int64), jnp.asarray(n, jnp.int64)
         )
     else:
-        j, st, latest, bad = jax.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
+        j, st, latest, bad = xla.jit(lambda s0: _replay_loop(step, ok, s0, k, n))(state)
     return int(j), st, (latest if bool(bad) else None)
 
 
@@ -528,7 +530,7 @@ def diagnose_divergence(
     if failing is not None:
         last_finite, k, t, max_steps = state0, k + j0, t + j0 * dt, max_steps - j0
     # compiled on its first call only (jit is lazy)
-    jstep = jax.jit(step) if params is None else functools.partial(_jitted(_params_step), params)
+    jstep = xla.jit(step) if params is None else functools.partial(_jitted(_params_step), params)
     acc: set[int] | None = None
     first: DivergenceInfo | None = None
     state, n, j = last_finite, max_steps, 0

@@ -690,8 +690,12 @@ class ClosedLoop:
     def _bounded(self, x) -> list[tuple[str, Any, Any]]:
         """(name, magnitude per spacecraft, bound) of the bounded truth quantities of plant state x."""
         out = []
-        bounds = (self.max_position, self.max_velocity, self.max_rate)  # of a Euclidean norm
-        for name, bound in zip(("position", "velocity", "angular_rate"), bounds, strict=True):
+        vectors = (
+            ("position", self.max_position),
+            ("velocity", self.max_velocity),
+            ("angular_rate", self.max_rate),
+        )
+        for name, bound in vectors:  # Euclidean norm per spacecraft
             v = getattr(self.plant, name)(x) if hasattr(self.plant, name) else None
             if v is not None:
                 out.append((f"plant.{name}", jnp.sqrt(jnp.sum(v * v, axis=-1)), bound))

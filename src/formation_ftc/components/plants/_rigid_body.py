@@ -67,12 +67,12 @@ class RigidBodyTorquePlant(Plant):
 @functools.cache
 def _jitted(name: str):
     """The jitted map ``name`` of :mod:`formation_ftc.core.euler_quaternion` (ZYX Euler <-> quaternion),
-    compiled on first use (JAX is imported by builds only)."""
-    import jax
-
+    compiled as the simulation programs are (:func:`formation_ftc.sim.runtime.xla.jit`) on first use (JAX
+    is imported by builds only)."""
     from formation_ftc.core import euler_quaternion
+    from formation_ftc.sim.runtime import xla
 
-    return jax.jit(getattr(euler_quaternion, name))
+    return xla.jit(getattr(euler_quaternion, name))
 
 
 class RigidBodyAttitudeSection(StrictModel):
